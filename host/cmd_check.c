@@ -1,0 +1,255 @@
+/*
+ * cmd_check.c - `stratum check FILE [--json] [--threads N]`: read a mesh,
+ * report its topology (seed 001) and whether it is printable (seed 000
+ * Definition 3.11).  Exit 0 printable, 1 not printable, 65 unreadable input.
+ */
+#include <errno.h>
+#include <jansson.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "commands.h"
+#include "mesh.h"
+#include "meshio.h"
+#include "st_error.h"
+
+static void check_usage(FILE *out)
+{
+	fprintf(out,
+		"usage: stratum check FILE [--json] [--threads N]\n"
+		"\n"
+		"Reads an STL (binary or ASCII), OBJ or OFF file and reports its topology:\n"
+		"edges, holes, singular edges, components, Euler characteristic and genus,\n"
+		"degenerate and duplicate triangles, exact self-intersections, orientation,\n"
+		"volume - and whether it is printable as it stands (Attene's Definition 3.11).\n"
+		"\n"
+		"  --json        one JSON object on stdout instead of the text report\n"
+		"  --threads N   cores for the self-intersection test (default: all)\n"
+		"\n"
+		"Exit status: 0 printable, 1 not printable, 2 usage, 65 unreadable input.\n");
+}
+
+/* Figures that explain a reason, for the text and JSON messages. */
+static void reason_detail(const struct mesh_report *r, enum mesh_reason why, char *buf,
+			  size_t cap)
+{
+	switch (why) {
+	case MESH_REASON_IRREGULAR:
+		snprintf(buf, cap, "%zu %s", r->irregular, mesh_reason_text(why));
+		break;
+	case MESH_REASON_DEGENERATE:
+		snprintf(buf, cap, "%zu %s", r->degenerate, mesh_reason_text(why));
+		break;
+	case MESH_REASON_OPEN:
+		snprintf(buf, cap, "%s (%zu boundary edges in %zu loops, %zu odd singular edges)",
+			 mesh_reason_text(why), r->boundary_edges, r->boundary_loops,
+			 r->odd_edges - r->boundary_edges);
+		break;
+	case MESH_REASON_SELF_INTERSECTION:
+		snprintf(buf, cap, "%llu pairs of %s",
+			 (unsigned long long)r->self_intersections, mesh_reason_text(why));
+		break;
+	case MESH_REASON_SEVERAL_PARTS:
+		snprintf(buf, cap, "%zu %s", r->components, mesh_reason_text(why));
+		break;
+	case MESH_REASON_NOT_MANIFOLD_CONNECTED:
+		snprintf(buf, cap, "%zu %s (%zu singular edges, %zu non-manifold vertices)",
+			 r->manifold_components, mesh_reason_text(why), r->singular_edges,
+			 r->nonmanifold_vertices);
+		break;
+	case MESH_REASON_DUPLICATE:
+		snprintf(buf, cap, "%zu %s", r->duplicates, mesh_reason_text(why));
+		break;
+	case MESH_REASON_INCONSISTENT_ORIENTATION:
+		snprintf(buf, cap, "%s (%zu edges)", mesh_reason_text(why), r->flipped_edges);
+		break;
+	default:
+		snprintf(buf, cap, "%s", mesh_reason_text(why));
+		break;
+	}
+}
+
+static json_t *reasons_json(const struct mesh_report *r, int from, int to)
+{
+	json_t *list = json_array();
+	char text[200];
+
+	for (int i = from; i < to; i++) {
+		if (!r->reasons[i])
+			continue;
+		reason_detail(r, (enum mesh_reason)i, text, sizeof(text));
+		json_array_append_new(list, json_pack("{s:s, s:s}", "code",
+						      mesh_reason_code((enum mesh_reason)i),
+						      "text", text));
+	}
+	return list;
+}
+
+static int print_json(const char *path, enum meshio_format fmt, const struct mesh_report *r)
+{
+	json_t *o = json_object();
+	json_t *bbox = json_pack("{s:[f,f,f], s:[f,f,f]}", "min", r->bbox_min[0],
+				 r->bbox_min[1], r->bbox_min[2], "max", r->bbox_max[0],
+				 r->bbox_max[1], r->bbox_max[2]);
+	int rc;
+
+	json_object_set_new(o, "file", json_string(path));
+	json_object_set_new(o, "format", json_string(meshio_format_name(fmt)));
+	json_object_set_new(o, "input_triangles", json_integer((json_int_t)r->input_triangles));
+	json_object_set_new(o, "vertices", json_integer((json_int_t)r->vertices));
+	json_object_set_new(o, "edges", json_integer((json_int_t)r->edges));
+	json_object_set_new(o, "triangles", json_integer((json_int_t)r->triangles));
+	json_object_set_new(o, "boundary_edges", json_integer((json_int_t)r->boundary_edges));
+	json_object_set_new(o, "singular_edges", json_integer((json_int_t)r->singular_edges));
+	json_object_set_new(o, "nonmanifold_vertices",
+			    json_integer((json_int_t)r->nonmanifold_vertices));
+	json_object_set_new(o, "components", json_integer((json_int_t)r->components));
+	json_object_set_new(o, "manifold_components",
+			    json_integer((json_int_t)r->manifold_components));
+	json_object_set_new(o, "boundary_loops", json_integer((json_int_t)r->boundary_loops));
+	json_object_set_new(o, "euler", json_integer((json_int_t)r->euler));
+	json_object_set_new(o, "genus",
+			    r->genus_defined ? json_integer((json_int_t)r->genus) : json_null());
+	json_object_set_new(o, "irregular", json_integer((json_int_t)r->irregular));
+	json_object_set_new(o, "degenerate", json_integer((json_int_t)r->degenerate));
+	json_object_set_new(o, "duplicates", json_integer((json_int_t)r->duplicates));
+	json_object_set_new(o, "self_intersections",
+			    json_integer((json_int_t)r->self_intersections));
+	json_object_set_new(o, "orientable", json_boolean(r->orientable));
+	json_object_set_new(o, "consistently_oriented", json_boolean(r->consistently_oriented));
+	json_object_set_new(o, "flipped_edges", json_integer((json_int_t)r->flipped_edges));
+	json_object_set_new(o, "volume", json_real(r->volume));
+	json_object_set_new(o, "bbox", bbox);
+	json_object_set_new(o, "printable", json_boolean(r->printable));
+	json_object_set_new(o, "reasons", reasons_json(r, 0, MESH_REASON_FIRST_WARNING));
+	json_object_set_new(o, "warnings",
+			    reasons_json(r, MESH_REASON_FIRST_WARNING, MESH_REASON_COUNT));
+	rc = json_dumpf(o, stdout, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(10));
+	json_decref(o);
+	if (rc || putchar('\n') == EOF)
+		return -1;
+	return 0;
+}
+
+static const char *yes_no(bool b)
+{
+	return b ? "yes" : "no";
+}
+
+static void print_text(const char *path, enum meshio_format fmt, const struct mesh_report *r)
+{
+	char text[200];
+
+	printf("%s: %s, %zu triangles\n", path, meshio_format_name(fmt), r->input_triangles);
+	printf("  vertices %zu, edges %zu, triangles %zu (after removing %zu irregular, "
+	       "%zu degenerate, %zu duplicate)\n",
+	       r->vertices, r->edges, r->triangles, r->irregular, r->degenerate, r->duplicates);
+	printf("  boundary edges %zu in %zu loops, singular edges %zu, non-manifold vertices %zu\n",
+	       r->boundary_edges, r->boundary_loops, r->singular_edges, r->nonmanifold_vertices);
+	printf("  components %zu (%zu manifold-connected), Euler characteristic %lld, genus ",
+	       r->components, r->manifold_components, r->euler);
+	if (r->genus_defined)
+		printf("%lld\n", r->genus);
+	else
+		printf("undefined (not closed, manifold and orientable)\n");
+	printf("  self-intersecting triangle pairs %llu\n",
+	       (unsigned long long)r->self_intersections);
+	printf("  orientable %s, consistently oriented %s", yes_no(r->orientable),
+	       yes_no(r->consistently_oriented));
+	if (r->flipped_edges)
+		printf(" (%zu flipped edges)", r->flipped_edges);
+	printf("\n  volume %.6g mm^3, size %.6g x %.6g x %.6g mm, from (%.6g, %.6g, %.6g)\n",
+	       r->volume, r->bbox_max[0] - r->bbox_min[0], r->bbox_max[1] - r->bbox_min[1],
+	       r->bbox_max[2] - r->bbox_min[2], r->bbox_min[0], r->bbox_min[1], r->bbox_min[2]);
+	printf("printable: %s\n", yes_no(r->printable));
+	for (int i = 0; i < MESH_REASON_COUNT; i++) {
+		if (!r->reasons[i])
+			continue;
+		reason_detail(r, (enum mesh_reason)i, text, sizeof(text));
+		printf("  %s %s: %s\n", i < MESH_REASON_FIRST_WARNING ? "reason " : "warning",
+		       mesh_reason_code((enum mesh_reason)i), text);
+	}
+	if (!r->printable)
+		printf("'stratum repair %s' makes it printable.\n", path);
+}
+
+/* Parse a positive thread count; -1 when not a whole number in 1..256. */
+static int parse_threads(const char *s)
+{
+	char *end;
+	long n;
+
+	errno = 0;
+	n = strtol(s, &end, 10);
+	if (errno || end == s || *end || n < 1 || n > 256)
+		return -1;
+	return (int)n;
+}
+
+int cmd_check(int argc, char **argv)
+{
+	const char *path = NULL;
+	bool json = false;
+	int threads = 0;
+	struct st_error err = {0};
+	struct mesh_report rep;
+	struct mesh *m = NULL;
+	enum meshio_format fmt;
+	int rc;
+
+	for (int i = 1; i < argc; i++) {
+		if (!strcmp(argv[i], "--json")) {
+			json = true;
+		} else if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
+			threads = parse_threads(argv[++i]);
+			if (threads < 0) {
+				fprintf(stderr, "stratum check: --threads wants a number from 1 to 256, "
+						"not '%s'\n", argv[i]);
+				return ST_EXIT_USAGE;
+			}
+		} else if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+			check_usage(stdout);
+			return ST_EXIT_OK;
+		} else if (argv[i][0] == '-' && argv[i][1]) {
+			fprintf(stderr, "stratum check: unknown option '%s'\n", argv[i]);
+			check_usage(stderr);
+			return ST_EXIT_USAGE;
+		} else if (!path) {
+			path = argv[i];
+		} else {
+			fprintf(stderr, "stratum check: one file at a time ('%s' and '%s')\n", path,
+				argv[i]);
+			return ST_EXIT_USAGE;
+		}
+	}
+	if (!path) {
+		check_usage(stderr);
+		return ST_EXIT_USAGE;
+	}
+
+	rc = meshio_read(path, MESHIO_AUTO, &m, &fmt, &err);
+	if (rc) {
+		fprintf(stderr, "stratum check: %s\n", err.msg);
+		return rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
+	}
+	rc = mesh_analyze(m, threads, &rep, &err);
+	mesh_free(m);
+	if (rc) {
+		fprintf(stderr, "stratum check: %s: %s\n", path, err.msg);
+		return ST_EXIT_SOFTWARE;
+	}
+	if (json) {
+		if (print_json(path, fmt, &rep)) {
+			fprintf(stderr, "stratum check: cannot write the JSON report\n");
+			return ST_EXIT_SOFTWARE;
+		}
+	} else {
+		print_text(path, fmt, &rep);
+	}
+	if (fflush(stdout) == EOF) {
+		fprintf(stderr, "stratum check: cannot write the report: %s\n", strerror(errno));
+		return ST_EXIT_SOFTWARE;
+	}
+	return rep.printable ? ST_EXIT_OK : ST_EXIT_FAILURE;
+}

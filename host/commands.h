@@ -1,0 +1,12 @@
+/*
+ * commands.h - one function per `stratum` subcommand, each in its own
+ * host/cmd_<name>.c.  argv[0] is the subcommand name; the return value is the
+ * process exit status (st_error.h enum st_exit).  Only host/ prints.
+ */
+#ifndef STRATUM_HOST_COMMANDS_H
+#define STRATUM_HOST_COMMANDS_H
+
+int cmd_check(int argc, char **argv);	 /* host/cmd_check.c */
+int cmd_printers(int argc, char **argv); /* host/cmd_printers.c */
+
+#endif

@@ -1,0 +1,51 @@
+/*
+ * main.c - the `stratum` command line: dispatch to one subcommand.
+ */
+#include <stdio.h>
+#include <string.h>
+
+#include "commands.h"
+#include "st_error.h"
+
+#define STRATUM_VERSION "0.1.0"
+
+struct command {
+	const char *name;
+	int (*run)(int argc, char **argv);
+	const char *summary;
+};
+
+static const struct command commands[] = {
+	{"check", cmd_check, "report a mesh's topology and whether it is printable"},
+	/*PRINTERS*/ /* {"printers", cmd_printers, "list the printer profiles"}, */
+};
+
+static void usage(FILE *out)
+{
+	fprintf(out, "usage: stratum <command> [options]\n\ncommands:\n");
+	for (size_t i = 0; i < sizeof(commands) / sizeof(commands[0]); i++)
+		fprintf(out, "  %-10s %s\n", commands[i].name, commands[i].summary);
+	fprintf(out, "\n'stratum <command> --help' describes a command's options.\n");
+}
+
+int main(int argc, char **argv)
+{
+	if (argc < 2) {
+		usage(stderr);
+		return ST_EXIT_USAGE;
+	}
+	if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {
+		usage(stdout);
+		return ST_EXIT_OK;
+	}
+	if (!strcmp(argv[1], "--version")) {
+		printf("stratum %s\n", STRATUM_VERSION);
+		return ST_EXIT_OK;
+	}
+	for (size_t i = 0; i < sizeof(commands) / sizeof(commands[0]); i++)
+		if (!strcmp(argv[1], commands[i].name))
+			return commands[i].run(argc - 1, argv + 1);
+	fprintf(stderr, "stratum: unknown command '%s'\n", argv[1]);
+	usage(stderr);
+	return ST_EXIT_USAGE;
+}

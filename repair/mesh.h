@@ -1,0 +1,138 @@
+/*
+ * mesh.h - the indexed triangle mesh and its topology report.
+ *
+ * A mesh keeps every input triangle, in input order, as three indices into a
+ * table of exactly welded vertices: two corners share an index only when
+ * their coordinates are bit-identical (+0.0 and -0.0 count as equal).  Seed
+ * 000 §3: vertex positions are the only reliable information in an STL, so
+ * nothing here snaps "nearby" vertices and normals are ignored.
+ *
+ * Nothing is dropped on input: irregular triangles (a repeated vertex),
+ * degenerate ones and duplicates stay in the triangle list so the report can
+ * count them and the repair can set them aside.
+ */
+#ifndef STRATUM_REPAIR_MESH_H
+#define STRATUM_REPAIR_MESH_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "st_error.h"
+
+/* Largest vertex or triangle count we index with uint32_t. */
+#define MESH_MAX_ELEMENTS 0xfffffff0u
+
+struct mesh {
+	double (*verts)[3];   /* welded positions, mm */
+	uint32_t (*tris)[3];  /* corner indices into verts, input order */
+	size_t nverts;
+	size_t ntris;
+	size_t cap_verts;     /* allocated slots (internal) */
+	size_t cap_tris;
+};
+
+/* Opaque: welds vertices while a reader adds triangles. */
+struct mesh_builder;
+
+/*
+ * mesh_builder_new - start a mesh.  tri_hint is the expected triangle count
+ * (0 if unknown) so the tables can be sized once.  Returns NULL on OOM.
+ */
+struct mesh_builder *mesh_builder_new(size_t tri_hint);
+
+/*
+ * mesh_builder_vertex - weld position p (finite, checked by the caller) and
+ * store its index in *index.  Returns 0, or ST_ERR_NOMEM / ST_ERR_RANGE
+ * (more than MESH_MAX_ELEMENTS vertices) with err filled.
+ */
+int mesh_builder_vertex(struct mesh_builder *b, const double p[3], uint32_t *index,
+			struct st_error *err);
+
+/* mesh_builder_triangle - append a triangle by welded indices. 0 or <0. */
+int mesh_builder_triangle(struct mesh_builder *b, uint32_t a, uint32_t c1, uint32_t c2,
+			  struct st_error *err);
+
+/*
+ * mesh_builder_finish - hand over the finished mesh (caller frees it with
+ * mesh_free) and free the builder.  Returns NULL only on OOM.
+ */
+struct mesh *mesh_builder_finish(struct mesh_builder *b);
+
+/* mesh_builder_free - abandon a mesh under construction; NULL is safe. */
+void mesh_builder_free(struct mesh_builder *b);
+
+/* mesh_free - free a mesh; NULL is safe. */
+void mesh_free(struct mesh *m);
+
+/* Axis-aligned bounding box of the vertices; all zero for an empty mesh. */
+void mesh_bbox(const struct mesh *m, double min[3], double max[3]);
+
+/*
+ * The topology report behind `stratum check` (seed 001 §3, seed 000 §3-4).
+ * Edge, component and Euler figures are over the "layer" of the input (seed
+ * 000 Def. 3.1): irregular and degenerate triangles and all but one of each
+ * set of equivalent triangles are left out there and counted on their own.
+ */
+enum mesh_reason {
+	/* Each of these makes the mesh not printable (Definition 3.11). */
+	MESH_REASON_EMPTY,		/* no usable triangles */
+	MESH_REASON_IRREGULAR,		/* a triangle repeats a vertex */
+	MESH_REASON_DEGENERATE,		/* collinear corners (exact test) */
+	MESH_REASON_OPEN,		/* edges with an odd number of triangles */
+	MESH_REASON_SELF_INTERSECTION,	/* triangles cross or overlap */
+	MESH_REASON_SEVERAL_PARTS,	/* more than one edge-connected component */
+	MESH_REASON_NOT_MANIFOLD_CONNECTED, /* singularities split it into parts */
+	/* Warnings: worth fixing, but Definition 3.11 holds without them. */
+	MESH_REASON_DUPLICATE,		/* equivalent triangles (a layer drops them) */
+	MESH_REASON_INCONSISTENT_ORIENTATION,
+	MESH_REASON_INSIDE_OUT,		/* closed but negative volume */
+	MESH_REASON_COUNT
+};
+
+/* Reasons below this value block printing; the rest are warnings. */
+#define MESH_REASON_FIRST_WARNING MESH_REASON_DUPLICATE
+
+struct mesh_report {
+	size_t input_triangles;		/* as read, nothing removed */
+	size_t vertices;		/* welded vertices used by the layer */
+	size_t edges;
+	size_t triangles;		/* the layer: regular, non-degenerate, unique */
+	size_t irregular;		/* triangles with a repeated vertex index */
+	size_t degenerate;		/* regular but collinear corners */
+	size_t duplicates;		/* extra copies of equivalent triangles */
+	size_t boundary_edges;		/* one incident triangle */
+	size_t singular_edges;		/* more than two incident triangles */
+	size_t odd_edges;		/* odd count: boundary or e.g. three triangles */
+	size_t nonmanifold_vertices;	/* star is not one disk or half-disk */
+	size_t components;		/* edge-connected components (Def. 4.3) */
+	size_t manifold_components;	/* joined across 2-connected edges only */
+	size_t boundary_loops;
+	size_t flipped_edges;		/* 2-connected edges walked the same way twice */
+	uint64_t self_intersections;	/* intersecting triangle pairs, exact */
+	long long euler;		/* V - E + F */
+	bool genus_defined;		/* closed, manifold, orientable everywhere */
+	long long genus;		/* sum over components of (2 - chi_c) / 2 */
+	bool orientable;
+	bool consistently_oriented;
+	double volume;			/* signed, mm^3, by the divergence theorem */
+	double bbox_min[3];		/* of the vertices the layer uses, mm */
+	double bbox_max[3];
+	bool printable;			/* seed 000 Definition 3.11 */
+	bool reasons[MESH_REASON_COUNT];
+};
+
+/* Short stable code ("boundary_edges") and one-line text for a reason. */
+const char *mesh_reason_code(enum mesh_reason r);
+const char *mesh_reason_text(enum mesh_reason r);
+
+/*
+ * mesh_analyze - fill *rep for m.  threads is how many cores the exact
+ * self-intersection pass may use (0 = all available).  Returns 0, or a
+ * negative class with err filled (ST_ERR_NOMEM, ST_ERR_INTERNAL).  The mesh is
+ * not modified.  Peak extra memory is about 100 bytes per triangle.
+ */
+int mesh_analyze(const struct mesh *m, int threads, struct mesh_report *rep,
+		 struct st_error *err);
+
+#endif /* STRATUM_REPAIR_MESH_H */

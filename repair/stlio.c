@@ -1,0 +1,636 @@
+/*
+ * stlio.c - binary and ASCII STL: the two readers (called by meshio.c after
+ * detection) and the atomic writer behind meshio_write_stl.
+ *
+ * Binary STL: an 80-byte header, a uint32 little-endian facet count, then 50
+ * bytes per facet (normal, three vertices as float32 LE, a uint16 attribute).
+ * A file is binary only if its size is exactly 84 + 50 * count, which both
+ * detects the format and bounds the count before anything is allocated.
+ * Every float is decoded byte by byte; nothing is fread into a struct.
+ */
+#include "meshio_impl.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#define STL_HEADER 80
+#define STL_PREFIX 84 /* header + count */
+#define STL_FACET 50
+
+_Static_assert(sizeof(float) == 4 && sizeof(uint32_t) == 4, "float must be IEEE binary32");
+
+/* Little-endian uint32 from 4 bytes, whatever the host order. */
+static uint32_t get_le32(const unsigned char *b)
+{
+	return (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
+}
+
+/* Store u as 4 little-endian bytes. */
+static void put_le32(unsigned char *b, uint32_t u)
+{
+	for (int i = 0; i < 4; i++)
+		b[i] = (unsigned char)(u >> (8 * i));
+}
+
+/* A little-endian IEEE binary32 as a double (exact). */
+static double get_le_float(const unsigned char *b)
+{
+	uint32_t u = get_le32(b);
+	float f;
+
+	memcpy(&f, &u, sizeof(f));
+	return f;
+}
+
+/* Store f as little-endian IEEE binary32. */
+static void put_le_float(unsigned char *b, float f)
+{
+	uint32_t u;
+
+	memcpy(&u, &f, sizeof(u));
+	put_le32(b, u);
+}
+
+/* Bytes a binary STL with count facets must have. */
+static uint64_t binary_size(uint32_t count)
+{
+	return STL_PREFIX + (uint64_t)STL_FACET * count;
+}
+
+bool stlio_binary_size_matches(const struct mio_src *s)
+{
+	return s->off == 0 && s->end - s->p >= STL_PREFIX &&
+	       s->size == binary_size(get_le32(s->p + STL_HEADER));
+}
+
+int stlio_binary_size_error(struct mio_src *s)
+{
+	uint32_t count;
+
+	if (s->size < STL_PREFIX || s->off != 0 || s->end - s->p < STL_PREFIX)
+		return mio_err(s, ST_ERR_PARSE,
+			       "byte %llu: the file ends inside the 84-byte binary STL header",
+			       (unsigned long long)s->size);
+	count = get_le32(s->p + STL_HEADER);
+	return mio_err(
+	    s, ST_ERR_PARSE,
+	    "byte 80: binary STL header says %lu triangles (needs %llu bytes) but the file has %llu bytes; it is truncated or not an STL file",
+	    (unsigned long)count, (unsigned long long)binary_size(count),
+	    (unsigned long long)s->size);
+}
+
+int stlio_read_binary(struct mio_src *s, struct mesh **out)
+{
+	unsigned char head[STL_PREFIX], fac[STL_FACET];
+	struct mesh_builder *b;
+	struct st_error berr;
+	uint32_t count, idx[3];
+	int rc;
+
+	*out = NULL;
+	if (!stlio_binary_size_matches(s))
+		return stlio_binary_size_error(s);
+	if (mio_read(s, head, sizeof(head)) != sizeof(head))
+		return s->read_errno ? mio_read_error(s, s->off) : stlio_binary_size_error(s);
+	count = get_le32(head + STL_HEADER);
+	if (count == 0)
+		return mio_err(
+		    s, ST_ERR_PARSE,
+		    "byte 80: binary STL header says 0 triangles; the file contains no triangles");
+	/* count is now bounded by the file size, so it may size the tables. */
+	b = mesh_builder_new(count);
+	if (!b)
+		return mio_err(s, ST_ERR_NOMEM, "out of memory for %lu triangles",
+			       (unsigned long)count);
+	for (uint32_t i = 0; i < count; i++) {
+		uint64_t at = s->off;
+
+		if (mio_read(s, fac, sizeof(fac)) != sizeof(fac)) {
+			rc =
+			    s->read_errno
+				? mio_read_error(s, s->off)
+				: mio_err(
+				      s, ST_ERR_PARSE,
+				      "byte %llu: the file ends inside facet %lu (did it change while being read?)",
+				      (unsigned long long)s->off, (unsigned long)i);
+			goto out_free_builder;
+		}
+		/* Bytes 0-11 are the normal, ignored; 12-47 the corners. */
+		for (int k = 0; k < 3; k++) {
+			double p[3];
+
+			for (int c = 0; c < 3; c++) {
+				size_t o = 12 + 12 * (size_t)k + 4 * (size_t)c;
+				p[c] = get_le_float(fac + o);
+				if (!isfinite(p[c])) {
+					rc = mio_err(
+					    s, ST_ERR_PARSE,
+					    "byte %llu: facet %lu has a non-finite coordinate (NaN or infinity)",
+					    (unsigned long long)(at + o), (unsigned long)i);
+					goto out_free_builder;
+				}
+			}
+			rc = mesh_builder_vertex(b, p, &idx[k], &berr);
+			if (rc) {
+				rc = mio_builder_error(s, "byte", at, &berr);
+				goto out_free_builder;
+			}
+		}
+		rc = mesh_builder_triangle(b, idx[0], idx[1], idx[2], &berr);
+		if (rc) {
+			rc = mio_builder_error(s, "byte", at, &berr);
+			goto out_free_builder;
+		}
+	}
+	*out = mesh_builder_finish(b);
+	if (!*out)
+		return mio_err(s, ST_ERR_NOMEM, "out of memory finishing the mesh");
+	return 0;
+
+out_free_builder:
+	mesh_builder_free(b);
+	return rc;
+}
+
+/* ---- ASCII STL ---------------------------------------------------------- */
+
+/* Parsing state of one ASCII STL: the reader, the builder, the facet index. */
+struct ascii_stl {
+	struct mio_text t;
+	struct mesh_builder *b;
+	size_t facet; /* index of the facet being read, from 0 */
+};
+
+/* The current line number, for messages. */
+static unsigned long long line_of(const struct ascii_stl *a)
+{
+	return (unsigned long long)a->t.lineno;
+}
+
+/* Next keyword token (may be on a later line); fails at end of input. */
+static int expect(struct ascii_stl *a, const char *kw)
+{
+	char shown[40];
+	size_t len;
+	int rc;
+	char *tok = mio_next_token(&a->t, &len, &rc);
+
+	if (!tok)
+		return rc ? rc
+			  : mio_err(
+				a->t.s, ST_ERR_PARSE,
+				"line %llu: unexpected end of file, expected '%s' (the file may be truncated)",
+				line_of(a), kw);
+	if (!mio_keyword(tok, kw))
+		return mio_err(a->t.s, ST_ERR_PARSE, "line %llu: expected '%s', found %s",
+			       line_of(a), kw, mio_tokstr(tok, shown, sizeof(shown)));
+	return 0;
+}
+
+/* Three numbers on the current line after "vertex" or "facet normal". */
+static int read_triple(struct ascii_stl *a, const char *what, bool finite, double v[3])
+{
+	char shown[40];
+
+	for (int c = 0; c < 3; c++) {
+		size_t len;
+		char *tok = mio_token(&a->t, &len);
+
+		if (!tok)
+			return mio_err(a->t.s, ST_ERR_PARSE,
+				       "line %llu: '%s' needs 3 numbers, found %d", line_of(a),
+				       what, c);
+		switch (mio_parse_double(tok, len, &v[c])) {
+		case MIO_NUM_OK:
+			break;
+		case MIO_NUM_NONFINITE:
+			if (!finite) {
+				v[c] = 0.0;
+				break;
+			}
+			return mio_err(
+			    a->t.s, ST_ERR_PARSE,
+			    "line %llu: facet %zu has a non-finite coordinate (NaN or infinity)",
+			    line_of(a), a->facet);
+		default:
+			return mio_err(a->t.s, ST_ERR_PARSE,
+				       "line %llu: facet %zu: %s is not a number", line_of(a),
+				       a->facet, mio_tokstr(tok, shown, sizeof(shown)));
+		}
+	}
+	return 0;
+}
+
+/* One facet after its "facet" keyword, through "endfacet". */
+static int read_facet(struct ascii_stl *a)
+{
+	char shown[40];
+	struct st_error berr;
+	uint32_t idx[3];
+	double v[3];
+	int n = 0, rc;
+
+	if ((rc = expect(a, "normal")) || (rc = read_triple(a, "normal", false, v)) ||
+	    (rc = expect(a, "outer")) || (rc = expect(a, "loop")))
+		return rc;
+	for (;;) {
+		size_t len;
+		char *tok = mio_next_token(&a->t, &len, &rc);
+
+		if (!tok)
+			return rc ? rc
+				  : mio_err(
+					a->t.s, ST_ERR_PARSE,
+					"line %llu: unexpected end of file inside facet %zu (the file may be truncated)",
+					line_of(a), a->facet);
+		if (mio_keyword(tok, "endloop"))
+			break;
+		if (!mio_keyword(tok, "vertex"))
+			return mio_err(a->t.s, ST_ERR_PARSE,
+				       "line %llu: expected 'vertex' or 'endloop', found %s",
+				       line_of(a), mio_tokstr(tok, shown, sizeof(shown)));
+		if (n == 3)
+			return mio_err(
+			    a->t.s, ST_ERR_PARSE,
+			    "line %llu: facet %zu has more than 3 vertices; STL facets must be triangles",
+			    line_of(a), a->facet);
+		if ((rc = read_triple(a, "vertex", true, v)))
+			return rc;
+		if (mesh_builder_vertex(a->b, v, &idx[n], &berr))
+			return mio_builder_error(a->t.s, "line", a->t.lineno, &berr);
+		n++;
+	}
+	if (n != 3)
+		return mio_err(a->t.s, ST_ERR_PARSE,
+			       "line %llu: facet %zu has %d vertices; STL facets must be triangles",
+			       line_of(a), a->facet, n);
+	if ((rc = expect(a, "endfacet")))
+		return rc;
+	if (mesh_builder_triangle(a->b, idx[0], idx[1], idx[2], &berr))
+		return mio_builder_error(a->t.s, "line", a->t.lineno, &berr);
+	a->facet++;
+	return 0;
+}
+
+/* The solid's body after "solid name": facets up to and including "endsolid". */
+static int read_solid(struct ascii_stl *a)
+{
+	char shown[40];
+	int rc;
+
+	for (;;) {
+		size_t len;
+		char *tok = mio_next_token(&a->t, &len, &rc);
+
+		if (!tok)
+			return rc ? rc
+				  : mio_err(
+					a->t.s, ST_ERR_PARSE,
+					"line %llu: unexpected end of file, 'endsolid' is missing (the file may be truncated)",
+					line_of(a));
+		if (mio_keyword(tok, "endsolid")) {
+			a->t.pos = a->t.len; /* the name, if any */
+			return 0;
+		}
+		if (!mio_keyword(tok, "facet"))
+			return mio_err(a->t.s, ST_ERR_PARSE,
+				       "line %llu: expected 'facet' or 'endsolid', found %s",
+				       line_of(a), mio_tokstr(tok, shown, sizeof(shown)));
+		if ((rc = read_facet(a)))
+			return rc;
+	}
+}
+
+int stlio_read_ascii(struct mio_src *s, struct mesh **out)
+{
+	struct ascii_stl *a;
+	char shown[40];
+	int rc;
+
+	*out = NULL;
+	a = calloc(1, sizeof(*a));
+	if (!a)
+		return mio_err(s, ST_ERR_NOMEM, "out of memory for the line buffer");
+	mio_text_init(&a->t, s);
+	/* No count in an ASCII STL: let the tables grow. */
+	a->b = mesh_builder_new(0);
+	if (!a->b) {
+		rc = mio_err(s, ST_ERR_NOMEM, "out of memory for the mesh");
+		goto out_free_state;
+	}
+	for (bool first = true;; first = false) {
+		size_t len;
+		char *tok = mio_next_token(&a->t, &len, &rc);
+
+		if (!tok) {
+			if (rc)
+				goto out_free_builder;
+			if (!first)
+				break;
+			rc = mio_err(s, ST_ERR_PARSE, "line %llu: no 'solid' in an empty text file",
+				     line_of(a));
+			goto out_free_builder;
+		}
+		if (!mio_keyword(tok, "solid")) {
+			rc = mio_err(
+			    s, ST_ERR_PARSE,
+			    first
+				? "line %llu: expected 'solid' at the start of an ASCII STL, found %s"
+				: "line %llu: expected 'solid' or the end of the file after 'endsolid', found %s",
+			    line_of(a), mio_tokstr(tok, shown, sizeof(shown)));
+			goto out_free_builder;
+		}
+		a->t.pos = a->t.len; /* the solid's name, free text */
+		rc = read_solid(a);
+		if (rc)
+			goto out_free_builder;
+	}
+	if (a->facet == 0) {
+		rc = mio_err(s, ST_ERR_PARSE, "line %llu: the file contains no triangles",
+			     line_of(a));
+		goto out_free_builder;
+	}
+	*out = mesh_builder_finish(a->b);
+	free(a);
+	if (!*out)
+		return mio_err(s, ST_ERR_NOMEM, "out of memory finishing the mesh");
+	return 0;
+
+out_free_builder:
+	mesh_builder_free(a->b);
+out_free_state:
+	free(a);
+	return rc;
+}
+
+/* ---- writer ------------------------------------------------------------- */
+
+/* Unit normal of triangle abc by the right-hand rule; zero if degenerate. */
+static void facet_normal(const double a[3], const double b[3], const double c[3], double n[3])
+{
+	double u[3], v[3], len;
+
+	for (int k = 0; k < 3; k++) {
+		u[k] = b[k] - a[k];
+		v[k] = c[k] - a[k];
+	}
+	n[0] = u[1] * v[2] - u[2] * v[1];
+	n[1] = u[2] * v[0] - u[0] * v[2];
+	n[2] = u[0] * v[1] - u[1] * v[0];
+	len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+	for (int k = 0; k < 3; k++)
+		n[k] = len > 0.0 && isfinite(len) ? n[k] / len : 0.0;
+}
+
+/* Every index in range, every used coordinate finite (and float-sized). */
+static int check_mesh(const char *path, const struct mesh *m, bool binary, struct st_error *err)
+{
+	for (size_t i = 0; i < m->ntris; i++) {
+		for (int k = 0; k < 3; k++) {
+			uint32_t v = m->tris[i][k];
+
+			if (v >= m->nverts)
+				return st_error_set(
+				    err, ST_ERR_ARG,
+				    "%s: triangle %zu refers to vertex %lu but the mesh has %zu vertices",
+				    path, i, (unsigned long)v, m->nverts);
+			for (int c = 0; c < 3; c++) {
+				double x = m->verts[v][c];
+
+				if (!isfinite(x))
+					return st_error_set(
+					    err, ST_ERR_RANGE,
+					    "%s: vertex %lu has a non-finite coordinate; nothing written",
+					    path, (unsigned long)v);
+				if (binary && fabs(x) > FLT_MAX)
+					return st_error_set(
+					    err, ST_ERR_RANGE,
+					    "%s: vertex %lu has coordinate %g, beyond the float32 range of binary STL; write ASCII STL instead",
+					    path, (unsigned long)v, x);
+			}
+		}
+	}
+	return 0;
+}
+
+/* Header, count and facets (normal from the rounded corners); 0 or -1. */
+static int write_binary(FILE *f, const struct mesh *m)
+{
+	unsigned char head[STL_PREFIX], fac[STL_FACET];
+	static const char title[] = "stratum binary STL";
+
+	memset(head, ' ', STL_HEADER);
+	memcpy(head, title, sizeof(title) - 1);
+	put_le32(head + STL_HEADER, (uint32_t)m->ntris);
+	if (fwrite(head, 1, sizeof(head), f) != sizeof(head))
+		return -1;
+	memset(fac, 0, sizeof(fac)); /* attribute bytes stay 0 */
+	for (size_t i = 0; i < m->ntris; i++) {
+		double p[3][3], n[3];
+
+		/* The normal of the triangle as stored, i.e. after rounding. */
+		for (int k = 0; k < 3; k++)
+			for (int c = 0; c < 3; c++)
+				p[k][c] = (float)m->verts[m->tris[i][k]][c];
+		facet_normal(p[0], p[1], p[2], n);
+		for (int c = 0; c < 3; c++)
+			put_le_float(fac + 4 * c, (float)n[c]);
+		for (int k = 0; k < 3; k++)
+			for (int c = 0; c < 3; c++)
+				put_le_float(fac + 12 + 12 * k + 4 * c, (float)p[k][c]);
+		if (fwrite(fac, 1, sizeof(fac), f) != sizeof(fac))
+			return -1;
+	}
+	return 0;
+}
+
+/* %.17g: every double is written with enough digits to read back exactly. */
+static int write_ascii(FILE *f, const struct mesh *m)
+{
+	if (fputs("solid stratum\n", f) == EOF)
+		return -1;
+	for (size_t i = 0; i < m->ntris; i++) {
+		const double *p[3];
+		double n[3];
+
+		for (int k = 0; k < 3; k++)
+			p[k] = m->verts[m->tris[i][k]];
+		facet_normal(p[0], p[1], p[2], n);
+		if (fprintf(f, "  facet normal %.9g %.9g %.9g\n    outer loop\n", n[0], n[1],
+			    n[2]) < 0)
+			return -1;
+		for (int k = 0; k < 3; k++)
+			if (fprintf(f, "      vertex %.17g %.17g %.17g\n", p[k][0], p[k][1],
+				    p[k][2]) < 0)
+				return -1;
+		if (fputs("    endloop\n  endfacet\n", f) == EOF)
+			return -1;
+	}
+	return fputs("endsolid stratum\n", f) == EOF ? -1 : 0;
+}
+
+/*
+ * The process umask without changing it (umask() can only be read by
+ * setting it, which would race with other threads creating files): Linux
+ * reports it in /proc/self/status; elsewhere assume the usual 022.
+ */
+static mode_t current_umask(void)
+{
+	FILE *f = fopen("/proc/self/status", "r");
+	char line[256];
+	mode_t mask = 022;
+
+	if (!f)
+		return mask;
+	while (fgets(line, sizeof(line), f)) {
+		if (!strncmp(line, "Umask:", 6)) {
+			mask = (mode_t)(strtol(line + 6, NULL, 8) & 0777);
+			break;
+		}
+	}
+	fclose(f);
+	return mask;
+}
+
+/*
+ * Give the temporary file the mode the target will need: the old file's
+ * mode when replacing one, else 0666 less the umask (mkstemp made it 0600).
+ * A failure here only leaves the safe 0600, so it is not an error.
+ */
+static void set_mode(int fd, const char *path)
+{
+	struct stat st;
+	mode_t mode;
+
+	if (stat(path, &st) == 0 && S_ISREG(st.st_mode))
+		mode = st.st_mode & 07777;
+	else
+		mode = 0666 & ~current_umask();
+	if (fchmod(fd, mode) != 0) {
+		/* keep 0600 */
+	}
+}
+
+/* "dir/.name.XXXXXX" for mkstemp, in the target's own directory. */
+static char *temp_template(const char *path)
+{
+	const char *slash = strrchr(path, '/');
+	size_t dirlen = slash ? (size_t)(slash - path) + 1 : 0;
+	size_t len = strlen(path) + sizeof(".") + sizeof(".XXXXXX");
+	char *t = malloc(len);
+
+	if (!t)
+		return NULL;
+	snprintf(t, len, "%.*s.%s.XXXXXX", (int)dirlen, path, path + dirlen);
+	return t;
+}
+
+/* Make the rename durable: fsync the directory (best effort). */
+static void sync_dir(const char *path)
+{
+	const char *slash = strrchr(path, '/');
+	char *dir;
+	int fd;
+
+	if (!slash) {
+		dir = strdup(".");
+	} else {
+		size_t n = slash == path ? 1 : (size_t)(slash - path);
+		dir = strndup(path, n);
+	}
+	if (!dir)
+		return;
+	fd = open(dir, O_RDONLY | O_DIRECTORY);
+	free(dir);
+	if (fd < 0)
+		return;
+	if (fsync(fd) != 0) {
+		/* the data itself is already on disk */
+	}
+	close(fd);
+}
+
+int stlio_write(const char *path, const struct mesh *m, enum meshio_format fmt,
+		struct st_error *err)
+{
+	bool binary = fmt == MESHIO_STL_BINARY;
+	char *tmp;
+	FILE *f;
+	int fd, rc, saved = 0;
+
+	if (!path || !*path || !m)
+		return st_error_set(err, ST_ERR_ARG, "meshio_write_stl: no path or no mesh");
+	if (!binary && fmt != MESHIO_STL_ASCII)
+		return st_error_set(err, ST_ERR_ARG,
+				    "%s: can only write binary or ASCII STL, not %s", path,
+				    meshio_format_name(fmt));
+	if (binary && (uint64_t)m->ntris > UINT32_MAX)
+		return st_error_set(
+		    err, ST_ERR_RANGE,
+		    "%s: %zu triangles do not fit in a binary STL (at most 4294967295); write ASCII STL instead",
+		    path, m->ntris);
+	if (m->ntris == 0)
+		return st_error_set(err, ST_ERR_ARG,
+				    "%s: the mesh has no triangles; an empty STL is not written",
+				    path);
+	if (!m->tris || !m->verts)
+		return st_error_set(err, ST_ERR_ARG, "%s: the mesh has no tables", path);
+	rc = check_mesh(path, m, binary, err);
+	if (rc)
+		return rc;
+
+	tmp = temp_template(path);
+	if (!tmp)
+		return st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", path);
+	fd = mkstemp(tmp);
+	if (fd < 0) {
+		rc =
+		    st_error_set(err, ST_ERR_IO, "%s: cannot create a temporary file beside it: %s",
+				 path, strerror(errno));
+		goto out_free_tmp;
+	}
+	set_mode(fd, path);
+	f = fdopen(fd, "wb");
+	if (!f) {
+		saved = errno;
+		close(fd);
+		goto out_unlink;
+	}
+	setvbuf(f, NULL, _IOFBF, MIO_CHUNK);
+	rc = binary ? write_binary(f, m) : write_ascii(f, m);
+	if (rc == 0 && fflush(f) == EOF)
+		rc = -1;
+	if (rc == 0 && fsync(fileno(f)))
+		rc = -1;
+	if (rc)
+		saved = errno;
+	if (fclose(f) == EOF && !rc) {
+		rc = -1;
+		saved = errno;
+	}
+	if (rc)
+		goto out_unlink;
+	if (rename(tmp, path)) {
+		rc = st_error_set(err, ST_ERR_IO, "%s: cannot replace the file: %s", path,
+				  strerror(errno));
+		unlink(tmp);
+		goto out_free_tmp;
+	}
+	sync_dir(path);
+	free(tmp);
+	return 0;
+
+out_unlink:
+	unlink(tmp);
+	rc = st_error_set(err, ST_ERR_IO, "%s: cannot write: %s; the file was left unchanged", path,
+			  strerror(saved ? saved : EIO));
+out_free_tmp:
+	free(tmp);
+	return rc;
+}

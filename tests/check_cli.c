@@ -1,0 +1,242 @@
+/*
+ * check_cli.c - the built `stratum` binary end to end: exit statuses, the
+ * `check --json` report on generated files, and one clear message naming
+ * file and offset for every kind of bad input.
+ */
+#include <check.h>
+#include <jansson.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "fixtures.h"
+#include "meshio.h"
+#include "suites.h"
+#include "testutil.h"
+
+static char out[1 << 16];
+
+/* Write m to a scratch file as binary STL and return its path. */
+static const char *write_mesh(struct mesh *m, const char *name)
+{
+	const char *path = tu_path(name);
+	struct st_error err = {0};
+
+	ck_assert_msg(meshio_write_stl(path, m, MESHIO_STL_BINARY, &err) == 0, "%s", err.msg);
+	mesh_free(m);
+	return path;
+}
+
+/* Run `check --json` on path, expect the exit status, return the parsed report. */
+static json_t *check_json(const char *path, int want_status)
+{
+	json_error_t jerr;
+	json_t *o;
+	int status = tu_run(out, sizeof(out), "check --json '%s'", path);
+
+	ck_assert_msg(status == want_status, "exit %d, wanted %d: %s", status, want_status, out);
+	o = json_loads(out, 0, &jerr);
+	ck_assert_msg(o != NULL, "not JSON (%s): %s", jerr.text, out);
+	return o;
+}
+
+static json_int_t field(json_t *o, const char *key)
+{
+	json_t *v = json_object_get(o, key);
+
+	ck_assert_msg(json_is_integer(v), "field %s missing or not an integer", key);
+	return json_integer_value(v);
+}
+
+static int has_reason(json_t *o, const char *list, const char *code)
+{
+	json_t *arr = json_object_get(o, list), *item;
+	size_t i;
+
+	json_array_foreach(arr, i, item)
+		if (!strcmp(json_string_value(json_object_get(item, "code")), code))
+			return 1;
+	return 0;
+}
+
+START_TEST(json_cube)
+{
+	json_t *o = check_json(write_mesh(fx_box(0, 0, 0, 20, 10, 5), "cube.stl"), 0);
+	static const char *const keys[] = {
+		"vertices", "edges", "triangles", "boundary_edges", "singular_edges",
+		"nonmanifold_vertices", "components", "boundary_loops", "euler", "genus",
+		"degenerate", "duplicates", "self_intersections", "orientable",
+		"consistently_oriented", "volume", "bbox", "printable", "reasons"};
+
+	for (size_t i = 0; i < sizeof(keys) / sizeof(keys[0]); i++)
+		ck_assert_msg(json_object_get(o, keys[i]) != NULL, "missing %s", keys[i]);
+	ck_assert_int_eq(field(o, "vertices"), 8);
+	ck_assert_int_eq(field(o, "edges"), 18);
+	ck_assert_int_eq(field(o, "triangles"), 12);
+	ck_assert_int_eq(field(o, "euler"), 2);
+	ck_assert_int_eq(field(o, "genus"), 0);
+	ck_assert_int_eq(field(o, "self_intersections"), 0);
+	ck_assert(json_is_true(json_object_get(o, "printable")));
+	ck_assert(json_is_true(json_object_get(o, "orientable")));
+	ck_assert_double_eq_tol(json_real_value(json_object_get(o, "volume")), 1000.0, 1e-6);
+	ck_assert_double_eq(json_number_value(json_array_get(
+				    json_object_get(json_object_get(o, "bbox"), "max"), 0)),
+			    20.0);
+	ck_assert_uint_eq(json_array_size(json_object_get(o, "reasons")), 0);
+	json_decref(o);
+}
+END_TEST
+
+START_TEST(json_torus_genus)
+{
+	json_t *o = check_json(write_mesh(fx_torus(20, 5, 40, 16), "torus.stl"), 0);
+
+	ck_assert_int_eq(field(o, "euler"), 0);
+	ck_assert_int_eq(field(o, "genus"), 1);
+	json_decref(o);
+}
+END_TEST
+
+START_TEST(json_open_cube_exit_1)
+{
+	struct mesh *m = fx_box(0, 0, 0, 10, 10, 10);
+	json_t *o;
+
+	fx_drop(m, 0);
+	o = check_json(write_mesh(m, "open.stl"), 1);
+	ck_assert_int_eq(field(o, "boundary_edges"), 3);
+	ck_assert_int_eq(field(o, "boundary_loops"), 1);
+	ck_assert(json_is_null(json_object_get(o, "genus")));
+	ck_assert(json_is_false(json_object_get(o, "printable")));
+	ck_assert(has_reason(o, "reasons", "open"));
+	json_decref(o);
+}
+END_TEST
+
+START_TEST(json_edge_sharing_cubes)
+{
+	struct mesh *a = fx_box(0, 0, 0, 1, 1, 1), *b = fx_box(1, 1, 0, 2, 2, 1);
+	json_t *o = check_json(write_mesh(fx_concat(a, b), "edge.stl"), 1);
+
+	ck_assert_int_eq(field(o, "singular_edges"), 1);
+	ck_assert(has_reason(o, "reasons", "not_manifold_connected"));
+	json_decref(o);
+	mesh_free(a);
+	mesh_free(b);
+}
+END_TEST
+
+START_TEST(json_overlapping_cubes)
+{
+	struct mesh *a = fx_box(0, 0, 0, 10, 10, 10), *b = fx_box(5, 5, 5, 15, 15, 15);
+	json_t *o = check_json(write_mesh(fx_concat(a, b), "overlap.stl"), 1);
+
+	ck_assert(field(o, "self_intersections") > 0);
+	ck_assert(has_reason(o, "reasons", "self_intersection"));
+	json_decref(o);
+	mesh_free(a);
+	mesh_free(b);
+}
+END_TEST
+
+START_TEST(text_report)
+{
+	const char *path = write_mesh(fx_box(0, 0, 0, 10, 10, 10), "text.stl");
+
+	ck_assert_int_eq(tu_run(out, sizeof(out), "check '%s'", path), 0);
+	ck_assert_ptr_nonnull(strstr(out, "printable: yes"));
+	ck_assert_ptr_nonnull(strstr(out, "Euler characteristic 2"));
+}
+END_TEST
+
+START_TEST(usage_errors_exit_2)
+{
+	ck_assert_int_eq(tu_run(out, sizeof(out), "check"), 2);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "check --bogus x.stl"), 2);
+	ck_assert_ptr_nonnull(strstr(out, "--bogus"));
+	ck_assert_int_eq(tu_run(out, sizeof(out), "check --threads zero x.stl"), 2);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "frobnicate"), 2);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "--help"), 0);
+}
+END_TEST
+
+/* Every malformed input: exit 65, one message naming the file and where. */
+static void expect_bad(const char *name, const void *data, size_t len, const char *where)
+{
+	const char *path = tu_path(name);
+
+	tu_write(path, data, len);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "check '%s'", path), 65);
+	ck_assert_msg(strstr(out, name) != NULL, "message does not name %s: %s", name, out);
+	if (where)
+		ck_assert_msg(strstr(out, where) != NULL, "message lacks '%s': %s", where, out);
+	ck_assert_msg(strchr(out, '\n') == out + strlen(out) - 1, "not one line: %s", out);
+}
+
+/* An 84-byte binary STL header announcing n facets. */
+static void binary_header(unsigned char *buf, uint32_t n)
+{
+	memset(buf, ' ', 80);
+	memcpy(buf, "generated", 9);
+	for (int i = 0; i < 4; i++)
+		buf[80 + i] = (unsigned char)(n >> (8 * i));
+}
+
+START_TEST(bad_inputs_exit_65)
+{
+	unsigned char bin[84 + 50 * 2];
+	const unsigned char png[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0, 13};
+	const float nan_bits = NAN;
+
+	expect_bad("empty.stl", "", 0, NULL);
+	/* Header says 1000 facets, file holds 2. */
+	memset(bin, 0, sizeof(bin));
+	binary_header(bin, 1000);
+	expect_bad("truncated.stl", bin, sizeof(bin), "byte");
+	/* Absurd count: about 4e9 facets in a small file. */
+	binary_header(bin, 0xfffffff0u);
+	expect_bad("absurd.stl", bin, sizeof(bin), "byte");
+	/* A NaN coordinate in the second facet's first vertex. */
+	binary_header(bin, 2);
+	memcpy(bin + 84 + 50 + 12, &nan_bits, 4);
+	expect_bad("nan.stl", bin, sizeof(bin), "byte");
+	expect_bad("ascii.stl",
+		   "solid x\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n"
+		   "   vertex 1 0 zero\n   vertex 0 1 0\n  endloop\n endfacet\nendsolid x\n",
+		   strlen("solid x\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n"
+			  "   vertex 1 0 zero\n   vertex 0 1 0\n  endloop\n endfacet\nendsolid x\n"),
+		   "line 5");
+	expect_bad("inf.stl",
+		   "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex inf 0 0\n"
+		   "vertex 0 1 0\nendloop\nendfacet\nendsolid x\n",
+		   strlen("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex inf 0 0\n"
+			  "vertex 0 1 0\nendloop\nendfacet\nendsolid x\n"),
+		   "line 5");
+	expect_bad("picture.stl", png, sizeof(png), NULL);
+	expect_bad("faces.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
+		   strlen("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"), "line 4");
+	expect_bad("counts.off", "OFF\n2000000000 1 0\n0 0 0\n",
+		   strlen("OFF\n2000000000 1 0\n0 0 0\n"), "line 2");
+	ck_assert_int_eq(tu_run(out, sizeof(out), "check '%s'", tu_path("does-not-exist.stl")),
+			 65);
+	ck_assert_ptr_nonnull(strstr(out, "does-not-exist.stl"));
+}
+END_TEST
+
+Suite *cli_suite(void)
+{
+	Suite *s = suite_create("cli");
+	TCase *tc = tcase_create("check");
+
+	tcase_set_timeout(tc, 60);
+	tcase_add_test(tc, json_cube);
+	tcase_add_test(tc, json_torus_genus);
+	tcase_add_test(tc, json_open_cube_exit_1);
+	tcase_add_test(tc, json_edge_sharing_cubes);
+	tcase_add_test(tc, json_overlapping_cubes);
+	tcase_add_test(tc, text_report);
+	tcase_add_test(tc, usage_errors_exit_2);
+	tcase_add_test(tc, bad_inputs_exit_65);
+	suite_add_tcase(s, tc);
+	return s;
+}

@@ -1,0 +1,507 @@
+/*
+ * check_exact.c - the CGAL bridge: exact predicates on inputs where plain
+ * double arithmetic decides wrongly, and the self-intersection count on
+ * generated meshes and hand-placed triangle pairs whose expected counts are
+ * derived in the comments (seed 000 Definition 3.6).
+ */
+#include <check.h>
+#include <float.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "exact.h"
+#include "fixtures.h"
+#include "mesh.h"
+#include "suites.h"
+
+/*
+ * ISO C before C23 does not convert double (*)[3] to const double (*)[3]
+ * implicitly, so callers with writable tables cast.
+ */
+#define CVERTS(v) ((const double(*)[3])(v))
+#define CTRIS(t) ((const uint32_t(*)[3])(t))
+
+/* Count over a whole mesh; the call must succeed. */
+static uint64_t count_mesh(const struct mesh *m, const uint8_t *skip, int threads)
+{
+	struct st_error err = {0};
+	uint64_t n = 12345;
+
+	ck_assert_msg(exact_count_self_intersections(CVERTS(m->verts), m->nverts, CTRIS(m->tris),
+						     m->ntris, skip, threads, &n, &err) == 0,
+		      "exact_count_self_intersections: %s", err.msg);
+	return n;
+}
+
+/* Count for two triangles (indices t into v), on one thread and on two. */
+static uint64_t count_two(double (*v)[3], size_t nv, const uint32_t (*t)[3])
+{
+	struct st_error err = {0};
+	uint64_t n1 = 12345, n2 = 12345;
+
+	ck_assert_int_eq(exact_count_self_intersections(CVERTS(v), nv, t, 2, NULL, 1, &n1, &err),
+			 0);
+	ck_assert_int_eq(exact_count_self_intersections(CVERTS(v), nv, t, 2, NULL, 2, &n2, &err),
+			 0);
+	ck_assert_uint_eq(n1, n2);
+	return n1;
+}
+
+/* ---- predicates ---- */
+
+START_TEST(collinear_exact)
+{
+	/*
+	 * p is 1/3 rounded down: 3p = 1 - 2^-54 exactly, which rounds to 1.0,
+	 * so the cross product of (1,3,0) and (p,1,0) evaluated in doubles is
+	 * 1*1 - fl(3p) = 0: naive arithmetic calls these collinear.  They are
+	 * not; the z component is exactly 2^-54.
+	 */
+	const double p = 0x1.5555555555555p-2;
+	const double o[3] = {0, 0, 0}, b[3] = {1, 3, 0}, c[3] = {p, 1, 0};
+	/* Points t*(1,1,1): exactly collinear although 0.1 + 0.2 != 0.3. */
+	const double d[3] = {0.1, 0.1, 0.1}, e[3] = {0.2, 0.2, 0.2}, f[3] = {0.3, 0.3, 0.3};
+	const double g[3] = {0.1 * 7, 0.1 * 7, 0.1 * 7};
+	/* One ulp off the line in one coordinate. */
+	const double h[3] = {0.3, 0.3, 0x1.3333333333334p-2};
+
+	ck_assert(!exact_collinear(o, b, c));
+	ck_assert(exact_collinear(d, e, f));
+	ck_assert(exact_collinear(d, f, g));
+	ck_assert(!exact_collinear(d, e, h));
+	ck_assert(exact_collinear(d, d, e)); /* coincident points */
+	ck_assert(exact_collinear(d, d, d));
+}
+END_TEST
+
+START_TEST(orient3d_exact)
+{
+	/*
+	 * Plane through the z axis and (1,3,0), i.e. y = 3x.  det[b-a, c-a,
+	 * d-a] for d = (p,1,0) expands to 1 - 3p = 2^-54 > 0 (naive: 0).
+	 */
+	const double p = 0x1.5555555555555p-2;
+	const double a[3] = {0, 0, 0}, b[3] = {0, 0, 1}, c[3] = {1, 3, 0};
+	const double d[3] = {p, 1, 0};
+	const double on[3] = {1, 3, 5}, off[3] = {1, 0x1.8000000000001p+1, 5};
+	/* 0.3 is not 3 * 0.1 in doubles: (0.1, 0.3) is just off y = 3x. */
+	const double near[3] = {0.1, 0.3, 7};
+	/* A plane far from the origin: z = 1e15 + x with unit steps. */
+	const double big_a[3] = {0, 0, 1e15}, big_b[3] = {1, 0, 1e15 + 1};
+	const double big_c[3] = {0, 1, 1e15}, big_on[3] = {3, 5, 1e15 + 3};
+	const double big_up[3] = {3, 5, 1e15 + 3.125};
+
+	ck_assert_int_eq(exact_orient3d(a, b, c, d), 1);
+	ck_assert_int_eq(exact_orient3d(a, c, b, d), -1);
+	ck_assert_int_eq(exact_orient3d(a, b, c, on), 0);
+	ck_assert_int_eq(exact_orient3d(a, b, c, off), 1); /* y - 3x = 1 ulp */
+	/* fl(0.1) * 3 = 0.3000000000000000166 > fl(0.3): below y = 3x, the
+	 * side opposite to (p,1,0). */
+	ck_assert_int_eq(exact_orient3d(a, b, c, near), -1);
+	ck_assert_int_eq(exact_orient3d(big_a, big_b, big_c, big_on), 0);
+	ck_assert_int_eq(exact_orient3d(big_a, big_b, big_c, big_up), 1);
+}
+END_TEST
+
+START_TEST(predicates_non_finite)
+{
+	const double a[3] = {0, 0, 0}, b[3] = {1, 0, 0}, c[3] = {0, 1, 0};
+	const double n[3] = {NAN, 0, 0}, i[3] = {0, INFINITY, 0};
+
+	/* The degenerate answer, never a crash. */
+	ck_assert(exact_collinear(a, b, n));
+	ck_assert(exact_collinear(i, b, c));
+	ck_assert_int_eq(exact_orient3d(a, b, c, n), 0);
+	ck_assert_int_eq(exact_orient3d(i, a, b, c), 0);
+}
+END_TEST
+
+/* ---- self-intersections of generated meshes ---- */
+
+START_TEST(closed_meshes_are_clean)
+{
+	struct mesh *box = fx_box(0, 0, 0, 10, 10, 10);
+	struct mesh *torus = fx_torus(10, 3, 60, 30);
+	struct mesh *sphere = fx_sphere(1, 2, 3, 5, 24, 48);
+
+	ck_assert_uint_eq(count_mesh(box, NULL, 1), 0);
+	ck_assert_uint_eq(count_mesh(torus, NULL, 1), 0);
+	ck_assert_uint_eq(count_mesh(torus, NULL, 2), 0);
+	ck_assert_uint_eq(count_mesh(sphere, NULL, 1), 0);
+	ck_assert_uint_eq(count_mesh(sphere, NULL, 0), 0);
+	mesh_free(box);
+	mesh_free(torus);
+	mesh_free(sphere);
+}
+END_TEST
+
+START_TEST(disjoint_cubes)
+{
+	struct mesh *a = fx_box(0, 0, 0, 1, 1, 1), *b = fx_box(3, 0, 0, 4, 1, 1);
+	struct mesh *m = fx_concat(a, b);
+
+	ck_assert_uint_eq(count_mesh(m, NULL, 1), 0);
+	mesh_free(a);
+	mesh_free(b);
+	mesh_free(m);
+}
+END_TEST
+
+/*
+ * A = [0,10]^3 and B = [5,15]^3.  Only A's three upper faces (x, y or z =
+ * 10) meet B's three lower faces (= 5), and only for different axes: six
+ * face pairs, each meeting in a segment of length 5 (e.g. x = 10, y = 5,
+ * z in [5,10]).  Every face of fx_box is split along the diagonal where its
+ * two free coordinates are equal, for both boxes, so any permutation of the
+ * axes maps the whole configuration onto itself and the six face pairs look
+ * alike.  Take A's x = 10 face against B's y = 5 face, on the line x = 10,
+ * y = 5: A's triangles cover z in [0,5] (z <= y) and [5,10] (z >= y); B's
+ * cover z in [5,10] (z <= x) and [10,15] (z >= x).  Meeting: [5,10]x[5,10]
+ * (a segment), [5,10]x[10,15] (the point z = 10), [0,5]x[5,10] (the point
+ * z = 5); [0,5]x[10,15] is empty.  3 pairs per face pair, 18 in all.
+ */
+START_TEST(overlapping_cubes)
+{
+	struct mesh *a = fx_box(0, 0, 0, 10, 10, 10), *b = fx_box(5, 5, 5, 15, 15, 15);
+	struct mesh *m = fx_concat(a, b);
+
+	ck_assert_uint_eq(m->ntris, 24);
+	ck_assert_uint_eq(count_mesh(m, NULL, 1), 18);
+	ck_assert_uint_eq(count_mesh(m, NULL, 2), 18);
+	mesh_free(a);
+	mesh_free(b);
+	mesh_free(m);
+}
+END_TEST
+
+/*
+ * Skip mask: fx_box emits the faces z0, z1, y0, y1, x0, x1 as triangle pairs
+ * 0-1 ... 10-11, and fx_concat keeps the order (A = 0..11, B = 12..23).
+ * Skipping A's x = 10 face (10, 11) removes its two face pairs with B's
+ * y = 5 and z = 5 faces, 6 pairs: 12 remain.  Skipping all of B leaves 0.
+ */
+START_TEST(skip_mask_honoured)
+{
+	struct mesh *a = fx_box(0, 0, 0, 10, 10, 10), *b = fx_box(5, 5, 5, 15, 15, 15);
+	struct mesh *m = fx_concat(a, b);
+	uint8_t skip[24] = {0};
+
+	skip[10] = skip[11] = 1;
+	ck_assert_uint_eq(count_mesh(m, skip, 1), 12);
+	ck_assert_uint_eq(count_mesh(m, skip, 2), 12);
+	for (int i = 0; i < 24; i++)
+		skip[i] = i >= 12;
+	ck_assert_uint_eq(count_mesh(m, skip, 1), 0);
+	mesh_free(a);
+	mesh_free(b);
+	mesh_free(m);
+}
+END_TEST
+
+/*
+ * Cubes welded along the edge x = y = 1.  The triangles on that edge share
+ * it (two coplanar pairs in x = 1 and y = 1 lie on opposite sides of it);
+ * the others touch B only at a shared corner.  Common faces only: 0.
+ */
+START_TEST(cubes_sharing_an_edge)
+{
+	struct mesh *a = fx_box(0, 0, 0, 1, 1, 1), *b = fx_box(1, 1, 0, 2, 2, 1);
+	struct mesh *m = fx_concat(a, b);
+
+	ck_assert_uint_eq(m->nverts, 14);
+	ck_assert_uint_eq(count_mesh(m, NULL, 1), 0);
+	mesh_free(a);
+	mesh_free(b);
+	mesh_free(m);
+}
+END_TEST
+
+/*
+ * A = [0,1]^3, B = [1,2] x [.25,.75]^2: B's x = 1 face lies inside A's, no
+ * vertex shared.  A's x = 1 triangles cover z <= y and z >= y; B's x = 1
+ * triangles z >= y and z <= y (same diagonal y = z): all 4 coplanar pairs
+ * meet.  Each of B's four side faces has one triangle holding its whole
+ * edge on x = 1 (it meets both A triangles: 4 x 2 = 8) and one touching
+ * x = 1 at a single corner: (1,.25,.25) lies on A's diagonal and touches
+ * both A triangles (y = .25 and z = .25 faces: 2 x 2), (1,.75,.25) and
+ * (1,.25,.75) only one each (2 x 1).  4 + 8 + 4 + 2 = 18.
+ */
+START_TEST(cubes_face_contact)
+{
+	struct mesh *a = fx_box(0, 0, 0, 1, 1, 1), *b = fx_box(1, 0.25, 0.25, 2, 0.75, 0.75);
+	struct mesh *m = fx_concat(a, b);
+
+	ck_assert_uint_eq(m->nverts, 16);
+	ck_assert_uint_eq(count_mesh(m, NULL, 1), 18);
+	ck_assert_uint_eq(count_mesh(m, NULL, 2), 18);
+	mesh_free(a);
+	mesh_free(b);
+	mesh_free(m);
+}
+END_TEST
+
+START_TEST(duplicates_not_counted)
+{
+	struct mesh *m = fx_box(0, 0, 0, 1, 1, 1);
+
+	fx_duplicate(m, 0, 0);
+	fx_duplicate(m, 5, 1);
+	/* Each copy shares all three vertices with its original; with its
+	 * neighbours it shares what the original shares. */
+	ck_assert_uint_eq(count_mesh(m, NULL, 1), 0);
+	mesh_free(m);
+}
+END_TEST
+
+START_TEST(threads_agree)
+{
+	struct mesh *a = fx_sphere(0, 0, 0, 1, 64, 128);
+	struct mesh *b = fx_sphere(0.3, 0.2, 0.1, 1, 64, 128);
+	struct mesh *m = fx_concat(a, b);
+	uint64_t n1 = count_mesh(m, NULL, 1);
+
+	/* 32k triangles: enough for the parallel path to split the work. */
+	ck_assert_uint_gt(n1, 100);
+	ck_assert_uint_eq(count_mesh(m, NULL, 2), n1);
+	ck_assert_uint_eq(count_mesh(m, NULL, 0), n1);
+	ck_assert_uint_eq(count_mesh(m, NULL, 64), n1);
+	mesh_free(a);
+	mesh_free(b);
+	mesh_free(m);
+}
+END_TEST
+
+/*
+ * Scaling by a power of two is exact, so no predicate changes: the count of
+ * two overlapping spheres must not change when they are moved beyond float
+ * range (the boxes are clamped there and still go through the tree).
+ */
+START_TEST(huge_coordinates)
+{
+	struct mesh *a = fx_sphere(0, 0, 0, 1, 16, 32);
+	struct mesh *b = fx_sphere(0.3, 0.2, 0.1, 1, 16, 32);
+	struct mesh *m = fx_concat(a, b);
+	uint64_t n = count_mesh(m, NULL, 1);
+
+	ck_assert_uint_gt(n, 10);
+	for (size_t i = 0; i < m->nverts; i++)
+		for (int k = 0; k < 3; k++)
+			m->verts[i][k] = ldexp(m->verts[i][k], 130);
+	ck_assert_uint_eq(count_mesh(m, NULL, 1), n);
+	mesh_free(a);
+	mesh_free(b);
+	mesh_free(m);
+}
+END_TEST
+
+/* ---- hand-placed pairs ---- */
+
+START_TEST(shared_edge_pairs)
+{
+	/* Edge (0,1) shared; corner 2 of the first, corner 3 of the second. */
+	double v[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.5, 0.5, 0}};
+	const uint32_t t[2][3] = {{0, 1, 2}, {1, 0, 3}};
+
+	/* Folded onto each other in z = 0. */
+	ck_assert_uint_eq(count_two(v, 4, t), 1);
+	/* Coplanar, opposite sides of the edge. */
+	v[3][1] = -1;
+	ck_assert_uint_eq(count_two(v, 4, t), 0);
+	/* Out of the plane. */
+	v[3][1] = 0.5;
+	v[3][2] = 1e-300;
+	ck_assert_uint_eq(count_two(v, 4, t), 0);
+	/* Same side, a sliver hugging the edge line. */
+	v[3][0] = 2;
+	v[3][1] = 1e-300;
+	v[3][2] = 0;
+	ck_assert_uint_eq(count_two(v, 4, t), 1);
+}
+END_TEST
+
+START_TEST(shared_vertex_pairs)
+{
+	/* Corner 0 shared: (v,a,b) = 0,1,2 and (v,c,d) = 0,3,4. */
+	double v[5][3] = {{0, 0, 0}, {2, 0, -1}, {2, 0, 1}, {2, -1, 0}, {2, 1, 0}};
+	const uint32_t t[2][3] = {{0, 1, 2}, {0, 3, 4}};
+
+	/* Planes y = 0 and z = 0 crossing along [0,2] on the x axis. */
+	ck_assert_uint_eq(count_two(v, 5, t), 1);
+	/* Second one above z = 0 except at v: touch at v only. */
+	v[3][2] = v[4][2] = 1;
+	v[1][2] = -1;
+	v[2][2] = -1e-300;
+	v[2][1] = 1;
+	ck_assert_uint_eq(count_two(v, 5, t), 0);
+}
+END_TEST
+
+START_TEST(shared_vertex_coplanar)
+{
+	/* Both in z = 0 with corner (0,0,0) shared. */
+	double v[5][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {0, -1, 0}};
+	const uint32_t t[2][3] = {{0, 1, 2}, {0, 3, 4}};
+
+	/* Opposite quadrants. */
+	ck_assert_uint_eq(count_two(v, 5, t), 0);
+	/* Edges along the same ray (second in the first's corner). */
+	v[3][0] = 2;
+	ck_assert_uint_eq(count_two(v, 5, t), 1);
+	/* Adjacent quadrants, touching along nothing but v... */
+	v[3][0] = -1;
+	v[4][0] = 0;
+	v[4][1] = 1;
+	v[2][0] = 1;
+	v[2][1] = 1;
+	ck_assert_uint_eq(count_two(v, 5, t), 0);
+	/* ...d just past the first's edge vb: a sliver of overlap... */
+	v[4][0] = 1;
+	v[4][1] = 1 - 0x1p-30;
+	ck_assert_uint_eq(count_two(v, 5, t), 1);
+	/* ...or just short of it: v only. */
+	v[4][1] = 1 + 0x1p-30;
+	ck_assert_uint_eq(count_two(v, 5, t), 0);
+}
+END_TEST
+
+START_TEST(shared_vertex_corner)
+{
+	/*
+	 * Second triangle (v,c,d) in z = 0; the first stands up from v with its
+	 * edge va lying in z = 0 and pointing into the second's corner.
+	 */
+	double v[5][3] = {{0, 0, 0}, {0.5, 0.5, 0}, {0, 0, 1}, {2, 0, 0}, {0, 2, 0}};
+	const uint32_t t[2][3] = {{0, 1, 2}, {0, 3, 4}};
+
+	ck_assert_uint_eq(count_two(v, 5, t), 1); /* a inside */
+	v[1][0] = v[1][1] = 3;
+	ck_assert_uint_eq(count_two(v, 5, t), 1); /* a beyond cd */
+	v[1][0] = 1;
+	v[1][1] = 0;
+	ck_assert_uint_eq(count_two(v, 5, t), 1); /* va along vc */
+	v[1][0] = -1;
+	v[1][1] = 1;
+	ck_assert_uint_eq(count_two(v, 5, t), 0); /* outside the corner */
+	v[1][0] = 1;
+	v[1][1] = -1e-300;
+	ck_assert_uint_eq(count_two(v, 5, t), 0); /* just outside */
+}
+END_TEST
+
+START_TEST(vertex_on_interior)
+{
+	/* No shared index; the second touches the first's inside with a corner. */
+	double v[6][3] = {{0, 0, 0.1},	   {2, 0, 0.1},	  {0, 2, 0.1},
+			  {0.5, 0.5, 0.1}, {0.5, 0.5, 1}, {1, 0.5, 1}};
+	const uint32_t t[2][3] = {{0, 1, 2}, {3, 4, 5}};
+
+	ck_assert_uint_eq(count_two(v, 6, t), 1);
+	/* One ulp above the plane: apart. */
+	v[3][2] = nextafter(0.1, 1);
+	ck_assert_uint_eq(count_two(v, 6, t), 0);
+	/* Beyond float range the boxes are clamped; the test stays exact. */
+	for (int i = 0; i < 3; i++)
+		v[i][2] = 1e39;
+	v[3][2] = 2e39;
+	v[4][2] = v[5][2] = 3e39;
+	ck_assert_uint_eq(count_two(v, 6, t), 0);
+	v[3][2] = 1e39;
+	ck_assert_uint_eq(count_two(v, 6, t), 1);
+	v[3][2] = nextafter(1e39, INFINITY);
+	ck_assert_uint_eq(count_two(v, 6, t), 0);
+}
+END_TEST
+
+START_TEST(degenerate_triangles_ignored)
+{
+	/* A flat (collinear) triangle through a good one, and an irregular
+	 * one: neither is looked at, and nothing aborts. */
+	double v[7][3] = {{0, 0, 0},	 {2, 0, 0},	{0, 2, 0}, {0.5, 0.5, -1},
+			  {0.5, 0.5, 0}, {0.5, 0.5, 1}, {1, 1, 1}};
+	const uint32_t t[3][3] = {{0, 1, 2}, {3, 4, 5}, {6, 6, 4}};
+	struct st_error err = {0};
+	uint64_t n = 1;
+
+	ck_assert_int_eq(exact_count_self_intersections(CVERTS(v), 7, t, 3, NULL, 1, &n, &err), 0);
+	ck_assert_uint_eq(n, 0);
+	ck_assert(exact_collinear(v[3], v[4], v[5]));
+}
+END_TEST
+
+/* ---- argument checks ---- */
+
+START_TEST(bad_arguments)
+{
+	double v[3][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+	uint32_t t[1][3] = {{0, 1, 3}};
+	struct st_error err = {0};
+	uint64_t n = 7;
+
+	ck_assert_int_eq(
+	    exact_count_self_intersections(CVERTS(v), 3, CTRIS(t), 1, NULL, 1, &n, &err),
+	    ST_ERR_ARG);
+	ck_assert_int_eq(err.code, ST_ERR_ARG);
+	ck_assert_uint_eq(n, 0);
+	ck_assert_ptr_nonnull(strstr(err.msg, "triangle 0"));
+	t[0][2] = 2;
+	ck_assert_int_eq(exact_count_self_intersections(NULL, 3, CTRIS(t), 1, NULL, 1, &n, &err),
+			 ST_ERR_ARG);
+	ck_assert_int_eq(exact_count_self_intersections(CVERTS(v), 3, NULL, 1, NULL, 1, &n, &err),
+			 ST_ERR_ARG);
+	ck_assert_int_eq(
+	    exact_count_self_intersections(CVERTS(v), 3, CTRIS(t), 1, NULL, 1, NULL, &err),
+	    ST_ERR_ARG);
+	ck_assert_int_eq(
+	    exact_count_self_intersections(CVERTS(v), 3, CTRIS(t), 1, NULL, -1, &n, &err),
+	    ST_ERR_ARG);
+	v[1][0] = NAN;
+	ck_assert_int_eq(
+	    exact_count_self_intersections(CVERTS(v), 3, CTRIS(t), 1, NULL, 1, &n, &err),
+	    ST_ERR_ARG);
+	/* A skipped triangle is not looked at, NaN or not. */
+	ck_assert_int_eq(exact_count_self_intersections(CVERTS(v), 3, CTRIS(t), 1,
+							(const uint8_t *)"\1", 1, &n, &err),
+			 0);
+	/* Nothing to count: fine with no arrays at all, and err untouched. */
+	err.code = 0;
+	n = 7;
+	ck_assert_int_eq(exact_count_self_intersections(NULL, 0, NULL, 0, NULL, 2, &n, NULL), 0);
+	ck_assert_uint_eq(n, 0);
+	ck_assert_int_eq(err.code, 0);
+}
+END_TEST
+
+Suite *exact_suite(void)
+{
+	Suite *s = suite_create("exact");
+	TCase *pred = tcase_create("predicates"), *mesh = tcase_create("meshes");
+	TCase *pairs = tcase_create("pairs"), *args = tcase_create("arguments");
+
+	tcase_add_test(pred, collinear_exact);
+	tcase_add_test(pred, orient3d_exact);
+	tcase_add_test(pred, predicates_non_finite);
+	suite_add_tcase(s, pred);
+	tcase_add_test(mesh, closed_meshes_are_clean);
+	tcase_add_test(mesh, disjoint_cubes);
+	tcase_add_test(mesh, overlapping_cubes);
+	tcase_add_test(mesh, skip_mask_honoured);
+	tcase_add_test(mesh, cubes_sharing_an_edge);
+	tcase_add_test(mesh, cubes_face_contact);
+	tcase_add_test(mesh, duplicates_not_counted);
+	tcase_add_test(mesh, threads_agree);
+	tcase_add_test(mesh, huge_coordinates);
+	tcase_set_timeout(mesh, 30);
+	suite_add_tcase(s, mesh);
+	tcase_add_test(pairs, shared_edge_pairs);
+	tcase_add_test(pairs, shared_vertex_pairs);
+	tcase_add_test(pairs, shared_vertex_coplanar);
+	tcase_add_test(pairs, shared_vertex_corner);
+	tcase_add_test(pairs, vertex_on_interior);
+	tcase_add_test(pairs, degenerate_triangles_ignored);
+	suite_add_tcase(s, pairs);
+	tcase_add_test(args, bad_arguments);
+	suite_add_tcase(s, args);
+	return s;
+}

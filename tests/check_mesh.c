@@ -1,0 +1,417 @@
+/*
+ * check_mesh.c - welding and the topology report, one generated fixture per
+ * defect class with counts that follow from how the fixture is built.
+ */
+#include <check.h>
+#include <math.h>
+#include <stdlib.h>
+
+#include "fixtures.h"
+#include "mesh.h"
+#include "suites.h"
+
+static struct mesh_report analyze(const struct mesh *m)
+{
+	struct mesh_report r;
+	struct st_error err = {0};
+
+	ck_assert_msg(mesh_analyze(m, 2, &r, &err) == 0, "mesh_analyze: %s", err.msg);
+	return r;
+}
+
+/* Reasons present, as a bit set, to compare with what a fixture expects. */
+static unsigned reasons(const struct mesh_report *r)
+{
+	unsigned bits = 0;
+
+	for (int i = 0; i < MESH_REASON_COUNT; i++)
+		if (r->reasons[i])
+			bits |= 1u << i;
+	return bits;
+}
+
+#define BIT(r) (1u << (r))
+
+START_TEST(weld_is_exact)
+{
+	struct mesh_builder *b = mesh_builder_new(0);
+	const double p[3] = {1.0, 2.0, 3.0}, q[3] = {1.0, 2.0, nextafter(3.0, 4.0)};
+	const double z[3] = {0.0, 0.0, 0.0}, nz[3] = {-0.0, 0.0, -0.0};
+	uint32_t a, c, d, e, f;
+	struct mesh *m;
+
+	ck_assert_ptr_nonnull(b);
+	ck_assert_int_eq(mesh_builder_vertex(b, p, &a, NULL), 0);
+	ck_assert_int_eq(mesh_builder_vertex(b, q, &c, NULL), 0);
+	ck_assert_int_eq(mesh_builder_vertex(b, p, &d, NULL), 0);
+	ck_assert_int_eq(mesh_builder_vertex(b, z, &e, NULL), 0);
+	ck_assert_int_eq(mesh_builder_vertex(b, nz, &f, NULL), 0);
+	ck_assert_uint_eq(a, d);	/* bit-identical: one vertex */
+	ck_assert_uint_ne(a, c);	/* one ulp apart: two vertices */
+	ck_assert_uint_eq(e, f);	/* -0.0 is the same point as +0.0 */
+	ck_assert_int_eq(mesh_builder_triangle(b, a, c, 7, NULL), ST_ERR_ARG);
+	m = mesh_builder_finish(b);
+	ck_assert_uint_eq(m->nverts, 3);
+	mesh_free(m);
+}
+END_TEST
+
+START_TEST(weld_many_vertices_grows_table)
+{
+	struct mesh_builder *b = mesh_builder_new(0);
+	struct mesh *m;
+
+	for (int round = 0; round < 2; round++) {
+		for (int i = 0; i < 50000; i++) {
+			const double p[3] = {i * 0.1, -i * 0.25, 1.0 / (i + 1)};
+			uint32_t idx;
+			ck_assert_int_eq(mesh_builder_vertex(b, p, &idx, NULL), 0);
+			ck_assert_uint_eq(idx, (uint32_t)i);
+		}
+	}
+	m = mesh_builder_finish(b);
+	ck_assert_uint_eq(m->nverts, 50000);
+	mesh_free(m);
+}
+END_TEST
+
+START_TEST(cube_is_printable)
+{
+	struct mesh *m = fx_box(0, 0, 0, 10, 10, 10);
+	struct mesh_report r = analyze(m);
+
+	ck_assert_uint_eq(r.vertices, 8);
+	ck_assert_uint_eq(r.edges, 18);
+	ck_assert_uint_eq(r.triangles, 12);
+	ck_assert_uint_eq(r.boundary_edges, 0);
+	ck_assert_uint_eq(r.singular_edges, 0);
+	ck_assert_uint_eq(r.nonmanifold_vertices, 0);
+	ck_assert_uint_eq(r.components, 1);
+	ck_assert_uint_eq(r.boundary_loops, 0);
+	ck_assert_int_eq(r.euler, 2);
+	ck_assert(r.genus_defined);
+	ck_assert_int_eq(r.genus, 0);
+	ck_assert_uint_eq(r.self_intersections, 0);
+	ck_assert(r.orientable && r.consistently_oriented);
+	ck_assert_double_eq_tol(r.volume, 1000.0, 1e-9);
+	ck_assert_double_eq(r.bbox_max[2], 10.0);
+	ck_assert(r.printable);
+	ck_assert_uint_eq(reasons(&r), 0);
+	mesh_free(m);
+}
+END_TEST
+
+START_TEST(sphere_genus_0)
+{
+	struct mesh *m = fx_sphere(0, 0, 0, 10, 8, 12);
+	struct mesh_report r = analyze(m);
+
+	ck_assert_uint_eq(r.vertices, 2 + 7 * 12);
+	ck_assert_uint_eq(r.triangles, 2 * 12 + 2 * 12 * 6);
+	ck_assert_uint_eq(r.edges, r.triangles * 3 / 2);
+	ck_assert_int_eq(r.euler, 2);
+	ck_assert(r.genus_defined);
+	ck_assert_int_eq(r.genus, 0);
+	ck_assert_uint_eq(r.self_intersections, 0);
+	ck_assert(r.volume > 0 && r.volume < 4.0 / 3.0 * M_PI * 1000.0);
+	ck_assert(r.printable);
+	mesh_free(m);
+}
+END_TEST
+
+START_TEST(torus_genus_1)
+{
+	struct mesh *m = fx_torus(10, 3, 24, 12);
+	struct mesh_report r = analyze(m);
+
+	ck_assert_uint_eq(r.vertices, 24 * 12);
+	ck_assert_uint_eq(r.triangles, 24 * 12 * 2);
+	ck_assert_uint_eq(r.edges, 24 * 12 * 3);
+	ck_assert_int_eq(r.euler, 0);
+	ck_assert(r.genus_defined);
+	ck_assert_int_eq(r.genus, 1);
+	ck_assert_uint_eq(r.self_intersections, 0);
+	ck_assert(r.printable);
+	mesh_free(m);
+}
+END_TEST
+
+START_TEST(two_tori_genus_2)
+{
+	struct mesh *a = fx_torus(10, 3, 24, 12), *b = fx_torus(10, 3, 24, 12);
+	struct mesh *m;
+	struct mesh_report r;
+
+	for (size_t v = 0; v < b->nverts; v++)
+		b->verts[v][0] += 40.0;
+	m = fx_concat(a, b);
+	r = analyze(m);
+	ck_assert_uint_eq(r.components, 2);
+	ck_assert_int_eq(r.euler, 0);
+	ck_assert(r.genus_defined);
+	ck_assert_int_eq(r.genus, 2);
+	ck_assert(!r.printable);
+	ck_assert_uint_eq(reasons(&r), BIT(MESH_REASON_SEVERAL_PARTS));
+	mesh_free(a);
+	mesh_free(b);
+	mesh_free(m);
+}
+END_TEST
+
+START_TEST(cube_missing_one_triangle)
+{
+	struct mesh *m = fx_box(0, 0, 0, 10, 10, 10);
+	struct mesh_report r;
+
+	fx_drop(m, 5);
+	r = analyze(m);
+	ck_assert_uint_eq(r.triangles, 11);
+	ck_assert_uint_eq(r.edges, 18);
+	ck_assert_uint_eq(r.boundary_edges, 3);
+	ck_assert_uint_eq(r.boundary_loops, 1);
+	ck_assert_int_eq(r.euler, 1);
+	ck_assert(!r.genus_defined);
+	ck_assert(!r.printable);
+	ck_assert_uint_eq(reasons(&r), BIT(MESH_REASON_OPEN));
+	mesh_free(m);
+}
+END_TEST
+
+START_TEST(cubes_sharing_an_edge)
+{
+	struct mesh *a = fx_box(0, 0, 0, 1, 1, 1), *b = fx_box(1, 1, 0, 2, 2, 1);
+	struct mesh *m = fx_concat(a, b);
+	struct mesh_report r = analyze(m);
+
+	ck_assert_uint_eq(r.vertices, 14);
+	ck_assert_uint_eq(r.edges, 35);
+	ck_assert_uint_eq(r.singular_edges, 1);
+	ck_assert_uint_eq(r.boundary_edges, 0);
+	ck_assert_uint_eq(r.nonmanifold_vertices, 2);
+	ck_assert_uint_eq(r.components, 1);
+	ck_assert_uint_eq(r.manifold_components, 2);
+	ck_assert_int_eq(r.euler, 3);
+	ck_assert(!r.genus_defined);
+	ck_assert_uint_eq(r.self_intersections, 0);
+	ck_assert(!r.printable);
+	ck_assert_uint_eq(reasons(&r), BIT(MESH_REASON_NOT_MANIFOLD_CONNECTED));
+	mesh_free(a);
+	mesh_free(b);
+	mesh_free(m);
+}
+END_TEST
+
+START_TEST(cubes_sharing_a_vertex)
+{
+	struct mesh *a = fx_box(0, 0, 0, 1, 1, 1), *b = fx_box(1, 1, 1, 2, 2, 2);
+	struct mesh *m = fx_concat(a, b);
+	struct mesh_report r = analyze(m);
+
+	ck_assert_uint_eq(r.vertices, 15);
+	ck_assert_uint_eq(r.singular_edges, 0);
+	ck_assert_uint_eq(r.nonmanifold_vertices, 1);
+	ck_assert_uint_eq(r.components, 2);
+	ck_assert_uint_eq(r.self_intersections, 0);
+	ck_assert(!r.genus_defined);
+	ck_assert_uint_eq(reasons(&r), BIT(MESH_REASON_SEVERAL_PARTS));
+	mesh_free(a);
+	mesh_free(b);
+	mesh_free(m);
+}
+END_TEST
+
+/* A box of zero height: the sides collapse to irregular triangles and the
+ * top duplicates the bottom, leaving one open square. */
+START_TEST(flat_cube)
+{
+	struct mesh *m = fx_box(0, 0, 0, 10, 10, 0);
+	struct mesh_report r = analyze(m);
+
+	ck_assert_uint_eq(r.input_triangles, 12);
+	ck_assert_uint_eq(r.irregular, 8);
+	ck_assert_uint_eq(r.duplicates, 2);
+	ck_assert_uint_eq(r.degenerate, 0);
+	ck_assert_uint_eq(r.triangles, 2);
+	ck_assert_uint_eq(r.vertices, 4);
+	ck_assert_uint_eq(r.edges, 5);
+	ck_assert_uint_eq(r.boundary_edges, 4);
+	ck_assert_uint_eq(r.boundary_loops, 1);
+	ck_assert_double_eq(r.volume, 0.0);
+	ck_assert(!r.printable);
+	ck_assert_uint_eq(reasons(&r), BIT(MESH_REASON_IRREGULAR) | BIT(MESH_REASON_OPEN) |
+					       BIT(MESH_REASON_DUPLICATE));
+	mesh_free(m);
+}
+END_TEST
+
+START_TEST(collinear_triangle_is_degenerate)
+{
+	struct mesh *cube = fx_box(0, 0, 0, 10, 10, 10);
+	struct mesh_builder *b = mesh_builder_new(0);
+	const double p[3][3] = {{0, 0, 0}, {3.3, 3.3, 3.3}, {10, 10, 10}};
+	uint32_t v[3];
+	struct mesh *needle, *m;
+	struct mesh_report r;
+
+	for (int k = 0; k < 3; k++)
+		ck_assert_int_eq(mesh_builder_vertex(b, p[k], &v[k], NULL), 0);
+	ck_assert_int_eq(mesh_builder_triangle(b, v[0], v[1], v[2], NULL), 0);
+	needle = mesh_builder_finish(b);
+	m = fx_concat(cube, needle);
+	r = analyze(m);
+	ck_assert_uint_eq(r.degenerate, 1);
+	ck_assert_uint_eq(r.triangles, 12);
+	ck_assert_uint_eq(r.vertices, 8);
+	ck_assert(!r.printable);
+	ck_assert_uint_eq(reasons(&r), BIT(MESH_REASON_DEGENERATE));
+	mesh_free(cube);
+	mesh_free(needle);
+	mesh_free(m);
+}
+END_TEST
+
+START_TEST(duplicated_triangles)
+{
+	struct mesh *m = fx_box(0, 0, 0, 10, 10, 10);
+	struct mesh_report r;
+
+	fx_duplicate(m, 0, 0);
+	fx_duplicate(m, 3, 1);
+	fx_duplicate(m, 3, 0);
+	r = analyze(m);
+	ck_assert_uint_eq(r.duplicates, 3);
+	ck_assert_uint_eq(r.triangles, 12);
+	ck_assert_uint_eq(r.edges, 18);
+	ck_assert_uint_eq(r.singular_edges, 0);
+	ck_assert(r.printable); /* a layer drops equivalent triangles (Def. 3.1) */
+	ck_assert_uint_eq(reasons(&r), BIT(MESH_REASON_DUPLICATE));
+	mesh_free(m);
+}
+END_TEST
+
+START_TEST(flipped_triangle)
+{
+	struct mesh *m = fx_box(0, 0, 0, 10, 10, 10);
+	struct mesh_report r;
+
+	fx_flip(m, 4);
+	r = analyze(m);
+	ck_assert(!r.consistently_oriented);
+	ck_assert(r.orientable);
+	ck_assert_uint_eq(r.flipped_edges, 3);
+	ck_assert(r.printable); /* normals are not reliable information (seed 000 §3) */
+	ck_assert_uint_eq(reasons(&r), BIT(MESH_REASON_INCONSISTENT_ORIENTATION));
+	mesh_free(m);
+}
+END_TEST
+
+START_TEST(inside_out_cube)
+{
+	struct mesh *m = fx_box(0, 0, 0, 10, 10, 10);
+	struct mesh_report r;
+
+	for (size_t t = 0; t < m->ntris; t++)
+		fx_flip(m, t);
+	r = analyze(m);
+	ck_assert(r.consistently_oriented);
+	ck_assert_double_eq_tol(r.volume, -1000.0, 1e-9);
+	ck_assert(r.printable);
+	ck_assert_uint_eq(reasons(&r), BIT(MESH_REASON_INSIDE_OUT));
+	mesh_free(m);
+}
+END_TEST
+
+START_TEST(overlapping_cubes)
+{
+	struct mesh *a = fx_box(0, 0, 0, 10, 10, 10), *b = fx_box(5, 5, 5, 15, 15, 15);
+	struct mesh *m = fx_concat(a, b);
+	struct mesh_report r = analyze(m);
+
+	ck_assert_uint_eq(r.components, 2);
+	ck_assert(r.self_intersections > 0);
+	ck_assert(!r.printable);
+	ck_assert_uint_eq(reasons(&r), BIT(MESH_REASON_SELF_INTERSECTION) |
+					       BIT(MESH_REASON_SEVERAL_PARTS));
+	mesh_free(a);
+	mesh_free(b);
+	mesh_free(m);
+}
+END_TEST
+
+/* A Moebius strip of n quads: one boundary loop of 2n edges, unorientable. */
+START_TEST(moebius_strip)
+{
+	const int n = 12;
+	struct mesh_builder *b = mesh_builder_new(0);
+	uint32_t top[12], bottom[12];
+	struct mesh *m;
+	struct mesh_report r;
+
+	for (int i = 0; i < n; i++) {
+		double u = 2 * M_PI * i / n, w = u / 2;
+		const double p[3] = {(10 + 2 * cos(w)) * cos(u), (10 + 2 * cos(w)) * sin(u),
+				     2 * sin(w)};
+		const double q[3] = {(10 - 2 * cos(w)) * cos(u), (10 - 2 * cos(w)) * sin(u),
+				     -2 * sin(w)};
+		ck_assert_int_eq(mesh_builder_vertex(b, p, &top[i], NULL), 0);
+		ck_assert_int_eq(mesh_builder_vertex(b, q, &bottom[i], NULL), 0);
+	}
+	for (int i = 0; i < n; i++) {
+		/* The half twist: the last quad joins top to bottom. */
+		uint32_t t1 = i + 1 < n ? top[i + 1] : bottom[0];
+		uint32_t b1 = i + 1 < n ? bottom[i + 1] : top[0];
+		ck_assert_int_eq(mesh_builder_triangle(b, top[i], t1, b1, NULL), 0);
+		ck_assert_int_eq(mesh_builder_triangle(b, top[i], b1, bottom[i], NULL), 0);
+	}
+	m = mesh_builder_finish(b);
+	r = analyze(m);
+	ck_assert(!r.orientable);
+	ck_assert_uint_eq(r.boundary_edges, 2 * n);
+	ck_assert_uint_eq(r.boundary_loops, 1);
+	ck_assert_int_eq(r.euler, 0);
+	ck_assert(!r.genus_defined);
+	ck_assert(!r.printable);
+	mesh_free(m);
+}
+END_TEST
+
+START_TEST(empty_mesh)
+{
+	struct mesh_builder *b = mesh_builder_new(0);
+	struct mesh *m = mesh_builder_finish(b);
+	struct mesh_report r = analyze(m);
+
+	ck_assert_uint_eq(r.triangles, 0);
+	ck_assert(!r.printable);
+	ck_assert(r.reasons[MESH_REASON_EMPTY]);
+	ck_assert_str_eq(mesh_reason_code(MESH_REASON_EMPTY), "empty");
+	mesh_free(m);
+}
+END_TEST
+
+Suite *mesh_suite(void)
+{
+	Suite *s = suite_create("mesh");
+	TCase *weld = tcase_create("weld"), *topo = tcase_create("topology");
+
+	tcase_add_test(weld, weld_is_exact);
+	tcase_add_test(weld, weld_many_vertices_grows_table);
+	suite_add_tcase(s, weld);
+	tcase_add_test(topo, cube_is_printable);
+	tcase_add_test(topo, sphere_genus_0);
+	tcase_add_test(topo, torus_genus_1);
+	tcase_add_test(topo, two_tori_genus_2);
+	tcase_add_test(topo, cube_missing_one_triangle);
+	tcase_add_test(topo, cubes_sharing_an_edge);
+	tcase_add_test(topo, cubes_sharing_a_vertex);
+	tcase_add_test(topo, flat_cube);
+	tcase_add_test(topo, collinear_triangle_is_degenerate);
+	tcase_add_test(topo, duplicated_triangles);
+	tcase_add_test(topo, flipped_triangle);
+	tcase_add_test(topo, inside_out_cube);
+	tcase_add_test(topo, overlapping_cubes);
+	tcase_add_test(topo, moebius_strip);
+	tcase_add_test(topo, empty_mesh);
+	suite_add_tcase(s, topo);
+	return s;
+}

@@ -1,0 +1,16 @@
+/*
+ * suites.h - one Check suite per module; check_main.c runs them all in one
+ * SRunner so `make check` ends with a single Check summary line.
+ */
+#ifndef STRATUM_TESTS_SUITES_H
+#define STRATUM_TESTS_SUITES_H
+
+#include <check.h>
+
+Suite *mesh_suite(void);	/* tests/check_mesh.c: welding, topology report */
+Suite *meshio_suite(void);	/* tests/check_meshio.c: STL/OBJ/OFF I/O, bad input */
+Suite *exact_suite(void);	/* tests/check_exact.c: CGAL bridge predicates */
+Suite *profile_suite(void);	/* tests/check_profile.c: printer profiles */
+Suite *cli_suite(void);		/* tests/check_cli.c: the stratum binary end to end */
+
+#endif

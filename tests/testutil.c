@@ -1,0 +1,101 @@
+/* testutil.c - scratch files and CLI runs for the Check suites. */
+#include "testutil.h"
+
+#include <check.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+static char scratch_dir[256];
+
+void tu_scratch_init(void)
+{
+	const char *tmp = getenv("TMPDIR");
+
+	snprintf(scratch_dir, sizeof(scratch_dir), "%s/stratum-test-XXXXXX", tmp ? tmp : "/tmp");
+	if (!mkdtemp(scratch_dir)) {
+		perror("tu_scratch_init: mkdtemp");
+		exit(EXIT_FAILURE);
+	}
+}
+
+void tu_scratch_cleanup(void)
+{
+	char cmd[300];
+
+	snprintf(cmd, sizeof(cmd), "rm -rf '%s'", scratch_dir);
+	if (scratch_dir[0] && system(cmd) != 0)
+		fprintf(stderr, "could not remove %s\n", scratch_dir);
+}
+
+const char *tu_path(const char *name)
+{
+	static char bufs[8][512];
+	static int next;
+	char *buf = bufs[next++ % 8];
+
+	ck_assert_msg(scratch_dir[0], "tu_scratch_init() was not called");
+	/* The pid keeps names apart when Check runs tests in parallel forks. */
+	snprintf(buf, 512, "%s/%d-%s", scratch_dir, (int)getpid(), name);
+	return buf;
+}
+
+void tu_write(const char *path, const void *data, size_t len)
+{
+	FILE *f = fopen(path, "wb");
+
+	ck_assert_msg(f != NULL, "cannot create %s", path);
+	ck_assert(fwrite(data, 1, len, f) == len);
+	ck_assert(fclose(f) == 0);
+}
+
+void tu_write_str(const char *path, const char *text)
+{
+	tu_write(path, text, strlen(text));
+}
+
+int tu_run(char *out, size_t cap, const char *args_fmt, ...)
+{
+	const char *bin = getenv("STRATUM_BIN");
+	char args[2048], cmd[2300];
+	va_list ap;
+	FILE *p;
+	size_t n = 0;
+	int status;
+
+	va_start(ap, args_fmt);
+	vsnprintf(args, sizeof(args), args_fmt, ap);
+	va_end(ap);
+	snprintf(cmd, sizeof(cmd), "%s %s 2>&1", bin ? bin : "build/stratum", args);
+	p = popen(cmd, "r");
+	ck_assert_msg(p != NULL, "cannot run %s", cmd);
+	while (cap > 1 && n < cap - 1) {
+		size_t got = fread(out + n, 1, cap - 1 - n, p);
+		if (got == 0)
+			break;
+		n += got;
+	}
+	if (cap)
+		out[n] = '\0';
+	/* Drain whatever did not fit so the child never blocks on a full pipe. */
+	{
+		char sink[4096];
+		while (fread(sink, 1, sizeof(sink), p) > 0)
+			;
+	}
+	status = pclose(p);
+	if (!WIFEXITED(status))
+		return -1;
+	return WEXITSTATUS(status);
+}
+
+int tu_file_exists(const char *path)
+{
+	struct stat st;
+
+	return stat(path, &st) == 0;
+}

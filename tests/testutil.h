@@ -1,0 +1,38 @@
+/*
+ * testutil.h - helpers shared by the Check suites: scratch files and running
+ * the built binary (path in $STRATUM_BIN, set by the Makefile).
+ */
+#ifndef STRATUM_TESTS_TESTUTIL_H
+#define STRATUM_TESTS_TESTUTIL_H
+
+#include <stddef.h>
+
+/* tu_scratch_init / tu_scratch_cleanup - make and remove the scratch
+ * directory under $TMPDIR; check_main.c calls them around the whole run. */
+void tu_scratch_init(void);
+void tu_scratch_cleanup(void);
+
+/*
+ * tu_path - a path name inside the scratch directory.  Returns a pointer to
+ * a static rotating buffer; copy it if you need it long.
+ */
+const char *tu_path(const char *name);
+
+/* tu_write - write len bytes to path; aborts the test on failure. */
+void tu_write(const char *path, const void *data, size_t len);
+
+/* tu_write_str - write a NUL-terminated string to path. */
+void tu_write_str(const char *path, const char *text);
+
+/*
+ * tu_run - run "$STRATUM_BIN <args>" through the shell with stdout and
+ * stderr captured into out (NUL-terminated, truncated to cap).  Returns the
+ * exit status, or -1 if it did not exit normally (a crash fails the test).
+ */
+int tu_run(char *out, size_t cap, const char *args_fmt, ...)
+	__attribute__((format(printf, 3, 4)));
+
+/* tu_file_exists - 1 if path exists. */
+int tu_file_exists(const char *path);
+
+#endif
