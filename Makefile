@@ -96,6 +96,8 @@ test-asan:
 	  LDEXTRA="$(SAN)" build/asan/check_all build/asan/stratum
 	ASAN_OPTIONS=detect_leaks=1 STRATUM_BIN=build/asan/stratum ./build/asan/check_all
 
+$(BUILD)/bench/gen_mesh.o: CPPFLAGS += -Itests
+
 $(BUILD)/bench/gen_mesh: $(BUILD)/bench/gen_mesh.o $(BUILD)/tests/fixtures.o $(BUILD)/libstratum.a
 	$(CXX) -pthread $(LDEXTRA) -o $@ $^ $(LDLIBS)
 

@@ -17,7 +17,7 @@ gen=build/bench/gen_mesh
 best_of3() {
 	best_t=""; best_m=""
 	for _ in 1 2 3; do
-		/usr/bin/time -f '%e %M' -o "$out/time.txt" "$@" >/dev/null 2>&1 || true
+		/usr/bin/time -q -f '%e %M' -o "$out/time.txt" "$@" >/dev/null 2>&1 || true
 		read -r t m < "$out/time.txt"
 		if [ -z "$best_t" ] || [ "$(echo "$t < $best_t" | bc)" = 1 ]; then best_t=$t; fi
 		if [ -z "$best_m" ] || [ "$m" -lt "$best_m" ]; then best_m=$m; fi
@@ -25,13 +25,15 @@ best_of3() {
 	echo "$best_t $best_m"
 }
 
-echo "| file | triangles | stratum check s | peak MiB | B/triangle | admesh s | admesh MiB | time ratio stratum/admesh |"
-echo "|---|---|---|---|---|---|---|---|"
+echo "| file | triangles | stratum check s (2 cores) | 1 core s | peak MiB | B/triangle | admesh s | admesh MiB | time ratio stratum/admesh |"
+echo "|---|---|---|---|---|---|---|---|---|"
 for f in torus-1m torus-2m spheres; do
 	path="$out/$f.stl"
 	tris=$(( ($(stat -c %s "$path") - 84) / 50 ))
 	set -- $(best_of3 "$bin" check "$path")
 	st=$1; sm=$2
+	set -- $(best_of3 "$bin" check --threads 1 "$path")
+	st1=$1
 	if command -v admesh >/dev/null 2>&1; then
 		set -- $(best_of3 admesh "$path")
 		at=$1; am=$2
@@ -40,5 +42,5 @@ for f in torus-1m torus-2m spheres; do
 	else
 		at="n/a"; amib="n/a"; ratio="n/a"
 	fi
-	echo "| $f | $tris | $st | $(echo "scale=1; $sm / 1024" | bc) | $(echo "$sm * 1024 / $tris" | bc) | $at | $amib | $ratio |"
+	echo "| $f | $tris | $st | $st1 | $(echo "scale=1; $sm / 1024" | bc) | $(echo "$sm * 1024 / $tris" | bc) | $at | $amib | $ratio |"
 done
