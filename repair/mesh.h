@@ -130,7 +130,8 @@ const char *mesh_reason_text(enum mesh_reason r);
  * mesh_analyze - fill *rep for m.  threads is how many cores the exact
  * self-intersection pass may use (0 = all available).  Returns 0, or a
  * negative class with err filled (ST_ERR_NOMEM, ST_ERR_INTERNAL).  The mesh is
- * not modified.  Peak extra memory is about 100 bytes per triangle.
+ * not modified.  The exact pass runs on its own thread beside the topology
+ * passes; peak extra memory is about 80 bytes per triangle.
  */
 int mesh_analyze(const struct mesh *m, int threads, struct mesh_report *rep,
 		 struct st_error *err);

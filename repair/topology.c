@@ -5,12 +5,13 @@
  * about 100 bytes each:
  *   1. classify triangles: irregular, degenerate (exact), duplicate; the rest
  *      form the layer (seed 000 Def. 3.1);
- *   2. weld edges with a hash table, count triangles per edge;
- *   3. edge -> corner incidence (CSR), then components, manifold components,
- *      vertex fans, orientation and boundary loops;
+ *   2. edges and edge -> corner incidence (CSR) from the vertex stars;
+ *   3. components, manifold components, vertex fans, orientation and
+ *      boundary loops;
  *   4. free all of that, then count self-intersections exactly (CGAL bridge).
  */
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -23,8 +24,8 @@ enum tri_class { TRI_LAYER = 0, TRI_IRREGULAR, TRI_DEGENERATE, TRI_DUPLICATE };
 struct topo {
 	const struct mesh *m;
 	uint8_t *tclass;	/* [tri] enum tri_class */
-	uint32_t (*tedge)[3];	/* [tri][k] edge of corner k: tris[k] -> tris[k+1] */
-	uint32_t (*ev)[2];	/* [edge] its two vertices, smaller first */
+	uint32_t *voff;		/* [vertex] start in vtri; [nverts] = end */
+	uint32_t *vtri;		/* layer-candidate triangles around each vertex */
 	uint32_t *eoff;		/* [edge] start in ecorner; [nedges] = end */
 	uint32_t *ecorner;	/* corner ids 3*tri+k incident to each edge */
 	size_t nedges;
@@ -61,25 +62,6 @@ const char *mesh_reason_text(enum mesh_reason r)
 	return (unsigned)r < MESH_REASON_COUNT ? reason_table[r].text : "unknown";
 }
 
-static uint64_t mix64(uint64_t h)
-{
-	h ^= h >> 33;
-	h *= 0xff51afd7ed558ccdull;
-	h ^= h >> 33;
-	h *= 0xc4ceb9fe1a85ec53ull;
-	h ^= h >> 33;
-	return h;
-}
-
-static size_t pow2_at_least(size_t n)
-{
-	size_t p = 16;
-
-	while (p < n)
-		p *= 2;
-	return p;
-}
-
 /* Union-find over uint32_t ids with path halving. */
 static uint32_t uf_find(uint32_t *parent, uint32_t x)
 {
@@ -98,6 +80,50 @@ static void uf_union(uint32_t *parent, uint32_t a, uint32_t b)
 		parent[a < b ? b : a] = a < b ? a : b;
 }
 
+/*
+ * Union-find whose links carry a parity bit: the parity of x relative to its
+ * root says whether x must be flipped to match the root's orientation.
+ */
+static uint32_t pf_find(uint32_t *parent, uint8_t *par, uint32_t x, uint8_t *parity)
+{
+	uint32_t root = x;
+	uint8_t p = 0, px;
+
+	while (parent[root] != root) {
+		p ^= par[root];
+		root = parent[root];
+	}
+	/* Point the whole path at the root, keeping each node's parity. */
+	for (px = p; parent[x] != root && x != root;) {
+		uint32_t next = parent[x];
+		uint8_t pnext = px ^ par[x];
+		parent[x] = root;
+		par[x] = px;
+		x = next;
+		px = pnext;
+	}
+	*parity = p;
+	return root;
+}
+
+/* Join a and b so that their parities differ by flip; false on a conflict. */
+static bool pf_union(uint32_t *parent, uint8_t *par, uint32_t a, uint32_t b, uint8_t flip)
+{
+	uint8_t pa, pb;
+	uint32_t ra = pf_find(parent, par, a, &pa), rb = pf_find(parent, par, b, &pb);
+
+	if (ra == rb)
+		return (pa ^ pb) == flip;
+	if (ra > rb) {
+		uint32_t t = ra;
+		ra = rb;
+		rb = t;
+	}
+	parent[rb] = ra;
+	par[rb] = pa ^ pb ^ flip;
+	return true;
+}
+
 static void sort3(const uint32_t in[3], uint32_t out[3])
 {
 	uint32_t a = in[0], b = in[1], c = in[2], t;
@@ -110,133 +136,177 @@ static void sort3(const uint32_t in[3], uint32_t out[3])
 	out[2] = c;
 }
 
-/* Step 1: irregular, degenerate and duplicate triangles. */
-static int classify_triangles(struct topo *tp, struct mesh_report *rep, struct st_error *err)
+/* Step 1a: irregular and degenerate triangles; the rest are layer candidates. */
+static void classify_triangles(struct topo *tp, struct mesh_report *rep)
 {
 	const struct mesh *m = tp->m;
-	size_t nslots = pow2_at_least(m->ntris * 2);
-	uint32_t *slots = calloc(nslots, sizeof(*slots)); /* tri + 1, 0 = empty */
 
-	if (!slots)
-		return st_error_set(err, ST_ERR_NOMEM, "out of memory classifying %zu triangles",
-				    m->ntris);
 	for (size_t t = 0; t < m->ntris; t++) {
 		const uint32_t *v = m->tris[t];
-		uint32_t key[3];
-		size_t i;
 
 		if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) {
 			tp->tclass[t] = TRI_IRREGULAR;
 			rep->irregular++;
-			continue;
-		}
-		if (exact_collinear(m->verts[v[0]], m->verts[v[1]], m->verts[v[2]])) {
+		} else if (exact_collinear(m->verts[v[0]], m->verts[v[1]], m->verts[v[2]])) {
 			tp->tclass[t] = TRI_DEGENERATE;
 			rep->degenerate++;
-			continue;
+		} else {
+			tp->tclass[t] = TRI_LAYER;
 		}
-		sort3(v, key);
-		i = mix64(((uint64_t)key[0] << 32 | key[1]) ^ mix64(key[2])) & (nslots - 1);
-		for (; slots[i]; i = (i + 1) & (nslots - 1)) {
-			uint32_t other[3];
-			sort3(m->tris[slots[i] - 1], other);
-			if (!memcmp(key, other, sizeof(key)))
-				break;
-		}
-		if (slots[i]) {
-			tp->tclass[t] = TRI_DUPLICATE;
-			rep->duplicates++;
-			continue;
-		}
-		slots[i] = (uint32_t)t + 1;
-		tp->tclass[t] = TRI_LAYER;
-		rep->triangles++;
 	}
-	free(slots);
+}
+
+/* Step 1b: the star of every vertex (its layer-candidate triangles), as
+ * compressed rows.  Walking stars keeps memory access local where a hash
+ * table of edges would jump across the whole mesh. */
+static int build_stars(struct topo *tp, struct st_error *err)
+{
+	const struct mesh *m = tp->m;
+
+	tp->voff = calloc(m->nverts + 1, sizeof(*tp->voff));
+	tp->vtri = malloc((m->ntris * 3 + 1) * sizeof(*tp->vtri));
+	if (!tp->voff || !tp->vtri)
+		return st_error_set(err, ST_ERR_NOMEM, "out of memory building vertex stars");
+	for (size_t t = 0; t < m->ntris; t++)
+		if (tp->tclass[t] == TRI_LAYER)
+			for (int k = 0; k < 3; k++)
+				tp->voff[m->tris[t][k] + 1]++;
+	for (size_t v = 0; v < m->nverts; v++)
+		tp->voff[v + 1] += tp->voff[v];
+	for (size_t t = 0; t < m->ntris; t++)
+		if (tp->tclass[t] == TRI_LAYER)
+			for (int k = 0; k < 3; k++)
+				tp->vtri[tp->voff[m->tris[t][k]]++] = (uint32_t)t;
+	for (size_t v = m->nverts; v > 0; v--)
+		tp->voff[v] = tp->voff[v - 1];
+	tp->voff[0] = 0;
 	return 0;
 }
 
-/* Step 2: one id per undirected edge of the layer. */
-static int weld_edges(struct topo *tp, struct st_error *err)
+/* Step 1c: a triangle with the same vertex set as an earlier one (either
+ * orientation) is a duplicate; both are in the star of their lowest vertex. */
+static void find_duplicates(struct topo *tp, struct mesh_report *rep)
 {
 	const struct mesh *m = tp->m;
-	size_t nslots = pow2_at_least(m->ntris * 3);
-	uint32_t *slots = calloc(nslots, sizeof(*slots)); /* edge + 1 */
-	size_t cap = m->ntris * 3 / 2 + 16;
-	int rc = 0;
 
-	tp->ev = malloc(cap * sizeof(*tp->ev));
-	if (!slots || !tp->ev) {
-		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory building edges");
-		goto out_free_slots;
-	}
 	for (size_t t = 0; t < m->ntris; t++) {
+		uint32_t key[3];
+
 		if (tp->tclass[t] != TRI_LAYER)
 			continue;
-		for (int k = 0; k < 3; k++) {
-			uint32_t a = m->tris[t][k], b = m->tris[t][(k + 1) % 3], lo, hi;
-			size_t i;
+		sort3(m->tris[t], key);
+		for (uint32_t i = tp->voff[key[0]]; i < tp->voff[key[0] + 1]; i++) {
+			uint32_t other = tp->vtri[i], okey[3];
 
-			lo = a < b ? a : b;
-			hi = a < b ? b : a;
-			i = mix64((uint64_t)lo << 32 | hi) & (nslots - 1);
-			for (; slots[i]; i = (i + 1) & (nslots - 1)) {
-				const uint32_t *e = tp->ev[slots[i] - 1];
-				if (e[0] == lo && e[1] == hi)
-					break;
+			if (other >= t)
+				break; /* stars list triangles in increasing order */
+			if (tp->tclass[other] != TRI_LAYER)
+				continue;
+			sort3(m->tris[other], okey);
+			if (okey[1] == key[1] && okey[2] == key[2]) {
+				tp->tclass[t] = TRI_DUPLICATE;
+				rep->duplicates++;
+				break;
 			}
-			if (!slots[i]) {
-				if (tp->nedges == cap) {
-					void *p = realloc(tp->ev, cap * 2 * sizeof(*tp->ev));
-					if (!p) {
-						rc = st_error_set(err, ST_ERR_NOMEM,
-								  "out of memory building edges");
-						goto out_free_slots;
-					}
-					tp->ev = p;
-					cap *= 2;
-				}
-				tp->ev[tp->nedges][0] = lo;
-				tp->ev[tp->nedges][1] = hi;
-				slots[i] = (uint32_t)++tp->nedges;
-			}
-			tp->tedge[t][k] = slots[i] - 1;
 		}
+		rep->triangles += tp->tclass[t] == TRI_LAYER;
 	}
-out_free_slots:
-	free(slots);
-	return rc;
 }
 
-/* Step 3a: edge -> incident corners, as compressed rows. */
-static int build_incidence(struct topo *tp, struct st_error *err)
+struct half {
+	uint32_t hi;	 /* the edge's other (higher) vertex */
+	uint32_t corner; /* 3*tri+k */
+};
+
+static int compare_half(const void *a, const void *b)
+{
+	const struct half *x = a, *y = b;
+
+	if (x->hi != y->hi)
+		return x->hi < y->hi ? -1 : 1;
+	return x->corner < y->corner ? -1 : x->corner > y->corner;
+}
+
+/* Start a new edge at position start of ecorner; grows eoff as needed. */
+static int push_edge(struct topo *tp, size_t *cap, uint32_t start)
+{
+	if (tp->nedges + 1 >= *cap) {
+		void *p = realloc(tp->eoff, (*cap * 2 + 1) * sizeof(*tp->eoff));
+		if (!p)
+			return -1;
+		tp->eoff = p;
+		*cap *= 2;
+	}
+	tp->eoff[tp->nedges++] = start;
+	return 0;
+}
+
+/*
+ * Step 2: edges and edge -> corner incidence straight from the stars.  Each
+ * edge belongs to its lower vertex; gathering that vertex's half-edges and
+ * sorting them by the other end groups every edge's corners together.
+ */
+static int build_edges(struct topo *tp, struct st_error *err)
 {
 	const struct mesh *m = tp->m;
+	size_t cap = m->ntris * 3 / 2 + 16, hcap = 64, pos = 0;
+	struct half *h = malloc(hcap * sizeof(*h));
+	int rc = 0;
 
-	tp->eoff = calloc(tp->nedges + 1, sizeof(*tp->eoff));
+	tp->eoff = malloc((cap + 1) * sizeof(*tp->eoff));
 	tp->ecorner = malloc((m->ntris * 3 + 1) * sizeof(*tp->ecorner));
-	if (!tp->eoff || !tp->ecorner)
-		return st_error_set(err, ST_ERR_NOMEM, "out of memory building edge incidence");
-	for (size_t t = 0; t < m->ntris; t++)
-		if (tp->tclass[t] == TRI_LAYER)
-			for (int k = 0; k < 3; k++)
-				tp->eoff[tp->tedge[t][k] + 1]++;
-	for (size_t e = 0; e < tp->nedges; e++)
-		tp->eoff[e + 1] += tp->eoff[e];
-	/* Fill using eoff[e] as a cursor, then shift the offsets back. */
-	for (size_t t = 0; t < m->ntris; t++)
-		if (tp->tclass[t] == TRI_LAYER)
-			for (int k = 0; k < 3; k++)
-				tp->ecorner[tp->eoff[tp->tedge[t][k]]++] = (uint32_t)(3 * t + k);
-	for (size_t e = tp->nedges; e > 0; e--)
-		tp->eoff[e] = tp->eoff[e - 1];
-	tp->eoff[0] = 0;
-	return 0;
+	if (!h || !tp->eoff || !tp->ecorner)
+		goto out_nomem;
+	for (size_t lo = 0; lo < m->nverts; lo++) {
+		size_t nh = 0;
+
+		for (uint32_t i = tp->voff[lo]; i < tp->voff[lo + 1]; i++) {
+			uint32_t t = tp->vtri[i];
+			if (tp->tclass[t] != TRI_LAYER)
+				continue;
+			for (uint32_t k = 0; k < 3; k++) {
+				uint32_t a = m->tris[t][k], b = m->tris[t][(k + 1) % 3];
+				if ((a < b ? a : b) != lo)
+					continue;
+				if (nh == hcap) {
+					void *p = realloc(h, hcap * 2 * sizeof(*h));
+					if (!p)
+						goto out_nomem;
+					h = p;
+					hcap *= 2;
+				}
+				h[nh].hi = a < b ? b : a;
+				h[nh++].corner = 3 * t + k;
+			}
+		}
+		qsort(h, nh, sizeof(*h), compare_half);
+		for (size_t i = 0; i < nh; i++) {
+			if (i == 0 || h[i].hi != h[i - 1].hi)
+				if (push_edge(tp, &cap, (uint32_t)pos))
+					goto out_nomem;
+			tp->ecorner[pos++] = h[i].corner;
+		}
+	}
+	tp->eoff[tp->nedges] = (uint32_t)pos;
+	goto out;
+out_nomem:
+	rc = st_error_set(err, ST_ERR_NOMEM, "out of memory building edges");
+out:
+	free(h);
+	return rc;
 }
 
 static uint32_t edge_count(const struct topo *tp, size_t e)
 {
 	return tp->eoff[e + 1] - tp->eoff[e];
+}
+
+/* Vertex end (0 or 1) of edge e, read off its first corner. */
+static uint32_t edge_vertex(const struct topo *tp, size_t e, int end)
+{
+	uint32_t c = tp->ecorner[tp->eoff[e]];
+
+	return tp->m->tris[c / 3][(c % 3 + (uint32_t)end) % 3];
 }
 
 /* Vertex at corner c (3*tri+k) and the corner of the same triangle at vertex v. */
@@ -261,15 +331,21 @@ static bool corner_forward(const struct mesh *m, uint32_t c)
 	return m->tris[t][k] < m->tris[t][(k + 1) % 3];
 }
 
-/* Step 3b: counts per edge class, components and manifold components. */
+/*
+ * Step 3b: counts per edge class, components, manifold components and
+ * orientability.  Manifold components join triangles across 2-connected
+ * edges only; the same joins, with a parity bit saying "flip one to match
+ * the other", find a non-orientable surface (a Moebius strip) as a conflict.
+ */
 static int count_edges_and_parts(struct topo *tp, struct mesh_report *rep, struct st_error *err)
 {
 	const struct mesh *m = tp->m;
 	uint32_t *comp = malloc(m->ntris * sizeof(*comp));
 	uint32_t *mcomp = malloc(m->ntris * sizeof(*mcomp));
+	uint8_t *flip = calloc(m->ntris, 1);
 	int rc = 0;
 
-	if (!comp || !mcomp) {
+	if (!comp || !mcomp || !flip) {
 		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory finding components");
 		goto out;
 	}
@@ -277,6 +353,7 @@ static int count_edges_and_parts(struct topo *tp, struct mesh_report *rep, struc
 		comp[t] = mcomp[t] = (uint32_t)t;
 	rep->edges = tp->nedges;
 	rep->consistently_oriented = true;
+	rep->orientable = true;
 	for (size_t e = 0; e < tp->nedges; e++) {
 		uint32_t n = edge_count(tp, e), first = tp->ecorner[tp->eoff[e]] / 3;
 
@@ -290,81 +367,30 @@ static int count_edges_and_parts(struct topo *tp, struct mesh_report *rep, struc
 			uf_union(comp, first, tp->ecorner[tp->eoff[e] + i] / 3);
 		if (n == 2) {
 			uint32_t c0 = tp->ecorner[tp->eoff[e]], c1 = tp->ecorner[tp->eoff[e] + 1];
-			uf_union(mcomp, c0 / 3, c1 / 3);
-			if (corner_forward(m, c0) == corner_forward(m, c1)) {
+			/* Walked the same way twice: one of the two is flipped. */
+			uint8_t same = corner_forward(m, c0) == corner_forward(m, c1);
+
+			if (same) {
 				rep->flipped_edges++;
 				rep->consistently_oriented = false;
 			}
+			if (!pf_union(mcomp, flip, c0 / 3, c1 / 3, same))
+				rep->orientable = false;
 		}
 	}
 	for (size_t t = 0; t < m->ntris; t++) {
+		uint8_t parity;
+
 		if (tp->tclass[t] != TRI_LAYER)
 			continue;
 		rep->components += uf_find(comp, (uint32_t)t) == t;
-		rep->manifold_components += uf_find(mcomp, (uint32_t)t) == t;
+		rep->manifold_components += pf_find(mcomp, flip, (uint32_t)t, &parity) == t;
 	}
 out:
 	free(comp);
 	free(mcomp);
+	free(flip);
 	return rc;
-}
-
-/*
- * Step 3c: orientability.  Give every triangle a flip bit so that each
- * 2-connected edge is walked both ways; a conflict means the surface is not
- * orientable (a Moebius strip).  Singular edges do not propagate.
- */
-static int check_orientable(struct topo *tp, struct mesh_report *rep, struct st_error *err)
-{
-	const struct mesh *m = tp->m;
-	uint8_t *state = calloc(m->ntris, 1); /* 0 unseen, 1 kept, 2 flipped */
-	uint32_t *queue = malloc(m->ntris * sizeof(*queue));
-
-	rep->orientable = true;
-	if (!state || !queue) {
-		free(state);
-		free(queue);
-		return st_error_set(err, ST_ERR_NOMEM, "out of memory checking orientation");
-	}
-	for (size_t seed = 0; seed < m->ntris; seed++) {
-		size_t head = 0, tail = 0;
-
-		if (tp->tclass[seed] != TRI_LAYER || state[seed])
-			continue;
-		state[seed] = 1;
-		queue[tail++] = (uint32_t)seed;
-		while (head < tail) {
-			uint32_t t = queue[head++];
-			for (uint32_t k = 0; k < 3; k++) {
-				uint32_t e = tp->tedge[t][k], c0, c1, other, want;
-				bool fwd0, fwd1;
-
-				if (edge_count(tp, e) != 2)
-					continue;
-				c0 = tp->ecorner[tp->eoff[e]];
-				c1 = tp->ecorner[tp->eoff[e] + 1];
-				if (c0 / 3 != t) {
-					uint32_t tmp = c0;
-					c0 = c1;
-					c1 = tmp;
-				}
-				other = c1 / 3;
-				fwd0 = corner_forward(m, c0) ^ (state[t] == 2);
-				fwd1 = corner_forward(m, c1);
-				/* other must end up walking e opposite to t. */
-				want = fwd0 == fwd1 ? 2 : 1;
-				if (!state[other]) {
-					state[other] = (uint8_t)want;
-					queue[tail++] = other;
-				} else if (state[other] != want) {
-					rep->orientable = false;
-				}
-			}
-		}
-	}
-	free(state);
-	free(queue);
-	return 0;
 }
 
 static int compare_end(const void *a, const void *b)
@@ -404,15 +430,15 @@ static int check_vertices_and_loops(struct topo *tp, struct mesh_report *rep,
 		uint32_t n = edge_count(tp, e);
 
 		if (n > 2) {
-			vstate[tp->ev[e][0]] |= 2;
-			vstate[tp->ev[e][1]] |= 2;
+			vstate[edge_vertex(tp, e, 0)] |= 2;
+			vstate[edge_vertex(tp, e, 1)] |= 2;
 		}
 		if (n == 1)
 			nb++;
 		if (n != 2)
 			continue;
 		for (int end = 0; end < 2; end++) {
-			uint32_t v = tp->ev[e][end];
+			uint32_t v = edge_vertex(tp, e, end);
 			uf_union(fan, corner_at(m, tp->ecorner[tp->eoff[e]] / 3, v),
 				 corner_at(m, tp->ecorner[tp->eoff[e] + 1] / 3, v));
 		}
@@ -452,7 +478,7 @@ static int check_vertices_and_loops(struct topo *tp, struct mesh_report *rep,
 			continue;
 		t = tp->ecorner[tp->eoff[e]] / 3;
 		for (int end = 0; end < 2; end++) {
-			uint32_t v = tp->ev[e][end];
+			uint32_t v = edge_vertex(tp, e, end);
 			ends[2 * nb + end][0] = (uint64_t)v << 32 | uf_find(fan, corner_at(m, t, v));
 			ends[2 * nb + end][1] = nb;
 		}
@@ -560,19 +586,40 @@ static void judge(struct mesh_report *rep)
 
 static void free_topology(struct topo *tp)
 {
-	free(tp->tedge);
-	free(tp->ev);
 	free(tp->eoff);
 	free(tp->ecorner);
-	tp->tedge = NULL;
-	tp->ev = NULL;
 	tp->eoff = tp->ecorner = NULL;
+}
+
+/* The exact self-intersection pass, run on its own thread beside the
+ * topology passes so the second core is busy during both. */
+struct exact_job {
+	const struct mesh *m;
+	const uint8_t *skip;
+	int threads;
+	uint64_t count;
+	int rc;
+	struct st_error err;
+};
+
+static void *exact_job_run(void *arg)
+{
+	struct exact_job *job = arg;
+
+	job->rc = exact_count_self_intersections((const double(*)[3])job->m->verts,
+						 job->m->nverts,
+						 (const uint32_t(*)[3])job->m->tris, job->m->ntris,
+						 job->skip, job->threads, &job->count, &job->err);
+	return NULL;
 }
 
 int mesh_analyze(const struct mesh *m, int threads, struct mesh_report *rep,
 		 struct st_error *err)
 {
 	struct topo tp = {.m = m};
+	struct exact_job job = {.m = m, .threads = threads};
+	pthread_t exact_thread;
+	bool exact_running = false;
 	int rc;
 
 	memset(rep, 0, sizeof(*rep));
@@ -581,36 +628,50 @@ int mesh_analyze(const struct mesh *m, int threads, struct mesh_report *rep,
 		return st_error_set(err, ST_ERR_RANGE,
 				    "%zu triangles is more than the checker handles", m->ntris);
 	tp.tclass = malloc(m->ntris ? m->ntris : 1);
-	tp.tedge = malloc((m->ntris ? m->ntris : 1) * sizeof(*tp.tedge));
-	if (!tp.tclass || !tp.tedge) {
+	if (!tp.tclass) {
 		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory analysing %zu triangles",
 				  m->ntris);
 		goto out;
 	}
-	rc = classify_triangles(&tp, rep, err);
-	if (!rc)
-		rc = weld_edges(&tp, err);
-	if (!rc)
-		rc = build_incidence(&tp, err);
+	classify_triangles(&tp, rep);
+	rc = build_stars(&tp, err);
+	if (rc)
+		goto out;
+	find_duplicates(&tp, rep);
+	/* From here tclass is final and only read: the exact pass can start. */
+	job.skip = tp.tclass;
+	if (threads != 1 && pthread_create(&exact_thread, NULL, exact_job_run, &job) == 0)
+		exact_running = true;
+	rc = build_edges(&tp, err);
+	/* The stars are not needed past this point. */
+	free(tp.voff);
+	free(tp.vtri);
+	tp.voff = tp.vtri = NULL;
 	if (!rc)
 		rc = count_edges_and_parts(&tp, rep, err);
 	if (!rc)
-		rc = check_orientable(&tp, rep, err);
-	if (!rc)
 		rc = check_vertices_and_loops(&tp, rep, err);
-	if (rc)
-		goto out;
-	measure(&tp, rep);
-	/* The exact pass needs only the triangle classes: free the rest first. */
+	if (!rc)
+		measure(&tp, rep);
 	free_topology(&tp);
-	rc = exact_count_self_intersections((const double(*)[3])m->verts, m->nverts,
-					    (const uint32_t(*)[3])m->tris, m->ntris, tp.tclass,
-					    threads, &rep->self_intersections, err);
+	if (exact_running)
+		pthread_join(exact_thread, NULL);
+	else if (!rc)
+		exact_job_run(&job); /* one core, or no thread: run it here */
 	if (rc)
 		goto out;
+	if (job.rc) {
+		rc = job.rc;
+		if (err)
+			*err = job.err;
+		goto out;
+	}
+	rep->self_intersections = job.count;
 	judge(rep);
 out:
 	free_topology(&tp);
+	free(tp.voff);
+	free(tp.vtri);
 	free(tp.tclass);
 	return rc;
 }
