@@ -24,13 +24,13 @@ DEB_PACKAGES := gcc g++ make pkg-config dpkg-dev \
 BENCH_PACKAGES := admesh time bc
 
 WARN     := -Wall -Wextra -Werror
-CPPFLAGS := -Iinclude -Irepair -Irepair/exact -Ihost -D_XOPEN_SOURCE=700 -D_DEFAULT_SOURCE -MMD -MP
+CPPFLAGS := -Iinclude -Irepair -Irepair/exact -Iserial -Ihost -D_XOPEN_SOURCE=700 -D_DEFAULT_SOURCE -MMD -MP
 CFLAGS   ?= -O2 -g
 override CFLAGS += -std=c11 -pedantic $(WARN) -Wstrict-prototypes -Wmissing-prototypes -Wshadow -pthread
 # CGAL: exact predicates, TBB for the parallel box intersection.
 CXXFLAGS ?= -O2 -g
 override CXXFLAGS += -std=c++17 $(WARN) -Wno-deprecated-declarations -pthread -DCGAL_LINKED_WITH_TBB -DNDEBUG
-LDLIBS   := -ljansson -ltbb -lgmp -lmpfr -lm -pthread
+LDLIBS   := -lserialport -lutil -ljansson -ltbb -lgmp -lmpfr -lm -pthread
 TEST_LDLIBS := $(shell pkg-config --libs check 2>/dev/null || echo -lcheck -lsubunit -lrt) $(LDLIBS)
 
 # Sources: every .c under the module folders is library code except the CLI
