@@ -17,7 +17,7 @@ struct command {
 
 static const struct command commands[] = {
 	{"check", cmd_check, "report a mesh's topology and whether it is printable"},
-	/*PRINTERS*/ /* {"printers", cmd_printers, "list the printer profiles"}, */
+	{"printers", cmd_printers, "list the printer profiles"},
 };
 
 static void usage(FILE *out)

@@ -1,0 +1,326 @@
+/*
+ * profile.h - printer profiles: flat `key = value` files in PrusaSlicer's
+ * syntax (printers/NAME.ini), loaded, type-checked and range-checked into one
+ * struct profile, with a default for every key the file leaves out.
+ *
+ * Key names are PrusaSlicer's wherever PrusaSlicer has the setting
+ * (nozzle_diameter, bed_shape, gcode_flavor, retract_length, start_gcode ...);
+ * the serial side and the Sailfish machine definition use our own keys
+ * (protocol, baudrate, usb_ids, rx_buffer_size, dtr_reset, steps_per_mm_x ...).
+ * docs/printers.md lists every key with its type, range and default.
+ *
+ * Resolving a name: profile_find("NAME") reads NAME.ini from the first of
+ *   1. $STRATUM_PRINTERS_DIR, when set and not empty;
+ *   2. the printers/ folder beside the build tree: <exe dir>/../printers, or
+ *      <exe dir>/../../printers when the first does not exist
+ *      (build/stratum and build/asan/stratum both find the source tree's);
+ *   3. STRATUM_DATADIR, the installed profiles (default
+ *      /usr/local/share/stratum/printers).
+ * An argument containing '/' or ending in ".ini" is a file path instead.
+ *
+ * Errors: every function that can fail fills a caller-supplied struct
+ * st_error whose message starts with the file name and, for content errors,
+ * "line N: KEY: ". Classes: ST_ERR_IO (cannot open/read), ST_ERR_PARSE
+ * (syntax or type: "0.4mm", a line without '=', a duplicate key),
+ * ST_ERR_RANGE (a well-formed value outside its range or inconsistent with
+ * another key), ST_ERR_ARG (no such profile name), ST_ERR_NOMEM.
+ *
+ * Thread safety: loading reads the environment and the file system only;
+ * a loaded struct profile is immutable and may be shared between threads.
+ */
+#ifndef STRATUM_HOST_PROFILE_H
+#define STRATUM_HOST_PROFILE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "st_error.h"
+
+#ifndef STRATUM_DATADIR
+#define STRATUM_DATADIR "/usr/local/share/stratum/printers"
+#endif
+
+#define PROFILE_MAX_EXTRUDERS 8	    /* per-extruder lists hold at most this many */
+#define PROFILE_MAX_USB_IDS 16	    /* usb_ids entries */
+#define PROFILE_MAX_BED_POINTS 1024 /* bed_shape polygon corners */
+#define PROFILE_LINE_MAX 65536	    /* bytes per line, newline excluded */
+#define PROFILE_MAX_DIRS 3	    /* search directories, see above */
+#define PROFILE_PATH_MAX 4096	    /* longest directory or file path handled */
+
+/* Wire protocol the printer speaks (our key `protocol`). */
+enum profile_protocol {
+	PROFILE_PROTOCOL_MARLIN = 0, /* Marlin text G-code, line numbers + checksums */
+	PROFILE_PROTOCOL_SAILFISH,   /* S3G/X3G binary packets (Makerbot, FlashForge) */
+};
+
+/* PrusaSlicer's `gcode_flavor` values, in PrusaSlicer's order. */
+enum profile_flavor {
+	PROFILE_FLAVOR_REPRAP = 0,     /* "reprap" (RepRap/Sprinter) */
+	PROFILE_FLAVOR_REPRAPFIRMWARE, /* "reprapfirmware" */
+	PROFILE_FLAVOR_REPETIER,       /* "repetier" */
+	PROFILE_FLAVOR_TEACUP,	       /* "teacup" */
+	PROFILE_FLAVOR_MAKERWARE,      /* "makerware" (MakerBot) */
+	PROFILE_FLAVOR_MARLIN,	       /* "marlin" (Marlin 1.x, legacy) */
+	PROFILE_FLAVOR_MARLIN2,	       /* "marlin2" */
+	PROFILE_FLAVOR_KLIPPER,	       /* "klipper" */
+	PROFILE_FLAVOR_SAILFISH,       /* "sailfish" (MakerBot) */
+	PROFILE_FLAVOR_MACH3,	       /* "mach3" */
+	PROFILE_FLAVOR_MACHINEKIT,     /* "machinekit" */
+	PROFILE_FLAVOR_SMOOTHIE,       /* "smoothie" */
+	PROFILE_FLAVOR_NO_EXTRUSION,   /* "no-extrusion" */
+};
+
+/* Which end of an axis its homing endstop sits at (GPX ENDSTOP_IS_MIN/MAX). */
+enum profile_home {
+	PROFILE_HOME_MIN = 0,
+	PROFILE_HOME_MAX,
+};
+
+/* Axis indices for the per-axis arrays below. */
+enum profile_axis {
+	PROFILE_AXIS_X = 0,
+	PROFILE_AXIS_Y,
+	PROFILE_AXIS_Z,
+	PROFILE_AXIS_E,
+	PROFILE_AXES
+};
+
+/* A point of bed_shape or extruder_offset, in mm. */
+struct profile_point {
+	double x, y;
+};
+
+/* One USB VID:PID pair from usb_ids. */
+struct profile_usb_id {
+	uint16_t vid, pid;
+};
+
+struct profile_keys; /* the file's raw key = value lines (private) */
+
+/*
+ * A loaded profile.  Every field holds the file's value or the documented
+ * default; per-extruder arrays are filled for [0, extruder_count).  Strings
+ * are owned by the profile and never NULL (empty when unset).  Speeds are in
+ * mm/s, lengths in mm, temperatures in degrees C, as in PrusaSlicer.
+ */
+struct profile {
+	/* Identity */
+	const char *id;		   /* file base name without .ini: what --printer takes */
+	const char *path;	   /* the file it was loaded from */
+	const char *name;	   /* `name`: display name; default: id */
+	const char *description;   /* `description`: one line; default "" */
+	const char *printer_model; /* `printer_model` (PrusaSlicer), e.g. "MK3S" */
+
+	/* Serial side (our keys) */
+	enum profile_protocol protocol; /* `protocol`; default from gcode_flavor, else marlin */
+	long baudrate;			/* `baudrate`: a standard rate; default 115200 */
+	struct profile_usb_id usb_ids[PROFILE_MAX_USB_IDS]; /* `usb_ids` */
+	size_t usb_id_count;
+	int rx_buffer_size;  /* `rx_buffer_size`: Marlin RX ring, bytes; default 128 */
+	bool dtr_reset;	     /* `dtr_reset`: opening the port resets the board; default 1 */
+	int x3g_buffer_size; /* `x3g_buffer_size`: bytes, 0 = ask the firmware; default 0 */
+
+	/* Machine */
+	enum profile_flavor gcode_flavor; /* default: marlin2 (marlin), sailfish (sailfish) */
+	struct profile_point *bed_shape;  /* `bed_shape` polygon, bed_points corners */
+	size_t bed_points;
+	double bed_min_x, bed_min_y, bed_max_x, bed_max_y; /* bed_shape bounding box, mm */
+	double max_print_height;			   /* mm; default 200 */
+	bool use_relative_e_distances;			   /* M83 instead of M82; default 0 */
+	int extruder_count; /* `extruder_count`, else the length of nozzle_diameter, else 1 */
+
+	/* Per extruder (comma lists; one value applies to every extruder) */
+	double nozzle_diameter[PROFILE_MAX_EXTRUDERS];		     /* mm, 0.05-3; default 0.4 */
+	double filament_diameter[PROFILE_MAX_EXTRUDERS];	     /* mm, 1-3.5; default 1.75 */
+	double extrusion_multiplier[PROFILE_MAX_EXTRUDERS];	     /* default 1 */
+	struct profile_point extruder_offset[PROFILE_MAX_EXTRUDERS]; /* mm; default 0x0 */
+	int temperature[PROFILE_MAX_EXTRUDERS];			     /* C, 0-450; default 200 */
+	int first_layer_temperature[PROFILE_MAX_EXTRUDERS];	     /* C; default: temperature */
+	double retract_length[PROFILE_MAX_EXTRUDERS];		     /* mm; default 2 */
+	double retract_speed[PROFILE_MAX_EXTRUDERS];		     /* mm/s; default 40 */
+	double retract_lift[PROFILE_MAX_EXTRUDERS];		     /* mm (Z hop); default 0 */
+	double min_layer_height[PROFILE_MAX_EXTRUDERS];		     /* mm; default 0.07 */
+	double max_layer_height[PROFILE_MAX_EXTRUDERS]; /* mm; 0 in the file = 75% of nozzle */
+	double steps_per_mm_e[PROFILE_MAX_EXTRUDERS];	/* steps/mm; sailfish only */
+
+	/* Bed (PrusaSlicer keeps one per filament: the first is used) */
+	int bed_temperature;		 /* C, 0-150; default 0 */
+	int first_layer_bed_temperature; /* C; default: bed_temperature */
+
+	/* Print settings */
+	double layer_height;	   /* mm, > 0 and <= the smallest nozzle; default 0.2 */
+	double first_layer_height; /* mm (a percentage in the file is of layer_height) */
+	double extrusion_width;	   /* mm, 0 = auto (a percentage is of layer_height) */
+	int perimeters, top_solid_layers, bottom_solid_layers; /* defaults 3, 3, 3 */
+	double fill_density;				       /* percent, 0-100; default 20 */
+	const char *fill_pattern;	/* a PrusaSlicer pattern name; default "stars" */
+	int skirts;			/* loops; default 1 */
+	double brim_width;		/* mm; default 0 */
+	bool support_material;		/* default 0 */
+	int support_material_threshold; /* degrees, 0 = automatic; default 0 */
+
+	/* Speeds, mm/s */
+	double travel_speed;	  /* default 130 */
+	double perimeter_speed;	  /* default 60 */
+	double infill_speed;	  /* default 80 */
+	double first_layer_speed; /* mm/s, or percent when first_layer_speed_is_percent */
+	bool first_layer_speed_is_percent;
+
+	/* Cooling (per filament in PrusaSlicer: the first is used) */
+	bool cooling;			  /* default 1 */
+	int min_fan_speed, max_fan_speed; /* percent; defaults 35, 100 */
+	int bridge_fan_speed;		  /* percent; default 100 */
+	int fan_below_layer_time;	  /* s; default 60 */
+	int slowdown_below_layer_time;	  /* s; default 5 */
+	double min_print_speed;		  /* mm/s; default 10 */
+
+	/* Machine limits (PrusaSlicer keeps normal,stealth: the first is used) */
+	double machine_max_feedrate[PROFILE_AXES];     /* mm/s, machine_max_feedrate_x... */
+	double machine_max_acceleration[PROFILE_AXES]; /* mm/s^2, machine_max_acceleration_x... */
+	double machine_max_acceleration_extruding;     /* mm/s^2 */
+	double machine_max_acceleration_retracting;    /* mm/s^2 */
+	double machine_max_acceleration_travel;	       /* mm/s^2, 0 = not limited separately */
+	double machine_max_jerk[PROFILE_AXES];	       /* mm/s, machine_max_jerk_x... */
+
+	/* Sailfish machine definition for X3G (GPX `Machine`); 0 = unknown */
+	double steps_per_mm[3];		     /* X, Y, Z steps/mm: steps_per_mm_x/y/z */
+	enum profile_home home_direction[3]; /* home_direction_x/y/z = min|max */
+	double home_feedrate[3];	     /* mm/min (as G-code F): home_feedrate_x/y/z */
+	double home_position[3];	     /* mm after homing: home_position_x/y/z */
+	double x3g_toolhead_offset[3];	     /* mm, tool 1 from tool 0: x3g_toolhead_offset_x/y/z */
+
+	/* Custom G-code, escapes decoded (PrusaSlicer placeholders left as written) */
+	const char *start_gcode;
+	const char *end_gcode;
+
+	struct profile_keys *keys; /* private: every key = value of the file */
+};
+
+/* A profile file found by profile_list(). */
+struct profile_entry {
+	char *id;   /* file base name, what --printer takes */
+	char *path; /* full path of the .ini file */
+};
+
+/* The directories NAME lookups search, in order (see the top of this file). */
+struct profile_dirs {
+	size_t count;
+	char path[PROFILE_MAX_DIRS][PROFILE_PATH_MAX];
+};
+
+/*
+ * profile_load_file - read and validate one profile file.
+ * @path: the .ini file.
+ * @out:  on success *out is a new profile (free with profile_free); NULL on error.
+ * @err:  filled on error (may be NULL).
+ * Returns 0 or a negative st_status class (IO, PARSE, RANGE, NOMEM).  The
+ * whole file is checked before anything is returned: a profile with any bad
+ * line is rejected, never partly applied.  Unknown keys are kept (see
+ * profile_get), duplicate keys are an error.
+ */
+int profile_load_file(const char *path, struct profile **out, struct st_error *err);
+
+/*
+ * profile_load_buffer - as profile_load_file, from memory.
+ * @text, @len: the file's bytes (need not be NUL-terminated).
+ * @origin: the name used in error messages and as `path`; its base name
+ *          without ".ini" becomes the id.
+ */
+int profile_load_buffer(const char *text, size_t len, const char *origin, struct profile **out,
+			struct st_error *err);
+
+/*
+ * profile_find - load a profile by NAME or by path.
+ * @name_or_path: a value containing '/' or ending in ".ini" is a file path;
+ *                anything else is a NAME looked up as NAME.ini in the
+ *                directories of profile_search_dirs(), first match wins.
+ * @out, @err: as profile_load_file.
+ * Returns 0; ST_ERR_ARG when NAME is empty, not a plain name, or no
+ * directory has it (the message lists where it looked); else as
+ * profile_load_file.
+ */
+int profile_find(const char *name_or_path, struct profile **out, struct st_error *err);
+
+/*
+ * profile_search_dirs - the directories NAME lookups search, in order.
+ * Reads $STRATUM_PRINTERS_DIR and /proc/self/exe; never fails (a directory
+ * that cannot be determined is left out).
+ */
+void profile_search_dirs(struct profile_dirs *dirs);
+
+/*
+ * profile_list - every NAME.ini in the search directories, sorted by id.
+ * A name found in an earlier directory hides the same name in later ones.
+ * Files are only listed, not loaded.  Missing or unreadable directories are
+ * skipped.
+ * @out: on success a new array (free with profile_list_free), NULL when empty.
+ * @count: number of entries.
+ * Returns 0 or ST_ERR_NOMEM.
+ */
+int profile_list(struct profile_entry **out, size_t *count, struct st_error *err);
+
+/* profile_list_free - free a profile_list() result; NULL is fine. */
+void profile_list_free(struct profile_entry *list, size_t count);
+
+/* profile_free - free a profile; NULL is fine. */
+void profile_free(struct profile *p);
+
+/*
+ * profile_get - the value of any key of the file, escapes decoded, or NULL
+ * when the file does not set it (defaults are not returned here; read the
+ * struct fields for resolved values).  The string is owned by the profile.
+ * This is how later code reads keys the loader does not type yet.
+ */
+const char *profile_get(const struct profile *p, const char *key);
+
+/*
+ * profile_key_line - the line (from 1) that set key, or 0 when the file
+ * does not set it.  For error messages about a key's value.
+ */
+int profile_key_line(const struct profile *p, const char *key);
+
+/*
+ * profile_get_number - read an untyped key as a number, checked with the
+ * loader's own number grammar ([+-]digits[.digits], no exponent) and range.
+ * @dflt: stored in *out when the file does not set key.
+ * Returns 0; ST_ERR_PARSE or ST_ERR_RANGE with "FILE: line N: KEY: ..." in err.
+ */
+int profile_get_number(const struct profile *p, const char *key, double min, double max,
+		       double dflt, double *out, struct st_error *err);
+
+/*
+ * profile_key_count / profile_key_at - iterate over the file's keys in file
+ * order.  profile_key_at returns the key and sets *value (decoded) and *line;
+ * NULL when i is out of range.
+ */
+size_t profile_key_count(const struct profile *p);
+const char *profile_key_at(const struct profile *p, size_t i, const char **value, int *line);
+
+/* profile_key_known - true when the loader types and checks this key. */
+bool profile_key_known(const char *key);
+
+/* Names for the enums, as written in profile files ("marlin", "marlin2", "max"). */
+const char *profile_protocol_name(enum profile_protocol protocol);
+const char *profile_flavor_name(enum profile_flavor flavor);
+const char *profile_home_name(enum profile_home dir);
+
+/*
+ * profile_write - write the resolved settings as a flat profile file: every
+ * key the loader knows with its resolved value (defaults included), then the
+ * file's other keys unchanged.  Loading the output gives the same profile.
+ * @f: an open stream; returns 0 or ST_ERR_IO (errno from the stream).
+ */
+int profile_write(const struct profile *p, FILE *f);
+
+struct json_t;
+/*
+ * profile_to_json - the resolved settings as a new JSON object: "id",
+ * "path", "settings" (every known key, typed: numbers, booleans, arrays,
+ * strings) and "other" (the file's remaining keys as strings).  NULL when
+ * out of memory.  The caller owns the reference (json_decref).
+ */
+struct json_t *profile_to_json(const struct profile *p);
+
+#endif /* STRATUM_HOST_PROFILE_H */
