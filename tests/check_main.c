@@ -5,13 +5,6 @@
 #include "suites.h"
 #include "testutil.h"
 
-/* TEMPORARY while the suites are written in parallel: weak, skipped if absent. */
-#pragma weak mesh_suite
-#pragma weak meshio_suite
-#pragma weak exact_suite
-#pragma weak profile_suite
-#pragma weak cli_suite
-
 int main(void)
 {
 	Suite *(*const suites[])(void) = {mesh_suite, meshio_suite, exact_suite, profile_suite,
@@ -21,8 +14,7 @@ int main(void)
 
 	tu_scratch_init();
 	for (size_t i = 0; i < sizeof(suites) / sizeof(suites[0]); i++)
-		if (suites[i])
-			srunner_add_suite(sr, suites[i]());
+		srunner_add_suite(sr, suites[i]());
 	srunner_run_all(sr, CK_NORMAL);
 	failed = srunner_ntests_failed(sr);
 	srunner_free(sr);
