@@ -14,6 +14,7 @@
  * strtod; the program never calls setlocale, so the C locale's '.' applies.
  */
 #include "profile.h"
+#include "st_number.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -26,7 +27,6 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#define NUMBER_MAX 64		     /* longest number token accepted */
 #define FILE_MAX (16u * 1024 * 1024) /* a profile is a few KiB; refuse absurd files */
 #define TOKEN_SHOW 40		     /* bytes of an offending value quoted in messages */
 
@@ -325,41 +325,10 @@ static void fmt_double(char *buf, size_t cap, double v)
 		snprintf(buf, cap, "%.17g", v);
 }
 
-/*
- * Check s[0..len) against [+-]digits[.digits] / [+-].digits / [+-]digits.
- * and convert it; false if it does not match or is not finite.
- */
+/* s[0..len) as a decimal number without exponent; false if it is not one. */
 static bool parse_number(const char *s, size_t len, double *out)
 {
-	char buf[NUMBER_MAX + 1];
-	size_t i = 0, digits = 0;
-	char *end;
-	double v;
-
-	if (len == 0 || len > NUMBER_MAX)
-		return false;
-	if (s[i] == '+' || s[i] == '-')
-		i++;
-	while (i < len && is_digit(s[i])) {
-		i++;
-		digits++;
-	}
-	if (i < len && s[i] == '.') {
-		i++;
-		while (i < len && is_digit(s[i])) {
-			i++;
-			digits++;
-		}
-	}
-	if (i != len || digits == 0)
-		return false;
-	memcpy(buf, s, len);
-	buf[len] = '\0';
-	v = strtod(buf, &end);
-	if (end != buf + len || !isfinite(v))
-		return false;
-	*out = v;
-	return true;
+	return st_parse_double(s, len, 0, out) == ST_NUMBER_OK;
 }
 
 /* [+-]digits, at most 18 digits, into *out. */

@@ -18,13 +18,14 @@
 #include "mesh.h"
 #include "meshio.h"
 #include "st_error.h"
+#include "st_number.h"
 
 /* File reads go through a window of this many bytes (memory budget). */
 #define MIO_CHUNK 65536
 /* Longest accepted text line, without its line break, in bytes. */
 #define MIO_LINE_MAX 4096
 /* Longest accepted number token ("-1.2345678901234567e-305" is 24). */
-#define MIO_NUM_MAX 96
+#define MIO_NUM_MAX ST_NUMBER_MAX
 
 /* A byte source: a file read in chunks or a buffer in memory. */
 struct mio_src {

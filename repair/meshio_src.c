@@ -246,51 +246,16 @@ static bool nonfinite_word(const char *tok, size_t len)
 
 enum mio_num mio_parse_double(const char *tok, size_t len, double *v)
 {
-	char buf[MIO_NUM_MAX + 1];
-	char *endp;
-	size_t i = 0, nd = 0, nf = 0, ne = 0;
-
 	if (nonfinite_word(tok, len))
 		return MIO_NUM_NONFINITE;
-	if (len == 0 || len > MIO_NUM_MAX)
-		return MIO_NUM_BAD;
-	if (tok[i] == '+' || tok[i] == '-')
-		i++;
-	while (i < len && is_digit(tok[i])) {
-		i++;
-		nd++;
-	}
-	if (i < len && tok[i] == '.') {
-		i++;
-		while (i < len && is_digit(tok[i])) {
-			i++;
-			nf++;
-		}
-	}
-	if (nd + nf == 0)
-		return MIO_NUM_BAD;
-	if (i < len && (tok[i] == 'e' || tok[i] == 'E')) {
-		i++;
-		if (i < len && (tok[i] == '+' || tok[i] == '-'))
-			i++;
-		while (i < len && is_digit(tok[i])) {
-			i++;
-			ne++;
-		}
-		/* Bounded exponent: "1e+308" fits, "1e0000000000001" does not. */
-		if (ne == 0 || ne > 5)
-			return MIO_NUM_BAD;
-	}
-	if (i != len)
-		return MIO_NUM_BAD;
-	memcpy(buf, tok, len);
-	buf[len] = '\0';
-	*v = strtod(buf, &endp);
-	if (endp != buf + len)
-		return MIO_NUM_BAD;
-	if (!isfinite(*v))
+	switch (st_parse_double(tok, len, ST_NUMBER_EXPONENT, v)) {
+	case ST_NUMBER_OK:
+		return MIO_NUM_OK;
+	case ST_NUMBER_NONFINITE:
 		return MIO_NUM_NONFINITE;
-	return MIO_NUM_OK;
+	default:
+		return MIO_NUM_BAD;
+	}
 }
 
 bool mio_parse_int(const char *tok, size_t len, long long *v)
