@@ -1,0 +1,1101 @@
+/*
+ * gcode.c - G-code line parser, number reader, checksums, classifier,
+ * slicer layer comments and a streaming line reader.  See gcode.h for the
+ * accepted syntax; every read below is checked against the line's end.
+ */
+#include "gcode.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Significant digits the number reader keeps exactly (10^15 < 2^53). */
+#define NUM_SIG_MAX 15
+/* Powers of ten that are exact doubles. */
+static const double pow10_exact[] = {
+    1e0,  1e1,	1e2,  1e3,  1e4,  1e5,	1e6,  1e7,  1e8,  1e9,	1e10, 1e11,
+    1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+};
+#define POW10_MAX ((int)(sizeof(pow10_exact) / sizeof(pow10_exact[0])) - 1)
+
+/* Characters of a token quoted in a message. */
+#define QUOTE_MAX 24
+
+enum num_status {
+	NUM_OK = 0,
+	NUM_SYNTAX,	/* not [+-]digits[.digits] */
+	NUM_TOO_LONG,	/* more than GCODE_NUMBER_MAX characters */
+	NUM_TOO_PRECISE /* more than NUM_SIG_MAX significant digits or 22 decimals */
+};
+
+/* Why a number was refused, as the tail of a message. */
+static const char *num_reason(enum num_status st)
+{
+	switch (st) {
+	case NUM_TOO_LONG:
+		return " (longer than 24 characters)";
+	case NUM_TOO_PRECISE:
+		return " (more than 15 significant digits or 22 decimals)";
+	default:
+		return "";
+	}
+}
+
+/* Convert [+-]digits[.digits] exactly as written; no locale, no exponent. */
+static enum num_status scan_number(const char *s, size_t n, double *value)
+{
+	size_t i = 0, digits = 0;
+	uint64_t mant = 0;
+	int sig = 0, frac = 0, zeros = 0;
+	bool neg = false, dot = false;
+	double v;
+
+	if (n > GCODE_NUMBER_MAX)
+		return NUM_TOO_LONG;
+	if (i < n && (s[i] == '+' || s[i] == '-'))
+		neg = s[i++] == '-';
+	for (; i < n; i++) {
+		char c = s[i];
+
+		if (c == '.') {
+			if (dot)
+				return NUM_SYNTAX;
+			dot = true;
+			continue;
+		}
+		if (c < '0' || c > '9')
+			return NUM_SYNTAX;
+		digits++;
+		if (dot && c == '0') {
+			zeros++; /* trailing fraction zeros change nothing */
+			continue;
+		}
+		if (!dot && mant == 0 && c == '0')
+			continue; /* leading zero */
+		for (; zeros > 0; zeros--) {
+			if (mant != 0 && ++sig > NUM_SIG_MAX)
+				return NUM_TOO_PRECISE;
+			mant *= 10;
+			frac++;
+		}
+		if (++sig > NUM_SIG_MAX)
+			return NUM_TOO_PRECISE;
+		mant = mant * 10 + (uint64_t)(c - '0');
+		if (dot)
+			frac++;
+	}
+	if (digits == 0)
+		return NUM_SYNTAX;
+	if (frac > POW10_MAX)
+		return NUM_TOO_PRECISE;
+	/* Both operands are exact doubles, so one division rounds correctly. */
+	v = (double)mant / pow10_exact[frac];
+	*value = neg ? -v : v;
+	return NUM_OK;
+}
+
+int gcode_read_number(const char *buf, size_t len, double *value, struct st_error *err)
+{
+	enum num_status st;
+	double v = 0;
+
+	if (!buf || !value)
+		return st_error_set(err, ST_ERR_ARG, "gcode_read_number: NULL argument");
+	st = scan_number(buf, len, &v);
+	if (st != NUM_OK)
+		return st_error_set(err, ST_ERR_PARSE, "'%.*s' is not a number%s",
+				    (int)(len < QUOTE_MAX ? len : QUOTE_MAX), buf, num_reason(st));
+	*value = v;
+	return 0;
+}
+
+uint8_t gcode_checksum(const char *s, size_t n)
+{
+	uint8_t cs = 0;
+
+	for (size_t i = 0; i < n; i++)
+		cs ^= (uint8_t)s[i];
+	return cs;
+}
+
+int gcode_format_numbered(char *out, size_t cap, long n, const char *cmd)
+{
+	char head[16];
+	size_t hlen, clen, need;
+	uint8_t cs;
+	int w;
+
+	if (out && cap > 0)
+		out[0] = '\0';
+	if (!out || !cmd || n < 0 || n > 2147483647L)
+		return ST_ERR_ARG;
+	clen = strlen(cmd);
+	if (clen == 0 || clen > GCODE_LINE_MAX)
+		return ST_ERR_ARG;
+	for (size_t i = 0; i < clen; i++) {
+		unsigned char c = (unsigned char)cmd[i];
+
+		if ((c < 0x20 && c != '\t') || c >= 0x7f || c == ';')
+			return ST_ERR_ARG;
+	}
+	w = snprintf(head, sizeof(head), "N%ld ", n);
+	if (w < 0 || (size_t)w >= sizeof(head))
+		return ST_ERR_ARG;
+	hlen = (size_t)w;
+	cs = (uint8_t)(gcode_checksum(head, hlen) ^ gcode_checksum(cmd, clen));
+	need = hlen + clen + 1 + (cs >= 100 ? 3 : cs >= 10 ? 2 : 1);
+	if (need + 1 > cap)
+		return ST_ERR_RANGE;
+	memcpy(out, head, hlen);
+	memcpy(out + hlen, cmd, clen);
+	snprintf(out + hlen + clen, cap - hlen - clen, "*%u", (unsigned)cs);
+	return (int)need;
+}
+
+/* ---- the line parser ---- */
+
+struct parser {
+	const char *buf;
+	size_t len; /* line ending removed */
+	size_t pos;
+	struct gcode_line *l;
+	struct st_error *err;
+};
+
+static bool is_blank(char c)
+{
+	return c == ' ' || c == '\t';
+}
+
+static bool is_alpha(char c)
+{
+	return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z');
+}
+
+static bool is_digit(char c)
+{
+	return c >= '0' && c <= '9';
+}
+
+static char upper(char c)
+{
+	return (c >= 'a' && c <= 'z') ? (char)(c - 'a' + 'A') : c;
+}
+
+/* End of the token that starts at pos, for quoting it in a message. */
+static size_t token_end(const struct parser *p, size_t pos)
+{
+	size_t e = pos;
+
+	while (e < p->len && e - pos < QUOTE_MAX && !is_blank(p->buf[e]) && p->buf[e] != ';' &&
+	       p->buf[e] != '(' && p->buf[e] != '*' && (unsigned char)p->buf[e] >= 0x20 &&
+	       (unsigned char)p->buf[e] < 0x7f)
+		e++;
+	return e;
+}
+
+/* Fail with "column C: 'TOKEN' <what>", quoting the token at pos. */
+static int fail_token(const struct parser *p, size_t pos, const char *what)
+{
+	size_t e = token_end(p, pos);
+
+	return st_error_set(p->err, ST_ERR_PARSE, "column %zu: '%.*s' %s", pos + 1, (int)(e - pos),
+			    p->buf + pos, what);
+}
+
+/* Refuse a byte of the command part that is not printable ASCII. */
+static int check_ascii(const struct parser *p, size_t pos)
+{
+	unsigned char c = (unsigned char)p->buf[pos];
+
+	if (c >= 0x80)
+		return st_error_set(p->err, ST_ERR_PARSE,
+				    "column %zu: non-ASCII byte 0x%02x; G-code commands are ASCII",
+				    pos + 1, c);
+	return 0;
+}
+
+/* Append to the cleaned text; refuse a command that grows too long. */
+static int text_put(struct parser *p, const char *s, size_t n)
+{
+	struct gcode_line *l = p->l;
+
+	if (n > GCODE_LINE_MAX - l->text_len)
+		return st_error_set(p->err, ST_ERR_PARSE,
+				    "command longer than %d characters (comments excluded); "
+				    "it is rejected, not cut",
+				    GCODE_LINE_MAX);
+	memcpy(l->text + l->text_len, s, n);
+	l->text_len += n;
+	l->text[l->text_len] = '\0';
+	return 0;
+}
+
+/* Keep comment text (possibly in part) in dst of GCODE_COMMENT_MAX + 1. */
+static void keep_comment(char *dst, size_t *dlen, bool *trunc, const char *s, size_t n)
+{
+	size_t room = GCODE_COMMENT_MAX - *dlen;
+
+	if (n > room) {
+		n = room;
+		*trunc = true;
+	}
+	memcpy(dst + *dlen, s, n);
+	*dlen += n;
+	dst[*dlen] = '\0';
+}
+
+/* Skip blanks and "( ... )" comments, keeping the comments' text. */
+static int skip_space(struct parser *p)
+{
+	struct gcode_line *l = p->l;
+
+	while (p->pos < p->len) {
+		char c = p->buf[p->pos];
+		size_t open, s, e;
+
+		if (is_blank(c)) {
+			p->pos++;
+			continue;
+		}
+		if (c != '(')
+			break;
+		open = p->pos;
+		e = open + 1;
+		while (e < p->len && p->buf[e] != ')')
+			e++;
+		if (e >= p->len)
+			return st_error_set(
+			    p->err, ST_ERR_PARSE,
+			    "column %zu: unterminated '(' comment; close it with ')'", open + 1);
+		for (s = open + 1; s < e && is_blank(p->buf[s]); s++)
+			;
+		{
+			size_t t = e;
+
+			while (t > s && is_blank(p->buf[t - 1]))
+				t--;
+			if (l->has_paren && t > s)
+				keep_comment(l->paren, &l->paren_len, &l->paren_truncated, " ", 1);
+			if (t > s || !l->has_paren)
+				keep_comment(l->paren, &l->paren_len, &l->paren_truncated,
+					     p->buf + s, t - s);
+		}
+		l->has_paren = true;
+		p->pos = e + 1;
+	}
+	return 0;
+}
+
+/* Read up to maxd decimal digits at pos into *v; returns how many (0 = none).
+ * A longer run of digits is reported as maxd + 1. */
+static size_t read_digits(const struct parser *p, size_t pos, size_t maxd, unsigned long *v)
+{
+	size_t n = 0;
+	unsigned long acc = 0;
+
+	while (pos + n < p->len && is_digit(p->buf[pos + n])) {
+		if (n == maxd)
+			return maxd + 1;
+		acc = acc * 10 + (unsigned long)(p->buf[pos + n] - '0');
+		n++;
+	}
+	*v = acc;
+	return n;
+}
+
+/* True if the byte at pos may end a number or a command number. */
+static bool at_delimiter(const struct parser *p, size_t pos)
+{
+	char c;
+
+	if (pos >= p->len)
+		return true;
+	c = p->buf[pos];
+	return is_blank(c) || c == ';' || c == '(' || c == '*' || is_alpha(c);
+}
+
+/* Parse "*<cs>" at pos and check only blanks or comments follow. */
+static int parse_checksum(struct parser *p)
+{
+	size_t star = p->pos, q = star + 1, nd;
+	unsigned long v = 0;
+	int rc;
+
+	while (q < p->len && is_blank(p->buf[q]))
+		q++;
+	nd = read_digits(p, q, 3, &v);
+	if (nd == 0 || nd > 3 || v > 255 || !at_delimiter(p, q + nd) ||
+	    (q + nd < p->len && is_alpha(p->buf[q + nd])))
+		return st_error_set(p->err, ST_ERR_PARSE,
+				    "column %zu: '*' must be followed by a checksum from 0 to 255",
+				    star + 1);
+	p->pos = q + nd;
+	rc = skip_space(p);
+	if (rc)
+		return rc;
+	if (p->pos < p->len && p->buf[p->pos] != ';')
+		return st_error_set(p->err, ST_ERR_PARSE,
+				    "column %zu: text after the checksum; the checksum must end "
+				    "the command",
+				    p->pos + 1);
+	p->l->has_checksum = true;
+	p->l->checksum = (uint8_t)v;
+	p->l->checksum_computed = 0; /* set by the caller, which knows the start */
+	return (int)star;
+}
+
+/* Marlin string-argument commands: the rest of the line is one string. */
+static bool takes_string(char letter, int number)
+{
+	if (letter != 'M')
+		return false;
+	switch (number) {
+	case 23:
+	case 28:
+	case 30:
+	case 32:
+	case 117:
+	case 118:
+	case 928:
+		return true;
+	default:
+		return false;
+	}
+}
+
+/* The kind of a command (letter 0 = no command). */
+static enum gcode_kind classify(char letter, int n)
+{
+	if (letter == 0 || letter == '@')
+		return GCODE_KIND_HOST_ONLY;
+	if (letter == 'T')
+		return GCODE_KIND_TOOL_CHANGE;
+	if (letter == 'G') {
+		switch (n) {
+		case 0:
+		case 1:
+		case 2:
+		case 3:
+		case 5:
+			return GCODE_KIND_MOTION;
+		case 4:
+			return GCODE_KIND_DWELL;
+		case 28:
+			return GCODE_KIND_HOME;
+		case 29:
+		case 30:
+		case 31:
+		case 32:
+		case 33:
+		case 34:
+		case 35:
+		case 38:
+		case 80:
+			return GCODE_KIND_PROBE;
+		case 92:
+			return GCODE_KIND_SET_POSITION;
+		case 20:
+		case 21:
+		case 90:
+		case 91:
+			return GCODE_KIND_MODE;
+		default:
+			return GCODE_KIND_OTHER;
+		}
+	}
+	switch (n) { /* M */
+	case 0:
+	case 1:
+	case 226:
+	case 600:
+		return GCODE_KIND_USER_WAIT;
+	case 6:
+		return GCODE_KIND_TOOL_CHANGE;
+	case 48:
+		return GCODE_KIND_PROBE;
+	case 82:
+	case 83:
+		return GCODE_KIND_MODE;
+	case 104:
+	case 140:
+	case 141:
+		return GCODE_KIND_TEMP_SET;
+	case 109:
+	case 116:
+	case 190:
+	case 191:
+		return GCODE_KIND_TEMP_WAIT;
+	case 106:
+	case 107:
+		return GCODE_KIND_FAN;
+	case 400:
+		return GCODE_KIND_FINISH_MOVES;
+	case 108:
+	case 112:
+	case 410:
+	case 524:
+	case 876:
+		return GCODE_KIND_EMERGENCY;
+	case 110:
+		return GCODE_KIND_LINE_NUMBER;
+	case 105:
+	case 114:
+	case 115:
+	case 119:
+	case 155:
+		return GCODE_KIND_REPORT;
+	case 73:
+	case 117:
+	case 118:
+		return GCODE_KIND_MESSAGE;
+	default:
+		return GCODE_KIND_OTHER;
+	}
+}
+
+/* Parse "[N<n>]" at the start of the command part. */
+static int parse_line_number(struct parser *p)
+{
+	size_t col = p->pos, nd;
+	unsigned long v = 0;
+
+	nd = read_digits(p, col + 1, 10, &v);
+	if (nd == 0)
+		return st_error_set(p->err, ST_ERR_PARSE,
+				    "column %zu: N without a number; the line number is "
+				    "N followed by digits",
+				    col + 1);
+	if (nd > 10 || v > 2147483647UL)
+		return fail_token(p, col, "is out of range; line numbers go from 0 to 2147483647");
+	if (!at_delimiter(p, col + 1 + nd))
+		return fail_token(p, col, "is not a line number");
+	p->l->has_line_number = true;
+	p->l->line_number = (long)v;
+	p->pos = col + 1 + nd;
+	return skip_space(p);
+}
+
+/* Parse the command letter and number: G1, M104, T0, G29.1. */
+static int parse_command(struct parser *p)
+{
+	struct gcode_line *l = p->l;
+	size_t col = p->pos, q = col + 1, nd;
+	unsigned long v = 0, sub = 0;
+	char letter = upper(p->buf[col]), tmp[24];
+	int w;
+
+	while (q < p->len && is_blank(p->buf[q]))
+		q++;
+	nd = read_digits(p, q, 5, &v);
+	if (nd == 0)
+		return st_error_set(p->err, ST_ERR_PARSE,
+				    "column %zu: command letter '%c' without a number; "
+				    "write it as %c<number>",
+				    col + 1, letter, letter);
+	if (nd > 5)
+		return fail_token(p, col, "has a command number over 5 digits");
+	q += nd;
+	l->letter = letter;
+	l->number = (int)v;
+	l->subcode = -1;
+	if (q < p->len && p->buf[q] == '.' && letter != 'T') {
+		size_t sd = read_digits(p, q + 1, 3, &sub);
+
+		if (sd == 0 || sd > 3)
+			return fail_token(p, col, "is not a command (bad subcode after '.')");
+		l->subcode = (int)sub;
+		q += 1 + sd;
+	}
+	if (!at_delimiter(p, q))
+		return fail_token(p, col, "is not a command");
+	if (l->subcode >= 0)
+		w = snprintf(tmp, sizeof(tmp), "%c%d.%d", letter, l->number, l->subcode);
+	else
+		w = snprintf(tmp, sizeof(tmp), "%c%d", letter, l->number);
+	p->pos = q;
+	return text_put(p, tmp, (size_t)w);
+}
+
+/* Rest of a string-argument command (or '@' host command) up to ';'. */
+static int parse_string(struct parser *p, size_t first)
+{
+	struct gcode_line *l = p->l;
+	size_t s = p->pos, end = s, e, d;
+	int rc;
+
+	while (s < p->len && is_blank(p->buf[s]))
+		s++;
+	while (end < p->len && p->buf[end] != ';')
+		end++;
+	for (size_t i = s; i < end; i++)
+		if ((rc = check_ascii(p, i)))
+			return rc;
+	/* A trailing "*<digits>" is the checksum (Marlin looks for the last '*'). */
+	e = end;
+	while (e > s && is_blank(p->buf[e - 1]))
+		e--;
+	d = e;
+	while (d > s && e - d < 4 && is_digit(p->buf[d - 1]))
+		d--;
+	if (l->letter != '@' && d < e && e - d <= 3 && d > s && p->buf[d - 1] == '*') {
+		unsigned long v = 0;
+
+		read_digits(p, d, 3, &v);
+		if (v > 255)
+			return st_error_set(p->err, ST_ERR_PARSE,
+					    "column %zu: '*' must be followed by a checksum "
+					    "from 0 to 255",
+					    d);
+		l->has_checksum = true;
+		l->checksum = (uint8_t)v;
+		l->checksum_computed = gcode_checksum(p->buf + first, d - 1 - first);
+		e = d - 1;
+	}
+	while (e > s && is_blank(p->buf[e - 1]))
+		e--;
+	if (l->letter != '@' && e > s && (rc = text_put(p, " ", 1)))
+		return rc;
+	l->string_off = l->letter == '@' ? 1 : l->text_len;
+	l->has_string = true;
+	if ((rc = text_put(p, p->buf + s, e - s)))
+		return rc;
+	p->pos = end;
+	return 0;
+}
+
+/* Read one word "L[value]" at p->pos. */
+static int parse_word(struct parser *p)
+{
+	struct gcode_line *l = p->l;
+	size_t col = p->pos, q = col + 1, ne;
+	char letter = upper(p->buf[col]);
+	struct gcode_word *wd;
+	const struct gcode_word *dup = gcode_find_word(l, letter);
+	int rc;
+
+	if (dup)
+		return st_error_set(p->err, ST_ERR_PARSE,
+				    "column %zu: '%c' appears twice (first at column %u); "
+				    "give each letter once",
+				    col + 1, letter, (unsigned)dup->column);
+	wd = &l->words[l->nwords];
+	wd->letter = letter;
+	wd->column = (uint32_t)(col + 1);
+	wd->has_value = false;
+	wd->value = 0;
+	while (q < p->len && is_blank(p->buf[q]))
+		q++;
+	if (q < p->len &&
+	    (is_digit(p->buf[q]) || p->buf[q] == '.' || p->buf[q] == '+' || p->buf[q] == '-')) {
+		enum num_status st;
+
+		ne = q;
+		if (p->buf[ne] == '+' || p->buf[ne] == '-')
+			ne++;
+		while (ne < p->len && (is_digit(p->buf[ne]) || p->buf[ne] == '.'))
+			ne++;
+		st = scan_number(p->buf + q, ne - q, &wd->value);
+		if (st != NUM_OK || !at_delimiter(p, ne)) {
+			size_t e = token_end(p, col);
+
+			return st_error_set(p->err, ST_ERR_PARSE,
+					    "column %zu: '%.*s' is not a number%s", col + 1,
+					    (int)(e - col), p->buf + col, num_reason(st));
+		}
+		wd->has_value = true;
+		if ((rc = text_put(p, " ", 1)) || (rc = text_put(p, &letter, 1)) ||
+		    (rc = text_put(p, p->buf + q, ne - q)))
+			return rc;
+		p->pos = ne;
+	} else {
+		if ((rc = text_put(p, " ", 1)) || (rc = text_put(p, &letter, 1)))
+			return rc;
+		p->pos = col + 1;
+	}
+	l->nwords++;
+	return 0;
+}
+
+/* The whole line into p->l; returns 0 or a negative class. */
+static int parse_line(struct parser *p, unsigned flags)
+{
+	struct gcode_line *l = p->l;
+	size_t first, star = 0;
+	bool has_star = false;
+	int rc;
+
+	/* Control bytes are refused everywhere, comments included. */
+	for (size_t i = 0; i < p->len; i++) {
+		unsigned char c = (unsigned char)p->buf[i];
+
+		if ((c < 0x20 && c != '\t') || c == 0x7f)
+			return st_error_set(p->err, ST_ERR_PARSE,
+					    "column %zu: control byte 0x%02x; a G-code line holds "
+					    "printable ASCII and tabs only",
+					    i + 1, c);
+	}
+	while (p->pos < p->len && is_blank(p->buf[p->pos]))
+		p->pos++;
+	first = p->pos;
+	if ((rc = skip_space(p)))
+		return rc;
+	if (p->pos < p->len && upper(p->buf[p->pos]) == 'N' && (rc = parse_line_number(p)))
+		return rc;
+
+	if (p->pos < p->len && p->buf[p->pos] != ';' && p->buf[p->pos] != '*') {
+		char c = upper(p->buf[p->pos]);
+
+		if ((rc = check_ascii(p, p->pos)))
+			return rc;
+		if (c == '@' && !l->has_line_number) {
+			l->letter = '@';
+			if ((rc = text_put(p, "@", 1)))
+				return rc;
+			p->pos++;
+			/* the name follows '@' directly */
+			if ((rc = parse_string(p, first)))
+				return rc;
+			if (l->text_len == 1)
+				return st_error_set(p->err, ST_ERR_PARSE,
+						    "column %zu: '@' without a host command name",
+						    first + 1);
+		} else if (c == 'G' || c == 'M' || c == 'T') {
+			if ((rc = parse_command(p)))
+				return rc;
+		} else if (is_alpha(c)) {
+			return fail_token(p, p->pos,
+					  "is not a command; a line starts with G, M or T");
+		} else {
+			return fail_token(p, p->pos, "is not a command");
+		}
+	}
+
+	if (takes_string(l->letter, l->number)) {
+		if ((rc = parse_string(p, first)))
+			return rc;
+	} else if (l->letter != '@') {
+		for (;;) {
+			char c;
+
+			if ((rc = skip_space(p)))
+				return rc;
+			if (p->pos >= p->len || p->buf[p->pos] == ';')
+				break;
+			c = p->buf[p->pos];
+			if (c == '*') {
+				rc = parse_checksum(p);
+				if (rc < 0)
+					return rc;
+				star = (size_t)rc;
+				has_star = true;
+				break;
+			}
+			if ((rc = check_ascii(p, p->pos)))
+				return rc;
+			if (is_alpha(c)) {
+				if (l->letter == 0)
+					return fail_token(p, p->pos,
+							  "is not a command; a line "
+							  "starts with G, M or T");
+				if ((rc = parse_word(p)))
+					return rc;
+				continue;
+			}
+			if (is_digit(c) || c == '.' || c == '+' || c == '-')
+				return fail_token(p, p->pos, "has no word letter in front");
+			return st_error_set(p->err, ST_ERR_PARSE,
+					    "column %zu: unexpected character '%c'", p->pos + 1, c);
+		}
+		if (has_star)
+			l->checksum_computed = gcode_checksum(p->buf + first, star - first);
+	}
+
+	/* The ';' comment runs to the end of the line. */
+	if (p->pos < p->len && p->buf[p->pos] == ';') {
+		size_t s = p->pos + 1, e = p->len;
+
+		while (e > s && is_blank(p->buf[e - 1]))
+			e--;
+		l->has_comment = true;
+		keep_comment(l->comment, &l->comment_len, &l->comment_truncated, p->buf + s, e - s);
+	}
+
+	/* Parameters that must have a value. */
+	if (l->letter == 'G' && l->number <= 5 && l->number != -1) {
+		for (size_t i = 0; i < l->nwords; i++)
+			if (!l->words[i].has_value)
+				return st_error_set(p->err, ST_ERR_PARSE,
+						    "column %u: '%c' without a value; G%d needs a "
+						    "number after each letter",
+						    (unsigned)l->words[i].column,
+						    l->words[i].letter, l->number);
+	}
+
+	if (!l->has_string)
+		l->string_off = l->text_len;
+	l->kind = classify(l->letter, l->number);
+	l->checksum_ok = true;
+	if (l->has_checksum && l->checksum != l->checksum_computed) {
+		if (!(flags & GCODE_PARSE_KEEP_BAD_CHECKSUM))
+			return st_error_set(p->err, ST_ERR_PARSE,
+					    "checksum %u does not match %u computed from the line; "
+					    "the line was damaged",
+					    (unsigned)l->checksum, (unsigned)l->checksum_computed);
+		l->checksum_ok = false;
+	}
+	return 0;
+}
+
+int gcode_parse(const char *buf, size_t len, unsigned flags, struct gcode_line *out,
+		struct st_error *err)
+{
+	struct gcode_line tmp;
+	struct parser p;
+	int rc;
+
+	if (!out || (!buf && len > 0))
+		return st_error_set(err, ST_ERR_ARG, "gcode_parse: NULL argument");
+	if (!buf)
+		buf = "";
+	if (len > 0 && buf[len - 1] == '\n')
+		len--;
+	if (len > 0 && buf[len - 1] == '\r')
+		len--;
+	if (len > GCODE_RAW_MAX)
+		return st_error_set(err, ST_ERR_PARSE,
+				    "line longer than %d bytes; it is rejected, not cut",
+				    GCODE_RAW_MAX);
+	memset(&tmp, 0, sizeof(tmp));
+	tmp.number = -1;
+	tmp.subcode = -1;
+	p.buf = buf;
+	p.len = len;
+	p.pos = 0;
+	p.l = &tmp;
+	p.err = err;
+	rc = parse_line(&p, flags);
+	if (rc)
+		return rc;
+	*out = tmp;
+	return 0;
+}
+
+/* ---- classification helpers ---- */
+
+static const char *const kind_names[GCODE_KIND_COUNT_] = {
+    [GCODE_KIND_OTHER] = "other",
+    [GCODE_KIND_HOST_ONLY] = "host_only",
+    [GCODE_KIND_MOTION] = "motion",
+    [GCODE_KIND_DWELL] = "dwell",
+    [GCODE_KIND_HOME] = "home",
+    [GCODE_KIND_PROBE] = "probe",
+    [GCODE_KIND_SET_POSITION] = "set_position",
+    [GCODE_KIND_MODE] = "mode",
+    [GCODE_KIND_TEMP_SET] = "temp_set",
+    [GCODE_KIND_TEMP_WAIT] = "temp_wait",
+    [GCODE_KIND_FAN] = "fan",
+    [GCODE_KIND_TOOL_CHANGE] = "tool_change",
+    [GCODE_KIND_FINISH_MOVES] = "finish_moves",
+    [GCODE_KIND_USER_WAIT] = "user_wait",
+    [GCODE_KIND_EMERGENCY] = "emergency",
+    [GCODE_KIND_LINE_NUMBER] = "line_number",
+    [GCODE_KIND_REPORT] = "report",
+    [GCODE_KIND_MESSAGE] = "message",
+};
+
+const char *gcode_kind_name(enum gcode_kind kind)
+{
+	if ((int)kind < 0 || kind >= GCODE_KIND_COUNT_)
+		return "unknown";
+	return kind_names[kind];
+}
+
+bool gcode_is_blocking(enum gcode_kind kind)
+{
+	switch (kind) {
+	case GCODE_KIND_DWELL:
+	case GCODE_KIND_HOME:
+	case GCODE_KIND_PROBE:
+	case GCODE_KIND_TEMP_WAIT:
+	case GCODE_KIND_FINISH_MOVES:
+	case GCODE_KIND_USER_WAIT:
+		return true;
+	default:
+		return false;
+	}
+}
+
+const struct gcode_word *gcode_find_word(const struct gcode_line *line, char letter)
+{
+	if (!line)
+		return NULL;
+	letter = upper(letter);
+	for (size_t i = 0; i < line->nwords && i < GCODE_WORDS_MAX; i++)
+		if (line->words[i].letter == letter)
+			return &line->words[i];
+	return NULL;
+}
+
+bool gcode_word_value(const struct gcode_line *line, char letter, double *value)
+{
+	const struct gcode_word *w = gcode_find_word(line, letter);
+
+	if (!w || !w->has_value)
+		return false;
+	if (value)
+		*value = w->value;
+	return true;
+}
+
+/* ---- slicer layer comments ---- */
+
+/* Number in s[0..n) after trimming blanks; false if it is not one. */
+static bool comment_number(const char *s, size_t n, double *v)
+{
+	while (n > 0 && is_blank(*s))
+		s++, n--;
+	while (n > 0 && is_blank(s[n - 1]))
+		n--;
+	return n > 0 && scan_number(s, n, v) == NUM_OK;
+}
+
+/* Whole number in s[0..n), blanks trimmed, |n| < 10^9. */
+static bool comment_integer(const char *s, size_t n, long *v)
+{
+	double d;
+
+	for (size_t i = 0; i < n; i++)
+		if (s[i] == '.')
+			return false;
+	if (!comment_number(s, n, &d) || fabs(d) >= 1e9)
+		return false;
+	*v = (long)d;
+	return true;
+}
+
+static bool has_prefix(const char *s, size_t n, const char *pre)
+{
+	size_t k = strlen(pre);
+
+	return n >= k && memcmp(s, pre, k) == 0;
+}
+
+enum gcode_layer_mark gcode_layer_comment(const struct gcode_line *line, long *layer, double *z)
+{
+	const char *s;
+	size_t n;
+	long num = -1;
+	double height = NAN;
+	enum gcode_layer_mark mark = GCODE_LAYER_NONE;
+
+	if (!line || line->letter != 0 || !line->has_comment)
+		return GCODE_LAYER_NONE;
+	s = line->comment;
+	n = line->comment_len;
+	while (n > 0 && is_blank(*s))
+		s++, n--;
+	if (has_prefix(s, n, "LAYER:")) { /* Cura */
+		if (comment_integer(s + 6, n - 6, &num))
+			mark = GCODE_LAYER_START;
+	} else if (n == 12 && memcmp(s, "LAYER_CHANGE", 12) == 0) { /* PrusaSlicer */
+		mark = GCODE_LAYER_START;
+	} else if (has_prefix(s, n, "Z:")) { /* PrusaSlicer, after ;LAYER_CHANGE */
+		if (comment_number(s + 2, n - 2, &height))
+			mark = GCODE_LAYER_Z;
+	} else if (has_prefix(s, n, "layer ")) { /* Simplify3D: "; layer 1, Z = 0.200" */
+		const char *comma = memchr(s, ',', n);
+		size_t i;
+
+		if (!comma || !comment_integer(s + 6, (size_t)(comma - s) - 6, &num))
+			return GCODE_LAYER_NONE;
+		i = (size_t)(comma - s) + 1;
+		while (i < n && is_blank(s[i]))
+			i++;
+		if (i >= n || s[i] != 'Z')
+			return GCODE_LAYER_NONE;
+		for (i++; i < n && is_blank(s[i]); i++)
+			;
+		if (i >= n || s[i] != '=' || !comment_number(s + i + 1, n - i - 1, &height))
+			return GCODE_LAYER_NONE;
+		mark = GCODE_LAYER_START;
+	}
+	if (mark == GCODE_LAYER_NONE)
+		return mark;
+	if (layer)
+		*layer = num;
+	if (z)
+		*z = height;
+	return mark;
+}
+
+/* ---- streaming reader ---- */
+
+#define READER_CHUNK 65536
+
+struct gcode_reader {
+	FILE *fp;
+	char *name;
+	char *chunk; /* READER_CHUNK bytes read ahead */
+	size_t chunk_len, chunk_pos;
+	char *line; /* GCODE_RAW_MAX bytes */
+	uint64_t lineno, bytes;
+	bool eof;
+	int io_code; /* sticky read error, 0 if none */
+	struct st_error io_err;
+};
+
+int gcode_reader_new(FILE *fp, const char *name, struct gcode_reader **out, struct st_error *err)
+{
+	struct gcode_reader *r;
+
+	if (out)
+		*out = NULL;
+	if (!fp || !out)
+		return st_error_set(err, ST_ERR_ARG, "gcode_reader_new: NULL argument");
+	if (!name)
+		name = "<input>";
+	r = calloc(1, sizeof(*r));
+	if (!r)
+		goto out_nomem;
+	r->name = malloc(strlen(name) + 1);
+	if (!r->name)
+		goto out_free_reader;
+	strcpy(r->name, name);
+	r->chunk = malloc(READER_CHUNK);
+	if (!r->chunk)
+		goto out_free_name;
+	r->line = malloc(GCODE_RAW_MAX);
+	if (!r->line)
+		goto out_free_chunk;
+	r->fp = fp;
+	*out = r;
+	return 0;
+
+out_free_chunk:
+	free(r->chunk);
+out_free_name:
+	free(r->name);
+out_free_reader:
+	free(r);
+out_nomem:
+	return st_error_set(err, ST_ERR_NOMEM, "%s: out of memory for the G-code reader", name);
+}
+
+void gcode_reader_free(struct gcode_reader *r)
+{
+	if (!r)
+		return;
+	free(r->line);
+	free(r->chunk);
+	free(r->name);
+	free(r);
+}
+
+/* Next byte of input, or -1 at the end or on a (sticky) read error. */
+static int reader_byte(struct gcode_reader *r)
+{
+	if (r->chunk_pos == r->chunk_len) {
+		size_t got;
+
+		if (r->eof || r->io_code)
+			return -1;
+		errno = 0;
+		got = fread(r->chunk, 1, READER_CHUNK, r->fp);
+		if (got == 0) {
+			if (ferror(r->fp)) {
+				int e = errno;
+
+				r->io_code = st_error_set(&r->io_err, ST_ERR_IO,
+							  "%s: line %llu: read error: %s", r->name,
+							  (unsigned long long)(r->lineno + 1),
+							  e ? strerror(e) : "unknown error");
+			} else {
+				r->eof = true;
+			}
+			return -1;
+		}
+		r->chunk_len = got;
+		r->chunk_pos = 0;
+	}
+	r->bytes++;
+	return (unsigned char)r->chunk[r->chunk_pos++];
+}
+
+/* Look at the next byte without taking it (-1 at the end). */
+static int reader_peek(struct gcode_reader *r)
+{
+	int c = reader_byte(r);
+
+	if (c >= 0) {
+		r->chunk_pos--;
+		r->bytes--;
+	}
+	return c;
+}
+
+int gcode_reader_next(struct gcode_reader *r, unsigned flags, struct gcode_line *line,
+		      struct st_error *err)
+{
+	size_t len = 0;
+	bool any = false, overlong = false;
+	int c, rc;
+
+	if (!r || !line)
+		return st_error_set(err, ST_ERR_ARG, "gcode_reader_next: NULL argument");
+	if (r->io_code) {
+		if (err)
+			*err = r->io_err;
+		return r->io_code;
+	}
+	for (;;) {
+		c = reader_byte(r);
+		if (c < 0)
+			break;
+		any = true;
+		if (c == '\n')
+			break;
+		if (c == '\r') {
+			if (reader_peek(r) == '\n')
+				reader_byte(r);
+			break;
+		}
+		if (len < GCODE_RAW_MAX)
+			r->line[len++] = (char)c;
+		else
+			overlong = true;
+	}
+	if (r->io_code) {
+		if (err)
+			*err = r->io_err;
+		return r->io_code;
+	}
+	if (!any)
+		return 0;
+	r->lineno++;
+	if (overlong)
+		return st_error_set(
+		    err, ST_ERR_PARSE,
+		    "%s: line %llu: line longer than %d bytes; it is rejected, not cut", r->name,
+		    (unsigned long long)r->lineno, GCODE_RAW_MAX);
+	{
+		struct st_error perr = {0};
+
+		rc = gcode_parse(r->line, len, flags, line, &perr);
+		if (rc)
+			return st_error_set(err, rc, "%s: line %llu: %s", r->name,
+					    (unsigned long long)r->lineno, perr.msg);
+	}
+	return 1;
+}
+
+uint64_t gcode_reader_line(const struct gcode_reader *r)
+{
+	return r ? r->lineno : 0;
+}
+
+uint64_t gcode_reader_bytes(const struct gcode_reader *r)
+{
+	return r ? r->bytes : 0;
+}
