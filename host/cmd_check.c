@@ -170,8 +170,6 @@ static void print_text(const char *path, enum meshio_format fmt, const struct me
 		printf("  %s %s: %s\n", i < MESH_REASON_FIRST_WARNING ? "reason " : "warning",
 		       mesh_reason_code((enum mesh_reason)i), text);
 	}
-	if (!r->printable)
-		printf("'stratum repair %s' makes it printable.\n", path);
 }
 
 /* Parse a positive thread count; -1 when not a whole number in 1..256. */
