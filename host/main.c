@@ -18,6 +18,7 @@ struct command {
 static const struct command commands[] = {
 	{"check", cmd_check, "report a mesh's topology and whether it is printable"},
 	{"printers", cmd_printers, "list the printer profiles"},
+	{"ports", cmd_ports, "list serial ports and the printers they match"},
 };
 
 static void usage(FILE *out)

@@ -223,6 +223,25 @@ START_TEST(bad_inputs_exit_65)
 }
 END_TEST
 
+/* The ports list is machine-dependent: check its shape, not its content. */
+START_TEST(ports_json)
+{
+	json_error_t jerr;
+	json_t *arr, *item;
+	size_t i;
+
+	ck_assert_int_eq(tu_run(out, sizeof(out), "ports --json"), 0);
+	arr = json_loads(out, 0, &jerr);
+	ck_assert_msg(json_is_array(arr), "not a JSON array (%s): %s", jerr.text, out);
+	json_array_foreach(arr, i, item) {
+		ck_assert(json_is_string(json_object_get(item, "name")));
+		ck_assert(json_is_array(json_object_get(item, "printers")));
+	}
+	json_decref(arr);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "ports --bogus"), 2);
+}
+END_TEST
+
 Suite *cli_suite(void)
 {
 	Suite *s = suite_create("cli");
@@ -237,6 +256,7 @@ Suite *cli_suite(void)
 	tcase_add_test(tc, text_report);
 	tcase_add_test(tc, usage_errors_exit_2);
 	tcase_add_test(tc, bad_inputs_exit_65);
+	tcase_add_test(tc, ports_json);
 	suite_add_tcase(s, tc);
 	return s;
 }

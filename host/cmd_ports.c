@@ -1,0 +1,185 @@
+/*
+ * cmd_ports.c - `stratum ports [--json]`: the serial ports the OS knows,
+ * with their USB identity, and which printer profiles claim them through
+ * their usb_ids.  Ptys and tcp:// bridges are not enumerable and are not
+ * listed.
+ */
+#include <jansson.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "commands.h"
+#include "profile.h"
+#include "st_error.h"
+#include "xport.h"
+
+/* The profiles that load, for matching; bad ones are reported and skipped. */
+struct profile_set {
+	struct profile **items;
+	size_t count;
+};
+
+static void load_profiles(struct profile_set *set)
+{
+	struct profile_entry *list = NULL;
+	size_t n = 0;
+	struct st_error err = {0};
+
+	set->items = NULL;
+	set->count = 0;
+	if (profile_list(&list, &n, &err)) {
+		fprintf(stderr, "stratum ports: %s\n", err.msg);
+		return;
+	}
+	set->items = calloc(n ? n : 1, sizeof(*set->items));
+	if (!set->items) {
+		fprintf(stderr, "stratum ports: out of memory loading printer profiles\n");
+		profile_list_free(list, n);
+		return;
+	}
+	for (size_t i = 0; i < n; i++) {
+		if (profile_load_file(list[i].path, &set->items[set->count], &err))
+			fprintf(stderr, "stratum ports: skipping profile: %s\n", err.msg);
+		else
+			set->count++;
+	}
+	profile_list_free(list, n);
+}
+
+static void free_profiles(struct profile_set *set)
+{
+	for (size_t i = 0; i < set->count; i++)
+		profile_free(set->items[i]);
+	free(set->items);
+}
+
+/* Does profile p list the port's USB VID:PID in its usb_ids? */
+static bool profile_claims(const struct profile *p, const struct xport_port_info *port)
+{
+	if (port->usb_vid < 0 || port->usb_pid < 0)
+		return false;
+	for (size_t i = 0; i < p->usb_id_count; i++)
+		if (p->usb_ids[i].vid == port->usb_vid && p->usb_ids[i].pid == port->usb_pid)
+			return true;
+	return false;
+}
+
+static const char *or_dash(const char *s)
+{
+	return s && *s ? s : "-";
+}
+
+static void print_text(const struct xport_port_info *ports, size_t n,
+		       const struct profile_set *set)
+{
+	if (n == 0) {
+		printf("No serial ports found. Is the printer plugged in and switched on?\n"
+		       "(Pseudo-terminals and tcp:// bridges are not listed; give them with "
+		       "--port.)\n");
+		return;
+	}
+	for (size_t i = 0; i < n; i++) {
+		const struct xport_port_info *p = &ports[i];
+		bool any = false;
+
+		printf("%s\n", p->by_id ? p->by_id : p->name);
+		if (p->by_id)
+			printf("  device        %s\n", p->name);
+		printf("  transport     %s\n", xport_transport_name(p->transport));
+		if (p->usb_vid >= 0)
+			printf("  usb id        %04x:%04x\n", p->usb_vid, p->usb_pid);
+		printf("  manufacturer  %s\n  product       %s\n  serial number %s\n",
+		       or_dash(p->manufacturer), or_dash(p->product), or_dash(p->serial));
+		printf("  printers      ");
+		for (size_t k = 0; k < set->count; k++) {
+			if (!profile_claims(set->items[k], p))
+				continue;
+			printf("%s%s", any ? ", " : "", set->items[k]->id);
+			any = true;
+		}
+		if (!any)
+			printf(p->usb_vid < 0 ? "(not a USB device)" : "(no profile lists this USB id)");
+		printf("\n");
+	}
+}
+
+static json_t *optional_string(const char *s)
+{
+	return s ? json_string(s) : json_null();
+}
+
+static int print_json(const struct xport_port_info *ports, size_t n,
+		      const struct profile_set *set)
+{
+	json_t *arr = json_array();
+	int rc;
+
+	for (size_t i = 0; i < n; i++) {
+		const struct xport_port_info *p = &ports[i];
+		json_t *o = json_object(), *matches = json_array();
+		char usb[16];
+
+		for (size_t k = 0; k < set->count; k++)
+			if (profile_claims(set->items[k], p))
+				json_array_append_new(matches, json_string(set->items[k]->id));
+		snprintf(usb, sizeof(usb), "%04x:%04x", p->usb_vid & 0xffff, p->usb_pid & 0xffff);
+		json_object_set_new(o, "name", json_string(p->name));
+		json_object_set_new(o, "by_id", optional_string(p->by_id));
+		json_object_set_new(o, "transport", json_string(xport_transport_name(p->transport)));
+		json_object_set_new(o, "usb_id", p->usb_vid >= 0 ? json_string(usb) : json_null());
+		json_object_set_new(o, "manufacturer", optional_string(p->manufacturer));
+		json_object_set_new(o, "product", optional_string(p->product));
+		json_object_set_new(o, "serial_number", optional_string(p->serial));
+		json_object_set_new(o, "description", optional_string(p->description));
+		json_object_set_new(o, "printers", matches);
+		json_array_append_new(arr, o);
+	}
+	rc = json_dumpf(arr, stdout, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
+	json_decref(arr);
+	return rc || putchar('\n') == EOF ? -1 : 0;
+}
+
+int cmd_ports(int argc, char **argv)
+{
+	struct xport_port_info *ports = NULL;
+	struct profile_set set;
+	struct st_error err = {0};
+	bool json = false;
+	size_t n = 0;
+	int rc = ST_EXIT_OK;
+
+	for (int i = 1; i < argc; i++) {
+		if (!strcmp(argv[i], "--json")) {
+			json = true;
+		} else if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+			printf("usage: stratum ports [--json]\n\n"
+			       "Lists the serial ports (name, stable /dev/serial/by-id name, USB\n"
+			       "VID:PID, manufacturer, product, serial number) and the printer\n"
+			       "profiles whose usb_ids match each one.\n");
+			return ST_EXIT_OK;
+		} else {
+			fprintf(stderr, "stratum ports: unknown argument '%s' (try --help)\n",
+				argv[i]);
+			return ST_EXIT_USAGE;
+		}
+	}
+	if (xport_list(&ports, &n, &err)) {
+		fprintf(stderr, "stratum ports: %s\n", err.msg);
+		return ST_EXIT_UNAVAILABLE;
+	}
+	load_profiles(&set);
+	if (json) {
+		if (print_json(ports, n, &set)) {
+			fprintf(stderr, "stratum ports: cannot write the JSON list\n");
+			rc = ST_EXIT_SOFTWARE;
+		}
+	} else {
+		print_text(ports, n, &set);
+	}
+	free_profiles(&set);
+	xport_list_free(ports, n);
+	if (fflush(stdout) == EOF)
+		rc = ST_EXIT_SOFTWARE;
+	return rc;
+}
