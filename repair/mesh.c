@@ -174,6 +174,25 @@ int mesh_builder_triangle(struct mesh_builder *b, uint32_t a, uint32_t c1, uint3
 	return 0;
 }
 
+int mesh_builder_append(struct mesh_builder *b, const struct mesh *part, struct st_error *err)
+{
+	uint32_t *remap = malloc((part->nverts ? part->nverts : 1) * sizeof(*remap));
+	int rc = 0;
+
+	if (!remap)
+		return st_error_set(err, ST_ERR_NOMEM, "out of memory joining %zu vertices",
+				    part->nverts);
+	/* part's vertices are in first-use order, so welding them in index
+	 * order keeps b's vertex order what one pass would have produced. */
+	for (size_t v = 0; v < part->nverts && !rc; v++)
+		rc = mesh_builder_vertex(b, part->verts[v], &remap[v], err);
+	for (size_t t = 0; t < part->ntris && !rc; t++)
+		rc = mesh_builder_triangle(b, remap[part->tris[t][0]], remap[part->tris[t][1]],
+					   remap[part->tris[t][2]], err);
+	free(remap);
+	return rc;
+}
+
 struct mesh *mesh_builder_finish(struct mesh_builder *b)
 {
 	struct mesh *m = b->mesh;

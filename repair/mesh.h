@@ -54,6 +54,15 @@ int mesh_builder_triangle(struct mesh_builder *b, uint32_t a, uint32_t c1, uint3
 			  struct st_error *err);
 
 /*
+ * mesh_builder_append - add every triangle of part, in order, welding its
+ * vertices into b's as mesh_builder_vertex would.  Building two halves of a
+ * file separately and appending the second to the first gives exactly the
+ * mesh one builder would have made (same vertex and triangle order).
+ * Returns 0 or ST_ERR_NOMEM / ST_ERR_RANGE with err filled.
+ */
+int mesh_builder_append(struct mesh_builder *b, const struct mesh *part, struct st_error *err);
+
+/*
  * mesh_builder_finish - hand over the finished mesh (caller frees it with
  * mesh_free) and free the builder.  Returns NULL only on OOM.
  */

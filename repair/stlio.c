@@ -14,6 +14,7 @@
 #include <fcntl.h>
 #include <float.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -85,12 +86,126 @@ int stlio_binary_size_error(struct mio_src *s)
 	    (unsigned long long)s->size);
 }
 
+/* Read facets first .. first+count-1 from s (positioned at the first) into b. */
+static int read_facets(struct mio_src *s, struct mesh_builder *b, uint32_t first, uint32_t count)
+{
+	unsigned char fac[STL_FACET];
+	struct st_error berr;
+	uint32_t idx[3];
+
+	for (uint32_t i = first; i < first + count; i++) {
+		uint64_t at = s->off;
+
+		if (mio_read(s, fac, sizeof(fac)) != sizeof(fac))
+			return s->read_errno
+				   ? mio_read_error(s, s->off)
+				   : mio_err(s, ST_ERR_PARSE,
+					     "byte %llu: the file ends inside facet %lu (did it "
+					     "change while being read?)",
+					     (unsigned long long)s->off, (unsigned long)i);
+		/* Bytes 0-11 are the normal, ignored; 12-47 the corners. */
+		for (int k = 0; k < 3; k++) {
+			double p[3];
+
+			for (int c = 0; c < 3; c++) {
+				size_t o = 12 + 12 * (size_t)k + 4 * (size_t)c;
+				p[c] = get_le_float(fac + o);
+				if (!isfinite(p[c]))
+					return mio_err(s, ST_ERR_PARSE,
+						       "byte %llu: facet %lu has a non-finite "
+						       "coordinate (NaN or infinity)",
+						       (unsigned long long)(at + o), (unsigned long)i);
+			}
+			if (mesh_builder_vertex(b, p, &idx[k], &berr))
+				return mio_builder_error(s, "byte", at, &berr);
+		}
+		if (mesh_builder_triangle(b, idx[0], idx[1], idx[2], &berr))
+			return mio_builder_error(s, "byte", at, &berr);
+	}
+	return 0;
+}
+
+/* The second half of a large binary STL, read on its own thread through a
+ * positioned source on the same file, into its own builder. */
+struct half_job {
+	struct mio_src src;
+	struct st_error err;
+	struct mesh_builder *b;
+	uint32_t first, count;
+	int rc;
+};
+
+static void *read_half(void *arg)
+{
+	struct half_job *j = arg;
+
+	j->rc = read_facets(&j->src, j->b, j->first, j->count);
+	return NULL;
+}
+
+/*
+ * Read the facets after the header.  Welding is the slow part, so files
+ * from SPLIT_MIN facets up are read in two halves on two threads and the
+ * second half is appended to the first (mesh_builder_append keeps the result
+ * identical to one sequential pass).  Errors in the first half win, so the
+ * message names the earliest bad byte either way.
+ */
+#define SPLIT_MIN 100000u
+
+static int read_all_facets(struct mio_src *s, struct mesh_builder *b, uint32_t count)
+{
+	struct half_job j;
+	pthread_t thread;
+	struct mesh *second = NULL;
+	struct st_error berr;
+	int rc;
+
+	if (!s->f || count < SPLIT_MIN)
+		return read_facets(s, b, 0, count);
+	memset(&j, 0, sizeof(j));
+	j.first = count / 2;
+	j.count = count - j.first;
+	j.src.name = s->name;
+	j.src.err = &j.err;
+	j.src.size = s->size;
+	j.src.positioned = true;
+	j.src.pread_fd = fileno(s->f);
+	j.src.off = j.src.pread_pos = binary_size(j.first);
+	j.src.chunk = malloc(MIO_CHUNK);
+	j.src.p = j.src.end = j.src.chunk;
+	j.b = mesh_builder_new(j.count);
+	if (!j.src.chunk || !j.b || pthread_create(&thread, NULL, read_half, &j)) {
+		/* Not enough for two: one pass does the same job. */
+		free(j.src.chunk);
+		mesh_builder_free(j.b);
+		return read_facets(s, b, 0, count);
+	}
+	rc = read_facets(s, b, 0, j.first);
+	pthread_join(thread, NULL);
+	free(j.src.chunk);
+	if (!rc && j.rc) {
+		if (s->err)
+			*s->err = j.err;
+		rc = j.rc;
+	}
+	if (!rc) {
+		second = mesh_builder_finish(j.b);
+		j.b = NULL;
+		if (!second)
+			rc = mio_err(s, ST_ERR_NOMEM, "out of memory finishing the mesh");
+		else if (mesh_builder_append(b, second, &berr))
+			rc = mio_builder_error(s, "byte", binary_size(j.first), &berr);
+	}
+	mesh_free(second);
+	mesh_builder_free(j.b);
+	return rc;
+}
+
 int stlio_read_binary(struct mio_src *s, struct mesh **out)
 {
-	unsigned char head[STL_PREFIX], fac[STL_FACET];
+	unsigned char head[STL_PREFIX];
 	struct mesh_builder *b;
-	struct st_error berr;
-	uint32_t count, idx[3];
+	uint32_t count;
 	int rc;
 
 	*out = NULL;
@@ -108,54 +223,15 @@ int stlio_read_binary(struct mio_src *s, struct mesh **out)
 	if (!b)
 		return mio_err(s, ST_ERR_NOMEM, "out of memory for %lu triangles",
 			       (unsigned long)count);
-	for (uint32_t i = 0; i < count; i++) {
-		uint64_t at = s->off;
-
-		if (mio_read(s, fac, sizeof(fac)) != sizeof(fac)) {
-			rc =
-			    s->read_errno
-				? mio_read_error(s, s->off)
-				: mio_err(
-				      s, ST_ERR_PARSE,
-				      "byte %llu: the file ends inside facet %lu (did it change while being read?)",
-				      (unsigned long long)s->off, (unsigned long)i);
-			goto out_free_builder;
-		}
-		/* Bytes 0-11 are the normal, ignored; 12-47 the corners. */
-		for (int k = 0; k < 3; k++) {
-			double p[3];
-
-			for (int c = 0; c < 3; c++) {
-				size_t o = 12 + 12 * (size_t)k + 4 * (size_t)c;
-				p[c] = get_le_float(fac + o);
-				if (!isfinite(p[c])) {
-					rc = mio_err(
-					    s, ST_ERR_PARSE,
-					    "byte %llu: facet %lu has a non-finite coordinate (NaN or infinity)",
-					    (unsigned long long)(at + o), (unsigned long)i);
-					goto out_free_builder;
-				}
-			}
-			rc = mesh_builder_vertex(b, p, &idx[k], &berr);
-			if (rc) {
-				rc = mio_builder_error(s, "byte", at, &berr);
-				goto out_free_builder;
-			}
-		}
-		rc = mesh_builder_triangle(b, idx[0], idx[1], idx[2], &berr);
-		if (rc) {
-			rc = mio_builder_error(s, "byte", at, &berr);
-			goto out_free_builder;
-		}
+	rc = read_all_facets(s, b, count);
+	if (rc) {
+		mesh_builder_free(b);
+		return rc;
 	}
 	*out = mesh_builder_finish(b);
 	if (!*out)
 		return mio_err(s, ST_ERR_NOMEM, "out of memory finishing the mesh");
 	return 0;
-
-out_free_builder:
-	mesh_builder_free(b);
-	return rc;
 }
 
 /* ---- ASCII STL ---------------------------------------------------------- */
