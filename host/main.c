@@ -19,6 +19,7 @@ static const struct command commands[] = {
 	{"check", cmd_check, "report a mesh's topology and whether it is printable"},
 	{"printers", cmd_printers, "list the printer profiles"},
 	{"ports", cmd_ports, "list serial ports and the printers they match"},
+	{"sim", cmd_sim, "run a simulated printer on a pseudo-terminal"},
 };
 
 static void usage(FILE *out)

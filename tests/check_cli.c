@@ -6,6 +6,15 @@
 #include <check.h>
 #include <jansson.h>
 #include <math.h>
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <termios.h>
+#include <time.h>
+#include <unistd.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -242,6 +251,69 @@ START_TEST(ports_json)
 }
 END_TEST
 
+/* Read from fd into buf until want appears or ms pass; 1 if it appeared. */
+static int read_until(int fd, char *buf, size_t cap, const char *want, int ms)
+{
+	size_t n = strlen(buf);
+	struct pollfd p = {.fd = fd, .events = POLLIN};
+
+	while (ms > 0 && !strstr(buf, want)) {
+		ssize_t got;
+
+		if (poll(&p, 1, 100) > 0) {
+			got = read(fd, buf + n, cap - 1 - n);
+			if (got > 0)
+				n += (size_t)got;
+			buf[n] = '\0';
+		}
+		ms -= 100;
+	}
+	return strstr(buf, want) != NULL;
+}
+
+/* `stratum sim` end to end: the link appears, the firmware answers, SIGTERM
+ * stops it cleanly and removes the link. */
+START_TEST(sim_command_runs_and_cleans_up)
+{
+	const char *bin = getenv("STRATUM_BIN");
+	char link[512], buf[4096] = "";
+	struct termios tio;
+	struct stat st;
+	int fd = -1, status;
+	pid_t pid;
+
+	snprintf(link, sizeof(link), "%s", tu_path("printer"));
+	pid = fork();
+	ck_assert_int_ge(pid, 0);
+	if (pid == 0) {
+		int devnull = open("/dev/null", O_WRONLY);
+		dup2(devnull, 1);
+		execl(bin ? bin : "build/stratum", "stratum", "sim", "--dialect", "marlin", "--link",
+		      link, "--speedup", "50", (char *)NULL);
+		_exit(127);
+	}
+	for (int i = 0; i < 50 && fd < 0; i++) {
+		fd = open(link, O_RDWR | O_NOCTTY);
+		if (fd < 0)
+			usleep(100 * 1000);
+	}
+	ck_assert_msg(fd >= 0, "the --link symlink never appeared");
+	ck_assert_int_eq(tcgetattr(fd, &tio), 0);
+	cfmakeraw(&tio);
+	ck_assert_int_eq(tcsetattr(fd, TCSANOW, &tio), 0);
+	ck_assert_msg(read_until(fd, buf, sizeof(buf), "start", 5000), "no boot banner: %s", buf);
+	usleep(2000 * 1000); /* the board ignores input while it boots */
+	buf[0] = '\0';
+	ck_assert_int_eq(write(fd, "M105\n", 5), 5);
+	ck_assert_msg(read_until(fd, buf, sizeof(buf), "ok T:", 5000), "no M105 reply: %s", buf);
+	close(fd);
+	ck_assert_int_eq(kill(pid, SIGTERM), 0);
+	ck_assert_int_eq(waitpid(pid, &status, 0), pid);
+	ck_assert_msg(WIFEXITED(status) && WEXITSTATUS(status) == 0, "status %d", status);
+	ck_assert_msg(lstat(link, &st) != 0, "the symlink is still there");
+}
+END_TEST
+
 Suite *cli_suite(void)
 {
 	Suite *s = suite_create("cli");
@@ -257,6 +329,7 @@ Suite *cli_suite(void)
 	tcase_add_test(tc, usage_errors_exit_2);
 	tcase_add_test(tc, bad_inputs_exit_65);
 	tcase_add_test(tc, ports_json);
+	tcase_add_test(tc, sim_command_runs_and_cleans_up);
 	suite_add_tcase(s, tc);
 	return s;
 }

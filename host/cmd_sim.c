@@ -1,0 +1,213 @@
+/*
+ * cmd_sim.c - `stratum sim --dialect marlin [options]`: run a simulated
+ * printer on a pseudo-terminal until SIGINT/SIGTERM (DESIGN.md item 7).
+ * Prints the pty path; --link PATH makes PATH a symlink to it, replaced
+ * atomically and removed on exit.
+ */
+#include <errno.h>
+#include <limits.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "commands.h"
+#include "gcode.h"
+#include "sim/marlin_sim.h"
+#include "st_error.h"
+
+/* The one stop flag a signal handler may set (STYLE rule 10 exception). */
+static volatile sig_atomic_t sim_stop_flag;
+
+/* SIGINT/SIGTERM: ask the event loop to finish. */
+static void sim_on_signal(int sig)
+{
+	(void)sig;
+	sim_stop_flag = 1;
+}
+
+static void sim_usage(FILE *out)
+{
+	fprintf(out,
+		"usage: stratum sim --dialect marlin [--link PATH] [--log FILE] [--speedup K]\n"
+		"                   [--rx-buffer N] [--bufsize N] [--advanced-ok] [--corrupt P]\n"
+		"                   [--drop P] [--latency MS] [--reset-at LINE] [--unplug-at LINE]\n"
+		"                   [--baud N] [--seed N]\n"
+		"Runs a simulated printer on a pseudo-terminal and prints its path; stops on\n"
+		"Ctrl-C.  --link makes PATH a symlink to the pty while it runs.\n");
+}
+
+/* Read a non-negative number option; false with a message if malformed. */
+static bool sim_number(const char *opt, const char *arg, double lo, double hi, double *out)
+{
+	double v;
+	if (gcode_read_number(arg, strlen(arg), &v, NULL) || v < lo || v > hi) {
+		fprintf(stderr, "stratum sim: %s wants a number from %g to %g, not '%s'\n", opt, lo,
+			hi, arg);
+		return false;
+	}
+	*out = v;
+	return true;
+}
+
+/* Point link at target: symlink to a temp name, then rename over link. */
+static int sim_make_link(const char *link, const char *target)
+{
+	char tmp[PATH_MAX];
+	struct stat st;
+
+	if (lstat(link, &st) == 0 && !S_ISLNK(st.st_mode)) {
+		fprintf(stderr, "stratum sim: --link %s exists and is not a symlink; "
+				"remove it or choose another path\n", link);
+		return -1;
+	}
+	if (snprintf(tmp, sizeof(tmp), "%s.tmp%ld", link, (long)getpid()) >= (int)sizeof(tmp)) {
+		fprintf(stderr, "stratum sim: --link path is too long\n");
+		return -1;
+	}
+	unlink(tmp);
+	if (symlink(target, tmp) < 0 || rename(tmp, link) < 0) {
+		fprintf(stderr, "stratum sim: cannot create symlink %s -> %s: %s\n", link, target,
+			strerror(errno));
+		unlink(tmp);
+		return -1;
+	}
+	return 0;
+}
+
+/* Remove link if it still points at target (another sim may own it now). */
+static void sim_remove_link(const char *link, const char *target)
+{
+	char buf[PATH_MAX];
+	ssize_t n = readlink(link, buf, sizeof(buf) - 1);
+	if (n < 0)
+		return;
+	buf[n] = '\0';
+	if (!strcmp(buf, target))
+		unlink(link);
+}
+
+int cmd_sim(int argc, char **argv)
+{
+	struct sim_marlin_options o;
+	struct sim_marlin *sim = NULL;
+	struct st_error err = {0};
+	const char *dialect = NULL, *link = NULL;
+	double v;
+	int rc;
+
+	sim_marlin_options_init(&o);
+	for (int i = 1; i < argc; i++) {
+		const char *a = argv[i];
+		const char *arg = i + 1 < argc ? argv[i + 1] : NULL;
+		if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+			sim_usage(stdout);
+			return ST_EXIT_OK;
+		} else if (!strcmp(a, "--advanced-ok")) {
+			o.advanced_ok = true;
+			continue;
+		}
+		if (a[0] != '-' || !arg) {
+			fprintf(stderr, "stratum sim: %s '%s'\n",
+				a[0] == '-' ? "missing value for" : "unexpected argument", a);
+			sim_usage(stderr);
+			return ST_EXIT_USAGE;
+		}
+		i++;
+		if (!strcmp(a, "--dialect")) {
+			dialect = arg;
+		} else if (!strcmp(a, "--link")) {
+			link = arg;
+		} else if (!strcmp(a, "--log")) {
+			o.log_path = arg;
+		} else if (!strcmp(a, "--speedup")) {
+			if (!sim_number(a, arg, 1e-3, 1e6, &o.speedup))
+				return ST_EXIT_USAGE;
+		} else if (!strcmp(a, "--rx-buffer")) {
+			if (!sim_number(a, arg, 8, 65536, &v))
+				return ST_EXIT_USAGE;
+			o.rx_buffer = (unsigned)v;
+		} else if (!strcmp(a, "--bufsize")) {
+			if (!sim_number(a, arg, 1, 1024, &v))
+				return ST_EXIT_USAGE;
+			o.bufsize = (unsigned)v;
+		} else if (!strcmp(a, "--corrupt")) {
+			if (!sim_number(a, arg, 0, 1, &o.corrupt_p))
+				return ST_EXIT_USAGE;
+		} else if (!strcmp(a, "--drop")) {
+			if (!sim_number(a, arg, 0, 1, &o.drop_p))
+				return ST_EXIT_USAGE;
+		} else if (!strcmp(a, "--latency")) {
+			if (!sim_number(a, arg, 0, 60000, &v))
+				return ST_EXIT_USAGE;
+			o.latency_ms = (unsigned)v;
+		} else if (!strcmp(a, "--reset-at")) {
+			if (!sim_number(a, arg, 1, 2147483647, &v))
+				return ST_EXIT_USAGE;
+			o.reset_at_line = (long)v;
+		} else if (!strcmp(a, "--unplug-at")) {
+			if (!sim_number(a, arg, 1, 2147483647, &v))
+				return ST_EXIT_USAGE;
+			o.unplug_at_line = (long)v;
+		} else if (!strcmp(a, "--baud")) {
+			if (!sim_number(a, arg, 300, 100000000, &v))
+				return ST_EXIT_USAGE;
+			o.baud = (unsigned)v;
+		} else if (!strcmp(a, "--seed")) {
+			if (!sim_number(a, arg, 0, 9007199254740992.0, &v))
+				return ST_EXIT_USAGE;
+			o.seed = (uint64_t)v;
+		} else {
+			fprintf(stderr, "stratum sim: unknown option '%s'\n", a);
+			sim_usage(stderr);
+			return ST_EXIT_USAGE;
+		}
+	}
+	if (!dialect) {
+		fprintf(stderr, "stratum sim: --dialect is required (marlin)\n");
+		sim_usage(stderr);
+		return ST_EXIT_USAGE;
+	}
+	if (!strcmp(dialect, "sailfish")) {
+		fprintf(stderr, "stratum sim: --dialect sailfish is not implemented yet; "
+				"use --dialect marlin\n");
+		return ST_EXIT_USAGE;
+	}
+	if (strcmp(dialect, "marlin")) {
+		fprintf(stderr, "stratum sim: unknown --dialect '%s'; use marlin\n", dialect);
+		return ST_EXIT_USAGE;
+	}
+
+	rc = sim_marlin_new(&o, &sim, &err);
+	if (rc) {
+		fprintf(stderr, "stratum sim: %s\n", err.msg);
+		return rc == ST_ERR_ARG ? ST_EXIT_USAGE : ST_EXIT_SOFTWARE;
+	}
+	const char *path = sim_marlin_slave_path(sim);
+	if (link && sim_make_link(link, path)) {
+		sim_marlin_free(sim);
+		return ST_EXIT_FAILURE;
+	}
+	printf("%s\n", path);
+	fflush(stdout);
+
+	struct sigaction sa;
+	memset(&sa, 0, sizeof(sa));
+	sa.sa_handler = sim_on_signal;
+	sigemptyset(&sa.sa_mask);
+	sigaction(SIGINT, &sa, NULL);
+	sigaction(SIGTERM, &sa, NULL);
+
+	rc = sim_marlin_run(sim, &sim_stop_flag, &err);
+	if (rc)
+		fprintf(stderr, "stratum sim: %s\n", err.msg);
+	else if (sim_marlin_unplugged(sim))
+		fprintf(stderr, "stratum sim: link unplugged at line %ld as asked (--unplug-at)\n",
+			o.unplug_at_line);
+	if (link)
+		sim_remove_link(link, path);
+	sim_marlin_free(sim);
+	return rc ? ST_EXIT_SOFTWARE : ST_EXIT_OK;
+}

@@ -1,0 +1,600 @@
+/*
+ * check_sim.c - the simulated Marlin (serial/sim/marlin_sim.c) driven over
+ * its pty from the test: boot banner, ok and execution log, checksum and
+ * line-number errors with Resend, duplicates, M110, M105, M115, ADVANCED_OK,
+ * RX overflow, M109 heating, M112, unplug and reset faults.
+ */
+#include <check.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <poll.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <termios.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "gcode.h"
+#include "sim/marlin_sim.h"
+#include "suites.h"
+
+/* The host side of the link: the pty slave, with a line buffer. */
+struct client {
+	struct sim_marlin *sim;
+	int fd;
+	char buf[16384];
+	size_t len;
+	FILE *log;
+};
+
+static double now_s(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
+/* Options for fast tests: high speedup, fast link. */
+static void fast_opts(struct sim_marlin_options *o)
+{
+	sim_marlin_options_init(o);
+	o->speedup = 100;
+	o->baud = 1000000;
+}
+
+/* Read one line (without "\n") within timeout seconds; -1 on time-out,
+ * -2 on hang-up. */
+static int cl_line(struct client *c, char *out, size_t cap, double timeout)
+{
+	double end = now_s() + timeout;
+	for (;;) {
+		char *nl = memchr(c->buf, '\n', c->len);
+		if (nl) {
+			size_t n = (size_t)(nl - c->buf);
+			size_t k = n < cap - 1 ? n : cap - 1;
+			memcpy(out, c->buf, k);
+			out[k] = '\0';
+			memmove(c->buf, nl + 1, c->len - n - 1);
+			c->len -= n + 1;
+			return (int)k;
+		}
+		double left = end - now_s();
+		if (left <= 0)
+			return -1;
+		struct pollfd p = {.fd = c->fd, .events = POLLIN};
+		int r = poll(&p, 1, (int)(left * 1000) + 1);
+		if (r <= 0)
+			continue;
+		if (p.revents & POLLIN) {
+			ssize_t n = read(c->fd, c->buf + c->len, sizeof(c->buf) - c->len - 1);
+			if (n > 0) {
+				c->len += (size_t)n;
+				continue;
+			}
+			if (n == 0 || errno != EAGAIN)
+				return -2;
+		} else if (p.revents & (POLLHUP | POLLERR)) {
+			return -2;
+		}
+	}
+}
+
+/* Read lines until one starts with prefix; fails the test on time-out. */
+static void cl_expect(struct client *c, const char *prefix, char *out, size_t cap, double timeout)
+{
+	char line[512];
+	double end = now_s() + timeout;
+	for (;;) {
+		double left = end - now_s();
+		int n = cl_line(c, line, sizeof(line), left > 0 ? left : 0);
+		ck_assert_msg(n >= 0, "no line starting with '%s' within %.1f s", prefix, timeout);
+		if (!strncmp(line, prefix, strlen(prefix))) {
+			if (out)
+				snprintf(out, cap, "%s", line);
+			return;
+		}
+	}
+}
+
+/* The next line must be exactly want. */
+static void cl_next_is(struct client *c, const char *want)
+{
+	char line[512];
+	ck_assert_int_ge(cl_line(c, line, sizeof(line), 2.0), 0);
+	ck_assert_str_eq(line, want);
+}
+
+static void cl_send(struct client *c, const char *text)
+{
+	size_t n = strlen(text), off = 0;
+	while (off < n) {
+		ssize_t w = write(c->fd, text + off, n - off);
+		ck_assert_int_gt(w, 0);
+		off += (size_t)w;
+	}
+}
+
+/* Send "N<n> <cmd>*<cs>\n". */
+static void cl_send_n(struct client *c, long n, const char *cmd)
+{
+	char line[200];
+	ck_assert_int_gt(gcode_format_numbered(line, sizeof(line) - 1, n, cmd), 0);
+	strcat(line, "\n");
+	cl_send(c, line);
+}
+
+/* Start a simulator with o on a thread and connect to it past its boot. */
+static void cl_start(struct client *c, struct sim_marlin_options *o)
+{
+	struct st_error err = {0};
+	struct termios tio;
+	memset(c, 0, sizeof(*c));
+	if (!o->log_fp && !o->log_path) {
+		c->log = tmpfile();
+		ck_assert_ptr_nonnull(c->log);
+		o->log_fp = c->log;
+	}
+	ck_assert_int_eq(sim_marlin_new(o, &c->sim, &err), 0);
+	c->fd = open(sim_marlin_slave_path(c->sim), O_RDWR | O_NOCTTY | O_NONBLOCK);
+	ck_assert_int_ge(c->fd, 0);
+	ck_assert_int_eq(tcgetattr(c->fd, &tio), 0);
+	cfmakeraw(&tio);
+	ck_assert_int_eq(tcsetattr(c->fd, TCSANOW, &tio), 0);
+	ck_assert_int_eq(sim_marlin_start_thread(c->sim, &err), 0);
+	cl_expect(c, "start", NULL, 0, 2.0);
+	cl_expect(c, "echo:Hardcoded Default Settings Loaded", NULL, 0, 2.0);
+	usleep(60000); /* past the boot time (1.5 s / speedup) */
+}
+
+static void cl_stop(struct client *c)
+{
+	sim_marlin_stop(c->sim);
+	sim_marlin_free(c->sim);
+	close(c->fd);
+	if (c->log)
+		fclose(c->log);
+}
+
+/* Whole execution log as a string (static buffer). */
+static const char *cl_log(struct client *c)
+{
+	static char text[4096];
+	size_t n;
+	fflush(c->log);
+	rewind(c->log);
+	n = fread(text, 1, sizeof(text) - 1, c->log);
+	text[n] = '\0';
+	return text;
+}
+
+START_TEST(boot_banner)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	fast_opts(&o);
+	memset(&c, 0, sizeof(c));
+	struct st_error err = {0};
+	ck_assert_int_eq(sim_marlin_new(&o, &c.sim, &err), 0);
+	c.fd = open(sim_marlin_slave_path(c.sim), O_RDWR | O_NOCTTY | O_NONBLOCK);
+	ck_assert_int_ge(c.fd, 0);
+	ck_assert_int_eq(sim_marlin_start_thread(c.sim, &err), 0);
+	cl_next_is(&c, "start");
+	cl_expect(&c, "echo:Marlin 2.1", NULL, 0, 1.0);
+	cl_expect(&c, "echo: Free Memory:", NULL, 0, 1.0);
+	sim_marlin_stop(c.sim);
+	sim_marlin_free(c.sim);
+	close(c.fd);
+}
+END_TEST
+
+START_TEST(ok_and_log)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	fast_opts(&o);
+	cl_start(&c, &o);
+	cl_send_n(&c, 1, "G28");
+	cl_send_n(&c, 2, "G1 X10 Y5 F6000");
+	cl_send(&c, "N3 M400*");
+	cl_send(&c, "36 ; comments are stripped first\n");
+	cl_next_is(&c, "ok");
+	cl_next_is(&c, "ok");
+	cl_next_is(&c, "ok");
+	sim_marlin_stop(c.sim);
+	ck_assert_str_eq(cl_log(&c), "1 G28\n2 G1 X10 Y5 F6000\n3 M400\n");
+	cl_stop(&c);
+}
+END_TEST
+
+START_TEST(bad_checksum)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	char line[64];
+	fast_opts(&o);
+	cl_start(&c, &o);
+	cl_send_n(&c, 1, "G21");
+	cl_next_is(&c, "ok");
+	snprintf(line, sizeof(line), "N2 G21*%u\n", (unsigned)(gcode_checksum("N2 G21", 6) ^ 1));
+	cl_send(&c, line);
+	cl_next_is(&c, "Error:checksum mismatch, Last Line: 1");
+	cl_next_is(&c, "Resend: 2");
+	cl_next_is(&c, "ok");
+	cl_send_n(&c, 2, "G21");
+	cl_next_is(&c, "ok");
+	cl_stop(&c);
+}
+END_TEST
+
+START_TEST(wrong_line_number)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	fast_opts(&o);
+	cl_start(&c, &o);
+	cl_send_n(&c, 1, "G21");
+	cl_next_is(&c, "ok");
+	cl_send_n(&c, 3, "G21");
+	cl_next_is(&c, "Error:Line Number is not Last Line Number+1, Last Line: 1");
+	cl_next_is(&c, "Resend: 2");
+	cl_next_is(&c, "ok");
+	cl_send(&c, "N2 G21\n");
+	cl_next_is(&c, "Error:No Checksum with line number, Last Line: 1");
+	cl_next_is(&c, "Resend: 2");
+	cl_next_is(&c, "ok");
+	cl_stop(&c);
+}
+END_TEST
+
+START_TEST(duplicate_ignored)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	fast_opts(&o);
+	o.advanced_ok = true;
+	cl_start(&c, &o);
+	cl_send_n(&c, 1, "G21");
+	cl_expect(&c, "ok N1 ", NULL, 0, 2.0);
+	cl_send_n(&c, 2, "G21");
+	cl_expect(&c, "ok N2 ", NULL, 0, 2.0);
+	cl_send_n(&c, 2, "G21");
+	cl_send_n(&c, 1, "G21");
+	cl_send_n(&c, 3, "G21");
+	cl_expect(&c, "ok N3 ", NULL, 0, 2.0); /* the very next line: no reply to dups */
+	sim_marlin_stop(c.sim);
+	ck_assert_str_eq(cl_log(&c), "1 G21\n2 G21\n3 G21\n");
+	cl_stop(&c);
+}
+END_TEST
+
+START_TEST(m110_renumbers)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	char line[128];
+	fast_opts(&o);
+	cl_start(&c, &o);
+	cl_send_n(&c, 1, "G21");
+	cl_next_is(&c, "ok");
+	cl_send_n(&c, 7, "M110 N100");
+	cl_next_is(&c, "ok");
+	cl_send_n(&c, 101, "G21");
+	cl_next_is(&c, "ok");
+	cl_send(&c, "M110 N5\n");
+	cl_next_is(&c, "ok");
+	cl_send_n(&c, 6, "G21");
+	ck_assert_int_ge(cl_line(&c, line, sizeof(line), 2.0), 0);
+	ck_assert_str_eq(line, "ok");
+	cl_stop(&c);
+}
+END_TEST
+
+START_TEST(m105_format)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	fast_opts(&o);
+	cl_start(&c, &o);
+	cl_send(&c, "M105\n");
+	cl_next_is(&c, "ok T:25.00 /0.00 B:25.00 /0.00 @:0 B@:0");
+	cl_send_n(&c, 1, "M105");
+	cl_next_is(&c, "ok T:25.00 /0.00 B:25.00 /0.00 @:0 B@:0");
+	cl_send(&c, "M9999\n");
+	cl_next_is(&c, "echo:Unknown command: \"M9999\"");
+	cl_next_is(&c, "ok");
+	cl_stop(&c);
+}
+END_TEST
+
+START_TEST(m115_caps)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	char line[512];
+	fast_opts(&o);
+	cl_start(&c, &o);
+	cl_send(&c, "M115\n");
+	cl_next_is(&c, "FIRMWARE_NAME:Marlin 2.1.2 (Stratum simulator) "
+		       "SOURCE_CODE_URL:github.com/MarlinFirmware/Marlin PROTOCOL_VERSION:1.0 "
+		       "MACHINE_TYPE:Stratum Simulated Printer EXTRUDER_COUNT:1 "
+		       "UUID:cede2a2f-41a2-4748-9b12-c55c62f367ff");
+	int seen = 0;
+	for (;;) {
+		ck_assert_int_ge(cl_line(&c, line, sizeof(line), 2.0), 0);
+		if (!strcmp(line, "ok"))
+			break;
+		ck_assert_msg(!strncmp(line, "Cap:", 4), "unexpected line '%s'", line);
+		if (!strcmp(line, "Cap:EMERGENCY_PARSER:1") || !strcmp(line, "Cap:AUTOREPORT_TEMP:1") ||
+		    !strcmp(line, "Cap:HOST_ACTION_COMMANDS:1") || !strcmp(line, "Cap:ADVANCED_OK:0"))
+			seen++;
+	}
+	ck_assert_int_eq(seen, 4);
+	cl_stop(&c);
+}
+END_TEST
+
+START_TEST(advanced_ok)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	fast_opts(&o);
+	o.advanced_ok = true;
+	cl_start(&c, &o);
+	cl_send_n(&c, 1, "G21");
+	cl_next_is(&c, "ok N1 P16 B3");
+	cl_send(&c, "G90\n");
+	cl_next_is(&c, "ok P16 B3");
+	cl_send_n(&c, 2, "G1 X100 F600");
+	cl_next_is(&c, "ok N2 P15 B3");
+	cl_stop(&c);
+}
+END_TEST
+
+START_TEST(rx_overflow)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	char blast[2048], line[512];
+	size_t len = 0;
+	fast_opts(&o);
+	cl_start(&c, &o);
+	cl_send_n(&c, 1, "G4 S30"); /* 0.3 s with the queue busy */
+	for (long n = 2; len < 1024; n++) {
+		char cmd[40];
+		snprintf(cmd, sizeof(cmd), "G1 X%ld F6000", n % 50);
+		int k = gcode_format_numbered(blast + len, sizeof(blast) - len - 1, n, cmd);
+		ck_assert_int_gt(k, 0);
+		len += (size_t)k;
+		blast[len++] = '\n';
+	}
+	blast[len] = '\0';
+	cl_send(&c, blast);
+	int resends = 0, oks = 0;
+	while (cl_line(&c, line, sizeof(line), 1.0) >= 0) {
+		if (!strncmp(line, "Resend: ", 8))
+			resends++;
+		else if (!strcmp(line, "ok"))
+			oks++;
+	}
+	ck_assert_int_gt(resends, 0);
+	ck_assert_int_gt(oks, 1);
+	ck_assert_uint_gt(sim_marlin_dropped_bytes(c.sim), 0);
+	/* Still alive and answering. */
+	/* The newline ends whatever partial line the lost bytes left. */
+	cl_send(&c, "\nM105\n");
+	cl_expect(&c, "ok T:", NULL, 0, 2.0);
+	cl_stop(&c);
+}
+END_TEST
+
+START_TEST(m109_waits)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	char line[512];
+	fast_opts(&o);
+	cl_start(&c, &o);
+	double t0 = now_s();
+	cl_send_n(&c, 1, "M109 S200");
+	int reports = 0;
+	for (;;) {
+		ck_assert_int_ge(cl_line(&c, line, sizeof(line), 3.0), 0);
+		if (!strcmp(line, "ok"))
+			break;
+		if (!strncmp(line, " T:", 3)) {
+			size_t n = strlen(line);
+			ck_assert_msg(n > 4 && !strcmp(line + n - 4, " W:?"), "report '%s'", line);
+			reports++;
+		}
+	}
+	double dt = now_s() - t0;
+	/* 25 -> 199 degC at 2 degC/s, 100 times faster: about 0.87 s. */
+	ck_assert_msg(dt > 0.7 && dt < 2.5, "M109 took %.2f s", dt);
+	ck_assert_int_gt(reports, 20);
+	cl_send(&c, "M105\n");
+	cl_expect(&c, "ok T:", line, sizeof(line), 2.0);
+	ck_assert_msg(strstr(line, "/200.00 B:") != NULL, "'%s'", line);
+	cl_stop(&c);
+}
+END_TEST
+
+START_TEST(m112_halts)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	char line[512];
+	fast_opts(&o);
+	cl_start(&c, &o);
+	cl_send_n(&c, 1, "G4 S100"); /* busy: M112 must not wait in line */
+	cl_send(&c, "M112\n");
+	cl_next_is(&c, "Error:Printer halted. kill() called!");
+	ck_assert(sim_marlin_halted(c.sim));
+	cl_send(&c, "M105\n");
+	ck_assert_int_eq(cl_line(&c, line, sizeof(line), 0.3), -1);
+	cl_stop(&c);
+}
+END_TEST
+
+START_TEST(m108_breaks_wait)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	fast_opts(&o);
+	cl_start(&c, &o);
+	double t0 = now_s();
+	cl_send_n(&c, 1, "M109 S300"); /* about 1.4 s of wall time */
+	usleep(200000);
+	cl_send_n(&c, 2, "M108"); /* acted on as it arrives, ahead of the queue */
+	cl_expect(&c, "ok", NULL, 0, 2.0);
+	cl_expect(&c, "ok", NULL, 0, 2.0);
+	double dt = now_s() - t0;
+	ck_assert_msg(dt < 0.8, "M108 took %.2f s to break the wait", dt);
+	cl_stop(&c);
+}
+END_TEST
+
+START_TEST(unplug_at)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	char line[512];
+	int r;
+	fast_opts(&o);
+	o.unplug_at_line = 2;
+	cl_start(&c, &o);
+	cl_send_n(&c, 1, "G21");
+	cl_next_is(&c, "ok");
+	cl_send_n(&c, 2, "G21");
+	r = cl_line(&c, line, sizeof(line), 2.0);
+	ck_assert_int_eq(r, -2);
+	ck_assert(sim_marlin_unplugged(c.sim));
+	cl_stop(&c);
+}
+END_TEST
+
+START_TEST(reset_at)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	fast_opts(&o);
+	o.reset_at_line = 2;
+	cl_start(&c, &o);
+	cl_send_n(&c, 1, "G21");
+	cl_next_is(&c, "ok");
+	cl_send_n(&c, 2, "G21");
+	cl_next_is(&c, "start");
+	cl_expect(&c, "echo:Hardcoded Default Settings Loaded", NULL, 0, 2.0);
+	usleep(60000);
+	cl_send_n(&c, 1, "G21"); /* line numbers were forgotten */
+	cl_next_is(&c, "ok");
+	cl_stop(&c);
+}
+END_TEST
+
+START_TEST(busy_keepalive)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	char line[512];
+	fast_opts(&o);
+	cl_start(&c, &o);
+	cl_send_n(&c, 1, "G4 S250"); /* 2.5 s of wall time at speedup 100 */
+	ck_assert_int_ge(cl_line(&c, line, sizeof(line), 3.0), 0);
+	ck_assert_str_eq(line, "echo:busy: processing");
+	cl_next_is(&c, "ok");
+	cl_stop(&c);
+}
+END_TEST
+
+/* A ping-pong host with resends gets every line through a noisy link, and
+ * the execution log shows each line once, in order. */
+START_TEST(corrupt_and_drop_recover)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	char line[512], cmd[40], want[2048];
+	size_t wl = 0;
+	int resends = 0;
+	fast_opts(&o);
+	o.corrupt_p = 0.01;
+	o.drop_p = 0.01;
+	o.seed = 42;
+	cl_start(&c, &o);
+	long n = 1;
+	double give_up = now_s() + 8.0;
+	while (n <= 40) {
+		ck_assert_msg(now_s() < give_up, "stuck at line %ld", n);
+		snprintf(cmd, sizeof(cmd), "G1 X%ld Y%ld F6000", n, n % 7);
+		cl_send(&c, "\n"); /* ends any fragment a lost newline left */
+		cl_send_n(&c, n, cmd);
+		int r;
+		long next = n + 1;
+		while ((r = cl_line(&c, line, sizeof(line), 0.3)) >= 0) {
+			if (!strncmp(line, "Resend: ", 8)) {
+				next = strtol(line + 8, NULL, 10);
+				resends++;
+			} else if (!strcmp(line, "ok")) {
+				break;
+			}
+		}
+		if (r < 0)
+			next = n; /* nothing came back: send it again */
+		n = next;
+	}
+	for (long k = 1; k <= 40; k++)
+		wl += (size_t)snprintf(want + wl, sizeof(want) - wl, "%ld G1 X%ld Y%ld F6000\n", k, k,
+				       k % 7);
+	sim_marlin_stop(c.sim);
+	ck_assert_int_gt(resends, 0);
+	ck_assert_str_eq(cl_log(&c), want);
+	cl_stop(&c);
+}
+END_TEST
+
+START_TEST(pacing)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	fast_opts(&o);
+	o.baud = 9600; /* 960 bytes/s */
+	cl_start(&c, &o);
+	double t0 = now_s();
+	cl_send(&c, "M115\n"); /* about 1 KiB of reply */
+	cl_expect(&c, "ok", NULL, 0, 5.0);
+	double dt = now_s() - t0;
+	ck_assert_msg(dt > 0.8, "1 KiB at 9600 baud took only %.2f s", dt);
+	cl_stop(&c);
+}
+END_TEST
+
+Suite *sim_suite(void)
+{
+	Suite *s = suite_create("sim");
+	TCase *proto = tcase_create("protocol");
+	TCase *faults = tcase_create("faults");
+
+	tcase_set_timeout(proto, 20);
+	tcase_set_timeout(faults, 20);
+	tcase_add_test(proto, boot_banner);
+	tcase_add_test(proto, ok_and_log);
+	tcase_add_test(proto, bad_checksum);
+	tcase_add_test(proto, wrong_line_number);
+	tcase_add_test(proto, duplicate_ignored);
+	tcase_add_test(proto, m110_renumbers);
+	tcase_add_test(proto, m105_format);
+	tcase_add_test(proto, m115_caps);
+	tcase_add_test(proto, advanced_ok);
+	tcase_add_test(proto, m109_waits);
+	tcase_add_test(proto, pacing);
+	tcase_add_test(proto, busy_keepalive);
+	tcase_add_test(faults, rx_overflow);
+	tcase_add_test(faults, corrupt_and_drop_recover);
+	tcase_add_test(faults, m112_halts);
+	tcase_add_test(faults, m108_breaks_wait);
+	tcase_add_test(faults, unplug_at);
+	tcase_add_test(faults, reset_at);
+	suite_add_tcase(s, proto);
+	suite_add_tcase(s, faults);
+	return s;
+}
