@@ -65,6 +65,143 @@ int exact_count_self_intersections(const double (*verts)[3], size_t nverts,
 				   const uint8_t *skip, int threads, uint64_t *count,
 				   struct st_error *err);
 
+
+/*
+ * An exact mesh: triangles over vertices whose exact positions may be
+ * rationals (points created where triangles cross).  Each vertex also has a
+ * double approximation for boxes, output and anything that decides nothing.
+ * Vertices given as doubles are exact as given.  Distinct vertex indices
+ * always mean distinct exact points.  Every triangle remembers an origin
+ * (a caller-chosen uint32_t, inherited by the pieces it is cut into).
+ *
+ * Not thread-safe: one thread per exact_mesh at a time.
+ */
+struct exact_mesh;
+
+/*
+ * exact_mesh_new - an exact mesh from double vertices and triangles.  The
+ * vertices must be welded (equal coordinates only once) and finite; the
+ * triangles regular (three different indices) and non-degenerate.  origin
+ * may be NULL (then triangle i has origin i).  Returns 0 and *out (free with
+ * exact_mesh_free), or ST_ERR_ARG / ST_ERR_NOMEM / ST_ERR_INTERNAL.
+ */
+int exact_mesh_new(const double (*verts)[3], size_t nverts, const uint32_t (*tris)[3],
+		   size_t ntris, const uint32_t *origin, struct exact_mesh **out,
+		   struct st_error *err);
+
+/* exact_mesh_free - free; NULL is safe. */
+void exact_mesh_free(struct exact_mesh *m);
+
+/*
+ * exact_mesh_append - add triangles over new double vertices (welded with
+ * the mesh's double-exact vertices and among themselves), all with origin
+ * origin.  Degenerate or irregular triangles (after welding) are skipped
+ * and counted in *skipped (may be NULL).  Returns 0 or a negative class.
+ */
+int exact_mesh_append(struct exact_mesh *m, const double (*verts)[3], size_t nverts,
+		      const uint32_t (*tris)[3], size_t ntris, uint32_t origin, size_t *skipped,
+		      struct st_error *err);
+
+/*
+ * exact_mesh_select - a new exact mesh with the triangles whose keep flag
+ * is set, in order, reversed where flip is set (flip may be NULL), over
+ * only the vertices they use (exact positions kept).
+ */
+int exact_mesh_select(const struct exact_mesh *m, const uint8_t *keep, const uint8_t *flip,
+		      struct exact_mesh **out, struct st_error *err);
+
+/* Sizes and read-only views; valid until the mesh is next changed. */
+size_t exact_mesh_nverts(const struct exact_mesh *m);
+size_t exact_mesh_ntris(const struct exact_mesh *m);
+const double (*exact_mesh_verts(const struct exact_mesh *m))[3];
+const uint32_t (*exact_mesh_tris(const struct exact_mesh *m))[3];
+const uint32_t *exact_mesh_origin(const struct exact_mesh *m);
+/* Whether vertex v's double approximation is its exact position. */
+bool exact_mesh_vertex_is_double(const struct exact_mesh *m, uint32_t v);
+
+struct exact_refine_stats {
+	uint64_t intersecting_pairs;	/* pairs that met outside a shared face */
+	size_t triangles_split;		/* triangles re-triangulated */
+	size_t new_vertices;		/* exact points created */
+	size_t duplicates_removed;	/* equal pieces of coplanar overlaps */
+};
+
+/*
+ * exact_mesh_refine - resolve every self-intersection (seed 000 §4.1):
+ * each pair of triangles that meets outside a common face is intersected
+ * exactly (Epeck), every cut triangle is re-triangulated in its plane with
+ * the intersection points and segments as constraints (constrained
+ * Delaunay, exact intersections), coincident points are unified exactly and
+ * equal pieces (coplanar overlaps) are kept once.  Triangles that meet
+ * nothing are kept untouched, in order.  Pieces keep their triangle's
+ * orientation and origin.  threads as for the count.  On error the mesh is
+ * unchanged.
+ */
+int exact_mesh_refine(struct exact_mesh *m, int threads, struct exact_refine_stats *stats,
+		      struct st_error *err);
+
+/*
+ * exact_mesh_count_intersections - pairs of triangles meeting outside a
+ * common face, exactly, over the exact positions.
+ */
+int exact_mesh_count_intersections(const struct exact_mesh *m, int threads, uint64_t *count,
+				   struct st_error *err);
+
+/* exact_mesh_orient3d - exact_orient3d on vertex indices (exact positions). */
+int exact_mesh_orient3d(const struct exact_mesh *m, uint32_t a, uint32_t b, uint32_t c,
+			uint32_t d);
+
+/*
+ * exact_mesh_on_triangle - whether vertex v lies, exactly, in the closed
+ * triangle abc (double corners): in its plane and within its edges.
+ */
+bool exact_mesh_on_triangle(const struct exact_mesh *m, uint32_t v, const double a[3],
+			    const double b[3], const double c[3]);
+
+/*
+ * exact_mesh_seed - the seed triangle of seed 000 §4.2.1 among the n
+ * triangles listed in tris: at the vertex with the largest x (then y, z),
+ * the incident edge with the smallest |x| component of its direction, and
+ * at that edge the triangle with the largest |x| component of its unit
+ * normal, all compared exactly.  *flip is set when that normal points to
+ * -x, i.e. the triangle must be reversed to face outwards.
+ */
+int exact_mesh_seed(const struct exact_mesh *m, const uint32_t *tris, size_t n, uint32_t *seed,
+		    bool *flip, struct st_error *err);
+
+/*
+ * exact_mesh_inside - whether the centroid of triangle probe lies inside
+ * the closed surface made of the n triangles listed in closed (exact ray
+ * parity; rays that graze an edge are re-cast).  The centroid must not lie
+ * on that surface.  *inside receives the answer.
+ */
+int exact_mesh_inside(const struct exact_mesh *m, const uint32_t *closed, size_t n,
+		      uint32_t probe, bool *inside, struct st_error *err);
+
+/*
+ * exact_segment_hidden - seed 000 §4.2.1 wires: whether segment pq (double
+ * points) is hidden, that is every part of it lies on one of the n_surface
+ * triangles listed in surface or inside the closed surface of the n_closed
+ * triangles listed in closed.  *hidden receives the answer.
+ */
+int exact_segment_hidden(const struct exact_mesh *m, const uint32_t *surface, size_t n_surface,
+			 const uint32_t *closed, size_t n_closed, const double p[3],
+			 const double q[3], bool *hidden, struct st_error *err);
+
+/*
+ * exact_wrap - close a set of triangles (sheets: open, possibly
+ * non-orientable) into a watertight, 2-manifold, intersection-free
+ * surface at distance offset around them (CGAL 3D alpha wrapping with ball
+ * radius alpha).  The result is returned as malloc'd arrays (*out_verts,
+ * *out_tris; free with free()) with counts; *deviation receives the largest
+ * distance from the result's vertices and face centroids to the input
+ * triangles (mm).
+ */
+int exact_wrap(const double (*verts)[3], size_t nverts, const uint32_t (*tris)[3], size_t ntris,
+	       double alpha, double offset, double (**out_verts)[3], size_t *nout_verts,
+	       uint32_t (**out_tris)[3], size_t *nout_tris, double *deviation,
+	       struct st_error *err);
+
 #ifdef __cplusplus
 }
 #endif

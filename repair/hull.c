@@ -1,0 +1,550 @@
+/*
+ * hull.c - outer hull by non-manifold region growing (seed 000 §4.2.1,
+ * Algorithms 1 and 2) over an exact mesh without self-intersections.
+ *
+ * Edges come from vertex stars as compressed rows (edge -> corners), so a
+ * million triangles need no hash table.  The radial order of the fan around
+ * an edge is never stored: the upward continuation is the triangle at the
+ * smallest positive angle, found with exact orientation tests on the fly.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "exact.h"
+#include "hull.h"
+
+/* Edge incidence as compressed rows; corner c = 3*tri+k is edge (k, k+1). */
+struct edges {
+	uint32_t *voff, *vtri;	 /* vertex stars */
+	uint32_t *eoff;		 /* [edge] first corner in ecorner, [nedges] end */
+	uint32_t *ecorner;	 /* corners grouped by edge */
+	uint32_t *corner_edge;	 /* [corner] its edge */
+	size_t nedges;
+};
+
+static void edges_free(struct edges *e)
+{
+	free(e->voff);
+	free(e->vtri);
+	free(e->eoff);
+	free(e->ecorner);
+	free(e->corner_edge);
+	memset(e, 0, sizeof(*e));
+}
+
+struct pending {
+	uint32_t other;	 /* the edge's higher vertex */
+	uint32_t corner;
+};
+
+static int compare_pending(const void *a, const void *b)
+{
+	const struct pending *x = a, *y = b;
+
+	if (x->other != y->other)
+		return x->other < y->other ? -1 : 1;
+	return x->corner < y->corner ? -1 : x->corner > y->corner;
+}
+
+/* Build the edges of every triangle; 0 or ST_ERR_NOMEM. */
+static int edges_build(const uint32_t (*tris)[3], size_t ntris, size_t nverts, struct edges *e,
+		       struct st_error *err)
+{
+	struct pending *buf = NULL;
+	size_t cap = 0, ne = 0;
+
+	memset(e, 0, sizeof(*e));
+	e->voff = calloc(nverts + 1, sizeof(*e->voff));
+	e->vtri = malloc((3 * ntris + 1) * sizeof(*e->vtri));
+	e->eoff = malloc((3 * ntris + 1) * sizeof(*e->eoff));
+	e->ecorner = malloc((3 * ntris + 1) * sizeof(*e->ecorner));
+	e->corner_edge = malloc((3 * ntris + 1) * sizeof(*e->corner_edge));
+	if (!e->voff || !e->vtri || !e->eoff || !e->ecorner || !e->corner_edge)
+		goto out_nomem;
+	for (size_t t = 0; t < ntris; t++)
+		for (int k = 0; k < 3; k++)
+			e->voff[tris[t][k] + 1]++;
+	for (size_t v = 0; v < nverts; v++)
+		e->voff[v + 1] += e->voff[v];
+	for (size_t t = 0; t < ntris; t++)
+		for (int k = 0; k < 3; k++)
+			e->vtri[e->voff[tris[t][k]]++] = (uint32_t)t;
+	for (size_t v = nverts; v > 0; v--)
+		e->voff[v] = e->voff[v - 1];
+	e->voff[0] = 0;
+
+	/* Each edge is collected at its lower vertex from that vertex's star. */
+	size_t pos = 0;
+	for (size_t v = 0; v < nverts; v++) {
+		size_t n = 0;
+
+		for (uint32_t i = e->voff[v]; i < e->voff[v + 1]; i++) {
+			const uint32_t t = e->vtri[i];
+			for (int k = 0; k < 3; k++) {
+				const uint32_t a = tris[t][k], b = tris[t][(k + 1) % 3];
+				if ((a == v && b > v) || (b == v && a > v)) {
+					if (n == cap) {
+						size_t nc = cap ? 2 * cap : 64;
+						struct pending *nb = realloc(buf, nc * sizeof(*nb));
+						if (!nb)
+							goto out_nomem;
+						buf = nb;
+						cap = nc;
+					}
+					buf[n].other = a == v ? b : a;
+					buf[n].corner = 3 * t + (uint32_t)k;
+					n++;
+				}
+			}
+		}
+		if (n > 1)
+			qsort(buf, n, sizeof(*buf), compare_pending);
+		for (size_t i = 0; i < n; i++) {
+			if (i == 0 || buf[i].other != buf[i - 1].other)
+				e->eoff[ne++] = (uint32_t)pos;
+			e->ecorner[pos++] = buf[i].corner;
+			e->corner_edge[buf[i].corner] = (uint32_t)(ne - 1);
+		}
+	}
+	e->eoff[ne] = (uint32_t)pos;
+	e->nedges = ne;
+	free(buf);
+	return 0;
+
+out_nomem:
+	free(buf);
+	edges_free(e);
+	return st_error_set(err, ST_ERR_NOMEM, "out of memory building the edges of %zu triangles",
+			    ntris);
+}
+
+static uint32_t uf_find(uint32_t *parent, uint32_t x)
+{
+	while (parent[x] != x) {
+		parent[x] = parent[parent[x]];
+		x = parent[x];
+	}
+	return x;
+}
+
+static void uf_union(uint32_t *parent, uint32_t a, uint32_t b)
+{
+	a = uf_find(parent, a);
+	b = uf_find(parent, b);
+	if (a != b)
+		parent[a < b ? b : a] = a < b ? a : b;
+}
+
+/* Triangle t as currently oriented. */
+static void oriented(const uint32_t (*tris)[3], const uint8_t *flip, uint32_t t, uint32_t v[3])
+{
+	v[0] = tris[t][0];
+	v[1] = flip[t] ? tris[t][2] : tris[t][1];
+	v[2] = flip[t] ? tris[t][1] : tris[t][2];
+}
+
+/* The corner of t (original order) that is not u or w. */
+static uint32_t third_vertex(const uint32_t (*tris)[3], uint32_t t, uint32_t u, uint32_t w)
+{
+	for (int k = 0; k < 3; k++)
+		if (tris[t][k] != u && tris[t][k] != w)
+			return tris[t][k];
+	return tris[t][0];
+}
+
+/*
+ * Rotation order around the directed axis a->b starting from the half-plane
+ * of c: 0 for angles in (0, pi), 1 for pi, 2 for (pi, 2 pi).  Positive
+ * rotation is towards the normal of (a, b, c).
+ */
+static int half_turn(const struct exact_mesh *em, uint32_t a, uint32_t b, uint32_t c, uint32_t x)
+{
+	const int s = exact_mesh_orient3d(em, a, b, c, x);
+
+	return s > 0 ? 0 : s == 0 ? 1 : 2;
+}
+
+/*
+ * The upward continuation (Def. 4.1, 4.2) of triangle ti, oriented
+ * (a, b, c), at its edge a->b: the first triangle met when turning the
+ * half-plane of ti about a->b towards ti's normal.  ti itself on a boundary.
+ */
+static uint32_t continuation(const struct exact_mesh *em, const uint32_t (*tris)[3],
+			     const struct edges *e, uint32_t edge, uint32_t ti, uint32_t a,
+			     uint32_t b, uint32_t c)
+{
+	uint32_t best = ti, bx = 0;
+	int bh = 3;
+
+	for (uint32_t i = e->eoff[edge]; i < e->eoff[edge + 1]; i++) {
+		const uint32_t t = e->ecorner[i] / 3;
+		if (t == ti)
+			continue;
+		const uint32_t x = third_vertex(tris, t, a, b);
+		const int h = half_turn(em, a, b, c, x);
+		/* Within one half turn, x comes first when bx lies further
+		 * along, i.e. on the positive side of the plane (a, b, x). */
+		if (h < bh || (h == bh && h != 1 && exact_mesh_orient3d(em, a, b, x, bx) > 0)) {
+			best = t;
+			bx = x;
+			bh = h;
+		}
+	}
+	return best;
+}
+
+/* Whether t, as currently oriented, runs along its edge from u to w. */
+static bool runs_from(const uint32_t (*tris)[3], const uint8_t *flip, uint32_t t, uint32_t u,
+		      uint32_t w)
+{
+	uint32_t v[3];
+
+	oriented(tris, flip, t, v);
+	for (int k = 0; k < 3; k++)
+		if (v[k] == u && v[(k + 1) % 3] == w)
+			return true;
+	return false;
+}
+
+/* A FIFO of (triangle, edge slot) pairs: the border B of Algorithm 1. */
+struct border {
+	uint32_t *items;	/* pairs: triangle, k in 0..2 packed as 3*t+k */
+	size_t head, tail, cap;
+};
+
+static int border_push_all(struct border *q, uint32_t t, struct st_error *err)
+{
+	if (q->tail + 3 > q->cap) {
+		/* Compact, then grow. */
+		memmove(q->items, q->items + q->head, (q->tail - q->head) * sizeof(*q->items));
+		q->tail -= q->head;
+		q->head = 0;
+		if (q->tail + 3 > q->cap) {
+			size_t nc = q->cap ? 2 * q->cap : 1024;
+			uint32_t *ni = realloc(q->items, nc * sizeof(*ni));
+			if (!ni)
+				return st_error_set(err, ST_ERR_NOMEM,
+						    "out of memory growing the outer hull");
+			q->items = ni;
+			q->cap = nc;
+		}
+	}
+	for (uint32_t k = 0; k < 3; k++)
+		q->items[q->tail++] = 3 * t + k;
+	return 0;
+}
+
+/*
+ * Algorithm 1 on the component whose triangles are listed in comp.  Tags:
+ * bit 1 outer, bit 2 inner.  One change from the listing: a triangle that
+ * becomes double-sided puts its edges back on the border, so the ant also
+ * walks its back side; without that, which parts of a sheet end up
+ * double-sided would depend on the order the border is visited in.
+ */
+static int grow(const struct exact_mesh *em, const uint32_t (*tris)[3], const struct edges *e,
+		const uint32_t *comp, size_t n, uint8_t *tag, uint8_t *flip, struct st_error *err)
+{
+	struct border q = {0};
+	uint32_t seed;
+	bool seed_flip;
+	int rc;
+
+	rc = exact_mesh_seed(em, comp, n, &seed, &seed_flip, err);
+	if (rc)
+		return rc;
+	flip[seed] = seed_flip;
+	tag[seed] = HULL_OUTER;
+	rc = border_push_all(&q, seed, err);
+	while (!rc && q.head < q.tail) {
+		const uint32_t item = q.items[q.head++];
+		const uint32_t ti = item / 3, k = item % 3;
+		uint32_t v[3];
+
+		/* The edge as ti runs along it now: a -> b, third corner c. */
+		oriented(tris, flip, ti, v);
+		const uint32_t a = v[k], b = v[(k + 1) % 3], c = v[(k + 2) % 3];
+		/* k indexes ti's current orientation; the edge id is the same
+		 * for either orientation, found from the original corners. */
+		uint32_t corner = 0;
+		for (uint32_t j = 0; j < 3; j++) {
+			const uint32_t p = tris[ti][j], r = tris[ti][(j + 1) % 3];
+			if ((p == a && r == b) || (p == b && r == a))
+				corner = 3 * ti + j;
+		}
+		const uint32_t tnew = continuation(em, tris, e, e->corner_edge[corner], ti, a, b, c);
+
+		if (tag[tnew] == (HULL_OUTER | HULL_INNER))
+			continue;
+		/* Consistent: tnew runs the common edge the other way. */
+		if (tnew != ti && runs_from(tris, flip, tnew, b, a)) {
+			if (!(tag[tnew] & HULL_OUTER)) {
+				tag[tnew] |= HULL_OUTER;
+				rc = border_push_all(&q, tnew, err);
+			}
+			continue;
+		}
+		flip[tnew] ^= 1;
+		if (tag[tnew] & HULL_OUTER)
+			tag[tnew] |= HULL_INNER;
+		else
+			tag[tnew] |= HULL_OUTER;
+		rc = border_push_all(&q, tnew, err);
+	}
+	free(q.items);
+	return rc;
+}
+
+/* Bounding box of the listed triangles' vertices (double approximations). */
+static void list_bbox(const double (*verts)[3], const uint32_t (*tris)[3], const uint32_t *list,
+		      size_t n, double lo[3], double hi[3])
+{
+	for (int k = 0; k < 3; k++) {
+		lo[k] = HUGE_VAL;
+		hi[k] = -HUGE_VAL;
+	}
+	for (size_t i = 0; i < n; i++)
+		for (int c = 0; c < 3; c++)
+			for (int k = 0; k < 3; k++) {
+				const double x = verts[tris[list[i]][c]][k];
+				lo[k] = x < lo[k] ? x : lo[k];
+				hi[k] = x > hi[k] ? x : hi[k];
+			}
+}
+
+/*
+ * Group triangles into components: those with member[t] set, joined
+ * across edges where both sides are members.  Writes the lists as rows
+ * (off has ncomp+1 entries) and returns the count, or -1 on OOM.
+ */
+static long components(const struct edges *e, size_t ntris, const uint8_t *member,
+		       uint32_t **off_out, uint32_t **list_out)
+{
+	uint32_t *parent = malloc((ntris + 1) * sizeof(*parent));
+	uint32_t *root_id = malloc((ntris + 1) * sizeof(*root_id));
+	uint32_t *off = NULL, *list = NULL;
+	long nc = 0;
+
+	if (!parent || !root_id)
+		goto out_nomem;
+	for (size_t t = 0; t < ntris; t++)
+		parent[t] = (uint32_t)t;
+	for (size_t ed = 0; ed < e->nedges; ed++) {
+		uint32_t first = UINT32_MAX;
+		for (uint32_t i = e->eoff[ed]; i < e->eoff[ed + 1]; i++) {
+			const uint32_t t = e->ecorner[i] / 3;
+			if (!member[t])
+				continue;
+			if (first == UINT32_MAX)
+				first = t;
+			else
+				uf_union(parent, first, t);
+		}
+	}
+	for (size_t t = 0; t < ntris; t++)
+		root_id[t] = UINT32_MAX;
+	for (size_t t = 0; t < ntris; t++)
+		if (member[t]) {
+			const uint32_t r = uf_find(parent, (uint32_t)t);
+			if (root_id[r] == UINT32_MAX)
+				root_id[r] = (uint32_t)nc++;
+		}
+	off = calloc((size_t)nc + 2, sizeof(*off));
+	list = malloc((ntris + 1) * sizeof(*list));
+	if (!off || !list)
+		goto out_nomem;
+	for (size_t t = 0; t < ntris; t++)
+		if (member[t])
+			off[root_id[uf_find(parent, (uint32_t)t)] + 1]++;
+	for (long c = 0; c < nc; c++)
+		off[c + 1] += off[c];
+	for (size_t t = 0; t < ntris; t++)
+		if (member[t])
+			list[off[root_id[uf_find(parent, (uint32_t)t)]]++] = (uint32_t)t;
+	for (long c = nc; c > 0; c--)
+		off[c] = off[c - 1];
+	off[0] = 0;
+	free(parent);
+	free(root_id);
+	*off_out = off;
+	*list_out = list;
+	return nc;
+
+out_nomem:
+	free(parent);
+	free(root_id);
+	free(off);
+	free(list);
+	return -1;
+}
+
+int hull_extract(const struct exact_mesh *em, uint8_t *tag, uint8_t *flip,
+		 struct hull_stats *st, struct st_error *err)
+{
+	const size_t ntris = exact_mesh_ntris(em), nverts = exact_mesh_nverts(em);
+	const uint32_t (*tris)[3] = exact_mesh_tris(em);
+	const double (*verts)[3] = exact_mesh_verts(em);
+	struct edges e;
+	uint8_t *member = NULL;
+	uint32_t *off = NULL, *list = NULL, *soff = NULL, *slist = NULL;
+	long nc, ns;
+	int rc;
+
+	memset(st, 0, sizeof(*st));
+	memset(tag, 0, ntris);
+	memset(flip, 0, ntris);
+	if (ntris == 0)
+		return 0;
+	rc = edges_build(tris, ntris, nverts, &e, err);
+	if (rc)
+		return rc;
+	member = malloc(ntris);
+	if (!member) {
+		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory in the outer hull");
+		goto out;
+	}
+
+	/* Algorithm 2, lines 1-3: grow the outer hull of every
+	 * edge-connected component from its own seed. */
+	memset(member, 1, ntris);
+	nc = components(&e, ntris, member, &off, &list);
+	if (nc < 0) {
+		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory finding components");
+		goto out;
+	}
+	for (long c = 0; c < nc && !rc; c++)
+		rc = grow(em, tris, &e, list + off[c], off[c + 1] - off[c], tag, flip, err);
+	if (rc)
+		goto out;
+	for (size_t t = 0; t < ntris; t++)
+		if (!(tag[t] & HULL_OUTER))
+			st->interior++;
+	free(off);
+	free(list);
+	off = list = NULL;
+
+	/* Lines 4-10: a component of M_solid and M_sheet that lies in the
+	 * space bounded by a component of M_solid is deleted. */
+	for (size_t t = 0; t < ntris; t++)
+		member[t] = (tag[t] & HULL_OUTER) != 0;
+	nc = components(&e, ntris, member, &off, &list);
+	for (size_t t = 0; t < ntris; t++)
+		member[t] = tag[t] == HULL_OUTER;
+	ns = nc < 0 ? -1 : components(&e, ntris, member, &soff, &slist);
+	if (nc < 0 || ns < 0) {
+		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory finding components");
+		goto out;
+	}
+	if (ns > 0 && nc > 1) {
+		uint8_t *doomed = calloc((size_t)nc, 1);
+		double (*slo)[3] = malloc((size_t)ns * sizeof(*slo));
+		double (*shi)[3] = malloc((size_t)ns * sizeof(*shi));
+		if (!doomed || !slo || !shi) {
+			free(doomed);
+			free(slo);
+			free(shi);
+			rc = st_error_set(err, ST_ERR_NOMEM, "out of memory testing containment");
+			goto out;
+		}
+		for (long d = 0; d < ns; d++)
+			list_bbox(verts, tris, slist + soff[d], soff[d + 1] - soff[d], slo[d],
+				  shi[d]);
+		for (long c = 0; c < nc && !rc; c++) {
+			const uint32_t *cl = list + off[c];
+			const size_t cn = off[c + 1] - off[c];
+			double lo[3], hi[3];
+			list_bbox(verts, tris, cl, cn, lo, hi);
+			for (long d = 0; d < ns && !rc && !doomed[c]; d++) {
+				const uint32_t *dl = slist + soff[d];
+				bool inside = false, own = false;
+				/* A solid part of C itself does not count. */
+				for (size_t i = 0; i < cn && !own; i++)
+					own = cl[i] == dl[0];
+				if (own)
+					continue;
+				/* Cheap reject: C's box must lie in D's box. */
+				bool boxed = true;
+				for (int k = 0; k < 3; k++)
+					boxed = boxed && lo[k] >= slo[d][k] && hi[k] <= shi[d][k];
+				if (!boxed)
+					continue;
+				rc = exact_mesh_inside(em, dl, soff[d + 1] - soff[d], cl[0],
+						       &inside, err);
+				if (!rc && inside)
+					doomed[c] = 1;
+			}
+		}
+		for (long c = 0; c < nc && !rc; c++)
+			if (doomed[c])
+				for (uint32_t i = off[c]; i < off[c + 1]; i++) {
+					tag[list[i]] = 0;
+					st->enclosed++;
+				}
+		free(doomed);
+		free(slo);
+		free(shi);
+		if (rc)
+			goto out;
+	}
+	for (size_t t = 0; t < ntris; t++) {
+		if (tag[t] == HULL_OUTER)
+			st->solid++;
+		else if (tag[t] == (HULL_OUTER | HULL_INNER))
+			st->sheet++;
+	}
+	/* Sheets as their own edge-connected parts. */
+	for (size_t t = 0; t < ntris; t++)
+		member[t] = tag[t] == (HULL_OUTER | HULL_INNER);
+	free(soff);
+	free(slist);
+	soff = slist = NULL;
+	ns = components(&e, ntris, member, &soff, &slist);
+	if (ns < 0) {
+		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory finding components");
+		goto out;
+	}
+	st->sheet_components = (size_t)ns;
+out:
+	free(member);
+	free(off);
+	free(list);
+	free(soff);
+	free(slist);
+	edges_free(&e);
+	return rc;
+}
+
+long hull_manifold_components(const uint32_t (*tris)[3], size_t ntris, size_t nverts,
+			      uint32_t *component, struct st_error *err)
+{
+	struct edges e;
+	uint32_t *parent;
+	long nc = 0;
+
+	if (edges_build(tris, ntris, nverts, &e, err))
+		return -1;
+	parent = malloc((ntris + 1) * sizeof(*parent));
+	if (!parent) {
+		edges_free(&e);
+		st_error_set(err, ST_ERR_NOMEM, "out of memory splitting components");
+		return -1;
+	}
+	for (size_t t = 0; t < ntris; t++)
+		parent[t] = (uint32_t)t;
+	/* Def. 3.10 via the manifold decomposition: only edges with exactly
+	 * two triangles join; singular edges and vertices split. */
+	for (size_t ed = 0; ed < e.nedges; ed++)
+		if (e.eoff[ed + 1] - e.eoff[ed] == 2)
+			uf_union(parent, e.ecorner[e.eoff[ed]] / 3, e.ecorner[e.eoff[ed] + 1] / 3);
+	for (size_t t = 0; t < ntris; t++)
+		component[t] = UINT32_MAX;
+	for (size_t t = 0; t < ntris; t++) {
+		const uint32_t r = uf_find(parent, (uint32_t)t);
+		if (component[r] == UINT32_MAX)
+			component[r] = (uint32_t)nc++;
+		component[t] = component[r];
+	}
+	free(parent);
+	edges_free(&e);
+	return nc;
+}

@@ -1,0 +1,761 @@
+/*
+ * repair.c - seed 000's repair pipeline end to end (repair.h).
+ *
+ * One "core" run is §4.1 and §4.2: clean, refine exactly, grow the outer
+ * hull; then, when there are sheets or visible wires, thicken them and run
+ * refine + hull again on M_solid and the new solids.  Rounding the exact
+ * result to the output precision can in rare cases create new contacts, so
+ * the rounded mesh is checked and, if needed, goes through the core again.
+ */
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "exact.h"
+#include "hull.h"
+#include "repair.h"
+
+/* Origins of triangles that are not pieces of an input triangle. */
+#define ORIGIN_THICKENED 0xfffffffeu
+
+/* Sides of the prism that stands in for an epsilon-diameter cylinder. */
+#define WIRE_SIDES 12
+
+/* Rounding rounds before giving up (each usually fixes all it finds). */
+#define MAX_ROUNDING_ROUNDS 6
+
+/* Thickening passes: seed 000 needs one; more only guard odd inputs. */
+#define MAX_THICKEN_PASSES 3
+
+struct segment {
+	double p[3], q[3];
+};
+
+/* What one core run produces. */
+struct core_out {
+	struct exact_mesh *result;	/* M_solid, oriented outwards */
+	size_t irregular, degenerate, duplicates;
+	uint64_t pairs;
+	size_t split, interior, enclosed;
+	size_t sheet, sheet_components, second_sheet;
+	double sheet_area, wire_length, sheet_deviation;
+	size_t wires, wires_discarded, thickened;
+	bool second_pass;
+};
+
+void repair_options_init(struct repair_options *opt)
+{
+	memset(opt, 0, sizeof(*opt));
+	opt->epsilon = 0.4;
+	opt->precision = REPAIR_FLOAT32;
+	opt->threads = 0;
+}
+
+static void progress(const struct repair_options *opt, const char *stage, double done)
+{
+	if (opt->progress)
+		opt->progress(opt->progress_ctx, stage, done);
+}
+
+static double dist3(const double a[3], const double b[3])
+{
+	const double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
+
+	return sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+static double tri_area(const double a[3], const double b[3], const double c[3])
+{
+	const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+	const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+	const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+			     u[0] * v[1] - u[1] * v[0]};
+
+	return 0.5 * sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+}
+
+struct tri_key {
+	uint32_t v[3];	/* sorted corners */
+	uint32_t t;
+};
+
+static int compare_tri_key(const void *a, const void *b)
+{
+	const struct tri_key *x = a, *y = b;
+
+	for (int k = 0; k < 3; k++)
+		if (x->v[k] != y->v[k])
+			return x->v[k] < y->v[k] ? -1 : 1;
+	return x->t < y->t ? -1 : x->t > y->t;
+}
+
+static void sort3(const uint32_t in[3], uint32_t out[3])
+{
+	uint32_t a = in[0], b = in[1], c = in[2], t;
+
+	if (a > b) { t = a; a = b; b = t; }
+	if (b > c) { t = b; b = c; c = t; }
+	if (a > b) { t = a; a = b; b = t; }
+	out[0] = a;
+	out[1] = b;
+	out[2] = c;
+}
+
+/*
+ * Step 1 (seed 000 §4.1, §4.2.1 last paragraphs): the layer of regular,
+ * non-degenerate, pairwise non-equivalent triangles (first of each set of
+ * equivalent ones, in input order) into *layer (n_layer of them), and the
+ * wire segments of irregular and degenerate ones into *wires.
+ */
+static int clean(const struct mesh *in, uint32_t **layer, size_t *n_layer, struct segment **wires,
+		 size_t *n_wires, struct core_out *co, struct st_error *err)
+{
+	uint8_t *usable = calloc(in->ntris + 1, 1);
+	struct tri_key *keys = malloc((in->ntris + 1) * sizeof(*keys));
+	uint32_t *out = malloc((in->ntris + 1) * sizeof(*out));
+	struct segment *segs = malloc((in->ntris + 1) * sizeof(*segs));
+	size_t nk = 0, ns = 0, nl = 0;
+
+	if (!usable || !keys || !out || !segs) {
+		free(usable);
+		free(keys);
+		free(out);
+		free(segs);
+		return st_error_set(err, ST_ERR_NOMEM, "out of memory cleaning %zu triangles",
+				    in->ntris);
+	}
+	for (size_t t = 0; t < in->ntris; t++) {
+		const uint32_t *v = in->tris[t];
+		const double *p[3] = {in->verts[v[0]], in->verts[v[1]], in->verts[v[2]]};
+
+		if (v[0] == v[1] && v[1] == v[2]) {
+			co->irregular++; /* a point: draws nothing */
+		} else if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) {
+			co->irregular++;
+			const uint32_t a = v[0], b = v[0] == v[1] ? v[2] : v[1];
+			memcpy(segs[ns].p, in->verts[a], sizeof(segs[ns].p));
+			memcpy(segs[ns].q, in->verts[b], sizeof(segs[ns].q));
+			ns++;
+		} else if (exact_collinear(p[0], p[1], p[2])) {
+			co->degenerate++;
+			/* The segment is spanned by the farthest pair. */
+			int i = 0, j = 1;
+			double best = dist3(p[0], p[1]);
+			if (dist3(p[1], p[2]) > best) {
+				i = 1;
+				j = 2;
+				best = dist3(p[1], p[2]);
+			}
+			if (dist3(p[0], p[2]) > best) {
+				i = 0;
+				j = 2;
+			}
+			memcpy(segs[ns].p, p[i], sizeof(segs[ns].p));
+			memcpy(segs[ns].q, p[j], sizeof(segs[ns].q));
+			ns++;
+		} else {
+			sort3(v, keys[nk].v);
+			keys[nk].t = (uint32_t)t;
+			nk++;
+		}
+	}
+	qsort(keys, nk, sizeof(*keys), compare_tri_key);
+	for (size_t i = 0; i < nk; i++) {
+		if (i > 0 && !memcmp(keys[i].v, keys[i - 1].v, sizeof(keys[i].v))) {
+			co->duplicates++;
+			continue;
+		}
+		usable[keys[i].t] = 1;
+	}
+	for (size_t t = 0; t < in->ntris; t++)
+		if (usable[t])
+			out[nl++] = (uint32_t)t;
+	free(usable);
+	free(keys);
+	*layer = out;
+	*n_layer = nl;
+	*wires = segs;
+	*n_wires = ns;
+	return 0;
+}
+
+/* Steps 2-3 on em, in place: refine, then tag.  tag/flip are malloc'd. */
+static int refine_and_grow(struct exact_mesh *em, int threads, struct exact_refine_stats *rs,
+			   struct hull_stats *hs, uint8_t **tag, uint8_t **flip,
+			   struct st_error *err)
+{
+	int rc = exact_mesh_refine(em, threads, rs, err);
+	size_t n;
+
+	*tag = *flip = NULL;
+	if (rc)
+		return rc;
+	n = exact_mesh_ntris(em);
+	*tag = malloc(n + 1);
+	*flip = malloc(n + 1);
+	if (!*tag || !*flip) {
+		free(*tag);
+		free(*flip);
+		*tag = *flip = NULL;
+		return st_error_set(err, ST_ERR_NOMEM, "out of memory tagging %zu triangles", n);
+	}
+	rc = hull_extract(em, *tag, *flip, hs, err);
+	if (rc) {
+		free(*tag);
+		free(*flip);
+		*tag = *flip = NULL;
+	}
+	return rc;
+}
+
+/*
+ * A closed prism of WIRE_SIDES sides and radius r around segment pq,
+ * oriented outwards, appended to em.
+ */
+static int append_cylinder(struct exact_mesh *em, const struct segment *s, double r,
+			   struct st_error *err)
+{
+	double d[3] = {s->q[0] - s->p[0], s->q[1] - s->p[1], s->q[2] - s->p[2]};
+	const double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+	double u[3], w[3], verts[2 * WIRE_SIDES + 2][3];
+	uint32_t tris[4 * WIRE_SIDES][3];
+	size_t nt = 0;
+
+	for (int k = 0; k < 3; k++)
+		d[k] /= len;
+	/* u: perpendicular to d, from the axis d is least aligned with. */
+	const int a = fabs(d[0]) <= fabs(d[1]) && fabs(d[0]) <= fabs(d[2]) ? 0
+		      : fabs(d[1]) <= fabs(d[2])			    ? 1
+									    : 2;
+	double e[3] = {0, 0, 0};
+	e[a] = 1;
+	u[0] = d[1] * e[2] - d[2] * e[1];
+	u[1] = d[2] * e[0] - d[0] * e[2];
+	u[2] = d[0] * e[1] - d[1] * e[0];
+	const double ul = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+	for (int k = 0; k < 3; k++)
+		u[k] /= ul;
+	w[0] = d[1] * u[2] - d[2] * u[1];
+	w[1] = d[2] * u[0] - d[0] * u[2];
+	w[2] = d[0] * u[1] - d[1] * u[0];
+	for (int i = 0; i < WIRE_SIDES; i++) {
+		const double th = 2 * M_PI * i / WIRE_SIDES, c = cos(th), sn = sin(th);
+		for (int k = 0; k < 3; k++) {
+			verts[i][k] = s->p[k] + r * (c * u[k] + sn * w[k]);
+			verts[WIRE_SIDES + i][k] = s->q[k] + r * (c * u[k] + sn * w[k]);
+		}
+	}
+	memcpy(verts[2 * WIRE_SIDES], s->p, sizeof(verts[0]));
+	memcpy(verts[2 * WIRE_SIDES + 1], s->q, sizeof(verts[0]));
+	for (uint32_t i = 0; i < WIRE_SIDES; i++) {
+		const uint32_t j = (i + 1) % WIRE_SIDES;
+		const uint32_t a0 = i, a1 = j, b0 = WIRE_SIDES + i, b1 = WIRE_SIDES + j;
+		const uint32_t cp = 2 * WIRE_SIDES, cq = 2 * WIRE_SIDES + 1;
+		uint32_t side1[3] = {a0, a1, b1}, side2[3] = {a0, b1, b0};
+		uint32_t cap1[3] = {cp, a1, a0}, cap2[3] = {cq, b0, b1};
+		memcpy(tris[nt++], side1, sizeof(side1));
+		memcpy(tris[nt++], side2, sizeof(side2));
+		memcpy(tris[nt++], cap1, sizeof(cap1));
+		memcpy(tris[nt++], cap2, sizeof(cap2));
+	}
+	return exact_mesh_append(em, (const double(*)[3])verts, 2 * WIRE_SIDES + 2,
+				 (const uint32_t(*)[3])tris, nt, ORIGIN_THICKENED, NULL, err);
+}
+
+/* List the triangles whose tag is want (0 = any nonzero) into a new array. */
+static uint32_t *list_tagged(const uint8_t *tag, size_t n, int want, size_t *count)
+{
+	uint32_t *l = malloc((n + 1) * sizeof(*l));
+	size_t c = 0;
+
+	if (!l)
+		return NULL;
+	for (size_t t = 0; t < n; t++)
+		if (want ? tag[t] == want : tag[t] != 0)
+			l[c++] = (uint32_t)t;
+	*count = c;
+	return l;
+}
+
+/*
+ * Thicken M_sheet of em (tag both) by alpha wrapping and the visible wires
+ * by cylinders; return a new exact mesh of M_solid plus the new solids.
+ */
+static int thicken(const struct exact_mesh *em, const uint8_t *tag, const uint8_t *flip,
+		   const struct segment *wires, size_t n_wires, const struct repair_options *opt,
+		   struct core_out *co, struct exact_mesh **out, struct st_error *err)
+{
+	const size_t n = exact_mesh_ntris(em), nv = exact_mesh_nverts(em);
+	const uint32_t (*tris)[3] = exact_mesh_tris(em);
+	const double (*verts)[3] = exact_mesh_verts(em);
+	uint8_t *keep = malloc(n + 1);
+	uint32_t *surface = NULL, *closed = NULL, *vmap = NULL;
+	double (*sv)[3] = NULL, (*wv)[3] = NULL;
+	uint32_t (*st)[3] = NULL, (*wt)[3] = NULL;
+	size_t ns = 0, nc = 0;
+	struct exact_mesh *res = NULL;
+	int rc = 0;
+
+	*out = NULL;
+	if (!keep)
+		return st_error_set(err, ST_ERR_NOMEM, "out of memory thickening");
+	for (size_t t = 0; t < n; t++)
+		keep[t] = tag[t] == HULL_OUTER;
+	rc = exact_mesh_select(em, keep, flip, &res, err);
+	if (rc)
+		goto out;
+
+	/* Sheets: one alpha wrap at offset epsilon/2, total thickness epsilon. */
+	size_t nsheet = 0;
+	for (size_t t = 0; t < n; t++)
+		nsheet += tag[t] == (HULL_OUTER | HULL_INNER);
+	if (nsheet) {
+		size_t nsv = 0, nwv = 0, nwt = 0;
+		double dev = 0;
+		vmap = malloc((nv + 1) * sizeof(*vmap));
+		sv = malloc((3 * nsheet) * sizeof(*sv));
+		st = malloc(nsheet * sizeof(*st));
+		if (!vmap || !sv || !st) {
+			rc = st_error_set(err, ST_ERR_NOMEM, "out of memory thickening sheets");
+			goto out;
+		}
+		for (size_t v = 0; v < nv; v++)
+			vmap[v] = UINT32_MAX;
+		size_t k = 0;
+		for (size_t t = 0; t < n; t++) {
+			if (tag[t] != (HULL_OUTER | HULL_INNER))
+				continue;
+			for (int c = 0; c < 3; c++) {
+				const uint32_t v = tris[t][c];
+				if (vmap[v] == UINT32_MAX) {
+					memcpy(sv[nsv], verts[v], sizeof(sv[0]));
+					vmap[v] = (uint32_t)nsv++;
+				}
+				st[k][c] = vmap[v];
+			}
+			co->sheet_area += tri_area(verts[tris[t][0]], verts[tris[t][1]],
+						   verts[tris[t][2]]);
+			k++;
+		}
+		progress(opt, "thickening sheets", 0);
+		/* CGAL places the wrap's vertices within 1% beyond the offset,
+		 * so asking for 1% less keeps them within epsilon/2. */
+		rc = exact_wrap((const double(*)[3])sv, nsv, (const uint32_t(*)[3])st, nsheet,
+				opt->epsilon, opt->epsilon / 2 / 1.01, &wv, &nwv, &wt, &nwt, &dev,
+				err);
+		if (rc)
+			goto out;
+		co->sheet_deviation = fmax(co->sheet_deviation, dev);
+		co->thickened += nwt;
+		rc = exact_mesh_append(res, (const double(*)[3])wv, nwv, (const uint32_t(*)[3])wt,
+				       nwt, ORIGIN_THICKENED, NULL, err);
+		if (rc)
+			goto out;
+	}
+
+	/* Wires: hidden ones (on the surface or inside M_solid) are dropped. */
+	if (n_wires) {
+		surface = list_tagged(tag, n, 0, &ns);
+		closed = list_tagged(tag, n, HULL_OUTER, &nc);
+		if (!surface || !closed) {
+			rc = st_error_set(err, ST_ERR_NOMEM, "out of memory testing wires");
+			goto out;
+		}
+		progress(opt, "thickening wires", 0);
+	}
+	for (size_t i = 0; i < n_wires; i++) {
+		bool hidden;
+		rc = exact_segment_hidden(em, surface, ns, closed, nc, wires[i].p, wires[i].q,
+					  &hidden, err);
+		if (rc)
+			goto out;
+		if (hidden) {
+			co->wires_discarded++;
+			continue;
+		}
+		co->wires++;
+		co->wire_length += dist3(wires[i].p, wires[i].q);
+		rc = append_cylinder(res, &wires[i], opt->epsilon / 2, err);
+		if (rc)
+			goto out;
+		co->thickened += 4 * WIRE_SIDES;
+		/* Every cylinder vertex is exactly r from the axis (rounding
+		 * aside), the caps end at the segment's ends. */
+		co->sheet_deviation = fmax(co->sheet_deviation, opt->epsilon / 2);
+	}
+out:
+	free(keep);
+	free(surface);
+	free(closed);
+	free(vmap);
+	free(sv);
+	free(st);
+	free(wv);
+	free(wt);
+	if (rc) {
+		exact_mesh_free(res);
+		return rc;
+	}
+	*out = res;
+	return 0;
+}
+
+/*
+ * Seed 000 §4 on one mesh: clean, refine, hull, thicken and repeat as
+ * needed.  co->result receives M_solid, oriented outwards.
+ */
+static int core(const struct mesh *in, const struct repair_options *opt, struct core_out *co,
+		struct st_error *err)
+{
+	uint32_t *layer = NULL;
+	struct segment *wires = NULL;
+	size_t n_layer = 0, n_wires = 0;
+	struct exact_mesh *em = NULL, *next = NULL;
+	uint8_t *tag = NULL, *flip = NULL;
+	struct exact_refine_stats rs;
+	struct hull_stats hs;
+	int rc;
+
+	memset(co, 0, sizeof(*co));
+	progress(opt, "cleaning", 0);
+	rc = clean(in, &layer, &n_layer, &wires, &n_wires, co, err);
+	if (rc)
+		return rc;
+	uint32_t (*lt)[3] = malloc((n_layer + 1) * sizeof(*lt));
+	if (!lt) {
+		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory copying the layer");
+		goto out;
+	}
+	for (size_t i = 0; i < n_layer; i++)
+		memcpy(lt[i], in->tris[layer[i]], sizeof(lt[i]));
+	rc = exact_mesh_new((const double(*)[3])in->verts, in->nverts, (const uint32_t(*)[3])lt,
+			    n_layer, layer, &em, err);
+	free(lt);
+	if (rc)
+		goto out;
+
+	progress(opt, "resolving self-intersections", 0.1);
+	rc = refine_and_grow(em, opt->threads, &rs, &hs, &tag, &flip, err);
+	if (rc)
+		goto out;
+	co->pairs = rs.intersecting_pairs;
+	co->split = rs.triangles_split;
+	co->interior = hs.interior;
+	co->enclosed = hs.enclosed;
+	co->sheet = hs.sheet;
+	co->sheet_components = hs.sheet_components;
+
+	for (int pass = 0; pass < MAX_THICKEN_PASSES; pass++) {
+		size_t visible_wires = pass == 0 ? n_wires : 0;
+		if (hs.sheet == 0 && visible_wires == 0)
+			break;
+		rc = thicken(em, tag, flip, wires, visible_wires, opt, co, &next, err);
+		if (rc)
+			goto out;
+		if (hs.sheet == 0 && co->wires == 0)
+			break; /* every wire was hidden: nothing was added */
+		free(tag);
+		free(flip);
+		tag = flip = NULL;
+		exact_mesh_free(em);
+		em = next;
+		next = NULL;
+		co->second_pass = true;
+		progress(opt, "second pass", 0.6);
+		rc = refine_and_grow(em, opt->threads, &rs, &hs, &tag, &flip, err);
+		if (rc)
+			goto out;
+		co->second_sheet = hs.sheet;
+	}
+	if (next) {
+		/* Only hidden wires: M_solid as selected by thicken(). */
+		co->result = next;
+		next = NULL;
+	} else {
+		uint8_t *keep = malloc(exact_mesh_ntris(em) + 1);
+		if (!keep) {
+			rc = st_error_set(err, ST_ERR_NOMEM, "out of memory selecting M_solid");
+			goto out;
+		}
+		for (size_t t = 0; t < exact_mesh_ntris(em); t++)
+			keep[t] = tag[t] == HULL_OUTER;
+		rc = exact_mesh_select(em, keep, flip, &co->result, err);
+		free(keep);
+	}
+out:
+	free(layer);
+	free(wires);
+	free(tag);
+	free(flip);
+	exact_mesh_free(em);
+	exact_mesh_free(next);
+	return rc;
+}
+
+/*
+ * The snapping grid of rounding round r: none in round 0 (plain rounding to
+ * the output precision); then 4^r units in the last place of the largest
+ * coordinate, a power of two, so every grid point is still representable.
+ * Coarser grids merge the clusters of nearly coincident points that plain
+ * rounding turns into new crossings.
+ */
+static double rounding_grid(const struct exact_mesh *em, enum repair_precision prec, int r)
+{
+	const size_t nv = exact_mesh_nverts(em);
+	const double (*verts)[3] = exact_mesh_verts(em);
+	double big = 0;
+	int e;
+
+	if (r == 0)
+		return 0;
+	for (size_t v = 0; v < nv; v++)
+		for (int k = 0; k < 3; k++)
+			big = fmax(big, fabs(verts[v][k]));
+	if (big == 0)
+		return 0;
+	frexp(big, &e); /* big < 2^e */
+	return ldexp(1.0, e - (prec == REPAIR_FLOAT32 ? 24 : 53) + 2 * r);
+}
+
+/*
+ * Round em's vertices to the output precision into a new welded mesh.
+ * *moved: largest distance a vertex moved; *changed: whether any did.
+ */
+static int round_result(const struct exact_mesh *em, enum repair_precision prec, double grid,
+			struct mesh **out, double *moved, bool *changed, struct st_error *err)
+{
+	const size_t n = exact_mesh_ntris(em), nv = exact_mesh_nverts(em);
+	const uint32_t (*tris)[3] = exact_mesh_tris(em);
+	const double (*verts)[3] = exact_mesh_verts(em);
+	struct mesh_builder *b = mesh_builder_new(n);
+	uint32_t *index = malloc((nv + 1) * sizeof(*index));
+	int rc = 0;
+
+	*out = NULL;
+	if (!b || !index) {
+		mesh_builder_free(b);
+		free(index);
+		return st_error_set(err, ST_ERR_NOMEM, "out of memory writing the result");
+	}
+	for (size_t v = 0; v < nv && !rc; v++) {
+		double p[3];
+		for (int k = 0; k < 3; k++) {
+			p[k] = verts[v][k];
+			if (prec == REPAIR_FLOAT32) {
+				if (fabs(p[k]) > FLT_MAX)
+					rc = st_error_set(err, ST_ERR_RANGE,
+							  "coordinate %g does not fit a binary "
+							  "STL float; write ASCII instead",
+							  p[k]);
+				p[k] = (double)(float)p[k];
+			}
+			if (grid > 0)
+				p[k] = nearbyint(p[k] / grid) * grid;
+		}
+		const double d = dist3(p, verts[v]);
+		*moved = fmax(*moved, d);
+		if (d > 0 || !exact_mesh_vertex_is_double(em, (uint32_t)v))
+			*changed = true;
+		if (!rc)
+			rc = mesh_builder_vertex(b, p, &index[v], err);
+	}
+	for (size_t t = 0; t < n && !rc; t++)
+		rc = mesh_builder_triangle(b, index[tris[t][0]], index[tris[t][1]],
+					   index[tris[t][2]], err);
+	free(index);
+	if (rc) {
+		mesh_builder_free(b);
+		return rc;
+	}
+	*out = mesh_builder_finish(b);
+	if (!*out)
+		return st_error_set(err, ST_ERR_NOMEM, "out of memory writing the result");
+	return 0;
+}
+
+/* Largest distance of a solid vertex from the input triangle it came from
+ * (0 when every one lies on it exactly, which is what seed 000 promises). */
+static double solid_deviation(const struct mesh *in, const struct exact_mesh *em)
+{
+	const size_t n = exact_mesh_ntris(em);
+	const uint32_t (*tris)[3] = exact_mesh_tris(em);
+	const uint32_t *origin = exact_mesh_origin(em);
+	const double (*verts)[3] = exact_mesh_verts(em);
+	double worst = 0;
+
+	for (size_t t = 0; t < n; t++) {
+		if (origin[t] >= in->ntris)
+			continue; /* made by thickening */
+		const uint32_t *o = in->tris[origin[t]];
+		const double *a = in->verts[o[0]], *b = in->verts[o[1]], *c = in->verts[o[2]];
+		for (int k = 0; k < 3; k++) {
+			if (exact_mesh_on_triangle(em, tris[t][k], a, b, c))
+				continue;
+			/* Off its triangle: measure how far (in doubles). */
+			const double *p = verts[tris[t][k]];
+			const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+			const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+			double nn[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+					u[0] * v[1] - u[1] * v[0]};
+			const double l = sqrt(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);
+			const double d = fabs((p[0] - a[0]) * nn[0] + (p[1] - a[1]) * nn[1] +
+					      (p[2] - a[2]) * nn[2]) / l;
+			worst = fmax(worst, d > 0 ? d : DBL_MIN);
+		}
+	}
+	return worst;
+}
+
+/* Copy the first core run's figures into the report. */
+static void report_core(struct repair_report *rep, const struct core_out *co)
+{
+	rep->irregular_removed = co->irregular;
+	rep->degenerate_removed = co->degenerate;
+	rep->duplicates_removed = co->duplicates;
+	rep->intersecting_pairs = co->pairs;
+	rep->triangles_split = co->split;
+	rep->interior_deleted = co->interior;
+	rep->enclosed_deleted = co->enclosed;
+	rep->sheet_triangles = co->sheet;
+	rep->sheet_area = co->sheet_area;
+	rep->sheet_components = co->sheet_components;
+	rep->wires = co->wires;
+	rep->wire_length = co->wire_length;
+	rep->wires_discarded = co->wires_discarded;
+	rep->second_pass = co->second_pass;
+	rep->thickened_triangles = co->thickened;
+	rep->second_sheet_triangles = co->second_sheet;
+	rep->sheet_deviation = co->sheet_deviation;
+}
+
+/*
+ * Whether every manifold-connected part of a checked result is printable
+ * (Def. 3.11): the result may hold several parts, which --split writes as
+ * one file each, but nothing else may be wrong.
+ */
+static bool parts_printable(const struct mesh_report *mr)
+{
+	for (int r = 0; r < MESH_REASON_FIRST_WARNING; r++)
+		if (mr->reasons[r] && r != MESH_REASON_SEVERAL_PARTS &&
+		    r != MESH_REASON_NOT_MANIFOLD_CONNECTED)
+			return false;
+	return !mr->reasons[MESH_REASON_DUPLICATE] && !mr->reasons[MESH_REASON_INSIDE_OUT] &&
+	       !mr->reasons[MESH_REASON_INCONSISTENT_ORIENTATION];
+}
+
+/* The first blocking reason of a report, as one sentence. */
+static void explain(const struct mesh_report *mr, char *why, size_t cap)
+{
+	for (int r = 0; r < MESH_REASON_COUNT; r++)
+		if (mr->reasons[r] && r != MESH_REASON_SEVERAL_PARTS &&
+		    r != MESH_REASON_NOT_MANIFOLD_CONNECTED) {
+			snprintf(why, cap, "the result has %s", mesh_reason_text((enum mesh_reason)r));
+			return;
+		}
+	snprintf(why, cap, "the result is not printable");
+}
+
+int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct mesh **out,
+		uint32_t **component, struct repair_report *rep, struct st_error *err)
+{
+	struct core_out co;
+	struct mesh *cur = NULL, *rounded = NULL;
+	struct mesh_report mr;
+	int rc;
+
+	if (out)
+		*out = NULL;
+	if (component)
+		*component = NULL;
+	if (!in || !opt || !out || !rep)
+		return st_error_set(err, ST_ERR_ARG, "repair: NULL mesh, options or output");
+	if (!(opt->epsilon > 0) || !isfinite(opt->epsilon))
+		return st_error_set(err, ST_ERR_ARG,
+				    "repair: epsilon %g mm must be a positive thickness",
+				    opt->epsilon);
+	if (opt->precision != REPAIR_FLOAT32 && opt->precision != REPAIR_FLOAT64)
+		return st_error_set(err, ST_ERR_ARG, "repair: unknown output precision %d",
+				    (int)opt->precision);
+	if (opt->threads < 0)
+		return st_error_set(err, ST_ERR_ARG, "repair: thread count %d is negative",
+				    opt->threads);
+	memset(rep, 0, sizeof(*rep));
+	rep->input_triangles = in->ntris;
+
+	rc = core(in, opt, &co, err);
+	if (rc)
+		return rc;
+	report_core(rep, &co);
+	rep->solid_deviation = solid_deviation(in, co.result);
+
+	/* Round, check, and run the core again on what rounding broke. */
+	for (;;) {
+		bool changed = false;
+		double moved = 0;
+		progress(opt, "rounding", 0.9);
+		rc = round_result(co.result, opt->precision,
+				  rounding_grid(co.result, opt->precision, rep->rounding_rounds),
+				  &rounded, &moved, &changed, err);
+		/* Rounds add up: each moves the previous round's result. */
+		rep->rounding_deviation += moved;
+		exact_mesh_free(co.result);
+		co.result = NULL;
+		mesh_free(cur);
+		cur = NULL;
+		if (rc)
+			return rc;
+		if (!changed || rep->rounding_rounds >= MAX_ROUNDING_ROUNDS)
+			break;
+		rc = mesh_analyze(rounded, opt->threads, &mr, err);
+		if (rc)
+			goto out_free;
+		if (parts_printable(&mr))
+			break;
+		rep->rounding_rounds++;
+		cur = rounded;
+		rounded = NULL;
+		rc = core(cur, opt, &co, err);
+		if (rc)
+			goto out_free;
+		rep->second_sheet_triangles += co.second_sheet;
+	}
+
+	progress(opt, "checking", 0.95);
+	rc = mesh_analyze(rounded, opt->threads, &mr, err);
+	if (rc)
+		goto out_free;
+	rep->output_triangles = rounded->ntris;
+	rep->output_vertices = mr.vertices;
+	rep->printable = parts_printable(&mr);
+	if (!rep->printable)
+		explain(&mr, rep->why, sizeof(rep->why));
+
+	uint32_t *comp = malloc((rounded->ntris + 1) * sizeof(*comp));
+	if (!comp) {
+		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory splitting components");
+		goto out_free;
+	}
+	long nc = hull_manifold_components((const uint32_t(*)[3])rounded->tris, rounded->ntris,
+					   rounded->nverts, comp, err);
+	if (nc < 0) {
+		free(comp);
+		rc = err ? err->code : ST_ERR_NOMEM;
+		goto out_free;
+	}
+	rep->components = (size_t)nc;
+	if (component)
+		*component = comp;
+	else
+		free(comp);
+	*out = rounded;
+	progress(opt, "done", 1);
+	return 0;
+
+out_free:
+	exact_mesh_free(co.result);
+	mesh_free(cur);
+	mesh_free(rounded);
+	return rc;
+}

@@ -1,0 +1,96 @@
+/*
+ * repair.h - seed 000's as-exact-as-possible repair: any triangle soup in,
+ * printable solids out (Definition 3.11), with nothing that was already
+ * solid moved.
+ *
+ * The pipeline (seed 000 §4):
+ *  1. clean: drop irregular triangles, set degenerate ones aside as wire
+ *     segments, keep one layer of equivalent triangles (Def. 3.1);
+ *  2. resolve every self-intersection exactly (CGAL Epeck, constrained
+ *     triangulation of each cut triangle), so the mesh is a polyhedron;
+ *  3. outer hull by non-manifold region growing (Algorithms 1 and 2):
+ *     M_solid (outer), M_sheet (double-sided), interior triangles deleted,
+ *     components enclosed by another component deleted;
+ *  4. when M_sheet or visible wires exist: thicken them to solids of total
+ *     thickness epsilon and run 2-3 again on M_solid and the new solids;
+ *  5. round to the output precision, re-checking exactly, so the written
+ *     file is itself printable.
+ *
+ * Exactness: vertices created by step 2 are exact rationals inside the CGAL
+ * bridge until step 5; every decision (radial order around a singular edge,
+ * seed orientation, containment) is an exact predicate.
+ */
+#ifndef STRATUM_REPAIR_REPAIR_H
+#define STRATUM_REPAIR_REPAIR_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "mesh.h"
+#include "st_error.h"
+
+/* How coordinates of the result must be representable when written. */
+enum repair_precision {
+	REPAIR_FLOAT32,	/* binary STL: every coordinate a float */
+	REPAIR_FLOAT64,	/* ASCII STL / OBJ with 17 significant digits */
+};
+
+struct repair_options {
+	double epsilon;		/* thickness for sheets and wires, mm (> 0) */
+	enum repair_precision precision;
+	int threads;		/* cores for the exact passes; 0 = all */
+	/* Called now and then with a stage name and 0..1 done; may be NULL. */
+	void (*progress)(void *ctx, const char *stage, double done);
+	void *progress_ctx;
+};
+
+/* What the repair did; every count refers to triangles unless named. */
+struct repair_report {
+	size_t input_triangles;
+	size_t irregular_removed;	/* repeated vertex index */
+	size_t degenerate_removed;	/* collinear corners: kept as wires */
+	size_t duplicates_removed;	/* equivalent triangles beyond one layer */
+	uint64_t intersecting_pairs;	/* pairs cut by the first exact pass */
+	size_t triangles_split;		/* triangles re-triangulated (first pass) */
+	size_t interior_deleted;	/* not on the outer hull (first pass) */
+	size_t enclosed_deleted;	/* in components inside another (first pass) */
+	size_t sheet_triangles;		/* M_sheet after the first pass */
+	double sheet_area;		/* mm^2 */
+	size_t sheet_components;	/* edge-connected parts of M_sheet */
+	size_t wires;			/* wire segments thickened */
+	double wire_length;		/* mm */
+	size_t wires_discarded;		/* on the surface or inside the solid */
+	bool second_pass;		/* thickening happened, steps 2-3 ran again */
+	size_t thickened_triangles;	/* triangles the thickening produced */
+	size_t second_sheet_triangles;	/* M_sheet of the second pass: must be 0 */
+	int rounding_rounds;		/* re-check rounds after rounding (0 = none needed) */
+	double solid_deviation;		/* mm: exact solid parts vs input, always 0 */
+	double rounding_deviation;	/* mm: largest move a vertex made when rounded */
+	double sheet_deviation;		/* mm: thickened surface to its sheet/wire, max */
+	size_t output_triangles;
+	size_t output_vertices;
+	size_t components;		/* manifold-connected components (Def. 3.10) */
+	bool printable;			/* the result passes Def. 3.11 after rounding */
+	char why[256];			/* when !printable: the reason, one sentence */
+};
+
+/* Defaults: epsilon 0.4 mm, float32 output, all cores, no progress. */
+void repair_options_init(struct repair_options *opt);
+
+/*
+ * repair_mesh - repair in into a new mesh *out (caller frees with
+ * mesh_free), filling *rep.  *out holds every part; component[i] (when
+ * component is non-NULL, a malloc'd array the caller frees) gives the
+ * manifold-connected component of output triangle i, numbered 0..
+ * rep->components-1.
+ *
+ * Returns 0 with rep->printable telling whether a printable result was
+ * reached (when not, *out still holds the best result and rep->why says
+ * what is wrong), or a negative class with err filled and *out NULL:
+ * ST_ERR_ARG (bad options), ST_ERR_NOMEM, ST_ERR_INTERNAL.
+ */
+int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct mesh **out,
+		uint32_t **component, struct repair_report *rep, struct st_error *err);
+
+#endif /* STRATUM_REPAIR_REPAIR_H */
