@@ -92,7 +92,7 @@ test: $(BUILD)/check_all $(BUILD)/stratum
 # Same suites under AddressSanitizer + UndefinedBehaviorSanitizer.
 SAN := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 test-asan:
-	@$(MAKE) BUILD=build/asan CFLAGS="-O1 -g $(SAN)" CXXFLAGS="-O1 -g $(SAN)" \
+	@$(MAKE) BUILD=build/asan CFLAGS="-O1 -g $(SAN)" CXXFLAGS="-O1 -g -Wno-maybe-uninitialized $(SAN)" \
 	  LDEXTRA="$(SAN)" build/asan/check_all build/asan/stratum
 	ASAN_OPTIONS=detect_leaks=1 STRATUM_BIN=build/asan/stratum ./build/asan/check_all
 

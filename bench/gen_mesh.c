@@ -1,8 +1,20 @@
 /*
- * gen_mesh.c - write a generated closed mesh for the benchmarks:
+ * gen_mesh.c - write a generated mesh for the benchmarks:
  *   gen_mesh torus NU NV OUT.stl     torus with NU x NV quads (2*NU*NV triangles)
  *   gen_mesh spheres N OUT.stl       N overlapping spheres (self-intersections)
+ *   gen_mesh twospheres NLAT NLON OUT.stl
+ *                                    two UV spheres of radius 20 whose centres
+ *                                    are 0.6 r apart (one intersection curve)
+ *   gen_mesh scan NU NV JITTER OUT.stl
+ *                                    "scan-like": a torus whose vertices are moved
+ *                                    by pseudo-random offsets of up to JITTER times
+ *                                    the smallest grid spacing in each axis, so
+ *                                    triangles fold over their neighbours and cut
+ *                                    through them (JITTER 0.7 folds many)
+ * Every mesh is deterministic: the same arguments give the same file.
  */
+#include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -10,15 +22,64 @@
 #include "fixtures.h"
 #include "meshio.h"
 
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+/* splitmix64: a small deterministic generator, so runs are repeatable. */
+static uint64_t next_random(uint64_t *state)
+{
+	uint64_t z = (*state += 0x9e3779b97f4a7c15ull);
+
+	z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+	z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+	return z ^ (z >> 31);
+}
+
+/* A uniform double in [-1, 1). */
+static double uniform(uint64_t *state)
+{
+	return (double)(next_random(state) >> 11) * 0x1.0p-52 - 1.0;
+}
+
+/* Move every welded vertex of m by up to amp (mm) in each axis. */
+static void jitter(struct mesh *m, double amp, uint64_t seed)
+{
+	for (size_t i = 0; i < m->nverts; i++)
+		for (int k = 0; k < 3; k++)
+			m->verts[i][k] += amp * uniform(&seed);
+}
+
+/* Whole number argument in [lo, hi], or exit with a usage message. */
+static int int_arg(const char *s, int lo, int hi)
+{
+	char *end;
+	long v = strtol(s, &end, 10);
+
+	if (end == s || *end || v < lo || v > hi) {
+		fprintf(stderr, "gen_mesh: '%s' is not a whole number from %d to %d\n", s, lo, hi);
+		exit(2);
+	}
+	return (int)v;
+}
+
+static void usage(void)
+{
+	fprintf(stderr, "usage: gen_mesh torus NU NV OUT.stl | gen_mesh spheres N OUT.stl\n"
+			"       gen_mesh twospheres NLAT NLON OUT.stl | gen_mesh scan NU NV JITTER "
+			"OUT.stl\n");
+	exit(2);
+}
+
 int main(int argc, char **argv)
 {
 	struct st_error err = {0};
 	struct mesh *m = NULL;
 
 	if (argc == 5 && !strcmp(argv[1], "torus")) {
-		m = fx_torus(60.0, 20.0, atoi(argv[2]), atoi(argv[3]));
+		m = fx_torus(60.0, 20.0, int_arg(argv[2], 3, 100000), int_arg(argv[3], 3, 100000));
 	} else if (argc == 4 && !strcmp(argv[1], "spheres")) {
-		int n = atoi(argv[2]);
+		int n = int_arg(argv[2], 1, 1000);
 		m = fx_sphere(0, 0, 0, 10, 64, 128);
 		for (int i = 1; i < n; i++) {
 			struct mesh *s = fx_sphere(i * 7.0, 0, 0, 10, 64, 128), *both;
@@ -27,9 +88,28 @@ int main(int argc, char **argv)
 			mesh_free(s);
 			m = both;
 		}
+	} else if (argc == 5 && !strcmp(argv[1], "twospheres")) {
+		int nlat = int_arg(argv[2], 3, 100000), nlon = int_arg(argv[3], 3, 100000);
+		/* Off the x axis by a little, so the two grids do not line up. */
+		struct mesh *a = fx_sphere(0, 0, 0, 20, nlat, nlon);
+		struct mesh *b = fx_sphere(12.0, 0.37, -0.23, 20, nlat, nlon);
+
+		m = fx_concat(a, b);
+		mesh_free(a);
+		mesh_free(b);
+	} else if (argc == 6 && !strcmp(argv[1], "scan")) {
+		int nu = int_arg(argv[2], 3, 100000), nv = int_arg(argv[3], 3, 100000);
+		char *end;
+		double j = strtod(argv[4], &end);
+		/* Grid spacing of fx_torus(60, 20): around the hole and around the tube. */
+		double du = 2 * M_PI * (60.0 - 20.0) / nu, dv = 2 * M_PI * 20.0 / nv;
+
+		if (end == argv[4] || *end || !(j >= 0 && j <= 10))
+			usage();
+		m = fx_torus(60.0, 20.0, nu, nv);
+		jitter(m, j * (du < dv ? du : dv), 20151215u);
 	} else {
-		fprintf(stderr, "usage: gen_mesh torus NU NV OUT.stl | gen_mesh spheres N OUT.stl\n");
-		return 2;
+		usage();
 	}
 	if (meshio_write_stl(argv[argc - 1], m, MESHIO_STL_BINARY, &err)) {
 		fprintf(stderr, "gen_mesh: %s\n", err.msg);

@@ -1,16 +1,25 @@
 #!/bin/sh
-# bench/run.sh BIN - time `stratum check` against admesh on the same
-# generated files; prints a Markdown table for docs/benchmarks.md.
-# Wall time and peak RSS come from GNU time; each figure is the best of 3 runs.
+# bench/run.sh BIN [check|repair|all] - time `stratum check` against admesh
+# and `stratum repair` on generated files; prints Markdown tables for
+# docs/benchmarks.md.  Wall time and peak RSS come from GNU time; each figure
+# is the best of 3 runs.
 set -eu
 bin=${1:-build/stratum}
+what=${2:-all}
 out=bench/out
 mkdir -p "$out"
 gen=build/bench/gen_mesh
 
+case $what in check|repair|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|all]" >&2; exit 2;; esac
+
 [ -f "$out/torus-1m.stl" ] || "$gen" torus 1000 500 "$out/torus-1m.stl"
 [ -f "$out/torus-2m.stl" ] || "$gen" torus 1000 1000 "$out/torus-2m.stl"
 [ -f "$out/spheres.stl" ] || "$gen" spheres 8 "$out/spheres.stl"
+if [ "$what" != check ]; then
+	[ -f "$out/torus-100k.stl" ] || "$gen" torus 250 200 "$out/torus-100k.stl"
+	[ -f "$out/twospheres.stl" ] || "$gen" twospheres 100 80 "$out/twospheres.stl"
+	[ -f "$out/scan.stl" ] || "$gen" scan 250 120 0.7 "$out/scan.stl"
+fi
 
 # best_of3 CMD... -> "seconds peak_kib" (exit status of CMD ignored: check exits 1
 # for an unprintable mesh, which is a result, not a failure)
@@ -25,6 +34,7 @@ best_of3() {
 	echo "$best_t $best_m"
 }
 
+check_table() {
 echo "| file | triangles | stratum check s (2 cores) | 1 core s | peak MiB | B/triangle | admesh s | admesh MiB | time ratio stratum/admesh |"
 echo "|---|---|---|---|---|---|---|---|---|"
 for f in torus-1m torus-2m spheres; do
@@ -44,3 +54,40 @@ for f in torus-1m torus-2m spheres; do
 	fi
 	echo "| $f | $tris | $st | $st1 | $(echo "scale=1; $sm / 1024" | bc) | $(echo "$sm * 1024 / $tris" | bc) | $at | $amib | $ratio |"
 done
+}
+
+# json_field FILE KEY -> the value of "KEY": in stratum's indented JSON
+json_field() {
+	sed -n "s/^  \"$2\": \([^,]*\),\{0,1\}\$/\1/p" "$1"
+}
+
+# `stratum repair` (seed 000 pipeline): throughput = input triangles / wall s.
+repair_table() {
+echo "| file | triangles | intersecting pairs | stratum repair s (2 cores) | triangles/s | peak MiB | B/triangle | output triangles | components | second pass | printable |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|"
+for f in torus-100k torus-1m twospheres scan spheres; do
+	path="$out/$f.stl"
+	rep="$out/$f-repaired.stl"
+	tris=$(( ($(stat -c %s "$path") - 84) / 50 ))
+	"$bin" repair --json "$path" -o "$rep" >"$out/$f-repair.json" 2>"$out/$f-repair.err" || true
+	pairs=$(json_field "$out/$f-repair.json" intersecting_pairs)
+	otris=$(json_field "$out/$f-repair.json" output_triangles)
+	comps=$(json_field "$out/$f-repair.json" components)
+	second=$(json_field "$out/$f-repair.json" second_pass)
+	printable=$(json_field "$out/$f-repair.json" printable)
+	set -- $(best_of3 "$bin" repair "$path" -o "$rep")
+	rt=$1; rmem=$2
+	if [ "$(echo "$rt > 0" | bc)" = 1 ]; then
+		rate=$(echo "$tris / $rt" | bc)
+	else
+		rate="n/a"
+	fi
+	echo "| $f | $tris | ${pairs:-n/a} | $rt | $rate | $(echo "scale=1; $rmem / 1024" | bc) | $(echo "$rmem * 1024 / $tris" | bc) | ${otris:-n/a} | ${comps:-n/a} | ${second:-n/a} | ${printable:-failed, see $out/$f-repair.err} |"
+done
+}
+
+case $what in
+check) check_table ;;
+repair) repair_table ;;
+all) check_table; echo; repair_table ;;
+esac

@@ -7,6 +7,7 @@
 #define STRATUM_HOST_COMMANDS_H
 
 int cmd_check(int argc, char **argv);	 /* host/cmd_check.c */
+int cmd_repair(int argc, char **argv);	 /* host/cmd_repair.c */
 int cmd_printers(int argc, char **argv); /* host/cmd_printers.c */
 int cmd_ports(int argc, char **argv);	 /* host/cmd_ports.c */
 int cmd_sim(int argc, char **argv);	 /* host/cmd_sim.c */

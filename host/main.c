@@ -17,6 +17,7 @@ struct command {
 
 static const struct command commands[] = {
 	{"check", cmd_check, "report a mesh's topology and whether it is printable"},
+	{"repair", cmd_repair, "repair a mesh exactly into printable solids and write STL"},
 	{"printers", cmd_printers, "list the printer profiles"},
 	{"ports", cmd_ports, "list serial ports and the printers they match"},
 	{"sim", cmd_sim, "run a simulated printer on a pseudo-terminal"},

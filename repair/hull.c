@@ -217,7 +217,9 @@ static int border_push_all(struct border *q, uint32_t t, struct st_error *err)
 {
 	if (q->tail + 3 > q->cap) {
 		/* Compact, then grow. */
-		memmove(q->items, q->items + q->head, (q->tail - q->head) * sizeof(*q->items));
+		if (q->head > 0)
+			memmove(q->items, q->items + q->head,
+				(q->tail - q->head) * sizeof(*q->items));
 		q->tail -= q->head;
 		q->head = 0;
 		if (q->tail + 3 > q->cap) {

@@ -145,4 +145,13 @@ const char *mesh_reason_text(enum mesh_reason r);
 int mesh_analyze(const struct mesh *m, int threads, struct mesh_report *rep,
 		 struct st_error *err);
 
+/*
+ * mesh_analyze_known - mesh_analyze for a caller that has just counted the
+ * self-intersections of exactly this mesh exactly (the repair, whose last
+ * refinement proved there are none): self_intersections >= 0 is taken as
+ * the count and the exact pass is skipped; -1 runs it as mesh_analyze does.
+ */
+int mesh_analyze_known(const struct mesh *m, int threads, long long self_intersections,
+		       struct mesh_report *rep, struct st_error *err);
+
 #endif /* STRATUM_REPAIR_MESH_H */

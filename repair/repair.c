@@ -16,6 +16,7 @@
 #include "exact.h"
 #include "hull.h"
 #include "repair.h"
+#include "thicken.h"
 
 /* Origins of triangles that are not pieces of an input triangle. */
 #define ORIGIN_THICKENED 0xfffffffeu
@@ -24,7 +25,7 @@
 #define WIRE_SIDES 12
 
 /* Rounding rounds before giving up (each usually fixes all it finds). */
-#define MAX_ROUNDING_ROUNDS 6
+#define MAX_ROUNDING_ROUNDS 10
 
 /* Thickening passes: seed 000 needs one; more only guard odd inputs. */
 #define MAX_THICKEN_PASSES 3
@@ -43,6 +44,7 @@ struct core_out {
 	double sheet_area, wire_length, sheet_deviation;
 	size_t wires, wires_discarded, thickened;
 	bool second_pass;
+	bool proved_clean;	/* the last refinement found nothing to cut */
 };
 
 void repair_options_init(struct repair_options *opt)
@@ -280,20 +282,18 @@ static uint32_t *list_tagged(const uint8_t *tag, size_t n, int want, size_t *cou
 }
 
 /*
- * Thicken M_sheet of em (tag both) by alpha wrapping and the visible wires
- * by cylinders; return a new exact mesh of M_solid plus the new solids.
+ * Thicken M_sheet of em (tag both) into slabs and the visible wires into
+ * cylinders; return a new exact mesh of M_solid plus the new solids.
  */
 static int thicken(const struct exact_mesh *em, const uint8_t *tag, const uint8_t *flip,
 		   const struct segment *wires, size_t n_wires, const struct repair_options *opt,
 		   struct core_out *co, struct exact_mesh **out, struct st_error *err)
 {
-	const size_t n = exact_mesh_ntris(em), nv = exact_mesh_nverts(em);
+	const size_t n = exact_mesh_ntris(em);
 	const uint32_t (*tris)[3] = exact_mesh_tris(em);
 	const double (*verts)[3] = exact_mesh_verts(em);
 	uint8_t *keep = malloc(n + 1);
-	uint32_t *surface = NULL, *closed = NULL, *vmap = NULL;
-	double (*sv)[3] = NULL, (*wv)[3] = NULL;
-	uint32_t (*st)[3] = NULL, (*wt)[3] = NULL;
+	uint32_t *surface = NULL, *closed = NULL;
 	size_t ns = 0, nc = 0;
 	struct exact_mesh *res = NULL;
 	int rc = 0;
@@ -307,52 +307,34 @@ static int thicken(const struct exact_mesh *em, const uint8_t *tag, const uint8_
 	if (rc)
 		goto out;
 
-	/* Sheets: one alpha wrap at offset epsilon/2, total thickness epsilon. */
+	/* Sheets: slabs of total thickness epsilon (thicken.c). */
 	size_t nsheet = 0;
-	for (size_t t = 0; t < n; t++)
-		nsheet += tag[t] == (HULL_OUTER | HULL_INNER);
+	uint32_t *sheet = list_tagged(tag, n, HULL_OUTER | HULL_INNER, &nsheet);
+	if (!sheet) {
+		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory thickening sheets");
+		goto out;
+	}
+	for (size_t i = 0; i < nsheet; i++)
+		co->sheet_area += tri_area(verts[tris[sheet[i]][0]], verts[tris[sheet[i]][1]],
+					   verts[tris[sheet[i]][2]]);
 	if (nsheet) {
-		size_t nsv = 0, nwv = 0, nwt = 0;
-		double dev = 0;
-		vmap = malloc((nv + 1) * sizeof(*vmap));
-		sv = malloc((3 * nsheet) * sizeof(*sv));
-		st = malloc(nsheet * sizeof(*st));
-		if (!vmap || !sv || !st) {
-			rc = st_error_set(err, ST_ERR_NOMEM, "out of memory thickening sheets");
-			goto out;
-		}
-		for (size_t v = 0; v < nv; v++)
-			vmap[v] = UINT32_MAX;
-		size_t k = 0;
-		for (size_t t = 0; t < n; t++) {
-			if (tag[t] != (HULL_OUTER | HULL_INNER))
-				continue;
-			for (int c = 0; c < 3; c++) {
-				const uint32_t v = tris[t][c];
-				if (vmap[v] == UINT32_MAX) {
-					memcpy(sv[nsv], verts[v], sizeof(sv[0]));
-					vmap[v] = (uint32_t)nsv++;
-				}
-				st[k][c] = vmap[v];
-			}
-			co->sheet_area += tri_area(verts[tris[t][0]], verts[tris[t][1]],
-						   verts[tris[t][2]]);
-			k++;
-		}
-		progress(opt, "thickening sheets", 0);
-		/* CGAL places the wrap's vertices within 1% beyond the offset,
-		 * so asking for 1% less keeps them within epsilon/2. */
-		rc = exact_wrap((const double(*)[3])sv, nsv, (const uint32_t(*)[3])st, nsheet,
-				opt->epsilon, opt->epsilon / 2 / 1.01, &wv, &nwv, &wt, &nwt, &dev,
-				err);
+		struct thick_out slab;
+		progress(opt, "thickening sheets", 0.5);
+		rc = thicken_sheets(verts, tris, sheet, nsheet, opt->epsilon / 2, &slab, err);
+		free(sheet);
 		if (rc)
 			goto out;
-		co->sheet_deviation = fmax(co->sheet_deviation, dev);
-		co->thickened += nwt;
-		rc = exact_mesh_append(res, (const double(*)[3])wv, nwv, (const uint32_t(*)[3])wt,
-				       nwt, ORIGIN_THICKENED, NULL, err);
+		co->sheet_deviation = fmax(co->sheet_deviation, slab.deviation);
+		co->thickened += slab.ntris;
+		rc = exact_mesh_append(res, (const double(*)[3])slab.verts, slab.nverts,
+				       (const uint32_t(*)[3])slab.tris, slab.ntris, ORIGIN_THICKENED,
+				       NULL, err);
+		free(slab.verts);
+		free(slab.tris);
 		if (rc)
 			goto out;
+	} else {
+		free(sheet);
 	}
 
 	/* Wires: hidden ones (on the surface or inside M_solid) are dropped. */
@@ -389,11 +371,6 @@ out:
 	free(keep);
 	free(surface);
 	free(closed);
-	free(vmap);
-	free(sv);
-	free(st);
-	free(wv);
-	free(wt);
 	if (rc) {
 		exact_mesh_free(res);
 		return rc;
@@ -406,8 +383,8 @@ out:
  * Seed 000 §4 on one mesh: clean, refine, hull, thicken and repeat as
  * needed.  co->result receives M_solid, oriented outwards.
  */
-static int core(const struct mesh *in, const struct repair_options *opt, struct core_out *co,
-		struct st_error *err)
+static int core(const struct mesh *in, const struct repair_options *opt, bool thicken_sheets_too,
+		struct core_out *co, struct st_error *err)
 {
 	uint32_t *layer = NULL;
 	struct segment *wires = NULL;
@@ -441,13 +418,17 @@ static int core(const struct mesh *in, const struct repair_options *opt, struct 
 	if (rc)
 		goto out;
 	co->pairs = rs.intersecting_pairs;
+	co->proved_clean = rs.intersecting_pairs == 0;
 	co->split = rs.triangles_split;
 	co->interior = hs.interior;
 	co->enclosed = hs.enclosed;
 	co->sheet = hs.sheet;
 	co->sheet_components = hs.sheet_components;
 
-	for (int pass = 0; pass < MAX_THICKEN_PASSES; pass++) {
+	/* After rounding, sheets and wires are parts thinner than the rounding
+	 * grid that collapsed: M_solid without them is closed, and thickening
+	 * them would add epsilon-thick slabs around rounding noise. */
+	for (int pass = 0; thicken_sheets_too && pass < MAX_THICKEN_PASSES; pass++) {
 		size_t visible_wires = pass == 0 ? n_wires : 0;
 		if (hs.sheet == 0 && visible_wires == 0)
 			break;
@@ -468,6 +449,7 @@ static int core(const struct mesh *in, const struct repair_options *opt, struct 
 		if (rc)
 			goto out;
 		co->second_sheet = hs.sheet;
+		co->proved_clean = rs.intersecting_pairs == 0;
 	}
 	if (next) {
 		/* Only hidden wires: M_solid as selected by thicken(). */
@@ -684,13 +666,14 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 	memset(rep, 0, sizeof(*rep));
 	rep->input_triangles = in->ntris;
 
-	rc = core(in, opt, &co, err);
+	rc = core(in, opt, true, &co, err);
 	if (rc)
 		return rc;
 	report_core(rep, &co);
 	rep->solid_deviation = solid_deviation(in, co.result);
 
 	/* Round, check, and run the core again on what rounding broke. */
+	bool unchanged = false;
 	for (;;) {
 		bool changed = false;
 		double moved = 0;
@@ -706,6 +689,7 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 		cur = NULL;
 		if (rc)
 			return rc;
+		unchanged = !changed;
 		if (!changed || rep->rounding_rounds >= MAX_ROUNDING_ROUNDS)
 			break;
 		rc = mesh_analyze(rounded, opt->threads, &mr, err);
@@ -716,18 +700,21 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 		rep->rounding_rounds++;
 		cur = rounded;
 		rounded = NULL;
-		rc = core(cur, opt, &co, err);
+		rc = core(cur, opt, false, &co, err);
 		if (rc)
 			goto out_free;
-		rep->second_sheet_triangles += co.second_sheet;
+		rep->rounding_dropped += co.sheet;
 	}
 
 	progress(opt, "checking", 0.95);
-	rc = mesh_analyze(rounded, opt->threads, &mr, err);
+	/* When rounding moved nothing and the last exact pass found no pair
+	 * to cut, that pass already proved the count is 0 for this mesh. */
+	rc = mesh_analyze_known(rounded, opt->threads, unchanged && co.proved_clean ? 0 : -1,
+				&mr, err);
 	if (rc)
 		goto out_free;
 	rep->output_triangles = rounded->ntris;
-	rep->output_vertices = mr.vertices;
+	rep->output_vertices = rounded->nverts;
 	rep->printable = parts_printable(&mr);
 	if (!rep->printable)
 		explain(&mr, rep->why, sizeof(rep->why));

@@ -600,6 +600,7 @@ struct exact_job {
 	uint64_t count;
 	int rc;
 	struct st_error err;
+	bool done;	/* the caller already knows the count */
 };
 
 static void *exact_job_run(void *arg)
@@ -615,6 +616,12 @@ static void *exact_job_run(void *arg)
 
 int mesh_analyze(const struct mesh *m, int threads, struct mesh_report *rep,
 		 struct st_error *err)
+{
+	return mesh_analyze_known(m, threads, -1, rep, err);
+}
+
+int mesh_analyze_known(const struct mesh *m, int threads, long long self_intersections,
+		       struct mesh_report *rep, struct st_error *err)
 {
 	struct topo tp = {.m = m};
 	struct exact_job job = {.m = m, .threads = threads};
@@ -640,7 +647,9 @@ int mesh_analyze(const struct mesh *m, int threads, struct mesh_report *rep,
 	find_duplicates(&tp, rep);
 	/* From here tclass is final and only read: the exact pass can start. */
 	job.skip = tp.tclass;
-	if (threads != 1 && pthread_create(&exact_thread, NULL, exact_job_run, &job) == 0)
+	if (self_intersections >= 0)
+		job.done = true;
+	else if (threads != 1 && pthread_create(&exact_thread, NULL, exact_job_run, &job) == 0)
 		exact_running = true;
 	rc = build_edges(&tp, err);
 	/* The stars are not needed past this point. */
@@ -656,8 +665,10 @@ int mesh_analyze(const struct mesh *m, int threads, struct mesh_report *rep,
 	free_topology(&tp);
 	if (exact_running)
 		pthread_join(exact_thread, NULL);
-	else if (!rc)
+	else if (!rc && !job.done)
 		exact_job_run(&job); /* one core, or no thread: run it here */
+	if (job.done)
+		job.count = (uint64_t)self_intersections;
 	if (rc)
 		goto out;
 	if (job.rc) {

@@ -33,4 +33,38 @@ void fx_flip(struct mesh *m, size_t i);
 /* Append a copy of triangle i, reversed when flipped is nonzero. */
 void fx_duplicate(struct mesh *m, size_t i, int flipped);
 
+/*
+ * fx_to_float - a copy of m with every coordinate rounded to the nearest
+ * float (what a binary STL can hold), vertices re-welded.
+ */
+struct mesh *fx_to_float(const struct mesh *m);
+
+/*
+ * fx_grid - an open planar sheet, the parallelogram o + s*u + t*v with s, t
+ * in [0,1], cut into nu x nv cells of two triangles each; oriented with
+ * normal u x v.  One boundary loop of 2*(nu+nv) edges.
+ */
+struct mesh *fx_grid(const double o[3], const double u[3], const double v[3], int nu, int nv);
+
+/* fx_triangle - a one-triangle mesh a-b-c (may be degenerate or irregular). */
+struct mesh *fx_triangle(const double a[3], const double b[3], const double c[3]);
+
+/*
+ * fx_random_triangles - n independent triangles with corners uniform in
+ * [0,size]^3 from a fixed generator seeded by seed: the same seed gives
+ * the same mesh on every platform.  Expect intersections, open edges,
+ * anything.
+ */
+struct mesh *fx_random_triangles(unsigned seed, int n, double size);
+
+/*
+ * fx_klein_bottle - the "figure-8" immersion of the Klein bottle, scaled by
+ * scale: closed (every edge has two triangles), unorientable, and crossing
+ * itself along the circle of radius R*scale in z = 0.  nu x nv quads; the
+ * seam u = 2*pi is glued to u = 0 with v reversed, sharing vertex indices.
+ * Grid rows sit half a step off v = 0 and v = pi so no vertex lies on the
+ * self-intersection.
+ */
+struct mesh *fx_klein_bottle(double R, double scale, int nu, int nv);
+
 #endif

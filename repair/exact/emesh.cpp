@@ -827,6 +827,13 @@ bool exact_mesh_on_triangle(const struct exact_mesh *m, uint32_t v, const double
 		return false;
 	try {
 		if (m->slot[v] < 0) {
+			/* Most vertices are corners of their own triangle: a
+			 * plain comparison, where has_on would need exact
+			 * arithmetic to confirm a point on the boundary. */
+			const std::array<double, 3> &p = m->approx[v];
+			for (const double *q : {a, b, c})
+				if (p[0] == q[0] && p[1] == q[1] && p[2] == q[2])
+					return true;
 			const IK::Triangle_3 t(IK::Point_3(a[0], a[1], a[2]),
 					       IK::Point_3(b[0], b[1], b[2]),
 					       IK::Point_3(c[0], c[1], c[2]));

@@ -188,20 +188,6 @@ int exact_segment_hidden(const struct exact_mesh *m, const uint32_t *surface, si
 			 const uint32_t *closed, size_t n_closed, const double p[3],
 			 const double q[3], bool *hidden, struct st_error *err);
 
-/*
- * exact_wrap - close a set of triangles (sheets: open, possibly
- * non-orientable) into a watertight, 2-manifold, intersection-free
- * surface at distance offset around them (CGAL 3D alpha wrapping with ball
- * radius alpha).  The result is returned as malloc'd arrays (*out_verts,
- * *out_tris; free with free()) with counts; *deviation receives the largest
- * distance from the result's vertices and face centroids to the input
- * triangles (mm).
- */
-int exact_wrap(const double (*verts)[3], size_t nverts, const uint32_t (*tris)[3], size_t ntris,
-	       double alpha, double offset, double (**out_verts)[3], size_t *nout_verts,
-	       uint32_t (**out_tris)[3], size_t *nout_tris, double *deviation,
-	       struct st_error *err);
-
 #ifdef __cplusplus
 }
 #endif

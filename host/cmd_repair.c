@@ -1,0 +1,636 @@
+/*
+ * cmd_repair.c - `stratum repair IN -o OUT [--printer NAME|FILE.ini |
+ * --epsilon MM] [--split] [--json] [--threads N] [--ascii]`: read a mesh,
+ * repair it with seed 000's pipeline (repair/repair.h) and write the
+ * printable result as STL, one file or one per manifold-connected part.
+ * Exit 0 repaired and written, 1 no printable result (nothing written) or
+ * the output could not be written, 2 usage, 65 unreadable input or bad
+ * printer profile, 70 internal error.
+ */
+#include <errno.h>
+#include <jansson.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "commands.h"
+#include "mesh.h"
+#include "meshio.h"
+#include "profile.h"
+#include "repair.h"
+#include "st_error.h"
+#include "st_number.h"
+
+#define REPAIR_EPSILON_DEFAULT 0.4   /* mm, when no printer is named */
+#define REPAIR_EPSILON_MAX 10.0	     /* mm; more is a typo, not a wall */
+#define REPAIR_PROGRESS_MIN 100000   /* triangles before progress is shown */
+
+static void repair_usage(FILE *out)
+{
+	fprintf(out,
+		"usage: stratum repair IN -o OUT [--printer NAME|FILE.ini | --epsilon MM]\n"
+		"                      [--split] [--json] [--threads N] [--ascii]\n"
+		"\n"
+		"Repairs a mesh (STL, OBJ or OFF) into printable solids with Attene's\n"
+		"as-exact-as-possible pipeline: removes degenerate and duplicate triangles,\n"
+		"resolves every self-intersection exactly, keeps the outer hull, thickens\n"
+		"sheets and wires to EPSILON, and writes the result as STL.  Nothing that was\n"
+		"already solid is moved (except by rounding to the output precision).\n"
+		"\n"
+		"  -o, --output OUT  the STL to write (written only when the result is printable)\n"
+		"  --printer P       take EPSILON from this printer's nozzle diameter\n"
+		"  --epsilon MM      thickness for sheets and wires, 0 < MM <= 10\n"
+		"                    (default: the printer's nozzle, else 0.4; wins over --printer)\n"
+		"  --split           one file per part: OUT part.stl gives part-1.stl, part-2.stl...\n"
+		"  --json            one JSON object on stdout instead of the text report\n"
+		"  --threads N       cores for the exact passes (default: all)\n"
+		"  --ascii           write ASCII STL (double precision) instead of binary (float)\n"
+		"\n"
+		"Exit status: 0 repaired, 1 no printable result or OUT not written, 2 usage,\n"
+		"65 unreadable input or printer profile, 70 internal error.  See docs/repair.md.\n");
+}
+
+/* Progress drawing state; the mutex guards against calls from worker threads. */
+struct repair_progress {
+	pthread_mutex_t lock;
+	bool tty;		/* draw a bar; otherwise one line per stage */
+	char stage[64];		/* the stage last shown */
+	int percent;		/* the percentage last shown, -1 none */
+	size_t width;		/* characters of the bar line on screen */
+};
+
+/* Progress callback for repair_mesh: redraw only when something changed. */
+static void repair_on_progress(void *ctx, const char *stage, double done)
+{
+	struct repair_progress *p = ctx;
+	int percent;
+	bool new_stage;
+
+	if (!stage)
+		stage = "";
+	percent = isfinite(done) ? (int)(done * 100.0) : 0;
+	if (percent < 0)
+		percent = 0;
+	if (percent > 100)
+		percent = 100;
+	pthread_mutex_lock(&p->lock);
+	new_stage = strncmp(p->stage, stage, sizeof(p->stage) - 1) != 0;
+	if (p->tty && (new_stage || percent != p->percent)) {
+		int n = fprintf(stderr, "\r[%.*s] %d%%", (int)(sizeof(p->stage) - 1), stage,
+				percent);
+		/* Blank what is left of a longer previous line. */
+		for (size_t w = n > 0 ? (size_t)n - 1 : 0; w < p->width; w++)
+			fputc(' ', stderr);
+		if (n > 0 && (size_t)n - 1 > p->width)
+			p->width = (size_t)n - 1;
+		fflush(stderr);
+	} else if (!p->tty && new_stage) {
+		fprintf(stderr, "stratum repair: %s\n", stage);
+	}
+	if (new_stage)
+		snprintf(p->stage, sizeof(p->stage), "%s", stage);
+	p->percent = percent;
+	pthread_mutex_unlock(&p->lock);
+}
+
+/* Erase the bar so the report starts on a clean line. */
+static void repair_progress_clear(struct repair_progress *p)
+{
+	if (!p->tty || !p->width)
+		return;
+	fputc('\r', stderr);
+	for (size_t w = 0; w < p->width; w++)
+		fputc(' ', stderr);
+	fputc('\r', stderr);
+	fflush(stderr);
+}
+
+/* Parse a positive thread count; -1 when not a whole number in 1..256. */
+static int parse_threads(const char *s)
+{
+	char *end;
+	long n;
+
+	errno = 0;
+	n = strtol(s, &end, 10);
+	if (errno || end == s || *end || n < 1 || n > 256)
+		return -1;
+	return (int)n;
+}
+
+/* Parse --epsilon with the project's number reader; false when out of range. */
+static bool parse_epsilon(const char *s, double *out)
+{
+	double v;
+
+	if (st_parse_double(s, strlen(s), 0, &v) != ST_NUMBER_OK || isnan(v) || v <= 0.0 ||
+	    v > REPAIR_EPSILON_MAX)
+		return false;
+	*out = v;
+	return true;
+}
+
+/*
+ * The name of part k (from 1) of OUT: "dir/part.stl" -> "dir/part-k.stl",
+ * "part" -> "part-k".  Returns a malloc'd string or NULL on OOM.
+ */
+static char *part_path(const char *out, size_t k)
+{
+	const char *slash = strrchr(out, '/');
+	const char *base = slash ? slash + 1 : out;
+	const char *dot = strrchr(base, '.');
+	size_t stem, cap;
+	char *s;
+
+	if (!dot || dot == base) /* no extension, or a dot file like ".stl" */
+		dot = out + strlen(out);
+	stem = (size_t)(dot - out);
+	cap = strlen(out) + 24;
+	s = malloc(cap);
+	if (s)
+		snprintf(s, cap, "%.*s-%zu%s", (int)stem, out, k, dot);
+	return s;
+}
+
+/* Exit status for a failed meshio_write_stl. */
+static int write_exit(int rc)
+{
+	switch (rc) {
+	case ST_ERR_IO:
+		return ST_EXIT_FAILURE;	/* the job could not finish; input was fine */
+	case ST_ERR_RANGE:
+		return ST_EXIT_DATAERR; /* coordinates that binary STL cannot hold */
+	default:
+		return ST_EXIT_SOFTWARE;
+	}
+}
+
+/*
+ * Write component c of m (triangles tri[first..first+n) of the bucketed
+ * order) to path.  Returns 0 or the exit status, with the message printed.
+ */
+static int write_part(const char *path, const struct mesh *m, const size_t *order, size_t n,
+		      enum meshio_format fmt)
+{
+	struct st_error err = {0};
+	struct mesh_builder *b = mesh_builder_new(n);
+	struct mesh *part;
+	int rc;
+
+	if (!b) {
+		fprintf(stderr, "stratum repair: %s: out of memory splitting the parts\n", path);
+		return ST_EXIT_SOFTWARE;
+	}
+	for (size_t i = 0; i < n; i++) {
+		const uint32_t *t = m->tris[order[i]];
+		uint32_t v[3];
+
+		for (int k = 0; k < 3; k++)
+			if (mesh_builder_vertex(b, m->verts[t[k]], &v[k], &err))
+				goto out_builder;
+		if (mesh_builder_triangle(b, v[0], v[1], v[2], &err))
+			goto out_builder;
+	}
+	part = mesh_builder_finish(b);
+	if (!part) {
+		fprintf(stderr, "stratum repair: %s: out of memory splitting the parts\n", path);
+		return ST_EXIT_SOFTWARE;
+	}
+	rc = meshio_write_stl(path, part, fmt, &err);
+	mesh_free(part);
+	if (rc) {
+		fprintf(stderr, "stratum repair: %s\n", err.msg);
+		return write_exit(rc);
+	}
+	return 0;
+
+out_builder:
+	mesh_builder_free(b);
+	fprintf(stderr, "stratum repair: %s: %s\n", path, err.msg);
+	return ST_EXIT_SOFTWARE;
+}
+
+/* The list of files written (for the report). */
+struct repair_outputs {
+	char **path;
+	size_t count;
+};
+
+static void outputs_free(struct repair_outputs *o)
+{
+	for (size_t i = 0; i < o->count; i++)
+		free(o->path[i]);
+	free(o->path);
+	o->path = NULL;
+	o->count = 0;
+}
+
+/*
+ * Write the result: one file, or with split one file per component.
+ * Returns 0 or the exit status (message printed); o lists what was
+ * written, also when a later part failed.
+ */
+static int write_outputs(const char *out, const struct mesh *m, const uint32_t *component,
+			 size_t ncomp, bool split, enum meshio_format fmt,
+			 struct repair_outputs *o)
+{
+	size_t *start = NULL, *order = NULL;
+	int status = ST_EXIT_SOFTWARE;
+
+	if (!split || ncomp <= 1 || !component) {
+		struct st_error err = {0};
+		int rc = meshio_write_stl(out, m, fmt, &err);
+
+		if (rc) {
+			fprintf(stderr, "stratum repair: %s\n", err.msg);
+			return write_exit(rc);
+		}
+		o->path = malloc(sizeof(*o->path));
+		if (!o->path || !(o->path[0] = strdup(out))) {
+			fprintf(stderr, "stratum repair: out of memory\n");
+			return ST_EXIT_SOFTWARE;
+		}
+		o->count = 1;
+		return 0;
+	}
+
+	/* Bucket the triangles by component (counting sort, input order kept). */
+	if (ncomp > SIZE_MAX / sizeof(*start) - 1 || m->ntris > SIZE_MAX / sizeof(*order))
+		goto out_nomem;
+	start = calloc(ncomp + 1, sizeof(*start));
+	order = malloc((m->ntris ? m->ntris : 1) * sizeof(*order));
+	o->path = calloc(ncomp, sizeof(*o->path));
+	if (!start || !order || !o->path)
+		goto out_nomem;
+	for (size_t t = 0; t < m->ntris; t++) {
+		if (component[t] >= ncomp) {
+			fprintf(stderr, "stratum repair: internal error: triangle %zu is in part %lu "
+					"of %zu\n", t, (unsigned long)component[t], ncomp);
+			goto out_free;
+		}
+		start[component[t] + 1]++;
+	}
+	for (size_t c = 0; c < ncomp; c++)
+		start[c + 1] += start[c];
+	{
+		size_t *fill = calloc(ncomp, sizeof(*fill));
+
+		if (!fill)
+			goto out_nomem;
+		for (size_t t = 0; t < m->ntris; t++)
+			order[start[component[t]] + fill[component[t]]++] = t;
+		free(fill);
+	}
+	for (size_t c = 0; c < ncomp; c++) {
+		char *path = part_path(out, c + 1);
+		int rc;
+
+		if (!path)
+			goto out_nomem;
+		rc = write_part(path, m, order + start[c], start[c + 1] - start[c], fmt);
+		if (rc) {
+			free(path);
+			status = rc;
+			goto out_free;
+		}
+		o->path[o->count++] = path;
+	}
+	status = 0;
+	goto out_free;
+
+out_nomem:
+	fprintf(stderr, "stratum repair: out of memory splitting the parts\n");
+out_free:
+	free(order);
+	free(start);
+	return status;
+}
+
+/* Everything the report shows besides struct repair_report. */
+struct repair_run {
+	const char *input;
+	enum meshio_format format;
+	const char *printer;	/* profile id, or NULL */
+	double epsilon;		/* mm */
+	const char *eps_source;	/* "--epsilon", "printer" or "default" */
+	bool ascii;
+};
+
+static json_t *json_size(size_t n)
+{
+	return json_integer((json_int_t)n);
+}
+
+static int print_json(const struct repair_run *run, const struct repair_report *r,
+		      const struct repair_outputs *o)
+{
+	json_t *obj = json_object();
+	json_t *outs = json_array();
+	int rc;
+
+	if (!obj || !outs) {
+		json_decref(obj);
+		json_decref(outs);
+		return -1;
+	}
+	for (size_t i = 0; i < o->count; i++)
+		json_array_append_new(outs, json_string(o->path[i]));
+	json_object_set_new(obj, "input", json_string(run->input));
+	json_object_set_new(obj, "format", json_string(meshio_format_name(run->format)));
+	json_object_set_new(obj, "printer", run->printer ? json_string(run->printer) : json_null());
+	json_object_set_new(obj, "epsilon", json_real(run->epsilon));
+	json_object_set_new(obj, "epsilon_source", json_string(run->eps_source));
+	json_object_set_new(obj, "precision", json_string(run->ascii ? "float64" : "float32"));
+	json_object_set_new(obj, "input_triangles", json_size(r->input_triangles));
+	json_object_set_new(obj, "irregular_removed", json_size(r->irregular_removed));
+	json_object_set_new(obj, "degenerate_removed", json_size(r->degenerate_removed));
+	json_object_set_new(obj, "duplicates_removed", json_size(r->duplicates_removed));
+	json_object_set_new(obj, "intersecting_pairs",
+			    json_integer((json_int_t)r->intersecting_pairs));
+	json_object_set_new(obj, "triangles_split", json_size(r->triangles_split));
+	json_object_set_new(obj, "interior_deleted", json_size(r->interior_deleted));
+	json_object_set_new(obj, "enclosed_deleted", json_size(r->enclosed_deleted));
+	json_object_set_new(obj, "sheet_triangles", json_size(r->sheet_triangles));
+	json_object_set_new(obj, "sheet_area", json_real(r->sheet_area));
+	json_object_set_new(obj, "sheet_components", json_size(r->sheet_components));
+	json_object_set_new(obj, "wires", json_size(r->wires));
+	json_object_set_new(obj, "wire_length", json_real(r->wire_length));
+	json_object_set_new(obj, "wires_discarded", json_size(r->wires_discarded));
+	json_object_set_new(obj, "second_pass", json_boolean(r->second_pass));
+	json_object_set_new(obj, "thickened_triangles", json_size(r->thickened_triangles));
+	json_object_set_new(obj, "second_sheet_triangles", json_size(r->second_sheet_triangles));
+	json_object_set_new(obj, "rounding_rounds", json_integer(r->rounding_rounds));
+	json_object_set_new(obj, "solid_deviation", json_real(r->solid_deviation));
+	json_object_set_new(obj, "rounding_deviation", json_real(r->rounding_deviation));
+	json_object_set_new(obj, "sheet_deviation", json_real(r->sheet_deviation));
+	json_object_set_new(obj, "output_triangles", json_size(r->output_triangles));
+	json_object_set_new(obj, "output_vertices", json_size(r->output_vertices));
+	json_object_set_new(obj, "components", json_size(r->components));
+	json_object_set_new(obj, "printable", json_boolean(r->printable));
+	json_object_set_new(obj, "why", r->printable ? json_null() : json_string(r->why));
+	json_object_set_new(obj, "outputs", outs);
+	rc = json_dumpf(obj, stdout,
+			JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(10));
+	json_decref(obj);
+	if (rc || putchar('\n') == EOF)
+		return -1;
+	return 0;
+}
+
+static const char *yes_no(bool b)
+{
+	return b ? "yes" : "no";
+}
+
+static void print_text(const struct repair_run *run, const struct repair_report *r,
+		       const struct repair_outputs *o)
+{
+	printf("%s: %s, %zu triangles\n", run->input, meshio_format_name(run->format),
+	       r->input_triangles);
+	if (!strcmp(run->eps_source, "printer"))
+		printf("  epsilon %g mm (nozzle of printer %s)", run->epsilon, run->printer);
+	else
+		printf("  epsilon %g mm (%s)", run->epsilon, run->eps_source);
+	printf(", output %s\n", run->ascii ? "ASCII STL (float64)" : "binary STL (float32)");
+	printf("  removed %zu irregular, %zu degenerate (kept as wires), %zu duplicate triangles\n",
+	       r->irregular_removed, r->degenerate_removed, r->duplicates_removed);
+	printf("  self-intersections: %llu intersecting pairs resolved, %zu triangles split\n",
+	       (unsigned long long)r->intersecting_pairs, r->triangles_split);
+	printf("  outer hull: %zu interior triangles deleted, %zu in enclosed components deleted\n",
+	       r->interior_deleted, r->enclosed_deleted);
+	if (r->sheet_triangles)
+		printf("  sheets: %zu triangles in %zu component%s, %.6g mm^2, thickened to %g mm\n",
+		       r->sheet_triangles, r->sheet_components, r->sheet_components == 1 ? "" : "s",
+		       r->sheet_area, run->epsilon);
+	else
+		printf("  sheets: none\n");
+	if (r->wires || r->wires_discarded)
+		printf("  wires: %zu thickened to %g mm, %.6g mm long; %zu discarded (on the "
+		       "surface or inside a solid)\n",
+		       r->wires, run->epsilon, r->wire_length, r->wires_discarded);
+	else
+		printf("  wires: none\n");
+	if (r->second_pass)
+		printf("  second pass: yes (%zu triangles from thickening, %zu sheet triangles "
+		       "left)\n", r->thickened_triangles, r->second_sheet_triangles);
+	else
+		printf("  second pass: no\n");
+	printf("  rounding to %s: %d re-check round%s\n", run->ascii ? "float64" : "float32",
+	       r->rounding_rounds, r->rounding_rounds == 1 ? "" : "s");
+	printf("  deviation: solid parts %.3g mm, rounding %.3g mm", r->solid_deviation,
+	       r->rounding_deviation);
+	if (r->second_pass)
+		printf(", sheets and wires %.6g mm (at most epsilon/2 + rounding = %.6g mm)",
+		       r->sheet_deviation, run->epsilon / 2 + r->rounding_deviation);
+	printf("\n  output: %zu triangles, %zu vertices, %zu component%s\n", r->output_triangles,
+	       r->output_vertices, r->components, r->components == 1 ? "" : "s");
+	printf("printable: %s\n", yes_no(r->printable));
+	if (!r->printable)
+		printf("  why: %s\n", r->why);
+	if (o->count == 0)
+		printf("written: nothing\n");
+	for (size_t i = 0; i < o->count; i++)
+		printf("%s %s\n", i ? "        " : "written:", o->path[i]);
+	if (o->count == 1 && r->components > 1)
+		printf("note: the %zu parts are in one file; --split writes one file per part\n",
+		       r->components);
+}
+
+/* Print the report; 0 or the exit status for a failed stdout. */
+static int report(const struct repair_run *run, const struct repair_report *r,
+		  const struct repair_outputs *o, bool json)
+{
+	if (json) {
+		if (print_json(run, r, o)) {
+			fprintf(stderr, "stratum repair: cannot write the JSON report\n");
+			return ST_EXIT_SOFTWARE;
+		}
+	} else {
+		print_text(run, r, o);
+	}
+	if (fflush(stdout) == EOF) {
+		fprintf(stderr, "stratum repair: cannot write the report: %s\n", strerror(errno));
+		return ST_EXIT_SOFTWARE;
+	}
+	return 0;
+}
+
+/* Fetch the value of an option given as "--opt VALUE" or "--opt=VALUE". */
+static const char *opt_value(int argc, char **argv, int *i, const char *name)
+{
+	size_t len = strlen(name);
+	const char *a = argv[*i];
+
+	if (!strcmp(a, name))
+		return *i + 1 < argc ? argv[++*i] : NULL;
+	if (!strncmp(a, name, len) && a[len] == '=')
+		return a + len + 1;
+	return NULL;
+}
+
+/* True when argv[i] is --name or --name=...; the value may still be missing. */
+static bool is_opt(const char *a, const char *name)
+{
+	size_t len = strlen(name);
+
+	return !strncmp(a, name, len) && (a[len] == '\0' || a[len] == '=');
+}
+
+int cmd_repair(int argc, char **argv)
+{
+	const char *in = NULL, *out = NULL, *printer = NULL, *eps_arg = NULL;
+	bool json = false, split = false, ascii = false;
+	int threads = 0, status = ST_EXIT_OK, rc;
+	struct st_error err = {0};
+	struct profile *prof = NULL;
+	struct repair_run run = {0};
+	struct repair_options opt;
+	struct repair_report rep;
+	struct repair_progress prog;
+	struct repair_outputs outs = {0};
+	struct mesh *m = NULL, *fixed = NULL;
+	uint32_t *component = NULL;
+
+	for (int i = 1; i < argc; i++) {
+		const char *a = argv[i];
+
+		if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+			repair_usage(stdout);
+			return ST_EXIT_OK;
+		} else if (!strcmp(a, "--json")) {
+			json = true;
+		} else if (!strcmp(a, "--split")) {
+			split = true;
+		} else if (!strcmp(a, "--ascii")) {
+			ascii = true;
+		} else if (!strcmp(a, "-o") || is_opt(a, "--output")) {
+			out = !strcmp(a, "-o") ? (i + 1 < argc ? argv[++i] : NULL)
+					       : opt_value(argc, argv, &i, "--output");
+			if (!out || !*out) {
+				fprintf(stderr, "stratum repair: %s needs the output file name\n", a);
+				return ST_EXIT_USAGE;
+			}
+		} else if (is_opt(a, "--printer")) {
+			printer = opt_value(argc, argv, &i, "--printer");
+			if (!printer || !*printer) {
+				fprintf(stderr, "stratum repair: --printer needs a printer name or "
+						"file (see 'stratum printers')\n");
+				return ST_EXIT_USAGE;
+			}
+		} else if (is_opt(a, "--epsilon")) {
+			eps_arg = opt_value(argc, argv, &i, "--epsilon");
+			if (!eps_arg || !parse_epsilon(eps_arg, &run.epsilon)) {
+				fprintf(stderr, "stratum repair: --epsilon wants a thickness in mm "
+						"greater than 0 and at most %g, not '%s'\n",
+					REPAIR_EPSILON_MAX, eps_arg ? eps_arg : "");
+				return ST_EXIT_USAGE;
+			}
+		} else if (is_opt(a, "--threads")) {
+			const char *v = opt_value(argc, argv, &i, "--threads");
+
+			threads = v ? parse_threads(v) : -1;
+			if (threads < 0) {
+				fprintf(stderr, "stratum repair: --threads wants a number from 1 to 256, "
+						"not '%s'\n", v ? v : "");
+				return ST_EXIT_USAGE;
+			}
+		} else if (a[0] == '-' && a[1]) {
+			fprintf(stderr, "stratum repair: unknown option '%s'\n", a);
+			repair_usage(stderr);
+			return ST_EXIT_USAGE;
+		} else if (!in) {
+			in = a;
+		} else {
+			fprintf(stderr, "stratum repair: one input file at a time ('%s' and '%s'); "
+					"name the output with -o\n", in, a);
+			return ST_EXIT_USAGE;
+		}
+	}
+	if (!in || !out) {
+		fprintf(stderr, "stratum repair: %s\n",
+			!in ? "no input file given" : "no output file given; add -o OUT.stl");
+		repair_usage(stderr);
+		return ST_EXIT_USAGE;
+	}
+
+	/* The printer is checked even when --epsilon overrides its nozzle. */
+	if (printer) {
+		rc = profile_find(printer, &prof, &err);
+		if (rc) {
+			fprintf(stderr, "stratum repair: %s\n", err.msg);
+			return st_exit_for(rc);
+		}
+		run.printer = prof->id;
+	}
+	if (eps_arg) {
+		run.eps_source = "--epsilon";
+	} else if (prof) {
+		run.eps_source = "printer";
+		run.epsilon = prof->nozzle_diameter[0];
+	} else {
+		run.eps_source = "default";
+		run.epsilon = REPAIR_EPSILON_DEFAULT;
+	}
+	run.input = in;
+	run.ascii = ascii;
+
+	rc = meshio_read(in, MESHIO_AUTO, &m, &run.format, &err);
+	if (rc) {
+		fprintf(stderr, "stratum repair: %s\n", err.msg);
+		status = rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
+		goto out_profile;
+	}
+
+	repair_options_init(&opt);
+	opt.epsilon = run.epsilon;
+	opt.precision = ascii ? REPAIR_FLOAT64 : REPAIR_FLOAT32;
+	opt.threads = threads;
+	memset(&prog, 0, sizeof(prog));
+	prog.percent = -1;
+	if (m->ntris >= REPAIR_PROGRESS_MIN) {
+		if (pthread_mutex_init(&prog.lock, NULL) == 0) {
+			prog.tty = isatty(STDERR_FILENO);
+			opt.progress = repair_on_progress;
+			opt.progress_ctx = &prog;
+		}
+	}
+	memset(&rep, 0, sizeof(rep));
+	rc = repair_mesh(m, &opt, &fixed, &component, &rep, &err);
+	if (opt.progress) {
+		repair_progress_clear(&prog);
+		pthread_mutex_destroy(&prog.lock);
+	}
+	mesh_free(m);
+	if (rc < 0) {
+		fprintf(stderr, "stratum repair: %s: %s\n", in, err.msg);
+		status = rc == ST_ERR_ARG ? ST_EXIT_SOFTWARE : st_exit_for(rc);
+		goto out_free_result;
+	}
+
+	if (rep.printable)
+		status = write_outputs(out, fixed, component, rep.components, split,
+				       ascii ? MESHIO_STL_ASCII : MESHIO_STL_BINARY, &outs);
+	rc = report(&run, &rep, &outs, json);
+	if (!rep.printable) {
+		fprintf(stderr, "stratum repair: %s: could not reach a printable result: %s\n", in,
+			rep.why);
+		status = ST_EXIT_FAILURE;
+	} else if (status && outs.count) {
+		fprintf(stderr, "stratum repair: only %zu of %zu parts were written\n", outs.count,
+			rep.components);
+	}
+	if (!status && rc)
+		status = rc;
+
+	outputs_free(&outs);
+out_free_result:
+	free(component); /* NULL unless repair_mesh set them */
+	mesh_free(fixed);
+out_profile:
+	profile_free(prof);
+	return status;
+}

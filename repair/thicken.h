@@ -1,0 +1,33 @@
+/*
+ * thicken.h - private to repair/: sheets into thin closed slabs (seed 000
+ * §4.2.1).  repair.c is the only user.
+ */
+#ifndef STRATUM_REPAIR_THICKEN_H
+#define STRATUM_REPAIR_THICKEN_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "st_error.h"
+
+struct thick_out {
+	double (*verts)[3];	/* malloc'd; free() both arrays */
+	uint32_t (*tris)[3];
+	size_t nverts, ntris;
+	double deviation;	/* largest distance of a new vertex from its own, mm */
+	size_t cut_edges;	/* two-triangle edges cut to orient the sheets */
+};
+
+/*
+ * thicken_sheets - a closed slab of total thickness 2 * half around the n
+ * triangles listed in list (indices into tris, corners into verts): each
+ * sheet oriented (cut where it cannot be), offset to both sides along
+ * angle-weighted vertex normals and stitched along its boundaries, cuts
+ * and edges shared by more than two of the listed triangles.  The slab may
+ * fold where the sheet bends sharply; the caller resolves that exactly.
+ * Returns 0 or ST_ERR_NOMEM with err filled.
+ */
+int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const uint32_t *list,
+		   size_t n, double half, struct thick_out *out, struct st_error *err);
+
+#endif /* STRATUM_REPAIR_THICKEN_H */
