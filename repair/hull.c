@@ -516,13 +516,17 @@ out:
 	return rc;
 }
 
-long hull_manifold_components(const uint32_t (*tris)[3], size_t ntris, size_t nverts,
-			      uint32_t *component, struct st_error *err)
+long hull_manifold_components(const struct exact_mesh *em, uint32_t *component,
+			      struct st_error *err)
 {
+	const size_t ntris = exact_mesh_ntris(em), nverts = exact_mesh_nverts(em);
+	const uint32_t (*tris)[3] = exact_mesh_tris(em);
 	struct edges e;
 	uint32_t *parent;
 	long nc = 0;
 
+	if (ntris == 0)
+		return 0;
 	if (edges_build(tris, ntris, nverts, &e, err))
 		return -1;
 	parent = malloc((ntris + 1) * sizeof(*parent));
@@ -533,11 +537,28 @@ long hull_manifold_components(const uint32_t (*tris)[3], size_t ntris, size_t nv
 	}
 	for (size_t t = 0; t < ntris; t++)
 		parent[t] = (uint32_t)t;
-	/* Def. 3.10 via the manifold decomposition: only edges with exactly
-	 * two triangles join; singular edges and vertices split. */
-	for (size_t ed = 0; ed < e.nedges; ed++)
-		if (e.eoff[ed + 1] - e.eoff[ed] == 2)
-			uf_union(parent, e.ecorner[e.eoff[ed]] / 3, e.ecorner[e.eoff[ed] + 1] / 3);
+	/*
+	 * The manifold decomposition (Def. 3.10, Hui et al.): across an edge
+	 * with two triangles they join; around a singular edge each triangle
+	 * joins the one it faces through the solid, the first met turning
+	 * away from its outward normal.  Two cubes sharing an edge stay two
+	 * parts; a solid pinched along an edge (Fig. 2d) stays one, closed.
+	 */
+	for (size_t ed = 0; ed < e.nedges; ed++) {
+		const uint32_t first = e.eoff[ed], count = e.eoff[ed + 1] - first;
+		if (count == 2) {
+			uf_union(parent, e.ecorner[first] / 3, e.ecorner[first + 1] / 3);
+			continue;
+		}
+		for (uint32_t i = first; i < e.eoff[ed + 1] && count > 2; i++) {
+			const uint32_t t = e.ecorner[i] / 3, k = e.ecorner[i] % 3;
+			const uint32_t a = tris[t][k], b = tris[t][(k + 1) % 3],
+				       c = tris[t][(k + 2) % 3];
+			/* Away from (a, b, c)'s normal is towards (b, a, c)'s. */
+			const uint32_t mate = continuation(em, tris, &e, (uint32_t)ed, t, b, a, c);
+			uf_union(parent, t, mate);
+		}
+	}
 	for (size_t t = 0; t < ntris; t++)
 		component[t] = UINT32_MAX;
 	for (size_t t = 0; t < ntris; t++) {

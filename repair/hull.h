@@ -35,11 +35,14 @@ int hull_extract(const struct exact_mesh *em, uint8_t *tag, uint8_t *flip,
 		 struct hull_stats *st, struct st_error *err);
 
 /*
- * hull_manifold_components - number the manifold-connected components of
- * a triangle set (joined across edges with exactly two triangles) into
- * component[0..ntris-1]; returns how many, or -1 with err filled.
+ * hull_manifold_components - number the manifold-connected components
+ * (Def. 3.10) of em, a closed outward-oriented mesh without
+ * self-intersections, into component[0..ntris-1]: triangles join across
+ * edges with two triangles, and around singular edges each joins the
+ * triangle it faces through the solid.  Returns how many, or -1 with err
+ * filled.
  */
-long hull_manifold_components(const uint32_t (*tris)[3], size_t ntris, size_t nverts,
-			      uint32_t *component, struct st_error *err);
+long hull_manifold_components(const struct exact_mesh *em, uint32_t *component,
+			      struct st_error *err);
 
 #endif /* STRATUM_REPAIR_HULL_H */

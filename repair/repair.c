@@ -557,8 +557,48 @@ static int round_result(const struct exact_mesh *em, enum repair_precision prec,
 	return 0;
 }
 
-/* Largest distance of a solid vertex from the input triangle it came from
- * (0 when every one lies on it exactly, which is what seed 000 promises). */
+/* Distance from p to the closed triangle abc, in doubles. */
+static double point_triangle_distance(const double p[3], const double a[3], const double b[3],
+				      const double c[3])
+{
+	const double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+	const double ac[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+	const double ap[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
+	const double n[3] = {ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2],
+			     ab[0] * ac[1] - ab[1] * ac[0]};
+	const double nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+	const double h = (ap[0] * n[0] + ap[1] * n[1] + ap[2] * n[2]) / nn;
+	const double q[3] = {p[0] - h * n[0], p[1] - h * n[1], p[2] - h * n[2]};
+	const double *v[3] = {a, b, c};
+	double best = HUGE_VAL;
+	bool inside = true;
+
+	/* q is p's foot in the plane; inside when on the inner side of
+	 * every edge, else the nearest point is on an edge. */
+	for (int k = 0; k < 3; k++) {
+		const double *u = v[k], *w = v[(k + 1) % 3];
+		const double e[3] = {w[0] - u[0], w[1] - u[1], w[2] - u[2]};
+		const double uq[3] = {q[0] - u[0], q[1] - u[1], q[2] - u[2]};
+		const double x[3] = {e[1] * uq[2] - e[2] * uq[1], e[2] * uq[0] - e[0] * uq[2],
+				     e[0] * uq[1] - e[1] * uq[0]};
+		if (x[0] * n[0] + x[1] * n[1] + x[2] * n[2] < 0)
+			inside = false;
+		const double up[3] = {p[0] - u[0], p[1] - u[1], p[2] - u[2]};
+		double t = (up[0] * e[0] + up[1] * e[1] + up[2] * e[2]) /
+			   (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+		t = t < 0 ? 0 : t > 1 ? 1 : t;
+		const double f[3] = {u[0] + t * e[0], u[1] + t * e[1], u[2] + t * e[2]};
+		best = fmin(best, dist3(p, f));
+	}
+	return inside ? fabs(h) * sqrt(nn) : best;
+}
+
+/*
+ * Largest distance of a solid vertex from the input triangle it came from.
+ * Pieces are constructed exactly in their triangle's plane, so this is 0
+ * up to the double approximation of rational points (about 1e-15 mm); a
+ * vertex that is an input corner of its triangle counts as 0 outright.
+ */
 static double solid_deviation(const struct mesh *in, const struct exact_mesh *em)
 {
 	const size_t n = exact_mesh_ntris(em);
@@ -573,18 +613,11 @@ static double solid_deviation(const struct mesh *in, const struct exact_mesh *em
 		const uint32_t *o = in->tris[origin[t]];
 		const double *a = in->verts[o[0]], *b = in->verts[o[1]], *c = in->verts[o[2]];
 		for (int k = 0; k < 3; k++) {
-			if (exact_mesh_on_triangle(em, tris[t][k], a, b, c))
-				continue;
-			/* Off its triangle: measure how far (in doubles). */
 			const double *p = verts[tris[t][k]];
-			const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-			const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-			double nn[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
-					u[0] * v[1] - u[1] * v[0]};
-			const double l = sqrt(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);
-			const double d = fabs((p[0] - a[0]) * nn[0] + (p[1] - a[1]) * nn[1] +
-					      (p[2] - a[2]) * nn[2]) / l;
-			worst = fmax(worst, d > 0 ? d : DBL_MIN);
+			if (!memcmp(p, a, sizeof(double[3])) || !memcmp(p, b, sizeof(double[3])) ||
+			    !memcmp(p, c, sizeof(double[3])))
+				continue;
+			worst = fmax(worst, point_triangle_distance(p, a, b, c));
 		}
 	}
 	return worst;
@@ -673,7 +706,7 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 	rep->solid_deviation = solid_deviation(in, co.result);
 
 	/* Round, check, and run the core again on what rounding broke. */
-	bool unchanged = false;
+	bool unchanged = false, checked = false;
 	for (;;) {
 		bool changed = false;
 		double moved = 0;
@@ -695,8 +728,10 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 		rc = mesh_analyze(rounded, opt->threads, &mr, err);
 		if (rc)
 			goto out_free;
+		checked = true;
 		if (parts_printable(&mr))
 			break;
+		checked = false;
 		rep->rounding_rounds++;
 		cur = rounded;
 		rounded = NULL;
@@ -709,8 +744,9 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 	progress(opt, "checking", 0.95);
 	/* When rounding moved nothing and the last exact pass found no pair
 	 * to cut, that pass already proved the count is 0 for this mesh. */
-	rc = mesh_analyze_known(rounded, opt->threads, unchanged && co.proved_clean ? 0 : -1,
-				&mr, err);
+	if (!checked)
+		rc = mesh_analyze_known(rounded, opt->threads,
+					unchanged && co.proved_clean ? 0 : -1, &mr, err);
 	if (rc)
 		goto out_free;
 	rep->output_triangles = rounded->ntris;
@@ -724,8 +760,13 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory splitting components");
 		goto out_free;
 	}
-	long nc = hull_manifold_components((const uint32_t(*)[3])rounded->tris, rounded->ntris,
-					   rounded->nverts, comp, err);
+	struct exact_mesh *final = NULL;
+	long nc = -1;
+	if (exact_mesh_new((const double(*)[3])rounded->verts, rounded->nverts,
+			   (const uint32_t(*)[3])rounded->tris, rounded->ntris, NULL, &final,
+			   err) == 0)
+		nc = hull_manifold_components(final, comp, err);
+	exact_mesh_free(final);
 	if (nc < 0) {
 		free(comp);
 		rc = err ? err->code : ST_ERR_NOMEM;
