@@ -557,6 +557,61 @@ static int round_result(const struct exact_mesh *em, enum repair_precision prec,
 	return 0;
 }
 
+/*
+ * Drop what rounding collapsed without moving anything: triangles that
+ * repeat a vertex (an edge or the whole triangle shrank to a point), and
+ * pairs of equal triangles (a part thinner than the grid, flattened to two
+ * layers).  Every edge keeps an even count, so a closed mesh stays closed.
+ * Returns a new mesh, or NULL when out of memory.
+ */
+static struct mesh *drop_collapsed(const struct mesh *m)
+{
+	struct tri_key *keys = malloc((m->ntris + 1) * sizeof(*keys));
+	uint8_t *drop = calloc(m->ntris + 1, 1);
+	struct mesh_builder *b = mesh_builder_new(m->ntris);
+	struct mesh *out = NULL;
+	struct st_error err;
+	size_t nk = 0;
+	int rc = 0;
+
+	if (!keys || !drop || !b)
+		goto done;
+	for (size_t t = 0; t < m->ntris; t++) {
+		const uint32_t *v = m->tris[t];
+		if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) {
+			drop[t] = 1;
+			continue;
+		}
+		sort3(v, keys[nk].v);
+		keys[nk++].t = (uint32_t)t;
+	}
+	qsort(keys, nk, sizeof(*keys), compare_tri_key);
+	/* Equal triangles come in runs; drop them pairwise. */
+	for (size_t i = 0; i + 1 < nk; i++)
+		if (!memcmp(keys[i].v, keys[i + 1].v, sizeof(keys[i].v))) {
+			drop[keys[i].t] = drop[keys[i + 1].t] = 1;
+			i++;
+		}
+	for (size_t t = 0; t < m->ntris && !rc; t++) {
+		uint32_t w[3];
+		if (drop[t])
+			continue;
+		for (int k = 0; k < 3 && !rc; k++)
+			rc = mesh_builder_vertex(b, m->verts[m->tris[t][k]], &w[k], &err);
+		if (!rc)
+			rc = mesh_builder_triangle(b, w[0], w[1], w[2], &err);
+	}
+	if (!rc) {
+		out = mesh_builder_finish(b);
+		b = NULL;
+	}
+done:
+	mesh_builder_free(b);
+	free(keys);
+	free(drop);
+	return out;
+}
+
 /* Distance from p to the closed triangle abc, in doubles. */
 static double point_triangle_distance(const double p[3], const double a[3], const double b[3],
 				      const double c[3])
@@ -732,6 +787,27 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 		if (parts_printable(&mr))
 			break;
 		checked = false;
+		/* Often rounding only collapsed slivers: dropping them is
+		 * enough, and needs no new (rational) points. */
+		if (mr.self_intersections == 0 && mr.degenerate == 0) {
+			struct mesh *pruned = drop_collapsed(rounded);
+			if (!pruned) {
+				rc = st_error_set(err, ST_ERR_NOMEM, "out of memory after rounding");
+				goto out_free;
+			}
+			rc = mesh_analyze(pruned, opt->threads, &mr, err);
+			if (rc) {
+				mesh_free(pruned);
+				goto out_free;
+			}
+			if (parts_printable(&mr)) {
+				mesh_free(rounded);
+				rounded = pruned;
+				checked = true;
+				break;
+			}
+			mesh_free(pruned);
+		}
 		rep->rounding_rounds++;
 		cur = rounded;
 		rounded = NULL;

@@ -205,6 +205,31 @@ static void pair_straight(const double (*verts)[3], const uint32_t (*tris)[3],
 	}
 }
 
+static int compare_u32(const void *a, const void *b)
+{
+	const uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+
+	return x < y ? -1 : x > y;
+}
+
+/*
+ * The slab's own copy of sheet vertex v (on the walls), made once: uv is
+ * the sorted list of the sheet's vertices (nu of them), sidx their slab
+ * vertex or UINT32_MAX.
+ */
+static uint32_t sheet_vertex(struct thick_out *out, const uint32_t *uv, size_t nu, uint32_t *sidx,
+			     const double (*verts)[3], uint32_t v)
+{
+	const uint32_t *hit = bsearch(&v, uv, nu, sizeof(*uv), compare_u32);
+	const size_t i = (size_t)(hit - uv);
+
+	if (sidx[i] == UINT32_MAX) {
+		memcpy(out->verts[out->nverts], verts[v], sizeof(out->verts[0]));
+		sidx[i] = (uint32_t)out->nverts++;
+	}
+	return sidx[i];
+}
+
 struct half_edge {
 	uint32_t from, to;
 };
@@ -299,6 +324,8 @@ int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const ui
 	uint32_t *group = malloc((3 * n + 1) * sizeof(*group));
 	uint32_t *gid = malloc((3 * n + 1) * sizeof(*gid));
 	uint8_t *gpar = malloc(3 * n + 1), *side = malloc(3 * n + 1);
+	uint32_t *uv = NULL, *sidx = NULL; /* sheet vertices, sorted; their slab copies */
+	size_t nu = 0;
 	double (*gnorm)[3] = calloc(3 * n + 1, sizeof(*gnorm));
 	size_t ng = 0;
 	int rc = 0;
@@ -437,9 +464,11 @@ int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const ui
 	/* Room for: two copies per group; per triangle top and bottom, and
 	 * per corner a wall or half a bevel (two faces each) plus the fans
 	 * that close corners (fewer faces than the edges they close). */
-	out->verts = malloc((2 * ng + 1) * sizeof(*out->verts));
-	out->tris = malloc((2 * n + 2 * 3 * n + 6 * 3 * n + 1) * sizeof(*out->tris));
-	if (!out->verts || !out->tris) {
+	out->verts = malloc((2 * ng + 3 * n + 1) * sizeof(*out->verts));
+	out->tris = malloc((32 * n + 1) * sizeof(*out->tris));
+	uv = malloc((3 * n + 1) * sizeof(*uv));
+	sidx = malloc((3 * n + 1) * sizeof(*sidx));
+	if (!out->verts || !out->tris || !uv || !sidx) {
 		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory thickening %zu sheet triangles",
 				  n);
 		goto out;
@@ -462,6 +491,14 @@ int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const ui
 		}
 	}
 	out->nverts = 2 * ng;
+	for (uint32_t c = 0; c < 3 * n; c++)
+		uv[c] = tris[list[c / 3]][c % 3];
+	qsort(uv, 3 * n, sizeof(*uv), compare_u32);
+	for (size_t c = 0; c < 3 * n; c++)
+		if (nu == 0 || uv[nu - 1] != uv[c])
+			uv[nu++] = uv[c];
+	for (size_t i = 0; i < nu; i++)
+		sidx[i] = UINT32_MAX;
 	/* copy(c, 0) lies on the side triangle c/3's normal points to (as
 	 * oriented), copy(c, 1) on the other: parity maps that to the group's
 	 * own two copies. */
@@ -486,10 +523,17 @@ int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const ui
 				a = b;
 				b = t;
 			}
-			const uint32_t w1[3] = {COPY(b, 0), COPY(a, 0), COPY(a, 1)};
-			const uint32_t w2[3] = {COPY(b, 0), COPY(a, 1), COPY(b, 1)};
-			memcpy(out->tris[out->ntris++], w1, sizeof(w1));
-			memcpy(out->tris[out->ntris++], w2, sizeof(w2));
+			/* The wall holds the sheet's own edge a b: walls of
+			 * several fans meet exactly there instead of crossing
+			 * each other within rounding of it. */
+			const uint32_t pa = sheet_vertex(out, uv, nu, sidx, verts, tris[list[a / 3]][a % 3]);
+			const uint32_t pb = sheet_vertex(out, uv, nu, sidx, verts, tris[list[b / 3]][b % 3]);
+			const uint32_t w[4][3] = {{COPY(b, 0), COPY(a, 0), pa},
+						  {COPY(b, 0), pa, pb},
+						  {pb, pa, COPY(a, 1)},
+						  {pb, COPY(a, 1), COPY(b, 1)}};
+			memcpy(out->tris[out->ntris], w, sizeof(w));
+			out->ntris += 4;
 		}
 	}
 	/* Bevels along creases (always between consistently oriented
@@ -556,6 +600,8 @@ out:
 	free(gid);
 	free(gpar);
 	free(side);
+	free(uv);
+	free(sidx);
 	free(gnorm);
 	return rc;
 }
