@@ -263,7 +263,7 @@ static bool has_half_edge(const struct half_edge *h, size_t n, uint32_t from, ui
  * half-edge without its twin starts a loop of copies of one vertex, closed
  * by a fan (within half of that vertex like the copies themselves).
  */
-static int fill_corner_holes(struct thick_out *out, struct st_error *err)
+static int fill_corner_holes(struct thick_out *out, size_t cap, struct st_error *err)
 {
 	const size_t nh = 3 * out->ntris;
 	struct half_edge *h = malloc((nh + 1) * sizeof(*h));
@@ -304,6 +304,12 @@ static int fill_corner_holes(struct thick_out *out, struct st_error *err)
 			if (cur == UINT32_MAX || cur == first)
 				break;
 			const uint32_t t[3] = {first, prev, cur};
+			if (out->ntris >= cap) {
+				free(next);
+				return st_error_set(err, ST_ERR_INTERNAL,
+						    "thickening: corner fans need more than the "
+						    "%zu triangles reserved", cap);
+			}
 			memcpy(out->tris[out->ntris++], t, sizeof(t));
 			prev = cur;
 		}
@@ -566,7 +572,7 @@ int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const ui
 		memcpy(out->tris[out->ntris++], b2, sizeof(b2));
 	}
 #undef COPY
-	rc = fill_corner_holes(out, err);
+	rc = fill_corner_holes(out, 32 * n, err);
 	if (rc)
 		goto out;
 	/* Every copy is exactly half from its vertex (up to rounding). */
