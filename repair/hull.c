@@ -13,6 +13,7 @@
 
 #include "exact.h"
 #include "hull.h"
+#include "ids.h"
 
 /* Edge incidence as compressed rows; corner c = 3*tri+k is edge (k, k+1). */
 struct edges {
@@ -117,23 +118,6 @@ out_nomem:
 	edges_free(e);
 	return st_error_set(err, ST_ERR_NOMEM, "out of memory building the edges of %zu triangles",
 			    ntris);
-}
-
-static uint32_t uf_find(uint32_t *parent, uint32_t x)
-{
-	while (parent[x] != x) {
-		parent[x] = parent[parent[x]];
-		x = parent[x];
-	}
-	return x;
-}
-
-static void uf_union(uint32_t *parent, uint32_t a, uint32_t b)
-{
-	a = uf_find(parent, a);
-	b = uf_find(parent, b);
-	if (a != b)
-		parent[a < b ? b : a] = a < b ? a : b;
 }
 
 /* Triangle t as currently oriented. */

@@ -15,6 +15,7 @@
 
 #include "exact.h"
 #include "hull.h"
+#include "ids.h"
 #include "repair.h"
 #include "thicken.h"
 
@@ -91,18 +92,6 @@ static int compare_tri_key(const void *a, const void *b)
 		if (x->v[k] != y->v[k])
 			return x->v[k] < y->v[k] ? -1 : 1;
 	return x->t < y->t ? -1 : x->t > y->t;
-}
-
-static void sort3(const uint32_t in[3], uint32_t out[3])
-{
-	uint32_t a = in[0], b = in[1], c = in[2], t;
-
-	if (a > b) { t = a; a = b; b = t; }
-	if (b > c) { t = b; b = c; c = t; }
-	if (a > b) { t = a; a = b; b = t; }
-	out[0] = a;
-	out[1] = b;
-	out[2] = c;
 }
 
 /*

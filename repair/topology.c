@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "exact.h"
+#include "ids.h"
 #include "mesh.h"
 
 enum tri_class { TRI_LAYER = 0, TRI_IRREGULAR, TRI_DEGENERATE, TRI_DUPLICATE };
@@ -62,24 +63,6 @@ const char *mesh_reason_text(enum mesh_reason r)
 	return (unsigned)r < MESH_REASON_COUNT ? reason_table[r].text : "unknown";
 }
 
-/* Union-find over uint32_t ids with path halving. */
-static uint32_t uf_find(uint32_t *parent, uint32_t x)
-{
-	while (parent[x] != x) {
-		parent[x] = parent[parent[x]];
-		x = parent[x];
-	}
-	return x;
-}
-
-static void uf_union(uint32_t *parent, uint32_t a, uint32_t b)
-{
-	a = uf_find(parent, a);
-	b = uf_find(parent, b);
-	if (a != b)
-		parent[a < b ? b : a] = a < b ? a : b;
-}
-
 /*
  * Union-find whose links carry a parity bit: the parity of x relative to its
  * root says whether x must be flipped to match the root's orientation.
@@ -122,18 +105,6 @@ static bool pf_union(uint32_t *parent, uint8_t *par, uint32_t a, uint32_t b, uin
 	parent[rb] = ra;
 	par[rb] = pa ^ pb ^ flip;
 	return true;
-}
-
-static void sort3(const uint32_t in[3], uint32_t out[3])
-{
-	uint32_t a = in[0], b = in[1], c = in[2], t;
-
-	if (a > b) { t = a; a = b; b = t; }
-	if (b > c) { t = b; b = c; c = t; }
-	if (a > b) { t = a; a = b; b = t; }
-	out[0] = a;
-	out[1] = b;
-	out[2] = c;
 }
 
 /* Step 1a: irregular and degenerate triangles; the rest are layer candidates. */

@@ -1,0 +1,55 @@
+/*
+ * ids.h - private to repair/: small helpers over uint32_t vertex and
+ * triangle ids shared by the topology report, the outer hull and the
+ * repair pipeline.
+ */
+#ifndef STRATUM_REPAIR_IDS_H
+#define STRATUM_REPAIR_IDS_H
+
+#include <stdint.h>
+
+/* Union-find root of x, with path halving. */
+static inline uint32_t uf_find(uint32_t *parent, uint32_t x)
+{
+	while (parent[x] != x) {
+		parent[x] = parent[parent[x]];
+		x = parent[x];
+	}
+	return x;
+}
+
+/* Join the sets of a and b; the lower root stays the root. */
+static inline void uf_union(uint32_t *parent, uint32_t a, uint32_t b)
+{
+	a = uf_find(parent, a);
+	b = uf_find(parent, b);
+	if (a != b)
+		parent[a < b ? b : a] = a < b ? a : b;
+}
+
+/* The three ids of in, ascending: the key of a triangle's vertex set. */
+static inline void sort3(const uint32_t in[3], uint32_t out[3])
+{
+	uint32_t a = in[0], b = in[1], c = in[2], t;
+
+	if (a > b) {
+		t = a;
+		a = b;
+		b = t;
+	}
+	if (b > c) {
+		t = b;
+		b = c;
+		c = t;
+	}
+	if (a > b) {
+		t = a;
+		a = b;
+		b = t;
+	}
+	out[0] = a;
+	out[1] = b;
+	out[2] = c;
+}
+
+#endif /* STRATUM_REPAIR_IDS_H */
