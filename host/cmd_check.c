@@ -172,8 +172,7 @@ static void print_text(const char *path, enum meshio_format fmt, const struct me
 	}
 }
 
-/* Parse a positive thread count; -1 when not a whole number in 1..256. */
-static int parse_threads(const char *s)
+int cmd_parse_threads(const char *s)
 {
 	char *end;
 	long n;
@@ -200,7 +199,7 @@ int cmd_check(int argc, char **argv)
 		if (!strcmp(argv[i], "--json")) {
 			json = true;
 		} else if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
-			threads = parse_threads(argv[++i]);
+			threads = cmd_parse_threads(argv[++i]);
 			if (threads < 0) {
 				fprintf(stderr, "stratum check: --threads wants a number from 1 to 256, "
 						"not '%s'\n", argv[i]);

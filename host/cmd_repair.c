@@ -109,19 +109,6 @@ static void repair_progress_clear(struct repair_progress *p)
 	fflush(stderr);
 }
 
-/* Parse a positive thread count; -1 when not a whole number in 1..256. */
-static int parse_threads(const char *s)
-{
-	char *end;
-	long n;
-
-	errno = 0;
-	n = strtol(s, &end, 10);
-	if (errno || end == s || *end || n < 1 || n > 256)
-		return -1;
-	return (int)n;
-}
-
 /* Parse --epsilon with the project's number reader; false when out of range. */
 static bool parse_epsilon(const char *s, double *out)
 {
@@ -532,7 +519,7 @@ int cmd_repair(int argc, char **argv)
 		} else if (is_opt(a, "--threads")) {
 			const char *v = opt_value(argc, argv, &i, "--threads");
 
-			threads = v ? parse_threads(v) : -1;
+			threads = v ? cmd_parse_threads(v) : -1;
 			if (threads < 0) {
 				fprintf(stderr, "stratum repair: --threads wants a number from 1 to 256, "
 						"not '%s'\n", v ? v : "");

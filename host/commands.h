@@ -12,4 +12,10 @@ int cmd_printers(int argc, char **argv); /* host/cmd_printers.c */
 int cmd_ports(int argc, char **argv);	 /* host/cmd_ports.c */
 int cmd_sim(int argc, char **argv);	 /* host/cmd_sim.c */
 
+/*
+ * cmd_parse_threads - the value of --threads N: N as an int, or -1 when it
+ * is not a whole number in 1..256 (host/cmd_check.c).
+ */
+int cmd_parse_threads(const char *s);
+
 #endif

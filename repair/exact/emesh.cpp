@@ -787,22 +787,6 @@ int exact_mesh_refine(struct exact_mesh *m, int threads, struct exact_refine_sta
 	}
 }
 
-int exact_mesh_count_intersections(const struct exact_mesh *m, int threads, uint64_t *count,
-				   struct st_error *err)
-{
-	if (!count)
-		return st_error_set(err, ST_ERR_ARG, "exact: count pointer is NULL");
-	*count = 0;
-	if (!m || threads < 0)
-		return st_error_set(err, ST_ERR_ARG, "exact: NULL mesh or negative thread count");
-	try {
-		*count = find_pairs(*m, threads).size();
-		return ST_OK;
-	} catch (...) {
-		return fail(err, "counting self-intersections");
-	}
-}
-
 int exact_mesh_orient3d(const struct exact_mesh *m, uint32_t a, uint32_t b, uint32_t c,
 			uint32_t d)
 {
@@ -817,33 +801,6 @@ int exact_mesh_orient3d(const struct exact_mesh *m, uint32_t a, uint32_t b, uint
 		return o == CGAL::POSITIVE ? 1 : o == CGAL::NEGATIVE ? -1 : 0;
 	} catch (...) {
 		return 0;
-	}
-}
-
-bool exact_mesh_on_triangle(const struct exact_mesh *m, uint32_t v, const double a[3],
-			    const double b[3], const double c[3])
-{
-	if (!m || v >= m->slot.size() || !a || !b || !c)
-		return false;
-	try {
-		if (m->slot[v] < 0) {
-			/* Most vertices are corners of their own triangle: a
-			 * plain comparison, where has_on would need exact
-			 * arithmetic to confirm a point on the boundary. */
-			const std::array<double, 3> &p = m->approx[v];
-			for (const double *q : {a, b, c})
-				if (p[0] == q[0] && p[1] == q[1] && p[2] == q[2])
-					return true;
-			const IK::Triangle_3 t(IK::Point_3(a[0], a[1], a[2]),
-					       IK::Point_3(b[0], b[1], b[2]),
-					       IK::Point_3(c[0], c[1], c[2]));
-			return t.has_on(ipoint(*m, v));
-		}
-		const EK::Triangle_3 t(EPoint(a[0], a[1], a[2]), EPoint(b[0], b[1], b[2]),
-				       EPoint(c[0], c[1], c[2]));
-		return t.has_on(epoint(*m, v));
-	} catch (...) {
-		return false;
 	}
 }
 

@@ -140,23 +140,9 @@ struct exact_refine_stats {
 int exact_mesh_refine(struct exact_mesh *m, int threads, struct exact_refine_stats *stats,
 		      struct st_error *err);
 
-/*
- * exact_mesh_count_intersections - pairs of triangles meeting outside a
- * common face, exactly, over the exact positions.
- */
-int exact_mesh_count_intersections(const struct exact_mesh *m, int threads, uint64_t *count,
-				   struct st_error *err);
-
 /* exact_mesh_orient3d - exact_orient3d on vertex indices (exact positions). */
 int exact_mesh_orient3d(const struct exact_mesh *m, uint32_t a, uint32_t b, uint32_t c,
 			uint32_t d);
-
-/*
- * exact_mesh_on_triangle - whether vertex v lies, exactly, in the closed
- * triangle abc (double corners): in its plane and within its edges.
- */
-bool exact_mesh_on_triangle(const struct exact_mesh *m, uint32_t v, const double a[3],
-			    const double b[3], const double c[3]);
 
 /*
  * exact_mesh_seed - the seed triangle of seed 000 §4.2.1 among the n
