@@ -24,7 +24,7 @@ DEB_PACKAGES := gcc g++ make pkg-config dpkg-dev \
 BENCH_PACKAGES := admesh time bc
 
 WARN     := -Wall -Wextra -Werror
-CPPFLAGS := -Iinclude -Irepair -Irepair/exact -Iserial -Ihost -D_XOPEN_SOURCE=700 -D_DEFAULT_SOURCE -MMD -MP
+CPPFLAGS := -Iinclude -Irepair -Irepair/exact -Iserial -Islicer -Islicer/clip -Ihost -D_XOPEN_SOURCE=700 -D_DEFAULT_SOURCE -MMD -MP
 CFLAGS   ?= -O2 -g
 override CFLAGS += -std=c11 -pedantic $(WARN) -Wstrict-prototypes -Wmissing-prototypes -Wshadow -pthread
 # CGAL: exact predicates, TBB for the parallel box intersection.
