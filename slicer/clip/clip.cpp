@@ -1,0 +1,470 @@
+/*
+ * clip.cpp - the Clipper bridge behind clip.h: converts the C containers to
+ * ClipperLib::Paths and back, and turns every exception into an error code
+ * (STYLE rule 14).  The containers are malloc'd here and freed here.
+ */
+#include "clip.h"
+
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <limits>
+#include <new>
+
+#include <polyclipping/clipper.hpp>
+
+namespace {
+
+using ClipperLib::IntPoint;
+using ClipperLib::Path;
+using ClipperLib::Paths;
+
+// Grow a malloc'd array to hold at least need elements; throws bad_alloc.
+template <class T> void reserve(T *&arr, size_t &cap, size_t need)
+{
+	if (need <= cap)
+		return;
+	size_t ncap = cap ? cap : 16;
+	while (ncap < need) {
+		if (ncap > std::numeric_limits<size_t>::max() / 2 / sizeof(T))
+			throw std::bad_alloc();
+		ncap *= 2;
+	}
+	T *grown = static_cast<T *>(std::realloc(arr, ncap * sizeof(T)));
+	if (!grown)
+		throw std::bad_alloc();
+	arr = grown;
+	cap = ncap;
+}
+
+// Append one path to ps; throws bad_alloc (ps unchanged then).
+void push_path(struct clip_paths *ps, const int64_t *xy, size_t npts)
+{
+	size_t have = clip_paths_points(ps);
+
+	if (npts > std::numeric_limits<size_t>::max() / 2 - have)
+		throw std::bad_alloc();
+	reserve(ps->start, ps->cap_paths, ps->n + 2);
+	reserve(ps->xy, ps->cap_pts, 2 * (have + npts));
+	if (npts)
+		std::memcpy(ps->xy + 2 * have, xy, 2 * npts * sizeof(*xy));
+	ps->start[ps->n] = have;
+	ps->start[ps->n + 1] = have + npts;
+	ps->n++;
+}
+
+void push_path(struct clip_paths *ps, const Path &p)
+{
+	size_t have = clip_paths_points(ps);
+
+	reserve(ps->start, ps->cap_paths, ps->n + 2);
+	reserve(ps->xy, ps->cap_pts, 2 * (have + p.size()));
+	for (size_t j = 0; j < p.size(); j++) {
+		ps->xy[2 * (have + j)] = p[j].X;
+		ps->xy[2 * (have + j) + 1] = p[j].Y;
+	}
+	ps->start[ps->n] = have;
+	ps->start[ps->n + 1] = have + p.size();
+	ps->n++;
+}
+
+Path to_path(const int64_t *xy, size_t npts)
+{
+	Path p;
+	p.reserve(npts);
+	for (size_t j = 0; j < npts; j++)
+		p.push_back(IntPoint(xy[2 * j], xy[2 * j + 1]));
+	return p;
+}
+
+Paths to_paths(const struct clip_paths *ps)
+{
+	Paths out;
+	if (!ps)
+		return out;
+	out.reserve(ps->n);
+	for (size_t i = 0; i < ps->n; i++)
+		out.push_back(to_path(clip_path_xy(ps, i), clip_path_len(ps, i)));
+	return out;
+}
+
+void from_paths(const Paths &in, struct clip_paths *out)
+{
+	clip_paths_clear(out);
+	for (const Path &p : in)
+		if (!p.empty())
+			push_path(out, p);
+}
+
+// Start a new expolygon at the next path index.
+void open_expoly(struct clip_expolys *ex)
+{
+	reserve(ex->first, ex->cap, ex->n + 2);
+	ex->first[ex->n] = ex->paths.n;
+	ex->n++;
+}
+
+// Outer node o with its holes becomes one expolygon; islands inside the
+// holes follow as expolygons of their own.
+void add_outer(const ClipperLib::PolyNode &o, struct clip_expolys *ex)
+{
+	open_expoly(ex);
+	push_path(&ex->paths, o.Contour);
+	for (const ClipperLib::PolyNode *h : o.Childs)
+		push_path(&ex->paths, h->Contour);
+	ex->first[ex->n] = ex->paths.n;
+	for (const ClipperLib::PolyNode *h : o.Childs)
+		for (const ClipperLib::PolyNode *island : h->Childs)
+			add_outer(*island, ex);
+}
+
+void from_tree(const ClipperLib::PolyTree &tree, struct clip_expolys *out)
+{
+	clip_expolys_clear(out);
+	for (const ClipperLib::PolyNode *o : tree.Childs)
+		if (!o->IsOpen())
+			add_outer(*o, out);
+}
+
+const ClipperLib::ClipType clip_types[CLIP_OPS] = {ClipperLib::ctUnion, ClipperLib::ctDifference,
+						   ClipperLib::ctIntersection, ClipperLib::ctXor};
+const ClipperLib::PolyFillType fill_types[CLIP_FILLS] = {
+	ClipperLib::pftEvenOdd, ClipperLib::pftNonZero, ClipperLib::pftPositive,
+	ClipperLib::pftNegative};
+const ClipperLib::JoinType join_types[CLIP_JOINS] = {ClipperLib::jtMiter, ClipperLib::jtRound,
+						     ClipperLib::jtSquare};
+const ClipperLib::EndType end_types[CLIP_ENDS] = {ClipperLib::etOpenButt,
+						  ClipperLib::etOpenSquare, ClipperLib::etOpenRound};
+
+// Run f, mapping every exception to an error class and message naming what.
+template <class F> int guarded(const char *what, struct st_error *err, F f)
+{
+	try {
+		return f();
+	} catch (const std::bad_alloc &) {
+		return st_error_set(err, ST_ERR_NOMEM, "clip: out of memory in %s", what);
+	} catch (const ClipperLib::clipperException &e) {
+		return st_error_set(err, ST_ERR_RANGE,
+				    "clip: %s refused the input (%s); coordinates must stay "
+				    "within +-4.6e18 nm",
+				    what, e.what());
+	} catch (const std::exception &e) {
+		return st_error_set(err, ST_ERR_INTERNAL, "clip: %s failed: %s", what, e.what());
+	} catch (...) {
+		return st_error_set(err, ST_ERR_INTERNAL, "clip: %s failed with an unknown exception",
+				    what);
+	}
+}
+
+int bad_enum(struct st_error *err, const char *what, const char *kind, int value)
+{
+	return st_error_set(err, ST_ERR_ARG, "clip: %s got an invalid %s (%d)", what, kind, value);
+}
+
+bool offset_args_ok(const char *what, enum clip_join join, double delta, double miter_limit,
+		    double arc_tolerance, struct st_error *err)
+{
+	if ((unsigned)join >= CLIP_JOINS) {
+		bad_enum(err, what, "join type", (int)join);
+		return false;
+	}
+	if (!(delta == delta) || delta > 4e18 || delta < -4e18) {
+		st_error_set(err, ST_ERR_ARG, "clip: %s got offset distance %g nm", what, delta);
+		return false;
+	}
+	if (join == CLIP_JOIN_MITER && !(miter_limit >= 2.0)) {
+		st_error_set(err, ST_ERR_ARG, "clip: %s needs a miter limit >= 2, got %g", what,
+			     miter_limit);
+		return false;
+	}
+	if (join == CLIP_JOIN_ROUND && !(arc_tolerance > 0.0)) {
+		st_error_set(err, ST_ERR_ARG, "clip: %s needs an arc tolerance > 0 nm, got %g",
+			     what, arc_tolerance);
+		return false;
+	}
+	return true;
+}
+
+ClipperLib::ClipperOffset make_offsetter(enum clip_join join, double miter_limit,
+					 double arc_tolerance)
+{
+	// Clipper ignores the unused parameter of the other join types.
+	return ClipperLib::ClipperOffset(join == CLIP_JOIN_MITER ? miter_limit : 2.0,
+					 join == CLIP_JOIN_ROUND ? arc_tolerance : 0.25);
+}
+
+} // namespace
+
+extern "C" {
+
+int clip_paths_add(struct clip_paths *ps, const int64_t *xy, size_t npts, struct st_error *err)
+{
+	if (!ps || (npts && !xy))
+		return st_error_set(err, ST_ERR_ARG, "clip: clip_paths_add got no %s",
+				    ps ? "coordinates" : "path set");
+	if (!npts)
+		return 0;
+	return guarded("clip_paths_add", err, [&] {
+		push_path(ps, xy, npts);
+		return 0;
+	});
+}
+
+int clip_paths_append(struct clip_paths *dst, const struct clip_paths *src, struct st_error *err)
+{
+	if (!dst || !src || dst == src)
+		return st_error_set(err, ST_ERR_ARG,
+				    "clip: clip_paths_append needs two distinct path sets");
+	return guarded("clip_paths_append", err, [&] {
+		for (size_t i = 0; i < src->n; i++)
+			push_path(dst, clip_path_xy(src, i), clip_path_len(src, i));
+		return 0;
+	});
+}
+
+void clip_paths_clear(struct clip_paths *ps)
+{
+	if (ps)
+		ps->n = 0;
+}
+
+void clip_paths_free(struct clip_paths *ps)
+{
+	if (!ps)
+		return;
+	std::free(ps->start);
+	std::free(ps->xy);
+	std::memset(ps, 0, sizeof(*ps));
+}
+
+void clip_expolys_clear(struct clip_expolys *ex)
+{
+	if (!ex)
+		return;
+	clip_paths_clear(&ex->paths);
+	ex->n = 0;
+}
+
+void clip_expolys_free(struct clip_expolys *ex)
+{
+	if (!ex)
+		return;
+	clip_paths_free(&ex->paths);
+	std::free(ex->first);
+	std::memset(ex, 0, sizeof(*ex));
+}
+
+int clip_expolys_get(const struct clip_expolys *ex, size_t i, struct clip_paths *out,
+		     struct st_error *err)
+{
+	if (!ex || !out || i >= ex->n || out == &ex->paths)
+		return st_error_set(err, ST_ERR_ARG, "clip: no expolygon %zu in a set of %zu", i,
+				    ex ? ex->n : 0);
+	return guarded("clip_expolys_get", err, [&] {
+		clip_paths_clear(out);
+		for (size_t p = ex->first[i]; p < ex->first[i + 1]; p++)
+			push_path(out, clip_path_xy(&ex->paths, p), clip_path_len(&ex->paths, p));
+		return 0;
+	});
+}
+
+int clip_boolean(enum clip_op op, const struct clip_paths *subject, const struct clip_paths *clip,
+		 enum clip_fill fill, struct clip_paths *out, struct st_error *err)
+{
+	if ((unsigned)op >= CLIP_OPS)
+		return bad_enum(err, "clip_boolean", "operation", (int)op);
+	if ((unsigned)fill >= CLIP_FILLS)
+		return bad_enum(err, "clip_boolean", "fill rule", (int)fill);
+	if (!subject || !out)
+		return st_error_set(err, ST_ERR_ARG, "clip: clip_boolean needs a subject and out");
+	return guarded("clip_boolean", err, [&] {
+		ClipperLib::Clipper c;
+		Paths result;
+		c.AddPaths(to_paths(subject), ClipperLib::ptSubject, true);
+		c.AddPaths(to_paths(clip), ClipperLib::ptClip, true);
+		if (!c.Execute(clip_types[op], result, fill_types[fill], fill_types[fill]))
+			return st_error_set(err, ST_ERR_INTERNAL, "clip: Clipper refused a boolean");
+		from_paths(result, out);
+		return 0;
+	});
+}
+
+int clip_boolean_ex(enum clip_op op, const struct clip_paths *subject,
+		    const struct clip_paths *clip, enum clip_fill fill, struct clip_expolys *out,
+		    struct st_error *err)
+{
+	if ((unsigned)op >= CLIP_OPS)
+		return bad_enum(err, "clip_boolean_ex", "operation", (int)op);
+	if ((unsigned)fill >= CLIP_FILLS)
+		return bad_enum(err, "clip_boolean_ex", "fill rule", (int)fill);
+	if (!subject || !out || subject == &out->paths || clip == &out->paths)
+		return st_error_set(err, ST_ERR_ARG,
+				    "clip: clip_boolean_ex needs a subject and a distinct out");
+	return guarded("clip_boolean_ex", err, [&] {
+		ClipperLib::Clipper c;
+		ClipperLib::PolyTree tree;
+		c.AddPaths(to_paths(subject), ClipperLib::ptSubject, true);
+		c.AddPaths(to_paths(clip), ClipperLib::ptClip, true);
+		if (!c.Execute(clip_types[op], tree, fill_types[fill], fill_types[fill]))
+			return st_error_set(err, ST_ERR_INTERNAL, "clip: Clipper refused a boolean");
+		from_tree(tree, out);
+		return 0;
+	});
+}
+
+int clip_lines(enum clip_op op, const struct clip_paths *lines, const struct clip_paths *polys,
+	       enum clip_fill fill, struct clip_paths *out, struct st_error *err)
+{
+	if (op != CLIP_INTERSECTION && op != CLIP_DIFFERENCE)
+		return bad_enum(err, "clip_lines", "operation (only intersection, difference)",
+				(int)op);
+	if ((unsigned)fill >= CLIP_FILLS)
+		return bad_enum(err, "clip_lines", "fill rule", (int)fill);
+	if (!lines || !out || out == lines || out == polys)
+		return st_error_set(err, ST_ERR_ARG,
+				    "clip: clip_lines needs lines and a distinct out");
+	return guarded("clip_lines", err, [&] {
+		ClipperLib::Clipper c;
+		ClipperLib::PolyTree tree;
+		Paths open;
+		c.AddPaths(to_paths(lines), ClipperLib::ptSubject, false);
+		c.AddPaths(to_paths(polys), ClipperLib::ptClip, true);
+		if (!c.Execute(clip_types[op], tree, fill_types[fill], fill_types[fill]))
+			return st_error_set(err, ST_ERR_INTERNAL, "clip: Clipper refused to clip lines");
+		ClipperLib::OpenPathsFromPolyTree(tree, open);
+		from_paths(open, out);
+		return 0;
+	});
+}
+
+int clip_offset(const struct clip_paths *in, double delta, enum clip_join join,
+		double miter_limit, double arc_tolerance, struct clip_paths *out,
+		struct st_error *err)
+{
+	if (!offset_args_ok("clip_offset", join, delta, miter_limit, arc_tolerance, err))
+		return err ? err->code : ST_ERR_ARG;
+	if (!in || !out)
+		return st_error_set(err, ST_ERR_ARG, "clip: clip_offset needs in and out");
+	return guarded("clip_offset", err, [&] {
+		ClipperLib::ClipperOffset o = make_offsetter(join, miter_limit, arc_tolerance);
+		Paths result;
+		o.AddPaths(to_paths(in), join_types[join], ClipperLib::etClosedPolygon);
+		o.Execute(result, delta);
+		from_paths(result, out);
+		return 0;
+	});
+}
+
+int clip_offset_ex(const struct clip_paths *in, double delta, enum clip_join join,
+		   double miter_limit, double arc_tolerance, struct clip_expolys *out,
+		   struct st_error *err)
+{
+	if (!offset_args_ok("clip_offset_ex", join, delta, miter_limit, arc_tolerance, err))
+		return err ? err->code : ST_ERR_ARG;
+	if (!in || !out || in == &out->paths)
+		return st_error_set(err, ST_ERR_ARG, "clip: clip_offset_ex needs in and a distinct out");
+	return guarded("clip_offset_ex", err, [&] {
+		ClipperLib::ClipperOffset o = make_offsetter(join, miter_limit, arc_tolerance);
+		ClipperLib::PolyTree tree;
+		o.AddPaths(to_paths(in), join_types[join], ClipperLib::etClosedPolygon);
+		o.Execute(tree, delta);
+		from_tree(tree, out);
+		return 0;
+	});
+}
+
+int clip_offset_open(const struct clip_paths *lines, double delta, enum clip_join join,
+		     enum clip_end end, double miter_limit, double arc_tolerance,
+		     struct clip_paths *out, struct st_error *err)
+{
+	if (!offset_args_ok("clip_offset_open", join, delta, miter_limit, arc_tolerance, err))
+		return err ? err->code : ST_ERR_ARG;
+	if ((unsigned)end >= CLIP_ENDS)
+		return bad_enum(err, "clip_offset_open", "end type", (int)end);
+	if (end == CLIP_END_ROUND && !(arc_tolerance > 0.0))
+		return st_error_set(err, ST_ERR_ARG,
+				    "clip: clip_offset_open needs an arc tolerance > 0 nm for "
+				    "round ends, got %g",
+				    arc_tolerance);
+	if (!lines || !out)
+		return st_error_set(err, ST_ERR_ARG, "clip: clip_offset_open needs lines and out");
+	return guarded("clip_offset_open", err, [&] {
+		ClipperLib::ClipperOffset o(join == CLIP_JOIN_MITER ? miter_limit : 2.0,
+					    arc_tolerance > 0.0 ? arc_tolerance : 0.25);
+		Paths result;
+		o.AddPaths(to_paths(lines), join_types[join], end_types[end]);
+		o.Execute(result, delta);
+		from_paths(result, out);
+		return 0;
+	});
+}
+
+int clip_simplify(const struct clip_paths *in, enum clip_fill fill, struct clip_paths *out,
+		  struct st_error *err)
+{
+	if ((unsigned)fill >= CLIP_FILLS)
+		return bad_enum(err, "clip_simplify", "fill rule", (int)fill);
+	if (!in || !out)
+		return st_error_set(err, ST_ERR_ARG, "clip: clip_simplify needs in and out");
+	return guarded("clip_simplify", err, [&] {
+		Paths result;
+		ClipperLib::SimplifyPolygons(to_paths(in), result, fill_types[fill]);
+		from_paths(result, out);
+		return 0;
+	});
+}
+
+int clip_clean(struct clip_paths *ps, double distance, struct st_error *err)
+{
+	if (!ps || !(distance >= 0.0))
+		return st_error_set(err, ST_ERR_ARG, "clip: clip_clean needs paths and a distance >= 0");
+	return guarded("clip_clean", err, [&] {
+		Paths p = to_paths(ps), kept;
+		ClipperLib::CleanPolygons(p, distance);
+		for (Path &q : p)
+			if (q.size() >= 3)
+				kept.push_back(q);
+		from_paths(kept, ps);
+		return 0;
+	});
+}
+
+int clip_area(const int64_t *xy, size_t npts, double *area, struct st_error *err)
+{
+	if (!area || (npts && !xy))
+		return st_error_set(err, ST_ERR_ARG, "clip: clip_area needs a path and a result");
+	*area = 0.0;
+	return guarded("clip_area", err, [&] {
+		*area = ClipperLib::Area(to_path(xy, npts));
+		return 0;
+	});
+}
+
+int clip_paths_area(const struct clip_paths *ps, double *area, struct st_error *err)
+{
+	if (!ps || !area)
+		return st_error_set(err, ST_ERR_ARG, "clip: clip_paths_area needs paths and a result");
+	*area = 0.0;
+	return guarded("clip_paths_area", err, [&] {
+		double sum = 0.0;
+		for (size_t i = 0; i < ps->n; i++)
+			sum += ClipperLib::Area(to_path(clip_path_xy(ps, i), clip_path_len(ps, i)));
+		*area = sum;
+		return 0;
+	});
+}
+
+int clip_point_in_polygon(int64_t x, int64_t y, const int64_t *xy, size_t npts, int *where,
+			  struct st_error *err)
+{
+	if (!where || (npts && !xy))
+		return st_error_set(err, ST_ERR_ARG,
+				    "clip: clip_point_in_polygon needs a path and a result");
+	*where = 0;
+	return guarded("clip_point_in_polygon", err, [&] {
+		*where = ClipperLib::PointInPolygon(IntPoint(x, y), to_path(xy, npts));
+		return 0;
+	});
+}
+
+} // extern "C"
