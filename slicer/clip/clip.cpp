@@ -280,9 +280,11 @@ int clip_boolean(enum clip_op op, const struct clip_paths *subject, const struct
 	return guarded("clip_boolean", err, [&] {
 		ClipperLib::Clipper c;
 		Paths result;
-		c.AddPaths(to_paths(subject), ClipperLib::ptSubject, true);
-		c.AddPaths(to_paths(clip), ClipperLib::ptClip, true);
-		if (!c.Execute(clip_types[op], result, fill_types[fill], fill_types[fill]))
+		// Clipper's Execute fails when it was given no edge at all: that
+		// is the empty set, not an error.
+		bool any = c.AddPaths(to_paths(subject), ClipperLib::ptSubject, true);
+		any = c.AddPaths(to_paths(clip), ClipperLib::ptClip, true) || any;
+		if (any && !c.Execute(clip_types[op], result, fill_types[fill], fill_types[fill]))
 			return st_error_set(err, ST_ERR_INTERNAL, "clip: Clipper refused a boolean");
 		from_paths(result, out);
 		return 0;
@@ -303,9 +305,9 @@ int clip_boolean_ex(enum clip_op op, const struct clip_paths *subject,
 	return guarded("clip_boolean_ex", err, [&] {
 		ClipperLib::Clipper c;
 		ClipperLib::PolyTree tree;
-		c.AddPaths(to_paths(subject), ClipperLib::ptSubject, true);
-		c.AddPaths(to_paths(clip), ClipperLib::ptClip, true);
-		if (!c.Execute(clip_types[op], tree, fill_types[fill], fill_types[fill]))
+		bool any = c.AddPaths(to_paths(subject), ClipperLib::ptSubject, true);
+		any = c.AddPaths(to_paths(clip), ClipperLib::ptClip, true) || any;
+		if (any && !c.Execute(clip_types[op], tree, fill_types[fill], fill_types[fill]))
 			return st_error_set(err, ST_ERR_INTERNAL, "clip: Clipper refused a boolean");
 		from_tree(tree, out);
 		return 0;
@@ -327,9 +329,9 @@ int clip_lines(enum clip_op op, const struct clip_paths *lines, const struct cli
 		ClipperLib::Clipper c;
 		ClipperLib::PolyTree tree;
 		Paths open;
-		c.AddPaths(to_paths(lines), ClipperLib::ptSubject, false);
-		c.AddPaths(to_paths(polys), ClipperLib::ptClip, true);
-		if (!c.Execute(clip_types[op], tree, fill_types[fill], fill_types[fill]))
+		bool any = c.AddPaths(to_paths(lines), ClipperLib::ptSubject, false);
+		any = c.AddPaths(to_paths(polys), ClipperLib::ptClip, true) || any;
+		if (any && !c.Execute(clip_types[op], tree, fill_types[fill], fill_types[fill]))
 			return st_error_set(err, ST_ERR_INTERNAL, "clip: Clipper refused to clip lines");
 		ClipperLib::OpenPathsFromPolyTree(tree, open);
 		from_paths(open, out);

@@ -1,0 +1,538 @@
+/*
+ * medial.c - centre lines of narrow regions by maximal inscribed disks
+ * grown from boundary samples (see medial.h for why this is the medial
+ * axis and how its corner branches are pruned).
+ */
+#include "medial.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Contacts of a kept disk must subtend at least 135 degrees at its centre. */
+#define MEDIAL_COS_MIN_ANGLE (-0.70710678118654752)
+/* Most boundary samples per piece; the step grows to stay below it. */
+#define MEDIAL_MAX_SAMPLES 2000000.0
+
+/* One boundary edge a->b with the region on its left. */
+struct edge {
+	double ax, ay, bx, by;
+	double nx, ny;	/* unit inward (left) normal */
+	double len;
+	double pos0;	/* arc length of a along its contour */
+	size_t contour;
+};
+
+/* A boundary sample and the maximal disk tangent there. */
+struct sample {
+	double px, py, nx, ny;
+	double cx, cy, r;	/* disk centre and radius; r = INFINITY if none */
+	size_t contour;
+	double pos;
+	bool ok;		/* a centre-line point this side keeps */
+};
+
+/* A polyline under construction: x, y, width per point (nm, doubles). */
+struct line {
+	double *p;	/* 3 doubles per point */
+	size_t n, cap;
+	bool closed;
+};
+
+/*
+ * Radius of the smallest circle tangent at p (inward normal n) that passes
+ * through a point of edge e, or INFINITY if e lies wholly behind p's
+ * tangent.  In p's frame (U along the tangent, V along n) that radius is
+ * f = (U^2 + V^2) / (2V) for V > 0; along the edge U and V are linear in
+ * lambda, and f' = 0 reduces to the quadratic
+ * dV L^2 lambda^2 + 2 V0 L^2 lambda + (2 dU U0 V0 + dV (V0^2 - U0^2)) = 0
+ * with L^2 = dU^2 + dV^2, so the minimum is at an end or a root.
+ */
+static double touch(const struct edge *e, double px, double py, double nx, double ny,
+		    double *lam_out)
+{
+	double tx = ny, ty = -nx;
+	double U0 = (e->ax - px) * tx + (e->ay - py) * ty;
+	double V0 = (e->ax - px) * nx + (e->ay - py) * ny;
+	double dU = (e->bx - e->ax) * tx + (e->by - e->ay) * ty;
+	double dV = (e->bx - e->ax) * nx + (e->by - e->ay) * ny;
+	double l0 = 0.0, l1 = 1.0, best = INFINITY, cand[4];
+	int nc = 0;
+
+	if (dV == 0.0) {
+		if (V0 <= 0.0)
+			return INFINITY;
+	} else {
+		double lz = -V0 / dV;
+		if (dV > 0.0)
+			l0 = fmax(l0, lz);
+		else
+			l1 = fmin(l1, lz);
+		if (l0 >= l1)
+			return INFINITY;
+	}
+	cand[nc++] = l0;
+	cand[nc++] = l1;
+	double L2 = dU * dU + dV * dV;
+	double qa = dV * L2, qb = 2.0 * V0 * L2, qc = 2.0 * dU * U0 * V0 + dV * (V0 * V0 - U0 * U0);
+	if (qa == 0.0) {
+		if (qb != 0.0)
+			cand[nc++] = -qc / qb;
+	} else {
+		double disc = qb * qb - 4.0 * qa * qc;
+		if (disc >= 0.0) {
+			double sq = sqrt(disc);
+			cand[nc++] = (-qb + sq) / (2.0 * qa);
+			cand[nc++] = (-qb - sq) / (2.0 * qa);
+		}
+	}
+	for (int i = 0; i < nc; i++) {
+		double l = cand[i];
+		if (!(l >= l0 && l <= l1))
+			continue;
+		double U = U0 + l * dU, V = V0 + l * dV;
+		if (V <= 0.0)
+			continue;
+		double f = (U * U + V * V) / (2.0 * V);
+		if (f < best) {
+			best = f;
+			*lam_out = l;
+		}
+	}
+	return best;
+}
+
+/* Distance from (x, y) along unit direction (ux, uy) to the first edge hit. */
+static double ray_hit(const struct edge *edges, size_t ne, double x, double y, double ux,
+		      double uy)
+{
+	double best = INFINITY;
+
+	for (size_t i = 0; i < ne; i++) {
+		const struct edge *e = &edges[i];
+		double ex = e->bx - e->ax, ey = e->by - e->ay;
+		double den = ux * ey - uy * ex;
+		if (den == 0.0)
+			continue;
+		double wx = e->ax - x, wy = e->ay - y;
+		double t = (wx * ey - wy * ex) / den; /* along the ray */
+		double s = (wx * uy - wy * ux) / den; /* along the edge */
+		if (t > 0.0 && s >= 0.0 && s <= 1.0 && t < best)
+			best = t;
+	}
+	return best;
+}
+
+static int line_push(struct line *l, double x, double y, double w, struct st_error *err)
+{
+	if (l->n == l->cap) {
+		size_t cap = l->cap ? 2 * l->cap : 32;
+		double *grown;
+		if (cap > SIZE_MAX / (3 * sizeof(*grown)))
+			return st_error_set(err, ST_ERR_NOMEM, "medial: centre line too long");
+		grown = realloc(l->p, cap * 3 * sizeof(*grown));
+		if (!grown)
+			return st_error_set(err, ST_ERR_NOMEM, "medial: out of memory");
+		l->p = grown;
+		l->cap = cap;
+	}
+	l->p[3 * l->n] = x;
+	l->p[3 * l->n + 1] = y;
+	l->p[3 * l->n + 2] = w;
+	l->n++;
+	return 0;
+}
+
+static void line_reverse(struct line *l)
+{
+	for (size_t i = 0, j = l->n ? l->n - 1 : 0; i < j; i++, j--)
+		for (int k = 0; k < 3; k++) {
+			double t = l->p[3 * i + k];
+			l->p[3 * i + k] = l->p[3 * j + k];
+			l->p[3 * j + k] = t;
+		}
+}
+
+static double pdist(const double *a, const double *b)
+{
+	return hypot(a[0] - b[0], a[1] - b[1]);
+}
+
+static double line_length(const struct line *l)
+{
+	double s = 0.0;
+
+	for (size_t i = 1; i < l->n; i++)
+		s += pdist(&l->p[3 * (i - 1)], &l->p[3 * i]);
+	return s;
+}
+
+/* Build the edge table of piece; returns the count or SIZE_MAX on OOM. */
+static size_t build_edges(const struct clip_paths *piece, struct edge **out)
+{
+	size_t total = clip_paths_points(piece), ne = 0;
+	struct edge *e = malloc((total ? total : 1) * sizeof(*e));
+
+	*out = e;
+	if (!e)
+		return SIZE_MAX;
+	for (size_t c = 0; c < piece->n; c++) {
+		const int64_t *xy = clip_path_xy(piece, c);
+		size_t n = clip_path_len(piece, c);
+		double pos = 0.0;
+		for (size_t i = 0; i < n && n >= 3; i++) {
+			size_t j = (i + 1) % n;
+			double ax = (double)xy[2 * i], ay = (double)xy[2 * i + 1];
+			double bx = (double)xy[2 * j], by = (double)xy[2 * j + 1];
+			double len = hypot(bx - ax, by - ay);
+			if (len == 0.0)
+				continue;
+			e[ne++] = (struct edge){.ax = ax, .ay = ay, .bx = bx, .by = by,
+						.nx = -(by - ay) / len, .ny = (bx - ax) / len,
+						.len = len, .pos0 = pos, .contour = c};
+			pos += len;
+		}
+	}
+	return ne;
+}
+
+/*
+ * The maximal disk tangent at sample s and whether its centre is kept:
+ * contacts facing each other, wide enough, and this side the earlier one
+ * in boundary order (contour, then arc length) so each line is found once.
+ */
+static void grow_disk(const struct edge *edges, size_t ne, size_t own, struct sample *s,
+		      double min_width)
+{
+	double best = INFINITY, lam = 0.0;
+	size_t partner = SIZE_MAX;
+
+	for (size_t i = 0; i < ne; i++) {
+		double l = 0.0, f;
+		if (i == own)
+			continue;
+		f = touch(&edges[i], s->px, s->py, s->nx, s->ny, &l);
+		if (f < best) {
+			best = f;
+			lam = l;
+			partner = i;
+		}
+	}
+	s->r = best;
+	s->ok = false;
+	if (partner == SIZE_MAX || !isfinite(best))
+		return;
+	const struct edge *q = &edges[partner];
+	double qx = q->ax + lam * (q->bx - q->ax), qy = q->ay + lam * (q->by - q->ay);
+	s->cx = s->px + best * s->nx;
+	s->cy = s->py + best * s->ny;
+	double cosang = ((s->px - s->cx) * (qx - s->cx) + (s->py - s->cy) * (qy - s->cy)) /
+			(best * best);
+	double qpos = q->pos0 + lam * q->len;
+	bool first = s->contour < q->contour || (s->contour == q->contour && s->pos < qpos);
+	s->ok = cosang <= MEDIAL_COS_MIN_ANGLE && 2.0 * best >= min_width && first;
+}
+
+/* Append to lines the runs of kept samples of one contour, samples[0..n). */
+static int contour_runs(const struct sample *smp, size_t n, double jump, struct line **lines,
+			size_t *nl, size_t *capl, struct st_error *err)
+{
+	size_t start = 0;
+	bool all = true;
+
+	for (size_t i = 0; i < n; i++)
+		if (!smp[i].ok) {
+			start = i;
+			all = false;
+			break;
+		}
+	struct line cur = {0};
+	for (size_t k = 0; k <= n; k++) {
+		const struct sample *s = &smp[(start + k) % n];
+		bool keep = k < n && s->ok;
+		if (keep && cur.n) {
+			const double *last = &cur.p[3 * (cur.n - 1)];
+			if (hypot(s->cx - last[0], s->cy - last[1]) > jump)
+				keep = false, k--; /* close this run; revisit s */
+		}
+		if (keep) {
+			int rc = line_push(&cur, s->cx, s->cy, 2.0 * s->r, err);
+			if (rc) {
+				free(cur.p);
+				return rc;
+			}
+			continue;
+		}
+		if (cur.n >= 2) {
+			if (*nl == *capl) {
+				size_t cap = *capl ? 2 * *capl : 8;
+				struct line *grown = realloc(*lines, cap * sizeof(*grown));
+				if (!grown) {
+					free(cur.p);
+					return st_error_set(err, ST_ERR_NOMEM, "medial: out of memory");
+				}
+				*lines = grown;
+				*capl = cap;
+			}
+			(*lines)[(*nl)++] = cur;
+		} else {
+			free(cur.p);
+		}
+		cur = (struct line){0};
+		if (k == n)
+			break;
+	}
+	/* Every sample kept and continuous all round: a loop (a ring's centre). */
+	if (all && *nl && n >= 3) {
+		struct line *l = &(*lines)[*nl - 1];
+		if (l->n == n && pdist(&l->p[0], &l->p[3 * (l->n - 1)]) <= jump)
+			l->closed = true;
+	}
+	return 0;
+}
+
+/* Join open lines whose ends are within dmax, nearest pairs first. */
+static int join_lines(struct line *ls, size_t *nl, double dmax, struct st_error *err)
+{
+	for (;;) {
+		double bd = dmax;
+		size_t bi = 0, bj = 0;
+		int bend = -1;
+		for (size_t i = 0; i < *nl; i++)
+			for (size_t j = i + 1; j < *nl; j++) {
+				if (ls[i].closed || ls[j].closed)
+					continue;
+				/* end: bit 1 = i's start, bit 0 = j's end */
+				for (int k = 0; k < 4; k++) {
+					const double *a = &ls[i].p[k & 2 ? 0 : 3 * (ls[i].n - 1)];
+					const double *b = &ls[j].p[k & 1 ? 3 * (ls[j].n - 1) : 0];
+					double d = pdist(a, b);
+					if (d <= bd) {
+						bd = d;
+						bi = i;
+						bj = j;
+						bend = k;
+					}
+				}
+			}
+		if (bend < 0)
+			return 0;
+		struct line *a = &ls[bi], *b = &ls[bj];
+		if (bend & 2)
+			line_reverse(a); /* now a ends where it started */
+		if (bend & 1)
+			line_reverse(b); /* now b starts at the joined end */
+		for (size_t k = 0; k < b->n; k++) {
+			int rc = line_push(a, b->p[3 * k], b->p[3 * k + 1], b->p[3 * k + 2], err);
+			if (rc)
+				return rc;
+		}
+		free(b->p);
+		ls[bj] = ls[--*nl];
+	}
+}
+
+/*
+ * Lengthen an open line at its end (the last point) along its last
+ * direction up to where a bead of the end width touches the boundary,
+ * by at most cap: the runs stop up to one sample short of the true end
+ * of the centre line.
+ */
+static int extend_end(struct line *l, const struct edge *edges, size_t ne, double cap,
+		      struct st_error *err)
+{
+	const double *a = &l->p[3 * (l->n - 2)], *b = &l->p[3 * (l->n - 1)];
+	double len = pdist(a, b);
+
+	if (len == 0.0)
+		return 0;
+	double ux = (b[0] - a[0]) / len, uy = (b[1] - a[1]) / len;
+	double ext = fmin(ray_hit(edges, ne, b[0], b[1], ux, uy) - b[2] / 2.0, cap);
+	if (!(ext > 0.0))
+		return 0;
+	return line_push(l, b[0] + ext * ux, b[1] + ext * uy, b[2], err);
+}
+
+/*
+ * Douglas-Peucker on points [i0, i1] of l, marking kept points in keep[]:
+ * a point may go when both its distance to the chord and its width's
+ * difference from the interpolated width are within tol.
+ */
+static int simplify(const struct line *l, size_t i0, size_t i1, double tol, bool *keep,
+		    struct st_error *err)
+{
+	size_t *stack = malloc(2 * (l->n + 1) * sizeof(*stack)), top = 0;
+
+	if (!stack)
+		return st_error_set(err, ST_ERR_NOMEM, "medial: out of memory simplifying");
+	stack[top++] = i0;
+	stack[top++] = i1;
+	while (top) {
+		size_t b = stack[--top], a = stack[--top];
+		const double *pa = &l->p[3 * a], *pb = &l->p[3 * b];
+		double dx = pb[0] - pa[0], dy = pb[1] - pa[1], len = hypot(dx, dy);
+		double worst = -1.0;
+		size_t wi = a;
+		for (size_t k = a + 1; k < b; k++) {
+			const double *pk = &l->p[3 * k];
+			double t = len > 0.0 ? ((pk[0] - pa[0]) * dx + (pk[1] - pa[1]) * dy) / (len * len)
+					     : 0.0;
+			t = fmin(1.0, fmax(0.0, t));
+			double ex = hypot(pa[0] + t * dx - pk[0], pa[1] + t * dy - pk[1]);
+			double ew = fabs(pa[2] + t * (pb[2] - pa[2]) - pk[2]) / 2.0;
+			double e = fmax(ex, ew);
+			if (e > worst) {
+				worst = e;
+				wi = k;
+			}
+		}
+		if (worst > tol) {
+			keep[wi] = true;
+			stack[top++] = a;
+			stack[top++] = wi;
+			stack[top++] = wi;
+			stack[top++] = b;
+		}
+	}
+	free(stack);
+	return 0;
+}
+
+/* Turn l into a medial_line appended to out (simplified, integer nm). */
+static int emit_line(const struct line *l, double tol, struct medial_lines *out,
+		     struct st_error *err)
+{
+	bool *keep = calloc(l->n, sizeof(*keep));
+	struct path_point *pts = NULL;
+	size_t m = 0;
+	int rc;
+
+	if (!keep)
+		return st_error_set(err, ST_ERR_NOMEM, "medial: out of memory");
+	keep[0] = keep[l->n - 1] = true;
+	if (l->closed) {
+		/* A loop: split it at the point farthest from the start. */
+		size_t far = 0;
+		for (size_t k = 1; k < l->n; k++)
+			if (pdist(&l->p[0], &l->p[3 * k]) > pdist(&l->p[0], &l->p[3 * far]))
+				far = k;
+		keep[far] = true;
+		rc = simplify(l, 0, far, tol, keep, err);
+		if (!rc)
+			rc = simplify(l, far, l->n - 1, tol, keep, err);
+	} else {
+		rc = simplify(l, 0, l->n - 1, tol, keep, err);
+	}
+	if (!rc && !(pts = malloc(l->n * sizeof(*pts))))
+		rc = st_error_set(err, ST_ERR_NOMEM, "medial: out of memory");
+	for (size_t k = 0; k < l->n && !rc; k++) {
+		if (!keep[k])
+			continue;
+		struct path_point p = {.x = llround(l->p[3 * k]), .y = llround(l->p[3 * k + 1]),
+				       .width = llround(l->p[3 * k + 2])};
+		if (m && pts[m - 1].x == p.x && pts[m - 1].y == p.y)
+			continue;
+		pts[m++] = p;
+	}
+	free(keep);
+	if (!rc && m >= (l->closed ? 3u : 2u)) {
+		if (out->n == out->cap) {
+			size_t cap = out->cap ? 2 * out->cap : 8;
+			struct medial_line *grown = realloc(out->v, cap * sizeof(*grown));
+			if (!grown) {
+				free(pts);
+				return st_error_set(err, ST_ERR_NOMEM, "medial: out of memory");
+			}
+			out->v = grown;
+			out->cap = cap;
+		}
+		out->v[out->n++] = (struct medial_line){.closed = l->closed, .n = m, .pts = pts};
+		return 0;
+	}
+	free(pts);
+	return rc;
+}
+
+int perim_medial_axis(const struct clip_paths *piece, double min_width, double step, double tol,
+		      struct medial_lines *out, struct st_error *err)
+{
+	struct edge *edges = NULL;
+	struct sample *smp = NULL;
+	struct line *lines = NULL;
+	size_t ne, ns = 0, nl = 0, capl = 0;
+	double perimeter = 0.0;
+	int rc = 0;
+
+	if (!piece || !out || !(step > 0.0) || !(tol >= 0.0) || !(min_width >= 0.0))
+		return st_error_set(err, ST_ERR_ARG, "medial: bad arguments");
+	ne = build_edges(piece, &edges);
+	if (ne == SIZE_MAX)
+		return st_error_set(err, ST_ERR_NOMEM, "medial: out of memory for edges");
+	for (size_t i = 0; i < ne; i++)
+		perimeter += edges[i].len;
+	if (perimeter / step + (double)ne > MEDIAL_MAX_SAMPLES)
+		step = perimeter / (MEDIAL_MAX_SAMPLES - (double)ne);
+	size_t cap = (size_t)(perimeter / step) + ne + 1;
+	smp = malloc(cap * sizeof(*smp));
+	if (!smp) {
+		rc = st_error_set(err, ST_ERR_NOMEM, "medial: out of memory for samples");
+		goto out_free;
+	}
+	/* Samples at the middles of equal sub-edges, never on a vertex. */
+	for (size_t i = 0; i < ne; i++) {
+		const struct edge *e = &edges[i];
+		size_t k = (size_t)ceil(e->len / step);
+		if (k < 1)
+			k = 1;
+		for (size_t j = 0; j < k && ns < cap; j++) {
+			double t = (j + 0.5) / (double)k;
+			struct sample *s = &smp[ns++];
+			*s = (struct sample){.px = e->ax + t * (e->bx - e->ax),
+					     .py = e->ay + t * (e->by - e->ay),
+					     .nx = e->nx, .ny = e->ny, .contour = e->contour,
+					     .pos = e->pos0 + t * e->len};
+			grow_disk(edges, ne, i, s, min_width);
+		}
+	}
+	/* Runs per contour (samples are grouped by contour in edge order). */
+	double jump = fmax(4.0 * step, min_width);
+	for (size_t a = 0; a < ns && !rc;) {
+		size_t b = a;
+		while (b < ns && smp[b].contour == smp[a].contour)
+			b++;
+		rc = contour_runs(&smp[a], b - a, jump, &lines, &nl, &capl, err);
+		a = b;
+	}
+	if (!rc)
+		rc = join_lines(lines, &nl, jump, err);
+	for (size_t i = 0; i < nl && !rc; i++) {
+		struct line *l = &lines[i];
+		if (!l->closed && l->n >= 2) {
+			rc = extend_end(l, edges, ne, 2.0 * step, err);
+			line_reverse(l);
+			if (!rc)
+				rc = extend_end(l, edges, ne, 2.0 * step, err);
+			line_reverse(l);
+		}
+		if (!rc && l->n >= 2 && line_length(l) > 0.0)
+			rc = emit_line(l, tol, out, err);
+	}
+out_free:
+	for (size_t i = 0; i < nl; i++)
+		free(lines[i].p);
+	free(lines);
+	free(smp);
+	free(edges);
+	return rc;
+}
+
+void perim_medial_free(struct medial_lines *ls)
+{
+	if (!ls)
+		return;
+	for (size_t i = 0; i < ls->n; i++)
+		free(ls->v[i].pts);
+	free(ls->v);
+	memset(ls, 0, sizeof(*ls));
+}

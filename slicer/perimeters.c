@@ -1,0 +1,525 @@
+/*
+ * perimeters.c - wall loops by exact erosion, thin walls and gap fill along
+ * medial axes, seam placement (see perimeters.h).
+ */
+#include "perimeters.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "medial.h"
+
+/* Miter limit (multiples of the offset) when restoring trimmed loops. */
+#define PERIM_MITER_LIMIT 3.0
+/* A turn of at least this much within one bead width is a corner, degrees. */
+#define PERIM_CORNER_DEG 30.0
+/* Thin features this much narrower than epsilon still count (float STL), nm. */
+#define PERIM_EPS_SLACK 5000.0
+/* Vertices closer than this to their neighbours' line are dropped from loops, nm. */
+#define PERIM_CLEAN_NM 10.0
+/* Beyond the arc tolerance, slivers this thin between two offsets are noise, nm. */
+#define PERIM_HAIRLINE 5.0
+
+struct perim_seams {
+	int64_t *prev, *cur;	/* seam points (x, y pairs) of the last and this layer */
+	size_t nprev, ncur, capprev, capcur;
+	int64_t lx, ly;		/* where the nozzle was left */
+	bool have_last;
+	uint64_t rng;		/* xorshift64* state, never 0 */
+};
+
+/* Everything one perim_generate call works with, lengths in nm. */
+struct ctx {
+	const struct perim_settings *s;
+	double w, sp, h, arc, eps;
+	struct perim_seams *sm;
+	struct layer_paths *out;
+	struct st_error *err;
+};
+
+void perim_settings_init(struct perim_settings *s, double nozzle_diameter)
+{
+	s->nozzle_diameter = nozzle_diameter;
+	s->extrusion_width = 1.125 * nozzle_diameter;
+	s->perimeters = 2;
+	s->outer_first = false;
+	s->seam = PERIM_SEAM_ALIGNED;
+	s->thin_walls = true;
+	s->gap_fill = true;
+	s->gap_fill_min = 0.1;
+	s->arc_tolerance = 0.002;
+}
+
+double perim_spacing(double width, double height)
+{
+	return width - height * (1.0 - M_PI / 4.0);
+}
+
+double perim_bead_area(double width, double height)
+{
+	return (width - height) * height + M_PI * (height / 2.0) * (height / 2.0);
+}
+
+int perim_settings_check(const struct perim_settings *s, double layer_height,
+			 struct st_error *err)
+{
+	if (!s)
+		return st_error_set(err, ST_ERR_ARG, "perimeters: no settings given");
+	if (!(s->nozzle_diameter > 0.0 && s->nozzle_diameter <= 5.0))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "perimeters: nozzle diameter %g mm is out of range; use (0, 5] mm",
+				    s->nozzle_diameter);
+	if (!(layer_height > 0.0))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "perimeters: layer height %g mm must be greater than 0",
+				    layer_height);
+	if (layer_height > s->nozzle_diameter)
+		return st_error_set(err, ST_ERR_RANGE,
+				    "perimeters: layer height %g mm is larger than the nozzle "
+				    "diameter %g mm; use layers of at most the nozzle diameter",
+				    layer_height, s->nozzle_diameter);
+	if (!(s->extrusion_width > 0.0))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "perimeters: extrusion width %g mm must be greater than 0 "
+				    "(default 1.125 x nozzle diameter)",
+				    s->extrusion_width);
+	if (s->extrusion_width < layer_height || s->extrusion_width > 4.0 * s->nozzle_diameter)
+		return st_error_set(err, ST_ERR_RANGE,
+				    "perimeters: extrusion width %g mm is out of range; use between "
+				    "the layer height %g mm and 4 x the nozzle diameter (%g mm)",
+				    s->extrusion_width, layer_height, 4.0 * s->nozzle_diameter);
+	if (s->perimeters < 0)
+		return st_error_set(err, ST_ERR_RANGE,
+				    "perimeters: perimeter count %d is negative; use 0 or more",
+				    s->perimeters);
+	if (s->perimeters > 1000)
+		return st_error_set(err, ST_ERR_RANGE,
+				    "perimeters: perimeter count %d is too large; use at most 1000",
+				    s->perimeters);
+	if ((unsigned)s->seam >= PERIM_SEAMS)
+		return st_error_set(err, ST_ERR_ARG,
+				    "perimeters: seam mode %d is unknown; use aligned, nearest or "
+				    "random",
+				    (int)s->seam);
+	if (!(s->gap_fill_min >= 0.0 && s->gap_fill_min <= 10.0))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "perimeters: gap fill minimum width %g mm is out of range; use "
+				    "[0, 10] mm",
+				    s->gap_fill_min);
+	if (!(s->arc_tolerance > 0.0 && s->arc_tolerance <= s->extrusion_width / 4.0))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "perimeters: arc tolerance %g mm is out of range; use (0, %g] mm "
+				    "(a quarter of the extrusion width)",
+				    s->arc_tolerance, s->extrusion_width / 4.0);
+	return 0;
+}
+
+struct perim_seams *perim_seams_new(unsigned seed)
+{
+	struct perim_seams *sm = calloc(1, sizeof(*sm));
+
+	if (sm) {
+		sm->rng = 0x9E3779B97F4A7C15ull ^ ((uint64_t)seed * 0xBF58476D1CE4E5B9ull);
+		if (!sm->rng)
+			sm->rng = 1;
+	}
+	return sm;
+}
+
+void perim_seams_free(struct perim_seams *sm)
+{
+	if (!sm)
+		return;
+	free(sm->prev);
+	free(sm->cur);
+	free(sm);
+}
+
+static uint64_t next_random(struct perim_seams *sm)
+{
+	sm->rng ^= sm->rng >> 12;
+	sm->rng ^= sm->rng << 25;
+	sm->rng ^= sm->rng >> 27;
+	return sm->rng * 0x2545F4914F6CDD1Dull;
+}
+
+/* Start a layer: this layer's seams become the reference of the next. */
+static void seams_next_layer(struct perim_seams *sm)
+{
+	if (!sm->ncur)
+		return; /* a layer without loops keeps the older reference */
+	int64_t *t = sm->prev;
+	size_t cap = sm->capprev;
+	sm->prev = sm->cur;
+	sm->capprev = sm->capcur;
+	sm->nprev = sm->ncur;
+	sm->cur = t;
+	sm->capcur = cap;
+	sm->ncur = 0;
+}
+
+static int seams_record(struct perim_seams *sm, int64_t x, int64_t y, struct st_error *err)
+{
+	if (sm->ncur == sm->capcur) {
+		size_t cap = sm->capcur ? 2 * sm->capcur : 16;
+		int64_t *grown = realloc(sm->cur, cap * 2 * sizeof(*grown));
+		if (!grown)
+			return st_error_set(err, ST_ERR_NOMEM, "perimeters: out of memory for seams");
+		sm->cur = grown;
+		sm->capcur = cap;
+	}
+	sm->cur[2 * sm->ncur] = x;
+	sm->cur[2 * sm->ncur + 1] = y;
+	sm->ncur++;
+	return 0;
+}
+
+static double dist2(int64_t ax, int64_t ay, int64_t bx, int64_t by)
+{
+	double dx = (double)ax - (double)bx, dy = (double)ay - (double)by;
+	return dx * dx + dy * dy;
+}
+
+/* Signed turn at vertex i of a closed path, radians (> 0 left). */
+static double turn_at(const int64_t *xy, size_t n, size_t i)
+{
+	size_t a = (i + n - 1) % n, b = (i + 1) % n;
+	double ux = (double)(xy[2 * i] - xy[2 * a]), uy = (double)(xy[2 * i + 1] - xy[2 * a + 1]);
+	double vx = (double)(xy[2 * b] - xy[2 * i]), vy = (double)(xy[2 * b + 1] - xy[2 * i + 1]);
+	return atan2(ux * vy - uy * vx, ux * vx + uy * vy);
+}
+
+static double edge_len(const int64_t *xy, size_t n, size_t i)
+{
+	size_t j = (i + 1) % n;
+	return sqrt(dist2(xy[2 * i], xy[2 * i + 1], xy[2 * j], xy[2 * j + 1]));
+}
+
+/*
+ * Corner class of vertex i: 0 concave, 1 convex, 2 smooth.  The turn is
+ * summed over the vertices within win nm along the loop, so a corner that
+ * the round joins spread over an arc counts as one corner.  With the solid
+ * on the left of every loop (outer CCW, holes CW), a right turn is a
+ * concave corner of the part, where a seam hides best.
+ */
+static int corner_class(const int64_t *xy, size_t n, size_t i, double win)
+{
+	double turn = turn_at(xy, n, i), d = 0.0;
+
+	for (size_t k = 1; k < n / 2; k++) { /* forward */
+		d += edge_len(xy, n, (i + k - 1) % n);
+		if (d > win)
+			break;
+		turn += turn_at(xy, n, (i + k) % n);
+	}
+	d = 0.0;
+	for (size_t k = 1; k < n / 2; k++) { /* backward */
+		d += edge_len(xy, n, (i + n - k) % n);
+		if (d > win)
+			break;
+		turn += turn_at(xy, n, (i + n - k) % n);
+	}
+	double lim = PERIM_CORNER_DEG * M_PI / 180.0;
+	return turn <= -lim ? 0 : turn >= lim ? 1 : 2;
+}
+
+/*
+ * Seam vertex of a closed loop: among the concave corners if any, else the
+ * convex ones, else all vertices, the one nearest the previous layer's
+ * seams (aligned), nearest the nozzle (nearest) or a random one; the
+ * rearmost (largest y, then smallest x) when there is no reference yet.
+ */
+static size_t pick_seam(struct ctx *c, const int64_t *xy, size_t n)
+{
+	int *cls = malloc(n * sizeof(*cls));
+	int best_cls = 2;
+	size_t pick = 0, ncand = 0;
+
+	if (!cls)
+		return 0; /* no memory for scoring: start where the loop starts */
+	for (size_t i = 0; i < n; i++) {
+		cls[i] = corner_class(xy, n, i, c->w);
+		if (cls[i] < best_cls)
+			best_cls = cls[i];
+	}
+	for (size_t i = 0; i < n; i++)
+		ncand += cls[i] == best_cls;
+	enum perim_seam mode = c->s->seam;
+	int64_t last[2] = {c->sm->lx, c->sm->ly};
+	const int64_t *ref = NULL;
+	size_t nref = 0;
+	if (mode == PERIM_SEAM_ALIGNED && c->sm->nprev) {
+		ref = c->sm->prev;
+		nref = c->sm->nprev;
+	} else if (mode == PERIM_SEAM_NEAREST && c->sm->have_last) {
+		ref = last;
+		nref = 1;
+	}
+	if (mode == PERIM_SEAM_RANDOM) {
+		size_t k = (size_t)(next_random(c->sm) % ncand);
+		for (size_t i = 0; i < n; i++)
+			if (cls[i] == best_cls && k-- == 0) {
+				pick = i;
+				break;
+			}
+	} else {
+		double bd = INFINITY;
+		bool have = false;
+		for (size_t i = 0; i < n; i++) {
+			if (cls[i] != best_cls)
+				continue;
+			int64_t x = xy[2 * i], y = xy[2 * i + 1];
+			double d;
+			if (nref) {
+				d = INFINITY;
+				for (size_t r = 0; r < nref; r++)
+					d = fmin(d, dist2(x, y, ref[2 * r], ref[2 * r + 1]));
+			} else {
+				/* rearmost: compare (-y, x) lexicographically */
+				if (!have || y > xy[2 * pick + 1] ||
+				    (y == xy[2 * pick + 1] && x < xy[2 * pick])) {
+					pick = i;
+					have = true;
+				}
+				continue;
+			}
+			if (d < bd) {
+				bd = d;
+				pick = i;
+			}
+		}
+	}
+	free(cls);
+	return pick;
+}
+
+/* Append one closed wall loop starting at its seam. */
+static int emit_loop(struct ctx *c, const int64_t *xy, size_t n, enum path_role role)
+{
+	struct path_point *pts;
+	size_t seam;
+	int rc;
+
+	if (n < 3)
+		return 0;
+	pts = malloc(n * sizeof(*pts));
+	if (!pts)
+		return st_error_set(c->err, ST_ERR_NOMEM, "perimeters: out of memory for a loop");
+	seam = pick_seam(c, xy, n);
+	for (size_t k = 0; k < n; k++) {
+		size_t i = (seam + k) % n;
+		pts[k] = (struct path_point){.x = xy[2 * i], .y = xy[2 * i + 1],
+					     .width = llround(c->w)};
+	}
+	rc = layer_add_path(c->out, role, true, pts, n, c->err);
+	if (!rc)
+		rc = seams_record(c->sm, pts[0].x, pts[0].y, c->err);
+	c->sm->lx = pts[0].x;
+	c->sm->ly = pts[0].y;
+	c->sm->have_last = true;
+	free(pts);
+	return rc;
+}
+
+/* Append a medial line; an open one starts at the end nearer the nozzle. */
+static int emit_medial(struct ctx *c, struct medial_line *l, enum path_role role)
+{
+	struct path_point *p = l->pts;
+	size_t n = l->n;
+	int rc;
+
+	if (!l->closed && c->sm->have_last &&
+	    dist2(p[n - 1].x, p[n - 1].y, c->sm->lx, c->sm->ly) <
+		    dist2(p[0].x, p[0].y, c->sm->lx, c->sm->ly))
+		for (size_t i = 0, j = n - 1; i < j; i++, j--) {
+			struct path_point t = p[i];
+			p[i] = p[j];
+			p[j] = t;
+		}
+	rc = layer_add_path(c->out, role, l->closed, p, n, c->err);
+	c->sm->lx = l->closed ? p[0].x : p[n - 1].x;
+	c->sm->ly = l->closed ? p[0].y : p[n - 1].y;
+	c->sm->have_last = true;
+	return rc;
+}
+
+/*
+ * Centre lines of every piece of area at least min_width wide, appended as
+ * paths of role.  Pieces whose area cannot hold a disk of that diameter
+ * are skipped without sampling.
+ */
+static int narrow_paths(struct ctx *c, const struct clip_expolys *area, double min_width,
+			enum path_role role)
+{
+	struct clip_paths piece = {0};
+	struct medial_lines ml = {0};
+	double step = fmax(min_width / 4.0, 1000.0);
+	int rc = 0;
+
+	for (size_t i = 0; i < area->n && !rc; i++) {
+		double a = 0.0;
+		rc = clip_expolys_get(area, i, &piece, c->err);
+		if (!rc)
+			rc = clip_paths_area(&piece, &a, c->err);
+		if (rc || a < M_PI / 4.0 * min_width * min_width)
+			continue;
+		rc = perim_medial_axis(&piece, min_width, step, c->arc, &ml, c->err);
+		for (size_t k = 0; k < ml.n && !rc; k++)
+			rc = emit_medial(c, &ml.v[k], role);
+		perim_medial_free(&ml);
+	}
+	clip_paths_free(&piece);
+	return rc;
+}
+
+/*
+ * Centre region of wall k of region R: the erosion of R by d (round joins,
+ * so every point is exactly d from R's boundary), cut where two of its
+ * sides come closer than the bead spacing (an opening by sp/2 whose
+ * dilation uses miter joins, so sharp convex corners stay sharp, then
+ * intersected with the erosion so no point moves outward).
+ */
+static int wall_centre(struct ctx *c, const struct clip_paths *R, double d,
+		       struct clip_paths *out)
+{
+	struct clip_paths e = {0}, t = {0};
+	int rc = clip_offset(R, -d, CLIP_JOIN_ROUND, 0.0, c->arc, &e, c->err);
+
+	if (!rc)
+		rc = clip_offset(&e, -c->sp / 2.0, CLIP_JOIN_ROUND, 0.0, c->arc, &t, c->err);
+	if (!rc)
+		rc = clip_offset(&t, c->sp / 2.0, CLIP_JOIN_MITER, PERIM_MITER_LIMIT, c->arc, &t,
+				 c->err);
+	if (!rc)
+		rc = clip_boolean(CLIP_INTERSECTION, &e, &t, CLIP_NONZERO, out, c->err);
+	/* Where the two boundaries cross, Clipper leaves vertices nm apart. */
+	if (!rc)
+		rc = clip_clean(out, PERIM_CLEAN_NM, c->err);
+	clip_paths_free(&e);
+	clip_paths_free(&t);
+	return rc;
+}
+
+/* area = a minus the dilation of b by d (plus the hairline margin). */
+static int minus_grown(struct ctx *c, const struct clip_paths *a, const struct clip_paths *b,
+		       double d, struct clip_expolys *area)
+{
+	struct clip_paths g = {0};
+	int rc = clip_offset(b, d + c->arc + PERIM_HAIRLINE, CLIP_JOIN_ROUND, 0.0, c->arc, &g,
+			     c->err);
+
+	if (!rc)
+		rc = clip_boolean_ex(CLIP_DIFFERENCE, a, &g, CLIP_NONZERO, area, c->err);
+	clip_paths_free(&g);
+	return rc;
+}
+
+/* Walls, gap fill and thin walls of one island R; its infill part into acc. */
+static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *acc)
+{
+	int N = c->s->perimeters, made = 0, rc = 0;
+	struct clip_paths *loops;
+	struct clip_paths m = {0};
+	struct clip_expolys area = {0};
+
+	if (N == 0)
+		return clip_paths_append(acc, R, c->err);
+	loops = calloc((size_t)N, sizeof(*loops));
+	if (!loops)
+		return st_error_set(c->err, ST_ERR_NOMEM, "perimeters: out of memory");
+	for (; made < N && !rc; made++) {
+		rc = wall_centre(c, R, c->w / 2.0 + made * c->sp, &loops[made]);
+		if (!rc && !loops[made].n)
+			break;
+	}
+	/* Walls in printing order. */
+	for (int i = 0; i < made && !rc; i++) {
+		int k = c->s->outer_first ? i : made - 1 - i;
+		enum path_role role = k == 0 ? PATH_OUTER_PERIMETER : PATH_INNER_PERIMETER;
+		for (size_t p = 0; p < loops[k].n && !rc; p++)
+			rc = emit_loop(c, clip_path_xy(&loops[k], p), clip_path_len(&loops[k], p),
+				       role);
+	}
+	/* Strips between walls: what wall k leaves (its inner half-spacing edge)
+	 * that wall k+1 cannot cover; after the last wall made short of N, all of
+	 * it.  After wall N the rest is infill. */
+	for (int k = 0; k < made && !rc; k++) {
+		rc = clip_offset(&loops[k], -c->sp / 2.0, CLIP_JOIN_ROUND, 0.0, c->arc, &m, c->err);
+		if (rc)
+			break;
+		if (k == N - 1) {
+			rc = clip_paths_append(acc, &m, c->err);
+			break;
+		}
+		if (!c->s->gap_fill)
+			continue;
+		if (k + 1 < made) {
+			rc = minus_grown(c, &m, &loops[k + 1], c->sp / 2.0, &area);
+		} else {
+			rc = clip_boolean_ex(CLIP_UNION, &m, NULL, CLIP_NONZERO, &area, c->err);
+		}
+		if (!rc)
+			rc = narrow_paths(c, &area, fmax(c->s->gap_fill_min * SLICE_UNITS_PER_MM, c->h),
+					  PATH_GAP_FILL);
+	}
+	/* Thin walls: the part of R the outer wall's beads do not reach. */
+	if (!rc && c->s->thin_walls) {
+		if (made)
+			rc = minus_grown(c, R, &loops[0], c->w / 2.0, &area);
+		else
+			rc = clip_boolean_ex(CLIP_UNION, R, NULL, CLIP_NONZERO, &area, c->err);
+		if (!rc)
+			rc = narrow_paths(c, &area, fmax(c->eps - PERIM_EPS_SLACK, c->h),
+					  PATH_THIN_WALL);
+	}
+	for (int k = 0; k < N; k++)
+		clip_paths_free(&loops[k]);
+	free(loops);
+	clip_paths_free(&m);
+	clip_expolys_free(&area);
+	return rc;
+}
+
+int perim_generate(const struct perim_settings *s, const struct clip_expolys *region,
+		   double layer_height, struct perim_seams *seams, struct layer_paths *out,
+		   struct clip_expolys *infill, struct st_error *err)
+{
+	struct perim_seams local = {.rng = 0x9E3779B97F4A7C15ull};
+	struct clip_paths R = {0}, acc = {0};
+	struct ctx c;
+	int rc;
+
+	rc = perim_settings_check(s, layer_height, err);
+	if (rc)
+		return rc;
+	if (!region || !out || !infill || &infill->paths == &region->paths)
+		return st_error_set(err, ST_ERR_ARG,
+				    "perimeters: perim_generate needs a region, an output layer "
+				    "and a distinct infill set");
+	c = (struct ctx){.s = s,
+			 .w = s->extrusion_width * SLICE_UNITS_PER_MM,
+			 .sp = perim_spacing(s->extrusion_width, layer_height) * SLICE_UNITS_PER_MM,
+			 .h = layer_height * SLICE_UNITS_PER_MM,
+			 .arc = s->arc_tolerance * SLICE_UNITS_PER_MM,
+			 .eps = s->nozzle_diameter * SLICE_UNITS_PER_MM,
+			 .sm = seams ? seams : &local,
+			 .out = out,
+			 .err = err};
+	seams_next_layer(c.sm);
+	for (size_t i = 0; i < region->n && !rc; i++) {
+		rc = clip_expolys_get(region, i, &R, err);
+		if (!rc)
+			rc = island(&c, &R, &acc);
+	}
+	if (!rc)
+		rc = clip_boolean_ex(CLIP_UNION, &acc, NULL, CLIP_NONZERO, infill, err);
+	clip_paths_free(&R);
+	clip_paths_free(&acc);
+	if (!seams) {
+		free(local.prev);
+		free(local.cur);
+	}
+	return rc;
+}

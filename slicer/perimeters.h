@@ -1,0 +1,110 @@
+/*
+ * perimeters.h - offset-aware walls of one layer (DESIGN.md item 4).
+ *
+ * Flow model: a bead of width w and height h has a rectangle-with-
+ * semicircular-ends cross-section, area (w - h) h + pi (h/2)^2, so beads
+ * laid side by side at spacing s = w - h (1 - pi/4) fill the layer exactly
+ * (s h is that area).  The outer wall's centre line runs exactly w/2 inside
+ * the surface (an erosion with round joins: every centre-line point is at
+ * distance w/2 from the surface, concave corners included), so the printed
+ * face lies on the model surface; wall k runs w/2 + (k-1) s inside.
+ *
+ * A wall loop is kept only where it has room: where two sides of a loop
+ * would come closer than s, the loop is cut there.  What the outer loop's
+ * beads do not cover (a region too narrow for two walls, a narrow neck) is
+ * printed as single centre-line beads along its medial axis, as wide as the
+ * region (PATH_THIN_WALL), as long as it is at least the nozzle diameter
+ * (epsilon) wide; strips left between walls are filled the same way
+ * (PATH_GAP_FILL) when at least gap_fill_min wide.
+ *
+ * All lengths in settings are mm; geometry is in nm (toolpath.h).
+ */
+#ifndef STRATUM_SLICER_PERIMETERS_H
+#define STRATUM_SLICER_PERIMETERS_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "clip.h"
+#include "st_error.h"
+#include "toolpath.h"
+
+/* Where each closed wall starts (and ends). */
+enum perim_seam {
+	PERIM_SEAM_ALIGNED = 0, /* near the previous layer's seams */
+	PERIM_SEAM_NEAREST,	/* nearest to where the nozzle is */
+	PERIM_SEAM_RANDOM,	/* anywhere (spreads the seam blobs) */
+	PERIM_SEAMS
+};
+
+/* Wall settings; perim_settings_init gives the defaults. */
+struct perim_settings {
+	double nozzle_diameter; /* mm; also epsilon, the narrowest feature printed (0.4) */
+	double extrusion_width; /* mm, bead width w (1.125 x nozzle) */
+	int perimeters;		/* walls per island, >= 0 (2) */
+	bool outer_first;	/* print the outer wall first (false: inner to outer) */
+	enum perim_seam seam;	/* seam placement (PERIM_SEAM_ALIGNED); concave corners
+				 * first, then convex corners, in every mode */
+	bool thin_walls;	/* centre-line beads in regions too narrow for walls (true) */
+	bool gap_fill;		/* beads in strips left between walls (true) */
+	double gap_fill_min;	/* mm; narrower strips stay empty (0.1; never below
+				 * the layer height, the flow model's narrowest bead) */
+	double arc_tolerance;	/* mm; chord error of rounded offsets (0.002) */
+};
+
+/*
+ * Seam memory across layers (opaque): the previous layer's seams for
+ * PERIM_SEAM_ALIGNED, the nozzle position for PERIM_SEAM_NEAREST and the
+ * random generator for PERIM_SEAM_RANDOM.  One per print; feed it the
+ * layers bottom to top.  Not thread-safe.
+ */
+struct perim_seams;
+
+/* perim_settings_init - defaults for a nozzle of nozzle_diameter mm. */
+void perim_settings_init(struct perim_settings *s, double nozzle_diameter);
+
+/*
+ * perim_settings_check - refuse settings that cannot make walls for layers
+ * layer_height mm thick: a layer thicker than the nozzle, a negative
+ * perimeter count, a width <= 0 or narrower than the layer, a bad seam
+ * mode, tolerances out of range.  Returns 0 or ST_ERR_ARG / ST_ERR_RANGE
+ * with a message naming the setting, its value and what is allowed.
+ */
+int perim_settings_check(const struct perim_settings *s, double layer_height,
+			 struct st_error *err);
+
+/* perim_spacing - centre distance of adjacent beads, mm: w - h (1 - pi/4). */
+double perim_spacing(double width, double height);
+
+/* perim_bead_area - cross-section of a bead, mm^2: (w - h) h + pi (h/2)^2. */
+double perim_bead_area(double width, double height);
+
+/*
+ * perim_seams_new - seam memory seeded for PERIM_SEAM_RANDOM (the same seed
+ * gives the same seams).  NULL when out of memory.
+ */
+struct perim_seams *perim_seams_new(unsigned seed);
+
+/* perim_seams_free - NULL is safe. */
+void perim_seams_free(struct perim_seams *sm);
+
+/*
+ * perim_generate - walls of one layer.
+ *   region: the layer's solid regions (slice_layer.regions), nm.
+ *   layer_height: mm, the bead height h.
+ *   seams: seam memory (may be NULL: no memory across layers, seed 0).
+ *   out: paths are appended in printing order, per island: the walls
+ *        (inner to outer unless outer_first) as closed loops of width w
+ *        with roles PATH_INNER_PERIMETER / PATH_OUTER_PERIMETER, then gap
+ *        fill, then thin walls (open or closed, width per point).
+ *   infill: replaced by the region left inside the innermost walls for
+ *        infill (each wall counted as its flow-equivalent band of width s,
+ *        so its inner edge is w/2 + (N - 1/2) s inside the surface).
+ * Returns 0 or a negative class with err filled (bad settings, ST_ERR_NOMEM,
+ * ST_ERR_INTERNAL); on error out may hold some of this layer's paths.
+ */
+int perim_generate(const struct perim_settings *s, const struct clip_expolys *region,
+		   double layer_height, struct perim_seams *seams, struct layer_paths *out,
+		   struct clip_expolys *infill, struct st_error *err);
+
+#endif /* STRATUM_SLICER_PERIMETERS_H */
