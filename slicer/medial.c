@@ -5,6 +5,8 @@
  */
 #include "medial.h"
 
+#include "grow.h"
+
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -126,17 +128,11 @@ static double ray_hit(const struct edge *edges, size_t ne, double x, double y, d
 
 static int line_push(struct line *l, double x, double y, double w, struct st_error *err)
 {
-	if (l->n == l->cap) {
-		size_t cap = l->cap ? 2 * l->cap : 32;
-		double *grown;
-		if (cap > SIZE_MAX / (3 * sizeof(*grown)))
-			return st_error_set(err, ST_ERR_NOMEM, "medial: centre line too long");
-		grown = realloc(l->p, cap * 3 * sizeof(*grown));
-		if (!grown)
-			return st_error_set(err, ST_ERR_NOMEM, "medial: out of memory");
-		l->p = grown;
-		l->cap = cap;
-	}
+	double *grown = slice_grow(l->p, &l->cap, l->n + 1, 3 * sizeof(*grown));
+
+	if (!grown)
+		return st_error_set(err, ST_ERR_NOMEM, "medial: out of memory for a centre line");
+	l->p = grown;
 	l->p[3 * l->n] = x;
 	l->p[3 * l->n + 1] = y;
 	l->p[3 * l->n + 2] = w;
@@ -265,16 +261,12 @@ static int contour_runs(const struct sample *smp, size_t n, double jump, struct 
 			continue;
 		}
 		if (cur.n >= 2) {
-			if (*nl == *capl) {
-				size_t cap = *capl ? 2 * *capl : 8;
-				struct line *grown = realloc(*lines, cap * sizeof(*grown));
-				if (!grown) {
-					free(cur.p);
-					return st_error_set(err, ST_ERR_NOMEM, "medial: out of memory");
-				}
-				*lines = grown;
-				*capl = cap;
+			struct line *grown = slice_grow(*lines, capl, *nl + 1, sizeof(*grown));
+			if (!grown) {
+				free(cur.p);
+				return st_error_set(err, ST_ERR_NOMEM, "medial: out of memory");
 			}
+			*lines = grown;
 			(*lines)[(*nl)++] = cur;
 		} else {
 			free(cur.p);
@@ -437,16 +429,12 @@ static int emit_line(const struct line *l, double tol, struct medial_lines *out,
 	}
 	free(keep);
 	if (!rc && m >= (l->closed ? 3u : 2u)) {
-		if (out->n == out->cap) {
-			size_t cap = out->cap ? 2 * out->cap : 8;
-			struct medial_line *grown = realloc(out->v, cap * sizeof(*grown));
-			if (!grown) {
-				free(pts);
-				return st_error_set(err, ST_ERR_NOMEM, "medial: out of memory");
-			}
-			out->v = grown;
-			out->cap = cap;
+		struct medial_line *grown = slice_grow(out->v, &out->cap, out->n + 1, sizeof(*grown));
+		if (!grown) {
+			free(pts);
+			return st_error_set(err, ST_ERR_NOMEM, "medial: out of memory");
 		}
+		out->v = grown;
 		out->v[out->n++] = (struct medial_line){.closed = l->closed, .n = m, .pts = pts};
 		return 0;
 	}

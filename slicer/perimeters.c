@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "grow.h"
 #include "medial.h"
 
 /* Miter limit (multiples of the offset) when restoring trimmed loops. */
@@ -162,14 +163,11 @@ static void seams_next_layer(struct perim_seams *sm)
 
 static int seams_record(struct perim_seams *sm, int64_t x, int64_t y, struct st_error *err)
 {
-	if (sm->ncur == sm->capcur) {
-		size_t cap = sm->capcur ? 2 * sm->capcur : 16;
-		int64_t *grown = realloc(sm->cur, cap * 2 * sizeof(*grown));
-		if (!grown)
-			return st_error_set(err, ST_ERR_NOMEM, "perimeters: out of memory for seams");
-		sm->cur = grown;
-		sm->capcur = cap;
-	}
+	int64_t *grown = slice_grow(sm->cur, &sm->capcur, sm->ncur + 1, 2 * sizeof(*grown));
+
+	if (!grown)
+		return st_error_set(err, ST_ERR_NOMEM, "perimeters: out of memory for seams");
+	sm->cur = grown;
 	sm->cur[2 * sm->ncur] = x;
 	sm->cur[2 * sm->ncur + 1] = y;
 	sm->ncur++;

@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "grow.h"
 #include "toolpath.h"
 
 /* Largest |coordinate| we accept, mm: keeps nm values far inside int64. */
@@ -137,17 +138,11 @@ static bool tri_segment(const struct mesh *m, size_t t, double zp, struct seg *s
 
 static int seg_push(struct seg_list *l, const struct seg *s, struct st_error *err)
 {
-	if (l->n == l->cap) {
-		size_t cap = l->cap ? 2 * l->cap : 64;
-		struct seg *grown;
-		if (cap > SIZE_MAX / sizeof(*grown))
-			return st_error_set(err, ST_ERR_NOMEM, "slice: too many segments in a layer");
-		grown = realloc(l->v, cap * sizeof(*grown));
-		if (!grown)
-			return st_error_set(err, ST_ERR_NOMEM, "slice: out of memory for segments");
-		l->v = grown;
-		l->cap = cap;
-	}
+	struct seg *grown = slice_grow(l->v, &l->cap, l->n + 1, sizeof(*grown));
+
+	if (!grown)
+		return st_error_set(err, ST_ERR_NOMEM, "slice: out of memory for segments");
+	l->v = grown;
 	l->v[l->n++] = *s;
 	return 0;
 }
@@ -184,19 +179,14 @@ struct pts {
 
 static int pts_push(struct pts *p, int64_t x, int64_t y, struct st_error *err)
 {
+	int64_t *grown;
+
 	if (p->n && p->xy[2 * p->n - 2] == x && p->xy[2 * p->n - 1] == y)
 		return 0; /* a vertex on the plane repeats a point: keep one */
-	if (p->n == p->cap) {
-		size_t cap = p->cap ? 2 * p->cap : 64;
-		int64_t *grown;
-		if (cap > SIZE_MAX / (2 * sizeof(*grown)))
-			return st_error_set(err, ST_ERR_NOMEM, "slice: contour too long");
-		grown = realloc(p->xy, cap * 2 * sizeof(*grown));
-		if (!grown)
-			return st_error_set(err, ST_ERR_NOMEM, "slice: out of memory for a contour");
-		p->xy = grown;
-		p->cap = cap;
-	}
+	grown = slice_grow(p->xy, &p->cap, p->n + 1, 2 * sizeof(*grown));
+	if (!grown)
+		return st_error_set(err, ST_ERR_NOMEM, "slice: out of memory for a contour");
+	p->xy = grown;
 	p->xy[2 * p->n] = x;
 	p->xy[2 * p->n + 1] = y;
 	p->n++;
@@ -290,7 +280,8 @@ static int chain_layer(struct seg *segs, size_t n, double tol, struct clip_paths
 
 	if (!used)
 		return st_error_set(err, ST_ERR_NOMEM, "slice: out of memory chaining contours");
-	qsort(segs, n, sizeof(*segs), seg_cmp_from);
+	if (n)
+		qsort(segs, n, sizeof(*segs), seg_cmp_from);
 	for (size_t s0 = 0; s0 < n && !rc; s0++) {
 		if (used[s0])
 			continue;
@@ -321,16 +312,12 @@ static int chain_layer(struct seg *segs, size_t n, double tol, struct clip_paths
 		rc = pts_push(&cur, segs[s].x1, segs[s].y1, err);
 		if (rc)
 			break;
-		if (noc == capoc) {
-			size_t cap = capoc ? 2 * capoc : 8;
-			struct open_chain *grown = realloc(oc, cap * sizeof(*grown));
-			if (!grown) {
-				rc = st_error_set(err, ST_ERR_NOMEM, "slice: out of memory chaining");
-				break;
-			}
-			oc = grown;
-			capoc = cap;
+		struct open_chain *grown = slice_grow(oc, &capoc, noc + 1, sizeof(*grown));
+		if (!grown) {
+			rc = st_error_set(err, ST_ERR_NOMEM, "slice: out of memory chaining");
+			break;
 		}
+		oc = grown;
 		oc[noc++] = (struct open_chain){.p = cur, .done = false};
 		cur = (struct pts){0};
 	}

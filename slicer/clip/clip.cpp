@@ -10,6 +10,7 @@
 #include <exception>
 #include <limits>
 #include <new>
+#include <type_traits>
 
 #include <polyclipping/clipper.hpp>
 
@@ -136,6 +137,16 @@ const ClipperLib::JoinType join_types[CLIP_JOINS] = {ClipperLib::jtMiter, Clippe
 const ClipperLib::EndType end_types[CLIP_ENDS] = {ClipperLib::etOpenButt,
 						  ClipperLib::etOpenSquare, ClipperLib::etOpenRound};
 
+// The value a C caller stored in an enum parameter, read as bytes: in C++
+// loading an out-of-range value through the enum type is undefined, and
+// the range check must come first.
+template <class E> unsigned raw(const E &e)
+{
+	std::underlying_type_t<E> v;
+	std::memcpy(&v, &e, sizeof(v));
+	return static_cast<unsigned>(v);
+}
+
 // Run f, mapping every exception to an error class and message naming what.
 template <class F> int guarded(const char *what, struct st_error *err, F f)
 {
@@ -164,8 +175,8 @@ int bad_enum(struct st_error *err, const char *what, const char *kind, int value
 bool offset_args_ok(const char *what, enum clip_join join, double delta, double miter_limit,
 		    double arc_tolerance, struct st_error *err)
 {
-	if ((unsigned)join >= CLIP_JOINS) {
-		bad_enum(err, what, "join type", (int)join);
+	if (raw(join) >= CLIP_JOINS) {
+		bad_enum(err, what, "join type", (int)raw(join));
 		return false;
 	}
 	if (!(delta == delta) || delta > 4e18 || delta < -4e18) {
@@ -271,10 +282,10 @@ int clip_expolys_get(const struct clip_expolys *ex, size_t i, struct clip_paths 
 int clip_boolean(enum clip_op op, const struct clip_paths *subject, const struct clip_paths *clip,
 		 enum clip_fill fill, struct clip_paths *out, struct st_error *err)
 {
-	if ((unsigned)op >= CLIP_OPS)
-		return bad_enum(err, "clip_boolean", "operation", (int)op);
-	if ((unsigned)fill >= CLIP_FILLS)
-		return bad_enum(err, "clip_boolean", "fill rule", (int)fill);
+	if (raw(op) >= CLIP_OPS)
+		return bad_enum(err, "clip_boolean", "operation", (int)raw(op));
+	if (raw(fill) >= CLIP_FILLS)
+		return bad_enum(err, "clip_boolean", "fill rule", (int)raw(fill));
 	if (!subject || !out)
 		return st_error_set(err, ST_ERR_ARG, "clip: clip_boolean needs a subject and out");
 	return guarded("clip_boolean", err, [&] {
@@ -295,10 +306,10 @@ int clip_boolean_ex(enum clip_op op, const struct clip_paths *subject,
 		    const struct clip_paths *clip, enum clip_fill fill, struct clip_expolys *out,
 		    struct st_error *err)
 {
-	if ((unsigned)op >= CLIP_OPS)
-		return bad_enum(err, "clip_boolean_ex", "operation", (int)op);
-	if ((unsigned)fill >= CLIP_FILLS)
-		return bad_enum(err, "clip_boolean_ex", "fill rule", (int)fill);
+	if (raw(op) >= CLIP_OPS)
+		return bad_enum(err, "clip_boolean_ex", "operation", (int)raw(op));
+	if (raw(fill) >= CLIP_FILLS)
+		return bad_enum(err, "clip_boolean_ex", "fill rule", (int)raw(fill));
 	if (!subject || !out || subject == &out->paths || clip == &out->paths)
 		return st_error_set(err, ST_ERR_ARG,
 				    "clip: clip_boolean_ex needs a subject and a distinct out");
@@ -317,11 +328,11 @@ int clip_boolean_ex(enum clip_op op, const struct clip_paths *subject,
 int clip_lines(enum clip_op op, const struct clip_paths *lines, const struct clip_paths *polys,
 	       enum clip_fill fill, struct clip_paths *out, struct st_error *err)
 {
-	if (op != CLIP_INTERSECTION && op != CLIP_DIFFERENCE)
+	if (raw(op) != CLIP_INTERSECTION && raw(op) != CLIP_DIFFERENCE)
 		return bad_enum(err, "clip_lines", "operation (only intersection, difference)",
-				(int)op);
-	if ((unsigned)fill >= CLIP_FILLS)
-		return bad_enum(err, "clip_lines", "fill rule", (int)fill);
+				(int)raw(op));
+	if (raw(fill) >= CLIP_FILLS)
+		return bad_enum(err, "clip_lines", "fill rule", (int)raw(fill));
 	if (!lines || !out || out == lines || out == polys)
 		return st_error_set(err, ST_ERR_ARG,
 				    "clip: clip_lines needs lines and a distinct out");
@@ -381,8 +392,8 @@ int clip_offset_open(const struct clip_paths *lines, double delta, enum clip_joi
 {
 	if (!offset_args_ok("clip_offset_open", join, delta, miter_limit, arc_tolerance, err))
 		return err ? err->code : ST_ERR_ARG;
-	if ((unsigned)end >= CLIP_ENDS)
-		return bad_enum(err, "clip_offset_open", "end type", (int)end);
+	if (raw(end) >= CLIP_ENDS)
+		return bad_enum(err, "clip_offset_open", "end type", (int)raw(end));
 	if (end == CLIP_END_ROUND && !(arc_tolerance > 0.0))
 		return st_error_set(err, ST_ERR_ARG,
 				    "clip: clip_offset_open needs an arc tolerance > 0 nm for "
@@ -404,8 +415,8 @@ int clip_offset_open(const struct clip_paths *lines, double delta, enum clip_joi
 int clip_simplify(const struct clip_paths *in, enum clip_fill fill, struct clip_paths *out,
 		  struct st_error *err)
 {
-	if ((unsigned)fill >= CLIP_FILLS)
-		return bad_enum(err, "clip_simplify", "fill rule", (int)fill);
+	if (raw(fill) >= CLIP_FILLS)
+		return bad_enum(err, "clip_simplify", "fill rule", (int)raw(fill));
 	if (!in || !out)
 		return st_error_set(err, ST_ERR_ARG, "clip: clip_simplify needs in and out");
 	return guarded("clip_simplify", err, [&] {
