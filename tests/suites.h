@@ -15,6 +15,7 @@ Suite *profile_suite(void);	/* tests/check_profile.c: printer profiles */
 Suite *gcode_suite(void);	/* tests/check_gcode.c: G-code parser and reader */
 Suite *xport_suite(void);	/* tests/check_xport.c: serial transports (pty, TCP) */
 Suite *sim_suite(void);		/* tests/check_sim.c: simulated Marlin over a pty */
+Suite *gcodewriter_suite(void); /* tests/check_gcodewriter.c: G-code writer and estimator */
 Suite *cli_suite(void);		/* tests/check_cli.c: the stratum binary end to end */
 
 #endif
