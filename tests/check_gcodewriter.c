@@ -246,6 +246,33 @@ static void replay(const char *text, struct replay *r)
 	}
 }
 
+/* Write the stack, replay it into *r (zeroed first) and check that E only
+ * runs backwards in retractions that are exactly undone.  Returns the text. */
+static char *write_replay(const struct layer_stack *st, const struct gcodew_settings *s,
+			  struct gcodew_summary *sum, struct replay *r)
+{
+	char *g = write_mem(st, s, sum);
+
+	memset(r, 0, sizeof(*r));
+	r->retract_before_travel = s->retract_before_travel;
+	replay(g, r);
+	ck_assert_msg(r->e_ok, "%s", r->why);
+	return g;
+}
+
+/* G1 lines of text before the first occurrence of mark (asserted present). */
+static size_t g1_before(const char *text, const char *mark)
+{
+	const char *end = strstr(text, mark);
+	size_t n = 0;
+
+	ck_assert_msg(end != NULL, "\"%s\" not in the output", mark);
+	for (const char *p = text; p < end; p = strchr(p, '\n') + 1)
+		if (strncmp(p, "G1 ", 3) == 0)
+			n++;
+	return n;
+}
+
 /* Count occurrences of needle in text. */
 static int count(const char *text, const char *needle)
 {
@@ -295,10 +322,7 @@ START_TEST(test_square_tower)
 		add_square(&st->layers[i], PATH_INNER_PERIMETER, 50, 50, 20, 0.45);
 	gcodew_settings_init(&s);
 	s.use_relative_e_distances = _i == 1;
-	g = write_mem(st, &s, &sum);
-	r.retract_before_travel = s.retract_before_travel;
-	replay(g, &r);
-	ck_assert_msg(r.e_ok, "%s", r.why);
+	g = write_replay(st, &s, &sum, &r);
 	ck_assert(r.relative == s.use_relative_e_distances);
 	ck_assert_int_eq(r.layers, 10);
 	ck_assert_uint_eq(sum.layers, 10);
@@ -339,10 +363,7 @@ START_TEST(test_thin_wall)
 	for (int i = 0; i < 4; i++)
 		add_line(&st->layers[i], PATH_THIN_WALL, xy, w, 5);
 	gcodew_settings_init(&s);
-	g = write_mem(st, &s, NULL);
-	r.retract_before_travel = s.retract_before_travel;
-	replay(g, &r);
-	ck_assert_msg(r.e_ok, "%s", r.why);
+	g = write_replay(st, &s, NULL, &r);
 	for (int i = 0; i < 4; i++) {
 		double want = expected_e(&st->layers[i], &s);
 		ck_assert_msg(fabs(r.e[i] - want) <= 1e-4 * want, "layer %d: E %.6f, model %.6f", i,
@@ -386,10 +407,7 @@ START_TEST(test_retraction)
 	s.use_relative_e_distances = _i & 1;
 	s.wipe = _i & 2;
 	s.retract_lift = 0.4;
-	g = write_mem(st, &s, NULL);
-	r.retract_before_travel = s.retract_before_travel;
-	replay(g, &r);
-	ck_assert_msg(r.e_ok, "%s", r.why);
+	g = write_replay(st, &s, NULL, &r);
 	/* Per layer: island A -> line (0.7 mm) dry, line -> island B (30.5 mm)
 	 * retracted; B -> A of the next layer (40 mm) retracted. */
 	ck_assert_int_eq(r.short_dry, 3);
@@ -600,7 +618,7 @@ START_TEST(test_fan)
 	struct layer_stack *st = stack_new(5, 0.2);
 	struct gcodew_settings s;
 	struct replay r = {0};
-	char *g, *l3;
+	char *g;
 
 	/* Layers: tiny, tiny, ~30 s, ~67 s, tiny with a bridge. */
 	add_square(&st->layers[0], PATH_INNER_PERIMETER, 0, 0, 10, 0.45);
@@ -614,26 +632,14 @@ START_TEST(test_fan)
 	s.disable_fan_first_layers = 1;
 	s.bridge_fan_speed = 80;
 	s.min_print_speed = 1000; /* no slow-down can happen: fan only */
-	g = write_mem(st, &s, NULL);
-	r.retract_before_travel = s.retract_before_travel;
-	replay(g, &r);
-	ck_assert_msg(r.e_ok, "%s", r.why);
+	g = write_replay(st, &s, NULL, &r);
 	ck_assert_int_eq(r.fan_first[0], 0);
 	ck_assert_int_lt(at(g, "\nM107\n"), at(g, ";LAYER_CHANGE"));
 	ck_assert_int_eq(r.fan_first[1], 255);
 	/* Layer 3: interpolated by its planned time. */
-	l3 = strstr(g, ";Z:0.6\n");
-	ck_assert_ptr_nonnull(l3);
 	{
-		size_t a = 0, b;
-		for (const char *p = g; p < l3; p = strchr(p, '\n') + 1)
-			if (!strncmp(p, "G1 ", 3))
-				a++;
-		b = a;
-		for (const char *p = l3; strncmp(p, ";LAYER_CHANGE", 13); p = strchr(p, '\n') + 1)
-			if (!strncmp(p, "G1 ", 3))
-				b++;
-		double t = moves_time(&r, &s, a, b), want = want_fan_s(&s, t);
+		double t = moves_time(&r, &s, g1_before(g, ";Z:0.6\n"), g1_before(g, ";Z:0.8\n"));
+		double want = want_fan_s(&s, t);
 		ck_assert_msg(t > 20 && t < 40, "layer 3 takes %g s", t);
 		ck_assert_msg(fabs(r.fan_first[2] - want) <= 1.5, "layer 3 (%.2f s): fan %d, want %.1f",
 			      t, r.fan_first[2], want);
@@ -662,9 +668,7 @@ START_TEST(test_slowdown)
 	add_square(&st->layers[2], PATH_INNER_PERIMETER, 0, 0, 100, 0.45);
 	gcodew_settings_init(&s);
 	s.first_layer_speed = 0;
-	g = write_mem(st, &s, NULL);
-	r.retract_before_travel = s.retract_before_travel;
-	replay(g, &r);
+	g = write_replay(st, &s, NULL, &r);
 	/* 20 mm in 5 s wants 4 mm/s: held at min_print_speed, 10 mm/s. */
 	ck_assert_double_eq(r.fmin[1], 600);
 	ck_assert_double_eq(r.fmax[1], 600);
@@ -675,22 +679,10 @@ START_TEST(test_slowdown)
 
 	/* With a lower floor the layer is stretched to 5 s exactly. */
 	s.min_print_speed = 1;
-	memset(&r, 0, sizeof(r));
-	g = write_mem(st, &s, NULL);
-	r.retract_before_travel = s.retract_before_travel;
-	replay(g, &r);
+	g = write_replay(st, &s, NULL, &r);
 	ck_assert_msg(r.fmin[1] > 60 && r.fmax[1] < 600, "F %g..%g", r.fmin[1], r.fmax[1]);
 	{
-		size_t a = 0, b = 0;
-		const char *l2 = strstr(g, ";Z:0.4\n"), *l3 = strstr(g, ";Z:0.6\n");
-		for (const char *p = g; p < l3; p = strchr(p, '\n') + 1) {
-			if (strncmp(p, "G1 ", 3))
-				continue;
-			if (p < l2)
-				a++;
-			b++;
-		}
-		double t = moves_time(&r, &s, a, b);
+		double t = moves_time(&r, &s, g1_before(g, ";Z:0.4\n"), g1_before(g, ";Z:0.6\n"));
 		ck_assert_msg(fabs(t - 5) < 0.05, "slowed layer takes %g s", t);
 	}
 	free(g);
@@ -715,9 +707,7 @@ START_TEST(test_header_estimate)
 	}
 	gcodew_settings_init(&s);
 	s.start_gcode = "G28 ; home all axes, nothing else moves\n";
-	g = write_mem(st, &s, &sum);
-	r.retract_before_travel = s.retract_before_travel;
-	replay(g, &r);
+	g = write_replay(st, &s, &sum, &r);
 	double t = moves_time(&r, &s, 0, r.nmoves);
 	ck_assert_msg(fabs(t - sum.time_s) <= 1e-9 * t, "summary %.9f s, parsed back %.9f s",
 		      sum.time_s, t);
