@@ -7,6 +7,14 @@
  * backward pass (every block must be able to stop in time) and a forward
  * pass (every block can only reach what acceleration allows).
  *
+ * A sequence starts and ends at rest: the first block starts at, and the
+ * last stops from, its safe speed (the largest speed from which no axis
+ * changes speed by more than its jerk), as PrusaSlicer's estimator assumes;
+ * a dwell (G4, heat waits) also brings the machine to rest.  Not modelled:
+ * Marlin's minimum segment time and minimum planner speed, junction
+ * deviation, S-curve acceleration and the 16-block look-ahead limit of the
+ * firmware (the estimate plans over a much longer window).
+ *
  * The estimator takes absolute target positions and feedrates, so it runs on
  * the G-code writer's own moves as well as on any G-code file a host has
  * parsed.  Memory is bounded: blocks are planned in a window of
