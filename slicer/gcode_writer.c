@@ -1,0 +1,1283 @@
+/*
+ * gcode_writer.c - layer stack to Marlin G-code (see gcode_writer.h).
+ *
+ * Each layer is first planned into a list of operations (moves with their
+ * kind, and role changes), so the layer's time can be estimated and its
+ * speeds lowered before anything is written; then the operations are
+ * emitted.  The whole print is generated twice: a dry pass that feeds the
+ * estimator and catches every error, then the writing pass with the
+ * estimates in the header.
+ *
+ * E is kept in integer units of 1e-5 mm (the written precision): the
+ * position written is extruded - retracted, both rounded from exact
+ * running sums, so per-layer amounts do not drift and every unretraction
+ * restores exactly what its retraction took.
+ */
+#include "gcode_writer.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#define E_UNITS 100000.0 /* E written in 1e-5 mm */
+#define E_DIGITS 5
+#define XYZ_UNITS 1000.0 /* X, Y, Z written in um */
+#define XYZ_DIGITS 3
+#define NUM_MAX 48	    /* longest formatted number */
+#define MOVE_EPS 1e-7	    /* mm: shorter travels are no travel */
+#define SLOWDOWN_STEPS 40   /* bisection steps for the slow-down factor */
+#define WIPE_SPEED_SHARE 0.8 /* wipe at 80% of the travel speed, as PrusaSlicer */
+
+/* ---------------------------------------------------------------------------
+ * Settings: one table drives defaults-free checks, the header and the
+ * placeholders.
+ */
+
+enum key_type { KEY_DOUBLE, KEY_INT, KEY_BOOL };
+
+struct key {
+	const char *name; /* PrusaSlicer key */
+	enum key_type type;
+	size_t off;	  /* in struct gcodew_settings */
+	bool vector;	  /* per extruder/filament in PrusaSlicer: {name[0]} allowed */
+	double min, max;  /* allowed range */
+};
+
+#define KD(n, vec, lo, hi) {#n, KEY_DOUBLE, offsetof(struct gcodew_settings, n), vec, lo, hi}
+#define KI(n, vec, lo, hi) {#n, KEY_INT, offsetof(struct gcodew_settings, n), vec, lo, hi}
+#define KB(n, vec) {#n, KEY_BOOL, offsetof(struct gcodew_settings, n), vec, 0, 1}
+#define SPEED(n) KD(n, false, 0.001, 10000)
+
+static const struct key keys[] = {
+    KD(nozzle_diameter, true, 0.01, 10),
+    KD(filament_diameter, true, 0.1, 10),
+    KD(extrusion_multiplier, true, 0.01, 10),
+    KD(filament_density, true, 0.01, 30),
+    KB(use_relative_e_distances, false),
+    KD(layer_height, false, 0.001, 10),
+    KD(first_layer_height, false, 0.001, 10),
+    KI(temperature, true, 0, 450),
+    KI(first_layer_temperature, true, 0, 450),
+    KI(bed_temperature, true, 0, 200),
+    KI(first_layer_bed_temperature, true, 0, 200),
+    KD(retract_length, true, 0, 100),
+    KD(retract_speed, true, 0.001, 10000),
+    KD(deretract_speed, true, 0, 10000),
+    KD(retract_lift, true, 0, 100),
+    KD(retract_before_travel, true, 0, 1e6),
+    KB(wipe, true),
+    SPEED(perimeter_speed),
+    SPEED(external_perimeter_speed),
+    SPEED(infill_speed),
+    SPEED(solid_infill_speed),
+    SPEED(top_solid_infill_speed),
+    SPEED(bridge_speed),
+    SPEED(gap_fill_speed),
+    SPEED(support_material_speed),
+    SPEED(support_material_interface_speed),
+    SPEED(travel_speed),
+    KD(travel_speed_z, false, 0, 10000),
+    KD(first_layer_speed, false, 0, 10000),
+    KB(cooling, true),
+    KB(fan_always_on, true),
+    KI(min_fan_speed, true, 0, 100),
+    KI(max_fan_speed, true, 0, 100),
+    KI(bridge_fan_speed, true, 0, 100),
+    KI(disable_fan_first_layers, true, 0, 1000000),
+    KD(fan_below_layer_time, true, 0, 1e6),
+    KD(slowdown_below_layer_time, true, 0, 1e6),
+    KD(min_print_speed, true, 0.001, 10000),
+};
+
+#define NKEYS (sizeof(keys) / sizeof(keys[0]))
+
+/* The value of key k in s, as a double. */
+static double key_value(const struct gcodew_settings *s, const struct key *k)
+{
+	const char *base = (const char *)s + k->off;
+
+	switch (k->type) {
+	case KEY_INT:
+		return *(const int *)(const void *)base;
+	case KEY_BOOL:
+		return *(const bool *)(const void *)base ? 1 : 0;
+	default:
+		return *(const double *)(const void *)base;
+	}
+}
+
+void gcodew_settings_init(struct gcodew_settings *s)
+{
+	*s = (struct gcodew_settings){
+	    .nozzle_diameter = 0.4,
+	    .filament_diameter = 1.75,
+	    .extrusion_multiplier = 1,
+	    .filament_density = 1.24,
+	    .use_relative_e_distances = false,
+	    .layer_height = 0.2,
+	    .first_layer_height = 0.2,
+	    .temperature = 200,
+	    .first_layer_temperature = 200,
+	    .bed_temperature = 0,
+	    .first_layer_bed_temperature = 0,
+	    .retract_length = 2,
+	    .retract_speed = 40,
+	    .deretract_speed = 0,
+	    .retract_lift = 0,
+	    .retract_before_travel = 2,
+	    .wipe = false,
+	    .perimeter_speed = 60,
+	    .external_perimeter_speed = 30,
+	    .infill_speed = 80,
+	    .solid_infill_speed = 20,
+	    .top_solid_infill_speed = 15,
+	    .bridge_speed = 60,
+	    .gap_fill_speed = 20,
+	    .support_material_speed = 60,
+	    .support_material_interface_speed = 60,
+	    .travel_speed = 130,
+	    .travel_speed_z = 0,
+	    .first_layer_speed = 30,
+	    .cooling = true,
+	    .fan_always_on = false,
+	    .min_fan_speed = 35,
+	    .max_fan_speed = 100,
+	    .bridge_fan_speed = 100,
+	    .disable_fan_first_layers = 3,
+	    .fan_below_layer_time = 60,
+	    .slowdown_below_layer_time = 5,
+	    .min_print_speed = 10,
+	    .start_gcode = "G28 ; home all axes\nG1 Z5 F5000 ; lift nozzle\n",
+	    .end_gcode = "M104 S0 ; turn off temperature\nG28 X0  ; home X axis\nM84     ; disable "
+			 "motors\n",
+	};
+	est_limits_init(&s->limits);
+}
+
+/* Check every setting against its range; names the first bad key. */
+static int check_settings(const struct gcodew_settings *s, struct st_error *err)
+{
+	for (size_t i = 0; i < NKEYS; i++) {
+		double v = key_value(s, &keys[i]);
+		if (!isfinite(v) || v < keys[i].min || v > keys[i].max)
+			return st_error_set(err, ST_ERR_RANGE,
+					    "G-code settings: %s = %g is outside %g to %g",
+					    keys[i].name, v, keys[i].min, keys[i].max);
+	}
+	if (s->min_fan_speed > s->max_fan_speed)
+		return st_error_set(err, ST_ERR_RANGE,
+				    "G-code settings: min_fan_speed %d is above max_fan_speed %d",
+				    s->min_fan_speed, s->max_fan_speed);
+	if (!s->start_gcode || !s->end_gcode)
+		return st_error_set(err, ST_ERR_ARG,
+				    "G-code settings: start_gcode and end_gcode must not be NULL");
+	return 0;
+}
+
+/* ---------------------------------------------------------------------------
+ * Numbers: fixed decimals, trailing zeros dropped, never an exponent or "-0".
+ */
+
+/* Write u / 10^digits into buf (NUM_MAX bytes). */
+static void fmt_units(char *buf, int64_t u, int digits)
+{
+	uint64_t mag = u < 0 ? (uint64_t)0 - (uint64_t)u : (uint64_t)u, scale = 1;
+	int len;
+
+	for (int i = 0; i < digits; i++)
+		scale *= 10;
+	len = snprintf(buf, NUM_MAX, "%s%llu.%0*llu", u < 0 ? "-" : "",
+		       (unsigned long long)(mag / scale), digits, (unsigned long long)(mag % scale));
+	while (len > 0 && buf[len - 1] == '0')
+		buf[--len] = '\0';
+	if (len > 0 && buf[len - 1] == '.')
+		buf[--len] = '\0';
+}
+
+/* Write v rounded to digits decimals into buf (NUM_MAX bytes). */
+static void fmt_num(char *buf, double v, int digits)
+{
+	double scale = pow(10, digits);
+
+	if (!(fabs(v) * scale < 9e18)) {
+		snprintf(buf, NUM_MAX, "%.0f", isfinite(v) ? v : 0.0);
+		return;
+	}
+	fmt_units(buf, llround(v * scale), digits);
+}
+
+/* ---------------------------------------------------------------------------
+ * Placeholders
+ */
+
+/* A growable string. */
+struct sbuf {
+	char *p;
+	size_t len, cap;
+};
+
+/* Append n bytes of s; keeps the buffer NUL-terminated. */
+static int sb_add(struct sbuf *b, const char *s, size_t n, struct st_error *err)
+{
+	if (b->len + n + 1 > b->cap) {
+		size_t cap = b->cap ? b->cap : 256;
+		while (cap < b->len + n + 1) {
+			if (cap > SIZE_MAX / 2)
+				return st_error_set(err, ST_ERR_NOMEM, "out of memory expanding placeholders");
+			cap *= 2;
+		}
+		char *grown = realloc(b->p, cap);
+		if (!grown)
+			return st_error_set(err, ST_ERR_NOMEM, "out of memory expanding placeholders");
+		b->p = grown;
+		b->cap = cap;
+	}
+	memcpy(b->p + b->len, s, n);
+	b->len += n;
+	b->p[b->len] = '\0';
+	return 0;
+}
+
+static bool is_ident(char c)
+{
+	return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+	       c == '_';
+}
+
+/* A placeholder's value: number text, and whether it may be indexed. */
+struct ph_value {
+	char text[NUM_MAX];
+	bool vector;
+};
+
+/* Look up name[0..n); false when unknown. */
+static bool ph_lookup(const struct gcodew_settings *s, size_t nlayers, const char *name,
+		      size_t n, struct ph_value *out)
+{
+	static const char *const extruder_vars[] = {"initial_extruder", "current_extruder"};
+
+	for (size_t i = 0; i < NKEYS; i++)
+		if (strlen(keys[i].name) == n && memcmp(keys[i].name, name, n) == 0) {
+			fmt_num(out->text, key_value(s, &keys[i]), 6);
+			out->vector = keys[i].vector;
+			return true;
+		}
+	for (size_t i = 0; i < 2; i++)
+		if (strlen(extruder_vars[i]) == n && memcmp(extruder_vars[i], name, n) == 0) {
+			snprintf(out->text, sizeof(out->text), "0");
+			out->vector = false;
+			return true;
+		}
+	if (n == strlen("total_layer_count") && memcmp(name, "total_layer_count", n) == 0) {
+		snprintf(out->text, sizeof(out->text), "%zu", nlayers);
+		out->vector = false;
+		return true;
+	}
+	return false;
+}
+
+/* True for the indices that name the one extruder: 0, initial_extruder,
+ * current_extruder. */
+static bool index_is_zero(const char *t, size_t n)
+{
+	static const char *const names[] = {"0", "initial_extruder", "current_extruder"};
+
+	for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); i++)
+		if (strlen(names[i]) == n && memcmp(names[i], t, n) == 0)
+			return true;
+	return false;
+}
+
+/* Skip blanks in [*i, end). */
+static void skip_blanks(const char *t, size_t *i, size_t end)
+{
+	while (*i < end && (t[*i] == ' ' || t[*i] == '\t'))
+		(*i)++;
+}
+
+/*
+ * Evaluate the expression t[a..b) of a {...} placeholder: name, or
+ * name[index] with index 0 or an extruder variable.  Fills out.
+ */
+static int eval_braces(const char *t, size_t a, size_t b, const char *what,
+		       const struct gcodew_settings *s, size_t nlayers, struct ph_value *out,
+		       struct st_error *err)
+{
+	size_t i = a, name, name_len, idx = 0, idx_len = 0;
+	int shown = (int)(b - a > 60 ? 60 : b - a);
+
+	skip_blanks(t, &i, b);
+	for (name = i; i < b && is_ident(t[i]); i++)
+		;
+	name_len = i - name;
+	skip_blanks(t, &i, b);
+	if (i < b && t[i] == '[') {
+		i++;
+		skip_blanks(t, &i, b);
+		for (idx = i; i < b && is_ident(t[i]); i++)
+			;
+		idx_len = i - idx;
+		skip_blanks(t, &i, b);
+		if (idx_len == 0 || i >= b || t[i] != ']')
+			idx_len = 0, i = b + 1;
+		else
+			i++;
+		skip_blanks(t, &i, b);
+	}
+	if (name_len == 0 || i != b || (name < b && t[name] >= '0' && t[name] <= '9'))
+		return st_error_set(err, ST_ERR_UNSUPPORTED,
+				    "%s: unsupported expression {%.*s}: only {name} and {name[0]} "
+				    "are understood",
+				    what, shown, t + a);
+	if (!ph_lookup(s, nlayers, t + name, name_len, out))
+		return st_error_set(err, ST_ERR_PARSE, "%s: unknown placeholder {%.*s}", what,
+				    shown, t + a);
+	if (idx_len == 0)
+		return 0;
+	if (!out->vector)
+		return st_error_set(err, ST_ERR_UNSUPPORTED, "%s: {%.*s}: %.*s is not a vector",
+				    what, shown, t + a, (int)name_len, t + name);
+	if (!index_is_zero(t + idx, idx_len))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "%s: {%.*s}: index %.*s is out of range (one extruder)", what,
+				    shown, t + a, (int)idx_len, t + idx);
+	return 0;
+}
+
+int gcodew_expand(const char *text, const char *what, const struct gcodew_settings *s,
+		  size_t nlayers, char **out, struct st_error *err)
+{
+	struct sbuf b = {0};
+	struct ph_value v;
+	size_t len, i = 0;
+	int rc = 0;
+
+	if (out)
+		*out = NULL;
+	if (!text || !s || !out)
+		return st_error_set(err, ST_ERR_ARG, "placeholders: no text, settings or output");
+	if (!what)
+		what = "custom G-code";
+	len = strlen(text);
+	while (i < len && rc == 0) {
+		size_t j = i + 1;
+		if (text[i] == '[') {
+			while (j < len && is_ident(text[j]))
+				j++;
+			if (j > i + 1 && j < len && text[j] == ']') {
+				if (!ph_lookup(s, nlayers, text + i + 1, j - i - 1, &v)) {
+					rc = st_error_set(err, ST_ERR_PARSE,
+							  "%s: unknown placeholder [%.*s]", what,
+							  (int)(j - i - 1 > 60 ? 60 : j - i - 1),
+							  text + i + 1);
+					break;
+				}
+				rc = sb_add(&b, v.text, strlen(v.text), err);
+				i = j + 1;
+				continue;
+			}
+		} else if (text[i] == '{') {
+			const char *close = strchr(text + i, '}');
+			if (!close) {
+				rc = st_error_set(err, ST_ERR_PARSE,
+						  "%s: '{' at byte %zu has no closing '}'", what, i);
+				break;
+			}
+			j = (size_t)(close - text);
+			rc = eval_braces(text, i + 1, j, what, s, nlayers, &v, err);
+			if (rc == 0)
+				rc = sb_add(&b, v.text, strlen(v.text), err);
+			i = j + 1;
+			continue;
+		}
+		rc = sb_add(&b, text + i, 1, err);
+		i++;
+	}
+	if (rc == 0 && !b.p)
+		rc = sb_add(&b, "", 0, err);
+	if (rc) {
+		free(b.p);
+		return rc;
+	}
+	*out = b.p;
+	return 0;
+}
+
+/*
+ * True when a line of text starts with the command M<m1> or M<m2> (an
+ * optional N<n> line number before it, comments ignored): PrusaSlicer's
+ * test for "the start G-code sets this temperature itself".
+ */
+static bool gcode_sets(const char *text, int m1, int m2)
+{
+	const char *p = text;
+
+	while (*p) {
+		const char *end = strchr(p, '\n');
+		size_t n = end ? (size_t)(end - p) : strlen(p), i = 0;
+		skip_blanks(p, &i, n);
+		if (i < n && (p[i] == 'N' || p[i] == 'n')) {
+			for (i++; i < n && p[i] >= '0' && p[i] <= '9'; i++)
+				;
+			skip_blanks(p, &i, n);
+		}
+		if (i < n && (p[i] == 'M' || p[i] == 'm')) {
+			int num = 0, digits = 0;
+			for (i++; i < n && p[i] >= '0' && p[i] <= '9' && digits < 6; i++, digits++)
+				num = num * 10 + (p[i] - '0');
+			if (digits && (i == n || !(p[i] == '.' || (p[i] >= '0' && p[i] <= '9'))) &&
+			    (num == m1 || num == m2))
+				return true;
+		}
+		p += n;
+		if (*p == '\n')
+			p++;
+	}
+	return false;
+}
+
+/* ---------------------------------------------------------------------------
+ * Planning a layer
+ */
+
+enum op_kind { OP_MOVE, OP_ROLE };
+
+enum move_kind {
+	MV_TRAVEL,    /* no extrusion */
+	MV_EXTRUDE,   /* e mm of filament extruded; slowed down for cooling */
+	MV_RETRACT,   /* e mm pulled back (standing, or wiping when xy) */
+	MV_UNRETRACT, /* everything retracted pushed back */
+};
+
+struct op {
+	enum op_kind kind;
+	enum move_kind mv;
+	enum path_role role; /* OP_ROLE */
+	bool xy;	     /* the move has an XY target */
+	double x, y, z;	     /* mm, target */
+	double e;	     /* mm of filament, see enum move_kind */
+	double f;	     /* mm/s */
+};
+
+struct writer {
+	const struct gcodew_settings *s;
+	const struct layer_stack *stack;
+	struct st_error *err;
+	FILE *fp;		 /* NULL in the dry pass */
+	struct est_planner *est; /* the dry pass only */
+
+	/* Planning state, in mm */
+	bool pos_known;
+	double px, py, pz;
+	double layer_z;
+	int plan_role; /* role of the last path planned in this layer, -1 none */
+	double fil_area;
+	struct op *ops;
+	size_t nops, opcap;
+	double *wipe; /* x, y pairs: the last path backwards from the nozzle */
+	size_t nwipe, wipecap;
+	bool *done; /* per path of the layer: already planned */
+	size_t donecap;
+
+	/* Emission state */
+	double ext_exact, r_exact; /* mm extruded since the last reset / retracted now */
+	int64_t ext_units, r_units, epos_units; /* the same in E units; position written */
+	double e_machine;			/* mm, absolute E for the estimator */
+	bool xy_known, z_known;
+	int64_t wx, wy, wz; /* um, last written */
+	long long wf;	    /* mm/min, last written, 0 none */
+	int fan;	    /* percent written, -1 unknown */
+	int layer_fan;	    /* percent for this layer's non-bridge paths */
+	bool bridge_fan;    /* bridges may use bridge_fan_speed on this layer */
+	size_t moves;
+	double filament_mm;
+};
+
+/* Append an operation. */
+static int push(struct writer *w, struct op o)
+{
+	if (w->nops == w->opcap) {
+		size_t cap = w->opcap ? 2 * w->opcap : 256;
+		struct op *grown;
+		if (cap > SIZE_MAX / sizeof(*grown))
+			return st_error_set(w->err, ST_ERR_NOMEM, "G-code: too many moves in a layer");
+		grown = realloc(w->ops, cap * sizeof(*grown));
+		if (!grown)
+			return st_error_set(w->err, ST_ERR_NOMEM, "G-code: out of memory planning a layer");
+		w->ops = grown;
+		w->opcap = cap;
+	}
+	w->ops[w->nops++] = o;
+	return 0;
+}
+
+/* A move op to (x, y, z); xy false leaves X and Y alone. */
+static int push_move(struct writer *w, enum move_kind mv, bool xy, double x, double y, double z,
+		     double e, double f)
+{
+	int rc = push(w, (struct op){.kind = OP_MOVE, .mv = mv, .xy = xy, .x = x, .y = y, .z = z,
+				     .e = e, .f = f});
+	if (rc == 0) {
+		if (xy) {
+			w->px = x;
+			w->py = y;
+		}
+		w->pz = z;
+	}
+	return rc;
+}
+
+/* Z speed: travel_speed_z, else the machine's Z limit. */
+static double z_speed(const struct gcodew_settings *s)
+{
+	return s->travel_speed_z > 0 ? s->travel_speed_z : s->limits.max_feedrate[EST_Z];
+}
+
+/* Retract, wiping back over the last path when asked. */
+static int plan_retract(struct writer *w)
+{
+	const struct gcodew_settings *s = w->s;
+	double len = s->retract_length, taken = 0;
+	int rc = 0;
+
+	if (s->wipe && w->nwipe >= 2) {
+		double speed = WIPE_SPEED_SHARE * s->travel_speed;
+		double dist = len / s->retract_speed * speed, walked = 0;
+		for (size_t k = 0; k + 1 < w->nwipe && walked < dist && rc == 0; k++) {
+			double x0 = w->wipe[2 * k], y0 = w->wipe[2 * k + 1];
+			double x1 = w->wipe[2 * k + 2], y1 = w->wipe[2 * k + 3];
+			double seg = hypot(x1 - x0, y1 - y0), step = fmin(seg, dist - walked);
+			if (seg <= 0)
+				continue;
+			double t = step / seg, r = len * step / dist;
+			rc = push_move(w, MV_RETRACT, true, x0 + t * (x1 - x0), y0 + t * (y1 - y0),
+				       w->pz, r, speed);
+			walked += step;
+			taken += r;
+		}
+	}
+	w->nwipe = 0;
+	if (rc == 0 && len - taken > 1e-9)
+		rc = push_move(w, MV_RETRACT, false, w->px, w->py, w->pz, len - taken,
+			       s->retract_speed);
+	return rc;
+}
+
+/*
+ * Travel to (x, y) on the current layer: retract (and lift) when longer
+ * than retract_before_travel, reach the layer's Z before moving in XY when
+ * not lifted, unretract on arrival.
+ */
+static int plan_travel(struct writer *w, double x, double y)
+{
+	const struct gcodew_settings *s = w->s;
+	double lz = w->layer_z, tz = lz, d;
+	bool retract;
+	int rc = 0;
+
+	if (!w->pos_known) {
+		w->pos_known = true;
+		rc = push_move(w, MV_TRAVEL, false, 0, 0, lz, 0, z_speed(s));
+		return rc ? rc : push_move(w, MV_TRAVEL, true, x, y, lz, 0, s->travel_speed);
+	}
+	d = hypot(x - w->px, y - w->py);
+	if (d < MOVE_EPS && fabs(w->pz - lz) < 1e-9)
+		return 0;
+	retract = s->retract_length > 0 && d > s->retract_before_travel;
+	if (retract) {
+		rc = plan_retract(w);
+		if (s->retract_lift > 0)
+			tz = lz + s->retract_lift;
+	}
+	if (rc == 0 && fabs(w->pz - tz) > 1e-9)
+		rc = push_move(w, MV_TRAVEL, false, 0, 0, tz, 0, z_speed(s));
+	if (rc == 0)
+		rc = push_move(w, MV_TRAVEL, true, x, y, tz, 0, s->travel_speed);
+	if (rc == 0 && tz != lz)
+		rc = push_move(w, MV_TRAVEL, false, 0, 0, lz, 0, z_speed(s));
+	if (rc == 0 && retract)
+		rc = push_move(w, MV_UNRETRACT, false, 0, 0, lz, s->retract_length,
+			       s->deretract_speed > 0 ? s->deretract_speed : s->retract_speed);
+	return rc;
+}
+
+/* Print speed of a role on layer li (0-based). */
+static double role_speed(const struct gcodew_settings *s, enum path_role role, size_t li)
+{
+	if (li == 0 && s->first_layer_speed > 0)
+		return s->first_layer_speed;
+	switch (role) {
+	case PATH_OUTER_PERIMETER:
+	case PATH_THIN_WALL:
+		return s->external_perimeter_speed;
+	case PATH_GAP_FILL:
+		return s->gap_fill_speed;
+	case PATH_SOLID_INFILL:
+	case PATH_BOTTOM_SKIN:
+		return s->solid_infill_speed;
+	case PATH_TOP_SKIN:
+		return s->top_solid_infill_speed;
+	case PATH_SPARSE_INFILL:
+		return s->infill_speed;
+	case PATH_BRIDGE:
+		return s->bridge_speed;
+	case PATH_SUPPORT:
+		return s->support_material_speed;
+	case PATH_SUPPORT_INTERFACE:
+		return s->support_material_interface_speed;
+	default: /* perimeters, skirt, brim */
+		return s->perimeter_speed;
+	}
+}
+
+/* Point index of step k (0 .. n or n-1) of a path printed forwards or
+ * reversed; a closed loop ends back at its seam. */
+static size_t trav(const struct toolpath *p, bool rev, size_t k)
+{
+	if (rev)
+		return p->n - 1 - k;
+	return k == p->n ? 0 : k;
+}
+
+/* Remember the printed path backwards from its end, for a wipe. */
+static int record_wipe(struct writer *w, const struct toolpath *p, bool rev, size_t steps)
+{
+	const struct gcodew_settings *s = w->s;
+	double dist = s->retract_length / s->retract_speed * WIPE_SPEED_SHARE * s->travel_speed;
+	double walked = 0;
+
+	w->nwipe = 0;
+	for (size_t k = steps; k-- > 0;) {
+		const struct path_point *q = &p->pts[trav(p, rev, k)];
+		double x = q->x / SLICE_UNITS_PER_MM, y = q->y / SLICE_UNITS_PER_MM;
+		if (w->nwipe == w->wipecap) {
+			size_t cap = w->wipecap ? 2 * w->wipecap : 32;
+			double *grown = realloc(w->wipe, cap * 2 * sizeof(*grown));
+			if (!grown)
+				return st_error_set(w->err, ST_ERR_NOMEM, "G-code: out of memory for a wipe");
+			w->wipe = grown;
+			w->wipecap = cap;
+		}
+		if (w->nwipe)
+			walked += hypot(x - w->wipe[2 * w->nwipe - 2], y - w->wipe[2 * w->nwipe - 1]);
+		w->wipe[2 * w->nwipe] = x;
+		w->wipe[2 * w->nwipe + 1] = y;
+		w->nwipe++;
+		if (walked >= dist)
+			break;
+	}
+	return 0;
+}
+
+/* Plan path pi of layer li: travel to its start, then its segments. */
+static int plan_path(struct writer *w, const struct layer_paths *l, size_t li, size_t pi, bool rev)
+{
+	const struct gcodew_settings *s = w->s;
+	const struct toolpath *p = &l->paths[pi];
+	size_t steps = p->closed ? p->n + 1 : p->n;
+	double speed = role_speed(s, p->role, li), h = l->height;
+	const struct path_point *q0 = &p->pts[trav(p, rev, 0)];
+	int rc;
+
+	rc = plan_travel(w, q0->x / SLICE_UNITS_PER_MM, q0->y / SLICE_UNITS_PER_MM);
+	if (rc == 0 && w->plan_role != (int)p->role) {
+		rc = push(w, (struct op){.kind = OP_ROLE, .role = p->role});
+		w->plan_role = (int)p->role;
+	}
+	for (size_t k = 0; k + 1 < steps && rc == 0; k++) {
+		size_t a = trav(p, rev, k), b = trav(p, rev, k + 1);
+		const struct path_point *pa = &p->pts[a], *pb = &p->pts[b];
+		double bead = (rev ? pb : pa)->width / SLICE_UNITS_PER_MM;
+		double len = hypot((double)(pb->x - pa->x), (double)(pb->y - pa->y)) /
+			     SLICE_UNITS_PER_MM;
+		if (bead < h)
+			return st_error_set(w->err, ST_ERR_RANGE,
+					    "G-code: layer %zu, path %zu (%s), point %zu: bead width "
+					    "%.4f mm is below the layer height %.4f mm",
+					    li + 1, pi, path_role_name(p->role), rev ? b : a, bead, h);
+		if (len <= 0)
+			continue;
+		double area = (bead - h) * h + M_PI * h * h / 4;
+		double e = area * len / w->fil_area * s->extrusion_multiplier;
+		rc = push_move(w, MV_EXTRUDE, true, pb->x / SLICE_UNITS_PER_MM,
+			       pb->y / SLICE_UNITS_PER_MM, w->layer_z, e, speed);
+	}
+	if (rc == 0 && s->wipe)
+		rc = record_wipe(w, p, rev, steps);
+	return rc;
+}
+
+/* Squared distance (mm^2) from the nozzle to (x, y) in nm. */
+static double dist2(const struct writer *w, int64_t x, int64_t y)
+{
+	double dx = x / SLICE_UNITS_PER_MM - w->px, dy = y / SLICE_UNITS_PER_MM - w->py;
+	return dx * dx + dy * dy;
+}
+
+/* Perimeter runs keep their order; other runs go nearest first. */
+static bool keep_order(enum path_role role)
+{
+	return role == PATH_OUTER_PERIMETER || role == PATH_INNER_PERIMETER;
+}
+
+/* Plan the paths [i, j) of one role run, nearest neighbour first. */
+static int plan_run(struct writer *w, const struct layer_paths *l, size_t li, size_t i, size_t j)
+{
+	for (size_t left = j - i; left > 0; left--) {
+		size_t best = j;
+		bool best_rev = false;
+		double best_d = INFINITY;
+		for (size_t k = i; k < j; k++) {
+			const struct toolpath *p = &l->paths[k];
+			if (w->done[k])
+				continue;
+			if (!w->pos_known || keep_order(p->role)) {
+				best = k;
+				break;
+			}
+			double d0 = dist2(w, p->pts[0].x, p->pts[0].y);
+			double d1 = p->closed ? INFINITY : dist2(w, p->pts[p->n - 1].x, p->pts[p->n - 1].y);
+			if (d0 < best_d || d1 < best_d) {
+				best = k;
+				best_rev = d1 < d0;
+				best_d = fmin(d0, d1);
+			}
+		}
+		w->done[best] = true;
+		int rc = plan_path(w, l, li, best, best_rev);
+		if (rc)
+			return rc;
+	}
+	return 0;
+}
+
+/* Plan every path of layer li into w->ops. */
+static int plan_layer(struct writer *w, const struct layer_paths *l, size_t li)
+{
+	int rc = 0;
+
+	w->nops = 0;
+	w->layer_z = l->z;
+	w->plan_role = -1;
+	if (l->n > w->donecap) {
+		bool *grown = realloc(w->done, l->n * sizeof(*grown));
+		if (!grown)
+			return st_error_set(w->err, ST_ERR_NOMEM, "G-code: out of memory planning a layer");
+		w->done = grown;
+		w->donecap = l->n;
+	}
+	if (l->n)
+		memset(w->done, 0, l->n * sizeof(*w->done));
+	for (size_t i = 0, j; i < l->n && rc == 0; i = j) {
+		for (j = i + 1; j < l->n && l->paths[j].role == l->paths[i].role; j++)
+			;
+		rc = plan_run(w, l, li, i, j);
+	}
+	return rc;
+}
+
+/* ---------------------------------------------------------------------------
+ * Cooling
+ */
+
+/* Speed of an extrusion slowed by factor f, never below min_print_speed
+ * unless it was slower already. */
+static double slowed(double v, double f, double min_speed)
+{
+	return fmax(v * f, fmin(v, min_speed));
+}
+
+/* Planner time of the layer's ops with extrusions slowed by f. */
+static int layer_time(struct writer *w, const double start[EST_AXES], double f, double *t)
+{
+	struct est_planner *p = est_planner_new(&w->s->limits, start, w->err);
+	struct est_result r;
+	double x = start[EST_X], y = start[EST_Y], e = 0;
+	int rc = 0;
+
+	if (!p)
+		return w->err ? w->err->code : ST_ERR_NOMEM;
+	for (size_t i = 0; i < w->nops && rc == 0; i++) {
+		const struct op *o = &w->ops[i];
+		double v = o->f;
+		if (o->kind != OP_MOVE)
+			continue;
+		if (o->xy) {
+			x = o->x;
+			y = o->y;
+		}
+		if (o->mv == MV_EXTRUDE) {
+			e += o->e;
+			v = slowed(v, f, w->s->min_print_speed);
+		} else if (o->mv == MV_RETRACT) {
+			e -= o->e;
+		} else if (o->mv == MV_UNRETRACT) {
+			e += o->e;
+		}
+		rc = est_planner_add(p, &(struct est_move){x, y, o->z, e, v}, w->err);
+	}
+	est_planner_result(p, &r);
+	est_planner_free(p);
+	*t = r.time_s;
+	return rc;
+}
+
+/* Fan percent of layer li taking t seconds (PrusaSlicer's rule). */
+static int fan_for(const struct gcodew_settings *s, size_t li, double t)
+{
+	int fan;
+
+	if (li < (size_t)s->disable_fan_first_layers)
+		return 0;
+	fan = s->fan_always_on ? s->min_fan_speed : 0;
+	if (!s->cooling)
+		return fan;
+	if (t < s->slowdown_below_layer_time) {
+		fan = s->max_fan_speed;
+	} else if (t < s->fan_below_layer_time) {
+		double k = (t - s->slowdown_below_layer_time) /
+			   (s->fan_below_layer_time - s->slowdown_below_layer_time);
+		fan = (int)lround(k * s->min_fan_speed + (1 - k) * s->max_fan_speed);
+	}
+	return fan;
+}
+
+/* Decide the layer's fan and slow its extrusions down if it is too fast. */
+static int cool_layer(struct writer *w, size_t li, const double start[EST_AXES])
+{
+	const struct gcodew_settings *s = w->s;
+	double t, target = s->slowdown_below_layer_time, lo = 0, hi = 1;
+	int rc = layer_time(w, start, 1, &t);
+
+	if (rc)
+		return rc;
+	w->layer_fan = fan_for(s, li, t);
+	w->bridge_fan = s->cooling && li >= (size_t)s->disable_fan_first_layers;
+	if (!s->cooling || t >= target || w->nops == 0)
+		return 0;
+	rc = layer_time(w, start, 0, &t);
+	if (rc)
+		return rc;
+	if (t <= target) { /* even at min_print_speed it is too fast */
+		hi = 0;
+	} else {
+		for (int i = 0; i < SLOWDOWN_STEPS && rc == 0; i++) {
+			double mid = 0.5 * (lo + hi);
+			rc = layer_time(w, start, mid, &t);
+			if (t > target)
+				lo = mid;
+			else
+				hi = mid;
+		}
+	}
+	for (size_t i = 0; i < w->nops; i++)
+		if (w->ops[i].kind == OP_MOVE && w->ops[i].mv == MV_EXTRUDE)
+			w->ops[i].f = slowed(w->ops[i].f, hi, s->min_print_speed);
+	return rc;
+}
+
+/* ---------------------------------------------------------------------------
+ * Emission
+ */
+
+/* printf to the output (nothing in the dry pass). */
+static void put(struct writer *w, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+static void put(struct writer *w, const char *fmt, ...)
+{
+	va_list ap;
+
+	if (!w->fp)
+		return;
+	va_start(ap, fmt);
+	vfprintf(w->fp, fmt, ap);
+	va_end(ap);
+}
+
+/* Set the fan to percent when it differs from what was written. */
+static void set_fan(struct writer *w, int percent)
+{
+	if (percent == w->fan)
+		return;
+	if (percent == 0)
+		put(w, "M107\n");
+	else
+		put(w, "M106 S%ld\n", lround(percent * 255.0 / 100));
+	w->fan = percent;
+}
+
+/* Write one move op and feed it to the estimator. */
+static int emit_move(struct writer *w, const struct op *o)
+{
+	int64_t x = o->xy ? llround(o->x * XYZ_UNITS) : w->wx;
+	int64_t y = o->xy ? llround(o->y * XYZ_UNITS) : w->wy;
+	int64_t z = llround(o->z * XYZ_UNITS), epos, de;
+	long long f = llround(o->f * 60);
+	bool mx, my, mz;
+	char nx[NUM_MAX], ny[NUM_MAX], nz[NUM_MAX], ne[NUM_MAX], nf[NUM_MAX] = "";
+
+	switch (o->mv) {
+	case MV_EXTRUDE:
+		w->ext_exact += o->e;
+		w->ext_units = llround(w->ext_exact * E_UNITS);
+		w->filament_mm += o->e;
+		break;
+	case MV_RETRACT:
+		w->r_exact += o->e;
+		w->r_units = llround(w->r_exact * E_UNITS);
+		break;
+	case MV_UNRETRACT:
+		w->r_exact = 0;
+		w->r_units = 0;
+		break;
+	case MV_TRAVEL:
+		break;
+	}
+	epos = w->ext_units - w->r_units;
+	de = epos - w->epos_units;
+	mx = o->xy && (!w->xy_known || x != w->wx);
+	my = o->xy && (!w->xy_known || y != w->wy);
+	mz = !w->z_known || z != w->wz;
+	if (!mx && !my && !mz && de == 0)
+		return 0;
+	if (f < 1)
+		f = 1;
+	fmt_units(nx, x, XYZ_DIGITS);
+	fmt_units(ny, y, XYZ_DIGITS);
+	fmt_units(nz, z, XYZ_DIGITS);
+	fmt_units(ne, w->s->use_relative_e_distances ? de : epos, E_DIGITS);
+	if (f != w->wf)
+		snprintf(nf, sizeof(nf), " F%lld", f);
+	put(w, "G1%s%s%s%s%s%s%s%s%s\n", mx ? " X" : "", mx ? nx : "", my ? " Y" : "", my ? ny : "",
+	    mz ? " Z" : "", mz ? nz : "", de ? " E" : "", de ? ne : "", nf);
+	w->moves++;
+	if (o->xy) {
+		w->wx = x;
+		w->wy = y;
+		w->xy_known = true;
+	}
+	w->wz = z;
+	w->z_known = true;
+	w->wf = f;
+	w->epos_units = epos;
+	w->e_machine += de / E_UNITS;
+	if (!w->est)
+		return 0;
+	return est_planner_add(w->est,
+			       &(struct est_move){x / XYZ_UNITS, y / XYZ_UNITS, z / XYZ_UNITS,
+						  w->e_machine, f / 60.0},
+			       w->err);
+}
+
+/* Write the planned ops of the current layer. */
+static int emit_ops(struct writer *w)
+{
+	int rc = 0;
+
+	for (size_t i = 0; i < w->nops && rc == 0; i++) {
+		const struct op *o = &w->ops[i];
+		if (o->kind == OP_ROLE) {
+			put(w, ";TYPE:%s\n", path_role_name(o->role));
+			set_fan(w, o->role == PATH_BRIDGE && w->bridge_fan ? w->s->bridge_fan_speed
+									  : w->layer_fan);
+		} else {
+			rc = emit_move(w, o);
+		}
+	}
+	return rc;
+}
+
+/* G92 E0: the written E position becomes 0, retraction state kept. */
+static void reset_e(struct writer *w)
+{
+	put(w, "G92 E0\n");
+	w->ext_exact -= w->epos_units / E_UNITS;
+	w->ext_units -= w->epos_units;
+	w->epos_units = 0;
+}
+
+/* Plan, cool and write layer li. */
+static int do_layer(struct writer *w, size_t li)
+{
+	const struct gcodew_settings *s = w->s;
+	const struct layer_paths *l = &w->stack->layers[li];
+	double start[EST_AXES] = {w->wx / XYZ_UNITS, w->wy / XYZ_UNITS, w->wz / XYZ_UNITS, 0};
+	char nz[NUM_MAX], nh[NUM_MAX];
+	int rc;
+
+	if (!isfinite(l->z) || !isfinite(l->height) || l->z <= 0 || l->height <= 0 ||
+	    l->height > l->z + 1e-9)
+		return st_error_set(w->err, ST_ERR_RANGE,
+				    "G-code: layer %zu has Z %g mm and height %g mm; both must be "
+				    "> 0 with the height at most Z",
+				    li + 1, l->z, l->height);
+	rc = plan_layer(w, l, li);
+	if (rc == 0)
+		rc = cool_layer(w, li, start);
+	if (rc)
+		return rc;
+	fmt_num(nz, l->z, XYZ_DIGITS);
+	fmt_num(nh, l->height, XYZ_DIGITS);
+	put(w, ";LAYER_CHANGE\n;Z:%s\n;HEIGHT:%s\n", nz, nh);
+	if (!s->use_relative_e_distances && li > 0)
+		reset_e(w);
+	if (li == 1 && s->temperature > 0 && s->temperature != s->first_layer_temperature)
+		put(w, "M104 S%d ; set temperature\n", s->temperature);
+	if (li == 1 && s->bed_temperature > 0 &&
+	    s->bed_temperature != s->first_layer_bed_temperature)
+		put(w, "M140 S%d ; set bed temperature\n", s->bed_temperature);
+	set_fan(w, w->layer_fan);
+	return emit_ops(w);
+}
+
+/* Write "; estimated printing time = 1h 2m 3s". */
+static void put_time(struct writer *w, double seconds)
+{
+	long long t = llround(seconds), d = t / 86400, h = t / 3600 % 24, m = t / 60 % 60;
+
+	put(w, "; estimated printing time =");
+	if (d)
+		put(w, " %lldd", d);
+	if (d || h)
+		put(w, " %lldh", h);
+	if (d || h || m)
+		put(w, " %lldm", m);
+	put(w, " %llds\n", t % 60);
+}
+
+/* The header: estimates, settings, machine limits, bead widths used. */
+static void put_header(struct writer *w, const struct gcodew_summary *sum)
+{
+	static const char axis[EST_AXES] = {'x', 'y', 'z', 'e'};
+	const struct est_limits *lim = &w->s->limits;
+	double len[PATH_ROLES] = {0}, area[PATH_ROLES] = {0};
+	char n[NUM_MAX];
+
+	put(w, "; generated by Stratum\n");
+	put_time(w, sum->time_s);
+	fmt_num(n, sum->filament_mm, 2);
+	put(w, "; filament used [mm] = %s\n", n);
+	fmt_num(n, sum->filament_cm3, 2);
+	put(w, "; filament used [cm3] = %s\n", n);
+	fmt_num(n, sum->filament_g, 2);
+	put(w, "; filament used [g] = %s\n", n);
+	put(w, "; total layers count = %zu\n", sum->layers);
+	put(w, "; total moves = %zu\n", sum->moves);
+	for (size_t i = 0; i < NKEYS; i++) {
+		fmt_num(n, key_value(w->s, &keys[i]), 6);
+		put(w, "; %s = %s\n", keys[i].name, n);
+	}
+	for (int a = 0; a < EST_AXES; a++) {
+		char f[NUM_MAX], acc[NUM_MAX], j[NUM_MAX];
+		fmt_num(f, lim->max_feedrate[a], 3);
+		fmt_num(acc, lim->max_acceleration[a], 3);
+		fmt_num(j, lim->max_jerk[a], 3);
+		put(w, "; machine_max_feedrate_%c = %s\n; machine_max_acceleration_%c = %s\n"
+		       "; machine_max_jerk_%c = %s\n",
+		    axis[a], f, axis[a], acc, axis[a], j);
+	}
+	fmt_num(n, lim->accel_extruding, 3);
+	put(w, "; machine_max_acceleration_extruding = %s\n", n);
+	fmt_num(n, lim->accel_retracting, 3);
+	put(w, "; machine_max_acceleration_retracting = %s\n", n);
+	fmt_num(n, lim->accel_travel, 3);
+	put(w, "; machine_max_acceleration_travel = %s\n", n);
+
+	/* Mean bead width per role, weighted by length. */
+	for (size_t li = 0; li < w->stack->nlayers; li++) {
+		const struct layer_paths *l = &w->stack->layers[li];
+		for (size_t pi = 0; pi < l->n; pi++) {
+			const struct toolpath *p = &l->paths[pi];
+			for (size_t k = 0; k + 1 < (p->closed ? p->n + 1 : p->n); k++) {
+				const struct path_point *a = &p->pts[k], *b = &p->pts[trav(p, false, k + 1)];
+				double d = hypot((double)(b->x - a->x), (double)(b->y - a->y));
+				len[p->role] += d;
+				area[p->role] += d * a->width;
+			}
+		}
+	}
+	for (int r = 0; r < PATH_ROLES; r++)
+		if (len[r] > 0) {
+			fmt_num(n, area[r] / len[r] / SLICE_UNITS_PER_MM, 3);
+			put(w, "; extrusion width (%s) = %s mm\n", path_role_name((enum path_role)r), n);
+		}
+	put(w, "\n");
+}
+
+/* Write custom G-code text, ending it with a newline. */
+static void put_custom(struct writer *w, const char *text)
+{
+	size_t n = strlen(text);
+
+	if (n)
+		put(w, "%s%s", text, text[n - 1] == '\n' ? "" : "\n");
+}
+
+/* One pass over the whole print: start, layers, end. */
+static int run_pass(struct writer *w, const char *start, const char *end)
+{
+	const struct gcodew_settings *s = w->s;
+	bool bed_set = gcode_sets(start, 140, 190), nozzle_set = gcode_sets(start, 104, 109);
+	int rc = 0;
+
+	if (!bed_set && s->first_layer_bed_temperature > 0)
+		put(w, "M190 S%d ; set bed temperature and wait for it to be reached\n",
+		    s->first_layer_bed_temperature);
+	if (!nozzle_set && s->first_layer_temperature > 0)
+		put(w, "M104 S%d ; set temperature\n", s->first_layer_temperature);
+	put_custom(w, start);
+	if (!nozzle_set && s->first_layer_temperature > 0)
+		put(w, "M109 S%d ; set temperature and wait for it to be reached\n",
+		    s->first_layer_temperature);
+	put(w, "G21 ; set units to millimeters\nG90 ; use absolute coordinates\n");
+	put(w, "%s\n", s->use_relative_e_distances ? "M83 ; use relative distances for extrusion"
+						   : "M82 ; use absolute distances for extrusion");
+	put(w, "G92 E0\n");
+	w->fan = -1;
+	set_fan(w, 0);
+	for (size_t li = 0; li < w->stack->nlayers && rc == 0; li++)
+		rc = do_layer(w, li);
+	if (rc)
+		return rc;
+	/* Final retraction, left for the end G-code to undo. */
+	w->nops = 0;
+	if (w->pos_known && s->retract_length > 0) {
+		rc = plan_retract(w);
+		if (rc == 0)
+			rc = emit_ops(w);
+	}
+	set_fan(w, 0);
+	put_custom(w, end);
+	return rc;
+}
+
+/* Reset the per-pass state of w. */
+static void pass_reset(struct writer *w)
+{
+	w->pos_known = false;
+	w->px = w->py = w->pz = 0;
+	w->nwipe = 0;
+	w->ext_exact = w->r_exact = w->e_machine = 0;
+	w->ext_units = w->r_units = w->epos_units = 0;
+	w->xy_known = w->z_known = false;
+	w->wx = w->wy = w->wz = 0;
+	w->wf = 0;
+	w->fan = -1;
+	w->moves = 0;
+	w->filament_mm = 0;
+}
+
+int gcodew_write_stream(const struct layer_stack *stack, const struct gcodew_settings *s,
+			FILE *fp, struct gcodew_summary *sum, struct st_error *err)
+{
+	struct st_error local;
+	struct writer w = {.s = s, .stack = stack};
+	struct gcodew_summary res = {0};
+	struct est_result er;
+	char *start = NULL, *end = NULL;
+	int rc;
+
+	if (!err)
+		err = &local;
+	w.err = err;
+	if (!stack || !s || !fp || (stack->nlayers && !stack->layers))
+		return st_error_set(err, ST_ERR_ARG, "G-code: no layers, settings or output given");
+	rc = check_settings(s, err);
+	if (rc == 0)
+		rc = gcodew_expand(s->start_gcode, "start_gcode", s, stack->nlayers, &start, err);
+	if (rc == 0)
+		rc = gcodew_expand(s->end_gcode, "end_gcode", s, stack->nlayers, &end, err);
+	if (rc)
+		goto out_free;
+	w.fil_area = M_PI * s->filament_diameter * s->filament_diameter / 4;
+
+	/* Pass 1: estimates and every check, nothing written. */
+	w.est = est_planner_new(&s->limits, NULL, err);
+	if (!w.est) {
+		rc = err->code;
+		goto out_free;
+	}
+	pass_reset(&w);
+	rc = run_pass(&w, start, end);
+	est_planner_result(w.est, &er);
+	est_planner_free(w.est);
+	w.est = NULL;
+	if (rc)
+		goto out_free;
+	res.time_s = er.time_s;
+	res.filament_mm = w.filament_mm;
+	res.filament_cm3 = w.filament_mm * w.fil_area / 1000;
+	res.filament_g = res.filament_cm3 * s->filament_density;
+	res.layers = stack->nlayers;
+	res.moves = w.moves;
+
+	/* Pass 2: the same again, written. */
+	w.fp = fp;
+	put_header(&w, &res);
+	pass_reset(&w);
+	rc = run_pass(&w, start, end);
+	if (rc == 0 && (fflush(fp) != 0 || ferror(fp)))
+		rc = st_error_set(err, ST_ERR_IO, "G-code: write failed: %s", strerror(errno));
+	if (rc == 0 && sum)
+		*sum = res;
+out_free:
+	free(w.ops);
+	free(w.wipe);
+	free(w.done);
+	free(start);
+	free(end);
+	return rc;
+}
+
+int gcodew_write_file(const struct layer_stack *stack, const struct gcodew_settings *s,
+		      const char *path, struct gcodew_summary *sum, struct st_error *err)
+{
+	struct st_error local;
+	char *tmp;
+	size_t n;
+	int fd, rc;
+	FILE *fp;
+
+	if (!err)
+		err = &local;
+	if (!path || !*path)
+		return st_error_set(err, ST_ERR_ARG, "G-code: no output file name given");
+	n = strlen(path);
+	if (n > SIZE_MAX - 8 || !(tmp = malloc(n + 8)))
+		return st_error_set(err, ST_ERR_NOMEM, "G-code: out of memory for a file name");
+	memcpy(tmp, path, n);
+	memcpy(tmp + n, ".XXXXXX", 8);
+	fd = mkstemp(tmp);
+	if (fd < 0) {
+		rc = st_error_set(err, ST_ERR_IO, "%s: cannot create a temporary file beside it: %s",
+				  path, strerror(errno));
+		goto out_free_name;
+	}
+	if (fchmod(fd, 0644) != 0 || !(fp = fdopen(fd, "w"))) {
+		rc = st_error_set(err, ST_ERR_IO, "%s: cannot open %s: %s", path, tmp,
+				  strerror(errno));
+		close(fd);
+		goto out_unlink;
+	}
+	rc = gcodew_write_stream(stack, s, fp, sum, err);
+	if (rc == 0 && fsync(fileno(fp)) != 0)
+		rc = st_error_set(err, ST_ERR_IO, "%s: fsync failed: %s", tmp, strerror(errno));
+	if (fclose(fp) != 0 && rc == 0)
+		rc = st_error_set(err, ST_ERR_IO, "%s: close failed: %s", tmp, strerror(errno));
+	if (rc == 0 && rename(tmp, path) != 0)
+		rc = st_error_set(err, ST_ERR_IO, "%s: cannot rename %s over it: %s", path, tmp,
+				  strerror(errno));
+	if (rc == 0)
+		goto out_free_name;
+out_unlink:
+	unlink(tmp);
+out_free_name:
+	free(tmp);
+	return rc;
+}

@@ -1,0 +1,167 @@
+/*
+ * gcode_writer.h - turn a struct layer_stack into a printable Marlin G-code
+ * file: travel and path ordering, retraction / z-hop / wipe, flow from the
+ * bead model, speeds per role, cooling (fan by layer time, bridge fan,
+ * minimum layer time slow-down), temperatures, start/end G-code with
+ * PrusaSlicer placeholders, and a header with the settings used and the
+ * estimates (print time from the planner of estimate.h, filament length,
+ * volume and mass).
+ *
+ * Ordering: the paths of a layer print in the given order of roles; within
+ * a run of consecutive paths of the same role the writer picks the nearest
+ * next path (greedy nearest neighbour from the nozzle), entering a closed
+ * loop at its seam (first point) and an open path at its nearer end.  Runs
+ * of outer and inner perimeters keep their given order: the geometry stage
+ * orders walls on purpose.
+ *
+ * Flow: a segment of bead width w (path_point.width of its first point)
+ * and layer height h has the cross-section of a rectangle with semicircular
+ * ends, A = (w - h)·h + π(h/2)²; it needs E = A·length / (π(d/2)²) ·
+ * extrusion_multiplier mm of filament of diameter d.  A width below the
+ * layer height has no such bead and is refused.
+ *
+ * Cooling, as PrusaSlicer's: layer time is estimated with the planner; the
+ * fan is off for the first disable_fan_first_layers layers, at
+ * max_fan_speed below slowdown_below_layer_time, interpolated down to
+ * min_fan_speed at fan_below_layer_time, and off above (min_fan_speed with
+ * fan_always_on); bridges run at bridge_fan_speed.  A layer faster than
+ * slowdown_below_layer_time has its extrusion moves slowed down uniformly
+ * until it takes that long, never below min_print_speed (a move already
+ * slower keeps its speed).
+ *
+ * Temperatures, PrusaSlicer's rule: before the start G-code, M190 (bed) when
+ * the start G-code has no M140/M190 and M104 (nozzle) when it has no
+ * M104/M109; after it, M109 when it has no M104/M109.  First-layer values
+ * there; M104/M140 to the other values at the start of layer 2 when they
+ * differ.
+ *
+ * Output to a path is written to a temporary file in the same directory,
+ * flushed, fsync'ed and renamed over the path only when everything
+ * succeeded (STYLE rule 7); on any error no file is left behind.
+ *
+ * Thread safety: no global state; distinct calls are independent.
+ */
+#ifndef STRATUM_SLICER_GCODE_WRITER_H
+#define STRATUM_SLICER_GCODE_WRITER_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdio.h>
+
+#include "estimate.h"
+#include "st_error.h"
+#include "toolpath.h"
+
+/*
+ * Everything the writer needs, filled by host code from the printer profile
+ * (host/profile.h) and the print settings.  Names are PrusaSlicer's keys;
+ * units mm, mm/s, degrees C, percent, seconds.
+ */
+struct gcodew_settings {
+	/* Machine and filament */
+	double nozzle_diameter;	       /* mm; 0.4 */
+	double filament_diameter;      /* mm; 1.75 */
+	double extrusion_multiplier;   /* 1 */
+	double filament_density;       /* g/cm^3; 1.24 (PLA) */
+	bool use_relative_e_distances; /* M83 and relative E; false (M82, G92 E0 each layer) */
+	double layer_height;	       /* mm, reported and for placeholders; 0.2 */
+	double first_layer_height;     /* mm, likewise; 0.2 */
+
+	/* Temperatures, degrees C (0 = leave alone) */
+	int temperature;		 /* nozzle, layers 2 and up; 200 */
+	int first_layer_temperature;	 /* nozzle, layer 1; 200 */
+	int bed_temperature;		 /* 0 */
+	int first_layer_bed_temperature; /* 0 */
+
+	/* Retraction */
+	double retract_length;	      /* mm; 2 (0 = never retract) */
+	double retract_speed;	      /* mm/s; 40 */
+	double deretract_speed;	      /* mm/s; 0 = retract_speed */
+	double retract_lift;	      /* mm of Z hop while travelling retracted; 0 */
+	double retract_before_travel; /* mm: retract on travels longer than this; 2 */
+	bool wipe;		      /* retract while moving back over the last path; false */
+
+	/* Speeds, mm/s */
+	double perimeter_speed;			 /* 60 */
+	double external_perimeter_speed;	 /* 30 (PrusaSlicer: 50% of perimeters) */
+	double infill_speed;			 /* 80 */
+	double solid_infill_speed;		 /* 20 */
+	double top_solid_infill_speed;		 /* 15 */
+	double bridge_speed;			 /* 60 */
+	double gap_fill_speed;			 /* 20 */
+	double support_material_speed;		 /* 60 */
+	double support_material_interface_speed; /* 60 (PrusaSlicer: 100% of support) */
+	double travel_speed;			 /* 130 */
+	double travel_speed_z;			 /* 0 = machine_max_feedrate_z */
+	double first_layer_speed;		 /* every extrusion of layer 1; 30 (0 = off) */
+
+	/* Cooling */
+	bool cooling;			  /* true */
+	bool fan_always_on;		  /* false */
+	int min_fan_speed;		  /* percent; 35 */
+	int max_fan_speed;		  /* percent; 100 */
+	int bridge_fan_speed;		  /* percent; 100 */
+	int disable_fan_first_layers;	  /* 3 */
+	double fan_below_layer_time;	  /* s; 60 */
+	double slowdown_below_layer_time; /* s; 5 */
+	double min_print_speed;		  /* mm/s; 10 */
+
+	/* Machine limits, for the estimates and the layer times */
+	struct est_limits limits; /* est_limits_init */
+
+	/* Custom G-code with PrusaSlicer placeholders; not owned, not NULL */
+	const char *start_gcode; /* "G28 ; home all axes\nG1 Z5 F5000 ; lift nozzle\n" */
+	const char *end_gcode;	 /* "M104 S0 ; turn off temperature\nG28 X0  ; home X axis\nM84 ..." */
+};
+
+/* What a written print will take; also written into the G-code header. */
+struct gcodew_summary {
+	double time_s;	     /* estimated printing time of the moves (heating excluded) */
+	double filament_mm;  /* filament extruded, retractions excluded */
+	double filament_cm3; /* its volume */
+	double filament_g;   /* its mass at filament_density */
+	size_t layers;	     /* layers written */
+	size_t moves;	     /* G1 lines written */
+};
+
+/* gcodew_settings_init - PrusaSlicer's defaults, as listed beside each field. */
+void gcodew_settings_init(struct gcodew_settings *s);
+
+/*
+ * gcodew_write_stream - write the whole print to @fp.
+ * @stack: the layers (not changed); @s: settings (checked first: a value
+ *         out of range is ST_ERR_RANGE naming the key).
+ * @sum:   filled on success (may be NULL).
+ * The print is generated twice, once to compute the estimates for the
+ * header and once to write, so nothing is written unless the first pass
+ * succeeded.  Errors: ST_ERR_RANGE (settings, a bead narrower than its
+ * layer, a bad layer Z/height), ST_ERR_PARSE / ST_ERR_UNSUPPORTED (start or
+ * end G-code placeholders: the message names the placeholder), ST_ERR_IO (a
+ * write failed; fp may then hold part of the output), ST_ERR_NOMEM.
+ */
+int gcodew_write_stream(const struct layer_stack *stack, const struct gcodew_settings *s,
+			FILE *fp, struct gcodew_summary *sum, struct st_error *err);
+
+/*
+ * gcodew_write_file - as gcodew_write_stream, to the file @path, through a
+ * temporary file in the same directory renamed over @path on success.  On
+ * error @path is untouched and no temporary file remains.
+ */
+int gcodew_write_file(const struct layer_stack *stack, const struct gcodew_settings *s,
+		      const char *path, struct gcodew_summary *sum, struct st_error *err);
+
+/*
+ * gcodew_expand - substitute PrusaSlicer placeholders in @text: [name],
+ * {name} and {name[i]} where i is 0 or initial_extruder/current_extruder.
+ * Known names: the numeric fields of struct gcodew_settings (by their
+ * PrusaSlicer key), total_layer_count (@nlayers), initial_extruder and
+ * current_extruder (0).  @what names the text in messages ("start_gcode").
+ * On success *out is a new NUL-terminated string (free() it); on error
+ * *out is NULL and err names the placeholder: ST_ERR_PARSE for an unknown
+ * name or an unclosed brace, ST_ERR_UNSUPPORTED for an expression other
+ * than these forms, ST_ERR_NOMEM.
+ */
+int gcodew_expand(const char *text, const char *what, const struct gcodew_settings *s,
+		  size_t nlayers, char **out, struct st_error *err);
+
+#endif /* STRATUM_SLICER_GCODE_WRITER_H */
