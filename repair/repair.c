@@ -27,6 +27,8 @@
 
 /* Rounding rounds before giving up (each usually fixes all it finds). */
 #define MAX_ROUNDING_ROUNDS 10
+/* Rounds without fewer defects before rounding moves to a coarser grid. */
+#define STALLED_ROUNDS 4
 
 /* Thickening passes: seed 000 needs one; more only guard odd inputs. */
 #define MAX_THICKEN_PASSES 3
@@ -315,10 +317,13 @@ static int thicken(const struct exact_mesh *em, const uint8_t *tag, const uint8_
 			goto out;
 		co->sheet_deviation = fmax(co->sheet_deviation, slab.deviation);
 		co->thickened += slab.ntris;
-		rc = exact_mesh_append(res, (const double(*)[3])slab.verts, slab.nverts,
-				       (const uint32_t(*)[3])slab.tris, slab.ntris, ORIGIN_THICKENED,
-				       NULL, err);
+		/* Walls hold the sheet's own points exactly, as in M_solid. */
+		rc = exact_mesh_append_ref(res, em, slab.sheet_ref,
+					   (const double(*)[3])slab.verts, slab.nverts,
+					   (const uint32_t(*)[3])slab.tris, slab.ntris,
+					   ORIGIN_THICKENED, NULL, err);
 		free(slab.verts);
+		free(slab.sheet_ref);
 		free(slab.tris);
 		if (rc)
 			goto out;
@@ -466,11 +471,12 @@ out:
 }
 
 /*
- * The snapping grid of rounding round r: none in round 0 (plain rounding to
- * the output precision); then 4^r units in the last place of the largest
+ * The snapping grid of coarsening level r: none at level 0 (plain rounding
+ * to the output precision); then 4^r units in the last place of the largest
  * coordinate, a power of two, so every grid point is still representable.
  * Coarser grids merge the clusters of nearly coincident points that plain
- * rounding turns into new crossings.
+ * rounding turns into new crossings; they also move more, so the loop only
+ * climbs a level when plain re-cutting stops making progress.
  */
 static double rounding_grid(const struct exact_mesh *em, enum repair_precision prec, int r)
 {
@@ -751,12 +757,14 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 
 	/* Round, check, and run the core again on what rounding broke. */
 	bool unchanged = false, checked = false;
+	int level = 0, stalled = 0; /* rounding_grid's coarsening level */
+	size_t last_defects = SIZE_MAX; /* of the previous round */
 	for (;;) {
 		bool changed = false;
 		double moved = 0;
 		progress(opt, "rounding", 0.9);
 		rc = round_result(co.result, opt->precision,
-				  rounding_grid(co.result, opt->precision, rep->rounding_rounds),
+				  rounding_grid(co.result, opt->precision, level),
 				  &rounded, &moved, &changed, err);
 		/* Rounds add up: each moves the previous round's result. */
 		rep->rounding_deviation += moved;
@@ -776,6 +784,17 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 		if (parts_printable(&mr))
 			break;
 		checked = false;
+		const size_t defects = (size_t)mr.self_intersections + mr.irregular + mr.degenerate +
+				       mr.duplicates + mr.boundary_edges + mr.singular_edges +
+				       mr.flipped_edges;
+		/* Climb only when re-cutting has stalled for a while: on the
+		 * random soups plain rounding converged in 11 of 12 cases and
+		 * climbing at the first stall in only 10. */
+		if (defects >= last_defects && ++stalled >= STALLED_ROUNDS) {
+			level++;
+			stalled = 0;
+		}
+		last_defects = defects;
 		/* Often rounding only collapsed slivers: dropping them is
 		 * enough, and needs no new (rational) points. */
 		if (mr.self_intersections == 0 && mr.degenerate == 0) {

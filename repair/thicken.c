@@ -19,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "ids.h"
 #include "thicken.h"
 
 /* Bends sharper than this keep separate vertex copies on each side. */
@@ -225,6 +226,7 @@ static uint32_t sheet_vertex(struct thick_out *out, const uint32_t *uv, size_t n
 
 	if (sidx[i] == UINT32_MAX) {
 		memcpy(out->verts[out->nverts], verts[v], sizeof(out->verts[0]));
+		out->sheet_ref[out->nverts] = v;
 		sidx[i] = (uint32_t)out->nverts++;
 	}
 	return sidx[i];
@@ -315,6 +317,75 @@ static int fill_corner_holes(struct thick_out *out, size_t cap, struct st_error 
 		}
 	}
 	free(next);
+	return 0;
+}
+
+struct x_order {
+	uint32_t v;
+	double x;
+};
+
+static int compare_x_order(const void *a, const void *b)
+{
+	const struct x_order *p = a, *q = b;
+
+	return p->x < q->x ? -1 : p->x > q->x;
+}
+
+/* A unit in the last place of a float at the slab's largest coordinate:
+ * points closer than this are one point once written to a binary STL. */
+static double weld_tolerance(const struct thick_out *out)
+{
+	double big = 0;
+	int e;
+
+	for (size_t v = 0; v < out->nverts; v++)
+		for (int k = 0; k < 3; k++)
+			big = fmax(big, fabs(out->verts[v][k]));
+	frexp(big, &e);
+	return ldexp(1.0, e - 24);
+}
+
+/*
+ * Make vertex copies closer than tol (in every coordinate) exactly equal.
+ * Copies of one sheet vertex in different fans that face the same way (or
+ * opposite ways) land within rounding of each other; left distinct, they
+ * are clusters of points a float cannot tell apart, and the exact pass
+ * turns them into slivers that rounding to the output precision flips.
+ * Equal, they are one point, which the exact mesh welds.
+ */
+static int weld_close(struct thick_out *out, double tol, struct st_error *err)
+{
+	struct x_order *o = malloc((out->nverts + 1) * sizeof(*o));
+	uint32_t *rep = malloc((out->nverts + 1) * sizeof(*rep));
+
+	if (!o || !rep) {
+		free(o);
+		free(rep);
+		return st_error_set(err, ST_ERR_NOMEM, "out of memory welding slab vertices");
+	}
+	size_t no = 0;
+	for (uint32_t v = 0; v < out->nverts; v++) {
+		rep[v] = v;
+		if (out->sheet_ref[v] != UINT32_MAX)
+			continue; /* the sheet's own point: exact, never moved */
+		o[no].v = v;
+		o[no++].x = out->verts[v][0];
+	}
+	qsort(o, no, sizeof(*o), compare_x_order);
+	for (size_t i = 0; i < no; i++)
+		for (size_t j = i + 1; j < no && o[j].x - o[i].x <= tol; j++) {
+			const double *a = out->verts[o[i].v], *b = out->verts[o[j].v];
+			if (fabs(a[1] - b[1]) <= tol && fabs(a[2] - b[2]) <= tol)
+				uf_union(rep, o[i].v, o[j].v);
+		}
+	for (uint32_t v = 0; v < out->nverts; v++) {
+		const uint32_t r = uf_find(rep, v);
+		if (r != v)
+			memcpy(out->verts[v], out->verts[r], sizeof(out->verts[v]));
+	}
+	free(o);
+	free(rep);
 	return 0;
 }
 
@@ -471,10 +542,11 @@ int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const ui
 	 * per corner a wall or half a bevel (two faces each) plus the fans
 	 * that close corners (fewer faces than the edges they close). */
 	out->verts = malloc((2 * ng + 3 * n + 1) * sizeof(*out->verts));
+	out->sheet_ref = malloc((2 * ng + 3 * n + 1) * sizeof(*out->sheet_ref));
 	out->tris = malloc((32 * n + 1) * sizeof(*out->tris));
 	uv = malloc((3 * n + 1) * sizeof(*uv));
 	sidx = malloc((3 * n + 1) * sizeof(*sidx));
-	if (!out->verts || !out->tris || !uv || !sidx) {
+	if (!out->verts || !out->sheet_ref || !out->tris || !uv || !sidx) {
 		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory thickening %zu sheet triangles",
 				  n);
 		goto out;
@@ -497,6 +569,8 @@ int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const ui
 		}
 	}
 	out->nverts = 2 * ng;
+	for (size_t v = 0; v < out->nverts; v++)
+		out->sheet_ref[v] = UINT32_MAX;
 	for (uint32_t c = 0; c < 3 * n; c++)
 		uv[c] = tris[list[c / 3]][c % 3];
 	qsort(uv, 3 * n, sizeof(*uv), compare_u32);
@@ -573,6 +647,8 @@ int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const ui
 	}
 #undef COPY
 	rc = fill_corner_holes(out, 32 * n, err);
+	if (!rc)
+		rc = weld_close(out, weld_tolerance(out), err);
 	if (rc)
 		goto out;
 	/* Every copy is exactly half from its vertex (up to rounding). */
@@ -592,6 +668,7 @@ int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const ui
 out:
 	if (rc) {
 		free(out->verts);
+		free(out->sheet_ref);
 		free(out->tris);
 		memset(out, 0, sizeof(*out));
 	}

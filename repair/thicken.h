@@ -11,8 +11,9 @@
 #include "st_error.h"
 
 struct thick_out {
-	double (*verts)[3];	/* malloc'd; free() both arrays */
+	double (*verts)[3];	/* malloc'd; free() the three arrays */
 	uint32_t (*tris)[3];
+	uint32_t *sheet_ref;	/* per vertex: the sheet vertex it is, or UINT32_MAX */
 	size_t nverts, ntris;
 	double deviation;	/* largest distance of a new vertex from its own, mm */
 	size_t cut_edges;	/* two-triangle edges cut to orient the sheets */

@@ -633,10 +633,25 @@ int exact_mesh_append(struct exact_mesh *m, const double (*verts)[3], size_t nve
 		      const uint32_t (*tris)[3], size_t ntris, uint32_t origin, size_t *skipped,
 		      struct st_error *err)
 {
+	return exact_mesh_append_ref(m, nullptr, nullptr, verts, nverts, tris, ntris, origin,
+				     skipped, err);
+}
+
+int exact_mesh_append_ref(struct exact_mesh *m, const struct exact_mesh *src, const uint32_t *ref,
+			  const double (*verts)[3], size_t nverts, const uint32_t (*tris)[3],
+			  size_t ntris, uint32_t origin, size_t *skipped, struct st_error *err)
+{
 	if (skipped)
 		*skipped = 0;
-	if (!m || (nverts && !verts) || (ntris && !tris))
+	if (!m || (nverts && !verts) || (ntris && !tris) || (ref && !src))
 		return st_error_set(err, ST_ERR_ARG, "exact: NULL mesh or array");
+	if (ref)
+		for (size_t v = 0; v < nverts; v++)
+			if (ref[v] != UINT32_MAX && ref[v] >= src->approx.size())
+				return st_error_set(err, ST_ERR_ARG,
+						    "exact: appended vertex %zu refers to vertex "
+						    "%lu of %zu", v, (unsigned long)ref[v],
+						    src->approx.size());
 	for (size_t v = 0; v < nverts; v++)
 		if (!finite3(verts[v]))
 			return st_error_set(err, ST_ERR_ARG, "exact: appended vertex %zu is not "
@@ -654,14 +669,46 @@ int exact_mesh_append(struct exact_mesh *m, const double (*verts)[3], size_t nve
 				weld.emplace(dkey{{m->approx[v][0], m->approx[v][1],
 						   m->approx[v][2]}},
 					     static_cast<uint32_t>(v));
+		/* Rational vertices by their approximation, compared exactly. */
+		std::unordered_multimap<dkey, uint32_t, dkey_hash> rational;
+		if (ref)
+			for (size_t v = 0; v < m->approx.size(); v++)
+				if (m->slot[v] >= 0)
+					rational.emplace(dkey{{m->approx[v][0], m->approx[v][1],
+							       m->approx[v][2]}},
+							 static_cast<uint32_t>(v));
 		std::vector<uint32_t> map(nverts);
 		for (size_t v = 0; v < nverts; v++) {
-			dkey k = {{verts[v][0], verts[v][1], verts[v][2]}};
+			if (ref && ref[v] != UINT32_MAX && src->slot[ref[v]] >= 0) {
+				const std::array<double, 3> &a = src->approx[ref[v]];
+				const EPoint &p = src->ex[static_cast<size_t>(src->slot[ref[v]])];
+				const dkey k = {{a[0], a[1], a[2]}};
+				uint32_t found = UINT32_MAX;
+				for (auto r = rational.equal_range(k); r.first != r.second; ++r.first)
+					if (epoint(*m, r.first->second) == p) {
+						found = r.first->second;
+						break;
+					}
+				if (found == UINT32_MAX) {
+					if (m->approx.size() >= MESH_LIMIT)
+						throw std::length_error("too many vertices");
+					m->approx.push_back(a);
+					m->slot.push_back(static_cast<int32_t>(m->ex.size()));
+					m->ex.push_back(p);
+					found = static_cast<uint32_t>(m->approx.size() - 1);
+					rational.emplace(k, found);
+				}
+				map[v] = found;
+				continue;
+			}
+			const double *d = ref && ref[v] != UINT32_MAX ? src->approx[ref[v]].data()
+								       : verts[v];
+			dkey k = {{d[0], d[1], d[2]}};
 			auto it = weld.find(k);
 			if (it == weld.end()) {
 				if (m->approx.size() >= MESH_LIMIT)
 					throw std::length_error("too many vertices");
-				m->approx.push_back({verts[v][0], verts[v][1], verts[v][2]});
+				m->approx.push_back({d[0], d[1], d[2]});
 				m->slot.push_back(-1);
 				it = weld.emplace(k, static_cast<uint32_t>(m->approx.size() - 1))
 					 .first;

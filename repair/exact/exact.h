@@ -103,6 +103,17 @@ int exact_mesh_append(struct exact_mesh *m, const double (*verts)[3], size_t nve
 		      struct st_error *err);
 
 /*
+ * exact_mesh_append_ref - exact_mesh_append where vertex v may instead be
+ * vertex ref[v] of src, exactly (ref[v] == UINT32_MAX: verts[v] as above).
+ * A referenced rational point is welded with an equal one already in m, so
+ * new triangles meet src's points exactly, not within rounding of them.
+ * ref may be NULL (then src too).
+ */
+int exact_mesh_append_ref(struct exact_mesh *m, const struct exact_mesh *src, const uint32_t *ref,
+			  const double (*verts)[3], size_t nverts, const uint32_t (*tris)[3],
+			  size_t ntris, uint32_t origin, size_t *skipped, struct st_error *err);
+
+/*
  * exact_mesh_select - a new exact mesh with the triangles whose keep flag
  * is set, in order, reversed where flip is set (flip may be NULL), over
  * only the vertices they use (exact positions kept).
