@@ -81,12 +81,14 @@ int pat_lines(double a, double spacing, double phase, const struct pat_box *box,
 /*
  * One sampled branch of the gyroid section: the curve t -> (t, w(t)) with
  * w = phi(t) + sign acos(-c(t) / r(t)) + 2 pi m, where the section reads
- * a(t) cos w + b sin w + c(t) = 0 (see pat_gyroid).  swap exchanges the
+ * a cos w + b sin w + c = 0 (see pat_gyroid), phi = atan2(b, a).  swap exchanges the
  * roles of x and y.  Points are appended to xy (2 * n doubles), in nm.
  */
 static void gyroid_branch(double k, double sz, double cz, bool swap, double sign, double m,
 			  double t0, double dt, size_t n, int64_t *xy)
 {
+	double prev = 0;
+
 	for (size_t i = 0; i < n; i++) {
 		double t = t0 + dt * (double)i, a, b, c;
 		if (!swap) { /* sin x cos y + cos z sin y + sin z cos x = 0, solve for y */
@@ -100,7 +102,12 @@ static void gyroid_branch(double k, double sz, double cz, bool swap, double sign
 		}
 		double r = hypot(a, b), q = r > 0 ? -c / r : 0;
 		q = fmax(-1.0, fmin(1.0, q));
-		double w = atan2(b, a) + sign * acos(q) + 2 * M_PI * m;
+		/* phi unwrapped: atan2 jumps by 2 pi where b changes sign with a < 0 */
+		double phi = atan2(b, a);
+		if (i)
+			phi += 2 * M_PI * round((prev - phi) / (2 * M_PI));
+		prev = phi;
+		double w = phi + sign * acos(q) + 2 * M_PI * m;
 		double px = swap ? w : t, py = swap ? t : w;
 		xy[2 * i] = llround(px / k);
 		xy[2 * i + 1] = llround(py / k);
@@ -110,11 +117,11 @@ static void gyroid_branch(double k, double sz, double cz, bool swap, double sign
 /*
  * The section at height z is a family of curves.  Grouped in y it reads
  * sin x cos y + cos z sin y = -sin z cos x, i.e. r cos(y - phi) = -c with
- * r = hypot(sin x, cos z): when |cos z| >= |sin z| it has a solution for
- * every x and phi = atan2(cos z, sin x) is continuous (cos z != 0), so each
- * branch y(x) is one continuous curve across the box.  Otherwise the same
- * holds with x and y exchanged (grouping in x: cos y sin x + sin z cos x =
- * -sin y cos z, with sin z != 0).
+ * r = hypot(sin x, cos z), phi = atan2(cos z, sin x): when |cos z| >=
+ * |sin z|, |c| <= r for every x, so each branch y(x) is one continuous
+ * curve across the box.  Otherwise the same holds with x and y exchanged
+ * (grouping in x: sin z cos x + cos y sin x = -sin y cos z).  Branches
+ * meet where |c| = r; together they trace the closed section.
  */
 int pat_gyroid(double k, double z_nm, const struct pat_box *box, struct clip_paths *out,
 	       struct st_error *err)
