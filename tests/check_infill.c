@@ -17,6 +17,7 @@
 #include "perimeters.h"
 #include "section.h"
 #include "suites.h"
+#include "testutil.h"
 #include "toolpath.h"
 
 #define NM SLICE_UNITS_PER_MM
@@ -65,25 +66,6 @@ static void run_free(struct run *r)
 	slice_stack_free(r->st);
 }
 
-static size_t count_role(const struct layer_paths *l, enum path_role role)
-{
-	size_t c = 0;
-
-	for (size_t i = 0; i < l->n; i++)
-		c += l->paths[i].role == role;
-	return c;
-}
-
-static double path_length(const struct toolpath *p)
-{
-	double s = 0;
-
-	for (size_t i = 1; i < p->n; i++)
-		s += hypot((double)(p->pts[i].x - p->pts[i - 1].x),
-			   (double)(p->pts[i].y - p->pts[i - 1].y));
-	return s;
-}
-
 /*
  * Flow-equivalent area (nm^2) of the paths of role on layer l: length x
  * the bead spacing of their width at height h (perim_spacing), i.e. the
@@ -95,7 +77,7 @@ static double flow_area(const struct layer_paths *l, enum path_role role, double
 
 	for (size_t i = 0; i < l->n; i++)
 		if (l->paths[i].role == role)
-			a += path_length(&l->paths[i]) *
+			a += tu_path_length(&l->paths[i]) *
 			     perim_spacing(l->paths[i].pts[0].width / NM, h) * NM;
 	return a;
 }
@@ -107,7 +89,7 @@ static double bead_area(const struct layer_paths *l, enum path_role role)
 
 	for (size_t i = 0; i < l->n; i++)
 		if (l->paths[i].role == role)
-			a += path_length(&l->paths[i]) * (double)l->paths[i].pts[0].width;
+			a += tu_path_length(&l->paths[i]) * (double)l->paths[i].pts[0].width;
 	return a;
 }
 
@@ -219,7 +201,7 @@ START_TEST(cube_skins_and_sparse)
 			ck_assert_msg(l->paths[k].role == want || l->paths[k].role == PATH_GAP_FILL,
 				      "layer %zu path %zu is %s", i, k,
 				      path_role_name(l->paths[k].role));
-		ck_assert_uint_eq(count_role(l, PATH_BRIDGE), 0);
+		ck_assert_uint_eq(tu_count_role(l, PATH_BRIDGE), 0);
 		double fa = flow_area(l, want, h) + flow_area(l, PATH_GAP_FILL, h);
 		if (want == PATH_SPARSE_INFILL) {
 			/* Lines at spacing / d: d of the region's volume, beads d w / s of it. */
@@ -286,7 +268,7 @@ START_TEST(patterns_stay_inside)
 					continue;
 				double A = region_area(&r.inner[i]);
 				double fa = flow_area(&r.ls->layers[i], PATH_SPARSE_INFILL, h);
-				ck_assert_uint_eq(count_role(&r.ls->layers[i], PATH_SPARSE_INFILL),
+				ck_assert_uint_eq(tu_count_role(&r.ls->layers[i], PATH_SPARSE_INFILL),
 						  r.ls->layers[i].n);
 				worst = fmax(worst, fabs(fa / (d * A) - 1));
 				mean += fa / (d * A) / (double)(r.st->n - 6);
@@ -321,7 +303,7 @@ START_TEST(bridge_between_pillars)
 	run_infill(m, h, &is, &r);
 	ck_assert_uint_eq(r.st->n, 30);
 	for (size_t i = 0; i < 25; i++)
-		ck_assert_uint_eq(count_role(&r.ls->layers[i], PATH_BRIDGE), 0);
+		ck_assert_uint_eq(tu_count_role(&r.ls->layers[i], PATH_BRIDGE), 0);
 	/* Layer 25 (z 5.0 .. 5.2) is the first slab layer. */
 	const struct layer_paths *l = &r.ls->layers[25];
 	double bw = h + M_PI * (0.16 - h * h) / (4 * h);
@@ -342,22 +324,22 @@ START_TEST(bridge_between_pillars)
 		double x0 = fmin(p->pts[0].x, p->pts[p->n - 1].x) / NM;
 		double x1 = fmax(p->pts[0].x, p->pts[p->n - 1].x) / NM;
 		ck_assert_msg(x0 < 5 && x1 > 15, "bridge line %zu from x %g to %g mm", k, x0, x1);
-		across += path_length(p);
+		across += tu_path_length(p);
 	}
 	ck_assert_msg(nb >= 15, "%zu bridge lines", nb);
 	/* The gap (10 x ~8.4 mm inside the walls) is spanned: lines every 0.45 mm. */
 	ck_assert_msg(across / NM > 8.0 / 0.45 * 10, "bridge lines total %g mm", across / NM);
 	/* Over the bridge: solid infill, then the top shell. */
-	ck_assert_uint_gt(count_role(&r.ls->layers[26], PATH_SOLID_INFILL), 0);
-	ck_assert_uint_eq(count_role(&r.ls->layers[26], PATH_BRIDGE), 0);
+	ck_assert_uint_gt(tu_count_role(&r.ls->layers[26], PATH_SOLID_INFILL), 0);
+	ck_assert_uint_eq(tu_count_role(&r.ls->layers[26], PATH_BRIDGE), 0);
 	for (size_t i = 27; i < 30; i++)
-		ck_assert_uint_gt(count_role(&r.ls->layers[i], PATH_TOP_SKIN), 0);
+		ck_assert_uint_gt(tu_count_role(&r.ls->layers[i], PATH_TOP_SKIN), 0);
 	run_free(&r);
 	/* A fixed bridge_angle overrides the detection. */
 	is.bridge_angle = 90;
 	run_infill(m, h, &is, &r);
 	l = &r.ls->layers[25];
-	ck_assert_uint_gt(count_role(l, PATH_BRIDGE), 0);
+	ck_assert_uint_gt(tu_count_role(l, PATH_BRIDGE), 0);
 	for (size_t k = 0; k < l->n; k++)
 		if (l->paths[k].role == PATH_BRIDGE)
 			ck_assert_int_eq(l->paths[k].pts[0].x, l->paths[k].pts[1].x);
@@ -414,11 +396,11 @@ static void skin_layers(const struct infill_settings *is, const double *heights,
 	ck_assert_msg(infill_generate(is, st, inner, ls, &err) == 0, "infill: %s", err.msg);
 	*nbottom = *ntop = 0;
 	for (size_t i = 0; i < n; i++) {
-		*nbottom += count_role(&ls->layers[i], PATH_BOTTOM_SKIN) > 0;
-		*ntop += count_role(&ls->layers[i], PATH_TOP_SKIN) > 0;
+		*nbottom += tu_count_role(&ls->layers[i], PATH_BOTTOM_SKIN) > 0;
+		*ntop += tu_count_role(&ls->layers[i], PATH_TOP_SKIN) > 0;
 		/* A layer is one class: all solid or all sparse here. */
-		ck_assert(count_role(&ls->layers[i], PATH_SPARSE_INFILL) == 0 ||
-			  count_role(&ls->layers[i], PATH_SPARSE_INFILL) == ls->layers[i].n);
+		ck_assert(tu_count_role(&ls->layers[i], PATH_SPARSE_INFILL) == 0 ||
+			  tu_count_role(&ls->layers[i], PATH_SPARSE_INFILL) == ls->layers[i].n);
 		clip_expolys_free(&inner[i]);
 	}
 	layer_stack_free(ls);
@@ -480,8 +462,8 @@ START_TEST(small_and_full_density_are_solid)
 		is.solid_infill_below_area = pass == 0 ? 0 : 70;
 		ck_assert_int_eq(infill_generate(&is, st, inner, ls, &err), 0);
 		const struct layer_paths *l = &ls->layers[5];
-		ck_assert_uint_eq(count_role(l, PATH_SPARSE_INFILL), 0);
-		ck_assert_uint_gt(count_role(l, PATH_SOLID_INFILL), 0);
+		ck_assert_uint_eq(tu_count_role(l, PATH_SPARSE_INFILL), 0);
+		ck_assert_uint_gt(tu_count_role(l, PATH_SOLID_INFILL), 0);
 		double A = region_area(&inner[5]);
 		ck_assert(covered(l, SOLID_ROLES, 0, CLIP_END_ROUND, &inner[5]) / A >= 0.99);
 		for (size_t i = 0; i < 10; i++)
