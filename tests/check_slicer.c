@@ -15,6 +15,7 @@
 #include "perimeters.h"
 #include "section.h"
 #include "suites.h"
+#include "testutil.h"
 #include "toolpath.h"
 
 #define NM SLICE_UNITS_PER_MM
@@ -119,31 +120,12 @@ static double dist_to_paths(const struct clip_paths *ps, double px, double py)
 	return best;
 }
 
-static size_t count_role(const struct layer_paths *l, enum path_role role)
-{
-	size_t c = 0;
-
-	for (size_t i = 0; i < l->n; i++)
-		c += l->paths[i].role == role;
-	return c;
-}
-
 static const struct toolpath *first_role(const struct layer_paths *l, enum path_role role)
 {
 	for (size_t i = 0; i < l->n; i++)
 		if (l->paths[i].role == role)
 			return &l->paths[i];
 	return NULL;
-}
-
-static double path_length(const struct toolpath *p)
-{
-	double s = 0;
-
-	for (size_t i = 1; i < p->n; i++)
-		s += hypot((double)(p->pts[i].x - p->pts[i - 1].x),
-			   (double)(p->pts[i].y - p->pts[i - 1].y));
-	return s;
 }
 
 /* Signed area (nm^2) of a closed toolpath, > 0 counter-clockwise. */
@@ -284,10 +266,10 @@ START_TEST(cube_layers_and_outer_wall)
 	const struct slice_layer *sl = &st->layers[10];
 	walls_ok(&s, sl, &out, &inner);
 	double w = 0.45 * NM, sp = perim_spacing(0.45, 0.2) * NM;
-	ck_assert_uint_eq(count_role(&out, PATH_OUTER_PERIMETER), 1);
-	ck_assert_uint_eq(count_role(&out, PATH_INNER_PERIMETER), 1);
-	ck_assert_uint_eq(count_role(&out, PATH_THIN_WALL), 0);
-	ck_assert_uint_eq(count_role(&out, PATH_GAP_FILL), 0);
+	ck_assert_uint_eq(tu_count_role(&out, PATH_OUTER_PERIMETER), 1);
+	ck_assert_uint_eq(tu_count_role(&out, PATH_INNER_PERIMETER), 1);
+	ck_assert_uint_eq(tu_count_role(&out, PATH_THIN_WALL), 0);
+	ck_assert_uint_eq(tu_count_role(&out, PATH_GAP_FILL), 0);
 	/* Inner to outer by default. */
 	ck_assert_int_eq(out.paths[0].role, PATH_INNER_PERIMETER);
 	ck_assert_int_eq(out.paths[1].role, PATH_OUTER_PERIMETER);
@@ -346,7 +328,7 @@ START_TEST(cylinder_outer_wall_within_chord)
 	walls_ok(&s, &st->layers[3], &out, &inner);
 	const struct toolpath *o = first_role(&out, PATH_OUTER_PERIMETER);
 	ck_assert_ptr_nonnull(o);
-	ck_assert_uint_eq(count_role(&out, PATH_OUTER_PERIMETER), 1);
+	ck_assert_uint_eq(tu_count_role(&out, PATH_OUTER_PERIMETER), 1);
 	ck_assert(path_area(o) > 0); /* counter-clockwise */
 	double worst_poly = 0, worst_circle = 0;
 	for (size_t k = 0; k < o->n; k++) {
@@ -392,10 +374,10 @@ START_TEST(two_mm_wall_filled_by_walls)
 
 	perim_settings_init(&s, 0.4);
 	walls_ok(&s, &st->layers[2], &out, &inner);
-	ck_assert_uint_eq(count_role(&out, PATH_OUTER_PERIMETER), 1);
-	ck_assert_uint_eq(count_role(&out, PATH_INNER_PERIMETER), 1);
-	ck_assert_uint_eq(count_role(&out, PATH_THIN_WALL), 0);
-	ck_assert_uint_eq(count_role(&out, PATH_GAP_FILL), 0);
+	ck_assert_uint_eq(tu_count_role(&out, PATH_OUTER_PERIMETER), 1);
+	ck_assert_uint_eq(tu_count_role(&out, PATH_INNER_PERIMETER), 1);
+	ck_assert_uint_eq(tu_count_role(&out, PATH_THIN_WALL), 0);
+	ck_assert_uint_eq(tu_count_role(&out, PATH_GAP_FILL), 0);
 	/* The middle strip goes to infill: 2 - 2 (w/2 + 1.5 s) wide. */
 	double iw = 2 - 2 * (w / 2 + 1.5 * sp), il = 20 - 2 * (w / 2 + 1.5 * sp), ia;
 	ck_assert_uint_eq(inner.n, 1);
@@ -405,10 +387,10 @@ START_TEST(two_mm_wall_filled_by_walls)
 	/* Three walls asked: no room for the third, the strip is gap-filled. */
 	s.perimeters = 3;
 	walls_ok(&s, &st->layers[2], &out, &inner);
-	ck_assert_uint_eq(count_role(&out, PATH_OUTER_PERIMETER), 1);
-	ck_assert_uint_eq(count_role(&out, PATH_INNER_PERIMETER), 1);
-	ck_assert_uint_eq(count_role(&out, PATH_THIN_WALL), 0);
-	ck_assert_uint_eq(count_role(&out, PATH_GAP_FILL), 1);
+	ck_assert_uint_eq(tu_count_role(&out, PATH_OUTER_PERIMETER), 1);
+	ck_assert_uint_eq(tu_count_role(&out, PATH_INNER_PERIMETER), 1);
+	ck_assert_uint_eq(tu_count_role(&out, PATH_THIN_WALL), 0);
+	ck_assert_uint_eq(tu_count_role(&out, PATH_GAP_FILL), 1);
 	ck_assert_uint_eq(inner.n, 0);
 	const struct toolpath *g = first_role(&out, PATH_GAP_FILL);
 	for (size_t k = 0; k < g->n; k++) {
@@ -416,7 +398,7 @@ START_TEST(two_mm_wall_filled_by_walls)
 			      (long long)g->pts[k].width);
 		ck_assert(fabs(g->pts[k].y - 1 * NM) < 1 * UM);
 	}
-	double gl = path_length(g) / NM;
+	double gl = tu_path_length(g) / NM;
 	ck_assert_msg(fabs(gl - (il - iw)) < 0.05, "gap fill length %g, want %g", gl, il - iw);
 	free_paths(&out);
 	clip_expolys_free(&inner);
@@ -437,7 +419,7 @@ START_TEST(wall_of_nozzle_width_gets_one_thin_wall)
 	ck_assert(fabs(s.extrusion_width - 0.45) < 1e-15);
 	walls_ok(&s, &st->layers[1], &out, &inner);
 	ck_assert_uint_eq(out.n, 1);
-	ck_assert_uint_eq(count_role(&out, PATH_THIN_WALL), 1);
+	ck_assert_uint_eq(tu_count_role(&out, PATH_THIN_WALL), 1);
 	ck_assert_uint_eq(inner.n, 0);
 	const struct toolpath *t = &out.paths[0];
 	ck_assert(!t->closed);
@@ -448,7 +430,7 @@ START_TEST(wall_of_nozzle_width_gets_one_thin_wall)
 			      (long long)t->pts[k].y);
 	}
 	/* Bead ends are round: the centre line stops w/2 short of each end. */
-	double len = path_length(t) / NM;
+	double len = tu_path_length(t) / NM;
 	ck_assert_msg(fabs(len - (20 - 0.4)) < 0.01, "thin wall length %g", len);
 	free_paths(&out);
 	/* Without thin walls the wall would be lost entirely. */
@@ -506,9 +488,9 @@ START_TEST(plate_holes_stay_holes)
 		}
 	}
 	ck_assert_uint_eq(hole_loops, 2);
-	ck_assert_uint_eq(count_role(&out, PATH_OUTER_PERIMETER), 3);
-	ck_assert_uint_eq(count_role(&out, PATH_INNER_PERIMETER), 3);
-	ck_assert_uint_eq(count_role(&out, PATH_THIN_WALL), 0);
+	ck_assert_uint_eq(tu_count_role(&out, PATH_OUTER_PERIMETER), 3);
+	ck_assert_uint_eq(tu_count_role(&out, PATH_INNER_PERIMETER), 3);
+	ck_assert_uint_eq(tu_count_role(&out, PATH_THIN_WALL), 0);
 	/* The infill region keeps both holes. */
 	ck_assert_uint_eq(inner.n, 1);
 	ck_assert_uint_eq(inner.first[1] - inner.first[0], 3);

@@ -2,6 +2,7 @@
 #include "testutil.h"
 
 #include <check.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -98,4 +99,23 @@ int tu_file_exists(const char *path)
 	struct stat st;
 
 	return stat(path, &st) == 0;
+}
+
+size_t tu_count_role(const struct layer_paths *l, enum path_role role)
+{
+	size_t c = 0;
+
+	for (size_t i = 0; i < l->n; i++)
+		c += l->paths[i].role == role;
+	return c;
+}
+
+double tu_path_length(const struct toolpath *p)
+{
+	double s = 0;
+
+	for (size_t i = 1; i < p->n; i++)
+		s += hypot((double)(p->pts[i].x - p->pts[i - 1].x),
+			   (double)(p->pts[i].y - p->pts[i - 1].y));
+	return s;
 }

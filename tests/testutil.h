@@ -1,11 +1,14 @@
 /*
  * testutil.h - helpers shared by the Check suites: scratch files and running
- * the built binary (path in $STRATUM_BIN, set by the Makefile).
+ * the built binary (path in $STRATUM_BIN, set by the Makefile); counting
+ * and measuring the slicer's toolpaths.
  */
 #ifndef STRATUM_TESTS_TESTUTIL_H
 #define STRATUM_TESTS_TESTUTIL_H
 
 #include <stddef.h>
+
+#include "toolpath.h"
 
 /* tu_scratch_init / tu_scratch_cleanup - make and remove the scratch
  * directory under $TMPDIR; check_main.c calls them around the whole run. */
@@ -34,5 +37,11 @@ int tu_run(char *out, size_t cap, const char *args_fmt, ...)
 
 /* tu_file_exists - 1 if path exists. */
 int tu_file_exists(const char *path);
+
+/* tu_count_role - number of paths of role on layer l. */
+size_t tu_count_role(const struct layer_paths *l, enum path_role role);
+
+/* tu_path_length - length of the open polyline through p's points, nm. */
+double tu_path_length(const struct toolpath *p);
 
 #endif

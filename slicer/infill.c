@@ -1,0 +1,735 @@
+/*
+ * infill.c - classification of the region inside the walls into skins,
+ * bridges, solid and sparse infill, and their lines (see infill.h).
+ */
+#include "infill.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "medial.h"
+#include "patterns.h"
+#include "perimeters.h"
+
+/* Chord error of round offsets, nm. */
+#define INFILL_ARC_NM 2000.0
+/* Heights closer than this are equal, mm. */
+#define INFILL_EPS_MM 1e-6
+/* Gap between bridge threads beyond their diameter, mm. */
+#define INFILL_BRIDGE_GAP_MM 0.05
+/* Bridges reach this many solid widths into the supported area. */
+#define INFILL_ANCHOR_WIDTHS 3.0
+/* Bridge directions tried: every 180 / this many degrees. */
+#define INFILL_BRIDGE_DIRS 180
+/* Directions anchoring within this fraction of the best compete on length. */
+#define INFILL_BRIDGE_SCORE_SLACK 0.01
+/* Solid lines on an island's edge parallel to them stay this far inside, nm. */
+#define INFILL_EDGE_MARGIN_NM 10000.0
+/* Clipped pieces of lines shorter than this are dropped, nm. */
+#define INFILL_MIN_SEGMENT_NM 10000.0
+
+/* Everything one infill_generate call works with; lengths nm unless named. */
+struct ctx {
+	const struct infill_settings *s;
+	const struct slice_stack *st;
+	const struct clip_expolys *inner;
+	struct layer_paths *out;
+	struct st_error *err;
+	size_t layer;	    /* index of the layer being filled */
+	double h;	    /* mm, its height */
+	double overlap;	    /* how far infill reaches into the walls */
+	double t_top, t_bot; /* mm, shell thicknesses */
+	int64_t lx, ly;	    /* where the last path ended */
+};
+
+/* The lines of one solid class: width, flow spacing, role. */
+struct bead {
+	double w, sp;
+	enum path_role role;
+	bool gap_fill;
+};
+
+/* PrusaSlicer's fill_pattern values; pattern -1: known there, not printed here. */
+static const struct {
+	const char *name;
+	int pattern;
+} pattern_names[] = {
+	{"rectilinear", INFILL_RECTILINEAR},
+	{"grid", INFILL_GRID},
+	{"gyroid", INFILL_GYROID},
+	{"alignedrectilinear", -1},
+	{"monotonic", -1},
+	{"monotoniclines", -1},
+	{"triangles", -1},
+	{"stars", -1},
+	{"cubic", -1},
+	{"line", -1},
+	{"concentric", -1},
+	{"honeycomb", -1},
+	{"3dhoneycomb", -1},
+	{"hilbertcurve", -1},
+	{"archimedeanchords", -1},
+	{"octagramspiral", -1},
+	{"adaptivecubic", -1},
+	{"supportcubic", -1},
+	{"lightning", -1},
+};
+
+void infill_settings_init(struct infill_settings *s, double nozzle_diameter)
+{
+	double w = 1.125 * nozzle_diameter;
+
+	*s = (struct infill_settings){
+		.nozzle_diameter = nozzle_diameter,
+		.fill_density = 20.0,
+		.fill_pattern = INFILL_GRID,
+		.fill_angle = 45.0,
+		.bridge_angle = 0.0,
+		.top_solid_layers = 3,
+		.bottom_solid_layers = 3,
+		.top_solid_min_thickness = 0.0,
+		.bottom_solid_min_thickness = 0.0,
+		.layer_height = 0.0,
+		.perimeter_extrusion_width = w,
+		.infill_extrusion_width = w,
+		.solid_infill_extrusion_width = w,
+		.top_infill_extrusion_width = w,
+		.infill_overlap = 25.0,
+		.solid_infill_below_area = 70.0,
+		.bridge_flow_ratio = 1.0,
+		.gap_fill_min = 0.1,
+	};
+}
+
+int infill_pattern_parse(const char *name, enum infill_pattern *out, struct st_error *err)
+{
+	for (size_t i = 0; name && i < sizeof(pattern_names) / sizeof(pattern_names[0]); i++) {
+		if (strcmp(name, pattern_names[i].name))
+			continue;
+		if (pattern_names[i].pattern < 0)
+			return st_error_set(err, ST_ERR_UNSUPPORTED,
+					    "infill: fill_pattern \"%s\" is not supported; use "
+					    "rectilinear, grid or gyroid",
+					    name);
+		*out = (enum infill_pattern)pattern_names[i].pattern;
+		return 0;
+	}
+	return st_error_set(err, ST_ERR_ARG,
+			    "infill: fill_pattern \"%.64s\" is unknown; use rectilinear, grid or "
+			    "gyroid",
+			    name ? name : "(none)");
+}
+
+const char *infill_pattern_name(enum infill_pattern p)
+{
+	for (size_t i = 0; i < sizeof(pattern_names) / sizeof(pattern_names[0]); i++)
+		if (pattern_names[i].pattern == (int)p)
+			return pattern_names[i].name;
+	return "unknown";
+}
+
+/* Refuse a width (mm) that is not in (0, 4 x nozzle]. */
+static int check_width(const struct infill_settings *s, const char *key, double w,
+		       struct st_error *err)
+{
+	if (!(w > 0.0 && w <= 4.0 * s->nozzle_diameter))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "infill: %s %g mm is out of range; use (0, %g] mm (4 x the "
+				    "nozzle diameter)",
+				    key, w, 4.0 * s->nozzle_diameter);
+	return 0;
+}
+
+int infill_settings_check(const struct infill_settings *s, struct st_error *err)
+{
+	int rc;
+
+	if (!s)
+		return st_error_set(err, ST_ERR_ARG, "infill: no settings given");
+	if (!(s->nozzle_diameter > 0.0 && s->nozzle_diameter <= 5.0))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "infill: nozzle diameter %g mm is out of range; use (0, 5] mm",
+				    s->nozzle_diameter);
+	if (!(s->fill_density >= 0.0 && s->fill_density <= 100.0))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "infill: fill_density %g %% is out of range; use 0 to 100 %% "
+				    "(100 %% is solid)",
+				    s->fill_density);
+	if ((unsigned)s->fill_pattern >= INFILL_PATTERNS)
+		return st_error_set(err, ST_ERR_ARG,
+				    "infill: fill_pattern %d is unknown; use rectilinear, grid or "
+				    "gyroid",
+				    (int)s->fill_pattern);
+	if (!isfinite(s->fill_angle) || !isfinite(s->bridge_angle))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "infill: fill_angle and bridge_angle must be finite degrees");
+	if (s->top_solid_layers < 0 || s->bottom_solid_layers < 0 ||
+	    s->top_solid_layers > 10000 || s->bottom_solid_layers > 10000)
+		return st_error_set(err, ST_ERR_RANGE,
+				    "infill: top_solid_layers %d / bottom_solid_layers %d out of "
+				    "range; use 0 to 10000",
+				    s->top_solid_layers, s->bottom_solid_layers);
+	if (!(s->top_solid_min_thickness >= 0.0 && s->top_solid_min_thickness <= 1000.0) ||
+	    !(s->bottom_solid_min_thickness >= 0.0 && s->bottom_solid_min_thickness <= 1000.0))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "infill: top_solid_min_thickness %g mm / "
+				    "bottom_solid_min_thickness %g mm out of range; use 0 to 1000 mm",
+				    s->top_solid_min_thickness, s->bottom_solid_min_thickness);
+	if (!(s->layer_height >= 0.0 && s->layer_height <= s->nozzle_diameter))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "infill: layer_height %g mm is out of range; use 0 (the most "
+				    "common layer height) up to the nozzle diameter %g mm",
+				    s->layer_height, s->nozzle_diameter);
+	if ((rc = check_width(s, "perimeter_extrusion_width", s->perimeter_extrusion_width, err)) ||
+	    (rc = check_width(s, "infill_extrusion_width", s->infill_extrusion_width, err)) ||
+	    (rc = check_width(s, "solid_infill_extrusion_width", s->solid_infill_extrusion_width,
+			      err)) ||
+	    (rc = check_width(s, "top_infill_extrusion_width", s->top_infill_extrusion_width, err)))
+		return rc;
+	if (!(s->infill_overlap >= 0.0 && s->infill_overlap <= 100.0))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "infill: infill_overlap %g %% is out of range; use 0 to 100 %% "
+				    "of the perimeter width",
+				    s->infill_overlap);
+	if (!(s->solid_infill_below_area >= 0.0 && s->solid_infill_below_area <= 1e6))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "infill: solid_infill_below_area %g mm^2 is out of range; use 0 "
+				    "to 1e6 mm^2",
+				    s->solid_infill_below_area);
+	if (!(s->bridge_flow_ratio > 0.0 && s->bridge_flow_ratio <= 2.0))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "infill: bridge_flow_ratio %g is out of range; use (0, 2]",
+				    s->bridge_flow_ratio);
+	if (!(s->gap_fill_min >= 0.0 && s->gap_fill_min <= 10.0))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "infill: gap_fill_min %g mm is out of range; use 0 to 10 mm",
+				    s->gap_fill_min);
+	return 0;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+	double x = *(const double *)a, y = *(const double *)b;
+	return (x > y) - (x < y);
+}
+
+/* The most common layer height of the stack above the first layer, mm. */
+static double common_height(const struct slice_stack *st, struct st_error *err)
+{
+	size_t from = st->n > 1 ? 1 : 0, n = st->n - from;
+	double *h = malloc(n * sizeof(*h)), best;
+	size_t run = 0, best_run = 0;
+
+	if (!h) {
+		st_error_set(err, ST_ERR_NOMEM, "infill: out of memory for %zu heights", n);
+		return -1.0;
+	}
+	for (size_t i = 0; i < n; i++)
+		h[i] = st->layers[from + i].height;
+	qsort(h, n, sizeof(*h), cmp_double);
+	best = h[0];
+	for (size_t i = 0; i < n; i++) {
+		run = i && h[i] - h[i - 1] < INFILL_EPS_MM ? run + 1 : 1;
+		if (run > best_run) {
+			best_run = run;
+			best = h[i];
+		}
+	}
+	free(h);
+	return best;
+}
+
+/* z of the bottom of layer i, mm. */
+static double z_bottom(const struct slice_stack *st, size_t i)
+{
+	return st->layers[i].z - st->layers[i].height;
+}
+
+/*
+ * out = R_i minus the intersection of the solid regions of the k layers
+ * next to layer i in direction dir (+1 up, -1 down), k = 1 .. count; a
+ * layer beyond the stack is empty.  count 0 gives an empty out: the part
+ * of R_i within count layers of a top (dir +1) or bottom surface.
+ */
+static int shell(struct ctx *c, int dir, size_t count, struct clip_paths *out)
+{
+	const struct clip_paths *R = &c->inner[c->layer].paths;
+	struct clip_paths inter = {0};
+	int rc = 0;
+
+	clip_paths_clear(out);
+	if (!count)
+		return 0;
+	for (size_t k = 1; k <= count && !rc; k++) {
+		if (dir < 0 ? k > c->layer : c->layer + k >= c->st->n) {
+			clip_paths_clear(&inter);
+			break;
+		}
+		const struct clip_paths *S = &c->st->layers[c->layer + (size_t)dir * k].regions.paths;
+		if (k == 1)
+			rc = clip_paths_append(&inter, S, c->err);
+		else
+			rc = clip_boolean(CLIP_INTERSECTION, &inter, S, CLIP_NONZERO, &inter, c->err);
+	}
+	if (!rc)
+		rc = clip_boolean(CLIP_DIFFERENCE, R, &inter, CLIP_NONZERO, out, c->err);
+	clip_paths_free(&inter);
+	return rc;
+}
+
+/* Is (x, y) inside or on the polygon set ps (contours of expolygons)? */
+static bool in_set(const struct clip_paths *ps, int64_t x, int64_t y)
+{
+	int parity = 0, where;
+
+	for (size_t i = 0; i < ps->n; i++) {
+		if (clip_point_in_polygon(x, y, clip_path_xy(ps, i), clip_path_len(ps, i), &where,
+					  NULL))
+			continue;
+		if (where < 0)
+			return true;
+		parity ^= where;
+	}
+	return parity != 0;
+}
+
+/* Append segs as open paths of role and width w (nm), nearest first. */
+static int emit_segments(struct ctx *c, const struct clip_paths *segs, enum path_role role,
+			 double w)
+{
+	size_t n = segs->n, maxlen = 0;
+	bool *used = calloc(n ? n : 1, sizeof(*used));
+	struct path_point *pts;
+	int rc = 0;
+
+	for (size_t i = 0; i < n; i++)
+		maxlen = clip_path_len(segs, i) > maxlen ? clip_path_len(segs, i) : maxlen;
+	pts = malloc((maxlen ? maxlen : 1) * sizeof(*pts));
+	if (!used || !pts) {
+		rc = st_error_set(c->err, ST_ERR_NOMEM, "infill: out of memory ordering %zu lines",
+				  n);
+		goto out_free;
+	}
+	for (size_t left = n; left && !rc; left--) {
+		size_t best = n;
+		bool rev = false;
+		double bd = INFINITY;
+		for (size_t i = 0; i < n; i++) {
+			if (used[i])
+				continue;
+			const int64_t *xy = clip_path_xy(segs, i);
+			size_t m = clip_path_len(segs, i);
+			double d0 = hypot((double)(xy[0] - c->lx), (double)(xy[1] - c->ly));
+			double d1 = hypot((double)(xy[2 * m - 2] - c->lx),
+					  (double)(xy[2 * m - 1] - c->ly));
+			if (fmin(d0, d1) < bd) {
+				bd = fmin(d0, d1);
+				best = i;
+				rev = d1 < d0;
+			}
+		}
+		used[best] = true;
+		const int64_t *xy = clip_path_xy(segs, best);
+		size_t m = clip_path_len(segs, best);
+		double len = 0;
+		for (size_t k = 0; k < m; k++) {
+			size_t j = rev ? m - 1 - k : k;
+			pts[k] = (struct path_point){xy[2 * j], xy[2 * j + 1], llround(w)};
+			if (k)
+				len += hypot((double)(pts[k].x - pts[k - 1].x),
+					     (double)(pts[k].y - pts[k - 1].y));
+		}
+		if (m < 2 || len < INFILL_MIN_SEGMENT_NM)
+			continue;
+		rc = layer_add_path(c->out, role, false, pts, m, c->err);
+		c->lx = pts[m - 1].x;
+		c->ly = pts[m - 1].y;
+	}
+out_free:
+	free(used);
+	free(pts);
+	return rc;
+}
+
+/* Lines clipped to the region grown by delta nm (round joins) into segs. */
+static int clip_to(struct ctx *c, const struct clip_paths *lines, const struct clip_paths *region,
+		   double delta, struct clip_paths *segs)
+{
+	struct clip_paths g = {0};
+	int rc = clip_offset(region, delta, CLIP_JOIN_ROUND, 0.0, INFILL_ARC_NM, &g, c->err);
+
+	if (!rc)
+		rc = clip_lines(CLIP_INTERSECTION, lines, &g, CLIP_NONZERO, segs, c->err);
+	clip_paths_free(&g);
+	return rc;
+}
+
+/*
+ * Lines of direction a across one island P, a whole number of beads at
+ * about spacing sp spanning it, clipped so their ends stop sp/2 inside P
+ * grown by the overlap, into segs; *fit is the spacing used.
+ */
+static int fitted_lines(struct ctx *c, const struct clip_paths *P, double a, double sp,
+			struct clip_paths *segs, double *fit)
+{
+	struct clip_paths lines = {0};
+	struct pat_box box;
+	double vmin, vmax;
+	int rc;
+
+	clip_paths_clear(segs);
+	*fit = 0;
+	if (!pat_box_of(P, &box))
+		return 0;
+	pat_extent(P, a, &vmin, &vmax);
+	double n = fmax(1.0, round((vmax - vmin) / sp));
+	*fit = (vmax - vmin) / n;
+	if (!(*fit > 0))
+		return 0;
+	rc = pat_lines(a, *fit, vmin + *fit / 2.0, &box, &lines, c->err);
+	if (!rc)
+		rc = clip_to(c, &lines, P,
+			     fmax(c->overlap - sp / 2.0, INFILL_EDGE_MARGIN_NM - *fit / 2.0), segs);
+	clip_paths_free(&lines);
+	return rc;
+}
+
+/*
+ * Gap fill of one solid island P: what beads of width fit along segs leave
+ * uncovered, where at least gap_fill_min (and the layer height) wide, as
+ * centre-line beads of the local width.
+ */
+static int gap_fill(struct ctx *c, const struct clip_paths *P, const struct clip_paths *segs,
+		    double fit)
+{
+	double minw = fmax(c->s->gap_fill_min, c->h) * SLICE_UNITS_PER_MM;
+	struct clip_paths cover = {0}, piece = {0};
+	struct clip_expolys gaps = {0};
+	struct medial_lines ml = {0};
+	int rc = clip_offset_open(segs, fit / 2.0, CLIP_JOIN_ROUND, CLIP_END_ROUND, 2.0,
+				  INFILL_ARC_NM, &cover, c->err);
+
+	if (!rc)
+		rc = clip_boolean_ex(CLIP_DIFFERENCE, P, &cover, CLIP_NONZERO, &gaps, c->err);
+	for (size_t i = 0; i < gaps.n && !rc; i++) {
+		double area = 0;
+		rc = clip_expolys_get(&gaps, i, &piece, c->err);
+		if (!rc)
+			rc = clip_paths_area(&piece, &area, c->err);
+		if (rc || area < M_PI / 4.0 * minw * minw)
+			continue;
+		rc = perim_medial_axis(&piece, minw, fmax(minw / 4.0, 1000.0), INFILL_ARC_NM, &ml,
+				       c->err);
+		for (size_t k = 0; k < ml.n && !rc; k++) {
+			struct medial_line *l = &ml.v[k];
+			rc = layer_add_path(c->out, PATH_GAP_FILL, l->closed, l->pts, l->n, c->err);
+			c->lx = l->pts[l->n - 1].x;
+			c->ly = l->pts[l->n - 1].y;
+		}
+		perim_medial_free(&ml);
+	}
+	clip_paths_free(&cover);
+	clip_paths_free(&piece);
+	clip_expolys_free(&gaps);
+	return rc;
+}
+
+/*
+ * Bridge direction of island P over the anchors A (the layer below): of
+ * the directions tried, those whose lines end on A at both ends for the
+ * largest share of their length (within INFILL_BRIDGE_SCORE_SLACK) compete
+ * on the mean length of those anchored lines; the shortest wins.
+ */
+static int bridge_direction(struct ctx *c, const struct clip_paths *P, const struct clip_paths *A,
+			    double sp, double *angle)
+{
+	enum { N = INFILL_BRIDGE_DIRS };
+	double score[N], mean[N], best = -1.0, fit;
+	struct clip_paths segs = {0};
+	int rc = 0;
+
+	*angle = 0.0;
+	for (int k = 0; k < N && !rc; k++) {
+		double a = k * M_PI / N, total = 0, held = 0;
+		size_t nheld = 0;
+		rc = fitted_lines(c, P, a, sp, &segs, &fit);
+		for (size_t i = 0; i < segs.n && !rc; i++) {
+			const int64_t *xy = clip_path_xy(&segs, i);
+			size_t m = clip_path_len(&segs, i);
+			double dx = (double)(xy[2 * m - 2] - xy[0]), dy = (double)(xy[2 * m - 1] - xy[1]);
+			double len = hypot(dx, dy);
+			if (len < INFILL_MIN_SEGMENT_NM)
+				continue;
+			/* Ends nudged 1 um inward, off the boundary they were clipped at. */
+			double ux = dx / len * 1000.0, uy = dy / len * 1000.0;
+			total += len;
+			if (in_set(A, xy[0] + llround(ux), xy[1] + llround(uy)) &&
+			    in_set(A, xy[2 * m - 2] - llround(ux), xy[2 * m - 1] - llround(uy))) {
+				held += len;
+				nheld++;
+			}
+		}
+		score[k] = total > 0 ? held / total : 0;
+		mean[k] = nheld ? held / (double)nheld : INFINITY;
+		best = fmax(best, score[k]);
+	}
+	double shortest = INFINITY;
+	for (int k = 0; k < N && !rc; k++)
+		if (score[k] >= best - INFILL_BRIDGE_SCORE_SLACK && mean[k] < shortest) {
+			shortest = mean[k];
+			*angle = k * M_PI / N;
+		}
+	clip_paths_free(&segs);
+	return rc;
+}
+
+/*
+ * Solid lines over every island of X: direction a, or per island the
+ * detected bridge direction over anchors when anchors is not NULL.
+ */
+static int fill_solid(struct ctx *c, const struct clip_paths *X, double a,
+		      const struct bead *b, const struct clip_paths *anchors)
+{
+	struct clip_expolys ex = {0};
+	struct clip_paths P = {0}, segs = {0};
+	double fit;
+	int rc = clip_boolean_ex(CLIP_UNION, X, NULL, CLIP_NONZERO, &ex, c->err);
+
+	for (size_t i = 0; i < ex.n && !rc; i++) {
+		double ai = a;
+		rc = clip_expolys_get(&ex, i, &P, c->err);
+		if (!rc && anchors)
+			rc = bridge_direction(c, &P, anchors, b->sp, &ai);
+		if (!rc)
+			rc = fitted_lines(c, &P, ai, b->sp, &segs, &fit);
+		if (!rc)
+			rc = emit_segments(c, &segs, b->role, b->w);
+		if (!rc && b->gap_fill && segs.n)
+			rc = gap_fill(c, &P, &segs, fit);
+	}
+	clip_expolys_free(&ex);
+	clip_paths_free(&P);
+	clip_paths_free(&segs);
+	return rc;
+}
+
+/* Sparse infill of X at fill_density with the chosen pattern. */
+static int fill_sparse(struct ctx *c, const struct clip_paths *X, double a)
+{
+	const struct infill_settings *s = c->s;
+	double w = s->infill_extrusion_width * SLICE_UNITS_PER_MM;
+	double sp = perim_spacing(s->infill_extrusion_width, c->h) * SLICE_UNITS_PER_MM;
+	double d = s->fill_density / 100.0, S = sp / d;
+	struct clip_paths lines = {0}, segs = {0};
+	struct pat_box box;
+	int rc = 0;
+
+	if (!pat_box_of(X, &box))
+		return 0;
+	switch (s->fill_pattern) {
+	case INFILL_RECTILINEAR:
+		rc = pat_lines(a, S, 0.0, &box, &lines, c->err);
+		break;
+	case INFILL_GRID:
+		rc = pat_lines(a, 2.0 * S, 0.0, &box, &lines, c->err);
+		if (!rc)
+			rc = pat_lines(a + M_PI / 2.0, 2.0 * S, 0.0, &box, &lines, c->err);
+		break;
+	default: { /* INFILL_GYROID, at the layer's mid-height */
+		double z = (c->st->layers[c->layer].z - c->h / 2.0) * SLICE_UNITS_PER_MM;
+		rc = pat_gyroid(d / (sp * PAT_GYROID_LENGTH), z, &box, &lines, c->err);
+		break;
+	}
+	}
+	if (!rc)
+		rc = clip_to(c, &lines, X, c->overlap - sp / 2.0, &segs);
+	if (!rc)
+		rc = emit_segments(c, &segs, PATH_SPARSE_INFILL, w);
+	clip_paths_free(&lines);
+	clip_paths_free(&segs);
+	return rc;
+}
+
+/*
+ * Split X into the islands smaller than solid_infill_below_area (appended
+ * to small) and the rest (appended to big).
+ */
+static int split_small(struct ctx *c, const struct clip_paths *X, struct clip_paths *small,
+		       struct clip_paths *big)
+{
+	struct clip_expolys ex = {0};
+	struct clip_paths P = {0};
+	double lim = c->s->solid_infill_below_area * SLICE_UNITS_PER_MM * SLICE_UNITS_PER_MM;
+	int rc = clip_boolean_ex(CLIP_UNION, X, NULL, CLIP_NONZERO, &ex, c->err);
+
+	for (size_t i = 0; i < ex.n && !rc; i++) {
+		double area = 0;
+		rc = clip_expolys_get(&ex, i, &P, c->err);
+		if (!rc)
+			rc = clip_paths_area(&P, &area, c->err);
+		if (!rc)
+			rc = clip_paths_append(area < lim ? small : big, &P, c->err);
+	}
+	clip_expolys_free(&ex);
+	clip_paths_free(&P);
+	return rc;
+}
+
+/* Number of layers of the shell of thickness t (mm) seen from layer i. */
+static size_t shell_count(const struct slice_stack *st, size_t i, int dir, double t)
+{
+	size_t n = 0;
+
+	if (dir > 0)
+		for (size_t j = i; j < st->n && st->layers[j].z - st->layers[i].z < t - INFILL_EPS_MM;
+		     j++)
+			n++;
+	else
+		for (size_t j = i + 1; j-- > 0 && z_bottom(st, i) - z_bottom(st, j) < t - INFILL_EPS_MM;)
+			n++;
+	return n;
+}
+
+/* Classes of one layer, in printing order (see infill.h). */
+enum { CL_BOTTOM, CL_BRIDGE, CL_SOLID, CL_SPARSE, CL_TOP, CL_N };
+
+/*
+ * Regions of layer c->layer by class (see infill.h for the rules).
+ * cl[CL_BRIDGE] is the bridges grown into their anchors.
+ */
+static int classify(struct ctx *c, struct clip_paths cl[CL_N])
+{
+	const struct slice_stack *st = c->st;
+	size_t i = c->layer;
+	const struct clip_paths *R = &c->inner[i].paths;
+	double sw = perim_spacing(c->s->solid_infill_extrusion_width, c->h) * SLICE_UNITS_PER_MM;
+	struct clip_paths t = {0}, taken = {0}, rest = {0};
+	int rc = 0;
+
+	if (i > 0) { /* over air, opened by half a line so slivers do not count */
+		rc = clip_boolean(CLIP_DIFFERENCE, R, &st->layers[i - 1].regions.paths,
+				  CLIP_NONZERO, &t, c->err);
+		if (!rc)
+			rc = clip_offset(&t, -sw / 2.0, CLIP_JOIN_ROUND, 0.0, INFILL_ARC_NM, &t,
+					 c->err);
+		if (!rc)
+			rc = clip_offset(&t, sw / 2.0 + INFILL_ANCHOR_WIDTHS * c->s->solid_infill_extrusion_width *
+						     SLICE_UNITS_PER_MM,
+					 CLIP_JOIN_ROUND, 0.0, INFILL_ARC_NM, &t, c->err);
+		if (!rc)
+			rc = clip_boolean(CLIP_INTERSECTION, &t, R, CLIP_NONZERO, &cl[CL_BRIDGE],
+					  c->err);
+	}
+	if (!rc)
+		rc = clip_paths_append(&taken, &cl[CL_BRIDGE], c->err);
+	if (!rc && i == 0)
+		rc = clip_boolean(CLIP_DIFFERENCE, R, &taken, CLIP_NONZERO, &cl[CL_BOTTOM], c->err);
+	if (!rc && i > 0) {
+		rc = shell(c, +1, shell_count(st, i, +1, c->t_top), &t);
+		if (!rc)
+			rc = clip_boolean(CLIP_DIFFERENCE, &t, &taken, CLIP_NONZERO, &cl[CL_TOP],
+					  c->err);
+		if (!rc)
+			rc = clip_paths_append(&taken, &cl[CL_TOP], c->err);
+		/* The bottom shell: skin when it rests on the bed, else solid over bridges. */
+		bool on_bed = z_bottom(st, i) < c->t_bot - INFILL_EPS_MM;
+		if (!rc)
+			rc = shell(c, -1, shell_count(st, i, -1, c->t_bot), &t);
+		if (!rc)
+			rc = clip_boolean(CLIP_DIFFERENCE, &t, &taken, CLIP_NONZERO,
+					  &cl[on_bed ? CL_BOTTOM : CL_SOLID], c->err);
+	}
+	if (!rc)
+		rc = clip_paths_append(&taken, &cl[CL_BOTTOM], c->err);
+	if (!rc)
+		rc = clip_paths_append(&taken, &cl[CL_SOLID], c->err);
+	if (!rc)
+		rc = clip_boolean(CLIP_DIFFERENCE, R, &taken, CLIP_NONZERO, &rest, c->err);
+	if (!rc && c->s->fill_density >= 100.0)
+		rc = clip_paths_append(&cl[CL_SOLID], &rest, c->err);
+	else if (!rc && c->s->fill_density > 0.0)
+		rc = split_small(c, &rest, &cl[CL_SOLID], &cl[CL_SPARSE]);
+	clip_paths_free(&t);
+	clip_paths_free(&taken);
+	clip_paths_free(&rest);
+	return rc;
+}
+
+/* Classify and fill one layer. */
+static int fill_layer(struct ctx *c)
+{
+	const struct infill_settings *s = c->s;
+	struct clip_paths cl[CL_N] = {{0}};
+	double a = (s->fill_angle + 90.0 * (double)(c->layer % 2)) * M_PI / 180.0;
+	double solid_w = s->solid_infill_extrusion_width, top_w = s->top_infill_extrusion_width;
+	/* Bridge flow: a round thread; the bead of equal cross-section. */
+	double thread = s->nozzle_diameter * sqrt(s->bridge_flow_ratio);
+	double bridge_w = fmax(c->h, c->h + M_PI * (thread * thread - c->h * c->h) / (4.0 * c->h));
+	const double U = SLICE_UNITS_PER_MM;
+	const struct bead solid = {solid_w * U, perim_spacing(solid_w, c->h) * U, PATH_SOLID_INFILL,
+				   true};
+	const struct bead bottom = {solid_w * U, solid.sp, PATH_BOTTOM_SKIN, true};
+	const struct bead top = {top_w * U, perim_spacing(top_w, c->h) * U, PATH_TOP_SKIN, true};
+	const struct bead bridge = {bridge_w * U, (thread + INFILL_BRIDGE_GAP_MM) * U, PATH_BRIDGE,
+				    false};
+	int rc;
+
+	if (!clip_paths_points(&c->inner[c->layer].paths))
+		return 0;
+	rc = classify(c, cl);
+	if (!rc)
+		rc = fill_solid(c, &cl[CL_BOTTOM], a, &bottom, NULL);
+	if (!rc && s->bridge_angle != 0.0)
+		rc = fill_solid(c, &cl[CL_BRIDGE], s->bridge_angle * M_PI / 180.0, &bridge, NULL);
+	else if (!rc)
+		rc = fill_solid(c, &cl[CL_BRIDGE], 0.0, &bridge,
+				&c->st->layers[c->layer - (c->layer > 0)].regions.paths);
+	if (!rc)
+		rc = fill_solid(c, &cl[CL_SOLID], a, &solid, NULL);
+	if (!rc)
+		rc = fill_sparse(c, &cl[CL_SPARSE], a);
+	if (!rc)
+		rc = fill_solid(c, &cl[CL_TOP], a, &top, NULL);
+	for (int k = 0; k < CL_N; k++)
+		clip_paths_free(&cl[k]);
+	return rc;
+}
+
+int infill_generate(const struct infill_settings *s, const struct slice_stack *st,
+		    const struct clip_expolys *inner, struct layer_stack *out,
+		    struct st_error *err)
+{
+	struct ctx c = {.s = s, .st = st, .inner = inner, .err = err};
+	int rc = infill_settings_check(s, err);
+
+	if (rc)
+		return rc;
+	if (!st || !out || (st->n && !inner))
+		return st_error_set(err, ST_ERR_ARG, "infill: no layers, regions or output given");
+	if (out->nlayers != st->n)
+		return st_error_set(err, ST_ERR_ARG,
+				    "infill: the output has %zu layers but the slices %zu",
+				    out->nlayers, st->n);
+	if (!st->n)
+		return 0;
+	for (size_t i = 0; i < st->n; i++)
+		if (!(st->layers[i].height > 0.0 && st->layers[i].height <= s->nozzle_diameter))
+			return st_error_set(err, ST_ERR_RANGE,
+					    "infill: layer %zu is %g mm thick; use layers thicker "
+					    "than 0 and at most the nozzle diameter %g mm",
+					    i, st->layers[i].height, s->nozzle_diameter);
+	double href = s->layer_height > 0.0 ? s->layer_height : common_height(st, err);
+	if (href < 0.0)
+		return ST_ERR_NOMEM;
+	c.t_top = fmax(s->top_solid_min_thickness, s->top_solid_layers * href);
+	c.t_bot = fmax(s->bottom_solid_min_thickness, s->bottom_solid_layers * href);
+	c.overlap = s->infill_overlap / 100.0 * s->perimeter_extrusion_width * SLICE_UNITS_PER_MM;
+	for (size_t i = 0; i < st->n && !rc; i++) {
+		c.layer = i;
+		c.h = st->layers[i].height;
+		c.out = &out->layers[i];
+		rc = fill_layer(&c);
+	}
+	return rc;
+}

@@ -1,0 +1,562 @@
+/*
+ * check_infill.c - skins, bridges, solid and sparse infill on meshes and
+ * stacks built in code, with expectations that follow from the geometry
+ * and the flow model: a solid layer deposits the region's volume and
+ * covers it, sparse infill at density d deposits d of it, bridges cross
+ * the gap from anchor to anchor, shells are as thick as asked.
+ */
+#include <check.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "clip.h"
+#include "fixtures.h"
+#include "infill.h"
+#include "mesh.h"
+#include "perimeters.h"
+#include "section.h"
+#include "suites.h"
+#include "testutil.h"
+#include "toolpath.h"
+
+#define NM SLICE_UNITS_PER_MM
+#define ARC 2000.0 /* nm, chord error of the tests' round offsets */
+
+/* A sliced mesh, its regions inside 2 walls, and the infill of every layer. */
+struct run {
+	struct slice_stack *st;
+	struct clip_expolys *inner;
+	struct layer_stack *ls;
+};
+
+static void run_infill(const struct mesh *m, double h, const struct infill_settings *is,
+		       struct run *r)
+{
+	struct st_error err = {0};
+	struct perim_settings ps;
+	struct layer_paths walls;
+
+	r->st = NULL;
+	ck_assert_msg(slice_mesh(m, h, h, NULL, &r->st, &err) == 0, "slice_mesh: %s", err.msg);
+	perim_settings_init(&ps, 0.4);
+	r->inner = calloc(r->st->n, sizeof(*r->inner));
+	ck_assert_ptr_nonnull(r->inner);
+	for (size_t i = 0; i < r->st->n; i++) {
+		memset(&walls, 0, sizeof(walls));
+		ck_assert_msg(perim_generate(&ps, &r->st->layers[i].regions, h, NULL, &walls,
+					     &r->inner[i], &err) == 0,
+			      "perim_generate: %s", err.msg);
+		for (size_t k = 0; k < walls.n; k++)
+			free(walls.paths[k].pts);
+		free(walls.paths);
+	}
+	r->ls = layer_stack_new(r->st->n, &err);
+	ck_assert_ptr_nonnull(r->ls);
+	ck_assert_msg(infill_generate(is, r->st, r->inner, r->ls, &err) == 0, "infill: %s",
+		      err.msg);
+}
+
+static void run_free(struct run *r)
+{
+	for (size_t i = 0; i < r->st->n; i++)
+		clip_expolys_free(&r->inner[i]);
+	free(r->inner);
+	layer_stack_free(r->ls);
+	slice_stack_free(r->st);
+}
+
+/*
+ * Flow-equivalent area (nm^2) of the paths of role on layer l: length x
+ * the bead spacing of their width at height h (perim_spacing), i.e. the
+ * deposited volume over h.
+ */
+static double flow_area(const struct layer_paths *l, enum path_role role, double h)
+{
+	double a = 0;
+
+	for (size_t i = 0; i < l->n; i++)
+		if (l->paths[i].role == role)
+			a += tu_path_length(&l->paths[i]) *
+			     perim_spacing(l->paths[i].pts[0].width / NM, h) * NM;
+	return a;
+}
+
+/* Sum of width x length (nm^2) of the paths of role on layer l. */
+static double bead_area(const struct layer_paths *l, enum path_role role)
+{
+	double a = 0;
+
+	for (size_t i = 0; i < l->n; i++)
+		if (l->paths[i].role == role)
+			a += tu_path_length(&l->paths[i]) * (double)l->paths[i].pts[0].width;
+	return a;
+}
+
+static double region_area(const struct clip_expolys *ex)
+{
+	double a = 0;
+
+	ck_assert_int_eq(clip_paths_area(&ex->paths, &a, NULL), 0);
+	return a;
+}
+
+/*
+ * Area (nm^2) of region covered by the beads of the paths of the roles in
+ * mask on layer l, each bead its width (or the given width when > 0) wide
+ * with ends as end.
+ */
+static double covered(const struct layer_paths *l, unsigned mask, double width,
+		      enum clip_end end, const struct clip_expolys *region)
+{
+	struct clip_paths line = {0}, bead = {0}, all = {0}, in = {0};
+	double a = 0;
+
+	for (size_t i = 0; i < l->n; i++) {
+		const struct toolpath *p = &l->paths[i];
+		if (!(mask & 1u << p->role))
+			continue;
+		int64_t *xy = malloc(2 * p->n * sizeof(*xy));
+		ck_assert_ptr_nonnull(xy);
+		for (size_t k = 0; k < p->n; k++) {
+			xy[2 * k] = p->pts[k].x;
+			xy[2 * k + 1] = p->pts[k].y;
+		}
+		clip_paths_clear(&line);
+		ck_assert_int_eq(clip_paths_add(&line, xy, p->n, NULL), 0);
+		free(xy);
+		double w = width > 0 ? width : (double)p->pts[0].width;
+		ck_assert_int_eq(clip_offset_open(&line, w / 2, CLIP_JOIN_ROUND, end, 2, ARC, &bead,
+						  NULL),
+				 0);
+		ck_assert_int_eq(clip_paths_append(&all, &bead, NULL), 0);
+	}
+	ck_assert_int_eq(clip_boolean(CLIP_INTERSECTION, &all, &region->paths, CLIP_NONZERO, &in,
+				      NULL),
+			 0);
+	ck_assert_int_eq(clip_paths_area(&in, &a, NULL), 0);
+	clip_paths_free(&line);
+	clip_paths_free(&bead);
+	clip_paths_free(&all);
+	clip_paths_free(&in);
+	return a;
+}
+
+/* Is (x, y) inside or on the polygon set ps? */
+static bool inside(const struct clip_paths *ps, int64_t x, int64_t y)
+{
+	int parity = 0, where;
+
+	for (size_t i = 0; i < ps->n; i++) {
+		ck_assert_int_eq(clip_point_in_polygon(x, y, clip_path_xy(ps, i),
+						       clip_path_len(ps, i), &where, NULL),
+				 0);
+		if (where < 0)
+			return true;
+		parity ^= where;
+	}
+	return parity != 0;
+}
+
+/* Every point of every path of layer l lies in region grown by d nm. */
+static void assert_inside(const struct layer_paths *l, const struct clip_expolys *region, double d)
+{
+	struct clip_paths g = {0};
+
+	ck_assert_int_eq(clip_offset(&region->paths, d, CLIP_JOIN_ROUND, 0, ARC, &g, NULL), 0);
+	for (size_t i = 0; i < l->n; i++)
+		for (size_t k = 0; k < l->paths[i].n; k++)
+			ck_assert_msg(inside(&g, l->paths[i].pts[k].x, l->paths[i].pts[k].y),
+				      "path %zu point %zu (%g, %g) mm outside the region", i, k,
+				      l->paths[i].pts[k].x / NM, l->paths[i].pts[k].y / NM);
+	clip_paths_free(&g);
+}
+
+#define ROLE(r) (1u << (r))
+#define SOLID_ROLES                                                                        \
+	(ROLE(PATH_BOTTOM_SKIN) | ROLE(PATH_TOP_SKIN) | ROLE(PATH_SOLID_INFILL) |          \
+	 ROLE(PATH_GAP_FILL))
+
+/* ---- tests ---- */
+
+START_TEST(cube_skins_and_sparse)
+{
+	struct mesh *m = fx_box(0, 0, 0, 20, 20, 20);
+	struct infill_settings is;
+	struct run r;
+	const double h = 0.2, d = 0.2;
+
+	infill_settings_init(&is, 0.4);
+	is.fill_pattern = INFILL_RECTILINEAR;
+	run_infill(m, h, &is, &r);
+	ck_assert_uint_eq(r.st->n, 100);
+	double worst_solid = 0, worst_sparse = 0, worst_cover = 1, worst_bead = 0;
+	for (size_t i = 0; i < r.st->n; i++) {
+		const struct layer_paths *l = &r.ls->layers[i];
+		double A = region_area(&r.inner[i]);
+		enum path_role want = i < 3 ? PATH_BOTTOM_SKIN : i >= 97 ? PATH_TOP_SKIN
+									: PATH_SPARSE_INFILL;
+		ck_assert_msg(l->n > 0, "layer %zu has no infill", i);
+		for (size_t k = 0; k < l->n; k++)
+			ck_assert_msg(l->paths[k].role == want || l->paths[k].role == PATH_GAP_FILL,
+				      "layer %zu path %zu is %s", i, k,
+				      path_role_name(l->paths[k].role));
+		ck_assert_uint_eq(tu_count_role(l, PATH_BRIDGE), 0);
+		double fa = flow_area(l, want, h) + flow_area(l, PATH_GAP_FILL, h);
+		if (want == PATH_SPARSE_INFILL) {
+			/* Lines at spacing / d: d of the region's volume, beads d w / s of it. */
+			worst_sparse = fmax(worst_sparse, fabs(fa / (d * A) - 1));
+			double ws = 0.45 / perim_spacing(0.45, h);
+			worst_bead = fmax(worst_bead, fabs(bead_area(l, want) / (d * ws * A) - 1));
+		} else {
+			worst_solid = fmax(worst_solid, fabs(fa / A - 1));
+			worst_cover =
+				fmin(worst_cover, covered(l, SOLID_ROLES, 0, CLIP_END_ROUND, &r.inner[i]) / A);
+		}
+	}
+	ck_assert_msg(worst_solid < 0.03, "solid layer volume off by %.2f %%", 100 * worst_solid);
+	ck_assert_msg(worst_sparse < 0.05, "sparse volume off by %.2f %%", 100 * worst_sparse);
+	ck_assert_msg(worst_bead < 0.05, "sparse width x length off by %.2f %%", 100 * worst_bead);
+	ck_assert_msg(worst_cover >= 0.99, "a solid layer covers %.2f %%", 100 * worst_cover);
+	/* Sparse beads of the flow spacing cover d of the region. */
+	const struct layer_paths *mid = &r.ls->layers[50];
+	double A = region_area(&r.inner[50]);
+	double cov = covered(mid, ROLE(PATH_SPARSE_INFILL), perim_spacing(0.45, h) * NM,
+			     CLIP_END_BUTT, &r.inner[50]) / A;
+	ck_assert_msg(fabs(cov / d - 1) < 0.05, "sparse covers %.2f %% of the region", 100 * cov);
+	/* Solid layers alternate 90 degrees; sparse lines repeat every other layer. */
+	const struct toolpath *p3 = &r.ls->layers[50].paths[0], *p4 = &r.ls->layers[51].paths[0];
+	double a3 = atan2((double)(p3->pts[1].y - p3->pts[0].y), (double)(p3->pts[1].x - p3->pts[0].x));
+	double a4 = atan2((double)(p4->pts[1].y - p4->pts[0].y), (double)(p4->pts[1].x - p4->pts[0].x));
+	ck_assert_msg(fabs(cos(a3 - a4)) < 1e-3, "layers 50, 51 not crossed");
+	ck_assert_msg(fabs(fabs(cos(a3)) - sqrt(0.5)) < 1e-3, "sparse not at 45 degrees");
+	ck_assert_uint_eq(r.ls->layers[50].n, r.ls->layers[52].n);
+	for (size_t k = 0; k < r.ls->layers[50].n; k++) {
+		const struct toolpath *p = &r.ls->layers[50].paths[k];
+		bool found = false;
+		for (size_t j = 0; j < r.ls->layers[52].n && !found; j++) {
+			const struct toolpath *q = &r.ls->layers[52].paths[j];
+			found = (q->pts[0].x == p->pts[0].x && q->pts[0].y == p->pts[0].y) ||
+				(q->pts[q->n - 1].x == p->pts[0].x && q->pts[q->n - 1].y == p->pts[0].y);
+		}
+		ck_assert_msg(found, "sparse line %zu of layer 50 not on layer 52", k);
+	}
+	run_free(&r);
+	mesh_free(m);
+}
+END_TEST
+
+START_TEST(patterns_stay_inside)
+{
+	struct mesh *m = fx_box(0, 0, 0, 20, 20, 4);
+	struct infill_settings is;
+	const enum infill_pattern pats[] = {INFILL_GRID, INFILL_GYROID, INFILL_RECTILINEAR};
+	const double h = 0.2;
+
+	for (size_t p = 0; p < sizeof(pats) / sizeof(pats[0]); p++) {
+		for (double d = 0.15; d < 0.5; d += 0.25) {
+			struct run r;
+			infill_settings_init(&is, 0.4);
+			is.fill_pattern = pats[p];
+			is.fill_density = 100 * d;
+			run_infill(m, h, &is, &r);
+			double overlap = 0.25 * 0.45 * NM;
+			double worst = 0, mean = 0;
+			for (size_t i = 0; i < r.st->n; i++) {
+				assert_inside(&r.ls->layers[i], &r.inner[i], overlap + 1000);
+				if (i < 3 || i + 3 >= r.st->n)
+					continue;
+				double A = region_area(&r.inner[i]);
+				double fa = flow_area(&r.ls->layers[i], PATH_SPARSE_INFILL, h);
+				ck_assert_uint_eq(tu_count_role(&r.ls->layers[i], PATH_SPARSE_INFILL),
+						  r.ls->layers[i].n);
+				worst = fmax(worst, fabs(fa / (d * A) - 1));
+				mean += fa / (d * A) / (double)(r.st->n - 6);
+			}
+			/*
+			 * The gyroid's section length per area varies with z and,
+			 * over a few periods, with where the region lies: per layer
+			 * within 20 %, on average within 5 %.
+			 */
+			double tol = pats[p] == INFILL_GYROID ? 0.2 : 0.06;
+			ck_assert_msg(worst < tol, "%s at %g: a layer's volume off by %.1f %%",
+				      infill_pattern_name(pats[p]), d, 100 * worst);
+			ck_assert_msg(fabs(mean - 1) < 0.05, "%s at %g: volume off by %.1f %%",
+				      infill_pattern_name(pats[p]), d, 100 * (mean - 1));
+			run_free(&r);
+		}
+	}
+	mesh_free(m);
+}
+END_TEST
+
+START_TEST(bridge_between_pillars)
+{
+	struct mesh *a = fx_box(0, 0, 0, 5, 10, 5), *b = fx_box(15, 0, 0, 20, 10, 5);
+	struct mesh *ab = fx_concat(a, b), *slab = fx_box(0, 0, 5, 20, 10, 6);
+	struct mesh *m = fx_concat(ab, slab);
+	struct infill_settings is;
+	struct run r;
+	const double h = 0.2;
+
+	infill_settings_init(&is, 0.4);
+	run_infill(m, h, &is, &r);
+	ck_assert_uint_eq(r.st->n, 30);
+	for (size_t i = 0; i < 25; i++)
+		ck_assert_uint_eq(tu_count_role(&r.ls->layers[i], PATH_BRIDGE), 0);
+	/* Layer 25 (z 5.0 .. 5.2) is the first slab layer. */
+	const struct layer_paths *l = &r.ls->layers[25];
+	double bw = h + M_PI * (0.16 - h * h) / (4 * h);
+	size_t nb = 0;
+	double across = 0;
+	for (size_t k = 0; k < l->n; k++) {
+		const struct toolpath *p = &l->paths[k];
+		if (p->role != PATH_BRIDGE)
+			continue;
+		nb++;
+		double dx = (double)(p->pts[p->n - 1].x - p->pts[0].x);
+		double dy = (double)(p->pts[p->n - 1].y - p->pts[0].y);
+		double ang = fabs(atan2(dy, dx)) * 180 / M_PI;
+		ang = fmin(ang, 180 - ang);
+		ck_assert_msg(ang < 10, "bridge line %zu at %g degrees to the gap", k, ang);
+		ck_assert_int_eq(p->pts[0].width, llround(bw * NM));
+		/* Both ends on a pillar. */
+		double x0 = fmin(p->pts[0].x, p->pts[p->n - 1].x) / NM;
+		double x1 = fmax(p->pts[0].x, p->pts[p->n - 1].x) / NM;
+		ck_assert_msg(x0 < 5 && x1 > 15, "bridge line %zu from x %g to %g mm", k, x0, x1);
+		across += tu_path_length(p);
+	}
+	ck_assert_msg(nb >= 15, "%zu bridge lines", nb);
+	/* The gap (10 x ~8.4 mm inside the walls) is spanned: lines every 0.45 mm. */
+	ck_assert_msg(across / NM > 8.0 / 0.45 * 10, "bridge lines total %g mm", across / NM);
+	/* Over the bridge: solid infill, then the top shell. */
+	ck_assert_uint_gt(tu_count_role(&r.ls->layers[26], PATH_SOLID_INFILL), 0);
+	ck_assert_uint_eq(tu_count_role(&r.ls->layers[26], PATH_BRIDGE), 0);
+	for (size_t i = 27; i < 30; i++)
+		ck_assert_uint_gt(tu_count_role(&r.ls->layers[i], PATH_TOP_SKIN), 0);
+	run_free(&r);
+	/* A fixed bridge_angle overrides the detection. */
+	is.bridge_angle = 90;
+	run_infill(m, h, &is, &r);
+	l = &r.ls->layers[25];
+	ck_assert_uint_gt(tu_count_role(l, PATH_BRIDGE), 0);
+	for (size_t k = 0; k < l->n; k++)
+		if (l->paths[k].role == PATH_BRIDGE)
+			ck_assert_int_eq(l->paths[k].pts[0].x, l->paths[k].pts[1].x);
+	run_free(&r);
+	mesh_free(a);
+	mesh_free(b);
+	mesh_free(ab);
+	mesh_free(slab);
+	mesh_free(m);
+}
+END_TEST
+
+/* A square column of layers of the given heights, 10 mm wide, walls 1 mm. */
+static struct slice_stack *column(const double *heights, size_t n, struct clip_expolys *inner)
+{
+	struct slice_stack *st = calloc(1, sizeof(*st));
+	const int64_t sq[] = {0, 0, 10 * NM, 0, 10 * NM, 10 * NM, 0, 10 * NM};
+	struct clip_paths p = {0};
+	double z = 0;
+
+	ck_assert_ptr_nonnull(st);
+	st->layers = calloc(n, sizeof(*st->layers));
+	ck_assert_ptr_nonnull(st->layers);
+	st->n = n;
+	ck_assert_int_eq(clip_paths_add(&p, sq, 4, NULL), 0);
+	for (size_t i = 0; i < n; i++) {
+		z += heights[i];
+		st->layers[i].z = z;
+		st->layers[i].height = heights[i];
+		st->layers[i].slice_z = z - heights[i] / 2;
+		ck_assert_int_eq(clip_boolean_ex(CLIP_UNION, &p, NULL, CLIP_NONZERO,
+						 &st->layers[i].regions, NULL),
+				 0);
+		ck_assert_int_eq(clip_offset_ex(&p, -1 * NM, CLIP_JOIN_MITER, 2, 0, &inner[i], NULL),
+				 0);
+	}
+	clip_paths_free(&p);
+	return st;
+}
+
+/* Layers (bottom, top) whose infill has the bottom / top skin role. */
+static void skin_layers(const struct infill_settings *is, const double *heights, size_t n,
+			size_t *nbottom, size_t *ntop)
+{
+	struct clip_expolys inner[40];
+
+	memset(inner, 0, sizeof(inner));
+	struct slice_stack *st;
+	struct layer_stack *ls = layer_stack_new(n, NULL);
+	struct st_error err = {0};
+
+	ck_assert(n <= 40 && ls);
+	st = column(heights, n, inner);
+	ck_assert_msg(infill_generate(is, st, inner, ls, &err) == 0, "infill: %s", err.msg);
+	*nbottom = *ntop = 0;
+	for (size_t i = 0; i < n; i++) {
+		*nbottom += tu_count_role(&ls->layers[i], PATH_BOTTOM_SKIN) > 0;
+		*ntop += tu_count_role(&ls->layers[i], PATH_TOP_SKIN) > 0;
+		/* A layer is one class: all solid or all sparse here. */
+		ck_assert(tu_count_role(&ls->layers[i], PATH_SPARSE_INFILL) == 0 ||
+			  tu_count_role(&ls->layers[i], PATH_SPARSE_INFILL) == ls->layers[i].n);
+		clip_expolys_free(&inner[i]);
+	}
+	layer_stack_free(ls);
+	slice_stack_free(st);
+}
+
+START_TEST(shells_by_thickness)
+{
+	struct infill_settings is;
+	double hs[30];
+	size_t nb, nt;
+
+	/* 12 layers of 0.1 mm, then 10 of 0.3 mm. */
+	for (size_t i = 0; i < 22; i++)
+		hs[i] = i < 12 ? 0.1 : 0.3;
+	infill_settings_init(&is, 0.4);
+	/* Reference 0.2 mm: 3 layers = 0.6 mm = 6 thin layers at the bottom, 2 thick on top. */
+	is.layer_height = 0.2;
+	skin_layers(&is, hs, 22, &nb, &nt);
+	ck_assert_uint_eq(nb, 6);
+	ck_assert_uint_eq(nt, 2);
+	/* Default reference: the most common height, 0.1 mm: 0.3 mm shells. */
+	is.layer_height = 0;
+	skin_layers(&is, hs, 22, &nb, &nt);
+	ck_assert_uint_eq(nb, 3);
+	ck_assert_uint_eq(nt, 1);
+	/* A minimum thickness wins over the count. */
+	is.top_solid_min_thickness = 0.9;
+	is.bottom_solid_min_thickness = 0.55;
+	skin_layers(&is, hs, 22, &nb, &nt);
+	ck_assert_uint_eq(nb, 6);
+	ck_assert_uint_eq(nt, 3);
+	/* No shells asked: no skins, sparse up to the top. */
+	is.top_solid_min_thickness = is.bottom_solid_min_thickness = 0;
+	is.top_solid_layers = is.bottom_solid_layers = 0;
+	skin_layers(&is, hs, 22, &nb, &nt);
+	ck_assert_uint_eq(nb, 1); /* layer 0 always rests on the bed */
+	ck_assert_uint_eq(nt, 0);
+}
+END_TEST
+
+START_TEST(small_and_full_density_are_solid)
+{
+	struct infill_settings is;
+	double hs[10];
+	struct clip_expolys inner[10];
+
+	memset(inner, 0, sizeof(inner));
+	struct st_error err = {0};
+
+	for (size_t i = 0; i < 10; i++)
+		hs[i] = 0.2;
+	for (int pass = 0; pass < 2; pass++) {
+		struct slice_stack *st = column(hs, 10, inner);
+		struct layer_stack *ls = layer_stack_new(10, NULL);
+		infill_settings_init(&is, 0.4);
+		if (pass == 0)
+			is.fill_density = 100; /* then: an 8 x 8 mm island < 70 mm^2 */
+		is.solid_infill_below_area = pass == 0 ? 0 : 70;
+		ck_assert_int_eq(infill_generate(&is, st, inner, ls, &err), 0);
+		const struct layer_paths *l = &ls->layers[5];
+		ck_assert_uint_eq(tu_count_role(l, PATH_SPARSE_INFILL), 0);
+		ck_assert_uint_gt(tu_count_role(l, PATH_SOLID_INFILL), 0);
+		double A = region_area(&inner[5]);
+		ck_assert(covered(l, SOLID_ROLES, 0, CLIP_END_ROUND, &inner[5]) / A >= 0.99);
+		for (size_t i = 0; i < 10; i++)
+			clip_expolys_free(&inner[i]);
+		layer_stack_free(ls);
+		slice_stack_free(st);
+	}
+}
+END_TEST
+
+START_TEST(bad_settings_refused)
+{
+	struct infill_settings is;
+	struct st_error err = {0};
+	enum infill_pattern p = INFILL_GRID;
+	double hs[4] = {0.2, 0.2, 0.2, 0.2};
+	struct clip_expolys inner[4];
+
+	memset(inner, 0, sizeof(inner));
+
+	infill_settings_init(&is, 0.4);
+	ck_assert_int_eq(infill_settings_check(&is, &err), 0);
+	ck_assert(fabs(is.infill_extrusion_width - 0.45) < 1e-15);
+	is.fill_density = 101;
+	ck_assert_int_eq(infill_settings_check(&is, &err), ST_ERR_RANGE);
+	ck_assert_ptr_nonnull(strstr(err.msg, "fill_density 101"));
+	ck_assert_ptr_nonnull(strstr(err.msg, "0 to 100"));
+	is.fill_density = -5;
+	ck_assert_int_eq(infill_settings_check(&is, &err), ST_ERR_RANGE);
+	ck_assert_ptr_nonnull(strstr(err.msg, "fill_density -5"));
+	is.fill_density = NAN;
+	ck_assert_int_eq(infill_settings_check(&is, &err), ST_ERR_RANGE);
+	infill_settings_init(&is, 0.4);
+	is.top_solid_layers = -1;
+	ck_assert_int_eq(infill_settings_check(&is, &err), ST_ERR_RANGE);
+	ck_assert_ptr_nonnull(strstr(err.msg, "top_solid_layers -1"));
+	infill_settings_init(&is, 0.4);
+	is.bottom_solid_min_thickness = -0.1;
+	ck_assert_int_eq(infill_settings_check(&is, &err), ST_ERR_RANGE);
+	infill_settings_init(&is, 0.4);
+	is.infill_extrusion_width = 0;
+	ck_assert_int_eq(infill_settings_check(&is, &err), ST_ERR_RANGE);
+	ck_assert_ptr_nonnull(strstr(err.msg, "infill_extrusion_width"));
+	infill_settings_init(&is, 0.4);
+	is.fill_pattern = (enum infill_pattern)7;
+	ck_assert_int_eq(infill_settings_check(&is, &err), ST_ERR_ARG);
+	/* Names: PrusaSlicer's, three printed, the others refused as unsupported. */
+	ck_assert_int_eq(infill_pattern_parse("gyroid", &p, &err), 0);
+	ck_assert_int_eq(p, INFILL_GYROID);
+	ck_assert_int_eq(infill_pattern_parse("rectilinear", &p, &err), 0);
+	ck_assert_int_eq(p, INFILL_RECTILINEAR);
+	ck_assert_str_eq(infill_pattern_name(INFILL_GRID), "grid");
+	ck_assert_int_eq(infill_pattern_parse("stars", &p, &err), ST_ERR_UNSUPPORTED);
+	ck_assert_ptr_nonnull(strstr(err.msg, "\"stars\" is not supported"));
+	ck_assert_ptr_nonnull(strstr(err.msg, "rectilinear, grid or gyroid"));
+	ck_assert_int_eq(infill_pattern_parse("spaghetti", &p, &err), ST_ERR_ARG);
+	ck_assert_ptr_nonnull(strstr(err.msg, "\"spaghetti\" is unknown"));
+	ck_assert_int_eq(p, INFILL_RECTILINEAR); /* untouched on error */
+	/* infill_generate refuses too, and adds nothing. */
+	struct slice_stack *st = column(hs, 4, inner);
+	struct layer_stack *ls = layer_stack_new(4, NULL);
+	infill_settings_init(&is, 0.4);
+	is.fill_density = 150;
+	ck_assert_int_eq(infill_generate(&is, st, inner, ls, &err), ST_ERR_RANGE);
+	for (size_t i = 0; i < 4; i++)
+		ck_assert_uint_eq(ls->layers[i].n, 0);
+	infill_settings_init(&is, 0.4);
+	st->layers[2].height = 0.5;
+	ck_assert_int_eq(infill_generate(&is, st, inner, ls, &err), ST_ERR_RANGE);
+	ck_assert_ptr_nonnull(strstr(err.msg, "layer 2"));
+	layer_stack_free(ls);
+	ls = layer_stack_new(3, NULL);
+	st->layers[2].height = 0.2;
+	ck_assert_int_eq(infill_generate(&is, st, inner, ls, &err), ST_ERR_ARG);
+	for (size_t i = 0; i < 4; i++)
+		clip_expolys_free(&inner[i]);
+	layer_stack_free(ls);
+	slice_stack_free(st);
+}
+END_TEST
+
+Suite *infill_suite(void)
+{
+	Suite *s = suite_create("infill");
+	TCase *tc = tcase_create("infill");
+
+	tcase_set_timeout(tc, 120);
+	tcase_add_test(tc, cube_skins_and_sparse);
+	tcase_add_test(tc, patterns_stay_inside);
+	tcase_add_test(tc, bridge_between_pillars);
+	tcase_add_test(tc, shells_by_thickness);
+	tcase_add_test(tc, small_and_full_density_are_solid);
+	tcase_add_test(tc, bad_settings_refused);
+	suite_add_tcase(s, tc);
+	return s;
+}
