@@ -507,6 +507,95 @@ START_TEST(support_by_overhang_angle)
 }
 END_TEST
 
+START_TEST(support_only_from_the_bed)
+{
+	/* A stem at x 0-4, a step on the bed at x 4-12 up to z 2, a plate at
+	 * z 9-10 over x 0-20: the plate is held from the bed at x 12-20 only;
+	 * over the step the support would stand on the part. */
+	struct mesh *stem = fx_box(0, 0, 0, 4, 10, 10), *step = fx_box(3, 0, 0, 12, 10, 2);
+	struct mesh *plate = fx_box(0, 0, 9, 20, 10, 10);
+	struct mesh *a = fx_concat(stem, step), *m = fx_concat(a, plate);
+	struct slice_stack *st = slice_ok(m);
+	struct support_settings s;
+	size_t layers = 0;
+
+	support_settings_init(&s, 0.4);
+	s.support_material = true;
+	double w = s.extrusion_width * NM, clear = s.support_material_xy_spacing * NM;
+	for (int style = 0; style < SUPPORT_STYLES; style++) {
+		s.support_material_style = style;
+		struct layer_stack *ls = support_ok(&s, st);
+		layers = 0;
+		for (size_t j = 0; j < ls->nlayers; j++) {
+			const struct layer_paths *l = &ls->layers[j];
+			layers += l->n > 0;
+			for (size_t i = 0; i < l->n; i++)
+				for (size_t k = 0; k < l->paths[i].n; k++) {
+					const struct path_point *q = &l->paths[i].pts[k];
+					ck_assert_msg(q->x >= 12 * NM + clear + w / 2 - TOL,
+						      "layer %zu: bead at x %.3f over the step", j,
+						      q->x / NM);
+				}
+		}
+		/* Layer 45 (z 9.0-9.2) is the plate's first: support on 0-43. */
+		ck_assert_uint_eq(layers, 44);
+		ck_assert_uint_eq(count_support(&ls->layers[43]), ls->layers[43].n);
+		ck_assert_uint_eq(ls->layers[44].n, 0);
+		layer_stack_free(ls);
+	}
+	slice_stack_free(st);
+	mesh_free(stem);
+	mesh_free(step);
+	mesh_free(plate);
+	mesh_free(a);
+	mesh_free(m);
+}
+END_TEST
+
+START_TEST(support_under_sphere)
+{
+	/* A sphere of radius 10 on the bed overhangs below its equator only:
+	 * support stays under the lower half, outside the sphere by the xy
+	 * spacing on every layer, and reaches up to just under the 45 degree
+	 * latitude at threshold 45 (above it each layer steps in less than
+	 * it steps out below). */
+	struct mesh *m = fx_sphere(0, 0, 10, 10, 48, 96);
+	struct slice_stack *st = slice_ok(m);
+	struct support_settings s;
+	size_t top = 0;
+
+	support_settings_init(&s, 0.4);
+	s.support_material = true;
+	s.support_material_threshold = 45;
+	struct layer_stack *ls = support_ok(&s, st);
+	double w = s.extrusion_width * NM, clear = s.support_material_xy_spacing * NM;
+	for (size_t j = 0; j < ls->nlayers; j++) {
+		const struct layer_paths *l = &ls->layers[j];
+		const struct clip_paths *sec = &st->layers[j].regions.paths;
+		double r = 0.0; /* the section's outermost vertex */
+		for (size_t k = 0; k < clip_paths_points(sec); k++)
+			r = fmax(r, hypot((double)sec->xy[2 * k], (double)sec->xy[2 * k + 1]));
+		if (l->n)
+			top = j;
+		for (size_t i = 0; i < l->n; i++)
+			for (size_t k = 0; k < l->paths[i].n; k++) {
+				const struct path_point *q = &l->paths[i].pts[k];
+				ck_assert_msg(hypot((double)q->x, (double)q->y) >= r + clear + w / 2 -
+										  TOL,
+					      "layer %zu: bead %.3f mm from the axis, sphere %.3f", j,
+					      hypot((double)q->x, (double)q->y) / NM, r / NM);
+			}
+	}
+	/* 45 degrees down from the equator lies at z = 10 - 7.07 = 2.93. */
+	ck_assert_msg(st->layers[top].z > 2.0 && st->layers[top].z < 3.0, "support up to z %.2f",
+		      st->layers[top].z);
+	ck_assert_uint_gt(ls->layers[0].n, 4);
+	layer_stack_free(ls);
+	slice_stack_free(st);
+	mesh_free(m);
+}
+END_TEST
+
 START_TEST(support_settings_refused)
 {
 	struct mesh *m = cantilever();
@@ -578,6 +667,8 @@ Suite *support_suite(void)
 	tcase_add_test(tc, support_under_cantilever_snug);
 	tcase_add_test(tc, support_off_and_skirt_around_it);
 	tcase_add_test(tc, support_by_overhang_angle);
+	tcase_add_test(tc, support_only_from_the_bed);
+	tcase_add_test(tc, support_under_sphere);
 	tcase_add_test(tc, support_settings_refused);
 	suite_add_tcase(s, tc);
 	return s;
