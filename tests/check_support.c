@@ -67,6 +67,22 @@ static struct layer_stack *support_ok(const struct support_settings *s,
 	return ls;
 }
 
+/* A 20 mm cube on the bed, sliced; *m receives the mesh. */
+static struct slice_stack *cube(struct mesh **m)
+{
+	*m = fx_box(0, 0, 0, 20, 20, 20);
+	return slice_ok(*m);
+}
+
+/* Free what a test made; any of them may be NULL. */
+static void release(struct layer_stack *ls, struct slice_stack *st, struct mesh *m)
+{
+	layer_stack_free(ls);
+	slice_stack_free(st);
+	if (m)
+		mesh_free(m);
+}
+
 /* ---- measures ---- */
 
 /* Signed distance (nm) from (x, y) to the box [x0,x1] x [y0,y1] (mm):
@@ -105,6 +121,24 @@ static void path_box_range(const struct toolpath *p, const double box[4], double
 		*lo = fmin(*lo, d);
 		*hi = fmax(*hi, d);
 	}
+}
+
+/* Every point of p lies want nm (within TOL) from the box; what names p. */
+static void assert_at(const struct toolpath *p, const double box[4], double want,
+		      const char *what, size_t k)
+{
+	double lo, hi;
+
+	path_box_range(p, box, &lo, &hi);
+	ck_assert_msg(fabs(lo - want) < TOL && fabs(hi - want) < TOL,
+		      "%s %zu at %.4f..%.4f mm, want %.4f", what, k, lo / NM, hi / NM, want / NM);
+}
+
+/* No paths on layers first .. top of ls. */
+static void assert_empty_from(const struct layer_stack *ls, size_t first)
+{
+	for (size_t l = first; l < ls->nlayers; l++)
+		ck_assert_msg(ls->layers[l].n == 0, "layer %zu has %zu paths", l, ls->layers[l].n);
 }
 
 /* Filament (mm) one closed path of width w mm on a layer h mm high uses. */
@@ -177,10 +211,9 @@ static const double cube_box[4] = {0, 0, 20, 20};
 
 START_TEST(skirt_one_loop_around_cube)
 {
-	struct mesh *m = fx_box(0, 0, 0, 20, 20, 20);
-	struct slice_stack *st = slice_ok(m);
+	struct mesh *m;
+	struct slice_stack *st = cube(&m);
 	struct skirt_settings s;
-	double lo, hi;
 
 	skirt_settings_init(&s, 0.4);
 	struct layer_stack *ls = skirt_ok(&s, st, NULL);
@@ -191,13 +224,10 @@ START_TEST(skirt_one_loop_around_cube)
 	ck_assert_int_eq(p->role, PATH_SKIRT);
 	ck_assert(p->closed);
 	ck_assert_uint_ge(p->n, 8); /* round corners */
-	path_box_range(p, cube_box, &lo, &hi);
-	ck_assert_msg(fabs(lo - want) < TOL && fabs(hi - want) < TOL,
-		      "skirt at %.4f..%.4f mm, want %.4f", lo / NM, hi / NM, want / NM);
+	assert_at(p, cube_box, want, "skirt", 0);
 	for (size_t i = 0; i < p->n; i++)
 		ck_assert_int_eq(p->pts[i].width, llround(s.extrusion_width * NM));
-	for (size_t l = 1; l < ls->nlayers; l++)
-		ck_assert_uint_eq(ls->layers[l].n, 0);
+	assert_empty_from(ls, 1);
 	layer_stack_free(ls);
 
 	/* Three loops one flow spacing apart, the outermost printed first;
@@ -209,24 +239,19 @@ START_TEST(skirt_one_loop_around_cube)
 	for (size_t l = 0; l < 2; l++) {
 		ck_assert_uint_eq(count_role(&ls->layers[l], PATH_SKIRT), 3);
 		for (size_t k = 0; k < 3; k++) {
-			path_box_range(&ls->layers[l].paths[k], cube_box, &lo, &hi);
-			double d = want + (2 - (double)k) * sp;
-			ck_assert_msg(fabs(lo - d) < TOL && fabs(hi - d) < TOL,
-				      "loop %zu at %.4f..%.4f mm, want %.4f", k, lo / NM, hi / NM,
-				      d / NM);
+			assert_at(&ls->layers[l].paths[k], cube_box, want + (2 - (double)k) * sp,
+				  "skirt loop", k);
 		}
 	}
-	ck_assert_uint_eq(ls->layers[2].n, 0);
-	layer_stack_free(ls);
-	slice_stack_free(st);
-	mesh_free(m);
+	assert_empty_from(ls, 2);
+	release(ls, st, m);
 }
 END_TEST
 
 START_TEST(skirt_min_length_adds_loops)
 {
-	struct mesh *m = fx_box(0, 0, 0, 20, 20, 20);
-	struct slice_stack *st = slice_ok(m);
+	struct mesh *m;
+	struct slice_stack *st = cube(&m);
 	struct skirt_settings s;
 	double used = 0, last = 0;
 
@@ -240,16 +265,14 @@ START_TEST(skirt_min_length_adds_loops)
 	}
 	ck_assert_uint_gt(l->n, 1);
 	ck_assert_msg(used >= 20.0 && used - last < 20.0, "%zu loops use %.3f mm", l->n, used);
-	layer_stack_free(ls);
-	slice_stack_free(st);
-	mesh_free(m);
+	release(ls, st, m);
 }
 END_TEST
 
 START_TEST(brim_attached_to_part)
 {
-	struct mesh *m = fx_box(0, 0, 0, 20, 20, 20);
-	struct slice_stack *st = slice_ok(m);
+	struct mesh *m;
+	struct slice_stack *st = cube(&m);
 	struct skirt_settings s;
 	double lo, hi;
 
@@ -267,16 +290,12 @@ START_TEST(brim_attached_to_part)
 	/* Outermost first; the last loop's inner edge touches the part. */
 	for (size_t k = 0; k < want; k++) {
 		ck_assert(l->paths[k].closed);
-		path_box_range(&l->paths[k], cube_box, &lo, &hi);
-		double d = w / 2 + (double)(want - 1 - k) * sp;
-		ck_assert_msg(fabs(lo - d) < TOL && fabs(hi - d) < TOL,
-			      "brim loop %zu at %.4f..%.4f mm, want %.4f", k, lo / NM, hi / NM,
-			      d / NM);
+		assert_at(&l->paths[k], cube_box, w / 2 + (double)(want - 1 - k) * sp, "brim loop",
+			  k);
 	}
 	path_box_range(&l->paths[want - 1], cube_box, &lo, &hi);
 	ck_assert_msg(fabs(lo - w / 2) < TOL, "inner edge %.4f mm from the part", (lo - w / 2) / NM);
-	for (size_t i = 1; i < ls->nlayers; i++)
-		ck_assert_uint_eq(ls->layers[i].n, 0);
+	assert_empty_from(ls, 1);
 	layer_stack_free(ls);
 
 	/* With a skirt too: skirt first, skirt_distance beyond the brim's outer
@@ -292,16 +311,14 @@ START_TEST(brim_attached_to_part)
 	ck_assert_msg(fabs(lo - (edge + 6.0 * NM + w / 2)) < TOL, "skirt at %.4f mm", lo / NM);
 	path_box_range(&l->paths[want], cube_box, &lo, &hi);
 	ck_assert_msg(fabs(lo - (1.0 * NM + w / 2)) < TOL, "first brim loop at %.4f mm", lo / NM);
-	layer_stack_free(ls);
-	slice_stack_free(st);
-	mesh_free(m);
+	release(ls, st, m);
 }
 END_TEST
 
 START_TEST(skirt_settings_refused)
 {
-	struct mesh *m = fx_box(0, 0, 0, 20, 20, 20);
-	struct slice_stack *st = slice_ok(m);
+	struct mesh *m;
+	struct slice_stack *st = cube(&m);
 	struct layer_stack *ls = stack_for(st), *short_ls = layer_stack_new(3, NULL);
 	struct skirt_settings s, bad;
 	struct st_error err = {0};
@@ -406,9 +423,7 @@ static void check_cantilever(enum support_style style)
 		ck_assert(fabs((double)(q->pts[0].x - p->pts[0].x) - sp) <= 1.0);
 	}
 	ck_assert(ls->layers[22].paths[0].pts[0].y == ls->layers[22].paths[0].pts[1].y);
-	layer_stack_free(ls);
-	slice_stack_free(st);
-	mesh_free(m);
+	release(ls, st, m);
 }
 
 START_TEST(support_under_cantilever_grid)
@@ -446,9 +461,7 @@ START_TEST(support_off_and_skirt_around_it)
 	struct layer_stack *bare = skirt_ok(&k, st, none), *around = skirt_ok(&k, st, sup);
 	ck_assert_uint_eq(bare->layers[0].n, 1);
 	ck_assert_uint_eq(around->layers[0].n, 1);
-	path_box_range(&bare->layers[0].paths[0], stem, &lo, &hi);
-	ck_assert_msg(fabs(lo - want) < TOL && fabs(hi - want) < TOL, "%.4f..%.4f", lo / NM,
-		      hi / NM);
+	assert_at(&bare->layers[0].paths[0], stem, want, "skirt around the stem", 0);
 	/* The support beads reach the plate's edge x = 20 but not its corners. */
 	const struct toolpath *p = &around->layers[0].paths[0];
 	double xmax = -INFINITY;
@@ -590,9 +603,7 @@ START_TEST(support_under_sphere)
 	ck_assert_msg(st->layers[top].z > 2.0 && st->layers[top].z < 3.0, "support up to z %.2f",
 		      st->layers[top].z);
 	ck_assert_uint_gt(ls->layers[0].n, 4);
-	layer_stack_free(ls);
-	slice_stack_free(st);
-	mesh_free(m);
+	release(ls, st, m);
 }
 END_TEST
 
