@@ -219,8 +219,8 @@ static int fill_lines(struct ctx *c, const struct clip_paths *R, double gap, int
 
 /*
  * Paths of one support area A (nm) on layer l: its centre region is A
- * shrunk by w/2; interface lines every gap nm along axis, or the body of
- * the chosen style.
+ * shrunk by w/2; interface lines along axis, or the body of the chosen
+ * style, every gap nm.
  */
 static int area_paths(struct ctx *c, const struct clip_paths *A, bool interface, double gap,
 		      int axis, struct layer_paths *l)
@@ -238,11 +238,11 @@ static int area_paths(struct ctx *c, const struct clip_paths *A, bool interface,
 			rc = slice_emit_xy(l, PATH_SUPPORT, true, clip_path_xy(&R, i),
 					   clip_path_len(&R, i), llround(c->w), 0, false, c->err);
 		if (!rc)
-			rc = fill_lines(c, &R, c->body, 1, PATH_SUPPORT, l);
+			rc = fill_lines(c, &R, gap, 1, PATH_SUPPORT, l);
 	} else if (!rc) {
-		rc = fill_lines(c, &R, c->body, 0, PATH_SUPPORT, l);
+		rc = fill_lines(c, &R, gap, 0, PATH_SUPPORT, l);
 		if (!rc)
-			rc = fill_lines(c, &R, c->body, 1, PATH_SUPPORT, l);
+			rc = fill_lines(c, &R, gap, 1, PATH_SUPPORT, l);
 	}
 	clip_paths_free(&R);
 	return rc;
@@ -285,13 +285,14 @@ static int layer_support(struct ctx *c, size_t j, const struct clip_paths *T,
 			 struct layer_paths *l)
 {
 	struct clip_paths S = {0}, I = {0}, B = {0};
-	double h = c->st->layers[j].height;
+	double sp = perim_spacing(c->w, c->st->layers[j].height * SLICE_UNITS_PER_MM);
+	double pitch = c->body + sp; /* PrusaSlicer: the spacing is the gap between beads */
 	int rc = 0;
 
 	if (c->s->support_material_style == SUPPORT_GRID) {
-		rc = clip_offset(T, c->body / 2.0, CLIP_JOIN_SQUARE, 2.0, c->arc, &S, c->err);
+		rc = clip_offset(T, pitch / 2.0, CLIP_JOIN_SQUARE, 2.0, c->arc, &S, c->err);
 		if (!rc)
-			rc = clip_offset(&S, -c->body / 2.0, CLIP_JOIN_SQUARE, 2.0, c->arc, &S,
+			rc = clip_offset(&S, -pitch / 2.0, CLIP_JOIN_SQUARE, 2.0, c->arc, &S,
 					 c->err);
 		if (!rc)
 			rc = clip_boolean(CLIP_UNION, &S, T, CLIP_NONZERO, &S, c->err);
@@ -307,10 +308,9 @@ static int layer_support(struct ctx *c, size_t j, const struct clip_paths *T,
 	if (!rc)
 		rc = clip_boolean(CLIP_DIFFERENCE, &S, &I, CLIP_NONZERO, &B, c->err);
 	if (!rc)
-		rc = area_paths(c, &I, true, perim_spacing(c->w, h * SLICE_UNITS_PER_MM),
-				(int)(j & 1), l);
+		rc = area_paths(c, &I, true, sp, (int)(j & 1), l);
 	if (!rc)
-		rc = area_paths(c, &B, false, c->body, 0, l);
+		rc = area_paths(c, &B, false, pitch, 0, l);
 	clip_paths_free(&S);
 	clip_paths_free(&I);
 	clip_paths_free(&B);

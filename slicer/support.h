@@ -24,7 +24,8 @@
  * Paths: on layers t(i) - interface_layers + 1 .. t(i) the area under C_i
  * is interface, dense lines at the flow spacing (perimeters.h) alternating
  * X and Y by layer (PATH_SUPPORT_INTERFACE); the rest is body
- * (PATH_SUPPORT) at support_material_spacing:
+ * (PATH_SUPPORT), lines support_material_spacing apart edge to edge (a
+ * pitch of that plus the flow spacing, as PrusaSlicer reads the key):
  *   SUPPORT_GRID: the column areas closed by the line spacing (nearby
  *     islands and notches merged into blocks) and filled with a grid of
  *     lines in X and Y;
@@ -60,7 +61,7 @@ struct support_settings {
 	enum support_style support_material_style; /* SUPPORT_GRID */
 	double support_material_contact_distance; /* mm, top Z gap, >= 0 (0.2) */
 	int support_material_interface_layers;	  /* dense layers under the gap, >= 0 (3) */
-	double support_material_spacing;	  /* mm between body lines, > 0 (2.5) */
+	double support_material_spacing;	  /* mm of air between body lines, > 0 (2.5) */
 	double support_material_xy_spacing;	  /* mm clearance from the model, >= 0
 						   * (60 % of the width) */
 	double extrusion_width;			  /* mm, support bead width (1.125 x nozzle) */

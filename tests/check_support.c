@@ -413,6 +413,21 @@ static void check_cantilever(enum support_style style)
 		ck_assert(loop);
 	else
 		ck_assert(!loop);
+	/* Body lines along Y are support_material_spacing apart edge to edge. */
+	const struct layer_paths *b = &ls->layers[10];
+	double pitch = (s.support_material_spacing + perim_spacing(s.extrusion_width, 0.2)) * NM;
+	int64_t prev = INT64_MIN;
+	size_t ylines = 0;
+	for (size_t i = 0; i < b->n; i++) {
+		const struct toolpath *p = &b->paths[i];
+		if (p->closed || p->pts[0].x != p->pts[p->n - 1].x || p->pts[0].x == prev)
+			continue;
+		if (ylines++)
+			ck_assert_msg(fabs((double)(p->pts[0].x - prev) - pitch) <= 1.0,
+				      "body lines %.4f mm apart", (p->pts[0].x - prev) / NM);
+		prev = p->pts[0].x;
+	}
+	ck_assert_uint_eq(ylines, 3); /* x = 4, 5, 6 pitches: 11.6, 14.5, 17.4 mm */
 	/* Interface lines are one flow spacing apart, alternating direction. */
 	const struct layer_paths *l = &ls->layers[23];
 	double sp = perim_spacing(s.extrusion_width, 0.2) * NM;
