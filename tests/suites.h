@@ -18,6 +18,7 @@ Suite *sim_suite(void);		/* tests/check_sim.c: simulated Marlin over a pty */
 Suite *slicer_suite(void);	/* tests/check_slicer.c: slicing, Clipper bridge, walls */
 Suite *gcodewriter_suite(void); /* tests/check_gcodewriter.c: G-code writer and estimator */
 Suite *infill_suite(void);	/* tests/check_infill.c: skins, bridges, infill */
+Suite *support_suite(void);	/* tests/check_support.c: skirt, brim, support material */
 Suite *cli_suite(void);		/* tests/check_cli.c: the stratum binary end to end */
 
 #endif

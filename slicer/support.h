@@ -1,0 +1,96 @@
+/*
+ * support.h - support material under overhangs (slicer issue item 6).
+ *
+ * Overhangs: layer i (i >= 1) overhangs where its regions reach more than
+ * d beyond layer i-1's: O_i = M_i - (M_{i-1} grown by d).  With a threshold
+ * angle a (degrees from horizontal; a surface flatter than a needs
+ * support), d = h_{i-1} / tan(a + 1 deg), the extra degree as PrusaSlicer
+ * adds it so a slope of exactly a prints unsupported (capped at 89 deg).
+ * With threshold 0 (automatic) d is half the extrusion width, PrusaSlicer's
+ * automatic rule: a bead that sits less than half on the layer below
+ * needs support.  Where O_i is not empty, the contact area is the whole
+ * unsupported strip around it, C_i = (M_i - M_{i-1}) within d + w of O_i,
+ * so the strips of a slope close up across layers.
+ *
+ * Columns: the contact area of layer i starts at the top support layer
+ * t(i), the highest layer whose top is at most
+ * support_material_contact_distance below the bottom of layer i (the
+ * interface gap; 0 puts the support right under the overhang).  Going down
+ * a column stops where it meets the model, and only support that reaches
+ * the bed is kept (buildplate_only, the one mode offered): on layer j the
+ * support area is every column passing j minus everything the model
+ * occupies on layers 0 .. j grown by support_material_xy_spacing.
+ *
+ * Paths: on layers t(i) - interface_layers + 1 .. t(i) the area under C_i
+ * is interface, dense lines at the flow spacing (perimeters.h) alternating
+ * X and Y by layer (PATH_SUPPORT_INTERFACE); the rest is body
+ * (PATH_SUPPORT), lines support_material_spacing apart edge to edge (a
+ * pitch of that plus the flow spacing, as PrusaSlicer reads the key):
+ *   SUPPORT_GRID: the column areas closed by the line spacing (nearby
+ *     islands and notches merged into blocks) and filled with a grid of
+ *     lines in X and Y;
+ *   SUPPORT_SNUG: the column areas as they are, following the overhang
+ *     outline, each island wrapped by a loop and filled with lines in Y.
+ * Every bead stays inside its area (centre lines w/2 inside), so no bead
+ * comes closer than the xy spacing to the model.  Line positions are on a
+ * global grid, so lines stack from layer to layer.
+ *
+ * Lengths in settings are mm; geometry is nm (toolpath.h).
+ */
+#ifndef STRATUM_SLICER_SUPPORT_H
+#define STRATUM_SLICER_SUPPORT_H
+
+#include <stdbool.h>
+
+#include "section.h"
+#include "st_error.h"
+#include "toolpath.h"
+
+/* Support shape (PrusaSlicer's support_material_style). */
+enum support_style {
+	SUPPORT_GRID = 0, /* blocks filled with a grid of lines */
+	SUPPORT_SNUG,	  /* follows the overhang outline, wrapped by a loop */
+	SUPPORT_STYLES
+};
+
+/* Support settings (PrusaSlicer key names); support_settings_init. */
+struct support_settings {
+	bool support_material;			  /* generate support (false) */
+	double support_material_threshold;	  /* degrees from horizontal, [0, 90];
+						   * 0 = automatic (0) */
+	enum support_style support_material_style; /* SUPPORT_GRID */
+	double support_material_contact_distance; /* mm, top Z gap, >= 0 (0.2) */
+	int support_material_interface_layers;	  /* dense layers under the gap, >= 0 (3) */
+	double support_material_spacing;	  /* mm of air between body lines, > 0 (2.5) */
+	double support_material_xy_spacing;	  /* mm clearance from the model, >= 0
+						   * (60 % of the width) */
+	double extrusion_width;			  /* mm, support bead width (1.125 x nozzle) */
+	double arc_tolerance;			  /* mm, chord error of round offsets (0.002) */
+};
+
+/* support_settings_init - PrusaSlicer's defaults for a nozzle of nozzle_diameter mm. */
+void support_settings_init(struct support_settings *s, double nozzle_diameter);
+
+/*
+ * support_settings_check - refuse settings that cannot make support: a
+ * threshold outside [0, 90] degrees, a negative gap, xy spacing or
+ * interface count, a line spacing or width <= 0, a bad style, an arc
+ * tolerance outside (0, w/4].  Returns 0 or ST_ERR_ARG / ST_ERR_RANGE with
+ * a message naming the setting, its value and what is allowed.
+ */
+int support_settings_check(const struct support_settings *s, struct st_error *err);
+
+/*
+ * support_generate - append the support paths of every layer to out.
+ *   st: the sliced model (its regions are M_i).
+ *   out: st->n layers (z and height set by the caller); each layer gets
+ *        its interface paths, then its body paths.
+ * Nothing is added when support_material is off.  Returns 0 or a negative
+ * class with err filled (bad settings, a layer count that does not match,
+ * a layer width the flow model cannot lay, ST_ERR_NOMEM, ST_ERR_INTERNAL);
+ * on error out may hold some paths.  Not thread-safe on one out.
+ */
+int support_generate(const struct support_settings *s, const struct slice_stack *st,
+		     struct layer_stack *out, struct st_error *err);
+
+#endif /* STRATUM_SLICER_SUPPORT_H */
