@@ -17,6 +17,7 @@ Suite *xport_suite(void);	/* tests/check_xport.c: serial transports (pty, TCP) *
 Suite *sim_suite(void);		/* tests/check_sim.c: simulated Marlin over a pty */
 Suite *slicer_suite(void);	/* tests/check_slicer.c: slicing, Clipper bridge, walls */
 Suite *gcodewriter_suite(void); /* tests/check_gcodewriter.c: G-code writer and estimator */
+Suite *slicecli_suite(void);	/* tests/check_slicecli.c: stratum slice end to end */
 Suite *cli_suite(void);		/* tests/check_cli.c: the stratum binary end to end */
 
 #endif
