@@ -13,9 +13,11 @@ gen=build/bench/gen_mesh
 
 case $what in check|repair|slice|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|slice|all]" >&2; exit 2;; esac
 
-[ -f "$out/torus-1m.stl" ] || "$gen" torus 1000 500 "$out/torus-1m.stl"
-[ -f "$out/torus-2m.stl" ] || "$gen" torus 1000 1000 "$out/torus-2m.stl"
-[ -f "$out/spheres.stl" ] || "$gen" spheres 8 "$out/spheres.stl"
+if [ "$what" != slice ]; then
+	[ -f "$out/torus-1m.stl" ] || "$gen" torus 1000 500 "$out/torus-1m.stl"
+	[ -f "$out/torus-2m.stl" ] || "$gen" torus 1000 1000 "$out/torus-2m.stl"
+	[ -f "$out/spheres.stl" ] || "$gen" spheres 8 "$out/spheres.stl"
+fi
 if [ "$what" != check ]; then
 	[ -f "$out/torus-100k.stl" ] || "$gen" torus 250 200 "$out/torus-100k.stl"
 	[ -f "$out/twospheres.stl" ] || "$gen" twospheres 100 80 "$out/twospheres.stl"
@@ -119,7 +121,12 @@ EOF
 once() {
 	/usr/bin/time -q -f '%e %U %S %M' -o "$out/time.txt" "$@" >/dev/null 2>&1 || echo "failed: $*" >&2
 	read -r t u s m < "$out/time.txt"
-	echo "$t $(echo "$u + $s" | bc) $m"
+	echo "$t $(echo "$u + $s" | bc | sed 's/^\./0./') $m"
+}
+
+# ratio A B -> A / B with two decimals
+ratio() {
+	echo "scale=2; $1 / $2" | bc | sed 's/^\./0./'
 }
 
 # `stratum slice` (repair included) against `prusa-slicer --export-gcode`.
@@ -145,7 +152,7 @@ for f in cube20 scan; do
 			-o "$out/$f-prusa-$cfg.gcode" "$path")
 		pt=$1; pc=$2; pm=$3
 		pl=$(grep -c '^;LAYER_CHANGE' "$out/$f-prusa-$cfg.gcode" || true)
-		echo "| $f | $tris | PrusaSlicer $pver ($cfg) | $pl | $pt | $pc | $(echo "scale=1; $pm / 1024" | bc) | $(echo "scale=2; $st / $pt" | bc) | $(echo "scale=2; $sc / $pc" | bc) | $(echo "scale=2; $sm / $pm" | bc) |"
+		echo "| $f | $tris | PrusaSlicer $pver ($cfg) | $pl | $pt | $pc | $(echo "scale=1; $pm / 1024" | bc) | $(ratio "$st" "$pt") | $(ratio "$sc" "$pc") | $(ratio "$sm" "$pm") |"
 	done
 done
 }
