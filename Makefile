@@ -21,7 +21,7 @@ DEB_PACKAGES := gcc g++ make pkg-config dpkg-dev \
 	libpolyclipping-dev check libsqlite3-dev libmicrohttpd-dev libjansson-dev \
 	libmosquitto-dev mosquitto
 # Only the benchmark compares against these.
-BENCH_PACKAGES := admesh time bc
+BENCH_PACKAGES := admesh time bc prusa-slicer
 
 WARN     := -Wall -Wextra -Werror
 CPPFLAGS := -Iinclude -Irepair -Irepair/exact -Iserial -Islicer -Islicer/clip -Ihost -D_XOPEN_SOURCE=700 -D_DEFAULT_SOURCE -MMD -MP

@@ -11,6 +11,7 @@
  *                                    the smallest grid spacing in each axis, so
  *                                    triangles fold over their neighbours and cut
  *                                    through them (JITTER 0.7 folds many)
+ *   gen_mesh box SX SY SZ OUT.stl    an SX x SY x SZ mm box (whole mm) at the origin
  * Every mesh is deterministic: the same arguments give the same file.
  */
 #include <math.h>
@@ -67,7 +68,8 @@ static void usage(void)
 {
 	fprintf(stderr, "usage: gen_mesh torus NU NV OUT.stl | gen_mesh spheres N OUT.stl\n"
 			"       gen_mesh twospheres NLAT NLON OUT.stl | gen_mesh scan NU NV JITTER "
-			"OUT.stl\n");
+			"OUT.stl\n"
+			"       gen_mesh box SX SY SZ OUT.stl\n");
 	exit(2);
 }
 
@@ -108,6 +110,9 @@ int main(int argc, char **argv)
 			usage();
 		m = fx_torus(60.0, 20.0, nu, nv);
 		jitter(m, j * (du < dv ? du : dv), 20151215u);
+	} else if (argc == 6 && !strcmp(argv[1], "box")) {
+		m = fx_box(0, 0, 0, int_arg(argv[2], 1, 10000), int_arg(argv[3], 1, 10000),
+			   int_arg(argv[4], 1, 10000));
 	} else {
 		usage();
 	}

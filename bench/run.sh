@@ -1,8 +1,9 @@
 #!/bin/sh
-# bench/run.sh BIN [check|repair|all] - time `stratum check` against admesh
-# and `stratum repair` on generated files; prints Markdown tables for
-# docs/benchmarks.md.  Wall time and peak RSS come from GNU time; each figure
-# is the best of 3 runs.
+# bench/run.sh BIN [check|repair|slice|all] - time `stratum check` against
+# admesh, `stratum repair` on generated files, and `stratum slice` against
+# PrusaSlicer's `--export-gcode`; prints Markdown tables for
+# docs/benchmarks.md.  Wall time, CPU time and peak RSS come from GNU time;
+# check and repair figures are the best of 3 runs, slice figures one run.
 set -eu
 bin=${1:-build/stratum}
 what=${2:-all}
@@ -10,15 +11,18 @@ out=bench/out
 mkdir -p "$out"
 gen=build/bench/gen_mesh
 
-case $what in check|repair|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|all]" >&2; exit 2;; esac
+case $what in check|repair|slice|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|slice|all]" >&2; exit 2;; esac
 
-[ -f "$out/torus-1m.stl" ] || "$gen" torus 1000 500 "$out/torus-1m.stl"
-[ -f "$out/torus-2m.stl" ] || "$gen" torus 1000 1000 "$out/torus-2m.stl"
-[ -f "$out/spheres.stl" ] || "$gen" spheres 8 "$out/spheres.stl"
+if [ "$what" != slice ]; then
+	[ -f "$out/torus-1m.stl" ] || "$gen" torus 1000 500 "$out/torus-1m.stl"
+	[ -f "$out/torus-2m.stl" ] || "$gen" torus 1000 1000 "$out/torus-2m.stl"
+	[ -f "$out/spheres.stl" ] || "$gen" spheres 8 "$out/spheres.stl"
+fi
 if [ "$what" != check ]; then
 	[ -f "$out/torus-100k.stl" ] || "$gen" torus 250 200 "$out/torus-100k.stl"
 	[ -f "$out/twospheres.stl" ] || "$gen" twospheres 100 80 "$out/twospheres.stl"
 	[ -f "$out/scan.stl" ] || "$gen" scan 250 120 0.7 "$out/scan.stl"
+	[ -f "$out/cube20.stl" ] || "$gen" box 20 20 20 "$out/cube20.stl"
 fi
 
 # best_of3 CMD... -> "seconds peak_kib" (exit status of CMD ignored: check exits 1
@@ -86,8 +90,77 @@ for f in torus-100k torus-1m twospheres scan spheres; do
 done
 }
 
+# PrusaSlicer settings matching printers/prusa-i3-mk3s.ini for what both
+# slicers do: nozzle 0.4, layers 0.2, 2 perimeters 0.45 mm wide, the MK3S bed.
+# $1 = walls: no infill, skins or skirt (what stratum prints at this commit);
+# $1 = full: the profile's 15 % gyroid infill, 5 top / 4 bottom layers, 1 skirt.
+prusa_ini() {
+	cat <<EOF
+bed_shape = 0x0,250x0,250x210,0x210
+max_print_height = 210
+gcode_flavor = marlin2
+nozzle_diameter = 0.4
+filament_diameter = 1.75
+layer_height = 0.2
+first_layer_height = 0.2
+perimeters = 2
+extrusion_width = 0.45
+thin_walls = 1
+gap_fill_enabled = 1
+support_material = 0
+brim_width = 0
+EOF
+	if [ "$1" = walls ]; then
+		printf 'fill_density = 0%%\ntop_solid_layers = 0\nbottom_solid_layers = 0\nskirts = 0\n'
+	else
+		printf 'fill_density = 15%%\nfill_pattern = gyroid\ntop_solid_layers = 5\nbottom_solid_layers = 4\nskirts = 1\n'
+	fi
+}
+
+# once CMD... -> "wall_s cpu_s peak_kib" of one run (GNU time)
+once() {
+	/usr/bin/time -q -f '%e %U %S %M' -o "$out/time.txt" "$@" >/dev/null 2>&1 || echo "failed: $*" >&2
+	read -r t u s m < "$out/time.txt"
+	echo "$t $(echo "$u + $s" | bc | sed 's/^\./0./') $m"
+}
+
+# ratio A B -> A / B with two decimals
+ratio() {
+	echo "scale=2; $1 / $2" | bc | sed 's/^\./0./'
+}
+
+# `stratum slice` (repair included) against `prusa-slicer --export-gcode`.
+slice_table() {
+if ! command -v prusa-slicer >/dev/null 2>&1; then
+	echo "prusa-slicer is not installed (make bench installs it)" >&2
+	return 1
+fi
+prusa_ini walls >"$out/prusa-walls.ini"
+prusa_ini full >"$out/prusa-full.ini"
+pver=$(prusa-slicer --help 2>/dev/null | sed -n 's/^PrusaSlicer-\([0-9.]*\).*/\1/p')
+echo "| model | triangles | slicer | layers | wall s | CPU s | peak MiB | wall ratio stratum/this | CPU ratio | memory ratio |"
+echo "|---|---|---|---|---|---|---|---|---|---|"
+for f in cube20 scan; do
+	path="$out/$f.stl"
+	tris=$(( ($(stat -c %s "$path") - 84) / 50 ))
+	set -- $(once "$bin" slice "$path" -o "$out/$f-stratum.gcode" --printer prusa-i3-mk3s)
+	st=$1; sc=$2; sm=$3
+	sl=$(grep -c '^;LAYER_CHANGE' "$out/$f-stratum.gcode" || true)
+	echo "| $f | $tris | stratum (walls only, repair included) | $sl | $st | $sc | $(echo "scale=1; $sm / 1024" | bc) | | | |"
+	for cfg in walls full; do
+		set -- $(once prusa-slicer --export-gcode --load "$out/prusa-$cfg.ini" --center 125,105 \
+			-o "$out/$f-prusa-$cfg.gcode" "$path")
+		pt=$1; pc=$2; pm=$3
+		pl=$(grep -c '^;LAYER_CHANGE' "$out/$f-prusa-$cfg.gcode" || true)
+		echo "| $f | $tris | PrusaSlicer $pver ($cfg) | $pl | $pt | $pc | $(echo "scale=1; $pm / 1024" | bc) | $(ratio "$st" "$pt") | $(ratio "$sc" "$pc") | $(ratio "$sm" "$pm") |"
+	done
+done
+}
+
 case $what in
 check) check_table ;;
 repair) repair_table ;;
-all) check_table; echo; repair_table ;;
+slice) slice_table ;;
+all) check_table; echo; repair_table; echo; slice_table ;;
 esac
+

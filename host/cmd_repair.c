@@ -10,17 +10,16 @@
 #include <errno.h>
 #include <jansson.h>
 #include <math.h>
-#include <pthread.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "commands.h"
 #include "mesh.h"
 #include "meshio.h"
 #include "profile.h"
+#include "progress.h"
 #include "repair.h"
 #include "st_error.h"
 #include "st_number.h"
@@ -52,61 +51,6 @@ static void repair_usage(FILE *out)
 		"\n"
 		"Exit status: 0 repaired, 1 no printable result or OUT not written, 2 usage,\n"
 		"65 unreadable input or printer profile, 70 internal error.  See docs/repair.md.\n");
-}
-
-/* Progress drawing state; the mutex guards against calls from worker threads. */
-struct repair_progress {
-	pthread_mutex_t lock;
-	bool tty;		/* draw a bar; otherwise one line per stage */
-	char stage[64];		/* the stage last shown */
-	int percent;		/* the percentage last shown, -1 none */
-	size_t width;		/* characters of the bar line on screen */
-};
-
-/* Progress callback for repair_mesh: redraw only when something changed. */
-static void repair_on_progress(void *ctx, const char *stage, double done)
-{
-	struct repair_progress *p = ctx;
-	int percent;
-	bool new_stage;
-
-	if (!stage)
-		stage = "";
-	percent = isfinite(done) ? (int)(done * 100.0) : 0;
-	if (percent < 0)
-		percent = 0;
-	if (percent > 100)
-		percent = 100;
-	pthread_mutex_lock(&p->lock);
-	new_stage = strncmp(p->stage, stage, sizeof(p->stage) - 1) != 0;
-	if (p->tty && (new_stage || percent != p->percent)) {
-		int n = fprintf(stderr, "\r[%.*s] %d%%", (int)(sizeof(p->stage) - 1), stage,
-				percent);
-		/* Blank what is left of a longer previous line. */
-		for (size_t w = n > 0 ? (size_t)n - 1 : 0; w < p->width; w++)
-			fputc(' ', stderr);
-		if (n > 0 && (size_t)n - 1 > p->width)
-			p->width = (size_t)n - 1;
-		fflush(stderr);
-	} else if (!p->tty && new_stage) {
-		fprintf(stderr, "stratum repair: %s\n", stage);
-	}
-	if (new_stage)
-		snprintf(p->stage, sizeof(p->stage), "%s", stage);
-	p->percent = percent;
-	pthread_mutex_unlock(&p->lock);
-}
-
-/* Erase the bar so the report starts on a clean line. */
-static void repair_progress_clear(struct repair_progress *p)
-{
-	if (!p->tty || !p->width)
-		return;
-	fputc('\r', stderr);
-	for (size_t w = 0; w < p->width; w++)
-		fputc(' ', stderr);
-	fputc('\r', stderr);
-	fflush(stderr);
 }
 
 /* Parse --epsilon with the project's number reader; false when out of range. */
@@ -446,27 +390,6 @@ static int report(const struct repair_run *run, const struct repair_report *r,
 	return 0;
 }
 
-/* Fetch the value of an option given as "--opt VALUE" or "--opt=VALUE". */
-static const char *opt_value(int argc, char **argv, int *i, const char *name)
-{
-	size_t len = strlen(name);
-	const char *a = argv[*i];
-
-	if (!strcmp(a, name))
-		return *i + 1 < argc ? argv[++*i] : NULL;
-	if (!strncmp(a, name, len) && a[len] == '=')
-		return a + len + 1;
-	return NULL;
-}
-
-/* True when argv[i] is --name or --name=...; the value may still be missing. */
-static bool is_opt(const char *a, const char *name)
-{
-	size_t len = strlen(name);
-
-	return !strncmp(a, name, len) && (a[len] == '\0' || a[len] == '=');
-}
-
 int cmd_repair(int argc, char **argv)
 {
 	const char *in = NULL, *out = NULL, *printer = NULL, *eps_arg = NULL;
@@ -477,7 +400,7 @@ int cmd_repair(int argc, char **argv)
 	struct repair_run run = {0};
 	struct repair_options opt;
 	struct repair_report rep;
-	struct repair_progress prog;
+	struct progress prog;
 	struct repair_outputs outs = {0};
 	struct mesh *m = NULL, *fixed = NULL;
 	uint32_t *component = NULL;
@@ -494,30 +417,30 @@ int cmd_repair(int argc, char **argv)
 			split = true;
 		} else if (!strcmp(a, "--ascii")) {
 			ascii = true;
-		} else if (!strcmp(a, "-o") || is_opt(a, "--output")) {
+		} else if (!strcmp(a, "-o") || cmd_is_opt(a, "--output")) {
 			out = !strcmp(a, "-o") ? (i + 1 < argc ? argv[++i] : NULL)
-					       : opt_value(argc, argv, &i, "--output");
+					       : cmd_opt_value(argc, argv, &i, "--output");
 			if (!out || !*out) {
 				fprintf(stderr, "stratum repair: %s needs the output file name\n", a);
 				return ST_EXIT_USAGE;
 			}
-		} else if (is_opt(a, "--printer")) {
-			printer = opt_value(argc, argv, &i, "--printer");
+		} else if (cmd_is_opt(a, "--printer")) {
+			printer = cmd_opt_value(argc, argv, &i, "--printer");
 			if (!printer || !*printer) {
 				fprintf(stderr, "stratum repair: --printer needs a printer name or "
 						"file (see 'stratum printers')\n");
 				return ST_EXIT_USAGE;
 			}
-		} else if (is_opt(a, "--epsilon")) {
-			eps_arg = opt_value(argc, argv, &i, "--epsilon");
+		} else if (cmd_is_opt(a, "--epsilon")) {
+			eps_arg = cmd_opt_value(argc, argv, &i, "--epsilon");
 			if (!eps_arg || !parse_epsilon(eps_arg, &run.epsilon)) {
 				fprintf(stderr, "stratum repair: --epsilon wants a thickness in mm "
 						"greater than 0 and at most %g, not '%s'\n",
 					REPAIR_EPSILON_MAX, eps_arg ? eps_arg : "");
 				return ST_EXIT_USAGE;
 			}
-		} else if (is_opt(a, "--threads")) {
-			const char *v = opt_value(argc, argv, &i, "--threads");
+		} else if (cmd_is_opt(a, "--threads")) {
+			const char *v = cmd_opt_value(argc, argv, &i, "--threads");
 
 			threads = v ? cmd_parse_threads(v) : -1;
 			if (threads < 0) {
@@ -576,21 +499,14 @@ int cmd_repair(int argc, char **argv)
 	opt.epsilon = run.epsilon;
 	opt.precision = ascii ? REPAIR_FLOAT64 : REPAIR_FLOAT32;
 	opt.threads = threads;
-	memset(&prog, 0, sizeof(prog));
-	prog.percent = -1;
-	if (m->ntris >= REPAIR_PROGRESS_MIN) {
-		if (pthread_mutex_init(&prog.lock, NULL) == 0) {
-			prog.tty = isatty(STDERR_FILENO);
-			opt.progress = repair_on_progress;
-			opt.progress_ctx = &prog;
-		}
+	if (m->ntris >= REPAIR_PROGRESS_MIN && progress_start(&prog, "stratum repair")) {
+		opt.progress = progress_update;
+		opt.progress_ctx = &prog;
 	}
 	memset(&rep, 0, sizeof(rep));
 	rc = repair_mesh(m, &opt, &fixed, &component, &rep, &err);
-	if (opt.progress) {
-		repair_progress_clear(&prog);
-		pthread_mutex_destroy(&prog.lock);
-	}
+	if (opt.progress)
+		progress_end(&prog);
 	mesh_free(m);
 	if (rc < 0) {
 		fprintf(stderr, "stratum repair: %s: %s\n", in, err.msg);

@@ -6,16 +6,29 @@
 #ifndef STRATUM_HOST_COMMANDS_H
 #define STRATUM_HOST_COMMANDS_H
 
+#include <stdbool.h>
+
 int cmd_check(int argc, char **argv);	 /* host/cmd_check.c */
 int cmd_repair(int argc, char **argv);	 /* host/cmd_repair.c */
 int cmd_printers(int argc, char **argv); /* host/cmd_printers.c */
 int cmd_ports(int argc, char **argv);	 /* host/cmd_ports.c */
 int cmd_sim(int argc, char **argv);	 /* host/cmd_sim.c */
+int cmd_slice(int argc, char **argv);	 /* host/cmd_slice.c */
 
 /*
  * cmd_parse_threads - the value of --threads N: N as an int, or -1 when it
  * is not a whole number in 1..256 (host/cmd_check.c).
  */
 int cmd_parse_threads(const char *s);
+
+/*
+ * cmd_opt_value - the value of option argv[*i] given as "NAME VALUE" (then
+ * *i moves past VALUE) or "NAME=VALUE"; NULL when the value is missing
+ * (host/cmd_opts.c).
+ */
+const char *cmd_opt_value(int argc, char **argv, int *i, const char *name);
+
+/* cmd_is_opt - true when a is NAME or NAME=...; the value may still be missing. */
+bool cmd_is_opt(const char *a, const char *name);
 
 #endif

@@ -20,6 +20,7 @@ static const struct command commands[] = {
 	{"repair", cmd_repair, "repair a mesh exactly into printable solids and write STL"},
 	{"printers", cmd_printers, "list the printer profiles"},
 	{"ports", cmd_ports, "list serial ports and the printers they match"},
+	{"slice", cmd_slice, "slice a mesh into G-code for a printer (walls only so far)"},
 	{"sim", cmd_sim, "run a simulated printer on a pseudo-terminal"},
 };
 

@@ -359,6 +359,7 @@ static bool takes_string(char letter, int number)
 	case 117:
 	case 118:
 	case 928:
+	case 862: /* Prusa print checks: M862.3 P "MK3S" quotes the model name */
 		return true;
 	default:
 		return false;

@@ -22,9 +22,9 @@
  *   anywhere except inside the text of a string-argument command;
  * - the checksum is the XOR of every byte from the first non-blank byte of
  *   the line up to the '*', written in decimal (PROTOCOLS.md section 1);
- * - string-argument commands (M23, M28, M30, M32, M117, M118, M928 and '@'
- *   host commands) keep the rest of the line, up to ';' or the checksum, as
- *   one string;
+ * - string-argument commands (M23, M28, M30, M32, M117, M118, M928,
+ *   Prusa's M862.x print checks and '@' host commands) keep the rest of the
+ *   line, up to ';' or the checksum, as one string;
  * - G-code is ASCII: bytes 0x80-0xff are refused in the command part (they
  *   are allowed in comments, which slicers fill with object names), and
  *   control bytes are refused everywhere except tab.

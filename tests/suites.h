@@ -19,6 +19,7 @@ Suite *slicer_suite(void);	/* tests/check_slicer.c: slicing, Clipper bridge, wal
 Suite *gcodewriter_suite(void); /* tests/check_gcodewriter.c: G-code writer and estimator */
 Suite *infill_suite(void);	/* tests/check_infill.c: skins, bridges, infill */
 Suite *support_suite(void);	/* tests/check_support.c: skirt, brim, support material */
+Suite *slicecli_suite(void);	/* tests/check_slicecli.c: stratum slice end to end */
 Suite *cli_suite(void);		/* tests/check_cli.c: the stratum binary end to end */
 
 #endif

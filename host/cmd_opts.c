@@ -1,0 +1,25 @@
+/*
+ * cmd_opts.c - option parsing helpers shared by the subcommands (commands.h).
+ */
+#include <string.h>
+
+#include "commands.h"
+
+const char *cmd_opt_value(int argc, char **argv, int *i, const char *name)
+{
+	size_t len = strlen(name);
+	const char *a = argv[*i];
+
+	if (!strcmp(a, name))
+		return *i + 1 < argc ? argv[++*i] : NULL;
+	if (!strncmp(a, name, len) && a[len] == '=')
+		return a + len + 1;
+	return NULL;
+}
+
+bool cmd_is_opt(const char *a, const char *name)
+{
+	size_t len = strlen(name);
+
+	return !strncmp(a, name, len) && (a[len] == '\0' || a[len] == '=');
+}

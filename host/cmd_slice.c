@@ -1,0 +1,590 @@
+/*
+ * cmd_slice.c - `stratum slice MODEL -o OUT.gcode --printer NAME
+ * [--layer-height H] [--first-layer-height H] [--perimeters N]
+ * [--infill D] [--center X,Y] [--no-repair] [--json] [--threads N]`:
+ * read a mesh, repair it (seed 000, epsilon = the nozzle diameter), place
+ * it on the bed, slice it (slicer/slicer.h) and write G-code.
+ * Exit 0 written, 1 the job cannot be done (no printable repair, does not
+ * fit, nothing to print, OUT not written), 2 usage or bad settings, 65
+ * unreadable model or bad printer profile, 70 internal error.
+ *
+ * The printer profile is mapped to struct slicer_config here, so slicer/
+ * never includes host/.
+ */
+#include <errno.h>
+#include <jansson.h>
+#include <math.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "commands.h"
+#include "mesh.h"
+#include "meshio.h"
+#include "profile.h"
+#include "progress.h"
+#include "repair.h"
+#include "slicer.h"
+#include "st_error.h"
+#include "st_number.h"
+
+#define SLICE_CMD "stratum slice"
+#define SLICE_FILAMENT_DENSITY 1.24 /* g/cm^3 (PLA) when the profile has none */
+
+static void slice_usage(FILE *out)
+{
+	fprintf(out,
+		"usage: stratum slice MODEL -o OUT.gcode --printer NAME|FILE.ini\n"
+		"                     [--layer-height H] [--first-layer-height H] [--perimeters N]\n"
+		"                     [--infill D] [--center X,Y] [--no-repair] [--json]\n"
+		"                     [--threads N]\n"
+		"\n"
+		"Slices a mesh (STL, OBJ or OFF) into G-code for the printer.  The model is\n"
+		"first repaired exactly (as 'stratum repair', epsilon = the nozzle diameter),\n"
+		"then placed with its bounding box centred on the bed and its lowest point on\n"
+		"the bed, and refused when it does not fit the bed or the build height.\n"
+		"This build prints walls (perimeters, gap fill and thin walls) only: infill,\n"
+		"supports and skirt/brim are not in it yet.  See docs/slicing.md.\n"
+		"\n"
+		"  -o, --output OUT        the G-code file (written only when everything succeeded)\n"
+		"  --printer P             printer profile name ('stratum printers') or .ini file\n"
+		"  --layer-height H        mm, > 0 and at most the nozzle (default: the profile's)\n"
+		"  --first-layer-height H  mm, likewise (default: the profile's)\n"
+		"  --perimeters N          walls per island, 0 or more (default: the profile's)\n"
+		"  --infill D              infill density in percent, 0 to 100 (recorded; this\n"
+		"                          build prints no infill)\n"
+		"  --center X,Y            put the model's centre there, mm (default: bed centre)\n"
+		"  --no-repair             slice the mesh as it is read\n"
+		"  --json                  one JSON object on stdout instead of the text summary\n"
+		"  --threads N             cores for the repair and the walls (default: all)\n"
+		"\n"
+		"Exit status: 0 written, 1 the job cannot be done (no printable repair, the model\n"
+		"does not fit, OUT not written), 2 usage or bad settings, 65 unreadable model or\n"
+		"printer profile, 70 internal error.\n");
+}
+
+/* The command line, checked for form; values are checked with the profile. */
+struct slice_args {
+	const char *in, *out, *printer;
+	bool json, no_repair;
+	int threads; /* 0 = all */
+	bool has_layer, has_first, has_perimeters, has_infill, has_center;
+	double layer_height, first_layer_height, infill, center[2];
+	int perimeters;
+};
+
+/* A number for option opt; false (message printed) when it is not one. */
+static bool parse_number(const char *opt, const char *v, const char *what, double *out)
+{
+	if (v && st_parse_double(v, strlen(v), 0, out) == ST_NUMBER_OK)
+		return true;
+	fprintf(stderr, SLICE_CMD ": %s wants %s, not '%s'\n", opt, what, v ? v : "");
+	return false;
+}
+
+/* --infill D or D%: a number of percent. */
+static bool parse_percent(const char *v, double *out)
+{
+	size_t n = v ? strlen(v) : 0;
+
+	if (n && v[n - 1] == '%')
+		n--;
+	if (v && n && st_parse_double(v, n, 0, out) == ST_NUMBER_OK)
+		return true;
+	fprintf(stderr, SLICE_CMD ": --infill wants a density in percent from 0 to 100, not '%s'\n",
+		v ? v : "");
+	return false;
+}
+
+/* --center X,Y. */
+static bool parse_center(const char *v, double c[2])
+{
+	const char *comma = v ? strchr(v, ',') : NULL;
+
+	if (comma && st_parse_double(v, (size_t)(comma - v), 0, &c[0]) == ST_NUMBER_OK &&
+	    st_parse_double(comma + 1, strlen(comma + 1), 0, &c[1]) == ST_NUMBER_OK)
+		return true;
+	fprintf(stderr, SLICE_CMD ": --center wants X,Y in mm (such as 125,105), not '%s'\n",
+		v ? v : "");
+	return false;
+}
+
+/* --perimeters N: a whole number (its range is checked with the settings). */
+static bool parse_count(const char *v, int *out)
+{
+	double d;
+
+	if (v && st_parse_double(v, strlen(v), 0, &d) == ST_NUMBER_OK && d == floor(d) &&
+	    fabs(d) <= 1e6) {
+		*out = (int)d;
+		return true;
+	}
+	fprintf(stderr, SLICE_CMD ": --perimeters wants a whole number of walls, not '%s'\n",
+		v ? v : "");
+	return false;
+}
+
+/* Parse argv; 0 to go on, -1 after --help, else the exit status. */
+static int parse_args(int argc, char **argv, struct slice_args *a)
+{
+	for (int i = 1; i < argc; i++) {
+		const char *s = argv[i];
+		const char *v;
+
+		if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
+			slice_usage(stdout);
+			return -1;
+		} else if (!strcmp(s, "--json")) {
+			a->json = true;
+		} else if (!strcmp(s, "--no-repair")) {
+			a->no_repair = true;
+		} else if (!strcmp(s, "-o") || cmd_is_opt(s, "--output")) {
+			a->out = !strcmp(s, "-o") ? (i + 1 < argc ? argv[++i] : NULL)
+						  : cmd_opt_value(argc, argv, &i, "--output");
+			if (!a->out || !*a->out) {
+				fprintf(stderr, SLICE_CMD ": %s needs the output file name\n", s);
+				return ST_EXIT_USAGE;
+			}
+		} else if (cmd_is_opt(s, "--printer")) {
+			a->printer = cmd_opt_value(argc, argv, &i, "--printer");
+			if (!a->printer || !*a->printer) {
+				fprintf(stderr, SLICE_CMD ": --printer needs a printer name or file "
+							  "(see 'stratum printers')\n");
+				return ST_EXIT_USAGE;
+			}
+		} else if (cmd_is_opt(s, "--layer-height")) {
+			v = cmd_opt_value(argc, argv, &i, "--layer-height");
+			if (!parse_number("--layer-height", v, "a height in mm", &a->layer_height))
+				return ST_EXIT_USAGE;
+			a->has_layer = true;
+		} else if (cmd_is_opt(s, "--first-layer-height")) {
+			v = cmd_opt_value(argc, argv, &i, "--first-layer-height");
+			if (!parse_number("--first-layer-height", v, "a height in mm",
+					  &a->first_layer_height))
+				return ST_EXIT_USAGE;
+			a->has_first = true;
+		} else if (cmd_is_opt(s, "--perimeters")) {
+			if (!parse_count(cmd_opt_value(argc, argv, &i, "--perimeters"),
+					 &a->perimeters))
+				return ST_EXIT_USAGE;
+			a->has_perimeters = true;
+		} else if (cmd_is_opt(s, "--infill")) {
+			if (!parse_percent(cmd_opt_value(argc, argv, &i, "--infill"), &a->infill))
+				return ST_EXIT_USAGE;
+			a->has_infill = true;
+		} else if (cmd_is_opt(s, "--center")) {
+			if (!parse_center(cmd_opt_value(argc, argv, &i, "--center"), a->center))
+				return ST_EXIT_USAGE;
+			a->has_center = true;
+		} else if (cmd_is_opt(s, "--threads")) {
+			v = cmd_opt_value(argc, argv, &i, "--threads");
+			a->threads = v ? cmd_parse_threads(v) : -1;
+			if (a->threads < 0) {
+				fprintf(stderr, SLICE_CMD ": --threads wants a number from 1 to 256, "
+							  "not '%s'\n", v ? v : "");
+				return ST_EXIT_USAGE;
+			}
+		} else if (s[0] == '-' && s[1]) {
+			fprintf(stderr, SLICE_CMD ": unknown option '%s'\n", s);
+			slice_usage(stderr);
+			return ST_EXIT_USAGE;
+		} else if (!a->in) {
+			a->in = s;
+		} else {
+			fprintf(stderr, SLICE_CMD ": one model at a time ('%s' and '%s'); name the "
+						  "output with -o\n", a->in, s);
+			return ST_EXIT_USAGE;
+		}
+	}
+	if (!a->in || !a->out || !a->printer) {
+		fprintf(stderr, SLICE_CMD ": %s\n",
+			!a->in	    ? "no model file given"
+			: !a->out   ? "no output file given; add -o OUT.gcode"
+				    : "no printer given; add --printer NAME ('stratum printers' "
+				      "lists them)");
+		slice_usage(stderr);
+		return ST_EXIT_USAGE;
+	}
+	return 0;
+}
+
+/* Machine limits of the profile where it sets them (> 0), else the defaults. */
+static void limits_from_profile(const struct profile *p, struct est_limits *lim)
+{
+	static const enum profile_axis pa[EST_AXES] = {PROFILE_AXIS_X, PROFILE_AXIS_Y,
+						       PROFILE_AXIS_Z, PROFILE_AXIS_E};
+
+	est_limits_init(lim);
+	for (int k = 0; k < EST_AXES; k++) {
+		if (p->machine_max_feedrate[pa[k]] > 0)
+			lim->max_feedrate[k] = p->machine_max_feedrate[pa[k]];
+		if (p->machine_max_acceleration[pa[k]] > 0)
+			lim->max_acceleration[k] = p->machine_max_acceleration[pa[k]];
+		lim->max_jerk[k] = p->machine_max_jerk[pa[k]];
+	}
+	if (p->machine_max_acceleration_extruding > 0)
+		lim->accel_extruding = p->machine_max_acceleration_extruding;
+	if (p->machine_max_acceleration_retracting > 0)
+		lim->accel_retracting = p->machine_max_acceleration_retracting;
+	lim->accel_travel = p->machine_max_acceleration_travel;
+}
+
+/*
+ * The job's settings from the printer profile (PrusaSlicer keys to the
+ * stages' fields), then the command line's overrides.  Returns 0 or the
+ * exit status with the message printed.
+ */
+static int config_from_profile(const struct profile *p, const struct slice_args *a,
+			       struct slicer_config *c)
+{
+	struct gcodew_settings *g = &c->gcodew;
+	struct st_error err = {0};
+	double nozzle = p->nozzle_diameter[0], v;
+
+	slicer_config_init(c, nozzle);
+	c->layer_height = a->has_layer ? a->layer_height : p->layer_height;
+	c->first_layer_height = a->has_first ? a->first_layer_height : p->first_layer_height;
+	if (p->extrusion_width > 0)
+		c->perim.extrusion_width = p->extrusion_width;
+	c->perim.perimeters = a->has_perimeters ? a->perimeters : p->perimeters;
+
+	c->infill.density = a->has_infill ? a->infill : p->fill_density;
+	c->infill.pattern = p->fill_pattern;
+	c->infill.top_solid_layers = p->top_solid_layers;
+	c->infill.bottom_solid_layers = p->bottom_solid_layers;
+	c->support.enabled = p->support_material;
+	c->support.threshold = p->support_material_threshold;
+	c->skirt.skirts = p->skirts;
+	c->skirt.brim_width = p->brim_width;
+
+	c->bed = (struct slicer_bed){.min_x = p->bed_min_x, .min_y = p->bed_min_y,
+				     .max_x = p->bed_max_x, .max_y = p->bed_max_y,
+				     .max_height = p->max_print_height,
+				     .has_center = a->has_center,
+				     .center_x = a->center[0], .center_y = a->center[1]};
+	c->threads = a->threads;
+
+	g->filament_diameter = p->filament_diameter[0];
+	g->extrusion_multiplier = p->extrusion_multiplier[0];
+	if (profile_get_number(p, "filament_density", 0.01, 30, SLICE_FILAMENT_DENSITY, &v,
+			       &err))
+		goto out_profile;
+	g->filament_density = v;
+	g->use_relative_e_distances = p->use_relative_e_distances;
+	g->temperature = p->temperature[0];
+	g->first_layer_temperature = p->first_layer_temperature[0];
+	g->bed_temperature = p->bed_temperature;
+	g->first_layer_bed_temperature = p->first_layer_bed_temperature;
+	g->retract_length = p->retract_length[0];
+	g->retract_speed = p->retract_speed[0];
+	g->retract_lift = p->retract_lift[0];
+	g->perimeter_speed = p->perimeter_speed;
+	g->external_perimeter_speed = p->perimeter_speed / 2; /* PrusaSlicer's 50% */
+	g->infill_speed = p->infill_speed;
+	g->travel_speed = p->travel_speed;
+	/* A percentage scales every role in PrusaSlicer; the writer takes one
+	 * first-layer speed, so the percentage is of the perimeter speed. */
+	g->first_layer_speed = p->first_layer_speed_is_percent
+				       ? p->first_layer_speed / 100 * p->perimeter_speed
+				       : p->first_layer_speed;
+	g->cooling = p->cooling;
+	g->min_fan_speed = p->min_fan_speed;
+	g->max_fan_speed = p->max_fan_speed;
+	g->bridge_fan_speed = p->bridge_fan_speed;
+	if (profile_get_number(p, "disable_fan_first_layers", 0, 1000,
+			       g->disable_fan_first_layers, &v, &err))
+		goto out_profile;
+	g->disable_fan_first_layers = (int)v;
+	g->fan_below_layer_time = p->fan_below_layer_time;
+	g->slowdown_below_layer_time = p->slowdown_below_layer_time;
+	g->min_print_speed = p->min_print_speed;
+	limits_from_profile(p, &g->limits);
+	g->start_gcode = p->start_gcode;
+	g->end_gcode = p->end_gcode;
+	return 0;
+
+out_profile:
+	fprintf(stderr, SLICE_CMD ": %s\n", err.msg);
+	return st_exit_for(err.code);
+}
+
+/* Exit status for a failed slicer_run (settings were checked before). */
+static int slice_exit(int rc)
+{
+	switch (rc) {
+	case ST_ERR_RANGE: /* does not fit, nothing to print, too many layers */
+	case ST_ERR_IO:	   /* OUT could not be written */
+		return ST_EXIT_FAILURE;
+	case ST_ERR_PARSE: /* the profile's start/end G-code */
+	case ST_ERR_UNSUPPORTED:
+		return ST_EXIT_DATAERR;
+	default:
+		return ST_EXIT_SOFTWARE;
+	}
+}
+
+/* What the summary shows besides struct slicer_summary. */
+struct slice_run {
+	const struct slice_args *a;
+	const struct slicer_config *c;
+	const struct profile *prof;
+	enum meshio_format format;
+	size_t input_triangles;
+	const struct repair_report *rep; /* NULL with --no-repair */
+};
+
+/* JSON keys of the path roles, in enum path_role order (the G-code names
+ * of path_role_name are not unique: skirt and brim share one). */
+static const char *const role_keys[] = {
+    "outer_perimeter", "inner_perimeter", "thin_wall", "gap_fill", "solid_infill",
+    "top_skin", "bottom_skin", "sparse_infill", "bridge", "skirt", "brim", "support",
+    "support_interface"};
+_Static_assert(sizeof(role_keys) / sizeof(role_keys[0]) == PATH_ROLES,
+	       "one JSON key per path role");
+
+static json_t *json_xyz(const double v[3])
+{
+	json_t *arr = json_array();
+
+	for (int k = 0; k < 3; k++)
+		json_array_append_new(arr, json_real(v[k]));
+	return arr;
+}
+
+static int print_json(const struct slice_run *r, const struct slicer_summary *s)
+{
+	json_t *o = json_object(), *paths = json_object(), *stages = json_object(),
+	       *place = json_object(), *rep = json_null();
+	int rc;
+
+	if (!o || !paths || !stages || !place)
+		goto out_nomem;
+	if (r->rep) {
+		rep = json_object();
+		if (!rep)
+			goto out_nomem;
+		json_object_set_new(rep, "input_triangles",
+				    json_integer((json_int_t)r->rep->input_triangles));
+		json_object_set_new(rep, "intersecting_pairs",
+				    json_integer((json_int_t)r->rep->intersecting_pairs));
+		json_object_set_new(rep, "output_triangles",
+				    json_integer((json_int_t)r->rep->output_triangles));
+		json_object_set_new(rep, "components", json_integer((json_int_t)r->rep->components));
+	}
+	for (int k = 0; k < PATH_ROLES; k++)
+		json_object_set_new(paths, role_keys[k],
+				    json_integer((json_int_t)s->paths[k]));
+	json_object_set_new(stages, "walls", json_boolean(s->walls));
+	json_object_set_new(stages, "infill", json_boolean(s->infill));
+	json_object_set_new(stages, "support", json_boolean(s->support));
+	json_object_set_new(stages, "skirt", json_boolean(s->skirt));
+	json_object_set_new(place, "offset", json_xyz(s->offset));
+	json_object_set_new(place, "min", json_xyz(s->min));
+	json_object_set_new(place, "max", json_xyz(s->max));
+
+	json_object_set_new(o, "input", json_string(r->a->in));
+	json_object_set_new(o, "format", json_string(meshio_format_name(r->format)));
+	json_object_set_new(o, "input_triangles", json_integer((json_int_t)r->input_triangles));
+	json_object_set_new(o, "printer", json_string(r->prof->id));
+	json_object_set_new(o, "nozzle_diameter", json_real(r->c->perim.nozzle_diameter));
+	json_object_set_new(o, "repair", rep);
+	json_object_set_new(o, "output", json_string(r->a->out));
+	json_object_set_new(o, "layers", json_integer((json_int_t)s->layers));
+	json_object_set_new(o, "layer_height", json_real(r->c->layer_height));
+	json_object_set_new(o, "first_layer_height", json_real(r->c->first_layer_height));
+	json_object_set_new(o, "perimeters", json_integer(r->c->perim.perimeters));
+	json_object_set_new(o, "fill_density", json_real(r->c->infill.density));
+	json_object_set_new(o, "time_s", json_real(s->time_s));
+	json_object_set_new(o, "filament_mm", json_real(s->filament_mm));
+	json_object_set_new(o, "filament_cm3", json_real(s->filament_cm3));
+	json_object_set_new(o, "filament_g", json_real(s->filament_g));
+	json_object_set_new(o, "moves", json_integer((json_int_t)s->moves));
+	json_object_set_new(o, "placement", place);
+	json_object_set_new(o, "paths", paths);
+	json_object_set_new(o, "stages", stages);
+	json_object_set_new(o, "open_contours_dropped", json_integer((json_int_t)s->open_dropped));
+	rc = json_dumpf(o, stdout, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(10));
+	json_decref(o);
+	if (rc || putchar('\n') == EOF)
+		return -1;
+	return 0;
+
+out_nomem:
+	json_decref(o);
+	json_decref(paths);
+	json_decref(stages);
+	json_decref(place);
+	json_decref(rep);
+	return -1;
+}
+
+static void print_text(const struct slice_run *r, const struct slicer_summary *s)
+{
+	long secs = lround(s->time_s);
+
+	printf("%s: %s, %zu triangles\n", r->a->in, meshio_format_name(r->format),
+	       r->input_triangles);
+	if (r->rep)
+		printf("  repaired (epsilon %g mm): %zu triangles, %zu part%s, %llu intersecting "
+		       "pairs resolved\n",
+		       r->c->perim.nozzle_diameter, r->rep->output_triangles, r->rep->components,
+		       r->rep->components == 1 ? "" : "s",
+		       (unsigned long long)r->rep->intersecting_pairs);
+	else
+		printf("  not repaired (--no-repair)\n");
+	printf("printer: %s (%s), nozzle %g mm\n", r->prof->id, r->prof->name,
+	       r->c->perim.nozzle_diameter);
+	printf("placed: X %.2f to %.2f, Y %.2f to %.2f, Z 0 to %.2f mm\n", s->min[0], s->max[0],
+	       s->min[1], s->max[1], s->max[2]);
+	printf("layers: %zu (first %g mm, then %g mm)\n", s->layers, r->c->first_layer_height,
+	       r->c->layer_height);
+	printf("paths: %zu external perimeters, %zu perimeters, %zu thin walls, %zu gap fills\n",
+	       s->paths[PATH_OUTER_PERIMETER], s->paths[PATH_INNER_PERIMETER],
+	       s->paths[PATH_THIN_WALL], s->paths[PATH_GAP_FILL]);
+	if (!s->infill || !s->support || !s->skirt)
+		printf("note: this build prints walls only (infill %g%%, supports and skirt/brim "
+		       "are not in it yet)\n", r->c->infill.density);
+	printf("time: %ldh %02ldm %02lds (estimate, heating excluded)\n", secs / 3600,
+	       secs / 60 % 60, secs % 60);
+	printf("filament: %.1f mm, %.2f cm^3, %.2f g\n", s->filament_mm, s->filament_cm3,
+	       s->filament_g);
+	printf("written: %s\n", r->a->out);
+}
+
+/* Print the summary; 0 or the exit status for a failed stdout. */
+static int report(const struct slice_run *r, const struct slicer_summary *s)
+{
+	if (r->a->json) {
+		if (print_json(r, s)) {
+			fprintf(stderr, SLICE_CMD ": cannot write the JSON summary\n");
+			return ST_EXIT_SOFTWARE;
+		}
+	} else {
+		print_text(r, s);
+	}
+	if (fflush(stdout) == EOF) {
+		fprintf(stderr, SLICE_CMD ": cannot write the summary: %s\n", strerror(errno));
+		return ST_EXIT_SOFTWARE;
+	}
+	return 0;
+}
+
+/*
+ * Repair m into *fixed (epsilon = the nozzle).  Returns 0 or the exit
+ * status with the message printed.
+ */
+static int repair_model(const char *in, const struct mesh *m, const struct slicer_config *c,
+			struct progress *prog, struct mesh **fixed, struct repair_report *rep)
+{
+	struct repair_options opt;
+	struct st_error err = {0};
+	int rc;
+
+	repair_options_init(&opt);
+	opt.epsilon = c->perim.nozzle_diameter;
+	opt.precision = REPAIR_FLOAT64; /* slicing reads doubles: no float32 rounding needed */
+	opt.threads = c->threads;
+	if (prog) {
+		opt.progress = progress_update;
+		opt.progress_ctx = prog;
+	}
+	memset(rep, 0, sizeof(*rep));
+	rc = repair_mesh(m, &opt, fixed, NULL, rep, &err);
+	if (rc < 0) {
+		fprintf(stderr, SLICE_CMD ": %s: %s\n", in, err.msg);
+		return rc == ST_ERR_ARG ? ST_EXIT_SOFTWARE : st_exit_for(rc);
+	}
+	if (!rep->printable) {
+		fprintf(stderr, SLICE_CMD ": %s: could not be repaired to a printable solid: %s; "
+				  "nothing was written\n", in, rep->why);
+		return ST_EXIT_FAILURE;
+	}
+	return 0;
+}
+
+int cmd_slice(int argc, char **argv)
+{
+	struct slice_args a = {0};
+	struct slice_run run = {0};
+	struct slicer_config cfg;
+	struct slicer_summary sum;
+	struct repair_report rep;
+	struct progress prog;
+	bool have_prog;
+	struct st_error err = {0};
+	struct profile *prof = NULL;
+	struct mesh *m = NULL, *fixed = NULL;
+	double off[3];
+	int status, rc;
+
+	status = parse_args(argc, argv, &a);
+	if (status)
+		return status < 0 ? ST_EXIT_OK : status;
+
+	rc = profile_find(a.printer, &prof, &err);
+	if (rc) {
+		fprintf(stderr, SLICE_CMD ": %s\n", err.msg);
+		return st_exit_for(rc);
+	}
+	status = config_from_profile(prof, &a, &cfg);
+	if (status)
+		goto out_profile;
+	rc = slicer_config_check(&cfg, &err);
+	if (rc) {
+		fprintf(stderr, SLICE_CMD ": %s\n", err.msg);
+		status = ST_EXIT_USAGE;
+		goto out_profile;
+	}
+
+	rc = meshio_read(a.in, MESHIO_AUTO, &m, &run.format, &err);
+	if (rc) {
+		fprintf(stderr, SLICE_CMD ": %s\n", err.msg);
+		status = rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
+		goto out_profile;
+	}
+	run.input_triangles = m->ntris;
+	/* Refuse a model too big before spending time on its repair. */
+	rc = slicer_place(m, &cfg.bed, off, NULL, NULL, &err);
+	if (rc) {
+		fprintf(stderr, SLICE_CMD ": %s: %s; nothing was written\n", a.in, err.msg);
+		status = slice_exit(rc);
+		goto out_mesh;
+	}
+
+	have_prog = progress_start(&prog, SLICE_CMD);
+	if (!a.no_repair) {
+		status = repair_model(a.in, m, &cfg, have_prog ? &prog : NULL, &fixed, &rep);
+		if (status)
+			goto out_progress;
+		run.rep = &rep;
+	}
+	if (have_prog) {
+		cfg.progress = progress_update;
+		cfg.progress_ctx = &prog;
+	}
+	rc = slicer_run(fixed ? fixed : m, &cfg, a.out, &sum, &err);
+	if (have_prog) {
+		progress_end(&prog);
+		have_prog = false;
+	}
+	if (rc) {
+		fprintf(stderr, SLICE_CMD ": %s: %s; nothing was written\n", a.in, err.msg);
+		status = slice_exit(rc);
+		goto out_progress;
+	}
+	run.a = &a;
+	run.c = &cfg;
+	run.prof = prof;
+	status = report(&run, &sum);
+
+out_progress:
+	if (have_prog)
+		progress_end(&prog);
+	mesh_free(fixed);
+out_mesh:
+	mesh_free(m);
+out_profile:
+	profile_free(prof);
+	return status;
+}

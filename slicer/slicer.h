@@ -1,0 +1,167 @@
+/*
+ * slicer.h - the whole slicing job (DESIGN.md item 4): a repaired mesh in,
+ * a printable G-code file and a summary out.
+ *
+ * Pipeline of slicer_run, stage by stage:
+ *   1. place: the part's bounding box is centred on the bed (or on a given
+ *      point) with its lowest point at z = 0, and refused when it does not
+ *      fit the bed's bounding box or the printer's maximum height;
+ *   2. slice (section.h): per layer, the solid cross-section;
+ *   3. stages, each writing into its own struct layer_stack:
+ *        skirt/brim  - not in this build (merge point, slicer.c stage_skirt)
+ *        support     - not in this build (merge point, slicer.c stage_support)
+ *        walls       - perimeters.h: walls, gap fill and thin walls
+ *        infill      - not in this build (merge point, slicer.c stage_infill);
+ *                      it receives the region inside the walls of each layer
+ *   4. merge: per layer, the paths of the stages in the order skirt/brim,
+ *      support, walls, infill;
+ *   5. write (gcode_writer.h) through a temporary file renamed on success.
+ * Until the merge points are filled the print is walls only: a closed part
+ * prints as a hollow shell with open top and bottom.  struct slicer_summary
+ * says which stages produced paths, so no caller mistakes it for more.
+ *
+ * Walls run in parallel over fixed chunks of SLICER_CHUNK_LAYERS layers, so
+ * the output does not depend on the number of threads: each chunk carries
+ * its own seam memory, warmed up on the layer below the chunk.
+ *
+ * Thread safety: no global state; distinct calls are independent.  The
+ * progress callback may be called from worker threads (never two at once).
+ */
+#ifndef STRATUM_SLICER_SLICER_H
+#define STRATUM_SLICER_SLICER_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "gcode_writer.h"
+#include "mesh.h"
+#include "perimeters.h"
+#include "section.h"
+#include "st_error.h"
+#include "toolpath.h"
+
+/* Layers per unit of parallel wall work (and per seam-memory restart). */
+#define SLICER_CHUNK_LAYERS 32
+/* Most worker threads used. */
+#define SLICER_MAX_THREADS 256
+/* Slack allowed when checking the fit on the bed, mm (rounding of the placement). */
+#define SLICER_FIT_SLACK 1e-6
+
+/* Where the part goes: the printer's bed and build height. */
+struct slicer_bed {
+	double min_x, min_y, max_x, max_y; /* mm, bounding box of bed_shape */
+	double max_height;		   /* mm, max_print_height */
+	bool has_center;		   /* place at center_x/y instead of the bed centre */
+	double center_x, center_y;	   /* mm, where the part's bounding-box centre goes */
+};
+
+/*
+ * Settings of the stages that are merged later (infill, support,
+ * skirt/brim).  The values are checked and carried so the stages find them
+ * here; until their code is merged nothing reads them (see the top).
+ */
+struct slicer_infill_settings {
+	double density;		 /* percent, 0-100 (fill_density) */
+	const char *pattern;	 /* fill_pattern, PrusaSlicer's name; not owned, not NULL */
+	int top_solid_layers;	 /* >= 0 */
+	int bottom_solid_layers; /* >= 0 */
+};
+
+struct slicer_support_settings {
+	bool enabled;	/* support_material */
+	int threshold;	/* degrees, 0-90, 0 = automatic (support_material_threshold) */
+};
+
+struct slicer_skirt_settings {
+	int skirts;	   /* loops, >= 0 */
+	double brim_width; /* mm, >= 0 */
+};
+
+/* Everything a job needs; slicer_config_init gives the defaults. */
+struct slicer_config {
+	double layer_height;	   /* mm, > 0, at most the nozzle diameter (0.2) */
+	double first_layer_height; /* mm, likewise (0.2) */
+	struct slice_settings slice;
+	struct perim_settings perim;
+	struct gcodew_settings gcodew; /* its layer heights and nozzle are overwritten
+					* from the fields above and perim */
+	struct slicer_infill_settings infill;
+	struct slicer_support_settings support;
+	struct slicer_skirt_settings skirt;
+	struct slicer_bed bed;
+	int threads; /* workers for the walls; 0 = all online cores */
+	/* Called with a stage name ("slicing", "walls", "writing G-code") and
+	 * 0..1 done; may be NULL. */
+	void (*progress)(void *ctx, const char *stage, double done);
+	void *progress_ctx;
+};
+
+/* What a job produced. */
+struct slicer_summary {
+	size_t layers;		       /* layers written */
+	double time_s;		       /* estimated print time, s (heating excluded) */
+	double filament_mm;	       /* filament length, mm */
+	double filament_cm3;	       /* its volume */
+	double filament_g;	       /* its mass */
+	size_t moves;		       /* G1 lines */
+	size_t paths[PATH_ROLES];      /* extrusion paths per role */
+	double offset[3];	       /* mm: translation applied to the mesh */
+	double min[3], max[3];	       /* mm: the part's bounding box as placed */
+	bool walls, infill, support, skirt; /* which stages produced paths in this build */
+	size_t open_dropped;	       /* open contour pieces the slicer could not close */
+};
+
+/*
+ * slicer_config_init - defaults for a nozzle of nozzle_diameter mm: the
+ * defaults of slice_settings_init, perim_settings_init and
+ * gcodew_settings_init, 0.2 mm layers, 20 % infill, 3 top and bottom
+ * layers, one skirt loop, no support, a 200 x 200 x 200 mm bed.
+ */
+void slicer_config_init(struct slicer_config *c, double nozzle_diameter);
+
+/*
+ * slicer_config_check - refuse settings that cannot make a print before any
+ * work: layer heights not > 0 or above the nozzle, the walls' settings
+ * (perim_settings_check for both layer heights), infill density outside
+ * 0-100 %, negative layer or loop counts or brim width, a support threshold
+ * outside 0-90, an empty bed or a height <= 0, a negative thread count.
+ * Returns 0 or ST_ERR_RANGE / ST_ERR_ARG with a message naming the setting
+ * (PrusaSlicer's key), its value and what is allowed.
+ */
+int slicer_config_check(const struct slicer_config *c, struct st_error *err);
+
+/*
+ * slicer_place - where the mesh goes on the bed: offset[3] (mm) to add to
+ * every vertex so that its bounding box is centred on the bed (or on the
+ * bed's center_x/y) and its lowest point is at z = 0; min and max (may be
+ * NULL) receive the placed bounding box.  Returns 0, or ST_ERR_RANGE when
+ * the placed box leaves the bed's bounding box or is taller than
+ * max_height (the message gives the part's size and the room there is),
+ * ST_ERR_ARG for an empty mesh.
+ */
+int slicer_place(const struct mesh *m, const struct slicer_bed *bed, double offset[3],
+		 double min[3], double max[3], struct st_error *err);
+
+/*
+ * slicer_toolpaths - stages 1-4: the merged layer stack of mesh m (mm,
+ * closed surface as the repair leaves it; not modified).  On success *out
+ * is a new stack (layer_stack_free) and sum (may be NULL) has the fields
+ * that do not need the G-code (paths, offset, min/max, stages, layers).
+ * Errors: those of slicer_config_check and slicer_place, then ST_ERR_RANGE
+ * (too many layers), ST_ERR_NOMEM, ST_ERR_INTERNAL; *out is NULL.
+ */
+int slicer_toolpaths(const struct mesh *m, const struct slicer_config *c,
+		     struct layer_stack **out, struct slicer_summary *sum, struct st_error *err);
+
+/*
+ * slicer_run - the whole job: slicer_toolpaths, then the G-code written to
+ * path through a temporary file renamed over it only on success (on any
+ * error path is untouched).  sum (may be NULL) is filled on success.
+ * Errors: as slicer_toolpaths, plus gcodew_write_file's (ST_ERR_IO for the
+ * file, ST_ERR_PARSE / ST_ERR_UNSUPPORTED for start/end G-code
+ * placeholders, ST_ERR_RANGE for a G-code setting).
+ */
+int slicer_run(const struct mesh *m, const struct slicer_config *c, const char *path,
+	       struct slicer_summary *sum, struct st_error *err);
+
+#endif /* STRATUM_SLICER_SLICER_H */

@@ -1,0 +1,343 @@
+/*
+ * check_slicecli.c - `stratum slice` end to end: the G-code it writes is
+ * read back with our own parser (serial/gcode.h) and measured (layers,
+ * first-layer Z, where the extrusions lie, filament), the --json summary,
+ * and every refusal (model too big, bad settings, unreadable model) with its
+ * exit status and no output file.
+ */
+#include <check.h>
+#include <jansson.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fixtures.h"
+#include "gcode.h"
+#include "meshio.h"
+#include "suites.h"
+#include "testutil.h"
+
+#define MK3S "--printer prusa-i3-mk3s"
+#define MK3S_CX 125.0 /* bed centre of printers/prusa-i3-mk3s.ini, mm */
+#define MK3S_CY 105.0
+#define MK3S_W 0.45 /* its extrusion_width, mm */
+
+static char out[1 << 16];
+
+/* m as a binary STL scratch file named name; m is freed. */
+static const char *stl_file(struct mesh *m, const char *name)
+{
+	const char *path = tu_path(name);
+	struct st_error err = {0};
+	int rc = meshio_write_stl(path, m, MESHIO_STL_BINARY, &err);
+
+	mesh_free(m);
+	ck_assert_msg(rc == 0, "%s", err.msg);
+	return path;
+}
+
+/* What the G-code of a print says, measured from the layers on. */
+struct gstats {
+	long layers;		  /* ;LAYER_CHANGE comments */
+	double first_z;		  /* the ;Z: of the first layer */
+	double first_move_z;	  /* the first G1 Z after it */
+	double lo[2], hi[2];	  /* extent of the extrusion moves, mm */
+	double extruded;	  /* E of the extrusion moves, mm */
+	long extrusions;
+};
+
+/* Read path with gcode_reader; fail the test on any line it rejects. */
+static void read_gcode(const char *path, struct gstats *g)
+{
+	FILE *f = fopen(path, "r");
+	struct gcode_reader *r = NULL;
+	struct gcode_line l;
+	struct st_error err = {0};
+	double x = 0, y = 0, v;
+	bool relative_e = false, in_layers = false;
+	int rc;
+
+	ck_assert_msg(f != NULL, "cannot open %s", path);
+	ck_assert_int_eq(gcode_reader_new(f, path, &r, &err), 0);
+	*g = (struct gstats){.first_z = NAN, .first_move_z = NAN, .lo = {INFINITY, INFINITY},
+			     .hi = {-INFINITY, -INFINITY}};
+	while ((rc = gcode_reader_next(r, 0, &l, &err)) != 0) {
+		long layer;
+		double z;
+		enum gcode_layer_mark mark;
+
+		ck_assert_msg(rc > 0, "our parser rejects the G-code: %s", err.msg);
+		mark = gcode_layer_comment(&l, &layer, &z);
+		if (mark == GCODE_LAYER_START) {
+			g->layers++;
+			in_layers = true;
+		} else if (mark == GCODE_LAYER_Z && g->layers == 1 && isnan(g->first_z)) {
+			g->first_z = z;
+		}
+		if (l.letter == 'M' && (l.number == 82 || l.number == 83))
+			relative_e = l.number == 83;
+		if (l.letter != 'G' || (l.number != 0 && l.number != 1))
+			continue;
+		double nx = x, ny = y, e = 0;
+		bool has_e = gcode_word_value(&l, 'E', &e), has_xy = false;
+
+		if (gcode_word_value(&l, 'X', &v))
+			nx = v, has_xy = true;
+		if (gcode_word_value(&l, 'Y', &v))
+			ny = v, has_xy = true;
+		if (in_layers && gcode_word_value(&l, 'Z', &v) && isnan(g->first_move_z))
+			g->first_move_z = v;
+		if (in_layers && has_e && has_xy && e > 0) {
+			ck_assert_msg(relative_e, "the MK3S profile prints with relative E");
+			g->lo[0] = fmin(g->lo[0], fmin(x, nx));
+			g->hi[0] = fmax(g->hi[0], fmax(x, nx));
+			g->lo[1] = fmin(g->lo[1], fmin(y, ny));
+			g->hi[1] = fmax(g->hi[1], fmax(y, ny));
+			g->extruded += e;
+			g->extrusions++;
+		}
+		x = nx;
+		y = ny;
+	}
+	gcode_reader_free(r);
+	fclose(f);
+}
+
+/* Run `stratum slice ARGS --json` with stdout to a file; the parsed summary. */
+static json_t *slice_json(const char *args, int want_status)
+{
+	const char *jpath = tu_path("summary.json");
+	json_error_t jerr;
+	json_t *o;
+	/* stderr (progress, messages) to out, stdout to the file; tu_run's own
+	 * trailing "2>&1" then applies to the exit alone. */
+	int status = tu_run(out, sizeof(out), "slice %s --json 2>&1 >'%s' || exit $?", args,
+			    jpath);
+
+	ck_assert_msg(status == want_status, "exit %d, wanted %d: %s", status, want_status, out);
+	o = json_load_file(jpath, 0, &jerr);
+	ck_assert_msg(o != NULL, "not JSON (%s): %s", jerr.text, out);
+	return o;
+}
+
+static double num(json_t *o, const char *key)
+{
+	json_t *v = json_object_get(o, key);
+
+	ck_assert_msg(json_is_number(v), "field %s missing or not a number", key);
+	return json_number_value(v);
+}
+
+START_TEST(cube_gcode_reads_back)
+{
+	const char *cube = stl_file(fx_box(0, 0, 0, 20, 20, 20), "cube.stl");
+	const char *gc = tu_path("cube.gcode");
+	struct gstats g;
+	int status;
+
+	/* First layer 0.3: layer mid-planes 0.15, then 0.4, 0.6 ... 19.8 -> 99 layers. */
+	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' " MK3S " --first-layer-height 0.3",
+			cube, gc);
+	ck_assert_msg(status == 0, "exit %d: %s", status, out);
+	ck_assert_msg(strstr(out, "layers: 99 (first 0.3 mm, then 0.2 mm)"), "%s", out);
+	read_gcode(gc, &g);
+	ck_assert_int_eq(g.layers, 99);
+	ck_assert_double_eq_tol(g.first_z, 0.3, 1e-9);
+	ck_assert_double_eq_tol(g.first_move_z, 0.3, 1e-9);
+	ck_assert_int_gt(g.extrusions, 99 * 8 - 1); /* two square loops per layer at least */
+	/* Centred on the bed ... */
+	ck_assert_double_eq_tol((g.lo[0] + g.hi[0]) / 2, MK3S_CX, MK3S_W);
+	ck_assert_double_eq_tol((g.lo[1] + g.hi[1]) / 2, MK3S_CY, MK3S_W);
+	/* ... with the outer wall's centre line w/2 inside the 20 mm faces. */
+	ck_assert_double_eq_tol(g.lo[0], MK3S_CX - 10 + MK3S_W / 2, 2e-3);
+	ck_assert_double_eq_tol(g.hi[0], MK3S_CX + 10 - MK3S_W / 2, 2e-3);
+	ck_assert_double_eq_tol(g.lo[1], MK3S_CY - 10 + MK3S_W / 2, 2e-3);
+	ck_assert_double_eq_tol(g.hi[1], MK3S_CY + 10 - MK3S_W / 2, 2e-3);
+}
+END_TEST
+
+START_TEST(json_summary_matches_gcode)
+{
+	const char *cube = stl_file(fx_box(0, 0, 0, 20, 20, 20), "cube.stl");
+	const char *gc = tu_path("cube.gcode");
+	char args[1024];
+	struct gstats g;
+	json_t *o, *place, *stages, *paths;
+
+	snprintf(args, sizeof(args), "'%s' -o '%s' " MK3S, cube, gc);
+	o = slice_json(args, 0);
+	read_gcode(gc, &g);
+	ck_assert_int_eq((long)num(o, "layers"), 100);
+	ck_assert_int_eq(g.layers, 100);
+	ck_assert_double_eq_tol(num(o, "first_layer_height"), 0.2, 1e-12);
+	ck_assert_double_eq_tol(g.first_z, 0.2, 1e-9);
+	ck_assert_msg(num(o, "time_s") > 60, "a 100-layer cube takes minutes, not %g s",
+		      num(o, "time_s"));
+	/* The summary's filament is what the extrusion moves push. */
+	ck_assert_double_eq_tol(num(o, "filament_mm"), g.extruded, 1e-3 * g.extruded);
+	ck_assert_double_eq_tol(num(o, "filament_g"),
+				num(o, "filament_cm3") * 1.24, 1e-6 * num(o, "filament_g"));
+	ck_assert_str_eq(json_string_value(json_object_get(o, "printer")), "prusa-i3-mk3s");
+	ck_assert(json_is_object(json_object_get(o, "repair")));
+	place = json_object_get(o, "placement");
+	ck_assert_double_eq_tol(json_number_value(json_array_get(json_object_get(place, "min"), 0)),
+				MK3S_CX - 10, 1e-9);
+	ck_assert_double_eq_tol(json_number_value(json_array_get(json_object_get(place, "max"), 1)),
+				MK3S_CY + 10, 1e-9);
+	stages = json_object_get(o, "stages");
+	ck_assert(json_is_true(json_object_get(stages, "walls")));
+	ck_assert(json_is_false(json_object_get(stages, "infill")));
+	paths = json_object_get(o, "paths");
+	ck_assert_int_eq(json_integer_value(json_object_get(paths, "outer_perimeter")), 100);
+	ck_assert_int_eq(json_integer_value(json_object_get(paths, "inner_perimeter")), 100);
+	json_decref(o);
+}
+END_TEST
+
+START_TEST(center_option_moves_the_part)
+{
+	const char *cube = stl_file(fx_box(-3, 7, 5, 17, 27, 25), "cube.stl");
+	const char *gc = tu_path("cube.gcode");
+	struct gstats g;
+	int status = tu_run(out, sizeof(out), "slice '%s' -o '%s' " MK3S " --center 60,50.5", cube,
+			    gc);
+
+	ck_assert_msg(status == 0, "exit %d: %s", status, out);
+	read_gcode(gc, &g);
+	ck_assert_int_eq(g.layers, 100); /* lifted from z = 5 onto the bed */
+	ck_assert_double_eq_tol((g.lo[0] + g.hi[0]) / 2, 60, 1e-3);
+	ck_assert_double_eq_tol((g.lo[1] + g.hi[1]) / 2, 50.5, 1e-3);
+}
+END_TEST
+
+START_TEST(thin_plate_prints_thin_walls)
+{
+	/* 0.6 mm: wider than the nozzle, narrower than two 0.45 mm walls. */
+	const char *plate = stl_file(fx_box(0, 0, 0, 30, 0.6, 4), "plate.stl");
+	char args[1024];
+	json_t *o, *paths;
+
+	snprintf(args, sizeof(args), "'%s' -o '%s' " MK3S, plate, tu_path("plate.gcode"));
+	o = slice_json(args, 0);
+	paths = json_object_get(o, "paths");
+	ck_assert_int_eq((long)num(o, "layers"), 20);
+	ck_assert_int_ge(json_integer_value(json_object_get(paths, "thin_wall")), 20);
+	ck_assert_int_eq(json_integer_value(json_object_get(paths, "inner_perimeter")), 0);
+	json_decref(o);
+}
+END_TEST
+
+START_TEST(threads_give_the_same_gcode)
+{
+	/* 25 mm tall: 125 layers, four chunks of walls. */
+	const char *ball = stl_file(fx_sphere(0, 0, 0, 12.5, 48, 64), "ball.stl");
+	const char *a = tu_path("ball1.gcode"), *b = tu_path("ball2.gcode");
+	char cmd[2048];
+	int status;
+
+	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' " MK3S " --threads 1", ball, a);
+	ck_assert_msg(status == 0, "exit %d: %s", status, out);
+	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' " MK3S " --threads 3", ball, b);
+	ck_assert_msg(status == 0, "exit %d: %s", status, out);
+	snprintf(cmd, sizeof(cmd), "cmp -s '%s' '%s'", a, b);
+	ck_assert_msg(system(cmd) == 0, "1 and 3 threads wrote different G-code");
+}
+END_TEST
+
+START_TEST(no_repair_slices_as_read)
+{
+	const char *cube = stl_file(fx_box(0, 0, 0, 20, 20, 20), "cube.stl");
+	const char *gc = tu_path("cube.gcode");
+	char args[1024];
+	struct gstats g;
+	json_t *o;
+
+	snprintf(args, sizeof(args), "'%s' -o '%s' " MK3S " --no-repair", cube, gc);
+	o = slice_json(args, 0);
+	ck_assert(json_is_null(json_object_get(o, "repair")));
+	ck_assert_int_eq((long)num(o, "layers"), 100);
+	read_gcode(gc, &g);
+	ck_assert_int_eq(g.layers, 100);
+	json_decref(o);
+}
+END_TEST
+
+/* Run slice with extra args on model, expect status and a message, and no file. */
+static void expect_refused(const char *model, const char *extra, int want, const char *msg)
+{
+	const char *gc = tu_path("refused.gcode");
+	int status = tu_run(out, sizeof(out), "slice '%s' -o '%s' %s", model, gc, extra);
+
+	ck_assert_msg(status == want, "%s: exit %d, wanted %d: %s", extra, status, want, out);
+	ck_assert_msg(strstr(out, msg), "%s: message lacks '%s': %s", extra, msg, out);
+	ck_assert_msg(!tu_file_exists(gc), "%s: a G-code file was written", extra);
+}
+
+START_TEST(too_big_for_the_bed_exit_1)
+{
+	const char *wide = stl_file(fx_box(0, 0, 0, 260, 20, 10), "wide.stl");
+	const char *tall = stl_file(fx_box(0, 0, 0, 10, 10, 215), "tall.stl");
+	const char *cube = stl_file(fx_box(0, 0, 0, 20, 20, 20), "cube.stl");
+
+	expect_refused(wide, MK3S, 1, "the model is 260.00 x 20.00 mm but the bed is 250.00 x "
+				      "210.00 mm (bed_shape)");
+	expect_refused(tall, MK3S, 1, "the model is 215.00 mm tall but the printer builds at most "
+				      "210.00 mm (max_print_height)");
+	/* Fits the bed, but not where --center puts it. */
+	expect_refused(cube, MK3S " --center 245,100", 1, "beyond the bed");
+}
+END_TEST
+
+START_TEST(bad_settings_exit_2)
+{
+	const char *cube = stl_file(fx_box(0, 0, 0, 20, 20, 20), "cube.stl");
+
+	expect_refused(cube, MK3S " --layer-height 0.5", 2,
+		       "layer height 0.5 mm is out of range; it must be > 0 and at most the "
+		       "nozzle diameter 0.4 mm");
+	expect_refused(cube, MK3S " --first-layer-height 0.45", 2, "first layer height 0.45 mm");
+	expect_refused(cube, MK3S " --infill 150", 2, "fill_density = 150% is out of range");
+	expect_refused(cube, MK3S " --infill 101%", 2, "fill_density = 101% is out of range");
+	expect_refused(cube, MK3S " --perimeters -1", 2, "perimeter count -1 is negative");
+	expect_refused(cube, MK3S " --perimeters 1.5", 2, "--perimeters wants a whole number");
+	expect_refused(cube, MK3S " --layer-height abc", 2, "--layer-height wants a height in mm");
+	expect_refused(cube, MK3S " --center 10", 2, "--center wants X,Y");
+	expect_refused(cube, MK3S " --threads 0", 2, "--threads wants a number from 1 to 256");
+	expect_refused(cube, "", 2, "no printer given");
+	expect_refused(cube, "--printer no-such-printer", 2, "no-such-printer");
+	expect_refused(cube, MK3S " --bogus", 2, "unknown option '--bogus'");
+}
+END_TEST
+
+START_TEST(unreadable_model_exit_65)
+{
+	const char *bad = tu_path("bad.stl");
+
+	/* A binary STL header announcing 10 facets, and 3 bytes of them. */
+	unsigned char buf[87] = {0};
+	buf[80] = 10;
+	tu_write(bad, buf, sizeof(buf));
+	expect_refused(bad, MK3S, 65, "truncated or not an STL file");
+	expect_refused(tu_path("missing.stl"), MK3S, 65, "cannot open");
+}
+END_TEST
+
+Suite *slicecli_suite(void)
+{
+	Suite *s = suite_create("slicecli");
+	TCase *tc = tcase_create("slice");
+
+	tcase_set_timeout(tc, 120);
+	tcase_add_test(tc, cube_gcode_reads_back);
+	tcase_add_test(tc, json_summary_matches_gcode);
+	tcase_add_test(tc, center_option_moves_the_part);
+	tcase_add_test(tc, thin_plate_prints_thin_walls);
+	tcase_add_test(tc, threads_give_the_same_gcode);
+	tcase_add_test(tc, no_repair_slices_as_read);
+	tcase_add_test(tc, too_big_for_the_bed_exit_1);
+	tcase_add_test(tc, bad_settings_exit_2);
+	tcase_add_test(tc, unreadable_model_exit_65);
+	suite_add_tcase(s, tc);
+	return s;
+}
