@@ -442,9 +442,13 @@ static void print_text(const struct slice_run *r, const struct slicer_summary *s
 	printf("paths: %zu external perimeters, %zu perimeters, %zu thin walls, %zu gap fills\n",
 	       s->paths[PATH_OUTER_PERIMETER], s->paths[PATH_INNER_PERIMETER],
 	       s->paths[PATH_THIN_WALL], s->paths[PATH_GAP_FILL]);
-	if (!s->infill || !s->support || !s->skirt)
-		printf("note: this build prints walls only (infill %g%%, supports and skirt/brim "
-		       "are not in it yet)\n", r->c->infill.density);
+	printf("       %zu top, %zu bottom, %zu solid, %zu sparse (%g%% %s), %zu bridge infill\n",
+	       s->paths[PATH_TOP_SKIN], s->paths[PATH_BOTTOM_SKIN], s->paths[PATH_SOLID_INFILL],
+	       s->paths[PATH_SPARSE_INFILL], r->c->infill.density, r->c->infill.pattern,
+	       s->paths[PATH_BRIDGE]);
+	printf("       %zu support, %zu support interface, %zu skirt, %zu brim\n",
+	       s->paths[PATH_SUPPORT], s->paths[PATH_SUPPORT_INTERFACE], s->paths[PATH_SKIRT],
+	       s->paths[PATH_BRIM]);
 	printf("time: %ldh %02ldm %02lds (estimate, heating excluded)\n", secs / 3600,
 	       secs / 60 % 60, secs % 60);
 	printf("filament: %.1f mm, %.2f cm^3, %.2f g\n", s->filament_mm, s->filament_cm3,

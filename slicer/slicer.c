@@ -11,6 +11,9 @@
 #include <unistd.h>
 
 #include "grow.h"
+#include "infill.h"
+#include "skirt.h"
+#include "support.h"
 
 void slicer_config_init(struct slicer_config *c, double nozzle_diameter)
 {
@@ -309,50 +312,85 @@ static int stage_walls(const struct slicer_config *c, const struct slice_stack *
 	return 0;
 }
 
-/* ---------------------------------------------------------------------------
- * Merge points.  Each stage below writes into its own stack; at this commit
- * they add no paths (the summary reports them as not run), so the print is
- * the walls of stage_walls.  The code of the parallel branches plugs in here.
- */
+/* Whether any layer of s holds a path. */
+static bool stack_has_paths(const struct layer_stack *s)
+{
+	for (size_t l = 0; l < s->nlayers; l++)
+		if (s->layers[l].n)
+			return true;
+	return false;
+}
 
 /*
- * Stage "infill" - MERGE POINT for the infill/skins/bridges branch:
- * infill_generate(settings, st, inner, out), with inner[i] the region left
- * inside layer i's walls.  Sets *ran when it produced paths.
+ * Stage "infill" (infill.h): skins, bridges, solid and sparse infill in
+ * inner[i], the region left inside layer i's walls, with the walls' width
+ * and the job's flow.  Sets *ran when it produced paths.
  */
 static int stage_infill(const struct slicer_config *c, const struct slice_stack *st,
 			const struct clip_expolys *inner, struct layer_stack *out, bool *ran,
 			struct st_error *err)
 {
-	(void)c, (void)st, (void)inner, (void)out, (void)err;
-	*ran = false;
-	return 0;
+	struct infill_settings s;
+	int rc;
+
+	infill_settings_init(&s, c->perim.nozzle_diameter);
+	rc = infill_pattern_parse(c->infill.pattern, &s.fill_pattern, err);
+	if (rc)
+		return rc;
+	s.fill_density = c->infill.density;
+	s.top_solid_layers = c->infill.top_solid_layers;
+	s.bottom_solid_layers = c->infill.bottom_solid_layers;
+	s.layer_height = c->layer_height;
+	s.perimeter_extrusion_width = c->perim.extrusion_width;
+	s.infill_extrusion_width = c->perim.extrusion_width;
+	s.solid_infill_extrusion_width = c->perim.extrusion_width;
+	s.top_infill_extrusion_width = c->perim.extrusion_width;
+	rc = infill_generate(&s, st, inner, out, err);
+	*ran = !rc && stack_has_paths(out);
+	return rc;
 }
 
 /*
- * Stage "support" - MERGE POINT for the supports branch:
- * support_generate(settings, st, out).  Sets *ran when it produced paths.
+ * Stage "support" (support.h): support material under overhangs, from the
+ * bed, when the job asks for it.  Sets *ran when it produced paths.
  */
 static int stage_support(const struct slicer_config *c, const struct slice_stack *st,
 			 struct layer_stack *out, bool *ran, struct st_error *err)
 {
-	(void)c, (void)st, (void)out, (void)err;
+	struct support_settings s;
+	int rc;
+
 	*ran = false;
-	return 0;
+	if (!c->support.enabled)
+		return 0;
+	support_settings_init(&s, c->perim.nozzle_diameter);
+	s.support_material = true;
+	s.support_material_threshold = c->support.threshold;
+	s.extrusion_width = c->perim.extrusion_width;
+	rc = support_generate(&s, st, out, err);
+	*ran = !rc && stack_has_paths(out);
+	return rc;
 }
 
 /*
- * Stage "skirt/brim" - MERGE POINT for the skirt/brim branch:
- * skirt_generate(settings, st, support stack or NULL, out), run after the
- * support stage so the skirt goes around the supports too.
+ * Stage "skirt/brim" (skirt.h), run after the support stage so the skirt
+ * goes around the supports too.  Sets *ran when it produced paths.
  */
 static int stage_skirt(const struct slicer_config *c, const struct slice_stack *st,
 		       const struct layer_stack *support, struct layer_stack *out, bool *ran,
 		       struct st_error *err)
 {
-	(void)c, (void)st, (void)support, (void)out, (void)err;
-	*ran = false;
-	return 0;
+	struct skirt_settings s;
+	int rc;
+
+	skirt_settings_init(&s, c->perim.nozzle_diameter);
+	s.skirts = c->skirt.skirts;
+	s.brim_width = c->skirt.brim_width;
+	s.extrusion_width = c->perim.extrusion_width;
+	s.filament_diameter = c->gcodew.filament_diameter;
+	rc = skirt_generate(&s, st, support, out, err);
+	*ran = !rc && stack_has_paths(out);
+	return rc;
 }
 
 /* Move the paths of every layer of src to the end of dst's (same layers). */

@@ -8,18 +8,15 @@
  *      fit the bed's bounding box or the printer's maximum height;
  *   2. slice (section.h): per layer, the solid cross-section;
  *   3. stages, each writing into its own struct layer_stack:
- *        skirt/brim  - not in this build (merge point, slicer.c stage_skirt)
- *        support     - not in this build (merge point, slicer.c stage_support)
+ *        skirt/brim  - skirt.h, around the first layer and its support
+ *        support     - support.h, when the job asks for it
  *        walls       - perimeters.h: walls, gap fill and thin walls
- *        infill      - not in this build (merge point, slicer.c stage_infill);
- *                      it receives the region inside the walls of each layer
+ *        infill      - infill.h: skins, bridges, solid and sparse infill in
+ *                      the region inside the walls of each layer
  *   4. merge: per layer, the paths of the stages in the order skirt/brim,
  *      support, walls, infill;
  *   5. write (gcode_writer.h) through a temporary file renamed on success.
- * Until the merge points are filled the print is walls only: a closed part
- * prints as a hollow shell with open top and bottom.  struct slicer_summary
- * says which stages produced paths, so no caller mistakes it for more.
- *
+ * struct slicer_summary says which stages produced paths.
  * Walls run in parallel over fixed chunks of SLICER_CHUNK_LAYERS layers, so
  * the output does not depend on the number of threads: each chunk carries
  * its own seam memory, warmed up on the layer below the chunk.

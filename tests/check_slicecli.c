@@ -55,7 +55,7 @@ static void read_gcode(const char *path, struct gstats *g)
 	struct gcode_line l;
 	struct st_error err = {0};
 	double x = 0, y = 0, v;
-	bool relative_e = false, in_layers = false;
+	bool relative_e = false, in_layers = false, in_skirt = false;
 	int rc;
 
 	ck_assert_msg(f != NULL, "cannot open %s", path);
@@ -75,6 +75,9 @@ static void read_gcode(const char *path, struct gstats *g)
 		} else if (mark == GCODE_LAYER_Z && g->layers == 1 && isnan(g->first_z)) {
 			g->first_z = z;
 		}
+		/* The part's extent: the skirt lies skirt_distance outside it. */
+		if (!strncmp(l.comment, "TYPE:", 5))
+			in_skirt = !strcmp(l.comment + 5, "Skirt/Brim");
 		if (l.letter == 'M' && (l.number == 82 || l.number == 83))
 			relative_e = l.number == 83;
 		if (l.letter != 'G' || (l.number != 0 && l.number != 1))
@@ -90,10 +93,12 @@ static void read_gcode(const char *path, struct gstats *g)
 			g->first_move_z = v;
 		if (in_layers && has_e && has_xy && e > 0) {
 			ck_assert_msg(relative_e, "the MK3S profile prints with relative E");
-			g->lo[0] = fmin(g->lo[0], fmin(x, nx));
-			g->hi[0] = fmax(g->hi[0], fmax(x, nx));
-			g->lo[1] = fmin(g->lo[1], fmin(y, ny));
-			g->hi[1] = fmax(g->hi[1], fmax(y, ny));
+			if (!in_skirt) {
+				g->lo[0] = fmin(g->lo[0], fmin(x, nx));
+				g->hi[0] = fmax(g->hi[0], fmax(x, nx));
+				g->lo[1] = fmin(g->lo[1], fmin(y, ny));
+				g->hi[1] = fmax(g->hi[1], fmax(y, ny));
+			}
 			g->extruded += e;
 			g->extrusions++;
 		}
@@ -187,7 +192,9 @@ START_TEST(json_summary_matches_gcode)
 				MK3S_CY + 10, 1e-9);
 	stages = json_object_get(o, "stages");
 	ck_assert(json_is_true(json_object_get(stages, "walls")));
-	ck_assert(json_is_false(json_object_get(stages, "infill")));
+	ck_assert(json_is_true(json_object_get(stages, "infill")));
+	ck_assert(json_is_true(json_object_get(stages, "skirt")));
+	ck_assert(json_is_false(json_object_get(stages, "support"))); /* MK3S: support off */
 	paths = json_object_get(o, "paths");
 	ck_assert_int_eq(json_integer_value(json_object_get(paths, "outer_perimeter")), 100);
 	ck_assert_int_eq(json_integer_value(json_object_get(paths, "inner_perimeter")), 100);
