@@ -27,8 +27,6 @@
 
 /* Rounding rounds before giving up (each usually fixes all it finds). */
 #define MAX_ROUNDING_ROUNDS 10
-/* Rounds without fewer defects before rounding moves to a coarser grid. */
-#define STALLED_ROUNDS 4
 
 /* Thickening passes: seed 000 needs one; more only guard odd inputs. */
 #define MAX_THICKEN_PASSES 3
@@ -273,6 +271,25 @@ static uint32_t *list_tagged(const uint8_t *tag, size_t n, int want, size_t *cou
 }
 
 /*
+ * A unit in the last place of the output precision at the largest
+ * coordinate of verts (0 when all are 0): points closer than this are one
+ * point once written.
+ */
+static double output_ulp(const double (*verts)[3], size_t nv, enum repair_precision prec)
+{
+	double big = 0;
+	int e;
+
+	for (size_t v = 0; v < nv; v++)
+		for (int k = 0; k < 3; k++)
+			big = fmax(big, fabs(verts[v][k]));
+	if (big == 0)
+		return 0;
+	frexp(big, &e); /* big < 2^e */
+	return ldexp(1.0, e - (prec == REPAIR_FLOAT32 ? 24 : 53));
+}
+
+/*
  * Thicken M_sheet of em (tag both) into slabs and the visible wires into
  * cylinders; return a new exact mesh of M_solid plus the new solids.
  */
@@ -311,7 +328,9 @@ static int thicken(const struct exact_mesh *em, const uint8_t *tag, const uint8_
 	if (nsheet) {
 		struct thick_out slab;
 		progress(opt, "thickening sheets", 0.5);
-		rc = thicken_sheets(verts, tris, sheet, nsheet, opt->epsilon / 2, &slab, err);
+		rc = thicken_sheets(verts, tris, sheet, nsheet, opt->epsilon / 2,
+				    output_ulp(verts, exact_mesh_nverts(em), opt->precision), &slab,
+				    err);
 		free(sheet);
 		if (rc)
 			goto out;
@@ -471,36 +490,10 @@ out:
 }
 
 /*
- * The snapping grid of coarsening level r: none at level 0 (plain rounding
- * to the output precision); then 4^r units in the last place of the largest
- * coordinate, a power of two, so every grid point is still representable.
- * Coarser grids merge the clusters of nearly coincident points that plain
- * rounding turns into new crossings; they also move more, so the loop only
- * climbs a level when plain re-cutting stops making progress.
- */
-static double rounding_grid(const struct exact_mesh *em, enum repair_precision prec, int r)
-{
-	const size_t nv = exact_mesh_nverts(em);
-	const double (*verts)[3] = exact_mesh_verts(em);
-	double big = 0;
-	int e;
-
-	if (r == 0)
-		return 0;
-	for (size_t v = 0; v < nv; v++)
-		for (int k = 0; k < 3; k++)
-			big = fmax(big, fabs(verts[v][k]));
-	if (big == 0)
-		return 0;
-	frexp(big, &e); /* big < 2^e */
-	return ldexp(1.0, e - (prec == REPAIR_FLOAT32 ? 24 : 53) + 2 * r);
-}
-
-/*
  * Round em's vertices to the output precision into a new welded mesh.
  * *moved: largest distance a vertex moved; *changed: whether any did.
  */
-static int round_result(const struct exact_mesh *em, enum repair_precision prec, double grid,
+static int round_result(const struct exact_mesh *em, enum repair_precision prec,
 			struct mesh **out, double *moved, bool *changed, struct st_error *err)
 {
 	const size_t n = exact_mesh_ntris(em), nv = exact_mesh_nverts(em);
@@ -528,8 +521,6 @@ static int round_result(const struct exact_mesh *em, enum repair_precision prec,
 							  p[k]);
 				p[k] = (double)(float)p[k];
 			}
-			if (grid > 0)
-				p[k] = nearbyint(p[k] / grid) * grid;
 		}
 		const double d = dist3(p, verts[v]);
 		*moved = fmax(*moved, d);
@@ -757,15 +748,11 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 
 	/* Round, check, and run the core again on what rounding broke. */
 	bool unchanged = false, checked = false;
-	int level = 0, stalled = 0; /* rounding_grid's coarsening level */
-	size_t last_defects = SIZE_MAX; /* of the previous round */
 	for (;;) {
 		bool changed = false;
 		double moved = 0;
 		progress(opt, "rounding", 0.9);
-		rc = round_result(co.result, opt->precision,
-				  rounding_grid(co.result, opt->precision, level),
-				  &rounded, &moved, &changed, err);
+		rc = round_result(co.result, opt->precision, &rounded, &moved, &changed, err);
 		/* Rounds add up: each moves the previous round's result. */
 		rep->rounding_deviation += moved;
 		exact_mesh_free(co.result);
@@ -784,17 +771,6 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 		if (parts_printable(&mr))
 			break;
 		checked = false;
-		const size_t defects = (size_t)mr.self_intersections + mr.irregular + mr.degenerate +
-				       mr.duplicates + mr.boundary_edges + mr.singular_edges +
-				       mr.flipped_edges;
-		/* Climb only when re-cutting has stalled for a while: on the
-		 * random soups plain rounding converged in 11 of 12 cases and
-		 * climbing at the first stall in only 10. */
-		if (defects >= last_defects && ++stalled >= STALLED_ROUNDS) {
-			level++;
-			stalled = 0;
-		}
-		last_defects = defects;
 		/* Often rounding only collapsed slivers: dropping them is
 		 * enough, and needs no new (rational) points. */
 		if (mr.self_intersections == 0 && mr.degenerate == 0) {

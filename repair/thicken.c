@@ -332,20 +332,6 @@ static int compare_x_order(const void *a, const void *b)
 	return p->x < q->x ? -1 : p->x > q->x;
 }
 
-/* A unit in the last place of a float at the slab's largest coordinate:
- * points closer than this are one point once written to a binary STL. */
-static double weld_tolerance(const struct thick_out *out)
-{
-	double big = 0;
-	int e;
-
-	for (size_t v = 0; v < out->nverts; v++)
-		for (int k = 0; k < 3; k++)
-			big = fmax(big, fabs(out->verts[v][k]));
-	frexp(big, &e);
-	return ldexp(1.0, e - 24);
-}
-
 /*
  * Make vertex copies closer than tol (in every coordinate) exactly equal.
  * Copies of one sheet vertex in different fans that face the same way (or
@@ -390,7 +376,7 @@ static int weld_close(struct thick_out *out, double tol, struct st_error *err)
 }
 
 int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const uint32_t *list,
-		   size_t n, double half, struct thick_out *out, struct st_error *err)
+		   size_t n, double half, double weld, struct thick_out *out, struct st_error *err)
 {
 	struct sheet_edge *edges = malloc((3 * n + 1) * sizeof(*edges));
 	uint8_t *flip = calloc(n + 1, 1), *seen = calloc(n + 1, 1);
@@ -648,7 +634,7 @@ int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const ui
 #undef COPY
 	rc = fill_corner_holes(out, 32 * n, err);
 	if (!rc)
-		rc = weld_close(out, weld_tolerance(out), err);
+		rc = weld_close(out, weld, err);
 	if (rc)
 		goto out;
 	/* Every copy is exactly half from its vertex (up to rounding). */

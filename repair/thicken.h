@@ -24,11 +24,15 @@ struct thick_out {
  * triangles listed in list (indices into tris, corners into verts): each
  * sheet oriented (cut where it cannot be), offset to both sides along
  * angle-weighted vertex normals and stitched along its boundaries, cuts
- * and edges shared by more than two of the listed triangles.  The slab may
+ * and edges shared by more than two of the listed triangles.  Copies of
+ * vertices closer than weld (mm, in every coordinate) are made equal: the
+ * caller passes the output's resolution, below which they would be
+ * clusters that rounding flips.  The slab may
  * fold where the sheet bends sharply; the caller resolves that exactly.
  * Returns 0 or ST_ERR_NOMEM with err filled.
  */
 int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const uint32_t *list,
-		   size_t n, double half, struct thick_out *out, struct st_error *err);
+		   size_t n, double half, double weld, struct thick_out *out,
+		   struct st_error *err);
 
 #endif /* STRATUM_REPAIR_THICKEN_H */
