@@ -56,6 +56,10 @@ int slicer_config_check(const struct slicer_config *c, struct st_error *err)
 				    c->infill.density);
 	if (!c->infill.pattern)
 		return st_error_set(err, ST_ERR_ARG, "slicer: no fill_pattern given");
+	enum infill_pattern pattern;
+	rc = infill_pattern_parse(c->infill.pattern, &pattern, err);
+	if (rc)
+		return rc; /* before any slicing: a pattern we cannot print */
 	if (c->infill.top_solid_layers < 0 || c->infill.bottom_solid_layers < 0)
 		return st_error_set(err, ST_ERR_RANGE,
 				    "top_solid_layers = %d, bottom_solid_layers = %d: layer counts "

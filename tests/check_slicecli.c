@@ -314,6 +314,15 @@ START_TEST(bad_settings_exit_2)
 	expect_refused(cube, "", 2, "no printer given");
 	expect_refused(cube, "--printer no-such-printer", 2, "no-such-printer");
 	expect_refused(cube, MK3S " --bogus", 2, "unknown option '--bogus'");
+
+	/* A profile asking for a pattern Stratum does not print: refused
+	 * before slicing, not after the walls are done. */
+	static const char stars[] = "nozzle_diameter = 0.4\nfill_pattern = stars\n";
+	const char *ini = tu_path("stars.ini");
+	char arg[4200];
+	tu_write(ini, stars, sizeof(stars) - 1);
+	snprintf(arg, sizeof(arg), "--printer '%s'", ini);
+	expect_refused(cube, arg, 2, "fill_pattern \"stars\" is not supported");
 }
 END_TEST
 
