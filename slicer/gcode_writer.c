@@ -4,9 +4,9 @@
  * Each layer is first planned into a list of operations (moves with their
  * kind, and role changes), so the layer's time can be estimated and its
  * speeds lowered before anything is written; then the operations are
- * emitted.  The whole print is generated twice: a dry pass that feeds the
- * estimator and catches every error, then the writing pass with the
- * estimates in the header.
+ * emitted.  The print is generated once, into an anonymous temporary file
+ * while the estimator runs beside it; the header with the estimates is
+ * then written and the body copied after it.
  *
  * E is kept in integer units of 1e-5 mm (the written precision): the
  * position written is extruded - retracted, both rounded from exact
@@ -469,8 +469,8 @@ struct writer {
 	const struct gcodew_settings *s;
 	const struct layer_stack *stack;
 	struct st_error *err;
-	FILE *fp;		 /* NULL in the dry pass */
-	struct est_planner *est; /* the dry pass only */
+	FILE *fp;		 /* where put() writes: the body, then the output */
+	struct est_planner *est; /* times the body's moves as they are written */
 
 	/* Planning state, in mm */
 	bool pos_known;
@@ -886,15 +886,13 @@ static int cool_layer(struct writer *w, size_t li, const double start[EST_AXES])
  * Emission
  */
 
-/* printf to the output (nothing in the dry pass). */
+/* printf to the current output. */
 static void put(struct writer *w, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
 static void put(struct writer *w, const char *fmt, ...)
 {
 	va_list ap;
 
-	if (!w->fp)
-		return;
 	va_start(ap, fmt);
 	vfprintf(w->fp, fmt, ap);
 	va_end(ap);
@@ -967,8 +965,6 @@ static int emit_move(struct writer *w, const struct op *o)
 	w->wf = f;
 	w->epos_units = epos;
 	w->e_machine += de / E_UNITS;
-	if (!w->est)
-		return 0;
 	return est_planner_add(w->est,
 			       &(struct est_move){x / XYZ_UNITS, y / XYZ_UNITS, z / XYZ_UNITS,
 						  w->e_machine, f / 60.0},
@@ -1157,8 +1153,8 @@ static int run_pass(struct writer *w, const char *start, const char *end)
 	return rc;
 }
 
-/* Reset the per-pass state of w. */
-static void pass_reset(struct writer *w)
+/* The machine state before the first line: nothing known, fan unset. */
+static void writer_start(struct writer *w)
 {
 	w->pos_known = false;
 	w->px = w->py = w->pz = 0;
@@ -1173,6 +1169,23 @@ static void pass_reset(struct writer *w)
 	w->filament_mm = 0;
 }
 
+/* Append everything of body (rewound here) to fp. */
+static int copy_body(FILE *body, FILE *fp, struct st_error *err)
+{
+	char buf[65536];
+	size_t n;
+
+	rewind(body);
+	while ((n = fread(buf, 1, sizeof(buf), body)) > 0)
+		if (fwrite(buf, 1, n, fp) != n)
+			return st_error_set(err, ST_ERR_IO, "G-code: write failed: %s",
+					    strerror(errno));
+	if (ferror(body))
+		return st_error_set(err, ST_ERR_IO, "G-code: cannot read back the temporary "
+				    "file: %s", strerror(errno));
+	return 0;
+}
+
 int gcodew_write_stream(const struct layer_stack *stack, const struct gcodew_settings *s,
 			FILE *fp, struct gcodew_summary *sum, struct st_error *err)
 {
@@ -1181,6 +1194,7 @@ int gcodew_write_stream(const struct layer_stack *stack, const struct gcodew_set
 	struct gcodew_summary res = {0};
 	struct est_result er;
 	char *start = NULL, *end = NULL;
+	FILE *body = NULL;
 	int rc;
 
 	if (!err)
@@ -1197,17 +1211,26 @@ int gcodew_write_stream(const struct layer_stack *stack, const struct gcodew_set
 		goto out_free;
 	w.fil_area = M_PI * s->filament_diameter * s->filament_diameter / 4;
 
-	/* Pass 1: estimates and every check, nothing written. */
+	/* One pass: the body into a temporary file, the estimator beside it. */
+	body = tmpfile();
+	if (!body) {
+		rc = st_error_set(err, ST_ERR_IO, "G-code: cannot create a temporary file: %s",
+				  strerror(errno));
+		goto out_free;
+	}
 	w.est = est_planner_new(&s->limits, NULL, err);
 	if (!w.est) {
 		rc = err->code;
 		goto out_free;
 	}
-	pass_reset(&w);
+	w.fp = body;
+	writer_start(&w);
 	rc = run_pass(&w, start, end);
 	est_planner_result(w.est, &er);
 	est_planner_free(w.est);
 	w.est = NULL;
+	if (rc == 0 && (fflush(body) != 0 || ferror(body)))
+		rc = st_error_set(err, ST_ERR_IO, "G-code: write failed: %s", strerror(errno));
 	if (rc)
 		goto out_free;
 	res.time_s = er.time_s;
@@ -1217,16 +1240,17 @@ int gcodew_write_stream(const struct layer_stack *stack, const struct gcodew_set
 	res.layers = stack->nlayers;
 	res.moves = w.moves;
 
-	/* Pass 2: the same again, written. */
+	/* The header first, then the body as generated. */
 	w.fp = fp;
 	put_header(&w, &res);
-	pass_reset(&w);
-	rc = run_pass(&w, start, end);
+	rc = copy_body(body, fp, err);
 	if (rc == 0 && (fflush(fp) != 0 || ferror(fp)))
 		rc = st_error_set(err, ST_ERR_IO, "G-code: write failed: %s", strerror(errno));
 	if (rc == 0 && sum)
 		*sum = res;
 out_free:
+	if (body)
+		fclose(body);
 	free(w.ops);
 	free(w.wipe);
 	free(w.done);

@@ -132,8 +132,9 @@ void gcodew_settings_init(struct gcodew_settings *s);
  * @stack: the layers (not changed); @s: settings (checked first: a value
  *         out of range is ST_ERR_RANGE naming the key).
  * @sum:   filled on success (may be NULL).
- * The print is generated twice, once to compute the estimates for the
- * header and once to write, so nothing is written unless the first pass
+ * The print is generated once into an anonymous temporary file while its
+ * moves are timed; then the header with the estimates is written to fp and
+ * the body copied after it, so nothing reaches fp unless generation
  * succeeded.  Errors: ST_ERR_RANGE (settings, a bead narrower than its
  * layer, a bad layer Z/height), ST_ERR_PARSE / ST_ERR_UNSUPPORTED (start or
  * end G-code placeholders: the message names the placeholder), ST_ERR_IO (a
