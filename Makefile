@@ -101,9 +101,13 @@ $(BUILD)/bench/gen_mesh.o: CPPFLAGS += -Itests
 $(BUILD)/bench/gen_mesh: $(BUILD)/bench/gen_mesh.o $(BUILD)/tests/fixtures.o $(BUILD)/libstratum.a
 	$(CXX) -pthread $(LDEXTRA) -o $@ $^ $(LDLIBS)
 
+# The issue 5 "Done when" measurement: printed region against cross-sections.
+$(BUILD)/bench/region_check: $(BUILD)/bench/region_check.o $(BUILD)/libstratum.a
+	$(CXX) -pthread $(LDEXTRA) -o $@ $^ $(LDLIBS)
+
 bench:
 	@$(MAKE) deps EXTRA_PACKAGES="$(BENCH_PACKAGES)"
-	@$(MAKE) all $(BUILD)/bench/gen_mesh
+	@$(MAKE) all $(BUILD)/bench/gen_mesh $(BUILD)/bench/region_check
 	bench/run.sh $(BUILD)/stratum
 
 clean:

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <exception>
 #include <limits>
+#include <map>
 #include <new>
 #include <type_traits>
 
@@ -407,6 +408,47 @@ int clip_offset_open(const struct clip_paths *lines, double delta, enum clip_joi
 		Paths result;
 		o.AddPaths(to_paths(lines), join_types[join], end_types[end]);
 		o.Execute(result, delta);
+		from_paths(result, out);
+		return 0;
+	});
+}
+
+int clip_sweep(const struct clip_paths *lines, const double *delta, double arc_tolerance,
+	       struct clip_paths *out, struct st_error *err)
+{
+	if (!lines || !out || out == lines || (lines->n && !delta))
+		return st_error_set(err, ST_ERR_ARG, "clip: clip_sweep needs lines, widths and a distinct out");
+	if (!(arc_tolerance > 0.0))
+		return st_error_set(err, ST_ERR_ARG, "clip: clip_sweep needs an arc tolerance > 0 nm, got %g",
+				    arc_tolerance);
+	for (size_t i = 0; i < lines->n; i++)
+		if (!(delta[i] > 0.0) || delta[i] > 4e18)
+			return st_error_set(err, ST_ERR_ARG, "clip: clip_sweep got bead half-width %g nm for path %zu",
+					    delta[i], i);
+	return guarded("clip_sweep", err, [&] {
+		// One ClipperOffset per distinct delta: Execute takes one delta.
+		std::map<double, Paths> groups;
+		for (size_t i = 0; i < lines->n; i++) {
+			Path p = to_path(clip_path_xy(lines, i), clip_path_len(lines, i));
+			if (p.empty())
+				continue;
+			if (p.size() == 1)
+				p.push_back(p[0]); // Clipper offsets a 2-point zero-length line as a disk
+			groups[delta[i]].push_back(std::move(p));
+		}
+		ClipperLib::Clipper c;
+		bool any = false;
+		for (auto &g : groups) {
+			ClipperLib::ClipperOffset o(2.0, arc_tolerance);
+			Paths swept;
+			o.AddPaths(g.second, ClipperLib::jtRound, ClipperLib::etOpenRound);
+			o.Execute(swept, g.first);
+			any = c.AddPaths(swept, ClipperLib::ptSubject, true) || any;
+		}
+		Paths result;
+		if (any && !c.Execute(ClipperLib::ctUnion, result, ClipperLib::pftNonZero,
+				      ClipperLib::pftNonZero))
+			return st_error_set(err, ST_ERR_INTERNAL, "clip: Clipper refused to unite beads");
 		from_paths(result, out);
 		return 0;
 	});

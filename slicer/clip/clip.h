@@ -183,6 +183,19 @@ int clip_offset_open(const struct clip_paths *lines, double delta, enum clip_joi
 		     struct clip_paths *out, struct st_error *err);
 
 /*
+ * clip_sweep - the union of beads swept along open polylines: path i of
+ * lines becomes the area within delta[i] nm (> 0) of it, with round joins
+ * and round ends (a disk swept along the centre line, what a nozzle leaves),
+ * arcs within arc_tolerance nm (> 0); all of them are united (non-zero).
+ * Paths of one point give a disk.  Paths sharing a delta are offset
+ * together, so few distinct deltas are cheaper than many.  out is replaced
+ * and must not be lines.  Returns 0, ST_ERR_ARG (a delta not > 0 or not
+ * finite, a bad tolerance), ST_ERR_RANGE, ST_ERR_NOMEM, ST_ERR_INTERNAL.
+ */
+int clip_sweep(const struct clip_paths *lines, const double *delta, double arc_tolerance,
+	       struct clip_paths *out, struct st_error *err);
+
+/*
  * clip_simplify - resolve self-intersections of in under fill rule fill into
  * simple polygons.  out is replaced and may be in.
  */
