@@ -11,7 +11,14 @@
  *                                    the smallest grid spacing in each axis, so
  *                                    triangles fold over their neighbours and cut
  *                                    through them (JITTER 0.7 folds many)
- *   gen_mesh box SX SY SZ OUT.stl    an SX x SY x SZ mm box (whole mm) at the origin
+ *   gen_mesh box SX SY SZ OUT.stl    an SX x SY x SZ mm box at the origin (mm, may
+ *                                    have decimals: "box 20 0.4 10" is a wall of 0.4)
+ *   gen_mesh cylinder R H N OUT.stl  a cylinder of radius R, height H mm: a regular
+ *                                    N-gon (3..256) prism
+ *   gen_mesh plate|overhang|bridge OUT.stl
+ *                                    the slicer's test models (tests/fixtures.h):
+ *                                    a plate with a square and a round hole, a 45
+ *                                    degree overhang, a 10 mm bridge between pillars
  * Every mesh is deterministic: the same arguments give the same file.
  */
 #include <math.h>
@@ -64,12 +71,26 @@ static int int_arg(const char *s, int lo, int hi)
 	return (int)v;
 }
 
+/* Length argument in mm, (0, 10000], or exit with a usage message. */
+static double mm_arg(const char *s)
+{
+	char *end;
+	double v = strtod(s, &end);
+
+	if (end == s || *end || !(v > 0 && v <= 10000)) {
+		fprintf(stderr, "gen_mesh: '%s' is not a length in mm from 0 to 10000\n", s);
+		exit(2);
+	}
+	return v;
+}
+
 static void usage(void)
 {
 	fprintf(stderr, "usage: gen_mesh torus NU NV OUT.stl | gen_mesh spheres N OUT.stl\n"
 			"       gen_mesh twospheres NLAT NLON OUT.stl | gen_mesh scan NU NV JITTER "
 			"OUT.stl\n"
-			"       gen_mesh box SX SY SZ OUT.stl\n");
+			"       gen_mesh box SX SY SZ OUT.stl | gen_mesh cylinder R H N OUT.stl\n"
+			"       gen_mesh plate|overhang|bridge OUT.stl\n");
 	exit(2);
 }
 
@@ -111,8 +132,15 @@ int main(int argc, char **argv)
 		m = fx_torus(60.0, 20.0, nu, nv);
 		jitter(m, j * (du < dv ? du : dv), 20151215u);
 	} else if (argc == 6 && !strcmp(argv[1], "box")) {
-		m = fx_box(0, 0, 0, int_arg(argv[2], 1, 10000), int_arg(argv[3], 1, 10000),
-			   int_arg(argv[4], 1, 10000));
+		m = fx_box(0, 0, 0, mm_arg(argv[2]), mm_arg(argv[3]), mm_arg(argv[4]));
+	} else if (argc == 6 && !strcmp(argv[1], "cylinder")) {
+		m = fx_cylinder(0, 0, mm_arg(argv[2]), mm_arg(argv[3]), int_arg(argv[4], 3, 256));
+	} else if (argc == 3 && !strcmp(argv[1], "plate")) {
+		m = fx_plate_holes();
+	} else if (argc == 3 && !strcmp(argv[1], "overhang")) {
+		m = fx_overhang();
+	} else if (argc == 3 && !strcmp(argv[1], "bridge")) {
+		m = fx_bridge();
 	} else {
 		usage();
 	}

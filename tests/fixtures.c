@@ -310,3 +310,223 @@ struct mesh *fx_klein_bottle(double R, double scale, int nu, int nv)
 	free(idx);
 	return finish(b);
 }
+
+/*
+ * Prism over the convex polygon (x[i], y[i]) (counter-clockwise) from z0 to
+ * z1, fan-triangulated caps; flip turns it inside out (a hole when it lies
+ * inside an enclosing solid of the same builder).
+ */
+static void add_prism(struct mesh_builder *b, const double *x, const double *y, int n, double z0,
+		      double z1, int flip)
+{
+	uint32_t lo[256], hi[256];
+
+	if (n < 3 || n > 256)
+		die("prism needs 3 to 256 corners");
+	for (int i = 0; i < n; i++) {
+		lo[i] = vert(b, x[i], y[i], z0);
+		hi[i] = vert(b, x[i], y[i], z1);
+	}
+	for (int i = 1; i + 1 < n; i++) {
+		if (flip) {
+			tri(b, lo[0], lo[i], lo[i + 1]);
+			tri(b, hi[0], hi[i + 1], hi[i]);
+		} else {
+			tri(b, lo[0], lo[i + 1], lo[i]);
+			tri(b, hi[0], hi[i], hi[i + 1]);
+		}
+	}
+	for (int i = 0; i < n; i++) {
+		int j = (i + 1) % n;
+		if (flip)
+			quad(b, lo[i], hi[i], hi[j], lo[j]);
+		else
+			quad(b, lo[i], lo[j], hi[j], hi[i]);
+	}
+}
+
+/* Regular n-gon of radius r around (cx, cy), vertices on the circle. */
+static void ngon(double cx, double cy, double r, int n, double *x, double *y)
+{
+	for (int i = 0; i < n; i++) {
+		x[i] = cx + r * cos(2 * M_PI * i / n);
+		y[i] = cy + r * sin(2 * M_PI * i / n);
+	}
+}
+
+/* The same n-gon as points. */
+static void ngon_xy(double cx, double cy, double r, int n, double (*xy)[2])
+{
+	for (int i = 0; i < n; i++) {
+		xy[i][0] = cx + r * cos(2 * M_PI * i / n);
+		xy[i][1] = cy + r * sin(2 * M_PI * i / n);
+	}
+}
+
+struct mesh *fx_cylinder(double cx, double cy, double r, double h, int n)
+{
+	struct mesh_builder *b = mesh_builder_new(4 * (size_t)n);
+	double x[256], y[256];
+
+	if (!b)
+		die("out of memory");
+	ngon(cx, cy, r, n, x, y);
+	add_prism(b, x, y, n, 0, h, 0);
+	return finish(b);
+}
+
+/* The square x0..x1, y0..y1 walked counter-clockwise from (x0, y0), a point
+ * every step mm; returns the number of points written to xy (at most cap). */
+static int square_loop(double x0, double y0, double x1, double y1, double step, double (*xy)[2],
+		       int cap)
+{
+	const double cx[4] = {x0, x1, x1, x0}, cy[4] = {y0, y0, y1, y1};
+	int n = 0;
+
+	for (int s = 0; s < 4; s++) {
+		double ax = cx[s], ay = cy[s], bx = cx[(s + 1) % 4], by = cy[(s + 1) % 4];
+		int k = (int)lround(hypot(bx - ax, by - ay) / step);
+		for (int i = 0; i < k; i++, n++) {
+			if (n == cap)
+				die("square_loop: too many points");
+			xy[n][0] = ax + (bx - ax) * i / k;
+			xy[n][1] = ay + (by - ay) * i / k;
+		}
+	}
+	return n;
+}
+
+/* Angle of (x, y) around (cx, cy) in [0, 2 pi). */
+static double angle_of(double x, double y, double cx, double cy)
+{
+	double a = atan2(y - cy, x - cx);
+	return a < 0 ? a + 2 * M_PI : a;
+}
+
+/*
+ * Triangulate, at height z, the ring between the loop o (n points,
+ * counter-clockwise, star-shaped from (cx, cy)) and the convex hole h (m
+ * points, counter-clockwise, around (cx, cy)) by zipping the two loops in
+ * angular order; up gives the normal +z, else -z.  Both loops must be
+ * dense enough that no triangle spans a large angle.
+ */
+static void zip_ring(struct mesh_builder *b, const double (*o)[2], int n, const double (*h)[2],
+		     int m, double cx, double cy, double z, int up)
+{
+	int os = 0, hs = 0;
+
+	for (int i = 1; i < n; i++)
+		if (angle_of(o[i][0], o[i][1], cx, cy) < angle_of(o[os][0], o[os][1], cx, cy))
+			os = i;
+	for (int j = 1; j < m; j++)
+		if (angle_of(h[j][0], h[j][1], cx, cy) < angle_of(h[hs][0], h[hs][1], cx, cy))
+			hs = j;
+	int i = 0, j = 0;
+	while (i < n || j < m) {
+		const double *oi = o[(os + i) % n], *oj = o[(os + i + 1) % n];
+		const double *hi = h[(hs + j) % m], *hj = h[(hs + j + 1) % m];
+		double ao = i < n ? angle_of(oj[0], oj[1], cx, cy) + (i + 1 == n ? 2 * M_PI : 0) : INFINITY;
+		double ah = j < m ? angle_of(hj[0], hj[1], cx, cy) + (j + 1 == m ? 2 * M_PI : 0) : INFINITY;
+		uint32_t a = vert(b, oi[0], oi[1], z), c, d;
+		if (ao <= ah) {
+			c = vert(b, oj[0], oj[1], z);
+			d = vert(b, hi[0], hi[1], z);
+			i++;
+		} else {
+			c = vert(b, hj[0], hj[1], z);
+			d = vert(b, hi[0], hi[1], z);
+			j++;
+		}
+		if (up)
+			tri(b, a, c, d);
+		else
+			tri(b, a, d, c);
+	}
+}
+
+/* Side walls of the loop xy (n points, counter-clockwise) from z0 to z1;
+ * inward (a hole's wall) when hole is set. */
+static void loop_walls(struct mesh_builder *b, const double (*xy)[2], int n, double z0, double z1,
+		       int hole)
+{
+	for (int i = 0; i < n; i++) {
+		int j = (i + 1) % n;
+		uint32_t li = vert(b, xy[i][0], xy[i][1], z0), lj = vert(b, xy[j][0], xy[j][1], z0);
+		uint32_t hi = vert(b, xy[i][0], xy[i][1], z1), hj = vert(b, xy[j][0], xy[j][1], z1);
+		if (hole)
+			quad(b, li, hi, hj, lj);
+		else
+			quad(b, li, lj, hj, hi);
+	}
+}
+
+struct mesh *fx_plate_holes(void)
+{
+	struct mesh_builder *b = mesh_builder_new(0);
+	double left[120][2], right[120][2], outer[160][2], sq[64][2], circ[64][2];
+	int nl, nr, no, ns;
+
+	if (!b)
+		die("out of memory");
+	/* Two cells (x 0..20 and 20..40), one hole each, so each cap is a ring
+	 * around a convex hole; the cells share the vertices on x = 20. */
+	nl = square_loop(0, 0, 20, 40, 1, left, 120);
+	nr = square_loop(20, 0, 40, 40, 1, right, 120);
+	no = square_loop(0, 0, 40, 40, 1, outer, 160);
+	ns = square_loop(8, 16, 16, 24, 0.5, sq, 64);
+	ngon_xy(28, 20, 4, 64, circ);
+	for (int up = 0; up < 2; up++) {
+		zip_ring(b, (const double(*)[2])left, nl, (const double(*)[2])sq, ns, 12, 20,
+			 up ? 3 : 0, up);
+		zip_ring(b, (const double(*)[2])right, nr, (const double(*)[2])circ, 64, 28, 20,
+			 up ? 3 : 0, up);
+	}
+	loop_walls(b, (const double(*)[2])outer, no, 0, 3, 0);
+	loop_walls(b, (const double(*)[2])sq, ns, 0, 3, 1);
+	loop_walls(b, (const double(*)[2])circ, 64, 0, 3, 1);
+	return finish(b);
+}
+
+/*
+ * The profile (x[i], z[i]) (counter-clockwise seen from -y, x right, z up)
+ * extruded from y = 0 to y = depth; tris (ntri triples of profile indices,
+ * counter-clockwise) triangulate the profile for the two caps.
+ */
+static struct mesh *extrude_y(const double *x, const double *z, int n, const int (*tris)[3],
+			      int ntri, double depth)
+{
+	struct mesh_builder *b = mesh_builder_new(2 * (size_t)(n + ntri));
+	uint32_t f[16], k[16];
+
+	if (!b || n > 16)
+		die("out of memory");
+	for (int i = 0; i < n; i++) {
+		f[i] = vert(b, x[i], 0, z[i]);
+		k[i] = vert(b, x[i], depth, z[i]);
+	}
+	for (int t = 0; t < ntri; t++) {
+		tri(b, f[tris[t][0]], f[tris[t][1]], f[tris[t][2]]);
+		tri(b, k[tris[t][0]], k[tris[t][2]], k[tris[t][1]]);
+	}
+	for (int i = 0; i < n; i++) {
+		int j = (i + 1) % n;
+		quad(b, f[i], k[i], k[j], f[j]);
+	}
+	return finish(b);
+}
+
+struct mesh *fx_overhang(void)
+{
+	static const double x[] = {0, 10, 10, 20, 0}, z[] = {0, 0, 5, 15, 15};
+	static const int t[][3] = {{4, 0, 1}, {4, 1, 2}, {4, 2, 3}};
+
+	return extrude_y(x, z, 5, t, 3, 10);
+}
+
+struct mesh *fx_bridge(void)
+{
+	static const double x[] = {0, 5, 5, 15, 15, 20, 20, 0}, z[] = {0, 0, 10, 10, 0, 0, 12, 12};
+	static const int t[][3] = {{0, 1, 2}, {0, 2, 7}, {2, 3, 6}, {2, 6, 7}, {3, 4, 5}, {3, 5, 6}};
+
+	return extrude_y(x, z, 8, t, 6, 10);
+}

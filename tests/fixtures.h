@@ -67,4 +67,26 @@ struct mesh *fx_random_triangles(unsigned seed, int n, double size);
  */
 struct mesh *fx_klein_bottle(double R, double scale, int nu, int nv);
 
+/* fx_cylinder - prism over a regular n-gon (3..256) of radius r around (cx, cy), z 0..h. */
+struct mesh *fx_cylinder(double cx, double cy, double r, double h, int n);
+
+/*
+ * fx_plate_holes - a 40 x 40 x 3 mm plate with a square hole (x 8..16,
+ * y 16..24) and a round one (64-gon, radius 4 around (28, 20)).
+ */
+struct mesh *fx_plate_holes(void);
+
+/*
+ * fx_overhang - a 20 x 10 x 15 mm block whose right side (x 10..20) leans
+ * out at 45 degrees from z 5 to z 15 over empty space (profile in x-z,
+ * extruded along y 0..10).
+ */
+struct mesh *fx_overhang(void);
+
+/*
+ * fx_bridge - two 5 x 10 mm pillars 10 mm high, 10 mm apart (x 0..5 and
+ * 15..20), joined by a 2 mm deck (z 10..12) that bridges the gap.
+ */
+struct mesh *fx_bridge(void);
+
 #endif
