@@ -1,8 +1,9 @@
 #!/bin/sh
-# bench/run.sh BIN [check|repair|slice|all] - time `stratum check` against
-# admesh, `stratum repair` on generated files, and `stratum slice` against
-# PrusaSlicer's `--export-gcode`; prints Markdown tables for
-# docs/benchmarks.md.  Wall time, CPU time and peak RSS come from GNU time;
+# bench/run.sh BIN [check|repair|slice|region|all] - time `stratum check`
+# against admesh, `stratum repair` on generated files, and `stratum slice`
+# against PrusaSlicer's `--export-gcode`; `region` measures how well both
+# slicers' printed regions match the models' cross-sections (issue 5, with
+# build/bench/region_check); prints Markdown tables for docs/benchmarks.md.  Wall time, CPU time and peak RSS come from GNU time;
 # check and repair figures are the best of 3 runs, slice figures one run.
 set -eu
 bin=${1:-build/stratum}
@@ -11,14 +12,14 @@ out=bench/out
 mkdir -p "$out"
 gen=build/bench/gen_mesh
 
-case $what in check|repair|slice|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|slice|all]" >&2; exit 2;; esac
+case $what in check|repair|slice|region|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|slice|region|all]" >&2; exit 2;; esac
 
-if [ "$what" != slice ]; then
+if [ "$what" != slice ] && [ "$what" != region ]; then
 	[ -f "$out/torus-1m.stl" ] || "$gen" torus 1000 500 "$out/torus-1m.stl"
 	[ -f "$out/torus-2m.stl" ] || "$gen" torus 1000 1000 "$out/torus-2m.stl"
 	[ -f "$out/spheres.stl" ] || "$gen" spheres 8 "$out/spheres.stl"
 fi
-if [ "$what" != check ]; then
+if [ "$what" != check ] && [ "$what" != region ]; then
 	[ -f "$out/torus-100k.stl" ] || "$gen" torus 250 200 "$out/torus-100k.stl"
 	[ -f "$out/twospheres.stl" ] || "$gen" twospheres 100 80 "$out/twospheres.stl"
 	[ -f "$out/scan.stl" ] || "$gen" scan 250 120 0.7 "$out/scan.stl"
@@ -157,10 +158,52 @@ for f in cube20 scan; do
 done
 }
 
+# The issue 5 test models, written by gen_mesh (tests/fixtures.h).
+region_models() {
+	[ -f "$out/cube20.stl" ] || "$gen" box 20 20 20 "$out/cube20.stl"
+	[ -f "$out/cylinder20.stl" ] || "$gen" cylinder 10 20 256 "$out/cylinder20.stl"
+	[ -f "$out/wall2.stl" ] || "$gen" box 20 2 10 "$out/wall2.stl"
+	[ -f "$out/wall-eps.stl" ] || "$gen" box 20 0.4 10 "$out/wall-eps.stl"
+	[ -f "$out/plate-holes.stl" ] || "$gen" plate "$out/plate-holes.stl"
+	[ -f "$out/overhang.stl" ] || "$gen" overhang "$out/overhang.stl"
+	[ -f "$out/bridge.stl" ] || "$gen" bridge "$out/bridge.stl"
+}
+
+# Printed region against the model's cross-sections: both slicers at the
+# profile's settings (PrusaSlicer's "full" ini above), the part centred on
+# 125,105 by both, so the check places the model there too.
+region_table() {
+if ! command -v prusa-slicer >/dev/null 2>&1; then
+	echo "prusa-slicer is not installed (make bench installs it)" >&2
+	return 1
+fi
+rc=build/bench/region_check
+region_models
+prusa_ini full >"$out/prusa-full.ini"
+pver=$(prusa-slicer --help 2>/dev/null | sed -n 's/^PrusaSlicer-\([0-9.]*\).*/\1/p')
+echo "| model | slicer | layers | p95 outer deviation mm | max mm | printed up to mm outside / inside | area error (voids filled) | area error (voids counted) |"
+echo "|---|---|---|---|---|---|---|---|"
+for f in cube20 cylinder20 wall2 wall-eps plate-holes overhang bridge; do
+	path="$out/$f.stl"
+	"$bin" slice "$path" -o "$out/$f-stratum.gcode" --printer prusa-i3-mk3s --center 125,105 \
+		>/dev/null 2>&1 || echo "failed: stratum slice $f" >&2
+	prusa-slicer --export-gcode --load "$out/prusa-full.ini" --center 125,105 \
+		-o "$out/$f-prusa.gcode" "$path" >/dev/null 2>&1 || echo "failed: prusa-slicer $f" >&2
+	for s in stratum prusa; do
+		"$rc" "$path" "$out/$f-$s.gcode" --center 125,105 --json >"$out/$f-$s-region.json" ||
+			{ echo "failed: region_check $f $s" >&2; continue; }
+		j="$out/$f-$s-region.json"
+		name=stratum; [ "$s" = prusa ] && name="PrusaSlicer $pver"
+		echo "| $f | $name | $(json_field "$j" layers) | $(json_field "$j" dev_p95) | $(json_field "$j" dev_max) | $(json_field "$j" outside_max) / $(json_field "$j" inside_max) | $(json_field "$j" area_error) | $(json_field "$j" area_error_raw) |"
+	done
+done
+}
+
 case $what in
+region) region_table ;;
 check) check_table ;;
 repair) repair_table ;;
 slice) slice_table ;;
-all) check_table; echo; repair_table; echo; slice_table ;;
+all) check_table; echo; repair_table; echo; slice_table; echo; region_table ;;
 esac
 
