@@ -311,13 +311,10 @@ struct mesh *fx_klein_bottle(double R, double scale, int nu, int nv)
 	return finish(b);
 }
 
-/*
- * Prism over the convex polygon (x[i], y[i]) (counter-clockwise) from z0 to
- * z1, fan-triangulated caps; flip turns it inside out (a hole when it lies
- * inside an enclosing solid of the same builder).
- */
+/* Prism over the convex polygon (x[i], y[i]) (counter-clockwise) from z0 to
+ * z1, fan-triangulated caps. */
 static void add_prism(struct mesh_builder *b, const double *x, const double *y, int n, double z0,
-		      double z1, int flip)
+		      double z1)
 {
 	uint32_t lo[256], hi[256];
 
@@ -328,21 +325,11 @@ static void add_prism(struct mesh_builder *b, const double *x, const double *y, 
 		hi[i] = vert(b, x[i], y[i], z1);
 	}
 	for (int i = 1; i + 1 < n; i++) {
-		if (flip) {
-			tri(b, lo[0], lo[i], lo[i + 1]);
-			tri(b, hi[0], hi[i + 1], hi[i]);
-		} else {
-			tri(b, lo[0], lo[i + 1], lo[i]);
-			tri(b, hi[0], hi[i], hi[i + 1]);
-		}
+		tri(b, lo[0], lo[i + 1], lo[i]);
+		tri(b, hi[0], hi[i], hi[i + 1]);
 	}
-	for (int i = 0; i < n; i++) {
-		int j = (i + 1) % n;
-		if (flip)
-			quad(b, lo[i], hi[i], hi[j], lo[j]);
-		else
-			quad(b, lo[i], lo[j], hi[j], hi[i]);
-	}
+	for (int i = 0; i < n; i++)
+		quad(b, lo[i], lo[(i + 1) % n], hi[(i + 1) % n], hi[i]);
 }
 
 /* Regular n-gon of radius r around (cx, cy), vertices on the circle. */
@@ -371,7 +358,7 @@ struct mesh *fx_cylinder(double cx, double cy, double r, double h, int n)
 	if (!b)
 		die("out of memory");
 	ngon(cx, cy, r, n, x, y);
-	add_prism(b, x, y, n, 0, h, 0);
+	add_prism(b, x, y, n, 0, h);
 	return finish(b);
 }
 
