@@ -7,6 +7,15 @@
  * estimates (print time from the planner of estimate.h, filament length,
  * volume and mass).
  *
+ * Travel: when the layer has a travel map (layer_paths.travel) and
+ * avoid_crossing_perimeters is set, a travel whose straight line would
+ * leave the part (a hole, a concave bay) and come back is routed inside the
+ * part along a boundary 1.5 perimeter spacings inside the surface
+ * (travel.h).  A travel retracts when it is longer than
+ * retract_before_travel, except, with only_retract_when_crossing_perimeters,
+ * when it stays inside one island and is at most max_unretracted_travel
+ * long: the ooze then falls inside the part.
+ *
  * Ordering: the paths of a layer print in the given order of roles; within
  * a run of consecutive paths of the same role the writer picks the nearest
  * next path (greedy nearest neighbour from the nozzle), entering a closed
@@ -80,6 +89,12 @@ struct gcodew_settings {
 	double retract_lift;	      /* mm of Z hop while travelling retracted; 0 */
 	double retract_before_travel; /* mm: retract on travels longer than this; 2 */
 	bool wipe;		      /* retract while moving back over the last path; false */
+	/* Travels that would leave the part and come back are routed inside
+	 * the layer's region (layer_paths.travel); true (PrusaSlicer: false) */
+	bool avoid_crossing_perimeters;
+	/* A travel that stays inside one island does not retract; true */
+	bool only_retract_when_crossing_perimeters;
+	double max_unretracted_travel; /* mm: ... unless longer than this; 20 (0 = any length) */
 
 	/* Speeds, mm/s */
 	double perimeter_speed;			 /* 60 */
