@@ -352,10 +352,37 @@ static int eval_braces(const char *t, size_t a, size_t b, const char *what,
 		return st_error_set(err, ST_ERR_UNSUPPORTED, "%s: {%.*s}: %.*s is not a vector",
 				    what, shown, t + a, (int)name_len, t + name);
 	if (!index_is_zero(t + idx, idx_len))
-		return st_error_set(err, ST_ERR_RANGE,
+		return st_error_set(err, ST_ERR_UNSUPPORTED,
 				    "%s: {%.*s}: index %.*s is out of range (one extruder)", what,
 				    shown, t + a, (int)idx_len, t + idx);
 	return 0;
+}
+
+/*
+ * Look up the [name] placeholder name[0..n): a plain name, or PrusaSlicer's
+ * legacy indexed form name_N of a per-extruder vector (N = 0 only: one
+ * extruder).
+ */
+static int lookup_bracket(const struct gcodew_settings *s, size_t nlayers, const char *name,
+			  size_t n, const char *what, struct ph_value *v, struct st_error *err)
+{
+	int shown = (int)(n > 60 ? 60 : n);
+	size_t us = n;
+
+	if (ph_lookup(s, nlayers, name, n, v))
+		return 0;
+	while (us > 0 && name[us - 1] >= '0' && name[us - 1] <= '9')
+		us--;
+	if (us > 1 && us < n && name[us - 1] == '_' && ph_lookup(s, nlayers, name, us - 1, v) &&
+	    v->vector) {
+		if (n - us == 1 && name[us] == '0')
+			return 0;
+		return st_error_set(err, ST_ERR_UNSUPPORTED,
+				    "%s: [%.*s]: extruder index %.*s is out of range (Stratum prints "
+				    "with one extruder); use [%.*s_0]",
+				    what, shown, name, (int)(n - us), name + us, (int)(us - 1), name);
+	}
+	return st_error_set(err, ST_ERR_PARSE, "%s: unknown placeholder [%.*s]", what, shown, name);
 }
 
 int gcodew_expand(const char *text, const char *what, const struct gcodew_settings *s,
@@ -379,13 +406,10 @@ int gcodew_expand(const char *text, const char *what, const struct gcodew_settin
 			while (j < len && is_ident(text[j]))
 				j++;
 			if (j > i + 1 && j < len && text[j] == ']') {
-				if (!ph_lookup(s, nlayers, text + i + 1, j - i - 1, &v)) {
-					rc = st_error_set(err, ST_ERR_PARSE,
-							  "%s: unknown placeholder [%.*s]", what,
-							  (int)(j - i - 1 > 60 ? 60 : j - i - 1),
-							  text + i + 1);
+				rc = lookup_bracket(s, nlayers, text + i + 1, j - i - 1, what, &v,
+						    err);
+				if (rc)
 					break;
-				}
 				rc = sb_add(&b, v.text, strlen(v.text), err);
 				i = j + 1;
 				continue;

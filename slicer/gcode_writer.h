@@ -168,14 +168,15 @@ int gcodew_write_file(const struct layer_stack *stack, const struct gcodew_setti
 
 /*
  * gcodew_expand - substitute PrusaSlicer placeholders in @text: [name],
- * {name} and {name[i]} where i is 0 or initial_extruder/current_extruder.
+ * [name_0] (the legacy form of a per-extruder value), {name} and {name[i]}
+ * where i is 0 or initial_extruder/current_extruder.
  * Known names: the numeric fields of struct gcodew_settings (by their
  * PrusaSlicer key), total_layer_count (@nlayers), initial_extruder and
  * current_extruder (0).  @what names the text in messages ("start_gcode").
  * On success *out is a new NUL-terminated string (free() it); on error
  * *out is NULL and err names the placeholder: ST_ERR_PARSE for an unknown
  * name or an unclosed brace, ST_ERR_UNSUPPORTED for an expression other
- * than these forms, ST_ERR_NOMEM.
+ * than these forms or an extruder index other than 0, ST_ERR_NOMEM.
  */
 int gcodew_expand(const char *text, const char *what, const struct gcodew_settings *s,
 		  size_t nlayers, char **out, struct st_error *err);
