@@ -447,6 +447,45 @@ START_TEST(wall_of_nozzle_width_gets_one_thin_wall)
 }
 END_TEST
 
+START_TEST(pillar_of_nozzle_width_gets_a_bead)
+{
+	/* An eps x eps square pillar, and a 0.3 mm one (narrower than eps). */
+	struct mesh *m = fx_box(0, 0, 0, 0.4, 0.4, 1), *thin = fx_box(0, 0, 0, 0.3, 0.3, 1);
+	struct slice_stack *st = slice_ok(m, 0.2, 0.2), *st_thin = slice_ok(thin, 0.2, 0.2);
+	struct perim_settings s;
+	struct layer_paths out;
+	struct clip_expolys inner = {0};
+
+	perim_settings_init(&s, 0.4);
+	for (size_t i = 0; i < st->n; i++) {
+		walls_ok(&s, &st->layers[i], &out, &inner);
+		ck_assert_uint_eq(out.n, 1);
+		ck_assert_uint_eq(tu_count_role(&out, PATH_THIN_WALL), 1);
+		const struct toolpath *t = &out.paths[0];
+		double h = st->layers[i].height, w = t->pts[0].width / NM;
+		double len = tu_path_length(t) / NM;
+		/* Centred, inside the pillar, and its flow fills the pillar's area. */
+		for (size_t k = 0; k < t->n; k++) {
+			ck_assert(t->pts[k].x > 0 && t->pts[k].x < 0.4 * NM);
+			ck_assert(t->pts[k].y > 0 && t->pts[k].y < 0.4 * NM);
+		}
+		ck_assert_double_eq_tol((t->pts[0].x + t->pts[1].x) / 2.0 / NM, 0.2, 1e-3);
+		ck_assert_double_eq_tol((t->pts[0].y + t->pts[1].y) / 2.0 / NM, 0.2, 1e-3);
+		ck_assert_double_eq_tol(perim_bead_area(w, h) * len, 0.16 * h, 0.01 * 0.16 * h);
+		free_paths(&out);
+	}
+	/* Narrower than eps: may vanish, as before. */
+	walls_ok(&s, &st_thin->layers[1], &out, &inner);
+	ck_assert_uint_eq(out.n, 0);
+	free_paths(&out);
+	clip_expolys_free(&inner);
+	slice_stack_free(st);
+	slice_stack_free(st_thin);
+	mesh_free(m);
+	mesh_free(thin);
+}
+END_TEST
+
 START_TEST(plate_holes_stay_holes)
 {
 	struct mesh_builder *b = mesh_builder_new(0);
@@ -991,6 +1030,7 @@ Suite *slicer_suite(void)
 	tcase_add_test(tc, cylinder_outer_wall_within_chord);
 	tcase_add_test(tc, two_mm_wall_filled_by_walls);
 	tcase_add_test(tc, wall_of_nozzle_width_gets_one_thin_wall);
+	tcase_add_test(tc, pillar_of_nozzle_width_gets_a_bead);
 	tcase_add_test(tc, plate_holes_stay_holes);
 	tcase_add_test(tc, vertices_on_the_plane);
 	tcase_add_test(tc, open_contour_gap_closed);
