@@ -759,7 +759,8 @@ int travel_plan(struct travel_map *m, int64_t ax, int64_t ay, int64_t bx, int64_
 	if (rc)
 		return rc;
 
-	/* The route must not touch a wall anywhere. */
+	/* The route must not touch a wall anywhere, nor wander off: a detour
+	 * beyond TRAVEL_MAX_DETOUR costs more than the crossing it avoids. */
 	{
 		int64_t p[2] = {ax, ay};
 		for (size_t k = 0; k < r->n; k++) {
@@ -771,5 +772,7 @@ int travel_plan(struct travel_map *m, int64_t ax, int64_t ay, int64_t bx, int64_
 			p[1] = q[1];
 		}
 	}
+	if (r->length > TRAVEL_MAX_DETOUR * hypot((double)(bx - ax), (double)(by - ay)))
+		return route_straight(r, ax, ay, bx, by, false, err);
 	return 0;
 }

@@ -11,7 +11,8 @@
  * then shortened where a straight cut stays inside the boundary.  Every
  * route is checked against the region's own walls at the end: a route that
  * cannot be made (ends in different islands, outside the part, an island
- * too thin for the boundary) is the straight segment, flagged as crossing.
+ * too thin for the boundary) or would be more than TRAVEL_MAX_DETOUR times
+ * the straight distance is the straight segment, flagged as crossing.
  *
  * Edges sit in a uniform grid, so a travel costs about the number of grid
  * cells it passes, not the size of the layer.
@@ -29,6 +30,10 @@
 
 #include "clip.h"
 #include "st_error.h"
+
+/* A route longer than this many times the straight distance is not taken
+ * (PrusaSlicer's avoid_crossing_perimeters_max_detour, as 200 %). */
+#define TRAVEL_MAX_DETOUR 2.0
 
 struct travel_map;
 
