@@ -452,39 +452,50 @@ bool travel_segment_inside(struct travel_map *m, int64_t ax, int64_t ay, int64_t
 	return m && !touches_wall(m, p, q) && ray_inside(m, ax, ay, true, -1, &island);
 }
 
-/* Append (x, y) to the route. */
-static int route_add(struct travel_route *r, int64_t x, int64_t y, struct st_error *err)
+/* Append (x, y) to the point list xy (n used, cap allocated). */
+static int xy_add(int64_t **xy, size_t *n, size_t *cap, int64_t x, int64_t y,
+		  struct st_error *err)
 {
-	if (r->n == r->cap) {
-		size_t cap = r->cap ? 2 * r->cap : 16;
-		int64_t *g = realloc(r->xy, 2 * cap * sizeof(*g));
+	if (*n == *cap) {
+		size_t grown_cap = *cap ? 2 * *cap : 16;
+		int64_t *g = realloc(*xy, 2 * grown_cap * sizeof(*g));
 		if (!g)
 			return st_error_set(err, ST_ERR_NOMEM, "travel: out of memory for a route");
-		r->xy = g;
-		r->cap = cap;
+		*xy = g;
+		*cap = grown_cap;
 	}
-	r->xy[2 * r->n] = x;
-	r->xy[2 * r->n + 1] = y;
-	r->n++;
+	(*xy)[2 * *n] = x;
+	(*xy)[2 * *n + 1] = y;
+	(*n)++;
 	return 0;
 }
 
-/* Append (x, y) to the map's scratch chain. */
+/* Append (x, y) to the route. */
+static int route_add(struct travel_route *r, int64_t x, int64_t y, struct st_error *err)
+{
+	return xy_add(&r->xy, &r->n, &r->cap, x, y, err);
+}
+
+/* Append (x, y) to the map's scratch chain unless it repeats the last point. */
 static int chain_add(struct travel_map *m, int64_t x, int64_t y, struct st_error *err)
 {
-	if (m->nchain == m->chaincap) {
-		size_t cap = m->chaincap ? 2 * m->chaincap : 64;
-		int64_t *g = realloc(m->chain, 2 * cap * sizeof(*g));
-		if (!g)
-			return st_error_set(err, ST_ERR_NOMEM, "travel: out of memory for a route");
-		m->chain = g;
-		m->chaincap = cap;
-	}
 	if (m->nchain && m->chain[2 * m->nchain - 2] == x && m->chain[2 * m->nchain - 1] == y)
 		return 0;
-	m->chain[2 * m->nchain] = x;
-	m->chain[2 * m->nchain + 1] = y;
-	m->nchain++;
+	return xy_add(&m->chain, &m->nchain, &m->chaincap, x, y, err);
+}
+
+/* Append h to the map's hits. */
+static int hit_add(struct travel_map *m, const struct hit *h, struct st_error *err)
+{
+	if (m->nhits == m->hitcap) {
+		size_t cap = m->hitcap ? 2 * m->hitcap : 32;
+		struct hit *g = realloc(m->hits, cap * sizeof(*g));
+		if (!g)
+			return st_error_set(err, ST_ERR_NOMEM, "travel: out of memory");
+		m->hits = g;
+		m->hitcap = cap;
+	}
+	m->hits[m->nhits++] = *h;
 	return 0;
 }
 
@@ -511,20 +522,11 @@ static bool collect_hit(struct travel_map *m, size_t e, void *arg)
 		return false; /* along the edge: the edges around it decide */
 	t = ((double)(a[0] - c->p[0]) * ey - (double)(a[1] - c->p[1]) * ex) / den;
 	t = fmin(1, fmax(0, t));
-	if (m->nhits == m->hitcap) {
-		size_t cap = m->hitcap ? 2 * m->hitcap : 32;
-		struct hit *g = realloc(m->hits, cap * sizeof(*g));
-		if (!g) {
-			c->rc = st_error_set(c->err, ST_ERR_NOMEM, "travel: out of memory");
-			return true;
-		}
-		m->hits = g;
-		m->hitcap = cap;
-	}
-	m->hits[m->nhits++] = (struct hit){.t = t, .poly = m->epoly[e], .edge = e,
-					   .x = llround(c->p[0] + t * dx),
-					   .y = llround(c->p[1] + t * dy)};
-	return false;
+	c->rc = hit_add(m,
+			&(struct hit){.t = t, .poly = m->epoly[e], .edge = e,
+				      .x = llround(c->p[0] + t * dx), .y = llround(c->p[1] + t * dy)},
+			c->err);
+	return c->rc != 0;
 }
 
 /* Order hits along the segment; ties by polygon and edge so the order is
@@ -655,17 +657,10 @@ static int walk_segment(struct travel_map *m, int island, const struct hit *from
 			ends[n] = *to;
 			ends[n++].t = 1;
 		}
-		for (size_t k = 0; k < n; k++) {
-			if (m->nhits == m->hitcap) {
-				size_t cap = m->hitcap ? 2 * m->hitcap : 32;
-				struct hit *g = realloc(m->hits, cap * sizeof(*g));
-				if (!g)
-					return st_error_set(err, ST_ERR_NOMEM, "travel: out of memory");
-				m->hits = g;
-				m->hitcap = cap;
-			}
-			m->hits[m->nhits++] = ends[k];
-		}
+		for (size_t k = 0; k < n && !rc; k++)
+			rc = hit_add(m, &ends[k], err);
+		if (rc)
+			return rc;
 	}
 	qsort(m->hits, m->nhits, sizeof(*m->hits), hit_cmp);
 	for (size_t i = 0; i < m->nhits && !rc;) {
