@@ -279,6 +279,19 @@ static int config_from_profile(const struct profile *p, const struct slice_args 
 	g->retract_length = p->retract_length[0];
 	g->retract_speed = p->retract_speed[0];
 	g->retract_lift = p->retract_lift[0];
+	/* Travel routing (untyped keys, PrusaSlicer's names where it has them). */
+	if (profile_get_number(p, "avoid_crossing_perimeters", 0, 1, g->avoid_crossing_perimeters,
+			       &v, &err))
+		goto out_profile;
+	g->avoid_crossing_perimeters = v != 0;
+	if (profile_get_number(p, "only_retract_when_crossing_perimeters", 0, 1,
+			       g->only_retract_when_crossing_perimeters, &v, &err))
+		goto out_profile;
+	g->only_retract_when_crossing_perimeters = v != 0;
+	if (profile_get_number(p, "max_unretracted_travel", 0, 1e6, g->max_unretracted_travel, &v,
+			       &err))
+		goto out_profile;
+	g->max_unretracted_travel = v;
 	g->perimeter_speed = p->perimeter_speed;
 	g->external_perimeter_speed = p->perimeter_speed / 2; /* PrusaSlicer's 50% */
 	g->infill_speed = p->infill_speed;

@@ -25,6 +25,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "travel.h"
+
 #define E_UNITS 100000.0 /* E written in 1e-5 mm */
 #define E_DIGITS 5
 #define XYZ_UNITS 1000.0 /* X, Y, Z written in um */
@@ -72,6 +74,9 @@ static const struct key keys[] = {
     KD(retract_lift, true, 0, 100),
     KD(retract_before_travel, true, 0, 1e6),
     KB(wipe, true),
+    KB(avoid_crossing_perimeters, false),
+    KB(only_retract_when_crossing_perimeters, false),
+    KD(max_unretracted_travel, false, 0, 1e6),
     SPEED(perimeter_speed),
     SPEED(external_perimeter_speed),
     SPEED(infill_speed),
@@ -132,6 +137,9 @@ void gcodew_settings_init(struct gcodew_settings *s)
 	    .retract_lift = 0,
 	    .retract_before_travel = 2,
 	    .wipe = false,
+	    .avoid_crossing_perimeters = true,
+	    .only_retract_when_crossing_perimeters = true,
+	    .max_unretracted_travel = 20,
 	    .perimeter_speed = 60,
 	    .external_perimeter_speed = 30,
 	    .infill_speed = 80,
@@ -344,10 +352,37 @@ static int eval_braces(const char *t, size_t a, size_t b, const char *what,
 		return st_error_set(err, ST_ERR_UNSUPPORTED, "%s: {%.*s}: %.*s is not a vector",
 				    what, shown, t + a, (int)name_len, t + name);
 	if (!index_is_zero(t + idx, idx_len))
-		return st_error_set(err, ST_ERR_RANGE,
+		return st_error_set(err, ST_ERR_UNSUPPORTED,
 				    "%s: {%.*s}: index %.*s is out of range (one extruder)", what,
 				    shown, t + a, (int)idx_len, t + idx);
 	return 0;
+}
+
+/*
+ * Look up the [name] placeholder name[0..n): a plain name, or PrusaSlicer's
+ * legacy indexed form name_N of a per-extruder vector (N = 0 only: one
+ * extruder).
+ */
+static int lookup_bracket(const struct gcodew_settings *s, size_t nlayers, const char *name,
+			  size_t n, const char *what, struct ph_value *v, struct st_error *err)
+{
+	int shown = (int)(n > 60 ? 60 : n);
+	size_t us = n;
+
+	if (ph_lookup(s, nlayers, name, n, v))
+		return 0;
+	while (us > 0 && name[us - 1] >= '0' && name[us - 1] <= '9')
+		us--;
+	if (us > 1 && us < n && name[us - 1] == '_' && ph_lookup(s, nlayers, name, us - 1, v) &&
+	    v->vector) {
+		if (n - us == 1 && name[us] == '0')
+			return 0;
+		return st_error_set(err, ST_ERR_UNSUPPORTED,
+				    "%s: [%.*s]: extruder index %.*s is out of range (Stratum prints "
+				    "with one extruder); use [%.*s_0]",
+				    what, shown, name, (int)(n - us), name + us, (int)(us - 1), name);
+	}
+	return st_error_set(err, ST_ERR_PARSE, "%s: unknown placeholder [%.*s]", what, shown, name);
 }
 
 int gcodew_expand(const char *text, const char *what, const struct gcodew_settings *s,
@@ -371,13 +406,10 @@ int gcodew_expand(const char *text, const char *what, const struct gcodew_settin
 			while (j < len && is_ident(text[j]))
 				j++;
 			if (j > i + 1 && j < len && text[j] == ']') {
-				if (!ph_lookup(s, nlayers, text + i + 1, j - i - 1, &v)) {
-					rc = st_error_set(err, ST_ERR_PARSE,
-							  "%s: unknown placeholder [%.*s]", what,
-							  (int)(j - i - 1 > 60 ? 60 : j - i - 1),
-							  text + i + 1);
+				rc = lookup_bracket(s, nlayers, text + i + 1, j - i - 1, what, &v,
+						    err);
+				if (rc)
 					break;
-				}
 				rc = sb_add(&b, v.text, strlen(v.text), err);
 				i = j + 1;
 				continue;
@@ -484,6 +516,8 @@ struct writer {
 	size_t nwipe, wipecap;
 	bool *done; /* per path of the layer: already planned */
 	size_t donecap;
+	struct travel_map *map;	  /* this layer's, NULL: straight travels */
+	struct travel_route route; /* the travel being planned */
 
 	/* Emission state */
 	double ext_exact, r_exact; /* mm extruded since the last reset / retracted now */
@@ -570,14 +604,17 @@ static int plan_retract(struct writer *w)
 }
 
 /*
- * Travel to (x, y) on the current layer: retract (and lift) when longer
- * than retract_before_travel, reach the layer's Z before moving in XY when
- * not lifted, unretract on arrival.
+ * Travel to (x, y) on the current layer, routed inside the part when the
+ * layer has a travel map: retract (and lift) when longer than
+ * retract_before_travel unless the route stays inside one island and is
+ * short enough to skip it, reach the layer's Z before moving in XY when not
+ * lifted, unretract on arrival.
  */
 static int plan_travel(struct writer *w, double x, double y)
 {
 	const struct gcodew_settings *s = w->s;
-	double lz = w->layer_z, tz = lz, d;
+	struct travel_route *r = &w->route;
+	double lz = w->layer_z, tz = lz, d, len;
 	bool retract;
 	int rc = 0;
 
@@ -589,7 +626,16 @@ static int plan_travel(struct writer *w, double x, double y)
 	d = hypot(x - w->px, y - w->py);
 	if (d < MOVE_EPS && fabs(w->pz - lz) < 1e-9)
 		return 0;
-	retract = s->retract_length > 0 && d > s->retract_before_travel;
+	rc = travel_plan(w->map, llround(w->px * SLICE_UNITS_PER_MM),
+			 llround(w->py * SLICE_UNITS_PER_MM), llround(x * SLICE_UNITS_PER_MM),
+			 llround(y * SLICE_UNITS_PER_MM), r, w->err);
+	if (rc)
+		return rc;
+	len = r->length / SLICE_UNITS_PER_MM;
+	retract = s->retract_length > 0 && len > s->retract_before_travel;
+	if (retract && r->inside && s->only_retract_when_crossing_perimeters &&
+	    (s->max_unretracted_travel == 0 || len <= s->max_unretracted_travel))
+		retract = false; /* any ooze falls inside the part */
 	if (retract) {
 		rc = plan_retract(w);
 		if (s->retract_lift > 0)
@@ -597,6 +643,9 @@ static int plan_travel(struct writer *w, double x, double y)
 	}
 	if (rc == 0 && fabs(w->pz - tz) > 1e-9)
 		rc = push_move(w, MV_TRAVEL, false, 0, 0, tz, 0, z_speed(s));
+	for (size_t k = 0; k + 1 < r->n && rc == 0; k++) /* the route's turns */
+		rc = push_move(w, MV_TRAVEL, true, r->xy[2 * k] / SLICE_UNITS_PER_MM,
+			       r->xy[2 * k + 1] / SLICE_UNITS_PER_MM, tz, 0, s->travel_speed);
 	if (rc == 0)
 		rc = push_move(w, MV_TRAVEL, true, x, y, tz, 0, s->travel_speed);
 	if (rc == 0 && tz != lz)
@@ -765,6 +814,7 @@ static int plan_layer(struct writer *w, const struct layer_paths *l, size_t li)
 	w->nops = 0;
 	w->layer_z = l->z;
 	w->plan_role = -1;
+	w->map = w->s->avoid_crossing_perimeters ? l->travel : NULL;
 	if (l->n > w->donecap) {
 		bool *grown = realloc(w->done, l->n * sizeof(*grown));
 		if (!grown)
@@ -1254,6 +1304,7 @@ out_free:
 	free(w.ops);
 	free(w.wipe);
 	free(w.done);
+	travel_route_free(&w.route);
 	free(start);
 	free(end);
 	return rc;

@@ -7,6 +7,15 @@
  * estimates (print time from the planner of estimate.h, filament length,
  * volume and mass).
  *
+ * Travel: when the layer has a travel map (layer_paths.travel) and
+ * avoid_crossing_perimeters is set, a travel whose straight line would
+ * leave the part (a hole, a concave bay) and come back is routed inside the
+ * part along a boundary 1.5 perimeter spacings inside the surface
+ * (travel.h).  A travel retracts when it is longer than
+ * retract_before_travel, except, with only_retract_when_crossing_perimeters,
+ * when it stays inside one island and is at most max_unretracted_travel
+ * long: the ooze then falls inside the part.
+ *
  * Ordering: the paths of a layer print in the given order of roles; within
  * a run of consecutive paths of the same role the writer picks the nearest
  * next path (greedy nearest neighbour from the nozzle), entering a closed
@@ -80,6 +89,12 @@ struct gcodew_settings {
 	double retract_lift;	      /* mm of Z hop while travelling retracted; 0 */
 	double retract_before_travel; /* mm: retract on travels longer than this; 2 */
 	bool wipe;		      /* retract while moving back over the last path; false */
+	/* Travels that would leave the part and come back are routed inside
+	 * the layer's region (layer_paths.travel); true (PrusaSlicer: false) */
+	bool avoid_crossing_perimeters;
+	/* A travel that stays inside one island does not retract; true */
+	bool only_retract_when_crossing_perimeters;
+	double max_unretracted_travel; /* mm: ... unless longer than this; 20 (0 = any length) */
 
 	/* Speeds, mm/s */
 	double perimeter_speed;			 /* 60 */
@@ -153,14 +168,15 @@ int gcodew_write_file(const struct layer_stack *stack, const struct gcodew_setti
 
 /*
  * gcodew_expand - substitute PrusaSlicer placeholders in @text: [name],
- * {name} and {name[i]} where i is 0 or initial_extruder/current_extruder.
+ * [name_0] (the legacy form of a per-extruder value), {name} and {name[i]}
+ * where i is 0 or initial_extruder/current_extruder.
  * Known names: the numeric fields of struct gcodew_settings (by their
  * PrusaSlicer key), total_layer_count (@nlayers), initial_extruder and
  * current_extruder (0).  @what names the text in messages ("start_gcode").
  * On success *out is a new NUL-terminated string (free() it); on error
  * *out is NULL and err names the placeholder: ST_ERR_PARSE for an unknown
  * name or an unclosed brace, ST_ERR_UNSUPPORTED for an expression other
- * than these forms, ST_ERR_NOMEM.
+ * than these forms or an extruder index other than 0, ST_ERR_NOMEM.
  */
 int gcodew_expand(const char *text, const char *what, const struct gcodew_settings *s,
 		  size_t nlayers, char **out, struct st_error *err);

@@ -344,8 +344,69 @@ static int emit_medial(struct ctx *c, struct medial_line *l, enum path_role role
 }
 
 /*
+ * A piece that holds a disk of diameter min_width but has no centre line (a
+ * square or round pillar about as wide as long, whose medial axis is a
+ * point): one short bead through the centre of the disk's possible
+ * positions, along the piece's longest extent, as wide as the nozzle and
+ * long enough that its flow fills the piece's area (area nm^2).  Adds
+ * nothing when no such disk fits.
+ */
+static int pillar_path(struct ctx *c, const struct clip_paths *piece, double area,
+		       double min_width)
+{
+	struct clip_paths core = {0};
+	const int64_t *o = clip_path_xy(piece, 0);
+	size_t n = clip_path_len(piece, 0);
+	double w = fmax(fmax(c->eps, min_width), c->h * 1.01), best = -1, dx = 1, dy = 0, len;
+	int64_t x0 = INT64_MAX, y0 = INT64_MAX, x1 = INT64_MIN, y1 = INT64_MIN;
+	int rc = clip_offset(piece, -(min_width / 2.0 - PERIM_HAIRLINE), CLIP_JOIN_ROUND, 0.0,
+			     c->arc, &core, c->err);
+
+	if (rc || !core.n)
+		goto out;
+	for (size_t k = 0; k < clip_paths_points(&core); k++) {
+		x0 = core.xy[2 * k] < x0 ? core.xy[2 * k] : x0;
+		y0 = core.xy[2 * k + 1] < y0 ? core.xy[2 * k + 1] : y0;
+		x1 = core.xy[2 * k] > x1 ? core.xy[2 * k] : x1;
+		y1 = core.xy[2 * k + 1] > y1 ? core.xy[2 * k + 1] : y1;
+	}
+	/* The longest extent: the farthest pair of outline vertices (pieces
+	 * reaching here are small). */
+	for (size_t i = 0; i < n; i++)
+		for (size_t j = i + 1; j < n; j++) {
+			double ex = (double)(o[2 * j] - o[2 * i]), ey = (double)(o[2 * j + 1] - o[2 * i + 1]);
+			if (ex * ex + ey * ey > best) {
+				best = ex * ex + ey * ey;
+				dx = ex;
+				dy = ey;
+			}
+		}
+	best = sqrt(fmax(best, 1.0));
+	dx /= best;
+	dy /= best;
+	/* Bead cross-section h (w - h (1 - pi/4)) times length = area times h. */
+	len = area / (w - c->h * (1.0 - M_PI / 4.0));
+	if (len > best) { /* widen rather than run past the piece */
+		len = best;
+		w = area / len + c->h * (1.0 - M_PI / 4.0);
+	}
+	{
+		double cx = ((double)x0 + (double)x1) / 2.0, cy = ((double)y0 + (double)y1) / 2.0;
+		struct path_point pts[2] = {
+		    {llround(cx - dx * len / 2), llround(cy - dy * len / 2), llround(w)},
+		    {llround(cx + dx * len / 2), llround(cy + dy * len / 2), llround(w)},
+		};
+		struct medial_line l = {.closed = false, .n = 2, .pts = pts};
+		rc = emit_medial(c, &l, PATH_THIN_WALL);
+	}
+out:
+	clip_paths_free(&core);
+	return rc;
+}
+
+/*
  * Centre lines of every piece of area at least min_width wide, appended as
- * paths of role.  Pieces whose area cannot hold a disk of that diameter
+ * paths of role; a thin-wall piece with none gets pillar_path's bead.  Pieces whose area cannot hold a disk of that diameter
  * are skipped without sampling.
  */
 static int narrow_paths(struct ctx *c, const struct clip_expolys *area, double min_width,
@@ -366,6 +427,8 @@ static int narrow_paths(struct ctx *c, const struct clip_expolys *area, double m
 		rc = perim_medial_axis(&piece, min_width, step, c->arc, &ml, c->err);
 		for (size_t k = 0; k < ml.n && !rc; k++)
 			rc = emit_medial(c, &ml.v[k], role);
+		if (!rc && !ml.n && role == PATH_THIN_WALL)
+			rc = pillar_path(c, &piece, a, min_width);
 		perim_medial_free(&ml);
 	}
 	clip_paths_free(&piece);

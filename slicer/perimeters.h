@@ -14,8 +14,10 @@
  * beads do not cover (a region too narrow for two walls, a narrow neck) is
  * printed as single centre-line beads along its medial axis, as wide as the
  * region (PATH_THIN_WALL), as long as it is at least the nozzle diameter
- * (epsilon) wide; strips left between walls are filled the same way
- * (PATH_GAP_FILL) when at least gap_fill_min wide.
+ * (epsilon) wide; a piece whose medial axis is only a point (a square or
+ * round pillar about epsilon across) gets one short bead through its
+ * centre whose flow fills its area.  Strips left between walls are filled
+ * the same way (PATH_GAP_FILL) when at least gap_fill_min wide.
  *
  * All lengths in settings are mm; geometry is in nm (toolpath.h).
  */

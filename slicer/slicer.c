@@ -14,6 +14,7 @@
 #include "infill.h"
 #include "skirt.h"
 #include "support.h"
+#include "travel.h"
 
 void slicer_config_init(struct slicer_config *c, double nozzle_diameter)
 {
@@ -190,6 +191,8 @@ struct walls_job {
 	const struct slice_stack *st;
 	struct layer_stack *out;
 	struct clip_expolys *inner; /* st->n regions inside the walls */
+	struct travel_map **travel; /* st->n travel maps, NULL when travels go straight */
+	int64_t travel_inset;	    /* nm, routing boundary inside the surface */
 	size_t nchunks, next, done;
 	pthread_mutex_t lock;
 	int rc;			/* first error */
@@ -228,6 +231,9 @@ static int walls_chunk(struct walls_job *j, size_t k, struct st_error *err)
 
 		rc = perim_generate(ps, &l->regions, l->height, seams, &j->out->layers[i],
 				    &j->inner[i], err);
+		if (!rc && j->travel && !(j->travel[i] = travel_map_new(&l->regions,
+									j->travel_inset, err)))
+			rc = err->code;
 		if (!rc) {
 			pthread_mutex_lock(&j->lock);
 			j->done++;
@@ -280,13 +286,22 @@ static size_t worker_count(int threads, size_t nchunks)
 
 /*
  * Stage "walls": outer and inner perimeters, gap fill and thin walls of
- * every layer into out, and the region inside the walls of layer i into
- * inner[i] (what the infill stage fills).
+ * every layer into out, the region inside the walls of layer i into
+ * inner[i] (what the infill stage fills), and when travel is not NULL the
+ * travel map of layer i's region into travel[i].
  */
 static int stage_walls(const struct slicer_config *c, const struct slice_stack *st,
-		       struct clip_expolys *inner, struct layer_stack *out, struct st_error *err)
+		       struct clip_expolys *inner, struct travel_map **travel,
+		       struct layer_stack *out, struct st_error *err)
 {
-	struct walls_job j = {.c = c, .st = st, .out = out, .inner = inner};
+	struct walls_job j = {.c = c, .st = st, .out = out, .inner = inner, .travel = travel};
+	/* PrusaSlicer's routing boundary: 1.5 perimeter spacings inside, so
+	 * routes run over the inner walls, never over the outer face. */
+	double spacing = perim_spacing(c->perim.extrusion_width, c->layer_height);
+
+	j.travel_inset = llround(1.5 * spacing * SLICE_UNITS_PER_MM);
+	if (j.travel_inset < 1)
+		j.travel_inset = 1;
 	pthread_t tid[SLICER_MAX_THREADS];
 	size_t nworkers, started = 0;
 
@@ -440,6 +455,7 @@ int slicer_toolpaths(const struct mesh *m, const struct slicer_config *c,
 	struct slice_stack *st = NULL;
 	struct layer_stack *stage[STAGES] = {0}, *merged = NULL;
 	struct clip_expolys *inner = NULL;
+	struct travel_map **travel = NULL;
 	bool ran[STAGES] = {false};
 	int rc;
 
@@ -470,16 +486,18 @@ int slicer_toolpaths(const struct mesh *m, const struct slicer_config *c,
 		s.open_dropped += st->layers[i].open_dropped;
 
 	inner = calloc(st->n, sizeof(*inner));
+	if (c->gcodew.avoid_crossing_perimeters)
+		travel = calloc(st->n, sizeof(*travel));
 	merged = stage_stack_new(st, err);
 	for (int k = 0; k < STAGES; k++)
 		stage[k] = stage_stack_new(st, err);
-	if (!inner || !merged || !stage[SKIRT] || !stage[SUPPORT] || !stage[WALLS] ||
-	    !stage[INFILL]) {
+	if (!inner || (c->gcodew.avoid_crossing_perimeters && !travel) || !merged ||
+	    !stage[SKIRT] || !stage[SUPPORT] || !stage[WALLS] || !stage[INFILL]) {
 		rc = st_error_set(err, ST_ERR_NOMEM, "slicer: out of memory for %zu layers", st->n);
 		goto out_free;
 	}
 
-	rc = stage_walls(c, st, inner, stage[WALLS], err);
+	rc = stage_walls(c, st, inner, travel, stage[WALLS], err);
 	ran[WALLS] = true;
 	if (!rc)
 		rc = stage_infill(c, st, inner, stage[INFILL], &ran[INFILL], err);
@@ -492,6 +510,10 @@ int slicer_toolpaths(const struct mesh *m, const struct slicer_config *c,
 		rc = merge_stage(merged, stage[k], err);
 	if (rc)
 		goto out_free;
+	for (size_t i = 0; travel && i < st->n; i++) {
+		merged->layers[i].travel = travel[i];
+		travel[i] = NULL;
+	}
 	if (!count_paths(merged, s.paths)) {
 		rc = st_error_set(err, ST_ERR_RANGE,
 				  "no layer has anything to print: every feature of the model is "
@@ -517,6 +539,10 @@ out_free:
 		for (size_t i = 0; i < st->n; i++)
 			clip_expolys_free(&inner[i]);
 	free(inner);
+	if (travel)
+		for (size_t i = 0; i < st->n; i++)
+			travel_map_free(travel[i]);
+	free(travel);
 	slice_stack_free(st);
 	return rc;
 }

@@ -7,6 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "travel.h"
+
 struct layer_stack *layer_stack_new(size_t nlayers, struct st_error *err)
 {
 	struct layer_stack *s = calloc(1, sizeof(*s));
@@ -28,6 +30,7 @@ void layer_stack_free(struct layer_stack *s)
 		for (size_t p = 0; p < s->layers[l].n; p++)
 			free(s->layers[l].paths[p].pts);
 		free(s->layers[l].paths);
+		travel_map_free(s->layers[l].travel);
 	}
 	free(s->layers);
 	free(s);

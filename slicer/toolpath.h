@@ -10,7 +10,8 @@
  * fan and temperature.  A layer_stack owns every layer of one print.
  *
  * Ownership: toolpath_* functions copy what they are given; layer_stack_free
- * frees everything.  Not thread-safe on one object; distinct layers may be
+ * frees everything, the layers' travel maps included.  Not thread-safe on
+ * one object; distinct layers may be
  * filled from distinct threads once layer_stack_new has sized the stack.
  */
 #ifndef STRATUM_SLICER_TOOLPATH_H
@@ -21,6 +22,8 @@
 #include <stdint.h>
 
 #include "st_error.h"
+
+struct travel_map; /* travel.h */
 
 /* Nanometres per millimetre: the integer grid of all 2-D work. */
 #define SLICE_UNITS_PER_MM 1000000.0
@@ -65,6 +68,9 @@ struct layer_paths {
 	double height; /* mm, layer thickness (bead height) */
 	size_t n, cap; /* paths used / allocated */
 	struct toolpath *paths;
+	/* The layer's region for travels that avoid crossing perimeters
+	 * (travel.h), owned; NULL: travels go straight. */
+	struct travel_map *travel;
 };
 
 /* Every layer of one print, bottom to top. */

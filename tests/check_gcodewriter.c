@@ -516,7 +516,26 @@ START_TEST(test_placeholders)
 			 ST_ERR_PARSE);
 	ck_assert_msg(strstr(err.msg, "foo_temp"), "%s", err.msg);
 	ck_assert_int_eq(gcodew_expand("M104 S{temperature[1]}", "x", &s, 2, &out, &err),
-			 ST_ERR_RANGE);
+			 ST_ERR_UNSUPPORTED);
+
+	/* PrusaSlicer's legacy [key_N] for per-extruder values: index 0 only. */
+	ck_assert_int_eq(gcodew_expand("M104 S[first_layer_temperature_0] Z[nozzle_diameter_0]",
+				       "start_gcode", &s, 2, &out, &err),
+			 0);
+	ck_assert_str_eq(out, "M104 S215 Z0.4");
+	free(out);
+	ck_assert_int_eq(gcodew_expand("M104 S[first_layer_temperature_1]", "start_gcode", &s, 2,
+				       &out, &err),
+			 ST_ERR_UNSUPPORTED);
+	ck_assert_ptr_null(out);
+	ck_assert_msg(strstr(err.msg, "[first_layer_temperature_1]") &&
+			      strstr(err.msg, "index 1") &&
+			      strstr(err.msg, "[first_layer_temperature_0]"),
+		      "%s", err.msg);
+	/* Not a vector, or no such key: unknown as before. */
+	ck_assert_int_eq(gcodew_expand("G1 Z[layer_height_0]", "x", &s, 2, &out, &err),
+			 ST_ERR_PARSE);
+	ck_assert_int_eq(gcodew_expand("G1 Z[bogus_0]", "x", &s, 2, &out, &err), ST_ERR_PARSE);
 	ck_assert_int_eq(gcodew_expand("{if layer_height > 0}G28{endif}", "x", &s, 2, &out, &err),
 			 ST_ERR_UNSUPPORTED);
 	ck_assert_int_eq(gcodew_expand("M104 {temperature", "x", &s, 2, &out, &err), ST_ERR_PARSE);

@@ -281,6 +281,47 @@ static void expect_refused(const char *model, const char *extra, int want, const
 	ck_assert_msg(!tu_file_exists(gc), "%s: a G-code file was written", extra);
 }
 
+START_TEST(flashforge_profile_slices)
+{
+	const char *cube = stl_file(fx_box(0, 0, 0, 20, 20, 5), "ffcube.stl");
+	const char *gc = tu_path("ff.gcode"), *ini = tu_path("ff1.ini");
+	static char text[1 << 16], gcode[1 << 20];
+	const char *key = "[first_layer_temperature_0]";
+	char *at;
+	size_t n;
+	FILE *f;
+	int status;
+
+	/* The shipped profile's start G-code uses [first_layer_temperature_0]. */
+	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' --printer flashforge-creator-pro",
+			cube, gc);
+	ck_assert_msg(status == 0, "exit %d: %s", status, out);
+	f = fopen(gc, "r");
+	ck_assert_ptr_nonnull(f);
+	n = fread(gcode, 1, sizeof(gcode) - 1, f);
+	fclose(f);
+	gcode[n] = '\0';
+	ck_assert_msg(strstr(gcode, "\nM104 S215 T0 ; nozzle to printing temperature\n"),
+		      "first-layer temperature not substituted");
+
+	/* The same profile asking for the second extruder is refused. */
+	f = fopen("printers/flashforge-creator-pro.ini", "r");
+	ck_assert_ptr_nonnull(f);
+	n = fread(text, 1, sizeof(text) - 1, f);
+	fclose(f);
+	text[n] = '\0';
+	at = strstr(text, key);
+	ck_assert_ptr_nonnull(at);
+	at[strlen(key) - 2] = '1';
+	tu_write_str(ini, text);
+	{
+		char extra[512];
+		snprintf(extra, sizeof(extra), "--printer '%s'", ini);
+		expect_refused(cube, extra, 65, "extruder index 1 is out of range");
+	}
+}
+END_TEST
+
 START_TEST(too_big_for_the_bed_exit_1)
 {
 	const char *wide = stl_file(fx_box(0, 0, 0, 260, 20, 10), "wide.stl");
@@ -354,6 +395,7 @@ Suite *slicecli_suite(void)
 	tcase_add_test(tc, too_big_for_the_bed_exit_1);
 	tcase_add_test(tc, bad_settings_exit_2);
 	tcase_add_test(tc, unreadable_model_exit_65);
+	tcase_add_test(tc, flashforge_profile_slices);
 	suite_add_tcase(s, tc);
 	return s;
 }
