@@ -290,6 +290,26 @@ START_TEST(m110_renumbers)
 }
 END_TEST
 
+/* printcore starts a job with "N-1 M110*15": Marlin's parser skips a signed
+ * line number, so the reply is a plain "ok" and the next line is N0. */
+START_TEST(m110_negative_line_number)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	char line[64];
+	fast_opts(&o);
+	cl_start(&c, &o);
+	snprintf(line, sizeof(line), "N-1 M110*%u\n", (unsigned)gcode_checksum("N-1 M110", 8));
+	cl_send(&c, line);
+	cl_next_is(&c, "ok");
+	cl_send_n(&c, 0, "G21");
+	cl_next_is(&c, "ok");
+	sim_marlin_stop(c.sim);
+	ck_assert_str_eq(cl_log(&c), "-1 M110\n0 G21\n");
+	cl_stop(&c);
+}
+END_TEST
+
 START_TEST(m105_format)
 {
 	struct sim_marlin_options o;
@@ -582,6 +602,7 @@ Suite *sim_suite(void)
 	tcase_add_test(proto, wrong_line_number);
 	tcase_add_test(proto, duplicate_ignored);
 	tcase_add_test(proto, m110_renumbers);
+	tcase_add_test(proto, m110_negative_line_number);
 	tcase_add_test(proto, m105_format);
 	tcase_add_test(proto, m115_caps);
 	tcase_add_test(proto, advanced_ok);

@@ -434,7 +434,6 @@ static void sim_accept_line(struct sim_marlin *s, double now)
 	memset(c, 0, sizeof(*c));
 	c->has_n = has_n;
 	c->n = n;
-	c->parsed = gcode_parse(cmd, len, GCODE_PARSE_KEEP_BAD_CHECKSUM, &c->g, NULL) == 0;
 	{
 		/* the command text without N prefix and checksum, for messages */
 		const char *p = cmd, *e = star ? star : cmd + len;
@@ -451,6 +450,10 @@ static void sim_accept_line(struct sim_marlin *s, double now)
 		memcpy(c->raw, p, k);
 		c->raw[k] = '\0';
 	}
+	/* Parse the text without N and checksum, as Marlin's parser skips
+	 * "N[-]digits": printcore numbers its M110 line N-1, which our
+	 * parser (rightly, for files) refuses as a line number. */
+	c->parsed = gcode_parse(c->raw, strlen(c->raw), 0, &c->g, NULL) == 0;
 	s->q_count++;
 }
 
