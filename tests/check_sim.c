@@ -375,6 +375,36 @@ START_TEST(advanced_ok)
 }
 END_TEST
 
+/* After a line error Marlin empties its RX ring: the good lines already
+ * waiting behind the bad one are dropped silently, so the host sees one
+ * Error/Resend/ok, not one per line. */
+START_TEST(line_error_flushes_rx)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	char line[512], bad[64];
+	fast_opts(&o);
+	cl_start(&c, &o);
+	cl_send_n(&c, 1, "G4 S30"); /* 0.3 s; the queue fills behind it */
+	cl_send_n(&c, 2, "G21");
+	cl_send_n(&c, 3, "G21");
+	cl_send_n(&c, 4, "G21");
+	snprintf(bad, sizeof(bad), "N5 G21*%u\n", (unsigned)gcode_checksum("N5 G21", 6) ^ 1u);
+	cl_send(&c, bad);
+	cl_send_n(&c, 6, "G90");
+	cl_send_n(&c, 7, "G90");
+	for (int k = 0; k < 4; k++)
+		cl_expect(&c, "ok", NULL, 0, 2.0);
+	cl_next_is(&c, "Error:checksum mismatch, Last Line: 4");
+	cl_next_is(&c, "Resend: 5");
+	cl_next_is(&c, "ok");
+	ck_assert_int_eq(cl_line(&c, line, sizeof(line), 0.5), -1);
+	sim_marlin_stop(c.sim);
+	ck_assert_str_eq(cl_log(&c), "1 G4 S30\n2 G21\n3 G21\n4 G21\n");
+	cl_stop(&c);
+}
+END_TEST
+
 START_TEST(rx_overflow)
 {
 	struct sim_marlin_options o;
@@ -792,6 +822,7 @@ Suite *sim_suite(void)
 	tcase_add_test(proto, pacing_after_idle);
 	tcase_add_test(proto, busy_keepalive);
 	tcase_add_test(faults, rx_overflow);
+	tcase_add_test(faults, line_error_flushes_rx);
 	tcase_add_test(faults, corrupt_and_drop_recover);
 	tcase_add_test(faults, m112_halts);
 	tcase_add_test(faults, m108_breaks_wait);

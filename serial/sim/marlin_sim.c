@@ -80,6 +80,7 @@ struct sim_marlin {
 
 	uint8_t *rx;		/* RX ring as a linear buffer */
 	size_t rx_len;
+	bool rx_flush;		/* a line error asks to empty the ring */
 	uint64_t dropped;
 
 	char line[SIM_MAX_CMD];	/* line being assembled from the RX ring */
@@ -357,9 +358,12 @@ static void sim_ok(struct sim_marlin *s, const struct sim_cmd *c, double now)
 		sim_sendf(s, "ok P%zu B%zu", pf, bf);
 }
 
-/* Marlin's gcode_line_error + flush_and_request_resend. */
+/* Marlin's gcode_line_error + flush_and_request_resend.  Marlin also reads
+ * its RX ring empty ("clear out the RX buffer"): lines behind the bad one
+ * that are already in the ring are lost without a word. */
 static void sim_line_error(struct sim_marlin *s, const char *what, double now)
 {
+	s->rx_flush = true;
 	sim_sendf(s, "Error:%s, Last Line: %ld", what, s->last_n);
 	sim_sendf(s, "Resend: %ld", s->last_n + 1);
 	sim_ok(s, NULL, now);
@@ -536,6 +540,10 @@ static void sim_serial_commands(struct sim_marlin *s, double now)
 				sim_accept_line(s, now);
 			s->line_len = 0;
 			s->line_comment = false;
+			if (s->rx_flush) {
+				s->rx_flush = false;
+				i = s->rx_len;
+			}
 			continue;
 		}
 		if (ch == ';')
