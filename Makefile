@@ -20,8 +20,9 @@ DEB_PACKAGES := gcc g++ make pkg-config dpkg-dev \
 	libserialport-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev libtbb-dev \
 	libpolyclipping-dev check libsqlite3-dev libmicrohttpd-dev libjansson-dev \
 	libmosquitto-dev mosquitto
-# Only the benchmark compares against these.
-BENCH_PACKAGES := admesh time bc prusa-slicer
+# Only the benchmark compares against these (printcore: Printrun's host, also
+# used by the sim suite's faithfulness test, which is skipped without it).
+BENCH_PACKAGES := admesh time bc prusa-slicer printcore
 
 WARN     := -Wall -Wextra -Werror
 CPPFLAGS := -Iinclude -Irepair -Irepair/exact -Iserial -Islicer -Islicer/clip -Ihost -D_XOPEN_SOURCE=700 -D_DEFAULT_SOURCE -MMD -MP

@@ -1,9 +1,11 @@
 #!/bin/sh
-# bench/run.sh BIN [check|repair|slice|region|all] - time `stratum check`
-# against admesh, `stratum repair` on generated files, and `stratum slice`
-# against PrusaSlicer's `--export-gcode`; `region` measures how well both
+# bench/run.sh BIN [check|repair|slice|region|stream|all] - time `stratum check`
+# against admesh, `stratum repair` on generated files, `stratum slice` against
+# PrusaSlicer's `--export-gcode`, and streaming to `stratum sim` with
+# `stratum send` against Printrun's printcore; `region` measures how well both
 # slicers' printed regions match the models' cross-sections (issue 5, with
-# build/bench/region_check); prints Markdown tables for docs/benchmarks.md.  Wall time, CPU time and peak RSS come from GNU time;
+# build/bench/region_check); prints Markdown tables for docs/benchmarks.md.
+# Wall time, CPU time and peak RSS come from GNU time;
 # check and repair figures are the best of 3 runs, slice figures one run.
 set -eu
 bin=${1:-build/stratum}
@@ -12,14 +14,14 @@ out=bench/out
 mkdir -p "$out"
 gen=build/bench/gen_mesh
 
-case $what in check|repair|slice|region|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|slice|region|all]" >&2; exit 2;; esac
+case $what in check|repair|slice|region|stream|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|slice|region|stream|all]" >&2; exit 2;; esac
 
-if [ "$what" != slice ] && [ "$what" != region ]; then
+if [ "$what" != slice ] && [ "$what" != region ] && [ "$what" != stream ]; then
 	[ -f "$out/torus-1m.stl" ] || "$gen" torus 1000 500 "$out/torus-1m.stl"
 	[ -f "$out/torus-2m.stl" ] || "$gen" torus 1000 1000 "$out/torus-2m.stl"
 	[ -f "$out/spheres.stl" ] || "$gen" spheres 8 "$out/spheres.stl"
 fi
-if [ "$what" != check ] && [ "$what" != region ]; then
+if [ "$what" != check ] && [ "$what" != region ] && [ "$what" != stream ]; then
 	[ -f "$out/torus-100k.stl" ] || "$gen" torus 250 200 "$out/torus-100k.stl"
 	[ -f "$out/twospheres.stl" ] || "$gen" twospheres 100 80 "$out/twospheres.stl"
 	[ -f "$out/scan.stl" ] || "$gen" scan 250 120 0.7 "$out/scan.stl"
@@ -199,11 +201,115 @@ for f in cube20 cylinder20 wall2 wall-eps plate-holes overhang bridge; do
 done
 }
 
+# dense_gcode SEGMENTS PATH - a dense curved surface: the wall of a 25 mm
+# dome in 0.2 mm layers, each circle cut into chords of about 0.5 mm, like
+# a slicer's output for a finely tessellated model.  Deterministic, so the
+# file for fewer segments is a prefix of the one for more.
+dense_gcode() {
+	LC_ALL=C awk -v segs="$1" 'BEGIN {
+		pi = 3.14159265358979; R = 25; n = 0; z = 0
+		print "; dense curved surface for bench/run.sh stream"
+		print "G28"; print "G90"; print "M83"; print "G92 E0"
+		while (n < segs) {
+			z += 0.2
+			r = sqrt(R * R - z * z)
+			k = int(2 * pi * r / 0.5)
+			printf ";LAYER_CHANGE\nG1 Z%.2f F600\nG1 X%.3f Y%.3f F3000\n", z, 100 + r, 100
+			for (i = 1; i <= k && n < segs; i++) {
+				a = 2 * pi * i / k
+				printf "G1 X%.3f Y%.3f E%.5f\n", 100 + r * cos(a), 100 + r * sin(a), 0.0166
+				n++
+			}
+		}
+		print "M400"; print "M84"
+	}' >"$2"
+}
+
+# json_any FILE KEY -> the value of "KEY": anywhere in FILE (any indentation)
+json_any() {
+	tr -d '\n' <"$1" | sed -n "s/.*\"$2\": *\([^,}]*\).*/\1/p"
+}
+
+# sim_start LATENCY_MS LOG - a fresh simulated Marlin at 115200 baud, motion
+# sped up so only the link and the round trips cost time; sets sim_pid.
+sim_start() {
+	rm -f "$out/stream-tty"
+	"$bin" sim --dialect marlin --baud 115200 --latency "$1" --speedup 1000000 \
+		--link "$out/stream-tty" --log "$2" >"$out/stream-sim.out" 2>&1 &
+	sim_pid=$!
+	i=0
+	while [ ! -L "$out/stream-tty" ] && [ $i -lt 100 ]; do sleep 0.05; i=$((i + 1)); done
+}
+
+sim_stop() {
+	kill "$sim_pid" 2>/dev/null || true
+	wait "$sim_pid" 2>/dev/null || true
+}
+
+# log_matches GCODE LOG -> "yes" when the simulator ran every command of
+# GCODE once, in order, under consecutive line numbers (the hosts' own M110
+# and unnumbered connect probes left out), else "no".
+log_matches() {
+	LC_ALL=C awk '{ sub(/;.*/, ""); gsub(/^[ \t]+|[ \t]+$/, ""); if ($0 != "") print }' \
+		"$1" >"$out/stream-want.txt"
+	LC_ALL=C awk '$1 ~ /^[0-9]+$/ && $2 != "M110" {
+		if (seen && $1 != prev + 1) print "line number " $1 " after " prev
+		prev = $1; seen = 1; sub(/^[0-9]+ /, ""); print
+	}' "$2" >"$out/stream-got.txt"
+	if cmp -s "$out/stream-want.txt" "$out/stream-got.txt"; then echo yes; else echo no; fi
+}
+
+# Streaming (issue 6 item 8): printcore and `stratum send` against fresh
+# simulators with the same settings.  Link capacity at 115200 baud, 10 bits
+# a byte: 11 520 bytes/s.  Bytes are those written towards the printer,
+# line numbers, checksums and newlines included.  The 16 ms rows stream the
+# first 5000 segments only: printcore needs about 21 ms a line there, and the
+# rate is the same over 5000 lines as over 20000.
+stream_table() {
+if [ ! -x /usr/bin/printcore ] || ! /usr/bin/python3 -c 'import printrun.printcore' 2>/dev/null; then
+	echo "printcore is not installed (make bench installs Debian's printcore)" >&2
+	return 1
+fi
+[ -f "$out/dense-20k.gcode" ] || dense_gcode 20000 "$out/dense-20k.gcode"
+[ -f "$out/dense-5k.gcode" ] || dense_gcode 5000 "$out/dense-5k.gcode"
+have_send=no
+"$bin" send --help >/dev/null 2>&1 && have_send=yes
+echo "| host | latency ms | file | lines | bytes | s | lines/s | bytes/s | link fraction | log == file | bytes/s ours/printcore |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|"
+for lat in 2 16; do
+	if [ "$lat" = 2 ]; then f=dense-20k; else f=dense-5k; fi
+	gcode="$out/$f.gcode"
+	log="$out/stream-printcore-$lat.log"
+	sim_start "$lat" "$log"
+	/usr/bin/python3 bench/printcore_stream.py "$out/stream-tty" "$gcode" 115200 \
+		>"$out/stream-printcore-$lat.json" 2>"$out/stream-printcore-$lat.err" || true
+	sim_stop
+	j="$out/stream-printcore-$lat.json"
+	pbps=$(json_any "$j" bytes_per_s)
+	echo "| printcore 2.0.0rc8 | $lat | $f | $(json_any "$j" lines) | $(json_any "$j" bytes) | $(json_any "$j" seconds) | $(json_any "$j" lines_per_s) | ${pbps:-failed, see $out/stream-printcore-$lat.err} | $(json_any "$j" link_fraction) | $(log_matches "$gcode" "$log") | |"
+	if [ "$have_send" = no ]; then
+		echo "| stratum send | $lat | $f | not measured yet: stratum send is not in this build | | | | | | | |"
+		continue
+	fi
+	log="$out/stream-stratum-$lat.log"
+	j="$out/stream-stratum-$lat.json"
+	sim_start "$lat" "$log"
+	"$bin" send "$gcode" --port "$out/stream-tty" --printer generic-marlin --json \
+		>"$j" 2>"$out/stream-stratum-$lat.err" || true
+	sim_stop
+	sbps=$(json_any "$j" bytes_per_s)
+	r=""
+	if [ -n "$sbps" ] && [ -n "$pbps" ]; then r=$(ratio "$sbps" "$pbps"); fi
+	echo "| stratum send | $lat | $f | $(json_any "$j" lines) | $(json_any "$j" bytes) | $(json_any "$j" seconds) | $(json_any "$j" lines_per_s) | ${sbps:-failed, see $out/stream-stratum-$lat.err} | $(json_any "$j" link_fraction) | $(log_matches "$gcode" "$log") | $r |"
+done
+}
+
 case $what in
 region) region_table ;;
 check) check_table ;;
 repair) repair_table ;;
 slice) slice_table ;;
-all) check_table; echo; repair_table; echo; slice_table; echo; region_table ;;
+stream) stream_table ;;
+all) check_table; echo; repair_table; echo; slice_table; echo; region_table; echo; stream_table ;;
 esac
 

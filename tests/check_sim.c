@@ -7,10 +7,13 @@
 #include <check.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <math.h>
 #include <poll.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/wait.h>
 #include <termios.h>
 #include <time.h>
 #include <unistd.h>
@@ -18,6 +21,7 @@
 #include "gcode.h"
 #include "sim/marlin_sim.h"
 #include "suites.h"
+#include "testutil.h"
 
 /* The host side of the link: the pty slave, with a line buffer. */
 struct client {
@@ -290,6 +294,26 @@ START_TEST(m110_renumbers)
 }
 END_TEST
 
+/* printcore starts a job with "N-1 M110*15": Marlin's parser skips a signed
+ * line number, so the reply is a plain "ok" and the next line is N0. */
+START_TEST(m110_negative_line_number)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	char line[64];
+	fast_opts(&o);
+	cl_start(&c, &o);
+	snprintf(line, sizeof(line), "N-1 M110*%u\n", (unsigned)gcode_checksum("N-1 M110", 8));
+	cl_send(&c, line);
+	cl_next_is(&c, "ok");
+	cl_send_n(&c, 0, "G21");
+	cl_next_is(&c, "ok");
+	sim_marlin_stop(c.sim);
+	ck_assert_str_eq(cl_log(&c), "-1 M110\n0 G21\n");
+	cl_stop(&c);
+}
+END_TEST
+
 START_TEST(m105_format)
 {
 	struct sim_marlin_options o;
@@ -351,16 +375,47 @@ START_TEST(advanced_ok)
 }
 END_TEST
 
+/* After a line error Marlin empties its RX ring: the good lines already
+ * waiting behind the bad one are dropped silently, so the host sees one
+ * Error/Resend/ok, not one per line. */
+START_TEST(line_error_flushes_rx)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	char line[512], bad[64];
+	fast_opts(&o);
+	cl_start(&c, &o);
+	cl_send_n(&c, 1, "G4 S30"); /* 0.3 s; the queue fills behind it */
+	cl_send_n(&c, 2, "G21");
+	cl_send_n(&c, 3, "G21");
+	cl_send_n(&c, 4, "G21");
+	snprintf(bad, sizeof(bad), "N5 G21*%u\n", (unsigned)gcode_checksum("N5 G21", 6) ^ 1u);
+	cl_send(&c, bad);
+	cl_send_n(&c, 6, "G90");
+	cl_send_n(&c, 7, "G90");
+	for (int k = 0; k < 4; k++)
+		cl_expect(&c, "ok", NULL, 0, 2.0);
+	cl_next_is(&c, "Error:checksum mismatch, Last Line: 4");
+	cl_next_is(&c, "Resend: 5");
+	cl_next_is(&c, "ok");
+	ck_assert_int_eq(cl_line(&c, line, sizeof(line), 0.5), -1);
+	sim_marlin_stop(c.sim);
+	ck_assert_str_eq(cl_log(&c), "1 G4 S30\n2 G21\n3 G21\n4 G21\n");
+	cl_stop(&c);
+}
+END_TEST
+
 START_TEST(rx_overflow)
 {
 	struct sim_marlin_options o;
 	struct client c;
 	char blast[2048], line[512];
 	size_t len = 0;
+	long n;
 	fast_opts(&o);
 	cl_start(&c, &o);
 	cl_send_n(&c, 1, "G4 S30"); /* 0.3 s with the queue busy */
-	for (long n = 2; len < 1024; n++) {
+	for (n = 2; len < 1024; n++) {
 		char cmd[40];
 		snprintf(cmd, sizeof(cmd), "G1 X%ld F6000", n % 50);
 		int k = gcode_format_numbered(blast + len, sizeof(blast) - len - 1, n, cmd);
@@ -371,11 +426,21 @@ START_TEST(rx_overflow)
 	blast[len] = '\0';
 	cl_send(&c, blast);
 	int resends = 0, oks = 0;
-	while (cl_line(&c, line, sizeof(line), 1.0) >= 0) {
-		if (!strncmp(line, "Resend: ", 8))
-			resends++;
-		else if (!strcmp(line, "ok"))
-			oks++;
+	/* The whole blast is on the wire within 10 ms, long before G4 ends:
+	 * what the ring could not hold is lost, the rest runs, and the
+	 * firmware waits for the end of the line it holds a piece of.  The
+	 * host's next line shows the loss. */
+	for (int phase = 0; phase < 2; phase++) {
+		while (cl_line(&c, line, sizeof(line), 1.0) >= 0) {
+			if (!strncmp(line, "Resend: ", 8))
+				resends++;
+			else if (!strcmp(line, "ok"))
+				oks++;
+		}
+		if (!phase) {
+			cl_send(&c, "\n");
+			cl_send_n(&c, n, "G21");
+		}
 	}
 	ck_assert_int_gt(resends, 0);
 	ck_assert_int_gt(oks, 1);
@@ -552,6 +617,34 @@ START_TEST(corrupt_and_drop_recover)
 }
 END_TEST
 
+/* An idle link banks no capacity: a ping-pong host that pauses between
+ * lines still pays one byte time per byte, line and "ok" alike. */
+START_TEST(pacing_after_idle)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	char cmd[64], framed[96];
+	size_t bytes = 0;
+	fast_opts(&o);
+	o.baud = 115200; /* 11 520 bytes/s */
+	o.speedup = 1e6;
+	cl_start(&c, &o);
+	double t0 = now_s();
+	for (long n = 1; n <= 60; n++) {
+		snprintf(cmd, sizeof(cmd), "G1 X%.3f Y100.000 E0.01660", 100 + n * 0.5);
+		ck_assert_int_gt(gcode_format_numbered(framed, sizeof(framed), n, cmd), 0);
+		bytes += strlen(framed) + 1 + 3; /* the line, its newline, "ok\n" */
+		cl_send_n(&c, n, cmd);
+		cl_next_is(&c, "ok");
+		usleep(5000); /* idle: a token bucket would refill here */
+	}
+	double wire = (double)bytes / 11520.0, dt = now_s() - t0 - 60 * 0.005;
+	ck_assert_msg(dt > 0.97 * wire, "%zu bytes took %.3f s on the link, less than the %.3f s "
+		      "115200 baud needs", bytes, dt, wire);
+	cl_stop(&c);
+}
+END_TEST
+
 START_TEST(pacing)
 {
 	struct sim_marlin_options o;
@@ -568,11 +661,149 @@ START_TEST(pacing)
 }
 END_TEST
 
+/* Find an executable on $PATH; false if there is none. */
+static bool find_on_path(const char *name, char *out, size_t cap)
+{
+	const char *path = getenv("PATH");
+	while (path && *path) {
+		const char *end = strchr(path, ':');
+		size_t n = end ? (size_t)(end - path) : strlen(path);
+		if (n && (size_t)snprintf(out, cap, "%.*s/%s", (int)n, path, name) < cap &&
+		    access(out, X_OK) == 0)
+			return true;
+		path = end ? end + 1 : NULL;
+	}
+	return false;
+}
+
+/* A small print: comments, blank lines, heat-up waits, homing, a dwell, a
+ * curved wall of 1200 short moves in six layers, fan and end code. */
+static void write_print(const char *path)
+{
+	FILE *f = fopen(path, "w");
+	ck_assert_ptr_nonnull(f);
+	fputs("; generated by check_sim.c\n\nM140 S60\nM104 S200\nM190 S60\nM109 S200\n"
+	      "G28 ; home\nG90\nM83\nG92 E0\nG4 P100\nM106 S255 (fan on)\n", f);
+	for (int i = 0; i < 1200; i++) {
+		double a = i * 0.05, r = 20.0 + 5.0 * sin(i * 0.013);
+		if (i % 200 == 0)
+			fprintf(f, ";LAYER_CHANGE\nG1 Z%.2f F600\n", 0.2 + 0.2 * (i / 200));
+		fprintf(f, "G1 X%.3f Y%.3f E%.5f%s\n", 100 + r * cos(a), 100 + r * sin(a), 0.0321,
+			i == 0 ? " F1800" : "");
+	}
+	fputs("M400\nM107\nM104 S0\nM140 S0\nM84\n", f);
+	ck_assert_int_eq(fclose(f), 0);
+}
+
+/* Printrun's printcore, a stock host, streams a print to the simulator:
+ * every command of the file is executed once, in order, numbered from 0
+ * after printcore's "N-1 M110".  Skipped when printcore is not installed
+ * (make bench installs it; it is not a build dependency). */
+START_TEST(printcore_streams)
+{
+	char exe[4096], *line = NULL;
+	size_t cap = 0;
+	const char *gpath = tu_path("printcore-job.gcode");
+	const char *opath = tu_path("printcore.out");
+	struct sim_marlin_options o;
+	struct sim_marlin *sim = NULL;
+	struct st_error err = {0};
+
+	if (!find_on_path("printcore", exe, sizeof(exe))) {
+		fprintf(stderr, "sim: printcore_streams skipped: printcore is not on PATH "
+				"(Debian package printcore; make bench installs it)\n");
+		return;
+	}
+	write_print(gpath);
+
+	/* What the firmware must run: the file's commands, cleaned as the
+	 * simulator's log writes them. */
+	FILE *gf = fopen(gpath, "r");
+	ck_assert_ptr_nonnull(gf);
+	size_t nwant = 0, wcap = 2048;
+	char (*want)[GCODE_LINE_MAX + 1] = malloc(wcap * sizeof(*want));
+	ck_assert_ptr_nonnull(want);
+	ssize_t n;
+	while ((n = getline(&line, &cap, gf)) >= 0) {
+		struct gcode_line g;
+		ck_assert_int_eq(gcode_parse(line, (size_t)n, 0, &g, NULL), 0);
+		if (!g.text_len)
+			continue;
+		ck_assert_uint_lt(nwant, wcap);
+		memcpy(want[nwant++], g.text, g.text_len + 1);
+	}
+	fclose(gf);
+
+	sim_marlin_options_init(&o);
+	o.speedup = 1000;
+	o.baud = 1000000;
+	o.log_fp = tmpfile();
+	ck_assert_ptr_nonnull(o.log_fp);
+	ck_assert_int_eq(sim_marlin_new(&o, &sim, &err), 0);
+	ck_assert_int_eq(sim_marlin_start_thread(sim, &err), 0);
+
+	pid_t pid = fork();
+	ck_assert_int_ge(pid, 0);
+	if (pid == 0) {
+		int fd = open(opath, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+		if (fd >= 0) {
+			dup2(fd, 1);
+			dup2(fd, 2);
+		}
+		execl(exe, "printcore", "-b", "115200", sim_marlin_slave_path(sim), gpath,
+		      (char *)NULL);
+		_exit(127);
+	}
+	/* printcore sleeps 2 s after connecting and polls once a second */
+	int status = 0;
+	double give_up = now_s() + 60.0;
+	while (waitpid(pid, &status, WNOHANG) == 0) {
+		if (now_s() > give_up) {
+			kill(pid, SIGKILL);
+			waitpid(pid, &status, 0);
+			ck_abort_msg("printcore did not finish within 60 s; its output is in %s",
+				     opath);
+		}
+		usleep(20000);
+	}
+	sim_marlin_stop(sim);
+	ck_assert_msg(WIFEXITED(status) && WEXITSTATUS(status) == 0,
+		      "printcore failed (status %d); its output is in %s", status, opath);
+
+	/* The log: printcore's connect probe (M105, unnumbered) and its M110
+	 * lines (numbered -1) around the job, the job itself numbered 0... */
+	size_t next = 0;
+	rewind(o.log_fp);
+	while ((n = getline(&line, &cap, o.log_fp)) >= 0) {
+		long k;
+		char *sp;
+		if (n && line[n - 1] == '\n')
+			line[--n] = '\0';
+		if (!strcmp(line, "- M105") || !strcmp(line, "-1 M110"))
+			continue;
+		k = strtol(line, &sp, 10);
+		ck_assert_msg(sp != line && *sp == ' ', "unexpected log line '%s'", line);
+		ck_assert_msg(k >= 0 && (size_t)k == next,
+			      "log line '%s': expected line number %zu (a command lost, doubled "
+			      "or out of order)", line, next);
+		ck_assert_uint_lt(next, nwant);
+		ck_assert_str_eq(sp + 1, want[next]);
+		next++;
+	}
+	ck_assert_msg(next == nwant, "only %zu of %zu commands executed", next, nwant);
+	free(line);
+	free(want);
+	sim_marlin_free(sim);
+	fclose(o.log_fp);
+}
+END_TEST
+
 Suite *sim_suite(void)
 {
 	Suite *s = suite_create("sim");
 	TCase *proto = tcase_create("protocol");
 	TCase *faults = tcase_create("faults");
+	TCase *hosts = tcase_create("hosts");
 
 	tcase_set_timeout(proto, 20);
 	tcase_set_timeout(faults, 20);
@@ -582,19 +813,26 @@ Suite *sim_suite(void)
 	tcase_add_test(proto, wrong_line_number);
 	tcase_add_test(proto, duplicate_ignored);
 	tcase_add_test(proto, m110_renumbers);
+	tcase_add_test(proto, m110_negative_line_number);
 	tcase_add_test(proto, m105_format);
 	tcase_add_test(proto, m115_caps);
 	tcase_add_test(proto, advanced_ok);
 	tcase_add_test(proto, m109_waits);
 	tcase_add_test(proto, pacing);
+	tcase_add_test(proto, pacing_after_idle);
 	tcase_add_test(proto, busy_keepalive);
 	tcase_add_test(faults, rx_overflow);
+	tcase_add_test(faults, line_error_flushes_rx);
 	tcase_add_test(faults, corrupt_and_drop_recover);
 	tcase_add_test(faults, m112_halts);
 	tcase_add_test(faults, m108_breaks_wait);
 	tcase_add_test(faults, unplug_at);
 	tcase_add_test(faults, reset_at);
+	/* printcore spends 3 s on fixed sleeps; 1250 ping-pong lines follow */
+	tcase_set_timeout(hosts, 90);
+	tcase_add_test(hosts, printcore_streams);
 	suite_add_tcase(s, proto);
 	suite_add_tcase(s, faults);
+	suite_add_tcase(s, hosts);
 	return s;
 }

@@ -1,12 +1,16 @@
 /*
  * marlin_sim.c - simulated Marlin 2.1 firmware over a pty (see marlin_sim.h).
  *
- * One thread, one poll() loop.  Input bytes are read from the pty master at
- * baud/10 bytes/s into the RX ring; the "firmware" takes bytes out of the
- * ring into the current line only while a command-queue slot is free, as
- * Marlin's get_serial_commands does, so a host that over-fills the ring
- * loses bytes.  Replies go to a TX buffer paced the same way.
+ * One thread, one poll() loop.  Bytes the host writes go "onto the wire"
+ * (a staging buffer standing for the adapter and cable) and reach the RX
+ * ring one byte time (10 bits / baud) after another, starting when the host
+ * wrote them: an idle link banks no capacity, as a UART does not.  The
+ * "firmware" takes bytes out of the ring into the current line only while
+ * a command-queue slot is free, as Marlin's get_serial_commands does, so a
+ * host that over-fills the ring loses bytes.  Reply lines are paced the same
+ * way and reach the host when their last byte has crossed the link.
  */
+#define _GNU_SOURCE /* ppoll: the link's byte times are well under 1 ms */
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
@@ -68,11 +72,15 @@ struct sim_marlin {
 	uint64_t rng;
 
 	double t_prev;		/* last loop time (wall s) */
-	double in_credit, out_credit; /* paced bytes allowed now */
+	uint8_t wire[4096];	/* bytes written by the host, still crossing the link */
+	size_t wire_len;
+	double in_t;		/* when the last byte delivered from wire arrived (wall s) */
+	double out_t;		/* when the last reply byte written finished crossing (wall s) */
 	double boot_until;	/* input ignored before this (wall s) */
 
 	uint8_t *rx;		/* RX ring as a linear buffer */
 	size_t rx_len;
+	bool rx_flush;		/* a line error asks to empty the ring */
 	uint64_t dropped;
 
 	char line[SIM_MAX_CMD];	/* line being assembled from the RX ring */
@@ -350,9 +358,12 @@ static void sim_ok(struct sim_marlin *s, const struct sim_cmd *c, double now)
 		sim_sendf(s, "ok P%zu B%zu", pf, bf);
 }
 
-/* Marlin's gcode_line_error + flush_and_request_resend. */
+/* Marlin's gcode_line_error + flush_and_request_resend.  Marlin also reads
+ * its RX ring empty ("clear out the RX buffer"): lines behind the bad one
+ * that are already in the ring are lost without a word. */
 static void sim_line_error(struct sim_marlin *s, const char *what, double now)
 {
+	s->rx_flush = true;
 	sim_sendf(s, "Error:%s, Last Line: %ld", what, s->last_n);
 	sim_sendf(s, "Resend: %ld", s->last_n + 1);
 	sim_ok(s, NULL, now);
@@ -434,7 +445,6 @@ static void sim_accept_line(struct sim_marlin *s, double now)
 	memset(c, 0, sizeof(*c));
 	c->has_n = has_n;
 	c->n = n;
-	c->parsed = gcode_parse(cmd, len, GCODE_PARSE_KEEP_BAD_CHECKSUM, &c->g, NULL) == 0;
 	{
 		/* the command text without N prefix and checksum, for messages */
 		const char *p = cmd, *e = star ? star : cmd + len;
@@ -451,6 +461,10 @@ static void sim_accept_line(struct sim_marlin *s, double now)
 		memcpy(c->raw, p, k);
 		c->raw[k] = '\0';
 	}
+	/* Parse the text without N and checksum, as Marlin's parser skips
+	 * "N[-]digits": printcore numbers its M110 line N-1, which our
+	 * parser (rightly, for files) refuses as a line number. */
+	c->parsed = gcode_parse(c->raw, strlen(c->raw), 0, &c->g, NULL) == 0;
 	s->q_count++;
 }
 
@@ -526,6 +540,10 @@ static void sim_serial_commands(struct sim_marlin *s, double now)
 				sim_accept_line(s, now);
 			s->line_len = 0;
 			s->line_comment = false;
+			if (s->rx_flush) {
+				s->rx_flush = false;
+				i = s->rx_len;
+			}
 			continue;
 		}
 		if (ch == ';')
@@ -820,22 +838,32 @@ static void sim_physics(struct sim_marlin *s, double now, double dt)
 	}
 }
 
-/* Write paced, ready TX bytes to the master. */
-static int sim_flush_tx(struct sim_marlin *s, double now)
+/* Write the reply lines whose last byte has crossed the link by now (each
+ * starts when it is ready and the line before it is through); lower *wake
+ * to when the next one will have. */
+static int sim_flush_tx(struct sim_marlin *s, double now, double *wake)
 {
+	const double byte_s = 10.0 / s->o.baud;
 	size_t limit = s->tx_off, k = 0;
-	while (k < s->marks_n && s->marks[k].ready <= now)
-		limit = s->marks[k++].end;
-	if (limit > s->tx_off && s->out_credit >= 1) {
-		size_t n = limit - s->tx_off;
-		if (n > (size_t)s->out_credit)
-			n = (size_t)s->out_credit;
-		ssize_t w = write(s->master, s->tx + s->tx_off, n);
+	double t = s->out_t;
+	for (; k < s->marks_n; k++) {
+		double start = s->marks[k].ready > t ? s->marks[k].ready : t;
+		double end = start + (double)(s->marks[k].end - limit) * byte_s;
+		if (end > now) {
+			if (end < *wake)
+				*wake = end;
+			break;
+		}
+		t = end;
+		limit = s->marks[k].end;
+	}
+	if (limit > s->tx_off) {
+		ssize_t w = write(s->master, s->tx + s->tx_off, limit - s->tx_off);
 		if (w < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)
 			return ST_ERR_IO;
 		if (w > 0) {
 			s->tx_off += (size_t)w;
-			s->out_credit -= (double)w;
+			s->out_t = t; /* a short write (host not reading) keeps the rest */
 		}
 	}
 	k = 0;
@@ -858,57 +886,74 @@ static int sim_flush_tx(struct sim_marlin *s, double now)
 	return 0;
 }
 
+/* Hand the bytes on the wire that have arrived by now to the RX ring, each
+ * one byte time after the one before; lower *wake to when the next line
+ * end (or the last staged byte) will have arrived. */
+static void sim_wire_deliver(struct sim_marlin *s, double now, double *wake)
+{
+	const double byte_s = 10.0 / s->o.baud;
+	size_t i = 0, j;
+	while (i < s->wire_len && s->in_t + byte_s <= now) {
+		s->in_t += byte_s;
+		sim_rx_byte(s, s->wire[i++], s->in_t);
+	}
+	memmove(s->wire, s->wire + i, s->wire_len - i);
+	s->wire_len -= i;
+	for (j = 0; j < s->wire_len; j++)
+		if (s->wire[j] == '\n' || s->wire[j] == '\r')
+			break;
+	if (s->wire_len) {
+		double due = s->in_t + (double)(j < s->wire_len ? j + 1 : s->wire_len) * byte_s;
+		if (due < *wake)
+			*wake = due;
+	}
+}
+
 int sim_marlin_run(struct sim_marlin *s, volatile sig_atomic_t *stop, struct st_error *err)
 {
-	const double bps = s->o.baud / 10.0;
-	const double credit_cap = bps * 0.005 + 1.0;
-
 	if (!stop && s->o.unplug_at_line <= 0)
 		return st_error_set(err, ST_ERR_ARG, "sim_marlin_run: no stop flag");
 	s->t_prev = sim_now();
 	while (!(stop && *stop) && !s->unplugged) {
 		double now = sim_now(), dt = now - s->t_prev;
 		s->t_prev = now;
-		s->in_credit += dt * bps;
-		if (s->in_credit > credit_cap)
-			s->in_credit = credit_cap;
-		s->out_credit += dt * bps;
-		if (s->out_credit > credit_cap)
-			s->out_credit = credit_cap;
+		bool busy = s->tx_len > s->tx_off || s->q_count || s->rx_len || s->wire_len ||
+			    s->planner_n || s->blk != SIM_BLK_NONE ||
+			    s->heater[0].temp != SIM_AMBIENT || s->heater[1].temp != SIM_AMBIENT ||
+			    s->autoreport_s > 0;
+		/* motion, heaters and timers are checked every millisecond while
+		 * anything runs; link events wake the loop exactly */
+		double wake = now + (busy ? 0.001 : 0.020);
 
+		sim_wire_deliver(s, now, &wake);
 		sim_physics(s, now, dt);
 		sim_serial_commands(s, now);
 		sim_execute(s, now);
 		sim_serial_commands(s, now);
 		if (s->unplugged)
 			break;
-		if (sim_flush_tx(s, now))
+		if (sim_flush_tx(s, now, &wake))
 			return st_error_set(err, ST_ERR_IO, "simulated Marlin: writing to the pty failed: %s",
 					    strerror(errno));
 
 		struct pollfd pfd = {.fd = s->master, .events = 0};
-		bool want_in = s->in_credit >= 1;
-		bool busy = s->tx_len > s->tx_off || s->q_count || s->rx_len ||
-			    s->planner_n || s->blk != SIM_BLK_NONE || !want_in ||
-			    s->heater[0].temp != SIM_AMBIENT || s->heater[1].temp != SIM_AMBIENT ||
-			    s->autoreport_s > 0;
-		if (want_in)
+		if (s->wire_len < sizeof(s->wire))
 			pfd.events |= POLLIN;
-		int r = poll(&pfd, 1, busy ? 1 : 20);
+		double left = wake - sim_now();
+		if (left < 0)
+			left = 0;
+		struct timespec ts = {(time_t)left, (long)((left - (double)(time_t)left) * 1e9)};
+		int r = ppoll(&pfd, 1, &ts, NULL);
 		if (r < 0 && errno != EINTR)
 			return st_error_set(err, ST_ERR_IO, "simulated Marlin: poll failed: %s",
 					    strerror(errno));
 		if (r > 0 && (pfd.revents & POLLIN)) {
-			uint8_t buf[4096];
-			size_t want = (size_t)s->in_credit;
-			if (want > sizeof(buf))
-				want = sizeof(buf);
-			ssize_t n = read(s->master, buf, want);
+			ssize_t n = read(s->master, s->wire + s->wire_len, sizeof(s->wire) - s->wire_len);
 			if (n > 0) {
 				now = sim_now();
-				s->in_credit -= (double)n;
-				for (ssize_t i = 0; i < n; i++)
-					sim_rx_byte(s, buf[i], now);
+				if (!s->wire_len && s->in_t < now)
+					s->in_t = now; /* idle link: these bytes start now */
+				s->wire_len += (size_t)n;
 			}
 		}
 	}
