@@ -1,0 +1,455 @@
+/*
+ * cmd_x3g.c - `stratum x3g IN.gcode -o OUT.x3g --printer NAME
+ * [--flavor reprap|makerbot] [--json]` translates G-code for a Sailfish
+ * printer into X3G (serial/x3g.h); `stratum x3g --decode FILE.x3g [--json]`
+ * lists the commands of an X3G file, one per line.
+ * Exit 0 done, 1 OUT could not be written, 2 usage or a printer that is not
+ * a Sailfish one, 65 bad G-code/X3G input or printer profile, 70 internal.
+ *
+ * The printer profile is mapped to struct x3g_machine here, so serial/
+ * never includes host/.
+ */
+#include <errno.h>
+#include <fcntl.h>
+#include <jansson.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "commands.h"
+#include "gcode.h"
+#include "profile.h"
+#include "st_error.h"
+#include "x3g.h"
+
+#define X3G_CMD "stratum x3g"
+#define X3G_JSON_WARNINGS 100	   /* warnings listed in --json output */
+#define X3G_DECODE_MAX (1ul << 30) /* largest X3G file --decode reads, bytes */
+
+static void x3g_usage(FILE *out)
+{
+	fprintf(out,
+		"usage: stratum x3g IN.gcode -o OUT.x3g --printer NAME|FILE.ini\n"
+		"                   [--flavor reprap|makerbot] [--json]\n"
+		"       stratum x3g --decode FILE.x3g [--json]\n"
+		"\n"
+		"Translates G-code into X3G, the binary command stream of Sailfish printers\n"
+		"(FlashForge Creator Pro, Makerbot Replicator 1/2), as GPX does.  Commands\n"
+		"X3G cannot express are reported as warnings with their line number.\n"
+		"With --decode, lists the commands of an X3G file, one per line.\n"
+		"\n"
+		"  -o, --output OUT   the X3G file (written only when the whole input translated)\n"
+		"  --printer P        a sailfish printer profile ('stratum printers') or .ini file\n"
+		"  --flavor F         reprap (default; makerware profiles: makerbot) or makerbot:\n"
+		"                     how M106/M107, M109 and T words are read, as GPX -r / -g\n"
+		"  --decode FILE      list FILE's commands instead of translating\n"
+		"  --json             one JSON object on stdout instead of the text output\n"
+		"\n"
+		"Exit status: 0 done, 1 OUT could not be written, 2 usage or not a sailfish\n"
+		"printer, 65 bad G-code, X3G or printer profile, 70 internal error.\n");
+}
+
+struct x3g_args {
+	const char *in, *out, *printer, *decode, *flavor;
+	bool json;
+};
+
+/* Parse argv; 0 to go on, -1 after --help, else the exit status. */
+static int parse_args(int argc, char **argv, struct x3g_args *a)
+{
+	for (int i = 1; i < argc; i++) {
+		const char *s = argv[i];
+		const char **slot = NULL, *name = s;
+
+		if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
+			x3g_usage(stdout);
+			return -1;
+		} else if (!strcmp(s, "--json")) {
+			a->json = true;
+			continue;
+		} else if (!strcmp(s, "-o")) {
+			a->out = i + 1 < argc ? argv[++i] : NULL;
+			slot = &a->out;
+		} else if (cmd_is_opt(s, "--output")) {
+			a->out = cmd_opt_value(argc, argv, &i, name = "--output");
+			slot = &a->out;
+		} else if (cmd_is_opt(s, "--printer")) {
+			a->printer = cmd_opt_value(argc, argv, &i, name = "--printer");
+			slot = &a->printer;
+		} else if (cmd_is_opt(s, "--decode")) {
+			a->decode = cmd_opt_value(argc, argv, &i, name = "--decode");
+			slot = &a->decode;
+		} else if (cmd_is_opt(s, "--flavor")) {
+			a->flavor = cmd_opt_value(argc, argv, &i, name = "--flavor");
+			slot = &a->flavor;
+		} else if (s[0] == '-' && s[1]) {
+			fprintf(stderr, X3G_CMD ": unknown option '%s'\n", s);
+			x3g_usage(stderr);
+			return ST_EXIT_USAGE;
+		} else if (!a->in) {
+			a->in = s;
+			continue;
+		} else {
+			fprintf(stderr, X3G_CMD ": one G-code file at a time ('%s' and '%s'); name "
+					"the output with -o\n", a->in, s);
+			return ST_EXIT_USAGE;
+		}
+		if (!*slot || !**slot) {
+			fprintf(stderr, X3G_CMD ": %s needs a value\n", name);
+			return ST_EXIT_USAGE;
+		}
+	}
+	if (a->decode) {
+		if (a->in || a->out || a->printer || a->flavor) {
+			fprintf(stderr, X3G_CMD ": --decode takes only the X3G file (and --json)\n");
+			return ST_EXIT_USAGE;
+		}
+		return 0;
+	}
+	if (!a->in || !a->out || !a->printer) {
+		fprintf(stderr, X3G_CMD ": %s\n",
+			!a->in ? "no G-code file given" : !a->out ? "no output given (-o OUT.x3g)"
+							  : "no printer given (--printer NAME)");
+		x3g_usage(stderr);
+		return ST_EXIT_USAGE;
+	}
+	if (a->flavor && strcmp(a->flavor, "reprap") && strcmp(a->flavor, "makerbot")) {
+		fprintf(stderr, X3G_CMD ": --flavor is reprap or makerbot, not '%s'\n", a->flavor);
+		return ST_EXIT_USAGE;
+	}
+	return 0;
+}
+
+/* The machine definition from a sailfish profile; returns an exit status. */
+static int machine_from_profile(const struct profile *p, struct x3g_machine *m)
+{
+	struct st_error err = {0};
+	double heated, timeout;
+
+	if (p->protocol != PROFILE_PROTOCOL_SAILFISH) {
+		fprintf(stderr, X3G_CMD ": printer '%s' speaks %s, not sailfish; X3G is for "
+				"Sailfish printers (send its G-code with 'stratum send')\n",
+			p->id, profile_protocol_name(p->protocol));
+		return ST_EXIT_USAGE;
+	}
+	if (profile_get_number(p, "x3g_heated_platform", 0, 1, 1, &heated, &err) ||
+	    profile_get_number(p, "x3g_home_timeout", 1, 65535, 20, &timeout, &err)) {
+		fprintf(stderr, X3G_CMD ": %s\n", err.msg);
+		return ST_EXIT_DATAERR;
+	}
+	memset(m, 0, sizeof(*m));
+	for (int i = 0; i < 3; i++) {
+		m->axis[i].steps_per_mm = p->steps_per_mm[i];
+		m->axis[i].home_feedrate = p->home_feedrate[i];
+		m->axis[i].endstop =
+		    p->home_direction[i] == PROFILE_HOME_MAX ? X3G_ENDSTOP_MAX : X3G_ENDSTOP_MIN;
+	}
+	for (int i = 0; i < 4; i++) {
+		/* mm/s in the profile, mm/min in X3G maths; round off the 1e-13
+		 * left by 26.666... x 60 so limits land exactly on GPX's. */
+		double mm_min = round(p->machine_max_feedrate[i] * 60 * 1e6) / 1e6;
+
+		if (i < 3)
+			m->axis[i].max_feedrate = mm_min;
+		else
+			m->axis[3].max_feedrate = m->axis[4].max_feedrate = mm_min;
+	}
+	m->extruder_count = p->extruder_count;
+	for (int e = 0; e < 2; e++)
+		m->axis[3 + e].steps_per_mm = p->steps_per_mm_e[e < p->extruder_count ? e : 0];
+	m->heated_platform = heated != 0;
+	m->home_timeout = (unsigned)timeout;
+	return 0;
+}
+
+/* "dir/name.x3g" -> "name", as GPX names the build after its output file. */
+static void build_name(const char *out, char *name, size_t cap)
+{
+	const char *base = strrchr(out, '/'), *dot;
+	size_t n;
+
+	base = base ? base + 1 : out;
+	dot = strrchr(base, '.');
+	n = dot && dot != base ? (size_t)(dot - base) : strlen(base);
+	snprintf(name, cap, "%.*s", (int)n, base);
+}
+
+struct x3g_run {
+	const struct x3g_args *a;
+	struct x3g_translator *t;
+	FILE *out;
+	uint64_t lines, commands, bytes, warnings;
+	json_t *jwarn;
+};
+
+/* Write one call's output and show its warnings; returns an exit status. */
+static int flush_call(struct x3g_run *r, int ncmds)
+{
+	const struct x3g_warning *w;
+	size_t len, nw = x3g_warnings(r->t, &w);
+	const uint8_t *bytes = x3g_output(r->t, &len);
+
+	for (size_t i = 0; i < nw; i++) {
+		fprintf(stderr, X3G_CMD ": %s:%llu: warning: %s\n", r->a->in,
+			(unsigned long long)w[i].line, w[i].msg);
+		if (r->jwarn && json_array_size(r->jwarn) < X3G_JSON_WARNINGS) {
+			json_t *o = json_object();
+
+			json_object_set_new(o, "line", json_integer((json_int_t)w[i].line));
+			json_object_set_new(o, "message", json_string(w[i].msg));
+			json_array_append_new(r->jwarn, o);
+		}
+	}
+	r->commands += (uint64_t)ncmds;
+	r->bytes += len;
+	if (len && fwrite(bytes, 1, len, r->out) != len) {
+		fprintf(stderr, X3G_CMD ": %s: write failed: %s\n", r->a->out, strerror(errno));
+		return ST_EXIT_FAILURE;
+	}
+	return 0;
+}
+
+/* Read, translate and write everything; returns an exit status. */
+static int translate_all(struct x3g_run *r, FILE *in)
+{
+	struct gcode_reader *rd;
+	struct gcode_line line;
+	struct st_error err = {0};
+	int rc, status = 0;
+
+	if (gcode_reader_new(in, r->a->in, &rd, &err)) {
+		fprintf(stderr, X3G_CMD ": %s\n", err.msg);
+		return ST_EXIT_SOFTWARE;
+	}
+	while ((rc = gcode_reader_next(rd, 0, &line, &err)) > 0) {
+		r->lines++;
+		rc = x3g_translate(r->t, &line, gcode_reader_line(rd), &err);
+		if (rc < 0)
+			break;
+		if ((status = flush_call(r, rc)))
+			goto out;
+	}
+	if (rc < 0) {
+		fprintf(stderr, X3G_CMD ": %s\n", err.msg);
+		status = rc == ST_ERR_NOMEM || rc == ST_ERR_INTERNAL ? ST_EXIT_SOFTWARE
+								     : ST_EXIT_DATAERR;
+		goto out;
+	}
+	rc = x3g_finish(r->t, &err);
+	status = rc < 0 ? ST_EXIT_SOFTWARE : flush_call(r, rc);
+out:
+	r->warnings = x3g_warning_total(r->t);
+	gcode_reader_free(rd);
+	return status;
+}
+
+/* Translate into a temporary file beside OUT, then rename it over OUT. */
+static int translate_to_file(struct x3g_run *r, FILE *in)
+{
+	size_t n = strlen(r->a->out);
+	char *tmp = malloc(n + 8);
+	int fd, status;
+
+	if (!tmp) {
+		fprintf(stderr, X3G_CMD ": out of memory\n");
+		return ST_EXIT_SOFTWARE;
+	}
+	snprintf(tmp, n + 8, "%s.XXXXXX", r->a->out);
+	fd = mkstemp(tmp);
+	if (fd < 0 || fchmod(fd, 0644) != 0 || !(r->out = fdopen(fd, "wb"))) {
+		fprintf(stderr, X3G_CMD ": %s: cannot create a temporary file beside it: %s\n",
+			r->a->out, strerror(errno));
+		if (fd >= 0) {
+			close(fd);
+			unlink(tmp);
+		}
+		free(tmp);
+		return ST_EXIT_FAILURE;
+	}
+	status = translate_all(r, in);
+	if (!status && (fflush(r->out) != 0 || fsync(fileno(r->out)) != 0))
+		status = ST_EXIT_FAILURE;
+	if (fclose(r->out) != 0 && !status)
+		status = ST_EXIT_FAILURE;
+	if (!status && rename(tmp, r->a->out) != 0)
+		status = ST_EXIT_FAILURE;
+	if (status == ST_EXIT_FAILURE)
+		fprintf(stderr, X3G_CMD ": %s: not written: %s\n", r->a->out, strerror(errno));
+	if (status)
+		unlink(tmp);
+	free(tmp);
+	return status;
+}
+
+static int run_translate(const struct x3g_args *a)
+{
+	struct x3g_run r = {.a = a};
+	struct x3g_machine m;
+	struct x3g_options opt = {0};
+	struct profile *p = NULL;
+	struct st_error err = {0};
+	char name[X3G_BUILD_NAME_MAX + 1];
+	FILE *in;
+	int status;
+
+	if (profile_find(a->printer, &p, &err)) {
+		fprintf(stderr, X3G_CMD ": %s\n", err.msg);
+		return err.code == ST_ERR_ARG ? ST_EXIT_USAGE : ST_EXIT_DATAERR;
+	}
+	if ((status = machine_from_profile(p, &m)))
+		goto out_profile;
+	opt.flavor = p->gcode_flavor == PROFILE_FLAVOR_MAKERWARE ? X3G_FLAVOR_MAKERBOT
+								 : X3G_FLAVOR_REPRAP;
+	if (a->flavor)
+		opt.flavor = strcmp(a->flavor, "makerbot") ? X3G_FLAVOR_REPRAP : X3G_FLAVOR_MAKERBOT;
+	build_name(a->out, name, sizeof(name));
+	opt.build_name = name;
+	if (x3g_new(&m, &opt, &r.t, &err)) {
+		fprintf(stderr, X3G_CMD ": %s: %s\n", p->path, err.msg);
+		status = err.code == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
+		goto out_profile;
+	}
+	in = fopen(a->in, "rb");
+	if (!in) {
+		fprintf(stderr, X3G_CMD ": %s: cannot open: %s\n", a->in, strerror(errno));
+		status = ST_EXIT_DATAERR;
+		goto out_translator;
+	}
+	if (a->json)
+		r.jwarn = json_array();
+	status = translate_to_file(&r, in);
+	fclose(in);
+	if (status == 0 && a->json) {
+		json_t *o = json_object();
+
+		json_object_set_new(o, "input", json_string(a->in));
+		json_object_set_new(o, "output", json_string(a->out));
+		json_object_set_new(o, "printer", json_string(p->id));
+		json_object_set_new(o, "flavor", json_string(opt.flavor == X3G_FLAVOR_REPRAP
+								    ? "reprap" : "makerbot"));
+		json_object_set_new(o, "lines", json_integer((json_int_t)r.lines));
+		json_object_set_new(o, "commands", json_integer((json_int_t)r.commands));
+		json_object_set_new(o, "bytes", json_integer((json_int_t)r.bytes));
+		json_object_set_new(o, "warnings", json_integer((json_int_t)r.warnings));
+		json_object_set_new(o, "warning_list", r.jwarn);
+		r.jwarn = NULL;
+		json_dumpf(o, stdout, JSON_INDENT(2));
+		fputc('\n', stdout);
+		json_decref(o);
+	} else if (status == 0) {
+		printf("%s: %llu lines -> %s: %llu commands, %llu bytes, %llu warnings\n", a->in,
+		       (unsigned long long)r.lines, a->out, (unsigned long long)r.commands,
+		       (unsigned long long)r.bytes, (unsigned long long)r.warnings);
+	}
+	json_decref(r.jwarn);
+out_translator:
+	x3g_free(r.t);
+out_profile:
+	profile_free(p);
+	return status;
+}
+
+/* Read a whole file of at most X3G_DECODE_MAX bytes; NULL (message printed)
+ * on failure. */
+static uint8_t *read_all(const char *path, size_t *len)
+{
+	FILE *f = fopen(path, "rb");
+	struct stat st;
+	uint8_t *buf;
+
+	if (!f || fstat(fileno(f), &st) != 0 || !S_ISREG(st.st_mode)) {
+		fprintf(stderr, X3G_CMD ": %s: cannot open: %s\n", path,
+			f ? "not a regular file" : strerror(errno));
+		if (f)
+			fclose(f);
+		return NULL;
+	}
+	if ((unsigned long long)st.st_size > X3G_DECODE_MAX) {
+		fprintf(stderr, X3G_CMD ": %s: larger than 1 GiB; not an X3G print\n", path);
+		fclose(f);
+		return NULL;
+	}
+	*len = (size_t)st.st_size;
+	buf = malloc(*len ? *len : 1);
+	if (!buf || fread(buf, 1, *len, f) != *len) {
+		fprintf(stderr, X3G_CMD ": %s: read error\n", path);
+		free(buf);
+		buf = NULL;
+	}
+	fclose(f);
+	return buf;
+}
+
+static json_t *command_json(const struct x3g_command *c)
+{
+	json_t *o = json_object(), *f = json_object();
+
+	json_object_set_new(o, "offset", json_integer((json_int_t)c->offset));
+	json_object_set_new(o, "code", json_integer(c->code));
+	json_object_set_new(o, "name", json_string(c->name));
+	json_object_set_new(o, "length", json_integer((json_int_t)c->length));
+	for (size_t i = 0; i < c->nfields; i++)
+		json_object_set_new(f, c->fields[i].name, json_real(c->fields[i].value));
+	json_object_set_new(o, "fields", f);
+	if (c->has_text)
+		json_object_set_new(o, "text", json_string(c->text));
+	return o;
+}
+
+static int run_decode(const struct x3g_args *a)
+{
+	struct x3g_command c;
+	struct st_error err = {0};
+	size_t len, pos = 0, count = 0;
+	uint8_t *buf = read_all(a->decode, &len);
+	json_t *arr = a->json ? json_array() : NULL;
+	char line[512];
+	int rc = 0;
+
+	if (!buf) {
+		json_decref(arr);
+		return ST_EXIT_DATAERR;
+	}
+	while (pos < len && (rc = x3g_decode(buf + pos, len - pos, pos, &c, &err)) > 0) {
+		if (arr) {
+			json_array_append_new(arr, command_json(&c));
+		} else {
+			x3g_format(&c, line, sizeof(line));
+			printf("%zu: %s\n", pos, line);
+		}
+		pos += (size_t)rc;
+		count++;
+	}
+	free(buf);
+	if (rc < 0) {
+		fprintf(stderr, X3G_CMD ": %s: %s\n", a->decode, err.msg);
+		json_decref(arr);
+		return ST_EXIT_DATAERR;
+	}
+	if (arr) {
+		json_t *o = json_object();
+
+		json_object_set_new(o, "input", json_string(a->decode));
+		json_object_set_new(o, "bytes", json_integer((json_int_t)len));
+		json_object_set_new(o, "commands", arr);
+		json_dumpf(o, stdout, JSON_INDENT(2));
+		fputc('\n', stdout);
+		json_decref(o);
+	} else {
+		fprintf(stderr, "%s: %zu commands, %zu bytes\n", a->decode, count, len);
+	}
+	return 0;
+}
+
+int cmd_x3g(int argc, char **argv)
+{
+	struct x3g_args a = {0};
+	int status = parse_args(argc, argv, &a);
+
+	if (status)
+		return status < 0 ? ST_EXIT_OK : status;
+	return a.decode ? run_decode(&a) : run_translate(&a);
+}
