@@ -1,10 +1,12 @@
 #!/bin/sh
-# bench/run.sh BIN [check|repair|slice|region|stream|all] - time `stratum check`
+# bench/run.sh BIN [check|repair|slice|region|stream|x3g|all] - time `stratum check`
 # against admesh, `stratum repair` on generated files, `stratum slice` against
 # PrusaSlicer's `--export-gcode`, and streaming to `stratum sim` with
 # `stratum send` against Printrun's printcore; `region` measures how well both
 # slicers' printed regions match the models' cross-sections (issue 5, with
-# build/bench/region_check); prints Markdown tables for docs/benchmarks.md.
+# build/bench/region_check); `x3g` times G-code -> X3G translation against
+# gpx -m fcp on the scan sliced for the Creator Pro; prints Markdown tables
+# for docs/benchmarks.md.
 # Wall time, CPU time and peak RSS come from GNU time;
 # check and repair figures are the best of 3 runs, slice figures one run.
 set -eu
@@ -14,14 +16,14 @@ out=bench/out
 mkdir -p "$out"
 gen=build/bench/gen_mesh
 
-case $what in check|repair|slice|region|stream|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|slice|region|stream|all]" >&2; exit 2;; esac
+case $what in check|repair|slice|region|stream|x3g|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|slice|region|stream|x3g|all]" >&2; exit 2;; esac
 
-if [ "$what" != slice ] && [ "$what" != region ] && [ "$what" != stream ]; then
+if [ "$what" != slice ] && [ "$what" != region ] && [ "$what" != stream ] && [ "$what" != x3g ]; then
 	[ -f "$out/torus-1m.stl" ] || "$gen" torus 1000 500 "$out/torus-1m.stl"
 	[ -f "$out/torus-2m.stl" ] || "$gen" torus 1000 1000 "$out/torus-2m.stl"
 	[ -f "$out/spheres.stl" ] || "$gen" spheres 8 "$out/spheres.stl"
 fi
-if [ "$what" != check ] && [ "$what" != region ] && [ "$what" != stream ]; then
+if [ "$what" != check ] && [ "$what" != region ] && [ "$what" != stream ] && [ "$what" != x3g ]; then
 	[ -f "$out/torus-100k.stl" ] || "$gen" torus 250 200 "$out/torus-100k.stl"
 	[ -f "$out/twospheres.stl" ] || "$gen" twospheres 100 80 "$out/twospheres.stl"
 	[ -f "$out/scan.stl" ] || "$gen" scan 250 120 0.7 "$out/scan.stl"
@@ -304,12 +306,42 @@ for lat in 2 16; do
 done
 }
 
+# G-code -> X3G: the two-sphere model (31 680 triangles; the scan and the
+# tori are wider than the Creator Pro's 148 mm) sliced for the FlashForge
+# Creator Pro at 0.07 mm layers, translated by stratum x3g and by gpx -m fcp
+# (no .ini: -I), best of 3; "same bytes" says whether the X3G files are equal.
+x3g_table() {
+[ -f "$out/twospheres.stl" ] || "$gen" twospheres 100 80 "$out/twospheres.stl"
+g="$out/x3g-twospheres.gcode"
+[ -f "$g" ] || "$bin" slice "$out/twospheres.stl" -o "$g" --printer flashforge-creator-pro \
+	--layer-height 0.07 >/dev/null 2>&1
+mkdir -p "$out/x3g-ours" "$out/x3g-gpx"
+lines=$(wc -l <"$g")
+echo "| input | lines | translator | wall s | peak MiB | lines/s | X3G bytes | same bytes as gpx |"
+echo "|---|---|---|---|---|---|---|---|"
+set -- $(best_of3 "$bin" x3g "$g" -o "$out/x3g-ours/twospheres.x3g" --printer flashforge-creator-pro)
+st=$1; sm=$2
+ours=$(stat -c %s "$out/x3g-ours/twospheres.x3g")
+if command -v gpx >/dev/null 2>&1; then
+	set -- $(best_of3 gpx -I -q -m fcp "$g" "$out/x3g-gpx/twospheres.x3g")
+	gt=$1; gm=$2
+	same=no; cmp -s "$out/x3g-ours/twospheres.x3g" "$out/x3g-gpx/twospheres.x3g" && same=yes
+fi
+echo "| twospheres.stl, 0.07 mm layers | $lines | stratum x3g | $st | $(echo "scale=1; $sm / 1024" | bc) | $(echo "$lines / $st" | bc) | $ours | ${same:-n/a} |"
+if [ -n "${gt:-}" ]; then
+	echo "| twospheres.stl, 0.07 mm layers | $lines | gpx -m fcp | $gt | $(echo "scale=1; $gm / 1024" | bc) | $(echo "$lines / $gt" | bc) | $(stat -c %s "$out/x3g-gpx/twospheres.x3g") | |"
+else
+	echo "| twospheres.stl, 0.07 mm layers | $lines | gpx -m fcp | not installed | | | | |"
+fi
+}
+
 case $what in
+x3g) x3g_table ;;
 region) region_table ;;
 check) check_table ;;
 repair) repair_table ;;
 slice) slice_table ;;
 stream) stream_table ;;
-all) check_table; echo; repair_table; echo; slice_table; echo; region_table; echo; stream_table ;;
+all) check_table; echo; repair_table; echo; slice_table; echo; region_table; echo; stream_table; echo; x3g_table ;;
 esac
 
