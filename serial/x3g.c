@@ -218,25 +218,20 @@ static void cmd_change_tool(struct x3g_translator *t, int tool)
 	end(t);
 }
 
-/* 136 tool action with a 16-bit argument (3 nozzle, 31 platform target). */
-static void cmd_tool_temp(struct x3g_translator *t, int tool, unsigned action, unsigned temp)
+/* 136 tool action: a 16-bit argument for targets (3 nozzle, 31 platform),
+ * one byte for toggles (12 fan, 13 blower "valve"). */
+static void cmd_tool_action(struct x3g_translator *t, int tool, unsigned action, unsigned value)
 {
-	begin(t, 136);
-	put8(t, (unsigned)tool);
-	put8(t, action);
-	put8(t, 2);
-	put16(t, temp);
-	end(t);
-}
+	bool wide = action == 3 || action == 31;
 
-/* 136 tool action with an on/off byte (12 fan, 13 blower "valve"). */
-static void cmd_tool_toggle(struct x3g_translator *t, int tool, unsigned action, unsigned on)
-{
 	begin(t, 136);
 	put8(t, (unsigned)tool);
 	put8(t, action);
-	put8(t, 1);
-	put8(t, on ? 1 : 0);
+	put8(t, wide ? 2 : 1);
+	if (wide)
+		put16(t, value);
+	else
+		put8(t, value ? 1 : 0);
 	end(t);
 }
 
@@ -639,7 +634,7 @@ static void g92(struct x3g_translator *t, const struct words *w)
 
 static void set_nozzle(struct x3g_translator *t, int tool, unsigned temp)
 {
-	cmd_tool_temp(t, tool, 3, temp);
+	cmd_tool_action(t, tool, 3, temp);
 	t->nozzle[tool] = temp;
 }
 
@@ -691,7 +686,7 @@ static void set_platform(struct x3g_translator *t, const struct words *w, int m)
 		return;
 	}
 	temp = clamp_u(w->s, 0xffff);
-	cmd_tool_temp(t, tool, 31, temp);
+	cmd_tool_action(t, tool, 31, temp);
 	t->platform[tool] = temp;
 }
 
@@ -760,7 +755,7 @@ static void fan(struct x3g_translator *t, const struct words *w, unsigned dflt)
 {
 	unsigned on = (w->flag & BIT_S) ? (clamp_u(w->s, 255) != 0) : dflt;
 
-	cmd_tool_toggle(t, t->tgt_tool, t->flavor == X3G_FLAVOR_REPRAP ? 13 : 12, on);
+	cmd_tool_action(t, t->tgt_tool, t->flavor == X3G_FLAVOR_REPRAP ? 13 : 12, on);
 }
 
 /* ---- build start and end ------------------------------------------------ */
@@ -1041,7 +1036,7 @@ static void m_code(struct x3g_translator *t, const struct gcode_line *l, struct 
 		break; /* line numbers, debug level, finish moves: nothing to queue */
 	case 126:
 	case 127:
-		cmd_tool_toggle(t, t->tgt_tool, 13,
+		cmd_tool_action(t, t->tgt_tool, 13,
 				m == 127 ? 0 : ((w->flag & BIT_S) ? (clamp_u(w->s, 255) != 0) : 1));
 		break;
 	case 131:
