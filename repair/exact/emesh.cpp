@@ -22,6 +22,7 @@
 #include <CGAL/intersections.h>
 
 #include "boxpairs.hpp"
+#include "emesh.hpp"
 #include "pairtest.hpp"
 
 #include <algorithm>
@@ -36,21 +37,6 @@
 #include <utility>
 #include <vector>
 
-typedef CGAL::Epeck EK;
-typedef CGAL::Epick IK;
-typedef EK::Point_3 EPoint;
-typedef EK::FT EFT;
-
-/* Largest vertex or triangle count an exact mesh indexes (as struct mesh). */
-static const size_t MESH_LIMIT = 0xfffffff0u;
-
-struct exact_mesh {
-	std::vector<std::array<double, 3>> approx; /* every vertex, mm */
-	std::vector<int32_t> slot;		    /* -1: approx is exact; else index in ex */
-	std::vector<EPoint> ex;			    /* exact positions of rational vertices */
-	std::vector<std::array<uint32_t, 3>> tris;
-	std::vector<uint32_t> origin;
-};
 
 namespace
 {
@@ -535,22 +521,7 @@ bool segment_hidden(const exact_mesh &m, const uint32_t *surface, size_t ns,
 	return true;
 }
 
-/* Turn the current exception into an error class and message. */
-int fail(struct st_error *err, const char *what)
-{
-	try {
-		throw;
-	} catch (const std::bad_alloc &) {
-		return st_error_set(err, ST_ERR_NOMEM, "exact: out of memory in %s", what);
-	} catch (const std::length_error &e) {
-		return st_error_set(err, ST_ERR_NOMEM, "exact: %s: %s", what, e.what());
-	} catch (const std::exception &e) {
-		return st_error_set(err, ST_ERR_INTERNAL, "exact: %s failed: %s", what, e.what());
-	} catch (...) {
-		return st_error_set(err, ST_ERR_INTERNAL, "exact: %s failed with an unknown error",
-				    what);
-	}
-}
+using emesh::fail;
 
 /* Key for welding double vertices bit-exactly (+0 and -0 are one). */
 struct dkey {
