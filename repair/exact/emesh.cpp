@@ -113,6 +113,18 @@ Box tri_box(const exact_mesh &m, size_t t)
 	return Box(lo, hi);
 }
 
+/* Whether triangles u and w are certainly apart, from interval corners. */
+bool apart(const exact_mesh &m, const uint32_t *u, const uint32_t *w)
+{
+	pairtest::Ipt p[3], q[3];
+	for (int k = 0; k < 3; k++) {
+		const auto &x = CGAL::approx(epoint(m, u[k])), &y = CGAL::approx(epoint(m, w[k]));
+		p[k] = {x.x(), x.y(), x.z()};
+		q[k] = {y.x(), y.y(), y.z()};
+	}
+	return pairtest::certainly_apart(p, q);
+}
+
 /*
  * Every pair of triangles meeting outside a common face.  Lazy exact
  * numbers are not safe to share between threads, so a mesh with rational
@@ -140,6 +152,8 @@ std::vector<std::pair<uint32_t, uint32_t>> find_pairs(const exact_mesh &m, int t
 		    bool hit;
 		    if (tri_is_double(m, s) && tri_is_double(m, t))
 			    hit = pairtest::intersects<IK>(u, w, geti);
+		    else if (pairtest::no_common_corner(u, w) && apart(m, u, w))
+			    hit = false;
 		    else
 			    hit = pairtest::intersects<EK>(u, w, gete);
 		    if (hit)

@@ -50,6 +50,9 @@ struct snapper {
 	std::vector<char> alive;
 	std::vector<std::vector<uint32_t>> star;	/* vertex -> triangles (some dead) */
 	std::vector<std::vector<uint32_t>> near;	/* triangle -> triangles it may meet */
+	std::vector<std::array<uint32_t, 3>> tris0;	/* corners in the exact mesh */
+	std::vector<char> moved;	/* not at its place in the exact mesh */
+	std::vector<uint32_t> patch;	/* edge-connected coplanar piece it is in */
 };
 
 bool on_grid(int bits, double x)
@@ -128,16 +131,62 @@ bool boxes_meet(const snapper &s, uint32_t t, uint32_t u)
 	return true;
 }
 
+/* Corners of t not where t had them in the exact mesh; *x: the last one. */
+int displaced(const snapper &s, uint32_t t, uint32_t *x)
+{
+	int n = 0;
+	for (int k = 0; k < 3; k++)
+		if (s.tris[t][k] != s.tris0[t][k] || s.moved[s.tris[t][k]]) {
+			n++;
+			*x = s.tris[t][k];
+		}
+	return n;
+}
+
+/*
+ * Pieces of one plane (same patch) cost exact arithmetic on rational
+ * points to tell apart, and they need not: in the exact mesh they met only
+ * in shared faces.  If u is still in place and t has one corner x off the
+ * plane, t meets the plane only in its opposite edge, which it had in the
+ * exact mesh too, so t and u still meet only in shared faces.
+ */
+bool coplanar_pieces_apart(const snapper &s, uint32_t t, uint32_t u)
+{
+	uint32_t x = 0, y = 0;
+	if (s.patch[t] != s.patch[u] || displaced(s, u, &y) != 0)
+		return false;
+	const int n = displaced(s, t, &x);
+	if (n == 0)
+		return true;
+	if (n > 1)
+		return false;
+	const auto &w = s.tris[u];
+	return CGAL::orientation(s.pos[w[0]], s.pos[w[1]], s.pos[w[2]], s.pos[x]) !=
+	       CGAL::COPLANAR;
+}
+
 bool meet(const snapper &s, uint32_t t, uint32_t u)
 {
 	const uint32_t *a = s.tris[t].data(), *b = s.tris[u].data();
 	if (!boxes_meet(s, t, u))
+		return false;
+	if (coplanar_pieces_apart(s, t, u) || coplanar_pieces_apart(s, u, t))
 		return false;
 	if (tri_double(s, t) && tri_double(s, u)) {
 		auto p = [&s](uint32_t i) {
 			return IK::Point_3(s.cur[i][0], s.cur[i][1], s.cur[i][2]);
 		};
 		return pairtest::intersects<IK>(a, b, p);
+	}
+	if (pairtest::no_common_corner(a, b)) {
+		pairtest::Ipt p[3], q[3];
+		for (int k = 0; k < 3; k++) {
+			const auto &x = CGAL::approx(s.pos[a[k]]), &y = CGAL::approx(s.pos[b[k]]);
+			p[k] = {x.x(), x.y(), x.z()};
+			q[k] = {y.x(), y.y(), y.z()};
+		}
+		if (pairtest::certainly_apart(p, q))
+			return false;
 	}
 	return pairtest::intersects<EK>(a, b, [&s](uint32_t i) { return s.pos[i]; });
 }
@@ -172,6 +221,7 @@ void set_pos(snapper &s, uint32_t v, const double p[3])
 	s.cur[v] = {p[0], p[1], p[2]};
 	s.pos[v] = EPoint(p[0], p[1], p[2]);
 	s.isd[v] = 1;
+	s.moved[v] = 1;
 }
 
 std::vector<uint32_t> live_star(const snapper &s, uint32_t v)
@@ -190,7 +240,7 @@ bool try_move(snapper &s, uint32_t v, const double p[3])
 		return false;
 	const EPoint old_pos = s.pos[v];
 	const std::array<double, 3> old_cur = s.cur[v];
-	const char old_isd = s.isd[v];
+	const char old_isd = s.isd[v], old_moved = s.moved[v];
 	set_pos(s, v, p);
 	if (safe(s, live_star(s, v))) {
 		s.done[v] = 1;
@@ -199,6 +249,7 @@ bool try_move(snapper &s, uint32_t v, const double p[3])
 	s.pos[v] = old_pos;
 	s.cur[v] = old_cur;
 	s.isd[v] = old_isd;
+	s.moved[v] = old_moved;
 	return false;
 }
 
@@ -320,6 +371,58 @@ std::vector<std::array<double, 3>> corners(const snapper &s, uint32_t v)
 	return c;
 }
 
+uint32_t find_patch(std::vector<uint32_t> &p, uint32_t x)
+{
+	while (p[x] != x)
+		x = p[x] = p[p[x]];
+	return x;
+}
+
+/* Union of triangles that share an edge and lie in one plane (exactly). */
+void build_patches(snapper &s)
+{
+	struct edge {
+		uint32_t lo, hi, t;
+	};
+	std::vector<edge> e;
+	const size_t nt = s.tris.size();
+	e.reserve(3 * nt);
+	for (size_t t = 0; t < nt; t++)
+		for (int k = 0; k < 3; k++) {
+			const uint32_t a = s.tris[t][k], b = s.tris[t][(k + 1) % 3];
+			e.push_back({std::min(a, b), std::max(a, b), static_cast<uint32_t>(t)});
+		}
+	std::sort(e.begin(), e.end(), [](const edge &x, const edge &y) {
+		return x.lo != y.lo ? x.lo < y.lo : x.hi != y.hi ? x.hi < y.hi : x.t < y.t;
+	});
+	s.patch.resize(nt);
+	for (size_t t = 0; t < nt; t++)
+		s.patch[t] = static_cast<uint32_t>(t);
+	auto third = [&s](uint32_t t, uint32_t a, uint32_t b) {
+		const auto &v = s.tris[t];
+		return v[0] ^ v[1] ^ v[2] ^ a ^ b;
+	};
+	for (size_t i = 0; i < e.size();) {
+		size_t j = i;
+		while (j < e.size() && e[j].lo == e[i].lo && e[j].hi == e[i].hi)
+			j++;
+		for (size_t a = i; a < j; a++)
+			for (size_t b = a + 1; b < j; b++) {
+				const uint32_t c = third(e[a].t, e[a].lo, e[a].hi),
+					       d = third(e[b].t, e[b].lo, e[b].hi);
+				if (CGAL::orientation(s.pos[e[a].lo], s.pos[e[a].hi], s.pos[c],
+						      s.pos[d]) != CGAL::COPLANAR)
+					continue;
+				const uint32_t ra = find_patch(s.patch, e[a].t),
+					       rb = find_patch(s.patch, e[b].t);
+				s.patch[std::max(ra, rb)] = std::min(ra, rb);
+			}
+		i = j;
+	}
+	for (size_t t = 0; t < nt; t++)
+		s.patch[t] = find_patch(s.patch, static_cast<uint32_t>(t));
+}
+
 void build(snapper &s, const exact_mesh &m)
 {
 	const size_t nv = m.approx.size(), nt = m.tris.size();
@@ -331,6 +434,8 @@ void build(snapper &s, const exact_mesh &m)
 	s.hi = m.approx;
 	s.into.resize(nv);
 	s.tris = m.tris;
+	s.tris0 = m.tris;
+	s.moved.assign(nv, 0);
 	s.origin = m.origin;
 	s.alive.assign(nt, 1);
 	s.star.assign(nv, {});
@@ -357,6 +462,7 @@ void build(snapper &s, const exact_mesh &m)
 	s.near.assign(nt, {});
 	if (!any)
 		return;
+	build_patches(s);
 	std::vector<Box> boxes(nt);
 	std::vector<const Box *> use(nt);
 	for (size_t t = 0; t < nt; t++) {
@@ -438,14 +544,14 @@ std::vector<uint32_t> round_plainly(snapper &s, const std::vector<uint32_t> &tod
 	const std::vector<EPoint> epos = s.pos;
 	const std::vector<std::array<double, 3>> ecur = s.cur;
 	const std::vector<char> eisd = s.isd;
-	std::vector<char> moved(nv, 0), back(nv, 0);
+	std::vector<char> rounded(nv, 0), back(nv, 0);
 	std::vector<uint32_t> check, taken, with;
 
 	for (uint32_t v : todo) {
 		const auto c = corners(s, v);
 		set_pos(s, v, c[0].data());
 		s.done[v] = 1;
-		moved[v] = 1;
+		rounded[v] = 1;
 	}
 	for (size_t t = 0; t < s.tris.size(); t++)
 		if (!s.near[t].empty())
@@ -454,7 +560,7 @@ std::vector<uint32_t> round_plainly(snapper &s, const std::vector<uint32_t> &tod
 		std::vector<uint32_t> fresh;
 		auto take = [&](uint32_t t) {
 			for (uint32_t x : s.tris[t])
-				if (moved[x] && !back[x]) {
+				if (rounded[x] && !back[x]) {
 					back[x] = 1;
 					fresh.push_back(x);
 				}
@@ -470,6 +576,7 @@ std::vector<uint32_t> round_plainly(snapper &s, const std::vector<uint32_t> &tod
 			s.pos[x] = epos[x];
 			s.cur[x] = ecur[x];
 			s.isd[x] = eisd[x];
+			s.moved[x] = 0;
 			s.done[x] = 0;
 		}
 		check.clear();
