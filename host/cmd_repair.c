@@ -295,6 +295,7 @@ static int print_json(const struct repair_run *run, const struct repair_report *
 	json_object_set_new(obj, "thickened_triangles", json_size(r->thickened_triangles));
 	json_object_set_new(obj, "second_sheet_triangles", json_size(r->second_sheet_triangles));
 	json_object_set_new(obj, "rounding_rounds", json_integer(r->rounding_rounds));
+	json_object_set_new(obj, "rounding_merged", json_size(r->rounding_merged));
 	json_object_set_new(obj, "solid_deviation", json_real(r->solid_deviation));
 	json_object_set_new(obj, "rounding_deviation", json_real(r->rounding_deviation));
 	json_object_set_new(obj, "sheet_deviation", json_real(r->sheet_deviation));

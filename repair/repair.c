@@ -490,57 +490,65 @@ out:
 }
 
 /*
- * Round em's vertices to the output precision into a new welded mesh.
- * *moved: largest distance a vertex moved; *changed: whether any did.
+ * Grid cells a vertex may end from its exact place when rounding has to
+ * pick another corner of its cell or merge it into a neighbour: two cells
+ * let points in neighbouring cells merge, as points in one cell do when
+ * rounded plainly.
+ */
+#define SNAP_REACH_CELLS 2
+
+/*
+ * Round em's vertices to the output precision into a new welded mesh, by
+ * snap rounding (exact_mesh_snap_round): no move that would make triangles
+ * meet is made.  *moved: largest distance a vertex moved; *changed:
+ * whether any did; *merged: vertices merged into a neighbour.
  */
 static int round_result(const struct exact_mesh *em, enum repair_precision prec,
-			struct mesh **out, double *moved, bool *changed, struct st_error *err)
+			struct mesh **out, double *moved, bool *changed, size_t *merged,
+			struct st_error *err)
 {
-	const size_t n = exact_mesh_ntris(em), nv = exact_mesh_nverts(em);
-	const uint32_t (*tris)[3] = exact_mesh_tris(em);
-	const double (*verts)[3] = exact_mesh_verts(em);
-	struct mesh_builder *b = mesh_builder_new(n);
-	uint32_t *index = malloc((nv + 1) * sizeof(*index));
-	int rc = 0;
+	const size_t nv = exact_mesh_nverts(em);
+	const double reach = SNAP_REACH_CELLS * output_ulp(exact_mesh_verts(em), nv, prec);
+	struct exact_mesh *snapped = NULL;
+	struct exact_snap_stats st;
+	int rc;
 
 	*out = NULL;
+	rc = exact_mesh_snap_round(em, prec == REPAIR_FLOAT32 ? 24 : 53, reach, &snapped, &st,
+				   err);
+	if (rc)
+		return rc;
+	*moved = fmax(*moved, st.max_move);
+	*merged += st.collapsed;
+	if (st.rounded || st.other_corner || st.collapsed || st.unplaced)
+		*changed = true;
+
+	const size_t n = exact_mesh_ntris(snapped);
+	const uint32_t (*tris)[3] = exact_mesh_tris(snapped);
+	const double (*verts)[3] = exact_mesh_verts(snapped);
+	struct mesh_builder *b = mesh_builder_new(n);
+	uint32_t *index = malloc((exact_mesh_nverts(snapped) + 1) * sizeof(*index));
+
 	if (!b || !index) {
-		mesh_builder_free(b);
-		free(index);
-		return st_error_set(err, ST_ERR_NOMEM, "out of memory writing the result");
+		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory writing the result");
+		goto out;
 	}
-	for (size_t v = 0; v < nv && !rc; v++) {
-		double p[3];
-		for (int k = 0; k < 3; k++) {
-			p[k] = verts[v][k];
-			if (prec == REPAIR_FLOAT32) {
-				if (fabs(p[k]) > FLT_MAX)
-					rc = st_error_set(err, ST_ERR_RANGE,
-							  "coordinate %g does not fit a binary "
-							  "STL float; write ASCII instead",
-							  p[k]);
-				p[k] = (double)(float)p[k];
-			}
-		}
-		const double d = dist3(p, verts[v]);
-		*moved = fmax(*moved, d);
-		if (d > 0 || !exact_mesh_vertex_is_double(em, (uint32_t)v))
-			*changed = true;
-		if (!rc)
-			rc = mesh_builder_vertex(b, p, &index[v], err);
-	}
+	for (size_t v = 0; v < exact_mesh_nverts(snapped) && !rc; v++)
+		rc = mesh_builder_vertex(b, verts[v], &index[v], err);
 	for (size_t t = 0; t < n && !rc; t++)
 		rc = mesh_builder_triangle(b, index[tris[t][0]], index[tris[t][1]],
 					   index[tris[t][2]], err);
-	free(index);
-	if (rc) {
-		mesh_builder_free(b);
-		return rc;
+	if (!rc) {
+		*out = mesh_builder_finish(b);
+		b = NULL;
+		if (!*out)
+			rc = st_error_set(err, ST_ERR_NOMEM, "out of memory writing the result");
 	}
-	*out = mesh_builder_finish(b);
-	if (!*out)
-		return st_error_set(err, ST_ERR_NOMEM, "out of memory writing the result");
-	return 0;
+out:
+	mesh_builder_free(b);
+	free(index);
+	exact_mesh_free(snapped);
+	return rc;
 }
 
 /*
@@ -752,7 +760,8 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 		bool changed = false;
 		double moved = 0;
 		progress(opt, "rounding", 0.9);
-		rc = round_result(co.result, opt->precision, &rounded, &moved, &changed, err);
+		rc = round_result(co.result, opt->precision, &rounded, &moved, &changed,
+				  &rep->rounding_merged, err);
 		/* Rounds add up: each moves the previous round's result. */
 		rep->rounding_deviation += moved;
 		exact_mesh_free(co.result);

@@ -66,6 +66,7 @@ struct repair_report {
 	size_t second_sheet_triangles;	/* M_sheet of the second pass: must be 0 */
 	int rounding_rounds;		/* re-check rounds after rounding (0 = none needed) */
 	size_t rounding_dropped;	/* zero-thickness slivers rounding collapsed, dropped */
+	size_t rounding_merged;		/* vertices snap rounding merged into a neighbour */
 	double solid_deviation;		/* mm: solid parts vs input triangles (doubles; ~1e-13) */
 	double rounding_deviation;	/* mm: largest move a vertex made when rounded */
 	double sheet_deviation;		/* mm: thickened surface to its sheet/wire, max */

@@ -325,7 +325,7 @@ START_TEST(repair_json_report)
 		"duplicates_removed", "intersecting_pairs", "triangles_split", "interior_deleted",
 		"enclosed_deleted", "sheet_triangles", "sheet_area", "sheet_components", "wires",
 		"wire_length", "wires_discarded", "second_pass", "thickened_triangles",
-		"second_sheet_triangles", "rounding_rounds", "solid_deviation",
+		"second_sheet_triangles", "rounding_rounds", "rounding_merged", "solid_deviation",
 		"rounding_deviation", "sheet_deviation", "output_triangles", "output_vertices",
 		"components", "printable", "outputs"};
 

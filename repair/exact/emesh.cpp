@@ -22,6 +22,7 @@
 #include <CGAL/intersections.h>
 
 #include "boxpairs.hpp"
+#include "emesh.hpp"
 #include "pairtest.hpp"
 
 #include <algorithm>
@@ -36,21 +37,6 @@
 #include <utility>
 #include <vector>
 
-typedef CGAL::Epeck EK;
-typedef CGAL::Epick IK;
-typedef EK::Point_3 EPoint;
-typedef EK::FT EFT;
-
-/* Largest vertex or triangle count an exact mesh indexes (as struct mesh). */
-static const size_t MESH_LIMIT = 0xfffffff0u;
-
-struct exact_mesh {
-	std::vector<std::array<double, 3>> approx; /* every vertex, mm */
-	std::vector<int32_t> slot;		    /* -1: approx is exact; else index in ex */
-	std::vector<EPoint> ex;			    /* exact positions of rational vertices */
-	std::vector<std::array<uint32_t, 3>> tris;
-	std::vector<uint32_t> origin;
-};
 
 namespace
 {
@@ -127,6 +113,18 @@ Box tri_box(const exact_mesh &m, size_t t)
 	return Box(lo, hi);
 }
 
+/* Whether triangles u and w are certainly apart, from interval corners. */
+bool apart(const exact_mesh &m, const uint32_t *u, const uint32_t *w)
+{
+	pairtest::Ipt p[3], q[3];
+	for (int k = 0; k < 3; k++) {
+		const auto &x = CGAL::approx(epoint(m, u[k])), &y = CGAL::approx(epoint(m, w[k]));
+		p[k] = {x.x(), x.y(), x.z()};
+		q[k] = {y.x(), y.y(), y.z()};
+	}
+	return pairtest::certainly_apart(p, q);
+}
+
 /*
  * Every pair of triangles meeting outside a common face.  Lazy exact
  * numbers are not safe to share between threads, so a mesh with rational
@@ -154,6 +152,8 @@ std::vector<std::pair<uint32_t, uint32_t>> find_pairs(const exact_mesh &m, int t
 		    bool hit;
 		    if (tri_is_double(m, s) && tri_is_double(m, t))
 			    hit = pairtest::intersects<IK>(u, w, geti);
+		    else if (pairtest::no_common_corner(u, w) && apart(m, u, w))
+			    hit = false;
 		    else
 			    hit = pairtest::intersects<EK>(u, w, gete);
 		    if (hit)
@@ -535,22 +535,7 @@ bool segment_hidden(const exact_mesh &m, const uint32_t *surface, size_t ns,
 	return true;
 }
 
-/* Turn the current exception into an error class and message. */
-int fail(struct st_error *err, const char *what)
-{
-	try {
-		throw;
-	} catch (const std::bad_alloc &) {
-		return st_error_set(err, ST_ERR_NOMEM, "exact: out of memory in %s", what);
-	} catch (const std::length_error &e) {
-		return st_error_set(err, ST_ERR_NOMEM, "exact: %s: %s", what, e.what());
-	} catch (const std::exception &e) {
-		return st_error_set(err, ST_ERR_INTERNAL, "exact: %s failed: %s", what, e.what());
-	} catch (...) {
-		return st_error_set(err, ST_ERR_INTERNAL, "exact: %s failed with an unknown error",
-				    what);
-	}
-}
+using emesh::fail;
 
 /* Key for welding double vertices bit-exactly (+0 and -0 are one). */
 struct dkey {

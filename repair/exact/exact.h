@@ -151,6 +151,41 @@ struct exact_refine_stats {
 int exact_mesh_refine(struct exact_mesh *m, int threads, struct exact_refine_stats *stats,
 		      struct st_error *err);
 
+struct exact_snap_stats {
+	size_t rounded;		/* vertices moved to the grid point nearest them */
+	size_t other_corner;	/* moved to another corner of their grid cell */
+	size_t collapsed;	/* merged into a neighbour already on the grid */
+	size_t triangles_removed;	/* triangles the merges collapsed */
+	size_t unplaced;	/* left at the nearest grid point although unsafe */
+	double max_move;	/* mm: farthest a vertex ended from its exact place */
+};
+
+/*
+ * exact_mesh_snap_round - move every vertex of m onto the output grid
+ * (mantissa_bits 24: float32, 53: double) without letting triangles meet
+ * anywhere but in shared faces, into a new mesh *out whose vertices are all
+ * exact doubles on that grid.
+ *
+ * Vertices are moved one at a time and each move is kept only when the
+ * triangles around the vertex stay non-degenerate and meet no other
+ * triangle (exact tests against the current, partly rounded mesh), so an
+ * intersection-free m stays intersection-free after every move.  A vertex
+ * goes to the grid point nearest it if that is safe, else to the nearest
+ * safe corner of the grid cell around it, else it is merged into a
+ * neighbour already on the grid (an edge collapse keeping the link
+ * condition, so a closed manifold stays one) that lies within reach (mm,
+ * in every coordinate) of the exact places of all vertices merged into
+ * it.  Vertices already on the grid never move.  Rounds of this repeat
+ * while they place more vertices; what still has no safe place is put on
+ * its nearest grid point and counted in stats->unplaced (then the result
+ * may have intersections; the caller checks).  Not thread-safe on m.
+ * Returns 0, ST_ERR_ARG (bad bits, reach < 0, NULL), ST_ERR_RANGE (a
+ * coordinate beyond float32), ST_ERR_NOMEM or ST_ERR_INTERNAL.
+ */
+int exact_mesh_snap_round(const struct exact_mesh *m, int mantissa_bits, double reach,
+			  struct exact_mesh **out, struct exact_snap_stats *stats,
+			  struct st_error *err);
+
 /* exact_mesh_orient3d - exact_orient3d on vertex indices (exact positions). */
 int exact_mesh_orient3d(const struct exact_mesh *m, uint32_t a, uint32_t b, uint32_t c,
 			uint32_t d);

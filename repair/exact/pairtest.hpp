@@ -11,6 +11,11 @@
 #include <CGAL/Intersections_3/Segment_3_Triangle_3.h>
 #include <CGAL/Intersections_3/Triangle_3_Triangle_3.h>
 
+#include <CGAL/Interval_nt.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdint>
 
 namespace pairtest
@@ -90,6 +95,62 @@ bool intersects(const uint32_t *u, const uint32_t *w, GetPoint pt)
 	/* No common vertex, so no common face: any contact counts. */
 	return CGAL::do_intersect(Triangle(pt(u[0]), pt(u[1]), pt(u[2])),
 				  Triangle(pt(w[0]), pt(w[1]), pt(w[2])));
+}
+
+typedef CGAL::Interval_nt<false> Ival;
+typedef std::array<Ival, 3> Ipt;
+
+/*
+ * Whether two triangles with no common corner are certainly apart: a
+ * separating axis (either normal or a cross product of two edges) along
+ * which their interval projections do not overlap.  Intervals enclose the
+ * exact corners, so "apart" is certain; "not known" leaves it to the exact
+ * test.  Where triangles only come near each other, as pieces of two cut
+ * triangles do along their cut, this spares the exact arithmetic the
+ * combined predicate falls back to whenever any one sign is zero.
+ */
+/* Whether triangles u and w (corner indices) have no corner in common. */
+inline bool no_common_corner(const uint32_t *u, const uint32_t *w)
+{
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 3; j++)
+			if (u[i] == w[j])
+				return false;
+	return true;
+}
+
+inline bool certainly_apart(const Ipt p[3], const Ipt q[3])
+{
+	CGAL::Protect_FPU_rounding<true> guard;
+	auto sub = [](const Ipt &a, const Ipt &b) {
+		return Ipt{a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+	};
+	auto cross = [](const Ipt &a, const Ipt &b) {
+		return Ipt{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+			   a[0] * b[1] - a[1] * b[0]};
+	};
+	const Ipt e[3] = {sub(p[1], p[0]), sub(p[2], p[1]), sub(p[0], p[2])};
+	const Ipt f[3] = {sub(q[1], q[0]), sub(q[2], q[1]), sub(q[0], q[2])};
+	Ipt axes[11] = {cross(e[0], e[1]), cross(f[0], f[1])};
+	int na = 2;
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 3; j++)
+			axes[na++] = cross(e[i], f[j]);
+	for (int k = 0; k < na; k++) {
+		const Ipt &a = axes[k];
+		double lp = HUGE_VAL, hp = -HUGE_VAL, lq = HUGE_VAL, hq = -HUGE_VAL;
+		for (int i = 0; i < 3; i++) {
+			const Ival dp = a[0] * p[i][0] + a[1] * p[i][1] + a[2] * p[i][2];
+			const Ival dq = a[0] * q[i][0] + a[1] * q[i][1] + a[2] * q[i][2];
+			lp = std::min(lp, dp.inf());
+			hp = std::max(hp, dp.sup());
+			lq = std::min(lq, dq.inf());
+			hq = std::max(hq, dq.sup());
+		}
+		if (hp < lq || hq < lp)
+			return true;
+	}
+	return false;
 }
 
 } /* namespace pairtest */

@@ -1,0 +1,58 @@
+/*
+ * emesh.hpp - private to repair/exact: the layout of struct exact_mesh,
+ * shared by the refinement (emesh.cpp) and the snap rounding (snap.cpp).
+ */
+#ifndef STRATUM_REPAIR_EXACT_EMESH_HPP
+#define STRATUM_REPAIR_EXACT_EMESH_HPP
+
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
+#include <array>
+#include <cstdint>
+#include <exception>
+#include <new>
+#include <stdexcept>
+#include <vector>
+
+#include "st_error.h"
+
+typedef CGAL::Epeck EK;
+typedef CGAL::Epick IK;
+typedef EK::Point_3 EPoint;
+typedef EK::FT EFT;
+
+/* Largest vertex or triangle count an exact mesh indexes (as struct mesh). */
+static const size_t MESH_LIMIT = 0xfffffff0u;
+
+struct exact_mesh {
+	std::vector<std::array<double, 3>> approx; /* every vertex, mm */
+	std::vector<int32_t> slot;		    /* -1: approx is exact; else index in ex */
+	std::vector<EPoint> ex;			    /* exact positions of rational vertices */
+	std::vector<std::array<uint32_t, 3>> tris;
+	std::vector<uint32_t> origin;
+};
+
+namespace emesh
+{
+
+/* Turn the current exception into an error class and message. */
+inline int fail(struct st_error *err, const char *what)
+{
+	try {
+		throw;
+	} catch (const std::bad_alloc &) {
+		return st_error_set(err, ST_ERR_NOMEM, "exact: out of memory in %s", what);
+	} catch (const std::length_error &e) {
+		return st_error_set(err, ST_ERR_NOMEM, "exact: %s: %s", what, e.what());
+	} catch (const std::exception &e) {
+		return st_error_set(err, ST_ERR_INTERNAL, "exact: %s failed: %s", what, e.what());
+	} catch (...) {
+		return st_error_set(err, ST_ERR_INTERNAL, "exact: %s failed with an unknown error",
+				    what);
+	}
+}
+
+} /* namespace emesh */
+
+#endif /* STRATUM_REPAIR_EXACT_EMESH_HPP */
