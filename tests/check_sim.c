@@ -227,6 +227,36 @@ START_TEST(bad_checksum)
 }
 END_TEST
 
+/* Marlin 2.1's gcode_line_error empties the RX ring (lines received after
+ * the bad one are lost without a reply) and flush_and_request_resend ends
+ * with a plain "ok", also with ADVANCED_OK. */
+START_TEST(line_error_flushes_rx)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	char two[128];
+	fast_opts(&o);
+	o.advanced_ok = true;
+	cl_start(&c, &o);
+	cl_send_n(&c, 1, "G21");
+	cl_expect(&c, "ok N1 ", NULL, 0, 2.0);
+	int k = snprintf(two, sizeof(two), "N2 G21*%u\n",
+			 (unsigned)(gcode_checksum("N2 G21", 6) ^ 1));
+	int k2 = gcode_format_numbered(two + k, sizeof(two) - (size_t)k - 1, 3, "G90");
+	ck_assert_int_gt(k2, 0);
+	strcat(two, "\n");
+	cl_send(&c, two); /* one write: both lines reach the ring together */
+	cl_next_is(&c, "Error:checksum mismatch, Last Line: 1");
+	cl_next_is(&c, "Resend: 2");
+	cl_next_is(&c, "ok");
+	cl_send_n(&c, 2, "G21");
+	cl_expect(&c, "ok N2 ", NULL, 0, 2.0); /* no error for the flushed N3 */
+	sim_marlin_stop(c.sim);
+	ck_assert_str_eq(cl_log(&c), "1 G21\n2 G21\n");
+	cl_stop(&c);
+}
+END_TEST
+
 START_TEST(wrong_line_number)
 {
 	struct sim_marlin_options o;
@@ -579,6 +609,7 @@ Suite *sim_suite(void)
 	tcase_add_test(proto, boot_banner);
 	tcase_add_test(proto, ok_and_log);
 	tcase_add_test(proto, bad_checksum);
+	tcase_add_test(proto, line_error_flushes_rx);
 	tcase_add_test(proto, wrong_line_number);
 	tcase_add_test(proto, duplicate_ignored);
 	tcase_add_test(proto, m110_renumbers);

@@ -350,12 +350,16 @@ static void sim_ok(struct sim_marlin *s, const struct sim_cmd *c, double now)
 		sim_sendf(s, "ok P%zu B%zu", pf, bf);
 }
 
-/* Marlin's gcode_line_error + flush_and_request_resend. */
-static void sim_line_error(struct sim_marlin *s, const char *what, double now)
+/*
+ * Marlin 2.1's gcode_line_error + flush_and_request_resend: the error, the
+ * RX ring emptied (bytes already received are lost), "Resend:" and a plain
+ * "ok" (STR_OK, never the ADVANCED_OK form).  The caller drops the ring.
+ */
+static void sim_line_error(struct sim_marlin *s, const char *what)
 {
 	sim_sendf(s, "Error:%s, Last Line: %ld", what, s->last_n);
 	sim_sendf(s, "Resend: %ld", s->last_n + 1);
-	sim_ok(s, NULL, now);
+	sim_send(s, "ok");
 }
 
 /* Temperature report as print_heater_states writes it (leading space). */
@@ -377,8 +381,9 @@ static long sim_read_long(const char *p, const char *end)
 	return neg ? -v : v;
 }
 
-/* Check one complete line the way queue.cpp does and queue it. */
-static void sim_accept_line(struct sim_marlin *s, double now)
+/* Check one complete line the way queue.cpp does and queue it.  Returns
+ * false after a line error, when the RX ring must be emptied. */
+static bool sim_accept_line(struct sim_marlin *s)
 {
 	char *cmd = s->line;
 	size_t len = s->line_len;
@@ -393,7 +398,7 @@ static void sim_accept_line(struct sim_marlin *s, double now)
 		len--;
 	}
 	if (!len)
-		return;
+		return true;
 	cmd[len] = '\0';
 	char *star = strrchr(cmd, '*');
 	if (*cmd == 'N') {
@@ -409,25 +414,25 @@ static void sim_accept_line(struct sim_marlin *s, double now)
 			/* A duplicate sent before the host saw our Resend: Marlin
 			 * 2.1 drops last-1 and last silently (no error, no ok). */
 			if (n == s->last_n || n == s->last_n - 1)
-				return;
-			sim_line_error(s, "Line Number is not Last Line Number+1", now);
-			return;
+				return true;
+			sim_line_error(s, "Line Number is not Last Line Number+1");
+			return false;
 		}
 		if (!star) {
-			sim_line_error(s, "No Checksum with line number", now);
-			return;
+			sim_line_error(s, "No Checksum with line number");
+			return false;
 		}
 		long want = sim_read_long(star + 1, cmd + len);
 		if (gcode_checksum(cmd, (size_t)(star - cmd)) != want) {
-			sim_line_error(s, "checksum mismatch", now);
-			return;
+			sim_line_error(s, "checksum mismatch");
+			return false;
 		}
 		s->last_n = n;
 		has_n = true;
 		n = sim_read_long(cmd + 1, cmd + len);
 	} else if (star) {
-		sim_line_error(s, "No Line Number with checksum", now);
-		return;
+		sim_line_error(s, "No Line Number with checksum");
+		return false;
 	}
 
 	c = &s->q[(s->q_head + s->q_count) % s->o.bufsize];
@@ -452,6 +457,7 @@ static void sim_accept_line(struct sim_marlin *s, double now)
 		c->raw[k] = '\0';
 	}
 	s->q_count++;
+	return true;
 }
 
 /* Marlin's emergency parser: act on M108/M112/M410 as the line arrives. */
@@ -516,16 +522,19 @@ static void sim_rx_byte(struct sim_marlin *s, uint8_t b, double now)
 }
 
 /* Move bytes from the RX ring into lines while a queue slot is free. */
-static void sim_serial_commands(struct sim_marlin *s, double now)
+static void sim_serial_commands(struct sim_marlin *s)
 {
 	size_t i = 0;
 	while (i < s->rx_len && s->q_count < s->o.bufsize && !s->halted) {
 		char ch = (char)s->rx[i++];
 		if (ch == '\n' || ch == '\r') {
+			bool ok = true;
 			if (!s->line_comment || s->line_len)
-				sim_accept_line(s, now);
+				ok = sim_accept_line(s);
 			s->line_len = 0;
 			s->line_comment = false;
+			if (!ok)
+				i = s->rx_len; /* gcode_line_error reads the ring empty */
 			continue;
 		}
 		if (ch == ';')
@@ -877,9 +886,9 @@ int sim_marlin_run(struct sim_marlin *s, volatile sig_atomic_t *stop, struct st_
 			s->out_credit = credit_cap;
 
 		sim_physics(s, now, dt);
-		sim_serial_commands(s, now);
+		sim_serial_commands(s);
 		sim_execute(s, now);
-		sim_serial_commands(s, now);
+		sim_serial_commands(s);
 		if (s->unplugged)
 			break;
 		if (sim_flush_tx(s, now))
