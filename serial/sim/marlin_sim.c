@@ -916,8 +916,15 @@ int sim_marlin_run(struct sim_marlin *s, volatile sig_atomic_t *stop, struct st_
 			if (n > 0) {
 				now = sim_now();
 				s->in_credit -= (double)n;
-				for (ssize_t i = 0; i < n; i++)
+				/* The firmware empties the ring while a queue slot is
+				 * free far faster than bytes arrive (87 us each at
+				 * 115200), so a burst read here must not overflow a
+				 * ring the real board would have drained. */
+				for (ssize_t i = 0; i < n; i++) {
 					sim_rx_byte(s, buf[i], now);
+					if (s->rx_len >= s->o.rx_buffer)
+						sim_serial_commands(s);
+				}
 			}
 		}
 	}
