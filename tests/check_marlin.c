@@ -357,6 +357,322 @@ START_TEST(stream_queue_full)
 }
 END_TEST
 
+/* Stream text through a rig; returns marlin_stream_file's result. */
+static int stream_text(struct rig *r, const char *text, struct st_error *err)
+{
+	FILE *f = tmpfile();
+	struct gcode_reader *gr;
+	ck_assert_ptr_nonnull(f);
+	fputs(text, f);
+	rewind(f);
+	ck_assert_int_eq(gcode_reader_new(f, "job", &gr, err), 0);
+	int rc = marlin_stream_file(r->m, gr, "job", NULL, NULL, NULL, err);
+	gcode_reader_free(gr);
+	fclose(f);
+	return rc;
+}
+
+/* M109 waits minutes of simulated time, several real seconds, with only
+ * temperature and busy lines meanwhile: no time-out, no resend, although
+ * the probe time-out is far shorter than the wait. */
+START_TEST(m109_no_timeout)
+{
+	struct rig r;
+	struct sim_marlin_options so;
+	struct marlin_options mo;
+	struct marlin_status st;
+	struct st_error err = {0};
+	fast_sim(&so);
+	so.speedup = 40; /* 25 -> 200 degC at 2 degC/s: 87 s simulated, ~2.2 s real */
+	fast_driver(&mo);
+	mo.probe_ms = 300;
+	mo.dead_ms = 1000;
+	rig_start(&r, &so, &mo);
+	double t0 = now_s();
+	int rc = stream_text(&r, "M104 S200\nM109 S200\nG1 X10 F3000\nM400\n", &err);
+	ck_assert_msg(rc == 0, "%s", err.msg);
+	ck_assert_double_gt(now_s() - t0, 1.5);
+	marlin_status(r.m, &st);
+	ck_assert_uint_eq(st.resends, 0);
+	ck_assert_uint_eq(st.acked, 4);
+	ck_assert(st.tool[0].present);
+	ck_assert_double_ge(st.tool[0].actual, 190.0); /* last report before the end */
+	ck_assert_double_eq(st.tool[0].target, 200.0);
+	rig_stop(&r);
+}
+END_TEST
+
+/* A board reset mid-stream ("start" again) ends the job with a clear
+ * error naming the last line acknowledged. */
+START_TEST(reset_detected)
+{
+	struct rig r;
+	struct sim_marlin_options so;
+	struct marlin_options mo;
+	struct marlin_status st;
+	struct st_error err = {0};
+	fast_sim(&so);
+	so.reset_at_line = 500;
+	fast_driver(&mo);
+	rig_start(&r, &so, &mo);
+	FILE *f = gen_file(2000);
+	struct gcode_reader *gr;
+	ck_assert_int_eq(gcode_reader_new(f, "gen", &gr, &err), 0);
+	int rc = marlin_stream_file(r.m, gr, "gen", NULL, NULL, NULL, &err);
+	ck_assert_int_eq(rc, ST_ERR_IO);
+	marlin_status(r.m, &st);
+	ck_assert_int_eq(st.fail, MARLIN_FAIL_LINK);
+	ck_assert_msg(strstr(err.msg, "restarted") && strstr(err.msg, "last line acknowledged"),
+		      "%s", err.msg);
+	ck_assert_int_lt(st.last_acked_n, 500);
+	ck_assert_int_gt(st.last_acked_n, 400);
+	gcode_reader_free(gr);
+	fclose(f);
+	rig_stop(&r);
+}
+END_TEST
+
+/* The cable pulled mid-stream: the port hangs up, the job ends. */
+START_TEST(unplug_detected)
+{
+	struct rig r;
+	struct sim_marlin_options so;
+	struct marlin_options mo;
+	struct marlin_status st;
+	struct st_error err = {0};
+	fast_sim(&so);
+	so.unplug_at_line = 700;
+	fast_driver(&mo);
+	rig_start(&r, &so, &mo);
+	FILE *f = gen_file(2000);
+	struct gcode_reader *gr;
+	ck_assert_int_eq(gcode_reader_new(f, "gen", &gr, &err), 0);
+	double t0 = now_s();
+	int rc = marlin_stream_file(r.m, gr, "gen", NULL, NULL, NULL, &err);
+	ck_assert_int_eq(rc, ST_ERR_IO);
+	ck_assert_double_lt(now_s() - t0, 4.0); /* seen at once, not by a time-out */
+	marlin_status(r.m, &st);
+	ck_assert_int_eq(st.fail, MARLIN_FAIL_LINK);
+	ck_assert_msg(strstr(err.msg, "closed") && strstr(err.msg, "line"), "%s", err.msg);
+	ck_assert_int_lt(st.last_acked_n, 700);
+	gcode_reader_free(gr);
+	fclose(f);
+	rig_stop(&r);
+}
+END_TEST
+
+/* M112 through the emergency parser halts the board: the firmware's
+ * "Error:Printer halted. kill() called!" stops the job, nothing is resent. */
+START_TEST(halt_stops_without_resend)
+{
+	struct rig r;
+	struct sim_marlin_options so;
+	struct marlin_options mo;
+	struct marlin_status st;
+	struct st_error err = {0};
+	fast_sim(&so);
+	so.speedup = 20; /* the G4 keeps the queue busy for 0.5 s */
+	fast_driver(&mo);
+	rig_start(&r, &so, &mo);
+	ck_assert(marlin_caps(r.m)->emergency_parser);
+	ck_assert_int_eq(marlin_submit(r.m, "G4 S10", 1, -1, NAN, &err), 1);
+	for (int i = 0; i < 20; i++)
+		ck_assert_int_eq(marlin_submit(r.m, "G1 X5 F3000", (uint64_t)i + 2, -1, NAN, &err), 1);
+	ck_assert_int_eq(marlin_step(r.m, 50, &err), 0);
+	ck_assert_int_eq(marlin_emergency(r.m, "M112", &err), 0);
+	int rc = 0;
+	for (int i = 0; i < 40 && rc == 0; i++)
+		rc = marlin_step(r.m, 50, &err);
+	ck_assert_int_eq(rc, ST_ERR_IO);
+	marlin_status(r.m, &st);
+	ck_assert_int_eq(st.fail, MARLIN_FAIL_FIRMWARE);
+	ck_assert_msg(strstr(err.msg, "Printer halted"), "%s", err.msg);
+	ck_assert_uint_eq(st.resends, 0);
+	ck_assert(sim_marlin_halted(r.sim));
+	rig_stop(&r);
+}
+END_TEST
+
+/* Cancel, then the safe stop: heaters and motors off reach the firmware. */
+START_TEST(cancel_safe_stop)
+{
+	struct rig r;
+	struct sim_marlin_options so;
+	struct marlin_options mo;
+	struct marlin_status st;
+	struct st_error err = {0};
+	char line[256];
+	fast_sim(&so);
+	so.speedup = 50;
+	fast_driver(&mo);
+	rig_start(&r, &so, &mo);
+	ck_assert_int_eq(marlin_submit(r.m, "M104 S200", 1, -1, NAN, &err), 1);
+	for (int i = 0; i < 200; i++)
+		ck_assert_int_eq(marlin_submit(r.m, "G1 X50 F3000", 2, -1, NAN, &err), 1);
+	ck_assert_int_eq(marlin_step(r.m, 50, &err), 0);
+	marlin_request_cancel(r.m);
+	ck_assert_int_eq(marlin_step(r.m, 10, &err), ST_ERR_IO);
+	marlin_status(r.m, &st);
+	ck_assert_int_eq(st.fail, MARLIN_FAIL_CANCELLED);
+	ck_assert_msg(marlin_safe_stop(r.m, 5000, &err) == 0, "%s", err.msg);
+	sim_marlin_stop(r.sim);
+	fflush(r.log);
+	rewind(r.log);
+	bool m84 = false, m104 = false, m140 = false;
+	long moves = 0;
+	while (fgets(line, sizeof(line), r.log)) {
+		m84 = m84 || strstr(line, "M84");
+		m104 = m104 || strstr(line, "M104 S0");
+		m140 = m140 || strstr(line, "M140 S0");
+		moves += strstr(line, "G1 X50") != NULL;
+	}
+	ck_assert(m84 && m104 && m140);
+	ck_assert_int_lt(moves, 200); /* the rest of the job was not sent */
+	rig_stop(&r);
+}
+END_TEST
+
+/* A printer that never answers: connect gives up with a clear error. */
+START_TEST(connect_no_answer)
+{
+	struct sim_marlin_options so;
+	struct sim_marlin *sim;
+	struct xport *x;
+	struct marlin *m;
+	struct marlin_options mo;
+	struct st_error err = {0};
+	fast_sim(&so);
+	ck_assert_int_eq(sim_marlin_new(&so, &sim, &err), 0); /* not running: silent */
+	ck_assert_int_eq(xport_open(sim_marlin_slave_path(sim), NULL, &x, &err), 0);
+	fast_driver(&mo);
+	mo.connect_timeout_ms = 700;
+	ck_assert_int_eq(marlin_new(x, &mo, &m, &err), 0);
+	ck_assert_int_eq(marlin_connect(m, &err), ST_ERR_IO);
+	ck_assert_msg(strstr(err.msg, "no answer"), "%s", err.msg);
+	marlin_free(m);
+	xport_close(x);
+	sim_marlin_free(sim);
+}
+END_TEST
+
+/* ---- reply parsing ---- */
+
+static enum marlin_reply_kind parse(const char *s, struct marlin_reply *r,
+				    struct marlin_status *st, struct marlin_caps *caps)
+{
+	return marlin_parse_reply(s, strlen(s), r, st, caps);
+}
+
+START_TEST(parse_ok)
+{
+	struct marlin_reply r;
+	ck_assert_int_eq(parse("ok", &r, NULL, NULL), MARLIN_REPLY_OK);
+	ck_assert(!r.has_n && !r.has_b);
+	ck_assert_int_eq(parse("ok\r", &r, NULL, NULL), MARLIN_REPLY_OK);
+	ck_assert_int_eq(parse("ok N123 P15 B3", &r, NULL, NULL), MARLIN_REPLY_OK);
+	ck_assert(r.has_n && r.has_p && r.has_b);
+	ck_assert_int_eq(r.n, 123);
+	ck_assert_int_eq(r.p, 15);
+	ck_assert_int_eq(r.b, 3);
+	ck_assert_int_eq(parse("ok P16 B4", &r, NULL, NULL), MARLIN_REPLY_OK);
+	ck_assert(!r.has_n && r.has_b && r.b == 4);
+	ck_assert_int_eq(parse("okay", &r, NULL, NULL), MARLIN_REPLY_OTHER);
+}
+END_TEST
+
+START_TEST(parse_resend_and_errors)
+{
+	struct marlin_reply r;
+	ck_assert_int_eq(parse("Resend: 42", &r, NULL, NULL), MARLIN_REPLY_RESEND);
+	ck_assert_int_eq(r.resend, 42);
+	ck_assert_int_eq(parse("Resend:7", &r, NULL, NULL), MARLIN_REPLY_RESEND);
+	ck_assert_int_eq(r.resend, 7);
+	ck_assert_int_eq(parse("rs N9", &r, NULL, NULL), MARLIN_REPLY_RESEND);
+	ck_assert_int_eq(r.resend, 9);
+	ck_assert_int_eq(parse("Resend: x", &r, NULL, NULL), MARLIN_REPLY_OTHER);
+	ck_assert_int_eq(parse("Error:checksum mismatch, Last Line: 41", &r, NULL, NULL),
+			 MARLIN_REPLY_LINE_ERROR);
+	ck_assert_int_eq(parse("Error:Line Number is not Last Line Number+1, Last Line: 4", &r,
+			       NULL, NULL),
+			 MARLIN_REPLY_LINE_ERROR);
+	ck_assert_int_eq(parse("Error:No Checksum with line number, Last Line: 4", &r, NULL, NULL),
+			 MARLIN_REPLY_LINE_ERROR);
+	ck_assert_int_eq(parse("Error:Printer halted. kill() called!", &r, NULL, NULL),
+			 MARLIN_REPLY_FATAL);
+	ck_assert_int_eq(parse("Error:Thermal Runaway, system stopped! Heater_ID: 0", &r, NULL,
+			       NULL),
+			 MARLIN_REPLY_FATAL);
+	ck_assert_int_eq(parse("Error:MINTEMP triggered, system stopped! Heater_ID: bed", &r,
+			       NULL, NULL),
+			 MARLIN_REPLY_FATAL);
+	ck_assert_int_eq(parse("Error: MAXTEMP triggered", &r, NULL, NULL), MARLIN_REPLY_FATAL);
+	ck_assert_int_eq(parse("Error:Something else", &r, NULL, NULL), MARLIN_REPLY_ERROR);
+	ck_assert_int_eq(parse("echo:busy: processing", &r, NULL, NULL), MARLIN_REPLY_BUSY);
+	ck_assert_int_eq(parse("echo:busy: paused for user", &r, NULL, NULL), MARLIN_REPLY_BUSY);
+	ck_assert_int_eq(parse("echo:Unknown command: \"M9999\"", &r, NULL, NULL),
+			 MARLIN_REPLY_UNKNOWN_CMD);
+	ck_assert_int_eq(parse("start", &r, NULL, NULL), MARLIN_REPLY_START);
+	ck_assert_int_eq(parse("//action:pause", &r, NULL, NULL), MARLIN_REPLY_ACTION);
+	ck_assert_str_eq(r.action, "pause");
+	ck_assert_int_eq(parse("//action:prompt_begin Filament", &r, NULL, NULL),
+			 MARLIN_REPLY_ACTION);
+	ck_assert_str_eq(r.action, "prompt_begin");
+}
+END_TEST
+
+START_TEST(parse_temperatures)
+{
+	struct marlin_reply r;
+	struct marlin_status st;
+	memset(&st, 0, sizeof(st));
+	ck_assert_int_eq(parse("ok T:210.50 /215.00 B:60.00 /60.00 @:127 B@:0", &r, &st, NULL),
+			 MARLIN_REPLY_OK);
+	ck_assert(r.has_temps && !r.has_b);
+	ck_assert_double_eq_tol(st.tool[0].actual, 210.5, 1e-9);
+	ck_assert_double_eq_tol(st.tool[0].target, 215.0, 1e-9);
+	ck_assert_double_eq_tol(st.bed.actual, 60.0, 1e-9);
+	ck_assert(!st.heating_wait);
+	ck_assert_int_eq(parse(" T:180.3 /200.0 B:25.0 /0.0 @:0 B@:0 W:?", &r, &st, NULL),
+			 MARLIN_REPLY_TEMP);
+	ck_assert(st.heating_wait);
+	ck_assert_double_eq_tol(st.tool[0].actual, 180.3, 1e-9);
+	ck_assert_int_eq(parse("T:200 /200 B:60 /60 T0:200 /200 T1:150.5 /160 C:35.5 /40 @:0 "
+			       "W:3",
+			       &r, &st, NULL),
+			 MARLIN_REPLY_TEMP);
+	ck_assert(st.tool[1].present && st.chamber.present);
+	ck_assert_double_eq_tol(st.tool[1].actual, 150.5, 1e-9);
+	ck_assert_double_eq_tol(st.tool[1].target, 160.0, 1e-9);
+	ck_assert_double_eq_tol(st.chamber.target, 40.0, 1e-9);
+	ck_assert(st.heating_wait);
+	ck_assert_int_eq(parse("X:0.00 Y:0.00 Z:0.00 E:0.00 Count X:0", &r, &st, NULL),
+			 MARLIN_REPLY_OTHER);
+}
+END_TEST
+
+START_TEST(parse_m115)
+{
+	struct marlin_reply r;
+	struct marlin_caps caps;
+	memset(&caps, 0, sizeof(caps));
+	ck_assert_int_eq(parse("FIRMWARE_NAME:Marlin 2.1.2.1 (Github) SOURCE_CODE_URL:github.com/"
+			       "MarlinFirmware/Marlin PROTOCOL_VERSION:1.0 MACHINE_TYPE:Ender-3 V2 "
+			       "EXTRUDER_COUNT:1 UUID:cede2a2f-41a2-4748-9b12-c55c62f367ff",
+			       &r, NULL, &caps),
+			 MARLIN_REPLY_FIRMWARE);
+	ck_assert(caps.m115);
+	ck_assert_str_eq(caps.firmware_name, "Marlin 2.1.2.1 (Github)");
+	ck_assert_str_eq(caps.machine_type, "Ender-3 V2");
+	ck_assert_int_eq(caps.extruder_count, 1);
+	ck_assert_int_eq(parse("Cap:EMERGENCY_PARSER:1", &r, NULL, &caps), MARLIN_REPLY_CAP);
+	ck_assert_int_eq(parse("Cap:AUTOREPORT_TEMP:1", &r, NULL, &caps), MARLIN_REPLY_CAP);
+	ck_assert_int_eq(parse("Cap:HOST_ACTION_COMMANDS:0", &r, NULL, &caps), MARLIN_REPLY_CAP);
+	ck_assert_int_eq(parse("Cap:ADVANCED_OK:1", &r, NULL, &caps), MARLIN_REPLY_CAP);
+	ck_assert(caps.emergency_parser && caps.autoreport_temp && caps.advanced_ok);
+	ck_assert(!caps.host_action_commands);
+}
+END_TEST
+
 /* One case per test so CK_RUN_CASE can pick one. */
 static void add_case(Suite *s, const char *name, const TTest *t, int timeout)
 {
@@ -378,5 +694,17 @@ Suite *marlin_suite(void)
 	add_case(s, "rx128", stream_rx128, 120);
 	add_case(s, "rx128_faults", stream_rx128_faults, 120);
 	add_case(s, "queue_full", stream_queue_full, 120);
+	add_case(s, "m109", m109_no_timeout, 60);
+	add_case(s, "reset", reset_detected, 60);
+	add_case(s, "unplug", unplug_detected, 60);
+	add_case(s, "halt", halt_stops_without_resend, 60);
+	add_case(s, "cancel", cancel_safe_stop, 60);
+	add_case(s, "connect_no_answer", connect_no_answer, 60);
+	TCase *tc = tcase_create("parse");
+	tcase_add_test(tc, parse_ok);
+	tcase_add_test(tc, parse_resend_and_errors);
+	tcase_add_test(tc, parse_temperatures);
+	tcase_add_test(tc, parse_m115);
+	suite_add_tcase(s, tc);
 	return s;
 }
