@@ -604,22 +604,29 @@ static void trace(struct marlin *m, const char *dir, const char *text, size_t le
 	m->o.trace(m->o.trace_ctx, dir, buf);
 }
 
+/* A read or write on the port failed (what: "reading from"/"writing to"):
+ * the job ends as a link failure, a hang-up named as such. */
+static int marlin_port_failed(struct marlin *m, const char *what, const struct st_error *e,
+			      struct st_error *err)
+{
+	char where[160];
+	marlin_where(m, where, sizeof(where));
+	if (xport_is_gone(m->x))
+		return marlin_fail(m, MARLIN_FAIL_LINK, err,
+				   "the port %s closed (printer unplugged or switched off); %s",
+				   xport_describe(m->x), where);
+	return marlin_fail(m, MARLIN_FAIL_LINK, err, "%s %s failed: %s; %s", what,
+			   xport_describe(m->x), e->msg, where);
+}
+
 /* Write raw bytes; a failure ends the job as a link failure. */
 static int marlin_write(struct marlin *m, const char *buf, size_t len, struct st_error *err)
 {
 	struct st_error e = {0};
-	char where[160];
 	if (!len)
 		return 0;
-	if (xport_write_all(m->x, buf, len, MARLIN_WRITE_MS, NULL, &e)) {
-		marlin_where(m, where, sizeof(where));
-		if (xport_is_gone(m->x))
-			return marlin_fail(m, MARLIN_FAIL_LINK, err,
-					   "the port %s closed (printer unplugged or switched off); %s",
-					   xport_describe(m->x), where);
-		return marlin_fail(m, MARLIN_FAIL_LINK, err, "writing to %s failed: %s; %s",
-				   xport_describe(m->x), e.msg, where);
-	}
+	if (xport_write_all(m->x, buf, len, MARLIN_WRITE_MS, NULL, &e))
+		return marlin_port_failed(m, "writing to", &e, err);
 	m->st.bytes_written += len;
 	return 0;
 }
@@ -927,17 +934,9 @@ static int marlin_read(struct marlin *m, int timeout_ms, struct st_error *err)
 {
 	char buf[4096];
 	struct st_error e = {0};
-	char where[160];
 	int n = xport_read(m->x, buf, sizeof(buf), timeout_ms, &e);
-	if (n < 0) {
-		marlin_where(m, where, sizeof(where));
-		if (xport_is_gone(m->x))
-			return marlin_fail(m, MARLIN_FAIL_LINK, err,
-					   "the port %s closed (printer unplugged or switched off); %s",
-					   xport_describe(m->x), where);
-		return marlin_fail(m, MARLIN_FAIL_LINK, err, "reading from %s failed: %s; %s",
-				   xport_describe(m->x), e.msg, where);
-	}
+	if (n < 0)
+		return marlin_port_failed(m, "reading from", &e, err);
 	if (n == 0)
 		return 0;
 	double now = mono_s();

@@ -395,62 +395,53 @@ START_TEST(m109_no_timeout)
 }
 END_TEST
 
+/* Stream 2000 generated lines with a reset or unplug fault: the job must
+ * end with a link failure whose message has want1 and want2, before line
+ * at_line was acknowledged, within limit_s. */
+static void fault_ends_job(struct sim_marlin_options *so, long at_line, const char *want1,
+			   const char *want2, double limit_s)
+{
+	struct rig r;
+	struct marlin_options mo;
+	struct marlin_status st;
+	struct st_error err = {0};
+	struct gcode_reader *gr;
+	fast_driver(&mo);
+	rig_start(&r, so, &mo);
+	FILE *f = gen_file(2000);
+	ck_assert_int_eq(gcode_reader_new(f, "gen", &gr, &err), 0);
+	double t0 = now_s();
+	int rc = marlin_stream_file(r.m, gr, "gen", NULL, NULL, NULL, &err);
+	ck_assert_int_eq(rc, ST_ERR_IO);
+	ck_assert_double_lt(now_s() - t0, limit_s); /* seen at once, not by a time-out */
+	marlin_status(r.m, &st);
+	ck_assert_int_eq(st.fail, MARLIN_FAIL_LINK);
+	ck_assert_msg(strstr(err.msg, want1) && strstr(err.msg, want2), "%s", err.msg);
+	ck_assert_int_lt(st.last_acked_n, at_line);
+	ck_assert_int_gt(st.last_acked_n, at_line - 100);
+	gcode_reader_free(gr);
+	fclose(f);
+	rig_stop(&r);
+}
+
 /* A board reset mid-stream ("start" again) ends the job with a clear
  * error naming the last line acknowledged. */
 START_TEST(reset_detected)
 {
-	struct rig r;
 	struct sim_marlin_options so;
-	struct marlin_options mo;
-	struct marlin_status st;
-	struct st_error err = {0};
 	fast_sim(&so);
 	so.reset_at_line = 500;
-	fast_driver(&mo);
-	rig_start(&r, &so, &mo);
-	FILE *f = gen_file(2000);
-	struct gcode_reader *gr;
-	ck_assert_int_eq(gcode_reader_new(f, "gen", &gr, &err), 0);
-	int rc = marlin_stream_file(r.m, gr, "gen", NULL, NULL, NULL, &err);
-	ck_assert_int_eq(rc, ST_ERR_IO);
-	marlin_status(r.m, &st);
-	ck_assert_int_eq(st.fail, MARLIN_FAIL_LINK);
-	ck_assert_msg(strstr(err.msg, "restarted") && strstr(err.msg, "last line acknowledged"),
-		      "%s", err.msg);
-	ck_assert_int_lt(st.last_acked_n, 500);
-	ck_assert_int_gt(st.last_acked_n, 400);
-	gcode_reader_free(gr);
-	fclose(f);
-	rig_stop(&r);
+	fault_ends_job(&so, 500, "restarted", "last line acknowledged", 4.0);
 }
 END_TEST
 
 /* The cable pulled mid-stream: the port hangs up, the job ends. */
 START_TEST(unplug_detected)
 {
-	struct rig r;
 	struct sim_marlin_options so;
-	struct marlin_options mo;
-	struct marlin_status st;
-	struct st_error err = {0};
 	fast_sim(&so);
 	so.unplug_at_line = 700;
-	fast_driver(&mo);
-	rig_start(&r, &so, &mo);
-	FILE *f = gen_file(2000);
-	struct gcode_reader *gr;
-	ck_assert_int_eq(gcode_reader_new(f, "gen", &gr, &err), 0);
-	double t0 = now_s();
-	int rc = marlin_stream_file(r.m, gr, "gen", NULL, NULL, NULL, &err);
-	ck_assert_int_eq(rc, ST_ERR_IO);
-	ck_assert_double_lt(now_s() - t0, 4.0); /* seen at once, not by a time-out */
-	marlin_status(r.m, &st);
-	ck_assert_int_eq(st.fail, MARLIN_FAIL_LINK);
-	ck_assert_msg(strstr(err.msg, "closed") && strstr(err.msg, "line"), "%s", err.msg);
-	ck_assert_int_lt(st.last_acked_n, 700);
-	gcode_reader_free(gr);
-	fclose(f);
-	rig_stop(&r);
+	fault_ends_job(&so, 700, "closed", "last line acknowledged", 4.0);
 }
 END_TEST
 
