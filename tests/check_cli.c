@@ -541,6 +541,80 @@ START_TEST(sim_command_runs_and_cleans_up)
 }
 END_TEST
 
+/* `stratum send` end to end against `stratum sim --link` in the
+ * background: the JSON report the benchmark reads, and the log equals the
+ * file. */
+START_TEST(send_json_to_sim)
+{
+	const char *gc = tu_path("send.gcode"), *link = tu_path("send-tty");
+	const char *log = tu_path("send-sim.log");
+	const char *bin = getenv("STRATUM_BIN") ? getenv("STRATUM_BIN") : "build/stratum";
+	FILE *f = fopen(gc, "w");
+	ck_assert_ptr_nonnull(f);
+	fputs("; test job\nG21\nG90\n;LAYER:0\n", f);
+	for (int i = 0; i < 2000; i++)
+		fprintf(f, "G1 X%d.%d Y%d E0.01 ; move\n", 10 + i % 90, i % 10, 20 + i % 70);
+	fclose(f);
+	int rc = tu_run(out, sizeof(out),
+			"sim --dialect marlin --baud 1000000 --speedup 100000 --link %s --log %s "
+			">/dev/null & P=$!; for i in 1 2 3 4 5 6 7 8 9 10; do [ -e %s ] && break; "
+			"sleep 0.1; done; %s send %s --port %s --printer generic-marlin --json; "
+			"r=$?; kill $P; wait $P; exit $r",
+			link, log, link, bin, gc, link);
+	ck_assert_msg(rc == 0, "exit %d: %s", rc, out);
+	json_error_t je;
+	const char *brace = strchr(out, '{');
+	ck_assert_msg(brace != NULL, "%s", out);
+	json_t *o = json_loads(brace, JSON_DISABLE_EOF_CHECK, &je);
+	ck_assert_msg(o != NULL, "bad JSON: %s", out);
+	ck_assert(json_is_true(json_object_get(o, "ok")));
+	ck_assert_int_eq(json_integer_value(json_object_get(o, "lines")), 2002);
+	ck_assert_int_eq(json_integer_value(json_object_get(o, "resends")), 0);
+	ck_assert_int_eq(json_integer_value(json_object_get(o, "errors")), 0);
+	const char *keys[] = {"seconds", "bytes", "lines_per_s", "bytes_per_s", "link_fraction"};
+	for (size_t i = 0; i < sizeof(keys) / sizeof(keys[0]); i++)
+		ck_assert_msg(json_number_value(json_object_get(o, keys[i])) > 0, "%s", keys[i]);
+	json_decref(o);
+	/* every command once, in order, no comment sent */
+	f = fopen(log, "r");
+	ck_assert_ptr_nonnull(f);
+	char line[256];
+	int moves = 0, other = 0;
+	while (fgets(line, sizeof(line), f)) {
+		if (strstr(line, " G1 X"))
+			moves++;
+		else
+			other++;
+		ck_assert_msg(!strchr(line, ';'), "a comment reached the printer: %s", line);
+	}
+	fclose(f);
+	ck_assert_int_eq(moves, 2000);
+}
+END_TEST
+
+START_TEST(send_exit_codes)
+{
+	const char *gc = tu_path("ok.gcode"), *bad = tu_path("bad.gcode");
+	tu_write_str(gc, "G28\nG1 X10\n");
+	tu_write_str(bad, "G28\nG1 X10\nG1 X1.2.3\n");
+	ck_assert_int_eq(tu_run(out, sizeof(out), "send %s --printer generic-marlin", gc), 2);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "send %s --port /dev/null --printer nosuch", gc),
+			 2);
+	ck_assert_int_eq(tu_run(out, sizeof(out),
+				"send %s --port %s --printer generic-marlin", gc,
+				tu_path("no-such-port")),
+			 69);
+	ck_assert_msg(strstr(out, "no-such-port"), "%s", out);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "send %s --port %s --printer generic-marlin",
+				bad, tu_path("no-such-port")),
+			 65);
+	ck_assert_msg(strstr(out, "line 3") && strstr(out, "nothing was sent"), "%s", out);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "send %s --port %s --printer generic-marlin",
+				tu_path("missing.gcode"), tu_path("no-such-port")),
+			 65);
+}
+END_TEST
+
 Suite *cli_suite(void)
 {
 	Suite *s = suite_create("cli");
@@ -557,6 +631,8 @@ Suite *cli_suite(void)
 	tcase_add_test(tc, bad_inputs_exit_65);
 	tcase_add_test(tc, ports_json);
 	tcase_add_test(tc, sim_command_runs_and_cleans_up);
+	tcase_add_test(tc, send_json_to_sim);
+	tcase_add_test(tc, send_exit_codes);
 	suite_add_tcase(s, tc);
 
 	tc = tcase_create("repair");

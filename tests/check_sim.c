@@ -231,6 +231,31 @@ START_TEST(bad_checksum)
 }
 END_TEST
 
+/* Marlin 2.1's flush_and_request_resend ends with a plain "ok", also with
+ * ADVANCED_OK: that ok answers the resend request, not a command. */
+START_TEST(line_error_plain_ok)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	char bad[64];
+	fast_opts(&o);
+	o.advanced_ok = true;
+	cl_start(&c, &o);
+	cl_send_n(&c, 1, "G21");
+	cl_expect(&c, "ok N1 ", NULL, 0, 2.0);
+	snprintf(bad, sizeof(bad), "N2 G21*%u\n", (unsigned)(gcode_checksum("N2 G21", 6) ^ 1));
+	cl_send(&c, bad);
+	cl_next_is(&c, "Error:checksum mismatch, Last Line: 1");
+	cl_next_is(&c, "Resend: 2");
+	cl_next_is(&c, "ok");
+	cl_send_n(&c, 2, "G21");
+	cl_expect(&c, "ok N2 ", NULL, 0, 2.0);
+	sim_marlin_stop(c.sim);
+	ck_assert_str_eq(cl_log(&c), "1 G21\n2 G21\n");
+	cl_stop(&c);
+}
+END_TEST
+
 START_TEST(wrong_line_number)
 {
 	struct sim_marlin_options o;
@@ -810,6 +835,7 @@ Suite *sim_suite(void)
 	tcase_add_test(proto, boot_banner);
 	tcase_add_test(proto, ok_and_log);
 	tcase_add_test(proto, bad_checksum);
+	tcase_add_test(proto, line_error_plain_ok);
 	tcase_add_test(proto, wrong_line_number);
 	tcase_add_test(proto, duplicate_ignored);
 	tcase_add_test(proto, m110_renumbers);

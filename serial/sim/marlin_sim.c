@@ -358,15 +358,18 @@ static void sim_ok(struct sim_marlin *s, const struct sim_cmd *c, double now)
 		sim_sendf(s, "ok P%zu B%zu", pf, bf);
 }
 
-/* Marlin's gcode_line_error + flush_and_request_resend.  Marlin also reads
- * its RX ring empty ("clear out the RX buffer"): lines behind the bad one
- * that are already in the ring are lost without a word. */
-static void sim_line_error(struct sim_marlin *s, const char *what, double now)
+/*
+ * Marlin 2.1's gcode_line_error + flush_and_request_resend: the error, the
+ * RX ring read empty ("clear out the RX buffer": lines behind the bad one
+ * that are already in the ring are lost without a word), "Resend:" and a
+ * plain "ok" (STR_OK, never the ADVANCED_OK form).
+ */
+static void sim_line_error(struct sim_marlin *s, const char *what)
 {
 	s->rx_flush = true;
 	sim_sendf(s, "Error:%s, Last Line: %ld", what, s->last_n);
 	sim_sendf(s, "Resend: %ld", s->last_n + 1);
-	sim_ok(s, NULL, now);
+	sim_send(s, "ok");
 }
 
 /* Temperature report as print_heater_states writes it (leading space). */
@@ -389,7 +392,7 @@ static long sim_read_long(const char *p, const char *end)
 }
 
 /* Check one complete line the way queue.cpp does and queue it. */
-static void sim_accept_line(struct sim_marlin *s, double now)
+static void sim_accept_line(struct sim_marlin *s)
 {
 	char *cmd = s->line;
 	size_t len = s->line_len;
@@ -421,23 +424,23 @@ static void sim_accept_line(struct sim_marlin *s, double now)
 			 * 2.1 drops last-1 and last silently (no error, no ok). */
 			if (n == s->last_n || n == s->last_n - 1)
 				return;
-			sim_line_error(s, "Line Number is not Last Line Number+1", now);
+			sim_line_error(s, "Line Number is not Last Line Number+1");
 			return;
 		}
 		if (!star) {
-			sim_line_error(s, "No Checksum with line number", now);
+			sim_line_error(s, "No Checksum with line number");
 			return;
 		}
 		long want = sim_read_long(star + 1, cmd + len);
 		if (gcode_checksum(cmd, (size_t)(star - cmd)) != want) {
-			sim_line_error(s, "checksum mismatch", now);
+			sim_line_error(s, "checksum mismatch");
 			return;
 		}
 		s->last_n = n;
 		has_n = true;
 		n = sim_read_long(cmd + 1, cmd + len);
 	} else if (star) {
-		sim_line_error(s, "No Line Number with checksum", now);
+		sim_line_error(s, "No Line Number with checksum");
 		return;
 	}
 
@@ -530,14 +533,14 @@ static void sim_rx_byte(struct sim_marlin *s, uint8_t b, double now)
 }
 
 /* Move bytes from the RX ring into lines while a queue slot is free. */
-static void sim_serial_commands(struct sim_marlin *s, double now)
+static void sim_serial_commands(struct sim_marlin *s)
 {
 	size_t i = 0;
 	while (i < s->rx_len && s->q_count < s->o.bufsize && !s->halted) {
 		char ch = (char)s->rx[i++];
 		if (ch == '\n' || ch == '\r') {
 			if (!s->line_comment || s->line_len)
-				sim_accept_line(s, now);
+				sim_accept_line(s);
 			s->line_len = 0;
 			s->line_comment = false;
 			if (s->rx_flush) {
@@ -896,6 +899,11 @@ static void sim_wire_deliver(struct sim_marlin *s, double now, double *wake)
 	while (i < s->wire_len && s->in_t + byte_s <= now) {
 		s->in_t += byte_s;
 		sim_rx_byte(s, s->wire[i++], s->in_t);
+		/* The firmware empties the ring while a queue slot is free far
+		 * faster than bytes arrive, so a late loop delivering a batch
+		 * must not overflow a ring the real board would have drained. */
+		if (s->rx_len >= s->o.rx_buffer)
+			sim_serial_commands(s);
 	}
 	memmove(s->wire, s->wire + i, s->wire_len - i);
 	s->wire_len -= i;
@@ -927,9 +935,9 @@ int sim_marlin_run(struct sim_marlin *s, volatile sig_atomic_t *stop, struct st_
 
 		sim_wire_deliver(s, now, &wake);
 		sim_physics(s, now, dt);
-		sim_serial_commands(s, now);
+		sim_serial_commands(s);
 		sim_execute(s, now);
-		sim_serial_commands(s, now);
+		sim_serial_commands(s);
 		if (s->unplugged)
 			break;
 		if (sim_flush_tx(s, now, &wake))
