@@ -15,11 +15,12 @@ BUILD    ?= build
 CC       := gcc
 CXX      := g++
 
-# Debian packages the build, tests and demo need (DESIGN.md "Dependencies").
+# Debian packages the build, tests and demo need (DESIGN.md "Dependencies");
+# gpx is the reference S3G host the s3g suite drives the simulator with.
 DEB_PACKAGES := gcc g++ make pkg-config dpkg-dev \
 	libserialport-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev libtbb-dev \
 	libpolyclipping-dev check libsqlite3-dev libmicrohttpd-dev libjansson-dev \
-	libmosquitto-dev mosquitto
+	libmosquitto-dev mosquitto gpx
 # Only the benchmark compares against these (printcore: Printrun's host, also
 # used by the sim suite's faithfulness test, which is skipped without it).
 BENCH_PACKAGES := admesh time bc prusa-slicer printcore
