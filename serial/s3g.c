@@ -493,6 +493,16 @@ static int s3g_send(struct s3g *s, const uint8_t *payload, size_t len, uint8_t *
 		s->st.retries++;
 		if (s3g_quiet(s, err) < 0)
 			return s3g_link_error(s, what, err);
+		/* the error may have been a late reply to an earlier, damaged
+		 * copy while this copy was queued: ask before resending */
+		if (res) {
+			int rc = 0;
+			enum s3g_lost d = res->decide(s, res->ctx, err, &rc);
+			if (rc < 0)
+				return rc;
+			if (d == S3G_LOST_QUEUED)
+				return 1;
+		}
 	}
 }
 

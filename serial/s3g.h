@@ -40,9 +40,13 @@
  * many bytes are still queued; the host knows the length of every command
  * it had confirmed, so the queued byte count matches either "packet queued"
  * or "packet not queued", and the packet is resent only in the second case.
+ * The same check runs before resending after an error reply, because a
+ * damaged packet makes the firmware answer each of its noise bytes with
+ * 0x80, and a late one can be taken for the reply to the next copy.
  * Where that cannot decide (no build start notification in the stream, or
  * neither count matches), the packet is resent as the protocol document
- * says and status.dup_risk counts it.
+ * says and status.dup_risk counts it.  CRC-8 itself misses some two-bit
+ * errors; a damaged packet it lets through is beyond any host's reach.
  *
  * Reset detection.  Sailfish sends nothing when it reboots; it simply
  * answers as freshly booted: build statistics state 0 ("no build

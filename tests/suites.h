@@ -21,6 +21,7 @@ Suite *infill_suite(void);	/* tests/check_infill.c: skins, bridges, infill */
 Suite *support_suite(void);	/* tests/check_support.c: skirt, brim, support material */
 Suite *slicecli_suite(void);	/* tests/check_slicecli.c: stratum slice end to end */
 Suite *region_suite(void);	/* tests/check_region.c: printed region against cross-sections */
+Suite *s3g_suite(void);		/* tests/check_s3g.c: S3G packets, driver, simulated Sailfish */
 Suite *cli_suite(void);		/* tests/check_cli.c: the stratum binary end to end */
 
 #endif
