@@ -444,49 +444,46 @@ START_TEST(overflow_resend)
 }
 END_TEST
 
+/* Stream n moves with a fault set in so; the stream must fail with ST_ERR_IO
+ * and a message holding want and naming the last confirmed command. */
+static void fault_stream(struct sim_sailfish_options *so, size_t n, const char *want,
+			 struct rig *r)
+{
+	struct s3g_options d;
+	struct st_error err = {0};
+	uint8_t *store;
+	fast_drv(&d);
+	rig_start(r, so, &d);
+	struct s3g_cmd *c = make_stream(n, 50000, &store);
+	int rc = s3g_stream(r->d, c, n, NULL, NULL, NULL, NULL, &err);
+	ck_assert_int_eq(rc, ST_ERR_IO);
+	ck_assert_msg(strstr(err.msg, want), "%s", err.msg);
+	ck_assert_msg(strstr(err.msg, "was confirmed"), "%s", err.msg);
+	free(c);
+	free(store);
+}
+
 START_TEST(reset_detected)
 {
 	struct sim_sailfish_options so;
-	struct s3g_options d;
 	struct rig r;
-	struct st_error err = {0};
-	uint8_t *store;
 	fast_sim(&so);
 	so.reset_at = 1500;
-	fast_drv(&d);
-	rig_start(&r, &so, &d);
-	struct s3g_cmd *c = make_stream(3000, 50000, &store);
-	int rc = s3g_stream(r.d, c, 3000, NULL, NULL, NULL, NULL, &err);
-	ck_assert_int_eq(rc, ST_ERR_IO);
-	ck_assert_msg(strstr(err.msg, "reset"), "%s", err.msg);
-	ck_assert_msg(strstr(err.msg, "confirmed"), "%s", err.msg);
+	fault_stream(&so, 3000, "reset", &r);
 	ck_assert_uint_eq(sim_sailfish_resets(r.sim), 1);
 	rig_stop(&r);
-	free(c);
-	free(store);
 }
 END_TEST
 
 START_TEST(unplug_detected)
 {
 	struct sim_sailfish_options so;
-	struct s3g_options d;
 	struct rig r;
-	struct st_error err = {0};
-	uint8_t *store;
 	fast_sim(&so);
 	so.unplug_at = 300;
-	fast_drv(&d);
-	rig_start(&r, &so, &d);
-	struct s3g_cmd *c = make_stream(2000, 50000, &store);
-	int rc = s3g_stream(r.d, c, 2000, NULL, NULL, NULL, NULL, &err);
-	ck_assert_int_eq(rc, ST_ERR_IO);
-	ck_assert_msg(strstr(err.msg, "unplugged"), "%s", err.msg);
-	ck_assert_msg(strstr(err.msg, "was confirmed"), "%s", err.msg);
+	fault_stream(&so, 2000, "unplugged", &r);
 	ck_assert(sim_sailfish_unplugged(r.sim));
 	rig_stop(&r);
-	free(c);
-	free(store);
 }
 END_TEST
 

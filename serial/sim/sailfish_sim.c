@@ -25,6 +25,7 @@
 
 #include "s3g.h"
 #include "sailfish_sim.h"
+#include "sim_util.h"
 
 #define SF_PLANNER 16		/* Sailfish BLOCK_BUFFER_SIZE */
 #define SF_TX_MAX (1u << 20)	/* reply backlog cap (bytes) */
@@ -96,28 +97,18 @@ struct sim_sailfish {
 	bool unplugged;
 
 	double t_prev;
-	pthread_t thread;
-	bool thread_on;
-	volatile sig_atomic_t thread_stop;
-	int thread_rc;
+	struct sim_thread th;
 };
 
 static double sf_now(void)
 {
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+	return sim_clock();
 }
 
 /* xorshift64*: uniform double in [0, 1). */
 static double sf_rand(struct sim_sailfish *s)
 {
-	uint64_t x = s->rng;
-	x ^= x >> 12;
-	x ^= x << 25;
-	x ^= x >> 27;
-	s->rng = x;
-	return (double)((x * 2685821657736338717ull) >> 11) * (1.0 / 9007199254740992.0);
+	return sim_rand01(&s->rng);
 }
 
 static uint32_t sf_rd32(const uint8_t *p)
@@ -195,11 +186,12 @@ static void sf_hard_reset(struct sim_sailfish *s, double now)
 	s->resets++;
 }
 
+static int sf_thread_run(void *sim, volatile sig_atomic_t *stop);
+
 int sim_sailfish_new(const struct sim_sailfish_options *opts, struct sim_sailfish **out,
 		     struct st_error *err)
 {
 	struct sim_sailfish *s;
-	struct termios tio;
 	int rc;
 
 	if (out)
@@ -231,19 +223,12 @@ int sim_sailfish_new(const struct sim_sailfish_options *opts, struct sim_sailfis
 		rc = st_error_set(err, ST_ERR_NOMEM, "simulated Sailfish: out of memory");
 		goto out_free;
 	}
-	if (openpty(&s->master, &s->slave, s->slave_path, NULL, NULL) < 0) {
+	if (sim_pty_open(&s->master, &s->slave, s->slave_path) < 0) {
 		rc = st_error_set(err, ST_ERR_IO,
 				  "simulated Sailfish: cannot open a pseudo-terminal: %s",
 				  strerror(errno));
 		goto out_free;
 	}
-	if (tcgetattr(s->slave, &tio) == 0) {
-		cfmakeraw(&tio);
-		tcsetattr(s->slave, TCSANOW, &tio);
-	}
-	fcntl(s->master, F_SETFL, fcntl(s->master, F_GETFL) | O_NONBLOCK);
-	fcntl(s->master, F_SETFD, FD_CLOEXEC);
-	fcntl(s->slave, F_SETFD, FD_CLOEXEC);
 	if (s->o.log_path) {
 		s->log = fopen(s->o.log_path, "w");
 		if (!s->log) {
@@ -263,6 +248,8 @@ int sim_sailfish_new(const struct sim_sailfish_options *opts, struct sim_sailfis
 	sf_hard_reset(s, sf_now());
 	s->resets = 0;
 	s->boot_until = 0; /* powered on before the host opened the port */
+	s->th.run = sf_thread_run;
+	s->th.sim = s;
 	*out = s;
 	return 0;
 
@@ -907,27 +894,14 @@ int sim_sailfish_run(struct sim_sailfish *s, volatile sig_atomic_t *stop, struct
 					       s->soft_reset_pending))
 			wake = now; /* the host slice has work */
 
-		struct pollfd pfd = {.fd = s->master, .events = 0};
-		if (s->wire_len < sizeof(s->wire))
-			pfd.events |= POLLIN;
-		double left = wake - sf_now();
-		if (left < 0)
-			left = 0;
-		struct timespec ts = {(time_t)left, (long)((left - (double)(time_t)left) * 1e9)};
-		int r = ppoll(&pfd, 1, &ts, NULL);
-		if (r < 0 && errno != EINTR)
+		double arrived = 0;
+		size_t before = s->wire_len;
+		if (sim_wait_input(s->master, true, wake, s->wire, &s->wire_len,
+				   sizeof(s->wire), &arrived))
 			return st_error_set(err, ST_ERR_IO, "simulated Sailfish: poll failed: %s",
 					    strerror(errno));
-		if (r > 0 && (pfd.revents & POLLIN)) {
-			ssize_t n = read(s->master, s->wire + s->wire_len,
-					 sizeof(s->wire) - s->wire_len);
-			if (n > 0) {
-				now = sf_now();
-				if (!s->wire_len && s->in_t < now)
-					s->in_t = now;
-				s->wire_len += (size_t)n;
-			}
-		}
+		if (s->wire_len > before && !before && s->in_t < arrived)
+			s->in_t = arrived; /* idle link: these bytes start now */
 	}
 	if (s->unplugged && s->master >= 0) {
 		close(s->master);
@@ -940,32 +914,20 @@ int sim_sailfish_run(struct sim_sailfish *s, volatile sig_atomic_t *stop, struct
 	return 0;
 }
 
-static void *sf_thread_main(void *arg)
+/* The event loop as sim_thread runs it. */
+static int sf_thread_run(void *sim, volatile sig_atomic_t *stop)
 {
-	struct sim_sailfish *s = arg;
-	s->thread_rc = sim_sailfish_run(s, &s->thread_stop, NULL);
-	return NULL;
+	return sim_sailfish_run(sim, stop, NULL);
 }
 
 int sim_sailfish_start_thread(struct sim_sailfish *s, struct st_error *err)
 {
-	if (s->thread_on)
-		return st_error_set(err, ST_ERR_ARG, "simulated Sailfish: thread already running");
-	s->thread_stop = 0;
-	if (pthread_create(&s->thread, NULL, sf_thread_main, s))
-		return st_error_set(err, ST_ERR_IO, "simulated Sailfish: cannot start a thread");
-	s->thread_on = true;
-	return 0;
+	return sim_thread_start(&s->th, "simulated Sailfish", err);
 }
 
 int sim_sailfish_stop(struct sim_sailfish *s)
 {
-	if (!s->thread_on)
-		return 0;
-	s->thread_stop = 1;
-	pthread_join(s->thread, NULL);
-	s->thread_on = false;
-	return s->thread_rc;
+	return sim_thread_stop(&s->th);
 }
 
 void sim_sailfish_free(struct sim_sailfish *s)
