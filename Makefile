@@ -15,7 +15,8 @@ BUILD    ?= build
 CC       := gcc
 CXX      := g++
 
-# Debian packages the build, tests and demo need (DESIGN.md "Dependencies").
+# Debian packages the build, tests and demo need (DESIGN.md "Dependencies");
+# gpx is the reference S3G host the s3g suite drives the simulator with.
 DEB_PACKAGES := gcc g++ make pkg-config dpkg-dev \
 	libserialport-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev libtbb-dev \
 	libpolyclipping-dev check libsqlite3-dev libmicrohttpd-dev libjansson-dev \
@@ -106,9 +107,13 @@ $(BUILD)/bench/gen_mesh: $(BUILD)/bench/gen_mesh.o $(BUILD)/tests/fixtures.o $(B
 $(BUILD)/bench/region_check: $(BUILD)/bench/region_check.o $(BUILD)/libstratum.a
 	$(CXX) -pthread $(LDEXTRA) -o $@ $^ $(LDLIBS)
 
+# S3G streaming figures: our driver on an X3G file (issue 7 item 6).
+$(BUILD)/bench/s3g_stream: $(BUILD)/bench/s3g_stream.o $(BUILD)/libstratum.a
+	$(CXX) -pthread $(LDEXTRA) -o $@ $^ $(LDLIBS)
+
 bench:
 	@$(MAKE) deps EXTRA_PACKAGES="$(BENCH_PACKAGES)"
-	@$(MAKE) all $(BUILD)/bench/gen_mesh $(BUILD)/bench/region_check
+	@$(MAKE) all $(BUILD)/bench/gen_mesh $(BUILD)/bench/region_check $(BUILD)/bench/s3g_stream
 	bench/run.sh $(BUILD)/stratum
 
 clean:

@@ -1,12 +1,13 @@
 #!/bin/sh
-# bench/run.sh BIN [check|repair|slice|region|stream|x3g|all] - time `stratum check`
+# bench/run.sh BIN [check|repair|slice|region|stream|x3g|s3g|all] - time `stratum check`
 # against admesh, `stratum repair` on generated files, `stratum slice` against
 # PrusaSlicer's `--export-gcode`, and streaming to `stratum sim` with
 # `stratum send` against Printrun's printcore; `region` measures how well both
 # slicers' printed regions match the models' cross-sections (issue 5, with
 # build/bench/region_check); `x3g` times G-code -> X3G translation against
-# gpx -m fcp on the scan sliced for the Creator Pro; prints Markdown tables
-# for docs/benchmarks.md.
+# gpx -m fcp on a model sliced for the Creator Pro; `s3g` streams X3G to
+# `stratum sim --dialect sailfish` with our S3G driver (build/bench/s3g_stream)
+# against `gpx -s`; prints Markdown tables for docs/benchmarks.md.
 # Wall time, CPU time and peak RSS come from GNU time;
 # check and repair figures are the best of 3 runs, slice figures one run.
 set -eu
@@ -16,14 +17,14 @@ out=bench/out
 mkdir -p "$out"
 gen=build/bench/gen_mesh
 
-case $what in check|repair|slice|region|stream|x3g|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|slice|region|stream|x3g|all]" >&2; exit 2;; esac
+case $what in check|repair|slice|region|stream|x3g|s3g|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|slice|region|stream|x3g|s3g|all]" >&2; exit 2;; esac
 
-if [ "$what" != slice ] && [ "$what" != region ] && [ "$what" != stream ] && [ "$what" != x3g ]; then
+if [ "$what" != slice ] && [ "$what" != region ] && [ "$what" != stream ] && [ "$what" != x3g ] && [ "$what" != s3g ]; then
 	[ -f "$out/torus-1m.stl" ] || "$gen" torus 1000 500 "$out/torus-1m.stl"
 	[ -f "$out/torus-2m.stl" ] || "$gen" torus 1000 1000 "$out/torus-2m.stl"
 	[ -f "$out/spheres.stl" ] || "$gen" spheres 8 "$out/spheres.stl"
 fi
-if [ "$what" != check ] && [ "$what" != region ] && [ "$what" != stream ] && [ "$what" != x3g ]; then
+if [ "$what" != check ] && [ "$what" != region ] && [ "$what" != stream ] && [ "$what" != x3g ] && [ "$what" != s3g ]; then
 	[ -f "$out/torus-100k.stl" ] || "$gen" torus 250 200 "$out/torus-100k.stl"
 	[ -f "$out/twospheres.stl" ] || "$gen" twospheres 100 80 "$out/twospheres.stl"
 	[ -f "$out/scan.stl" ] || "$gen" scan 250 120 0.7 "$out/scan.stl"
@@ -335,13 +336,60 @@ else
 fi
 }
 
+# S3G streaming (issue 7 item 6): the same G-code as X3G to a fresh
+# simulated Sailfish per host at 115200 baud, motion and heating sped up so
+# only the link and the round trips cost time.  gpx -s translates and sends
+# in one pass; our driver sends gpx's own X3G of the file, so both send the
+# same commands.  Bytes are those written towards the printer (framing and
+# queries included); the link fraction counts both directions against
+# 11 520 bytes/s.
+s3g_table() {
+if ! command -v gpx >/dev/null 2>&1; then
+	echo "gpx is not installed (make deps installs it)" >&2
+	return 1
+fi
+[ -f "$out/dense-5k.gcode" ] || dense_gcode 5000 "$out/dense-5k.gcode"
+gcode="$out/dense-5k.gcode"
+(cd "$out" && gpx -m fcp dense-5k.gcode dense-5k.x3g >/dev/null 2>&1)
+cmds=$(wc -l <"$out/dense-5k.gcode")
+echo "| host | file | commands | bytes out | s | commands/s | bytes/s | link fraction (both ways) | log commands |"
+echo "|---|---|---|---|---|---|---|---|---|"
+for host in gpx stratum; do
+	log="$out/s3g-$host.log"
+	rm -f "$out/s3g-tty"
+	"$bin" sim --dialect sailfish --baud 115200 --speedup 1000000 --link "$out/s3g-tty" \
+		--log "$log" >"$out/s3g-sim.out" 2>&1 &
+	sim_pid=$!
+	i=0
+	while [ ! -L "$out/s3g-tty" ] && [ $i -lt 100 ]; do sleep 0.05; i=$((i + 1)); done
+	if [ "$host" = gpx ]; then
+		t0=$(date +%s.%N)
+		(cd "$out" && gpx -s -m fcp dense-5k.gcode "$(readlink s3g-tty)" >/dev/null 2>&1) || true
+		t1=$(date +%s.%N)
+		sleep 0.5
+		n=$(grep -c '^[0-9]' "$log" || true)
+		bytes=$(( $(stat -c %s "$out/dense-5k.x3g") + 3 * n ))
+		secs=$(echo "$t1 - $t0" | bc)
+		echo "| gpx -s $(dpkg-query -W -f='${Version}' gpx 2>/dev/null) | dense-5k | $n | $bytes | $secs | $(echo "$n / $secs" | bc) | $(echo "$bytes / $secs" | bc) | $(echo "scale=3; ($bytes + 4 * $n) / $secs / 11520" | bc) | $n |"
+	else
+		j="$out/s3g-stratum.json"
+		build/bench/s3g_stream "$(readlink "$out/s3g-tty")" "$out/dense-5k.x3g" 115200 >"$j" 2>"$out/s3g-stratum.err" || true
+		n=$(grep -c '^[0-9]' "$log" || true)
+		echo "| stratum (s3g driver) | dense-5k | $(json_any "$j" confirmed) | $(json_any "$j" bytes) | $(json_any "$j" seconds) | $(json_any "$j" commands_per_s) | $(json_any "$j" bytes_per_s) | $(json_any "$j" link_fraction) | $n |"
+	fi
+	kill "$sim_pid" 2>/dev/null || true
+	wait "$sim_pid" 2>/dev/null || true
+done
+}
+
 case $what in
 x3g) x3g_table ;;
+s3g) s3g_table ;;
 region) region_table ;;
 check) check_table ;;
 repair) repair_table ;;
 slice) slice_table ;;
 stream) stream_table ;;
-all) check_table; echo; repair_table; echo; slice_table; echo; region_table; echo; stream_table; echo; x3g_table ;;
+all) check_table; echo; repair_table; echo; slice_table; echo; region_table; echo; stream_table; echo; x3g_table; echo; s3g_table ;;
 esac
 

@@ -1,6 +1,7 @@
 /*
- * cmd_sim.c - `stratum sim --dialect marlin [options]`: run a simulated
- * printer on a pseudo-terminal until SIGINT/SIGTERM (DESIGN.md item 7).
+ * cmd_sim.c - `stratum sim --dialect marlin|sailfish [options]`: run a
+ * simulated printer on a pseudo-terminal until SIGINT/SIGTERM (DESIGN.md
+ * item 7).
  * Prints the pty path; --link PATH makes PATH a symlink to it, replaced
  * atomically and removed on exit.
  */
@@ -16,6 +17,7 @@
 #include "commands.h"
 #include "gcode.h"
 #include "sim/marlin_sim.h"
+#include "sim/sailfish_sim.h"
 #include "st_error.h"
 
 /* The one stop flag a signal handler may set (STYLE rule 10 exception). */
@@ -31,12 +33,15 @@ static void sim_on_signal(int sig)
 static void sim_usage(FILE *out)
 {
 	fprintf(out,
-		"usage: stratum sim --dialect marlin [--link PATH] [--log FILE] [--speedup K]\n"
-		"                   [--rx-buffer N] [--bufsize N] [--advanced-ok] [--corrupt P]\n"
-		"                   [--drop P] [--latency MS] [--reset-at LINE] [--unplug-at LINE]\n"
-		"                   [--baud N] [--seed N]\n"
+		"usage: stratum sim --dialect marlin|sailfish [--link PATH] [--log FILE]\n"
+		"                   [--speedup K] [--corrupt P] [--drop P] [--latency MS]\n"
+		"                   [--reset-at N] [--unplug-at N] [--baud N] [--seed N]\n"
+		"  marlin only:     [--rx-buffer N] [--bufsize N] [--advanced-ok]\n"
+		"  sailfish only:   [--buffer-size N] [--corrupt-replies P]\n"
 		"Runs a simulated printer on a pseudo-terminal and prints its path; stops on\n"
-		"Ctrl-C.  --link makes PATH a symlink to the pty while it runs.\n");
+		"Ctrl-C.  --link makes PATH a symlink to the pty while it runs.  N of\n"
+		"--reset-at/--unplug-at is a line number (marlin) or the number of the\n"
+		"executed command (sailfish).\n");
 }
 
 /* Read a non-negative number option; false with a message if malformed. */
@@ -89,16 +94,60 @@ static void sim_remove_link(const char *link, const char *target)
 		unlink(link);
 }
 
+/* Install the SIGINT/SIGTERM handler that sets sim_stop_flag. */
+static void sim_catch_signals(void)
+{
+	struct sigaction sa;
+	memset(&sa, 0, sizeof(sa));
+	sa.sa_handler = sim_on_signal;
+	sigemptyset(&sa.sa_mask);
+	sigaction(SIGINT, &sa, NULL);
+	sigaction(SIGTERM, &sa, NULL);
+}
+
+/* The sailfish half of cmd_sim: options already checked. */
+static int sim_run_sailfish(const struct sim_sailfish_options *so, const char *link)
+{
+	struct sim_sailfish *sim = NULL;
+	struct st_error err = {0};
+	int rc = sim_sailfish_new(so, &sim, &err);
+	if (rc) {
+		fprintf(stderr, "stratum sim: %s\n", err.msg);
+		return rc == ST_ERR_ARG ? ST_EXIT_USAGE : ST_EXIT_SOFTWARE;
+	}
+	const char *path = sim_sailfish_slave_path(sim);
+	if (link && sim_make_link(link, path)) {
+		sim_sailfish_free(sim);
+		return ST_EXIT_FAILURE;
+	}
+	printf("%s\n", path);
+	fflush(stdout);
+	sim_catch_signals();
+	rc = sim_sailfish_run(sim, &sim_stop_flag, &err);
+	if (rc)
+		fprintf(stderr, "stratum sim: %s\n", err.msg);
+	else if (sim_sailfish_unplugged(sim))
+		fprintf(stderr, "stratum sim: link unplugged after command %ld as asked "
+				"(--unplug-at)\n", so->unplug_at);
+	if (link)
+		sim_remove_link(link, path);
+	sim_sailfish_free(sim);
+	return rc ? ST_EXIT_SOFTWARE : ST_EXIT_OK;
+}
+
 int cmd_sim(int argc, char **argv)
 {
 	struct sim_marlin_options o;
+	struct sim_sailfish_options so;
 	struct sim_marlin *sim = NULL;
+	const char *marlin_only = NULL, *sailfish_only = NULL;
 	struct st_error err = {0};
 	const char *dialect = NULL, *link = NULL;
 	double v;
 	int rc;
 
 	sim_marlin_options_init(&o);
+	sim_sailfish_options_init(&so);
 	for (int i = 1; i < argc; i++) {
 		const char *a = argv[i];
 		const char *arg = i + 1 < argc ? argv[i + 1] : NULL;
@@ -107,6 +156,7 @@ int cmd_sim(int argc, char **argv)
 			return ST_EXIT_OK;
 		} else if (!strcmp(a, "--advanced-ok")) {
 			o.advanced_ok = true;
+			marlin_only = a;
 			continue;
 		}
 		if (a[0] != '-' || !arg) {
@@ -129,10 +179,21 @@ int cmd_sim(int argc, char **argv)
 			if (!sim_number(a, arg, 8, 65536, &v))
 				return ST_EXIT_USAGE;
 			o.rx_buffer = (unsigned)v;
+			marlin_only = a;
 		} else if (!strcmp(a, "--bufsize")) {
 			if (!sim_number(a, arg, 1, 1024, &v))
 				return ST_EXIT_USAGE;
 			o.bufsize = (unsigned)v;
+			marlin_only = a;
+		} else if (!strcmp(a, "--buffer-size")) {
+			if (!sim_number(a, arg, 64, 65536, &v))
+				return ST_EXIT_USAGE;
+			so.buffer_size = (unsigned)v;
+			sailfish_only = a;
+		} else if (!strcmp(a, "--corrupt-replies")) {
+			if (!sim_number(a, arg, 0, 1, &so.reply_corrupt_p))
+				return ST_EXIT_USAGE;
+			sailfish_only = a;
 		} else if (!strcmp(a, "--corrupt")) {
 			if (!sim_number(a, arg, 0, 1, &o.corrupt_p))
 				return ST_EXIT_USAGE;
@@ -166,17 +227,34 @@ int cmd_sim(int argc, char **argv)
 		}
 	}
 	if (!dialect) {
-		fprintf(stderr, "stratum sim: --dialect is required (marlin)\n");
+		fprintf(stderr, "stratum sim: --dialect is required (marlin or sailfish)\n");
 		sim_usage(stderr);
 		return ST_EXIT_USAGE;
 	}
 	if (!strcmp(dialect, "sailfish")) {
-		fprintf(stderr, "stratum sim: --dialect sailfish is not implemented yet; "
-				"use --dialect marlin\n");
-		return ST_EXIT_USAGE;
+		if (marlin_only) {
+			fprintf(stderr, "stratum sim: %s applies to --dialect marlin only\n",
+				marlin_only);
+			return ST_EXIT_USAGE;
+		}
+		so.log_path = o.log_path;
+		so.speedup = o.speedup;
+		so.baud = o.baud;
+		so.latency_ms = o.latency_ms;
+		so.corrupt_p = o.corrupt_p;
+		so.drop_p = o.drop_p;
+		so.reset_at = o.reset_at_line;
+		so.unplug_at = o.unplug_at_line;
+		so.seed = o.seed;
+		return sim_run_sailfish(&so, link);
 	}
 	if (strcmp(dialect, "marlin")) {
-		fprintf(stderr, "stratum sim: unknown --dialect '%s'; use marlin\n", dialect);
+		fprintf(stderr, "stratum sim: unknown --dialect '%s'; use marlin or sailfish\n",
+			dialect);
+		return ST_EXIT_USAGE;
+	}
+	if (sailfish_only) {
+		fprintf(stderr, "stratum sim: %s applies to --dialect sailfish only\n", sailfish_only);
 		return ST_EXIT_USAGE;
 	}
 
@@ -193,13 +271,7 @@ int cmd_sim(int argc, char **argv)
 	printf("%s\n", path);
 	fflush(stdout);
 
-	struct sigaction sa;
-	memset(&sa, 0, sizeof(sa));
-	sa.sa_handler = sim_on_signal;
-	sigemptyset(&sa.sa_mask);
-	sigaction(SIGINT, &sa, NULL);
-	sigaction(SIGTERM, &sa, NULL);
-
+	sim_catch_signals();
 	rc = sim_marlin_run(sim, &sim_stop_flag, &err);
 	if (rc)
 		fprintf(stderr, "stratum sim: %s\n", err.msg);

@@ -26,6 +26,7 @@
 
 #include "gcode.h"
 #include "marlin_sim.h"
+#include "sim_util.h"
 
 #define SIM_MAX_CMD 96		/* Marlin MAX_CMD_SIZE (bytes, NUL included) */
 #define SIM_PLANNER 16		/* Marlin BLOCK_BUFFER_SIZE */
@@ -118,29 +119,19 @@ struct sim_marlin {
 
 	bool halted, unplugged;
 
-	pthread_t thread;
-	bool thread_on;
-	volatile sig_atomic_t thread_stop;
-	int thread_rc;
+	struct sim_thread th;
 };
 
 /* Monotonic wall clock in seconds. */
 static double sim_now(void)
 {
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+	return sim_clock();
 }
 
 /* xorshift64* step: uniform double in [0, 1). */
 static double sim_rand(struct sim_marlin *s)
 {
-	uint64_t x = s->rng;
-	x ^= x >> 12;
-	x ^= x << 25;
-	x ^= x >> 27;
-	s->rng = x;
-	return (double)((x * 2685821657736338717ull) >> 11) * (1.0 / 9007199254740992.0);
+	return sim_rand01(&s->rng);
 }
 
 void sim_marlin_options_init(struct sim_marlin_options *o)
@@ -232,11 +223,12 @@ static void sim_reset_state(struct sim_marlin *s)
 	s->autoreport_s = 0;
 }
 
+static int sim_thread_run(void *sim, volatile sig_atomic_t *stop);
+
 int sim_marlin_new(const struct sim_marlin_options *opts, struct sim_marlin **out,
 		   struct st_error *err)
 {
 	struct sim_marlin *s;
-	struct termios tio;
 	int rc;
 
 	if (out)
@@ -269,18 +261,11 @@ int sim_marlin_new(const struct sim_marlin_options *opts, struct sim_marlin **ou
 		rc = st_error_set(err, ST_ERR_NOMEM, "simulated Marlin: out of memory");
 		goto out_free;
 	}
-	if (openpty(&s->master, &s->slave, s->slave_path, NULL, NULL) < 0) {
+	if (sim_pty_open(&s->master, &s->slave, s->slave_path) < 0) {
 		rc = st_error_set(err, ST_ERR_IO, "simulated Marlin: cannot open a pseudo-terminal: %s",
 				  strerror(errno));
 		goto out_free;
 	}
-	if (tcgetattr(s->slave, &tio) == 0) {
-		cfmakeraw(&tio);
-		tcsetattr(s->slave, TCSANOW, &tio);
-	}
-	fcntl(s->master, F_SETFL, fcntl(s->master, F_GETFL) | O_NONBLOCK);
-	fcntl(s->master, F_SETFD, FD_CLOEXEC);
-	fcntl(s->slave, F_SETFD, FD_CLOEXEC);
 	if (s->o.log_path) {
 		s->log = fopen(s->o.log_path, "w");
 		if (!s->log) {
@@ -299,6 +284,8 @@ int sim_marlin_new(const struct sim_marlin_options *opts, struct sim_marlin **ou
 	sim_reset_state(s);
 	s->t_prev = sim_now();
 	sim_boot(s, s->t_prev);
+	s->th.run = sim_thread_run;
+	s->th.sim = s;
 	*out = s;
 	return 0;
 
@@ -944,26 +931,14 @@ int sim_marlin_run(struct sim_marlin *s, volatile sig_atomic_t *stop, struct st_
 			return st_error_set(err, ST_ERR_IO, "simulated Marlin: writing to the pty failed: %s",
 					    strerror(errno));
 
-		struct pollfd pfd = {.fd = s->master, .events = 0};
-		if (s->wire_len < sizeof(s->wire))
-			pfd.events |= POLLIN;
-		double left = wake - sim_now();
-		if (left < 0)
-			left = 0;
-		struct timespec ts = {(time_t)left, (long)((left - (double)(time_t)left) * 1e9)};
-		int r = ppoll(&pfd, 1, &ts, NULL);
-		if (r < 0 && errno != EINTR)
+		double arrived = 0;
+		size_t before = s->wire_len;
+		if (sim_wait_input(s->master, true, wake, s->wire, &s->wire_len,
+				   sizeof(s->wire), &arrived))
 			return st_error_set(err, ST_ERR_IO, "simulated Marlin: poll failed: %s",
 					    strerror(errno));
-		if (r > 0 && (pfd.revents & POLLIN)) {
-			ssize_t n = read(s->master, s->wire + s->wire_len, sizeof(s->wire) - s->wire_len);
-			if (n > 0) {
-				now = sim_now();
-				if (!s->wire_len && s->in_t < now)
-					s->in_t = now; /* idle link: these bytes start now */
-				s->wire_len += (size_t)n;
-			}
-		}
+		if (s->wire_len > before && !before && s->in_t < arrived)
+			s->in_t = arrived; /* idle link: these bytes start now */
 	}
 	if (s->unplugged && s->master >= 0) {
 		close(s->master);
@@ -976,33 +951,20 @@ int sim_marlin_run(struct sim_marlin *s, volatile sig_atomic_t *stop, struct st_
 	return 0;
 }
 
-/* Thread body for sim_marlin_start_thread. */
-static void *sim_thread_main(void *arg)
+/* The event loop as sim_thread runs it. */
+static int sim_thread_run(void *sim, volatile sig_atomic_t *stop)
 {
-	struct sim_marlin *s = arg;
-	s->thread_rc = sim_marlin_run(s, &s->thread_stop, NULL);
-	return NULL;
+	return sim_marlin_run(sim, stop, NULL);
 }
 
 int sim_marlin_start_thread(struct sim_marlin *s, struct st_error *err)
 {
-	if (s->thread_on)
-		return st_error_set(err, ST_ERR_ARG, "simulated Marlin: thread already running");
-	s->thread_stop = 0;
-	if (pthread_create(&s->thread, NULL, sim_thread_main, s))
-		return st_error_set(err, ST_ERR_IO, "simulated Marlin: cannot start a thread");
-	s->thread_on = true;
-	return 0;
+	return sim_thread_start(&s->th, "simulated Marlin", err);
 }
 
 int sim_marlin_stop(struct sim_marlin *s)
 {
-	if (!s->thread_on)
-		return 0;
-	s->thread_stop = 1;
-	pthread_join(s->thread, NULL);
-	s->thread_on = false;
-	return s->thread_rc;
+	return sim_thread_stop(&s->th);
 }
 
 void sim_marlin_free(struct sim_marlin *s)
