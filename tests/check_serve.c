@@ -203,6 +203,18 @@ static void http(int port, const char *method, const char *path, const char *aut
 	http_raw(port, req, (size_t)n, r);
 }
 
+/* A request whose answer must have status want; the body is not needed. */
+static void expect(int port, const char *method, const char *path, const char *auth,
+		   const char *json_body, int want)
+{
+	struct resp r;
+
+	http(port, method, path, auth, json_body, &r);
+	ck_assert_msg(r.status == want, "%s %s: %d, not %d: %s", method, path, r.status, want,
+		      r.body);
+	resp_free(&r);
+}
+
 /*
  * The multipart upload as PrusaSlicer sends it (Http::form_add "print",
  * "path", then form_add_file "file"; libcurl's mime layout).  path_len and
@@ -336,9 +348,7 @@ START_TEST(test_version_as_prusaslicer)
 	ck_assert(text && !strncmp(text, "OctoPrint", 9));
 	resp_free(&r);
 	/* Bearer works as well, and under the printer's prefix. */
-	http(np.port, "GET", "/p/ender/api/version", "Authorization: Bearer " KEY_READ, NULL, &r);
-	ck_assert_int_eq(r.status, 200);
-	resp_free(&r);
+	expect(np.port, "GET", "/p/ender/api/version", "Authorization: Bearer " KEY_READ, NULL, 200);
 	node_stop(&np);
 }
 END_TEST
@@ -354,15 +364,9 @@ START_TEST(test_auth)
 	ck_assert_int_eq(r.status, 403);
 	ck_assert(json_is_string(json_object_get(r.json, "error")));
 	resp_free(&r);
-	http(np.port, "GET", "/api/job", "X-Api-Key: " KEY_UP "x", NULL, &r);
-	ck_assert_int_eq(r.status, 403);
-	resp_free(&r);
-	http(np.port, "GET", "/api/job", "X-Api-Key: upload-key-012345678", NULL, &r);
-	ck_assert_int_eq(r.status, 403); /* a prefix of a key is not the key */
-	resp_free(&r);
-	http(np.port, "GET", "/api/printer", "Authorization: Bearer nope-nope-nope-nope", NULL, &r);
-	ck_assert_int_eq(r.status, 403);
-	resp_free(&r);
+	expect(np.port, "GET", "/api/job", "X-Api-Key: " KEY_UP "x", NULL, 403);
+	expect(np.port, "GET", "/api/job", "X-Api-Key: upload-key-012345678", NULL, 403); /* a prefix of a key is not the key */
+	expect(np.port, "GET", "/api/printer", "Authorization: Bearer nope-nope-nope-nope", NULL, 403);
 	/* Roles: read cannot upload; upload cannot control. */
 	upload_text(np.port, "", KEY_READ, "a.gcode", "G28\n", "false", &r);
 	ck_assert_int_eq(r.status, 403);
@@ -370,13 +374,9 @@ START_TEST(test_auth)
 	upload_text(np.port, "", NULL, "a.gcode", "G28\n", "true", &r);
 	ck_assert_int_eq(r.status, 403);
 	resp_free(&r);
-	http(np.port, "POST", "/api/job", "X-Api-Key: " KEY_UP, "{\"command\":\"cancel\"}", &r);
-	ck_assert_int_eq(r.status, 403);
-	resp_free(&r);
-	http(np.port, "POST", "/api/printer/command", "X-Api-Key: " KEY_READ,
-	     "{\"command\":\"G28\"}", &r);
-	ck_assert_int_eq(r.status, 403);
-	resp_free(&r);
+	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_UP, "{\"command\":\"cancel\"}", 403);
+	expect(np.port, "POST", "/api/printer/command", "X-Api-Key: " KEY_READ,
+	     "{\"command\":\"G28\"}", 403);
 	/* Nothing was stored by the refused uploads. */
 	ck_assert(!tu_file_exists(tu_path("node/data/files/mk3s/a.gcode")));
 	node_stop(&np);
@@ -442,9 +442,7 @@ START_TEST(test_upload_as_prusaslicer)
 	ck_assert_str_eq(json_string_value(json_object_get(json_object_get(r.json, "current"),
 							   "state")), "Operational");
 	resp_free(&r);
-	http(np.port, "GET", "/api/settings", "X-Api-Key: " KEY_READ, NULL, &r);
-	ck_assert_int_eq(r.status, 200);
-	resp_free(&r);
+	expect(np.port, "GET", "/api/settings", "X-Api-Key: " KEY_READ, NULL, 200);
 	http(np.port, "GET", "/api/printerprofiles", "X-Api-Key: " KEY_READ, NULL, &r);
 	ck_assert_int_eq(r.status, 200);
 	ck_assert(json_real_value(json_object_get(json_object_get(json_object_get(json_object_get(
@@ -635,44 +633,28 @@ START_TEST(test_pause_resume_cancel)
 	upload_text(np.port, "", KEY_UP, "long.gcode", "G28\n", "false", &r);
 	ck_assert_int_eq(r.status, 409);
 	resp_free(&r);
-	http(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL,
-	     "{\"command\":\"pause\",\"action\":\"pause\"}", &r);
-	ck_assert_int_eq(r.status, 204);
-	resp_free(&r);
+	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL,
+	     "{\"command\":\"pause\",\"action\":\"pause\"}", 204);
 	ck_assert_str_eq(job_state(np.port, "", id, NULL), "paused");
 	usleep(300000);
 	http(np.port, "GET", "/api/job", "X-Api-Key: " KEY_READ, NULL, &r);
 	ck_assert_str_eq(json_string_value(json_object_get(r.json, "state")), "Paused");
 	resp_free(&r);
 	/* Commands are taken between jobs only. */
-	http(np.port, "POST", "/api/printer/command", "X-Api-Key: " KEY_CTL,
-	     "{\"commands\":[\"M105\"]}", &r);
-	ck_assert_int_eq(r.status, 409);
-	resp_free(&r);
-	http(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL,
-	     "{\"command\":\"pause\",\"action\":\"resume\"}", &r);
-	ck_assert_int_eq(r.status, 204);
-	resp_free(&r);
+	expect(np.port, "POST", "/api/printer/command", "X-Api-Key: " KEY_CTL,
+	     "{\"commands\":[\"M105\"]}", 409);
+	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL,
+	     "{\"command\":\"pause\",\"action\":\"resume\"}", 204);
 	ck_assert_str_eq(job_state(np.port, "", id, NULL), "printing");
-	http(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL, "{\"command\":\"cancel\"}", &r);
-	ck_assert_int_eq(r.status, 204);
-	resp_free(&r);
+	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL, "{\"command\":\"cancel\"}", 204);
 	wait_state(np.port, "", id, "cancelled", 5);
-	http(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL, "{\"command\":\"cancel\"}", &r);
-	ck_assert_int_eq(r.status, 409); /* nothing printing */
-	resp_free(&r);
+	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL, "{\"command\":\"cancel\"}", 409); /* nothing printing */
 	/* A bad command line is refused whole; a good one is accepted. */
-	http(np.port, "POST", "/api/printer/command", "X-Api-Key: " KEY_CTL,
-	     "{\"commands\":[\"M105\",\"G1 X1 X2\"]}", &r);
-	ck_assert_int_eq(r.status, 400);
-	resp_free(&r);
-	http(np.port, "POST", "/api/printer/command", "X-Api-Key: " KEY_CTL,
-	     "{\"command\":\"M105\"}", &r);
-	ck_assert_int_eq(r.status, 204);
-	resp_free(&r);
-	http(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL, "not json", &r);
-	ck_assert_int_eq(r.status, 400);
-	resp_free(&r);
+	expect(np.port, "POST", "/api/printer/command", "X-Api-Key: " KEY_CTL,
+	     "{\"commands\":[\"M105\",\"G1 X1 X2\"]}", 400);
+	expect(np.port, "POST", "/api/printer/command", "X-Api-Key: " KEY_CTL,
+	     "{\"command\":\"M105\"}", 204);
+	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL, "not json", 400);
 	node_stop(&np);
 }
 END_TEST
@@ -718,10 +700,8 @@ START_TEST(test_kill9_restart)
 	/* The bed is not clear while the interrupted part is on it. */
 	bed_clear(np.port, "", 409);
 	/* Resume: it continues after the dwell it was in, then waits for the bed. */
-	http(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL,
-	     "{\"command\":\"pause\",\"action\":\"resume\"}", &r);
-	ck_assert_int_eq(r.status, 204);
-	resp_free(&r);
+	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL,
+	     "{\"command\":\"pause\",\"action\":\"resume\"}", 204);
 	wait_state(np.port, "", a, "done", 5);
 	ck_assert_str_eq(job_state(np.port, "", b, NULL), "queued");
 	bed_clear(np.port, "", 204);
@@ -737,9 +717,7 @@ START_TEST(test_not_operational)
 
 	write_config(&np, "[printer real]\nprofile = generic-marlin\nport = /dev/ttyACM9\n", 8);
 	node_start(&np);
-	http(np.port, "GET", "/api/printer", "X-Api-Key: " KEY_READ, NULL, &r);
-	ck_assert_int_eq(r.status, 409);
-	resp_free(&r);
+	expect(np.port, "GET", "/api/printer", "X-Api-Key: " KEY_READ, NULL, 409);
 	http(np.port, "GET", "/p/real/api/connection", "X-Api-Key: " KEY_READ, NULL, &r);
 	ck_assert_int_eq(r.status, 200);
 	ck_assert_str_eq(json_string_value(json_object_get(json_object_get(r.json, "current"),
@@ -751,9 +729,7 @@ START_TEST(test_not_operational)
 	usleep(1200000);
 	ck_assert_str_eq(job_state(np.port, "", job_of(&r), NULL), "queued");
 	resp_free(&r);
-	http(np.port, "GET", "/api/nothing", "X-Api-Key: " KEY_READ, NULL, &r);
-	ck_assert_int_eq(r.status, 404);
-	resp_free(&r);
+	expect(np.port, "GET", "/api/nothing", "X-Api-Key: " KEY_READ, NULL, 404);
 	node_stop(&np);
 }
 END_TEST

@@ -105,6 +105,17 @@ void node_queue_close(struct node_queue *q)
 	free(q);
 }
 
+/* Bind parameters by fmt: 's' text, 'i' int64. */
+static void bind_args(sqlite3_stmt *st, const char *fmt, va_list ap)
+{
+	for (int i = 0; fmt[i]; i++) {
+		if (fmt[i] == 's')
+			sqlite3_bind_text(st, i + 1, va_arg(ap, const char *), -1, SQLITE_TRANSIENT);
+		else
+			sqlite3_bind_int64(st, i + 1, va_arg(ap, int64_t));
+	}
+}
+
 /* Run sql with text/integer parameters (fmt: 's' text, 'i' int64); q->mu held. */
 static int run(struct node_queue *q, const char *sql, const char *fmt, ...)
 {
@@ -115,12 +126,7 @@ static int run(struct node_queue *q, const char *sql, const char *fmt, ...)
 	if (sqlite3_prepare_v2(q->db, sql, -1, &st, NULL) != SQLITE_OK)
 		return -1;
 	va_start(ap, fmt);
-	for (int i = 0; fmt[i]; i++) {
-		if (fmt[i] == 's')
-			sqlite3_bind_text(st, i + 1, va_arg(ap, const char *), -1, SQLITE_TRANSIENT);
-		else
-			sqlite3_bind_int64(st, i + 1, va_arg(ap, int64_t));
-	}
+	bind_args(st, fmt, ap);
 	va_end(ap);
 	while ((rc = sqlite3_step(st)) == SQLITE_ROW)
 		;
@@ -156,7 +162,7 @@ static void row_to_job(sqlite3_stmt *st, struct node_job *j)
 	j->finished = sqlite3_column_int64(st, 14);
 }
 
-/* The first row of a one-job query with parameters (fmt as run); q->mu held. */
+/* The first row of a one-job query with parameters (fmt as run); takes q->mu. */
 static int one_job(struct node_queue *q, const char *sql, struct node_job *job,
 		   struct st_error *err, const char *fmt, ...)
 {
@@ -164,15 +170,14 @@ static int one_job(struct node_queue *q, const char *sql, struct node_job *job,
 	va_list ap;
 	int rc;
 
-	if (sqlite3_prepare_v2(q->db, sql, -1, &st, NULL) != SQLITE_OK)
-		return db_error(q, err, "query");
-	va_start(ap, fmt);
-	for (int i = 0; fmt[i]; i++) {
-		if (fmt[i] == 's')
-			sqlite3_bind_text(st, i + 1, va_arg(ap, const char *), -1, SQLITE_TRANSIENT);
-		else
-			sqlite3_bind_int64(st, i + 1, va_arg(ap, int64_t));
+	pthread_mutex_lock(&q->mu);
+	if (sqlite3_prepare_v2(q->db, sql, -1, &st, NULL) != SQLITE_OK) {
+		rc = db_error(q, err, "query");
+		pthread_mutex_unlock(&q->mu);
+		return rc;
 	}
+	va_start(ap, fmt);
+	bind_args(st, fmt, ap);
 	va_end(ap);
 	rc = sqlite3_step(st);
 	if (rc == SQLITE_ROW) {
@@ -184,6 +189,7 @@ static int one_job(struct node_queue *q, const char *sql, struct node_job *job,
 		rc = db_error(q, err, "query");
 	}
 	sqlite3_finalize(st);
+	pthread_mutex_unlock(&q->mu);
 	return rc;
 }
 
@@ -234,37 +240,22 @@ int node_queue_add(struct node_queue *q, const char *printer, const char *name,
 int node_queue_next(struct node_queue *q, const char *printer, struct node_job *job,
 		    struct st_error *err)
 {
-	int rc;
-
-	pthread_mutex_lock(&q->mu);
-	rc = one_job(q, "SELECT " JOB_COLUMNS " FROM jobs WHERE printer=? AND "
-			"((state='paused' AND interrupted=1 AND resume=1) OR state='queued') "
-			"ORDER BY resume DESC, id LIMIT 1", job, err, "s", printer);
-	pthread_mutex_unlock(&q->mu);
-	return rc;
+	return one_job(q, "SELECT " JOB_COLUMNS " FROM jobs WHERE printer=? AND "
+			  "((state='paused' AND interrupted=1 AND resume=1) OR state='queued') "
+			  "ORDER BY resume DESC, id LIMIT 1", job, err, "s", printer);
 }
 
 int node_queue_get(struct node_queue *q, int64_t id, struct node_job *job, struct st_error *err)
 {
-	int rc;
-
-	pthread_mutex_lock(&q->mu);
-	rc = one_job(q, "SELECT " JOB_COLUMNS " FROM jobs WHERE id=?", job, err, "i", id);
-	pthread_mutex_unlock(&q->mu);
-	return rc;
+	return one_job(q, "SELECT " JOB_COLUMNS " FROM jobs WHERE id=?", job, err, "i", id);
 }
 
 int node_queue_active(struct node_queue *q, const char *printer, struct node_job *job,
 		      struct st_error *err)
 {
-	int rc;
-
-	pthread_mutex_lock(&q->mu);
-	rc = one_job(q, "SELECT " JOB_COLUMNS " FROM jobs WHERE printer=? AND state IN "
-			"('slicing','printing','paused') ORDER BY id DESC LIMIT 1", job, err, "s",
-		     printer);
-	pthread_mutex_unlock(&q->mu);
-	return rc;
+	return one_job(q, "SELECT " JOB_COLUMNS " FROM jobs WHERE printer=? AND state IN "
+			  "('slicing','printing','paused') ORDER BY id DESC LIMIT 1", job, err,
+		       "s", printer);
 }
 
 int node_queue_update(struct node_queue *q, const struct node_job *j, struct st_error *err)
