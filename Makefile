@@ -32,7 +32,7 @@ override CFLAGS += -std=c11 -pedantic $(WARN) -Wstrict-prototypes -Wmissing-prot
 # CGAL: exact predicates, TBB for the parallel box intersection.
 CXXFLAGS ?= -O2 -g
 override CXXFLAGS += -std=c++17 $(WARN) -Wno-deprecated-declarations -pthread -DCGAL_LINKED_WITH_TBB -DNDEBUG
-LDLIBS   := -lserialport -lutil -ljansson -lpolyclipping -ltbb -lgmp -lmpfr -lm -pthread
+LDLIBS   := -lmicrohttpd -lsqlite3 -lserialport -lutil -ljansson -lpolyclipping -ltbb -lgmp -lmpfr -lm -pthread
 TEST_LDLIBS := $(shell pkg-config --libs check 2>/dev/null || echo -lcheck -lsubunit -lrt) $(LDLIBS)
 
 # Sources: every .c under the module folders is library code except the CLI

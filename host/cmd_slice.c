@@ -23,6 +23,7 @@
 #include "mesh.h"
 #include "meshio.h"
 #include "profile.h"
+#include "profile_slicer.h"
 #include "progress.h"
 #include "repair.h"
 #include "slicer.h"
@@ -30,7 +31,6 @@
 #include "st_number.h"
 
 #define SLICE_CMD "stratum slice"
-#define SLICE_FILAMENT_DENSITY 1.24 /* g/cm^3 (PLA) when the profile has none */
 
 static void slice_usage(FILE *out)
 {
@@ -209,117 +209,34 @@ static int parse_args(int argc, char **argv, struct slice_args *a)
 	return 0;
 }
 
-/* Machine limits of the profile where it sets them (> 0), else the defaults. */
-static void limits_from_profile(const struct profile *p, struct est_limits *lim)
-{
-	static const enum profile_axis pa[EST_AXES] = {PROFILE_AXIS_X, PROFILE_AXIS_Y,
-						       PROFILE_AXIS_Z, PROFILE_AXIS_E};
-
-	est_limits_init(lim);
-	for (int k = 0; k < EST_AXES; k++) {
-		if (p->machine_max_feedrate[pa[k]] > 0)
-			lim->max_feedrate[k] = p->machine_max_feedrate[pa[k]];
-		if (p->machine_max_acceleration[pa[k]] > 0)
-			lim->max_acceleration[k] = p->machine_max_acceleration[pa[k]];
-		lim->max_jerk[k] = p->machine_max_jerk[pa[k]];
-	}
-	if (p->machine_max_acceleration_extruding > 0)
-		lim->accel_extruding = p->machine_max_acceleration_extruding;
-	if (p->machine_max_acceleration_retracting > 0)
-		lim->accel_retracting = p->machine_max_acceleration_retracting;
-	lim->accel_travel = p->machine_max_acceleration_travel;
-}
-
 /*
- * The job's settings from the printer profile (PrusaSlicer keys to the
- * stages' fields), then the command line's overrides.  Returns 0 or the
- * exit status with the message printed.
+ * The job's settings from the printer profile (host/profile_slicer.h), then
+ * the command line's overrides.  Returns 0 or the exit status with the
+ * message printed.
  */
 static int config_from_profile(const struct profile *p, const struct slice_args *a,
 			       struct slicer_config *c)
 {
-	struct gcodew_settings *g = &c->gcodew;
 	struct st_error err = {0};
-	double nozzle = p->nozzle_diameter[0], v;
+	int rc = profile_slicer_config(p, c, &err);
 
-	slicer_config_init(c, nozzle);
-	c->layer_height = a->has_layer ? a->layer_height : p->layer_height;
-	c->first_layer_height = a->has_first ? a->first_layer_height : p->first_layer_height;
-	if (p->extrusion_width > 0)
-		c->perim.extrusion_width = p->extrusion_width;
-	c->perim.perimeters = a->has_perimeters ? a->perimeters : p->perimeters;
-
-	c->infill.density = a->has_infill ? a->infill : p->fill_density;
-	c->infill.pattern = p->fill_pattern;
-	c->infill.top_solid_layers = p->top_solid_layers;
-	c->infill.bottom_solid_layers = p->bottom_solid_layers;
-	c->support.enabled = p->support_material;
-	c->support.threshold = p->support_material_threshold;
-	c->skirt.skirts = p->skirts;
-	c->skirt.brim_width = p->brim_width;
-
-	c->bed = (struct slicer_bed){.min_x = p->bed_min_x, .min_y = p->bed_min_y,
-				     .max_x = p->bed_max_x, .max_y = p->bed_max_y,
-				     .max_height = p->max_print_height,
-				     .has_center = a->has_center,
-				     .center_x = a->center[0], .center_y = a->center[1]};
+	if (rc) {
+		fprintf(stderr, SLICE_CMD ": %s\n", err.msg);
+		return st_exit_for(rc);
+	}
+	if (a->has_layer)
+		c->layer_height = a->layer_height;
+	if (a->has_first)
+		c->first_layer_height = a->first_layer_height;
+	if (a->has_perimeters)
+		c->perim.perimeters = a->perimeters;
+	if (a->has_infill)
+		c->infill.density = a->infill;
+	c->bed.has_center = a->has_center;
+	c->bed.center_x = a->center[0];
+	c->bed.center_y = a->center[1];
 	c->threads = a->threads;
-
-	g->filament_diameter = p->filament_diameter[0];
-	g->extrusion_multiplier = p->extrusion_multiplier[0];
-	if (profile_get_number(p, "filament_density", 0.01, 30, SLICE_FILAMENT_DENSITY, &v,
-			       &err))
-		goto out_profile;
-	g->filament_density = v;
-	g->use_relative_e_distances = p->use_relative_e_distances;
-	g->temperature = p->temperature[0];
-	g->first_layer_temperature = p->first_layer_temperature[0];
-	g->bed_temperature = p->bed_temperature;
-	g->first_layer_bed_temperature = p->first_layer_bed_temperature;
-	g->retract_length = p->retract_length[0];
-	g->retract_speed = p->retract_speed[0];
-	g->retract_lift = p->retract_lift[0];
-	/* Travel routing (untyped keys, PrusaSlicer's names where it has them). */
-	if (profile_get_number(p, "avoid_crossing_perimeters", 0, 1, g->avoid_crossing_perimeters,
-			       &v, &err))
-		goto out_profile;
-	g->avoid_crossing_perimeters = v != 0;
-	if (profile_get_number(p, "only_retract_when_crossing_perimeters", 0, 1,
-			       g->only_retract_when_crossing_perimeters, &v, &err))
-		goto out_profile;
-	g->only_retract_when_crossing_perimeters = v != 0;
-	if (profile_get_number(p, "max_unretracted_travel", 0, 1e6, g->max_unretracted_travel, &v,
-			       &err))
-		goto out_profile;
-	g->max_unretracted_travel = v;
-	g->perimeter_speed = p->perimeter_speed;
-	g->external_perimeter_speed = p->perimeter_speed / 2; /* PrusaSlicer's 50% */
-	g->infill_speed = p->infill_speed;
-	g->travel_speed = p->travel_speed;
-	/* A percentage scales every role in PrusaSlicer; the writer takes one
-	 * first-layer speed, so the percentage is of the perimeter speed. */
-	g->first_layer_speed = p->first_layer_speed_is_percent
-				       ? p->first_layer_speed / 100 * p->perimeter_speed
-				       : p->first_layer_speed;
-	g->cooling = p->cooling;
-	g->min_fan_speed = p->min_fan_speed;
-	g->max_fan_speed = p->max_fan_speed;
-	g->bridge_fan_speed = p->bridge_fan_speed;
-	if (profile_get_number(p, "disable_fan_first_layers", 0, 1000,
-			       g->disable_fan_first_layers, &v, &err))
-		goto out_profile;
-	g->disable_fan_first_layers = (int)v;
-	g->fan_below_layer_time = p->fan_below_layer_time;
-	g->slowdown_below_layer_time = p->slowdown_below_layer_time;
-	g->min_print_speed = p->min_print_speed;
-	limits_from_profile(p, &g->limits);
-	g->start_gcode = p->start_gcode;
-	g->end_gcode = p->end_gcode;
 	return 0;
-
-out_profile:
-	fprintf(stderr, SLICE_CMD ": %s\n", err.msg);
-	return st_exit_for(err.code);
 }
 
 /* Exit status for a failed slicer_run (settings were checked before). */

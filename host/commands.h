@@ -16,6 +16,7 @@ int cmd_sim(int argc, char **argv);	 /* host/cmd_sim.c */
 int cmd_slice(int argc, char **argv);	 /* host/cmd_slice.c */
 int cmd_x3g(int argc, char **argv);	 /* host/cmd_x3g.c */
 int cmd_send(int argc, char **argv);	 /* host/cmd_send.c */
+int cmd_serve(int argc, char **argv);	 /* host/cmd_serve.c */
 
 /*
  * cmd_parse_threads - the value of --threads N: N as an int, or -1 when it

@@ -24,6 +24,7 @@ static const struct command commands[] = {
 	{"send", cmd_send, "stream a G-code file to a Marlin printer"},
 	{"sim", cmd_sim, "run a simulated printer on a pseudo-terminal"},
 	{"x3g", cmd_x3g, "translate G-code to X3G for Sailfish printers, or list an X3G file"},
+	{"serve", cmd_serve, "run the farm node: OctoPrint-compatible API and job queue"},
 };
 
 static void usage(FILE *out)

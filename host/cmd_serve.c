@@ -1,0 +1,128 @@
+/*
+ * cmd_serve.c - `stratum serve --config node.ini [--listen ADDR:PORT]`: run
+ * the farm node (host/serve/node.h) until SIGTERM or SIGINT.  Log records go
+ * to stderr, one line each, with a UTC time stamp (journald adds its own,
+ * but a plain terminal needs one).
+ * Exit 0 after a signal, 2 usage, 65 bad config or printer profile,
+ * 69 cannot listen, 70 internal error.
+ */
+#include <signal.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+
+#include "commands.h"
+#include "serve/node.h"
+#include "st_error.h"
+
+#define SERVE_CMD "stratum serve"
+
+static void serve_usage(FILE *out)
+{
+	fprintf(out,
+		"usage: stratum serve --config NODE.ini [--listen ADDR:PORT]\n"
+		"\n"
+		"Runs the farm node: every printer of the config with its own job queue,\n"
+		"behind an OctoPrint-compatible HTTP API that PrusaSlicer and Cura upload to.\n"
+		"Uploaded STL/OBJ models are repaired and sliced with the printer's profile.\n"
+		"The queue lives in DATA_DIR/queue.db and survives a crash; a print that was\n"
+		"running is marked interrupted and waits for an operator.  See docs/serve.md.\n"
+		"\n"
+		"  --config FILE      the node's config (docs/serve.md)\n"
+		"  --listen ADDR:PORT listen there instead of the config's listen = (port 0:\n"
+		"                     any free port, logged at start)\n"
+		"\n"
+		"Stops cleanly on SIGTERM or SIGINT.  Exit status: 0 stopped by a signal,\n"
+		"2 usage, 65 bad config or printer profile, 69 cannot listen, 70 internal\n"
+		"error.\n");
+}
+
+/* Log sink: a UTC time stamp, then the record. */
+static void log_stderr(const char *line, void *ctx)
+{
+	char ts[32];
+	time_t now = time(NULL);
+	struct tm tm;
+
+	(void)ctx;
+	gmtime_r(&now, &tm);
+	strftime(ts, sizeof(ts), "%Y-%m-%dT%H:%M:%SZ", &tm);
+	fprintf(stderr, "%s %s\n", ts, line);
+	fflush(stderr);
+}
+
+int cmd_serve(int argc, char **argv)
+{
+	const char *config = NULL, *listen = NULL;
+	struct node_config *cfg;
+	struct node *n = NULL;
+	struct st_error err = {0};
+	sigset_t set;
+	int sig = 0, rc;
+	static struct node_config cfg_store; /* large: kept off the stack */
+
+	for (int i = 1; i < argc; i++) {
+		if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+			serve_usage(stdout);
+			return ST_EXIT_OK;
+		} else if (cmd_is_opt(argv[i], "--config")) {
+			config = cmd_opt_value(argc, argv, &i, "--config");
+			if (!config || !*config) {
+				fprintf(stderr, SERVE_CMD ": --config needs the node's config file\n");
+				return ST_EXIT_USAGE;
+			}
+		} else if (cmd_is_opt(argv[i], "--listen")) {
+			listen = cmd_opt_value(argc, argv, &i, "--listen");
+			if (!listen) {
+				fprintf(stderr, SERVE_CMD ": --listen needs ADDR:PORT\n");
+				return ST_EXIT_USAGE;
+			}
+		} else {
+			fprintf(stderr, SERVE_CMD ": unknown option '%s'\n", argv[i]);
+			serve_usage(stderr);
+			return ST_EXIT_USAGE;
+		}
+	}
+	if (!config) {
+		fprintf(stderr, SERVE_CMD ": no config given; add --config NODE.ini\n");
+		serve_usage(stderr);
+		return ST_EXIT_USAGE;
+	}
+	cfg = &cfg_store;
+	rc = node_config_load(config, cfg, &err);
+	if (rc) {
+		fprintf(stderr, SERVE_CMD ": %s\n", err.msg);
+		return rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
+	}
+	if (listen && node_parse_listen(listen, cfg->listen_addr, sizeof(cfg->listen_addr),
+					&cfg->listen_port, &err)) {
+		fprintf(stderr, SERVE_CMD ": --listen: %s\n", err.msg);
+		return ST_EXIT_USAGE;
+	}
+
+	/* Signals are taken by sigwait here only; every thread inherits the mask. */
+	sigemptyset(&set);
+	sigaddset(&set, SIGTERM);
+	sigaddset(&set, SIGINT);
+	pthread_sigmask(SIG_BLOCK, &set, NULL);
+	signal(SIGPIPE, SIG_IGN);
+	node_set_log(log_stderr, NULL);
+
+	rc = node_new(cfg, &n, &err);
+	if (rc) {
+		fprintf(stderr, SERVE_CMD ": %s\n", err.msg);
+		return rc == ST_ERR_IO ? ST_EXIT_DATAERR
+		       : rc == ST_ERR_NOMEM || rc == ST_ERR_INTERNAL ? ST_EXIT_SOFTWARE
+								       : ST_EXIT_DATAERR;
+	}
+	rc = node_start(n, &err);
+	if (rc) {
+		fprintf(stderr, SERVE_CMD ": %s\n", err.msg);
+		node_free(n);
+		return rc == ST_ERR_IO ? ST_EXIT_UNAVAILABLE : ST_EXIT_SOFTWARE;
+	}
+	sigwait(&set, &sig);
+	fprintf(stderr, SERVE_CMD ": %s received, stopping\n", sig == SIGTERM ? "SIGTERM" : "SIGINT");
+	node_free(n);
+	return ST_EXIT_OK;
+}

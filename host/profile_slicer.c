@@ -1,0 +1,112 @@
+/*
+ * profile_slicer.c - printer profile to slicer settings (profile_slicer.h).
+ */
+#include "profile_slicer.h"
+
+/* Machine limits of the profile where it sets them (> 0), else the defaults. */
+static void limits_from_profile(const struct profile *p, struct est_limits *lim)
+{
+	static const enum profile_axis pa[EST_AXES] = {PROFILE_AXIS_X, PROFILE_AXIS_Y,
+						       PROFILE_AXIS_Z, PROFILE_AXIS_E};
+
+	est_limits_init(lim);
+	for (int k = 0; k < EST_AXES; k++) {
+		if (p->machine_max_feedrate[pa[k]] > 0)
+			lim->max_feedrate[k] = p->machine_max_feedrate[pa[k]];
+		if (p->machine_max_acceleration[pa[k]] > 0)
+			lim->max_acceleration[k] = p->machine_max_acceleration[pa[k]];
+		lim->max_jerk[k] = p->machine_max_jerk[pa[k]];
+	}
+	if (p->machine_max_acceleration_extruding > 0)
+		lim->accel_extruding = p->machine_max_acceleration_extruding;
+	if (p->machine_max_acceleration_retracting > 0)
+		lim->accel_retracting = p->machine_max_acceleration_retracting;
+	lim->accel_travel = p->machine_max_acceleration_travel;
+}
+
+/* The slicer's settings from p (profile_slicer.h). */
+int profile_slicer_config(const struct profile *p, struct slicer_config *c,
+			  struct st_error *err)
+{
+	struct gcodew_settings *g = &c->gcodew;
+	struct st_error e = {0};
+	double nozzle = p->nozzle_diameter[0], v;
+
+	slicer_config_init(c, nozzle);
+	c->layer_height = p->layer_height;
+	c->first_layer_height = p->first_layer_height;
+	if (p->extrusion_width > 0)
+		c->perim.extrusion_width = p->extrusion_width;
+	c->perim.perimeters = p->perimeters;
+
+	c->infill.density = p->fill_density;
+	c->infill.pattern = p->fill_pattern;
+	c->infill.top_solid_layers = p->top_solid_layers;
+	c->infill.bottom_solid_layers = p->bottom_solid_layers;
+	c->support.enabled = p->support_material;
+	c->support.threshold = p->support_material_threshold;
+	c->skirt.skirts = p->skirts;
+	c->skirt.brim_width = p->brim_width;
+
+	c->bed = (struct slicer_bed){.min_x = p->bed_min_x, .min_y = p->bed_min_y,
+				     .max_x = p->bed_max_x, .max_y = p->bed_max_y,
+				     .max_height = p->max_print_height};
+
+	g->filament_diameter = p->filament_diameter[0];
+	g->extrusion_multiplier = p->extrusion_multiplier[0];
+	if (profile_get_number(p, "filament_density", 0.01, 30, PROFILE_FILAMENT_DENSITY, &v,
+			       &e))
+		goto out_profile;
+	g->filament_density = v;
+	g->use_relative_e_distances = p->use_relative_e_distances;
+	g->temperature = p->temperature[0];
+	g->first_layer_temperature = p->first_layer_temperature[0];
+	g->bed_temperature = p->bed_temperature;
+	g->first_layer_bed_temperature = p->first_layer_bed_temperature;
+	g->retract_length = p->retract_length[0];
+	g->retract_speed = p->retract_speed[0];
+	g->retract_lift = p->retract_lift[0];
+	/* Travel routing (untyped keys, PrusaSlicer's names where it has them). */
+	if (profile_get_number(p, "avoid_crossing_perimeters", 0, 1, g->avoid_crossing_perimeters,
+			       &v, &e))
+		goto out_profile;
+	g->avoid_crossing_perimeters = v != 0;
+	if (profile_get_number(p, "only_retract_when_crossing_perimeters", 0, 1,
+			       g->only_retract_when_crossing_perimeters, &v, &e))
+		goto out_profile;
+	g->only_retract_when_crossing_perimeters = v != 0;
+	if (profile_get_number(p, "max_unretracted_travel", 0, 1e6, g->max_unretracted_travel, &v,
+			       &e))
+		goto out_profile;
+	g->max_unretracted_travel = v;
+	g->perimeter_speed = p->perimeter_speed;
+	g->external_perimeter_speed = p->perimeter_speed / 2; /* PrusaSlicer's 50% */
+	g->infill_speed = p->infill_speed;
+	g->travel_speed = p->travel_speed;
+	/* A percentage scales every role in PrusaSlicer; the writer takes one
+	 * first-layer speed, so the percentage is of the perimeter speed. */
+	g->first_layer_speed = p->first_layer_speed_is_percent
+				       ? p->first_layer_speed / 100 * p->perimeter_speed
+				       : p->first_layer_speed;
+	g->cooling = p->cooling;
+	g->min_fan_speed = p->min_fan_speed;
+	g->max_fan_speed = p->max_fan_speed;
+	g->bridge_fan_speed = p->bridge_fan_speed;
+	if (profile_get_number(p, "disable_fan_first_layers", 0, 1000,
+			       g->disable_fan_first_layers, &v, &e))
+		goto out_profile;
+	g->disable_fan_first_layers = (int)v;
+	g->fan_below_layer_time = p->fan_below_layer_time;
+	g->slowdown_below_layer_time = p->slowdown_below_layer_time;
+	g->min_print_speed = p->min_print_speed;
+	limits_from_profile(p, &g->limits);
+	g->start_gcode = p->start_gcode;
+	g->end_gcode = p->end_gcode;
+	return 0;
+
+out_profile:
+	if (err)
+		*err = e;
+	return e.code;
+}
+

@@ -1,0 +1,448 @@
+/*
+ * config.c - the node's own small ini reader (node.h node_config_load):
+ * [node], [key NAME] and [printer NAME] sections of `key = value` lines,
+ * '#' or ';' comments on their own lines.  Unknown sections and keys are
+ * errors so a typo never silently leaves a printer unprotected.
+ */
+#include <arpa/inet.h>
+#include <ctype.h>
+#include <stdarg.h>
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "node.h"
+#include "st_number.h"
+
+#define CFG_LINE_MAX 4096
+
+enum section { SEC_NONE, SEC_NODE, SEC_KEY, SEC_PRINTER };
+
+/* Parse state: where we are, for messages and duplicate checks. */
+struct cfg_parse {
+	const char *file;
+	int line;
+	enum section sec;
+	unsigned seen; /* bit per key of the current section */
+	bool node_seen;
+	struct node_config *cfg;
+	struct st_error *err;
+};
+
+/* Error at the current line. */
+#define CFG_FAIL(p, code, ...) cfg_fail((p), (code), __VA_ARGS__)
+static int cfg_fail(struct cfg_parse *p, int code, const char *fmt, ...)
+	__attribute__((format(printf, 3, 4)));
+static int cfg_fail(struct cfg_parse *p, int code, const char *fmt, ...)
+{
+	char what[200];
+	va_list ap;
+
+	va_start(ap, fmt);
+	vsnprintf(what, sizeof(what), fmt, ap);
+	va_end(ap);
+	return st_error_set(p->err, code, "%s: line %d: %s", p->file, p->line, what);
+}
+
+/* Trim blanks at both ends in place; returns the start. */
+static char *trim(char *s)
+{
+	char *e;
+
+	while (*s == ' ' || *s == '\t')
+		s++;
+	e = s + strlen(s);
+	while (e > s && (e[-1] == ' ' || e[-1] == '\t' || e[-1] == '\r'))
+		*--e = '\0';
+	return s;
+}
+
+/* A name for a section: letters, digits, '-', '_' and '.', 1-63 bytes. */
+static bool good_name(const char *s)
+{
+	size_t n = strlen(s);
+
+	if (!n || n >= NODE_NAME_MAX || s[0] == '.')
+		return false;
+	for (; *s; s++)
+		if (!isalnum((unsigned char)*s) && !strchr("-_.", *s))
+			return false;
+	return true;
+}
+
+/* Copy v into dst (cap bytes) or fail when it does not fit or is empty. */
+static int copy_value(struct cfg_parse *p, const char *key, const char *v, char *dst, size_t cap)
+{
+	size_t n = strlen(v);
+
+	if (!n)
+		return CFG_FAIL(p, ST_ERR_RANGE, "%s: empty value", key);
+	if (n >= cap)
+		return CFG_FAIL(p, ST_ERR_RANGE, "%s: longer than %zu bytes", key, cap - 1);
+	memcpy(dst, v, n + 1);
+	return 0;
+}
+
+/* A whole number in [lo, hi]. */
+static int whole(struct cfg_parse *p, const char *key, const char *v, double lo, double hi,
+		 double *out)
+{
+	double d;
+
+	if (st_parse_double(v, strlen(v), 0, &d) != ST_NUMBER_OK || d != (double)(long long)d)
+		return CFG_FAIL(p, ST_ERR_PARSE, "%s: '%s' is not a whole number", key, v);
+	if (d < lo || d > hi)
+		return CFG_FAIL(p, ST_ERR_RANGE, "%s: %s is outside %g to %g", key, v, lo, hi);
+	*out = d;
+	return 0;
+}
+
+/* roles = read, upload, control (any of them, comma separated). */
+static int parse_roles(struct cfg_parse *p, const char *v, unsigned *roles)
+{
+	char buf[CFG_LINE_MAX], *next = buf, *tok;
+
+	snprintf(buf, sizeof(buf), "%s", v);
+	*roles = 0;
+	while (next) {
+		tok = next;
+		next = strchr(tok, ',');
+		if (next)
+			*next++ = '\0';
+		tok = trim(tok);
+		if (!strcmp(tok, "read"))
+			*roles |= NODE_ROLE_READ;
+		else if (!strcmp(tok, "upload"))
+			*roles |= NODE_ROLE_UPLOAD;
+		else if (!strcmp(tok, "control"))
+			*roles |= NODE_ROLE_CONTROL;
+		else
+			return CFG_FAIL(p, ST_ERR_PARSE,
+					"roles: '%s' is not a role (read, upload, control)", tok);
+	}
+	if (!*roles)
+		return CFG_FAIL(p, ST_ERR_RANGE, "roles: give at least one of read, upload, control");
+	return 0;
+}
+
+/* Mark key number bit of this section seen; fail on a duplicate. */
+static int once(struct cfg_parse *p, const char *key, unsigned bit)
+{
+	if (p->seen & (1u << bit))
+		return CFG_FAIL(p, ST_ERR_PARSE, "%s: set twice in this section", key);
+	p->seen |= 1u << bit;
+	return 0;
+}
+
+static int node_key_value(struct cfg_parse *p, const char *k, const char *v)
+{
+	struct node_config *c = p->cfg;
+	double d;
+	int rc;
+
+	if (!strcmp(k, "name")) {
+		if ((rc = once(p, k, 0)))
+			return rc;
+		if (!good_name(v))
+			return CFG_FAIL(p, ST_ERR_RANGE, "name: '%s' is not a name (letters, "
+						       "digits, '-', '_', '.'; at most 63)", v);
+		return copy_value(p, k, v, c->name, sizeof(c->name));
+	}
+	if (!strcmp(k, "listen")) {
+		struct st_error e;
+
+		if ((rc = once(p, k, 1)))
+			return rc;
+		if (node_parse_listen(v, c->listen_addr, sizeof(c->listen_addr), &c->listen_port, &e))
+			return CFG_FAIL(p, ST_ERR_PARSE, "listen: %s", e.msg);
+		return 0;
+	}
+	if (!strcmp(k, "data_dir")) {
+		if ((rc = once(p, k, 2)))
+			return rc;
+		return copy_value(p, k, v, c->data_dir, sizeof(c->data_dir));
+	}
+	if (!strcmp(k, "max_upload_mb")) {
+		if ((rc = once(p, k, 3)) || (rc = whole(p, k, v, 1, 1 << 20, &d)))
+			return rc;
+		c->max_upload = (uint64_t)d << 20;
+		return 0;
+	}
+	if (!strcmp(k, "slice_threads")) {
+		if ((rc = once(p, k, 4)) || (rc = whole(p, k, v, 0, 256, &d)))
+			return rc;
+		c->slice_threads = (int)d;
+		return 0;
+	}
+	return CFG_FAIL(p, ST_ERR_PARSE, "unknown key '%s' in [node] (name, listen, data_dir, "
+					  "max_upload_mb, slice_threads)", k);
+}
+
+static int key_key_value(struct cfg_parse *p, const char *k, const char *v)
+{
+	struct node_key *key = &p->cfg->keys[p->cfg->nkeys - 1];
+	int rc;
+
+	if (!strcmp(k, "key")) {
+		size_t n = strlen(v);
+
+		if ((rc = once(p, k, 0)))
+			return rc;
+		if (n < NODE_KEY_MIN || n > NODE_KEY_MAX)
+			return CFG_FAIL(p, ST_ERR_RANGE, "key: %zu bytes; an API key has %d to %d",
+					n, NODE_KEY_MIN, NODE_KEY_MAX);
+		for (const char *s = v; *s; s++)
+			if (!isgraph((unsigned char)*s))
+				return CFG_FAIL(p, ST_ERR_RANGE, "key: only printable characters "
+								"without blanks");
+		memcpy(key->secret, v, n + 1);
+		return 0;
+	}
+	if (!strcmp(k, "roles")) {
+		if ((rc = once(p, k, 1)))
+			return rc;
+		return parse_roles(p, v, &key->roles);
+	}
+	return CFG_FAIL(p, ST_ERR_PARSE, "unknown key '%s' in [key %s] (key, roles)", k, key->name);
+}
+
+static int printer_key_value(struct cfg_parse *p, const char *k, const char *v)
+{
+	struct node_printer_config *pc = &p->cfg->printers[p->cfg->nprinters - 1];
+	int rc;
+
+	if (!strcmp(k, "profile")) {
+		if ((rc = once(p, k, 0)))
+			return rc;
+		return copy_value(p, k, v, pc->profile, sizeof(pc->profile));
+	}
+	if (!strcmp(k, "port")) {
+		if ((rc = once(p, k, 1)))
+			return rc;
+		return copy_value(p, k, v, pc->port, sizeof(pc->port));
+	}
+	if (!strcmp(k, "prefix")) {
+		size_t n = strlen(v);
+
+		if ((rc = once(p, k, 2)))
+			return rc;
+		if (n < 2 || v[0] != '/' || v[n - 1] == '/' || strstr(v, "//") ||
+		    strstr(v, "/.") || !strncmp(v, "/api", 4) || strspn(v, "/abcdefghijklmnopqrstuvwxyz"
+			"ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_.") != n)
+			return CFG_FAIL(p, ST_ERR_RANGE, "prefix: '%s' is not a URL path such as "
+							 "/p/mk3s (starts with '/', no trailing "
+							 "'/', not under /api)", v);
+		return copy_value(p, k, v, pc->prefix, sizeof(pc->prefix));
+	}
+	return CFG_FAIL(p, ST_ERR_PARSE, "unknown key '%s' in [printer %s] (profile, port, prefix)",
+			k, pc->name);
+}
+
+/* "[node]", "[key NAME]" or "[printer NAME]". */
+static int section_line(struct cfg_parse *p, char *s)
+{
+	struct node_config *c = p->cfg;
+	char *end = strchr(s, ']'), *name;
+
+	if (!end || trim(end + 1)[0])
+		return CFG_FAIL(p, ST_ERR_PARSE, "a section line is [node], [key NAME] or "
+						 "[printer NAME]");
+	*end = '\0';
+	s = trim(s + 1);
+	p->seen = 0;
+	if (!strcmp(s, "node")) {
+		if (p->node_seen)
+			return CFG_FAIL(p, ST_ERR_PARSE, "[node] given twice");
+		p->node_seen = true;
+		p->sec = SEC_NODE;
+		return 0;
+	}
+	name = strchr(s, ' ');
+	if (!name)
+		return CFG_FAIL(p, ST_ERR_PARSE, "unknown section [%s] (node, key NAME, "
+						 "printer NAME)", s);
+	*name = '\0';
+	name = trim(name + 1);
+	if (!good_name(name))
+		return CFG_FAIL(p, ST_ERR_RANGE, "'%s' is not a name (letters, digits, '-', '_', "
+						 "'.'; at most 63)", name);
+	if (!strcmp(s, "key")) {
+		if (c->nkeys == NODE_MAX_KEYS)
+			return CFG_FAIL(p, ST_ERR_RANGE, "more than %d keys", NODE_MAX_KEYS);
+		for (size_t i = 0; i < c->nkeys; i++)
+			if (!strcmp(c->keys[i].name, name))
+				return CFG_FAIL(p, ST_ERR_PARSE, "[key %s] given twice", name);
+		snprintf(c->keys[c->nkeys++].name, NODE_NAME_MAX, "%s", name);
+		p->sec = SEC_KEY;
+		return 0;
+	}
+	if (!strcmp(s, "printer")) {
+		if (c->nprinters == NODE_MAX_PRINTERS)
+			return CFG_FAIL(p, ST_ERR_RANGE, "more than %d printers", NODE_MAX_PRINTERS);
+		for (size_t i = 0; i < c->nprinters; i++)
+			if (!strcmp(c->printers[i].name, name))
+				return CFG_FAIL(p, ST_ERR_PARSE, "[printer %s] given twice", name);
+		snprintf(c->printers[c->nprinters++].name, NODE_NAME_MAX, "%s", name);
+		p->sec = SEC_PRINTER;
+		return 0;
+	}
+	return CFG_FAIL(p, ST_ERR_PARSE, "unknown section [%s %s] (node, key NAME, printer NAME)",
+			s, name);
+}
+
+static int one_line(struct cfg_parse *p, char *s)
+{
+	char *eq, *k, *v;
+
+	s = trim(s);
+	if (!*s || *s == '#' || *s == ';')
+		return 0;
+	if (*s == '[')
+		return section_line(p, s);
+	eq = strchr(s, '=');
+	if (!eq)
+		return CFG_FAIL(p, ST_ERR_PARSE, "expected 'key = value' or a [section]");
+	*eq = '\0';
+	k = trim(s);
+	v = trim(eq + 1);
+	switch (p->sec) {
+	case SEC_NODE:
+		return node_key_value(p, k, v);
+	case SEC_KEY:
+		return key_key_value(p, k, v);
+	case SEC_PRINTER:
+		return printer_key_value(p, k, v);
+	default:
+		return CFG_FAIL(p, ST_ERR_PARSE, "'%s' before any [section]", k);
+	}
+}
+
+/* What every section must have, checked once the whole file is read. */
+static int check_complete(struct cfg_parse *p)
+{
+	struct node_config *c = p->cfg;
+
+	p->line = 0;
+	if (!c->nkeys)
+		return st_error_set(p->err, ST_ERR_RANGE, "%s: no [key NAME] section: the node "
+							  "refuses every request without a key",
+				    p->file);
+	for (size_t i = 0; i < c->nkeys; i++)
+		if (!c->keys[i].secret[0] || !c->keys[i].roles)
+			return st_error_set(p->err, ST_ERR_RANGE, "%s: [key %s] needs key = and "
+								  "roles =", p->file, c->keys[i].name);
+	if (!c->nprinters)
+		return st_error_set(p->err, ST_ERR_RANGE, "%s: no [printer NAME] section", p->file);
+	for (size_t i = 0; i < c->nprinters; i++) {
+		struct node_printer_config *pc = &c->printers[i];
+
+		if (!pc->profile[0] || !pc->port[0])
+			return st_error_set(p->err, ST_ERR_RANGE, "%s: [printer %s] needs profile = "
+								  "and port =", p->file, pc->name);
+		if (!pc->prefix[0])
+			snprintf(pc->prefix, sizeof(pc->prefix), "/p/%s", pc->name);
+		for (size_t j = 0; j < i; j++)
+			if (!strcmp(c->printers[j].prefix, pc->prefix))
+				return st_error_set(p->err, ST_ERR_RANGE, "%s: printers %s and %s "
+									  "have the same prefix %s",
+						    p->file, c->printers[j].name, pc->name,
+						    pc->prefix);
+	}
+	return 0;
+}
+
+/* data_dir relative to the config file's folder. */
+static int resolve_data_dir(struct node_config *c, const char *path, struct st_error *err)
+{
+	char dir[NODE_PATH_MAX];
+	const char *slash = strrchr(path, '/');
+
+	if (!c->data_dir[0])
+		return st_error_set(err, ST_ERR_RANGE, "%s: [node] needs data_dir = (where the "
+						       "queue and the files are kept)", path);
+	if (c->data_dir[0] == '/' || !slash)
+		return 0;
+	if (snprintf(dir, sizeof(dir), "%.*s/%s", (int)(slash - path), path, c->data_dir) >=
+	    (int)sizeof(dir))
+		return st_error_set(err, ST_ERR_RANGE, "%s: data_dir: path too long", path);
+	memcpy(c->data_dir, dir, sizeof(dir));
+	return 0;
+}
+
+int node_config_load(const char *path, struct node_config *out, struct st_error *err)
+{
+	struct node_config *c = calloc(1, sizeof(*c));
+	struct cfg_parse p = {.file = path, .cfg = c, .err = err};
+	char buf[CFG_LINE_MAX + 2];
+	FILE *f;
+	int rc = 0;
+
+	if (!c)
+		return st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", path);
+	f = fopen(path, "r");
+	if (!f) {
+		rc = st_error_set(err, ST_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+		goto out_free;
+	}
+	snprintf(c->path, sizeof(c->path), "%s", path);
+	snprintf(c->name, sizeof(c->name), "stratum");
+	snprintf(c->listen_addr, sizeof(c->listen_addr), "127.0.0.1");
+	c->listen_port = 5000;
+	c->max_upload = NODE_UPLOAD_DEFAULT;
+	c->slice_threads = 1;
+	while (fgets(buf, sizeof(buf), f)) {
+		size_t n = strlen(buf);
+
+		p.line++;
+		if (n && buf[n - 1] == '\n')
+			buf[--n] = '\0';
+		else if (n > CFG_LINE_MAX) {
+			rc = CFG_FAIL(&p, ST_ERR_PARSE, "longer than %d bytes", CFG_LINE_MAX);
+			goto out_close;
+		}
+		if (strlen(buf) != n) {
+			rc = CFG_FAIL(&p, ST_ERR_PARSE, "NUL byte in the line");
+			goto out_close;
+		}
+		if ((rc = one_line(&p, buf)))
+			goto out_close;
+	}
+	if (ferror(f)) {
+		rc = st_error_set(err, ST_ERR_IO, "%s: read error", path);
+		goto out_close;
+	}
+	if (!(rc = check_complete(&p)) && !(rc = resolve_data_dir(c, path, err)))
+		*out = *c;
+out_close:
+	fclose(f);
+out_free:
+	free(c);
+	return rc;
+}
+
+int node_parse_listen(const char *s, char *addr, size_t cap, uint16_t *port,
+		      struct st_error *err)
+{
+	const char *colon = strrchr(s, ':');
+	struct in_addr in;
+	char host[INET_ADDRSTRLEN];
+	double d;
+
+	if (!colon || colon == s || (size_t)(colon - s) >= sizeof(host))
+		goto out_bad;
+	memcpy(host, s, (size_t)(colon - s));
+	host[colon - s] = '\0';
+	if (inet_pton(AF_INET, host, &in) != 1 ||
+	    st_parse_double(colon + 1, strlen(colon + 1), 0, &d) != ST_NUMBER_OK ||
+	    d != (double)(long)d || d < 0 || d > 65535 || strchr(colon + 1, '.'))
+		goto out_bad;
+	if (!inet_ntop(AF_INET, &in, addr, (socklen_t)cap))
+		goto out_bad;
+	*port = (uint16_t)d;
+	return 0;
+
+out_bad:
+	return st_error_set(err, ST_ERR_PARSE, "'%s' is not ADDRESS:PORT such as 127.0.0.1:5000 "
+					       "(IPv4, port 0 to 65535)", s);
+}

@@ -1,0 +1,52 @@
+/*
+ * names.c - which uploaded file names the node stores (node.h).  Names are
+ * refused, not rewritten, so what the slicer shows is what the node keeps.
+ */
+#include <ctype.h>
+#include <string.h>
+#include <strings.h>
+
+#include "node.h"
+
+int node_check_file_name(const char *name, size_t len, struct st_error *err)
+{
+	if (!len)
+		return st_error_set(err, ST_ERR_PARSE, "the file name is empty");
+	if (len > NODE_FILE_NAME_MAX)
+		return st_error_set(err, ST_ERR_PARSE, "the file name has %zu bytes; at most %d",
+				    len, NODE_FILE_NAME_MAX);
+	if (name[0] == '.')
+		return st_error_set(err, ST_ERR_PARSE, "the file name starts with '.' (hidden "
+						       "files and '..' are refused)");
+	if (name[0] == ' ' || name[len - 1] == ' ')
+		return st_error_set(err, ST_ERR_PARSE, "the file name starts or ends with a blank");
+	for (size_t i = 0; i < len; i++) {
+		unsigned char c = (unsigned char)name[i];
+
+		if (c == '/' || c == '\\')
+			return st_error_set(err, ST_ERR_PARSE, "the file name contains '%c' at byte "
+							       "%zu; give a name without folders",
+					    c, i);
+		if (c < 0x20 || c == 0x7f)
+			return st_error_set(err, ST_ERR_PARSE, "the file name contains the control "
+							       "byte 0x%02x at byte %zu", c, i);
+	}
+	return 0;
+}
+
+/* True when name ends in ext (with its dot), case-insensitively. */
+static bool ends_with(const char *name, const char *ext)
+{
+	size_t n = strlen(name), e = strlen(ext);
+
+	return n > e && !strcasecmp(name + n - e, ext);
+}
+
+char node_file_kind(const char *name)
+{
+	if (ends_with(name, ".gcode") || ends_with(name, ".gco") || ends_with(name, ".g"))
+		return 'g';
+	if (ends_with(name, ".stl") || ends_with(name, ".obj"))
+		return 'm';
+	return 0;
+}

@@ -1,0 +1,137 @@
+/*
+ * node.h - the farm node behind `stratum serve` (DESIGN.md item 8): one
+ * process that drives every printer of its config, each with its own
+ * durable job queue (SQLite, WAL) and worker thread, behind an HTTP API
+ * that speaks the OctoPrint subset slicers upload to (libmicrohttpd,
+ * jansson).  docs/serve.md describes the config, the API and the queue.
+ *
+ * Life cycle: node_config_load, node_new (opens the queue, recovers it after
+ * a crash, loads the profiles), node_start (workers and HTTP), node_stop
+ * (from any thread but the node's own), node_free.  Errors fill a struct
+ * st_error; the node itself logs one-line records through node_set_log.
+ */
+#ifndef STRATUM_HOST_SERVE_NODE_H
+#define STRATUM_HOST_SERVE_NODE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "st_error.h"
+
+#define NODE_MAX_PRINTERS 16
+#define NODE_MAX_KEYS 32
+#define NODE_NAME_MAX 64	/* node, printer and key names, bytes with the NUL */
+#define NODE_KEY_MIN 16		/* shortest API key accepted, bytes */
+#define NODE_KEY_MAX 128	/* longest API key, bytes */
+#define NODE_PATH_MAX 1024	/* data directory, profile and port paths */
+#define NODE_PREFIX_MAX 128	/* a printer's URL path prefix */
+#define NODE_FILE_NAME_MAX 255	/* an uploaded file's name, bytes (NAME_MAX) */
+#define NODE_UPLOAD_DEFAULT (256ull << 20) /* max_upload_mb default: 256 MiB */
+
+/* Roles of an API key (bit set). */
+enum node_role {
+	NODE_ROLE_READ = 1u << 0,    /* every GET */
+	NODE_ROLE_UPLOAD = 1u << 1,  /* POST /api/files/local */
+	NODE_ROLE_CONTROL = 1u << 2, /* job, printer command, connection, bed clear */
+};
+
+struct node_key {
+	char name[NODE_NAME_MAX];  /* the [key NAME] section, for the log */
+	char secret[NODE_KEY_MAX + 1];
+	unsigned roles; /* enum node_role bits */
+};
+
+struct node_printer_config {
+	char name[NODE_NAME_MAX];	/* [printer NAME] */
+	char profile[NODE_PATH_MAX];	/* profile name or .ini path (profile_find) */
+	char port[NODE_PATH_MAX];	/* device path, "sim" or "test-instant" */
+	char prefix[NODE_PREFIX_MAX];	/* URL prefix; default "/p/NAME" */
+};
+
+struct node_config {
+	char path[NODE_PATH_MAX];	/* the file it was read from */
+	char name[NODE_NAME_MAX];	/* [node] name; default "stratum" */
+	char listen_addr[64];		/* IPv4 address; default 127.0.0.1 */
+	uint16_t listen_port;		/* default 5000 (OctoPrint's); 0 = any free port */
+	char data_dir[NODE_PATH_MAX];	/* relative paths are from the config's folder */
+	uint64_t max_upload;		/* bytes; max_upload_mb in the file */
+	int slice_threads;		/* cores per slicing job, 0 = all; default 1 */
+	struct node_key keys[NODE_MAX_KEYS];
+	size_t nkeys;
+	struct node_printer_config printers[NODE_MAX_PRINTERS];
+	size_t nprinters;
+};
+
+/*
+ * node_config_load - read and check a node config (docs/serve.md).
+ * The whole file is checked before *cfg is used: any bad line rejects it.
+ * Returns 0, or ST_ERR_IO (cannot read), ST_ERR_PARSE (syntax, unknown
+ * section or key, duplicate), ST_ERR_RANGE (a value out of range, no key,
+ * no printer, two printers with one name or prefix) with "FILE: line N:
+ * ..." in err.
+ */
+int node_config_load(const char *path, struct node_config *cfg, struct st_error *err);
+
+/*
+ * node_parse_listen - "ADDR:PORT" (IPv4 dotted quad, port 0-65535) into
+ * addr (cap bytes) and *port.  Returns 0 or ST_ERR_PARSE.
+ */
+int node_parse_listen(const char *s, char *addr, size_t cap, uint16_t *port,
+		      struct st_error *err);
+
+/*
+ * node_check_file_name - whether name (len bytes, may hold NUL bytes) may be
+ * stored as an uploaded file: 1-255 bytes, no '/', '\\', NUL or control
+ * byte, not starting with '.', no leading or trailing blank.  Returns 0 or
+ * ST_ERR_PARSE with the reason (the API answers 400 with it).
+ */
+int node_check_file_name(const char *name, size_t len, struct st_error *err);
+
+/*
+ * node_file_kind - 'g' for G-code (.gcode .gco .g), 'm' for a model the
+ * node slices (.stl .obj), 0 for anything else (the API answers 415).
+ * Case-insensitive on the extension.
+ */
+char node_file_kind(const char *name);
+
+/*
+ * The log sink: every record is one line without the newline ("level=info
+ * printer=mk3s job=3 msg=..."), passed to fn.  One sink per process (the
+ * style's one allowed global); set it before node_new.  NULL drops records.
+ */
+typedef void (*node_log_fn)(const char *line, void *ctx);
+void node_set_log(node_log_fn fn, void *ctx);
+
+struct node;
+
+/*
+ * node_new - open the data directory (created when missing) and its queue
+ * database, recover the queue after a crash (a printing job becomes paused
+ * and marked interrupted; a slicing one is queued again), load every
+ * printer's profile.  Nothing is started.  *out NULL on error.
+ * Returns 0, ST_ERR_IO (data directory, database), ST_ERR_PARSE /
+ * ST_ERR_RANGE / ST_ERR_ARG (a printer's profile), ST_ERR_NOMEM.
+ */
+int node_new(const struct node_config *cfg, struct node **out, struct st_error *err);
+
+/*
+ * node_start - start one worker thread per printer and the HTTP server.
+ * Returns 0 or ST_ERR_IO (cannot listen: the message names the address).
+ */
+int node_start(struct node *n, struct st_error *err);
+
+/* node_port - the TCP port the node listens on (after node_start). */
+uint16_t node_port(const struct node *n);
+
+/*
+ * node_stop - stop the HTTP server and the workers; a print in progress is
+ * left as an interrupted job (as after a crash) to be resumed by an
+ * operator.  Safe to call twice.
+ */
+void node_stop(struct node *n);
+
+/* node_free - stop if needed and free; NULL is fine. */
+void node_free(struct node *n);
+
+#endif /* STRATUM_HOST_SERVE_NODE_H */

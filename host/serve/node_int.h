@@ -1,0 +1,169 @@
+/*
+ * node_int.h - private to host/serve/: the node's parts (queue, workers,
+ * HTTP) and how they share state.  Nothing outside host/serve/ includes it.
+ *
+ * Locks, taken in this order only: node_printer.mu, then the print ctl's
+ * mu; the queue has its own mutex and is never called with ctl.mu held.
+ */
+#ifndef STRATUM_HOST_SERVE_NODE_INT_H
+#define STRATUM_HOST_SERVE_NODE_INT_H
+
+#include <jansson.h>
+#include <pthread.h>
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "node.h"
+#include "print.h"
+#include "profile.h"
+
+/* Job states, as stored and as the API names them. */
+enum node_job_state {
+	NODE_JOB_QUEUED = 0,
+	NODE_JOB_SLICING,
+	NODE_JOB_PRINTING,
+	NODE_JOB_PAUSED,
+	NODE_JOB_DONE,
+	NODE_JOB_FAILED,
+	NODE_JOB_CANCELLED,
+	NODE_JOB_STATES
+};
+
+const char *node_job_state_name(enum node_job_state s);
+
+/* One row of the queue. */
+struct node_job {
+	int64_t id;
+	char printer[NODE_NAME_MAX];
+	char name[NODE_FILE_NAME_MAX + 1]; /* the uploaded file's name */
+	char file[NODE_PATH_MAX];	   /* the stored upload */
+	char gcode[NODE_PATH_MAX];	   /* what is printed: file, or the sliced output ("" before) */
+	char kind;			   /* 'g' G-code, 'm' model to slice */
+	enum node_job_state state;
+	bool interrupted; /* the node died or stopped while it printed */
+	bool resume;	  /* an operator asked to resume the interrupted print */
+	int64_t filepos, size; /* bytes printed, bytes of gcode */
+	char error[256];
+	int64_t created, started, finished; /* Unix time, s; 0 = not yet */
+};
+
+struct node_queue;
+
+/* node_queue_open - open or create the database at path (WAL). */
+int node_queue_open(const char *path, struct node_queue **out, struct st_error *err);
+void node_queue_close(struct node_queue *q);
+
+/*
+ * node_queue_recover - after a start: printing/paused jobs become paused and
+ * interrupted (never restarted on their own), slicing jobs queued again.
+ * Counts in *interrupted and *requeued.
+ */
+int node_queue_recover(struct node_queue *q, int *interrupted, int *requeued,
+		       struct st_error *err);
+
+/* node_queue_add - a new queued job; *id its number. */
+int node_queue_add(struct node_queue *q, const char *printer, const char *name,
+		   const char *file, char kind, int64_t *id, struct st_error *err);
+
+/*
+ * node_queue_next - the job printer's worker should take: an interrupted job
+ * an operator resumed, else the oldest queued one.  Returns 1 with *job, 0
+ * when none, or a negative class.
+ */
+int node_queue_next(struct node_queue *q, const char *printer, struct node_job *job,
+		    struct st_error *err);
+
+/* node_queue_get - job number id; 1 found, 0 not, negative on error. */
+int node_queue_get(struct node_queue *q, int64_t id, struct node_job *job, struct st_error *err);
+
+/*
+ * node_queue_active - printer's newest job in slicing, printing or paused
+ * (an interrupted print counts); 1 found, 0 none, negative on error.
+ */
+int node_queue_active(struct node_queue *q, const char *printer, struct node_job *job,
+		      struct st_error *err);
+
+/* node_queue_update - write back the mutable fields of job. */
+int node_queue_update(struct node_queue *q, const struct node_job *job, struct st_error *err);
+
+/* node_queue_progress - store the print position of job id (cheap, often). */
+int node_queue_progress(struct node_queue *q, int64_t id, int64_t filepos, int64_t size);
+
+/* node_queue_file_busy - 1 when an unfinished job of printer uses file. */
+int node_queue_file_busy(struct node_queue *q, const char *printer, const char *file);
+
+/* Per printer: is the bed clear for the next job, and the selected file. */
+int node_queue_bed_clear(struct node_queue *q, const char *printer, bool *clear);
+int node_queue_set_bed_clear(struct node_queue *q, const char *printer, bool clear,
+			     struct st_error *err);
+int node_queue_selected(struct node_queue *q, const char *printer, char *name, size_t cap);
+int node_queue_set_selected(struct node_queue *q, const char *printer, const char *name,
+			    struct st_error *err);
+
+/* node_queue_list - printer's jobs, newest first, at most limit, as JSON. */
+json_t *node_queue_list(struct node_queue *q, const char *printer, int limit);
+
+/* node_job_json - one job as the /api/stratum/queue entry. */
+json_t *node_job_json(const struct node_job *job);
+
+#define NODE_CMD_QUEUE 16 /* printer commands waiting for an idle printer */
+#define NODE_CMD_MAX 257 /* one command line with its NUL (serial/gcode.h GCODE_LINE_MAX) */
+
+/* A printer and its worker. */
+struct node_printer {
+	struct node *node;
+	const struct node_printer_config *cfg;
+	struct profile *prof;
+	char files_dir[NODE_PATH_MAX]; /* uploads of this printer */
+
+	pthread_t thread;
+	bool thread_started;
+	pthread_mutex_t mu; /* the fields below */
+	pthread_cond_t cv;  /* wakes the worker */
+	bool stop;
+	bool want_connect, want_disconnect;
+	bool connected;
+	char conn_error[256]; /* why the last connect failed, "" if it did not */
+	int64_t job_id;	      /* the job the worker is on, 0 when idle */
+	bool job_printing;    /* job_id is at the print step */
+	char cmds[NODE_CMD_QUEUE][NODE_CMD_MAX];
+	int ncmds;
+
+	struct node_link *link; /* the worker's alone */
+	struct node_print_ctl ctl;
+};
+
+struct MHD_Daemon;
+
+struct node {
+	struct node_config cfg;
+	struct node_queue *q;
+	char tmp_dir[NODE_PATH_MAX];	/* upload temp files, same file system */
+	char sliced_dir[NODE_PATH_MAX]; /* G-code sliced from uploaded models */
+	struct node_printer printers[NODE_MAX_PRINTERS];
+	size_t nprinters;
+	struct MHD_Daemon *httpd;
+	uint16_t port;
+	bool started, stopped;
+	/* The ticker stores each print's position every NODE_TICK_MS. */
+	pthread_t ticker;
+	bool ticker_started, ticker_stop;
+	pthread_mutex_t tick_mu;
+	pthread_cond_t tick_cv;
+};
+
+#define NODE_TICK_MS 500
+
+/* node_log - one record to the sink (log.c); printer NULL and job 0 omit. */
+void node_log(const char *level, const char *printer, int64_t job, const char *fmt, ...)
+	__attribute__((format(printf, 4, 5)));
+
+/* worker.c: the printer's thread, and waking it after a change. */
+void *node_worker_main(void *printer);
+void node_printer_wake(struct node_printer *p);
+
+/* http.c */
+int node_http_start(struct node *n, struct st_error *err);
+void node_http_stop(struct node *n);
+
+#endif /* STRATUM_HOST_SERVE_NODE_INT_H */

@@ -1,0 +1,68 @@
+/*
+ * print.c - the print step of the farm node (print.h): the one place that
+ * chooses how a printer is driven.  The Marlin driver (serial/marlin.h,
+ * `stratum send`) plugs in here as a second ops table; until then a device
+ * path or "sim" is refused at connect time with a message saying so.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "print.h"
+
+struct node_link {
+	const struct node_printer_ops *ops;
+	void *state;
+};
+
+/* The back end for a port value; NULL when none is wired yet. */
+static const struct node_printer_ops *ops_for_port(const char *port)
+{
+	if (!strcmp(port, "test-instant"))
+		return &node_double_ops;
+	return NULL;
+}
+
+int node_print_connect(const struct node_printer_config *pc, const struct profile *prof,
+		       struct node_link **out, struct st_error *err)
+{
+	const struct node_printer_ops *ops = ops_for_port(pc->port);
+	struct node_link *l;
+	int rc;
+
+	*out = NULL;
+	if (!ops)
+		return st_error_set(err, ST_ERR_UNSUPPORTED,
+				    "printer %s: port %s: the Marlin streaming driver is not wired "
+				    "to the node yet; use port = test-instant to try the API",
+				    pc->name, pc->port);
+	l = calloc(1, sizeof(*l));
+	if (!l)
+		return st_error_set(err, ST_ERR_NOMEM, "printer %s: out of memory", pc->name);
+	l->ops = ops;
+	rc = ops->connect(pc, prof, &l->state, err);
+	if (rc) {
+		free(l);
+		return rc;
+	}
+	*out = l;
+	return 0;
+}
+
+void node_print_disconnect(struct node_link *l)
+{
+	if (!l)
+		return;
+	l->ops->disconnect(l->state);
+	free(l);
+}
+
+int node_print_file(struct node_link *l, const char *path, int64_t start, bool resume,
+		    struct node_print_ctl *ctl, struct st_error *err)
+{
+	return l->ops->print(l->state, path, start, resume, ctl, err);
+}
+
+int node_print_command(struct node_link *l, const char *line, struct st_error *err)
+{
+	return l->ops->command(l->state, line, err);
+}

@@ -1,0 +1,97 @@
+/*
+ * print.h - the node's printer-worker interface: how a printer's worker
+ * thread (worker.c) talks to the printer.  One table of operations; print.c
+ * chooses the back end from the printer's `port`:
+ *   - "test-instant": a test double (print_double.c) that "prints" by
+ *     reading the G-code file line by line with our parser, reporting
+ *     progress, honouring pause, cancel and G4 dwells; no printer involved.
+ *     A testing aid, documented as such in docs/serve.md.
+ *   - a device path or "sim": the Marlin streaming driver (serial/marlin.h),
+ *     not wired yet: connecting fails with a message saying so.
+ *
+ * Threads: the worker thread alone calls the operations of one link; the
+ * HTTP threads only write requests into struct node_print_ctl (under its
+ * mutex) and read its status fields.
+ */
+#ifndef STRATUM_HOST_SERVE_PRINT_H
+#define STRATUM_HOST_SERVE_PRINT_H
+
+#include <pthread.h>
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "node.h"
+#include "profile.h"
+#include "st_error.h"
+
+/* Shared between a print and the API; every field under mu. */
+struct node_print_ctl {
+	pthread_mutex_t mu;
+	pthread_cond_t cv; /* signalled on every request */
+	/* Requests, written by the API or node_stop. */
+	bool pause;  /* hold at the next line boundary until cleared */
+	bool cancel; /* stop this print: it ends as cancelled */
+	bool stop;   /* the node shuts down: the print ends as interrupted */
+	/* Status, written by the back end. */
+	bool paused;		 /* the printer is holding (pause acknowledged) */
+	int64_t filepos, size;	 /* bytes of the file sent, and its size */
+	double tool_actual, tool_target, bed_actual, bed_target; /* degrees C */
+};
+
+/* node_print_file results besides negative errors. */
+enum node_print_result {
+	NODE_PRINT_DONE = 0,
+	NODE_PRINT_CANCELLED = 1,
+	NODE_PRINT_STOPPED = 2, /* ctl->stop: the job stays resumable */
+};
+
+struct node_link; /* one connected printer (opaque, per back end) */
+
+/*
+ * node_print_connect - open the printer of pc (profile prof stays the
+ * caller's and outlives the link).  *out NULL on error.
+ * Returns 0; ST_ERR_IO (port cannot be opened), ST_ERR_UNSUPPORTED (a back
+ * end not wired yet), ST_ERR_NOMEM.
+ */
+int node_print_connect(const struct node_printer_config *pc, const struct profile *prof,
+		       struct node_link **out, struct st_error *err);
+
+/* node_print_disconnect - close the link; NULL is fine. */
+void node_print_disconnect(struct node_link *l);
+
+/*
+ * node_print_file - print the G-code file path, blocking until it ends.
+ * @start: byte offset to start from (0, or the saved position of an
+ *         interrupted print); @resume: true when continuing an interrupted
+ *         print, so the back end can restore heat and position first.
+ * Progress and temperatures go into ctl; ctl->pause holds, ctl->cancel
+ * ends as NODE_PRINT_CANCELLED, ctl->stop as NODE_PRINT_STOPPED.
+ * Returns an enum node_print_result, or a negative class with err filled
+ * (ST_ERR_IO: file or port; ST_ERR_PARSE: a line that is not G-code,
+ * named "FILE: line N"); ctl->filepos then says how far it got.
+ */
+int node_print_file(struct node_link *l, const char *path, int64_t start, bool resume,
+		    struct node_print_ctl *ctl, struct st_error *err);
+
+/*
+ * node_print_command - send one G-code line outside a print (POST
+ * /api/printer/command).  The line is checked with the parser first; a bad
+ * line changes nothing.  Returns 0, ST_ERR_PARSE, ST_ERR_IO.
+ */
+int node_print_command(struct node_link *l, const char *line, struct st_error *err);
+
+/* Back-end operations (print.c picks one table per link). */
+struct node_printer_ops {
+	const char *name; /* for the log */
+	int (*connect)(const struct node_printer_config *pc, const struct profile *prof,
+		       void **state, struct st_error *err);
+	void (*disconnect)(void *state);
+	int (*print)(void *state, const char *path, int64_t start, bool resume,
+		     struct node_print_ctl *ctl, struct st_error *err);
+	int (*command)(void *state, const char *line, struct st_error *err);
+};
+
+/* The test double's table (print_double.c). */
+extern const struct node_printer_ops node_double_ops;
+
+#endif /* STRATUM_HOST_SERVE_PRINT_H */

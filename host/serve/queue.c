@@ -1,0 +1,428 @@
+/*
+ * queue.c - the durable job queue (node_int.h): one SQLite database in the
+ * data directory, WAL journal and synchronous=FULL so a job the API has
+ * answered for survives kill -9 and a power cut.  One connection shared by
+ * every thread behind one mutex: the node's writes are few and small.
+ */
+#include <pthread.h>
+#include <sqlite3.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "node_int.h"
+
+struct node_queue {
+	sqlite3 *db;
+	pthread_mutex_t mu;
+};
+
+static const char *const state_names[NODE_JOB_STATES] = {
+	"queued", "slicing", "printing", "paused", "done", "failed", "cancelled"};
+
+const char *node_job_state_name(enum node_job_state s)
+{
+	return (unsigned)s < NODE_JOB_STATES ? state_names[s] : "unknown";
+}
+
+static enum node_job_state state_from_name(const char *s)
+{
+	for (int i = 0; i < NODE_JOB_STATES; i++)
+		if (s && !strcmp(s, state_names[i]))
+			return (enum node_job_state)i;
+	return NODE_JOB_FAILED; /* a row we do not understand is not printed */
+}
+
+static const char schema[] =
+	"CREATE TABLE IF NOT EXISTS jobs ("
+	" id INTEGER PRIMARY KEY AUTOINCREMENT,"
+	" printer TEXT NOT NULL, name TEXT NOT NULL, file TEXT NOT NULL,"
+	" gcode TEXT NOT NULL DEFAULT '', kind TEXT NOT NULL,"
+	" state TEXT NOT NULL, interrupted INTEGER NOT NULL DEFAULT 0,"
+	" resume INTEGER NOT NULL DEFAULT 0,"
+	" filepos INTEGER NOT NULL DEFAULT 0, size INTEGER NOT NULL DEFAULT 0,"
+	" error TEXT NOT NULL DEFAULT '',"
+	" created INTEGER NOT NULL, started INTEGER NOT NULL DEFAULT 0,"
+	" finished INTEGER NOT NULL DEFAULT 0);"
+	"CREATE INDEX IF NOT EXISTS jobs_printer_state ON jobs(printer, state);"
+	"CREATE TABLE IF NOT EXISTS printers ("
+	" name TEXT PRIMARY KEY, bed_clear INTEGER NOT NULL DEFAULT 1,"
+	" selected TEXT NOT NULL DEFAULT '');";
+
+#define JOB_COLUMNS                                                                       \
+	"id, printer, name, file, gcode, kind, state, interrupted, resume, filepos, size, " \
+	"error, created, started, finished"
+
+static int db_error(struct node_queue *q, struct st_error *err, const char *what)
+{
+	return st_error_set(err, ST_ERR_IO, "job queue: %s: %s", what, sqlite3_errmsg(q->db));
+}
+
+int node_queue_open(const char *path, struct node_queue **out, struct st_error *err)
+{
+	struct node_queue *q = calloc(1, sizeof(*q));
+	char *msg = NULL;
+	int rc;
+
+	*out = NULL;
+	if (!q)
+		return st_error_set(err, ST_ERR_NOMEM, "job queue: out of memory");
+	pthread_mutex_init(&q->mu, NULL);
+	if (sqlite3_open_v2(path, &q->db,
+			    SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
+			    NULL) != SQLITE_OK) {
+		rc = st_error_set(err, ST_ERR_IO, "%s: cannot open the job queue: %s", path,
+				  q->db ? sqlite3_errmsg(q->db) : "out of memory");
+		goto out_close;
+	}
+	sqlite3_busy_timeout(q->db, 5000);
+	if (sqlite3_exec(q->db, "PRAGMA journal_mode=WAL; PRAGMA synchronous=FULL;", NULL, NULL,
+			 &msg) != SQLITE_OK ||
+	    sqlite3_exec(q->db, schema, NULL, NULL, &msg) != SQLITE_OK) {
+		rc = st_error_set(err, ST_ERR_IO, "%s: cannot set up the job queue: %s", path,
+				  msg ? msg : sqlite3_errmsg(q->db));
+		sqlite3_free(msg);
+		goto out_close;
+	}
+	*out = q;
+	return 0;
+
+out_close:
+	sqlite3_close(q->db);
+	pthread_mutex_destroy(&q->mu);
+	free(q);
+	return rc;
+}
+
+void node_queue_close(struct node_queue *q)
+{
+	if (!q)
+		return;
+	sqlite3_close(q->db);
+	pthread_mutex_destroy(&q->mu);
+	free(q);
+}
+
+/* Bind parameters by fmt: 's' text, 'i' int64. */
+static void bind_args(sqlite3_stmt *st, const char *fmt, va_list ap)
+{
+	for (int i = 0; fmt[i]; i++) {
+		if (fmt[i] == 's')
+			sqlite3_bind_text(st, i + 1, va_arg(ap, const char *), -1, SQLITE_TRANSIENT);
+		else
+			sqlite3_bind_int64(st, i + 1, va_arg(ap, int64_t));
+	}
+}
+
+/* Run sql with text/integer parameters (fmt: 's' text, 'i' int64); q->mu held. */
+static int run(struct node_queue *q, const char *sql, const char *fmt, ...)
+{
+	sqlite3_stmt *st;
+	va_list ap;
+	int rc;
+
+	if (sqlite3_prepare_v2(q->db, sql, -1, &st, NULL) != SQLITE_OK)
+		return -1;
+	va_start(ap, fmt);
+	bind_args(st, fmt, ap);
+	va_end(ap);
+	while ((rc = sqlite3_step(st)) == SQLITE_ROW)
+		;
+	sqlite3_finalize(st);
+	return rc == SQLITE_DONE ? 0 : -1;
+}
+
+static void copy_text(char *dst, size_t cap, const unsigned char *s)
+{
+	snprintf(dst, cap, "%s", s ? (const char *)s : "");
+}
+
+static void row_to_job(sqlite3_stmt *st, struct node_job *j)
+{
+	const unsigned char *kind;
+
+	memset(j, 0, sizeof(*j));
+	j->id = sqlite3_column_int64(st, 0);
+	copy_text(j->printer, sizeof(j->printer), sqlite3_column_text(st, 1));
+	copy_text(j->name, sizeof(j->name), sqlite3_column_text(st, 2));
+	copy_text(j->file, sizeof(j->file), sqlite3_column_text(st, 3));
+	copy_text(j->gcode, sizeof(j->gcode), sqlite3_column_text(st, 4));
+	kind = sqlite3_column_text(st, 5);
+	j->kind = kind && kind[0] == 'm' ? 'm' : 'g';
+	j->state = state_from_name((const char *)sqlite3_column_text(st, 6));
+	j->interrupted = sqlite3_column_int(st, 7) != 0;
+	j->resume = sqlite3_column_int(st, 8) != 0;
+	j->filepos = sqlite3_column_int64(st, 9);
+	j->size = sqlite3_column_int64(st, 10);
+	copy_text(j->error, sizeof(j->error), sqlite3_column_text(st, 11));
+	j->created = sqlite3_column_int64(st, 12);
+	j->started = sqlite3_column_int64(st, 13);
+	j->finished = sqlite3_column_int64(st, 14);
+}
+
+/* The first row of a one-job query with parameters (fmt as run); takes q->mu. */
+static int one_job(struct node_queue *q, const char *sql, struct node_job *job,
+		   struct st_error *err, const char *fmt, ...)
+{
+	sqlite3_stmt *st;
+	va_list ap;
+	int rc;
+
+	pthread_mutex_lock(&q->mu);
+	if (sqlite3_prepare_v2(q->db, sql, -1, &st, NULL) != SQLITE_OK) {
+		rc = db_error(q, err, "query");
+		pthread_mutex_unlock(&q->mu);
+		return rc;
+	}
+	va_start(ap, fmt);
+	bind_args(st, fmt, ap);
+	va_end(ap);
+	rc = sqlite3_step(st);
+	if (rc == SQLITE_ROW) {
+		row_to_job(st, job);
+		rc = 1;
+	} else if (rc == SQLITE_DONE) {
+		rc = 0;
+	} else {
+		rc = db_error(q, err, "query");
+	}
+	sqlite3_finalize(st);
+	pthread_mutex_unlock(&q->mu);
+	return rc;
+}
+
+int node_queue_recover(struct node_queue *q, int *interrupted, int *requeued,
+		       struct st_error *err)
+{
+	int rc = 0;
+
+	pthread_mutex_lock(&q->mu);
+	if (run(q, "BEGIN IMMEDIATE", "") ||
+	    run(q, "UPDATE jobs SET state='paused', interrupted=1, resume=0 "
+		   "WHERE state IN ('printing','paused')", "")) {
+		rc = db_error(q, err, "recovery");
+		goto out;
+	}
+	*interrupted = sqlite3_changes(q->db);
+	if (run(q, "UPDATE jobs SET state='queued' WHERE state='slicing'", "")) {
+		rc = db_error(q, err, "recovery");
+		goto out;
+	}
+	*requeued = sqlite3_changes(q->db);
+	if (run(q, "COMMIT", ""))
+		rc = db_error(q, err, "recovery");
+out:
+	if (rc)
+		run(q, "ROLLBACK", "");
+	pthread_mutex_unlock(&q->mu);
+	return rc;
+}
+
+int node_queue_add(struct node_queue *q, const char *printer, const char *name,
+		   const char *file, char kind, int64_t *id, struct st_error *err)
+{
+	int rc = 0;
+	const char *k = kind == 'm' ? "m" : "g";
+
+	pthread_mutex_lock(&q->mu);
+	if (run(q, "INSERT INTO jobs(printer, name, file, gcode, kind, state, created) "
+		   "VALUES(?, ?, ?, ?, ?, 'queued', ?)", "sssssi", printer, name, file,
+		kind == 'm' ? "" : file, k, (int64_t)time(NULL)))
+		rc = db_error(q, err, "adding a job");
+	else
+		*id = sqlite3_last_insert_rowid(q->db);
+	pthread_mutex_unlock(&q->mu);
+	return rc;
+}
+
+int node_queue_next(struct node_queue *q, const char *printer, struct node_job *job,
+		    struct st_error *err)
+{
+	return one_job(q, "SELECT " JOB_COLUMNS " FROM jobs WHERE printer=? AND "
+			  "((state='paused' AND interrupted=1 AND resume=1) OR state='queued') "
+			  "ORDER BY resume DESC, id LIMIT 1", job, err, "s", printer);
+}
+
+int node_queue_get(struct node_queue *q, int64_t id, struct node_job *job, struct st_error *err)
+{
+	return one_job(q, "SELECT " JOB_COLUMNS " FROM jobs WHERE id=?", job, err, "i", id);
+}
+
+int node_queue_active(struct node_queue *q, const char *printer, struct node_job *job,
+		      struct st_error *err)
+{
+	return one_job(q, "SELECT " JOB_COLUMNS " FROM jobs WHERE printer=? AND state IN "
+			  "('slicing','printing','paused') ORDER BY id DESC LIMIT 1", job, err,
+		       "s", printer);
+}
+
+int node_queue_update(struct node_queue *q, const struct node_job *j, struct st_error *err)
+{
+	int rc = 0;
+
+	pthread_mutex_lock(&q->mu);
+	if (run(q, "UPDATE jobs SET gcode=?, state=?, interrupted=?, resume=?, filepos=?, "
+		   "size=?, error=?, started=?, finished=? WHERE id=?", "ssiiiisiii", j->gcode,
+		node_job_state_name(j->state), (int64_t)j->interrupted, (int64_t)j->resume,
+		j->filepos, j->size, j->error, j->started, j->finished, j->id))
+		rc = db_error(q, err, "updating a job");
+	pthread_mutex_unlock(&q->mu);
+	return rc;
+}
+
+int node_queue_progress(struct node_queue *q, int64_t id, int64_t filepos, int64_t size)
+{
+	int rc;
+
+	pthread_mutex_lock(&q->mu);
+	rc = run(q, "UPDATE jobs SET filepos=?, size=? WHERE id=?", "iii", filepos, size, id);
+	pthread_mutex_unlock(&q->mu);
+	return rc;
+}
+
+int node_queue_file_busy(struct node_queue *q, const char *printer, const char *file)
+{
+	sqlite3_stmt *st;
+	int busy = 1; /* when in doubt, do not overwrite */
+
+	pthread_mutex_lock(&q->mu);
+	if (sqlite3_prepare_v2(q->db, "SELECT 1 FROM jobs WHERE printer=? AND file=? AND state "
+				      "IN ('queued','slicing','printing','paused') LIMIT 1",
+			       -1, &st, NULL) == SQLITE_OK) {
+		sqlite3_bind_text(st, 1, printer, -1, SQLITE_TRANSIENT);
+		sqlite3_bind_text(st, 2, file, -1, SQLITE_TRANSIENT);
+		switch (sqlite3_step(st)) {
+		case SQLITE_ROW:
+			busy = 1;
+			break;
+		case SQLITE_DONE:
+			busy = 0;
+			break;
+		default:
+			break;
+		}
+		sqlite3_finalize(st);
+	}
+	pthread_mutex_unlock(&q->mu);
+	return busy;
+}
+
+/* The printers row of printer, created with its defaults when missing; q->mu held. */
+static int printer_row(struct node_queue *q, const char *printer)
+{
+	return run(q, "INSERT OR IGNORE INTO printers(name) VALUES(?)", "s", printer);
+}
+
+int node_queue_bed_clear(struct node_queue *q, const char *printer, bool *clear)
+{
+	sqlite3_stmt *st;
+	int rc = -1;
+
+	pthread_mutex_lock(&q->mu);
+	if (!printer_row(q, printer) &&
+	    sqlite3_prepare_v2(q->db, "SELECT bed_clear FROM printers WHERE name=?", -1, &st,
+			       NULL) == SQLITE_OK) {
+		sqlite3_bind_text(st, 1, printer, -1, SQLITE_TRANSIENT);
+		if (sqlite3_step(st) == SQLITE_ROW) {
+			*clear = sqlite3_column_int(st, 0) != 0;
+			rc = 0;
+		}
+		sqlite3_finalize(st);
+	}
+	pthread_mutex_unlock(&q->mu);
+	return rc;
+}
+
+int node_queue_set_bed_clear(struct node_queue *q, const char *printer, bool clear,
+			     struct st_error *err)
+{
+	int rc = 0;
+
+	pthread_mutex_lock(&q->mu);
+	if (printer_row(q, printer) ||
+	    run(q, "UPDATE printers SET bed_clear=? WHERE name=?", "is", (int64_t)clear, printer))
+		rc = db_error(q, err, "bed state");
+	pthread_mutex_unlock(&q->mu);
+	return rc;
+}
+
+int node_queue_selected(struct node_queue *q, const char *printer, char *name, size_t cap)
+{
+	sqlite3_stmt *st;
+	int rc = -1;
+
+	name[0] = '\0';
+	pthread_mutex_lock(&q->mu);
+	if (!printer_row(q, printer) &&
+	    sqlite3_prepare_v2(q->db, "SELECT selected FROM printers WHERE name=?", -1, &st,
+			       NULL) == SQLITE_OK) {
+		sqlite3_bind_text(st, 1, printer, -1, SQLITE_TRANSIENT);
+		if (sqlite3_step(st) == SQLITE_ROW) {
+			copy_text(name, cap, sqlite3_column_text(st, 0));
+			rc = 0;
+		}
+		sqlite3_finalize(st);
+	}
+	pthread_mutex_unlock(&q->mu);
+	return rc;
+}
+
+int node_queue_set_selected(struct node_queue *q, const char *printer, const char *name,
+			    struct st_error *err)
+{
+	int rc = 0;
+
+	pthread_mutex_lock(&q->mu);
+	if (printer_row(q, printer) ||
+	    run(q, "UPDATE printers SET selected=? WHERE name=?", "ss", name, printer))
+		rc = db_error(q, err, "selecting a file");
+	pthread_mutex_unlock(&q->mu);
+	return rc;
+}
+
+json_t *node_job_json(const struct node_job *j)
+{
+	json_t *o = json_object();
+
+	if (!o)
+		return NULL;
+	json_object_set_new(o, "id", json_integer(j->id));
+	json_object_set_new(o, "printer", json_string(j->printer));
+	json_object_set_new(o, "name", json_string(j->name));
+	json_object_set_new(o, "state", json_string(node_job_state_name(j->state)));
+	json_object_set_new(o, "interrupted", json_boolean(j->interrupted));
+	json_object_set_new(o, "sliced", json_boolean(j->kind == 'm' && j->gcode[0]));
+	json_object_set_new(o, "filepos", json_integer(j->filepos));
+	json_object_set_new(o, "size", json_integer(j->size));
+	json_object_set_new(o, "error", j->error[0] ? json_string(j->error) : json_null());
+	json_object_set_new(o, "created", json_integer(j->created));
+	json_object_set_new(o, "started", j->started ? json_integer(j->started) : json_null());
+	json_object_set_new(o, "finished", j->finished ? json_integer(j->finished) : json_null());
+	return o;
+}
+
+json_t *node_queue_list(struct node_queue *q, const char *printer, int limit)
+{
+	json_t *arr = json_array();
+	sqlite3_stmt *st;
+
+	if (!arr)
+		return NULL;
+	pthread_mutex_lock(&q->mu);
+	if (sqlite3_prepare_v2(q->db, "SELECT " JOB_COLUMNS " FROM jobs WHERE printer=? "
+				      "ORDER BY id DESC LIMIT ?", -1, &st, NULL) == SQLITE_OK) {
+		struct node_job j;
+
+		sqlite3_bind_text(st, 1, printer, -1, SQLITE_TRANSIENT);
+		sqlite3_bind_int(st, 2, limit);
+		while (sqlite3_step(st) == SQLITE_ROW) {
+			row_to_job(st, &j);
+			json_array_append_new(arr, node_job_json(&j));
+		}
+		sqlite3_finalize(st);
+	}
+	pthread_mutex_unlock(&q->mu);
+	return arr;
+}

@@ -1,0 +1,283 @@
+/*
+ * worker.c - one thread per printer (node_int.h): connects the printer when
+ * asked, slices uploaded models, and prints the queue one job at a time,
+ * waiting for an operator to confirm the bed is clear between jobs.  Every
+ * change of a job's state is written to the queue before it takes effect
+ * on the printer side, so a crash never loses what was printing.
+ */
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+
+#include "mesh.h"
+#include "meshio.h"
+#include "node_int.h"
+#include "profile_slicer.h"
+#include "repair.h"
+#include "slicer.h"
+
+#define WORKER_IDLE_MS 1000 /* idle wake-up, for requests that did not signal */
+
+void node_printer_wake(struct node_printer *p)
+{
+	pthread_mutex_lock(&p->mu);
+	pthread_cond_signal(&p->cv);
+	pthread_mutex_unlock(&p->mu);
+}
+
+/* Repair (epsilon = the nozzle) and slice job j's model into out. */
+static int slice_model(struct node_printer *p, const struct node_job *j, const char *out,
+		       struct st_error *err)
+{
+	struct slicer_config cfg;
+	struct repair_options opt;
+	struct repair_report rep;
+	struct mesh *m = NULL, *fixed = NULL;
+	enum meshio_format fmt;
+	double off[3];
+	int rc;
+
+	if (!out[0])
+		return st_error_set(err, ST_ERR_RANGE, "the data directory's path is too long");
+	if ((rc = profile_slicer_config(p->prof, &cfg, err)))
+		return rc;
+	cfg.threads = p->node->cfg.slice_threads;
+	if ((rc = slicer_config_check(&cfg, err)) || (rc = meshio_read(j->file, MESHIO_AUTO, &m,
+								       &fmt, err)))
+		return rc;
+	if ((rc = slicer_place(m, &cfg.bed, off, NULL, NULL, err)))
+		goto out_mesh;
+	repair_options_init(&opt);
+	opt.epsilon = cfg.perim.nozzle_diameter;
+	opt.precision = REPAIR_FLOAT64; /* slicing reads doubles */
+	opt.threads = cfg.threads;
+	if ((rc = repair_mesh(m, &opt, &fixed, NULL, &rep, err)))
+		goto out_mesh;
+	if (!rep.printable) {
+		rc = st_error_set(err, ST_ERR_RANGE, "could not be repaired to a printable solid: %s",
+				  rep.why);
+		goto out_fixed;
+	}
+	rc = slicer_run(fixed, &cfg, out, NULL, err);
+out_fixed:
+	mesh_free(fixed);
+out_mesh:
+	mesh_free(m);
+	return rc;
+}
+
+/* Write j back; a failing database is logged (the job goes on in memory). */
+static void save(struct node_printer *p, const struct node_job *j)
+{
+	struct st_error err = {0};
+
+	if (node_queue_update(p->node->q, j, &err))
+		node_log("error", p->cfg->name, j->id, "%s", err.msg);
+}
+
+/* Slice job j (a model without G-code yet); p->mu held on entry and exit. */
+static void run_slicing(struct node_printer *p, struct node_job *j)
+{
+	struct st_error err = {0};
+	char out[NODE_PATH_MAX];
+	int rc;
+
+	j->state = NODE_JOB_SLICING;
+	save(p, j);
+	p->job_id = j->id;
+	if (snprintf(out, sizeof(out), "%s/job-%lld.gcode", p->node->sliced_dir,
+		     (long long)j->id) >= (int)sizeof(out))
+		out[0] = '\0'; /* slice_model refuses it */
+	node_log("info", p->cfg->name, j->id, "slicing %s with profile %s", j->name,
+		 p->prof->id);
+	pthread_mutex_unlock(&p->mu);
+	rc = slice_model(p, j, out, &err);
+	pthread_mutex_lock(&p->mu);
+	p->job_id = 0;
+	/* The API may have cancelled it meanwhile. */
+	if (node_queue_get(p->node->q, j->id, j, &err) != 1 || j->state != NODE_JOB_SLICING)
+		return;
+	if (rc) {
+		j->state = NODE_JOB_FAILED;
+		j->finished = time(NULL);
+		snprintf(j->error, sizeof(j->error), "%.60s: %.190s", j->name, err.msg);
+		node_log("error", p->cfg->name, j->id, "slicing failed: %s", j->error);
+	} else {
+		j->state = NODE_JOB_QUEUED;
+		memcpy(j->gcode, out, sizeof(j->gcode));
+		node_log("info", p->cfg->name, j->id, "sliced into %s", out);
+	}
+	save(p, j);
+}
+
+/* Print job j; p->mu held on entry and exit. */
+static void run_print(struct node_printer *p, struct node_job *j)
+{
+	struct node *n = p->node;
+	struct st_error err = {0};
+	bool resume = j->resume;
+	int64_t start = resume ? j->filepos : 0;
+	int rc;
+
+	/* The bed is taken before the first byte goes out, so a crash leaves it so. */
+	if (node_queue_set_bed_clear(n->q, p->cfg->name, false, &err)) {
+		node_log("error", p->cfg->name, j->id, "%s", err.msg);
+		return;
+	}
+	j->state = NODE_JOB_PRINTING;
+	j->resume = false;
+	j->filepos = start;
+	if (!j->started)
+		j->started = time(NULL);
+	save(p, j);
+	p->job_id = j->id;
+	p->job_printing = true;
+	pthread_mutex_lock(&p->ctl.mu);
+	p->ctl.pause = p->ctl.cancel = p->ctl.paused = false;
+	p->ctl.filepos = start;
+	p->ctl.size = j->size;
+	pthread_mutex_unlock(&p->ctl.mu);
+	node_log("info", p->cfg->name, j->id, "%s %s from byte %lld", resume ? "resuming" : "printing",
+		 j->name, (long long)start);
+	pthread_mutex_unlock(&p->mu);
+	rc = node_print_file(p->link, j->gcode, start, resume, &p->ctl, &err);
+	pthread_mutex_lock(&p->mu);
+	p->job_printing = false;
+	p->job_id = 0;
+	if (node_queue_get(n->q, j->id, j, &err) != 1)
+		return;
+	pthread_mutex_lock(&p->ctl.mu);
+	j->filepos = p->ctl.filepos;
+	j->size = p->ctl.size;
+	pthread_mutex_unlock(&p->ctl.mu);
+	switch (rc) {
+	case NODE_PRINT_DONE:
+		j->state = NODE_JOB_DONE;
+		j->interrupted = false;
+		break;
+	case NODE_PRINT_CANCELLED:
+		j->state = NODE_JOB_CANCELLED;
+		break;
+	case NODE_PRINT_STOPPED:
+		j->state = NODE_JOB_PAUSED;
+		j->interrupted = true;
+		break;
+	default:
+		j->state = NODE_JOB_FAILED;
+		snprintf(j->error, sizeof(j->error), "%s", err.msg);
+		break;
+	}
+	if (j->state != NODE_JOB_PAUSED)
+		j->finished = time(NULL);
+	save(p, j);
+	node_log(j->state == NODE_JOB_FAILED ? "error" : "info", p->cfg->name, j->id, "%s%s%s",
+		 node_job_state_name(j->state), j->error[0] ? ": " : "", j->error);
+	if (j->state != NODE_JOB_PAUSED)
+		node_log("info", p->cfg->name, 0, "waiting for the bed to be cleared "
+						  "(POST %s/api/stratum/bed-clear)", p->cfg->prefix);
+}
+
+/* One step of work; p->mu held.  True when something was done. */
+static bool step(struct node_printer *p)
+{
+	struct st_error err = {0};
+	struct node_job j;
+	bool clear = false;
+	int rc = node_queue_next(p->node->q, p->cfg->name, &j, &err);
+
+	if (rc < 0)
+		node_log("error", p->cfg->name, 0, "%s", err.msg);
+	if (rc != 1)
+		return false;
+	if (j.kind == 'm' && !j.gcode[0]) {
+		run_slicing(p, &j);
+		return true;
+	}
+	if (!p->connected)
+		return false;
+	/* A resumed print continues on its own part: no clear bed needed. */
+	if (!j.resume && (node_queue_bed_clear(p->node->q, p->cfg->name, &clear) || !clear))
+		return false;
+	run_print(p, &j);
+	return true;
+}
+
+/* Connect or disconnect as asked; p->mu held.  True when something was done. */
+static bool connection(struct node_printer *p)
+{
+	struct st_error err = {0};
+	struct node_link *l;
+	int rc;
+
+	if (p->want_disconnect) {
+		p->want_disconnect = false;
+		node_print_disconnect(p->link);
+		p->link = NULL;
+		p->connected = false;
+		node_log("info", p->cfg->name, 0, "disconnected");
+		return true;
+	}
+	if (!p->want_connect)
+		return false;
+	p->want_connect = false;
+	if (p->connected)
+		return false;
+	pthread_mutex_unlock(&p->mu);
+	rc = node_print_connect(p->cfg, p->prof, &l, &err);
+	pthread_mutex_lock(&p->mu);
+	if (rc) {
+		snprintf(p->conn_error, sizeof(p->conn_error), "%s", err.msg);
+		node_log("error", p->cfg->name, 0, "cannot connect: %s", err.msg);
+	} else {
+		p->link = l;
+		p->connected = true;
+		p->conn_error[0] = '\0';
+		node_log("info", p->cfg->name, 0, "connected on %s", p->cfg->port);
+	}
+	return true;
+}
+
+/* Send one waiting printer command; p->mu held.  True when one was sent. */
+static bool command(struct node_printer *p)
+{
+	char line[NODE_CMD_MAX];
+	struct st_error err = {0};
+
+	if (!p->connected || !p->ncmds)
+		return false;
+	memcpy(line, p->cmds[0], sizeof(line));
+	memmove(p->cmds[0], p->cmds[1], sizeof(p->cmds[0]) * (size_t)(--p->ncmds));
+	pthread_mutex_unlock(&p->mu);
+	if (node_print_command(p->link, line, &err))
+		node_log("error", p->cfg->name, 0, "command %s: %s", line, err.msg);
+	pthread_mutex_lock(&p->mu);
+	return true;
+}
+
+/* Wait for a signal or the idle period; p->mu held. */
+static void idle(struct node_printer *p)
+{
+	struct timespec t;
+
+	clock_gettime(CLOCK_REALTIME, &t);
+	t.tv_sec += WORKER_IDLE_MS / 1000;
+	pthread_cond_timedwait(&p->cv, &p->mu, &t);
+}
+
+void *node_worker_main(void *arg)
+{
+	struct node_printer *p = arg;
+
+	pthread_mutex_lock(&p->mu);
+	while (!p->stop) {
+		if (connection(p) || command(p) || step(p))
+			continue;
+		if (!p->stop)
+			idle(p);
+	}
+	node_print_disconnect(p->link);
+	p->link = NULL;
+	p->connected = false;
+	pthread_mutex_unlock(&p->mu);
+	return NULL;
+}
