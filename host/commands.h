@@ -15,6 +15,7 @@ int cmd_ports(int argc, char **argv);	 /* host/cmd_ports.c */
 int cmd_sim(int argc, char **argv);	 /* host/cmd_sim.c */
 int cmd_slice(int argc, char **argv);	 /* host/cmd_slice.c */
 int cmd_x3g(int argc, char **argv);	 /* host/cmd_x3g.c */
+int cmd_preview(int argc, char **argv);	 /* host/cmd_preview.c */
 
 /*
  * cmd_parse_threads - the value of --threads N: N as an int, or -1 when it

@@ -22,6 +22,7 @@ static const struct command commands[] = {
 	{"ports", cmd_ports, "list serial ports and the printers they match"},
 	{"slice", cmd_slice, "slice a mesh into G-code for a printer (walls only so far)"},
 	{"sim", cmd_sim, "run a simulated printer on a pseudo-terminal"},
+	{"preview", cmd_preview, "draw one layer of a G-code file as SVG or PNG"},
 	{"x3g", cmd_x3g, "translate G-code to X3G for Sailfish printers, or list an X3G file"},
 };
 
