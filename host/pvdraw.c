@@ -143,6 +143,19 @@ int pvdraw_size(const struct preview *pv, const struct pvdraw_opts *o, int *w, i
 	return 0;
 }
 
+int pvdraw_to_px(const struct preview *pv, const struct pvdraw_opts *o, double x, double y,
+		 double *px, double *py, struct st_error *err)
+{
+	struct layout l;
+	int rc = layout(pv, o, &l, err);
+
+	if (rc)
+		return rc;
+	*px = l.tx + x * l.s;
+	*py = l.ty - y * l.s;
+	return 0;
+}
+
 /* Legend text of entry k. */
 static void legend_text(const struct preview *pv, int e, char *buf, size_t cap)
 {

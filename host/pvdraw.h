@@ -54,6 +54,13 @@ int pvdraw_size(const struct preview *pv, const struct pvdraw_opts *o, int *w, i
 		struct st_error *err);
 
 /*
+ * pvdraw_to_px - where the point (x, y) mm lands in the picture, px from
+ * the top left corner.  Returns 0 or ST_ERR_ARG as pvdraw_size.
+ */
+int pvdraw_to_px(const struct preview *pv, const struct pvdraw_opts *o, double x, double y,
+		 double *px, double *py, struct st_error *err);
+
+/*
  * pvdraw_svg, pvdraw_png - write the picture to f (the caller's, left
  * open).  Return 0, ST_ERR_ARG (as pvdraw_size), ST_ERR_IO (a write
  * failed), ST_ERR_NOMEM or ST_ERR_INTERNAL (cairo refused).

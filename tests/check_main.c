@@ -10,7 +10,8 @@ int main(void)
 	Suite *(*const suites[])(void) = {mesh_suite,  meshio_suite, exact_suite, repair_suite,
 					  profile_suite, gcode_suite, xport_suite, sim_suite,
 					  slicer_suite, gcodewriter_suite, infill_suite, support_suite,
-					  slicecli_suite, region_suite, x3g_suite, cli_suite};
+					  slicecli_suite, region_suite, x3g_suite, preview_suite,
+					  portpick_suite, cli_suite};
 	SRunner *sr = srunner_create(NULL);
 	int failed;
 

@@ -22,6 +22,8 @@ Suite *support_suite(void);	/* tests/check_support.c: skirt, brim, support mater
 Suite *slicecli_suite(void);	/* tests/check_slicecli.c: stratum slice end to end */
 Suite *region_suite(void);	/* tests/check_region.c: printed region against cross-sections */
 Suite *x3g_suite(void);		/* tests/check_x3g.c: G-code to X3G, decoder, against gpx */
+Suite *preview_suite(void);	/* tests/check_preview.c: layer preview, move walker */
+Suite *portpick_suite(void);	/* tests/check_portpick.c: --port auto on fake enumerations */
 Suite *cli_suite(void);		/* tests/check_cli.c: the stratum binary end to end */
 
 #endif
