@@ -61,10 +61,7 @@ struct preview_args {
 /* A number for opt; false (message printed) when v is not one. */
 static bool number_arg(const char *opt, const char *v, const char *what, double *out)
 {
-	if (v && st_parse_double(v, strlen(v), 0, out) == ST_NUMBER_OK)
-		return true;
-	fprintf(stderr, PREVIEW_CMD ": %s wants %s, not '%s'\n", opt, what, v ? v : "");
-	return false;
+	return cmd_number(PREVIEW_CMD, opt, v, what, out);
 }
 
 /* One option at argv[*i]; 0 to go on, -1 after --help, else the exit status. */

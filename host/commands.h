@@ -30,6 +30,12 @@ int cmd_parse_threads(const char *s);
  */
 const char *cmd_opt_value(int argc, char **argv, int *i, const char *name);
 
+/*
+ * cmd_number - true and *out set when v is a number (st_number.h rules);
+ * else prints "CMD: OPT wants WHAT, not 'V'" on stderr and returns false.
+ */
+bool cmd_number(const char *cmd, const char *opt, const char *v, const char *what, double *out);
+
 /* cmd_is_opt - true when a is NAME or NAME=...; the value may still be missing. */
 bool cmd_is_opt(const char *a, const char *name);
 

@@ -16,6 +16,7 @@
 #include "gcwalk.h"
 #include "region.h"
 #include "section.h"
+#include "st_grow.h"
 #include "toolpath.h"
 
 #ifndef M_PI
@@ -89,22 +90,14 @@ void preview_opts_init(struct preview_opts *o)
 	o->layer = 1;
 }
 
-/* Grow an array of elem-sized items to hold need; 0 or ST_ERR_NOMEM. */
+/* st_grow through a void **: 0 or ST_ERR_NOMEM (*arr kept on failure). */
 static int grow(void **arr, size_t *cap, size_t need, size_t elem)
 {
-	if (need <= *cap)
-		return 0;
-	size_t ncap = *cap ? *cap : 16;
-	while (ncap < need) {
-		if (ncap > SIZE_MAX / 2 / elem)
-			return ST_ERR_NOMEM;
-		ncap *= 2;
-	}
-	void *p = realloc(*arr, ncap * elem);
+	void *p = st_grow(*arr, cap, need, elem);
+
 	if (!p)
 		return ST_ERR_NOMEM;
 	*arr = p;
-	*cap = ncap;
 	return 0;
 }
 

@@ -14,6 +14,7 @@
 
 #include "gcwalk.h"
 #include "section.h"
+#include "st_grow.h"
 #include "toolpath.h"
 
 #ifndef M_PI
@@ -62,19 +63,11 @@ double region_bead_width(double area, double h)
 /* Grow an array of elem-sized items to hold need; 0 or ST_ERR_NOMEM. */
 static int grow(void **arr, size_t *cap, size_t need, size_t elem)
 {
-	if (need <= *cap)
-		return 0;
-	size_t ncap = *cap ? *cap : 64;
-	while (ncap < need) {
-		if (ncap > SIZE_MAX / 2 / elem)
-			return ST_ERR_NOMEM;
-		ncap *= 2;
-	}
-	void *p = realloc(*arr, ncap * elem);
+	void *p = st_grow(*arr, cap, need, elem);
+
 	if (!p)
 		return ST_ERR_NOMEM;
 	*arr = p;
-	*cap = ncap;
 	return 0;
 }
 
