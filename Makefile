@@ -100,7 +100,8 @@ SAN := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recove
 test-asan:
 	@$(MAKE) BUILD=build/asan CFLAGS="-O1 -g $(SAN)" CXXFLAGS="-O1 -g -Wno-maybe-uninitialized $(SAN)" \
 	  LDEXTRA="$(SAN)" build/asan/check_all build/asan/stratum
-	ASAN_OPTIONS=detect_leaks=1 STRATUM_BIN=build/asan/stratum ./build/asan/check_all
+	ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
+	  STRATUM_BIN=build/asan/stratum ./build/asan/check_all
 
 $(BUILD)/bench/gen_mesh.o: CPPFLAGS += -Itests
 
