@@ -20,7 +20,7 @@ CXX      := g++
 DEB_PACKAGES := gcc g++ make pkg-config dpkg-dev \
 	libserialport-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev libtbb-dev \
 	libpolyclipping-dev check libsqlite3-dev libmicrohttpd-dev libjansson-dev \
-	libmosquitto-dev mosquitto gpx
+	libmosquitto-dev mosquitto gpx libcairo2-dev libxml2-utils
 # Only the benchmark compares against these (printcore: Printrun's host, also
 # used by the sim suite's faithfulness test, which is skipped without it).
 BENCH_PACKAGES := admesh time bc prusa-slicer printcore
@@ -32,7 +32,12 @@ override CFLAGS += -std=c11 -pedantic $(WARN) -Wstrict-prototypes -Wmissing-prot
 # CGAL: exact predicates, TBB for the parallel box intersection.
 CXXFLAGS ?= -O2 -g
 override CXXFLAGS += -std=c++17 $(WARN) -Wno-deprecated-declarations -pthread -DCGAL_LINKED_WITH_TBB -DNDEBUG
-LDLIBS   := -lmicrohttpd -lsqlite3 -lserialport -lutil -ljansson -lpolyclipping -ltbb -lgmp -lmpfr -lm -pthread
+# cairo draws the PNG layer previews (host/pvdraw.c); -isystem keeps its
+# headers out of -Werror.
+CAIRO_CFLAGS := $(patsubst -I%,-isystem %,$(shell pkg-config --cflags cairo 2>/dev/null))
+CAIRO_LIBS   := $(shell pkg-config --libs cairo 2>/dev/null || echo -lcairo)
+CPPFLAGS += $(CAIRO_CFLAGS)
+LDLIBS   := $(CAIRO_LIBS) -lmicrohttpd -lsqlite3 -lserialport -lutil -ljansson -lpolyclipping -ltbb -lgmp -lmpfr -lm -pthread
 TEST_LDLIBS := $(shell pkg-config --libs check 2>/dev/null || echo -lcheck -lsubunit -lrt) $(LDLIBS)
 
 # Sources: every .c under the module folders is library code except the CLI
@@ -96,7 +101,8 @@ SAN := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recove
 test-asan:
 	@$(MAKE) BUILD=build/asan CFLAGS="-O1 -g $(SAN)" CXXFLAGS="-O1 -g -Wno-maybe-uninitialized $(SAN)" \
 	  LDEXTRA="$(SAN)" build/asan/check_all build/asan/stratum
-	ASAN_OPTIONS=detect_leaks=1 STRATUM_BIN=build/asan/stratum ./build/asan/check_all
+	ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
+	  STRATUM_BIN=build/asan/stratum ./build/asan/check_all
 
 $(BUILD)/bench/gen_mesh.o: CPPFLAGS += -Itests
 

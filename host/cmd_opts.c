@@ -1,9 +1,11 @@
 /*
  * cmd_opts.c - option parsing helpers shared by the subcommands (commands.h).
  */
+#include <stdio.h>
 #include <string.h>
 
 #include "commands.h"
+#include "st_number.h"
 
 const char *cmd_opt_value(int argc, char **argv, int *i, const char *name)
 {
@@ -22,4 +24,12 @@ bool cmd_is_opt(const char *a, const char *name)
 	size_t len = strlen(name);
 
 	return !strncmp(a, name, len) && (a[len] == '\0' || a[len] == '=');
+}
+
+bool cmd_number(const char *cmd, const char *opt, const char *v, const char *what, double *out)
+{
+	if (v && st_parse_double(v, strlen(v), 0, out) == ST_NUMBER_OK)
+		return true;
+	fprintf(stderr, "%s: %s wants %s, not '%s'\n", cmd, opt, what, v ? v : "");
+	return false;
 }

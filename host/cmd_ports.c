@@ -1,7 +1,7 @@
 /*
- * cmd_ports.c - `stratum ports [--json]`: the serial ports the OS knows,
- * with their USB identity, and which printer profiles claim them through
- * their usb_ids.  Ptys and tcp:// bridges are not enumerable and are not
+ * cmd_ports.c - `stratum ports [--printer NAME] [--json]`: the serial ports
+ * the OS knows, with their USB identity, which printer profiles claim them
+ * through their usb_ids, and what `--port auto` would choose (portpick.h).  Ptys and tcp:// bridges are not enumerable and are not
  * listed.
  */
 #include <jansson.h>
@@ -10,11 +10,12 @@
 #include <string.h>
 
 #include "commands.h"
+#include "portpick.h"
 #include "profile.h"
 #include "st_error.h"
 #include "xport.h"
 
-/* The profiles that load, for matching; bad ones are reported and skipped. */
+/* The profiles that load, for matching; bad ones are counted and skipped. */
 struct profile_set {
 	struct profile **items;
 	size_t count;
@@ -22,47 +23,21 @@ struct profile_set {
 
 static void load_profiles(struct profile_set *set)
 {
-	struct profile_entry *list = NULL;
-	size_t n = 0;
 	struct st_error err = {0};
+	size_t skipped = 0;
 
-	set->items = NULL;
-	set->count = 0;
-	if (profile_list(&list, &n, &err)) {
+	if (portpick_profiles(&set->items, &set->count, &skipped, &err))
 		fprintf(stderr, "stratum ports: %s\n", err.msg);
-		return;
-	}
-	set->items = calloc(n ? n : 1, sizeof(*set->items));
-	if (!set->items) {
-		fprintf(stderr, "stratum ports: out of memory loading printer profiles\n");
-		profile_list_free(list, n);
-		return;
-	}
-	for (size_t i = 0; i < n; i++) {
-		if (profile_load_file(list[i].path, &set->items[set->count], &err))
-			fprintf(stderr, "stratum ports: skipping profile: %s\n", err.msg);
-		else
-			set->count++;
-	}
-	profile_list_free(list, n);
+	else if (skipped)
+		fprintf(stderr,
+			"stratum ports: %zu printer profile%s could not be loaded and %s skipped "
+			"('stratum printers' says why)\n",
+			skipped, skipped == 1 ? "" : "s", skipped == 1 ? "is" : "are");
 }
 
 static void free_profiles(struct profile_set *set)
 {
-	for (size_t i = 0; i < set->count; i++)
-		profile_free(set->items[i]);
-	free(set->items);
-}
-
-/* Does profile p list the port's USB VID:PID in its usb_ids? */
-static bool profile_claims(const struct profile *p, const struct xport_port_info *port)
-{
-	if (port->usb_vid < 0 || port->usb_pid < 0)
-		return false;
-	for (size_t i = 0; i < p->usb_id_count; i++)
-		if (p->usb_ids[i].vid == port->usb_vid && p->usb_ids[i].pid == port->usb_pid)
-			return true;
-	return false;
+	portpick_profiles_free(set->items, set->count);
 }
 
 static const char *or_dash(const char *s)
@@ -71,7 +46,8 @@ static const char *or_dash(const char *s)
 }
 
 static void print_text(const struct xport_port_info *ports, size_t n,
-		       const struct profile_set *set)
+		       const struct profile_set *set, const struct portpick_result *pick,
+		       const struct profile *want)
 {
 	if (n == 0) {
 		printf("No serial ports found. Is the printer plugged in and switched on?\n"
@@ -93,7 +69,7 @@ static void print_text(const struct xport_port_info *ports, size_t n,
 		       or_dash(p->manufacturer), or_dash(p->product), or_dash(p->serial));
 		printf("  printers      ");
 		for (size_t k = 0; k < set->count; k++) {
-			if (!profile_claims(set->items[k], p))
+			if (!portpick_claims(set->items[k], p))
 				continue;
 			printf("%s%s", any ? ", " : "", set->items[k]->id);
 			any = true;
@@ -102,6 +78,8 @@ static void print_text(const struct xport_port_info *ports, size_t n,
 			printf(p->usb_vid < 0 ? "(not a USB device)" : "(no profile lists this USB id)");
 		printf("\n");
 	}
+	printf("\n--port auto%s%s: %s%s\n", want ? " for " : "", want ? want->id : "",
+	       pick->index >= 0 ? "" : "nothing chosen: ", pick->why);
 }
 
 static json_t *optional_string(const char *s)
@@ -110,7 +88,7 @@ static json_t *optional_string(const char *s)
 }
 
 static int print_json(const struct xport_port_info *ports, size_t n,
-		      const struct profile_set *set)
+		      const struct profile_set *set, const struct portpick_result *pick)
 {
 	json_t *arr = json_array();
 	int rc;
@@ -121,7 +99,7 @@ static int print_json(const struct xport_port_info *ports, size_t n,
 		char usb[16];
 
 		for (size_t k = 0; k < set->count; k++)
-			if (profile_claims(set->items[k], p))
+			if (portpick_claims(set->items[k], p))
 				json_array_append_new(matches, json_string(set->items[k]->id));
 		snprintf(usb, sizeof(usb), "%04x:%04x", p->usb_vid & 0xffff, p->usb_pid & 0xffff);
 		json_object_set_new(o, "name", json_string(p->name));
@@ -133,6 +111,7 @@ static int print_json(const struct xport_port_info *ports, size_t n,
 		json_object_set_new(o, "serial_number", optional_string(p->serial));
 		json_object_set_new(o, "description", optional_string(p->description));
 		json_object_set_new(o, "printers", matches);
+		json_object_set_new(o, "auto", json_boolean(pick->index == (long)i));
 		json_array_append_new(arr, o);
 	}
 	rc = json_dumpf(arr, stdout, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
@@ -144,7 +123,10 @@ int cmd_ports(int argc, char **argv)
 {
 	struct xport_port_info *ports = NULL;
 	struct profile_set set;
+	struct portpick_result pick;
+	struct profile *want = NULL;
 	struct st_error err = {0};
+	const char *printer = NULL;
 	bool json = false;
 	size_t n = 0;
 	int rc = ST_EXIT_OK;
@@ -152,11 +134,19 @@ int cmd_ports(int argc, char **argv)
 	for (int i = 1; i < argc; i++) {
 		if (!strcmp(argv[i], "--json")) {
 			json = true;
+		} else if (cmd_is_opt(argv[i], "--printer")) {
+			printer = cmd_opt_value(argc, argv, &i, "--printer");
+			if (!printer || !*printer) {
+				fprintf(stderr, "stratum ports: --printer needs a printer name or file "
+						"(see 'stratum printers')\n");
+				return ST_EXIT_USAGE;
+			}
 		} else if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-			printf("usage: stratum ports [--json]\n\n"
+			printf("usage: stratum ports [--printer NAME] [--json]\n\n"
 			       "Lists the serial ports (name, stable /dev/serial/by-id name, USB\n"
 			       "VID:PID, manufacturer, product, serial number) and the printer\n"
-			       "profiles whose usb_ids match each one.\n");
+			       "profiles whose usb_ids match each one, then which port '--port auto'\n"
+			       "would choose (for the printer NAME when given) and why.\n");
 			return ST_EXIT_OK;
 		} else {
 			fprintf(stderr, "stratum ports: unknown argument '%s' (try --help)\n",
@@ -164,20 +154,29 @@ int cmd_ports(int argc, char **argv)
 			return ST_EXIT_USAGE;
 		}
 	}
+	if (printer && profile_find(printer, &want, &err)) {
+		fprintf(stderr, "stratum ports: %s\n", err.msg);
+		return err.code == ST_ERR_ARG ? ST_EXIT_USAGE : ST_EXIT_DATAERR;
+	}
 	if (xport_list(&ports, &n, &err)) {
 		fprintf(stderr, "stratum ports: %s\n", err.msg);
+		profile_free(want);
 		return ST_EXIT_UNAVAILABLE;
 	}
 	load_profiles(&set);
+	/* Only the explanation is wanted here; "nothing fits" is not an error. */
+	portpick_choose(want, (const struct profile *const *)set.items, set.count, ports, n, &pick,
+			NULL);
 	if (json) {
-		if (print_json(ports, n, &set)) {
+		if (print_json(ports, n, &set, &pick)) {
 			fprintf(stderr, "stratum ports: cannot write the JSON list\n");
 			rc = ST_EXIT_SOFTWARE;
 		}
 	} else {
-		print_text(ports, n, &set);
+		print_text(ports, n, &set, &pick, want);
 	}
 	free_profiles(&set);
+	profile_free(want);
 	xport_list_free(ports, n);
 	if (fflush(stdout) == EOF)
 		rc = ST_EXIT_SOFTWARE;

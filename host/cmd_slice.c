@@ -77,10 +77,7 @@ struct slice_args {
 /* A number for option opt; false (message printed) when it is not one. */
 static bool parse_number(const char *opt, const char *v, const char *what, double *out)
 {
-	if (v && st_parse_double(v, strlen(v), 0, out) == ST_NUMBER_OK)
-		return true;
-	fprintf(stderr, SLICE_CMD ": %s wants %s, not '%s'\n", opt, what, v ? v : "");
-	return false;
+	return cmd_number(SLICE_CMD, opt, v, what, out);
 }
 
 /* --infill D or D%: a number of percent. */

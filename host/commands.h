@@ -17,6 +17,7 @@ int cmd_slice(int argc, char **argv);	 /* host/cmd_slice.c */
 int cmd_x3g(int argc, char **argv);	 /* host/cmd_x3g.c */
 int cmd_send(int argc, char **argv);	 /* host/cmd_send.c */
 int cmd_serve(int argc, char **argv);	 /* host/cmd_serve.c */
+int cmd_preview(int argc, char **argv);	 /* host/cmd_preview.c */
 
 /*
  * cmd_parse_threads - the value of --threads N: N as an int, or -1 when it
@@ -30,6 +31,12 @@ int cmd_parse_threads(const char *s);
  * (host/cmd_opts.c).
  */
 const char *cmd_opt_value(int argc, char **argv, int *i, const char *name);
+
+/*
+ * cmd_number - true and *out set when v is a number (st_number.h rules);
+ * else prints "CMD: OPT wants WHAT, not 'V'" on stderr and returns false.
+ */
+bool cmd_number(const char *cmd, const char *opt, const char *v, const char *what, double *out);
 
 /* cmd_is_opt - true when a is NAME or NAME=...; the value may still be missing. */
 bool cmd_is_opt(const char *a, const char *name);

@@ -23,6 +23,7 @@ static const struct command commands[] = {
 	{"slice", cmd_slice, "slice a mesh into G-code for a printer (walls only so far)"},
 	{"send", cmd_send, "stream a G-code file to a Marlin printer"},
 	{"sim", cmd_sim, "run a simulated printer on a pseudo-terminal"},
+	{"preview", cmd_preview, "draw one layer of a G-code file as SVG or PNG"},
 	{"x3g", cmd_x3g, "translate G-code to X3G for Sailfish printers, or list an X3G file"},
 	{"serve", cmd_serve, "run the farm node: OctoPrint-compatible API and job queue"},
 };

@@ -5,8 +5,7 @@
 #ifndef STRATUM_SLICER_GROW_H
 #define STRATUM_SLICER_GROW_H
 
-#include <stdint.h>
-#include <stdlib.h>
+#include "st_grow.h"
 
 /*
  * slice_grow - arr (capacity *cap elements of elem bytes) reallocated to
@@ -16,20 +15,7 @@
  */
 static inline void *slice_grow(void *arr, size_t *cap, size_t need, size_t elem)
 {
-	size_t ncap = *cap ? *cap : 16;
-	void *grown;
-
-	if (need <= *cap)
-		return arr;
-	while (ncap < need) {
-		if (ncap > SIZE_MAX / 2)
-			return NULL;
-		ncap *= 2;
-	}
-	if (ncap > SIZE_MAX / elem || !(grown = realloc(arr, ncap * elem)))
-		return NULL;
-	*cap = ncap;
-	return grown;
+	return st_grow(arr, cap, need, elem);
 }
 
 #endif /* STRATUM_SLICER_GROW_H */

@@ -12,8 +12,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "gcode.h"
+#include "gcwalk.h"
 #include "section.h"
+#include "st_grow.h"
 #include "toolpath.h"
 
 #ifndef M_PI
@@ -21,8 +22,6 @@
 #endif
 
 #define NM SLICE_UNITS_PER_MM
-/* Farthest coordinate accepted from a file, mm (keeps nm within int64). */
-#define REGION_COORD_MAX 1e6
 /* Layers whose Z differ by less than this are one layer, mm. */
 #define REGION_Z_EPS 1e-4
 /* Bead widths are rounded to this before grouping, nm (1 um). */
@@ -64,19 +63,11 @@ double region_bead_width(double area, double h)
 /* Grow an array of elem-sized items to hold need; 0 or ST_ERR_NOMEM. */
 static int grow(void **arr, size_t *cap, size_t need, size_t elem)
 {
-	if (need <= *cap)
-		return 0;
-	size_t ncap = *cap ? *cap : 64;
-	while (ncap < need) {
-		if (ncap > SIZE_MAX / 2 / elem)
-			return ST_ERR_NOMEM;
-		ncap *= 2;
-	}
-	void *p = realloc(*arr, ncap * elem);
+	void *p = st_grow(*arr, cap, need, elem);
+
 	if (!p)
 		return ST_ERR_NOMEM;
 	*arr = p;
-	*cap = ncap;
 	return 0;
 }
 
@@ -93,142 +84,33 @@ static bool type_skipped(const char *t)
 	return false;
 }
 
-/* "; filament_diameter = 1.75[,1.75...]": 1 and *d set, or 0. */
-static int header_filament(const struct gcode_line *l, double *d)
-{
-	static const char key[] = "filament_diameter";
-	const char *c = l->comment, *end = l->comment + l->comment_len;
-
-	while (c < end && (*c == ' ' || *c == '\t'))
-		c++;
-	if ((size_t)(end - c) <= sizeof(key) - 1 || memcmp(c, key, sizeof(key) - 1))
-		return 0;
-	c += sizeof(key) - 1;
-	while (c < end && *c == ' ')
-		c++;
-	if (c == end || *c != '=')
-		return 0;
-	c++;
-	while (c < end && *c == ' ')
-		c++;
-	const char *num = c;
-	while (c < end && *c != ',' && *c != ' ')
-		c++;
-	double v;
-	if (gcode_read_number(num, (size_t)(c - num), &v, NULL) || !(v > 0.0))
-		return 0;
-	*d = v;
-	return 1;
-}
-
-/* The parser's state of the machine that matters here. */
-struct machine {
-	double x, y, z, e;
-	bool abs_xyz, abs_e;
-	bool skipping; /* inside a feature that is not the part */
-};
-
-/* Apply one motion or G92 line; appends a bead when it extrudes the part. */
-static int machine_line(struct machine *mc, const struct gcode_line *l, struct bead_vec *beads,
-			struct region_print *p, const char *name, uint64_t lineno,
-			struct st_error *err)
-{
-	double v, nx = mc->x, ny = mc->y, nz = mc->z, ne = mc->e;
-	int g = l->number;
-
-	if (l->letter == 'M' && (g == 82 || g == 83)) {
-		mc->abs_e = g == 82;
-		return 0;
-	}
-	if (l->letter != 'G')
-		return 0;
-	if (g == 20)
-		return st_error_set(err, ST_ERR_UNSUPPORTED,
-				    "%s: line %llu: G20 (inches) is not supported; slice in mm", name,
-				    (unsigned long long)lineno);
-	if (g == 90 || g == 91) {
-		/* Marlin: G90/G91 set E's mode too; a later M82/M83 overrides. */
-		mc->abs_xyz = mc->abs_e = g == 90;
-		return 0;
-	}
-	if (g == 28) {
-		mc->x = mc->y = mc->z = 0.0;
-		return 0;
-	}
-	if (g == 92) {
-		if (gcode_word_value(l, 'X', &v))
-			mc->x = v;
-		if (gcode_word_value(l, 'Y', &v))
-			mc->y = v;
-		if (gcode_word_value(l, 'Z', &v))
-			mc->z = v;
-		if (gcode_word_value(l, 'E', &v))
-			mc->e = v;
-		return 0;
-	}
-	if (g < 0 || g > 3)
-		return 0;
-	if (gcode_word_value(l, 'X', &v))
-		nx = mc->abs_xyz ? v : mc->x + v;
-	if (gcode_word_value(l, 'Y', &v))
-		ny = mc->abs_xyz ? v : mc->y + v;
-	if (gcode_word_value(l, 'Z', &v))
-		nz = mc->abs_xyz ? v : mc->z + v;
-	if (gcode_word_value(l, 'E', &v))
-		ne = mc->abs_e ? v : mc->e + v;
-	if (fabs(nx) > REGION_COORD_MAX || fabs(ny) > REGION_COORD_MAX ||
-	    fabs(nz) > REGION_COORD_MAX)
-		return st_error_set(err, ST_ERR_RANGE,
-				    "%s: line %llu: position beyond +-%g mm", name,
-				    (unsigned long long)lineno, REGION_COORD_MAX);
-	double de = ne - mc->e;
-	bool moves = nx != mc->x || ny != mc->y;
-	if (g >= 2 && de > 0.0 && moves)
-		return st_error_set(err, ST_ERR_UNSUPPORTED,
-				    "%s: line %llu: extruding arcs (G2/G3) are not supported; "
-				    "turn arc fitting off in the slicer",
-				    name, (unsigned long long)lineno);
-	if (de > 0.0 && moves) {
-		if (mc->skipping) {
-			p->skipped++;
-		} else {
-			if (grow((void **)&beads->v, &beads->cap, beads->n + 1, sizeof(*beads->v)))
-				return st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", name);
-			beads->v[beads->n++] = (struct bead){mc->x, mc->y, nx, ny, nz, de, 0};
-		}
-	}
-	mc->x = nx;
-	mc->y = ny;
-	mc->z = nz;
-	mc->e = ne;
-	return 0;
-}
-
-/* Read every line of fp into beads; fills p's counts and diameter. */
+/* Read every move of fp into beads; fills p's counts and diameter. */
 static int read_beads(FILE *fp, const char *name, struct bead_vec *beads, struct region_print *p,
 		      struct st_error *err)
 {
-	struct gcode_reader *r;
-	struct gcode_line l;
-	struct machine mc = {0, 0, 0, 0, true, true, true};
-	int rc = gcode_reader_new(fp, name, &r, err);
+	struct gcwalk *w;
+	struct gcwalk_move m;
+	int rc = gcwalk_new(fp, name, &w, err);
 
 	if (rc)
 		return rc;
-	while ((rc = gcode_reader_next(r, 0, &l, err)) == 1) {
-		if (l.has_comment && l.letter == 0) {
-			double d;
-			if (!strncmp(l.comment, "TYPE:", 5))
-				mc.skipping = type_skipped(l.comment + 5);
-			else if (header_filament(&l, &d) && p->filament_diameter == 0.0)
-				p->filament_diameter = d;
+	while ((rc = gcwalk_next(w, &m, err)) == 1) {
+		if (!(m.de > 0.0) || (m.to[0] == m.from[0] && m.to[1] == m.from[1]))
+			continue;
+		/* Moves before the first ;TYPE: are start G-code and prime lines. */
+		if (!*m.type || type_skipped(m.type)) {
+			p->skipped++;
 			continue;
 		}
-		rc = machine_line(&mc, &l, beads, p, name, gcode_reader_line(r), err);
-		if (rc)
+		if (grow((void **)&beads->v, &beads->cap, beads->n + 1, sizeof(*beads->v))) {
+			rc = st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", name);
 			break;
+		}
+		beads->v[beads->n++] =
+			(struct bead){m.from[0], m.from[1], m.to[0], m.to[1], m.to[2], m.de, 0};
 	}
-	gcode_reader_free(r);
+	p->filament_diameter = gcwalk_filament_diameter(w);
+	gcwalk_free(w);
 	return rc < 0 ? rc : 0;
 }
 
@@ -817,12 +699,28 @@ out:
 	return rc;
 }
 
+void region_place(const struct mesh *m, const struct region_opts *o, const double pmin[2],
+		  const double pmax[2], double offset[3])
+{
+	double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+
+	for (size_t i = 0; i < m->nverts; i++)
+		for (int a = 0; a < 3; a++) {
+			lo[a] = fmin(lo[a], m->verts[i][a]);
+			hi[a] = fmax(hi[a], m->verts[i][a]);
+		}
+	double cx = o && o->has_center ? o->center_x : (pmin[0] + pmax[0]) / 2;
+	double cy = o && o->has_center ? o->center_y : (pmin[1] + pmax[1]) / 2;
+	offset[0] = cx - (lo[0] + hi[0]) / 2;
+	offset[1] = cy - (lo[1] + hi[1]) / 2;
+	offset[2] = -lo[2];
+}
+
 int region_compare(const struct mesh *m, const struct region_print *p,
 		   const struct region_opts *o, struct region_report **out, struct st_error *err)
 {
 	struct region_opts defaults;
 	struct samples s[3] = {{0}};
-	double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
 	double sec_sum = 0, xor_sum = 0, raw_sum = 0;
 	struct region_report *r;
 	int rc = 0;
@@ -843,20 +741,11 @@ int region_compare(const struct mesh *m, const struct region_print *p,
 		free(r);
 		return st_error_set(err, ST_ERR_NOMEM, "region: out of memory");
 	}
-	for (size_t i = 0; i < m->nverts; i++)
-		for (int a = 0; a < 3; a++) {
-			lo[a] = fmin(lo[a], m->verts[i][a]);
-			hi[a] = fmax(hi[a], m->verts[i][a]);
-		}
-	double cx = o->has_center ? o->center_x : (p->min[0] + p->max[0]) / 2;
-	double cy = o->has_center ? o->center_y : (p->min[1] + p->max[1]) / 2;
-	r->offset[0] = cx - (lo[0] + hi[0]) / 2;
-	r->offset[1] = cy - (lo[1] + hi[1]) / 2;
-	r->offset[2] = -lo[2];
+	region_place(m, o, p->min, p->max, r->offset);
 	const int64_t d[2] = {llround(r->offset[0] * NM), llround(r->offset[1] * NM)};
 	for (size_t i = 0; i < p->n; i++) {
 		struct region_layer_result *lr = &r->per_layer[i];
-		rc = compare_layer(m, &p->layers[i], lo[2], d, o->sample_step, r, lr, s, err);
+		rc = compare_layer(m, &p->layers[i], -r->offset[2], d, o->sample_step, r, lr, s, err);
 		if (rc)
 			goto out;
 		sec_sum += lr->section_mm2;

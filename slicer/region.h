@@ -3,7 +3,7 @@
  * G-code file prints match the model's cross-sections?
  *
  * Reading (region_read): any Marlin-flavour G-code file, through our own
- * parser (gcode.h), with G90/G91, M82/M83, G92 and Z per layer tracked.
+ * parser and its move walker (gcwalk.h: G90/G91, M82/M83, G92 tracked).
  * Every extruding move (E increases while X/Y move) is a bead whose width
  * follows from the flow model of perimeters.h: the filament volume per mm
  * of move is the bead cross-section (w - h) h + pi (h/2)^2, solved for w,
@@ -127,6 +127,16 @@ void region_print_free(struct region_print *p);
  */
 int region_compare(const struct mesh *m, const struct region_print *p,
 		   const struct region_opts *o, struct region_report **out, struct st_error *err);
+
+/*
+ * region_place - where region_compare puts the model: the offset (mm) added
+ * to m's coordinates so that its bounding-box centre lies on o's center
+ * (has_center) or else on the centre of the box pmin..pmax (mm, the
+ * printed part's: struct region_print min/max), and its lowest point on
+ * z = 0.  o may be NULL (no center).  m must have vertices.
+ */
+void region_place(const struct mesh *m, const struct region_opts *o, const double pmin[2],
+		  const double pmax[2], double offset[3]);
 
 /* region_report_free - NULL is safe. */
 void region_report_free(struct region_report *r);

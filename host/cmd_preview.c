@@ -1,0 +1,285 @@
+/*
+ * cmd_preview.c - `stratum preview FILE.gcode (--layer N | --z Z)
+ * -o OUT.(svg|png) [--model MODEL] [--center X,Y] [--width PX]
+ * [--filament-diameter D] [--json]`: draw one layer of a G-code file
+ * (preview.h, pvdraw.h).  Exit 0 written, 1 OUT not written, 2 usage (bad
+ * option, no such layer), 65 unreadable G-code or model, 70 internal.
+ */
+#include <jansson.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "commands.h"
+#include "mesh.h"
+#include "meshio.h"
+#include "preview.h"
+#include "pvdraw.h"
+#include "st_error.h"
+#include "st_number.h"
+
+#define PREVIEW_CMD "stratum preview"
+
+static void preview_usage(FILE *out)
+{
+	fprintf(out,
+		"usage: stratum preview FILE.gcode (--layer N | --z Z) -o OUT.svg|OUT.png\n"
+		"                       [--model MODEL] [--center X,Y] [--width PX]\n"
+		"                       [--filament-diameter D] [--json]\n"
+		"\n"
+		"Draws one layer of a G-code file seen from above: outer and inner perimeters,\n"
+		"gap fill, solid and sparse infill, bridges, support, skirt/brim and other\n"
+		"extrusion in their own colours, each bead at the width its filament makes;\n"
+		"travels thin and dashed; a legend and a scale bar in mm.  See docs/preview.md.\n"
+		"\n"
+		"  --layer N         the N-th layer, from 1 (the slicer's layer comments, or\n"
+		"                    the distinct heights of the extrusion when there are none)\n"
+		"  --z Z             the layer printed at height Z mm\n"
+		"  -o, --output OUT  the picture, .svg or .png (written only when complete)\n"
+		"  --model MODEL     also draw the model's section (STL, OBJ or OFF) at the\n"
+		"                    layer's mid-height, placed as the slicer placed it\n"
+		"  --center X,Y      the model's centre on the bed, mm (default: the centre of\n"
+		"                    the printed part, right for 'stratum slice' and PrusaSlicer\n"
+		"                    unless the part is lopsided under --center)\n"
+		"  --width PX        picture width, %d to %d px (default %d)\n"
+		"  --filament-diameter D  mm, when the file has no '; filament_diameter =' line\n"
+		"  --json            one JSON object on stdout instead of the text summary\n"
+		"\n"
+		"Exit status: 0 written, 1 OUT not written, 2 usage or no such layer,\n"
+		"65 unreadable G-code or model, 70 internal error.\n",
+		PVDRAW_WIDTH_MIN, PVDRAW_WIDTH_MAX, PVDRAW_WIDTH_DEFAULT);
+}
+
+struct preview_args {
+	const char *in, *out, *model;
+	bool json, has_layer, has_z;
+	struct preview_opts o;
+	int width;
+};
+
+/* A number for opt; false (message printed) when v is not one. */
+static bool number_arg(const char *opt, const char *v, const char *what, double *out)
+{
+	return cmd_number(PREVIEW_CMD, opt, v, what, out);
+}
+
+/* One option at argv[*i]; 0 to go on, -1 after --help, else the exit status. */
+static int parse_opt(int argc, char **argv, int *i, struct preview_args *a)
+{
+	const char *s = argv[*i];
+	double d;
+
+	if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
+		preview_usage(stdout);
+		return -1;
+	}
+	if (!strcmp(s, "--json")) {
+		a->json = true;
+	} else if (!strcmp(s, "-o") || cmd_is_opt(s, "--output")) {
+		a->out = !strcmp(s, "-o") ? (*i + 1 < argc ? argv[++*i] : NULL)
+					  : cmd_opt_value(argc, argv, i, "--output");
+		if (!a->out || !*a->out) {
+			fprintf(stderr, PREVIEW_CMD ": %s needs the picture's file name\n", s);
+			return ST_EXIT_USAGE;
+		}
+	} else if (cmd_is_opt(s, "--layer")) {
+		if (!number_arg("--layer", cmd_opt_value(argc, argv, i, "--layer"),
+				"a layer number from 1", &d))
+			return ST_EXIT_USAGE;
+		if (!(d >= 1 && d <= 1e9 && d == floor(d))) {
+			fprintf(stderr, PREVIEW_CMD ": --layer wants a layer number from 1, not %g\n",
+				d);
+			return ST_EXIT_USAGE;
+		}
+		a->o.layer = (long)d;
+		a->has_layer = true;
+	} else if (cmd_is_opt(s, "--z")) {
+		if (!number_arg("--z", cmd_opt_value(argc, argv, i, "--z"), "a height in mm",
+				&a->o.z))
+			return ST_EXIT_USAGE;
+		a->has_z = true;
+	} else if (cmd_is_opt(s, "--model")) {
+		a->model = cmd_opt_value(argc, argv, i, "--model");
+		if (!a->model || !*a->model) {
+			fprintf(stderr, PREVIEW_CMD ": --model needs a mesh file\n");
+			return ST_EXIT_USAGE;
+		}
+	} else if (cmd_is_opt(s, "--center")) {
+		const char *v = cmd_opt_value(argc, argv, i, "--center");
+		const char *comma = v ? strchr(v, ',') : NULL;
+		if (!comma ||
+		    st_parse_double(v, (size_t)(comma - v), 0, &a->o.center_x) != ST_NUMBER_OK ||
+		    st_parse_double(comma + 1, strlen(comma + 1), 0, &a->o.center_y) !=
+			    ST_NUMBER_OK) {
+			fprintf(stderr, PREVIEW_CMD ": --center wants X,Y in mm, not '%s'\n",
+				v ? v : "");
+			return ST_EXIT_USAGE;
+		}
+		a->o.has_center = true;
+	} else if (cmd_is_opt(s, "--width")) {
+		if (!number_arg("--width", cmd_opt_value(argc, argv, i, "--width"),
+				"a width in pixels", &d))
+			return ST_EXIT_USAGE;
+		if (!(d >= PVDRAW_WIDTH_MIN && d <= PVDRAW_WIDTH_MAX && d == floor(d))) {
+			fprintf(stderr, PREVIEW_CMD ": --width wants a whole number of pixels from "
+						    "%d to %d, not %g\n",
+				PVDRAW_WIDTH_MIN, PVDRAW_WIDTH_MAX, d);
+			return ST_EXIT_USAGE;
+		}
+		a->width = (int)d;
+	} else if (cmd_is_opt(s, "--filament-diameter")) {
+		if (!number_arg("--filament-diameter",
+				cmd_opt_value(argc, argv, i, "--filament-diameter"), "a diameter in mm",
+				&a->o.filament_diameter))
+			return ST_EXIT_USAGE;
+		if (!(a->o.filament_diameter > 0 && a->o.filament_diameter <= 10)) {
+			fprintf(stderr, PREVIEW_CMD ": --filament-diameter wants mm in (0, 10]\n");
+			return ST_EXIT_USAGE;
+		}
+	} else if (s[0] == '-' && s[1]) {
+		fprintf(stderr, PREVIEW_CMD ": unknown option '%s' (try --help)\n", s);
+		return ST_EXIT_USAGE;
+	} else if (!a->in) {
+		a->in = s;
+	} else {
+		fprintf(stderr, PREVIEW_CMD ": one G-code file at a time ('%s' and '%s')\n", a->in,
+			s);
+		return ST_EXIT_USAGE;
+	}
+	return 0;
+}
+
+/* Parse argv; 0 to go on, -1 after --help, else the exit status. */
+static int parse_args(int argc, char **argv, struct preview_args *a)
+{
+	enum pvdraw_format fmt;
+
+	preview_opts_init(&a->o);
+	a->width = PVDRAW_WIDTH_DEFAULT;
+	for (int i = 1; i < argc; i++) {
+		int rc = parse_opt(argc, argv, &i, a);
+		if (rc)
+			return rc;
+	}
+	const char *missing = !a->in			 ? "no G-code file given"
+			      : !a->out			 ? "no picture given; add -o OUT.svg or -o OUT.png"
+			      : a->has_layer == a->has_z ? "give either --layer N or --z Z"
+							 : NULL;
+	if (missing) {
+		fprintf(stderr, PREVIEW_CMD ": %s\n", missing);
+		preview_usage(stderr);
+		return ST_EXIT_USAGE;
+	}
+	if (!pvdraw_format_of(a->out, &fmt)) {
+		fprintf(stderr, PREVIEW_CMD ": %s: the picture must end in .svg or .png\n", a->out);
+		return ST_EXIT_USAGE;
+	}
+	if (a->has_z)
+		a->o.layer = 0;
+	return 0;
+}
+
+/* The file name without its directories, for the picture's title. */
+static const char *base_name(const char *path)
+{
+	const char *slash = strrchr(path, '/');
+	return slash ? slash + 1 : path;
+}
+
+static void print_text(const struct preview_args *a, const struct preview *pv, int w, int h)
+{
+	bool any = false;
+
+	printf("layer %zu of %zu: Z %g mm, %g mm high\npaths:", pv->layer, pv->layers, pv->z,
+	       pv->height);
+	for (int f = 0; f < PREVIEW_FEATURES; f++) {
+		if (!pv->count[f])
+			continue;
+		printf("%s %zu %s", any ? "," : "", pv->count[f], preview_feature_name(f));
+		any = true;
+	}
+	printf("%s\n", any ? "" : " none");
+	if (pv->has_model)
+		printf("model section: %zu loop%s (model moved by %.3f, %.3f, %.3f mm)\n",
+		       pv->noutline, pv->noutline == 1 ? "" : "s", pv->model_offset[0] + 0.0,
+		       pv->model_offset[1] + 0.0, pv->model_offset[2] + 0.0); /* no "-0.000" */
+	printf("written: %s (%d x %d px)\n", a->out, w, h);
+}
+
+static int print_json(const struct preview_args *a, const struct preview *pv, int w, int h)
+{
+	json_t *o = json_object(), *paths = json_object();
+	int rc;
+
+	for (int f = 0; f < PREVIEW_FEATURES; f++)
+		json_object_set_new(paths, preview_feature_id(f), json_integer((json_int_t)pv->count[f]));
+	json_object_set_new(o, "file", json_string(a->in));
+	json_object_set_new(o, "layer", json_integer((json_int_t)pv->layer));
+	json_object_set_new(o, "layers", json_integer((json_int_t)pv->layers));
+	json_object_set_new(o, "layers_from", json_string(pv->by_comments ? "comments" : "z"));
+	json_object_set_new(o, "z", json_real(pv->z));
+	json_object_set_new(o, "height", json_real(pv->height));
+	json_object_set_new(o, "paths", paths);
+	json_object_set_new(o, "model_loops",
+			    pv->has_model ? json_integer((json_int_t)pv->noutline) : json_null());
+	json_object_set_new(o, "output", json_string(a->out));
+	json_object_set_new(o, "width_px", json_integer(w));
+	json_object_set_new(o, "height_px", json_integer(h));
+	rc = json_dumpf(o, stdout, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
+	json_decref(o);
+	return rc || putchar('\n') == EOF ? -1 : 0;
+}
+
+/* Exit status for a library error class. */
+static int exit_for(const struct st_error *err)
+{
+	fprintf(stderr, PREVIEW_CMD ": %s\n", err->msg);
+	return err->code == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : st_exit_for(err->code);
+}
+
+int cmd_preview(int argc, char **argv)
+{
+	struct preview_args a = {0};
+	struct preview *pv = NULL;
+	struct mesh *m = NULL;
+	struct st_error err = {0};
+	struct pvdraw_opts d;
+	int w, h, status = parse_args(argc, argv, &a);
+
+	if (status)
+		return status < 0 ? ST_EXIT_OK : status;
+	if (preview_load(a.in, &a.o, &pv, &err))
+		return exit_for(&err);
+	if (a.model) {
+		if (meshio_read(a.model, MESHIO_AUTO, &m, NULL, &err) ||
+		    preview_add_model(pv, m, &a.o, &err)) {
+			status = exit_for(&err);
+			goto out;
+		}
+		if (!pv->noutline)
+			fprintf(stderr,
+				PREVIEW_CMD ": note: %s has no cross-section at this layer's "
+					    "mid-height (%g mm above its lowest point)\n",
+				a.model, pv->z - pv->height / 2);
+	}
+	d = (struct pvdraw_opts){.width_px = a.width, .title = base_name(a.in)};
+	if (pvdraw_size(pv, &d, &w, &h, &err)) {
+		status = exit_for(&err);
+		goto out;
+	}
+	if (pvdraw_write(pv, &d, a.out, &err)) {
+		status = exit_for(&err);
+		if (err.code == ST_ERR_IO)
+			status = ST_EXIT_FAILURE; /* the job, not the input, failed */
+		goto out;
+	}
+	if (a.json ? print_json(&a, pv, w, h) : (print_text(&a, pv, w, h), 0))
+		status = ST_EXIT_SOFTWARE;
+	if (fflush(stdout) == EOF)
+		status = ST_EXIT_SOFTWARE;
+out:
+	mesh_free(m);
+	preview_free(pv);
+	return status;
+}
