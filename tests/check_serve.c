@@ -457,15 +457,16 @@ START_TEST(test_oversize)
 	struct node_proc np;
 	struct resp r;
 	size_t big = (1u << 20) + 30000; /* over 1 MiB, within the multipart slack */
-	char *data = malloc(big);
+	size_t huge = 3u << 20;		 /* the announced body of the first request */
+	char *data = malloc(huge);
 
 	ck_assert(data);
-	memset(data, ';', big);
+	memset(data, ';', huge);
 	data[big - 1] = '\n';
 	write_config(&np, TWO_PRINTERS, 1);
 	node_start(&np);
 	/* curl sends Expect: 100-continue for a large body and waits: answered at once. */
-	upload(np.port, "", KEY_UP, "big.gcode", 9, "", 0, "false", data, 3u << 20,
+	upload(np.port, "", KEY_UP, "big.gcode", 9, "", 0, "false", data, huge,
 	       "Expect: 100-continue\r\n", false, &r);
 	ck_assert_int_eq(r.status, 413);
 	resp_free(&r);
