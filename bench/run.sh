@@ -1,8 +1,9 @@
 #!/bin/sh
-# bench/run.sh BIN [check|repair|slice|region|stream|x3g|s3g|all] - time `stratum check`
+# bench/run.sh BIN [check|repair|slice|region|stream|soak|x3g|s3g|all] - time `stratum check`
 # against admesh, `stratum repair` on generated files, `stratum slice` against
 # PrusaSlicer's `--export-gcode`, and streaming to `stratum sim` with
-# `stratum send` against Printrun's printcore; `region` measures how well both
+# `stratum send` against Printrun's printcore (`soak`: 100k lines under
+# faults, exactly once); `region` measures how well both
 # slicers' printed regions match the models' cross-sections (issue 5, with
 # build/bench/region_check); `x3g` times G-code -> X3G translation against
 # gpx -m fcp on a model sliced for the Creator Pro; `s3g` streams X3G to
@@ -17,14 +18,14 @@ out=bench/out
 mkdir -p "$out"
 gen=build/bench/gen_mesh
 
-case $what in check|repair|slice|region|stream|x3g|s3g|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|slice|region|stream|x3g|s3g|all]" >&2; exit 2;; esac
+case $what in check|repair|slice|region|stream|soak|x3g|s3g|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|slice|region|stream|soak|x3g|s3g|all]" >&2; exit 2;; esac
 
-if [ "$what" != slice ] && [ "$what" != region ] && [ "$what" != stream ] && [ "$what" != x3g ] && [ "$what" != s3g ]; then
+if [ "$what" != slice ] && [ "$what" != region ] && [ "$what" != stream ] && [ "$what" != soak ] && [ "$what" != x3g ] && [ "$what" != s3g ]; then
 	[ -f "$out/torus-1m.stl" ] || "$gen" torus 1000 500 "$out/torus-1m.stl"
 	[ -f "$out/torus-2m.stl" ] || "$gen" torus 1000 1000 "$out/torus-2m.stl"
 	[ -f "$out/spheres.stl" ] || "$gen" spheres 8 "$out/spheres.stl"
 fi
-if [ "$what" != check ] && [ "$what" != region ] && [ "$what" != stream ] && [ "$what" != x3g ] && [ "$what" != s3g ]; then
+if [ "$what" != check ] && [ "$what" != region ] && [ "$what" != stream ] && [ "$what" != soak ] && [ "$what" != x3g ] && [ "$what" != s3g ]; then
 	[ -f "$out/torus-100k.stl" ] || "$gen" torus 250 200 "$out/torus-100k.stl"
 	[ -f "$out/twospheres.stl" ] || "$gen" twospheres 100 80 "$out/twospheres.stl"
 	[ -f "$out/scan.stl" ] || "$gen" scan 250 120 0.7 "$out/scan.stl"
@@ -205,7 +206,7 @@ done
 }
 
 # dense_gcode SEGMENTS PATH - a dense curved surface: the wall of a 25 mm
-# dome in 0.2 mm layers, each circle cut into chords of about 0.5 mm, like
+# dome (domes stacked when SEGMENTS needs more than one) in 0.2 mm layers, each circle cut into chords of about 0.5 mm, like
 # a slicer's output for a finely tessellated model.  Deterministic, so the
 # file for fewer segments is a prefix of the one for more.
 dense_gcode() {
@@ -215,7 +216,9 @@ dense_gcode() {
 		print "G28"; print "G90"; print "M83"; print "G92 E0"
 		while (n < segs) {
 			z += 0.2
-			r = sqrt(R * R - z * z)
+			# past the top of the dome, the next dome sits on it
+			zd = z - (R - 0.2) * int((z - 0.001) / (R - 0.2))
+			r = sqrt(R * R - zd * zd)
 			k = int(2 * pi * r / 0.5)
 			printf ";LAYER_CHANGE\nG1 Z%.2f F600\nG1 X%.3f Y%.3f F3000\n", z, 100 + r, 100
 			for (i = 1; i <= k && n < segs; i++) {
@@ -384,6 +387,52 @@ for host in gpx stratum; do
 done
 }
 
+# Exactly-once soak (issue 6 item 7 at full size): a 100 000-line file
+# streamed by `stratum send` to a fresh simulator per fault, at 1 Mbaud with
+# motion sped up so the run is short.  The check: every line number of the
+# file executed once and in order, and how many executed lines differ from
+# the file -- corruption Marlin's 8-bit XOR checksum cannot see (two flips
+# of the same bit in one line), which no host can catch either.
+soak_check() {
+	LC_ALL=C awk '{ sub(/;.*/, ""); gsub(/^[ \t]+|[ \t]+$/, ""); if ($0 != "") print }' \
+		"$1" >"$out/soak-want.txt"
+	LC_ALL=C awk 'NR == FNR { want[++n] = $0; next }
+		$1 ~ /^[0-9]+$/ && $2 != "M110" && $2 != "M115" && $2 != "M155" {
+			k++; if (seen && $1 != prev + 1) gaps++
+			prev = $1; seen = 1; sub(/^[0-9]+ /, ""); if ($0 != want[k]) diff++
+		}
+		END { printf "%s | %d | %d", (k == n && !gaps) ? "yes" : "NO", k, diff + 0 }' \
+		"$out/soak-want.txt" "$2"
+}
+soak_table() {
+[ -f "$out/dense-100k.gcode" ] || dense_gcode 100000 "$out/dense-100k.gcode"
+sed 's/^rx_buffer_size = .*/rx_buffer_size = 32/' printers/generic-marlin.ini >"$out/marlin-rx32.ini"
+echo "| fault | simulator | lines sent | every line once, in order | lines executed | changed lines the checksum missed | resends | s |"
+echo "|---|---|---|---|---|---|---|---|"
+for v in clean corrupt drop rx32 rx32-adv adv-corrupt; do
+	prof=generic-marlin; extra=""
+	case $v in
+	corrupt) extra="--corrupt 0.01" ;;
+	drop) extra="--drop 0.01" ;;
+	rx32) extra="--rx-buffer 32"; prof="$out/marlin-rx32.ini" ;;
+	rx32-adv) extra="--rx-buffer 32 --advanced-ok"; prof="$out/marlin-rx32.ini" ;;
+	adv-corrupt) extra="--advanced-ok --corrupt 0.01 --drop 0.005" ;;
+	esac
+	log="$out/soak-$v.log"; j="$out/soak-$v.json"
+	rm -f "$out/soak-tty"
+	# shellcheck disable=SC2086
+	"$bin" sim --dialect marlin --baud 1000000 --speedup 1000000 --seed 7 $extra \
+		--link "$out/soak-tty" --log "$log" >"$out/soak-sim.out" 2>&1 &
+	sim_pid=$!
+	i=0
+	while [ ! -L "$out/soak-tty" ] && [ $i -lt 100 ]; do sleep 0.05; i=$((i + 1)); done
+	"$bin" send "$out/dense-100k.gcode" --port "$out/soak-tty" --printer "$prof" --baud 1000000 \
+		--json >"$j" 2>"$out/soak-$v.err" || true
+	sim_stop
+	echo "| $v | ${extra:-defaults} | $(json_any "$j" lines) | $(soak_check "$out/dense-100k.gcode" "$log") | $(json_any "$j" resends) | $(json_any "$j" seconds) |"
+done
+}
+
 case $what in
 x3g) x3g_table ;;
 s3g) s3g_table ;;
@@ -392,6 +441,7 @@ check) check_table ;;
 repair) repair_table ;;
 slice) slice_table ;;
 stream) stream_table ;;
-all) check_table; echo; repair_table; echo; slice_table; echo; region_table; echo; stream_table; echo; x3g_table; echo; s3g_table ;;
+soak) soak_table ;;
+all) check_table; echo; repair_table; echo; slice_table; echo; region_table; echo; stream_table; echo; soak_table; echo; x3g_table; echo; s3g_table ;;
 esac
 
