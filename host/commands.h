@@ -7,6 +7,10 @@
 #define STRATUM_HOST_COMMANDS_H
 
 #include <stdbool.h>
+#include <stddef.h>
+
+#include "st_error.h"
+#include "x3g.h"
 
 int cmd_check(int argc, char **argv);	 /* host/cmd_check.c */
 int cmd_repair(int argc, char **argv);	 /* host/cmd_repair.c */
@@ -16,6 +20,19 @@ int cmd_sim(int argc, char **argv);	 /* host/cmd_sim.c */
 int cmd_slice(int argc, char **argv);	 /* host/cmd_slice.c */
 int cmd_x3g(int argc, char **argv);	 /* host/cmd_x3g.c */
 int cmd_send(int argc, char **argv);	 /* host/cmd_send.c */
+
+struct profile;
+
+/*
+ * cmd_x3g_machine - the X3G machine definition and command flavour of a
+ * sailfish printer profile (host/cmd_x3g.c; also used by stratum send).
+ * Returns 0, or the profile's error class with err naming the key.
+ */
+int cmd_x3g_machine(const struct profile *p, struct x3g_machine *m, enum x3g_flavor *flavor,
+		    struct st_error *err);
+
+/* cmd_x3g_build_name - "dir/name.ext" -> "name", the build name GPX uses. */
+void cmd_x3g_build_name(const char *path, char *name, size_t cap);
 
 /*
  * cmd_parse_threads - the value of --threads N: N as an int, or -1 when it
