@@ -11,7 +11,8 @@ int main(void)
 					  profile_suite, gcode_suite, xport_suite, sim_suite,
 					  marlin_suite,
 					  slicer_suite, gcodewriter_suite, infill_suite, support_suite,
-					  slicecli_suite, region_suite, x3g_suite, s3g_suite, cli_suite};
+					  slicecli_suite, region_suite, x3g_suite, s3g_suite, send_suite,
+					  cli_suite};
 	SRunner *sr = srunner_create(NULL);
 	int failed;
 

@@ -24,6 +24,7 @@ Suite *slicecli_suite(void);	/* tests/check_slicecli.c: stratum slice end to end
 Suite *region_suite(void);	/* tests/check_region.c: printed region against cross-sections */
 Suite *x3g_suite(void);		/* tests/check_x3g.c: G-code to X3G, decoder, against gpx */
 Suite *s3g_suite(void);		/* tests/check_s3g.c: S3G packets, driver, simulated Sailfish */
+Suite *send_suite(void);	/* tests/check_send.c: stratum send to the simulated Sailfish */
 Suite *cli_suite(void);		/* tests/check_cli.c: the stratum binary end to end */
 
 #endif
