@@ -39,12 +39,7 @@ static void send_on_signal(int sig)
 
 volatile sig_atomic_t *send_catch_signals(void)
 {
-	struct sigaction sa;
-	memset(&sa, 0, sizeof(sa));
-	sa.sa_handler = send_on_signal;
-	sigemptyset(&sa.sa_mask);
-	sigaction(SIGINT, &sa, NULL);
-	sigaction(SIGTERM, &sa, NULL);
+	cmd_on_stop_signals(send_on_signal);
 	return &send_stop;
 }
 

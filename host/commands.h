@@ -47,6 +47,10 @@ int cmd_parse_threads(const char *s);
  */
 const char *cmd_opt_value(int argc, char **argv, int *i, const char *name);
 
+/* cmd_on_stop_signals - SIGINT and SIGTERM call handler, which sets the
+ * command's stop flag (host/cmd_opts.c). */
+void cmd_on_stop_signals(void (*handler)(int));
+
 /* cmd_is_opt - true when a is NAME or NAME=...; the value may still be missing. */
 bool cmd_is_opt(const char *a, const char *name);
 

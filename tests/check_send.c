@@ -70,6 +70,31 @@ static int sim_send(const char *simopts, const char *log, const char *file, cons
 		      simopts, link, log, link, bin(), file, link, sendopts);
 }
 
+/* Scratch files of one run. */
+struct sf_files {
+	char gc[512], x3g[512], dec[512], log[512];
+};
+
+/*
+ * Slice the bracket into f->gc, keep its first head_lines lines if > 0,
+ * and return the reference commands of the result (stratum x3g, decoded).
+ */
+static json_t *sf_setup(struct sf_files *f, long head_lines)
+{
+	snprintf(f->gc, sizeof(f->gc), "%s", tu_path("bracket.gcode"));
+	snprintf(f->x3g, sizeof(f->x3g), "%s", tu_path("bracket.x3g"));
+	snprintf(f->dec, sizeof(f->dec), "%s", tu_path("bracket.json"));
+	snprintf(f->log, sizeof(f->log), "%s", tu_path("sf.log"));
+	slice_bracket(f->gc);
+	if (head_lines > 0) {
+		char cmd[3000];
+		snprintf(cmd, sizeof(cmd), "head -n %ld %s >%s.part && mv %s.part %s", head_lines,
+			 f->gc, f->gc, f->gc, f->gc);
+		ck_assert_int_eq(system(cmd), 0);
+	}
+	return reference_commands(f->gc, f->x3g, f->dec);
+}
+
 /* A field of a decoded command as an integer. */
 static long field(json_t *cmd, const char *name)
 {
@@ -145,15 +170,10 @@ static long long jint(json_t *o, const char *key)
  * simulated Sailfish printer from one command, translated on the fly. */
 START_TEST(gcode_prints_exactly_once)
 {
-	char gc[512], x3g[512], dec[512], log[512];
-	snprintf(gc, sizeof(gc), "%s", tu_path("bracket.gcode"));
-	snprintf(x3g, sizeof(x3g), "%s", tu_path("bracket.x3g"));
-	snprintf(dec, sizeof(dec), "%s", tu_path("bracket.json"));
-	snprintf(log, sizeof(log), "%s", tu_path("sf.log"));
-	slice_bracket(gc);
-	json_t *cmds = reference_commands(gc, x3g, dec);
+	struct sf_files f;
+	json_t *cmds = sf_setup(&f, 0);
 
-	int rc = sim_send(SF_SIM_FAST, log, gc, SF_SEND_FAST " --json");
+	int rc = sim_send(SF_SIM_FAST, f.log, f.gc, SF_SEND_FAST " --json");
 	ck_assert_msg(rc == 0, "send: exit %d: %s", rc, out);
 	json_t *o = report();
 	ck_assert(json_is_true(json_object_get(o, "ok")));
@@ -170,7 +190,7 @@ START_TEST(gcode_prints_exactly_once)
 	for (size_t i = 0; i < sizeof(keys) / sizeof(keys[0]); i++)
 		ck_assert_msg(json_number_value(json_object_get(o, keys[i])) > 0, "%s", keys[i]);
 	json_decref(o);
-	check_log(log, cmds, true);
+	check_log(f.log, cmds, true);
 	json_decref(cmds);
 }
 END_TEST
@@ -178,18 +198,13 @@ END_TEST
 /* The same part as an X3G file, cut into commands with x3g_decode. */
 START_TEST(x3g_file_prints_exactly_once)
 {
-	char gc[512], x3g[512], dec[512], log[512];
-	snprintf(gc, sizeof(gc), "%s", tu_path("bracket.gcode"));
-	snprintf(x3g, sizeof(x3g), "%s", tu_path("bracket.x3g"));
-	snprintf(dec, sizeof(dec), "%s", tu_path("bracket.json"));
-	snprintf(log, sizeof(log), "%s", tu_path("sf.log"));
-	slice_bracket(gc);
-	json_t *cmds = reference_commands(gc, x3g, dec);
+	struct sf_files f;
+	json_t *cmds = sf_setup(&f, 0);
 
-	int rc = sim_send(SF_SIM_FAST, log, x3g, SF_SEND_FAST);
+	int rc = sim_send(SF_SIM_FAST, f.log, f.x3g, SF_SEND_FAST);
 	ck_assert_msg(rc == 0, "send: exit %d: %s", rc, out);
 	ck_assert_msg(strstr(out, "sent ") && strstr(out, " commands in "), "%s", out);
-	check_log(log, cmds, true);
+	check_log(f.log, cmds, true);
 	json_decref(cmds);
 }
 END_TEST
@@ -201,19 +216,10 @@ END_TEST
  * would run with damaged coordinates. */
 START_TEST(gcode_under_corruption_exactly_once)
 {
-	char gc[512], part[512], x3g[512], dec[512], log[512];
-	snprintf(gc, sizeof(gc), "%s", tu_path("bracket.gcode"));
-	snprintf(part, sizeof(part), "%s", tu_path("part.gcode"));
-	snprintf(x3g, sizeof(x3g), "%s", tu_path("part.x3g"));
-	snprintf(dec, sizeof(dec), "%s", tu_path("part.json"));
-	snprintf(log, sizeof(log), "%s", tu_path("sf.log"));
-	slice_bracket(gc);
-	char cmd[1200];
-	snprintf(cmd, sizeof(cmd), "head -n 1500 %s >%s", gc, part);
-	ck_assert_int_eq(system(cmd), 0);
-	json_t *cmds = reference_commands(part, x3g, dec);
+	struct sf_files f;
+	json_t *cmds = sf_setup(&f, 1500);
 
-	int rc = sim_send(SF_SIM_FAST " --corrupt 0.01 --seed 3", log, part,
+	int rc = sim_send(SF_SIM_FAST " --corrupt 0.01 --seed 3", f.log, f.gc,
 			  SF_SEND_FAST " --json");
 	ck_assert_msg(rc == 0, "send: exit %d: %s", rc, out);
 	json_t *o = report();
@@ -221,7 +227,7 @@ START_TEST(gcode_under_corruption_exactly_once)
 	ck_assert_int_gt(jint(o, "resends"), 10); /* the noise was there */
 	ck_assert_int_eq(jint(o, "commands"), (long long)json_array_size(cmds));
 	json_decref(o);
-	check_log(log, cmds, false);
+	check_log(f.log, cmds, false);
 	json_decref(cmds);
 }
 END_TEST
