@@ -113,13 +113,9 @@ $(BUILD)/bench/gen_mesh: $(BUILD)/bench/gen_mesh.o $(BUILD)/tests/fixtures.o $(B
 $(BUILD)/bench/region_check: $(BUILD)/bench/region_check.o $(BUILD)/libstratum.a
 	$(CXX) -pthread $(LDEXTRA) -o $@ $^ $(LDLIBS)
 
-# S3G streaming figures: our driver on an X3G file (issue 7 item 6).
-$(BUILD)/bench/s3g_stream: $(BUILD)/bench/s3g_stream.o $(BUILD)/libstratum.a
-	$(CXX) -pthread $(LDEXTRA) -o $@ $^ $(LDLIBS)
-
 bench:
 	@$(MAKE) deps EXTRA_PACKAGES="$(BENCH_PACKAGES)"
-	@$(MAKE) all $(BUILD)/bench/gen_mesh $(BUILD)/bench/region_check $(BUILD)/bench/s3g_stream
+	@$(MAKE) all $(BUILD)/bench/gen_mesh $(BUILD)/bench/region_check
 	bench/run.sh $(BUILD)/stratum
 
 clean:

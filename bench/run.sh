@@ -6,8 +6,8 @@
 # faults, exactly once); `region` measures how well both
 # slicers' printed regions match the models' cross-sections (issue 5, with
 # build/bench/region_check); `x3g` times G-code -> X3G translation against
-# gpx -m fcp on a model sliced for the Creator Pro; `s3g` streams X3G to
-# `stratum sim --dialect sailfish` with our S3G driver (build/bench/s3g_stream)
+# gpx -m fcp on a model sliced for the Creator Pro; `s3g` streams G-code to
+# `stratum sim --dialect sailfish` with `stratum send` (translated on the fly)
 # against `gpx -s`; prints Markdown tables for docs/benchmarks.md.
 # Wall time, CPU time and peak RSS come from GNU time;
 # check and repair figures are the best of 3 runs, slice figures one run.
@@ -341,32 +341,47 @@ else
 fi
 }
 
-# S3G streaming (issue 7 item 6): the same G-code as X3G to a fresh
+# S3G streaming (issue 7 items 4 and 6): the same G-code to a fresh
 # simulated Sailfish per host at 115200 baud, motion and heating sped up so
-# only the link and the round trips cost time.  gpx -s translates and sends
-# in one pass; our driver sends gpx's own X3G of the file, so both send the
-# same commands.  Bytes are those written towards the printer (framing and
-# queries included); the link fraction counts both directions against
-# 11 520 bytes/s.
+# only the link and the round trips cost time.  gpx -s and `stratum send`
+# both translate and send in one pass; `stratum send` of gpx's own X3G file
+# shows what the translation costs.  "bytes out" are those written towards
+# the printer (framing and queries included; gpx's are its X3G file plus 3
+# framing bytes a packet: it sends no queries); the link fraction counts
+# both directions against 11 520 bytes/s.  "log == X3G" says whether the
+# simulator ran the commands of the X3G file for that G-code (gpx's, or
+# `stratum x3g`'s, which is byte-identical), each once and in order.
+s3g_sim_start() {
+	rm -f "$out/s3g-tty"
+	"$bin" sim --dialect sailfish --baud 115200 --speedup 1000000 --link "$out/s3g-tty" \
+		--log "$1" >"$out/s3g-sim.out" 2>&1 &
+	sim_pid=$!
+	i=0
+	while [ ! -L "$out/s3g-tty" ] && [ $i -lt 100 ]; do sleep 0.05; i=$((i + 1)); done
+}
+
+# s3g_log_matches X3G LOG -> yes/no
+s3g_log_matches() {
+	"$bin" x3g --decode "$1" 2>/dev/null | awk '{ print $2 }' >"$out/s3g-want.txt"
+	awk '$1 ~ /^[0-9]+$/ { if ($1 != NR) print "seq " $1 " at " NR; print $2 }' "$2" \
+		>"$out/s3g-got.txt"
+	if cmp -s "$out/s3g-want.txt" "$out/s3g-got.txt"; then echo yes; else echo no; fi
+}
+
 s3g_table() {
 if ! command -v gpx >/dev/null 2>&1; then
 	echo "gpx is not installed (make deps installs it)" >&2
 	return 1
 fi
 [ -f "$out/dense-5k.gcode" ] || dense_gcode 5000 "$out/dense-5k.gcode"
-gcode="$out/dense-5k.gcode"
 (cd "$out" && gpx -m fcp dense-5k.gcode dense-5k.x3g >/dev/null 2>&1)
-cmds=$(wc -l <"$out/dense-5k.gcode")
-echo "| host | file | commands | bytes out | s | commands/s | bytes/s | link fraction (both ways) | log commands |"
+"$bin" x3g "$out/dense-5k.gcode" -o "$out/dense-5k-ours.x3g" --printer flashforge-creator-pro \
+	>/dev/null 2>&1
+echo "| host | input | commands | bytes out | s | commands/s | bytes/s | link fraction (both ways) | log == X3G |"
 echo "|---|---|---|---|---|---|---|---|---|"
-for host in gpx stratum; do
+for host in gpx gcode x3g; do
 	log="$out/s3g-$host.log"
-	rm -f "$out/s3g-tty"
-	"$bin" sim --dialect sailfish --baud 115200 --speedup 1000000 --link "$out/s3g-tty" \
-		--log "$log" >"$out/s3g-sim.out" 2>&1 &
-	sim_pid=$!
-	i=0
-	while [ ! -L "$out/s3g-tty" ] && [ $i -lt 100 ]; do sleep 0.05; i=$((i + 1)); done
+	s3g_sim_start "$log"
 	if [ "$host" = gpx ]; then
 		t0=$(date +%s.%N)
 		(cd "$out" && gpx -s -m fcp dense-5k.gcode "$(readlink s3g-tty)" >/dev/null 2>&1) || true
@@ -375,12 +390,18 @@ for host in gpx stratum; do
 		n=$(grep -c '^[0-9]' "$log" || true)
 		bytes=$(( $(stat -c %s "$out/dense-5k.x3g") + 3 * n ))
 		secs=$(echo "$t1 - $t0" | bc)
-		echo "| gpx -s $(dpkg-query -W -f='${Version}' gpx 2>/dev/null) | dense-5k | $n | $bytes | $secs | $(echo "$n / $secs" | bc) | $(echo "$bytes / $secs" | bc) | $(echo "scale=3; ($bytes + 4 * $n) / $secs / 11520" | bc) | $n |"
+		echo "| gpx -s $(dpkg-query -W -f='${Version}' gpx 2>/dev/null) | dense-5k.gcode | $n | $bytes | $(printf %.2f "$secs") | $(echo "$n / $secs" | bc) | $(echo "$bytes / $secs" | bc) | $(printf %.3f "$(echo "scale=4; ($bytes + 4 * $n) / $secs / 11520" | bc)") | $(s3g_log_matches "$out/dense-5k.x3g" "$log") |"
 	else
-		j="$out/s3g-stratum.json"
-		build/bench/s3g_stream "$(readlink "$out/s3g-tty")" "$out/dense-5k.x3g" 115200 >"$j" 2>"$out/s3g-stratum.err" || true
-		n=$(grep -c '^[0-9]' "$log" || true)
-		echo "| stratum (s3g driver) | dense-5k | $(json_any "$j" confirmed) | $(json_any "$j" bytes) | $(json_any "$j" seconds) | $(json_any "$j" commands_per_s) | $(json_any "$j" bytes_per_s) | $(json_any "$j" link_fraction) | $n |"
+		j="$out/s3g-stratum-$host.json"
+		if [ "$host" = gcode ]; then in=dense-5k.gcode; ref=dense-5k-ours.x3g; else in=dense-5k.x3g; ref=dense-5k.x3g; fi
+		"$bin" send "$out/$in" --port "$out/s3g-tty" --printer flashforge-creator-pro \
+			--baud 115200 --json >"$j" 2>"$out/s3g-stratum-$host.err" || true
+		n=$(json_any "$j" commands); bytes=$(json_any "$j" bytes_written); secs=$(json_any "$j" seconds)
+		if [ -z "$n" ] || [ -z "$secs" ]; then
+			echo "| stratum send | $in | failed, see $out/s3g-stratum-$host.err | | | | | | |"
+		else
+			echo "| stratum send | $in | $n | $bytes | $(printf %.2f "$secs") | $(echo "$n / $secs" | bc) | $(echo "$bytes / $secs" | bc) | $(printf %.3f "$(json_any "$j" link_fraction_both_ways)") | $(s3g_log_matches "$out/$ref" "$log") |"
+		fi
 	fi
 	kill "$sim_pid" 2>/dev/null || true
 	wait "$sim_pid" 2>/dev/null || true

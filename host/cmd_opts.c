@@ -1,11 +1,23 @@
 /*
  * cmd_opts.c - option parsing helpers shared by the subcommands (commands.h).
  */
+#include <signal.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "commands.h"
 #include "st_number.h"
+
+void cmd_on_stop_signals(void (*handler)(int))
+{
+	struct sigaction sa;
+
+	memset(&sa, 0, sizeof(sa));
+	sa.sa_handler = handler;
+	sigemptyset(&sa.sa_mask);
+	sigaction(SIGINT, &sa, NULL);
+	sigaction(SIGTERM, &sa, NULL);
+}
 
 const char *cmd_opt_value(int argc, char **argv, int *i, const char *name)
 {

@@ -1,7 +1,10 @@
 /*
- * cmd_send.c - `stratum send FILE.gcode --port PATH --printer NAME [--json]
- * [--baud N]`: stream a G-code file to a Marlin printer (serial/marlin.h)
- * with progress on stderr and a final report on stdout.
+ * cmd_send.c - `stratum send FILE --port PATH --printer NAME [--json]
+ * [--baud N]`: stream a file to a printer with progress on stderr and a
+ * final report on stdout.  G-code goes to a Marlin printer here
+ * (serial/marlin.h); a sailfish profile hands over to send_sailfish
+ * (host/send_sailfish.c), which shares the options, progress, report and
+ * stop flag below (host/send.h).
  *
  * The whole file is checked before the port is opened, so a bad file sends
  * nothing.  Ctrl-C stops safely (marlin_safe_stop) and exits 130.
@@ -13,6 +16,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -20,10 +24,9 @@
 #include "gcode.h"
 #include "marlin.h"
 #include "profile.h"
+#include "send.h"
 #include "st_error.h"
 #include "xport.h"
-
-#define SEND_CMD "stratum send"
 
 /* The stop flag SIGINT/SIGTERM set (STYLE rule 10 exception). */
 static volatile sig_atomic_t send_stop;
@@ -34,37 +37,35 @@ static void send_on_signal(int sig)
 	send_stop = 1;
 }
 
-struct send_args {
-	const char *file, *port, *printer;
-	bool json;
-	long baud; /* 0 = the profile's */
-};
+volatile sig_atomic_t *send_catch_signals(void)
+{
+	cmd_on_stop_signals(send_on_signal);
+	return &send_stop;
+}
 
-/* What the progress callback needs. */
-struct send_progress {
-	bool tty;
-	uint64_t total;	     /* commands in the file */
-	uint64_t file_bytes;
-	double t0;
-	int last_decile;     /* plain mode: last 10 % step printed */
-	size_t width;
-};
-
-static double mono_now(void)
+double send_now(void)
 {
 	struct timespec ts;
 	clock_gettime(CLOCK_MONOTONIC, &ts);
 	return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
 }
 
+bool send_has_ext(const char *path, const char *ext)
+{
+	size_t n = strlen(path), k = strlen(ext);
+	return n > k && !strcasecmp(path + n - k, ext);
+}
+
 static void send_usage(FILE *out)
 {
 	fprintf(out,
-		"usage: stratum send FILE.gcode --port PATH --printer NAME [--json] [--baud N]\n"
-		"Streams FILE to a Marlin printer on PATH (a serial device, a pty or\n"
-		"tcp://HOST:PORT) with line numbers, checksums and resends; progress goes to\n"
-		"stderr, the report to stdout (one JSON object with --json).  Ctrl-C stops\n"
-		"safely: heaters and motors off.\n");
+		"usage: stratum send FILE --port PATH --printer NAME [--json] [--baud N]\n"
+		"Streams FILE to the printer on PATH (a serial device, a pty or\n"
+		"tcp://HOST:PORT); progress goes to stderr, the report to stdout (one JSON\n"
+		"object with --json).  Ctrl-C stops safely: heaters and motors off.\n"
+		"  Marlin printers: FILE.gcode, with line numbers, checksums and resends.\n"
+		"  Sailfish printers (FlashForge Creator Pro): FILE.gcode, translated to X3G\n"
+		"  as it streams (as 'stratum x3g' does), or FILE.x3g; S3G packets.\n");
 }
 
 /* Parse argv; returns 0, or an exit status (-1 = --help shown). */
@@ -104,7 +105,7 @@ static int send_parse(int argc, char **argv, struct send_args *a)
 		} else if (!a->file) {
 			a->file = s;
 		} else {
-			fprintf(stderr, SEND_CMD ": one G-code file only ('%s' is extra)\n", s);
+			fprintf(stderr, SEND_CMD ": one file only ('%s' is extra)\n", s);
 			return ST_EXIT_USAGE;
 		}
 		continue;
@@ -114,7 +115,7 @@ missing:
 	}
 	if (!a->file || !a->port || !a->printer) {
 		fprintf(stderr, SEND_CMD ": %s is required\n",
-			!a->file ? "a G-code FILE" : !a->port ? "--port" : "--printer");
+			!a->file ? "a FILE" : !a->port ? "--port" : "--printer");
 		send_usage(stderr);
 		return ST_EXIT_USAGE;
 	}
@@ -158,31 +159,36 @@ static int send_check_file(FILE *f, const char *name, uint64_t *commands, uint64
 	return 0;
 }
 
-/* Progress: a redrawn line on a terminal, a line per 10 % otherwise. */
-static void send_progress_cb(void *ctx, const struct marlin_status *st, uint64_t bytes_read)
+void send_progress_start(struct send_progress *p)
 {
-	struct send_progress *p = ctx;
-	double frac = p->total ? (double)st->acked / (double)p->total : 1.0;
-	double el = mono_now() - p->t0;
-	char temps[96] = "", eta[32] = "", layer[32] = "";
-	(void)bytes_read;
+	memset(p, 0, sizeof(*p));
+	p->tty = isatty(STDERR_FILENO);
+	p->last_decile = -1;
+	p->t0 = send_now();
+}
 
-	if (st->tool[0].present)
-		snprintf(temps, sizeof(temps), " T %.0f/%.0f", st->tool[0].actual,
-			 st->tool[0].target);
-	if (st->bed.present)
+void send_progress_show(struct send_progress *p, const struct send_view *v)
+{
+	double frac = v->total ? (double)v->done / (double)v->total : 1.0;
+	double el = send_now() - p->t0;
+	char temps[96] = "", eta[32] = "", layer[32] = "";
+
+	if (v->tool)
+		snprintf(temps, sizeof(temps), " T %.0f/%.0f", v->tool_actual, v->tool_target);
+	if (v->bed)
 		snprintf(temps + strlen(temps), sizeof(temps) - strlen(temps), " B %.0f/%.0f",
-			 st->bed.actual, st->bed.target);
+			 v->bed_actual, v->bed_target);
 	if (frac > 0.01 && frac < 1) {
 		double left = el / frac - el;
 		snprintf(eta, sizeof(eta), " ETA %d:%02d", (int)(left / 60), (int)fmod(left, 60));
 	}
-	if (st->layer >= 0)
-		snprintf(layer, sizeof(layer), " layer %ld", st->layer);
+	if (v->layer >= 0)
+		snprintf(layer, sizeof(layer), " layer %ld", v->layer);
 	if (p->tty) {
-		int n = fprintf(stderr, "\r[send] %3d%% line %llu/%llu%s%s%s%s", (int)(frac * 100),
-				(unsigned long long)st->acked, (unsigned long long)p->total, layer,
-				temps, eta, st->paused ? " (paused)" : "");
+		int n = fprintf(stderr, "\r[send] %3d%% %s %llu/%llu%s%s%s%s", (int)(frac * 100),
+				v->unit, (unsigned long long)v->done,
+				(unsigned long long)v->total, layer, temps, eta,
+				v->paused ? " (paused)" : "");
 		for (size_t w = n > 0 ? (size_t)n : 0; w < p->width; w++)
 			fputc(' ', stderr);
 		if (n > 0 && (size_t)n > p->width)
@@ -192,11 +198,44 @@ static void send_progress_cb(void *ctx, const struct marlin_status *st, uint64_t
 		int decile = (int)(frac * 10);
 		if (decile != p->last_decile) {
 			p->last_decile = decile;
-			fprintf(stderr, SEND_CMD ": %d%% line %llu/%llu%s%s%s\n", decile * 10,
-				(unsigned long long)st->acked, (unsigned long long)p->total, layer,
+			fprintf(stderr, SEND_CMD ": %d%% %s %llu/%llu%s%s%s\n", decile * 10, v->unit,
+				(unsigned long long)v->done, (unsigned long long)v->total, layer,
 				temps, eta);
 		}
 	}
+}
+
+void send_progress_end(struct send_progress *p)
+{
+	if (p->tty)
+		fputc('\n', stderr);
+}
+
+/* What the Marlin progress callback needs. */
+struct marlin_progress {
+	struct send_progress p;
+	uint64_t total; /* commands in the file */
+};
+
+/* Marlin's status as the shared progress line. */
+static void send_progress_cb(void *ctx, const struct marlin_status *st, uint64_t bytes_read)
+{
+	struct marlin_progress *mp = ctx;
+	struct send_view v = {
+		.unit = "line",
+		.done = st->acked,
+		.total = mp->total,
+		.layer = st->layer,
+		.tool = st->tool[0].present,
+		.bed = st->bed.present,
+		.tool_actual = st->tool[0].actual,
+		.tool_target = st->tool[0].target,
+		.bed_actual = st->bed.actual,
+		.bed_target = st->bed.target,
+		.paused = st->paused,
+	};
+	(void)bytes_read;
+	send_progress_show(&mp->p, &v);
 }
 
 /* Exit status for a failed job. */
@@ -213,55 +252,100 @@ static int send_exit_for(const struct marlin_status *st, int rc)
 	}
 }
 
-/* The final report, as text or one JSON object on stdout. */
+json_t *send_report_json(const struct send_args *a, const struct send_summary *s)
+{
+	double cap = s->baud / 10.0;
+	double bps = s->seconds > 0 ? (double)s->bytes / s->seconds : 0;
+	json_t *o = json_object();
+
+	if (!o)
+		return NULL;
+	json_object_set_new(o, "ok", json_boolean(s->ok));
+	json_object_set_new(o, "file", json_string(a->file));
+	json_object_set_new(o, "port", json_string(a->port));
+	json_object_set_new(o, "printer", json_string(a->printer));
+	json_object_set_new(o, "protocol", json_string(s->protocol));
+	json_object_set_new(o, "firmware", json_string(s->firmware));
+	json_object_set_new(o, "resends", json_integer((json_int_t)s->resends));
+	json_object_set_new(o, "errors", json_integer((json_int_t)s->errors));
+	json_object_set_new(o, "unknown_commands", json_integer((json_int_t)s->unknown_commands));
+	json_object_set_new(o, "seconds", json_real(s->seconds));
+	json_object_set_new(o, "bytes", json_integer((json_int_t)s->bytes));
+	json_object_set_new(o, "bytes_written", json_integer((json_int_t)s->bytes_written));
+	json_object_set_new(o, "bytes_per_s", json_real(bps));
+	json_object_set_new(o, "baud", json_integer(s->baud));
+	json_object_set_new(o, "link_fraction", json_real(cap > 0 ? bps / cap : 0));
+	if (s->error)
+		json_object_set_new(o, "error", json_string(s->error));
+	return o;
+}
+
+void send_report_emit(json_t *o)
+{
+	char *text = o ? json_dumps(o, JSON_COMPACT) : NULL;
+	if (text)
+		printf("%s\n", text);
+	else
+		fprintf(stderr, SEND_CMD ": out of memory writing the report\n");
+	free(text);
+	json_decref(o);
+}
+
+void send_report_text(const struct send_args *a, const struct send_summary *s,
+		      const char *detail)
+{
+	double cap = s->baud / 10.0;
+	double ups = s->seconds > 0 ? (double)s->done / s->seconds : 0;
+	double bps = s->seconds > 0 ? (double)s->bytes / s->seconds : 0;
+
+	printf("%s %s: %llu %s in %.2f s\n", s->ok ? "sent" : "stopped", a->file,
+	       (unsigned long long)s->done, s->unit, s->seconds);
+	if (detail)
+		printf("  %s\n", detail);
+	printf("  %.0f %s/s, %.0f bytes/s = %.1f%% of the link (%ld baud = %.0f bytes/s)\n", ups,
+	       s->unit, bps, cap > 0 ? 100.0 * bps / cap : 0, s->baud, cap);
+}
+
+/* The Marlin job's report, as text or one JSON object on stdout. */
 static void send_report(const struct send_args *a, const struct marlin_status *st,
 			const struct marlin_caps *caps, double seconds, long baud, bool ok,
 			const char *error)
 {
-	double cap = baud / 10.0;
-	double lps = seconds > 0 ? (double)st->acked / seconds : 0;
-	double bps = seconds > 0 ? (double)st->bytes_acked / seconds : 0;
-	uint64_t errors = st->line_errors + st->other_errors;
+	struct send_summary s = {
+		.ok = ok,
+		.error = error,
+		.protocol = "marlin",
+		.firmware = caps->firmware_name,
+		.unit = "lines",
+		.done = st->acked,
+		.resends = st->resends,
+		.errors = st->line_errors + st->other_errors,
+		.unknown_commands = st->unknown_commands,
+		.bytes = st->bytes_acked,
+		.bytes_written = st->bytes_written,
+		.seconds = seconds,
+		.baud = baud,
+	};
+	char detail[320];
 
 	if (a->json) {
-		json_t *o = json_object();
-		json_object_set_new(o, "ok", json_boolean(ok));
-		json_object_set_new(o, "file", json_string(a->file));
-		json_object_set_new(o, "port", json_string(a->port));
-		json_object_set_new(o, "printer", json_string(a->printer));
-		json_object_set_new(o, "firmware", json_string(caps->firmware_name));
-		json_object_set_new(o, "lines", json_integer((json_int_t)st->acked));
-		json_object_set_new(o, "resends", json_integer((json_int_t)st->resends));
-		json_object_set_new(o, "resend_requests",
-				    json_integer((json_int_t)st->resend_requests));
-		json_object_set_new(o, "errors", json_integer((json_int_t)errors));
-		json_object_set_new(o, "unknown_commands",
-				    json_integer((json_int_t)st->unknown_commands));
-		json_object_set_new(o, "seconds", json_real(seconds));
-		json_object_set_new(o, "bytes", json_integer((json_int_t)st->bytes_acked));
-		json_object_set_new(o, "bytes_written",
-				    json_integer((json_int_t)st->bytes_written));
-		json_object_set_new(o, "lines_per_s", json_real(lps));
-		json_object_set_new(o, "bytes_per_s", json_real(bps));
-		json_object_set_new(o, "baud", json_integer(baud));
-		json_object_set_new(o, "link_fraction", json_real(cap > 0 ? bps / cap : 0));
-		json_object_set_new(o, "advanced_ok", json_boolean(caps->advanced_ok));
-		if (error)
-			json_object_set_new(o, "error", json_string(error));
-		char *text = json_dumps(o, JSON_COMPACT);
-		if (text)
-			printf("%s\n", text);
-		free(text);
-		json_decref(o);
+		json_t *o = send_report_json(a, &s);
+		if (o) {
+			json_object_set_new(o, "lines", json_integer((json_int_t)st->acked));
+			json_object_set_new(o, "lines_per_s",
+					    json_real(seconds > 0 ? (double)st->acked / seconds : 0));
+			json_object_set_new(o, "resend_requests",
+					    json_integer((json_int_t)st->resend_requests));
+			json_object_set_new(o, "advanced_ok", json_boolean(caps->advanced_ok));
+		}
+		send_report_emit(o);
 		return;
 	}
-	printf("%s %s: %llu lines in %.2f s\n", ok ? "sent" : "stopped", a->file,
-	       (unsigned long long)st->acked, seconds);
-	printf("  resends %llu (%llu requests), errors %llu, unknown commands %llu\n",
-	       (unsigned long long)st->resends, (unsigned long long)st->resend_requests,
-	       (unsigned long long)errors, (unsigned long long)st->unknown_commands);
-	printf("  %.0f lines/s, %.0f bytes/s = %.1f%% of the link (%ld baud = %.0f bytes/s)\n",
-	       lps, bps, cap > 0 ? 100.0 * bps / cap : 0, baud, cap);
+	snprintf(detail, sizeof(detail),
+		 "resends %llu (%llu requests), errors %llu, unknown commands %llu",
+		 (unsigned long long)st->resends, (unsigned long long)st->resend_requests,
+		 (unsigned long long)s.errors, (unsigned long long)st->unknown_commands);
+	send_report_text(a, &s, detail);
 	if (st->last_warning[0])
 		printf("  last warning: %s\n", st->last_warning);
 }
@@ -275,7 +359,8 @@ int cmd_send(int argc, char **argv)
 	struct gcode_reader *r = NULL;
 	struct st_error err = {0};
 	struct marlin_status st;
-	struct send_progress prog = {0};
+	struct marlin_progress prog;
+	volatile sig_atomic_t *stop;
 	uint64_t commands = 0, file_bytes = 0;
 	FILE *f = NULL;
 	int status, rc;
@@ -288,9 +373,13 @@ int cmd_send(int argc, char **argv)
 		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
 		return st_exit_for(rc);
 	}
-	if (prof->protocol != PROFILE_PROTOCOL_MARLIN) {
-		fprintf(stderr, SEND_CMD ": printer '%s' speaks %s; stratum send drives Marlin "
-				     "printers only\n", a.printer,
+	if (prof->protocol == PROFILE_PROTOCOL_SAILFISH) {
+		status = send_sailfish(&a, prof);
+		goto out_profile;
+	}
+	if (send_has_ext(a.file, ".x3g")) {
+		fprintf(stderr, SEND_CMD ": %s is X3G, which only Sailfish printers take; printer "
+				     "'%s' speaks %s: send it the G-code\n", a.file, a.printer,
 			profile_protocol_name(prof->protocol));
 		status = ST_EXIT_USAGE;
 		goto out_profile;
@@ -325,12 +414,7 @@ int cmd_send(int argc, char **argv)
 		goto out_port;
 	}
 
-	struct sigaction sa;
-	memset(&sa, 0, sizeof(sa));
-	sa.sa_handler = send_on_signal;
-	sigemptyset(&sa.sa_mask);
-	sigaction(SIGINT, &sa, NULL);
-	sigaction(SIGTERM, &sa, NULL);
+	stop = send_catch_signals();
 
 	rc = marlin_connect(m, &err);
 	if (rc) {
@@ -343,19 +427,15 @@ int cmd_send(int argc, char **argv)
 		status = ST_EXIT_SOFTWARE;
 		goto out_driver;
 	}
-	prog.tty = isatty(STDERR_FILENO);
+	send_progress_start(&prog.p);
 	prog.total = commands;
-	prog.file_bytes = file_bytes;
-	prog.last_decile = -1;
-	prog.t0 = mono_now();
-	if (!a.json || prog.tty)
+	if (!a.json || prog.p.tty)
 		fprintf(stderr, SEND_CMD ": %s on %s, %llu commands\n",
 			marlin_caps(m)->firmware_name[0] ? marlin_caps(m)->firmware_name : "Marlin",
 			xport_describe(x), (unsigned long long)commands);
-	rc = marlin_stream_file(m, r, a.file, send_progress_cb, &prog, &send_stop, &err);
-	double seconds = mono_now() - prog.t0;
-	if (prog.tty)
-		fputc('\n', stderr);
+	rc = marlin_stream_file(m, r, a.file, send_progress_cb, &prog, stop, &err);
+	double seconds = send_now() - prog.p.t0;
+	send_progress_end(&prog.p);
 	marlin_status(m, &st);
 	if (rc == 0) {
 		status = ST_EXIT_OK;

@@ -97,12 +97,7 @@ static void sim_remove_link(const char *link, const char *target)
 /* Install the SIGINT/SIGTERM handler that sets sim_stop_flag. */
 static void sim_catch_signals(void)
 {
-	struct sigaction sa;
-	memset(&sa, 0, sizeof(sa));
-	sa.sa_handler = sim_on_signal;
-	sigemptyset(&sa.sa_mask);
-	sigaction(SIGINT, &sa, NULL);
-	sigaction(SIGTERM, &sa, NULL);
+	cmd_on_stop_signals(sim_on_signal);
 }
 
 /* The sailfish half of cmd_sim: options already checked. */

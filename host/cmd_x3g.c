@@ -123,23 +123,19 @@ static int parse_args(int argc, char **argv, struct x3g_args *a)
 	return 0;
 }
 
-/* The machine definition from a sailfish profile; returns an exit status. */
-static int machine_from_profile(const struct profile *p, struct x3g_machine *m)
+/* The machine definition and flavour from a sailfish profile (shared with
+ * stratum send); returns 0 or the profile's error, err filled. */
+int cmd_x3g_machine(const struct profile *p, struct x3g_machine *m, enum x3g_flavor *flavor,
+		    struct st_error *err)
 {
-	struct st_error err = {0};
 	double heated, timeout;
+	int rc;
 
-	if (p->protocol != PROFILE_PROTOCOL_SAILFISH) {
-		fprintf(stderr, X3G_CMD ": printer '%s' speaks %s, not sailfish; X3G is for "
-				"Sailfish printers (send its G-code with 'stratum send')\n",
-			p->id, profile_protocol_name(p->protocol));
-		return ST_EXIT_USAGE;
-	}
-	if (profile_get_number(p, "x3g_heated_platform", 0, 1, 1, &heated, &err) ||
-	    profile_get_number(p, "x3g_home_timeout", 1, 65535, 20, &timeout, &err)) {
-		fprintf(stderr, X3G_CMD ": %s\n", err.msg);
-		return ST_EXIT_DATAERR;
-	}
+	if ((rc = profile_get_number(p, "x3g_heated_platform", 0, 1, 1, &heated, err)) ||
+	    (rc = profile_get_number(p, "x3g_home_timeout", 1, 65535, 20, &timeout, err)))
+		return rc;
+	*flavor = p->gcode_flavor == PROFILE_FLAVOR_MAKERWARE ? X3G_FLAVOR_MAKERBOT
+							      : X3G_FLAVOR_REPRAP;
 	memset(m, 0, sizeof(*m));
 	for (int i = 0; i < 3; i++) {
 		m->axis[i].steps_per_mm = p->steps_per_mm[i];
@@ -166,7 +162,7 @@ static int machine_from_profile(const struct profile *p, struct x3g_machine *m)
 }
 
 /* "dir/name.x3g" -> "name", as GPX names the build after its output file. */
-static void build_name(const char *out, char *name, size_t cap)
+void cmd_x3g_build_name(const char *out, char *name, size_t cap)
 {
 	const char *base = strrchr(out, '/'), *dot;
 	size_t n;
@@ -299,13 +295,21 @@ static int run_translate(const struct x3g_args *a)
 		fprintf(stderr, X3G_CMD ": %s\n", err.msg);
 		return err.code == ST_ERR_ARG ? ST_EXIT_USAGE : ST_EXIT_DATAERR;
 	}
-	if ((status = machine_from_profile(p, &m)))
+	if (p->protocol != PROFILE_PROTOCOL_SAILFISH) {
+		fprintf(stderr, X3G_CMD ": printer '%s' speaks %s, not sailfish; X3G is for "
+				"Sailfish printers (send its G-code with 'stratum send')\n",
+			p->id, profile_protocol_name(p->protocol));
+		status = ST_EXIT_USAGE;
 		goto out_profile;
-	opt.flavor = p->gcode_flavor == PROFILE_FLAVOR_MAKERWARE ? X3G_FLAVOR_MAKERBOT
-								 : X3G_FLAVOR_REPRAP;
+	}
+	if (cmd_x3g_machine(p, &m, &opt.flavor, &err)) {
+		fprintf(stderr, X3G_CMD ": %s\n", err.msg);
+		status = ST_EXIT_DATAERR;
+		goto out_profile;
+	}
 	if (a->flavor)
 		opt.flavor = strcmp(a->flavor, "makerbot") ? X3G_FLAVOR_REPRAP : X3G_FLAVOR_MAKERBOT;
-	build_name(a->out, name, sizeof(name));
+	cmd_x3g_build_name(a->out, name, sizeof(name));
 	opt.build_name = name;
 	if (x3g_new(&m, &opt, &r.t, &err)) {
 		fprintf(stderr, X3G_CMD ": %s: %s\n", p->path, err.msg);

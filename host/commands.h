@@ -7,6 +7,10 @@
 #define STRATUM_HOST_COMMANDS_H
 
 #include <stdbool.h>
+#include <stddef.h>
+
+#include "st_error.h"
+#include "x3g.h"
 
 int cmd_check(int argc, char **argv);	 /* host/cmd_check.c */
 int cmd_repair(int argc, char **argv);	 /* host/cmd_repair.c */
@@ -18,6 +22,19 @@ int cmd_x3g(int argc, char **argv);	 /* host/cmd_x3g.c */
 int cmd_send(int argc, char **argv);	 /* host/cmd_send.c */
 int cmd_serve(int argc, char **argv);	 /* host/cmd_serve.c */
 int cmd_preview(int argc, char **argv);	 /* host/cmd_preview.c */
+
+struct profile;
+
+/*
+ * cmd_x3g_machine - the X3G machine definition and command flavour of a
+ * sailfish printer profile (host/cmd_x3g.c; also used by stratum send).
+ * Returns 0, or the profile's error class with err naming the key.
+ */
+int cmd_x3g_machine(const struct profile *p, struct x3g_machine *m, enum x3g_flavor *flavor,
+		    struct st_error *err);
+
+/* cmd_x3g_build_name - "dir/name.ext" -> "name", the build name GPX uses. */
+void cmd_x3g_build_name(const char *path, char *name, size_t cap);
 
 /*
  * cmd_parse_threads - the value of --threads N: N as an int, or -1 when it
@@ -37,6 +54,10 @@ const char *cmd_opt_value(int argc, char **argv, int *i, const char *name);
  * else prints "CMD: OPT wants WHAT, not 'V'" on stderr and returns false.
  */
 bool cmd_number(const char *cmd, const char *opt, const char *v, const char *what, double *out);
+
+/* cmd_on_stop_signals - SIGINT and SIGTERM call handler, which sets the
+ * command's stop flag (host/cmd_opts.c). */
+void cmd_on_stop_signals(void (*handler)(int));
 
 /* cmd_is_opt - true when a is NAME or NAME=...; the value may still be missing. */
 bool cmd_is_opt(const char *a, const char *name);

@@ -250,6 +250,7 @@ void s3g_options_init(struct s3g_options *o)
 	memset(o, 0, sizeof(*o));
 	o->timeout_ms = 1000;
 	o->max_retries = 5;
+	o->max_rejects = 30;
 	o->overflow_deadline_ms = 300000;
 	o->poll_ms = 5;
 	o->stats_ms = 1000;
@@ -271,7 +272,7 @@ int s3g_new(struct xport *x, const struct s3g_options *opts, struct s3g **out,
 		s->o = *opts;
 	else
 		s3g_options_init(&s->o);
-	if (s->o.timeout_ms <= S3G_PACKET_TIMEOUT_MS || s->o.max_retries < 0 ||
+	if (s->o.timeout_ms <= S3G_PACKET_TIMEOUT_MS || s->o.max_retries < 0 || s->o.max_rejects < 0 ||
 	    s->o.poll_ms < 1 || s->o.quiet_ms < 0 || s->o.stats_ms < 1 ||
 	    s->o.overflow_deadline_ms < 1) {
 		free(s);
@@ -325,11 +326,20 @@ static int s3g_quiet(struct s3g *s, struct st_error *err)
 	return r < 0 ? r : 0;
 }
 
+/* Record why a call failed (status.fail); returns code, to wrap
+ * st_error_set. */
+static int s3g_why(struct s3g *s, enum s3g_fail why, int code)
+{
+	s->st.fail = why;
+	return code;
+}
+
 /* The message for a dead link. */
 static int s3g_link_error(struct s3g *s, const char *what, struct st_error *err)
 {
 	char inner[256];
 	snprintf(inner, sizeof(inner), "%s", err ? err->msg : "");
+	s->st.fail = S3G_FAIL_LINK;
 	if (xport_is_gone(s->x))
 		return st_error_set(err, ST_ERR_IO,
 				    "printer unplugged: %s closed the link during %s",
@@ -404,7 +414,7 @@ static int s3g_send(struct s3g *s, const uint8_t *payload, size_t len, uint8_t *
 	uint8_t pkt[S3G_MAX_PACKET];
 	char what[96];
 	int plen = s3g_encode(payload, len, pkt, sizeof(pkt), err);
-	int retries = 0;
+	int retries = 0, rejects = 0;
 	double overflow_since = 0;
 	uint32_t last_free = UINT32_MAX;
 
@@ -420,11 +430,12 @@ static int s3g_send(struct s3g *s, const uint8_t *payload, size_t len, uint8_t *
 		if (r == 0) {
 			s->st.timeouts++;
 			if (++retries > s->o.max_retries)
-				return st_error_set(err, ST_ERR_IO,
-						    "no valid reply from the printer on %s to %s "
-						    "after %d tries of %d ms",
-						    xport_describe(s->x), what, retries,
-						    s->o.timeout_ms);
+				return s3g_why(s, S3G_FAIL_LINK,
+					       st_error_set(err, ST_ERR_IO,
+							    "no valid reply from the printer on %s "
+							    "to %s after %d tries of %d ms",
+							    xport_describe(s->x), what, retries,
+							    s->o.timeout_ms));
 			s->st.retries++;
 			if (s3g_quiet(s, err) < 0)
 				return s3g_link_error(s, what, err);
@@ -466,10 +477,11 @@ static int s3g_send(struct s3g *s, const uint8_t *payload, size_t len, uint8_t *
 				last_free = f;
 			}
 			if ((s3g_now() - overflow_since) * 1000.0 > s->o.overflow_deadline_ms)
-				return st_error_set(err, ST_ERR_IO,
-						    "the printer's command buffer stayed full for %d ms "
-						    "without draining while sending %s",
-						    s->o.overflow_deadline_ms, what);
+				return s3g_why(s, S3G_FAIL_PRINTER,
+					       st_error_set(err, ST_ERR_IO,
+							    "the printer's command buffer stayed full "
+							    "for %d ms without draining while sending %s",
+							    s->o.overflow_deadline_ms, what));
 			continue;
 		}
 		case S3G_ACT_RETRY:
@@ -477,19 +489,23 @@ static int s3g_send(struct s3g *s, const uint8_t *payload, size_t len, uint8_t *
 		case S3G_ACT_FAIL:
 			if (code == S3G_RC_QUERY_TOO_BIG && len <= S3G_MAX_PAYLOAD)
 				break; /* our length was fine: noise changed it */
-			return st_error_set(err, ST_ERR_IO, "the printer answered %s with 0x%02X (%s)",
-					    what, code, s3g_rc_name(code));
+			return s3g_why(s, S3G_FAIL_PRINTER,
+				       st_error_set(err, ST_ERR_IO,
+						    "the printer answered %s with 0x%02X (%s)", what,
+						    code, s3g_rc_name(code)));
 		case S3G_ACT_STOP:
-			return st_error_set(err, ST_ERR_IO,
-					    "the printer stopped the build: it answered %s with "
-					    "0x%02X (%s)",
-					    what, code, s3g_rc_name(code));
+			return s3g_why(s, S3G_FAIL_PRINTER,
+				       st_error_set(err, ST_ERR_IO,
+						    "the printer stopped the build: it answered %s "
+						    "with 0x%02X (%s)",
+						    what, code, s3g_rc_name(code)));
 		}
-		if (++retries > s->o.max_retries)
-			return st_error_set(err, ST_ERR_IO,
-					    "the printer kept rejecting %s: last reply 0x%02X (%s) "
-					    "after %d tries",
-					    what, code, s3g_rc_name(code), retries);
+		if (++rejects > s->o.max_rejects)
+			return s3g_why(s, S3G_FAIL_LINK,
+				       st_error_set(err, ST_ERR_IO,
+						    "the printer kept rejecting %s: last reply 0x%02X "
+						    "(%s) after %d tries",
+						    what, code, s3g_rc_name(code), rejects));
 		s->st.retries++;
 		if (s3g_quiet(s, err) < 0)
 			return s3g_link_error(s, what, err);
@@ -653,10 +669,16 @@ int s3g_cancel(struct s3g *s, struct st_error *err)
 
 /* ---- streaming ---------------------------------------------------------- */
 
-/* What the stream knows for settling lost replies and spotting resets. */
+#define S3G_HIST_MASK (S3G_STREAM_HISTORY - 1)
+_Static_assert((S3G_STREAM_HISTORY & S3G_HIST_MASK) == 0, "history must be a power of two");
+
+/* What the stream knows for settling lost replies and spotting resets.
+ * Commands are pulled one at a time, so the lengths and codes of the last
+ * S3G_STREAM_HISTORY are kept by index: those still queued in the
+ * firmware are always among them (a buffer of capacity bytes holds at most
+ * capacity / 2 commands). */
 struct s3g_stream_ctx {
-	const struct s3g_cmd *cmds;
-	size_t n;
+	size_t n;		/* commands expected, 0 unknown */
 	size_t cur;		/* index of the packet in flight */
 	long base;		/* index of the last confirmed build start (153), -1 none */
 	uint32_t capacity;	/* largest free space seen (bytes) */
@@ -664,17 +686,22 @@ struct s3g_stream_ctx {
 	uint32_t last_line;
 	double next_stats;
 	bool stats_due;		/* check now (after a time-out) */
+	uint8_t len[S3G_STREAM_HISTORY];  /* by index & S3G_HIST_MASK */
+	uint8_t code[S3G_STREAM_HISTORY];
 };
 
 /* The last confirmed command, for messages. */
 static void s3g_last_desc(const struct s3g_stream_ctx *c, char *buf, size_t cap)
 {
+	char of[32] = "";
+	if (c->n)
+		snprintf(of, sizeof(of), " of %zu", c->n);
 	if (c->cur == 0)
 		snprintf(buf, cap, "before the first command was confirmed");
 	else
-		snprintf(buf, cap, "after command %zu of %zu (code %u, %s) was confirmed", c->cur,
-			 c->n, c->cmds[c->cur - 1].payload[0],
-			 s3g_command_name(c->cmds[c->cur - 1].payload[0]));
+		snprintf(buf, cap, "after command %zu%s (code %u, %s) was confirmed", c->cur, of,
+			 c->code[(c->cur - 1) & S3G_HIST_MASK],
+			 s3g_command_name(c->code[(c->cur - 1) & S3G_HIST_MASK]));
 }
 
 /* Build statistics: remember the build running; a reboot shows as state
@@ -695,11 +722,12 @@ static int s3g_check_reset(struct s3g *s, struct s3g_stream_ctx *c, struct s3g_b
 	if (c->seen_running &&
 	    (b.state == S3G_BUILD_NONE || (running && b.line < c->last_line))) {
 		s3g_last_desc(c, last, sizeof(last));
-		return st_error_set(err, ST_ERR_IO,
-				    "the printer reset during the print: it answers as freshly "
-				    "booted (build state %u, line %u, was line %u) %s; home it and "
-				    "start the print again",
-				    b.state, b.line, c->last_line, last);
+		return s3g_why(s, S3G_FAIL_LINK,
+			       st_error_set(err, ST_ERR_IO,
+					    "the printer reset during the print: it answers as "
+					    "freshly booted (build state %u, line %u, was line %u) "
+					    "%s; home it and start the print again",
+					    b.state, b.line, c->last_line, last));
 	}
 	if (running && c->base >= 0) {
 		c->seen_running = true;
@@ -708,7 +736,7 @@ static int s3g_check_reset(struct s3g *s, struct s3g_stream_ctx *c, struct s3g_b
 	return 0;
 }
 
-/* Settle a lost reply to cmds[cur] (see s3g.h "Exactly once"). */
+/* Settle a lost reply to command cur (see s3g.h "Exactly once"). */
 static enum s3g_lost s3g_decide(struct s3g *s, void *ctx, struct st_error *err, int *rc)
 {
 	struct s3g_stream_ctx *c = ctx;
@@ -739,11 +767,11 @@ static enum s3g_lost s3g_decide(struct s3g *s, void *ctx, struct st_error *err, 
 			s->st.resolved++;
 			return S3G_LOST_QUEUED;
 		}
-		if (first > c->cur + 1)
+		if (first > c->cur + 1 || c->cur - first >= S3G_STREAM_HISTORY)
 			goto unknown;
 		for (size_t i = first; i < c->cur; i++)
-			without += c->cmds[i].len;
-		if (queued == without + c->cmds[c->cur].len) {
+			without += c->len[i & S3G_HIST_MASK];
+		if (queued == without + c->len[c->cur & S3G_HIST_MASK]) {
 			s->st.resolved++;
 			return S3G_LOST_QUEUED;
 		}
@@ -765,12 +793,110 @@ static void s3g_report(struct s3g *s, double t0, s3g_progress_fn progress, void 
 		progress(ctx, &s->st);
 }
 
-int s3g_stream(struct s3g *s, const struct s3g_cmd *cmds, size_t n, s3g_progress_fn progress,
-	       void *ctx, volatile sig_atomic_t *stop, struct s3g_status *st,
-	       struct st_error *err)
+/* ST_ERR_ARG unless k is one whole action command of at most 32 bytes. */
+static int s3g_check_cmd(const struct s3g_cmd *k, size_t i, struct st_error *err)
 {
-	struct s3g_stream_ctx c = {.cmds = cmds, .n = n, .base = -1};
-	struct s3g_resolver res = {s3g_decide, &c};
+	int want = k->payload && k->len ? s3g_action_length(k->payload, k->len) : -1;
+	if (!k->payload || k->len == 0 || k->len > S3G_MAX_PAYLOAD || want != k->len)
+		return st_error_set(err, ST_ERR_ARG,
+				    "S3G stream command %zu (code %u, %u bytes) is not one "
+				    "whole action command of at most %d bytes",
+				    i, k->payload && k->len ? k->payload[0] : 0u, k->len,
+				    S3G_MAX_PAYLOAD);
+	return 0;
+}
+
+/* Wait until the packet of len bytes fits the printer's buffer: only poll
+ * while it cannot.  Returns 0 (also when *stop was set: status says so) or
+ * an error. */
+static int s3g_wait_room(struct s3g *s, struct s3g_stream_ctx *c, uint32_t *free_est,
+			 uint8_t len, double t0, double *next_report, s3g_progress_fn progress,
+			 void *ctx, volatile sig_atomic_t *stop, struct st_error *err)
+{
+	double now = s3g_now(), idle_since = now;
+	uint32_t seen = *free_est;
+	struct s3g_temps temps;
+	char last[160];
+	int rc;
+
+	while (*free_est < len) {
+		if (stop && *stop) {
+			s->st.interrupted = true;
+			return 0;
+		}
+		s3g_sleep_ms(s->o.poll_ms);
+		if ((rc = s3g_get_buffer_free(s, free_est, err)))
+			return rc;
+		if (*free_est > c->capacity)
+			c->capacity = *free_est;
+		now = s3g_now();
+		if (*free_est != seen) {
+			seen = *free_est;
+			idle_since = now;
+		}
+		if (now >= c->next_stats) {
+			if ((rc = s3g_check_reset(s, c, NULL, err)))
+				return rc;
+			/* heating counts as progress: waits block the buffer */
+			int before = s->st.tool_temp + s->st.platform_temp;
+			if (s3g_get_temps(s, &temps, NULL) == 0 &&
+			    temps.tool + temps.platform != before)
+				idle_since = now;
+		}
+		if (progress && now >= *next_report) {
+			s3g_report(s, t0, progress, ctx);
+			*next_report = now + 0.1;
+		}
+		if ((now - idle_since) * 1000.0 > s->o.overflow_deadline_ms) {
+			s3g_last_desc(c, last, sizeof(last));
+			return s3g_why(s, S3G_FAIL_PRINTER,
+				       st_error_set(err, ST_ERR_IO,
+						    "the printer's command buffer stayed full for %d "
+						    "ms with no progress %s",
+						    s->o.overflow_deadline_ms, last));
+		}
+	}
+	return 0;
+}
+
+/* Poll until the printer is idle (or *stop). */
+static int s3g_wait_done(struct s3g *s, struct s3g_stream_ctx *c, double t0, double *next_report,
+			 s3g_progress_fn progress, void *ctx, volatile sig_atomic_t *stop,
+			 struct st_error *err)
+{
+	struct s3g_temps temps;
+	bool done = false;
+	int rc;
+
+	while (!done) {
+		if (stop && *stop) {
+			s->st.interrupted = true;
+			break;
+		}
+		if ((rc = s3g_is_finished(s, &done, err)))
+			return rc;
+		double now = s3g_now();
+		if (now >= c->next_stats || done) {
+			if ((rc = s3g_check_reset(s, c, NULL, err)))
+				return rc;
+			s3g_get_temps(s, &temps, NULL);
+		}
+		if (progress && now >= *next_report) {
+			s3g_report(s, t0, progress, ctx);
+			*next_report = now + 0.1;
+		}
+		if (!done)
+			s3g_sleep_ms(20);
+	}
+	return 0;
+}
+
+int s3g_stream_pull(struct s3g *s, s3g_source_fn next, void *src, size_t total,
+		    s3g_progress_fn progress, void *ctx, volatile sig_atomic_t *stop,
+		    struct s3g_status *st, struct st_error *err)
+{
+	struct s3g_stream_ctx *c;
+	struct s3g_resolver res;
 	uint8_t resp[S3G_MAX_PAYLOAD];
 	size_t rlen;
 	uint32_t free_est = 0;
@@ -779,35 +905,43 @@ int s3g_stream(struct s3g *s, const struct s3g_cmd *cmds, size_t n, s3g_progress
 	char last[160];
 	int rc = 0;
 
-	if (!s || (!cmds && n))
+	if (!s || !next)
 		return st_error_set(err, ST_ERR_ARG, "s3g_stream: NULL argument");
-	for (size_t i = 0; i < n; i++) {
-		const struct s3g_cmd *k = &cmds[i];
-		int want = k->payload && k->len ? s3g_action_length(k->payload, k->len) : -1;
-		if (!k->payload || k->len == 0 || k->len > S3G_MAX_PAYLOAD || want != k->len)
-			return st_error_set(err, ST_ERR_ARG,
-					    "S3G stream command %zu (code %u, %u bytes) is not one "
-					    "whole action command of at most %d bytes",
-					    i, k->payload && k->len ? k->payload[0] : 0u, k->len,
-					    S3G_MAX_PAYLOAD);
-	}
-	s->st.total = n;
+	c = calloc(1, sizeof(*c));
+	if (!c)
+		return st_error_set(err, ST_ERR_NOMEM, "S3G stream: out of memory");
+	c->n = total;
+	c->base = -1;
+	res = (struct s3g_resolver){s3g_decide, c};
+	s->st.total = total;
 	s->st.confirmed = s->st.skipped = 0;
 	s->st.interrupted = false;
+	s->st.fail = S3G_FAIL_NONE;
 	if ((rc = s3g_get_buffer_free(s, &free_est, err)))
 		goto out;
-	c.capacity = free_est;
-	if ((rc = s3g_check_reset(s, &c, NULL, err)))
+	c->capacity = free_est;
+	if ((rc = s3g_check_reset(s, c, NULL, err)))
 		goto out;
-	for (c.cur = 0; c.cur < n; c.cur++) {
-		const struct s3g_cmd *k = &cmds[c.cur];
+	for (c->cur = 0;; c->cur++) {
+		struct s3g_cmd k;
 		double now = s3g_now();
 		if (stop && *stop) {
 			s->st.interrupted = true;
 			break;
 		}
-		if (c.stats_due || now >= c.next_stats) {
-			if ((rc = s3g_check_reset(s, &c, NULL, err)))
+		rc = next(src, &k, err);
+		if (rc == 0)
+			break;
+		if (rc > 0)
+			rc = s3g_check_cmd(&k, c->cur, err);
+		if (rc < 0) {
+			s->st.fail = S3G_FAIL_SOURCE;
+			goto out;
+		}
+		c->len[c->cur & S3G_HIST_MASK] = k.len;
+		c->code[c->cur & S3G_HIST_MASK] = k.payload[0];
+		if (c->stats_due || now >= c->next_stats) {
+			if ((rc = s3g_check_reset(s, c, NULL, err)))
 				goto out;
 			s3g_get_temps(s, &temps, NULL);
 		}
@@ -815,109 +949,84 @@ int s3g_stream(struct s3g *s, const struct s3g_cmd *cmds, size_t n, s3g_progress
 			s3g_report(s, t0, progress, ctx);
 			next_report = now + 0.1;
 		}
-		/* wait for room: only poll while the packet cannot fit */
-		double idle_since = now;
-		uint32_t seen = free_est;
-		while (free_est < k->len) {
-			if (stop && *stop) {
-				s->st.interrupted = true;
-				goto out;
-			}
-			s3g_sleep_ms(s->o.poll_ms);
-			if ((rc = s3g_get_buffer_free(s, &free_est, err)))
-				goto out;
-			if (free_est > c.capacity)
-				c.capacity = free_est;
-			now = s3g_now();
-			if (free_est != seen) {
-				seen = free_est;
-				idle_since = now;
-			}
-			if (now >= c.next_stats) {
-				if ((rc = s3g_check_reset(s, &c, NULL, err)))
-					goto out;
-				/* heating counts as progress: waits block the buffer */
-				int before = s->st.tool_temp + s->st.platform_temp;
-				if (s3g_get_temps(s, &temps, NULL) == 0 &&
-				    temps.tool + temps.platform != before)
-					idle_since = now;
-			}
-			if (progress && now >= next_report) {
-				s3g_report(s, t0, progress, ctx);
-				next_report = now + 0.1;
-			}
-			if ((now - idle_since) * 1000.0 > s->o.overflow_deadline_ms) {
-				s3g_last_desc(&c, last, sizeof(last));
-				rc = st_error_set(err, ST_ERR_IO,
-						  "the printer's command buffer stayed full for %d ms "
-						  "with no progress %s",
-						  s->o.overflow_deadline_ms, last);
-				goto out;
-			}
-		}
+		rc = s3g_wait_room(s, c, &free_est, k.len, t0, &next_report, progress, ctx, stop,
+				   err);
+		if (rc || s->st.interrupted)
+			goto out;
 		uint64_t timeouts = s->st.timeouts, overflows = s->st.overflows;
-		rc = s3g_send(s, k->payload, k->len, resp, sizeof(resp), &rlen, &res, err);
+		rc = s3g_send(s, k.payload, k.len, resp, sizeof(resp), &rlen, &res, err);
 		if (rc < 0) {
 			char inner[256];
 			snprintf(inner, sizeof(inner), "%s", err ? err->msg : "");
-			s3g_last_desc(&c, last, sizeof(last));
+			s3g_last_desc(c, last, sizeof(last));
 			st_error_set(err, rc, "%s (%s)", inner, last);
 			goto out;
 		}
 		if (s->st.timeouts != timeouts)
-			c.stats_due = true;
+			c->stats_due = true;
 		if (s->st.overflows != overflows || rc == 1)
 			free_est = 0; /* our count was off: ask again before the next */
-		else if (free_est >= k->len)
-			free_est -= k->len;
+		else if (free_est >= k.len)
+			free_est -= k.len;
 		if (rc == 0 && resp[0] == S3G_RC_UNSUPPORTED) {
 			s->st.skipped++;
 		} else {
 			s->st.confirmed++;
-			s->st.action_bytes += k->len;
-			if (k->payload[0] == 153) {
-				c.base = (long)c.cur;
-				c.seen_running = false;
-				c.last_line = 0;
+			s->st.action_bytes += k.len;
+			if (k.payload[0] == 153) {
+				c->base = (long)c->cur;
+				c->seen_running = false;
+				c->last_line = 0;
 			}
 		}
 		rc = 0;
 	}
-	if (!s->st.interrupted && s->o.wait_finished) {
-		bool done = false;
-		c.cur = n;
-		while (!done) {
-			if (stop && *stop) {
-				s->st.interrupted = true;
-				break;
-			}
-			if ((rc = s3g_is_finished(s, &done, err)))
-				goto out;
-			double now = s3g_now();
-			if (now >= c.next_stats || done) {
-				if ((rc = s3g_check_reset(s, &c, NULL, err)))
-					goto out;
-				s3g_get_temps(s, &temps, NULL);
-			}
-			if (progress && now >= next_report) {
-				s3g_report(s, t0, progress, ctx);
-				next_report = now + 0.1;
-			}
-			if (!done)
-				s3g_sleep_ms(20);
-		}
-	}
+	if (!s->st.interrupted && s->o.wait_finished)
+		rc = s3g_wait_done(s, c, t0, &next_report, progress, ctx, stop, err);
 out:
-	if (rc < 0 && err && c.cur <= n && !strstr(err->msg, "confirmed")) {
+	if (rc < 0 && err && !strstr(err->msg, "confirmed")) {
 		char inner[256];
 		snprintf(inner, sizeof(inner), "%s", err->msg);
-		s3g_last_desc(&c, last, sizeof(last));
+		s3g_last_desc(c, last, sizeof(last));
 		st_error_set(err, rc, "%s (%s)", inner, last);
 	}
+	free(c);
 	s->st.elapsed_s = s3g_now() - t0;
 	if (progress)
 		progress(ctx, &s->st);
 	if (st)
 		*st = s->st;
 	return rc;
+}
+
+/* The source over an array, for s3g_stream. */
+struct s3g_array_src {
+	const struct s3g_cmd *cmds;
+	size_t n, next;
+};
+
+static int s3g_array_next(void *src, struct s3g_cmd *cmd, struct st_error *err)
+{
+	struct s3g_array_src *a = src;
+	(void)err;
+	if (a->next >= a->n)
+		return 0;
+	*cmd = a->cmds[a->next++];
+	return 1;
+}
+
+int s3g_stream(struct s3g *s, const struct s3g_cmd *cmds, size_t n, s3g_progress_fn progress,
+	       void *ctx, volatile sig_atomic_t *stop, struct s3g_status *st,
+	       struct st_error *err)
+{
+	struct s3g_array_src a = {cmds, n, 0};
+	int rc;
+
+	if (!s || (!cmds && n))
+		return st_error_set(err, ST_ERR_ARG, "s3g_stream: NULL argument");
+	/* all checked before the first packet: a bad array sends nothing */
+	for (size_t i = 0; i < n; i++)
+		if ((rc = s3g_check_cmd(&cmds[i], i, err)))
+			return rc;
+	return s3g_stream_pull(s, s3g_array_next, &a, n, progress, ctx, stop, st, err);
 }

@@ -23,7 +23,9 @@
  *                              progress (free space or temperatures moving)
  *   0x80 generic, 0x83 CRC, 0x88 tool lock, 0x8C packet timeout, and 0x84
  *   for a packet we know is <= 32 bytes (line noise turned the length byte
- *   into something larger) -> drain stray replies, resend; bounded
+ *   into something larger) -> drain stray replies, resend; bounded by
+ *                              max_rejects, apart from the time-outs'
+ *                              max_retries (a reply shows the link alive)
  *   0x85 unsupported        -> skip the command, count it
  *   0x87, 0x89 cancelled on the printer, 0x8A building from SD, 0x8B
  *   overheat                -> stop with an error naming the code
@@ -207,12 +209,26 @@ int s3g_action_length(const uint8_t *buf, size_t avail);
 /* Driver options; s3g_options_init fills the defaults. */
 struct s3g_options {
 	int timeout_ms;		 /* wait for a reply (ms); default 1000 (GPX: 1 s) */
-	int max_retries;	 /* retryable errors per packet; default 5 (s3g doc) */
+	int max_retries;	 /* time-outs per packet; default 5 (s3g doc) */
+	int max_rejects;	 /* retryable error replies per packet; default 30:
+				  * the printer answers, so the link is alive but
+				  * noisy, and at 1 % of bytes hit 30 % of 35-byte
+				  * packets are spoilt: 5 tries give up once in
+				  * 1 400 packets, 30 once in 10^15 */
 	int overflow_deadline_ms; /* buffer full with no progress (ms); default 300000 */
 	int poll_ms;		 /* free-space poll interval when full (ms); default 5 */
 	int stats_ms;		 /* reset check interval while streaming (ms); default 1000 */
 	int quiet_ms;		 /* line must be silent this long after an error (ms); default 10 */
 	bool wait_finished;	 /* s3g_stream waits until the printer is idle; default true */
+};
+
+/* Why a stream ended early, for the caller's exit status. */
+enum s3g_fail {
+	S3G_FAIL_NONE = 0,
+	S3G_FAIL_LINK,	  /* unplugged, reset, no answer, a line too noisy */
+	S3G_FAIL_PRINTER, /* the printer stopped or refused the build, or its
+			   * buffer stayed full: cancelled on its panel, overheat */
+	S3G_FAIL_SOURCE,  /* the command source failed or gave a bad command */
 };
 
 /* Status and counters, filled by s3g_stream (and by every exchange). */
@@ -235,6 +251,7 @@ struct s3g_status {
 	int build_state;	 /* enum s3g_build_state, -1 unknown */
 	double elapsed_s;	 /* since s3g_stream started */
 	bool interrupted;	 /* *stop was set */
+	enum s3g_fail fail;	 /* why the last failed call failed */
 };
 
 /* One action command payload for s3g_stream (one packet each). */
@@ -328,5 +345,30 @@ int s3g_cancel(struct s3g *s, struct st_error *err);
 int s3g_stream(struct s3g *s, const struct s3g_cmd *cmds, size_t n, s3g_progress_fn progress,
 	       void *ctx, volatile sig_atomic_t *stop, struct s3g_status *st,
 	       struct st_error *err);
+
+/*
+ * s3g_source_fn - the command source of s3g_stream_pull: fill *cmd with the
+ * next action command, its payload valid until the next call.  Returns 1,
+ * 0 at the end of the stream, or a negative class with err filled (the
+ * stream then ends with that class and S3G_FAIL_SOURCE).
+ */
+typedef int (*s3g_source_fn)(void *src, struct s3g_cmd *cmd, struct st_error *err);
+
+/* Commands whose lengths the stream remembers for settling lost replies;
+ * enough for a command buffer of 2 x this many bytes (Sailfish: 512). */
+#define S3G_STREAM_HISTORY 4096
+
+/*
+ * s3g_stream_pull - s3g_stream with commands pulled one at a time from
+ * next(src, ...), so a caller can translate G-code as it streams with
+ * bounded memory.  Each command is checked as it comes: a bad one ends the
+ * stream with ST_ERR_ARG after the commands before it were sent.  total is
+ * the number of commands expected (0 if unknown), for status.total and
+ * messages.  Returns, stops and reports as s3g_stream; status.fail says
+ * why a failed stream ended.
+ */
+int s3g_stream_pull(struct s3g *s, s3g_source_fn next, void *src, size_t total,
+		    s3g_progress_fn progress, void *ctx, volatile sig_atomic_t *stop,
+		    struct s3g_status *st, struct st_error *err);
 
 #endif /* STRATUM_SERIAL_S3G_H */

@@ -1310,6 +1310,16 @@ static uint32_t get_le(const uint8_t *p, int n)
 	return v;
 }
 
+/* Bytes of the fixed-size fields from ty to the end or the next string. */
+static size_t fixed_span(const char *ty)
+{
+	size_t n = 0;
+
+	for (; *ty && *ty != 'z'; ty++)
+		n += *ty == '1' ? 1 : *ty == '2' ? 2 : 4;
+	return n;
+}
+
 static int cut_short(struct st_error *err, uint64_t offset, const struct layout *lo, size_t need,
 		     size_t have)
 {
@@ -1402,9 +1412,9 @@ int x3g_decode(const uint8_t *buf, size_t len, uint64_t offset, struct x3g_comma
 			int n = *ty == '1' ? 1 : *ty == '2' ? 2 : 4;
 			double v;
 
+			/* name the whole command's length, not the field's */
 			if (len - pos < (size_t)n)
-				return cut_short(err, offset, lo, pos + (size_t)n,
-						 len);
+				return cut_short(err, offset, lo, pos + fixed_span(ty), len);
 			if (*ty == 'i') {
 				v = (double)(int32_t)get_le(buf + pos, 4);
 			} else if (*ty == 'f') {

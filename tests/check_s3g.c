@@ -335,10 +335,7 @@ static struct s3g_status stream_and_check(struct sim_sailfish_options *so, size_
 	struct st_error err = {0};
 	struct s3g_status st;
 	uint8_t *store;
-	fast_drv(&d);
-	/* 1 % of bytes hit spoils ~30 % of 35-byte packets; the protocol
-	 * document's 5 retries then give up about once in 1400 packets */
-	d.max_retries = 15;
+	fast_drv(&d); /* the default retry budgets: they must carry 1 % noise */
 	rig_start(&r, so, &d);
 	struct s3g_cmd *c = make_stream(n, rate, &store);
 	int rc = s3g_stream(r.d, c, n, NULL, NULL, NULL, &st, &err);

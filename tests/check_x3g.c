@@ -421,8 +421,11 @@ START_TEST(test_decode_errors)
 	uint8_t msg[40];
 
 	/* every cut of a full command is refused, never read past */
-	for (size_t n = 1; n < sizeof(move); n++)
-		decode_bad(move, n, 7, "ends after");
+	for (size_t n = 1; n < sizeof(move); n++) {
+		char want[64];
+		snprintf(want, sizeof(want), "needs 32 bytes but the data ends after %zu", n);
+		decode_bad(move, n, 7, want);
+	}
 	decode_bad((const uint8_t[]){200, 0}, 2, 12, "200 is not an X3G action command");
 	decode_bad((const uint8_t[]){10, 0}, 2, 0, "is not an X3G action command");
 	decode_bad(big_tool, sizeof(big_tool), 3, "at most 32");

@@ -27,6 +27,7 @@ Suite *s3g_suite(void);		/* tests/check_s3g.c: S3G packets, driver, simulated Sa
 Suite *serve_suite(void);		/* tests/check_serve.c: stratum serve, the farm node's API and queue */
 Suite *preview_suite(void);	/* tests/check_preview.c: layer preview, move walker */
 Suite *portpick_suite(void);	/* tests/check_portpick.c: --port auto on fake enumerations */
+Suite *send_suite(void);	/* tests/check_send.c: stratum send to the simulated Sailfish */
 Suite *cli_suite(void);		/* tests/check_cli.c: the stratum binary end to end */
 
 #endif

@@ -1,0 +1,465 @@
+/*
+ * send_sailfish.c - the Sailfish half of `stratum send`: a G-code file is
+ * translated to X3G as it streams (serial/x3g.h, one line at a time, so
+ * memory stays bounded whatever the file's size), an X3G file is cut into
+ * commands with x3g_decode, and the commands go out as S3G packets through
+ * s3g_stream_pull (serial/s3g.h).
+ *
+ * As on the Marlin path, the whole file is checked before the port is
+ * opened (a first translation or decoding pass whose output is dropped),
+ * so a bad file sends nothing; that pass also counts the commands for the
+ * progress line and shows the translator's warnings, once.  Ctrl-C stops
+ * safely (s3g_cancel: abort, heaters off, motors off) and exits 130.
+ */
+#include <errno.h>
+#include <jansson.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "commands.h"
+#include "gcode.h"
+#include "profile.h"
+#include "s3g.h"
+#include "send.h"
+#include "st_error.h"
+#include "x3g.h"
+#include "xport.h"
+
+#define SF_X3G_CHUNK 8192 /* X3G bytes read at a time */
+/* Host version sent with the version query; Sailfish answers 0 below 39
+ * (Host.cc), and RepG sends 40. */
+#define SF_HOST_VERSION 40
+
+/* A command source over a G-code file: read a line, translate, hand out
+ * the line's commands one by one. */
+struct sf_gcode_src {
+	struct gcode_reader *r;
+	struct x3g_translator *t;
+	const char *name;
+	bool show_warnings;	  /* the check pass prints them, the send pass not */
+	const uint8_t *out;	  /* this line's commands */
+	size_t out_len, pos;
+	uint64_t out_line;	  /* the line they came from */
+	bool finished;		  /* x3g_finish done */
+	uint64_t line, prev_line; /* lines of the last two commands handed out */
+	uint64_t pulled;	  /* commands handed out */
+	long layer;		  /* from the slicer's layer comments, -1 unknown */
+};
+
+/* A command source over an X3G file, read in chunks. */
+struct sf_x3g_src {
+	FILE *f;
+	uint8_t buf[SF_X3G_CHUNK];
+	size_t pos, len;
+	uint64_t off; /* file offset of buf[pos] */
+	bool eof;
+};
+
+/* What the progress callback needs. */
+struct sf_progress {
+	struct send_progress p;
+	const struct sf_gcode_src *g; /* NULL for an X3G file */
+};
+
+/* Print the translator's warnings of the last call, as stratum x3g does. */
+static void sf_show_warnings(const struct sf_gcode_src *g)
+{
+	const struct x3g_warning *w;
+	size_t nw = x3g_warnings(g->t, &w);
+
+	for (size_t i = 0; i < nw; i++)
+		fprintf(stderr, SEND_CMD ": %s:%llu: warning: %s\n", g->name,
+			(unsigned long long)w[i].line, w[i].msg);
+}
+
+/* s3g_source_fn over a G-code file. */
+static int sf_gcode_next(void *src, struct s3g_cmd *cmd, struct st_error *err)
+{
+	struct sf_gcode_src *g = src;
+	struct gcode_line line;
+	int n, k;
+
+	while (g->pos >= g->out_len) {
+		if (g->finished)
+			return 0;
+		n = gcode_reader_next(g->r, 0, &line, err);
+		if (n < 0)
+			return n;
+		if (n == 0) {
+			g->finished = true;
+			n = x3g_finish(g->t, err);
+		} else {
+			long l;
+			if (gcode_layer_comment(&line, &l, NULL) == GCODE_LAYER_START)
+				g->layer = l >= 0 ? l : g->layer + 1;
+			n = x3g_translate(g->t, &line, gcode_reader_line(g->r), err);
+		}
+		if (n < 0)
+			return n;
+		g->out_line = gcode_reader_line(g->r);
+		if (g->show_warnings)
+			sf_show_warnings(g);
+		g->out = x3g_output(g->t, &g->out_len);
+		g->pos = 0;
+	}
+	k = s3g_action_length(g->out + g->pos, g->out_len - g->pos);
+	if (k <= 0 || k > S3G_MAX_PAYLOAD || (size_t)k > g->out_len - g->pos)
+		return st_error_set(err, ST_ERR_INTERNAL,
+				    "%s: line %llu: the translator wrote command %u, which the "
+				    "S3G driver cannot send",
+				    g->name, (unsigned long long)g->out_line, g->out[g->pos]);
+	cmd->payload = g->out + g->pos;
+	cmd->len = (uint8_t)k;
+	g->pos += (size_t)k;
+	g->prev_line = g->line;
+	g->line = g->out_line;
+	g->pulled++;
+	return 1;
+}
+
+/* s3g_source_fn over an X3G file: every command must decode and be one
+ * the firmware takes (x3g_decode also knows the old 129/130). */
+static int sf_x3g_next(void *src, struct s3g_cmd *cmd, struct st_error *err)
+{
+	struct sf_x3g_src *x = src;
+	struct x3g_command c;
+	int rc;
+
+	if (x->len - x->pos < X3G_PAYLOAD_MAX && !x->eof) {
+		memmove(x->buf, x->buf + x->pos, x->len - x->pos);
+		x->len -= x->pos;
+		x->pos = 0;
+		x->len += fread(x->buf + x->len, 1, sizeof(x->buf) - x->len, x->f);
+		if (ferror(x->f))
+			return st_error_set(err, ST_ERR_IO, "byte %llu: read error: %s",
+					    (unsigned long long)x->off, strerror(errno));
+		x->eof = feof(x->f);
+	}
+	if (x->pos == x->len)
+		return 0;
+	rc = x3g_decode(x->buf + x->pos, x->len - x->pos, x->off, &c, err);
+	if (rc < 0)
+		return rc;
+	if (s3g_action_length(x->buf + x->pos, (size_t)rc) != rc)
+		return st_error_set(err, ST_ERR_PARSE,
+				    "byte %llu: command %u (%s) is not one Sailfish takes over USB",
+				    (unsigned long long)x->off, c.code, c.name);
+	cmd->payload = x->buf + x->pos;
+	cmd->len = (uint8_t)rc;
+	x->pos += (size_t)rc;
+	x->off += (uint64_t)rc;
+	return 1;
+}
+
+/* The S3G status as the shared progress line. */
+static void sf_progress_cb(void *ctx, const struct s3g_status *st)
+{
+	struct sf_progress *sp = ctx;
+	struct send_view v = {
+		.unit = "command",
+		.done = st->confirmed + st->skipped,
+		.total = st->total,
+		.layer = sp->g ? sp->g->layer : -1,
+		.tool = st->tool_temp || st->tool_target,
+		.bed = st->platform_temp || st->platform_target,
+		.tool_actual = st->tool_temp,
+		.tool_target = st->tool_target,
+		.bed_actual = st->platform_temp,
+		.bed_target = st->platform_target,
+		.paused = st->build_state == S3G_BUILD_PAUSED,
+	};
+	send_progress_show(&sp->p, &v);
+}
+
+/* Everything one Sailfish job holds. */
+struct sf_job {
+	const struct send_args *a;
+	const struct profile *prof;
+	bool x3g;		 /* FILE is X3G, not G-code */
+	FILE *f;
+	struct x3g_machine m;
+	struct x3g_options xo;
+	char build[X3G_BUILD_NAME_MAX + 1];
+	struct sf_gcode_src g;
+	struct sf_x3g_src *x;
+	uint64_t commands;	 /* in the file, from the check pass */
+	uint64_t lines;		 /* G-code lines in the file */
+	uint64_t warnings;	 /* translator warnings */
+	char firmware[32];
+};
+
+/* Set up the source over j->f from its start; 0 or an error. */
+static int sf_source_open(struct sf_job *j, bool show_warnings, struct st_error *err)
+{
+	int rc;
+
+	rewind(j->f);
+	if (j->x3g) {
+		memset(j->x, 0, sizeof(*j->x));
+		j->x->f = j->f;
+		return 0;
+	}
+	memset(&j->g, 0, sizeof(j->g));
+	j->g.name = j->a->file;
+	j->g.show_warnings = show_warnings;
+	j->g.layer = -1;
+	if ((rc = x3g_new(&j->m, &j->xo, &j->g.t, err)))
+		return rc;
+	if ((rc = gcode_reader_new(j->f, j->a->file, &j->g.r, err))) {
+		x3g_free(j->g.t);
+		j->g.t = NULL;
+		return rc;
+	}
+	return 0;
+}
+
+static void sf_source_close(struct sf_job *j)
+{
+	if (j->x3g)
+		return;
+	gcode_reader_free(j->g.r);
+	x3g_free(j->g.t);
+	j->g.r = NULL;
+	j->g.t = NULL;
+}
+
+/* The check pass: every command translates or decodes; count them.
+ * Returns 0 or an exit status (message printed; nothing was sent). */
+static int sf_check_file(struct sf_job *j)
+{
+	struct st_error err = {0};
+	struct s3g_cmd c;
+	int rc;
+
+	if ((rc = sf_source_open(j, true, &err))) {
+		fprintf(stderr, SEND_CMD ": %s: %s\n", j->prof->path, err.msg);
+		return rc == ST_ERR_ARG ? ST_EXIT_DATAERR : ST_EXIT_SOFTWARE;
+	}
+	j->commands = 0;
+	while ((rc = j->x3g ? sf_x3g_next(j->x, &c, &err) : sf_gcode_next(&j->g, &c, &err)) > 0)
+		j->commands++;
+	if (!j->x3g) {
+		j->lines = gcode_reader_line(j->g.r);
+		j->warnings = x3g_warning_total(j->g.t);
+	}
+	sf_source_close(j);
+	if (rc < 0) {
+		if (j->x3g)
+			fprintf(stderr, SEND_CMD ": %s: %s; nothing was sent\n", j->a->file, err.msg);
+		else
+			fprintf(stderr, SEND_CMD ": %s; nothing was sent\n", err.msg);
+		return rc == ST_ERR_NOMEM || rc == ST_ERR_INTERNAL ? ST_EXIT_SOFTWARE
+								   : ST_EXIT_DATAERR;
+	}
+	return 0;
+}
+
+/* Exit status of a stream that returned rc with status st. */
+static int sf_exit_for(const struct s3g_status *st, int rc)
+{
+	if (rc == 0)
+		return st->interrupted ? ST_EXIT_INTERRUPTED : ST_EXIT_OK;
+	switch (st->fail) {
+	case S3G_FAIL_PRINTER:
+		return ST_EXIT_FAILURE;
+	case S3G_FAIL_SOURCE:
+		return rc == ST_ERR_PARSE || rc == ST_ERR_IO ? ST_EXIT_DATAERR : ST_EXIT_SOFTWARE;
+	case S3G_FAIL_LINK:
+		return ST_EXIT_UNAVAILABLE;
+	default:
+		return rc == ST_ERR_IO || rc == ST_ERR_RANGE ? ST_EXIT_UNAVAILABLE
+							     : ST_EXIT_SOFTWARE;
+	}
+}
+
+/* The report, as text or one JSON object on stdout. */
+static void sf_report(const struct sf_job *j, const struct s3g_status *st, long baud, bool ok,
+		      const char *error)
+{
+	uint64_t done = st->confirmed + st->skipped;
+	/* G-code lines done: all, or up to that of the last command taken;
+	 * the stream pulls one command ahead at most */
+	uint64_t lines = ok ? j->lines
+			 : done == 0 ? 0
+			 : done == j->g.pulled ? j->g.line
+			 : j->g.prev_line;
+	struct send_summary s = {
+		.ok = ok,
+		.error = error,
+		.protocol = "sailfish",
+		.firmware = j->firmware,
+		.unit = "commands",
+		.done = st->confirmed,
+		.resends = st->retries,
+		.errors = st->errors,
+		.unknown_commands = st->skipped,
+		/* confirmed commands as framed packets: start, length, CRC */
+		.bytes = st->action_bytes + 3 * (uint64_t)st->confirmed,
+		.bytes_written = st->bytes_out,
+		.seconds = st->elapsed_s,
+		.baud = baud,
+	};
+	double sec = st->elapsed_s, cap = baud / 10.0;
+	double both = sec > 0 && cap > 0 ? (double)(st->bytes_out + st->bytes_in) / sec / cap : 0;
+	char detail[320];
+
+	if (j->a->json) {
+		json_t *o = send_report_json(j->a, &s);
+		if (o) {
+			json_object_set_new(o, "input", json_string(j->x3g ? "x3g" : "gcode"));
+			if (!j->x3g) {
+				json_object_set_new(o, "lines", json_integer((json_int_t)lines));
+				json_object_set_new(o, "lines_per_s",
+						    json_real(sec > 0 ? (double)lines / sec : 0));
+				json_object_set_new(o, "warnings",
+						    json_integer((json_int_t)j->warnings));
+			}
+			json_object_set_new(o, "commands", json_integer((json_int_t)st->confirmed));
+			json_object_set_new(o, "commands_total", json_integer((json_int_t)j->commands));
+			json_object_set_new(o, "commands_per_s",
+					    json_real(sec > 0 ? (double)st->confirmed / sec : 0));
+			json_object_set_new(o, "packets", json_integer((json_int_t)st->packets));
+			json_object_set_new(o, "retries", json_integer((json_int_t)st->retries));
+			json_object_set_new(o, "overflows", json_integer((json_int_t)st->overflows));
+			json_object_set_new(o, "timeouts", json_integer((json_int_t)st->timeouts));
+			json_object_set_new(o, "resolved", json_integer((json_int_t)st->resolved));
+			json_object_set_new(o, "dup_risk", json_integer((json_int_t)st->dup_risk));
+			json_object_set_new(o, "bytes_read", json_integer((json_int_t)st->bytes_in));
+			json_object_set_new(o, "link_fraction_both_ways", json_real(both));
+		}
+		send_report_emit(o);
+		return;
+	}
+	snprintf(detail, sizeof(detail),
+		 "%llu packets: retries %llu, errors %llu, unsupported commands %llu, buffer "
+		 "overflows %llu, time-outs %llu (%llu settled by asking, %llu resent unsure)",
+		 (unsigned long long)st->packets,
+		 (unsigned long long)st->retries, (unsigned long long)st->errors,
+		 (unsigned long long)st->skipped, (unsigned long long)st->overflows,
+		 (unsigned long long)st->timeouts, (unsigned long long)st->resolved,
+		 (unsigned long long)st->dup_risk);
+	send_report_text(j->a, &s, detail);
+	if (!j->x3g)
+		printf("  G-code lines %llu of %llu, translator warnings %llu\n",
+		       (unsigned long long)lines, (unsigned long long)j->lines,
+		       (unsigned long long)j->warnings);
+	printf("  link both ways %.1f%%\n", 100.0 * both);
+}
+
+/* Connect, stream, stop safely if need be, report; returns the exit status. */
+static int sf_stream(struct sf_job *j, struct xport *x, long baud)
+{
+	struct s3g *d = NULL;
+	struct st_error err = {0};
+	struct s3g_status st;
+	struct sf_progress prog = {.g = j->x3g ? NULL : &j->g};
+	volatile sig_atomic_t *stop;
+	uint16_t fw = 0;
+	int rc, status;
+
+	if (s3g_new(x, NULL, &d, &err)) {
+		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
+		return ST_EXIT_SOFTWARE;
+	}
+	stop = send_catch_signals();
+	/* the version query proves a Sailfish board answers S3G on the port */
+	if (s3g_get_version(d, SF_HOST_VERSION, &fw, &err)) {
+		fprintf(stderr, SEND_CMD ": no answer from a Sailfish printer on %s (%s); check "
+				     "that it is switched on, not busy with an SD print, and that the "
+				     "baud rate matches\n", xport_describe(x), err.msg);
+		s3g_free(d);
+		return ST_EXIT_UNAVAILABLE;
+	}
+	snprintf(j->firmware, sizeof(j->firmware), "Sailfish %u.%u", fw / 100u, fw % 100u);
+	if ((rc = sf_source_open(j, false, &err))) {
+		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
+		s3g_free(d);
+		return ST_EXIT_SOFTWARE;
+	}
+	send_progress_start(&prog.p);
+	if (!j->a->json || prog.p.tty)
+		fprintf(stderr, SEND_CMD ": %s on %s, %llu commands%s\n", j->firmware,
+			xport_describe(x), (unsigned long long)j->commands,
+			j->x3g ? "" : " translated from G-code as they go");
+	rc = j->x3g ? s3g_stream_pull(d, sf_x3g_next, j->x, j->commands, sf_progress_cb, &prog,
+				      stop, &st, &err)
+		    : s3g_stream_pull(d, sf_gcode_next, &j->g, j->commands, sf_progress_cb, &prog,
+				      stop, &st, &err);
+	send_progress_end(&prog.p);
+	status = sf_exit_for(&st, rc);
+	if (rc)
+		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
+	else if (st.interrupted)
+		fprintf(stderr, SEND_CMD ": the job was cancelled after command %zu of %llu\n",
+			st.confirmed + st.skipped, (unsigned long long)j->commands);
+	/* the link still works: leave the printer safe */
+	if (st.interrupted || (rc && st.fail != S3G_FAIL_LINK)) {
+		struct st_error e2 = {0};
+		if (s3g_cancel(d, &e2))
+			fprintf(stderr, SEND_CMD ": safe stop: %s; switch the printer off by hand\n",
+				e2.msg);
+		else
+			fprintf(stderr, SEND_CMD ": stopped safely: build aborted, heaters and motors "
+					     "off\n");
+	}
+	sf_report(j, &st, baud, rc == 0 && !st.interrupted,
+		  rc ? err.msg : st.interrupted ? "the job was cancelled" : NULL);
+	sf_source_close(j);
+	s3g_free(d);
+	return status;
+}
+
+int send_sailfish(const struct send_args *a, const struct profile *prof)
+{
+	struct sf_job *j = calloc(1, sizeof(*j));
+	struct st_error err = {0};
+	struct xport *x = NULL;
+	int status;
+
+	if (!j || !(j->x = calloc(1, sizeof(*j->x)))) {
+		fprintf(stderr, SEND_CMD ": out of memory\n");
+		free(j);
+		return ST_EXIT_SOFTWARE;
+	}
+	j->a = a;
+	j->prof = prof;
+	j->x3g = send_has_ext(a->file, ".x3g");
+	if (!j->x3g) {
+		if (cmd_x3g_machine(prof, &j->m, &j->xo.flavor, &err)) {
+			fprintf(stderr, SEND_CMD ": %s\n", err.msg);
+			status = ST_EXIT_DATAERR;
+			goto out;
+		}
+		/* named as `stratum x3g FILE -o NAME.x3g` names it */
+		cmd_x3g_build_name(a->file, j->build, sizeof(j->build));
+		j->xo.build_name = j->build;
+	}
+	j->f = fopen(a->file, "rb");
+	if (!j->f) {
+		fprintf(stderr, SEND_CMD ": cannot open %s: %s\n", a->file, strerror(errno));
+		status = ST_EXIT_DATAERR;
+		goto out;
+	}
+	if ((status = sf_check_file(j)))
+		goto out_file;
+
+	struct xport_options xo = {0};
+	long baud = a->baud ? a->baud : prof->baudrate;
+	xo.baudrate = (int)baud;
+	xo.dtr_reset = prof->dtr_reset;
+	if (xport_open(a->port, &xo, &x, &err)) {
+		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
+		status = ST_EXIT_UNAVAILABLE;
+		goto out_file;
+	}
+	status = sf_stream(j, x, baud);
+	xport_drain(x, 1000, NULL);
+	xport_close(x);
+out_file:
+	fclose(j->f);
+out:
+	free(j->x);
+	free(j);
+	return status;
+}
