@@ -235,8 +235,16 @@ static int printer_key_value(struct cfg_parse *p, const char *k, const char *v)
 							 "'/', not under /api)", v);
 		return copy_value(p, k, v, pc->prefix, sizeof(pc->prefix));
 	}
-	return CFG_FAIL(p, ST_ERR_PARSE, "unknown key '%s' in [printer %s] (profile, port, prefix)",
-			k, pc->name);
+	if (!strcmp(k, "sim_speedup")) {
+		double d;
+
+		if ((rc = once(p, k, 3)) || (rc = whole(p, k, v, 1, 100000, &d)))
+			return rc;
+		pc->sim_speedup = d;
+		return 0;
+	}
+	return CFG_FAIL(p, ST_ERR_PARSE, "unknown key '%s' in [printer %s] (profile, port, prefix, "
+			"sim_speedup)", k, pc->name);
 }
 
 /* "[node]", "[key NAME]" or "[printer NAME]". */
@@ -283,7 +291,8 @@ static int section_line(struct cfg_parse *p, char *s)
 		for (size_t i = 0; i < c->nprinters; i++)
 			if (!strcmp(c->printers[i].name, name))
 				return CFG_FAIL(p, ST_ERR_PARSE, "[printer %s] given twice", name);
-		snprintf(c->printers[c->nprinters++].name, NODE_NAME_MAX, "%s", name);
+		snprintf(c->printers[c->nprinters].name, NODE_NAME_MAX, "%s", name);
+		c->printers[c->nprinters++].sim_speedup = 100;
 		p->sec = SEC_PRINTER;
 		return 0;
 	}

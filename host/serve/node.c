@@ -53,6 +53,18 @@ static int setup_printer(struct node *n, size_t i, struct st_error *err)
 	    (rc = join(p->files_dir, sizeof(p->files_dir), files, p->cfg->name, err)) ||
 	    (rc = make_dir(p->files_dir, err)))
 		return rc;
+	if (!strcmp(p->cfg->port, "sim")) {
+		struct node_printer_config *pc = &n->cfg.printers[i];
+		char sim[NODE_PATH_MAX];
+
+		if ((rc = join(sim, sizeof(sim), n->cfg.data_dir, "sim", err)) ||
+		    (rc = make_dir(sim, err)) ||
+		    (rc = join(files, sizeof(files), sim, pc->name, err)) ||
+		    (rc = snprintf(pc->sim_log, sizeof(pc->sim_log), "%s.log", files) >=
+			  (int)sizeof(pc->sim_log)
+			  ? st_error_set(err, ST_ERR_RANGE, "%s.log: path too long", files) : 0))
+			return rc;
+	}
 	return 0;
 }
 

@@ -45,8 +45,10 @@ struct node_key {
 struct node_printer_config {
 	char name[NODE_NAME_MAX];	/* [printer NAME] */
 	char profile[NODE_PATH_MAX];	/* profile name or .ini path (profile_find) */
-	char port[NODE_PATH_MAX];	/* device path, "sim" or "test-instant" */
+	char port[NODE_PATH_MAX];	/* device path, tcp://, "sim" or "test-instant" */
 	char prefix[NODE_PREFIX_MAX];	/* URL prefix; default "/p/NAME" */
+	double sim_speedup;		/* port = sim: time divisor; default 100 */
+	char sim_log[NODE_PATH_MAX];	/* port = sim: execution log (set by node_new) */
 };
 
 struct node_config {

@@ -124,6 +124,7 @@ struct node_printer {
 	bool want_connect, want_disconnect;
 	bool connected;
 	char conn_error[256]; /* why the last connect failed, "" if it did not */
+	char link_desc[128];  /* what is connected (firmware; simulated or not) */
 	int64_t job_id;	      /* the job the worker is on, 0 when idle */
 	bool job_printing;    /* job_id is at the print step */
 	char cmds[NODE_CMD_QUEUE][NODE_CMD_MAX];
