@@ -163,6 +163,31 @@ void node_log(const char *level, const char *printer, int64_t job, const char *f
 void *node_worker_main(void *printer);
 void node_printer_wake(struct node_printer *p);
 
+/*
+ * control.c: shared by the HTTP API and MQTT.  node_control_job - cmd
+ * "cancel" or "pause" (action pause, resume or toggle; NULL = toggle) on
+ * p's active job.  Returns 0, ST_ERR_RANGE (no job, or not in a state for
+ * it: HTTP 409), ST_ERR_ARG (bad command or action: 400), ST_ERR_IO.
+ */
+int node_control_job(struct node *n, struct node_printer *p, const char *cmd,
+		     const char *action, struct st_error *err);
+
+/*
+ * node_store_file - move the complete temporary file tmp (same file
+ * system) to p's files as rel (checked by the caller), select it and, with
+ * print, queue it (*id the job, else 0).  Returns 0, ST_ERR_RANGE (a
+ * queued or running job uses that file: 409), ST_ERR_ARG, ST_ERR_IO.
+ */
+int node_store_file(struct node *n, struct node_printer *p, const char *tmp, const char *rel,
+		    bool select, bool print, int64_t *id, struct st_error *err);
+
+/* http.c; node_printer_json - p's state, temperatures, progress, job and
+ * its newest queue_limit jobs (0: no queue), for /api/stratum/node and MQTT. */
+json_t *node_printer_json(struct node *n, struct node_printer *p, int queue_limit);
+
+/* page.c: the status page served at GET / (HTML with its script). */
+extern const char node_status_page[];
+
 /* http.c */
 int node_http_start(struct node *n, struct st_error *err);
 void node_http_stop(struct node *n);
