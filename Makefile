@@ -20,10 +20,13 @@ CXX      := g++
 DEB_PACKAGES := gcc g++ make pkg-config dpkg-dev \
 	libserialport-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev libtbb-dev \
 	libpolyclipping-dev check libsqlite3-dev libmicrohttpd-dev libjansson-dev \
-	libmosquitto-dev mosquitto gpx
+	libmosquitto-dev mosquitto gpx libcurl4-openssl-dev
 # Only the benchmark compares against these (printcore: Printrun's host, also
 # used by the sim suite's faithfulness test, which is skipped without it).
-BENCH_PACKAGES := admesh time bc prusa-slicer printcore
+BENCH_PACKAGES := admesh time bc prusa-slicer printcore apache2-utils
+# Only the tests need these (the serve suite's status page in headless
+# Chromium; skipped with a message without it); `make check` installs them.
+TEST_PACKAGES := chromium
 
 WARN     := -Wall -Wextra -Werror
 CPPFLAGS := -Iinclude -Irepair -Irepair/exact -Iserial -Islicer -Islicer/clip -Ihost -D_XOPEN_SOURCE=700 -D_DEFAULT_SOURCE -MMD -MP
@@ -32,7 +35,7 @@ override CFLAGS += -std=c11 -pedantic $(WARN) -Wstrict-prototypes -Wmissing-prot
 # CGAL: exact predicates, TBB for the parallel box intersection.
 CXXFLAGS ?= -O2 -g
 override CXXFLAGS += -std=c++17 $(WARN) -Wno-deprecated-declarations -pthread -DCGAL_LINKED_WITH_TBB -DNDEBUG
-LDLIBS   := -lmicrohttpd -lsqlite3 -lserialport -lutil -ljansson -lpolyclipping -ltbb -lgmp -lmpfr -lm -pthread
+LDLIBS   := -lmicrohttpd -lmosquitto -lcurl -lsqlite3 -lserialport -lutil -ljansson -lpolyclipping -ltbb -lgmp -lmpfr -lm -pthread
 TEST_LDLIBS := $(shell pkg-config --libs check 2>/dev/null || echo -lcheck -lsubunit -lrt) $(LDLIBS)
 
 # Sources: every .c under the module folders is library code except the CLI
@@ -84,7 +87,8 @@ demo: deps
 	./$(BUILD)/stratum check docs/examples/bracket.stl
 
 # The plain suite runs last so the output ends with Check's summary line.
-check: deps
+check:
+	@$(MAKE) deps EXTRA_PACKAGES="$(TEST_PACKAGES)"
 	@$(MAKE) test-asan
 	@$(MAKE) test
 

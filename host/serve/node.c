@@ -159,7 +159,7 @@ int node_start(struct node *n, struct st_error *err)
 		p->thread_started = true;
 	}
 	n->started = true;
-	if ((rc = node_http_start(n, err)))
+	if ((rc = node_http_start(n, err)) || (rc = node_mqtt_start(n, err)))
 		goto out_stop;
 	node_log("info", NULL, 0, "node %s listening on %s:%u with %zu printer(s)", n->cfg.name,
 		 n->cfg.listen_addr, n->port, n->nprinters);
@@ -180,6 +180,7 @@ void node_stop(struct node *n)
 	if (!n || n->stopped)
 		return;
 	n->stopped = true;
+	node_mqtt_stop(n);
 	node_http_stop(n);
 	for (size_t i = 0; i < n->nprinters; i++) {
 		struct node_printer *p = &n->printers[i];

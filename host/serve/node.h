@@ -51,6 +51,16 @@ struct node_printer_config {
 	char sim_log[NODE_PATH_MAX];	/* port = sim: execution log (set by node_new) */
 };
 
+/* [mqtt]: optional; host empty = no MQTT. */
+struct node_mqtt_config {
+	char host[256];
+	uint16_t port;			/* default 1883 */
+	char username[128], password[128]; /* "" = none */
+	char client_id[NODE_NAME_MAX + 16]; /* default "stratum-NODE" */
+	char topic[128];		/* topic root; default "stratum" */
+	int keepalive;			/* seconds; default 30 */
+};
+
 struct node_config {
 	char path[NODE_PATH_MAX];	/* the file it was read from */
 	char name[NODE_NAME_MAX];	/* [node] name; default "stratum" */
@@ -63,6 +73,7 @@ struct node_config {
 	size_t nkeys;
 	struct node_printer_config printers[NODE_MAX_PRINTERS];
 	size_t nprinters;
+	struct node_mqtt_config mqtt;
 };
 
 /*

@@ -100,6 +100,14 @@ int node_queue_selected(struct node_queue *q, const char *printer, char *name, s
 int node_queue_set_selected(struct node_queue *q, const char *printer, const char *name,
 			    struct st_error *err);
 
+/*
+ * node_queue_command_once - record command id (MQTT) as received, durably.
+ * Returns 1 the first time, 0 when id was seen before (a re-delivery: do
+ * not run it again), or a negative class.
+ */
+int node_queue_command_once(struct node_queue *q, const char *id, const char *printer,
+			    struct st_error *err);
+
 /* node_queue_list - printer's jobs, newest first, at most limit, as JSON. */
 json_t *node_queue_list(struct node_queue *q, const char *printer, int limit);
 
@@ -151,6 +159,7 @@ struct node {
 	bool ticker_started, ticker_stop;
 	pthread_mutex_t tick_mu;
 	pthread_cond_t tick_cv;
+	struct node_mqtt *mqtt; /* NULL without [mqtt] */
 };
 
 #define NODE_TICK_MS 500
@@ -180,6 +189,11 @@ int node_control_job(struct node *n, struct node_printer *p, const char *cmd,
  */
 int node_store_file(struct node *n, struct node_printer *p, const char *tmp, const char *rel,
 		    bool select, bool print, int64_t *id, struct st_error *err);
+
+/* mqtt.c: started and stopped with the node; does nothing without [mqtt]. */
+struct node_mqtt;
+int node_mqtt_start(struct node *n, struct st_error *err);
+void node_mqtt_stop(struct node *n);
 
 /* http.c; node_printer_json - p's state, temperatures, progress, job and
  * its newest queue_limit jobs (0: no queue), for /api/stratum/node and MQTT. */
