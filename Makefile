@@ -20,10 +20,13 @@ CXX      := g++
 DEB_PACKAGES := gcc g++ make pkg-config dpkg-dev \
 	libserialport-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev libtbb-dev \
 	libpolyclipping-dev check libsqlite3-dev libmicrohttpd-dev libjansson-dev \
-	libmosquitto-dev mosquitto gpx libcairo2-dev libxml2-utils
+	libmosquitto-dev mosquitto gpx libcairo2-dev libxml2-utils libcurl4-openssl-dev
 # Only the benchmark compares against these (printcore: Printrun's host, also
 # used by the sim suite's faithfulness test, which is skipped without it).
-BENCH_PACKAGES := admesh time bc prusa-slicer printcore
+BENCH_PACKAGES := admesh time bc prusa-slicer printcore apache2-utils
+# Only the tests need these (the serve suite's status page in headless
+# Chromium; skipped with a message without it); `make check` installs them.
+TEST_PACKAGES := chromium
 
 WARN     := -Wall -Wextra -Werror
 CPPFLAGS := -Iinclude -Irepair -Irepair/exact -Iserial -Islicer -Islicer/clip -Ihost -D_XOPEN_SOURCE=700 -D_DEFAULT_SOURCE -MMD -MP
@@ -37,7 +40,7 @@ override CXXFLAGS += -std=c++17 $(WARN) -Wno-deprecated-declarations -pthread -D
 CAIRO_CFLAGS := $(patsubst -I%,-isystem %,$(shell pkg-config --cflags cairo 2>/dev/null))
 CAIRO_LIBS   := $(shell pkg-config --libs cairo 2>/dev/null || echo -lcairo)
 CPPFLAGS += $(CAIRO_CFLAGS)
-LDLIBS   := $(CAIRO_LIBS) -lmicrohttpd -lsqlite3 -lserialport -lutil -ljansson -lpolyclipping -ltbb -lgmp -lmpfr -lm -pthread
+LDLIBS   := $(CAIRO_LIBS) -lmicrohttpd -lmosquitto -lcurl -lsqlite3 -lserialport -lutil -ljansson -lpolyclipping -ltbb -lgmp -lmpfr -lm -pthread
 TEST_LDLIBS := $(shell pkg-config --libs check 2>/dev/null || echo -lcheck -lsubunit -lrt) $(LDLIBS)
 
 # Sources: every .c under the module folders is library code except the CLI
@@ -89,7 +92,8 @@ demo: deps
 	./$(BUILD)/stratum check docs/examples/bracket.stl
 
 # The plain suite runs last so the output ends with Check's summary line.
-check: deps
+check:
+	@$(MAKE) deps EXTRA_PACKAGES="$(TEST_PACKAGES)"
 	@$(MAKE) test-asan
 	@$(MAKE) test
 

@@ -1,5 +1,5 @@
 #!/bin/sh
-# bench/run.sh BIN [check|repair|slice|region|stream|soak|x3g|s3g|all] - time `stratum check`
+# bench/run.sh BIN [check|repair|slice|region|stream|soak|x3g|s3g|serve|all] - time `stratum check`
 # against admesh, `stratum repair` on generated files, `stratum slice` against
 # PrusaSlicer's `--export-gcode`, and streaming to `stratum sim` with
 # `stratum send` against Printrun's printcore (`soak`: 100k lines under
@@ -8,7 +8,10 @@
 # build/bench/region_check); `x3g` times G-code -> X3G translation against
 # gpx -m fcp on a model sliced for the Creator Pro; `s3g` streams G-code to
 # `stratum sim --dialect sailfish` with `stratum send` (translated on the fly)
-# against `gpx -s`; prints Markdown tables for docs/benchmarks.md.
+# against `gpx -s`; `serve` loads a `stratum serve` node on loopback with
+# ApacheBench (apache2-utils): bounded counts of multipart uploads and of
+# status requests from concurrent clients; prints Markdown tables for
+# docs/benchmarks.md.
 # Wall time, CPU time and peak RSS come from GNU time;
 # check and repair figures are the best of 3 runs, slice figures one run.
 set -eu
@@ -18,14 +21,14 @@ out=bench/out
 mkdir -p "$out"
 gen=build/bench/gen_mesh
 
-case $what in check|repair|slice|region|stream|soak|x3g|s3g|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|slice|region|stream|soak|x3g|s3g|all]" >&2; exit 2;; esac
+case $what in check|repair|slice|region|stream|soak|x3g|s3g|serve|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|slice|region|stream|soak|x3g|s3g|serve|all]" >&2; exit 2;; esac
 
-if [ "$what" != slice ] && [ "$what" != region ] && [ "$what" != stream ] && [ "$what" != soak ] && [ "$what" != x3g ] && [ "$what" != s3g ]; then
+if [ "$what" != slice ] && [ "$what" != region ] && [ "$what" != stream ] && [ "$what" != soak ] && [ "$what" != x3g ] && [ "$what" != s3g ] && [ "$what" != serve ]; then
 	[ -f "$out/torus-1m.stl" ] || "$gen" torus 1000 500 "$out/torus-1m.stl"
 	[ -f "$out/torus-2m.stl" ] || "$gen" torus 1000 1000 "$out/torus-2m.stl"
 	[ -f "$out/spheres.stl" ] || "$gen" spheres 8 "$out/spheres.stl"
 fi
-if [ "$what" != check ] && [ "$what" != region ] && [ "$what" != stream ] && [ "$what" != soak ] && [ "$what" != x3g ] && [ "$what" != s3g ]; then
+if [ "$what" != check ] && [ "$what" != region ] && [ "$what" != stream ] && [ "$what" != soak ] && [ "$what" != x3g ] && [ "$what" != s3g ] && [ "$what" != serve ]; then
 	[ -f "$out/torus-100k.stl" ] || "$gen" torus 250 200 "$out/torus-100k.stl"
 	[ -f "$out/twospheres.stl" ] || "$gen" twospheres 100 80 "$out/twospheres.stl"
 	[ -f "$out/scan.stl" ] || "$gen" scan 250 120 0.7 "$out/scan.stl"
@@ -454,7 +457,56 @@ for v in clean corrupt drop rx32 rx32-adv adv-corrupt; do
 done
 }
 
+# The farm node under load: a node with two test-instant printers on a
+# loopback port, N uploads (a G-code file, multipart as PrusaSlicer sends
+# it, stored with fsync, not queued) and M status requests, C concurrent
+# clients each.  Counts and ab's -t bound keep it short.
+serve_table() {
+if ! command -v ab >/dev/null 2>&1; then echo "serve: ab (apache2-utils) is not installed: make bench installs it" >&2; return 0; fi
+d="$out/serve-node"
+rm -rf "$d"; mkdir -p "$d"
+key=bench-key-0123456789abcdef
+printf '[node]\nname = bench\nlisten = 127.0.0.1:0\ndata_dir = data\n[key bench]\nkey = %s\nroles = read, upload, control\n[printer mk3s]\nprofile = prusa-i3-mk3s\nport = test-instant\n[printer ender]\nprofile = creality-ender-3\nport = test-instant\n' "$key" >"$d/node.ini"
+"$bin" serve --config "$d/node.ini" 2>"$d/node.log" &
+node_pid=$!
+port=""; i=0
+while [ -z "$port" ] && [ $i -lt 200 ]; do
+	port=$(sed -n 's/.*listening on 127.0.0.1:\([0-9]*\).*/\1/p' "$d/node.log" | head -n 1)
+	sleep 0.05; i=$((i + 1))
+done
+b=------------------------d74496d66958873e
+LC_ALL=C awk 'BEGIN { for (i = 0; i < 2048; i++) printf "G1 X%d.5 Y%d.25 E0.0123 F1800\n", i % 200, i % 190 }' >"$d/part.gcode"
+{
+	printf -- '--%s\r\nContent-Disposition: form-data; name="print"\r\n\r\nfalse\r\n' "$b"
+	printf -- '--%s\r\nContent-Disposition: form-data; name="path"\r\n\r\n\r\n' "$b"
+	printf -- '--%s\r\nContent-Disposition: form-data; name="file"; filename="part.gcode"\r\n' "$b"
+	printf 'Content-Type: application/octet-stream\r\n\r\n'
+	cat "$d/part.gcode"
+	printf '\r\n--%s--\r\n' "$b"
+} >"$d/upload.body"
+size=$(stat -c %s "$d/part.gcode")
+echo "| load (ab, $(nproc) cores, loopback) | requests | clients | requests/s | mean ms per request | failed | non-2xx |"
+echo "|---|---|---|---|---|---|---|"
+run_ab() { # label n c ab-args...
+	label=$1; n=$2; c=$3; shift 3
+	ab -q -t 60 -n "$n" -c "$c" -s 30 -H "X-Api-Key: $key" "$@" >"$d/ab.txt" 2>&1 || true
+	rps=$(sed -n 's/^Requests per second: *\([0-9.]*\).*/\1/p' "$d/ab.txt")
+	mean=$(sed -n 's/^Time per request: *\([0-9.]*\) \[ms\] (mean)$/\1/p' "$d/ab.txt")
+	done_n=$(sed -n 's/^Complete requests: *\([0-9]*\)/\1/p' "$d/ab.txt")
+	failed=$(sed -n 's/^Failed requests: *\([0-9]*\)/\1/p' "$d/ab.txt")
+	non2xx=$(sed -n 's/^Non-2xx responses: *\([0-9]*\)/\1/p' "$d/ab.txt")
+	echo "| $label | ${done_n:-0} | $c | ${rps:-?} | ${mean:-?} | ${failed:-?} | ${non2xx:-0} |"
+}
+run_ab "upload $size B G-code (multipart, fsync)" 500 4 -p "$d/upload.body" -T "multipart/form-data; boundary=$b" "http://127.0.0.1:$port/p/mk3s/api/files/local"
+run_ab "GET /api/printer" 5000 8 "http://127.0.0.1:$port/api/printer"
+run_ab "GET /api/job" 5000 8 "http://127.0.0.1:$port/p/ender/api/job"
+run_ab "GET /api/stratum/node (status page poll)" 5000 8 "http://127.0.0.1:$port/api/stratum/node"
+kill "$node_pid" 2>/dev/null || true
+wait "$node_pid" 2>/dev/null || true
+}
+
 case $what in
+serve) serve_table ;;
 x3g) x3g_table ;;
 s3g) s3g_table ;;
 region) region_table ;;
@@ -463,6 +515,6 @@ repair) repair_table ;;
 slice) slice_table ;;
 stream) stream_table ;;
 soak) soak_table ;;
-all) check_table; echo; repair_table; echo; slice_table; echo; region_table; echo; stream_table; echo; soak_table; echo; x3g_table; echo; s3g_table ;;
+all) check_table; echo; repair_table; echo; slice_table; echo; region_table; echo; stream_table; echo; soak_table; echo; x3g_table; echo; s3g_table; echo; serve_table ;;
 esac
 

@@ -28,7 +28,11 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <mosquitto.h>
+#include <pthread.h>
+
 #include "fixtures.h"
+#include "gcode.h"
 #include "meshio.h"
 #include "suites.h"
 #include "testutil.h"
@@ -93,21 +97,22 @@ static void node_start(struct node_proc *np)
 	np->port = 0;
 	for (int i = 0; i < 1000 && !np->port; i++) {
 		FILE *f = fopen(np->log, "r");
-		size_t n = f ? fread(buf, 1, sizeof(buf) - 1, f) : 0;
+		size_t n = 0;
 		char *at = NULL;
 
+		/* This start's records only: the log is appended across restarts. */
+		if (f && !fseek(f, (long)np->log_end, SEEK_SET))
+			n = fread(buf, 1, sizeof(buf) - 1, f);
 		if (f)
 			fclose(f);
 		buf[n] = '\0';
-		/* The last "listening" line: the log is appended across restarts. */
-		for (char *s = buf; (s = strstr(s, "listening on 127.0.0.1:")); s++)
-			at = s;
-		if (at && (!np->log_end || at > buf + np->log_end))
+		at = strstr(buf, "listening on 127.0.0.1:");
+		if (at)
 			np->port = atoi(at + strlen("listening on 127.0.0.1:"));
 		if (!np->port)
 			usleep(10000);
 	}
-	ck_assert_msg(np->port > 0, "the node did not start: %s", buf);
+	ck_assert_msg(np->port > 0, "the node did not start: %.3000s", buf);
 }
 
 /* Stop with SIGTERM and expect exit status 0. */
@@ -772,6 +777,554 @@ START_TEST(test_config_errors)
 }
 END_TEST
 
+/* ---- simulated printers (port = sim), MQTT, status page -------------------- */
+
+#define TWO_SIMS                                                                      \
+	"[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\nsim_speedup = 1000\n\n"    \
+	"[printer ender]\nprofile = creality-ender-3\nport = sim\nsim_speedup = 1000\n"
+
+/* A G-code text of n moves with extrusion, heating first; malloc'd. */
+static char *moves_gcode(int n, int feed)
+{
+	size_t cap = (size_t)n * 48 + 256, len;
+	char *g = malloc(cap);
+
+	ck_assert(g);
+	len = (size_t)snprintf(g, cap, "; test part\nM140 S60\nM104 S210\nG28\nM190 S60\n"
+				       "M109 S210\nG92 E0\nG1 Z0.3 F600\n");
+	for (int i = 0; i < n; i++)
+		len += (size_t)snprintf(g + len, cap - len, "G1 X%d Y%d E%.3f F%d ; move %d\n",
+					10 + i % 50, 10 + (i / 50) % 50, 0.05 * (i + 1), feed, i);
+	snprintf(g + len, cap - len, "M104 S0\nM140 S0\n");
+	return g;
+}
+
+/* The cleaned commands of a G-code text, one per line, as Marlin gets them. */
+static char *commands_of(const char *gcode)
+{
+	size_t cap = strlen(gcode) + 1, len = 0;
+	char *out = malloc(cap);
+	const char *s = gcode;
+
+	ck_assert(out);
+	while (*s) {
+		size_t n = strcspn(s, "\n");
+		struct gcode_line l;
+		struct st_error err = {0};
+
+		ck_assert_int_eq(gcode_parse(s, n, 0, &l, &err), 0);
+		if (l.text_len && l.kind != GCODE_KIND_HOST_ONLY)
+			len += (size_t)snprintf(out + len, cap - len, "%s\n", l.text);
+		s += n + (s[n] == '\n');
+	}
+	out[len] = '\0';
+	return out;
+}
+
+/*
+ * The simulator's execution log of printer name, from its first command
+ * after the connect (M110, M115, M155), as commands one per line; checks
+ * that every line number ran exactly once, in order.
+ */
+static char *sim_executed(const struct node_proc *np, const char *name)
+{
+	char path[600], line[512];
+	size_t cap = 1 << 20, len = 0;
+	char *out = malloc(cap);
+	long last = -1;
+	int skip = 3;
+	FILE *f;
+
+	snprintf(path, sizeof(path), "%s/data/sim/%s.log", np->dir, name);
+	f = fopen(path, "r");
+	ck_assert_msg(f, "no simulator log %s", path);
+	ck_assert(out);
+	while (fgets(line, sizeof(line), f)) {
+		char *sp = strchr(line, ' ');
+		long n = atol(line);
+
+		ck_assert_msg(sp && line[0] != '-', "unnumbered line executed: %s", line);
+		ck_assert_msg(n == last + 1, "line %ld ran after line %ld", n, last);
+		last = n;
+		if (skip > 0) {
+			skip--;
+			continue;
+		}
+		ck_assert(len + strlen(sp + 1) < cap);
+		len += (size_t)snprintf(out + len, cap - len, "%s", sp + 1);
+	}
+	fclose(f);
+	out[len] = '\0';
+	return out;
+}
+
+/* GET path with the read key; the JSON answer (caller decrefs). */
+static json_t *get_json(int port, const char *path)
+{
+	struct resp r;
+	json_t *o;
+
+	http(port, "GET", path, "X-Api-Key: " KEY_READ, NULL, &r);
+	ck_assert_msg(r.status == 200, "GET %s: %d %s", path, r.status, r.body);
+	o = json_incref(r.json);
+	resp_free(&r);
+	return o;
+}
+
+START_TEST(test_sim_two_printers)
+{
+	struct node_proc np;
+	struct resp r;
+	char *g1 = moves_gcode(400, 6000), *g2 = moves_gcode(300, 4800);
+	long long a, b;
+	bool seen_both = false;
+	json_t *o;
+	int st = 0;
+
+	write_config(&np, TWO_SIMS, 8);
+	node_start(&np);
+	/* Reported as simulated, with the firmware the simulator announces. */
+	for (int i = 0; i < 200; i++) { /* 409 until the simulator has booted */
+		http(np.port, "GET", "/p/ender/api/printer", "X-Api-Key: " KEY_READ, NULL, &r);
+		st = r.status;
+		resp_free(&r);
+		if (st == 200)
+			break;
+		usleep(50000);
+	}
+	o = get_json(np.port, "/p/ender/api/printer");
+	ck_assert(json_is_true(json_object_get(json_object_get(o, "stratum"), "simulated")));
+	ck_assert(strstr(json_string_value(json_object_get(json_object_get(o, "stratum"),
+							   "firmware")), "simulated"));
+	json_decref(o);
+	upload_text(np.port, "/p/mk3s", KEY_UP, "a.gcode", g1, "true", &r);
+	ck_assert_int_eq(r.status, 201);
+	a = job_of(&r);
+	resp_free(&r);
+	upload_text(np.port, "/p/ender", KEY_UP, "b.gcode", g2, "true", &r);
+	ck_assert_int_eq(r.status, 201);
+	b = job_of(&r);
+	resp_free(&r);
+	/* Both print at the same time. */
+	for (int i = 0; i < 500 && !seen_both; i++) {
+		const char *sa = job_state(np.port, "/p/mk3s", a, NULL);
+		bool pa = !strcmp(sa, "printing");
+
+		seen_both = pa && !strcmp(job_state(np.port, "/p/ender", b, NULL), "printing");
+		if (!seen_both)
+			usleep(10000);
+	}
+	ck_assert_msg(seen_both, "the two printers never printed at the same time");
+	wait_state(np.port, "/p/mk3s", a, "done", 30);
+	wait_state(np.port, "/p/ender", b, "done", 30);
+	/* Every command ran once, in order, on its own printer. */
+	{
+		char *want1 = commands_of(g1), *want2 = commands_of(g2);
+		char *got1 = sim_executed(&np, "mk3s"), *got2 = sim_executed(&np, "ender");
+
+		ck_assert_str_eq(got1, want1);
+		ck_assert_str_eq(got2, want2);
+		free(want1);
+		free(want2);
+		free(got1);
+		free(got2);
+	}
+	/* Progress ends at the file's size. */
+	o = get_json(np.port, "/p/mk3s/api/stratum/queue");
+	{
+		json_t *j = json_array_get(json_object_get(o, "jobs"), 0);
+
+		ck_assert(json_integer_value(json_object_get(j, "filepos")) == (json_int_t)strlen(g1));
+		ck_assert(json_integer_value(json_object_get(j, "size")) == (json_int_t)strlen(g1));
+	}
+	json_decref(o);
+	node_stop(&np);
+	free(g1);
+	free(g2);
+}
+END_TEST
+
+START_TEST(test_sim_stl_print)
+{
+	struct node_proc np;
+	struct resp r;
+	size_t len;
+	char *stl = cube_stl(&len);
+	long long id;
+
+	write_config(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\n"
+			  "sim_speedup = 1000\n", 8);
+	node_start(&np);
+	/* PrusaSlicer's upload: print=true, path="", the STL as "file". */
+	upload(np.port, "", KEY_UP, "cube.stl", 8, "", 0, "true", stl, len, NULL, true, &r);
+	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
+	id = job_of(&r);
+	resp_free(&r);
+	wait_state(np.port, "", id, "done", 40);
+	/* What the printer ran is what the node sliced. */
+	{
+		char path[600], *text, *want, *got;
+		FILE *f;
+		long size;
+
+		snprintf(path, sizeof(path), "%s/data/sliced/job-%lld.gcode", np.dir, id);
+		f = fopen(path, "rb");
+		ck_assert(f);
+		fseek(f, 0, SEEK_END);
+		size = ftell(f);
+		rewind(f);
+		text = malloc((size_t)size + 1);
+		ck_assert(text && fread(text, 1, (size_t)size, f) == (size_t)size);
+		text[size] = '\0';
+		fclose(f);
+		want = commands_of(text);
+		got = sim_executed(&np, "mk3s");
+		ck_assert(strlen(want) > 1000);
+		ck_assert_str_eq(got, want);
+		free(text);
+		free(want);
+		free(got);
+	}
+	node_stop(&np);
+	free(stl);
+}
+END_TEST
+
+START_TEST(test_sim_kill9)
+{
+	struct node_proc np;
+	struct resp r;
+	char *g = moves_gcode(300, 60); /* 1 mm at 1 mm/s: 1 s per move, 20 ms sped up */
+	long long id;
+	bool interrupted = false;
+	int st;
+	json_t *o;
+	json_int_t pos;
+
+	write_config(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\n"
+			  "sim_speedup = 50\n", 8);
+	node_start(&np);
+	upload_text(np.port, "", KEY_UP, "slow.gcode", g, "true", &r);
+	id = job_of(&r);
+	resp_free(&r);
+	wait_state(np.port, "", id, "printing", 10);
+	usleep(4500000); /* past heating, some moves, a stored position */
+	/* The temperatures the firmware reports reach the API. */
+	o = get_json(np.port, "/api/printer");
+	ck_assert_msg(json_real_value(json_object_get(json_object_get(json_object_get(
+			      o, "temperature"), "tool0"), "actual")) > 200, "%s",
+		      json_dumps(o, JSON_COMPACT));
+	ck_assert_str_eq(json_string_value(json_object_get(json_object_get(o, "state"), "text")),
+			 "Printing");
+	json_decref(o);
+	ck_assert(kill(np.pid, SIGKILL) == 0);
+	ck_assert(waitpid(np.pid, &st, 0) == np.pid);
+	node_start(&np);
+	ck_assert_str_eq(job_state(np.port, "", id, &interrupted), "paused");
+	ck_assert(interrupted);
+	o = get_json(np.port, "/api/job");
+	pos = json_integer_value(json_object_get(json_object_get(o, "progress"), "filepos"));
+	ck_assert_msg(pos > 0 && pos < (json_int_t)strlen(g), "filepos %lld", (long long)pos);
+	json_decref(o);
+	/* Not restarted: the new simulator ran only the connect commands. */
+	usleep(1500000);
+	ck_assert_str_eq(job_state(np.port, "", id, NULL), "paused");
+	{
+		char *got = sim_executed(&np, "mk3s");
+
+		ck_assert_msg(!got[0], "the simulator ran commands after the restart: %.200s", got);
+		free(got);
+	}
+	/* Cancel it: the node stays usable. */
+	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL, "{\"command\":\"cancel\"}", 204);
+	wait_state(np.port, "", id, "cancelled", 5);
+	node_stop(&np);
+	free(g);
+}
+END_TEST
+
+/* A free loopback TCP port (bound once, then released). */
+static int free_port(void)
+{
+	struct sockaddr_in sa = {.sin_family = AF_INET};
+	socklen_t len = sizeof(sa);
+	int fd = socket(AF_INET, SOCK_STREAM, 0), port;
+
+	inet_pton(AF_INET, "127.0.0.1", &sa.sin_addr);
+	ck_assert(fd >= 0 && bind(fd, (struct sockaddr *)&sa, sizeof(sa)) == 0);
+	ck_assert(getsockname(fd, (struct sockaddr *)&sa, &len) == 0);
+	port = ntohs(sa.sin_port);
+	close(fd);
+	return port;
+}
+
+/* A one-file HTTP server for the node's MQTT downloads. */
+struct file_server {
+	int fd, port;
+	const char *body;
+	pthread_t thread;
+	int served;
+};
+
+static void *file_server_main(void *arg)
+{
+	struct file_server *fs = arg;
+	int c;
+
+	while ((c = accept(fs->fd, NULL, NULL)) >= 0) {
+		char req[4096], head[256];
+		ssize_t n = recv(c, req, sizeof(req) - 1, 0);
+		int hn = snprintf(head, sizeof(head), "HTTP/1.1 200 OK\r\nContent-Length: %zu\r\n"
+					 "Connection: close\r\n\r\n", strlen(fs->body));
+
+		if (n > 0) {
+			send(c, head, (size_t)hn, MSG_NOSIGNAL);
+			send(c, fs->body, strlen(fs->body), MSG_NOSIGNAL);
+			fs->served++;
+		}
+		close(c);
+	}
+	return NULL;
+}
+
+static void file_server_start(struct file_server *fs, const char *body)
+{
+	struct sockaddr_in sa = {.sin_family = AF_INET};
+	socklen_t len = sizeof(sa);
+
+	memset(fs, 0, sizeof(*fs));
+	fs->body = body;
+	fs->fd = socket(AF_INET, SOCK_STREAM, 0);
+	inet_pton(AF_INET, "127.0.0.1", &sa.sin_addr);
+	ck_assert(bind(fs->fd, (struct sockaddr *)&sa, sizeof(sa)) == 0 && listen(fs->fd, 4) == 0);
+	getsockname(fs->fd, (struct sockaddr *)&sa, &len);
+	fs->port = ntohs(sa.sin_port);
+	ck_assert(pthread_create(&fs->thread, NULL, file_server_main, fs) == 0);
+}
+
+static void file_server_stop(struct file_server *fs)
+{
+	shutdown(fs->fd, SHUT_RDWR);
+	close(fs->fd);
+	pthread_join(fs->thread, NULL);
+}
+
+/* What the test's MQTT client saw: the last payload of each topic. */
+#define SEEN_MAX 64
+struct mqtt_seen {
+	pthread_mutex_t mu;
+	int n;
+	char topic[SEEN_MAX][128];
+	char payload[SEEN_MAX][2048];
+	int results; /* messages on .../result */
+};
+
+static void seen_message(struct mosquitto *mosq, void *ctx, const struct mosquitto_message *m)
+{
+	struct mqtt_seen *s = ctx;
+	int i;
+
+	(void)mosq;
+	pthread_mutex_lock(&s->mu);
+	for (i = 0; i < s->n && strcmp(s->topic[i], m->topic); i++)
+		;
+	if (i < SEEN_MAX) {
+		if (i == s->n)
+			s->n++;
+		snprintf(s->topic[i], sizeof(s->topic[i]), "%s", m->topic);
+		snprintf(s->payload[i], sizeof(s->payload[i]), "%.*s", m->payloadlen,
+			 (const char *)m->payload);
+	}
+	if (strstr(m->topic, "/result"))
+		s->results++;
+	pthread_mutex_unlock(&s->mu);
+}
+
+/* Wait up to secs for topic's last payload to contain want; returns a copy in out. */
+static void wait_topic(struct mqtt_seen *s, const char *topic, const char *want, int secs,
+		       char *out, size_t cap)
+{
+	char last[2048] = "";
+
+	for (int t = 0; t < secs * 50; t++) {
+		pthread_mutex_lock(&s->mu);
+		for (int i = 0; i < s->n; i++)
+			if (!strcmp(s->topic[i], topic))
+				snprintf(last, sizeof(last), "%s", s->payload[i]);
+		pthread_mutex_unlock(&s->mu);
+		if (strstr(last, want)) {
+			if (out)
+				snprintf(out, cap, "%s", last);
+			return;
+		}
+		usleep(20000);
+	}
+	ck_abort_msg("%s: '%s', waited for '%s'", topic, last, want);
+}
+
+START_TEST(test_mqtt)
+{
+	struct node_proc np;
+	struct file_server fs;
+	struct mqtt_seen seen = {.n = 0};
+	struct mosquitto *mq;
+	char conf[512], text[4096], out[2048], cmd[512];
+	int bport, st, results;
+	pid_t broker;
+	long long id;
+
+	if (access("/usr/sbin/mosquitto", X_OK)) {
+		printf("serve: MQTT test skipped: /usr/sbin/mosquitto is not installed (make deps)\n");
+		return;
+	}
+	/* The broker, on a loopback port of its own. */
+	bport = free_port();
+	snprintf(conf, sizeof(conf), "%s", tu_path("mosquitto.conf"));
+	snprintf(text, sizeof(text), "listener %d 127.0.0.1\nallow_anonymous true\n"
+				     "persistence false\n", bport);
+	tu_write_str(conf, text);
+	broker = fork();
+	ck_assert(broker >= 0);
+	if (!broker) {
+		int fd = open("/dev/null", O_WRONLY);
+
+		dup2(fd, 1);
+		dup2(fd, 2);
+		execl("/usr/sbin/mosquitto", "mosquitto", "-c", conf, (char *)NULL);
+		_exit(127);
+	}
+	file_server_start(&fs, "G28\nG1 X5\nG4 P20000\nG1 X6\n");
+	snprintf(text, sizeof(text), "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = test-instant\n"
+				     "\n[mqtt]\nhost = 127.0.0.1\nport = %d\nkeepalive = 5\n", bport);
+	write_config(&np, text, 8);
+	node_start(&np);
+
+	pthread_mutex_init(&seen.mu, NULL);
+	mosquitto_lib_init();
+	mq = mosquitto_new("check-serve", true, &seen);
+	ck_assert(mq);
+	mosquitto_message_callback_set(mq, seen_message);
+	for (int i = 0; i < 100 && mosquitto_connect(mq, "127.0.0.1", bport, 30); i++)
+		usleep(50000); /* the broker may still be starting */
+	ck_assert_int_eq(mosquitto_subscribe(mq, NULL, "stratum/test-node/#", 1), 0);
+	ck_assert_int_eq(mosquitto_loop_start(mq), 0);
+	/* Retained state arrives on subscription. */
+	wait_topic(&seen, "stratum/test-node/status", "online", 10, NULL, 0);
+	wait_topic(&seen, "stratum/test-node/mk3s/status", "Operational", 10, NULL, 0);
+	wait_topic(&seen, "stratum/test-node/mk3s/temperatures", "\"tool0\"", 5, NULL, 0);
+	/* Enqueue by URL; the same id delivered twice runs once. */
+	snprintf(cmd, sizeof(cmd), "{\"id\":\"cmd-1\",\"command\":\"enqueue\",\"url\":"
+				   "\"http://127.0.0.1:%d/files/dwell.gcode\"}", fs.port);
+	ck_assert_int_eq(mosquitto_publish(mq, NULL, "stratum/test-node/mk3s/cmd", (int)strlen(cmd),
+					   cmd, 1, false), 0);
+	wait_topic(&seen, "stratum/test-node/mk3s/result", "\"cmd-1\"", 10, out, sizeof(out));
+	ck_assert_msg(strstr(out, "\"ok\":true") && strstr(out, "\"job\":"), "%s", out);
+	id = atoll(strstr(out, "\"job\":") + 6);
+	pthread_mutex_lock(&seen.mu);
+	results = seen.results;
+	pthread_mutex_unlock(&seen.mu);
+	ck_assert_int_eq(mosquitto_publish(mq, NULL, "stratum/test-node/mk3s/cmd", (int)strlen(cmd),
+					   cmd, 1, false), 0);
+	wait_topic(&seen, "stratum/test-node/mk3s/result", "\"duplicate\":true", 10, NULL, 0);
+	pthread_mutex_lock(&seen.mu);
+	ck_assert_int_eq(seen.results, results + 1);
+	pthread_mutex_unlock(&seen.mu);
+	ck_assert_int_eq(fs.served, 1);
+	/* The job is printing (held in its dwell), as the job topic says. */
+	wait_state(np.port, "", id, "printing", 5);
+	wait_topic(&seen, "stratum/test-node/mk3s/status", "Printing", 5, NULL, 0);
+	wait_topic(&seen, "stratum/test-node/mk3s/job", "dwell.gcode", 5, NULL, 0);
+	/* Cancel over MQTT. */
+	snprintf(cmd, sizeof(cmd), "{\"id\":\"cmd-2\",\"command\":\"cancel\"}");
+	ck_assert_int_eq(mosquitto_publish(mq, NULL, "stratum/test-node/mk3s/cmd", (int)strlen(cmd),
+					   cmd, 1, false), 0);
+	wait_topic(&seen, "stratum/test-node/mk3s/result", "\"cmd-2\"", 10, out, sizeof(out));
+	ck_assert_msg(strstr(out, "\"ok\":true"), "%s", out);
+	wait_state(np.port, "", id, "cancelled", 5);
+	wait_topic(&seen, "stratum/test-node/mk3s/status", "Operational", 5, NULL, 0);
+	wait_topic(&seen, "stratum/test-node/mk3s/job", "null", 5, NULL, 0);
+	/* A command without id is refused. */
+	ck_assert_int_eq(mosquitto_publish(mq, NULL, "stratum/test-node/mk3s/cmd", 20,
+					   "{\"command\":\"pause\"}", 1, false), 0);
+	wait_topic(&seen, "stratum/test-node/mk3s/result", "id is required", 10, NULL, 0);
+	/* The node dies: the broker publishes its last will. */
+	ck_assert(kill(np.pid, SIGKILL) == 0);
+	ck_assert(waitpid(np.pid, &st, 0) == np.pid);
+	wait_topic(&seen, "stratum/test-node/status", "offline", 15, NULL, 0);
+
+	mosquitto_loop_stop(mq, true);
+	mosquitto_destroy(mq);
+	mosquitto_lib_cleanup();
+	file_server_stop(&fs);
+	kill(broker, SIGTERM);
+	waitpid(broker, &st, 0);
+	pthread_mutex_destroy(&seen.mu);
+}
+END_TEST
+
+START_TEST(test_status_page)
+{
+	static const char *const browsers[] = {"/usr/bin/chromium", "/usr/bin/chromium-browser",
+					       "/usr/bin/google-chrome"};
+	const char *browser = NULL;
+	struct node_proc np;
+	struct resp r;
+	char cmd[1024], *dom;
+	size_t cap = 1 << 20, len = 0;
+	FILE *p;
+
+	for (size_t i = 0; i < sizeof(browsers) / sizeof(browsers[0]) && !browser; i++)
+		if (!access(browsers[i], X_OK))
+			browser = browsers[i];
+	write_config(&np, TWO_PRINTERS, 8);
+	node_start(&np);
+	/* The page itself needs no key (it holds no data); the data does. */
+	http(np.port, "GET", "/", NULL, NULL, &r);
+	ck_assert_int_eq(r.status, 200);
+	ck_assert(has_text(r.head, "Content-Type: text/html"));
+	ck_assert(strstr(r.body, "api/stratum/node"));
+	resp_free(&r);
+	expect(np.port, "GET", "/api/stratum/node", NULL, NULL, 403);
+	if (!browser) {
+		printf("serve: status page browser test skipped: no chromium (make check installs "
+		       "it)\n");
+		node_stop(&np);
+		return;
+	}
+	upload_text(np.port, "/p/ender", KEY_UP, "hold.gcode", "M104 S205\nG4 P20000\n", "true", &r);
+	resp_free(&r);
+	usleep(300000);
+	snprintf(cmd, sizeof(cmd), "%s --headless --no-sandbox --disable-gpu --no-first-run "
+				   "--user-data-dir=%s --virtual-time-budget=4000 --dump-dom "
+				   "'http://127.0.0.1:%d/#key=%s' 2>/dev/null",
+		 browser, tu_path("chromium-profile"), np.port, KEY_READ);
+	p = popen(cmd, "r");
+	ck_assert(p);
+	dom = malloc(cap);
+	ck_assert(dom);
+	while (len + 1 < cap) {
+		size_t n = fread(dom + len, 1, cap - len - 1, p);
+
+		if (!n)
+			break;
+		len += n;
+	}
+	dom[len] = '\0';
+	pclose(p);
+	/* The script ran, polled with the key from the address and filled the table. */
+	ck_assert_msg(strstr(dom, "<span id=\"node\">test-node</span>"), "%.3000s", dom);
+	ck_assert_msg(strstr(dom, "data-printer=\"mk3s\""), "%.3000s", dom);
+	ck_assert_msg(strstr(dom, "<td class=\"state\">Operational</td>"), "%.3000s", dom);
+	ck_assert_msg(strstr(dom, "<td class=\"state\">Printing</td>"), "%.3000s", dom);
+	ck_assert_msg(strstr(dom, "205 °C"), "%.3000s", dom);
+	ck_assert_msg(strstr(dom, "hold.gcode (printing)"), "%.3000s", dom);
+	ck_assert_msg(!strstr(dom, "data-updates=\"0\"") && strstr(dom, "data-updates=\""), "%.300s",
+		      dom);
+	free(dom);
+	node_stop(&np);
+}
+END_TEST
+
 Suite *serve_suite(void)
 {
 	Suite *s = suite_create("serve");
@@ -788,6 +1341,11 @@ Suite *serve_suite(void)
 	tcase_add_test(tc, test_kill9_restart);
 	tcase_add_test(tc, test_not_operational);
 	tcase_add_test(tc, test_config_errors);
+	tcase_add_test(tc, test_sim_two_printers);
+	tcase_add_test(tc, test_sim_stl_print);
+	tcase_add_test(tc, test_sim_kill9);
+	tcase_add_test(tc, test_mqtt);
+	tcase_add_test(tc, test_status_page);
 	suite_add_tcase(s, tc);
 	return s;
 }

@@ -17,7 +17,7 @@
 
 #define CFG_LINE_MAX 4096
 
-enum section { SEC_NONE, SEC_NODE, SEC_KEY, SEC_PRINTER };
+enum section { SEC_NONE, SEC_NODE, SEC_KEY, SEC_PRINTER, SEC_MQTT };
 
 /* Parse state: where we are, for messages and duplicate checks. */
 struct cfg_parse {
@@ -25,7 +25,7 @@ struct cfg_parse {
 	int line;
 	enum section sec;
 	unsigned seen; /* bit per key of the current section */
-	bool node_seen;
+	bool node_seen, mqtt_seen;
 	struct node_config *cfg;
 	struct st_error *err;
 };
@@ -235,19 +235,69 @@ static int printer_key_value(struct cfg_parse *p, const char *k, const char *v)
 							 "'/', not under /api)", v);
 		return copy_value(p, k, v, pc->prefix, sizeof(pc->prefix));
 	}
-	return CFG_FAIL(p, ST_ERR_PARSE, "unknown key '%s' in [printer %s] (profile, port, prefix)",
-			k, pc->name);
+	if (!strcmp(k, "sim_speedup")) {
+		double d;
+
+		if ((rc = once(p, k, 3)) || (rc = whole(p, k, v, 1, 100000, &d)))
+			return rc;
+		pc->sim_speedup = d;
+		return 0;
+	}
+	return CFG_FAIL(p, ST_ERR_PARSE, "unknown key '%s' in [printer %s] (profile, port, prefix, "
+			"sim_speedup)", k, pc->name);
 }
 
-/* "[node]", "[key NAME]" or "[printer NAME]". */
+static int mqtt_key_value(struct cfg_parse *p, const char *k, const char *v)
+{
+	struct node_mqtt_config *m = &p->cfg->mqtt;
+	static const char *const keys[] = {"host", "port", "username", "password", "client_id",
+					   "topic", "keepalive"};
+	double d;
+	int rc;
+
+	for (unsigned i = 0; i < sizeof(keys) / sizeof(keys[0]); i++)
+		if (!strcmp(k, keys[i]) && (rc = once(p, k, i)))
+			return rc;
+	if (!strcmp(k, "host"))
+		return copy_value(p, k, v, m->host, sizeof(m->host));
+	if (!strcmp(k, "username"))
+		return copy_value(p, k, v, m->username, sizeof(m->username));
+	if (!strcmp(k, "password"))
+		return copy_value(p, k, v, m->password, sizeof(m->password));
+	if (!strcmp(k, "client_id"))
+		return copy_value(p, k, v, m->client_id, sizeof(m->client_id));
+	if (!strcmp(k, "topic")) {
+		if (strpbrk(v, "+#") || v[0] == '/' || (*v && v[strlen(v) - 1] == '/'))
+			return CFG_FAIL(p, ST_ERR_RANGE, "topic: '%s' is not a topic root such as "
+							 "stratum (no + or #, no leading or "
+							 "trailing /)", v);
+		return copy_value(p, k, v, m->topic, sizeof(m->topic));
+	}
+	if (!strcmp(k, "port")) {
+		if ((rc = whole(p, k, v, 1, 65535, &d)))
+			return rc;
+		m->port = (uint16_t)d;
+		return 0;
+	}
+	if (!strcmp(k, "keepalive")) {
+		if ((rc = whole(p, k, v, 5, 3600, &d)))
+			return rc;
+		m->keepalive = (int)d;
+		return 0;
+	}
+	return CFG_FAIL(p, ST_ERR_PARSE, "unknown key '%s' in [mqtt] (host, port, username, "
+					  "password, client_id, topic, keepalive)", k);
+}
+
+/* "[node]", "[key NAME]", "[printer NAME]" or "[mqtt]". */
 static int section_line(struct cfg_parse *p, char *s)
 {
 	struct node_config *c = p->cfg;
 	char *end = strchr(s, ']'), *name;
 
 	if (!end || trim(end + 1)[0])
-		return CFG_FAIL(p, ST_ERR_PARSE, "a section line is [node], [key NAME] or "
-						 "[printer NAME]");
+		return CFG_FAIL(p, ST_ERR_PARSE, "a section line is [node], [key NAME], "
+						 "[printer NAME] or [mqtt]");
 	*end = '\0';
 	s = trim(s + 1);
 	p->seen = 0;
@@ -258,10 +308,17 @@ static int section_line(struct cfg_parse *p, char *s)
 		p->sec = SEC_NODE;
 		return 0;
 	}
+	if (!strcmp(s, "mqtt")) {
+		if (p->mqtt_seen)
+			return CFG_FAIL(p, ST_ERR_PARSE, "[mqtt] given twice");
+		p->mqtt_seen = true;
+		p->sec = SEC_MQTT;
+		return 0;
+	}
 	name = strchr(s, ' ');
 	if (!name)
 		return CFG_FAIL(p, ST_ERR_PARSE, "unknown section [%s] (node, key NAME, "
-						 "printer NAME)", s);
+						 "printer NAME, mqtt)", s);
 	*name = '\0';
 	name = trim(name + 1);
 	if (!good_name(name))
@@ -283,11 +340,12 @@ static int section_line(struct cfg_parse *p, char *s)
 		for (size_t i = 0; i < c->nprinters; i++)
 			if (!strcmp(c->printers[i].name, name))
 				return CFG_FAIL(p, ST_ERR_PARSE, "[printer %s] given twice", name);
-		snprintf(c->printers[c->nprinters++].name, NODE_NAME_MAX, "%s", name);
+		snprintf(c->printers[c->nprinters].name, NODE_NAME_MAX, "%s", name);
+		c->printers[c->nprinters++].sim_speedup = 100;
 		p->sec = SEC_PRINTER;
 		return 0;
 	}
-	return CFG_FAIL(p, ST_ERR_PARSE, "unknown section [%s %s] (node, key NAME, printer NAME)",
+	return CFG_FAIL(p, ST_ERR_PARSE, "unknown section [%s %s] (node, key NAME, printer NAME, mqtt)",
 			s, name);
 }
 
@@ -313,6 +371,8 @@ static int one_line(struct cfg_parse *p, char *s)
 		return key_key_value(p, k, v);
 	case SEC_PRINTER:
 		return printer_key_value(p, k, v);
+	case SEC_MQTT:
+		return mqtt_key_value(p, k, v);
 	default:
 		return CFG_FAIL(p, ST_ERR_PARSE, "'%s' before any [section]", k);
 	}
@@ -349,6 +409,12 @@ static int check_complete(struct cfg_parse *p)
 						    p->file, c->printers[j].name, pc->name,
 						    pc->prefix);
 	}
+	if (p->mqtt_seen && !c->mqtt.host[0])
+		return st_error_set(p->err, ST_ERR_RANGE, "%s: [mqtt] needs host =", p->file);
+	if (!c->mqtt.topic[0])
+		snprintf(c->mqtt.topic, sizeof(c->mqtt.topic), "stratum");
+	if (!c->mqtt.client_id[0])
+		snprintf(c->mqtt.client_id, sizeof(c->mqtt.client_id), "stratum-%s", c->name);
 	return 0;
 }
 
@@ -389,6 +455,8 @@ int node_config_load(const char *path, struct node_config *out, struct st_error 
 	snprintf(c->name, sizeof(c->name), "stratum");
 	snprintf(c->listen_addr, sizeof(c->listen_addr), "127.0.0.1");
 	c->listen_port = 5000;
+	c->mqtt.port = 1883;
+	c->mqtt.keepalive = 30;
 	c->max_upload = NODE_UPLOAD_DEFAULT;
 	c->slice_threads = 1;
 	while (fgets(buf, sizeof(buf), f)) {

@@ -102,6 +102,24 @@ static enum MHD_Result send_error(struct MHD_Connection *c, unsigned status, con
 	return send_json(c, status, o, NULL);
 }
 
+/* The status page (page.c); it holds no data, so it needs no key. */
+static enum MHD_Result send_page(struct MHD_Connection *c)
+{
+	struct MHD_Response *resp = MHD_create_response_from_buffer(
+		strlen(node_status_page), (void *)node_status_page, MHD_RESPMEM_PERSISTENT);
+	enum MHD_Result ret;
+
+	if (!resp)
+		return MHD_NO;
+	MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, "text/html; charset=utf-8");
+	MHD_add_response_header(resp, "Content-Security-Policy",
+				"default-src 'self'; script-src 'unsafe-inline'; "
+				"style-src 'unsafe-inline'");
+	ret = MHD_queue_response(c, MHD_HTTP_OK, resp);
+	MHD_destroy_response(resp);
+	return ret;
+}
+
 static enum MHD_Result no_content(struct MHD_Connection *c)
 {
 	return send_json(c, MHD_HTTP_NO_CONTENT, NULL, NULL);
@@ -113,6 +131,7 @@ static enum MHD_Result no_content(struct MHD_Connection *c)
 struct view {
 	bool connected, printing, paused, pausing;
 	char conn_error[256];
+	char link_desc[128];
 	int64_t job_id;
 	int64_t filepos, size;
 	double tool[2], bed[2]; /* actual, target */
@@ -127,6 +146,7 @@ static void take_view(struct node *n, struct node_printer *p, struct view *v)
 	pthread_mutex_lock(&p->mu);
 	v->connected = p->connected;
 	snprintf(v->conn_error, sizeof(v->conn_error), "%s", p->conn_error);
+	snprintf(v->link_desc, sizeof(v->link_desc), "%s", p->link_desc);
 	v->printing = p->job_printing;
 	v->job_id = p->job_id;
 	pthread_mutex_lock(&p->ctl.mu);
@@ -172,6 +192,41 @@ static json_t *temp_json(const double t[2])
 	return o;
 }
 
+/* What OctoPrint has no field for: which port, simulated or not, firmware. */
+static json_t *link_json(const struct node_printer *p, const struct view *v)
+{
+	return json_pack("{s:s,s:s,s:b,s:s,s:s*}", "printer", p->cfg->name, "port", p->cfg->port,
+			 "simulated", node_port_simulated(p->cfg->port), "firmware", v->link_desc,
+			 "error", v->conn_error[0] ? v->conn_error : NULL);
+}
+
+/* Completion in percent, or null. */
+static json_t *completion_json(const struct view *v)
+{
+	return v->has_job && v->size > 0 ? json_real(100.0 * (double)v->filepos / (double)v->size)
+					  : json_null();
+}
+
+json_t *node_printer_json(struct node *n, struct node_printer *p, int queue_limit)
+{
+	struct view v;
+	bool clear = false;
+	json_t *o;
+
+	take_view(n, p, &v);
+	node_queue_bed_clear(n->q, p->cfg->name, &clear);
+	o = json_pack("{s:s,s:s,s:s,s:o,s:{s:o,s:o},s:{s:o,s:I,s:I},s:o,s:b}", "name",
+		      p->cfg->name, "prefix", p->cfg->prefix, "state", state_text(&v), "link",
+		      link_json(p, &v), "temperature", "tool0", temp_json(v.tool), "bed",
+		      temp_json(v.bed), "progress", "completion", completion_json(&v), "filepos",
+		      (json_int_t)(v.has_job ? v.filepos : 0), "size",
+		      (json_int_t)(v.has_job ? v.size : 0), "job",
+		      v.has_job ? node_job_json(&v.job) : json_null(), "bedClear", clear);
+	if (o && queue_limit > 0)
+		json_object_set_new(o, "queue", node_queue_list(n->q, p->cfg->name, queue_limit));
+	return o;
+}
+
 /* ---- GET handlers -------------------------------------------------------- */
 
 static enum MHD_Result get_version(struct node *n, struct MHD_Connection *c, struct req *r)
@@ -209,6 +264,7 @@ static enum MHD_Result get_printer(struct node *n, struct MHD_Connection *c, str
 	o = json_pack("{s:{s:o,s:o},s:{s:b},s:{s:s,s:o}}", "temperature", "tool0", temp_json(v.tool),
 		      "bed", temp_json(v.bed), "sd", "ready", 0, "state", "text", state_text(&v),
 		      "flags", flags);
+	json_object_set_new(o, "stratum", link_json(r->p, &v));
 	return send_json(c, MHD_HTTP_OK, o, NULL);
 }
 
@@ -240,14 +296,9 @@ static enum MHD_Result get_job(struct node *n, struct MHD_Connection *c, struct 
 		json_object_set_new(file, "date", json_null());
 	}
 	progress = json_object();
-	if (v.has_job && v.size > 0) {
-		json_object_set_new(progress, "completion", json_real(100.0 * (double)v.filepos /
-									(double)v.size));
-		json_object_set_new(progress, "filepos", json_integer(v.filepos));
-	} else {
-		json_object_set_new(progress, "completion", json_null());
-		json_object_set_new(progress, "filepos", json_null());
-	}
+	json_object_set_new(progress, "completion", completion_json(&v));
+	json_object_set_new(progress, "filepos", v.has_job && v.size > 0 ? json_integer(v.filepos)
+									 : json_null());
 	json_object_set_new(progress, "printTime",
 			    v.has_job && v.job.started ? json_integer(time(NULL) - v.job.started)
 						       : json_null());
@@ -274,6 +325,7 @@ static enum MHD_Result get_connection(struct node *n, struct MHD_Connection *c, 
 		      "portPreference", p->cfg->port, "baudratePreference",
 		      (json_int_t)p->prof->baudrate, "printerProfilePreference", p->cfg->name,
 		      "autoconnect", 1);
+	json_object_set_new(o, "stratum", link_json(p, &v));
 	return send_json(c, MHD_HTTP_OK, o, NULL);
 }
 
@@ -410,6 +462,18 @@ static enum MHD_Result get_queue(struct node *n, struct MHD_Connection *c, struc
 /* ---- POST handlers with JSON bodies ------------------------------------------ */
 
 /* The JSON object of the body, or NULL with the error answer sent in *ret. */
+/* Every printer of the node at once, for the status page and farm tools. */
+static enum MHD_Result get_node(struct node *n, struct MHD_Connection *c, struct req *r)
+{
+	json_t *arr = json_array();
+
+	(void)r;
+	for (size_t i = 0; i < n->nprinters; i++)
+		json_array_append_new(arr, node_printer_json(n, &n->printers[i], 10));
+	return send_json(c, MHD_HTTP_OK, json_pack("{s:s,s:o}", "node", n->cfg.name, "printers",
+						   arr), NULL);
+}
+
 static json_t *body_json(struct MHD_Connection *c, struct req *r, enum MHD_Result *ret)
 {
 	json_error_t je;
@@ -424,53 +488,6 @@ static json_t *body_json(struct MHD_Connection *c, struct req *r, enum MHD_Resul
 		return NULL;
 	}
 	return o;
-}
-
-/* Set what the worker's print should do (pause, resume, cancel); p->mu held. */
-static void ctl_request(struct node_printer *p, int pause, bool cancel)
-{
-	pthread_mutex_lock(&p->ctl.mu);
-	if (pause >= 0)
-		p->ctl.pause = pause != 0;
-	if (cancel)
-		p->ctl.cancel = true;
-	pthread_cond_broadcast(&p->ctl.cv);
-	pthread_mutex_unlock(&p->ctl.mu);
-}
-
-/* "pause" with action pause/resume/toggle; p->mu held. */
-static enum MHD_Result job_pause(struct node *n, struct MHD_Connection *c, struct node_printer *p,
-				 struct node_job *j, const char *action)
-{
-	bool worker = p->job_printing && p->job_id == j->id;
-	bool paused = j->state == NODE_JOB_PAUSED;
-	bool want;
-
-	if (!strcmp(action, "toggle"))
-		want = !paused;
-	else if (!strcmp(action, "pause") || !strcmp(action, "resume"))
-		want = !strcmp(action, "pause");
-	else
-		return send_error(c, MHD_HTTP_BAD_REQUEST, "action is pause, resume or toggle");
-	if (j->state == NODE_JOB_SLICING)
-		return send_error(c, MHD_HTTP_CONFLICT, "the job is still slicing");
-	if (want == paused)
-		return no_content(c);
-	if (!worker) {
-		/* An interrupted print: only resuming makes sense, and the worker does it. */
-		if (want)
-			return send_error(c, MHD_HTTP_CONFLICT, "the job is not printing");
-		j->resume = true;
-		node_log("info", p->cfg->name, j->id, "resume of the interrupted print requested");
-	} else {
-		ctl_request(p, want, false);
-		j->state = want ? NODE_JOB_PAUSED : NODE_JOB_PRINTING;
-		node_log("info", p->cfg->name, j->id, "%s", want ? "paused" : "resumed");
-	}
-	if (node_queue_update(n->q, j, NULL))
-		return send_error(c, MHD_HTTP_INTERNAL_SERVER_ERROR, "the job queue cannot be written");
-	pthread_cond_signal(&p->cv);
-	return no_content(c);
 }
 
 /* Queue the selected file (command "start"); p->mu held. */
@@ -494,47 +511,40 @@ static enum MHD_Result job_start(struct node *n, struct MHD_Connection *c, struc
 	return no_content(c);
 }
 
+/* The HTTP status for a control error class. */
+static unsigned control_status(int rc)
+{
+	return rc == ST_ERR_RANGE ? MHD_HTTP_CONFLICT
+	       : rc == ST_ERR_ARG ? MHD_HTTP_BAD_REQUEST
+				  : MHD_HTTP_INTERNAL_SERVER_ERROR;
+}
+
 static enum MHD_Result post_job(struct node *n, struct MHD_Connection *c, struct req *r)
 {
 	struct node_printer *p = r->p;
 	enum MHD_Result ret;
 	json_t *o = body_json(c, r, &ret);
 	const char *cmd, *action;
-	struct node_job j;
-	int have;
+	struct st_error err = {0};
+	int rc;
 
 	if (!o)
 		return ret;
 	cmd = json_string_value(json_object_get(o, "command"));
 	action = json_string_value(json_object_get(o, "action"));
-	pthread_mutex_lock(&p->mu);
-	have = node_queue_active(n->q, p->cfg->name, &j, NULL);
 	if (!cmd) {
 		ret = send_error(c, MHD_HTTP_BAD_REQUEST, "command is missing (start, cancel, "
 							  "pause)");
 	} else if (!strcmp(cmd, "start")) {
+		pthread_mutex_lock(&p->mu);
 		ret = job_start(n, c, p);
-	} else if (!strcmp(cmd, "cancel")) {
-		if (have != 1) {
-			ret = send_error(c, MHD_HTTP_CONFLICT, "no job is printing");
-		} else if (p->job_printing && p->job_id == j.id) {
-			ctl_request(p, -1, true);
-			node_log("info", p->cfg->name, j.id, "cancel requested");
-			ret = no_content(c);
-		} else {
-			j.state = NODE_JOB_CANCELLED;
-			j.finished = time(NULL);
-			node_queue_update(n->q, &j, NULL);
-			node_log("info", p->cfg->name, j.id, "cancelled");
-			ret = no_content(c);
-		}
-	} else if (!strcmp(cmd, "pause")) {
-		ret = have == 1 ? job_pause(n, c, p, &j, action ? action : "toggle")
-				: send_error(c, MHD_HTTP_CONFLICT, "no job is printing");
+		pthread_mutex_unlock(&p->mu);
+	} else if (!strcmp(cmd, "cancel") || !strcmp(cmd, "pause")) {
+		rc = node_control_job(n, p, cmd, action, &err);
+		ret = rc ? send_error(c, control_status(rc), err.msg) : no_content(c);
 	} else {
 		ret = send_error(c, MHD_HTTP_BAD_REQUEST, "command is start, cancel or pause");
 	}
-	pthread_mutex_unlock(&p->mu);
 	json_decref(o);
 	return ret;
 }
@@ -787,23 +797,6 @@ static bool form_true(const char *v)
 	       !strcmp(v, "1");
 }
 
-/* mkdir each folder of rel under base (rel's last part is the file). */
-static int make_folders(const char *base, const char *rel)
-{
-	char path[NODE_PATH_MAX + HTTP_FIELD_MAX];
-	size_t b = (size_t)snprintf(path, sizeof(path), "%s/", base);
-
-	for (const char *s = rel; *s; s++) {
-		if (*s == '/') {
-			path[b] = '\0';
-			if (mkdir(path, 0750) && errno != EEXIST)
-				return -1;
-		}
-		path[b++] = *s;
-	}
-	return 0;
-}
-
 /* Store the finished upload and queue or select it. */
 static enum MHD_Result finish_upload(struct node *n, struct MHD_Connection *c, struct req *r)
 {
@@ -816,6 +809,7 @@ static enum MHD_Result finish_upload(struct node *n, struct MHD_Connection *c, s
 	int64_t id = 0;
 	struct stat st;
 	json_t *o;
+	int rc;
 
 	if (!r->has_file)
 		return send_error(c, MHD_HTTP_BAD_REQUEST, "no file part named 'file' in the "
@@ -837,29 +831,16 @@ static enum MHD_Result finish_upload(struct node *n, struct MHD_Connection *c, s
 	}
 	snprintf(rel, sizeof(rel), "%s%s%s", folder, *folder && folder[strlen(folder) - 1] != '/'
 							 ? "/" : "", r->filename);
-	snprintf(full, sizeof(full), "%s/%s", p->files_dir, rel);
-	if (node_queue_file_busy(n->q, p->cfg->name, full)) {
-		snprintf(msg, sizeof(msg), "%.250s is being printed or waits in the queue; upload "
-					   "it under another name", rel);
-		return send_error(c, MHD_HTTP_CONFLICT, msg);
-	}
 	if (fsync(r->fd) || close(r->fd)) {
 		r->fd = -1;
 		return send_error(c, MHD_HTTP_INSUFFICIENT_STORAGE, "cannot store the upload");
 	}
 	r->fd = -1;
-	if (make_folders(p->files_dir, rel) || rename(r->tmp, full)) {
-		node_log("error", p->cfg->name, 0, "%s: cannot store: %s", full, strerror(errno));
-		return send_error(c, MHD_HTTP_INTERNAL_SERVER_ERROR, "cannot store the upload");
-	}
+	if ((rc = node_store_file(n, p, r->tmp, rel, select, print, &id, &err)))
+		return send_error(c, rc == ST_ERR_RANGE ? MHD_HTTP_CONFLICT
+				  : MHD_HTTP_INTERNAL_SERVER_ERROR, err.msg);
 	r->tmp[0] = '\0';
-	if (select && node_queue_set_selected(n->q, p->cfg->name, rel, &err))
-		return send_error(c, MHD_HTTP_INTERNAL_SERVER_ERROR, err.msg);
-	if (print) {
-		if (node_queue_add(n->q, p->cfg->name, rel, full, node_file_kind(rel), &id, &err))
-			return send_error(c, MHD_HTTP_INTERNAL_SERVER_ERROR, err.msg);
-		node_printer_wake(p);
-	}
+	snprintf(full, sizeof(full), "%s/%s", p->files_dir, rel);
 	node_log("info", p->cfg->name, id, "stored %s (%llu bytes)%s", rel,
 		 (unsigned long long)r->bytes, print ? ", queued" : "");
 	stat(full, &st);
@@ -887,6 +868,7 @@ static const struct route routes[] = {
 	{"GET", "/api/files/local/", true, NODE_ROLE_READ, false, get_file},
 	{"GET", "/api/stratum/queue", false, NODE_ROLE_READ, false, get_queue},
 	{"POST", "/api/stratum/bed-clear", false, NODE_ROLE_CONTROL, false, post_bed_clear},
+	{"GET", "/api/stratum/node", false, NODE_ROLE_READ, false, get_node},
 };
 
 /* The roles of the request's key (X-Api-Key or Authorization: Bearer); 0 if none. */
@@ -1010,6 +992,8 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *u
 	struct req *r = *con_cls;
 
 	(void)version;
+	if (!r && !strcmp(method, "GET") && (!strcmp(url, "/") || !strcmp(url, "/index.html")))
+		return send_page(c);
 	if (!r) {
 		r = calloc(1, sizeof(*r));
 		if (!r)

@@ -53,6 +53,18 @@ static int setup_printer(struct node *n, size_t i, struct st_error *err)
 	    (rc = join(p->files_dir, sizeof(p->files_dir), files, p->cfg->name, err)) ||
 	    (rc = make_dir(p->files_dir, err)))
 		return rc;
+	if (!strcmp(p->cfg->port, "sim")) {
+		struct node_printer_config *pc = &n->cfg.printers[i];
+		char sim[NODE_PATH_MAX];
+
+		if ((rc = join(sim, sizeof(sim), n->cfg.data_dir, "sim", err)) ||
+		    (rc = make_dir(sim, err)) ||
+		    (rc = join(files, sizeof(files), sim, pc->name, err)) ||
+		    (rc = snprintf(pc->sim_log, sizeof(pc->sim_log), "%s.log", files) >=
+			  (int)sizeof(pc->sim_log)
+			  ? st_error_set(err, ST_ERR_RANGE, "%s.log: path too long", files) : 0))
+			return rc;
+	}
 	return 0;
 }
 
@@ -147,7 +159,7 @@ int node_start(struct node *n, struct st_error *err)
 		p->thread_started = true;
 	}
 	n->started = true;
-	if ((rc = node_http_start(n, err)))
+	if ((rc = node_http_start(n, err)) || (rc = node_mqtt_start(n, err)))
 		goto out_stop;
 	node_log("info", NULL, 0, "node %s listening on %s:%u with %zu printer(s)", n->cfg.name,
 		 n->cfg.listen_addr, n->port, n->nprinters);
@@ -168,6 +180,7 @@ void node_stop(struct node *n)
 	if (!n || n->stopped)
 		return;
 	n->stopped = true;
+	node_mqtt_stop(n);
 	node_http_stop(n);
 	for (size_t i = 0; i < n->nprinters; i++) {
 		struct node_printer *p = &n->printers[i];

@@ -45,8 +45,20 @@ struct node_key {
 struct node_printer_config {
 	char name[NODE_NAME_MAX];	/* [printer NAME] */
 	char profile[NODE_PATH_MAX];	/* profile name or .ini path (profile_find) */
-	char port[NODE_PATH_MAX];	/* device path, "sim" or "test-instant" */
+	char port[NODE_PATH_MAX];	/* device path, tcp://, "sim" or "test-instant" */
 	char prefix[NODE_PREFIX_MAX];	/* URL prefix; default "/p/NAME" */
+	double sim_speedup;		/* port = sim: time divisor; default 100 */
+	char sim_log[NODE_PATH_MAX];	/* port = sim: execution log (set by node_new) */
+};
+
+/* [mqtt]: optional; host empty = no MQTT. */
+struct node_mqtt_config {
+	char host[256];
+	uint16_t port;			/* default 1883 */
+	char username[128], password[128]; /* "" = none */
+	char client_id[NODE_NAME_MAX + 16]; /* default "stratum-NODE" */
+	char topic[128];		/* topic root; default "stratum" */
+	int keepalive;			/* seconds; default 30 */
 };
 
 struct node_config {
@@ -61,6 +73,7 @@ struct node_config {
 	size_t nkeys;
 	struct node_printer_config printers[NODE_MAX_PRINTERS];
 	size_t nprinters;
+	struct node_mqtt_config mqtt;
 };
 
 /*

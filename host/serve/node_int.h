@@ -100,6 +100,14 @@ int node_queue_selected(struct node_queue *q, const char *printer, char *name, s
 int node_queue_set_selected(struct node_queue *q, const char *printer, const char *name,
 			    struct st_error *err);
 
+/*
+ * node_queue_command_once - record command id (MQTT) as received, durably.
+ * Returns 1 the first time, 0 when id was seen before (a re-delivery: do
+ * not run it again), or a negative class.
+ */
+int node_queue_command_once(struct node_queue *q, const char *id, const char *printer,
+			    struct st_error *err);
+
 /* node_queue_list - printer's jobs, newest first, at most limit, as JSON. */
 json_t *node_queue_list(struct node_queue *q, const char *printer, int limit);
 
@@ -124,6 +132,7 @@ struct node_printer {
 	bool want_connect, want_disconnect;
 	bool connected;
 	char conn_error[256]; /* why the last connect failed, "" if it did not */
+	char link_desc[128];  /* what is connected (firmware; simulated or not) */
 	int64_t job_id;	      /* the job the worker is on, 0 when idle */
 	bool job_printing;    /* job_id is at the print step */
 	char cmds[NODE_CMD_QUEUE][NODE_CMD_MAX];
@@ -150,6 +159,7 @@ struct node {
 	bool ticker_started, ticker_stop;
 	pthread_mutex_t tick_mu;
 	pthread_cond_t tick_cv;
+	struct node_mqtt *mqtt; /* NULL without [mqtt] */
 };
 
 #define NODE_TICK_MS 500
@@ -161,6 +171,36 @@ void node_log(const char *level, const char *printer, int64_t job, const char *f
 /* worker.c: the printer's thread, and waking it after a change. */
 void *node_worker_main(void *printer);
 void node_printer_wake(struct node_printer *p);
+
+/*
+ * control.c: shared by the HTTP API and MQTT.  node_control_job - cmd
+ * "cancel" or "pause" (action pause, resume or toggle; NULL = toggle) on
+ * p's active job.  Returns 0, ST_ERR_RANGE (no job, or not in a state for
+ * it: HTTP 409), ST_ERR_ARG (bad command or action: 400), ST_ERR_IO.
+ */
+int node_control_job(struct node *n, struct node_printer *p, const char *cmd,
+		     const char *action, struct st_error *err);
+
+/*
+ * node_store_file - move the complete temporary file tmp (same file
+ * system) to p's files as rel (checked by the caller), select it and, with
+ * print, queue it (*id the job, else 0).  Returns 0, ST_ERR_RANGE (a
+ * queued or running job uses that file: 409), ST_ERR_ARG, ST_ERR_IO.
+ */
+int node_store_file(struct node *n, struct node_printer *p, const char *tmp, const char *rel,
+		    bool select, bool print, int64_t *id, struct st_error *err);
+
+/* mqtt.c: started and stopped with the node; does nothing without [mqtt]. */
+struct node_mqtt;
+int node_mqtt_start(struct node *n, struct st_error *err);
+void node_mqtt_stop(struct node *n);
+
+/* http.c; node_printer_json - p's state, temperatures, progress, job and
+ * its newest queue_limit jobs (0: no queue), for /api/stratum/node and MQTT. */
+json_t *node_printer_json(struct node *n, struct node_printer *p, int queue_limit);
+
+/* page.c: the status page served at GET / (HTML with its script). */
+extern const char node_status_page[];
 
 /* http.c */
 int node_http_start(struct node *n, struct st_error *err);

@@ -1,9 +1,9 @@
 /*
  * print.c - the print step of the farm node (print.h): the one place that
- * chooses how a printer is driven.  The Marlin driver (serial/marlin.h,
- * `stratum send`) plugs in here as a second ops table; until then a device
- * path or "sim" is refused at connect time with a message saying so.
+ * chooses how a printer is driven: the test double for "test-instant",
+ * the Marlin driver for everything else (print_marlin.c).
  */
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -14,12 +14,17 @@ struct node_link {
 	void *state;
 };
 
-/* The back end for a port value; NULL when none is wired yet. */
+/* The back end for a port value. */
 static const struct node_printer_ops *ops_for_port(const char *port)
 {
 	if (!strcmp(port, "test-instant"))
 		return &node_double_ops;
-	return NULL;
+	return &node_marlin_ops;
+}
+
+bool node_port_simulated(const char *port)
+{
+	return !strcmp(port, "test-instant") || !strcmp(port, "sim");
 }
 
 int node_print_connect(const struct node_printer_config *pc, const struct profile *prof,
@@ -30,11 +35,6 @@ int node_print_connect(const struct node_printer_config *pc, const struct profil
 	int rc;
 
 	*out = NULL;
-	if (!ops)
-		return st_error_set(err, ST_ERR_UNSUPPORTED,
-				    "printer %s: port %s: the Marlin streaming driver is not wired "
-				    "to the node yet; use port = test-instant to try the API",
-				    pc->name, pc->port);
 	l = calloc(1, sizeof(*l));
 	if (!l)
 		return st_error_set(err, ST_ERR_NOMEM, "printer %s: out of memory", pc->name);
@@ -65,4 +65,17 @@ int node_print_file(struct node_link *l, const char *path, int64_t start, bool r
 int node_print_command(struct node_link *l, const char *line, struct st_error *err)
 {
 	return l->ops->command(l->state, line, err);
+}
+
+int node_print_poll(struct node_link *l, struct node_print_ctl *ctl, struct st_error *err)
+{
+	return l->ops->poll ? l->ops->poll(l->state, ctl, err) : 0;
+}
+
+void node_print_describe(struct node_link *l, char *out, size_t cap)
+{
+	if (l->ops->describe)
+		l->ops->describe(l->state, out, cap);
+	else
+		snprintf(out, cap, "%s", l->ops->name);
 }

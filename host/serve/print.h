@@ -6,8 +6,10 @@
  *     reading the G-code file line by line with our parser, reporting
  *     progress, honouring pause, cancel and G4 dwells; no printer involved.
  *     A testing aid, documented as such in docs/serve.md.
- *   - a device path or "sim": the Marlin streaming driver (serial/marlin.h),
- *     not wired yet: connecting fails with a message saying so.
+ *   - a device path, a pty or tcp://HOST:PORT: the Marlin streaming driver
+ *     (serial/marlin.h, print_marlin.c);
+ *   - "sim": the same driver against the simulated Marlin printer
+ *     (serial/sim/marlin_sim.h) run inside the node, sped up.
  *
  * Threads: the worker thread alone calls the operations of one link; the
  * HTTP threads only write requests into struct node_print_ctl (under its
@@ -43,6 +45,7 @@ enum node_print_result {
 	NODE_PRINT_DONE = 0,
 	NODE_PRINT_CANCELLED = 1,
 	NODE_PRINT_STOPPED = 2, /* ctl->stop: the job stays resumable */
+	NODE_PRINT_LINK_LOST = 3, /* the printer went away: resumable, err says why */
 };
 
 struct node_link; /* one connected printer (opaque, per back end) */
@@ -80,6 +83,18 @@ int node_print_file(struct node_link *l, const char *path, int64_t start, bool r
  */
 int node_print_command(struct node_link *l, const char *line, struct st_error *err);
 
+/*
+ * node_print_poll - between jobs: read what the printer reported
+ * (temperatures into ctl).  Returns 0, or ST_ERR_IO when the link is gone.
+ */
+int node_print_poll(struct node_link *l, struct node_print_ctl *ctl, struct st_error *err);
+
+/* node_print_describe - what is connected ("Marlin 2.1.2 (simulated printer)"). */
+void node_print_describe(struct node_link *l, char *out, size_t cap);
+
+/* node_port_simulated - true for a port value that is no real printer. */
+bool node_port_simulated(const char *port);
+
 /* Back-end operations (print.c picks one table per link). */
 struct node_printer_ops {
 	const char *name; /* for the log */
@@ -89,9 +104,12 @@ struct node_printer_ops {
 	int (*print)(void *state, const char *path, int64_t start, bool resume,
 		     struct node_print_ctl *ctl, struct st_error *err);
 	int (*command)(void *state, const char *line, struct st_error *err);
+	int (*poll)(void *state, struct node_print_ctl *ctl, struct st_error *err);
+	void (*describe)(void *state, char *out, size_t cap);
 };
 
-/* The test double's table (print_double.c). */
+/* The test double's table (print_double.c) and the Marlin one (print_marlin.c). */
 extern const struct node_printer_ops node_double_ops;
+extern const struct node_printer_ops node_marlin_ops;
 
 #endif /* STRATUM_HOST_SERVE_PRINT_H */

@@ -49,7 +49,9 @@ static const char schema[] =
 	"CREATE INDEX IF NOT EXISTS jobs_printer_state ON jobs(printer, state);"
 	"CREATE TABLE IF NOT EXISTS printers ("
 	" name TEXT PRIMARY KEY, bed_clear INTEGER NOT NULL DEFAULT 1,"
-	" selected TEXT NOT NULL DEFAULT '');";
+	" selected TEXT NOT NULL DEFAULT '');"
+	"CREATE TABLE IF NOT EXISTS commands ("
+	" id TEXT PRIMARY KEY, printer TEXT NOT NULL, received INTEGER NOT NULL);";
 
 #define JOB_COLUMNS                                                                       \
 	"id, printer, name, file, gcode, kind, state, interrupted, resume, filepos, size, " \
@@ -378,6 +380,21 @@ int node_queue_set_selected(struct node_queue *q, const char *printer, const cha
 	if (printer_row(q, printer) ||
 	    run(q, "UPDATE printers SET selected=? WHERE name=?", "ss", name, printer))
 		rc = db_error(q, err, "selecting a file");
+	pthread_mutex_unlock(&q->mu);
+	return rc;
+}
+
+int node_queue_command_once(struct node_queue *q, const char *id, const char *printer,
+			    struct st_error *err)
+{
+	int rc;
+
+	pthread_mutex_lock(&q->mu);
+	if (run(q, "INSERT OR IGNORE INTO commands(id, printer, received) VALUES(?, ?, ?)", "ssi",
+		id, printer, (int64_t)time(NULL)))
+		rc = db_error(q, err, "recording a command id");
+	else
+		rc = sqlite3_changes(q->db) == 1;
 	pthread_mutex_unlock(&q->mu);
 	return rc;
 }

@@ -110,6 +110,18 @@ static void run_slicing(struct node_printer *p, struct node_job *j)
 	save(p, j);
 }
 
+/* Close a link that failed (unplugged, firmware halted); p->mu held. */
+static void drop_link(struct node_printer *p, const char *why)
+{
+	node_print_disconnect(p->link);
+	p->link = NULL;
+	p->connected = false;
+	p->link_desc[0] = '\0';
+	snprintf(p->conn_error, sizeof(p->conn_error), "%s", why);
+	node_log("error", p->cfg->name, 0, "disconnected: %s (POST %s/api/connection "
+		 "{\"command\":\"connect\"} to reconnect)", why, p->cfg->prefix);
+}
+
 /* Print job j; p->mu held on entry and exit. */
 static void run_print(struct node_printer *p, struct node_job *j)
 {
@@ -126,6 +138,7 @@ static void run_print(struct node_printer *p, struct node_job *j)
 	}
 	j->state = NODE_JOB_PRINTING;
 	j->resume = false;
+	j->error[0] = '\0';
 	j->filepos = start;
 	if (!j->started)
 		j->started = time(NULL);
@@ -162,9 +175,18 @@ static void run_print(struct node_printer *p, struct node_job *j)
 		j->state = NODE_JOB_PAUSED;
 		j->interrupted = true;
 		break;
+	case NODE_PRINT_LINK_LOST:
+		/* The part may be fine: offered for resume like a crash. */
+		j->state = NODE_JOB_PAUSED;
+		j->interrupted = true;
+		snprintf(j->error, sizeof(j->error), "%s", err.msg);
+		drop_link(p, err.msg);
+		break;
 	default:
 		j->state = NODE_JOB_FAILED;
 		snprintf(j->error, sizeof(j->error), "%s", err.msg);
+		if (rc == ST_ERR_INTERNAL) /* a halted board answers nothing until reset */
+			drop_link(p, err.msg);
 		break;
 	}
 	if (j->state != NODE_JOB_PAUSED)
@@ -214,6 +236,7 @@ static bool connection(struct node_printer *p)
 		node_print_disconnect(p->link);
 		p->link = NULL;
 		p->connected = false;
+		p->link_desc[0] = '\0';
 		node_log("info", p->cfg->name, 0, "disconnected");
 		return true;
 	}
@@ -232,7 +255,10 @@ static bool connection(struct node_printer *p)
 		p->link = l;
 		p->connected = true;
 		p->conn_error[0] = '\0';
-		node_log("info", p->cfg->name, 0, "connected on %s", p->cfg->port);
+		node_print_describe(l, p->link_desc, sizeof(p->link_desc));
+		node_log(node_port_simulated(p->cfg->port) ? "warning" : "info", p->cfg->name, 0,
+			 "connected on %s: %s%s", p->cfg->port, p->link_desc,
+			 node_port_simulated(p->cfg->port) ? "; this is not a real printer" : "");
 	}
 	return true;
 }
@@ -254,11 +280,14 @@ static bool command(struct node_printer *p)
 	return true;
 }
 
-/* Wait for a signal or the idle period; p->mu held. */
+/* Wait for a signal or the idle period, reading the printer first; p->mu held. */
 static void idle(struct node_printer *p)
 {
+	struct st_error err = {0};
 	struct timespec t;
 
+	if (p->connected && node_print_poll(p->link, &p->ctl, &err))
+		drop_link(p, err.msg);
 	clock_gettime(CLOCK_REALTIME, &t);
 	t.tv_sec += WORKER_IDLE_MS / 1000;
 	pthread_cond_timedwait(&p->cv, &p->mu, &t);

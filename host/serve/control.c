@@ -1,0 +1,133 @@
+/*
+ * control.c - what the HTTP API and MQTT commands both do to a printer
+ * (node_int.h): cancel, pause and resume its job, and store a received
+ * file into its files (queued or not).  One place, so both ways of
+ * steering a node behave the same.
+ */
+#include <errno.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+#include "node_int.h"
+
+/* Set what the worker's print should do (pause, resume, cancel); p->mu held. */
+static void ctl_request(struct node_printer *p, int pause, bool cancel)
+{
+	pthread_mutex_lock(&p->ctl.mu);
+	if (pause >= 0)
+		p->ctl.pause = pause != 0;
+	if (cancel)
+		p->ctl.cancel = true;
+	pthread_cond_broadcast(&p->ctl.cv);
+	pthread_mutex_unlock(&p->ctl.mu);
+}
+
+/* "pause" with action pause/resume/toggle of job j; p->mu held. */
+static int job_pause(struct node *n, struct node_printer *p, struct node_job *j,
+		     const char *action, struct st_error *err)
+{
+	bool worker = p->job_printing && p->job_id == j->id;
+	bool paused = j->state == NODE_JOB_PAUSED;
+	bool want;
+
+	if (!strcmp(action, "toggle"))
+		want = !paused;
+	else if (!strcmp(action, "pause") || !strcmp(action, "resume"))
+		want = !strcmp(action, "pause");
+	else
+		return st_error_set(err, ST_ERR_ARG, "action is pause, resume or toggle");
+	if (j->state == NODE_JOB_SLICING)
+		return st_error_set(err, ST_ERR_RANGE, "the job is still slicing");
+	if (want == paused)
+		return 0;
+	if (!worker) {
+		/* An interrupted print: only resuming makes sense, and the worker does it. */
+		if (want)
+			return st_error_set(err, ST_ERR_RANGE, "the job is not printing");
+		j->resume = true;
+		node_log("info", p->cfg->name, j->id, "resume of the interrupted print requested");
+	} else {
+		ctl_request(p, want, false);
+		j->state = want ? NODE_JOB_PAUSED : NODE_JOB_PRINTING;
+		node_log("info", p->cfg->name, j->id, "%s", want ? "paused" : "resumed");
+	}
+	if (node_queue_update(n->q, j, err))
+		return ST_ERR_IO;
+	pthread_cond_signal(&p->cv);
+	return 0;
+}
+
+int node_control_job(struct node *n, struct node_printer *p, const char *cmd,
+		     const char *action, struct st_error *err)
+{
+	struct node_job j;
+	int rc, have;
+
+	pthread_mutex_lock(&p->mu);
+	have = node_queue_active(n->q, p->cfg->name, &j, NULL);
+	if (have != 1) {
+		rc = st_error_set(err, ST_ERR_RANGE, "no job is printing");
+	} else if (!strcmp(cmd, "cancel")) {
+		rc = 0;
+		if (p->job_printing && p->job_id == j.id) {
+			ctl_request(p, -1, true);
+			node_log("info", p->cfg->name, j.id, "cancel requested");
+		} else {
+			j.state = NODE_JOB_CANCELLED;
+			j.finished = time(NULL);
+			if (node_queue_update(n->q, &j, err))
+				rc = ST_ERR_IO;
+			node_log("info", p->cfg->name, j.id, "cancelled");
+		}
+	} else if (!strcmp(cmd, "pause")) {
+		rc = job_pause(n, p, &j, action ? action : "toggle", err);
+	} else {
+		rc = st_error_set(err, ST_ERR_ARG, "command is cancel or pause, not '%s'", cmd);
+	}
+	pthread_mutex_unlock(&p->mu);
+	return rc;
+}
+
+/* mkdir each folder of rel under base (rel's last part is the file). */
+static int make_folders(const char *base, const char *rel)
+{
+	char path[2 * NODE_PATH_MAX];
+	size_t b = (size_t)snprintf(path, sizeof(path), "%s/", base);
+
+	for (const char *s = rel; *s && b + 1 < sizeof(path); s++) {
+		if (*s == '/') {
+			path[b] = '\0';
+			if (mkdir(path, 0750) && errno != EEXIST)
+				return -1;
+		}
+		path[b++] = *s;
+	}
+	return 0;
+}
+
+int node_store_file(struct node *n, struct node_printer *p, const char *tmp, const char *rel,
+		    bool select, bool print, int64_t *id, struct st_error *err)
+{
+	char full[2 * NODE_PATH_MAX];
+
+	*id = 0;
+	if (snprintf(full, sizeof(full), "%s/%s", p->files_dir, rel) >= (int)sizeof(full))
+		return st_error_set(err, ST_ERR_ARG, "the file's path is too long");
+	if (node_queue_file_busy(n->q, p->cfg->name, full))
+		return st_error_set(err, ST_ERR_RANGE, "%.250s is being printed or waits in the "
+				    "queue; send it under another name", rel);
+	if (make_folders(p->files_dir, rel) || rename(tmp, full)) {
+		node_log("error", p->cfg->name, 0, "%s: cannot store: %s", full, strerror(errno));
+		return st_error_set(err, ST_ERR_IO, "cannot store the file");
+	}
+	if ((select || print) && node_queue_set_selected(n->q, p->cfg->name, rel, err))
+		return ST_ERR_IO;
+	if (print) {
+		if (node_queue_add(n->q, p->cfg->name, rel, full, node_file_kind(rel), id, err))
+			return ST_ERR_IO;
+		node_printer_wake(p);
+	}
+	return 0;
+}

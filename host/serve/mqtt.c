@@ -1,0 +1,479 @@
+/*
+ * mqtt.c - the node on an MQTT broker (libmosquitto; docs/serve.md "MQTT"),
+ * when the config has an [mqtt] section.  Under ROOT/NODE/ (ROOT = the
+ * `topic` key, default "stratum"):
+ *   status                      "online", or "offline" (the last will)
+ *   PRINTER/status              OctoPrint's state text
+ *   PRINTER/temperatures        {"tool0":{"actual","target"},"bed":{...}}
+ *   PRINTER/progress            {"completion","filepos","size"}
+ *   PRINTER/job                 the active job as /api/stratum/queue has it, or null
+ * all retained and published when they change.  Commands arrive on
+ * PRINTER/cmd as JSON {"id", "command": enqueue|cancel|pause|resume, "url",
+ * "name"}; each id is recorded in the queue database before the command
+ * runs, so a re-delivered command (QoS 1, a client that sends twice) runs
+ * once.  The answer goes to PRINTER/result.  G-code never travels over MQTT:
+ * enqueue downloads the file from url (libcurl: http and https only).
+ *
+ * Threads: libmosquitto's network thread only queues commands; the node's
+ * MQTT thread runs them (a download may take a while) and publishes state.
+ */
+#include <curl/curl.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <mosquitto.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "node_int.h"
+
+#define MQTT_TICK_MS 500	  /* state publishing period */
+#define MQTT_PENDING 32		  /* commands waiting to run */
+#define MQTT_PAYLOAD_MAX 4096	  /* largest command accepted, bytes */
+#define MQTT_ID_MAX 128		  /* longest command id, bytes */
+#define MQTT_DOWNLOAD_S 600	  /* longest download */
+#define MQTT_TOPICS 4		  /* status, temperatures, progress, job */
+
+static const char *const state_topics[MQTT_TOPICS] = {"status", "temperatures", "progress",
+						      "job"};
+
+struct node_mqtt {
+	struct node *n;
+	struct mosquitto *mosq;
+	char base[256]; /* ROOT/NODE */
+	pthread_t thread;
+	bool thread_started, loop_started;
+	pthread_mutex_t mu; /* the fields below */
+	pthread_cond_t cv;
+	bool stop, connected, republish;
+	struct {
+		size_t printer;
+		char *payload;
+	} pending[MQTT_PENDING];
+	int npending;
+	char *last[NODE_MAX_PRINTERS][MQTT_TOPICS]; /* last published; the MQTT thread's */
+};
+
+static void on_connect(struct mosquitto *mosq, void *ctx, int rc)
+{
+	struct node_mqtt *m = ctx;
+	char topic[300];
+
+	if (rc) {
+		node_log("error", NULL, 0, "mqtt: the broker refused the connection: %s",
+			 mosquitto_connack_string(rc));
+		return;
+	}
+	snprintf(topic, sizeof(topic), "%s/+/cmd", m->base);
+	mosquitto_subscribe(mosq, NULL, topic, 1);
+	snprintf(topic, sizeof(topic), "%s/status", m->base);
+	mosquitto_publish(mosq, NULL, topic, 6, "online", 1, true);
+	pthread_mutex_lock(&m->mu);
+	m->connected = m->republish = true;
+	pthread_cond_signal(&m->cv);
+	pthread_mutex_unlock(&m->mu);
+	node_log("info", NULL, 0, "mqtt: connected to %s:%u as %s, topics under %s/",
+		 m->n->cfg.mqtt.host, m->n->cfg.mqtt.port, m->n->cfg.mqtt.client_id, m->base);
+}
+
+static void on_disconnect(struct mosquitto *mosq, void *ctx, int rc)
+{
+	struct node_mqtt *m = ctx;
+
+	(void)mosq;
+	pthread_mutex_lock(&m->mu);
+	m->connected = false;
+	pthread_mutex_unlock(&m->mu);
+	if (rc)
+		node_log("warning", NULL, 0, "mqtt: connection lost (%s); reconnecting",
+			 mosquitto_strerror(rc));
+}
+
+/* Queue a command for the MQTT thread (the network thread must not block). */
+static void on_message(struct mosquitto *mosq, void *ctx, const struct mosquitto_message *msg)
+{
+	struct node_mqtt *m = ctx;
+	size_t blen = strlen(m->base), i;
+	const char *rest;
+	char *copy;
+
+	(void)mosq;
+	if (strncmp(msg->topic, m->base, blen) || msg->topic[blen] != '/')
+		return;
+	rest = msg->topic + blen + 1;
+	for (i = 0; i < m->n->nprinters; i++) {
+		size_t pl = strlen(m->n->printers[i].cfg->name);
+
+		if (!strncmp(rest, m->n->printers[i].cfg->name, pl) && !strcmp(rest + pl, "/cmd"))
+			break;
+	}
+	if (i == m->n->nprinters) {
+		node_log("warning", NULL, 0, "mqtt: %.200s: no such printer on this node",
+			 msg->topic);
+		return;
+	}
+	if (msg->payloadlen <= 0 || msg->payloadlen > MQTT_PAYLOAD_MAX) {
+		node_log("warning", m->n->printers[i].cfg->name, 0, "mqtt: a command of %d bytes "
+			 "was dropped (1 to %d)", msg->payloadlen, MQTT_PAYLOAD_MAX);
+		return;
+	}
+	copy = malloc((size_t)msg->payloadlen + 1);
+	if (!copy)
+		return;
+	memcpy(copy, msg->payload, (size_t)msg->payloadlen);
+	copy[msg->payloadlen] = '\0';
+	pthread_mutex_lock(&m->mu);
+	if (m->npending == MQTT_PENDING) {
+		free(copy);
+		node_log("warning", m->n->printers[i].cfg->name, 0, "mqtt: too many commands "
+			 "waiting; one was dropped");
+	} else {
+		m->pending[m->npending].printer = i;
+		m->pending[m->npending++].payload = copy;
+		pthread_cond_signal(&m->cv);
+	}
+	pthread_mutex_unlock(&m->mu);
+}
+
+/* Publish text (retained) under base/printer/what. */
+static void publish(struct node_mqtt *m, const char *printer, const char *what, const char *text,
+		    bool retain)
+{
+	char topic[400];
+
+	snprintf(topic, sizeof(topic), "%s/%s/%s", m->base, printer, what);
+	mosquitto_publish(m->mosq, NULL, topic, (int)strlen(text), text, 1, retain);
+}
+
+/* What a download writes to, with the size limit. */
+struct download {
+	int fd;
+	uint64_t bytes, max;
+	bool too_big, write_failed;
+};
+
+static size_t download_write(char *data, size_t size, size_t nmemb, void *ctx)
+{
+	struct download *d = ctx;
+	size_t n = size * nmemb, done = 0;
+
+	if (d->bytes + n > d->max) {
+		d->too_big = true;
+		return 0;
+	}
+	while (done < n) {
+		ssize_t w = write(d->fd, data + done, n - done);
+
+		if (w < 0 && errno == EINTR)
+			continue;
+		if (w <= 0) {
+			d->write_failed = true;
+			return 0;
+		}
+		done += (size_t)w;
+	}
+	d->bytes += n;
+	return n;
+}
+
+/* The file name a URL ends in ("http://h/a/b.gcode?x" -> "b.gcode"). */
+static void name_of_url(const char *url, char *out, size_t cap)
+{
+	const char *end = url + strcspn(url, "?#"), *s = end;
+
+	while (s > url && s[-1] != '/')
+		s--;
+	snprintf(out, cap, "%.*s", (int)(end - s), s);
+}
+
+/* Download url into a temporary file tmp (cap bytes for its path). */
+static int download(struct node *n, const char *url, char *tmp, size_t cap, struct st_error *err)
+{
+	struct download d = {.max = n->cfg.max_upload};
+	char curl_err[CURL_ERROR_SIZE] = "";
+	CURL *c;
+	CURLcode cc;
+	long status = 0;
+
+	if (strncmp(url, "http://", 7) && strncmp(url, "https://", 8))
+		return st_error_set(err, ST_ERR_ARG, "url must be http:// or https://");
+	if (snprintf(tmp, cap, "%s/mqtt-XXXXXX", n->tmp_dir) >= (int)cap)
+		return st_error_set(err, ST_ERR_RANGE, "the data directory's path is too long");
+	d.fd = mkstemp(tmp);
+	if (d.fd < 0)
+		return st_error_set(err, ST_ERR_IO, "%s: %s", tmp, strerror(errno));
+	c = curl_easy_init();
+	if (!c) {
+		close(d.fd);
+		unlink(tmp);
+		return st_error_set(err, ST_ERR_NOMEM, "cannot start a download");
+	}
+	curl_easy_setopt(c, CURLOPT_URL, url);
+	curl_easy_setopt(c, CURLOPT_PROTOCOLS_STR, "http,https");
+	curl_easy_setopt(c, CURLOPT_REDIR_PROTOCOLS_STR, "http,https");
+	curl_easy_setopt(c, CURLOPT_FOLLOWLOCATION, 1L);
+	curl_easy_setopt(c, CURLOPT_MAXREDIRS, 5L);
+	curl_easy_setopt(c, CURLOPT_TIMEOUT, (long)MQTT_DOWNLOAD_S);
+	curl_easy_setopt(c, CURLOPT_NOSIGNAL, 1L);
+	curl_easy_setopt(c, CURLOPT_MAXFILESIZE_LARGE, (curl_off_t)d.max);
+	curl_easy_setopt(c, CURLOPT_WRITEFUNCTION, download_write);
+	curl_easy_setopt(c, CURLOPT_WRITEDATA, &d);
+	curl_easy_setopt(c, CURLOPT_ERRORBUFFER, curl_err);
+	curl_easy_setopt(c, CURLOPT_USERAGENT, "stratum-node");
+	cc = curl_easy_perform(c);
+	curl_easy_getinfo(c, CURLINFO_RESPONSE_CODE, &status);
+	curl_easy_cleanup(c);
+	if (cc == CURLE_OK && status == 200 && !fsync(d.fd) && !close(d.fd))
+		return 0;
+	if (cc == CURLE_OK && status == 200)
+		st_error_set(err, ST_ERR_IO, "cannot store the download: %s", strerror(errno));
+	else if (d.too_big || cc == CURLE_FILESIZE_EXCEEDED)
+		st_error_set(err, ST_ERR_RANGE, "the file is larger than the node's limit of %llu "
+			     "bytes", (unsigned long long)d.max);
+	else if (d.write_failed)
+		st_error_set(err, ST_ERR_IO, "cannot store the download: %s", strerror(errno));
+	else if (cc == CURLE_OK)
+		st_error_set(err, ST_ERR_IO, "the server answered HTTP %ld", status);
+	else
+		st_error_set(err, ST_ERR_IO, "download failed: %s",
+			     curl_err[0] ? curl_err : curl_easy_strerror(cc));
+	close(d.fd);
+	unlink(tmp);
+	return err->code;
+}
+
+/* enqueue: fetch url and queue it like an upload with print=true. */
+static int cmd_enqueue(struct node *n, struct node_printer *p, json_t *o, int64_t *job,
+		       struct st_error *err)
+{
+	const char *url = json_string_value(json_object_get(o, "url"));
+	const char *name = json_string_value(json_object_get(o, "name"));
+	char fname[NODE_FILE_NAME_MAX + 1], tmp[NODE_PATH_MAX + 16];
+	int rc;
+
+	if (!url)
+		return st_error_set(err, ST_ERR_ARG, "enqueue needs url");
+	if (name)
+		snprintf(fname, sizeof(fname), "%s", name);
+	else
+		name_of_url(url, fname, sizeof(fname));
+	if ((name && strlen(name) > NODE_FILE_NAME_MAX) ||
+	    node_check_file_name(fname, strlen(fname), err))
+		return st_error_set(err, ST_ERR_ARG, "bad file name '%.100s': %s", fname,
+				    name && strlen(name) > NODE_FILE_NAME_MAX ? "too long" : err->msg);
+	if (!node_file_kind(fname))
+		return st_error_set(err, ST_ERR_ARG, "'%.100s': only G-code (.gcode, .gco, .g) "
+				    "and models (.stl, .obj) are accepted", fname);
+	if ((rc = download(n, url, tmp, sizeof(tmp), err)))
+		return rc;
+	if ((rc = node_store_file(n, p, tmp, fname, true, true, job, err))) {
+		unlink(tmp);
+		return rc;
+	}
+	node_log("info", p->cfg->name, *job, "mqtt: downloaded %s from %.200s, queued", fname,
+		 url);
+	return 0;
+}
+
+/* Run one command and publish its result. */
+static void run_command(struct node_mqtt *m, struct node_printer *p, const char *payload)
+{
+	struct st_error err = {0};
+	json_error_t je;
+	json_t *o = json_loads(payload, 0, &je), *res;
+	const char *id = json_string_value(json_object_get(o, "id"));
+	const char *cmd = json_string_value(json_object_get(o, "command"));
+	int64_t job = 0;
+	bool duplicate = false;
+	char *text;
+	int rc;
+
+	if (!json_is_object(o)) {
+		rc = st_error_set(&err, ST_ERR_PARSE, "the command is not a JSON object");
+	} else if (!id || !*id || strlen(id) > MQTT_ID_MAX) {
+		rc = st_error_set(&err, ST_ERR_ARG, "id is required (a string of 1 to %d bytes) so "
+				  "that a re-delivered command runs once", MQTT_ID_MAX);
+	} else if (!cmd) {
+		rc = st_error_set(&err, ST_ERR_ARG, "command is enqueue, cancel, pause or resume");
+	} else if ((rc = node_queue_command_once(m->n->q, id, p->cfg->name, &err)) <= 0) {
+		duplicate = rc == 0; /* seen before: it ran (or was refused) then */
+	} else if (!strcmp(cmd, "enqueue")) {
+		rc = cmd_enqueue(m->n, p, o, &job, &err);
+	} else if (!strcmp(cmd, "cancel")) {
+		rc = node_control_job(m->n, p, "cancel", NULL, &err);
+	} else if (!strcmp(cmd, "pause") || !strcmp(cmd, "resume")) {
+		rc = node_control_job(m->n, p, "pause", cmd, &err);
+	} else {
+		rc = st_error_set(&err, ST_ERR_ARG, "command is enqueue, cancel, pause or resume, "
+				  "not '%.40s'", cmd);
+	}
+	if (rc < 0)
+		node_log("warning", p->cfg->name, 0, "mqtt: command %.40s (id %.60s) refused: %s",
+			 cmd ? cmd : "?", id ? id : "?", err.msg);
+	else if (duplicate)
+		node_log("info", p->cfg->name, 0, "mqtt: command id %.60s was received before; not "
+			 "run again", id);
+	res = json_pack("{s:s?,s:s?,s:b,s:b}", "id", id, "command", cmd, "ok", rc >= 0,
+			"duplicate", duplicate);
+	if (rc < 0)
+		json_object_set_new(res, "error", json_string(err.msg));
+	if (job)
+		json_object_set_new(res, "job", json_integer(job));
+	text = json_dumps(res, JSON_COMPACT);
+	if (text)
+		publish(m, p->cfg->name, "result", text, false);
+	free(text);
+	json_decref(res);
+	json_decref(o);
+}
+
+/* Publish printer i's state topics that changed (all with force). */
+static void publish_state(struct node_mqtt *m, size_t i, bool force)
+{
+	struct node_printer *p = &m->n->printers[i];
+	json_t *o = node_printer_json(m->n, p, 0);
+	char *text[MQTT_TOPICS];
+
+	if (!o)
+		return;
+	text[0] = strdup(json_string_value(json_object_get(o, "state")));
+	text[1] = json_dumps(json_object_get(o, "temperature"), JSON_COMPACT);
+	text[2] = json_dumps(json_object_get(o, "progress"), JSON_COMPACT);
+	text[3] = json_dumps(json_object_get(o, "job"), JSON_COMPACT | JSON_ENCODE_ANY);
+	json_decref(o);
+	for (int t = 0; t < MQTT_TOPICS; t++) {
+		if (!text[t])
+			continue;
+		if (force || !m->last[i][t] || strcmp(m->last[i][t], text[t])) {
+			publish(m, p->cfg->name, state_topics[t], text[t], true);
+			free(m->last[i][t]);
+			m->last[i][t] = text[t];
+		} else {
+			free(text[t]);
+		}
+	}
+}
+
+static void *mqtt_main(void *arg)
+{
+	struct node_mqtt *m = arg;
+	struct timespec t;
+
+	pthread_mutex_lock(&m->mu);
+	while (!m->stop) {
+		if (m->npending) {
+			size_t i = m->pending[0].printer;
+			char *payload = m->pending[0].payload;
+
+			memmove(&m->pending[0], &m->pending[1],
+				sizeof(m->pending[0]) * (size_t)--m->npending);
+			pthread_mutex_unlock(&m->mu);
+			run_command(m, &m->n->printers[i], payload);
+			free(payload);
+			pthread_mutex_lock(&m->mu);
+			continue;
+		}
+		if (m->connected) {
+			bool force = m->republish;
+
+			m->republish = false;
+			pthread_mutex_unlock(&m->mu);
+			for (size_t i = 0; i < m->n->nprinters; i++)
+				publish_state(m, i, force);
+			pthread_mutex_lock(&m->mu);
+		}
+		clock_gettime(CLOCK_REALTIME, &t);
+		t.tv_nsec += MQTT_TICK_MS * 1000000L;
+		t.tv_sec += t.tv_nsec / 1000000000L;
+		t.tv_nsec %= 1000000000L;
+		if (!m->stop && !m->npending)
+			pthread_cond_timedwait(&m->cv, &m->mu, &t);
+	}
+	pthread_mutex_unlock(&m->mu);
+	return NULL;
+}
+
+int node_mqtt_start(struct node *n, struct st_error *err)
+{
+	const struct node_mqtt_config *c = &n->cfg.mqtt;
+	struct node_mqtt *m;
+	char topic[300];
+	int rc;
+
+	if (!c->host[0])
+		return 0;
+	m = calloc(1, sizeof(*m));
+	if (!m)
+		return st_error_set(err, ST_ERR_NOMEM, "mqtt: out of memory");
+	m->n = n;
+	pthread_mutex_init(&m->mu, NULL);
+	pthread_cond_init(&m->cv, NULL);
+	n->mqtt = m;
+	snprintf(m->base, sizeof(m->base), "%s/%s", c->topic, n->cfg.name);
+	mosquitto_lib_init();
+	curl_global_init(CURL_GLOBAL_DEFAULT);
+	/* A kept session: commands sent while the node was away still arrive. */
+	m->mosq = mosquitto_new(c->client_id, false, m);
+	if (!m->mosq)
+		return st_error_set(err, ST_ERR_NOMEM, "mqtt: cannot create the client");
+	snprintf(topic, sizeof(topic), "%s/status", m->base);
+	mosquitto_will_set(m->mosq, topic, 7, "offline", 1, true);
+	if (c->username[0])
+		mosquitto_username_pw_set(m->mosq, c->username,
+					  c->password[0] ? c->password : NULL);
+	mosquitto_connect_callback_set(m->mosq, on_connect);
+	mosquitto_disconnect_callback_set(m->mosq, on_disconnect);
+	mosquitto_message_callback_set(m->mosq, on_message);
+	mosquitto_reconnect_delay_set(m->mosq, 1, 30, true);
+	/* A broker that is down now is retried; the node runs meanwhile. */
+	rc = mosquitto_connect_async(m->mosq, c->host, c->port, c->keepalive);
+	if (rc != MOSQ_ERR_SUCCESS)
+		node_log("warning", NULL, 0, "mqtt: cannot reach %s:%u yet (%s); retrying",
+			 c->host, c->port, rc == MOSQ_ERR_ERRNO ? strerror(errno)
+								 : mosquitto_strerror(rc));
+	if (mosquitto_loop_start(m->mosq) != MOSQ_ERR_SUCCESS)
+		return st_error_set(err, ST_ERR_INTERNAL, "mqtt: cannot start the network thread");
+	m->loop_started = true;
+	if (pthread_create(&m->thread, NULL, mqtt_main, m))
+		return st_error_set(err, ST_ERR_INTERNAL, "mqtt: cannot start its thread");
+	m->thread_started = true;
+	return 0;
+}
+
+void node_mqtt_stop(struct node *n)
+{
+	struct node_mqtt *m = n->mqtt;
+	char topic[300];
+
+	if (!m)
+		return;
+	if (m->thread_started) {
+		pthread_mutex_lock(&m->mu);
+		m->stop = true;
+		pthread_cond_signal(&m->cv);
+		pthread_mutex_unlock(&m->mu);
+		pthread_join(m->thread, NULL);
+	}
+	if (m->mosq) {
+		/* A clean stop says offline itself: the broker sends no will then. */
+		snprintf(topic, sizeof(topic), "%s/status", m->base);
+		mosquitto_publish(m->mosq, NULL, topic, 7, "offline", 1, true);
+		mosquitto_disconnect(m->mosq);
+		if (m->loop_started)
+			mosquitto_loop_stop(m->mosq, true);
+		mosquitto_destroy(m->mosq);
+	}
+	for (int i = 0; i < m->npending; i++)
+		free(m->pending[i].payload);
+	for (size_t i = 0; i < NODE_MAX_PRINTERS; i++)
+		for (int t = 0; t < MQTT_TOPICS; t++)
+			free(m->last[i][t]);
+	pthread_mutex_destroy(&m->mu);
+	pthread_cond_destroy(&m->cv);
+	free(m);
+	n->mqtt = NULL;
+	curl_global_cleanup();
+	mosquitto_lib_cleanup();
+}
