@@ -278,22 +278,6 @@ static int shell(struct ctx *c, int dir, size_t count, struct clip_paths *out)
 	return rc;
 }
 
-/* Is (x, y) inside or on the polygon set ps (contours of expolygons)? */
-static bool in_set(const struct clip_paths *ps, int64_t x, int64_t y)
-{
-	int parity = 0, where;
-
-	for (size_t i = 0; i < ps->n; i++) {
-		if (clip_point_in_polygon(x, y, clip_path_xy(ps, i), clip_path_len(ps, i), &where,
-					  NULL))
-			continue;
-		if (where < 0)
-			return true;
-		parity ^= where;
-	}
-	return parity != 0;
-}
-
 /* Append segs as open paths of role and width w (nm), nearest first. */
 static int emit_segments(struct ctx *c, const struct clip_paths *segs, enum path_role role,
 			 double w)
@@ -352,26 +336,45 @@ out_free:
 	return rc;
 }
 
-/* Lines clipped to the region grown by delta nm (round joins) into segs. */
-static int clip_to(struct ctx *c, const struct clip_paths *lines, const struct clip_paths *region,
-		   double delta, struct clip_paths *segs)
-{
-	struct clip_paths g = {0};
-	int rc = clip_offset(region, delta, CLIP_JOIN_ROUND, 0.0, INFILL_ARC_NM, &g, c->err);
+/*
+ * One region grown by delta nm (round joins), kept while the same region is
+ * clipped against again: the bridge directions all grow their island by
+ * the same distance but for the smallest islands.
+ */
+struct grown {
+	bool valid;
+	double delta;
+	struct clip_paths g;
+};
 
+/* Lines clipped to the region grown by delta nm (round joins) into segs;
+ * memo (may be NULL) holds the growth of this same region. */
+static int clip_to(struct ctx *c, const struct clip_paths *lines, const struct clip_paths *region,
+		   double delta, struct grown *memo, struct clip_paths *segs)
+{
+	struct grown local = {0}, *m = memo ? memo : &local;
+	int rc = 0;
+
+	if (!m->valid || m->delta != delta) {
+		m->valid = false;
+		rc = clip_offset(region, delta, CLIP_JOIN_ROUND, 0.0, INFILL_ARC_NM, &m->g, c->err);
+		m->valid = !rc;
+		m->delta = delta;
+	}
 	if (!rc)
-		rc = clip_lines(CLIP_INTERSECTION, lines, &g, CLIP_NONZERO, segs, c->err);
-	clip_paths_free(&g);
+		rc = clip_lines(CLIP_INTERSECTION, lines, &m->g, CLIP_NONZERO, segs, c->err);
+	clip_paths_free(&local.g);
 	return rc;
 }
 
 /*
  * Lines of direction a across one island P, a whole number of beads at
  * about spacing sp spanning it, clipped so their ends stop sp/2 inside P
- * grown by the overlap, into segs; *fit is the spacing used.
+ * grown by the overlap, into segs; *fit is the spacing used.  memo (may be
+ * NULL) carries P's growth between calls on the same island.
  */
 static int fitted_lines(struct ctx *c, const struct clip_paths *P, double a, double sp,
-			struct clip_paths *segs, double *fit)
+			struct grown *memo, struct clip_paths *segs, double *fit)
 {
 	struct clip_paths lines = {0};
 	struct pat_box box;
@@ -390,7 +393,8 @@ static int fitted_lines(struct ctx *c, const struct clip_paths *P, double a, dou
 	rc = pat_lines(a, *fit, vmin + *fit / 2.0, &box, &lines, c->err);
 	if (!rc)
 		rc = clip_to(c, &lines, P,
-			     fmax(c->overlap - sp / 2.0, INFILL_EDGE_MARGIN_NM - *fit / 2.0), segs);
+			     fmax(c->overlap - sp / 2.0, INFILL_EDGE_MARGIN_NM - *fit / 2.0), memo,
+			     segs);
 	clip_paths_free(&lines);
 	return rc;
 }
@@ -441,19 +445,20 @@ static int gap_fill(struct ctx *c, const struct clip_paths *P, const struct clip
  * largest share of their length (within INFILL_BRIDGE_SCORE_SLACK) compete
  * on the mean length of those anchored lines; the shortest wins.
  */
-static int bridge_direction(struct ctx *c, const struct clip_paths *P, const struct clip_paths *A,
-			    double sp, double *angle)
+static int bridge_direction(struct ctx *c, const struct clip_paths *P,
+			    const struct clip_locator *A, double sp, double *angle)
 {
 	enum { N = INFILL_BRIDGE_DIRS };
 	double score[N], mean[N], best = -1.0, fit;
 	struct clip_paths segs = {0};
+	struct grown memo = {0};
 	int rc = 0;
 
 	*angle = 0.0;
 	for (int k = 0; k < N && !rc; k++) {
 		double a = k * M_PI / N, total = 0, held = 0;
 		size_t nheld = 0;
-		rc = fitted_lines(c, P, a, sp, &segs, &fit);
+		rc = fitted_lines(c, P, a, sp, &memo, &segs, &fit);
 		for (size_t i = 0; i < segs.n && !rc; i++) {
 			const int64_t *xy = clip_path_xy(&segs, i);
 			size_t m = clip_path_len(&segs, i);
@@ -464,8 +469,9 @@ static int bridge_direction(struct ctx *c, const struct clip_paths *P, const str
 			/* Ends nudged 1 um inward, off the boundary they were clipped at. */
 			double ux = dx / len * 1000.0, uy = dy / len * 1000.0;
 			total += len;
-			if (in_set(A, xy[0] + llround(ux), xy[1] + llround(uy)) &&
-			    in_set(A, xy[2 * m - 2] - llround(ux), xy[2 * m - 1] - llround(uy))) {
+			if (clip_locator_inside(A, xy[0] + llround(ux), xy[1] + llround(uy)) &&
+			    clip_locator_inside(A, xy[2 * m - 2] - llround(ux),
+						xy[2 * m - 1] - llround(uy))) {
 				held += len;
 				nheld++;
 			}
@@ -481,6 +487,7 @@ static int bridge_direction(struct ctx *c, const struct clip_paths *P, const str
 			*angle = k * M_PI / N;
 		}
 	clip_paths_free(&segs);
+	clip_paths_free(&memo.g);
 	return rc;
 }
 
@@ -493,21 +500,26 @@ static int fill_solid(struct ctx *c, const struct clip_paths *X, double a,
 {
 	struct clip_expolys ex = {0};
 	struct clip_paths P = {0}, segs = {0};
+	struct clip_locator *A = NULL;
 	double fit;
 	int rc = clip_boolean_ex(CLIP_UNION, X, NULL, CLIP_NONZERO, &ex, c->err);
+
+	if (!rc && anchors && ex.n && !(A = clip_locator_new(anchors, c->err)))
+		rc = c->err ? c->err->code : ST_ERR_NOMEM;
 
 	for (size_t i = 0; i < ex.n && !rc; i++) {
 		double ai = a;
 		rc = clip_expolys_get(&ex, i, &P, c->err);
 		if (!rc && anchors)
-			rc = bridge_direction(c, &P, anchors, b->sp, &ai);
+			rc = bridge_direction(c, &P, A, b->sp, &ai);
 		if (!rc)
-			rc = fitted_lines(c, &P, ai, b->sp, &segs, &fit);
+			rc = fitted_lines(c, &P, ai, b->sp, NULL, &segs, &fit);
 		if (!rc)
 			rc = emit_segments(c, &segs, b->role, b->w);
 		if (!rc && b->gap_fill && segs.n)
 			rc = gap_fill(c, &P, &segs, fit);
 	}
+	clip_locator_free(A);
 	clip_expolys_free(&ex);
 	clip_paths_free(&P);
 	clip_paths_free(&segs);
@@ -543,7 +555,7 @@ static int fill_sparse(struct ctx *c, const struct clip_paths *X, double a)
 	}
 	}
 	if (!rc)
-		rc = clip_to(c, &lines, X, c->overlap - sp / 2.0, &segs);
+		rc = clip_to(c, &lines, X, c->overlap - sp / 2.0, NULL, &segs);
 	if (!rc)
 		rc = emit_segments(c, &segs, PATH_SPARSE_INFILL, w);
 	clip_paths_free(&lines);

@@ -10,8 +10,10 @@
 #include <exception>
 #include <limits>
 #include <map>
+#include <memory>
 #include <new>
 #include <type_traits>
+#include <vector>
 
 #include <polyclipping/clipper.hpp>
 
@@ -206,6 +208,12 @@ ClipperLib::ClipperOffset make_offsetter(enum clip_join join, double miter_limit
 }
 
 } // namespace
+
+// A locator: the paths as Clipper paths, each with its bounding box.
+struct clip_locator {
+	Paths paths;
+	std::vector<int64_t> box; // x0, y0, x1, y1 per path
+};
 
 extern "C" {
 
@@ -520,6 +528,63 @@ int clip_point_in_polygon(int64_t x, int64_t y, const int64_t *xy, size_t npts, 
 		*where = ClipperLib::PointInPolygon(IntPoint(x, y), to_path(xy, npts));
 		return 0;
 	});
+}
+
+} // extern "C"
+
+extern "C" {
+
+struct clip_locator *clip_locator_new(const struct clip_paths *ps, struct st_error *err)
+{
+	struct clip_locator *loc = nullptr;
+
+	if (!ps) {
+		st_error_set(err, ST_ERR_ARG, "clip: clip_locator_new needs paths");
+		return nullptr;
+	}
+	int rc = guarded("clip_locator_new", err, [&] {
+		std::unique_ptr<clip_locator> l(new clip_locator);
+		l->paths = to_paths(ps);
+		l->box.reserve(4 * l->paths.size());
+		for (const Path &p : l->paths) {
+			int64_t x0 = INT64_MAX, y0 = INT64_MAX, x1 = INT64_MIN, y1 = INT64_MIN;
+			for (const IntPoint &q : p) {
+				x0 = q.X < x0 ? q.X : x0;
+				y0 = q.Y < y0 ? q.Y : y0;
+				x1 = q.X > x1 ? q.X : x1;
+				y1 = q.Y > y1 ? q.Y : y1;
+			}
+			l->box.insert(l->box.end(), {x0, y0, x1, y1});
+		}
+		loc = l.release();
+		return 0;
+	});
+	return rc ? nullptr : loc;
+}
+
+bool clip_locator_inside(const struct clip_locator *loc, int64_t x, int64_t y)
+{
+	int parity = 0;
+
+	if (!loc)
+		return false;
+	for (size_t i = 0; i < loc->paths.size(); i++) {
+		const int64_t *b = &loc->box[4 * i];
+		// Outside the closed box no edge is crossed or touched: Clipper
+		// would answer 0 (outside) without any arithmetic.
+		if (x < b[0] || x > b[2] || y < b[1] || y > b[3])
+			continue;
+		int where = ClipperLib::PointInPolygon(IntPoint(x, y), loc->paths[i]);
+		if (where < 0)
+			return true;
+		parity ^= where;
+	}
+	return parity != 0;
+}
+
+void clip_locator_free(struct clip_locator *loc)
+{
+	delete loc;
 }
 
 } // extern "C"
