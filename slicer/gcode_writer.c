@@ -192,20 +192,35 @@ static int check_settings(const struct gcodew_settings *s, struct st_error *err)
  * Numbers: fixed decimals, trailing zeros dropped, never an exponent or "-0".
  */
 
-/* Write u / 10^digits into buf (NUM_MAX bytes). */
-static void fmt_units(char *buf, int64_t u, int digits)
+/*
+ * Write u / 10^digits into buf (NUM_MAX bytes, digits < NUM_MAX - 3) and
+ * return its length.  By hand rather than through snprintf: a print has
+ * millions of coordinates and this was a tenth of the writer's time.
+ */
+static size_t fmt_units(char *buf, int64_t u, int digits)
 {
-	uint64_t mag = u < 0 ? (uint64_t)0 - (uint64_t)u : (uint64_t)u, scale = 1;
-	int len;
+	uint64_t mag = u < 0 ? (uint64_t)0 - (uint64_t)u : (uint64_t)u;
+	char rev[NUM_MAX]; /* decimal digits, least significant first */
+	int n = 0, lo = 0;
+	size_t len = 0;
 
-	for (int i = 0; i < digits; i++)
-		scale *= 10;
-	len = snprintf(buf, NUM_MAX, "%s%llu.%0*llu", u < 0 ? "-" : "",
-		       (unsigned long long)(mag / scale), digits, (unsigned long long)(mag % scale));
-	while (len > 0 && buf[len - 1] == '0')
-		buf[--len] = '\0';
-	if (len > 0 && buf[len - 1] == '.')
-		buf[--len] = '\0';
+	do {
+		rev[n++] = (char)('0' + mag % 10);
+		mag /= 10;
+	} while (mag || n <= digits);
+	if (u < 0)
+		buf[len++] = '-';
+	for (int i = n - 1; i >= digits; i--)
+		buf[len++] = rev[i];
+	while (lo < digits && rev[lo] == '0') /* trailing zeros dropped */
+		lo++;
+	if (lo < digits) {
+		buf[len++] = '.';
+		for (int i = digits - 1; i >= lo; i--)
+			buf[len++] = rev[i];
+	}
+	buf[len] = '\0';
+	return len;
 }
 
 /* Write v rounded to digits decimals into buf (NUM_MAX bytes). */
@@ -968,7 +983,8 @@ static int emit_move(struct writer *w, const struct op *o)
 	int64_t z = llround(o->z * XYZ_UNITS), epos, de;
 	long long f = llround(o->f * 60);
 	bool mx, my, mz;
-	char nx[NUM_MAX], ny[NUM_MAX], nz[NUM_MAX], ne[NUM_MAX], nf[NUM_MAX] = "";
+	char line[6 * NUM_MAX];
+	size_t len;
 
 	switch (o->mv) {
 	case MV_EXTRUDE:
@@ -996,14 +1012,32 @@ static int emit_move(struct writer *w, const struct op *o)
 		return 0;
 	if (f < 1)
 		f = 1;
-	fmt_units(nx, x, XYZ_DIGITS);
-	fmt_units(ny, y, XYZ_DIGITS);
-	fmt_units(nz, z, XYZ_DIGITS);
-	fmt_units(ne, w->s->use_relative_e_distances ? de : epos, E_DIGITS);
-	if (f != w->wf)
-		snprintf(nf, sizeof(nf), " F%lld", f);
-	put(w, "G1%s%s%s%s%s%s%s%s%s\n", mx ? " X" : "", mx ? nx : "", my ? " Y" : "", my ? ny : "",
-	    mz ? " Z" : "", mz ? nz : "", de ? " E" : "", de ? ne : "", nf);
+	/* The line is assembled here and written at once (see fmt_units). */
+	len = 2;
+	memcpy(line, "G1", 2);
+	if (mx) {
+		memcpy(line + len, " X", 2);
+		len += 2 + fmt_units(line + len + 2, x, XYZ_DIGITS);
+	}
+	if (my) {
+		memcpy(line + len, " Y", 2);
+		len += 2 + fmt_units(line + len + 2, y, XYZ_DIGITS);
+	}
+	if (mz) {
+		memcpy(line + len, " Z", 2);
+		len += 2 + fmt_units(line + len + 2, z, XYZ_DIGITS);
+	}
+	if (de) {
+		memcpy(line + len, " E", 2);
+		len += 2 + fmt_units(line + len + 2,
+				     w->s->use_relative_e_distances ? de : epos, E_DIGITS);
+	}
+	if (f != w->wf) {
+		memcpy(line + len, " F", 2);
+		len += 2 + fmt_units(line + len + 2, f, 0);
+	}
+	line[len++] = '\n';
+	fwrite(line, 1, len, w->fp);
 	w->moves++;
 	if (o->xy) {
 		w->wx = x;
