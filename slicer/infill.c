@@ -29,18 +29,47 @@
 /* Clipped pieces of lines shorter than this are dropped, nm. */
 #define INFILL_MIN_SEGMENT_NM 10000.0
 
-/* Everything one infill_generate call works with; lengths nm unless named. */
+/*
+ * One step of a layer's infill as planned: lines to be ordered nearest
+ * first from wherever the nozzle is by then, or a path to append as it is
+ * (gap fill).  Planning needs no nozzle position, so layers can be planned
+ * in parallel and emitted in order.
+ */
+struct item {
+	bool fixed;		/* a path as it is, else lines to order */
+	enum path_role role;
+	double w;		/* nm, bead width of the lines */
+	struct clip_paths segs; /* the lines */
+	bool closed;		/* the path's */
+	size_t n;
+	struct path_point *pts; /* the path's n points */
+};
+
+struct infill_plan {
+	size_t n, cap;
+	struct item *v;
+};
+
+/* What infill_job_new works out once for every layer. */
+struct infill_job {
+	struct infill_settings s;
+	const struct slice_stack *st;
+	double overlap;	     /* nm, how far infill reaches into the walls */
+	double t_top, t_bot; /* mm, shell thicknesses */
+	int64_t lx, ly;	     /* nm, where the last emitted path ended */
+};
+
+/* Everything the planning of one layer works with; lengths nm unless named. */
 struct ctx {
 	const struct infill_settings *s;
 	const struct slice_stack *st;
-	const struct clip_expolys *inner;
-	struct layer_paths *out;
+	const struct clip_paths *R;	  /* this layer's region inside the walls */
+	struct infill_plan *plan;
 	struct st_error *err;
 	size_t layer;	    /* index of the layer being filled */
 	double h;	    /* mm, its height */
 	double overlap;	    /* how far infill reaches into the walls */
 	double t_top, t_bot; /* mm, shell thicknesses */
-	int64_t lx, ly;	    /* where the last path ended */
 };
 
 /* The lines of one solid class: width, flow spacing, role. */
@@ -254,7 +283,7 @@ static double z_bottom(const struct slice_stack *st, size_t i)
  */
 static int shell(struct ctx *c, int dir, size_t count, struct clip_paths *out)
 {
-	const struct clip_paths *R = &c->inner[c->layer].paths;
+	const struct clip_paths *R = c->R;
 	struct clip_paths inter = {0};
 	int rc = 0;
 
@@ -278,10 +307,67 @@ static int shell(struct ctx *c, int dir, size_t count, struct clip_paths *out)
 	return rc;
 }
 
-/* Append segs as open paths of role and width w (nm), nearest first. */
+/* A new empty item at the end of the plan, NULL when out of memory. */
+static struct item *plan_item(struct ctx *c)
+{
+	struct infill_plan *p = c->plan;
+
+	if (p->n == p->cap) {
+		size_t cap = p->cap ? 2 * p->cap : 16;
+		struct item *grown = cap < SIZE_MAX / sizeof(*grown)
+					 ? realloc(p->v, cap * sizeof(*grown))
+					 : NULL;
+		if (!grown) {
+			st_error_set(c->err, ST_ERR_NOMEM, "infill: out of memory planning a layer");
+			return NULL;
+		}
+		p->v = grown;
+		p->cap = cap;
+	}
+	p->v[p->n] = (struct item){0};
+	return &p->v[p->n++];
+}
+
+/* Plan segs as open paths of role and width w (nm), to be ordered nearest
+ * first when the layer is emitted. */
 static int emit_segments(struct ctx *c, const struct clip_paths *segs, enum path_role role,
 			 double w)
 {
+	struct item *it = plan_item(c);
+
+	if (!it)
+		return ST_ERR_NOMEM;
+	it->role = role;
+	it->w = w;
+	return clip_paths_append(&it->segs, segs, c->err);
+}
+
+/* Plan a path of role to be appended as it is. */
+static int emit_path(struct ctx *c, enum path_role role, bool closed,
+		     const struct path_point *pts, size_t n)
+{
+	struct item *it = plan_item(c);
+
+	if (!it)
+		return ST_ERR_NOMEM;
+	it->fixed = true;
+	it->role = role;
+	it->closed = closed;
+	if (!n)
+		return 0;
+	it->pts = malloc(n * sizeof(*pts));
+	if (!it->pts)
+		return st_error_set(c->err, ST_ERR_NOMEM, "infill: out of memory planning a path");
+	memcpy(it->pts, pts, n * sizeof(*pts));
+	it->n = n;
+	return 0;
+}
+
+/* Append the lines of it to out, nearest first from (*lx, *ly). */
+static int order_segments(const struct item *it, int64_t *lx, int64_t *ly,
+			  struct layer_paths *out, struct st_error *err)
+{
+	const struct clip_paths *segs = &it->segs;
 	size_t n = segs->n, maxlen = 0;
 	bool *used = calloc(n ? n : 1, sizeof(*used));
 	struct path_point *pts;
@@ -291,8 +377,7 @@ static int emit_segments(struct ctx *c, const struct clip_paths *segs, enum path
 		maxlen = clip_path_len(segs, i) > maxlen ? clip_path_len(segs, i) : maxlen;
 	pts = malloc((maxlen ? maxlen : 1) * sizeof(*pts));
 	if (!used || !pts) {
-		rc = st_error_set(c->err, ST_ERR_NOMEM, "infill: out of memory ordering %zu lines",
-				  n);
+		rc = st_error_set(err, ST_ERR_NOMEM, "infill: out of memory ordering %zu lines", n);
 		goto out_free;
 	}
 	for (size_t left = n; left && !rc; left--) {
@@ -304,9 +389,8 @@ static int emit_segments(struct ctx *c, const struct clip_paths *segs, enum path
 				continue;
 			const int64_t *xy = clip_path_xy(segs, i);
 			size_t m = clip_path_len(segs, i);
-			double d0 = hypot((double)(xy[0] - c->lx), (double)(xy[1] - c->ly));
-			double d1 = hypot((double)(xy[2 * m - 2] - c->lx),
-					  (double)(xy[2 * m - 1] - c->ly));
+			double d0 = hypot((double)(xy[0] - *lx), (double)(xy[1] - *ly));
+			double d1 = hypot((double)(xy[2 * m - 2] - *lx), (double)(xy[2 * m - 1] - *ly));
 			if (fmin(d0, d1) < bd) {
 				bd = fmin(d0, d1);
 				best = i;
@@ -319,16 +403,16 @@ static int emit_segments(struct ctx *c, const struct clip_paths *segs, enum path
 		double len = 0;
 		for (size_t k = 0; k < m; k++) {
 			size_t j = rev ? m - 1 - k : k;
-			pts[k] = (struct path_point){xy[2 * j], xy[2 * j + 1], llround(w)};
+			pts[k] = (struct path_point){xy[2 * j], xy[2 * j + 1], llround(it->w)};
 			if (k)
 				len += hypot((double)(pts[k].x - pts[k - 1].x),
 					     (double)(pts[k].y - pts[k - 1].y));
 		}
 		if (m < 2 || len < INFILL_MIN_SEGMENT_NM)
 			continue;
-		rc = layer_add_path(c->out, role, false, pts, m, c->err);
-		c->lx = pts[m - 1].x;
-		c->ly = pts[m - 1].y;
+		rc = layer_add_path(out, it->role, false, pts, m, err);
+		*lx = pts[m - 1].x;
+		*ly = pts[m - 1].y;
 	}
 out_free:
 	free(used);
@@ -427,9 +511,7 @@ static int gap_fill(struct ctx *c, const struct clip_paths *P, const struct clip
 				       c->err);
 		for (size_t k = 0; k < ml.n && !rc; k++) {
 			struct medial_line *l = &ml.v[k];
-			rc = layer_add_path(c->out, PATH_GAP_FILL, l->closed, l->pts, l->n, c->err);
-			c->lx = l->pts[l->n - 1].x;
-			c->ly = l->pts[l->n - 1].y;
+			rc = emit_path(c, PATH_GAP_FILL, l->closed, l->pts, l->n);
 		}
 		perim_medial_free(&ml);
 	}
@@ -614,7 +696,7 @@ static int classify(struct ctx *c, struct clip_paths cl[CL_N])
 {
 	const struct slice_stack *st = c->st;
 	size_t i = c->layer;
-	const struct clip_paths *R = &c->inner[i].paths;
+	const struct clip_paths *R = c->R;
 	double sw = perim_spacing(c->s->solid_infill_extrusion_width, c->h) * SLICE_UNITS_PER_MM;
 	struct clip_paths t = {0}, taken = {0}, rest = {0};
 	int rc = 0;
@@ -687,7 +769,7 @@ static int fill_layer(struct ctx *c)
 				    false};
 	int rc;
 
-	if (!clip_paths_points(&c->inner[c->layer].paths))
+	if (!clip_paths_points(c->R))
 		return 0;
 	rc = classify(c, cl);
 	if (!rc)
@@ -708,11 +790,121 @@ static int fill_layer(struct ctx *c)
 	return rc;
 }
 
+int infill_job_new(const struct infill_settings *s, const struct slice_stack *st,
+		   struct infill_job **out, struct st_error *err)
+{
+	struct infill_job *job;
+	int rc;
+
+	if (!out)
+		return st_error_set(err, ST_ERR_ARG, "infill: infill_job_new needs an out pointer");
+	*out = NULL;
+	rc = infill_settings_check(s, err);
+	if (rc)
+		return rc;
+	if (!st)
+		return st_error_set(err, ST_ERR_ARG, "infill: no layers given");
+	for (size_t i = 0; i < st->n; i++)
+		if (!(st->layers[i].height > 0.0 && st->layers[i].height <= s->nozzle_diameter))
+			return st_error_set(err, ST_ERR_RANGE,
+					    "infill: layer %zu is %g mm thick; use layers thicker "
+					    "than 0 and at most the nozzle diameter %g mm",
+					    i, st->layers[i].height, s->nozzle_diameter);
+	job = calloc(1, sizeof(*job));
+	if (!job)
+		return st_error_set(err, ST_ERR_NOMEM, "infill: out of memory");
+	job->s = *s;
+	job->st = st;
+	if (st->n) {
+		double href = s->layer_height > 0.0 ? s->layer_height : common_height(st, err);
+		if (href < 0.0) {
+			free(job);
+			return ST_ERR_NOMEM;
+		}
+		job->t_top = fmax(s->top_solid_min_thickness, s->top_solid_layers * href);
+		job->t_bot = fmax(s->bottom_solid_min_thickness, s->bottom_solid_layers * href);
+	}
+	job->overlap = s->infill_overlap / 100.0 * s->perimeter_extrusion_width * SLICE_UNITS_PER_MM;
+	*out = job;
+	return 0;
+}
+
+void infill_job_free(struct infill_job *job)
+{
+	free(job);
+}
+
+void infill_plan_free(struct infill_plan *p)
+{
+	if (!p)
+		return;
+	for (size_t i = 0; i < p->n; i++) {
+		clip_paths_free(&p->v[i].segs);
+		free(p->v[i].pts);
+	}
+	free(p->v);
+	free(p);
+}
+
+int infill_plan_layer(const struct infill_job *job, size_t i, const struct clip_expolys *inner,
+		      struct infill_plan **out, struct st_error *err)
+{
+	struct ctx c;
+	int rc;
+
+	if (!out)
+		return st_error_set(err, ST_ERR_ARG, "infill: infill_plan_layer needs an out pointer");
+	*out = NULL;
+	if (!job || !inner || i >= job->st->n)
+		return st_error_set(err, ST_ERR_ARG, "infill: no layer %zu to plan", i);
+	c = (struct ctx){.s = &job->s,
+			 .st = job->st,
+			 .R = &inner->paths,
+			 .err = err,
+			 .layer = i,
+			 .h = job->st->layers[i].height,
+			 .overlap = job->overlap,
+			 .t_top = job->t_top,
+			 .t_bot = job->t_bot};
+	c.plan = calloc(1, sizeof(*c.plan));
+	if (!c.plan)
+		return st_error_set(err, ST_ERR_NOMEM, "infill: out of memory planning layer %zu", i);
+	rc = fill_layer(&c);
+	if (rc) {
+		infill_plan_free(c.plan);
+		return rc;
+	}
+	*out = c.plan;
+	return 0;
+}
+
+int infill_emit_layer(struct infill_job *job, const struct infill_plan *plan,
+		      struct layer_paths *out, struct st_error *err)
+{
+	int rc = 0;
+
+	if (!job || !plan || !out)
+		return st_error_set(err, ST_ERR_ARG, "infill: no plan or layer to emit into");
+	for (size_t i = 0; i < plan->n && !rc; i++) {
+		const struct item *it = &plan->v[i];
+		if (!it->fixed) {
+			rc = order_segments(it, &job->lx, &job->ly, out, err);
+			continue;
+		}
+		rc = layer_add_path(out, it->role, it->closed, it->pts, it->n, err);
+		if (it->n) {
+			job->lx = it->pts[it->n - 1].x;
+			job->ly = it->pts[it->n - 1].y;
+		}
+	}
+	return rc;
+}
+
 int infill_generate(const struct infill_settings *s, const struct slice_stack *st,
 		    const struct clip_expolys *inner, struct layer_stack *out,
 		    struct st_error *err)
 {
-	struct ctx c = {.s = s, .st = st, .inner = inner, .err = err};
+	struct infill_job *job = NULL;
 	int rc = infill_settings_check(s, err);
 
 	if (rc)
@@ -725,23 +917,14 @@ int infill_generate(const struct infill_settings *s, const struct slice_stack *s
 				    out->nlayers, st->n);
 	if (!st->n)
 		return 0;
-	for (size_t i = 0; i < st->n; i++)
-		if (!(st->layers[i].height > 0.0 && st->layers[i].height <= s->nozzle_diameter))
-			return st_error_set(err, ST_ERR_RANGE,
-					    "infill: layer %zu is %g mm thick; use layers thicker "
-					    "than 0 and at most the nozzle diameter %g mm",
-					    i, st->layers[i].height, s->nozzle_diameter);
-	double href = s->layer_height > 0.0 ? s->layer_height : common_height(st, err);
-	if (href < 0.0)
-		return ST_ERR_NOMEM;
-	c.t_top = fmax(s->top_solid_min_thickness, s->top_solid_layers * href);
-	c.t_bot = fmax(s->bottom_solid_min_thickness, s->bottom_solid_layers * href);
-	c.overlap = s->infill_overlap / 100.0 * s->perimeter_extrusion_width * SLICE_UNITS_PER_MM;
+	rc = infill_job_new(s, st, &job, err);
 	for (size_t i = 0; i < st->n && !rc; i++) {
-		c.layer = i;
-		c.h = st->layers[i].height;
-		c.out = &out->layers[i];
-		rc = fill_layer(&c);
+		struct infill_plan *plan;
+		rc = infill_plan_layer(job, i, &inner[i], &plan, err);
+		if (!rc)
+			rc = infill_emit_layer(job, plan, &out->layers[i], err);
+		infill_plan_free(plan);
 	}
+	infill_job_free(job);
 	return rc;
 }

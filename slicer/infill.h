@@ -122,4 +122,48 @@ int infill_generate(const struct infill_settings *s, const struct slice_stack *s
 		    const struct clip_expolys *inner, struct layer_stack *out,
 		    struct st_error *err);
 
+/*
+ * The same work a layer at a time, for callers that fill layers in
+ * parallel and print them as they come.  A layer is first planned (its
+ * classes, lines and gap fill; independent of every other layer's plan, so
+ * plans may be made on several threads at once) and then emitted: the
+ * lines are ordered nearest first from where the previous emitted layer's
+ * infill ended, so layers must be emitted bottom to top, one at a time.
+ * Planning and emitting every layer gives exactly infill_generate's paths.
+ */
+struct infill_job;
+struct infill_plan;
+
+/*
+ * infill_job_new - check s and the layers of st (as infill_generate does)
+ * and work out the shell thicknesses.  st must outlive the job.  Returns 0
+ * with *out a new job (infill_job_free), or a negative class with err
+ * filled and *out NULL.
+ */
+int infill_job_new(const struct infill_settings *s, const struct slice_stack *st,
+		   struct infill_job **out, struct st_error *err);
+
+/* infill_job_free - release a job; NULL is safe. */
+void infill_job_free(struct infill_job *job);
+
+/*
+ * infill_plan_layer - plan layer i (< st->n) of the job, inner being the
+ * region inside that layer's walls.  Reads the job and the slices only:
+ * thread-safe for distinct plans.  Returns 0 with *out a new plan
+ * (infill_plan_free), or a negative class with err filled and *out NULL.
+ */
+int infill_plan_layer(const struct infill_job *job, size_t i, const struct clip_expolys *inner,
+		      struct infill_plan **out, struct st_error *err);
+
+/*
+ * infill_emit_layer - append the paths of plan to out, in infill_generate's
+ * order; advances the job's nozzle position.  Returns 0, ST_ERR_NOMEM or
+ * the error of a path layer_add_path refuses.
+ */
+int infill_emit_layer(struct infill_job *job, const struct infill_plan *plan,
+		      struct layer_paths *out, struct st_error *err);
+
+/* infill_plan_free - release a plan; NULL is safe. */
+void infill_plan_free(struct infill_plan *p);
+
 #endif /* STRATUM_SLICER_INFILL_H */
