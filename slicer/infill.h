@@ -31,9 +31,9 @@
  * gyroid's section at the layer's mid-height).  Bridges use bridge flow: a
  * round thread of diameter nozzle x sqrt(bridge_flow_ratio) (its bead width
  * is the one whose flow-model cross-section equals that thread's area) at
- * thread + 0.05 mm spacing, in the direction that anchors most of its
- * lines on the layer below at both ends, the shortest such lines first
- * (bridge_angle overrides).  Line ends stop half a spacing inside the
+ * thread + 0.05 mm spacing, in the direction (tried every 5 degrees) that
+ * anchors most of its lines on the layer below at both ends, the shortest
+ * such lines first (bridge_angle overrides).  Line ends stop half a spacing inside the
  * region grown by infill_overlap, so beads reach into the innermost wall.
  * Strips of a solid island that its lines leave uncovered, at least
  * gap_fill_min wide, get PATH_GAP_FILL beads along their centre lines.
