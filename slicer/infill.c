@@ -28,6 +28,10 @@
 #define INFILL_BRIDGE_SCORE_SLACK 0.01
 /* Solid lines on an island's edge parallel to them stay this far inside, nm. */
 #define INFILL_EDGE_MARGIN_NM 10000.0
+/* The region inside the walls loses vertices that move its boundary less
+ * than this, nm: its round joins (arcs within 2 um) give it four times the
+ * section's vertices, and every class is cut from it. */
+#define INFILL_CLEAN_NM 2000.0
 /* Clipped pieces of lines shorter than this are dropped, nm. */
 #define INFILL_MIN_SEGMENT_NM 10000.0
 
@@ -851,6 +855,7 @@ void infill_plan_free(struct infill_plan *p)
 int infill_plan_layer(const struct infill_job *job, size_t i, const struct clip_expolys *inner,
 		      struct infill_plan **out, struct st_error *err)
 {
+	struct clip_paths R = {0};
 	struct ctx c;
 	int rc;
 
@@ -859,9 +864,16 @@ int infill_plan_layer(const struct infill_job *job, size_t i, const struct clip_
 	*out = NULL;
 	if (!job || !inner || i >= job->st->n)
 		return st_error_set(err, ST_ERR_ARG, "infill: no layer %zu to plan", i);
+	rc = clip_paths_append(&R, &inner->paths, err);
+	if (!rc)
+		rc = clip_clean(&R, INFILL_CLEAN_NM, err);
+	if (rc) {
+		clip_paths_free(&R);
+		return rc;
+	}
 	c = (struct ctx){.s = &job->s,
 			 .st = job->st,
-			 .R = &inner->paths,
+			 .R = &R,
 			 .err = err,
 			 .layer = i,
 			 .h = job->st->layers[i].height,
@@ -869,9 +881,12 @@ int infill_plan_layer(const struct infill_job *job, size_t i, const struct clip_
 			 .t_top = job->t_top,
 			 .t_bot = job->t_bot};
 	c.plan = calloc(1, sizeof(*c.plan));
-	if (!c.plan)
+	if (!c.plan) {
+		clip_paths_free(&R);
 		return st_error_set(err, ST_ERR_NOMEM, "infill: out of memory planning layer %zu", i);
+	}
 	rc = fill_layer(&c);
+	clip_paths_free(&R);
 	if (rc) {
 		infill_plan_free(c.plan);
 		return rc;
