@@ -503,6 +503,42 @@ int clip_clean(struct clip_paths *ps, double distance, struct st_error *err)
 	});
 }
 
+int clip_expolys_clean(struct clip_expolys *ex, double distance, struct st_error *err)
+{
+	if (!ex || !(distance >= 0.0))
+		return st_error_set(err, ST_ERR_ARG,
+				    "clip: clip_expolys_clean needs polygons and a distance >= 0");
+	return guarded("clip_expolys_clean", err, [&] {
+		struct clip_expolys kept = {};
+		try {
+			for (size_t i = 0; i < ex->n; i++) {
+				bool outer = true;
+				for (size_t p = ex->first[i]; p < ex->first[i + 1]; p++) {
+					Path q = to_path(clip_path_xy(&ex->paths, p),
+							 clip_path_len(&ex->paths, p));
+					ClipperLib::CleanPolygon(q, distance);
+					if (q.size() < 3) {
+						if (outer)
+							break; /* the island is gone, holes and all */
+						continue;
+					}
+					if (outer)
+						open_expoly(&kept);
+					push_path(&kept.paths, q);
+					kept.first[kept.n] = kept.paths.n;
+					outer = false;
+				}
+			}
+		} catch (...) {
+			clip_expolys_free(&kept);
+			throw;
+		}
+		clip_expolys_free(ex);
+		*ex = kept;
+		return 0;
+	});
+}
+
 int clip_area(const int64_t *xy, size_t npts, double *area, struct st_error *err)
 {
 	if (!area || (npts && !xy))

@@ -210,6 +210,14 @@ int clip_simplify(const struct clip_paths *in, enum clip_fill fill, struct clip_
  */
 int clip_clean(struct clip_paths *ps, double distance, struct st_error *err);
 
+/*
+ * clip_expolys_clean - clip_clean on every contour of ex, keeping the
+ * expolygon structure: an outer contour left with fewer than 3 points
+ * drops its expolygon, a hole so left is dropped alone.  Returns 0,
+ * ST_ERR_ARG, ST_ERR_NOMEM (ex unchanged then).
+ */
+int clip_expolys_clean(struct clip_expolys *ex, double distance, struct st_error *err);
+
 /* clip_area - signed area of one closed path in nm^2 (> 0 for CCW) into *area. */
 int clip_area(const int64_t *xy, size_t npts, double *area, struct st_error *err);
 
