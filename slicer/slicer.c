@@ -148,13 +148,6 @@ int slicer_place(const struct mesh *m, const struct slicer_bed *bed, double offs
 	return 0;
 }
 
-/*
- * Section vertices that move the outline less than this are dropped once
- * after slicing, nm: far below the 0.02 mm accuracy bound, and every wall
- * offset makes two or three points of each vertex it keeps.
- */
-#define SLICER_CLEAN_NM 1000.0
-
 /* Report progress if the caller asked for it. */
 static void progress(const struct slicer_config *c, const char *stage, double done)
 {
