@@ -501,8 +501,9 @@ static int gap_fill(struct ctx *c, const struct clip_paths *P, const struct clip
 	struct clip_paths cover = {0}, piece = {0};
 	struct clip_expolys gaps = {0};
 	struct medial_lines ml = {0};
-	int rc = clip_offset_open(segs, fit / 2.0, CLIP_JOIN_ROUND, CLIP_END_ROUND, 2.0,
-				  INFILL_ARC_NM, &cover, c->err);
+	int rc = segs->n ? clip_offset_open(segs, fit / 2.0, CLIP_JOIN_ROUND, CLIP_END_ROUND,
+					    2.0, INFILL_ARC_NM, &cover, c->err)
+			 : 0;
 
 	if (!rc)
 		rc = clip_boolean_ex(CLIP_DIFFERENCE, P, &cover, CLIP_NONZERO, &gaps, c->err);
@@ -580,6 +581,22 @@ static int bridge_direction(struct ctx *c, const struct clip_paths *P,
 }
 
 /*
+ * Whether island P is narrower than the line spacing sp everywhere (P
+ * shrunk by sp/2 is empty).  Lines of any direction would cross such a
+ * strip as short dashes with voids between them (1 % of the section of a
+ * 2 mm wall between its walls); its centre line carries it instead.
+ */
+static int too_narrow(struct ctx *c, const struct clip_paths *P, double sp, bool *narrow)
+{
+	struct clip_paths core = {0};
+	int rc = clip_offset(P, -sp / 2.0, CLIP_JOIN_ROUND, 0.0, INFILL_ARC_NM, &core, c->err);
+
+	*narrow = !rc && core.n == 0;
+	clip_paths_free(&core);
+	return rc;
+}
+
+/*
  * Solid lines over every island of X: direction a, or per island the
  * detected bridge direction over anchors when anchors is not NULL.
  */
@@ -597,7 +614,15 @@ static int fill_solid(struct ctx *c, const struct clip_paths *X, double a,
 
 	for (size_t i = 0; i < ex.n && !rc; i++) {
 		double ai = a;
+		bool narrow = false;
 		rc = clip_expolys_get(&ex, i, &P, c->err);
+		if (!rc && b->gap_fill)
+			rc = too_narrow(c, &P, b->sp, &narrow);
+		if (!rc && narrow) { /* one bead along it, as wide as it is */
+			clip_paths_clear(&segs);
+			rc = gap_fill(c, &P, &segs, 0.0);
+			continue;
+		}
 		if (!rc && anchors)
 			rc = bridge_direction(c, &P, A, b->sp, &ai);
 		if (!rc)

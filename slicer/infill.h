@@ -36,7 +36,9 @@
  * such lines first (bridge_angle overrides).  Line ends stop half a spacing inside the
  * region grown by infill_overlap, so beads reach into the innermost wall.
  * Strips of a solid island that its lines leave uncovered, at least
- * gap_fill_min wide, get PATH_GAP_FILL beads along their centre lines.
+ * gap_fill_min wide, get PATH_GAP_FILL beads along their centre lines; an
+ * island narrower than its line spacing everywhere gets no lines, only
+ * such beads (lines across it would leave voids between them).
  *
  * Lengths in settings are mm, geometry nm (toolpath.h).
  */
