@@ -465,7 +465,7 @@ struct sink {
 	struct layer_stack *stack; /* slicer_toolpaths */
 	const struct gcodew_settings *gs; /* slicer_run: the writer's settings, */
 	const char *path;	   /* the file, */
-	struct gcodew *w;	   /* the writer once begun; NULL after its first error */
+	struct gcodew *w;	   /* the writer once begun */
 	int rc;			   /* the writer's first error: reported after any
 				    * of the stages', as when writing came last */
 	struct st_error err;
@@ -480,13 +480,8 @@ static int sink_layer(struct sink *k, struct layer_paths *m, size_t li)
 		*m = (struct layer_paths){.z = d->z, .height = d->height};
 		return 0;
 	}
-	if (k->w) {
-		int rc = gcodew_layer(k->w, m, &k->err);
-		if (rc) {
-			k->rc = rc;
-			k->w = NULL; /* nothing more is written; the stages go on */
-		}
-	}
+	if (k->w && !k->rc) /* after an error nothing more is written; the stages go on */
+		k->rc = gcodew_layer(k->w, m, &k->err);
 	layer_paths_clear(m);
 	return 0;
 }
