@@ -57,7 +57,7 @@ static void slice_usage(FILE *out)
 		"  --center X,Y            put the model's centre there, mm (default: bed centre)\n"
 		"  --no-repair             slice the mesh as it is read\n"
 		"  --json                  one JSON object on stdout instead of the text summary\n"
-		"  --threads N             cores for the repair and the walls (default: all)\n"
+		"  --threads N             cores for the repair, walls and infill (default: all)\n"
 		"\n"
 		"Exit status: 0 written, 1 the job cannot be done (no printable repair, the model\n"
 		"does not fit, OUT not written), 2 usage or bad settings, 65 unreadable model or\n"

@@ -192,20 +192,35 @@ static int check_settings(const struct gcodew_settings *s, struct st_error *err)
  * Numbers: fixed decimals, trailing zeros dropped, never an exponent or "-0".
  */
 
-/* Write u / 10^digits into buf (NUM_MAX bytes). */
-static void fmt_units(char *buf, int64_t u, int digits)
+/*
+ * Write u / 10^digits into buf (NUM_MAX bytes, digits < NUM_MAX - 3) and
+ * return its length.  By hand rather than through snprintf: a print has
+ * millions of coordinates and this was a tenth of the writer's time.
+ */
+static size_t fmt_units(char *buf, int64_t u, int digits)
 {
-	uint64_t mag = u < 0 ? (uint64_t)0 - (uint64_t)u : (uint64_t)u, scale = 1;
-	int len;
+	uint64_t mag = u < 0 ? (uint64_t)0 - (uint64_t)u : (uint64_t)u;
+	char rev[NUM_MAX]; /* decimal digits, least significant first */
+	int n = 0, lo = 0;
+	size_t len = 0;
 
-	for (int i = 0; i < digits; i++)
-		scale *= 10;
-	len = snprintf(buf, NUM_MAX, "%s%llu.%0*llu", u < 0 ? "-" : "",
-		       (unsigned long long)(mag / scale), digits, (unsigned long long)(mag % scale));
-	while (len > 0 && buf[len - 1] == '0')
-		buf[--len] = '\0';
-	if (len > 0 && buf[len - 1] == '.')
-		buf[--len] = '\0';
+	do {
+		rev[n++] = (char)('0' + mag % 10);
+		mag /= 10;
+	} while (mag || n <= digits);
+	if (u < 0)
+		buf[len++] = '-';
+	for (int i = n - 1; i >= digits; i--)
+		buf[len++] = rev[i];
+	while (lo < digits && rev[lo] == '0') /* trailing zeros dropped */
+		lo++;
+	if (lo < digits) {
+		buf[len++] = '.';
+		for (int i = digits - 1; i >= lo; i--)
+			buf[len++] = rev[i];
+	}
+	buf[len] = '\0';
+	return len;
 }
 
 /* Write v rounded to digits decimals into buf (NUM_MAX bytes). */
@@ -497,9 +512,17 @@ struct op {
 	double f;	     /* mm/s */
 };
 
-struct writer {
+struct gcodew {
 	const struct gcodew_settings *s;
-	const struct layer_stack *stack;
+	size_t nlayers;		 /* layers announced to gcodew_begin */
+	size_t next;		 /* index of the next layer to write */
+	char *start, *end;	 /* custom G-code, placeholders expanded */
+	FILE *body;		 /* the body, generated before the header */
+	const char *path;	 /* gcodew_begin_file: the file to write, */
+	char *tmp;		 /* the temporary file beside it until renamed, */
+	FILE *out;		 /* open on tmp */
+	double len[PATH_ROLES], area[PATH_ROLES]; /* per role: nm and nm^2 of
+						     * beads, for the mean widths */
 	struct st_error *err;
 	FILE *fp;		 /* where put() writes: the body, then the output */
 	struct est_planner *est; /* times the body's moves as they are written */
@@ -534,7 +557,7 @@ struct writer {
 };
 
 /* Append an operation. */
-static int push(struct writer *w, struct op o)
+static int push(struct gcodew *w, struct op o)
 {
 	if (w->nops == w->opcap) {
 		size_t cap = w->opcap ? 2 * w->opcap : 256;
@@ -552,7 +575,7 @@ static int push(struct writer *w, struct op o)
 }
 
 /* A move op to (x, y, z); xy false leaves X and Y alone. */
-static int push_move(struct writer *w, enum move_kind mv, bool xy, double x, double y, double z,
+static int push_move(struct gcodew *w, enum move_kind mv, bool xy, double x, double y, double z,
 		     double e, double f)
 {
 	int rc = push(w, (struct op){.kind = OP_MOVE, .mv = mv, .xy = xy, .x = x, .y = y, .z = z,
@@ -574,7 +597,7 @@ static double z_speed(const struct gcodew_settings *s)
 }
 
 /* Retract, wiping back over the last path when asked. */
-static int plan_retract(struct writer *w)
+static int plan_retract(struct gcodew *w)
 {
 	const struct gcodew_settings *s = w->s;
 	double len = s->retract_length, taken = 0;
@@ -610,7 +633,7 @@ static int plan_retract(struct writer *w)
  * short enough to skip it, reach the layer's Z before moving in XY when not
  * lifted, unretract on arrival.
  */
-static int plan_travel(struct writer *w, double x, double y)
+static int plan_travel(struct gcodew *w, double x, double y)
 {
 	const struct gcodew_settings *s = w->s;
 	struct travel_route *r = &w->route;
@@ -695,7 +718,7 @@ static size_t trav(const struct toolpath *p, bool rev, size_t k)
 }
 
 /* Remember the printed path backwards from its end, for a wipe. */
-static int record_wipe(struct writer *w, const struct toolpath *p, bool rev, size_t steps)
+static int record_wipe(struct gcodew *w, const struct toolpath *p, bool rev, size_t steps)
 {
 	const struct gcodew_settings *s = w->s;
 	double dist = s->retract_length / s->retract_speed * WIPE_SPEED_SHARE * s->travel_speed;
@@ -725,7 +748,7 @@ static int record_wipe(struct writer *w, const struct toolpath *p, bool rev, siz
 }
 
 /* Plan path pi of layer li: travel to its start, then its segments. */
-static int plan_path(struct writer *w, const struct layer_paths *l, size_t li, size_t pi, bool rev)
+static int plan_path(struct gcodew *w, const struct layer_paths *l, size_t li, size_t pi, bool rev)
 {
 	const struct gcodew_settings *s = w->s;
 	const struct toolpath *p = &l->paths[pi];
@@ -763,7 +786,7 @@ static int plan_path(struct writer *w, const struct layer_paths *l, size_t li, s
 }
 
 /* Squared distance (mm^2) from the nozzle to (x, y) in nm. */
-static double dist2(const struct writer *w, int64_t x, int64_t y)
+static double dist2(const struct gcodew *w, int64_t x, int64_t y)
 {
 	double dx = x / SLICE_UNITS_PER_MM - w->px, dy = y / SLICE_UNITS_PER_MM - w->py;
 	return dx * dx + dy * dy;
@@ -776,7 +799,7 @@ static bool keep_order(enum path_role role)
 }
 
 /* Plan the paths [i, j) of one role run, nearest neighbour first. */
-static int plan_run(struct writer *w, const struct layer_paths *l, size_t li, size_t i, size_t j)
+static int plan_run(struct gcodew *w, const struct layer_paths *l, size_t li, size_t i, size_t j)
 {
 	for (size_t left = j - i; left > 0; left--) {
 		size_t best = j;
@@ -807,7 +830,7 @@ static int plan_run(struct writer *w, const struct layer_paths *l, size_t li, si
 }
 
 /* Plan every path of layer li into w->ops. */
-static int plan_layer(struct writer *w, const struct layer_paths *l, size_t li)
+static int plan_layer(struct gcodew *w, const struct layer_paths *l, size_t li)
 {
 	int rc = 0;
 
@@ -844,7 +867,7 @@ static double slowed(double v, double f, double min_speed)
 }
 
 /* Planner time of the layer's ops with extrusions slowed by f. */
-static int layer_time(struct writer *w, const double start[EST_AXES], double f, double *t)
+static int layer_time(struct gcodew *w, const double start[EST_AXES], double f, double *t)
 {
 	struct est_planner *p = est_planner_new(&w->s->limits, start, w->err);
 	struct est_result r;
@@ -899,7 +922,7 @@ static int fan_for(const struct gcodew_settings *s, size_t li, double t)
 }
 
 /* Decide the layer's fan and slow its extrusions down if it is too fast. */
-static int cool_layer(struct writer *w, size_t li, const double start[EST_AXES])
+static int cool_layer(struct gcodew *w, size_t li, const double start[EST_AXES])
 {
 	const struct gcodew_settings *s = w->s;
 	double t, target = s->slowdown_below_layer_time, lo = 0, hi = 1;
@@ -937,9 +960,9 @@ static int cool_layer(struct writer *w, size_t li, const double start[EST_AXES])
  */
 
 /* printf to the current output. */
-static void put(struct writer *w, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void put(struct gcodew *w, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
-static void put(struct writer *w, const char *fmt, ...)
+static void put(struct gcodew *w, const char *fmt, ...)
 {
 	va_list ap;
 
@@ -949,7 +972,7 @@ static void put(struct writer *w, const char *fmt, ...)
 }
 
 /* Set the fan to percent when it differs from what was written. */
-static void set_fan(struct writer *w, int percent)
+static void set_fan(struct gcodew *w, int percent)
 {
 	if (percent == w->fan)
 		return;
@@ -961,14 +984,15 @@ static void set_fan(struct writer *w, int percent)
 }
 
 /* Write one move op and feed it to the estimator. */
-static int emit_move(struct writer *w, const struct op *o)
+static int emit_move(struct gcodew *w, const struct op *o)
 {
 	int64_t x = o->xy ? llround(o->x * XYZ_UNITS) : w->wx;
 	int64_t y = o->xy ? llround(o->y * XYZ_UNITS) : w->wy;
 	int64_t z = llround(o->z * XYZ_UNITS), epos, de;
 	long long f = llround(o->f * 60);
 	bool mx, my, mz;
-	char nx[NUM_MAX], ny[NUM_MAX], nz[NUM_MAX], ne[NUM_MAX], nf[NUM_MAX] = "";
+	char line[6 * NUM_MAX];
+	size_t len;
 
 	switch (o->mv) {
 	case MV_EXTRUDE:
@@ -996,14 +1020,32 @@ static int emit_move(struct writer *w, const struct op *o)
 		return 0;
 	if (f < 1)
 		f = 1;
-	fmt_units(nx, x, XYZ_DIGITS);
-	fmt_units(ny, y, XYZ_DIGITS);
-	fmt_units(nz, z, XYZ_DIGITS);
-	fmt_units(ne, w->s->use_relative_e_distances ? de : epos, E_DIGITS);
-	if (f != w->wf)
-		snprintf(nf, sizeof(nf), " F%lld", f);
-	put(w, "G1%s%s%s%s%s%s%s%s%s\n", mx ? " X" : "", mx ? nx : "", my ? " Y" : "", my ? ny : "",
-	    mz ? " Z" : "", mz ? nz : "", de ? " E" : "", de ? ne : "", nf);
+	/* The line is assembled here and written at once (see fmt_units). */
+	len = 2;
+	memcpy(line, "G1", 2);
+	if (mx) {
+		memcpy(line + len, " X", 2);
+		len += 2 + fmt_units(line + len + 2, x, XYZ_DIGITS);
+	}
+	if (my) {
+		memcpy(line + len, " Y", 2);
+		len += 2 + fmt_units(line + len + 2, y, XYZ_DIGITS);
+	}
+	if (mz) {
+		memcpy(line + len, " Z", 2);
+		len += 2 + fmt_units(line + len + 2, z, XYZ_DIGITS);
+	}
+	if (de) {
+		memcpy(line + len, " E", 2);
+		len += 2 + fmt_units(line + len + 2,
+				     w->s->use_relative_e_distances ? de : epos, E_DIGITS);
+	}
+	if (f != w->wf) {
+		memcpy(line + len, " F", 2);
+		len += 2 + fmt_units(line + len + 2, f, 0);
+	}
+	line[len++] = '\n';
+	fwrite(line, 1, len, w->fp);
 	w->moves++;
 	if (o->xy) {
 		w->wx = x;
@@ -1022,7 +1064,7 @@ static int emit_move(struct writer *w, const struct op *o)
 }
 
 /* Write the planned ops of the current layer. */
-static int emit_ops(struct writer *w)
+static int emit_ops(struct gcodew *w)
 {
 	int rc = 0;
 
@@ -1040,7 +1082,7 @@ static int emit_ops(struct writer *w)
 }
 
 /* G92 E0: the written E position becomes 0, retraction state kept. */
-static void reset_e(struct writer *w)
+static void reset_e(struct gcodew *w)
 {
 	put(w, "G92 E0\n");
 	w->ext_exact -= w->epos_units / E_UNITS;
@@ -1049,10 +1091,9 @@ static void reset_e(struct writer *w)
 }
 
 /* Plan, cool and write layer li. */
-static int do_layer(struct writer *w, size_t li)
+static int do_layer(struct gcodew *w, const struct layer_paths *l, size_t li)
 {
 	const struct gcodew_settings *s = w->s;
-	const struct layer_paths *l = &w->stack->layers[li];
 	double start[EST_AXES] = {w->wx / XYZ_UNITS, w->wy / XYZ_UNITS, w->wz / XYZ_UNITS, 0};
 	char nz[NUM_MAX], nh[NUM_MAX];
 	int rc;
@@ -1083,7 +1124,7 @@ static int do_layer(struct writer *w, size_t li)
 }
 
 /* Write "; estimated printing time = 1h 2m 3s". */
-static void put_time(struct writer *w, double seconds)
+static void put_time(struct gcodew *w, double seconds)
 {
 	long long t = llround(seconds), d = t / 86400, h = t / 3600 % 24, m = t / 60 % 60;
 
@@ -1098,11 +1139,11 @@ static void put_time(struct writer *w, double seconds)
 }
 
 /* The header: estimates, settings, machine limits, bead widths used. */
-static void put_header(struct writer *w, const struct gcodew_summary *sum)
+static void put_header(struct gcodew *w, const struct gcodew_summary *sum)
 {
 	static const char axis[EST_AXES] = {'x', 'y', 'z', 'e'};
 	const struct est_limits *lim = &w->s->limits;
-	double len[PATH_ROLES] = {0}, area[PATH_ROLES] = {0};
+	const double *len = w->len, *area = w->area;
 	char n[NUM_MAX];
 
 	put(w, "; generated by Stratum\n");
@@ -1135,19 +1176,6 @@ static void put_header(struct writer *w, const struct gcodew_summary *sum)
 	fmt_num(n, lim->accel_travel, 3);
 	put(w, "; machine_max_acceleration_travel = %s\n", n);
 
-	/* Mean bead width per role, weighted by length. */
-	for (size_t li = 0; li < w->stack->nlayers; li++) {
-		const struct layer_paths *l = &w->stack->layers[li];
-		for (size_t pi = 0; pi < l->n; pi++) {
-			const struct toolpath *p = &l->paths[pi];
-			for (size_t k = 0; k + 1 < (p->closed ? p->n + 1 : p->n); k++) {
-				const struct path_point *a = &p->pts[k], *b = &p->pts[trav(p, false, k + 1)];
-				double d = hypot((double)(b->x - a->x), (double)(b->y - a->y));
-				len[p->role] += d;
-				area[p->role] += d * a->width;
-			}
-		}
-	}
 	for (int r = 0; r < PATH_ROLES; r++)
 		if (len[r] > 0) {
 			fmt_num(n, area[r] / len[r] / SLICE_UNITS_PER_MM, 3);
@@ -1157,7 +1185,7 @@ static void put_header(struct writer *w, const struct gcodew_summary *sum)
 }
 
 /* Write custom G-code text, ending it with a newline. */
-static void put_custom(struct writer *w, const char *text)
+static void put_custom(struct gcodew *w, const char *text)
 {
 	size_t n = strlen(text);
 
@@ -1165,12 +1193,12 @@ static void put_custom(struct writer *w, const char *text)
 		put(w, "%s%s", text, text[n - 1] == '\n' ? "" : "\n");
 }
 
-/* One pass over the whole print: start, layers, end. */
-static int run_pass(struct writer *w, const char *start, const char *end)
+/* The part before the first layer: temperatures, start G-code, modes. */
+static void put_start(struct gcodew *w)
 {
 	const struct gcodew_settings *s = w->s;
+	const char *start = w->start;
 	bool bed_set = gcode_sets(start, 140, 190), nozzle_set = gcode_sets(start, 104, 109);
-	int rc = 0;
 
 	if (!bed_set && s->first_layer_bed_temperature > 0)
 		put(w, "M190 S%d ; set bed temperature and wait for it to be reached\n",
@@ -1187,24 +1215,42 @@ static int run_pass(struct writer *w, const char *start, const char *end)
 	put(w, "G92 E0\n");
 	w->fan = -1;
 	set_fan(w, 0);
-	for (size_t li = 0; li < w->stack->nlayers && rc == 0; li++)
-		rc = do_layer(w, li);
-	if (rc)
-		return rc;
+}
+
+/* The part after the last layer: final retraction, fan off, end G-code. */
+static int put_end(struct gcodew *w)
+{
+	int rc = 0;
+
 	/* Final retraction, left for the end G-code to undo. */
 	w->nops = 0;
-	if (w->pos_known && s->retract_length > 0) {
+	if (w->pos_known && w->s->retract_length > 0) {
 		rc = plan_retract(w);
 		if (rc == 0)
 			rc = emit_ops(w);
 	}
 	set_fan(w, 0);
-	put_custom(w, end);
+	put_custom(w, w->end);
 	return rc;
 }
 
+/* Add the beads of layer l to the per-role sums of the header's widths
+ * (in the order of the layers, so the sums do not depend on batching). */
+static void add_widths(struct gcodew *w, const struct layer_paths *l)
+{
+	for (size_t pi = 0; pi < l->n; pi++) {
+		const struct toolpath *p = &l->paths[pi];
+		for (size_t k = 0; k + 1 < (p->closed ? p->n + 1 : p->n); k++) {
+			const struct path_point *a = &p->pts[k], *b = &p->pts[trav(p, false, k + 1)];
+			double d = hypot((double)(b->x - a->x), (double)(b->y - a->y));
+			w->len[p->role] += d;
+			w->area[p->role] += d * a->width;
+		}
+	}
+}
+
 /* The machine state before the first line: nothing known, fan unset. */
-static void writer_start(struct writer *w)
+static void writer_start(struct gcodew *w)
 {
 	w->pos_known = false;
 	w->px = w->py = w->pz = 0;
@@ -1236,91 +1282,156 @@ static int copy_body(FILE *body, FILE *fp, struct st_error *err)
 	return 0;
 }
 
-int gcodew_write_stream(const struct layer_stack *stack, const struct gcodew_settings *s,
-			FILE *fp, struct gcodew_summary *sum, struct st_error *err)
+void gcodew_free(struct gcodew *w)
 {
-	struct st_error local;
-	struct writer w = {.s = s, .stack = stack};
-	struct gcodew_summary res = {0};
-	struct est_result er;
-	char *start = NULL, *end = NULL;
-	FILE *body = NULL;
+	if (!w)
+		return;
+	if (w->body)
+		fclose(w->body);
+	if (w->out) /* a file begun and never finished */
+		fclose(w->out);
+	if (w->tmp) {
+		unlink(w->tmp);
+		free(w->tmp);
+	}
+	est_planner_free(w->est);
+	free(w->ops);
+	free(w->wipe);
+	free(w->done);
+	travel_route_free(&w->route);
+	free(w->start);
+	free(w->end);
+	free(w);
+}
+
+int gcodew_begin(const struct gcodew_settings *s, size_t nlayers, struct gcodew **out,
+		 struct st_error *err)
+{
+	struct gcodew *w;
 	int rc;
 
-	if (!err)
-		err = &local;
-	w.err = err;
-	if (!stack || !s || !fp || (stack->nlayers && !stack->layers))
+	if (!out)
+		return st_error_set(err, ST_ERR_ARG, "G-code: gcodew_begin needs an out pointer");
+	*out = NULL;
+	if (!s)
 		return st_error_set(err, ST_ERR_ARG, "G-code: no layers, settings or output given");
 	rc = check_settings(s, err);
+	if (rc)
+		return rc;
+	w = calloc(1, sizeof(*w));
+	if (!w)
+		return st_error_set(err, ST_ERR_NOMEM, "G-code: out of memory");
+	w->s = s;
+	w->nlayers = nlayers;
+	w->err = err;
+	rc = gcodew_expand(s->start_gcode, "start_gcode", s, nlayers, &w->start, err);
 	if (rc == 0)
-		rc = gcodew_expand(s->start_gcode, "start_gcode", s, stack->nlayers, &start, err);
-	if (rc == 0)
-		rc = gcodew_expand(s->end_gcode, "end_gcode", s, stack->nlayers, &end, err);
+		rc = gcodew_expand(s->end_gcode, "end_gcode", s, nlayers, &w->end, err);
 	if (rc)
 		goto out_free;
-	w.fil_area = M_PI * s->filament_diameter * s->filament_diameter / 4;
+	w->fil_area = M_PI * s->filament_diameter * s->filament_diameter / 4;
 
 	/* One pass: the body into a temporary file, the estimator beside it. */
-	body = tmpfile();
-	if (!body) {
+	w->body = tmpfile();
+	if (!w->body) {
 		rc = st_error_set(err, ST_ERR_IO, "G-code: cannot create a temporary file: %s",
 				  strerror(errno));
 		goto out_free;
 	}
-	w.est = est_planner_new(&s->limits, NULL, err);
-	if (!w.est) {
-		rc = err->code;
+	w->est = est_planner_new(&s->limits, NULL, err);
+	if (!w->est) {
+		rc = err && err->code ? err->code : ST_ERR_NOMEM;
 		goto out_free;
 	}
-	w.fp = body;
-	writer_start(&w);
-	rc = run_pass(&w, start, end);
-	est_planner_result(w.est, &er);
-	est_planner_free(w.est);
-	w.est = NULL;
-	if (rc == 0 && (fflush(body) != 0 || ferror(body)))
+	w->fp = w->body;
+	writer_start(w);
+	put_start(w);
+	*out = w;
+	return 0;
+out_free:
+	gcodew_free(w);
+	return rc;
+}
+
+int gcodew_layer(struct gcodew *w, const struct layer_paths *l, struct st_error *err)
+{
+	if (!w || !l)
+		return st_error_set(err, ST_ERR_ARG, "G-code: no writer or layer given");
+	if (w->next >= w->nlayers)
+		return st_error_set(err, ST_ERR_ARG, "G-code: layer %zu is one more than the %zu "
+				    "announced", w->next + 1, w->nlayers);
+	w->err = err;
+	add_widths(w, l);
+	return do_layer(w, l, w->next++);
+}
+
+int gcodew_finish(struct gcodew *w, FILE *fp, struct gcodew_summary *sum, struct st_error *err)
+{
+	struct gcodew_summary res = {0};
+	struct est_result er;
+	int rc;
+
+	if (!w || !fp)
+		return st_error_set(err, ST_ERR_ARG, "G-code: no writer or output given");
+	if (w->next != w->nlayers)
+		return st_error_set(err, ST_ERR_ARG, "G-code: %zu of the %zu layers announced were "
+				    "written", w->next, w->nlayers);
+	w->err = err;
+	rc = put_end(w);
+	est_planner_result(w->est, &er);
+	if (rc == 0 && (fflush(w->body) != 0 || ferror(w->body)))
 		rc = st_error_set(err, ST_ERR_IO, "G-code: write failed: %s", strerror(errno));
 	if (rc)
-		goto out_free;
+		return rc;
 	res.time_s = er.time_s;
-	res.filament_mm = w.filament_mm;
-	res.filament_cm3 = w.filament_mm * w.fil_area / 1000;
-	res.filament_g = res.filament_cm3 * s->filament_density;
-	res.layers = stack->nlayers;
-	res.moves = w.moves;
+	res.filament_mm = w->filament_mm;
+	res.filament_cm3 = w->filament_mm * w->fil_area / 1000;
+	res.filament_g = res.filament_cm3 * w->s->filament_density;
+	res.layers = w->nlayers;
+	res.moves = w->moves;
 
 	/* The header first, then the body as generated. */
-	w.fp = fp;
-	put_header(&w, &res);
-	rc = copy_body(body, fp, err);
+	w->fp = fp;
+	put_header(w, &res);
+	rc = copy_body(w->body, fp, err);
 	if (rc == 0 && (fflush(fp) != 0 || ferror(fp)))
 		rc = st_error_set(err, ST_ERR_IO, "G-code: write failed: %s", strerror(errno));
 	if (rc == 0 && sum)
 		*sum = res;
-out_free:
-	if (body)
-		fclose(body);
-	free(w.ops);
-	free(w.wipe);
-	free(w.done);
-	travel_route_free(&w.route);
-	free(start);
-	free(end);
 	return rc;
 }
 
-int gcodew_write_file(const struct layer_stack *stack, const struct gcodew_settings *s,
-		      const char *path, struct gcodew_summary *sum, struct st_error *err)
+int gcodew_write_stream(const struct layer_stack *stack, const struct gcodew_settings *s,
+			FILE *fp, struct gcodew_summary *sum, struct st_error *err)
 {
 	struct st_error local;
+	struct gcodew *w = NULL;
+	int rc;
+
+	if (!err)
+		err = &local;
+	if (!stack || !s || !fp || (stack->nlayers && !stack->layers))
+		return st_error_set(err, ST_ERR_ARG, "G-code: no layers, settings or output given");
+	rc = gcodew_begin(s, stack->nlayers, &w, err);
+	for (size_t li = 0; rc == 0 && li < stack->nlayers; li++)
+		rc = gcodew_layer(w, &stack->layers[li], err);
+	if (rc == 0)
+		rc = gcodew_finish(w, fp, sum, err);
+	gcodew_free(w);
+	return rc;
+}
+
+int gcodew_begin_file(const struct gcodew_settings *s, size_t nlayers, const char *path,
+		      struct gcodew **out, struct st_error *err)
+{
 	char *tmp;
 	size_t n;
 	int fd, rc;
 	FILE *fp;
 
-	if (!err)
-		err = &local;
+	if (!out)
+		return st_error_set(err, ST_ERR_ARG, "G-code: gcodew_begin_file needs an out pointer");
+	*out = NULL;
 	if (!path || !*path)
 		return st_error_set(err, ST_ERR_ARG, "G-code: no output file name given");
 	n = strlen(path);
@@ -1332,7 +1443,8 @@ int gcodew_write_file(const struct layer_stack *stack, const struct gcodew_setti
 	if (fd < 0) {
 		rc = st_error_set(err, ST_ERR_IO, "%s: cannot create a temporary file beside it: %s",
 				  path, strerror(errno));
-		goto out_free_name;
+		free(tmp);
+		return rc;
 	}
 	if (fchmod(fd, 0644) != 0 || !(fp = fdopen(fd, "w"))) {
 		rc = st_error_set(err, ST_ERR_IO, "%s: cannot open %s: %s", path, tmp,
@@ -1340,19 +1452,63 @@ int gcodew_write_file(const struct layer_stack *stack, const struct gcodew_setti
 		close(fd);
 		goto out_unlink;
 	}
-	rc = gcodew_write_stream(stack, s, fp, sum, err);
-	if (rc == 0 && fsync(fileno(fp)) != 0)
-		rc = st_error_set(err, ST_ERR_IO, "%s: fsync failed: %s", tmp, strerror(errno));
-	if (fclose(fp) != 0 && rc == 0)
-		rc = st_error_set(err, ST_ERR_IO, "%s: close failed: %s", tmp, strerror(errno));
-	if (rc == 0 && rename(tmp, path) != 0)
-		rc = st_error_set(err, ST_ERR_IO, "%s: cannot rename %s over it: %s", path, tmp,
-				  strerror(errno));
-	if (rc == 0)
-		goto out_free_name;
+	rc = gcodew_begin(s, nlayers, out, err);
+	if (rc) {
+		fclose(fp);
+		goto out_unlink;
+	}
+	(*out)->path = path;
+	(*out)->tmp = tmp;
+	(*out)->out = fp;
+	return 0;
 out_unlink:
 	unlink(tmp);
-out_free_name:
 	free(tmp);
+	return rc;
+}
+
+int gcodew_finish_file(struct gcodew *w, struct gcodew_summary *sum, struct st_error *err)
+{
+	FILE *fp;
+	int rc;
+
+	if (!w || !w->out)
+		return st_error_set(err, ST_ERR_ARG, "G-code: no writer of a file given");
+	rc = gcodew_finish(w, w->out, sum, err);
+	fp = w->out;
+	w->out = NULL;
+	if (rc == 0 && fsync(fileno(fp)) != 0)
+		rc = st_error_set(err, ST_ERR_IO, "%s: fsync failed: %s", w->tmp, strerror(errno));
+	if (fclose(fp) != 0 && rc == 0)
+		rc = st_error_set(err, ST_ERR_IO, "%s: close failed: %s", w->tmp, strerror(errno));
+	if (rc == 0 && rename(w->tmp, w->path) != 0)
+		rc = st_error_set(err, ST_ERR_IO, "%s: cannot rename %s over it: %s", w->path,
+				  w->tmp, strerror(errno));
+	if (rc)
+		unlink(w->tmp);
+	free(w->tmp);
+	w->tmp = NULL;
+	return rc;
+}
+
+int gcodew_write_file(const struct layer_stack *stack, const struct gcodew_settings *s,
+		      const char *path, struct gcodew_summary *sum, struct st_error *err)
+{
+	struct st_error local;
+	struct gcodew *w = NULL;
+	int rc;
+
+	if (!err)
+		err = &local;
+	if (!path || !*path)
+		return st_error_set(err, ST_ERR_ARG, "G-code: no output file name given");
+	if (!stack || !s || (stack->nlayers && !stack->layers))
+		return st_error_set(err, ST_ERR_ARG, "G-code: no layers, settings or output given");
+	rc = gcodew_begin_file(s, stack->nlayers, path, &w, err);
+	for (size_t li = 0; rc == 0 && li < stack->nlayers; li++)
+		rc = gcodew_layer(w, &stack->layers[li], err);
+	if (rc == 0)
+		rc = gcodew_finish_file(w, sum, err);
+	gcodew_free(w);
 	return rc;
 }

@@ -167,6 +167,38 @@ int gcodew_write_file(const struct layer_stack *stack, const struct gcodew_setti
 		      const char *path, struct gcodew_summary *sum, struct st_error *err);
 
 /*
+ * The same output a layer at a time, so a caller can free each layer once
+ * it is written instead of holding the whole print:
+ *   gcodew_begin  - check the settings, expand the start and end G-code for
+ *                   nlayers layers, open the body's temporary file and
+ *                   write the start of the print;
+ *   gcodew_layer  - plan, cool and write the next layer (bottom to top;
+ *                   l is only read, and may be freed on return);
+ *   gcodew_finish - after the nlayers-th layer: the end of the print, then
+ *                   the header with the estimates and the body, to fp;
+ *   gcodew_free   - release the writer (NULL is safe), finished or not.
+ * For a file, gcodew_begin_file first creates a temporary file beside path
+ * (path is kept, not copied) and gcodew_finish_file ends the print there,
+ * fsyncs it and renames it over path, as gcodew_write_file does; freeing a
+ * writer whose file was not finished removes the temporary file.  s must
+ * outlive the writer.
+ * Writing every layer of a stack this way gives exactly
+ * gcodew_write_stream's bytes.  Errors as gcodew_write_stream's, plus
+ * ST_ERR_ARG for a layer beyond nlayers or a finish before the last one.
+ * One writer is used by one thread at a time.
+ */
+struct gcodew;
+
+int gcodew_begin(const struct gcodew_settings *s, size_t nlayers, struct gcodew **out,
+		 struct st_error *err);
+int gcodew_layer(struct gcodew *w, const struct layer_paths *l, struct st_error *err);
+int gcodew_finish(struct gcodew *w, FILE *fp, struct gcodew_summary *sum, struct st_error *err);
+int gcodew_begin_file(const struct gcodew_settings *s, size_t nlayers, const char *path,
+		      struct gcodew **out, struct st_error *err);
+int gcodew_finish_file(struct gcodew *w, struct gcodew_summary *sum, struct st_error *err);
+void gcodew_free(struct gcodew *w);
+
+/*
  * gcodew_expand - substitute PrusaSlicer placeholders in @text: [name],
  * [name_0] (the legacy form of a per-extruder value), {name} and {name[i]}
  * where i is 0 or initial_extruder/current_extruder.

@@ -20,27 +20,62 @@
 #define INFILL_BRIDGE_GAP_MM 0.05
 /* Bridges reach this many solid widths into the supported area. */
 #define INFILL_ANCHOR_WIDTHS 3.0
-/* Bridge directions tried: every 180 / this many degrees. */
-#define INFILL_BRIDGE_DIRS 180
+/* Bridge directions tried: every 180 / this many degrees (5, the step of
+ * PrusaSlicer's bridge detector; every degree cost a sixth of the infill
+ * stage on the scan model and chose the same bridges within a few degrees). */
+#define INFILL_BRIDGE_DIRS 36
 /* Directions anchoring within this fraction of the best compete on length. */
 #define INFILL_BRIDGE_SCORE_SLACK 0.01
 /* Solid lines on an island's edge parallel to them stay this far inside, nm. */
 #define INFILL_EDGE_MARGIN_NM 10000.0
+/* The region inside the walls loses vertices that move its boundary less
+ * than this, nm: its round joins (arcs within 2 um) give it four times the
+ * section's vertices, and every class is cut from it. */
+#define INFILL_CLEAN_NM 2000.0
 /* Clipped pieces of lines shorter than this are dropped, nm. */
 #define INFILL_MIN_SEGMENT_NM 10000.0
 
-/* Everything one infill_generate call works with; lengths nm unless named. */
+/*
+ * One step of a layer's infill as planned: lines to be ordered nearest
+ * first from wherever the nozzle is by then, or a path to append as it is
+ * (gap fill).  Planning needs no nozzle position, so layers can be planned
+ * in parallel and emitted in order.
+ */
+struct item {
+	bool fixed;		/* a path as it is, else lines to order */
+	enum path_role role;
+	double w;		/* nm, bead width of the lines */
+	struct clip_paths segs; /* the lines */
+	bool closed;		/* the path's */
+	size_t n;
+	struct path_point *pts; /* the path's n points */
+};
+
+struct infill_plan {
+	size_t n, cap;
+	struct item *v;
+};
+
+/* What infill_job_new works out once for every layer. */
+struct infill_job {
+	struct infill_settings s;
+	const struct slice_stack *st;
+	double overlap;	     /* nm, how far infill reaches into the walls */
+	double t_top, t_bot; /* mm, shell thicknesses */
+	int64_t lx, ly;	     /* nm, where the last emitted path ended */
+};
+
+/* Everything the planning of one layer works with; lengths nm unless named. */
 struct ctx {
 	const struct infill_settings *s;
 	const struct slice_stack *st;
-	const struct clip_expolys *inner;
-	struct layer_paths *out;
+	const struct clip_paths *R;	  /* this layer's region inside the walls */
+	struct infill_plan *plan;
 	struct st_error *err;
 	size_t layer;	    /* index of the layer being filled */
 	double h;	    /* mm, its height */
 	double overlap;	    /* how far infill reaches into the walls */
 	double t_top, t_bot; /* mm, shell thicknesses */
-	int64_t lx, ly;	    /* where the last path ended */
 };
 
 /* The lines of one solid class: width, flow spacing, role. */
@@ -254,7 +289,7 @@ static double z_bottom(const struct slice_stack *st, size_t i)
  */
 static int shell(struct ctx *c, int dir, size_t count, struct clip_paths *out)
 {
-	const struct clip_paths *R = &c->inner[c->layer].paths;
+	const struct clip_paths *R = c->R;
 	struct clip_paths inter = {0};
 	int rc = 0;
 
@@ -278,26 +313,67 @@ static int shell(struct ctx *c, int dir, size_t count, struct clip_paths *out)
 	return rc;
 }
 
-/* Is (x, y) inside or on the polygon set ps (contours of expolygons)? */
-static bool in_set(const struct clip_paths *ps, int64_t x, int64_t y)
+/* A new empty item at the end of the plan, NULL when out of memory. */
+static struct item *plan_item(struct ctx *c)
 {
-	int parity = 0, where;
+	struct infill_plan *p = c->plan;
 
-	for (size_t i = 0; i < ps->n; i++) {
-		if (clip_point_in_polygon(x, y, clip_path_xy(ps, i), clip_path_len(ps, i), &where,
-					  NULL))
-			continue;
-		if (where < 0)
-			return true;
-		parity ^= where;
+	if (p->n == p->cap) {
+		size_t cap = p->cap ? 2 * p->cap : 16;
+		struct item *grown = cap < SIZE_MAX / sizeof(*grown)
+					 ? realloc(p->v, cap * sizeof(*grown))
+					 : NULL;
+		if (!grown) {
+			st_error_set(c->err, ST_ERR_NOMEM, "infill: out of memory planning a layer");
+			return NULL;
+		}
+		p->v = grown;
+		p->cap = cap;
 	}
-	return parity != 0;
+	p->v[p->n] = (struct item){0};
+	return &p->v[p->n++];
 }
 
-/* Append segs as open paths of role and width w (nm), nearest first. */
+/* Plan segs as open paths of role and width w (nm), to be ordered nearest
+ * first when the layer is emitted. */
 static int emit_segments(struct ctx *c, const struct clip_paths *segs, enum path_role role,
 			 double w)
 {
+	struct item *it = plan_item(c);
+
+	if (!it)
+		return ST_ERR_NOMEM;
+	it->role = role;
+	it->w = w;
+	return clip_paths_append(&it->segs, segs, c->err);
+}
+
+/* Plan a path of role to be appended as it is. */
+static int emit_path(struct ctx *c, enum path_role role, bool closed,
+		     const struct path_point *pts, size_t n)
+{
+	struct item *it = plan_item(c);
+
+	if (!it)
+		return ST_ERR_NOMEM;
+	it->fixed = true;
+	it->role = role;
+	it->closed = closed;
+	if (!n)
+		return 0;
+	it->pts = malloc(n * sizeof(*pts));
+	if (!it->pts)
+		return st_error_set(c->err, ST_ERR_NOMEM, "infill: out of memory planning a path");
+	memcpy(it->pts, pts, n * sizeof(*pts));
+	it->n = n;
+	return 0;
+}
+
+/* Append the lines of it to out, nearest first from (*lx, *ly). */
+static int order_segments(const struct item *it, int64_t *lx, int64_t *ly,
+			  struct layer_paths *out, struct st_error *err)
+{
+	const struct clip_paths *segs = &it->segs;
 	size_t n = segs->n, maxlen = 0;
 	bool *used = calloc(n ? n : 1, sizeof(*used));
 	struct path_point *pts;
@@ -307,8 +383,7 @@ static int emit_segments(struct ctx *c, const struct clip_paths *segs, enum path
 		maxlen = clip_path_len(segs, i) > maxlen ? clip_path_len(segs, i) : maxlen;
 	pts = malloc((maxlen ? maxlen : 1) * sizeof(*pts));
 	if (!used || !pts) {
-		rc = st_error_set(c->err, ST_ERR_NOMEM, "infill: out of memory ordering %zu lines",
-				  n);
+		rc = st_error_set(err, ST_ERR_NOMEM, "infill: out of memory ordering %zu lines", n);
 		goto out_free;
 	}
 	for (size_t left = n; left && !rc; left--) {
@@ -320,9 +395,8 @@ static int emit_segments(struct ctx *c, const struct clip_paths *segs, enum path
 				continue;
 			const int64_t *xy = clip_path_xy(segs, i);
 			size_t m = clip_path_len(segs, i);
-			double d0 = hypot((double)(xy[0] - c->lx), (double)(xy[1] - c->ly));
-			double d1 = hypot((double)(xy[2 * m - 2] - c->lx),
-					  (double)(xy[2 * m - 1] - c->ly));
+			double d0 = hypot((double)(xy[0] - *lx), (double)(xy[1] - *ly));
+			double d1 = hypot((double)(xy[2 * m - 2] - *lx), (double)(xy[2 * m - 1] - *ly));
 			if (fmin(d0, d1) < bd) {
 				bd = fmin(d0, d1);
 				best = i;
@@ -335,16 +409,16 @@ static int emit_segments(struct ctx *c, const struct clip_paths *segs, enum path
 		double len = 0;
 		for (size_t k = 0; k < m; k++) {
 			size_t j = rev ? m - 1 - k : k;
-			pts[k] = (struct path_point){xy[2 * j], xy[2 * j + 1], llround(w)};
+			pts[k] = (struct path_point){xy[2 * j], xy[2 * j + 1], llround(it->w)};
 			if (k)
 				len += hypot((double)(pts[k].x - pts[k - 1].x),
 					     (double)(pts[k].y - pts[k - 1].y));
 		}
 		if (m < 2 || len < INFILL_MIN_SEGMENT_NM)
 			continue;
-		rc = layer_add_path(c->out, role, false, pts, m, c->err);
-		c->lx = pts[m - 1].x;
-		c->ly = pts[m - 1].y;
+		rc = layer_add_path(out, it->role, false, pts, m, err);
+		*lx = pts[m - 1].x;
+		*ly = pts[m - 1].y;
 	}
 out_free:
 	free(used);
@@ -352,26 +426,45 @@ out_free:
 	return rc;
 }
 
-/* Lines clipped to the region grown by delta nm (round joins) into segs. */
-static int clip_to(struct ctx *c, const struct clip_paths *lines, const struct clip_paths *region,
-		   double delta, struct clip_paths *segs)
-{
-	struct clip_paths g = {0};
-	int rc = clip_offset(region, delta, CLIP_JOIN_ROUND, 0.0, INFILL_ARC_NM, &g, c->err);
+/*
+ * One region grown by delta nm (round joins), kept while the same region is
+ * clipped against again: the bridge directions all grow their island by
+ * the same distance but for the smallest islands.
+ */
+struct grown {
+	bool valid;
+	double delta;
+	struct clip_paths g;
+};
 
+/* Lines clipped to the region grown by delta nm (round joins) into segs;
+ * memo (may be NULL) holds the growth of this same region. */
+static int clip_to(struct ctx *c, const struct clip_paths *lines, const struct clip_paths *region,
+		   double delta, struct grown *memo, struct clip_paths *segs)
+{
+	struct grown local = {0}, *m = memo ? memo : &local;
+	int rc = 0;
+
+	if (!m->valid || m->delta != delta) {
+		m->valid = false;
+		rc = clip_offset(region, delta, CLIP_JOIN_ROUND, 0.0, INFILL_ARC_NM, &m->g, c->err);
+		m->valid = !rc;
+		m->delta = delta;
+	}
 	if (!rc)
-		rc = clip_lines(CLIP_INTERSECTION, lines, &g, CLIP_NONZERO, segs, c->err);
-	clip_paths_free(&g);
+		rc = clip_lines(CLIP_INTERSECTION, lines, &m->g, CLIP_NONZERO, segs, c->err);
+	clip_paths_free(&local.g);
 	return rc;
 }
 
 /*
  * Lines of direction a across one island P, a whole number of beads at
  * about spacing sp spanning it, clipped so their ends stop sp/2 inside P
- * grown by the overlap, into segs; *fit is the spacing used.
+ * grown by the overlap, into segs; *fit is the spacing used.  memo (may be
+ * NULL) carries P's growth between calls on the same island.
  */
 static int fitted_lines(struct ctx *c, const struct clip_paths *P, double a, double sp,
-			struct clip_paths *segs, double *fit)
+			struct grown *memo, struct clip_paths *segs, double *fit)
 {
 	struct clip_paths lines = {0};
 	struct pat_box box;
@@ -390,7 +483,8 @@ static int fitted_lines(struct ctx *c, const struct clip_paths *P, double a, dou
 	rc = pat_lines(a, *fit, vmin + *fit / 2.0, &box, &lines, c->err);
 	if (!rc)
 		rc = clip_to(c, &lines, P,
-			     fmax(c->overlap - sp / 2.0, INFILL_EDGE_MARGIN_NM - *fit / 2.0), segs);
+			     fmax(c->overlap - sp / 2.0, INFILL_EDGE_MARGIN_NM - *fit / 2.0), memo,
+			     segs);
 	clip_paths_free(&lines);
 	return rc;
 }
@@ -407,8 +501,9 @@ static int gap_fill(struct ctx *c, const struct clip_paths *P, const struct clip
 	struct clip_paths cover = {0}, piece = {0};
 	struct clip_expolys gaps = {0};
 	struct medial_lines ml = {0};
-	int rc = clip_offset_open(segs, fit / 2.0, CLIP_JOIN_ROUND, CLIP_END_ROUND, 2.0,
-				  INFILL_ARC_NM, &cover, c->err);
+	int rc = segs->n ? clip_offset_open(segs, fit / 2.0, CLIP_JOIN_ROUND, CLIP_END_ROUND,
+					    2.0, INFILL_ARC_NM, &cover, c->err)
+			 : 0;
 
 	if (!rc)
 		rc = clip_boolean_ex(CLIP_DIFFERENCE, P, &cover, CLIP_NONZERO, &gaps, c->err);
@@ -423,9 +518,7 @@ static int gap_fill(struct ctx *c, const struct clip_paths *P, const struct clip
 				       c->err);
 		for (size_t k = 0; k < ml.n && !rc; k++) {
 			struct medial_line *l = &ml.v[k];
-			rc = layer_add_path(c->out, PATH_GAP_FILL, l->closed, l->pts, l->n, c->err);
-			c->lx = l->pts[l->n - 1].x;
-			c->ly = l->pts[l->n - 1].y;
+			rc = emit_path(c, PATH_GAP_FILL, l->closed, l->pts, l->n);
 		}
 		perim_medial_free(&ml);
 	}
@@ -441,19 +534,20 @@ static int gap_fill(struct ctx *c, const struct clip_paths *P, const struct clip
  * largest share of their length (within INFILL_BRIDGE_SCORE_SLACK) compete
  * on the mean length of those anchored lines; the shortest wins.
  */
-static int bridge_direction(struct ctx *c, const struct clip_paths *P, const struct clip_paths *A,
-			    double sp, double *angle)
+static int bridge_direction(struct ctx *c, const struct clip_paths *P,
+			    const struct clip_locator *A, double sp, double *angle)
 {
 	enum { N = INFILL_BRIDGE_DIRS };
 	double score[N], mean[N], best = -1.0, fit;
 	struct clip_paths segs = {0};
+	struct grown memo = {0};
 	int rc = 0;
 
 	*angle = 0.0;
 	for (int k = 0; k < N && !rc; k++) {
 		double a = k * M_PI / N, total = 0, held = 0;
 		size_t nheld = 0;
-		rc = fitted_lines(c, P, a, sp, &segs, &fit);
+		rc = fitted_lines(c, P, a, sp, &memo, &segs, &fit);
 		for (size_t i = 0; i < segs.n && !rc; i++) {
 			const int64_t *xy = clip_path_xy(&segs, i);
 			size_t m = clip_path_len(&segs, i);
@@ -464,8 +558,9 @@ static int bridge_direction(struct ctx *c, const struct clip_paths *P, const str
 			/* Ends nudged 1 um inward, off the boundary they were clipped at. */
 			double ux = dx / len * 1000.0, uy = dy / len * 1000.0;
 			total += len;
-			if (in_set(A, xy[0] + llround(ux), xy[1] + llround(uy)) &&
-			    in_set(A, xy[2 * m - 2] - llround(ux), xy[2 * m - 1] - llround(uy))) {
+			if (clip_locator_inside(A, xy[0] + llround(ux), xy[1] + llround(uy)) &&
+			    clip_locator_inside(A, xy[2 * m - 2] - llround(ux),
+						xy[2 * m - 1] - llround(uy))) {
 				held += len;
 				nheld++;
 			}
@@ -481,6 +576,23 @@ static int bridge_direction(struct ctx *c, const struct clip_paths *P, const str
 			*angle = k * M_PI / N;
 		}
 	clip_paths_free(&segs);
+	clip_paths_free(&memo.g);
+	return rc;
+}
+
+/*
+ * Whether island P is narrower than the line spacing sp everywhere (P
+ * shrunk by sp/2 is empty).  Lines of any direction would cross such a
+ * strip as short dashes with voids between them (1 % of the section of a
+ * 2 mm wall between its walls); its centre line carries it instead.
+ */
+static int too_narrow(struct ctx *c, const struct clip_paths *P, double sp, bool *narrow)
+{
+	struct clip_paths core = {0};
+	int rc = clip_offset(P, -sp / 2.0, CLIP_JOIN_ROUND, 0.0, INFILL_ARC_NM, &core, c->err);
+
+	*narrow = !rc && core.n == 0;
+	clip_paths_free(&core);
 	return rc;
 }
 
@@ -493,21 +605,34 @@ static int fill_solid(struct ctx *c, const struct clip_paths *X, double a,
 {
 	struct clip_expolys ex = {0};
 	struct clip_paths P = {0}, segs = {0};
+	struct clip_locator *A = NULL;
 	double fit;
 	int rc = clip_boolean_ex(CLIP_UNION, X, NULL, CLIP_NONZERO, &ex, c->err);
 
+	if (!rc && anchors && ex.n && !(A = clip_locator_new(anchors, c->err)))
+		rc = c->err ? c->err->code : ST_ERR_NOMEM;
+
 	for (size_t i = 0; i < ex.n && !rc; i++) {
 		double ai = a;
+		bool narrow = false;
 		rc = clip_expolys_get(&ex, i, &P, c->err);
+		if (!rc && b->gap_fill)
+			rc = too_narrow(c, &P, b->sp, &narrow);
+		if (!rc && narrow) { /* one bead along it, as wide as it is */
+			clip_paths_clear(&segs);
+			rc = gap_fill(c, &P, &segs, 0.0);
+			continue;
+		}
 		if (!rc && anchors)
-			rc = bridge_direction(c, &P, anchors, b->sp, &ai);
+			rc = bridge_direction(c, &P, A, b->sp, &ai);
 		if (!rc)
-			rc = fitted_lines(c, &P, ai, b->sp, &segs, &fit);
+			rc = fitted_lines(c, &P, ai, b->sp, NULL, &segs, &fit);
 		if (!rc)
 			rc = emit_segments(c, &segs, b->role, b->w);
 		if (!rc && b->gap_fill && segs.n)
 			rc = gap_fill(c, &P, &segs, fit);
 	}
+	clip_locator_free(A);
 	clip_expolys_free(&ex);
 	clip_paths_free(&P);
 	clip_paths_free(&segs);
@@ -543,7 +668,7 @@ static int fill_sparse(struct ctx *c, const struct clip_paths *X, double a)
 	}
 	}
 	if (!rc)
-		rc = clip_to(c, &lines, X, c->overlap - sp / 2.0, &segs);
+		rc = clip_to(c, &lines, X, c->overlap - sp / 2.0, NULL, &segs);
 	if (!rc)
 		rc = emit_segments(c, &segs, PATH_SPARSE_INFILL, w);
 	clip_paths_free(&lines);
@@ -602,7 +727,7 @@ static int classify(struct ctx *c, struct clip_paths cl[CL_N])
 {
 	const struct slice_stack *st = c->st;
 	size_t i = c->layer;
-	const struct clip_paths *R = &c->inner[i].paths;
+	const struct clip_paths *R = c->R;
 	double sw = perim_spacing(c->s->solid_infill_extrusion_width, c->h) * SLICE_UNITS_PER_MM;
 	struct clip_paths t = {0}, taken = {0}, rest = {0};
 	int rc = 0;
@@ -675,7 +800,7 @@ static int fill_layer(struct ctx *c)
 				    false};
 	int rc;
 
-	if (!clip_paths_points(&c->inner[c->layer].paths))
+	if (!clip_paths_points(c->R))
 		return 0;
 	rc = classify(c, cl);
 	if (!rc)
@@ -696,11 +821,132 @@ static int fill_layer(struct ctx *c)
 	return rc;
 }
 
+int infill_job_new(const struct infill_settings *s, const struct slice_stack *st,
+		   struct infill_job **out, struct st_error *err)
+{
+	struct infill_job *job;
+	int rc;
+
+	if (!out)
+		return st_error_set(err, ST_ERR_ARG, "infill: infill_job_new needs an out pointer");
+	*out = NULL;
+	rc = infill_settings_check(s, err);
+	if (rc)
+		return rc;
+	if (!st)
+		return st_error_set(err, ST_ERR_ARG, "infill: no layers given");
+	for (size_t i = 0; i < st->n; i++)
+		if (!(st->layers[i].height > 0.0 && st->layers[i].height <= s->nozzle_diameter))
+			return st_error_set(err, ST_ERR_RANGE,
+					    "infill: layer %zu is %g mm thick; use layers thicker "
+					    "than 0 and at most the nozzle diameter %g mm",
+					    i, st->layers[i].height, s->nozzle_diameter);
+	job = calloc(1, sizeof(*job));
+	if (!job)
+		return st_error_set(err, ST_ERR_NOMEM, "infill: out of memory");
+	job->s = *s;
+	job->st = st;
+	if (st->n) {
+		double href = s->layer_height > 0.0 ? s->layer_height : common_height(st, err);
+		if (href < 0.0) {
+			free(job);
+			return ST_ERR_NOMEM;
+		}
+		job->t_top = fmax(s->top_solid_min_thickness, s->top_solid_layers * href);
+		job->t_bot = fmax(s->bottom_solid_min_thickness, s->bottom_solid_layers * href);
+	}
+	job->overlap = s->infill_overlap / 100.0 * s->perimeter_extrusion_width * SLICE_UNITS_PER_MM;
+	*out = job;
+	return 0;
+}
+
+void infill_job_free(struct infill_job *job)
+{
+	free(job);
+}
+
+void infill_plan_free(struct infill_plan *p)
+{
+	if (!p)
+		return;
+	for (size_t i = 0; i < p->n; i++) {
+		clip_paths_free(&p->v[i].segs);
+		free(p->v[i].pts);
+	}
+	free(p->v);
+	free(p);
+}
+
+int infill_plan_layer(const struct infill_job *job, size_t i, const struct clip_expolys *inner,
+		      struct infill_plan **out, struct st_error *err)
+{
+	struct clip_paths R = {0};
+	struct ctx c;
+	int rc;
+
+	if (!out)
+		return st_error_set(err, ST_ERR_ARG, "infill: infill_plan_layer needs an out pointer");
+	*out = NULL;
+	if (!job || !inner || i >= job->st->n)
+		return st_error_set(err, ST_ERR_ARG, "infill: no layer %zu to plan", i);
+	rc = clip_paths_append(&R, &inner->paths, err);
+	if (!rc)
+		rc = clip_clean(&R, INFILL_CLEAN_NM, err);
+	if (rc) {
+		clip_paths_free(&R);
+		return rc;
+	}
+	c = (struct ctx){.s = &job->s,
+			 .st = job->st,
+			 .R = &R,
+			 .err = err,
+			 .layer = i,
+			 .h = job->st->layers[i].height,
+			 .overlap = job->overlap,
+			 .t_top = job->t_top,
+			 .t_bot = job->t_bot};
+	c.plan = calloc(1, sizeof(*c.plan));
+	if (!c.plan) {
+		clip_paths_free(&R);
+		return st_error_set(err, ST_ERR_NOMEM, "infill: out of memory planning layer %zu", i);
+	}
+	rc = fill_layer(&c);
+	clip_paths_free(&R);
+	if (rc) {
+		infill_plan_free(c.plan);
+		return rc;
+	}
+	*out = c.plan;
+	return 0;
+}
+
+int infill_emit_layer(struct infill_job *job, const struct infill_plan *plan,
+		      struct layer_paths *out, struct st_error *err)
+{
+	int rc = 0;
+
+	if (!job || !plan || !out)
+		return st_error_set(err, ST_ERR_ARG, "infill: no plan or layer to emit into");
+	for (size_t i = 0; i < plan->n && !rc; i++) {
+		const struct item *it = &plan->v[i];
+		if (!it->fixed) {
+			rc = order_segments(it, &job->lx, &job->ly, out, err);
+			continue;
+		}
+		rc = layer_add_path(out, it->role, it->closed, it->pts, it->n, err);
+		if (it->n) {
+			job->lx = it->pts[it->n - 1].x;
+			job->ly = it->pts[it->n - 1].y;
+		}
+	}
+	return rc;
+}
+
 int infill_generate(const struct infill_settings *s, const struct slice_stack *st,
 		    const struct clip_expolys *inner, struct layer_stack *out,
 		    struct st_error *err)
 {
-	struct ctx c = {.s = s, .st = st, .inner = inner, .err = err};
+	struct infill_job *job = NULL;
 	int rc = infill_settings_check(s, err);
 
 	if (rc)
@@ -713,23 +959,14 @@ int infill_generate(const struct infill_settings *s, const struct slice_stack *s
 				    out->nlayers, st->n);
 	if (!st->n)
 		return 0;
-	for (size_t i = 0; i < st->n; i++)
-		if (!(st->layers[i].height > 0.0 && st->layers[i].height <= s->nozzle_diameter))
-			return st_error_set(err, ST_ERR_RANGE,
-					    "infill: layer %zu is %g mm thick; use layers thicker "
-					    "than 0 and at most the nozzle diameter %g mm",
-					    i, st->layers[i].height, s->nozzle_diameter);
-	double href = s->layer_height > 0.0 ? s->layer_height : common_height(st, err);
-	if (href < 0.0)
-		return ST_ERR_NOMEM;
-	c.t_top = fmax(s->top_solid_min_thickness, s->top_solid_layers * href);
-	c.t_bot = fmax(s->bottom_solid_min_thickness, s->bottom_solid_layers * href);
-	c.overlap = s->infill_overlap / 100.0 * s->perimeter_extrusion_width * SLICE_UNITS_PER_MM;
+	rc = infill_job_new(s, st, &job, err);
 	for (size_t i = 0; i < st->n && !rc; i++) {
-		c.layer = i;
-		c.h = st->layers[i].height;
-		c.out = &out->layers[i];
-		rc = fill_layer(&c);
+		struct infill_plan *plan;
+		rc = infill_plan_layer(job, i, &inner[i], &plan, err);
+		if (!rc)
+			rc = infill_emit_layer(job, plan, &out->layers[i], err);
+		infill_plan_free(plan);
 	}
+	infill_job_free(job);
 	return rc;
 }

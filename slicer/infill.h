@@ -31,12 +31,14 @@
  * gyroid's section at the layer's mid-height).  Bridges use bridge flow: a
  * round thread of diameter nozzle x sqrt(bridge_flow_ratio) (its bead width
  * is the one whose flow-model cross-section equals that thread's area) at
- * thread + 0.05 mm spacing, in the direction that anchors most of its
- * lines on the layer below at both ends, the shortest such lines first
- * (bridge_angle overrides).  Line ends stop half a spacing inside the
+ * thread + 0.05 mm spacing, in the direction (tried every 5 degrees) that
+ * anchors most of its lines on the layer below at both ends, the shortest
+ * such lines first (bridge_angle overrides).  Line ends stop half a spacing inside the
  * region grown by infill_overlap, so beads reach into the innermost wall.
  * Strips of a solid island that its lines leave uncovered, at least
- * gap_fill_min wide, get PATH_GAP_FILL beads along their centre lines.
+ * gap_fill_min wide, get PATH_GAP_FILL beads along their centre lines; an
+ * island narrower than its line spacing everywhere gets no lines, only
+ * such beads (lines across it would leave voids between them).
  *
  * Lengths in settings are mm, geometry nm (toolpath.h).
  */
@@ -121,5 +123,49 @@ int infill_settings_check(const struct infill_settings *s, struct st_error *err)
 int infill_generate(const struct infill_settings *s, const struct slice_stack *st,
 		    const struct clip_expolys *inner, struct layer_stack *out,
 		    struct st_error *err);
+
+/*
+ * The same work a layer at a time, for callers that fill layers in
+ * parallel and print them as they come.  A layer is first planned (its
+ * classes, lines and gap fill; independent of every other layer's plan, so
+ * plans may be made on several threads at once) and then emitted: the
+ * lines are ordered nearest first from where the previous emitted layer's
+ * infill ended, so layers must be emitted bottom to top, one at a time.
+ * Planning and emitting every layer gives exactly infill_generate's paths.
+ */
+struct infill_job;
+struct infill_plan;
+
+/*
+ * infill_job_new - check s and the layers of st (as infill_generate does)
+ * and work out the shell thicknesses.  st must outlive the job.  Returns 0
+ * with *out a new job (infill_job_free), or a negative class with err
+ * filled and *out NULL.
+ */
+int infill_job_new(const struct infill_settings *s, const struct slice_stack *st,
+		   struct infill_job **out, struct st_error *err);
+
+/* infill_job_free - release a job; NULL is safe. */
+void infill_job_free(struct infill_job *job);
+
+/*
+ * infill_plan_layer - plan layer i (< st->n) of the job, inner being the
+ * region inside that layer's walls.  Reads the job and the slices only:
+ * thread-safe for distinct plans.  Returns 0 with *out a new plan
+ * (infill_plan_free), or a negative class with err filled and *out NULL.
+ */
+int infill_plan_layer(const struct infill_job *job, size_t i, const struct clip_expolys *inner,
+		      struct infill_plan **out, struct st_error *err);
+
+/*
+ * infill_emit_layer - append the paths of plan to out, in infill_generate's
+ * order; advances the job's nozzle position.  Returns 0, ST_ERR_NOMEM or
+ * the error of a path layer_add_path refuses.
+ */
+int infill_emit_layer(struct infill_job *job, const struct infill_plan *plan,
+		      struct layer_paths *out, struct st_error *err);
+
+/* infill_plan_free - release a plan; NULL is safe. */
+void infill_plan_free(struct infill_plan *p);
 
 #endif /* STRATUM_SLICER_INFILL_H */

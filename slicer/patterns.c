@@ -6,9 +6,14 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* Gyroid samples per period along the sampled axis. */
 #define PAT_GYROID_STEPS 48
+/* Samples closer than this to the chord of their neighbours are dropped, nm:
+ * sparse infill needs no finer curve, and the full sampling made 70 % of
+ * the G-code moves on the scan model. */
+#define PAT_GYROID_TOLERANCE 10000.0
 
 bool pat_box_of(const struct clip_paths *ps, struct pat_box *box)
 {
@@ -115,6 +120,63 @@ static void gyroid_branch(double k, double sz, double cz, bool swap, double sign
 }
 
 /*
+ * The point of xy strictly between a and b farthest from the line through
+ * them (from point a when they coincide) into *far; returns that distance
+ * squared, nm^2 (-1 when there is no point between).
+ */
+static double farthest(const int64_t *xy, size_t a, size_t b, size_t *far)
+{
+	double ax = (double)xy[2 * a], ay = (double)xy[2 * a + 1];
+	double dx = (double)xy[2 * b] - ax, dy = (double)xy[2 * b + 1] - ay;
+	double len2 = dx * dx + dy * dy, best = -1;
+
+	for (size_t i = a + 1; i < b; i++) {
+		double px = (double)xy[2 * i] - ax, py = (double)xy[2 * i + 1] - ay;
+		double c = px * dy - py * dx;
+		double d2 = len2 > 0 ? c * c / len2 : px * px + py * py;
+		if (d2 > best) {
+			best = d2;
+			*far = i;
+		}
+	}
+	return best;
+}
+
+/*
+ * Keep the points of the polyline xy (n points) that Douglas-Peucker keeps
+ * at tolerance tol (first and last always), compacted in place; returns
+ * how many.  stack has room for n indices.
+ */
+static size_t simplify(int64_t *xy, size_t n, double tol, size_t *stack, unsigned char *keep)
+{
+	size_t top = 0, m = 0;
+
+	if (n < 3)
+		return n;
+	memset(keep, 0, n);
+	keep[0] = keep[n - 1] = 1;
+	stack[top++] = 0;
+	stack[top++] = n - 1;
+	while (top) {
+		size_t b = stack[--top], a = stack[--top], far = a;
+		if (farthest(xy, a, b, &far) > tol * tol) {
+			keep[far] = 1;
+			stack[top++] = a;
+			stack[top++] = far;
+			stack[top++] = far;
+			stack[top++] = b;
+		}
+	}
+	for (size_t i = 0; i < n; i++)
+		if (keep[i]) {
+			xy[2 * m] = xy[2 * i];
+			xy[2 * m + 1] = xy[2 * i + 1];
+			m++;
+		}
+	return m;
+}
+
+/*
  * The section at height z is a family of curves.  Grouped in y it reads
  * sin x cos y + cos z sin y = -sin z cos x, i.e. r cos(y - phi) = -c with
  * r = hypot(sin x, cos z), phi = atan2(cos z, sin x): when |cos z| >=
@@ -144,14 +206,23 @@ int pat_gyroid(double k, double z_nm, const struct pat_box *box, struct clip_pat
 				    2 * M_PI / k / 1e6);
 	size_t n = (size_t)steps;
 	int64_t *xy = malloc(2 * n * sizeof(*xy));
-	if (!xy)
-		return st_error_set(err, ST_ERR_NOMEM, "infill: out of memory for the gyroid");
+	/* Each split pushes two ranges and pops one: at most 2 n entries. */
+	size_t *stack = malloc(4 * n * sizeof(*stack));
+	unsigned char *keep = malloc(n);
 	int rc = 0;
+	if (!xy || !stack || !keep) {
+		rc = st_error_set(err, ST_ERR_NOMEM, "infill: out of memory for the gyroid");
+		goto out_free;
+	}
 	for (double m = m0; m <= m1 && !rc; m++)
 		for (int sign = -1; sign <= 1 && !rc; sign += 2) {
 			gyroid_branch(k, sz, cz, swap, sign, m, t0, dt, n, xy);
-			rc = clip_paths_add(out, xy, n, err);
+			rc = clip_paths_add(out, xy,
+					   simplify(xy, n, PAT_GYROID_TOLERANCE, stack, keep), err);
 		}
+out_free:
 	free(xy);
+	free(stack);
+	free(keep);
 	return rc;
 }

@@ -41,7 +41,8 @@ int pat_lines(double a, double spacing, double phase, const struct pat_box *box,
  * pat_gyroid - append to out the cross-section of the gyroid surface
  * sin x cos y + sin y cos z + sin z cos x = 0, with (x, y, z) = k (X, Y, Z)
  * for bed coordinates X, Y, Z in nm, at height z_nm, as polylines covering
- * box.  k > 0 (radians per nm) sets the period 2 pi / k.  Returns 0,
+ * box, within 10 um of the curve (samples the curve needs no more are
+ * dropped).  k > 0 (radians per nm) sets the period 2 pi / k.  Returns 0,
  * ST_ERR_RANGE (too many polylines), ST_ERR_NOMEM.
  */
 int pat_gyroid(double k, double z_nm, const struct pat_box *box, struct clip_paths *out,

@@ -182,155 +182,6 @@ static struct layer_stack *stage_stack_new(const struct slice_stack *st, struct 
 	return s;
 }
 
-/* ---------------------------------------------------------------------------
- * Walls: perim_generate per layer, in parallel over chunks of layers.
- */
-
-struct walls_job {
-	const struct slicer_config *c;
-	const struct slice_stack *st;
-	struct layer_stack *out;
-	struct clip_expolys *inner; /* st->n regions inside the walls */
-	struct travel_map **travel; /* st->n travel maps, NULL when travels go straight */
-	int64_t travel_inset;	    /* nm, routing boundary inside the surface */
-	size_t nchunks, next, done;
-	pthread_mutex_t lock;
-	int rc;			/* first error */
-	struct st_error err;	/* its message */
-};
-
-/*
- * Walls of chunk k.  The seam memory starts on the layer below the chunk
- * (walls made and dropped), so seams continue across chunk boundaries the
- * same way whatever thread runs which chunk.
- */
-static int walls_chunk(struct walls_job *j, size_t k, struct st_error *err)
-{
-	const struct perim_settings *ps = &j->c->perim;
-	size_t first = k * SLICER_CHUNK_LAYERS;
-	size_t last = first + SLICER_CHUNK_LAYERS < j->st->n ? first + SLICER_CHUNK_LAYERS
-							      : j->st->n;
-	struct perim_seams *seams = perim_seams_new((unsigned)k + 1u);
-	int rc = 0;
-
-	if (!seams)
-		return st_error_set(err, ST_ERR_NOMEM, "walls: out of memory for seams");
-	if (first > 0) {
-		const struct slice_layer *below = &j->st->layers[first - 1];
-		struct layer_stack *scratch = layer_stack_new(1, err);
-		struct clip_expolys scratch_inner = {0};
-
-		rc = scratch ? perim_generate(ps, &below->regions, below->height, seams,
-					      &scratch->layers[0], &scratch_inner, err)
-			     : ST_ERR_NOMEM;
-		layer_stack_free(scratch);
-		clip_expolys_free(&scratch_inner);
-	}
-	for (size_t i = first; i < last && !rc; i++) {
-		const struct slice_layer *l = &j->st->layers[i];
-
-		rc = perim_generate(ps, &l->regions, l->height, seams, &j->out->layers[i],
-				    &j->inner[i], err);
-		if (!rc && j->travel && !(j->travel[i] = travel_map_new(&l->regions,
-									j->travel_inset, err)))
-			rc = err->code;
-		if (!rc) {
-			pthread_mutex_lock(&j->lock);
-			j->done++;
-			progress(j->c, "walls", (double)j->done / (double)j->st->n);
-			pthread_mutex_unlock(&j->lock);
-		}
-	}
-	perim_seams_free(seams);
-	return rc;
-}
-
-/* Worker: take chunks until none is left or one failed. */
-static void *walls_worker(void *arg)
-{
-	struct walls_job *j = arg;
-
-	for (;;) {
-		struct st_error err = {0};
-		size_t k;
-		int rc;
-
-		pthread_mutex_lock(&j->lock);
-		if (j->rc || j->next >= j->nchunks) {
-			pthread_mutex_unlock(&j->lock);
-			return NULL;
-		}
-		k = j->next++;
-		pthread_mutex_unlock(&j->lock);
-		rc = walls_chunk(j, k, &err);
-		if (rc) {
-			pthread_mutex_lock(&j->lock);
-			if (!j->rc) {
-				j->rc = rc;
-				j->err = err;
-			}
-			pthread_mutex_unlock(&j->lock);
-		}
-	}
-}
-
-/* Worker threads to start: the setting or all cores, at most one per chunk. */
-static size_t worker_count(int threads, size_t nchunks)
-{
-	long n = threads > 0 ? threads : sysconf(_SC_NPROCESSORS_ONLN);
-
-	if (n < 1)
-		n = 1;
-	return (size_t)n < nchunks ? (size_t)n : nchunks;
-}
-
-/*
- * Stage "walls": outer and inner perimeters, gap fill and thin walls of
- * every layer into out, the region inside the walls of layer i into
- * inner[i] (what the infill stage fills), and when travel is not NULL the
- * travel map of layer i's region into travel[i].
- */
-static int stage_walls(const struct slicer_config *c, const struct slice_stack *st,
-		       struct clip_expolys *inner, struct travel_map **travel,
-		       struct layer_stack *out, struct st_error *err)
-{
-	struct walls_job j = {.c = c, .st = st, .out = out, .inner = inner, .travel = travel};
-	/* PrusaSlicer's routing boundary: 1.5 perimeter spacings inside, so
-	 * routes run over the inner walls, never over the outer face. */
-	double spacing = perim_spacing(c->perim.extrusion_width, c->layer_height);
-
-	j.travel_inset = llround(1.5 * spacing * SLICE_UNITS_PER_MM);
-	if (j.travel_inset < 1)
-		j.travel_inset = 1;
-	pthread_t tid[SLICER_MAX_THREADS];
-	size_t nworkers, started = 0;
-
-	j.nchunks = (st->n + SLICER_CHUNK_LAYERS - 1) / SLICER_CHUNK_LAYERS;
-	if (!j.nchunks)
-		return 0;
-	if (pthread_mutex_init(&j.lock, NULL))
-		return st_error_set(err, ST_ERR_INTERNAL, "walls: cannot create a mutex");
-	progress(c, "walls", 0.0);
-	nworkers = worker_count(c->threads, j.nchunks);
-	/* The calling thread is one worker; a thread that cannot start is
-	 * only a lost core, the chunks are shared by those that run. */
-	for (size_t t = 1; t < nworkers; t++) {
-		if (pthread_create(&tid[started], NULL, walls_worker, &j))
-			break;
-		started++;
-	}
-	walls_worker(&j);
-	for (size_t t = 0; t < started; t++)
-		pthread_join(tid[t], NULL);
-	pthread_mutex_destroy(&j.lock);
-	if (j.rc) {
-		if (err)
-			*err = j.err;
-		return j.rc;
-	}
-	return 0;
-}
-
 /* Whether any layer of s holds a path. */
 static bool stack_has_paths(const struct layer_stack *s)
 {
@@ -338,35 +189,6 @@ static bool stack_has_paths(const struct layer_stack *s)
 		if (s->layers[l].n)
 			return true;
 	return false;
-}
-
-/*
- * Stage "infill" (infill.h): skins, bridges, solid and sparse infill in
- * inner[i], the region left inside layer i's walls, with the walls' width
- * and the job's flow.  Sets *ran when it produced paths.
- */
-static int stage_infill(const struct slicer_config *c, const struct slice_stack *st,
-			const struct clip_expolys *inner, struct layer_stack *out, bool *ran,
-			struct st_error *err)
-{
-	struct infill_settings s;
-	int rc;
-
-	infill_settings_init(&s, c->perim.nozzle_diameter);
-	rc = infill_pattern_parse(c->infill.pattern, &s.fill_pattern, err);
-	if (rc)
-		return rc;
-	s.fill_density = c->infill.density;
-	s.top_solid_layers = c->infill.top_solid_layers;
-	s.bottom_solid_layers = c->infill.bottom_solid_layers;
-	s.layer_height = c->layer_height;
-	s.perimeter_extrusion_width = c->perim.extrusion_width;
-	s.infill_extrusion_width = c->perim.extrusion_width;
-	s.solid_infill_extrusion_width = c->perim.extrusion_width;
-	s.top_infill_extrusion_width = c->perim.extrusion_width;
-	rc = infill_generate(&s, st, inner, out, err);
-	*ran = !rc && stack_has_paths(out);
-	return rc;
 }
 
 /*
@@ -412,56 +234,432 @@ static int stage_skirt(const struct slicer_config *c, const struct slice_stack *
 	return rc;
 }
 
-/* Move the paths of every layer of src to the end of dst's (same layers). */
-static int merge_stage(struct layer_stack *dst, struct layer_stack *src, struct st_error *err)
+/* The infill job (infill.h) of the settings: the walls' width, the job's flow. */
+static int infill_job_for(const struct slicer_config *c, const struct slice_stack *st,
+			  struct infill_job **job, struct st_error *err)
 {
-	for (size_t i = 0; i < dst->nlayers; i++) {
-		struct layer_paths *d = &dst->layers[i], *s = &src->layers[i];
-		struct toolpath *grown;
+	struct infill_settings s;
+	int rc;
 
-		if (!s->n)
-			continue;
-		grown = slice_grow(d->paths, &d->cap, d->n + s->n, sizeof(*grown));
-		if (!grown)
-			return st_error_set(err, ST_ERR_NOMEM, "slicer: out of memory merging layer %zu",
-					    i + 1);
-		d->paths = grown;
-		memcpy(d->paths + d->n, s->paths, s->n * sizeof(*s->paths));
-		d->n += s->n;
-		s->n = 0; /* the points now belong to dst */
+	infill_settings_init(&s, c->perim.nozzle_diameter);
+	rc = infill_pattern_parse(c->infill.pattern, &s.fill_pattern, err);
+	if (rc)
+		return rc;
+	s.fill_density = c->infill.density;
+	s.top_solid_layers = c->infill.top_solid_layers;
+	s.bottom_solid_layers = c->infill.bottom_solid_layers;
+	s.layer_height = c->layer_height;
+	s.perimeter_extrusion_width = c->perim.extrusion_width;
+	s.infill_extrusion_width = c->perim.extrusion_width;
+	s.solid_infill_extrusion_width = c->perim.extrusion_width;
+	s.top_infill_extrusion_width = c->perim.extrusion_width;
+	return infill_job_new(&s, st, job, err);
+}
+
+/* ---------------------------------------------------------------------------
+ * The layer pipeline.  Worker threads make the walls (perim_generate, in
+ * chunks of SLICER_CHUNK_LAYERS layers, each chunk with its own seam memory
+ * warmed up on the layer below it) and then plan each layer's infill
+ * (infill_plan_layer).  The calling thread takes the layers bottom to top:
+ * it emits the layer's infill (ordered from where the layer below ended),
+ * merges skirt/brim, support, walls and infill, hands the layer to the
+ * sink (the G-code writer, or a stack) and frees it, helping with the
+ * workers' tasks while its next layer is not ready.  Chunks start only
+ * within a window above the last layer taken, so memory holds a few
+ * chunks of layers, not the whole print.  None of this depends on the
+ * number of threads: the output is the same for any count.
+ */
+
+enum { L_WAIT, L_WALLS, L_PLANNING, L_PLANNED }; /* a layer's state */
+enum { C_TODO, C_RUNNING, C_DONE };		 /* a chunk's state */
+
+struct pipe {
+	const struct slicer_config *c;
+	const struct slice_stack *st;
+	const struct infill_job *job;
+	int64_t travel_inset;	    /* nm, routing boundary inside the surface */
+	bool travel;		    /* make travel maps */
+	size_t nchunks, window;	    /* window: layers that may start above taken */
+	struct layer_paths *walls;  /* st->n: the walls stage's paths */
+	struct clip_expolys *inner; /* st->n: the regions inside the walls */
+	struct travel_map **maps;   /* st->n: travel maps, or NULL */
+	struct infill_plan **plans; /* st->n */
+	unsigned char *lstate;	    /* st->n layer states */
+	unsigned char *cstate;	    /* nchunks chunk states */
+	size_t taken;		    /* layers the calling thread has taken */
+	pthread_mutex_t lock;	    /* guards the states, taken, rc and err */
+	pthread_cond_t cond;	    /* signalled when a state changes */
+	int rc;			    /* first error of a task */
+	struct st_error err;	    /* its message */
+};
+
+/* A task: walls of a chunk (layer == SIZE_MAX) or the infill plan of a layer. */
+struct task {
+	size_t chunk, layer;
+};
+
+/* Mark layer i's walls made (lock held by the caller or not, see callers). */
+static void walls_made(struct pipe *p, size_t i)
+{
+	pthread_mutex_lock(&p->lock);
+	p->lstate[i] = L_WALLS;
+	pthread_cond_broadcast(&p->cond);
+	pthread_mutex_unlock(&p->lock);
+}
+
+/*
+ * Walls of chunk k.  The seam memory starts on the layer below the chunk
+ * (walls made and dropped), so seams continue across chunk boundaries the
+ * same way whatever thread runs which chunk.
+ */
+static int walls_chunk(struct pipe *p, size_t k, struct st_error *err)
+{
+	const struct perim_settings *ps = &p->c->perim;
+	size_t first = k * SLICER_CHUNK_LAYERS;
+	size_t last = first + SLICER_CHUNK_LAYERS < p->st->n ? first + SLICER_CHUNK_LAYERS
+							      : p->st->n;
+	struct perim_seams *seams = perim_seams_new((unsigned)k + 1u);
+	int rc = 0;
+
+	if (!seams)
+		return st_error_set(err, ST_ERR_NOMEM, "walls: out of memory for seams");
+	if (first > 0) {
+		const struct slice_layer *below = &p->st->layers[first - 1];
+		struct layer_paths scratch = {0};
+		struct clip_expolys scratch_inner = {0};
+
+		rc = perim_generate(ps, &below->regions, below->height, seams, &scratch,
+				    &scratch_inner, err);
+		layer_paths_clear(&scratch);
+		clip_expolys_free(&scratch_inner);
 	}
+	for (size_t i = first; i < last && !rc; i++) {
+		const struct slice_layer *l = &p->st->layers[i];
+
+		rc = perim_generate(ps, &l->regions, l->height, seams, &p->walls[i], &p->inner[i],
+				    err);
+		if (!rc && p->travel &&
+		    !(p->maps[i] = travel_map_new(&l->regions, p->travel_inset, err)))
+			rc = err->code;
+		if (!rc)
+			walls_made(p, i);
+	}
+	perim_seams_free(seams);
+	return rc;
+}
+
+/* Run task t; on failure record the first error. */
+static void run_task(struct pipe *p, struct task t)
+{
+	struct st_error err = {0};
+	int rc;
+
+	if (t.layer == SIZE_MAX)
+		rc = walls_chunk(p, t.chunk, &err);
+	else
+		rc = infill_plan_layer(p->job, t.layer, &p->inner[t.layer], &p->plans[t.layer], &err);
+	pthread_mutex_lock(&p->lock);
+	if (t.layer == SIZE_MAX)
+		p->cstate[t.chunk] = C_DONE;
+	else
+		p->lstate[t.layer] = L_PLANNED;
+	if (rc && !p->rc) {
+		p->rc = rc;
+		p->err = err;
+	}
+	pthread_cond_broadcast(&p->cond);
+	pthread_mutex_unlock(&p->lock);
+}
+
+/*
+ * With the lock held: claim the next task, preferring the infill plan of
+ * layer want when its walls are made, then the lowest chunk within the
+ * window (walls are the long tasks the plans wait for), then the lowest
+ * layer with walls and no plan.  False when there is none now.
+ */
+static bool claim_task(struct pipe *p, size_t want, struct task *t)
+{
+	size_t n = p->st->n;
+
+	if (want < n && p->lstate[want] == L_WALLS) {
+		*t = (struct task){.layer = want};
+		p->lstate[want] = L_PLANNING;
+		return true;
+	}
+	for (size_t k = 0; k < p->nchunks; k++) {
+		if (p->cstate[k] != C_TODO)
+			continue;
+		if (k * SLICER_CHUNK_LAYERS >= p->taken + p->window)
+			break;
+		*t = (struct task){.chunk = k, .layer = SIZE_MAX};
+		p->cstate[k] = C_RUNNING;
+		return true;
+	}
+	for (size_t i = p->taken; i < n; i++)
+		if (p->lstate[i] == L_WALLS) {
+			*t = (struct task){.layer = i};
+			p->lstate[i] = L_PLANNING;
+			return true;
+		}
+	return false;
+}
+
+/* With the lock held: whether every layer has its plan claimed or made. */
+static bool all_claimed(const struct pipe *p)
+{
+	for (size_t i = p->taken; i < p->st->n; i++)
+		if (p->lstate[i] < L_PLANNING)
+			return false;
+	return true;
+}
+
+/* Worker thread: run tasks until all are claimed or one failed. */
+static void *pipe_worker(void *arg)
+{
+	struct pipe *p = arg;
+	struct task t;
+
+	pthread_mutex_lock(&p->lock);
+	while (!p->rc && !all_claimed(p)) {
+		if (!claim_task(p, SIZE_MAX, &t)) {
+			pthread_cond_wait(&p->cond, &p->lock);
+			continue;
+		}
+		pthread_mutex_unlock(&p->lock);
+		run_task(p, t);
+		pthread_mutex_lock(&p->lock);
+	}
+	pthread_mutex_unlock(&p->lock);
+	return NULL;
+}
+
+/* Worker threads to use: the setting or all cores, at least one. */
+static size_t worker_count(int threads)
+{
+	long n = threads > 0 ? threads : sysconf(_SC_NPROCESSORS_ONLN);
+
+	return n < 1 ? 1 : (size_t)n;
+}
+
+/* Move the paths of src to the end of dst's. */
+static int move_paths(struct layer_paths *dst, struct layer_paths *src, size_t li,
+		      struct st_error *err)
+{
+	struct toolpath *grown;
+
+	if (!src->n)
+		return 0;
+	grown = slice_grow(dst->paths, &dst->cap, dst->n + src->n, sizeof(*grown));
+	if (!grown)
+		return st_error_set(err, ST_ERR_NOMEM, "slicer: out of memory merging layer %zu",
+				    li + 1);
+	dst->paths = grown;
+	memcpy(dst->paths + dst->n, src->paths, src->n * sizeof(*src->paths));
+	dst->n += src->n;
+	src->n = 0; /* the points now belong to dst */
 	return 0;
 }
 
-/* Count the paths per role and say whether any layer has a path. */
-static bool count_paths(const struct layer_stack *s, size_t paths[PATH_ROLES])
-{
-	bool any = false;
+/* Where finished layers go: moved into stack, or written with w. */
+struct sink {
+	struct layer_stack *stack; /* slicer_toolpaths */
+	const struct gcodew_settings *gs; /* slicer_run: the writer's settings, */
+	const char *path;	   /* the file, */
+	struct gcodew *w;	   /* the writer once begun */
+	int rc;			   /* the writer's first error: reported after any
+				    * of the stages', as when writing came last */
+	struct st_error err;
+};
 
-	memset(paths, 0, PATH_ROLES * sizeof(*paths));
-	for (size_t i = 0; i < s->nlayers; i++)
-		for (size_t p = 0; p < s->layers[i].n; p++) {
-			paths[s->layers[i].paths[p].role]++;
-			any = true;
-		}
-	return any;
+/* Hand the merged layer li to the sink; the sink takes or frees its paths. */
+static int sink_layer(struct sink *k, struct layer_paths *m, size_t li)
+{
+	if (k->stack) {
+		struct layer_paths *d = &k->stack->layers[li];
+		*d = *m;
+		*m = (struct layer_paths){.z = d->z, .height = d->height};
+		return 0;
+	}
+	if (k->w && !k->rc) /* after an error nothing more is written; the stages go on */
+		k->rc = gcodew_layer(k->w, m, &k->err);
+	layer_paths_clear(m);
+	return 0;
 }
 
-int slicer_toolpaths(const struct mesh *m, const struct slicer_config *c,
-		     struct layer_stack **out, struct slicer_summary *sum, struct st_error *err)
+/* What the pipeline found, for the summary. */
+struct pipe_result {
+	size_t paths[PATH_ROLES];
+	bool any, infill;
+};
+
+/*
+ * Layer li, ready: emit its infill, merge the stages in the order
+ * skirt/brim, support, walls, infill, count its paths and sink it.
+ */
+static int finish_layer(struct pipe *p, struct infill_job *job, struct layer_stack *skirt,
+			struct layer_stack *support, size_t li, struct sink *k,
+			struct pipe_result *res, struct st_error *err)
 {
-	enum { SKIRT, SUPPORT, WALLS, INFILL, STAGES };
-	struct slicer_summary s = {0};
-	struct slice_stack *st = NULL;
-	struct layer_stack *stage[STAGES] = {0}, *merged = NULL;
-	struct clip_expolys *inner = NULL;
-	struct travel_map **travel = NULL;
-	bool ran[STAGES] = {false};
+	struct layer_paths m = {.z = p->st->layers[li].z, .height = p->st->layers[li].height};
+	size_t walls_end;
+	int rc = move_paths(&m, &skirt->layers[li], li, err);
+
+	if (!rc)
+		rc = move_paths(&m, &support->layers[li], li, err);
+	if (!rc)
+		rc = move_paths(&m, &p->walls[li], li, err);
+	walls_end = m.n;
+	if (!rc)
+		rc = infill_emit_layer(job, p->plans[li], &m, err);
+	if (rc) {
+		layer_paths_clear(&m);
+		return rc;
+	}
+	res->infill = res->infill || m.n > walls_end;
+	for (size_t i = 0; i < m.n; i++)
+		res->paths[m.paths[i].role]++;
+	res->any = res->any || m.n;
+	m.travel = p->maps[li];
+	p->maps[li] = NULL;
+	return sink_layer(k, &m, li);
+}
+
+/* Free what the pipeline holds for layer i. */
+static void drop_layer(struct pipe *p, size_t i)
+{
+	layer_paths_clear(&p->walls[i]);
+	clip_expolys_free(&p->inner[i]);
+	travel_map_free(p->maps[i]);
+	p->maps[i] = NULL;
+	infill_plan_free(p->plans[i]);
+	p->plans[i] = NULL;
+}
+
+/*
+ * Walls and infill of every layer, merged with the skirt and support
+ * stacks (whose paths are taken), into the sink bottom to top.
+ */
+static int run_pipe(const struct slicer_config *c, const struct slice_stack *st,
+		    struct layer_stack *skirt, struct layer_stack *support, struct sink *k,
+		    struct pipe_result *res, struct st_error *err)
+{
+	struct pipe p = {.c = c, .st = st, .travel = c->gcodew.avoid_crossing_perimeters};
+	struct infill_job *job = NULL;
+	pthread_t tid[SLICER_MAX_THREADS];
+	size_t nworkers = worker_count(c->threads), started = 0, n = st->n;
+	/* PrusaSlicer's routing boundary: 1.5 perimeter spacings inside, so
+	 * routes run over the inner walls, never over the outer face. */
+	double spacing = perim_spacing(c->perim.extrusion_width, c->layer_height);
 	int rc;
 
-	if (!out)
-		return st_error_set(err, ST_ERR_ARG, "slicer: slicer_toolpaths needs an out pointer");
-	*out = NULL;
+	p.travel_inset = llround(1.5 * spacing * SLICE_UNITS_PER_MM);
+	if (p.travel_inset < 1)
+		p.travel_inset = 1;
+	p.nchunks = (n + SLICER_CHUNK_LAYERS - 1) / SLICER_CHUNK_LAYERS;
+	p.window = (nworkers + 1) * SLICER_CHUNK_LAYERS;
+	rc = infill_job_for(c, st, &job, err);
+	if (rc)
+		return rc;
+	p.job = job;
+	p.walls = calloc(n, sizeof(*p.walls));
+	p.inner = calloc(n, sizeof(*p.inner));
+	p.maps = calloc(n, sizeof(*p.maps));
+	p.plans = calloc(n, sizeof(*p.plans));
+	p.lstate = calloc(n, sizeof(*p.lstate));
+	p.cstate = calloc(p.nchunks ? p.nchunks : 1, sizeof(*p.cstate));
+	if (!p.walls || !p.inner || !p.maps || !p.plans || !p.lstate || !p.cstate) {
+		rc = st_error_set(err, ST_ERR_NOMEM, "slicer: out of memory for %zu layers", n);
+		goto out_free;
+	}
+	for (size_t i = 0; i < n; i++) {
+		p.walls[i].z = st->layers[i].z;
+		p.walls[i].height = st->layers[i].height;
+	}
+	if (pthread_mutex_init(&p.lock, NULL)) {
+		rc = st_error_set(err, ST_ERR_INTERNAL, "slicer: cannot create a mutex");
+		goto out_free;
+	}
+	if (pthread_cond_init(&p.cond, NULL)) {
+		pthread_mutex_destroy(&p.lock);
+		rc = st_error_set(err, ST_ERR_INTERNAL, "slicer: cannot create a condition");
+		goto out_free;
+	}
+	progress(c, "layers", 0.0);
+	/* The calling thread is one worker; a thread that cannot start is
+	 * only a lost core, the tasks are shared by those that run. */
+	for (size_t t = 1; t < nworkers && t < SLICER_MAX_THREADS; t++) {
+		if (pthread_create(&tid[started], NULL, pipe_worker, &p))
+			break;
+		started++;
+	}
+	for (size_t i = 0; i < n && !rc; i++) {
+		struct task t;
+
+		pthread_mutex_lock(&p.lock);
+		while (!p.rc && p.lstate[i] != L_PLANNED) {
+			if (claim_task(&p, i, &t)) {
+				pthread_mutex_unlock(&p.lock);
+				run_task(&p, t);
+				pthread_mutex_lock(&p.lock);
+			} else {
+				pthread_cond_wait(&p.cond, &p.lock);
+			}
+		}
+		if (p.rc) {
+			rc = p.rc;
+			if (err)
+				*err = p.err;
+		}
+		pthread_mutex_unlock(&p.lock);
+		if (!rc)
+			rc = finish_layer(&p, job, skirt, support, i, k, res, err);
+		drop_layer(&p, i);
+		pthread_mutex_lock(&p.lock);
+		p.taken = i + 1;
+		if (rc && !p.rc)
+			p.rc = rc; /* the workers stop */
+		pthread_cond_broadcast(&p.cond);
+		pthread_mutex_unlock(&p.lock);
+		if (!rc)
+			progress(c, "layers", (double)(i + 1) / (double)n);
+	}
+	for (size_t t = 0; t < started; t++)
+		pthread_join(tid[t], NULL);
+	pthread_cond_destroy(&p.cond);
+	pthread_mutex_destroy(&p.lock);
+out_free:
+	for (size_t i = 0; p.walls && p.inner && p.maps && p.plans && i < n; i++)
+		drop_layer(&p, i);
+	free(p.walls);
+	free(p.inner);
+	free(p.maps);
+	free(p.plans);
+	free(p.lstate);
+	free(p.cstate);
+	infill_job_free(job);
+	return rc;
+}
+
+/*
+ * Stages 1-4 into the sink: place, slice, support and skirt/brim for the
+ * whole stack, then the layer pipeline.  Errors in the order the stages
+ * come (the pipeline's before support's and skirt's, which are computed
+ * first but reported as if they came after), then "nothing to print",
+ * then the sink's.
+ */
+static int toolpaths(const struct mesh *m, const struct slicer_config *c,
+		     struct layer_stack **shape, struct sink *k, struct slicer_summary *sum,
+		     struct st_error *err)
+{
+	enum { SKIRT, SUPPORT, STAGES };
+	struct slicer_summary s = {0};
+	struct slice_stack *st = NULL;
+	struct layer_stack *stage[STAGES] = {0};
+	struct pipe_result res = {.any = false};
+	struct st_error late_err = {0};
+	bool ran[STAGES] = {false};
+	int rc, late = 0;
+
 	rc = slicer_config_check(c, err);
 	if (!rc)
 		rc = slicer_place(m, &c->bed, s.offset, s.min, s.max, err);
@@ -482,92 +680,106 @@ int slicer_toolpaths(const struct mesh *m, const struct slicer_config *c,
 	}
 	move_sections(st, llround(s.offset[0] * SLICE_UNITS_PER_MM),
 		      llround(s.offset[1] * SLICE_UNITS_PER_MM));
-	for (size_t i = 0; i < st->n; i++)
+	for (size_t i = 0; i < st->n && !rc; i++) {
 		s.open_dropped += st->layers[i].open_dropped;
-
-	inner = calloc(st->n, sizeof(*inner));
-	if (c->gcodew.avoid_crossing_perimeters)
-		travel = calloc(st->n, sizeof(*travel));
-	merged = stage_stack_new(st, err);
-	for (int k = 0; k < STAGES; k++)
-		stage[k] = stage_stack_new(st, err);
-	if (!inner || (c->gcodew.avoid_crossing_perimeters && !travel) || !merged ||
-	    !stage[SKIRT] || !stage[SUPPORT] || !stage[WALLS] || !stage[INFILL]) {
-		rc = st_error_set(err, ST_ERR_NOMEM, "slicer: out of memory for %zu layers", st->n);
-		goto out_free;
+		rc = clip_expolys_clean(&st->layers[i].regions, SLICER_CLEAN_NM, err);
 	}
-
-	rc = stage_walls(c, st, inner, travel, stage[WALLS], err);
-	ran[WALLS] = true;
-	if (!rc)
-		rc = stage_infill(c, st, inner, stage[INFILL], &ran[INFILL], err);
-	if (!rc)
-		rc = stage_support(c, st, stage[SUPPORT], &ran[SUPPORT], err);
-	if (!rc)
-		rc = stage_skirt(c, st, ran[SUPPORT] ? stage[SUPPORT] : NULL, stage[SKIRT],
-				 &ran[SKIRT], err);
-	for (int k = 0; k < STAGES && !rc; k++) /* skirt/brim, support, walls, infill */
-		rc = merge_stage(merged, stage[k], err);
 	if (rc)
 		goto out_free;
-	for (size_t i = 0; travel && i < st->n; i++) {
-		merged->layers[i].travel = travel[i];
-		travel[i] = NULL;
+	if (shape && !(*shape = stage_stack_new(st, err))) {
+		rc = ST_ERR_NOMEM;
+		goto out_free;
 	}
-	if (!count_paths(merged, s.paths)) {
+	if (shape)
+		k->stack = *shape;
+	if (k->path) /* its errors wait until the stages have succeeded */
+		k->rc = gcodew_begin_file(k->gs, st->n, k->path, &k->w, &k->err);
+	for (int j = 0; j < STAGES; j++)
+		if (!(stage[j] = stage_stack_new(st, err))) {
+			rc = ST_ERR_NOMEM;
+			goto out_free;
+		}
+
+	late = stage_support(c, st, stage[SUPPORT], &ran[SUPPORT], &late_err);
+	if (!late)
+		late = stage_skirt(c, st, ran[SUPPORT] ? stage[SUPPORT] : NULL, stage[SKIRT],
+				   &ran[SKIRT], &late_err);
+	rc = run_pipe(c, st, stage[SKIRT], stage[SUPPORT], k, &res, err);
+	if (!rc && late) {
+		rc = late;
+		if (err)
+			*err = late_err;
+	}
+	if (rc)
+		goto out_free;
+	if (!res.any) {
 		rc = st_error_set(err, ST_ERR_RANGE,
 				  "no layer has anything to print: every feature of the model is "
 				  "narrower than the nozzle (%g mm)",
 				  c->perim.nozzle_diameter);
 		goto out_free;
 	}
-	s.layers = merged->nlayers;
-	s.walls = ran[WALLS];
-	s.infill = ran[INFILL];
+	memcpy(s.paths, res.paths, sizeof(s.paths));
+	s.layers = st->n;
+	s.walls = true;
+	s.infill = res.infill;
 	s.support = ran[SUPPORT];
 	s.skirt = ran[SKIRT];
 	if (sum)
 		*sum = s;
-	*out = merged;
-	merged = NULL;
 
 out_free:
-	layer_stack_free(merged);
-	for (int k = 0; k < STAGES; k++)
-		layer_stack_free(stage[k]);
-	if (inner)
-		for (size_t i = 0; i < st->n; i++)
-			clip_expolys_free(&inner[i]);
-	free(inner);
-	if (travel)
-		for (size_t i = 0; i < st->n; i++)
-			travel_map_free(travel[i]);
-	free(travel);
+	for (int j = 0; j < STAGES; j++)
+		layer_stack_free(stage[j]);
 	slice_stack_free(st);
+	return rc;
+}
+
+int slicer_toolpaths(const struct mesh *m, const struct slicer_config *c,
+		     struct layer_stack **out, struct slicer_summary *sum, struct st_error *err)
+{
+	struct sink k = {0};
+	int rc;
+
+	if (!out)
+		return st_error_set(err, ST_ERR_ARG, "slicer: slicer_toolpaths needs an out pointer");
+	*out = NULL;
+	rc = toolpaths(m, c, out, &k, sum, err);
+	if (rc) {
+		layer_stack_free(*out);
+		*out = NULL;
+	}
 	return rc;
 }
 
 int slicer_run(const struct mesh *m, const struct slicer_config *c, const char *path,
 	       struct slicer_summary *sum, struct st_error *err)
 {
-	struct layer_stack *stack = NULL;
 	struct slicer_summary s;
 	struct gcodew_settings gs;
 	struct gcodew_summary gsum;
+	struct sink k = {.gs = &gs, .path = path};
 	int rc;
 
 	if (!path || !*path)
 		return st_error_set(err, ST_ERR_ARG, "slicer: no output file given");
-	rc = slicer_toolpaths(m, c, &stack, &s, err);
-	if (rc)
-		return rc;
+	if (!c)
+		return slicer_config_check(c, err);
 	gs = c->gcodew;
 	gs.nozzle_diameter = c->perim.nozzle_diameter;
 	gs.layer_height = c->layer_height;
 	gs.first_layer_height = c->first_layer_height;
-	progress(c, "writing G-code", 0.0);
-	rc = gcodew_write_file(stack, &gs, path, &gsum, err);
-	layer_stack_free(stack);
+	rc = toolpaths(m, c, NULL, &k, &s, err);
+	if (!rc && k.rc) {
+		rc = k.rc;
+		if (err)
+			*err = k.err;
+	}
+	if (!rc) {
+		progress(c, "writing G-code", 0.0);
+		rc = gcodew_finish_file(k.w, &gsum, err);
+	}
+	gcodew_free(k.w);
 	if (rc)
 		return rc;
 	progress(c, "writing G-code", 1.0);

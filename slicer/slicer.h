@@ -6,23 +6,24 @@
  *   1. place: the part's bounding box is centred on the bed (or on a given
  *      point) with its lowest point at z = 0, and refused when it does not
  *      fit the bed's bounding box or the printer's maximum height;
- *   2. slice (section.h): per layer, the solid cross-section;
- *   3. stages, each writing into its own struct layer_stack:
- *        skirt/brim  - skirt.h, around the first layer and its support
- *        support     - support.h, when the job asks for it
- *        walls       - perimeters.h: walls, gap fill and thin walls
- *        infill      - infill.h: skins, bridges, solid and sparse infill in
- *                      the region inside the walls of each layer
- *   4. merge: per layer, the paths of the stages in the order skirt/brim,
- *      support, walls, infill;
- *   5. write (gcode_writer.h) through a temporary file renamed on success.
+ *   2. slice (section.h): per layer, the solid cross-section, cleaned of
+ *      vertices within SLICER_CLEAN_NM of their neighbours' line;
+ *   3. support (support.h, when the job asks for it) and skirt/brim
+ *      (skirt.h, around the first layer and its support), whole stack;
+ *   4. the layer pipeline: walls (perimeters.h: walls, gap fill and thin
+ *      walls) in chunks of SLICER_CHUNK_LAYERS layers and each layer's
+ *      infill plan (infill.h: skins, bridges, solid and sparse infill in the
+ *      region inside the walls) on worker threads; bottom to top, each
+ *      layer's infill is emitted, its paths merged in the order skirt/brim,
+ *      support, walls, infill, and the layer written (gcode_writer.h, to a
+ *      temporary file renamed on success) and freed.
  * struct slicer_summary says which stages produced paths.
- * Walls run in parallel over fixed chunks of SLICER_CHUNK_LAYERS layers, so
- * the output does not depend on the number of threads: each chunk carries
- * its own seam memory, warmed up on the layer below the chunk.
+ * Each chunk of walls carries its own seam memory, warmed up on the layer
+ * below the chunk, and infill is ordered from where the layer below ended,
+ * so the output does not depend on the number of threads.
  *
  * Thread safety: no global state; distinct calls are independent.  The
- * progress callback may be called from worker threads (never two at once).
+ * progress callback is called from the calling thread only.
  */
 #ifndef STRATUM_SLICER_SLICER_H
 #define STRATUM_SLICER_SLICER_H
@@ -39,6 +40,10 @@
 
 /* Layers per unit of parallel wall work (and per seam-memory restart). */
 #define SLICER_CHUNK_LAYERS 32
+/* Section vertices that move the outline less than this are dropped once
+ * after slicing, nm: far below the 0.02 mm accuracy bound, and every wall
+ * offset makes two or three points of each vertex it keeps. */
+#define SLICER_CLEAN_NM 1000.0
 /* Most worker threads used. */
 #define SLICER_MAX_THREADS 256
 /* Slack allowed when checking the fit on the bed, mm (rounding of the placement). */
@@ -86,8 +91,8 @@ struct slicer_config {
 	struct slicer_support_settings support;
 	struct slicer_skirt_settings skirt;
 	struct slicer_bed bed;
-	int threads; /* workers for the walls; 0 = all online cores */
-	/* Called with a stage name ("slicing", "walls", "writing G-code") and
+	int threads; /* workers for walls and infill; 0 = all online cores */
+	/* Called with a stage name ("slicing", "layers", "writing G-code") and
 	 * 0..1 done; may be NULL. */
 	void (*progress)(void *ctx, const char *stage, double done);
 	void *progress_ctx;

@@ -22,16 +22,25 @@ struct layer_stack *layer_stack_new(size_t nlayers, struct st_error *err)
 	return s;
 }
 
+void layer_paths_clear(struct layer_paths *l)
+{
+	if (!l)
+		return;
+	for (size_t p = 0; p < l->n; p++)
+		free(l->paths[p].pts);
+	free(l->paths);
+	travel_map_free(l->travel);
+	l->paths = NULL;
+	l->n = l->cap = 0;
+	l->travel = NULL;
+}
+
 void layer_stack_free(struct layer_stack *s)
 {
 	if (!s)
 		return;
-	for (size_t l = 0; l < s->nlayers; l++) {
-		for (size_t p = 0; p < s->layers[l].n; p++)
-			free(s->layers[l].paths[p].pts);
-		free(s->layers[l].paths);
-		travel_map_free(s->layers[l].travel);
-	}
+	for (size_t l = 0; l < s->nlayers; l++)
+		layer_paths_clear(&s->layers[l]);
 	free(s->layers);
 	free(s);
 }

@@ -86,6 +86,10 @@ struct layer_stack *layer_stack_new(size_t nlayers, struct st_error *err);
 /* Free a stack and every path in it; NULL is fine. */
 void layer_stack_free(struct layer_stack *s);
 
+/* Free the paths and travel map of one layer, leaving it empty (z and
+ * height kept); NULL is fine. */
+void layer_paths_clear(struct layer_paths *l);
+
 /* Append a copy of pts[0..n) as a path of the given role to layer l.
  * A path needs at least 2 points (3 when closed); widths must be > 0.
  * Returns 0, ST_ERR_ARG for a bad path, ST_ERR_NOMEM. */

@@ -756,6 +756,97 @@ START_TEST(test_header_estimate)
 }
 END_TEST
 
+/* The whole file at path, NUL-terminated (free it); *len its length. */
+static char *read_whole(const char *path, size_t *len)
+{
+	FILE *fp = fopen(path, "rb");
+	char *buf;
+
+	ck_assert_ptr_nonnull(fp);
+	ck_assert_int_eq(fseek(fp, 0, SEEK_END), 0);
+	*len = (size_t)ftell(fp);
+	rewind(fp);
+	buf = malloc(*len + 1);
+	ck_assert_ptr_nonnull(buf);
+	ck_assert_uint_eq(fread(buf, 1, *len, fp), *len);
+	buf[*len] = '\0';
+	fclose(fp);
+	return buf;
+}
+
+/* Count the files beside path whose names start with path's and a dot. */
+static int temporaries_beside(const char *path)
+{
+	char dir[512], *slash;
+	const char *base;
+	int n = 0;
+	DIR *d;
+	struct dirent *de;
+
+	snprintf(dir, sizeof(dir), "%s", path);
+	slash = strrchr(dir, '/');
+	ck_assert_ptr_nonnull(slash);
+	*slash = '\0';
+	base = strrchr(path, '/') + 1;
+	d = opendir(dir);
+	ck_assert_ptr_nonnull(d);
+	while ((de = readdir(d)))
+		if (!strncmp(de->d_name, base, strlen(base)) && de->d_name[strlen(base)] == '.')
+			n++;
+	closedir(d);
+	return n;
+}
+
+/*
+ * A layer at a time (gcodew_begin_file, gcodew_layer, gcodew_finish_file)
+ * writes the very bytes of the whole-stack call; too many or too few layers
+ * are refused, and a writer freed unfinished leaves no file behind.
+ */
+START_TEST(test_layer_at_a_time)
+{
+	struct layer_stack *st = stack_new(3, 0.2);
+	struct gcodew_settings s;
+	struct gcodew_summary sum, sum2;
+	struct st_error err = {0};
+	struct gcodew *w = NULL;
+	const char *path = tu_path("layers.gcode"), *path2 = tu_path("never.gcode");
+	char *whole, *text;
+	size_t len;
+
+	add_square(&st->layers[0], PATH_OUTER_PERIMETER, 0, 0, 10, 0.45);
+	add_square(&st->layers[1], PATH_INNER_PERIMETER, 1, 1, 8, 0.45);
+	add_square(&st->layers[2], PATH_SPARSE_INFILL, 20, 0, 5, 0.45);
+	gcodew_settings_init(&s);
+	s.start_gcode = "M117 [total_layer_count] layers\n";
+	whole = write_mem(st, &s, &sum);
+
+	ck_assert_int_eq(gcodew_begin_file(&s, 3, path, &w, &err), 0);
+	ck_assert_int_eq(gcodew_finish_file(w, NULL, &err), ST_ERR_ARG); /* 0 of 3 layers */
+	gcodew_free(w);
+	ck_assert_int_eq(gcodew_begin_file(&s, 3, path, &w, &err), 0);
+	for (size_t i = 0; i < 3; i++)
+		ck_assert_int_eq(gcodew_layer(w, &st->layers[i], &err), 0);
+	ck_assert_int_eq(gcodew_layer(w, &st->layers[2], &err), ST_ERR_ARG); /* a 4th */
+	ck_assert_int_eq(gcodew_finish_file(w, &sum2, &err), 0);
+	gcodew_free(w);
+	text = read_whole(path, &len);
+	ck_assert_str_eq(text, whole);
+	ck_assert_uint_eq(sum2.moves, sum.moves);
+	ck_assert_double_eq(sum2.time_s, sum.time_s);
+
+	/* Begun, given a layer, freed: neither the file nor a temporary. */
+	ck_assert_int_eq(gcodew_begin_file(&s, 3, path2, &w, &err), 0);
+	ck_assert_int_eq(gcodew_layer(w, &st->layers[0], &err), 0);
+	ck_assert_int_eq(temporaries_beside(path2), 1);
+	gcodew_free(w);
+	ck_assert(!tu_file_exists(path2));
+	ck_assert_int_eq(temporaries_beside(path2), 0);
+	free(text);
+	free(whole);
+	layer_stack_free(st);
+}
+END_TEST
+
 /* No file, and no temporary, after a failure. */
 START_TEST(test_file_output)
 {
@@ -958,6 +1049,7 @@ Suite *gcodewriter_suite(void)
 	tcase_add_test(out, test_placeholders);
 	tcase_add_test(out, test_header_estimate);
 	tcase_add_test(out, test_file_output);
+	tcase_add_test(out, test_layer_at_a_time);
 	tcase_add_test(cool, test_temperatures);
 	tcase_add_test(cool, test_fan);
 	tcase_add_test(cool, test_slowdown);

@@ -474,6 +474,40 @@ START_TEST(small_and_full_density_are_solid)
 }
 END_TEST
 
+/*
+ * A 2 mm wall leaves a strip about 0.33 mm wide inside its two walls,
+ * narrower than a solid line's spacing: one centre-line bead of the strip's
+ * width fills it, where lines across it left dashes with voids between.
+ */
+START_TEST(narrow_strip_gets_one_bead)
+{
+	struct mesh *m = fx_box(0, 0, 0, 20, 2, 10);
+	struct infill_settings is;
+	struct run r;
+	const double h = 0.2;
+
+	infill_settings_init(&is, 0.4);
+	run_infill(m, h, &is, &r);
+	for (size_t i = 5; i < 45; i++) {
+		const struct layer_paths *l = &r.ls->layers[i];
+		double A = region_area(&r.inner[i]);
+		size_t lines = 0, beads = 0;
+		ck_assert_msg(A > 0.3 * 18 * NM * NM && A < 0.4 * 19 * NM * NM,
+			      "layer %zu: %g mm2 inside the walls", i, A / NM / NM);
+		for (size_t k = 0; k < l->n; k++) {
+			lines += l->paths[k].role == PATH_SOLID_INFILL;
+			beads += l->paths[k].role == PATH_GAP_FILL;
+		}
+		ck_assert_msg(lines == 0 && beads >= 1, "layer %zu: %zu solid lines, %zu beads", i,
+			      lines, beads);
+		double cov = covered(l, SOLID_ROLES, 0, CLIP_END_ROUND, &r.inner[i]) / A;
+		ck_assert_msg(cov > 0.99, "layer %zu: %.4f of the strip covered", i, cov);
+	}
+	run_free(&r);
+	mesh_free(m);
+}
+END_TEST
+
 START_TEST(bad_settings_refused)
 {
 	struct infill_settings is;
@@ -556,6 +590,7 @@ Suite *infill_suite(void)
 	tcase_add_test(tc, bridge_between_pillars);
 	tcase_add_test(tc, shells_by_thickness);
 	tcase_add_test(tc, small_and_full_density_are_solid);
+	tcase_add_test(tc, narrow_strip_gets_one_bead);
 	tcase_add_test(tc, bad_settings_refused);
 	suite_add_tcase(s, tc);
 	return s;

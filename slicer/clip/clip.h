@@ -19,6 +19,7 @@
 #ifndef STRATUM_SLICER_CLIP_H
 #define STRATUM_SLICER_CLIP_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -209,6 +210,14 @@ int clip_simplify(const struct clip_paths *in, enum clip_fill fill, struct clip_
  */
 int clip_clean(struct clip_paths *ps, double distance, struct st_error *err);
 
+/*
+ * clip_expolys_clean - clip_clean on every contour of ex, keeping the
+ * expolygon structure: an outer contour left with fewer than 3 points
+ * drops its expolygon, a hole so left is dropped alone.  Returns 0,
+ * ST_ERR_ARG, ST_ERR_NOMEM (ex unchanged then).
+ */
+int clip_expolys_clean(struct clip_expolys *ex, double distance, struct st_error *err);
+
 /* clip_area - signed area of one closed path in nm^2 (> 0 for CCW) into *area. */
 int clip_area(const int64_t *xy, size_t npts, double *area, struct st_error *err);
 
@@ -221,6 +230,32 @@ int clip_paths_area(const struct clip_paths *ps, double *area, struct st_error *
  */
 int clip_point_in_polygon(int64_t x, int64_t y, const int64_t *xy, size_t npts, int *where,
 			  struct st_error *err);
+
+/*
+ * A polygon set prepared for many point queries: the paths are converted
+ * once and each keeps its bounding box, so a query skips the paths whose
+ * box does not hold the point (where Clipper's test cannot answer anything
+ * but outside) instead of copying every path per query.
+ */
+struct clip_locator;
+
+/*
+ * clip_locator_new - a locator of a copy of ps (ps may be changed or freed
+ * afterwards).  Returns NULL with err filled (ST_ERR_ARG, ST_ERR_NOMEM).
+ */
+struct clip_locator *clip_locator_new(const struct clip_paths *ps, struct st_error *err);
+
+/*
+ * clip_locator_inside - whether (x, y) lies on the boundary of a path of the
+ * set or inside an odd number of its paths (even-odd over the contours of
+ * expolygons: inside a contour and not in one of its holes), with
+ * clip_point_in_polygon's answer per path.  Read-only: one locator may be
+ * queried from several threads.
+ */
+bool clip_locator_inside(const struct clip_locator *loc, int64_t x, int64_t y);
+
+/* clip_locator_free - release a locator; NULL is safe. */
+void clip_locator_free(struct clip_locator *loc);
 
 #ifdef __cplusplus
 }
