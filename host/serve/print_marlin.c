@@ -23,13 +23,13 @@
 #include "sim/marlin_sim.h"
 #include "print.h"
 #include "resume.h"
+#include "simprinter.h"
 #include "xport.h"
 
 #define MARLIN_STEP_MS 50	 /* longest wait for replies per loop turn */
 #define MARLIN_CMD_WAIT_MS 120000 /* longest wait for one printer command */
 #define MARLIN_STOP_MS 10000	 /* safe stop: longest wait for its commands */
 #define MARLIN_POLL_S 5		 /* M105 period when idle without autoreport */
-#define SIM_BAUD_MAX 20000000.0	 /* sped-up link of the simulated printer, bits/s */
 
 _Static_assert(RESUME_LINE_MAX == MARLIN_CMD_MAX, "resume lines fit Marlin's limit");
 
@@ -67,23 +67,12 @@ static void mlink_free(struct mlink *s)
 static int start_sim(struct mlink *s, const struct node_printer_config *pc,
 		     const struct profile *prof, const char **path, struct st_error *err)
 {
-	struct sim_marlin_options so;
-	double baud;
-	int rc;
+	int rc = simprinter_marlin(prof, pc->sim_speedup, pc->sim_log[0] ? pc->sim_log : NULL,
+				   &s->sim, err);
 
-	sim_marlin_options_init(&so);
-	so.speedup = pc->sim_speedup;
-	/* The link is sped up as well, so a job takes seconds, not hours. */
-	baud = (double)prof->baudrate * pc->sim_speedup;
-	so.baud = (unsigned)(baud > SIM_BAUD_MAX ? SIM_BAUD_MAX : baud);
-	if (prof->rx_buffer_size > 0)
-		so.rx_buffer = (unsigned)prof->rx_buffer_size;
-	so.advanced_ok = true;
-	so.log_path = pc->sim_log[0] ? pc->sim_log : NULL;
-	if ((rc = sim_marlin_new(&so, &s->sim, err)) || (rc = sim_marlin_start_thread(s->sim, err)))
-		return rc;
-	*path = sim_marlin_slave_path(s->sim);
-	return 0;
+	if (!rc)
+		*path = sim_marlin_slave_path(s->sim);
+	return rc;
 }
 
 static int marlin_connect_op(const struct node_printer_config *pc, const struct profile *prof,
