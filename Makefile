@@ -90,9 +90,13 @@ deps:
 	  DEBIAN_FRONTEND=noninteractive $$sudo apt-get install -y -qq --no-install-recommends $$missing >/dev/null || exit 1; \
 	fi
 
+# The bundled model checked, then repaired, sliced and printed on the built-in
+# simulated printers: the FlashForge Creator Pro (Sailfish) and a Marlin one.
 demo: deps
 	@$(MAKE) all
 	./$(BUILD)/stratum check docs/examples/bracket.stl
+	./$(BUILD)/stratum print docs/examples/bracket.stl --printer flashforge-creator-pro
+	./$(BUILD)/stratum print docs/examples/bracket.stl --printer prusa-i3-mk3s
 
 # The plain suite runs last so the output ends with Check's summary line.
 check:

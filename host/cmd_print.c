@@ -494,7 +494,7 @@ static int print_marlin(struct print_job *job, const char *path)
 	}
 	snprintf(job->printer_desc, sizeof(job->printer_desc), "%s%s",
 		 marlin_caps(m)->firmware_name[0] ? marlin_caps(m)->firmware_name : "Marlin",
-		 job->simulated ? " (simulated printer)" : "");
+		 job->simulated ? ", simulated" : "");
 	f = fopen(job->gcode, "rb");
 	if (job->start_layer >= 0)
 		offset = job->layers.v[job->start_layer].offset;
@@ -569,8 +569,7 @@ static int print_sailfish(struct print_job *job, const char *path)
 	job->resends = res.retries;
 	job->stream_s = res.seconds;
 	snprintf(job->printer_desc, sizeof(job->printer_desc), "%s%s",
-		 res.firmware[0] ? res.firmware : "Sailfish",
-		 job->simulated ? " (simulated printer)" : "");
+		 res.firmware[0] ? res.firmware : "Sailfish", job->simulated ? ", simulated" : "");
 	if (status && !job->fail)
 		job->fail = status == ST_EXIT_INTERRUPTED ? "interrupted" : "the print failed";
 	return status;
@@ -753,7 +752,7 @@ static void print_summary_text(const struct print_job *job)
 	char est[32], took[32], sim[32];
 	const struct slicer_summary *s = &job->slice.sum;
 
-	printf("%s %s on %s (%s)\n", job->status == 0 ? "printed" : "stopped",
+	printf("%s %s on %s: %s\n", job->status == 0 ? "printed" : "stopped",
 	       job->a->in ? job->a->in : job->gcode, job->prof->id,
 	       job->printer_desc[0] ? job->printer_desc : job->port ? job->port : "");
 	if (job->sliced && job->slice.repaired)

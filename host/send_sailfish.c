@@ -308,6 +308,19 @@ static void sf_report(const struct sf_job *j, const struct s3g_status *st, long 
 	double both = sec > 0 && cap > 0 ? (double)(st->bytes_out + st->bytes_in) / sec / cap : 0;
 	char detail[320];
 
+	if (j->a->result) {
+		struct send_result *res = j->a->result;
+
+		res->ok = ok;
+		res->done = done;
+		res->total = j->commands;
+		res->lines = lines;
+		res->layer = j->x3g ? -1 : j->g.layer;
+		res->retries = st->retries;
+		res->seconds = sec;
+		snprintf(res->firmware, sizeof(res->firmware), "%s", j->firmware);
+		return;
+	}
 	if (j->a->json) {
 		json_t *o = send_report_json(j->a, &s);
 		if (o) {
