@@ -357,20 +357,12 @@ static void print_marlin_progress(void *ctx, const struct marlin_status *st, uin
 	struct print_marlin_ctx *c = ctx;
 	struct print_job *job = c->job;
 	double now = send_now();
-	struct send_view v = {
-		.unit = "line",
-		.total = job->layers.lines,
-		.tool = st->tool[0].present,
-		.bed = st->bed.present,
-		.tool_actual = st->tool[0].actual,
-		.tool_target = st->tool[0].target,
-		.bed_actual = st->bed.actual,
-		.bed_target = st->bed.target,
-		.paused = st->paused,
-	};
+	struct send_view v;
 
 	(void)bytes;
 	print_take(job, st);
+	/* lines of the file, not of this run: a resume starts part-way */
+	send_view_marlin(st, job->layers.lines, &v);
 	v.done = job->last_line;
 	v.layer = job->layer >= 0 ? job->layer + 1 : -1;
 	if (!job->a->json || c->p.tty)

@@ -220,14 +220,12 @@ struct marlin_progress {
 	uint64_t total; /* commands in the file */
 };
 
-/* Marlin's status as the shared progress line. */
-static void send_progress_cb(void *ctx, const struct marlin_status *st, uint64_t bytes_read)
+void send_view_marlin(const struct marlin_status *st, uint64_t total, struct send_view *v)
 {
-	struct marlin_progress *mp = ctx;
-	struct send_view v = {
+	*v = (struct send_view){
 		.unit = "line",
 		.done = st->acked,
-		.total = mp->total,
+		.total = total,
 		.layer = st->layer,
 		.tool = st->tool[0].present,
 		.bed = st->bed.present,
@@ -237,7 +235,16 @@ static void send_progress_cb(void *ctx, const struct marlin_status *st, uint64_t
 		.bed_target = st->bed.target,
 		.paused = st->paused,
 	};
+}
+
+/* Marlin's status as the shared progress line. */
+static void send_progress_cb(void *ctx, const struct marlin_status *st, uint64_t bytes_read)
+{
+	struct marlin_progress *mp = ctx;
+	struct send_view v;
+
 	(void)bytes_read;
+	send_view_marlin(st, mp->total, &v);
 	send_progress_show(&mp->p, &v);
 }
 

@@ -52,6 +52,12 @@ struct send_view {
 	bool paused;
 };
 
+struct marlin_status;
+
+/* send_view_marlin - the Marlin driver's status as a view of lines:
+ * done = acknowledged, layer and temperatures as reported. */
+void send_view_marlin(const struct marlin_status *st, uint64_t total, struct send_view *v);
+
 /* Progress state: a redrawn line on a terminal, a line per 10 % otherwise. */
 struct send_progress {
 	const char *cmd; /* plain lines' prefix, SEND_CMD unless changed after start */
