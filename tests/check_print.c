@@ -25,11 +25,6 @@
 
 static char out[1 << 16];
 
-static const char *bin(void)
-{
-	return getenv("STRATUM_BIN") ? getenv("STRATUM_BIN") : "build/stratum";
-}
-
 /* A fresh state directory for this test's journals; its path in dir. */
 static void state_dir(const char *name, char *dir, size_t cap)
 {
@@ -264,7 +259,7 @@ START_TEST(test_sailfish_prints_every_command_once)
 	ck_assert_msg(rc == 0, "exit %d: %s", rc, out);
 	ck_assert_msg(strstr(out, "SIMULATION") && strstr(out, "printed "), "%s", out);
 	rc = tu_run(out, sizeof(out), "x3g %s -o %s --printer " SF_PRINTER " && %s x3g --decode "
-		    "%s --json >%s", gc, x3g, bin(), x3g, dec);
+		    "%s --json >%s", gc, x3g, tu_bin(), x3g, dec);
 	ck_assert_msg(rc == 0, "x3g: exit %d: %s", rc, out);
 	json_t *o = json_load_file(dec, 0, &je);
 	ck_assert_msg(o != NULL, "%s", je.text);
@@ -328,7 +323,7 @@ static int print_external(const char *fault, const char *dir)
 		      "sim --dialect marlin %s --speedup 1000 --baud 4000000 --link %s >/dev/null "
 		      "2>&1 & S=$!; for i in $(seq 50); do [ -e %s ] && break; sleep 0.1; done; "
 		      "%s print " MODEL " --printer " MARLIN_PRINTER " --port %s 2>&1; r=$?; "
-		      "kill $S 2>/dev/null; wait $S; exit $r", fault, link, link, bin(), link);
+		      "kill $S 2>/dev/null; wait $S; exit $r", fault, link, link, tu_bin(), link);
 }
 
 START_TEST(test_unplug_and_reset_exit_69)
