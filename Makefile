@@ -16,11 +16,14 @@ CC       := gcc
 CXX      := g++
 
 # Debian packages the build, tests and demo need (DESIGN.md "Dependencies");
-# gpx is the reference S3G host the s3g suite drives the simulator with.
+# gpx is the reference S3G host the s3g suite drives the simulator with;
+# libssl-dev gives libcrypto for the SHA-256 of the print journal (host/journal.c:
+# OpenSSL is already on the machine for libcurl4-openssl-dev, nettle would be one more).
 DEB_PACKAGES := gcc g++ make pkg-config dpkg-dev \
 	libserialport-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev libtbb-dev \
 	libpolyclipping-dev check libsqlite3-dev libmicrohttpd-dev libjansson-dev \
-	libmosquitto-dev mosquitto gpx libcairo2-dev libxml2-utils libcurl4-openssl-dev
+	libmosquitto-dev mosquitto gpx libcairo2-dev libxml2-utils libcurl4-openssl-dev \
+	libssl-dev
 # Only the benchmark compares against these (printcore: Printrun's host, also
 # used by the sim suite's faithfulness test, which is skipped without it).
 BENCH_PACKAGES := admesh time bc prusa-slicer printcore apache2-utils
@@ -40,7 +43,7 @@ override CXXFLAGS += -std=c++17 $(WARN) -Wno-deprecated-declarations -pthread -D
 CAIRO_CFLAGS := $(patsubst -I%,-isystem %,$(shell pkg-config --cflags cairo 2>/dev/null))
 CAIRO_LIBS   := $(shell pkg-config --libs cairo 2>/dev/null || echo -lcairo)
 CPPFLAGS += $(CAIRO_CFLAGS)
-LDLIBS   := $(CAIRO_LIBS) -lmicrohttpd -lmosquitto -lcurl -lsqlite3 -lserialport -lutil -ljansson -lpolyclipping -ltbb -lgmp -lmpfr -lm -pthread
+LDLIBS   := $(CAIRO_LIBS) -lcrypto -lmicrohttpd -lmosquitto -lcurl -lsqlite3 -lserialport -lutil -ljansson -lpolyclipping -ltbb -lgmp -lmpfr -lm -pthread
 TEST_LDLIBS := $(shell pkg-config --libs check 2>/dev/null || echo -lcheck -lsubunit -lrt) $(LDLIBS)
 
 # Sources: every .c under the module folders is library code except the CLI
@@ -87,9 +90,13 @@ deps:
 	  DEBIAN_FRONTEND=noninteractive $$sudo apt-get install -y -qq --no-install-recommends $$missing >/dev/null || exit 1; \
 	fi
 
+# The bundled model checked, then repaired, sliced and printed on the built-in
+# simulated printers: the FlashForge Creator Pro (Sailfish) and a Marlin one.
 demo: deps
 	@$(MAKE) all
 	./$(BUILD)/stratum check docs/examples/bracket.stl
+	./$(BUILD)/stratum print docs/examples/bracket.stl --printer flashforge-creator-pro
+	./$(BUILD)/stratum print docs/examples/bracket.stl --printer prusa-i3-mk3s
 
 # The plain suite runs last so the output ends with Check's summary line.
 check:

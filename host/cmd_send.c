@@ -162,6 +162,8 @@ static int send_check_file(FILE *f, const char *name, uint64_t *commands, uint64
 void send_progress_start(struct send_progress *p)
 {
 	memset(p, 0, sizeof(*p));
+	p->cmd = SEND_CMD;
+	p->tag = "send";
 	p->tty = isatty(STDERR_FILENO);
 	p->last_decile = -1;
 	p->t0 = send_now();
@@ -172,6 +174,7 @@ void send_progress_show(struct send_progress *p, const struct send_view *v)
 	double frac = v->total ? (double)v->done / (double)v->total : 1.0;
 	double el = send_now() - p->t0;
 	char temps[96] = "", eta[32] = "", layer[32] = "";
+	int ela = (int)el;
 
 	if (v->tool)
 		snprintf(temps, sizeof(temps), " T %.0f/%.0f", v->tool_actual, v->tool_target);
@@ -185,8 +188,8 @@ void send_progress_show(struct send_progress *p, const struct send_view *v)
 	if (v->layer >= 0)
 		snprintf(layer, sizeof(layer), " layer %ld", v->layer);
 	if (p->tty) {
-		int n = fprintf(stderr, "\r[send] %3d%% %s %llu/%llu%s%s%s%s", (int)(frac * 100),
-				v->unit, (unsigned long long)v->done,
+		int n = fprintf(stderr, "\r[%s] %3d%% %d:%02d %s %llu/%llu%s%s%s%s", p->tag,
+				(int)(frac * 100), ela / 60, ela % 60, v->unit, (unsigned long long)v->done,
 				(unsigned long long)v->total, layer, temps, eta,
 				v->paused ? " (paused)" : "");
 		for (size_t w = n > 0 ? (size_t)n : 0; w < p->width; w++)
@@ -198,7 +201,7 @@ void send_progress_show(struct send_progress *p, const struct send_view *v)
 		int decile = (int)(frac * 10);
 		if (decile != p->last_decile) {
 			p->last_decile = decile;
-			fprintf(stderr, SEND_CMD ": %d%% %s %llu/%llu%s%s%s\n", decile * 10, v->unit,
+			fprintf(stderr, "%s: %d%% %s %llu/%llu%s%s%s\n", p->cmd, decile * 10, v->unit,
 				(unsigned long long)v->done, (unsigned long long)v->total, layer,
 				temps, eta);
 		}
@@ -217,14 +220,12 @@ struct marlin_progress {
 	uint64_t total; /* commands in the file */
 };
 
-/* Marlin's status as the shared progress line. */
-static void send_progress_cb(void *ctx, const struct marlin_status *st, uint64_t bytes_read)
+void send_view_marlin(const struct marlin_status *st, uint64_t total, struct send_view *v)
 {
-	struct marlin_progress *mp = ctx;
-	struct send_view v = {
+	*v = (struct send_view){
 		.unit = "line",
 		.done = st->acked,
-		.total = mp->total,
+		.total = total,
 		.layer = st->layer,
 		.tool = st->tool[0].present,
 		.bed = st->bed.present,
@@ -234,7 +235,16 @@ static void send_progress_cb(void *ctx, const struct marlin_status *st, uint64_t
 		.bed_target = st->bed.target,
 		.paused = st->paused,
 	};
+}
+
+/* Marlin's status as the shared progress line. */
+static void send_progress_cb(void *ctx, const struct marlin_status *st, uint64_t bytes_read)
+{
+	struct marlin_progress *mp = ctx;
+	struct send_view v;
+
 	(void)bytes_read;
+	send_view_marlin(st, mp->total, &v);
 	send_progress_show(&mp->p, &v);
 }
 

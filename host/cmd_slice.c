@@ -20,12 +20,11 @@
 #include <string.h>
 
 #include "commands.h"
-#include "mesh.h"
 #include "meshio.h"
 #include "profile.h"
 #include "profile_slicer.h"
-#include "progress.h"
 #include "repair.h"
+#include "slicejob.h"
 #include "slicer.h"
 #include "st_error.h"
 #include "st_number.h"
@@ -236,21 +235,6 @@ static int config_from_profile(const struct profile *p, const struct slice_args 
 	return 0;
 }
 
-/* Exit status for a failed slicer_run (settings were checked before). */
-static int slice_exit(int rc)
-{
-	switch (rc) {
-	case ST_ERR_RANGE: /* does not fit, nothing to print, too many layers */
-	case ST_ERR_IO:	   /* OUT could not be written */
-		return ST_EXIT_FAILURE;
-	case ST_ERR_PARSE: /* the profile's start/end G-code */
-	case ST_ERR_UNSUPPORTED:
-		return ST_EXIT_DATAERR;
-	default:
-		return ST_EXIT_SOFTWARE;
-	}
-}
-
 /* What the summary shows besides struct slicer_summary. */
 struct slice_run {
 	const struct slice_args *a;
@@ -401,52 +385,14 @@ static int report(const struct slice_run *r, const struct slicer_summary *s)
 	return 0;
 }
 
-/*
- * Repair m into *fixed (epsilon = the nozzle).  Returns 0 or the exit
- * status with the message printed.
- */
-static int repair_model(const char *in, const struct mesh *m, const struct slicer_config *c,
-			struct progress *prog, struct mesh **fixed, struct repair_report *rep)
-{
-	struct repair_options opt;
-	struct st_error err = {0};
-	int rc;
-
-	repair_options_init(&opt);
-	opt.epsilon = c->perim.nozzle_diameter;
-	opt.precision = REPAIR_FLOAT64; /* slicing reads doubles: no float32 rounding needed */
-	opt.threads = c->threads;
-	if (prog) {
-		opt.progress = progress_update;
-		opt.progress_ctx = prog;
-	}
-	memset(rep, 0, sizeof(*rep));
-	rc = repair_mesh(m, &opt, fixed, NULL, rep, &err);
-	if (rc < 0) {
-		fprintf(stderr, SLICE_CMD ": %s: %s\n", in, err.msg);
-		return rc == ST_ERR_ARG ? ST_EXIT_SOFTWARE : st_exit_for(rc);
-	}
-	if (!rep->printable) {
-		fprintf(stderr, SLICE_CMD ": %s: could not be repaired to a printable solid: %s; "
-				  "nothing was written\n", in, rep->why);
-		return ST_EXIT_FAILURE;
-	}
-	return 0;
-}
-
 int cmd_slice(int argc, char **argv)
 {
 	struct slice_args a = {0};
 	struct slice_run run = {0};
 	struct slicer_config cfg;
-	struct slicer_summary sum;
-	struct repair_report rep;
-	struct progress prog;
-	bool have_prog;
+	struct slicejob_result res;
 	struct st_error err = {0};
 	struct profile *prof = NULL;
-	struct mesh *m = NULL, *fixed = NULL;
-	double off[3];
 	int status, rc;
 
 	status = parse_args(argc, argv, &a);
@@ -467,54 +413,16 @@ int cmd_slice(int argc, char **argv)
 		status = ST_EXIT_USAGE;
 		goto out_profile;
 	}
-
-	rc = meshio_read(a.in, MESHIO_AUTO, &m, &run.format, &err);
-	if (rc) {
-		fprintf(stderr, SLICE_CMD ": %s\n", err.msg);
-		status = rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
+	status = slicejob_run(SLICE_CMD, a.in, &cfg, a.no_repair, a.out, true, &res);
+	if (status)
 		goto out_profile;
-	}
-	run.input_triangles = m->ntris;
-	/* Refuse a model too big before spending time on its repair. */
-	rc = slicer_place(m, &cfg.bed, off, NULL, NULL, &err);
-	if (rc) {
-		fprintf(stderr, SLICE_CMD ": %s: %s; nothing was written\n", a.in, err.msg);
-		status = slice_exit(rc);
-		goto out_mesh;
-	}
-
-	have_prog = progress_start(&prog, SLICE_CMD);
-	if (!a.no_repair) {
-		status = repair_model(a.in, m, &cfg, have_prog ? &prog : NULL, &fixed, &rep);
-		if (status)
-			goto out_progress;
-		run.rep = &rep;
-	}
-	if (have_prog) {
-		cfg.progress = progress_update;
-		cfg.progress_ctx = &prog;
-	}
-	rc = slicer_run(fixed ? fixed : m, &cfg, a.out, &sum, &err);
-	if (have_prog) {
-		progress_end(&prog);
-		have_prog = false;
-	}
-	if (rc) {
-		fprintf(stderr, SLICE_CMD ": %s: %s; nothing was written\n", a.in, err.msg);
-		status = slice_exit(rc);
-		goto out_progress;
-	}
 	run.a = &a;
 	run.c = &cfg;
 	run.prof = prof;
-	status = report(&run, &sum);
-
-out_progress:
-	if (have_prog)
-		progress_end(&prog);
-	mesh_free(fixed);
-out_mesh:
-	mesh_free(m);
+	run.format = res.format;
+	run.input_triangles = res.input_triangles;
+	run.rep = res.repaired ? &res.rep : NULL;
+	status = report(&run, &res.sum);
 out_profile:
 	profile_free(prof);
 	return status;

@@ -22,6 +22,7 @@ int cmd_x3g(int argc, char **argv);	 /* host/cmd_x3g.c */
 int cmd_send(int argc, char **argv);	 /* host/cmd_send.c */
 int cmd_serve(int argc, char **argv);	 /* host/cmd_serve.c */
 int cmd_preview(int argc, char **argv);	 /* host/cmd_preview.c */
+int cmd_print(int argc, char **argv);	 /* host/cmd_print.c */
 
 struct profile;
 

@@ -6,7 +6,17 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
+
+/* Monotonic clock, seconds. */
+static double progress_now(void)
+{
+	struct timespec ts;
+
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
 
 bool progress_start(struct progress *p, const char *cmd)
 {
@@ -35,9 +45,17 @@ void progress_update(void *ctx, const char *stage, double done)
 		percent = 100;
 	pthread_mutex_lock(&p->lock);
 	new_stage = strncmp(p->stage, stage, sizeof(p->stage) - 1) != 0;
+	if (new_stage)
+		p->t0 = progress_now();
 	if (p->tty && (new_stage || percent != p->percent)) {
-		int n = fprintf(stderr, "\r[%.*s] %d%%", (int)(sizeof(p->stage) - 1), stage,
-				percent);
+		double el = progress_now() - p->t0;
+		char eta[32] = "";
+		int n;
+
+		if (done > 0.01 && done < 1)
+			snprintf(eta, sizeof(eta), " ETA %.0f s", el / done - el);
+		n = fprintf(stderr, "\r[%.*s] %d%% %.1f s%s", (int)(sizeof(p->stage) - 1), stage,
+			    percent, el, eta);
 		/* Blank what is left of a longer previous line. */
 		for (size_t w = n > 0 ? (size_t)n - 1 : 0; w < p->width; w++)
 			fputc(' ', stderr);

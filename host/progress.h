@@ -21,6 +21,7 @@ struct progress {
 	char stage[64];		/* the stage last shown */
 	int percent;		/* the percentage last shown, -1 none */
 	size_t width;		/* characters of the bar line on screen */
+	double t0;		/* monotonic s when the stage began */
 };
 
 /*
@@ -30,7 +31,8 @@ struct progress {
  */
 bool progress_start(struct progress *p, const char *cmd);
 
-/* progress_update - callback: stage name and 0..1 done; redraws only on change. */
+/* progress_update - callback: stage name and 0..1 done; redraws only on
+ * change.  The bar shows the stage, its percentage, elapsed time and ETA. */
 void progress_update(void *ctx, const char *stage, double done);
 
 /* progress_end - erase the bar so the report starts on a clean line; frees p. */

@@ -17,10 +17,23 @@
 
 #define SEND_CMD "stratum send"
 
+/* What a Sailfish job did, for a caller that reports it itself. */
+struct send_result {
+	bool ok;
+	uint64_t done, total;	/* commands confirmed (or skipped), of total */
+	uint64_t lines;		/* G-code lines done (G-code input) */
+	long layer;		/* layer of the last command taken, -1 unknown */
+	uint64_t retries;
+	double seconds;
+	char firmware[32];
+};
+
 struct send_args {
 	const char *file, *port, *printer;
 	bool json;
 	long baud; /* 0 = the profile's */
+	const char *cmd;	    /* message prefix; NULL = SEND_CMD */
+	struct send_result *result; /* set: filled instead of printing the report */
 };
 
 /*
@@ -39,8 +52,16 @@ struct send_view {
 	bool paused;
 };
 
+struct marlin_status;
+
+/* send_view_marlin - the Marlin driver's status as a view of lines:
+ * done = acknowledged, layer and temperatures as reported. */
+void send_view_marlin(const struct marlin_status *st, uint64_t total, struct send_view *v);
+
 /* Progress state: a redrawn line on a terminal, a line per 10 % otherwise. */
 struct send_progress {
+	const char *cmd; /* plain lines' prefix, SEND_CMD unless changed after start */
+	const char *tag; /* the bar's "[send]", likewise */
 	bool tty;
 	double t0;	 /* monotonic s */
 	int last_decile; /* plain mode: last 10 % step printed */

@@ -27,6 +27,8 @@
 #include "xport.h"
 
 #define SF_X3G_CHUNK 8192 /* X3G bytes read at a time */
+/* The prefix of messages: stratum send, or the command that called it. */
+#define SF_CMD(a) ((a)->cmd ? (a)->cmd : SEND_CMD)
 /* Host version sent with the version query; Sailfish answers 0 below 39
  * (Host.cc), and RepG sends 40. */
 #define SF_HOST_VERSION 40
@@ -37,6 +39,7 @@ struct sf_gcode_src {
 	struct gcode_reader *r;
 	struct x3g_translator *t;
 	const char *name;
+	const char *cmd;	  /* message prefix */
 	bool show_warnings;	  /* the check pass prints them, the send pass not */
 	const uint8_t *out;	  /* this line's commands */
 	size_t out_len, pos;
@@ -69,7 +72,7 @@ static void sf_show_warnings(const struct sf_gcode_src *g)
 	size_t nw = x3g_warnings(g->t, &w);
 
 	for (size_t i = 0; i < nw; i++)
-		fprintf(stderr, SEND_CMD ": %s:%llu: warning: %s\n", g->name,
+		fprintf(stderr, "%s: %s:%llu: warning: %s\n", g->cmd, g->name,
 			(unsigned long long)w[i].line, w[i].msg);
 }
 
@@ -202,6 +205,7 @@ static int sf_source_open(struct sf_job *j, bool show_warnings, struct st_error 
 	}
 	memset(&j->g, 0, sizeof(j->g));
 	j->g.name = j->a->file;
+	j->g.cmd = SF_CMD(j->a);
 	j->g.show_warnings = show_warnings;
 	j->g.layer = -1;
 	if ((rc = x3g_new(&j->m, &j->xo, &j->g.t, err)))
@@ -233,7 +237,7 @@ static int sf_check_file(struct sf_job *j)
 	int rc;
 
 	if ((rc = sf_source_open(j, true, &err))) {
-		fprintf(stderr, SEND_CMD ": %s: %s\n", j->prof->path, err.msg);
+		fprintf(stderr, "%s: %s: %s\n", SF_CMD(j->a), j->prof->path, err.msg);
 		return rc == ST_ERR_ARG ? ST_EXIT_DATAERR : ST_EXIT_SOFTWARE;
 	}
 	j->commands = 0;
@@ -246,9 +250,9 @@ static int sf_check_file(struct sf_job *j)
 	sf_source_close(j);
 	if (rc < 0) {
 		if (j->x3g)
-			fprintf(stderr, SEND_CMD ": %s: %s; nothing was sent\n", j->a->file, err.msg);
+			fprintf(stderr, "%s: %s: %s; nothing was sent\n", SF_CMD(j->a), j->a->file, err.msg);
 		else
-			fprintf(stderr, SEND_CMD ": %s; nothing was sent\n", err.msg);
+			fprintf(stderr, "%s: %s; nothing was sent\n", SF_CMD(j->a), err.msg);
 		return rc == ST_ERR_NOMEM || rc == ST_ERR_INTERNAL ? ST_EXIT_SOFTWARE
 								   : ST_EXIT_DATAERR;
 	}
@@ -304,6 +308,19 @@ static void sf_report(const struct sf_job *j, const struct s3g_status *st, long 
 	double both = sec > 0 && cap > 0 ? (double)(st->bytes_out + st->bytes_in) / sec / cap : 0;
 	char detail[320];
 
+	if (j->a->result) {
+		struct send_result *res = j->a->result;
+
+		res->ok = ok;
+		res->done = done;
+		res->total = j->commands;
+		res->lines = lines;
+		res->layer = j->x3g ? -1 : j->g.layer;
+		res->retries = st->retries;
+		res->seconds = sec;
+		snprintf(res->firmware, sizeof(res->firmware), "%s", j->firmware);
+		return;
+	}
 	if (j->a->json) {
 		json_t *o = send_report_json(j->a, &s);
 		if (o) {
@@ -359,27 +376,29 @@ static int sf_stream(struct sf_job *j, struct xport *x, long baud)
 	int rc, status;
 
 	if (s3g_new(x, NULL, &d, &err)) {
-		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
+		fprintf(stderr, "%s: %s\n", SF_CMD(j->a), err.msg);
 		return ST_EXIT_SOFTWARE;
 	}
 	stop = send_catch_signals();
 	/* the version query proves a Sailfish board answers S3G on the port */
 	if (s3g_get_version(d, SF_HOST_VERSION, &fw, &err)) {
-		fprintf(stderr, SEND_CMD ": no answer from a Sailfish printer on %s (%s); check "
+		fprintf(stderr, "%s: no answer from a Sailfish printer on %s (%s); check "
 				     "that it is switched on, not busy with an SD print, and that the "
-				     "baud rate matches\n", xport_describe(x), err.msg);
+				     "baud rate matches\n", SF_CMD(j->a), xport_describe(x), err.msg);
 		s3g_free(d);
 		return ST_EXIT_UNAVAILABLE;
 	}
 	snprintf(j->firmware, sizeof(j->firmware), "Sailfish %u.%u", fw / 100u, fw % 100u);
 	if ((rc = sf_source_open(j, false, &err))) {
-		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
+		fprintf(stderr, "%s: %s\n", SF_CMD(j->a), err.msg);
 		s3g_free(d);
 		return ST_EXIT_SOFTWARE;
 	}
 	send_progress_start(&prog.p);
+	prog.p.cmd = SF_CMD(j->a);
+	prog.p.tag = j->a->cmd ? "print" : "send";
 	if (!j->a->json || prog.p.tty)
-		fprintf(stderr, SEND_CMD ": %s on %s, %llu commands%s\n", j->firmware,
+		fprintf(stderr, "%s: %s on %s, %llu commands%s\n", SF_CMD(j->a), j->firmware,
 			xport_describe(x), (unsigned long long)j->commands,
 			j->x3g ? "" : " translated from G-code as they go");
 	rc = j->x3g ? s3g_stream_pull(d, sf_x3g_next, j->x, j->commands, sf_progress_cb, &prog,
@@ -389,19 +408,19 @@ static int sf_stream(struct sf_job *j, struct xport *x, long baud)
 	send_progress_end(&prog.p);
 	status = sf_exit_for(&st, rc);
 	if (rc)
-		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
+		fprintf(stderr, "%s: %s\n", SF_CMD(j->a), err.msg);
 	else if (st.interrupted)
-		fprintf(stderr, SEND_CMD ": the job was cancelled after command %zu of %llu\n",
+		fprintf(stderr, "%s: the job was cancelled after command %zu of %llu\n", SF_CMD(j->a),
 			st.confirmed + st.skipped, (unsigned long long)j->commands);
 	/* the link still works: leave the printer safe */
 	if (st.interrupted || (rc && st.fail != S3G_FAIL_LINK)) {
 		struct st_error e2 = {0};
 		if (s3g_cancel(d, &e2))
-			fprintf(stderr, SEND_CMD ": safe stop: %s; switch the printer off by hand\n",
+			fprintf(stderr, "%s: safe stop: %s; switch the printer off by hand\n", SF_CMD(j->a),
 				e2.msg);
 		else
-			fprintf(stderr, SEND_CMD ": stopped safely: build aborted, heaters and motors "
-					     "off\n");
+			fprintf(stderr, "%s: stopped safely: build aborted, heaters and motors "
+					     "off\n", SF_CMD(j->a));
 	}
 	sf_report(j, &st, baud, rc == 0 && !st.interrupted,
 		  rc ? err.msg : st.interrupted ? "the job was cancelled" : NULL);
@@ -418,7 +437,7 @@ int send_sailfish(const struct send_args *a, const struct profile *prof)
 	int status;
 
 	if (!j || !(j->x = calloc(1, sizeof(*j->x)))) {
-		fprintf(stderr, SEND_CMD ": out of memory\n");
+		fprintf(stderr, "%s: out of memory\n", SF_CMD(a));
 		free(j);
 		return ST_EXIT_SOFTWARE;
 	}
@@ -427,7 +446,7 @@ int send_sailfish(const struct send_args *a, const struct profile *prof)
 	j->x3g = send_has_ext(a->file, ".x3g");
 	if (!j->x3g) {
 		if (cmd_x3g_machine(prof, &j->m, &j->xo.flavor, &err)) {
-			fprintf(stderr, SEND_CMD ": %s\n", err.msg);
+			fprintf(stderr, "%s: %s\n", SF_CMD(j->a), err.msg);
 			status = ST_EXIT_DATAERR;
 			goto out;
 		}
@@ -437,7 +456,7 @@ int send_sailfish(const struct send_args *a, const struct profile *prof)
 	}
 	j->f = fopen(a->file, "rb");
 	if (!j->f) {
-		fprintf(stderr, SEND_CMD ": cannot open %s: %s\n", a->file, strerror(errno));
+		fprintf(stderr, "%s: cannot open %s: %s\n", SF_CMD(j->a), a->file, strerror(errno));
 		status = ST_EXIT_DATAERR;
 		goto out;
 	}
@@ -449,7 +468,7 @@ int send_sailfish(const struct send_args *a, const struct profile *prof)
 	xo.baudrate = (int)baud;
 	xo.dtr_reset = prof->dtr_reset;
 	if (xport_open(a->port, &xo, &x, &err)) {
-		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
+		fprintf(stderr, "%s: %s\n", SF_CMD(j->a), err.msg);
 		status = ST_EXIT_UNAVAILABLE;
 		goto out_file;
 	}

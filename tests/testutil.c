@@ -119,3 +119,8 @@ double tu_path_length(const struct toolpath *p)
 			   (double)(p->pts[i].y - p->pts[i - 1].y));
 	return s;
 }
+
+const char *tu_bin(void)
+{
+	return getenv("STRATUM_BIN") ? getenv("STRATUM_BIN") : "build/stratum";
+}

@@ -35,6 +35,9 @@ void tu_write_str(const char *path, const char *text);
 int tu_run(char *out, size_t cap, const char *args_fmt, ...)
 	__attribute__((format(printf, 3, 4)));
 
+/* tu_bin - the binary under test: $STRATUM_BIN, else build/stratum. */
+const char *tu_bin(void);
+
 /* tu_file_exists - 1 if path exists. */
 int tu_file_exists(const char *path);
 

@@ -22,13 +22,16 @@
 #include "marlin.h"
 #include "sim/marlin_sim.h"
 #include "print.h"
+#include "resume.h"
+#include "simprinter.h"
 #include "xport.h"
 
 #define MARLIN_STEP_MS 50	 /* longest wait for replies per loop turn */
 #define MARLIN_CMD_WAIT_MS 120000 /* longest wait for one printer command */
 #define MARLIN_STOP_MS 10000	 /* safe stop: longest wait for its commands */
 #define MARLIN_POLL_S 5		 /* M105 period when idle without autoreport */
-#define SIM_BAUD_MAX 20000000.0	 /* sped-up link of the simulated printer, bits/s */
+
+_Static_assert(RESUME_LINE_MAX == MARLIN_CMD_MAX, "resume lines fit Marlin's limit");
 
 struct mlink {
 	char name[NODE_NAME_MAX];
@@ -64,23 +67,12 @@ static void mlink_free(struct mlink *s)
 static int start_sim(struct mlink *s, const struct node_printer_config *pc,
 		     const struct profile *prof, const char **path, struct st_error *err)
 {
-	struct sim_marlin_options so;
-	double baud;
-	int rc;
+	int rc = simprinter_marlin(prof, pc->sim_speedup, pc->sim_log[0] ? pc->sim_log : NULL,
+				   &s->sim, err);
 
-	sim_marlin_options_init(&so);
-	so.speedup = pc->sim_speedup;
-	/* The link is sped up as well, so a job takes seconds, not hours. */
-	baud = (double)prof->baudrate * pc->sim_speedup;
-	so.baud = (unsigned)(baud > SIM_BAUD_MAX ? SIM_BAUD_MAX : baud);
-	if (prof->rx_buffer_size > 0)
-		so.rx_buffer = (unsigned)prof->rx_buffer_size;
-	so.advanced_ok = true;
-	so.log_path = pc->sim_log[0] ? pc->sim_log : NULL;
-	if ((rc = sim_marlin_new(&so, &s->sim, err)) || (rc = sim_marlin_start_thread(s->sim, err)))
-		return rc;
-	*path = sim_marlin_slave_path(s->sim);
-	return 0;
+	if (!rc)
+		*path = sim_marlin_slave_path(s->sim);
+	return rc;
 }
 
 static int marlin_connect_op(const struct node_printer_config *pc, const struct profile *prof,
@@ -177,123 +169,6 @@ static int end_result(struct mlink *s, const struct marlin_status *st, int rc, b
 	}
 }
 
-/* The printer's state at a byte of a file, for a resume. */
-struct resume_state {
-	double tool, bed, fan;	   /* targets; fan 0-255 */
-	double x, y, z, e, f;	   /* positions (mm) in the file's own coordinates */
-	bool rel_xyz, rel_e;	   /* G91, M83 */
-	bool moved;		   /* a move was seen: x, y, z mean something */
-};
-
-/* Read path up to byte end and work out where the printer was. */
-static int resume_scan(const char *path, int64_t end, struct resume_state *rs,
-		       struct st_error *err)
-{
-	FILE *f = fopen(path, "rb");
-	struct gcode_reader *r;
-	struct gcode_line g;
-	int rc;
-
-	memset(rs, 0, sizeof(*rs));
-	rs->f = 1500;
-	if (!f)
-		return st_error_set(err, ST_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
-	if ((rc = gcode_reader_new(f, path, &r, err))) {
-		fclose(f);
-		return rc;
-	}
-	while ((int64_t)gcode_reader_bytes(r) < end && (rc = gcode_reader_next(r, 0, &g, err)) == 1) {
-		double v;
-
-		if (g.letter == 'M') {
-			if ((g.number == 104 || g.number == 109) && gcode_word_value(&g, 'S', &v))
-				rs->tool = v;
-			else if ((g.number == 140 || g.number == 190) && gcode_word_value(&g, 'S', &v))
-				rs->bed = v;
-			else if (g.number == 106)
-				rs->fan = gcode_word_value(&g, 'S', &v) ? v : 255;
-			else if (g.number == 107)
-				rs->fan = 0;
-			else if (g.number == 82 || g.number == 83)
-				rs->rel_e = g.number == 83;
-			continue;
-		}
-		if (g.letter != 'G')
-			continue;
-		if (g.number == 90 || g.number == 91) {
-			rs->rel_xyz = rs->rel_e = g.number == 91;
-		} else if (g.number == 92) {
-			if (gcode_word_value(&g, 'X', &v)) rs->x = v;
-			if (gcode_word_value(&g, 'Y', &v)) rs->y = v;
-			if (gcode_word_value(&g, 'Z', &v)) rs->z = v;
-			if (gcode_word_value(&g, 'E', &v)) rs->e = v;
-		} else if (g.number == 28) {
-			bool all = !gcode_find_word(&g, 'X') && !gcode_find_word(&g, 'Y') &&
-				   !gcode_find_word(&g, 'Z');
-			if (all || gcode_find_word(&g, 'X')) rs->x = 0;
-			if (all || gcode_find_word(&g, 'Y')) rs->y = 0;
-			if (all || gcode_find_word(&g, 'Z')) rs->z = 0;
-		} else if (g.number >= 0 && g.number <= 3) {
-			double *axis[4] = {&rs->x, &rs->y, &rs->z, &rs->e};
-			const char *names = "XYZE";
-
-			for (int i = 0; i < 4; i++) {
-				bool rel = i == 3 ? rs->rel_e : rs->rel_xyz;
-
-				if (gcode_word_value(&g, names[i], &v))
-					*axis[i] = rel ? *axis[i] + v : v;
-			}
-			if (gcode_word_value(&g, 'F', &v))
-				rs->f = v;
-			rs->moved = true;
-		}
-	}
-	gcode_reader_free(r);
-	fclose(f);
-	return rc < 0 ? rc : 0;
-}
-
-/*
- * The commands that bring a printer back to where an interrupted print
- * stopped (docs/serve.md "Resume"): bed heat first so the part stays
- * stuck, Z taken as it was (never homed: that would drive into the part),
- * lift, home X and Y only, nozzle heat, back over the part, down, modes,
- * extruder position, fan.  n lines into out.
- */
-static size_t resume_preamble(const struct resume_state *rs, char out[][MARLIN_CMD_MAX + 1],
-			      size_t cap)
-{
-	size_t n = 0;
-
-#define ADD(...) (n < cap ? (void)snprintf(out[n++], MARLIN_CMD_MAX + 1, __VA_ARGS__) : (void)0)
-	if (rs->bed > 0) {
-		ADD("M140 S%.0f", rs->bed);
-		ADD("M190 S%.0f", rs->bed);
-	}
-	if (rs->tool > 0)
-		ADD("M104 S%.0f", rs->tool);
-	ADD("G92 Z%.3f", rs->z);
-	ADD("G91");
-	ADD("G1 Z2 F600");
-	ADD("G90");
-	ADD("G28 X Y");
-	if (rs->tool > 0)
-		ADD("M109 S%.0f", rs->tool);
-	if (rs->moved)
-		ADD("G1 X%.3f Y%.3f F6000", rs->x, rs->y);
-	ADD("G1 Z%.3f F600", rs->z);
-	ADD("%s", rs->rel_e ? "M83" : "M82");
-	ADD("G92 E%.5f", rs->rel_e ? 0.0 : rs->e);
-	if (rs->rel_xyz)
-		ADD("G91");
-	ADD("G1 F%.0f", rs->f);
-	if (rs->fan > 0)
-		ADD("M106 S%.0f", rs->fan);
-#undef ADD
-	return n;
-}
-
-#define RESUME_LINES 20
 
 /*
  * Follow ctl's requests; ctl->mu held.  Returns true when the job is to
@@ -319,7 +194,7 @@ static int marlin_print_op(void *state, const char *path, int64_t start, bool re
 			   struct node_print_ctl *ctl, struct st_error *err)
 {
 	struct mlink *s = state;
-	char pre[RESUME_LINES][MARLIN_CMD_MAX + 1];
+	char pre[RESUME_LINES][RESUME_LINE_MAX + 1];
 	size_t npre = 0, ipre = 0;
 	struct marlin_status st;
 	struct gcode_reader *r = NULL;

@@ -1,0 +1,1031 @@
+/*
+ * cmd_print.c - `stratum print MODEL [--printer NAME] [--port ...]`: one
+ * command from a model to a printed part (docs/printing.md).  Stages:
+ * repair and slice (host/slicejob.c, the same path as `stratum slice`),
+ * optional layer previews, then streaming: Marlin with the driver
+ * (serial/marlin.h) here, Sailfish through send_sailfish (X3G on the fly).
+ * G-code and X3G input skip the first stages.
+ *
+ * With no --port (or --port sim) the printer is the built-in simulated one
+ * of the profile's dialect, run in this process and sped up.  Marlin jobs
+ * keep a journal (host/journal.h) synced per layer and every few seconds,
+ * so `--resume JOB` can continue after a crash, a power cut or a lost
+ * printer.  Ctrl-C/SIGTERM stop safely and exit 130; a lost printer exits
+ * 69 with the last confirmed line and layer; a firmware error exits 1.
+ */
+#include <errno.h>
+#include <fcntl.h>
+#include <jansson.h>
+#include <limits.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <unistd.h>
+
+#include "commands.h"
+#include "gcode.h"
+#include "journal.h"
+#include "marlin.h"
+#include "portpick.h"
+#include "preview.h"
+#include "profile.h"
+#include "profile_slicer.h"
+#include "pvdraw.h"
+#include "resume.h"
+#include "send.h"
+#include "simprinter.h"
+#include "slicejob.h"
+#include "st_error.h"
+#include "xport.h"
+
+#define PRINT_CMD "stratum print"
+#define PRINT_SPEEDUP 1000.0	 /* built-in simulator: default time divisor */
+#define PRINT_SYNC_S 3.0	 /* journal sync period besides every layer change */
+#define PRINT_STOP_MS 10000	 /* safe stop: longest wait for its commands */
+#define PRINT_PREVIEW_LAYERS 3	 /* --preview: the first layers drawn */
+
+static void print_usage(FILE *out)
+{
+	fprintf(out,
+		"usage: stratum print MODEL --printer NAME [--port PATH|auto|tcp://HOST:PORT|sim]\n"
+		"                     [--dry-run -o OUT] [--preview] [--json] [--speedup K]\n"
+		"       stratum print --resume JOB [--yes] [--port ...] [--json]\n"
+		"\n"
+		"Repairs and slices MODEL (STL, OBJ or OFF) as 'stratum slice' does, then prints\n"
+		"it; a .gcode file (or .x3g for Sailfish printers) is printed as it is.\n"
+		"  --printer NAME     the printer profile ('stratum printers'); required\n"
+		"  --port P           a serial device, 'auto' (the port whose USB id the profile\n"
+		"                     lists), tcp://HOST:PORT, or 'sim'.  Default: sim, the\n"
+		"                     built-in simulated printer of the profile's firmware\n"
+		"  --speedup K        the simulated printer runs K times faster (default 1000)\n"
+		"  --dry-run -o OUT   write the G-code (X3G for Sailfish printers unless OUT\n"
+		"                     ends in .gcode) instead of printing\n"
+		"  --preview          write PNGs of the first layers (MODEL-layerN.png) first\n"
+		"  --json             the summary as one JSON object on stdout\n"
+		"  --resume JOB       continue an interrupted Marlin print from the start of the\n"
+		"                     last layer the printer confirmed: reheat, home X and Y only,\n"
+		"                     restore Z and E.  Asks first; --yes answers for scripts\n"
+		"  --sim-log FILE     testing aid: the simulated printer's execution log\n"
+		"Ctrl-C stops safely (heaters and motors off).  Exit status: 0 printed, 1 the\n"
+		"job failed (firmware error, not repaired, resume declined), 2 usage, 65 bad\n"
+		"input, 69 printer unavailable or lost, 70 internal error, 130 interrupted.\n");
+}
+
+struct print_args {
+	const char *in, *printer, *port, *out, *resume, *sim_log;
+	bool dry_run, json, yes, preview;
+	double speedup;
+};
+
+/* Parse argv; 0 to go on, -1 after --help, else the exit status. */
+static int print_parse(int argc, char **argv, struct print_args *a)
+{
+	memset(a, 0, sizeof(*a));
+	a->speedup = PRINT_SPEEDUP;
+	for (int i = 1; i < argc; i++) {
+		const char *s = argv[i], *v = NULL;
+
+		if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
+			print_usage(stdout);
+			return -1;
+		} else if (!strcmp(s, "--json")) {
+			a->json = true;
+		} else if (!strcmp(s, "--yes") || !strcmp(s, "-y")) {
+			a->yes = true;
+		} else if (!strcmp(s, "--dry-run")) {
+			a->dry_run = true;
+		} else if (!strcmp(s, "--preview")) {
+			a->preview = true;
+		} else if (!strcmp(s, "-o") || cmd_is_opt(s, "--output")) {
+			v = !strcmp(s, "-o") ? (i + 1 < argc ? argv[++i] : NULL)
+					     : cmd_opt_value(argc, argv, &i, "--output");
+			a->out = v;
+		} else if (cmd_is_opt(s, "--printer")) {
+			a->printer = v = cmd_opt_value(argc, argv, &i, "--printer");
+		} else if (cmd_is_opt(s, "--port")) {
+			a->port = v = cmd_opt_value(argc, argv, &i, "--port");
+		} else if (cmd_is_opt(s, "--resume")) {
+			a->resume = v = cmd_opt_value(argc, argv, &i, "--resume");
+		} else if (cmd_is_opt(s, "--sim-log")) {
+			a->sim_log = v = cmd_opt_value(argc, argv, &i, "--sim-log");
+		} else if (cmd_is_opt(s, "--speedup")) {
+			v = cmd_opt_value(argc, argv, &i, "--speedup");
+			if (v && (!cmd_number(PRINT_CMD, "--speedup", v, "a factor from 1 to 1000000",
+					      &a->speedup) ||
+				  a->speedup < 1 || a->speedup > 1e6)) {
+				if (a->speedup < 1 || a->speedup > 1e6)
+					fprintf(stderr, PRINT_CMD ": --speedup wants a factor from 1 "
+							"to 1000000, not '%s'\n", v);
+				return ST_EXIT_USAGE;
+			}
+		} else if (s[0] == '-' && s[1]) {
+			fprintf(stderr, PRINT_CMD ": unknown option '%s'\n", s);
+			print_usage(stderr);
+			return ST_EXIT_USAGE;
+		} else if (!a->in) {
+			a->in = v = s;
+		} else {
+			fprintf(stderr, PRINT_CMD ": one model at a time ('%s' and '%s')\n", a->in, s);
+			return ST_EXIT_USAGE;
+		}
+		if (!v && s[0] == '-' && strcmp(s, "--json") && strcmp(s, "--yes") && strcmp(s, "-y") &&
+		    strcmp(s, "--dry-run") && strcmp(s, "--preview")) {
+			fprintf(stderr, PRINT_CMD ": %s needs a value\n", s);
+			return ST_EXIT_USAGE;
+		}
+	}
+	if (a->resume && (a->in || a->dry_run)) {
+		fprintf(stderr, PRINT_CMD ": --resume JOB takes no model and no --dry-run: the job "
+				"journal names the file\n");
+		return ST_EXIT_USAGE;
+	}
+	if (!a->resume && (!a->in || !a->printer)) {
+		fprintf(stderr, PRINT_CMD ": %s\n",
+			!a->in ? "no model file given"
+			       : "no printer given; add --printer NAME ('stratum printers' lists "
+				 "them)");
+		print_usage(stderr);
+		return ST_EXIT_USAGE;
+	}
+	if (a->dry_run != (a->out != NULL)) {
+		fprintf(stderr, PRINT_CMD ": %s\n", a->dry_run ? "--dry-run needs -o OUT"
+							       : "-o OUT goes with --dry-run");
+		return ST_EXIT_USAGE;
+	}
+	return 0;
+}
+
+/* What the input file is, from its name. */
+enum print_input { PRINT_MODEL, PRINT_GCODE, PRINT_X3G };
+
+static enum print_input print_input_of(const char *path)
+{
+	if (send_has_ext(path, ".x3g"))
+		return PRINT_X3G;
+	if (send_has_ext(path, ".gcode") || send_has_ext(path, ".gco") || send_has_ext(path, ".g"))
+		return PRINT_GCODE;
+	return PRINT_MODEL;
+}
+
+/* Where each layer of a G-code file starts, as the driver counts layers. */
+struct print_layer {
+	uint64_t line;	 /* file line of its layer comment */
+	int64_t offset;	 /* byte offset of that line */
+	double z;	 /* mm, NAN unknown */
+};
+
+struct print_layers {
+	struct print_layer *v;
+	size_t n, cap;
+	uint64_t lines, commands; /* in the file */
+};
+
+/*
+ * Read the G-code once: layer starts, line and command counts, and for
+ * Marlin every command within its line limit (so a bad file sends nothing).
+ * Returns 0 or the exit status (message printed).
+ */
+static int print_scan(const char *path, bool marlin, struct print_layers *L)
+{
+	struct gcode_reader *r;
+	struct gcode_line g;
+	struct st_error err = {0};
+	FILE *f = fopen(path, "rb");
+	long layer = -1;
+	int64_t before = 0;
+	int rc, status = 0;
+
+	memset(L, 0, sizeof(*L));
+	if (!f) {
+		fprintf(stderr, PRINT_CMD ": cannot open %s: %s\n", path, strerror(errno));
+		return ST_EXIT_DATAERR;
+	}
+	if (gcode_reader_new(f, path, &r, &err)) {
+		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
+		fclose(f);
+		return ST_EXIT_SOFTWARE;
+	}
+	while ((rc = gcode_reader_next(r, 0, &g, &err)) == 1) {
+		long l;
+		double z;
+		enum gcode_layer_mark mark = gcode_layer_comment(&g, &l, &z);
+
+		if (mark == GCODE_LAYER_START) {
+			layer = l >= 0 ? l : layer + 1;
+			if (layer < 0 || (size_t)layer > L->n + 100000) {
+				fprintf(stderr, PRINT_CMD ": %s: line %llu: layer number %ld is out "
+						"of order\n", path,
+					(unsigned long long)gcode_reader_line(r), layer);
+				status = ST_EXIT_DATAERR;
+				goto out;
+			}
+			while (L->n <= (size_t)layer) {
+				if (L->n == L->cap) {
+					size_t cap = L->cap ? 2 * L->cap : 256;
+					void *p = realloc(L->v, cap * sizeof(*L->v));
+					if (!p) {
+						fprintf(stderr, PRINT_CMD ": out of memory\n");
+						status = ST_EXIT_SOFTWARE;
+						goto out;
+					}
+					L->v = p;
+					L->cap = cap;
+				}
+				L->v[L->n++] = (struct print_layer){gcode_reader_line(r), before, NAN};
+			}
+			L->v[layer] = (struct print_layer){gcode_reader_line(r), before, z};
+		} else if (mark == GCODE_LAYER_Z && layer >= 0) {
+			L->v[layer].z = z;
+		}
+		before = (int64_t)gcode_reader_bytes(r);
+		if (g.kind == GCODE_KIND_HOST_ONLY || !g.text_len)
+			continue;
+		if (marlin && g.text_len > MARLIN_CMD_MAX) {
+			fprintf(stderr, PRINT_CMD ": %s: line %llu: the command is %zu bytes long; "
+					"Marlin takes at most %d (shorten it); nothing was sent\n",
+				path, (unsigned long long)gcode_reader_line(r), g.text_len,
+				MARLIN_CMD_MAX);
+			status = ST_EXIT_DATAERR;
+			goto out;
+		}
+		L->commands++;
+	}
+	L->lines = gcode_reader_line(r);
+	if (rc < 0) {
+		fprintf(stderr, PRINT_CMD ": %s; nothing was sent\n", err.msg);
+		status = ST_EXIT_DATAERR;
+	}
+out:
+	gcode_reader_free(r);
+	fclose(f);
+	return status;
+}
+
+/* The layer (0-based) a file line belongs to, -1 before the first. */
+static long print_layer_of(const struct print_layers *L, uint64_t line)
+{
+	size_t lo = 0, hi = L->n;
+
+	while (lo < hi) {
+		size_t mid = (lo + hi) / 2;
+		if (L->v[mid].line <= line)
+			lo = mid + 1;
+		else
+			hi = mid;
+	}
+	return (long)lo - 1;
+}
+
+/* Everything one print holds, for the stages and the summary. */
+struct print_job {
+	struct print_args *a;
+	struct profile *prof;
+	enum print_input input;
+	const char *gcode;	   /* the G-code printed (or the X3G file) */
+	char gcode_buf[JOURNAL_PATH_MAX];
+	bool sliced;
+	struct slicejob_result slice;
+	struct print_layers layers;
+	struct journal j;
+	bool journal_on;	   /* Marlin: the journal is kept */
+	bool simulated;
+	const char *port;	   /* the port opened */
+	char *port_auto;	   /* --port auto's choice (free) */
+	char printer_desc[96];	   /* "Marlin 2.1.2 (simulated printer)" */
+	/* the streaming stage */
+	uint64_t base_line;	   /* resume: file lines before the reader's first */
+	long start_layer;	   /* resume: the layer it starts at, else -1 */
+	uint64_t done, total;	   /* lines (Marlin) or commands (Sailfish) */
+	uint64_t last_line;	   /* last file line the printer confirmed */
+	long layer;		   /* its layer, -1 unknown */
+	uint64_t resends;
+	double stream_s, total_s, t0;
+	const char *fail;	   /* why it stopped, NULL done */
+	char fail_buf[300];
+	int status;
+};
+
+/* -------- Marlin streaming with the journal -------- */
+
+struct print_marlin_ctx {
+	struct send_progress p;
+	struct print_job *job;
+	double last_sync;
+	long last_layer;
+};
+
+/* Sync the journal now; a failure is shown once, the print goes on. */
+static void print_sync(struct print_job *job)
+{
+	struct st_error err = {0};
+	static bool warned; /* once per process: a full disk is said once */
+
+	if (job->journal_on && journal_save(&job->j, &err) && !warned) {
+		warned = true;
+		fprintf(stderr, PRINT_CMD ": warning: %s; the print goes on but cannot be resumed "
+				"from here\n", err.msg);
+	}
+}
+
+/* Take the driver's state into the job and the journal. */
+static void print_take(struct print_job *job, const struct marlin_status *st)
+{
+	if (st->last_acked_src) {
+		job->last_line = job->base_line + st->last_acked_src;
+		job->layer = print_layer_of(&job->layers, job->last_line);
+	}
+	job->done = st->acked;
+	job->resends = st->resends;
+	job->j.last_line = job->last_line;
+	job->j.layer = job->layer;
+	job->j.z = job->layer >= 0 ? job->layers.v[job->layer].z : NAN;
+	if (st->tool[0].present) {
+		job->j.tool_actual = st->tool[0].actual;
+		job->j.tool_target = st->tool[0].target;
+	}
+	if (st->bed.present) {
+		job->j.bed_actual = st->bed.actual;
+		job->j.bed_target = st->bed.target;
+	}
+}
+
+static void print_marlin_progress(void *ctx, const struct marlin_status *st, uint64_t bytes)
+{
+	struct print_marlin_ctx *c = ctx;
+	struct print_job *job = c->job;
+	double now = send_now();
+	struct send_view v;
+
+	(void)bytes;
+	print_take(job, st);
+	/* lines of the file, not of this run: a resume starts part-way */
+	send_view_marlin(st, job->layers.lines, &v);
+	v.done = job->last_line;
+	v.layer = job->layer >= 0 ? job->layer + 1 : -1;
+	if (!job->a->json || c->p.tty)
+		send_progress_show(&c->p, &v);
+	if (job->layer != c->last_layer || now - c->last_sync >= PRINT_SYNC_S) {
+		c->last_layer = job->layer;
+		c->last_sync = now;
+		print_sync(job);
+	}
+}
+
+/* Send the resume preamble and wait for it; 0 or the driver's error. */
+static int print_preamble(struct print_job *job, struct marlin *m, int64_t offset,
+			  volatile sig_atomic_t *stop, struct st_error *err)
+{
+	char pre[RESUME_LINES][RESUME_LINE_MAX + 1];
+	struct resume_state rs;
+	size_t n, i = 0;
+	int rc;
+
+	if ((rc = resume_scan(job->gcode, offset, &rs, err)))
+		return rc;
+	n = resume_preamble(&rs, pre, RESUME_LINES);
+	while (i < n || !marlin_idle(m)) {
+		if (*stop)
+			marlin_request_cancel(m);
+		while (i < n && marlin_can_submit(m))
+			if ((rc = marlin_submit(m, pre[i++], 0, -1, NAN, err)) < 0)
+				return rc;
+		if ((rc = marlin_step(m, 50, err)))
+			return rc;
+	}
+	return 0;
+}
+
+/* Exit status and journal state of a failed Marlin job. */
+static int print_marlin_failed(struct print_job *job, struct marlin *m,
+			       const struct marlin_status *st, int rc, const struct st_error *err)
+{
+	struct st_error e2 = {0};
+	const char *state = "failed";
+	int status = ST_EXIT_SOFTWARE;
+
+	snprintf(job->fail_buf, sizeof(job->fail_buf), "%s", err->msg);
+	job->fail = job->fail_buf;
+	if (rc == ST_ERR_PARSE || rc == ST_ERR_ARG) {
+		status = ST_EXIT_DATAERR;
+	} else if (st->fail == MARLIN_FAIL_LINK) {
+		status = ST_EXIT_UNAVAILABLE;
+		state = "link-lost";
+	} else if (st->fail == MARLIN_FAIL_FIRMWARE || st->fail == MARLIN_FAIL_PRINTER_CANCEL) {
+		status = ST_EXIT_FAILURE;
+	} else if (st->fail == MARLIN_FAIL_CANCELLED) {
+		status = ST_EXIT_INTERRUPTED;
+		state = "cancelled";
+	}
+	fprintf(stderr, PRINT_CMD ": %s\n", err->msg);
+	/* the link still works: leave the printer safe */
+	if (st->fail == MARLIN_FAIL_CANCELLED || st->fail == MARLIN_FAIL_PRINTER_CANCEL ||
+	    rc == ST_ERR_PARSE || rc == ST_ERR_ARG) {
+		if (marlin_safe_stop(m, PRINT_STOP_MS, &e2))
+			fprintf(stderr, PRINT_CMD ": safe stop: %s; switch the printer off by hand\n",
+				e2.msg);
+		else
+			fprintf(stderr, PRINT_CMD ": stopped safely: heaters and motors off\n");
+	}
+	if (job->layer >= 0)
+		fprintf(stderr, PRINT_CMD ": the printer confirmed line %llu of %llu (layer %ld of "
+				"%zu, Z %.2f mm)\n", (unsigned long long)job->last_line,
+			(unsigned long long)job->layers.lines, job->layer + 1, job->layers.n,
+			job->layers.v[job->layer].z);
+	else
+		fprintf(stderr, PRINT_CMD ": the printer confirmed line %llu of %llu (before the "
+				"first layer)\n", (unsigned long long)job->last_line,
+			(unsigned long long)job->layers.lines);
+	snprintf(job->j.state, sizeof(job->j.state), "%s", state);
+	print_sync(job);
+	if (job->journal_on && status != ST_EXIT_DATAERR)
+		fprintf(stderr, PRINT_CMD ": the job is saved; continue it with 'stratum print "
+				"--resume %s'\n", job->j.id);
+	return status;
+}
+
+/* Stream job->gcode to the Marlin printer on path; returns the exit status. */
+static int print_marlin(struct print_job *job, const char *path)
+{
+	struct xport *x = NULL;
+	struct marlin *m = NULL;
+	struct gcode_reader *r = NULL;
+	struct st_error err = {0};
+	struct marlin_options mo;
+	struct xport_options xo = {0};
+	struct marlin_status st;
+	struct print_marlin_ctx ctx = {.job = job, .last_layer = -2};
+	volatile sig_atomic_t *stop;
+	int64_t offset = 0;
+	FILE *f = NULL;
+	int rc, status;
+
+	xo.baudrate = (int)job->prof->baudrate;
+	xo.dtr_reset = job->prof->dtr_reset && !job->simulated;
+	if (xport_open(path, &xo, &x, &err)) {
+		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
+		return ST_EXIT_UNAVAILABLE;
+	}
+	marlin_options_init(&mo);
+	mo.rx_buffer = job->prof->rx_buffer_size > 0 ? (unsigned)job->prof->rx_buffer_size : 0;
+	/* the simulator boots like a board; ptys and TCP bridges are not reset */
+	mo.expect_reset = job->simulated || (job->prof->dtr_reset &&
+					     xport_backend_of(x) == XPORT_BACKEND_SERIALPORT);
+	if (marlin_new(x, &mo, &m, &err)) {
+		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
+		status = ST_EXIT_SOFTWARE;
+		goto out_port;
+	}
+	stop = send_catch_signals();
+	if ((rc = marlin_connect(m, &err))) {
+		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
+		status = rc == ST_ERR_INTERNAL ? ST_EXIT_FAILURE : ST_EXIT_UNAVAILABLE;
+		goto out_driver;
+	}
+	snprintf(job->printer_desc, sizeof(job->printer_desc), "%s%s",
+		 marlin_caps(m)->firmware_name[0] ? marlin_caps(m)->firmware_name : "Marlin",
+		 job->simulated ? ", simulated" : "");
+	f = fopen(job->gcode, "rb");
+	if (job->start_layer >= 0)
+		offset = job->layers.v[job->start_layer].offset;
+	if (!f || fseeko(f, (off_t)offset, SEEK_SET)) {
+		fprintf(stderr, PRINT_CMD ": cannot read %s: %s\n", job->gcode, strerror(errno));
+		status = ST_EXIT_DATAERR;
+		goto out_file;
+	}
+	if (gcode_reader_new(f, job->gcode, &r, &err)) {
+		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
+		status = ST_EXIT_SOFTWARE;
+		goto out_file;
+	}
+	send_progress_start(&ctx.p);
+	ctx.p.cmd = PRINT_CMD;
+	ctx.p.tag = "print";
+	job->total = job->layers.lines;
+	if (!job->a->json || ctx.p.tty)
+		fprintf(stderr, PRINT_CMD ": printing on %s at %s%s, %llu lines\n", job->printer_desc,
+			xport_describe(x), job->simulated ? "" : "",
+			(unsigned long long)job->layers.lines);
+	print_sync(job);
+	rc = 0;
+	if (job->start_layer >= 0) {
+		job->base_line = job->layers.v[job->start_layer].line - 1;
+		rc = print_preamble(job, m, offset, stop, &err);
+	}
+	if (!rc)
+		rc = marlin_stream_file(m, r, job->gcode, print_marlin_progress, &ctx, stop, &err);
+	job->stream_s = send_now() - ctx.p.t0;
+	send_progress_end(&ctx.p);
+	marlin_status(m, &st);
+	print_take(job, &st);
+	if (rc == 0) {
+		status = ST_EXIT_OK;
+		snprintf(job->j.state, sizeof(job->j.state), "done");
+		print_sync(job);
+	} else {
+		status = print_marlin_failed(job, m, &st, rc, &err);
+	}
+	gcode_reader_free(r);
+out_file:
+	if (f)
+		fclose(f);
+out_driver:
+	marlin_free(m);
+out_port:
+	xport_drain(x, 1000, NULL);
+	xport_close(x);
+	return status;
+}
+
+/* -------- Sailfish: stratum send's streaming, reported here -------- */
+
+static int print_sailfish(struct print_job *job, const char *path)
+{
+	struct send_result res = {0};
+	struct send_args sa = {
+		.file = job->gcode,
+		.port = path,
+		.printer = job->prof->id,
+		.json = job->a->json,
+		.cmd = PRINT_CMD,
+		.result = &res,
+	};
+	int status = send_sailfish(&sa, job->prof);
+
+	job->done = res.done;
+	job->total = res.total;
+	job->layer = res.layer;
+	job->last_line = res.lines;
+	job->resends = res.retries;
+	job->stream_s = res.seconds;
+	snprintf(job->printer_desc, sizeof(job->printer_desc), "%s%s",
+		 res.firmware[0] ? res.firmware : "Sailfish", job->simulated ? ", simulated" : "");
+	if (status && !job->fail)
+		job->fail = status == ST_EXIT_INTERRUPTED ? "interrupted" : "the print failed";
+	return status;
+}
+
+/* -------- stages -------- */
+
+/* Slice the model into job->gcode (or OUT); 0 or the exit status. */
+static int print_slice(struct print_job *job, const char *out)
+{
+	struct slicer_config cfg;
+	struct st_error err = {0};
+	int rc = profile_slicer_config(job->prof, &cfg, &err);
+
+	if (rc) {
+		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
+		return st_exit_for(rc);
+	}
+	if ((rc = slicer_config_check(&cfg, &err))) {
+		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
+		return ST_EXIT_DATAERR;
+	}
+	rc = slicejob_run(PRINT_CMD, job->a->in, &cfg, false, out, true, &job->slice);
+	job->sliced = rc == 0;
+	return rc;
+}
+
+/* --preview: the first layers as MODEL-layerN.png; 0 or the exit status. */
+static int print_preview(struct print_job *job)
+{
+	const char *base = strrchr(job->a->in, '/');
+	const char *dot;
+	char name[PATH_MAX];
+	int n;
+
+	base = base ? base + 1 : job->a->in;
+	dot = strrchr(base, '.');
+	n = dot && dot != base ? (int)(dot - base) : (int)strlen(base);
+	for (int l = 1; l <= PRINT_PREVIEW_LAYERS && (size_t)l <= job->layers.n; l++) {
+		struct preview_opts o;
+		struct pvdraw_opts d = {.width_px = PVDRAW_WIDTH_DEFAULT, .title = base};
+		struct preview *pv = NULL;
+		struct st_error err = {0};
+
+		preview_opts_init(&o);
+		o.layer = l;
+		snprintf(name, sizeof(name), "%.*s-layer%d.png", n, base, l);
+		if (preview_load(job->gcode, &o, &pv, &err) ||
+		    pvdraw_write(pv, &d, name, &err)) {
+			fprintf(stderr, PRINT_CMD ": preview of layer %d: %s\n", l, err.msg);
+			preview_free(pv);
+			return ST_EXIT_FAILURE;
+		}
+		preview_free(pv);
+		if (!job->a->json)
+			fprintf(stderr, PRINT_CMD ": preview: %s\n", name);
+	}
+	return 0;
+}
+
+/* Ask before a resume (or take --yes); true to go on. */
+static bool print_confirm(const struct print_job *job)
+{
+	char line[16] = "";
+	const struct print_layer *L = &job->layers.v[job->start_layer];
+
+	fprintf(stderr, PRINT_CMD ": resume job %s: %s on %s, from layer %ld of %zu (Z %.2f mm, "
+			"line %llu); the printer reheats (bed %.0f, nozzle %.0f degC), homes X and "
+			"Y only, and goes on with the remaining layers.\n",
+		job->j.id, job->gcode, job->prof->id, job->start_layer + 1, job->layers.n, L->z,
+		(unsigned long long)L->line, isfinite(job->j.bed_target) ? job->j.bed_target : 0,
+		isfinite(job->j.tool_target) ? job->j.tool_target : 0);
+	if (job->a->yes)
+		return true;
+	fprintf(stderr, "Is the part still on the bed, untouched?  Continue? [y/N] ");
+	fflush(stderr);
+	if (!fgets(line, sizeof(line), stdin)) {
+		fprintf(stderr, "\n" PRINT_CMD ": no answer on stdin; add --yes to resume without "
+				"asking\n");
+		return false;
+	}
+	return line[0] == 'y' || line[0] == 'Y';
+}
+
+/* Set up a resume from the journal; 0 or the exit status. */
+static int print_setup_resume(struct print_job *job)
+{
+	struct st_error err = {0};
+	char hex[65];
+	int rc;
+
+	if ((rc = journal_load(job->a->resume, &job->j, &err))) {
+		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
+		return rc == ST_ERR_PARSE ? ST_EXIT_DATAERR : ST_EXIT_USAGE;
+	}
+	if (!strcmp(job->j.state, "done")) {
+		fprintf(stderr, PRINT_CMD ": job %s finished printing; there is nothing to "
+				"resume\n", job->j.id);
+		return ST_EXIT_USAGE;
+	}
+	if ((rc = journal_sha256(job->j.gcode, hex, &err))) {
+		fprintf(stderr, PRINT_CMD ": job %s: %s\n", job->j.id, err.msg);
+		return ST_EXIT_DATAERR;
+	}
+	if (strcmp(hex, job->j.sha256)) {
+		fprintf(stderr, PRINT_CMD ": job %s: %s changed since the print started (SHA-256 "
+				"%.12s..., the journal has %.12s...); refusing to resume with "
+				"another file\n", job->j.id, job->j.gcode, hex, job->j.sha256);
+		return ST_EXIT_DATAERR;
+	}
+	snprintf(job->gcode_buf, sizeof(job->gcode_buf), "%s", job->j.gcode);
+	job->gcode = job->gcode_buf;
+	if (!job->a->printer)
+		job->a->printer = job->j.printer;
+	if (!job->a->port)
+		job->a->port = job->j.port;
+	job->input = PRINT_GCODE;
+	return 0;
+}
+
+/* Open the port the user asked for (or the simulator); 0 or exit status. */
+static int print_stream(struct print_job *job)
+{
+	const char *port = job->a->port ? job->a->port : "sim";
+	struct sim_marlin *sm = NULL;
+	struct sim_sailfish *ss = NULL;
+	struct st_error err = {0};
+	bool sailfish = job->prof->protocol == PROFILE_PROTOCOL_SAILFISH;
+	int rc, status;
+
+	job->simulated = !strcmp(port, "sim");
+	if (job->simulated) {
+		rc = sailfish ? simprinter_sailfish(job->prof, job->a->speedup, job->a->sim_log, &ss,
+						    &err)
+			      : simprinter_marlin(job->prof, job->a->speedup, job->a->sim_log, &sm,
+						  &err);
+		if (rc) {
+			fprintf(stderr, PRINT_CMD ": the simulated printer: %s\n", err.msg);
+			return ST_EXIT_SOFTWARE;
+		}
+		port = sailfish ? sim_sailfish_slave_path(ss) : sim_marlin_slave_path(sm);
+		if (!job->a->json)
+			fprintf(stderr, PRINT_CMD ": SIMULATION: no printer is used; printing to the "
+					"built-in simulated %s printer, %gx faster than real time "
+					"(choose a printer with --port PATH or --port auto)\n",
+				sailfish ? "Sailfish" : "Marlin", job->a->speedup);
+	} else if (!strcmp(port, "auto")) {
+		char why[512] = "";
+
+		if (portpick_auto(job->prof, &job->port_auto, why, sizeof(why), &err)) {
+			fprintf(stderr, PRINT_CMD ": --port auto: %s\n", err.msg);
+			return ST_EXIT_UNAVAILABLE;
+		}
+		if (!job->a->json)
+			fprintf(stderr, PRINT_CMD ": --port auto: %s\n", why);
+		port = job->port_auto;
+	}
+	job->port = port;
+	snprintf(job->j.port, sizeof(job->j.port), "%s", job->a->port ? job->a->port : "sim");
+	job->t0 = send_now();
+	status = sailfish ? print_sailfish(job, port) : print_marlin(job, port);
+	sim_marlin_free(sm);
+	sim_sailfish_free(ss);
+	return status;
+}
+
+/* A figure of seconds as "1h 02m 03s" or "4.2 s". */
+static void print_duration(char *out, size_t cap, double s)
+{
+	long t = lround(s);
+
+	if (s < 60)
+		snprintf(out, cap, "%.1f s", s);
+	else
+		snprintf(out, cap, "%ldh %02ldm %02lds", t / 3600, t / 60 % 60, t % 60);
+}
+
+static void print_summary_text(const struct print_job *job)
+{
+	char est[32], took[32], sim[32];
+	const struct slicer_summary *s = &job->slice.sum;
+
+	printf("%s %s on %s: %s\n", job->status == 0 ? "printed" : "stopped",
+	       job->a->in ? job->a->in : job->gcode, job->prof->id,
+	       job->printer_desc[0] ? job->printer_desc : job->port ? job->port : "");
+	if (job->sliced && job->slice.repaired)
+		printf("  repair: %zu triangles in, %zu out, %zu part%s, %llu intersecting pairs "
+		       "resolved\n", job->slice.input_triangles, job->slice.rep.output_triangles,
+		       job->slice.rep.components, job->slice.rep.components == 1 ? "" : "s",
+		       (unsigned long long)job->slice.rep.intersecting_pairs);
+	if (job->sliced)
+		printf("  slice: %zu layers, filament %.1f mm (%.2f g)\n", s->layers, s->filament_mm,
+		       s->filament_g);
+	if (job->start_layer >= 0)
+		printf("  resumed job %s from layer %ld of %zu\n", job->j.id, job->start_layer + 1,
+		       job->layers.n);
+	if (job->prof->protocol == PROFILE_PROTOCOL_SAILFISH)
+		printf("  streamed: %llu of %llu commands (%llu retries)\n",
+		       (unsigned long long)job->done, (unsigned long long)job->total,
+		       (unsigned long long)job->resends);
+	else
+		printf("  streamed: line %llu of %llu confirmed, layer %ld of %zu (%llu resends)\n",
+		       (unsigned long long)job->last_line, (unsigned long long)job->layers.lines,
+		       job->layer + 1, job->layers.n, (unsigned long long)job->resends);
+	print_duration(took, sizeof(took), job->stream_s);
+	if (job->sliced) {
+		print_duration(est, sizeof(est), s->time_s);
+		printf("  time: estimated %s (heating excluded), took %s", est, took);
+	} else {
+		printf("  time: took %s", took);
+	}
+	if (job->simulated) {
+		print_duration(sim, sizeof(sim), job->stream_s * job->a->speedup);
+		printf(" = %s of printer time (simulated, %gx)", sim, job->a->speedup);
+	}
+	printf("\n");
+	if (job->journal_on)
+		printf("  journal: %s\n", job->j.file);
+	if (job->fail)
+		printf("  stopped: %s\n", job->fail);
+}
+
+static void print_summary_json(const struct print_job *job)
+{
+	json_t *o = json_object();
+	const struct slicer_summary *s = &job->slice.sum;
+
+	if (!o)
+		return;
+	json_object_set_new(o, "ok", json_boolean(job->status == 0));
+	json_object_set_new(o, "exit", json_integer(job->status));
+	json_object_set_new(o, "input", json_string(job->a->in ? job->a->in : job->gcode));
+	json_object_set_new(o, "gcode", json_string(job->gcode));
+	json_object_set_new(o, "printer", json_string(job->prof->id));
+	json_object_set_new(o, "port", json_string(job->port ? job->port : ""));
+	json_object_set_new(o, "firmware", json_string(job->printer_desc));
+	json_object_set_new(o, "simulated", json_boolean(job->simulated));
+	if (job->simulated)
+		json_object_set_new(o, "speedup", json_real(job->a->speedup));
+	if (job->sliced && job->slice.repaired) {
+		json_t *r = json_object();
+		json_object_set_new(r, "input_triangles",
+				    json_integer((json_int_t)job->slice.input_triangles));
+		json_object_set_new(r, "output_triangles",
+				    json_integer((json_int_t)job->slice.rep.output_triangles));
+		json_object_set_new(r, "components",
+				    json_integer((json_int_t)job->slice.rep.components));
+		json_object_set_new(r, "intersecting_pairs",
+				    json_integer((json_int_t)job->slice.rep.intersecting_pairs));
+		json_object_set_new(o, "repair", r);
+	}
+	json_object_set_new(o, "layers", json_integer((json_int_t)(job->sliced ? s->layers
+									       : job->layers.n)));
+	if (job->sliced) {
+		json_object_set_new(o, "filament_mm", json_real(s->filament_mm));
+		json_object_set_new(o, "filament_g", json_real(s->filament_g));
+		json_object_set_new(o, "estimated_s", json_real(s->time_s));
+	}
+	json_object_set_new(o, "unit", json_string(job->prof->protocol ==
+							   PROFILE_PROTOCOL_SAILFISH ? "commands"
+										     : "lines"));
+	json_object_set_new(o, "done", json_integer((json_int_t)job->done));
+	json_object_set_new(o, "total", json_integer((json_int_t)job->total));
+	json_object_set_new(o, "last_line", json_integer((json_int_t)job->last_line));
+	json_object_set_new(o, "layer", json_integer(job->layer + 1));
+	json_object_set_new(o, "resends", json_integer((json_int_t)job->resends));
+	json_object_set_new(o, "seconds", json_real(job->stream_s));
+	if (job->start_layer >= 0)
+		json_object_set_new(o, "resumed_from_layer", json_integer(job->start_layer + 1));
+	if (job->journal_on) {
+		json_object_set_new(o, "job", json_string(job->j.id));
+		json_object_set_new(o, "journal", json_string(job->j.file));
+	}
+	if (job->fail)
+		json_object_set_new(o, "error", json_string(job->fail));
+	send_report_emit(o);
+}
+
+/* --dry-run: G-code (or X3G) into OUT; 0 or the exit status. */
+static int print_dry_run(struct print_job *job)
+{
+	const char *out = job->a->out;
+	bool sailfish = job->prof->protocol == PROFILE_PROTOCOL_SAILFISH;
+	bool x3g = sailfish && !send_has_ext(out, ".gcode");
+	int status;
+
+	if (job->input != PRINT_MODEL && !(x3g && job->input == PRINT_GCODE)) {
+		fprintf(stderr, PRINT_CMD ": --dry-run: %s is already what would be printed\n",
+			job->a->in);
+		return ST_EXIT_USAGE;
+	}
+	if (job->input == PRINT_MODEL) {
+		if (x3g) {
+			struct st_error err = {0};
+			char dir[JOURNAL_PATH_MAX - 64];
+			if (journal_dir(dir, sizeof(dir), &err)) {
+				fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
+				return ST_EXIT_FAILURE;
+			}
+			snprintf(job->gcode_buf, sizeof(job->gcode_buf), "%s/dry-run-%ld.gcode", dir,
+				 (long)getpid());
+		} else {
+			snprintf(job->gcode_buf, sizeof(job->gcode_buf), "%s", out);
+		}
+		job->gcode = job->gcode_buf;
+		if ((status = print_slice(job, job->gcode)))
+			return status;
+	}
+	if (x3g) {
+		char *argv[] = {"x3g", (char *)job->gcode, "-o", (char *)out, "--printer",
+				(char *)job->prof->path, NULL};
+		int saved = -1;
+		fflush(stdout);
+		if (job->a->json) /* one JSON object on stdout: ours */
+			saved = dup(STDOUT_FILENO), freopen("/dev/null", "w", stdout);
+		status = cmd_x3g(6, argv);
+		if (saved >= 0) {
+			fflush(stdout);
+			dup2(saved, STDOUT_FILENO);
+			close(saved);
+		}
+		if (job->input == PRINT_MODEL)
+			unlink(job->gcode);
+		if (status)
+			return status;
+	}
+	if (job->a->json) {
+		json_t *o = json_object();
+		json_object_set_new(o, "ok", json_true());
+		json_object_set_new(o, "input", json_string(job->a->in));
+		json_object_set_new(o, "printer", json_string(job->prof->id));
+		json_object_set_new(o, "output", json_string(out));
+		json_object_set_new(o, "format", json_string(x3g ? "x3g" : "gcode"));
+		if (job->sliced) {
+			json_object_set_new(o, "layers", json_integer((json_int_t)job->slice.sum.layers));
+			json_object_set_new(o, "filament_mm", json_real(job->slice.sum.filament_mm));
+			json_object_set_new(o, "estimated_s", json_real(job->slice.sum.time_s));
+		}
+		send_report_emit(o);
+	} else {
+		printf("dry run: %s for %s written to %s", x3g ? "X3G" : "G-code", job->prof->id,
+		       out);
+		if (job->sliced)
+			printf(" (%zu layers, filament %.1f mm)", job->slice.sum.layers,
+			       job->slice.sum.filament_mm);
+		printf("; nothing was printed\n");
+	}
+	return 0;
+}
+
+int cmd_print(int argc, char **argv)
+{
+	struct print_args a;
+	struct print_job *job;
+	struct st_error err = {0};
+	int status, rc;
+
+	status = print_parse(argc, argv, &a);
+	if (status)
+		return status < 0 ? ST_EXIT_OK : status;
+	job = calloc(1, sizeof(*job));
+	if (!job) {
+		fprintf(stderr, PRINT_CMD ": out of memory\n");
+		return ST_EXIT_SOFTWARE;
+	}
+	job->a = &a;
+	job->start_layer = -1;
+	job->layer = -1;
+	if (a.resume && (status = print_setup_resume(job)))
+		goto out;
+	if ((rc = profile_find(a.printer, &job->prof, &err))) {
+		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
+		status = st_exit_for(rc);
+		goto out;
+	}
+	if (a.resume && job->prof->protocol != PROFILE_PROTOCOL_MARLIN) {
+		fprintf(stderr, PRINT_CMD ": --resume works with Marlin printers only; '%s' speaks "
+				"%s\n", job->prof->id, profile_protocol_name(job->prof->protocol));
+		status = ST_EXIT_USAGE;
+		goto out;
+	}
+	if (!a.resume) {
+		job->input = print_input_of(a.in);
+		job->gcode = a.in;
+	}
+	if (job->input == PRINT_X3G && job->prof->protocol != PROFILE_PROTOCOL_SAILFISH) {
+		fprintf(stderr, PRINT_CMD ": %s is X3G, which only Sailfish printers take; printer "
+				"'%s' speaks %s: print the model or its G-code\n", a.in,
+			job->prof->id, profile_protocol_name(job->prof->protocol));
+		status = ST_EXIT_USAGE;
+		goto out;
+	}
+	if (a.dry_run) {
+		status = print_dry_run(job);
+		goto out;
+	}
+	job->journal_on = job->prof->protocol == PROFILE_PROTOCOL_MARLIN;
+	if (!a.resume && job->journal_on && (rc = journal_init(&job->j, &err))) {
+		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
+		status = ST_EXIT_FAILURE;
+		goto out;
+	}
+	if (job->input == PRINT_MODEL) {
+		char dir[JOURNAL_PATH_MAX - 64];
+		if (!job->journal_on && (rc = journal_dir(dir, sizeof(dir), &err))) {
+			fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
+			status = ST_EXIT_FAILURE;
+			goto out;
+		}
+		/* the sliced G-code is kept beside the journal so the job can resume */
+		if (job->journal_on)
+			snprintf(job->gcode_buf, sizeof(job->gcode_buf), "%.*s.gcode",
+				 (int)(strlen(job->j.file) - 5), job->j.file);
+		else
+			snprintf(job->gcode_buf, sizeof(job->gcode_buf), "%s/print-%ld.gcode", dir,
+				 (long)getpid());
+		job->gcode = job->gcode_buf;
+		if ((status = print_slice(job, job->gcode)))
+			goto out;
+	}
+	if (job->input != PRINT_X3G &&
+	    (status = print_scan(job->gcode, job->journal_on, &job->layers)))
+		goto out;
+	if (a.resume) {
+		job->start_layer = job->j.layer >= 0 && (size_t)job->j.layer < job->layers.n
+					   ? job->j.layer : 0;
+		if (!job->layers.n) {
+			fprintf(stderr, PRINT_CMD ": %s has no layer comments; cannot tell where to "
+					"resume\n", job->gcode);
+			status = ST_EXIT_DATAERR;
+			goto out;
+		}
+		if (!print_confirm(job)) {
+			fprintf(stderr, PRINT_CMD ": not resumed\n");
+			status = ST_EXIT_FAILURE;
+			goto out;
+		}
+		snprintf(job->j.state, sizeof(job->j.state), "printing");
+	} else if (job->journal_on) {
+		char path[PATH_MAX];
+		if (!realpath(job->gcode, path) || journal_sha256(path, job->j.sha256, &err)) {
+			fprintf(stderr, PRINT_CMD ": %s: %s\n", job->gcode,
+				err.msg[0] ? err.msg : strerror(errno));
+			status = ST_EXIT_DATAERR;
+			goto out;
+		}
+		snprintf(job->j.gcode, sizeof(job->j.gcode), "%s", path);
+		snprintf(job->j.printer, sizeof(job->j.printer), "%s", job->prof->path);
+		job->j.lines = job->layers.lines;
+	}
+	if (a.preview && job->input != PRINT_X3G && (status = print_preview(job)))
+		goto out;
+	status = print_stream(job);
+	job->status = status;
+	if (a.json)
+		print_summary_json(job);
+	else
+		print_summary_text(job);
+	if (job->sliced && !job->journal_on)
+		unlink(job->gcode);
+out:
+	free(job->port_auto);
+	free(job->layers.v);
+	profile_free(job->prof);
+	free(job);
+	return status;
+}

@@ -1,0 +1,114 @@
+/*
+ * resume.c - the state of a printer at a byte of a G-code file, and the
+ * commands that restore it (resume.h).
+ */
+#include "resume.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "gcode.h"
+
+/* Read path up to byte end and work out where the printer was. */
+int resume_scan(const char *path, int64_t end, struct resume_state *rs,
+		       struct st_error *err)
+{
+	FILE *f = fopen(path, "rb");
+	struct gcode_reader *r;
+	struct gcode_line g;
+	int rc;
+
+	memset(rs, 0, sizeof(*rs));
+	rs->f = 1500;
+	if (!f)
+		return st_error_set(err, ST_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+	if ((rc = gcode_reader_new(f, path, &r, err))) {
+		fclose(f);
+		return rc;
+	}
+	while ((int64_t)gcode_reader_bytes(r) < end && (rc = gcode_reader_next(r, 0, &g, err)) == 1) {
+		double v;
+
+		if (g.letter == 'M') {
+			if ((g.number == 104 || g.number == 109) && gcode_word_value(&g, 'S', &v))
+				rs->tool = v;
+			else if ((g.number == 140 || g.number == 190) && gcode_word_value(&g, 'S', &v))
+				rs->bed = v;
+			else if (g.number == 106)
+				rs->fan = gcode_word_value(&g, 'S', &v) ? v : 255;
+			else if (g.number == 107)
+				rs->fan = 0;
+			else if (g.number == 82 || g.number == 83)
+				rs->rel_e = g.number == 83;
+			continue;
+		}
+		if (g.letter != 'G')
+			continue;
+		if (g.number == 90 || g.number == 91) {
+			rs->rel_xyz = rs->rel_e = g.number == 91;
+		} else if (g.number == 92) {
+			if (gcode_word_value(&g, 'X', &v)) rs->x = v;
+			if (gcode_word_value(&g, 'Y', &v)) rs->y = v;
+			if (gcode_word_value(&g, 'Z', &v)) rs->z = v;
+			if (gcode_word_value(&g, 'E', &v)) rs->e = v;
+		} else if (g.number == 28) {
+			bool all = !gcode_find_word(&g, 'X') && !gcode_find_word(&g, 'Y') &&
+				   !gcode_find_word(&g, 'Z');
+			if (all || gcode_find_word(&g, 'X')) rs->x = 0;
+			if (all || gcode_find_word(&g, 'Y')) rs->y = 0;
+			if (all || gcode_find_word(&g, 'Z')) rs->z = 0;
+		} else if (g.number >= 0 && g.number <= 3) {
+			double *axis[4] = {&rs->x, &rs->y, &rs->z, &rs->e};
+			const char *names = "XYZE";
+
+			for (int i = 0; i < 4; i++) {
+				bool rel = i == 3 ? rs->rel_e : rs->rel_xyz;
+
+				if (gcode_word_value(&g, names[i], &v))
+					*axis[i] = rel ? *axis[i] + v : v;
+			}
+			if (gcode_word_value(&g, 'F', &v))
+				rs->f = v;
+			rs->moved = true;
+		}
+	}
+	gcode_reader_free(r);
+	fclose(f);
+	return rc < 0 ? rc : 0;
+}
+
+/* The restoring commands, in the order resume.h gives and why. */
+size_t resume_preamble(const struct resume_state *rs, char out[][RESUME_LINE_MAX + 1],
+			      size_t cap)
+{
+	size_t n = 0;
+
+#define ADD(...) (n < cap ? (void)snprintf(out[n++], RESUME_LINE_MAX + 1, __VA_ARGS__) : (void)0)
+	if (rs->bed > 0) {
+		ADD("M140 S%.0f", rs->bed);
+		ADD("M190 S%.0f", rs->bed);
+	}
+	if (rs->tool > 0)
+		ADD("M104 S%.0f", rs->tool);
+	ADD("G92 Z%.3f", rs->z);
+	ADD("G91");
+	ADD("G1 Z2 F600");
+	ADD("G90");
+	ADD("G28 X Y");
+	if (rs->tool > 0)
+		ADD("M109 S%.0f", rs->tool);
+	if (rs->moved)
+		ADD("G1 X%.3f Y%.3f F6000", rs->x, rs->y);
+	ADD("G1 Z%.3f F600", rs->z);
+	ADD("%s", rs->rel_e ? "M83" : "M82");
+	ADD("G92 E%.5f", rs->rel_e ? 0.0 : rs->e);
+	if (rs->rel_xyz)
+		ADD("G91");
+	ADD("G1 F%.0f", rs->f);
+	if (rs->fan > 0)
+		ADD("M106 S%.0f", rs->fan);
+#undef ADD
+	return n;
+}
+

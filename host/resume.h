@@ -1,0 +1,47 @@
+/*
+ * resume.h - continuing an interrupted print on a Marlin printer: where
+ * the printer was at a byte of the G-code file (heater targets, position,
+ * modes) and the commands that bring it back there.  Shared by the farm
+ * node (host/serve/print_marlin.c) and `stratum print --resume`
+ * (host/cmd_print.c); docs/serve.md and docs/printing.md describe the
+ * sequence.
+ */
+#ifndef STRATUM_HOST_RESUME_H
+#define STRATUM_HOST_RESUME_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "st_error.h"
+
+/* Longest preamble line (bytes), Marlin's command limit (marlin.h). */
+#define RESUME_LINE_MAX 81
+/* Room for the longest preamble resume_preamble writes. */
+#define RESUME_LINES 20
+
+/* The printer's state at a byte of a file, for a resume. */
+struct resume_state {
+	double tool, bed, fan;	   /* targets; fan 0-255 */
+	double x, y, z, e, f;	   /* positions (mm) in the file's own coordinates */
+	bool rel_xyz, rel_e;	   /* G91, M83 */
+	bool moved;		   /* a move was seen: x, y, z mean something */
+};
+
+/*
+ * resume_scan - read the G-code file path up to byte end and work out the
+ * state there into *rs.  Returns 0, ST_ERR_IO (cannot open), or the
+ * parser's error for a bad line (err names file and line).
+ */
+int resume_scan(const char *path, int64_t end, struct resume_state *rs, struct st_error *err);
+
+/*
+ * resume_preamble - the commands that bring a printer back to rs: bed heat
+ * first so the part stays stuck, Z taken as it was (never homed: that
+ * would drive into the part), lift, home X and Y only, nozzle heat, back
+ * over the part, down, modes, extruder position, fan.  Writes at most cap
+ * lines into out; returns how many.
+ */
+size_t resume_preamble(const struct resume_state *rs, char out[][RESUME_LINE_MAX + 1], size_t cap);
+
+#endif /* STRATUM_HOST_RESUME_H */

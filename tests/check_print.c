@@ -1,0 +1,440 @@
+/*
+ * check_print.c - `stratum print` end to end (issue 8): the binary prints
+ * the bundled bracket on the built-in simulated Marlin and Sailfish
+ * printers, whose execution logs (--sim-log) must hold every command of
+ * the G-code once and in order; Ctrl-C ends with the stop sequence and
+ * exit 130; an unplugged or reset printer (an external `stratum sim`)
+ * gives exit 69 and a saved journal; a host killed mid-print resumes with
+ * only the remaining layers, after reheating; --dry-run writes what
+ * `stratum slice` writes.
+ */
+#include <check.h>
+#include <dirent.h>
+#include <jansson.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gcode.h"
+#include "suites.h"
+#include "testutil.h"
+
+#define MODEL "docs/examples/bracket.stl"
+#define MARLIN_PRINTER "generic-marlin"
+#define SF_PRINTER "flashforge-creator-pro"
+
+static char out[1 << 16];
+
+/* A fresh state directory for this test's journals; its path in dir. */
+static void state_dir(const char *name, char *dir, size_t cap)
+{
+	snprintf(dir, cap, "%s", tu_path(name));
+	setenv("STRATUM_STATE_DIR", dir, 1);
+}
+
+/* A growing list of strings. */
+struct strs {
+	char **v;
+	long *n; /* a number per string (line numbers) */
+	size_t len, cap;
+};
+
+static void strs_add(struct strs *s, const char *text, long n)
+{
+	if (s->len == s->cap) {
+		s->cap = s->cap ? 2 * s->cap : 1024;
+		s->v = realloc(s->v, s->cap * sizeof(*s->v));
+		s->n = realloc(s->n, s->cap * sizeof(*s->n));
+		ck_assert(s->v && s->n);
+	}
+	s->v[s->len] = strdup(text);
+	ck_assert_ptr_nonnull(s->v[s->len]);
+	s->n[s->len++] = n;
+}
+
+static void strs_free(struct strs *s)
+{
+	for (size_t i = 0; i < s->len; i++)
+		free(s->v[i]);
+	free(s->v);
+	free(s->n);
+}
+
+/*
+ * The commands of a G-code file as the driver sends them (cleaned text),
+ * with their file lines; only from file line `from` on.  *layer_line (may
+ * be NULL) gets the file line where 0-based layer `layer` starts.
+ */
+static void gcode_commands(const char *path, uint64_t from, struct strs *s, long layer,
+			   uint64_t *layer_line)
+{
+	FILE *f = fopen(path, "rb");
+	struct gcode_reader *r;
+	struct gcode_line g;
+	struct st_error err = {0};
+	long cur = -1;
+	int rc;
+
+	ck_assert_msg(f != NULL, "%s", path);
+	ck_assert_int_eq(gcode_reader_new(f, path, &r, &err), 0);
+	while ((rc = gcode_reader_next(r, 0, &g, &err)) == 1) {
+		long l;
+		if (gcode_layer_comment(&g, &l, NULL) == GCODE_LAYER_START) {
+			cur = l >= 0 ? l : cur + 1;
+			if (layer_line && cur == layer)
+				*layer_line = gcode_reader_line(r);
+		}
+		if (g.kind == GCODE_KIND_HOST_ONLY || !g.text_len || gcode_reader_line(r) < from)
+			continue;
+		strs_add(s, g.text, (long)gcode_reader_line(r));
+	}
+	ck_assert_msg(rc == 0, "%s", err.msg);
+	gcode_reader_free(r);
+	fclose(f);
+}
+
+/* The simulated Marlin's execution log: "N text" (n) or "- text" (-1). */
+static void marlin_log(const char *path, struct strs *s)
+{
+	FILE *f = fopen(path, "r");
+	char line[512];
+
+	ck_assert_msg(f != NULL, "%s", path);
+	while (fgets(line, sizeof(line), f)) {
+		char *sp = strchr(line, ' ');
+		line[strcspn(line, "\n")] = '\0';
+		ck_assert_msg(sp != NULL, "log line: %s", line);
+		strs_add(s, sp + 1, line[0] == '-' ? -1 : atol(line));
+	}
+	fclose(f);
+}
+
+/* Index of the first log entry with text t at or after i, or len. */
+static size_t strs_find(const struct strs *s, size_t i, const char *t)
+{
+	while (i < s->len && strcmp(s->v[i], t))
+		i++;
+	return i;
+}
+
+/*
+ * log[k..] is exactly cmds, every line numbered one after the other (each
+ * executed once, in order).
+ */
+static void check_tail(const struct strs *log, size_t k, const struct strs *cmds)
+{
+	ck_assert_msg(log->len - k == cmds->len, "%zu commands executed after the start, %zu "
+		      "in the file", log->len - k, cmds->len);
+	for (size_t i = 0; i < cmds->len; i++) {
+		ck_assert_msg(!strcmp(log->v[k + i], cmds->v[i]), "command %zu (file line %ld): "
+			      "executed '%s', the file has '%s'", i, cmds->n[i], log->v[k + i],
+			      cmds->v[i]);
+		ck_assert_msg(log->n[k + i] == log->n[k] + (long)i, "log entry %zu: line number "
+			      "%ld, expected %ld", k + i, log->n[k + i], log->n[k] + (long)i);
+	}
+}
+
+/* The one journal in the state directory dir. */
+static json_t *load_journal(const char *dir, char *path, size_t cap)
+{
+	char jobs[600];
+	struct dirent *e;
+	DIR *d;
+	json_error_t je;
+	json_t *o;
+
+	snprintf(jobs, sizeof(jobs), "%s/jobs", dir);
+	d = opendir(jobs);
+	ck_assert_msg(d != NULL, "%s", jobs);
+	path[0] = '\0';
+	while ((e = readdir(d)))
+		if (strstr(e->d_name, ".json") && !strstr(e->d_name, ".tmp")) {
+			ck_assert_msg(!path[0], "more than one journal in %s", jobs);
+			snprintf(path, cap, "%s/%s", jobs, e->d_name);
+		}
+	closedir(d);
+	ck_assert_msg(path[0], "no journal in %s", jobs);
+	o = json_load_file(path, 0, &je);
+	ck_assert_msg(o != NULL, "%s: %s", path, je.text);
+	return o;
+}
+
+static const char *jstr(json_t *o, const char *k)
+{
+	const char *s = json_string_value(json_object_get(o, k));
+	ck_assert_msg(s != NULL, "no string %s", k);
+	return s;
+}
+
+static long jint(json_t *o, const char *k)
+{
+	json_t *v = json_object_get(o, k);
+	ck_assert_msg(json_is_integer(v), "no integer %s", k);
+	return (long)json_integer_value(v);
+}
+
+/* The last line of out that starts with '{', parsed. */
+static json_t *last_json(void)
+{
+	const char *p = NULL;
+	json_error_t je;
+	json_t *o;
+
+	for (const char *l = out; l && *l; l = strchr(l, '\n') ? strchr(l, '\n') + 1 : NULL)
+		if (*l == '{')
+			p = l;
+	ck_assert_msg(p != NULL, "no JSON in: %s", out);
+	o = json_loadb(p, strcspn(p, "\n"), 0, &je);
+	ck_assert_msg(o != NULL, "%s: %s", je.text, p);
+	return o;
+}
+
+START_TEST(test_marlin_prints_every_line_once)
+{
+	char dir[512], log[512], jpath[1024];
+	struct strs lg = {0}, cmds = {0};
+	json_t *o, *j;
+	size_t k;
+	int rc;
+
+	state_dir("st-marlin", dir, sizeof(dir));
+	snprintf(log, sizeof(log), "%s", tu_path("marlin.log"));
+	rc = tu_run(out, sizeof(out), "print " MODEL " --printer " MARLIN_PRINTER " --json "
+		    "--sim-log %s 2>/dev/null", log);
+	ck_assert_msg(rc == 0, "exit %d: %s", rc, out);
+	o = last_json();
+	ck_assert(json_is_true(json_object_get(o, "ok")));
+	ck_assert(json_is_true(json_object_get(o, "simulated")));
+	ck_assert_int_eq(jint(o, "layers"), 150);
+	ck_assert_int_eq(jint(o, "last_line"), jint(o, "total"));
+	gcode_commands(jstr(o, "gcode"), 0, &cmds, -1, NULL);
+	marlin_log(log, &lg);
+	/* connecting (M110, M115, M155), then the file */
+	k = strs_find(&lg, 0, cmds.v[0]);
+	ck_assert_uint_le(k, 3);
+	for (size_t i = 0; i < k; i++)
+		ck_assert_msg(!strncmp(lg.v[i], "M11", 3) || !strncmp(lg.v[i], "M155", 4), "%s",
+			      lg.v[i]);
+	check_tail(&lg, k, &cmds);
+	j = load_journal(dir, jpath, sizeof(jpath));
+	ck_assert_str_eq(jstr(j, "state"), "done");
+	ck_assert_int_eq(jint(j, "last_line"), jint(o, "total"));
+	ck_assert_int_eq(strlen(jstr(j, "sha256")), 64);
+
+	/* A finished job has nothing to resume; a changed file is refused. */
+	rc = tu_run(out, sizeof(out), "print --resume %s --yes", jstr(j, "id"));
+	ck_assert_msg(rc == 2 && strstr(out, "nothing to resume"), "exit %d: %s", rc, out);
+	json_object_set_new(j, "state", json_string("cancelled"));
+	ck_assert_int_eq(json_dump_file(j, jpath, 0), 0);
+	FILE *f = fopen(jstr(o, "gcode"), "a");
+	ck_assert_ptr_nonnull(f);
+	fputs("; edited\n", f);
+	fclose(f);
+	rc = tu_run(out, sizeof(out), "print --resume %s --yes", jstr(j, "id"));
+	ck_assert_msg(rc == 65 && strstr(out, "changed since the print started"), "exit %d: %s",
+		      rc, out);
+	json_decref(j);
+	json_decref(o);
+	strs_free(&lg);
+	strs_free(&cmds);
+}
+END_TEST
+
+START_TEST(test_sailfish_prints_every_command_once)
+{
+	char dir[512], gc[512], x3g[512], dec[512], log[512], line[512];
+	json_error_t je;
+	size_t i = 0;
+	int rc;
+
+	state_dir("st-sf", dir, sizeof(dir));
+	snprintf(gc, sizeof(gc), "%s", tu_path("sf.gcode"));
+	snprintf(x3g, sizeof(x3g), "%s", tu_path("sf.x3g"));
+	snprintf(dec, sizeof(dec), "%s", tu_path("sf.json"));
+	snprintf(log, sizeof(log), "%s", tu_path("sf.log"));
+	rc = tu_run(out, sizeof(out), "print " MODEL " --printer " SF_PRINTER " --dry-run -o %s",
+		    gc);
+	ck_assert_msg(rc == 0, "dry run: exit %d: %s", rc, out);
+	rc = tu_run(out, sizeof(out), "print %s --printer " SF_PRINTER " --sim-log %s", gc, log);
+	ck_assert_msg(rc == 0, "exit %d: %s", rc, out);
+	ck_assert_msg(strstr(out, "SIMULATION") && strstr(out, "printed "), "%s", out);
+	rc = tu_run(out, sizeof(out), "x3g %s -o %s --printer " SF_PRINTER " && %s x3g --decode "
+		    "%s --json >%s", gc, x3g, tu_bin(), x3g, dec);
+	ck_assert_msg(rc == 0, "x3g: exit %d: %s", rc, out);
+	json_t *o = json_load_file(dec, 0, &je);
+	ck_assert_msg(o != NULL, "%s", je.text);
+	json_t *cmds = json_object_get(o, "commands");
+	ck_assert_uint_gt(json_array_size(cmds), 1000);
+	FILE *f = fopen(log, "r");
+	ck_assert_ptr_nonnull(f);
+	while (fgets(line, sizeof(line), f)) {
+		unsigned long long seq;
+		unsigned code;
+		ck_assert_msg(sscanf(line, "%llu %u", &seq, &code) == 2, "log: %s", line);
+		ck_assert_msg(i < json_array_size(cmds), "more executed than sent: %s", line);
+		ck_assert_uint_eq(seq, i + 1);
+		ck_assert_int_eq(code, json_integer_value(json_object_get(json_array_get(cmds, i),
+									  "code")));
+		i++;
+	}
+	fclose(f);
+	ck_assert_uint_eq(i, json_array_size(cmds));
+	json_decref(o);
+}
+END_TEST
+
+START_TEST(test_ctrl_c_stops_safely)
+{
+	char dir[512], log[512], jpath[1024];
+	struct strs lg = {0};
+	size_t k;
+	int rc;
+
+	state_dir("st-int", dir, sizeof(dir));
+	snprintf(log, sizeof(log), "%s", tu_path("int.log"));
+	rc = tu_run(out, sizeof(out), "print " MODEL " --printer " MARLIN_PRINTER " --speedup 200 "
+		    "--sim-log %s >%s 2>&1 & P=$!; for i in $(seq 200); do grep -qs "
+		    "'\"layer\": [2-9]' %s/jobs/*.json && break; sleep 0.05; done; "
+		    "kill -INT $P; wait $P", log, tu_path("int.out"), dir);
+	ck_assert_msg(rc == 130, "exit %d", rc);
+	marlin_log(log, &lg);
+	/* the stop sequence ends the log: quick stop, heaters, fan, motors off */
+	k = strs_find(&lg, 0, "M410");
+	ck_assert_msg(k < lg.len, "no M410 in the log");
+	ck_assert_uint_lt(strs_find(&lg, k, "M104 S0"), lg.len);
+	ck_assert_uint_lt(strs_find(&lg, k, "M140 S0"), lg.len);
+	ck_assert_str_eq(lg.v[lg.len - 1], "M84");
+	json_t *j = load_journal(dir, jpath, sizeof(jpath));
+	ck_assert_str_eq(jstr(j, "state"), "cancelled");
+	ck_assert_int_ge(jint(j, "layer"), 2);
+	json_decref(j);
+	strs_free(&lg);
+}
+END_TEST
+
+/* Print against an external `stratum sim FAULT`; returns print's status. */
+static int print_external(const char *fault, const char *dir)
+{
+	char link[512];
+
+	snprintf(link, sizeof(link), "%s", tu_path("tty-fault"));
+	(void)dir;
+	return tu_run(out, sizeof(out),
+		      "sim --dialect marlin %s --speedup 1000 --baud 4000000 --link %s >/dev/null "
+		      "2>&1 & S=$!; for i in $(seq 50); do [ -e %s ] && break; sleep 0.1; done; "
+		      "%s print " MODEL " --printer " MARLIN_PRINTER " --port %s 2>&1; r=$?; "
+		      "kill $S 2>/dev/null; wait $S; exit $r", fault, link, link, tu_bin(), link);
+}
+
+START_TEST(test_unplug_and_reset_exit_69)
+{
+	const char *faults[] = {"--unplug-at 2000", "--reset-at 2000"};
+
+	for (int f = 0; f < 2; f++) {
+		char dir[512], jpath[1024];
+		state_dir(f ? "st-reset" : "st-unplug", dir, sizeof(dir));
+		int rc = print_external(faults[f], dir);
+		ck_assert_msg(rc == 69, "%s: exit %d: %s", faults[f], rc, out);
+		ck_assert_msg(strstr(out, "the printer confirmed line") &&
+				      strstr(out, "--resume"), "%s", out);
+		json_t *j = load_journal(dir, jpath, sizeof(jpath));
+		ck_assert_str_eq(jstr(j, "state"), "link-lost");
+		ck_assert_int_gt(jint(j, "last_line"), 1000);
+		ck_assert_int_gt(jint(j, "layer"), 5);
+		json_decref(j);
+	}
+}
+END_TEST
+
+START_TEST(test_resume_after_kill)
+{
+	char dir[512], log[512], log2[512], jpath[1024];
+	struct strs lg = {0}, cmds = {0};
+	uint64_t start = 0;
+	long layer;
+	size_t k, pre;
+	int rc;
+
+	state_dir("st-kill", dir, sizeof(dir));
+	snprintf(log, sizeof(log), "%s", tu_path("kill.log"));
+	snprintf(log2, sizeof(log2), "%s", tu_path("resume.log"));
+	rc = tu_run(out, sizeof(out), "print " MODEL " --printer " MARLIN_PRINTER " --speedup 200 "
+		    "--sim-log %s >/dev/null 2>&1 & P=$!; for i in $(seq 200); do grep -qs "
+		    "'\"layer\": [5-9]' %s/jobs/*.json && break; sleep 0.05; done; "
+		    "kill -KILL $P; wait $P", log, dir);
+	ck_assert_msg(rc == 137, "exit %d", rc);
+	json_t *j = load_journal(dir, jpath, sizeof(jpath));
+	ck_assert_str_eq(jstr(j, "state"), "printing");
+	layer = jint(j, "layer");
+	ck_assert_int_ge(layer, 5);
+
+	/* without an answer nothing is sent */
+	rc = tu_run(out, sizeof(out), "print --resume %s </dev/null", jstr(j, "id"));
+	ck_assert_msg(rc == 1 && strstr(out, "--yes"), "exit %d: %s", rc, out);
+	rc = tu_run(out, sizeof(out), "print --resume %s --yes --json --sim-log %s 2>/dev/null",
+		    jstr(j, "id"), log2);
+	ck_assert_msg(rc == 0, "exit %d: %s", rc, out);
+	json_t *o = last_json();
+	ck_assert_int_eq(jint(o, "resumed_from_layer"), layer + 1);
+
+	/* the simulator saw: connect, reheat and home X/Y, then the file from
+	 * the start of the last confirmed layer on, once each, in order */
+	gcode_commands(jstr(j, "gcode"), 0, &cmds, layer, &start);
+	ck_assert_uint_gt(start, 0);
+	strs_free(&cmds);
+	memset(&cmds, 0, sizeof(cmds));
+	gcode_commands(jstr(j, "gcode"), start, &cmds, -1, NULL);
+	marlin_log(log2, &lg);
+	pre = strs_find(&lg, 0, "G28 X Y");
+	ck_assert_uint_lt(pre, lg.len);
+	ck_assert_uint_lt(strs_find(&lg, 0, "M190 S60"), pre);
+	for (size_t i = 0; i < lg.len; i++)
+		ck_assert_msg(strcmp(lg.v[i], "G28") && strncmp(lg.v[i], "G28 Z", 5),
+			      "Z was homed: %s", lg.v[i]);
+	k = strs_find(&lg, pre, "M109 S205");
+	ck_assert_uint_lt(k, lg.len);
+	/* the preamble ends with the modes, E, feed rate and fan; the file follows */
+	while (k < lg.len && lg.len - k > cmds.len)
+		k++;
+	check_tail(&lg, k, &cmds);
+	json_decref(o);
+	json_decref(j);
+	strs_free(&lg);
+	strs_free(&cmds);
+}
+END_TEST
+
+START_TEST(test_dry_run_is_slice)
+{
+	char a[512], b[512];
+	int rc;
+
+	state_dir("st-dry", a, sizeof(a));
+	snprintf(a, sizeof(a), "%s", tu_path("slice.gcode"));
+	snprintf(b, sizeof(b), "%s", tu_path("dry.gcode"));
+	rc = tu_run(out, sizeof(out), "slice " MODEL " -o %s --printer " MARLIN_PRINTER, a);
+	ck_assert_msg(rc == 0, "slice: exit %d: %s", rc, out);
+	rc = tu_run(out, sizeof(out), "print " MODEL " --printer " MARLIN_PRINTER " --dry-run -o %s",
+		    b);
+	ck_assert_msg(rc == 0 && strstr(out, "nothing was printed"), "exit %d: %s", rc, out);
+	rc = tu_run(out, sizeof(out), "print " MODEL " --printer " MARLIN_PRINTER " --dry-run "
+		    "2>&1; cmp %s %s", a, b);
+	ck_assert_msg(rc == 0 && strstr(out, "--dry-run needs -o OUT"), "exit %d: %s", rc, out);
+}
+END_TEST
+
+Suite *print_suite(void)
+{
+	Suite *s = suite_create("print");
+	TCase *tc = tcase_create("end to end");
+
+	tcase_set_timeout(tc, 120);
+	tcase_add_test(tc, test_dry_run_is_slice);
+	tcase_add_test(tc, test_marlin_prints_every_line_once);
+	tcase_add_test(tc, test_sailfish_prints_every_command_once);
+	tcase_add_test(tc, test_ctrl_c_stops_safely);
+	tcase_add_test(tc, test_unplug_and_reset_exit_69);
+	tcase_add_test(tc, test_resume_after_kill);
+	suite_add_tcase(s, tc);
+	return s;
+}
