@@ -1,7 +1,8 @@
 /*
  * print.c - the print step of the farm node (print.h): the one place that
  * chooses how a printer is driven: the test double for "test-instant",
- * the Marlin driver for everything else (print_marlin.c).
+ * the S3G driver for Sailfish profiles (print_sailfish.c), the Marlin
+ * driver for everything else (print_marlin.c).
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -14,12 +15,19 @@ struct node_link {
 	void *state;
 };
 
-/* The back end for a port value. */
-static const struct node_printer_ops *ops_for_port(const char *port)
+/* The back end for a port value and the profile's protocol. */
+static const struct node_printer_ops *ops_for(const char *port, const struct profile *prof)
 {
 	if (!strcmp(port, "test-instant"))
 		return &node_double_ops;
+	if (prof->protocol == PROFILE_PROTOCOL_SAILFISH)
+		return &node_sailfish_ops;
 	return &node_marlin_ops;
+}
+
+bool node_print_resumable(const struct node_printer_config *pc, const struct profile *prof)
+{
+	return ops_for(pc->port, prof)->can_resume;
 }
 
 bool node_port_simulated(const char *port)
@@ -30,7 +38,7 @@ bool node_port_simulated(const char *port)
 int node_print_connect(const struct node_printer_config *pc, const struct profile *prof,
 		       struct node_link **out, struct st_error *err)
 {
-	const struct node_printer_ops *ops = ops_for_port(pc->port);
+	const struct node_printer_ops *ops = ops_for(pc->port, prof);
 	struct node_link *l;
 	int rc;
 

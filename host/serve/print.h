@@ -9,7 +9,10 @@
  *   - a device path, a pty or tcp://HOST:PORT: the Marlin streaming driver
  *     (serial/marlin.h, print_marlin.c);
  *   - "sim": the same driver against the simulated Marlin printer
- *     (serial/sim/marlin_sim.h) run inside the node, sped up.
+ *     (serial/sim/marlin_sim.h) run inside the node, sped up;
+ *   - with a `protocol = sailfish` profile, a port or "sim": the S3G driver
+ *     (serial/s3g.h, print_sailfish.c), G-code translated to X3G on the fly,
+ *     against the simulated Sailfish printer for "sim".
  *
  * Threads: the worker thread alone calls the operations of one link; the
  * HTTP threads only write requests into struct node_print_ctl (under its
@@ -92,12 +95,19 @@ int node_print_poll(struct node_link *l, struct node_print_ctl *ctl, struct st_e
 /* node_print_describe - what is connected ("Marlin 2.1.2 (simulated printer)"). */
 void node_print_describe(struct node_link *l, char *out, size_t cap);
 
+/*
+ * node_print_resumable - whether the back end that drives pc with profile
+ * prof can continue an interrupted print (Sailfish cannot: docs/serve.md).
+ */
+bool node_print_resumable(const struct node_printer_config *pc, const struct profile *prof);
+
 /* node_port_simulated - true for a port value that is no real printer. */
 bool node_port_simulated(const char *port);
 
 /* Back-end operations (print.c picks one table per link). */
 struct node_printer_ops {
 	const char *name; /* for the log */
+	bool can_resume;  /* an interrupted print can be continued (print's resume) */
 	int (*connect)(const struct node_printer_config *pc, const struct profile *prof,
 		       void **state, struct st_error *err);
 	void (*disconnect)(void *state);
@@ -108,8 +118,10 @@ struct node_printer_ops {
 	void (*describe)(void *state, char *out, size_t cap);
 };
 
-/* The test double's table (print_double.c) and the Marlin one (print_marlin.c). */
+/* The test double's table (print_double.c), the Marlin one (print_marlin.c)
+ * and the Sailfish one (print_sailfish.c). */
 extern const struct node_printer_ops node_double_ops;
 extern const struct node_printer_ops node_marlin_ops;
+extern const struct node_printer_ops node_sailfish_ops;
 
 #endif /* STRATUM_HOST_SERVE_PRINT_H */

@@ -98,7 +98,7 @@ static int marlin_connect_op(const struct node_printer_config *pc, const struct 
 	snprintf(s->name, sizeof(s->name), "%s", pc->name);
 	if (prof->protocol != PROFILE_PROTOCOL_MARLIN) {
 		rc = st_error_set(err, ST_ERR_UNSUPPORTED, "printer %s: profile %s speaks %s; the "
-				  "node drives Marlin printers only (S3G is not wired yet)",
+				  "Marlin back end drives Marlin printers only",
 				  pc->name, prof->id, profile_protocol_name(prof->protocol));
 		goto out_free;
 	}
@@ -491,6 +491,7 @@ static void marlin_describe_op(void *state, char *out, size_t cap)
 
 const struct node_printer_ops node_marlin_ops = {
 	.name = "marlin",
+	.can_resume = true,
 	.connect = marlin_connect_op,
 	.disconnect = marlin_disconnect_op,
 	.print = marlin_print_op,
