@@ -859,6 +859,19 @@ static char *sim_executed(const struct node_proc *np, const char *name)
 	return out;
 }
 
+/* Upload a G-code text to print on prefix's printer; the job number. */
+static long long print_text(int port, const char *prefix, const char *name, const char *gcode)
+{
+	struct resp r;
+	long long id;
+
+	upload_text(port, prefix, KEY_UP, name, gcode, "true", &r);
+	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
+	id = job_of(&r);
+	resp_free(&r);
+	return id;
+}
+
 /* GET path with the read key; the JSON answer (caller decrefs). */
 static json_t *get_json(int port, const char *path)
 {
@@ -898,14 +911,8 @@ START_TEST(test_sim_two_printers)
 	ck_assert(strstr(json_string_value(json_object_get(json_object_get(o, "stratum"),
 							   "firmware")), "simulated"));
 	json_decref(o);
-	upload_text(np.port, "/p/mk3s", KEY_UP, "a.gcode", g1, "true", &r);
-	ck_assert_int_eq(r.status, 201);
-	a = job_of(&r);
-	resp_free(&r);
-	upload_text(np.port, "/p/ender", KEY_UP, "b.gcode", g2, "true", &r);
-	ck_assert_int_eq(r.status, 201);
-	b = job_of(&r);
-	resp_free(&r);
+	a = print_text(np.port, "/p/mk3s", "a.gcode", g1);
+	b = print_text(np.port, "/p/ender", "b.gcode", g2);
 	/* Both print at the same time. */
 	for (int i = 0; i < 500 && !seen_both; i++) {
 		const char *sa = job_state(np.port, "/p/mk3s", a, NULL);
@@ -1039,10 +1046,7 @@ START_TEST(test_sim_sailfish)
 	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
 	id = job_of(&r);
 	resp_free(&r);
-	upload_text(np.port, "/p/mk3s", KEY_UP, "m.gcode", m, "true", &r);
-	ck_assert_int_eq(r.status, 201);
-	idm = job_of(&r);
-	resp_free(&r);
+	idm = print_text(np.port, "/p/mk3s", "m.gcode", m);
 	wait_state(np.port, "/p/fcp", id, "done", 40);
 	wait_state(np.port, "/p/mk3s", idm, "done", 20);
 	/* Progress ends at the size of the sliced G-code. */
@@ -1062,10 +1066,7 @@ START_TEST(test_sim_sailfish)
 	tu_write_str(path, g);
 	cancelled = sfc_reference(path, tu_path("long.x3g"), tu_path("long.json"), 300);
 	bed_clear(np.port, "/p/fcp", 204);
-	upload_text(np.port, "/p/fcp", KEY_UP, "long.gcode", g, "true", &r);
-	ck_assert_int_eq(r.status, 201);
-	idc = job_of(&r);
-	resp_free(&r);
+	idc = print_text(np.port, "/p/fcp", "long.gcode", g);
 	wait_state(np.port, "/p/fcp", idc, "printing", 10);
 	usleep(500000);
 	expect(np.port, "POST", "/p/fcp/api/job", "X-Api-Key: " KEY_CTL,

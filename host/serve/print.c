@@ -9,6 +9,9 @@
 #include <string.h>
 
 #include "print.h"
+#include "xport.h"
+
+#define NODE_SIM_BAUD_MAX 20000000.0 /* sped-up link of a simulated printer, bits/s */
 
 struct node_link {
 	const struct node_printer_ops *ops;
@@ -86,4 +89,32 @@ void node_print_describe(struct node_link *l, char *out, size_t cap)
 		l->ops->describe(l->state, out, cap);
 	else
 		snprintf(out, cap, "%s", l->ops->name);
+}
+
+unsigned node_sim_baud(const struct profile *prof, double speedup)
+{
+	double baud = (double)prof->baudrate * speedup;
+
+	return (unsigned)(baud > NODE_SIM_BAUD_MAX ? NODE_SIM_BAUD_MAX : baud);
+}
+
+int node_port_open(const struct node_printer_config *pc, const struct profile *prof,
+		   const char *path, bool simulated, struct xport **x, struct st_error *err)
+{
+	struct xport_options xo = {0};
+	struct st_error e = {0};
+
+	xo.baudrate = (int)prof->baudrate;
+	xo.dtr_reset = prof->dtr_reset && !simulated;
+	if (xport_open(path, &xo, x, &e))
+		return st_error_set(err, ST_ERR_IO, "printer %s: %s", pc->name, e.msg);
+	return 0;
+}
+
+void node_port_close(struct xport *x)
+{
+	if (!x)
+		return;
+	xport_drain(x, 1000, NULL);
+	xport_close(x);
 }

@@ -104,6 +104,24 @@ bool node_print_resumable(const struct node_printer_config *pc, const struct pro
 /* node_port_simulated - true for a port value that is no real printer. */
 bool node_port_simulated(const char *port);
 
+/* Helpers the serial back ends share (print.c). */
+struct xport;
+
+/* node_sim_baud - the link speed of a simulated printer: the profile's baud
+ * rate x speed-up, so a job takes seconds, at most 20 Mbit/s. */
+unsigned node_sim_baud(const struct profile *prof, double speedup);
+
+/*
+ * node_port_open - open path (a device, pty or tcp://) for printer pc at
+ * the profile's baud rate; DTR reset only on a real port.  Returns 0 or
+ * ST_ERR_IO with err naming the printer; *x NULL on error.
+ */
+int node_port_open(const struct node_printer_config *pc, const struct profile *prof,
+		   const char *path, bool simulated, struct xport **x, struct st_error *err);
+
+/* node_port_close - drain what is still going out (1 s at most), close; NULL is fine. */
+void node_port_close(struct xport *x);
+
 /* Back-end operations (print.c picks one table per link). */
 struct node_printer_ops {
 	const char *name; /* for the log */

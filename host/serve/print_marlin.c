@@ -28,7 +28,6 @@
 #define MARLIN_CMD_WAIT_MS 120000 /* longest wait for one printer command */
 #define MARLIN_STOP_MS 10000	 /* safe stop: longest wait for its commands */
 #define MARLIN_POLL_S 5		 /* M105 period when idle without autoreport */
-#define SIM_BAUD_MAX 20000000.0	 /* sped-up link of the simulated printer, bits/s */
 
 struct mlink {
 	char name[NODE_NAME_MAX];
@@ -52,10 +51,7 @@ static void mlink_free(struct mlink *s)
 	if (!s)
 		return;
 	marlin_free(s->m);
-	if (s->x) {
-		xport_drain(s->x, 1000, NULL);
-		xport_close(s->x);
-	}
+	node_port_close(s->x);
 	sim_marlin_free(s->sim);
 	free(s);
 }
@@ -65,14 +61,11 @@ static int start_sim(struct mlink *s, const struct node_printer_config *pc,
 		     const struct profile *prof, const char **path, struct st_error *err)
 {
 	struct sim_marlin_options so;
-	double baud;
 	int rc;
 
 	sim_marlin_options_init(&so);
 	so.speedup = pc->sim_speedup;
-	/* The link is sped up as well, so a job takes seconds, not hours. */
-	baud = (double)prof->baudrate * pc->sim_speedup;
-	so.baud = (unsigned)(baud > SIM_BAUD_MAX ? SIM_BAUD_MAX : baud);
+	so.baud = node_sim_baud(prof, pc->sim_speedup);
 	if (prof->rx_buffer_size > 0)
 		so.rx_buffer = (unsigned)prof->rx_buffer_size;
 	so.advanced_ok = true;
@@ -87,7 +80,6 @@ static int marlin_connect_op(const struct node_printer_config *pc, const struct 
 			     void **state, struct st_error *err)
 {
 	struct mlink *s = calloc(1, sizeof(*s));
-	struct xport_options xo = {0};
 	struct marlin_options mo;
 	const char *path = pc->port;
 	struct st_error e = {0};
@@ -107,12 +99,8 @@ static int marlin_connect_op(const struct node_printer_config *pc, const struct 
 		rc = st_error_set(err, rc, "printer %s: simulated printer: %s", pc->name, e.msg);
 		goto out_free;
 	}
-	xo.baudrate = (int)prof->baudrate;
-	xo.dtr_reset = prof->dtr_reset && !s->simulated;
-	if ((rc = xport_open(path, &xo, &s->x, &e))) {
-		rc = st_error_set(err, ST_ERR_IO, "printer %s: %s", pc->name, e.msg);
+	if ((rc = node_port_open(pc, prof, path, s->simulated, &s->x, err)))
 		goto out_free;
-	}
 	marlin_options_init(&mo);
 	mo.rx_buffer = prof->rx_buffer_size > 0 ? (unsigned)prof->rx_buffer_size : 0;
 	/* the simulator boots like a board; ptys and TCP bridges are not reset */

@@ -36,7 +36,6 @@
 
 #define SF_POLL_S 2		 /* temperature queries between jobs (s) */
 #define SF_HOLD_MS 250		 /* status poll while a pause holds (ms) */
-#define SF_SIM_BAUD_MAX 20000000.0 /* sped-up link of the simulated printer, bits/s */
 
 struct slink {
 	char name[NODE_NAME_MAX];
@@ -69,10 +68,7 @@ static void slink_free(struct slink *s)
 	if (!s)
 		return;
 	s3g_free(s->d);
-	if (s->x) {
-		xport_drain(s->x, 1000, NULL);
-		xport_close(s->x);
-	}
+	node_port_close(s->x);
 	sim_sailfish_free(s->sim);
 	free(s);
 }
@@ -82,14 +78,11 @@ static int start_sim(struct slink *s, const struct node_printer_config *pc,
 		     const struct profile *prof, const char **path, struct st_error *err)
 {
 	struct sim_sailfish_options so;
-	double baud;
 	int rc;
 
 	sim_sailfish_options_init(&so);
 	so.speedup = pc->sim_speedup;
-	/* The link is sped up as well, so a job takes seconds, not hours. */
-	baud = (double)prof->baudrate * pc->sim_speedup;
-	so.baud = (unsigned)(baud > SF_SIM_BAUD_MAX ? SF_SIM_BAUD_MAX : baud);
+	so.baud = node_sim_baud(prof, pc->sim_speedup);
 	so.log_path = pc->sim_log[0] ? pc->sim_log : NULL;
 	if ((rc = sim_sailfish_new(&so, &s->sim, err)) ||
 	    (rc = sim_sailfish_start_thread(s->sim, err)))
@@ -102,7 +95,6 @@ static int sf_connect_op(const struct node_printer_config *pc, const struct prof
 			 void **state, struct st_error *err)
 {
 	struct slink *s = calloc(1, sizeof(*s));
-	struct xport_options xo = {0};
 	const char *path = pc->port;
 	struct st_error e = {0};
 	uint16_t fw = 0;
@@ -120,12 +112,8 @@ static int sf_connect_op(const struct node_printer_config *pc, const struct prof
 		rc = st_error_set(err, rc, "printer %s: simulated printer: %s", pc->name, e.msg);
 		goto out_free;
 	}
-	xo.baudrate = (int)prof->baudrate;
-	xo.dtr_reset = prof->dtr_reset && !s->simulated;
-	if ((rc = xport_open(path, &xo, &s->x, &e))) {
-		rc = st_error_set(err, ST_ERR_IO, "printer %s: %s", pc->name, e.msg);
+	if ((rc = node_port_open(pc, prof, path, s->simulated, &s->x, err)))
 		goto out_free;
-	}
 	if ((rc = s3g_new(s->x, NULL, &s->d, &e))) {
 		rc = st_error_set(err, rc, "printer %s: %s", pc->name, e.msg);
 		goto out_free;
