@@ -22,137 +22,28 @@
 #include "profile.h"
 #include "s3g.h"
 #include "send.h"
+#include "sf_source.h"
 #include "st_error.h"
 #include "x3g.h"
 #include "xport.h"
 
-#define SF_X3G_CHUNK 8192 /* X3G bytes read at a time */
 /* The prefix of messages: stratum send, or the command that called it. */
 #define SF_CMD(a) ((a)->cmd ? (a)->cmd : SEND_CMD)
-/* Host version sent with the version query; Sailfish answers 0 below 39
- * (Host.cc), and RepG sends 40. */
-#define SF_HOST_VERSION 40
-
-/* A command source over a G-code file: read a line, translate, hand out
- * the line's commands one by one. */
-struct sf_gcode_src {
-	struct gcode_reader *r;
-	struct x3g_translator *t;
-	const char *name;
-	const char *cmd;	  /* message prefix */
-	bool show_warnings;	  /* the check pass prints them, the send pass not */
-	const uint8_t *out;	  /* this line's commands */
-	size_t out_len, pos;
-	uint64_t out_line;	  /* the line they came from */
-	bool finished;		  /* x3g_finish done */
-	uint64_t line, prev_line; /* lines of the last two commands handed out */
-	uint64_t pulled;	  /* commands handed out */
-	long layer;		  /* from the slicer's layer comments, -1 unknown */
-};
-
-/* A command source over an X3G file, read in chunks. */
-struct sf_x3g_src {
-	FILE *f;
-	uint8_t buf[SF_X3G_CHUNK];
-	size_t pos, len;
-	uint64_t off; /* file offset of buf[pos] */
-	bool eof;
-};
 
 /* What the progress callback needs. */
 struct sf_progress {
 	struct send_progress p;
-	const struct sf_gcode_src *g; /* NULL for an X3G file */
+	const struct sfsrc_gcode *g; /* NULL for an X3G file */
 };
 
-/* Print the translator's warnings of the last call, as stratum x3g does. */
-static void sf_show_warnings(const struct sf_gcode_src *g)
+/* Show a line's translator warnings, as stratum x3g does (check pass only). */
+static void sf_show_warnings(void *ctx, const char *name, const struct x3g_warning *w, size_t n)
 {
-	const struct x3g_warning *w;
-	size_t nw = x3g_warnings(g->t, &w);
+	const char *cmd = ctx ? ctx : SEND_CMD;
 
-	for (size_t i = 0; i < nw; i++)
-		fprintf(stderr, "%s: %s:%llu: warning: %s\n", g->cmd, g->name,
+	for (size_t i = 0; i < n; i++)
+		fprintf(stderr, "%s: %s:%llu: warning: %s\n", cmd, name,
 			(unsigned long long)w[i].line, w[i].msg);
-}
-
-/* s3g_source_fn over a G-code file. */
-static int sf_gcode_next(void *src, struct s3g_cmd *cmd, struct st_error *err)
-{
-	struct sf_gcode_src *g = src;
-	struct gcode_line line;
-	int n, k;
-
-	while (g->pos >= g->out_len) {
-		if (g->finished)
-			return 0;
-		n = gcode_reader_next(g->r, 0, &line, err);
-		if (n < 0)
-			return n;
-		if (n == 0) {
-			g->finished = true;
-			n = x3g_finish(g->t, err);
-		} else {
-			long l;
-			if (gcode_layer_comment(&line, &l, NULL) == GCODE_LAYER_START)
-				g->layer = l >= 0 ? l : g->layer + 1;
-			n = x3g_translate(g->t, &line, gcode_reader_line(g->r), err);
-		}
-		if (n < 0)
-			return n;
-		g->out_line = gcode_reader_line(g->r);
-		if (g->show_warnings)
-			sf_show_warnings(g);
-		g->out = x3g_output(g->t, &g->out_len);
-		g->pos = 0;
-	}
-	k = s3g_action_length(g->out + g->pos, g->out_len - g->pos);
-	if (k <= 0 || k > S3G_MAX_PAYLOAD || (size_t)k > g->out_len - g->pos)
-		return st_error_set(err, ST_ERR_INTERNAL,
-				    "%s: line %llu: the translator wrote command %u, which the "
-				    "S3G driver cannot send",
-				    g->name, (unsigned long long)g->out_line, g->out[g->pos]);
-	cmd->payload = g->out + g->pos;
-	cmd->len = (uint8_t)k;
-	g->pos += (size_t)k;
-	g->prev_line = g->line;
-	g->line = g->out_line;
-	g->pulled++;
-	return 1;
-}
-
-/* s3g_source_fn over an X3G file: every command must decode and be one
- * the firmware takes (x3g_decode also knows the old 129/130). */
-static int sf_x3g_next(void *src, struct s3g_cmd *cmd, struct st_error *err)
-{
-	struct sf_x3g_src *x = src;
-	struct x3g_command c;
-	int rc;
-
-	if (x->len - x->pos < X3G_PAYLOAD_MAX && !x->eof) {
-		memmove(x->buf, x->buf + x->pos, x->len - x->pos);
-		x->len -= x->pos;
-		x->pos = 0;
-		x->len += fread(x->buf + x->len, 1, sizeof(x->buf) - x->len, x->f);
-		if (ferror(x->f))
-			return st_error_set(err, ST_ERR_IO, "byte %llu: read error: %s",
-					    (unsigned long long)x->off, strerror(errno));
-		x->eof = feof(x->f);
-	}
-	if (x->pos == x->len)
-		return 0;
-	rc = x3g_decode(x->buf + x->pos, x->len - x->pos, x->off, &c, err);
-	if (rc < 0)
-		return rc;
-	if (s3g_action_length(x->buf + x->pos, (size_t)rc) != rc)
-		return st_error_set(err, ST_ERR_PARSE,
-				    "byte %llu: command %u (%s) is not one Sailfish takes over USB",
-				    (unsigned long long)x->off, c.code, c.name);
-	cmd->payload = x->buf + x->pos;
-	cmd->len = (uint8_t)rc;
-	x->pos += (size_t)rc;
-	x->off += (uint64_t)rc;
-	return 1;
 }
 
 /* The S3G status as the shared progress line. */
@@ -184,8 +75,8 @@ struct sf_job {
 	struct x3g_machine m;
 	struct x3g_options xo;
 	char build[X3G_BUILD_NAME_MAX + 1];
-	struct sf_gcode_src g;
-	struct sf_x3g_src *x;
+	struct sfsrc_gcode g;
+	struct sfsrc_x3g *x;
 	uint64_t commands;	 /* in the file, from the check pass */
 	uint64_t lines;		 /* G-code lines in the file */
 	uint64_t warnings;	 /* translator warnings */
@@ -199,33 +90,20 @@ static int sf_source_open(struct sf_job *j, bool show_warnings, struct st_error 
 
 	rewind(j->f);
 	if (j->x3g) {
-		memset(j->x, 0, sizeof(*j->x));
-		j->x->f = j->f;
+		sfsrc_x3g_open(j->x, j->f);
 		return 0;
 	}
-	memset(&j->g, 0, sizeof(j->g));
-	j->g.name = j->a->file;
-	j->g.cmd = SF_CMD(j->a);
-	j->g.show_warnings = show_warnings;
-	j->g.layer = -1;
-	if ((rc = x3g_new(&j->m, &j->xo, &j->g.t, err)))
-		return rc;
-	if ((rc = gcode_reader_new(j->f, j->a->file, &j->g.r, err))) {
-		x3g_free(j->g.t);
-		j->g.t = NULL;
-		return rc;
-	}
-	return 0;
+	j->g.warn = show_warnings ? sf_show_warnings : NULL;
+	j->g.warn_ctx = (void *)SF_CMD(j->a); /* only read, as the prefix */
+	if ((rc = sfsrc_gcode_open(&j->g, j->f, j->a->file, &j->m, &j->xo, err)))
+		sfsrc_gcode_close(&j->g);
+	return rc;
 }
 
 static void sf_source_close(struct sf_job *j)
 {
-	if (j->x3g)
-		return;
-	gcode_reader_free(j->g.r);
-	x3g_free(j->g.t);
-	j->g.r = NULL;
-	j->g.t = NULL;
+	if (!j->x3g)
+		sfsrc_gcode_close(&j->g);
 }
 
 /* The check pass: every command translates or decodes; count them.
@@ -241,7 +119,7 @@ static int sf_check_file(struct sf_job *j)
 		return rc == ST_ERR_ARG ? ST_EXIT_DATAERR : ST_EXIT_SOFTWARE;
 	}
 	j->commands = 0;
-	while ((rc = j->x3g ? sf_x3g_next(j->x, &c, &err) : sf_gcode_next(&j->g, &c, &err)) > 0)
+	while ((rc = j->x3g ? sfsrc_x3g_next(j->x, &c, &err) : sfsrc_gcode_next(&j->g, &c, &err)) > 0)
 		j->commands++;
 	if (!j->x3g) {
 		j->lines = gcode_reader_line(j->g.r);
@@ -381,7 +259,7 @@ static int sf_stream(struct sf_job *j, struct xport *x, long baud)
 	}
 	stop = send_catch_signals();
 	/* the version query proves a Sailfish board answers S3G on the port */
-	if (s3g_get_version(d, SF_HOST_VERSION, &fw, &err)) {
+	if (s3g_get_version(d, SFSRC_HOST_VERSION, &fw, &err)) {
 		fprintf(stderr, "%s: no answer from a Sailfish printer on %s (%s); check "
 				     "that it is switched on, not busy with an SD print, and that the "
 				     "baud rate matches\n", SF_CMD(j->a), xport_describe(x), err.msg);
@@ -401,9 +279,9 @@ static int sf_stream(struct sf_job *j, struct xport *x, long baud)
 		fprintf(stderr, "%s: %s on %s, %llu commands%s\n", SF_CMD(j->a), j->firmware,
 			xport_describe(x), (unsigned long long)j->commands,
 			j->x3g ? "" : " translated from G-code as they go");
-	rc = j->x3g ? s3g_stream_pull(d, sf_x3g_next, j->x, j->commands, sf_progress_cb, &prog,
+	rc = j->x3g ? s3g_stream_pull(d, sfsrc_x3g_next, j->x, j->commands, sf_progress_cb, &prog,
 				      stop, &st, &err)
-		    : s3g_stream_pull(d, sf_gcode_next, &j->g, j->commands, sf_progress_cb, &prog,
+		    : s3g_stream_pull(d, sfsrc_gcode_next, &j->g, j->commands, sf_progress_cb, &prog,
 				      stop, &st, &err);
 	send_progress_end(&prog.p);
 	status = sf_exit_for(&st, rc);

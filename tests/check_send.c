@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "sfcheck.h"
 #include "suites.h"
 #include "testutil.h"
 
@@ -39,18 +40,7 @@ static void slice_bracket(const char *gcode)
 /* `stratum x3g` of gcode into x3g, decoded: the commands as a JSON array. */
 static json_t *reference_commands(const char *gcode, const char *x3g, const char *dec)
 {
-	json_error_t je;
-	int rc = tu_run(out, sizeof(out), "x3g %s -o %s --printer " SF_PRINTER, gcode, x3g);
-	ck_assert_msg(rc == 0, "x3g: exit %d: %s", rc, out);
-	rc = tu_run(out, sizeof(out), "x3g --decode %s --json >%s", x3g, dec);
-	ck_assert_msg(rc == 0, "x3g --decode: exit %d: %s", rc, out);
-	json_t *o = json_load_file(dec, 0, &je);
-	ck_assert_msg(o != NULL, "%s: %s", dec, je.text);
-	json_t *cmds = json_incref(json_object_get(o, "commands"));
-	json_decref(o);
-	ck_assert(json_is_array(cmds));
-	ck_assert_uint_gt(json_array_size(cmds), 100);
-	return cmds;
+	return sfc_reference(gcode, x3g, dec, 101);
 }
 
 /*
@@ -95,57 +85,17 @@ static json_t *sf_setup(struct sf_files *f, long head_lines)
 	return reference_commands(f->gc, f->x3g, f->dec);
 }
 
-/* A field of a decoded command as an integer. */
-static long field(json_t *cmd, const char *name)
-{
-	json_t *v = json_object_get(json_object_get(cmd, "fields"), name);
-	ck_assert_msg(json_is_number(v), "no field %s", name);
-	return (long)json_number_value(v);
-}
-
-/*
- * The simulator's log holds the reference commands, each once, in order:
- * sequence numbers 1..n and the same codes; with fields, also the step
- * positions and DDA rate of every move and the value of every tool action.
- */
+/* The simulator's log holds the reference commands, each once, in order
+ * (sfc_check_log), and nothing more. */
 static void check_log(const char *log, json_t *cmds, bool fields)
 {
 	FILE *f = fopen(log, "r");
 	char line[512];
-	size_t i = 0;
 
 	ck_assert_ptr_nonnull(f);
-	while (fgets(line, sizeof(line), f)) {
-		unsigned long long seq;
-		unsigned code;
-		ck_assert_msg(sscanf(line, "%llu %u", &seq, &code) == 2, "log line: %s", line);
-		ck_assert_msg(i < json_array_size(cmds), "more commands executed than sent: %s",
-			      line);
-		json_t *c = json_array_get(cmds, i);
-		ck_assert_uint_eq(seq, i + 1);
-		ck_assert_msg(code == json_integer_value(json_object_get(c, "code")),
-			      "command %zu: code %u executed, %lld expected", i + 1, code,
-			      (long long)json_integer_value(json_object_get(c, "code")));
-		const char *p = strstr(line, " X=");
-		if (fields && p) {
-			long x, y, z, a, b;
-			ck_assert_int_eq(sscanf(p, " X=%ld Y=%ld Z=%ld A=%ld B=%ld", &x, &y, &z, &a,
-						&b), 5);
-			ck_assert_msg(x == field(c, "x") && y == field(c, "y") && z == field(c, "z") &&
-					      a == field(c, "a") && b == field(c, "b"),
-				      "command %zu: %s", i + 1, line);
-		}
-		if (fields && code == 155) {
-			p = strstr(line, " rate=");
-			ck_assert_ptr_nonnull(p);
-			ck_assert_int_eq(atol(p + 6), field(c, "dda_rate"));
-		}
-		if (fields && code == 136 && (p = strstr(line, " value=")))
-			ck_assert_int_eq(atol(p + 7), field(c, "value"));
-		i++;
-	}
+	sfc_check_log(f, cmds, fields);
+	ck_assert_msg(!fgets(line, sizeof(line), f), "more commands executed than sent: %s", line);
 	fclose(f);
-	ck_assert_uint_eq(i, json_array_size(cmds));
 }
 
 /* The JSON report at the end of out. */

@@ -34,6 +34,7 @@
 #include "fixtures.h"
 #include "gcode.h"
 #include "meshio.h"
+#include "sfcheck.h"
 #include "suites.h"
 #include "testutil.h"
 
@@ -858,6 +859,19 @@ static char *sim_executed(const struct node_proc *np, const char *name)
 	return out;
 }
 
+/* Upload a G-code text to print on prefix's printer; the job number. */
+static long long print_text(int port, const char *prefix, const char *name, const char *gcode)
+{
+	struct resp r;
+	long long id;
+
+	upload_text(port, prefix, KEY_UP, name, gcode, "true", &r);
+	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
+	id = job_of(&r);
+	resp_free(&r);
+	return id;
+}
+
 /* GET path with the read key; the JSON answer (caller decrefs). */
 static json_t *get_json(int port, const char *path)
 {
@@ -897,14 +911,8 @@ START_TEST(test_sim_two_printers)
 	ck_assert(strstr(json_string_value(json_object_get(json_object_get(o, "stratum"),
 							   "firmware")), "simulated"));
 	json_decref(o);
-	upload_text(np.port, "/p/mk3s", KEY_UP, "a.gcode", g1, "true", &r);
-	ck_assert_int_eq(r.status, 201);
-	a = job_of(&r);
-	resp_free(&r);
-	upload_text(np.port, "/p/ender", KEY_UP, "b.gcode", g2, "true", &r);
-	ck_assert_int_eq(r.status, 201);
-	b = job_of(&r);
-	resp_free(&r);
+	a = print_text(np.port, "/p/mk3s", "a.gcode", g1);
+	b = print_text(np.port, "/p/ender", "b.gcode", g2);
 	/* Both print at the same time. */
 	for (int i = 0; i < 500 && !seen_both; i++) {
 		const char *sa = job_state(np.port, "/p/mk3s", a, NULL);
@@ -987,6 +995,108 @@ START_TEST(test_sim_stl_print)
 	}
 	node_stop(&np);
 	free(stl);
+}
+END_TEST
+
+/*
+ * A Creator Pro (Sailfish, S3G) and a Marlin printer, both `port = sim`, on
+ * one node: an STL uploaded as PrusaSlicer does is repaired, sliced with
+ * the Creator Pro's profile and printed, translated to X3G on the fly: the
+ * simulator ran exactly what `stratum x3g` makes of the stored G-code.
+ * Then a long job is cancelled mid-print: the safe stop is the printer's
+ * last commands.
+ */
+START_TEST(test_sim_sailfish)
+{
+	struct node_proc np;
+	struct resp r;
+	size_t len;
+	char *stl = cube_stl(&len), *g = moves_gcode(300, 6), *m = moves_gcode(200, 6000);
+	char path[600], line[512], last[4][512];
+	long long id, idm, idc;
+	json_t *o, *cmds, *cancelled;
+	FILE *f;
+	int st = 0;
+	size_t n = 0;
+
+	write_config(&np, "[printer fcp]\nprofile = " SFC_PRINTER "\nport = sim\n"
+			  "sim_speedup = 1000\n\n"
+			  "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\nsim_speedup = 1000\n",
+		     8);
+	node_start(&np);
+	for (int i = 0; i < 200 && st != 200; i++) { /* 409 until connected */
+		http(np.port, "GET", "/p/fcp/api/printer", "X-Api-Key: " KEY_READ, NULL, &r);
+		st = r.status;
+		resp_free(&r);
+		if (st != 200)
+			usleep(50000);
+	}
+	o = get_json(np.port, "/p/fcp/api/printer");
+	ck_assert(json_is_true(json_object_get(json_object_get(o, "stratum"), "simulated")));
+	ck_assert(strstr(json_string_value(json_object_get(json_object_get(o, "stratum"),
+							   "firmware")), "Sailfish"));
+	ck_assert(json_is_number(json_object_get(json_object_get(json_object_get(o, "temperature"),
+								 "bed"), "actual")));
+	json_decref(o);
+	/* X3G files are for the Sailfish printer only. */
+	upload_text(np.port, "/p/mk3s", KEY_UP, "part.x3g", "\x99", "true", &r);
+	ck_assert_msg(r.status == 415, "%d %s", r.status, r.body);
+	resp_free(&r);
+	upload(np.port, "/p/fcp", KEY_UP, "cube.stl", 8, "", 0, "true", stl, len, NULL, true, &r);
+	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
+	id = job_of(&r);
+	resp_free(&r);
+	idm = print_text(np.port, "/p/mk3s", "m.gcode", m);
+	wait_state(np.port, "/p/fcp", id, "done", 40);
+	wait_state(np.port, "/p/mk3s", idm, "done", 20);
+	/* Progress ends at the size of the sliced G-code. */
+	o = get_json(np.port, "/p/fcp/api/stratum/queue");
+	{
+		json_t *j = json_array_get(json_object_get(o, "jobs"), 0);
+
+		ck_assert(json_integer_value(json_object_get(j, "filepos")) ==
+			  json_integer_value(json_object_get(j, "size")));
+		ck_assert(json_integer_value(json_object_get(j, "size")) > 10000);
+	}
+	json_decref(o);
+	snprintf(path, sizeof(path), "%s/data/sliced/job-%lld.gcode", np.dir, id);
+	cmds = sfc_reference(path, tu_path("fcp.x3g"), tu_path("fcp.json"), 100);
+	/* A long job, cancelled once it runs. */
+	snprintf(path, sizeof(path), "%s", tu_path("long.gcode"));
+	tu_write_str(path, g);
+	cancelled = sfc_reference(path, tu_path("long.x3g"), tu_path("long.json"), 300);
+	bed_clear(np.port, "/p/fcp", 204);
+	idc = print_text(np.port, "/p/fcp", "long.gcode", g);
+	wait_state(np.port, "/p/fcp", idc, "printing", 10);
+	usleep(500000);
+	expect(np.port, "POST", "/p/fcp/api/job", "X-Api-Key: " KEY_CTL,
+	       "{\"command\":\"cancel\"}", 204);
+	wait_state(np.port, "/p/fcp", idc, "cancelled", 10);
+	/* The printer ran the sliced part exactly, then part of the long job,
+	 * then the safe stop: heaters off (tools, platform), motors off. */
+	snprintf(path, sizeof(path), "%s/data/sim/fcp.log", np.dir);
+	f = fopen(path, "r");
+	ck_assert_msg(f, "no %s", path);
+	sfc_check_log(f, cmds, true);
+	while (fgets(line, sizeof(line), f))
+		memcpy(last[n++ % 4], line, sizeof(line));
+	fclose(f);
+	ck_assert_msg(n > 8 && n < json_array_size(cancelled), "%zu commands of the cancelled job",
+		      n);
+	ck_assert_msg(strstr(last[(n - 4) % 4], " 136 tool action tool=0 cmd=3 ") &&
+			      strstr(last[(n - 4) % 4], "value=0"), "%s", last[(n - 4) % 4]);
+	ck_assert_msg(strstr(last[(n - 3) % 4], " 136 tool action tool=1 cmd=3 "), "%s",
+		      last[(n - 3) % 4]);
+	ck_assert_msg(strstr(last[(n - 2) % 4], " 136 tool action tool=0 cmd=31 ") &&
+			      strstr(last[(n - 2) % 4], "value=0"), "%s", last[(n - 2) % 4]);
+	ck_assert_msg(strstr(last[(n - 1) % 4], " 137 enable axes value=0x1F"), "%s",
+		      last[(n - 1) % 4]);
+	json_decref(cmds);
+	json_decref(cancelled);
+	node_stop(&np);
+	free(stl);
+	free(g);
+	free(m);
 }
 END_TEST
 
@@ -1344,6 +1454,7 @@ Suite *serve_suite(void)
 	tcase_add_test(tc, test_sim_two_printers);
 	tcase_add_test(tc, test_sim_stl_print);
 	tcase_add_test(tc, test_sim_kill9);
+	tcase_add_test(tc, test_sim_sailfish);
 	tcase_add_test(tc, test_mqtt);
 	tcase_add_test(tc, test_status_page);
 	suite_add_tcase(s, tc);

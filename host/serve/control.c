@@ -46,6 +46,11 @@ static int job_pause(struct node *n, struct node_printer *p, struct node_job *j,
 		/* An interrupted print: only resuming makes sense, and the worker does it. */
 		if (want)
 			return st_error_set(err, ST_ERR_RANGE, "the job is not printing");
+		if (!node_print_resumable(p->cfg, p->prof))
+			return st_error_set(err, ST_ERR_RANGE, "printer %s: an interrupted Sailfish "
+					    "print cannot be resumed safely (the printer lost "
+					    "its position); cancel the job and print it again",
+					    p->cfg->name);
 		j->resume = true;
 		node_log("info", p->cfg->name, j->id, "resume of the interrupted print requested");
 	} else {
@@ -88,6 +93,21 @@ int node_control_job(struct node *n, struct node_printer *p, const char *cmd,
 	}
 	pthread_mutex_unlock(&p->mu);
 	return rc;
+}
+
+int node_check_kind(const struct node_printer *p, const char *name, struct st_error *err)
+{
+	char kind = node_file_kind(name);
+	bool sailfish = p->prof->protocol == PROFILE_PROTOCOL_SAILFISH;
+
+	if (kind == 'g' || kind == 'm' || (kind == 'x' && sailfish))
+		return 0;
+	if (kind == 'x')
+		return st_error_set(err, ST_ERR_UNSUPPORTED, "X3G files are for Sailfish "
+				    "printers; printer %s takes G-code (.gcode, .gco, .g) and "
+				    "models (.stl, .obj)", p->cfg->name);
+	return st_error_set(err, ST_ERR_UNSUPPORTED, "only G-code (.gcode, .gco, .g)%s and "
+			    "models (.stl, .obj) are accepted", sailfish ? ", X3G (.x3g)" : "");
 }
 
 /* mkdir each folder of rel under base (rel's last part is the file). */

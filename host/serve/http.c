@@ -403,10 +403,10 @@ static json_t *file_json(struct MHD_Connection *c, const struct req *r, const ch
 	url_for(c, r, "/downloads/files/local/", rel, dl, sizeof(dl));
 	json_t *o = json_pack("{s:s,s:s,s:s,s:s,s:{s:s,s:s}}", "name", slash ? slash + 1 : rel,
 			      "path", rel, "origin", "local", "type",
-			      kind == 'g' ? "machinecode" : "model", "refs", "resource", res,
+			      kind == 'm' ? "model" : "machinecode", "refs", "resource", res,
 			      "download", dl);
-	json_object_set_new(o, "typePath", kind == 'g' ? json_pack("[s,s]", "machinecode", "gcode")
-						       : json_pack("[s,s]", "model", "stl"));
+	json_object_set_new(o, "typePath", kind == 'm' ? json_pack("[s,s]", "model", "stl")
+				: json_pack("[s,s]", "machinecode", kind == 'x' ? "x3g" : "gcode"));
 	if (st) {
 		json_object_set_new(o, "size", json_integer(st->st_size));
 		json_object_set_new(o, "date", json_integer(st->st_mtime));
@@ -818,10 +818,8 @@ static enum MHD_Result finish_upload(struct node *n, struct MHD_Connection *c, s
 		snprintf(msg, sizeof(msg), "bad file name: %s", err.msg);
 		return send_error(c, MHD_HTTP_BAD_REQUEST, msg);
 	}
-	if (!node_file_kind(r->filename))
-		return send_error(c, MHD_HTTP_UNSUPPORTED_MEDIA_TYPE,
-				  "only G-code (.gcode, .gco, .g) and models (.stl, .obj) are "
-				  "accepted");
+	if (node_check_kind(p, r->filename, &err))
+		return send_error(c, MHD_HTTP_UNSUPPORTED_MEDIA_TYPE, err.msg);
 	while (*folder == '/')
 		folder++; /* "/" and "" both mean the top folder */
 	if (strlen(folder) != r->path_len - (size_t)(folder - r->path) ||

@@ -251,6 +251,7 @@ static int cmd_enqueue(struct node *n, struct node_printer *p, json_t *o, int64_
 	const char *url = json_string_value(json_object_get(o, "url"));
 	const char *name = json_string_value(json_object_get(o, "name"));
 	char fname[NODE_FILE_NAME_MAX + 1], tmp[NODE_PATH_MAX + 16];
+	struct st_error e = {0};
 	int rc;
 
 	if (!url)
@@ -263,9 +264,8 @@ static int cmd_enqueue(struct node *n, struct node_printer *p, json_t *o, int64_
 	    node_check_file_name(fname, strlen(fname), err))
 		return st_error_set(err, ST_ERR_ARG, "bad file name '%.100s': %s", fname,
 				    name && strlen(name) > NODE_FILE_NAME_MAX ? "too long" : err->msg);
-	if (!node_file_kind(fname))
-		return st_error_set(err, ST_ERR_ARG, "'%.100s': only G-code (.gcode, .gco, .g) "
-				    "and models (.stl, .obj) are accepted", fname);
+	if (node_check_kind(p, fname, &e))
+		return st_error_set(err, ST_ERR_ARG, "'%.100s': %s", fname, e.msg);
 	if ((rc = download(n, url, tmp, sizeof(tmp), err)))
 		return rc;
 	if ((rc = node_store_file(n, p, tmp, fname, true, true, job, err))) {

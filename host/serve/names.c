@@ -48,5 +48,7 @@ char node_file_kind(const char *name)
 		return 'g';
 	if (ends_with(name, ".stl") || ends_with(name, ".obj"))
 		return 'm';
+	if (ends_with(name, ".x3g"))
+		return 'x';
 	return 0;
 }

@@ -190,6 +190,13 @@ int node_control_job(struct node *n, struct node_printer *p, const char *cmd,
 int node_store_file(struct node *n, struct node_printer *p, const char *tmp, const char *rel,
 		    bool select, bool print, int64_t *id, struct st_error *err);
 
+/*
+ * node_check_kind - whether p takes a file called name: G-code and models
+ * always, X3G only with a `protocol = sailfish` profile.  Returns 0 or
+ * ST_ERR_UNSUPPORTED with the reason (HTTP 415).
+ */
+int node_check_kind(const struct node_printer *p, const char *name, struct st_error *err);
+
 /* mqtt.c: started and stopped with the node; does nothing without [mqtt]. */
 struct node_mqtt;
 int node_mqtt_start(struct node *n, struct st_error *err);

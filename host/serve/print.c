@@ -1,25 +1,35 @@
 /*
  * print.c - the print step of the farm node (print.h): the one place that
  * chooses how a printer is driven: the test double for "test-instant",
- * the Marlin driver for everything else (print_marlin.c).
+ * the S3G driver for Sailfish profiles (print_sailfish.c), the Marlin
+ * driver for everything else (print_marlin.c).
  */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "print.h"
+#include "xport.h"
+
 
 struct node_link {
 	const struct node_printer_ops *ops;
 	void *state;
 };
 
-/* The back end for a port value. */
-static const struct node_printer_ops *ops_for_port(const char *port)
+/* The back end for a port value and the profile's protocol. */
+static const struct node_printer_ops *ops_for(const char *port, const struct profile *prof)
 {
 	if (!strcmp(port, "test-instant"))
 		return &node_double_ops;
+	if (prof->protocol == PROFILE_PROTOCOL_SAILFISH)
+		return &node_sailfish_ops;
 	return &node_marlin_ops;
+}
+
+bool node_print_resumable(const struct node_printer_config *pc, const struct profile *prof)
+{
+	return ops_for(pc->port, prof)->can_resume;
 }
 
 bool node_port_simulated(const char *port)
@@ -30,7 +40,7 @@ bool node_port_simulated(const char *port)
 int node_print_connect(const struct node_printer_config *pc, const struct profile *prof,
 		       struct node_link **out, struct st_error *err)
 {
-	const struct node_printer_ops *ops = ops_for_port(pc->port);
+	const struct node_printer_ops *ops = ops_for(pc->port, prof);
 	struct node_link *l;
 	int rc;
 
@@ -78,4 +88,26 @@ void node_print_describe(struct node_link *l, char *out, size_t cap)
 		l->ops->describe(l->state, out, cap);
 	else
 		snprintf(out, cap, "%s", l->ops->name);
+}
+
+
+int node_port_open(const struct node_printer_config *pc, const struct profile *prof,
+		   const char *path, bool simulated, struct xport **x, struct st_error *err)
+{
+	struct xport_options xo = {0};
+	struct st_error e = {0};
+
+	xo.baudrate = (int)prof->baudrate;
+	xo.dtr_reset = prof->dtr_reset && !simulated;
+	if (xport_open(path, &xo, x, &e))
+		return st_error_set(err, ST_ERR_IO, "printer %s: %s", pc->name, e.msg);
+	return 0;
+}
+
+void node_port_close(struct xport *x)
+{
+	if (!x)
+		return;
+	xport_drain(x, 1000, NULL);
+	xport_close(x);
 }

@@ -9,7 +9,10 @@
  *   - a device path, a pty or tcp://HOST:PORT: the Marlin streaming driver
  *     (serial/marlin.h, print_marlin.c);
  *   - "sim": the same driver against the simulated Marlin printer
- *     (serial/sim/marlin_sim.h) run inside the node, sped up.
+ *     (serial/sim/marlin_sim.h) run inside the node, sped up;
+ *   - with a `protocol = sailfish` profile, a port or "sim": the S3G driver
+ *     (serial/s3g.h, print_sailfish.c), G-code translated to X3G on the fly,
+ *     against the simulated Sailfish printer for "sim".
  *
  * Threads: the worker thread alone calls the operations of one link; the
  * HTTP threads only write requests into struct node_print_ctl (under its
@@ -92,12 +95,33 @@ int node_print_poll(struct node_link *l, struct node_print_ctl *ctl, struct st_e
 /* node_print_describe - what is connected ("Marlin 2.1.2 (simulated printer)"). */
 void node_print_describe(struct node_link *l, char *out, size_t cap);
 
+/*
+ * node_print_resumable - whether the back end that drives pc with profile
+ * prof can continue an interrupted print (Sailfish cannot: docs/serve.md).
+ */
+bool node_print_resumable(const struct node_printer_config *pc, const struct profile *prof);
+
 /* node_port_simulated - true for a port value that is no real printer. */
 bool node_port_simulated(const char *port);
+
+/* Helpers the serial back ends share (print.c). */
+struct xport;
+
+/*
+ * node_port_open - open path (a device, pty or tcp://) for printer pc at
+ * the profile's baud rate; DTR reset only on a real port.  Returns 0 or
+ * ST_ERR_IO with err naming the printer; *x NULL on error.
+ */
+int node_port_open(const struct node_printer_config *pc, const struct profile *prof,
+		   const char *path, bool simulated, struct xport **x, struct st_error *err);
+
+/* node_port_close - drain what is still going out (1 s at most), close; NULL is fine. */
+void node_port_close(struct xport *x);
 
 /* Back-end operations (print.c picks one table per link). */
 struct node_printer_ops {
 	const char *name; /* for the log */
+	bool can_resume;  /* an interrupted print can be continued (print's resume) */
 	int (*connect)(const struct node_printer_config *pc, const struct profile *prof,
 		       void **state, struct st_error *err);
 	void (*disconnect)(void *state);
@@ -108,8 +132,10 @@ struct node_printer_ops {
 	void (*describe)(void *state, char *out, size_t cap);
 };
 
-/* The test double's table (print_double.c) and the Marlin one (print_marlin.c). */
+/* The test double's table (print_double.c), the Marlin one (print_marlin.c)
+ * and the Sailfish one (print_sailfish.c). */
 extern const struct node_printer_ops node_double_ops;
 extern const struct node_printer_ops node_marlin_ops;
+extern const struct node_printer_ops node_sailfish_ops;
 
 #endif /* STRATUM_HOST_SERVE_PRINT_H */

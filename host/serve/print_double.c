@@ -178,6 +178,7 @@ static int double_command(void *state, const char *text, struct st_error *err)
 
 const struct node_printer_ops node_double_ops = {
 	.name = "test-instant",
+	.can_resume = true,
 	.connect = double_connect,
 	.disconnect = double_disconnect,
 	.print = double_print,

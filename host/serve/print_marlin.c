@@ -55,10 +55,7 @@ static void mlink_free(struct mlink *s)
 	if (!s)
 		return;
 	marlin_free(s->m);
-	if (s->x) {
-		xport_drain(s->x, 1000, NULL);
-		xport_close(s->x);
-	}
+	node_port_close(s->x);
 	sim_marlin_free(s->sim);
 	free(s);
 }
@@ -79,7 +76,6 @@ static int marlin_connect_op(const struct node_printer_config *pc, const struct 
 			     void **state, struct st_error *err)
 {
 	struct mlink *s = calloc(1, sizeof(*s));
-	struct xport_options xo = {0};
 	struct marlin_options mo;
 	const char *path = pc->port;
 	struct st_error e = {0};
@@ -90,7 +86,7 @@ static int marlin_connect_op(const struct node_printer_config *pc, const struct 
 	snprintf(s->name, sizeof(s->name), "%s", pc->name);
 	if (prof->protocol != PROFILE_PROTOCOL_MARLIN) {
 		rc = st_error_set(err, ST_ERR_UNSUPPORTED, "printer %s: profile %s speaks %s; the "
-				  "node drives Marlin printers only (S3G is not wired yet)",
+				  "Marlin back end drives Marlin printers only",
 				  pc->name, prof->id, profile_protocol_name(prof->protocol));
 		goto out_free;
 	}
@@ -99,12 +95,8 @@ static int marlin_connect_op(const struct node_printer_config *pc, const struct 
 		rc = st_error_set(err, rc, "printer %s: simulated printer: %s", pc->name, e.msg);
 		goto out_free;
 	}
-	xo.baudrate = (int)prof->baudrate;
-	xo.dtr_reset = prof->dtr_reset && !s->simulated;
-	if ((rc = xport_open(path, &xo, &s->x, &e))) {
-		rc = st_error_set(err, ST_ERR_IO, "printer %s: %s", pc->name, e.msg);
+	if ((rc = node_port_open(pc, prof, path, s->simulated, &s->x, err)))
 		goto out_free;
-	}
 	marlin_options_init(&mo);
 	mo.rx_buffer = prof->rx_buffer_size > 0 ? (unsigned)prof->rx_buffer_size : 0;
 	/* the simulator boots like a board; ptys and TCP bridges are not reset */
@@ -366,6 +358,7 @@ static void marlin_describe_op(void *state, char *out, size_t cap)
 
 const struct node_printer_ops node_marlin_ops = {
 	.name = "marlin",
+	.can_resume = true,
 	.connect = marlin_connect_op,
 	.disconnect = marlin_disconnect_op,
 	.print = marlin_print_op,
