@@ -118,7 +118,11 @@ bool apart(const exact_mesh &m, const uint32_t *u, const uint32_t *w)
 {
 	pairtest::Ipt p[3], q[3];
 	for (int k = 0; k < 3; k++) {
-		const auto &x = CGAL::approx(epoint(m, u[k])), &y = CGAL::approx(epoint(m, w[k]));
+		/* epoint returns a handle by value: keep it alive while its
+		 * interval approximation is read (a reference into a temporary
+		 * dangles). */
+		const auto pu = epoint(m, u[k]), pw = epoint(m, w[k]);
+		const auto x = CGAL::approx(pu), y = CGAL::approx(pw);
 		p[k] = {x.x(), x.y(), x.z()};
 		q[k] = {y.x(), y.y(), y.z()};
 	}
