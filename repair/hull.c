@@ -120,12 +120,12 @@ out_nomem:
 			    ntris);
 }
 
-/* Triangle t as currently oriented. */
-static void oriented(const uint32_t (*tris)[3], const uint8_t *flip, uint32_t t, uint32_t v[3])
+/* Side s of triangle t: its corners as stored (s = 0) or reversed. */
+static void oriented(const uint32_t (*tris)[3], uint32_t t, uint8_t s, uint32_t v[3])
 {
 	v[0] = tris[t][0];
-	v[1] = flip[t] ? tris[t][2] : tris[t][1];
-	v[2] = flip[t] ? tris[t][1] : tris[t][2];
+	v[1] = s ? tris[t][2] : tris[t][1];
+	v[2] = s ? tris[t][1] : tris[t][2];
 }
 
 /* The corner of t (original order) that is not u or w. */
@@ -178,26 +178,30 @@ static uint32_t continuation(const struct exact_mesh *em, const uint32_t (*tris)
 	return best;
 }
 
-/* Whether t, as currently oriented, runs along its edge from u to w. */
-static bool runs_from(const uint32_t (*tris)[3], const uint8_t *flip, uint32_t t, uint32_t u,
-		      uint32_t w)
+/* Whether t as stored runs along its edge from u to w. */
+static bool runs_from(const uint32_t (*tris)[3], uint32_t t, uint32_t u, uint32_t w)
 {
 	uint32_t v[3];
 
-	oriented(tris, flip, t, v);
+	oriented(tris, t, 0, v);
 	for (int k = 0; k < 3; k++)
 		if (v[k] == u && v[(k + 1) % 3] == w)
 			return true;
 	return false;
 }
 
-/* A FIFO of (triangle, edge slot) pairs: the border B of Algorithm 1. */
+/*
+ * A FIFO of sides to walk from: the border B of Algorithm 1.  An item is
+ * 6*t + 2*k + s: edge slot k of triangle t seen from side s (0: as stored,
+ * 1: reversed).  The side travels with the item, so walking one side of a
+ * triangle never depends on when its other side is reached.
+ */
 struct border {
-	uint32_t *items;	/* pairs: triangle, k in 0..2 packed as 3*t+k */
+	uint64_t *items;
 	size_t head, tail, cap;
 };
 
-static int border_push_all(struct border *q, uint32_t t, struct st_error *err)
+static int border_push_all(struct border *q, uint32_t t, uint32_t side, struct st_error *err)
 {
 	if (q->tail + 3 > q->cap) {
 		/* Compact, then grow. */
@@ -208,7 +212,7 @@ static int border_push_all(struct border *q, uint32_t t, struct st_error *err)
 		q->head = 0;
 		if (q->tail + 3 > q->cap) {
 			size_t nc = q->cap ? 2 * q->cap : 1024;
-			uint32_t *ni = realloc(q->items, nc * sizeof(*ni));
+			uint64_t *ni = realloc(q->items, nc * sizeof(*ni));
 			if (!ni)
 				return st_error_set(err, ST_ERR_NOMEM,
 						    "out of memory growing the outer hull");
@@ -217,19 +221,24 @@ static int border_push_all(struct border *q, uint32_t t, struct st_error *err)
 		}
 	}
 	for (uint32_t k = 0; k < 3; k++)
-		q->items[q->tail++] = 3 * t + k;
+		q->items[q->tail++] = 6 * (uint64_t)t + 2 * k + side;
 	return 0;
 }
 
 /*
- * Algorithm 1 on the component whose triangles are listed in comp.  Tags:
- * bit 1 outer, bit 2 inner.  One change from the listing: a triangle that
- * becomes double-sided puts its edges back on the border, so the ant also
- * walks its back side; without that, which parts of a sheet end up
- * double-sided would depend on the order the border is visited in.
+ * Algorithm 1 on the component whose triangles are listed in comp, over
+ * triangle sides: side s of t is reached once, and a triangle whose two
+ * sides are both reached is double-sided (tag outer and inner).  Keeping
+ * the side in each border item matters: with one orientation bit per
+ * triangle, the edges a triangle queued for one side were walked from the
+ * other once that was reached too, so a face in the middle of a sheet
+ * could be left single-sided, a hole in M_solid that the second pass then
+ * found as a sheet again.  side_seen: per triangle, bit s when side s was
+ * reached; first: the side reached first.
  */
 static int grow(const struct exact_mesh *em, const uint32_t (*tris)[3], const struct edges *e,
-		const uint32_t *comp, size_t n, uint8_t *tag, uint8_t *flip, struct st_error *err)
+		const uint32_t *comp, size_t n, uint8_t *side_seen, uint8_t *first,
+		struct st_error *err)
 {
 	struct border q = {0};
 	uint32_t seed;
@@ -239,19 +248,20 @@ static int grow(const struct exact_mesh *em, const uint32_t (*tris)[3], const st
 	rc = exact_mesh_seed(em, comp, n, &seed, &seed_flip, err);
 	if (rc)
 		return rc;
-	flip[seed] = seed_flip;
-	tag[seed] = HULL_OUTER;
-	rc = border_push_all(&q, seed, err);
+	side_seen[seed] = (uint8_t)(1u << seed_flip);
+	first[seed] = seed_flip;
+	rc = border_push_all(&q, seed, seed_flip, err);
 	while (!rc && q.head < q.tail) {
-		const uint32_t item = q.items[q.head++];
-		const uint32_t ti = item / 3, k = item % 3;
+		const uint64_t item = q.items[q.head++];
+		const uint32_t ti = (uint32_t)(item / 6), k = (uint32_t)(item / 2 % 3);
+		const uint8_t s = (uint8_t)(item % 2);
 		uint32_t v[3];
 
-		/* The edge as ti runs along it now: a -> b, third corner c. */
-		oriented(tris, flip, ti, v);
+		/* The edge as side s of ti runs along it: a -> b, third c. */
+		oriented(tris, ti, s, v);
 		const uint32_t a = v[k], b = v[(k + 1) % 3], c = v[(k + 2) % 3];
-		/* k indexes ti's current orientation; the edge id is the same
-		 * for either orientation, found from the original corners. */
+		/* k indexes that orientation; the edge id is the same for
+		 * either, found from the original corners. */
 		uint32_t corner = 0;
 		for (uint32_t j = 0; j < 3; j++) {
 			const uint32_t p = tris[ti][j], r = tris[ti][(j + 1) % 3];
@@ -259,23 +269,15 @@ static int grow(const struct exact_mesh *em, const uint32_t (*tris)[3], const st
 				corner = 3 * ti + j;
 		}
 		const uint32_t tnew = continuation(em, tris, e, e->corner_edge[corner], ti, a, b, c);
-
-		if (tag[tnew] == (HULL_OUTER | HULL_INNER))
+		/* The side of tnew facing the same way runs the edge b -> a;
+		 * on a boundary (tnew == ti) that is ti's other side. */
+		const uint8_t snew = tnew == ti ? (uint8_t)!s : !runs_from(tris, tnew, b, a);
+		if (side_seen[tnew] & (1u << snew))
 			continue;
-		/* Consistent: tnew runs the common edge the other way. */
-		if (tnew != ti && runs_from(tris, flip, tnew, b, a)) {
-			if (!(tag[tnew] & HULL_OUTER)) {
-				tag[tnew] |= HULL_OUTER;
-				rc = border_push_all(&q, tnew, err);
-			}
-			continue;
-		}
-		flip[tnew] ^= 1;
-		if (tag[tnew] & HULL_OUTER)
-			tag[tnew] |= HULL_INNER;
-		else
-			tag[tnew] |= HULL_OUTER;
-		rc = border_push_all(&q, tnew, err);
+		if (!side_seen[tnew])
+			first[tnew] = snew;
+		side_seen[tnew] |= (uint8_t)(1u << snew);
+		rc = border_push_all(&q, tnew, snew, err);
 	}
 	free(q.items);
 	return rc;
@@ -398,10 +400,18 @@ int hull_extract(const struct exact_mesh *em, uint8_t *tag, uint8_t *flip,
 		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory finding components");
 		goto out;
 	}
+	/* tag holds the sides reached (bit s), flip the first one, until
+	 * they become tags: one side outer, both sides a sheet. */
 	for (long c = 0; c < nc && !rc; c++)
 		rc = grow(em, tris, &e, list + off[c], off[c + 1] - off[c], tag, flip, err);
 	if (rc)
 		goto out;
+	for (size_t t = 0; t < ntris; t++) {
+		const uint8_t seen = tag[t];
+		tag[t] = seen == 3 ? HULL_OUTER | HULL_INNER : seen ? HULL_OUTER : 0;
+		if (seen == 1 || seen == 2)
+			flip[t] = seen == 2;
+	}
 	for (size_t t = 0; t < ntris; t++)
 		if (!(tag[t] & HULL_OUTER))
 			st->interior++;

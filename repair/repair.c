@@ -28,9 +28,6 @@
 /* Rounding rounds before giving up (each usually fixes all it finds). */
 #define MAX_ROUNDING_ROUNDS 10
 
-/* Thickening passes: seed 000 needs one; more only guard odd inputs. */
-#define MAX_THICKEN_PASSES 3
-
 struct segment {
 	double p[3], q[3];
 };
@@ -441,15 +438,12 @@ static int core(const struct mesh *in, const struct repair_options *opt, bool th
 	/* After rounding, sheets and wires are parts thinner than the rounding
 	 * grid that collapsed: M_solid without them is closed, and thickening
 	 * them would add epsilon-thick slabs around rounding noise. */
-	for (int pass = 0; thicken_sheets_too && pass < MAX_THICKEN_PASSES; pass++) {
-		size_t visible_wires = pass == 0 ? n_wires : 0;
-		if (hs.sheet == 0 && visible_wires == 0)
-			break;
-		rc = thicken(em, tag, flip, wires, visible_wires, opt, co, &next, err);
+	if (thicken_sheets_too && (hs.sheet || n_wires)) {
+		rc = thicken(em, tag, flip, wires, n_wires, opt, co, &next, err);
 		if (rc)
 			goto out;
-		if (hs.sheet == 0 && co->wires == 0)
-			break; /* every wire was hidden: nothing was added */
+	}
+	if (next && (hs.sheet || co->wires)) {
 		free(tag);
 		free(flip);
 		tag = flip = NULL;
@@ -463,6 +457,16 @@ static int core(const struct mesh *in, const struct repair_options *opt, bool th
 			goto out;
 		co->second_sheet = hs.sheet;
 		co->proved_clean = rs.intersecting_pairs == 0;
+		/* Seed 000 §4.2.1: M_solid and closed slabs leave no sheet.
+		 * One left means a bug here, not bad input: no third pass
+		 * hides it. */
+		if (hs.sheet) {
+			rc = st_error_set(err, ST_ERR_INTERNAL,
+					  "repair: the second pass left %zu sheet triangles "
+					  "(it must leave none)",
+					  hs.sheet);
+			goto out;
+		}
 	}
 	if (next) {
 		/* Only hidden wires: M_solid as selected by thicken(). */
