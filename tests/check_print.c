@@ -247,6 +247,14 @@ START_TEST(test_marlin_prints_every_line_once)
 }
 END_TEST
 
+/* The bundled model sliced for the Creator Pro into gc. */
+static void sf_gcode(const char *gc)
+{
+	int rc = tu_run(out, sizeof(out), "print " MODEL " --printer " SF_PRINTER " --dry-run "
+			"-o %s", gc);
+	ck_assert_msg(rc == 0, "dry run: exit %d: %s", rc, out);
+}
+
 START_TEST(test_sailfish_prints_every_command_once)
 {
 	char dir[512], gc[512], x3g[512], dec[512], log[512], line[512];
@@ -259,9 +267,7 @@ START_TEST(test_sailfish_prints_every_command_once)
 	snprintf(x3g, sizeof(x3g), "%s", tu_path("sf.x3g"));
 	snprintf(dec, sizeof(dec), "%s", tu_path("sf.json"));
 	snprintf(log, sizeof(log), "%s", tu_path("sf.log"));
-	rc = tu_run(out, sizeof(out), "print " MODEL " --printer " SF_PRINTER " --dry-run -o %s",
-		    gc);
-	ck_assert_msg(rc == 0, "dry run: exit %d: %s", rc, out);
+	sf_gcode(gc);
 	rc = tu_run(out, sizeof(out), "print %s --printer " SF_PRINTER " --sim-log %s", gc, log);
 	ck_assert_msg(rc == 0, "exit %d: %s", rc, out);
 	ck_assert_msg(strstr(out, "SIMULATION") && strstr(out, "printed "), "%s", out);
@@ -541,9 +547,7 @@ START_TEST(test_sailfish_resume_after_kill)
 	snprintf(tty, sizeof(tty), "%s", tu_path("tty-sfk"));
 	snprintf(log, sizeof(log), "%s", tu_path("sfk1.log"));
 	snprintf(log2, sizeof(log2), "%s", tu_path("sfk2.log"));
-	rc = tu_run(out, sizeof(out), "print " MODEL " --printer " SF_PRINTER " --dry-run -o %s",
-		    gc);
-	ck_assert_msg(rc == 0, "dry run: exit %d: %s", rc, out);
+	sf_gcode(gc);
 	/* print to an external simulator; kill -9 the host at layer 5 or later */
 	rc = tu_run(out, sizeof(out),
 		    "sim --dialect sailfish --speedup 200 --baud 4000000 --link %s --log %s "
