@@ -7,7 +7,7 @@
  * G-code and X3G input skip the first stages.
  *
  * With no --port (or --port sim) the printer is the built-in simulated one
- * of the profile's dialect, run in this process and sped up.  Marlin jobs
+ * of the profile's dialect, run in this process and sped up.  G-code jobs
  * keep a journal (host/journal.h) synced per layer and every few seconds,
  * so `--resume JOB` can continue after a crash, a power cut or a lost
  * printer.  Ctrl-C/SIGTERM stop safely and exit 130; a lost printer exits
@@ -65,8 +65,9 @@ static void print_usage(FILE *out)
 		"                     ends in .gcode) instead of printing\n"
 		"  --preview          write PNGs of the first layers (MODEL-layerN.png) first\n"
 		"  --json             the summary as one JSON object on stdout\n"
-		"  --resume JOB       continue an interrupted Marlin print from the start of the\n"
-		"                     last layer the printer confirmed: reheat, home X and Y only,\n"
+		"  --resume JOB       continue an interrupted print (G-code, Marlin or Sailfish)\n"
+		"                     from the start of the last layer the printer confirmed:\n"
+		"                     reheat, home X and Y only,\n"
 		"                     restore Z and E.  Asks first; --yes answers for scripts\n"
 		"  --sim-log FILE     testing aid: the simulated printer's execution log\n"
 		"Ctrl-C stops safely (heaters and motors off).  Exit status: 0 printed, 1 the\n"
@@ -398,6 +399,25 @@ static int print_preamble(struct print_job *job, struct marlin *m, int64_t offse
 	return 0;
 }
 
+/* Where a stopped job got to; the journal saved in state. */
+static void print_stopped_at(struct print_job *job, const char *state, int status)
+{
+	if (job->layer >= 0)
+		fprintf(stderr, PRINT_CMD ": the printer confirmed line %llu of %llu (layer %ld of "
+				"%zu, Z %.2f mm)\n", (unsigned long long)job->last_line,
+			(unsigned long long)job->layers.lines, job->layer + 1, job->layers.n,
+			job->layers.v[job->layer].z);
+	else
+		fprintf(stderr, PRINT_CMD ": the printer confirmed line %llu of %llu (before the "
+				"first layer)\n", (unsigned long long)job->last_line,
+			(unsigned long long)job->layers.lines);
+	snprintf(job->j.state, sizeof(job->j.state), "%s", state);
+	print_sync(job);
+	if (job->journal_on && status != ST_EXIT_DATAERR)
+		fprintf(stderr, PRINT_CMD ": the job is saved; continue it with 'stratum print "
+				"--resume %s'\n", job->j.id);
+}
+
 /* Exit status and journal state of a failed Marlin job. */
 static int print_marlin_failed(struct print_job *job, struct marlin *m,
 			       const struct marlin_status *st, int rc, const struct st_error *err)
@@ -429,20 +449,7 @@ static int print_marlin_failed(struct print_job *job, struct marlin *m,
 		else
 			fprintf(stderr, PRINT_CMD ": stopped safely: heaters and motors off\n");
 	}
-	if (job->layer >= 0)
-		fprintf(stderr, PRINT_CMD ": the printer confirmed line %llu of %llu (layer %ld of "
-				"%zu, Z %.2f mm)\n", (unsigned long long)job->last_line,
-			(unsigned long long)job->layers.lines, job->layer + 1, job->layers.n,
-			job->layers.v[job->layer].z);
-	else
-		fprintf(stderr, PRINT_CMD ": the printer confirmed line %llu of %llu (before the "
-				"first layer)\n", (unsigned long long)job->last_line,
-			(unsigned long long)job->layers.lines);
-	snprintf(job->j.state, sizeof(job->j.state), "%s", state);
-	print_sync(job);
-	if (job->journal_on && status != ST_EXIT_DATAERR)
-		fprintf(stderr, PRINT_CMD ": the job is saved; continue it with 'stratum print "
-				"--resume %s'\n", job->j.id);
+	print_stopped_at(job, state, status);
 	return status;
 }
 
@@ -541,9 +548,80 @@ out_port:
 
 /* -------- Sailfish: stratum send's streaming, reported here -------- */
 
+struct print_sf_ctx {
+	struct print_job *job;
+	double last_sync;
+	long last_layer;
+};
+
+/* Take a Sailfish job's progress into the job and the journal: the last
+ * command the printer confirmed gives its G-code line, and so the layer. */
+static void print_sf_take(struct print_job *job, const struct send_result *r)
+{
+	job->done = r->done;
+	job->total = r->total;
+	job->resends = r->retries;
+	if (job->input == PRINT_X3G) {
+		job->layer = r->layer;
+		return;
+	}
+	if (r->lines) {
+		job->last_line = job->base_line + r->lines;
+		job->layer = print_layer_of(&job->layers, job->last_line);
+	}
+	job->j.last_line = job->last_line;
+	job->j.layer = job->layer;
+	job->j.z = job->layer >= 0 ? job->layers.v[job->layer].z : NAN;
+	if (r->tool_target > 0 || r->tool_actual > 0) {
+		job->j.tool_actual = r->tool_actual;
+		job->j.tool_target = r->tool_target;
+	}
+	if (r->bed_target > 0 || r->bed_actual > 0) {
+		job->j.bed_actual = r->bed_actual;
+		job->j.bed_target = r->bed_target;
+	}
+}
+
+static void print_sf_progress(void *ctx, const struct send_result *r)
+{
+	struct print_sf_ctx *c = ctx;
+	double now = send_now();
+
+	print_sf_take(c->job, r);
+	if (c->job->layer != c->last_layer || now - c->last_sync >= PRINT_SYNC_S) {
+		c->last_layer = c->job->layer;
+		c->last_sync = now;
+		print_sync(c->job);
+	}
+}
+
+/*
+ * The resume preamble as G-code lines for the X3G translator, into buf;
+ * 0 or the exit status (message printed).
+ */
+static int print_sf_preamble(struct print_job *job, char *buf, size_t cap)
+{
+	char pre[RESUME_LINES][RESUME_LINE_MAX + 1];
+	struct resume_state rs;
+	struct st_error err = {0};
+	size_t n, len = 0;
+
+	if (resume_scan(job->gcode, job->layers.v[job->start_layer].offset, &rs, &err)) {
+		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
+		return ST_EXIT_DATAERR;
+	}
+	n = resume_preamble_x3g(&rs, pre, RESUME_LINES);
+	buf[0] = '\0';
+	for (size_t i = 0; i < n && len < cap; i++)
+		len += (size_t)snprintf(buf + len, cap - len, "%s\n", pre[i]);
+	return 0;
+}
+
 static int print_sailfish(struct print_job *job, const char *path)
 {
+	static char preamble[RESUME_LINES * (RESUME_LINE_MAX + 2)];
 	struct send_result res = {0};
+	struct print_sf_ctx ctx = {.job = job, .last_layer = -2};
 	struct send_args sa = {
 		.file = job->gcode,
 		.port = path,
@@ -551,19 +629,37 @@ static int print_sailfish(struct print_job *job, const char *path)
 		.json = job->a->json,
 		.cmd = PRINT_CMD,
 		.result = &res,
+		.progress = job->journal_on ? print_sf_progress : NULL,
+		.progress_ctx = &ctx,
 	};
-	int status = send_sailfish(&sa, job->prof);
+	int status;
 
-	job->done = res.done;
-	job->total = res.total;
-	job->layer = res.layer;
-	job->last_line = res.lines;
-	job->resends = res.retries;
+	if (job->start_layer >= 0) {
+		if ((status = print_sf_preamble(job, preamble, sizeof(preamble))))
+			return status;
+		sa.offset = job->layers.v[job->start_layer].offset;
+		sa.preamble = preamble;
+		job->base_line = job->layers.v[job->start_layer].line - 1;
+	}
+	print_sync(job);
+	status = send_sailfish(&sa, job->prof);
+	print_sf_take(job, &res);
 	job->stream_s = res.seconds;
 	snprintf(job->printer_desc, sizeof(job->printer_desc), "%s%s",
 		 res.firmware[0] ? res.firmware : "Sailfish", job->simulated ? ", simulated" : "");
 	if (status && !job->fail)
 		job->fail = status == ST_EXIT_INTERRUPTED ? "interrupted" : "the print failed";
+	if (!job->journal_on)
+		return status;
+	if (status == ST_EXIT_OK) {
+		job->last_line = job->j.last_line = job->layers.lines;
+		snprintf(job->j.state, sizeof(job->j.state), "done");
+		print_sync(job);
+	} else {
+		print_stopped_at(job, status == ST_EXIT_UNAVAILABLE ? "link-lost"
+				      : status == ST_EXIT_INTERRUPTED ? "cancelled" : "failed",
+				 status);
+	}
 	return status;
 }
 
@@ -937,12 +1033,6 @@ int cmd_print(int argc, char **argv)
 		status = st_exit_for(rc);
 		goto out;
 	}
-	if (a.resume && job->prof->protocol != PROFILE_PROTOCOL_MARLIN) {
-		fprintf(stderr, PRINT_CMD ": --resume works with Marlin printers only; '%s' speaks "
-				"%s\n", job->prof->id, profile_protocol_name(job->prof->protocol));
-		status = ST_EXIT_USAGE;
-		goto out;
-	}
 	if (!a.resume) {
 		job->input = print_input_of(a.in);
 		job->gcode = a.in;
@@ -958,7 +1048,8 @@ int cmd_print(int argc, char **argv)
 		status = print_dry_run(job);
 		goto out;
 	}
-	job->journal_on = job->prof->protocol == PROFILE_PROTOCOL_MARLIN;
+	/* an X3G file has no G-code lines to resume from */
+	job->journal_on = job->input != PRINT_X3G;
 	if (!a.resume && job->journal_on && (rc = journal_init(&job->j, &err))) {
 		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
 		status = ST_EXIT_FAILURE;
@@ -983,7 +1074,8 @@ int cmd_print(int argc, char **argv)
 			goto out;
 	}
 	if (job->input != PRINT_X3G &&
-	    (status = print_scan(job->gcode, job->journal_on, &job->layers)))
+	    (status = print_scan(job->gcode, job->prof->protocol == PROFILE_PROTOCOL_MARLIN,
+				 &job->layers)))
 		goto out;
 	if (a.resume) {
 		job->start_layer = job->j.layer >= 0 && (size_t)job->j.layer < job->layers.n

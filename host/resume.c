@@ -78,13 +78,31 @@ int resume_scan(const char *path, int64_t end, struct resume_state *rs,
 	return rc < 0 ? rc : 0;
 }
 
+#define ADD(...) (n < cap ? (void)snprintf(out[n++], RESUME_LINE_MAX + 1, __VA_ARGS__) : (void)0)
+
+/* Both preambles' end, from line n on: down to Z, modes, E (set_e), feed
+ * rate, fan.  Returns the line count. */
+static size_t resume_finish(const struct resume_state *rs, bool set_e,
+			    char out[][RESUME_LINE_MAX + 1], size_t n, size_t cap)
+{
+	ADD("G1 Z%.3f F600", rs->z);
+	ADD("%s", rs->rel_e ? "M83" : "M82");
+	if (set_e)
+		ADD("G92 E%.5f", rs->rel_e ? 0.0 : rs->e);
+	if (rs->rel_xyz)
+		ADD("G91");
+	ADD("G1 F%.0f", rs->f);
+	if (rs->fan > 0)
+		ADD("M106 S%.0f", rs->fan);
+	return n;
+}
+
 /* The restoring commands, in the order resume.h gives and why. */
 size_t resume_preamble(const struct resume_state *rs, char out[][RESUME_LINE_MAX + 1],
 			      size_t cap)
 {
 	size_t n = 0;
 
-#define ADD(...) (n < cap ? (void)snprintf(out[n++], RESUME_LINE_MAX + 1, __VA_ARGS__) : (void)0)
 	if (rs->bed > 0) {
 		ADD("M140 S%.0f", rs->bed);
 		ADD("M190 S%.0f", rs->bed);
@@ -100,15 +118,30 @@ size_t resume_preamble(const struct resume_state *rs, char out[][RESUME_LINE_MAX
 		ADD("M109 S%.0f", rs->tool);
 	if (rs->moved)
 		ADD("G1 X%.3f Y%.3f F6000", rs->x, rs->y);
-	ADD("G1 Z%.3f F600", rs->z);
-	ADD("%s", rs->rel_e ? "M83" : "M82");
-	ADD("G92 E%.5f", rs->rel_e ? 0.0 : rs->e);
-	if (rs->rel_xyz)
-		ADD("G91");
-	ADD("G1 F%.0f", rs->f);
-	if (rs->fan > 0)
-		ADD("M106 S%.0f", rs->fan);
-#undef ADD
-	return n;
+	return resume_finish(rs, true, out, n, cap);
 }
 
+/* The Sailfish form: what resume_preamble does, in the translator's words. */
+size_t resume_preamble_x3g(const struct resume_state *rs, char out[][RESUME_LINE_MAX + 1],
+			   size_t cap)
+{
+	size_t n = 0;
+
+	ADD("M73 P0"); /* starts the build, as the file's start G-code did */
+	if (rs->bed > 0)
+		ADD("M190 S%.0f", rs->bed); /* sets the target too */
+	if (rs->tool > 0)
+		ADD("M104 S%.0f T0", rs->tool);
+	ADD("G90");
+	ADD("G92 X0 Y0 Z%.3f A0 B0", rs->z);
+	ADD("G1 Z%.3f F600", rs->z + 2);
+	ADD("G28 X Y");
+	ADD("M132 X Y");
+	if (rs->tool > 0)
+		ADD("M133 T0");
+	if (rs->moved)
+		ADD("G1 X%.3f Y%.3f F6000", rs->x, rs->y);
+	/* G92 E in relative mode would be one more set-position of all axes */
+	return resume_finish(rs, !rs->rel_e, out, n, cap);
+}
+#undef ADD

@@ -4,7 +4,8 @@
  * modes) and the commands that bring it back there.  Shared by the farm
  * node (host/serve/print_marlin.c) and `stratum print --resume`
  * (host/cmd_print.c); docs/serve.md and docs/printing.md describe the
- * sequence.
+ * sequence.  The Sailfish form (resume_preamble_x3g) is translated to X3G
+ * by the stream's own translator (host/send_sailfish.c).
  */
 #ifndef STRATUM_HOST_RESUME_H
 #define STRATUM_HOST_RESUME_H
@@ -43,5 +44,21 @@ int resume_scan(const char *path, int64_t end, struct resume_state *rs, struct s
  * lines into out; returns how many.
  */
 size_t resume_preamble(const struct resume_state *rs, char out[][RESUME_LINE_MAX + 1], size_t cap);
+
+/*
+ * resume_preamble_x3g - the same restoring sequence as G-code the X3G
+ * translator takes (serial/x3g.h), for Sailfish printers: build start
+ * (M73), bed heat and wait (M190 S), nozzle heat (M104), Z set with
+ * G92 (X3G sets all five axes at once, so X, Y and the extruders are set
+ * too, and the translator's position agrees), lift, G28 X Y (the
+ * translator homes each axis to the end the machine's endstop is at: the
+ * Creator Pro's X and Y are at max), M132 X Y (the calibrated home
+ * offsets, so X and Y are in the file's frame again), nozzle wait (M133:
+ * M109 means the platform to GPX), back over the part, down, modes,
+ * extruder position, feed rate, fan.  Writes at most cap lines; returns
+ * how many.
+ */
+size_t resume_preamble_x3g(const struct resume_state *rs, char out[][RESUME_LINE_MAX + 1],
+			   size_t cap);
 
 #endif /* STRATUM_HOST_RESUME_H */

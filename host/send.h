@@ -26,6 +26,7 @@ struct send_result {
 	uint64_t retries;
 	double seconds;
 	char firmware[32];
+	double tool_actual, tool_target, bed_actual, bed_target; /* degC, last reported */
 };
 
 struct send_args {
@@ -34,6 +35,14 @@ struct send_args {
 	long baud; /* 0 = the profile's */
 	const char *cmd;	    /* message prefix; NULL = SEND_CMD */
 	struct send_result *result; /* set: filled instead of printing the report */
+	/* Sailfish G-code only, for a resume (stratum print): start reading at
+	 * byte offset, and translate the G-code lines of preamble ('\n' after
+	 * each) first with the same translator; lines then count from offset */
+	int64_t offset;
+	const char *preamble;
+	/* called as the stream goes with what is done so far (may be NULL) */
+	void (*progress)(void *ctx, const struct send_result *r);
+	void *progress_ctx;
 };
 
 /*

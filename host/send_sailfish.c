@@ -30,11 +30,18 @@
 /* The prefix of messages: stratum send, or the command that called it. */
 #define SF_CMD(a) ((a)->cmd ? (a)->cmd : SEND_CMD)
 
+struct sf_job;
+
 /* What the progress callback needs. */
 struct sf_progress {
 	struct send_progress p;
 	const struct sfsrc_gcode *g; /* NULL for an X3G file */
+	const struct sf_job *j;
+	const struct send_args *a;
 };
+
+static void sf_result(const struct sf_job *j, const struct s3g_status *st, bool ok,
+		      struct send_result *res);
 
 /* Show a line's translator warnings, as stratum x3g does (check pass only). */
 static void sf_show_warnings(void *ctx, const char *name, const struct x3g_warning *w, size_t n)
@@ -63,7 +70,14 @@ static void sf_progress_cb(void *ctx, const struct s3g_status *st)
 		.bed_target = st->platform_target,
 		.paused = st->build_state == S3G_BUILD_PAUSED,
 	};
+	const struct send_args *a = sp->a;
+
 	send_progress_show(&sp->p, &v);
+	if (a->progress) {
+		struct send_result r;
+		sf_result(sp->j, st, false, &r);
+		a->progress(a->progress_ctx, &r);
+	}
 }
 
 /* Everything one Sailfish job holds. */
@@ -88,16 +102,22 @@ static int sf_source_open(struct sf_job *j, bool show_warnings, struct st_error 
 {
 	int rc;
 
-	rewind(j->f);
+	if (fseeko(j->f, j->x3g ? 0 : (off_t)j->a->offset, SEEK_SET))
+		return st_error_set(err, ST_ERR_IO, "%s: cannot seek: %s", j->a->file,
+				    strerror(errno));
 	if (j->x3g) {
 		sfsrc_x3g_open(j->x, j->f);
 		return 0;
 	}
 	j->g.warn = show_warnings ? sf_show_warnings : NULL;
 	j->g.warn_ctx = (void *)SF_CMD(j->a); /* only read, as the prefix */
-	if ((rc = sfsrc_gcode_open(&j->g, j->f, j->a->file, &j->m, &j->xo, err)))
+	if ((rc = sfsrc_gcode_open(&j->g, j->f, j->a->file, &j->m, &j->xo, err))) {
 		sfsrc_gcode_close(&j->g);
-	return rc;
+		return rc;
+	}
+	j->g.pre = j->a->preamble;
+	j->g.pre_len = j->a->preamble ? strlen(j->a->preamble) : 0;
+	return 0;
 }
 
 static void sf_source_close(struct sf_job *j)
@@ -155,17 +175,39 @@ static int sf_exit_for(const struct s3g_status *st, int rc)
 	}
 }
 
+/* G-code lines done: all, or up to that of the last command taken; the
+ * stream pulls one command ahead at most. */
+static uint64_t sf_lines_done(const struct sf_job *j, const struct s3g_status *st, bool ok)
+{
+	uint64_t done = st->confirmed + st->skipped;
+
+	return ok ? j->lines : done == 0 ? 0 : done == j->g.pulled ? j->g.line : j->g.prev_line;
+}
+
+/* What the job did, for a caller that reports it itself. */
+static void sf_result(const struct sf_job *j, const struct s3g_status *st, bool ok,
+		      struct send_result *res)
+{
+	memset(res, 0, sizeof(*res));
+	res->ok = ok;
+	res->done = st->confirmed + st->skipped;
+	res->total = j->commands;
+	res->lines = sf_lines_done(j, st, ok);
+	res->layer = j->x3g ? -1 : j->g.layer;
+	res->retries = st->retries;
+	res->seconds = st->elapsed_s;
+	res->tool_actual = st->tool_temp;
+	res->tool_target = st->tool_target;
+	res->bed_actual = st->platform_temp;
+	res->bed_target = st->platform_target;
+	snprintf(res->firmware, sizeof(res->firmware), "%s", j->firmware);
+}
+
 /* The report, as text or one JSON object on stdout. */
 static void sf_report(const struct sf_job *j, const struct s3g_status *st, long baud, bool ok,
 		      const char *error)
 {
-	uint64_t done = st->confirmed + st->skipped;
-	/* G-code lines done: all, or up to that of the last command taken;
-	 * the stream pulls one command ahead at most */
-	uint64_t lines = ok ? j->lines
-			 : done == 0 ? 0
-			 : done == j->g.pulled ? j->g.line
-			 : j->g.prev_line;
+	uint64_t lines = sf_lines_done(j, st, ok);
 	struct send_summary s = {
 		.ok = ok,
 		.error = error,
@@ -187,16 +229,7 @@ static void sf_report(const struct sf_job *j, const struct s3g_status *st, long 
 	char detail[320];
 
 	if (j->a->result) {
-		struct send_result *res = j->a->result;
-
-		res->ok = ok;
-		res->done = done;
-		res->total = j->commands;
-		res->lines = lines;
-		res->layer = j->x3g ? -1 : j->g.layer;
-		res->retries = st->retries;
-		res->seconds = sec;
-		snprintf(res->firmware, sizeof(res->firmware), "%s", j->firmware);
+		sf_result(j, st, ok, j->a->result);
 		return;
 	}
 	if (j->a->json) {
@@ -248,7 +281,7 @@ static int sf_stream(struct sf_job *j, struct xport *x, long baud)
 	struct s3g *d = NULL;
 	struct st_error err = {0};
 	struct s3g_status st;
-	struct sf_progress prog = {.g = j->x3g ? NULL : &j->g};
+	struct sf_progress prog = {.g = j->x3g ? NULL : &j->g, .j = j, .a = j->a};
 	volatile sig_atomic_t *stop;
 	uint16_t fw = 0;
 	int rc, status;

@@ -42,10 +42,21 @@ int sfsrc_gcode_next(void *src, struct s3g_cmd *cmd, struct st_error *err)
 	while (g->pos >= g->out_len) {
 		if (g->finished)
 			return 0;
-		n = gcode_reader_next(g->r, 0, &line, err);
+		bool pre = g->pre_pos < g->pre_len;
+		if (pre) {
+			const char *p = g->pre + g->pre_pos, *nl = memchr(p, '\n', g->pre_len - g->pre_pos);
+			size_t len = nl ? (size_t)(nl - p) : g->pre_len - g->pre_pos;
+			g->pre_pos += len + (nl != NULL);
+			n = gcode_parse(p, len, 0, &line, err);
+			n = n < 0 ? n : x3g_translate(g->t, &line, 0, err);
+		} else {
+			n = gcode_reader_next(g->r, 0, &line, err);
+		}
 		if (n < 0)
 			return n;
-		if (n == 0) {
+		if (pre) {
+			/* commands of the preamble: nothing of the file yet */
+		} else if (n == 0) {
 			g->finished = true;
 			n = x3g_finish(g->t, err);
 		} else {
@@ -56,8 +67,8 @@ int sfsrc_gcode_next(void *src, struct s3g_cmd *cmd, struct st_error *err)
 		}
 		if (n < 0)
 			return n;
-		g->out_line = gcode_reader_line(g->r);
-		g->out_end = gcode_reader_bytes(g->r);
+		g->out_line = pre ? 0 : gcode_reader_line(g->r);
+		g->out_end = pre ? 0 : gcode_reader_bytes(g->r);
 		if (g->warn) {
 			const struct x3g_warning *w;
 			size_t nw = x3g_warnings(g->t, &w);

@@ -47,6 +47,11 @@ struct sfsrc_gcode {
 	uint64_t end, prev_end;	  /* their lines' ends (bytes from the reader's start) */
 	uint64_t pulled;	  /* commands handed out */
 	long layer;		  /* from the slicer's layer comments, -1 unknown */
+	/* G-code lines ('\n' after each) translated before the file's (a
+	 * resume preamble), set after sfsrc_gcode_open; their commands count
+	 * as line 0, end 0 (nothing of the file done) */
+	const char *pre;
+	size_t pre_len, pre_pos;
 };
 
 /* A command source over an X3G file, read in chunks. */

@@ -5,19 +5,26 @@
  * the G-code once and in order; Ctrl-C ends with the stop sequence and
  * exit 130; an unplugged or reset printer (an external `stratum sim`)
  * gives exit 69 and a saved journal; a host killed mid-print resumes with
- * only the remaining layers, after reheating; --dry-run writes what
+ * only the remaining layers, after reheating (on Marlin and on Sailfish,
+ * where the X3G stream after the preamble must be the tail of the file's
+ * own translation); --dry-run writes what
  * `stratum slice` writes.
  */
 #include <check.h>
 #include <dirent.h>
 #include <jansson.h>
+#include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "commands.h"
 #include "gcode.h"
+#include "profile.h"
 #include "suites.h"
 #include "testutil.h"
+#include "x3g.h"
 
 #define MODEL "docs/examples/bracket.stl"
 #define MARLIN_PRINTER "generic-marlin"
@@ -240,6 +247,14 @@ START_TEST(test_marlin_prints_every_line_once)
 }
 END_TEST
 
+/* The bundled model sliced for the Creator Pro into gc. */
+static void sf_gcode(const char *gc)
+{
+	int rc = tu_run(out, sizeof(out), "print " MODEL " --printer " SF_PRINTER " --dry-run "
+			"-o %s", gc);
+	ck_assert_msg(rc == 0, "dry run: exit %d: %s", rc, out);
+}
+
 START_TEST(test_sailfish_prints_every_command_once)
 {
 	char dir[512], gc[512], x3g[512], dec[512], log[512], line[512];
@@ -252,9 +267,7 @@ START_TEST(test_sailfish_prints_every_command_once)
 	snprintf(x3g, sizeof(x3g), "%s", tu_path("sf.x3g"));
 	snprintf(dec, sizeof(dec), "%s", tu_path("sf.json"));
 	snprintf(log, sizeof(log), "%s", tu_path("sf.log"));
-	rc = tu_run(out, sizeof(out), "print " MODEL " --printer " SF_PRINTER " --dry-run -o %s",
-		    gc);
-	ck_assert_msg(rc == 0, "dry run: exit %d: %s", rc, out);
+	sf_gcode(gc);
 	rc = tu_run(out, sizeof(out), "print %s --printer " SF_PRINTER " --sim-log %s", gc, log);
 	ck_assert_msg(rc == 0, "exit %d: %s", rc, out);
 	ck_assert_msg(strstr(out, "SIMULATION") && strstr(out, "printed "), "%s", out);
@@ -404,6 +417,215 @@ START_TEST(test_resume_after_kill)
 }
 END_TEST
 
+/* One S3G command as the simulated Sailfish logs it: code and, for the
+ * position commands, the five axes in steps. */
+struct sfcmd {
+	unsigned code;
+	long pos[5];
+	bool has_pos;
+};
+
+static bool sf_has_pos(unsigned code)
+{
+	return code == 139 || code == 140 || code == 142 || code == 155;
+}
+
+/*
+ * The commands of `path` translated for the Creator Pro, each with its
+ * G-code line; *start gets the index of the first command of line `from`
+ * or later.
+ */
+static size_t sf_translate(const char *path, uint64_t from, struct sfcmd **cmds, size_t *start)
+{
+	struct profile *prof = NULL;
+	struct x3g_machine m;
+	struct x3g_options xo = {0};
+	struct x3g_translator *t;
+	struct gcode_reader *r;
+	struct gcode_line g;
+	struct st_error err = {0};
+	size_t n = 0, cap = 0;
+	FILE *f = fopen(path, "rb");
+	int rc;
+
+	*cmds = NULL;
+	*start = SIZE_MAX;
+	ck_assert_ptr_nonnull(f);
+	ck_assert_int_eq(profile_find(SF_PRINTER, &prof, &err), 0);
+	ck_assert_int_eq(cmd_x3g_machine(prof, &m, &xo.flavor, &err), 0);
+	ck_assert_int_eq(x3g_new(&m, &xo, &t, &err), 0);
+	ck_assert_int_eq(gcode_reader_new(f, path, &r, &err), 0);
+	do {
+		const uint8_t *b;
+		size_t len, pos = 0;
+
+		rc = gcode_reader_next(r, 0, &g, &err);
+		ck_assert_msg(rc >= 0, "%s", err.msg);
+		ck_assert_int_ge(rc ? x3g_translate(t, &g, gcode_reader_line(r), &err)
+				    : x3g_finish(t, &err), 0);
+		if (rc && gcode_reader_line(r) >= from && *start == SIZE_MAX)
+			*start = n;
+		b = x3g_output(t, &len);
+		while (pos < len) {
+			struct x3g_command c;
+			int k = x3g_decode(b + pos, len - pos, 0, &c, &err);
+			ck_assert_msg(k > 0, "%s", err.msg);
+			if (n == cap) {
+				cap = cap ? 2 * cap : 4096;
+				*cmds = realloc(*cmds, cap * sizeof(**cmds));
+				ck_assert_ptr_nonnull(*cmds);
+			}
+			(*cmds)[n] = (struct sfcmd){.code = c.code, .has_pos = sf_has_pos(c.code)};
+			for (int i = 0; i < 5 && (*cmds)[n].has_pos; i++) {
+				double v;
+				ck_assert(x3g_field_value(&c, (const char[][2]){"x", "y", "z", "a",
+									     "b"}[i], &v));
+				(*cmds)[n].pos[i] = lround(v);
+			}
+			n++;
+			pos += (size_t)k;
+		}
+	} while (rc == 1);
+	gcode_reader_free(r);
+	fclose(f);
+	x3g_free(t);
+	profile_free(prof);
+	return n;
+}
+
+/* The simulated Sailfish's log: one command a line, numbered from 1. */
+static size_t sf_log_read(const char *path, struct sfcmd **cmds, char (**text)[160])
+{
+	FILE *f = fopen(path, "r");
+	char line[512];
+	size_t n = 0, cap = 0;
+
+	ck_assert_msg(f != NULL, "%s", path);
+	*cmds = NULL;
+	*text = NULL;
+	while (fgets(line, sizeof(line), f)) {
+		unsigned long long seq;
+		const char *p;
+		struct sfcmd c = {0};
+
+		ck_assert_msg(sscanf(line, "%llu %u", &seq, &c.code) == 2, "log: %s", line);
+		ck_assert_uint_eq(seq, n + 1);
+		if ((c.has_pos = sf_has_pos(c.code))) {
+			p = strstr(line, " X=");
+			ck_assert_msg(p && sscanf(p, " X=%ld Y=%ld Z=%ld A=%ld B=%ld", &c.pos[0],
+						  &c.pos[1], &c.pos[2], &c.pos[3], &c.pos[4]) == 5,
+				      "log: %s", line);
+		}
+		if (n == cap) {
+			cap = cap ? 2 * cap : 4096;
+			*cmds = realloc(*cmds, cap * sizeof(**cmds));
+			*text = realloc(*text, cap * sizeof(**text));
+			ck_assert(*cmds && *text);
+		}
+		line[strcspn(line, "\n")] = '\0';
+		snprintf((*text)[n], sizeof((*text)[n]), "%.159s", line);
+		(*cmds)[n++] = c;
+	}
+	fclose(f);
+	return n;
+}
+
+START_TEST(test_sailfish_resume_after_kill)
+{
+	char dir[512], gc[512], tty[512], log[512], log2[512], jpath[1024];
+	char (*text)[160];
+	struct sfcmd *want, *got;
+	size_t nwant, ngot, start, pre;
+	uint64_t first = 0;
+	struct strs none = {0};
+	long layer;
+	double z;
+	int rc;
+
+	state_dir("st-sfkill", dir, sizeof(dir));
+	snprintf(gc, sizeof(gc), "%s", tu_path("sfk.gcode"));
+	snprintf(tty, sizeof(tty), "%s", tu_path("tty-sfk"));
+	snprintf(log, sizeof(log), "%s", tu_path("sfk1.log"));
+	snprintf(log2, sizeof(log2), "%s", tu_path("sfk2.log"));
+	sf_gcode(gc);
+	/* print to an external simulator; kill -9 the host at layer 5 or later */
+	rc = tu_run(out, sizeof(out),
+		    "sim --dialect sailfish --speedup 200 --baud 4000000 --link %s --log %s "
+		    ">/dev/null 2>&1 & S=$!; for i in $(seq 50); do [ -e %s ] && break; sleep 0.1; "
+		    "done; %s print %s --printer " SF_PRINTER " --port %s >/dev/null 2>&1 & P=$!; "
+		    "for i in $(seq 600); do grep -qs '\"layer\": [5-9]' %s/jobs/*.json && break; "
+		    "sleep 0.05; done; kill -KILL $P; wait $P; r=$?; kill $S; wait $S; exit $r",
+		    tty, log, tty, tu_bin(), gc, tty, dir);
+	ck_assert_msg(rc == 137, "exit %d: %s", rc, out);
+	json_t *j = load_journal(dir, jpath, sizeof(jpath));
+	ck_assert_str_eq(jstr(j, "state"), "printing");
+	layer = jint(j, "layer");
+	ck_assert_int_ge(layer, 5);
+
+	/* resume on a fresh simulator */
+	rc = tu_run(out, sizeof(out),
+		    "sim --dialect sailfish --speedup 1000 --baud 4000000 --link %s --log %s "
+		    ">/dev/null 2>&1 & S=$!; for i in $(seq 50); do [ -e %s ] && break; sleep 0.1; "
+		    "done; %s print --resume %s --yes --json --port %s 2>/dev/null; r=$?; kill $S; "
+		    "wait $S; exit $r", tty, log2, tty, tu_bin(), jstr(j, "id"), tty);
+	ck_assert_msg(rc == 0, "resume: exit %d: %s", rc, out);
+	json_t *o = last_json();
+	ck_assert_int_eq(jint(o, "resumed_from_layer"), layer + 1);
+
+	/* the file's translation from the start of that layer on ... */
+	gcode_commands(gc, 0, &none, layer, &first);
+	ck_assert_uint_gt(first, 0);
+	nwant = sf_translate(gc, first, &want, &start);
+	ngot = sf_log_read(log2, &got, &text);
+	ck_assert_uint_lt(start, nwant);
+	ck_assert_uint_gt(ngot, nwant - start);
+	/* ... is exactly what the simulator executed after the preamble */
+	pre = ngot - (nwant - start);
+	for (size_t i = 0; i < nwant - start; i++) {
+		const struct sfcmd *a = &got[pre + i], *b = &want[start + i];
+		ck_assert_msg(a->code == b->code, "command %zu after the preamble: executed %s, "
+			      "the file gives %u", i, text[pre + i], b->code);
+		/* X, Y, Z exact; the extruders within a step: the translator
+		 * carries the rounding remainder of extruder steps from move to
+		 * move, and the resumed translation starts without the
+		 * remainder of the layers before */
+		for (int k = 0; k < 5 && a->has_pos; k++)
+			ck_assert_msg(labs(a->pos[k] - b->pos[k]) <= (k >= 3),
+				      "command %zu after the preamble: "
+				      "executed %s, the file gives axis %d = %ld", i, text[pre + i],
+				      k, b->pos[k]);
+	}
+	/* the preamble: bed and nozzle waits, X/Y homed (never Z), a set
+	 * position at the layer's Z, the calibrated X/Y home recalled */
+	bool bed = false, nozzle = false, home = false, setpos = false, recall = false;
+	z = NAN;
+	for (size_t i = 0; i < pre; i++) {
+		ck_assert_msg(got[i].code != 131, "homed to a minimum: %s", text[i]);
+		if (got[i].code == 132) {
+			ck_assert_msg(strstr(text[i], "axes=0x03"), "not X/Y only: %s", text[i]);
+			home = true;
+		}
+		bed |= got[i].code == 141;
+		nozzle |= got[i].code == 135 && home;
+		recall |= got[i].code == 144 && home && strstr(text[i], "value=0x03");
+		if (got[i].code == 140 && !home) {
+			setpos = true;
+			z = got[i].pos[2] / 400.0;
+		}
+	}
+	ck_assert_msg(bed && nozzle && home && setpos && recall, "preamble: bed wait %d, nozzle "
+		      "wait %d, X/Y home %d, set position %d, recall %d", bed, nozzle, home, setpos,
+		      recall);
+	ck_assert_msg(z > 0 && z <= jint(j, "layer") * 0.2 + 0.25 + 1e-9, "Z set to %g", z);
+	json_decref(o);
+	json_decref(j);
+	free(want);
+	free(got);
+	free(text);
+	strs_free(&none);
+}
+END_TEST
+
 START_TEST(test_dry_run_is_slice)
 {
 	char a[512], b[512];
@@ -435,6 +657,7 @@ Suite *print_suite(void)
 	tcase_add_test(tc, test_ctrl_c_stops_safely);
 	tcase_add_test(tc, test_unplug_and_reset_exit_69);
 	tcase_add_test(tc, test_resume_after_kill);
+	tcase_add_test(tc, test_sailfish_resume_after_kill);
 	suite_add_tcase(s, tc);
 	return s;
 }
