@@ -599,27 +599,20 @@ static void print_sf_progress(void *ctx, const struct send_result *r)
  * The resume preamble as G-code lines for the X3G translator, into buf;
  * 0 or the exit status (message printed).
  */
-static int print_sf_preamble(struct print_job *job, char *buf, size_t cap)
+static int print_sf_preamble(struct print_job *job, char buf[RESUME_TEXT_MAX])
 {
-	char pre[RESUME_LINES][RESUME_LINE_MAX + 1];
-	struct resume_state rs;
 	struct st_error err = {0};
-	size_t n, len = 0;
 
-	if (resume_scan(job->gcode, job->layers.v[job->start_layer].offset, &rs, &err)) {
+	if (resume_x3g_text(job->gcode, job->layers.v[job->start_layer].offset, buf, &err)) {
 		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
 		return ST_EXIT_DATAERR;
 	}
-	n = resume_preamble_x3g(&rs, pre, RESUME_LINES);
-	buf[0] = '\0';
-	for (size_t i = 0; i < n && len < cap; i++)
-		len += (size_t)snprintf(buf + len, cap - len, "%s\n", pre[i]);
 	return 0;
 }
 
 static int print_sailfish(struct print_job *job, const char *path)
 {
-	static char preamble[RESUME_LINES * (RESUME_LINE_MAX + 2)];
+	static char preamble[RESUME_TEXT_MAX];
 	struct send_result res = {0};
 	struct print_sf_ctx ctx = {.job = job, .last_layer = -2};
 	struct send_args sa = {
@@ -635,7 +628,7 @@ static int print_sailfish(struct print_job *job, const char *path)
 	int status;
 
 	if (job->start_layer >= 0) {
-		if ((status = print_sf_preamble(job, preamble, sizeof(preamble))))
+		if ((status = print_sf_preamble(job, preamble)))
 			return status;
 		sa.offset = job->layers.v[job->start_layer].offset;
 		sa.preamble = preamble;

@@ -145,3 +145,61 @@ size_t resume_preamble_x3g(const struct resume_state *rs, char out[][RESUME_LINE
 	return resume_finish(rs, !rs->rel_e, out, n, cap);
 }
 #undef ADD
+
+int resume_x3g_text(const char *path, int64_t offset, char buf[RESUME_TEXT_MAX],
+		    struct st_error *err)
+{
+	char pre[RESUME_LINES][RESUME_LINE_MAX + 1];
+	struct resume_state rs;
+	size_t n, len = 0;
+	int rc = resume_scan(path, offset, &rs, err);
+
+	buf[0] = '\0';
+	if (rc)
+		return rc;
+	n = resume_preamble_x3g(&rs, pre, RESUME_LINES);
+	for (size_t i = 0; i < n && len < RESUME_TEXT_MAX; i++)
+		len += (size_t)snprintf(buf + len, RESUME_TEXT_MAX - len, "%s\n", pre[i]);
+	return 0;
+}
+
+int resume_layer_start(const char *path, int64_t pos, int64_t *offset, long *layer,
+		       struct st_error *err)
+{
+	FILE *f = fopen(path, "rb");
+	struct gcode_reader *r;
+	struct gcode_line g;
+	int64_t before = 0;
+	long num = -1;
+	int rc;
+
+	*offset = 0;
+	*layer = -1;
+	if (!f)
+		return st_error_set(err, ST_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+	if ((rc = gcode_reader_new(f, path, &r, err))) {
+		fclose(f);
+		return rc;
+	}
+	/* a layer whose comment starts before pos has its comment line done */
+	while ((rc = gcode_reader_next(r, 0, &g, err)) == 1) {
+		long l;
+
+		if (gcode_layer_comment(&g, &l, NULL) == GCODE_LAYER_START) {
+			num = l >= 0 ? l : num + 1;
+			if (*layer >= 0 && before >= pos)
+				break;
+			*offset = before;
+			*layer = num;
+		}
+		before = (int64_t)gcode_reader_bytes(r);
+	}
+	gcode_reader_free(r);
+	fclose(f);
+	if (rc < 0)
+		return rc;
+	if (*layer < 0)
+		return st_error_set(err, ST_ERR_PARSE, "%s has no layer comments; cannot tell "
+				    "where to resume", path);
+	return 0;
+}

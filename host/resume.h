@@ -61,4 +61,27 @@ size_t resume_preamble(const struct resume_state *rs, char out[][RESUME_LINE_MAX
 size_t resume_preamble_x3g(const struct resume_state *rs, char out[][RESUME_LINE_MAX + 1],
 			   size_t cap);
 
+/* Room for the text resume_x3g_text writes. */
+#define RESUME_TEXT_MAX (RESUME_LINES * (RESUME_LINE_MAX + 2))
+
+/*
+ * resume_x3g_text - resume_scan of path up to byte offset, then
+ * resume_preamble_x3g as one string, '\n' after each line, the form the
+ * Sailfish sources take (sf_source.h pre).  buf holds RESUME_TEXT_MAX
+ * bytes.  Returns 0 or resume_scan's error.
+ */
+int resume_x3g_text(const char *path, int64_t offset, char buf[RESUME_TEXT_MAX],
+		    struct st_error *err);
+
+/*
+ * resume_layer_start - where a Sailfish resume starts: the layer (by the
+ * slicer's layer comments, gcode_layer_comment) that holds the last line
+ * ending at or before byte pos, or the first layer when none does.  Its
+ * comment line's byte offset in *offset, its 0-based number in *layer.
+ * Returns 0; ST_ERR_IO (cannot open), the parser's error, or ST_ERR_PARSE
+ * "has no layer comments" (then nobody can tell where a layer starts).
+ */
+int resume_layer_start(const char *path, int64_t pos, int64_t *offset, long *layer,
+		       struct st_error *err);
+
 #endif /* STRATUM_HOST_RESUME_H */

@@ -22,6 +22,7 @@
 #include "commands.h"
 #include "gcode.h"
 #include "profile.h"
+#include "sfcheck.h"
 #include "suites.h"
 #include "testutil.h"
 #include "x3g.h"
@@ -417,125 +418,9 @@ START_TEST(test_resume_after_kill)
 }
 END_TEST
 
-/* One S3G command as the simulated Sailfish logs it: code and, for the
- * position commands, the five axes in steps. */
-struct sfcmd {
-	unsigned code;
-	long pos[5];
-	bool has_pos;
-};
-
-static bool sf_has_pos(unsigned code)
-{
-	return code == 139 || code == 140 || code == 142 || code == 155;
-}
-
-/*
- * The commands of `path` translated for the Creator Pro, each with its
- * G-code line; *start gets the index of the first command of line `from`
- * or later.
- */
-static size_t sf_translate(const char *path, uint64_t from, struct sfcmd **cmds, size_t *start)
-{
-	struct profile *prof = NULL;
-	struct x3g_machine m;
-	struct x3g_options xo = {0};
-	struct x3g_translator *t;
-	struct gcode_reader *r;
-	struct gcode_line g;
-	struct st_error err = {0};
-	size_t n = 0, cap = 0;
-	FILE *f = fopen(path, "rb");
-	int rc;
-
-	*cmds = NULL;
-	*start = SIZE_MAX;
-	ck_assert_ptr_nonnull(f);
-	ck_assert_int_eq(profile_find(SF_PRINTER, &prof, &err), 0);
-	ck_assert_int_eq(cmd_x3g_machine(prof, &m, &xo.flavor, &err), 0);
-	ck_assert_int_eq(x3g_new(&m, &xo, &t, &err), 0);
-	ck_assert_int_eq(gcode_reader_new(f, path, &r, &err), 0);
-	do {
-		const uint8_t *b;
-		size_t len, pos = 0;
-
-		rc = gcode_reader_next(r, 0, &g, &err);
-		ck_assert_msg(rc >= 0, "%s", err.msg);
-		ck_assert_int_ge(rc ? x3g_translate(t, &g, gcode_reader_line(r), &err)
-				    : x3g_finish(t, &err), 0);
-		if (rc && gcode_reader_line(r) >= from && *start == SIZE_MAX)
-			*start = n;
-		b = x3g_output(t, &len);
-		while (pos < len) {
-			struct x3g_command c;
-			int k = x3g_decode(b + pos, len - pos, 0, &c, &err);
-			ck_assert_msg(k > 0, "%s", err.msg);
-			if (n == cap) {
-				cap = cap ? 2 * cap : 4096;
-				*cmds = realloc(*cmds, cap * sizeof(**cmds));
-				ck_assert_ptr_nonnull(*cmds);
-			}
-			(*cmds)[n] = (struct sfcmd){.code = c.code, .has_pos = sf_has_pos(c.code)};
-			for (int i = 0; i < 5 && (*cmds)[n].has_pos; i++) {
-				double v;
-				ck_assert(x3g_field_value(&c, (const char[][2]){"x", "y", "z", "a",
-									     "b"}[i], &v));
-				(*cmds)[n].pos[i] = lround(v);
-			}
-			n++;
-			pos += (size_t)k;
-		}
-	} while (rc == 1);
-	gcode_reader_free(r);
-	fclose(f);
-	x3g_free(t);
-	profile_free(prof);
-	return n;
-}
-
-/* The simulated Sailfish's log: one command a line, numbered from 1. */
-static size_t sf_log_read(const char *path, struct sfcmd **cmds, char (**text)[160])
-{
-	FILE *f = fopen(path, "r");
-	char line[512];
-	size_t n = 0, cap = 0;
-
-	ck_assert_msg(f != NULL, "%s", path);
-	*cmds = NULL;
-	*text = NULL;
-	while (fgets(line, sizeof(line), f)) {
-		unsigned long long seq;
-		const char *p;
-		struct sfcmd c = {0};
-
-		ck_assert_msg(sscanf(line, "%llu %u", &seq, &c.code) == 2, "log: %s", line);
-		ck_assert_uint_eq(seq, n + 1);
-		if ((c.has_pos = sf_has_pos(c.code))) {
-			p = strstr(line, " X=");
-			ck_assert_msg(p && sscanf(p, " X=%ld Y=%ld Z=%ld A=%ld B=%ld", &c.pos[0],
-						  &c.pos[1], &c.pos[2], &c.pos[3], &c.pos[4]) == 5,
-				      "log: %s", line);
-		}
-		if (n == cap) {
-			cap = cap ? 2 * cap : 4096;
-			*cmds = realloc(*cmds, cap * sizeof(**cmds));
-			*text = realloc(*text, cap * sizeof(**text));
-			ck_assert(*cmds && *text);
-		}
-		line[strcspn(line, "\n")] = '\0';
-		snprintf((*text)[n], sizeof((*text)[n]), "%.159s", line);
-		(*cmds)[n++] = c;
-	}
-	fclose(f);
-	return n;
-}
-
 START_TEST(test_sailfish_resume_after_kill)
 {
 	char dir[512], gc[512], tty[512], log[512], log2[512], jpath[1024];
-	char (*text)[160];
-	struct sfcmd *want, *got;
-	size_t nwant, ngot, start, pre;
 	uint64_t first = 0;
 	struct strs none = {0};
 	long layer;
@@ -575,53 +460,10 @@ START_TEST(test_sailfish_resume_after_kill)
 	/* the file's translation from the start of that layer on ... */
 	gcode_commands(gc, 0, &none, layer, &first);
 	ck_assert_uint_gt(first, 0);
-	nwant = sf_translate(gc, first, &want, &start);
-	ngot = sf_log_read(log2, &got, &text);
-	ck_assert_uint_lt(start, nwant);
-	ck_assert_uint_gt(ngot, nwant - start);
-	/* ... is exactly what the simulator executed after the preamble */
-	pre = ngot - (nwant - start);
-	for (size_t i = 0; i < nwant - start; i++) {
-		const struct sfcmd *a = &got[pre + i], *b = &want[start + i];
-		ck_assert_msg(a->code == b->code, "command %zu after the preamble: executed %s, "
-			      "the file gives %u", i, text[pre + i], b->code);
-		/* X, Y, Z exact; the extruders within a step: the translator
-		 * carries the rounding remainder of extruder steps from move to
-		 * move, and the resumed translation starts without the
-		 * remainder of the layers before */
-		for (int k = 0; k < 5 && a->has_pos; k++)
-			ck_assert_msg(labs(a->pos[k] - b->pos[k]) <= (k >= 3),
-				      "command %zu after the preamble: "
-				      "executed %s, the file gives axis %d = %ld", i, text[pre + i],
-				      k, b->pos[k]);
-	}
-	/* the preamble: bed and nozzle waits, X/Y homed (never Z), a set
-	 * position at the layer's Z, the calibrated X/Y home recalled */
-	bool bed = false, nozzle = false, home = false, setpos = false, recall = false;
-	z = NAN;
-	for (size_t i = 0; i < pre; i++) {
-		ck_assert_msg(got[i].code != 131, "homed to a minimum: %s", text[i]);
-		if (got[i].code == 132) {
-			ck_assert_msg(strstr(text[i], "axes=0x03"), "not X/Y only: %s", text[i]);
-			home = true;
-		}
-		bed |= got[i].code == 141;
-		nozzle |= got[i].code == 135 && home;
-		recall |= got[i].code == 144 && home && strstr(text[i], "value=0x03");
-		if (got[i].code == 140 && !home) {
-			setpos = true;
-			z = got[i].pos[2] / 400.0;
-		}
-	}
-	ck_assert_msg(bed && nozzle && home && setpos && recall, "preamble: bed wait %d, nozzle "
-		      "wait %d, X/Y home %d, set position %d, recall %d", bed, nozzle, home, setpos,
-		      recall);
+	z = sfc_check_resumed(gc, first, log2);
 	ck_assert_msg(z > 0 && z <= jint(j, "layer") * 0.2 + 0.25 + 1e-9, "Z set to %g", z);
 	json_decref(o);
 	json_decref(j);
-	free(want);
-	free(got);
-	free(text);
 	strs_free(&none);
 }
 END_TEST

@@ -47,10 +47,13 @@ static int job_pause(struct node *n, struct node_printer *p, struct node_job *j,
 		if (want)
 			return st_error_set(err, ST_ERR_RANGE, "the job is not printing");
 		if (!node_print_resumable(p->cfg, p->prof))
-			return st_error_set(err, ST_ERR_RANGE, "printer %s: an interrupted Sailfish "
-					    "print cannot be resumed safely (the printer lost "
-					    "its position); cancel the job and print it again",
-					    p->cfg->name);
+			return st_error_set(err, ST_ERR_RANGE, "printer %s cannot resume an "
+					    "interrupted print", p->cfg->name);
+		/* Sailfish resumes restart a layer of the G-code; X3G has none. */
+		if (j->kind == 'x')
+			return st_error_set(err, ST_ERR_RANGE, "an interrupted X3G print cannot "
+					    "be resumed (it has no layers to restart from); "
+					    "cancel the job and print it again");
 		j->resume = true;
 		node_log("info", p->cfg->name, j->id, "resume of the interrupted print requested");
 	} else {

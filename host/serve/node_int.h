@@ -38,7 +38,7 @@ struct node_job {
 	char name[NODE_FILE_NAME_MAX + 1]; /* the uploaded file's name */
 	char file[NODE_PATH_MAX];	   /* the stored upload */
 	char gcode[NODE_PATH_MAX];	   /* what is printed: file, or the sliced output ("" before) */
-	char kind;			   /* 'g' G-code, 'm' model to slice */
+	char kind;			   /* 'g' G-code, 'm' model to slice, 'x' X3G */
 	enum node_job_state state;
 	bool interrupted; /* the node died or stopped while it printed */
 	bool resume;	  /* an operator asked to resume the interrupted print */

@@ -97,7 +97,7 @@ void node_print_describe(struct node_link *l, char *out, size_t cap);
 
 /*
  * node_print_resumable - whether the back end that drives pc with profile
- * prof can continue an interrupted print (Sailfish cannot: docs/serve.md).
+ * prof can continue an interrupted print (all of them today; X3G jobs cannot).
  */
 bool node_print_resumable(const struct node_printer_config *pc, const struct profile *prof);
 

@@ -14,10 +14,11 @@
  * it toggles, so a resent packet after a lost reply would undo it, and
  * Sailfish moves the head on its own when it pauses.  Cancel and node
  * stop end with s3g_cancel (abort, heaters off, motors off).  An
- * interrupted print is not resumed (can_resume false): X3G moves carry
- * absolute step positions after a homing the firmware lost in the reset,
- * and Sailfish has no way to be told where the head is without homing Z
- * into the part.
+ * interrupted G-code print resumes as `stratum print --resume` does: from
+ * the start of the layer that holds the saved position, after the
+ * preamble of resume_x3g_text (bed wait, Z set where it was, X/Y homed,
+ * M132, nozzle wait), both through one translator so its positions agree
+ * with the firmware's.  An X3G file has no layers to restart from.
  */
 #include <errno.h>
 #include <stdio.h>
@@ -29,6 +30,7 @@
 
 #include "commands.h"
 #include "print.h"
+#include "resume.h"
 #include "s3g.h"
 #include "sf_source.h"
 #include "sim/sailfish_sim.h"
@@ -55,6 +57,9 @@ struct sf_run {
 	struct slink *s;
 	struct node_print_ctl *ctl;
 	bool x3g;
+	int64_t start;	  /* the saved position a resume starts from, else 0 */
+	int64_t offset;	  /* byte the G-code source reads from (a layer start) */
+	const char *pre;  /* resume preamble lines, or NULL */
 	struct sfsrc_gcode g;
 	struct sfsrc_x3g x;
 	volatile sig_atomic_t stop; /* polled by the driver */
@@ -146,7 +151,11 @@ static void take_temps(const struct s3g_status *st, struct node_print_ctl *ctl)
 /* Where the file is done after the commands the printer took. */
 static int64_t done_pos(const struct sf_run *r, const struct s3g_status *st)
 {
-	return (int64_t)sfsrc_done_end(&r->g, &r->x, r->x3g, st->confirmed + st->skipped);
+	uint64_t end = sfsrc_done_end(&r->g, &r->x, r->x3g, st->confirmed + st->skipped);
+
+	/* Within the preamble the saved position stands: the layer start would
+	 * read as the layer before, which a second resume would print again. */
+	return end ? r->offset + (int64_t)end : r->start;
 }
 
 /* Follow ctl's cancel and stop; ctl->mu held.  True when the job is to end. */
@@ -239,15 +248,41 @@ static int sf_next(void *src, struct s3g_cmd *cmd, struct st_error *err)
 	return r->x3g ? sfsrc_x3g_next(&r->x, cmd, err) : sfsrc_gcode_next(&r->g, cmd, err);
 }
 
-/* Open r's source over f from its start; 0 or an error. */
+/* Open r's source over f from r->offset, preamble first; 0 or an error. */
 static int source_open(struct sf_run *r, FILE *f, const char *path, struct st_error *err)
 {
-	rewind(f);
+	int rc;
+
+	if (fseeko(f, (off_t)r->offset, SEEK_SET))
+		return st_error_set(err, ST_ERR_IO, "%s: cannot seek: %s", path, strerror(errno));
 	if (r->x3g) {
 		sfsrc_x3g_open(&r->x, f);
 		return 0;
 	}
-	return sfsrc_gcode_open(&r->g, f, path, &r->s->m, &r->s->xo, err);
+	if ((rc = sfsrc_gcode_open(&r->g, f, path, &r->s->m, &r->s->xo, err)))
+		return rc;
+	r->g.pre = r->pre;
+	r->g.pre_len = r->pre ? strlen(r->pre) : 0;
+	return 0;
+}
+
+/* A resume: the layer to start from and the preamble into pre; 0 or an error. */
+static int resume_setup(struct sf_run *r, const char *path, int64_t start,
+			char pre[RESUME_TEXT_MAX], struct st_error *err)
+{
+	long layer;
+	int rc;
+
+	if (r->x3g)
+		return st_error_set(err, ST_ERR_UNSUPPORTED, "printer %s: an interrupted X3G "
+				    "print cannot be resumed: it has no layers to restart from",
+				    r->s->name);
+	if ((rc = resume_layer_start(path, start, &r->offset, &layer, err)) ||
+	    (rc = resume_x3g_text(path, r->offset, pre, err)))
+		return rc;
+	r->start = start;
+	r->pre = pre;
+	return 0;
 }
 
 /* Count the commands of the file, checking every one: a bad file sends nothing. */
@@ -291,21 +326,21 @@ static int sf_print_op(void *state, const char *path, int64_t start, bool resume
 	struct sf_run *r;
 	struct s3g_status st;
 	char build[X3G_BUILD_NAME_MAX + 1];
+	char pre[RESUME_TEXT_MAX];
 	struct stat sb;
 	uint64_t total = 0;
 	size_t n = strlen(path);
 	FILE *f;
 	int rc;
 
-	if (resume || start)
-		return st_error_set(err, ST_ERR_UNSUPPORTED, "printer %s: an interrupted "
-				    "Sailfish print cannot be resumed", s->name);
 	r = calloc(1, sizeof(*r));
 	if (!r)
 		return st_error_set(err, ST_ERR_NOMEM, "printer %s: out of memory", s->name);
 	r->s = s;
 	r->ctl = ctl;
 	r->x3g = n > 4 && !strcasecmp(path + n - 4, ".x3g");
+	if ((resume || start) && (rc = resume_setup(r, path, start, pre, err)))
+		goto out_free;
 	cmd_x3g_build_name(path, build, sizeof(build));
 	s->xo.build_name = build;
 	f = fopen(path, "rb");
@@ -321,7 +356,7 @@ static int sf_print_op(void *state, const char *path, int64_t start, bool resume
 		goto out_close;
 	pthread_mutex_lock(&ctl->mu);
 	ctl->size = sb.st_size;
-	ctl->filepos = 0;
+	ctl->filepos = r->start;
 	pthread_mutex_unlock(&ctl->mu);
 	if ((rc = source_open(r, f, path, err)))
 		goto out_source;
@@ -425,7 +460,7 @@ static void sf_describe_op(void *state, char *out, size_t cap)
 
 const struct node_printer_ops node_sailfish_ops = {
 	.name = "sailfish",
-	.can_resume = false,
+	.can_resume = true,
 	.connect = sf_connect_op,
 	.disconnect = sf_disconnect_op,
 	.print = sf_print_op,
