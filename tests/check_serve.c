@@ -15,6 +15,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <jansson.h>
+#include <math.h>
 #include <netinet/in.h>
 #include <signal.h>
 #include <stdbool.h>
@@ -1153,6 +1154,100 @@ START_TEST(test_sim_kill9)
 }
 END_TEST
 
+/* nl layers of per slow moves each, under Cura-style layer comments. */
+static char *layers_gcode(int nl, int per)
+{
+	size_t cap = (size_t)(nl * (per + 2)) * 48 + 256, len;
+	char *g = malloc(cap);
+
+	ck_assert(g);
+	len = (size_t)snprintf(g, cap, "; layered test part\nM140 S60\nM104 S210\nG28\n"
+				       "M190 S60\nM109 S210\nG92 E0\n");
+	for (int l = 0, i = 0; l < nl; l++) {
+		len += (size_t)snprintf(g + len, cap - len, ";LAYER:%d\nG1 Z%.2f F600\n", l,
+					0.2 * (l + 1));
+		for (int k = 0; k < per; k++, i++)
+			len += (size_t)snprintf(g + len, cap - len, "G1 X%d Y%d E%.3f F60\n",
+						10 + i % 2, 10 + k, 0.05 * (i + 1));
+	}
+	snprintf(g + len, cap - len, "M104 S0\nM140 S0\n");
+	return g;
+}
+
+/*
+ * A Creator Pro on `port = sim` printing a layered job, the node killed
+ * with kill -9 mid-print and restarted: the job waits, interrupted, until
+ * the operator resumes it; then the new simulator runs the resume preamble
+ * (heat waits, X/Y homed, never Z) and the file from the start of the
+ * layer the saved position is in, as `stratum print --resume` does.
+ */
+START_TEST(test_sim_sailfish_resume)
+{
+	struct node_proc np;
+	struct resp r;
+	char *g = layers_gcode(10, 30), path[600], gc[600];
+	const char *lay, *at;
+	long long id;
+	bool interrupted = false;
+	json_int_t pos = 0;
+	uint64_t from = 1;
+	long layer = -1;
+	double z;
+	int st;
+	json_t *o;
+
+	write_config(&np, "[printer fcp]\nprofile = " SFC_PRINTER "\nport = sim\n"
+			  "sim_speedup = 50\n", 8);
+	node_start(&np);
+	upload_text(np.port, "", KEY_UP, "layers.gcode", g, "true", &r);
+	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
+	id = job_of(&r);
+	resp_free(&r);
+	wait_state(np.port, "", id, "printing", 20);
+	/* kill once the node saved a position past the third layer */
+	at = strstr(g, ";LAYER:3\n");
+	for (int i = 0; i < 600 && pos <= at - g; i++) {
+		o = get_json(np.port, "/api/stratum/queue");
+		pos = json_integer_value(json_object_get(json_array_get(json_object_get(o, "jobs"),
+									 0), "filepos"));
+		json_decref(o);
+		usleep(50000);
+	}
+	ck_assert_msg(pos > at - g, "filepos %lld", (long long)pos);
+	ck_assert(kill(np.pid, SIGKILL) == 0);
+	ck_assert(waitpid(np.pid, &st, 0) == np.pid);
+	node_start(&np);
+	ck_assert_str_eq(job_state(np.port, "", id, &interrupted), "paused");
+	ck_assert(interrupted);
+	o = get_json(np.port, "/api/job");
+	pos = json_integer_value(json_object_get(json_object_get(o, "progress"), "filepos"));
+	json_decref(o);
+	ck_assert_msg(pos > at - g && pos < (json_int_t)strlen(g), "filepos %lld", (long long)pos);
+	/* nothing runs until the operator says so */
+	usleep(1000000);
+	ck_assert_str_eq(job_state(np.port, "", id, NULL), "paused");
+	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL,
+	       "{\"command\":\"pause\",\"action\":\"resume\"}", 204);
+	wait_state(np.port, "", id, "done", 40);
+	/* the layer the saved position is in: its comment starts before it */
+	for (lay = strstr(g, ";LAYER:"); lay && lay - g < pos; lay = strstr(lay + 1, ";LAYER:")) {
+		layer++;
+		from = 1;
+		for (const char *c = g; c < lay; c++)
+			from += *c == '\n';
+	}
+	ck_assert_int_ge(layer, 3);
+	snprintf(gc, sizeof(gc), "%s", tu_path("layers.gcode"));
+	tu_write_str(gc, g);
+	snprintf(path, sizeof(path), "%s/data/sim/fcp.log", np.dir);
+	z = sfc_check_resumed(gc, from, path);
+	/* Z is set where the layer before ended: never homed into the part */
+	ck_assert_msg(fabs(z - 0.2 * layer) < 0.01, "Z set to %g at layer %ld", z, layer);
+	node_stop(&np);
+	free(g);
+}
+END_TEST
+
 /* A free loopback TCP port (bound once, then released). */
 static int free_port(void)
 {
@@ -1455,6 +1550,7 @@ Suite *serve_suite(void)
 	tcase_add_test(tc, test_sim_stl_print);
 	tcase_add_test(tc, test_sim_kill9);
 	tcase_add_test(tc, test_sim_sailfish);
+	tcase_add_test(tc, test_sim_sailfish_resume);
 	tcase_add_test(tc, test_mqtt);
 	tcase_add_test(tc, test_status_page);
 	suite_add_tcase(s, tc);
