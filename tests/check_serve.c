@@ -1101,14 +1101,31 @@ START_TEST(test_sim_sailfish)
 }
 END_TEST
 
+/* kill -9 the node and start it again: job id is interrupted, paused; its saved filepos. */
+static json_int_t kill9_restart(struct node_proc *np, long long id)
+{
+	bool interrupted = false;
+	json_int_t pos;
+	json_t *o;
+	int st;
+
+	ck_assert(kill(np->pid, SIGKILL) == 0);
+	ck_assert(waitpid(np->pid, &st, 0) == np->pid);
+	node_start(np);
+	ck_assert_str_eq(job_state(np->port, "", id, &interrupted), "paused");
+	ck_assert(interrupted);
+	o = get_json(np->port, "/api/job");
+	pos = json_integer_value(json_object_get(json_object_get(o, "progress"), "filepos"));
+	json_decref(o);
+	return pos;
+}
+
 START_TEST(test_sim_kill9)
 {
 	struct node_proc np;
 	struct resp r;
 	char *g = moves_gcode(300, 60); /* 1 mm at 1 mm/s: 1 s per move, 20 ms sped up */
 	long long id;
-	bool interrupted = false;
-	int st;
 	json_t *o;
 	json_int_t pos;
 
@@ -1128,15 +1145,8 @@ START_TEST(test_sim_kill9)
 	ck_assert_str_eq(json_string_value(json_object_get(json_object_get(o, "state"), "text")),
 			 "Printing");
 	json_decref(o);
-	ck_assert(kill(np.pid, SIGKILL) == 0);
-	ck_assert(waitpid(np.pid, &st, 0) == np.pid);
-	node_start(&np);
-	ck_assert_str_eq(job_state(np.port, "", id, &interrupted), "paused");
-	ck_assert(interrupted);
-	o = get_json(np.port, "/api/job");
-	pos = json_integer_value(json_object_get(json_object_get(o, "progress"), "filepos"));
+	pos = kill9_restart(&np, id);
 	ck_assert_msg(pos > 0 && pos < (json_int_t)strlen(g), "filepos %lld", (long long)pos);
-	json_decref(o);
 	/* Not restarted: the new simulator ran only the connect commands. */
 	usleep(1500000);
 	ck_assert_str_eq(job_state(np.port, "", id, NULL), "paused");
@@ -1188,12 +1198,10 @@ START_TEST(test_sim_sailfish_resume)
 	char *g = layers_gcode(10, 30), path[600], gc[600];
 	const char *lay, *at;
 	long long id;
-	bool interrupted = false;
 	json_int_t pos = 0;
 	uint64_t from = 1;
 	long layer = -1;
 	double z;
-	int st;
 	json_t *o;
 
 	write_config(&np, "[printer fcp]\nprofile = " SFC_PRINTER "\nport = sim\n"
@@ -1214,14 +1222,7 @@ START_TEST(test_sim_sailfish_resume)
 		usleep(50000);
 	}
 	ck_assert_msg(pos > at - g, "filepos %lld", (long long)pos);
-	ck_assert(kill(np.pid, SIGKILL) == 0);
-	ck_assert(waitpid(np.pid, &st, 0) == np.pid);
-	node_start(&np);
-	ck_assert_str_eq(job_state(np.port, "", id, &interrupted), "paused");
-	ck_assert(interrupted);
-	o = get_json(np.port, "/api/job");
-	pos = json_integer_value(json_object_get(json_object_get(o, "progress"), "filepos"));
-	json_decref(o);
+	pos = kill9_restart(&np, id);
 	ck_assert_msg(pos > at - g && pos < (json_int_t)strlen(g), "filepos %lld", (long long)pos);
 	/* nothing runs until the operator says so */
 	usleep(1000000);
