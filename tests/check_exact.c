@@ -473,6 +473,46 @@ START_TEST(bad_arguments)
 }
 END_TEST
 
+/*
+ * Snap rounding of a tetrahedron plus an unused vertex: on the float grid
+ * already, nothing moves and the result holds the used vertices in order of
+ * first use; one corner off the grid goes to its nearest float.
+ */
+START_TEST(snap_round_on_grid_and_off)
+{
+	double v[5][3] = {{9, 9, 9}, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+	const uint32_t t[4][3] = {{4, 2, 3}, {1, 3, 2}, {1, 2, 4}, {1, 4, 3}};
+	const uint32_t origin[4] = {7, 8, 9, 10};
+	const uint32_t want_tris[4][3] = {{0, 1, 2}, {3, 2, 1}, {3, 1, 0}, {3, 0, 2}};
+	const uint32_t order[4] = {4, 2, 3, 1};
+
+	for (int off = 0; off < 2; off++) {
+		struct st_error err = {0};
+		struct exact_mesh *m = NULL, *r = NULL;
+		struct exact_snap_stats st;
+
+		v[4][2] = off ? 0.1 : 1;
+		ck_assert_int_eq(exact_mesh_new(CVERTS(v), 5, t, 4, origin, &m, &err), 0);
+		ck_assert_int_eq(exact_mesh_snap_round(m, 24, 1e-3, &r, &st, &err), 0);
+		ck_assert_uint_eq(exact_mesh_nverts(r), 4);
+		ck_assert_uint_eq(exact_mesh_ntris(r), 4);
+		ck_assert_uint_eq(st.rounded, (size_t)off);
+		ck_assert_uint_eq(st.other_corner + st.collapsed + st.unplaced, 0);
+		ck_assert(off ? st.max_move > 0 && st.max_move < 1e-8 : st.max_move == 0);
+		for (size_t i = 0; i < 4; i++) {
+			ck_assert_uint_eq(exact_mesh_origin(r)[i], origin[i]);
+			for (int k = 0; k < 3; k++) {
+				ck_assert_uint_eq(exact_mesh_tris(r)[i][k], want_tris[i][k]);
+				ck_assert(exact_mesh_verts(r)[i][k] ==
+					  (double)(float)v[order[i]][k]);
+			}
+		}
+		exact_mesh_free(r);
+		exact_mesh_free(m);
+	}
+}
+END_TEST
+
 Suite *exact_suite(void)
 {
 	Suite *s = suite_create("exact");
@@ -492,6 +532,7 @@ Suite *exact_suite(void)
 	tcase_add_test(mesh, duplicates_not_counted);
 	tcase_add_test(mesh, threads_agree);
 	tcase_add_test(mesh, huge_coordinates);
+	tcase_add_test(mesh, snap_round_on_grid_and_off);
 	tcase_set_timeout(mesh, 30);
 	suite_add_tcase(s, mesh);
 	tcase_add_test(pairs, shared_edge_pairs);

@@ -28,6 +28,7 @@
 #include <cfloat>
 #include <cmath>
 #include <iterator>
+#include <memory>
 #include <vector>
 
 namespace
@@ -624,6 +625,45 @@ void run(snapper &s, exact_snap_stats &st)
 	}
 }
 
+/* Whether every vertex a triangle uses is exact and on the grid already. */
+bool on_grid_already(const exact_mesh &m, int bits)
+{
+	for (const auto &t : m.tris)
+		for (uint32_t v : t)
+			if (m.slot[v] >= 0 || !on_grid(bits, m.approx[v][0]) ||
+			    !on_grid(bits, m.approx[v][1]) || !on_grid(bits, m.approx[v][2]))
+				return false;
+	return true;
+}
+
+/* The live triangles (all when alive is NULL) with the vertices they use,
+ * numbered in order of first use, at their double places. */
+std::unique_ptr<exact_mesh> emit(const std::vector<std::array<uint32_t, 3>> &tris,
+				 const std::vector<char> *alive,
+				 const std::vector<std::array<double, 3>> &cur,
+				 const std::vector<uint32_t> &origin)
+{
+	std::unique_ptr<exact_mesh> r(new exact_mesh);
+	std::vector<uint32_t> map(cur.size(), UINT32_MAX);
+	for (size_t t = 0; t < tris.size(); t++) {
+		if (alive && !(*alive)[t])
+			continue;
+		std::array<uint32_t, 3> w;
+		for (int k = 0; k < 3; k++) {
+			const uint32_t v = tris[t][k];
+			if (map[v] == UINT32_MAX) {
+				map[v] = static_cast<uint32_t>(r->approx.size());
+				r->approx.push_back(cur[v]);
+				r->slot.push_back(-1);
+			}
+			w[k] = map[v];
+		}
+		r->tris.push_back(w);
+		r->origin.push_back(origin[t]);
+	}
+	return r;
+}
+
 } /* namespace */
 
 extern "C" int exact_mesh_snap_round(const struct exact_mesh *m, int mantissa_bits, double reach,
@@ -648,30 +688,20 @@ extern "C" int exact_mesh_snap_round(const struct exact_mesh *m, int mantissa_bi
 						    "write ASCII instead",
 						    x);
 	try {
+		/* A mesh already on the grid (any clean float STL) keeps every
+		 * vertex: skip the snapper, whose per-vertex exact points, stars
+		 * and candidate lists would double the peak memory for nothing. */
+		if (on_grid_already(*m, mantissa_bits)) {
+			*out = emit(m->tris, nullptr, m->approx, m->origin).release();
+			return ST_OK;
+		}
 		snapper s;
 		s.bits = mantissa_bits;
 		s.reach = reach;
 		build(s, *m);
 		run(s, st);
 
-		exact_mesh *r = new exact_mesh;
-		std::vector<uint32_t> map(s.pos.size(), UINT32_MAX);
-		for (size_t t = 0; t < s.tris.size(); t++) {
-			if (!s.alive[t])
-				continue;
-			std::array<uint32_t, 3> w;
-			for (int k = 0; k < 3; k++) {
-				const uint32_t v = s.tris[t][k];
-				if (map[v] == UINT32_MAX) {
-					map[v] = static_cast<uint32_t>(r->approx.size());
-					r->approx.push_back(s.cur[v]);
-					r->slot.push_back(-1);
-				}
-				w[k] = map[v];
-			}
-			r->tris.push_back(w);
-			r->origin.push_back(s.origin[t]);
-		}
+		std::unique_ptr<exact_mesh> r = emit(s.tris, &s.alive, s.cur, s.origin);
 		/* How far each exact place ended up: follow its merges. */
 		for (size_t v = 0; v < s.pos.size(); v++) {
 			uint32_t w = static_cast<uint32_t>(v);
@@ -682,7 +712,7 @@ extern "C" int exact_mesh_snap_round(const struct exact_mesh *m, int mantissa_bi
 				d += (s.cur[w][k] - m->approx[v][k]) * (s.cur[w][k] - m->approx[v][k]);
 			st.max_move = std::max(st.max_move, std::sqrt(d));
 		}
-		*out = r;
+		*out = r.release();
 		if (stats)
 			*stats = st;
 		return ST_OK;
