@@ -812,6 +812,10 @@ static int print_stream(struct print_job *job)
 	snprintf(job->j.port, sizeof(job->j.port), "%s", job->a->port ? job->a->port : "sim");
 	job->t0 = send_now();
 	status = sailfish ? print_sailfish(job, port) : print_marlin(job, port);
+	/* The pty path belongs to the simulator freed below; the summary,
+	 * written later, names the port as the user gave it. */
+	if (job->simulated)
+		job->port = "sim";
 	sim_marlin_free(sm);
 	sim_sailfish_free(ss);
 	return status;
