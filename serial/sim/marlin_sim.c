@@ -940,14 +940,8 @@ int sim_marlin_run(struct sim_marlin *s, volatile sig_atomic_t *stop, struct st_
 		if (s->wire_len > before && !before && s->in_t < arrived)
 			s->in_t = arrived; /* idle link: these bytes start now */
 	}
-	if (s->unplugged && s->master >= 0) {
-		close(s->master);
-		s->master = -1;
-		if (s->slave >= 0) {
-			close(s->slave);
-			s->slave = -1;
-		}
-	}
+	if (s->unplugged)
+		sim_pty_close(&s->master, &s->slave);
 	return 0;
 }
 
@@ -972,10 +966,7 @@ void sim_marlin_free(struct sim_marlin *s)
 	if (!s)
 		return;
 	sim_marlin_stop(s);
-	if (s->master >= 0)
-		close(s->master);
-	if (s->slave >= 0)
-		close(s->slave);
+	sim_pty_close(&s->master, &s->slave);
 	if (s->own_log && s->log)
 		fclose(s->log);
 	free(s->rx);

@@ -903,14 +903,8 @@ int sim_sailfish_run(struct sim_sailfish *s, volatile sig_atomic_t *stop, struct
 		if (s->wire_len > before && !before && s->in_t < arrived)
 			s->in_t = arrived; /* idle link: these bytes start now */
 	}
-	if (s->unplugged && s->master >= 0) {
-		close(s->master);
-		s->master = -1;
-		if (s->slave >= 0) {
-			close(s->slave);
-			s->slave = -1;
-		}
-	}
+	if (s->unplugged)
+		sim_pty_close(&s->master, &s->slave);
 	return 0;
 }
 
@@ -935,10 +929,7 @@ void sim_sailfish_free(struct sim_sailfish *s)
 	if (!s)
 		return;
 	sim_sailfish_stop(s);
-	if (s->master >= 0)
-		close(s->master);
-	if (s->slave >= 0)
-		close(s->slave);
+	sim_pty_close(&s->master, &s->slave);
 	if (s->own_log && s->log)
 		fclose(s->log);
 	free(s->cb);

@@ -44,6 +44,15 @@ int sim_pty_open(int *master, int *slave, char *path)
 	return 0;
 }
 
+void sim_pty_close(int *master, int *slave)
+{
+	if (*master >= 0)
+		close(*master);
+	if (*slave >= 0)
+		close(*slave);
+	*master = *slave = -1;
+}
+
 int sim_wait_input(int fd, bool want_in, double wake, uint8_t *buf, size_t *len, size_t cap,
 		   double *arrived)
 {

@@ -25,6 +25,10 @@ double sim_rand01(uint64_t *state);
  * -1 with errno set. */
 int sim_pty_open(int *master, int *slave, char *path);
 
+/* sim_pty_close - close whichever ends of a pty pair are open and mark
+ * them closed (-1): the simulated cable pulled, or the simulator freed. */
+void sim_pty_close(int *master, int *slave);
+
 /*
  * sim_wait_input - sleep until wake (sim_clock seconds) or until fd is
  * readable (only if want_in), then read what came into buf[*len..cap),
