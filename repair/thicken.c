@@ -1,18 +1,29 @@
 /*
  * thicken.c - seed 000 §4.2.1: turn M_sheet into thin closed solids.
  *
- * As the paper does: orient each sheet (cutting it where it cannot be
- * oriented), make a copy on each side at distance half = epsilon/2 along
- * the vertex normals, and stitch the two copies along every boundary and
- * cut with a wall.  Where sheets cross (edges with more than two sheet
- * triangles) each sheet is continued straight through; where a sheet bends
- * sharply the two sides keep their own copies, joined by a bevel, and the
- * small holes left at such corners are closed by fans.  Every point of the result is a convex combination of points at
- * distance half from a point of the sheet, so it lies within half of the
- * sheet: the deviation bound holds by construction.  Folds and overlaps
- * the offset makes are resolved exactly by the repair's second pass, which
- * treats the slabs like any other input.  Doubles only: nothing here
- * decides anything.
+ * The slab of a sheet S is the boundary of S x [-half, half]: a copy of S
+ * offset by half along the vertex normals on each side (C and its inverted
+ * copy C'), stitched by a wall along every edge where S ends.  That surface
+ * is closed by construction, whatever S looks like, because S is first cut
+ * into a surface the construction applies to:
+ *  - an edge joins two sheet triangles only if it has exactly two (or, at
+ *    an edge with more, the two that continue each other straight through)
+ *    and they bend by less than CREASE_DEGREES; every other edge is cut and
+ *    gets a wall on each side;
+ *  - where the sheet cannot be oriented (a Moebius strip, a Klein bottle),
+ *    the copy above one triangle continues below its neighbour, which keeps
+ *    the copies closed without an orientation;
+ *  - a vertex's fan (its triangles joined around it) shares one normal; a
+ *    fan whose normal leans more than FAN_DEGREES from one of its triangles
+ *    has its edges at that vertex cut, so every offset stays on its own
+ *    side of the sheet.  At worst every edge is cut and each triangle is a
+ *    prism of its own.
+ * Slabs of cut neighbours overlap near their common edge; the repair's
+ * second pass unites them exactly like any other touching solids, so the
+ * result is closed and M_sheet is empty there (docs/repair.md).  Every
+ * vertex of a slab is its sheet vertex itself or a copy exactly half away
+ * from it, so every point lies within half of the sheet.  Doubles only:
+ * nothing here decides anything.
  */
 #include <math.h>
 #include <stdbool.h>
@@ -22,8 +33,11 @@
 #include "ids.h"
 #include "thicken.h"
 
-/* Bends sharper than this keep separate vertex copies on each side. */
+/* Bends sharper than this cut the sheet: each side keeps its own slab. */
 #define CREASE_DEGREES 30.0
+
+/* A fan normal may lean at most this far from each triangle of the fan. */
+#define FAN_DEGREES 60.0
 
 struct sheet_edge {
 	uint32_t lo, hi;	/* vertex ids, lo < hi */
@@ -84,15 +98,6 @@ static void join(uint32_t *parent, uint8_t *par, uint32_t a, uint32_t b, uint8_t
 	}
 	parent[b] = a;
 	par[b] = pa ^ pb ^ flip;
-}
-
-/* Corner k of listed triangle i as oriented (flip reverses it). */
-static uint32_t corner_vertex(const uint32_t (*tris)[3], const uint32_t *list, const uint8_t *flip,
-			      uint32_t i, int k)
-{
-	static const int rev[3] = {0, 2, 1};
-
-	return tris[list[i]][flip[i] ? rev[k] : k];
 }
 
 /* Position in the oriented triangle of original corner k. */
@@ -232,94 +237,6 @@ static uint32_t sheet_vertex(struct thick_out *out, const uint32_t *uv, size_t n
 	return sidx[i];
 }
 
-struct half_edge {
-	uint32_t from, to;
-};
-
-static int compare_half_edge(const void *a, const void *b)
-{
-	const struct half_edge *x = a, *y = b;
-
-	if (x->from != y->from)
-		return x->from < y->from ? -1 : 1;
-	return x->to < y->to ? -1 : x->to > y->to;
-}
-
-/* Whether sorted array h (n entries) holds from -> to. */
-static bool has_half_edge(const struct half_edge *h, size_t n, uint32_t from, uint32_t to)
-{
-	size_t lo = 0, hi = n;
-
-	while (lo < hi) {
-		const size_t mid = lo + (hi - lo) / 2;
-		if (h[mid].from < from || (h[mid].from == from && h[mid].to < to))
-			lo = mid + 1;
-		else
-			hi = mid;
-	}
-	return lo < n && h[lo].from == from && h[lo].to == to;
-}
-
-/*
- * Close the holes left where bevels and walls meet around a vertex: every
- * half-edge without its twin starts a loop of copies of one vertex, closed
- * by a fan (within half of that vertex like the copies themselves).
- */
-static int fill_corner_holes(struct thick_out *out, size_t cap, struct st_error *err)
-{
-	const size_t nh = 3 * out->ntris;
-	struct half_edge *h = malloc((nh + 1) * sizeof(*h));
-	uint32_t *next = malloc((out->nverts + 1) * sizeof(*next));
-	size_t nfill = 0;
-
-	if (!h || !next) {
-		free(h);
-		free(next);
-		return st_error_set(err, ST_ERR_NOMEM, "out of memory closing slab corners");
-	}
-	for (size_t t = 0; t < out->ntris; t++)
-		for (int k = 0; k < 3; k++) {
-			h[3 * t + (size_t)k].from = out->tris[t][k];
-			h[3 * t + (size_t)k].to = out->tris[t][(k + 1) % 3];
-		}
-	qsort(h, nh, sizeof(*h), compare_half_edge);
-	for (size_t v = 0; v < out->nverts; v++)
-		next[v] = UINT32_MAX;
-	for (size_t i = 0; i < nh; i++)
-		if (!has_half_edge(h, nh, h[i].to, h[i].from)) {
-			/* The fill runs this edge backwards: to -> from. */
-			next[h[i].to] = h[i].from;
-			nfill++;
-		}
-	free(h);
-	/* Each loop of k edges takes k - 2 triangles; the caller sized the
-	 * array for them (at most one loop edge per bevel or wall side). */
-	for (size_t v = 0; v < out->nverts; v++) {
-		if (next[v] == UINT32_MAX)
-			continue;
-		const uint32_t first = (uint32_t)v;
-		uint32_t prev = next[first], steps = 0;
-		next[first] = UINT32_MAX;
-		while (prev != UINT32_MAX && prev != first && steps++ < nfill) {
-			const uint32_t cur = next[prev];
-			next[prev] = UINT32_MAX;
-			if (cur == UINT32_MAX || cur == first)
-				break;
-			const uint32_t t[3] = {first, prev, cur};
-			if (out->ntris >= cap) {
-				free(next);
-				return st_error_set(err, ST_ERR_INTERNAL,
-						    "thickening: corner fans need more than the "
-						    "%zu triangles reserved", cap);
-			}
-			memcpy(out->tris[out->ntris++], t, sizeof(t));
-			prev = cur;
-		}
-	}
-	free(next);
-	return 0;
-}
-
 struct x_order {
 	uint32_t v;
 	double x;
@@ -375,141 +292,145 @@ static int weld_close(struct thick_out *out, double tol, struct st_error *err)
 	return 0;
 }
 
-int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const uint32_t *list,
-		   size_t n, double half, double weld, struct thick_out *out, struct st_error *err)
+/* The working state of one thickening: the sheet as a cut surface. */
+struct sheet {
+	const double (*verts)[3];
+	const uint32_t (*tris)[3];
+	const uint32_t *list;
+	size_t n;
+	uint32_t *mate;		/* [corner] the corner across its edge, or UINT32_MAX */
+	uint8_t *flip;		/* [triangle] reversed to orient the sheet */
+	uint8_t *joined;	/* [corner] its edge joins it to mate (not cut) */
+	uint32_t *group;	/* [corner] union-find over corners of one fan */
+	uint8_t *gpar;		/* [corner] parity against the parent (side swap) */
+	uint32_t *gid;		/* [corner] its fan, 0..ng-1 */
+	uint8_t *side;		/* [corner] its side against its fan's normal */
+	double (*gnorm)[3];	/* [fan] angle-weighted normal (not unit) */
+	size_t ng;
+};
+
+/*
+ * Pair the corners across each edge: two triangles at an edge pair up, at
+ * an edge with more the straight continuations do (pair_straight).
+ */
+static void pair_edges(struct sheet *s, struct sheet_edge *edges)
 {
-	struct sheet_edge *edges = malloc((3 * n + 1) * sizeof(*edges));
-	uint8_t *flip = calloc(n + 1, 1), *seen = calloc(n + 1, 1);
-	uint8_t *joined = calloc(3 * n + 1, 1); /* [corner] edge is joined */
-	uint8_t *crease = calloc(3 * n + 1, 1); /* [corner] joined by a bevel */
-	uint32_t *mate = malloc((3 * n + 1) * sizeof(*mate)); /* [corner] other corner */
-	uint32_t *queue = malloc((n + 1) * sizeof(*queue));
-	uint32_t *group = malloc((3 * n + 1) * sizeof(*group));
-	uint32_t *gid = malloc((3 * n + 1) * sizeof(*gid));
-	uint8_t *gpar = malloc(3 * n + 1), *side = malloc(3 * n + 1);
-	uint32_t *uv = NULL, *sidx = NULL; /* sheet vertices, sorted; their slab copies */
-	size_t nu = 0;
-	double (*gnorm)[3] = calloc(3 * n + 1, sizeof(*gnorm));
-	size_t ng = 0;
-	int rc = 0;
+	const size_t nc = 3 * s->n;
 
-	memset(out, 0, sizeof(*out));
-	if (!edges || !flip || !seen || !joined || !crease || !mate || !queue || !group || !gid ||
-	    !gnorm || !gpar || !side) {
-		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory thickening %zu sheet triangles",
-				  n);
-		goto out;
-	}
-
-	/* Edges of the sheet; an edge with exactly two sheet triangles can
-	 * join them, any other is a boundary of the slab. */
-	for (uint32_t i = 0; i < n; i++)
+	for (uint32_t i = 0; i < s->n; i++)
 		for (int k = 0; k < 3; k++) {
-			uint32_t a = tris[list[i]][k], b = tris[list[i]][(k + 1) % 3];
+			const uint32_t a = s->tris[s->list[i]][k], b = s->tris[s->list[i]][(k + 1) % 3];
 			edges[3 * i + k].lo = a < b ? a : b;
 			edges[3 * i + k].hi = a < b ? b : a;
 			edges[3 * i + k].corner = 3 * i + (uint32_t)k;
 		}
-	qsort(edges, 3 * n, sizeof(*edges), compare_sheet_edge);
-	for (size_t c = 0; c < 3 * n; c++)
-		mate[c] = UINT32_MAX;
-	for (size_t e = 0; e < 3 * n;) {
+	qsort(edges, nc, sizeof(*edges), compare_sheet_edge);
+	for (size_t c = 0; c < nc; c++)
+		s->mate[c] = UINT32_MAX;
+	for (size_t e = 0; e < nc;) {
 		size_t f = e + 1;
-		while (f < 3 * n && edges[f].lo == edges[e].lo && edges[f].hi == edges[e].hi)
+		while (f < nc && edges[f].lo == edges[e].lo && edges[f].hi == edges[e].hi)
 			f++;
 		if (f - e == 2) {
-			mate[edges[e].corner] = edges[e + 1].corner;
-			mate[edges[e + 1].corner] = edges[e].corner;
+			s->mate[edges[e].corner] = edges[e + 1].corner;
+			s->mate[edges[e + 1].corner] = edges[e].corner;
 		} else if (f - e > 2) {
-			pair_straight(verts, tris, list, edges + e, f - e, mate);
+			pair_straight(s->verts, s->tris, s->list, edges + e, f - e, s->mate);
 		}
 		e = f;
 	}
+}
 
-	/* Orient by breadth-first search across two-triangle edges; an edge
-	 * whose two triangles disagree once oriented is cut (this is what
-	 * makes a Moebius strip or Klein bottle orientable). */
-	for (uint32_t s = 0; s < n; s++) {
+/*
+ * Orient by breadth-first search across paired edges and join the pairs
+ * that bend less than CREASE_DEGREES.  Where two joined triangles disagree
+ * once oriented (no orientation exists) the join swaps sides instead.
+ */
+static void orient_and_join(struct sheet *s, uint32_t *queue, uint8_t *seen)
+{
+	for (uint32_t t = 0; t < s->n; t++) {
 		size_t head = 0, tail = 0;
-		if (seen[s])
+		if (seen[t])
 			continue;
-		seen[s] = 1;
-		queue[tail++] = s;
+		seen[t] = 1;
+		queue[tail++] = t;
 		while (head < tail) {
 			const uint32_t i = queue[head++];
 			for (int k = 0; k < 3; k++) {
-				const uint32_t m = mate[3 * i + (uint32_t)k];
+				const uint32_t m = s->mate[3 * i + (uint32_t)k];
 				if (m == UINT32_MAX)
 					continue;
 				const uint32_t j = m / 3;
 				/* Same direction along the edge in the original
 				 * order means opposite orientations. */
-				const bool same = tris[list[i]][k] == tris[list[j]][m % 3];
-				const uint8_t want = (uint8_t)(flip[i] ^ same);
+				const bool same = s->tris[s->list[i]][k] == s->tris[s->list[j]][m % 3];
+				const uint8_t want = (uint8_t)(s->flip[i] ^ same);
 				if (!seen[j]) {
 					seen[j] = 1;
-					flip[j] = want;
+					s->flip[j] = want;
 					queue[tail++] = j;
 				}
-				if (is_crease(verts, tris, list, flip, i, j, want)) {
-					if (flip[j] != want)
-						continue; /* cut: walls on both sides */
-					crease[3 * i + (uint32_t)k] = 1;
-					crease[m] = 1;
-				} else {
-					/* Straight on: joined, reversed when the
-					 * orientations conflict (Moebius). */
-					joined[3 * i + (uint32_t)k] = 1;
-					joined[m] = 1;
+				if (!is_crease(s->verts, s->tris, s->list, s->flip, i, j, want)) {
+					s->joined[3 * i + (uint32_t)k] = 1;
+					s->joined[m] = 1;
 				}
 			}
 		}
 	}
+}
 
-	/* Vertex copies: corners of one vertex joined across joined edges
-	 * share a copy, so a cut or non-manifold vertex gets one per fan. */
-	for (uint32_t c = 0; c < 3 * n; c++) {
-		group[c] = c;
-		gpar[c] = 0;
+/* Oriented unit normal of listed triangle i, or false when it has none. */
+static bool oriented_normal(const struct sheet *s, uint32_t i, double nn[3])
+{
+	return unit_normal(s->verts, s->tris, s->list, i, s->flip[i], nn);
+}
+
+/*
+ * Fans: corners of one vertex joined across joined edges share a fan, so a
+ * cut or non-manifold vertex has one per side of the cut.  Then each fan's
+ * angle-weighted normal, with the side parity of each corner.
+ */
+static void group_fans(struct sheet *s)
+{
+	const uint32_t nc = (uint32_t)(3 * s->n);
+
+	for (uint32_t c = 0; c < nc; c++) {
+		s->group[c] = c;
+		s->gpar[c] = 0;
 	}
-	for (uint32_t c = 0; c < 3 * n; c++) {
-		if (!joined[c])
+	for (uint32_t c = 0; c < nc; c++) {
+		if (!s->joined[c])
 			continue;
-		const uint32_t i = c / 3, k = c % 3, m = mate[c], j = m / 3, l = m % 3;
-		const uint32_t a = tris[list[i]][k], b = tris[list[i]][(k + 1) % 3];
+		const uint32_t i = c / 3, k = c % 3, m = s->mate[c], j = m / 3, l = m % 3;
+		const uint32_t a = s->tris[s->list[i]][k], b = s->tris[s->list[i]][(k + 1) % 3];
 		/* Corner of j holding a, and the one holding b. */
-		const uint32_t ja = tris[list[j]][l] == a ? l : (l + 1) % 3;
-		const uint32_t jb = tris[list[j]][l] == b ? l : (l + 1) % 3;
-		const uint8_t rev = flip[i] ^ flip[j] ^ (uint8_t)(tris[list[i]][k] == tris[list[j]][l]);
-		join(group, gpar, 3 * i + k, 3 * j + ja, rev);
-		join(group, gpar, 3 * i + (k + 1) % 3, 3 * j + jb, rev);
+		const uint32_t ja = s->tris[s->list[j]][l] == a ? l : (l + 1) % 3;
+		const uint32_t jb = s->tris[s->list[j]][l] == b ? l : (l + 1) % 3;
+		const uint8_t rev = s->flip[i] ^ s->flip[j] ^
+				    (uint8_t)(s->tris[s->list[i]][k] == s->tris[s->list[j]][l]);
+		join(s->group, s->gpar, 3 * i + k, 3 * j + ja, rev);
+		join(s->group, s->gpar, 3 * i + (k + 1) % 3, 3 * j + jb, rev);
 	}
-	for (uint32_t c = 0; c < 3 * n; c++)
-		gid[c] = UINT32_MAX;
-	for (uint32_t c = 0; c < 3 * n; c++) {
+	s->ng = 0;
+	for (uint32_t c = 0; c < nc; c++)
+		s->gid[c] = UINT32_MAX;
+	for (uint32_t c = 0; c < nc; c++) {
 		uint8_t p;
-		const uint32_t r = find(group, gpar, c, &p);
-		if (gid[r] == UINT32_MAX)
-			gid[r] = (uint32_t)ng++;
-		gid[c] = gid[r];
-		side[c] = p;
+		const uint32_t r = find(s->group, s->gpar, c, &p);
+		if (s->gid[r] == UINT32_MAX)
+			s->gid[r] = (uint32_t)s->ng++;
+		s->gid[c] = s->gid[r];
+		s->side[c] = p;
 	}
-
-	/* Angle-weighted normal of each copy, from its fan as oriented. */
-	for (uint32_t i = 0; i < n; i++) {
-		const double *p[3];
-		for (int k = 0; k < 3; k++)
-			p[k] = verts[corner_vertex(tris, list, flip, i, k)];
-		const double u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
-		const double v[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
-		double nn[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
-				u[0] * v[1] - u[1] * v[0]};
-		const double l = sqrt(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);
-		if (!(l > 0))
+	memset(s->gnorm, 0, s->ng * sizeof(*s->gnorm));
+	for (uint32_t i = 0; i < s->n; i++) {
+		double nn[3];
+		if (!oriented_normal(s, i, nn))
 			continue;
 		for (int k = 0; k < 3; k++) {
-			const int s = oriented_slot(flip, i, k);
-			const double *o = p[s], *a = p[(s + 1) % 3], *b = p[(s + 2) % 3];
+			const double *o = s->verts[s->tris[s->list[i]][k]];
+			const double *a = s->verts[s->tris[s->list[i]][(k + 1) % 3]];
+			const double *b = s->verts[s->tris[s->list[i]][(k + 2) % 3]];
 			const double e1[3] = {a[0] - o[0], a[1] - o[1], a[2] - o[2]};
 			const double e2[3] = {b[0] - o[0], b[1] - o[1], b[2] - o[2]};
 			const double d = e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2];
@@ -518,47 +439,120 @@ int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const ui
 			double cosv = d / (l1 * l2);
 			cosv = cosv > 1 ? 1 : cosv < -1 ? -1 : cosv;
 			const double w = acos(cosv);
-			const double sign = side[3 * i + (uint32_t)k] ? -1 : 1;
+			const double sign = s->side[3 * i + (uint32_t)k] ? -1 : 1;
 			for (int j = 0; j < 3; j++)
-				gnorm[gid[3 * i + (uint32_t)k]][j] += sign * w * nn[j] / l;
+				s->gnorm[s->gid[3 * i + (uint32_t)k]][j] += sign * w * nn[j];
 		}
 	}
+}
 
-	/* Room for: two copies per group; per triangle top and bottom, and
-	 * per corner a wall or half a bevel (two faces each) plus the fans
-	 * that close corners (fewer faces than the edges they close). */
-	out->verts = malloc((2 * ng + 3 * n + 1) * sizeof(*out->verts));
-	out->sheet_ref = malloc((2 * ng + 3 * n + 1) * sizeof(*out->sheet_ref));
-	out->tris = malloc((32 * n + 1) * sizeof(*out->tris));
-	uv = malloc((3 * n + 1) * sizeof(*uv));
-	sidx = malloc((3 * n + 1) * sizeof(*sidx));
+/* Cut both edges of listed triangle i at its corner k (both sides). */
+static void cut_corner(struct sheet *s, uint32_t i, int k)
+{
+	const uint32_t out = 3 * i + (uint32_t)k, in = 3 * i + (uint32_t)(k + 2) % 3;
+
+	if (s->joined[out]) {
+		s->joined[out] = 0;
+		s->joined[s->mate[out]] = 0;
+	}
+	if (s->joined[in]) {
+		s->joined[in] = 0;
+		s->joined[s->mate[in]] = 0;
+	}
+}
+
+/*
+ * Cut the edges around every fan whose normal leans more than FAN_DEGREES
+ * from one of its triangles (or has no direction).  Returns how many fans
+ * were cut; a fan of one corner is never cut (its normal is its own).
+ */
+static size_t cut_leaning_fans(struct sheet *s, uint8_t *bad)
+{
+	const double min_cos = cos(FAN_DEGREES * M_PI / 180);
+	size_t nbad = 0;
+
+	memset(bad, 0, s->ng);
+	for (uint32_t i = 0; i < s->n; i++) {
+		double nn[3];
+		const bool has = oriented_normal(s, i, nn);
+		for (int k = 0; k < 3; k++) {
+			const uint32_t c = 3 * i + (uint32_t)k, g = s->gid[c];
+			const double *f = s->gnorm[g];
+			const double l = sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+			const double sign = s->side[c] ? -1 : 1;
+			const double d = has && l > 0
+						 ? sign * (f[0] * nn[0] + f[1] * nn[1] + f[2] * nn[2]) / l
+						 : -1;
+			if (!(d >= min_cos))
+				bad[g] = 1;
+		}
+	}
+	for (uint32_t i = 0; i < s->n; i++)
+		for (int k = 0; k < 3; k++) {
+			const uint32_t c = 3 * i + (uint32_t)k;
+			if (!bad[s->gid[c]])
+				continue;
+			cut_corner(s, i, k);
+			nbad++;
+		}
+	return nbad;
+}
+
+/* A fan's unit normal (+z for a fan without direction: one corner of a
+ * triangle without a normal, which the exact pass drops anyway). */
+static void fan_unit_normal(const struct sheet *s, uint32_t g, double u[3])
+{
+	const double *f = s->gnorm[g];
+	const double l = sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+
+	if (!(l > 0)) {
+		u[0] = u[1] = 0;
+		u[2] = 1;
+		return;
+	}
+	for (int k = 0; k < 3; k++)
+		u[k] = f[k] / l;
+}
+
+/*
+ * Write the slab: per fan a copy on each side (2g on the normal's side,
+ * 2g+1 on the other), per triangle its two offset copies, per cut or
+ * boundary edge a wall through the sheet's own edge.
+ */
+static int emit_slab(const struct sheet *s, double half, struct thick_out *out,
+		     struct st_error *err)
+{
+	const size_t n = s->n;
+	uint32_t *uv = malloc((3 * n + 1) * sizeof(*uv));
+	uint32_t *sidx = malloc((3 * n + 1) * sizeof(*sidx));
+	size_t nu = 0;
+
+	/* Copies: two per fan, plus the sheet's own vertices on the walls;
+	 * triangles: two per triangle, four per wall (at most one a corner). */
+	out->verts = malloc((2 * s->ng + 3 * n + 1) * sizeof(*out->verts));
+	out->sheet_ref = malloc((2 * s->ng + 3 * n + 1) * sizeof(*out->sheet_ref));
+	out->tris = malloc((14 * n + 1) * sizeof(*out->tris));
 	if (!out->verts || !out->sheet_ref || !out->tris || !uv || !sidx) {
-		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory thickening %zu sheet triangles",
-				  n);
-		goto out;
+		free(uv);
+		free(sidx);
+		return st_error_set(err, ST_ERR_NOMEM, "out of memory thickening %zu sheet triangles",
+				    n);
 	}
-	/* Copies: 2g on the normal's side, 2g+1 on the other. */
 	for (uint32_t c = 0; c < 3 * n; c++) {
-		const uint32_t g = gid[c];
-		const double *p = verts[tris[list[c / 3]][c % 3]];
-		double *nn = gnorm[g];
-		double l = sqrt(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);
-		if (!(l > 0)) {
-			nn[0] = 0; /* a fan whose normals cancel: any direction */
-			nn[1] = 0;
-			nn[2] = 1;
-			l = 1;
-		}
+		const uint32_t g = s->gid[c];
+		const double *p = s->verts[s->tris[s->list[c / 3]][c % 3]];
+		double u[3];
+		fan_unit_normal(s, g, u);
 		for (int j = 0; j < 3; j++) {
-			out->verts[2 * g][j] = p[j] + half * nn[j] / l;
-			out->verts[2 * g + 1][j] = p[j] - half * nn[j] / l;
+			out->verts[2 * g][j] = p[j] + half * u[j];
+			out->verts[2 * g + 1][j] = p[j] - half * u[j];
 		}
 	}
-	out->nverts = 2 * ng;
+	out->nverts = 2 * s->ng;
 	for (size_t v = 0; v < out->nverts; v++)
 		out->sheet_ref[v] = UINT32_MAX;
 	for (uint32_t c = 0; c < 3 * n; c++)
-		uv[c] = tris[list[c / 3]][c % 3];
+		uv[c] = s->tris[s->list[c / 3]][c % 3];
 	qsort(uv, 3 * n, sizeof(*uv), compare_u32);
 	for (size_t c = 0; c < 3 * n; c++)
 		if (nu == 0 || uv[nu - 1] != uv[c])
@@ -566,22 +560,22 @@ int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const ui
 	for (size_t i = 0; i < nu; i++)
 		sidx[i] = UINT32_MAX;
 	/* copy(c, 0) lies on the side triangle c/3's normal points to (as
-	 * oriented), copy(c, 1) on the other: parity maps that to the group's
+	 * oriented), copy(c, 1) on the other: parity maps that to the fan's
 	 * own two copies. */
-#define COPY(c, s) (2 * gid[(c)] + (uint32_t)(side[(c)] ^ (s)))
+#define COPY(c, sd) (2 * s->gid[(c)] + (uint32_t)(s->side[(c)] ^ (sd)))
 	for (uint32_t i = 0; i < n; i++) {
 		uint32_t cs[3]; /* corner ids by oriented slot */
 		for (int k = 0; k < 3; k++)
-			cs[oriented_slot(flip, i, k)] = 3 * i + (uint32_t)k;
+			cs[oriented_slot(s->flip, i, k)] = 3 * i + (uint32_t)k;
 		const uint32_t top[3] = {COPY(cs[0], 0), COPY(cs[1], 0), COPY(cs[2], 0)};
 		const uint32_t bot[3] = {COPY(cs[0], 1), COPY(cs[2], 1), COPY(cs[1], 1)};
 		memcpy(out->tris[out->ntris++], top, sizeof(top));
 		memcpy(out->tris[out->ntris++], bot, sizeof(bot));
-		/* A wall along every edge that neither joins nor bevels. */
 		for (int k = 0; k < 3; k++) {
-			if (joined[3 * i + (uint32_t)k] || crease[3 * i + (uint32_t)k])
+			if (s->joined[3 * i + (uint32_t)k])
 				continue;
-			const int s0 = oriented_slot(flip, i, k), s1 = oriented_slot(flip, i, (k + 1) % 3);
+			const int s0 = oriented_slot(s->flip, i, k);
+			const int s1 = oriented_slot(s->flip, i, (k + 1) % 3);
 			/* As oriented the edge runs a -> b. */
 			uint32_t a = cs[s0], b = cs[s1];
 			if ((s0 + 1) % 3 != s1) {
@@ -592,8 +586,10 @@ int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const ui
 			/* The wall holds the sheet's own edge a b: walls of
 			 * several fans meet exactly there instead of crossing
 			 * each other within rounding of it. */
-			const uint32_t pa = sheet_vertex(out, uv, nu, sidx, verts, tris[list[a / 3]][a % 3]);
-			const uint32_t pb = sheet_vertex(out, uv, nu, sidx, verts, tris[list[b / 3]][b % 3]);
+			const uint32_t pa = sheet_vertex(out, uv, nu, sidx, s->verts,
+							 s->tris[s->list[a / 3]][a % 3]);
+			const uint32_t pb = sheet_vertex(out, uv, nu, sidx, s->verts,
+							 s->tris[s->list[b / 3]][b % 3]);
 			const uint32_t w[4][3] = {{COPY(b, 0), COPY(a, 0), pa},
 						  {COPY(b, 0), pa, pb},
 						  {pb, pa, COPY(a, 1)},
@@ -602,37 +598,44 @@ int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const ui
 			out->ntris += 4;
 		}
 	}
-	/* Bevels along creases (always between consistently oriented
-	 * triangles): on each side, the quad between the two triangles'
-	 * copies of the edge. */
-	for (uint32_t c = 0; c < 3 * n; c++) {
-		const uint32_t m = mate[c];
-		if (!crease[c] || c > m)
-			continue;
-		const uint32_t i = c / 3, k = c % 3, j = m / 3, l = m % 3;
-		const uint32_t a = tris[list[i]][k];
-		const uint32_t ja = tris[list[j]][l] == a ? l : (l + 1) % 3;
-		const uint32_t jb = ja == l ? (l + 1) % 3 : l;
-		const uint32_t ia = 3 * i + k, ib = 3 * i + (k + 1) % 3;
-		const uint32_t ga = 3 * j + ja, gb = 3 * j + jb;
-		/* Make i run the edge a -> b as oriented. */
-		const int s0 = oriented_slot(flip, i, (int)k), s1 = oriented_slot(flip, i, (int)(k + 1) % 3);
-		const bool forward = (s0 + 1) % 3 == s1;
-		const uint32_t xa = forward ? ia : ib, xb = forward ? ib : ia;
-		const uint32_t ya = forward ? ga : gb, yb = forward ? gb : ga;
-		/* i's top runs xa -> xb, j's top yb -> ya; the bevel runs
-		 * each the other way.  The bottom side mirrors it. */
-		const uint32_t t1[3] = {COPY(xb, 0), COPY(xa, 0), COPY(ya, 0)};
-		const uint32_t t2[3] = {COPY(xb, 0), COPY(ya, 0), COPY(yb, 0)};
-		const uint32_t b1[3] = {COPY(xa, 1), COPY(xb, 1), COPY(yb, 1)};
-		const uint32_t b2[3] = {COPY(xa, 1), COPY(yb, 1), COPY(ya, 1)};
-		memcpy(out->tris[out->ntris++], t1, sizeof(t1));
-		memcpy(out->tris[out->ntris++], t2, sizeof(t2));
-		memcpy(out->tris[out->ntris++], b1, sizeof(b1));
-		memcpy(out->tris[out->ntris++], b2, sizeof(b2));
-	}
 #undef COPY
-	rc = fill_corner_holes(out, 32 * n, err);
+	free(uv);
+	free(sidx);
+	return 0;
+}
+
+int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const uint32_t *list,
+		   size_t n, double half, double weld, struct thick_out *out, struct st_error *err)
+{
+	struct sheet s = {.verts = verts, .tris = tris, .list = list, .n = n};
+	struct sheet_edge *edges = malloc((3 * n + 1) * sizeof(*edges));
+	uint8_t *seen = calloc(n + 1, 1), *bad = malloc(3 * n + 1);
+	uint32_t *queue = malloc((n + 1) * sizeof(*queue));
+	int rc = 0;
+
+	memset(out, 0, sizeof(*out));
+	s.flip = calloc(n + 1, 1);
+	s.joined = calloc(3 * n + 1, 1);
+	s.mate = malloc((3 * n + 1) * sizeof(*s.mate));
+	s.group = malloc((3 * n + 1) * sizeof(*s.group));
+	s.gpar = malloc(3 * n + 1);
+	s.gid = malloc((3 * n + 1) * sizeof(*s.gid));
+	s.side = malloc(3 * n + 1);
+	s.gnorm = malloc((3 * n + 1) * sizeof(*s.gnorm));
+	if (!edges || !seen || !bad || !queue || !s.flip || !s.joined || !s.mate || !s.group ||
+	    !s.gpar || !s.gid || !s.side || !s.gnorm) {
+		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory thickening %zu sheet triangles",
+				  n);
+		goto out;
+	}
+	pair_edges(&s, edges);
+	orient_and_join(&s, queue, seen);
+	/* Each round cuts at least one joined edge, so this ends (at worst
+	 * with every triangle a prism of its own). */
+	do
+		group_fans(&s);
+	while (cut_leaning_fans(&s, bad));
+	rc = emit_slab(&s, half, out, err);
 	if (!rc)
 		rc = weld_close(out, weld, err);
 	if (rc)
@@ -640,8 +643,8 @@ int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const ui
 	/* Every copy is exactly half from its vertex (up to rounding). */
 	for (uint32_t c = 0; c < 3 * n; c++) {
 		const double *p = verts[tris[list[c / 3]][c % 3]];
-		for (int s = 0; s < 2; s++) {
-			const double *q = out->verts[2 * gid[c] + (uint32_t)s];
+		for (int sd = 0; sd < 2; sd++) {
+			const double *q = out->verts[2 * s.gid[c] + (uint32_t)sd];
 			const double d = sqrt((p[0] - q[0]) * (p[0] - q[0]) +
 					      (p[1] - q[1]) * (p[1] - q[1]) +
 					      (p[2] - q[2]) * (p[2] - q[2]));
@@ -649,7 +652,7 @@ int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const ui
 		}
 	}
 	for (uint32_t c = 0; c < 3 * n; c++)
-		out->cut_edges += !joined[c] && !crease[c] && mate[c] != UINT32_MAX;
+		out->cut_edges += !s.joined[c] && s.mate[c] != UINT32_MAX;
 	out->cut_edges /= 2;
 out:
 	if (rc) {
@@ -659,18 +662,16 @@ out:
 		memset(out, 0, sizeof(*out));
 	}
 	free(edges);
-	free(flip);
 	free(seen);
-	free(joined);
-	free(crease);
-	free(mate);
+	free(bad);
 	free(queue);
-	free(group);
-	free(gid);
-	free(gpar);
-	free(side);
-	free(uv);
-	free(sidx);
-	free(gnorm);
+	free(s.flip);
+	free(s.joined);
+	free(s.mate);
+	free(s.group);
+	free(s.gpar);
+	free(s.gid);
+	free(s.side);
+	free(s.gnorm);
 	return rc;
 }

@@ -21,14 +21,17 @@ struct thick_out {
 
 /*
  * thicken_sheets - a closed slab of total thickness 2 * half around the n
- * triangles listed in list (indices into tris, corners into verts): each
- * sheet oriented (cut where it cannot be), offset to both sides along
- * angle-weighted vertex normals and stitched along its boundaries, cuts
- * and edges shared by more than two of the listed triangles.  Copies of
- * vertices closer than weld (mm, in every coordinate) are made equal: the
- * caller passes the output's resolution, below which they would be
- * clusters that rounding flips.  The slab may
- * fold where the sheet bends sharply; the caller resolves that exactly.
+ * triangles listed in list (indices into tris, corners into verts): the
+ * sheet cut where it cannot be offset as one surface (edges that are not
+ * shared by exactly two of the listed triangles, creases, non-orientable
+ * seams, fans whose normal leans too far), offset to both sides along
+ * angle-weighted vertex normals and closed by a wall along every cut and
+ * boundary edge.  Every directed edge of the slab occurs as often as its
+ * reverse: closed and oriented by construction.  Copies of vertices closer
+ * than weld (mm, in every coordinate) are made equal: the caller passes
+ * the output's resolution, below which they would be clusters that
+ * rounding flips.  Slabs of cut neighbours overlap and may fold where the
+ * sheet bends sharply; the caller resolves that exactly.
  * Returns 0 or ST_ERR_NOMEM with err filled.
  */
 int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const uint32_t *list,
