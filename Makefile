@@ -25,8 +25,10 @@ DEB_PACKAGES := gcc g++ make pkg-config dpkg-dev \
 	libmosquitto-dev mosquitto gpx libcairo2-dev libxml2-utils libcurl4-openssl-dev \
 	libssl-dev
 # Only the benchmark compares against these (printcore: Printrun's host, also
-# used by the sim suite's faithfulness test, which is skipped without it).
-BENCH_PACKAGES := admesh time bc prusa-slicer printcore apache2-utils
+# used by the sim suite's faithfulness test, which is skipped without it;
+# libcgal-demo: CGAL's data meshes, the real broken models bench/cgal_corpus.sh
+# repairs).
+BENCH_PACKAGES := admesh time bc prusa-slicer printcore apache2-utils libcgal-demo
 # Only the tests need these (the serve suite's status page in headless
 # Chromium; skipped with a message without it); `make check` installs them.
 TEST_PACKAGES := chromium
@@ -128,6 +130,7 @@ bench:
 	@$(MAKE) deps EXTRA_PACKAGES="$(BENCH_PACKAGES)"
 	@$(MAKE) all $(BUILD)/bench/gen_mesh $(BUILD)/bench/region_check
 	bench/run.sh $(BUILD)/stratum
+	bench/cgal_corpus.sh $(BUILD)/stratum
 
 clean:
 	rm -rf build

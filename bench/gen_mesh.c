@@ -15,6 +15,10 @@
  *                                    have decimals: "box 20 0.4 10" is a wall of 0.4)
  *   gen_mesh cylinder R H N OUT.stl  a cylinder of radius R, height H mm: a regular
  *                                    N-gon (3..256) prism
+ *   gen_mesh convert IN SIZE OUT.stl
+ *                                    IN (STL, OBJ or OFF) moved to the origin and
+ *                                    scaled so its largest extent is SIZE mm, as
+ *                                    seed 000's experiments scale their models
  *   gen_mesh plate|overhang|bridge OUT.stl
  *                                    the slicer's test models (tests/fixtures.h):
  *                                    a plate with a square and a round hole, a 45
@@ -84,13 +88,27 @@ static double mm_arg(const char *s)
 	return v;
 }
 
+/* Move m's bounding box to the origin and scale its largest extent to size. */
+static void fit(struct mesh *m, double size)
+{
+	double lo[3], hi[3], ext = 0;
+
+	mesh_bbox(m, lo, hi);
+	for (int k = 0; k < 3; k++)
+		ext = fmax(ext, hi[k] - lo[k]);
+	for (size_t i = 0; i < m->nverts; i++)
+		for (int k = 0; k < 3; k++)
+			m->verts[i][k] = ext > 0 ? (m->verts[i][k] - lo[k]) * (size / ext) : 0;
+}
+
 static void usage(void)
 {
 	fprintf(stderr, "usage: gen_mesh torus NU NV OUT.stl | gen_mesh spheres N OUT.stl\n"
 			"       gen_mesh twospheres NLAT NLON OUT.stl | gen_mesh scan NU NV JITTER "
 			"OUT.stl\n"
 			"       gen_mesh box SX SY SZ OUT.stl | gen_mesh cylinder R H N OUT.stl\n"
-			"       gen_mesh plate|overhang|bridge OUT.stl\n");
+			"       gen_mesh convert IN SIZE OUT.stl | gen_mesh plate|overhang|bridge "
+			"OUT.stl\n");
 	exit(2);
 }
 
@@ -135,6 +153,12 @@ int main(int argc, char **argv)
 		m = fx_box(0, 0, 0, mm_arg(argv[2]), mm_arg(argv[3]), mm_arg(argv[4]));
 	} else if (argc == 6 && !strcmp(argv[1], "cylinder")) {
 		m = fx_cylinder(0, 0, mm_arg(argv[2]), mm_arg(argv[3]), int_arg(argv[4], 3, 256));
+	} else if (argc == 5 && !strcmp(argv[1], "convert")) {
+		if (meshio_read(argv[2], MESHIO_AUTO, &m, NULL, &err)) {
+			fprintf(stderr, "gen_mesh: %s\n", err.msg);
+			return 1;
+		}
+		fit(m, mm_arg(argv[3]));
 	} else if (argc == 3 && !strcmp(argv[1], "plate")) {
 		m = fx_plate_holes();
 	} else if (argc == 3 && !strcmp(argv[1], "overhang")) {
