@@ -67,7 +67,6 @@ struct repair_report {
 	size_t stitched_vertices;	/* boundary vertices snapped onto other boundary */
 	size_t stitched_gaps;		/* pairs of boundary loops joined */
 	double stitch_max_gap;		/* mm: longest snap */
-	size_t zipped_triangles;	/* triangles closing gaps between stitched runs */
 	size_t stitch_collapsed;	/* triangles stitching shrank to an edge, dropped */
 	size_t holes_filled;		/* boundary loops closed by a patch */
 	size_t fill_triangles;		/* triangles the patches added */
