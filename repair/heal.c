@@ -450,7 +450,7 @@ static bool may_merge(const struct boundary *b, const uint32_t *next, uint32_t r
  * gamma, nearest pairs first (heal.h says which snaps are allowed).
  */
 static int stitch(struct heal_work *w, double gamma, struct repair_report *rep,
-		  struct st_error *err)
+		  size_t *n_boundary, struct st_error *err)
 {
 	struct boundary b;
 	struct pair_list pl = {0};
@@ -461,6 +461,7 @@ static int stitch(struct heal_work *w, double gamma, struct repair_report *rep,
 
 	if (rc)
 		return rc;
+	*n_boundary = b.n;
 	if (b.n < 2)
 		goto out;
 	rc = near_pairs((const double(*)[3])w->verts, b.ids, b.n, gamma, &pl, err);
@@ -576,6 +577,7 @@ int heal_mesh(const struct mesh *in, const struct repair_options *opt, struct me
 	      struct repair_report *rep, struct st_error *err)
 {
 	struct heal_work w = {0};
+	size_t n_boundary = 1; /* unknown until stitching looks */
 	int rc = 0;
 
 	*out = NULL;
@@ -605,8 +607,9 @@ int heal_mesh(const struct mesh *in, const struct repair_options *opt, struct me
 	if (rep->weld_tolerance > 0)
 		rc = weld(&w, rep->weld_tolerance, rep, err);
 	if (!rc && rep->stitch_tolerance > 0)
-		rc = stitch(&w, rep->stitch_tolerance, rep, err);
-	if (!rc && !opt->keep_holes)
+		rc = stitch(&w, rep->stitch_tolerance, rep, &n_boundary, err);
+	/* A closed mesh has no hole: skip the second walk over its edges. */
+	if (!rc && !opt->keep_holes && n_boundary > 0)
 		rc = heal_fill(&w, rep, err);
 	if (!rc && (rep->welded_vertices || rep->stitched_vertices || rep->holes_filled))
 		rc = build(&w, out, err);
