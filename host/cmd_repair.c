@@ -1,6 +1,7 @@
 /*
  * cmd_repair.c - `stratum repair IN -o OUT [--printer NAME|FILE.ini |
- * --epsilon MM] [--split] [--json] [--threads N] [--ascii]`: read a mesh,
+ * --epsilon MM] [--split] [--json] [--threads N] [--ascii] [--weld MM]
+ * [--stitch MM] [--keep-holes]`: read a mesh,
  * repair it with seed 000's pipeline (repair/repair.h) and write the
  * printable result as STL, one file or one per manifold-connected part.
  * Exit 0 repaired and written, 1 no printable result (nothing written) or
@@ -26,6 +27,7 @@
 
 #define REPAIR_EPSILON_DEFAULT 0.4   /* mm, when no printer is named */
 #define REPAIR_EPSILON_MAX 10.0	     /* mm; more is a typo, not a wall */
+#define REPAIR_HEAL_MAX 10.0	     /* mm, for --weld and --stitch: more is a typo */
 #define REPAIR_PROGRESS_MIN 100000   /* triangles before progress is shown */
 
 static void repair_usage(FILE *out)
@@ -33,9 +35,12 @@ static void repair_usage(FILE *out)
 	fprintf(out,
 		"usage: stratum repair IN -o OUT [--printer NAME|FILE.ini | --epsilon MM]\n"
 		"                      [--split] [--json] [--threads N] [--ascii]\n"
+		"                      [--weld MM] [--stitch MM] [--keep-holes]\n"
 		"\n"
 		"Repairs a mesh (STL, OBJ or OFF) into printable solids with Attene's\n"
-		"as-exact-as-possible pipeline: removes degenerate and duplicate triangles,\n"
+		"as-exact-as-possible pipeline: welds vertices a few float ulps apart,\n"
+		"stitches boundary gaps narrower than the stitch distance and fills holes\n"
+		"small against their shell, removes degenerate and duplicate triangles,\n"
 		"resolves every self-intersection exactly, keeps the outer hull, thickens\n"
 		"sheets and wires to EPSILON, and writes the result as STL.  Nothing that was\n"
 		"already solid is moved (except by rounding to the output precision).\n"
@@ -48,18 +53,25 @@ static void repair_usage(FILE *out)
 		"  --json            one JSON object on stdout instead of the text report\n"
 		"  --threads N       cores for the exact passes (default: all)\n"
 		"  --ascii           write ASCII STL (double precision) instead of binary (float)\n"
+		"  --weld MM         weld vertices closer than MM (default: 8 float32 ulps of\n"
+		"                    the largest coordinate; 0 = off)\n"
+		"  --stitch MM       stitch boundary gaps up to MM (default 1.5 * EPSILON; 0 = off)\n"
+		"  --keep-holes      no stitching, no hole filling: every open part is a sheet\n"
 		"\n"
 		"Exit status: 0 repaired, 1 no printable result or OUT not written, 2 usage,\n"
 		"65 unreadable input or printer profile, 70 internal error.  See docs/repair.md.\n");
 }
 
-/* Parse --epsilon with the project's number reader; false when out of range. */
-static bool parse_epsilon(const char *s, double *out)
+/*
+ * Parse a length in mm with the project's number reader: lo < v <= max
+ * (zero_ok: 0 <= v <= max); false when out of range.
+ */
+static bool parse_mm(const char *s, bool zero_ok, double max, double *out)
 {
 	double v;
 
-	if (st_parse_double(s, strlen(s), 0, &v) != ST_NUMBER_OK || isnan(v) || v <= 0.0 ||
-	    v > REPAIR_EPSILON_MAX)
+	if (!s || st_parse_double(s, strlen(s), 0, &v) != ST_NUMBER_OK || isnan(v) || v < 0.0 ||
+	    (v == 0.0 && !zero_ok) || v > max)
 		return false;
 	*out = v;
 	return true;
@@ -256,6 +268,63 @@ static json_t *json_size(size_t n)
 	return json_integer((json_int_t)n);
 }
 
+/* The healing figures (docs/repair.md "Healing") into obj. */
+static void json_heal(json_t *obj, const struct repair_report *r)
+{
+	json_t *areas = json_array();
+	const size_t listed = r->holes_filled < REPAIR_HOLES_LISTED ? r->holes_filled
+								    : REPAIR_HOLES_LISTED;
+
+	for (size_t i = 0; areas && i < listed; i++)
+		json_array_append_new(areas, json_real(r->hole_area[i]));
+	json_object_set_new(obj, "weld_tolerance", json_real(r->weld_tolerance));
+	json_object_set_new(obj, "welded_vertices", json_size(r->welded_vertices));
+	json_object_set_new(obj, "weld_collapsed", json_size(r->weld_collapsed));
+	json_object_set_new(obj, "stitch_tolerance", json_real(r->stitch_tolerance));
+	json_object_set_new(obj, "stitched_vertices", json_size(r->stitched_vertices));
+	json_object_set_new(obj, "stitched_gaps", json_size(r->stitched_gaps));
+	json_object_set_new(obj, "stitch_max_gap", json_real(r->stitch_max_gap));
+	json_object_set_new(obj, "stitch_collapsed", json_size(r->stitch_collapsed));
+	json_object_set_new(obj, "holes_filled", json_size(r->holes_filled));
+	json_object_set_new(obj, "fill_triangles", json_size(r->fill_triangles));
+	json_object_set_new(obj, "fill_area", json_real(r->fill_area));
+	json_object_set_new(obj, "hole_areas", areas ? areas : json_null());
+	json_object_set_new(obj, "holes_kept", json_size(r->holes_kept));
+	json_object_set_new(obj, "kept_patch_fraction", json_real(r->kept_patch_fraction));
+}
+
+/* One line of what the healing did, e.g. "welded 24 vertices, stitched ...". */
+static void print_heal(const struct repair_report *r)
+{
+	printf("  healing: welded %zu vertices (within %.3g mm)", r->welded_vertices,
+	       r->weld_tolerance);
+	if (r->weld_collapsed)
+		printf(", %zu triangles collapsed", r->weld_collapsed);
+	if (r->stitch_tolerance == 0) {
+		printf("; stitching and hole filling off\n");
+		return;
+	}
+	printf(", stitched %zu gap%s", r->stitched_gaps, r->stitched_gaps == 1 ? "" : "s");
+	if (r->stitched_vertices)
+		printf(" <= %.3g mm (%zu vertices)", r->stitch_max_gap, r->stitched_vertices);
+	else
+		printf(" (gamma %g mm)", r->stitch_tolerance);
+	if (r->stitch_collapsed)
+		printf(", %zu triangles collapsed", r->stitch_collapsed);
+	printf(", filled %zu hole%s", r->holes_filled, r->holes_filled == 1 ? "" : "s");
+	for (size_t i = 0; i < r->holes_filled && i < REPAIR_HOLES_LISTED; i++)
+		printf("%s%.3g", i == 0 ? " of " : i + 1 == r->holes_filled ? " and " : ", ",
+		       r->hole_area[i]);
+	if (r->holes_filled > REPAIR_HOLES_LISTED)
+		printf(" ... (%.6g in all)", r->fill_area);
+	if (r->holes_filled)
+		printf(" mm^2");
+	if (r->holes_kept)
+		printf("; %zu hole%s left open (patch >= %.3g of its shell: a sheet)", r->holes_kept,
+		       r->holes_kept == 1 ? "" : "s", r->kept_patch_fraction);
+	printf("\n");
+}
+
 static int print_json(const struct repair_run *run, const struct repair_report *r,
 		      const struct repair_outputs *o)
 {
@@ -277,6 +346,7 @@ static int print_json(const struct repair_run *run, const struct repair_report *
 	json_object_set_new(obj, "epsilon_source", json_string(run->eps_source));
 	json_object_set_new(obj, "precision", json_string(run->ascii ? "float64" : "float32"));
 	json_object_set_new(obj, "input_triangles", json_size(r->input_triangles));
+	json_heal(obj, r);
 	json_object_set_new(obj, "irregular_removed", json_size(r->irregular_removed));
 	json_object_set_new(obj, "degenerate_removed", json_size(r->degenerate_removed));
 	json_object_set_new(obj, "duplicates_removed", json_size(r->duplicates_removed));
@@ -328,6 +398,7 @@ static void print_text(const struct repair_run *run, const struct repair_report 
 	else
 		printf("  epsilon %g mm (%s)", run->epsilon, run->eps_source);
 	printf(", output %s\n", run->ascii ? "ASCII STL (float64)" : "binary STL (float32)");
+	print_heal(r);
 	printf("  removed %zu irregular, %zu degenerate (kept as wires), %zu duplicate triangles\n",
 	       r->irregular_removed, r->degenerate_removed, r->duplicates_removed);
 	printf("  self-intersections: %llu intersecting pairs resolved, %zu triangles split\n",
@@ -394,7 +465,8 @@ static int report(const struct repair_run *run, const struct repair_report *r,
 int cmd_repair(int argc, char **argv)
 {
 	const char *in = NULL, *out = NULL, *printer = NULL, *eps_arg = NULL;
-	bool json = false, split = false, ascii = false;
+	bool json = false, split = false, ascii = false, keep_holes = false;
+	double weld = -1, stitch = -1; /* < 0: the defaults of repair_options_init */
 	int threads = 0, status = ST_EXIT_OK, rc;
 	struct st_error err = {0};
 	struct profile *prof = NULL;
@@ -434,10 +506,23 @@ int cmd_repair(int argc, char **argv)
 			}
 		} else if (cmd_is_opt(a, "--epsilon")) {
 			eps_arg = cmd_opt_value(argc, argv, &i, "--epsilon");
-			if (!eps_arg || !parse_epsilon(eps_arg, &run.epsilon)) {
+			if (!parse_mm(eps_arg, false, REPAIR_EPSILON_MAX, &run.epsilon)) {
 				fprintf(stderr, "stratum repair: --epsilon wants a thickness in mm "
 						"greater than 0 and at most %g, not '%s'\n",
 					REPAIR_EPSILON_MAX, eps_arg ? eps_arg : "");
+				return ST_EXIT_USAGE;
+			}
+		} else if (!strcmp(a, "--keep-holes")) {
+			keep_holes = true;
+		} else if (cmd_is_opt(a, "--weld") || cmd_is_opt(a, "--stitch")) {
+			const bool is_weld = cmd_is_opt(a, "--weld");
+			const char *name = is_weld ? "--weld" : "--stitch";
+			const char *v = cmd_opt_value(argc, argv, &i, name);
+
+			if (!parse_mm(v, true, REPAIR_HEAL_MAX, is_weld ? &weld : &stitch)) {
+				fprintf(stderr, "stratum repair: %s wants a distance in mm from 0 "
+						"(off) to %g, not '%s'\n", name, REPAIR_HEAL_MAX,
+					v ? v : "");
 				return ST_EXIT_USAGE;
 			}
 		} else if (cmd_is_opt(a, "--threads")) {
@@ -500,6 +585,9 @@ int cmd_repair(int argc, char **argv)
 	opt.epsilon = run.epsilon;
 	opt.precision = ascii ? REPAIR_FLOAT64 : REPAIR_FLOAT32;
 	opt.threads = threads;
+	opt.weld = weld;
+	opt.stitch = stitch;
+	opt.keep_holes = keep_holes;
 	if (m->ntris >= REPAIR_PROGRESS_MIN && progress_start(&prog, "stratum repair")) {
 		opt.progress = progress_update;
 		opt.progress_ctx = &prog;

@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "exact.h"
+#include "heal.h"
 #include "hull.h"
 #include "ids.h"
 #include "repair.h"
@@ -51,6 +52,9 @@ void repair_options_init(struct repair_options *opt)
 	opt->epsilon = 0.4;
 	opt->precision = REPAIR_FLOAT32;
 	opt->threads = 0;
+	opt->weld = -1;		/* heal.h: HEAL_WELD_ULPS float32 ulps */
+	opt->stitch = -1;	/* heal.h: HEAL_STITCH_FACTOR * epsilon */
+	opt->keep_holes = false;
 }
 
 static void progress(const struct repair_options *opt, const char *stage, double done)
@@ -729,7 +733,7 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 		uint32_t **component, struct repair_report *rep, struct st_error *err)
 {
 	struct core_out co;
-	struct mesh *cur = NULL, *rounded = NULL;
+	struct mesh *cur = NULL, *rounded = NULL, *healed = NULL;
 	struct mesh_report mr;
 	int rc;
 
@@ -751,10 +755,17 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 				    opt->threads);
 	memset(rep, 0, sizeof(*rep));
 	rep->input_triangles = in->ntris;
-
-	rc = core(in, opt, true, &co, err);
+	/* Weld, stitch and fill before anything is decided (heal.h). */
+	rc = heal_mesh(in, opt, &healed, rep, err);
 	if (rc)
 		return rc;
+	if (healed)
+		in = healed;
+
+	co.result = NULL;
+	rc = core(in, opt, true, &co, err);
+	if (rc)
+		goto out_free;
 	report_core(rep, &co);
 	rep->solid_deviation = solid_deviation(in, co.result);
 
@@ -773,7 +784,7 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 		mesh_free(cur);
 		cur = NULL;
 		if (rc)
-			return rc;
+			goto out_free;
 		unchanged = !changed;
 		if (!changed || rep->rounding_rounds >= MAX_ROUNDING_ROUNDS)
 			break;
@@ -851,6 +862,7 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 	else
 		free(comp);
 	*out = rounded;
+	mesh_free(healed);
 	progress(opt, "done", 1);
 	return 0;
 
@@ -858,5 +870,6 @@ out_free:
 	exact_mesh_free(co.result);
 	mesh_free(cur);
 	mesh_free(rounded);
+	mesh_free(healed);
 	return rc;
 }

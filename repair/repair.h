@@ -3,7 +3,11 @@
  * printable solids out (Definition 3.11), with nothing that was already
  * solid moved.
  *
- * The pipeline (seed 000 §4):
+ * The pipeline (seed 000 §4, with the healing of §5.2 made automatic):
+ *  0. heal (repair/heal.c): weld vertices closer than a few float ulps,
+ *     stitch boundary that lies within gamma of other boundary, fill holes
+ *     whose patch closes a small part of a shell; what is left open stays
+ *     a sheet;
  *  1. clean: drop irregular triangles, set degenerate ones aside as wire
  *     segments, keep one layer of equivalent triangles (Def. 3.1);
  *  2. resolve every self-intersection exactly (CGAL Epeck, constrained
@@ -40,14 +44,36 @@ struct repair_options {
 	double epsilon;		/* thickness for sheets and wires, mm (> 0) */
 	enum repair_precision precision;
 	int threads;		/* cores for the exact passes; 0 = all */
+	/* Healing (docs/repair.md "Healing"): < 0 picks the default, 0 = off. */
+	double weld;		/* mm: weld vertices this close; default 8 float32 ulps */
+	double stitch;		/* mm: gamma, stitch boundary this close; default 1.5 eps */
+	bool keep_holes;	/* no stitching or hole filling (the seed's pipeline) */
 	/* Called now and then with a stage name and 0..1 done; may be NULL. */
 	void (*progress)(void *ctx, const char *stage, double done);
 	void *progress_ctx;
 };
 
 /* What the repair did; every count refers to triangles unless named. */
+/* Hole areas listed one by one in the report (the rest only summed). */
+#define REPAIR_HOLES_LISTED 8
+
 struct repair_report {
 	size_t input_triangles;
+	/* Healing, before everything else (docs/repair.md "Healing"). */
+	double weld_tolerance;		/* mm, as used */
+	size_t welded_vertices;		/* merged into another vertex */
+	size_t weld_collapsed;		/* triangles welding shrank to an edge, dropped */
+	double stitch_tolerance;	/* mm, gamma as used; 0 = stitching off */
+	size_t stitched_vertices;	/* boundary vertices snapped onto other boundary */
+	size_t stitched_gaps;		/* pairs of boundary loops joined */
+	double stitch_max_gap;		/* mm: longest snap */
+	size_t stitch_collapsed;	/* triangles stitching shrank to an edge, dropped */
+	size_t holes_filled;		/* boundary loops closed by a patch */
+	size_t fill_triangles;		/* triangles the patches added */
+	double fill_area;		/* mm^2, all patches */
+	double hole_area[REPAIR_HOLES_LISTED]; /* mm^2, the first holes filled */
+	size_t holes_kept;		/* loops left open: their shells stay sheets */
+	double kept_patch_fraction;	/* smallest patch/shell area ratio among kept shells */
 	size_t irregular_removed;	/* repeated vertex index */
 	size_t degenerate_removed;	/* collinear corners: kept as wires */
 	size_t duplicates_removed;	/* equivalent triangles beyond one layer */
@@ -77,7 +103,8 @@ struct repair_report {
 	char why[256];			/* when !printable: the reason, one sentence */
 };
 
-/* Defaults: epsilon 0.4 mm, float32 output, all cores, no progress. */
+/* Defaults: epsilon 0.4 mm, float32 output, all cores, no progress, healing
+ * with default tolerances. */
 void repair_options_init(struct repair_options *opt);
 
 /*

@@ -517,3 +517,44 @@ struct mesh *fx_bridge(void)
 
 	return extrude_y(x, z, 8, t, 6, 10);
 }
+
+struct mesh *fx_jitter(const struct mesh *m, double amount, unsigned seed)
+{
+	struct mesh_builder *b = mesh_builder_new(m->ntris);
+	uint64_t state = seed;
+
+	if (!b)
+		die("out of memory");
+	for (size_t t = 0; t < m->ntris; t++) {
+		uint32_t v[3];
+		for (int k = 0; k < 3; k++) {
+			const double *p = m->verts[m->tris[t][k]];
+			double q[3];
+			for (int a = 0; a < 3; a++) /* uniform in [-amount, amount) */
+				q[a] = p[a] + amount * (2 * (double)(fx_next(&state) >> 11) * 0x1p-53 - 1);
+			v[k] = vert(b, q[0], q[1], q[2]);
+		}
+		tri(b, v[0], v[1], v[2]);
+	}
+	return finish(b);
+}
+
+struct mesh *fx_split_gap(const struct mesh *m, double z0, double gap)
+{
+	struct mesh_builder *b = mesh_builder_new(m->ntris);
+
+	if (!b)
+		die("out of memory");
+	for (size_t t = 0; t < m->ntris; t++) {
+		const uint32_t *c = m->tris[t];
+		const double zc = (m->verts[c[0]][2] + m->verts[c[1]][2] + m->verts[c[2]][2]) / 3;
+		const double dz = zc < z0 ? -gap : 0;
+		uint32_t v[3];
+		for (int k = 0; k < 3; k++) {
+			const double *p = m->verts[c[k]];
+			v[k] = vert(b, p[0], p[1], p[2] + dz);
+		}
+		tri(b, v[0], v[1], v[2]);
+	}
+	return finish(b);
+}

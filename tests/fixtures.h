@@ -89,4 +89,19 @@ struct mesh *fx_overhang(void);
  */
 struct mesh *fx_bridge(void);
 
+/*
+ * fx_jitter - m with every triangle on corners of its own (nothing shared),
+ * each corner moved by up to amount mm in each coordinate (uniform, from a
+ * fixed generator seeded by seed): an export that lost its vertex welding.
+ */
+struct mesh *fx_jitter(const struct mesh *m, double amount, unsigned seed);
+
+/*
+ * fx_split_gap - m cut along the plane z = z0 into the triangles whose
+ * centroid lies above it and those below, the lower part moved down by gap
+ * mm: two halves exported apart, with a seam of width gap between equal
+ * boundary loops (z0 must run along edges of m, e.g. a sphere's equator).
+ */
+struct mesh *fx_split_gap(const struct mesh *m, double z0, double gap);
+
 #endif

@@ -12,6 +12,7 @@ Suite *meshio_suite(void);	/* tests/check_meshio.c: STL/OBJ/OFF I/O, bad input *
 Suite *exact_suite(void);	/* tests/check_exact.c: CGAL bridge predicates */
 Suite *repair_suite(void);	/* tests/check_repair.c: seed 000 repair end to end */
 Suite *thicken_suite(void);	/* tests/check_thicken.c: sheets into closed slabs */
+Suite *heal_suite(void);	/* tests/check_heal.c: welding, stitching, hole filling */
 Suite *profile_suite(void);	/* tests/check_profile.c: printer profiles */
 Suite *gcode_suite(void);	/* tests/check_gcode.c: G-code parser and reader */
 Suite *xport_suite(void);	/* tests/check_xport.c: serial transports (pty, TCP) */
