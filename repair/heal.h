@@ -37,7 +37,7 @@
 /* A snap moves a vertex less than this fraction of its shortest edge. */
 #define HEAL_STITCH_EDGE 0.5
 /* A shell is filled when its patches cover at most this part of its area. */
-#define HEAL_FILL_FRACTION 0.125
+#define HEAL_FILL_FRACTION 0.25
 
 /*
  * heal_mesh - run the three steps on in.  When any changed something,

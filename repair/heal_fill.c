@@ -46,35 +46,101 @@ static void holes_free(struct holes *hs)
 	free(hs->tangled);
 }
 
+/* A hole edge from -> to, the reverse of a boundary edge of triangle t. */
+struct hole_edge {
+	uint32_t from, to, far, t;
+};
+
+static int compare_hole_edge(const void *pa, const void *pb)
+{
+	const struct hole_edge *x = pa, *y = pb;
+
+	if (x->from != y->from)
+		return x->from < y->from ? -1 : 1;
+	return x->to < y->to ? -1 : x->to > y->to;
+}
+
+/* Index of the first of the n edges e (sorted by a, b) equal to {a, b}, or n. */
+static size_t find_edge(const struct heal_edge *e, size_t n, uint32_t a, uint32_t b)
+{
+	const uint32_t lo = a < b ? a : b, hi = a < b ? b : a;
+	size_t l = 0, h = n;
+
+	while (l < h) {
+		const size_t m = l + (h - l) / 2;
+		if (e[m].a < lo || (e[m].a == lo && e[m].b < hi))
+			l = m + 1;
+		else
+			h = m;
+	}
+	return l < n && e[l].a == lo && e[l].b == hi ? l : n;
+}
+
+/* The corner of triangle t that is neither a nor b. */
+static uint32_t third_corner(const uint32_t t[3], uint32_t a, uint32_t b)
+{
+	int k = 0;
+
+	while (t[k] == a || t[k] == b)
+		k++;
+	return t[k];
+}
+
+/*
+ * At a pinch (a vertex v with several hole edges leaving it): the hole
+ * edge leaving v from the same fan as triangle t, found turning around v
+ * through t's fan: from t across its other edge at v (to corner c),
+ * triangle by triangle, each edge shared by exactly two.  Returns its index
+ * in be (nb of them, sorted), or nb when the fan is not a simple one.
+ */
+static size_t fan_next(const struct heal_work *w, const struct heal_edge *e, size_t ne,
+		       const struct hole_edge *be, size_t nb, uint32_t v, uint32_t t, uint32_t c)
+{
+	for (size_t steps = 0; steps < ne; steps++) {
+		/* Is v -> c the hole edge of t's boundary edge c -> v? */
+		const struct hole_edge key = {.from = v, .to = c};
+		const struct hole_edge *hit = bsearch(&key, be, nb, sizeof(*be), compare_hole_edge);
+		if (hit && hit->t == t)
+			return (size_t)(hit - be);
+		const size_t i = find_edge(e, ne, v, c);
+		if (i == ne || i + 2 > ne || e[i + 1].a != e[i].a || e[i + 1].b != e[i].b ||
+		    (i + 2 < ne && e[i + 2].a == e[i].a && e[i + 2].b == e[i].b))
+			return nb; /* singular, or oriented against t: no way round */
+		const uint32_t u = e[i].t == t ? e[i + 1].t : e[i].t;
+		c = third_corner(w->tris[u], v, c);
+		t = u;
+	}
+	return nb;
+}
+
 /*
  * Walk the boundary of w into holes.  Boundary edge a->b of triangle
- * (a, b, c) gives the hole edge b->a with far corner c.  A vertex with
- * other than one hole edge out (a pinch, or triangles oriented against
- * each other) makes its shell tangled: such a shell is not filled.
+ * (a, b, c) gives the hole edge b->a with far corner c.  At a vertex with
+ * one hole edge out the walk takes it; where two fans meet (a pinch) it
+ * leaves along the fan it did not come along (fan_next finds the one it
+ * came along).  A hole that cannot be walked
+ * back to its start (triangles oriented against each other, a singular
+ * fan) makes its shell tangled: such a shell is not filled.
  */
 static int find_holes(const struct heal_work *w, const uint32_t *shell, struct holes *hs,
 		      struct st_error *err)
 {
 	struct heal_edge *e = NULL;
+	struct hole_edge *be = NULL;
 	size_t ne = 0, nb = 0;
-	uint32_t *out_to = NULL, *out_far = NULL, *outs = NULL;
-	uint8_t *seen = NULL;
+	uint8_t *used = NULL;
 	int rc;
 
 	memset(hs, 0, sizeof(*hs));
 	rc = heal_edges(w, &e, &ne, err);
 	if (rc)
 		return rc;
-	out_to = malloc((w->nverts + 1) * sizeof(*out_to));
-	out_far = malloc((w->nverts + 1) * sizeof(*out_far));
-	outs = calloc(w->nverts + 1, sizeof(*outs));
-	seen = calloc(w->nverts + 1, 1);
+	be = malloc((ne + 1) * sizeof(*be));
 	hs->tangled = calloc(w->nverts + 1, 1);
 	hs->vert = malloc((ne + 1) * sizeof(*hs->vert));
 	hs->third = malloc((ne + 1) * sizeof(*hs->third));
 	hs->h = malloc((ne + 1) * sizeof(*hs->h));
-	if (!out_to || !out_far || !outs || !seen || !hs->tangled || !hs->vert || !hs->third ||
-	    !hs->h) {
+	if (!be || !hs->tangled || !hs->vert || !hs->third || !hs->h) {
 		rc = st_error_set(err, ST_ERR_NOMEM, "heal: out of memory finding holes");
 		goto out;
 	}
@@ -88,44 +154,65 @@ static int find_holes(const struct heal_work *w, const uint32_t *shell, struct h
 			while (t[k] == e[i].a || t[k] == e[i].b)
 				k++;
 			/* t walks t[k+1] -> t[k+2] along the edge; the hole back. */
-			const uint32_t from = t[(k + 2) % 3], to = t[(k + 1) % 3];
-			outs[from]++;
-			out_to[from] = to;
-			out_far[from] = t[k];
+			be[nb].from = t[(k + 2) % 3];
+			be[nb].to = t[(k + 1) % 3];
+			be[nb].far = t[k];
+			be[nb].t = e[i].t;
 			nb++;
 		}
 		i = j;
 	}
-	for (size_t v = 0; v < w->nverts; v++)
-		if (outs[v] > 1)
-			hs->tangled[shell[v]] = 1;
-	for (size_t v = 0; v < w->nverts; v++) {
-		if (outs[v] != 1 || seen[v] || hs->tangled[shell[v]])
+	qsort(be, nb, sizeof(*be), compare_hole_edge);
+	used = calloc(nb + 1, 1);
+	if (!used) {
+		rc = st_error_set(err, ST_ERR_NOMEM, "heal: out of memory finding holes");
+		goto out;
+	}
+	for (size_t s = 0; s < nb; s++) {
+		if (used[s] || hs->tangled[shell[be[s].from]])
 			continue;
 		struct hole *h = &hs->h[hs->nh];
-		uint32_t x = (uint32_t)v;
+		size_t x = s;
 		h->first = hs->nv;
-		h->shell = shell[v];
+		h->shell = shell[be[s].from];
 		h->area = 0;
-		while (!seen[x] && outs[x] == 1 && hs->nv < nb) {
-			seen[x] = 1;
-			hs->vert[hs->nv] = x;
-			hs->third[hs->nv] = out_far[x];
+		while (x < nb && !used[x]) {
+			used[x] = 1;
+			hs->vert[hs->nv] = be[x].from;
+			hs->third[hs->nv] = be[x].far;
 			hs->nv++;
-			x = out_to[x];
+			/* The hole edges leaving be[x].to: one, or a pinch. */
+			const uint32_t v = be[x].to;
+			const struct hole_edge key = {.from = v, .to = 0};
+			size_t lo = 0, hi = nb;
+			while (lo < hi) {
+				const size_t m = lo + (hi - lo) / 2;
+				if (compare_hole_edge(&be[m], &key) < 0)
+					lo = m + 1;
+				else
+					hi = m;
+			}
+			if (lo + 2 < nb && be[lo + 2].from == v) {
+				x = nb; /* three holes at one vertex: no way to tell */
+			} else if (lo + 1 < nb && be[lo + 1].from == v) {
+				/* Two fans meet at v, two hole sectors between them:
+				 * the one this hole ran along ends at the other fan. */
+				const size_t own = fan_next(w, e, ne, be, nb, v, be[x].t, be[x].far);
+				x = own == lo ? lo + 1 : own == lo + 1 ? lo : nb;
+			} else {
+				x = lo < nb && be[lo].from == v ? lo : nb;
+			}
 		}
 		h->n = hs->nv - h->first;
-		if (x != v || h->n < 3) /* did not come back: a boundary that does not close */
-			hs->tangled[shell[v]] = 1;
+		if (x != s || h->n < 3) /* did not come back: a boundary that does not close */
+			hs->tangled[h->shell] = 1;
 		else
 			hs->nh++;
 	}
 out:
 	free(e);
-	free(out_to);
-	free(out_far);
-	free(outs);
-	free(seen);
+	free(be);
+	free(used);
 	if (rc)
 		holes_free(hs);
 	return rc;

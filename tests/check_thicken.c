@@ -104,17 +104,6 @@ static size_t assert_closed_slab(const struct mesh *m, const char *name)
 	return n;
 }
 
-/* A 10 mm cube without the triangles whose bits are set in drop. */
-static struct mesh *cube_without(unsigned drop)
-{
-	struct mesh *m = fx_box(0, 0, 0, 10, 10, 10);
-
-	for (int t = 11; t >= 0; t--)
-		if (drop & (1u << t))
-			fx_drop(m, (size_t)t);
-	return m;
-}
-
 /*
  * Proves that the slab of every cube with one or two facets missing (78
  * sheets with sharp 90-degree creases, which the old bevels left open) is
@@ -124,7 +113,7 @@ START_TEST(open_cubes_slab_closed)
 {
 	for (int i = 0; i < 12; i++)
 		for (int j = i; j < 12; j++) {
-			struct mesh *m = cube_without((1u << i) | (1u << j));
+			struct mesh *m = fx_cube_without(10, (1u << i) | (1u << j));
 			char name[32];
 			snprintf(name, sizeof(name), "cube-%d-%d", i, j);
 			ck_assert_uint_gt(assert_closed_slab(m, name), 0);
@@ -177,6 +166,7 @@ static void assert_repaired(const struct mesh *m, const char *name)
 
 	repair_options_init(&opt);
 	opt.epsilon = EPS;
+	opt.keep_holes = true; /* the seed's pipeline: every hole thickened */
 	rc = repair_mesh(m, &opt, &out, NULL, &rep, &err);
 	ck_assert_msg(rc == 0, "%s: repair_mesh returned %d: %s", name, rc, err.msg);
 	ck_assert_msg(rep.second_sheet_triangles == 0, "%s: %zu sheet triangles left", name,
@@ -194,7 +184,7 @@ START_TEST(open_cubes_repaired)
 {
 	for (int i = 0; i < 12; i++)
 		for (int j = i; j < 12; j++) {
-			struct mesh *m = cube_without((1u << i) | (1u << j));
+			struct mesh *m = fx_cube_without(10, (1u << i) | (1u << j));
 			char name[32];
 			snprintf(name, sizeof(name), "cube-%d-%d", i, j);
 			assert_repaired(m, name);
@@ -206,7 +196,7 @@ END_TEST
 /* Proves the same for an open corner: three faces of a cube (6 facets). */
 START_TEST(open_corner_repaired)
 {
-	struct mesh *m = cube_without(0x3f);
+	struct mesh *m = fx_cube_without(10, 0xccc);
 
 	assert_repaired(m, "corner");
 	mesh_free(m);

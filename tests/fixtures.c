@@ -518,6 +518,16 @@ struct mesh *fx_bridge(void)
 	return extrude_y(x, z, 8, t, 6, 10);
 }
 
+struct mesh *fx_cube_without(double size, unsigned drop)
+{
+	struct mesh *m = fx_box(0, 0, 0, size, size, size);
+
+	for (int t = 11; t >= 0; t--)
+		if (drop & (1u << t))
+			fx_drop(m, (size_t)t);
+	return m;
+}
+
 struct mesh *fx_jitter(const struct mesh *m, double amount, unsigned seed)
 {
 	struct mesh_builder *b = mesh_builder_new(m->ntris);
@@ -553,6 +563,29 @@ struct mesh *fx_split_gap(const struct mesh *m, double z0, double gap)
 		for (int k = 0; k < 3; k++) {
 			const double *p = m->verts[c[k]];
 			v[k] = vert(b, p[0], p[1], p[2] + dz);
+		}
+		tri(b, v[0], v[1], v[2]);
+	}
+	return finish(b);
+}
+
+struct mesh *fx_soup(unsigned seed, int n, double box, double size)
+{
+	struct mesh_builder *b = mesh_builder_new((size_t)n);
+	uint64_t state = seed;
+
+	if (!b)
+		die("out of memory");
+	for (int t = 0; t < n; t++) {
+		double c[3];
+		uint32_t v[3];
+		for (int a = 0; a < 3; a++) /* 53 random bits in [0,1) */
+			c[a] = box * (double)(fx_next(&state) >> 11) * 0x1p-53;
+		for (int k = 0; k < 3; k++) {
+			double p[3];
+			for (int a = 0; a < 3; a++)
+				p[a] = c[a] + size * ((double)(fx_next(&state) >> 11) * 0x1p-53 - 0.5);
+			v[k] = vert(b, p[0], p[1], p[2]);
 		}
 		tri(b, v[0], v[1], v[2]);
 	}

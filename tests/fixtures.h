@@ -104,4 +104,15 @@ struct mesh *fx_jitter(const struct mesh *m, double amount, unsigned seed);
  */
 struct mesh *fx_split_gap(const struct mesh *m, double z0, double gap);
 
+/*
+ * fx_soup - n random triangles as a scan or a broken export leaves them:
+ * centres uniform in [0,box]^3, corners within size/2 of their centre in
+ * each axis (fixed generator seeded by seed).  Crossing, open, anything,
+ * but each triangle meets only its neighbours.
+ */
+struct mesh *fx_soup(unsigned seed, int n, double box, double size);
+
+/* fx_cube_without - fx_box(0,0,0, size,size,size) without the triangles whose bit is set in drop. */
+struct mesh *fx_cube_without(double size, unsigned drop);
+
 #endif

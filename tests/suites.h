@@ -13,6 +13,7 @@ Suite *exact_suite(void);	/* tests/check_exact.c: CGAL bridge predicates */
 Suite *repair_suite(void);	/* tests/check_repair.c: seed 000 repair end to end */
 Suite *thicken_suite(void);	/* tests/check_thicken.c: sheets into closed slabs */
 Suite *heal_suite(void);	/* tests/check_heal.c: welding, stitching, hole filling */
+Suite *corpus_suite(void);	/* tests/check_corpus.c: repair on generated defect cases */
 Suite *profile_suite(void);	/* tests/check_profile.c: printer profiles */
 Suite *gcode_suite(void);	/* tests/check_gcode.c: G-code parser and reader */
 Suite *xport_suite(void);	/* tests/check_xport.c: serial transports (pty, TCP) */
