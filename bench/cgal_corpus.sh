@@ -13,7 +13,7 @@ set -eu
 bin=${1:-build/stratum}
 limit=${2:-120}
 out=bench/out/cgal
-gen=build/bench/gen_mesh
+gen=${GEN_MESH:-build/bench/gen_mesh}
 tarball=/usr/share/doc/libcgal-demo/data.tar.gz
 mkdir -p "$out"
 

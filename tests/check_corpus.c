@@ -165,7 +165,8 @@ END_TEST
 /*
  * Proves that a sphere exported as two halves with a seam gap of 0.001,
  * 0.01 and 0.1 mm is stitched into one solid sphere (volume within 1 % of
- * the closed one), not grown by epsilon everywhere.
+ * the closed one), not grown by epsilon everywhere: with the same vertices
+ * on both sides of the seam, and with halves tessellated apart.
  */
 START_TEST(seamed_spheres)
 {
@@ -176,6 +177,15 @@ START_TEST(seamed_spheres)
 
 	snprintf(name, sizeof(name), "seam-%d", _i);
 	repair_case(m, volume_of(closed), name);
+	/* The halves tessellated apart: 32 and 27 sectors, turned. */
+	struct mesh *up = fx_hemisphere(10, 16, 32, 1, gaps[_i], 0);
+	struct mesh *down = fx_hemisphere(10, 16, 27, 0, 0, 0.05);
+	struct mesh *both = fx_concat(up, down);
+	snprintf(name, sizeof(name), "seam-apart-%d", _i);
+	repair_case(both, volume_of(closed), name);
+	mesh_free(up);
+	mesh_free(down);
+	mesh_free(both);
 	mesh_free(closed);
 	mesh_free(m);
 }

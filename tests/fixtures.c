@@ -591,3 +591,28 @@ struct mesh *fx_soup(unsigned seed, int n, double box, double size)
 	}
 	return finish(b);
 }
+
+struct mesh *fx_hemisphere(double r, int nlat, int nlon, int upper, double dz, double turn)
+{
+	struct mesh_builder *b = mesh_builder_new((size_t)nlat * nlon);
+	const int k0 = upper ? 0 : nlat / 2, k1 = upper ? nlat / 2 : nlat;
+
+	if (!b)
+		die("out of memory");
+	for (int k = k0; k < k1; k++)
+		for (int j = 0; j < nlon; j++) {
+			uint32_t v[2][2];
+			for (int a = 0; a < 2; a++)
+				for (int c = 0; c < 2; c++) {
+					const double th = M_PI * (k + a) / nlat;
+					const double ph = 2 * M_PI * (j + c) / nlon + turn;
+					v[a][c] = vert(b, r * sin(th) * cos(ph), r * sin(th) * sin(ph),
+						       r * cos(th) + dz);
+				}
+			if (k > 0) /* no triangle at the north pole's ring of points */
+				tri(b, v[0][0], v[1][0], v[0][1]);
+			if (k + 1 < nlat)
+				tri(b, v[1][0], v[1][1], v[0][1]);
+		}
+	return finish(b);
+}

@@ -112,6 +112,15 @@ struct mesh *fx_split_gap(const struct mesh *m, double z0, double gap);
  */
 struct mesh *fx_soup(unsigned seed, int n, double box, double size);
 
+/*
+ * fx_hemisphere - the upper (upper != 0) or lower half of a UV sphere of
+ * radius r at the origin, nlat (even) bands over the whole sphere, nlon
+ * sectors turned by turn radians, raised by dz: two halves with different
+ * nlon or turn meet along the equator without sharing vertices, as two
+ * CAD patches exported apart do.
+ */
+struct mesh *fx_hemisphere(double r, int nlat, int nlon, int upper, double dz, double turn);
+
 /* fx_cube_without - fx_box(0,0,0, size,size,size) without the triangles whose bit is set in drop. */
 struct mesh *fx_cube_without(double size, unsigned drop);
 
