@@ -291,6 +291,7 @@ static void json_heal(json_t *obj, const struct repair_report *r)
 	json_object_set_new(obj, "hole_areas", areas ? areas : json_null());
 	json_object_set_new(obj, "holes_kept", json_size(r->holes_kept));
 	json_object_set_new(obj, "kept_patch_fraction", json_real(r->kept_patch_fraction));
+	json_object_set_new(obj, "holes_crossing", json_size(r->holes_crossing));
 }
 
 /* One line of what the healing did, e.g. "welded 24 vertices, stitched ...". */
@@ -322,6 +323,8 @@ static void print_heal(const struct repair_report *r)
 	if (r->holes_kept)
 		printf("; %zu hole%s left open (patch >= %.3g of its shell: a sheet)", r->holes_kept,
 		       r->holes_kept == 1 ? "" : "s", r->kept_patch_fraction);
+	if (r->holes_crossing)
+		printf(", %zu of them because the patch would cross the model", r->holes_crossing);
 	printf("\n");
 }
 

@@ -19,6 +19,7 @@
 
 #include "heal.h"
 #include "holefill.h"
+#include "exact.h"
 #include "ids.h"
 #include "vec3.h"
 
@@ -312,6 +313,53 @@ static int append_patch(struct heal_work *w, const struct patch *p, struct st_er
 	return 0;
 }
 
+/*
+ * Pairs of w's triangles of shell sh (shell[] per vertex) that meet
+ * outside a shared face, exactly; skip is scratch for w->ntris flags.
+ */
+static int count_crossings(const struct heal_work *w, const uint32_t *shell, uint32_t sh,
+			   uint8_t *skip, uint64_t *count, struct st_error *err)
+{
+	for (size_t t = 0; t < w->ntris; t++)
+		skip[t] = shell[w->tris[t][0]] != sh;
+	return exact_count_self_intersections((const double(*)[3])w->verts, w->nverts,
+					      (const uint32_t(*)[3])w->tris, w->ntris, skip, 0,
+					      count, err);
+}
+
+/*
+ * Whether patch p would cross its own shell sh: the exact count of
+ * intersecting pairs of the shell with p appended against the count
+ * without it.  Such a patch (a hole whose rim is far from flat, spanned
+ * through the model) would be cut by the repair into flaps that stick out;
+ * its hole is left open.  What crosses other shells is a union the repair
+ * resolves like any other.
+ */
+static int patch_crosses(struct heal_work *w, const uint32_t *shell, uint32_t sh,
+			 const struct patch *p, bool *crossing, struct st_error *err)
+{
+	uint64_t without = 0, with = 0;
+	uint8_t *skip;
+	int rc;
+
+	*crossing = false;
+	rc = append_patch(w, p, err); /* first, so skip is sized for both counts */
+	if (rc)
+		return rc;
+	skip = malloc(w->ntris + 1);
+	if (!skip) {
+		w->ntris -= p->n;
+		return st_error_set(err, ST_ERR_NOMEM, "heal: out of memory checking a patch");
+	}
+	rc = count_crossings(w, shell, sh, skip, &with, err);
+	w->ntris -= p->n; /* the caller appends it if it is kept */
+	if (!rc)
+		rc = count_crossings(w, shell, sh, skip, &without, err);
+	free(skip);
+	*crossing = !rc && with > without;
+	return rc;
+}
+
 int heal_fill(struct heal_work *w, struct repair_report *rep, struct st_error *err)
 {
 	uint32_t *shell = malloc((w->nverts + 1) * sizeof(*shell));
@@ -362,7 +410,13 @@ int heal_fill(struct heal_work *w, struct repair_report *rep, struct st_error *e
 		}
 		const double shell_area = area[hs.h[i].shell];
 		const double frac = shell_area > 0 ? p.area / shell_area : HUGE_VAL;
+		bool crossing = false;
 		if (all && frac <= HEAL_FILL_FRACTION) {
+			rc = patch_crosses(w, shell, hs.h[i].shell, &p, &crossing, err);
+			if (rc)
+				goto out;
+		}
+		if (all && frac <= HEAL_FILL_FRACTION && !crossing) {
 			for (size_t k = i; k < j; k++) {
 				if (rep->holes_filled < REPAIR_HOLES_LISTED)
 					rep->hole_area[rep->holes_filled] = hs.h[k].area;
@@ -375,6 +429,8 @@ int heal_fill(struct heal_work *w, struct repair_report *rep, struct st_error *e
 				goto out;
 		} else {
 			rep->holes_kept += j - i;
+			if (crossing)
+				rep->holes_crossing += j - i;
 			if (rep->kept_patch_fraction == 0 || frac < rep->kept_patch_fraction)
 				rep->kept_patch_fraction = frac;
 		}

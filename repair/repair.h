@@ -74,6 +74,7 @@ struct repair_report {
 	double hole_area[REPAIR_HOLES_LISTED]; /* mm^2, the first holes filled */
 	size_t holes_kept;		/* loops left open: their shells stay sheets */
 	double kept_patch_fraction;	/* smallest patch/shell area ratio among kept shells */
+	size_t holes_crossing;		/* of those kept: their patch would cross the model */
 	size_t irregular_removed;	/* repeated vertex index */
 	size_t degenerate_removed;	/* collinear corners: kept as wires */
 	size_t duplicates_removed;	/* equivalent triangles beyond one layer */

@@ -339,6 +339,48 @@ START_TEST(bad_tolerance_rejected)
 }
 END_TEST
 
+/*
+ * Proves that a patch is checked exactly against its own shell: an open
+ * box (patch 1/5, small enough to fill) with a spike of the same shell
+ * (a tetrahedron hanging from the bottom corner) standing up through the
+ * opening.  The flat patch would cross the spike, so the hole is left open
+ * and counted as crossing; the repair thickens the box instead.
+ */
+START_TEST(crossing_patch_not_used)
+{
+	static const double spike[4][3] = {{0, 0, 0}, {3, 3, 1}, {4, 2, 1}, {3, 3, 14}};
+	static const int faces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+	struct mesh *box = fx_cube_without(10, 0xc); /* no top face (z = 10) */
+	struct mesh_builder *b = mesh_builder_new(box->ntris + 4);
+	struct repair_options opt;
+	struct repair_report rep;
+	struct st_error err = {0};
+	struct mesh *in, *out = NULL;
+	uint32_t v[4];
+
+	ck_assert_ptr_nonnull(b);
+	ck_assert_int_eq(mesh_builder_append(b, box, &err), 0);
+	for (int i = 0; i < 4; i++)
+		ck_assert_int_eq(mesh_builder_vertex(b, spike[i], &v[i], &err), 0);
+	for (int f = 0; f < 4; f++)
+		ck_assert_int_eq(mesh_builder_triangle(b, v[faces[f][0]], v[faces[f][1]],
+						       v[faces[f][2]], &err), 0);
+	in = mesh_builder_finish(b);
+	ck_assert_ptr_nonnull(in);
+	repair_options_init(&opt);
+	opt.epsilon = EPS;
+	ck_assert_int_eq(repair_mesh(in, &opt, &out, NULL, &rep, &err), 0);
+	ck_assert_uint_eq(rep.holes_filled, 0);
+	ck_assert_uint_eq(rep.holes_kept, 1);
+	ck_assert_uint_eq(rep.holes_crossing, 1);
+	ck_assert_msg(rep.printable, "not printable: %s", rep.why);
+	ck_assert_uint_gt(rep.sheet_triangles, 0);
+	mesh_free(out);
+	mesh_free(in);
+	mesh_free(box);
+}
+END_TEST
+
 Suite *heal_suite(void)
 {
 	Suite *s = suite_create("heal");
@@ -354,6 +396,7 @@ Suite *heal_suite(void)
 	suite_add_tcase(s, solid);
 	tcase_add_loop_test(open, open_surface_stays_sheet, 0, 2);
 	tcase_add_test(open, keep_holes_turns_off_stitch_and_fill);
+	tcase_add_test(open, crossing_patch_not_used);
 	suite_add_tcase(s, open);
 	tcase_add_test(args, heal_defaults);
 	tcase_add_loop_test(args, bad_tolerance_rejected, 0, 2);
