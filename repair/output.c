@@ -112,7 +112,10 @@ int repair_finish_parts(struct mesh **m, const struct repair_options *opt, long 
 {
 	uint32_t *part = malloc(((*m)->ntris + 1) * sizeof(*part));
 	struct mesh_report mr;
+	double lo[3], hi[3];
 	int rc;
+
+	mesh_bbox(*m, lo, hi); /* of everything, for the message below */
 
 	if (!part)
 		return st_error_set(err, ST_ERR_NOMEM, "out of memory numbering the parts");
@@ -139,8 +142,10 @@ int repair_finish_parts(struct mesh **m, const struct repair_options *opt, long 
 	rep->printable = repair_result_printable(&mr);
 	if (!rep->printable && rep->parts_dropped && mr.triangles == 0)
 		snprintf(rep->why, sizeof(rep->why),
-			 "every part is smaller than epsilon (%g mm) in all three directions",
-			 opt->epsilon);
+			 "every part is smaller than epsilon (%g mm) in all three directions (the "
+			 "model is %.3g x %.3g x %.3g mm: if it was drawn in metres or inches, "
+			 "scale it up)",
+			 opt->epsilon, hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
 	else if (!rep->printable)
 		explain(&mr, rep->why, sizeof(rep->why));
 	if (component)
