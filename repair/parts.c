@@ -101,15 +101,21 @@ int parts_nest(const struct mesh *m, const uint8_t *in_layer, uint32_t *shell, s
 	int rc = 0;
 
 	memset(out, 0, sizeof(*out));
-	if (nest && (nshells > 1 || singular)) {
-		lpos = malloc((m->ntris + 1) * sizeof(*lpos));
-		if (!lpos)
-			goto out_nomem;
-		rc = exact_shells(m, in_layer, shell, &nshells, singular, lpos, &em, out, err);
-		if (rc)
-			goto out;
-		*nshells_io = nshells;
+	if (!nest || (nshells < 2 && !singular)) {
+		/* Nothing to group: each shell is a part (most files: one). */
+		out->parts = nshells;
+		if (part)
+			for (size_t t = 0; t < m->ntris; t++)
+				part[t] = in_layer[t] ? shell[t] : UINT32_MAX;
+		return 0;
 	}
+	lpos = malloc((m->ntris + 1) * sizeof(*lpos));
+	if (!lpos)
+		goto out_nomem;
+	rc = exact_shells(m, in_layer, shell, &nshells, singular, lpos, &em, out, err);
+	if (rc)
+		goto out;
+	*nshells_io = nshells;
 	s = calloc(nshells + 1, sizeof(*s));
 	off = calloc(nshells + 2, sizeof(*off));
 	if (!s || !off)
@@ -127,8 +133,8 @@ int parts_nest(const struct mesh *m, const uint8_t *in_layer, uint32_t *shell, s
 		for (int j = 0; j < 3; j++)
 			for (int k = 0; k < 3; k++) {
 				const double x = m->verts[m->tris[t][j]][k];
-				si->lo[k] = fmin(si->lo[k], x);
-				si->hi[k] = fmax(si->hi[k], x);
+				si->lo[k] = x < si->lo[k] ? x : si->lo[k];
+				si->hi[k] = x > si->hi[k] ? x : si->hi[k];
 			}
 		off[shell[t] + 1]++;
 		nl++;
@@ -149,7 +155,7 @@ int parts_nest(const struct mesh *m, const uint8_t *in_layer, uint32_t *shell, s
 	for (size_t i = 0; i < nshells; i++)
 		s[i].part = (uint32_t)i;
 	out->parts = nshells;
-	if (!nest || nshells < 2)
+	if (nshells < 2)
 		goto assign;
 
 	/* The analysed triangles listed by shell, as exact-mesh indices. */

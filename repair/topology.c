@@ -320,10 +320,9 @@ static int count_edges_and_parts(struct topo *tp, struct mesh_report *rep, struc
 	uint32_t *comp = malloc((m->ntris + 1) * sizeof(*comp));
 	uint32_t *mcomp = malloc((m->ntris + 1) * sizeof(*mcomp));
 	uint8_t *flip = calloc(m->ntris + 1, 1);
-	uint32_t *shell = malloc((m->ntris + 1) * sizeof(*shell));
 	int rc = 0;
 
-	if (!comp || !mcomp || !flip || !shell) {
+	if (!comp || !mcomp || !flip) {
 		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory finding components");
 		goto out;
 	}
@@ -356,22 +355,24 @@ static int count_edges_and_parts(struct topo *tp, struct mesh_report *rep, struc
 				rep->orientable = false;
 		}
 	}
+	for (size_t t = 0; t < m->ntris; t++)
+		if (tp->tclass[t] == TRI_LAYER)
+			rep->components += uf_find(comp, (uint32_t)t) == t;
+	/* comp is done with: it becomes the shell numbers.  Roots come first
+	 * in their set (the lower root wins a union). */
 	for (size_t t = 0; t < m->ntris; t++) {
 		uint8_t parity;
 
 		if (tp->tclass[t] != TRI_LAYER)
 			continue;
-		rep->components += uf_find(comp, (uint32_t)t) == t;
-		/* Roots come first in their set: number the shells. */
 		if (pf_find(mcomp, flip, (uint32_t)t, &parity) == t)
-			shell[t] = (uint32_t)rep->manifold_components++;
+			comp[t] = (uint32_t)rep->manifold_components++;
 		else
-			shell[t] = shell[mcomp[t]]; /* pf_find pointed t at its root */
+			comp[t] = comp[mcomp[t]]; /* pf_find pointed t at its root */
 	}
-	tp->shell = shell;
-	shell = NULL;
+	tp->shell = comp;
+	comp = NULL;
 out:
-	free(shell);
 	free(comp);
 	free(mcomp);
 	free(flip);
