@@ -729,9 +729,9 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 	rep->input_triangles = in->ntris;
 
 	rc = core(in, opt, true, &co, err);
+	report_core(rep, &co); /* on failure too: what was measured so far */
 	if (rc)
 		return rc;
-	report_core(rep, &co);
 	rep->solid_deviation = solid_deviation(in, co.result);
 
 	/* Round, check, and run the core again on what rounding broke. */

@@ -97,7 +97,8 @@ void repair_options_init(struct repair_options *opt);
  * Returns 0 with rep->printable telling whether a printable result was
  * reached (when not, *out still holds the best result and rep->why says
  * what is wrong), or a negative class with err filled and *out NULL:
- * ST_ERR_ARG (bad options), ST_ERR_NOMEM, ST_ERR_INTERNAL.
+ * ST_ERR_ARG (bad options), ST_ERR_NOMEM, ST_ERR_INTERNAL; then *rep
+ * holds what the first core run measured before the failure.
  */
 int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct mesh **out,
 		uint32_t **component, struct repair_report *rep, struct st_error *err);
