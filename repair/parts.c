@@ -88,6 +88,93 @@ static int exact_shells(const struct mesh *m, const uint8_t *in_layer, uint32_t 
 	return nc < 0 ? (err ? err->code : ST_ERR_INTERNAL) : 0;
 }
 
+/* An edge of a triangle of a shell, to find shells that share edges. */
+struct shell_edge {
+	uint32_t lo, hi, shell;
+};
+
+static int compare_shell_edge(const void *pa, const void *pb)
+{
+	const struct shell_edge *a = pa, *b = pb;
+
+	if (a->lo != b->lo)
+		return a->lo < b->lo ? -1 : 1;
+	if (a->hi != b->hi)
+		return a->hi < b->hi ? -1 : 1;
+	return a->shell < b->shell ? -1 : a->shell > b->shell;
+}
+
+static int compare_pair(const void *pa, const void *pb)
+{
+	const uint64_t a = *(const uint64_t *)pa, b = *(const uint64_t *)pb;
+
+	return a < b ? -1 : a > b;
+}
+
+/*
+ * The pairs of different shells that share an edge (a singular edge), as
+ * sorted keys lo << 32 | hi.  Two shells facing the same way (both
+ * outwards, or both inwards) that stayed apart at a shared edge lie
+ * outside each other: had one been inside the other, a triangle of the
+ * outer one would have met the inner one first turning into its material
+ * and the two would have been paired (or found unpaired).  Nothing
+ * crosses, so that holds everywhere and no ray test is needed.  (A part
+ * touching the wall of the cavity it sits in faces the other way and is
+ * tested.)  This spares one test over the body per pocket on scans with
+ * hundreds of pockets.  Returns the count or -1 on OOM.
+ */
+static long touching_pairs(const struct mesh *m, const uint8_t *in_layer, const uint32_t *shell,
+			   uint64_t **out)
+{
+	struct shell_edge *e = malloc((3 * m->ntris + 1) * sizeof(*e));
+	uint64_t *pairs = NULL;
+	size_t ne = 0, np = 0, cap = 0;
+
+	*out = NULL;
+	if (!e)
+		return -1;
+	for (size_t t = 0; t < m->ntris; t++)
+		for (int k = 0; in_layer[t] && k < 3; k++) {
+			const uint32_t a = m->tris[t][k], b = m->tris[t][(k + 1) % 3];
+			e[ne].lo = a < b ? a : b;
+			e[ne].hi = a < b ? b : a;
+			e[ne++].shell = shell[t];
+		}
+	qsort(e, ne, sizeof(*e), compare_shell_edge);
+	for (size_t i = 0; i + 1 < ne; i++) {
+		if (e[i].lo != e[i + 1].lo || e[i].hi != e[i + 1].hi ||
+		    e[i].shell == e[i + 1].shell)
+			continue;
+		if (np == cap) {
+			size_t ncap = cap ? 2 * cap : 64;
+			uint64_t *p = realloc(pairs, ncap * sizeof(*p));
+			if (!p) {
+				free(e);
+				free(pairs);
+				return -1;
+			}
+			pairs = p;
+			cap = ncap;
+		}
+		/* Shells along one edge come sorted: consecutive pairs cover
+		 * two shells per edge, the usual case. */
+		pairs[np++] = (uint64_t)e[i].shell << 32 | e[i + 1].shell;
+	}
+	free(e);
+	if (np)
+		qsort(pairs, np, sizeof(*pairs), compare_pair);
+	*out = pairs;
+	return (long)np;
+}
+
+/* Whether shells a and b are listed in the sorted touching pairs. */
+static bool touching(const uint64_t *pairs, size_t n, uint32_t a, uint32_t b)
+{
+	const uint64_t key = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+
+	return n && bsearch(&key, pairs, n, sizeof(*pairs), compare_pair) != NULL;
+}
+
 int parts_nest(const struct mesh *m, const uint8_t *in_layer, uint32_t *shell, size_t *nshells_io,
 	       bool nest, bool singular, uint32_t *part, struct parts_out *out,
 	       struct st_error *err)
@@ -96,6 +183,8 @@ int parts_nest(const struct mesh *m, const uint8_t *in_layer, uint32_t *shell, s
 	uint32_t *off = NULL, *list = NULL, *lpos = NULL, *outer = NULL;
 	struct id_depth *order = NULL;
 	struct exact_mesh *em = NULL;
+	uint64_t *touch = NULL;
+	long ntouch = 0;
 	size_t nl = 0, nshells = *nshells_io;
 	double c[3] = {0, 0, 0};
 	int rc = 0;
@@ -173,6 +262,9 @@ int parts_nest(const struct mesh *m, const uint8_t *in_layer, uint32_t *shell, s
 		off[i] = off[i - 1];
 	off[0] = 0;
 
+	ntouch = touching_pairs(m, in_layer, shell, &touch);
+	if (ntouch < 0)
+		goto out_nomem;
 	/* outer[i]: the innermost outward shell around i (UINT32_MAX: none);
 	 * depth and winding from every shell around i. */
 	for (size_t i = 0; i < nshells && !rc; i++) {
@@ -180,6 +272,9 @@ int parts_nest(const struct mesh *m, const uint8_t *in_layer, uint32_t *shell, s
 		for (size_t j = 0; j < nshells && !rc; j++) {
 			bool inside = false;
 			if (j == i || !box_within(&s[i], &s[j]))
+				continue;
+			if ((s[i].volume > 0) == (s[j].volume > 0) &&
+			    touching(touch, (size_t)ntouch, (uint32_t)i, (uint32_t)j))
 				continue;
 			rc = exact_mesh_inside(em, list + off[j], off[j + 1] - off[j], list[off[i]],
 					       &inside, err);
@@ -230,5 +325,6 @@ out:
 	free(lpos);
 	free(order);
 	free(outer);
+	free(touch);
 	return rc;
 }

@@ -253,7 +253,10 @@ static struct mesh *tetra(const double p[3], const double q[3], const double r[3
  * box's bottom face.  The four triangles at that singular edge pair up
  * through the material, so the file is one part and printable, volume box
  * minus tetrahedron.  The same tetrahedron facing outwards is a solid
- * inside the solid and is not printable.
+ * inside the solid and is not printable.  A part standing in a cavity
+ * and touching its floor along an edge (a tetrahedron on the floor
+ * diagonal of an inward box [2,8]^3) is in the void: two parts, one
+ * cavity, printable.
  */
 START_TEST(cavity_touching_the_wall)
 {
@@ -272,6 +275,24 @@ START_TEST(cavity_touching_the_wall)
 	ck_assert_double_eq_tol(rep.volume, 1000.0 - tr.volume, 1e-9);
 	rep = analyze(bad);
 	ck_assert(!rep.printable);
+	{
+		const double a[3] = {2, 2, 2}, b[3] = {8, 8, 2}, c[3] = {3, 5, 4}, d[3] = {5, 3, 4};
+		struct mesh *box = fx_box(2, 2, 2, 8, 8, 8), *cav = inward(box);
+		struct mesh *island = tetra(a, b, c, d), *hollow = fx_concat(outer, cav);
+		struct mesh *all = fx_concat(hollow, island);
+
+		rep = analyze(all);
+		ck_assert_uint_eq(rep.singular_edges, 1);
+		ck_assert_msg(rep.printable, "unpaired %zu misnested %zu", rep.open_singular_edges,
+			      rep.misnested_shells);
+		ck_assert_uint_eq(rep.parts, 2);
+		ck_assert_uint_eq(rep.cavities, 1);
+		mesh_free(box);
+		mesh_free(cav);
+		mesh_free(island);
+		mesh_free(hollow);
+		mesh_free(all);
+	}
 	mesh_free(outer);
 	mesh_free(tet);
 	mesh_free(hole);
