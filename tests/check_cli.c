@@ -76,7 +76,8 @@ START_TEST(json_cube)
 		"vertices", "edges", "triangles", "boundary_edges", "singular_edges",
 		"nonmanifold_vertices", "components", "boundary_loops", "euler", "genus",
 		"degenerate", "duplicates", "self_intersections", "orientable",
-		"consistently_oriented", "volume", "bbox", "printable", "reasons"};
+		"consistently_oriented", "volume", "bbox", "printable", "reasons", "parts",
+		"cavities", "misnested_shells", "unpaired_singular_edges", "warnings"};
 
 	for (size_t i = 0; i < sizeof(keys) / sizeof(keys[0]); i++)
 		ck_assert_msg(json_object_get(o, keys[i]) != NULL, "missing %s", keys[i]);
@@ -86,6 +87,8 @@ START_TEST(json_cube)
 	ck_assert_int_eq(field(o, "euler"), 2);
 	ck_assert_int_eq(field(o, "genus"), 0);
 	ck_assert_int_eq(field(o, "self_intersections"), 0);
+	ck_assert_int_eq(field(o, "parts"), 1);
+	ck_assert_int_eq(field(o, "cavities"), 0);
 	ck_assert(json_is_true(json_object_get(o, "printable")));
 	ck_assert(json_is_true(json_object_get(o, "orientable")));
 	ck_assert_double_eq_tol(json_real_value(json_object_get(o, "volume")), 1000.0, 1e-6);
