@@ -22,7 +22,9 @@ static void check_usage(FILE *out)
 		"Reads an STL (binary or ASCII), OBJ or OFF file and reports its topology:\n"
 		"edges, holes, singular edges, components, Euler characteristic and genus,\n"
 		"degenerate and duplicate triangles, exact self-intersections, orientation,\n"
-		"volume - and whether it is printable as it stands (Attene's Definition 3.11).\n"
+		"volume, parts and cavities - and whether it is printable as it stands\n"
+		"(Attene's Definition 3.11 for each part; parts may touch along edges or at\n"
+		"vertices, cavities are closed shells facing inwards).  See docs/check.md.\n"
 		"\n"
 		"  --json        one JSON object on stdout instead of the text report\n"
 		"  --threads N   cores for the self-intersection test (default: all)\n"
@@ -42,16 +44,21 @@ static void reason_detail(const struct mesh_report *r, enum mesh_reason why, cha
 		snprintf(buf, cap, "%zu %s", r->degenerate, mesh_reason_text(why));
 		break;
 	case MESH_REASON_OPEN:
-		snprintf(buf, cap, "%s (%zu boundary edges in %zu loops, %zu odd singular edges)",
+		snprintf(buf, cap,
+			 "%s (%zu boundary edges in %zu loops, %zu odd singular edges, %zu singular "
+			 "edges whose triangles do not pair up)",
 			 mesh_reason_text(why), r->boundary_edges, r->boundary_loops,
-			 r->odd_edges - r->boundary_edges);
+			 r->odd_edges - r->boundary_edges, r->open_singular_edges);
+		break;
+	case MESH_REASON_MISNESTED:
+		snprintf(buf, cap, "%zu %s", r->misnested_shells, mesh_reason_text(why));
 		break;
 	case MESH_REASON_SELF_INTERSECTION:
 		snprintf(buf, cap, "%llu pairs of %s",
 			 (unsigned long long)r->self_intersections, mesh_reason_text(why));
 		break;
 	case MESH_REASON_SEVERAL_PARTS:
-		snprintf(buf, cap, "%zu %s", r->components, mesh_reason_text(why));
+		snprintf(buf, cap, "%zu %s", r->parts, mesh_reason_text(why));
 		break;
 	case MESH_REASON_NOT_MANIFOLD_CONNECTED:
 		snprintf(buf, cap, "%zu %s (%zu singular edges, %zu non-manifold vertices)",
@@ -107,6 +114,11 @@ static int print_json(const char *path, enum meshio_format fmt, const struct mes
 	json_object_set_new(o, "components", json_integer((json_int_t)r->components));
 	json_object_set_new(o, "manifold_components",
 			    json_integer((json_int_t)r->manifold_components));
+	json_object_set_new(o, "parts", json_integer((json_int_t)r->parts));
+	json_object_set_new(o, "cavities", json_integer((json_int_t)r->cavities));
+	json_object_set_new(o, "misnested_shells", json_integer((json_int_t)r->misnested_shells));
+	json_object_set_new(o, "unpaired_singular_edges",
+			    json_integer((json_int_t)r->open_singular_edges));
 	json_object_set_new(o, "boundary_loops", json_integer((json_int_t)r->boundary_loops));
 	json_object_set_new(o, "euler", json_integer((json_int_t)r->euler));
 	json_object_set_new(o, "genus",
@@ -153,7 +165,10 @@ static void print_text(const char *path, enum meshio_format fmt, const struct me
 		printf("%lld\n", r->genus);
 	else
 		printf("undefined (not closed, manifold and orientable)\n");
-	printf("  self-intersecting triangle pairs %llu\n",
+	printf("  parts %zu, cavities %zu", r->parts, r->cavities);
+	if (r->misnested_shells)
+		printf(", misnested shells %zu", r->misnested_shells);
+	printf("\n  self-intersecting triangle pairs %llu\n",
 	       (unsigned long long)r->self_intersections);
 	printf("  orientable %s, consistently oriented %s", yes_no(r->orientable),
 	       yes_no(r->consistently_oriented));

@@ -10,6 +10,8 @@
  */
 #include <errno.h>
 #include <jansson.h>
+#include <limits.h>
+#include <stdarg.h>
 #include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -99,6 +101,36 @@ static char *part_path(const char *out, size_t k)
 	return s;
 }
 
+/* Everything the report shows besides struct repair_report. */
+struct repair_run {
+	const char *input;
+	enum meshio_format format;
+	const char *printer;	/* profile id, or NULL */
+	double epsilon;		/* mm */
+	const char *eps_source;	/* "--epsilon", "printer" or "default" */
+	bool ascii;
+	/* How far the run got, for the report printed on every exit. */
+	const char *stage;	/* "arguments", "reading", "repairing", "writing", "done" */
+	bool read, repaired;	/* the input was read / repair_mesh returned */
+	size_t input_triangles;
+	int exit;		/* the exit status */
+	char error[512];	/* the last error message, "" when none */
+};
+
+/* Print "stratum repair: MESSAGE" on stderr and keep it for the report. */
+static void say(struct repair_run *run, const char *fmt, ...)
+	__attribute__((format(printf, 2, 3)));
+
+static void say(struct repair_run *run, const char *fmt, ...)
+{
+	va_list ap;
+
+	va_start(ap, fmt);
+	vsnprintf(run->error, sizeof(run->error), fmt, ap);
+	va_end(ap);
+	fprintf(stderr, "stratum repair: %s\n", run->error);
+}
+
 /* Exit status for a failed meshio_write_stl. */
 static int write_exit(int rc)
 {
@@ -116,8 +148,8 @@ static int write_exit(int rc)
  * Write component c of m (triangles tri[first..first+n) of the bucketed
  * order) to path.  Returns 0 or the exit status, with the message printed.
  */
-static int write_part(const char *path, const struct mesh *m, const size_t *order, size_t n,
-		      enum meshio_format fmt)
+static int write_part(struct repair_run *run, const char *path, const struct mesh *m,
+		      const size_t *order, size_t n, enum meshio_format fmt)
 {
 	struct st_error err = {0};
 	struct mesh_builder *b = mesh_builder_new(n);
@@ -125,8 +157,14 @@ static int write_part(const char *path, const struct mesh *m, const size_t *orde
 	int rc;
 
 	if (!b) {
-		fprintf(stderr, "stratum repair: %s: out of memory splitting the parts\n", path);
+		say(run, "%s: out of memory splitting the parts", path);
 		return ST_EXIT_SOFTWARE;
+	}
+	if (cmd_same_file(run->input, path)) {
+		mesh_builder_free(b);
+		say(run, "%s is the input file %s; name another output so the input is kept",
+		    path, run->input);
+		return ST_EXIT_USAGE;
 	}
 	for (size_t i = 0; i < n; i++) {
 		const uint32_t *t = m->tris[order[i]];
@@ -140,20 +178,20 @@ static int write_part(const char *path, const struct mesh *m, const size_t *orde
 	}
 	part = mesh_builder_finish(b);
 	if (!part) {
-		fprintf(stderr, "stratum repair: %s: out of memory splitting the parts\n", path);
+		say(run, "%s: out of memory splitting the parts", path);
 		return ST_EXIT_SOFTWARE;
 	}
 	rc = meshio_write_stl(path, part, fmt, &err);
 	mesh_free(part);
 	if (rc) {
-		fprintf(stderr, "stratum repair: %s\n", err.msg);
+		say(run, "%s", err.msg);
 		return write_exit(rc);
 	}
 	return 0;
 
 out_builder:
 	mesh_builder_free(b);
-	fprintf(stderr, "stratum repair: %s: %s\n", path, err.msg);
+	say(run, "%s: %s", path, err.msg);
 	return ST_EXIT_SOFTWARE;
 }
 
@@ -177,9 +215,9 @@ static void outputs_free(struct repair_outputs *o)
  * Returns 0 or the exit status (message printed); o lists what was
  * written, also when a later part failed.
  */
-static int write_outputs(const char *out, const struct mesh *m, const uint32_t *component,
-			 size_t ncomp, bool split, enum meshio_format fmt,
-			 struct repair_outputs *o)
+static int write_outputs(struct repair_run *run, const char *out, const struct mesh *m,
+			 const uint32_t *component, size_t ncomp, bool split,
+			 enum meshio_format fmt, struct repair_outputs *o)
 {
 	size_t *start = NULL, *order = NULL;
 	int status = ST_EXIT_SOFTWARE;
@@ -189,12 +227,12 @@ static int write_outputs(const char *out, const struct mesh *m, const uint32_t *
 		int rc = meshio_write_stl(out, m, fmt, &err);
 
 		if (rc) {
-			fprintf(stderr, "stratum repair: %s\n", err.msg);
+			say(run, "%s", err.msg);
 			return write_exit(rc);
 		}
 		o->path = malloc(sizeof(*o->path));
 		if (!o->path || !(o->path[0] = strdup(out))) {
-			fprintf(stderr, "stratum repair: out of memory\n");
+			say(run, "out of memory");
 			return ST_EXIT_SOFTWARE;
 		}
 		o->count = 1;
@@ -211,8 +249,8 @@ static int write_outputs(const char *out, const struct mesh *m, const uint32_t *
 		goto out_nomem;
 	for (size_t t = 0; t < m->ntris; t++) {
 		if (component[t] >= ncomp) {
-			fprintf(stderr, "stratum repair: internal error: triangle %zu is in part %lu "
-					"of %zu\n", t, (unsigned long)component[t], ncomp);
+			say(run, "internal error: triangle %zu is in part %lu of %zu", t,
+			    (unsigned long)component[t], ncomp);
 			goto out_free;
 		}
 		start[component[t] + 1]++;
@@ -234,7 +272,7 @@ static int write_outputs(const char *out, const struct mesh *m, const uint32_t *
 
 		if (!path)
 			goto out_nomem;
-		rc = write_part(path, m, order + start[c], start[c + 1] - start[c], fmt);
+		rc = write_part(run, path, m, order + start[c], start[c + 1] - start[c], fmt);
 		if (rc) {
 			free(path);
 			status = rc;
@@ -246,22 +284,13 @@ static int write_outputs(const char *out, const struct mesh *m, const uint32_t *
 	goto out_free;
 
 out_nomem:
-	fprintf(stderr, "stratum repair: out of memory splitting the parts\n");
+	say(run, "out of memory splitting the parts");
 out_free:
 	free(order);
 	free(start);
 	return status;
 }
 
-/* Everything the report shows besides struct repair_report. */
-struct repair_run {
-	const char *input;
-	enum meshio_format format;
-	const char *printer;	/* profile id, or NULL */
-	double epsilon;		/* mm */
-	const char *eps_source;	/* "--epsilon", "printer" or "default" */
-	bool ascii;
-};
 
 static json_t *json_size(size_t n)
 {
@@ -342,13 +371,20 @@ static int print_json(const struct repair_run *run, const struct repair_report *
 	}
 	for (size_t i = 0; i < o->count; i++)
 		json_array_append_new(outs, json_string(o->path[i]));
-	json_object_set_new(obj, "input", json_string(run->input));
+	json_object_set_new(obj, "ok", json_boolean(run->exit == ST_EXIT_OK));
+	json_object_set_new(obj, "exit", json_integer(run->exit));
+	json_object_set_new(obj, "error", run->error[0] ? json_string(run->error) : json_null());
+	json_object_set_new(obj, "stage", json_string(run->stage));
+	json_object_set_new(obj, "input", run->input ? json_string(run->input) : json_null());
 	json_object_set_new(obj, "format", json_string(meshio_format_name(run->format)));
 	json_object_set_new(obj, "printer", run->printer ? json_string(run->printer) : json_null());
 	json_object_set_new(obj, "epsilon", json_real(run->epsilon));
 	json_object_set_new(obj, "epsilon_source", json_string(run->eps_source));
 	json_object_set_new(obj, "precision", json_string(run->ascii ? "float64" : "float32"));
-	json_object_set_new(obj, "input_triangles", json_size(r->input_triangles));
+	json_object_set_new(obj, "input_triangles",
+			    run->read ? json_size(run->input_triangles) : json_null());
+	if (!run->repaired)
+		goto out_dump; /* nothing measured beyond the input */
 	json_heal(obj, r);
 	json_object_set_new(obj, "irregular_removed", json_size(r->irregular_removed));
 	json_object_set_new(obj, "degenerate_removed", json_size(r->degenerate_removed));
@@ -358,6 +394,10 @@ static int print_json(const struct repair_run *run, const struct repair_report *
 	json_object_set_new(obj, "triangles_split", json_size(r->triangles_split));
 	json_object_set_new(obj, "interior_deleted", json_size(r->interior_deleted));
 	json_object_set_new(obj, "enclosed_deleted", json_size(r->enclosed_deleted));
+	json_object_set_new(obj, "enclosed_components", json_size(r->enclosed_components));
+	json_object_set_new(obj, "cavities", json_size(r->cavities));
+	json_object_set_new(obj, "parts_dropped", json_size(r->parts_dropped));
+	json_object_set_new(obj, "dropped_triangles", json_size(r->dropped_triangles));
 	json_object_set_new(obj, "sheet_triangles", json_size(r->sheet_triangles));
 	json_object_set_new(obj, "sheet_area", json_real(r->sheet_area));
 	json_object_set_new(obj, "sheet_components", json_size(r->sheet_components));
@@ -377,6 +417,7 @@ static int print_json(const struct repair_run *run, const struct repair_report *
 	json_object_set_new(obj, "components", json_size(r->components));
 	json_object_set_new(obj, "printable", json_boolean(r->printable));
 	json_object_set_new(obj, "why", r->printable ? json_null() : json_string(r->why));
+out_dump:
 	json_object_set_new(obj, "outputs", outs);
 	rc = json_dumpf(obj, stdout,
 			JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(10));
@@ -391,9 +432,28 @@ static const char *yes_no(bool b)
 	return b ? "yes" : "no";
 }
 
+/* What a run that stopped early got to, and why it stopped. */
+static void print_failure(const struct repair_run *run, const struct repair_outputs *o)
+{
+	if (run->read)
+		printf("%s: %s, %zu triangles\n", run->input, meshio_format_name(run->format),
+		       run->input_triangles);
+	else
+		printf("%s: not read\n", run->input ? run->input : "(no input)");
+	printf("failed while %s: %s (exit %d)\n", run->stage,
+	       run->error[0] ? run->error : "see the message above", run->exit);
+	printf("written: %s\n", o->count ? "see below" : "nothing");
+	for (size_t i = 0; i < o->count; i++)
+		printf("  %s\n", o->path[i]);
+}
+
 static void print_text(const struct repair_run *run, const struct repair_report *r,
 		       const struct repair_outputs *o)
 {
+	if (!run->repaired) {
+		print_failure(run, o);
+		return;
+	}
 	printf("%s: %s, %zu triangles\n", run->input, meshio_format_name(run->format),
 	       r->input_triangles);
 	if (!strcmp(run->eps_source, "printer"))
@@ -406,8 +466,10 @@ static void print_text(const struct repair_run *run, const struct repair_report 
 	       r->irregular_removed, r->degenerate_removed, r->duplicates_removed);
 	printf("  self-intersections: %llu intersecting pairs resolved, %zu triangles split\n",
 	       (unsigned long long)r->intersecting_pairs, r->triangles_split);
-	printf("  outer hull: %zu interior triangles deleted, %zu in enclosed components deleted\n",
-	       r->interior_deleted, r->enclosed_deleted);
+	printf("  outer hull: %zu interior triangles deleted, %zu enclosed components (%zu "
+	       "triangles) deleted, %zu cavit%s kept\n",
+	       r->interior_deleted, r->enclosed_components, r->enclosed_deleted, r->cavities,
+	       r->cavities == 1 ? "y" : "ies");
 	if (r->sheet_triangles)
 		printf("  sheets: %zu triangles in %zu component%s, %.6g mm^2, thickened to %g mm\n",
 		       r->sheet_triangles, r->sheet_components, r->sheet_components == 1 ? "" : "s",
@@ -432,18 +494,24 @@ static void print_text(const struct repair_run *run, const struct repair_report 
 	if (r->second_pass)
 		printf(", sheets and wires %.6g mm (at most epsilon/2 + rounding = %.6g mm)",
 		       r->sheet_deviation, run->epsilon / 2 + r->rounding_deviation);
-	printf("\n  output: %zu triangles, %zu vertices, %zu component%s\n", r->output_triangles,
+	printf("\n  output: %zu triangles, %zu vertices, %zu part%s", r->output_triangles,
 	       r->output_vertices, r->components, r->components == 1 ? "" : "s");
+	if (r->parts_dropped)
+		printf(" (%zu smaller than epsilon in every direction dropped, %zu triangles)",
+		       r->parts_dropped, r->dropped_triangles);
+	printf("\n");
 	printf("printable: %s\n", yes_no(r->printable));
 	if (!r->printable)
 		printf("  why: %s\n", r->why);
+	if (run->exit && run->error[0])
+		printf("failed while %s: %s (exit %d)\n", run->stage, run->error, run->exit);
 	if (o->count == 0)
 		printf("written: nothing\n");
 	for (size_t i = 0; i < o->count; i++)
 		printf("%s %s\n", i ? "        " : "written:", o->path[i]);
 	if (o->count == 1 && r->components > 1)
-		printf("note: the %zu parts are in one file; --split writes one file per part\n",
-		       r->components);
+		printf("note: the %zu parts are in one file (printable as it is); --split writes "
+		       "one file per part\n", r->components);
 }
 
 /* Print the report; 0 or the exit status for a failed stdout. */
@@ -465,7 +533,46 @@ static int report(const struct repair_run *run, const struct repair_report *r,
 	return 0;
 }
 
-int cmd_repair(int argc, char **argv)
+/*
+ * Is in named like one of the files --split makes from out ("dir/part.stl"
+ * -> "dir/part-K.stl"), in the same directory however either is spelled?
+ */
+static bool input_is_a_part(const char *in, const char *out)
+{
+	char *probe = part_path(out, 1);
+	char real_in[PATH_MAX], real_dir[PATH_MAX], dir[PATH_MAX];
+	const char *slash, *base, *dot, *ibase;
+	size_t stem;
+	bool match = false;
+
+	if (!probe)
+		return false;
+	slash = strrchr(probe, '/');
+	snprintf(dir, sizeof(dir), "%.*s", slash ? (int)(slash - probe) : 1, slash ? probe : ".");
+	base = slash ? slash + 1 : probe;
+	/* probe's base is STEM-1EXT: the stem ends at the "-1". */
+	dot = strstr(base, "-1");
+	while (dot && strstr(dot + 1, "-1"))
+		dot = strstr(dot + 1, "-1");
+	if (dot && realpath(in, real_in) && realpath(dir, real_dir)) {
+		const char *islash = strrchr(real_in, '/');
+		const char *ext = dot + 2, *k;
+
+		stem = (size_t)(dot - base);
+		ibase = islash + 1;
+		if ((size_t)(islash - real_in) == strlen(real_dir) &&
+		    !strncmp(real_in, real_dir, strlen(real_dir)) && !strncmp(ibase, base, stem + 1)) {
+			k = ibase + stem + 1;
+			while (*k >= '0' && *k <= '9')
+				k++;
+			match = k > ibase + stem + 1 && !strcmp(k, ext);
+		}
+	}
+	free(probe);
+	return match;
+}
+
+static int repair_command(int argc, char **argv, struct repair_run *run)
 {
 	const char *in = NULL, *out = NULL, *printer = NULL, *eps_arg = NULL;
 	bool json = false, split = false, ascii = false, keep_holes = false;
@@ -473,12 +580,13 @@ int cmd_repair(int argc, char **argv)
 	int threads = 0, status = ST_EXIT_OK, rc;
 	struct st_error err = {0};
 	struct profile *prof = NULL;
-	struct repair_run run = {0};
 	struct repair_options opt;
 	struct repair_report rep;
 	struct progress prog;
 	struct repair_outputs outs = {0};
 	struct mesh *m = NULL, *fixed = NULL;
+
+	memset(&rep, 0, sizeof(rep));
 	uint32_t *component = NULL;
 
 	for (int i = 1; i < argc; i++) {
@@ -509,7 +617,7 @@ int cmd_repair(int argc, char **argv)
 			}
 		} else if (cmd_is_opt(a, "--epsilon")) {
 			eps_arg = cmd_opt_value(argc, argv, &i, "--epsilon");
-			if (!parse_mm(eps_arg, false, REPAIR_EPSILON_MAX, &run.epsilon)) {
+			if (!eps_arg || !parse_mm(eps_arg, false, REPAIR_EPSILON_MAX, &run->epsilon)) {
 				fprintf(stderr, "stratum repair: --epsilon wants a thickness in mm "
 						"greater than 0 and at most %g, not '%s'\n",
 					REPAIR_EPSILON_MAX, eps_arg ? eps_arg : "");
@@ -556,36 +664,54 @@ int cmd_repair(int argc, char **argv)
 		return ST_EXIT_USAGE;
 	}
 
+	run->input = in;
+	run->ascii = ascii;
+	run->eps_source = eps_arg ? "--epsilon" : "default";
+	run->epsilon = eps_arg ? run->epsilon : REPAIR_EPSILON_DEFAULT;
+	run->stage = "checking the output";
+	/* Before any work: never the input, and a directory we can write in.
+	 * With --split the parts are OUT-1, OUT-2, ...; each is checked
+	 * against the input again just before it is written. */
+	status = cmd_output_check(in, out, run->error, sizeof(run->error));
+	if (!status && split && input_is_a_part(in, out)) {
+		snprintf(run->error, sizeof(run->error),
+			 "%s is named like a part of %s (--split writes PART-1, PART-2, ...); name "
+			 "another output so the input is kept", in, out);
+		status = ST_EXIT_USAGE;
+	}
+	if (status) {
+		fprintf(stderr, "stratum repair: %s\n", run->error);
+		goto out_report;
+	}
+
 	/* The printer is checked even when --epsilon overrides its nozzle. */
+	run->stage = "reading the printer profile";
 	if (printer) {
 		rc = profile_find(printer, &prof, &err);
 		if (rc) {
-			fprintf(stderr, "stratum repair: %s\n", err.msg);
-			return st_exit_for(rc);
+			say(run, "%s", err.msg);
+			status = st_exit_for(rc);
+			goto out_report;
 		}
-		run.printer = prof->id;
+		run->printer = prof->id;
+		if (!eps_arg) {
+			run->eps_source = "printer";
+			run->epsilon = prof->nozzle_diameter[0];
+		}
 	}
-	if (eps_arg) {
-		run.eps_source = "--epsilon";
-	} else if (prof) {
-		run.eps_source = "printer";
-		run.epsilon = prof->nozzle_diameter[0];
-	} else {
-		run.eps_source = "default";
-		run.epsilon = REPAIR_EPSILON_DEFAULT;
-	}
-	run.input = in;
-	run.ascii = ascii;
 
-	rc = meshio_read(in, MESHIO_AUTO, &m, &run.format, &err);
+	run->stage = "reading";
+	rc = meshio_read(in, MESHIO_AUTO, &m, &run->format, &err);
 	if (rc) {
-		fprintf(stderr, "stratum repair: %s\n", err.msg);
+		say(run, "%s", err.msg);
 		status = rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
-		goto out_profile;
+		goto out_report;
 	}
+	run->read = true;
+	run->input_triangles = m->ntris;
 
 	repair_options_init(&opt);
-	opt.epsilon = run.epsilon;
+	opt.epsilon = run->epsilon;
 	opt.precision = ascii ? REPAIR_FLOAT64 : REPAIR_FLOAT32;
 	opt.threads = threads;
 	opt.weld = weld;
@@ -595,37 +721,71 @@ int cmd_repair(int argc, char **argv)
 		opt.progress = progress_update;
 		opt.progress_ctx = &prog;
 	}
-	memset(&rep, 0, sizeof(rep));
+	run->stage = "repairing";
 	rc = repair_mesh(m, &opt, &fixed, &component, &rep, &err);
 	if (opt.progress)
 		progress_end(&prog);
 	mesh_free(m);
 	if (rc < 0) {
-		fprintf(stderr, "stratum repair: %s: %s\n", in, err.msg);
+		/* What the repair measured before it failed is still reported. */
+		run->repaired = true;
+		say(run, "%s: %s", in, err.msg);
 		status = rc == ST_ERR_ARG ? ST_EXIT_SOFTWARE : st_exit_for(rc);
-		goto out_free_result;
+		goto out_report;
 	}
-
-	if (rep.printable)
-		status = write_outputs(out, fixed, component, rep.components, split,
-				       ascii ? MESHIO_STL_ASCII : MESHIO_STL_BINARY, &outs);
-	rc = report(&run, &rep, &outs, json);
+	run->repaired = true;
 	if (!rep.printable) {
-		fprintf(stderr, "stratum repair: %s: could not reach a printable result: %s\n", in,
-			rep.why);
+		say(run, "%s: could not reach a printable result: %s", in, rep.why);
 		status = ST_EXIT_FAILURE;
-	} else if (status && outs.count) {
-		fprintf(stderr, "stratum repair: only %zu of %zu parts were written\n", outs.count,
-			rep.components);
+		goto out_report;
 	}
+	run->stage = "writing";
+	status = write_outputs(run, out, fixed, component, rep.components, split,
+			       ascii ? MESHIO_STL_ASCII : MESHIO_STL_BINARY, &outs);
+	if (status && outs.count)
+		say(run, "only %zu of %zu parts were written", outs.count, rep.components);
+	if (!status)
+		run->stage = "done";
+
+out_report:
+	run->exit = status;
+	rc = report(run, &rep, &outs, json);
 	if (!status && rc)
 		status = rc;
-
 	outputs_free(&outs);
-out_free_result:
 	free(component); /* NULL unless repair_mesh set them */
 	mesh_free(fixed);
-out_profile:
 	profile_free(prof);
+	return status;
+}
+
+/*
+ * Argument errors end before there is a report; with --json the caller
+ * still gets a JSON object saying so.
+ */
+int cmd_repair(int argc, char **argv)
+{
+	struct repair_run run;
+	int status;
+
+	memset(&run, 0, sizeof(run));
+	run.stage = "arguments";
+	status = repair_command(argc, argv, &run);
+	if (status && !strcmp(run.stage, "arguments")) {
+		bool json = false;
+
+		for (int i = 1; i < argc; i++)
+			json = json || !strcmp(argv[i], "--json");
+		if (json) {
+			json_t *o = json_pack("{s:b, s:i, s:s, s:s}", "ok", 0, "exit", status,
+					      "error", "the command line was refused (the reason "
+					      "is on stderr)", "stage", "arguments");
+			if (o) {
+				json_dumpf(o, stdout, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
+				putchar('\n');
+				json_decref(o);
+			}
+		}
+	}
 	return status;
 }

@@ -398,6 +398,16 @@ int cmd_slice(int argc, char **argv)
 	status = parse_args(argc, argv, &a);
 	if (status)
 		return status < 0 ? ST_EXIT_OK : status;
+	{
+		/* Before any work: never over the model, and a writable directory. */
+		char why[512];
+
+		status = cmd_output_check(a.in, a.out, why, sizeof(why));
+		if (status) {
+			fprintf(stderr, SLICE_CMD ": %s; nothing was written\n", why);
+			return status;
+		}
+	}
 
 	rc = profile_find(a.printer, &prof, &err);
 	if (rc) {

@@ -60,6 +60,19 @@ bool cmd_number(const char *cmd, const char *opt, const char *v, const char *wha
  * command's stop flag (host/cmd_opts.c). */
 void cmd_on_stop_signals(void (*handler)(int));
 
+/* cmd_same_file - whether paths a and b name the same existing file (device
+ * and inode, so through symlinks, hard links and any spelling of the path). */
+bool cmd_same_file(const char *a, const char *b);
+
+/*
+ * cmd_output_check - before any work: refuse an output out that is the
+ * input in (cmd_same_file; in may be NULL) or a directory (ST_EXIT_USAGE),
+ * and one whose directory does not exist or cannot be written
+ * (ST_EXIT_FAILURE), with a one-line reason in msg.  0 when out may be
+ * written (host/cmd_output.c).
+ */
+int cmd_output_check(const char *in, const char *out, char *msg, size_t cap);
+
 /* cmd_is_opt - true when a is NAME or NAME=...; the value may still be missing. */
 bool cmd_is_opt(const char *a, const char *name);
 

@@ -366,12 +366,165 @@ out_nomem:
 	return -1;
 }
 
+/* A component C of M_solid and M_sheet inside the space bounded by D, a
+ * component of M_solid (by index into the two component lists). */
+struct containment {
+	uint32_t c, d;
+};
+
+/* What the nesting pass decided for a component. */
+enum nest_fate { NEST_SOLID, NEST_CAVITY, NEST_DELETED };
+
+/*
+ * Whether component C (its triangles in cl) is a cavity as the input drew
+ * it: a closed M_solid shell every triangle of which the input oriented
+ * towards the inside of C, i.e. the growing from outside C had to flip
+ * all of them.  Pieces keep their input triangle's orientation
+ * (exact_mesh_refine), so the stored orientation is the input's and the
+ * comparison with the exact flip decides exactly.  A shell with mixed
+ * orientation is unreliable and stays an enclosed component, as seed 000
+ * §5.3 warns.
+ */
+static bool input_faces_inward(const uint8_t *tag, const uint8_t *flip, const uint32_t *cl,
+			       size_t cn)
+{
+	for (size_t i = 0; i < cn; i++)
+		if (tag[cl[i]] != HULL_OUTER || !flip[cl[i]])
+			return false;
+	return cn > 0;
+}
+
+/*
+ * Algorithm 2, lines 4-10, extended to designed cavities (docs/repair.md,
+ * "Cavities").  The nc components of M_solid and M_sheet (rows off/list)
+ * are tested exactly against the ns components of M_solid (soff/slist).
+ * Going outwards in, a component is in material when the kept shells
+ * around it wind round it once more outwards than inwards (an outward
+ * solid +1, a cavity -1).  There it is kept as a cavity when the input
+ * faced it inwards (its triangles keep the input orientation, facing into
+ * the void) and deleted otherwise (seed 000); a component in empty space,
+ * such as a part inside a cavity, is kept as a solid.
+ */
+static int nest_components(const struct exact_mesh *em, long nc, const uint32_t *off,
+			   const uint32_t *list, long ns, const uint32_t *soff,
+			   const uint32_t *slist, uint8_t *tag, uint8_t *flip,
+			   struct hull_stats *st, struct st_error *err)
+{
+	const size_t ntris = exact_mesh_ntris(em);
+	const uint32_t (*tris)[3] = exact_mesh_tris(em);
+	const double (*verts)[3] = exact_mesh_verts(em);
+	uint32_t *owner = malloc((size_t)ns * sizeof(*owner));	  /* D -> its C */
+	uint32_t *comp_of = malloc((ntris + 1) * sizeof(*comp_of)); /* tri -> C */
+	double (*slo)[3] = malloc((size_t)ns * sizeof(*slo));
+	double (*shi)[3] = malloc((size_t)ns * sizeof(*shi));
+	struct id_depth *order = calloc((size_t)nc, sizeof(*order));
+	uint8_t *fate = calloc((size_t)nc, 1);
+	struct containment *pairs = NULL;
+	uint32_t *prow = NULL; /* [c] first pair of c; pairs come grouped by c */
+	size_t npairs = 0, cap = 0;
+	int rc = 0;
+
+	if (!owner || !comp_of || !slo || !shi || !order || !fate)
+		goto out_nomem;
+	for (long c = 0; c < nc; c++)
+		for (uint32_t i = off[c]; i < off[c + 1]; i++)
+			comp_of[list[i]] = (uint32_t)c;
+	for (long d = 0; d < ns; d++) {
+		owner[d] = comp_of[slist[soff[d]]];
+		list_bbox(verts, tris, slist + soff[d], soff[d + 1] - soff[d], slo[d], shi[d]);
+	}
+	for (long c = 0; c < nc && !rc; c++) {
+		const uint32_t *cl = list + off[c];
+		double lo[3], hi[3];
+
+		order[c].id = (uint32_t)c;
+		list_bbox(verts, tris, cl, off[c + 1] - off[c], lo, hi);
+		for (long d = 0; d < ns && !rc; d++) {
+			bool inside = false, boxed = true;
+
+			if (owner[d] == (uint32_t)c)
+				continue; /* a solid part of C itself does not count */
+			/* Cheap reject: C's box must lie in D's box. */
+			for (int k = 0; k < 3; k++)
+				boxed = boxed && lo[k] >= slo[d][k] && hi[k] <= shi[d][k];
+			if (!boxed)
+				continue;
+			rc = exact_mesh_inside(em, slist + soff[d], soff[d + 1] - soff[d], cl[0],
+					       &inside, err);
+			if (rc || !inside)
+				continue;
+			if (npairs == cap) {
+				size_t ncap = cap ? 2 * cap : 64;
+				struct containment *np = realloc(pairs, ncap * sizeof(*np));
+				if (!np)
+					goto out_nomem;
+				pairs = np;
+				cap = ncap;
+			}
+			pairs[npairs].c = (uint32_t)c;
+			pairs[npairs++].d = (uint32_t)d;
+			order[c].depth++;
+		}
+	}
+	if (rc)
+		goto out;
+	prow = calloc((size_t)nc + 1, sizeof(*prow));
+	if (!prow)
+		goto out_nomem;
+	for (size_t i = 0; i < npairs; i++)
+		prow[pairs[i].c + 1]++;
+	for (long c = 0; c < nc; c++)
+		prow[c + 1] += prow[c];
+	qsort(order, (size_t)nc, sizeof(*order), id_depth_compare);
+	for (long i = 0; i < nc; i++) {
+		const uint32_t c = order[i].id;
+		const uint32_t *cl = list + off[c];
+		const size_t cn = off[c + 1] - off[c];
+		long winding = 0;
+
+		/* Containers enclose fewer solids, so their fate is known. */
+		for (uint32_t p = prow[c]; p < prow[c + 1]; p++) {
+			const uint8_t f = fate[owner[pairs[p].d]];
+			winding += f == NEST_SOLID ? 1 : f == NEST_CAVITY ? -1 : 0;
+		}
+		if (winding <= 0) {
+			fate[c] = NEST_SOLID;
+		} else if (input_faces_inward(tag, flip, cl, cn)) {
+			fate[c] = NEST_CAVITY;
+			st->cavities++;
+			st->cavity_triangles += cn;
+			for (size_t k = 0; k < cn; k++)
+				flip[cl[k]] = 0;
+		} else {
+			fate[c] = NEST_DELETED;
+			st->enclosed_components++;
+			for (size_t k = 0; k < cn; k++) {
+				tag[cl[k]] = 0;
+				st->enclosed++;
+			}
+		}
+	}
+	goto out;
+
+out_nomem:
+	rc = st_error_set(err, ST_ERR_NOMEM, "out of memory testing containment");
+out:
+	free(owner);
+	free(comp_of);
+	free(slo);
+	free(shi);
+	free(order);
+	free(fate);
+	free(pairs);
+	free(prow);
+	return rc;
+}
+
 int hull_extract(const struct exact_mesh *em, uint8_t *tag, uint8_t *flip,
 		 struct hull_stats *st, struct st_error *err)
 {
 	const size_t ntris = exact_mesh_ntris(em), nverts = exact_mesh_nverts(em);
 	const uint32_t (*tris)[3] = exact_mesh_tris(em);
-	const double (*verts)[3] = exact_mesh_verts(em);
 	struct edges e;
 	uint8_t *member = NULL;
 	uint32_t *off = NULL, *list = NULL, *soff = NULL, *slist = NULL;
@@ -420,7 +573,8 @@ int hull_extract(const struct exact_mesh *em, uint8_t *tag, uint8_t *flip,
 	off = list = NULL;
 
 	/* Lines 4-10: a component of M_solid and M_sheet that lies in the
-	 * space bounded by a component of M_solid is deleted. */
+	 * space bounded by a component of M_solid is deleted, unless it is a
+	 * cavity or lies in one (nest_components). */
 	for (size_t t = 0; t < ntris; t++)
 		member[t] = (tag[t] & HULL_OUTER) != 0;
 	nc = components(&e, ntris, member, &off, &list);
@@ -432,53 +586,7 @@ int hull_extract(const struct exact_mesh *em, uint8_t *tag, uint8_t *flip,
 		goto out;
 	}
 	if (ns > 0 && nc > 1) {
-		uint8_t *doomed = calloc((size_t)nc, 1);
-		double (*slo)[3] = malloc((size_t)ns * sizeof(*slo));
-		double (*shi)[3] = malloc((size_t)ns * sizeof(*shi));
-		if (!doomed || !slo || !shi) {
-			free(doomed);
-			free(slo);
-			free(shi);
-			rc = st_error_set(err, ST_ERR_NOMEM, "out of memory testing containment");
-			goto out;
-		}
-		for (long d = 0; d < ns; d++)
-			list_bbox(verts, tris, slist + soff[d], soff[d + 1] - soff[d], slo[d],
-				  shi[d]);
-		for (long c = 0; c < nc && !rc; c++) {
-			const uint32_t *cl = list + off[c];
-			const size_t cn = off[c + 1] - off[c];
-			double lo[3], hi[3];
-			list_bbox(verts, tris, cl, cn, lo, hi);
-			for (long d = 0; d < ns && !rc && !doomed[c]; d++) {
-				const uint32_t *dl = slist + soff[d];
-				bool inside = false, own = false;
-				/* A solid part of C itself does not count. */
-				for (size_t i = 0; i < cn && !own; i++)
-					own = cl[i] == dl[0];
-				if (own)
-					continue;
-				/* Cheap reject: C's box must lie in D's box. */
-				bool boxed = true;
-				for (int k = 0; k < 3; k++)
-					boxed = boxed && lo[k] >= slo[d][k] && hi[k] <= shi[d][k];
-				if (!boxed)
-					continue;
-				rc = exact_mesh_inside(em, dl, soff[d + 1] - soff[d], cl[0],
-						       &inside, err);
-				if (!rc && inside)
-					doomed[c] = 1;
-			}
-		}
-		for (long c = 0; c < nc && !rc; c++)
-			if (doomed[c])
-				for (uint32_t i = off[c]; i < off[c + 1]; i++) {
-					tag[list[i]] = 0;
-					st->enclosed++;
-				}
-		free(doomed);
-		free(slo);
-		free(shi);
+		rc = nest_components(em, nc, off, list, ns, soff, slist, tag, flip, st, err);
 		if (rc)
 			goto out;
 	}
@@ -511,7 +619,7 @@ out:
 }
 
 long hull_manifold_components(const struct exact_mesh *em, uint32_t *component,
-			      struct st_error *err)
+			      size_t *unpaired, struct st_error *err)
 {
 	const size_t ntris = exact_mesh_ntris(em), nverts = exact_mesh_nverts(em);
 	const uint32_t (*tris)[3] = exact_mesh_tris(em);
@@ -519,6 +627,7 @@ long hull_manifold_components(const struct exact_mesh *em, uint32_t *component,
 	uint32_t *parent;
 	long nc = 0;
 
+	*unpaired = 0;
 	if (ntris == 0)
 		return 0;
 	if (edges_build(tris, ntris, nverts, &e, err))
@@ -538,20 +647,32 @@ long hull_manifold_components(const struct exact_mesh *em, uint32_t *component,
 	 * away from its outward normal.  Two cubes sharing an edge stay two
 	 * parts; a solid pinched along an edge (Fig. 2d) stays one, closed.
 	 */
+	*unpaired = 0;
 	for (size_t ed = 0; ed < e.nedges; ed++) {
 		const uint32_t first = e.eoff[ed], count = e.eoff[ed + 1] - first;
+		bool mutual = true;
 		if (count == 2) {
 			uf_union(parent, e.ecorner[first] / 3, e.ecorner[first + 1] / 3);
 			continue;
 		}
-		for (uint32_t i = first; i < e.eoff[ed + 1] && count > 2; i++) {
+		for (uint32_t i = first; i < e.eoff[ed + 1]; i++) {
 			const uint32_t t = e.ecorner[i] / 3, k = e.ecorner[i] % 3;
 			const uint32_t a = tris[t][k], b = tris[t][(k + 1) % 3],
 				       c = tris[t][(k + 2) % 3];
 			/* Away from (a, b, c)'s normal is towards (b, a, c)'s. */
 			const uint32_t mate = continuation(em, tris, &e, (uint32_t)ed, t, b, a, c);
+			/* Around a solid's edge the material between two
+			 * triangles is theirs alone: each is the other's mate,
+			 * and the two walk the edge opposite ways. */
+			const uint32_t back = continuation(em, tris, &e, (uint32_t)ed, mate,
+							   runs_from(tris, mate, a, b) ? b : a,
+							   runs_from(tris, mate, a, b) ? a : b,
+							   third_vertex(tris, mate, a, b));
+			if (back != t || runs_from(tris, mate, a, b))
+				mutual = false;
 			uf_union(parent, t, mate);
 		}
+		*unpaired += !mutual;
 	}
 	for (size_t t = 0; t < ntris; t++)
 		component[t] = UINT32_MAX;

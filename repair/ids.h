@@ -1,7 +1,7 @@
 /*
- * ids.h - private to repair/: small helpers over uint32_t vertex and
- * triangle ids shared by the topology report, the outer hull and the
- * repair pipeline.
+ * ids.h - private to repair/: small helpers over uint32_t vertex,
+ * triangle and component ids shared by the topology report, the parts
+ * split, the outer hull and the repair pipeline.
  */
 #ifndef STRATUM_REPAIR_IDS_H
 #define STRATUM_REPAIR_IDS_H
@@ -50,6 +50,20 @@ static inline void sort3(const uint32_t in[3], uint32_t out[3])
 	out[0] = a;
 	out[1] = b;
 	out[2] = c;
+}
+
+/* An id and how many shells enclose it: sorted outermost first, then by id. */
+struct id_depth {
+	uint32_t depth, id;
+};
+
+static inline int id_depth_compare(const void *pa, const void *pb)
+{
+	const struct id_depth *a = pa, *b = pb;
+
+	if (a->depth != b->depth)
+		return a->depth < b->depth ? -1 : 1;
+	return a->id < b->id ? -1 : a->id > b->id;
 }
 
 #endif /* STRATUM_REPAIR_IDS_H */

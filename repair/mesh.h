@@ -84,18 +84,20 @@ void mesh_bbox(const struct mesh *m, double min[3], double max[3]);
  * set of equivalent triangles are left out there and counted on their own.
  */
 enum mesh_reason {
-	/* Each of these makes the mesh not printable (Definition 3.11). */
+	/* Each of these makes the mesh not printable (Definition 3.11, with
+	 * several parts and cavities allowed: docs/check.md). */
 	MESH_REASON_EMPTY,		/* no usable triangles */
 	MESH_REASON_IRREGULAR,		/* a triangle repeats a vertex */
 	MESH_REASON_DEGENERATE,		/* collinear corners (exact test) */
-	MESH_REASON_OPEN,		/* edges with an odd number of triangles */
+	MESH_REASON_OPEN,		/* a shell with an edge it does not close */
 	MESH_REASON_SELF_INTERSECTION,	/* triangles cross or overlap */
-	MESH_REASON_SEVERAL_PARTS,	/* more than one edge-connected component */
-	MESH_REASON_NOT_MANIFOLD_CONNECTED, /* singularities split it into parts */
-	/* Warnings: worth fixing, but Definition 3.11 holds without them. */
+	MESH_REASON_MISNESTED,		/* a shell facing out inside a solid, or in outside one */
+	/* Warnings: worth knowing, but the file prints as it stands. */
 	MESH_REASON_DUPLICATE,		/* equivalent triangles (a layer drops them) */
 	MESH_REASON_INCONSISTENT_ORIENTATION,
 	MESH_REASON_INSIDE_OUT,		/* closed but negative volume */
+	MESH_REASON_SEVERAL_PARTS,	/* more than one part (solid with its cavities) */
+	MESH_REASON_NOT_MANIFOLD_CONNECTED, /* shells touching along singular edges */
 	MESH_REASON_COUNT
 };
 
@@ -115,7 +117,11 @@ struct mesh_report {
 	size_t odd_edges;		/* odd count: boundary or e.g. three triangles */
 	size_t nonmanifold_vertices;	/* star is not one disk or half-disk */
 	size_t components;		/* edge-connected components (Def. 4.3) */
-	size_t manifold_components;	/* joined across 2-connected edges only */
+	size_t manifold_components;	/* shells: joined across 2-connected edges only */
+	size_t parts;			/* outward shells, each with the cavities in it */
+	size_t cavities;		/* closed shells facing inwards inside a part */
+	size_t misnested_shells;	/* facing out inside a part, or in outside all */
+	size_t open_singular_edges;	/* singular edges some shell does not close */
 	size_t boundary_loops;
 	size_t flipped_edges;		/* 2-connected edges walked the same way twice */
 	uint64_t self_intersections;	/* intersecting triangle pairs, exact */
@@ -127,7 +133,7 @@ struct mesh_report {
 	double volume;			/* signed, mm^3, by the divergence theorem */
 	double bbox_min[3];		/* of the vertices the layer uses, mm */
 	double bbox_max[3];
-	bool printable;			/* seed 000 Definition 3.11 */
+	bool printable;			/* Definition 3.11 per part (docs/check.md) */
 	bool reasons[MESH_REASON_COUNT];
 };
 
@@ -153,5 +159,16 @@ int mesh_analyze(const struct mesh *m, int threads, struct mesh_report *rep,
  */
 int mesh_analyze_known(const struct mesh *m, int threads, long long self_intersections,
 		       struct mesh_report *rep, struct st_error *err);
+
+/*
+ * mesh_analyze_parts - mesh_analyze_known that also numbers the parts:
+ * part (m->ntris entries, or NULL) receives each triangle's part,
+ * 0..rep->parts-1, a cavity the number of the part around it, and
+ * UINT32_MAX for triangles outside the layer (irregular, degenerate,
+ * duplicate).  Writing each part to a file of its own gives files that
+ * are each printable when the whole is.
+ */
+int mesh_analyze_parts(const struct mesh *m, int threads, long long self_intersections,
+		       struct mesh_report *rep, uint32_t *part, struct st_error *err);
 
 #endif /* STRATUM_REPAIR_MESH_H */

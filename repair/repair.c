@@ -17,6 +17,7 @@
 #include "heal.h"
 #include "hull.h"
 #include "ids.h"
+#include "output.h"
 #include "repair.h"
 #include "thicken.h"
 
@@ -38,7 +39,7 @@ struct core_out {
 	struct exact_mesh *result;	/* M_solid, oriented outwards */
 	size_t irregular, degenerate, duplicates;
 	uint64_t pairs;
-	size_t split, interior, enclosed;
+	size_t split, interior, enclosed, enclosed_components;
 	size_t sheet, sheet_components, second_sheet;
 	double sheet_area, wire_length, sheet_deviation;
 	size_t wires, wires_discarded, thickened;
@@ -436,6 +437,7 @@ static int core(const struct mesh *in, const struct repair_options *opt, bool th
 	co->split = rs.triangles_split;
 	co->interior = hs.interior;
 	co->enclosed = hs.enclosed;
+	co->enclosed_components = hs.enclosed_components;
 	co->sheet = hs.sheet;
 	co->sheet_components = hs.sheet_components;
 
@@ -690,6 +692,7 @@ static void report_core(struct repair_report *rep, const struct core_out *co)
 	rep->triangles_split = co->split;
 	rep->interior_deleted = co->interior;
 	rep->enclosed_deleted = co->enclosed;
+	rep->enclosed_components = co->enclosed_components;
 	rep->sheet_triangles = co->sheet;
 	rep->sheet_area = co->sheet_area;
 	rep->sheet_components = co->sheet_components;
@@ -700,33 +703,6 @@ static void report_core(struct repair_report *rep, const struct core_out *co)
 	rep->thickened_triangles = co->thickened;
 	rep->second_sheet_triangles = co->second_sheet;
 	rep->sheet_deviation = co->sheet_deviation;
-}
-
-/*
- * Whether every manifold-connected part of a checked result is printable
- * (Def. 3.11): the result may hold several parts, which --split writes as
- * one file each, but nothing else may be wrong.
- */
-static bool parts_printable(const struct mesh_report *mr)
-{
-	for (int r = 0; r < MESH_REASON_FIRST_WARNING; r++)
-		if (mr->reasons[r] && r != MESH_REASON_SEVERAL_PARTS &&
-		    r != MESH_REASON_NOT_MANIFOLD_CONNECTED)
-			return false;
-	return !mr->reasons[MESH_REASON_DUPLICATE] && !mr->reasons[MESH_REASON_INSIDE_OUT] &&
-	       !mr->reasons[MESH_REASON_INCONSISTENT_ORIENTATION];
-}
-
-/* The first blocking reason of a report, as one sentence. */
-static void explain(const struct mesh_report *mr, char *why, size_t cap)
-{
-	for (int r = 0; r < MESH_REASON_COUNT; r++)
-		if (mr->reasons[r] && r != MESH_REASON_SEVERAL_PARTS &&
-		    r != MESH_REASON_NOT_MANIFOLD_CONNECTED) {
-			snprintf(why, cap, "the result has %s", mesh_reason_text((enum mesh_reason)r));
-			return;
-		}
-	snprintf(why, cap, "the result is not printable");
 }
 
 int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct mesh **out,
@@ -764,9 +740,9 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 
 	co.result = NULL;
 	rc = core(in, opt, true, &co, err);
+	report_core(rep, &co); /* on failure too: what was measured so far */
 	if (rc)
 		goto out_free;
-	report_core(rep, &co);
 	rep->solid_deviation = solid_deviation(in, co.result);
 
 	/* Round, check, and run the core again on what rounding broke. */
@@ -792,7 +768,7 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 		if (rc)
 			goto out_free;
 		checked = true;
-		if (parts_printable(&mr))
+		if (repair_result_printable(&mr))
 			break;
 		checked = false;
 		/* Often rounding only collapsed slivers: dropping them is
@@ -808,7 +784,7 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 				mesh_free(pruned);
 				goto out_free;
 			}
-			if (parts_printable(&mr)) {
+			if (repair_result_printable(&mr)) {
 				mesh_free(rounded);
 				rounded = pruned;
 				checked = true;
@@ -827,40 +803,14 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 
 	progress(opt, "checking", 0.95);
 	/* When rounding moved nothing and the last exact pass found no pair
-	 * to cut, that pass already proved the count is 0 for this mesh. */
-	if (!checked)
-		rc = mesh_analyze_known(rounded, opt->threads,
-					unchanged && co.proved_clean ? 0 : -1, &mr, err);
+	 * to cut, that pass already proved the count is 0 for this mesh; a
+	 * mesh checked in the loop has its count already. */
+	rc = repair_finish_parts(&rounded, opt,
+			  checked ? (long long)mr.self_intersections
+				  : unchanged && co.proved_clean ? 0 : -1,
+			  component, rep, err);
 	if (rc)
 		goto out_free;
-	rep->output_triangles = rounded->ntris;
-	rep->output_vertices = rounded->nverts;
-	rep->printable = parts_printable(&mr);
-	if (!rep->printable)
-		explain(&mr, rep->why, sizeof(rep->why));
-
-	uint32_t *comp = malloc((rounded->ntris + 1) * sizeof(*comp));
-	if (!comp) {
-		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory splitting components");
-		goto out_free;
-	}
-	struct exact_mesh *final = NULL;
-	long nc = -1;
-	if (exact_mesh_new((const double(*)[3])rounded->verts, rounded->nverts,
-			   (const uint32_t(*)[3])rounded->tris, rounded->ntris, NULL, &final,
-			   err) == 0)
-		nc = hull_manifold_components(final, comp, err);
-	exact_mesh_free(final);
-	if (nc < 0) {
-		free(comp);
-		rc = err ? err->code : ST_ERR_NOMEM;
-		goto out_free;
-	}
-	rep->components = (size_t)nc;
-	if (component)
-		*component = comp;
-	else
-		free(comp);
 	*out = rounded;
 	mesh_free(healed);
 	progress(opt, "done", 1);

@@ -14,11 +14,13 @@
  *     triangulation of each cut triangle), so the mesh is a polyhedron;
  *  3. outer hull by non-manifold region growing (Algorithms 1 and 2):
  *     M_solid (outer), M_sheet (double-sided), interior triangles deleted,
- *     components enclosed by another component deleted;
+ *     components enclosed by another component deleted unless the input
+ *     faced them inwards (cavities, kept);
  *  4. when M_sheet or visible wires exist: thicken them to solids of total
  *     thickness epsilon and run 2-3 again on M_solid and the new solids;
  *  5. round to the output precision, re-checking exactly, so the written
- *     file is itself printable.
+ *     file is itself printable; drop parts smaller than epsilon in every
+ *     direction and number the rest (solids with their cavities).
  *
  * Exactness: vertices created by step 2 are exact rationals inside the CGAL
  * bridge until step 5; every decision (radial order around a singular edge,
@@ -82,6 +84,10 @@ struct repair_report {
 	size_t triangles_split;		/* triangles re-triangulated (first pass) */
 	size_t interior_deleted;	/* not on the outer hull (first pass) */
 	size_t enclosed_deleted;	/* in components inside another (first pass) */
+	size_t enclosed_components;	/* those components: shells facing out inside a solid */
+	size_t cavities;		/* inward shells kept as cavities (in the output) */
+	size_t parts_dropped;		/* parts smaller than epsilon in every direction */
+	size_t dropped_triangles;	/* their triangles */
 	size_t sheet_triangles;		/* M_sheet after the first pass */
 	double sheet_area;		/* mm^2 */
 	size_t sheet_components;	/* edge-connected parts of M_sheet */
@@ -99,7 +105,7 @@ struct repair_report {
 	double sheet_deviation;		/* mm: thickened surface to its sheet/wire, max */
 	size_t output_triangles;
 	size_t output_vertices;
-	size_t components;		/* manifold-connected components (Def. 3.10) */
+	size_t components;		/* parts: outward shells with their cavities */
 	bool printable;			/* the result passes Def. 3.11 after rounding */
 	char why[256];			/* when !printable: the reason, one sentence */
 };
@@ -112,13 +118,15 @@ void repair_options_init(struct repair_options *opt);
  * repair_mesh - repair in into a new mesh *out (caller frees with
  * mesh_free), filling *rep.  *out holds every part; component[i] (when
  * component is non-NULL, a malloc'd array the caller frees) gives the
- * manifold-connected component of output triangle i, numbered 0..
- * rep->components-1.
+ * part of output triangle i, numbered 0..rep->components-1: a solid
+ * (a manifold-connected shell, Def. 3.10) and the cavities inside it, so
+ * that each part written alone passes `stratum check` as the whole does.
  *
  * Returns 0 with rep->printable telling whether a printable result was
  * reached (when not, *out still holds the best result and rep->why says
  * what is wrong), or a negative class with err filled and *out NULL:
- * ST_ERR_ARG (bad options), ST_ERR_NOMEM, ST_ERR_INTERNAL.
+ * ST_ERR_ARG (bad options), ST_ERR_NOMEM, ST_ERR_INTERNAL; then *rep
+ * holds what the first core run measured before the failure.
  */
 int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct mesh **out,
 		uint32_t **component, struct repair_report *rep, struct st_error *err);

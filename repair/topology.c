@@ -18,6 +18,7 @@
 #include "exact.h"
 #include "ids.h"
 #include "mesh.h"
+#include "parts.h"
 
 enum tri_class { TRI_LAYER = 0, TRI_IRREGULAR, TRI_DEGENERATE, TRI_DUPLICATE };
 
@@ -30,6 +31,7 @@ struct topo {
 	uint32_t *eoff;		/* [edge] start in ecorner; [nedges] = end */
 	uint32_t *ecorner;	/* corner ids 3*tri+k incident to each edge */
 	size_t nedges;
+	uint32_t *shell;	/* [tri] manifold component (shell), 0.. */
 };
 
 static const struct {
@@ -39,14 +41,18 @@ static const struct {
 	[MESH_REASON_EMPTY] = {"empty", "no usable triangles"},
 	[MESH_REASON_IRREGULAR] = {"irregular", "triangles that repeat a vertex"},
 	[MESH_REASON_DEGENERATE] = {"degenerate", "triangles whose corners are collinear"},
-	[MESH_REASON_OPEN] = {"open", "holes: edges with an odd number of triangles"},
+	[MESH_REASON_OPEN] = {"open", "holes: edges a shell does not close"},
 	[MESH_REASON_SELF_INTERSECTION] = {"self_intersection",
 					   "triangles that cross or overlap each other"},
+	[MESH_REASON_MISNESTED] = {"misnested",
+				   "shells facing outwards inside a solid, or inwards outside "
+				   "every solid"},
 	[MESH_REASON_SEVERAL_PARTS] = {"several_parts",
-				       "several separate parts (print them as separate files)"},
+				       "separate parts, printed side by side (--split in "
+				       "stratum repair writes one file each)"},
 	[MESH_REASON_NOT_MANIFOLD_CONNECTED] =
 		{"not_manifold_connected",
-		 "parts joined only along singular edges or at single vertices"},
+		 "parts or cavities touching along singular edges"},
 	[MESH_REASON_DUPLICATE] = {"duplicates", "equivalent (duplicated) triangles"},
 	[MESH_REASON_INCONSISTENT_ORIENTATION] =
 		{"inconsistent_orientation", "neighbouring triangles face opposite ways"},
@@ -311,9 +317,9 @@ static bool corner_forward(const struct mesh *m, uint32_t c)
 static int count_edges_and_parts(struct topo *tp, struct mesh_report *rep, struct st_error *err)
 {
 	const struct mesh *m = tp->m;
-	uint32_t *comp = malloc(m->ntris * sizeof(*comp));
-	uint32_t *mcomp = malloc(m->ntris * sizeof(*mcomp));
-	uint8_t *flip = calloc(m->ntris, 1);
+	uint32_t *comp = malloc((m->ntris + 1) * sizeof(*comp));
+	uint32_t *mcomp = malloc((m->ntris + 1) * sizeof(*mcomp));
+	uint8_t *flip = calloc(m->ntris + 1, 1);
 	int rc = 0;
 
 	if (!comp || !mcomp || !flip) {
@@ -349,14 +355,23 @@ static int count_edges_and_parts(struct topo *tp, struct mesh_report *rep, struc
 				rep->orientable = false;
 		}
 	}
+	for (size_t t = 0; t < m->ntris; t++)
+		if (tp->tclass[t] == TRI_LAYER)
+			rep->components += uf_find(comp, (uint32_t)t) == t;
+	/* comp is done with: it becomes the shell numbers.  Roots come first
+	 * in their set (the lower root wins a union). */
 	for (size_t t = 0; t < m->ntris; t++) {
 		uint8_t parity;
 
 		if (tp->tclass[t] != TRI_LAYER)
 			continue;
-		rep->components += uf_find(comp, (uint32_t)t) == t;
-		rep->manifold_components += pf_find(mcomp, flip, (uint32_t)t, &parity) == t;
+		if (pf_find(mcomp, flip, (uint32_t)t, &parity) == t)
+			comp[t] = (uint32_t)rep->manifold_components++;
+		else
+			comp[t] = comp[mcomp[t]]; /* pf_find pointed t at its root */
 	}
+	tp->shell = comp;
+	comp = NULL;
 out:
 	free(comp);
 	free(mcomp);
@@ -533,15 +548,18 @@ static void judge(struct mesh_report *rep)
 	r[MESH_REASON_EMPTY] = rep->triangles == 0;
 	r[MESH_REASON_IRREGULAR] = rep->irregular > 0;
 	r[MESH_REASON_DEGENERATE] = rep->degenerate > 0;
-	r[MESH_REASON_OPEN] = rep->odd_edges > 0;
+	r[MESH_REASON_OPEN] = rep->odd_edges > 0 || rep->open_singular_edges > 0;
 	r[MESH_REASON_SELF_INTERSECTION] = rep->self_intersections > 0;
-	r[MESH_REASON_SEVERAL_PARTS] = rep->components > 1;
-	r[MESH_REASON_NOT_MANIFOLD_CONNECTED] =
-		rep->components <= 1 && rep->manifold_components > 1;
+	r[MESH_REASON_MISNESTED] = rep->misnested_shells > 0;
+	r[MESH_REASON_SEVERAL_PARTS] = rep->parts > 1;
+	/* Shells joined into fewer edge-connected components touch along
+	 * an edge (a pinch within one shell is not counted). */
+	r[MESH_REASON_NOT_MANIFOLD_CONNECTED] = rep->manifold_components > rep->components;
 	r[MESH_REASON_DUPLICATE] = rep->duplicates > 0;
 	r[MESH_REASON_INCONSISTENT_ORIENTATION] = !rep->consistently_oriented;
 	r[MESH_REASON_INSIDE_OUT] = rep->odd_edges == 0 && rep->triangles > 0 &&
-				     rep->consistently_oriented && rep->volume < 0;
+				     rep->consistently_oriented && rep->volume < 0 &&
+				     rep->manifold_components == 1;
 	rep->printable = true;
 	for (int i = 0; i < MESH_REASON_FIRST_WARNING; i++)
 		if (r[i])
@@ -560,6 +578,41 @@ static void free_topology(struct topo *tp)
 	free(tp->eoff);
 	free(tp->ecorner);
 	tp->eoff = tp->ecorner = NULL;
+}
+
+/*
+ * Step 5: parts and cavities (parts.c).  Nesting means something only for
+ * closed, intersection-free shells; with several shells a side can only
+ * be told when they are consistently oriented, so without that they are
+ * all counted misnested.
+ */
+static int find_parts(struct topo *tp, struct mesh_report *rep, uint32_t *part,
+		      struct st_error *err)
+{
+	const struct mesh *m = tp->m;
+	const bool closed = rep->odd_edges == 0 && rep->open_singular_edges == 0 &&
+			    rep->self_intersections == 0 && rep->triangles > 0;
+	struct parts_out po;
+	uint8_t *in_layer = malloc(m->ntris + 1);
+	int rc;
+
+	if (!in_layer)
+		return st_error_set(err, ST_ERR_NOMEM, "out of memory finding parts");
+	for (size_t t = 0; t < m->ntris; t++)
+		in_layer[t] = tp->tclass[t] == TRI_LAYER;
+	rc = parts_nest(m, in_layer, tp->shell, &rep->manifold_components,
+			closed && rep->consistently_oriented, rep->singular_edges > 0, part, &po,
+			err);
+	free(in_layer);
+	if (rc)
+		return rc;
+	rep->open_singular_edges = po.unpaired;
+	rep->parts = po.parts;
+	rep->cavities = po.cavities;
+	rep->misnested_shells = po.misnested;
+	if (closed && !rep->consistently_oriented && rep->manifold_components > 1)
+		rep->misnested_shells = rep->manifold_components;
+	return 0;
 }
 
 /* The exact self-intersection pass, run on its own thread beside the
@@ -593,6 +646,12 @@ int mesh_analyze(const struct mesh *m, int threads, struct mesh_report *rep,
 
 int mesh_analyze_known(const struct mesh *m, int threads, long long self_intersections,
 		       struct mesh_report *rep, struct st_error *err)
+{
+	return mesh_analyze_parts(m, threads, self_intersections, rep, NULL, err);
+}
+
+int mesh_analyze_parts(const struct mesh *m, int threads, long long self_intersections,
+		       struct mesh_report *rep, uint32_t *part, struct st_error *err)
 {
 	struct topo tp = {.m = m};
 	struct exact_job job = {.m = m, .threads = threads};
@@ -649,8 +708,12 @@ int mesh_analyze_known(const struct mesh *m, int threads, long long self_interse
 		goto out;
 	}
 	rep->self_intersections = job.count;
+	rc = find_parts(&tp, rep, part, err);
+	if (rc)
+		goto out;
 	judge(rep);
 out:
+	free(tp.shell);
 	free_topology(&tp);
 	free(tp.voff);
 	free(tp.vtri);

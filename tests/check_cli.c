@@ -76,7 +76,8 @@ START_TEST(json_cube)
 		"vertices", "edges", "triangles", "boundary_edges", "singular_edges",
 		"nonmanifold_vertices", "components", "boundary_loops", "euler", "genus",
 		"degenerate", "duplicates", "self_intersections", "orientable",
-		"consistently_oriented", "volume", "bbox", "printable", "reasons"};
+		"consistently_oriented", "volume", "bbox", "printable", "reasons", "parts",
+		"cavities", "misnested_shells", "unpaired_singular_edges", "warnings"};
 
 	for (size_t i = 0; i < sizeof(keys) / sizeof(keys[0]); i++)
 		ck_assert_msg(json_object_get(o, keys[i]) != NULL, "missing %s", keys[i]);
@@ -86,6 +87,8 @@ START_TEST(json_cube)
 	ck_assert_int_eq(field(o, "euler"), 2);
 	ck_assert_int_eq(field(o, "genus"), 0);
 	ck_assert_int_eq(field(o, "self_intersections"), 0);
+	ck_assert_int_eq(field(o, "parts"), 1);
+	ck_assert_int_eq(field(o, "cavities"), 0);
 	ck_assert(json_is_true(json_object_get(o, "printable")));
 	ck_assert(json_is_true(json_object_get(o, "orientable")));
 	ck_assert_double_eq_tol(json_real_value(json_object_get(o, "volume")), 1000.0, 1e-6);
@@ -126,10 +129,13 @@ END_TEST
 START_TEST(json_edge_sharing_cubes)
 {
 	struct mesh *a = fx_box(0, 0, 0, 1, 1, 1), *b = fx_box(1, 1, 0, 2, 2, 1);
-	json_t *o = check_json(write_mesh(fx_concat(a, b), "edge.stl"), 1);
+	json_t *o = check_json(write_mesh(fx_concat(a, b), "edge.stl"), 0);
 
+	/* Two closed parts touching along an edge print as they are. */
 	ck_assert_int_eq(field(o, "singular_edges"), 1);
-	ck_assert(has_reason(o, "reasons", "not_manifold_connected"));
+	ck_assert_int_eq(field(o, "parts"), 2);
+	ck_assert(has_reason(o, "warnings", "not_manifold_connected"));
+	ck_assert_uint_eq(json_array_size(json_object_get(o, "reasons")), 0);
 	json_decref(o);
 	mesh_free(a);
 	mesh_free(b);
@@ -247,9 +253,13 @@ static json_t *repair_json(const char *in, const char *outp, const char *extra, 
 	json_error_t jerr;
 	json_t *o;
 	int status = tu_run(out, sizeof(out), "repair --json '%s' -o '%s' %s", in, outp, extra);
+	const char *start;
 
 	ck_assert_msg(status == want_status, "exit %d, wanted %d: %s", status, want_status, out);
-	o = json_loads(out, 0, &jerr);
+	/* Messages on stderr (mixed in by tu_run) come before the report. */
+	start = out[0] == '{' ? out : strstr(out, "\n{");
+	ck_assert_msg(start != NULL, "no JSON object: %s", out);
+	o = json_loads(start, 0, &jerr);
 	ck_assert_msg(o != NULL, "not JSON (%s): %s", jerr.text, out);
 	return o;
 }
@@ -323,7 +333,8 @@ START_TEST(repair_json_report)
 	static const char *const keys[] = {
 		"input", "epsilon", "input_triangles", "irregular_removed", "degenerate_removed",
 		"duplicates_removed", "intersecting_pairs", "triangles_split", "interior_deleted",
-		"enclosed_deleted", "sheet_triangles", "sheet_area", "sheet_components", "wires",
+		"enclosed_deleted", "enclosed_components", "cavities", "parts_dropped",
+		"dropped_triangles", "ok", "exit", "error", "stage", "sheet_triangles", "sheet_area", "sheet_components", "wires",
 		"wire_length", "wires_discarded", "second_pass", "thickened_triangles",
 		"second_sheet_triangles", "rounding_rounds", "rounding_merged", "solid_deviation",
 		"rounding_deviation", "sheet_deviation", "output_triangles", "output_vertices",
@@ -439,6 +450,158 @@ START_TEST(repair_unwritable_output_exit_1)
 	snprintf(outp, sizeof(outp), "%s", tu_path("no-such-dir/out.stl"));
 	ck_assert_int_eq(tu_run(out, sizeof(out), "repair '%s' -o '%s'", in, outp), 1);
 	ck_assert_msg(strstr(out, outp) != NULL, "message does not name %s: %s", outp, out);
+}
+END_TEST
+
+/* Two 10 mm cubes touching along an edge (i = 0) or at a vertex (i = 1). */
+static struct mesh *touching_cubes(int i)
+{
+	struct mesh *a = fx_box(0, 0, 0, 10, 10, 10);
+	struct mesh *b = i == 0 ? fx_box(10, 10, 0, 20, 20, 10) : fx_box(10, 10, 10, 20, 20, 20);
+	struct mesh *m = fx_concat(a, b);
+
+	mesh_free(a);
+	mesh_free(b);
+	return m;
+}
+
+/*
+ * Proves that repair and check agree on touching parts: the one output
+ * file holds two parts sharing an edge or a vertex (equal coordinates
+ * weld in STL), `stratum check` exits 0 on it and counts 2 parts, and
+ * each --split part passes check too.
+ */
+START_TEST(repair_touching_cubes_check_exit_0)
+{
+	const char *in = write_mesh(touching_cubes(_i), _i ? "r-touch-v.stl" : "r-touch-e.stl");
+	char outp[512], p1[512], p2[512];
+	json_t *o;
+
+	snprintf(outp, sizeof(outp), "%s", tu_path("r-touch-out.stl"));
+	o = repair_json(in, outp, "", 0);
+	ck_assert_int_eq(field(o, "components"), 2);
+	json_decref(o);
+	o = check_json(outp, 0);
+	ck_assert_int_eq(field(o, "parts"), 2);
+	ck_assert(has_reason(o, "warnings", "several_parts"));
+	json_decref(o);
+	snprintf(outp, sizeof(outp), "%s", tu_path("r-touch-split.stl"));
+	snprintf(p1, sizeof(p1), "%s", tu_path("r-touch-split-1.stl"));
+	snprintf(p2, sizeof(p2), "%s", tu_path("r-touch-split-2.stl"));
+	o = repair_json(in, outp, "--split", 0);
+	json_decref(o);
+	ck_assert_int_eq(check_status(p1), 0);
+	ck_assert_int_eq(check_status(p2), 0);
+}
+END_TEST
+
+/* The bytes of path, malloc'd, with their count in *n. */
+static unsigned char *slurp(const char *path, size_t *n)
+{
+	FILE *f = fopen(path, "rb");
+	unsigned char *buf = malloc(1 << 16);
+
+	ck_assert_ptr_nonnull(f);
+	ck_assert_ptr_nonnull(buf);
+	*n = fread(buf, 1, 1 << 16, f);
+	fclose(f);
+	return buf;
+}
+
+/* Run repair with json and the given output; it must refuse with exit 2. */
+static void assert_refused(const char *in, const char *outp, const char *extra)
+{
+	json_t *o = repair_json(in, outp, extra, 2);
+
+	ck_assert(json_is_false(json_object_get(o, "ok")));
+	ck_assert_int_eq(field(o, "exit"), 2);
+	ck_assert_msg(strstr(json_string_value(json_object_get(o, "error")), "is the input") ||
+			      strstr(json_string_value(json_object_get(o, "error")), "like a part"),
+		      "error: %s", json_string_value(json_object_get(o, "error")));
+	json_decref(o);
+}
+
+/*
+ * Proves that -o never overwrites the input: the same path, another
+ * spelling of it, a symlink to it, and with --split an input named like
+ * one of the parts are all refused with exit 2 before any work, and the
+ * input's bytes are unchanged.
+ */
+START_TEST(repair_refuses_to_overwrite_input)
+{
+	const char *in = write_mesh(fx_box(0, 0, 0, 10, 10, 10), "r-own.stl");
+	char other[512], link[512], part_in[512], part_out[512], cmd[1600];
+	unsigned char *before, *after;
+	size_t nb, na;
+
+	before = slurp(in, &nb);
+	/* dir/name spelled dir/./name */
+	snprintf(other, sizeof(other), "%.*s/.%s", (int)(strrchr(in, '/') - in), in,
+		 strrchr(in, '/'));
+	snprintf(link, sizeof(link), "%s", tu_path("r-own-link.stl"));
+	unlink(link);
+	ck_assert_int_eq(symlink(in, link), 0);
+	assert_refused(in, in, "");
+	assert_refused(in, other, "");
+	assert_refused(in, link, "");
+	assert_refused(link, in, "");
+	snprintf(part_in, sizeof(part_in), "%s", tu_path("r-ownpart-2.stl"));
+	snprintf(part_out, sizeof(part_out), "%s", tu_path("r-ownpart.stl"));
+	snprintf(cmd, sizeof(cmd), "cp '%s' '%s'", in, part_in);
+	ck_assert_int_eq(system(cmd), 0);
+	assert_refused(part_in, part_out, "--split");
+	after = slurp(in, &na);
+	ck_assert_uint_eq(na, nb);
+	ck_assert_int_eq(memcmp(before, after, nb), 0);
+	free(before);
+	free(after);
+}
+END_TEST
+
+/*
+ * Proves that every exit prints the report: a missing output directory
+ * (exit 1, found before the input is read), an unreadable input (65) and
+ * a result with nothing printable left (1: a 0.1 mm cube, smaller than
+ * epsilon) each give a JSON object with ok, exit, error and what was
+ * measured so far.
+ */
+START_TEST(repair_json_on_every_exit)
+{
+	const char *in = write_mesh(fx_box(0, 0, 0, 10, 10, 10), "r-every.stl");
+	const char *tiny = write_mesh(fx_box(0, 0, 0, 0.1, 0.1, 0.1), "r-tiny.stl");
+	char outp[512], bad[512];
+	FILE *f;
+	json_t *o;
+
+	snprintf(outp, sizeof(outp), "%s", tu_path("no-such-dir/out.stl"));
+	o = repair_json(in, outp, "", 1);
+	ck_assert(json_is_false(json_object_get(o, "ok")));
+	ck_assert_int_eq(field(o, "exit"), 1);
+	ck_assert_str_eq(json_string_value(json_object_get(o, "stage")), "checking the output");
+	ck_assert(strstr(json_string_value(json_object_get(o, "error")), "does not exist"));
+	json_decref(o);
+
+	snprintf(bad, sizeof(bad), "%s", tu_path("r-garbage.stl"));
+	f = fopen(bad, "w");
+	ck_assert_ptr_nonnull(f);
+	fputs("not a mesh\n", f);
+	fclose(f);
+	snprintf(outp, sizeof(outp), "%s", tu_path("r-every-out.stl"));
+	o = repair_json(bad, outp, "", 65);
+	ck_assert_int_eq(field(o, "exit"), 65);
+	ck_assert_str_eq(json_string_value(json_object_get(o, "stage")), "reading");
+	ck_assert(json_is_null(json_object_get(o, "input_triangles")));
+	json_decref(o);
+
+	o = repair_json(tiny, outp, "", 1);
+	ck_assert(json_is_false(json_object_get(o, "ok")));
+	ck_assert_int_eq(field(o, "exit"), 1);
+	ck_assert_int_eq(field(o, "input_triangles"), 12);
+	ck_assert_int_eq(field(o, "parts_dropped"), 1);
+	ck_assert(json_is_false(json_object_get(o, "printable")));
+	ck_assert_uint_eq(json_array_size(json_object_get(o, "outputs")), 0);
+	json_decref(o);
+	ck_assert(!tu_file_exists(outp));
 }
 END_TEST
 
@@ -647,6 +810,9 @@ Suite *cli_suite(void)
 	tcase_add_test(tc, repair_overlapping_cubes);
 	tcase_add_test(tc, repair_ascii_output);
 	tcase_add_test(tc, repair_unwritable_output_exit_1);
+	tcase_add_loop_test(tc, repair_touching_cubes_check_exit_0, 0, 2);
+	tcase_add_test(tc, repair_refuses_to_overwrite_input);
+	tcase_add_test(tc, repair_json_on_every_exit);
 	suite_add_tcase(s, tc);
 	return s;
 }

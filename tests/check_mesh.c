@@ -150,11 +150,154 @@ START_TEST(two_tori_genus_2)
 	ck_assert_int_eq(r.euler, 0);
 	ck_assert(r.genus_defined);
 	ck_assert_int_eq(r.genus, 2);
-	ck_assert(!r.printable);
+	/* Two parts side by side print as they are (docs/check.md). */
+	ck_assert(r.printable);
+	ck_assert_uint_eq(r.parts, 2);
+	ck_assert_uint_eq(r.cavities, 0);
 	ck_assert_uint_eq(reasons(&r), BIT(MESH_REASON_SEVERAL_PARTS));
 	mesh_free(a);
 	mesh_free(b);
 	mesh_free(m);
+}
+END_TEST
+
+/* A copy of m with every triangle reversed: a shell facing inwards. */
+static struct mesh *inward(const struct mesh *m)
+{
+	struct mesh *r = fx_concat(m, m);
+
+	/* fx_concat welds the copy onto the same vertices; keep one copy. */
+	r->ntris = m->ntris;
+	for (size_t t = 0; t < r->ntris; t++)
+		fx_flip(r, t);
+	return r;
+}
+
+/*
+ * Proves that a closed shell facing inwards inside a solid is a cavity:
+ * printable, one part with one cavity, volume outer minus inner; the same
+ * inner shell facing outwards is a solid inside a solid, which no layer of
+ * a printable file holds (misnested), and so is a lone inward cube beside
+ * an outward one.
+ */
+START_TEST(nested_shells_cavity_or_misnested)
+{
+	struct mesh *outer = fx_box(0, 0, 0, 10, 10, 10), *box = fx_box(3, 3, 3, 7, 7, 7);
+	struct mesh *hole = inward(box), *beside = fx_box(20, 0, 0, 24, 4, 4);
+	struct mesh *hollow = fx_concat(outer, hole), *nested = fx_concat(outer, box);
+	struct mesh *away = inward(beside), *pair = fx_concat(outer, away);
+	struct mesh_report r = analyze(hollow);
+
+	ck_assert(r.printable);
+	ck_assert_uint_eq(r.parts, 1);
+	ck_assert_uint_eq(r.cavities, 1);
+	ck_assert_uint_eq(r.manifold_components, 2);
+	ck_assert_double_eq_tol(r.volume, 1000.0 - 64.0, 1e-9);
+	ck_assert_uint_eq(reasons(&r), 0);
+
+	r = analyze(nested);
+	ck_assert(!r.printable);
+	ck_assert_uint_eq(r.misnested_shells, 1);
+	ck_assert_uint_eq(reasons(&r), BIT(MESH_REASON_MISNESTED) | BIT(MESH_REASON_SEVERAL_PARTS));
+
+	r = analyze(pair);
+	ck_assert(!r.printable);
+	ck_assert_uint_eq(r.misnested_shells, 1);
+	ck_assert(r.reasons[MESH_REASON_MISNESTED]);
+	mesh_free(outer);
+	mesh_free(box);
+	mesh_free(hole);
+	mesh_free(beside);
+	mesh_free(hollow);
+	mesh_free(nested);
+	mesh_free(away);
+	mesh_free(pair);
+}
+END_TEST
+
+/* A tetrahedron p q r s facing outwards: each face has the fourth corner behind it. */
+static struct mesh *tetra(const double p[3], const double q[3], const double r[3],
+			  const double s[3])
+{
+	const double *v[4] = {p, q, r, s};
+	static const int face[4][4] = {{0, 1, 2, 3}, {0, 1, 3, 2}, {0, 2, 3, 1}, {1, 2, 3, 0}};
+	struct mesh *m = NULL;
+
+	for (int f = 0; f < 4; f++) {
+		const double *a = v[face[f][0]], *b = v[face[f][1]], *c = v[face[f][2]];
+		const double *d = v[face[f][3]];
+		double u[3], w[3], x[3], det;
+		struct mesh *t, *all;
+
+		for (int k = 0; k < 3; k++) {
+			u[k] = b[k] - a[k];
+			w[k] = c[k] - a[k];
+			x[k] = d[k] - a[k];
+		}
+		det = x[0] * (u[1] * w[2] - u[2] * w[1]) - x[1] * (u[0] * w[2] - u[2] * w[0]) +
+		      x[2] * (u[0] * w[1] - u[1] * w[0]);
+		t = det < 0 ? fx_triangle(a, b, c) : fx_triangle(a, c, b);
+		all = m ? fx_concat(m, t) : t;
+		if (m) {
+			mesh_free(m);
+			mesh_free(t);
+		}
+		m = all;
+	}
+	return m;
+}
+
+/*
+ * Proves that a cavity touching the outer wall along an edge stays part
+ * of its solid: a tetrahedral cavity whose edge is the diagonal of the
+ * box's bottom face.  The four triangles at that singular edge pair up
+ * through the material, so the file is one part and printable, volume box
+ * minus tetrahedron.  The same tetrahedron facing outwards is a solid
+ * inside the solid and is not printable.  A part standing in a cavity
+ * and touching its floor along an edge (a tetrahedron on the floor
+ * diagonal of an inward box [2,8]^3) is in the void: two parts, one
+ * cavity, printable.
+ */
+START_TEST(cavity_touching_the_wall)
+{
+	const double p[3] = {0, 0, 0}, q[3] = {10, 10, 0}, r[3] = {2, 6, 3}, s[3] = {6, 2, 3};
+	struct mesh *outer = fx_box(0, 0, 0, 10, 10, 10), *tet = tetra(p, q, r, s);
+	struct mesh *hole = inward(tet);
+	struct mesh *m = fx_concat(outer, hole), *bad = fx_concat(outer, tet);
+	struct mesh_report rep, tr = analyze(tet);
+
+	rep = analyze(m);
+	ck_assert_uint_eq(rep.singular_edges, 1);
+	ck_assert_uint_eq(rep.self_intersections, 0);
+	ck_assert_msg(rep.printable, "odd %zu unpaired %zu misnested %zu", rep.odd_edges,
+		      rep.open_singular_edges, rep.misnested_shells);
+	ck_assert_uint_eq(rep.parts, 1);
+	ck_assert_double_eq_tol(rep.volume, 1000.0 - tr.volume, 1e-9);
+	rep = analyze(bad);
+	ck_assert(!rep.printable);
+	{
+		const double a[3] = {2, 2, 2}, b[3] = {8, 8, 2}, c[3] = {3, 5, 4}, d[3] = {5, 3, 4};
+		struct mesh *box = fx_box(2, 2, 2, 8, 8, 8), *cav = inward(box);
+		struct mesh *island = tetra(a, b, c, d), *hollow = fx_concat(outer, cav);
+		struct mesh *all = fx_concat(hollow, island);
+
+		rep = analyze(all);
+		ck_assert_uint_eq(rep.singular_edges, 1);
+		ck_assert_msg(rep.printable, "unpaired %zu misnested %zu", rep.open_singular_edges,
+			      rep.misnested_shells);
+		ck_assert_uint_eq(rep.parts, 2);
+		ck_assert_uint_eq(rep.cavities, 1);
+		mesh_free(box);
+		mesh_free(cav);
+		mesh_free(island);
+		mesh_free(hollow);
+		mesh_free(all);
+	}
+	mesh_free(outer);
+	mesh_free(tet);
+	mesh_free(hole);
+	mesh_free(m);
+	mesh_free(bad);
 }
 END_TEST
 
@@ -193,8 +336,12 @@ START_TEST(cubes_sharing_an_edge)
 	ck_assert_int_eq(r.euler, 3);
 	ck_assert(!r.genus_defined);
 	ck_assert_uint_eq(r.self_intersections, 0);
-	ck_assert(!r.printable);
-	ck_assert_uint_eq(reasons(&r), BIT(MESH_REASON_NOT_MANIFOLD_CONNECTED));
+	/* Two closed parts touching along an edge: printable, two parts. */
+	ck_assert(r.printable);
+	ck_assert_uint_eq(r.parts, 2);
+	ck_assert_uint_eq(r.open_singular_edges, 0);
+	ck_assert_uint_eq(reasons(&r), BIT(MESH_REASON_NOT_MANIFOLD_CONNECTED) |
+					       BIT(MESH_REASON_SEVERAL_PARTS));
 	mesh_free(a);
 	mesh_free(b);
 	mesh_free(m);
@@ -213,6 +360,8 @@ START_TEST(cubes_sharing_a_vertex)
 	ck_assert_uint_eq(r.components, 2);
 	ck_assert_uint_eq(r.self_intersections, 0);
 	ck_assert(!r.genus_defined);
+	ck_assert(r.printable);
+	ck_assert_uint_eq(r.parts, 2);
 	ck_assert_uint_eq(reasons(&r), BIT(MESH_REASON_SEVERAL_PARTS));
 	mesh_free(a);
 	mesh_free(b);
@@ -404,6 +553,8 @@ Suite *mesh_suite(void)
 	tcase_add_test(topo, cube_missing_one_triangle);
 	tcase_add_test(topo, cubes_sharing_an_edge);
 	tcase_add_test(topo, cubes_sharing_a_vertex);
+	tcase_add_test(topo, nested_shells_cavity_or_misnested);
+	tcase_add_test(topo, cavity_touching_the_wall);
 	tcase_add_test(topo, flat_cube);
 	tcase_add_test(topo, collinear_triangle_is_degenerate);
 	tcase_add_test(topo, duplicated_triangles);

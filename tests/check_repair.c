@@ -3,7 +3,8 @@
  *
  * Every input is generated in code (tests/fixtures.c) so what the answer
  * must be follows from how the input is built.  Every test judges the
- * result the way a printer would get it: each manifold-connected component
+ * result the way a printer would get it: each part (a manifold-connected
+ * shell with its cavities)
  * of the output is written as a binary STL (ASCII with 17 digits for
  * REPAIR_FLOAT64), read back, and the project's exact checker
  * (mesh_analyze) must call the file printable (Definition 3.11 holds per
@@ -346,7 +347,8 @@ static struct mesh *round_trip(const struct mesh *m, const char *name, enum mesh
  * output has no self-intersections and no open edges and splits into
  * exactly rep.components manifold-connected parts; each part, written as
  * the file a printer would get and read back, is unchanged by the trip,
- * printable by mesh_analyze and encloses positive volume.  Returns the
+ * printable by mesh_analyze and encloses positive volume, and so is the
+ * whole output written as one file.  Returns the
  * analysis of the whole output as read back from a file (volume, bbox).
  */
 static struct mesh_report judge(const struct fixed *f, enum repair_precision prec,
@@ -371,9 +373,12 @@ static struct mesh_report judge(const struct fixed *f, enum repair_precision pre
 		      name, (unsigned long long)whole.self_intersections);
 	ck_assert_msg(whole.odd_edges == 0, "%s: output has %zu odd edges (%zu boundary)", name,
 		      whole.odd_edges, whole.boundary_edges);
-	ck_assert_msg(whole.manifold_components == f->rep.components,
-		      "%s: mesh_analyze finds %zu manifold components, repair reports %zu", name,
-		      whole.manifold_components, f->rep.components);
+	ck_assert_msg(whole.parts == f->rep.components,
+		      "%s: mesh_analyze finds %zu parts, repair reports %zu", name, whole.parts,
+		      f->rep.components);
+	ck_assert_msg(whole.cavities == f->rep.cavities,
+		      "%s: mesh_analyze finds %zu cavities, repair reports %zu", name,
+		      whole.cavities, f->rep.cavities);
 
 	for (uint32_t c = 0; c < f->rep.components; c++) {
 		struct mesh *part = part_mesh(f->out, f->comp, c);
@@ -394,9 +399,9 @@ static struct mesh_report judge(const struct fixed *f, enum repair_precision pre
 	snprintf(file, sizeof(file), "%s-all.stl", name);
 	back = round_trip(f->out, file, fmt);
 	whole = analyze(back);
-	if (f->rep.components == 1)
-		ck_assert_msg(whole.printable, "%s: written output not printable: %s", name,
-			      reason_list(&whole, why, sizeof(why)));
+	/* Several parts and cavities in one file print too (docs/check.md). */
+	ck_assert_msg(whole.printable, "%s: written output not printable: %s", name,
+		      reason_list(&whole, why, sizeof(why)));
 	mesh_free(back);
 	return whole;
 }
@@ -653,6 +658,130 @@ START_TEST(nested_shell_deleted)
 	mesh_free(in);
 	mesh_free(outer);
 	mesh_free(inner);
+}
+END_TEST
+
+/* m with every triangle reversed (a closed shell facing inwards). */
+static struct mesh *reversed(const struct mesh *m)
+{
+	struct mesh *r = fx_concat(m, m);
+
+	r->ntris = m->ntris; /* the copy welded onto the same vertices: keep one */
+	for (size_t t = 0; t < r->ntris; t++)
+		fx_flip(r, t);
+	return r;
+}
+
+/*
+ * Proves that an enclosed shell the input faces inwards is a designed
+ * cavity and is kept (docs/repair.md, "Cavities"): the output is the
+ * input, triangle for triangle and orientation for orientation, one part
+ * with one cavity, volume 1000 - 64; nothing is counted as enclosed.
+ */
+START_TEST(nested_inward_shell_is_a_cavity)
+{
+	struct mesh *outer = fx_box(0, 0, 0, 10, 10, 10), *box = fx_box(3, 3, 3, 7, 7, 7);
+	struct mesh *inner = reversed(box), *in = fx_concat(outer, inner);
+	struct fixed f = repair_eps(in, EPS);
+	struct mesh_report r = judge(&f, REPAIR_FLOAT32, "cavity");
+
+	assert_same_triangles(f.out, in, "output vs input");
+	ck_assert_uint_eq(f.rep.enclosed_deleted, 0);
+	ck_assert_uint_eq(f.rep.cavities, 1);
+	ck_assert_uint_eq(f.rep.components, 1);
+	ck_assert_uint_eq(r.cavities, 1);
+	ck_assert_double_eq_tol(r.volume, 1000.0 - 64.0, 1e-9);
+	fixed_free(&f);
+	mesh_free(in);
+	mesh_free(outer);
+	mesh_free(box);
+	mesh_free(inner);
+}
+END_TEST
+
+/*
+ * Proves that a part inside a cavity is in empty space and is kept as a
+ * part of its own (a ball in a hollow box): outer box, inward cavity
+ * [2,8]^3, outward cube [4,6]^3 in it: two parts, one cavity, volume
+ * 1000 - 216 + 8.
+ */
+START_TEST(part_inside_a_cavity_kept)
+{
+	struct mesh *outer = fx_box(0, 0, 0, 10, 10, 10), *box = fx_box(2, 2, 2, 8, 8, 8);
+	struct mesh *cavity = reversed(box), *core = fx_box(4, 4, 4, 6, 6, 6);
+	struct mesh *shell = fx_concat(outer, cavity), *in = fx_concat(shell, core);
+	struct fixed f = repair_eps(in, EPS);
+	struct mesh_report r = judge(&f, REPAIR_FLOAT32, "ballinbox");
+
+	assert_same_triangles(f.out, in, "output vs input");
+	ck_assert_uint_eq(f.rep.components, 2);
+	ck_assert_uint_eq(f.rep.cavities, 1);
+	ck_assert_double_eq_tol(r.volume, 1000.0 - 216.0 + 8.0, 1e-9);
+	fixed_free(&f);
+	mesh_free(in);
+	mesh_free(shell);
+	mesh_free(outer);
+	mesh_free(box);
+	mesh_free(cavity);
+	mesh_free(core);
+}
+END_TEST
+
+/*
+ * Proves that touching cubes come out as one printable file: two 10 mm
+ * cubes sharing a face (i = 0: fused into one solid), an edge (i = 1) or
+ * a vertex (i = 2) (two parts); 2000 mm^3 either way, the file printable
+ * as a whole and part by part.
+ */
+START_TEST(touching_cubes_printable)
+{
+	const int i = _i;
+	const double off[3][3] = {{10, 0, 0}, {10, 10, 0}, {10, 10, 10}};
+	struct mesh *a = fx_box(0, 0, 0, 10, 10, 10);
+	struct mesh *b = fx_box(off[i][0], off[i][1], off[i][2], off[i][0] + 10, off[i][1] + 10,
+				off[i][2] + 10);
+	struct mesh *in = fx_concat(a, b);
+	struct fixed f = repair_eps(in, EPS);
+	struct mesh_report r = judge(&f, REPAIR_FLOAT32, "touching");
+
+	ck_assert_uint_eq(f.rep.components, i == 0 ? 1 : 2);
+	ck_assert_double_eq_tol(r.volume, 2000.0, 1e-9);
+	fixed_free(&f);
+	mesh_free(in);
+	mesh_free(a);
+	mesh_free(b);
+}
+END_TEST
+
+/*
+ * Proves that a part smaller than epsilon in every direction is dropped
+ * and counted: a 0.1 mm cube beside a 10 mm cube, epsilon 0.4, leaves
+ * the 10 mm cube alone (its 12 triangles unchanged); a plate 0.1 mm thin
+ * but 10 mm wide is kept.
+ */
+START_TEST(tiny_part_dropped)
+{
+	struct mesh *big = fx_box(0, 0, 0, 10, 10, 10), *tiny = fx_box(20, 0, 0, 20.1, 0.1, 0.1);
+	struct mesh *plate = fx_box(0, 20, 0, 10, 30, 0.1);
+	struct mesh *in = fx_concat(big, tiny), *both = fx_concat(big, plate);
+	struct fixed f = repair_eps(in, EPS), g;
+
+	judge(&f, REPAIR_FLOAT32, "tiny");
+	assert_same_triangles(f.out, big, "output vs the big cube");
+	ck_assert_uint_eq(f.rep.parts_dropped, 1);
+	ck_assert_uint_eq(f.rep.dropped_triangles, 12);
+	ck_assert_uint_eq(f.rep.components, 1);
+	g = repair_eps(both, EPS);
+	judge(&g, REPAIR_FLOAT32, "plate");
+	ck_assert_uint_eq(g.rep.parts_dropped, 0);
+	ck_assert_uint_eq(g.rep.components, 2);
+	fixed_free(&f);
+	fixed_free(&g);
+	mesh_free(in);
+	mesh_free(both);
+	mesh_free(big);
+	mesh_free(tiny);
+	mesh_free(plate);
 }
 END_TEST
 
@@ -1118,6 +1247,10 @@ Suite *repair_suite(void)
 	tcase_add_test(solid, overlapping_cubes_union);
 	tcase_add_test(solid, threads_do_not_change_result);
 	tcase_add_test(solid, nested_shell_deleted);
+	tcase_add_test(solid, nested_inward_shell_is_a_cavity);
+	tcase_add_test(solid, part_inside_a_cavity_kept);
+	tcase_add_loop_test(solid, touching_cubes_printable, 0, 3);
+	tcase_add_test(solid, tiny_part_dropped);
 	tcase_add_test(solid, inner_wire_discarded);
 	tcase_add_test(solid, edge_touching_cubes_two_components);
 	suite_add_tcase(s, solid);

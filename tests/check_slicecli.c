@@ -270,6 +270,73 @@ START_TEST(no_repair_slices_as_read)
 }
 END_TEST
 
+/* Filament of slicing m (written as name) with the MK3S profile, mm. */
+static double filament_of(struct mesh *m, const char *name)
+{
+	char args[1024];
+	json_t *o;
+	double f;
+
+	snprintf(args, sizeof(args), "'%s' -o '%s' " MK3S, stl_file(m, name),
+		 tu_path("parts.gcode"));
+	o = slice_json(args, 0);
+	f = num(o, "filament_mm");
+	json_decref(o);
+	return f;
+}
+
+/*
+ * Proves that parts touching along an edge or at a corner slice as the
+ * two parts they are: the repaired file holds two 10 mm cubes sharing
+ * vertices, and the filament is that of two cubes apart (within 1 %: the
+ * walls meet at the shared corner line).  A cube with an inward 4 mm
+ * cube inside is sliced with its cavity (walls around it instead of
+ * infill there), so its filament differs from the plain cube's.
+ */
+START_TEST(touching_parts_slice_as_parts)
+{
+	struct mesh *a = fx_box(0, 0, 0, 10, 10, 10), *apart = fx_box(20, 20, 0, 30, 30, 10);
+	struct mesh *edge = fx_box(10, 10, 0, 20, 20, 10), *corner = fx_box(10, 10, 10, 20, 20, 20);
+	struct mesh *hole = fx_box(3, 3, 3, 7, 7, 7), *hollow;
+	double two, f;
+
+	two = filament_of(fx_concat(a, apart), "parts-apart.stl");
+	f = filament_of(fx_concat(a, edge), "parts-edge.stl");
+	ck_assert_msg(fabs(f - two) <= 0.01 * two, "edge-touching cubes %g mm, apart %g mm", f,
+		      two);
+	/* The corner pair is twice as tall: compare with a stacked pair apart. */
+	mesh_free(apart);
+	apart = fx_box(20, 20, 10, 30, 30, 20);
+	two = filament_of(fx_concat(a, apart), "parts-apart2.stl");
+	f = filament_of(fx_concat(a, corner), "parts-corner.stl");
+	ck_assert_msg(fabs(f - two) <= 0.01 * two, "corner-touching cubes %g mm, apart %g mm", f,
+		      two);
+	for (size_t t = 0; t < hole->ntris; t++)
+		fx_flip(hole, t);
+	hollow = fx_concat(a, hole);
+	f = filament_of(hollow, "parts-hollow.stl");
+	two = filament_of(a, "parts-solid.stl");
+	ck_assert_msg(fabs(f - two) > 0.01 * two, "the cavity changed nothing: %g mm vs %g mm", f,
+		      two);
+	mesh_free(apart);
+	mesh_free(edge);
+	mesh_free(corner);
+	mesh_free(hole);
+}
+END_TEST
+
+/* Proves that slice refuses to write its G-code over the model (exit 2). */
+START_TEST(output_over_the_model_refused)
+{
+	const char *cube = stl_file(fx_box(0, 0, 0, 10, 10, 10), "own.stl");
+	int status = tu_run(out, sizeof(out), "slice '%s' -o '%s' " MK3S, cube, cube);
+
+	ck_assert_msg(status == 2, "exit %d: %s", status, out);
+	ck_assert_msg(strstr(out, "is the input file"), "%s", out);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "check '%s'", cube), 0);
+}
+END_TEST
+
 /* Run slice with extra args on model, expect status and a message, and no file. */
 static void expect_refused(const char *model, const char *extra, int want, const char *msg)
 {
@@ -396,6 +463,8 @@ Suite *slicecli_suite(void)
 	tcase_add_test(tc, bad_settings_exit_2);
 	tcase_add_test(tc, unreadable_model_exit_65);
 	tcase_add_test(tc, flashforge_profile_slices);
+	tcase_add_test(tc, touching_parts_slice_as_parts);
+	tcase_add_test(tc, output_over_the_model_refused);
 	suite_add_tcase(s, tc);
 	return s;
 }

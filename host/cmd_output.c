@@ -1,0 +1,65 @@
+/*
+ * cmd_output.c - checks on an output path made before a command does its
+ * work (commands.h): the user's input is never overwritten, and a missing
+ * or read-only directory is reported at once, not after a long repair.
+ */
+#include <errno.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "commands.h"
+#include "st_error.h"
+
+bool cmd_same_file(const char *a, const char *b)
+{
+	struct stat sa, sb;
+
+	/* stat follows symlinks: a link to the input is the input. */
+	if (stat(a, &sa) || stat(b, &sb))
+		return false;
+	return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
+/* The directory part of path ("." when there is none) into dir. */
+static void dir_of(const char *path, char *dir, size_t cap)
+{
+	const char *slash = strrchr(path, '/');
+
+	if (!slash)
+		snprintf(dir, cap, ".");
+	else if (slash == path)
+		snprintf(dir, cap, "/");
+	else
+		snprintf(dir, cap, "%.*s", (int)(slash - path), path);
+}
+
+int cmd_output_check(const char *in, const char *out, char *msg, size_t cap)
+{
+	char dir[PATH_MAX];
+	struct stat st;
+
+	if (in && cmd_same_file(in, out)) {
+		snprintf(msg, cap, "%s is the input file %s; name another output so the input "
+			 "is kept", out, in);
+		return ST_EXIT_USAGE;
+	}
+	if (stat(out, &st) == 0 && S_ISDIR(st.st_mode)) {
+		snprintf(msg, cap, "%s is a directory; name the output file", out);
+		return ST_EXIT_USAGE;
+	}
+	dir_of(out, dir, sizeof(dir));
+	if (stat(dir, &st) || !S_ISDIR(st.st_mode)) {
+		snprintf(msg, cap, "%s: the directory %s does not exist; create it first", out, dir);
+		return ST_EXIT_FAILURE;
+	}
+	if (access(dir, W_OK | X_OK)) {
+		snprintf(msg, cap, "%s: cannot write in the directory %s: %s", out, dir,
+			 strerror(errno));
+		return ST_EXIT_FAILURE;
+	}
+	return 0;
+}
