@@ -23,7 +23,7 @@ DEB_PACKAGES := gcc g++ make pkg-config dpkg-dev \
 	libserialport-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev libtbb-dev \
 	libpolyclipping-dev check libsqlite3-dev libmicrohttpd-dev libjansson-dev \
 	libmosquitto-dev mosquitto gpx libcairo2-dev libxml2-utils libcurl4-openssl-dev \
-	libssl-dev
+	libssl-dev libeigen3-dev
 # Only the benchmark compares against these (printcore: Printrun's host, also
 # used by the sim suite's faithfulness test, which is skipped without it;
 # libcgal-demo: CGAL's data meshes, the real broken models bench/cgal_corpus.sh
@@ -37,9 +37,11 @@ WARN     := -Wall -Wextra -Werror
 CPPFLAGS := -Iinclude -Irepair -Irepair/exact -Iserial -Islicer -Islicer/clip -Ihost -D_XOPEN_SOURCE=700 -D_DEFAULT_SOURCE -MMD -MP
 CFLAGS   ?= -O2 -g
 override CFLAGS += -std=c11 -pedantic $(WARN) -Wstrict-prototypes -Wmissing-prototypes -Wshadow -pthread
-# CGAL: exact predicates, TBB for the parallel box intersection.
+# CGAL: exact predicates, TBB for the parallel box intersection, Eigen for
+# fairing hole patches (repair/exact/holefill.cpp).
 CXXFLAGS ?= -O2 -g
-override CXXFLAGS += -std=c++17 $(WARN) -Wno-deprecated-declarations -pthread -DCGAL_LINKED_WITH_TBB -DNDEBUG
+override CXXFLAGS += -std=c++17 $(WARN) -Wno-deprecated-declarations -pthread -DCGAL_LINKED_WITH_TBB -DNDEBUG \
+	-DCGAL_EIGEN3_ENABLED -isystem /usr/include/eigen3
 # cairo draws the PNG layer previews (host/pvdraw.c); -isystem keeps its
 # headers out of -Werror.
 CAIRO_CFLAGS := $(patsubst -I%,-isystem %,$(shell pkg-config --cflags cairo 2>/dev/null))

@@ -243,14 +243,39 @@ static int patch_add(struct patch *p, const uint32_t t[3])
 	return 0;
 }
 
-/* Triangulate hole h into p (appending); *ok false when CGAL found none. */
-static int fill_one(const struct heal_work *w, const struct holes *hs, struct hole *h,
+/* Append np points to w's vertices; their ids follow the old ones. */
+static int add_points(struct heal_work *w, const double (*pts)[3], size_t np,
+		      struct st_error *err)
+{
+	double (*nv)[3];
+
+	if (np == 0)
+		return 0;
+	if (w->nverts + np > MESH_MAX_ELEMENTS)
+		return st_error_set(err, ST_ERR_RANGE, "heal: too many vertices after filling");
+	nv = realloc(w->verts, (w->nverts + np) * sizeof(*nv));
+	if (!nv)
+		return st_error_set(err, ST_ERR_NOMEM, "heal: out of memory filling a hole");
+	memcpy(nv[w->nverts], pts, np * sizeof(*nv));
+	w->verts = nv;
+	w->nverts += np;
+	return 0;
+}
+
+/*
+ * Fill hole h into p (appending): triangulated, refined and faired
+ * (holefill.h); the faired patch's new points become vertices of w.  *ok
+ * false when CGAL found no triangulation.
+ */
+static int fill_one(struct heal_work *w, const struct holes *hs, struct hole *h,
 		    struct patch *p, bool *ok, struct st_error *err)
 {
 	double (*loop)[3] = malloc(h->n * sizeof(*loop));
 	double (*far)[3] = malloc(h->n * sizeof(*far));
+	double (*pts)[3] = NULL;
 	uint32_t (*tris)[3] = NULL;
-	size_t nt = 0;
+	size_t nt = 0, np = 0;
+	const size_t first_new = w->nverts;
 	int rc;
 
 	*ok = false;
@@ -263,23 +288,26 @@ static int fill_one(const struct heal_work *w, const struct holes *hs, struct ho
 		memcpy(loop[i], w->verts[hs->vert[h->first + i]], sizeof(loop[i]));
 		memcpy(far[i], w->verts[hs->third[h->first + i]], sizeof(far[i]));
 	}
-	rc = exact_fill_hole((const double(*)[3])loop, h->n, (const double(*)[3])far, &tris, &nt,
-			     err);
+	rc = exact_fill_hole((const double(*)[3])loop, h->n, (const double(*)[3])far, &pts, &np,
+			     &tris, &nt, err);
 	free(loop);
 	free(far);
-	if (rc)
-		return rc;
-	for (size_t t = 0; t < nt; t++) {
+	if (!rc)
+		rc = add_points(w, (const double(*)[3])pts, np, err);
+	free(pts);
+	for (size_t t = 0; t < nt && !rc; t++) {
 		uint32_t m[3];
-		for (int k = 0; k < 3; k++)
-			m[k] = hs->vert[h->first + tris[t][k]];
-		h->area += vec3_tri_area(w->verts[m[0]], w->verts[m[1]], w->verts[m[2]]);
-		if (patch_add(p, m)) {
-			free(tris);
-			return st_error_set(err, ST_ERR_NOMEM, "heal: out of memory filling a hole");
+		for (int k = 0; k < 3; k++) {
+			const uint32_t i = tris[t][k];
+			m[k] = i < h->n ? hs->vert[h->first + i] : (uint32_t)(first_new + i - h->n);
 		}
+		h->area += vec3_tri_area(w->verts[m[0]], w->verts[m[1]], w->verts[m[2]]);
+		if (patch_add(p, m))
+			rc = st_error_set(err, ST_ERR_NOMEM, "heal: out of memory filling a hole");
 	}
 	free(tris);
+	if (rc)
+		return rc;
 	p->area += h->area;
 	*ok = nt > 0;
 	return 0;
@@ -314,14 +342,16 @@ static int append_patch(struct heal_work *w, const struct patch *p, struct st_er
 }
 
 /*
- * Pairs of w's triangles of shell sh (shell[] per vertex) that meet
- * outside a shared face, exactly; skip is scratch for w->ntris flags.
+ * Pairs of w's triangles of shell sh (shell[] per vertex of the first
+ * nt_old triangles) and the ones after them that meet outside a shared
+ * face, exactly; skip is scratch for w->ntris flags.
  */
 static int count_crossings(const struct heal_work *w, const uint32_t *shell, uint32_t sh,
-			   uint8_t *skip, uint64_t *count, struct st_error *err)
+			   size_t nt_old, uint8_t *skip, uint64_t *count, struct st_error *err)
 {
+	/* Triangles from nt_old on are the patch, over new vertices too. */
 	for (size_t t = 0; t < w->ntris; t++)
-		skip[t] = shell[w->tris[t][0]] != sh;
+		skip[t] = t < nt_old && shell[w->tris[t][0]] != sh;
 	return exact_count_self_intersections((const double(*)[3])w->verts, w->nverts,
 					      (const uint32_t(*)[3])w->tris, w->ntris, skip, 0,
 					      count, err);
@@ -339,6 +369,7 @@ static int patch_crosses(struct heal_work *w, const uint32_t *shell, uint32_t sh
 			 const struct patch *p, bool *crossing, struct st_error *err)
 {
 	uint64_t without = 0, with = 0;
+	const size_t nt_old = w->ntris;
 	uint8_t *skip;
 	int rc;
 
@@ -351,10 +382,10 @@ static int patch_crosses(struct heal_work *w, const uint32_t *shell, uint32_t sh
 		w->ntris -= p->n;
 		return st_error_set(err, ST_ERR_NOMEM, "heal: out of memory checking a patch");
 	}
-	rc = count_crossings(w, shell, sh, skip, &with, err);
+	rc = count_crossings(w, shell, sh, nt_old, skip, &with, err);
 	w->ntris -= p->n; /* the caller appends it if it is kept */
 	if (!rc)
-		rc = count_crossings(w, shell, sh, skip, &without, err);
+		rc = count_crossings(w, shell, sh, nt_old, skip, &without, err);
 	free(skip);
 	*crossing = !rc && with > without;
 	return rc;

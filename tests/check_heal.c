@@ -381,6 +381,40 @@ START_TEST(crossing_patch_not_used)
 }
 END_TEST
 
+/*
+ * Proves that a curved hole gets a curved patch: a sphere (r 10) without
+ * its cap above z = 9 (rim at z = 9.24) is filled, and the refined and
+ * faired patch rises above the rim towards the pole (a flat patch would
+ * end at the rim), the volume within 1 % of the closed sphere.
+ */
+START_TEST(curved_hole_faired)
+{
+	struct mesh *closed = fx_sphere(0, 0, 0, 10, 32, 64);
+	struct mesh *in = fx_sphere(0, 0, 0, 10, 32, 64);
+	struct healed h;
+	double lo[3], hi[3], rim = 0;
+
+	for (size_t t = in->ntris; t-- > 0;) {
+		const uint32_t *c = in->tris[t];
+		if (in->verts[c[0]][2] > 9 && in->verts[c[1]][2] > 9 && in->verts[c[2]][2] > 9)
+			fx_drop(in, t);
+	}
+	for (size_t t = 0; t < in->ntris; t++)
+		for (int k = 0; k < 3; k++)
+			rim = fmax(rim, in->verts[in->tris[t][k]][2]);
+	h = run(in, false);
+	ck_assert_uint_eq(h.rep.holes_filled, 1);
+	ck_assert_uint_gt(h.rep.fill_triangles, 64 - 2); /* refined: more than the rim's fan */
+	mesh_bbox(h.out, lo, hi);
+	ck_assert_msg(hi[2] > rim + 0.2, "patch top z %g, rim %g: not faired", hi[2], rim);
+	ck_assert_msg(hi[2] < 10 + 1e-9, "patch top z %g above the sphere", hi[2]);
+	assert_solid(&h, closed, "capless.stl");
+	healed_free(&h);
+	mesh_free(in);
+	mesh_free(closed);
+}
+END_TEST
+
 Suite *heal_suite(void)
 {
 	Suite *s = suite_create("heal");
@@ -393,6 +427,7 @@ Suite *heal_suite(void)
 	tcase_add_loop_test(solid, jittered_sphere_solid, 0, 4);
 	tcase_add_loop_test(solid, sphere_halves_stitched, 0, 3);
 	tcase_add_loop_test(solid, small_hole_filled, 0, 3);
+	tcase_add_test(solid, curved_hole_faired);
 	suite_add_tcase(s, solid);
 	tcase_add_loop_test(open, open_surface_stays_sheet, 0, 2);
 	tcase_add_test(open, keep_holes_turns_off_stitch_and_fill);
