@@ -6,7 +6,8 @@
 # 000's experiments do, and written as binary STL (build/bench/gen_mesh
 # convert).  `stratum check` sorts them into already printable and needing
 # repair; each is repaired with a LIMIT_S second limit (default 120), and the
-# written file is judged by `stratum check` again.  Prints one Markdown row
+# written file is judged by `stratum check` again; an already printable one
+# must come back with the same triangles, bit for bit (gen_mesh same).  Prints one Markdown row
 # per mesh and a summary for docs/benchmarks.md.  Wall time and peak RSS
 # come from GNU time.
 set -eu
@@ -24,7 +25,7 @@ fi
 
 echo "| mesh | triangles | before | repair exit | s | peak MiB | after (stratum check) |"
 echo "|---|---|---|---|---|---|---|"
-n_ok=0; n_fix=0; n_fixed=0; n_kept=0; n_70=0; n_slow=0; n_other=0; n_unread=0
+n_ok=0; n_fix=0; n_fixed=0; n_kept=0; n_same=0; n_70=0; n_slow=0; n_other=0; n_unread=0
 for src in "$out"/data/meshes/*.off "$out"/data/meshes/*.obj "$out"/data/meshes/*.stl; do
 	[ -f "$src" ] || continue
 	name=$(basename "$src")
@@ -55,6 +56,9 @@ for src in "$out"/data/meshes/*.off "$out"/data/meshes/*.obj "$out"/data/meshes/
 	if [ "$before" = printable ]; then
 		n_ok=$((n_ok + 1))
 		[ "$after" = printable ] && n_kept=$((n_kept + 1))
+		if [ "$rc" = 0 ] && "$gen" same "$stl" "$out/repaired.stl"; then
+			n_same=$((n_same + 1)); after="$after, unchanged"
+		fi
 	else
 		n_fix=$((n_fix + 1))
 		[ "$after" = printable ] && n_fixed=$((n_fixed + 1))
@@ -62,6 +66,6 @@ for src in "$out"/data/meshes/*.off "$out"/data/meshes/*.obj "$out"/data/meshes/
 	echo "| $name | $tris | $before | $rc | $secs | $((kib / 1024)) | $after |"
 done
 echo
-echo "Already printable: $n_ok, printable after repair: $n_kept."
+echo "Already printable: $n_ok, printable after repair: $n_kept, of them unchanged bit for bit: $n_same."
 echo "Needing repair: $n_fix, printable after repair: $n_fixed."
 echo "Exit 70: $n_70; over ${limit} s: $n_slow; other non-zero exits: $n_other; unreadable: $n_unread."

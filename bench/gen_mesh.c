@@ -19,6 +19,9 @@
  *                                    IN (STL, OBJ or OFF) moved to the origin and
  *                                    scaled so its largest extent is SIZE mm, as
  *                                    seed 000's experiments scale their models
+ *   gen_mesh same A B                exit 0 when meshes A and B have the same triangles
+ *                                    in the same order over bit-identical corners
+ *                                    (normals and headers aside), else 1
  *   gen_mesh plate|overhang|bridge OUT.stl
  *                                    the slicer's test models (tests/fixtures.h):
  *                                    a plate with a square and a round hole, a 45
@@ -26,6 +29,7 @@
  * Every mesh is deterministic: the same arguments give the same file.
  */
 #include <math.h>
+#include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -101,14 +105,27 @@ static void fit(struct mesh *m, double size)
 			m->verts[i][k] = ext > 0 ? (m->verts[i][k] - lo[k]) * (size / ext) : 0;
 }
 
+/* Whether a and b list the same triangles, in order, over identical corners. */
+static bool same_triangles(const struct mesh *a, const struct mesh *b)
+{
+	if (a->ntris != b->ntris)
+		return false;
+	for (size_t t = 0; t < a->ntris; t++)
+		for (int k = 0; k < 3; k++)
+			if (memcmp(a->verts[a->tris[t][k]], b->verts[b->tris[t][k]],
+				   sizeof(a->verts[0])))
+				return false;
+	return true;
+}
+
 static void usage(void)
 {
 	fprintf(stderr, "usage: gen_mesh torus NU NV OUT.stl | gen_mesh spheres N OUT.stl\n"
 			"       gen_mesh twospheres NLAT NLON OUT.stl | gen_mesh scan NU NV JITTER "
 			"OUT.stl\n"
 			"       gen_mesh box SX SY SZ OUT.stl | gen_mesh cylinder R H N OUT.stl\n"
-			"       gen_mesh convert IN SIZE OUT.stl | gen_mesh plate|overhang|bridge "
-			"OUT.stl\n");
+			"       gen_mesh convert IN SIZE OUT.stl | gen_mesh same A B\n"
+			"       gen_mesh plate|overhang|bridge OUT.stl\n");
 	exit(2);
 }
 
@@ -117,6 +134,19 @@ int main(int argc, char **argv)
 	struct st_error err = {0};
 	struct mesh *m = NULL;
 
+	if (argc == 4 && !strcmp(argv[1], "same")) {
+		struct mesh *b = NULL;
+		if (meshio_read(argv[2], MESHIO_AUTO, &m, NULL, &err) ||
+		    meshio_read(argv[3], MESHIO_AUTO, &b, NULL, &err)) {
+			fprintf(stderr, "gen_mesh: %s\n", err.msg);
+			mesh_free(m);
+			return 2;
+		}
+		const bool same = same_triangles(m, b);
+		mesh_free(m);
+		mesh_free(b);
+		return same ? 0 : 1;
+	}
 	if (argc == 5 && !strcmp(argv[1], "torus")) {
 		m = fx_torus(60.0, 20.0, int_arg(argv[2], 3, 100000), int_arg(argv[3], 3, 100000));
 	} else if (argc == 4 && !strcmp(argv[1], "spheres")) {
