@@ -147,7 +147,7 @@ START_TEST(hard_sheets_slab_closed)
 	m[4] = fx_random_triangles(7, 60, 10);
 	m[5] = fx_klein_bottle(3, 0.05, 16, 8);
 	for (int i = 0; i < 6; i++) {
-		char name[16];
+		char name[32];
 		snprintf(name, sizeof(name), "sheet-%d", i);
 		ck_assert_uint_gt(assert_closed_slab(m[i], name), 0);
 		mesh_free(m[i]);
