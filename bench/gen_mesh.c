@@ -15,6 +15,14 @@
  *                                    have decimals: "box 20 0.4 10" is a wall of 0.4)
  *   gen_mesh cylinder R H N OUT.stl  a cylinder of radius R, height H mm: a regular
  *                                    N-gon (3..256) prism
+ *   gen_mesh soup N SIZE SEED OUT.stl
+ *                                    N random triangles, each with corners uniform in
+ *                                    its own SIZE mm cube, the cubes scattered
+ *                                    uniformly at a density of 8 per SIZE^3: a soup
+ *                                    whose triangles each cross a few others, as in a
+ *                                    broken download (corners everywhere in one cube,
+ *                                    tests/fixtures.h fx_random_triangles, would make
+ *                                    every triangle cross a fixed share of all others)
  *   gen_mesh plate|overhang|bridge OUT.stl
  *                                    the slicer's test models (tests/fixtures.h):
  *                                    a plate with a square and a round hole, a 45
@@ -58,6 +66,35 @@ static void jitter(struct mesh *m, double amp, uint64_t seed)
 			m->verts[i][k] += amp * uniform(&seed);
 }
 
+/* See "gen_mesh soup" above: n triangles of extent size, 8 per size^3. */
+static struct mesh *soup(int n, double size, uint64_t seed)
+{
+	struct mesh_builder *b = mesh_builder_new((size_t)n);
+	const double side = size * cbrt((double)n) / 2;
+
+	if (!b)
+		return NULL;
+	for (int t = 0; t < n; t++) {
+		double o[3], p[3];
+		uint32_t v[3];
+
+		for (int a = 0; a < 3; a++)
+			o[a] = side * (uniform(&seed) + 1) / 2;
+		for (int k = 0; k < 3; k++) {
+			for (int a = 0; a < 3; a++)
+				p[a] = o[a] + size * (uniform(&seed) + 1) / 2;
+			if (mesh_builder_vertex(b, p, &v[k], NULL))
+				goto fail;
+		}
+		if (mesh_builder_triangle(b, v[0], v[1], v[2], NULL))
+			goto fail;
+	}
+	return mesh_builder_finish(b);
+fail:
+	mesh_builder_free(b);
+	return NULL;
+}
+
 /* Whole number argument in [lo, hi], or exit with a usage message. */
 static int int_arg(const char *s, int lo, int hi)
 {
@@ -90,7 +127,8 @@ static void usage(void)
 			"       gen_mesh twospheres NLAT NLON OUT.stl | gen_mesh scan NU NV JITTER "
 			"OUT.stl\n"
 			"       gen_mesh box SX SY SZ OUT.stl | gen_mesh cylinder R H N OUT.stl\n"
-			"       gen_mesh plate|overhang|bridge OUT.stl\n");
+			"       gen_mesh soup N SIZE SEED OUT.stl | gen_mesh plate|overhang|bridge "
+			"OUT.stl\n");
 	exit(2);
 }
 
@@ -135,6 +173,9 @@ int main(int argc, char **argv)
 		m = fx_box(0, 0, 0, mm_arg(argv[2]), mm_arg(argv[3]), mm_arg(argv[4]));
 	} else if (argc == 6 && !strcmp(argv[1], "cylinder")) {
 		m = fx_cylinder(0, 0, mm_arg(argv[2]), mm_arg(argv[3]), int_arg(argv[4], 3, 256));
+	} else if (argc == 6 && !strcmp(argv[1], "soup")) {
+		m = soup(int_arg(argv[2], 1, 50000000), mm_arg(argv[3]),
+			 (uint64_t)int_arg(argv[4], 0, 1 << 30));
 	} else if (argc == 3 && !strcmp(argv[1], "plate")) {
 		m = fx_plate_holes();
 	} else if (argc == 3 && !strcmp(argv[1], "overhang")) {
@@ -143,6 +184,10 @@ int main(int argc, char **argv)
 		m = fx_bridge();
 	} else {
 		usage();
+	}
+	if (!m) {
+		fprintf(stderr, "gen_mesh: out of memory\n");
+		return 1;
 	}
 	if (meshio_write_stl(argv[argc - 1], m, MESHIO_STL_BINARY, &err)) {
 		fprintf(stderr, "gen_mesh: %s\n", err.msg);

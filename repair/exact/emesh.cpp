@@ -9,21 +9,17 @@
  * Decisions over double-only triangles use Epick's filtered predicates;
  * anything touching a rational vertex uses Epeck.
  */
-#define CGAL_NO_CDT_2_WARNING 1
-
 #include "exact.h"
 
-#include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/Projection_traits_xy_3.h>
-#include <CGAL/Projection_traits_xz_3.h>
-#include <CGAL/Projection_traits_yz_3.h>
 #include <CGAL/intersections.h>
 
 #include "boxpairs.hpp"
+#include "cutpair.hpp"
 #include "emesh.hpp"
 #include "pairtest.hpp"
+#include "retri.hpp"
 
 #include <algorithm>
 #include <array>
@@ -43,6 +39,8 @@ namespace
 
 using boxpairs::Box;
 using boxpairs::box_coord;
+using retri::cuts;
+using retri::add_intersection;
 
 EPoint epoint(const exact_mesh &m, uint32_t v)
 {
@@ -129,11 +127,7 @@ bool apart(const exact_mesh &m, const uint32_t *u, const uint32_t *w)
 	return pairtest::certainly_apart(p, q);
 }
 
-/*
- * Every pair of triangles meeting outside a common face.  Lazy exact
- * numbers are not safe to share between threads, so a mesh with rational
- * vertices is searched on this thread only.
- */
+/* Every pair of triangles meeting outside a common face. */
 std::vector<std::pair<uint32_t, uint32_t>> find_pairs(const exact_mesh &m, int threads)
 {
 	const size_t n = m.tris.size();
@@ -145,8 +139,6 @@ std::vector<std::pair<uint32_t, uint32_t>> find_pairs(const exact_mesh &m, int t
 		boxes[t] = tri_box(m, t);
 		use[t] = &boxes[t];
 	}
-	if (!m.ex.empty())
-		threads = 1;
 	auto geti = [&m](uint32_t v) { return ipoint(m, v); };
 	auto gete = [&m](uint32_t v) { return epoint(m, v); };
 	boxpairs::for_each_pair(
@@ -171,74 +163,12 @@ std::vector<std::pair<uint32_t, uint32_t>> find_pairs(const exact_mesh &m, int t
 	return all;
 }
 
-/* What cuts one triangle: points and segments in its plane. */
-struct cuts {
-	std::vector<EPoint> points;
-	std::vector<std::pair<EPoint, EPoint>> segments;
-};
-
-/* Add the intersection of two triangles to both triangles' cuts. */
-void add_intersection(const EK::Triangle_3 &a, const EK::Triangle_3 &b, cuts &ca, cuts &cb)
+/* Cut triangle t of m along c into *pieces (retri.hpp). */
+void split_triangle(const exact_mesh &m, uint32_t t, const cuts &c,
+		    std::vector<std::array<EPoint, 3>> &pieces)
 {
-	auto r = CGAL::intersection(a, b);
-	if (!r)
-		return;
-	auto seg = [&](const EPoint &p, const EPoint &q) {
-		ca.segments.emplace_back(p, q);
-		cb.segments.emplace_back(p, q);
-	};
-	if (const EPoint *p = boost::get<EPoint>(&*r)) {
-		ca.points.push_back(*p);
-		cb.points.push_back(*p);
-	} else if (const EK::Segment_3 *s = boost::get<EK::Segment_3>(&*r)) {
-		seg(s->source(), s->target());
-	} else if (const EK::Triangle_3 *t = boost::get<EK::Triangle_3>(&*r)) {
-		for (int k = 0; k < 3; k++)
-			seg(t->vertex(k), t->vertex(k + 1));
-	} else if (const std::vector<EPoint> *poly = boost::get<std::vector<EPoint>>(&*r)) {
-		for (size_t k = 0; k < poly->size(); k++)
-			seg((*poly)[k], (*poly)[(k + 1) % poly->size()]);
-	}
-}
-
-/*
- * Triangulate triangle (p0, p1, p2) with its cuts as constraints in the
- * coordinate plane it projects onto without degenerating (Traits), and
- * append the pieces as point triples with the triangle's own orientation.
- */
-template <class Traits>
-void triangulate(const EPoint &p0, const EPoint &p1, const EPoint &p2, const cuts &c,
-		 std::vector<std::array<EPoint, 3>> &pieces)
-{
-	typedef CGAL::Triangulation_vertex_base_2<Traits> Vb;
-	typedef CGAL::Constrained_triangulation_face_base_2<Traits> Fb;
-	typedef CGAL::Triangulation_data_structure_2<Vb, Fb> Tds;
-	typedef CGAL::Constrained_Delaunay_triangulation_2<Traits, Tds,
-							   CGAL::Exact_intersections_tag>
-	    CDT;
-	CDT cdt;
-
-	cdt.insert(p0);
-	cdt.insert(p1);
-	cdt.insert(p2);
-	for (const EPoint &p : c.points)
-		cdt.insert(p);
-	for (const auto &s : c.segments) {
-		if (s.first == s.second)
-			cdt.insert(s.first);
-		else
-			cdt.insert_constraint(s.first, s.second);
-	}
-	/* The pieces are counter-clockwise in the projection; so is the
-	 * triangle, or else every piece is reversed. */
-	const bool reverse = Traits().orientation_2_object()(p0, p1, p2) == CGAL::CLOCKWISE;
-	for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
-		std::array<EPoint, 3> t = {f->vertex(0)->point(), f->vertex(1)->point(),
-					   f->vertex(2)->point()};
-		if (reverse)
-			std::swap(t[1], t[2]);
-		pieces.push_back(t);
-	}
+	retri::split(epoint(m, m.tris[t][0]), epoint(m, m.tris[t][1]), epoint(m, m.tris[t][2]), c,
+		     pieces);
 }
 
 /* The refinement itself; see exact_mesh_refine. */
@@ -251,14 +181,49 @@ void refine(exact_mesh &m, int threads, exact_refine_stats &st)
 	if (pairs.empty())
 		return;
 
-	/* Cuts of every affected triangle, from every pair it is in. */
-	std::unordered_map<uint32_t, cuts> cut;
-	for (const auto &pr : pairs) {
-		const auto &u = m.tris[pr.first], &w = m.tris[pr.second];
+	/* What each pair adds to both its triangles' cuts, found on all cores
+	 * (Epeck's lazy numbers are thread-safe since CGAL 5.5: each exact
+	 * value is computed under a once flag), then gathered in pair order. */
+	std::vector<cuts> meet(pairs.size());
+	boxpairs::for_each_index(pairs.size(), threads, [&](size_t i) {
+		const uint32_t s = pairs[i].first, t = pairs[i].second;
+		const auto &u = m.tris[s], &w = m.tris[t];
+		if (tri_is_double(m, s) && tri_is_double(m, t)) {
+			const IK::Point_3 pu[3] = {ipoint(m, u[0]), ipoint(m, u[1]), ipoint(m, u[2])};
+			const IK::Point_3 pw[3] = {ipoint(m, w[0]), ipoint(m, w[1]), ipoint(m, w[2])};
+			std::vector<EPoint> seg;
+			if (cutpair::intersect(pu, pw, seg)) {
+				if (seg.size() == 1)
+					meet[i].points.push_back(seg[0]);
+				else if (seg.size() == 2)
+					meet[i].segments.emplace_back(seg[0], seg[1]);
+				return;
+			}
+		}
 		EK::Triangle_3 a(epoint(m, u[0]), epoint(m, u[1]), epoint(m, u[2]));
 		EK::Triangle_3 b(epoint(m, w[0]), epoint(m, w[1]), epoint(m, w[2]));
-		add_intersection(a, b, cut[pr.first], cut[pr.second]);
-	}
+		add_intersection(a, b, meet[i]);
+	});
+	std::unordered_map<uint32_t, cuts> cut;
+	for (size_t i = 0; i < pairs.size(); i++)
+		for (uint32_t t : {pairs[i].first, pairs[i].second}) {
+			cuts &c = cut[t];
+			c.points.insert(c.points.end(), meet[i].points.begin(), meet[i].points.end());
+			c.segments.insert(c.segments.end(), meet[i].segments.begin(),
+					  meet[i].segments.end());
+		}
+	std::vector<cuts>().swap(meet);
+
+	/* The cut triangles in order, each triangulated on any core. */
+	std::vector<uint32_t> order;
+	order.reserve(cut.size());
+	for (const auto &kv : cut)
+		order.push_back(kv.first);
+	std::sort(order.begin(), order.end());
+	std::vector<std::vector<std::array<EPoint, 3>>> pieces_of(order.size());
+	boxpairs::for_each_index(order.size(), threads, [&](size_t i) {
+		split_triangle(m, order[i], cut.find(order[i])->second, pieces_of[i]);
+	});
 
 	/* Points of affected triangles are unified through this map; it starts
 	 * with their own corners so a cut point on a corner reuses it. */
@@ -269,7 +234,6 @@ void refine(exact_mesh &m, int threads, exact_refine_stats &st)
 
 	std::vector<std::array<uint32_t, 3>> tris;
 	std::vector<uint32_t> origin;
-	std::vector<std::array<EPoint, 3>> pieces;
 	/* Pieces already emitted, by sorted corners: coplanar overlaps give
 	 * the same piece from both triangles, and one layer is kept. */
 	std::map<std::array<uint32_t, 3>, uint32_t> emitted;
@@ -278,37 +242,14 @@ void refine(exact_mesh &m, int threads, exact_refine_stats &st)
 	tris.reserve(m.tris.size() + 4 * cut.size());
 	origin.reserve(tris.capacity());
 	for (size_t t = 0; t < m.tris.size(); t++) {
-		auto it = cut.find(static_cast<uint32_t>(t));
-		if (it == cut.end()) {
+		if (!cut.count(static_cast<uint32_t>(t))) {
 			tris.push_back(m.tris[t]);
 			origin.push_back(m.origin[t]);
 			continue;
 		}
-		const EPoint p0 = epoint(m, m.tris[t][0]), p1 = epoint(m, m.tris[t][1]),
-			     p2 = epoint(m, m.tris[t][2]);
-		const EK::Vector_3 nrm = CGAL::normal(p0, p1, p2);
-		/* Project along the axis where the normal is largest; its exact
-		 * sign is checked so the projection never degenerates. */
-		const double ax = std::fabs(CGAL::to_double(nrm.x())),
-			     ay = std::fabs(CGAL::to_double(nrm.y())),
-			     az = std::fabs(CGAL::to_double(nrm.z()));
-		int axis = az >= ax && az >= ay ? 2 : (ay >= ax ? 1 : 0);
-		const EFT comp[3] = {nrm.x(), nrm.y(), nrm.z()};
-		if (CGAL::sign(comp[axis]) == CGAL::ZERO)
-			for (axis = 0; axis < 3 && CGAL::sign(comp[axis]) == CGAL::ZERO; axis++)
-				;
-		if (axis == 3)
-			throw std::logic_error("degenerate triangle reached the refinement");
-		pieces.clear();
-		if (axis == 2)
-			triangulate<CGAL::Projection_traits_xy_3<EK>>(p0, p1, p2, it->second,
-								      pieces);
-		else if (axis == 1)
-			triangulate<CGAL::Projection_traits_xz_3<EK>>(p0, p1, p2, it->second,
-								      pieces);
-		else
-			triangulate<CGAL::Projection_traits_yz_3<EK>>(p0, p1, p2, it->second,
-								      pieces);
+		const std::vector<std::array<EPoint, 3>> &pieces =
+		    pieces_of[static_cast<size_t>(
+			std::lower_bound(order.begin(), order.end(), t) - order.begin())];
 		st.triangles_split++;
 		for (const auto &pc : pieces) {
 			std::array<uint32_t, 3> v;
