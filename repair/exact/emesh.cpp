@@ -232,6 +232,11 @@ void refine(exact_mesh &m, int threads, exact_refine_stats &st)
 		for (uint32_t v : m.tris[kv.first])
 			index.emplace(epoint(m, v), v);
 
+	/* The same point reaches several pieces as one lazy handle (a cut
+	 * point is shared by both triangles of its pair): those skip the
+	 * exact comparisons of the map.  Every handle stays alive in
+	 * pieces_of while this is used, so no id is reused. */
+	std::unordered_map<EPoint::Id_type, uint32_t> by_handle;
 	std::vector<std::array<uint32_t, 3>> tris;
 	std::vector<uint32_t> origin;
 	/* Pieces already emitted, by sorted corners: coplanar overlaps give
@@ -254,10 +259,16 @@ void refine(exact_mesh &m, int threads, exact_refine_stats &st)
 		for (const auto &pc : pieces) {
 			std::array<uint32_t, 3> v;
 			for (int k = 0; k < 3; k++) {
+				auto h = by_handle.find(pc[k].id());
+				if (h != by_handle.end()) {
+					v[k] = h->second;
+					continue;
+				}
 				auto f = index.find(pc[k]);
 				if (f == index.end())
 					f = index.emplace(pc[k], add_vertex(m, pc[k])).first;
 				v[k] = f->second;
+				by_handle.emplace(pc[k].id(), v[k]);
 			}
 			std::array<uint32_t, 3> key = v;
 			std::sort(key.begin(), key.end());
