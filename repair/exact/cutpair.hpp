@@ -1,15 +1,14 @@
 /*
  * cutpair.hpp - private to repair/exact: the exact intersection of two
- * triangles with double corners that do not lie in one plane, built
- * directly instead of through Epeck's general triangle-triangle
- * intersection.
+ * triangles that do not lie in one plane, built directly instead of
+ * through Epeck's general triangle-triangle intersection.
  *
  * Why: Epeck's triangle-triangle intersection records the whole
  * construction in its lazy DAG, and nearly every cut point is later needed
  * exactly (it lies on an edge of the triangle it cuts, so the constrained
  * triangulation's interval filter cannot decide it): each such point then
  * redoes the whole intersection in rationals.  Here the combinatorics come
- * from filtered exact predicates on the doubles (Epick) and each new point
+ * from filtered exact predicates (Epick on double corners) and each new point
  * (an edge crossing the other plane) is computed once, as an exact
  * rational, from the two orientation determinants.  Measured on eight
  * overlapping spheres (9750 pairs): see docs/benchmarks.md.
@@ -28,18 +27,40 @@ namespace cutpair
 typedef EK::Exact_kernel XK; /* the rationals behind Epeck */
 typedef XK::FT XFT;
 
+/* Exact coordinates of a point, as rationals, and the point as Epeck's. */
+inline void coords(const IK::Point_3 &p, XFT c[3])
+{
+	for (int k = 0; k < 3; k++)
+		c[k] = XFT(p[k]);
+}
+inline void coords(const EPoint &p, XFT c[3])
+{
+	const XK::Point_3 &e = CGAL::exact(p);
+	for (int k = 0; k < 3; k++)
+		c[k] = e[k];
+}
+inline EPoint as_epoint(const IK::Point_3 &p)
+{
+	return EPoint(p.x(), p.y(), p.z());
+}
+inline const EPoint &as_epoint(const EPoint &p)
+{
+	return p;
+}
+
 /*
  * The exact point where segment pq crosses the plane through a with
  * normal n (exact), p and q strictly on opposite sides:
  * p + (q - p) * dp / (dp - dq) with dp = n.(p - a), dq = n.(q - a).
  */
-inline EPoint edge_plane(const IK::Point_3 &p, const IK::Point_3 &q, const XFT a[3],
-			 const XFT n[3])
+template <class P>
+EPoint edge_plane(const P &p, const P &q, const XFT a[3], const XFT n[3])
 {
-	const XFT pp[3] = {XFT(p.x()), XFT(p.y()), XFT(p.z())};
-	const XFT qq[3] = {XFT(q.x()), XFT(q.y()), XFT(q.z())};
+	XFT pp[3], qq[3];
 	XFT dp = 0, dq = 0;
 
+	coords(p, pp);
+	coords(q, qq);
 	for (int k = 0; k < 3; k++) {
 		dp += n[k] * (pp[k] - a[k]);
 		dq += n[k] * (qq[k] - a[k]);
@@ -55,26 +76,29 @@ inline EPoint edge_plane(const IK::Point_3 &p, const IK::Point_3 &q, const XFT a
  * The part of triangle t in the plane of triangle s (o[i]: side of t's
  * corner i, never all zero): one or two points, in *pts.
  */
-inline void plane_section(const IK::Point_3 t[3], const CGAL::Orientation o[3],
-			  const IK::Point_3 s[3], std::vector<EPoint> &pts)
+template <class P>
+void plane_section(const P t[3], const CGAL::Orientation o[3], const P s[3],
+		   std::vector<EPoint> &pts)
 {
 	XFT a[3], n[3];
 	bool have_plane = false;
 
 	for (int i = 0; i < 3; i++)
 		if (o[i] == CGAL::COPLANAR)
-			pts.emplace_back(t[i].x(), t[i].y(), t[i].z());
+			pts.push_back(as_epoint(t[i]));
 	for (int i = 0; i < 3; i++) {
 		const int j = (i + 1) % 3;
 		if (o[i] == CGAL::COPLANAR || o[j] == CGAL::COPLANAR || o[i] == o[j])
 			continue;
 		if (!have_plane) {
-			const XFT s0[3] = {s[0].x(), s[0].y(), s[0].z()};
+			XFT s1[3], s2[3];
+			coords(s[0], a);
+			coords(s[1], s1);
+			coords(s[2], s2);
 			XFT e1[3], e2[3];
 			for (int k = 0; k < 3; k++) {
-				a[k] = s0[k];
-				e1[k] = XFT(s[1][k]) - s0[k];
-				e2[k] = XFT(s[2][k]) - s0[k];
+				e1[k] = s1[k] - a[k];
+				e2[k] = s2[k] - a[k];
 			}
 			n[0] = e1[1] * e2[2] - e1[2] * e2[1];
 			n[1] = e1[2] * e2[0] - e1[0] * e2[2];
@@ -92,7 +116,8 @@ inline bool xyz_less(const EPoint &a, const EPoint &b)
 }
 
 /*
- * Intersect triangles u and w (double corners, each non-degenerate).
+ * Intersect triangles u and w (each non-degenerate; P is IK::Point_3 for
+ * double corners, whose orientations Epick decides, or EPoint).
  * Returns false, adding nothing, when they lie in one plane (the caller
  * intersects them in general).  Otherwise appends their intersection to
  * *seg as a segment (two points) or a point (one), or nothing when they
@@ -102,7 +127,7 @@ inline bool xyz_less(const EPoint &a, const EPoint &b)
  * lexicographic order is monotone along any line, so the intersection is
  * the overlap of the two sections in that order.
  */
-inline bool intersect(const IK::Point_3 u[3], const IK::Point_3 w[3], std::vector<EPoint> &seg)
+template <class P> bool intersect(const P u[3], const P w[3], std::vector<EPoint> &seg)
 {
 	CGAL::Orientation ou[3], ow[3];
 

@@ -188,18 +188,25 @@ void refine(exact_mesh &m, int threads, exact_refine_stats &st)
 	boxpairs::for_each_index(pairs.size(), threads, [&](size_t i) {
 		const uint32_t s = pairs[i].first, t = pairs[i].second;
 		const auto &u = m.tris[s], &w = m.tris[t];
+		std::vector<EPoint> seg;
+		auto keep = [&](const std::vector<EPoint> &g) {
+			if (g.size() == 1)
+				meet[i].points.push_back(g[0]);
+			else if (g.size() == 2)
+				meet[i].segments.emplace_back(g[0], g[1]);
+		};
 		if (tri_is_double(m, s) && tri_is_double(m, t)) {
 			const IK::Point_3 pu[3] = {ipoint(m, u[0]), ipoint(m, u[1]), ipoint(m, u[2])};
 			const IK::Point_3 pw[3] = {ipoint(m, w[0]), ipoint(m, w[1]), ipoint(m, w[2])};
-			std::vector<EPoint> seg;
-			if (cutpair::intersect(pu, pw, seg)) {
-				if (seg.size() == 1)
-					meet[i].points.push_back(seg[0]);
-				else if (seg.size() == 2)
-					meet[i].segments.emplace_back(seg[0], seg[1]);
-				return;
-			}
+			if (cutpair::intersect(pu, pw, seg))
+				return keep(seg);
+		} else {
+			const EPoint eu[3] = {epoint(m, u[0]), epoint(m, u[1]), epoint(m, u[2])};
+			const EPoint ew[3] = {epoint(m, w[0]), epoint(m, w[1]), epoint(m, w[2])};
+			if (cutpair::intersect(eu, ew, seg))
+				return keep(seg);
 		}
+		/* In one plane: the general intersection (an overlap polygon). */
 		EK::Triangle_3 a(epoint(m, u[0]), epoint(m, u[1]), epoint(m, u[2]));
 		EK::Triangle_3 b(epoint(m, w[0]), epoint(m, w[1]), epoint(m, w[2]));
 		add_intersection(a, b, meet[i]);
