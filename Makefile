@@ -128,9 +128,13 @@ $(BUILD)/bench/gen_mesh: $(BUILD)/bench/gen_mesh.o $(BUILD)/tests/fixtures.o $(B
 $(BUILD)/bench/region_check: $(BUILD)/bench/region_check.o $(BUILD)/libstratum.a
 	$(CXX) -pthread $(LDEXTRA) -o $@ $^ $(LDLIBS)
 
+# Issue 15 item 4: the exact pass of the repair timed alone.
+$(BUILD)/bench/refine_time: $(BUILD)/bench/refine_time.o $(BUILD)/libstratum.a
+	$(CXX) -pthread $(LDEXTRA) -o $@ $^ $(LDLIBS)
+
 bench:
 	@$(MAKE) deps EXTRA_PACKAGES="$(BENCH_PACKAGES)"
-	@$(MAKE) all $(BUILD)/bench/gen_mesh $(BUILD)/bench/region_check
+	@$(MAKE) all $(BUILD)/bench/gen_mesh $(BUILD)/bench/region_check $(BUILD)/bench/refine_time
 	bench/run.sh $(BUILD)/stratum
 	bench/cgal_corpus.sh $(BUILD)/stratum
 

@@ -15,6 +15,14 @@
  *                                    have decimals: "box 20 0.4 10" is a wall of 0.4)
  *   gen_mesh cylinder R H N OUT.stl  a cylinder of radius R, height H mm: a regular
  *                                    N-gon (3..256) prism
+ *   gen_mesh soup N SIZE SEED OUT.stl
+ *                                    N random triangles, each with corners uniform in
+ *                                    its own SIZE mm cube, the cubes scattered
+ *                                    uniformly at a density of 8 per SIZE^3: a soup
+ *                                    whose triangles each cross a few others, as in a
+ *                                    broken download (corners everywhere in one cube,
+ *                                    fx_random_triangles, would make
+ *                                    every triangle cross a fixed share of all others)
  *   gen_mesh convert IN SIZE OUT.stl
  *                                    IN (STL, OBJ or OFF) moved to the origin and
  *                                    scaled so its largest extent is SIZE mm, as
@@ -124,8 +132,8 @@ static void usage(void)
 			"       gen_mesh twospheres NLAT NLON OUT.stl | gen_mesh scan NU NV JITTER "
 			"OUT.stl\n"
 			"       gen_mesh box SX SY SZ OUT.stl | gen_mesh cylinder R H N OUT.stl\n"
-			"       gen_mesh convert IN SIZE OUT.stl | gen_mesh same A B\n"
-			"       gen_mesh plate|overhang|bridge OUT.stl\n");
+			"       gen_mesh soup N SIZE SEED OUT.stl | gen_mesh convert IN SIZE OUT.stl\n"
+			"       gen_mesh same A B | gen_mesh plate|overhang|bridge OUT.stl\n");
 	exit(2);
 }
 
@@ -183,6 +191,12 @@ int main(int argc, char **argv)
 		m = fx_box(0, 0, 0, mm_arg(argv[2]), mm_arg(argv[3]), mm_arg(argv[4]));
 	} else if (argc == 6 && !strcmp(argv[1], "cylinder")) {
 		m = fx_cylinder(0, 0, mm_arg(argv[2]), mm_arg(argv[3]), int_arg(argv[4], 3, 256));
+	} else if (argc == 6 && !strcmp(argv[1], "soup")) {
+		const int n = int_arg(argv[2], 1, 50000000);
+		const double size = mm_arg(argv[3]);
+		/* Boxes of side size at 8 per size^3 fill a cube of this side. */
+		m = fx_soup((unsigned)int_arg(argv[4], 0, 1 << 30), n, size * cbrt((double)n) / 2,
+			    size);
 	} else if (argc == 5 && !strcmp(argv[1], "convert")) {
 		if (meshio_read(argv[2], MESHIO_AUTO, &m, NULL, &err)) {
 			fprintf(stderr, "gen_mesh: %s\n", err.msg);
@@ -197,6 +211,10 @@ int main(int argc, char **argv)
 		m = fx_bridge();
 	} else {
 		usage();
+	}
+	if (!m) {
+		fprintf(stderr, "gen_mesh: out of memory\n");
+		return 1;
 	}
 	if (meshio_write_stl(argv[argc - 1], m, MESHIO_STL_BINARY, &err)) {
 		fprintf(stderr, "gen_mesh: %s\n", err.msg);

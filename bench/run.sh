@@ -1,6 +1,8 @@
 #!/bin/sh
-# bench/run.sh BIN [check|repair|slice|region|stream|soak|x3g|s3g|serve|all] - time `stratum check`
-# against admesh, `stratum repair` on generated files, `stratum slice` against
+# bench/run.sh BIN [check|repair|intersect|slice|region|stream|soak|x3g|s3g|serve|all] - time `stratum check`
+# against admesh, `stratum repair` on generated files, the exact pass of the
+# repair on self-intersecting inputs (`intersect`: CGAL data meshes, spheres,
+# scattered soups; build/bench/refine_time), `stratum slice` against
 # PrusaSlicer's `--export-gcode`, and streaming to `stratum sim` with
 # `stratum send` against Printrun's printcore (`soak`: 100k lines under
 # faults, exactly once); `region` measures how well both
@@ -21,8 +23,9 @@ what=${2:-all}
 out=bench/out
 mkdir -p "$out"
 gen=build/bench/gen_mesh
+refine=build/bench/refine_time
 
-case $what in check|repair|slice|region|stream|soak|x3g|s3g|serve|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|slice|region|stream|soak|x3g|s3g|serve|all]" >&2; exit 2;; esac
+case $what in check|repair|intersect|slice|region|stream|soak|x3g|s3g|serve|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|intersect|slice|region|stream|soak|x3g|s3g|serve|all]" >&2; exit 2;; esac
 
 if [ "$what" != slice ] && [ "$what" != region ] && [ "$what" != stream ] && [ "$what" != soak ] && [ "$what" != x3g ] && [ "$what" != s3g ] && [ "$what" != serve ]; then
 	[ -f "$out/torus-1m.stl" ] || "$gen" torus 1000 500 "$out/torus-1m.stl"
@@ -510,6 +513,43 @@ kill "$node_pid" 2>/dev/null || true
 wait "$node_pid" 2>/dev/null || true
 }
 
+# The exact pass on self-intersecting input (issue 15 item 4): the pair
+# search, the exact cuts and the re-triangulation (build/bench/refine_time,
+# best of 3), then the whole `stratum repair` once (it may thicken sheets
+# and run a second pass; bounded by 600 s).  Throughput = input triangles /
+# wall s.
+intersect_table() {
+cgal=/usr/share/doc/libcgal-demo/data.tar.gz
+for m in mannequin-devil ChineseDragon-10kv; do
+	[ -f "$out/$m.off" ] || [ ! -f "$cgal" ] ||
+		tar -xzf "$cgal" -O "data/meshes/$m.off" >"$out/$m.off" 2>/dev/null || rm -f "$out/$m.off"
+done
+[ -f "$out/soup-20k.stl" ] || "$gen" soup 20000 10 1 "$out/soup-20k.stl" >/dev/null
+[ -f "$out/soup-200k.stl" ] || "$gen" soup 200000 10 1 "$out/soup-200k.stl" >/dev/null
+echo "| file | triangles | intersecting pairs | triangles split | exact pass s (2 cores) | exact pass triangles/s | exact pass peak MiB | repair s | repair triangles/s | repair peak MiB | repair exit | printable |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
+for f in mannequin-devil.off ChineseDragon-10kv.off spheres.stl twospheres.stl soup-20k.stl soup-200k.stl; do
+	path="$out/$f"
+	[ -f "$path" ] || continue
+	best=""; bmem=""
+	for _ in 1 2 3; do
+		/usr/bin/time -q -f '%M' -o "$out/time.txt" "$refine" "$path" >"$out/refine.txt"
+		read -r tris pairs split t rate < "$out/refine.txt"
+		read -r mem < "$out/time.txt"
+		if [ -z "$best" ] || [ "$(echo "$t < $best" | bc)" = 1 ]; then best=$t; brate=$rate; fi
+		if [ -z "$bmem" ] || [ "$mem" -lt "$bmem" ]; then bmem=$mem; fi
+	done
+	rc=0
+	/usr/bin/time -q -f '%e %M' -o "$out/time.txt" timeout 600 "$bin" repair --json "$path" \
+		-o "$out/${f%.*}-repaired.stl" >"$out/${f%.*}-repair.json" 2>"$out/${f%.*}-repair.err" || rc=$?
+	read -r rt rmem < "$out/time.txt"
+	printable=$(json_field "$out/${f%.*}-repair.json" printable)
+	[ "$rc" = 124 ] && rt="> 600"
+	rrate=$( [ "$rc" != 124 ] && [ "$(echo "$rt > 0" | bc)" = 1 ] && echo "$tris / $rt" | bc || echo "n/a")
+	echo "| ${f%.*} | $tris | $pairs | $split | $best | $brate | $(echo "scale=1; $bmem / 1024" | bc) | $rt | $rrate | $(echo "scale=1; $rmem / 1024" | bc) | $rc | ${printable:-n/a} |"
+done
+}
+
 case $what in
 serve) serve_table ;;
 x3g) x3g_table ;;
@@ -517,9 +557,10 @@ s3g) s3g_table ;;
 region) region_table ;;
 check) check_table ;;
 repair) repair_table ;;
+intersect) intersect_table ;;
 slice) slice_table ;;
 stream) stream_table ;;
 soak) soak_table ;;
-all) check_table; echo; repair_table; echo; slice_table; echo; region_table; echo; stream_table; echo; soak_table; echo; x3g_table; echo; s3g_table; echo; serve_table ;;
+all) check_table; echo; repair_table; echo; intersect_table; echo; slice_table; echo; region_table; echo; stream_table; echo; soak_table; echo; x3g_table; echo; s3g_table; echo; serve_table ;;
 esac
 

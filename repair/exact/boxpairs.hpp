@@ -19,6 +19,8 @@
 
 #include <CGAL/box_intersection_d.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
@@ -137,6 +139,38 @@ inline void split_leaf(leaf &&x, int depth, std::vector<leaf> &out)
 	split_leaf(std::move(right), depth - 1, out);
 }
 
+/* Threads to use for a thread count as in exact.h (0 = all cores): more
+ * threads than TBB has cores for only makes TBB print warnings. */
+inline int concurrency(int threads)
+{
+	const int cores = tbb::this_task_arena::max_concurrency();
+
+	return threads > 0 && threads < cores ? threads : cores;
+}
+
+/*
+ * Call f(i) for every i < n on up to concurrency(threads) cores, in no
+ * particular order; f must only write to what belongs to i.
+ */
+template <class F> void for_each_index(size_t n, int threads, F f)
+{
+	const int conc = concurrency(threads);
+
+	if (conc <= 1 || n < 2) {
+		for (size_t i = 0; i < n; i++)
+			f(i);
+		return;
+	}
+	tbb::task_arena arena(conc);
+	arena.execute([&] {
+		tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 16),
+				  [&](const tbb::blocked_range<size_t> &r) {
+					  for (size_t i = r.begin(); i != r.end(); i++)
+						  f(i);
+				  });
+	});
+}
+
 /*
  * Call visit(leaf_index, s, t) once for every pair of overlapping boxes,
  * where s and t are indices into boxes; boxes not listed in use are left
@@ -153,9 +187,7 @@ void for_each_pair(const std::vector<Box> &boxes, std::vector<const Box *> &&use
 	leaf all;
 
 	all.boxes = std::move(use);
-	/* More threads than TBB has cores for only makes TBB print warnings. */
-	const int cores = tbb::this_task_arena::max_concurrency();
-	const int conc = threads > 0 && threads < cores ? threads : cores;
+	const int conc = concurrency(threads);
 	std::vector<leaf> leaves;
 	if (conc <= 1) {
 		leaves.push_back(std::move(all));

@@ -9,21 +9,17 @@
  * Decisions over double-only triangles use Epick's filtered predicates;
  * anything touching a rational vertex uses Epeck.
  */
-#define CGAL_NO_CDT_2_WARNING 1
-
 #include "exact.h"
 
-#include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/Projection_traits_xy_3.h>
-#include <CGAL/Projection_traits_xz_3.h>
-#include <CGAL/Projection_traits_yz_3.h>
 #include <CGAL/intersections.h>
 
 #include "boxpairs.hpp"
+#include "cutpair.hpp"
 #include "emesh.hpp"
 #include "pairtest.hpp"
+#include "retri.hpp"
 
 #include <algorithm>
 #include <array>
@@ -34,6 +30,7 @@
 #include <new>
 #include <stdexcept>
 #include <unordered_map>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -43,6 +40,18 @@ namespace
 
 using boxpairs::Box;
 using boxpairs::box_coord;
+using retri::cuts;
+using retri::add_intersection;
+typedef EK::Exact_kernel::Point_3 XPoint;
+
+/* Hash of a triangle's sorted corners. */
+struct tri_hash {
+	size_t operator()(const std::array<uint32_t, 3> &t) const
+	{
+		return (static_cast<size_t>(t[0]) * 0x9e3779b97f4a7c15ull) ^
+		       (static_cast<size_t>(t[1]) * 0xc2b2ae3d27d4eb4full) ^ t[2];
+	}
+};
 
 EPoint epoint(const exact_mesh &m, uint32_t v)
 {
@@ -82,11 +91,65 @@ uint32_t add_vertex(exact_mesh &m, const EPoint &p)
 	return static_cast<uint32_t>(m.approx.size() - 1);
 }
 
-/* Exact lexicographic order of points, for unifying equal points. */
-struct epoint_less {
-	bool operator()(const EPoint &a, const EPoint &b) const
+/* Key for welding double vertices bit-exactly (+0 and -0 are one). */
+struct dkey {
+	double v[3];
+	bool operator==(const dkey &o) const
 	{
-		return CGAL::compare_xyz(a, b) == CGAL::SMALLER;
+		return v[0] == o.v[0] && v[1] == o.v[1] && v[2] == o.v[2];
+	}
+};
+struct dkey_hash {
+	size_t operator()(const dkey &k) const
+	{
+		size_t h = 1469598103934665603ull;
+		for (double x : k.v) {
+			if (x == 0)
+				x = 0; /* -0 hashes like +0 */
+			uint64_t b;
+			std::memcpy(&b, &x, sizeof(b));
+			h = (h ^ b) * 1099511628211ull;
+		}
+		return h;
+	}
+};
+
+/*
+ * Exact points unified by the doubles nearest their exact coordinates
+ * (which, unlike interval approximations, depend on the value alone),
+ * candidates with equal doubles then compared exactly.  A hash, not an
+ * ordered map: on 200k-triangle soups the ordered map's cache misses
+ * took a fifth of the exact pass.
+ */
+struct point_index {
+	exact_mesh &m;
+	std::unordered_multimap<dkey, uint32_t, dkey_hash> map;
+
+	static dkey key(const EPoint &p)
+	{
+		const XPoint &e = CGAL::exact(p);
+		return dkey{{CGAL::to_double(e.x()), CGAL::to_double(e.y()), CGAL::to_double(e.z())}};
+	}
+	/* Vertex v of m, once (distinct vertices are distinct points). */
+	void add_existing(uint32_t v)
+	{
+		const dkey k = m.slot[v] < 0 ? dkey{{m.approx[v][0], m.approx[v][1], m.approx[v][2]}}
+					     : key(m.ex[static_cast<size_t>(m.slot[v])]);
+		for (auto r = map.equal_range(k); r.first != r.second; ++r.first)
+			if (r.first->second == v)
+				return;
+		map.emplace(k, v);
+	}
+	/* The vertex at exact point p, added to m if new. */
+	uint32_t find_or_add(const EPoint &p)
+	{
+		const dkey k = key(p);
+		for (auto r = map.equal_range(k); r.first != r.second; ++r.first)
+			if (epoint(m, r.first->second) == p)
+				return r.first->second;
+		const uint32_t v = add_vertex(m, p);
+		map.emplace(k, v);
+		return v;
 	}
 };
 
@@ -129,11 +192,7 @@ bool apart(const exact_mesh &m, const uint32_t *u, const uint32_t *w)
 	return pairtest::certainly_apart(p, q);
 }
 
-/*
- * Every pair of triangles meeting outside a common face.  Lazy exact
- * numbers are not safe to share between threads, so a mesh with rational
- * vertices is searched on this thread only.
- */
+/* Every pair of triangles meeting outside a common face. */
 std::vector<std::pair<uint32_t, uint32_t>> find_pairs(const exact_mesh &m, int threads)
 {
 	const size_t n = m.tris.size();
@@ -145,8 +204,6 @@ std::vector<std::pair<uint32_t, uint32_t>> find_pairs(const exact_mesh &m, int t
 		boxes[t] = tri_box(m, t);
 		use[t] = &boxes[t];
 	}
-	if (!m.ex.empty())
-		threads = 1;
 	auto geti = [&m](uint32_t v) { return ipoint(m, v); };
 	auto gete = [&m](uint32_t v) { return epoint(m, v); };
 	boxpairs::for_each_pair(
@@ -171,74 +228,12 @@ std::vector<std::pair<uint32_t, uint32_t>> find_pairs(const exact_mesh &m, int t
 	return all;
 }
 
-/* What cuts one triangle: points and segments in its plane. */
-struct cuts {
-	std::vector<EPoint> points;
-	std::vector<std::pair<EPoint, EPoint>> segments;
-};
-
-/* Add the intersection of two triangles to both triangles' cuts. */
-void add_intersection(const EK::Triangle_3 &a, const EK::Triangle_3 &b, cuts &ca, cuts &cb)
+/* Cut triangle t of m along c into *pieces (retri.hpp). */
+void split_triangle(const exact_mesh &m, uint32_t t, const cuts &c,
+		    std::vector<std::array<EPoint, 3>> &pieces)
 {
-	auto r = CGAL::intersection(a, b);
-	if (!r)
-		return;
-	auto seg = [&](const EPoint &p, const EPoint &q) {
-		ca.segments.emplace_back(p, q);
-		cb.segments.emplace_back(p, q);
-	};
-	if (const EPoint *p = boost::get<EPoint>(&*r)) {
-		ca.points.push_back(*p);
-		cb.points.push_back(*p);
-	} else if (const EK::Segment_3 *s = boost::get<EK::Segment_3>(&*r)) {
-		seg(s->source(), s->target());
-	} else if (const EK::Triangle_3 *t = boost::get<EK::Triangle_3>(&*r)) {
-		for (int k = 0; k < 3; k++)
-			seg(t->vertex(k), t->vertex(k + 1));
-	} else if (const std::vector<EPoint> *poly = boost::get<std::vector<EPoint>>(&*r)) {
-		for (size_t k = 0; k < poly->size(); k++)
-			seg((*poly)[k], (*poly)[(k + 1) % poly->size()]);
-	}
-}
-
-/*
- * Triangulate triangle (p0, p1, p2) with its cuts as constraints in the
- * coordinate plane it projects onto without degenerating (Traits), and
- * append the pieces as point triples with the triangle's own orientation.
- */
-template <class Traits>
-void triangulate(const EPoint &p0, const EPoint &p1, const EPoint &p2, const cuts &c,
-		 std::vector<std::array<EPoint, 3>> &pieces)
-{
-	typedef CGAL::Triangulation_vertex_base_2<Traits> Vb;
-	typedef CGAL::Constrained_triangulation_face_base_2<Traits> Fb;
-	typedef CGAL::Triangulation_data_structure_2<Vb, Fb> Tds;
-	typedef CGAL::Constrained_Delaunay_triangulation_2<Traits, Tds,
-							   CGAL::Exact_intersections_tag>
-	    CDT;
-	CDT cdt;
-
-	cdt.insert(p0);
-	cdt.insert(p1);
-	cdt.insert(p2);
-	for (const EPoint &p : c.points)
-		cdt.insert(p);
-	for (const auto &s : c.segments) {
-		if (s.first == s.second)
-			cdt.insert(s.first);
-		else
-			cdt.insert_constraint(s.first, s.second);
-	}
-	/* The pieces are counter-clockwise in the projection; so is the
-	 * triangle, or else every piece is reversed. */
-	const bool reverse = Traits().orientation_2_object()(p0, p1, p2) == CGAL::CLOCKWISE;
-	for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
-		std::array<EPoint, 3> t = {f->vertex(0)->point(), f->vertex(1)->point(),
-					   f->vertex(2)->point()};
-		if (reverse)
-			std::swap(t[1], t[2]);
-		pieces.push_back(t);
-	}
+	retri::split(epoint(m, m.tris[t][0]), epoint(m, m.tris[t][1]), epoint(m, m.tris[t][2]), c,
+		     pieces);
 }
 
 /* The refinement itself; see exact_mesh_refine. */
@@ -251,76 +246,104 @@ void refine(exact_mesh &m, int threads, exact_refine_stats &st)
 	if (pairs.empty())
 		return;
 
-	/* Cuts of every affected triangle, from every pair it is in. */
-	std::unordered_map<uint32_t, cuts> cut;
-	for (const auto &pr : pairs) {
-		const auto &u = m.tris[pr.first], &w = m.tris[pr.second];
+	/* What each pair adds to both its triangles' cuts, found on all cores
+	 * (Epeck's lazy numbers are thread-safe since CGAL 5.5: each exact
+	 * value is computed under a once flag), then gathered in pair order. */
+	std::vector<cuts> meet(pairs.size());
+	boxpairs::for_each_index(pairs.size(), threads, [&](size_t i) {
+		const uint32_t s = pairs[i].first, t = pairs[i].second;
+		const auto &u = m.tris[s], &w = m.tris[t];
+		std::vector<EPoint> seg;
+		auto keep = [&](const std::vector<EPoint> &g) {
+			if (g.size() == 1)
+				meet[i].points.push_back(g[0]);
+			else if (g.size() == 2)
+				meet[i].segments.emplace_back(g[0], g[1]);
+		};
+		if (tri_is_double(m, s) && tri_is_double(m, t)) {
+			const IK::Point_3 pu[3] = {ipoint(m, u[0]), ipoint(m, u[1]), ipoint(m, u[2])};
+			const IK::Point_3 pw[3] = {ipoint(m, w[0]), ipoint(m, w[1]), ipoint(m, w[2])};
+			if (cutpair::intersect(pu, pw, seg))
+				return keep(seg);
+		} else {
+			const EPoint eu[3] = {epoint(m, u[0]), epoint(m, u[1]), epoint(m, u[2])};
+			const EPoint ew[3] = {epoint(m, w[0]), epoint(m, w[1]), epoint(m, w[2])};
+			if (cutpair::intersect(eu, ew, seg))
+				return keep(seg);
+		}
+		/* In one plane: the general intersection (an overlap polygon). */
 		EK::Triangle_3 a(epoint(m, u[0]), epoint(m, u[1]), epoint(m, u[2]));
 		EK::Triangle_3 b(epoint(m, w[0]), epoint(m, w[1]), epoint(m, w[2]));
-		add_intersection(a, b, cut[pr.first], cut[pr.second]);
-	}
+		add_intersection(a, b, meet[i]);
+	});
+	std::unordered_map<uint32_t, cuts> cut;
+	for (size_t i = 0; i < pairs.size(); i++)
+		for (uint32_t t : {pairs[i].first, pairs[i].second}) {
+			cuts &c = cut[t];
+			c.points.insert(c.points.end(), meet[i].points.begin(), meet[i].points.end());
+			c.segments.insert(c.segments.end(), meet[i].segments.begin(),
+					  meet[i].segments.end());
+		}
+	std::vector<cuts>().swap(meet);
+
+	/* The cut triangles in order, each triangulated on any core. */
+	std::vector<uint32_t> order;
+	order.reserve(cut.size());
+	for (const auto &kv : cut)
+		order.push_back(kv.first);
+	std::sort(order.begin(), order.end());
+	std::vector<std::vector<std::array<EPoint, 3>>> pieces_of(order.size());
+	std::vector<int32_t> piece_slot(m.tris.size(), -1);
+	for (size_t i = 0; i < order.size(); i++)
+		piece_slot[order[i]] = static_cast<int32_t>(i);
+	boxpairs::for_each_index(order.size(), threads, [&](size_t i) {
+		split_triangle(m, order[i], cut.find(order[i])->second, pieces_of[i]);
+	});
 
 	/* Points of affected triangles are unified through this map; it starts
 	 * with their own corners so a cut point on a corner reuses it. */
-	std::map<EPoint, uint32_t, epoint_less> index;
-	for (const auto &kv : cut)
-		for (uint32_t v : m.tris[kv.first])
-			index.emplace(epoint(m, v), v);
+	point_index index{m, {}};
+	for (uint32_t t : order)
+		for (uint32_t v : m.tris[t])
+			index.add_existing(v);
 
+	/* The same point reaches several pieces as one lazy handle (a cut
+	 * point is shared by both triangles of its pair): those skip the
+	 * exact comparisons of the map.  Every handle stays alive in
+	 * pieces_of while this is used, so no id is reused. */
+	std::unordered_map<EPoint::Id_type, uint32_t> by_handle;
 	std::vector<std::array<uint32_t, 3>> tris;
 	std::vector<uint32_t> origin;
-	std::vector<std::array<EPoint, 3>> pieces;
 	/* Pieces already emitted, by sorted corners: coplanar overlaps give
 	 * the same piece from both triangles, and one layer is kept. */
-	std::map<std::array<uint32_t, 3>, uint32_t> emitted;
+	std::unordered_set<std::array<uint32_t, 3>, tri_hash> emitted;
 	const size_t nverts0 = m.approx.size();
 
 	tris.reserve(m.tris.size() + 4 * cut.size());
 	origin.reserve(tris.capacity());
 	for (size_t t = 0; t < m.tris.size(); t++) {
-		auto it = cut.find(static_cast<uint32_t>(t));
-		if (it == cut.end()) {
+		if (piece_slot[t] < 0) {
 			tris.push_back(m.tris[t]);
 			origin.push_back(m.origin[t]);
 			continue;
 		}
-		const EPoint p0 = epoint(m, m.tris[t][0]), p1 = epoint(m, m.tris[t][1]),
-			     p2 = epoint(m, m.tris[t][2]);
-		const EK::Vector_3 nrm = CGAL::normal(p0, p1, p2);
-		/* Project along the axis where the normal is largest; its exact
-		 * sign is checked so the projection never degenerates. */
-		const double ax = std::fabs(CGAL::to_double(nrm.x())),
-			     ay = std::fabs(CGAL::to_double(nrm.y())),
-			     az = std::fabs(CGAL::to_double(nrm.z()));
-		int axis = az >= ax && az >= ay ? 2 : (ay >= ax ? 1 : 0);
-		const EFT comp[3] = {nrm.x(), nrm.y(), nrm.z()};
-		if (CGAL::sign(comp[axis]) == CGAL::ZERO)
-			for (axis = 0; axis < 3 && CGAL::sign(comp[axis]) == CGAL::ZERO; axis++)
-				;
-		if (axis == 3)
-			throw std::logic_error("degenerate triangle reached the refinement");
-		pieces.clear();
-		if (axis == 2)
-			triangulate<CGAL::Projection_traits_xy_3<EK>>(p0, p1, p2, it->second,
-								      pieces);
-		else if (axis == 1)
-			triangulate<CGAL::Projection_traits_xz_3<EK>>(p0, p1, p2, it->second,
-								      pieces);
-		else
-			triangulate<CGAL::Projection_traits_yz_3<EK>>(p0, p1, p2, it->second,
-								      pieces);
+		const std::vector<std::array<EPoint, 3>> &pieces =
+		    pieces_of[static_cast<size_t>(piece_slot[t])];
 		st.triangles_split++;
 		for (const auto &pc : pieces) {
 			std::array<uint32_t, 3> v;
 			for (int k = 0; k < 3; k++) {
-				auto f = index.find(pc[k]);
-				if (f == index.end())
-					f = index.emplace(pc[k], add_vertex(m, pc[k])).first;
-				v[k] = f->second;
+				auto h = by_handle.find(pc[k].id());
+				if (h != by_handle.end()) {
+					v[k] = h->second;
+					continue;
+				}
+				v[k] = index.find_or_add(pc[k]);
+				by_handle.emplace(pc[k].id(), v[k]);
 			}
 			std::array<uint32_t, 3> key = v;
 			std::sort(key.begin(), key.end());
-			if (!emitted.emplace(key, static_cast<uint32_t>(tris.size())).second) {
+			if (!emitted.insert(key).second) {
 				st.duplicates_removed++;
 				continue;
 			}
@@ -540,29 +563,6 @@ bool segment_hidden(const exact_mesh &m, const uint32_t *surface, size_t ns,
 }
 
 using emesh::fail;
-
-/* Key for welding double vertices bit-exactly (+0 and -0 are one). */
-struct dkey {
-	double v[3];
-	bool operator==(const dkey &o) const
-	{
-		return v[0] == o.v[0] && v[1] == o.v[1] && v[2] == o.v[2];
-	}
-};
-struct dkey_hash {
-	size_t operator()(const dkey &k) const
-	{
-		size_t h = 1469598103934665603ull;
-		for (double x : k.v) {
-			if (x == 0)
-				x = 0; /* -0 hashes like +0 */
-			uint64_t b;
-			std::memcpy(&b, &x, sizeof(b));
-			h = (h ^ b) * 1099511628211ull;
-		}
-		return h;
-	}
-};
 
 bool finite3(const double p[3])
 {
