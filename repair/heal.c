@@ -141,7 +141,8 @@ static int near_pairs(const double (*verts)[3], const uint32_t *ids, size_t n, d
 				}
 	}
 	free(g);
-	qsort(out->p, out->n, sizeof(*out->p), compare_near_pair);
+	if (out->n) /* out->p may be NULL: nothing near */
+		qsort(out->p, out->n, sizeof(*out->p), compare_near_pair);
 	return 0;
 }
 
@@ -601,8 +602,10 @@ int heal_mesh(const struct mesh *in, const struct repair_options *opt, struct me
 				  in->ntris);
 		goto out;
 	}
-	memcpy(w.verts, in->verts, in->nverts * sizeof(*w.verts));
-	memcpy(w.tris, in->tris, in->ntris * sizeof(*w.tris));
+	if (in->nverts)
+		memcpy(w.verts, in->verts, in->nverts * sizeof(*w.verts));
+	if (in->ntris)
+		memcpy(w.tris, in->tris, in->ntris * sizeof(*w.tris));
 
 	if (rep->weld_tolerance > 0)
 		rc = weld(&w, rep->weld_tolerance, rep, err);
