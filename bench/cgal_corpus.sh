@@ -25,7 +25,7 @@ fi
 
 echo "| mesh | triangles | before | repair exit | s | peak MiB | after (stratum check) |"
 echo "|---|---|---|---|---|---|---|"
-n_ok=0; n_fix=0; n_fixed=0; n_kept=0; n_same=0; n_70=0; n_slow=0; n_other=0; n_unread=0
+n_ok=0; n_fix=0; n_fixed=0; n_kept=0; n_same=0; n_warned=0; n_70=0; n_slow=0; n_other=0; n_unread=0
 for src in "$out"/data/meshes/*.off "$out"/data/meshes/*.obj "$out"/data/meshes/*.stl; do
 	[ -f "$src" ] || continue
 	name=$(basename "$src")
@@ -36,7 +36,14 @@ for src in "$out"/data/meshes/*.off "$out"/data/meshes/*.obj "$out"/data/meshes/
 		continue
 	fi
 	tris=$(( ($(stat -c %s "$stl") - 84) / 50 ))
-	if "$bin" check "$stl" >/dev/null 2>&1; then before=printable; else before=needs_repair; fi
+	warns=""
+	if "$bin" check "$stl" >"$out/check.txt" 2>&1; then
+		before=printable
+		# Orientation warnings: repair turns those triangles, so they differ.
+		warns=$(sed -n 's/^  warning \([a-z_]*\).*/\1/p' "$out/check.txt" | tr '\n' ' ')
+	else
+		before=needs_repair
+	fi
 	rc=0
 	/usr/bin/time -q -f '%e %M' -o "$out/time.txt" timeout "$limit" \
 		"$bin" repair "$stl" -o "$out/repaired.stl" >/dev/null 2>"$out/repair.err" || rc=$?
@@ -58,6 +65,8 @@ for src in "$out"/data/meshes/*.off "$out"/data/meshes/*.obj "$out"/data/meshes/
 		[ "$after" = printable ] && n_kept=$((n_kept + 1))
 		if [ "$rc" = 0 ] && "$gen" same "$stl" "$out/repaired.stl"; then
 			n_same=$((n_same + 1)); after="$after, unchanged"
+		elif [ -n "$warns" ]; then
+			n_warned=$((n_warned + 1)); after="$after, reoriented (was: ${warns% })"
 		fi
 	else
 		n_fix=$((n_fix + 1))
@@ -66,6 +75,6 @@ for src in "$out"/data/meshes/*.off "$out"/data/meshes/*.obj "$out"/data/meshes/
 	echo "| $name | $tris | $before | $rc | $secs | $((kib / 1024)) | $after |"
 done
 echo
-echo "Already printable: $n_ok, printable after repair: $n_kept, of them unchanged bit for bit: $n_same."
+echo "Already printable: $n_ok, printable after repair: $n_kept, of them unchanged bit for bit: $n_same, reoriented (inside out or inconsistently oriented before): $n_warned."
 echo "Needing repair: $n_fix, printable after repair: $n_fixed."
 echo "Exit 70: $n_70; over ${limit} s: $n_slow; other non-zero exits: $n_other; unreadable: $n_unread."
