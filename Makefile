@@ -15,7 +15,7 @@ BUILD    ?= build
 CC       := gcc
 CXX      := g++
 
-# Debian packages the build, tests and demo need (DESIGN.md "Dependencies");
+# Debian packages the build, tests and demo need (docs/architecture.md "Dependencies");
 # gpx is the reference S3G host the s3g suite drives the simulator with;
 # libssl-dev gives libcrypto for the SHA-256 of the print journal (host/journal.c:
 # OpenSSL is already on the machine for libcurl4-openssl-dev, nettle would be one more).
@@ -51,7 +51,7 @@ LDLIBS   := $(CAIRO_LIBS) -lcrypto -lmicrohttpd -lmosquitto -lcurl -lsqlite3 -ls
 TEST_LDLIBS := $(shell pkg-config --libs check 2>/dev/null || echo -lcheck -lsubunit -lrt) $(LDLIBS)
 
 # Sources: every .c under the module folders is library code except the CLI
-# entry point; .cpp only in the bridge folders DESIGN.md names.
+# entry point; .cpp only in the bridge folders docs/architecture.md names.
 C_SRC    := $(shell find host repair slicer serial -name '*.c' 2>/dev/null | sort)
 CXX_SRC  := $(shell find repair/exact slicer/clip -name '*.cpp' 2>/dev/null | sort)
 MAIN_SRC := host/main.c

@@ -1,6 +1,6 @@
 /*
  * cmd_sim.c - `stratum sim --dialect marlin|sailfish [options]`: run a
- * simulated printer on a pseudo-terminal until SIGINT/SIGTERM (DESIGN.md
+ * simulated printer on a pseudo-terminal until SIGINT/SIGTERM (docs/architecture.md
  * item 7).
  * Prints the pty path; --link PATH makes PATH a symlink to it, replaced
  * atomically and removed on exit.

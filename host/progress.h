@@ -1,5 +1,5 @@
 /*
- * progress.h - progress output of long subcommands (DESIGN.md "Errors, exit
+ * progress.h - progress output of long subcommands (docs/architecture.md "Errors, exit
  * codes, output"): a redrawn "[stage] N%" bar on stderr when stderr is a
  * terminal, one plain "stratum CMD: stage" line per stage otherwise.
  *

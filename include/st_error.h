@@ -24,7 +24,7 @@ enum st_status {
 	ST_ERR_INTERNAL = -7,	 /* a bug or a library exception */
 };
 
-/* Process exit statuses (DESIGN.md "Errors, exit codes, output"). */
+/* Process exit statuses (docs/architecture.md "Errors, exit codes, output"). */
 enum st_exit {
 	ST_EXIT_OK = 0,
 	ST_EXIT_FAILURE = 1,	/* the job ran but its answer is "no" */

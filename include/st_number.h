@@ -1,5 +1,5 @@
 /*
- * st_number.h - the one locale-independent decimal reader (STYLE.md rule
+ * st_number.h - the one locale-independent decimal reader (docs/architecture.md convention
  * 12), shared by every module that reads numbers from untrusted text: mesh
  * files, printer profiles, G-code.
  *

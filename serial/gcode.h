@@ -1,5 +1,5 @@
 /*
- * gcode.h - the one G-code parser of Stratum (DESIGN.md item 5), shared by
+ * gcode.h - the one G-code parser of Stratum (docs/architecture.md item 5), shared by
  * the sender, the X3G translator, the estimator and the simulated printers.
  *
  * A line is read from (buf, len) with no NUL required.  It is checked as a
@@ -21,7 +21,7 @@
  *   M117 included (Marlin does the same); "( ... )" comments are removed
  *   anywhere except inside the text of a string-argument command;
  * - the checksum is the XOR of every byte from the first non-blank byte of
- *   the line up to the '*', written in decimal (PROTOCOLS.md section 1);
+ *   the line up to the '*', written in decimal (docs/protocols.md section 1);
  * - string-argument commands (M23, M28, M30, M32, M117, M118, M928,
  *   Prusa's M862.x print checks and '@' host commands) keep the rest of the
  *   line, up to ';' or the checksum, as one string;

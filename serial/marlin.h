@@ -1,6 +1,6 @@
 /*
  * marlin.h - the Marlin text-protocol driver over a struct xport
- * (DESIGN.md item 6, PROTOCOLS.md section 1, docs/streaming.md).
+ * (docs/architecture.md item 6, docs/protocols.md section 1, docs/streaming.md).
  *
  * Every command goes out as "N<n> <cmd>*<cs>"; replies drive a window of
  * commands in flight:
@@ -200,7 +200,7 @@ void marlin_request_resume(struct marlin *m);
 void marlin_request_cancel(struct marlin *m);
 
 /*
- * marlin_safe_stop - PROTOCOLS.md "A safe cancel": drop the commands not
+ * marlin_safe_stop - docs/protocols.md "A safe cancel": drop the commands not
  * yet sent, M410 past the queue (EMERGENCY_PARSER; M108 too when a heat
  * wait runs), then M104 S0, M140 S0, M107, M84, waiting at most
  * timeout_ms for them.  Works after a cancel; does nothing useful after a

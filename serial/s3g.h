@@ -1,6 +1,6 @@
 /*
  * s3g.h - the S3G packet layer and host driver for Makerbot-family printers
- * running Sailfish (FlashForge Creator Pro); PROTOCOLS.md section 2.
+ * running Sailfish (FlashForge Creator Pro); docs/protocols.md section 2.
  *
  * Three layers, usable separately:
  *   1. Framing: 0xD5, length (<= 32), payload, CRC-8 (iButton/Maxim,

@@ -2,7 +2,7 @@
  * x3g.h - G-code to X3G translation for Sailfish (Makerbot family) printers,
  * and the decoder that cuts an X3G byte stream back into commands.
  *
- * X3G is a file of S3G action-command payloads (PROTOCOLS.md section 2):
+ * X3G is a file of S3G action-command payloads (docs/protocols.md section 2):
  * a command byte, then little-endian fields.  The translator follows the
  * reference translator GPX (markwal/GPX src/gpx/gpx.c, machine "fcp") so
  * that its output matches `gpx -m fcp` command for command: moves become

@@ -1,5 +1,5 @@
 /*
- * infill.h - skins, bridges and infill inside the walls (DESIGN.md item 4;
+ * infill.h - skins, bridges and infill inside the walls (docs/architecture.md item 4;
  * slicer issue items 5 and 6).
  *
  * Classification, per layer i, of the region left inside the walls (R_i,

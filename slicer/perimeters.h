@@ -1,5 +1,5 @@
 /*
- * perimeters.h - offset-aware walls of one layer (DESIGN.md item 4).
+ * perimeters.h - offset-aware walls of one layer (docs/architecture.md item 4).
  *
  * Flow model: a bead of width w and height h has a rectangle-with-
  * semicircular-ends cross-section, area (w - h) h + pi (h/2)^2, so beads

@@ -1,5 +1,5 @@
 /*
- * slicer.h - the whole slicing job (DESIGN.md item 4): a repaired mesh in,
+ * slicer.h - the whole slicing job (docs/architecture.md item 4): a repaired mesh in,
  * a printable G-code file and a summary out.
  *
  * Pipeline of slicer_run, stage by stage:

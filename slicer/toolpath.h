@@ -1,7 +1,7 @@
 /*
  * toolpath.h - what the slicer's geometry stages hand to the G-code writer:
  * per layer, an ordered list of extrusion paths in integer coordinates
- * (1 unit = 1 nm, DESIGN.md item 4), each point carrying its bead width so
+ * (1 unit = 1 nm, docs/architecture.md item 4), each point carrying its bead width so
  * thin walls can vary their flow along the path.
  *
  * The geometry stages (perimeters, thin walls, skins, infill, skirt, brim,

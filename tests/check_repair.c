@@ -1159,7 +1159,7 @@ END_TEST
 
 /*
  * Proves that a non-positive or NaN epsilon is refused with ST_ERR_ARG, a
- * message, and both output pointers set to NULL (STYLE.md rule 3).
+ * message, and both output pointers set to NULL (docs/architecture.md convention 3).
  */
 START_TEST(bad_epsilon_rejected)
 {

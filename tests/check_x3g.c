@@ -1,7 +1,7 @@
 /*
  * check_x3g.c - serial/x3g.c: the bytes of each translated G-code command,
  * worked out by hand from the s3g command layouts and GPX's arithmetic
- * (PROTOCOLS.md section 2) for the FlashForge Creator Pro; flavours, tools,
+ * (docs/protocols.md section 2) for the FlashForge Creator Pro; flavours, tools,
  * warnings; the decoder's checks on truncated and unknown input; and, when
  * Debian's gpx is installed, a command-by-command comparison with
  * `gpx -m fcp` on a hand-written Sailfish file and on a sliced part, plus

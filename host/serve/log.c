@@ -8,7 +8,7 @@
 
 #include "node_int.h"
 
-/* The process's one log sink (STYLE.md rule 10's allowed exception). */
+/* The process's one log sink (docs/architecture.md convention 10's allowed exception). */
 static node_log_fn log_fn;
 static void *log_ctx;
 

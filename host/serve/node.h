@@ -1,5 +1,5 @@
 /*
- * node.h - the farm node behind `stratum serve` (DESIGN.md item 8): one
+ * node.h - the farm node behind `stratum serve` (docs/architecture.md item 8): one
  * process that drives every printer of its config, each with its own
  * durable job queue (SQLite, WAL) and worker thread, behind an HTTP API
  * that speaks the OctoPrint subset slicers upload to (libmicrohttpd,

@@ -1,6 +1,6 @@
 /*
  * marlin_sim.h - a simulated Marlin 2.1 printer behind a pseudo-terminal
- * (DESIGN.md item 7, PROTOCOLS.md section 1).
+ * (docs/architecture.md item 7, docs/protocols.md section 1).
  *
  * The simulator opens a pty pair and answers on its master side the way
  * Marlin does: boot banner, RX ring of rx_buffer bytes (bytes arriving when

@@ -1,7 +1,7 @@
 /*
  * sailfish_sim.h - a simulated Sailfish (Makerbot-family) printer behind a
- * pseudo-terminal, as on a FlashForge Creator Pro (DESIGN.md item 7,
- * PROTOCOLS.md section 2).
+ * pseudo-terminal, as on a FlashForge Creator Pro (docs/architecture.md item 7,
+ * docs/protocols.md section 2).
  *
  * The simulator answers S3G packets on the pty master the way Sailfish's
  * Host.cc and Packet.cc do: a byte-wise packet reader (noise bytes,
