@@ -522,21 +522,6 @@ out:
 	return rc;
 }
 
-/* The default weld tolerance: HEAL_WELD_ULPS float32 ulps of the largest coordinate. */
-static double default_weld(const struct mesh *m)
-{
-	double big = 0;
-	int e;
-
-	for (size_t v = 0; v < m->nverts; v++)
-		for (int k = 0; k < 3; k++)
-			big = fmax(big, fabs(m->verts[v][k]));
-	if (big == 0)
-		return 0;
-	frexp(big, &e); /* big < 2^e: its float32 ulp is 2^(e-24) */
-	return HEAL_WELD_ULPS * ldexp(1.0, e - 24);
-}
-
 /* w as a new welded mesh. */
 static int build(const struct heal_work *w, struct mesh **out, struct st_error *err)
 {
@@ -586,7 +571,10 @@ int heal_mesh(const struct mesh *in, const struct repair_options *opt, struct me
 		return st_error_set(err, ST_ERR_ARG,
 				    "repair: weld %g mm and stitch %g mm must be finite", opt->weld,
 				    opt->stitch);
-	rep->weld_tolerance = opt->weld < 0 ? default_weld(in) : opt->weld;
+	/* Default: HEAL_WELD_ULPS float32 ulps of the largest coordinate. */
+	rep->weld_tolerance =
+		opt->weld < 0 ? HEAL_WELD_ULPS * vec3_ulp((const double(*)[3])in->verts, in->nverts, 24)
+			      : opt->weld;
 	rep->stitch_tolerance = opt->keep_holes ? 0
 				: opt->stitch < 0 ? HEAL_STITCH_FACTOR * opt->epsilon
 						  : opt->stitch;

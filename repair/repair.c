@@ -20,6 +20,7 @@
 #include "output.h"
 #include "repair.h"
 #include "thicken.h"
+#include "vec3.h"
 
 /* Origins of triangles that are not pieces of an input triangle. */
 #define ORIGIN_THICKENED 0xfffffffeu
@@ -62,23 +63,6 @@ static void progress(const struct repair_options *opt, const char *stage, double
 {
 	if (opt->progress)
 		opt->progress(opt->progress_ctx, stage, done);
-}
-
-static double dist3(const double a[3], const double b[3])
-{
-	const double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
-
-	return sqrt(dx * dx + dy * dy + dz * dz);
-}
-
-static double tri_area(const double a[3], const double b[3], const double c[3])
-{
-	const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-	const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-	const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
-			     u[0] * v[1] - u[1] * v[0]};
-
-	return 0.5 * sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
 }
 
 struct tri_key {
@@ -135,13 +119,13 @@ static int clean(const struct mesh *in, uint32_t **layer, size_t *n_layer, struc
 			co->degenerate++;
 			/* The segment is spanned by the farthest pair. */
 			int i = 0, j = 1;
-			double best = dist3(p[0], p[1]);
-			if (dist3(p[1], p[2]) > best) {
+			double best = vec3_dist(p[0], p[1]);
+			if (vec3_dist(p[1], p[2]) > best) {
 				i = 1;
 				j = 2;
-				best = dist3(p[1], p[2]);
+				best = vec3_dist(p[1], p[2]);
 			}
-			if (dist3(p[0], p[2]) > best) {
+			if (vec3_dist(p[0], p[2]) > best) {
 				i = 0;
 				j = 2;
 			}
@@ -279,16 +263,7 @@ static uint32_t *list_tagged(const uint8_t *tag, size_t n, int want, size_t *cou
  */
 static double output_ulp(const double (*verts)[3], size_t nv, enum repair_precision prec)
 {
-	double big = 0;
-	int e;
-
-	for (size_t v = 0; v < nv; v++)
-		for (int k = 0; k < 3; k++)
-			big = fmax(big, fabs(verts[v][k]));
-	if (big == 0)
-		return 0;
-	frexp(big, &e); /* big < 2^e */
-	return ldexp(1.0, e - (prec == REPAIR_FLOAT32 ? 24 : 53));
+	return vec3_ulp(verts, nv, prec == REPAIR_FLOAT32 ? 24 : 53);
 }
 
 /*
@@ -325,7 +300,7 @@ static int thicken(const struct exact_mesh *em, const uint8_t *tag, const uint8_
 		goto out;
 	}
 	for (size_t i = 0; i < nsheet; i++)
-		co->sheet_area += tri_area(verts[tris[sheet[i]][0]], verts[tris[sheet[i]][1]],
+		co->sheet_area += vec3_tri_area(verts[tris[sheet[i]][0]], verts[tris[sheet[i]][1]],
 					   verts[tris[sheet[i]][2]]);
 	if (nsheet) {
 		struct thick_out slab;
@@ -373,7 +348,7 @@ static int thicken(const struct exact_mesh *em, const uint8_t *tag, const uint8_
 			continue;
 		}
 		co->wires++;
-		co->wire_length += dist3(wires[i].p, wires[i].q);
+		co->wire_length += vec3_dist(wires[i].p, wires[i].q);
 		rc = append_cylinder(res, &wires[i], opt->epsilon / 2, err);
 		if (rc)
 			goto out;
@@ -647,7 +622,7 @@ static double point_triangle_distance(const double p[3], const double a[3], cons
 			   (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
 		t = t < 0 ? 0 : t > 1 ? 1 : t;
 		const double f[3] = {u[0] + t * e[0], u[1] + t * e[1], u[2] + t * e[2]};
-		best = fmin(best, dist3(p, f));
+		best = fmin(best, vec3_dist(p, f));
 	}
 	return inside ? fabs(h) * sqrt(nn) : best;
 }

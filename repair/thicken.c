@@ -32,6 +32,7 @@
 
 #include "ids.h"
 #include "thicken.h"
+#include "vec3.h"
 
 /* Bends sharper than this cut the sheet: each side keeps its own slab. */
 #define CREASE_DEGREES 30.0
@@ -461,6 +462,22 @@ static void cut_corner(struct sheet *s, uint32_t i, int k)
 	}
 }
 
+/* A fan's unit normal into u; false (u = +z) for a fan without direction. */
+static bool fan_unit_normal(const struct sheet *s, uint32_t g, double u[3])
+{
+	const double *f = s->gnorm[g];
+	const double l = sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+
+	if (!(l > 0)) {
+		u[0] = u[1] = 0;
+		u[2] = 1;
+		return false;
+	}
+	for (int k = 0; k < 3; k++)
+		u[k] = f[k] / l;
+	return true;
+}
+
 /*
  * Cut the edges around every fan whose normal leans more than FAN_DEGREES
  * from one of its triangles (or has no direction).  Returns how many fans
@@ -477,12 +494,11 @@ static size_t cut_leaning_fans(struct sheet *s, uint8_t *bad)
 		const bool has = oriented_normal(s, i, nn);
 		for (int k = 0; k < 3; k++) {
 			const uint32_t c = 3 * i + (uint32_t)k, g = s->gid[c];
-			const double *f = s->gnorm[g];
-			const double l = sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+			double u[3];
+			const bool dir = fan_unit_normal(s, g, u);
 			const double sign = s->side[c] ? -1 : 1;
-			const double d = has && l > 0
-						 ? sign * (f[0] * nn[0] + f[1] * nn[1] + f[2] * nn[2]) / l
-						 : -1;
+			const double d =
+				has && dir ? sign * (u[0] * nn[0] + u[1] * nn[1] + u[2] * nn[2]) : -1;
 			if (!(d >= min_cos))
 				bad[g] = 1;
 		}
@@ -496,22 +512,6 @@ static size_t cut_leaning_fans(struct sheet *s, uint8_t *bad)
 			nbad++;
 		}
 	return nbad;
-}
-
-/* A fan's unit normal (+z for a fan without direction: one corner of a
- * triangle without a normal, which the exact pass drops anyway). */
-static void fan_unit_normal(const struct sheet *s, uint32_t g, double u[3])
-{
-	const double *f = s->gnorm[g];
-	const double l = sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
-
-	if (!(l > 0)) {
-		u[0] = u[1] = 0;
-		u[2] = 1;
-		return;
-	}
-	for (int k = 0; k < 3; k++)
-		u[k] = f[k] / l;
 }
 
 /*
@@ -645,10 +645,7 @@ int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const ui
 		const double *p = verts[tris[list[c / 3]][c % 3]];
 		for (int sd = 0; sd < 2; sd++) {
 			const double *q = out->verts[2 * s.gid[c] + (uint32_t)sd];
-			const double d = sqrt((p[0] - q[0]) * (p[0] - q[0]) +
-					      (p[1] - q[1]) * (p[1] - q[1]) +
-					      (p[2] - q[2]) * (p[2] - q[2]));
-			out->deviation = fmax(out->deviation, d);
+			out->deviation = fmax(out->deviation, vec3_dist(p, q));
 		}
 	}
 	for (uint32_t c = 0; c < 3 * n; c++)
