@@ -61,10 +61,7 @@ static struct outcome repair_case(const struct mesh *in, double want, const char
 	ck_assert_msg(rc == 0, "%s: repair_mesh returned %d: %s", name, rc, err.msg);
 	ck_assert_msg(o.rep.printable, "%s: repair says not printable: %s", name, o.rep.why);
 	snprintf(file, sizeof(file), "%s.stl", name);
-	ck_assert_msg(meshio_write_stl(tu_path(file), out, MESHIO_STL_BINARY, &err) == 0,
-		      "%s: write: %s", name, err.msg);
-	ck_assert_msg(meshio_read(tu_path(file), MESHIO_AUTO, &back, NULL, &err) == 0,
-		      "%s: read back: %s", name, err.msg);
+	back = tu_round_trip(out, file, MESHIO_STL_BINARY);
 	ck_assert_msg(mesh_analyze(back, 2, &o.file, &err) == 0, "%s: mesh_analyze: %s", name,
 		      err.msg);
 	for (int r = 0; r < MESH_REASON_COUNT && !o.file.printable; r++)

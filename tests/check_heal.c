@@ -62,17 +62,12 @@ static struct mesh_report analyze(const struct mesh *m)
  */
 static double assert_solid(const struct healed *h, const struct mesh *want, const char *name)
 {
-	const char *path = tu_path(name);
-	struct st_error err = {0};
-	struct mesh *back = NULL;
+	struct mesh *back;
 	struct mesh_report r, w = analyze(want);
 
 	ck_assert_msg(w.printable && w.volume > 0, "%s: the intended solid is not one", name);
 	ck_assert_msg(h->rep.printable, "%s: not printable: %s", name, h->rep.why);
-	ck_assert_msg(meshio_write_stl(path, h->out, MESHIO_STL_BINARY, &err) == 0, "%s: %s",
-		      name, err.msg);
-	ck_assert_msg(meshio_read(path, MESHIO_AUTO, &back, NULL, &err) == 0, "%s: %s", name,
-		      err.msg);
+	back = tu_round_trip(h->out, name, MESHIO_STL_BINARY);
 	r = analyze(back);
 	mesh_free(back);
 	ck_assert_msg(r.printable, "%s: written file not printable (%zu boundary edges, %llu "

@@ -329,17 +329,6 @@ static struct mesh *part_mesh(const struct mesh *m, const uint32_t *comp, uint32
 }
 
 /* Write m to the scratch file name in fmt and read it back. */
-static struct mesh *round_trip(const struct mesh *m, const char *name, enum meshio_format fmt)
-{
-	const char *path = tu_path(name);
-	struct st_error err = {0};
-	struct mesh *back = NULL;
-
-	ck_assert_msg(meshio_write_stl(path, m, fmt, &err) == 0, "write %s: %s", path, err.msg);
-	ck_assert_msg(meshio_read(path, MESHIO_AUTO, &back, NULL, &err) == 0, "read %s: %s", path,
-		      err.msg);
-	return back;
-}
 
 /*
  * judge - the checks every test makes on a result: the repair calls it
@@ -385,7 +374,7 @@ static struct mesh_report judge(const struct fixed *f, enum repair_precision pre
 		struct mesh_report r;
 
 		snprintf(file, sizeof(file), "%s-part%u.stl", name, c);
-		back = round_trip(part, file, fmt);
+		back = tu_round_trip(part, file, fmt);
 		assert_same_triangles(back, part, file);
 		r = analyze(back);
 		ck_assert_msg(r.printable, "%s: component %u of %zu (%zu triangles) not printable: %s",
@@ -397,7 +386,7 @@ static struct mesh_report judge(const struct fixed *f, enum repair_precision pre
 	}
 
 	snprintf(file, sizeof(file), "%s-all.stl", name);
-	back = round_trip(f->out, file, fmt);
+	back = tu_round_trip(f->out, file, fmt);
 	whole = analyze(back);
 	/* Several parts and cavities in one file print too (docs/check.md). */
 	ck_assert_msg(whole.printable, "%s: written output not printable: %s", name,
@@ -458,7 +447,7 @@ START_TEST(solid_float_input_unchanged)
 
 	assert_same_triangles(f.out, in, "output");
 	judge(&f, REPAIR_FLOAT32, "unchanged");
-	back = round_trip(f.out, "unchanged-file.stl", MESHIO_STL_BINARY);
+	back = tu_round_trip(f.out, "unchanged-file.stl", MESHIO_STL_BINARY);
 	assert_same_triangles(back, in, "written file");
 	assert_untouched_report(&f.rep);
 	ck_assert_double_eq(f.rep.rounding_deviation, 0.0);

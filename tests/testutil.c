@@ -124,3 +124,15 @@ const char *tu_bin(void)
 {
 	return getenv("STRATUM_BIN") ? getenv("STRATUM_BIN") : "build/stratum";
 }
+
+struct mesh *tu_round_trip(const struct mesh *m, const char *name, enum meshio_format fmt)
+{
+	const char *path = tu_path(name);
+	struct st_error err = {0};
+	struct mesh *back = NULL;
+
+	ck_assert_msg(meshio_write_stl(path, m, fmt, &err) == 0, "write %s: %s", path, err.msg);
+	ck_assert_msg(meshio_read(path, MESHIO_AUTO, &back, NULL, &err) == 0, "read %s: %s", path,
+		      err.msg);
+	return back;
+}

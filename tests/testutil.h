@@ -8,6 +8,7 @@
 
 #include <stddef.h>
 
+#include "meshio.h"
 #include "toolpath.h"
 
 /* tu_scratch_init / tu_scratch_cleanup - make and remove the scratch
@@ -26,6 +27,13 @@ void tu_write(const char *path, const void *data, size_t len);
 
 /* tu_write_str - write a NUL-terminated string to path. */
 void tu_write_str(const char *path, const char *text);
+
+/*
+ * tu_round_trip - m as a printer gets it: written as fmt (binary or ASCII
+ * STL) to the scratch file name, read back into a new mesh (mesh_free).
+ * Aborts the test if either fails.
+ */
+struct mesh *tu_round_trip(const struct mesh *m, const char *name, enum meshio_format fmt);
 
 /*
  * tu_run - run "$STRATUM_BIN <args>" through the shell with stdout and
