@@ -161,12 +161,21 @@ static uint32_t continuation(const struct exact_mesh *em, const uint32_t (*tris)
 	uint32_t best = ti, bx = 0;
 	int bh = 3;
 
+	/* Across a manifold edge the one other triangle is the continuation
+	 * whatever the angle: no predicate (pieces of one split triangle are
+	 * coplanar, so their orientation would need exact arithmetic). */
+	if (e->eoff[edge + 1] - e->eoff[edge] == 2) {
+		const uint32_t t0 = e->ecorner[e->eoff[edge]] / 3;
+		return t0 != ti ? t0 : e->ecorner[e->eoff[edge] + 1] / 3;
+	}
 	for (uint32_t i = e->eoff[edge]; i < e->eoff[edge + 1]; i++) {
 		const uint32_t t = e->ecorner[i] / 3;
 		if (t == ti)
 			continue;
 		const uint32_t x = third_vertex(tris, t, a, b);
-		const int h = half_turn(em, a, b, c, x);
+		/* A piece of ti's own triangle lies straight through: the
+		 * half turn, known without the (exact, costly) zero. */
+		const int h = exact_mesh_same_plane(em, ti, t) ? 1 : half_turn(em, a, b, c, x);
 		/* Within one half turn, x comes first when bx lies further
 		 * along, i.e. on the positive side of the plane (a, b, x). */
 		if (h < bh || (h == bh && h != 1 && exact_mesh_orient3d(em, a, b, x, bx) > 0)) {

@@ -271,7 +271,7 @@ static double output_ulp(const double (*verts)[3], size_t nv, enum repair_precis
  * cylinders; return a new exact mesh of M_solid plus the new solids.
  */
 static int thicken(const struct exact_mesh *em, const uint8_t *tag, const uint8_t *flip,
-		   const struct segment *wires, size_t n_wires, const struct repair_options *opt,
+		   const uint32_t (*before)[3], size_t nbefore, const struct segment *wires, size_t n_wires, const struct repair_options *opt,
 		   struct core_out *co, struct exact_mesh **out, struct st_error *err)
 {
 	const size_t n = exact_mesh_ntris(em);
@@ -304,11 +304,33 @@ static int thicken(const struct exact_mesh *em, const uint8_t *tag, const uint8_
 					   verts[tris[sheet[i]][2]]);
 	if (nsheet) {
 		struct thick_out slab;
+		const uint8_t *whole = NULL;
+		const uint32_t *parent = exact_mesh_parents(em, &whole);
+		uint32_t (*units)[3] = NULL, *ids = NULL;
+		uint8_t *free_edges = NULL;
+		size_t nunits = 0;
 		progress(opt, "thickening sheets", 0.5);
-		rc = thicken_sheets(verts, tris, sheet, nsheet, opt->epsilon / 2,
+		rc = thicken_units(tris, sheet, nsheet, parent, whole, before, nbefore, n, &units,
+				   &free_edges, &nunits, err);
+		free(sheet);
+		if (rc)
+			goto out;
+		ids = malloc((nunits + 1) * sizeof(*ids));
+		if (!ids) {
+			free(units);
+			free(free_edges);
+			rc = st_error_set(err, ST_ERR_NOMEM, "out of memory thickening sheets");
+			goto out;
+		}
+		for (size_t i = 0; i < nunits; i++)
+			ids[i] = (uint32_t)i;
+		rc = thicken_sheets(verts, (const uint32_t(*)[3])units, ids, free_edges, nunits,
+				    opt->epsilon / 2,
 				    output_ulp(verts, exact_mesh_nverts(em), opt->precision), &slab,
 				    err);
-		free(sheet);
+		free(units);
+		free(free_edges);
+		free(ids);
 		if (rc)
 			goto out;
 		co->sheet_deviation = fmax(co->sheet_deviation, slab.deviation);
@@ -377,6 +399,7 @@ static int core(const struct mesh *in, const struct repair_options *opt, bool th
 		struct core_out *co, struct st_error *err)
 {
 	uint32_t *layer = NULL;
+	uint32_t (*lt)[3] = NULL; /* the layer's triangles: what the first pass cut */
 	struct segment *wires = NULL;
 	size_t n_layer = 0, n_wires = 0;
 	struct exact_mesh *em = NULL, *next = NULL;
@@ -390,7 +413,7 @@ static int core(const struct mesh *in, const struct repair_options *opt, bool th
 	rc = clean(in, &layer, &n_layer, &wires, &n_wires, co, err);
 	if (rc)
 		return rc;
-	uint32_t (*lt)[3] = malloc((n_layer + 1) * sizeof(*lt));
+	lt = malloc((n_layer + 1) * sizeof(*lt));
 	if (!lt) {
 		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory copying the layer");
 		goto out;
@@ -399,7 +422,6 @@ static int core(const struct mesh *in, const struct repair_options *opt, bool th
 		memcpy(lt[i], in->tris[layer[i]], sizeof(lt[i]));
 	rc = exact_mesh_new((const double(*)[3])in->verts, in->nverts, (const uint32_t(*)[3])lt,
 			    n_layer, layer, &em, err);
-	free(lt);
 	if (rc)
 		goto out;
 
@@ -420,7 +442,7 @@ static int core(const struct mesh *in, const struct repair_options *opt, bool th
 	 * grid that collapsed: M_solid without them is closed, and thickening
 	 * them would add epsilon-thick slabs around rounding noise. */
 	if (thicken_sheets_too && (hs.sheet || n_wires)) {
-		rc = thicken(em, tag, flip, wires, n_wires, opt, co, &next, err);
+		rc = thicken(em, tag, flip, (const uint32_t(*)[3])lt, n_layer, wires, n_wires, opt, co, &next, err);
 		if (rc)
 			goto out;
 	}
@@ -466,6 +488,7 @@ static int core(const struct mesh *in, const struct repair_options *opt, bool th
 	}
 out:
 	free(layer);
+	free(lt);
 	free(wires);
 	free(tag);
 	free(flip);

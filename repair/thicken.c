@@ -224,11 +224,17 @@ static int compare_u32(const void *a, const void *b)
  * the sorted list of the sheet's vertices (nu of them), sidx their slab
  * vertex or UINT32_MAX.
  */
+static size_t sheet_index(const uint32_t *uv, size_t nu, uint32_t v)
+{
+	const uint32_t *hit = bsearch(&v, uv, nu, sizeof(*uv), compare_u32);
+
+	return (size_t)(hit - uv);
+}
+
 static uint32_t sheet_vertex(struct thick_out *out, const uint32_t *uv, size_t nu, uint32_t *sidx,
 			     const double (*verts)[3], uint32_t v)
 {
-	const uint32_t *hit = bsearch(&v, uv, nu, sizeof(*uv), compare_u32);
-	const size_t i = (size_t)(hit - uv);
+	const size_t i = sheet_index(uv, nu, v);
 
 	if (sidx[i] == UINT32_MAX) {
 		memcpy(out->verts[out->nverts], verts[v], sizeof(out->verts[0]));
@@ -298,6 +304,7 @@ struct sheet {
 	const double (*verts)[3];
 	const uint32_t (*tris)[3];
 	const uint32_t *list;
+	const uint8_t *free_edges; /* [triangle] bit k: edge k touches nothing; may be NULL */
 	size_t n;
 	uint32_t *mate;		/* [corner] the corner across its edge, or UINT32_MAX */
 	uint8_t *flip;		/* [triangle] reversed to orient the sheet */
@@ -525,6 +532,7 @@ static int emit_slab(const struct sheet *s, double half, struct thick_out *out,
 	const size_t n = s->n;
 	uint32_t *uv = malloc((3 * n + 1) * sizeof(*uv));
 	uint32_t *sidx = malloc((3 * n + 1) * sizeof(*sidx));
+	uint8_t *through = calloc(3 * n + 1, 1);
 	size_t nu = 0;
 
 	/* Copies: two per fan, plus the sheet's own vertices on the walls;
@@ -532,9 +540,10 @@ static int emit_slab(const struct sheet *s, double half, struct thick_out *out,
 	out->verts = malloc((2 * s->ng + 3 * n + 1) * sizeof(*out->verts));
 	out->sheet_ref = malloc((2 * s->ng + 3 * n + 1) * sizeof(*out->sheet_ref));
 	out->tris = malloc((14 * n + 1) * sizeof(*out->tris));
-	if (!out->verts || !out->sheet_ref || !out->tris || !uv || !sidx) {
+	if (!out->verts || !out->sheet_ref || !out->tris || !uv || !sidx || !through) {
 		free(uv);
 		free(sidx);
+		free(through);
 		return st_error_set(err, ST_ERR_NOMEM, "out of memory thickening %zu sheet triangles",
 				    n);
 	}
@@ -559,6 +568,14 @@ static int emit_slab(const struct sheet *s, double half, struct thick_out *out,
 			uv[nu++] = uv[c];
 	for (size_t i = 0; i < nu; i++)
 		sidx[i] = UINT32_MAX;
+	/* Sheet vertices where some wall must hold the sheet's own edge. */
+	for (uint32_t c = 0; c < 3 * n; c++) {
+		const uint32_t i = c / 3, k = c % 3;
+		if (s->joined[c] || (s->free_edges && (s->free_edges[i] >> k & 1)))
+			continue;
+		through[sheet_index(uv, nu, s->tris[s->list[i]][k])] = 1;
+		through[sheet_index(uv, nu, s->tris[s->list[i]][(k + 1) % 3])] = 1;
+	}
 	/* copy(c, 0) lies on the side triangle c/3's normal points to (as
 	 * oriented), copy(c, 1) on the other: parity maps that to the fan's
 	 * own two copies. */
@@ -585,29 +602,54 @@ static int emit_slab(const struct sheet *s, double half, struct thick_out *out,
 			}
 			/* The wall holds the sheet's own edge a b: walls of
 			 * several fans meet exactly there instead of crossing
-			 * each other within rounding of it. */
-			const uint32_t pa = sheet_vertex(out, uv, nu, sidx, s->verts,
-							 s->tris[s->list[a / 3]][a % 3]);
-			const uint32_t pb = sheet_vertex(out, uv, nu, sidx, s->verts,
-							 s->tris[s->list[b / 3]][b % 3]);
-			const uint32_t w[4][3] = {{COPY(b, 0), COPY(a, 0), pa},
-						  {COPY(b, 0), pa, pb},
-						  {pb, pa, COPY(a, 1)},
-						  {pb, COPY(a, 1), COPY(b, 1)}};
-			memcpy(out->tris[out->ntris], w, sizeof(w));
-			out->ntris += 4;
+			 * each other within rounding of it, and where the
+			 * sheet meets other triangles, the wall meets them
+			 * exactly too.  At a vertex whose walls all run along
+			 * edges that touch nothing, it goes straight from one
+			 * copy to the other (every wall at that vertex alike,
+			 * so their upright edges still match). */
+			const uint32_t va = s->tris[s->list[a / 3]][a % 3];
+			const uint32_t vb = s->tris[s->list[b / 3]][b % 3];
+			const bool ta = through[sheet_index(uv, nu, va)];
+			const bool tb = through[sheet_index(uv, nu, vb)];
+			const uint32_t a0 = COPY(a, 0), a1 = COPY(a, 1), b0 = COPY(b, 0),
+				       b1 = COPY(b, 1);
+			const uint32_t pa = ta ? sheet_vertex(out, uv, nu, sidx, s->verts, va) : 0;
+			const uint32_t pb = tb ? sheet_vertex(out, uv, nu, sidx, s->verts, vb) : 0;
+			if (ta && tb) {
+				const uint32_t w[4][3] = {
+				    {b0, a0, pa}, {b0, pa, pb}, {pb, pa, a1}, {pb, a1, b1}};
+				memcpy(out->tris[out->ntris], w, sizeof(w));
+				out->ntris += 4;
+			} else if (ta) {
+				const uint32_t w[3][3] = {{b0, a0, pa}, {b0, pa, a1}, {b0, a1, b1}};
+				memcpy(out->tris[out->ntris], w, sizeof(w));
+				out->ntris += 3;
+			} else if (tb) {
+				/* Fanned from a0, off the line b0 pb b1. */
+				const uint32_t w[3][3] = {{a0, a1, b1}, {a0, b1, pb}, {a0, pb, b0}};
+				memcpy(out->tris[out->ntris], w, sizeof(w));
+				out->ntris += 3;
+			} else {
+				const uint32_t w[2][3] = {{b0, a0, a1}, {b0, a1, b1}};
+				memcpy(out->tris[out->ntris], w, sizeof(w));
+				out->ntris += 2;
+			}
 		}
 	}
 #undef COPY
 	free(uv);
 	free(sidx);
+	free(through);
 	return 0;
 }
 
 int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const uint32_t *list,
-		   size_t n, double half, double weld, struct thick_out *out, struct st_error *err)
+		   const uint8_t *free_edges, size_t n, double half, double weld,
+		   struct thick_out *out, struct st_error *err)
 {
-	struct sheet s = {.verts = verts, .tris = tris, .list = list, .n = n};
+	struct sheet s = {.verts = verts, .tris = tris, .list = list, .free_edges = free_edges,
+			  .n = n};
 	struct sheet_edge *edges = malloc((3 * n + 1) * sizeof(*edges));
 	uint8_t *seen = calloc(n + 1, 1), *bad = malloc(3 * n + 1);
 	uint32_t *queue = malloc((n + 1) * sizeof(*queue));

@@ -35,7 +35,23 @@ struct thick_out {
  * Returns 0 or ST_ERR_NOMEM with err filled.
  */
 int thicken_sheets(const double (*verts)[3], const uint32_t (*tris)[3], const uint32_t *list,
-		   size_t n, double half, double weld, struct thick_out *out,
-		   struct st_error *err);
+		   const uint8_t *free_edges, size_t n, double half, double weld,
+		   struct thick_out *out, struct st_error *err);
+
+/*
+ * thicken_units - the triangles to thicken for the nsheet sheet triangles
+ * listed in sheet (indices into tris, ntris triangles in all): a triangle
+ * of before (the list the refinement cut, nbefore long) whose pieces
+ * (parent: per triangle of tris, the one it came from; exact_mesh_parents)
+ * are all sheet and cover it (whole) comes back once, whole; every other
+ * sheet triangle as it is.  parent may be NULL (nothing is grouped).
+ * *free_edges: per unit, thicken_sheets' free_edges (a whole triangle's
+ * edges are free when none of its pieces' boundary edges is shared).
+ * *units and *free_edges are malloc'd.  Returns 0 or ST_ERR_NOMEM.
+ */
+int thicken_units(const uint32_t (*tris)[3], const uint32_t *sheet, size_t nsheet,
+		  const uint32_t *parent, const uint8_t *whole, const uint32_t (*before)[3],
+		  size_t nbefore, size_t ntris, uint32_t (**units)[3], uint8_t **free_edges,
+		  size_t *nunits, struct st_error *err);
 
 #endif /* STRATUM_REPAIR_THICKEN_H */

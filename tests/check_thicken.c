@@ -54,14 +54,20 @@ static size_t count_edge(const struct dir_edge *e, size_t n, uint32_t from, uint
 	return c;
 }
 
+/* Which walls may skip the sheet's own edge (thicken_sheets' free_edges). */
+enum free_walls { NO_FREE, SOME_FREE, ALL_FREE };
+
 /*
  * Thicken every triangle of m and assert the slab is closed and oriented:
  * each directed edge as often as its reverse, no triangle repeating a
- * vertex, every copy within half of the sheet.  Returns the slab's size.
+ * vertex, every copy within half of the sheet.  With SOME_FREE, edges are
+ * marked free by a fixed pseudo-random pattern, so vertices where free and
+ * held walls meet are covered.  Returns the slab's size.
  */
-static size_t assert_closed_slab(const struct mesh *m, const char *name)
+static size_t assert_closed_slab(const struct mesh *m, const char *name, enum free_walls walls)
 {
 	uint32_t *list = malloc((m->ntris + 1) * sizeof(*list));
+	uint8_t *free_edges = malloc(m->ntris + 1);
 	struct thick_out slab;
 	struct st_error err = {0};
 	struct dir_edge *e;
@@ -69,10 +75,14 @@ static size_t assert_closed_slab(const struct mesh *m, const char *name)
 	int rc;
 
 	ck_assert_ptr_nonnull(list);
-	for (size_t t = 0; t < m->ntris; t++)
+	ck_assert_ptr_nonnull(free_edges);
+	for (size_t t = 0; t < m->ntris; t++) {
 		list[t] = (uint32_t)t;
+		free_edges[t] = walls == ALL_FREE ? 7 : (uint8_t)((t * 2654435761u) >> 13 & 7);
+	}
 	rc = thicken_sheets((const double(*)[3])m->verts, (const uint32_t(*)[3])m->tris, list,
-			    m->ntris, EPS / 2, 0, &slab, &err);
+			    walls == NO_FREE ? NULL : free_edges, m->ntris, EPS / 2, 0, &slab,
+			    &err);
 	ck_assert_msg(rc == 0, "%s: thicken_sheets returned %d: %s", name, rc, err.msg);
 	ne = 3 * slab.ntris;
 	e = malloc((ne + 1) * sizeof(*e));
@@ -98,6 +108,7 @@ static size_t assert_closed_slab(const struct mesh *m, const char *name)
 	const size_t n = slab.ntris;
 	free(e);
 	free(list);
+	free(free_edges);
 	free(slab.verts);
 	free(slab.tris);
 	free(slab.sheet_ref);
@@ -107,7 +118,8 @@ static size_t assert_closed_slab(const struct mesh *m, const char *name)
 /*
  * Proves that the slab of every cube with one or two facets missing (78
  * sheets with sharp 90-degree creases, which the old bevels left open) is
- * closed.
+ * closed, also where walls along edges that touch nothing skip the sheet's
+ * edge (fewer triangles) and where such walls meet held ones.
  */
 START_TEST(open_cubes_slab_closed)
 {
@@ -116,7 +128,10 @@ START_TEST(open_cubes_slab_closed)
 			struct mesh *m = fx_cube_without(10, (1u << i) | (1u << j));
 			char name[32];
 			snprintf(name, sizeof(name), "cube-%d-%d", i, j);
-			ck_assert_uint_gt(assert_closed_slab(m, name), 0);
+			const size_t held = assert_closed_slab(m, name, NO_FREE);
+			ck_assert_uint_gt(held, 0);
+			ck_assert_uint_le(assert_closed_slab(m, name, SOME_FREE), held);
+			ck_assert_uint_lt(assert_closed_slab(m, name, ALL_FREE), held);
 			mesh_free(m);
 		}
 }
@@ -149,7 +164,8 @@ START_TEST(hard_sheets_slab_closed)
 	for (int i = 0; i < 6; i++) {
 		char name[32];
 		snprintf(name, sizeof(name), "sheet-%d", i);
-		ck_assert_uint_gt(assert_closed_slab(m[i], name), 0);
+		for (int w = NO_FREE; w <= ALL_FREE; w++)
+			ck_assert_uint_gt(assert_closed_slab(m[i], name, (enum free_walls)w), 0);
 		mesh_free(m[i]);
 	}
 }
@@ -203,6 +219,37 @@ START_TEST(open_corner_repaired)
 }
 END_TEST
 
+/*
+ * Proves that two triangles crossing through each other are thickened
+ * whole, not as the pieces the first pass cut them into, and with plain
+ * walls along edges that touch nothing: 2 x (2 faces + 3 walls of 2) = 16
+ * triangles (the pieces gave 14 per piece), and the result is printable.
+ */
+START_TEST(crossing_sheets_thickened_whole)
+{
+	const double a[3] = {0, 0, 0}, b[3] = {10, 0, 0}, c[3] = {0, 10, 0};
+	const double d[3] = {2, 2, -5}, e[3] = {2, 2, 5}, f[3] = {8, -3, 0.5};
+	struct mesh *t1 = fx_triangle(a, b, c), *t2 = fx_triangle(d, e, f);
+	struct mesh *m = fx_concat(t1, t2);
+	struct repair_options opt;
+	struct repair_report rep;
+	struct st_error err = {0};
+	struct mesh *out = NULL;
+
+	repair_options_init(&opt);
+	opt.epsilon = EPS;
+	ck_assert_int_eq(repair_mesh(m, &opt, &out, NULL, &rep, &err), 0);
+	ck_assert(rep.printable);
+	ck_assert_uint_gt(rep.intersecting_pairs, 0);
+	ck_assert_uint_gt(rep.sheet_triangles, 2);
+	ck_assert_uint_eq(rep.thickened_triangles, 16);
+	mesh_free(out);
+	mesh_free(m);
+	mesh_free(t1);
+	mesh_free(t2);
+}
+END_TEST
+
 Suite *thicken_suite(void)
 {
 	Suite *s = suite_create("thicken");
@@ -215,6 +262,7 @@ Suite *thicken_suite(void)
 	tcase_set_timeout(repair, 240);
 	tcase_add_test(repair, open_cubes_repaired);
 	tcase_add_test(repair, open_corner_repaired);
+	tcase_add_test(repair, crossing_sheets_thickened_whole);
 	suite_add_tcase(s, repair);
 	return s;
 }

@@ -243,8 +243,13 @@ void refine(exact_mesh &m, int threads, exact_refine_stats &st)
 
 	st = exact_refine_stats();
 	st.intersecting_pairs = pairs.size();
-	if (pairs.empty())
+	if (pairs.empty()) {
+		m.parent.resize(m.tris.size());
+		for (size_t t = 0; t < m.tris.size(); t++)
+			m.parent[t] = static_cast<uint32_t>(t);
+		m.parent_whole.assign(m.tris.size(), 1);
 		return;
+	}
 
 	/* What each pair adds to both its triangles' cuts, found on all cores
 	 * (Epeck's lazy numbers are thread-safe since CGAL 5.5: each exact
@@ -313,7 +318,8 @@ void refine(exact_mesh &m, int threads, exact_refine_stats &st)
 	 * pieces_of while this is used, so no id is reused. */
 	std::unordered_map<EPoint::Id_type, uint32_t> by_handle;
 	std::vector<std::array<uint32_t, 3>> tris;
-	std::vector<uint32_t> origin;
+	std::vector<uint32_t> origin, plane, parent;
+	std::vector<uint8_t> parent_whole(m.tris.size(), 1);
 	/* Pieces already emitted, by sorted corners: coplanar overlaps give
 	 * the same piece from both triangles, and one layer is kept. */
 	std::unordered_set<std::array<uint32_t, 3>, tri_hash> emitted;
@@ -321,10 +327,14 @@ void refine(exact_mesh &m, int threads, exact_refine_stats &st)
 
 	tris.reserve(m.tris.size() + 4 * cut.size());
 	origin.reserve(tris.capacity());
+	plane.reserve(tris.capacity());
+	parent.reserve(tris.capacity());
 	for (size_t t = 0; t < m.tris.size(); t++) {
 		if (piece_slot[t] < 0) {
 			tris.push_back(m.tris[t]);
 			origin.push_back(m.origin[t]);
+			plane.push_back(m.plane[t]);
+			parent.push_back(static_cast<uint32_t>(t));
 			continue;
 		}
 		const std::vector<std::array<EPoint, 3>> &pieces =
@@ -345,17 +355,23 @@ void refine(exact_mesh &m, int threads, exact_refine_stats &st)
 			std::sort(key.begin(), key.end());
 			if (!emitted.insert(key).second) {
 				st.duplicates_removed++;
+				parent_whole[t] = 0;
 				continue;
 			}
 			if (tris.size() >= MESH_LIMIT)
 				throw std::length_error("too many triangles");
 			tris.push_back(v);
 			origin.push_back(m.origin[t]);
+			plane.push_back(m.plane[t]);
+			parent.push_back(static_cast<uint32_t>(t));
 		}
 	}
 	st.new_vertices = m.approx.size() - nverts0;
 	m.tris.swap(tris);
 	m.origin.swap(origin);
+	m.plane.swap(plane);
+	m.parent.swap(parent);
+	m.parent_whole.swap(parent_whole);
 }
 
 /* Exact comparison of two vertices, lexicographic on (x, y, z). */
@@ -600,12 +616,12 @@ int exact_mesh_new(const double (*verts)[3], size_t nverts, const uint32_t (*tri
 		for (size_t v = 0; v < nverts; v++)
 			m->approx[v] = {verts[v][0], verts[v][1], verts[v][2]};
 		m->slot.assign(nverts, -1);
-		m->tris.resize(ntris);
-		m->origin.resize(ntris);
-		for (size_t t = 0; t < ntris; t++) {
-			m->tris[t] = {tris[t][0], tris[t][1], tris[t][2]};
-			m->origin[t] = origin ? origin[t] : static_cast<uint32_t>(t);
-		}
+		m->tris.reserve(ntris);
+		m->origin.reserve(ntris);
+		m->plane.reserve(ntris);
+		for (size_t t = 0; t < ntris; t++)
+			m->add_triangle({tris[t][0], tris[t][1], tris[t][2]},
+					origin ? origin[t] : static_cast<uint32_t>(t));
 		*out = m;
 		return ST_OK;
 	} catch (...) {
@@ -713,8 +729,7 @@ int exact_mesh_append_ref(struct exact_mesh *m, const struct exact_mesh *src, co
 					++*skipped;
 				continue;
 			}
-			m->tris.push_back(w);
-			m->origin.push_back(origin);
+			m->add_triangle(w, origin);
 		}
 		return ST_OK;
 	} catch (...) {
@@ -757,7 +772,9 @@ int exact_mesh_select(const struct exact_mesh *m, const uint8_t *keep, const uin
 				std::swap(w[1], w[2]);
 			r->tris.push_back(w);
 			r->origin.push_back(m->origin[t]);
+			r->plane.push_back(m->plane[t]);
 		}
+		r->next_plane = m->next_plane;
 		*out = r;
 		return ST_OK;
 	} catch (...) {
@@ -794,6 +811,20 @@ const uint32_t (*exact_mesh_tris(const struct exact_mesh *m))[3]
 const uint32_t *exact_mesh_origin(const struct exact_mesh *m)
 {
 	return m && !m->origin.empty() ? m->origin.data() : nullptr;
+}
+
+const uint32_t *exact_mesh_parents(const struct exact_mesh *m, const uint8_t **whole)
+{
+	if (!m || m->tris.empty() || m->parent.size() != m->tris.size())
+		return nullptr;
+	if (whole)
+		*whole = m->parent_whole.data();
+	return m->parent.data();
+}
+
+bool exact_mesh_same_plane(const struct exact_mesh *m, uint32_t t, uint32_t u)
+{
+	return m && t < m->plane.size() && u < m->plane.size() && m->plane[t] == m->plane[u];
 }
 
 bool exact_mesh_vertex_is_double(const struct exact_mesh *m, uint32_t v)

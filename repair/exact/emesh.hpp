@@ -31,6 +31,24 @@ struct exact_mesh {
 	std::vector<EPoint> ex;			    /* exact positions of rational vertices */
 	std::vector<std::array<uint32_t, 3>> tris;
 	std::vector<uint32_t> origin;
+	/* Per triangle: triangles with the same id lie exactly in one plane
+	 * (pieces of one split triangle); different ids tell nothing. */
+	std::vector<uint32_t> plane;
+	uint32_t next_plane = 0; /* an id no triangle has yet */
+	/* Set by the last refinement only (empty after any other change):
+	 * per triangle, the index before it of the triangle it is a piece of;
+	 * per such index, 0 when a piece of it went to a coplanar overlap. */
+	std::vector<uint32_t> parent;
+	std::vector<uint8_t> parent_whole;
+
+	void add_triangle(const std::array<uint32_t, 3> &t, uint32_t orig)
+	{
+		tris.push_back(t);
+		origin.push_back(orig);
+		plane.push_back(next_plane++);
+		parent.clear();
+		parent_whole.clear();
+	}
 };
 
 namespace emesh

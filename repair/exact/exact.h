@@ -127,6 +127,18 @@ size_t exact_mesh_ntris(const struct exact_mesh *m);
 const double (*exact_mesh_verts(const struct exact_mesh *m))[3];
 const uint32_t (*exact_mesh_tris(const struct exact_mesh *m))[3];
 const uint32_t *exact_mesh_origin(const struct exact_mesh *m);
+/*
+ * exact_mesh_parents - right after exact_mesh_refine (NULL after any other
+ * change): per triangle, the index in the list before the refinement of
+ * the triangle it is a piece of (its own when it was not cut); *whole[i]
+ * is 0 when part of triangle i's area went to an equal piece of another
+ * triangle (a coplanar overlap), so its own pieces do not cover it.
+ */
+const uint32_t *exact_mesh_parents(const struct exact_mesh *m, const uint8_t **whole);
+/* True when triangles t and u are known to lie exactly in one plane (pieces
+ * of one triangle the refinement split); false tells nothing.  Lets callers
+ * skip the predicates whose exact zero is the costly case. */
+bool exact_mesh_same_plane(const struct exact_mesh *m, uint32_t t, uint32_t u);
 /* Whether vertex v's double approximation is its exact position. */
 bool exact_mesh_vertex_is_double(const struct exact_mesh *m, uint32_t v);
 

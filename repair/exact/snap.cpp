@@ -379,8 +379,10 @@ uint32_t find_patch(std::vector<uint32_t> &p, uint32_t x)
 	return x;
 }
 
-/* Union of triangles that share an edge and lie in one plane (exactly). */
-void build_patches(snapper &s)
+/* Union of triangles that share an edge and lie in one plane (exactly).
+ * Pieces of one split triangle are known to (m.plane): for them the
+ * predicate would only confirm an exact zero, its costliest answer. */
+void build_patches(snapper &s, const exact_mesh &m)
 {
 	struct edge {
 		uint32_t lo, hi, t;
@@ -411,7 +413,8 @@ void build_patches(snapper &s)
 			for (size_t b = a + 1; b < j; b++) {
 				const uint32_t c = third(e[a].t, e[a].lo, e[a].hi),
 					       d = third(e[b].t, e[b].lo, e[b].hi);
-				if (CGAL::orientation(s.pos[e[a].lo], s.pos[e[a].hi], s.pos[c],
+				if (m.plane[e[a].t] != m.plane[e[b].t] &&
+				    CGAL::orientation(s.pos[e[a].lo], s.pos[e[a].hi], s.pos[c],
 						      s.pos[d]) != CGAL::COPLANAR)
 					continue;
 				const uint32_t ra = find_patch(s.patch, e[a].t),
@@ -463,7 +466,7 @@ void build(snapper &s, const exact_mesh &m)
 	s.near.assign(nt, {});
 	if (!any)
 		return;
-	build_patches(s);
+	build_patches(s, m);
 	std::vector<Box> boxes(nt);
 	std::vector<const Box *> use(nt);
 	for (size_t t = 0; t < nt; t++) {
@@ -658,8 +661,8 @@ std::unique_ptr<exact_mesh> emit(const std::vector<std::array<uint32_t, 3>> &tri
 			}
 			w[k] = map[v];
 		}
-		r->tris.push_back(w);
-		r->origin.push_back(origin[t]);
+		/* Rounded corners leave no plane known: each its own id. */
+		r->add_triangle(w, origin[t]);
 	}
 	return r;
 }
