@@ -1071,6 +1071,8 @@ START_TEST(test_random)
 	    "G1",   "G28", "M104", "M117",  "T0", "N5 ",  "@",	  " ", " ",  "\t",  "X1.5",
 	    "Y-2",  "E.5", "Z",	   "F1800", "S",  "(p)",  "(",	  ")", ";c", "*12", "*",
 	    "\r\n", "1e3", "-",	   ".",	    "a",  "\xff", "M110", "N", "0",
+	    /* the paths of commands that end in a text */
+	    "M0",   "M115", "U3.11.0", "Click", "\"q\"", "\xc2\xb0", "T?", "M862.3",
 	};
 	uint64_t seed = 0x5eed5eed12345678ULL;
 	char buf[320], out[GCODE_LINE_MAX + 32];
@@ -1133,6 +1135,7 @@ START_TEST(test_random)
 			ck_assert_str_eq(again.text, l.text);
 			ck_assert_int_eq(again.kind, l.kind);
 			ck_assert_uint_eq(again.nwords, l.nwords);
+			ck_assert_uint_eq(again.string_off, l.string_off);
 		}
 	}
 	/* The generator must exercise the accepting paths too. */
