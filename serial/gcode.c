@@ -1,12 +1,12 @@
 /*
- * gcode.c - G-code line parser, number reader, checksums, classifier,
- * slicer layer comments and a streaming line reader.  See gcode.h for the
- * accepted syntax; every read below is checked against the line's end.
+ * gcode.c - G-code line parser, number reader, checksums and classifier
+ * (the streaming reader and the layer comments are in gcode_reader.c).  See
+ * gcode.h for the accepted syntax; every read below is checked against the
+ * line's end.
  */
 #include "gcode.h"
+#include "gcode_impl.h"
 
-#include <errno.h>
-#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -136,7 +136,7 @@ int gcode_format_numbered(char *out, size_t cap, long n, const char *cmd)
 	for (size_t i = 0; i < clen; i++) {
 		unsigned char c = (unsigned char)cmd[i];
 
-		if ((c < 0x20 && c != '\t') || c >= 0x7f || c == ';')
+		if ((c < 0x20 && c != '\t') || c == 0x7f || c == ';' || c == '*')
 			return ST_ERR_ARG;
 	}
 	w = snprintf(head, sizeof(head), "N%ld ", n);
@@ -346,116 +346,6 @@ static int parse_checksum(struct parser *p)
 	return (int)star;
 }
 
-/* Marlin string-argument commands: the rest of the line is one string. */
-static bool takes_string(char letter, int number)
-{
-	if (letter != 'M')
-		return false;
-	switch (number) {
-	case 23:
-	case 28:
-	case 30:
-	case 32:
-	case 117:
-	case 118:
-	case 928:
-	case 862: /* Prusa print checks: M862.3 P "MK3S" quotes the model name */
-		return true;
-	default:
-		return false;
-	}
-}
-
-/* The kind of a command (letter 0 = no command). */
-static enum gcode_kind classify(char letter, int n)
-{
-	if (letter == 0 || letter == '@')
-		return GCODE_KIND_HOST_ONLY;
-	if (letter == 'T')
-		return GCODE_KIND_TOOL_CHANGE;
-	if (letter == 'G') {
-		switch (n) {
-		case 0:
-		case 1:
-		case 2:
-		case 3:
-		case 5:
-			return GCODE_KIND_MOTION;
-		case 4:
-			return GCODE_KIND_DWELL;
-		case 28:
-			return GCODE_KIND_HOME;
-		case 29:
-		case 30:
-		case 31:
-		case 32:
-		case 33:
-		case 34:
-		case 35:
-		case 38:
-		case 80:
-			return GCODE_KIND_PROBE;
-		case 92:
-			return GCODE_KIND_SET_POSITION;
-		case 20:
-		case 21:
-		case 90:
-		case 91:
-			return GCODE_KIND_MODE;
-		default:
-			return GCODE_KIND_OTHER;
-		}
-	}
-	switch (n) { /* M */
-	case 0:
-	case 1:
-	case 226:
-	case 600:
-		return GCODE_KIND_USER_WAIT;
-	case 6:
-		return GCODE_KIND_TOOL_CHANGE;
-	case 48:
-		return GCODE_KIND_PROBE;
-	case 82:
-	case 83:
-		return GCODE_KIND_MODE;
-	case 104:
-	case 140:
-	case 141:
-		return GCODE_KIND_TEMP_SET;
-	case 109:
-	case 116:
-	case 190:
-	case 191:
-		return GCODE_KIND_TEMP_WAIT;
-	case 106:
-	case 107:
-		return GCODE_KIND_FAN;
-	case 400:
-		return GCODE_KIND_FINISH_MOVES;
-	case 108:
-	case 112:
-	case 410:
-	case 524:
-	case 876:
-		return GCODE_KIND_EMERGENCY;
-	case 110:
-		return GCODE_KIND_LINE_NUMBER;
-	case 105:
-	case 114:
-	case 115:
-	case 119:
-	case 155:
-		return GCODE_KIND_REPORT;
-	case 73:
-	case 117:
-	case 118:
-		return GCODE_KIND_MESSAGE;
-	default:
-		return GCODE_KIND_OTHER;
-	}
-}
-
 /* Parse "[N<n>]" at the start of the command part. */
 static int parse_line_number(struct parser *p)
 {
@@ -490,6 +380,21 @@ static int parse_command(struct parser *p)
 	while (q < p->len && is_blank(p->buf[q]))
 		q++;
 	nd = read_digits(p, q, 5, &v);
+	if (nd == 0 && letter == 'T' && q < p->len && memchr("?xc", p->buf[q], 3) &&
+	    (q + 1 >= p->len || is_blank(p->buf[q + 1]) || p->buf[q + 1] == ';' ||
+	     p->buf[q + 1] == '*')) {
+		/* Prusa MMU: T? lets the user pick the filament, Tx and Tc load it
+		 * in two steps (Prusa firmware and Marlin's PRUSA_MMU2 read these) */
+		tmp[0] = 'T';
+		tmp[1] = p->buf[q];
+		l->letter = 'T';
+		l->number = -1;
+		l->subcode = -1;
+		l->has_string = true;
+		l->string_off = 1;
+		p->pos = q + 1;
+		return text_put(p, tmp, 2);
+	}
 	if (nd == 0)
 		return st_error_set(p->err, ST_ERR_PARSE,
 				    "column %zu: command letter '%c' without a number; "
@@ -519,7 +424,27 @@ static int parse_command(struct parser *p)
 	return text_put(p, tmp, (size_t)w);
 }
 
-/* Rest of a string-argument command (or '@' host command) up to ';'. */
+/* Refuse a '*' left inside a text once its checksum is taken off: Marlin's
+ * parser ends the command at the first '*' and Prusa's firmware computes
+ * the checksum up to it, so the text would be cut or the line resent for
+ * ever (docs/errors.md "G-code input"). */
+static int check_no_star(const struct parser *p, size_t s, size_t e)
+{
+	const char *star = memchr(p->buf + s, '*', e - s);
+	const char *cmd = p->l->text, *sp = memchr(cmd, ' ', p->l->text_len);
+
+	if (!star)
+		return 0;
+	return st_error_set(p->err, ST_ERR_PARSE,
+			    "column %zu: '*' inside the text of %.*s; the firmware takes '*' for "
+			    "the start of the checksum and would cut the text there, so remove it",
+			    (size_t)(star - p->buf) + 1,
+			    (int)(sp ? (size_t)(sp - cmd) : p->l->text_len), cmd);
+}
+
+/* Rest of a string-argument command (or '@' host command, or the text that
+ * ends a command which takes text) up to ';', as written: any byte but
+ * control bytes, UTF-8 included. */
 static int parse_string(struct parser *p, size_t first)
 {
 	struct gcode_line *l = p->l;
@@ -530,10 +455,7 @@ static int parse_string(struct parser *p, size_t first)
 		s++;
 	while (end < p->len && p->buf[end] != ';')
 		end++;
-	for (size_t i = s; i < end; i++)
-		if ((rc = check_ascii(p, i)))
-			return rc;
-	/* A trailing "*<digits>" is the checksum (Marlin looks for the last '*'). */
+	/* A trailing "*<digits>" is the checksum. */
 	e = end;
 	while (e > s && is_blank(p->buf[e - 1]))
 		e--;
@@ -556,6 +478,8 @@ static int parse_string(struct parser *p, size_t first)
 	}
 	while (e > s && is_blank(p->buf[e - 1]))
 		e--;
+	if (l->letter != '@' && (rc = check_no_star(p, s, e)))
+		return rc;
 	if (l->letter != '@' && e > s && (rc = text_put(p, " ", 1)))
 		return rc;
 	l->string_off = l->letter == '@' ? 1 : l->text_len;
@@ -566,22 +490,30 @@ static int parse_string(struct parser *p, size_t first)
 	return 0;
 }
 
-/* Read one word "L[value]" at p->pos. */
-static int parse_word(struct parser *p)
+/* How a word at p->pos reads. */
+enum word_status {
+	WORD_OK = 0,
+	WORD_TWICE,	/* its letter was given before */
+	WORD_BAD_NUMBER, /* the letter is followed by something that is not a number */
+	WORD_RUN_ON,	/* a bare letter run into more letters or symbols ("Click") */
+};
+
+/* Read one word "L[value]" at p->pos into the next slot of p->l->words
+ * without taking it; *end is where the word ends, *num why a number failed.
+ * In a command that takes numbers only (strict) a bare letter is a word
+ * whatever follows (G28XY is G28 X Y; what follows is checked next); in
+ * one that may end in text, it must stand alone ("Click" is text). */
+static enum word_status scan_word(struct parser *p, bool strict, size_t *end,
+				  enum num_status *num)
 {
 	struct gcode_line *l = p->l;
 	size_t col = p->pos, q = col + 1, ne;
 	char letter = upper(p->buf[col]);
-	struct gcode_word *wd;
-	const struct gcode_word *dup = gcode_find_word(l, letter);
-	int rc;
+	struct gcode_word *wd = &l->words[l->nwords];
 
-	if (dup)
-		return st_error_set(p->err, ST_ERR_PARSE,
-				    "column %zu: '%c' appears twice (first at column %u); "
-				    "give each letter once",
-				    col + 1, letter, (unsigned)dup->column);
-	wd = &l->words[l->nwords];
+	*num = NUM_OK;
+	if (gcode_find_word(l, letter))
+		return WORD_TWICE;
 	wd->letter = letter;
 	wd->column = (uint32_t)(col + 1);
 	wd->has_value = false;
@@ -590,41 +522,148 @@ static int parse_word(struct parser *p)
 		q++;
 	if (q < p->len &&
 	    (is_digit(p->buf[q]) || p->buf[q] == '.' || p->buf[q] == '+' || p->buf[q] == '-')) {
-		enum num_status st;
-
 		ne = q;
 		if (p->buf[ne] == '+' || p->buf[ne] == '-')
 			ne++;
 		while (ne < p->len && (is_digit(p->buf[ne]) || p->buf[ne] == '.'))
 			ne++;
-		st = scan_number(p->buf + q, ne - q, &wd->value);
-		if (st != NUM_OK || !at_delimiter(p, ne)) {
-			size_t e = token_end(p, col);
-
-			return st_error_set(p->err, ST_ERR_PARSE,
-					    "column %zu: '%.*s' is not a number%s", col + 1,
-					    (int)(e - col), p->buf + col, num_reason(st));
-		}
+		*num = scan_number(p->buf + q, ne - q, &wd->value);
+		if (*num != NUM_OK || !at_delimiter(p, ne))
+			return WORD_BAD_NUMBER;
 		wd->has_value = true;
-		if ((rc = text_put(p, " ", 1)) || (rc = text_put(p, &letter, 1)) ||
-		    (rc = text_put(p, p->buf + q, ne - q)))
+		*end = ne;
+		return WORD_OK;
+	}
+	*end = col + 1;
+	if (!strict && (!at_delimiter(p, col + 1) || (col + 1 < p->len && is_alpha(p->buf[col + 1]))))
+		return WORD_RUN_ON;
+	return WORD_OK;
+}
+
+/* Take the word scan_word just read (ending at end) into the line. */
+static int take_word(struct parser *p, size_t end)
+{
+	struct gcode_line *l = p->l;
+	const struct gcode_word *wd = &l->words[l->nwords];
+	size_t vs = wd->column; /* index just after the letter */
+	int rc;
+
+	if ((rc = text_put(p, " ", 1)) || (rc = text_put(p, &wd->letter, 1)))
+		return rc;
+	if (wd->has_value) {
+		while (is_blank(p->buf[vs]))
+			vs++;
+		if ((rc = text_put(p, p->buf + vs, end - vs)))
 			return rc;
-		p->pos = ne;
-	} else {
-		if ((rc = text_put(p, " ", 1)) || (rc = text_put(p, &letter, 1)))
-			return rc;
-		p->pos = col + 1;
 	}
 	l->nwords++;
+	p->pos = end;
 	return 0;
+}
+
+/* The error for a word scan_word refused, in a command that takes numbers
+ * only. */
+static int word_error(const struct parser *p, enum word_status st, enum num_status num)
+{
+	const struct gcode_line *l = p->l;
+	size_t col = p->pos, e = token_end(p, col);
+	char letter = upper(p->buf[col]);
+
+	if (st == WORD_TWICE)
+		return st_error_set(p->err, ST_ERR_PARSE,
+				    "column %zu: '%c' appears twice (first at column %u); "
+				    "give each letter once",
+				    col + 1, letter, (unsigned)gcode_find_word(l, letter)->column);
+	if (e < p->len && (unsigned char)p->buf[e] >= 0x80)
+		return check_ascii(p, e); /* "S60°C": the degree sign is the trouble */
+	return st_error_set(p->err, ST_ERR_PARSE, "column %zu: '%.*s' is not a number%s",
+			    col + 1, (int)(e - col), p->buf + col, num_reason(num));
+}
+
+/* The words of the command, up to ';', the checksum or (for a command that
+ * takes text) the first token that is not a word, which starts the text. */
+static int parse_words(struct parser *p, size_t first)
+{
+	struct gcode_line *l = p->l;
+	bool strict = l->letter == 0 || gcode_needs_numbers(l->letter, l->number);
+	/* Start of the blank-separated token being read, and the line then. */
+	size_t tok = p->pos, tok_words = l->nwords, tok_text = l->text_len;
+	int rc;
+
+	for (;;) {
+		size_t before = p->pos, end = 0;
+		enum num_status num;
+		enum word_status st;
+		char c;
+
+		while (p->pos < p->len && is_blank(p->buf[p->pos]))
+			p->pos++;
+		if (!strict && p->pos < p->len && p->buf[p->pos] == '(' &&
+		    !memchr(p->buf + p->pos, ')', p->len - p->pos)) {
+			if (p->pos != before) {
+				tok = p->pos;
+				tok_words = l->nwords;
+				tok_text = l->text_len;
+			}
+			goto text; /* an unclosed '(' in a text is text */
+		}
+		if ((rc = skip_space(p)))
+			return rc;
+		if (p->pos != before) {
+			tok = p->pos;
+			tok_words = l->nwords;
+			tok_text = l->text_len;
+		}
+		if (p->pos >= p->len || p->buf[p->pos] == ';')
+			return 0;
+		c = p->buf[p->pos];
+		if (c == '*') {
+			size_t star;
+
+			rc = parse_checksum(p);
+			if (rc < 0)
+				return rc;
+			star = (size_t)rc;
+			l->checksum_computed = gcode_checksum(p->buf + first, star - first);
+			return 0;
+		}
+		if (is_alpha(c)) {
+			if (l->letter == 0)
+				return fail_token(p, p->pos,
+						  "is not a command; a line starts with G, M or T");
+			st = scan_word(p, strict, &end, &num);
+			if (st == WORD_OK) {
+				if ((rc = take_word(p, end)))
+					return rc;
+				continue;
+			}
+			if (strict && st != WORD_RUN_ON)
+				return word_error(p, st, num);
+		}
+		if (strict) {
+			if ((rc = check_ascii(p, p->pos)))
+				return rc;
+			if (is_digit(c) || c == '.' || c == '+' || c == '-')
+				return fail_token(p, p->pos, "has no word letter in front");
+			return st_error_set(p->err, ST_ERR_PARSE,
+					    "column %zu: unexpected character '%c'", p->pos + 1, c);
+		}
+		break;
+	}
+text:
+	/* The text starts with the token that is not a word, as written. */
+	l->nwords = tok_words;
+	l->text_len = tok_text;
+	l->text[l->text_len] = '\0';
+	p->pos = tok;
+	return parse_string(p, first);
 }
 
 /* The whole line into p->l; returns 0 or a negative class. */
 static int parse_line(struct parser *p, unsigned flags)
 {
 	struct gcode_line *l = p->l;
-	size_t first, star = 0;
-	bool has_star = false;
+	size_t first;
 	int rc;
 
 	/* Control bytes are refused everywhere, comments included. */
@@ -673,44 +712,11 @@ static int parse_line(struct parser *p, unsigned flags)
 		}
 	}
 
-	if (takes_string(l->letter, l->number)) {
+	if (gcode_takes_string(l->letter, l->number)) {
 		if ((rc = parse_string(p, first)))
 			return rc;
-	} else if (l->letter != '@') {
-		for (;;) {
-			char c;
-
-			if ((rc = skip_space(p)))
-				return rc;
-			if (p->pos >= p->len || p->buf[p->pos] == ';')
-				break;
-			c = p->buf[p->pos];
-			if (c == '*') {
-				rc = parse_checksum(p);
-				if (rc < 0)
-					return rc;
-				star = (size_t)rc;
-				has_star = true;
-				break;
-			}
-			if ((rc = check_ascii(p, p->pos)))
-				return rc;
-			if (is_alpha(c)) {
-				if (l->letter == 0)
-					return fail_token(p, p->pos,
-							  "is not a command; a line "
-							  "starts with G, M or T");
-				if ((rc = parse_word(p)))
-					return rc;
-				continue;
-			}
-			if (is_digit(c) || c == '.' || c == '+' || c == '-')
-				return fail_token(p, p->pos, "has no word letter in front");
-			return st_error_set(p->err, ST_ERR_PARSE,
-					    "column %zu: unexpected character '%c'", p->pos + 1, c);
-		}
-		if (has_star)
-			l->checksum_computed = gcode_checksum(p->buf + first, star - first);
+	} else if (l->letter != '@' && (rc = parse_words(p, first))) {
+		return rc;
 	}
 
 	/* The ';' comment runs to the end of the line. */
@@ -736,7 +742,7 @@ static int parse_line(struct parser *p, unsigned flags)
 
 	if (!l->has_string)
 		l->string_off = l->text_len;
-	l->kind = classify(l->letter, l->number);
+	l->kind = gcode_classify(l->letter, l->number);
 	l->checksum_ok = true;
 	if (l->has_checksum && l->checksum != l->checksum_computed) {
 		if (!(flags & GCODE_PARSE_KEEP_BAD_CHECKSUM))
@@ -781,322 +787,4 @@ int gcode_parse(const char *buf, size_t len, unsigned flags, struct gcode_line *
 		return rc;
 	*out = tmp;
 	return 0;
-}
-
-/* ---- classification helpers ---- */
-
-static const char *const kind_names[GCODE_KIND_COUNT_] = {
-    [GCODE_KIND_OTHER] = "other",
-    [GCODE_KIND_HOST_ONLY] = "host_only",
-    [GCODE_KIND_MOTION] = "motion",
-    [GCODE_KIND_DWELL] = "dwell",
-    [GCODE_KIND_HOME] = "home",
-    [GCODE_KIND_PROBE] = "probe",
-    [GCODE_KIND_SET_POSITION] = "set_position",
-    [GCODE_KIND_MODE] = "mode",
-    [GCODE_KIND_TEMP_SET] = "temp_set",
-    [GCODE_KIND_TEMP_WAIT] = "temp_wait",
-    [GCODE_KIND_FAN] = "fan",
-    [GCODE_KIND_TOOL_CHANGE] = "tool_change",
-    [GCODE_KIND_FINISH_MOVES] = "finish_moves",
-    [GCODE_KIND_USER_WAIT] = "user_wait",
-    [GCODE_KIND_EMERGENCY] = "emergency",
-    [GCODE_KIND_LINE_NUMBER] = "line_number",
-    [GCODE_KIND_REPORT] = "report",
-    [GCODE_KIND_MESSAGE] = "message",
-};
-
-const char *gcode_kind_name(enum gcode_kind kind)
-{
-	if ((int)kind < 0 || kind >= GCODE_KIND_COUNT_)
-		return "unknown";
-	return kind_names[kind];
-}
-
-bool gcode_is_blocking(enum gcode_kind kind)
-{
-	switch (kind) {
-	case GCODE_KIND_DWELL:
-	case GCODE_KIND_HOME:
-	case GCODE_KIND_PROBE:
-	case GCODE_KIND_TEMP_WAIT:
-	case GCODE_KIND_FINISH_MOVES:
-	case GCODE_KIND_USER_WAIT:
-		return true;
-	default:
-		return false;
-	}
-}
-
-const struct gcode_word *gcode_find_word(const struct gcode_line *line, char letter)
-{
-	if (!line)
-		return NULL;
-	letter = upper(letter);
-	for (size_t i = 0; i < line->nwords && i < GCODE_WORDS_MAX; i++)
-		if (line->words[i].letter == letter)
-			return &line->words[i];
-	return NULL;
-}
-
-bool gcode_word_value(const struct gcode_line *line, char letter, double *value)
-{
-	const struct gcode_word *w = gcode_find_word(line, letter);
-
-	if (!w || !w->has_value)
-		return false;
-	if (value)
-		*value = w->value;
-	return true;
-}
-
-/* ---- slicer layer comments ---- */
-
-/* Number in s[0..n) after trimming blanks; false if it is not one. */
-static bool comment_number(const char *s, size_t n, double *v)
-{
-	while (n > 0 && is_blank(*s))
-		s++, n--;
-	while (n > 0 && is_blank(s[n - 1]))
-		n--;
-	return n > 0 && scan_number(s, n, v) == NUM_OK;
-}
-
-/* Whole number in s[0..n), blanks trimmed, |n| < 10^9. */
-static bool comment_integer(const char *s, size_t n, long *v)
-{
-	double d;
-
-	for (size_t i = 0; i < n; i++)
-		if (s[i] == '.')
-			return false;
-	if (!comment_number(s, n, &d) || fabs(d) >= 1e9)
-		return false;
-	*v = (long)d;
-	return true;
-}
-
-static bool has_prefix(const char *s, size_t n, const char *pre)
-{
-	size_t k = strlen(pre);
-
-	return n >= k && memcmp(s, pre, k) == 0;
-}
-
-enum gcode_layer_mark gcode_layer_comment(const struct gcode_line *line, long *layer, double *z)
-{
-	const char *s;
-	size_t n;
-	long num = -1;
-	double height = NAN;
-	enum gcode_layer_mark mark = GCODE_LAYER_NONE;
-
-	if (!line || line->letter != 0 || !line->has_comment)
-		return GCODE_LAYER_NONE;
-	s = line->comment;
-	n = line->comment_len;
-	while (n > 0 && is_blank(*s))
-		s++, n--;
-	if (has_prefix(s, n, "LAYER:")) { /* Cura */
-		if (comment_integer(s + 6, n - 6, &num))
-			mark = GCODE_LAYER_START;
-	} else if (n == 12 && memcmp(s, "LAYER_CHANGE", 12) == 0) { /* PrusaSlicer */
-		mark = GCODE_LAYER_START;
-	} else if (has_prefix(s, n, "Z:")) { /* PrusaSlicer, after ;LAYER_CHANGE */
-		if (comment_number(s + 2, n - 2, &height))
-			mark = GCODE_LAYER_Z;
-	} else if (has_prefix(s, n, "layer ")) { /* Simplify3D: "; layer 1, Z = 0.200" */
-		const char *comma = memchr(s, ',', n);
-		size_t i;
-
-		if (!comma || !comment_integer(s + 6, (size_t)(comma - s) - 6, &num))
-			return GCODE_LAYER_NONE;
-		i = (size_t)(comma - s) + 1;
-		while (i < n && is_blank(s[i]))
-			i++;
-		if (i >= n || s[i] != 'Z')
-			return GCODE_LAYER_NONE;
-		for (i++; i < n && is_blank(s[i]); i++)
-			;
-		if (i >= n || s[i] != '=' || !comment_number(s + i + 1, n - i - 1, &height))
-			return GCODE_LAYER_NONE;
-		mark = GCODE_LAYER_START;
-	}
-	if (mark == GCODE_LAYER_NONE)
-		return mark;
-	if (layer)
-		*layer = num;
-	if (z)
-		*z = height;
-	return mark;
-}
-
-/* ---- streaming reader ---- */
-
-#define READER_CHUNK 65536
-
-struct gcode_reader {
-	FILE *fp;
-	char *name;
-	char *chunk; /* READER_CHUNK bytes read ahead */
-	size_t chunk_len, chunk_pos;
-	char *line; /* GCODE_RAW_MAX bytes */
-	uint64_t lineno, bytes;
-	bool eof;
-	int io_code; /* sticky read error, 0 if none */
-	struct st_error io_err;
-};
-
-int gcode_reader_new(FILE *fp, const char *name, struct gcode_reader **out, struct st_error *err)
-{
-	struct gcode_reader *r;
-
-	if (out)
-		*out = NULL;
-	if (!fp || !out)
-		return st_error_set(err, ST_ERR_ARG, "gcode_reader_new: NULL argument");
-	if (!name)
-		name = "<input>";
-	r = calloc(1, sizeof(*r));
-	if (!r)
-		goto out_nomem;
-	r->name = malloc(strlen(name) + 1);
-	if (!r->name)
-		goto out_free_reader;
-	strcpy(r->name, name);
-	r->chunk = malloc(READER_CHUNK);
-	if (!r->chunk)
-		goto out_free_name;
-	r->line = malloc(GCODE_RAW_MAX);
-	if (!r->line)
-		goto out_free_chunk;
-	r->fp = fp;
-	*out = r;
-	return 0;
-
-out_free_chunk:
-	free(r->chunk);
-out_free_name:
-	free(r->name);
-out_free_reader:
-	free(r);
-out_nomem:
-	return st_error_set(err, ST_ERR_NOMEM, "%s: out of memory for the G-code reader", name);
-}
-
-void gcode_reader_free(struct gcode_reader *r)
-{
-	if (!r)
-		return;
-	free(r->line);
-	free(r->chunk);
-	free(r->name);
-	free(r);
-}
-
-/* Next byte of input, or -1 at the end or on a (sticky) read error. */
-static int reader_byte(struct gcode_reader *r)
-{
-	if (r->chunk_pos == r->chunk_len) {
-		size_t got;
-
-		if (r->eof || r->io_code)
-			return -1;
-		errno = 0;
-		got = fread(r->chunk, 1, READER_CHUNK, r->fp);
-		if (got == 0) {
-			if (ferror(r->fp)) {
-				int e = errno;
-
-				r->io_code = st_error_set(&r->io_err, ST_ERR_IO,
-							  "%s: line %llu: read error: %s", r->name,
-							  (unsigned long long)(r->lineno + 1),
-							  e ? strerror(e) : "unknown error");
-			} else {
-				r->eof = true;
-			}
-			return -1;
-		}
-		r->chunk_len = got;
-		r->chunk_pos = 0;
-	}
-	r->bytes++;
-	return (unsigned char)r->chunk[r->chunk_pos++];
-}
-
-/* Look at the next byte without taking it (-1 at the end). */
-static int reader_peek(struct gcode_reader *r)
-{
-	int c = reader_byte(r);
-
-	if (c >= 0) {
-		r->chunk_pos--;
-		r->bytes--;
-	}
-	return c;
-}
-
-int gcode_reader_next(struct gcode_reader *r, unsigned flags, struct gcode_line *line,
-		      struct st_error *err)
-{
-	size_t len = 0;
-	bool any = false, overlong = false;
-	int c, rc;
-
-	if (!r || !line)
-		return st_error_set(err, ST_ERR_ARG, "gcode_reader_next: NULL argument");
-	if (r->io_code) {
-		if (err)
-			*err = r->io_err;
-		return r->io_code;
-	}
-	for (;;) {
-		c = reader_byte(r);
-		if (c < 0)
-			break;
-		any = true;
-		if (c == '\n')
-			break;
-		if (c == '\r') {
-			if (reader_peek(r) == '\n')
-				reader_byte(r);
-			break;
-		}
-		if (len < GCODE_RAW_MAX)
-			r->line[len++] = (char)c;
-		else
-			overlong = true;
-	}
-	if (r->io_code) {
-		if (err)
-			*err = r->io_err;
-		return r->io_code;
-	}
-	if (!any)
-		return 0;
-	r->lineno++;
-	if (overlong)
-		return st_error_set(
-		    err, ST_ERR_PARSE,
-		    "%s: line %llu: line longer than %d bytes; it is rejected, not cut", r->name,
-		    (unsigned long long)r->lineno, GCODE_RAW_MAX);
-	{
-		struct st_error perr = {0};
-
-		rc = gcode_parse(r->line, len, flags, line, &perr);
-		if (rc)
-			return st_error_set(err, rc, "%s: line %llu: %s", r->name,
-					    (unsigned long long)r->lineno, perr.msg);
-	}
-	return 1;
-}
-
-uint64_t gcode_reader_line(const struct gcode_reader *r)
-{
-	return r ? r->lineno : 0;
-}
-
-uint64_t gcode_reader_bytes(const struct gcode_reader *r)
-{
-	return r ? r->bytes : 0;
 }

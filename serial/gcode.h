@@ -11,7 +11,8 @@
  *   [N<line>] <command> [<words>] [*<checksum>] [;<comment>]
  *
  * - command: G<n>, M<n> or T<n> (letters in either case; G and M may carry
- *   a subcode, G29.1), or an OctoPrint-style host command "@name args";
+ *   a subcode, G29.1), the Prusa MMU tool commands T?, Tx and Tc, or an
+ *   OctoPrint-style host command "@name args";
  * - words: a letter A-Z, then optionally a number; "G28 X" gives a word
  *   with no value.  Spaces between words are optional (G1X10Y-2.5);
  * - numbers: [+-]digits[.digits] or [+-].digits, at most 15 significant
@@ -19,15 +20,28 @@
  *   two words X1 and E3, exactly as Marlin and grbl read it;
  * - ';' starts a comment that runs to the end of the line, everywhere,
  *   M117 included (Marlin does the same); "( ... )" comments are removed
- *   anywhere except inside the text of a string-argument command;
+ *   anywhere except inside a text;
  * - the checksum is the XOR of every byte from the first non-blank byte of
  *   the line up to the '*', written in decimal (docs/protocols.md section 1);
  * - string-argument commands (M23, M28, M30, M32, M117, M118, M928,
  *   Prusa's M862.x print checks and '@' host commands) keep the rest of the
- *   line, up to ';' or the checksum, as one string;
- * - G-code is ASCII: bytes 0x80-0xff are refused in the command part (they
- *   are allowed in comments, which slicers fill with object names), and
- *   control bytes are refused everywhere except tab.
+ *   line, up to ';' or the checksum, as one text;
+ * - any other M command may end in text, as Marlin reads it: the first
+ *   blank-separated token that is not a word (a bare letter run into more
+ *   letters as in "M0 Click to continue", a value that is not a number as
+ *   in "M115 U3.11.0", a letter given twice, a quote, a non-ASCII byte)
+ *   starts a text that runs, as written, to ';' or the checksum.  The
+ *   exceptions are the M commands whose numbers heat, move or set how the
+ *   machine moves (temperatures, fans, M82/M83, M92, M200-M209, M220/M221,
+ *   M851, M900 ...), which like every G and T command take words only: a
+ *   word there that is not a number is refused, never passed on for the
+ *   firmware to read a prefix of;
+ * - a text may hold any byte except control bytes, UTF-8 included, but no
+ *   '*' (Marlin's parser ends a command at its first '*', so the text would
+ *   be cut); the command part outside texts is ASCII.  Control bytes are
+ *   refused everywhere except tab, comments included: they break the
+ *   line protocol (NUL ends a line early, 0x08 erases a byte in Marlin).
+ *   See docs/errors.md "G-code input" for every refusal and its reason.
  *
  * Nothing here allocates except gcode_reader_new; nothing is global.  All
  * functions are thread-safe on distinct objects.
@@ -91,7 +105,9 @@ struct gcode_word {
 /* A parsed line.  Plain value type: copy it freely. */
 struct gcode_line {
 	char letter; /* 'G', 'M', 'T', '@' (host command) or 0 (no command) */
-	int number;  /* command number, -1 if letter is 0 or '@' */
+	int number;  /* command number, -1 if letter is 0 or '@', and for the
+		      * Prusa MMU tool commands T?, Tx and Tc (the '?', 'x' or
+		      * 'c' is then the string) */
 	int subcode; /* digits after '.', G29.1 -> 1; -1 if none */
 	enum gcode_kind kind;
 
@@ -107,12 +123,14 @@ struct gcode_line {
 	bool checksum_ok;	   /* false only with GCODE_PARSE_KEEP_BAD_CHECKSUM */
 
 	/* Cleaned command: upper-case command and words separated by single
-	 * spaces, numbers as written, no line number, checksum or comment.
-	 * Empty for comment-only lines.  Ready for gcode_format_numbered. */
+	 * spaces, numbers as written, then the text if any, as written; no line
+	 * number, checksum or comment.  Empty for comment-only lines.  Ready for
+	 * gcode_format_numbered. */
 	char text[GCODE_LINE_MAX + 1];
 	size_t text_len;
-	/* For string-argument commands: text + string_off is the string (may be
-	 * empty); string_off == text_len for all other lines. */
+	/* For string-argument commands and commands that end in text: text +
+	 * string_off is the text as written (may be empty for the former);
+	 * string_off == text_len for all other lines. */
 	size_t string_off;
 	bool has_string;
 
@@ -167,8 +185,9 @@ uint8_t gcode_checksum(const char *s, size_t n);
  * gcode_format_numbered - write "N<n> <cmd>*<cs>" and a NUL into out, where
  * <cs> is gcode_checksum of "N<n> <cmd>", as Marlin expects.
  * @n:   0-2147483647.
- * @cmd: a cleaned command (struct gcode_line.text): non-empty printable
- *       ASCII with no ';'.  No line ending is added.
+ * @cmd: a cleaned command (struct gcode_line.text): non-empty, no control
+ *       byte but tab, no ';' or '*' (bytes 0x80-0xff are allowed: UTF-8
+ *       texts).  No line ending is added.
  * Returns the length written (> 0, NUL excluded), ST_ERR_ARG for a bad n or
  * cmd, or ST_ERR_RANGE if out (cap bytes) is too small; out is then "" when
  * cap > 0.

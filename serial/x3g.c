@@ -828,7 +828,8 @@ static void read_words(const struct x3g_translator *t, const struct gcode_line *
 		w->t = l->number;
 	} else if (gcode_find_word(l, 'T')) {
 		w->flag |= BIT_T;
-		w->t = gcode_word_value(l, 'T', &v) ? (int)clamp_u(v, 255) : 0;
+		/* kept whole for the warning: GPX names T1250 as written */
+		w->t = gcode_word_value(l, 'T', &v) ? (int)clamp_u(v, 65535) : 0;
 	}
 	if (gcode_find_word(l, 'E')) {
 		int ax = t->cur_tool == 0 ? AX_A : AX_B;
@@ -1097,7 +1098,10 @@ static void m_code(struct x3g_translator *t, const struct gcode_line *l, struct 
 		cmd_one_byte(t, 156, m == 320);
 		break;
 	default:
-		warn(t, "M%d is not supported in X3G; nothing written", m);
+		if (l->subcode >= 0)
+			warn(t, "M%d.%d is not supported in X3G; nothing written", m, l->subcode);
+		else
+			warn(t, "M%d is not supported in X3G; nothing written", m);
 	}
 }
 
@@ -1122,6 +1126,11 @@ int x3g_translate(struct x3g_translator *t, const struct gcode_line *l, uint64_t
 		macro(t, l->comment);
 	if (l->letter == 0 || l->letter == '@')
 		return 0;
+	if (l->letter == 'T' && l->number < 0) {
+		warn(t, "%s (a Prusa MMU filament command) is not supported in X3G; nothing written",
+		     l->text);
+		return 0;
+	}
 	if (t->flavor == X3G_FLAVOR_MAKERBOT)
 		t->tgt_tool = t->cur_tool; /* Makerbot's T on a command is for that line */
 	read_words(t, l, &w);

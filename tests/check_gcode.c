@@ -1,6 +1,7 @@
 /*
  * check_gcode.c - serial/gcode.c: words and numbers, comments, checksums,
- * string-argument commands, every refused input (with its column), the
+ * string-argument commands, the texts the firmware accepts (PrusaSlicer's
+ * real output among them), every refused input (with its column), the
  * classifier and blocking flags, slicer layer comments, numbered-line
  * round trips, the streaming reader, and a randomized robustness test.
  */
@@ -288,8 +289,24 @@ START_TEST(test_tools)
 	ck_assert_int_eq(l.kind, GCODE_KIND_TOOL_CHANGE);
 	want_word(&l, 0, 'T', 2);
 	parse_bad("T", "column 1", "command letter 'T' without a number");
-	parse_bad("T?", "without a number");
 	parse_bad("T1.5", "'T1.5' is not a command");
+
+	/* Prusa MMU filament commands (PrusaSlicer's MK2S MMU and MK3 MMU2
+	 * start G-code): Prusa's firmware and Marlin's PRUSA_MMU2 read them. */
+	parse_ok("T? ; let the user pick", &l);
+	ck_assert_int_eq(l.letter, 'T');
+	ck_assert_int_eq(l.number, -1);
+	ck_assert_int_eq(l.kind, GCODE_KIND_TOOL_CHANGE);
+	ck_assert_str_eq(l.text, "T?");
+	ck_assert_str_eq(l.text + l.string_off, "?");
+	parse_ok("Tx", &l);
+	ck_assert_str_eq(l.text, "Tx");
+	parse_ok("Tc", &l);
+	ck_assert_str_eq(l.text + l.string_off, "c");
+	/* Nothing else without a number: Marlin reads only these three. */
+	parse_bad("TX", "without a number");
+	parse_bad("T?x", "without a number");
+	parse_bad("T#", "without a number");
 }
 END_TEST
 
@@ -306,10 +323,10 @@ START_TEST(test_string_args)
 	ck_assert_int_eq(l.kind, GCODE_KIND_MESSAGE);
 	ck_assert_uint_eq(l.nwords, 0);
 
-	/* Inner spacing, parentheses, '*' and letters are text; ';' is not. */
-	parse_ok("m117   Layer  2 (50%) X1.2.3 a*b  ", &l);
-	ck_assert_str_eq(l.text + l.string_off, "Layer  2 (50%) X1.2.3 a*b");
-	ck_assert_str_eq(l.text, "M117 Layer  2 (50%) X1.2.3 a*b");
+	/* Inner spacing, parentheses and letters are text; ';' is not. */
+	parse_ok("m117   Layer  2 (50%) X1.2.3 a+b  ", &l);
+	ck_assert_str_eq(l.text + l.string_off, "Layer  2 (50%) X1.2.3 a+b");
+	ck_assert_str_eq(l.text, "M117 Layer  2 (50%) X1.2.3 a+b");
 	ck_assert(!l.has_paren && !l.has_checksum);
 
 	parse_ok("M117", &l);
@@ -323,13 +340,20 @@ START_TEST(test_string_args)
 	ck_assert_int_eq(l.kind, GCODE_KIND_OTHER);
 	ck_assert_str_eq(l.text + l.string_off, "/models/part one.gco");
 
-	/* A trailing *<digits> is the checksum, as Marlin finds the last '*'. */
-	snprintf(line, sizeof(line), "N7 M117 a*b*%u",
-		 gcode_checksum("N7 M117 a*b", strlen("N7 M117 a*b")));
+	/* A trailing *<digits> is the checksum. */
+	snprintf(line, sizeof(line), "N7 M117 a+b*%u",
+		 gcode_checksum("N7 M117 a+b", strlen("N7 M117 a+b")));
 	parse_ok(line, &l);
 	ck_assert(l.has_checksum && l.checksum_ok);
-	ck_assert_str_eq(l.text + l.string_off, "a*b");
+	ck_assert_str_eq(l.text + l.string_off, "a+b");
 	ck_assert_int_eq(l.line_number, 7);
+	/* Any other '*' is refused: Marlin's parser cuts the command at the
+	 * first '*' and Prusa's firmware checksums up to it. */
+	snprintf(line, sizeof(line), "N7 M117 a*b*%u",
+		 gcode_checksum("N7 M117 a*b", strlen("N7 M117 a*b")));
+	parse_bad(line, "column 10", "'*' inside the text of M117", "remove it");
+	parse_bad("M117 a*b", "column 7", "'*' inside the text of M117");
+	parse_bad("M23 part*.gco", "'*' inside the text of M23");
 
 	/* M73 progress has ordinary words. */
 	parse_ok("M73 P42 R10", &l);
@@ -345,7 +369,9 @@ START_TEST(test_string_args)
 	ck_assert_str_eq(l.text + l.string_off, "pause now");
 	parse_bad("@", "'@' without a host command name");
 
-	parse_bad("M117 caf\xc3\xa9", "column 9", "non-ASCII byte 0xc3");
+	/* UTF-8 in a message is the firmware's to show (Marlin's LCDs do). */
+	parse_ok("M117 caf\xc3\xa9", &l);
+	ck_assert_str_eq(l.text + l.string_off, "caf\xc3\xa9");
 }
 END_TEST
 
@@ -655,7 +681,11 @@ START_TEST(test_format_numbered)
 	    "M110 N0",
 	    "T1",
 	    "M117 Hello World",
-	    "M117 a*b",
+	    "M117 Bed: 60\xc2\xb0" "C",
+	    "M0 Click to continue",
+	    "M115 U3.11.0",
+	    "M862.3 P \"MK3S\"",
+	    "T?",
 	    "G28 X Y",
 	    "M104 S215",
 	    "G29.1 P2",
@@ -695,9 +725,214 @@ START_TEST(test_format_numbered)
 	ck_assert_int_eq(gcode_format_numbered(out, sizeof(out), 1, ""), ST_ERR_ARG);
 	ck_assert_int_eq(gcode_format_numbered(out, sizeof(out), 1, "G1 ;x"), ST_ERR_ARG);
 	ck_assert_int_eq(gcode_format_numbered(out, sizeof(out), 1, "G1\n"), ST_ERR_ARG);
-	ck_assert_int_eq(gcode_format_numbered(out, sizeof(out), 1, "M117 \xc3\xa9"), ST_ERR_ARG);
+	ck_assert_int_gt(gcode_format_numbered(out, sizeof(out), 1, "M117 \xc3\xa9"), 0);
+	ck_assert_int_eq(gcode_format_numbered(out, sizeof(out), 1, "M117 a*b"), ST_ERR_ARG);
+	ck_assert_int_eq(gcode_format_numbered(out, sizeof(out), 1, "M117 a\x08"), ST_ERR_ARG);
 	ck_assert_int_eq(gcode_format_numbered(out, sizeof(out), 1, NULL), ST_ERR_ARG);
 	ck_assert_int_eq(gcode_format_numbered(NULL, 10, 1, "G28"), ST_ERR_ARG);
+}
+END_TEST
+
+/* Parse in, check the cleaned text, the text part (NULL: none) and the
+ * number of words, and that a resend (new line number, checksum) reads the
+ * same. */
+static void want_text(const char *in, const char *text, const char *string, size_t nwords)
+{
+	struct gcode_line l, again;
+	struct st_error err = {0};
+	char out[GCODE_LINE_MAX + 32];
+	int n;
+
+	parse_ok(in, &l);
+	ck_assert_msg(!strcmp(l.text, text), "'%s': text '%s', wanted '%s'", in, l.text, text);
+	ck_assert_msg(l.has_string == (string != NULL), "'%s': has_string %d", in, l.has_string);
+	if (string)
+		ck_assert_msg(!strcmp(l.text + l.string_off, string), "'%s': string '%s', wanted '%s'",
+			      in, l.text + l.string_off, string);
+	ck_assert_msg(l.nwords == nwords, "'%s': %zu words, wanted %zu", in, l.nwords, nwords);
+	n = gcode_format_numbered(out, sizeof(out), 4711, l.text);
+	ck_assert_msg(n > 0, "'%s': cannot number '%s'", in, l.text);
+	ck_assert_msg(gcode_parse(out, (size_t)n, 0, &again, &err) == 0, "'%s': %s", out, err.msg);
+	ck_assert_str_eq(again.text, l.text);
+	ck_assert_uint_eq(again.string_off, l.string_off);
+	ck_assert_uint_eq(again.nwords, l.nwords);
+	ck_assert_int_eq(again.kind, l.kind);
+}
+
+/* What Marlin (and Prusa's firmware) accept is accepted and passed on as
+ * written: version strings, texts after M0/M1, quotes, UTF-8, unknown
+ * commands and letters (issue 18). */
+START_TEST(test_firmware_texts)
+{
+	struct gcode_line l;
+	char line[128];
+
+	/* PrusaSlicer's bundled start G-code, 29 of 31 printers */
+	want_text("M115 U3.11.0 ; tell printer latest fw version", "M115 U3.11.0", "U3.11.0", 0);
+	parse_ok("M115 U3.11.0", &l);
+	ck_assert_int_eq(l.kind, GCODE_KIND_REPORT);
+	want_text("M115U3.2.3", "M115 U3.2.3", "U3.2.3", 0);
+	want_text("M115", "M115", NULL, 0);
+	want_text("M862.3 P \"MK3S\" ; printer model check", "M862.3 P \"MK3S\"", "P \"MK3S\"", 0);
+	want_text("M862.1 P0.4 ; nozzle diameter check", "M862.1 P0.4", "P0.4", 0);
+	/* M0/M1 with a message, Marlin's string_arg from the first bare letter */
+	want_text("M0 Click to continue", "M0 Click to continue", "Click to continue", 0);
+	parse_ok("M1 Change filament", &l);
+	ck_assert_int_eq(l.kind, GCODE_KIND_USER_WAIT);
+	ck_assert_str_eq(l.text + l.string_off, "Change filament");
+	want_text("M0 S30 Remove the print", "M0 S30 Remove the print", "Remove the print", 1);
+	want_text("M0 Push S to stop", "M0 Push S to stop", "Push S to stop", 0);
+	want_text("M0 PRESS OK", "M0 PRESS OK", "PRESS OK", 0);
+	want_text("M0 S5 S6", "M0 S5 S6", "S6", 1);
+	want_text("M0 X10abc", "M0 X10abc", "X10abc", 0);
+	/* UTF-8 and quotes in messages */
+	want_text("M117 Bed: 60\xc2\xb0" "C", "M117 Bed: 60\xc2\xb0" "C", "Bed: 60\xc2\xb0" "C", 0);
+	want_text("M0 W\xc3\xa4rmen", "M0 W\xc3\xa4rmen", "W\xc3\xa4rmen", 0);
+	want_text("M117 \"quoted\" text", "M117 \"quoted\" text", "\"quoted\" text", 0);
+	want_text("M118 E1 \"Hello\"", "M118 E1 \"Hello\"", "E1 \"Hello\"", 0);
+	/* '( )' inside a text is text, before it a comment; an open '(' is text */
+	want_text("M0 Click (here) to go", "M0 Click (here) to go", "Click (here) to go", 0);
+	want_text("M0 (first) Click", "M0 Click", "Click", 0);
+	want_text("M0 Wait (forever", "M0 Wait (forever", "Wait (forever", 0);
+	want_text("M0 (forever", "M0 (forever", "(forever", 0);
+	/* tabs inside a text are kept, around words they are blanks */
+	want_text("M0\tClick\tnow", "M0 Click\tnow", "Click\tnow", 0);
+	want_text("G1\tX10\tY10 F3000", "G1 X10 Y10 F3000", NULL, 3);
+	/* commands and letters the firmware does not know: "Unknown command", ok */
+	want_text("M999 Q1 W ; unknown", "M999 Q1 W", NULL, 2);
+	want_text("G28 X0 Y0 Q", "G28 X0 Y0 Q", NULL, 3);
+	want_text("M300 S440 P200 beep", "M300 S440 P200 beep", "beep", 2);
+	/* PrusaSlicer's own words */
+	want_text("M73 Q0 S37", "M73 Q0 S37", NULL, 2);
+	want_text("M204 P1250 R1250 T1250", "M204 P1250 R1250 T1250", NULL, 3);
+	want_text("M900 K0.05 ; Filament gcode LA 1.5", "M900 K0.05", NULL, 1);
+	want_text("G28 W ; home all without mesh bed level", "G28 W", NULL, 1);
+	want_text("G80 ; mesh bed leveling", "G80", NULL, 0);
+	want_text("G29", "G29", NULL, 0);
+	/* SD card file names */
+	want_text("M23 my part.gco", "M23 my part.gco", "my part.gco", 0);
+	want_text("M32 P !/models/part.gco#", "M32 P !/models/part.gco#", "P !/models/part.gco#", 0);
+	/* a checksum after a text */
+	snprintf(line, sizeof(line), "N3 M115 U3.11.0*%u",
+		 gcode_checksum("N3 M115 U3.11.0", strlen("N3 M115 U3.11.0")));
+	parse_ok(line, &l);
+	ck_assert(l.has_checksum && l.checksum_ok);
+	ck_assert_str_eq(l.text, "M115 U3.11.0");
+	parse_bad("N3 M115 U3.11.0*1", "checksum 1 does not match");
+}
+END_TEST
+
+/* What cannot be sent safely is refused, with the column and the reason. */
+START_TEST(test_firmware_refusals)
+{
+	static char line[GCODE_LINE_MAX + 64];
+	size_t n;
+
+	/* numbers that heat, move or set how the machine moves: never a prefix */
+	parse_bad("M104 S2.1.0", "column 6: 'S2.1.0' is not a number");
+	parse_bad("M140 S60\xc2\xb0", "column 9: non-ASCII byte 0xc2");
+	parse_bad("M104 S200 S210", "'S' appears twice");
+	parse_bad("M900 K0.0.5", "'K0.0.5' is not a number");
+	parse_bad("M851 Z-1.2.3", "'Z-1.2.3' is not a number");
+	parse_bad("M221 S95%", "column 6: 'S95%' is not a number");
+	parse_bad("G1 X1 Move", "without a value", "G1");
+	parse_bad("G28 X\"a\"", "unexpected character '\"'");
+	parse_bad("T0 F1.2.3", "'F1.2.3' is not a number");
+	/* '*' in a text: Marlin cuts the command at the first '*' */
+	parse_bad("M0 Press * to go", "column 10", "'*' inside the text of M0");
+	parse_bad("M115 U3*", "column 8: '*' must be followed by a checksum");
+	parse_bad("M115 U3.1.0* x", "'*' inside the text of M115");
+	parse_bad("M862.3 P \"MK*\"", "'*' inside the text of M862.3");
+	/* control bytes break the line protocol, texts and comments included */
+	parse_bad("M117 a\x08" "b", "column 7: control byte 0x08");
+	parse_bad_n("M117 a\0b", 8, "column 7: control byte 0x00", (const char *)NULL);
+	parse_bad("M0 Click\x1b[0m", "control byte 0x1b");
+	parse_bad("M117 ok\x7f", "control byte 0x7f");
+	/* a line that starts with no command is not sent (with Marlin's motion
+	 * modes "X10" would move) */
+	parse_bad("X10 Y10", "'X10' is not a command");
+	parse_bad("Hello", "is not a command");
+	/* a text longer than the cleaned command holds is refused, not cut */
+	n = (size_t)snprintf(line, sizeof(line), "M0 ");
+	memset(line + n, 'a', GCODE_LINE_MAX);
+	line[n + GCODE_LINE_MAX] = '\0';
+	parse_bad(line, "command longer than 256 characters");
+}
+END_TEST
+
+/* Every command line of FILE, in order, as gcode_reader reads it. */
+static size_t read_all(const char *path, struct gcode_line *lines, size_t cap, size_t *total)
+{
+	FILE *fp = fopen(path, "rb");
+	struct gcode_reader *r;
+	struct st_error err = {0};
+	struct gcode_line l;
+	size_t n = 0;
+	int rc;
+
+	ck_assert_msg(fp != NULL, "%s: not found (run from the source tree)", path);
+	ck_assert_int_eq(gcode_reader_new(fp, path, &r, &err), 0);
+	while ((rc = gcode_reader_next(r, 0, &l, &err)) == 1)
+		if (l.text_len > 0 && n < cap)
+			lines[n++] = l;
+	ck_assert_msg(rc == 0, "%s", err.msg);
+	*total = (size_t)gcode_reader_line(r);
+	gcode_reader_free(r);
+	fclose(fp);
+	return n;
+}
+
+/* PrusaSlicer 2.5's G-code for the MK3S (a 20 mm cube, first three layers
+ * and the end): every line reads, and each command is the line as written,
+ * comment and trailing blanks removed, since PrusaSlicer writes the words
+ * single-spaced. */
+START_TEST(test_prusaslicer_file)
+{
+	static struct gcode_line lines[2048];
+	static const char path[] = "tests/data/prusaslicer-mk3s-cube.gcode";
+	static char raw[GCODE_RAW_MAX + 2];
+	size_t total, n = read_all(path, lines, 2048, &total), k = 0;
+	bool m115 = false, m862 = false, g80 = false;
+	FILE *fp = fopen(path, "rb");
+
+	ck_assert_uint_eq(total, 1058);
+	while (fgets(raw, sizeof(raw), fp)) {
+		char *semi = strchr(raw, ';');
+		size_t len = semi ? (size_t)(semi - raw) : strlen(raw);
+
+		while (len > 0 && strchr(" \t\r\n", raw[len - 1]))
+			len--;
+		if (len == 0)
+			continue;
+		raw[len] = '\0';
+		ck_assert_uint_lt(k, n);
+		ck_assert_msg(!strcmp(lines[k].text, raw), "command %zu: '%s', the file says '%s'", k,
+			      lines[k].text, raw);
+		m115 |= !strcmp(raw, "M115 U3.11.0");
+		m862 |= !strcmp(raw, "M862.3 P \"MK3S\"");
+		g80 |= !strcmp(raw, "G80");
+		k++;
+	}
+	fclose(fp);
+	ck_assert_uint_eq(k, n);
+	ck_assert(m115 && m862 && g80);
+}
+END_TEST
+
+/* tests/data/firmware-texts.gcode (what the send suite streams): every line
+ * reads, the last one has no line ending. */
+START_TEST(test_firmware_texts_file)
+{
+	static struct gcode_line lines[64];
+	size_t total, n = read_all("tests/data/firmware-texts.gcode", lines, 64, &total);
+
+	ck_assert_uint_eq(total, 26);
+	ck_assert_uint_eq(n, 23);
+	ck_assert_str_eq(lines[0].text, "M115 U3.11.0");
+	ck_assert_str_eq(lines[6].text, "M117 Bed: 60\xc2\xb0" "C");
+	ck_assert_str_eq(lines[9].text, "M0 Click to continue");
+	ck_assert_str_eq(lines[10].text, "M1 Change filament");
+	ck_assert_str_eq(lines[n - 1].text, "M117 Done");
 }
 END_TEST
 
@@ -836,6 +1071,8 @@ START_TEST(test_random)
 	    "G1",   "G28", "M104", "M117",  "T0", "N5 ",  "@",	  " ", " ",  "\t",  "X1.5",
 	    "Y-2",  "E.5", "Z",	   "F1800", "S",  "(p)",  "(",	  ")", ";c", "*12", "*",
 	    "\r\n", "1e3", "-",	   ".",	    "a",  "\xff", "M110", "N", "0",
+	    /* the paths of commands that end in a text */
+	    "M0",   "M115", "U3.11.0", "Click", "\"q\"", "\xc2\xb0", "T?", "M862.3",
 	};
 	uint64_t seed = 0x5eed5eed12345678ULL;
 	char buf[320], out[GCODE_LINE_MAX + 32];
@@ -898,6 +1135,7 @@ START_TEST(test_random)
 			ck_assert_str_eq(again.text, l.text);
 			ck_assert_int_eq(again.kind, l.kind);
 			ck_assert_uint_eq(again.nwords, l.nwords);
+			ck_assert_uint_eq(again.string_off, l.string_off);
 		}
 	}
 	/* The generator must exercise the accepting paths too. */
@@ -943,10 +1181,12 @@ Suite *gcode_suite(void)
 	tcase_add_test(parse, test_tools);
 	tcase_add_test(parse, test_string_args);
 	tcase_add_test(parse, test_number_reader);
+	tcase_add_test(parse, test_firmware_texts);
 	suite_add_tcase(s, parse);
 
 	tcase_add_test(errors, test_rejects);
 	tcase_add_test(errors, test_lengths);
+	tcase_add_test(errors, test_firmware_refusals);
 	suite_add_tcase(s, errors);
 
 	tcase_add_test(meaning, test_classify);
@@ -956,6 +1196,8 @@ Suite *gcode_suite(void)
 
 	tcase_add_test(io, test_reader);
 	tcase_add_test(io, test_reader_errors);
+	tcase_add_test(io, test_prusaslicer_file);
+	tcase_add_test(io, test_firmware_texts_file);
 	suite_add_tcase(s, io);
 
 	tcase_add_test(fuzz, test_random);

@@ -386,6 +386,20 @@ START_TEST(prusa_style_file)
 }
 END_TEST
 
+/* PrusaSlicer 2.5's own MK3S output (M862.3, M115 U3.11.0, M73 Q S, G80)
+ * previews (issue 18). */
+START_TEST(prusaslicer_output)
+{
+	const char *svg = tu_path("mk3s.svg");
+
+	ck_assert_msg(tu_run(out, sizeof(out),
+			     "preview tests/data/prusaslicer-mk3s-cube.gcode --layer 2 -o %s", svg) ==
+			  0,
+		      "%s", out);
+	ck_assert(tu_file_exists(svg));
+}
+END_TEST
+
 /* No layer comments at all: layers are the extrusion heights; a Z hop stays in its layer. */
 START_TEST(layers_by_z)
 {
@@ -472,6 +486,7 @@ Suite *preview_suite(void)
 	tcase_add_test(tc, box_svg);
 	tcase_add_test(tc, box_png);
 	tcase_add_test(tc, prusa_style_file);
+	tcase_add_test(tc, prusaslicer_output);
 	tcase_add_test(tc, layers_by_z);
 	tcase_add_test(tc, cli_refusals);
 	suite_add_tcase(s, tc);

@@ -3,7 +3,9 @@
  * binary against `stratum sim --dialect sailfish` in the background, with a
  * part sliced for the FlashForge Creator Pro (issue 7's "Done when").  The
  * simulator's execution log must hold exactly the commands `stratum x3g`
- * writes for the same G-code, once each and in order.
+ * writes for the same G-code, once each and in order.  And, to a simulated
+ * Marlin printer, PrusaSlicer's own G-code and the texts Marlin accepts
+ * arrive as written.
  */
 #include <check.h>
 #include <jansson.h>
@@ -300,6 +302,79 @@ START_TEST(no_answer_exit_69)
 }
 END_TEST
 
+/*
+ * Stream FILE to `stratum sim --dialect marlin` with `stratum send` and
+ * check the simulator's log holds the file's commands, each once and in
+ * order, after the driver's own greeting: every line of the file with its
+ * ';' comment, trailing blanks and line ending removed, tabs as spaces.
+ */
+static void marlin_log_equals_file(const char *file)
+{
+	char link[512], log[512];
+	static char line[1 << 16];
+	static char want[4096][128];
+	size_t nwant = 0, nlog = 0, first;
+	FILE *f;
+	int rc;
+
+	snprintf(link, sizeof(link), "%s", tu_path("marlin-tty"));
+	snprintf(log, sizeof(log), "%s", tu_path("marlin.log"));
+	rc = tu_run(out, sizeof(out),
+		    "sim --dialect marlin --baud 4000000 --speedup 100000 --link %s --log %s "
+		    ">/dev/null 2>&1 & P=$!; "
+		    "for i in $(seq 50); do [ -e %s ] && break; sleep 0.1; done; "
+		    "%s send %s --port %s --printer prusa-i3-mk3s " SF_SEND_FAST " 2>&1; r=$?; "
+		    "kill $P; wait $P; exit $r",
+		    link, log, link, bin(), file, link);
+	ck_assert_msg(rc == 0, "%s: exit %d: %.2000s", file, rc, out);
+	f = fopen(file, "r");
+	ck_assert_ptr_nonnull(f);
+	while (fgets(line, sizeof(line), f)) {
+		size_t n = strcspn(line, ";\r\n");
+
+		while (n > 0 && (line[n - 1] == ' ' || line[n - 1] == '\t'))
+			n--;
+		if (n == 0)
+			continue;
+		ck_assert_uint_lt(nwant, 4096);
+		ck_assert_uint_lt(n, sizeof(want[0]));
+		for (size_t i = 0; i < n; i++)
+			want[nwant][i] = line[i] == '\t' ? ' ' : line[i];
+		want[nwant++][n] = '\0';
+	}
+	fclose(f);
+	f = fopen(log, "r");
+	ck_assert_ptr_nonnull(f);
+	/* "<N> <command>" per line; the greeting (M110, M115, M155) comes first */
+	static char logged[4200][128];
+	while (fgets(line, sizeof(line), f) && nlog < 4200) {
+		char *sp = strchr(line, ' ');
+
+		ck_assert_ptr_nonnull(sp);
+		line[strcspn(line, "\n")] = '\0';
+		snprintf(logged[nlog++], sizeof(logged[0]), "%s", sp + 1);
+	}
+	fclose(f);
+	ck_assert_msg(nlog >= nwant && nlog - nwant <= 8, "%zu commands logged, %zu in %s", nlog,
+		      nwant, file);
+	first = nlog - nwant;
+	for (size_t i = 0; i < nwant; i++)
+		ck_assert_msg(!strcmp(logged[first + i], want[i]), "%s: command %zu: sent '%s', the "
+								   "file says '%s'",
+			      file, i + 1, logged[first + i], want[i]);
+}
+
+/* PrusaSlicer 2.5's MK3S output (M862.3 P "MK3S", M115 U3.11.0, M73 Q S,
+ * G80, M900) and the firmware texts Marlin accepts (M0 Click to continue,
+ * M117 Bed: 60°C, T?, unknown commands, a last line with no line ending)
+ * reach the printer as written, exit 0 (issue 18). */
+START_TEST(marlin_prusaslicer_as_written)
+{
+	marlin_log_equals_file("tests/data/prusaslicer-mk3s-cube.gcode");
+	marlin_log_equals_file("tests/data/firmware-texts.gcode");
+}
+END_TEST
+
 Suite *send_suite(void)
 {
 	Suite *s = suite_create("send");
@@ -312,6 +387,10 @@ Suite *send_suite(void)
 	tcase_add_test(tc, sigint_stops_safely);
 	tcase_add_test(tc, bad_input_and_exit_codes);
 	tcase_add_test(tc, no_answer_exit_69);
+	suite_add_tcase(s, tc);
+	tc = tcase_create("marlin");
+	tcase_set_timeout(tc, 120);
+	tcase_add_test(tc, marlin_prusaslicer_as_written);
 	suite_add_tcase(s, tc);
 	return s;
 }

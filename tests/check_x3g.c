@@ -4,8 +4,8 @@
  * (docs/protocols.md section 2) for the FlashForge Creator Pro; flavours, tools,
  * warnings; the decoder's checks on truncated and unknown input; and, when
  * Debian's gpx is installed, a command-by-command comparison with
- * `gpx -m fcp` on a hand-written Sailfish file and on a sliced part, plus
- * `stratum x3g` end to end.
+ * `gpx -m fcp` on a hand-written Sailfish file, on a sliced part and on
+ * PrusaSlicer's MK3S output, plus `stratum x3g` end to end.
  */
 #include <check.h>
 #include <math.h>
@@ -339,6 +339,52 @@ START_TEST(test_warnings)
 }
 END_TEST
 
+/* What Marlin and Prusa's firmware accept but X3G cannot express is warned
+ * about, naming the command and the line, as GPX does (issue 18). */
+START_TEST(test_firmware_texts)
+{
+	static const struct {
+		const char *line, *warning;
+		size_t warnings;
+	} cases[] = {
+	    {"M115 U3.11.0 ; tell printer latest fw version", "M115 is not supported", 1},
+	    {"M862.3 P \"MK3S\" ; printer model check", "M862.3 is not supported", 1},
+	    {"M862.1 P0.4", "M862.1 is not supported", 1},
+	    {"M117 Bed: 60\xc2\xb0" "C", "M117 is not supported", 1},
+	    {"M0 Click to continue", "M0 is not supported", 1},
+	    {"M1 Change filament", "M1 is not supported", 1},
+	    {"M900 K0.05", "M900 is not supported", 1},
+	    {"M73 Q0 S37", "M73 without P", 1},
+	    {"G80", "G80 is not supported", 1},
+	    {"G29", "G29 is not supported", 1},
+	    {"T?", "T? (a Prusa MMU filament command) is not supported", 1},
+	    {"Tc", "Tc (a Prusa MMU", 1},
+	    /* GPX: "T1250 cannot select non-existant extruder", then M204 */
+	    {"M204 P1250 R1250 T1250", "M204 is not supported", 2},
+	};
+	struct tr r;
+
+	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+		const struct x3g_warning *w;
+
+		tr_open(&r, RR);
+		tr_lines(&r, cases[i].line);
+		ck_assert_msg(r.len == 0, "%s wrote %zu bytes", cases[i].line, r.len);
+		ck_assert_msg(r.warnings == cases[i].warnings, "%s: %zu warnings", cases[i].line,
+			      r.warnings);
+		ck_assert_msg(strstr(r.warning, cases[i].warning), "%s: %s", cases[i].line,
+			      r.warning);
+		ck_assert_uint_eq(r.warning_line, 1);
+		if (cases[i].warnings == 2) {
+			ck_assert_uint_eq(x3g_warnings(r.t, &w), 2);
+			ck_assert_msg(strstr(w[0].msg, "T1250: this printer has 2 extruders"), "%s",
+				      w[0].msg);
+		}
+		x3g_free(r.t);
+	}
+}
+END_TEST
+
 START_TEST(test_bad_machine)
 {
 	struct x3g_machine m;
@@ -643,6 +689,44 @@ START_TEST(test_gpx_sliced)
 }
 END_TEST
 
+/* PrusaSlicer 2.5's own G-code for the MK3S translates, with its Prusa-only
+ * commands warned about, as GPX translates it. */
+START_TEST(test_gpx_prusaslicer)
+{
+	char out[1 << 16];
+	const char *x3g = tu_path("mk3s.x3g");
+	int rc;
+
+	rc = tu_run(out, sizeof(out),
+		    "x3g tests/data/prusaslicer-mk3s-cube.gcode -o '%s' --printer "
+		    "flashforge-creator-pro",
+		    x3g);
+	ck_assert_msg(rc == 0, "stratum x3g failed (%d): %.2000s", rc, out);
+	ck_assert_msg(strstr(out, "prusaslicer-mk3s-cube.gcode:23: warning: M115 is not supported"),
+		      "%.2000s", out);
+	ck_assert_msg(strstr(out, "prusaslicer-mk3s-cube.gcode:21: warning: M862.3"), "%.2000s", out);
+	ck_assert_msg(strstr(out, "1058 lines"), "%.2000s", out);
+	if (!have_gpx())
+		return;
+	/* GPX writes M115 as a host query (27, which a file cannot answer);
+	 * this translator warns instead (test_warnings), so that line is left
+	 * out of the comparison */
+	{
+		FILE *in = fopen("tests/data/prusaslicer-mk3s-cube.gcode", "r");
+		const char *copy = tu_path("mk3s.gcode");
+		FILE *o = fopen(copy, "w");
+		static char line[1 << 16];
+
+		ck_assert(in && o);
+		while (fgets(line, sizeof(line), in))
+			fputs(strncmp(line, "M115 ", 5) ? line : ";M115 left out\n", o);
+		fclose(in);
+		ck_assert_int_eq(fclose(o), 0);
+		ck_assert_uint_ge(against_gpx(copy, "mk3s"), 500);
+	}
+}
+END_TEST
+
 /* ---- stratum x3g end to end --------------------------------------------- */
 
 START_TEST(test_cli)
@@ -719,6 +803,7 @@ Suite *x3g_suite(void)
 	tcase_add_test(tr, test_build_and_messages);
 	tcase_add_test(tr, test_finish_and_m2);
 	tcase_add_test(tr, test_warnings);
+	tcase_add_test(tr, test_firmware_texts);
 	tcase_add_test(tr, test_bad_machine);
 	suite_add_tcase(s, tr);
 
@@ -730,6 +815,7 @@ Suite *x3g_suite(void)
 	tcase_set_timeout(gpx, 120);
 	tcase_add_test(gpx, test_gpx_handwritten);
 	tcase_add_test(gpx, test_gpx_sliced);
+	tcase_add_test(gpx, test_gpx_prusaslicer);
 	tcase_add_test(gpx, test_cli);
 	suite_add_tcase(s, gpx);
 	return s;
