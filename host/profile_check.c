@@ -1,5 +1,6 @@
 /*
- * profile_check.c - checks between a profile's keys (layer height against
+ * profile_check.c - pass 2 of loading in order (extruder count and
+ * protocol first, then every key), checks between a profile's keys (layer height against
  * nozzle, protocol against G-code flavor ...) and, last, the slicer's own
  * check of the settings it would slice with, so a profile that loads is one
  * that slices (profile_int.h).
@@ -175,4 +176,96 @@ int prof_cross_check(struct loader *L, const struct pending *pend)
 	if (rc)
 		return prof_key_error(L, NULL, NULL, rc, "cannot be sliced: %s", e.msg);
 	return 0;
+}
+
+/* Extruder count: extruder_count, else the length of nozzle_diameter, else 1. */
+static int resolve_extruders(struct loader *L, struct pending *pend)
+{
+	struct profile *p = L->p;
+	const struct profile_kv *kv = prof_find_kv(p->keys, "extruder_count");
+	struct item items[PROFILE_MAX_EXTRUDERS];
+	int n;
+
+	if (kv) {
+		L->ec_kv = kv;
+		L->ec_key = "extruder_count";
+		return prof_apply_key(L, prof_find_def("extruder_count"), kv, pend);
+	}
+	kv = prof_find_kv(p->keys, "nozzle_diameter");
+	if (!kv)
+		return 0;
+	n = prof_split_list(L, kv, items, PROFILE_MAX_EXTRUDERS);
+	if (n < 0)
+		return n;
+	p->extruder_count = n;
+	L->ec_kv = kv;
+	L->ec_key = "nozzle_diameter";
+	return 0;
+}
+
+/* Protocol and flavor, each defaulting from the other. */
+static int resolve_protocol(struct loader *L, struct pending *pend)
+{
+	struct profile *p = L->p;
+	const struct profile_kv *proto = prof_find_kv(p->keys, "protocol");
+	const struct profile_kv *flavor = prof_find_kv(p->keys, "gcode_flavor");
+	int rc;
+
+	if (flavor) {
+		rc = prof_apply_key(L, prof_find_def("gcode_flavor"), flavor, pend);
+		if (rc)
+			return rc;
+	}
+	if (proto) {
+		rc = prof_apply_key(L, prof_find_def("protocol"), proto, pend);
+		if (rc)
+			return rc;
+	} else if (flavor && (p->gcode_flavor == PROFILE_FLAVOR_SAILFISH ||
+			      p->gcode_flavor == PROFILE_FLAVOR_MAKERWARE)) {
+		p->protocol = PROFILE_PROTOCOL_SAILFISH;
+	}
+	if (p->protocol == PROFILE_PROTOCOL_SAILFISH) {
+		enum profile_flavor f = p->gcode_flavor;
+		rc = prof_set_defaults(p, true);
+		if (rc)
+			return prof_key_error(L, NULL, NULL, rc, "the sailfish defaults do not load");
+		if (flavor)
+			p->gcode_flavor = f;
+	}
+	return 0;
+}
+
+/* Pass 2: type every known key, derive defaults that follow other keys, check. */
+int prof_apply_all(struct loader *L)
+{
+	struct profile *p = L->p;
+	struct pending pend = {false, false, p->first_layer_height, 0};
+	size_t ndefs;
+	const struct key_def *defs = prof_defs(&ndefs);
+	int rc;
+
+	rc = resolve_extruders(L, &pend);
+	if (rc)
+		return rc;
+	rc = resolve_protocol(L, &pend);
+	if (rc)
+		return rc;
+	for (size_t i = 0; i < ndefs; i++) {
+		const struct key_def *d = &defs[i];
+		const struct profile_kv *kv;
+
+		if (d->type == KT_EXTRUDERS || d->type == KT_PROTOCOL || d->type == KT_FLAVOR)
+			continue;
+		kv = prof_find_kv(p->keys, d->key);
+		if (!kv)
+			continue;
+		rc = prof_apply_key(L, d, kv, &pend);
+		if (rc)
+			return rc;
+	}
+	if (!prof_find_kv(p->keys, "first_layer_temperature"))
+		memcpy(p->first_layer_temperature, p->temperature, sizeof(p->temperature));
+	if (!prof_find_kv(p->keys, "first_layer_bed_temperature"))
+		p->first_layer_bed_temperature = p->bed_temperature;
+	return prof_cross_check(L, &pend);
 }

@@ -102,6 +102,13 @@ int prof_key_error(struct loader *L, const struct profile_kv *kv, const char *ke
 int prof_number_item(struct loader *L, const struct profile_kv *kv, const struct setting *decl,
 		     const struct item *it, int i, int n, double *out);
 
+/* Split a list value into at most cap trimmed items; the count or ST_ERR_PARSE. */
+int prof_split_list(struct loader *L, const struct profile_kv *kv, struct item *items, size_t cap);
+
+/* Type one key that the file sets (or a declared default, line 0). */
+int prof_apply_key(struct loader *L, const struct key_def *d, const struct profile_kv *kv,
+		   struct pending *pend);
+
 /* Type every known key, apply the defaults that follow other keys, check (pass 2). */
 int prof_apply_all(struct loader *L);
 

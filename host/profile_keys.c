@@ -200,7 +200,7 @@ static bool parse_bool(const char *s, size_t len, bool *out)
  * Split value on ',' into at most cap trimmed items.  Returns the count, or
  * ST_ERR_PARSE (error set) when there are more than cap or one is empty.
  */
-static int split_list(struct loader *L, const struct profile_kv *kv, struct item *items, size_t cap)
+int prof_split_list(struct loader *L, const struct profile_kv *kv, struct item *items, size_t cap)
 {
 	const char *s = kv->value;
 	size_t n = 0;
@@ -402,7 +402,7 @@ static int apply_usb(struct loader *L, const struct profile_kv *kv)
 	p->usb_id_count = 0;
 	if (kv->value[0] == '\0')
 		return 0;
-	n = split_list(L, kv, items, PROFILE_MAX_USB_IDS);
+	n = prof_split_list(L, kv, items, PROFILE_MAX_USB_IDS);
 	if (n < 0)
 		return n;
 	for (int i = 0; i < n; i++) {
@@ -445,7 +445,7 @@ static int apply_bed(struct loader *L, const struct profile_kv *kv, const struct
 	items = calloc(PROFILE_MAX_BED_POINTS, sizeof(*items));
 	if (!items)
 		return prof_key_error(L, kv, NULL, ST_ERR_NOMEM, "out of memory");
-	n = split_list(L, kv, items, PROFILE_MAX_BED_POINTS);
+	n = prof_split_list(L, kv, items, PROFILE_MAX_BED_POINTS);
 	if (n < 0) {
 		rc = n;
 		goto out_free_items;
@@ -508,8 +508,7 @@ static int pct_or_number(struct loader *L, const struct profile_kv *kv, double *
 }
 
 
-/* Apply one known key that the file sets. */
-static int apply_key(struct loader *L, const struct key_def *d, const struct profile_kv *kv,
+int prof_apply_key(struct loader *L, const struct key_def *d, const struct profile_kv *kv,
 		     struct pending *pend)
 {
 	struct profile *p = L->p;
@@ -545,7 +544,7 @@ static int apply_key(struct loader *L, const struct key_def *d, const struct pro
 	case KT_FIRST_DOUBLE:
 	case KT_FIRST_INT:
 	case KT_FIRST_BOOL:
-		n = split_list(L, kv, items, PROFILE_MAX_EXTRUDERS);
+		n = prof_split_list(L, kv, items, PROFILE_MAX_EXTRUDERS);
 		if (n < 0)
 			return n;
 		for (i = 0; i < n; i++) {
@@ -728,98 +727,6 @@ static int apply_key(struct loader *L, const struct key_def *d, const struct pro
 	return prof_key_error(L, kv, NULL, ST_ERR_INTERNAL, "no parser for this key");
 }
 
-/* Extruder count: extruder_count, else the length of nozzle_diameter, else 1. */
-static int resolve_extruders(struct loader *L, struct pending *pend)
-{
-	struct profile *p = L->p;
-	const struct profile_kv *kv = prof_find_kv(p->keys, "extruder_count");
-	struct item items[PROFILE_MAX_EXTRUDERS];
-	int n;
-
-	if (kv) {
-		L->ec_kv = kv;
-		L->ec_key = "extruder_count";
-		return apply_key(L, prof_find_def("extruder_count"), kv, pend);
-	}
-	kv = prof_find_kv(p->keys, "nozzle_diameter");
-	if (!kv)
-		return 0;
-	n = split_list(L, kv, items, PROFILE_MAX_EXTRUDERS);
-	if (n < 0)
-		return n;
-	p->extruder_count = n;
-	L->ec_kv = kv;
-	L->ec_key = "nozzle_diameter";
-	return 0;
-}
-
-/* Protocol and flavor, each defaulting from the other. */
-static int resolve_protocol(struct loader *L, struct pending *pend)
-{
-	struct profile *p = L->p;
-	const struct profile_kv *proto = prof_find_kv(p->keys, "protocol");
-	const struct profile_kv *flavor = prof_find_kv(p->keys, "gcode_flavor");
-	int rc;
-
-	if (flavor) {
-		rc = apply_key(L, prof_find_def("gcode_flavor"), flavor, pend);
-		if (rc)
-			return rc;
-	}
-	if (proto) {
-		rc = apply_key(L, prof_find_def("protocol"), proto, pend);
-		if (rc)
-			return rc;
-	} else if (flavor && (p->gcode_flavor == PROFILE_FLAVOR_SAILFISH ||
-			      p->gcode_flavor == PROFILE_FLAVOR_MAKERWARE)) {
-		p->protocol = PROFILE_PROTOCOL_SAILFISH;
-	}
-	if (p->protocol == PROFILE_PROTOCOL_SAILFISH) {
-		enum profile_flavor f = p->gcode_flavor;
-		rc = prof_set_defaults(p, true);
-		if (rc)
-			return prof_key_error(L, NULL, NULL, rc, "the sailfish defaults do not load");
-		if (flavor)
-			p->gcode_flavor = f;
-	}
-	return 0;
-}
-
-/* Pass 2: type every known key, derive defaults that follow other keys, check. */
-int prof_apply_all(struct loader *L)
-{
-	struct profile *p = L->p;
-	struct pending pend = {false, false, p->first_layer_height, 0};
-	size_t ndefs;
-	const struct key_def *defs = prof_defs(&ndefs);
-	int rc;
-
-	rc = resolve_extruders(L, &pend);
-	if (rc)
-		return rc;
-	rc = resolve_protocol(L, &pend);
-	if (rc)
-		return rc;
-	for (size_t i = 0; i < ndefs; i++) {
-		const struct key_def *d = &defs[i];
-		const struct profile_kv *kv;
-
-		if (d->type == KT_EXTRUDERS || d->type == KT_PROTOCOL || d->type == KT_FLAVOR)
-			continue;
-		kv = prof_find_kv(p->keys, d->key);
-		if (!kv)
-			continue;
-		rc = apply_key(L, d, kv, &pend);
-		if (rc)
-			return rc;
-	}
-	if (!prof_find_kv(p->keys, "first_layer_temperature"))
-		memcpy(p->first_layer_temperature, p->temperature, sizeof(p->temperature));
-	if (!prof_find_kv(p->keys, "first_layer_bed_temperature"))
-		p->first_layer_bed_temperature = p->bed_temperature;
-	return prof_cross_check(L, &pend);
-}
-
 /*
  * The declared defaults, read with the same parsers as a file's values so a
  * default is always a value the loader accepts.  sailfish: only the keys
@@ -842,7 +749,7 @@ int prof_set_defaults(struct profile *p, bool sailfish)
 
 		if (!text || d->type == KT_EXTRUDERS)
 			continue;
-		rc = apply_key(&L, d, &kv, &pend);
+		rc = prof_apply_key(&L, d, &kv, &pend);
 		if (d->type == KT_FIRST_HEIGHT)
 			p->first_layer_height = pend.flh;
 		else if (d->type == KT_WIDTH)
