@@ -67,6 +67,14 @@ static int one_line(const char *s, size_t len, int line, const char *origin,
 	trim(&s, &len);
 	if (len == 0 || s[0] == '#' || s[0] == ';')
 		return 0;
+	if (h->inline_comments) {
+		for (size_t i = 1; i < len; i++)
+			if (s[i] == '#' && is_blank(s[i - 1])) {
+				len = i;
+				break;
+			}
+		trim(&s, &len);
+	}
 	if (s[0] == '[') {
 		if (h->section)
 			return h->section(ctx, line, s, len, err);
@@ -97,8 +105,8 @@ static int one_line(const char *s, size_t len, int line, const char *origin,
 	return h->entry(ctx, &e, err);
 }
 
-int ini_parse(const char *text, size_t len, const char *origin, size_t line_max,
-	      const struct ini_handler *h, void *ctx, struct st_error *err)
+int ini_parse(const char *text, size_t len, const char *origin, const struct ini_handler *h,
+	      void *ctx, struct st_error *err)
 {
 	size_t pos = 0;
 	int line = 0, rc;
@@ -114,11 +122,11 @@ int ini_parse(const char *text, size_t len, const char *origin, size_t line_max,
 		pos += n + (nl ? 1 : 0);
 		if (n && start[n - 1] == '\r')
 			n--;
-		if (n > line_max)
+		if (n > INI_LINE_MAX)
 			return st_error_set(err, ST_ERR_PARSE,
-					    "%s: line %d is longer than %zu bytes; the line is "
+					    "%s: line %d is longer than %u bytes; the line is "
 					    "rejected, not cut",
-					    origin, line, line_max);
+					    origin, line, INI_LINE_MAX);
 		rc = one_line(start, n, line, origin, h, ctx, err);
 		if (rc)
 			return rc;
@@ -126,11 +134,12 @@ int ini_parse(const char *text, size_t len, const char *origin, size_t line_max,
 	return 0;
 }
 
-int ini_read_file(const char *path, size_t max, char **text, size_t *len, struct st_error *err)
+int ini_read_file(const char *path, char **text, size_t *len, struct st_error *err)
 {
 	struct stat st;
 	char *buf = NULL;
 	size_t n = 0, cap = 0;
+	const size_t max = INI_FILE_MAX;
 	FILE *f;
 	int rc;
 

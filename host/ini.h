@@ -4,11 +4,18 @@
  * (host/serve/, with [sections]).  Both therefore agree on every quirk:
  *
  *   - a UTF-8 byte order mark at the start is skipped;
- *   - lines end in LF or CRLF; a line longer than the caller's limit is
- *     rejected, never cut; a NUL byte anywhere in a line is rejected;
+ *   - lines end in LF or CRLF; a line longer than INI_LINE_MAX bytes is
+ *     rejected, never cut; a NUL byte anywhere in a line is rejected; a
+ *     file larger than INI_FILE_MAX is refused;
  *   - blanks (space, tab) around keys and values are dropped;
- *   - a line starting with '#' or ';' is a comment (only whole lines: a
- *     value may contain '#');
+ *   - a line starting with '#' or ';' is a comment;
+ *   - after a value, a '#' that follows a blank starts a comment only where
+ *     the caller asks for it (inline_comments: the node's configuration).
+ *     Profiles keep it as part of the value: their G-code values hold ' #'
+ *     (PrusaSlicer's own bundles have start_gcode = ; # # # START Header...)
+ *     and cutting them there would drop G-code silently.  A '#' that does
+ *     not follow a blank (API keys, URLs, colours) is always part of the
+ *     value;
  *   - a line starting with '[' is a section line, handed to the caller;
  *   - every other line is KEY = VALUE, KEY of letters, digits and '_'; the
  *     value is everything after the first '=' (may be empty).
@@ -23,9 +30,13 @@
 #ifndef STRATUM_HOST_INI_H
 #define STRATUM_HOST_INI_H
 
+#include <stdbool.h>
 #include <stddef.h>
 
 #include "st_error.h"
+
+#define INI_LINE_MAX 65536u		  /* bytes per line, line end excluded */
+#define INI_FILE_MAX (16u * 1024 * 1024) /* these files are a few KiB; refuse absurd ones */
 
 /* One KEY = VALUE line, trimmed; the pointers are into the caller's text. */
 struct ini_entry {
@@ -40,25 +51,27 @@ struct ini_handler {
 	 * lines are refused as "sections are not supported". */
 	int (*section)(void *ctx, int line, const char *text, size_t len, struct st_error *err);
 	int (*entry)(void *ctx, const struct ini_entry *e, struct st_error *err);
+	/* true: a '#' after a blank ends the line (section and key lines);
+	 * so "key = #x" has an empty value. */
+	bool inline_comments;
 };
 
 /*
  * ini_parse - read text[0..len) line by line and call h for each section
  * and key line.
- * @origin: the file name for messages.  @line_max: longest line in bytes,
- * line end excluded.  Returns 0, ST_ERR_PARSE (err set), or the first
- * non-zero callback return.
+ * @origin: the file name for messages.  Returns 0, ST_ERR_PARSE (err set),
+ * or the first non-zero callback return.
  */
-int ini_parse(const char *text, size_t len, const char *origin, size_t line_max,
-	      const struct ini_handler *h, void *ctx, struct st_error *err);
+int ini_parse(const char *text, size_t len, const char *origin, const struct ini_handler *h,
+	      void *ctx, struct st_error *err);
 
 /*
  * ini_read_file - the whole file into a new buffer (free with free()).
- * @max: larger files are refused (ST_ERR_PARSE, "larger than N KiB").
- * Returns 0, ST_ERR_IO (cannot open or read, or a directory), ST_ERR_PARSE
- * or ST_ERR_NOMEM; *text is NULL on error.
+ * A file larger than INI_FILE_MAX is refused (ST_ERR_PARSE, "larger than
+ * N KiB").  Returns 0, ST_ERR_IO (cannot open or read, or a directory),
+ * ST_ERR_PARSE or ST_ERR_NOMEM; *text is NULL on error.
  */
-int ini_read_file(const char *path, size_t max, char **text, size_t *len, struct st_error *err);
+int ini_read_file(const char *path, char **text, size_t *len, struct st_error *err);
 
 /*
  * ini_show - copy at most 40 bytes of s[0..len) into buf for a message,

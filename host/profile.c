@@ -17,8 +17,6 @@
 
 #include "ini.h"
 
-#define FILE_MAX (16u * 1024 * 1024) /* a profile is a few KiB; refuse absurd files */
-
 /* ---------------------------------------------------------------------------
  * Helpers shared by the profile modules (profile_int.h)
  */
@@ -216,7 +214,7 @@ void profile_free(struct profile *p)
 int profile_load_buffer(const char *text, size_t len, const char *origin, struct profile **out,
 			struct st_error *err)
 {
-	static const struct ini_handler handler = {on_section, on_entry};
+	static const struct ini_handler handler = {on_section, on_entry, false};
 	struct loader L = {0};
 	struct profile *p;
 	int rc;
@@ -244,7 +242,7 @@ int profile_load_buffer(const char *text, size_t len, const char *origin, struct
 	L.p = p;
 	L.origin = origin;
 	L.err = err;
-	rc = ini_parse(text, len, origin, PROFILE_LINE_MAX, &handler, &L, err);
+	rc = ini_parse(text, len, origin, &handler, &L, err);
 	if (rc)
 		goto out_free;
 	rc = prof_apply_all(&L);
@@ -271,7 +269,7 @@ int profile_load_file(const char *path, struct profile **out, struct st_error *e
 	if (stat(path, &st) == 0 && S_ISDIR(st.st_mode))
 		return st_error_set(err, ST_ERR_IO, "%s: is a directory, not a printer profile",
 				    path);
-	rc = ini_read_file(path, FILE_MAX, &buf, &len, err);
+	rc = ini_read_file(path, &buf, &len, err);
 	if (rc)
 		return rc;
 	rc = profile_load_buffer(buf, len, path, out, err);

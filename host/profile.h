@@ -47,7 +47,6 @@
 #define PROFILE_MAX_EXTRUDERS 8	    /* per-extruder lists hold at most this many */
 #define PROFILE_MAX_USB_IDS 16	    /* usb_ids entries */
 #define PROFILE_MAX_BED_POINTS 1024 /* bed_shape polygon corners */
-#define PROFILE_LINE_MAX 65536	    /* bytes per line, newline excluded */
 #define PROFILE_MAX_DIRS 3	    /* search directories, see above */
 #define PROFILE_PATH_MAX 4096	    /* longest directory or file path handled */
 

@@ -16,6 +16,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "ini.h"
 #include "profile.h"
 #include "settings.h"
 #include "suites.h"
@@ -470,20 +471,20 @@ END_TEST
 
 START_TEST(test_overlong_line)
 {
-	size_t body = PROFILE_LINE_MAX + 1;
+	size_t body = INI_LINE_MAX + 1;
 	char *text = malloc(body + 64);
 	struct profile *p = NULL;
 	struct st_error err = {0};
 	size_t n;
 
 	ck_assert_ptr_nonnull(text);
-	/* exactly PROFILE_LINE_MAX bytes is fine */
+	/* exactly INI_LINE_MAX bytes is fine */
 	n = (size_t)sprintf(text, "name = x\nstart_gcode = ");
-	memset(text + n, 'G', PROFILE_LINE_MAX - strlen("start_gcode = "));
-	n += PROFILE_LINE_MAX - strlen("start_gcode = ");
+	memset(text + n, 'G', INI_LINE_MAX - strlen("start_gcode = "));
+	n += INI_LINE_MAX - strlen("start_gcode = ");
 	text[n++] = '\n';
 	ck_assert_msg(profile_load_buffer(text, n, "long.ini", &p, &err) == 0, "%s", err.msg);
-	ck_assert_uint_eq(strlen(p->start_gcode), PROFILE_LINE_MAX - strlen("start_gcode = "));
+	ck_assert_uint_eq(strlen(p->start_gcode), INI_LINE_MAX - strlen("start_gcode = "));
 	profile_free(p);
 	/* one byte more is rejected, never cut */
 	text[n - 1] = 'G';
@@ -860,21 +861,9 @@ END_TEST
 START_TEST(test_doc_matches_declaration)
 {
 	static char doc[1 << 17], keys[1 << 16];
-	const char *begin = "<!-- keys:begin -->\n", *end = "<!-- keys:end -->";
-	FILE *f = fopen("docs/printers.md", "r");
-	char *a, *b;
-	size_t n;
+	const char *a = tu_read_between("docs/printers.md", doc, sizeof(doc),
+					"<!-- keys:begin -->\n", "<!-- keys:end -->");
 
-	ck_assert_ptr_nonnull(f);
-	n = fread(doc, 1, sizeof(doc) - 1, f);
-	fclose(f);
-	doc[n] = '\0';
-	a = strstr(doc, begin);
-	ck_assert_ptr_nonnull(a);
-	a += strlen(begin);
-	b = strstr(a, end);
-	ck_assert_ptr_nonnull(b);
-	*b = '\0';
 	ck_assert_int_eq(tu_run(keys, sizeof(keys), "printers --keys"), 0);
 	ck_assert_msg(!strcmp(a, keys),
 		      "docs/printers.md's key tables differ from `stratum printers --keys`; "
