@@ -12,6 +12,7 @@
 
 #include "commands.h"
 #include "profile.h"
+#include "settings.h"
 #include "st_error.h"
 
 /* The --help text. */
@@ -20,11 +21,13 @@ static void printers_usage(FILE *out)
 	fprintf(out,
 		"usage: stratum printers [--json]\n"
 		"       stratum printers --show NAME|FILE.ini [--json]\n"
+		"       stratum printers --keys\n"
 		"\n"
 		"Lists the printer profiles (NAME.ini files) found in, in this order:\n"
 		"$STRATUM_PRINTERS_DIR, the printers/ folder of the build tree, and\n"
 		"%s.  NAME is what --printer takes.\n"
 		"\n"
+		"  --keys          every key a profile takes: the tables of docs/printers.md\n"
 		"  --json          a JSON array (or, with --show, one object) on stdout\n"
 		"  --show PRINTER  print every resolved setting of one profile, defaults\n"
 		"                  included, as a profile file (--printer is a synonym)\n"
@@ -258,6 +261,11 @@ int cmd_printers(int argc, char **argv)
 			return ST_EXIT_OK;
 		} else if (!strcmp(a, "--json")) {
 			json = true;
+		} else if (!strcmp(a, "--keys")) {
+			/* docs/printers.md's key tables, from the one declaration */
+			if (settings_write_doc(stdout) || fflush(stdout) == EOF)
+				return ST_EXIT_SOFTWARE;
+			return ST_EXIT_OK;
 		} else if (!strcmp(a, "--show") || !strcmp(a, "--printer")) {
 			if (i + 1 >= argc) {
 				fprintf(stderr,

@@ -411,8 +411,9 @@ int cmd_slice(int argc, char **argv)
 
 	rc = profile_find(a.printer, &prof, &err);
 	if (rc) {
+		/* Settings that cannot slice are refused like a bad --layer-height. */
 		fprintf(stderr, SLICE_CMD ": %s\n", err.msg);
-		return st_exit_for(rc);
+		return rc == ST_ERR_RANGE ? ST_EXIT_USAGE : st_exit_for(rc);
 	}
 	status = config_from_profile(prof, &a, &cfg);
 	if (status)

@@ -22,6 +22,7 @@
 #include "commands.h"
 #include "gcode.h"
 #include "profile.h"
+#include "profile_x3g.h"
 #include "st_error.h"
 #include "x3g.h"
 
@@ -121,56 +122,6 @@ static int parse_args(int argc, char **argv, struct x3g_args *a)
 		return ST_EXIT_USAGE;
 	}
 	return 0;
-}
-
-/* The machine definition and flavour from a sailfish profile (shared with
- * stratum send); returns 0 or the profile's error, err filled. */
-int cmd_x3g_machine(const struct profile *p, struct x3g_machine *m, enum x3g_flavor *flavor,
-		    struct st_error *err)
-{
-	double heated, timeout;
-	int rc;
-
-	if ((rc = profile_get_number(p, "x3g_heated_platform", 0, 1, 1, &heated, err)) ||
-	    (rc = profile_get_number(p, "x3g_home_timeout", 1, 65535, 20, &timeout, err)))
-		return rc;
-	*flavor = p->gcode_flavor == PROFILE_FLAVOR_MAKERWARE ? X3G_FLAVOR_MAKERBOT
-							      : X3G_FLAVOR_REPRAP;
-	memset(m, 0, sizeof(*m));
-	for (int i = 0; i < 3; i++) {
-		m->axis[i].steps_per_mm = p->steps_per_mm[i];
-		m->axis[i].home_feedrate = p->home_feedrate[i];
-		m->axis[i].endstop =
-		    p->home_direction[i] == PROFILE_HOME_MAX ? X3G_ENDSTOP_MAX : X3G_ENDSTOP_MIN;
-	}
-	for (int i = 0; i < 4; i++) {
-		/* mm/s in the profile, mm/min in X3G maths; round off the 1e-13
-		 * left by 26.666... x 60 so limits land exactly on GPX's. */
-		double mm_min = round(p->machine_max_feedrate[i] * 60 * 1e6) / 1e6;
-
-		if (i < 3)
-			m->axis[i].max_feedrate = mm_min;
-		else
-			m->axis[3].max_feedrate = m->axis[4].max_feedrate = mm_min;
-	}
-	m->extruder_count = p->extruder_count;
-	for (int e = 0; e < 2; e++)
-		m->axis[3 + e].steps_per_mm = p->steps_per_mm_e[e < p->extruder_count ? e : 0];
-	m->heated_platform = heated != 0;
-	m->home_timeout = (unsigned)timeout;
-	return 0;
-}
-
-/* "dir/name.x3g" -> "name", as GPX names the build after its output file. */
-void cmd_x3g_build_name(const char *out, char *name, size_t cap)
-{
-	const char *base = strrchr(out, '/'), *dot;
-	size_t n;
-
-	base = base ? base + 1 : out;
-	dot = strrchr(base, '.');
-	n = dot && dot != base ? (size_t)(dot - base) : strlen(base);
-	snprintf(name, cap, "%.*s", (int)n, base);
 }
 
 struct x3g_run {
@@ -302,14 +253,14 @@ static int run_translate(const struct x3g_args *a)
 		status = ST_EXIT_USAGE;
 		goto out_profile;
 	}
-	if (cmd_x3g_machine(p, &m, &opt.flavor, &err)) {
+	if (profile_x3g_machine(p, &m, &opt.flavor, &err)) {
 		fprintf(stderr, X3G_CMD ": %s\n", err.msg);
 		status = ST_EXIT_DATAERR;
 		goto out_profile;
 	}
 	if (a->flavor)
 		opt.flavor = strcmp(a->flavor, "makerbot") ? X3G_FLAVOR_REPRAP : X3G_FLAVOR_MAKERBOT;
-	cmd_x3g_build_name(a->out, name, sizeof(name));
+	profile_x3g_build_name(a->out, name, sizeof(name));
 	opt.build_name = name;
 	if (x3g_new(&m, &opt, &r.t, &err)) {
 		fprintf(stderr, X3G_CMD ": %s: %s\n", p->path, err.msg);

@@ -24,19 +24,6 @@ int cmd_serve(int argc, char **argv);	 /* host/cmd_serve.c */
 int cmd_preview(int argc, char **argv);	 /* host/cmd_preview.c */
 int cmd_print(int argc, char **argv);	 /* host/cmd_print.c */
 
-struct profile;
-
-/*
- * cmd_x3g_machine - the X3G machine definition and command flavour of a
- * sailfish printer profile (host/cmd_x3g.c; also used by stratum send).
- * Returns 0, or the profile's error class with err naming the key.
- */
-int cmd_x3g_machine(const struct profile *p, struct x3g_machine *m, enum x3g_flavor *flavor,
-		    struct st_error *err);
-
-/* cmd_x3g_build_name - "dir/name.ext" -> "name", the build name GPX uses. */
-void cmd_x3g_build_name(const char *path, char *name, size_t cap);
-
 /*
  * cmd_parse_threads - the value of --threads N: N as an int, or -1 when it
  * is not a whole number in 1..256 (host/cmd_check.c).

@@ -7,7 +7,9 @@
  * (nozzle_diameter, bed_shape, gcode_flavor, retract_length, start_gcode ...);
  * the serial side and the Sailfish machine definition use our own keys
  * (protocol, baudrate, usb_ids, rx_buffer_size, dtr_reset, steps_per_mm_x ...).
- * docs/printers.md lists every key with its type, range and default.
+ * Every key is declared once, with its type, range, default, unit and help,
+ * in slicer/settings.h; docs/printers.md's key tables are generated from
+ * that declaration.  A profile that loads is one the slicer accepts.
  *
  * Resolving a name: profile_find("NAME") reads NAME.ini from the first of
  *   1. $STRATUM_PRINTERS_DIR, when set and not empty;
@@ -45,7 +47,6 @@
 #define PROFILE_MAX_EXTRUDERS 8	    /* per-extruder lists hold at most this many */
 #define PROFILE_MAX_USB_IDS 16	    /* usb_ids entries */
 #define PROFILE_MAX_BED_POINTS 1024 /* bed_shape polygon corners */
-#define PROFILE_LINE_MAX 65536	    /* bytes per line, newline excluded */
 #define PROFILE_MAX_DIRS 3	    /* search directories, see above */
 #define PROFILE_PATH_MAX 4096	    /* longest directory or file path handled */
 
@@ -135,6 +136,7 @@ struct profile {
 	double nozzle_diameter[PROFILE_MAX_EXTRUDERS];		     /* mm, 0.05-3; default 0.4 */
 	double filament_diameter[PROFILE_MAX_EXTRUDERS];	     /* mm, 1-3.5; default 1.75 */
 	double extrusion_multiplier[PROFILE_MAX_EXTRUDERS];	     /* default 1 */
+	double filament_density; /* g/cm^3, the first filament's; default 1.24 */
 	struct profile_point extruder_offset[PROFILE_MAX_EXTRUDERS]; /* mm; default 0x0 */
 	int temperature[PROFILE_MAX_EXTRUDERS];			     /* C, 0-450; default 200 */
 	int first_layer_temperature[PROFILE_MAX_EXTRUDERS];	     /* C; default: temperature */
@@ -168,10 +170,16 @@ struct profile {
 	double first_layer_speed; /* mm/s, or percent when first_layer_speed_is_percent */
 	bool first_layer_speed_is_percent;
 
+	/* Travel */
+	bool avoid_crossing_perimeters;		    /* default 1 */
+	bool only_retract_when_crossing_perimeters; /* default 1 */
+	double max_unretracted_travel;		    /* mm; default 20 */
+
 	/* Cooling (per filament in PrusaSlicer: the first is used) */
 	bool cooling;			  /* default 1 */
 	int min_fan_speed, max_fan_speed; /* percent; defaults 35, 100 */
 	int bridge_fan_speed;		  /* percent; default 100 */
+	int disable_fan_first_layers;	  /* layers; default 3 */
 	int fan_below_layer_time;	  /* s; default 60 */
 	int slowdown_below_layer_time;	  /* s; default 5 */
 	double min_print_speed;		  /* mm/s; default 10 */
@@ -190,6 +198,8 @@ struct profile {
 	double home_feedrate[3];	     /* mm/min (as G-code F): home_feedrate_x/y/z */
 	double home_position[3];	     /* mm after homing: home_position_x/y/z */
 	double x3g_toolhead_offset[3];	     /* mm, tool 1 from tool 0: x3g_toolhead_offset_x/y/z */
+	bool x3g_heated_platform;	     /* the platform heater is on the tool boards; default 1 */
+	int x3g_home_timeout;		     /* s, homing time-out of X3G 131/132; default 20 */
 
 	/* Custom G-code, escapes decoded (PrusaSlicer placeholders left as written) */
 	const char *start_gcode;

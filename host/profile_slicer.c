@@ -29,8 +29,7 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 			  struct st_error *err)
 {
 	struct gcodew_settings *g = &c->gcodew;
-	struct st_error e = {0};
-	double nozzle = p->nozzle_diameter[0], v;
+	double nozzle = p->nozzle_diameter[0];
 
 	slicer_config_init(c, nozzle);
 	c->layer_height = p->layer_height;
@@ -54,10 +53,7 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 
 	g->filament_diameter = p->filament_diameter[0];
 	g->extrusion_multiplier = p->extrusion_multiplier[0];
-	if (profile_get_number(p, "filament_density", 0.01, 30, PROFILE_FILAMENT_DENSITY, &v,
-			       &e))
-		goto out_profile;
-	g->filament_density = v;
+	g->filament_density = p->filament_density;
 	g->use_relative_e_distances = p->use_relative_e_distances;
 	g->temperature = p->temperature[0];
 	g->first_layer_temperature = p->first_layer_temperature[0];
@@ -66,19 +62,10 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	g->retract_length = p->retract_length[0];
 	g->retract_speed = p->retract_speed[0];
 	g->retract_lift = p->retract_lift[0];
-	/* Travel routing (untyped keys, PrusaSlicer's names where it has them). */
-	if (profile_get_number(p, "avoid_crossing_perimeters", 0, 1, g->avoid_crossing_perimeters,
-			       &v, &e))
-		goto out_profile;
-	g->avoid_crossing_perimeters = v != 0;
-	if (profile_get_number(p, "only_retract_when_crossing_perimeters", 0, 1,
-			       g->only_retract_when_crossing_perimeters, &v, &e))
-		goto out_profile;
-	g->only_retract_when_crossing_perimeters = v != 0;
-	if (profile_get_number(p, "max_unretracted_travel", 0, 1e6, g->max_unretracted_travel, &v,
-			       &e))
-		goto out_profile;
-	g->max_unretracted_travel = v;
+	/* Travel routing. */
+	g->avoid_crossing_perimeters = p->avoid_crossing_perimeters;
+	g->only_retract_when_crossing_perimeters = p->only_retract_when_crossing_perimeters;
+	g->max_unretracted_travel = p->max_unretracted_travel;
 	g->perimeter_speed = p->perimeter_speed;
 	g->external_perimeter_speed = p->perimeter_speed / 2; /* PrusaSlicer's 50% */
 	g->infill_speed = p->infill_speed;
@@ -92,21 +79,14 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	g->min_fan_speed = p->min_fan_speed;
 	g->max_fan_speed = p->max_fan_speed;
 	g->bridge_fan_speed = p->bridge_fan_speed;
-	if (profile_get_number(p, "disable_fan_first_layers", 0, 1000,
-			       g->disable_fan_first_layers, &v, &e))
-		goto out_profile;
-	g->disable_fan_first_layers = (int)v;
+	g->disable_fan_first_layers = p->disable_fan_first_layers;
 	g->fan_below_layer_time = p->fan_below_layer_time;
 	g->slowdown_below_layer_time = p->slowdown_below_layer_time;
 	g->min_print_speed = p->min_print_speed;
 	limits_from_profile(p, &g->limits);
 	g->start_gcode = p->start_gcode;
 	g->end_gcode = p->end_gcode;
+	(void)err; /* every value was typed and checked when the profile was loaded */
 	return 0;
-
-out_profile:
-	if (err)
-		*err = e;
-	return e.code;
 }
 

@@ -12,16 +12,14 @@
 #include "slicer.h"
 #include "st_error.h"
 
-#define PROFILE_FILAMENT_DENSITY 1.24 /* g/cm^3 (PLA) when the profile has none */
-
 /*
  * profile_slicer_config - fill *c from profile p: slicer_config_init with
  * the first nozzle, then every setting the profile has.  The bed has no
  * centre override and threads is 0 (all cores); callers change those
  * fields afterwards.  The result is not range-checked here
  * (slicer_config_check does that).
- * Returns 0, or ST_ERR_PARSE / ST_ERR_RANGE for an untyped key of the
- * profile that is not a number in its range ("FILE: line N: KEY: ...").
+ * Returns 0: every value was typed and range-checked when the profile was
+ * loaded (err is kept for callers; it is never filled).
  * Thread-safe: reads p only.
  */
 int profile_slicer_config(const struct profile *p, struct slicer_config *c,

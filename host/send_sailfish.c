@@ -18,6 +18,7 @@
 #include <string.h>
 
 #include "commands.h"
+#include "profile_x3g.h"
 #include "gcode.h"
 #include "profile.h"
 #include "s3g.h"
@@ -356,13 +357,13 @@ int send_sailfish(const struct send_args *a, const struct profile *prof)
 	j->prof = prof;
 	j->x3g = send_has_ext(a->file, ".x3g");
 	if (!j->x3g) {
-		if (cmd_x3g_machine(prof, &j->m, &j->xo.flavor, &err)) {
+		if (profile_x3g_machine(prof, &j->m, &j->xo.flavor, &err)) {
 			fprintf(stderr, "%s: %s\n", SF_CMD(j->a), err.msg);
 			status = ST_EXIT_DATAERR;
 			goto out;
 		}
 		/* named as `stratum x3g FILE -o NAME.x3g` names it */
-		cmd_x3g_build_name(a->file, j->build, sizeof(j->build));
+		profile_x3g_build_name(a->file, j->build, sizeof(j->build));
 		j->xo.build_name = j->build;
 	}
 	j->f = fopen(a->file, "rb");

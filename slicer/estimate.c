@@ -14,8 +14,11 @@
 #include "estimate.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "settings.h"
 
 /* A length below this (mm) does not move an axis. */
 #define EST_EPS 1e-9
@@ -42,20 +45,31 @@ struct est_planner {
 	struct est_result tally; /* counts and filament, time filled on demand */
 };
 
+/* The declared default of a machine limit (settings.h); NaN, which every
+ * planner refuses, if the declaration lost it. */
+static double limit_default(const char *name)
+{
+	double v;
+
+	return setting_default_number(name, false, &v) ? v : NAN;
+}
+
 void est_limits_init(struct est_limits *lim)
 {
-	static const double feed[EST_AXES] = {500, 500, 12, 120};
-	static const double accel[EST_AXES] = {9000, 9000, 500, 10000};
-	static const double jerk[EST_AXES] = {10, 10, 0.2, 2.5};
+	static const char axis[EST_AXES] = {'x', 'y', 'z', 'e'};
+	char name[64];
 
 	for (int a = 0; a < EST_AXES; a++) {
-		lim->max_feedrate[a] = feed[a];
-		lim->max_acceleration[a] = accel[a];
-		lim->max_jerk[a] = jerk[a];
+		snprintf(name, sizeof(name), "machine_max_feedrate_%c", axis[a]);
+		lim->max_feedrate[a] = limit_default(name);
+		snprintf(name, sizeof(name), "machine_max_acceleration_%c", axis[a]);
+		lim->max_acceleration[a] = limit_default(name);
+		snprintf(name, sizeof(name), "machine_max_jerk_%c", axis[a]);
+		lim->max_jerk[a] = limit_default(name);
 	}
-	lim->accel_extruding = 1500;
-	lim->accel_retracting = 1500;
-	lim->accel_travel = 1500;
+	lim->accel_extruding = limit_default("machine_max_acceleration_extruding");
+	lim->accel_retracting = limit_default("machine_max_acceleration_retracting");
+	lim->accel_travel = limit_default("machine_max_acceleration_travel");
 }
 
 /* True when v is finite and > 0 (or >= 0 with zero_ok). */

@@ -67,9 +67,8 @@ struct est_result {
 
 struct est_planner;
 
-/* est_limits_init - PrusaSlicer's machine-limit defaults (MK3 normal mode:
- * feedrate 500/500/12/120 mm/s, acceleration 9000/9000/500/10000 mm/s^2,
- * 1500 mm/s^2 extruding/retracting/travel, jerk 10/10/0.2/2.5 mm/s). */
+/* est_limits_init - the declared defaults of the machine_max_* settings
+ * (settings.h; PrusaSlicer's, MK3 normal mode). */
 void est_limits_init(struct est_limits *lim);
 
 /*

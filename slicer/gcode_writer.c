@@ -25,6 +25,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "settings.h"
 #include "travel.h"
 
 #define E_UNITS 100000.0 /* E written in 1e-5 mm */
@@ -37,67 +38,66 @@
 #define WIPE_SPEED_SHARE 0.8 /* wipe at 80% of the travel speed, as PrusaSlicer */
 
 /* ---------------------------------------------------------------------------
- * Settings: one table drives defaults-free checks, the header and the
- * placeholders.
+ * Settings: the writer's fields bound to their declarations (settings.h),
+ * which give every range and default; the table also drives the header and
+ * the placeholders.
  */
 
 enum key_type { KEY_DOUBLE, KEY_INT, KEY_BOOL };
 
 struct key {
-	const char *name; /* PrusaSlicer key */
+	const char *name; /* the declared setting */
 	enum key_type type;
 	size_t off;	  /* in struct gcodew_settings */
 	bool vector;	  /* per extruder/filament in PrusaSlicer: {name[0]} allowed */
-	double min, max;  /* allowed range */
 };
 
-#define KD(n, vec, lo, hi) {#n, KEY_DOUBLE, offsetof(struct gcodew_settings, n), vec, lo, hi}
-#define KI(n, vec, lo, hi) {#n, KEY_INT, offsetof(struct gcodew_settings, n), vec, lo, hi}
-#define KB(n, vec) {#n, KEY_BOOL, offsetof(struct gcodew_settings, n), vec, 0, 1}
-#define SPEED(n) KD(n, false, 0.001, 10000)
+#define KD(n, vec) {#n, KEY_DOUBLE, offsetof(struct gcodew_settings, n), vec}
+#define KI(n, vec) {#n, KEY_INT, offsetof(struct gcodew_settings, n), vec}
+#define KB(n, vec) {#n, KEY_BOOL, offsetof(struct gcodew_settings, n), vec}
 
 static const struct key keys[] = {
-    KD(nozzle_diameter, true, 0.01, 10),
-    KD(filament_diameter, true, 0.1, 10),
-    KD(extrusion_multiplier, true, 0.01, 10),
-    KD(filament_density, true, 0.01, 30),
+    KD(nozzle_diameter, true),
+    KD(filament_diameter, true),
+    KD(extrusion_multiplier, true),
+    KD(filament_density, true),
     KB(use_relative_e_distances, false),
-    KD(layer_height, false, 0.001, 10),
-    KD(first_layer_height, false, 0.001, 10),
-    KI(temperature, true, 0, 450),
-    KI(first_layer_temperature, true, 0, 450),
-    KI(bed_temperature, true, 0, 200),
-    KI(first_layer_bed_temperature, true, 0, 200),
-    KD(retract_length, true, 0, 100),
-    KD(retract_speed, true, 0.001, 10000),
-    KD(deretract_speed, true, 0, 10000),
-    KD(retract_lift, true, 0, 100),
-    KD(retract_before_travel, true, 0, 1e6),
+    KD(layer_height, false),
+    KD(first_layer_height, false),
+    KI(temperature, true),
+    KI(first_layer_temperature, true),
+    KI(bed_temperature, true),
+    KI(first_layer_bed_temperature, true),
+    KD(retract_length, true),
+    KD(retract_speed, true),
+    KD(deretract_speed, true),
+    KD(retract_lift, true),
+    KD(retract_before_travel, true),
     KB(wipe, true),
     KB(avoid_crossing_perimeters, false),
     KB(only_retract_when_crossing_perimeters, false),
-    KD(max_unretracted_travel, false, 0, 1e6),
-    SPEED(perimeter_speed),
-    SPEED(external_perimeter_speed),
-    SPEED(infill_speed),
-    SPEED(solid_infill_speed),
-    SPEED(top_solid_infill_speed),
-    SPEED(bridge_speed),
-    SPEED(gap_fill_speed),
-    SPEED(support_material_speed),
-    SPEED(support_material_interface_speed),
-    SPEED(travel_speed),
-    KD(travel_speed_z, false, 0, 10000),
-    KD(first_layer_speed, false, 0, 10000),
+    KD(max_unretracted_travel, false),
+    KD(perimeter_speed, false),
+    KD(external_perimeter_speed, false),
+    KD(infill_speed, false),
+    KD(solid_infill_speed, false),
+    KD(top_solid_infill_speed, false),
+    KD(bridge_speed, false),
+    KD(gap_fill_speed, false),
+    KD(support_material_speed, false),
+    KD(support_material_interface_speed, false),
+    KD(travel_speed, false),
+    KD(travel_speed_z, false),
+    KD(first_layer_speed, false),
     KB(cooling, true),
     KB(fan_always_on, true),
-    KI(min_fan_speed, true, 0, 100),
-    KI(max_fan_speed, true, 0, 100),
-    KI(bridge_fan_speed, true, 0, 100),
-    KI(disable_fan_first_layers, true, 0, 1000000),
-    KD(fan_below_layer_time, true, 0, 1e6),
-    KD(slowdown_below_layer_time, true, 0, 1e6),
-    KD(min_print_speed, true, 0.001, 10000),
+    KI(min_fan_speed, true),
+    KI(max_fan_speed, true),
+    KI(bridge_fan_speed, true),
+    KI(disable_fan_first_layers, true),
+    KD(fan_below_layer_time, true),
+    KD(slowdown_below_layer_time, true),
+    KD(min_print_speed, true),
 };
 
 #define NKEYS (sizeof(keys) / sizeof(keys[0]))
@@ -117,66 +117,48 @@ static double key_value(const struct gcodew_settings *s, const struct key *k)
 	}
 }
 
+/* Store v as key k's field of s. */
+static void key_set(struct gcodew_settings *s, const struct key *k, double v)
+{
+	char *base = (char *)s + k->off;
+
+	switch (k->type) {
+	case KEY_INT:
+		*(int *)(void *)base = (int)v;
+		break;
+	case KEY_BOOL:
+		*(bool *)(void *)base = v != 0;
+		break;
+	default:
+		*(double *)(void *)base = v;
+		break;
+	}
+}
+
 void gcodew_settings_init(struct gcodew_settings *s)
 {
-	*s = (struct gcodew_settings){
-	    .nozzle_diameter = 0.4,
-	    .filament_diameter = 1.75,
-	    .extrusion_multiplier = 1,
-	    .filament_density = 1.24,
-	    .use_relative_e_distances = false,
-	    .layer_height = 0.2,
-	    .first_layer_height = 0.2,
-	    .temperature = 200,
-	    .first_layer_temperature = 200,
-	    .bed_temperature = 0,
-	    .first_layer_bed_temperature = 0,
-	    .retract_length = 2,
-	    .retract_speed = 40,
-	    .deretract_speed = 0,
-	    .retract_lift = 0,
-	    .retract_before_travel = 2,
-	    .wipe = false,
-	    .avoid_crossing_perimeters = true,
-	    .only_retract_when_crossing_perimeters = true,
-	    .max_unretracted_travel = 20,
-	    .perimeter_speed = 60,
-	    .external_perimeter_speed = 30,
-	    .infill_speed = 80,
-	    .solid_infill_speed = 20,
-	    .top_solid_infill_speed = 15,
-	    .bridge_speed = 60,
-	    .gap_fill_speed = 20,
-	    .support_material_speed = 60,
-	    .support_material_interface_speed = 60,
-	    .travel_speed = 130,
-	    .travel_speed_z = 0,
-	    .first_layer_speed = 30,
-	    .cooling = true,
-	    .fan_always_on = false,
-	    .min_fan_speed = 35,
-	    .max_fan_speed = 100,
-	    .bridge_fan_speed = 100,
-	    .disable_fan_first_layers = 3,
-	    .fan_below_layer_time = 60,
-	    .slowdown_below_layer_time = 5,
-	    .min_print_speed = 10,
-	    .start_gcode = "G28 ; home all axes\nG1 Z5 F5000 ; lift nozzle\n",
-	    .end_gcode = "M104 S0 ; turn off temperature\nG28 X0  ; home X axis\nM84     ; disable "
-			 "motors\n",
-	};
+	double v;
+
+	memset(s, 0, sizeof(*s));
+	for (size_t i = 0; i < NKEYS; i++)
+		if (setting_default_number(keys[i].name, false, &v))
+			key_set(s, &keys[i], v);
+	/* Declared as following another key (settings.c). */
+	s->first_layer_temperature = s->temperature;
+	s->first_layer_bed_temperature = s->bed_temperature;
+	s->start_gcode = settings_find("start_gcode")->dflt;
+	s->end_gcode = settings_find("end_gcode")->dflt;
 	est_limits_init(&s->limits);
 }
 
-/* Check every setting against its range; names the first bad key. */
-static int check_settings(const struct gcodew_settings *s, struct st_error *err)
+int gcodew_settings_check(const struct gcodew_settings *s, struct st_error *err)
 {
+	if (!s)
+		return st_error_set(err, ST_ERR_ARG, "G-code settings: none given");
 	for (size_t i = 0; i < NKEYS; i++) {
-		double v = key_value(s, &keys[i]);
-		if (!isfinite(v) || v < keys[i].min || v > keys[i].max)
-			return st_error_set(err, ST_ERR_RANGE,
-					    "G-code settings: %s = %g is outside %g to %g",
-					    keys[i].name, v, keys[i].min, keys[i].max);
+		int rc = setting_check("G-code settings", keys[i].name, key_value(s, &keys[i]), err);
+		if (rc)
+			return rc;
 	}
 	if (s->min_fan_speed > s->max_fan_speed)
 		return st_error_set(err, ST_ERR_RANGE,
@@ -1315,7 +1297,7 @@ int gcodew_begin(const struct gcodew_settings *s, size_t nlayers, struct gcodew 
 	*out = NULL;
 	if (!s)
 		return st_error_set(err, ST_ERR_ARG, "G-code: no layers, settings or output given");
-	rc = check_settings(s, err);
+	rc = gcodew_settings_check(s, err);
 	if (rc)
 		return rc;
 	w = calloc(1, sizeof(*w));

@@ -139,8 +139,16 @@ struct gcodew_summary {
 	size_t moves;	     /* G1 lines written */
 };
 
-/* gcodew_settings_init - PrusaSlicer's defaults, as listed beside each field. */
+/* gcodew_settings_init - the declared defaults (settings.h), as listed beside each field. */
 void gcodew_settings_init(struct gcodew_settings *s);
+
+/*
+ * gcodew_settings_check - every setting inside its declared range
+ * (settings.h, the ranges the profile loader applies), min_fan_speed at most
+ * max_fan_speed, start and end G-code given.  Returns 0, ST_ERR_RANGE or
+ * ST_ERR_ARG naming the first bad key.
+ */
+int gcodew_settings_check(const struct gcodew_settings *s, struct st_error *err);
 
 /*
  * gcodew_write_stream - write the whole print to @fp.

@@ -49,6 +49,8 @@ int slicer_config_check(const struct slicer_config *c, struct st_error *err)
 		rc = perim_settings_check(&c->perim, c->first_layer_height, err);
 	if (!rc)
 		rc = perim_settings_check(&c->perim, c->layer_height, err);
+	if (!rc)
+		rc = gcodew_settings_check(&c->gcodew, err);
 	if (rc)
 		return rc;
 	if (!(c->infill.density >= 0.0 && c->infill.density <= 100.0))

@@ -16,6 +16,7 @@
 #include "estimate.h"
 #include "gcode.h"
 #include "gcode_writer.h"
+#include "settings.h"
 #include "suites.h"
 #include "testutil.h"
 
@@ -931,6 +932,42 @@ static double run_moves(const struct est_limits *lim, const struct est_move *m, 
 #define REL_EQ(got, want) \
 	ck_assert_msg(fabs((got) - (want)) <= 1e-6 * (want), "%.12f s, analytic %.12f s", (got), (want))
 
+/* The estimator's default limits are the declared machine_max_* defaults
+ * (PrusaSlicer's MK3 normal mode), every one of them found. */
+START_TEST(test_est_limits_are_declared)
+{
+	static const char axis[EST_AXES] = {'x', 'y', 'z', 'e'};
+	struct est_limits lim;
+	struct est_planner *p;
+	struct st_error err = {0};
+	char name[64];
+	double v;
+
+	est_limits_init(&lim);
+	for (int a = 0; a < EST_AXES; a++) {
+		snprintf(name, sizeof(name), "machine_max_feedrate_%c", axis[a]);
+		ck_assert(setting_default_number(name, false, &v));
+		ck_assert_double_eq(lim.max_feedrate[a], v);
+		snprintf(name, sizeof(name), "machine_max_acceleration_%c", axis[a]);
+		ck_assert(setting_default_number(name, false, &v));
+		ck_assert_double_eq(lim.max_acceleration[a], v);
+		snprintf(name, sizeof(name), "machine_max_jerk_%c", axis[a]);
+		ck_assert(setting_default_number(name, false, &v));
+		ck_assert_double_eq(lim.max_jerk[a], v);
+	}
+	ck_assert(setting_default_number("machine_max_acceleration_travel", false, &v));
+	ck_assert_double_eq(lim.accel_travel, v);
+	ck_assert_double_eq(lim.max_feedrate[EST_Z], 12);
+	ck_assert_double_eq(lim.max_acceleration[EST_E], 10000);
+	ck_assert_double_eq(lim.max_jerk[EST_E], 2.5);
+	ck_assert_double_eq(lim.accel_extruding, 1500);
+	ck_assert_double_eq(lim.accel_retracting, 1500);
+	p = est_planner_new(&lim, NULL, &err);
+	ck_assert_msg(p != NULL, "%s", err.msg);
+	est_planner_free(p);
+}
+END_TEST
+
 START_TEST(test_est_trapezoid)
 {
 	struct est_limits lim;
@@ -1053,6 +1090,7 @@ Suite *gcodewriter_suite(void)
 	tcase_add_test(cool, test_temperatures);
 	tcase_add_test(cool, test_fan);
 	tcase_add_test(cool, test_slowdown);
+	tcase_add_test(est, test_est_limits_are_declared);
 	tcase_add_test(est, test_est_trapezoid);
 	tcase_add_test(est, test_est_triangle);
 	tcase_add_test(est, test_est_corner);

@@ -12,10 +12,13 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "ini.h"
 #include "profile.h"
+#include "settings.h"
 #include "suites.h"
 #include "testutil.h"
 
@@ -468,20 +471,20 @@ END_TEST
 
 START_TEST(test_overlong_line)
 {
-	size_t body = PROFILE_LINE_MAX + 1;
+	size_t body = INI_LINE_MAX + 1;
 	char *text = malloc(body + 64);
 	struct profile *p = NULL;
 	struct st_error err = {0};
 	size_t n;
 
 	ck_assert_ptr_nonnull(text);
-	/* exactly PROFILE_LINE_MAX bytes is fine */
+	/* exactly INI_LINE_MAX bytes is fine */
 	n = (size_t)sprintf(text, "name = x\nstart_gcode = ");
-	memset(text + n, 'G', PROFILE_LINE_MAX - strlen("start_gcode = "));
-	n += PROFILE_LINE_MAX - strlen("start_gcode = ");
+	memset(text + n, 'G', INI_LINE_MAX - strlen("start_gcode = "));
+	n += INI_LINE_MAX - strlen("start_gcode = ");
 	text[n++] = '\n';
 	ck_assert_msg(profile_load_buffer(text, n, "long.ini", &p, &err) == 0, "%s", err.msg);
-	ck_assert_uint_eq(strlen(p->start_gcode), PROFILE_LINE_MAX - strlen("start_gcode = "));
+	ck_assert_uint_eq(strlen(p->start_gcode), INI_LINE_MAX - strlen("start_gcode = "));
 	profile_free(p);
 	/* one byte more is rejected, never cut */
 	text[n - 1] = 'G';
@@ -793,6 +796,81 @@ START_TEST(test_cli_bad_profile_in_dir)
 }
 END_TEST
 
+
+/* Issue 16: one settings truth.  A profile the slicer would refuse
+ * (min_print_speed = 0 was accepted here and refused by the G-code writer
+ * after repair and slicing, exit 1) fails when it is loaded: exit 2 from
+ * `stratum slice` in milliseconds, no G-code written. */
+START_TEST(test_unsliceable_profile_fails_at_load)
+{
+	static const char text[] = "nozzle_diameter = 0.4\nmin_print_speed = 0\n";
+	const char *ini = tu_path("mps0.ini"), *gc = tu_path("mps0.gcode");
+	struct st_error err = {0};
+	struct profile *p = NULL;
+	struct timespec t0, t1;
+	double ms;
+	int status;
+
+	ck_assert_int_eq(profile_load_buffer(text, sizeof(text) - 1, "mps0.ini", &p, &err),
+			 ST_ERR_RANGE);
+	ck_assert_ptr_null(p);
+	ck_assert_ptr_nonnull(strstr(err.msg, "line 2: min_print_speed"));
+	tu_write_str(ini, text);
+	clock_gettime(CLOCK_MONOTONIC, &t0);
+	status = tu_run(out, sizeof(out), "slice docs/examples/bracket.stl -o '%s' --printer '%s'",
+			gc, ini);
+	clock_gettime(CLOCK_MONOTONIC, &t1);
+	ms = (double)(t1.tv_sec - t0.tv_sec) * 1e3 + (double)(t1.tv_nsec - t0.tv_nsec) / 1e6;
+	ck_assert_msg(status == 2, "exit %d: %s", status, out);
+	ck_assert_ptr_nonnull(strstr(out, "min_print_speed"));
+	ck_assert_ptr_null(strstr(out, "repaired"));
+	ck_assert(!tu_file_exists(gc));
+	/* Repairing and slicing the bracket takes seconds; refusing it, a
+	 * process start and a file read (well under a second even under ASan). */
+	ck_assert_msg(ms < 1000, "refused after %.0f ms", ms);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "printers --show '%s'", ini), 65);
+	/* A derived value is checked too: 1000% of perimeter_speed 200 is
+	 * beyond the declared first_layer_speed range. */
+	load_bad("perimeter_speed = 200\nfirst_layer_speed = 1000%\n", ST_ERR_RANGE,
+		 "cannot be sliced", "first_layer_speed", NULL);
+}
+END_TEST
+
+/* Every key the loader binds is declared, in declaration order, and every
+ * declared key a profile may set is bound; every default loads. */
+START_TEST(test_bindings_match_declaration)
+{
+	size_t n = settings_count(), bound = 0;
+	const char *prev = NULL;
+
+	for (size_t i = 0; i < n; i++) {
+		const struct setting *s = settings_at(i);
+		bool slicer_only = (s->flags & SETTING_SLICER_ONLY) != 0;
+
+		ck_assert_msg(profile_key_known(s->name) != slicer_only, "%s", s->name);
+		bound += !slicer_only;
+		prev = s->name;
+	}
+	ck_assert_ptr_nonnull(prev);
+	ck_assert_uint_gt(bound, 80);
+	ck_assert(!profile_key_known("no_such_key"));
+}
+END_TEST
+
+/* docs/printers.md's key tables are `stratum printers --keys`, byte for byte. */
+START_TEST(test_doc_matches_declaration)
+{
+	static char doc[1 << 17], keys[1 << 16];
+	const char *a = tu_read_between("docs/printers.md", doc, sizeof(doc),
+					"<!-- keys:begin -->\n", "<!-- keys:end -->");
+
+	ck_assert_int_eq(tu_run(keys, sizeof(keys), "printers --keys"), 0);
+	ck_assert_msg(!strcmp(a, keys),
+		      "docs/printers.md's key tables differ from `stratum printers --keys`; "
+		      "regenerate them from slicer/settings.c");
+}
+END_TEST
+
 Suite *profile_suite(void)
 {
 	Suite *s = suite_create("profile");
@@ -843,6 +921,9 @@ Suite *profile_suite(void)
 	tcase_add_test(cli, test_cli_table);
 	tcase_add_test(cli, test_cli_show);
 	tcase_add_test(cli, test_cli_bad_profile_in_dir);
+	tcase_add_test(cli, test_unsliceable_profile_fails_at_load);
+	tcase_add_test(cli, test_doc_matches_declaration);
+	tcase_add_test(access, test_bindings_match_declaration);
 	tcase_set_timeout(cli, 60);
 	suite_add_tcase(s, cli);
 	return s;

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "commands.h"
+#include "profile_x3g.h"
 #include "gcode.h"
 #include "profile.h"
 #include "sfcheck.h"
@@ -111,7 +112,7 @@ static size_t sf_translate(const char *path, uint64_t from, struct sfc_cmd **cmd
 	*start = SIZE_MAX;
 	ck_assert_ptr_nonnull(f);
 	ck_assert_int_eq(profile_find(SFC_PRINTER, &prof, &err), 0);
-	ck_assert_int_eq(cmd_x3g_machine(prof, &m, &xo.flavor, &err), 0);
+	ck_assert_int_eq(profile_x3g_machine(prof, &m, &xo.flavor, &err), 0);
 	ck_assert_int_eq(x3g_new(&m, &xo, &t, &err), 0);
 	ck_assert_int_eq(gcode_reader_new(f, path, &r, &err), 0);
 	do {

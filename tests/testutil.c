@@ -59,6 +59,27 @@ void tu_write_str(const char *path, const char *text)
 	tu_write(path, text, strlen(text));
 }
 
+char *tu_read_between(const char *path, char *buf, size_t cap, const char *begin,
+		      const char *end)
+{
+	FILE *f = fopen(path, "rb");
+	char *a, *b;
+	size_t n;
+
+	ck_assert_msg(f != NULL, "cannot open %s", path);
+	n = fread(buf, 1, cap - 1, f);
+	ck_assert_msg(n < cap - 1, "%s is larger than the test's buffer", path);
+	fclose(f);
+	buf[n] = '\0';
+	a = strstr(buf, begin);
+	ck_assert_msg(a != NULL, "%s: no '%s'", path, begin);
+	a += strlen(begin);
+	b = strstr(a, end);
+	ck_assert_msg(b != NULL, "%s: no '%s' after '%s'", path, end, begin);
+	*b = '\0';
+	return a;
+}
+
 int tu_run(char *out, size_t cap, const char *args_fmt, ...)
 {
 	const char *bin = getenv("STRATUM_BIN");

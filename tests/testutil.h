@@ -29,6 +29,14 @@ void tu_write(const char *path, const void *data, size_t len);
 void tu_write_str(const char *path, const char *text);
 
 /*
+ * tu_read_between - read the text file path into buf (cap bytes) and return
+ * the text between the first @begin and the next @end after it, cut there
+ * (in buf).  Aborts the test when the file or either marker is missing.
+ */
+char *tu_read_between(const char *path, char *buf, size_t cap, const char *begin,
+		      const char *end);
+
+/*
  * tu_round_trip - m as a printer gets it: written as fmt (binary or ASCII
  * STL) to the scratch file name, read back into a new mesh (mesh_free).
  * Aborts the test if either fails.

@@ -1,21 +1,21 @@
 /*
- * config.c - the node's own small ini reader (node.h node_config_load):
- * [node], [key NAME] and [printer NAME] sections of `key = value` lines,
- * '#' or ';' comments on their own lines.  Unknown sections and keys are
- * errors so a typo never silently leaves a printer unprotected.
+ * config.c - the node's configuration (node.h node_config_load): [node],
+ * [key NAME], [printer NAME] and [mqtt] sections of `key = value` lines,
+ * read by the same ini reader as printer profiles (ini.h), so both take the
+ * same line ends, BOM, blanks, comments and key syntax; here a ' #' also
+ * starts a comment after a value.  Unknown sections and keys are errors so
+ * a typo never silently leaves a printer unprotected.
  */
 #include <arpa/inet.h>
 #include <ctype.h>
 #include <stdarg.h>
-#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "ini.h"
 #include "node.h"
 #include "st_number.h"
-
-#define CFG_LINE_MAX 4096
 
 enum section { SEC_NONE, SEC_NODE, SEC_KEY, SEC_PRINTER, SEC_MQTT };
 
@@ -28,6 +28,7 @@ struct cfg_parse {
 	bool node_seen, mqtt_seen;
 	struct node_config *cfg;
 	struct st_error *err;
+	char *scratch; /* the current line's key and value, NUL-terminated */
 };
 
 /* Error at the current line. */
@@ -98,12 +99,11 @@ static int whole(struct cfg_parse *p, const char *key, const char *v, double lo,
 	return 0;
 }
 
-/* roles = read, upload, control (any of them, comma separated). */
-static int parse_roles(struct cfg_parse *p, const char *v, unsigned *roles)
+/* roles = read, upload, control (any of them, comma separated); v is cut up. */
+static int parse_roles(struct cfg_parse *p, char *v, unsigned *roles)
 {
-	char buf[CFG_LINE_MAX], *next = buf, *tok;
+	char *next = v, *tok;
 
-	snprintf(buf, sizeof(buf), "%s", v);
 	*roles = 0;
 	while (next) {
 		tok = next;
@@ -179,7 +179,7 @@ static int node_key_value(struct cfg_parse *p, const char *k, const char *v)
 					  "max_upload_mb, slice_threads)", k);
 }
 
-static int key_key_value(struct cfg_parse *p, const char *k, const char *v)
+static int key_key_value(struct cfg_parse *p, const char *k, char *v)
 {
 	struct node_key *key = &p->cfg->keys[p->cfg->nkeys - 1];
 	int rc;
@@ -349,21 +349,30 @@ static int section_line(struct cfg_parse *p, char *s)
 			s, name);
 }
 
-static int one_line(struct cfg_parse *p, char *s)
+/* A section line from the ini reader: copied so it can be cut up. */
+static int on_section(void *ctx, int line, const char *text, size_t len, struct st_error *err)
 {
-	char *eq, *k, *v;
+	struct cfg_parse *p = ctx;
 
-	s = trim(s);
-	if (!*s || *s == '#' || *s == ';')
-		return 0;
-	if (*s == '[')
-		return section_line(p, s);
-	eq = strchr(s, '=');
-	if (!eq)
-		return CFG_FAIL(p, ST_ERR_PARSE, "expected 'key = value' or a [section]");
-	*eq = '\0';
-	k = trim(s);
-	v = trim(eq + 1);
+	(void)err; /* p->err is the same */
+	p->line = line;
+	memcpy(p->scratch, text, len);
+	p->scratch[len] = '\0';
+	return section_line(p, p->scratch);
+}
+
+/* A key = value line from the ini reader, into the current section. */
+static int on_entry(void *ctx, const struct ini_entry *e, struct st_error *err)
+{
+	struct cfg_parse *p = ctx;
+	char *k = p->scratch, *v = p->scratch + e->key_len + 1;
+
+	(void)err;
+	p->line = e->line;
+	memcpy(k, e->key, e->key_len);
+	k[e->key_len] = '\0';
+	memcpy(v, e->value, e->value_len);
+	v[e->value_len] = '\0';
 	switch (p->sec) {
 	case SEC_NODE:
 		return node_key_value(p, k, v);
@@ -438,19 +447,22 @@ static int resolve_data_dir(struct node_config *c, const char *path, struct st_e
 
 int node_config_load(const char *path, struct node_config *out, struct st_error *err)
 {
+	static const struct ini_handler handler = {on_section, on_entry, true};
 	struct node_config *c = calloc(1, sizeof(*c));
 	struct cfg_parse p = {.file = path, .cfg = c, .err = err};
-	char buf[CFG_LINE_MAX + 2];
-	FILE *f;
-	int rc = 0;
+	char *text = NULL;
+	size_t len;
+	int rc;
 
-	if (!c)
-		return st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", path);
-	f = fopen(path, "r");
-	if (!f) {
-		rc = st_error_set(err, ST_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+	/* a line's key and value, each at most a line long, plus their NULs */
+	p.scratch = malloc(2 * INI_LINE_MAX + 2);
+	if (!c || !p.scratch) {
+		rc = st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", path);
 		goto out_free;
 	}
+	rc = ini_read_file(path, &text, &len, err);
+	if (rc)
+		goto out_free;
 	snprintf(c->path, sizeof(c->path), "%s", path);
 	snprintf(c->name, sizeof(c->name), "stratum");
 	snprintf(c->listen_addr, sizeof(c->listen_addr), "127.0.0.1");
@@ -459,32 +471,12 @@ int node_config_load(const char *path, struct node_config *out, struct st_error 
 	c->mqtt.keepalive = 30;
 	c->max_upload = NODE_UPLOAD_DEFAULT;
 	c->slice_threads = 1;
-	while (fgets(buf, sizeof(buf), f)) {
-		size_t n = strlen(buf);
-
-		p.line++;
-		if (n && buf[n - 1] == '\n')
-			buf[--n] = '\0';
-		else if (n > CFG_LINE_MAX) {
-			rc = CFG_FAIL(&p, ST_ERR_PARSE, "longer than %d bytes", CFG_LINE_MAX);
-			goto out_close;
-		}
-		if (strlen(buf) != n) {
-			rc = CFG_FAIL(&p, ST_ERR_PARSE, "NUL byte in the line");
-			goto out_close;
-		}
-		if ((rc = one_line(&p, buf)))
-			goto out_close;
-	}
-	if (ferror(f)) {
-		rc = st_error_set(err, ST_ERR_IO, "%s: read error", path);
-		goto out_close;
-	}
-	if (!(rc = check_complete(&p)) && !(rc = resolve_data_dir(c, path, err)))
+	if (!(rc = ini_parse(text, len, path, &handler, &p, err)) &&
+	    !(rc = check_complete(&p)) && !(rc = resolve_data_dir(c, path, err)))
 		*out = *c;
-out_close:
-	fclose(f);
 out_free:
+	free(text);
+	free(p.scratch);
 	free(c);
 	return rc;
 }

@@ -77,7 +77,8 @@ struct node_config {
 };
 
 /*
- * node_config_load - read and check a node config (docs/serve.md).
+ * node_config_load - read and check a node config (docs/serve.md): the
+ * syntax of host/ini.h, with a ' #' after a value starting a comment.
  * The whole file is checked before *cfg is used: any bad line rejects it.
  * Returns 0, or ST_ERR_IO (cannot read), ST_ERR_PARSE (syntax, unknown
  * section or key, duplicate), ST_ERR_RANGE (a value out of range, no key,

@@ -28,7 +28,7 @@
 #include <sys/stat.h>
 #include <time.h>
 
-#include "commands.h"
+#include "profile_x3g.h"
 #include "print.h"
 #include "resume.h"
 #include "s3g.h"
@@ -103,7 +103,7 @@ static int sf_connect_op(const struct node_printer_config *pc, const struct prof
 	if (!s)
 		return st_error_set(err, ST_ERR_NOMEM, "printer %s: out of memory", pc->name);
 	snprintf(s->name, sizeof(s->name), "%s", pc->name);
-	if ((rc = cmd_x3g_machine(prof, &s->m, &s->xo.flavor, &e))) {
+	if ((rc = profile_x3g_machine(prof, &s->m, &s->xo.flavor, &e))) {
 		rc = st_error_set(err, rc, "printer %s: profile %s: %s", pc->name, prof->id, e.msg);
 		goto out_free;
 	}
@@ -341,7 +341,7 @@ static int sf_print_op(void *state, const char *path, int64_t start, bool resume
 	r->x3g = n > 4 && !strcasecmp(path + n - 4, ".x3g");
 	if ((resume || start) && (rc = resume_setup(r, path, start, pre, err)))
 		goto out_free;
-	cmd_x3g_build_name(path, build, sizeof(build));
+	profile_x3g_build_name(path, build, sizeof(build));
 	s->xo.build_name = build;
 	f = fopen(path, "rb");
 	if (!f) {

@@ -1,0 +1,121 @@
+/*
+ * profile_int.h - what the profile modules share (host/profile*.c); nothing
+ * outside them includes it.  The public contract is profile.h.
+ *
+ *   profile.c        loading (through ini.h), freeing, raw key access
+ *   profile_keys.c   key typing: the binding of each declared setting
+ *                    (slicer/settings.h) to its struct profile field, and
+ *                    the declared defaults
+ *   profile_check.c  checks between keys, and the slicer's own check
+ *   profile_find.c   search directories, NAME lookup, listing
+ *   profile_out.c    profile_write and profile_to_json
+ */
+#ifndef STRATUM_HOST_PROFILE_INT_H
+#define STRATUM_HOST_PROFILE_INT_H
+
+#include "profile.h"
+#include "settings.h"
+
+#define PROF_TOKEN_SHOW 40 /* bytes of an offending value quoted in messages */
+
+/* One key = value line of the file. */
+struct profile_kv {
+	char *key;
+	char *value; /* escapes decoded */
+	int line;
+};
+
+struct profile_keys {
+	struct profile_kv *kv;
+	size_t count, cap;
+};
+
+/* How a key is parsed and where it is stored (its range is declared in settings.c). */
+enum key_type {
+	KT_STRING,	 /* const char * */
+	KT_DOUBLE,	 /* double */
+	KT_INT,		 /* int */
+	KT_BOOL,	 /* bool, 0/1 */
+	KT_EX_DOUBLE,	 /* double[PROFILE_MAX_EXTRUDERS], one per extruder */
+	KT_EX_INT,	 /* int[PROFILE_MAX_EXTRUDERS] */
+	KT_EX_POINT,	 /* struct profile_point[PROFILE_MAX_EXTRUDERS], "XxY" */
+	KT_FIRST_DOUBLE, /* double; a list is accepted, its first value used */
+	KT_FIRST_INT,	 /* int; likewise */
+	KT_FIRST_BOOL,	 /* bool; likewise */
+	KT_FIRST_HEIGHT, /* first_layer_height: mm or % of layer_height */
+	KT_WIDTH,	 /* extrusion_width: mm or % of layer_height, 0 = auto */
+	KT_SPEED_PCT,	 /* first_layer_speed: mm/s or % */
+	KT_DENSITY,	 /* fill_density: N% or a fraction 0-1 */
+	KT_PROTOCOL,	 /* enum profile_protocol */
+	KT_FLAVOR,	 /* enum profile_flavor */
+	KT_BAUD,	 /* long, a standard rate */
+	KT_USB,		 /* usb_ids */
+	KT_BED,		 /* bed_shape */
+	KT_PATTERN,	 /* fill_pattern */
+	KT_HOME,	 /* enum profile_home */
+	KT_EXTRUDERS,	 /* extruder_count */
+};
+
+/* A declared setting bound to its field. */
+struct key_def {
+	const char *key;
+	enum key_type type;
+	size_t off; /* offsetof(struct profile, field) */
+};
+
+/* Loading state: the profile being filled and where errors go. */
+struct loader {
+	struct profile *p;
+	const char *origin;
+	struct st_error *err;
+	const struct profile_kv *ec_kv; /* what set extruder_count, NULL = default */
+	const char *ec_key;
+};
+
+/* State pass 2 keeps for percentages resolved once layer_height is known. */
+struct pending {
+	bool flh_pct, width_pct;
+	double flh, width;
+};
+
+/* One comma-separated item of a list value. */
+struct item {
+	const char *s;
+	size_t len;
+};
+
+/* The bound keys in declaration order; the declaration of one. */
+const struct key_def *prof_defs(size_t *count);
+const struct key_def *prof_find_def(const char *key);
+const struct setting *prof_decl(const struct key_def *d);
+
+char *prof_dup(const char *s, size_t len);
+void prof_trim(const char **s, size_t *len);
+void prof_fmt_double(char *buf, size_t cap, double v);
+struct profile_kv *prof_find_kv(const struct profile_keys *keys, const char *key);
+
+/* "ORIGIN: line N: KEY: message" (line and key left out when kv and key are NULL). */
+int prof_key_error(struct loader *L, const struct profile_kv *kv, const char *key, int code,
+		   const char *fmt, ...) __attribute__((format(printf, 5, 6)));
+
+/* A number item checked against decl's range; i of n names it in messages. */
+int prof_number_item(struct loader *L, const struct profile_kv *kv, const struct setting *decl,
+		     const struct item *it, int i, int n, double *out);
+
+/* Split a list value into at most cap trimmed items; the count or ST_ERR_PARSE. */
+int prof_split_list(struct loader *L, const struct profile_kv *kv, struct item *items, size_t cap);
+
+/* Type one key that the file sets (or a declared default, line 0). */
+int prof_apply_key(struct loader *L, const struct key_def *d, const struct profile_kv *kv,
+		   struct pending *pend);
+
+/* Type every known key, apply the defaults that follow other keys, check (pass 2). */
+int prof_apply_all(struct loader *L);
+
+/* The declared defaults; sailfish: only those a sailfish printer changes. */
+int prof_set_defaults(struct profile *p, bool sailfish);
+
+/* Checks between keys and the slicer's own check, once every value is read. */
+int prof_cross_check(struct loader *L, const struct pending *pend);
+
+#endif /* STRATUM_HOST_PROFILE_INT_H */

@@ -1,0 +1,411 @@
+/*
+ * settings.c - the declaration of every printer and slicer setting
+ * (settings.h).  Ranges are what the slicer can print with; the loader
+ * refuses anything outside them when a profile is loaded.
+ */
+#include "settings.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "st_number.h"
+
+#define COUNT(a) (sizeof(a) / sizeof((a)[0]))
+
+static const char *const protocol_names[] = {"marlin", "sailfish"};
+
+/* PrusaSlicer's gcode_flavor names (PrintConfig.cpp), in enum profile_flavor order. */
+static const char *const flavor_names[] = {
+    "reprap",  "reprapfirmware", "repetier", "teacup",	   "makerware", "marlin",	"marlin2",
+    "klipper", "sailfish",	 "mach3",    "machinekit", "smoothie",	"no-extrusion",
+};
+
+/* PrusaSlicer's InfillPattern names (PrintConfig.cpp s_keys_map_InfillPattern). */
+static const char *const pattern_names[] = {
+    "rectilinear",  "monotonic",	 "monotoniclines", "alignedrectilinear", "grid",
+    "triangles",    "stars",		 "cubic",	   "line",		 "concentric",
+    "honeycomb",    "3dhoneycomb",	 "gyroid",	   "hilbertcurve",	 "archimedeanchords",
+    "octagramspiral", "adaptivecubic", "supportcubic",   "lightning",		 "zigzag",
+};
+
+static const char *const home_names[] = {"min", "max"};
+
+static const long baud_rates[] = {2400,	  4800,	  9600,	  19200,  38400,  57600,   115200,
+				  230400, 250000, 460800, 500000, 921600, 1000000, 2000000};
+
+#define CHOICES(a) a, COUNT(a)
+#define S_ SETTING_ONE
+#define EX SETTING_PER_EXTRUDER
+#define FI SETTING_FIRST
+#define LI SETTING_LIMITS
+#define GT SETTING_GT_MIN
+#define SF SETTING_SAILFISH
+#define SO SETTING_SLICER_ONLY
+#define NUM SETTING_NUMBER
+#define INT SETTING_INT
+#define BOOL SETTING_BOOL
+#define STR SETTING_STRING
+
+/* Keys in the order the loader applies and writes them. */
+static const struct setting table[] = {
+    {"name", STR, S_, 0, 0, 0, "", NULL, NULL, NULL, 0, "Identity",
+     "display name; default: the file name without .ini"},
+    {"description", STR, S_, 0, 0, 0, "", "", NULL, NULL, 0, NULL, "one line"},
+    {"printer_model", STR, S_, 0, 0, 0, "", "", NULL, NULL, 0, NULL, "PrusaSlicer's model id, e.g. MK3S"},
+
+    {"protocol", SETTING_CHOICE, S_, 0, 0, 0, "", "marlin", NULL, CHOICES(protocol_names),
+     "Connection", "wire protocol; sailfish when gcode_flavor is sailfish or makerware"},
+    {"baudrate", SETTING_BAUD, S_, 0, 0, 0, "", "115200", NULL, NULL, 0, NULL,
+     "the firmware's BAUDRATE"},
+    {"usb_ids", SETTING_USB_IDS, S_, 0, 0, 0, "", "", NULL, NULL, 0, NULL,
+     "USB VID:PID pairs that identify the board (lsusb's ID vvvv:pppp)"},
+    {"rx_buffer_size", INT, S_, 16, 65536, 0, "bytes", "128", NULL, NULL, 0, NULL,
+     "the firmware's RX_BUFFER_SIZE (Marlin)"},
+    {"dtr_reset", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, NULL,
+     "opening the port resets the board"},
+    {"x3g_buffer_size", INT, S_, 0, 65536, SF, "bytes", "0", NULL, NULL, 0, NULL,
+     "Sailfish command buffer; 0 = ask the firmware"},
+
+    {"gcode_flavor", SETTING_CHOICE, S_, 0, 0, 0, "", "marlin2", "sailfish", CHOICES(flavor_names),
+     "Machine", "G-code dialect; must fit protocol (sailfish or makerware for sailfish)"},
+    {"bed_shape", SETTING_POLYGON, S_, -10000, 10000, 0, "mm", "0x0,200x0,200x200,0x200", NULL,
+     NULL, 0, NULL, "printable bed polygon in printer coordinates, 3-1024 points"},
+    {"max_print_height", NUM, S_, 0, 10000, GT, "mm", "200", NULL, NULL, 0, NULL, ""},
+    {"extruder_count", INT, S_, 1, 8, 0, "", NULL, NULL, NULL, 0, NULL,
+     "Stratum's key; default: the length of nozzle_diameter, else 1 (sailfish: at most 2)"},
+    {"use_relative_e_distances", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
+     "M83 (relative E) instead of M82"},
+
+    {"nozzle_diameter", NUM, EX, 0.05, 3, 0, "mm", "0.4", NULL, NULL, 0, "Extruders", ""},
+    {"filament_diameter", NUM, EX, 1, 3.5, 0, "mm", "1.75", NULL, NULL, 0, NULL, ""},
+    {"extruder_offset", SETTING_POINT, EX, -1000, 1000, 0, "mm", "0x0", NULL, NULL, 0, NULL, ""},
+    {"extrusion_multiplier", NUM, EX, 0, 5, GT, "", "1", NULL, NULL, 0, NULL, ""},
+    {"filament_density", NUM, FI, 0.01, 30, 0, "g/cm^3", "1.24", NULL, NULL, 0, NULL,
+     "for the filament weight in the estimate (PLA: 1.24)"},
+    {"temperature", INT, EX, 0, 450, 0, "C", "200", NULL, NULL, 0, NULL, ""},
+    {"first_layer_temperature", INT, EX, 0, 450, 0, "C", NULL, NULL, NULL, 0, NULL,
+     "default: temperature"},
+    {"bed_temperature", INT, FI, 0, 150, 0, "C", "0", NULL, NULL, 0, NULL, ""},
+    {"first_layer_bed_temperature", INT, FI, 0, 150, 0, "C", NULL, NULL, NULL, 0, NULL,
+     "default: bed_temperature"},
+    {"retract_length", NUM, EX, 0, 50, 0, "mm", "2", NULL, NULL, 0, NULL, ""},
+    {"retract_speed", NUM, EX, 0, 1000, GT, "mm/s", "40", NULL, NULL, 0, NULL, ""},
+    {"retract_lift", NUM, EX, 0, 50, 0, "mm", "0", NULL, NULL, 0, NULL, "Z hop"},
+    {"min_layer_height", NUM, EX, 0, 3, 0, "mm", "0.07", NULL, NULL, 0, NULL,
+     "at most the nozzle and max_layer_height"},
+    {"max_layer_height", NUM, EX, 0, 3, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "at most the nozzle; 0 means 75% of the nozzle"},
+
+    {"layer_height", NUM, S_, 0, 3, GT, "mm", "0.2", NULL, NULL, 0, "Print",
+     "at most the smallest nozzle"},
+    {"first_layer_height", SETTING_NUMBER_OR_PCT, S_, 0, 3, GT, "mm", "0.2", NULL, NULL, 0, NULL,
+     "at most the smallest nozzle; a percentage is of layer_height"},
+    {"extrusion_width", SETTING_NUMBER_OR_PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "0 = automatic; a percentage is of layer_height (as in PrusaSlicer)"},
+    {"perimeters", INT, S_, 0, 100, 0, "", "3", NULL, NULL, 0, NULL, ""},
+    {"top_solid_layers", INT, S_, 0, 1000, 0, "", "3", NULL, NULL, 0, NULL, ""},
+    {"bottom_solid_layers", INT, S_, 0, 1000, 0, "", "3", NULL, NULL, 0, NULL, ""},
+    {"fill_density", SETTING_PERCENT, S_, 0, 100, 0, "%", "20%", NULL, NULL, 0, NULL,
+     "a bare number is a fraction (0.15 = 15%), as old Slic3r wrote it"},
+    {"fill_pattern", SETTING_CHOICE, S_, 0, 0, 0, "", "stars", NULL, CHOICES(pattern_names), NULL,
+     "PrusaSlicer's pattern names (monotonous is read as monotonic)"},
+    {"skirts", INT, S_, 0, 100, 0, "", "1", NULL, NULL, 0, NULL, "loops"},
+    {"brim_width", NUM, S_, 0, 200, 0, "mm", "0", NULL, NULL, 0, NULL, ""},
+    {"support_material", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL, ""},
+    {"support_material_threshold", INT, S_, 0, 90, 0, "degrees", "0", NULL, NULL, 0, NULL,
+     "0 = automatic"},
+
+    {"travel_speed", NUM, S_, 0, 1000, GT, "mm/s", "130", NULL, NULL, 0, "Speed", ""},
+    {"perimeter_speed", NUM, S_, 0, 1000, GT, "mm/s", "60", NULL, NULL, 0, NULL,
+     "external perimeters at half of it"},
+    {"infill_speed", NUM, S_, 0, 1000, GT, "mm/s", "80", NULL, NULL, 0, NULL, ""},
+    {"first_layer_speed", SETTING_NUMBER_OR_PCT, S_, 0, 1000, 0, "mm/s", "30", NULL, NULL, 0, NULL,
+     "0 = not slowed; a percentage is of perimeter_speed"},
+
+    {"avoid_crossing_perimeters", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, "Travel",
+     "route travels inside the part instead of across its walls"},
+    {"only_retract_when_crossing_perimeters", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, NULL,
+     "no retraction for a travel that stays inside the part"},
+    {"max_unretracted_travel", NUM, S_, 0, 1e6, 0, "mm", "20", NULL, NULL, 0, NULL,
+     "Stratum's key: longer travels inside the part retract anyway"},
+
+    {"cooling", BOOL, FI, 0, 0, 0, "", "1", NULL, NULL, 0, "Cooling", ""},
+    {"min_fan_speed", INT, FI, 0, 100, 0, "%", "35", NULL, NULL, 0, NULL, "at most max_fan_speed"},
+    {"max_fan_speed", INT, FI, 0, 100, 0, "%", "100", NULL, NULL, 0, NULL, ""},
+    {"bridge_fan_speed", INT, FI, 0, 100, 0, "%", "100", NULL, NULL, 0, NULL, ""},
+    {"disable_fan_first_layers", INT, FI, 0, 1000, 0, "", "3", NULL, NULL, 0, NULL,
+     "layers printed with the fan off"},
+    {"fan_below_layer_time", INT, FI, 0, 3600, 0, "s", "60", NULL, NULL, 0, NULL, ""},
+    {"slowdown_below_layer_time", INT, FI, 0, 3600, 0, "s", "5", NULL, NULL, 0, NULL, ""},
+    {"min_print_speed", NUM, FI, 0, 1000, GT, "mm/s", "10", NULL, NULL, 0, NULL,
+     "slow-down for short layers stops here"},
+
+    {"machine_max_feedrate_x", NUM, LI, 0, 10000, GT, "mm/s", "500", NULL, NULL, 0,
+     "Machine limits", ""},
+    {"machine_max_feedrate_y", NUM, LI, 0, 10000, GT, "mm/s", "500", NULL, NULL, 0, NULL, ""},
+    {"machine_max_feedrate_z", NUM, LI, 0, 10000, GT, "mm/s", "12", NULL, NULL, 0, NULL, ""},
+    {"machine_max_feedrate_e", NUM, LI, 0, 10000, GT, "mm/s", "120", NULL, NULL, 0, NULL, ""},
+    {"machine_max_acceleration_x", NUM, LI, 0, 100000, GT, "mm/s^2", "9000", NULL, NULL, 0, NULL,
+     ""},
+    {"machine_max_acceleration_y", NUM, LI, 0, 100000, GT, "mm/s^2", "9000", NULL, NULL, 0, NULL,
+     ""},
+    {"machine_max_acceleration_z", NUM, LI, 0, 100000, GT, "mm/s^2", "500", NULL, NULL, 0, NULL,
+     ""},
+    {"machine_max_acceleration_e", NUM, LI, 0, 100000, GT, "mm/s^2", "10000", NULL, NULL, 0, NULL,
+     ""},
+    {"machine_max_acceleration_extruding", NUM, LI, 0, 100000, 0, "mm/s^2", "1500", NULL, NULL, 0,
+     NULL, ""},
+    {"machine_max_acceleration_retracting", NUM, LI, 0, 100000, 0, "mm/s^2", "1500", NULL, NULL,
+     0, NULL, ""},
+    {"machine_max_acceleration_travel", NUM, LI, 0, 100000, 0, "mm/s^2", "1500", NULL, NULL, 0,
+     NULL, "0 = not limited separately"},
+    {"machine_max_jerk_x", NUM, LI, 0, 1000, 0, "mm/s", "10", NULL, NULL, 0, NULL, ""},
+    {"machine_max_jerk_y", NUM, LI, 0, 1000, 0, "mm/s", "10", NULL, NULL, 0, NULL, ""},
+    {"machine_max_jerk_z", NUM, LI, 0, 1000, 0, "mm/s", "0.2", NULL, NULL, 0, NULL, ""},
+    {"machine_max_jerk_e", NUM, LI, 0, 1000, 0, "mm/s", "2.5", NULL, NULL, 0, NULL, ""},
+
+    /* The sailfish defaults are GPX's Replicator 1 machine (markwal/GPX
+     * src/shared/std_machines.h), the family the Creator Pro belongs to. */
+    {"steps_per_mm_x", NUM, S_, 0, 100000, SF, "steps/mm", "0", "94.117647", NULL, 0,
+     "Sailfish machine (X3G)", "more than 0 on a sailfish printer"},
+    {"steps_per_mm_y", NUM, S_, 0, 100000, SF, "steps/mm", "0", "94.117647", NULL, 0, NULL,
+     "more than 0 on a sailfish printer"},
+    {"steps_per_mm_z", NUM, S_, 0, 100000, SF, "steps/mm", "0", "400", NULL, 0, NULL,
+     "more than 0 on a sailfish printer"},
+    {"steps_per_mm_e", NUM, EX, 0, 100000, SF, "steps/mm", "0", "96.275201870333662", NULL, 0,
+     NULL, "per mm of filament; more than 0 on a sailfish printer"},
+    {"home_direction_x", SETTING_CHOICE, S_, 0, 0, SF, "", "min", "max", CHOICES(home_names), NULL,
+     "which end the axis homes to"},
+    {"home_direction_y", SETTING_CHOICE, S_, 0, 0, SF, "", "min", "max", CHOICES(home_names), NULL,
+     ""},
+    {"home_direction_z", SETTING_CHOICE, S_, 0, 0, SF, "", "min", "min", CHOICES(home_names), NULL,
+     ""},
+    {"home_feedrate_x", NUM, S_, 0, 100000, SF, "mm/min", "0", "2500", NULL, 0, NULL,
+     "homing speed (G-code F units)"},
+    {"home_feedrate_y", NUM, S_, 0, 100000, SF, "mm/min", "0", "2500", NULL, 0, NULL, ""},
+    {"home_feedrate_z", NUM, S_, 0, 100000, SF, "mm/min", "0", "1100", NULL, 0, NULL, ""},
+    {"home_position_x", NUM, S_, -10000, 10000, SF, "mm", "0", NULL, NULL, 0, NULL,
+     "position after homing, before M132 recalls the calibrated one"},
+    {"home_position_y", NUM, S_, -10000, 10000, SF, "mm", "0", NULL, NULL, 0, NULL, ""},
+    {"home_position_z", NUM, S_, -10000, 10000, SF, "mm", "0", NULL, NULL, 0, NULL, ""},
+    {"x3g_toolhead_offset_x", NUM, S_, -1000, 1000, SF, "mm", "0", NULL, NULL, 0, NULL,
+     "tool 1's offset from tool 0 (Sailfish applies its EEPROM's on tool changes)"},
+    {"x3g_toolhead_offset_y", NUM, S_, -1000, 1000, SF, "mm", "0", NULL, NULL, 0, NULL, ""},
+    {"x3g_toolhead_offset_z", NUM, S_, -1000, 1000, SF, "mm", "0", NULL, NULL, 0, NULL, ""},
+    {"x3g_heated_platform", BOOL, S_, 0, 0, SF, "", "1", NULL, NULL, 0, NULL,
+     "the platform heater is driven through the tool boards (M140/M190 are written)"},
+    {"x3g_home_timeout", INT, S_, 1, 65535, SF, "s", "20", NULL, NULL, 0, NULL,
+     "homing time-out in X3G commands 131/132 (GPX timeout)"},
+
+    {"start_gcode", STR, S_, 0, 0, 0, "", "G28 ; home all axes\nG1 Z5 F5000 ; lift nozzle\n", "",
+     NULL, 0, "Custom G-code", "PrusaSlicer's default; a sailfish profile must give its own"},
+    {"end_gcode", STR, S_, 0, 0, 0, "",
+     "M104 S0 ; turn off temperature\nG28 X0  ; home X axis\nM84     ; disable motors\n", "", NULL,
+     0, NULL, "PrusaSlicer's default; a sailfish profile must give its own"},
+
+    /* The G-code writer's settings a profile does not set yet. */
+    {"external_perimeter_speed", NUM, S_, 0, 1000, GT | SO, "mm/s", "30", NULL, NULL, 0,
+     "Fixed by the slicer (not read from a profile yet)", "half of perimeter_speed"},
+    {"solid_infill_speed", NUM, S_, 0, 1000, GT | SO, "mm/s", "20", NULL, NULL, 0, NULL, ""},
+    {"top_solid_infill_speed", NUM, S_, 0, 1000, GT | SO, "mm/s", "15", NULL, NULL, 0, NULL, ""},
+    {"bridge_speed", NUM, S_, 0, 1000, GT | SO, "mm/s", "60", NULL, NULL, 0, NULL, ""},
+    {"gap_fill_speed", NUM, S_, 0, 1000, GT | SO, "mm/s", "20", NULL, NULL, 0, NULL, ""},
+    {"support_material_speed", NUM, S_, 0, 1000, GT | SO, "mm/s", "60", NULL, NULL, 0, NULL, ""},
+    {"support_material_interface_speed", NUM, S_, 0, 1000, GT | SO, "mm/s", "60", NULL, NULL, 0,
+     NULL, ""},
+    {"travel_speed_z", NUM, S_, 0, 1000, SO, "mm/s", "0", NULL, NULL, 0, NULL,
+     "0 = travel_speed"},
+    {"deretract_speed", NUM, EX, 0, 1000, SO, "mm/s", "0", NULL, NULL, 0, NULL,
+     "0 = retract_speed"},
+    {"retract_before_travel", NUM, EX, 0, 1e6, SO, "mm", "2", NULL, NULL, 0, NULL,
+     "shorter travels do not retract"},
+    {"wipe", BOOL, EX, 0, 0, SO, "", "0", NULL, NULL, 0, NULL, ""},
+    {"fan_always_on", BOOL, FI, 0, 0, SO, "", "0", NULL, NULL, 0, NULL, ""},
+};
+
+size_t settings_count(void)
+{
+	return COUNT(table);
+}
+
+const struct setting *settings_at(size_t i)
+{
+	return i < COUNT(table) ? &table[i] : NULL;
+}
+
+const struct setting *settings_find(const char *name)
+{
+	for (size_t i = 0; name && i < COUNT(table); i++)
+		if (!strcmp(table[i].name, name))
+			return &table[i];
+	return NULL;
+}
+
+/* A bool has the range 0 to 1 whatever the table says. */
+bool setting_in_range(const struct setting *s, double v)
+{
+	double lo = s->type == SETTING_BOOL ? 0 : s->min, hi = s->type == SETTING_BOOL ? 1 : s->max;
+
+	if (!isfinite(v))
+		return false;
+	if (s->flags & SETTING_GT_MIN)
+		return v > lo && v <= hi;
+	return v >= lo && v <= hi;
+}
+
+/* Shortest %g form of v that reads back exactly. */
+static void fmt_exact(char *buf, size_t cap, double v)
+{
+	snprintf(buf, cap, "%.15g", v);
+	if (strtod(buf, NULL) != v)
+		snprintf(buf, cap, "%.17g", v);
+}
+
+void setting_range_text(const struct setting *s, char *buf, size_t cap)
+{
+	char lo[32], hi[32];
+	const char *sp = *s->unit ? " " : "";
+
+	fmt_exact(lo, sizeof(lo), s->min);
+	fmt_exact(hi, sizeof(hi), s->max);
+	if (s->flags & SETTING_GT_MIN)
+		snprintf(buf, cap, "more than %s and at most %s%s%s", lo, hi, sp, s->unit);
+	else
+		snprintf(buf, cap, "between %s and %s%s%s", lo, hi, sp, s->unit);
+}
+
+bool setting_default_number(const char *name, bool sailfish, double *out)
+{
+	const struct setting *s = settings_find(name);
+	const char *d;
+
+	if (!s || (s->type != SETTING_NUMBER && s->type != SETTING_INT && s->type != SETTING_BOOL &&
+		   s->type != SETTING_NUMBER_OR_PCT))
+		return false;
+	d = sailfish && s->sailfish_dflt ? s->sailfish_dflt : s->dflt;
+	return d && st_parse_double(d, strlen(d), 0, out) == ST_NUMBER_OK;
+}
+
+int setting_check(const char *what, const char *name, double v, struct st_error *err)
+{
+	const struct setting *s = settings_find(name);
+	char range[96];
+
+	if (!s)
+		return st_error_set(err, ST_ERR_INTERNAL, "%s: %s is not a declared setting", what,
+				    name);
+	if (setting_in_range(s, v))
+		return 0;
+	setting_range_text(s, range, sizeof(range));
+	return st_error_set(err, ST_ERR_RANGE, "%s: %s = %g is out of range (must be %s)", what,
+			    name, v, range);
+}
+
+const long *settings_baud_rates(size_t *count)
+{
+	*count = COUNT(baud_rates);
+	return baud_rates;
+}
+
+/* ---------------------------------------------------------------------------
+ * The docs' key tables
+ */
+
+static const char *const type_words[] = {
+    [SETTING_STRING] = "text",
+    [SETTING_NUMBER] = "number",
+    [SETTING_INT] = "whole number",
+    [SETTING_BOOL] = "0 or 1",
+    [SETTING_POINT] = "point XxY",
+    [SETTING_NUMBER_OR_PCT] = "number or percentage",
+    [SETTING_PERCENT] = "percentage",
+    [SETTING_CHOICE] = "name",
+    [SETTING_BAUD] = "baud rate",
+    [SETTING_USB_IDS] = "list of VVVV:PPPP",
+    [SETTING_POLYGON] = "list of points XxY",
+};
+
+static const char *const shape_words[] = {
+    [SETTING_ONE] = "",
+    [SETTING_PER_EXTRUDER] = ", per extruder",
+    [SETTING_FIRST] = ", a list's first value is used",
+    [SETTING_LIMITS] = ", 1 or 2 values (normal, stealth)",
+};
+
+/* A default as the docs show it: escapes for newlines, in backticks. */
+static void put_default(FILE *f, const char *d)
+{
+	if (!d) {
+		fputs("see meaning", f);
+		return;
+	}
+	if (!*d) {
+		fputs("empty", f);
+		return;
+	}
+	fputc('`', f);
+	for (; *d; d++)
+		if (*d == '\n')
+			fputs("\\n", f);
+		else
+			fputc(*d, f);
+	fputc('`', f);
+}
+
+/* The range column: numbers, names or rates. */
+static void put_range(FILE *f, const struct setting *s)
+{
+	char buf[128];
+
+	switch (s->type) {
+	case SETTING_NUMBER:
+	case SETTING_INT:
+	case SETTING_POINT:
+	case SETTING_POLYGON:
+	case SETTING_PERCENT:
+		setting_range_text(s, buf, sizeof(buf));
+		fputs(buf, f);
+		return;
+	case SETTING_NUMBER_OR_PCT:
+		setting_range_text(s, buf, sizeof(buf));
+		fprintf(f, "%s, or 0%% to 1000%%", buf);
+		return;
+	case SETTING_CHOICE:
+		for (size_t i = 0; i < s->nnames; i++)
+			fprintf(f, "%s`%s`", i ? ", " : "", s->names[i]);
+		return;
+	case SETTING_BAUD:
+		for (size_t i = 0; i < COUNT(baud_rates); i++)
+			fprintf(f, "%s%ld", i ? ", " : "", baud_rates[i]);
+		return;
+	case SETTING_STRING:
+	case SETTING_BOOL:
+	case SETTING_USB_IDS:
+		return;
+	}
+}
+
+int settings_write_doc(FILE *f)
+{
+	for (size_t i = 0; i < COUNT(table); i++) {
+		const struct setting *s = &table[i];
+
+		if (s->group)
+			fprintf(f, "%s### %s\n\n| key | type | range | default | meaning |\n"
+				   "|---|---|---|---|---|\n",
+				i ? "\n" : "", s->group);
+		fprintf(f, "| `%s` | %s%s%s | ", s->name, type_words[s->type], shape_words[s->shape],
+			(s->flags & SETTING_SAILFISH) ? ", sailfish" : "");
+		put_range(f, s);
+		fputs(" | ", f);
+		put_default(f, s->dflt);
+		if (s->sailfish_dflt && strcmp(s->sailfish_dflt, s->dflt ? s->dflt : "")) {
+			fputs(" (sailfish: ", f);
+			put_default(f, s->sailfish_dflt);
+			fputc(')', f);
+		}
+		fprintf(f, " | %s |\n", s->help);
+	}
+	return ferror(f) ? ST_ERR_IO : 0;
+}
