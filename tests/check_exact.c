@@ -390,6 +390,51 @@ START_TEST(shared_vertex_corner)
 }
 END_TEST
 
+/*
+ * A fan of n triangles around an apex above the unit circle, ring vertex i
+ * at angle i * step (radians); closed joins the last to the first.  Every
+ * triangle turns counterclockwise, so only going around more than once
+ * makes them cross: what the vertex stars must notice (stars.hpp).
+ */
+static uint64_t count_fan(int n, double step, bool closed, int threads)
+{
+	double v[16][3] = {{0, 0, 1}};
+	uint32_t t[16][3];
+	const int ntris = closed ? n : n - 1;
+	struct st_error err = {0};
+	uint64_t count = 12345;
+
+	ck_assert_int_lt(n, 16);
+	for (int i = 0; i < n; i++) {
+		v[1 + i][0] = cos(i * step);
+		v[1 + i][1] = sin(i * step);
+		v[1 + i][2] = 0;
+	}
+	for (int i = 0; i < ntris; i++) {
+		t[i][0] = 0;
+		t[i][1] = (uint32_t)(1 + i);
+		t[i][2] = (uint32_t)(1 + (i + 1) % n);
+	}
+	ck_assert_int_eq(exact_count_self_intersections(CVERTS(v), (size_t)n + 1, CTRIS(t),
+							 (size_t)ntris, NULL, threads, &count, &err),
+			 0);
+	return count;
+}
+
+START_TEST(fans_winding_more_than_once)
+{
+	for (int threads = 1; threads <= 2; threads++) {
+		/* Once around (a cone): nothing. */
+		ck_assert_uint_eq(count_fan(7, 2 * M_PI / 7, true, threads), 0);
+		ck_assert_uint_eq(count_fan(6, 2 * M_PI / 7, false, threads), 0);
+		/* Twice around, a {7/2} star: each chord crosses two others. */
+		ck_assert_uint_eq(count_fan(7, 4 * M_PI / 7, true, threads), 7);
+		/* One and a half turns, open: 108 degree steps, three crossings. */
+		ck_assert_uint_eq(count_fan(6, 108 * M_PI / 180, false, threads), 3);
+	}
+}
+END_TEST
+
 START_TEST(vertex_on_interior)
 {
 	/* No shared index; the second touches the first's inside with a corner. */
@@ -540,6 +585,7 @@ Suite *exact_suite(void)
 	tcase_add_test(pairs, shared_vertex_coplanar);
 	tcase_add_test(pairs, shared_vertex_corner);
 	tcase_add_test(pairs, vertex_on_interior);
+	tcase_add_test(pairs, fans_winding_more_than_once);
 	tcase_add_test(pairs, degenerate_triangles_ignored);
 	suite_add_tcase(s, pairs);
 	tcase_add_test(args, bad_arguments);
