@@ -274,6 +274,36 @@ START_TEST(threads_agree)
 END_TEST
 
 /*
+ * A sphere cut by one triangle in a plane: with a triangle of 40 mm the
+ * candidate pairs come from the grid (gridpairs.hpp); one of 4 m would
+ * put it in millions of grid cells, so the grid declines and CGAL's box
+ * intersection finds them.  Both cross the same sphere triangles.
+ */
+START_TEST(grid_and_boxes_agree)
+{
+	struct mesh *sphere = fx_sphere(0, 0, 0, 5, 32, 64);
+	uint64_t counts[2];
+
+	for (int i = 0; i < 2; i++) {
+		const double s = i ? 100 : 1;
+		const double a[3] = {-20 * s, -10 * s, 0.123}, b[3] = {20 * s, -10 * s, 0.123},
+			     c[3] = {0, 20 * s, 0.123};
+		struct mesh *cut = fx_triangle(a, b, c);
+		struct mesh *m = fx_concat(sphere, cut);
+
+		counts[i] = count_mesh(m, NULL, 1);
+		ck_assert_uint_eq(count_mesh(m, NULL, 2), counts[i]);
+		mesh_free(cut);
+		mesh_free(m);
+	}
+	/* The 64 quads (128 triangles) of the band the plane goes through. */
+	ck_assert_uint_eq(counts[0], 128);
+	ck_assert_uint_eq(counts[1], counts[0]);
+	mesh_free(sphere);
+}
+END_TEST
+
+/*
  * Scaling by a power of two is exact, so no predicate changes: the count of
  * two overlapping spheres must not change when they are moved beyond float
  * range (the boxes are clamped there and still go through the tree).
@@ -576,6 +606,7 @@ Suite *exact_suite(void)
 	tcase_add_test(mesh, cubes_face_contact);
 	tcase_add_test(mesh, duplicates_not_counted);
 	tcase_add_test(mesh, threads_agree);
+	tcase_add_test(mesh, grid_and_boxes_agree);
 	tcase_add_test(mesh, huge_coordinates);
 	tcase_add_test(mesh, snap_round_on_grid_and_off);
 	tcase_set_timeout(mesh, 30);
