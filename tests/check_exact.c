@@ -304,6 +304,45 @@ START_TEST(grid_and_boxes_agree)
 END_TEST
 
 /*
+ * 200 flat triangles stacked 0.001 apart all fall in one grid cell, so
+ * comparing all their pairs there is too much for the grid: it declines
+ * after sorting the boxes, and CGAL's box intersection must still see
+ * every box where it was.  One upright triangle crosses each of them.
+ */
+START_TEST(crowded_cell_falls_back)
+{
+	enum { LAYERS = 200 };
+	double (*v)[3] = calloc(3 * (LAYERS + 1), sizeof(*v));
+	uint32_t (*t)[3] = calloc(LAYERS + 1, sizeof(*t));
+	struct st_error err = {0};
+	uint64_t n = 12345;
+
+	ck_assert_ptr_nonnull(v);
+	ck_assert_ptr_nonnull(t);
+	for (int i = 0; i <= LAYERS; i++)
+		for (int k = 0; k < 3; k++)
+			t[i][k] = (uint32_t)(3 * i + k);
+	for (int i = 0; i < LAYERS; i++) {
+		const double z = 0.001 * i;
+		const double c[3][3] = {{0, 0, z}, {1, 0, z}, {0, 1, z}};
+		memcpy(v[3 * i], c, sizeof(c));
+	}
+	/* Upright in x = 0.25 from z = -1 to 2, through every layer. */
+	const double up[3][3] = {{0.25, 0.1, -1}, {0.25, 0.2, -1}, {0.25, 0.15, 2}};
+	memcpy(v[3 * LAYERS], up, sizeof(up));
+	for (int threads = 1; threads <= 2; threads++) {
+		ck_assert_int_eq(exact_count_self_intersections(CVERTS(v), 3 * (LAYERS + 1),
+								 CTRIS(t), LAYERS + 1, NULL,
+								 threads, &n, &err),
+				 0);
+		ck_assert_uint_eq(n, LAYERS);
+	}
+	free(v);
+	free(t);
+}
+END_TEST
+
+/*
  * Scaling by a power of two is exact, so no predicate changes: the count of
  * two overlapping spheres must not change when they are moved beyond float
  * range (the boxes are clamped there and still go through the tree).
@@ -607,6 +646,7 @@ Suite *exact_suite(void)
 	tcase_add_test(mesh, duplicates_not_counted);
 	tcase_add_test(mesh, threads_agree);
 	tcase_add_test(mesh, grid_and_boxes_agree);
+	tcase_add_test(mesh, crowded_cell_falls_back);
 	tcase_add_test(mesh, huge_coordinates);
 	tcase_add_test(mesh, snap_round_on_grid_and_off);
 	tcase_set_timeout(mesh, 30);

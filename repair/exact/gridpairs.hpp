@@ -83,10 +83,10 @@ inline bool overlap(const Box &a, const Box &b)
  * Call visit(s, t) once, from any thread, for every pair of overlapping
  * boxes (closed, as boxpairs.hpp) among boxes[use[..]] for which keep(s, t)
  * is true; s and t are indices into boxes as given.  Returns false, having
- * called nothing and changed nothing, when the grid would be slow for these
- * boxes.  On true, boxes is left empty: the boxes are sorted into cell
- * order (so that the pairs are walked through memory in order), and
- * keeping the unsorted copy as well would cost 24 bytes per triangle.
+ * called nothing, when the grid would be slow for these boxes; boxes[use[..]]
+ * are then as given.  On true, boxes is left empty: the boxes are sorted
+ * into cell order (so that the pairs are walked through memory in order),
+ * and keeping the unsorted copy as well would cost 24 bytes per triangle.
  */
 template <class Keep, class Visit>
 bool for_each_pair(std::vector<Box> &boxes, const std::vector<uint32_t> &use, int threads,
@@ -135,8 +135,10 @@ bool for_each_pair(std::vector<Box> &boxes, const std::vector<uint32_t> &use, in
 	}
 	if (entries > MAX_ENTRIES_PER_BOX * (double)n + 1024 || entries >= (double)UINT32_MAX)
 		return false;
+	/* A bucket per two entries: a cell holds about three, so most buckets
+	 * still hold one cell, and the row table is half the size. */
 	int bits = 10;
-	while (((size_t)1 << bits) < (size_t)entries && bits < 31)
+	while (((size_t)2 << bits) < (size_t)entries && bits < 31)
 		bits++;
 	const size_t nb = (size_t)1 << bits;
 	g.mask = nb - 1;
@@ -163,9 +165,13 @@ bool for_each_pair(std::vector<Box> &boxes, const std::vector<uint32_t> &use, in
 		for (size_t i = 0; i < n; i++)
 			id[first[group(boxes[use[i]])]++] = use[i];
 	}
+	/* The sorted copy replaces the given one (24 bytes per box less at
+	 * the peak); it is put back if the grid declines below. */
 	std::vector<Box> sorted(n);
 	for (size_t i = 0; i < n; i++)
 		sorted[i] = boxes[id[i]];
+	const size_t nboxes = boxes.size();
+	std::vector<Box>().swap(boxes);
 
 	/* Buckets in compressed rows; a box is listed once per cell, so twice
 	 * in a bucket when two of its cells share it (then next to itself). */
@@ -177,9 +183,12 @@ bool for_each_pair(std::vector<Box> &boxes, const std::vector<uint32_t> &use, in
 		tests += 0.5 * (double)off[b + 1] * (double)off[b + 1];
 		off[b + 1] += off[b];
 	}
-	if (tests > MAX_TESTS_PER_BOX * (double)n + 4096)
+	if (tests > MAX_TESTS_PER_BOX * (double)n + 4096) {
+		boxes.resize(nboxes);
+		for (size_t i = 0; i < n; i++)
+			boxes[id[i]] = sorted[i];
 		return false;
-	std::vector<Box>().swap(boxes);
+	}
 	std::vector<uint32_t> entry(off[nb]);
 	for (size_t i = 0; i < n; i++)
 		for_each_cell(g, sorted[i], [&](uint32_t b) { entry[off[b]++] = (uint32_t)i; });
