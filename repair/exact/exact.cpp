@@ -7,10 +7,12 @@
  *
  * Self-intersection count, in three steps:
  *  1. One float box per usable triangle (24 bytes); skipped and degenerate
- *     triangles get no box pointer, so they meet nothing.
- *  2. boxpairs.hpp reports every pair of overlapping boxes once, split over
- *     the cores along planes.
- *  3. Each candidate pair is decided by pairtest.hpp with exact predicates.
+ *     triangles are not used, so they meet nothing.
+ *  2. Pairs that share a vertex: stars.hpp, star by star.
+ *  3. Pairs that share nothing: every pair of overlapping boxes once, from
+ *     gridpairs.hpp or, where it declines, boxpairs.hpp (split over the
+ *     cores along planes); each is decided by pairtest.hpp with exact
+ *     predicates.
  */
 #include "exact.h"
 
