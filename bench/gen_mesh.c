@@ -2,6 +2,10 @@
  * gen_mesh.c - write a generated mesh for the benchmarks:
  *   gen_mesh torus NU NV OUT.stl     torus with NU x NV quads (2*NU*NV triangles)
  *   gen_mesh spheres N OUT.stl       N overlapping spheres (self-intersections)
+ *   gen_mesh sphere NLAT NLON OUT.stl
+ *                                    one UV sphere of radius 50 (2*NLON*(NLAT-1)
+ *                                    triangles; "sphere 501 1000" is 1M), poles
+ *                                    where NLON thin triangles meet
  *   gen_mesh twospheres NLAT NLON OUT.stl
  *                                    two UV spheres of radius 20 whose centres
  *                                    are 0.6 r apart (one intersection curve)
@@ -129,6 +133,7 @@ static bool same_triangles(const struct mesh *a, const struct mesh *b)
 static void usage(void)
 {
 	fprintf(stderr, "usage: gen_mesh torus NU NV OUT.stl | gen_mesh spheres N OUT.stl\n"
+			"       gen_mesh sphere NLAT NLON OUT.stl\n"
 			"       gen_mesh twospheres NLAT NLON OUT.stl | gen_mesh scan NU NV JITTER "
 			"OUT.stl\n"
 			"       gen_mesh box SX SY SZ OUT.stl | gen_mesh cylinder R H N OUT.stl\n"
@@ -167,6 +172,8 @@ int main(int argc, char **argv)
 			mesh_free(s);
 			m = both;
 		}
+	} else if (argc == 5 && !strcmp(argv[1], "sphere")) {
+		m = fx_sphere(0, 0, 0, 50, int_arg(argv[2], 3, 100000), int_arg(argv[3], 3, 100000));
 	} else if (argc == 5 && !strcmp(argv[1], "twospheres")) {
 		int nlat = int_arg(argv[2], 3, 100000), nlon = int_arg(argv[3], 3, 100000);
 		/* Off the x axis by a little, so the two grids do not line up. */

@@ -30,6 +30,7 @@ case $what in check|repair|intersect|slice|region|stream|soak|x3g|s3g|serve|all)
 if [ "$what" != slice ] && [ "$what" != region ] && [ "$what" != stream ] && [ "$what" != soak ] && [ "$what" != x3g ] && [ "$what" != s3g ] && [ "$what" != serve ]; then
 	[ -f "$out/torus-1m.stl" ] || "$gen" torus 1000 500 "$out/torus-1m.stl"
 	[ -f "$out/torus-2m.stl" ] || "$gen" torus 1000 1000 "$out/torus-2m.stl"
+	[ -f "$out/sphere-1m.stl" ] || "$gen" sphere 501 1000 "$out/sphere-1m.stl"
 	[ -f "$out/spheres.stl" ] || "$gen" spheres 8 "$out/spheres.stl"
 fi
 if [ "$what" != check ] && [ "$what" != region ] && [ "$what" != stream ] && [ "$what" != soak ] && [ "$what" != x3g ] && [ "$what" != s3g ] && [ "$what" != serve ]; then
@@ -55,7 +56,7 @@ best_of3() {
 check_table() {
 echo "| file | triangles | stratum check s (2 cores) | 1 core s | peak MiB | B/triangle | admesh s | admesh MiB | time ratio stratum/admesh |"
 echo "|---|---|---|---|---|---|---|---|---|"
-for f in torus-1m torus-2m spheres; do
+for f in torus-1m sphere-1m torus-2m spheres; do
 	path="$out/$f.stl"
 	tris=$(( ($(stat -c %s "$path") - 84) / 50 ))
 	set -- $(best_of3 "$bin" check "$path")

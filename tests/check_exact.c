@@ -274,6 +274,75 @@ START_TEST(threads_agree)
 END_TEST
 
 /*
+ * A sphere cut by one triangle in a plane: with a triangle of 40 mm the
+ * candidate pairs come from the grid (gridpairs.hpp); one of 4 m would
+ * put it in millions of grid cells, so the grid declines and CGAL's box
+ * intersection finds them.  Both cross the same sphere triangles.
+ */
+START_TEST(grid_and_boxes_agree)
+{
+	struct mesh *sphere = fx_sphere(0, 0, 0, 5, 32, 64);
+	uint64_t counts[2];
+
+	for (int i = 0; i < 2; i++) {
+		const double s = i ? 100 : 1;
+		const double a[3] = {-20 * s, -10 * s, 0.123}, b[3] = {20 * s, -10 * s, 0.123},
+			     c[3] = {0, 20 * s, 0.123};
+		struct mesh *cut = fx_triangle(a, b, c);
+		struct mesh *m = fx_concat(sphere, cut);
+
+		counts[i] = count_mesh(m, NULL, 1);
+		ck_assert_uint_eq(count_mesh(m, NULL, 2), counts[i]);
+		mesh_free(cut);
+		mesh_free(m);
+	}
+	/* The 64 quads (128 triangles) of the band the plane goes through. */
+	ck_assert_uint_eq(counts[0], 128);
+	ck_assert_uint_eq(counts[1], counts[0]);
+	mesh_free(sphere);
+}
+END_TEST
+
+/*
+ * 200 flat triangles stacked 0.001 apart all fall in one grid cell, so
+ * comparing all their pairs there is too much for the grid: it declines
+ * after sorting the boxes, and CGAL's box intersection must still see
+ * every box where it was.  One upright triangle crosses each of them.
+ */
+START_TEST(crowded_cell_falls_back)
+{
+	enum { LAYERS = 200 };
+	double (*v)[3] = calloc(3 * (LAYERS + 1), sizeof(*v));
+	uint32_t (*t)[3] = calloc(LAYERS + 1, sizeof(*t));
+	struct st_error err = {0};
+	uint64_t n = 12345;
+
+	ck_assert_ptr_nonnull(v);
+	ck_assert_ptr_nonnull(t);
+	for (int i = 0; i <= LAYERS; i++)
+		for (int k = 0; k < 3; k++)
+			t[i][k] = (uint32_t)(3 * i + k);
+	for (int i = 0; i < LAYERS; i++) {
+		const double z = 0.001 * i;
+		const double c[3][3] = {{0, 0, z}, {1, 0, z}, {0, 1, z}};
+		memcpy(v[3 * i], c, sizeof(c));
+	}
+	/* Upright in x = 0.25 from z = -1 to 2, through every layer. */
+	const double up[3][3] = {{0.25, 0.1, -1}, {0.25, 0.2, -1}, {0.25, 0.15, 2}};
+	memcpy(v[3 * LAYERS], up, sizeof(up));
+	for (int threads = 1; threads <= 2; threads++) {
+		ck_assert_int_eq(exact_count_self_intersections(CVERTS(v), 3 * (LAYERS + 1),
+								 CTRIS(t), LAYERS + 1, NULL,
+								 threads, &n, &err),
+				 0);
+		ck_assert_uint_eq(n, LAYERS);
+	}
+	free(v);
+	free(t);
+}
+END_TEST
+
+/*
  * Scaling by a power of two is exact, so no predicate changes: the count of
  * two overlapping spheres must not change when they are moved beyond float
  * range (the boxes are clamped there and still go through the tree).
@@ -387,6 +456,51 @@ START_TEST(shared_vertex_corner)
 	v[1][0] = 1;
 	v[1][1] = -1e-300;
 	ck_assert_uint_eq(count_two(v, 5, t), 0); /* just outside */
+}
+END_TEST
+
+/*
+ * A fan of n triangles around an apex above the unit circle, ring vertex i
+ * at angle i * step (radians); closed joins the last to the first.  Every
+ * triangle turns counterclockwise, so only going around more than once
+ * makes them cross: what the vertex stars must notice (stars.hpp).
+ */
+static uint64_t count_fan(int n, double step, bool closed, int threads)
+{
+	double v[16][3] = {{0, 0, 1}};
+	uint32_t t[16][3];
+	const int ntris = closed ? n : n - 1;
+	struct st_error err = {0};
+	uint64_t count = 12345;
+
+	ck_assert_int_lt(n, 16);
+	for (int i = 0; i < n; i++) {
+		v[1 + i][0] = cos(i * step);
+		v[1 + i][1] = sin(i * step);
+		v[1 + i][2] = 0;
+	}
+	for (int i = 0; i < ntris; i++) {
+		t[i][0] = 0;
+		t[i][1] = (uint32_t)(1 + i);
+		t[i][2] = (uint32_t)(1 + (i + 1) % n);
+	}
+	ck_assert_int_eq(exact_count_self_intersections(CVERTS(v), (size_t)n + 1, CTRIS(t),
+							 (size_t)ntris, NULL, threads, &count, &err),
+			 0);
+	return count;
+}
+
+START_TEST(fans_winding_more_than_once)
+{
+	for (int threads = 1; threads <= 2; threads++) {
+		/* Once around (a cone): nothing. */
+		ck_assert_uint_eq(count_fan(7, 2 * M_PI / 7, true, threads), 0);
+		ck_assert_uint_eq(count_fan(6, 2 * M_PI / 7, false, threads), 0);
+		/* Twice around, a {7/2} star: each chord crosses two others. */
+		ck_assert_uint_eq(count_fan(7, 4 * M_PI / 7, true, threads), 7);
+		/* One and a half turns, open: 108 degree steps, three crossings. */
+		ck_assert_uint_eq(count_fan(6, 108 * M_PI / 180, false, threads), 3);
+	}
 }
 END_TEST
 
@@ -531,6 +645,8 @@ Suite *exact_suite(void)
 	tcase_add_test(mesh, cubes_face_contact);
 	tcase_add_test(mesh, duplicates_not_counted);
 	tcase_add_test(mesh, threads_agree);
+	tcase_add_test(mesh, grid_and_boxes_agree);
+	tcase_add_test(mesh, crowded_cell_falls_back);
 	tcase_add_test(mesh, huge_coordinates);
 	tcase_add_test(mesh, snap_round_on_grid_and_off);
 	tcase_set_timeout(mesh, 30);
@@ -540,6 +656,7 @@ Suite *exact_suite(void)
 	tcase_add_test(pairs, shared_vertex_coplanar);
 	tcase_add_test(pairs, shared_vertex_corner);
 	tcase_add_test(pairs, vertex_on_interior);
+	tcase_add_test(pairs, fans_winding_more_than_once);
 	tcase_add_test(pairs, degenerate_triangles_ignored);
 	suite_add_tcase(s, pairs);
 	tcase_add_test(args, bad_arguments);

@@ -7,19 +7,24 @@
  *
  * Self-intersection count, in three steps:
  *  1. One float box per usable triangle (24 bytes); skipped and degenerate
- *     triangles get no box pointer, so they meet nothing.
- *  2. boxpairs.hpp reports every pair of overlapping boxes once, split over
- *     the cores along planes.
- *  3. Each candidate pair is decided by pairtest.hpp with exact predicates.
+ *     triangles are not used, so they meet nothing.
+ *  2. Pairs that share a vertex: stars.hpp, star by star.
+ *  3. Pairs that share nothing: every pair of overlapping boxes once, from
+ *     gridpairs.hpp or, where it declines, boxpairs.hpp (split over the
+ *     cores along planes); each is decided by pairtest.hpp with exact
+ *     predicates.
  */
 #include "exact.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
 #include "boxpairs.hpp"
+#include "gridpairs.hpp"
 #include "pairtest.hpp"
+#include "stars.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <exception>
 #include <new>
@@ -47,17 +52,18 @@ Point to_point(const double p[3])
 }
 
 /* The body of exact_count_self_intersections once arguments are checked. */
-int count_pairs(const double (*verts)[3], const uint32_t (*tris)[3], size_t ntris,
+int count_pairs(const double (*verts)[3], size_t nverts, const uint32_t (*tris)[3], size_t ntris,
 		const uint8_t *skip, int threads, uint64_t *count, struct st_error *err)
 {
 	std::vector<Box> boxes(ntris);
-	std::vector<const Box *> all;
+	std::vector<uint32_t> use;
+	std::vector<uint8_t> usable(ntris, 0);
 	size_t nuse = 0;
 
 	for (size_t t = 0; t < ntris; t++)
 		if (!(skip && skip[t]))
 			nuse++;
-	all.reserve(nuse);
+	use.reserve(nuse);
 	for (size_t t = 0; t < ntris; t++) {
 		const double *p[3];
 		float lo[3], hi[3];
@@ -79,18 +85,53 @@ int count_pairs(const double (*verts)[3], const uint32_t (*tris)[3], size_t ntri
 			hi[k] = box_coord(std::max(std::max(p[0][k], p[1][k]), p[2][k]));
 		}
 		boxes[t] = Box(lo, hi);
-		all.push_back(&boxes[t]);
+		use.push_back(static_cast<uint32_t>(t));
+		usable[t] = 1;
 	}
 
-	std::vector<uint64_t> counts;
+	/* Pairs that share a vertex: from the stars, never from the boxes. */
+	stars::table st;
+	stars::build(tris, ntris, nverts, usable, st);
 	auto get = [verts](uint32_t i) { return to_point(verts[i]); };
+	std::atomic<uint64_t> near_hits{0};
+	boxpairs::for_each_index(nverts, threads, [&](size_t v) {
+		static thread_local stars::scratch s;
+		const size_t k = st.off[v + 1] - st.off[v];
+		const uint64_t h = stars::count_in_star<K>(static_cast<uint32_t>(v),
+							    st.tri.data() + st.off[v], k, tris,
+							    get, s);
+		if (h)
+			near_hits += h;
+	});
+	std::vector<size_t>().swap(st.off);
+	std::vector<uint32_t>().swap(st.tri);
+
+	std::vector<uint8_t>().swap(usable);
+
+	/* Pairs that share nothing: the boxes, on a grid where it is fast. */
+	auto apart = [tris](size_t s, size_t t) {
+		return pairtest::no_common_corner(tris[s], tris[t]);
+	};
+	std::atomic<uint64_t> far_hits{0};
+	if (gridpairs::for_each_pair(boxes, use, threads, apart, [&](size_t s, size_t t) {
+		    if (pairtest::intersects<K>(tris[s], tris[t], get))
+			    far_hits++;
+	    })) {
+		*count = near_hits + far_hits;
+		return ST_OK;
+	}
+	std::vector<const Box *> all(use.size());
+	for (size_t i = 0; i < use.size(); i++)
+		all[i] = &boxes[use[i]];
+	std::vector<uint32_t>().swap(use);
+	std::vector<uint64_t> counts;
 	boxpairs::for_each_pair(
 	    boxes, std::move(all), threads, [&](size_t n) { counts.assign(n, 0); },
 	    [&](size_t leaf, size_t s, size_t t) {
-		    if (pairtest::intersects<K>(tris[s], tris[t], get))
+		    if (apart(s, t) && pairtest::intersects<K>(tris[s], tris[t], get))
 			    counts[leaf]++;
 	    });
-	uint64_t total = 0;
+	uint64_t total = near_hits;
 	for (uint64_t c : counts)
 		total += c;
 	*count = total;
@@ -157,7 +198,7 @@ int exact_count_self_intersections(const double (*verts)[3], size_t nverts,
 						    "but there are only %zu vertices",
 						    t, k, (unsigned long)tris[t][k], nverts);
 	try {
-		return count_pairs(verts, tris, ntris, skip, threads, count, err);
+		return count_pairs(verts, nverts, tris, ntris, skip, threads, count, err);
 	} catch (const std::bad_alloc &) {
 		*count = 0;
 		return st_error_set(err, ST_ERR_NOMEM,

@@ -48,11 +48,12 @@ int exact_orient3d(const double a[3], const double b[3], const double c[3],
  * (collinear corners, exact test) is ignored as well, never an error.
  * Pairs that share an edge intersect only when they overlap in their common
  * plane; pairs that share one vertex only when they meet anywhere else;
- * pairs sharing all three vertices never count.  Candidate pairs come from
- * CGAL's box intersection; threads: 1 = this thread only, n > 1 = up to n
- * cores (capped at what TBB has), 0 = all cores.
+ * pairs sharing all three vertices never count.  Pairs sharing a vertex
+ * are decided from the vertex stars, the others are found with a grid or
+ * CGAL's box intersection (docs/check.md); threads: 1 = this thread only,
+ * n > 1 = up to n cores (capped at what TBB has), 0 = all cores.
  *
- * Memory: about 40 bytes per triangle on top of the arrays, any thread
+ * Memory: about 50 bytes per triangle on top of the arrays, any thread
  * count.  Reentrant; the arrays are only read.
  *
  * Returns 0 with *count set, or a negative class with err filled and

@@ -1,0 +1,231 @@
+/*
+ * gridpairs.hpp - private to repair/exact: every pair of overlapping
+ * triangle boxes, found with a hashed uniform grid when the triangles are
+ * of similar size, as in a scanned or finely tessellated model.
+ *
+ * Why not always CGAL's box intersection (boxpairs.hpp): on such meshes it
+ * spends about 0.4 s of one core per million triangles sorting, against
+ * about a tenth of that here: each box goes into the few grid cells it
+ * covers and only boxes sharing a cell are compared.  A grid is only good
+ * while cells stay small, so for_each_pair() measures the work first and
+ * declines (returns false) when boxes of very different sizes would put
+ * too many boxes in a cell or a box in too many cells; the caller then
+ * uses boxpairs.hpp.
+ */
+#ifndef STRATUM_REPAIR_EXACT_GRIDPAIRS_HPP
+#define STRATUM_REPAIR_EXACT_GRIDPAIRS_HPP
+
+#include "boxpairs.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+namespace gridpairs
+{
+
+using boxpairs::Box;
+
+/* Cells per axis at most (the cell key packs three 21-bit indices). */
+const int64_t MAX_CELLS = (int64_t)1 << 21;
+/* Declined above this many cell entries, or box comparisons, per box. */
+const double MAX_ENTRIES_PER_BOX = 8, MAX_TESTS_PER_BOX = 48;
+/* Cell side, in median largest box sides: each box covers about
+ * 2-4 cells and a cell holds a handful of boxes. */
+const double CELL_SIDE = 1.5;
+
+struct grid {
+	double origin[3], inv_side;
+	uint64_t dim[2]; /* cells along x and y */
+	uint64_t mask;	 /* buckets - 1 */
+};
+
+/* Cell index along axis k of x >= origin[k] (truncation is floor here). */
+inline uint64_t cell_of(const grid &g, int k, float x)
+{
+	return (uint64_t)(((double)x - g.origin[k]) * g.inv_side);
+}
+
+/* Cells in raster order, wrapped onto the buckets: neighbouring cells get
+ * neighbouring buckets, so walking the buckets walks through space. */
+inline uint64_t bucket_of(const grid &g, uint64_t i, uint64_t j, uint64_t k)
+{
+	return (i + g.dim[0] * (j + g.dim[1] * k)) & g.mask;
+}
+
+/* Call f(bucket) for each cell box b covers. */
+template <class F> void for_each_cell(const grid &g, const Box &b, F f)
+{
+	uint64_t lo[3], hi[3];
+
+	for (int k = 0; k < 3; k++) {
+		lo[k] = cell_of(g, k, b.min_coord(k));
+		hi[k] = cell_of(g, k, b.max_coord(k));
+	}
+	for (uint64_t k = lo[2]; k <= hi[2]; k++)
+		for (uint64_t j = lo[1]; j <= hi[1]; j++)
+			for (uint64_t i = lo[0]; i <= hi[0]; i++)
+				f(static_cast<uint32_t>(bucket_of(g, i, j, k)));
+}
+
+/* Whether two closed boxes meet; no early exit, as about half of the
+ * pairs in a cell meet and a branch per axis would mispredict. */
+inline bool overlap(const Box &a, const Box &b)
+{
+	return (a.max_coord(0) >= b.min_coord(0)) & (b.max_coord(0) >= a.min_coord(0)) &
+	       (a.max_coord(1) >= b.min_coord(1)) & (b.max_coord(1) >= a.min_coord(1)) &
+	       (a.max_coord(2) >= b.min_coord(2)) & (b.max_coord(2) >= a.min_coord(2));
+}
+
+/*
+ * Call visit(s, t) once, from any thread, for every pair of overlapping
+ * boxes (closed, as boxpairs.hpp) among boxes[use[..]] for which keep(s, t)
+ * is true; s and t are indices into boxes as given.  Returns false, having
+ * called nothing, when the grid would be slow for these boxes; boxes[use[..]]
+ * are then as given.  On true, boxes is left empty: the boxes are sorted
+ * into cell order (so that the pairs are walked through memory in order),
+ * and keeping the unsorted copy as well would cost 24 bytes per triangle.
+ */
+template <class Keep, class Visit>
+bool for_each_pair(std::vector<Box> &boxes, const std::vector<uint32_t> &use, int threads,
+		   Keep keep, Visit visit)
+{
+	const size_t n = use.size();
+	grid g;
+
+	if (n < 2)
+		return n == 1 || n == 0;
+	/* Cell side from the median largest box side. */
+	std::vector<float> side(n);
+	float lo[3] = {HUGE_VALF, HUGE_VALF, HUGE_VALF}, hi[3] = {-HUGE_VALF, -HUGE_VALF, -HUGE_VALF};
+	for (size_t i = 0; i < n; i++) {
+		const Box &b = boxes[use[i]];
+		float s = 0;
+		for (int k = 0; k < 3; k++) {
+			s = std::max(s, b.max_coord(k) - b.min_coord(k));
+			lo[k] = std::min(lo[k], b.min_coord(k));
+			hi[k] = std::max(hi[k], b.max_coord(k));
+		}
+		side[i] = s;
+	}
+	std::nth_element(side.begin(), side.begin() + n / 2, side.end());
+	const double cell = CELL_SIDE * side[n / 2];
+	std::vector<float>().swap(side);
+	if (!(cell > 0) || !std::isfinite(cell))
+		return false;
+	g.inv_side = 1 / cell;
+	for (int k = 0; k < 3; k++) {
+		g.origin[k] = lo[k];
+		if (!(((double)hi[k] - lo[k]) * g.inv_side < (double)(MAX_CELLS - 1)))
+			return false;
+	}
+	g.dim[0] = cell_of(g, 0, hi[0]) + 1;
+	g.dim[1] = cell_of(g, 1, hi[1]) + 1;
+
+	/* Count cell entries first: decline before allocating much. */
+	double entries = 0;
+	for (size_t i = 0; i < n; i++) {
+		const Box &b = boxes[use[i]];
+		double c = 1;
+		for (int k = 0; k < 3; k++)
+			c *= (double)(cell_of(g, k, b.max_coord(k)) - cell_of(g, k, b.min_coord(k)) + 1);
+		entries += c;
+	}
+	if (entries > MAX_ENTRIES_PER_BOX * (double)n + 1024 || entries >= (double)UINT32_MAX)
+		return false;
+	/* A bucket per two entries: a cell holds about three, so most buckets
+	 * still hold one cell, and the row table is half the size. */
+	int bits = 10;
+	while (((size_t)2 << bits) < (size_t)entries && bits < 31)
+		bits++;
+	const size_t nb = (size_t)1 << bits;
+	g.mask = nb - 1;
+
+	/*
+	 * Sort the boxes into raster order of their low corner's cell (a
+	 * counting sort on groups of 16 buckets, a table that stays in cache),
+	 * keeping where each came from: the passes below then walk through
+	 * memory in order whatever the order of the file.
+	 */
+	const int group_bits = bits > 4 ? 4 : 0;
+	std::vector<uint32_t> id(n);
+	{
+		std::vector<uint32_t> first((nb >> group_bits) + 1, 0);
+		auto group = [&](const Box &b) {
+			return bucket_of(g, cell_of(g, 0, b.min_coord(0)), cell_of(g, 1, b.min_coord(1)),
+					 cell_of(g, 2, b.min_coord(2))) >>
+			       group_bits;
+		};
+		for (size_t i = 0; i < n; i++)
+			first[group(boxes[use[i]]) + 1]++;
+		for (size_t b = 0; b + 1 < first.size(); b++)
+			first[b + 1] += first[b];
+		for (size_t i = 0; i < n; i++)
+			id[first[group(boxes[use[i]])]++] = use[i];
+	}
+	/* The sorted copy replaces the given one (24 bytes per box less at
+	 * the peak); it is put back if the grid declines below. */
+	std::vector<Box> sorted(n);
+	for (size_t i = 0; i < n; i++)
+		sorted[i] = boxes[id[i]];
+	const size_t nboxes = boxes.size();
+	std::vector<Box>().swap(boxes);
+
+	/* Buckets in compressed rows; a box is listed once per cell, so twice
+	 * in a bucket when two of its cells share it (then next to itself). */
+	std::vector<uint32_t> off(nb + 1, 0);
+	for (size_t i = 0; i < n; i++)
+		for_each_cell(g, sorted[i], [&](uint32_t b) { off[b + 1]++; });
+	double tests = 0;
+	for (size_t b = 0; b < nb; b++) {
+		tests += 0.5 * (double)off[b + 1] * (double)off[b + 1];
+		off[b + 1] += off[b];
+	}
+	if (tests > MAX_TESTS_PER_BOX * (double)n + 4096) {
+		boxes.resize(nboxes);
+		for (size_t i = 0; i < n; i++)
+			boxes[id[i]] = sorted[i];
+		return false;
+	}
+	std::vector<uint32_t> entry(off[nb]);
+	for (size_t i = 0; i < n; i++)
+		for_each_cell(g, sorted[i], [&](uint32_t b) { entry[off[b]++] = (uint32_t)i; });
+	for (size_t b = nb; b > 0; b--)
+		off[b] = off[b - 1];
+	off[0] = 0;
+
+	/* A pair is visited in the bucket of the cell holding the low corner
+	 * of the two boxes' intersection: a cell both boxes cover. */
+	const size_t chunk = 4096;
+	boxpairs::for_each_index((nb + chunk - 1) / chunk, threads, [&](size_t c) {
+		const size_t end_b = std::min(nb, (c + 1) * chunk);
+		for (size_t b = c * chunk; b < end_b; b++)
+			for (uint32_t i = off[b]; i < off[b + 1]; i++) {
+				const uint32_t s = entry[i];
+				if (i > off[b] && entry[i - 1] == s)
+					continue;
+				const Box &bs = sorted[s];
+				for (uint32_t j = i + 1; j < off[b + 1]; j++) {
+					const uint32_t t = entry[j];
+					if (t == entry[j - 1])
+						continue;
+					const Box &bt = sorted[t];
+					if (!overlap(bs, bt))
+						continue;
+					const uint64_t at = bucket_of(
+					    g, cell_of(g, 0, std::max(bs.min_coord(0), bt.min_coord(0))),
+					    cell_of(g, 1, std::max(bs.min_coord(1), bt.min_coord(1))),
+					    cell_of(g, 2, std::max(bs.min_coord(2), bt.min_coord(2))));
+					if (at == b && keep(id[s], id[t]))
+						visit(id[s], id[t]);
+				}
+			}
+	});
+	return true;
+}
+
+} /* namespace gridpairs */
+
+#endif /* STRATUM_REPAIR_EXACT_GRIDPAIRS_HPP */
