@@ -162,17 +162,6 @@ int cmd_x3g_machine(const struct profile *p, struct x3g_machine *m, enum x3g_fla
 }
 
 /* "dir/name.x3g" -> "name", as GPX names the build after its output file. */
-void cmd_x3g_build_name(const char *out, char *name, size_t cap)
-{
-	const char *base = strrchr(out, '/'), *dot;
-	size_t n;
-
-	base = base ? base + 1 : out;
-	dot = strrchr(base, '.');
-	n = dot && dot != base ? (size_t)(dot - base) : strlen(base);
-	snprintf(name, cap, "%.*s", (int)n, base);
-}
-
 struct x3g_run {
 	const struct x3g_args *a;
 	struct x3g_translator *t;
@@ -309,7 +298,7 @@ static int run_translate(const struct x3g_args *a)
 	}
 	if (a->flavor)
 		opt.flavor = strcmp(a->flavor, "makerbot") ? X3G_FLAVOR_REPRAP : X3G_FLAVOR_MAKERBOT;
-	cmd_x3g_build_name(a->out, name, sizeof(name));
+	x3g_build_name(a->out, name, sizeof(name));
 	opt.build_name = name;
 	if (x3g_new(&m, &opt, &r.t, &err)) {
 		fprintf(stderr, X3G_CMD ": %s: %s\n", p->path, err.msg);

@@ -34,9 +34,6 @@ struct profile;
 int cmd_x3g_machine(const struct profile *p, struct x3g_machine *m, enum x3g_flavor *flavor,
 		    struct st_error *err);
 
-/* cmd_x3g_build_name - "dir/name.ext" -> "name", the build name GPX uses. */
-void cmd_x3g_build_name(const char *path, char *name, size_t cap);
-
 /*
  * cmd_parse_threads - the value of --threads N: N as an int, or -1 when it
  * is not a whole number in 1..256 (host/cmd_check.c).

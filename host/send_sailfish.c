@@ -362,7 +362,7 @@ int send_sailfish(const struct send_args *a, const struct profile *prof)
 			goto out;
 		}
 		/* named as `stratum x3g FILE -o NAME.x3g` names it */
-		cmd_x3g_build_name(a->file, j->build, sizeof(j->build));
+		x3g_build_name(a->file, j->build, sizeof(j->build));
 		j->xo.build_name = j->build;
 	}
 	j->f = fopen(a->file, "rb");

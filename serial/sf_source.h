@@ -9,8 +9,8 @@
  *
  * Nothing here prints: translator warnings go to the caller's callback.
  */
-#ifndef STRATUM_HOST_SF_SOURCE_H
-#define STRATUM_HOST_SF_SOURCE_H
+#ifndef STRATUM_SERIAL_SF_SOURCE_H
+#define STRATUM_SERIAL_SF_SOURCE_H
 
 #include <stdbool.h>
 #include <stdint.h>
@@ -100,4 +100,4 @@ int sfsrc_x3g_next(void *src, struct s3g_cmd *cmd, struct st_error *err);
 uint64_t sfsrc_done_end(const struct sfsrc_gcode *g, const struct sfsrc_x3g *x, bool x3g,
 			uint64_t done);
 
-#endif /* STRATUM_HOST_SF_SOURCE_H */
+#endif /* STRATUM_SERIAL_SF_SOURCE_H */

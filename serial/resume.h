@@ -7,8 +7,8 @@
  * sequence.  The Sailfish form (resume_preamble_x3g) is translated to X3G
  * by the stream's own translator (host/send_sailfish.c).
  */
-#ifndef STRATUM_HOST_RESUME_H
-#define STRATUM_HOST_RESUME_H
+#ifndef STRATUM_SERIAL_RESUME_H
+#define STRATUM_SERIAL_RESUME_H
 
 #include <stdbool.h>
 #include <stddef.h>
@@ -84,4 +84,4 @@ int resume_x3g_text(const char *path, int64_t offset, char buf[RESUME_TEXT_MAX],
 int resume_layer_start(const char *path, int64_t pos, int64_t *offset, long *layer,
 		       struct st_error *err);
 
-#endif /* STRATUM_HOST_RESUME_H */
+#endif /* STRATUM_SERIAL_RESUME_H */
