@@ -98,11 +98,12 @@ const struct printer_ops *printer_ops_of(const struct printer *p)
 	return p->ops;
 }
 
-int printer_check(struct printer *p, const struct printer_job *job, printer_warn_fn warn,
-		  void *warn_ctx, struct printer_file_info *info, struct st_error *err)
+int printer_check(const struct printer_ops *ops, const struct printer_options *o,
+		  const struct printer_job *job, printer_warn_fn warn, void *warn_ctx,
+		  struct printer_file_info *info, struct st_error *err)
 {
 	memset(info, 0, sizeof(*info));
-	return p->ops->check(p->state, job, warn, warn_ctx, info, err);
+	return ops->check(o, job, warn, warn_ctx, info, err);
 }
 
 int printer_stream(struct printer *p, const struct printer_job *job, struct printer_result *res,

@@ -74,11 +74,12 @@ struct printer_job {
 	bool x3g;
 	int64_t offset;	      /* byte the stream reads from */
 	uint64_t first_line;  /* file lines before offset, so progress counts file lines */
-	/* Continue an interrupted print: offset is the saved position, and
-	 * the adapter restarts at or before it where its dialect can (Marlin:
-	 * there; Sailfish: the start of its layer), after its resume preamble
-	 * (resume.h) restores heat and position. */
+	/* Continue an interrupted print at offset: the adapter first sends its
+	 * resume preamble (resume.h) that restores heat and position as the
+	 * file left them there.  saved: the position progress reports until
+	 * a command of the file is confirmed (the saved one; 0 = offset). */
 	bool resume;
+	int64_t saved;
 	uint64_t total;	      /* commands of the run (printer_check's), for progress */
 	/* called about every 50 ms and before each command; NULL = always GO */
 	enum printer_control (*control)(void *ctx);
@@ -124,17 +125,22 @@ struct printer_result {
 	uint64_t errors, unknown_commands;
 	struct printer_counter counters[PRINTER_COUNTERS_MAX];
 	size_t ncounters;
-	char detail[320];	/* the counters as one line of text */
+	char detail[512];	/* the counters as text: lines, "\n  " between */
 };
 
 /* The operations of one dialect (or a test double). */
 struct printer_ops {
 	const char *name;  /* "marlin", "sailfish" */
 	bool can_resume;   /* a G-code print can continue from a layer (preamble) */
+	bool takes_x3g;	   /* X3G files can be streamed (job.x3g) */
+	/* a resume restarts at the start of the layer holding the saved
+	 * position (resume_layer_start), not at the saved byte itself */
+	bool resume_from_layer;
 	int (*open)(const struct printer_options *o, void **state, struct st_error *err);
 	void (*close)(void *state);
-	int (*check)(void *state, const struct printer_job *job, printer_warn_fn warn,
-		     void *warn_ctx, struct printer_file_info *info, struct st_error *err);
+	int (*check)(const struct printer_options *o, const struct printer_job *job,
+		     printer_warn_fn warn, void *warn_ctx, struct printer_file_info *info,
+		     struct st_error *err);
 	int (*stream)(void *state, const struct printer_job *job, struct printer_result *res,
 		      struct st_error *err);
 	int (*command)(void *state, const char *line, char *reply, size_t cap,
@@ -168,12 +174,15 @@ const struct printer_ops *printer_ops_of(const struct printer *p);
 
 /*
  * printer_check - read the whole file of job (from job->offset, preamble
- * first) as the stream will, without sending: every line parses, fits the
- * firmware, translates.  Returns 0, ST_ERR_PARSE (err names file and
- * line; "nothing was sent"), ST_ERR_IO (cannot read), ST_ERR_NOMEM.
+ * first) as a printer of ops and o would be sent it, with no printer
+ * needed: every line parses, fits the firmware, translates; warn (may be
+ * NULL) sees the translator's warnings.  Returns 0, ST_ERR_PARSE (err
+ * names file and line; "nothing was sent"), ST_ERR_IO (cannot read),
+ * ST_ERR_UNSUPPORTED (a resume the dialect cannot do), ST_ERR_NOMEM.
  */
-int printer_check(struct printer *p, const struct printer_job *job, printer_warn_fn warn,
-		  void *warn_ctx, struct printer_file_info *info, struct st_error *err);
+int printer_check(const struct printer_ops *ops, const struct printer_options *o,
+		  const struct printer_job *job, printer_warn_fn warn, void *warn_ctx,
+		  struct printer_file_info *info, struct st_error *err);
 
 /*
  * printer_stream - send the file of job, blocking until it ends; res says

@@ -172,15 +172,16 @@ static int pm_reader(const struct printer_job *job, FILE **f, struct gcode_reade
 	return 0;
 }
 
-static int pm_check(void *state, const struct printer_job *job, printer_warn_fn warn,
-		    void *warn_ctx, struct printer_file_info *info, struct st_error *err)
+static int pm_check(const struct printer_options *o, const struct printer_job *job,
+		    printer_warn_fn warn, void *warn_ctx, struct printer_file_info *info,
+		    struct st_error *err)
 {
 	struct gcode_reader *r;
 	struct gcode_line g;
 	FILE *f;
 	int rc;
 
-	(void)state;
+	(void)o;
 	(void)warn;
 	(void)warn_ctx;
 	if (job->x3g)
@@ -324,7 +325,7 @@ static int pm_stream(void *state, const struct printer_job *job, struct printer_
 	FILE *f;
 	int rc, bad = 0;
 
-	res->last.filepos = job->offset;
+	res->last.filepos = job->saved ? job->saved : job->offset;
 	res->last.layer = -1;
 	res->last.z = NAN;
 	if ((rc = pm_preamble(job, pre, &npre, err)) || (rc = pm_reader(job, &f, &r, err)))

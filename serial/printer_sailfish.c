@@ -12,8 +12,8 @@
  * the printer reports it is finished.  S3G's pause (query 8) is not used:
  * it toggles, so a resent packet after a lost reply would undo it, and
  * Sailfish moves the head on its own when it pauses.  An interrupted G-code
- * print resumes from the start of the layer that holds the saved position,
- * after the preamble of resume_x3g_text (bed wait, Z set where it was, X/Y
+ * print resumes from the start of a layer (resume_from_layer), after the
+ * preamble of resume_x3g_text (bed wait, Z set where it was, X/Y
  * homed, M132, nozzle wait), both through one translator so its positions
  * agree with the firmware's.  An X3G file has no layers to restart from.
  */
@@ -45,6 +45,7 @@ struct ps_state {
 	struct x3g_machine m;
 	struct x3g_options xo;
 	char firmware[32];
+	long baud;
 	time_t last_poll;
 };
 
@@ -109,6 +110,7 @@ static int ps_open(const struct printer_options *o, void **state, struct st_erro
 	snprintf(s->name, sizeof(s->name), "%s", printer_name(o));
 	s->m = o->machine;
 	s->xo = o->x3g;
+	s->baud = o->baud;
 	s->simulated = !strcmp(o->port, "sim");
 	if (s->simulated && (rc = ps_start_sim(s, o, &path, &e))) {
 		rc = st_error_set(err, rc, "%s: simulated printer: %s", s->name, e.msg);
@@ -174,7 +176,8 @@ static void ps_progress_of(struct ps_run *r, const struct s3g_status *st)
 	p->total = r->job->total;
 	/* Within the preamble the saved position stands: the layer start would
 	 * read as the layer before, which a second resume would print again. */
-	p->filepos = end ? r->offset + (int64_t)end : r->job->offset;
+	p->filepos = end ? r->offset + (int64_t)end
+			 : r->job->saved ? r->job->saved : r->job->offset;
 	if (line)
 		p->line = r->job->first_line + line;
 	p->layer = r->job->x3g ? -1 : r->g.layer;
@@ -313,7 +316,6 @@ static void ps_source_close(struct ps_run *r)
 static int ps_run_init(struct ps_run *r, struct ps_state *s, const struct printer_job *job,
 		       char *build, size_t cap, struct st_error *err)
 {
-	long layer;
 	int rc;
 
 	memset(r, 0, sizeof(*r));
@@ -325,8 +327,7 @@ static int ps_run_init(struct ps_run *r, struct ps_state *s, const struct printe
 			return st_error_set(err, ST_ERR_UNSUPPORTED, "%s: an interrupted X3G print "
 					    "cannot be resumed: it has no layers to restart from",
 					    s->name);
-		if ((rc = resume_layer_start(job->path, job->offset, &r->offset, &layer, err)) ||
-		    (rc = resume_x3g_text(job->path, r->offset, r->pre, err)))
+		if ((rc = resume_x3g_text(job->path, r->offset, r->pre, err)))
 			return rc;
 		r->has_pre = true;
 	}
@@ -336,18 +337,25 @@ static int ps_run_init(struct ps_run *r, struct ps_state *s, const struct printe
 	return 0;
 }
 
-static int ps_check(void *state, const struct printer_job *job, printer_warn_fn warn,
-		    void *warn_ctx, struct printer_file_info *info, struct st_error *err)
+static int ps_check(const struct printer_options *o, const struct printer_job *job,
+		    printer_warn_fn warn, void *warn_ctx, struct printer_file_info *info,
+		    struct st_error *err)
 {
-	struct ps_state *s = state;
+	struct ps_state *s = calloc(1, sizeof(*s)); /* no link: the translator's part */
 	struct ps_run *r = malloc(sizeof(*r));
 	char build[X3G_BUILD_NAME_MAX + 1];
 	struct s3g_cmd c;
 	FILE *f = NULL;
 	int rc;
 
-	if (!r)
-		return st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", s->name);
+	if (!r || !s) {
+		free(r);
+		free(s);
+		return st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", printer_name(o));
+	}
+	snprintf(s->name, sizeof(s->name), "%s", printer_name(o));
+	s->m = o->machine;
+	s->xo = o->x3g;
 	if ((rc = ps_run_init(r, s, job, build, sizeof(build), err)))
 		goto out;
 	r->warn = warn;
@@ -357,9 +365,9 @@ static int ps_check(void *state, const struct printer_job *job, printer_warn_fn 
 		rc = st_error_set(err, ST_ERR_IO, "%s: cannot open: %s", job->path, strerror(errno));
 		goto out;
 	}
-	rc = ps_source_open(r, f, err);
-	while (!rc && (rc = ps_next_of_file(r, &c, err)) > 0)
-		info->commands++;
+	if (!(rc = ps_source_open(r, f, err)))
+		while ((rc = ps_next_of_file(r, &c, err)) > 0)
+			info->commands++;
 	if (!job->x3g && r->g.r) {
 		info->lines = gcode_reader_line(r->g.r);
 		info->warnings = x3g_warning_total(r->g.t);
@@ -377,7 +385,7 @@ static int ps_check(void *state, const struct printer_job *job, printer_warn_fn 
 out:
 	if (f)
 		fclose(f);
-	s->xo.build_name = NULL;
+	free(s);
 	free(r);
 	return rc < 0 ? rc : 0;
 }
@@ -390,6 +398,8 @@ static void ps_counters(const struct ps_run *r, const struct s3g_status *st,
 	uint64_t lines = res->end == PRINTER_END_DONE && r->g.r ? gcode_reader_line(r->g.r)
 								: ps_lines_done(r, st->confirmed +
 										       st->skipped);
+	double cap = r->s->baud / 10.0;
+	double both = sec > 0 && cap > 0 ? (double)(st->bytes_out + st->bytes_in) / sec / cap : 0;
 	struct printer_counter v[] = {
 		{"commands", (double)st->confirmed, false},
 		{"commands_total", (double)r->job->total, false},
@@ -401,6 +411,7 @@ static void ps_counters(const struct ps_run *r, const struct s3g_status *st,
 		{"resolved", (double)st->resolved, false},
 		{"dup_risk", (double)st->dup_risk, false},
 		{"bytes_read", (double)st->bytes_in, false},
+		{"link_fraction_both_ways", both, true},
 		{"lines", (double)lines, false},
 		{"lines_per_s", sec > 0 ? (double)lines / sec : 0, true},
 	};
@@ -424,6 +435,11 @@ static void ps_counters(const struct ps_run *r, const struct s3g_status *st,
 		 (unsigned long long)st->errors, (unsigned long long)st->skipped,
 		 (unsigned long long)st->overflows, (unsigned long long)st->timeouts,
 		 (unsigned long long)st->resolved, (unsigned long long)st->dup_risk);
+	if (!r->job->x3g)
+		snprintf(res->detail + strlen(res->detail), sizeof(res->detail) - strlen(res->detail),
+			 "\n  G-code lines %llu", (unsigned long long)lines);
+	snprintf(res->detail + strlen(res->detail), sizeof(res->detail) - strlen(res->detail),
+		 "\n  link both ways %.1f%%", 100.0 * both);
 }
 
 /* How the stream ended; err filled when not done. */
@@ -470,7 +486,7 @@ static int ps_stream(void *state, const struct printer_job *job, struct printer_
 
 	if (!r)
 		return st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", s->name);
-	res->last.filepos = job->offset;
+	res->last.filepos = job->saved ? job->saved : job->offset;
 	if ((rc = ps_run_init(r, s, job, build, sizeof(build), err)))
 		goto out;
 	r->last = &res->last;
@@ -577,6 +593,8 @@ static void ps_describe(void *state, char *out, size_t cap)
 const struct printer_ops printer_sailfish_ops = {
 	.name = "sailfish",
 	.can_resume = true,
+	.takes_x3g = true,
+	.resume_from_layer = true,
 	.open = ps_open,
 	.close = ps_close,
 	.check = ps_check,

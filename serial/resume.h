@@ -1,11 +1,11 @@
 /*
- * resume.h - continuing an interrupted print on a Marlin printer: where
- * the printer was at a byte of the G-code file (heater targets, position,
- * modes) and the commands that bring it back there.  Shared by the farm
- * node (host/serve/print_marlin.c) and `stratum print --resume`
- * (host/cmd_print.c); docs/serve.md and docs/printing.md describe the
- * sequence.  The Sailfish form (resume_preamble_x3g) is translated to X3G
- * by the stream's own translator (host/send_sailfish.c).
+ * resume.h - continuing an interrupted print: where the printer was at a
+ * byte of the G-code file (heater targets, position, modes) and the
+ * commands that bring it back there.  The printer adapters send them
+ * (printer.h, job.resume): Marlin's form as it is (printer_marlin.c), the
+ * Sailfish form (resume_preamble_x3g) translated to X3G by the stream's
+ * own translator (printer_sailfish.c).  docs/serve.md and
+ * docs/printing.md describe the sequence.
  */
 #ifndef STRATUM_SERIAL_RESUME_H
 #define STRATUM_SERIAL_RESUME_H

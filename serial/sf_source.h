@@ -1,7 +1,6 @@
 /*
- * sf_source.h - the S3G command sources both Sailfish paths use (`stratum
- * send`, host/send_sailfish.c, and the farm node, host/serve/
- * print_sailfish.c): a G-code file translated to X3G one line at a time
+ * sf_source.h - the S3G command sources of the Sailfish adapter
+ * (printer_sailfish.c): a G-code file translated to X3G one line at a time
  * (serial/x3g.h), or an X3G file cut into commands with x3g_decode.  Each
  * is an s3g_source_fn for s3g_stream_pull (serial/s3g.h), and each keeps
  * where in its file the commands it handed out came from, so a caller can

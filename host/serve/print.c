@@ -14,9 +14,12 @@
 
 #include "print.h"
 #include "printer_profile.h"
+#include "resume.h"
 
 struct node_link {
 	struct printer *p;
+	const struct printer_ops *ops;
+	struct printer_options o; /* strings borrowed from the config and profile */
 };
 
 /* The options and operations for printer pc; 0 or the profile's error. */
@@ -64,6 +67,8 @@ int node_print_connect(const struct node_printer_config *pc, const struct profil
 	l = calloc(1, sizeof(*l));
 	if (!l)
 		return st_error_set(err, ST_ERR_NOMEM, "printer %s: out of memory", pc->name);
+	l->ops = ops;
+	l->o = o;
 	if ((rc = printer_open(ops, &o, &l->p, err))) {
 		free(l);
 		return rc;
@@ -160,7 +165,14 @@ int node_print_file(struct node_link *l, const char *path, int64_t start, bool r
 	ctl->layer = -1;
 	ctl->z = NAN;
 	pthread_mutex_unlock(&ctl->mu);
-	if ((rc = printer_check(l->p, &job, NULL, NULL, &info, err)))
+	if (resume && l->ops->resume_from_layer && !job.x3g) {
+		long layer;
+
+		if ((rc = resume_layer_start(path, start, &job.offset, &layer, err)))
+			return rc;
+		job.saved = start;
+	}
+	if ((rc = printer_check(l->ops, &l->o, &job, NULL, NULL, &info, err)))
 		return rc;
 	job.total = info.commands;
 	rc = printer_stream(l->p, &job, &res, err);

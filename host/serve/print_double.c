@@ -169,12 +169,14 @@ out_close:
 	return rc;
 }
 
-static int double_check(void *state, const struct printer_job *job, printer_warn_fn warn,
-			void *warn_ctx, struct printer_file_info *info, struct st_error *err)
+static int double_check(const struct printer_options *o, const struct printer_job *job,
+			printer_warn_fn warn, void *warn_ctx, struct printer_file_info *info,
+			struct st_error *err)
 {
+	(void)o;
 	(void)warn;
 	(void)warn_ctx;
-	return double_run(state, job, NULL, info, err);
+	return double_run(NULL, job, NULL, info, err);
 }
 
 static int double_stream(void *state, const struct printer_job *job, struct printer_result *res,
