@@ -624,6 +624,37 @@ START_TEST(test_stl_two_printers)
 }
 END_TEST
 
+/*
+ * The node slices with the job `stratum slice` runs (host/slicejob.h): the
+ * G-code it prints from an uploaded STL is byte for byte what `stratum
+ * slice` writes for the same model and printer profile.
+ */
+START_TEST(test_node_gcode_is_slice_gcode)
+{
+	struct node_proc np;
+	struct resp r;
+	size_t len;
+	char *stl = cube_stl(&len), path[600], mine[600], out[4096];
+	long long id;
+	int rc;
+
+	write_config(&np, TWO_PRINTERS, 8);
+	node_start(&np);
+	upload(np.port, "/p/mk3s", KEY_UP, "cube.stl", 8, "", 0, "true", stl, len, NULL, true, &r);
+	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
+	id = job_of(&r);
+	resp_free(&r);
+	wait_state(np.port, "/p/mk3s", id, "done", 30);
+	node_stop(&np);
+	snprintf(path, sizeof(path), "%s/data/sliced/job-%lld.gcode", np.dir, id);
+	snprintf(mine, sizeof(mine), "%s", tu_path("slice-cube.gcode"));
+	rc = tu_run(out, sizeof(out), "slice %s -o %s --printer prusa-i3-mk3s >/dev/null 2>&1 && "
+		    "cmp %s %s", tu_path("cube.stl"), mine, path, mine);
+	ck_assert_msg(rc == 0, "the node's G-code is not stratum slice's (%d): %s", rc, out);
+	free(stl);
+}
+END_TEST
+
 START_TEST(test_pause_resume_cancel)
 {
 	struct node_proc np;
@@ -1602,6 +1633,7 @@ Suite *serve_suite(void)
 	tcase_add_test(tc, test_oversize);
 	tcase_add_test(tc, test_hostile_names);
 	tcase_add_test(tc, test_stl_two_printers);
+	tcase_add_test(tc, test_node_gcode_is_slice_gcode);
 	tcase_add_test(tc, test_pause_resume_cancel);
 	tcase_add_test(tc, test_kill9_restart);
 	tcase_add_test(tc, test_not_operational);
