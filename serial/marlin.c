@@ -184,6 +184,11 @@ bool marlin_idle(const struct marlin *m)
 	return m->pend_count == 0 && m->prio_count == 0 && m->n_acked + 1 >= m->n_next;
 }
 
+bool marlin_drained(const struct marlin *m)
+{
+	return m->prio_count == 0 && m->n_acked + 1 >= m->n_next;
+}
+
 size_t marlin_pending(const struct marlin *m)
 {
 	return m->pend_count + m->prio_count + (size_t)(m->n_next - 1 - m->n_acked);

@@ -173,6 +173,10 @@ int marlin_step(struct marlin *m, int timeout_ms, struct st_error *err);
 /* marlin_idle - true when every submitted command has been acknowledged. */
 bool marlin_idle(const struct marlin *m);
 
+/* marlin_drained - true when every line written has been acknowledged (lines
+ * still queued may wait: what a pause holds back). */
+bool marlin_drained(const struct marlin *m);
+
 /* marlin_can_submit - true when marlin_submit has room for one more. */
 bool marlin_can_submit(const struct marlin *m);
 

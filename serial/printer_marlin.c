@@ -172,10 +172,27 @@ static int pm_reader(const struct printer_job *job, FILE **f, struct gcode_reade
 	return 0;
 }
 
+/* The resume preamble of job into pre; how many lines (0 without resume). */
+static int pm_preamble(const struct printer_job *job, char pre[][RESUME_LINE_MAX + 1],
+		       uint64_t *n, struct st_error *err)
+{
+	struct resume_state rs;
+	int rc;
+
+	*n = 0;
+	if (!job->resume)
+		return 0;
+	if ((rc = resume_scan(job->path, job->offset, &rs, err)))
+		return rc;
+	*n = resume_preamble(&rs, pre, RESUME_LINES);
+	return 0;
+}
+
 static int pm_check(const struct printer_options *o, const struct printer_job *job,
 		    printer_warn_fn warn, void *warn_ctx, struct printer_file_info *info,
 		    struct st_error *err)
 {
+	char pre[RESUME_LINES][RESUME_LINE_MAX + 1];
 	struct gcode_reader *r;
 	struct gcode_line g;
 	FILE *f;
@@ -187,7 +204,7 @@ static int pm_check(const struct printer_options *o, const struct printer_job *j
 	if (job->x3g)
 		return st_error_set(err, ST_ERR_PARSE, "%s is X3G, which only Sailfish printers "
 				    "take: send the G-code", job->path);
-	if ((rc = pm_reader(job, &f, &r, err)))
+	if ((rc = pm_preamble(job, pre, &info->commands, err)) || (rc = pm_reader(job, &f, &r, err)))
 		return rc;
 	while ((rc = gcode_reader_next(r, 0, &g, err)) == 1) {
 		if (g.kind == GCODE_KIND_HOST_ONLY || !g.text_len)
@@ -292,28 +309,13 @@ static void pm_end(const struct pm_state *s, const struct marlin_status *st, int
 	}
 }
 
-/* The resume preamble of job into pre; how many lines (0 without resume). */
-static int pm_preamble(const struct printer_job *job, char pre[][RESUME_LINE_MAX + 1],
-		       size_t *n, struct st_error *err)
-{
-	struct resume_state rs;
-	int rc;
-
-	*n = 0;
-	if (!job->resume)
-		return 0;
-	if ((rc = resume_scan(job->path, job->offset, &rs, err)))
-		return rc;
-	*n = resume_preamble(&rs, pre, RESUME_LINES);
-	return 0;
-}
 
 static int pm_stream(void *state, const struct printer_job *job, struct printer_result *res,
 		     struct st_error *err)
 {
 	struct pm_state *s = state;
 	char pre[RESUME_LINES][RESUME_LINE_MAX + 1];
-	size_t npre = 0, ipre = 0;
+	uint64_t npre = 0, ipre = 0;
 	struct marlin_status st;
 	struct gcode_reader *r = NULL;
 	struct gcode_line g;
@@ -383,7 +385,8 @@ static int pm_stream(void *state, const struct printer_job *job, struct printer_
 		rc = marlin_step(s->m, PM_STEP_MS, err);
 		marlin_status(s->m, &st);
 		pm_progress(s, job, &st, first_src, t0, &res->last);
-		res->last.paused = asked == PRINTER_HOLD && marlin_idle(s->m);
+		/* held once the firmware has taken every line written to it */
+		res->last.paused = asked == PRINTER_HOLD && marlin_drained(s->m);
 		if (rc) {
 			pm_end(s, &st, rc, asked, res, err);
 			goto out_end;
