@@ -1141,56 +1141,6 @@ START_TEST(test_sim_sailfish)
 }
 END_TEST
 
-/*
- * A Marlin printer on `port = sim`: a job cancelled mid-print ends with the
- * safe stop, and the printer then takes more jobs on the same connection.
- * Regression: the driver kept the cancelled job's failure, so every later
- * job failed at once with "the job was cancelled" until a reconnect.
- */
-START_TEST(test_sim_marlin_after_cancel)
-{
-	struct node_proc np;
-	char *slow = moves_gcode(300, 60), *g2 = moves_gcode(120, 6000), *g3 = moves_gcode(90, 4800);
-	char *want, *got, *want2 = commands_of(g2), *want3 = commands_of(g3);
-	long long idc, id2, id3;
-	size_t lg, lw;
-
-	write_config(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\n"
-			  "sim_speedup = 50\n", 8);
-	node_start(&np);
-	idc = print_text(np.port, "", "slow.gcode", slow);
-	wait_state(np.port, "", idc, "printing", 10);
-	usleep(500000);
-	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL, "{\"command\":\"cancel\"}", 204);
-	wait_state(np.port, "", idc, "cancelled", 10);
-	bed_clear(np.port, "", 204);
-	id2 = print_text(np.port, "", "two.gcode", g2);
-	wait_state(np.port, "", id2, "done", 30);
-	bed_clear(np.port, "", 204);
-	id3 = print_text(np.port, "", "three.gcode", g3);
-	wait_state(np.port, "", id3, "done", 30);
-	/* The log: part of the cancelled job, its safe stop, then both jobs whole. */
-	want = malloc(strlen(want2) + strlen(want3) + 1);
-	ck_assert(want);
-	strcat(strcpy(want, want2), want3);
-	got = sim_executed_ex(&np, "mk3s", true);
-	lg = strlen(got);
-	lw = strlen(want);
-	ck_assert_msg(lg > lw && !strcmp(got + lg - lw, want), "the jobs after the cancel did not "
-		      "run exactly: %.300s", lg > lw ? got + lg - lw : got);
-	ck_assert_msg(lg - lw >= 4 && !strncmp(got + lg - lw - 4, "M84\n", 4),
-		      "no safe stop before the next job");
-	free(want);
-	free(got);
-	free(want2);
-	free(want3);
-	node_stop(&np);
-	free(slow);
-	free(g2);
-	free(g3);
-}
-END_TEST
-
 /* kill -9 the node and start it again: job id is interrupted, paused; its saved filepos. */
 static json_int_t kill9_restart(struct node_proc *np, long long id)
 {
@@ -1273,6 +1223,66 @@ static char *layers_gcode(int nl, int per)
 	snprintf(g + len, cap - len, "M104 S0\nM140 S0\n");
 	return g;
 }
+
+/*
+ * A Marlin printer on `port = sim`: the job's progress names the layer; a
+ * job cancelled mid-print ends with the safe stop, and the printer then takes more jobs on the same connection.
+ * Regression: the driver kept the cancelled job's failure, so every later
+ * job failed at once with "the job was cancelled" until a reconnect.
+ */
+START_TEST(test_sim_marlin_after_cancel)
+{
+	struct node_proc np;
+	char *slow = layers_gcode(12, 30), *g2 = moves_gcode(120, 6000), *g3 = moves_gcode(90, 4800);
+	char *want, *got, *want2 = commands_of(g2), *want3 = commands_of(g3);
+	long long idc, id2, id3;
+	json_int_t layer = 0;
+	size_t lg, lw;
+
+	write_config(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\n"
+			  "sim_speedup = 50\n", 8);
+	node_start(&np);
+	idc = print_text(np.port, "", "slow.gcode", slow);
+	wait_state(np.port, "", idc, "printing", 10);
+	/* the layer the printer confirmed is in the job's progress */
+	for (int i = 0; i < 200 && layer < 1; i++) {
+		json_t *o = get_json(np.port, "/api/job");
+
+		layer = json_integer_value(json_object_get(json_object_get(o, "progress"), "layer"));
+		json_decref(o);
+		if (layer < 1)
+			usleep(20000);
+	}
+	ck_assert_msg(layer >= 1, "no layer in the job's progress");
+	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL, "{\"command\":\"cancel\"}", 204);
+	wait_state(np.port, "", idc, "cancelled", 10);
+	bed_clear(np.port, "", 204);
+	id2 = print_text(np.port, "", "two.gcode", g2);
+	wait_state(np.port, "", id2, "done", 30);
+	bed_clear(np.port, "", 204);
+	id3 = print_text(np.port, "", "three.gcode", g3);
+	wait_state(np.port, "", id3, "done", 30);
+	/* The log: part of the cancelled job, its safe stop, then both jobs whole. */
+	want = malloc(strlen(want2) + strlen(want3) + 1);
+	ck_assert(want);
+	strcat(strcpy(want, want2), want3);
+	got = sim_executed_ex(&np, "mk3s", true);
+	lg = strlen(got);
+	lw = strlen(want);
+	ck_assert_msg(lg > lw && !strcmp(got + lg - lw, want), "the jobs after the cancel did not "
+		      "run exactly: %.300s", lg > lw ? got + lg - lw : got);
+	ck_assert_msg(lg - lw >= 4 && !strncmp(got + lg - lw - 4, "M84\n", 4),
+		      "no safe stop before the next job");
+	free(want);
+	free(got);
+	free(want2);
+	free(want3);
+	node_stop(&np);
+	free(slow);
+	free(g2);
+	free(g3);
+}
+END_TEST
 
 /*
  * A Creator Pro on `port = sim` printing a layered job, the node killed

@@ -15,6 +15,7 @@
 #include <fcntl.h>
 #include <jansson.h>
 #include <microhttpd.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -134,6 +135,8 @@ struct view {
 	char link_desc[128];
 	int64_t job_id;
 	int64_t filepos, size;
+	long layer;		/* of the last confirmed command (0-based), -1 unknown */
+	double z;		/* its Z (mm), NAN unknown */
 	double tool[2], bed[2]; /* actual, target */
 	bool has_job;
 	struct node_job job; /* the active job (printing, paused, slicing), if has_job */
@@ -154,6 +157,8 @@ static void take_view(struct node *n, struct node_printer *p, struct view *v)
 	v->pausing = v->printing && p->ctl.pause && !p->ctl.paused;
 	v->filepos = p->ctl.filepos;
 	v->size = p->ctl.size;
+	v->layer = v->printing ? p->ctl.layer : -1;
+	v->z = v->printing ? p->ctl.z : NAN;
 	v->tool[0] = p->ctl.tool_actual;
 	v->tool[1] = p->ctl.tool_target;
 	v->bed[0] = p->ctl.bed_actual;
@@ -302,6 +307,10 @@ static enum MHD_Result get_job(struct node *n, struct MHD_Connection *c, struct 
 	json_object_set_new(progress, "printTime",
 			    v.has_job && v.job.started ? json_integer(time(NULL) - v.job.started)
 						       : json_null());
+	/* Stratum's additions: the layer (1-based) and Z the printer confirmed */
+	json_object_set_new(progress, "layer", v.layer >= 0 ? json_integer(v.layer + 1)
+							    : json_null());
+	json_object_set_new(progress, "z", isfinite(v.z) ? json_real(v.z) : json_null());
 	json_object_set_new(progress, "printTimeLeft", json_null());
 	json_object_set_new(progress, "printTimeLeftOrigin", json_null());
 	o = json_pack("{s:{s:o,s:n,s:n,s:n},s:o,s:s}", "job", "file", file, "estimatedPrintTime",
