@@ -196,8 +196,9 @@ int printer_stream(struct printer *p, const struct printer_job *job, struct prin
 
 /*
  * printer_command - send one G-code line outside a print, checked first (a
- * bad line changes nothing); the firmware's reply lines into reply ('\n'
- * after each; may be NULL).  Returns 0, ST_ERR_PARSE, ST_ERR_IO.
+ * bad line changes nothing), and wait until the firmware took it; its text
+ * reply lines into reply ('\n' after each; may be NULL; Sailfish answers
+ * in packets, so nothing).  Returns 0, ST_ERR_PARSE, ST_ERR_IO.
  */
 int printer_command(struct printer *p, const char *line, char *reply, size_t cap,
 		    struct st_error *err);

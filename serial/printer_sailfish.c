@@ -182,8 +182,7 @@ static void ps_progress_of(struct ps_run *r, const struct s3g_status *st)
 		p->line = r->job->first_line + line;
 	p->layer = r->job->x3g ? -1 : r->g.layer;
 	p->z = NAN;
-	ps_temps(st, p);
-	p->paused = p->paused && st->build_state != S3G_BUILD_RUNNING;
+	ps_temps(st, p); /* paused is ps_hold's */
 	p->resends = st->retries;
 	p->seconds = printer_now() - r->t0;
 }
