@@ -17,6 +17,7 @@
 #include "resume.h"
 
 struct node_link {
+	char name[NODE_NAME_MAX + 8]; /* "printer NAME", for messages */
 	struct printer *p;
 	const struct printer_ops *ops;
 	struct printer_options o; /* strings borrowed from the config and profile */
@@ -67,6 +68,8 @@ int node_print_connect(const struct node_printer_config *pc, const struct profil
 	l = calloc(1, sizeof(*l));
 	if (!l)
 		return st_error_set(err, ST_ERR_NOMEM, "printer %s: out of memory", pc->name);
+	snprintf(l->name, sizeof(l->name), "printer %s", pc->name);
+	o.name = l->name;
 	l->ops = ops;
 	l->o = o;
 	if ((rc = printer_open(ops, &o, &l->p, err))) {
