@@ -2,8 +2,8 @@
  * cmd_print.c - `stratum print MODEL [--printer NAME] [--port ...]`: one
  * command from a model to a printed part (docs/printing.md).  Stages:
  * repair and slice (host/slicejob.c, the same path as `stratum slice`),
- * optional layer previews, then streaming: Marlin with the driver
- * (serial/marlin.h) here, Sailfish through send_sailfish (X3G on the fly).
+ * optional layer previews, then streaming through serial/printer.h, one
+ * path whatever the printer's dialect.
  * G-code and X3G input skip the first stages.
  *
  * With no --port (or --port sim) the printer is the built-in simulated one
@@ -27,24 +27,16 @@
 
 #include "commands.h"
 #include "gcode.h"
-#include "journal.h"
-#include "marlin.h"
-#include "portpick.h"
+#include "print_job.h"
 #include "preview.h"
 #include "profile.h"
 #include "profile_slicer.h"
 #include "pvdraw.h"
-#include "resume.h"
 #include "send.h"
-#include "simprinter.h"
 #include "slicejob.h"
 #include "st_error.h"
-#include "xport.h"
 
-#define PRINT_CMD "stratum print"
 #define PRINT_SPEEDUP 1000.0	 /* built-in simulator: default time divisor */
-#define PRINT_SYNC_S 3.0	 /* journal sync period besides every layer change */
-#define PRINT_STOP_MS 10000	 /* safe stop: longest wait for its commands */
 #define PRINT_PREVIEW_LAYERS 3	 /* --preview: the first layers drawn */
 
 static void print_usage(FILE *out)
@@ -74,12 +66,6 @@ static void print_usage(FILE *out)
 		"job failed (firmware error, not repaired, resume declined), 2 usage, 65 bad\n"
 		"input, 69 printer unavailable or lost, 70 internal error, 130 interrupted.\n");
 }
-
-struct print_args {
-	const char *in, *printer, *port, *out, *resume, *sim_log;
-	bool dry_run, json, yes, preview;
-	double speedup;
-};
 
 /* Parse argv; 0 to go on, -1 after --help, else the exit status. */
 static int print_parse(int argc, char **argv, struct print_args *a)
@@ -159,9 +145,6 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 	return 0;
 }
 
-/* What the input file is, from its name. */
-enum print_input { PRINT_MODEL, PRINT_GCODE, PRINT_X3G };
-
 static enum print_input print_input_of(const char *path)
 {
 	if (send_has_ext(path, ".x3g"))
@@ -169,491 +152,6 @@ static enum print_input print_input_of(const char *path)
 	if (send_has_ext(path, ".gcode") || send_has_ext(path, ".gco") || send_has_ext(path, ".g"))
 		return PRINT_GCODE;
 	return PRINT_MODEL;
-}
-
-/* Where each layer of a G-code file starts, as the driver counts layers. */
-struct print_layer {
-	uint64_t line;	 /* file line of its layer comment */
-	int64_t offset;	 /* byte offset of that line */
-	double z;	 /* mm, NAN unknown */
-};
-
-struct print_layers {
-	struct print_layer *v;
-	size_t n, cap;
-	uint64_t lines, commands; /* in the file */
-};
-
-/*
- * Read the G-code once: layer starts, line and command counts, and for
- * Marlin every command within its line limit (so a bad file sends nothing).
- * Returns 0 or the exit status (message printed).
- */
-static int print_scan(const char *path, bool marlin, struct print_layers *L)
-{
-	struct gcode_reader *r;
-	struct gcode_line g;
-	struct st_error err = {0};
-	FILE *f = fopen(path, "rb");
-	long layer = -1;
-	int64_t before = 0;
-	int rc, status = 0;
-
-	memset(L, 0, sizeof(*L));
-	if (!f) {
-		fprintf(stderr, PRINT_CMD ": cannot open %s: %s\n", path, strerror(errno));
-		return ST_EXIT_DATAERR;
-	}
-	if (gcode_reader_new(f, path, &r, &err)) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		fclose(f);
-		return ST_EXIT_SOFTWARE;
-	}
-	while ((rc = gcode_reader_next(r, 0, &g, &err)) == 1) {
-		long l;
-		double z;
-		enum gcode_layer_mark mark = gcode_layer_comment(&g, &l, &z);
-
-		if (mark == GCODE_LAYER_START) {
-			layer = l >= 0 ? l : layer + 1;
-			if (layer < 0 || (size_t)layer > L->n + 100000) {
-				fprintf(stderr, PRINT_CMD ": %s: line %llu: layer number %ld is out "
-						"of order\n", path,
-					(unsigned long long)gcode_reader_line(r), layer);
-				status = ST_EXIT_DATAERR;
-				goto out;
-			}
-			while (L->n <= (size_t)layer) {
-				if (L->n == L->cap) {
-					size_t cap = L->cap ? 2 * L->cap : 256;
-					void *p = realloc(L->v, cap * sizeof(*L->v));
-					if (!p) {
-						fprintf(stderr, PRINT_CMD ": out of memory\n");
-						status = ST_EXIT_SOFTWARE;
-						goto out;
-					}
-					L->v = p;
-					L->cap = cap;
-				}
-				L->v[L->n++] = (struct print_layer){gcode_reader_line(r), before, NAN};
-			}
-			L->v[layer] = (struct print_layer){gcode_reader_line(r), before, z};
-		} else if (mark == GCODE_LAYER_Z && layer >= 0) {
-			L->v[layer].z = z;
-		}
-		before = (int64_t)gcode_reader_bytes(r);
-		if (g.kind == GCODE_KIND_HOST_ONLY || !g.text_len)
-			continue;
-		if (marlin && g.text_len > MARLIN_CMD_MAX) {
-			fprintf(stderr, PRINT_CMD ": %s: line %llu: the command is %zu bytes long; "
-					"Marlin takes at most %d (shorten it); nothing was sent\n",
-				path, (unsigned long long)gcode_reader_line(r), g.text_len,
-				MARLIN_CMD_MAX);
-			status = ST_EXIT_DATAERR;
-			goto out;
-		}
-		L->commands++;
-	}
-	L->lines = gcode_reader_line(r);
-	if (rc < 0) {
-		fprintf(stderr, PRINT_CMD ": %s; nothing was sent\n", err.msg);
-		status = ST_EXIT_DATAERR;
-	}
-out:
-	gcode_reader_free(r);
-	fclose(f);
-	return status;
-}
-
-/* The layer (0-based) a file line belongs to, -1 before the first. */
-static long print_layer_of(const struct print_layers *L, uint64_t line)
-{
-	size_t lo = 0, hi = L->n;
-
-	while (lo < hi) {
-		size_t mid = (lo + hi) / 2;
-		if (L->v[mid].line <= line)
-			lo = mid + 1;
-		else
-			hi = mid;
-	}
-	return (long)lo - 1;
-}
-
-/* Everything one print holds, for the stages and the summary. */
-struct print_job {
-	struct print_args *a;
-	struct profile *prof;
-	enum print_input input;
-	const char *gcode;	   /* the G-code printed (or the X3G file) */
-	char gcode_buf[JOURNAL_PATH_MAX];
-	bool sliced;
-	struct slicejob_result slice;
-	struct print_layers layers;
-	struct journal j;
-	bool journal_on;	   /* Marlin: the journal is kept */
-	bool simulated;
-	const char *port;	   /* the port opened */
-	char *port_auto;	   /* --port auto's choice (free) */
-	char printer_desc[96];	   /* "Marlin 2.1.2 (simulated printer)" */
-	/* the streaming stage */
-	uint64_t base_line;	   /* resume: file lines before the reader's first */
-	long start_layer;	   /* resume: the layer it starts at, else -1 */
-	uint64_t done, total;	   /* lines (Marlin) or commands (Sailfish) */
-	uint64_t last_line;	   /* last file line the printer confirmed */
-	long layer;		   /* its layer, -1 unknown */
-	uint64_t resends;
-	double stream_s, total_s, t0;
-	const char *fail;	   /* why it stopped, NULL done */
-	char fail_buf[300];
-	int status;
-};
-
-/* -------- Marlin streaming with the journal -------- */
-
-struct print_marlin_ctx {
-	struct send_progress p;
-	struct print_job *job;
-	double last_sync;
-	long last_layer;
-};
-
-/* Sync the journal now; a failure is shown once, the print goes on. */
-static void print_sync(struct print_job *job)
-{
-	struct st_error err = {0};
-	static bool warned; /* once per process: a full disk is said once */
-
-	if (job->journal_on && journal_save(&job->j, &err) && !warned) {
-		warned = true;
-		fprintf(stderr, PRINT_CMD ": warning: %s; the print goes on but cannot be resumed "
-				"from here\n", err.msg);
-	}
-}
-
-/* Take the driver's state into the job and the journal. */
-static void print_take(struct print_job *job, const struct marlin_status *st)
-{
-	if (st->last_acked_src) {
-		job->last_line = job->base_line + st->last_acked_src;
-		job->layer = print_layer_of(&job->layers, job->last_line);
-	}
-	job->done = st->acked;
-	job->resends = st->resends;
-	job->j.last_line = job->last_line;
-	job->j.layer = job->layer;
-	job->j.z = job->layer >= 0 ? job->layers.v[job->layer].z : NAN;
-	if (st->tool[0].present) {
-		job->j.tool_actual = st->tool[0].actual;
-		job->j.tool_target = st->tool[0].target;
-	}
-	if (st->bed.present) {
-		job->j.bed_actual = st->bed.actual;
-		job->j.bed_target = st->bed.target;
-	}
-}
-
-static void print_marlin_progress(void *ctx, const struct marlin_status *st, uint64_t bytes)
-{
-	struct print_marlin_ctx *c = ctx;
-	struct print_job *job = c->job;
-	double now = send_now();
-	struct send_view v;
-
-	(void)bytes;
-	print_take(job, st);
-	/* lines of the file, not of this run: a resume starts part-way */
-	send_view_marlin(st, job->layers.lines, &v);
-	v.done = job->last_line;
-	v.layer = job->layer >= 0 ? job->layer + 1 : -1;
-	if (!job->a->json || c->p.tty)
-		send_progress_show(&c->p, &v);
-	if (job->layer != c->last_layer || now - c->last_sync >= PRINT_SYNC_S) {
-		c->last_layer = job->layer;
-		c->last_sync = now;
-		print_sync(job);
-	}
-}
-
-/* Send the resume preamble and wait for it; 0 or the driver's error. */
-static int print_preamble(struct print_job *job, struct marlin *m, int64_t offset,
-			  volatile sig_atomic_t *stop, struct st_error *err)
-{
-	char pre[RESUME_LINES][RESUME_LINE_MAX + 1];
-	struct resume_state rs;
-	size_t n, i = 0;
-	int rc;
-
-	if ((rc = resume_scan(job->gcode, offset, &rs, err)))
-		return rc;
-	n = resume_preamble(&rs, pre, RESUME_LINES);
-	while (i < n || !marlin_idle(m)) {
-		if (*stop)
-			marlin_request_cancel(m);
-		while (i < n && marlin_can_submit(m))
-			if ((rc = marlin_submit(m, pre[i++], 0, -1, NAN, err)) < 0)
-				return rc;
-		if ((rc = marlin_step(m, 50, err)))
-			return rc;
-	}
-	return 0;
-}
-
-/* Where a stopped job got to; the journal saved in state. */
-static void print_stopped_at(struct print_job *job, const char *state, int status)
-{
-	if (job->layer >= 0)
-		fprintf(stderr, PRINT_CMD ": the printer confirmed line %llu of %llu (layer %ld of "
-				"%zu, Z %.2f mm)\n", (unsigned long long)job->last_line,
-			(unsigned long long)job->layers.lines, job->layer + 1, job->layers.n,
-			job->layers.v[job->layer].z);
-	else
-		fprintf(stderr, PRINT_CMD ": the printer confirmed line %llu of %llu (before the "
-				"first layer)\n", (unsigned long long)job->last_line,
-			(unsigned long long)job->layers.lines);
-	snprintf(job->j.state, sizeof(job->j.state), "%s", state);
-	print_sync(job);
-	if (job->journal_on && status != ST_EXIT_DATAERR)
-		fprintf(stderr, PRINT_CMD ": the job is saved; continue it with 'stratum print "
-				"--resume %s'\n", job->j.id);
-}
-
-/* Exit status and journal state of a failed Marlin job. */
-static int print_marlin_failed(struct print_job *job, struct marlin *m,
-			       const struct marlin_status *st, int rc, const struct st_error *err)
-{
-	struct st_error e2 = {0};
-	const char *state = "failed";
-	int status = ST_EXIT_SOFTWARE;
-
-	snprintf(job->fail_buf, sizeof(job->fail_buf), "%s", err->msg);
-	job->fail = job->fail_buf;
-	if (rc == ST_ERR_PARSE || rc == ST_ERR_ARG) {
-		status = ST_EXIT_DATAERR;
-	} else if (st->fail == MARLIN_FAIL_LINK) {
-		status = ST_EXIT_UNAVAILABLE;
-		state = "link-lost";
-	} else if (st->fail == MARLIN_FAIL_FIRMWARE || st->fail == MARLIN_FAIL_PRINTER_CANCEL) {
-		status = ST_EXIT_FAILURE;
-	} else if (st->fail == MARLIN_FAIL_CANCELLED) {
-		status = ST_EXIT_INTERRUPTED;
-		state = "cancelled";
-	}
-	fprintf(stderr, PRINT_CMD ": %s\n", err->msg);
-	/* the link still works: leave the printer safe */
-	if (st->fail == MARLIN_FAIL_CANCELLED || st->fail == MARLIN_FAIL_PRINTER_CANCEL ||
-	    rc == ST_ERR_PARSE || rc == ST_ERR_ARG) {
-		if (marlin_safe_stop(m, PRINT_STOP_MS, &e2))
-			fprintf(stderr, PRINT_CMD ": safe stop: %s; switch the printer off by hand\n",
-				e2.msg);
-		else
-			fprintf(stderr, PRINT_CMD ": stopped safely: heaters and motors off\n");
-	}
-	print_stopped_at(job, state, status);
-	return status;
-}
-
-/* Stream job->gcode to the Marlin printer on path; returns the exit status. */
-static int print_marlin(struct print_job *job, const char *path)
-{
-	struct xport *x = NULL;
-	struct marlin *m = NULL;
-	struct gcode_reader *r = NULL;
-	struct st_error err = {0};
-	struct marlin_options mo;
-	struct xport_options xo = {0};
-	struct marlin_status st;
-	struct print_marlin_ctx ctx = {.job = job, .last_layer = -2};
-	volatile sig_atomic_t *stop;
-	int64_t offset = 0;
-	FILE *f = NULL;
-	int rc, status;
-
-	xo.baudrate = (int)job->prof->baudrate;
-	xo.dtr_reset = job->prof->dtr_reset && !job->simulated;
-	if (xport_open(path, &xo, &x, &err)) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		return ST_EXIT_UNAVAILABLE;
-	}
-	marlin_options_init(&mo);
-	mo.rx_buffer = job->prof->rx_buffer_size > 0 ? (unsigned)job->prof->rx_buffer_size : 0;
-	/* the simulator boots like a board; ptys and TCP bridges are not reset */
-	mo.expect_reset = job->simulated || (job->prof->dtr_reset &&
-					     xport_backend_of(x) == XPORT_BACKEND_SERIALPORT);
-	if (marlin_new(x, &mo, &m, &err)) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		status = ST_EXIT_SOFTWARE;
-		goto out_port;
-	}
-	stop = send_catch_signals();
-	if ((rc = marlin_connect(m, &err))) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		status = rc == ST_ERR_INTERNAL ? ST_EXIT_FAILURE : ST_EXIT_UNAVAILABLE;
-		goto out_driver;
-	}
-	snprintf(job->printer_desc, sizeof(job->printer_desc), "%s%s",
-		 marlin_caps(m)->firmware_name[0] ? marlin_caps(m)->firmware_name : "Marlin",
-		 job->simulated ? ", simulated" : "");
-	f = fopen(job->gcode, "rb");
-	if (job->start_layer >= 0)
-		offset = job->layers.v[job->start_layer].offset;
-	if (!f || fseeko(f, (off_t)offset, SEEK_SET)) {
-		fprintf(stderr, PRINT_CMD ": cannot read %s: %s\n", job->gcode, strerror(errno));
-		status = ST_EXIT_DATAERR;
-		goto out_file;
-	}
-	if (gcode_reader_new(f, job->gcode, &r, &err)) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		status = ST_EXIT_SOFTWARE;
-		goto out_file;
-	}
-	send_progress_start(&ctx.p);
-	ctx.p.cmd = PRINT_CMD;
-	ctx.p.tag = "print";
-	job->total = job->layers.lines;
-	if (!job->a->json || ctx.p.tty)
-		fprintf(stderr, PRINT_CMD ": printing on %s at %s%s, %llu lines\n", job->printer_desc,
-			xport_describe(x), job->simulated ? "" : "",
-			(unsigned long long)job->layers.lines);
-	print_sync(job);
-	rc = 0;
-	if (job->start_layer >= 0) {
-		job->base_line = job->layers.v[job->start_layer].line - 1;
-		rc = print_preamble(job, m, offset, stop, &err);
-	}
-	if (!rc)
-		rc = marlin_stream_file(m, r, job->gcode, print_marlin_progress, &ctx, stop, &err);
-	job->stream_s = send_now() - ctx.p.t0;
-	send_progress_end(&ctx.p);
-	marlin_status(m, &st);
-	print_take(job, &st);
-	if (rc == 0) {
-		status = ST_EXIT_OK;
-		snprintf(job->j.state, sizeof(job->j.state), "done");
-		print_sync(job);
-	} else {
-		status = print_marlin_failed(job, m, &st, rc, &err);
-	}
-	gcode_reader_free(r);
-out_file:
-	if (f)
-		fclose(f);
-out_driver:
-	marlin_free(m);
-out_port:
-	xport_drain(x, 1000, NULL);
-	xport_close(x);
-	return status;
-}
-
-/* -------- Sailfish: stratum send's streaming, reported here -------- */
-
-struct print_sf_ctx {
-	struct print_job *job;
-	double last_sync;
-	long last_layer;
-};
-
-/* Take a Sailfish job's progress into the job and the journal: the last
- * command the printer confirmed gives its G-code line, and so the layer. */
-static void print_sf_take(struct print_job *job, const struct send_result *r)
-{
-	job->done = r->done;
-	job->total = r->total;
-	job->resends = r->retries;
-	if (job->input == PRINT_X3G) {
-		job->layer = r->layer;
-		return;
-	}
-	if (r->lines) {
-		job->last_line = job->base_line + r->lines;
-		job->layer = print_layer_of(&job->layers, job->last_line);
-	}
-	job->j.last_line = job->last_line;
-	job->j.layer = job->layer;
-	job->j.z = job->layer >= 0 ? job->layers.v[job->layer].z : NAN;
-	if (r->tool_target > 0 || r->tool_actual > 0) {
-		job->j.tool_actual = r->tool_actual;
-		job->j.tool_target = r->tool_target;
-	}
-	if (r->bed_target > 0 || r->bed_actual > 0) {
-		job->j.bed_actual = r->bed_actual;
-		job->j.bed_target = r->bed_target;
-	}
-}
-
-static void print_sf_progress(void *ctx, const struct send_result *r)
-{
-	struct print_sf_ctx *c = ctx;
-	double now = send_now();
-
-	print_sf_take(c->job, r);
-	if (c->job->layer != c->last_layer || now - c->last_sync >= PRINT_SYNC_S) {
-		c->last_layer = c->job->layer;
-		c->last_sync = now;
-		print_sync(c->job);
-	}
-}
-
-/*
- * The resume preamble as G-code lines for the X3G translator, into buf;
- * 0 or the exit status (message printed).
- */
-static int print_sf_preamble(struct print_job *job, char buf[RESUME_TEXT_MAX])
-{
-	struct st_error err = {0};
-
-	if (resume_x3g_text(job->gcode, job->layers.v[job->start_layer].offset, buf, &err)) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		return ST_EXIT_DATAERR;
-	}
-	return 0;
-}
-
-static int print_sailfish(struct print_job *job, const char *path)
-{
-	static char preamble[RESUME_TEXT_MAX];
-	struct send_result res = {0};
-	struct print_sf_ctx ctx = {.job = job, .last_layer = -2};
-	struct send_args sa = {
-		.file = job->gcode,
-		.port = path,
-		.printer = job->prof->id,
-		.json = job->a->json,
-		.cmd = PRINT_CMD,
-		.result = &res,
-		.progress = job->journal_on ? print_sf_progress : NULL,
-		.progress_ctx = &ctx,
-	};
-	int status;
-
-	if (job->start_layer >= 0) {
-		if ((status = print_sf_preamble(job, preamble)))
-			return status;
-		sa.offset = job->layers.v[job->start_layer].offset;
-		sa.preamble = preamble;
-		job->base_line = job->layers.v[job->start_layer].line - 1;
-	}
-	print_sync(job);
-	status = send_sailfish(&sa, job->prof);
-	print_sf_take(job, &res);
-	job->stream_s = res.seconds;
-	snprintf(job->printer_desc, sizeof(job->printer_desc), "%s%s",
-		 res.firmware[0] ? res.firmware : "Sailfish", job->simulated ? ", simulated" : "");
-	if (status && !job->fail)
-		job->fail = status == ST_EXIT_INTERRUPTED ? "interrupted" : "the print failed";
-	if (!job->journal_on)
-		return status;
-	if (status == ST_EXIT_OK) {
-		job->last_line = job->j.last_line = job->layers.lines;
-		snprintf(job->j.state, sizeof(job->j.state), "done");
-		print_sync(job);
-	} else {
-		print_stopped_at(job, status == ST_EXIT_UNAVAILABLE ? "link-lost"
-				      : status == ST_EXIT_INTERRUPTED ? "cancelled" : "failed",
-				 status);
-	}
-	return status;
 }
 
 /* -------- stages -------- */
@@ -771,56 +269,6 @@ static int print_setup_resume(struct print_job *job)
 	return 0;
 }
 
-/* Open the port the user asked for (or the simulator); 0 or exit status. */
-static int print_stream(struct print_job *job)
-{
-	const char *port = job->a->port ? job->a->port : "sim";
-	struct sim_marlin *sm = NULL;
-	struct sim_sailfish *ss = NULL;
-	struct st_error err = {0};
-	bool sailfish = job->prof->protocol == PROFILE_PROTOCOL_SAILFISH;
-	int rc, status;
-
-	job->simulated = !strcmp(port, "sim");
-	if (job->simulated) {
-		rc = sailfish ? simprinter_sailfish(job->prof, job->a->speedup, job->a->sim_log, &ss,
-						    &err)
-			      : simprinter_marlin(job->prof, job->a->speedup, job->a->sim_log, &sm,
-						  &err);
-		if (rc) {
-			fprintf(stderr, PRINT_CMD ": the simulated printer: %s\n", err.msg);
-			return ST_EXIT_SOFTWARE;
-		}
-		port = sailfish ? sim_sailfish_slave_path(ss) : sim_marlin_slave_path(sm);
-		if (!job->a->json)
-			fprintf(stderr, PRINT_CMD ": SIMULATION: no printer is used; printing to the "
-					"built-in simulated %s printer, %gx faster than real time "
-					"(choose a printer with --port PATH or --port auto)\n",
-				sailfish ? "Sailfish" : "Marlin", job->a->speedup);
-	} else if (!strcmp(port, "auto")) {
-		char why[512] = "";
-
-		if (portpick_auto(job->prof, &job->port_auto, why, sizeof(why), &err)) {
-			fprintf(stderr, PRINT_CMD ": --port auto: %s\n", err.msg);
-			return ST_EXIT_UNAVAILABLE;
-		}
-		if (!job->a->json)
-			fprintf(stderr, PRINT_CMD ": --port auto: %s\n", why);
-		port = job->port_auto;
-	}
-	job->port = port;
-	snprintf(job->j.port, sizeof(job->j.port), "%s", job->a->port ? job->a->port : "sim");
-	job->t0 = send_now();
-	status = sailfish ? print_sailfish(job, port) : print_marlin(job, port);
-	/* The pty path belongs to the simulator freed below; the summary,
-	 * written later, names the port as the user gave it. */
-	if (job->simulated)
-		job->port = "sim";
-	sim_marlin_free(sm);
-	sim_sailfish_free(ss);
-	return status;
-}
-
 /* A figure of seconds as "1h 02m 03s" or "4.2 s". */
 static void print_duration(char *out, size_t cap, double s)
 {
@@ -851,8 +299,8 @@ static void print_summary_text(const struct print_job *job)
 	if (job->start_layer >= 0)
 		printf("  resumed job %s from layer %ld of %zu\n", job->j.id, job->start_layer + 1,
 		       job->layers.n);
-	if (job->prof->protocol == PROFILE_PROTOCOL_SAILFISH)
-		printf("  streamed: %llu of %llu commands (%llu retries)\n",
+	if (job->input == PRINT_X3G)
+		printf("  streamed: %llu of %llu commands (%llu resends)\n",
 		       (unsigned long long)job->done, (unsigned long long)job->total,
 		       (unsigned long long)job->resends);
 	else
@@ -913,9 +361,7 @@ static void print_summary_json(const struct print_job *job)
 		json_object_set_new(o, "filament_g", json_real(s->filament_g));
 		json_object_set_new(o, "estimated_s", json_real(s->time_s));
 	}
-	json_object_set_new(o, "unit", json_string(job->prof->protocol ==
-							   PROFILE_PROTOCOL_SAILFISH ? "commands"
-										     : "lines"));
+	json_object_set_new(o, "unit", json_string(job->input == PRINT_X3G ? "commands" : "lines"));
 	json_object_set_new(o, "done", json_integer((json_int_t)job->done));
 	json_object_set_new(o, "total", json_integer((json_int_t)job->total));
 	json_object_set_new(o, "last_line", json_integer((json_int_t)job->last_line));
@@ -1071,8 +517,7 @@ int cmd_print(int argc, char **argv)
 			goto out;
 	}
 	if (job->input != PRINT_X3G &&
-	    (status = print_scan(job->gcode, job->prof->protocol == PROFILE_PROTOCOL_MARLIN,
-				 &job->layers)))
+	    (status = print_scan(job->gcode, &job->layers)))
 		goto out;
 	if (a.resume) {
 		job->start_layer = job->j.layer >= 0 && (size_t)job->j.layer < job->layers.n

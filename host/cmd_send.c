@@ -1,13 +1,14 @@
 /*
  * cmd_send.c - `stratum send FILE --port PATH --printer NAME [--json]
  * [--baud N]`: stream a file to a printer with progress on stderr and a
- * final report on stdout.  G-code goes to a Marlin printer here
- * (serial/marlin.h); a sailfish profile hands over to send_sailfish
- * (host/send_sailfish.c), which shares the options, progress, report and
- * stop flag below (host/send.h).
+ * final report on stdout, through serial/printer.h whatever the printer's
+ * dialect: G-code with line numbers and checksums to Marlin, G-code
+ * translated to X3G as it streams (or an X3G file) to Sailfish.  The
+ * progress line and the report (host/send.h) are shared with `stratum
+ * print`.
  *
  * The whole file is checked before the port is opened, so a bad file sends
- * nothing.  Ctrl-C stops safely (marlin_safe_stop) and exits 130.
+ * nothing.  Ctrl-C stops safely (heaters and motors off) and exits 130.
  */
 #include <errno.h>
 #include <jansson.h>
@@ -22,11 +23,11 @@
 
 #include "commands.h"
 #include "gcode.h"
-#include "marlin.h"
+#include "printer.h"
+#include "printer_profile.h"
 #include "profile.h"
 #include "send.h"
 #include "st_error.h"
-#include "xport.h"
 
 /* The stop flag SIGINT/SIGTERM set (STYLE rule 10 exception). */
 static volatile sig_atomic_t send_stop;
@@ -122,43 +123,6 @@ missing:
 	return 0;
 }
 
-/* Read the whole file once: every line must parse and fit Marlin's
- * buffer.  Counts the commands.  Returns 0 or an exit status. */
-static int send_check_file(FILE *f, const char *name, uint64_t *commands, uint64_t *bytes)
-{
-	struct gcode_reader *r;
-	struct gcode_line g;
-	struct st_error err = {0};
-	int rc;
-
-	*commands = 0;
-	if (gcode_reader_new(f, name, &r, &err)) {
-		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
-		return ST_EXIT_SOFTWARE;
-	}
-	while ((rc = gcode_reader_next(r, 0, &g, &err)) == 1) {
-		if (g.kind == GCODE_KIND_HOST_ONLY || !g.text_len)
-			continue;
-		if (g.text_len > MARLIN_CMD_MAX) {
-			fprintf(stderr,
-				SEND_CMD ": %s: line %llu: the command is %zu bytes long; Marlin "
-					 "takes at most %d (shorten it); nothing was sent\n",
-				name, (unsigned long long)gcode_reader_line(r), g.text_len,
-				MARLIN_CMD_MAX);
-			gcode_reader_free(r);
-			return ST_EXIT_DATAERR;
-		}
-		(*commands)++;
-	}
-	*bytes = gcode_reader_bytes(r);
-	gcode_reader_free(r);
-	if (rc < 0) {
-		fprintf(stderr, SEND_CMD ": %s; nothing was sent\n", err.msg);
-		return ST_EXIT_DATAERR;
-	}
-	return 0;
-}
-
 void send_progress_start(struct send_progress *p)
 {
 	memset(p, 0, sizeof(*p));
@@ -212,54 +176,6 @@ void send_progress_end(struct send_progress *p)
 {
 	if (p->tty)
 		fputc('\n', stderr);
-}
-
-/* What the Marlin progress callback needs. */
-struct marlin_progress {
-	struct send_progress p;
-	uint64_t total; /* commands in the file */
-};
-
-void send_view_marlin(const struct marlin_status *st, uint64_t total, struct send_view *v)
-{
-	*v = (struct send_view){
-		.unit = "line",
-		.done = st->acked,
-		.total = total,
-		.layer = st->layer,
-		.tool = st->tool[0].present,
-		.bed = st->bed.present,
-		.tool_actual = st->tool[0].actual,
-		.tool_target = st->tool[0].target,
-		.bed_actual = st->bed.actual,
-		.bed_target = st->bed.target,
-		.paused = st->paused,
-	};
-}
-
-/* Marlin's status as the shared progress line. */
-static void send_progress_cb(void *ctx, const struct marlin_status *st, uint64_t bytes_read)
-{
-	struct marlin_progress *mp = ctx;
-	struct send_view v;
-
-	(void)bytes_read;
-	send_view_marlin(st, mp->total, &v);
-	send_progress_show(&mp->p, &v);
-}
-
-/* Exit status for a failed job. */
-static int send_exit_for(const struct marlin_status *st, int rc)
-{
-	if (rc == ST_ERR_PARSE || rc == ST_ERR_ARG)
-		return ST_EXIT_DATAERR;
-	switch (st->fail) {
-	case MARLIN_FAIL_LINK: return ST_EXIT_UNAVAILABLE;
-	case MARLIN_FAIL_FIRMWARE: return ST_EXIT_FAILURE;
-	case MARLIN_FAIL_PRINTER_CANCEL: return ST_EXIT_FAILURE;
-	case MARLIN_FAIL_CANCELLED: return ST_EXIT_INTERRUPTED;
-	default: return ST_EXIT_SOFTWARE;
-	}
 }
 
 json_t *send_report_json(const struct send_args *a, const struct send_summary *s)
@@ -316,63 +232,145 @@ void send_report_text(const struct send_args *a, const struct send_summary *s,
 	       s->unit, bps, cap > 0 ? 100.0 * bps / cap : 0, s->baud, cap);
 }
 
-/* The Marlin job's report, as text or one JSON object on stdout. */
-static void send_report(const struct send_args *a, const struct marlin_status *st,
-			const struct marlin_caps *caps, double seconds, long baud, bool ok,
+/* One stream's progress line and the stop flag Ctrl-C sets. */
+struct send_run {
+	struct send_progress p;
+	volatile sig_atomic_t *stop;
+};
+
+/* The stop flag as the printer's control hook. */
+static enum printer_control send_run_control(void *ctx)
+{
+	return *((struct send_run *)ctx)->stop ? PRINTER_CANCEL : PRINTER_GO;
+}
+
+static void send_run_progress(void *ctx, const struct printer_progress *pp)
+{
+	struct send_run *r = ctx;
+	struct send_view v;
+
+	send_view_of(pp, &v);
+	send_progress_show(&r->p, &v);
+}
+
+void send_view_of(const struct printer_progress *p, struct send_view *v)
+{
+	*v = (struct send_view){
+		.unit = p->unit,
+		.done = p->done,
+		.total = p->total,
+		.layer = p->layer,
+		.tool = p->tool,
+		.bed = p->bed,
+		.tool_actual = p->tool_actual,
+		.tool_target = p->tool_target,
+		.bed_actual = p->bed_actual,
+		.bed_target = p->bed_target,
+		.paused = p->paused,
+	};
+}
+
+void send_warning(void *ctx, const char *path, uint64_t line, const char *msg)
+{
+	fprintf(stderr, "%s: %s:%llu: warning: %s\n", (const char *)ctx, path,
+		(unsigned long long)line, msg);
+}
+
+int send_exit_for_check(int rc)
+{
+	return rc == ST_ERR_NOMEM || rc == ST_ERR_INTERNAL ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
+}
+
+int send_exit_for_open(int rc)
+{
+	return rc == ST_ERR_INTERNAL ? ST_EXIT_FAILURE
+	       : rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_UNAVAILABLE;
+}
+
+int send_exit_for(const struct printer_result *res, int rc)
+{
+	switch (res->end) {
+	case PRINTER_END_DONE: return ST_EXIT_OK;
+	case PRINTER_END_CANCELLED:
+	case PRINTER_END_STOPPED: return ST_EXIT_INTERRUPTED;
+	case PRINTER_END_LINK_LOST: return ST_EXIT_UNAVAILABLE;
+	default: return rc == ST_ERR_PARSE ? ST_EXIT_DATAERR : ST_EXIT_FAILURE;
+	}
+}
+
+bool send_safe_stop(const char *cmd, struct printer *pr, const struct printer_result *res)
+{
+	struct st_error e = {0};
+
+	if (!res->safe_stop)
+		return false;
+	if (printer_safe_stop(pr, &e))
+		fprintf(stderr, "%s: safe stop: %s\n", cmd, e.msg);
+	else
+		fprintf(stderr, "%s: stopped safely: heaters and motors off\n", cmd);
+	return true;
+}
+
+/* The report, as text or one JSON object on stdout. */
+static void send_report(const struct send_args *a, const struct printer_ops *ops,
+			const struct printer_file_info *info, const struct printer_job *job,
+			const struct printer_result *res, const char *firmware, long baud,
 			const char *error)
 {
+	char units[16];
 	struct send_summary s = {
-		.ok = ok,
+		.ok = res->end == PRINTER_END_DONE,
 		.error = error,
-		.protocol = "marlin",
-		.firmware = caps->firmware_name,
-		.unit = "lines",
-		.done = st->acked,
-		.resends = st->resends,
-		.errors = st->line_errors + st->other_errors,
-		.unknown_commands = st->unknown_commands,
-		.bytes = st->bytes_acked,
-		.bytes_written = st->bytes_written,
-		.seconds = seconds,
+		.protocol = ops->name,
+		.firmware = firmware,
+		.unit = units,
+		.done = res->last.done,
+		.resends = res->last.resends,
+		.errors = res->errors,
+		.unknown_commands = res->unknown_commands,
+		.bytes = res->bytes_acked,
+		.bytes_written = res->bytes_written,
+		.seconds = res->last.seconds,
 		.baud = baud,
 	};
-	char detail[320];
 
+	snprintf(units, sizeof(units), "%ss", res->last.unit ? res->last.unit : "line");
 	if (a->json) {
 		json_t *o = send_report_json(a, &s);
+
 		if (o) {
-			json_object_set_new(o, "lines", json_integer((json_int_t)st->acked));
-			json_object_set_new(o, "lines_per_s",
-					    json_real(seconds > 0 ? (double)st->acked / seconds : 0));
-			json_object_set_new(o, "resend_requests",
-					    json_integer((json_int_t)st->resend_requests));
-			json_object_set_new(o, "advanced_ok", json_boolean(caps->advanced_ok));
+			json_object_set_new(o, "input", json_string(job->x3g ? "x3g" : "gcode"));
+			if (!job->x3g)
+				json_object_set_new(o, "warnings",
+						    json_integer((json_int_t)info->warnings));
+			for (size_t i = 0; i < res->ncounters; i++)
+				json_object_set_new(o, res->counters[i].name,
+						    res->counters[i].real
+							    ? json_real(res->counters[i].value)
+							    : json_integer((json_int_t)
+									   res->counters[i].value));
 		}
 		send_report_emit(o);
 		return;
 	}
-	snprintf(detail, sizeof(detail),
-		 "resends %llu (%llu requests), errors %llu, unknown commands %llu",
-		 (unsigned long long)st->resends, (unsigned long long)st->resend_requests,
-		 (unsigned long long)s.errors, (unsigned long long)st->unknown_commands);
-	send_report_text(a, &s, detail);
-	if (st->last_warning[0])
-		printf("  last warning: %s\n", st->last_warning);
+	send_report_text(a, &s, res->detail);
+	if (info->warnings)
+		printf("  translator warnings %llu\n", (unsigned long long)info->warnings);
 }
 
 int cmd_send(int argc, char **argv)
 {
 	struct send_args a;
 	struct profile *prof = NULL;
-	struct xport *x = NULL;
-	struct marlin *m = NULL;
-	struct gcode_reader *r = NULL;
+	struct printer *pr = NULL;
+	struct printer_options o;
+	const struct printer_ops *ops;
+	struct printer_file_info info;
+	struct printer_result res;
+	struct send_run run;
+	struct printer_job job = {0};
 	struct st_error err = {0};
-	struct marlin_status st;
-	struct marlin_progress prog;
-	volatile sig_atomic_t *stop;
-	uint64_t commands = 0, file_bytes = 0;
-	FILE *f = NULL;
+	char firmware[96] = "";
 	int status, rc;
 
 	status = send_parse(argc, argv, &a);
@@ -383,94 +381,51 @@ int cmd_send(int argc, char **argv)
 		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
 		return st_exit_for(rc);
 	}
-	if (prof->protocol == PROFILE_PROTOCOL_SAILFISH) {
-		status = send_sailfish(&a, prof);
+	if ((rc = printer_profile_options(prof, a.port, a.baud, &o, &ops, &err))) {
+		fprintf(stderr, SEND_CMD ": %s: %s\n", prof->path, err.msg);
+		status = ST_EXIT_DATAERR;
 		goto out_profile;
 	}
-	if (send_has_ext(a.file, ".x3g")) {
+	job.path = a.file;
+	job.x3g = send_has_ext(a.file, ".x3g");
+	if (job.x3g && !ops->takes_x3g) {
 		fprintf(stderr, SEND_CMD ": %s is X3G, which only Sailfish printers take; printer "
 				     "'%s' speaks %s: send it the G-code\n", a.file, a.printer,
 			profile_protocol_name(prof->protocol));
 		status = ST_EXIT_USAGE;
 		goto out_profile;
 	}
-	f = fopen(a.file, "rb");
-	if (!f) {
-		fprintf(stderr, SEND_CMD ": cannot open %s: %s\n", a.file, strerror(errno));
-		status = ST_EXIT_DATAERR;
+	if ((rc = printer_check(ops, &o, &job, send_warning, (void *)SEND_CMD, &info, &err))) {
+		fprintf(stderr, SEND_CMD ": %s%s\n", err.msg,
+			strstr(err.msg, "nothing was sent") ? "" : "; nothing was sent");
+		status = send_exit_for_check(rc);
 		goto out_profile;
 	}
-	if ((status = send_check_file(f, a.file, &commands, &file_bytes)))
-		goto out_file;
-	rewind(f);
-
-	struct xport_options xo = {0};
-	long baud = a.baud ? a.baud : prof->baudrate;
-	xo.baudrate = (int)baud;
-	xo.dtr_reset = prof->dtr_reset;
-	if (xport_open(a.port, &xo, &x, &err)) {
+	run.stop = send_catch_signals();
+	if ((rc = printer_open(ops, &o, &pr, &err))) {
 		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
-		status = ST_EXIT_UNAVAILABLE;
-		goto out_file;
+		status = send_exit_for_open(rc);
+		goto out_profile;
 	}
-	struct marlin_options mo;
-	marlin_options_init(&mo);
-	mo.rx_buffer = prof->rx_buffer_size > 0 ? (unsigned)prof->rx_buffer_size : 0;
-	/* only a real serial device is reset by DTR; ptys and TCP are not */
-	mo.expect_reset = prof->dtr_reset && xport_backend_of(x) == XPORT_BACKEND_SERIALPORT;
-	if (marlin_new(x, &mo, &m, &err)) {
-		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
-		status = ST_EXIT_SOFTWARE;
-		goto out_port;
-	}
-
-	stop = send_catch_signals();
-
-	rc = marlin_connect(m, &err);
-	if (rc) {
-		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
-		status = rc == ST_ERR_INTERNAL ? ST_EXIT_FAILURE : ST_EXIT_UNAVAILABLE;
-		goto out_driver;
-	}
-	if (gcode_reader_new(f, a.file, &r, &err)) {
-		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
-		status = ST_EXIT_SOFTWARE;
-		goto out_driver;
-	}
-	send_progress_start(&prog.p);
-	prog.total = commands;
-	if (!a.json || prog.p.tty)
-		fprintf(stderr, SEND_CMD ": %s on %s, %llu commands\n",
-			marlin_caps(m)->firmware_name[0] ? marlin_caps(m)->firmware_name : "Marlin",
-			xport_describe(x), (unsigned long long)commands);
-	rc = marlin_stream_file(m, r, a.file, send_progress_cb, &prog, stop, &err);
-	double seconds = send_now() - prog.p.t0;
-	send_progress_end(&prog.p);
-	marlin_status(m, &st);
-	if (rc == 0) {
-		status = ST_EXIT_OK;
-	} else {
-		status = send_exit_for(&st, rc);
-		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
-		if (st.fail == MARLIN_FAIL_CANCELLED || st.fail == MARLIN_FAIL_PRINTER_CANCEL ||
-		    rc == ST_ERR_PARSE || rc == ST_ERR_ARG) {
-			struct st_error e2 = {0};
-			if (marlin_safe_stop(m, 10000, &e2))
-				fprintf(stderr, SEND_CMD ": safe stop: %s\n", e2.msg);
-			else
-				fprintf(stderr, SEND_CMD ": stopped safely: heaters and motors "
-							 "off\n");
-		}
-	}
-	send_report(&a, &st, marlin_caps(m), seconds, baud, rc == 0, rc ? err.msg : NULL);
-	gcode_reader_free(r);
-out_driver:
-	marlin_free(m);
-out_port:
-	xport_drain(x, 1000, NULL);
-	xport_close(x);
-out_file:
-	fclose(f);
+	printer_describe(pr, firmware, sizeof(firmware));
+	job.total = info.commands;
+	job.control = send_run_control;
+	job.progress = send_run_progress;
+	job.ctx = &run;
+	send_progress_start(&run.p);
+	if (!a.json || run.p.tty)
+		fprintf(stderr, SEND_CMD ": %s on %s, %llu commands%s\n", firmware, a.port,
+			(unsigned long long)info.commands,
+			ops->takes_x3g && !job.x3g ? " translated from G-code as they go" : "");
+	rc = printer_stream(pr, &job, &res, &err);
+	send_progress_end(&run.p);
+	status = send_exit_for(&res, rc);
+	if (status)
+		fprintf(stderr, SEND_CMD ": %s\n", err.msg[0] ? err.msg : "the job was cancelled");
+	send_safe_stop(SEND_CMD, pr, &res);
+	send_report(&a, ops, &info, &job, &res, firmware, o.baud,
+		    status ? (err.msg[0] ? err.msg : "the job was cancelled") : NULL);
+	printer_close(pr);
 out_profile:
 	profile_free(prof);
 	return status;

@@ -260,7 +260,7 @@ static int run_translate(const struct x3g_args *a)
 	}
 	if (a->flavor)
 		opt.flavor = strcmp(a->flavor, "makerbot") ? X3G_FLAVOR_REPRAP : X3G_FLAVOR_MAKERBOT;
-	profile_x3g_build_name(a->out, name, sizeof(name));
+	x3g_build_name(a->out, name, sizeof(name));
 	opt.build_name = name;
 	if (x3g_new(&m, &opt, &r.t, &err)) {
 		fprintf(stderr, X3G_CMD ": %s: %s\n", p->path, err.msg);

@@ -40,16 +40,3 @@ int profile_x3g_machine(const struct profile *p, struct x3g_machine *m, enum x3g
 	m->home_timeout = (unsigned)p->x3g_home_timeout;
 	return 0;
 }
-
-/* "dir/name.x3g" -> "name", as GPX names the build after its output file. */
-void profile_x3g_build_name(const char *out, char *name, size_t cap)
-{
-	const char *base = strrchr(out, '/'), *dot;
-	size_t n;
-
-	base = base ? base + 1 : out;
-	dot = strrchr(base, '.');
-	n = dot && dot != base ? (size_t)(dot - base) : strlen(base);
-	snprintf(name, cap, "%.*s", (int)n, base);
-}
-

@@ -23,7 +23,5 @@
 int profile_x3g_machine(const struct profile *p, struct x3g_machine *m, enum x3g_flavor *flavor,
 			struct st_error *err);
 
-/* profile_x3g_build_name - "dir/name.ext" -> "name", the build name GPX uses. */
-void profile_x3g_build_name(const char *path, char *name, size_t cap);
 
 #endif /* STRATUM_HOST_PROFILE_X3G_H */

@@ -1,8 +1,8 @@
 /*
- * send.h - what the two halves of `stratum send` share (host/ only): the
- * options, the stop flag Ctrl-C sets, the progress line and the final
- * report.  host/cmd_send.c holds these and the Marlin path;
- * host/send_sailfish.c streams to Sailfish printers over S3G.
+ * send.h - what `stratum send` (host/cmd_send.c) and `stratum print`
+ * (host/cmd_print.c) share on top of serial/printer.h: the options, the
+ * stop flag Ctrl-C sets, the progress line, exit statuses and the final
+ * report.
  */
 #ifndef STRATUM_HOST_SEND_H
 #define STRATUM_HOST_SEND_H
@@ -13,36 +13,15 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "printer.h"
 #include "profile.h"
 
 #define SEND_CMD "stratum send"
-
-/* What a Sailfish job did, for a caller that reports it itself. */
-struct send_result {
-	bool ok;
-	uint64_t done, total;	/* commands confirmed (or skipped), of total */
-	uint64_t lines;		/* G-code lines done (G-code input) */
-	long layer;		/* layer of the last command taken, -1 unknown */
-	uint64_t retries;
-	double seconds;
-	char firmware[32];
-	double tool_actual, tool_target, bed_actual, bed_target; /* degC, last reported */
-};
 
 struct send_args {
 	const char *file, *port, *printer;
 	bool json;
 	long baud; /* 0 = the profile's */
-	const char *cmd;	    /* message prefix; NULL = SEND_CMD */
-	struct send_result *result; /* set: filled instead of printing the report */
-	/* Sailfish G-code only, for a resume (stratum print): start reading at
-	 * byte offset, and translate the G-code lines of preamble ('\n' after
-	 * each) first with the same translator; lines then count from offset */
-	int64_t offset;
-	const char *preamble;
-	/* called as the stream goes with what is done so far (may be NULL) */
-	void (*progress)(void *ctx, const struct send_result *r);
-	void *progress_ctx;
 };
 
 /*
@@ -61,11 +40,23 @@ struct send_view {
 	bool paused;
 };
 
-struct marlin_status;
+/* send_view_of - a stream's progress as the progress line's view. */
+void send_view_of(const struct printer_progress *p, struct send_view *v);
 
-/* send_view_marlin - the Marlin driver's status as a view of lines:
- * done = acknowledged, layer and temperatures as reported. */
-void send_view_marlin(const struct marlin_status *st, uint64_t total, struct send_view *v);
+/* send_warning - printer_warn_fn printing "CMD: FILE:LINE: warning: MSG" (ctx = CMD). */
+void send_warning(void *ctx, const char *path, uint64_t line, const char *msg);
+
+/* Exit statuses: of a failed printer_check, a failed printer_open, and a
+ * stream (printer_stream's rc and result). */
+int send_exit_for_check(int rc);
+int send_exit_for_open(int rc);
+int send_exit_for(const struct printer_result *res, int rc);
+
+/*
+ * send_safe_stop - when res asks for it, stop pr safely and say so on
+ * stderr ("CMD: stopped safely: ..."); true when it was asked.
+ */
+bool send_safe_stop(const char *cmd, struct printer *pr, const struct printer_result *res);
 
 /* Progress state: a redrawn line on a terminal, a line per 10 % otherwise. */
 struct send_progress {
@@ -125,12 +116,5 @@ void send_report_text(const struct send_args *a, const struct send_summary *s,
 
 /* send_has_ext - true when path ends in ext (".x3g"), any case. */
 bool send_has_ext(const char *path, const char *ext);
-
-/*
- * send_sailfish - the Sailfish half of cmd_send (host/send_sailfish.c):
- * FILE (G-code translated on the fly, or X3G) to the S3G printer on the
- * port.  prof is a sailfish profile.  Returns the exit status.
- */
-int send_sailfish(const struct send_args *a, const struct profile *prof);
 
 #endif /* STRATUM_HOST_SEND_H */

@@ -184,6 +184,11 @@ bool marlin_idle(const struct marlin *m)
 	return m->pend_count == 0 && m->prio_count == 0 && m->n_acked + 1 >= m->n_next;
 }
 
+bool marlin_drained(const struct marlin *m)
+{
+	return m->prio_count == 0 && m->n_acked + 1 >= m->n_next;
+}
+
 size_t marlin_pending(const struct marlin *m)
 {
 	return m->pend_count + m->prio_count + (size_t)(m->n_next - 1 - m->n_acked);
@@ -1086,6 +1091,20 @@ int marlin_emergency(struct marlin *m, const char *cmd, struct st_error *err)
 	return marlin_transmit(m, err);
 }
 
+/* The printer confirmed the safe stop: the cancelled job is over and the
+ * link takes the next one (a long-lived connection, as the farm node's). */
+static void marlin_job_over(struct marlin *m)
+{
+	m->stopping = false;
+	m->cancelled = false;
+	m->req_cancel = 0;
+	m->req_pause = 0;
+	m->req_resume = 0;
+	m->st.paused = false;
+	m->st.fail = MARLIN_FAIL_NONE;
+	m->st.fail_msg[0] = '\0';
+}
+
 int marlin_safe_stop(struct marlin *m, int timeout_ms, struct st_error *err)
 {
 	double end = mono_s() + timeout_ms / 1000.0;
@@ -1115,6 +1134,7 @@ int marlin_safe_stop(struct marlin *m, int timeout_ms, struct st_error *err)
 		if (rc)
 			return rc;
 	}
+	marlin_job_over(m);
 	return 0;
 }
 

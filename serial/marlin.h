@@ -173,6 +173,10 @@ int marlin_step(struct marlin *m, int timeout_ms, struct st_error *err);
 /* marlin_idle - true when every submitted command has been acknowledged. */
 bool marlin_idle(const struct marlin *m);
 
+/* marlin_drained - true when every line written has been acknowledged (lines
+ * still queued may wait: what a pause holds back). */
+bool marlin_drained(const struct marlin *m);
+
 /* marlin_can_submit - true when marlin_submit has room for one more. */
 bool marlin_can_submit(const struct marlin *m);
 
@@ -204,7 +208,9 @@ void marlin_request_cancel(struct marlin *m);
  * yet sent, M410 past the queue (EMERGENCY_PARSER; M108 too when a heat
  * wait runs), then M104 S0, M140 S0, M107, M84, waiting at most
  * timeout_ms for them.  Works after a cancel; does nothing useful after a
- * link failure.  Returns 0 or ST_ERR_IO.
+ * link failure.  On success the cancelled job is over: status.fail is NONE
+ * again and the driver takes the next job on the same link (read the
+ * status before, to report why the job ended).  Returns 0 or ST_ERR_IO.
  */
 int marlin_safe_stop(struct marlin *m, int timeout_ms, struct st_error *err);
 

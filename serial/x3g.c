@@ -1473,3 +1473,14 @@ int x3g_format(const struct x3g_command *cmd, char *out, size_t cap)
 	}
 	return total;
 }
+
+void x3g_build_name(const char *path, char *name, size_t cap)
+{
+	const char *base = strrchr(path, '/'), *dot;
+	size_t n;
+
+	base = base ? base + 1 : path;
+	dot = strrchr(base, '.');
+	n = dot && dot != base ? (size_t)(dot - base) : strlen(base);
+	snprintf(name, cap, "%.*s", (int)n, base);
+}

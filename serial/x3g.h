@@ -131,6 +131,9 @@ const uint8_t *x3g_output(const struct x3g_translator *t, size_t *len);
 /* x3g_warnings - the warnings of the last call; returns their number. */
 size_t x3g_warnings(const struct x3g_translator *t, const struct x3g_warning **out);
 
+/* x3g_build_name - "dir/name.ext" -> "name": the build name GPX gives a file. */
+void x3g_build_name(const char *path, char *name, size_t cap);
+
 /* x3g_warning_total - every warning so far, those not kept included. */
 uint64_t x3g_warning_total(const struct x3g_translator *t);
 

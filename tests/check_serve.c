@@ -624,6 +624,37 @@ START_TEST(test_stl_two_printers)
 }
 END_TEST
 
+/*
+ * The node slices with the job `stratum slice` runs (host/slicejob.h): the
+ * G-code it prints from an uploaded STL is byte for byte what `stratum
+ * slice` writes for the same model and printer profile.
+ */
+START_TEST(test_node_gcode_is_slice_gcode)
+{
+	struct node_proc np;
+	struct resp r;
+	size_t len;
+	char *stl = cube_stl(&len), path[600], mine[600], out[4096];
+	long long id;
+	int rc;
+
+	write_config(&np, TWO_PRINTERS, 8);
+	node_start(&np);
+	upload(np.port, "/p/mk3s", KEY_UP, "cube.stl", 8, "", 0, "true", stl, len, NULL, true, &r);
+	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
+	id = job_of(&r);
+	resp_free(&r);
+	wait_state(np.port, "/p/mk3s", id, "done", 30);
+	node_stop(&np);
+	snprintf(path, sizeof(path), "%s/data/sliced/job-%lld.gcode", np.dir, id);
+	snprintf(mine, sizeof(mine), "%s", tu_path("slice-cube.gcode"));
+	rc = tu_run(out, sizeof(out), "slice %s -o %s --printer prusa-i3-mk3s >/dev/null 2>&1 && "
+		    "cmp %s %s", tu_path("cube.stl"), mine, path, mine);
+	ck_assert_msg(rc == 0, "the node's G-code is not stratum slice's (%d): %s", rc, out);
+	free(stl);
+}
+END_TEST
+
 START_TEST(test_pause_resume_cancel)
 {
 	struct node_proc np;
@@ -826,9 +857,11 @@ static char *commands_of(const char *gcode)
 /*
  * The simulator's execution log of printer name, from its first command
  * after the connect (M110, M115, M155), as commands one per line; checks
- * that every line number ran exactly once, in order.
+ * that every line number ran exactly once, in order.  Unnumbered lines
+ * (the safe stop's M108/M410 past the queue) fail the check unless
+ * emergency_ok, and are then left out.
  */
-static char *sim_executed(const struct node_proc *np, const char *name)
+static char *sim_executed_ex(const struct node_proc *np, const char *name, bool emergency_ok)
 {
 	char path[600], line[512];
 	size_t cap = 1 << 20, len = 0;
@@ -845,6 +878,8 @@ static char *sim_executed(const struct node_proc *np, const char *name)
 		char *sp = strchr(line, ' ');
 		long n = atol(line);
 
+		if (emergency_ok && line[0] == '-' && line[1] == ' ')
+			continue;
 		ck_assert_msg(sp && line[0] != '-', "unnumbered line executed: %s", line);
 		ck_assert_msg(n == last + 1, "line %ld ran after line %ld", n, last);
 		last = n;
@@ -858,6 +893,11 @@ static char *sim_executed(const struct node_proc *np, const char *name)
 	fclose(f);
 	out[len] = '\0';
 	return out;
+}
+
+static char *sim_executed(const struct node_proc *np, const char *name)
+{
+	return sim_executed_ex(np, name, false);
 }
 
 /* Upload a G-code text to print on prefix's printer; the job number. */
@@ -1183,6 +1223,66 @@ static char *layers_gcode(int nl, int per)
 	snprintf(g + len, cap - len, "M104 S0\nM140 S0\n");
 	return g;
 }
+
+/*
+ * A Marlin printer on `port = sim`: the job's progress names the layer; a
+ * job cancelled mid-print ends with the safe stop, and the printer then takes more jobs on the same connection.
+ * Regression: the driver kept the cancelled job's failure, so every later
+ * job failed at once with "the job was cancelled" until a reconnect.
+ */
+START_TEST(test_sim_marlin_after_cancel)
+{
+	struct node_proc np;
+	char *slow = layers_gcode(12, 30), *g2 = moves_gcode(120, 6000), *g3 = moves_gcode(90, 4800);
+	char *want, *got, *want2 = commands_of(g2), *want3 = commands_of(g3);
+	long long idc, id2, id3;
+	json_int_t layer = 0;
+	size_t lg, lw;
+
+	write_config(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\n"
+			  "sim_speedup = 50\n", 8);
+	node_start(&np);
+	idc = print_text(np.port, "", "slow.gcode", slow);
+	wait_state(np.port, "", idc, "printing", 10);
+	/* the layer the printer confirmed is in the job's progress */
+	for (int i = 0; i < 200 && layer < 1; i++) {
+		json_t *o = get_json(np.port, "/api/job");
+
+		layer = json_integer_value(json_object_get(json_object_get(o, "progress"), "layer"));
+		json_decref(o);
+		if (layer < 1)
+			usleep(20000);
+	}
+	ck_assert_msg(layer >= 1, "no layer in the job's progress");
+	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL, "{\"command\":\"cancel\"}", 204);
+	wait_state(np.port, "", idc, "cancelled", 10);
+	bed_clear(np.port, "", 204);
+	id2 = print_text(np.port, "", "two.gcode", g2);
+	wait_state(np.port, "", id2, "done", 30);
+	bed_clear(np.port, "", 204);
+	id3 = print_text(np.port, "", "three.gcode", g3);
+	wait_state(np.port, "", id3, "done", 30);
+	/* The log: part of the cancelled job, its safe stop, then both jobs whole. */
+	want = malloc(strlen(want2) + strlen(want3) + 1);
+	ck_assert(want);
+	strcat(strcpy(want, want2), want3);
+	got = sim_executed_ex(&np, "mk3s", true);
+	lg = strlen(got);
+	lw = strlen(want);
+	ck_assert_msg(lg > lw && !strcmp(got + lg - lw, want), "the jobs after the cancel did not "
+		      "run exactly: %.300s", lg > lw ? got + lg - lw : got);
+	ck_assert_msg(lg - lw >= 4 && !strncmp(got + lg - lw - 4, "M84\n", 4),
+		      "no safe stop before the next job");
+	free(want);
+	free(got);
+	free(want2);
+	free(want3);
+	node_stop(&np);
+	free(slow);
+	free(g2);
+	free(g3);
+}
+END_TEST
 
 /*
  * A Creator Pro on `port = sim` printing a layered job, the node killed
@@ -1543,6 +1643,7 @@ Suite *serve_suite(void)
 	tcase_add_test(tc, test_oversize);
 	tcase_add_test(tc, test_hostile_names);
 	tcase_add_test(tc, test_stl_two_printers);
+	tcase_add_test(tc, test_node_gcode_is_slice_gcode);
 	tcase_add_test(tc, test_pause_resume_cancel);
 	tcase_add_test(tc, test_kill9_restart);
 	tcase_add_test(tc, test_not_operational);
@@ -1550,6 +1651,7 @@ Suite *serve_suite(void)
 	tcase_add_test(tc, test_sim_two_printers);
 	tcase_add_test(tc, test_sim_stl_print);
 	tcase_add_test(tc, test_sim_kill9);
+	tcase_add_test(tc, test_sim_marlin_after_cancel);
 	tcase_add_test(tc, test_sim_sailfish);
 	tcase_add_test(tc, test_sim_sailfish_resume);
 	tcase_add_test(tc, test_mqtt);

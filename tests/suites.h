@@ -20,6 +20,7 @@ Suite *gcode_suite(void);	/* tests/check_gcode.c: G-code parser and reader */
 Suite *xport_suite(void);	/* tests/check_xport.c: serial transports (pty, TCP) */
 Suite *sim_suite(void);		/* tests/check_sim.c: simulated Marlin over a pty */
 Suite *marlin_suite(void);	/* tests/check_marlin.c: Marlin driver against the simulator */
+Suite *printer_suite(void);	/* tests/check_printer.c: printer.h adapters on both simulators */
 Suite *slicer_suite(void);	/* tests/check_slicer.c: slicing, Clipper bridge, walls */
 Suite *gcodewriter_suite(void); /* tests/check_gcodewriter.c: G-code writer and estimator */
 Suite *infill_suite(void);	/* tests/check_infill.c: skins, bridges, infill */

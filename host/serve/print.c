@@ -1,35 +1,52 @@
 /*
- * print.c - the print step of the farm node (print.h): the one place that
- * chooses how a printer is driven: the test double for "test-instant",
- * the S3G driver for Sailfish profiles (print_sailfish.c), the Marlin
- * driver for everything else (print_marlin.c).
+ * print.c - the print step of the farm node (print.h) over serial/printer.h:
+ * the test double for "test-instant", else the adapter the printer's
+ * profile names (host/printer_profile.h).  The node's requests reach the
+ * adapter through the control hook, its progress comes back through the
+ * progress hook; both go through struct node_print_ctl.
  */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
 
 #include "print.h"
-#include "xport.h"
-
+#include "printer_profile.h"
+#include "resume.h"
 
 struct node_link {
-	const struct node_printer_ops *ops;
-	void *state;
+	char name[NODE_NAME_MAX + 8]; /* "printer NAME", for messages */
+	struct printer *p;
+	const struct printer_ops *ops;
+	struct printer_options o; /* strings borrowed from the config and profile */
 };
 
-/* The back end for a port value and the profile's protocol. */
-static const struct node_printer_ops *ops_for(const char *port, const struct profile *prof)
+/* The options and operations for printer pc; 0 or the profile's error. */
+static int options_for(const struct node_printer_config *pc, const struct profile *prof,
+		       struct printer_options *o, const struct printer_ops **ops,
+		       struct st_error *err)
 {
-	if (!strcmp(port, "test-instant"))
-		return &node_double_ops;
-	if (prof->protocol == PROFILE_PROTOCOL_SAILFISH)
-		return &node_sailfish_ops;
-	return &node_marlin_ops;
+	struct st_error e = {0};
+	int rc = printer_profile_options(prof, pc->port, 0, o, ops, &e);
+
+	if (rc)
+		return st_error_set(err, rc, "printer %s: profile %s: %s", pc->name, prof->id, e.msg);
+	if (!strcmp(pc->port, "test-instant"))
+		*ops = &node_double_ops;
+	o->name = pc->name;
+	o->sim_speedup = pc->sim_speedup;
+	o->sim_log = pc->sim_log[0] ? pc->sim_log : NULL;
+	return 0;
 }
 
 bool node_print_resumable(const struct node_printer_config *pc, const struct profile *prof)
 {
-	return ops_for(pc->port, prof)->can_resume;
+	struct printer_options o;
+	const struct printer_ops *ops;
+
+	return !options_for(pc, prof, &o, &ops, NULL) && printer_can_resume(ops);
 }
 
 bool node_port_simulated(const char *port)
@@ -40,17 +57,22 @@ bool node_port_simulated(const char *port)
 int node_print_connect(const struct node_printer_config *pc, const struct profile *prof,
 		       struct node_link **out, struct st_error *err)
 {
-	const struct node_printer_ops *ops = ops_for(pc->port, prof);
+	struct printer_options o;
+	const struct printer_ops *ops;
 	struct node_link *l;
 	int rc;
 
 	*out = NULL;
+	if ((rc = options_for(pc, prof, &o, &ops, err)))
+		return rc;
 	l = calloc(1, sizeof(*l));
 	if (!l)
 		return st_error_set(err, ST_ERR_NOMEM, "printer %s: out of memory", pc->name);
+	snprintf(l->name, sizeof(l->name), "printer %s", pc->name);
+	o.name = l->name;
 	l->ops = ops;
-	rc = ops->connect(pc, prof, &l->state, err);
-	if (rc) {
+	l->o = o;
+	if ((rc = printer_open(ops, &o, &l->p, err))) {
 		free(l);
 		return rc;
 	}
@@ -62,52 +84,136 @@ void node_print_disconnect(struct node_link *l)
 {
 	if (!l)
 		return;
-	l->ops->disconnect(l->state);
+	printer_close(l->p);
 	free(l);
+}
+
+/* The control hook: the node's requests, read under ctl->mu. */
+static enum printer_control ctl_control(void *ctx)
+{
+	struct node_print_ctl *ctl = ctx;
+	enum printer_control c;
+
+	pthread_mutex_lock(&ctl->mu);
+	c = ctl->stop ? PRINTER_STOP : ctl->cancel ? PRINTER_CANCEL
+			: ctl->pause ? PRINTER_HOLD : PRINTER_GO;
+	pthread_mutex_unlock(&ctl->mu);
+	return c;
+}
+
+/* Temperatures reported into ctl; ctl->mu held. */
+static void ctl_temps(struct node_print_ctl *ctl, const struct printer_progress *p)
+{
+	if (p->tool) {
+		ctl->tool_actual = p->tool_actual;
+		ctl->tool_target = p->tool_target;
+	}
+	if (p->bed) {
+		ctl->bed_actual = p->bed_actual;
+		ctl->bed_target = p->bed_target;
+	}
+}
+
+/* The progress hook: position, layer, temperatures into ctl. */
+static void ctl_progress(void *ctx, const struct printer_progress *p)
+{
+	struct node_print_ctl *ctl = ctx;
+
+	pthread_mutex_lock(&ctl->mu);
+	ctl->filepos = p->filepos;
+	ctl->layer = p->layer;
+	ctl->z = p->z;
+	ctl->paused = p->paused;
+	ctl_temps(ctl, p);
+	pthread_mutex_unlock(&ctl->mu);
+}
+
+/* After a stream that ended with the printer answering: leave it safe. */
+static int safe_stop(struct node_link *l, int rc, struct st_error *err)
+{
+	struct st_error e = {0};
+
+	if (!printer_safe_stop(l->p, &e))
+		return rc;
+	if (rc < 0) { /* the job's error stands; say the stop failed too */
+		char msg[sizeof(err->msg)];
+
+		snprintf(msg, sizeof(msg), "%s", err->msg);
+		return st_error_set(err, rc, "%.180s; the safe stop failed too: %.60s", msg, e.msg);
+	}
+	return st_error_set(err, ST_ERR_IO, "%s", e.msg);
 }
 
 int node_print_file(struct node_link *l, const char *path, int64_t start, bool resume,
 		    struct node_print_ctl *ctl, struct st_error *err)
 {
-	return l->ops->print(l->state, path, start, resume, ctl, err);
+	struct printer_job job = {
+		.path = path,
+		.offset = start,
+		.resume = resume,
+		.control = ctl_control,
+		.progress = ctl_progress,
+		.ctx = ctl,
+	};
+	struct printer_file_info info;
+	struct printer_result res;
+	struct stat sb;
+	size_t n = strlen(path);
+	int rc;
+
+	job.x3g = n > 4 && !strcasecmp(path + n - 4, ".x3g");
+	pthread_mutex_lock(&ctl->mu);
+	if (!stat(path, &sb))
+		ctl->size = sb.st_size;
+	ctl->layer = -1;
+	ctl->z = NAN;
+	pthread_mutex_unlock(&ctl->mu);
+	if (resume && l->ops->resume_from_layer && !job.x3g) {
+		long layer;
+
+		if ((rc = resume_layer_start(path, start, &job.offset, &layer, err)))
+			return rc;
+		job.saved = start;
+	}
+	if ((rc = printer_check(l->ops, &l->o, &job, NULL, NULL, &info, err)))
+		return rc;
+	job.total = info.commands;
+	rc = printer_stream(l->p, &job, &res, err);
+	pthread_mutex_lock(&ctl->mu);
+	ctl->paused = false;
+	pthread_mutex_unlock(&ctl->mu);
+	switch (res.end) {
+	case PRINTER_END_DONE:
+		return rc ? rc : NODE_PRINT_DONE;
+	case PRINTER_END_CANCELLED:
+		return safe_stop(l, NODE_PRINT_CANCELLED, err);
+	case PRINTER_END_STOPPED:
+		return safe_stop(l, NODE_PRINT_STOPPED, err);
+	case PRINTER_END_LINK_LOST:
+		return NODE_PRINT_LINK_LOST;
+	default:
+		rc = rc ? rc : err->code ? err->code : ST_ERR_IO;
+		return res.safe_stop ? safe_stop(l, rc, err) : rc;
+	}
 }
 
 int node_print_command(struct node_link *l, const char *line, struct st_error *err)
 {
-	return l->ops->command(l->state, line, err);
+	return printer_command(l->p, line, NULL, 0, err);
 }
 
 int node_print_poll(struct node_link *l, struct node_print_ctl *ctl, struct st_error *err)
 {
-	return l->ops->poll ? l->ops->poll(l->state, ctl, err) : 0;
+	struct printer_progress t = {0};
+	int rc = printer_poll(l->p, &t, err);
+
+	pthread_mutex_lock(&ctl->mu);
+	ctl_temps(ctl, &t);
+	pthread_mutex_unlock(&ctl->mu);
+	return rc;
 }
 
 void node_print_describe(struct node_link *l, char *out, size_t cap)
 {
-	if (l->ops->describe)
-		l->ops->describe(l->state, out, cap);
-	else
-		snprintf(out, cap, "%s", l->ops->name);
-}
-
-
-int node_port_open(const struct node_printer_config *pc, const struct profile *prof,
-		   const char *path, bool simulated, struct xport **x, struct st_error *err)
-{
-	struct xport_options xo = {0};
-	struct st_error e = {0};
-
-	xo.baudrate = (int)prof->baudrate;
-	xo.dtr_reset = prof->dtr_reset && !simulated;
-	if (xport_open(path, &xo, x, &e))
-		return st_error_set(err, ST_ERR_IO, "printer %s: %s", pc->name, e.msg);
-	return 0;
-}
-
-void node_port_close(struct xport *x)
-{
-	if (!x)
-		return;
-	xport_drain(x, 1000, NULL);
-	xport_close(x);
+	printer_describe(l->p, out, cap);
 }

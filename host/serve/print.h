@@ -1,18 +1,13 @@
 /*
  * print.h - the node's printer-worker interface: how a printer's worker
- * thread (worker.c) talks to the printer.  One table of operations; print.c
- * chooses the back end from the printer's `port`:
- *   - "test-instant": a test double (print_double.c) that "prints" by
- *     reading the G-code file line by line with our parser, reporting
- *     progress, honouring pause, cancel and G4 dwells; no printer involved.
- *     A testing aid, documented as such in docs/serve.md.
- *   - a device path, a pty or tcp://HOST:PORT: the Marlin streaming driver
- *     (serial/marlin.h, print_marlin.c);
- *   - "sim": the same driver against the simulated Marlin printer
- *     (serial/sim/marlin_sim.h) run inside the node, sped up;
- *   - with a `protocol = sailfish` profile, a port or "sim": the S3G driver
- *     (serial/s3g.h, print_sailfish.c), G-code translated to X3G on the fly,
- *     against the simulated Sailfish printer for "sim".
+ * thread (worker.c) talks to the printer, over serial/printer.h.  print.c
+ * picks the operations: for "test-instant" the test double
+ * (print_double.c), which "prints" by reading the G-code file line by
+ * line with our parser, reporting progress, honouring pause, cancel and
+ * G4 dwells, with no printer involved (a testing aid, docs/serve.md);
+ * otherwise the dialect's adapter the profile names (host/printer_profile.h),
+ * to a device path, a pty, tcp://HOST:PORT or "sim", the adapter's own
+ * simulated printer run inside the node, sped up.
  *
  * Threads: the worker thread alone calls the operations of one link; the
  * HTTP threads only write requests into struct node_print_ctl (under its
@@ -26,6 +21,7 @@
 #include <stdint.h>
 
 #include "node.h"
+#include "printer.h"
 #include "profile.h"
 #include "st_error.h"
 
@@ -40,6 +36,8 @@ struct node_print_ctl {
 	/* Status, written by the back end. */
 	bool paused;		 /* the printer is holding (pause acknowledged) */
 	int64_t filepos, size;	 /* bytes of the file sent, and its size */
+	long layer;		 /* layer of the last confirmed command (0-based), -1 unknown */
+	double z;		 /* its Z (mm), NAN unknown */
 	double tool_actual, tool_target, bed_actual, bed_target; /* degrees C */
 };
 
@@ -96,7 +94,7 @@ int node_print_poll(struct node_link *l, struct node_print_ctl *ctl, struct st_e
 void node_print_describe(struct node_link *l, char *out, size_t cap);
 
 /*
- * node_print_resumable - whether the back end that drives pc with profile
+ * node_print_resumable - whether the operations that drive pc with profile
  * prof can continue an interrupted print (all of them today; X3G jobs cannot).
  */
 bool node_print_resumable(const struct node_printer_config *pc, const struct profile *prof);
@@ -104,38 +102,7 @@ bool node_print_resumable(const struct node_printer_config *pc, const struct pro
 /* node_port_simulated - true for a port value that is no real printer. */
 bool node_port_simulated(const char *port);
 
-/* Helpers the serial back ends share (print.c). */
-struct xport;
-
-/*
- * node_port_open - open path (a device, pty or tcp://) for printer pc at
- * the profile's baud rate; DTR reset only on a real port.  Returns 0 or
- * ST_ERR_IO with err naming the printer; *x NULL on error.
- */
-int node_port_open(const struct node_printer_config *pc, const struct profile *prof,
-		   const char *path, bool simulated, struct xport **x, struct st_error *err);
-
-/* node_port_close - drain what is still going out (1 s at most), close; NULL is fine. */
-void node_port_close(struct xport *x);
-
-/* Back-end operations (print.c picks one table per link). */
-struct node_printer_ops {
-	const char *name; /* for the log */
-	bool can_resume;  /* an interrupted print can be continued (print's resume) */
-	int (*connect)(const struct node_printer_config *pc, const struct profile *prof,
-		       void **state, struct st_error *err);
-	void (*disconnect)(void *state);
-	int (*print)(void *state, const char *path, int64_t start, bool resume,
-		     struct node_print_ctl *ctl, struct st_error *err);
-	int (*command)(void *state, const char *line, struct st_error *err);
-	int (*poll)(void *state, struct node_print_ctl *ctl, struct st_error *err);
-	void (*describe)(void *state, char *out, size_t cap);
-};
-
-/* The test double's table (print_double.c), the Marlin one (print_marlin.c)
- * and the Sailfish one (print_sailfish.c). */
-extern const struct node_printer_ops node_double_ops;
-extern const struct node_printer_ops node_marlin_ops;
-extern const struct node_printer_ops node_sailfish_ops;
+/* The test double's operations (print_double.c). */
+extern const struct printer_ops node_double_ops;
 
 #endif /* STRATUM_HOST_SERVE_PRINT_H */

@@ -1,5 +1,6 @@
 /*
- * print_double.c - the test double behind `port = test-instant` (print.h):
+ * print_double.c - the test double behind `port = test-instant` (print.h),
+ * on the printer table of serial/printer.h:
  * it "prints" a G-code file by reading it line by line through our parser,
  * so a file that is not G-code fails as it would on a printer, reports the
  * byte position as progress, takes temperatures from M104/M109/M140/M190 as
@@ -15,27 +16,28 @@
 
 #include "gcode.h"
 #include "print.h"
+#include "printer.h"
 
 #define DOUBLE_DWELL_MAX_MS 60000 /* longest G4 honoured, ms */
+#define DOUBLE_WAIT_MS 10	  /* request poll while holding or dwelling, ms */
 
 struct double_state {
 	char name[NODE_NAME_MAX];
+	struct printer_progress temps; /* as the last job set them */
 };
 
-static int double_connect(const struct node_printer_config *pc, const struct profile *prof,
-			  void **state, struct st_error *err)
+static int double_open(const struct printer_options *o, void **state, struct st_error *err)
 {
 	struct double_state *s = calloc(1, sizeof(*s));
 
-	(void)prof;
 	if (!s)
-		return st_error_set(err, ST_ERR_NOMEM, "printer %s: out of memory", pc->name);
-	snprintf(s->name, sizeof(s->name), "%s", pc->name);
+		return st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", printer_name(o));
+	snprintf(s->name, sizeof(s->name), "%s", printer_name(o));
 	*state = s;
 	return 0;
 }
 
-static void double_disconnect(void *state)
+static void double_close(void *state)
 {
 	free(state);
 }
@@ -49,138 +51,173 @@ static double word(const struct gcode_line *l, char letter, double dflt)
 	return dflt;
 }
 
-/* Temperatures a line sets; ctl->mu held. */
-static void apply_temps(const struct gcode_line *l, struct node_print_ctl *ctl)
+/* Temperatures a line sets, reached at once. */
+static void apply_temps(const struct gcode_line *l, struct printer_progress *p)
 {
 	if (l->letter != 'M')
 		return;
 	if (l->number == 104 || l->number == 109) {
-		ctl->tool_target = word(l, 'S', ctl->tool_target);
-		ctl->tool_actual = ctl->tool_target;
+		p->tool = true;
+		p->tool_target = word(l, 'S', p->tool_target);
+		p->tool_actual = p->tool_target;
 	} else if (l->number == 140 || l->number == 190) {
-		ctl->bed_target = word(l, 'S', ctl->bed_target);
-		ctl->bed_actual = ctl->bed_target;
+		p->bed = true;
+		p->bed_target = word(l, 'S', p->bed_target);
+		p->bed_actual = p->bed_target;
 	}
 }
 
-/* Deadline ms from now on CLOCK_REALTIME (the condition variable's clock). */
-static struct timespec deadline_ms(long ms)
+/* Sleep ms milliseconds. */
+static void sleep_ms(long ms)
 {
-	struct timespec t;
+	struct timespec t = {ms / 1000, (ms % 1000) * 1000000L};
 
-	clock_gettime(CLOCK_REALTIME, &t);
-	t.tv_sec += ms / 1000;
-	t.tv_nsec += (ms % 1000) * 1000000L;
-	if (t.tv_nsec >= 1000000000L) {
-		t.tv_sec++;
-		t.tv_nsec -= 1000000000L;
-	}
-	return t;
+	nanosleep(&t, NULL);
 }
 
 /*
- * Hold while paused, for up to dwell_ms besides (0: no dwell); ctl->mu held.
- * Returns -1 to go on, else the node_print_result that ends the print.
+ * Hold while the hook says so, for up to dwell_ms besides (0: no dwell).
+ * Returns PRINTER_GO to go on, else the request that ends the print.
  */
-static int wait_requests(struct node_print_ctl *ctl, long dwell_ms)
+static enum printer_control wait_requests(const struct printer_job *job,
+					  struct printer_progress *p, long dwell_ms)
 {
-	struct timespec until = deadline_ms(dwell_ms);
-	int rc = 0;
-
 	for (;;) {
-		if (ctl->stop)
-			return NODE_PRINT_STOPPED;
-		if (ctl->cancel)
-			return NODE_PRINT_CANCELLED;
-		ctl->paused = ctl->pause;
-		if (ctl->pause) {
-			pthread_cond_wait(&ctl->cv, &ctl->mu);
-			continue;
+		enum printer_control c = job->control ? job->control(job->ctx) : PRINTER_GO;
+
+		if (c == PRINTER_CANCEL || c == PRINTER_STOP)
+			return c;
+		if (p->paused != (c == PRINTER_HOLD)) {
+			p->paused = c == PRINTER_HOLD;
+			if (job->progress)
+				job->progress(job->ctx, p);
 		}
-		if (dwell_ms <= 0 || rc == ETIMEDOUT)
-			return -1;
-		rc = pthread_cond_timedwait(&ctl->cv, &ctl->mu, &until);
+		if (c != PRINTER_HOLD && dwell_ms <= 0)
+			return PRINTER_GO;
+		sleep_ms(DOUBLE_WAIT_MS);
+		if (c != PRINTER_HOLD)
+			dwell_ms -= DOUBLE_WAIT_MS;
 	}
 }
 
-static int double_print(void *state, const char *path, int64_t start, bool resume,
-			struct node_print_ctl *ctl, struct st_error *err)
+/* Read job's file line by line from its offset: each line parses. */
+static int double_run(struct double_state *s, const struct printer_job *job,
+		      struct printer_result *res, struct printer_file_info *info,
+		      struct st_error *err)
 {
-	FILE *f = fopen(path, "rb");
+	FILE *f = fopen(job->path, "rb");
 	char *line = NULL;
 	size_t cap = 0;
 	ssize_t n;
 	long lineno = 0;
-	int64_t pos = start;
-	struct stat st;
-	int result = NODE_PRINT_DONE;
+	int64_t pos = job->offset;
+	int rc = 0;
 
-	(void)state;
-	(void)resume; /* nothing to restore: the double keeps no position */
 	if (!f)
-		return st_error_set(err, ST_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
-	if (fstat(fileno(f), &st) || fseeko(f, (off_t)start, SEEK_SET)) {
-		result = st_error_set(err, ST_ERR_IO, "%s: cannot read: %s", path, strerror(errno));
+		return st_error_set(err, ST_ERR_IO, "%s: cannot open: %s", job->path, strerror(errno));
+	if (fseeko(f, (off_t)job->offset, SEEK_SET)) {
+		rc = st_error_set(err, ST_ERR_IO, "%s: cannot read: %s", job->path, strerror(errno));
 		goto out_close;
 	}
-	pthread_mutex_lock(&ctl->mu);
-	ctl->size = st.st_size;
-	ctl->filepos = pos;
-	pthread_mutex_unlock(&ctl->mu);
 	while ((n = getline(&line, &cap, f)) > 0) {
 		struct gcode_line l;
 		long dwell = 0;
-		int r;
+		enum printer_control c;
 
 		lineno++;
 		if (gcode_parse(line, (size_t)n, 0, &l, err)) {
 			char why[sizeof(err->msg)];
 
 			snprintf(why, sizeof(why), "%s", err->msg);
-			result = start ? st_error_set(err, ST_ERR_PARSE, "%s: byte %lld: %s", path,
-						      (long long)pos, why)
-				       : st_error_set(err, ST_ERR_PARSE, "%s: line %ld: %s", path,
-						      lineno, why);
+			rc = job->offset ? st_error_set(err, ST_ERR_PARSE, "%s: byte %lld: %s",
+							job->path, (long long)pos, why)
+					 : st_error_set(err, ST_ERR_PARSE, "%s: line %ld: %s",
+							job->path, lineno, why);
 			goto out_free;
+		}
+		pos += n;
+		if (info) { /* the check: count, nothing else */
+			info->commands += l.text_len > 0;
+			continue;
 		}
 		if (l.letter == 'G' && l.number == 4)
 			dwell = (long)(word(&l, 'P', 0) + 1000 * word(&l, 'S', 0));
 		if (dwell > DOUBLE_DWELL_MAX_MS)
 			dwell = DOUBLE_DWELL_MAX_MS;
-		pos += n;
-		pthread_mutex_lock(&ctl->mu);
-		apply_temps(&l, ctl);
-		ctl->filepos = pos;
-		r = wait_requests(ctl, dwell);
-		pthread_mutex_unlock(&ctl->mu);
-		if (r >= 0) {
-			result = r;
+		apply_temps(&l, &s->temps);
+		res->last = s->temps;
+		res->last.filepos = pos;
+		res->last.line = job->first_line + (uint64_t)lineno;
+		res->last.layer = -1;
+		if (job->progress)
+			job->progress(job->ctx, &res->last);
+		c = wait_requests(job, &res->last, dwell);
+		if (c != PRINTER_GO) {
+			res->end = c == PRINTER_STOP ? PRINTER_END_STOPPED : PRINTER_END_CANCELLED;
 			goto out_free;
 		}
 	}
 	if (ferror(f))
-		result = st_error_set(err, ST_ERR_IO, "%s: read error at byte %lld", path,
-				      (long long)pos);
+		rc = st_error_set(err, ST_ERR_IO, "%s: read error at byte %lld", job->path,
+				  (long long)pos);
+	if (info)
+		info->lines = (uint64_t)lineno;
 out_free:
 	free(line);
 out_close:
 	fclose(f);
-	return result;
+	return rc;
 }
 
-static int double_command(void *state, const char *text, struct st_error *err)
+static int double_check(const struct printer_options *o, const struct printer_job *job,
+			printer_warn_fn warn, void *warn_ctx, struct printer_file_info *info,
+			struct st_error *err)
+{
+	(void)o;
+	(void)warn;
+	(void)warn_ctx;
+	return double_run(NULL, job, NULL, info, err);
+}
+
+static int double_stream(void *state, const struct printer_job *job, struct printer_result *res,
+			 struct st_error *err)
+{
+	int rc;
+
+	res->last.filepos = job->offset;
+	rc = double_run(state, job, res, NULL, err);
+	if (rc)
+		res->end = PRINTER_END_FAILED;
+	return rc;
+}
+
+static int double_command(void *state, const char *text, char *reply, size_t cap,
+			  struct st_error *err)
 {
 	struct gcode_line l;
 
 	(void)state;
+	if (reply && cap)
+		snprintf(reply, cap, "ok\n");
 	return gcode_parse(text, strlen(text), 0, &l, err);
 }
 
-const struct node_printer_ops node_double_ops = {
+static int double_poll(void *state, struct printer_progress *t, struct st_error *err)
+{
+	struct double_state *s = state;
+
+	(void)err;
+	*t = s->temps;
+	return 0;
+}
+
+const struct printer_ops node_double_ops = {
 	.name = "test-instant",
 	.can_resume = true,
-	.connect = double_connect,
-	.disconnect = double_disconnect,
-	.print = double_print,
+	.open = double_open,
+	.close = double_close,
+	.check = double_check,
+	.stream = double_stream,
 	.command = double_command,
+	.poll = double_poll,
 };

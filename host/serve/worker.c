@@ -9,12 +9,9 @@
 #include <string.h>
 #include <time.h>
 
-#include "mesh.h"
-#include "meshio.h"
 #include "node_int.h"
 #include "profile_slicer.h"
-#include "repair.h"
-#include "slicer.h"
+#include "slicejob.h"
 
 #define WORKER_IDLE_MS 1000 /* idle wake-up, for requests that did not signal */
 
@@ -25,16 +22,12 @@ void node_printer_wake(struct node_printer *p)
 	pthread_mutex_unlock(&p->mu);
 }
 
-/* Repair (epsilon = the nozzle) and slice job j's model into out. */
+/* Slice job j's model into out as `stratum slice` does (slicejob.h). */
 static int slice_model(struct node_printer *p, const struct node_job *j, const char *out,
 		       struct st_error *err)
 {
 	struct slicer_config cfg;
-	struct repair_options opt;
-	struct repair_report rep;
-	struct mesh *m = NULL, *fixed = NULL;
-	enum meshio_format fmt;
-	double off[3];
+	struct slicejob_result res;
 	int rc;
 
 	if (!out[0])
@@ -42,28 +35,9 @@ static int slice_model(struct node_printer *p, const struct node_job *j, const c
 	if ((rc = profile_slicer_config(p->prof, &cfg, err)))
 		return rc;
 	cfg.threads = p->node->cfg.slice_threads;
-	if ((rc = slicer_config_check(&cfg, err)) || (rc = meshio_read(j->file, MESHIO_AUTO, &m,
-								       &fmt, err)))
+	if ((rc = slicer_config_check(&cfg, err)))
 		return rc;
-	if ((rc = slicer_place(m, &cfg.bed, off, NULL, NULL, err)))
-		goto out_mesh;
-	repair_options_init(&opt);
-	opt.epsilon = cfg.perim.nozzle_diameter;
-	opt.precision = REPAIR_FLOAT64; /* slicing reads doubles */
-	opt.threads = cfg.threads;
-	if ((rc = repair_mesh(m, &opt, &fixed, NULL, &rep, err)))
-		goto out_mesh;
-	if (!rep.printable) {
-		rc = st_error_set(err, ST_ERR_RANGE, "could not be repaired to a printable solid: %s",
-				  rep.why);
-		goto out_fixed;
-	}
-	rc = slicer_run(fixed, &cfg, out, NULL, err);
-out_fixed:
-	mesh_free(fixed);
-out_mesh:
-	mesh_free(m);
-	return rc;
+	return slicejob_slice(j->file, &cfg, false, out, NULL, &res, err);
 }
 
 /* Write j back; a failing database is logged (the job goes on in memory). */

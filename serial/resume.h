@@ -1,14 +1,14 @@
 /*
- * resume.h - continuing an interrupted print on a Marlin printer: where
- * the printer was at a byte of the G-code file (heater targets, position,
- * modes) and the commands that bring it back there.  Shared by the farm
- * node (host/serve/print_marlin.c) and `stratum print --resume`
- * (host/cmd_print.c); docs/serve.md and docs/printing.md describe the
- * sequence.  The Sailfish form (resume_preamble_x3g) is translated to X3G
- * by the stream's own translator (host/send_sailfish.c).
+ * resume.h - continuing an interrupted print: where the printer was at a
+ * byte of the G-code file (heater targets, position, modes) and the
+ * commands that bring it back there.  The printer adapters send them
+ * (printer.h, job.resume): Marlin's form as it is (printer_marlin.c), the
+ * Sailfish form (resume_preamble_x3g) translated to X3G by the stream's
+ * own translator (printer_sailfish.c).  docs/serve.md and
+ * docs/printing.md describe the sequence.
  */
-#ifndef STRATUM_HOST_RESUME_H
-#define STRATUM_HOST_RESUME_H
+#ifndef STRATUM_SERIAL_RESUME_H
+#define STRATUM_SERIAL_RESUME_H
 
 #include <stdbool.h>
 #include <stddef.h>
@@ -84,4 +84,4 @@ int resume_x3g_text(const char *path, int64_t offset, char buf[RESUME_TEXT_MAX],
 int resume_layer_start(const char *path, int64_t pos, int64_t *offset, long *layer,
 		       struct st_error *err);
 
-#endif /* STRATUM_HOST_RESUME_H */
+#endif /* STRATUM_SERIAL_RESUME_H */

@@ -1,6 +1,6 @@
 /*
  * sf_source.c - S3G command sources over G-code and X3G files
- * (sf_source.h), shared by `stratum send` and the farm node.
+ * (sf_source.h), for the Sailfish adapter (printer_sailfish.c).
  */
 #include <errno.h>
 #include <string.h>

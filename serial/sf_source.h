@@ -1,7 +1,6 @@
 /*
- * sf_source.h - the S3G command sources both Sailfish paths use (`stratum
- * send`, host/send_sailfish.c, and the farm node, host/serve/
- * print_sailfish.c): a G-code file translated to X3G one line at a time
+ * sf_source.h - the S3G command sources of the Sailfish adapter
+ * (printer_sailfish.c): a G-code file translated to X3G one line at a time
  * (serial/x3g.h), or an X3G file cut into commands with x3g_decode.  Each
  * is an s3g_source_fn for s3g_stream_pull (serial/s3g.h), and each keeps
  * where in its file the commands it handed out came from, so a caller can
@@ -9,8 +8,8 @@
  *
  * Nothing here prints: translator warnings go to the caller's callback.
  */
-#ifndef STRATUM_HOST_SF_SOURCE_H
-#define STRATUM_HOST_SF_SOURCE_H
+#ifndef STRATUM_SERIAL_SF_SOURCE_H
+#define STRATUM_SERIAL_SF_SOURCE_H
 
 #include <stdbool.h>
 #include <stdint.h>
@@ -100,4 +99,4 @@ int sfsrc_x3g_next(void *src, struct s3g_cmd *cmd, struct st_error *err);
 uint64_t sfsrc_done_end(const struct sfsrc_gcode *g, const struct sfsrc_x3g *x, bool x3g,
 			uint64_t done);
 
-#endif /* STRATUM_HOST_SF_SOURCE_H */
+#endif /* STRATUM_SERIAL_SF_SOURCE_H */

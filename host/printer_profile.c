@@ -1,0 +1,27 @@
+/*
+ * printer_profile.c - profile to printer.h options (printer_profile.h).
+ */
+#include "printer_profile.h"
+
+#include "profile_x3g.h"
+
+int printer_profile_options(const struct profile *prof, const char *port, long baud,
+			    struct printer_options *o, const struct printer_ops **ops,
+			    struct st_error *err)
+{
+	int rc;
+
+	printer_options_init(o);
+	o->port = port;
+	o->baud = baud ? baud : prof->baudrate;
+	o->dtr_reset = prof->dtr_reset;
+	o->rx_buffer = prof->rx_buffer_size > 0 ? (unsigned)prof->rx_buffer_size : 0;
+	if (prof->protocol != PROFILE_PROTOCOL_SAILFISH) {
+		*ops = &printer_marlin_ops;
+		return 0;
+	}
+	*ops = &printer_sailfish_ops;
+	if ((rc = profile_x3g_machine(prof, &o->machine, &o->x3g.flavor, err)))
+		return rc;
+	return 0;
+}
