@@ -34,7 +34,19 @@ BENCH_PACKAGES := admesh time bc prusa-slicer printcore apache2-utils libcgal-de
 TEST_PACKAGES := chromium
 
 WARN     := -Wall -Wextra -Werror
-CPPFLAGS := -Iinclude -Irepair -Irepair/exact -Iserial -Islicer -Islicer/clip -Ihost -D_XOPEN_SOURCE=700 -D_DEFAULT_SOURCE -MMD -MP
+CPPFLAGS := -D_XOPEN_SOURCE=700 -D_DEFAULT_SOURCE -MMD -MP
+# Layering as a compile error (docs/architecture.md): each folder sees the
+# headers of its own layer and the layers below, nothing above.  repair/
+# and serial/ stand alone, slicer/ builds on repair/ (the mesh), host/,
+# tests/ and bench/ see everything.
+INC_repair := -Iinclude -Irepair -Irepair/exact
+INC_serial := -Iinclude -Iserial
+INC_slicer := -Iinclude -Islicer -Islicer/clip -Irepair
+INC_all    := -Iinclude -Irepair -Irepair/exact -Iserial -Islicer -Islicer/clip -Ihost
+$(BUILD)/repair/%.o: CPPFLAGS += $(INC_repair)
+$(BUILD)/serial/%.o: CPPFLAGS += $(INC_serial)
+$(BUILD)/slicer/%.o: CPPFLAGS += $(INC_slicer)
+$(BUILD)/host/%.o $(BUILD)/tests/%.o $(BUILD)/bench/%.o: CPPFLAGS += $(INC_all)
 CFLAGS   ?= -O2 -g
 override CFLAGS += -std=c11 -pedantic $(WARN) -Wstrict-prototypes -Wmissing-prototypes -Wshadow -pthread
 # CGAL: exact predicates, TBB for the parallel box intersection, Eigen for
@@ -61,7 +73,7 @@ TEST_SRC := $(sort $(wildcard tests/*.c))
 LIB_OBJ  := $(LIB_SRC:%.c=$(BUILD)/%.o) $(CXX_SRC:%.cpp=$(BUILD)/%.o)
 TEST_OBJ := $(TEST_SRC:%.c=$(BUILD)/%.o)
 
-.PHONY: all deps demo check test test-asan bench clean
+.PHONY: all deps demo check test test-asan bench clean layers
 
 all: $(BUILD)/stratum
 
@@ -108,8 +120,21 @@ check:
 	@$(MAKE) test-asan
 	@$(MAKE) test
 
-test: $(BUILD)/check_all $(BUILD)/stratum
+test: layers $(BUILD)/check_all $(BUILD)/stratum
 	STRATUM_BIN=$(BUILD)/stratum ./$(BUILD)/check_all
+
+# Proves the layering holds: a header from a layer above must not be found.
+LAYER_PROBES := repair:slicer.h repair:gcode.h repair:profile.h serial:slicer.h serial:mesh.h \
+	serial:profile.h slicer:gcode.h slicer:marlin.h slicer:profile.h
+layers:
+	@for probe in $(LAYER_PROBES); do \
+	  dir=$${probe%%:*}; hdr=$${probe#*:}; \
+	  case $$dir in repair) inc="$(INC_repair)";; serial) inc="$(INC_serial)";; slicer) inc="$(INC_slicer)";; esac; \
+	  if echo "#include \"$$hdr\"" | $(CC) $$inc -fsyntax-only -x c - 2>/dev/null; then \
+	    echo "layers: $$dir/ can include $$hdr (a layer above it)"; exit 1; fi; \
+	  if ! echo "#include \"$$hdr\"" | $(CC) $(INC_all) $(CAIRO_CFLAGS) -fsyntax-only -x c - 2>/dev/null; then \
+	    echo "layers: probe $$hdr is not a header of the tree"; exit 1; fi; \
+	done; echo "layers: repair/, serial/ and slicer/ see no layer above them"
 
 # Same suites under AddressSanitizer + UndefinedBehaviorSanitizer.
 SAN := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all

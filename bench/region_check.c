@@ -1,7 +1,7 @@
 /*
  * region_check.c - the slicer's "Done when" measurement (issue 5) for the
  * benchmark: how well does the region a G-code file prints match the
- * model's cross-sections?  See slicer/region.h for what is measured.
+ * model's cross-sections?  See host/region.h for what is measured.
  *
  *   region_check MODEL GCODE [--center X,Y] [--filament-diameter D]
  *                [--step MM] [--json] [--layers]

@@ -2,7 +2,7 @@
  * gcwalk.h - walk the moves of a G-code file with absolute positions: the
  * machine state a reader of sliced G-code needs (G90/G91, M82/M83, G92,
  * G28) kept once, on top of the one parser (gcode.h), for the region check
- * (slicer/region.c) and the layer preview (host/preview.c).
+ * (host/region.c) and the layer preview (host/preview.c).
  *
  * Each G0-G3 line becomes one struct gcwalk_move with where the nozzle was
  * and where it goes (mm), the change of E (mm of filament) and what the

@@ -1,5 +1,5 @@
 /*
- * check_region.c - the printed-region check (slicer/region.h): hand-made
+ * check_region.c - the printed-region check (host/region.h): hand-made
  * G-code whose printed region is known exactly (a square of beads), the
  * ways of writing E it must follow, its refusals, and our own slicer's
  * cube and cylinder against the issue 5 bound (95th-percentile outer
