@@ -158,7 +158,7 @@ struct profile {
 	double extrusion_width;	   /* mm, 0 = auto (a percentage is of layer_height) */
 	int perimeters, top_solid_layers, bottom_solid_layers; /* defaults 3, 3, 3 */
 	double fill_density;				       /* percent, 0-100; default 20 */
-	const char *fill_pattern;	/* a PrusaSlicer pattern name; default "stars" */
+	const char *fill_pattern;	/* a PrusaSlicer pattern name; default "rectilinear" */
 	int skirts;			/* loops; default 1 */
 	double brim_width;		/* mm; default 0 */
 	bool support_material;		/* default 0 */

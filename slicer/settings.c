@@ -108,8 +108,9 @@ static const struct setting table[] = {
     {"bottom_solid_layers", INT, S_, 0, 1000, 0, "", "3", NULL, NULL, 0, NULL, ""},
     {"fill_density", SETTING_PERCENT, S_, 0, 100, 0, "%", "20%", NULL, NULL, 0, NULL,
      "a bare number is a fraction (0.15 = 15%), as old Slic3r wrote it"},
-    {"fill_pattern", SETTING_CHOICE, S_, 0, 0, 0, "", "stars", NULL, CHOICES(pattern_names), NULL,
-     "PrusaSlicer's pattern names (monotonous is read as monotonic)"},
+    {"fill_pattern", SETTING_CHOICE, S_, 0, 0, 0, "", "rectilinear", NULL, CHOICES(pattern_names),
+     NULL, "PrusaSlicer's names (monotonous is read as monotonic); one Stratum does not print "
+     "(PrusaSlicer's default stars ...) prints rectilinear, named in the warning"},
     {"skirts", INT, S_, 0, 100, 0, "", "1", NULL, NULL, 0, NULL, "loops"},
     {"brim_width", NUM, S_, 0, 200, 0, "mm", "0", NULL, NULL, 0, NULL, ""},
     {"support_material", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL, ""},
