@@ -19,8 +19,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cfgopt.h"
 #include "commands.h"
 #include "meshio.h"
+#include "placeholder.h"
 #include "profile.h"
 #include "profile_slicer.h"
 #include "repair.h"
@@ -35,6 +37,7 @@ static void slice_usage(FILE *out)
 {
 	fprintf(out,
 		"usage: stratum slice MODEL -o OUT.gcode --printer NAME|FILE.ini\n"
+		"                     [--load FILE.ini]... [--set KEY=VALUE]... [--KEY-NAME V]...\n"
 		"                     [--layer-height H] [--first-layer-height H] [--perimeters N]\n"
 		"                     [--infill D] [--center X,Y] [--no-repair] [--json]\n"
 		"                     [--threads N]\n"
@@ -58,6 +61,10 @@ static void slice_usage(FILE *out)
 		"  --json                  one JSON object on stdout instead of the text summary\n"
 		"  --threads N             cores for the repair, walls and infill (default: all)\n"
 		"\n"
+		"Settings (--printer may be left out when --load gives a whole config):\n");
+	cfgopt_usage(out);
+	fprintf(out,
+		"\n"
 		"Exit status: 0 written, 1 the job cannot be done (no printable repair, the model\n"
 		"does not fit, OUT not written), 2 usage or bad settings, 65 unreadable model or\n"
 		"printer profile, 70 internal error.\n");
@@ -66,6 +73,7 @@ static void slice_usage(FILE *out)
 /* The command line, checked for form; values are checked with the profile. */
 struct slice_args {
 	const char *in, *out, *printer;
+	struct cfgopt cfg; /* --load, --set, --KEY-NAME ... */
 	bool json, no_repair;
 	int threads; /* 0 = all */
 	bool has_layer, has_first, has_perimeters, has_infill, has_center;
@@ -127,6 +135,7 @@ static int parse_args(int argc, char **argv, struct slice_args *a)
 	for (int i = 1; i < argc; i++) {
 		const char *s = argv[i];
 		const char *v;
+		int taken;
 
 		if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
 			slice_usage(stdout);
@@ -181,6 +190,9 @@ static int parse_args(int argc, char **argv, struct slice_args *a)
 							  "not '%s'\n", v ? v : "");
 				return ST_EXIT_USAGE;
 			}
+		} else if ((taken = cfgopt_parse(&a->cfg, SLICE_CMD, argc, argv, &i)) != 0) {
+			if (taken < 0)
+				return ST_EXIT_USAGE;
 		} else if (s[0] == '-' && s[1]) {
 			fprintf(stderr, SLICE_CMD ": unknown option '%s'\n", s);
 			slice_usage(stderr);
@@ -193,12 +205,12 @@ static int parse_args(int argc, char **argv, struct slice_args *a)
 			return ST_EXIT_USAGE;
 		}
 	}
-	if (!a->in || !a->out || !a->printer) {
+	if (!a->in || !a->out || (!a->printer && !a->cfg.has_files)) {
 		fprintf(stderr, SLICE_CMD ": %s\n",
 			!a->in	    ? "no model file given"
 			: !a->out   ? "no output file given; add -o OUT.gcode"
 				    : "no printer given; add --printer NAME ('stratum printers' "
-				      "lists them)");
+				      "lists them) or --load a PrusaSlicer config");
 		slice_usage(stderr);
 		return ST_EXIT_USAGE;
 	}
@@ -385,6 +397,26 @@ static int report(const struct slice_run *r, const struct slicer_summary *s)
 	return 0;
 }
 
+/* PrusaSlicer's input_filename and input_filename_base for the custom G-code. */
+static int input_vars(struct profile *p, const char *in)
+{
+	const char *base = strrchr(in, '/') ? strrchr(in, '/') + 1 : in;
+	const char *dot = strrchr(base, '.');
+	char stem[PROFILE_PATH_MAX];
+	const char *stem_p = stem;
+	struct st_error err = {0};
+	int rc;
+
+	snprintf(stem, sizeof(stem), "%.*s", (int)(dot && dot != base ? dot - base : (long)strlen(base)),
+		 base);
+	rc = ph_vars_set_strings(p->vars, "input_filename", &base, 1, false, &err);
+	if (rc == 0)
+		rc = ph_vars_set_strings(p->vars, "input_filename_base", &stem_p, 1, false, &err);
+	if (rc)
+		fprintf(stderr, SLICE_CMD ": %s\n", err.msg);
+	return rc ? ST_EXIT_SOFTWARE : 0;
+}
+
 int cmd_slice(int argc, char **argv)
 {
 	struct slice_args a = {0};
@@ -409,12 +441,27 @@ int cmd_slice(int argc, char **argv)
 		}
 	}
 
-	rc = profile_find(a.printer, &prof, &err);
-	if (rc) {
-		/* Settings that cannot slice are refused like a bad --layer-height. */
-		fprintf(stderr, SLICE_CMD ": %s\n", err.msg);
-		return rc == ST_ERR_RANGE ? ST_EXIT_USAGE : st_exit_for(rc);
+	if (a.printer) {
+		rc = profile_find(a.printer, &prof, &err);
+		if (rc) {
+			/* Settings that cannot slice are refused like a bad --layer-height. */
+			fprintf(stderr, SLICE_CMD ": %s\n", err.msg);
+			return rc == ST_ERR_RANGE ? ST_EXIT_USAGE : st_exit_for(rc);
+		}
 	}
+	if (a.cfg.n || a.cfg.presets.printer) {
+		struct profile *layered = NULL;
+
+		status = cfgopt_load(&a.cfg, SLICE_CMD, prof, &layered);
+		profile_free(prof);
+		prof = layered;
+		if (status)
+			return status;
+	}
+	cfgopt_warn_unsupported(prof, SLICE_CMD);
+	status = input_vars(prof, a.in);
+	if (status)
+		goto out_profile;
 	status = config_from_profile(prof, &a, &cfg);
 	if (status)
 		goto out_profile;

@@ -16,6 +16,7 @@
 #include <sys/stat.h>
 
 #include "ini.h"
+#include "placeholder.h"
 
 /* ---------------------------------------------------------------------------
  * Helpers shared by the profile modules (profile_int.h)
@@ -60,10 +61,11 @@ int prof_key_error(struct loader *L, const struct profile_kv *kv, const char *ke
 	vsnprintf(msg, sizeof(msg), fmt, ap);
 	va_end(ap);
 	if (kv && kv->line)
-		return st_error_set(L->err, code, "%s: line %d: %s: %s", L->origin, kv->line,
-				    kv->key, msg);
+		return st_error_set(L->err, code, "%s: line %d: %s: %s",
+				    kv->file ? kv->file : L->origin, kv->line, kv->key, msg);
 	if (kv || key)
-		return st_error_set(L->err, code, "%s: %s: %s", L->origin, kv ? kv->key : key, msg);
+		return st_error_set(L->err, code, "%s: %s: %s",
+				    kv && kv->file ? kv->file : L->origin, kv ? kv->key : key, msg);
 	return st_error_set(L->err, code, "%s: %s", L->origin, msg);
 }
 
@@ -72,7 +74,7 @@ int prof_key_error(struct loader *L, const struct profile_kv *kv, const char *ke
  */
 
 /* Decode PrusaSlicer's C-style escapes: \n \r \\ \" ; any other \X is kept as is. */
-static char *decode_value(const char *s, size_t len)
+char *prof_decode_value(const char *s, size_t len)
 {
 	char *d = malloc(len + 1);
 	size_t i, o = 0;
@@ -104,7 +106,7 @@ struct profile_kv *prof_find_kv(const struct profile_keys *keys, const char *key
 }
 
 /* Append one pair; takes ownership of key and value (frees them on failure). */
-static int keys_add(struct profile_keys *keys, char *key, char *value, int line)
+int prof_keys_add(struct profile_keys *keys, char *key, char *value, int line)
 {
 	if (keys->count == keys->cap) {
 		size_t cap = keys->cap ? keys->cap * 2 : 64;
@@ -121,6 +123,7 @@ static int keys_add(struct profile_keys *keys, char *key, char *value, int line)
 	keys->kv[keys->count].key = key;
 	keys->kv[keys->count].value = value;
 	keys->kv[keys->count].line = line;
+	keys->kv[keys->count].file = NULL;
 	keys->count++;
 	return 0;
 
@@ -143,42 +146,91 @@ static int on_section(void *ctx, int line, const char *s, size_t len, struct st_
 			    L->origin, line, tok);
 }
 
-/* A key = value line: decoded and added, a duplicate refused. */
-static int on_entry(void *ctx, const struct ini_entry *e, struct st_error *err)
+int prof_add_entry(struct profile_keys *keys, const struct ini_entry *e, const char *origin,
+		   struct st_error *err)
 {
-	struct loader *L = ctx;
-	struct profile_keys *keys = L->p->keys;
 	struct profile_kv *prev;
 	char *k, *v;
 
 	k = prof_dup(e->key, e->key_len);
 	if (!k)
-		return st_error_set(err, ST_ERR_NOMEM, "%s: line %d: out of memory", L->origin,
-				    e->line);
+		return st_error_set(err, ST_ERR_NOMEM, "%s: line %d: out of memory", origin, e->line);
 	prev = prof_find_kv(keys, k);
 	if (prev) {
 		int first = prev->line;
 		free(k);
 		return st_error_set(err, ST_ERR_PARSE,
-				    "%s: line %d: duplicate key '%.*s' (first set on line %d)",
-				    L->origin, e->line, (int)(e->key_len > 64 ? 64 : e->key_len),
-				    e->key, first);
+				    "%s: line %d: duplicate key '%.*s' (first set on line %d)", origin,
+				    e->line, (int)(e->key_len > 64 ? 64 : e->key_len), e->key, first);
 	}
-	v = decode_value(e->value, e->value_len);
+	v = prof_decode_value(e->value, e->value_len);
 	if (!v) {
 		free(k);
-		return st_error_set(err, ST_ERR_NOMEM, "%s: line %d: out of memory", L->origin,
-				    e->line);
+		return st_error_set(err, ST_ERR_NOMEM, "%s: line %d: out of memory", origin, e->line);
 	}
-	if (keys_add(keys, k, v, e->line))
-		return st_error_set(err, ST_ERR_NOMEM, "%s: line %d: out of memory", L->origin,
-				    e->line);
+	if (prof_keys_add(keys, k, v, e->line))
+		return st_error_set(err, ST_ERR_NOMEM, "%s: line %d: out of memory", origin, e->line);
 	return 0;
+}
+
+/* A key = value line of a profile file. */
+static int on_entry(void *ctx, const struct ini_entry *e, struct st_error *err)
+{
+	struct loader *L = ctx;
+
+	return prof_add_entry(L->p->keys, e, L->origin, err);
 }
 
 /* ---------------------------------------------------------------------------
  * Loading
  */
+
+/*
+ * The placeholder variables: PrusaSlicer gives the custom G-code every key
+ * of its config, so every key of the file is one, typed from its text;
+ * declared keys the file leaves out give their default, and the preset
+ * names PrusaSlicer always sets are empty unless the file names them.
+ * The G-code writer puts the values it prints with above these.
+ */
+int prof_build_vars(struct profile *p, struct st_error *err)
+{
+	static const char *const ids[] = {"print_settings_id", "filament_settings_id",
+					  "printer_settings_id"};
+	int rc = 0;
+
+	ph_vars_free(p->vars);
+	p->vars = ph_vars_new(NULL);
+	if (!p->vars)
+		return st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", p->path);
+	for (size_t i = 0; rc == 0 && i < p->keys->count; i++)
+		rc = ph_vars_set_config(p->vars, p->keys->kv[i].key, p->keys->kv[i].value, err);
+	for (size_t i = 0; rc == 0 && i < settings_count(); i++) {
+		const struct setting *s = settings_at(i);
+		const char *d = s->dflt;
+
+		if (!ph_vars_has(p->vars, s->name) && d && *d)
+			rc = ph_vars_set_config(p->vars, s->name, d, err);
+	}
+	for (size_t i = 0; rc == 0 && i < sizeof(ids) / sizeof(ids[0]); i++) {
+		const char *empty = "";
+
+		if (!ph_vars_has(p->vars, ids[i]))
+			rc = ph_vars_set_strings(p->vars, ids[i], &empty, 1, i == 1, err);
+	}
+	if (rc == 0 && !ph_vars_has(p->vars, "printer_model"))
+		rc = ph_vars_set_strings(p->vars, "printer_model", &p->printer_model, 1, false, err);
+	if (rc == 0) { /* PrusaSlicer's bed box variables, from bed_shape */
+		double lo[2] = {p->bed_min_x, p->bed_min_y}, hi[2] = {p->bed_max_x, p->bed_max_y};
+		double size[2] = {hi[0] - lo[0], hi[1] - lo[1]};
+
+		rc = ph_vars_set_numbers(p->vars, "print_bed_min", PH_REAL, lo, 2, true, err);
+		if (rc == 0)
+			rc = ph_vars_set_numbers(p->vars, "print_bed_max", PH_REAL, hi, 2, true, err);
+		if (rc == 0)
+			rc = ph_vars_set_numbers(p->vars, "print_bed_size", PH_REAL, size, 2, true, err);
+	}
+	return rc;
+}
 
 /* The id: base name of origin without a trailing ".ini". */
 static char *id_of(const char *origin)
@@ -202,13 +254,57 @@ void profile_free(struct profile *p)
 			free(p->keys->kv[i].key);
 			free(p->keys->kv[i].value);
 		}
+		for (size_t i = 0; i < p->keys->nfiles; i++)
+			free(p->keys->files[i]);
+		free(p->keys->files);
 		free(p->keys->kv);
 		free(p->keys);
 	}
+	ph_vars_free(p->vars);
 	free(p->bed_shape);
 	free((char *)p->id);
 	free((char *)p->path);
 	free(p);
+}
+
+struct profile *prof_new(const char *origin, struct st_error *err)
+{
+	struct profile *p = calloc(1, sizeof(*p));
+
+	if (!p) {
+		st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", origin);
+		return NULL;
+	}
+	p->keys = calloc(1, sizeof(*p->keys));
+	p->id = id_of(origin);
+	p->path = prof_dup(origin, strlen(origin));
+	p->extruder_count = 1;
+	if (!p->keys || !p->id || !p->path) {
+		st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", origin);
+		profile_free(p);
+		return NULL;
+	}
+	p->name = p->id;
+	if (prof_set_defaults(p, false)) {
+		st_error_set(err, ST_ERR_INTERNAL, "%s: the declared defaults do not load", origin);
+		profile_free(p);
+		return NULL;
+	}
+	return p;
+}
+
+int prof_finish(struct profile *p, const char *origin, struct profile **out,
+		struct st_error *err)
+{
+	struct loader L = {.p = p, .origin = origin, .err = err};
+	int rc = prof_apply_all(&L);
+
+	if (rc) {
+		profile_free(p);
+		return rc;
+	}
+	*out = p;
+	return 0;
 }
 
 int profile_load_buffer(const char *text, size_t len, const char *origin, struct profile **out,
@@ -222,38 +318,18 @@ int profile_load_buffer(const char *text, size_t len, const char *origin, struct
 	if (!out || (!text && len) || !origin)
 		return st_error_set(err, ST_ERR_ARG, "profile_load_buffer: bad arguments");
 	*out = NULL;
-	p = calloc(1, sizeof(*p));
+	p = prof_new(origin, err);
 	if (!p)
-		return st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", origin);
-	p->keys = calloc(1, sizeof(*p->keys));
-	p->id = id_of(origin);
-	p->path = prof_dup(origin, strlen(origin));
-	p->extruder_count = 1;
-	if (!p->keys || !p->id || !p->path) {
-		rc = st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", origin);
-		goto out_free;
-	}
-	p->name = p->id;
-	rc = prof_set_defaults(p, false);
-	if (rc) {
-		rc = st_error_set(err, rc, "%s: the declared defaults do not load", origin);
-		goto out_free;
-	}
+		return err && err->code ? err->code : ST_ERR_NOMEM;
 	L.p = p;
 	L.origin = origin;
 	L.err = err;
 	rc = ini_parse(text, len, origin, &handler, &L, err);
-	if (rc)
-		goto out_free;
-	rc = prof_apply_all(&L);
-	if (rc)
-		goto out_free;
-	*out = p;
-	return 0;
-
-out_free:
-	profile_free(p);
-	return rc;
+	if (rc) {
+		profile_free(p);
+		return rc;
+	}
+	return prof_finish(p, origin, out, err);
 }
 
 int profile_load_file(const char *path, struct profile **out, struct st_error *err)

@@ -99,6 +99,7 @@ struct profile_usb_id {
 };
 
 struct profile_keys; /* the file's raw key = value lines (private) */
+struct ph_vars;	     /* slicer/placeholder.h */
 
 /*
  * A loaded profile.  Every field holds the file's value or the documented
@@ -157,7 +158,7 @@ struct profile {
 	double extrusion_width;	   /* mm, 0 = auto (a percentage is of layer_height) */
 	int perimeters, top_solid_layers, bottom_solid_layers; /* defaults 3, 3, 3 */
 	double fill_density;				       /* percent, 0-100; default 20 */
-	const char *fill_pattern;	/* a PrusaSlicer pattern name; default "stars" */
+	const char *fill_pattern;	/* a PrusaSlicer pattern name; default "rectilinear" */
 	int skirts;			/* loops; default 1 */
 	double brim_width;		/* mm; default 0 */
 	bool support_material;		/* default 0 */
@@ -204,8 +205,16 @@ struct profile {
 	/* Custom G-code, escapes decoded (PrusaSlicer placeholders left as written) */
 	const char *start_gcode;
 	const char *end_gcode;
+	const char *before_layer_gcode, *layer_gcode; /* around each layer change */
+	const char *start_filament_gcode, *end_filament_gcode; /* the first filament's */
+	const char *toolchange_gcode; /* checked only: one extruder prints */
 
 	struct profile_keys *keys; /* private: every key = value of the file */
+	/* Every key of the file, and every declared key's resolved value or
+	 * default, as placeholder variables for the custom G-code; also
+	 * print_settings_id, filament_settings_id, printer_settings_id ("" when
+	 * the file has none). */
+	struct ph_vars *vars;
 };
 
 /* A profile file found by profile_list(). */
@@ -239,6 +248,43 @@ int profile_load_file(const char *path, struct profile **out, struct st_error *e
  *          without ".ini" becomes the id.
  */
 int profile_load_buffer(const char *text, size_t len, const char *origin, struct profile **out,
+			struct st_error *err);
+
+/* One layer of settings for profile_load_layers: a file, or one key. */
+struct profile_layer {
+	const char *path;	 /* a flat config or a PrusaSlicer bundle; NULL: a key */
+	const char *key, *value; /* the key to set (path NULL), value as in a file */
+	const char *option;	 /* names the key's origin in messages ("--set"); NULL: --set */
+};
+
+/* The presets to take from a bundle; NULL members: the printer's defaults. */
+struct profile_presets {
+	const char *printer;  /* [printer:NAME]; required when a layer is a bundle */
+	const char *print;    /* [print:NAME]; default: its default_print_profile */
+	const char *filament; /* [filament:NAME]; default: its default_filament_profile */
+};
+
+/*
+ * profile_load_layers - a profile from layers, later ones replacing the
+ * keys of earlier ones, as PrusaSlicer's repeated --load:
+ * @base:   a loaded profile whose keys come first (e.g. --printer), or NULL;
+ * @layers: files and single keys in order.  A file with [printer:...],
+ *          [print:...] or [filament:...] sections is a PrusaSlicer bundle:
+ *          @pre's presets are resolved through `inherits` (parents split at
+ *          ';', applied left to right, abstract *name* presets included)
+ *          and applied printer, print, filament, with print_settings_id,
+ *          filament_settings_id and printer_settings_id set to their names;
+ *          [vendor] and [printer_model:...] set nothing.  Any other file is
+ *          a flat config (a duplicate key in it is an error).  After each
+ *          file a filament's filament_retract_* values that are not "nil"
+ *          replace the printer's, as PrusaSlicer does.
+ * The result is then checked as one file is; messages name the file and
+ * line that set the key ("--set: layer_height: ..." for a key layer).
+ * Returns 0 or as profile_load_file; ST_ERR_ARG for a bundle without a
+ * printer preset or a preset it does not have.
+ */
+int profile_load_layers(const struct profile *base, const struct profile_layer *layers,
+			size_t n, const struct profile_presets *pre, struct profile **out,
 			struct st_error *err);
 
 /*
@@ -307,6 +353,18 @@ int profile_get_number(const struct profile *p, const char *key, double min, dou
  */
 size_t profile_key_count(const struct profile *p);
 const char *profile_key_at(const struct profile *p, size_t i, const char **value, int *line);
+
+/*
+ * profile_unsupported - the keys p sets that Stratum does not honour, as
+ * one list "raft_layers=3, ironing=1" (values cut at 24 bytes), and a
+ * fill_pattern Stratum does not print ("fill_pattern=stars (rectilinear
+ * used)").  A key is honoured when the loader types it, when it cannot
+ * change what Stratum prints (notes, preset names, multi-material ...) or
+ * when its value asks for what Stratum does anyway (raft_layers = 0).
+ * *out: a new string (free()), NULL when every key is honoured.
+ * Returns 0 or ST_ERR_NOMEM.
+ */
+int profile_unsupported(const struct profile *p, char **out);
 
 /* profile_key_known - true when the loader types and checks this key. */
 bool profile_key_known(const char *key);

@@ -33,7 +33,9 @@ static void origin_of(const struct profile *p, const char *key, char *buf, size_
 {
 	const struct profile_kv *kv = prof_find_kv(p->keys, key);
 
-	if (kv)
+	if (kv && kv->file)
+		snprintf(buf, cap, " (%s%s%.0d)", kv->file, kv->line ? " line " : "", kv->line);
+	else if (kv)
 		snprintf(buf, cap, " (line %d)", kv->line);
 	else
 		snprintf(buf, cap, " (default)");
@@ -46,7 +48,7 @@ static int conflict(struct loader *L, const char *key, const char *other, const 
 static int conflict(struct loader *L, const char *key, const char *other, const char *fmt, ...)
 {
 	const struct profile_kv *kv = prof_find_kv(L->p->keys, key);
-	char msg[200];
+	char msg[512];
 	va_list ap;
 
 	va_start(ap, fmt);
@@ -65,7 +67,7 @@ static int conflict(struct loader *L, const char *key, const char *other, const 
 static int keys_agree(struct loader *L, const struct pending *pend)
 {
 	struct profile *p = L->p;
-	char a[32], b[32], o1[32], o2[32];
+	char a[32], b[32], o1[200], o2[200];
 	double min_nozzle = p->nozzle_diameter[0];
 	int ec = p->extruder_count;
 
@@ -267,5 +269,8 @@ int prof_apply_all(struct loader *L)
 		memcpy(p->first_layer_temperature, p->temperature, sizeof(p->temperature));
 	if (!prof_find_kv(p->keys, "first_layer_bed_temperature"))
 		p->first_layer_bed_temperature = p->bed_temperature;
-	return prof_cross_check(L, &pend);
+	rc = prof_cross_check(L, &pend);
+	if (rc)
+		return rc;
+	return prof_build_vars(p, L->err);
 }

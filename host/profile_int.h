@@ -23,16 +23,20 @@ struct profile_kv {
 	char *key;
 	char *value; /* escapes decoded */
 	int line;
+	const char *file; /* where it was set (one of files[]), NULL: the profile's path */
 };
 
 struct profile_keys {
 	struct profile_kv *kv;
 	size_t count, cap;
+	char **files; /* the files and options the keys came from (owned) */
+	size_t nfiles;
 };
 
 /* How a key is parsed and where it is stored (its range is declared in settings.c). */
 enum key_type {
 	KT_STRING,	 /* const char * */
+	KT_FIRST_STRING, /* const char *: the first of "a";"b" (per filament) */
 	KT_DOUBLE,	 /* double */
 	KT_INT,		 /* int */
 	KT_BOOL,	 /* bool, 0/1 */
@@ -114,6 +118,27 @@ int prof_apply_all(struct loader *L);
 
 /* The declared defaults; sailfish: only those a sailfish printer changes. */
 int prof_set_defaults(struct profile *p, bool sailfish);
+
+/* Append one pair; takes ownership of key and value (frees them on failure). */
+int prof_keys_add(struct profile_keys *keys, char *key, char *value, int line);
+
+struct ini_entry;
+/* One key = value line into keys, decoded; a key already there is refused. */
+int prof_add_entry(struct profile_keys *keys, const struct ini_entry *e, const char *origin,
+		   struct st_error *err);
+
+/* Decode PrusaSlicer's C-style escapes: \n \r \\ \" ; any other \X is kept. */
+char *prof_decode_value(const char *s, size_t len);
+
+/* A new empty profile named after origin (its base name without .ini). */
+struct profile *prof_new(const char *origin, struct st_error *err);
+
+/* Pass 2 over the keys already in p->keys; p is freed on error. */
+int prof_finish(struct profile *p, const char *origin, struct profile **out,
+		struct st_error *err);
+
+/* The placeholder variables of a loaded profile (p->vars). */
+int prof_build_vars(struct profile *p, struct st_error *err);
 
 /* Checks between keys and the slicer's own check, once every value is read. */
 int prof_cross_check(struct loader *L, const struct pending *pend);

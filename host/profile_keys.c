@@ -112,6 +112,11 @@ static const struct key_def key_defs[] = {
 	{"x3g_home_timeout", KT_INT, OFF(x3g_home_timeout)},
 	{"start_gcode", KT_STRING, OFF(start_gcode)},
 	{"end_gcode", KT_STRING, OFF(end_gcode)},
+	{"before_layer_gcode", KT_STRING, OFF(before_layer_gcode)},
+	{"layer_gcode", KT_STRING, OFF(layer_gcode)},
+	{"start_filament_gcode", KT_FIRST_STRING, OFF(start_filament_gcode)},
+	{"end_filament_gcode", KT_FIRST_STRING, OFF(end_filament_gcode)},
+	{"toolchange_gcode", KT_STRING, OFF(toolchange_gcode)},
 };
 
 #define KEY_DEFS (sizeof(key_defs) / sizeof(key_defs[0]))
@@ -489,6 +494,25 @@ out_free_items:
 	return rc;
 }
 
+/*
+ * The first of PrusaSlicer's per-filament strings "a";"b" (escapes already
+ * decoded), cut in place: the value is owned by the profile's key list.  A
+ * value without the quotes is one string.
+ */
+static const char *first_string(char *v)
+{
+	size_t n = strlen(v);
+	char *sep;
+
+	if (n < 2 || v[0] != '"' || v[n - 1] != '"')
+		return v;
+	v[n - 1] = '\0';
+	sep = strstr(v + 1, "\";\"");
+	if (sep)
+		*sep = '\0';
+	return v + 1;
+}
+
 /* The sign-and-number part of "N%" or "N", with *pct telling which. */
 static int pct_or_number(struct loader *L, const struct profile_kv *kv, double *v, bool *pct)
 {
@@ -521,12 +545,15 @@ int prof_apply_key(struct loader *L, const struct key_def *d, const struct profi
 	double v;
 	bool pct;
 
-	if (!*kv->value && d->type != KT_STRING && d->type != KT_USB)
+	if (!*kv->value && d->type != KT_STRING && d->type != KT_FIRST_STRING && d->type != KT_USB)
 		return prof_key_error(L, kv, NULL, ST_ERR_PARSE,
 				 "no value given (write one or remove the line)");
 	switch (d->type) {
 	case KT_STRING:
 		*(const char **)field = kv->value;
+		return 0;
+	case KT_FIRST_STRING:
+		*(const char **)field = first_string(kv->value);
 		return 0;
 	case KT_DOUBLE:
 		prof_trim(&one.s, &one.len);
@@ -745,7 +772,7 @@ int prof_set_defaults(struct profile *p, bool sailfish)
 		const struct key_def *d = &key_defs[i];
 		const struct setting *s = prof_decl(d);
 		const char *text = sailfish ? s->sailfish_dflt : s->dflt;
-		struct profile_kv kv = {(char *)d->key, (char *)text, 0};
+		struct profile_kv kv = {(char *)d->key, (char *)text, 0, NULL};
 
 		if (!text || d->type == KT_EXTRUDERS)
 			continue;

@@ -42,6 +42,7 @@ static void put_value(FILE *f, const struct profile *p, const struct key_def *d)
 
 	switch (d->type) {
 	case KT_STRING:
+	case KT_FIRST_STRING:
 		put_escaped(f, *(const char *const *)field);
 		break;
 	case KT_DOUBLE:
@@ -197,6 +198,7 @@ static json_t *json_value(const struct profile *p, const struct key_def *d)
 
 	switch (d->type) {
 	case KT_STRING:
+	case KT_FIRST_STRING:
 		return json_text(*(const char *const *)field);
 	case KT_DOUBLE:
 	case KT_FIRST_DOUBLE:

@@ -3,6 +3,8 @@
  */
 #include "profile_slicer.h"
 
+#include "infill.h"
+
 /* Machine limits of the profile where it sets them (> 0), else the defaults. */
 static void limits_from_profile(const struct profile *p, struct est_limits *lim)
 {
@@ -30,6 +32,7 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 {
 	struct gcodew_settings *g = &c->gcodew;
 	double nozzle = p->nozzle_diameter[0];
+	enum infill_pattern pat;
 
 	slicer_config_init(c, nozzle);
 	c->layer_height = p->layer_height;
@@ -39,7 +42,10 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	c->perim.perimeters = p->perimeters;
 
 	c->infill.density = p->fill_density;
-	c->infill.pattern = p->fill_pattern;
+	/* A pattern Stratum does not print is rectilinear, and named in the
+	 * profile's unsupported keys (profile_unsupported). */
+	c->infill.pattern = infill_pattern_parse(p->fill_pattern, &pat, NULL) ? "rectilinear"
+									     : p->fill_pattern;
 	c->infill.top_solid_layers = p->top_solid_layers;
 	c->infill.bottom_solid_layers = p->bottom_solid_layers;
 	c->support.enabled = p->support_material;
@@ -86,6 +92,11 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	limits_from_profile(p, &g->limits);
 	g->start_gcode = p->start_gcode;
 	g->end_gcode = p->end_gcode;
+	g->before_layer_gcode = p->before_layer_gcode;
+	g->layer_gcode = p->layer_gcode;
+	g->start_filament_gcode = p->start_filament_gcode;
+	g->end_filament_gcode = p->end_filament_gcode;
+	g->vars = p->vars;
 	(void)err; /* every value was typed and checked when the profile was loaded */
 	return 0;
 }

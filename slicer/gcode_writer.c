@@ -25,6 +25,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "placeholder.h"
 #include "settings.h"
 #include "travel.h"
 
@@ -148,6 +149,8 @@ void gcodew_settings_init(struct gcodew_settings *s)
 	s->first_layer_bed_temperature = s->bed_temperature;
 	s->start_gcode = settings_find("start_gcode")->dflt;
 	s->end_gcode = settings_find("end_gcode")->dflt;
+	s->before_layer_gcode = s->layer_gcode = "";
+	s->start_filament_gcode = s->end_filament_gcode = "";
 	est_limits_init(&s->limits);
 }
 
@@ -164,9 +167,10 @@ int gcodew_settings_check(const struct gcodew_settings *s, struct st_error *err)
 		return st_error_set(err, ST_ERR_RANGE,
 				    "G-code settings: min_fan_speed %d is above max_fan_speed %d",
 				    s->min_fan_speed, s->max_fan_speed);
-	if (!s->start_gcode || !s->end_gcode)
+	if (!s->start_gcode || !s->end_gcode || !s->before_layer_gcode || !s->layer_gcode ||
+	    !s->start_filament_gcode || !s->end_filament_gcode)
 		return st_error_set(err, ST_ERR_ARG,
-				    "G-code settings: start_gcode and end_gcode must not be NULL");
+				    "G-code settings: the custom G-code texts must not be NULL");
 	return 0;
 }
 
@@ -218,86 +222,13 @@ static void fmt_num(char *buf, double v, int digits)
 }
 
 /* ---------------------------------------------------------------------------
- * Placeholders
+ * Placeholders (slicer/placeholder.h): the writer's own variables - the
+ * settings it prints with and PrusaSlicer's standard variables - over the
+ * printer's config (s->vars).
  */
 
-/* A growable string. */
-struct sbuf {
-	char *p;
-	size_t len, cap;
-};
-
-/* Append n bytes of s; keeps the buffer NUL-terminated. */
-static int sb_add(struct sbuf *b, const char *s, size_t n, struct st_error *err)
-{
-	if (b->len + n + 1 > b->cap) {
-		size_t cap = b->cap ? b->cap : 256;
-		while (cap < b->len + n + 1) {
-			if (cap > SIZE_MAX / 2)
-				return st_error_set(err, ST_ERR_NOMEM, "out of memory expanding placeholders");
-			cap *= 2;
-		}
-		char *grown = realloc(b->p, cap);
-		if (!grown)
-			return st_error_set(err, ST_ERR_NOMEM, "out of memory expanding placeholders");
-		b->p = grown;
-		b->cap = cap;
-	}
-	memcpy(b->p + b->len, s, n);
-	b->len += n;
-	b->p[b->len] = '\0';
-	return 0;
-}
-
-static bool is_ident(char c)
-{
-	return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-	       c == '_';
-}
-
-/* A placeholder's value: number text, and whether it may be indexed. */
-struct ph_value {
-	char text[NUM_MAX];
-	bool vector;
-};
-
-/* Look up name[0..n); false when unknown. */
-static bool ph_lookup(const struct gcodew_settings *s, size_t nlayers, const char *name,
-		      size_t n, struct ph_value *out)
-{
-	static const char *const extruder_vars[] = {"initial_extruder", "current_extruder"};
-
-	for (size_t i = 0; i < NKEYS; i++)
-		if (strlen(keys[i].name) == n && memcmp(keys[i].name, name, n) == 0) {
-			fmt_num(out->text, key_value(s, &keys[i]), 6);
-			out->vector = keys[i].vector;
-			return true;
-		}
-	for (size_t i = 0; i < 2; i++)
-		if (strlen(extruder_vars[i]) == n && memcmp(extruder_vars[i], name, n) == 0) {
-			snprintf(out->text, sizeof(out->text), "0");
-			out->vector = false;
-			return true;
-		}
-	if (n == strlen("total_layer_count") && memcmp(name, "total_layer_count", n) == 0) {
-		snprintf(out->text, sizeof(out->text), "%zu", nlayers);
-		out->vector = false;
-		return true;
-	}
-	return false;
-}
-
-/* True for the indices that name the one extruder: 0, initial_extruder,
- * current_extruder. */
-static bool index_is_zero(const char *t, size_t n)
-{
-	static const char *const names[] = {"0", "initial_extruder", "current_extruder"};
-
-	for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); i++)
-		if (strlen(names[i]) == n && memcmp(names[i], t, n) == 0)
-			return true;
-	return false;
-}
+static const enum ph_type ph_types[] = {[KEY_DOUBLE] = PH_REAL, [KEY_INT] = PH_INT,
+					[KEY_BOOL] = PH_BOOL};
 
 /* Skip blanks in [*i, end). */
 static void skip_blanks(const char *t, size_t *i, size_t end)
@@ -306,136 +237,69 @@ static void skip_blanks(const char *t, size_t *i, size_t end)
 		(*i)++;
 }
 
-/*
- * Evaluate the expression t[a..b) of a {...} placeholder: name, or
- * name[index] with index 0 or an extruder variable.  Fills out.
- */
-static int eval_braces(const char *t, size_t a, size_t b, const char *what,
-		       const struct gcodew_settings *s, size_t nlayers, struct ph_value *out,
-		       struct st_error *err)
+/* The variables of a print of nlayers layers, before its first layer. */
+static struct ph_vars *writer_vars(const struct gcodew_settings *s, size_t nlayers,
+				   struct st_error *err)
 {
-	size_t i = a, name, name_len, idx = 0, idx_len = 0;
-	int shown = (int)(b - a > 60 ? 60 : b - a);
+	static const char *const zero_ints[] = {"initial_extruder", "initial_tool",
+						"current_extruder", "next_extruder",
+						"filament_extruder_id", "layer_num"};
+	static const char *const no_bools[] = {"has_wipe_tower",
+					       "has_single_extruder_multi_material_priming"};
+	struct ph_vars *v = ph_vars_new(s->vars);
+	int rc = v ? 0 : st_error_set(err, ST_ERR_NOMEM, "G-code: out of memory");
 
-	skip_blanks(t, &i, b);
-	for (name = i; i < b && is_ident(t[i]); i++)
-		;
-	name_len = i - name;
-	skip_blanks(t, &i, b);
-	if (i < b && t[i] == '[') {
-		i++;
-		skip_blanks(t, &i, b);
-		for (idx = i; i < b && is_ident(t[i]); i++)
-			;
-		idx_len = i - idx;
-		skip_blanks(t, &i, b);
-		if (idx_len == 0 || i >= b || t[i] != ']')
-			idx_len = 0, i = b + 1;
-		else
-			i++;
-		skip_blanks(t, &i, b);
+	for (size_t i = 0; rc == 0 && i < NKEYS; i++) {
+		double x = key_value(s, &keys[i]);
+		rc = ph_vars_set_numbers(v, keys[i].name, ph_types[keys[i].type], &x, 1,
+					 keys[i].vector, err);
 	}
-	if (name_len == 0 || i != b || (name < b && t[name] >= '0' && t[name] <= '9'))
-		return st_error_set(err, ST_ERR_UNSUPPORTED,
-				    "%s: unsupported expression {%.*s}: only {name} and {name[0]} "
-				    "are understood",
-				    what, shown, t + a);
-	if (!ph_lookup(s, nlayers, t + name, name_len, out))
-		return st_error_set(err, ST_ERR_PARSE, "%s: unknown placeholder {%.*s}", what,
-				    shown, t + a);
-	if (idx_len == 0)
-		return 0;
-	if (!out->vector)
-		return st_error_set(err, ST_ERR_UNSUPPORTED, "%s: {%.*s}: %.*s is not a vector",
-				    what, shown, t + a, (int)name_len, t + name);
-	if (!index_is_zero(t + idx, idx_len))
-		return st_error_set(err, ST_ERR_UNSUPPORTED,
-				    "%s: {%.*s}: index %.*s is out of range (one extruder)", what,
-				    shown, t + a, (int)idx_len, t + idx);
-	return 0;
+	for (size_t i = 0; rc == 0 && i < sizeof(zero_ints) / sizeof(zero_ints[0]); i++)
+		rc = ph_vars_set_number(v, zero_ints[i], PH_INT, 0, err);
+	for (size_t i = 0; rc == 0 && i < sizeof(no_bools) / sizeof(no_bools[0]); i++)
+		rc = ph_vars_set_number(v, no_bools[i], PH_BOOL, 0, err);
+	if (rc == 0)
+		rc = ph_vars_set_number(v, "total_layer_count", PH_INT, (double)nlayers, err);
+	if (rc == 0)
+		rc = ph_vars_set_number(v, "layer_z", PH_REAL, s->first_layer_height, err);
+	if (rc == 0)
+		rc = ph_vars_set_number(v, "max_layer_z", PH_REAL, 0, err);
+	if (rc) {
+		ph_vars_free(v);
+		return NULL;
+	}
+	return v;
 }
 
-/*
- * Look up the [name] placeholder name[0..n): a plain name, or PrusaSlicer's
- * legacy indexed form name_N of a per-extruder vector (N = 0 only: one
- * extruder).
- */
-static int lookup_bracket(const struct gcodew_settings *s, size_t nlayers, const char *name,
-			  size_t n, const char *what, struct ph_value *v, struct st_error *err)
+/* layer_num (from 0), layer_z and max_layer_z for the next text. */
+static int set_layer_vars(struct ph_vars *v, size_t li, double z, double max_z,
+			  struct st_error *err)
 {
-	int shown = (int)(n > 60 ? 60 : n);
-	size_t us = n;
+	int rc = ph_vars_set_number(v, "layer_num", PH_INT, (double)li, err);
 
-	if (ph_lookup(s, nlayers, name, n, v))
-		return 0;
-	while (us > 0 && name[us - 1] >= '0' && name[us - 1] <= '9')
-		us--;
-	if (us > 1 && us < n && name[us - 1] == '_' && ph_lookup(s, nlayers, name, us - 1, v) &&
-	    v->vector) {
-		if (n - us == 1 && name[us] == '0')
-			return 0;
-		return st_error_set(err, ST_ERR_UNSUPPORTED,
-				    "%s: [%.*s]: extruder index %.*s is out of range (Stratum prints "
-				    "with one extruder); use [%.*s_0]",
-				    what, shown, name, (int)(n - us), name + us, (int)(us - 1), name);
-	}
-	return st_error_set(err, ST_ERR_PARSE, "%s: unknown placeholder [%.*s]", what, shown, name);
+	if (rc == 0)
+		rc = ph_vars_set_number(v, "layer_z", PH_REAL, z, err);
+	if (rc == 0)
+		rc = ph_vars_set_number(v, "max_layer_z", PH_REAL, max_z, err);
+	return rc;
 }
 
 int gcodew_expand(const char *text, const char *what, const struct gcodew_settings *s,
 		  size_t nlayers, char **out, struct st_error *err)
 {
-	struct sbuf b = {0};
-	struct ph_value v;
-	size_t len, i = 0;
-	int rc = 0;
+	struct ph_vars *v;
+	int rc;
 
 	if (out)
 		*out = NULL;
 	if (!text || !s || !out)
 		return st_error_set(err, ST_ERR_ARG, "placeholders: no text, settings or output");
-	if (!what)
-		what = "custom G-code";
-	len = strlen(text);
-	while (i < len && rc == 0) {
-		size_t j = i + 1;
-		if (text[i] == '[') {
-			while (j < len && is_ident(text[j]))
-				j++;
-			if (j > i + 1 && j < len && text[j] == ']') {
-				rc = lookup_bracket(s, nlayers, text + i + 1, j - i - 1, what, &v,
-						    err);
-				if (rc)
-					break;
-				rc = sb_add(&b, v.text, strlen(v.text), err);
-				i = j + 1;
-				continue;
-			}
-		} else if (text[i] == '{') {
-			const char *close = strchr(text + i, '}');
-			if (!close) {
-				rc = st_error_set(err, ST_ERR_PARSE,
-						  "%s: '{' at byte %zu has no closing '}'", what, i);
-				break;
-			}
-			j = (size_t)(close - text);
-			rc = eval_braces(text, i + 1, j, what, s, nlayers, &v, err);
-			if (rc == 0)
-				rc = sb_add(&b, v.text, strlen(v.text), err);
-			i = j + 1;
-			continue;
-		}
-		rc = sb_add(&b, text + i, 1, err);
-		i++;
-	}
-	if (rc == 0 && !b.p)
-		rc = sb_add(&b, "", 0, err);
-	if (rc) {
-		free(b.p);
-		return rc;
-	}
-	*out = b.p;
-	return 0;
+	v = writer_vars(s, nlayers, err);
+	if (!v)
+		return err && err->code ? err->code : ST_ERR_NOMEM;
+	rc = ph_expand(text, what, v, 0, out, err);
+	ph_vars_free(v);
+	return rc;
 }
 
 /*
@@ -498,7 +362,9 @@ struct gcodew {
 	const struct gcodew_settings *s;
 	size_t nlayers;		 /* layers announced to gcodew_begin */
 	size_t next;		 /* index of the next layer to write */
-	char *start, *end;	 /* custom G-code, placeholders expanded */
+	char *start, *start_filament; /* custom G-code, placeholders expanded */
+	struct ph_vars *vars;	 /* placeholders: the print's variables */
+	double max_z;		 /* mm, highest layer written so far */
 	FILE *body;		 /* the body, generated before the header */
 	const char *path;	 /* gcodew_begin_file: the file to write, */
 	char *tmp;		 /* the temporary file beside it until renamed, */
@@ -1072,6 +938,9 @@ static void reset_e(struct gcodew *w)
 	w->epos_units = 0;
 }
 
+static int put_expanded(struct gcodew *w, const char *text, const char *what, size_t li,
+			double z);
+
 /* Plan, cool and write layer li. */
 static int do_layer(struct gcodew *w, const struct layer_paths *l, size_t li)
 {
@@ -1093,7 +962,17 @@ static int do_layer(struct gcodew *w, const struct layer_paths *l, size_t li)
 		return rc;
 	fmt_num(nz, l->z, XYZ_DIGITS);
 	fmt_num(nh, l->height, XYZ_DIGITS);
+	/* PrusaSlicer 2.5's order: the layer change comments, before_layer_gcode
+	 * (the new layer's number and Z, the old maximum), layer_gcode (the new
+	 * maximum). */
 	put(w, ";LAYER_CHANGE\n;Z:%s\n;HEIGHT:%s\n", nz, nh);
+	rc = put_expanded(w, s->before_layer_gcode, "before_layer_gcode", li, l->z);
+	if (rc)
+		return rc;
+	w->max_z = fmax(w->max_z, l->z);
+	rc = put_expanded(w, s->layer_gcode, "layer_gcode", li, l->z);
+	if (rc)
+		return rc;
 	if (!s->use_relative_e_distances && li > 0)
 		reset_e(w);
 	if (li == 1 && s->temperature > 0 && s->temperature != s->first_layer_temperature)
@@ -1175,6 +1054,23 @@ static void put_custom(struct gcodew *w, const char *text)
 		put(w, "%s%s", text, text[n - 1] == '\n' ? "" : "\n");
 }
 
+/* Expand text for layer li at z and write it; nothing for an empty text. */
+static int put_expanded(struct gcodew *w, const char *text, const char *what, size_t li, double z)
+{
+	char *out = NULL;
+	int rc;
+
+	if (!*text)
+		return 0;
+	rc = set_layer_vars(w->vars, li, z, w->max_z, w->err);
+	if (rc == 0)
+		rc = ph_expand(text, what, w->vars, 0, &out, w->err);
+	if (rc == 0)
+		put_custom(w, out);
+	free(out);
+	return rc;
+}
+
 /* The part before the first layer: temperatures, start G-code, modes. */
 static void put_start(struct gcodew *w)
 {
@@ -1188,6 +1084,7 @@ static void put_start(struct gcodew *w)
 	if (!nozzle_set && s->first_layer_temperature > 0)
 		put(w, "M104 S%d ; set temperature\n", s->first_layer_temperature);
 	put_custom(w, start);
+	put_custom(w, w->start_filament); /* PrusaSlicer: the first tool's filament */
 	if (!nozzle_set && s->first_layer_temperature > 0)
 		put(w, "M109 S%d ; set temperature and wait for it to be reached\n",
 		    s->first_layer_temperature);
@@ -1212,7 +1109,12 @@ static int put_end(struct gcodew *w)
 			rc = emit_ops(w);
 	}
 	set_fan(w, 0);
-	put_custom(w, w->end);
+	if (rc == 0)
+		rc = put_expanded(w, w->s->end_filament_gcode, "end_filament_gcode",
+				  w->nlayers ? w->nlayers - 1 : 0, w->layer_z);
+	if (rc == 0)
+		rc = put_expanded(w, w->s->end_gcode, "end_gcode", w->nlayers ? w->nlayers - 1 : 0,
+				  w->layer_z);
 	return rc;
 }
 
@@ -1282,8 +1184,41 @@ void gcodew_free(struct gcodew *w)
 	free(w->done);
 	travel_route_free(&w->route);
 	free(w->start);
-	free(w->end);
+	free(w->start_filament);
+	ph_vars_free(w->vars);
 	free(w);
+}
+
+/*
+ * The variables, the start texts expanded, and every other text expanded
+ * once as it would be on its first use, so a mistake in any of them is
+ * refused before the first layer rather than after the last.
+ */
+static int begin_texts(struct gcodew *w, struct st_error *err)
+{
+	const struct gcodew_settings *s = w->s;
+	const char *const later[][2] = {{s->before_layer_gcode, "before_layer_gcode"},
+					{s->layer_gcode, "layer_gcode"},
+					{s->end_filament_gcode, "end_filament_gcode"},
+					{s->end_gcode, "end_gcode"}};
+	int rc;
+
+	w->vars = writer_vars(s, w->nlayers, err);
+	if (!w->vars)
+		return err && err->code ? err->code : ST_ERR_NOMEM;
+	rc = ph_expand(s->start_gcode, "start_gcode", w->vars, 0, &w->start, err);
+	if (rc == 0)
+		rc = ph_expand(s->start_filament_gcode, "start_filament_gcode", w->vars, 0,
+			       &w->start_filament, err);
+	for (size_t i = 0; rc == 0 && i < sizeof(later) / sizeof(later[0]); i++) {
+		char *out = NULL;
+
+		rc = set_layer_vars(w->vars, 0, s->first_layer_height, s->first_layer_height, err);
+		if (rc == 0)
+			rc = ph_expand(later[i][0], later[i][1], w->vars, 0, &out, err);
+		free(out);
+	}
+	return rc;
 }
 
 int gcodew_begin(const struct gcodew_settings *s, size_t nlayers, struct gcodew **out,
@@ -1306,9 +1241,7 @@ int gcodew_begin(const struct gcodew_settings *s, size_t nlayers, struct gcodew 
 	w->s = s;
 	w->nlayers = nlayers;
 	w->err = err;
-	rc = gcodew_expand(s->start_gcode, "start_gcode", s, nlayers, &w->start, err);
-	if (rc == 0)
-		rc = gcodew_expand(s->end_gcode, "end_gcode", s, nlayers, &w->end, err);
+	rc = begin_texts(w, err);
 	if (rc)
 		goto out_free;
 	w->fil_area = M_PI * s->filament_diameter * s->filament_diameter / 4;

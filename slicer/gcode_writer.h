@@ -58,6 +58,7 @@
 #include <stdio.h>
 
 #include "estimate.h"
+#include "placeholder.h"
 #include "st_error.h"
 #include "toolpath.h"
 
@@ -124,9 +125,20 @@ struct gcodew_settings {
 	/* Machine limits, for the estimates and the layer times */
 	struct est_limits limits; /* est_limits_init */
 
-	/* Custom G-code with PrusaSlicer placeholders; not owned, not NULL */
+	/* Custom G-code in PrusaSlicer's placeholder language (placeholder.h);
+	 * not owned, not NULL.  Written where PrusaSlicer writes them: the start
+	 * G-code, then the first filament's; before each layer change, after
+	 * it; the filament's end G-code, then the end G-code. */
 	const char *start_gcode; /* "G28 ; home all axes\nG1 Z5 F5000 ; lift nozzle\n" */
 	const char *end_gcode;	 /* "M104 S0 ; turn off temperature\nG28 X0  ; home X axis\nM84 ..." */
+	const char *before_layer_gcode;	  /* "" */
+	const char *layer_gcode;	  /* "" */
+	const char *start_filament_gcode; /* "" */
+	const char *end_filament_gcode;	  /* "" */
+	/* The printer's config for the placeholders (every key of its files,
+	 * host/profile.h), under the writer's own variables; NULL: none.  Not
+	 * owned; must outlive the writer. */
+	const struct ph_vars *vars;
 };
 
 /* What a written print will take; also written into the G-code header. */
@@ -207,16 +219,18 @@ int gcodew_finish_file(struct gcodew *w, struct gcodew_summary *sum, struct st_e
 void gcodew_free(struct gcodew *w);
 
 /*
- * gcodew_expand - substitute PrusaSlicer placeholders in @text: [name],
- * [name_0] (the legacy form of a per-extruder value), {name} and {name[i]}
- * where i is 0 or initial_extruder/current_extruder.
- * Known names: the numeric fields of struct gcodew_settings (by their
- * PrusaSlicer key), total_layer_count (@nlayers), initial_extruder and
- * current_extruder (0).  @what names the text in messages ("start_gcode").
- * On success *out is a new NUL-terminated string (free() it); on error
- * *out is NULL and err names the placeholder: ST_ERR_PARSE for an unknown
- * name or an unclosed brace, ST_ERR_UNSUPPORTED for an expression other
- * than these forms or an extruder index other than 0, ST_ERR_NOMEM.
+ * gcodew_expand - @text in PrusaSlicer's placeholder language
+ * (placeholder.h) as the writer expands its start G-code: the numeric
+ * fields of struct gcodew_settings by their PrusaSlicer key (per-extruder
+ * ones as one-value vectors), over s->vars; total_layer_count (@nlayers);
+ * initial_extruder, initial_tool, current_extruder, next_extruder,
+ * filament_extruder_id and layer_num 0; layer_z the first layer's height,
+ * max_layer_z 0; has_wipe_tower and
+ * has_single_extruder_multi_material_priming false.  Before and after each
+ * layer change, layer_num (from 0), layer_z and max_layer_z are that
+ * layer's; in the end G-code the last layer's.  @what names the text in
+ * messages ("start_gcode").  On success *out is a new string (free() it);
+ * on error NULL, with err as ph_expand's (line and column).
  */
 int gcodew_expand(const char *text, const char *what, const struct gcodew_settings *s,
 		  size_t nlayers, char **out, struct st_error *err);

@@ -9,8 +9,8 @@ int main(void)
 {
 	Suite *(*const suites[])(void) = {mesh_suite,  meshio_suite, exact_suite, repair_suite,
 					  thicken_suite, heal_suite, corpus_suite,
-					  profile_suite, ini_suite, gcode_suite, xport_suite, sim_suite,
-					  marlin_suite, printer_suite,
+					  profile_suite, ini_suite, placeholder_suite, gcode_suite,
+					  xport_suite, sim_suite, marlin_suite, printer_suite,
 					  slicer_suite, gcodewriter_suite, infill_suite, support_suite,
 					  slicecli_suite, region_suite, x3g_suite, s3g_suite, serve_suite,
 					  preview_suite, portpick_suite, send_suite, print_suite, cli_suite};

@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "fixtures.h"
 #include "gcode.h"
@@ -423,14 +424,21 @@ START_TEST(bad_settings_exit_2)
 	expect_refused(cube, "--printer no-such-printer", 2, "no-such-printer");
 	expect_refused(cube, MK3S " --bogus", 2, "unknown option '--bogus'");
 
-	/* A profile asking for a pattern Stratum does not print: refused
-	 * before slicing, not after the walls are done. */
+	/* A pattern Stratum does not print (PrusaSlicer's default, stars): the
+	 * profile slices with rectilinear and says so in its one warning line
+	 * (issue 18: a default PrusaSlicer config was refused here). */
 	static const char stars[] = "nozzle_diameter = 0.4\nfill_pattern = stars\n";
-	const char *ini = tu_path("stars.ini");
-	char arg[4200];
+	char model[4096], ini[4096], gc[4096];
+	int status;
+	snprintf(model, sizeof(model), "%s", stl_file(fx_box(0, 0, 0, 20, 20, 20), "cube.stl"));
+	snprintf(ini, sizeof(ini), "%s", tu_path("stars.ini"));
+	snprintf(gc, sizeof(gc), "%s", tu_path("stars.gcode"));
 	tu_write(ini, stars, sizeof(stars) - 1);
-	snprintf(arg, sizeof(arg), "--printer '%s'", ini);
-	expect_refused(cube, arg, 2, "fill_pattern \"stars\" is not supported");
+	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' --printer '%s'", model, gc, ini);
+	ck_assert_msg(status == 0, "exit %d: %s", status, out);
+	ck_assert_msg(strstr(out, "warning: not supported, ignored: fill_pattern=stars "
+				  "(rectilinear used)"),
+		      "%s", out);
 }
 END_TEST
 
@@ -444,6 +452,170 @@ START_TEST(unreadable_model_exit_65)
 	tu_write(bad, buf, sizeof(buf));
 	expect_refused(bad, MK3S, 65, "truncated or not an STL file");
 	expect_refused(tu_path("missing.stl"), MK3S, 65, "cannot open");
+}
+END_TEST
+
+
+/* ---------------------------------------------------------------------------
+ * PrusaSlicer configs (--load, bundles, --set; issue 18 items 3 and 5)
+ */
+
+#define BUNDLES "/usr/share/PrusaSlicer/profiles"
+
+/* A copy of a tu_path (its buffer is reused by the next call). */
+static void scratch(char *buf, size_t cap, const char *name)
+{
+	snprintf(buf, cap, "%s", tu_path(name));
+}
+
+/* Slurp path into buf; the length. */
+static size_t slurp(const char *path, char *buf, size_t cap)
+{
+	FILE *f = fopen(path, "rb");
+	size_t n = f ? fread(buf, 1, cap - 1, f) : 0;
+
+	if (f)
+		fclose(f);
+	buf[n] = '\0';
+	return n;
+}
+
+START_TEST(bundle_presets_slice)
+{
+	static char gcode[1 << 20];
+	char model[4096], gc[4096];
+	int status;
+
+	if (access(BUNDLES "/PrusaResearch.ini", R_OK) || access(BUNDLES "/Creality.ini", R_OK)) {
+		fprintf(stderr, "bundle_presets_slice: skipped, no PrusaSlicer bundles in "
+				BUNDLES "\n");
+		return;
+	}
+	snprintf(model, sizeof(model), "%s", stl_file(fx_box(0, 0, 0, 10, 10, 2), "bcube.stl"));
+	scratch(gc, sizeof(gc), "mk3s.gcode");
+	status = tu_run(out, sizeof(out),
+			"slice '%s' -o '%s' --load " BUNDLES "/PrusaResearch.ini --printer-preset "
+			"'Original Prusa i3 MK3S & MK3S+' --print-preset '0.20mm QUALITY @MK3' "
+			"--filament-preset 'Prusament PLA'",
+			model, gc);
+	ck_assert_msg(status == 0, "exit %d: %s", status, out);
+	/* One warning line, naming keys with their values. */
+	ck_assert_msg(strstr(out, "warning: not supported, ignored: ") &&
+			      strstr(out, "remaining_times=1") && !strstr(out, "raft_layers"),
+		      "%s", out);
+	slurp(gc, gcode, sizeof(gcode));
+	/* PrusaSlicer's own expansions of the MK3S start, filament and end G-code. */
+	ck_assert_msg(strstr(gcode, "M862.3 P \"MK3S\" ; printer model check\n"), "start");
+	ck_assert_msg(strstr(gcode, "M862.1 P0.4 ; nozzle diameter check\n"), "nozzle");
+	ck_assert_msg(strstr(gcode, "M104 S215 ; set extruder temp\n"), "temperature");
+	ck_assert_msg(strstr(gcode, "M900 K0.05 ; Filament gcode LA 1.5\n"), "filament gcode");
+	ck_assert_msg(strstr(gcode, ";BEFORE_LAYER_CHANGE\nG92 E0.0\n;0.2\n"), "before layer");
+	ck_assert_msg(strstr(gcode, ";AFTER_LAYER_CHANGE\n;0.2\n"), "after layer");
+	ck_assert_msg(strstr(gcode, "G1 Z3 F720 ; Move print head up\n"), "end: max_layer_z + 1");
+	ck_assert_msg(strstr(gcode, "; layer_height = 0.2\n"), "0.20mm QUALITY's layers");
+
+	scratch(gc, sizeof(gc), "ender3.gcode");
+	status = tu_run(out, sizeof(out),
+			"slice '%s' -o '%s' --load " BUNDLES "/Creality.ini --printer-preset "
+			"'Creality Ender-3 (0.4 mm nozzle)'",
+			model, gc);
+	ck_assert_msg(status == 0, "exit %d: %s", status, out);
+	slurp(gc, gcode, sizeof(gcode));
+	ck_assert_msg(strstr(gcode, "G1 X5 Y182.4 F9000 ; present print\n"), "print_bed_max");
+
+	/* A bundle needs its printer named; a preset it lacks is exit 2. */
+	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' --load " BUNDLES "/Creality.ini",
+			model, gc);
+	ck_assert_msg(status == 2 && strstr(out, "choose its printer with --printer-preset"),
+		      "exit %d: %s", status, out);
+	status = tu_run(out, sizeof(out),
+			"slice '%s' -o '%s' --load " BUNDLES "/Creality.ini --printer-preset nope",
+			model, gc);
+	ck_assert_msg(status == 2 && strstr(out, "no [printer:nope] preset"), "exit %d: %s",
+		      status, out);
+}
+END_TEST
+
+START_TEST(saved_default_config_loads)
+{
+	char model[4096], ini[4096], gc[4096], cmd[9000];
+	int status;
+
+	if (access("/usr/bin/prusa-slicer", X_OK)) {
+		fprintf(stderr, "saved_default_config_loads: skipped, no prusa-slicer\n");
+		return;
+	}
+	snprintf(model, sizeof(model), "%s", stl_file(fx_box(0, 0, 0, 10, 10, 2), "dcube.stl"));
+	scratch(ini, sizeof(ini), "default.ini");
+	scratch(gc, sizeof(gc), "default.gcode");
+	snprintf(cmd, sizeof(cmd), "prusa-slicer --save '%s' >/dev/null 2>&1", ini);
+	ck_assert_int_eq(system(cmd), 0);
+	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' --load '%s'", model, gc, ini);
+	ck_assert_msg(status == 0, "exit %d: %s", status, out);
+	ck_assert_msg(strstr(out, "fill_pattern=stars (rectilinear used)"), "%s", out);
+}
+END_TEST
+
+START_TEST(settings_options_doc)
+{
+	static char doc[1 << 16], help[1 << 16];
+	const char *a = tu_read_between("docs/slicing.md", doc, sizeof(doc),
+					"<!-- cfgopt:begin -->\n```\n", "```\n<!-- cfgopt:end -->");
+
+	ck_assert_int_eq(tu_run(help, sizeof(help), "slice --help"), 0);
+	ck_assert_msg(strstr(help, a), "docs/slicing.md's settings options differ from "
+				       "'stratum slice --help' (host/cfgopt.c)");
+}
+END_TEST
+
+START_TEST(load_order_and_set)
+{
+	static char gcode[1 << 20];
+	char model[4096], a[4096], b[4096], gc[4096];
+	int status;
+
+	snprintf(model, sizeof(model), "%s", stl_file(fx_box(0, 0, 0, 10, 10, 2), "ocube.stl"));
+	scratch(a, sizeof(a), "a.ini");
+	scratch(b, sizeof(b), "b.ini");
+	scratch(gc, sizeof(gc), "order.gcode");
+	tu_write_str(a, "temperature = 200\nbed_temperature = 50\nstart_gcode = ; A [temperature]\n");
+	tu_write_str(b, "temperature = 230\n");
+	/* Later files replace earlier ones; --set and --KEY-NAME come last. */
+	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' --load '%s' --load '%s'", model, gc,
+			a, b);
+	ck_assert_msg(status == 0, "exit %d: %s", status, out);
+	slurp(gc, gcode, sizeof(gcode));
+	ck_assert_msg(strstr(gcode, "; A 230\n") && strstr(gcode, "; bed_temperature = 50\n"), "b wins");
+	status = tu_run(out, sizeof(out),
+			"slice '%s' -o '%s' --load '%s' --load '%s' --set temperature=240 "
+			"--bed-temperature 65 --brim-width 3 --fill-density 30%% --support-material",
+			model, gc, b, a);
+	ck_assert_msg(status == 0, "exit %d: %s", status, out);
+	slurp(gc, gcode, sizeof(gcode));
+	ck_assert_msg(strstr(gcode, "; A 240\n") && strstr(gcode, "; bed_temperature = 65\n"),
+		      "--set wins");
+	ck_assert_msg(strstr(out, "(30% "), "--fill-density: %s", out);
+
+	/* Bad values: exit 2 before any repair, naming the option. */
+	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' --load '%s' --set temperature=900",
+			model, gc, a);
+	ck_assert_msg(status == 2 && strstr(out, "--set: temperature: 900 is out of range") &&
+			      !strstr(out, "repaired"),
+		      "exit %d: %s", status, out);
+	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' --load '%s' --brim-width wide", model,
+			gc, a);
+	ck_assert_msg(status == 2 && strstr(out, "--brim-width: brim_width: 'wide' is not a number"),
+		      "exit %d: %s", status, out);
+	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' --load '%s' --set nokey", model, gc, a);
+	ck_assert_msg(status == 2 && strstr(out, "--set wants KEY=VALUE"), "exit %d: %s", status,
+		      out);
+	/* An unsupported key is named once, with its value. */
+	status = tu_run(out, sizeof(out),
+			"slice '%s' -o '%s' --load '%s' --set raft_layers=3 --set ironing=1", model,
+			gc, a);
+	ck_assert_msg(status == 0 && strstr(out, "warning: not supported, ignored: raft_layers=3, "
+						 "ironing=1\n"),
+		      "exit %d: %s", status, out);
 }
 END_TEST
 
@@ -465,6 +637,10 @@ Suite *slicecli_suite(void)
 	tcase_add_test(tc, flashforge_profile_slices);
 	tcase_add_test(tc, touching_parts_slice_as_parts);
 	tcase_add_test(tc, output_over_the_model_refused);
+	tcase_add_test(tc, bundle_presets_slice);
+	tcase_add_test(tc, saved_default_config_loads);
+	tcase_add_test(tc, load_order_and_set);
+	tcase_add_test(tc, settings_options_doc);
 	suite_add_tcase(s, tc);
 	return s;
 }

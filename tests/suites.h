@@ -16,6 +16,7 @@ Suite *heal_suite(void);	/* tests/check_heal.c: welding, stitching, hole filling
 Suite *corpus_suite(void);	/* tests/check_corpus.c: repair on generated defect cases */
 Suite *profile_suite(void);	/* tests/check_profile.c: printer profiles */
 Suite *ini_suite(void);		/* tests/check_ini.c: the ini reader of profiles and the node config */
+Suite *placeholder_suite(void); /* tests/check_placeholder.c: PrusaSlicer's placeholder language */
 Suite *gcode_suite(void);	/* tests/check_gcode.c: G-code parser and reader */
 Suite *xport_suite(void);	/* tests/check_xport.c: serial transports (pty, TCP) */
 Suite *sim_suite(void);		/* tests/check_sim.c: simulated Marlin over a pty */

@@ -1,0 +1,190 @@
+/*
+ * cfgopt.c - the settings options shared by the commands that slice
+ * (cfgopt.h).
+ */
+#include "cfgopt.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "commands.h"
+#include "settings.h"
+#include "st_error.h"
+
+/* The help text, also docs/slicing.md's "Settings options" block. */
+static const char usage_text[] =
+    "  --load FILE.ini         a PrusaSlicer config (File > Export Config, or\n"
+    "                          'prusa-slicer --save') or vendor bundle; repeat it:\n"
+    "                          later files replace the keys of earlier ones\n"
+    "  --printer-preset NAME   the [printer:NAME] preset of a bundle given with --load\n"
+    "  --print-preset NAME     its [print:NAME] (default: the printer's\n"
+    "                          default_print_profile)\n"
+    "  --filament-preset NAME  its [filament:NAME] (default: the printer's\n"
+    "                          default_filament_profile)\n"
+    "  --set KEY=VALUE         any key, as in a profile file; repeatable\n"
+    "  --KEY-NAME VALUE        PrusaSlicer's spelling of any setting of 'stratum\n"
+    "                          printers --keys': --fill-density 20%, --temperature 215,\n"
+    "                          --bed-temperature 60, --brim-width 5, --nozzle-diameter\n"
+    "                          0.6, --support-material (a flag; --no-support-material)\n"
+    "  Order: --printer, then the --load files, then --set and --KEY-NAME in the\n"
+    "  order given.  Keys Stratum does not honour are named in one warning.\n";
+
+void cfgopt_usage(FILE *f)
+{
+	fputs(usage_text, f);
+}
+
+/* A layer setting key (copied into o) to value. */
+static int add_key(struct cfgopt *o, const char *cmd, const char *opt, const char *key,
+		   size_t klen, const char *value)
+{
+	if (o->n == CFGOPT_MAX) {
+		fprintf(stderr, "%s: more than %d settings options\n", cmd, CFGOPT_MAX);
+		return -1;
+	}
+	if (klen == 0 || klen >= sizeof(o->keybuf[0])) {
+		fprintf(stderr, "%s: %s wants KEY=VALUE with a key such as layer_height\n", cmd,
+			opt);
+		return -1;
+	}
+	memcpy(o->keybuf[o->n], key, klen);
+	o->keybuf[o->n][klen] = '\0';
+	o->layer[o->n] = (struct profile_layer){NULL, o->keybuf[o->n], value, opt};
+	o->n++;
+	return 1;
+}
+
+/* --KEY-NAME: the declared setting it spells, or NULL. */
+static const struct setting *spelled(const char *a, bool *negated, size_t *len)
+{
+	char key[64];
+	size_t n = strcspn(a + 2, "=");
+
+	*negated = !strncmp(a, "--no-", 5);
+	if (*negated) {
+		a += 3;
+		n -= 3;
+	}
+	if (n >= sizeof(key))
+		return NULL;
+	for (size_t k = 0; k < n; k++)
+		key[k] = a[2 + k] == '-' ? '_' : a[2 + k] == '_' ? '\0' : a[2 + k];
+	key[n] = '\0';
+	*len = n;
+	if (strlen(key) != n)
+		return NULL; /* PrusaSlicer spells keys with '-' only */
+	return settings_find(key);
+}
+
+int cfgopt_parse(struct cfgopt *o, const char *cmd, int argc, char **argv, int *i)
+{
+	const char *a = argv[*i], *v;
+	const struct setting *s;
+	bool neg;
+	size_t n;
+
+	if (cmd_is_opt(a, "--load")) {
+		v = cmd_opt_value(argc, argv, i, "--load");
+		if (!v || !*v) {
+			fprintf(stderr, "%s: --load needs a config file\n", cmd);
+			return -1;
+		}
+		if (o->n == CFGOPT_MAX)
+			return add_key(o, cmd, "--load", "", 0, NULL);
+		o->layer[o->n++] = (struct profile_layer){v, NULL, NULL, NULL};
+		o->has_files = true;
+		return 1;
+	}
+	{
+		static const char *const presets[] = {"--printer-preset", "--print-preset",
+						      "--filament-preset"};
+		const char **slot[] = {&o->presets.printer, &o->presets.print,
+				       &o->presets.filament};
+
+		for (int k = 0; k < 3; k++) {
+			if (!cmd_is_opt(a, presets[k]))
+				continue;
+			v = cmd_opt_value(argc, argv, i, presets[k]);
+			if (!v || !*v) {
+				fprintf(stderr, "%s: %s needs a preset name\n", cmd, presets[k]);
+				return -1;
+			}
+			*slot[k] = v;
+			return 1;
+		}
+	}
+	if (cmd_is_opt(a, "--set")) {
+		const char *eq;
+
+		v = cmd_opt_value(argc, argv, i, "--set");
+		eq = v ? strchr(v, '=') : NULL;
+		if (!eq)
+			return add_key(o, cmd, "--set", "", 0, NULL);
+		return add_key(o, cmd, "--set", v, (size_t)(eq - v), eq + 1);
+	}
+	if (strncmp(a, "--", 2) || !(s = spelled(a, &neg, &n)))
+		return 0;
+	if (s->type == SETTING_BOOL && !strchr(a, '='))
+		return add_key(o, cmd, a, s->name, strlen(s->name), neg ? "0" : "1");
+	if (neg)
+		return 0;
+	{
+		char opt[80];
+		snprintf(opt, sizeof(opt), "%.*s", (int)(n + 2), a);
+		v = cmd_opt_value(argc, argv, i, opt);
+		if (!v) {
+			fprintf(stderr, "%s: %s needs a value (see 'stratum printers --keys')\n", cmd,
+				opt);
+			return -1;
+		}
+		/* The option as written names it in messages (argv outlives the parse). */
+		return add_key(o, cmd, a, s->name, strlen(s->name), v);
+	}
+}
+
+int cfgopt_load(const struct cfgopt *o, const char *cmd, const struct profile *base,
+		struct profile **out)
+{
+	struct st_error err = {0};
+	size_t files = 0;
+	int rc;
+
+	*out = NULL;
+	/* The files alone first, so a bad file is the file's error and a bad
+	 * option value is a usage error (exit 2). */
+	while (files < o->n && o->layer[files].path)
+		files++;
+	for (size_t k = files; k < o->n; k++)
+		if (o->layer[k].path) {
+			fprintf(stderr, "%s: give every --load before --set and the --KEY-NAME "
+					"options (%s comes after one)\n",
+				cmd, o->layer[k].path);
+			return ST_EXIT_USAGE;
+		}
+	rc = profile_load_layers(base, o->layer, files, &o->presets, out, &err);
+	if (rc == 0 && files < o->n) {
+		struct profile *p = *out;
+
+		*out = NULL;
+		rc = profile_load_layers(p, o->layer + files, o->n - files, NULL, out, &err);
+		profile_free(p);
+		if (rc) {
+			fprintf(stderr, "%s: %s\n", cmd, err.msg);
+			return ST_EXIT_USAGE;
+		}
+	}
+	if (rc) {
+		fprintf(stderr, "%s: %s\n", cmd, err.msg);
+		return rc == ST_ERR_RANGE || rc == ST_ERR_ARG ? ST_EXIT_USAGE : st_exit_for(rc);
+	}
+	return 0;
+}
+
+void cfgopt_warn_unsupported(const struct profile *p, const char *cmd)
+{
+	char *list = NULL;
+
+	if (profile_unsupported(p, &list) == 0 && list)
+		fprintf(stderr, "%s: warning: not supported, ignored: %s\n", cmd, list);
+	free(list);
+}

@@ -1,0 +1,57 @@
+/*
+ * cfgopt.h - the settings options `stratum slice` (and the commands that
+ * slice) share: --load FILE (repeatable, later files win, as PrusaSlicer's),
+ * --printer-preset/--print-preset/--filament-preset NAME for a PrusaSlicer
+ * bundle, --set KEY=VALUE for any key, and PrusaSlicer's own spelling
+ * --KEY-NAME VALUE of every declared setting (slicer/settings.h): a bool as
+ * a flag, --no-KEY-NAME for 0.  Values are checked by the profile loader
+ * against the same declarations as a profile file's (profile.h).
+ *
+ * The option text printed by cfgopt_usage is also docs/slicing.md's
+ * (tests/check_slicecli.c compares them).
+ */
+#ifndef STRATUM_HOST_CFGOPT_H
+#define STRATUM_HOST_CFGOPT_H
+
+#include <stdbool.h>
+#include <stdio.h>
+
+#include "profile.h"
+
+#define CFGOPT_MAX 256 /* layers on one command line */
+
+struct cfgopt {
+	struct profile_layer layer[CFGOPT_MAX]; /* in command-line order */
+	size_t n;
+	bool has_files; /* a --load was given */
+	struct profile_presets presets;
+	char keybuf[CFGOPT_MAX][64]; /* KEY of --set KEY=VALUE and --KEY-NAME */
+};
+
+/*
+ * cfgopt_parse - read argv[*i] (and its value) when it is one of these
+ * options.  Returns 1 when taken (*i moved past its value), 0 when it is
+ * not one of them, or -1 after printing "CMD: ..." for a malformed one.
+ */
+int cfgopt_parse(struct cfgopt *o, const char *cmd, int argc, char **argv, int *i);
+
+/*
+ * cfgopt_load - the profile: @base (NULL: none) under the --load files and
+ * then the key options, in order.  Returns 0, or the exit status with the
+ * message printed: 2 for a bad option value or preset name, else as the
+ * profile's own errors.
+ */
+int cfgopt_load(const struct cfgopt *o, const char *cmd, const struct profile *base,
+		struct profile **out);
+
+/* cfgopt_usage - the options' help lines. */
+void cfgopt_usage(FILE *f);
+
+/*
+ * cfgopt_warn_unsupported - print "CMD: warning: not supported, ignored:
+ * KEY=VALUE, ..." on stderr when the profile sets keys Stratum does not
+ * honour (profile_unsupported); nothing otherwise.
+ */
+void cfgopt_warn_unsupported(const struct profile *p, const char *cmd);
+
+#endif /* STRATUM_HOST_CFGOPT_H */
