@@ -8,12 +8,15 @@
  * objectid transform p:path printable>.  Everything else (metadata,
  * materials, colours, thumbnails, other namespaces) is skipped.
  *
- * Every message names the zip entry and the XML line.  A DTD is refused
+ * Vertices are rounded to float32 as read (what lib3mf and PrusaSlicer
+ * store); transforms stay double.  Every message names the zip entry and the XML line.  A DTD is refused
  * (the 3MF core spec forbids one), so no entity is ever expanded.
  */
 #include "threemf_impl.h"
 
+#include <float.h>
 #include <libxml/xmlreader.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
@@ -401,6 +404,15 @@ static int on_vertex(struct tmf_parser *ps)
 	if (seen != 7)
 		return perr(ps, ST_ERR_PARSE, "vertex %zu of object %u lacks x, y or z", o->nverts,
 			    (unsigned)o->id);
+	/* Held as float32, as lib3mf and PrusaSlicer hold them: a PrusaSlicer
+	 * 3MF then gives its STL's coordinates bit for bit (docs/repair.md). */
+	for (int k = 0; k < 3; k++) {
+		if (fabs(v[k]) > FLT_MAX)
+			return perr(ps, ST_ERR_PARSE, "vertex %zu of object %u: %g is beyond the "
+				    "float32 range of 3MF coordinates",
+				    o->nverts, (unsigned)o->id, v[k]);
+		v[k] = (double)(float)v[k];
+	}
 	if (o->nverts >= MESH_MAX_ELEMENTS)
 		return perr(ps, ST_ERR_RANGE, "object %u has more than %lu vertices",
 			    (unsigned)o->id, (unsigned long)MESH_MAX_ELEMENTS);
