@@ -19,11 +19,13 @@ CXX      := g++
 # gpx is the reference S3G host the s3g suite drives the simulator with;
 # libssl-dev gives libcrypto for the SHA-256 of the print journal (host/journal.c:
 # OpenSSL is already on the machine for libcurl4-openssl-dev, nettle would be one more).
+# libzip-dev + libxml2-dev read 3MF (repair/threemf.c): a 3MF is a zip of XML
+# parts; both are C libraries (lib3mf-dev is C++ and Debian's is 1.8, old).
 DEB_PACKAGES := gcc g++ make pkg-config dpkg-dev \
 	libserialport-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev libtbb-dev \
 	libpolyclipping-dev check libsqlite3-dev libmicrohttpd-dev libjansson-dev \
 	libmosquitto-dev mosquitto gpx libcairo2-dev libxml2-utils libcurl4-openssl-dev \
-	libssl-dev libeigen3-dev
+	libssl-dev libeigen3-dev libzip-dev libxml2-dev
 # Only the benchmark compares against these (printcore: Printrun's host, also
 # used by the sim suite's faithfulness test, which is skipped without it;
 # libcgal-demo: CGAL's data meshes, the real broken models bench/cgal_corpus.sh
@@ -59,7 +61,11 @@ override CXXFLAGS += -std=c++17 $(WARN) -Wno-deprecated-declarations -pthread -D
 CAIRO_CFLAGS := $(patsubst -I%,-isystem %,$(shell pkg-config --cflags cairo 2>/dev/null))
 CAIRO_LIBS   := $(shell pkg-config --libs cairo 2>/dev/null || echo -lcairo)
 CPPFLAGS += $(CAIRO_CFLAGS)
-LDLIBS   := $(CAIRO_LIBS) -lcrypto -lmicrohttpd -lmosquitto -lcurl -lsqlite3 -lserialport -lutil -ljansson -lpolyclipping -ltbb -lgmp -lmpfr -lm -pthread
+# libzip and libxml2 read 3MF (repair/threemf.c); -isystem as for cairo.
+ZIPXML_CFLAGS := $(patsubst -I%,-isystem %,$(shell pkg-config --cflags libzip libxml-2.0 2>/dev/null))
+ZIPXML_LIBS   := $(shell pkg-config --libs libzip libxml-2.0 2>/dev/null || echo -lzip -lxml2)
+CPPFLAGS += $(ZIPXML_CFLAGS)
+LDLIBS   := $(ZIPXML_LIBS) $(CAIRO_LIBS) -lcrypto -lmicrohttpd -lmosquitto -lcurl -lsqlite3 -lserialport -lutil -ljansson -lpolyclipping -ltbb -lgmp -lmpfr -lm -pthread
 TEST_LDLIBS := $(shell pkg-config --libs check 2>/dev/null || echo -lcheck -lsubunit -lrt) $(LDLIBS)
 
 # Sources: every .c under the module folders is library code except the CLI

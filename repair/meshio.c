@@ -1,9 +1,11 @@
 /*
  * meshio.c - the public entry points of meshio.h: open the input, detect its
- * format and hand it to the right reader (stlio.c, objoff.c).
+ * format and hand it to the right reader (stlio.c, objoff.c, threemf.c).
  *
  * Detection, in order: binary STL when the size is exactly 84 + 50 * count
- * (whatever the header says, "solid" included); ASCII STL when the text
+ * (whatever the header says, "solid" included); 3MF when the bytes open
+ * like a zip archive (the reader then looks for the 3D model part in it);
+ * ASCII STL when the text
  * starts with "solid"; OFF when the first keyword is OFF (or COFF, NOFF,
  * CNOFF); OBJ when it is an OBJ statement or the text opens with comments.
  * The extension only chooses between messages for content that fits none.
@@ -38,7 +40,13 @@ static bool looks_like_text(const unsigned char *p, size_t n)
 	return true;
 }
 
-/* Magic numbers of common non-mesh files (PNG, JPEG, GIF, ZIP/3MF, gzip, ELF, PDF). */
+/* A zip archive's first bytes: a local file header, or the end record of an empty one. */
+static bool zip_signature(const unsigned char *p, size_t n)
+{
+	return n >= 4 && (!memcmp(p, "PK\x03\x04", 4) || !memcmp(p, "PK\x05\x06", 4));
+}
+
+/* Magic numbers of common non-mesh files (PNG, JPEG, GIF, gzip, ELF, PDF). */
 static bool foreign_signature(const unsigned char *p, size_t n)
 {
 	static const struct {
@@ -48,7 +56,6 @@ static bool foreign_signature(const unsigned char *p, size_t n)
 	    {"\x89PNG\r\n\x1a\n", 8},
 	    {"\xff\xd8\xff", 3},
 	    {"GIF8", 4},
-	    {"PK\x03\x04", 4},
 	    {"\x1f\x8b", 2},
 	    {"\x7f"
 	     "ELF",
@@ -140,8 +147,11 @@ static bool starts_with_solid(const unsigned char *p, size_t n)
 /* The one message for content that fits no supported format. */
 static int not_a_mesh(struct mio_src *s)
 {
+	if (has_extension(s->name, "3mf"))
+		return mio_err(s, ST_ERR_PARSE,
+			       "does not start like a zip archive, so it is not a 3MF file");
 	return mio_err(s, ST_ERR_PARSE,
-		       "not a mesh file (expected binary or ASCII STL, OBJ or OFF)");
+		       "not a mesh file (expected binary or ASCII STL, OBJ, OFF or 3MF)");
 }
 
 /* Decide the format of s from its first window; see the file comment. */
@@ -155,6 +165,10 @@ static int detect(struct mio_src *s, enum meshio_format *fmt)
 
 	if (stlio_binary_size_matches(s)) {
 		*fmt = MESHIO_STL_BINARY;
+		return 0;
+	}
+	if (zip_signature(p, n)) {
+		*fmt = MESHIO_3MF;
 		return 0;
 	}
 	if (foreign_signature(p, n))
@@ -187,8 +201,9 @@ static int detect(struct mio_src *s, enum meshio_format *fmt)
 
 /* Read s (positioned at its start) in format fmt, detecting it if AUTO. */
 static int read_source(struct mio_src *s, enum meshio_format fmt, struct mesh **out,
-		       enum meshio_format *detected)
+		       struct meshio_info *info)
 {
+	struct meshio_info got = {.items = 1, .meshes = 1, .objects = 1};
 	long avail;
 	int rc;
 
@@ -217,12 +232,16 @@ static int read_source(struct mio_src *s, enum meshio_format fmt, struct mesh **
 	case MESHIO_OFF:
 		rc = objoff_read_off(s, out);
 		break;
+	case MESHIO_3MF:
+		rc = threemf_read(s, out, &got);
+		break;
 	default:
 		rc = mio_err(s, ST_ERR_ARG, "unknown mesh format %d", (int)fmt);
 		break;
 	}
-	if (rc == 0 && detected)
-		*detected = fmt;
+	got.format = fmt;
+	if (rc == 0 && info)
+		*info = got;
 	return rc;
 }
 
@@ -230,14 +249,46 @@ static int read_source(struct mio_src *s, enum meshio_format fmt, struct mesh **
 static bool format_valid(enum meshio_format fmt)
 {
 	return fmt == MESHIO_AUTO || fmt == MESHIO_STL_BINARY || fmt == MESHIO_STL_ASCII ||
-	       fmt == MESHIO_OBJ || fmt == MESHIO_OFF;
+	       fmt == MESHIO_OBJ || fmt == MESHIO_OFF || fmt == MESHIO_3MF;
 }
 
-int meshio_read(const char *path, enum meshio_format fmt, struct mesh **out,
-		enum meshio_format *detected, struct st_error *err)
+/* Open path for reading into s (regular files only: sizes must be known). */
+static int open_file(struct mio_src *s, const char *path, struct st_error *err)
+{
+	struct stat st;
+	int rc;
+
+	memset(s, 0, sizeof(*s));
+	s->name = path;
+	s->err = err;
+	s->f = fopen(path, "rb");
+	if (!s->f)
+		return mio_err(s, ST_ERR_IO, "cannot open: %s", strerror(errno));
+	if (fstat(fileno(s->f), &st)) {
+		rc = mio_err(s, ST_ERR_IO, "cannot stat: %s", strerror(errno));
+		goto out_close;
+	}
+	if (S_ISDIR(st.st_mode)) {
+		rc = mio_err(s, ST_ERR_IO, "is a directory, not a mesh file");
+		goto out_close;
+	}
+	if (!S_ISREG(st.st_mode)) {
+		/* Size arithmetic needs the size up front: no pipes or devices. */
+		rc = mio_err(s, ST_ERR_IO, "not a regular file; save the mesh to a file first");
+		goto out_close;
+	}
+	s->size = (uint64_t)st.st_size;
+	return 0;
+out_close:
+	fclose(s->f);
+	s->f = NULL;
+	return rc;
+}
+
+int meshio_read_info(const char *path, enum meshio_format fmt, struct mesh **out,
+		     struct meshio_info *info, struct st_error *err)
 {
 	struct mio_src s;
-	struct stat st;
 	int rc;
 
 	if (out)
@@ -245,41 +296,35 @@ int meshio_read(const char *path, enum meshio_format fmt, struct mesh **out,
 	if (!path || !out || !format_valid(fmt))
 		return st_error_set(err, ST_ERR_ARG,
 				    "meshio_read: no path, no output or bad format");
-	memset(&s, 0, sizeof(s));
-	s.name = path;
-	s.err = err;
-	s.f = fopen(path, "rb");
-	if (!s.f)
-		return mio_err(&s, ST_ERR_IO, "cannot open: %s", strerror(errno));
-	if (fstat(fileno(s.f), &st)) {
-		rc = mio_err(&s, ST_ERR_IO, "cannot stat: %s", strerror(errno));
-		goto out_close;
-	}
-	if (S_ISDIR(st.st_mode)) {
-		rc = mio_err(&s, ST_ERR_IO, "is a directory, not a mesh file");
-		goto out_close;
-	}
-	if (!S_ISREG(st.st_mode)) {
-		/* Size arithmetic needs the size up front: no pipes or devices. */
-		rc = mio_err(&s, ST_ERR_IO, "not a regular file; save the mesh to a file first");
-		goto out_close;
-	}
-	s.size = (uint64_t)st.st_size;
+	if ((rc = open_file(&s, path, err)))
+		return rc;
 	s.chunk = malloc(MIO_CHUNK);
 	if (!s.chunk) {
 		rc = mio_err(&s, ST_ERR_NOMEM, "out of memory for the read buffer");
 		goto out_close;
 	}
 	s.p = s.end = s.chunk;
-	rc = read_source(&s, fmt, out, detected);
+	rc = read_source(&s, fmt, out, info);
 	free(s.chunk);
 out_close:
 	fclose(s.f);
 	return rc;
 }
 
-int meshio_read_buffer(const void *buf, size_t len, const char *name, enum meshio_format fmt,
-		       struct mesh **out, enum meshio_format *detected, struct st_error *err)
+int meshio_read(const char *path, enum meshio_format fmt, struct mesh **out,
+		enum meshio_format *detected, struct st_error *err)
+{
+	struct meshio_info info;
+	int rc = meshio_read_info(path, fmt, out, &info, err);
+
+	if (rc == 0 && detected)
+		*detected = info.format;
+	return rc;
+}
+
+int meshio_read_buffer_info(const void *buf, size_t len, const char *name,
+			    enum meshio_format fmt, struct mesh **out, struct meshio_info *info,
+			    struct st_error *err)
 {
 	struct mio_src s;
 
@@ -296,7 +341,34 @@ int meshio_read_buffer(const void *buf, size_t len, const char *name, enum meshi
 		s.end = s.p + len;
 	}
 	s.size = len;
-	return read_source(&s, fmt, out, detected);
+	return read_source(&s, fmt, out, info);
+}
+
+int meshio_read_buffer(const void *buf, size_t len, const char *name, enum meshio_format fmt,
+		       struct mesh **out, enum meshio_format *detected, struct st_error *err)
+{
+	struct meshio_info info;
+	int rc = meshio_read_buffer_info(buf, len, name, fmt, out, &info, err);
+
+	if (rc == 0 && detected)
+		*detected = info.format;
+	return rc;
+}
+
+int meshio_3mf_config(const char *path, char **text, struct st_error *err)
+{
+	struct mio_src s;
+	int rc;
+
+	if (text)
+		*text = NULL;
+	if (!path || !text)
+		return st_error_set(err, ST_ERR_ARG, "meshio_3mf_config: no path or no output");
+	if ((rc = open_file(&s, path, err)))
+		return rc;
+	rc = threemf_config(&s, text);
+	fclose(s.f);
+	return rc;
 }
 
 int meshio_write_stl(const char *path, const struct mesh *m, enum meshio_format fmt,
@@ -318,6 +390,8 @@ const char *meshio_format_name(enum meshio_format fmt)
 		return "OBJ";
 	case MESHIO_OFF:
 		return "OFF";
+	case MESHIO_3MF:
+		return "3MF";
 	}
 	return "unknown format";
 }

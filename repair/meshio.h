@@ -2,10 +2,13 @@
  * meshio.h - reading and writing mesh files.
  *
  * Readers: binary and ASCII STL (told apart by size arithmetic, not by the
- * "solid" prefix), Wavefront OBJ and OFF (polygons fan-triangulated).  Input
+ * "solid" prefix), Wavefront OBJ and OFF (polygons fan-triangulated), and
+ * 3MF (a zip of XML parts: every build item placed through its transforms
+ * and the model's unit, all items in one mesh; docs/repair.md).  Input
  * is untrusted: every count is checked against the file size, every token is
  * bounded, NaN/Inf are rejected, and a failure fills err with one sentence
- * naming the file and the byte offset (binary) or line (text).
+ * naming the file and the byte offset (binary) or line (text), for 3MF the
+ * zip entry and its XML line.
  *
  * Writers go to a temporary file in the target's directory, check every
  * write, fsync and rename, so a failure never leaves a partial file.
@@ -24,6 +27,16 @@ enum meshio_format {
 	MESHIO_STL_ASCII,
 	MESHIO_OBJ,
 	MESHIO_OFF,
+	MESHIO_3MF,
+};
+
+/* What a read found besides the mesh. */
+struct meshio_info {
+	enum meshio_format format; /* the format that was read */
+	size_t items;		   /* 3MF build items placed; 1 for the other formats */
+	size_t skipped_items;	   /* 3MF items left out: printable="0", support or surface */
+	size_t meshes;		   /* mesh instances placed (components count each); 1 otherwise */
+	size_t objects;		   /* 3MF <object> resources defined; 1 otherwise */
 };
 
 /*
@@ -43,6 +56,28 @@ int meshio_read(const char *path, enum meshio_format fmt, struct mesh **out,
 int meshio_read_buffer(const void *buf, size_t len, const char *name,
 		       enum meshio_format fmt, struct mesh **out,
 		       enum meshio_format *detected, struct st_error *err);
+
+/*
+ * meshio_read_info, meshio_read_buffer_info - meshio_read and
+ * meshio_read_buffer that fill *info (may be NULL) on success.  For 3MF
+ * also ST_ERR_RANGE (the zip unpacks to more than 2 GiB, components nest
+ * too deep, the build places more than 2^27 triangles) and
+ * ST_ERR_UNSUPPORTED (the file requires a 3MF extension we do not read).
+ */
+int meshio_read_info(const char *path, enum meshio_format fmt, struct mesh **out,
+		     struct meshio_info *info, struct st_error *err);
+int meshio_read_buffer_info(const void *buf, size_t len, const char *name,
+			    enum meshio_format fmt, struct mesh **out,
+			    struct meshio_info *info, struct st_error *err);
+
+/*
+ * meshio_3mf_config - the text of Metadata/Slic3r_PE.config (PrusaSlicer's
+ * print, filament and printer settings) inside the 3MF at path: *text gets
+ * a malloc'd NUL-terminated copy (caller frees), or NULL when the file has
+ * none.  Returns 0, ST_ERR_IO, ST_ERR_PARSE (not a zip, bad entry),
+ * ST_ERR_RANGE (more than 16 MiB), ST_ERR_NOMEM; *text is NULL on error.
+ */
+int meshio_3mf_config(const char *path, char **text, struct st_error *err);
 
 /*
  * meshio_write_stl - write m as binary (fmt MESHIO_STL_BINARY) or ASCII

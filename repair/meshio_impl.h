@@ -128,6 +128,11 @@ int stlio_read_binary(struct mio_src *s, struct mesh **out);
 int stlio_read_ascii(struct mio_src *s, struct mesh **out);
 int objoff_read_obj(struct mio_src *s, struct mesh **out);
 int objoff_read_off(struct mio_src *s, struct mesh **out);
+/* 3MF (threemf.c): the zip is s's file by name, or s's whole buffer; info may be NULL. */
+int threemf_read(struct mio_src *s, struct mesh **out, struct meshio_info *info);
+
+/* threemf_config - the 3MF's Metadata/Slic3r_PE.config text or NULL (meshio_3mf_config). */
+int threemf_config(struct mio_src *s, char **text);
 
 /* True if the first window shows a binary STL: size == 84 + 50 * count. */
 bool stlio_binary_size_matches(const struct mio_src *s);

@@ -278,6 +278,43 @@ START_TEST(repair_cube_checks_printable)
 }
 END_TEST
 
+/* check and repair take a 3MF as they take an STL; a broken one exits 65. */
+START_TEST(check_and_repair_3mf)
+{
+	struct mesh *cube = fx_box(0, 0, 0, 10, 10, 10);
+	const char *in = tu_path("c3.3mf");
+	char outp[512];
+	struct st_error err = {0};
+	struct mesh *back = NULL;
+	json_t *o;
+
+	tu_write_3mf_mesh(in, cube);
+	o = check_json(in, 0);
+	ck_assert_str_eq(json_string_value(json_object_get(o, "format")), "3MF");
+	ck_assert_int_eq(field(o, "input_triangles"), 12);
+	json_decref(o);
+	snprintf(outp, sizeof(outp), "%s", tu_path("c3-out.stl"));
+	ck_assert_int_eq(tu_run(out, sizeof(out), "repair '%s' -o '%s'", in, outp), 0);
+	ck_assert_msg(meshio_read(outp, MESHIO_AUTO, &back, NULL, &err) == 0, "%s", err.msg);
+	ck_assert_uint_eq(back->ntris, 12);
+	mesh_free(back);
+
+	in = tu_path("c3-bad.3mf");
+	tu_write_3mf(in, "<model xmlns=\"http://schemas.microsoft.com/3dmanufacturing/core/"
+			 "2015/02\"><resources><object id=\"1\"><mesh><vertices/><triangles>"
+			 "<triangle v1=\"0\" v2=\"1\" v3=\"2\"/></triangles></mesh></object>"
+			 "</resources><build><item objectid=\"1\"/></build></model>");
+	ck_assert_int_eq(tu_run(out, sizeof(out), "check '%s'", in), 65);
+	ck_assert_msg(strstr(out, "3D/3dmodel.model line 1: triangle 0 of object 1 refers to "
+			      "vertex 0"),
+		      "%s", out);
+	snprintf(outp, sizeof(outp), "%s", tu_path("c3-bad-out.stl"));
+	ck_assert_int_eq(tu_run(out, sizeof(out), "repair '%s' -o '%s'", in, outp), 65);
+	ck_assert_msg(!tu_file_exists(outp), "%s was written", outp);
+	mesh_free(cube);
+}
+END_TEST
+
 START_TEST(repair_bad_input_exit_65_writes_nothing)
 {
 	const char *in = tu_path("r-truncated.stl");
@@ -802,6 +839,7 @@ Suite *cli_suite(void)
 	tcase_set_timeout(tc, 120); /* the exact passes run slowly under ASan */
 	tcase_add_test(tc, repair_cube_checks_printable);
 	tcase_add_test(tc, repair_bad_input_exit_65_writes_nothing);
+	tcase_add_test(tc, check_and_repair_3mf);
 	tcase_add_test(tc, repair_usage_errors_exit_2);
 	tcase_add_test(tc, repair_json_report);
 	tcase_add_test(tc, repair_epsilon_from_printer);

@@ -1,5 +1,5 @@
 /*
- * check_meshio.c - STL/OBJ/OFF reading and STL writing: round trips of
+ * check_meshio.c - STL/OBJ/OFF reading and STL writing (3MF: check_meshio_3mf.c): round trips of
  * generated meshes, every accepted spelling we promise, and for every kind
  * of bad input the error class and a message naming the file and the byte
  * or line.  Every bad input is read twice, from a file and from memory, and
@@ -71,26 +71,6 @@ static void write_ok(const char *path, const struct mesh *m, enum meshio_format 
 	struct st_error err = {0};
 
 	ck_assert_msg(meshio_write_stl(path, m, fmt, &err) == 0, "%s", err.msg);
-}
-
-static void *slurp(const char *path, size_t *len)
-{
-	FILE *f = fopen(path, "rb");
-	char *buf;
-	long n;
-
-	ck_assert_ptr_nonnull(f);
-	ck_assert_int_eq(fseek(f, 0, SEEK_END), 0);
-	n = ftell(f);
-	ck_assert_int_ge(n, 0);
-	rewind(f);
-	buf = malloc((size_t)n + 1);
-	ck_assert_ptr_nonnull(buf);
-	ck_assert_uint_eq(fread(buf, 1, (size_t)n, f), (size_t)n);
-	fclose(f);
-	buf[n] = '\0';
-	*len = (size_t)n;
-	return buf;
 }
 
 /* Entries in a directory other than . and .. */
@@ -193,23 +173,9 @@ static void expect_fail(const char *name, const void *data, size_t len, int code
 			const char *const *needles)
 {
 	char *path = scratch(name);
-	struct st_error e1 = {0}, e2 = {0};
-	struct mesh *m = (struct mesh *)&e1; /* must be reset to NULL */
 
 	tu_write(path, data, len);
-	ck_assert_int_eq(meshio_read(path, MESHIO_AUTO, &m, NULL, &e1), code);
-	ck_assert_ptr_null(m);
-	ck_assert_int_eq(e1.code, code);
-	ck_assert_msg(!strncmp(e1.msg, path, strlen(path)) && e1.msg[strlen(path)] == ':',
-		      "message does not start with the file name: %s", e1.msg);
-	ck_assert_msg(!strchr(e1.msg, '\n'), "not one line: %s", e1.msg);
-	for (size_t i = 0; needles[i]; i++)
-		ck_assert_msg(strstr(e1.msg, needles[i]), "'%s' missing in: %s", needles[i],
-			      e1.msg);
-	m = (struct mesh *)&e2;
-	ck_assert_int_eq(meshio_read_buffer(data, len, path, MESHIO_AUTO, &m, NULL, &e2), code);
-	ck_assert_ptr_null(m);
-	ck_assert_str_eq(e1.msg, e2.msg);
+	tu_expect_read_fail(path, data, len, code, needles);
 	free(path);
 }
 
@@ -233,7 +199,7 @@ START_TEST(binary_round_trip)
 	unsigned char *raw;
 
 	write_ok(path, m, MESHIO_STL_BINARY);
-	raw = slurp(path, &len);
+	raw = tu_slurp(path, &len);
 	ck_assert_uint_eq(len, 84 + 50 * m->ntris);
 	ck_assert_uint_eq(get_le32(raw + 80), m->ntris);
 	r = read_path(path, MESHIO_STL_BINARY);
@@ -265,7 +231,7 @@ START_TEST(binary_layout)
 	ck_assert_int_eq(mesh_builder_triangle(b, v[0], v[0], v[1], NULL), 0); /* degenerate */
 	m = mesh_builder_finish(b);
 	write_ok(path, m, MESHIO_STL_BINARY);
-	raw = slurp(path, &len);
+	raw = tu_slurp(path, &len);
 	ck_assert_uint_eq(len, 84 + 2 * 50);
 	ck_assert(!memcmp(raw, "stratum binary STL", 18));
 	ck_assert_uint_eq(get_le32(raw + 80), 2);
@@ -292,7 +258,7 @@ START_TEST(ascii_round_trip_exact)
 	size_t len;
 
 	write_ok(path, m, MESHIO_STL_ASCII);
-	raw = slurp(path, &len);
+	raw = tu_slurp(path, &len);
 	ck_assert_uint_gt(len, 4 * 65536);
 	ck_assert(!strncmp(raw, "solid stratum\n", 14));
 	ck_assert_str_eq(raw + len - 17, "endsolid stratum\n");
@@ -771,7 +737,7 @@ START_TEST(write_failure_keeps_old_file)
 	ck_assert_ptr_nonnull(strstr(err.msg, "cannot write"));
 	ck_assert_int_eq(meshio_write_stl(path, m, MESHIO_STL_ASCII, &err), ST_ERR_IO);
 	ck_assert_int_eq(setrlimit(RLIMIT_FSIZE, &old), 0);
-	after = slurp(path, &len);
+	after = tu_slurp(path, &len);
 	ck_assert_str_eq(after, before);
 	ck_assert_int_eq(dir_entries(dir), 1); /* the temporary files are gone */
 	free(after);
@@ -852,8 +818,8 @@ START_TEST(mutations_never_crash)
 
 	write_ok(bpath, m, MESHIO_STL_BINARY);
 	write_ok(apath, m, MESHIO_STL_ASCII);
-	bases[0] = slurp(bpath, &lens[0]);
-	bases[1] = slurp(apath, &lens[1]);
+	bases[0] = tu_slurp(bpath, &lens[0]);
+	bases[1] = tu_slurp(apath, &lens[1]);
 	bases[2] = (unsigned char *)strdup(obj);
 	lens[2] = strlen(obj);
 	bases[3] = (unsigned char *)strdup(off);
@@ -919,7 +885,7 @@ START_TEST(binary_split_read_matches_one_pass)
 
 	write_ok(path, torus, MESHIO_STL_BINARY);
 	a = read_path(path, MESHIO_STL_BINARY);
-	data = slurp(path, &len);
+	data = tu_slurp(path, &len);
 	b = read_buf(data, len, MESHIO_STL_BINARY);
 	ck_assert_uint_eq(a->nverts, b->nverts);
 	ck_assert_uint_eq(a->ntris, b->ntris);
@@ -989,5 +955,6 @@ Suite *meshio_suite(void)
 	tcase_set_timeout(fz, 120);
 	tcase_add_test(fz, mutations_never_crash);
 	suite_add_tcase(s, fz);
+	meshio_3mf_tcases(s);
 	return s;
 }

@@ -452,6 +452,51 @@ START_TEST(unreadable_model_exit_65)
 	tu_write(bad, buf, sizeof(buf));
 	expect_refused(bad, MK3S, 65, "truncated or not an STL file");
 	expect_refused(tu_path("missing.stl"), MK3S, 65, "cannot open");
+	bad = tu_path("bad.3mf");
+	tu_write_3mf(bad, "<model xmlns=\"http://schemas.microsoft.com/3dmanufacturing/core/"
+			  "2015/02\"><resources/></model>");
+	expect_refused(bad, MK3S, 65, "3D/3dmodel.model has no <build>");
+}
+END_TEST
+
+/* slice a and b with the MK3S profile; their G-code must be byte for byte the same. */
+static void same_gcode(const char *a, const char *b, const char *what)
+{
+	char ga[512], gb[512], cmd[1200];
+	int status;
+
+	snprintf(ga, sizeof(ga), "%s.gcode", a);
+	snprintf(gb, sizeof(gb), "%s.gcode", b);
+	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' " MK3S, a, ga);
+	ck_assert_msg(status == 0, "exit %d: %s", status, out);
+	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' " MK3S, b, gb);
+	ck_assert_msg(status == 0, "exit %d: %s", status, out);
+	snprintf(cmd, sizeof(cmd), "cmp -s '%s' '%s'", ga, gb);
+	ck_assert_msg(system(cmd) == 0, "%s: the 3MF and the STL slice differently", what);
+}
+
+/* A 3MF slices as the STL of the same triangles: our own, and PrusaSlicer's export. */
+START_TEST(slice_3mf_same_as_stl)
+{
+	struct mesh *ball = fx_sphere(0, 0, 0, 10, 24, 32);
+	struct mesh *stl = tu_round_trip(ball, "ball3.stl", MESHIO_STL_BINARY);
+	char in[512], own[512], prusa[512], cmd[2048];
+
+	snprintf(in, sizeof(in), "%s", tu_path("ball3.stl"));
+	snprintf(own, sizeof(own), "%s", tu_path("ball3.3mf"));
+	snprintf(prusa, sizeof(prusa), "%s", tu_path("ball3-prusaslicer.3mf"));
+	tu_write_3mf_mesh(own, stl);
+	same_gcode(in, own, "hand-built 3MF");
+	if (system("command -v prusa-slicer >/dev/null 2>&1") == 0) {
+		snprintf(cmd, sizeof(cmd), "timeout 120 prusa-slicer --export-3mf -o '%s' '%s' "
+			 ">/dev/null 2>&1", prusa, in);
+		ck_assert_msg(system(cmd) == 0, "%s failed", cmd);
+		same_gcode(in, prusa, "prusa-slicer --export-3mf");
+	} else {
+		fprintf(stderr, "slicecli: prusa-slicer not installed, its 3MF export not sliced\n");
+	}
+	mesh_free(stl);
+	mesh_free(ball);
 }
 END_TEST
 
@@ -641,6 +686,7 @@ Suite *slicecli_suite(void)
 	tcase_add_test(tc, saved_default_config_loads);
 	tcase_add_test(tc, load_order_and_set);
 	tcase_add_test(tc, settings_options_doc);
+	tcase_add_test(tc, slice_3mf_same_as_stl);
 	suite_add_tcase(s, tc);
 	return s;
 }

@@ -10,6 +10,7 @@
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <zip.h>
 
 static char scratch_dir[256];
 
@@ -57,6 +58,103 @@ void tu_write(const char *path, const void *data, size_t len)
 void tu_write_str(const char *path, const char *text)
 {
 	tu_write(path, text, strlen(text));
+}
+
+void *tu_slurp(const char *path, size_t *len)
+{
+	FILE *f = fopen(path, "rb");
+	char *buf;
+	long n;
+
+	ck_assert_msg(f != NULL, "cannot open %s", path);
+	ck_assert_int_eq(fseek(f, 0, SEEK_END), 0);
+	n = ftell(f);
+	ck_assert_int_ge(n, 0);
+	rewind(f);
+	buf = malloc((size_t)n + 1);
+	ck_assert_ptr_nonnull(buf);
+	ck_assert_uint_eq(fread(buf, 1, (size_t)n, f), (size_t)n);
+	fclose(f);
+	buf[n] = '\0';
+	*len = (size_t)n;
+	return buf;
+}
+
+void tu_expect_read_fail(const char *path, const void *data, size_t len, int code,
+			 const char *const *needles)
+{
+	struct st_error e1 = {0}, e2 = {0};
+	struct mesh *m = (struct mesh *)&e1; /* must be reset to NULL */
+
+	ck_assert_int_eq(meshio_read(path, MESHIO_AUTO, &m, NULL, &e1), code);
+	ck_assert_ptr_null(m);
+	ck_assert_int_eq(e1.code, code);
+	ck_assert_msg(!strncmp(e1.msg, path, strlen(path)) && e1.msg[strlen(path)] == ':',
+		      "message does not start with the file name: %s", e1.msg);
+	ck_assert_msg(!strchr(e1.msg, '\n'), "not one line: %s", e1.msg);
+	for (size_t i = 0; needles[i]; i++)
+		ck_assert_msg(strstr(e1.msg, needles[i]), "'%s' missing in: %s", needles[i],
+			      e1.msg);
+	m = (struct mesh *)&e2;
+	ck_assert_int_eq(meshio_read_buffer(data, len, path, MESHIO_AUTO, &m, NULL, &e2), code);
+	ck_assert_ptr_null(m);
+	ck_assert_str_eq(e1.msg, e2.msg);
+}
+
+void tu_write_zip(const char *path, const char *const *names, const char *const *texts,
+		  size_t n)
+{
+	int zerr = 0;
+	zip_t *z = zip_open(path, ZIP_CREATE | ZIP_TRUNCATE, &zerr);
+
+	ck_assert_msg(z != NULL, "cannot create zip %s (libzip error %d)", path, zerr);
+	for (size_t i = 0; i < n; i++) {
+		zip_source_t *src = zip_source_buffer(z, texts[i], strlen(texts[i]), 0);
+
+		ck_assert_msg(src && zip_file_add(z, names[i], src, ZIP_FL_OVERWRITE) >= 0,
+			      "zip %s: cannot add %s: %s", path, names[i], zip_strerror(z));
+	}
+	ck_assert_msg(zip_close(z) == 0, "zip %s: %s", path, zip_strerror(z));
+}
+
+const char tu_3mf_rels[] =
+    "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+    "<Relationships xmlns=\"http://schemas.openxmlformats.org/package/2006/relationships\">\n"
+    " <Relationship Target=\"/3D/3dmodel.model\" Id=\"rel0\" "
+    "Type=\"http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel\"/>\n"
+    "</Relationships>\n";
+
+void tu_write_3mf(const char *path, const char *model_xml)
+{
+	const char *names[] = {"_rels/.rels", "3D/3dmodel.model"};
+	const char *texts[] = {tu_3mf_rels, model_xml};
+
+	tu_write_zip(path, names, texts, 2);
+}
+
+void tu_write_3mf_mesh(const char *path, const struct mesh *m)
+{
+	size_t cap = 256 + m->nverts * 128 + m->ntris * 64, n = 0;
+	char *xml = malloc(cap);
+
+	ck_assert_ptr_nonnull(xml);
+	n += (size_t)snprintf(xml + n, cap - n,
+			      "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<model unit=\"millimeter\" "
+			      "xmlns=\"http://schemas.microsoft.com/3dmanufacturing/core/2015/02\">\n"
+			      "<resources><object id=\"1\" type=\"model\"><mesh><vertices>\n");
+	for (size_t i = 0; i < m->nverts; i++)
+		n += (size_t)snprintf(xml + n, cap - n, "<vertex x=\"%.17g\" y=\"%.17g\" z=\"%.17g\"/>\n",
+				      m->verts[i][0], m->verts[i][1], m->verts[i][2]);
+	n += (size_t)snprintf(xml + n, cap - n, "</vertices><triangles>\n");
+	for (size_t i = 0; i < m->ntris; i++)
+		n += (size_t)snprintf(xml + n, cap - n, "<triangle v1=\"%u\" v2=\"%u\" v3=\"%u\"/>\n",
+				      (unsigned)m->tris[i][0], (unsigned)m->tris[i][1],
+				      (unsigned)m->tris[i][2]);
+	n += (size_t)snprintf(xml + n, cap - n, "</triangles></mesh></object></resources>\n"
+			      "<build><item objectid=\"1\"/></build></model>\n");
+	ck_assert_msg(n < cap, "tu_write_3mf_mesh: buffer too small");
+	tu_write_3mf(path, xml);
+	free(xml);
 }
 
 char *tu_read_between(const char *path, char *buf, size_t cap, const char *begin,

@@ -29,6 +29,39 @@ void tu_write(const char *path, const void *data, size_t len);
 void tu_write_str(const char *path, const char *text);
 
 /*
+ * tu_write_zip - write a zip archive (libzip, deflated) with n entries:
+ * names[i] holding the NUL-terminated texts[i].  Aborts the test on failure.
+ */
+void tu_write_zip(const char *path, const char *const *names, const char *const *texts,
+		  size_t n);
+
+/*
+ * tu_slurp - the whole file at path in a new buffer (free it), NUL-terminated
+ * one past *len.  Aborts the test on failure.
+ */
+void *tu_slurp(const char *path, size_t *len);
+
+/*
+ * tu_expect_read_fail - reading the mesh file at path (meshio_read) and its
+ * bytes data[0..len) under the same name (meshio_read_buffer) must both fail
+ * with code and a NULL mesh, in the same one-line message that starts with
+ * "PATH:" and contains every needle (a NULL-terminated list).
+ */
+void tu_expect_read_fail(const char *path, const void *data, size_t len, int code,
+			 const char *const *needles);
+
+/* The _rels/.rels of a 3MF whose model part is /3D/3dmodel.model. */
+extern const char tu_3mf_rels[];
+
+/*
+ * tu_write_3mf - a 3MF at path whose 3D/3dmodel.model is model_xml (with
+ * the _rels/.rels above).  tu_write_3mf_mesh - the same for m as one object
+ * placed once without a transform, coordinates printed exactly (%.17g).
+ */
+void tu_write_3mf(const char *path, const char *model_xml);
+void tu_write_3mf_mesh(const char *path, const struct mesh *m);
+
+/*
  * tu_read_between - read the text file path into buf (cap bytes) and return
  * the text between the first @begin and the next @end after it, cut there
  * (in buf).  Aborts the test when the file or either marker is missing.
