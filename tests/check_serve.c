@@ -941,7 +941,9 @@ START_TEST(test_sim_two_printers)
 {
 	struct node_proc np;
 	struct resp r;
-	char *g1 = moves_gcode(400, 6000), *g2 = moves_gcode(300, 4800);
+	/* The first job is long enough that the second starts while it runs,
+	 * even on a loaded machine (400 moves could end before it began). */
+	char *g1 = moves_gcode(2000, 6000), *g2 = moves_gcode(300, 4800);
 	long long a, b;
 	bool seen_both = false;
 	json_t *o;
@@ -1609,6 +1611,8 @@ START_TEST(test_status_page)
 		return;
 	}
 	upload_text(np.port, "/p/ender", KEY_UP, "hold.gcode", "M104 S205\nG4 P20000\n", "true", &r);
+	/* Printing (past the M104) before the browser looks, loaded or not. */
+	wait_state(np.port, "/p/ender", job_of(&r), "printing", 30);
 	resp_free(&r);
 	usleep(300000);
 	snprintf(cmd, sizeof(cmd), "%s --headless --no-sandbox --disable-gpu --no-first-run "
