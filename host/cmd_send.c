@@ -22,6 +22,7 @@
 #include <unistd.h>
 
 #include "commands.h"
+#include "st_clock.h"
 #include "gcode.h"
 #include "printer.h"
 #include "printer_profile.h"
@@ -46,9 +47,7 @@ volatile sig_atomic_t *send_catch_signals(void)
 
 double send_now(void)
 {
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+	return st_mono_s();
 }
 
 bool send_has_ext(const char *path, const char *ext)

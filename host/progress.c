@@ -2,6 +2,7 @@
  * progress.c - progress bar or plain progress lines on stderr (progress.h).
  */
 #include "progress.h"
+#include "st_clock.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -12,10 +13,7 @@
 /* Monotonic clock, seconds. */
 static double progress_now(void)
 {
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+	return st_mono_s();
 }
 
 bool progress_start(struct progress *p, const char *cmd)

@@ -3,6 +3,7 @@
  * an ops table, and the port helpers the adapters share.
  */
 #include "printer.h"
+#include "st_clock.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -27,10 +28,7 @@ void printer_options_init(struct printer_options *o)
 
 double printer_now(void)
 {
-	struct timespec t;
-
-	clock_gettime(CLOCK_MONOTONIC, &t);
-	return (double)t.tv_sec + (double)t.tv_nsec * 1e-9;
+	return st_mono_s();
 }
 
 const char *printer_name(const struct printer_options *o)

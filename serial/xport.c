@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include "xport_impl.h"
+#include "st_clock.h"
 
 /* Unix98 pty slaves use majors 136..143 (Linux devices.txt). */
 #define PTY_SLAVE_MAJOR_FIRST 136
@@ -25,10 +26,7 @@
 /* Monotonic milliseconds, for deadlines that ignore wall-clock jumps. */
 int64_t xport_now_ms(void)
 {
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (int64_t)ts.tv_sec * 1000 + ts.tv_nsec / 1000000;
+	return st_mono_ms();
 }
 
 /* Sleep the full ms even if signals interrupt nanosleep. */

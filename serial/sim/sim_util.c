@@ -11,12 +11,11 @@
 #include <unistd.h>
 
 #include "sim_util.h"
+#include "st_clock.h"
 
 double sim_clock(void)
 {
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+	return st_mono_s();
 }
 
 double sim_rand01(uint64_t *state)
