@@ -376,22 +376,3 @@ int meshio_write_stl(const char *path, const struct mesh *m, enum meshio_format 
 {
 	return stlio_write(path, m, fmt, err);
 }
-
-const char *meshio_format_name(enum meshio_format fmt)
-{
-	switch (fmt) {
-	case MESHIO_AUTO:
-		return "auto-detected";
-	case MESHIO_STL_BINARY:
-		return "binary STL";
-	case MESHIO_STL_ASCII:
-		return "ASCII STL";
-	case MESHIO_OBJ:
-		return "OBJ";
-	case MESHIO_OFF:
-		return "OFF";
-	case MESHIO_3MF:
-		return "3MF";
-	}
-	return "unknown format";
-}

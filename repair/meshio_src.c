@@ -315,3 +315,24 @@ const char *mio_tokstr(const char *tok, char *buf, size_t cap)
 	buf[o] = '\0';
 	return buf;
 }
+
+/* Here, not in meshio.c, so the readers and the writer (stlio.c) can name a
+ * format without depending on the format dispatch that calls them. */
+const char *meshio_format_name(enum meshio_format fmt)
+{
+	switch (fmt) {
+	case MESHIO_AUTO:
+		return "auto-detected";
+	case MESHIO_STL_BINARY:
+		return "binary STL";
+	case MESHIO_STL_ASCII:
+		return "ASCII STL";
+	case MESHIO_OBJ:
+		return "OBJ";
+	case MESHIO_OFF:
+		return "OFF";
+	case MESHIO_3MF:
+		return "3MF";
+	}
+	return "unknown format";
+}
