@@ -61,6 +61,12 @@ struct marlin {
 	struct marlin_entry *hist;
 	long n_next, n_send, n_acked, n_max_sent;
 	long last_tx_n;		/* number of the line written last */
+	long n_taken;		/* the firmware has every line up to this one
+				 * (a "Resend: k" says k - 1): out of its RX ring */
+	long n_acked_hi;	/* highest line ever acknowledged (an un-ack may
+				 * have to be undone) */
+	bool probed;		/* a probe went out and nothing answered since */
+	bool talks_blocked;	/* busy/W: reports seen: it talks while it waits */
 
 	struct marlin_pend *pend;
 	size_t pend_head, pend_count;
@@ -77,7 +83,8 @@ struct marlin {
 	unsigned skip_ok;	/* oks that belong to Resend requests */
 	long phantom[MARLIN_PHANTOMS]; /* unnumbered lines: written after line n */
 	size_t phantom_n;
-	unsigned bufsize_learnt;
+	unsigned bufsize_learnt; /* largest ADVANCED_OK B<n>: BUFSIZE - 1 */
+	long queued;		/* lines after n_acked surely in the firmware's queue */
 	double rtt;		/* smoothed write-to-ok time of clean lines (s) */
 
 	double t_progress;	/* last reply showing the firmware works on us */
@@ -558,10 +565,30 @@ static void ghost_pop(struct marlin *m)
 	m->ghost_n--;
 }
 
-/* Command slots of the firmware we may count on (0 = unknown). */
+/*
+ * Lines in flight that are surely out of the RX ring (0 = unknown).
+ * Marlin reads its ring only in its main loop, between commands: lines
+ * that arrive while a command waits (a move for a planner block) stay in
+ * the ring even with queue slots free.  ADVANCED_OK's "ok N<n> B<b>" says
+ * how many commands besides n were queued when n finished (largest B
+ * seen, BUFSIZE - 1, minus b): those, and no more, are out of the ring
+ * (docs/streaming.md "The window").  A declared bufsize without
+ * ADVANCED_OK counts BUFSIZE - 1, the running command's slot aside.
+ */
 static unsigned marlin_slots(const struct marlin *m)
 {
-	return m->o.bufsize ? m->o.bufsize : m->bufsize_learnt;
+	if (m->caps.advanced_ok)
+		return (unsigned)m->queued;
+	return m->o.bufsize ? m->o.bufsize - 1 : 0;
+}
+
+/* An ADVANCED_OK B<b>: learn BUFSIZE - 1. */
+static void marlin_learn_b(struct marlin *m, const struct marlin_reply *r)
+{
+	if (r->has_n || r->has_b)
+		m->caps.advanced_ok = true;
+	if (r->has_b && r->b < 4096 && (unsigned)r->b > m->bufsize_learnt)
+		m->bufsize_learnt = (unsigned)r->b;
 }
 
 /*
@@ -585,7 +612,11 @@ static bool marlin_window_open(const struct marlin *m, size_t len)
 	bytes = m->ghost_bytes;
 	if ((unsigned long)inflight >= slots)
 		bytes += len;
-	for (long n = m->n_acked + 1 + (long)slots; n < m->n_send; n++)
+	/* lines the firmware said it has (Resend) left the ring as well */
+	long first = m->n_acked + 1 + (long)slots;
+	if (first <= m->n_taken)
+		first = m->n_taken + 1;
+	for (long n = first; n < m->n_send; n++)
 		bytes += m->hist[(unsigned long)n % MARLIN_HIST].len;
 	return bytes + 1 <= m->o.rx_buffer; /* AVR rings hold size - 1 bytes */
 }
@@ -655,7 +686,9 @@ static int marlin_transmit(struct marlin *m, struct st_error *err)
 {
 	char buf[8192];
 	size_t len = 0;
-	bool was_empty = m->n_send - 1 <= m->n_acked;
+	/* nothing written is unacknowledged: a probe's rewrite (n_send moved
+	 * back) is not a fresh start and must not restart the dead-link clock */
+	bool was_empty = m->n_max_sent <= m->n_acked;
 
 	for (;;) {
 		struct marlin_entry *e;
@@ -733,7 +766,10 @@ static void marlin_ack_through(struct marlin *m, long n)
 		m->st.layer = e->layer;
 		m->st.z = e->z;
 	}
+	m->queued = m->queued > n - m->n_acked ? m->queued - (n - m->n_acked) : 0;
 	m->n_acked = n;
+	if (n > m->n_acked_hi)
+		m->n_acked_hi = n;
 	if (m->n_send <= n)
 		m->n_send = n + 1;
 	if (m->rewinding && n >= m->rewind_k)
@@ -752,6 +788,26 @@ static void marlin_unack_to(struct marlin *m, long n)
 		m->st.bytes_acked -= e->len;
 	}
 	m->n_acked = n;
+	m->queued = 0;
+}
+
+/*
+ * The firmware says it has every line up to `have` (a "Resend: have + 1")
+ * while we count fewer acknowledged: it is ahead of us.  Lines we had seen
+ * acknowledged before an un-ack (a late Resend taken for a new one) are
+ * done again; after a probe nothing answered the firmware is idle, so all
+ * of them are done; the rest sit in its command queue, out of the RX ring,
+ * their oks to come.  Without this the window stays shut on lines the
+ * firmware no longer holds and the host rewrites them for ever.
+ */
+static void marlin_firmware_has(struct marlin *m, long have)
+{
+	if (have > m->n_acked) {
+		long done = m->probed || m->n_acked_hi > have ? have : m->n_acked_hi;
+		if (done > m->n_acked)
+			marlin_ack_through(m, done);
+	}
+	m->n_taken = have;
 }
 
 /* "Resend: k": the firmware has taken every line before k, none after. */
@@ -762,6 +818,7 @@ static int marlin_resend(struct marlin *m, long k, struct st_error *err)
 		if (k == m->n_max_sent + 1 && k == m->n_next) {
 			/* the next line, never written: nothing to rewind */
 			ghost_clear(m);
+			marlin_firmware_has(m, k - 1);
 			return 0;
 		}
 		marlin_where(m, where, sizeof(where));
@@ -779,6 +836,7 @@ static int marlin_resend(struct marlin *m, long k, struct st_error *err)
 	ghost_clear(m);
 	if (k - 1 < m->n_acked)
 		marlin_unack_to(m, k - 1);
+	marlin_firmware_has(m, k - 1);
 	for (long n = k; n < m->n_send; n++)
 		ghost_push(m, entry(m, n)->len);
 	m->stale_left = m->ghost_n ? m->ghost_n - 1 : 0;
@@ -811,19 +869,22 @@ static int marlin_handle(struct marlin *m, const char *line, size_t len, double 
 	switch (kind) {
 	case MARLIN_REPLY_OK:
 		m->t_progress = now;
+		m->probed = false;
 		if (m->skip_ok) {
 			m->skip_ok--;
 			break;
 		}
-		if (r.has_n || r.has_b)
-			m->caps.advanced_ok = true;
-		if (r.has_b && (unsigned)r.b + 1 > m->bufsize_learnt && r.b < 4096)
-			m->bufsize_learnt = (unsigned)r.b + 1;
+		marlin_learn_b(m, &r);
 		if (r.has_n) {
-			if (r.n > m->n_acked && r.n < m->n_next && r.n <= m->n_max_sent)
+			if (r.n > m->n_acked && r.n < m->n_next && r.n <= m->n_max_sent) {
 				marlin_ack_through(m, r.n);
-			else
+				if (r.has_b)
+					m->queued = (long)m->bufsize_learnt > r.b
+							    ? (long)m->bufsize_learnt - r.b
+							    : 0;
+			} else {
 				m->st.stray_oks++;
+			}
 			break;
 		}
 		if (m->caps.advanced_ok && !r.has_temps) {
@@ -871,6 +932,8 @@ static int marlin_handle(struct marlin *m, const char *line, size_t len, double 
 	case MARLIN_REPLY_BUSY:
 		m->st.busy++;
 		m->t_progress = now;
+		m->probed = false;
+		m->talks_blocked = true;
 		break;
 	case MARLIN_REPLY_UNKNOWN_CMD: {
 		size_t n = len < sizeof(m->st.last_warning) - 1 ? len : sizeof(m->st.last_warning) - 1;
@@ -880,8 +943,11 @@ static int marlin_handle(struct marlin *m, const char *line, size_t len, double 
 		break;
 	}
 	case MARLIN_REPLY_TEMP:
-		if (m->st.heating_wait || marlin_blocking_inflight(m))
+		if (m->st.heating_wait || marlin_blocking_inflight(m)) {
 			m->t_progress = now;
+			m->probed = false;
+			m->talks_blocked = m->talks_blocked || m->st.heating_wait;
+		}
 		break;
 	case MARLIN_REPLY_START:
 		if (m->connected) {
@@ -952,7 +1018,10 @@ static int marlin_timers(struct marlin *m, double now, struct st_error *err)
 	if (m->n_max_sent <= m->n_acked && m->n_send - 1 <= m->n_acked)
 		return 0; /* nothing in flight */
 	bool blocking = marlin_blocking_inflight(m);
-	double dead = (blocking ? m->o.dead_blocking_ms : m->o.dead_ms) / 1000.0;
+	/* a firmware that sends busy or W: reports while it waits
+	 * (HOST_KEEPALIVE) falls silent only when it hangs */
+	double dead = (blocking && !m->talks_blocked ? m->o.dead_blocking_ms : m->o.dead_ms) /
+		      1000.0;
 	if (now - m->t_rx > dead) {
 		marlin_where(m, where, sizeof(where));
 		return marlin_fail(m, MARLIN_FAIL_LINK, err,
@@ -975,6 +1044,7 @@ static int marlin_timers(struct marlin *m, double now, struct st_error *err)
 		m->skip_ok = 0;
 		m->n_send = m->n_acked + 1;
 		m->t_progress = now;
+		m->probed = true;
 		if (marlin_write(m, "\n", 1, err))
 			return ST_ERR_IO;
 	}
@@ -1167,8 +1237,11 @@ int marlin_connect(struct marlin *m, struct st_error *err)
 		trace(m, ">", buf + 1, (size_t)k - 1);
 		if ((rc = marlin_write(m, buf, (size_t)k, err)))
 			return rc;
-		/* Answer: ok (M110), FIRMWARE_NAME, Cap lines, ok (M115). */
+		/* Answer: ok (M110), FIRMWARE_NAME, Cap lines, ok (M115); some
+		 * boards and serial bridges answer M115 with a bare ok, and
+		 * then the capabilities stay unknown. */
 		bool fw = false, done = false;
+		int oks = 0;
 		double until = mono_s() + m->o.retry_ms / 1000.0;
 		if (until > end)
 			until = end;
@@ -1204,12 +1277,8 @@ int marlin_connect(struct marlin *m, struct st_error *err)
 				if (kind == MARLIN_REPLY_FIRMWARE) {
 					fw = true;
 				} else if (kind == MARLIN_REPLY_OK) {
-					if (r.has_n || r.has_b)
-						m->caps.advanced_ok = true;
-					if (r.has_b && r.b < 4096 &&
-					    (unsigned)r.b + 1 > m->bufsize_learnt)
-						m->bufsize_learnt = (unsigned)r.b + 1;
-					done = fw;
+					marlin_learn_b(m, &r);
+					done = fw || ++oks == 2;
 				} else if (kind == MARLIN_REPLY_FATAL) {
 					return st_error_set(err, ST_ERR_INTERNAL,
 							    "the printer on %s reports a fatal error: "
@@ -1226,12 +1295,13 @@ int marlin_connect(struct marlin *m, struct st_error *err)
 			continue;
 		/* Answers to an earlier attempt may follow; they must not count
 		 * as acks, and if one of them reset the line numbers (an M110
-		 * read after our M115), start over. */
-		if (attempt > 0) {
-			uint64_t seen = m->st.resend_requests;
+		 * read after our M115), start over.  Two bare oks may also be
+		 * an old ok and our M110's: an ok more after them means so. */
+		if (attempt > 0 || !fw) {
+			uint64_t seen = m->st.resend_requests, strays = m->st.stray_oks;
 			if ((rc = marlin_wait_quiet(m, 200, m->o.retry_ms, err)))
 				return rc;
-			if (m->st.resend_requests != seen)
+			if (m->st.resend_requests != seen || (!fw && m->st.stray_oks != strays))
 				continue;
 		}
 		m->st.resend_requests = 0;
@@ -1239,6 +1309,8 @@ int marlin_connect(struct marlin *m, struct st_error *err)
 		m->st.stray_oks = 0;
 		m->n_next = m->n_send = 2;
 		m->n_acked = m->n_max_sent = m->last_tx_n = 1;
+		m->n_acked_hi = m->n_taken = 1;
+		m->probed = false;
 		entry(m, 0)->n = 0;
 		entry(m, 1)->n = 0; /* not resendable: connect lines are not kept */
 		m->connected = true;
