@@ -120,6 +120,7 @@ struct sim_marlin {
 
 	bool halted, unplugged;
 	bool frozen;		/* freeze_at_line ran: no byte in or out any more */
+	double thaw_at;		/* when a freeze_s stall ends (sim_now) */
 
 	struct sim_thread th;
 };
@@ -252,7 +253,7 @@ int sim_marlin_new(const struct sim_marlin_options *opts, struct sim_marlin **ou
 	    s->o.baud < 300 || s->o.baud > 100000000 || !(s->o.corrupt_p >= 0) ||
 	    s->o.corrupt_p > 1 || !(s->o.drop_p >= 0) || s->o.drop_p > 1 ||
 	    !(s->o.reply_loss_p >= 0) || s->o.reply_loss_p > 1 ||
-	    !(s->o.boot_s >= 0) || s->o.latency_ms > 60000) {
+	    !(s->o.boot_s >= 0) || !(s->o.freeze_s >= 0) || s->o.latency_ms > 60000) {
 		rc = st_error_set(err, ST_ERR_ARG,
 				  "simulated Marlin: an option is out of range (rx buffer 8-65536 "
 				  "bytes, bufsize 1-1024, speedup > 0, baud 300-100000000, "
@@ -798,13 +799,16 @@ static void sim_execute(struct sim_marlin *s, double now)
 		struct sim_cmd *c = &s->q[s->q_head];
 		bool done;
 		if (s->blk == SIM_BLK_NONE) {
+			if (c->has_n && s->o.freeze_at_line > 0 && c->n == s->o.freeze_at_line &&
+			    !s->thaw_at) {
+				/* hangs before running it; after a stall it runs */
+				s->frozen = true;
+				s->thaw_at = s->o.freeze_s > 0 ? now + s->o.freeze_s : INFINITY;
+				return;
+			}
 			sim_log(s, c);
 			if (c->has_n && s->o.unplug_at_line > 0 && c->n == s->o.unplug_at_line) {
 				s->unplugged = true;
-				return;
-			}
-			if (c->has_n && s->o.freeze_at_line > 0 && c->n == s->o.freeze_at_line) {
-				s->frozen = true;
 				return;
 			}
 			if (c->has_n && s->o.reset_at_line > 0 && c->n == s->o.reset_at_line) {
@@ -952,6 +956,11 @@ int sim_marlin_run(struct sim_marlin *s, volatile sig_atomic_t *stop, struct st_
 		 * anything runs; link events wake the loop exactly */
 		double wake = now + (busy ? 0.001 : 0.020);
 
+		if (s->frozen && now >= s->thaw_at) {
+			/* the stall is over: what came meanwhile is read at once */
+			s->frozen = false;
+			s->in_t = now;
+		}
 		if (s->frozen) {
 			/* a hung board: the UART still fills the kernel's buffer
 			 * but nothing is read, run or answered */

@@ -13,7 +13,7 @@
  * M109...) lines stay in the ring.  Motion and heating run speedup times faster than real time; the
  * link itself is paced at baud/10 bytes/s in both directions and is never
  * sped up.  Faults: corrupted and dropped bytes, reset and unplug at a line, a hang
- * at a line, minutes of "busy", an M115 without FIRMWARE_NAME.
+ * at a line (for ever or for a while), minutes of "busy", an M115 without FIRMWARE_NAME.
  *
  * Library code: nothing is printed; the execution log is the only output
  * besides the pty.  All state lives in struct sim_marlin, so several
@@ -57,6 +57,9 @@ struct sim_marlin_options {
 				* lines), as some boards and serial bridges do */
 	long freeze_at_line; /* when this line runs the board hangs: not one byte
 			      * in or out any more (like kill -STOP); <= 0: never */
+	double freeze_s;     /* with freeze_at_line: the hang ends after this many
+			      * wall seconds and all goes on (a board, or the
+			      * computer running the host, stalled); 0: for ever */
 	long busy_at_line;   /* this line holds the queue for busy_s wall seconds,
 			      * sending "echo:busy: processing" every 2 s; <= 0: never */
 	double busy_s;
