@@ -80,6 +80,9 @@ struct marlin {
 	size_t stale_left;	/* further "Resend: rewind_k" they may cause */
 	long rewind_k;
 	bool rewinding;
+	long ghost_line;	/* after a probe: the line of ghost[ghost_head] (0:
+				 * the ghosts are a Resend's stale copies) */
+	bool probe_copy;	/* that probe's one copy is still to be written */
 	unsigned skip_ok;	/* oks that belong to Resend requests */
 	long phantom[MARLIN_PHANTOMS]; /* unnumbered lines: written after line n */
 	size_t phantom_n;
@@ -546,6 +549,7 @@ static void ghost_clear(struct marlin *m)
 	m->ghost_head = m->ghost_n = m->ghost_bytes = 0;
 	m->stale_left = 0;
 	m->rewinding = false;
+	m->ghost_line = 0;
 }
 
 static void ghost_push(struct marlin *m, uint16_t len)
@@ -603,8 +607,10 @@ static bool marlin_window_open(const struct marlin *m, size_t len)
 	unsigned slots = marlin_slots(m);
 	size_t bytes;
 
-	if (inflight <= 0)
+	if (inflight <= 0 && (!m->ghost_line || m->probe_copy))
 		return true; /* one in flight always */
+	if (m->ghost_line)
+		return false; /* after a probe: its one copy until the ghosts are read */
 	if (inflight >= MARLIN_MAX_INFLIGHT)
 		return false;
 	if (!m->o.rx_buffer)
@@ -734,6 +740,7 @@ static int marlin_transmit(struct marlin *m, struct st_error *err)
 		memcpy(buf + len, e->text, e->len);
 		len += e->len;
 		trace(m, ">", e->text, e->len);
+		m->probe_copy = false;
 		m->last_tx_n = e->n;
 		if (e->n > m->n_max_sent)
 			m->n_max_sent = e->n;
@@ -772,8 +779,17 @@ static void marlin_ack_through(struct marlin *m, long n)
 		m->n_acked_hi = n;
 	if (m->n_send <= n)
 		m->n_send = n + 1;
-	if (m->rewinding && n >= m->rewind_k)
+	if (m->ghost_line) {
+		/* after a probe: the copies of lines up to n have been read */
+		while (m->ghost_n && m->ghost_line <= n) {
+			ghost_pop(m);
+			m->ghost_line++;
+		}
+		if (!m->ghost_n)
+			ghost_clear(m);
+	} else if (m->rewinding && n >= m->rewind_k) {
 		ghost_clear(m); /* a copy after the rewind got through: the old ones are gone */
+	}
 }
 
 /* Undo the accounting of lines (n, n_acked]: the firmware says it never
@@ -911,8 +927,11 @@ static int marlin_handle(struct marlin *m, const char *line, size_t len, double 
 		m->t_progress = now;
 		m->skip_ok++;
 		m->st.resend_requests++;
-		if (m->connected)
-			return marlin_resend(m, r.resend, err);
+		if (m->connected) {
+			int rc = marlin_resend(m, r.resend, err);
+			m->probed = false;
+			return rc;
+		}
 		break;
 	case MARLIN_REPLY_LINE_ERROR:
 		m->st.line_errors++;
@@ -1011,6 +1030,50 @@ static int marlin_read(struct marlin *m, int timeout_ms, struct st_error *err)
 	return rc ? rc : n;
 }
 
+/*
+ * Nothing answered for probe_ms.  Silence may be a stall (a busy host
+ * computer, a board held up): then every copy in flight is still in the
+ * RX ring, and rewrites behind them would overflow it (the fragments would
+ * run) and reach the firmware as old line numbers, each an error that
+ * empties the ring under the lines that follow.  So the first probe only
+ * ends a fragment whose end was lost ("\n": the firmware answers with a
+ * Resend), and rewrites nothing.  When that probe is not answered either,
+ * the firmware is idle: what is unacknowledged is written again, except
+ * the lines a Resend said it has, one line at a time while the copies
+ * written before the probe stay counted as ghosts (until oks show them
+ * read or a Resend where the firmware is).  A Resend's stale copies are
+ * gone after such a silence.
+ */
+static int marlin_probe(struct marlin *m, double now, struct st_error *err)
+{
+	bool answered = !m->probed;
+	m->t_progress = now;
+	m->probed = true;
+	if (m->ghost_line && answered) {
+		/* the firmware answered after the copy, then fell silent: it
+		 * is idle, the copies still counted are gone */
+		ghost_clear(m);
+	} else if (m->ghost_line || (answered && !m->rewinding)) {
+		/* still held up, its copy out; or a first silence */
+		return marlin_write(m, "\n", 1, err);
+	}
+	long from = (m->n_taken > m->n_acked ? m->n_taken : m->n_acked) + 1;
+	if (from > m->n_send)
+		from = m->n_send;
+	ghost_clear(m);
+	for (long n = from; n < m->n_send; n++)
+		ghost_push(m, entry(m, n)->len);
+	if (m->ghost_n) {
+		m->ghost_line = from;
+		m->rewinding = true;
+		m->rewind_k = from;
+		m->probe_copy = true;
+	}
+	m->skip_ok = 0;
+	m->n_send = from;
+	return marlin_write(m, "\n", 1, err);
+}
+
 /* Time-outs: re-send what seems lost, give up on a silent printer. */
 static int marlin_timers(struct marlin *m, double now, struct st_error *err)
 {
@@ -1031,23 +1094,13 @@ static int marlin_timers(struct marlin *m, double now, struct st_error *err)
 	/* After a rewind, copies the firmware flushed never answer: when the
 	 * replies stop for several round trips, the ones still counted as
 	 * "on the way" are gone, and so is our resent line (flushed by one of
-	 * their errors).  Write it again without waiting for probe_ms. */
+	 * their errors).  Write it again without waiting for probe_ms.  Not
+	 * after a probe: a stalled firmware would get a window of copies. */
 	double quiet = m->o.probe_ms / 1000.0;
-	if (m->rewinding && m->rtt > 0 && 8 * m->rtt < quiet)
+	if (m->rewinding && !m->ghost_line && m->rtt > 0 && 8 * m->rtt < quiet)
 		quiet = 8 * m->rtt < 0.02 ? 0.02 : 8 * m->rtt;
-	if (!blocking && now - m->t_progress > quiet) {
-		/* A line's end was lost and nothing followed to expose it: end
-		 * any fragment and write everything unacknowledged again.
-		 * Copies the firmware already has are dropped or answered with
-		 * a Resend that puts us right. */
-		ghost_clear(m);
-		m->skip_ok = 0;
-		m->n_send = m->n_acked + 1;
-		m->t_progress = now;
-		m->probed = true;
-		if (marlin_write(m, "\n", 1, err))
-			return ST_ERR_IO;
-	}
+	if (!blocking && now - m->t_progress > quiet)
+		return marlin_probe(m, now, err);
 	return 0;
 }
 
