@@ -190,9 +190,17 @@ static long check_log(struct rig *r, FILE *file)
 	return checked;
 }
 
-/* Stream n generated lines through the rig; check the log; return status. */
-static struct marlin_status stream_and_check(struct sim_marlin_options *so,
-					     const struct marlin_options *mo, long n)
+/* What a streamed run cost besides the driver's status. */
+struct rig_result {
+	uint64_t dropped; /* bytes the simulator lost (ring overflow, faults) */
+	long unnumbered;  /* fragments without a line number it ran */
+};
+
+/* Stream n generated lines through the rig; check the log; return status
+ * (and, if res is not NULL, the simulator's side). */
+static struct marlin_status stream_and_check_r(struct sim_marlin_options *so,
+					       const struct marlin_options *mo, long n,
+					       struct rig_result *res)
 {
 	struct rig r;
 	struct st_error err = {0};
@@ -220,9 +228,19 @@ static struct marlin_status stream_and_check(struct sim_marlin_options *so,
 		(unsigned long long)st.resends, (unsigned long long)st.line_errors,
 		(unsigned long long)sim_marlin_dropped_bytes(r.sim), r.unnumbered,
 		r.undetectable);
+	if (res) {
+		res->dropped = sim_marlin_dropped_bytes(r.sim);
+		res->unnumbered = r.unnumbered;
+	}
 	rig_stop(&r);
 	fclose(f);
 	return st;
+}
+
+static struct marlin_status stream_and_check(struct sim_marlin_options *so,
+					     const struct marlin_options *mo, long n)
+{
+	return stream_and_check_r(so, mo, n, NULL);
 }
 
 /*
@@ -253,6 +271,29 @@ START_TEST(stream_clean)
 	ck_assert_uint_eq(st.resends, 0);
 	ck_assert_uint_eq(st.line_errors, 0);
 	ck_assert_int_eq(st.layer, (BIG - 1) / 1000);
+}
+END_TEST
+
+/*
+ * A stall on a clean link (the board, or the loaded computer running the
+ * host, held still for longer than probe_ms, as a loaded machine does to
+ * the clean run): the probe fires while the firmware's ring still holds a
+ * full window of lines.  A stall shorter than two probes must cost
+ * nothing: no resend, no overflow (fragments run), no cascade.
+ */
+START_TEST(stream_clean_stall)
+{
+	struct sim_marlin_options so;
+	struct marlin_options mo;
+	struct rig_result res;
+	big_ring(&so, &mo);
+	so.freeze_at_line = 3000;
+	so.freeze_s = 0.8;
+	struct marlin_status st = stream_and_check_r(&so, &mo, SMALL, &res);
+	ck_assert_uint_eq(st.resends, 0);
+	ck_assert_uint_eq(st.line_errors, 0);
+	ck_assert_uint_eq(res.dropped, 0);
+	ck_assert_int_eq(res.unnumbered, 0);
 }
 END_TEST
 
@@ -442,6 +483,140 @@ START_TEST(unplug_detected)
 	fast_sim(&so);
 	so.unplug_at_line = 700;
 	fault_ends_job(&so, 700, "closed", "last line acknowledged", 4.0);
+}
+END_TEST
+
+/* A board that hangs (no byte in or out, like kill -STOP) while lines are
+ * in flight: the probes must not keep the dead-link clock young; the job
+ * ends as a link failure within dead_ms (+ a probe), naming the last line. */
+START_TEST(frozen_detected)
+{
+	struct sim_marlin_options so;
+	fast_sim(&so);
+	so.freeze_at_line = 900;
+	fault_ends_job(&so, 900, "stopped answering", "last line acknowledged", 5.0 + 1.5);
+}
+END_TEST
+
+/* The same hang during a heat wait of a firmware that reports while it
+ * waits: dead_ms applies, not the 10 minutes allowed a silent G28/M109. */
+START_TEST(frozen_in_heat_wait_detected)
+{
+	struct rig r;
+	struct sim_marlin_options so;
+	struct marlin_options mo;
+	struct st_error err = {0};
+	struct marlin_status st;
+	fast_sim(&so);
+	so.speedup = 40; /* a first wait of a few seconds with W: reports */
+	so.freeze_at_line = 4; /* the second M109 (M155 is N2) */
+	fast_driver(&mo);
+	rig_start(&r, &so, &mo);
+	double t0 = now_s();
+	int rc = stream_text(&r, "M109 S100\nM109 S200\nG1 X1\n", &err);
+	ck_assert_int_eq(rc, ST_ERR_IO);
+	marlin_status(r.m, &st);
+	ck_assert_int_eq(st.fail, MARLIN_FAIL_LINK);
+	ck_assert_msg(strstr(err.msg, "stopped answering"), "%s", err.msg);
+	ck_assert_double_lt(now_s() - t0, 15.0);
+	rig_stop(&r);
+}
+END_TEST
+
+/* A firmware that keeps the bytes behind a bad line and answers each
+ * (Error, Resend, ok per stale copy): late Resends un-ack lines it has
+ * run, and the host must take them back when it says it has them, not
+ * rewrite them for ever.  Every line runs once, in order. */
+START_TEST(stream_keep_rx_no_livelock)
+{
+	static const double rate[] = {0.005, 0.01};
+	for (size_t i = 0; i < 2; i++) {
+		struct sim_marlin_options so;
+		struct marlin_options mo;
+		fast_sim(&so);
+		fast_driver(&mo);
+		so.keep_rx_on_error = true;
+		so.corrupt_p = rate[i];
+		so.seed = 5 + i;
+		struct marlin_status st = stream_and_check(&so, &mo, FAULTY / (1 + 4 * (long)i));
+		ck_assert_uint_gt(st.line_errors, FAULTY / 50);
+	}
+}
+END_TEST
+
+/* oks lost on the way back: each leaves the host counting
+ * lines in flight that the firmware has run; the probe's answer ("Resend:
+ * last + 1") must settle them, or the window stays shut and the host
+ * rewrites the same lines for ever. */
+START_TEST(stream_lost_oks_no_livelock)
+{
+	struct sim_marlin_options so;
+	struct marlin_options mo;
+	fast_sim(&so);
+	fast_driver(&mo);
+	so.reply_loss_p = 0.01;
+	so.corrupt_p = 0.005;
+	so.seed = 13;
+	struct marlin_status st = stream_and_check(&so, &mo, 2000);
+	ck_assert_uint_gt(st.resend_requests, 10);
+}
+END_TEST
+
+/* M115 answered with a bare "ok": online, capabilities unknown. */
+START_TEST(m115_bare_ok)
+{
+	struct sim_marlin_options so;
+	struct marlin_options mo;
+	fast_sim(&so);
+	fast_driver(&mo);
+	so.no_firmware_name = true;
+	struct marlin_status st = stream_and_check(&so, &mo, 2000);
+	ck_assert_uint_eq(st.stray_oks, 0);
+}
+END_TEST
+
+/* ADVANCED_OK with moves slow enough to fill the planner: the head command
+ * blocks, the firmware reads no input meanwhile, and the window must still
+ * fit the 128-byte ring: not one byte lost. */
+START_TEST(advanced_ok_no_overflow)
+{
+	struct rig r;
+	struct sim_marlin_options so;
+	struct marlin_options mo;
+	struct st_error err = {0};
+	struct gcode_reader *gr;
+	fast_sim(&so);
+	so.speedup = 100;
+	so.advanced_ok = true;
+	fast_driver(&mo);
+	FILE *f = gen_file(3000);
+	rig_start(&r, &so, &mo);
+	ck_assert_int_eq(gcode_reader_new(f, "gen", &gr, &err), 0);
+	ck_assert_msg(marlin_stream_file(r.m, gr, "gen", NULL, NULL, NULL, &err) == 0, "%s",
+		      err.msg);
+	gcode_reader_free(gr);
+	sim_marlin_stop(r.sim);
+	ck_assert_uint_eq(sim_marlin_dropped_bytes(r.sim), 0);
+	ck_assert_int_eq(check_log(&r, f), 3003);
+	rig_stop(&r);
+	fclose(f);
+}
+END_TEST
+
+/* Minutes of "busy" (a long G29, a filament change) are not a dead link:
+ * the keep-alives hold the job (here 8 s against a 5 s dead_ms). */
+START_TEST(long_busy_survives)
+{
+	struct sim_marlin_options so;
+	struct marlin_options mo;
+	fast_sim(&so);
+	fast_driver(&mo);
+	mo.probe_ms = 3000; /* longer than the 2 s between keep-alives */
+	so.busy_at_line = 300;
+	so.busy_s = 8;
+	struct marlin_status st = stream_and_check(&so, &mo, 1000);
+	ck_assert_uint_ge(st.busy, 3);
+	ck_assert_uint_eq(st.resends, 0);
 }
 END_TEST
 
@@ -670,6 +845,7 @@ Suite *marlin_suite(void)
 {
 	Suite *s = suite_create("marlin");
 	add_case(s, "clean", stream_clean, 120);
+	add_case(s, "clean_stall", stream_clean_stall, 60);
 	add_case(s, "corrupt", stream_corrupt, 120);
 	add_case(s, "drop", stream_drop, 120);
 	add_case(s, "advanced_ok_faults", stream_advanced_ok_faults, 120);
@@ -683,6 +859,13 @@ Suite *marlin_suite(void)
 	add_case(s, "halt", halt_stops_without_resend, 60);
 	add_case(s, "cancel", cancel_safe_stop, 60);
 	add_case(s, "connect_no_answer", connect_no_answer, 60);
+	add_case(s, "frozen", frozen_detected, 20);
+	add_case(s, "frozen_heat_wait", frozen_in_heat_wait_detected, 40);
+	add_case(s, "keep_rx", stream_keep_rx_no_livelock, 120);
+	add_case(s, "m115_bare_ok", m115_bare_ok, 60);
+	add_case(s, "lost_oks", stream_lost_oks_no_livelock, 60);
+	add_case(s, "advanced_ok_no_overflow", advanced_ok_no_overflow, 120);
+	add_case(s, "long_busy", long_busy_survives, 60);
 	TCase *tc = tcase_create("parse");
 	tcase_add_test(tc, parse_ok);
 	tcase_add_test(tc, parse_resend_and_errors);

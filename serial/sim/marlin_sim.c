@@ -51,6 +51,7 @@ enum sim_block {
 	SIM_BLK_PLANNER_SLOT, /* G0/G1 with the planner full */
 	SIM_BLK_SYNC_TIMED,   /* planner empty, then wait dur (G4, G28, M400) */
 	SIM_BLK_HEAT,	      /* M109 / M190 */
+	SIM_BLK_BUSY,	      /* busy_at_line: held for busy_s wall seconds */
 };
 
 /* A reply line in the TX buffer: ends at byte end, may go out at ready. */
@@ -118,6 +119,8 @@ struct sim_marlin {
 	size_t marks_n, marks_cap;
 
 	bool halted, unplugged;
+	bool frozen;		/* freeze_at_line ran: no byte in or out any more */
+	double thaw_at;		/* when a freeze_s stall ends (sim_now) */
 
 	struct sim_thread th;
 };
@@ -149,6 +152,8 @@ static void sim_send(struct sim_marlin *s, const char *text)
 {
 	size_t n = strlen(text);
 	if (s->unplugged)
+		return;
+	if (s->o.reply_loss_p > 0 && !strncmp(text, "ok", 2) && sim_rand(s) < s->o.reply_loss_p)
 		return;
 	if (s->tx_len + n + 1 > s->tx_cap) {
 		size_t cap = s->tx_cap ? s->tx_cap : 4096;
@@ -247,7 +252,8 @@ int sim_marlin_new(const struct sim_marlin_options *opts, struct sim_marlin **ou
 	    s->o.bufsize > 1024 || !(s->o.speedup > 0) || s->o.speedup > 1e6 ||
 	    s->o.baud < 300 || s->o.baud > 100000000 || !(s->o.corrupt_p >= 0) ||
 	    s->o.corrupt_p > 1 || !(s->o.drop_p >= 0) || s->o.drop_p > 1 ||
-	    !(s->o.boot_s >= 0) || s->o.latency_ms > 60000) {
+	    !(s->o.reply_loss_p >= 0) || s->o.reply_loss_p > 1 ||
+	    !(s->o.boot_s >= 0) || !(s->o.freeze_s >= 0) || s->o.latency_ms > 60000) {
 		rc = st_error_set(err, ST_ERR_ARG,
 				  "simulated Marlin: an option is out of range (rx buffer 8-65536 "
 				  "bytes, bufsize 1-1024, speedup > 0, baud 300-100000000, "
@@ -314,6 +320,11 @@ bool sim_marlin_halted(const struct sim_marlin *sim)
 	return sim->halted;
 }
 
+bool sim_marlin_frozen(const struct sim_marlin *sim)
+{
+	return sim->frozen;
+}
+
 uint64_t sim_marlin_dropped_bytes(const struct sim_marlin *sim)
 {
 	return sim->dropped;
@@ -348,12 +359,15 @@ static void sim_ok(struct sim_marlin *s, const struct sim_cmd *c, double now)
 /*
  * Marlin 2.1's gcode_line_error + flush_and_request_resend: the error, the
  * RX ring read empty ("clear out the RX buffer": lines behind the bad one
- * that are already in the ring are lost without a word), "Resend:" and a
- * plain "ok" (STR_OK, never the ADVANCED_OK form).
+ * that are already in the ring are lost without a word; keep_rx_on_error
+ * keeps them, to be answered one by one), "Resend:" and a plain "ok"
+ * (STR_OK, never the ADVANCED_OK form).  The command queue is kept: the
+ * lines before the bad one run and earn their oks, so the firmware is
+ * ahead of what the host has seen acknowledged.
  */
 static void sim_line_error(struct sim_marlin *s, const char *what)
 {
-	s->rx_flush = true;
+	s->rx_flush = !s->o.keep_rx_on_error;
 	sim_sendf(s, "Error:%s, Last Line: %ld", what, s->last_n);
 	sim_sendf(s, "Resend: %ld", s->last_n + 1);
 	sim_send(s, "ok");
@@ -519,10 +533,14 @@ static void sim_rx_byte(struct sim_marlin *s, uint8_t b, double now)
 	s->rx[s->rx_len++] = b;
 }
 
-/* Move bytes from the RX ring into lines while a queue slot is free. */
+/* Move bytes from the RX ring into lines while a queue slot is free and no
+ * command blocks: Marlin reads serial input in its main loop, between
+ * commands, not in the idle() a waiting command spins in. */
 static void sim_serial_commands(struct sim_marlin *s)
 {
 	size_t i = 0;
+	if (s->blk != SIM_BLK_NONE || s->frozen)
+		return;
 	while (i < s->rx_len && s->q_count < s->o.bufsize && !s->halted) {
 		char ch = (char)s->rx[i++];
 		if (ch == '\n' || ch == '\r') {
@@ -613,6 +631,8 @@ static void sim_m115(struct sim_marlin *s)
 		"MOTION_MODES:0", "ARCS:1", "BABYSTEPPING:0", "CHAMBER_TEMPERATURE:0",
 		"COOLER_TEMPERATURE:0", "MEATPACK:0",
 	};
+	if (s->o.no_firmware_name)
+		return; /* the ok alone */
 	sim_send(s, "FIRMWARE_NAME:Marlin 2.1.2 (Stratum simulator) "
 		    "SOURCE_CODE_URL:github.com/MarlinFirmware/Marlin PROTOCOL_VERSION:1.0 "
 		    "MACHINE_TYPE:Stratum Simulated Printer EXTRUDER_COUNT:1 "
@@ -749,6 +769,8 @@ static bool sim_exec_poll(struct sim_marlin *s, struct sim_cmd *c, double now)
 			s->blk_until = now + s->blk_dur;
 		}
 		return now >= s->blk_until;
+	case SIM_BLK_BUSY:
+		return now >= s->blk_until;
 	case SIM_BLK_HEAT: {
 		struct sim_heater *h = &s->heater[s->blk_heater];
 		if (s->wait_cancel)
@@ -777,6 +799,13 @@ static void sim_execute(struct sim_marlin *s, double now)
 		struct sim_cmd *c = &s->q[s->q_head];
 		bool done;
 		if (s->blk == SIM_BLK_NONE) {
+			if (c->has_n && s->o.freeze_at_line > 0 && c->n == s->o.freeze_at_line &&
+			    !s->thaw_at) {
+				/* hangs before running it; after a stall it runs */
+				s->frozen = true;
+				s->thaw_at = s->o.freeze_s > 0 ? now + s->o.freeze_s : INFINITY;
+				return;
+			}
 			sim_log(s, c);
 			if (c->has_n && s->o.unplug_at_line > 0 && c->n == s->o.unplug_at_line) {
 				s->unplugged = true;
@@ -789,7 +818,13 @@ static void sim_execute(struct sim_marlin *s, double now)
 				return;
 			}
 			s->next_busy = now + SIM_KEEPALIVE_S;
-			done = sim_exec_start(s, c, now);
+			if (c->has_n && s->o.busy_at_line > 0 && c->n == s->o.busy_at_line) {
+				s->blk = SIM_BLK_BUSY;
+				s->blk_until = now + s->o.busy_s;
+				done = false;
+			} else {
+				done = sim_exec_start(s, c, now);
+			}
 		} else {
 			done = sim_exec_poll(s, c, now);
 		}
@@ -805,6 +840,7 @@ static void sim_execute(struct sim_marlin *s, double now)
 			sim_ok(s, c, now);
 		s->q_head = (s->q_head + 1) % s->o.bufsize;
 		s->q_count--;
+		sim_serial_commands(s); /* the main loop reads input between commands */
 	}
 }
 
@@ -920,6 +956,21 @@ int sim_marlin_run(struct sim_marlin *s, volatile sig_atomic_t *stop, struct st_
 		 * anything runs; link events wake the loop exactly */
 		double wake = now + (busy ? 0.001 : 0.020);
 
+		if (s->frozen && now >= s->thaw_at) {
+			/* the stall is over: what came meanwhile is read at once */
+			s->frozen = false;
+			s->in_t = now;
+		}
+		if (s->frozen) {
+			/* a hung board: the UART still fills the kernel's buffer
+			 * but nothing is read, run or answered */
+			size_t none = 0;
+			uint8_t sink[1];
+			if (sim_wait_input(s->master, false, now + 0.020, sink, &none, 0, NULL))
+				return st_error_set(err, ST_ERR_IO, "simulated Marlin: poll failed: %s",
+						    strerror(errno));
+			continue;
+		}
 		sim_wire_deliver(s, now, &wake);
 		sim_physics(s, now, dt);
 		sim_serial_commands(s);

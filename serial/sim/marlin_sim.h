@@ -8,9 +8,12 @@
  * checksums with Error/Resend/ok, "ok" once a command has been executed
  * (moves: once planned into the 16-block planner), temperature reports,
  * busy keep-alives, M115 capabilities and the emergency parser (M108, M112,
- * M410).  Motion and heating run speedup times faster than real time; the
+ * M410).  Like Marlin's main loop, the ring is read only between commands:
+ * while a command blocks (a move waiting for a planner block, G4, G28,
+ * M109...) lines stay in the ring.  Motion and heating run speedup times faster than real time; the
  * link itself is paced at baud/10 bytes/s in both directions and is never
- * sped up.  Faults: corrupted and dropped bytes, reset and unplug at a line.
+ * sped up.  Faults: corrupted and dropped bytes, reset and unplug at a line, a hang
+ * at a line (for ever or for a while), minutes of "busy", an M115 without FIRMWARE_NAME.
  *
  * Library code: nothing is printed; the execution log is the only output
  * besides the pty.  All state lives in struct sim_marlin, so several
@@ -38,12 +41,28 @@ struct sim_marlin_options {
 	unsigned latency_ms; /* extra delay before each reply line (ms); default 0 */
 	double corrupt_p;   /* probability of a bit flip in each received byte [0,1] */
 	double drop_p;	    /* probability that a received byte is lost [0,1] */
+	double reply_loss_p; /* probability that an "ok" reply is lost on the way
+			      * back [0,1]: the host's count falls behind the firmware */
 	long reset_at_line; /* simulate a board reset when this line runs; <= 0: never */
 	long unplug_at_line; /* close the pty master when this line runs; <= 0: never */
 	const char *log_path; /* execution log file, created/truncated; NULL: none */
 	FILE *log_fp;	    /* or an open stream (stays the caller's); used if log_path is NULL */
 	uint64_t seed;	    /* PRNG seed for faults; 0 picks a fixed default */
 	double boot_s;	    /* boot time in simulated seconds (input ignored); default 1.5 */
+	/* Firmware variants and hangs (docs/protocols.md section 1): */
+	bool keep_rx_on_error; /* a line error leaves the bytes behind the bad line in
+				* the RX ring, so each later line is answered in turn
+				* (queue.cpp reads the ring empty); default false */
+	bool no_firmware_name; /* M115 answers a bare "ok" (no FIRMWARE_NAME, no Cap:
+				* lines), as some boards and serial bridges do */
+	long freeze_at_line; /* when this line runs the board hangs: not one byte
+			      * in or out any more (like kill -STOP); <= 0: never */
+	double freeze_s;     /* with freeze_at_line: the hang ends after this many
+			      * wall seconds and all goes on (a board, or the
+			      * computer running the host, stalled); 0: for ever */
+	long busy_at_line;   /* this line holds the queue for busy_s wall seconds,
+			      * sending "echo:busy: processing" every 2 s; <= 0: never */
+	double busy_s;
 };
 
 /* Opaque simulator. */
@@ -81,6 +100,9 @@ bool sim_marlin_unplugged(const struct sim_marlin *sim);
 
 /* sim_marlin_halted - true once M112 killed the simulated board. */
 bool sim_marlin_halted(const struct sim_marlin *sim);
+
+/* sim_marlin_frozen - true once freeze_at_line hung the board. */
+bool sim_marlin_frozen(const struct sim_marlin *sim);
 
 /* sim_marlin_dropped_bytes - bytes lost so far: RX ring overflow plus
  * injected drops. */

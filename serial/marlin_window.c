@@ -1,0 +1,238 @@
+/*
+ * marlin_window.c - how many lines may be in flight (the firmware's RX
+ * ring and command queue), acknowledgements, Resend rewinds and probes
+ * (docs/streaming.md "The window").
+ */
+
+#include "marlin_impl.h"
+
+static void ghost_clear(struct marlin *m)
+{
+	m->ghost_head = m->ghost_n = m->ghost_bytes = 0;
+	m->stale_left = 0;
+	m->rewinding = false;
+}
+
+static void ghost_push(struct marlin *m, uint16_t len)
+{
+	if (m->ghost_n == MARLIN_MAX_INFLIGHT)
+		return;
+	m->ghost[(m->ghost_head + m->ghost_n++) % MARLIN_MAX_INFLIGHT] = len;
+	m->ghost_bytes += len;
+}
+
+static void ghost_pop(struct marlin *m)
+{
+	if (!m->ghost_n)
+		return;
+	m->ghost_bytes -= m->ghost[m->ghost_head];
+	m->ghost_head = (m->ghost_head + 1) % MARLIN_MAX_INFLIGHT;
+	m->ghost_n--;
+}
+
+/*
+ * Lines in flight that are surely out of the RX ring (0 = unknown).
+ * Marlin reads its ring only in its main loop, between commands: lines
+ * that arrive while a command waits (a move for a planner block) stay in
+ * the ring even with queue slots free.  ADVANCED_OK's "ok N<n> B<b>" says
+ * how many commands besides n were queued when n finished (largest B
+ * seen, BUFSIZE - 1, minus b): those, and no more, are out of the ring
+ * (docs/streaming.md "The window").  A declared bufsize without
+ * ADVANCED_OK counts BUFSIZE - 1, the running command's slot aside.
+ */
+static unsigned marlin_slots(const struct marlin *m)
+{
+	if (m->caps.advanced_ok)
+		return (unsigned)m->queued;
+	return m->o.bufsize ? m->o.bufsize - 1 : 0;
+}
+
+/* An ADVANCED_OK B<b>: learn BUFSIZE - 1. */
+void marlin_learn_b(struct marlin *m, const struct marlin_reply *r)
+{
+	if (r->has_n || r->has_b)
+		m->caps.advanced_ok = true;
+	if (r->has_b && r->b < 4096 && (unsigned)r->b > m->bufsize_learnt)
+		m->bufsize_learnt = (unsigned)r->b;
+}
+
+/*
+ * May a line of len bytes go out now?  The oldest `slots` lines in flight
+ * have left the RX ring for the command queue (Marlin reads the ring only
+ * while a slot is free, and answers "ok" only when the command is done);
+ * the rest, plus copies written before a rewind, must fit in the ring.
+ */
+bool marlin_window_open(const struct marlin *m, size_t len)
+{
+	long inflight = m->n_send - 1 - m->n_acked;
+	unsigned slots = marlin_slots(m);
+	size_t bytes;
+
+	if (inflight <= 0)
+		return true; /* one in flight always */
+	if (inflight >= MARLIN_MAX_INFLIGHT)
+		return false;
+	if (!m->o.rx_buffer)
+		return slots && (unsigned long)inflight < slots;
+	bytes = m->ghost_bytes;
+	if ((unsigned long)inflight >= slots)
+		bytes += len;
+	/* lines the firmware said it has (Resend) left the ring as well */
+	long first = m->n_acked + 1 + (long)slots;
+	if (first <= m->n_taken)
+		first = m->n_taken + 1;
+	for (long n = first; n < m->n_send; n++)
+		bytes += m->hist[(unsigned long)n % MARLIN_HIST].len;
+	return bytes + 1 <= m->o.rx_buffer; /* AVR rings hold size - 1 bytes */
+}
+
+/* Account lines (n_acked, n] as acknowledged. */
+void marlin_ack_through(struct marlin *m, long n)
+{
+	struct marlin_entry *last = marlin_hist_entry(m, n);
+	if (last->n == n && last->t_sent > 0 && !last->blocking) {
+		double sample = marlin_now_s() - last->t_sent;
+		m->rtt = m->rtt > 0 ? 0.875 * m->rtt + 0.125 * sample : sample;
+	}
+	for (long k = m->n_acked + 1; k <= n; k++) {
+		struct marlin_entry *e = marlin_hist_entry(m, k);
+		if (e->n != k || !e->job)
+			continue;
+		m->st.acked++;
+		m->st.bytes_acked += e->len;
+		m->st.last_acked_n = k;
+		m->st.last_acked_src = e->src;
+		m->st.layer = e->layer;
+		m->st.z = e->z;
+	}
+	m->queued = m->queued > n - m->n_acked ? m->queued - (n - m->n_acked) : 0;
+	m->n_acked = n;
+	if (n > m->n_acked_hi)
+		m->n_acked_hi = n;
+	if (m->n_send <= n)
+		m->n_send = n + 1;
+	if (m->rewinding && n >= m->rewind_k)
+		ghost_clear(m); /* a copy after the rewind got through: the old ones are gone */
+}
+
+/* Undo the accounting of lines (n, n_acked]: the firmware says it never
+ * took them (an "ok" we counted belonged to something else). */
+static void marlin_unack_to(struct marlin *m, long n)
+{
+	for (long k = n + 1; k <= m->n_acked; k++) {
+		struct marlin_entry *e = marlin_hist_entry(m, k);
+		if (e->n != k || !e->job || !m->st.acked)
+			continue;
+		m->st.acked--;
+		m->st.bytes_acked -= e->len;
+	}
+	m->n_acked = n;
+	m->queued = 0;
+}
+
+/*
+ * The firmware says it has every line up to `have` (a "Resend: have + 1")
+ * while we count fewer acknowledged: it is ahead of us.  Lines we had seen
+ * acknowledged before an un-ack (a late Resend taken for a new one) are
+ * done again; after a probe nothing answered the firmware is idle, so all
+ * of them are done; the rest sit in its command queue, out of the RX ring,
+ * their oks to come.  Without this the window stays shut on lines the
+ * firmware no longer holds and the host rewrites them for ever.
+ */
+static void marlin_firmware_has(struct marlin *m, long have)
+{
+	if (have > m->n_acked) {
+		long done = m->probed || m->n_acked_hi > have ? have : m->n_acked_hi;
+		if (done > m->n_acked)
+			marlin_ack_through(m, done);
+	}
+	m->n_taken = have;
+}
+
+/* "Resend: k": the firmware has taken every line before k, none after. */
+int marlin_resend(struct marlin *m, long k, struct st_error *err)
+{
+	char where[160];
+	if (k < 1 || k > m->n_max_sent + 1 || marlin_hist_entry(m, k)->n != k || k < m->n_acked - 8) {
+		if (k == m->n_max_sent + 1 && k == m->n_next) {
+			/* the next line, never written: nothing to rewind */
+			ghost_clear(m);
+			marlin_firmware_has(m, k - 1);
+			return 0;
+		}
+		marlin_where(m, where, sizeof(where));
+		return marlin_fail(m, MARLIN_FAIL_LINK, err,
+				   "the printer asked for line N%ld again, which this job %s "
+				   "(was the printer reset?); %s",
+				   k, k > m->n_max_sent ? "never sent" : "no longer keeps", where);
+	}
+	if (m->rewinding && k == m->rewind_k && m->stale_left > 0) {
+		/* caused by a copy written before our rewind: already handled */
+		m->stale_left--;
+		ghost_pop(m);
+		return 0;
+	}
+	ghost_clear(m);
+	if (k - 1 < m->n_acked)
+		marlin_unack_to(m, k - 1);
+	marlin_firmware_has(m, k - 1);
+	for (long n = k; n < m->n_send; n++)
+		ghost_push(m, marlin_hist_entry(m, n)->len);
+	m->stale_left = m->ghost_n ? m->ghost_n - 1 : 0;
+	ghost_pop(m); /* the copy that caused this request has been read */
+	m->rewinding = true;
+	m->rewind_k = k;
+	m->n_send = k;
+	return 0;
+}
+
+/* Is a blocking command (G28, M109, M400 ...) among the lines in flight? */
+bool marlin_blocking_inflight(const struct marlin *m)
+{
+	long hi = m->n_max_sent < m->n_next ? m->n_max_sent : m->n_next - 1;
+	for (long n = m->n_acked + 1; n <= hi; n++)
+		if (m->hist[(unsigned long)n % MARLIN_HIST].blocking)
+			return true;
+	return false;
+}
+
+/*
+ * Nothing answered for probe_ms.  Silence may be a stall (a busy host
+ * computer, a board held up) with every copy in flight still in the RX
+ * ring: rewrites behind them would overflow it (the fragments would run)
+ * and reach the firmware as old line numbers, each an error that empties
+ * the ring under the lines that follow, each error's Resend a new rewind.
+ * So a probe rewrites nothing.  The first ends a fragment whose end was
+ * lost ("\n": the firmware then asks for the line).  Unanswered ones
+ * (the 2nd, 4th, 8th ...) add a copy of a line the firmware surely has
+ * and that is not one of its last two (those it drops silently): its
+ * answer is always "Resend: last + 1", which says where it is, be it
+ * ahead (lost oks), behind (lost lines) or just back from a stall.  After
+ * a rewind the silence means flushed copies: rewrite from the first line
+ * it has not reported having.
+ */
+int marlin_probe(struct marlin *m, double now, struct st_error *err)
+{
+	bool rewinding = m->rewinding;
+	if (!m->probed)
+		m->silent_probes = 0; /* something answered since the last probe */
+	m->t_progress = now;
+	m->probed = true;
+	if (rewinding) {
+		long from = (m->n_taken > m->n_acked ? m->n_taken : m->n_acked) + 1;
+		ghost_clear(m);
+		m->skip_ok = 0;
+		m->n_send = from < m->n_send ? from : m->n_send;
+		return marlin_write(m, "\n", 1, err);
+	}
+	unsigned k = m->silent_probes++;
+	if (marlin_write(m, "\n", 1, err))
+		return ST_ERR_IO;
+	long n = m->n_acked - 1;
+	struct marlin_entry *e = marlin_hist_entry(m, n);
+	if (!k || (k & (k + 1)) || n < 1 || e->n != n)
+		return 0;
+	marlin_trace(m, ">", e->text, e->len);
+	m->st.resends++;
+	return marlin_write(m, e->text, e->len, err);
+}
