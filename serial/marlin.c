@@ -13,12 +13,11 @@
 #include <time.h>
 
 #include "marlin_impl.h"
+#include "st_clock.h"
 
 double marlin_now_s(void)
 {
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+	return st_mono_s();
 }
 
 void marlin_options_init(struct marlin_options *o)

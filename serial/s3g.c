@@ -7,6 +7,7 @@
 #include <time.h>
 
 #include "s3g.h"
+#include "st_clock.h"
 
 #define S3G_RX_CAP 1024	     /* reply bytes kept while framing */
 #define S3G_MAX_TOOLS_OFF 2  /* tools switched off by s3g_cancel */
@@ -19,12 +20,9 @@ struct s3g {
 	struct s3g_status st;
 };
 
-/* Monotonic clock, seconds. */
 static double s3g_now(void)
 {
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+	return st_mono_s();
 }
 
 static void s3g_sleep_ms(int ms)
