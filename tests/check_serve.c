@@ -546,6 +546,56 @@ START_TEST(test_hostile_names)
 }
 END_TEST
 
+/*
+ * Multipart parts without a usable name (issue 17, found by fuzzing): a bare
+ * "Content-Disposition: form-data" or a mangled name= gives libmicrohttpd's
+ * callback a NULL key, which once crashed the node.  Each is an unknown part:
+ * the node answers 400 (no 'file' part) or stores the real file beside it,
+ * and keeps serving.
+ */
+START_TEST(test_nameless_part)
+{
+	static const char *const parts[] = {
+		"Content-Disposition: form-data\r\n\r\nx",
+		"Content-Disposition: form-data; name\r\n\r\nx",
+		"Content-Disposition: form-data; filename=\"a.gcode\"\r\n\r\nG28\n",
+		"Content-Disposition: form-data; nam=\"file\"; filename=\"a.gcode\"\r\n\r\nG28\n",
+	};
+	struct node_proc np;
+	struct resp r;
+
+	write_config(&np, TWO_PRINTERS, 8);
+	node_start(&np);
+	for (size_t i = 0; i < sizeof(parts) / sizeof(parts[0]); i++) {
+		for (int with_file = 0; with_file < 2; with_file++) {
+			char body[1024], req[2048];
+			int bn = snprintf(body, sizeof(body), "--" BOUNDARY "\r\n%s\r\n%s--" BOUNDARY
+							      "--\r\n",
+					  parts[i],
+					  with_file ? "--" BOUNDARY "\r\nContent-Disposition: form-data; "
+						      "name=\"file\"; filename=\"ok.gcode\"\r\n"
+						      "Content-Type: application/octet-stream\r\n\r\n"
+						      "G28\n\r\n"
+						    : "");
+			int n = snprintf(req, sizeof(req),
+					 "POST /api/files/local HTTP/1.1\r\nHost: 127.0.0.1:%d\r\n"
+					 "X-Api-Key: " KEY_UP "\r\nConnection: close\r\n"
+					 "Content-Length: %d\r\nContent-Type: multipart/form-data; "
+					 "boundary=" BOUNDARY "\r\n\r\n%s",
+					 np.port, bn, body);
+
+			http_raw(np.port, req, (size_t)n, &r);
+			ck_assert_msg(r.status == (with_file ? 201 : 400), "part %zu, file %d: %d %s",
+				      i, with_file, r.status, r.body);
+			resp_free(&r);
+			expect(np.port, "GET", "/api/version", "X-Api-Key: " KEY_READ, NULL, 200);
+		}
+	}
+	ck_assert(tu_file_exists(tu_path("node/data/files/mk3s/ok.gcode")));
+	node_stop(&np);
+}
+END_TEST
+
 /* An STL cube as a string of bytes. */
 static char *cube_stl(size_t *len)
 {
@@ -1542,6 +1592,7 @@ Suite *serve_suite(void)
 	tcase_add_test(tc, test_upload_as_prusaslicer);
 	tcase_add_test(tc, test_oversize);
 	tcase_add_test(tc, test_hostile_names);
+	tcase_add_test(tc, test_nameless_part);
 	tcase_add_test(tc, test_stl_two_printers);
 	tcase_add_test(tc, test_pause_resume_cancel);
 	tcase_add_test(tc, test_kill9_restart);
