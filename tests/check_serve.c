@@ -812,6 +812,25 @@ START_TEST(test_config_errors)
 		{"[node]\ndata_dir = d\n[key a]\nkey = 0123456789abcdef\nroles = read\n"
 		 "[printer p]\nprofile = no-such-printer\nport = sim\n",
 		 "[printer p]"},
+		/* Beyond long long (issue 17, found by fuzzing): out of range, and
+		 * no undefined float-to-integer conversion on the way. */
+		{"[node]\ndata_dir = d\nmax_upload_mb = 99999999999999999999\n",
+		 "line 3: max_upload_mb: 99999999999999999999 is out of range"},
+		{"[node]\nslice_threads = -99999999999999999999\n",
+		 "line 2: slice_threads: -99999999999999999999 is out of range"},
+		{"[node]\nlisten = 127.0.0.1:99999999999999999999\n",
+		 "line 2: listen: '127.0.0.1:99999999999999999999': port 99999999999999999999 is "
+		 "out of range"},
+		{"[node]\nlisten = 127.0.0.1:65536\n", "line 2: listen: '127.0.0.1:65536': port "
+							 "65536 is out of range"},
+		{"[node]\ndata_dir = d\n[printer p]\nsim_speedup = 99999999999999999999\n",
+		 "line 4: sim_speedup: 99999999999999999999 is out of range"},
+		{"[node]\ndata_dir = d\n[mqtt]\nport = 99999999999999999999\n",
+		 "line 4: port: 99999999999999999999 is out of range"},
+		{"[node]\ndata_dir = d\n[mqtt]\nkeepalive = -99999999999999999999\n",
+		 "line 4: keepalive: -99999999999999999999 is out of range"},
+		{"[node]\ndata_dir = d\nmax_upload_mb = 2.5\n",
+		 "line 3: max_upload_mb: '2.5' is not a whole number"},
 	};
 	char out[4096];
 
