@@ -1171,7 +1171,9 @@ static int set_defaults(struct profile *p)
 	p->top_solid_layers = 3;
 	p->bottom_solid_layers = 3;
 	p->fill_density = 20;
-	p->fill_pattern = "stars";
+	/* the slicer's own default (infill_settings_init, slicer/infill.c): one
+	 * it prints; PrusaSlicer's "stars" is refused (docs/printers.md) */
+	p->fill_pattern = "grid";
 	p->skirts = 1;
 	p->brim_width = 0;
 	p->support_material = false;
