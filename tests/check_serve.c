@@ -1522,6 +1522,17 @@ START_TEST(test_mqtt)
 	ck_assert_int_eq(mosquitto_publish(mq, NULL, "stratum/test-node/mk3s/cmd", 20,
 					   "{\"command\":\"pause\"}", 1, false), 0);
 	wait_topic(&seen, "stratum/test-node/mk3s/result", "id is required", 10, NULL, 0);
+	/* A refused name: the reason is wrapped whole, not formatted over itself
+	 * (issue 17: the message once garbled). */
+	snprintf(cmd, sizeof(cmd), "{\"id\":\"cmd-3\",\"command\":\"enqueue\",\"name\":"
+				   "\"../x.gcode\",\"url\":\"http://127.0.0.1:%d/files/x.gcode\"}",
+		 fs.port);
+	ck_assert_int_eq(mosquitto_publish(mq, NULL, "stratum/test-node/mk3s/cmd", (int)strlen(cmd),
+					   cmd, 1, false), 0);
+	wait_topic(&seen, "stratum/test-node/mk3s/result", "\"cmd-3\"", 10, out, sizeof(out));
+	ck_assert_msg(strstr(out, "\"bad file name '../x.gcode': the file name starts with '.' "
+				  "(hidden files and '..' are refused)\""),
+		      "%s", out);
 	/* The node dies: the broker publishes its last will. */
 	ck_assert(kill(np.pid, SIGKILL) == 0);
 	ck_assert(waitpid(np.pid, &st, 0) == np.pid);
