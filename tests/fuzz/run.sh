@@ -30,7 +30,7 @@ done
 status=0
 for name in "$@"; do
 	corpus=$fb/corpus/$name
-	mkdir -p "$corpus" "tests/fuzz/seeds/$name"
+	mkdir -p "$corpus"
 	case $name in
 	meshio) extra="$gen/meshio" ;;
 	profile) extra="$gen/profile" ;;
