@@ -109,7 +109,8 @@ demo: deps
 check:
 	@$(MAKE) deps EXTRA_PACKAGES="$(TEST_PACKAGES)"
 	@$(MAKE) test-asan
-	@$(MAKE) fuzz FUZZ_SECONDS=4
+	@rm -rf build/fuzz/check-corpus
+	@$(MAKE) fuzz FUZZ_SECONDS=4 FUZZ_CORPUS=build/fuzz/check-corpus
 	@$(MAKE) test
 
 test: $(BUILD)/check_all $(BUILD)/stratum
@@ -153,6 +154,9 @@ FUZZ_CXX     := $(shell command -v clang++-14 2>/dev/null || echo clang++)
 FUZZ_SAN     := -fsanitize=address,undefined,float-cast-overflow -fno-sanitize-recover=all \
 	-fno-omit-frame-pointer
 FUZZ_SECONDS ?= 60
+# Where each target's corpus grows; make check starts from the seeds alone,
+# so its few seconds do not go to replaying what long runs collected.
+FUZZ_CORPUS  ?= $(FUZZ_BUILD)/corpus
 FUZZ_NAMES   := $(patsubst tests/fuzz/fuzz_%.c,%,$(wildcard tests/fuzz/fuzz_*.c))
 FUZZ_BINS    := $(FUZZ_NAMES:%=$(FUZZ_BUILD)/fuzz_%)
 
@@ -175,7 +179,7 @@ $(FUZZ_BUILD)/fuzz_%: $(FUZZ_BUILD)/tests/fuzz/fuzz_%.o $(FUZZ_BUILD)/tests/fuzz
 fuzz:
 	@$(MAKE) deps EXTRA_PACKAGES=clang
 	@$(MAKE) $(FUZZ_BINS) $(BUILD)/bench/gen_mesh $(BUILD)/stratum
-	tests/fuzz/run.sh $(FUZZ_BUILD) $(FUZZ_SECONDS) $(BUILD) $(FUZZ_NAMES)
+	tests/fuzz/run.sh $(FUZZ_BUILD) $(FUZZ_SECONDS) $(BUILD) $(FUZZ_CORPUS) $(FUZZ_NAMES)
 
 clean:
 	rm -rf build

@@ -1,13 +1,13 @@
 #!/bin/sh
-# run.sh FUZZ_BUILD SECONDS BUILD NAME... - run each libFuzzer target
+# run.sh FUZZ_BUILD SECONDS BUILD CORPUS NAME... - run each libFuzzer target
 # FUZZ_BUILD/fuzz_NAME for SECONDS seconds (make fuzz, docs/reliability.md).
-# Corpora: FUZZ_BUILD/corpus/NAME (kept between runs, grows), seeded from
+# Corpora: CORPUS/NAME (kept between runs, grows), seeded from
 # tests/fuzz/seeds/NAME and the test fixtures (tests/data, printers/, the
 # example model, generated meshes, X3G translated from the G-code fixtures).
 # A crash leaves FUZZ_BUILD/crash-NAME-* and fails the run; every target runs.
 set -u
-fb=$1 secs=$2 build=$3
-shift 3
+fb=$1 secs=$2 build=$3 corpora=$4
+shift 4
 gen=$fb/fixture-seeds
 
 # Fixture seeds, made once per run (cheap).
@@ -29,7 +29,7 @@ done
 
 status=0
 for name in "$@"; do
-	corpus=$fb/corpus/$name
+	corpus=$corpora/$name
 	mkdir -p "$corpus"
 	case $name in
 	meshio) extra="$gen/meshio" ;;
