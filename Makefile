@@ -4,6 +4,8 @@
 #   make demo     deps + build + the main job on the bundled example
 #   make check    deps + build + every Check suite (plain, then ASan/UBSan)
 #   make bench    deps + build + benchmarks (bench/), figures for docs/benchmarks.md
+#   make fuzz [FUZZ_SECONDS=N]  every libFuzzer target of tests/fuzz/ for N s
+#                 (default 60), docs/reliability.md
 #   make clean
 
 MAKEFLAGS += --no-print-directory
@@ -32,8 +34,9 @@ DEB_PACKAGES := gcc g++ make pkg-config dpkg-dev \
 # repairs).
 BENCH_PACKAGES := admesh time bc prusa-slicer printcore apache2-utils libcgal-demo
 # Only the tests need these (the serve suite's status page in headless
-# Chromium; skipped with a message without it); `make check` installs them.
-TEST_PACKAGES := chromium
+# Chromium, skipped with a message without it; clang for libFuzzer, `make
+# fuzz`); `make check` installs them.
+TEST_PACKAGES := chromium clang
 
 WARN     := -Wall -Wextra -Werror
 CPPFLAGS := -D_XOPEN_SOURCE=700 -D_DEFAULT_SOURCE -MMD -MP
@@ -45,10 +48,12 @@ INC_repair := -Iinclude -Irepair -Irepair/exact
 INC_serial := -Iinclude -Iserial
 INC_slicer := -Iinclude -Islicer -Islicer/clip -Irepair
 INC_all    := -Iinclude -Irepair -Irepair/exact -Iserial -Islicer -Islicer/clip -Ihost
-$(BUILD)/repair/%.o: CPPFLAGS += $(INC_repair)
-$(BUILD)/serial/%.o: CPPFLAGS += $(INC_serial)
-$(BUILD)/slicer/%.o: CPPFLAGS += $(INC_slicer)
-$(BUILD)/host/%.o $(BUILD)/tests/%.o $(BUILD)/bench/%.o: CPPFLAGS += $(INC_all)
+FUZZ_BUILD := build/fuzz
+$(BUILD)/repair/%.o $(FUZZ_BUILD)/repair/%.o: CPPFLAGS += $(INC_repair)
+$(BUILD)/serial/%.o $(FUZZ_BUILD)/serial/%.o: CPPFLAGS += $(INC_serial)
+$(BUILD)/slicer/%.o $(FUZZ_BUILD)/slicer/%.o: CPPFLAGS += $(INC_slicer)
+$(BUILD)/host/%.o $(BUILD)/tests/%.o $(BUILD)/bench/%.o $(FUZZ_BUILD)/host/%.o \
+	$(FUZZ_BUILD)/tests/%.o: CPPFLAGS += $(INC_all)
 CFLAGS   ?= -O2 -g
 override CFLAGS += -std=c11 -pedantic $(WARN) -Wstrict-prototypes -Wmissing-prototypes -Wshadow -pthread
 # CGAL: exact predicates, TBB for the parallel box intersection, Eigen for
@@ -79,7 +84,7 @@ TEST_SRC := $(sort $(wildcard tests/*.c))
 LIB_OBJ  := $(LIB_SRC:%.c=$(BUILD)/%.o) $(CXX_SRC:%.cpp=$(BUILD)/%.o)
 TEST_OBJ := $(TEST_SRC:%.c=$(BUILD)/%.o)
 
-.PHONY: all deps demo check test test-asan bench clean layers
+.PHONY: all deps demo check test test-asan bench fuzz clean layers
 
 all: $(BUILD)/stratum
 
@@ -124,6 +129,8 @@ demo: deps
 check:
 	@$(MAKE) deps EXTRA_PACKAGES="$(TEST_PACKAGES)"
 	@$(MAKE) test-asan
+	@rm -rf build/fuzz/check-corpus
+	@$(MAKE) fuzz FUZZ_SECONDS=4 FUZZ_CORPUS=build/fuzz/check-corpus
 	@$(MAKE) test
 
 test: layers $(BUILD)/check_all $(BUILD)/stratum
@@ -168,6 +175,43 @@ bench:
 	@$(MAKE) all $(BUILD)/bench/gen_mesh $(BUILD)/bench/region_check $(BUILD)/bench/refine_time
 	bench/run.sh $(BUILD)/stratum
 	bench/cgal_corpus.sh $(BUILD)/stratum
+
+# libFuzzer targets (tests/fuzz/fuzz_NAME.c, one per parser of outside data;
+# docs/reliability.md).  The C library is built again with clang under
+# ASan+UBSan and coverage in its own folder; the C++ bridges (CGAL, Clipper)
+# are linked as the plain build made them, uninstrumented: they take meshes
+# and polygons the instrumented C code has already checked.
+FUZZ_CC      := $(shell command -v clang-14 2>/dev/null || echo clang)
+FUZZ_CXX     := $(shell command -v clang++-14 2>/dev/null || echo clang++)
+FUZZ_SAN     := -fsanitize=address,undefined,float-cast-overflow -fno-sanitize-recover=all \
+	-fno-omit-frame-pointer
+FUZZ_SECONDS ?= 60
+# Where each target's corpus grows; make check starts from the seeds alone,
+# so its few seconds do not go to replaying what long runs collected.
+FUZZ_CORPUS  ?= $(FUZZ_BUILD)/corpus
+FUZZ_NAMES   := $(patsubst tests/fuzz/fuzz_%.c,%,$(wildcard tests/fuzz/fuzz_*.c))
+FUZZ_BINS    := $(FUZZ_NAMES:%=$(FUZZ_BUILD)/fuzz_%)
+
+$(FUZZ_BUILD)/%.o: %.c
+	@mkdir -p $(@D)
+	$(FUZZ_CC) $(CPPFLAGS) -Ihost/serve -Itests/fuzz $(CFLAGS) -O1 $(FUZZ_SAN) \
+	  -fsanitize=fuzzer-no-link -c $< -o $@
+
+$(FUZZ_BUILD)/libstratum.a: $(LIB_SRC:%.c=$(FUZZ_BUILD)/%.o) $(CXX_SRC:%.cpp=$(BUILD)/%.o)
+	@rm -f $@
+	ar rcs $@ $^
+
+# kept, not deleted as intermediates, so a rebuild only compiles what changed
+.SECONDARY: $(FUZZ_NAMES:%=$(FUZZ_BUILD)/tests/fuzz/fuzz_%.o) $(FUZZ_BUILD)/tests/fuzz/util.o
+
+$(FUZZ_BUILD)/fuzz_%: $(FUZZ_BUILD)/tests/fuzz/fuzz_%.o $(FUZZ_BUILD)/tests/fuzz/util.o \
+		$(FUZZ_BUILD)/libstratum.a
+	$(FUZZ_CXX) $(FUZZ_SAN) -fsanitize=fuzzer -pthread -o $@ $^ $(LDLIBS)
+
+fuzz:
+	@$(MAKE) deps EXTRA_PACKAGES=clang
+	@$(MAKE) $(FUZZ_BINS) $(BUILD)/bench/gen_mesh $(BUILD)/stratum
+	tests/fuzz/run.sh $(FUZZ_BUILD) $(FUZZ_SECONDS) $(BUILD) $(FUZZ_CORPUS) $(FUZZ_NAMES)
 
 clean:
 	rm -rf build

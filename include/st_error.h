@@ -11,6 +11,7 @@
 
 #include <stdarg.h>
 #include <stdio.h>
+#include <string.h>
 
 /* Return classes: 0 = OK, negative = error class, positive = counts. */
 enum st_status {
@@ -45,18 +46,25 @@ struct st_error {
 	char msg[256];
 };
 
-/* Set err (if not NULL) to code and a printf-style message; returns code. */
+/*
+ * Set err (if not NULL) to code and a printf-style message; returns code.
+ * The arguments may include err->msg itself (wrapping the cause in context):
+ * the text is formatted aside first, as vsnprintf into the buffer it reads
+ * from is undefined and garbles the message.
+ */
 static inline int st_error_set(struct st_error *err, int code, const char *fmt, ...)
 	__attribute__((format(printf, 3, 4)));
 
 static inline int st_error_set(struct st_error *err, int code, const char *fmt, ...)
 {
 	if (err) {
+		char text[sizeof(err->msg)];
 		va_list ap;
 		va_start(ap, fmt);
-		err->code = code;
-		vsnprintf(err->msg, sizeof(err->msg), fmt, ap);
+		vsnprintf(text, sizeof(text), fmt, ap);
 		va_end(ap);
+		err->code = code;
+		memcpy(err->msg, text, sizeof(text));
 	}
 	return code;
 }

@@ -270,9 +270,13 @@ enum marlin_reply_kind marlin_parse_reply(const char *line, size_t len, struct m
 					   caps->firmware_name, sizeof(caps->firmware_name));
 			copy_field(line, len, "MACHINE_TYPE:", " EXTRUDER_COUNT:",
 				   caps->machine_type, sizeof(caps->machine_type));
-			const char *ec = strstr(line, "EXTRUDER_COUNT:");
+			/* (line, len) need not end in a NUL: search within len only */
+			const char *ec = NULL;
+			for (size_t i = 0; !ec && i + 15 <= len; i++)
+				if (!memcmp(line + i, "EXTRUDER_COUNT:", 15))
+					ec = line + i;
 			long v;
-			if (ec && ec < end && read_long(ec + 15, end, &v, NULL) && v < 64)
+			if (ec && read_long(ec + 15, end, &v, NULL) && v < 64)
 				caps->extruder_count = (int)v;
 		}
 		return r->kind = MARLIN_REPLY_FIRMWARE;

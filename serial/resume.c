@@ -5,10 +5,40 @@
 #include "resume.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "gcode.h"
+
+/*
+ * Relative moves and G92 can add up to positions no G-code line can carry
+ * (the parser takes 15 significant digits, gcode.h); the preamble writes
+ * them with up to 5 decimals (plus 2 mm of lift), so beyond RESUME_VALUE_MAX
+ * its own lines would be refused or, cut at RESUME_LINE_MAX, mean another
+ * place.  Refuse such a state instead of writing it.
+ */
+static int check_writable(const char *path, int64_t end, const struct resume_state *rs,
+			  struct st_error *err)
+{
+	const struct {
+		const char *what;
+		double v;
+	} vals[] = {
+		{"X position", rs->x}, {"Y position", rs->y},	  {"Z position", rs->z},
+		{"E position", rs->e}, {"feed rate", rs->f},	  {"nozzle target", rs->tool},
+		{"bed target", rs->bed}, {"fan speed", rs->fan},
+	};
+
+	for (size_t i = 0; i < sizeof(vals) / sizeof(vals[0]); i++)
+		if (!(fabs(vals[i].v) < RESUME_VALUE_MAX))
+			return st_error_set(err, ST_ERR_RANGE, "%s: byte %lld: the %s is %g, "
+							       "beyond the %g a resume can set; "
+							       "the job cannot be resumed there",
+					    path, (long long)end, vals[i].what, vals[i].v,
+					    RESUME_VALUE_MAX);
+	return 0;
+}
 
 /* Read path up to byte end and work out where the printer was. */
 int resume_scan(const char *path, int64_t end, struct resume_state *rs,
@@ -75,7 +105,9 @@ int resume_scan(const char *path, int64_t end, struct resume_state *rs,
 	}
 	gcode_reader_free(r);
 	fclose(f);
-	return rc < 0 ? rc : 0;
+	if (rc < 0)
+		return rc;
+	return check_writable(path, end, rs, err);
 }
 
 #define ADD(...) (n < cap ? (void)snprintf(out[n++], RESUME_LINE_MAX + 1, __VA_ARGS__) : (void)0)

@@ -18,6 +18,9 @@
 
 /* Longest preamble line (bytes), Marlin's command limit (marlin.h). */
 #define RESUME_LINE_MAX 81
+/* Largest |value| (mm, mm/min, C) a preamble line carries: 9 digits and 5
+ * decimals stay within the G-code parser's 15 significant digits. */
+#define RESUME_VALUE_MAX 1e9
 /* Room for the longest preamble resume_preamble writes. */
 #define RESUME_LINES 20
 
@@ -31,8 +34,10 @@ struct resume_state {
 
 /*
  * resume_scan - read the G-code file path up to byte end and work out the
- * state there into *rs.  Returns 0, ST_ERR_IO (cannot open), or the
- * parser's error for a bad line (err names file and line).
+ * state there into *rs.  Returns 0, ST_ERR_IO (cannot open), the parser's
+ * error for a bad line (err names file and line), or ST_ERR_RANGE when a
+ * position, feed rate or target reaches RESUME_VALUE_MAX (relative moves
+ * add up): the preamble could not write it.
  */
 int resume_scan(const char *path, int64_t end, struct resume_state *rs, struct st_error *err);
 

@@ -832,6 +832,49 @@ START_TEST(parse_m115)
 }
 END_TEST
 
+/*
+ * The reply is (line, len) with no NUL after it (issue 17, found by
+ * fuzzing): the parser once ran strstr past len.  The line sits in a heap
+ * block of exactly len bytes, so ASan (make check's first pass) sees any read
+ * beyond; a count past len is not the line's.
+ */
+START_TEST(parse_m115_not_terminated)
+{
+	static const char *const lines[] = {
+		"FIRMWARE_NAME:Marlin",
+		"FIRMWARE_NAME:Marlin EXTRUDER_COUNT:",
+		"FIRMWARE_NAME:Marlin EXTRUDER_COUNT:2",
+	};
+	for (size_t i = 0; i < sizeof(lines) / sizeof(lines[0]); i++) {
+		size_t len = strlen(lines[i]);
+		char *buf = malloc(len);
+		struct marlin_reply r;
+		struct marlin_caps caps;
+
+		ck_assert(buf);
+		memcpy(buf, lines[i], len);
+		memset(&caps, 0, sizeof(caps));
+		ck_assert_int_eq(marlin_parse_reply(buf, len, &r, NULL, &caps),
+				 MARLIN_REPLY_FIRMWARE);
+		ck_assert_int_eq(caps.extruder_count, i == 2 ? 2 : 0);
+		free(buf);
+	}
+	/* "EXTRUDER_COUNT:5" after len is outside the line. */
+	{
+		const char text[] = "FIRMWARE_NAME:Marlin EXTRUDER_COUNT:5";
+		struct marlin_reply r;
+		struct marlin_caps caps;
+
+		memset(&caps, 0, sizeof(caps));
+		ck_assert_int_eq(marlin_parse_reply(text, strlen("FIRMWARE_NAME:Marlin"), &r, NULL,
+						    &caps),
+				 MARLIN_REPLY_FIRMWARE);
+		ck_assert_int_eq(caps.extruder_count, 0);
+		ck_assert_str_eq(caps.firmware_name, "Marlin");
+	}
+}
+END_TEST
+
 /* One case per test so CK_RUN_CASE can pick one. */
 static void add_case(Suite *s, const char *name, const TTest *t, int timeout)
 {
@@ -871,6 +914,7 @@ Suite *marlin_suite(void)
 	tcase_add_test(tc, parse_resend_and_errors);
 	tcase_add_test(tc, parse_temperatures);
 	tcase_add_test(tc, parse_m115);
+	tcase_add_test(tc, parse_m115_not_terminated);
 	suite_add_tcase(s, tc);
 	return s;
 }

@@ -22,6 +22,7 @@
 #include "commands.h"
 #include "gcode.h"
 #include "profile.h"
+#include "resume.h"
 #include "sfcheck.h"
 #include "suites.h"
 #include "testutil.h"
@@ -360,6 +361,51 @@ START_TEST(test_unplug_and_reset_exit_69)
 }
 END_TEST
 
+/*
+ * Relative moves add up to positions no line can carry (issue 17, found by
+ * fuzzing): the preamble once wrote "G1 X1800000000000000.000 ..." that our
+ * own parser refuses.  resume_scan refuses such a state; below the bound,
+ * every line of both preambles parses.
+ */
+START_TEST(test_resume_absurd_coordinates)
+{
+	static const char *const absurd[] = {
+		"G91\nG1 X900000000000000\nG1 X900000000000000\nG1 X1\n",
+		"G92 Z999999999.999\nG91\nG1 Z1\n",
+		"M83\nG1 E999999999999999\nG1 E999999999999999\n",
+		"G1 F999999999999999\n",
+	};
+	const char *path = tu_path("resume-absurd.gcode");
+	char pre[RESUME_LINES][RESUME_LINE_MAX + 1];
+	struct resume_state rs;
+	struct st_error err = {0};
+
+	for (size_t i = 0; i < sizeof(absurd) / sizeof(absurd[0]); i++) {
+		tu_write_str(path, absurd[i]);
+		ck_assert_int_eq(resume_scan(path, (int64_t)strlen(absurd[i]), &rs, &err),
+				 ST_ERR_RANGE);
+		ck_assert_msg(strstr(err.msg, "cannot be resumed"), "%s", err.msg);
+	}
+	/* The largest a resume takes: every line of both forms parses. */
+	tu_write_str(path, "M140 S999999\nM104 S999999\nM106 S255\nG1 X-999999999.999 "
+			   "Y999999999.999 Z999999997.5 E999999999.99999 F99999999\n");
+	ck_assert_int_eq(resume_scan(path, 200, &rs, &err), 0);
+	for (int form = 0; form < 2; form++) {
+		size_t n = form ? resume_preamble_x3g(&rs, pre, RESUME_LINES)
+				: resume_preamble(&rs, pre, RESUME_LINES);
+
+		ck_assert_uint_gt(n, 5);
+		for (size_t k = 0; k < n; k++) {
+			struct gcode_line g;
+
+			ck_assert_msg(strlen(pre[k]) < RESUME_LINE_MAX, "%s", pre[k]);
+			ck_assert_msg(!gcode_parse(pre[k], strlen(pre[k]), 0, &g, &err), "%s: %s",
+				      pre[k], err.msg);
+		}
+	}
+}
+END_TEST
+
 START_TEST(test_resume_after_kill)
 {
 	char dir[512], log[512], log2[512], jpath[1024];
@@ -498,6 +544,7 @@ Suite *print_suite(void)
 	tcase_add_test(tc, test_sailfish_prints_every_command_once);
 	tcase_add_test(tc, test_ctrl_c_stops_safely);
 	tcase_add_test(tc, test_unplug_and_reset_exit_69);
+	tcase_add_test(tc, test_resume_absurd_coordinates);
 	tcase_add_test(tc, test_resume_after_kill);
 	tcase_add_test(tc, test_sailfish_resume_after_kill);
 	suite_add_tcase(s, tc);

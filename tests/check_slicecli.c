@@ -442,6 +442,22 @@ START_TEST(bad_settings_exit_2)
 }
 END_TEST
 
+/* The smallest profile slices on the documented defaults (issue 17: the
+ * default fill_pattern was "stars", which the slicer refuses). */
+START_TEST(minimal_profile_slices)
+{
+	static const char minimal[] = "nozzle_diameter = 0.4\n";
+	const char *cube = stl_file(fx_box(0, 0, 0, 20, 20, 20), "cube.stl");
+	const char *ini = tu_path("minimal.ini"), *gc = tu_path("minimal.gcode");
+	int status;
+
+	tu_write(ini, minimal, sizeof(minimal) - 1);
+	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' --printer '%s'", cube, gc, ini);
+	ck_assert_msg(status == 0, "exit %d: %s", status, out);
+	ck_assert(tu_file_exists(gc));
+}
+END_TEST
+
 START_TEST(unreadable_model_exit_65)
 {
 	const char *bad = tu_path("bad.stl");
@@ -678,6 +694,7 @@ Suite *slicecli_suite(void)
 	tcase_add_test(tc, no_repair_slices_as_read);
 	tcase_add_test(tc, too_big_for_the_bed_exit_1);
 	tcase_add_test(tc, bad_settings_exit_2);
+	tcase_add_test(tc, minimal_profile_slices);
 	tcase_add_test(tc, unreadable_model_exit_65);
 	tcase_add_test(tc, flashforge_profile_slices);
 	tcase_add_test(tc, touching_parts_slice_as_parts);

@@ -85,16 +85,20 @@ static int copy_value(struct cfg_parse *p, const char *key, const char *v, char 
 	return 0;
 }
 
-/* A whole number in [lo, hi]. */
+/* A whole number in [lo, hi].  The range is checked first: converting a
+ * double beyond long long (99999999999999999999) is undefined behaviour. */
 static int whole(struct cfg_parse *p, const char *key, const char *v, double lo, double hi,
 		 double *out)
 {
 	double d;
 
-	if (st_parse_double(v, strlen(v), 0, &d) != ST_NUMBER_OK || d != (double)(long long)d)
+	if (st_parse_double(v, strlen(v), 0, &d) != ST_NUMBER_OK)
 		return CFG_FAIL(p, ST_ERR_PARSE, "%s: '%s' is not a whole number", key, v);
-	if (d < lo || d > hi)
-		return CFG_FAIL(p, ST_ERR_RANGE, "%s: %s is outside %g to %g", key, v, lo, hi);
+	if (!(d >= lo && d <= hi))
+		return CFG_FAIL(p, ST_ERR_RANGE, "%s: %s is out of range (%g to %g)", key, v, lo,
+				hi);
+	if (d != floor(d))
+		return CFG_FAIL(p, ST_ERR_PARSE, "%s: '%s' is not a whole number", key, v);
 	*out = d;
 	return 0;
 }
@@ -155,7 +159,7 @@ static int node_key_value(struct cfg_parse *p, const char *k, const char *v)
 		if ((rc = once(p, k, 1)))
 			return rc;
 		if (node_parse_listen(v, c->listen_addr, sizeof(c->listen_addr), &c->listen_port, &e))
-			return CFG_FAIL(p, ST_ERR_PARSE, "listen: %s", e.msg);
+			return CFG_FAIL(p, e.code, "listen: %s", e.msg);
 		return 0;
 	}
 	if (!strcmp(k, "data_dir")) {
@@ -495,7 +499,13 @@ int node_parse_listen(const char *s, char *addr, size_t cap, uint16_t *port,
 	host[colon - s] = '\0';
 	if (inet_pton(AF_INET, host, &in) != 1 ||
 	    st_parse_double(colon + 1, strlen(colon + 1), 0, &d) != ST_NUMBER_OK ||
-	    d != (double)(long)d || d < 0 || d > 65535 || strchr(colon + 1, '.'))
+	    strchr(colon + 1, '.'))
+		goto out_bad;
+	/* Range before the whole-number test: (long)d is undefined beyond long. */
+	if (!(d >= 0 && d <= 65535))
+		return st_error_set(err, ST_ERR_RANGE, "'%s': port %s is out of range (0 to "
+						       "65535)", s, colon + 1);
+	if (d != floor(d))
 		goto out_bad;
 	if (!inet_ntop(AF_INET, &in, addr, (socklen_t)cap))
 		goto out_bad;

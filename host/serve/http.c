@@ -144,7 +144,9 @@ static enum MHD_Result post_iter(void *cls, enum MHD_ValueKind kind, const char 
 	(void)content_type;
 	(void)transfer_encoding;
 	(void)off;
-	if (r->status)
+	/* A part without name= (or one libmicrohttpd could not read) has no
+	 * key: it is no field of ours, like the unknown ones below. */
+	if (r->status || !key)
 		return MHD_YES; /* keep reading, answer at the end */
 	if (!strcmp(key, "print")) {
 		size_t l = strlen(r->print);

@@ -89,7 +89,8 @@ int node_config_load(const char *path, struct node_config *cfg, struct st_error 
 
 /*
  * node_parse_listen - "ADDR:PORT" (IPv4 dotted quad, port 0-65535) into
- * addr (cap bytes) and *port.  Returns 0 or ST_ERR_PARSE.
+ * addr (cap bytes) and *port.  Returns 0, ST_ERR_PARSE, or ST_ERR_RANGE for
+ * a port number beyond 0-65535.
  */
 int node_parse_listen(const char *s, char *addr, size_t cap, uint16_t *port,
 		      struct st_error *err);
