@@ -225,7 +225,7 @@ START_TEST(test_defaults)
 	ck_assert_int_eq(p->temperature[0], 200);
 	ck_assert_int_eq(p->first_layer_temperature[0], 200);
 	/* a pattern the slicer prints (issue 17: "stars" could not be sliced) */
-	ck_assert_str_eq(p->fill_pattern, "grid");
+	ck_assert_str_eq(p->fill_pattern, "rectilinear");
 	ck_assert_ptr_nonnull(strstr(p->start_gcode, "G28"));
 	assert_close(p->steps_per_mm[0], 0); /* unknown on Marlin: the firmware knows */
 	ck_assert_ptr_null(profile_get(p, "nozzle_diameter"));
