@@ -473,7 +473,7 @@ int cmd_print(int argc, char **argv)
 		goto out;
 	if ((rc = profile_find(a.printer, &job->prof, &err))) {
 		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		status = st_exit_for(rc);
+		status = profile_exit_status(rc);
 		goto out;
 	}
 	if (!a.resume) {

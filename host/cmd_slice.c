@@ -446,7 +446,7 @@ int cmd_slice(int argc, char **argv)
 		if (rc) {
 			/* Settings that cannot slice are refused like a bad --layer-height. */
 			fprintf(stderr, SLICE_CMD ": %s\n", err.msg);
-			return rc == ST_ERR_RANGE ? ST_EXIT_USAGE : st_exit_for(rc);
+			return profile_exit_status(rc);
 		}
 	}
 	if (a.cfg.n || a.cfg.presets.printer) {

@@ -300,6 +300,13 @@ int profile_load_layers(const struct profile *base, const struct profile_layer *
 int profile_find(const char *name_or_path, struct profile **out, struct st_error *err);
 
 /*
+ * profile_exit_status - the exit status for a failed profile_find or
+ * profile_load_file: settings that cannot slice (ST_ERR_RANGE) are refused
+ * like a bad --layer-height (ST_EXIT_USAGE); anything else by its class.
+ */
+int profile_exit_status(int rc);
+
+/*
  * profile_search_dirs - the directories NAME lookups search, in order.
  * Reads $STRATUM_PRINTERS_DIR and /proc/self/exe; never fails (a directory
  * that cannot be determined is left out).

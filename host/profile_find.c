@@ -203,3 +203,8 @@ out_nomem:
 	profile_list_free(list, n);
 	return st_error_set(err, ST_ERR_NOMEM, "out of memory listing printer profiles");
 }
+
+int profile_exit_status(int rc)
+{
+	return rc == ST_ERR_RANGE ? ST_EXIT_USAGE : st_exit_for(rc);
+}

@@ -198,6 +198,24 @@ static json_t *last_json(void)
 	return o;
 }
 
+/*
+ * Proves that a profile that cannot slice stops `stratum print` at load
+ * with exit 2, as it stops `stratum slice`, before anything is repaired
+ * or sent (it used to give 65).
+ */
+START_TEST(test_unsliceable_profile_exit_2)
+{
+	char said[4096];
+	const char *ini = tu_path("mps0.ini");
+
+	tu_write_str(ini, "nozzle_diameter = 0.4\nmin_print_speed = 0\n");
+	int rc = tu_run(said, sizeof(said), "print " MODEL " --printer %s", ini);
+	ck_assert_msg(rc == 2, "exit %d: %s", rc, said);
+	ck_assert_msg(strstr(said, "min_print_speed"), "%s", said);
+	ck_assert_msg(!strstr(said, "repair"), "%s", said);
+}
+END_TEST
+
 START_TEST(test_marlin_prints_every_line_once)
 {
 	char dir[512], log[512], jpath[1024];
@@ -540,6 +558,7 @@ Suite *print_suite(void)
 
 	tcase_set_timeout(tc, 120);
 	tcase_add_test(tc, test_dry_run_is_slice);
+	tcase_add_test(tc, test_unsliceable_profile_exit_2);
 	tcase_add_test(tc, test_marlin_prints_every_line_once);
 	tcase_add_test(tc, test_sailfish_prints_every_command_once);
 	tcase_add_test(tc, test_ctrl_c_stops_safely);
