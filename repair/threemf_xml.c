@@ -616,7 +616,8 @@ static int finish(struct tmf_parser *ps)
 {
 	struct tmf_part *p = ps->p;
 
-	qsort(p->objs, p->nobjs, sizeof(*p->objs), by_id);
+	if (p->nobjs > 1) /* qsort may not take NULL, even with no element */
+		qsort(p->objs, p->nobjs, sizeof(*p->objs), by_id);
 	for (size_t i = 1; i < p->nobjs; i++)
 		if (p->objs[i].id == p->objs[i - 1].id) {
 			const struct tmf_object *a = &p->objs[i - 1], *b = &p->objs[i];
