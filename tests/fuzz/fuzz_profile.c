@@ -10,7 +10,7 @@
 
 #include <jansson.h>
 
-#include "commands.h"
+#include "profile_x3g.h"
 #include "profile.h"
 #include "profile_slicer.h"
 #include "slicer.h"
@@ -35,7 +35,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		struct x3g_machine m;
 		enum x3g_flavor flavor;
 
-		(void)cmd_x3g_machine(p, &m, &flavor, &err);
+		(void)profile_x3g_machine(p, &m, &flavor, &err);
 	}
 	json_decref(profile_to_json(p));
 	{
