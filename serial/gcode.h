@@ -231,6 +231,13 @@ enum gcode_layer_mark {
 enum gcode_layer_mark gcode_layer_comment(const struct gcode_line *line, long *layer, double *z);
 
 /*
+ * gcode_layer_follow - keep a streamer's running layer and Z up to date:
+ * a layer comment with a number sets *layer, one without counts it on, a
+ * height sets *z.  Returns true when line starts a layer.
+ */
+bool gcode_layer_follow(const struct gcode_line *line, long *layer, double *z);
+
+/*
  * gcode_reader - streaming reader over a FILE*, for `stratum send` and the
  * X3G translator.  Bounded memory (about 2 x GCODE_RAW_MAX bytes).  Lines may
  * end in "\n", "\r\n" or "\r", mixed; the last line needs no ending.

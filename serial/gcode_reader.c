@@ -47,6 +47,19 @@ static bool has_prefix(const char *s, size_t n, const char *pre)
 	return n >= k && memcmp(s, pre, k) == 0;
 }
 
+bool gcode_layer_follow(const struct gcode_line *line, long *layer, double *z)
+{
+	long l;
+	double zz;
+	const enum gcode_layer_mark mark = gcode_layer_comment(line, &l, &zz);
+
+	if (mark == GCODE_LAYER_START)
+		*layer = l >= 0 ? l : *layer + 1;
+	if (mark != GCODE_LAYER_NONE && !isnan(zz))
+		*z = zz;
+	return mark == GCODE_LAYER_START;
+}
+
 enum gcode_layer_mark gcode_layer_comment(const struct gcode_line *line, long *layer, double *z)
 {
 	const char *s;

@@ -655,16 +655,7 @@ int marlin_stream_file(struct marlin *m, struct gcode_reader *r, const char *nam
 			}
 			if (rc < 0)
 				return rc;
-			long l;
-			double zz;
-			enum gcode_layer_mark mark = gcode_layer_comment(&g, &l, &zz);
-			if (mark == GCODE_LAYER_START) {
-				layer = l >= 0 ? l : layer + 1;
-				if (!isnan(zz))
-					z = zz;
-			} else if (mark == GCODE_LAYER_Z) {
-				z = zz;
-			}
+			gcode_layer_follow(&g, &layer, &z);
 			if (g.kind == GCODE_KIND_HOST_ONLY || g.text_len == 0)
 				continue;
 			uint64_t src = gcode_reader_line(r);

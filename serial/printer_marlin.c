@@ -353,17 +353,7 @@ static int pm_stream(void *state, const struct printer_job *job, struct printer_
 				eof = true;
 				break;
 			} else if (rc == 1) {
-				long l;
-				double zz;
-				enum gcode_layer_mark mark = gcode_layer_comment(&g, &l, &zz);
-
-				if (mark == GCODE_LAYER_START) {
-					layer = l >= 0 ? l : layer + 1;
-					if (!isnan(zz))
-						z = zz;
-				} else if (mark == GCODE_LAYER_Z) {
-					z = zz;
-				}
+				gcode_layer_follow(&g, &layer, &z);
 				if (g.kind == GCODE_KIND_HOST_ONLY || !g.text_len)
 					continue;
 				if (g.text_len > MARLIN_CMD_MAX) {
