@@ -511,7 +511,7 @@ out:
  * meet is made.  *moved: largest distance a vertex moved; *changed:
  * whether any did; *merged: vertices merged into a neighbour.
  */
-static int round_result(const struct exact_mesh *em, enum repair_precision prec,
+static int round_result(const struct exact_mesh *em, enum repair_precision prec, int threads,
 			struct mesh **out, double *moved, bool *changed, size_t *merged,
 			struct st_error *err)
 {
@@ -522,8 +522,8 @@ static int round_result(const struct exact_mesh *em, enum repair_precision prec,
 	int rc;
 
 	*out = NULL;
-	rc = exact_mesh_snap_round(em, prec == REPAIR_FLOAT32 ? 24 : 53, reach, &snapped, &st,
-				   err);
+	rc = exact_mesh_snap_round(em, prec == REPAIR_FLOAT32 ? 24 : 53, reach, threads, &snapped,
+				   &st, err);
 	if (rc)
 		return rc;
 	*moved = fmax(*moved, st.max_move);
@@ -749,7 +749,7 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 		bool changed = false;
 		double moved = 0;
 		progress(opt, "rounding", 0.9);
-		rc = round_result(co.result, opt->precision, &rounded, &moved, &changed,
+		rc = round_result(co.result, opt->precision, opt->threads, &rounded, &moved, &changed,
 				  &rep->rounding_merged, err);
 		/* Rounds add up: each moves the previous round's result. */
 		rep->rounding_deviation += moved;

@@ -607,7 +607,7 @@ START_TEST(snap_round_on_grid_and_off)
 
 		v[4][2] = off ? 0.1 : 1;
 		ck_assert_int_eq(exact_mesh_new(CVERTS(v), 5, t, 4, origin, &m, &err), 0);
-		ck_assert_int_eq(exact_mesh_snap_round(m, 24, 1e-3, &r, &st, &err), 0);
+		ck_assert_int_eq(exact_mesh_snap_round(m, 24, 1e-3, 1, &r, &st, &err), 0);
 		ck_assert_uint_eq(exact_mesh_nverts(r), 4);
 		ck_assert_uint_eq(exact_mesh_ntris(r), 4);
 		ck_assert_uint_eq(st.rounded, (size_t)off);

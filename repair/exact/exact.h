@@ -191,12 +191,14 @@ struct exact_snap_stats {
  * it.  Vertices already on the grid never move.  Rounds of this repeat
  * while they place more vertices; what still has no safe place is put on
  * its nearest grid point and counted in stats->unplaced (then the result
- * may have intersections; the caller checks).  Not thread-safe on m.
+ * may have intersections; the caller checks).  threads as for the count
+ * (the candidate search runs on them; the result does not depend on it).
+ * Not thread-safe on m.
  * Returns 0, ST_ERR_ARG (bad bits, reach < 0, NULL), ST_ERR_RANGE (a
  * coordinate beyond float32), ST_ERR_NOMEM or ST_ERR_INTERNAL.
  */
 int exact_mesh_snap_round(const struct exact_mesh *m, int mantissa_bits, double reach,
-			  struct exact_mesh **out, struct exact_snap_stats *stats,
+			  int threads, struct exact_mesh **out, struct exact_snap_stats *stats,
 			  struct st_error *err);
 
 /* exact_mesh_orient3d - exact_orient3d on vertex indices (exact positions). */

@@ -427,7 +427,7 @@ void build_patches(snapper &s, const exact_mesh &m)
 		s.patch[t] = find_patch(s.patch, static_cast<uint32_t>(t));
 }
 
-void build(snapper &s, const exact_mesh &m)
+void build(snapper &s, const exact_mesh &m, int threads)
 {
 	const size_t nv = m.approx.size(), nt = m.tris.size();
 	s.pos.resize(nv);
@@ -485,14 +485,28 @@ void build(snapper &s, const exact_mesh &m)
 		boxes[t] = Box(lo, hi);
 		use[t] = &boxes[t];
 	}
+	/* On all cores, one pair list per leaf; each candidate list is then
+	 * sorted, so the result is the same whatever the thread count. */
+	std::vector<std::vector<std::pair<uint32_t, uint32_t>>> found;
 	boxpairs::for_each_pair(
-	    boxes, std::move(use), 1, [](size_t) {},
-	    [&](size_t, size_t a, size_t b) {
-		    if (active[a])
-			    s.near[a].push_back(static_cast<uint32_t>(b));
-		    if (active[b])
-			    s.near[b].push_back(static_cast<uint32_t>(a));
+	    boxes, std::move(use), threads, [&](size_t n) { found.resize(n); },
+	    [&](size_t leaf, size_t a, size_t b) {
+		    if (active[a] || active[b])
+			    found[leaf].emplace_back(static_cast<uint32_t>(a),
+						     static_cast<uint32_t>(b));
 	    });
+	std::vector<Box>().swap(boxes);
+	for (auto &f : found) {
+		for (const auto &ab : f) {
+			if (active[ab.first])
+				s.near[ab.first].push_back(ab.second);
+			if (active[ab.second])
+				s.near[ab.second].push_back(ab.first);
+		}
+		std::vector<std::pair<uint32_t, uint32_t>>().swap(f);
+	}
+	boxpairs::for_each_index(nt, threads,
+				 [&](size_t t) { std::sort(s.near[t].begin(), s.near[t].end()); });
 }
 
 /* Place v safely: a corner of its cell, else a merge; false if neither. */
@@ -670,8 +684,8 @@ std::unique_ptr<exact_mesh> emit(const std::vector<std::array<uint32_t, 3>> &tri
 } /* namespace */
 
 extern "C" int exact_mesh_snap_round(const struct exact_mesh *m, int mantissa_bits, double reach,
-				     struct exact_mesh **out, struct exact_snap_stats *stats,
-				     struct st_error *err)
+				     int threads, struct exact_mesh **out,
+				     struct exact_snap_stats *stats, struct st_error *err)
 {
 	exact_snap_stats st = exact_snap_stats();
 
@@ -701,7 +715,7 @@ extern "C" int exact_mesh_snap_round(const struct exact_mesh *m, int mantissa_bi
 		snapper s;
 		s.bits = mantissa_bits;
 		s.reach = reach;
-		build(s, *m);
+		build(s, *m, threads);
 		run(s, st);
 
 		std::unique_ptr<exact_mesh> r = emit(s.tris, &s.alive, s.cur, s.origin);
