@@ -7,6 +7,7 @@
 #include <check.h>
 #include <float.h>
 #include <math.h>
+#include <stdbool.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -627,6 +628,59 @@ START_TEST(snap_round_on_grid_and_off)
 }
 END_TEST
 
+/*
+ * The points where one triangle's edges cross another's plane are exact
+ * at any scale: the integer construction of double corners
+ * (repair/exact/cutpair.hpp) factors out the smallest exponent, which is
+ * far below 1 for tiny models and above 1 for huge ones.  Triangle w
+ * stands in the plane y = s and crosses u (in z = s / 2) along the
+ * segment from (1, 1, 1/2) s to (23/7, 1, 1/2) s; 23/7 is no double.
+ */
+START_TEST(cut_points_exact_at_any_scale)
+{
+	const double scale[] = {0x1p-70, 1.0 / 3.0, 1, 0x1p+60};
+	const double s = scale[_i];
+	const double v[6][3] = {{0, 0, s / 2}, {8 * s, 0, s / 2}, {0, 8 * s, s / 2},
+				{s, s, -s},    {5 * s, s, -s},	  {s, s, 2.5 * s}};
+	const uint32_t t[2][3] = {{0, 1, 2}, {3, 4, 5}};
+	const uint32_t origin[2] = {0, 1};
+	const double want[2][3] = {{s, s, s / 2}, {23.0 / 7.0 * s, s, s / 2}};
+	struct st_error err = {0};
+	struct exact_mesh *m = NULL;
+	struct exact_refine_stats st;
+
+	ck_assert_int_eq(exact_mesh_new(CVERTS(v), 6, t, 2, origin, &m, &err), 0);
+	ck_assert_int_eq(exact_mesh_refine(m, 1, &st, &err), 0);
+	ck_assert_uint_eq(st.intersecting_pairs, 1);
+	ck_assert_uint_eq(st.triangles_split, 2);
+	for (int w = 0; w < 2; w++) {
+		bool found = false;
+		for (size_t i = 0; i < exact_mesh_nverts(m); i++) {
+			const double *p = exact_mesh_verts(m)[i];
+			bool near = true;
+			for (int k = 0; k < 3; k++)
+				near = near && fabs(p[k] - want[w][k]) <= 2 * DBL_EPSILON * fabs(want[w][k]);
+			found = found || near;
+		}
+		ck_assert_msg(found, "scale %g: cut point %d missing", s, w);
+	}
+	/* The first point is a double, and must be found as one exactly. */
+	bool exact_double = false;
+	for (size_t i = 0; i < exact_mesh_nverts(m); i++)
+		exact_double = exact_double || (memcmp(exact_mesh_verts(m)[i], want[0],
+						       sizeof(want[0])) == 0);
+	ck_assert(exact_double);
+	/* And the mesh is now free of crossings. */
+	uint64_t n = 1;
+	ck_assert_int_eq(exact_count_self_intersections(exact_mesh_verts(m), exact_mesh_nverts(m),
+							exact_mesh_tris(m), exact_mesh_ntris(m),
+							NULL, 1, &n, &err),
+			 0);
+	ck_assert_uint_eq(n, 0);
+	exact_mesh_free(m);
+}
+END_TEST
+
 Suite *exact_suite(void)
 {
 	Suite *s = suite_create("exact");
@@ -656,6 +710,7 @@ Suite *exact_suite(void)
 	tcase_add_test(pairs, shared_vertex_coplanar);
 	tcase_add_test(pairs, shared_vertex_corner);
 	tcase_add_test(pairs, vertex_on_interior);
+	tcase_add_loop_test(pairs, cut_points_exact_at_any_scale, 0, 4);
 	tcase_add_test(pairs, fans_winding_more_than_once);
 	tcase_add_test(pairs, degenerate_triangles_ignored);
 	suite_add_tcase(s, pairs);

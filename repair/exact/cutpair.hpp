@@ -18,6 +18,11 @@
 
 #include "emesh.hpp"
 
+#include <gmp.h>
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
 #include <utility>
 #include <vector>
 
@@ -73,12 +78,136 @@ EPoint edge_plane(const P &p, const P &q, const XFT a[3], const XFT n[3])
 }
 
 /*
- * The part of triangle t in the plane of triangle s (o[i]: side of t's
- * corner i, never all zero): one or two points, in *pts.
+ * The same for double corners, in integers: every double is an integer
+ * times a power of two, so with the smallest exponent of the five points
+ * factored out the construction is integer products and sums, and only
+ * the three final quotients are reduced.  Rationals reduce (a gcd) after
+ * every operation, which made the cut points about a quarter of the
+ * refinement on soups.
  */
-template <class P>
-void plane_section(const P t[3], const CGAL::Orientation o[3], const P s[3],
-		   std::vector<EPoint> &pts)
+class integer_plane
+{
+      public:
+	/* The plane through s[0], s[1], s[2]. */
+	explicit integer_plane(const IK::Point_3 s[3]) : s_(s)
+	{
+		for (auto &row : v_)
+			for (auto &x : row)
+				mpz_init(x);
+		for (auto &x : tmp_)
+			mpz_init(x);
+		mpq_init(r_);
+	}
+	~integer_plane()
+	{
+		for (auto &row : v_)
+			for (auto &x : row)
+				mpz_clear(x);
+		for (auto &x : tmp_)
+			mpz_clear(x);
+		mpq_clear(r_);
+	}
+	integer_plane(const integer_plane &) = delete;
+	integer_plane &operator=(const integer_plane &) = delete;
+
+	/* Where pq crosses the plane; p and q strictly on opposite sides. */
+	EPoint cut(const IK::Point_3 &p, const IK::Point_3 &q)
+	{
+		const IK::Point_3 *pt[5] = {&s_[0], &s_[1], &s_[2], &p, &q};
+		/* The smallest exponent of a significand bit: every coordinate
+		 * is then an integer times 2^e. */
+		int e = INT_MAX;
+		for (const IK::Point_3 *x : pt)
+			for (int k = 0; k < 3; k++)
+				if ((*x)[k] != 0) {
+					int ex;
+					std::frexp((*x)[k], &ex);
+					e = std::min(e, ex - 53);
+				}
+		if (e == INT_MAX) /* all zero: cannot happen for a real plane */
+			e = 0;
+		for (int i = 0; i < 5; i++)
+			for (int k = 0; k < 3; k++)
+				to_integer((*pt[i])[k], e, v_[i][k]);
+		mpz_t *e1 = tmp_, *e2 = tmp_ + 3, *n = tmp_ + 6, &dp = tmp_[9], &dq = tmp_[10],
+		      &t = tmp_[11], &den = tmp_[12];
+		for (int k = 0; k < 3; k++) {
+			mpz_sub(e1[k], v_[1][k], v_[0][k]);
+			mpz_sub(e2[k], v_[2][k], v_[0][k]);
+		}
+		for (int k = 0; k < 3; k++) { /* n = e1 x e2 */
+			const int i = (k + 1) % 3, j = (k + 2) % 3;
+			mpz_mul(n[k], e1[i], e2[j]);
+			mpz_submul(n[k], e1[j], e2[i]);
+		}
+		mpz_set_ui(dp, 0);
+		mpz_set_ui(dq, 0);
+		for (int k = 0; k < 3; k++) {
+			mpz_sub(t, v_[3][k], v_[0][k]);
+			mpz_addmul(dp, n[k], t);
+			mpz_sub(t, v_[4][k], v_[0][k]);
+			mpz_addmul(dq, n[k], t);
+		}
+		mpz_sub(den, dp, dq); /* not 0: p and q are on opposite sides */
+		EFT c[3];
+		for (int k = 0; k < 3; k++) { /* (q dp - p dq) / (dp - dq) * 2^e */
+			mpz_mul(mpq_numref(r_), v_[4][k], dp);
+			mpz_submul(mpq_numref(r_), v_[3][k], dq);
+			mpz_set(mpq_denref(r_), den);
+			mpq_canonicalize(r_);
+			if (e > 0)
+				mpq_mul_2exp(r_, r_, (mp_bitcnt_t)e);
+			else if (e < 0)
+				mpq_div_2exp(r_, r_, (mp_bitcnt_t)-e);
+			c[k] = EFT(XFT(r_));
+		}
+		return EPoint(c[0], c[1], c[2]);
+	}
+
+      private:
+	const IK::Point_3 *s_;
+	mpz_t v_[5][3], tmp_[13];
+	mpq_t r_;
+
+	/* x / 2^e into out, exactly (x is an integer multiple of 2^e). */
+	static void to_integer(double x, int e, mpz_t out)
+	{
+		int ex;
+		const double m = std::frexp(x, &ex); /* x = m 2^ex, 1/2 <= |m| < 1 */
+		mpz_set_si(out, (long)std::ldexp(m, 53)); /* exact: 53 bits */
+		if (x != 0 && ex - 53 > e)
+			mpz_mul_2exp(out, out, (mp_bitcnt_t)(ex - 53 - e));
+	}
+};
+
+/*
+ * The part of triangle t in the plane of triangle s (o[i]: side of t's
+ * corner i, never all zero): one or two points, in *pts.  Double corners.
+ */
+inline void plane_section(const IK::Point_3 t[3], const CGAL::Orientation o[3],
+			  const IK::Point_3 s[3], std::vector<EPoint> &pts)
+{
+	for (int i = 0; i < 3; i++)
+		if (o[i] == CGAL::COPLANAR)
+			pts.push_back(as_epoint(t[i]));
+	bool crosses = false;
+	for (int i = 0; i < 3; i++)
+		crosses |= o[i] != CGAL::COPLANAR && o[(i + 1) % 3] != CGAL::COPLANAR &&
+			   o[i] != o[(i + 1) % 3];
+	if (!crosses)
+		return;
+	integer_plane plane(s);
+	for (int i = 0; i < 3; i++) {
+		const int j = (i + 1) % 3;
+		if (o[i] == CGAL::COPLANAR || o[j] == CGAL::COPLANAR || o[i] == o[j])
+			continue;
+		pts.push_back(plane.cut(t[i], t[j]));
+	}
+}
+
+/* The same with rational corners. */
+inline void plane_section(const EPoint t[3], const CGAL::Orientation o[3], const EPoint s[3],
+			  std::vector<EPoint> &pts)
 {
 	XFT a[3], n[3];
 	bool have_plane = false;
