@@ -21,6 +21,7 @@
 
 #include "emesh.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -100,13 +101,50 @@ inline void split(const EPoint &p0, const EPoint &p1, const EPoint &p2, const cu
 		}
 		return v;
 	};
-	const CDT::Vertex_handle v0 = insert(p0), v1 = insert(p1), v2 = insert(p2);
+	/*
+	 * Every point in insertion order: the corners, the points, then both
+	 * ends of each segment.  The cuts through a triangle form closed
+	 * polylines, so nearly every end is given twice (by two pairs, as two
+	 * handles of one exact point).  Inserting a point again made the
+	 * triangulation's walk prove it equal to a vertex with exact
+	 * orientations, the costliest part of the split; equal points are
+	 * found here by sorting instead (exact comparisons of known values)
+	 * and each is inserted once, at its first place in the order, so the
+	 * triangulation is the one the full insertion sequence gives.
+	 */
+	std::vector<const EPoint *> all;
+	all.reserve(3 + c.points.size() + 2 * c.segments.size());
+	all.push_back(&p0);
+	all.push_back(&p1);
+	all.push_back(&p2);
 	for (const EPoint &p : c.points)
-		insert(p);
+		all.push_back(&p);
 	for (const auto &s : c.segments) {
-		const CDT::Vertex_handle a = insert(s.first), b = insert(s.second);
-		if (a != b)
-			cdt.insert_constraint(a, b);
+		all.push_back(&s.first);
+		all.push_back(&s.second);
+	}
+	std::vector<uint32_t> order(all.size()), first(all.size());
+	for (uint32_t a = 0; a < order.size(); a++)
+		order[a] = first[a] = a;
+	std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+		return CGAL::compare_xyz(*all[a], *all[b]) == CGAL::SMALLER;
+	});
+	for (size_t r = 1; r < order.size(); r++)
+		if (CGAL::compare_xyz(*all[order[r - 1]], *all[order[r]]) == CGAL::EQUAL)
+			first[order[r]] = first[order[r - 1]]; /* stable: smallest first */
+	std::vector<CDT::Vertex_handle> vh(all.size());
+	auto place = [&](size_t a) { /* in order: first[a] <= a is placed */
+		vh[a] = first[a] == a ? insert(*all[a]) : vh[first[a]];
+		return vh[a];
+	};
+	const size_t nfirst = 3 + c.points.size();
+	for (size_t a = 0; a < nfirst; a++)
+		place(a);
+	const CDT::Vertex_handle v0 = vh[0], v1 = vh[1], v2 = vh[2];
+	for (size_t a = nfirst; a < all.size(); a += 2) {
+		const CDT::Vertex_handle from = place(a), to = place(a + 1);
+		if (from != to)
+			cdt.insert_constraint(from, to);
 	}
 	/* The pieces are counter-clockwise in the projection; so is the
 	 * triangle, or else every piece is reversed. */
