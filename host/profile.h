@@ -93,6 +93,13 @@ struct profile_point {
 	double x, y;
 };
 
+/* A speed in mm/s, or a percentage of another speed (PrusaSlicer's
+ * FloatOrPercent; slicer/settings.h names what it is of). */
+struct profile_speed {
+	double value;
+	bool is_percent;
+};
+
 /* One USB VID:PID pair from usb_ids. */
 struct profile_usb_id {
 	uint16_t vid, pid;
@@ -144,6 +151,9 @@ struct profile {
 	double retract_length[PROFILE_MAX_EXTRUDERS];		     /* mm; default 2 */
 	double retract_speed[PROFILE_MAX_EXTRUDERS];		     /* mm/s; default 40 */
 	double retract_lift[PROFILE_MAX_EXTRUDERS];		     /* mm (Z hop); default 0 */
+	double deretract_speed[PROFILE_MAX_EXTRUDERS]; /* mm/s, 0 = retract_speed; default 0 */
+	double retract_before_travel[PROFILE_MAX_EXTRUDERS]; /* mm; default 2 */
+	bool wipe; /* the first extruder's (one prints); default 0 */
 	double min_layer_height[PROFILE_MAX_EXTRUDERS];		     /* mm; default 0.07 */
 	double max_layer_height[PROFILE_MAX_EXTRUDERS]; /* mm; 0 in the file = 75% of nozzle */
 	double steps_per_mm_e[PROFILE_MAX_EXTRUDERS];	/* steps/mm; sailfish only */
@@ -164,12 +174,19 @@ struct profile {
 	bool support_material;		/* default 0 */
 	int support_material_threshold; /* degrees, 0 = automatic; default 0 */
 
-	/* Speeds, mm/s */
-	double travel_speed;	  /* default 130 */
-	double perimeter_speed;	  /* default 60 */
-	double infill_speed;	  /* default 80 */
-	double first_layer_speed; /* mm/s, or percent when first_layer_speed_is_percent */
-	bool first_layer_speed_is_percent;
+	/* Speeds, mm/s (a percentage is of the key slicer/settings.h names) */
+	double travel_speed;			       /* default 130 */
+	double travel_speed_z;			       /* 0 = machine_max_feedrate_z; default 0 */
+	double perimeter_speed;			       /* default 60 */
+	struct profile_speed external_perimeter_speed; /* default 50% */
+	double infill_speed;			       /* default 80 */
+	struct profile_speed solid_infill_speed;       /* default 20 */
+	struct profile_speed top_solid_infill_speed;   /* default 15 */
+	double bridge_speed;			       /* default 60 */
+	double gap_fill_speed;			       /* default 20 */
+	double support_material_speed;		       /* default 60 */
+	struct profile_speed support_material_interface_speed; /* default 100% */
+	struct profile_speed first_layer_speed; /* a percentage is of each role's speed */
 
 	/* Travel */
 	bool avoid_crossing_perimeters;		    /* default 1 */
@@ -178,6 +195,7 @@ struct profile {
 
 	/* Cooling (per filament in PrusaSlicer: the first is used) */
 	bool cooling;			  /* default 1 */
+	bool fan_always_on;		  /* default 0 */
 	int min_fan_speed, max_fan_speed; /* percent; defaults 35, 100 */
 	int bridge_fan_speed;		  /* percent; default 100 */
 	int disable_fan_first_layers;	  /* layers; default 3 */

@@ -48,6 +48,9 @@ static const struct key_def key_defs[] = {
 	{"retract_length", KT_EX_DOUBLE, OFF(retract_length)},
 	{"retract_speed", KT_EX_DOUBLE, OFF(retract_speed)},
 	{"retract_lift", KT_EX_DOUBLE, OFF(retract_lift)},
+	{"deretract_speed", KT_EX_DOUBLE, OFF(deretract_speed)},
+	{"retract_before_travel", KT_EX_DOUBLE, OFF(retract_before_travel)},
+	{"wipe", KT_FIRST_BOOL, OFF(wipe)},
 	{"min_layer_height", KT_EX_DOUBLE, OFF(min_layer_height)},
 	{"max_layer_height", KT_EX_DOUBLE, OFF(max_layer_height)},
 	{"layer_height", KT_DOUBLE, OFF(layer_height)},
@@ -63,13 +66,22 @@ static const struct key_def key_defs[] = {
 	{"support_material", KT_BOOL, OFF(support_material)},
 	{"support_material_threshold", KT_INT, OFF(support_material_threshold)},
 	{"travel_speed", KT_DOUBLE, OFF(travel_speed)},
+	{"travel_speed_z", KT_DOUBLE, OFF(travel_speed_z)},
 	{"perimeter_speed", KT_DOUBLE, OFF(perimeter_speed)},
+	{"external_perimeter_speed", KT_SPEED_PCT, OFF(external_perimeter_speed)},
 	{"infill_speed", KT_DOUBLE, OFF(infill_speed)},
+	{"solid_infill_speed", KT_SPEED_PCT, OFF(solid_infill_speed)},
+	{"top_solid_infill_speed", KT_SPEED_PCT, OFF(top_solid_infill_speed)},
+	{"bridge_speed", KT_DOUBLE, OFF(bridge_speed)},
+	{"gap_fill_speed", KT_DOUBLE, OFF(gap_fill_speed)},
+	{"support_material_speed", KT_DOUBLE, OFF(support_material_speed)},
+	{"support_material_interface_speed", KT_SPEED_PCT, OFF(support_material_interface_speed)},
 	{"first_layer_speed", KT_SPEED_PCT, OFF(first_layer_speed)},
 	{"avoid_crossing_perimeters", KT_BOOL, OFF(avoid_crossing_perimeters)},
 	{"only_retract_when_crossing_perimeters", KT_BOOL, OFF(only_retract_when_crossing_perimeters)},
 	{"max_unretracted_travel", KT_DOUBLE, OFF(max_unretracted_travel)},
 	{"cooling", KT_FIRST_BOOL, OFF(cooling)},
+	{"fan_always_on", KT_FIRST_BOOL, OFF(fan_always_on)},
 	{"min_fan_speed", KT_FIRST_INT, OFF(min_fan_speed)},
 	{"max_fan_speed", KT_FIRST_INT, OFF(max_fan_speed)},
 	{"bridge_fan_speed", KT_FIRST_INT, OFF(bridge_fan_speed)},
@@ -660,8 +672,7 @@ int prof_apply_key(struct loader *L, const struct key_def *d, const struct profi
 			pend->width_pct = pct;
 			pend->width = v;
 		} else {
-			p->first_layer_speed = v;
-			p->first_layer_speed_is_percent = pct;
+			*(struct profile_speed *)field = (struct profile_speed){v, pct};
 		}
 		return 0;
 	case KT_DENSITY:

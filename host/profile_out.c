@@ -52,8 +52,8 @@ static void put_value(FILE *f, const struct profile *p, const struct key_def *d)
 		put_double(f, *(const double *)field);
 		break;
 	case KT_SPEED_PCT:
-		put_double(f, p->first_layer_speed);
-		if (p->first_layer_speed_is_percent)
+		put_double(f, ((const struct profile_speed *)field)->value);
+		if (((const struct profile_speed *)field)->is_percent)
 			fputc('%', f);
 		break;
 	case KT_DENSITY:
@@ -205,14 +205,17 @@ static json_t *json_value(const struct profile *p, const struct key_def *d)
 	case KT_FIRST_HEIGHT:
 	case KT_WIDTH:
 		return json_real(*(const double *)field);
-	case KT_SPEED_PCT:
-		if (p->first_layer_speed_is_percent) {
+	case KT_SPEED_PCT: {
+		const struct profile_speed *sp = field;
+
+		if (sp->is_percent) {
 			char buf[48];
-			prof_fmt_double(buf, sizeof(buf) - 1, p->first_layer_speed);
+			prof_fmt_double(buf, sizeof(buf) - 1, sp->value);
 			strcat(buf, "%");
 			return json_string(buf);
 		}
-		return json_real(p->first_layer_speed);
+		return json_real(sp->value);
+	}
 	case KT_DENSITY:
 		return json_real(p->fill_density);
 	case KT_INT:

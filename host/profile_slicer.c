@@ -26,6 +26,12 @@ static void limits_from_profile(const struct profile *p, struct est_limits *lim)
 	lim->accel_travel = p->machine_max_acceleration_travel;
 }
 
+/* A speed in mm/s, or its percentage of base. */
+static double speed_of(const struct profile_speed *sp, double base)
+{
+	return sp->is_percent ? sp->value / 100 * base : sp->value;
+}
+
 /* The slicer's settings from p (profile_slicer.h). */
 int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 			  struct st_error *err)
@@ -68,20 +74,32 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	g->retract_length = p->retract_length[0];
 	g->retract_speed = p->retract_speed[0];
 	g->retract_lift = p->retract_lift[0];
+	g->deretract_speed = p->deretract_speed[0];
+	g->retract_before_travel = p->retract_before_travel[0];
+	g->wipe = p->wipe;
 	/* Travel routing. */
 	g->avoid_crossing_perimeters = p->avoid_crossing_perimeters;
 	g->only_retract_when_crossing_perimeters = p->only_retract_when_crossing_perimeters;
 	g->max_unretracted_travel = p->max_unretracted_travel;
-	g->perimeter_speed = p->perimeter_speed;
-	g->external_perimeter_speed = p->perimeter_speed / 2; /* PrusaSlicer's 50% */
-	g->infill_speed = p->infill_speed;
+	/* Percentages resolved against the key each is of (settings.h pct_of),
+	 * so the G-code header lists the speeds printed with. */
 	g->travel_speed = p->travel_speed;
-	/* A percentage scales every role in PrusaSlicer; the writer takes one
-	 * first-layer speed, so the percentage is of the perimeter speed. */
-	g->first_layer_speed = p->first_layer_speed_is_percent
-				       ? p->first_layer_speed / 100 * p->perimeter_speed
-				       : p->first_layer_speed;
+	g->travel_speed_z = p->travel_speed_z;
+	g->perimeter_speed = p->perimeter_speed;
+	g->external_perimeter_speed = speed_of(&p->external_perimeter_speed, p->perimeter_speed);
+	g->infill_speed = p->infill_speed;
+	g->solid_infill_speed = speed_of(&p->solid_infill_speed, p->infill_speed);
+	g->top_solid_infill_speed = speed_of(&p->top_solid_infill_speed, g->solid_infill_speed);
+	g->bridge_speed = p->bridge_speed;
+	g->gap_fill_speed = p->gap_fill_speed;
+	g->support_material_speed = p->support_material_speed;
+	g->support_material_interface_speed =
+	    speed_of(&p->support_material_interface_speed, p->support_material_speed);
+	/* A percentage scales each role's own speed (PrusaSlicer 2.5). */
+	g->first_layer_speed = p->first_layer_speed.value;
+	g->first_layer_speed_is_percent = p->first_layer_speed.is_percent;
 	g->cooling = p->cooling;
+	g->fan_always_on = p->fan_always_on;
 	g->min_fan_speed = p->min_fan_speed;
 	g->max_fan_speed = p->max_fan_speed;
 	g->bridge_fan_speed = p->bridge_fan_speed;

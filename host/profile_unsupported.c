@@ -1,8 +1,7 @@
 /*
  * profile_unsupported.c - which keys of a loaded profile Stratum does not
  * honour (profile.h, profile_unsupported).  A key is honoured when the
- * loader types it (slicer/settings.h, except the keys the slicer still
- * fixes itself), when it cannot change what Stratum prints (names, notes,
+ * loader types it (slicer/settings.h), when it cannot change what Stratum prints (names, notes,
  * the GUI's and the print host's keys, multi-material and wipe tower
  * settings of a single-extruder print ...), or when its value asks for
  * what Stratum does anyway (raft_layers = 0, ironing = 0, spiral_vase = 0).
@@ -68,9 +67,6 @@ static const struct known known[] = {
     {"support_material_interface_extruder", NULL, "support_material", "0"},
     {"wipe_tower", NULL, NULL, NULL}, /* PrusaSlicer builds none for one extruder */
     {"wipe_tower_*", NULL, NULL, NULL},
-    /* The fixed values of keys the slicer sets itself (settings.c) */
-    {"external_perimeter_speed", "50%", NULL, NULL},
-    {"support_material_interface_speed", "100%", NULL, NULL},
     {"wiping_volumes_*", NULL, NULL, NULL}, {"single_extruder_multi_material", "0", NULL, NULL},
     {"single_extruder_multi_material_priming", NULL, NULL, NULL},
     {"cooling_tube_*", NULL, NULL, NULL}, {"parking_pos_retraction", NULL, NULL, NULL},
@@ -164,9 +160,6 @@ static bool honoured(const struct profile *p, const struct profile_kv *kv)
 	const struct known *k;
 
 	k = find_known(kv->key);
-	/* A key the slicer still fixes is honoured at the value it fixes. */
-	if (s && (s->flags & SETTING_SLICER_ONLY))
-		return same_value(kv->value, k && k->ok ? k->ok : s->dflt ? s->dflt : "");
 	if (s)
 		return true;
 	if (!k)

@@ -527,11 +527,9 @@ static int plan_travel(struct gcodew *w, double x, double y)
 	return rc;
 }
 
-/* Print speed of a role on layer li (0-based). */
-static double role_speed(const struct gcodew_settings *s, enum path_role role, size_t li)
+/* Print speed of a role, PrusaSlicer's choice of key. */
+static double role_base_speed(const struct gcodew_settings *s, enum path_role role)
 {
-	if (li == 0 && s->first_layer_speed > 0)
-		return s->first_layer_speed;
 	switch (role) {
 	case PATH_OUTER_PERIMETER:
 	case PATH_THIN_WALL:
@@ -548,12 +546,26 @@ static double role_speed(const struct gcodew_settings *s, enum path_role role, s
 	case PATH_BRIDGE:
 		return s->bridge_speed;
 	case PATH_SUPPORT:
+	case PATH_SKIRT:
+	case PATH_BRIM:
 		return s->support_material_speed;
 	case PATH_SUPPORT_INTERFACE:
 		return s->support_material_interface_speed;
-	default: /* perimeters, skirt, brim */
+	default: /* inner perimeters */
 		return s->perimeter_speed;
 	}
+}
+
+/* Print speed of a role on layer li (0-based): the first layer's replaces
+ * it, or scales it when a percentage. */
+static double role_speed(const struct gcodew_settings *s, enum path_role role, size_t li)
+{
+	double v = role_base_speed(s, role);
+
+	if (li > 0 || s->first_layer_speed <= 0)
+		return v;
+	return s->first_layer_speed_is_percent ? v * s->first_layer_speed / 100
+					       : s->first_layer_speed;
 }
 
 /* Point index of step k (0 .. n or n-1) of a path printed forwards or
@@ -1018,8 +1030,10 @@ static void put_header(struct gcodew *w, const struct gcodew_summary *sum)
 	put(w, "; total layers count = %zu\n", sum->layers);
 	put(w, "; total moves = %zu\n", sum->moves);
 	for (size_t i = 0; i < NKEYS; i++) {
+		bool pct = keys[i].off == offsetof(struct gcodew_settings, first_layer_speed) &&
+			   w->s->first_layer_speed_is_percent;
 		fmt_num(n, key_value(w->s, &keys[i]), 6);
-		put(w, "; %s = %s\n", keys[i].name, n);
+		put(w, "; %s = %s%s\n", keys[i].name, n, pct ? "%" : "");
 	}
 	for (int a = 0; a < EST_AXES; a++) {
 		char f[NUM_MAX], acc[NUM_MAX], j[NUM_MAX];

@@ -99,17 +99,18 @@ struct gcodew_settings {
 
 	/* Speeds, mm/s */
 	double perimeter_speed;			 /* 60 */
-	double external_perimeter_speed;	 /* 30 (PrusaSlicer: 50% of perimeters) */
+	double external_perimeter_speed;	 /* 30 (50% of perimeter_speed) */
 	double infill_speed;			 /* 80 */
 	double solid_infill_speed;		 /* 20 */
 	double top_solid_infill_speed;		 /* 15 */
 	double bridge_speed;			 /* 60 */
 	double gap_fill_speed;			 /* 20 */
-	double support_material_speed;		 /* 60 */
-	double support_material_interface_speed; /* 60 (PrusaSlicer: 100% of support) */
+	double support_material_speed;		 /* 60, also skirt and brim */
+	double support_material_interface_speed; /* 60 (100% of support_material_speed) */
 	double travel_speed;			 /* 130 */
 	double travel_speed_z;			 /* 0 = machine_max_feedrate_z */
 	double first_layer_speed;		 /* every extrusion of layer 1; 30 (0 = off) */
+	bool first_layer_speed_is_percent;	 /* ... is a percentage of each role's speed */
 
 	/* Cooling */
 	bool cooling;			  /* true */

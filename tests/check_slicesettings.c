@@ -1,0 +1,173 @@
+/*
+ * check_slicesettings.c - the print settings users set, honoured end to end
+ * (issue 18 item 4; part of the slicecli suite): `stratum slice` with
+ * --set, its G-code read back for the feed rate of every extrusion by
+ * role and layer, the fan commands, and the header's values.
+ */
+#include <check.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fixtures.h"
+#include "meshio.h"
+#include "suites.h"
+#include "testutil.h"
+
+static char out[1 << 16];
+
+/* m as a binary STL scratch file named name (m is freed), copied to buf. */
+static void model_file(struct mesh *m, const char *name, char *buf, size_t cap)
+{
+	struct st_error err = {0};
+	int rc;
+
+	snprintf(buf, cap, "%s", tu_path(name));
+	rc = meshio_write_stl(buf, m, MESHIO_STL_BINARY, &err);
+	mesh_free(m);
+	ck_assert_msg(rc == 0, "%s", err.msg);
+}
+
+/* Slice model for generic-marlin with the extra arguments; the G-code (free it). */
+static char *slice(const char *model, const char *args)
+{
+	char gc[4096];
+	size_t len;
+	int status;
+
+	snprintf(gc, sizeof(gc), "%s", tu_path("settings.gcode"));
+	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' --printer generic-marlin %s", model,
+			gc, args);
+	ck_assert_msg(status == 0, "exit %d: %s", status, out);
+	return tu_slurp(gc, &len);
+}
+
+/* Feed rates (mm/min) of the extrusions of one ;TYPE: on the first layer or on the others. */
+struct feeds {
+	double lo, hi;
+	long moves;
+};
+
+/* The feeds of role (its ;TYPE: name) in text, first layer (first) or above. */
+static struct feeds role_feeds(const char *text, const char *role, bool first)
+{
+	struct feeds f = {INFINITY, -INFINITY, 0};
+	double feed = 0;
+	long layer = 0;
+	bool in_role = false;
+
+	for (const char *l = text; *l; l = strchr(l, '\n') ? strchr(l, '\n') + 1 : l + strlen(l)) {
+		size_t n = strcspn(l, "\n");
+		const char *fw = memchr(l, 'F', n), *ew = memchr(l, 'E', n);
+
+		if (!strncmp(l, ";LAYER_CHANGE", 13))
+			layer++;
+		if (!strncmp(l, ";TYPE:", 6))
+			in_role = n == 6 + strlen(role) && !strncmp(l + 6, role, strlen(role));
+		if (strncmp(l, "G1 ", 3))
+			continue;
+		if (fw)
+			feed = strtod(fw + 1, NULL);
+		if (!in_role || !ew || strtod(ew + 1, NULL) <= 0 ||
+		    (!memchr(l, 'X', n) && !memchr(l, 'Y', n)) || (layer == 1) != first)
+			continue;
+		f.lo = fmin(f.lo, feed);
+		f.hi = fmax(f.hi, feed);
+		f.moves++;
+	}
+	return f;
+}
+
+/* Every extrusion of role on the layers asked for is at feed (mm/min). */
+static void assert_feed(const char *text, const char *role, bool first, double feed)
+{
+	struct feeds f = role_feeds(text, role, first);
+
+	ck_assert_msg(f.moves > 0, "no %s extrusion on %s", role,
+		      first ? "the first layer" : "the layers above");
+	ck_assert_msg(fabs(f.lo - feed) < 1e-6 && fabs(f.hi - feed) < 1e-6,
+		      "%s on %s: F%g to F%g, wanted F%g", role,
+		      first ? "the first layer" : "the layers above", f.lo, f.hi, feed);
+}
+
+/* The header line "; KEY = VALUE". */
+static void assert_header(const char *text, const char *line)
+{
+	char want[256];
+
+	snprintf(want, sizeof(want), "\n; %s\n", line);
+	ck_assert_msg(strstr(text, want), "the header has no '%s'", line);
+}
+
+/* Cooling off, so no layer is slowed down and every feed is the setting's. */
+#define STEADY "--set cooling=0 "
+
+START_TEST(role_speeds_honoured)
+{
+	char model[4096];
+	char *g;
+
+	model_file(fx_bridge(), "bridge.stl", model, sizeof(model));
+	g = slice(model, STEADY "--set perimeter_speed=40 --set external_perimeter_speed=25 "
+			  "--set infill_speed=70 --set solid_infill_speed=33 "
+			  "--set top_solid_infill_speed=19 --set bridge_speed=17 "
+			  "--set support_material_speed=37 --set first_layer_speed=23 "
+			  "--set travel_speed_z=7");
+	assert_feed(g, "External perimeter", false, 25 * 60);
+	assert_feed(g, "Perimeter", false, 40 * 60);
+	assert_feed(g, "Internal infill", false, 70 * 60);
+	assert_feed(g, "Top solid infill", false, 19 * 60);
+	assert_feed(g, "Bridge infill", false, 17 * 60);
+	/* An absolute first-layer speed replaces every role's there. */
+	assert_feed(g, "External perimeter", true, 23 * 60);
+	assert_feed(g, "Skirt/Brim", true, 23 * 60);
+	assert_feed(g, "Bottom solid infill", true, 23 * 60);
+	ck_assert_msg(strstr(g, "Z10.2 F420\n"), "Z moves at travel_speed_z");
+	assert_header(g, "external_perimeter_speed = 25");
+	assert_header(g, "solid_infill_speed = 33");
+	assert_header(g, "top_solid_infill_speed = 19");
+	assert_header(g, "bridge_speed = 17");
+	assert_header(g, "travel_speed_z = 7");
+	free(g);
+}
+END_TEST
+
+/* Percentages, PrusaSlicer's way: each of its own base key, and the
+ * first layer's of each role's own speed. */
+START_TEST(speed_percentages_resolved)
+{
+	char model[4096];
+	char *g;
+
+	model_file(fx_bridge(), "bridge.stl", model, sizeof(model));
+	g = slice(model, STEADY "--set perimeter_speed=40 --set external_perimeter_speed=50% "
+			  "--set infill_speed=70 --set solid_infill_speed=60% "
+			  "--set top_solid_infill_speed=50% --set support_material_speed=37 "
+			  "--set first_layer_speed=50%");
+	assert_feed(g, "External perimeter", false, 20 * 60);
+	assert_feed(g, "Top solid infill", false, 21 * 60); /* 50% of 60% of 70 */
+	assert_feed(g, "External perimeter", true, 10 * 60);
+	assert_feed(g, "Perimeter", true, 20 * 60);
+	/* Skirt and brim print at support_material_speed, as in PrusaSlicer. */
+	assert_feed(g, "Skirt/Brim", true, 18.5 * 60);
+	/* The header lists what was printed with, the percentage resolved. */
+	assert_header(g, "external_perimeter_speed = 20");
+	assert_header(g, "solid_infill_speed = 42");
+	assert_header(g, "top_solid_infill_speed = 21");
+	assert_header(g, "first_layer_speed = 50%");
+	free(g);
+	/* Honoured keys are not named in the warning of unsupported ones. */
+	ck_assert_msg(!strstr(out, "external_perimeter_speed="), "%s", out);
+}
+END_TEST
+
+void slicecli_settings_tcases(Suite *s)
+{
+	TCase *tc = tcase_create("settings");
+
+	tcase_set_timeout(tc, 120);
+	tcase_add_test(tc, role_speeds_honoured);
+	tcase_add_test(tc, speed_percentages_resolved);
+	suite_add_tcase(s, tc);
+}
