@@ -100,6 +100,8 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	g->first_layer_speed_is_percent = p->first_layer_speed.is_percent;
 	g->cooling = p->cooling;
 	g->fan_always_on = p->fan_always_on;
+	g->fan_on_off = p->gcode_flavor == PROFILE_FLAVOR_MAKERWARE ||
+			p->gcode_flavor == PROFILE_FLAVOR_SAILFISH;
 	g->min_fan_speed = p->min_fan_speed;
 	g->max_fan_speed = p->max_fan_speed;
 	g->bridge_fan_speed = p->bridge_fan_speed;

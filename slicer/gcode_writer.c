@@ -836,7 +836,9 @@ static void set_fan(struct gcodew *w, int percent)
 {
 	if (percent == w->fan)
 		return;
-	if (percent == 0)
+	if (w->s->fan_on_off)
+		put(w, "%s", percent ? "M126\n" : "M127\n");
+	else if (percent == 0)
 		put(w, "M107\n");
 	else
 		put(w, "M106 S%ld\n", lround(percent * 255.0 / 100));

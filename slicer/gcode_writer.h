@@ -122,6 +122,10 @@ struct gcodew_settings {
 	double fan_below_layer_time;	  /* s; 60 */
 	double slowdown_below_layer_time; /* s; 5 */
 	double min_print_speed;		  /* mm/s; 10 */
+	/* The part fan is only switched, M126 on / M127 off, as PrusaSlicer
+	 * writes it for the makerware and sailfish flavours (their M106 drives
+	 * another fan); false: M106 S0-255 / M107 */
+	bool fan_on_off;
 
 	/* Machine limits, for the estimates and the layer times */
 	struct est_limits limits; /* est_limits_init */

@@ -162,6 +162,73 @@ START_TEST(speed_percentages_resolved)
 }
 END_TEST
 
+/* Lines of text starting with cmd before the n-th ;LAYER_CHANGE (n = 0:
+ * in the whole text). */
+static int count_before_layer(const char *text, const char *cmd, int n)
+{
+	const char *end = text + strlen(text), *l = text;
+	int c = 0;
+
+	for (int k = 0; n > 0 && k < n && l; k++)
+		l = strstr(l + 1, "\n;LAYER_CHANGE");
+	if (n > 0 && l)
+		end = l;
+	for (l = text; l && l < end; l = strchr(l, '\n') ? strchr(l, '\n') + 1 : NULL)
+		c += !strncmp(l, cmd, strlen(cmd));
+	return c;
+}
+
+/* Every layer here takes longer than fan_below_layer_time, so the fan is
+ * off unless fan_always_on keeps it at min_fan_speed; never on the
+ * disable_fan_first_layers first layers. */
+#define LONG_LAYERS "--set fan_below_layer_time=1 --set slowdown_below_layer_time=0 "
+
+START_TEST(fan_always_on_honoured)
+{
+	char model[4096];
+	char *g;
+
+	model_file(fx_box(0, 0, 0, 20, 20, 3), "fancube.stl", model, sizeof(model));
+	g = slice(model, LONG_LAYERS "--set min_fan_speed=40 --set disable_fan_first_layers=2 "
+				     "--set fan_always_on=1");
+	ck_assert_int_eq(count_before_layer(g, "M106", 2), 0);
+	ck_assert_int_eq(count_before_layer(g, "M106 S102\n", 0), 1); /* 40% of 255 */
+	ck_assert_int_eq(count_before_layer(g, "M106", 0), 1);
+	assert_header(g, "fan_always_on = 1");
+	free(g);
+	ck_assert_msg(!strstr(out, "fan_always_on="), "%s", out);
+
+	g = slice(model, LONG_LAYERS "--set min_fan_speed=40 --set fan_always_on=0");
+	ck_assert_int_eq(count_before_layer(g, "M106", 0), 0);
+	free(g);
+}
+END_TEST
+
+/* The Creator Pro's part fan is M126/M127, as PrusaSlicer writes it for
+ * sailfish and makerware (their M106 is the extruder's heatsink fan). */
+START_TEST(sailfish_fan_is_m126)
+{
+	char model[4096], gc[4096];
+	char *g;
+	size_t len;
+	int status;
+
+	model_file(fx_box(0, 0, 0, 20, 20, 3), "ffcube.stl", model, sizeof(model));
+	snprintf(gc, sizeof(gc), "%s", tu_path("ff.gcode"));
+	status = tu_run(out, sizeof(out),
+			"slice '%s' -o '%s' --printer flashforge-creator-pro " LONG_LAYERS
+			"--set fan_always_on=1 --set disable_fan_first_layers=1",
+			model, gc);
+	ck_assert_msg(status == 0, "exit %d: %s", status, out);
+	g = tu_slurp(gc, &len);
+	ck_assert_int_eq(count_before_layer(g, "M126", 1), 0);
+	ck_assert_int_ge(count_before_layer(g, "M126", 0), 1);
+	ck_assert_int_eq(count_before_layer(g, "M106", 0), 0);
+	ck_assert_int_eq(count_before_layer(g, "M107", 0), 0);
+	free(g);
+}
+END_TEST
+
 void slicecli_settings_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("settings");
@@ -169,5 +236,7 @@ void slicecli_settings_tcases(Suite *s)
 	tcase_set_timeout(tc, 120);
 	tcase_add_test(tc, role_speeds_honoured);
 	tcase_add_test(tc, speed_percentages_resolved);
+	tcase_add_test(tc, fan_always_on_honoured);
+	tcase_add_test(tc, sailfish_fan_is_m126);
 	suite_add_tcase(s, tc);
 }
