@@ -167,10 +167,16 @@ struct profile {
 	double first_layer_height; /* mm (a percentage in the file is of layer_height) */
 	double extrusion_width;	   /* mm, 0 = auto (a percentage is of layer_height) */
 	int perimeters, top_solid_layers, bottom_solid_layers; /* defaults 3, 3, 3 */
+	const char *seam_position; /* aligned, nearest, random or rear; default aligned */
 	double fill_density;				       /* percent, 0-100; default 20 */
 	const char *fill_pattern;	/* a PrusaSlicer pattern name; default "rectilinear" */
+	double solid_infill_below_area;	/* mm^2; default 70 */
 	int skirts;			/* loops; default 1 */
+	double skirt_distance;		/* mm; default 6 */
+	int skirt_height;		/* layers, 0 = no skirt; default 1 */
+	double min_skirt_length;	/* mm of filament; default 0 */
 	double brim_width;		/* mm; default 0 */
+	double brim_separation;		/* mm; default 0 */
 	bool support_material;		/* default 0 */
 	int support_material_threshold; /* degrees, 0 = automatic; default 0 */
 

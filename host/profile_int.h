@@ -55,7 +55,7 @@ enum key_type {
 	KT_BAUD,	 /* long, a standard rate */
 	KT_USB,		 /* usb_ids */
 	KT_BED,		 /* bed_shape */
-	KT_PATTERN,	 /* fill_pattern */
+	KT_CHOICE,	 /* const char *: one of the declared names (fill_pattern ...) */
 	KT_HOME,	 /* enum profile_home */
 	KT_EXTRUDERS,	 /* extruder_count */
 };

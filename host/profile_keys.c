@@ -57,12 +57,18 @@ static const struct key_def key_defs[] = {
 	{"first_layer_height", KT_FIRST_HEIGHT, OFF(first_layer_height)},
 	{"extrusion_width", KT_WIDTH, OFF(extrusion_width)},
 	{"perimeters", KT_INT, OFF(perimeters)},
+	{"seam_position", KT_CHOICE, OFF(seam_position)},
 	{"top_solid_layers", KT_INT, OFF(top_solid_layers)},
 	{"bottom_solid_layers", KT_INT, OFF(bottom_solid_layers)},
 	{"fill_density", KT_DENSITY, OFF(fill_density)},
-	{"fill_pattern", KT_PATTERN, OFF(fill_pattern)},
+	{"fill_pattern", KT_CHOICE, OFF(fill_pattern)},
+	{"solid_infill_below_area", KT_DOUBLE, OFF(solid_infill_below_area)},
 	{"skirts", KT_INT, OFF(skirts)},
+	{"skirt_distance", KT_DOUBLE, OFF(skirt_distance)},
+	{"skirt_height", KT_INT, OFF(skirt_height)},
+	{"min_skirt_length", KT_DOUBLE, OFF(min_skirt_length)},
 	{"brim_width", KT_DOUBLE, OFF(brim_width)},
+	{"brim_separation", KT_DOUBLE, OFF(brim_separation)},
 	{"support_material", KT_BOOL, OFF(support_material)},
 	{"support_material_threshold", KT_INT, OFF(support_material_threshold)},
 	{"travel_speed", KT_DOUBLE, OFF(travel_speed)},
@@ -709,9 +715,9 @@ int prof_apply_key(struct loader *L, const struct key_def *d, const struct profi
 		}
 		p->gcode_flavor = (enum profile_flavor)idx;
 		return 0;
-	case KT_PATTERN:
+	case KT_CHOICE:
 		idx = name_index(decl->names, decl->nnames, kv->value);
-		if (idx < 0 && !strcmp(kv->value, "monotonous"))
+		if (idx < 0 && !strcmp(d->key, "fill_pattern") && !strcmp(kv->value, "monotonous"))
 			idx = 1; /* PrusaSlicer's old name of monotonic */
 		if (idx < 0) {
 			ini_show(tok, sizeof(tok), kv->value, strlen(kv->value));
@@ -719,7 +725,7 @@ int prof_apply_key(struct loader *L, const struct key_def *d, const struct profi
 			return prof_key_error(L, kv, NULL, ST_ERR_PARSE, "'%s' is not one of %s", tok,
 					 names);
 		}
-		p->fill_pattern = decl->names[idx];
+		*(const char **)field = decl->names[idx];
 		return 0;
 	case KT_HOME:
 		if (!strcmp(kv->value, "min") || !strcmp(kv->value, "max")) {

@@ -110,8 +110,8 @@ static void put_value(FILE *f, const struct profile *p, const struct key_def *d)
 	case KT_FLAVOR:
 		fputs(profile_flavor_name(p->gcode_flavor), f);
 		break;
-	case KT_PATTERN:
-		fputs(p->fill_pattern, f);
+	case KT_CHOICE:
+		fputs(*(const char *const *)field, f);
 		break;
 	case KT_HOME:
 		fputs(profile_home_name(*(const enum profile_home *)field), f);
@@ -231,8 +231,8 @@ static json_t *json_value(const struct profile *p, const struct key_def *d)
 		return json_string(profile_protocol_name(p->protocol));
 	case KT_FLAVOR:
 		return json_string(profile_flavor_name(p->gcode_flavor));
-	case KT_PATTERN:
-		return json_string(p->fill_pattern);
+	case KT_CHOICE:
+		return json_string(*(const char *const *)field);
 	case KT_HOME:
 		return json_string(profile_home_name(*(const enum profile_home *)field));
 	case KT_EX_DOUBLE:

@@ -39,6 +39,7 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	struct gcodew_settings *g = &c->gcodew;
 	double nozzle = p->nozzle_diameter[0];
 	enum infill_pattern pat;
+	int rc;
 
 	slicer_config_init(c, nozzle);
 	c->layer_height = p->layer_height;
@@ -46,6 +47,9 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	if (p->extrusion_width > 0)
 		c->perim.extrusion_width = p->extrusion_width;
 	c->perim.perimeters = p->perimeters;
+	rc = perim_seam_parse(p->seam_position, &c->perim.seam, err);
+	if (rc)
+		return rc; /* not reached: the loader accepts the declared names only */
 
 	c->infill.density = p->fill_density;
 	/* A pattern Stratum does not print is rectilinear, and named in the
@@ -56,8 +60,13 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	c->infill.bottom_solid_layers = p->bottom_solid_layers;
 	c->support.enabled = p->support_material;
 	c->support.threshold = p->support_material_threshold;
-	c->skirt.skirts = p->skirts;
-	c->skirt.brim_width = p->brim_width;
+	c->infill.solid_infill_below_area = p->solid_infill_below_area;
+	c->skirt = (struct slicer_skirt_settings){.skirts = p->skirts,
+						  .skirt_distance = p->skirt_distance,
+						  .skirt_height = p->skirt_height,
+						  .min_skirt_length = p->min_skirt_length,
+						  .brim_width = p->brim_width,
+						  .brim_separation = p->brim_separation};
 
 	c->bed = (struct slicer_bed){.min_x = p->bed_min_x, .min_y = p->bed_min_y,
 				     .max_x = p->bed_max_x, .max_y = p->bed_max_y,
@@ -117,7 +126,6 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	g->start_filament_gcode = p->start_filament_gcode;
 	g->end_filament_gcode = p->end_filament_gcode;
 	g->vars = p->vars;
-	(void)err; /* every value was typed and checked when the profile was loaded */
 	return 0;
 }
 

@@ -31,6 +31,9 @@ static const char *const pattern_names[] = {
 
 static const char *const home_names[] = {"min", "max"};
 
+/* PrusaSlicer's SeamPosition names, in enum perim_seam order. */
+static const char *const seam_names[] = {"aligned", "nearest", "random", "rear"};
+
 /* What a percentage of a speed is of (PrusaSlicer's ratio_over); the help
  * of each key says the same. */
 static const struct {
@@ -121,6 +124,9 @@ static const struct setting table[] = {
     {"extrusion_width", SETTING_NUMBER_OR_PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
      "0 = automatic; a percentage is of layer_height (as in PrusaSlicer)"},
     {"perimeters", INT, S_, 0, 100, 0, "", "3", NULL, NULL, 0, NULL, ""},
+    {"seam_position", SETTING_CHOICE, S_, 0, 0, 0, "", "aligned", NULL, CHOICES(seam_names),
+     NULL, "where closed walls start: near the seams below, nearest the nozzle, anywhere, or "
+     "at the back (largest Y); concave corners first"},
     {"top_solid_layers", INT, S_, 0, 1000, 0, "", "3", NULL, NULL, 0, NULL, ""},
     {"bottom_solid_layers", INT, S_, 0, 1000, 0, "", "3", NULL, NULL, 0, NULL, ""},
     {"fill_density", SETTING_PERCENT, S_, 0, 100, 0, "%", "20%", NULL, NULL, 0, NULL,
@@ -128,8 +134,18 @@ static const struct setting table[] = {
     {"fill_pattern", SETTING_CHOICE, S_, 0, 0, 0, "", "rectilinear", NULL, CHOICES(pattern_names),
      NULL, "PrusaSlicer's names (monotonous is read as monotonic); one Stratum does not print "
      "(PrusaSlicer's default stars ...) prints rectilinear, named in the warning"},
+    {"solid_infill_below_area", NUM, S_, 0, 1e6, 0, "mm^2", "70", NULL, NULL, 0, NULL,
+     "sparse infill islands smaller than this are solid"},
     {"skirts", INT, S_, 0, 100, 0, "", "1", NULL, NULL, 0, NULL, "loops"},
+    {"skirt_distance", NUM, S_, 0, 1000, 0, "mm", "6", NULL, NULL, 0, NULL,
+     "gap between the skirt and the part, or its brim"},
+    {"skirt_height", INT, S_, 0, 10000, 0, "", "1", NULL, NULL, 0, NULL,
+     "layers carrying the skirt; 0 = no skirt"},
+    {"min_skirt_length", NUM, S_, 0, 1e6, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "loops are added until the skirt uses this much filament"},
     {"brim_width", NUM, S_, 0, 200, 0, "mm", "0", NULL, NULL, 0, NULL, ""},
+    {"brim_separation", NUM, S_, 0, 100, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "gap between the brim and the part"},
     {"support_material", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL, ""},
     {"support_material_threshold", INT, S_, 0, 90, 0, "degrees", "0", NULL, NULL, 0, NULL,
      "0 = automatic"},

@@ -27,9 +27,10 @@ void slicer_config_init(struct slicer_config *c, double nozzle_diameter)
 	gcodew_settings_init(&c->gcodew);
 	c->gcodew.nozzle_diameter = nozzle_diameter;
 	c->infill = (struct slicer_infill_settings){
-	    .density = 20, .pattern = "rectilinear", .top_solid_layers = 3, .bottom_solid_layers = 3};
+	    .density = 20, .pattern = "rectilinear", .top_solid_layers = 3, .bottom_solid_layers = 3,
+	    .solid_infill_below_area = 70};
 	c->support = (struct slicer_support_settings){.enabled = false, .threshold = 0};
-	c->skirt = (struct slicer_skirt_settings){.skirts = 1, .brim_width = 0};
+	c->skirt = (struct slicer_skirt_settings){.skirts = 1, .skirt_distance = 6, .skirt_height = 1};
 	c->bed = (struct slicer_bed){.max_x = 200, .max_y = 200, .max_height = 200};
 }
 
@@ -227,8 +228,13 @@ static int stage_skirt(const struct slicer_config *c, const struct slice_stack *
 	int rc;
 
 	skirt_settings_init(&s, c->perim.nozzle_diameter);
-	s.skirts = c->skirt.skirts;
+	/* PrusaSlicer prints no skirt at skirt_height 0. */
+	s.skirts = c->skirt.skirt_height > 0 ? c->skirt.skirts : 0;
+	s.skirt_distance = c->skirt.skirt_distance;
+	s.skirt_height = c->skirt.skirt_height > 0 ? c->skirt.skirt_height : 1;
+	s.min_skirt_length = c->skirt.skirt_height > 0 ? c->skirt.min_skirt_length : 0;
 	s.brim_width = c->skirt.brim_width;
+	s.brim_separation = c->skirt.brim_separation;
 	s.extrusion_width = c->perim.extrusion_width;
 	s.filament_diameter = c->gcodew.filament_diameter;
 	rc = skirt_generate(&s, st, support, out, err);
@@ -250,6 +256,7 @@ static int infill_job_for(const struct slicer_config *c, const struct slice_stac
 	s.fill_density = c->infill.density;
 	s.top_solid_layers = c->infill.top_solid_layers;
 	s.bottom_solid_layers = c->infill.bottom_solid_layers;
+	s.solid_infill_below_area = c->infill.solid_infill_below_area;
 	s.layer_height = c->layer_height;
 	s.perimeter_extrusion_width = c->perim.extrusion_width;
 	s.infill_extrusion_width = c->perim.extrusion_width;

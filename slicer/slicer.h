@@ -67,6 +67,7 @@ struct slicer_infill_settings {
 	const char *pattern;	 /* fill_pattern, PrusaSlicer's name; not owned, not NULL */
 	int top_solid_layers;	 /* >= 0 */
 	int bottom_solid_layers; /* >= 0 */
+	double solid_infill_below_area; /* mm^2, >= 0 (70) */
 };
 
 struct slicer_support_settings {
@@ -75,8 +76,12 @@ struct slicer_support_settings {
 };
 
 struct slicer_skirt_settings {
-	int skirts;	   /* loops, >= 0 */
-	double brim_width; /* mm, >= 0 */
+	int skirts;		 /* loops, >= 0 (1) */
+	double skirt_distance;	 /* mm, >= 0 (6) */
+	int skirt_height;	 /* layers, 0 = no skirt (1) */
+	double min_skirt_length; /* mm of filament, >= 0 (0) */
+	double brim_width;	 /* mm, >= 0 (0) */
+	double brim_separation;	 /* mm, >= 0 (0) */
 };
 
 /* Everything a job needs; slicer_config_init gives the defaults. */

@@ -229,6 +229,123 @@ START_TEST(sailfish_fan_is_m126)
 }
 END_TEST
 
+/* Layers with a ;TYPE: role, and the smallest X its extrusions reach. */
+static int role_layers(const char *text, const char *role, double *min_x)
+{
+	char mark[128];
+	int layers = 0;
+	const char *last = NULL;
+
+	snprintf(mark, sizeof(mark), "\n;TYPE:%s\n", role);
+	*min_x = INFINITY;
+	for (const char *l = strstr(text, mark); l; l = strstr(l + 1, mark)) {
+		const char *layer = l, *next;
+
+		while (layer > text && strncmp(layer, "\n;LAYER_CHANGE", 14))
+			layer--;
+		layers += layer != last;
+		last = layer;
+		next = strstr(l + 1, "\n;TYPE:");
+		for (const char *m = l + 1; m && (!next || m < next); m = strchr(m + 1, '\n')) {
+			const char *x = m + 1;
+			size_t n = strcspn(x, "\n");
+
+			if (!strncmp(x, "G1 X", 4) && memchr(x, 'E', n))
+				*min_x = fmin(*min_x, strtod(x + 4, NULL));
+		}
+	}
+	return layers;
+}
+
+START_TEST(skirt_settings_honoured)
+{
+	char model[4096];
+	double x;
+	char *g;
+
+	/* generic-marlin's bed is 200 x 200: the part spans x 90..110. */
+	model_file(fx_box(0, 0, 0, 20, 20, 3), "skirtcube.stl", model, sizeof(model));
+	g = slice(model, "--set skirts=1 --set skirt_distance=10 --set skirt_height=3");
+	ck_assert_int_eq(role_layers(g, "Skirt/Brim", &x), 3);
+	/* A centre line 10 mm + half a bead outside the part: x 79.5..80. */
+	ck_assert_msg(x > 90 - 10.5 && x < 90 - 10, "skirt reaches x = %g", x);
+	free(g);
+	ck_assert_msg(!strstr(out, "skirt_distance=") && !strstr(out, "skirt_height="), "%s", out);
+	g = slice(model, "--set skirts=2 --set skirt_height=0");
+	ck_assert_int_eq(role_layers(g, "Skirt/Brim", &x), 0);
+	free(g);
+}
+END_TEST
+
+/* A small island's infill is solid below solid_infill_below_area. */
+START_TEST(solid_infill_below_area_honoured)
+{
+	char model[4096];
+	double x;
+	char *g;
+
+	model_file(fx_box(0, 0, 0, 8, 8, 4), "small.stl", model, sizeof(model));
+	g = slice(model, "--set solid_infill_below_area=70");
+	ck_assert_int_eq(role_layers(g, "Internal infill", &x), 0);
+	free(g);
+	g = slice(model, "--set solid_infill_below_area=0");
+	ck_assert_int_gt(role_layers(g, "Internal infill", &x), 0);
+	free(g);
+	ck_assert_msg(!strstr(out, "solid_infill_below_area="), "%s", out);
+}
+END_TEST
+
+/* External perimeter loops in text, and how many start at their rearmost
+ * point (largest Y of the loop, within 1 um). */
+static int rear_seams(const char *text, int *loops)
+{
+	double y = 0, start_y = 0, max_y = -INFINITY;
+	bool in_loop = false;
+	int rear = 0;
+
+	*loops = 0;
+	for (const char *l = text; *l; l = strchr(l, '\n') ? strchr(l, '\n') + 1 : l + strlen(l)) {
+		size_t n = strcspn(l, "\n");
+		const char *yw = memchr(l, 'Y', n);
+
+		if (!strncmp(l, ";TYPE:", 6)) {
+			if (in_loop)
+				rear += start_y >= max_y - 1e-3;
+			in_loop = !strncmp(l, ";TYPE:External perimeter\n", 25);
+			*loops += in_loop;
+			start_y = y;
+			max_y = y;
+		}
+		if (strncmp(l, "G1 ", 3))
+			continue;
+		if (yw)
+			y = strtod(yw + 1, NULL);
+		if (in_loop && memchr(l, 'E', n))
+			max_y = fmax(max_y, y);
+	}
+	return rear + (in_loop && start_y >= max_y - 1e-3);
+}
+
+START_TEST(seam_position_honoured)
+{
+	char model[4096];
+	int loops, rear;
+	char *g;
+
+	model_file(fx_sphere(0, 0, 8, 8, 16, 40), "ball.stl", model, sizeof(model));
+	g = slice(model, "--set seam_position=rear");
+	rear = rear_seams(g, &loops);
+	ck_assert_int_gt(loops, 20);
+	ck_assert_msg(rear == loops, "rear: %d of %d loops start at the back", rear, loops);
+	free(g);
+	g = slice(model, "--set seam_position=random");
+	rear = rear_seams(g, &loops);
+	ck_assert_msg(rear < loops / 2, "random: %d of %d loops start at the back", rear, loops);
+	free(g);
+	ck_assert_msg(!strstr(out, "seam_position="), "%s", out);
+}
+END_TEST
+
 void slicecli_settings_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("settings");
@@ -238,5 +355,8 @@ void slicecli_settings_tcases(Suite *s)
 	tcase_add_test(tc, speed_percentages_resolved);
 	tcase_add_test(tc, fan_always_on_honoured);
 	tcase_add_test(tc, sailfish_fan_is_m126);
+	tcase_add_test(tc, skirt_settings_honoured);
+	tcase_add_test(tc, solid_infill_below_area_honoured);
+	tcase_add_test(tc, seam_position_honoured);
 	suite_add_tcase(s, tc);
 }
