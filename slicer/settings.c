@@ -132,8 +132,9 @@ static const struct setting table[] = {
     {"fill_density", SETTING_PERCENT, S_, 0, 100, 0, "%", "20%", NULL, NULL, 0, NULL,
      "a bare number is a fraction (0.15 = 15%), as old Slic3r wrote it"},
     {"fill_pattern", SETTING_CHOICE, S_, 0, 0, 0, "", "rectilinear", NULL, CHOICES(pattern_names),
-     NULL, "PrusaSlicer's names (monotonous is read as monotonic); one Stratum does not print "
-     "(PrusaSlicer's default stars ...) prints rectilinear, named in the warning"},
+     NULL, "PrusaSlicer's names (monotonous is read as monotonic); rectilinear, grid, gyroid, "
+     "triangles, stars and cubic are printed, any other prints rectilinear, named in the "
+     "warning"},
     {"solid_infill_below_area", NUM, S_, 0, 1e6, 0, "mm^2", "70", NULL, NULL, 0, NULL,
      "sparse infill islands smaller than this are solid"},
     {"skirts", INT, S_, 0, 100, 0, "", "1", NULL, NULL, 0, NULL, "loops"},
