@@ -168,6 +168,7 @@ struct profile {
 	double extrusion_width;	   /* mm, 0 = auto (a percentage is of layer_height) */
 	int perimeters, top_solid_layers, bottom_solid_layers; /* defaults 3, 3, 3 */
 	const char *seam_position; /* aligned, nearest, random or rear; default aligned */
+	double elefant_foot_compensation; /* mm, first layer shrunk; default 0 */
 	double fill_density;				       /* percent, 0-100; default 20 */
 	const char *fill_pattern;	/* a PrusaSlicer pattern name; default "rectilinear" */
 	double solid_infill_below_area;	/* mm^2; default 70 */

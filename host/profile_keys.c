@@ -57,6 +57,7 @@ static const struct key_def key_defs[] = {
 	{"first_layer_height", KT_FIRST_HEIGHT, OFF(first_layer_height)},
 	{"extrusion_width", KT_WIDTH, OFF(extrusion_width)},
 	{"perimeters", KT_INT, OFF(perimeters)},
+	{"elefant_foot_compensation", KT_DOUBLE, OFF(elefant_foot_compensation)},
 	{"seam_position", KT_CHOICE, OFF(seam_position)},
 	{"top_solid_layers", KT_INT, OFF(top_solid_layers)},
 	{"bottom_solid_layers", KT_INT, OFF(bottom_solid_layers)},

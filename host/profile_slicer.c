@@ -47,6 +47,7 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	if (p->extrusion_width > 0)
 		c->perim.extrusion_width = p->extrusion_width;
 	c->perim.perimeters = p->perimeters;
+	c->elefant_foot_compensation = p->elefant_foot_compensation;
 	rc = perim_seam_parse(p->seam_position, &c->perim.seam, err);
 	if (rc)
 		return rc; /* not reached: the loader accepts the declared names only */

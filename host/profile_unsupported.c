@@ -91,7 +91,7 @@ static const struct known known[] = {
     {"spiral_vase", "0", NULL, NULL}, {"complete_objects", "0", NULL, NULL},
     {"fuzzy_skin", "none", NULL, NULL}, {"fuzzy_skin_*", NULL, "fuzzy_skin", "none"},
     {"draft_shield", "disabled", NULL, NULL}, {"xy_size_compensation", "0", NULL, NULL},
-    {"elefant_foot_compensation", "0", NULL, NULL}, {"z_offset", "0", NULL, NULL},
+    {"z_offset", "0", NULL, NULL},
     {"use_firmware_retraction", "0", NULL, NULL}, {"use_volumetric_e", "0", NULL, NULL},
     {"extrusion_axis", "E", NULL, NULL}, {"infill_every_layers", "1", NULL, NULL},
     {"solid_infill_every_layers", "0", NULL, NULL}, {"interface_shells", "0", NULL, NULL},

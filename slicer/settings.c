@@ -124,6 +124,8 @@ static const struct setting table[] = {
     {"extrusion_width", SETTING_NUMBER_OR_PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
      "0 = automatic; a percentage is of layer_height (as in PrusaSlicer)"},
     {"perimeters", INT, S_, 0, 100, 0, "", "3", NULL, NULL, 0, NULL, ""},
+    {"elefant_foot_compensation", NUM, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "the first layer's islands shrunk by this much (one the shrink would remove is kept)"},
     {"seam_position", SETTING_CHOICE, S_, 0, 0, 0, "", "aligned", NULL, CHOICES(seam_names),
      NULL, "where closed walls start: near the seams below, nearest the nozzle, anywhere, or "
      "at the back (largest Y); concave corners first"},

@@ -12,6 +12,7 @@
 
 #include "grow.h"
 #include "infill.h"
+#include "settings.h"
 #include "skirt.h"
 #include "support.h"
 #include "travel.h"
@@ -90,6 +91,10 @@ int slicer_config_check(const struct slicer_config *c, struct st_error *err)
 				    "empty; check bed_shape and max_print_height",
 				    c->bed.min_x, c->bed.max_x, c->bed.min_y, c->bed.max_y,
 				    c->bed.max_height);
+	rc = setting_check("slicer", "elefant_foot_compensation", c->elefant_foot_compensation,
+			   err);
+	if (rc)
+		return rc;
 	if (c->bed.has_center && !(isfinite(c->bed.center_x) && isfinite(c->bed.center_y)))
 		return st_error_set(err, ST_ERR_RANGE, "the placement centre is not a finite point");
 	if (c->threads < 0 || c->threads > SLICER_MAX_THREADS)
@@ -693,6 +698,9 @@ static int toolpaths(const struct mesh *m, const struct slicer_config *c,
 		s.open_dropped += st->layers[i].open_dropped;
 		rc = clip_expolys_clean(&st->layers[i].regions, SLICER_CLEAN_NM, err);
 	}
+	if (!rc && c->elefant_foot_compensation > 0)
+		rc = slice_layer_shrink(&st->layers[0], c->elefant_foot_compensation,
+					SLICER_CLEAN_NM, err);
 	if (rc)
 		goto out_free;
 	if (shape && !(*shape = stage_stack_new(st, err))) {

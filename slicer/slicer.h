@@ -96,6 +96,7 @@ struct slicer_config {
 	struct slicer_support_settings support;
 	struct slicer_skirt_settings skirt;
 	struct slicer_bed bed;
+	double elefant_foot_compensation; /* mm the first layer's islands shrink, >= 0 (0) */
 	int threads; /* workers for walls and infill; 0 = all online cores */
 	/* Called with a stage name ("slicing", "layers", "writing G-code") and
 	 * 0..1 done; may be NULL. */

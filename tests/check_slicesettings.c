@@ -346,6 +346,52 @@ START_TEST(seam_position_honoured)
 }
 END_TEST
 
+/* The text after the n-th ;LAYER_CHANGE line's start (n >= 1), or NULL. */
+static char *layer_start(char *text, int n)
+{
+	char *l = text;
+
+	for (int k = 0; k < n && l; k++)
+		l = strstr(l + 1, "\n;LAYER_CHANGE");
+	return l;
+}
+
+START_TEST(elefant_foot_compensation_honoured)
+{
+	char model[4096];
+	double x1, x2;
+	char *g, *second;
+
+	model_file(fx_box(0, 0, 0, 20, 20, 2), "efcube.stl", model, sizeof(model));
+	g = slice(model, "--set elefant_foot_compensation=0.3");
+	second = layer_start(g, 2);
+	ck_assert_ptr_nonnull(second);
+	ck_assert_int_gt(role_layers(second, "External perimeter", &x2), 0);
+	*second = '\0';
+	ck_assert_int_eq(role_layers(g, "External perimeter", &x1), 1);
+	/* The part spans x 90..110; its outer wall's centre line lies half a
+	 * bead inside, on the first layer 0.3 mm further in. */
+	ck_assert_msg(fabs(x1 - x2 - 0.3) < 1e-3, "first layer x %g, above %g", x1, x2);
+	free(g);
+	ck_assert_msg(!strstr(out, "elefant_foot_compensation="), "%s", out);
+
+	/* A wall too thin to shrink keeps its first layer. */
+	model_file(fx_box(0, 0, 0, 20, 0.5, 2), "efwall.stl", model, sizeof(model));
+	g = slice(model, "--set elefant_foot_compensation=0.3");
+	second = layer_start(g, 2);
+	ck_assert_ptr_nonnull(second);
+	*second = '\0';
+	long printed = 0;
+	for (const char *l = layer_start(g, 1); l && (l = strstr(l + 1, "\nG1 ")) != NULL;) {
+		size_t n = strcspn(l + 1, "\n");
+		const char *e = memchr(l + 1, 'E', n);
+		printed += e && strtod(e + 1, NULL) > 0 && (memchr(l + 1, 'X', n) || memchr(l + 1, 'Y', n));
+	}
+	ck_assert_msg(printed > 0, "the first layer prints");
+	free(g);
+}
+END_TEST
+
 void slicecli_settings_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("settings");
@@ -358,5 +404,6 @@ void slicecli_settings_tcases(Suite *s)
 	tcase_add_test(tc, skirt_settings_honoured);
 	tcase_add_test(tc, solid_infill_below_area_honoured);
 	tcase_add_test(tc, seam_position_honoured);
+	tcase_add_test(tc, elefant_foot_compensation_honoured);
 	suite_add_tcase(s, tc);
 }
