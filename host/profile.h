@@ -169,6 +169,9 @@ struct profile {
 	int perimeters, top_solid_layers, bottom_solid_layers; /* defaults 3, 3, 3 */
 	const char *seam_position; /* aligned, nearest, random or rear; default aligned */
 	double elefant_foot_compensation; /* mm, first layer shrunk; default 0 */
+	bool external_perimeters_first, thin_walls, gap_fill_enabled; /* defaults 0, 1, 1 */
+	double top_solid_min_thickness, bottom_solid_min_thickness; /* mm; defaults 0, 0 */
+	double fill_angle, bridge_angle; /* degrees; defaults 45, 0 (0 = per bridge) */
 	double fill_density;				       /* percent, 0-100; default 20 */
 	const char *fill_pattern;	/* a PrusaSlicer pattern name; default "rectilinear" */
 	double solid_infill_below_area;	/* mm^2; default 70 */

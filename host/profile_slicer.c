@@ -48,6 +48,9 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 		c->perim.extrusion_width = p->extrusion_width;
 	c->perim.perimeters = p->perimeters;
 	c->elefant_foot_compensation = p->elefant_foot_compensation;
+	c->perim.outer_first = p->external_perimeters_first;
+	c->perim.thin_walls = p->thin_walls;
+	c->perim.gap_fill = p->gap_fill_enabled;
 	rc = perim_seam_parse(p->seam_position, &c->perim.seam, err);
 	if (rc)
 		return rc; /* not reached: the loader accepts the declared names only */
@@ -62,6 +65,10 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	c->support.enabled = p->support_material;
 	c->support.threshold = p->support_material_threshold;
 	c->infill.solid_infill_below_area = p->solid_infill_below_area;
+	c->infill.top_solid_min_thickness = p->top_solid_min_thickness;
+	c->infill.bottom_solid_min_thickness = p->bottom_solid_min_thickness;
+	c->infill.fill_angle = p->fill_angle;
+	c->infill.bridge_angle = p->bridge_angle;
 	c->skirt = (struct slicer_skirt_settings){.skirts = p->skirts,
 						  .skirt_distance = p->skirt_distance,
 						  .skirt_height = p->skirt_height,

@@ -68,6 +68,8 @@ struct slicer_infill_settings {
 	int top_solid_layers;	 /* >= 0 */
 	int bottom_solid_layers; /* >= 0 */
 	double solid_infill_below_area; /* mm^2, >= 0 (70) */
+	double top_solid_min_thickness, bottom_solid_min_thickness; /* mm, >= 0 (0) */
+	double fill_angle, bridge_angle; /* degrees (45, 0 = per bridge) */
 };
 
 struct slicer_support_settings {

@@ -392,6 +392,64 @@ START_TEST(elefant_foot_compensation_honoured)
 }
 END_TEST
 
+/* Extrusion moves of role whose direction is (not) axis-aligned. */
+static void axis_moves(const char *text, const char *role, long *aligned, long *other)
+{
+	double x = 0, y = 0;
+	bool in_role = false;
+	char mark[128];
+
+	snprintf(mark, sizeof(mark), ";TYPE:%s\n", role);
+	*aligned = *other = 0;
+	for (const char *l = text; *l; l = strchr(l, '\n') ? strchr(l, '\n') + 1 : l + strlen(l)) {
+		size_t n = strcspn(l, "\n");
+		const char *xw = memchr(l, 'X', n), *yw = memchr(l, 'Y', n), *ew = memchr(l, 'E', n);
+		double nx = xw ? strtod(xw + 1, NULL) : x, ny = yw ? strtod(yw + 1, NULL) : y;
+
+		if (!strncmp(l, ";TYPE:", 6))
+			in_role = !strncmp(l, mark, strlen(mark));
+		if (strncmp(l, "G1 ", 3))
+			continue;
+		if (in_role && ew && strtod(ew + 1, NULL) > 0 && (xw || yw)) {
+			if (fabs(nx - x) < 1e-3 || fabs(ny - y) < 1e-3)
+				++*aligned;
+			else
+				++*other;
+		}
+		x = nx;
+		y = ny;
+	}
+}
+
+START_TEST(wall_order_and_fill_angle_honoured)
+{
+	char model[4096];
+	long aligned, other;
+	char *g, *l2;
+
+	model_file(fx_box(0, 0, 0, 20, 20, 3), "wallcube.stl", model, sizeof(model));
+	g = slice(model, "--set external_perimeters_first=1 --set fill_angle=0");
+	l2 = layer_start(g, 5);
+	ck_assert_ptr_nonnull(l2);
+	ck_assert_msg(strstr(l2, ";TYPE:External perimeter") < strstr(l2, ";TYPE:Perimeter"),
+		      "outer wall first");
+	axis_moves(g, "Internal infill", &aligned, &other);
+	ck_assert_msg(aligned > 0 && other == 0, "fill_angle 0: %ld along the axes, %ld not",
+		      aligned, other);
+	free(g);
+	ck_assert_msg(!strstr(out, "fill_angle=") && !strstr(out, "external_perimeters_first="),
+		      "%s", out);
+	g = slice(model, "");
+	l2 = layer_start(g, 5);
+	ck_assert_ptr_nonnull(l2);
+	ck_assert_msg(strstr(l2, ";TYPE:Perimeter") < strstr(l2, ";TYPE:External perimeter"),
+		      "inner walls first by default");
+	axis_moves(g, "Internal infill", &aligned, &other);
+	ck_assert_msg(other > aligned, "fill_angle 45: %ld along the axes, %ld not", aligned, other);
+	free(g);
+}
+END_TEST
+
 void slicecli_settings_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("settings");
@@ -405,5 +463,6 @@ void slicecli_settings_tcases(Suite *s)
 	tcase_add_test(tc, solid_infill_below_area_honoured);
 	tcase_add_test(tc, seam_position_honoured);
 	tcase_add_test(tc, elefant_foot_compensation_honoured);
+	tcase_add_test(tc, wall_order_and_fill_angle_honoured);
 	suite_add_tcase(s, tc);
 }
