@@ -93,9 +93,9 @@ struct profile_point {
 	double x, y;
 };
 
-/* A speed in mm/s, or a percentage of another speed (PrusaSlicer's
- * FloatOrPercent; slicer/settings.h names what it is of). */
-struct profile_speed {
+/* A value (a speed in mm/s, a width in mm), or a percentage of another
+ * (PrusaSlicer's FloatOrPercent; slicer/settings.h says of what). */
+struct profile_pct {
 	double value;
 	bool is_percent;
 };
@@ -172,6 +172,9 @@ struct profile {
 	bool external_perimeters_first, thin_walls, gap_fill_enabled; /* defaults 0, 1, 1 */
 	double top_solid_min_thickness, bottom_solid_min_thickness; /* mm; defaults 0, 0 */
 	double fill_angle, bridge_angle; /* degrees; defaults 45, 0 (0 = per bridge) */
+	/* mm or % of layer_height; 0 = extrusion_width; defaults 0 */
+	struct profile_pct infill_extrusion_width, solid_infill_extrusion_width;
+	struct profile_pct top_infill_extrusion_width;
 	double fill_density;				       /* percent, 0-100; default 20 */
 	const char *fill_pattern;	/* a PrusaSlicer pattern name; default "rectilinear" */
 	double solid_infill_below_area;	/* mm^2; default 70 */
@@ -188,15 +191,15 @@ struct profile {
 	double travel_speed;			       /* default 130 */
 	double travel_speed_z;			       /* 0 = machine_max_feedrate_z; default 0 */
 	double perimeter_speed;			       /* default 60 */
-	struct profile_speed external_perimeter_speed; /* default 50% */
+	struct profile_pct external_perimeter_speed; /* default 50% */
 	double infill_speed;			       /* default 80 */
-	struct profile_speed solid_infill_speed;       /* default 20 */
-	struct profile_speed top_solid_infill_speed;   /* default 15 */
+	struct profile_pct solid_infill_speed;       /* default 20 */
+	struct profile_pct top_solid_infill_speed;   /* default 15 */
 	double bridge_speed;			       /* default 60 */
 	double gap_fill_speed;			       /* default 20 */
 	double support_material_speed;		       /* default 60 */
-	struct profile_speed support_material_interface_speed; /* default 100% */
-	struct profile_speed first_layer_speed; /* a percentage is of each role's speed */
+	struct profile_pct support_material_interface_speed; /* default 100% */
+	struct profile_pct first_layer_speed; /* a percentage is of each role's speed */
 
 	/* Travel */
 	bool avoid_crossing_perimeters;		    /* default 1 */

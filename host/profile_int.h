@@ -48,7 +48,7 @@ enum key_type {
 	KT_FIRST_BOOL,	 /* bool; likewise */
 	KT_FIRST_HEIGHT, /* first_layer_height: mm or % of layer_height */
 	KT_WIDTH,	 /* extrusion_width: mm or % of layer_height, 0 = auto */
-	KT_SPEED_PCT,	 /* struct profile_speed: mm/s or % */
+	KT_NUM_PCT,	 /* struct profile_pct: a number (mm/s, mm) or % */
 	KT_DENSITY,	 /* fill_density: N% or a fraction 0-1 */
 	KT_PROTOCOL,	 /* enum profile_protocol */
 	KT_FLAVOR,	 /* enum profile_flavor */

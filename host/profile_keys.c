@@ -56,6 +56,9 @@ static const struct key_def key_defs[] = {
 	{"layer_height", KT_DOUBLE, OFF(layer_height)},
 	{"first_layer_height", KT_FIRST_HEIGHT, OFF(first_layer_height)},
 	{"extrusion_width", KT_WIDTH, OFF(extrusion_width)},
+	{"infill_extrusion_width", KT_NUM_PCT, OFF(infill_extrusion_width)},
+	{"solid_infill_extrusion_width", KT_NUM_PCT, OFF(solid_infill_extrusion_width)},
+	{"top_infill_extrusion_width", KT_NUM_PCT, OFF(top_infill_extrusion_width)},
 	{"perimeters", KT_INT, OFF(perimeters)},
 	{"elefant_foot_compensation", KT_DOUBLE, OFF(elefant_foot_compensation)},
 	{"seam_position", KT_CHOICE, OFF(seam_position)},
@@ -82,15 +85,15 @@ static const struct key_def key_defs[] = {
 	{"travel_speed", KT_DOUBLE, OFF(travel_speed)},
 	{"travel_speed_z", KT_DOUBLE, OFF(travel_speed_z)},
 	{"perimeter_speed", KT_DOUBLE, OFF(perimeter_speed)},
-	{"external_perimeter_speed", KT_SPEED_PCT, OFF(external_perimeter_speed)},
+	{"external_perimeter_speed", KT_NUM_PCT, OFF(external_perimeter_speed)},
 	{"infill_speed", KT_DOUBLE, OFF(infill_speed)},
-	{"solid_infill_speed", KT_SPEED_PCT, OFF(solid_infill_speed)},
-	{"top_solid_infill_speed", KT_SPEED_PCT, OFF(top_solid_infill_speed)},
+	{"solid_infill_speed", KT_NUM_PCT, OFF(solid_infill_speed)},
+	{"top_solid_infill_speed", KT_NUM_PCT, OFF(top_solid_infill_speed)},
 	{"bridge_speed", KT_DOUBLE, OFF(bridge_speed)},
 	{"gap_fill_speed", KT_DOUBLE, OFF(gap_fill_speed)},
 	{"support_material_speed", KT_DOUBLE, OFF(support_material_speed)},
-	{"support_material_interface_speed", KT_SPEED_PCT, OFF(support_material_interface_speed)},
-	{"first_layer_speed", KT_SPEED_PCT, OFF(first_layer_speed)},
+	{"support_material_interface_speed", KT_NUM_PCT, OFF(support_material_interface_speed)},
+	{"first_layer_speed", KT_NUM_PCT, OFF(first_layer_speed)},
 	{"avoid_crossing_perimeters", KT_BOOL, OFF(avoid_crossing_perimeters)},
 	{"only_retract_when_crossing_perimeters", KT_BOOL, OFF(only_retract_when_crossing_perimeters)},
 	{"max_unretracted_travel", KT_DOUBLE, OFF(max_unretracted_travel)},
@@ -662,7 +665,7 @@ int prof_apply_key(struct loader *L, const struct key_def *d, const struct profi
 		return 0;
 	case KT_FIRST_HEIGHT:
 	case KT_WIDTH:
-	case KT_SPEED_PCT:
+	case KT_NUM_PCT:
 		rc = pct_or_number(L, kv, &v, &pct);
 		if (rc)
 			return rc;
@@ -686,7 +689,7 @@ int prof_apply_key(struct loader *L, const struct key_def *d, const struct profi
 			pend->width_pct = pct;
 			pend->width = v;
 		} else {
-			*(struct profile_speed *)field = (struct profile_speed){v, pct};
+			*(struct profile_pct *)field = (struct profile_pct){v, pct};
 		}
 		return 0;
 	case KT_DENSITY:

@@ -51,9 +51,9 @@ static void put_value(FILE *f, const struct profile *p, const struct key_def *d)
 	case KT_WIDTH:
 		put_double(f, *(const double *)field);
 		break;
-	case KT_SPEED_PCT:
-		put_double(f, ((const struct profile_speed *)field)->value);
-		if (((const struct profile_speed *)field)->is_percent)
+	case KT_NUM_PCT:
+		put_double(f, ((const struct profile_pct *)field)->value);
+		if (((const struct profile_pct *)field)->is_percent)
 			fputc('%', f);
 		break;
 	case KT_DENSITY:
@@ -205,8 +205,8 @@ static json_t *json_value(const struct profile *p, const struct key_def *d)
 	case KT_FIRST_HEIGHT:
 	case KT_WIDTH:
 		return json_real(*(const double *)field);
-	case KT_SPEED_PCT: {
-		const struct profile_speed *sp = field;
+	case KT_NUM_PCT: {
+		const struct profile_pct *sp = field;
 
 		if (sp->is_percent) {
 			char buf[48];

@@ -27,9 +27,17 @@ static void limits_from_profile(const struct profile *p, struct est_limits *lim)
 }
 
 /* A speed in mm/s, or its percentage of base. */
-static double speed_of(const struct profile_speed *sp, double base)
+static double speed_of(const struct profile_pct *sp, double base)
 {
 	return sp->is_percent ? sp->value / 100 * base : sp->value;
+}
+
+/* A width in mm, or its percentage of the layer height; 0 means dflt. */
+static double width_of(const struct profile_pct *w, const struct profile *p, double dflt)
+{
+	double v = w->is_percent ? w->value / 100 * p->layer_height : w->value;
+
+	return v > 0 ? v : dflt;
 }
 
 /* The slicer's settings from p (profile_slicer.h). */
@@ -68,6 +76,12 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	c->infill.top_solid_min_thickness = p->top_solid_min_thickness;
 	c->infill.bottom_solid_min_thickness = p->bottom_solid_min_thickness;
 	c->infill.fill_angle = p->fill_angle;
+	c->infill.infill_extrusion_width =
+	    width_of(&p->infill_extrusion_width, p, c->perim.extrusion_width);
+	c->infill.solid_infill_extrusion_width =
+	    width_of(&p->solid_infill_extrusion_width, p, c->perim.extrusion_width);
+	c->infill.top_infill_extrusion_width =
+	    width_of(&p->top_infill_extrusion_width, p, c->perim.extrusion_width);
 	c->infill.bridge_angle = p->bridge_angle;
 	c->skirt = (struct slicer_skirt_settings){.skirts = p->skirts,
 						  .skirt_distance = p->skirt_distance,

@@ -247,6 +247,12 @@ static int stage_skirt(const struct slicer_config *c, const struct slice_stack *
 	return rc;
 }
 
+/* A role's width w, or the walls' when w is 0. */
+static double width_or(double w, const struct slicer_config *c)
+{
+	return w > 0 ? w : c->perim.extrusion_width;
+}
+
 /* The infill job (infill.h) of the settings: the walls' width, the job's flow. */
 static int infill_job_for(const struct slicer_config *c, const struct slice_stack *st,
 			  struct infill_job **job, struct st_error *err)
@@ -268,9 +274,9 @@ static int infill_job_for(const struct slicer_config *c, const struct slice_stac
 	s.bridge_angle = c->infill.bridge_angle;
 	s.layer_height = c->layer_height;
 	s.perimeter_extrusion_width = c->perim.extrusion_width;
-	s.infill_extrusion_width = c->perim.extrusion_width;
-	s.solid_infill_extrusion_width = c->perim.extrusion_width;
-	s.top_infill_extrusion_width = c->perim.extrusion_width;
+	s.infill_extrusion_width = width_or(c->infill.infill_extrusion_width, c);
+	s.solid_infill_extrusion_width = width_or(c->infill.solid_infill_extrusion_width, c);
+	s.top_infill_extrusion_width = width_or(c->infill.top_infill_extrusion_width, c);
 	return infill_job_new(&s, st, job, err);
 }
 

@@ -450,6 +450,24 @@ START_TEST(wall_order_and_fill_angle_honoured)
 }
 END_TEST
 
+/* Per-role infill widths: mm, or a percentage of layer_height (0.2). */
+START_TEST(infill_widths_honoured)
+{
+	char model[4096];
+	char *g;
+
+	model_file(fx_box(0, 0, 0, 20, 20, 3), "widthcube.stl", model, sizeof(model));
+	g = slice(model, "--set infill_extrusion_width=0.6 --set solid_infill_extrusion_width=0.5 "
+			 "--set top_infill_extrusion_width=200%");
+	assert_header(g, "extrusion width (Internal infill) = 0.6 mm");
+	assert_header(g, "extrusion width (Bottom solid infill) = 0.5 mm");
+	assert_header(g, "extrusion width (Top solid infill) = 0.4 mm");
+	assert_header(g, "extrusion width (Perimeter) = 0.45 mm");
+	free(g);
+	ck_assert_msg(!strstr(out, "infill_extrusion_width="), "%s", out);
+}
+END_TEST
+
 void slicecli_settings_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("settings");
@@ -464,5 +482,6 @@ void slicecli_settings_tcases(Suite *s)
 	tcase_add_test(tc, seam_position_honoured);
 	tcase_add_test(tc, elefant_foot_compensation_honoured);
 	tcase_add_test(tc, wall_order_and_fill_angle_honoured);
+	tcase_add_test(tc, infill_widths_honoured);
 	suite_add_tcase(s, tc);
 }
