@@ -212,6 +212,7 @@ struct profile {
 	int min_fan_speed, max_fan_speed; /* percent; defaults 35, 100 */
 	int bridge_fan_speed;		  /* percent; default 100 */
 	int disable_fan_first_layers;	  /* layers; default 3 */
+	int full_fan_speed_layer;	  /* 1-based, 0 = no ramp; default 0 */
 	int fan_below_layer_time;	  /* s; default 60 */
 	int slowdown_below_layer_time;	  /* s; default 5 */
 	double min_print_speed;		  /* mm/s; default 10 */

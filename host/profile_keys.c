@@ -103,6 +103,7 @@ static const struct key_def key_defs[] = {
 	{"max_fan_speed", KT_FIRST_INT, OFF(max_fan_speed)},
 	{"bridge_fan_speed", KT_FIRST_INT, OFF(bridge_fan_speed)},
 	{"disable_fan_first_layers", KT_FIRST_INT, OFF(disable_fan_first_layers)},
+	{"full_fan_speed_layer", KT_FIRST_INT, OFF(full_fan_speed_layer)},
 	{"fan_below_layer_time", KT_FIRST_INT, OFF(fan_below_layer_time)},
 	{"slowdown_below_layer_time", KT_FIRST_INT, OFF(slowdown_below_layer_time)},
 	{"min_print_speed", KT_FIRST_DOUBLE, OFF(min_print_speed)},

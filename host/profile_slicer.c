@@ -137,6 +137,7 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	g->max_fan_speed = p->max_fan_speed;
 	g->bridge_fan_speed = p->bridge_fan_speed;
 	g->disable_fan_first_layers = p->disable_fan_first_layers;
+	g->full_fan_speed_layer = p->full_fan_speed_layer;
 	g->fan_below_layer_time = p->fan_below_layer_time;
 	g->slowdown_below_layer_time = p->slowdown_below_layer_time;
 	g->min_print_speed = p->min_print_speed;

@@ -96,6 +96,7 @@ static const struct key keys[] = {
     KI(max_fan_speed, true),
     KI(bridge_fan_speed, true),
     KI(disable_fan_first_layers, true),
+    KI(full_fan_speed_layer, true),
     KD(fan_below_layer_time, true),
     KD(slowdown_below_layer_time, true),
     KD(min_print_speed, true),
@@ -399,7 +400,7 @@ struct gcodew {
 	long long wf;	    /* mm/min, last written, 0 none */
 	int fan;	    /* percent written, -1 unknown */
 	int layer_fan;	    /* percent for this layer's non-bridge paths */
-	bool bridge_fan;    /* bridges may use bridge_fan_speed on this layer */
+	int bridge_fan;	    /* percent for bridges on this layer; -1: layer_fan */
 	size_t moves;
 	double filament_mm;
 };
@@ -761,12 +762,31 @@ static int layer_time(struct gcodew *w, const double start[EST_AXES], double f, 
 	return rc;
 }
 
+/* The first layer (0-based) the fan may run on: a ramp starts on layer 2
+ * at the earliest (PrusaSlicer). */
+static size_t first_fan_layer(const struct gcodew_settings *s)
+{
+	return s->disable_fan_first_layers <= 0 && s->full_fan_speed_layer > 0
+		   ? 1
+		   : (size_t)s->disable_fan_first_layers;
+}
+
+/* fan percent on layer li, ramped up to full at full_fan_speed_layer (1-based). */
+static int fan_ramp(const struct gcodew_settings *s, size_t li, int fan)
+{
+	double d = (double)first_fan_layer(s);
+
+	if ((int)li + 1 >= s->full_fan_speed_layer)
+		return fan;
+	return (int)lround(fan * ((double)li + 1 - d) / (s->full_fan_speed_layer - d));
+}
+
 /* Fan percent of layer li taking t seconds (PrusaSlicer's rule). */
 static int fan_for(const struct gcodew_settings *s, size_t li, double t)
 {
 	int fan;
 
-	if (li < (size_t)s->disable_fan_first_layers)
+	if (li < first_fan_layer(s))
 		return 0;
 	fan = s->fan_always_on ? s->min_fan_speed : 0;
 	if (!s->cooling)
@@ -778,7 +798,7 @@ static int fan_for(const struct gcodew_settings *s, size_t li, double t)
 			   (s->fan_below_layer_time - s->slowdown_below_layer_time);
 		fan = (int)lround(k * s->min_fan_speed + (1 - k) * s->max_fan_speed);
 	}
-	return fan;
+	return fan_ramp(s, li, fan);
 }
 
 /* Decide the layer's fan and slow its extrusions down if it is too fast. */
@@ -791,7 +811,9 @@ static int cool_layer(struct gcodew *w, size_t li, const double start[EST_AXES])
 	if (rc)
 		return rc;
 	w->layer_fan = fan_for(s, li, t);
-	w->bridge_fan = s->cooling && li >= (size_t)s->disable_fan_first_layers;
+	w->bridge_fan = s->cooling && li >= first_fan_layer(s)
+			    ? fan_ramp(s, li, s->bridge_fan_speed)
+			    : -1;
 	if (!s->cooling || t >= target || w->nops == 0)
 		return 0;
 	rc = layer_time(w, start, 0, &t);
@@ -934,8 +956,8 @@ static int emit_ops(struct gcodew *w)
 		const struct op *o = &w->ops[i];
 		if (o->kind == OP_ROLE) {
 			put(w, ";TYPE:%s\n", path_role_name(o->role));
-			set_fan(w, o->role == PATH_BRIDGE && w->bridge_fan ? w->s->bridge_fan_speed
-									  : w->layer_fan);
+			set_fan(w, o->role == PATH_BRIDGE && w->bridge_fan >= 0 ? w->bridge_fan
+									       : w->layer_fan);
 		} else {
 			rc = emit_move(w, o);
 		}

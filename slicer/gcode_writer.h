@@ -33,7 +33,9 @@
  * fan is off for the first disable_fan_first_layers layers, at
  * max_fan_speed below slowdown_below_layer_time, interpolated down to
  * min_fan_speed at fan_below_layer_time, and off above (min_fan_speed with
- * fan_always_on); bridges run at bridge_fan_speed.  A layer faster than
+ * fan_always_on); bridges run at bridge_fan_speed; with
+ * full_fan_speed_layer both ramp up linearly to full on that layer.  The
+ * fan is M106/M107, or M126/M127 with fan_on_off.  A layer faster than
  * slowdown_below_layer_time has its extrusion moves slowed down uniformly
  * until it takes that long, never below min_print_speed (a move already
  * slower keeps its speed).
@@ -119,6 +121,7 @@ struct gcodew_settings {
 	int max_fan_speed;		  /* percent; 100 */
 	int bridge_fan_speed;		  /* percent; 100 */
 	int disable_fan_first_layers;	  /* 3 */
+	int full_fan_speed_layer;	  /* the fan ramps up to full on this layer (1-based); 0 */
 	double fan_below_layer_time;	  /* s; 60 */
 	double slowdown_below_layer_time; /* s; 5 */
 	double min_print_speed;		  /* mm/s; 10 */

@@ -212,6 +212,8 @@ static const struct setting table[] = {
     {"bridge_fan_speed", INT, FI, 0, 100, 0, "%", "100", NULL, NULL, 0, NULL, ""},
     {"disable_fan_first_layers", INT, FI, 0, 1000, 0, "", "3", NULL, NULL, 0, NULL,
      "layers printed with the fan off"},
+    {"full_fan_speed_layer", INT, FI, 0, 1000, 0, "", "0", NULL, NULL, 0, NULL,
+     "the fan ramps up from disable_fan_first_layers to full speed on this layer; 0 = no ramp"},
     {"fan_below_layer_time", INT, FI, 0, 3600, 0, "s", "60", NULL, NULL, 0, NULL, ""},
     {"slowdown_below_layer_time", INT, FI, 0, 3600, 0, "s", "5", NULL, NULL, 0, NULL, ""},
     {"min_print_speed", NUM, FI, 0, 1000, GT, "mm/s", "10", NULL, NULL, 0, NULL,

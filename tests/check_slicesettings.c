@@ -468,6 +468,29 @@ START_TEST(infill_widths_honoured)
 }
 END_TEST
 
+/* full_fan_speed_layer ramps the fan up as PrusaSlicer 2.5 does: from
+ * disable_fan_first_layers (1: fan from layer 2) to full on layer 5. */
+START_TEST(fan_ramp_honoured)
+{
+	static const char *const want[] = {"M106 S64\n", "M106 S128\n", "M106 S191\n", "M106 S255\n"};
+	char model[4096];
+	char *g;
+
+	model_file(fx_box(0, 0, 0, 20, 20, 3), "rampcube.stl", model, sizeof(model));
+	g = slice(model, "--set disable_fan_first_layers=1 --set full_fan_speed_layer=5 "
+			 "--set fan_below_layer_time=1000 --set slowdown_below_layer_time=0 "
+			 "--set min_fan_speed=100");
+	for (int k = 0; k < 4; k++) {
+		char *at = strstr(layer_start(g, k + 2), want[k]);
+		ck_assert_msg(at && at < layer_start(g, k + 3), "layer %d: no %s", k + 2, want[k]);
+	}
+	ck_assert_int_eq(count_before_layer(g, "M106", 2), 0);
+	assert_header(g, "full_fan_speed_layer = 5");
+	free(g);
+	ck_assert_msg(!strstr(out, "full_fan_speed_layer="), "%s", out);
+}
+END_TEST
+
 void slicecli_settings_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("settings");
@@ -483,5 +506,6 @@ void slicecli_settings_tcases(Suite *s)
 	tcase_add_test(tc, elefant_foot_compensation_honoured);
 	tcase_add_test(tc, wall_order_and_fill_angle_honoured);
 	tcase_add_test(tc, infill_widths_honoured);
+	tcase_add_test(tc, fan_ramp_honoured);
 	suite_add_tcase(s, tc);
 }
