@@ -192,6 +192,7 @@ struct profile {
 	double travel_speed_z;			       /* 0 = machine_max_feedrate_z; default 0 */
 	double perimeter_speed;			       /* default 60 */
 	struct profile_pct external_perimeter_speed; /* default 50% */
+	struct profile_pct small_perimeter_speed;    /* default 15 */
 	double infill_speed;			       /* default 80 */
 	struct profile_pct solid_infill_speed;       /* default 20 */
 	struct profile_pct top_solid_infill_speed;   /* default 15 */

@@ -86,6 +86,7 @@ static const struct key_def key_defs[] = {
 	{"travel_speed_z", KT_DOUBLE, OFF(travel_speed_z)},
 	{"perimeter_speed", KT_DOUBLE, OFF(perimeter_speed)},
 	{"external_perimeter_speed", KT_NUM_PCT, OFF(external_perimeter_speed)},
+	{"small_perimeter_speed", KT_NUM_PCT, OFF(small_perimeter_speed)},
 	{"infill_speed", KT_DOUBLE, OFF(infill_speed)},
 	{"solid_infill_speed", KT_NUM_PCT, OFF(solid_infill_speed)},
 	{"top_solid_infill_speed", KT_NUM_PCT, OFF(top_solid_infill_speed)},

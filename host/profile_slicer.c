@@ -118,6 +118,7 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	g->travel_speed_z = p->travel_speed_z;
 	g->perimeter_speed = p->perimeter_speed;
 	g->external_perimeter_speed = speed_of(&p->external_perimeter_speed, p->perimeter_speed);
+	g->small_perimeter_speed = speed_of(&p->small_perimeter_speed, p->perimeter_speed);
 	g->infill_speed = p->infill_speed;
 	g->solid_infill_speed = speed_of(&p->solid_infill_speed, p->infill_speed);
 	g->top_solid_infill_speed = speed_of(&p->top_solid_infill_speed, g->solid_infill_speed);

@@ -80,6 +80,7 @@ static const struct key keys[] = {
     KD(max_unretracted_travel, false),
     KD(perimeter_speed, false),
     KD(external_perimeter_speed, false),
+    KD(small_perimeter_speed, false),
     KD(infill_speed, false),
     KD(solid_infill_speed, false),
     KD(top_solid_infill_speed, false),
@@ -557,11 +558,30 @@ static double role_base_speed(const struct gcodew_settings *s, enum path_role ro
 	}
 }
 
-/* Print speed of a role on layer li (0-based): the first layer's replaces
- * it, or scales it when a percentage. */
-static double role_speed(const struct gcodew_settings *s, enum path_role role, size_t li)
+/* A closed wall this long or shorter prints at small_perimeter_speed
+ * (PrusaSlicer's SMALL_PERIMETER_LENGTH: a circle of radius 6.5 mm), mm. */
+#define SMALL_PERIMETER_MM (2 * M_PI * 6.5)
+
+/* Whether p is a small perimeter: a closed wall loop at most SMALL_PERIMETER_MM long. */
+static bool small_perimeter(const struct toolpath *p)
 {
-	double v = role_base_speed(s, role);
+	double len = 0;
+
+	if (!p->closed || (p->role != PATH_OUTER_PERIMETER && p->role != PATH_INNER_PERIMETER))
+		return false;
+	for (size_t k = 0; k < p->n && len <= SMALL_PERIMETER_MM; k++) {
+		const struct path_point *a = &p->pts[k], *b = &p->pts[(k + 1) % p->n];
+		len += hypot((double)(b->x - a->x), (double)(b->y - a->y)) / SLICE_UNITS_PER_MM;
+	}
+	return len <= SMALL_PERIMETER_MM;
+}
+
+/* Print speed of path p on layer li (0-based): its role's, or
+ * small_perimeter_speed for a small wall loop; the first layer's replaces
+ * it, or scales it when a percentage. */
+static double path_speed(const struct gcodew_settings *s, const struct toolpath *p, size_t li)
+{
+	double v = small_perimeter(p) ? s->small_perimeter_speed : role_base_speed(s, p->role);
 
 	if (li > 0 || s->first_layer_speed <= 0)
 		return v;
@@ -614,7 +634,7 @@ static int plan_path(struct gcodew *w, const struct layer_paths *l, size_t li, s
 	const struct gcodew_settings *s = w->s;
 	const struct toolpath *p = &l->paths[pi];
 	size_t steps = p->closed ? p->n + 1 : p->n;
-	double speed = role_speed(s, p->role, li), h = l->height;
+	double speed = path_speed(s, p, li), h = l->height;
 	const struct path_point *q0 = &p->pts[trav(p, rev, 0)];
 	int rc;
 

@@ -102,6 +102,7 @@ struct gcodew_settings {
 	/* Speeds, mm/s */
 	double perimeter_speed;			 /* 60 */
 	double external_perimeter_speed;	 /* 30 (50% of perimeter_speed) */
+	double small_perimeter_speed;		 /* closed walls up to 2 pi 6.5 mm long; 15 */
 	double infill_speed;			 /* 80 */
 	double solid_infill_speed;		 /* 20 */
 	double top_solid_infill_speed;		 /* 15 */

@@ -40,6 +40,7 @@ static const struct {
 	const char *key, *of;
 } pct_bases[] = {
     {"external_perimeter_speed", "perimeter_speed"},
+    {"small_perimeter_speed", "perimeter_speed"},
     {"solid_infill_speed", "infill_speed"},
     {"top_solid_infill_speed", "solid_infill_speed"},
     {"support_material_interface_speed", "support_material_speed"},
@@ -181,6 +182,9 @@ static const struct setting table[] = {
      "inner walls"},
     {"external_perimeter_speed", PCT, S_, 0, 1000, GT, "mm/s", "50%", NULL, NULL, 0, NULL,
      "outermost walls and thin walls; a percentage is of perimeter_speed"},
+    {"small_perimeter_speed", PCT, S_, 0, 1000, GT, "mm/s", "15", NULL, NULL, 0, NULL,
+     "closed walls at most 2 pi 6.5 mm long (PrusaSlicer's small perimeters); a percentage is "
+     "of perimeter_speed"},
     {"infill_speed", NUM, S_, 0, 1000, GT, "mm/s", "80", NULL, NULL, 0, NULL, "sparse infill"},
     {"solid_infill_speed", PCT, S_, 0, 1000, GT, "mm/s", "20", NULL, NULL, 0, NULL,
      "solid infill and bottom skin; a percentage is of infill_speed"},

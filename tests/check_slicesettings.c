@@ -100,6 +100,19 @@ static void assert_header(const char *text, const char *line)
 	ck_assert_msg(strstr(text, want), "the header has no '%s'", line);
 }
 
+/* fx_bridge twice as wide and deep: pillars of 10 x 20 mm, so no wall loop
+ * is a small perimeter (at most 2 pi 6.5 mm long). */
+static struct mesh *wide_bridge(void)
+{
+	struct mesh *m = fx_bridge();
+
+	for (size_t i = 0; i < m->nverts; i++) {
+		m->verts[i][0] *= 2;
+		m->verts[i][1] *= 2;
+	}
+	return m;
+}
+
 /* Cooling off, so no layer is slowed down and every feed is the setting's. */
 #define STEADY "--set cooling=0 "
 
@@ -108,7 +121,7 @@ START_TEST(role_speeds_honoured)
 	char model[4096];
 	char *g;
 
-	model_file(fx_bridge(), "bridge.stl", model, sizeof(model));
+	model_file(wide_bridge(), "bridge.stl", model, sizeof(model));
 	g = slice(model, STEADY "--set perimeter_speed=40 --set external_perimeter_speed=25 "
 			  "--set infill_speed=70 --set solid_infill_speed=33 "
 			  "--set top_solid_infill_speed=19 --set bridge_speed=17 "
@@ -140,7 +153,7 @@ START_TEST(speed_percentages_resolved)
 	char model[4096];
 	char *g;
 
-	model_file(fx_bridge(), "bridge.stl", model, sizeof(model));
+	model_file(wide_bridge(), "bridge.stl", model, sizeof(model));
 	g = slice(model, STEADY "--set perimeter_speed=40 --set external_perimeter_speed=50% "
 			  "--set infill_speed=70 --set solid_infill_speed=60% "
 			  "--set top_solid_infill_speed=50% --set support_material_speed=37 "
@@ -491,6 +504,26 @@ START_TEST(fan_ramp_honoured)
 }
 END_TEST
 
+/* Closed walls at most 2 pi 6.5 mm long print at small_perimeter_speed (a
+ * percentage of perimeter_speed), as in PrusaSlicer; longer ones do not. */
+START_TEST(small_perimeter_speed_honoured)
+{
+	char model[4096];
+	char *g;
+
+	model_file(fx_box(0, 0, 0, 8, 8, 2), "smallbox.stl", model, sizeof(model));
+	g = slice(model, STEADY "--set perimeter_speed=40 --set small_perimeter_speed=50%");
+	assert_feed(g, "External perimeter", false, 20 * 60);
+	assert_feed(g, "Perimeter", false, 20 * 60);
+	assert_header(g, "small_perimeter_speed = 20");
+	free(g);
+	model_file(fx_box(0, 0, 0, 16, 16, 2), "bigbox.stl", model, sizeof(model));
+	g = slice(model, STEADY "--set perimeter_speed=40 --set small_perimeter_speed=50%");
+	assert_feed(g, "Perimeter", false, 40 * 60);
+	free(g);
+}
+END_TEST
+
 void slicecli_settings_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("settings");
@@ -507,5 +540,6 @@ void slicecli_settings_tcases(Suite *s)
 	tcase_add_test(tc, wall_order_and_fill_angle_honoured);
 	tcase_add_test(tc, infill_widths_honoured);
 	tcase_add_test(tc, fan_ramp_honoured);
+	tcase_add_test(tc, small_perimeter_speed_honoured);
 	suite_add_tcase(s, tc);
 }
