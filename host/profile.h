@@ -172,6 +172,8 @@ struct profile {
 	bool external_perimeters_first, thin_walls, gap_fill_enabled; /* defaults 0, 1, 1 */
 	double top_solid_min_thickness, bottom_solid_min_thickness; /* mm; defaults 0, 0 */
 	double fill_angle, bridge_angle; /* degrees; defaults 45, 0 (0 = per bridge) */
+	double bridge_flow_ratio;	 /* default 1 */
+	struct profile_pct infill_overlap; /* mm or % of extrusion_width; default 25% */
 	/* mm or % of layer_height; 0 = extrusion_width; defaults 0 */
 	struct profile_pct infill_extrusion_width, solid_infill_extrusion_width;
 	struct profile_pct top_infill_extrusion_width;

@@ -71,6 +71,8 @@ static const struct key_def key_defs[] = {
 	{"bottom_solid_min_thickness", KT_DOUBLE, OFF(bottom_solid_min_thickness)},
 	{"fill_angle", KT_DOUBLE, OFF(fill_angle)},
 	{"bridge_angle", KT_DOUBLE, OFF(bridge_angle)},
+	{"bridge_flow_ratio", KT_DOUBLE, OFF(bridge_flow_ratio)},
+	{"infill_overlap", KT_NUM_PCT, OFF(infill_overlap)},
 	{"fill_density", KT_DENSITY, OFF(fill_density)},
 	{"fill_pattern", KT_CHOICE, OFF(fill_pattern)},
 	{"solid_infill_below_area", KT_DOUBLE, OFF(solid_infill_below_area)},

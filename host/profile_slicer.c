@@ -76,6 +76,11 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	c->infill.top_solid_min_thickness = p->top_solid_min_thickness;
 	c->infill.bottom_solid_min_thickness = p->bottom_solid_min_thickness;
 	c->infill.fill_angle = p->fill_angle;
+	c->infill.bridge_flow_ratio = p->bridge_flow_ratio;
+	/* The infill stage takes a percentage of the walls' width. */
+	c->infill.infill_overlap = p->infill_overlap.is_percent
+				       ? p->infill_overlap.value
+				       : p->infill_overlap.value / c->perim.extrusion_width * 100;
 	c->infill.infill_extrusion_width =
 	    width_of(&p->infill_extrusion_width, p, c->perim.extrusion_width);
 	c->infill.solid_infill_extrusion_width =

@@ -152,6 +152,11 @@ static const struct setting table[] = {
      "direction of infill lines (sparse lines turn 90 degrees each layer)"},
     {"bridge_angle", NUM, S_, -360, 360, 0, "degrees", "0", NULL, NULL, 0, NULL,
      "direction of bridges; 0 = the best one per bridge"},
+    {"bridge_flow_ratio", NUM, S_, 0, 2, GT, "", "1", NULL, NULL, 0, NULL,
+     "bridge thread area over the nozzle's"},
+    {"infill_overlap", PCT, S_, 0, 10, 0, "mm", "25%", NULL, NULL, 0, NULL,
+     "how far infill reaches into the innermost wall; a percentage (at most 100%) is of "
+     "extrusion_width"},
     {"fill_density", SETTING_PERCENT, S_, 0, 100, 0, "%", "20%", NULL, NULL, 0, NULL,
      "a bare number is a fraction (0.15 = 15%), as old Slic3r wrote it"},
     {"fill_pattern", SETTING_CHOICE, S_, 0, 0, 0, "", "rectilinear", NULL, CHOICES(pattern_names),

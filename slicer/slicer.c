@@ -29,7 +29,8 @@ void slicer_config_init(struct slicer_config *c, double nozzle_diameter)
 	c->gcodew.nozzle_diameter = nozzle_diameter;
 	c->infill = (struct slicer_infill_settings){
 	    .density = 20, .pattern = "rectilinear", .top_solid_layers = 3, .bottom_solid_layers = 3,
-	    .solid_infill_below_area = 70, .fill_angle = 45};
+	    .solid_infill_below_area = 70, .fill_angle = 45, .bridge_flow_ratio = 1,
+	    .infill_overlap = 25};
 	c->support = (struct slicer_support_settings){.enabled = false, .threshold = 0};
 	c->skirt = (struct slicer_skirt_settings){.skirts = 1, .skirt_distance = 6, .skirt_height = 1};
 	c->bed = (struct slicer_bed){.max_x = 200, .max_y = 200, .max_height = 200};
@@ -272,6 +273,8 @@ static int infill_job_for(const struct slicer_config *c, const struct slice_stac
 	s.bottom_solid_min_thickness = c->infill.bottom_solid_min_thickness;
 	s.fill_angle = c->infill.fill_angle;
 	s.bridge_angle = c->infill.bridge_angle;
+	s.bridge_flow_ratio = c->infill.bridge_flow_ratio;
+	s.infill_overlap = c->infill.infill_overlap;
 	s.layer_height = c->layer_height;
 	s.perimeter_extrusion_width = c->perim.extrusion_width;
 	s.infill_extrusion_width = width_or(c->infill.infill_extrusion_width, c);

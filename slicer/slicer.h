@@ -70,6 +70,8 @@ struct slicer_infill_settings {
 	double solid_infill_below_area; /* mm^2, >= 0 (70) */
 	double top_solid_min_thickness, bottom_solid_min_thickness; /* mm, >= 0 (0) */
 	double fill_angle, bridge_angle; /* degrees (45, 0 = per bridge) */
+	double bridge_flow_ratio;	 /* (0, 2] (1) */
+	double infill_overlap;		 /* percent of the walls' width, 0-100 (25) */
 	/* mm: sparse, solid and bottom, top; 0 = the walls' extrusion_width (0) */
 	double infill_extrusion_width, solid_infill_extrusion_width, top_infill_extrusion_width;
 };

@@ -524,6 +524,57 @@ START_TEST(small_perimeter_speed_honoured)
 }
 END_TEST
 
+/* The smallest X the extrusions of role reach, over the whole print. */
+static double role_min_x(const char *text, const char *role)
+{
+	double x;
+
+	role_layers(text, role, &x);
+	return x;
+}
+
+/* infill_overlap (mm, or % of extrusion_width 0.45) moves the infill's
+ * ends into the innermost wall; bridge_flow_ratio thins the bridge thread. */
+START_TEST(infill_overlap_and_bridge_flow_honoured)
+{
+	char model[4096];
+	double x0, x1, x2;
+	char *g;
+	const char *bw;
+
+	model_file(fx_box(0, 0, 0, 20, 20, 3), "ovcube.stl", model, sizeof(model));
+	g = slice(model, "--set infill_overlap=0");
+	x0 = role_min_x(g, "Internal infill");
+	free(g);
+	g = slice(model, "--set infill_overlap=0.3");
+	x1 = role_min_x(g, "Internal infill");
+	free(g);
+	g = slice(model, "--set infill_overlap=50%");
+	x2 = role_min_x(g, "Internal infill");
+	free(g);
+	ck_assert_msg(fabs(x0 - x1 - 0.3) < 0.01 && fabs(x0 - x2 - 0.225) < 0.01,
+		      "infill reaches x %g, %g, %g", x0, x1, x2);
+	ck_assert_msg(!strstr(out, "infill_overlap="), "%s", out);
+
+	model_file(wide_bridge(), "flowbridge.stl", model, sizeof(model));
+	g = slice(model, "--set bridge_flow_ratio=1");
+	bw = strstr(g, "; extrusion width (Bridge infill) = ");
+	ck_assert_ptr_nonnull(bw);
+	double w1 = strtod(bw + 36, NULL);
+	free(g);
+	g = slice(model, "--set bridge_flow_ratio=0.5");
+	bw = strstr(g, "; extrusion width (Bridge infill) = ");
+	ck_assert_ptr_nonnull(bw);
+	/* Half the thread's cross-section; the header gives the bead width of
+	 * the same flow, (w - h) h + pi h^2 / 4 with h = 0.2. */
+	double w2 = strtod(bw + 36, NULL), h = 0.2;
+	double a1 = (w1 - h) * h + M_PI * h * h / 4, a2 = (w2 - h) * h + M_PI * h * h / 4;
+	ck_assert_msg(fabs(a2 / a1 - 0.5) < 0.02, "bridge width %g, was %g", w2, w1);
+	free(g);
+	ck_assert_msg(!strstr(out, "bridge_flow_ratio="), "%s", out);
+}
+END_TEST
+
 void slicecli_settings_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("settings");
@@ -541,5 +592,6 @@ void slicecli_settings_tcases(Suite *s)
 	tcase_add_test(tc, infill_widths_honoured);
 	tcase_add_test(tc, fan_ramp_honoured);
 	tcase_add_test(tc, small_perimeter_speed_honoured);
+	tcase_add_test(tc, infill_overlap_and_bridge_flow_honoured);
 	suite_add_tcase(s, tc);
 }
