@@ -287,6 +287,14 @@ START_TEST(skirt_settings_honoured)
 	g = slice(model, "--set skirts=2 --set skirt_height=0");
 	ck_assert_int_eq(role_layers(g, "Skirt/Brim", &x), 0);
 	free(g);
+	/* min_skirt_length adds loops until the skirt uses that much filament. */
+	g = slice(model, "--set skirts=1");
+	long one = role_feeds(g, "Skirt/Brim", true).moves;
+	free(g);
+	g = slice(model, "--set skirts=1 --set min_skirt_length=20");
+	ck_assert_int_gt(role_feeds(g, "Skirt/Brim", true).moves, 3 * one);
+	free(g);
+	ck_assert_msg(!strstr(out, "min_skirt_length="), "%s", out);
 }
 END_TEST
 
