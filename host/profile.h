@@ -93,6 +93,13 @@ struct profile_point {
 	double x, y;
 };
 
+/* A value (a speed in mm/s, a width in mm), or a percentage of another
+ * (PrusaSlicer's FloatOrPercent; slicer/settings.h says of what). */
+struct profile_pct {
+	double value;
+	bool is_percent;
+};
+
 /* One USB VID:PID pair from usb_ids. */
 struct profile_usb_id {
 	uint16_t vid, pid;
@@ -144,6 +151,9 @@ struct profile {
 	double retract_length[PROFILE_MAX_EXTRUDERS];		     /* mm; default 2 */
 	double retract_speed[PROFILE_MAX_EXTRUDERS];		     /* mm/s; default 40 */
 	double retract_lift[PROFILE_MAX_EXTRUDERS];		     /* mm (Z hop); default 0 */
+	double deretract_speed[PROFILE_MAX_EXTRUDERS]; /* mm/s, 0 = retract_speed; default 0 */
+	double retract_before_travel[PROFILE_MAX_EXTRUDERS]; /* mm; default 2 */
+	bool wipe; /* the first extruder's (one prints); default 0 */
 	double min_layer_height[PROFILE_MAX_EXTRUDERS];		     /* mm; default 0.07 */
 	double max_layer_height[PROFILE_MAX_EXTRUDERS]; /* mm; 0 in the file = 75% of nozzle */
 	double steps_per_mm_e[PROFILE_MAX_EXTRUDERS];	/* steps/mm; sailfish only */
@@ -157,19 +167,42 @@ struct profile {
 	double first_layer_height; /* mm (a percentage in the file is of layer_height) */
 	double extrusion_width;	   /* mm, 0 = auto (a percentage is of layer_height) */
 	int perimeters, top_solid_layers, bottom_solid_layers; /* defaults 3, 3, 3 */
+	const char *seam_position; /* aligned, nearest, random or rear; default aligned */
+	double elefant_foot_compensation; /* mm, first layer shrunk; default 0 */
+	bool external_perimeters_first, thin_walls, gap_fill_enabled; /* defaults 0, 1, 1 */
+	double top_solid_min_thickness, bottom_solid_min_thickness; /* mm; defaults 0, 0 */
+	double fill_angle, bridge_angle; /* degrees; defaults 45, 0 (0 = per bridge) */
+	double bridge_flow_ratio;	 /* default 1 */
+	struct profile_pct infill_overlap; /* mm or % of extrusion_width; default 25% */
+	/* mm or % of layer_height; 0 = extrusion_width; defaults 0 */
+	struct profile_pct infill_extrusion_width, solid_infill_extrusion_width;
+	struct profile_pct top_infill_extrusion_width;
 	double fill_density;				       /* percent, 0-100; default 20 */
 	const char *fill_pattern;	/* a PrusaSlicer pattern name; default "rectilinear" */
+	double solid_infill_below_area;	/* mm^2; default 70 */
 	int skirts;			/* loops; default 1 */
+	double skirt_distance;		/* mm; default 6 */
+	int skirt_height;		/* layers, 0 = no skirt; default 1 */
+	double min_skirt_length;	/* mm of filament; default 0 */
 	double brim_width;		/* mm; default 0 */
+	double brim_separation;		/* mm; default 0 */
 	bool support_material;		/* default 0 */
 	int support_material_threshold; /* degrees, 0 = automatic; default 0 */
 
-	/* Speeds, mm/s */
-	double travel_speed;	  /* default 130 */
-	double perimeter_speed;	  /* default 60 */
-	double infill_speed;	  /* default 80 */
-	double first_layer_speed; /* mm/s, or percent when first_layer_speed_is_percent */
-	bool first_layer_speed_is_percent;
+	/* Speeds, mm/s (a percentage is of the key slicer/settings.h names) */
+	double travel_speed;			       /* default 130 */
+	double travel_speed_z;			       /* 0 = machine_max_feedrate_z; default 0 */
+	double perimeter_speed;			       /* default 60 */
+	struct profile_pct external_perimeter_speed; /* default 50% */
+	struct profile_pct small_perimeter_speed;    /* default 15 */
+	double infill_speed;			       /* default 80 */
+	struct profile_pct solid_infill_speed;       /* default 20 */
+	struct profile_pct top_solid_infill_speed;   /* default 15 */
+	double bridge_speed;			       /* default 60 */
+	double gap_fill_speed;			       /* default 20 */
+	double support_material_speed;		       /* default 60 */
+	struct profile_pct support_material_interface_speed; /* default 100% */
+	struct profile_pct first_layer_speed; /* a percentage is of each role's speed */
 
 	/* Travel */
 	bool avoid_crossing_perimeters;		    /* default 1 */
@@ -178,9 +211,11 @@ struct profile {
 
 	/* Cooling (per filament in PrusaSlicer: the first is used) */
 	bool cooling;			  /* default 1 */
+	bool fan_always_on;		  /* default 0 */
 	int min_fan_speed, max_fan_speed; /* percent; defaults 35, 100 */
 	int bridge_fan_speed;		  /* percent; default 100 */
 	int disable_fan_first_layers;	  /* layers; default 3 */
+	int full_fan_speed_layer;	  /* 1-based, 0 = no ramp; default 0 */
 	int fan_below_layer_time;	  /* s; default 60 */
 	int slowdown_below_layer_time;	  /* s; default 5 */
 	double min_print_speed;		  /* mm/s; default 10 */

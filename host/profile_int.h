@@ -48,14 +48,14 @@ enum key_type {
 	KT_FIRST_BOOL,	 /* bool; likewise */
 	KT_FIRST_HEIGHT, /* first_layer_height: mm or % of layer_height */
 	KT_WIDTH,	 /* extrusion_width: mm or % of layer_height, 0 = auto */
-	KT_SPEED_PCT,	 /* first_layer_speed: mm/s or % */
+	KT_NUM_PCT,	 /* struct profile_pct: a number (mm/s, mm) or % */
 	KT_DENSITY,	 /* fill_density: N% or a fraction 0-1 */
 	KT_PROTOCOL,	 /* enum profile_protocol */
 	KT_FLAVOR,	 /* enum profile_flavor */
 	KT_BAUD,	 /* long, a standard rate */
 	KT_USB,		 /* usb_ids */
 	KT_BED,		 /* bed_shape */
-	KT_PATTERN,	 /* fill_pattern */
+	KT_CHOICE,	 /* const char *: one of the declared names (fill_pattern ...) */
 	KT_HOME,	 /* enum profile_home */
 	KT_EXTRUDERS,	 /* extruder_count */
 };

@@ -48,32 +48,65 @@ static const struct key_def key_defs[] = {
 	{"retract_length", KT_EX_DOUBLE, OFF(retract_length)},
 	{"retract_speed", KT_EX_DOUBLE, OFF(retract_speed)},
 	{"retract_lift", KT_EX_DOUBLE, OFF(retract_lift)},
+	{"deretract_speed", KT_EX_DOUBLE, OFF(deretract_speed)},
+	{"retract_before_travel", KT_EX_DOUBLE, OFF(retract_before_travel)},
+	{"wipe", KT_FIRST_BOOL, OFF(wipe)},
 	{"min_layer_height", KT_EX_DOUBLE, OFF(min_layer_height)},
 	{"max_layer_height", KT_EX_DOUBLE, OFF(max_layer_height)},
 	{"layer_height", KT_DOUBLE, OFF(layer_height)},
 	{"first_layer_height", KT_FIRST_HEIGHT, OFF(first_layer_height)},
 	{"extrusion_width", KT_WIDTH, OFF(extrusion_width)},
+	{"infill_extrusion_width", KT_NUM_PCT, OFF(infill_extrusion_width)},
+	{"solid_infill_extrusion_width", KT_NUM_PCT, OFF(solid_infill_extrusion_width)},
+	{"top_infill_extrusion_width", KT_NUM_PCT, OFF(top_infill_extrusion_width)},
 	{"perimeters", KT_INT, OFF(perimeters)},
+	{"elefant_foot_compensation", KT_DOUBLE, OFF(elefant_foot_compensation)},
+	{"seam_position", KT_CHOICE, OFF(seam_position)},
+	{"external_perimeters_first", KT_BOOL, OFF(external_perimeters_first)},
+	{"thin_walls", KT_BOOL, OFF(thin_walls)},
+	{"gap_fill_enabled", KT_BOOL, OFF(gap_fill_enabled)},
 	{"top_solid_layers", KT_INT, OFF(top_solid_layers)},
 	{"bottom_solid_layers", KT_INT, OFF(bottom_solid_layers)},
+	{"top_solid_min_thickness", KT_DOUBLE, OFF(top_solid_min_thickness)},
+	{"bottom_solid_min_thickness", KT_DOUBLE, OFF(bottom_solid_min_thickness)},
+	{"fill_angle", KT_DOUBLE, OFF(fill_angle)},
+	{"bridge_angle", KT_DOUBLE, OFF(bridge_angle)},
+	{"bridge_flow_ratio", KT_DOUBLE, OFF(bridge_flow_ratio)},
+	{"infill_overlap", KT_NUM_PCT, OFF(infill_overlap)},
 	{"fill_density", KT_DENSITY, OFF(fill_density)},
-	{"fill_pattern", KT_PATTERN, OFF(fill_pattern)},
+	{"fill_pattern", KT_CHOICE, OFF(fill_pattern)},
+	{"solid_infill_below_area", KT_DOUBLE, OFF(solid_infill_below_area)},
 	{"skirts", KT_INT, OFF(skirts)},
+	{"skirt_distance", KT_DOUBLE, OFF(skirt_distance)},
+	{"skirt_height", KT_INT, OFF(skirt_height)},
+	{"min_skirt_length", KT_DOUBLE, OFF(min_skirt_length)},
 	{"brim_width", KT_DOUBLE, OFF(brim_width)},
+	{"brim_separation", KT_DOUBLE, OFF(brim_separation)},
 	{"support_material", KT_BOOL, OFF(support_material)},
 	{"support_material_threshold", KT_INT, OFF(support_material_threshold)},
 	{"travel_speed", KT_DOUBLE, OFF(travel_speed)},
+	{"travel_speed_z", KT_DOUBLE, OFF(travel_speed_z)},
 	{"perimeter_speed", KT_DOUBLE, OFF(perimeter_speed)},
+	{"external_perimeter_speed", KT_NUM_PCT, OFF(external_perimeter_speed)},
+	{"small_perimeter_speed", KT_NUM_PCT, OFF(small_perimeter_speed)},
 	{"infill_speed", KT_DOUBLE, OFF(infill_speed)},
-	{"first_layer_speed", KT_SPEED_PCT, OFF(first_layer_speed)},
+	{"solid_infill_speed", KT_NUM_PCT, OFF(solid_infill_speed)},
+	{"top_solid_infill_speed", KT_NUM_PCT, OFF(top_solid_infill_speed)},
+	{"bridge_speed", KT_DOUBLE, OFF(bridge_speed)},
+	{"gap_fill_speed", KT_DOUBLE, OFF(gap_fill_speed)},
+	{"support_material_speed", KT_DOUBLE, OFF(support_material_speed)},
+	{"support_material_interface_speed", KT_NUM_PCT, OFF(support_material_interface_speed)},
+	{"first_layer_speed", KT_NUM_PCT, OFF(first_layer_speed)},
 	{"avoid_crossing_perimeters", KT_BOOL, OFF(avoid_crossing_perimeters)},
 	{"only_retract_when_crossing_perimeters", KT_BOOL, OFF(only_retract_when_crossing_perimeters)},
 	{"max_unretracted_travel", KT_DOUBLE, OFF(max_unretracted_travel)},
 	{"cooling", KT_FIRST_BOOL, OFF(cooling)},
+	{"fan_always_on", KT_FIRST_BOOL, OFF(fan_always_on)},
 	{"min_fan_speed", KT_FIRST_INT, OFF(min_fan_speed)},
 	{"max_fan_speed", KT_FIRST_INT, OFF(max_fan_speed)},
 	{"bridge_fan_speed", KT_FIRST_INT, OFF(bridge_fan_speed)},
 	{"disable_fan_first_layers", KT_FIRST_INT, OFF(disable_fan_first_layers)},
+	{"full_fan_speed_layer", KT_FIRST_INT, OFF(full_fan_speed_layer)},
 	{"fan_below_layer_time", KT_FIRST_INT, OFF(fan_below_layer_time)},
 	{"slowdown_below_layer_time", KT_FIRST_INT, OFF(slowdown_below_layer_time)},
 	{"min_print_speed", KT_FIRST_DOUBLE, OFF(min_print_speed)},
@@ -636,7 +669,7 @@ int prof_apply_key(struct loader *L, const struct key_def *d, const struct profi
 		return 0;
 	case KT_FIRST_HEIGHT:
 	case KT_WIDTH:
-	case KT_SPEED_PCT:
+	case KT_NUM_PCT:
 		rc = pct_or_number(L, kv, &v, &pct);
 		if (rc)
 			return rc;
@@ -660,8 +693,7 @@ int prof_apply_key(struct loader *L, const struct key_def *d, const struct profi
 			pend->width_pct = pct;
 			pend->width = v;
 		} else {
-			p->first_layer_speed = v;
-			p->first_layer_speed_is_percent = pct;
+			*(struct profile_pct *)field = (struct profile_pct){v, pct};
 		}
 		return 0;
 	case KT_DENSITY:
@@ -698,9 +730,9 @@ int prof_apply_key(struct loader *L, const struct key_def *d, const struct profi
 		}
 		p->gcode_flavor = (enum profile_flavor)idx;
 		return 0;
-	case KT_PATTERN:
+	case KT_CHOICE:
 		idx = name_index(decl->names, decl->nnames, kv->value);
-		if (idx < 0 && !strcmp(kv->value, "monotonous"))
+		if (idx < 0 && !strcmp(d->key, "fill_pattern") && !strcmp(kv->value, "monotonous"))
 			idx = 1; /* PrusaSlicer's old name of monotonic */
 		if (idx < 0) {
 			ini_show(tok, sizeof(tok), kv->value, strlen(kv->value));
@@ -708,7 +740,7 @@ int prof_apply_key(struct loader *L, const struct key_def *d, const struct profi
 			return prof_key_error(L, kv, NULL, ST_ERR_PARSE, "'%s' is not one of %s", tok,
 					 names);
 		}
-		p->fill_pattern = decl->names[idx];
+		*(const char **)field = decl->names[idx];
 		return 0;
 	case KT_HOME:
 		if (!strcmp(kv->value, "min") || !strcmp(kv->value, "max")) {

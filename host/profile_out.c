@@ -51,9 +51,9 @@ static void put_value(FILE *f, const struct profile *p, const struct key_def *d)
 	case KT_WIDTH:
 		put_double(f, *(const double *)field);
 		break;
-	case KT_SPEED_PCT:
-		put_double(f, p->first_layer_speed);
-		if (p->first_layer_speed_is_percent)
+	case KT_NUM_PCT:
+		put_double(f, ((const struct profile_pct *)field)->value);
+		if (((const struct profile_pct *)field)->is_percent)
 			fputc('%', f);
 		break;
 	case KT_DENSITY:
@@ -110,8 +110,8 @@ static void put_value(FILE *f, const struct profile *p, const struct key_def *d)
 	case KT_FLAVOR:
 		fputs(profile_flavor_name(p->gcode_flavor), f);
 		break;
-	case KT_PATTERN:
-		fputs(p->fill_pattern, f);
+	case KT_CHOICE:
+		fputs(*(const char *const *)field, f);
 		break;
 	case KT_HOME:
 		fputs(profile_home_name(*(const enum profile_home *)field), f);
@@ -205,14 +205,17 @@ static json_t *json_value(const struct profile *p, const struct key_def *d)
 	case KT_FIRST_HEIGHT:
 	case KT_WIDTH:
 		return json_real(*(const double *)field);
-	case KT_SPEED_PCT:
-		if (p->first_layer_speed_is_percent) {
+	case KT_NUM_PCT: {
+		const struct profile_pct *sp = field;
+
+		if (sp->is_percent) {
 			char buf[48];
-			prof_fmt_double(buf, sizeof(buf) - 1, p->first_layer_speed);
+			prof_fmt_double(buf, sizeof(buf) - 1, sp->value);
 			strcat(buf, "%");
 			return json_string(buf);
 		}
-		return json_real(p->first_layer_speed);
+		return json_real(sp->value);
+	}
 	case KT_DENSITY:
 		return json_real(p->fill_density);
 	case KT_INT:
@@ -228,8 +231,8 @@ static json_t *json_value(const struct profile *p, const struct key_def *d)
 		return json_string(profile_protocol_name(p->protocol));
 	case KT_FLAVOR:
 		return json_string(profile_flavor_name(p->gcode_flavor));
-	case KT_PATTERN:
-		return json_string(p->fill_pattern);
+	case KT_CHOICE:
+		return json_string(*(const char *const *)field);
 	case KT_HOME:
 		return json_string(profile_home_name(*(const enum profile_home *)field));
 	case KT_EX_DOUBLE:

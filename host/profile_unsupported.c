@@ -1,8 +1,7 @@
 /*
  * profile_unsupported.c - which keys of a loaded profile Stratum does not
  * honour (profile.h, profile_unsupported).  A key is honoured when the
- * loader types it (slicer/settings.h, except the keys the slicer still
- * fixes itself), when it cannot change what Stratum prints (names, notes,
+ * loader types it (slicer/settings.h), when it cannot change what Stratum prints (names, notes,
  * the GUI's and the print host's keys, multi-material and wipe tower
  * settings of a single-extruder print ...), or when its value asks for
  * what Stratum does anyway (raft_layers = 0, ironing = 0, spiral_vase = 0).
@@ -68,9 +67,6 @@ static const struct known known[] = {
     {"support_material_interface_extruder", NULL, "support_material", "0"},
     {"wipe_tower", NULL, NULL, NULL}, /* PrusaSlicer builds none for one extruder */
     {"wipe_tower_*", NULL, NULL, NULL},
-    /* The fixed values of keys the slicer sets itself (settings.c) */
-    {"external_perimeter_speed", "50%", NULL, NULL},
-    {"support_material_interface_speed", "100%", NULL, NULL},
     {"wiping_volumes_*", NULL, NULL, NULL}, {"single_extruder_multi_material", "0", NULL, NULL},
     {"single_extruder_multi_material_priming", NULL, NULL, NULL},
     {"cooling_tube_*", NULL, NULL, NULL}, {"parking_pos_retraction", NULL, NULL, NULL},
@@ -95,7 +91,7 @@ static const struct known known[] = {
     {"spiral_vase", "0", NULL, NULL}, {"complete_objects", "0", NULL, NULL},
     {"fuzzy_skin", "none", NULL, NULL}, {"fuzzy_skin_*", NULL, "fuzzy_skin", "none"},
     {"draft_shield", "disabled", NULL, NULL}, {"xy_size_compensation", "0", NULL, NULL},
-    {"elefant_foot_compensation", "0", NULL, NULL}, {"z_offset", "0", NULL, NULL},
+    {"z_offset", "0", NULL, NULL},
     {"use_firmware_retraction", "0", NULL, NULL}, {"use_volumetric_e", "0", NULL, NULL},
     {"extrusion_axis", "E", NULL, NULL}, {"infill_every_layers", "1", NULL, NULL},
     {"solid_infill_every_layers", "0", NULL, NULL}, {"interface_shells", "0", NULL, NULL},
@@ -109,9 +105,7 @@ static const struct known known[] = {
     {"retract_before_wipe", NULL, "wipe", "0"}, {"max_volumetric_speed", "0", NULL, NULL},
     {"filament_max_volumetric_speed", "0", NULL, NULL},
     {"max_volumetric_extrusion_rate_slope_*", "0", NULL, NULL},
-    {"solid_infill_below_area", "70", NULL, NULL}, {"thin_walls", "1", NULL, NULL},
-    {"gap_fill_enabled", "1", NULL, NULL}, {"infill_first", "0", NULL, NULL},
-    {"brim_*", NULL, "brim_width", "0"}, {"min_skirt_length", "0", NULL, NULL},
+    {"infill_first", "0", NULL, NULL}, {"brim_*", NULL, "brim_width", "0"},
     {"support_material_*", NULL, "support_material", "0"},
     {"dont_support_bridges", NULL, "support_material", "0"},
     {"default_acceleration", "0", NULL, NULL}, {"perimeter_acceleration", "0", NULL, NULL},
@@ -164,9 +158,6 @@ static bool honoured(const struct profile *p, const struct profile_kv *kv)
 	const struct known *k;
 
 	k = find_known(kv->key);
-	/* A key the slicer still fixes is honoured at the value it fixes. */
-	if (s && (s->flags & SETTING_SLICER_ONLY))
-		return same_value(kv->value, k && k->ok ? k->ok : s->dflt ? s->dflt : "");
 	if (s)
 		return true;
 	if (!k)

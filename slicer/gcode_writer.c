@@ -80,6 +80,7 @@ static const struct key keys[] = {
     KD(max_unretracted_travel, false),
     KD(perimeter_speed, false),
     KD(external_perimeter_speed, false),
+    KD(small_perimeter_speed, false),
     KD(infill_speed, false),
     KD(solid_infill_speed, false),
     KD(top_solid_infill_speed, false),
@@ -96,6 +97,7 @@ static const struct key keys[] = {
     KI(max_fan_speed, true),
     KI(bridge_fan_speed, true),
     KI(disable_fan_first_layers, true),
+    KI(full_fan_speed_layer, true),
     KD(fan_below_layer_time, true),
     KD(slowdown_below_layer_time, true),
     KD(min_print_speed, true),
@@ -399,7 +401,7 @@ struct gcodew {
 	long long wf;	    /* mm/min, last written, 0 none */
 	int fan;	    /* percent written, -1 unknown */
 	int layer_fan;	    /* percent for this layer's non-bridge paths */
-	bool bridge_fan;    /* bridges may use bridge_fan_speed on this layer */
+	int bridge_fan;	    /* percent for bridges on this layer; -1: layer_fan */
 	size_t moves;
 	double filament_mm;
 };
@@ -527,11 +529,9 @@ static int plan_travel(struct gcodew *w, double x, double y)
 	return rc;
 }
 
-/* Print speed of a role on layer li (0-based). */
-static double role_speed(const struct gcodew_settings *s, enum path_role role, size_t li)
+/* Print speed of a role, PrusaSlicer's choice of key. */
+static double role_base_speed(const struct gcodew_settings *s, enum path_role role)
 {
-	if (li == 0 && s->first_layer_speed > 0)
-		return s->first_layer_speed;
 	switch (role) {
 	case PATH_OUTER_PERIMETER:
 	case PATH_THIN_WALL:
@@ -548,12 +548,45 @@ static double role_speed(const struct gcodew_settings *s, enum path_role role, s
 	case PATH_BRIDGE:
 		return s->bridge_speed;
 	case PATH_SUPPORT:
+	case PATH_SKIRT:
+	case PATH_BRIM:
 		return s->support_material_speed;
 	case PATH_SUPPORT_INTERFACE:
 		return s->support_material_interface_speed;
-	default: /* perimeters, skirt, brim */
+	default: /* inner perimeters */
 		return s->perimeter_speed;
 	}
+}
+
+/* A closed wall this long or shorter prints at small_perimeter_speed
+ * (PrusaSlicer's SMALL_PERIMETER_LENGTH: a circle of radius 6.5 mm), mm. */
+#define SMALL_PERIMETER_MM (2 * M_PI * 6.5)
+
+/* Whether p is a small perimeter: a closed wall loop at most SMALL_PERIMETER_MM long. */
+static bool small_perimeter(const struct toolpath *p)
+{
+	double len = 0;
+
+	if (!p->closed || (p->role != PATH_OUTER_PERIMETER && p->role != PATH_INNER_PERIMETER))
+		return false;
+	for (size_t k = 0; k < p->n && len <= SMALL_PERIMETER_MM; k++) {
+		const struct path_point *a = &p->pts[k], *b = &p->pts[(k + 1) % p->n];
+		len += hypot((double)(b->x - a->x), (double)(b->y - a->y)) / SLICE_UNITS_PER_MM;
+	}
+	return len <= SMALL_PERIMETER_MM;
+}
+
+/* Print speed of path p on layer li (0-based): its role's, or
+ * small_perimeter_speed for a small wall loop; the first layer's replaces
+ * it, or scales it when a percentage. */
+static double path_speed(const struct gcodew_settings *s, const struct toolpath *p, size_t li)
+{
+	double v = small_perimeter(p) ? s->small_perimeter_speed : role_base_speed(s, p->role);
+
+	if (li > 0 || s->first_layer_speed <= 0)
+		return v;
+	return s->first_layer_speed_is_percent ? v * s->first_layer_speed / 100
+					       : s->first_layer_speed;
 }
 
 /* Point index of step k (0 .. n or n-1) of a path printed forwards or
@@ -601,7 +634,7 @@ static int plan_path(struct gcodew *w, const struct layer_paths *l, size_t li, s
 	const struct gcodew_settings *s = w->s;
 	const struct toolpath *p = &l->paths[pi];
 	size_t steps = p->closed ? p->n + 1 : p->n;
-	double speed = role_speed(s, p->role, li), h = l->height;
+	double speed = path_speed(s, p, li), h = l->height;
 	const struct path_point *q0 = &p->pts[trav(p, rev, 0)];
 	int rc;
 
@@ -749,12 +782,31 @@ static int layer_time(struct gcodew *w, const double start[EST_AXES], double f, 
 	return rc;
 }
 
+/* The first layer (0-based) the fan may run on: a ramp starts on layer 2
+ * at the earliest (PrusaSlicer). */
+static size_t first_fan_layer(const struct gcodew_settings *s)
+{
+	return s->disable_fan_first_layers <= 0 && s->full_fan_speed_layer > 0
+		   ? 1
+		   : (size_t)s->disable_fan_first_layers;
+}
+
+/* fan percent on layer li, ramped up to full at full_fan_speed_layer (1-based). */
+static int fan_ramp(const struct gcodew_settings *s, size_t li, int fan)
+{
+	double d = (double)first_fan_layer(s);
+
+	if ((int)li + 1 >= s->full_fan_speed_layer)
+		return fan;
+	return (int)lround(fan * ((double)li + 1 - d) / (s->full_fan_speed_layer - d));
+}
+
 /* Fan percent of layer li taking t seconds (PrusaSlicer's rule). */
 static int fan_for(const struct gcodew_settings *s, size_t li, double t)
 {
 	int fan;
 
-	if (li < (size_t)s->disable_fan_first_layers)
+	if (li < first_fan_layer(s))
 		return 0;
 	fan = s->fan_always_on ? s->min_fan_speed : 0;
 	if (!s->cooling)
@@ -766,7 +818,7 @@ static int fan_for(const struct gcodew_settings *s, size_t li, double t)
 			   (s->fan_below_layer_time - s->slowdown_below_layer_time);
 		fan = (int)lround(k * s->min_fan_speed + (1 - k) * s->max_fan_speed);
 	}
-	return fan;
+	return fan_ramp(s, li, fan);
 }
 
 /* Decide the layer's fan and slow its extrusions down if it is too fast. */
@@ -779,7 +831,9 @@ static int cool_layer(struct gcodew *w, size_t li, const double start[EST_AXES])
 	if (rc)
 		return rc;
 	w->layer_fan = fan_for(s, li, t);
-	w->bridge_fan = s->cooling && li >= (size_t)s->disable_fan_first_layers;
+	w->bridge_fan = s->cooling && li >= first_fan_layer(s)
+			    ? fan_ramp(s, li, s->bridge_fan_speed)
+			    : -1;
 	if (!s->cooling || t >= target || w->nops == 0)
 		return 0;
 	rc = layer_time(w, start, 0, &t);
@@ -824,7 +878,9 @@ static void set_fan(struct gcodew *w, int percent)
 {
 	if (percent == w->fan)
 		return;
-	if (percent == 0)
+	if (w->s->fan_on_off)
+		put(w, "%s", percent ? "M126\n" : "M127\n");
+	else if (percent == 0)
 		put(w, "M107\n");
 	else
 		put(w, "M106 S%ld\n", lround(percent * 255.0 / 100));
@@ -920,8 +976,8 @@ static int emit_ops(struct gcodew *w)
 		const struct op *o = &w->ops[i];
 		if (o->kind == OP_ROLE) {
 			put(w, ";TYPE:%s\n", path_role_name(o->role));
-			set_fan(w, o->role == PATH_BRIDGE && w->bridge_fan ? w->s->bridge_fan_speed
-									  : w->layer_fan);
+			set_fan(w, o->role == PATH_BRIDGE && w->bridge_fan >= 0 ? w->bridge_fan
+									       : w->layer_fan);
 		} else {
 			rc = emit_move(w, o);
 		}
@@ -1018,8 +1074,10 @@ static void put_header(struct gcodew *w, const struct gcodew_summary *sum)
 	put(w, "; total layers count = %zu\n", sum->layers);
 	put(w, "; total moves = %zu\n", sum->moves);
 	for (size_t i = 0; i < NKEYS; i++) {
+		bool pct = keys[i].off == offsetof(struct gcodew_settings, first_layer_speed) &&
+			   w->s->first_layer_speed_is_percent;
 		fmt_num(n, key_value(w->s, &keys[i]), 6);
-		put(w, "; %s = %s\n", keys[i].name, n);
+		put(w, "; %s = %s%s\n", keys[i].name, n, pct ? "%" : "");
 	}
 	for (int a = 0; a < EST_AXES; a++) {
 		char f[NUM_MAX], acc[NUM_MAX], j[NUM_MAX];

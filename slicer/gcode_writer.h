@@ -33,7 +33,9 @@
  * fan is off for the first disable_fan_first_layers layers, at
  * max_fan_speed below slowdown_below_layer_time, interpolated down to
  * min_fan_speed at fan_below_layer_time, and off above (min_fan_speed with
- * fan_always_on); bridges run at bridge_fan_speed.  A layer faster than
+ * fan_always_on); bridges run at bridge_fan_speed; with
+ * full_fan_speed_layer both ramp up linearly to full on that layer.  The
+ * fan is M106/M107, or M126/M127 with fan_on_off.  A layer faster than
  * slowdown_below_layer_time has its extrusion moves slowed down uniformly
  * until it takes that long, never below min_print_speed (a move already
  * slower keeps its speed).
@@ -99,17 +101,19 @@ struct gcodew_settings {
 
 	/* Speeds, mm/s */
 	double perimeter_speed;			 /* 60 */
-	double external_perimeter_speed;	 /* 30 (PrusaSlicer: 50% of perimeters) */
+	double external_perimeter_speed;	 /* 30 (50% of perimeter_speed) */
+	double small_perimeter_speed;		 /* closed walls up to 2 pi 6.5 mm long; 15 */
 	double infill_speed;			 /* 80 */
 	double solid_infill_speed;		 /* 20 */
 	double top_solid_infill_speed;		 /* 15 */
 	double bridge_speed;			 /* 60 */
 	double gap_fill_speed;			 /* 20 */
-	double support_material_speed;		 /* 60 */
-	double support_material_interface_speed; /* 60 (PrusaSlicer: 100% of support) */
+	double support_material_speed;		 /* 60, also skirt and brim */
+	double support_material_interface_speed; /* 60 (100% of support_material_speed) */
 	double travel_speed;			 /* 130 */
 	double travel_speed_z;			 /* 0 = machine_max_feedrate_z */
 	double first_layer_speed;		 /* every extrusion of layer 1; 30 (0 = off) */
+	bool first_layer_speed_is_percent;	 /* ... is a percentage of each role's speed */
 
 	/* Cooling */
 	bool cooling;			  /* true */
@@ -118,9 +122,14 @@ struct gcodew_settings {
 	int max_fan_speed;		  /* percent; 100 */
 	int bridge_fan_speed;		  /* percent; 100 */
 	int disable_fan_first_layers;	  /* 3 */
+	int full_fan_speed_layer;	  /* the fan ramps up to full on this layer (1-based); 0 */
 	double fan_below_layer_time;	  /* s; 60 */
 	double slowdown_below_layer_time; /* s; 5 */
 	double min_print_speed;		  /* mm/s; 10 */
+	/* The part fan is only switched, M126 on / M127 off, as PrusaSlicer
+	 * writes it for the makerware and sailfish flavours (their M106 drives
+	 * another fan); false: M106 S0-255 / M107 */
+	bool fan_on_off;
 
 	/* Machine limits, for the estimates and the layer times */
 	struct est_limits limits; /* est_limits_init */

@@ -85,6 +85,9 @@ struct bead {
 	bool gap_fill;
 };
 
+/* The patterns printed, for messages. */
+#define PATTERNS_PRINTED "rectilinear, grid, gyroid, triangles, stars or cubic"
+
 /* PrusaSlicer's fill_pattern values; pattern -1: known there, not printed here. */
 static const struct {
 	const char *name;
@@ -93,12 +96,12 @@ static const struct {
 	{"rectilinear", INFILL_RECTILINEAR},
 	{"grid", INFILL_GRID},
 	{"gyroid", INFILL_GYROID},
+	{"triangles", INFILL_TRIANGLES},
+	{"stars", INFILL_STARS},
+	{"cubic", INFILL_CUBIC},
 	{"alignedrectilinear", -1},
 	{"monotonic", -1},
 	{"monotoniclines", -1},
-	{"triangles", -1},
-	{"stars", -1},
-	{"cubic", -1},
 	{"line", -1},
 	{"concentric", -1},
 	{"honeycomb", -1},
@@ -145,14 +148,13 @@ int infill_pattern_parse(const char *name, enum infill_pattern *out, struct st_e
 		if (pattern_names[i].pattern < 0)
 			return st_error_set(err, ST_ERR_UNSUPPORTED,
 					    "infill: fill_pattern \"%s\" is not supported; use "
-					    "rectilinear, grid or gyroid",
+					    PATTERNS_PRINTED,
 					    name);
 		*out = (enum infill_pattern)pattern_names[i].pattern;
 		return 0;
 	}
 	return st_error_set(err, ST_ERR_ARG,
-			    "infill: fill_pattern \"%.64s\" is unknown; use rectilinear, grid or "
-			    "gyroid",
+			    "infill: fill_pattern \"%.64s\" is unknown; use " PATTERNS_PRINTED,
 			    name ? name : "(none)");
 }
 
@@ -193,8 +195,7 @@ int infill_settings_check(const struct infill_settings *s, struct st_error *err)
 				    s->fill_density);
 	if ((unsigned)s->fill_pattern >= INFILL_PATTERNS)
 		return st_error_set(err, ST_ERR_ARG,
-				    "infill: fill_pattern %d is unknown; use rectilinear, grid or "
-				    "gyroid",
+				    "infill: fill_pattern %d is unknown; use " PATTERNS_PRINTED,
 				    (int)s->fill_pattern);
 	if (!isfinite(s->fill_angle) || !isfinite(s->bridge_angle))
 		return st_error_set(err, ST_ERR_RANGE,
@@ -639,6 +640,33 @@ static int fill_solid(struct ctx *c, const struct clip_paths *X, double a,
 	return rc;
 }
 
+/*
+ * Triangles, stars and cubic, PrusaSlicer's way (FillRectilinear.cpp): three
+ * sets of lines at the fill angle plus 0, 60 and 120 degrees on every layer
+ * (no alternation), each 3 S apart so the density is that of lines S apart.
+ * Stars shifts the third set by half its period; cubic shifts the sets by
+ * +-sqrt(1/2) z, so that the layers stack into tilted cubes.
+ */
+static int three_line_sets(struct ctx *c, double S, const struct pat_box *box,
+			   struct clip_paths *lines)
+{
+	const struct infill_settings *s = c->s;
+	double a = s->fill_angle * M_PI / 180.0;
+	double dz = sqrt(0.5) * c->st->layers[c->layer].z * SLICE_UNITS_PER_MM;
+	int rc = 0;
+
+	for (int k = 0; k < 3 && !rc; k++) {
+		double phase = 0.0;
+
+		if (s->fill_pattern == INFILL_STARS && k == 2)
+			phase = 1.5 * S;
+		else if (s->fill_pattern == INFILL_CUBIC)
+			phase = k == 1 ? -dz : dz;
+		rc = pat_lines(a + k * M_PI / 3.0, 3.0 * S, phase, box, lines, c->err);
+	}
+	return rc;
+}
+
 /* Sparse infill of X at fill_density with the chosen pattern. */
 static int fill_sparse(struct ctx *c, const struct clip_paths *X, double a)
 {
@@ -660,6 +688,11 @@ static int fill_sparse(struct ctx *c, const struct clip_paths *X, double a)
 		rc = pat_lines(a, 2.0 * S, 0.0, &box, &lines, c->err);
 		if (!rc)
 			rc = pat_lines(a + M_PI / 2.0, 2.0 * S, 0.0, &box, &lines, c->err);
+		break;
+	case INFILL_TRIANGLES:
+	case INFILL_STARS:
+	case INFILL_CUBIC:
+		rc = three_line_sets(c, S, &box, &lines);
 		break;
 	default: { /* INFILL_GYROID, at the layer's mid-height */
 		double z = (c->st->layers[c->layer].z - c->h / 2.0) * SLICE_UNITS_PER_MM;

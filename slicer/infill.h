@@ -57,6 +57,9 @@ enum infill_pattern {
 	INFILL_RECTILINEAR = 0, /* "rectilinear": parallel lines, alternating 90 degrees */
 	INFILL_GRID,		/* "grid": both directions on every layer */
 	INFILL_GYROID,		/* "gyroid": sections of the gyroid surface */
+	INFILL_TRIANGLES,	/* "triangles": 3 line sets 60 degrees apart, through common points */
+	INFILL_STARS,		/* "stars": the same, the third set shifted half a period */
+	INFILL_CUBIC,		/* "cubic": the 3 sets shifted with z, stacking into cubes */
 	INFILL_PATTERNS
 };
 

@@ -11,6 +11,7 @@
 
 #include "grow.h"
 #include "medial.h"
+#include "settings.h"
 
 /* Miter limit (multiples of the offset) when restoring trimmed loops. */
 #define PERIM_MITER_LIMIT 3.0
@@ -101,8 +102,8 @@ int perim_settings_check(const struct perim_settings *s, double layer_height,
 				    s->perimeters);
 	if ((unsigned)s->seam >= PERIM_SEAMS)
 		return st_error_set(err, ST_ERR_ARG,
-				    "perimeters: seam mode %d is unknown; use aligned, nearest or "
-				    "random",
+				    "perimeters: seam mode %d is unknown; use aligned, nearest, "
+				    "random or rear",
 				    (int)s->seam);
 	if (!(s->gap_fill_min >= 0.0 && s->gap_fill_min <= 10.0))
 		return st_error_set(err, ST_ERR_RANGE,
@@ -115,6 +116,22 @@ int perim_settings_check(const struct perim_settings *s, double layer_height,
 				    "(a quarter of the extrusion width)",
 				    s->arc_tolerance, s->extrusion_width / 4.0);
 	return 0;
+}
+
+/* The names are seam_position's declaration (settings.c), in enum order. */
+int perim_seam_parse(const char *name, enum perim_seam *out, struct st_error *err)
+{
+	const struct setting *d = settings_find("seam_position");
+
+	for (size_t i = 0; name && d && i < d->nnames && i < PERIM_SEAMS; i++)
+		if (!strcmp(name, d->names[i])) {
+			*out = (enum perim_seam)i;
+			return 0;
+		}
+	return st_error_set(err, ST_ERR_ARG,
+			    "perimeters: seam_position \"%.64s\" is unknown; use aligned, nearest, "
+			    "random or rear",
+			    name ? name : "(none)");
 }
 
 struct perim_seams *perim_seams_new(unsigned seed)
@@ -227,7 +244,8 @@ static int corner_class(const int64_t *xy, size_t n, size_t i, double win)
  * Seam vertex of a closed loop: among the concave corners if any, else the
  * convex ones, else all vertices, the one nearest the previous layer's
  * seams (aligned), nearest the nozzle (nearest) or a random one; the
- * rearmost (largest y, then smallest x) when there is no reference yet.
+ * rearmost (largest y, then smallest x) when there is no reference yet, and
+ * always for rear.
  */
 static size_t pick_seam(struct ctx *c, const int64_t *xy, size_t n)
 {

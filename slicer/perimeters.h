@@ -36,8 +36,16 @@ enum perim_seam {
 	PERIM_SEAM_ALIGNED = 0, /* near the previous layer's seams */
 	PERIM_SEAM_NEAREST,	/* nearest to where the nozzle is */
 	PERIM_SEAM_RANDOM,	/* anywhere (spreads the seam blobs) */
+	PERIM_SEAM_REAR,	/* at the back: largest y, then smallest x */
 	PERIM_SEAMS
 };
+
+/*
+ * perim_seam_parse - the mode of PrusaSlicer's seam_position name
+ * ("aligned", "nearest", "random", "rear").  Returns 0, or ST_ERR_ARG naming
+ * the value and the accepted ones.
+ */
+int perim_seam_parse(const char *name, enum perim_seam *out, struct st_error *err);
 
 /* Wall settings; perim_settings_init gives the defaults. */
 struct perim_settings {

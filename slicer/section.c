@@ -499,3 +499,32 @@ out_free:
 	*out = st;
 	return 0;
 }
+
+/* An island the shrink removes keeps its outline (section.h). */
+int slice_layer_shrink(struct slice_layer *l, double mm, double tolerance, struct st_error *err)
+{
+	struct clip_paths island = {0}, shrunk = {0}, all = {0};
+	struct clip_expolys out = {0};
+	int rc = 0;
+
+	for (size_t i = 0; i < l->regions.n && !rc; i++) {
+		rc = clip_expolys_get(&l->regions, i, &island, err);
+		if (!rc)
+			rc = clip_offset(&island, -mm * SLICE_UNITS_PER_MM, CLIP_JOIN_MITER, 3.0,
+					 tolerance, &shrunk, err);
+		if (!rc)
+			rc = clip_paths_append(&all, shrunk.n ? &shrunk : &island, err);
+	}
+	if (!rc)
+		rc = clip_boolean_ex(CLIP_UNION, &all, NULL, CLIP_NONZERO, &out, err);
+	if (!rc) {
+		clip_expolys_free(&l->regions);
+		l->regions = out;
+	} else {
+		clip_expolys_free(&out);
+	}
+	clip_paths_free(&island);
+	clip_paths_free(&shrunk);
+	clip_paths_free(&all);
+	return rc;
+}

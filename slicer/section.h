@@ -74,6 +74,15 @@ int slice_settings_check(const struct slice_settings *s, double first_layer_heig
 int slice_mesh(const struct mesh *m, double first_layer_height, double layer_height,
 	       const struct slice_settings *s, struct slice_stack **out, struct st_error *err);
 
+/*
+ * slice_layer_shrink - elefant_foot_compensation: the islands of l shrunk
+ * by mm (> 0), sharp corners kept (mitred), as the squashed first layer
+ * spreads that much; an island the shrink would remove keeps its outline
+ * rather than vanish.  tolerance: nm, > 0 (the offset's arc tolerance).
+ * Returns 0, or a negative class with err filled (l unchanged).
+ */
+int slice_layer_shrink(struct slice_layer *l, double mm, double tolerance, struct st_error *err);
+
 /* slice_stack_free - free a stack and its regions; NULL is safe. */
 void slice_stack_free(struct slice_stack *st);
 

@@ -31,6 +31,21 @@ static const char *const pattern_names[] = {
 
 static const char *const home_names[] = {"min", "max"};
 
+/* PrusaSlicer's SeamPosition names, in enum perim_seam order. */
+static const char *const seam_names[] = {"aligned", "nearest", "random", "rear"};
+
+/* What a percentage of a speed is of (PrusaSlicer's ratio_over); the help
+ * of each key says the same. */
+static const struct {
+	const char *key, *of;
+} pct_bases[] = {
+    {"external_perimeter_speed", "perimeter_speed"},
+    {"small_perimeter_speed", "perimeter_speed"},
+    {"solid_infill_speed", "infill_speed"},
+    {"top_solid_infill_speed", "solid_infill_speed"},
+    {"support_material_interface_speed", "support_material_speed"},
+};
+
 static const long baud_rates[] = {2400,	  4800,	  9600,	  19200,  38400,  57600,   115200,
 				  230400, 250000, 460800, 500000, 921600, 1000000, 2000000};
 
@@ -41,8 +56,8 @@ static const long baud_rates[] = {2400,	  4800,	  9600,	  19200,  38400,  57600,
 #define LI SETTING_LIMITS
 #define GT SETTING_GT_MIN
 #define SF SETTING_SAILFISH
-#define SO SETTING_SLICER_ONLY
 #define NUM SETTING_NUMBER
+#define PCT SETTING_NUMBER_OR_PCT
 #define INT SETTING_INT
 #define BOOL SETTING_BOOL
 #define STR SETTING_STRING
@@ -92,6 +107,12 @@ static const struct setting table[] = {
     {"retract_length", NUM, EX, 0, 50, 0, "mm", "2", NULL, NULL, 0, NULL, ""},
     {"retract_speed", NUM, EX, 0, 1000, GT, "mm/s", "40", NULL, NULL, 0, NULL, ""},
     {"retract_lift", NUM, EX, 0, 50, 0, "mm", "0", NULL, NULL, 0, NULL, "Z hop"},
+    {"deretract_speed", NUM, EX, 0, 1000, 0, "mm/s", "0", NULL, NULL, 0, NULL,
+     "0 = retract_speed"},
+    {"retract_before_travel", NUM, EX, 0, 1e6, 0, "mm", "2", NULL, NULL, 0, NULL,
+     "shorter travels do not retract"},
+    {"wipe", BOOL, FI, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
+     "retract while moving back over the last path"},
     {"min_layer_height", NUM, EX, 0, 3, 0, "mm", "0.07", NULL, NULL, 0, NULL,
      "at most the nozzle and max_layer_height"},
     {"max_layer_height", NUM, EX, 0, 3, 0, "mm", "0", NULL, NULL, 0, NULL,
@@ -103,26 +124,86 @@ static const struct setting table[] = {
      "at most the smallest nozzle; a percentage is of layer_height"},
     {"extrusion_width", SETTING_NUMBER_OR_PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
      "0 = automatic; a percentage is of layer_height (as in PrusaSlicer)"},
+    {"infill_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "sparse infill; 0 = extrusion_width; a percentage is of layer_height"},
+    {"solid_infill_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "solid infill and bottom skin; likewise"},
+    {"top_infill_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "top skin; likewise"},
     {"perimeters", INT, S_, 0, 100, 0, "", "3", NULL, NULL, 0, NULL, ""},
+    {"elefant_foot_compensation", NUM, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "the first layer's islands shrunk by this much (one the shrink would remove is kept)"},
+    {"seam_position", SETTING_CHOICE, S_, 0, 0, 0, "", "aligned", NULL, CHOICES(seam_names),
+     NULL, "where closed walls start: near the seams below, nearest the nozzle, anywhere, or "
+     "at the back (largest Y); concave corners first"},
+    {"external_perimeters_first", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
+     "walls printed outside in (default: inside out)"},
+    {"thin_walls", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, NULL,
+     "one centre-line bead where two walls do not fit"},
+    {"gap_fill_enabled", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, NULL,
+     "beads in the strips left between walls"},
     {"top_solid_layers", INT, S_, 0, 1000, 0, "", "3", NULL, NULL, 0, NULL, ""},
     {"bottom_solid_layers", INT, S_, 0, 1000, 0, "", "3", NULL, NULL, 0, NULL, ""},
+    {"top_solid_min_thickness", NUM, S_, 0, 1000, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "more top layers until the top shell is this thick"},
+    {"bottom_solid_min_thickness", NUM, S_, 0, 1000, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "likewise for the bottom shell"},
+    {"fill_angle", NUM, S_, -360, 360, 0, "degrees", "45", NULL, NULL, 0, NULL,
+     "direction of infill lines (sparse lines turn 90 degrees each layer)"},
+    {"bridge_angle", NUM, S_, -360, 360, 0, "degrees", "0", NULL, NULL, 0, NULL,
+     "direction of bridges; 0 = the best one per bridge"},
+    {"bridge_flow_ratio", NUM, S_, 0, 2, GT, "", "1", NULL, NULL, 0, NULL,
+     "bridge thread area over the nozzle's"},
+    {"infill_overlap", PCT, S_, 0, 10, 0, "mm", "25%", NULL, NULL, 0, NULL,
+     "how far infill reaches into the innermost wall; a percentage (at most 100%) is of "
+     "extrusion_width"},
     {"fill_density", SETTING_PERCENT, S_, 0, 100, 0, "%", "20%", NULL, NULL, 0, NULL,
      "a bare number is a fraction (0.15 = 15%), as old Slic3r wrote it"},
     {"fill_pattern", SETTING_CHOICE, S_, 0, 0, 0, "", "rectilinear", NULL, CHOICES(pattern_names),
-     NULL, "PrusaSlicer's names (monotonous is read as monotonic); one Stratum does not print "
-     "(PrusaSlicer's default stars ...) prints rectilinear, named in the warning"},
+     NULL, "PrusaSlicer's names (monotonous is read as monotonic); rectilinear, grid, gyroid, "
+     "triangles, stars and cubic are printed, any other prints rectilinear, named in the "
+     "warning"},
+    {"solid_infill_below_area", NUM, S_, 0, 1e6, 0, "mm^2", "70", NULL, NULL, 0, NULL,
+     "sparse infill islands smaller than this are solid"},
     {"skirts", INT, S_, 0, 100, 0, "", "1", NULL, NULL, 0, NULL, "loops"},
+    {"skirt_distance", NUM, S_, 0, 1000, 0, "mm", "6", NULL, NULL, 0, NULL,
+     "gap between the skirt and the part, or its brim"},
+    {"skirt_height", INT, S_, 0, 10000, 0, "", "1", NULL, NULL, 0, NULL,
+     "layers carrying the skirt; 0 = no skirt"},
+    {"min_skirt_length", NUM, S_, 0, 1e6, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "loops are added until the skirt uses this much filament"},
     {"brim_width", NUM, S_, 0, 200, 0, "mm", "0", NULL, NULL, 0, NULL, ""},
+    {"brim_separation", NUM, S_, 0, 100, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "gap between the brim and the part"},
     {"support_material", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL, ""},
     {"support_material_threshold", INT, S_, 0, 90, 0, "degrees", "0", NULL, NULL, 0, NULL,
      "0 = automatic"},
 
     {"travel_speed", NUM, S_, 0, 1000, GT, "mm/s", "130", NULL, NULL, 0, "Speed", ""},
+    {"travel_speed_z", NUM, S_, 0, 1000, 0, "mm/s", "0", NULL, NULL, 0, NULL,
+     "Z moves; 0 = machine_max_feedrate_z (PrusaSlicer: travel_speed, which the firmware "
+     "limits to it)"},
     {"perimeter_speed", NUM, S_, 0, 1000, GT, "mm/s", "60", NULL, NULL, 0, NULL,
-     "external perimeters at half of it"},
-    {"infill_speed", NUM, S_, 0, 1000, GT, "mm/s", "80", NULL, NULL, 0, NULL, ""},
-    {"first_layer_speed", SETTING_NUMBER_OR_PCT, S_, 0, 1000, 0, "mm/s", "30", NULL, NULL, 0, NULL,
-     "0 = not slowed; a percentage is of perimeter_speed"},
+     "inner walls"},
+    {"external_perimeter_speed", PCT, S_, 0, 1000, GT, "mm/s", "50%", NULL, NULL, 0, NULL,
+     "outermost walls and thin walls; a percentage is of perimeter_speed"},
+    {"small_perimeter_speed", PCT, S_, 0, 1000, GT, "mm/s", "15", NULL, NULL, 0, NULL,
+     "closed walls at most 2 pi 6.5 mm long (PrusaSlicer's small perimeters); a percentage is "
+     "of perimeter_speed"},
+    {"infill_speed", NUM, S_, 0, 1000, GT, "mm/s", "80", NULL, NULL, 0, NULL, "sparse infill"},
+    {"solid_infill_speed", PCT, S_, 0, 1000, GT, "mm/s", "20", NULL, NULL, 0, NULL,
+     "solid infill and bottom skin; a percentage is of infill_speed"},
+    {"top_solid_infill_speed", PCT, S_, 0, 1000, GT, "mm/s", "15", NULL, NULL, 0, NULL,
+     "top skin; a percentage is of solid_infill_speed"},
+    {"bridge_speed", NUM, S_, 0, 1000, GT, "mm/s", "60", NULL, NULL, 0, NULL, ""},
+    {"gap_fill_speed", NUM, S_, 0, 1000, GT, "mm/s", "20", NULL, NULL, 0, NULL, ""},
+    {"support_material_speed", NUM, S_, 0, 1000, GT, "mm/s", "60", NULL, NULL, 0, NULL,
+     "support, skirt and brim (as PrusaSlicer)"},
+    {"support_material_interface_speed", PCT, S_, 0, 1000, GT, "mm/s", "100%", NULL, NULL, 0,
+     NULL, "a percentage is of support_material_speed"},
+    {"first_layer_speed", PCT, S_, 0, 1000, 0, "mm/s", "30", NULL, NULL, 0, NULL,
+     "every extrusion of the first layer; a percentage is of each one's own speed; 0 = not "
+     "slowed"},
 
     {"avoid_crossing_perimeters", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, "Travel",
      "route travels inside the part instead of across its walls"},
@@ -131,12 +212,17 @@ static const struct setting table[] = {
     {"max_unretracted_travel", NUM, S_, 0, 1e6, 0, "mm", "20", NULL, NULL, 0, NULL,
      "Stratum's key: longer travels inside the part retract anyway"},
 
-    {"cooling", BOOL, FI, 0, 0, 0, "", "1", NULL, NULL, 0, "Cooling", ""},
+    {"cooling", BOOL, FI, 0, 0, 0, "", "1", NULL, NULL, 0, "Cooling",
+     "the fan and slow-down by layer time"},
+    {"fan_always_on", BOOL, FI, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
+     "the fan never goes below min_fan_speed (after disable_fan_first_layers)"},
     {"min_fan_speed", INT, FI, 0, 100, 0, "%", "35", NULL, NULL, 0, NULL, "at most max_fan_speed"},
     {"max_fan_speed", INT, FI, 0, 100, 0, "%", "100", NULL, NULL, 0, NULL, ""},
     {"bridge_fan_speed", INT, FI, 0, 100, 0, "%", "100", NULL, NULL, 0, NULL, ""},
     {"disable_fan_first_layers", INT, FI, 0, 1000, 0, "", "3", NULL, NULL, 0, NULL,
      "layers printed with the fan off"},
+    {"full_fan_speed_layer", INT, FI, 0, 1000, 0, "", "0", NULL, NULL, 0, NULL,
+     "the fan ramps up from disable_fan_first_layers to full speed on this layer; 0 = no ramp"},
     {"fan_below_layer_time", INT, FI, 0, 3600, 0, "s", "60", NULL, NULL, 0, NULL, ""},
     {"slowdown_below_layer_time", INT, FI, 0, 3600, 0, "s", "5", NULL, NULL, 0, NULL, ""},
     {"min_print_speed", NUM, FI, 0, 1000, GT, "mm/s", "10", NULL, NULL, 0, NULL,
@@ -213,24 +299,6 @@ static const struct setting table[] = {
     {"toolchange_gcode", STR, S_, 0, 0, 0, "", "", NULL, NULL, 0, NULL,
      "checked, never written: one extruder prints (PrusaSlicer writes none either)"},
 
-    /* The G-code writer's settings a profile does not set yet. */
-    {"external_perimeter_speed", NUM, S_, 0, 1000, GT | SO, "mm/s", "30", NULL, NULL, 0,
-     "Fixed by the slicer (not read from a profile yet)", "half of perimeter_speed"},
-    {"solid_infill_speed", NUM, S_, 0, 1000, GT | SO, "mm/s", "20", NULL, NULL, 0, NULL, ""},
-    {"top_solid_infill_speed", NUM, S_, 0, 1000, GT | SO, "mm/s", "15", NULL, NULL, 0, NULL, ""},
-    {"bridge_speed", NUM, S_, 0, 1000, GT | SO, "mm/s", "60", NULL, NULL, 0, NULL, ""},
-    {"gap_fill_speed", NUM, S_, 0, 1000, GT | SO, "mm/s", "20", NULL, NULL, 0, NULL, ""},
-    {"support_material_speed", NUM, S_, 0, 1000, GT | SO, "mm/s", "60", NULL, NULL, 0, NULL, ""},
-    {"support_material_interface_speed", NUM, S_, 0, 1000, GT | SO, "mm/s", "60", NULL, NULL, 0,
-     NULL, ""},
-    {"travel_speed_z", NUM, S_, 0, 1000, SO, "mm/s", "0", NULL, NULL, 0, NULL,
-     "0 = travel_speed"},
-    {"deretract_speed", NUM, EX, 0, 1000, SO, "mm/s", "0", NULL, NULL, 0, NULL,
-     "0 = retract_speed"},
-    {"retract_before_travel", NUM, EX, 0, 1e6, SO, "mm", "2", NULL, NULL, 0, NULL,
-     "shorter travels do not retract"},
-    {"wipe", BOOL, EX, 0, 0, SO, "", "0", NULL, NULL, 0, NULL, ""},
-    {"fan_always_on", BOOL, FI, 0, 0, SO, "", "0", NULL, NULL, 0, NULL, ""},
 };
 
 size_t settings_count(void)
@@ -248,6 +316,14 @@ const struct setting *settings_find(const char *name)
 	for (size_t i = 0; name && i < COUNT(table); i++)
 		if (!strcmp(table[i].name, name))
 			return &table[i];
+	return NULL;
+}
+
+const char *setting_pct_of(const struct setting *s)
+{
+	for (size_t i = 0; s && i < COUNT(pct_bases); i++)
+		if (!strcmp(pct_bases[i].key, s->name))
+			return pct_bases[i].of;
 	return NULL;
 }
 
@@ -288,12 +364,24 @@ bool setting_default_number(const char *name, bool sailfish, double *out)
 {
 	const struct setting *s = settings_find(name);
 	const char *d;
+	size_t len;
+	double base;
 
 	if (!s || (s->type != SETTING_NUMBER && s->type != SETTING_INT && s->type != SETTING_BOOL &&
 		   s->type != SETTING_NUMBER_OR_PCT))
 		return false;
 	d = sailfish && s->sailfish_dflt ? s->sailfish_dflt : s->dflt;
-	return d && st_parse_double(d, strlen(d), 0, out) == ST_NUMBER_OK;
+	if (!d)
+		return false;
+	len = strlen(d);
+	if (len && d[len - 1] == '%') { /* a percentage of another key's default */
+		if (!setting_pct_of(s) || st_parse_double(d, len - 1, 0, out) != ST_NUMBER_OK ||
+		    !setting_default_number(setting_pct_of(s), sailfish, &base))
+			return false;
+		*out *= base / 100;
+		return true;
+	}
+	return st_parse_double(d, len, 0, out) == ST_NUMBER_OK;
 }
 
 int setting_check(const char *what, const char *name, double v, struct st_error *err)

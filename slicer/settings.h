@@ -46,7 +46,6 @@ enum setting_shape {
 
 #define SETTING_GT_MIN 1u      /* the minimum itself is not allowed */
 #define SETTING_SAILFISH 2u    /* matters for sailfish printers only */
-#define SETTING_SLICER_ONLY 4u /* fixed by the slicer: not read from a profile (yet) */
 
 /* One setting.  Ranges apply to every value of a list (and to both
  * coordinates of a point); a default is written in file syntax, except
@@ -73,6 +72,13 @@ const struct setting *settings_at(size_t i);
 /* settings_find - the declaration of name, or NULL. */
 const struct setting *settings_find(const char *name);
 
+/*
+ * setting_pct_of - the key a percentage of s is of (PrusaSlicer's
+ * ratio_over: external_perimeter_speed -> perimeter_speed), or NULL when s
+ * takes no percentage or its help says what it is of.
+ */
+const char *setting_pct_of(const struct setting *s);
+
 /* setting_in_range - v inside s's range (minimum excluded with SETTING_GT_MIN). */
 bool setting_in_range(const struct setting *s, double v);
 
@@ -84,8 +90,9 @@ void setting_range_text(const struct setting *s, char *buf, size_t cap);
 
 /*
  * setting_default_number - the declared default of a numeric, whole-number
- * or bool setting (sailfish: the sailfish default).  Returns false when name
- * is not declared or has no plain numeric default.
+ * or bool setting (sailfish: the sailfish default); a percentage default
+ * ("50%") is resolved against the default of the key it is of (setting_pct_of).
+ * Returns false when name is not declared or has no numeric default.
  */
 bool setting_default_number(const char *name, bool sailfish, double *out);
 

@@ -16,88 +16,6 @@
 #include "support.h"
 #include "travel.h"
 
-void slicer_config_init(struct slicer_config *c, double nozzle_diameter)
-{
-	memset(c, 0, sizeof(*c));
-	c->layer_height = 0.2;
-	c->first_layer_height = 0.2;
-	slice_settings_init(&c->slice);
-	c->slice.nozzle_diameter = nozzle_diameter;
-	perim_settings_init(&c->perim, nozzle_diameter);
-	gcodew_settings_init(&c->gcodew);
-	c->gcodew.nozzle_diameter = nozzle_diameter;
-	c->infill = (struct slicer_infill_settings){
-	    .density = 20, .pattern = "rectilinear", .top_solid_layers = 3, .bottom_solid_layers = 3};
-	c->support = (struct slicer_support_settings){.enabled = false, .threshold = 0};
-	c->skirt = (struct slicer_skirt_settings){.skirts = 1, .brim_width = 0};
-	c->bed = (struct slicer_bed){.max_x = 200, .max_y = 200, .max_height = 200};
-}
-
-int slicer_config_check(const struct slicer_config *c, struct st_error *err)
-{
-	int rc;
-
-	if (!c)
-		return st_error_set(err, ST_ERR_ARG, "slicer: no settings given");
-	if (c->slice.nozzle_diameter != c->perim.nozzle_diameter)
-		return st_error_set(err, ST_ERR_ARG,
-				    "slicer: the slicing nozzle %g mm and the walls' nozzle %g mm "
-				    "differ; set both from nozzle_diameter",
-				    c->slice.nozzle_diameter, c->perim.nozzle_diameter);
-	rc = slice_settings_check(&c->slice, c->first_layer_height, c->layer_height, err);
-	if (!rc)
-		rc = perim_settings_check(&c->perim, c->first_layer_height, err);
-	if (!rc)
-		rc = perim_settings_check(&c->perim, c->layer_height, err);
-	if (!rc)
-		rc = gcodew_settings_check(&c->gcodew, err);
-	if (rc)
-		return rc;
-	if (!(c->infill.density >= 0.0 && c->infill.density <= 100.0))
-		return st_error_set(err, ST_ERR_RANGE,
-				    "fill_density = %g%% is out of range; use 0 to 100%%",
-				    c->infill.density);
-	if (!c->infill.pattern)
-		return st_error_set(err, ST_ERR_ARG, "slicer: no fill_pattern given");
-	enum infill_pattern pattern;
-	rc = infill_pattern_parse(c->infill.pattern, &pattern, err);
-	if (rc)
-		return rc; /* before any slicing: a pattern we cannot print */
-	if (c->infill.top_solid_layers < 0 || c->infill.bottom_solid_layers < 0)
-		return st_error_set(err, ST_ERR_RANGE,
-				    "top_solid_layers = %d, bottom_solid_layers = %d: layer counts "
-				    "cannot be negative; use 0 or more",
-				    c->infill.top_solid_layers, c->infill.bottom_solid_layers);
-	if (c->support.threshold < 0 || c->support.threshold > 90)
-		return st_error_set(err, ST_ERR_RANGE,
-				    "support_material_threshold = %d is out of range; use 0 "
-				    "(automatic) to 90 degrees",
-				    c->support.threshold);
-	if (c->skirt.skirts < 0)
-		return st_error_set(err, ST_ERR_RANGE,
-				    "skirts = %d: the loop count cannot be negative; use 0 or more",
-				    c->skirt.skirts);
-	if (!(c->skirt.brim_width >= 0.0 && c->skirt.brim_width <= 1000.0))
-		return st_error_set(err, ST_ERR_RANGE,
-				    "brim_width = %g mm is out of range; use 0 to 1000 mm",
-				    c->skirt.brim_width);
-	if (!(c->bed.max_x > c->bed.min_x && c->bed.max_y > c->bed.min_y &&
-	      c->bed.max_height > 0.0 && isfinite(c->bed.max_x - c->bed.min_x) &&
-	      isfinite(c->bed.max_y - c->bed.min_y) && isfinite(c->bed.max_height)))
-		return st_error_set(err, ST_ERR_RANGE,
-				    "the bed (%g to %g mm in X, %g to %g mm in Y, %g mm high) is "
-				    "empty; check bed_shape and max_print_height",
-				    c->bed.min_x, c->bed.max_x, c->bed.min_y, c->bed.max_y,
-				    c->bed.max_height);
-	if (c->bed.has_center && !(isfinite(c->bed.center_x) && isfinite(c->bed.center_y)))
-		return st_error_set(err, ST_ERR_RANGE, "the placement centre is not a finite point");
-	if (c->threads < 0 || c->threads > SLICER_MAX_THREADS)
-		return st_error_set(err, ST_ERR_RANGE,
-				    "threads = %d is out of range; use 0 (all cores) to %d",
-				    c->threads, SLICER_MAX_THREADS);
-	return 0;
-}
-
 int slicer_place(const struct mesh *m, const struct slicer_bed *bed, double offset[3],
 		 double min[3], double max[3], struct st_error *err)
 {
@@ -227,13 +145,24 @@ static int stage_skirt(const struct slicer_config *c, const struct slice_stack *
 	int rc;
 
 	skirt_settings_init(&s, c->perim.nozzle_diameter);
-	s.skirts = c->skirt.skirts;
+	/* PrusaSlicer prints no skirt at skirt_height 0. */
+	s.skirts = c->skirt.skirt_height > 0 ? c->skirt.skirts : 0;
+	s.skirt_distance = c->skirt.skirt_distance;
+	s.skirt_height = c->skirt.skirt_height > 0 ? c->skirt.skirt_height : 1;
+	s.min_skirt_length = c->skirt.skirt_height > 0 ? c->skirt.min_skirt_length : 0;
 	s.brim_width = c->skirt.brim_width;
+	s.brim_separation = c->skirt.brim_separation;
 	s.extrusion_width = c->perim.extrusion_width;
 	s.filament_diameter = c->gcodew.filament_diameter;
 	rc = skirt_generate(&s, st, support, out, err);
 	*ran = !rc && stack_has_paths(out);
 	return rc;
+}
+
+/* A role's width w, or the walls' when w is 0. */
+static double width_or(double w, const struct slicer_config *c)
+{
+	return w > 0 ? w : c->perim.extrusion_width;
 }
 
 /* The infill job (infill.h) of the settings: the walls' width, the job's flow. */
@@ -250,11 +179,18 @@ static int infill_job_for(const struct slicer_config *c, const struct slice_stac
 	s.fill_density = c->infill.density;
 	s.top_solid_layers = c->infill.top_solid_layers;
 	s.bottom_solid_layers = c->infill.bottom_solid_layers;
+	s.solid_infill_below_area = c->infill.solid_infill_below_area;
+	s.top_solid_min_thickness = c->infill.top_solid_min_thickness;
+	s.bottom_solid_min_thickness = c->infill.bottom_solid_min_thickness;
+	s.fill_angle = c->infill.fill_angle;
+	s.bridge_angle = c->infill.bridge_angle;
+	s.bridge_flow_ratio = c->infill.bridge_flow_ratio;
+	s.infill_overlap = c->infill.infill_overlap;
 	s.layer_height = c->layer_height;
 	s.perimeter_extrusion_width = c->perim.extrusion_width;
-	s.infill_extrusion_width = c->perim.extrusion_width;
-	s.solid_infill_extrusion_width = c->perim.extrusion_width;
-	s.top_infill_extrusion_width = c->perim.extrusion_width;
+	s.infill_extrusion_width = width_or(c->infill.infill_extrusion_width, c);
+	s.solid_infill_extrusion_width = width_or(c->infill.solid_infill_extrusion_width, c);
+	s.top_infill_extrusion_width = width_or(c->infill.top_infill_extrusion_width, c);
 	return infill_job_new(&s, st, job, err);
 }
 
@@ -686,6 +622,9 @@ static int toolpaths(const struct mesh *m, const struct slicer_config *c,
 		s.open_dropped += st->layers[i].open_dropped;
 		rc = clip_expolys_clean(&st->layers[i].regions, SLICER_CLEAN_NM, err);
 	}
+	if (!rc && c->elefant_foot_compensation > 0)
+		rc = slice_layer_shrink(&st->layers[0], c->elefant_foot_compensation,
+					SLICER_CLEAN_NM, err);
 	if (rc)
 		goto out_free;
 	if (shape && !(*shape = stage_stack_new(st, err))) {

@@ -67,6 +67,13 @@ struct slicer_infill_settings {
 	const char *pattern;	 /* fill_pattern, PrusaSlicer's name; not owned, not NULL */
 	int top_solid_layers;	 /* >= 0 */
 	int bottom_solid_layers; /* >= 0 */
+	double solid_infill_below_area; /* mm^2, >= 0 (70) */
+	double top_solid_min_thickness, bottom_solid_min_thickness; /* mm, >= 0 (0) */
+	double fill_angle, bridge_angle; /* degrees (45, 0 = per bridge) */
+	double bridge_flow_ratio;	 /* (0, 2] (1) */
+	double infill_overlap;		 /* percent of the walls' width, 0-100 (25) */
+	/* mm: sparse, solid and bottom, top; 0 = the walls' extrusion_width (0) */
+	double infill_extrusion_width, solid_infill_extrusion_width, top_infill_extrusion_width;
 };
 
 struct slicer_support_settings {
@@ -75,8 +82,12 @@ struct slicer_support_settings {
 };
 
 struct slicer_skirt_settings {
-	int skirts;	   /* loops, >= 0 */
-	double brim_width; /* mm, >= 0 */
+	int skirts;		 /* loops, >= 0 (1) */
+	double skirt_distance;	 /* mm, >= 0 (6) */
+	int skirt_height;	 /* layers, 0 = no skirt (1) */
+	double min_skirt_length; /* mm of filament, >= 0 (0) */
+	double brim_width;	 /* mm, >= 0 (0) */
+	double brim_separation;	 /* mm, >= 0 (0) */
 };
 
 /* Everything a job needs; slicer_config_init gives the defaults. */
@@ -91,6 +102,7 @@ struct slicer_config {
 	struct slicer_support_settings support;
 	struct slicer_skirt_settings skirt;
 	struct slicer_bed bed;
+	double elefant_foot_compensation; /* mm the first layer's islands shrink, >= 0 (0) */
 	int threads; /* workers for walls and infill; 0 = all online cores */
 	/* Called with a stage name ("slicing", "layers", "writing G-code") and
 	 * 0..1 done; may be NULL. */

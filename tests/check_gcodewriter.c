@@ -655,6 +655,7 @@ START_TEST(test_fan)
 	s.disable_fan_first_layers = 1;
 	s.bridge_fan_speed = 80;
 	s.min_print_speed = 1000; /* no slow-down can happen: fan only */
+	s.small_perimeter_speed = s.perimeter_speed; /* the tiny squares' times as planned */
 	g = write_replay(st, &s, NULL, &r);
 	ck_assert_int_eq(r.fan_first[0], 0);
 	ck_assert_int_lt(at(g, "\nM107\n"), at(g, ";LAYER_CHANGE"));

@@ -250,7 +250,8 @@ START_TEST(patterns_stay_inside)
 {
 	struct mesh *m = fx_box(0, 0, 0, 20, 20, 4);
 	struct infill_settings is;
-	const enum infill_pattern pats[] = {INFILL_GRID, INFILL_GYROID, INFILL_RECTILINEAR};
+	const enum infill_pattern pats[] = {INFILL_GRID,      INFILL_GYROID, INFILL_RECTILINEAR,
+					    INFILL_TRIANGLES, INFILL_STARS,  INFILL_CUBIC};
 	const double h = 0.2;
 
 	for (size_t p = 0; p < sizeof(pats) / sizeof(pats[0]); p++) {
@@ -286,6 +287,102 @@ START_TEST(patterns_stay_inside)
 			run_free(&r);
 		}
 	}
+	mesh_free(m);
+}
+END_TEST
+
+/* Sparse segments of layer l whose direction (mod 180) is deg degrees. */
+static size_t segments_at(const struct layer_paths *l, double deg)
+{
+	size_t n = 0;
+
+	for (size_t k = 0; k < l->n; k++)
+		for (size_t j = 0; j + 1 < l->paths[k].n; j++) {
+			const struct path_point *a = &l->paths[k].pts[j], *b = a + 1;
+			double t = atan2((double)(b->y - a->y), (double)(b->x - a->x)) * 180 / M_PI;
+			double d = fmod(fmod(t - deg, 180) + 180, 180);
+
+			n += d < 0.5 || d > 179.5;
+		}
+	return n;
+}
+
+/* A segment with its ends in order, for comparing layers whatever the
+ * printing order and direction. */
+struct seg4 {
+	int64_t v[4];
+};
+
+static int seg4_cmp(const void *a, const void *b)
+{
+	const int64_t *p = ((const struct seg4 *)a)->v, *q = ((const struct seg4 *)b)->v;
+
+	for (int i = 0; i < 4; i++)
+		if (p[i] != q[i])
+			return p[i] < q[i] ? -1 : 1;
+	return 0;
+}
+
+/* The segments of l, sorted; *n of them (free the array). */
+static struct seg4 *layer_segments(const struct layer_paths *l, size_t *n)
+{
+	size_t cap = 0, k = 0;
+	struct seg4 *s;
+
+	for (size_t i = 0; i < l->n; i++)
+		cap += l->paths[i].n - 1;
+	s = calloc(cap + 1, sizeof(*s));
+	ck_assert_ptr_nonnull(s);
+	for (size_t i = 0; i < l->n; i++)
+		for (size_t j = 0; j + 1 < l->paths[i].n; j++, k++) {
+			const struct path_point *a = &l->paths[i].pts[j], *b = a + 1;
+			bool swap = a->x > b->x || (a->x == b->x && a->y > b->y);
+			const struct path_point *lo = swap ? b : a, *hi = swap ? a : b;
+			s[k] = (struct seg4){{lo->x, lo->y, hi->x, hi->y}};
+		}
+	qsort(s, k, sizeof(*s), seg4_cmp);
+	*n = k;
+	return s;
+}
+
+/* The same segments, whatever their order and direction. */
+static bool same_layer(const struct layer_paths *a, const struct layer_paths *b)
+{
+	size_t na, nb;
+	struct seg4 *sa = layer_segments(a, &na), *sb = layer_segments(b, &nb);
+	bool same = na == nb && !memcmp(sa, sb, na * sizeof(*sa));
+
+	free(sa);
+	free(sb);
+	return same;
+}
+
+/* Triangles, stars and cubic: three line sets at the fill angle + 0, 60,
+ * 120 degrees on every layer; triangles and stars repeat layer after layer,
+ * stars differs from triangles, cubic moves with z. */
+START_TEST(three_line_set_patterns)
+{
+	struct mesh *m = fx_box(0, 0, 0, 20, 20, 4);
+	const enum infill_pattern pats[] = {INFILL_TRIANGLES, INFILL_STARS, INFILL_CUBIC};
+	struct infill_settings is;
+	struct run r[3];
+
+	for (size_t p = 0; p < 3; p++) {
+		infill_settings_init(&is, 0.4);
+		is.fill_pattern = pats[p];
+		run_infill(m, 0.2, &is, &r[p]);
+		const struct layer_paths *l = &r[p].ls->layers[8];
+		size_t total = 0;
+		for (size_t k = 0; k < l->n; k++)
+			total += l->paths[k].n - 1;
+		size_t a = segments_at(l, 45), b = segments_at(l, 105), c = segments_at(l, 165);
+		ck_assert_msg(a && b && c && a + b + c == total, "%s: %zu + %zu + %zu of %zu",
+			      infill_pattern_name(pats[p]), a, b, c, total);
+		ck_assert(same_layer(l, &r[p].ls->layers[9]) == (pats[p] != INFILL_CUBIC));
+	}
+	ck_assert(!same_layer(&r[0].ls->layers[8], &r[1].ls->layers[8]));
+	for (size_t p = 0; p < 3; p++)
+		run_free(&r[p]);
 	mesh_free(m);
 }
 END_TEST
@@ -550,9 +647,12 @@ START_TEST(bad_settings_refused)
 	ck_assert_int_eq(infill_pattern_parse("rectilinear", &p, &err), 0);
 	ck_assert_int_eq(p, INFILL_RECTILINEAR);
 	ck_assert_str_eq(infill_pattern_name(INFILL_GRID), "grid");
-	ck_assert_int_eq(infill_pattern_parse("stars", &p, &err), ST_ERR_UNSUPPORTED);
-	ck_assert_ptr_nonnull(strstr(err.msg, "\"stars\" is not supported"));
-	ck_assert_ptr_nonnull(strstr(err.msg, "rectilinear, grid or gyroid"));
+	ck_assert_int_eq(infill_pattern_parse("stars", &p, &err), 0);
+	ck_assert_int_eq(p, INFILL_STARS);
+	ck_assert_int_eq(infill_pattern_parse("honeycomb", &p, &err), ST_ERR_UNSUPPORTED);
+	ck_assert_ptr_nonnull(strstr(err.msg, "\"honeycomb\" is not supported"));
+	ck_assert_ptr_nonnull(strstr(err.msg, "rectilinear, grid, gyroid, triangles, stars or cubic"));
+	p = INFILL_RECTILINEAR;
 	ck_assert_int_eq(infill_pattern_parse("spaghetti", &p, &err), ST_ERR_ARG);
 	ck_assert_ptr_nonnull(strstr(err.msg, "\"spaghetti\" is unknown"));
 	ck_assert_int_eq(p, INFILL_RECTILINEAR); /* untouched on error */
@@ -587,6 +687,7 @@ Suite *infill_suite(void)
 	tcase_set_timeout(tc, 120);
 	tcase_add_test(tc, cube_skins_and_sparse);
 	tcase_add_test(tc, patterns_stay_inside);
+	tcase_add_test(tc, three_line_set_patterns);
 	tcase_add_test(tc, bridge_between_pillars);
 	tcase_add_test(tc, shells_by_thickness);
 	tcase_add_test(tc, small_and_full_density_are_solid);

@@ -28,6 +28,7 @@ Suite *gcodewriter_suite(void); /* tests/check_gcodewriter.c: G-code writer and 
 Suite *infill_suite(void);	/* tests/check_infill.c: skins, bridges, infill */
 Suite *support_suite(void);	/* tests/check_support.c: skirt, brim, support material */
 Suite *slicecli_suite(void);	/* tests/check_slicecli.c: stratum slice end to end */
+void slicecli_settings_tcases(Suite *s); /* tests/check_slicesettings.c: settings honoured, part of slicecli */
 Suite *region_suite(void);	/* tests/check_region.c: printed region against cross-sections */
 Suite *x3g_suite(void);		/* tests/check_x3g.c: G-code to X3G, decoder, against gpx */
 Suite *s3g_suite(void);		/* tests/check_s3g.c: S3G packets, driver, simulated Sailfish */

@@ -1,0 +1,99 @@
+/*
+ * slicer_config.c - the slicing job's settings: the defaults and the checks
+ * made before any work (slicer.h).
+ */
+#include "slicer.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "infill.h"
+#include "settings.h"
+
+void slicer_config_init(struct slicer_config *c, double nozzle_diameter)
+{
+	memset(c, 0, sizeof(*c));
+	c->layer_height = 0.2;
+	c->first_layer_height = 0.2;
+	slice_settings_init(&c->slice);
+	c->slice.nozzle_diameter = nozzle_diameter;
+	perim_settings_init(&c->perim, nozzle_diameter);
+	gcodew_settings_init(&c->gcodew);
+	c->gcodew.nozzle_diameter = nozzle_diameter;
+	c->infill = (struct slicer_infill_settings){
+	    .density = 20, .pattern = "rectilinear", .top_solid_layers = 3, .bottom_solid_layers = 3,
+	    .solid_infill_below_area = 70, .fill_angle = 45, .bridge_flow_ratio = 1,
+	    .infill_overlap = 25};
+	c->support = (struct slicer_support_settings){.enabled = false, .threshold = 0};
+	c->skirt = (struct slicer_skirt_settings){.skirts = 1, .skirt_distance = 6, .skirt_height = 1};
+	c->bed = (struct slicer_bed){.max_x = 200, .max_y = 200, .max_height = 200};
+}
+
+int slicer_config_check(const struct slicer_config *c, struct st_error *err)
+{
+	int rc;
+
+	if (!c)
+		return st_error_set(err, ST_ERR_ARG, "slicer: no settings given");
+	if (c->slice.nozzle_diameter != c->perim.nozzle_diameter)
+		return st_error_set(err, ST_ERR_ARG,
+				    "slicer: the slicing nozzle %g mm and the walls' nozzle %g mm "
+				    "differ; set both from nozzle_diameter",
+				    c->slice.nozzle_diameter, c->perim.nozzle_diameter);
+	rc = slice_settings_check(&c->slice, c->first_layer_height, c->layer_height, err);
+	if (!rc)
+		rc = perim_settings_check(&c->perim, c->first_layer_height, err);
+	if (!rc)
+		rc = perim_settings_check(&c->perim, c->layer_height, err);
+	if (!rc)
+		rc = gcodew_settings_check(&c->gcodew, err);
+	if (rc)
+		return rc;
+	if (!(c->infill.density >= 0.0 && c->infill.density <= 100.0))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "fill_density = %g%% is out of range; use 0 to 100%%",
+				    c->infill.density);
+	if (!c->infill.pattern)
+		return st_error_set(err, ST_ERR_ARG, "slicer: no fill_pattern given");
+	enum infill_pattern pattern;
+	rc = infill_pattern_parse(c->infill.pattern, &pattern, err);
+	if (rc)
+		return rc; /* before any slicing: a pattern we cannot print */
+	if (c->infill.top_solid_layers < 0 || c->infill.bottom_solid_layers < 0)
+		return st_error_set(err, ST_ERR_RANGE,
+				    "top_solid_layers = %d, bottom_solid_layers = %d: layer counts "
+				    "cannot be negative; use 0 or more",
+				    c->infill.top_solid_layers, c->infill.bottom_solid_layers);
+	if (c->support.threshold < 0 || c->support.threshold > 90)
+		return st_error_set(err, ST_ERR_RANGE,
+				    "support_material_threshold = %d is out of range; use 0 "
+				    "(automatic) to 90 degrees",
+				    c->support.threshold);
+	if (c->skirt.skirts < 0)
+		return st_error_set(err, ST_ERR_RANGE,
+				    "skirts = %d: the loop count cannot be negative; use 0 or more",
+				    c->skirt.skirts);
+	if (!(c->skirt.brim_width >= 0.0 && c->skirt.brim_width <= 1000.0))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "brim_width = %g mm is out of range; use 0 to 1000 mm",
+				    c->skirt.brim_width);
+	if (!(c->bed.max_x > c->bed.min_x && c->bed.max_y > c->bed.min_y &&
+	      c->bed.max_height > 0.0 && isfinite(c->bed.max_x - c->bed.min_x) &&
+	      isfinite(c->bed.max_y - c->bed.min_y) && isfinite(c->bed.max_height)))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "the bed (%g to %g mm in X, %g to %g mm in Y, %g mm high) is "
+				    "empty; check bed_shape and max_print_height",
+				    c->bed.min_x, c->bed.max_x, c->bed.min_y, c->bed.max_y,
+				    c->bed.max_height);
+	rc = setting_check("slicer", "elefant_foot_compensation", c->elefant_foot_compensation,
+			   err);
+	if (rc)
+		return rc;
+	if (c->bed.has_center && !(isfinite(c->bed.center_x) && isfinite(c->bed.center_y)))
+		return st_error_set(err, ST_ERR_RANGE, "the placement centre is not a finite point");
+	if (c->threads < 0 || c->threads > SLICER_MAX_THREADS)
+		return st_error_set(err, ST_ERR_RANGE,
+				    "threads = %d is out of range; use 0 (all cores) to %d",
+				    c->threads, SLICER_MAX_THREADS);
+	return 0;
+}
