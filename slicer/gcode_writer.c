@@ -29,6 +29,7 @@
 #include "settings.h"
 #include "st_file.h"
 #include "travel.h"
+#include "st_grow.h"
 
 #define E_UNITS 100000.0 /* E written in 1e-5 mm */
 #define E_DIGITS 5
@@ -406,17 +407,11 @@ struct gcodew {
 /* Append an operation. */
 static int push(struct gcodew *w, struct op o)
 {
-	if (w->nops == w->opcap) {
-		size_t cap = w->opcap ? 2 * w->opcap : 256;
-		struct op *grown;
-		if (cap > SIZE_MAX / sizeof(*grown))
-			return st_error_set(w->err, ST_ERR_NOMEM, "G-code: too many moves in a layer");
-		grown = realloc(w->ops, cap * sizeof(*grown));
-		if (!grown)
-			return st_error_set(w->err, ST_ERR_NOMEM, "G-code: out of memory planning a layer");
-		w->ops = grown;
-		w->opcap = cap;
-	}
+	struct op *grown = st_grow(w->ops, &w->opcap, w->nops + 1, sizeof(*grown));
+
+	if (!grown)
+		return st_error_set(w->err, ST_ERR_NOMEM, "G-code: out of memory planning a layer");
+	w->ops = grown;
 	w->ops[w->nops++] = o;
 	return 0;
 }
@@ -575,14 +570,10 @@ static int record_wipe(struct gcodew *w, const struct toolpath *p, bool rev, siz
 	for (size_t k = steps; k-- > 0;) {
 		const struct path_point *q = &p->pts[trav(p, rev, k)];
 		double x = q->x / SLICE_UNITS_PER_MM, y = q->y / SLICE_UNITS_PER_MM;
-		if (w->nwipe == w->wipecap) {
-			size_t cap = w->wipecap ? 2 * w->wipecap : 32;
-			double *grown = realloc(w->wipe, cap * 2 * sizeof(*grown));
-			if (!grown)
-				return st_error_set(w->err, ST_ERR_NOMEM, "G-code: out of memory for a wipe");
-			w->wipe = grown;
-			w->wipecap = cap;
-		}
+		double *grown = st_grow(w->wipe, &w->wipecap, w->nwipe + 1, 2 * sizeof(*grown));
+		if (!grown)
+			return st_error_set(w->err, ST_ERR_NOMEM, "G-code: out of memory for a wipe");
+		w->wipe = grown;
 		if (w->nwipe)
 			walked += hypot(x - w->wipe[2 * w->nwipe - 2], y - w->wipe[2 * w->nwipe - 1]);
 		w->wipe[2 * w->nwipe] = x;
