@@ -232,7 +232,7 @@ static int run_translate(const struct x3g_args *a)
 
 	if (profile_find(a->printer, &p, &err)) {
 		fprintf(stderr, X3G_CMD ": %s\n", err.msg);
-		return err.code == ST_ERR_ARG ? ST_EXIT_USAGE : ST_EXIT_DATAERR;
+		return profile_exit_status(err.code);
 	}
 	if (p->protocol != PROFILE_PROTOCOL_SAILFISH) {
 		fprintf(stderr, X3G_CMD ": printer '%s' speaks %s, not sailfish; X3G is for "
