@@ -156,7 +156,7 @@ int cmd_ports(int argc, char **argv)
 	}
 	if (printer && profile_find(printer, &want, &err)) {
 		fprintf(stderr, "stratum ports: %s\n", err.msg);
-		return err.code == ST_ERR_ARG ? ST_EXIT_USAGE : ST_EXIT_DATAERR;
+		return profile_exit_status(err.code);
 	}
 	if (xport_list(&ports, &n, &err)) {
 		fprintf(stderr, "stratum ports: %s\n", err.msg);

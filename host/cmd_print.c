@@ -165,7 +165,7 @@ static int print_slice(struct print_job *job, const char *out)
 
 	if (rc) {
 		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		return st_exit_for(rc);
+		return profile_exit_status(rc);
 	}
 	if ((rc = slicer_config_check(&cfg, &err))) {
 		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);

@@ -155,7 +155,7 @@ static int show_one(const char *which, bool json)
 	rc = profile_find(which, &p, &err);
 	if (rc) {
 		fprintf(stderr, "stratum printers: %s\n", err.msg);
-		return st_exit_for(rc);
+		return profile_exit_status(rc);
 	}
 	if (json) {
 		json_t *o = profile_to_json(p);

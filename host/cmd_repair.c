@@ -690,7 +690,7 @@ static int repair_command(int argc, char **argv, struct repair_run *run)
 		rc = profile_find(printer, &prof, &err);
 		if (rc) {
 			say(run, "%s", err.msg);
-			status = st_exit_for(rc);
+			status = profile_exit_status(rc);
 			goto out_report;
 		}
 		run->printer = prof->id;

@@ -378,7 +378,7 @@ int cmd_send(int argc, char **argv)
 	rc = profile_find(a.printer, &prof, &err);
 	if (rc) {
 		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
-		return st_exit_for(rc);
+		return profile_exit_status(rc);
 	}
 	if ((rc = printer_profile_options(prof, a.port, a.baud, &o, &ops, &err))) {
 		fprintf(stderr, SEND_CMD ": %s: %s\n", prof->path, err.msg);

@@ -230,7 +230,7 @@ static int config_from_profile(const struct profile *p, const struct slice_args 
 
 	if (rc) {
 		fprintf(stderr, SLICE_CMD ": %s\n", err.msg);
-		return st_exit_for(rc);
+		return profile_exit_status(rc);
 	}
 	if (a->has_layer)
 		c->layer_height = a->layer_height;

@@ -24,6 +24,7 @@
 #include "profile.h"
 #include "profile_x3g.h"
 #include "st_error.h"
+#include "st_file.h"
 #include "x3g.h"
 
 #define X3G_CMD "stratum x3g"
@@ -196,39 +197,26 @@ out:
 /* Translate into a temporary file beside OUT, then rename it over OUT. */
 static int translate_to_file(struct x3g_run *r, FILE *in)
 {
-	size_t n = strlen(r->a->out);
-	char *tmp = malloc(n + 8);
-	int fd, status;
+	struct st_file_out out;
+	struct st_error err = {0};
+	int status;
 
-	if (!tmp) {
-		fprintf(stderr, X3G_CMD ": out of memory\n");
-		return ST_EXIT_SOFTWARE;
+	if (st_file_begin(&out, r->a->out, &err)) {
+		fprintf(stderr, X3G_CMD ": %s\n", err.msg);
+		return err.code == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_FAILURE;
 	}
-	snprintf(tmp, n + 8, "%s.XXXXXX", r->a->out);
-	fd = mkstemp(tmp);
-	if (fd < 0 || fchmod(fd, 0644) != 0 || !(r->out = fdopen(fd, "wb"))) {
-		fprintf(stderr, X3G_CMD ": %s: cannot create a temporary file beside it: %s\n",
-			r->a->out, strerror(errno));
-		if (fd >= 0) {
-			close(fd);
-			unlink(tmp);
-		}
-		free(tmp);
+	r->out = out.f;
+	status = translate_all(r, in);
+	r->out = NULL;
+	if (status) {
+		st_file_abort(&out);
+		return status;
+	}
+	if (st_file_commit(&out, &err)) {
+		fprintf(stderr, X3G_CMD ": %s\n", err.msg);
 		return ST_EXIT_FAILURE;
 	}
-	status = translate_all(r, in);
-	if (!status && (fflush(r->out) != 0 || fsync(fileno(r->out)) != 0))
-		status = ST_EXIT_FAILURE;
-	if (fclose(r->out) != 0 && !status)
-		status = ST_EXIT_FAILURE;
-	if (!status && rename(tmp, r->a->out) != 0)
-		status = ST_EXIT_FAILURE;
-	if (status == ST_EXIT_FAILURE)
-		fprintf(stderr, X3G_CMD ": %s: not written: %s\n", r->a->out, strerror(errno));
-	if (status)
-		unlink(tmp);
-	free(tmp);
-	return status;
+	return 0;
 }
 
 static int run_translate(const struct x3g_args *a)
@@ -244,7 +232,7 @@ static int run_translate(const struct x3g_args *a)
 
 	if (profile_find(a->printer, &p, &err)) {
 		fprintf(stderr, X3G_CMD ": %s\n", err.msg);
-		return err.code == ST_ERR_ARG ? ST_EXIT_USAGE : ST_EXIT_DATAERR;
+		return profile_exit_status(err.code);
 	}
 	if (p->protocol != PROFILE_PROTOCOL_SAILFISH) {
 		fprintf(stderr, X3G_CMD ": printer '%s' speaks %s, not sailfish; X3G is for "

@@ -16,6 +16,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "st_file.h"
+
 /* mkdir -p of path (modifies nothing else); 0 or -1 with errno. */
 static int journal_mkdirs(char *path)
 {
@@ -83,10 +85,9 @@ static json_t *journal_real(double v)
 
 int journal_save(struct journal *j, struct st_error *err)
 {
-	char tmp[JOURNAL_PATH_MAX + 16];
 	json_t *o = json_object();
-	FILE *f;
-	int fail;
+	struct st_file_out out;
+	int rc;
 
 	if (!o)
 		return st_error_set(err, ST_ERR_NOMEM, "out of memory writing the job journal");
@@ -106,23 +107,17 @@ int journal_save(struct journal *j, struct st_error *err)
 	json_object_set_new(o, "bed_actual", journal_real(j->bed_actual));
 	json_object_set_new(o, "bed_target", journal_real(j->bed_target));
 	json_object_set_new(o, "updated", json_integer((json_int_t)j->updated));
-	snprintf(tmp, sizeof(tmp), "%s.tmp", j->file);
-	f = fopen(tmp, "w");
-	if (!f) {
-		json_decref(o);
-		return st_error_set(err, ST_ERR_IO, "cannot write the job journal %s: %s", tmp,
-				    strerror(errno));
+	if ((rc = st_file_begin(&out, j->file, err)) == 0) {
+		errno = 0;
+		if (json_dumpf(o, out.f, JSON_INDENT(2) | JSON_PRESERVE_ORDER) ||
+		    fputc('\n', out.f) == EOF)
+			rc = st_file_fail(&out, err);
+		else
+			rc = st_file_commit(&out, err);
 	}
-	fail = json_dumpf(o, f, JSON_INDENT(2) | JSON_PRESERVE_ORDER) || fputc('\n', f) == EOF;
-	fail |= fflush(f) == EOF || fsync(fileno(f));
-	fail |= fclose(f) == EOF;
 	json_decref(o);
-	if (fail || rename(tmp, j->file)) {
-		int e = errno;
-		unlink(tmp);
-		return st_error_set(err, ST_ERR_IO, "cannot write the job journal %s: %s", j->file,
-				    strerror(e));
-	}
+	if (rc)
+		return st_error_set(err, rc, "cannot write the job journal: %s", err->msg);
 	return 0;
 }
 

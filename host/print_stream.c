@@ -17,6 +17,7 @@
 #include "printer_profile.h"
 #include "send.h"
 #include "st_error.h"
+#include "st_grow.h"
 
 #define PRINT_SYNC_S 3.0 /* journal sync period besides every layer change */
 
@@ -55,17 +56,13 @@ int print_scan(const char *path, struct print_layers *L)
 				goto out;
 			}
 			while (L->n <= (size_t)layer) {
-				if (L->n == L->cap) {
-					size_t cap = L->cap ? 2 * L->cap : 256;
-					void *p = realloc(L->v, cap * sizeof(*L->v));
-					if (!p) {
-						fprintf(stderr, PRINT_CMD ": out of memory\n");
-						status = ST_EXIT_SOFTWARE;
-						goto out;
-					}
-					L->v = p;
-					L->cap = cap;
+				void *p = st_grow(L->v, &L->cap, L->n + 1, sizeof(*L->v));
+				if (!p) {
+					fprintf(stderr, PRINT_CMD ": out of memory\n");
+					status = ST_EXIT_SOFTWARE;
+					goto out;
 				}
+				L->v = p;
 				L->v[L->n++] = (struct print_layer){gcode_reader_line(r), before, NAN};
 			}
 			L->v[layer] = (struct print_layer){gcode_reader_line(r), before, z};

@@ -17,6 +17,7 @@
 
 #include "ini.h"
 #include "placeholder.h"
+#include "st_grow.h"
 
 /* ---------------------------------------------------------------------------
  * Helpers shared by the profile modules (profile_int.h)
@@ -108,18 +109,11 @@ struct profile_kv *prof_find_kv(const struct profile_keys *keys, const char *key
 /* Append one pair; takes ownership of key and value (frees them on failure). */
 int prof_keys_add(struct profile_keys *keys, char *key, char *value, int line)
 {
-	if (keys->count == keys->cap) {
-		size_t cap = keys->cap ? keys->cap * 2 : 64;
-		struct profile_kv *kv;
+	struct profile_kv *kv = st_grow(keys->kv, &keys->cap, keys->count + 1, sizeof(*kv));
 
-		if (cap > SIZE_MAX / sizeof(*kv))
-			goto out_free;
-		kv = realloc(keys->kv, cap * sizeof(*kv));
-		if (!kv)
-			goto out_free;
-		keys->kv = kv;
-		keys->cap = cap;
-	}
+	if (!kv)
+		goto out_free;
+	keys->kv = kv;
 	keys->kv[keys->count].key = key;
 	keys->kv[keys->count].value = value;
 	keys->kv[keys->count].line = line;

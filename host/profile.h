@@ -335,9 +335,13 @@ int profile_load_layers(const struct profile *base, const struct profile_layer *
 int profile_find(const char *name_or_path, struct profile **out, struct st_error *err);
 
 /*
- * profile_exit_status - the exit status for a failed profile_find or
- * profile_load_file: settings that cannot slice (ST_ERR_RANGE) are refused
- * like a bad --layer-height (ST_EXIT_USAGE); anything else by its class.
+ * profile_exit_status - the exit status for a failed profile_find,
+ * profile_load_file or profile_slicer_config, the one rule of every command
+ * that loads a profile (printers --show, repair, slice, x3g, send, print,
+ * ports): a value out of range or settings that cannot slice (ST_ERR_RANGE)
+ * are refused like a bad --layer-height (ST_EXIT_USAGE), an unknown name too
+ * (ST_ERR_ARG); anything else by its class (65 for a file that cannot be
+ * read or parsed).
  */
 int profile_exit_status(int rc);
 

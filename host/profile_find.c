@@ -3,6 +3,7 @@
  * NAME lookup and listing (profile.h).
  */
 #include "profile_int.h"
+#include "st_grow.h"
 
 #include <dirent.h>
 #include <limits.h>
@@ -167,22 +168,14 @@ int profile_list(struct profile_entry **out, size_t *count, struct st_error *err
 				free(id);
 				continue;
 			}
-			if (n == cap) {
-				size_t ncap = cap ? cap * 2 : 16;
-				struct profile_entry *nl;
+			struct profile_entry *nl = st_grow(list, &cap, n + 1, sizeof(*nl));
 
-				if (ncap > SIZE_MAX / sizeof(*nl))
-					nl = NULL;
-				else
-					nl = realloc(list, ncap * sizeof(*nl));
-				if (!nl) {
-					free(id);
-					closedir(dir);
-					goto out_nomem;
-				}
-				list = nl;
-				cap = ncap;
+			if (!nl) {
+				free(id);
+				closedir(dir);
+				goto out_nomem;
 			}
+			list = nl;
 			list[n].id = id;
 			list[n].path = prof_dup(path, strlen(path));
 			n++;

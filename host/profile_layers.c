@@ -20,6 +20,7 @@
 #include <string.h>
 
 #include "ini.h"
+#include "st_grow.h"
 
 #define BUNDLE_DEPTH_MAX 16 /* inherits chains longer than this are a loop */
 
@@ -50,15 +51,11 @@ static void sections_free(struct file_read *f)
 
 static int add_section(struct file_read *f, const char *name, size_t len, struct st_error *err)
 {
-	if (f->n == f->cap) {
-		size_t cap = f->cap ? f->cap * 2 : 64;
-		struct section *grown = realloc(f->sec, cap * sizeof(*grown));
+	struct section *grown = st_grow(f->sec, &f->cap, f->n + 1, sizeof(*grown));
 
-		if (!grown)
-			return st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", f->path);
-		f->sec = grown;
-		f->cap = cap;
-	}
+	if (!grown)
+		return st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", f->path);
+	f->sec = grown;
 	memset(&f->sec[f->n], 0, sizeof(f->sec[0]));
 	f->sec[f->n].name = prof_dup(name, len);
 	if (!f->sec[f->n].name)

@@ -13,6 +13,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "st_file.h"
+
 #define MARGIN 16	/* px around everything */
 #define TITLE_H 24	/* px, the title line */
 #define FONT_PX 12	/* px, text size */
@@ -409,41 +411,18 @@ int pvdraw_write(const struct preview *pv, const struct pvdraw_opts *o, const ch
 		 struct st_error *err)
 {
 	enum pvdraw_format fmt;
-	size_t n = path ? strlen(path) : 0;
-	char *tmp;
-	FILE *f;
-	int fd, rc;
+	struct st_file_out out;
+	int rc;
 
 	if (!pvdraw_format_of(path, &fmt))
 		return st_error_set(err, ST_ERR_ARG, "%s: the picture must end in .svg or .png",
 				    path ? path : "(no path)");
-	if (!(tmp = malloc(n + sizeof(".XXXXXX"))))
-		return st_error_set(err, ST_ERR_NOMEM, "preview: out of memory");
-	snprintf(tmp, n + sizeof(".XXXXXX"), "%s.XXXXXX", path);
-	fd = mkstemp(tmp);
-	if (fd < 0 || fchmod(fd, 0644) != 0 || !(f = fdopen(fd, "wb"))) {
-		rc = st_error_set(err, ST_ERR_IO, "%s: cannot create a temporary file beside it: %s",
-				  path, strerror(errno));
-		if (fd >= 0) {
-			close(fd);
-			unlink(tmp);
-		}
-		free(tmp);
+	if ((rc = st_file_begin(&out, path, err)))
+		return rc;
+	rc = fmt == PVDRAW_SVG ? pvdraw_svg(pv, o, out.f, err) : pvdraw_png(pv, o, out.f, err);
+	if (rc) {
+		st_file_abort(&out);
 		return rc;
 	}
-	rc = fmt == PVDRAW_SVG ? pvdraw_svg(pv, o, f, err) : pvdraw_png(pv, o, f, err);
-	if (rc == 0 && (fflush(f) != 0 || fsync(fileno(f)) != 0))
-		rc = st_error_set(err, ST_ERR_IO, "%s: cannot write: %s", path, strerror(errno));
-	if (fclose(f) != 0 && rc == 0)
-		rc = st_error_set(err, ST_ERR_IO, "%s: cannot write: %s", path, strerror(errno));
-	if (rc == 0 && rename(tmp, path) != 0)
-		rc = st_error_set(err, ST_ERR_IO, "%s: cannot replace it: %s", path,
-				  strerror(errno));
-	if (rc) {
-		unlink(tmp);
-		if (rc == ST_ERR_IO && err && !strstr(err->msg, path))
-			st_error_set(err, ST_ERR_IO, "%s: not written: %s", path, strerror(errno));
-	}
-	free(tmp);
-	return rc;
+	return st_file_commit(&out, err);
 }

@@ -13,6 +13,7 @@
 #include "heal.h"
 #include "ids.h"
 #include "vec3.h"
+#include "st_grow.h"
 
 /* Grid coordinates beyond this many cells are not searched (no overflow). */
 #define HEAL_MAX_CELLS 4.0e18
@@ -64,18 +65,11 @@ struct pair_list {
 
 static int pair_push(struct pair_list *l, double d, uint32_t v, uint32_t u)
 {
-	if (l->n == l->cap) {
-		size_t cap = l->cap ? 2 * l->cap : 256;
-		struct near_pair *p;
+	struct near_pair *p = st_grow(l->p, &l->cap, l->n + 1, sizeof(*p));
 
-		if (cap > SIZE_MAX / sizeof(*p))
-			return -1;
-		p = realloc(l->p, cap * sizeof(*p));
-		if (!p)
-			return -1;
-		l->p = p;
-		l->cap = cap;
-	}
+	if (!p)
+		return -1;
+	l->p = p;
 	l->p[l->n].d = d;
 	l->p[l->n].v = v < u ? v : u;
 	l->p[l->n].u = v < u ? u : v;

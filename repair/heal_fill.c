@@ -22,6 +22,7 @@
 #include "exact.h"
 #include "ids.h"
 #include "vec3.h"
+#include "st_grow.h"
 
 /* One hole: vertices loop[first..first+n) of the loop table. */
 struct hole {
@@ -228,17 +229,11 @@ struct patch {
 
 static int patch_add(struct patch *p, const uint32_t t[3])
 {
-	if (p->n == p->cap) {
-		size_t cap = p->cap ? 2 * p->cap : 64;
-		uint32_t (*nt)[3];
-		if (cap > SIZE_MAX / sizeof(*nt))
-			return -1;
-		nt = realloc(p->tris, cap * sizeof(*nt));
-		if (!nt)
-			return -1;
-		p->tris = nt;
-		p->cap = cap;
-	}
+	uint32_t (*nt)[3] = st_grow(p->tris, &p->cap, p->n + 1, sizeof(*nt));
+
+	if (!nt)
+		return -1;
+	p->tris = nt;
 	memcpy(p->tris[p->n++], t, sizeof(uint32_t[3]));
 	return 0;
 }
@@ -325,17 +320,14 @@ static int compare_hole_shell(const void *pa, const void *pb)
 /* Append the patch's triangles to w. */
 static int append_patch(struct heal_work *w, const struct patch *p, struct st_error *err)
 {
-	if (w->ntris + p->n > w->cap_tris) {
-		size_t cap = 2 * w->cap_tris + p->n;
-		uint32_t (*nt)[3];
-		if (cap > MESH_MAX_ELEMENTS)
-			return st_error_set(err, ST_ERR_RANGE, "heal: too many triangles after filling");
-		nt = realloc(w->tris, cap * sizeof(*nt));
-		if (!nt)
-			return st_error_set(err, ST_ERR_NOMEM, "heal: out of memory filling holes");
-		w->tris = nt;
-		w->cap_tris = cap;
-	}
+	uint32_t (*nt)[3];
+
+	if (w->ntris + p->n > MESH_MAX_ELEMENTS)
+		return st_error_set(err, ST_ERR_RANGE, "heal: too many triangles after filling");
+	nt = st_grow(w->tris, &w->cap_tris, w->ntris + p->n, sizeof(*nt));
+	if (!nt)
+		return st_error_set(err, ST_ERR_NOMEM, "heal: out of memory filling holes");
+	w->tris = nt;
 	memcpy(w->tris[w->ntris], p->tris, p->n * sizeof(*p->tris));
 	w->ntris += p->n;
 	return 0;

@@ -14,6 +14,7 @@
 #include "exact.h"
 #include "hull.h"
 #include "ids.h"
+#include "st_grow.h"
 
 /* Edge incidence as compressed rows; corner c = 3*tri+k is edge (k, k+1). */
 struct edges {
@@ -85,14 +86,10 @@ static int edges_build(const uint32_t (*tris)[3], size_t ntris, size_t nverts, s
 			for (int k = 0; k < 3; k++) {
 				const uint32_t a = tris[t][k], b = tris[t][(k + 1) % 3];
 				if ((a == v && b > v) || (b == v && a > v)) {
-					if (n == cap) {
-						size_t nc = cap ? 2 * cap : 64;
-						struct pending *nb = realloc(buf, nc * sizeof(*nb));
-						if (!nb)
-							goto out_nomem;
-						buf = nb;
-						cap = nc;
-					}
+					struct pending *nb = st_grow(buf, &cap, n + 1, sizeof(*nb));
+					if (!nb)
+						goto out_nomem;
+					buf = nb;
 					buf[n].other = a == v ? b : a;
 					buf[n].corner = 3 * t + (uint32_t)k;
 					n++;
@@ -219,15 +216,10 @@ static int border_push_all(struct border *q, uint32_t t, uint32_t side, struct s
 				(q->tail - q->head) * sizeof(*q->items));
 		q->tail -= q->head;
 		q->head = 0;
-		if (q->tail + 3 > q->cap) {
-			size_t nc = q->cap ? 2 * q->cap : 1024;
-			uint64_t *ni = realloc(q->items, nc * sizeof(*ni));
-			if (!ni)
-				return st_error_set(err, ST_ERR_NOMEM,
-						    "out of memory growing the outer hull");
-			q->items = ni;
-			q->cap = nc;
-		}
+		uint64_t *ni = st_grow(q->items, &q->cap, q->tail + 3, sizeof(*ni));
+		if (!ni)
+			return st_error_set(err, ST_ERR_NOMEM, "out of memory growing the outer hull");
+		q->items = ni;
 	}
 	for (uint32_t k = 0; k < 3; k++)
 		q->items[q->tail++] = 6 * (uint64_t)t + 2 * k + side;
@@ -462,14 +454,10 @@ static int nest_components(const struct exact_mesh *em, long nc, const uint32_t 
 					       &inside, err);
 			if (rc || !inside)
 				continue;
-			if (npairs == cap) {
-				size_t ncap = cap ? 2 * cap : 64;
-				struct containment *np = realloc(pairs, ncap * sizeof(*np));
-				if (!np)
-					goto out_nomem;
-				pairs = np;
-				cap = ncap;
-			}
+			struct containment *np = st_grow(pairs, &cap, npairs + 1, sizeof(*np));
+			if (!np)
+				goto out_nomem;
+			pairs = np;
 			pairs[npairs].c = (uint32_t)c;
 			pairs[npairs++].d = (uint32_t)d;
 			order[c].depth++;

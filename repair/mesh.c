@@ -5,6 +5,7 @@
  * bit pattern of the coordinates, so only bit-identical positions merge.
  */
 #include "mesh.h"
+#include "st_grow.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -16,25 +17,14 @@ struct mesh_builder {
 	size_t nslots;		/* power of two */
 };
 
-/* Grow an array of elem-sized items to hold at least need; 0 or -1. */
+/* Grow an array of elem-sized items to hold at least need (st_grow); 0 or -1. */
 static int grow(void **arr, size_t *cap, size_t need, size_t elem)
 {
-	size_t ncap;
-	void *p;
+	void *p = st_grow(*arr, cap, need, elem);
 
-	if (need <= *cap)
-		return 0;
-	ncap = *cap ? *cap : 64;
-	while (ncap < need) {
-		if (ncap > SIZE_MAX / 2 / elem)
-			return -1;
-		ncap *= 2;
-	}
-	p = realloc(*arr, ncap * elem);
 	if (!p)
 		return -1;
 	*arr = p;
-	*cap = ncap;
 	return 0;
 }
 

@@ -5,6 +5,7 @@
  * becomes (v0, vi, vi+1) for i = 1 .. n-2, in order.
  */
 #include "meshio_impl.h"
+#include "st_grow.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -81,18 +82,11 @@ static int read_position(struct mio_text *t, size_t extra, double p[3])
 /* Grow the OBJ vertex map (file order -> welded index) by one slot. */
 static int map_push(uint32_t **map, size_t *n, size_t *cap, uint32_t v)
 {
-	if (*n == *cap) {
-		size_t ncap = *cap ? *cap * 2 : 1024;
-		uint32_t *p;
+	uint32_t *p = st_grow(*map, cap, *n + 1, sizeof(**map));
 
-		if (ncap > SIZE_MAX / sizeof(**map))
-			return -1;
-		p = realloc(*map, ncap * sizeof(**map));
-		if (!p)
-			return -1;
-		*map = p;
-		*cap = ncap;
-	}
+	if (!p)
+		return -1;
+	*map = p;
 	(*map)[(*n)++] = v;
 	return 0;
 }

@@ -17,6 +17,7 @@
 #include "hull.h"
 #include "ids.h"
 #include "parts.h"
+#include "st_grow.h"
 
 /* Per shell: bounding box, signed volume, triangles (rows into a list). */
 struct shell_info {
@@ -145,17 +146,13 @@ static long touching_pairs(const struct mesh *m, const uint8_t *in_layer, const 
 		if (e[i].lo != e[i + 1].lo || e[i].hi != e[i + 1].hi ||
 		    e[i].shell == e[i + 1].shell)
 			continue;
-		if (np == cap) {
-			size_t ncap = cap ? 2 * cap : 64;
-			uint64_t *p = realloc(pairs, ncap * sizeof(*p));
-			if (!p) {
-				free(e);
-				free(pairs);
-				return -1;
-			}
-			pairs = p;
-			cap = ncap;
+		uint64_t *p = st_grow(pairs, &cap, np + 1, sizeof(*p));
+		if (!p) {
+			free(e);
+			free(pairs);
+			return -1;
 		}
+		pairs = p;
 		/* Shells along one edge come sorted: consecutive pairs cover
 		 * two shells per edge, the usual case. */
 		pairs[np++] = (uint64_t)e[i].shell << 32 | e[i + 1].shell;

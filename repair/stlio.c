@@ -9,6 +9,7 @@
  * Every float is decoded byte by byte; nothing is fread into a struct.
  */
 #include "meshio_impl.h"
+#include "st_file.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -551,94 +552,12 @@ static int write_ascii(FILE *f, const struct mesh *m)
 	return fputs("endsolid stratum\n", f) == EOF ? -1 : 0;
 }
 
-/*
- * The process umask without changing it (umask() can only be read by
- * setting it, which would race with other threads creating files): Linux
- * reports it in /proc/self/status; elsewhere assume the usual 022.
- */
-static mode_t current_umask(void)
-{
-	FILE *f = fopen("/proc/self/status", "r");
-	char line[256];
-	mode_t mask = 022;
-
-	if (!f)
-		return mask;
-	while (fgets(line, sizeof(line), f)) {
-		if (!strncmp(line, "Umask:", 6)) {
-			mask = (mode_t)(strtol(line + 6, NULL, 8) & 0777);
-			break;
-		}
-	}
-	fclose(f);
-	return mask;
-}
-
-/*
- * Give the temporary file the mode the target will need: the old file's
- * mode when replacing one, else 0666 less the umask (mkstemp made it 0600).
- * A failure here only leaves the safe 0600, so it is not an error.
- */
-static void set_mode(int fd, const char *path)
-{
-	struct stat st;
-	mode_t mode;
-
-	if (stat(path, &st) == 0 && S_ISREG(st.st_mode))
-		mode = st.st_mode & 07777;
-	else
-		mode = 0666 & ~current_umask();
-	if (fchmod(fd, mode) != 0) {
-		/* keep 0600 */
-	}
-}
-
-/* "dir/.name.XXXXXX" for mkstemp, in the target's own directory. */
-static char *temp_template(const char *path)
-{
-	const char *slash = strrchr(path, '/');
-	size_t dirlen = slash ? (size_t)(slash - path) + 1 : 0;
-	size_t len = strlen(path) + sizeof(".") + sizeof(".XXXXXX");
-	char *t = malloc(len);
-
-	if (!t)
-		return NULL;
-	snprintf(t, len, "%.*s.%s.XXXXXX", (int)dirlen, path, path + dirlen);
-	return t;
-}
-
-/* Make the rename durable: fsync the directory (best effort). */
-static void sync_dir(const char *path)
-{
-	const char *slash = strrchr(path, '/');
-	char *dir;
-	int fd;
-
-	if (!slash) {
-		dir = strdup(".");
-	} else {
-		size_t n = slash == path ? 1 : (size_t)(slash - path);
-		dir = strndup(path, n);
-	}
-	if (!dir)
-		return;
-	fd = open(dir, O_RDONLY | O_DIRECTORY);
-	free(dir);
-	if (fd < 0)
-		return;
-	if (fsync(fd) != 0) {
-		/* the data itself is already on disk */
-	}
-	close(fd);
-}
-
 int stlio_write(const char *path, const struct mesh *m, enum meshio_format fmt,
 		struct st_error *err)
 {
 	bool binary = fmt == MESHIO_STL_BINARY;
-	char *tmp;
-	FILE *f;
-	int fd, rc, saved = 0;
+	struct st_file_out out;
+	int rc;
 
 	if (!path || !*path || !m)
 		return st_error_set(err, ST_ERR_ARG, "meshio_write_stl: no path or no mesh");
@@ -661,52 +580,11 @@ int stlio_write(const char *path, const struct mesh *m, enum meshio_format fmt,
 	if (rc)
 		return rc;
 
-	tmp = temp_template(path);
-	if (!tmp)
-		return st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", path);
-	fd = mkstemp(tmp);
-	if (fd < 0) {
-		rc =
-		    st_error_set(err, ST_ERR_IO, "%s: cannot create a temporary file beside it: %s",
-				 path, strerror(errno));
-		goto out_free_tmp;
-	}
-	set_mode(fd, path);
-	f = fdopen(fd, "wb");
-	if (!f) {
-		saved = errno;
-		close(fd);
-		goto out_unlink;
-	}
-	setvbuf(f, NULL, _IOFBF, MIO_CHUNK);
-	rc = binary ? write_binary(f, m) : write_ascii(f, m);
-	if (rc == 0 && fflush(f) == EOF)
-		rc = -1;
-	if (rc == 0 && fsync(fileno(f)))
-		rc = -1;
-	if (rc)
-		saved = errno;
-	if (fclose(f) == EOF && !rc) {
-		rc = -1;
-		saved = errno;
-	}
-	if (rc)
-		goto out_unlink;
-	if (rename(tmp, path)) {
-		rc = st_error_set(err, ST_ERR_IO, "%s: cannot replace the file: %s", path,
-				  strerror(errno));
-		unlink(tmp);
-		goto out_free_tmp;
-	}
-	sync_dir(path);
-	free(tmp);
-	return 0;
-
-out_unlink:
-	unlink(tmp);
-	rc = st_error_set(err, ST_ERR_IO, "%s: cannot write: %s; the file was left unchanged", path,
-			  strerror(saved ? saved : EIO));
-out_free_tmp:
-	free(tmp);
-	return rc;
+	if ((rc = st_file_begin(&out, path, err)))
+		return rc;
+	setvbuf(out.f, NULL, _IOFBF, MIO_CHUNK);
+	errno = 0;
+	if ((binary ? write_binary(out.f, m) : write_ascii(out.f, m)) != 0)
+		return st_file_fail(&out, err);
+	return st_file_commit(&out, err);
 }

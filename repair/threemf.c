@@ -12,6 +12,7 @@
  * repeat one mesh many times over).
  */
 #include "threemf_impl.h"
+#include "st_grow.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -112,15 +113,11 @@ static struct tmf_part *get_part(struct tmf_doc *d, const char *entry, int *rc)
 	for (size_t i = 0; i < d->nparts; i++)
 		if (!strcasecmp(d->parts[i]->entry, entry))
 			return d->parts[i];
-	if (d->nparts == d->cap_parts) {
-		size_t ncap = d->cap_parts ? 2 * d->cap_parts : 4;
-		struct tmf_part **q = realloc(d->parts, ncap * sizeof(*q));
+	struct tmf_part **q = st_grow(d->parts, &d->cap_parts, d->nparts + 1, sizeof(*q));
 
-		if (!q)
-			goto out_nomem;
-		d->parts = q;
-		d->cap_parts = ncap;
-	}
+	if (!q)
+		goto out_nomem;
+	d->parts = q;
 	*rc = open_entry(d, entry, &st);
 	if (*rc == 1) {
 		*rc = mio_err(d->s, ST_ERR_PARSE, "the 3MF names model part %s, which the zip does "

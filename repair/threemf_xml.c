@@ -13,6 +13,7 @@
  * (the 3MF core spec forbids one), so no entity is ever expanded.
  */
 #include "threemf_impl.h"
+#include "st_grow.h"
 
 #include <float.h>
 #include <libxml/xmlreader.h>
@@ -99,23 +100,15 @@ static int perr(struct tmf_parser *ps, int code, const char *fmt, ...)
 	return mio_err(ps->s, code, "%s line %lu: %s", ps->entry, node_line(ps), text);
 }
 
-/* Grow *arr (of *cap elements of size) to hold one more than n. */
+/* Grow *arr (of *cap elements of size) to hold one more than n (st_grow). */
 static int grow(void *arr, size_t *cap, size_t n, size_t size)
 {
 	void **a = arr;
-	size_t ncap;
-	void *q;
+	void *q = n < SIZE_MAX ? st_grow(*a, cap, n + 1, size) : NULL;
 
-	if (n < *cap)
-		return 0;
-	ncap = *cap ? *cap * 2 : 16;
-	if (ncap > SIZE_MAX / size)
-		return ST_ERR_NOMEM;
-	q = realloc(*a, ncap * size);
 	if (!q)
 		return ST_ERR_NOMEM;
 	*a = q;
-	*cap = ncap;
 	return 0;
 }
 

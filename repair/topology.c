@@ -19,6 +19,7 @@
 #include "ids.h"
 #include "mesh.h"
 #include "parts.h"
+#include "st_grow.h"
 
 enum tri_class { TRI_LAYER = 0, TRI_IRREGULAR, TRI_DEGENERATE, TRI_DUPLICATE };
 
@@ -245,13 +246,10 @@ static int build_edges(struct topo *tp, struct st_error *err)
 				uint32_t a = m->tris[t][k], b = m->tris[t][(k + 1) % 3];
 				if ((a < b ? a : b) != lo)
 					continue;
-				if (nh == hcap) {
-					void *p = realloc(h, hcap * 2 * sizeof(*h));
-					if (!p)
-						goto out_nomem;
-					h = p;
-					hcap *= 2;
-				}
+				void *p = st_grow(h, &hcap, nh + 1, sizeof(*h));
+				if (!p)
+					goto out_nomem;
+				h = p;
 				h[nh].hi = a < b ? b : a;
 				h[nh++].corner = 3 * t + k;
 			}

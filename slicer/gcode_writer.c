@@ -27,7 +27,9 @@
 
 #include "placeholder.h"
 #include "settings.h"
+#include "st_file.h"
 #include "travel.h"
+#include "st_grow.h"
 
 #define E_UNITS 100000.0 /* E written in 1e-5 mm */
 #define E_DIGITS 5
@@ -368,9 +370,7 @@ struct gcodew {
 	struct ph_vars *vars;	 /* placeholders: the print's variables */
 	double max_z;		 /* mm, highest layer written so far */
 	FILE *body;		 /* the body, generated before the header */
-	const char *path;	 /* gcodew_begin_file: the file to write, */
-	char *tmp;		 /* the temporary file beside it until renamed, */
-	FILE *out;		 /* open on tmp */
+	struct st_file_out out;	 /* gcodew_begin_file: the file being written */
 	double len[PATH_ROLES], area[PATH_ROLES]; /* per role: nm and nm^2 of
 						     * beads, for the mean widths */
 	struct st_error *err;
@@ -409,17 +409,11 @@ struct gcodew {
 /* Append an operation. */
 static int push(struct gcodew *w, struct op o)
 {
-	if (w->nops == w->opcap) {
-		size_t cap = w->opcap ? 2 * w->opcap : 256;
-		struct op *grown;
-		if (cap > SIZE_MAX / sizeof(*grown))
-			return st_error_set(w->err, ST_ERR_NOMEM, "G-code: too many moves in a layer");
-		grown = realloc(w->ops, cap * sizeof(*grown));
-		if (!grown)
-			return st_error_set(w->err, ST_ERR_NOMEM, "G-code: out of memory planning a layer");
-		w->ops = grown;
-		w->opcap = cap;
-	}
+	struct op *grown = st_grow(w->ops, &w->opcap, w->nops + 1, sizeof(*grown));
+
+	if (!grown)
+		return st_error_set(w->err, ST_ERR_NOMEM, "G-code: out of memory planning a layer");
+	w->ops = grown;
 	w->ops[w->nops++] = o;
 	return 0;
 }
@@ -609,14 +603,10 @@ static int record_wipe(struct gcodew *w, const struct toolpath *p, bool rev, siz
 	for (size_t k = steps; k-- > 0;) {
 		const struct path_point *q = &p->pts[trav(p, rev, k)];
 		double x = q->x / SLICE_UNITS_PER_MM, y = q->y / SLICE_UNITS_PER_MM;
-		if (w->nwipe == w->wipecap) {
-			size_t cap = w->wipecap ? 2 * w->wipecap : 32;
-			double *grown = realloc(w->wipe, cap * 2 * sizeof(*grown));
-			if (!grown)
-				return st_error_set(w->err, ST_ERR_NOMEM, "G-code: out of memory for a wipe");
-			w->wipe = grown;
-			w->wipecap = cap;
-		}
+		double *grown = st_grow(w->wipe, &w->wipecap, w->nwipe + 1, 2 * sizeof(*grown));
+		if (!grown)
+			return st_error_set(w->err, ST_ERR_NOMEM, "G-code: out of memory for a wipe");
+		w->wipe = grown;
 		if (w->nwipe)
 			walked += hypot(x - w->wipe[2 * w->nwipe - 2], y - w->wipe[2 * w->nwipe - 1]);
 		w->wipe[2 * w->nwipe] = x;
@@ -1230,12 +1220,7 @@ void gcodew_free(struct gcodew *w)
 		return;
 	if (w->body)
 		fclose(w->body);
-	if (w->out) /* a file begun and never finished */
-		fclose(w->out);
-	if (w->tmp) {
-		unlink(w->tmp);
-		free(w->tmp);
-	}
+	st_file_abort(&w->out); /* a file begun and never finished */
 	est_planner_free(w->est);
 	free(w->ops);
 	free(w->wipe);
@@ -1397,71 +1382,35 @@ int gcodew_write_stream(const struct layer_stack *stack, const struct gcodew_set
 int gcodew_begin_file(const struct gcodew_settings *s, size_t nlayers, const char *path,
 		      struct gcodew **out, struct st_error *err)
 {
-	char *tmp;
-	size_t n;
-	int fd, rc;
-	FILE *fp;
+	struct st_file_out o;
+	int rc;
 
 	if (!out)
 		return st_error_set(err, ST_ERR_ARG, "G-code: gcodew_begin_file needs an out pointer");
 	*out = NULL;
 	if (!path || !*path)
 		return st_error_set(err, ST_ERR_ARG, "G-code: no output file name given");
-	n = strlen(path);
-	if (n > SIZE_MAX - 8 || !(tmp = malloc(n + 8)))
-		return st_error_set(err, ST_ERR_NOMEM, "G-code: out of memory for a file name");
-	memcpy(tmp, path, n);
-	memcpy(tmp + n, ".XXXXXX", 8);
-	fd = mkstemp(tmp);
-	if (fd < 0) {
-		rc = st_error_set(err, ST_ERR_IO, "%s: cannot create a temporary file beside it: %s",
-				  path, strerror(errno));
-		free(tmp);
+	if ((rc = st_file_begin(&o, path, err)))
+		return rc;
+	if ((rc = gcodew_begin(s, nlayers, out, err))) {
+		st_file_abort(&o);
 		return rc;
 	}
-	if (fchmod(fd, 0644) != 0 || !(fp = fdopen(fd, "w"))) {
-		rc = st_error_set(err, ST_ERR_IO, "%s: cannot open %s: %s", path, tmp,
-				  strerror(errno));
-		close(fd);
-		goto out_unlink;
-	}
-	rc = gcodew_begin(s, nlayers, out, err);
-	if (rc) {
-		fclose(fp);
-		goto out_unlink;
-	}
-	(*out)->path = path;
-	(*out)->tmp = tmp;
-	(*out)->out = fp;
+	(*out)->out = o;
 	return 0;
-out_unlink:
-	unlink(tmp);
-	free(tmp);
-	return rc;
 }
 
 int gcodew_finish_file(struct gcodew *w, struct gcodew_summary *sum, struct st_error *err)
 {
-	FILE *fp;
 	int rc;
 
-	if (!w || !w->out)
+	if (!w || !w->out.f)
 		return st_error_set(err, ST_ERR_ARG, "G-code: no writer of a file given");
-	rc = gcodew_finish(w, w->out, sum, err);
-	fp = w->out;
-	w->out = NULL;
-	if (rc == 0 && fsync(fileno(fp)) != 0)
-		rc = st_error_set(err, ST_ERR_IO, "%s: fsync failed: %s", w->tmp, strerror(errno));
-	if (fclose(fp) != 0 && rc == 0)
-		rc = st_error_set(err, ST_ERR_IO, "%s: close failed: %s", w->tmp, strerror(errno));
-	if (rc == 0 && rename(w->tmp, w->path) != 0)
-		rc = st_error_set(err, ST_ERR_IO, "%s: cannot rename %s over it: %s", w->path,
-				  w->tmp, strerror(errno));
-	if (rc)
-		unlink(w->tmp);
-	free(w->tmp);
-	w->tmp = NULL;
-	return rc;
+	if ((rc = gcodew_finish(w, w->out.f, sum, err))) {
+		st_file_abort(&w->out);
+		return rc;
+	}
+	return st_file_commit(&w->out, err);
 }
 
 int gcodew_write_file(const struct layer_stack *stack, const struct gcodew_settings *s,

@@ -11,6 +11,7 @@
 #include "medial.h"
 #include "patterns.h"
 #include "perimeters.h"
+#include "st_grow.h"
 
 /* Chord error of round offsets, nm. */
 #define INFILL_ARC_NM 2000.0
@@ -319,18 +320,13 @@ static struct item *plan_item(struct ctx *c)
 {
 	struct infill_plan *p = c->plan;
 
-	if (p->n == p->cap) {
-		size_t cap = p->cap ? 2 * p->cap : 16;
-		struct item *grown = cap < SIZE_MAX / sizeof(*grown)
-					 ? realloc(p->v, cap * sizeof(*grown))
-					 : NULL;
-		if (!grown) {
-			st_error_set(c->err, ST_ERR_NOMEM, "infill: out of memory planning a layer");
-			return NULL;
-		}
-		p->v = grown;
-		p->cap = cap;
+	struct item *grown = st_grow(p->v, &p->cap, p->n + 1, sizeof(*grown));
+
+	if (!grown) {
+		st_error_set(c->err, ST_ERR_NOMEM, "infill: out of memory planning a layer");
+		return NULL;
 	}
+	p->v = grown;
 	p->v[p->n] = (struct item){0};
 	return &p->v[p->n++];
 }

@@ -6,6 +6,7 @@
  * unary.
  */
 #include "placeholder_int.h"
+#include "st_grow.h"
 
 #include <math.h>
 #include <regex.h>
@@ -39,21 +40,11 @@ int ph_buf_add(struct ps *p, struct buf *b, const char *s, size_t n)
 {
 	if (!b)
 		return 0;
-	if (b->len + n + 1 > b->cap) {
-		size_t cap = b->cap ? b->cap : 256;
-		char *grown;
+	char *grown = n < SIZE_MAX - b->len - 1 ? st_grow(b->p, &b->cap, b->len + n + 1, 1) : NULL;
 
-		while (cap < b->len + n + 1) {
-			if (cap > SIZE_MAX / 2)
-				return ph_err(p, p->i, ST_ERR_NOMEM, "out of memory");
-			cap *= 2;
-		}
-		grown = realloc(b->p, cap);
-		if (!grown)
-			return ph_err(p, p->i, ST_ERR_NOMEM, "out of memory");
-		b->p = grown;
-		b->cap = cap;
-	}
+	if (!grown)
+		return ph_err(p, p->i, ST_ERR_NOMEM, "out of memory");
+	b->p = grown;
 	memcpy(b->p + b->len, s, n);
 	b->len += n;
 	b->p[b->len] = '\0';

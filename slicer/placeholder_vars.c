@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "st_number.h"
+#include "st_grow.h"
 
 struct ph_vars *ph_vars_new(const struct ph_vars *parent)
 {
@@ -74,15 +75,11 @@ static struct ph_var *slot(struct ph_vars *v, const char *name)
 			var_clear(&v->v[i]);
 			return &v->v[i];
 		}
-	if (v->n == v->cap) {
-		size_t cap = v->cap ? v->cap * 2 : 32;
-		struct ph_var *grown = realloc(v->v, cap * sizeof(*grown));
+	struct ph_var *grown = st_grow(v->v, &v->cap, v->n + 1, sizeof(*grown));
 
-		if (!grown)
-			return NULL;
-		v->v = grown;
-		v->cap = cap;
-	}
+	if (!grown)
+		return NULL;
+	v->v = grown;
 	x = &v->v[v->n];
 	memset(x, 0, sizeof(*x));
 	x->name = strdup(name);

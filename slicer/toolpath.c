@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "travel.h"
+#include "st_grow.h"
 
 struct layer_stack *layer_stack_new(size_t nlayers, struct st_error *err)
 {
@@ -58,14 +59,10 @@ int layer_add_path(struct layer_paths *l, enum path_role role, bool closed,
 					    (long long)pts[i].width);
 	if (n > SIZE_MAX / sizeof(*pts))
 		return st_error_set(err, ST_ERR_NOMEM, "toolpath: %zu points overflow", n);
-	if (l->n == l->cap) {
-		size_t cap = l->cap ? 2 * l->cap : 16;
-		struct toolpath *grown = realloc(l->paths, cap * sizeof(*grown));
-		if (!grown)
-			return st_error_set(err, ST_ERR_NOMEM, "out of memory adding a path");
-		l->paths = grown;
-		l->cap = cap;
-	}
+	struct toolpath *grown = st_grow(l->paths, &l->cap, l->n + 1, sizeof(*grown));
+	if (!grown)
+		return st_error_set(err, ST_ERR_NOMEM, "out of memory adding a path");
+	l->paths = grown;
 	struct path_point *copy = malloc(n * sizeof(*copy));
 	if (!copy)
 		return st_error_set(err, ST_ERR_NOMEM, "out of memory adding a path");

@@ -9,6 +9,7 @@
  * an edge in several cells is tested once.
  */
 #include "travel.h"
+#include "st_grow.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -113,24 +114,14 @@ static int add_poly(struct travel_map *m, size_t *cap_polys, size_t *cap_pts, co
 {
 	if (n < 3)
 		return 0;
-	if (m->npolys == *cap_polys) {
-		size_t cap = *cap_polys ? 2 * *cap_polys : 16;
-		struct tpoly *g = realloc(m->polys, cap * sizeof(*g));
-		if (!g)
-			return st_error_set(err, ST_ERR_NOMEM, "travel: out of memory");
-		m->polys = g;
-		*cap_polys = cap;
-	}
-	if (m->npts + n > *cap_pts) {
-		size_t cap = *cap_pts ? 2 * *cap_pts : 256;
-		while (cap < m->npts + n)
-			cap *= 2;
-		int64_t *g = realloc(m->xy, 2 * cap * sizeof(*g));
-		if (!g)
-			return st_error_set(err, ST_ERR_NOMEM, "travel: out of memory");
-		m->xy = g;
-		*cap_pts = cap;
-	}
+	struct tpoly *g = st_grow(m->polys, cap_polys, m->npolys + 1, sizeof(*g));
+	if (!g)
+		return st_error_set(err, ST_ERR_NOMEM, "travel: out of memory");
+	m->polys = g;
+	int64_t *gxy = st_grow(m->xy, cap_pts, m->npts + n, 2 * sizeof(*gxy)); /* x, y */
+	if (!gxy)
+		return st_error_set(err, ST_ERR_NOMEM, "travel: out of memory");
+	m->xy = gxy;
 	memcpy(m->xy + 2 * m->npts, xy, 2 * n * sizeof(*xy));
 	m->polys[m->npolys++] = (struct tpoly){.start = m->npts, .n = n, .island = island,
 					       .wall = wall};
@@ -456,14 +447,10 @@ bool travel_segment_inside(struct travel_map *m, int64_t ax, int64_t ay, int64_t
 static int xy_add(int64_t **xy, size_t *n, size_t *cap, int64_t x, int64_t y,
 		  struct st_error *err)
 {
-	if (*n == *cap) {
-		size_t grown_cap = *cap ? 2 * *cap : 16;
-		int64_t *g = realloc(*xy, 2 * grown_cap * sizeof(*g));
-		if (!g)
-			return st_error_set(err, ST_ERR_NOMEM, "travel: out of memory for a route");
-		*xy = g;
-		*cap = grown_cap;
-	}
+	int64_t *g = st_grow(*xy, cap, *n + 1, 2 * sizeof(*g)); /* x, y */
+	if (!g)
+		return st_error_set(err, ST_ERR_NOMEM, "travel: out of memory for a route");
+	*xy = g;
 	(*xy)[2 * *n] = x;
 	(*xy)[2 * *n + 1] = y;
 	(*n)++;
@@ -487,14 +474,10 @@ static int chain_add(struct travel_map *m, int64_t x, int64_t y, struct st_error
 /* Append h to the map's hits. */
 static int hit_add(struct travel_map *m, const struct hit *h, struct st_error *err)
 {
-	if (m->nhits == m->hitcap) {
-		size_t cap = m->hitcap ? 2 * m->hitcap : 32;
-		struct hit *g = realloc(m->hits, cap * sizeof(*g));
-		if (!g)
-			return st_error_set(err, ST_ERR_NOMEM, "travel: out of memory");
-		m->hits = g;
-		m->hitcap = cap;
-	}
+	struct hit *g = st_grow(m->hits, &m->hitcap, m->nhits + 1, sizeof(*g));
+	if (!g)
+		return st_error_set(err, ST_ERR_NOMEM, "travel: out of memory");
+	m->hits = g;
 	m->hits[m->nhits++] = *h;
 	return 0;
 }

@@ -779,7 +779,7 @@ static char *read_whole(const char *path, size_t *len)
 	return buf;
 }
 
-/* Count the files beside path whose names start with path's and a dot. */
+/* Count the temporary files beside path: the writer's ".NAME.XXXXXX". */
 static int temporaries_beside(const char *path)
 {
 	char dir[512], *slash;
@@ -796,7 +796,8 @@ static int temporaries_beside(const char *path)
 	d = opendir(dir);
 	ck_assert_ptr_nonnull(d);
 	while ((de = readdir(d)))
-		if (!strncmp(de->d_name, base, strlen(base)) && de->d_name[strlen(base)] == '.')
+		if (de->d_name[0] == '.' && !strncmp(de->d_name + 1, base, strlen(base)) &&
+		    de->d_name[strlen(base) + 1] == '.')
 			n++;
 	closedir(d);
 	return n;
@@ -860,10 +861,6 @@ START_TEST(test_file_output)
 	struct gcodew_summary sum;
 	struct st_error err = {0};
 	const char *path = tu_path("out.gcode");
-	char dir[512], *slash;
-	DIR *d;
-	struct dirent *de;
-	int leftovers = 0;
 
 	add_square(&st->layers[0], PATH_OUTER_PERIMETER, 0, 0, 10, 0.45);
 	add_square(&st->layers[1], PATH_OUTER_PERIMETER, 0, 0, 10, 0.45);
@@ -878,16 +875,7 @@ START_TEST(test_file_output)
 	st->layers[1].paths[0].pts[2].width = 1000; /* 1 um < layer height */
 	ck_assert_int_eq(gcodew_write_file(st, &s, path, NULL, &err), ST_ERR_RANGE);
 	ck_assert(tu_file_exists(path));
-	snprintf(dir, sizeof(dir), "%s", path);
-	slash = strrchr(dir, '/');
-	*slash = '\0';
-	d = opendir(dir);
-	ck_assert_ptr_nonnull(d);
-	while ((de = readdir(d)))
-		if (strstr(de->d_name, "out.gcode."))
-			leftovers++;
-	closedir(d);
-	ck_assert_int_eq(leftovers, 0);
+	ck_assert_int_eq(temporaries_beside(path), 0);
 	/* Bad settings are refused by name. */
 	s.retract_speed = 0;
 	ck_assert_int_eq(gcodew_write_file(st, &s, path, NULL, &err), ST_ERR_RANGE);

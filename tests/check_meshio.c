@@ -7,7 +7,6 @@
  * generated here; no binary fixture files.
  */
 #include <check.h>
-#include <dirent.h>
 #include <math.h>
 #include <signal.h>
 #include <stdint.h>
@@ -71,21 +70,6 @@ static void write_ok(const char *path, const struct mesh *m, enum meshio_format 
 	struct st_error err = {0};
 
 	ck_assert_msg(meshio_write_stl(path, m, fmt, &err) == 0, "%s", err.msg);
-}
-
-/* Entries in a directory other than . and .. */
-static int dir_entries(const char *dir)
-{
-	DIR *d = opendir(dir);
-	struct dirent *e;
-	int n = 0;
-
-	ck_assert_ptr_nonnull(d);
-	while ((e = readdir(d)))
-		if (strcmp(e->d_name, ".") && strcmp(e->d_name, ".."))
-			n++;
-	closedir(d);
-	return n;
 }
 
 /* Corner k of triangle i of m. */
@@ -297,7 +281,7 @@ START_TEST(write_replaces_and_keeps_mode)
 	}
 	r = read_path(path, MESHIO_STL_BINARY);
 	assert_same(b, r, true);
-	ck_assert_int_eq(dir_entries(dir), 1); /* no temporary left over */
+	ck_assert_int_eq(tu_dir_entries(dir), 1); /* no temporary left over */
 	mesh_free(r);
 	mesh_free(a);
 	mesh_free(b);
@@ -739,14 +723,14 @@ START_TEST(write_failure_keeps_old_file)
 	ck_assert_int_eq(setrlimit(RLIMIT_FSIZE, &old), 0);
 	after = tu_slurp(path, &len);
 	ck_assert_str_eq(after, before);
-	ck_assert_int_eq(dir_entries(dir), 1); /* the temporary files are gone */
+	ck_assert_int_eq(tu_dir_entries(dir), 1); /* the temporary files are gone */
 	free(after);
 	/* A directory in the way: rename fails, nothing else changes. */
 	snprintf(path, sizeof(path), "%s/adir", dir);
 	ck_assert_int_eq(mkdir(path, 0700), 0);
 	ck_assert_int_eq(meshio_write_stl(path, m, MESHIO_STL_BINARY, &err), ST_ERR_IO);
-	ck_assert_int_eq(dir_entries(dir), 2);
-	ck_assert_int_eq(dir_entries(path), 0);
+	ck_assert_int_eq(tu_dir_entries(dir), 2);
+	ck_assert_int_eq(tu_dir_entries(path), 0);
 	mesh_free(m);
 	free(dir);
 }

@@ -23,7 +23,7 @@
 #include "suites.h"
 #include "testutil.h"
 
-#define PT_SPEEDUP 20.0
+#define PT_SPEEDUP 100.0
 #define PT_LAYERS 8
 #define PT_PER_LAYER 40
 
@@ -76,6 +76,7 @@ static void rig_open(struct rig *r, int dialect, long reset_at, long unplug_at)
 
 		sim_marlin_options_init(&so);
 		so.speedup = PT_SPEEDUP;
+		so.boot_s = 0; /* booted before we open: the first M110 is answered */
 		so.baud = 4000000;
 		so.log_path = r->log;
 		so.reset_at_line = reset_at;

@@ -830,7 +830,16 @@ START_TEST(test_unsliceable_profile_fails_at_load)
 	/* Repairing and slicing the bracket takes seconds; refusing it, a
 	 * process start and a file read (well under a second even under ASan). */
 	ck_assert_msg(ms < 1000, "refused after %.0f ms", ms);
-	ck_assert_int_eq(tu_run(out, sizeof(out), "printers --show '%s'", ini), 65);
+	/* one rule for every command that loads it: printers --show, repair,
+	 * x3g and send refuse it with the same 2 */
+	ck_assert_int_eq(tu_run(out, sizeof(out), "printers --show '%s'", ini), 2);
+	ck_assert_ptr_nonnull(strstr(out, "line 2: min_print_speed"));
+	ck_assert_int_eq(tu_run(out, sizeof(out), "repair docs/examples/bracket.stl -o '%s' "
+				"--printer '%s'", tu_path("mps0.stl"), ini), 2);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "x3g tests/data/prusaslicer-mk3s-cube.gcode -o '%s' "
+				"--printer '%s'", tu_path("mps0.x3g"), ini), 2);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "send tests/data/prusaslicer-mk3s-cube.gcode --port "
+				"/nonexistent --printer '%s'", ini), 2);
 	/* A derived value is checked too: 1000% of perimeter_speed 200 is
 	 * beyond the declared external_perimeter_speed range. */
 	load_bad("perimeter_speed = 200\nexternal_perimeter_speed = 1000%\n", ST_ERR_RANGE,

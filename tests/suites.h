@@ -7,6 +7,7 @@
 
 #include <check.h>
 
+Suite *stfile_suite(void);	/* tests/check_stfile.c: the atomic file writer of include/ */
 Suite *mesh_suite(void);	/* tests/check_mesh.c: welding, topology report */
 Suite *meshio_suite(void);	/* tests/check_meshio.c: STL/OBJ/OFF I/O, bad input */
 void meshio_3mf_tcases(Suite *s); /* tests/check_meshio_3mf.c: 3MF, part of the meshio suite */

@@ -2,6 +2,7 @@
 #include "testutil.h"
 
 #include <check.h>
+#include <dirent.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -254,4 +255,18 @@ struct mesh *tu_round_trip(const struct mesh *m, const char *name, enum meshio_f
 	ck_assert_msg(meshio_read(path, MESHIO_AUTO, &back, NULL, &err) == 0, "read %s: %s", path,
 		      err.msg);
 	return back;
+}
+
+int tu_dir_entries(const char *dir)
+{
+	DIR *d = opendir(dir);
+	struct dirent *e;
+	int n = 0;
+
+	ck_assert_msg(d, "cannot list %s", dir);
+	while ((e = readdir(d)))
+		if (strcmp(e->d_name, ".") && strcmp(e->d_name, ".."))
+			n++;
+	closedir(d);
+	return n;
 }

@@ -41,6 +41,9 @@ void tu_write_zip(const char *path, const char *const *names, const char *const 
  */
 void *tu_slurp(const char *path, size_t *len);
 
+/* tu_dir_entries - the number of entries in directory dir (. and .. not counted). */
+int tu_dir_entries(const char *dir);
+
 /*
  * tu_expect_read_fail - reading the mesh file at path (meshio_read) and its
  * bytes data[0..len) under the same name (meshio_read_buffer) must both fail

@@ -11,6 +11,7 @@
 #include <time.h>
 
 #include "node_int.h"
+#include "st_file.h"
 
 /* Set what the worker's print should do (pause, resume, cancel); p->mu held. */
 static void ctl_request(struct node_printer *p, int pause, bool cancel)
@@ -145,6 +146,7 @@ int node_store_file(struct node *n, struct node_printer *p, const char *tmp, con
 		node_log("error", p->cfg->name, 0, "%s: cannot store: %s", full, strerror(errno));
 		return st_error_set(err, ST_ERR_IO, "cannot store the file");
 	}
+	st_file_sync_dir(full); /* the upload was synced before; now its name */
 	if ((select || print) && node_queue_set_selected(n->q, p->cfg->name, rel, err))
 		return ST_ERR_IO;
 	if (print) {

@@ -27,6 +27,7 @@
 #include "gcode.h"
 #include "marlin_sim.h"
 #include "sim_util.h"
+#include "st_grow.h"
 
 #define SIM_MAX_CMD 96		/* Marlin MAX_CMD_SIZE (bytes, NUL included) */
 #define SIM_PLANNER 16		/* Marlin BLOCK_BUFFER_SIZE */
@@ -167,14 +168,10 @@ static void sim_send(struct sim_marlin *s, const char *text)
 		s->tx = p;
 		s->tx_cap = cap;
 	}
-	if (s->marks_n == s->marks_cap) {
-		size_t cap = s->marks_cap ? s->marks_cap * 2 : 64;
-		struct sim_txmark *m = realloc(s->marks, cap * sizeof(*m));
-		if (!m)
-			return;
-		s->marks = m;
-		s->marks_cap = cap;
-	}
+	struct sim_txmark *m = st_grow(s->marks, &s->marks_cap, s->marks_n + 1, sizeof(*m));
+	if (!m)
+		return;
+	s->marks = m;
 	memcpy(s->tx + s->tx_len, text, n);
 	s->tx[s->tx_len + n] = '\n';
 	s->tx_len += n + 1;

@@ -5,9 +5,12 @@
 # tests/fuzz/seeds/NAME and the test fixtures (tests/data, printers/, the
 # example model, generated meshes, X3G translated from the G-code fixtures).
 # A crash leaves FUZZ_BUILD/crash-NAME-* and fails the run; every target runs.
+# FUZZ_JOBS targets (default 2, one per core) run at a time; their reports
+# follow in the order of the names.
 set -u
 fb=$1 secs=$2 build=$3 corpora=$4
 shift 4
+jobs=${FUZZ_JOBS:-2}
 gen=$fb/fixture-seeds
 
 # Fixture seeds, made once per run (cheap).
@@ -27,8 +30,10 @@ for g in tests/data/*.gcode; do
 		--printer flashforge-creator-pro >/dev/null 2>&1
 done
 
-status=0
-for name in "$@"; do
+# Fuzz one target; its report goes to FUZZ_BUILD/fuzz_NAME.report, and the
+# file FUZZ_BUILD/fuzz_NAME.failed says it failed.
+fuzz_one() {
+	name=$1
 	corpus=$corpora/$name
 	mkdir -p "$corpus"
 	case $name in
@@ -42,6 +47,8 @@ for name in "$@"; do
 	leaks=1
 	[ "$name" = http ] && leaks=0
 	log=$fb/fuzz_$name.log
+	report=$fb/fuzz_$name.report
+	rm -f "$fb/fuzz_$name.failed"
 	"$fb/fuzz_$name" -max_total_time="$secs" -timeout=10 -print_final_stats=1 \
 		-detect_leaks=$leaks -artifact_prefix="$fb/crash-$name-" \
 		"$corpus" "tests/fuzz/seeds/$name" $extra >"$log" 2>&1
@@ -49,11 +56,39 @@ for name in "$@"; do
 	execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")
 	cov=$(grep -o 'cov: [0-9]*' "$log" | tail -1)
 	if [ $rc -ne 0 ]; then
-		echo "fuzz $name: FAILED (exit $rc) after ${execs:-?} executions; see $log" >&2
-		grep -m 3 -E 'ERROR|SUMMARY|runtime error' "$log" >&2
-		status=1
+		{
+			echo "fuzz $name: FAILED (exit $rc) after ${execs:-?} executions; see $log"
+			grep -m 3 -E 'ERROR|SUMMARY|runtime error' "$log"
+		} >"$report"
+		: >"$fb/fuzz_$name.failed"
 	else
-		echo "fuzz $name: ${execs:-?} executions in $secs s, $cov, no crash"
+		echo "fuzz $name: ${execs:-?} executions in $secs s, $cov, no crash" >"$report"
+	fi
+}
+
+status=0
+report() {
+	for done_name in "$@"; do
+		if [ -e "$fb/fuzz_$done_name.failed" ]; then
+			cat "$fb/fuzz_$done_name.report" >&2
+			status=1
+		else
+			cat "$fb/fuzz_$done_name.report"
+		fi
+	done
+}
+batch=""
+n=0
+for name in "$@"; do
+	fuzz_one "$name" &
+	batch="$batch $name"
+	n=$((n + 1))
+	if [ $n -ge "$jobs" ]; then
+		wait
+		report $batch
+		batch="" n=0
 	fi
 done
+wait
+report $batch
 exit $status

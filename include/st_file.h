@@ -1,0 +1,181 @@
+/*
+ * st_file.h - the one atomic file writer, header-only like st_error.h so
+ * every layer may use it.  An output is written to a temporary file in its
+ * own directory, flushed to disk, then renamed over the output and the
+ * directory synced: a reader sees the old file or the whole new one, and a
+ * failure leaves neither a half-written output nor the temporary file.
+ *
+ *	struct st_file_out o;
+ *	if (st_file_begin(&o, path, err)) return err->code;
+ *	... write to o.f ...
+ *	return st_file_commit(&o, err);	   (or st_file_abort(&o) to give up)
+ */
+#ifndef STRATUM_ST_FILE_H
+#define STRATUM_ST_FILE_H
+
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "st_error.h"
+
+/* An output being written: write to f; tmp is the file beside path. */
+struct st_file_out {
+	FILE *f;
+	char *tmp;
+	const char *path; /* the caller's string, kept until commit or abort */
+};
+
+/* The process umask without changing it (umask() would, for every thread):
+ * Linux reports it in /proc/self/status; elsewhere assume the usual 022. */
+static inline mode_t st_file_umask(void)
+{
+	FILE *f = fopen("/proc/self/status", "r");
+	char line[256];
+	mode_t mask = 022;
+
+	if (!f)
+		return mask;
+	while (fgets(line, sizeof(line), f)) {
+		if (!strncmp(line, "Umask:", 6)) {
+			mask = (mode_t)(strtol(line + 6, NULL, 8) & 0777);
+			break;
+		}
+	}
+	fclose(f);
+	return mask;
+}
+
+/*
+ * st_file_begin - open a temporary file "DIR/.NAME.XXXXXX" beside path
+ * with the mode the output will need (the old file's when replacing one,
+ * else 0666 less the umask).  Returns 0, or ST_ERR_ARG / ST_ERR_NOMEM /
+ * ST_ERR_IO with err naming path; nothing is left behind on failure.
+ */
+static inline int st_file_begin(struct st_file_out *o, const char *path, struct st_error *err)
+{
+	const char *slash;
+	size_t dirlen, len;
+	struct stat sb;
+	mode_t mode;
+	int fd, rc;
+
+	memset(o, 0, sizeof(*o));
+	if (!path || !*path)
+		return st_error_set(err, ST_ERR_ARG, "no output file name given");
+	slash = strrchr(path, '/');
+	dirlen = slash ? (size_t)(slash - path) + 1 : 0;
+	len = strlen(path) + sizeof(".") + sizeof(".XXXXXX");
+	if (!(o->tmp = malloc(len)))
+		return st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", path);
+	snprintf(o->tmp, len, "%.*s.%s.XXXXXX", (int)dirlen, path, path + dirlen);
+	fd = mkstemp(o->tmp);
+	if (fd < 0) {
+		rc = st_error_set(err, ST_ERR_IO, "%s: cannot create a temporary file beside it: %s",
+				  path, strerror(errno));
+		free(o->tmp);
+		o->tmp = NULL;
+		return rc;
+	}
+	if (stat(path, &sb) == 0 && S_ISREG(sb.st_mode))
+		mode = sb.st_mode & 07777;
+	else
+		mode = 0666 & ~st_file_umask();
+	if (fchmod(fd, mode) != 0 || !(o->f = fdopen(fd, "wb"))) {
+		rc = st_error_set(err, ST_ERR_IO, "%s: cannot open the temporary file %s: %s",
+				  path, o->tmp, strerror(errno));
+		close(fd);
+		unlink(o->tmp);
+		free(o->tmp);
+		o->tmp = NULL;
+		return rc;
+	}
+	o->path = path;
+	return 0;
+}
+
+/* st_file_abort - give up: the temporary file is removed, the output is
+ * as it was.  Safe on a writer that failed to begin or was committed. */
+static inline void st_file_abort(struct st_file_out *o)
+{
+	if (o->f)
+		fclose(o->f);
+	if (o->tmp) {
+		unlink(o->tmp);
+		free(o->tmp);
+	}
+	memset(o, 0, sizeof(*o));
+}
+
+/* st_file_sync_dir - fsync the directory holding path, so that a rename
+ * into it is on disk (best effort: the data itself already is). */
+static inline void st_file_sync_dir(const char *path)
+{
+	const char *slash = strrchr(path, '/');
+	char *dir = slash ? strndup(path, slash == path ? 1 : (size_t)(slash - path))
+			  : strdup(".");
+	int fd;
+
+	if (dir && (fd = open(dir, O_RDONLY | O_DIRECTORY)) >= 0) {
+		if (fsync(fd) != 0) {
+			/* some file systems refuse to sync a directory */
+		}
+		close(fd);
+	}
+	free(dir);
+}
+
+/* st_file_fail - writing to f failed (errno says why): abort and return
+ * ST_ERR_IO with err naming the output. */
+static inline int st_file_fail(struct st_file_out *o, struct st_error *err)
+{
+	int rc = st_error_set(err, ST_ERR_IO, "%s: cannot write: %s; the file was left unchanged",
+			      o->path ? o->path : "(no file)", strerror(errno ? errno : EIO));
+
+	st_file_abort(o);
+	return rc;
+}
+
+/*
+ * st_file_commit - flush and fsync the temporary file, rename it over the
+ * output and fsync the directory (the rename itself on disk).  Returns 0,
+ * or ST_ERR_IO with err naming the output and the step that failed; then
+ * the temporary file is removed and the output is left unchanged.
+ */
+static inline int st_file_commit(struct st_file_out *o, struct st_error *err)
+{
+	const char *path = o->path;
+	int rc;
+
+	if (!o->f || !o->tmp)
+		return st_error_set(err, ST_ERR_ARG, "st_file_commit: no file being written");
+	errno = 0;
+	if (fflush(o->f) == EOF || ferror(o->f))
+		return st_file_fail(o, err);
+	if (fsync(fileno(o->f)) != 0) {
+		rc = st_error_set(err, ST_ERR_IO, "%s: cannot sync it to disk: %s; the file was "
+				  "left unchanged", path, strerror(errno));
+		st_file_abort(o);
+		return rc;
+	}
+	rc = fclose(o->f);
+	o->f = NULL;
+	if (rc != 0)
+		return st_file_fail(o, err);
+	if (rename(o->tmp, path) != 0) {
+		rc = st_error_set(err, ST_ERR_IO, "%s: cannot replace the file: %s", path,
+				  strerror(errno));
+		st_file_abort(o);
+		return rc;
+	}
+	free(o->tmp);
+	memset(o, 0, sizeof(*o));
+	st_file_sync_dir(path);
+	return 0;
+}
+
+#endif /* STRATUM_ST_FILE_H */
