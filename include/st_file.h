@@ -28,6 +28,7 @@ struct st_file_out {
 	FILE *f;
 	char *tmp;
 	const char *path; /* the caller's string, kept until commit or abort */
+	int direct;	  /* path is a device or pipe, written in place */
 };
 
 /* The process umask without changing it (umask() would, for every thread):
@@ -53,8 +54,11 @@ static inline mode_t st_file_umask(void)
 /*
  * st_file_begin - open a temporary file "DIR/.NAME.XXXXXX" beside path
  * with the mode the output will need (the old file's when replacing one,
- * else 0666 less the umask).  Returns 0, or ST_ERR_ARG / ST_ERR_NOMEM /
- * ST_ERR_IO with err naming path; nothing is left behind on failure.
+ * else 0666 less the umask).  An existing path that is no regular file
+ * (/dev/null, /dev/stdout, a named pipe) is written in place instead: a
+ * rename would replace the device with a file.  Returns 0, or ST_ERR_ARG /
+ * ST_ERR_NOMEM / ST_ERR_IO with err naming path; nothing is left behind on
+ * failure.
  */
 static inline int st_file_begin(struct st_file_out *o, const char *path, struct st_error *err)
 {
@@ -67,6 +71,16 @@ static inline int st_file_begin(struct st_file_out *o, const char *path, struct 
 	memset(o, 0, sizeof(*o));
 	if (!path || !*path)
 		return st_error_set(err, ST_ERR_ARG, "no output file name given");
+	if (stat(path, &sb) == 0 && S_ISDIR(sb.st_mode))
+		return st_error_set(err, ST_ERR_IO, "%s: is a directory, not a file", path);
+	if (stat(path, &sb) == 0 && !S_ISREG(sb.st_mode)) {
+		if (!(o->f = fopen(path, "wb")))
+			return st_error_set(err, ST_ERR_IO, "%s: cannot open: %s", path,
+					    strerror(errno));
+		o->path = path;
+		o->direct = 1;
+		return 0;
+	}
 	slash = strrchr(path, '/');
 	dirlen = slash ? (size_t)(slash - path) + 1 : 0;
 	len = strlen(path) + sizeof(".") + sizeof(".XXXXXX");
@@ -151,11 +165,19 @@ static inline int st_file_commit(struct st_file_out *o, struct st_error *err)
 	const char *path = o->path;
 	int rc;
 
-	if (!o->f || !o->tmp)
+	if (!o->f || (!o->tmp && !o->direct))
 		return st_error_set(err, ST_ERR_ARG, "st_file_commit: no file being written");
 	errno = 0;
 	if (fflush(o->f) == EOF || ferror(o->f))
 		return st_file_fail(o, err);
+	if (o->direct) { /* a device or pipe: nothing to sync or rename */
+		rc = fclose(o->f);
+		o->f = NULL;
+		if (rc != 0)
+			return st_file_fail(o, err);
+		memset(o, 0, sizeof(*o));
+		return 0;
+	}
 	if (fsync(fileno(o->f)) != 0) {
 		rc = st_error_set(err, ST_ERR_IO, "%s: cannot sync it to disk: %s; the file was "
 				  "left unchanged", path, strerror(errno));

@@ -6,6 +6,7 @@
  */
 #include <check.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -61,6 +62,35 @@ START_TEST(replaces_atomically)
 	ck_assert_int_eq(tu_dir_entries(dir), 1);
 	ck_assert(stat(path, &sb) == 0);
 	ck_assert_uint_eq(sb.st_mode & 07777, 0640);
+}
+END_TEST
+
+/* An output that is a pipe or a device (-o /dev/null, -o /dev/stdout) is
+ * written in place: a rename would have replaced it with a plain file (it
+ * once turned the machine's /dev/null into one). */
+START_TEST(pipe_written_in_place)
+{
+	const char *dir = fresh_dir("stf-fifo");
+	char path[600], got[64] = "";
+	struct st_file_out o;
+	struct st_error err = {0};
+	struct stat sb;
+
+	snprintf(path, sizeof(path), "%s/pipe", dir);
+	ck_assert(mkfifo(path, 0600) == 0);
+	const int rd = open(path, O_RDONLY | O_NONBLOCK); /* so the writer's open returns */
+	ck_assert(rd >= 0);
+	ck_assert_msg(st_file_begin(&o, path, &err) == 0, "%s", err.msg);
+	ck_assert(fputs("through the pipe\n", o.f) != EOF);
+	ck_assert_msg(st_file_commit(&o, &err) == 0, "%s", err.msg);
+	ck_assert_int_eq(read(rd, got, sizeof(got) - 1), 17);
+	ck_assert_str_eq(got, "through the pipe\n");
+	close(rd);
+	ck_assert(stat(path, &sb) == 0 && S_ISFIFO(sb.st_mode));
+	ck_assert_int_eq(tu_dir_entries(dir), 1); /* no temporary file beside it */
+	/* A directory is refused, naming it. */
+	ck_assert_int_eq(st_file_begin(&o, dir, &err), ST_ERR_IO);
+	ck_assert_msg(strstr(err.msg, "is a directory"), "%s", err.msg);
 }
 END_TEST
 
@@ -134,7 +164,8 @@ START_TEST(write_failure_leaves_nothing_half_written)
 }
 END_TEST
 
-/* The rename is refused (a directory stands where the file should go). */
+/* The rename is refused (a directory appeared where the file should go;
+ * one there already is refused by st_file_begin). */
 START_TEST(rename_failure_removes_the_temporary_file)
 {
 	const char *dir = fresh_dir("stf-rename");
@@ -143,8 +174,8 @@ START_TEST(rename_failure_removes_the_temporary_file)
 	struct st_error err = {0};
 
 	snprintf(path, sizeof(path), "%s/out", dir);
-	ck_assert(mkdir(path, 0755) == 0);
 	ck_assert_msg(st_file_begin(&o, path, &err) == 0, "%s", err.msg);
+	ck_assert(mkdir(path, 0755) == 0);
 	fputs("content\n", o.f);
 	ck_assert_int_eq(st_file_commit(&o, &err), ST_ERR_IO);
 	ck_assert_msg(strstr(err.msg, path) && strstr(err.msg, "cannot replace the file"), "%s",
@@ -180,6 +211,7 @@ Suite *stfile_suite(void)
 	tcase_add_test(tc, write_failure_leaves_nothing_half_written);
 	tcase_add_test(tc, rename_failure_removes_the_temporary_file);
 	tcase_add_test(tc, missing_directory_is_named);
+	tcase_add_test(tc, pipe_written_in_place);
 	suite_add_tcase(s, tc);
 	return s;
 }
