@@ -339,6 +339,12 @@ void profile_free(struct profile *p);
 const char *profile_get(const struct profile *p, const char *key);
 
 /*
+ * profile_printer_name - the printer as G-code headers name it
+ * (printer_settings_id): a bundle's printer preset, else the profile's id.
+ */
+const char *profile_printer_name(const struct profile *p);
+
+/*
  * profile_key_line - the line (from 1) that set key, or 0 when the file
  * does not set it.  For error messages about a key's value.
  */

@@ -35,6 +35,7 @@ Suite *serve_suite(void);		/* tests/check_serve.c: stratum serve, the farm node'
 Suite *preview_suite(void);	/* tests/check_preview.c: layer preview, move walker */
 Suite *portpick_suite(void);	/* tests/check_portpick.c: --port auto on fake enumerations */
 Suite *send_suite(void);	/* tests/check_send.c: stratum send to the simulated Sailfish */
+Suite *guard_suite(void);	/* tests/check_guard.c: the wrong-printer guard, send/print/x3g */
 Suite *print_suite(void);	/* tests/check_print.c: stratum print end to end, both simulators */
 Suite *cli_suite(void);		/* tests/check_cli.c: the stratum binary end to end */
 
