@@ -257,10 +257,15 @@ static int apply_bundle(struct profile *p, const struct file_read *f,
 		const char *name = names[k];
 		char *copy;
 
-		if (name)
+		if (name) {
 			len = strlen(name);
-		else
-			name = resolved(p, dflt[k], &len);
+		} else if ((name = resolved(p, dflt[k], &len))) {
+			/* a multi-extruder printer's default filaments: "A; B"; the
+			 * first extruder's prints */
+			const char *semi = memchr(name, ';', len);
+			if (semi)
+				len = (size_t)(semi - name);
+		}
 		if (!name)
 			return st_error_set(err, ST_ERR_ARG,
 					    "%s: printer '%s' names no %s preset; choose one with "
