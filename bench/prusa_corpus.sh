@@ -8,7 +8,10 @@
 #  3. `stratum send` streams the G-code to `stratum sim` (the preset's
 #     protocol) with --printer that config: exit 0, and for Marlin the
 #     simulator's log holds every command of the file once, in order;
-#  4. `stratum preview` draws its middle layer (exit 0, a PNG).
+#  4. `stratum preview` draws its middle layer (exit 0, a PNG);
+#  5. a `stratum serve` node with that config on a test-instant port takes
+#     the G-code as PrusaSlicer uploads it (201) and prints it to the end
+#     (the job "done", every byte confirmed).
 # One line per preset: "pass VENDOR: PRESET" or "FAIL VENDOR: PRESET: STAGE
 # (detail)", then "corpus: P of N presets pass (S skipped: prusa-slicer
 # refused the preset)".  Exit 0 when every preset that PrusaSlicer slices
@@ -52,6 +55,48 @@ cube=$dir/cube.stl
 # (@BEDLEVELVISUALIZER: not for the printer) left out.
 commands() {
 	sed -e 's/;.*//' -e 's/[[:space:]]//g' "$1" | tr -d '\r' | grep -v '^$' | grep -v '^@'
+}
+
+# Stage 5 in folder $1: a node for config $2, G-code $3 uploaded and printed.
+node_prints() {
+	key=corpus-upload-key-0123
+	printf '[node]\nname = corpus\nlisten = 127.0.0.1:0\ndata_dir = %s/node\n\n[key up]\nkey = %s\nroles = read, upload\n\n[printer p]\nprofile = %s\nport = test-instant\n' \
+		"$1" "$key" "$2" >"$1/node.ini"
+	"$bin" serve --config "$1/node.ini" >/dev/null 2>"$1/node.log" &
+	node=$!
+	port=
+	for _ in $(seq 100); do
+		port=$(sed -n 's/.*listening on 127.0.0.1:\([0-9]*\).*/\1/p' "$1/node.log")
+		[ -n "$port" ] && break
+		sleep 0.1
+	done
+	ok=1
+	if [ -z "$port" ]; then
+		tail -n 1 "$1/node.log" >"$1/node.why"
+	else
+		code=$(curl -s -o "$1/upload.json" -w '%{http_code}' -H "X-Api-Key: $key" \
+			-F print=true -F "file=@$3;filename=cube.gcode" \
+			"http://127.0.0.1:$port/api/files/local")
+		if [ "$code" != 201 ]; then
+			echo "HTTP $code $(head -c 250 "$1/upload.json")" >"$1/node.why"
+		else
+			for _ in $(seq 300); do
+				curl -s -H "X-Api-Key: $key" "http://127.0.0.1:$port/api/stratum/queue" \
+					>"$1/queue.json"
+				grep -q '"state":"\(done\|failed\|cancelled\)"' "$1/queue.json" && break
+				sleep 0.1
+			done
+			size=$(wc -c <"$3")
+			if grep -q "\"state\":\"done\".*\"filepos\":$size,\"size\":$size" "$1/queue.json"; then
+				ok=0
+			else
+				head -c 300 "$1/queue.json" >"$1/node.why"
+			fi
+		fi
+	fi
+	kill "$node" 2>/dev/null
+	wait "$node" 2>/dev/null
+	return $ok
 }
 
 pass=0 total=0 skipped=0 n=0
@@ -106,6 +151,10 @@ while IFS=$tab read -r vendor preset; do
 	if ! "$bin" preview "$gc" --layer "$mid" -o "$w/mid.png" >/dev/null 2>"$w/preview.err" ||
 		[ ! -s "$w/mid.png" ]; then
 		fail "preview of layer $mid ($(tail -n 1 "$w/preview.err" | head -c 300))"
+		continue
+	fi
+	if ! node_prints "$w" "$ini" "$gc"; then
+		fail "node upload ($(head -c 300 "$w/node.why"))"
 		continue
 	fi
 	echo "pass $vendor: $preset"

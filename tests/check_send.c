@@ -378,7 +378,7 @@ END_TEST
 /* The PrusaSlicer corpus on a fixed sample (bench/prusa_corpus.sh; make bench
  * runs every preset): presets of three vendors, resolved from the installed
  * bundles, sliced by prusa-slicer, sent to the simulator (log == file, exit
- * 0) and previewed (issue 18 item 2). */
+ * 0), previewed and printed through a farm node (issue 18 item 2). */
 START_TEST(prusaslicer_corpus_sample)
 {
 	static char text[1 << 14];
