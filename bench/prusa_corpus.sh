@@ -24,14 +24,14 @@ shift 2
 profiles=${PRUSA_PROFILES:-/usr/share/PrusaSlicer/profiles}
 mkdir -p "$dir"
 
-# The presets: "VENDOR<TAB>PRESET" lines.
+# The presets: "VENDOR<TAB>PRESET" lines (some bundles end their lines in CR LF).
 list=$dir/presets.txt
 if [ $# -gt 0 ]; then
 	for vp in "$@"; do printf '%s\t%s\n' "${vp%%:*}" "${vp#*:}"; done >"$list"
 else
 	for b in "$profiles"/*.ini; do
 		v=$(basename "$b" .ini)
-		sed -n 's/^\[printer:\([^]*][^]]*\)\]$/\1/p' "$b" | sed "s/^/$v	/"
+		tr -d '\r' <"$b" | sed -n 's/^\[printer:\([^]*][^]]*\)\]$/\1/p' | sed "s/^/$v	/"
 	done >"$list"
 fi
 

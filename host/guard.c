@@ -120,7 +120,9 @@ int guard_check_file(const char *path, const char *name, const struct profile *p
 			continue;
 		if (!any.line)
 			any = o;
-		if (m.layer >= 0)
+		/* PrusaSlicer labels the printer's own start and end G-code (a
+		 * park position off the print area) ";TYPE:Custom" */
+		if (m.layer >= 0 && strcmp(m.type, "Custom"))
 			printed = o;
 	}
 	const struct gcwalk_header *h = gcwalk_header(w);

@@ -14,9 +14,11 @@
  *     by more than GUARD_NOZZLE_TOLERANCE;
  *  3. a move leaves the profile's bed: a move in X or Y ends outside the
  *     bed_shape's bounding box by more than GUARD_BED_TOLERANCE, or an
- *     extruding move is above max_print_height.  Moves before the first layer comment (start
- *     G-code: homing, prime lines outside the print area) are the printer's
- *     own and not judged, unless the file has no layer comments at all.
+ *     extruding move is above max_print_height.  The printer's own start
+ *     and end G-code is not judged (homing, a prime line or a park position
+ *     off the print area): moves before the first layer comment and moves
+ *     under ";TYPE:Custom" (PrusaSlicer's label for it), unless the file
+ *     has no layer comments at all.
  * The header is read where Stratum writes it (the top) and where PrusaSlicer
  * does (its config block at the end): "; printer_settings_id = ",
  * "; printer_model = ", "; bed_shape = ", "; nozzle_diameter = ".

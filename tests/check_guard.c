@@ -127,6 +127,11 @@ START_TEST(moves_leave_the_bed)
 	accepted("G1 Y-3 F1000\nG1 X60 E9\n;LAYER_CHANGE\nG1 X10 Y10 E1\n", "prusa-i3-mk3s");
 	refused("G1 Y-3 F1000\n;LAYER_CHANGE\nG1 X10 Y10 E1\nG1 X251 E2\n", "prusa-i3-mk3s",
 		(const char *[]){"line 4", NULL});
+	/* PrusaSlicer's ";TYPE:Custom" end G-code may park off the bed; the part may not. */
+	accepted(";LAYER_CHANGE\n;TYPE:Perimeter\nG1 X10 Y10 E1\n;TYPE:Custom\nG1 X145 Y275\n",
+		 "creality-ender-3");
+	refused(";LAYER_CHANGE\n;TYPE:Perimeter\nG1 X10 Y10 E1\nG1 X145 Y275 E2\n",
+		"creality-ender-3", (const char *[]){"line 4", NULL});
 	/* Without layer comments every move counts. */
 	refused("G1 Y-3 F1000\nG1 X10 Y10 E1\n", "prusa-i3-mk3s", (const char *[]){"line 1", NULL});
 }
