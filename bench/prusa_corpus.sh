@@ -80,7 +80,9 @@ node_prints() {
 		if [ "$code" != 201 ]; then
 			echo "HTTP $code $(head -c 250 "$1/upload.json")" >"$1/node.why"
 		else
-			for _ in $(seq 300); do
+			# up to 90 s: the test double waits out G4 dwells of up to 60 s
+			# (INAT's end G-code has G4 S180)
+			for _ in $(seq 900); do
 				curl -s -H "X-Api-Key: $key" "http://127.0.0.1:$port/api/stratum/queue" \
 					>"$1/queue.json"
 				grep -q '"state":"\(done\|failed\|cancelled\)"' "$1/queue.json" && break
