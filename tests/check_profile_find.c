@@ -24,7 +24,15 @@ static void tiny_vendor_dir(void)
 		     "[vendor]\nname = Tiny\n\n[printer:*common*]\nbed_shape = 0x0,180x0,180x180,0x180\n"
 		     "\n[printer:Tiny Printer Mk2 & Co+]\ninherits = *common*\nprinter_model = TINY2\n"
 		     "default_print_profile = 0.2mm\ndefault_filament_profile = PLA\n\n"
-		     "[print:0.2mm]\nlayer_height = 0.2\n\n[filament:PLA]\ntemperature = 205\n");
+		     "[print:0.2mm]\nlayer_height = 0.2\n\n[filament:PLA]\ntemperature = 205\n"
+		     "compatible_printers = \"Tiny Printer Mk2 & Co+\"\n\n"
+		     "[printer:Tiny Three]\ninherits = *common*\nprinter_model = TINY3\n"
+		     "default_print_profile = 0.3mm\n\n[print:0.3mm Other]\nlayer_height = 0.25\n"
+		     "compatible_printers_condition = printer_model=~/.*OTHER.*/\n\n"
+		     "[print:0.3mm Tiny3]\nlayer_height = 0.3\n"
+		     "compatible_printers_condition = printer_model==\"TINY3\" and "
+		     "nozzle_diameter[0]==0.4\n\n[filament:PETG listed]\ntemperature = 240\n"
+		     "compatible_printers = \"Tiny Three\";\"Tiny Four\"\n");
 	setenv("STRATUM_VENDOR_DIR", dir, 1);
 }
 
@@ -49,6 +57,22 @@ START_TEST(vendor_preset_by_name_and_slug)
 	ck_assert_int_eq(profile_find("No Such Printer", &p, &err), ST_ERR_ARG);
 	ck_assert_msg(strstr(err.msg, "nor a printer preset of PrusaSlicer's bundles"), "%s",
 		      err.msg);
+}
+END_TEST
+
+/* A default preset the bundle lacks (or none named): the first compatible
+ * one, a name starting with the default's first (PrusaSlicer's choice). */
+START_TEST(vendor_missing_default_preset)
+{
+	struct st_error err = {0};
+	struct profile *p = NULL;
+
+	tiny_vendor_dir();
+	ck_assert_msg(profile_find("Tiny Three", &p, &err) == 0, "%s", err.msg);
+	ck_assert(p->layer_height == 0.3);     /* [print:0.3mm Tiny3]: its condition holds */
+	ck_assert_int_eq(p->temperature[0], 240); /* PLA lists another printer, PETG this one */
+	ck_assert_str_eq(profile_get(p, "print_settings_id"), "0.3mm Tiny3");
+	profile_free(p);
 }
 END_TEST
 
@@ -82,6 +106,7 @@ void profile_find_tcases(Suite *s)
 	TCase *tc = tcase_create("find vendor");
 
 	tcase_add_test(tc, vendor_preset_by_name_and_slug);
+	tcase_add_test(tc, vendor_missing_default_preset);
 	tcase_add_test(tc, user_profiles_dir);
 	suite_add_tcase(s, tc);
 }
