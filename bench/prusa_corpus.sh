@@ -1,7 +1,8 @@
 #!/bin/sh
 # bench/prusa_corpus.sh BIN OUTDIR [VENDOR:PRESET ...] - the PrusaSlicer corpus
 # (issue 18 item 2): for every printer preset of every vendor bundle
-# PrusaSlicer ships (abstract *presets* left out), or only the ones named,
+# PrusaSlicer ships (abstract *presets* and resin printers left out), or only
+# the ones named,
 #  1. `stratum printers --show --load BUNDLE --printer-preset P` resolves it
 #     (inherits) into one flat config;
 #  2. `prusa-slicer --export-gcode --load` that config slices a 10 mm cube;
@@ -31,7 +32,12 @@ if [ $# -gt 0 ]; then
 else
 	for b in "$profiles"/*.ini; do
 		v=$(basename "$b" .ini)
-		tr -d '\r' <"$b" | sed -n 's/^\[printer:\([^]*][^]]*\)\]$/\1/p' | sed "s/^/$v	/"
+		# resin printers (printer_technology = SLA) print no G-code: left out
+		tr -d '\r' <"$b" | awk -v v="$v" '
+			/^\[/ { if (name != "" && !sla) print v "\t" name; name = ""; sla = 0 }
+			/^\[printer:[^*].*\]$/ { name = substr($0, 10, length($0) - 10) }
+			/^printer_technology *= *SLA/ { sla = 1 }
+			END { if (name != "" && !sla) print v "\t" name }'
 	done >"$list"
 fi
 
