@@ -1,5 +1,5 @@
 #!/bin/sh
-# bench/run.sh BIN [check|repair|intersect|slice|region|stream|soak|x3g|s3g|serve|all] - time `stratum check`
+# bench/run.sh BIN [check|repair|intersect|slice|region|stream|soak|x3g|s3g|serve|corpus|all] - time `stratum check`
 # against admesh, `stratum repair` on generated files, the exact pass of the
 # repair on self-intersecting inputs (`intersect`: CGAL data meshes, spheres,
 # scattered soups; build/bench/refine_time), `stratum slice` against
@@ -12,7 +12,10 @@
 # `stratum sim --dialect sailfish` with `stratum send` (translated on the fly)
 # against `gpx -s`; `serve` loads a `stratum serve` node on loopback with
 # ApacheBench (apache2-utils): bounded counts of multipart uploads and of
-# status requests from concurrent clients; prints Markdown tables for
+# status requests from concurrent clients; `corpus` runs the PrusaSlicer
+# corpus (bench/prusa_corpus.sh: every printer preset of every installed
+# vendor bundle, sliced by prusa-slicer, sent to the simulator, previewed)
+# and prints its failures and pass count; prints Markdown tables for
 # docs/benchmarks.md.
 # Wall time, CPU time and peak RSS come from GNU time;
 # check and repair figures are the best of 3 runs; slice figures one run of
@@ -25,7 +28,7 @@ mkdir -p "$out"
 gen=build/bench/gen_mesh
 refine=build/bench/refine_time
 
-case $what in check|repair|intersect|slice|region|stream|soak|x3g|s3g|serve|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|intersect|slice|region|stream|soak|x3g|s3g|serve|all]" >&2; exit 2;; esac
+case $what in check|repair|intersect|slice|region|stream|soak|x3g|s3g|serve|corpus|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|intersect|slice|region|stream|soak|x3g|s3g|serve|corpus|all]" >&2; exit 2;; esac
 
 if [ "$what" != slice ] && [ "$what" != region ] && [ "$what" != stream ] && [ "$what" != soak ] && [ "$what" != x3g ] && [ "$what" != s3g ] && [ "$what" != serve ]; then
 	[ -f "$out/torus-1m.stl" ] || "$gen" torus 1000 500 "$out/torus-1m.stl"
@@ -551,7 +554,18 @@ for f in mannequin-devil.off ChineseDragon-10kv.off spheres.stl twospheres.stl s
 done
 }
 
+# The PrusaSlicer corpus: failures and skips listed, then the pass count.
+corpus_table() {
+	if ! command -v prusa-slicer >/dev/null 2>&1; then
+		echo "prusa-slicer is not installed (make bench installs it)" >&2
+		return 0
+	fi
+	bench/prusa_corpus.sh "$bin" "$out/prusa-corpus" >"$out/prusa-corpus.txt" 2>&1 || true
+	grep -v '^pass ' "$out/prusa-corpus.txt"
+}
+
 case $what in
+corpus) corpus_table ;;
 serve) serve_table ;;
 x3g) x3g_table ;;
 s3g) s3g_table ;;
@@ -562,6 +576,6 @@ intersect) intersect_table ;;
 slice) slice_table ;;
 stream) stream_table ;;
 soak) soak_table ;;
-all) check_table; echo; repair_table; echo; intersect_table; echo; slice_table; echo; region_table; echo; stream_table; echo; soak_table; echo; x3g_table; echo; s3g_table; echo; serve_table ;;
+all) check_table; echo; repair_table; echo; intersect_table; echo; slice_table; echo; region_table; echo; stream_table; echo; soak_table; echo; x3g_table; echo; s3g_table; echo; serve_table; echo; corpus_table ;;
 esac
 

@@ -27,6 +27,7 @@
 
 #include "commands.h"
 #include "gcode.h"
+#include "guard.h"
 #include "print_job.h"
 #include "preview.h"
 #include "profile.h"
@@ -44,6 +45,7 @@ static void print_usage(FILE *out)
 	fprintf(out,
 		"usage: stratum print MODEL --printer NAME [--port PATH|auto|tcp://HOST:PORT|sim]\n"
 		"                     [--dry-run -o OUT] [--preview] [--json] [--speedup K]\n"
+		"                     [--force] [--load FILE.ini ...] [--set KEY=VALUE ...]\n"
 		"       stratum print --resume JOB [--yes] [--port ...] [--json]\n"
 		"\n"
 		"Repairs and slices MODEL (STL, OBJ or OFF) as 'stratum slice' does, then prints\n"
@@ -61,10 +63,16 @@ static void print_usage(FILE *out)
 		"                     from the start of the last layer the printer confirmed:\n"
 		"                     reheat, home X and Y only,\n"
 		"                     restore Z and E.  Asks first; --yes answers for scripts\n"
+		"  --force            " GUARD_FORCE_HELP "\n"
 		"  --sim-log FILE     testing aid: the simulated printer's execution log\n"
+		"Settings for slicing MODEL (on top of --printer, or instead of it), as\n"
+		"'stratum slice' takes them:\n");
+	cfgopt_usage(out);
+	fprintf(out,
 		"Ctrl-C stops safely (heaters and motors off).  Exit status: 0 printed, 1 the\n"
-		"job failed (firmware error, not repaired, resume declined), 2 usage, 65 bad\n"
-		"input, 69 printer unavailable or lost, 70 internal error, 130 interrupted.\n");
+		"job failed (firmware error, not repaired, resume declined), 2 usage or G-code\n"
+		"sliced for another printer, 65 bad input, 69 printer unavailable or lost,\n"
+		"70 internal error, 130 interrupted.\n");
 }
 
 /* Parse argv; 0 to go on, -1 after --help, else the exit status. */
@@ -74,6 +82,7 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 	a->speedup = PRINT_SPEEDUP;
 	for (int i = 1; i < argc; i++) {
 		const char *s = argv[i], *v = NULL;
+		int taken;
 
 		if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
 			print_usage(stdout);
@@ -86,6 +95,8 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 			a->dry_run = true;
 		} else if (!strcmp(s, "--preview")) {
 			a->preview = true;
+		} else if (!strcmp(s, "--force")) {
+			a->force = true;
 		} else if (!strcmp(s, "-o") || cmd_is_opt(s, "--output")) {
 			v = !strcmp(s, "-o") ? (i + 1 < argc ? argv[++i] : NULL)
 					     : cmd_opt_value(argc, argv, &i, "--output");
@@ -108,6 +119,10 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 							"to 1000000, not '%s'\n", v);
 				return ST_EXIT_USAGE;
 			}
+		} else if ((taken = cfgopt_parse(&a->cfg, PRINT_CMD, argc, argv, &i)) != 0) {
+			if (taken < 0)
+				return ST_EXIT_USAGE;
+			continue;
 		} else if (s[0] == '-' && s[1]) {
 			fprintf(stderr, PRINT_CMD ": unknown option '%s'\n", s);
 			print_usage(stderr);
@@ -119,17 +134,17 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 			return ST_EXIT_USAGE;
 		}
 		if (!v && s[0] == '-' && strcmp(s, "--json") && strcmp(s, "--yes") && strcmp(s, "-y") &&
-		    strcmp(s, "--dry-run") && strcmp(s, "--preview")) {
+		    strcmp(s, "--dry-run") && strcmp(s, "--preview") && strcmp(s, "--force")) {
 			fprintf(stderr, PRINT_CMD ": %s needs a value\n", s);
 			return ST_EXIT_USAGE;
 		}
 	}
-	if (a->resume && (a->in || a->dry_run)) {
-		fprintf(stderr, PRINT_CMD ": --resume JOB takes no model and no --dry-run: the job "
-				"journal names the file\n");
+	if (a->resume && (a->in || a->dry_run || a->cfg.n || a->cfg.presets.printer)) {
+		fprintf(stderr, PRINT_CMD ": --resume JOB takes no model, no --dry-run and no "
+				"settings options: the job journal names the file\n");
 		return ST_EXIT_USAGE;
 	}
-	if (!a->resume && (!a->in || !a->printer)) {
+	if (!a->resume && (!a->in || (!a->printer && !a->cfg.has_files))) {
 		fprintf(stderr, PRINT_CMD ": %s\n",
 			!a->in ? "no model file given"
 			       : "no printer given; add --printer NAME ('stratum printers' lists "
@@ -410,13 +425,14 @@ static int print_dry_run(struct print_job *job)
 			return status;
 	}
 	if (x3g) {
+		/* the guard has judged the file already (cmd_print) */
 		char *argv[] = {"x3g", (char *)job->gcode, "-o", (char *)out, "--printer",
-				(char *)job->prof->path, NULL};
+				(char *)job->prof->path, job->a->force ? "--force" : NULL, NULL};
 		int saved = -1;
 		fflush(stdout);
 		if (job->a->json) /* one JSON object on stdout: ours */
 			saved = dup(STDOUT_FILENO), freopen("/dev/null", "w", stdout);
-		status = cmd_x3g(6, argv);
+		status = cmd_x3g(job->a->force ? 7 : 6, argv);
 		if (saved >= 0) {
 			fflush(stdout);
 			dup2(saved, STDOUT_FILENO);
@@ -471,10 +487,20 @@ int cmd_print(int argc, char **argv)
 	job->layer = -1;
 	if (a.resume && (status = print_setup_resume(job)))
 		goto out;
-	if ((rc = profile_find(a.printer, &job->prof, &err))) {
+	if (a.printer && (rc = profile_find(a.printer, &job->prof, &err))) {
 		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
 		status = profile_exit_status(rc);
 		goto out;
+	}
+	if (a.cfg.n || a.cfg.presets.printer) {
+		struct profile *layered = NULL;
+
+		status = cfgopt_load(&a.cfg, PRINT_CMD, job->prof, &layered);
+		profile_free(job->prof);
+		job->prof = layered;
+		if (status)
+			goto out;
+		cfgopt_warn_unsupported(job->prof, PRINT_CMD);
 	}
 	if (!a.resume) {
 		job->input = print_input_of(a.in);
@@ -487,6 +513,9 @@ int cmd_print(int argc, char **argv)
 		status = ST_EXIT_USAGE;
 		goto out;
 	}
+	if (job->input == PRINT_GCODE &&
+	    (status = guard_cli(PRINT_CMD, job->gcode, job->prof, a.force)))
+		goto out;
 	if (a.dry_run) {
 		status = print_dry_run(job);
 		goto out;

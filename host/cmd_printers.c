@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cfgopt.h"
 #include "commands.h"
 #include "profile.h"
 #include "settings.h"
@@ -20,7 +21,8 @@ static void printers_usage(FILE *out)
 {
 	fprintf(out,
 		"usage: stratum printers [--json]\n"
-		"       stratum printers --show NAME|FILE.ini [--json]\n"
+		"       stratum printers --show NAME|FILE.ini [--json] [SETTINGS OPTIONS]\n"
+		"       stratum printers --show --load BUNDLE.ini --printer-preset NAME ...\n"
 		"       stratum printers --keys\n"
 		"\n"
 		"Lists the printer profiles (NAME.ini files) found in, in this order:\n"
@@ -30,12 +32,16 @@ static void printers_usage(FILE *out)
 		"  --keys          every key a profile takes: the tables of docs/printers.md\n"
 		"  --json          a JSON array (or, with --show, one object) on stdout\n"
 		"  --show PRINTER  print every resolved setting of one profile, defaults\n"
-		"                  included, as a profile file (--printer is a synonym)\n"
+		"                  included, as a profile file (--printer is a synonym);\n"
+		"                  with the settings options of 'stratum slice', as they\n"
+		"                  resolve it:\n",
+		STRATUM_DATADIR);
+	cfgopt_usage(out);
+	fprintf(out,
 		"\n"
 		"A profile that fails to load is reported on stderr and left out of the\n"
 		"list.  Exit status: 0 ok, 2 usage error or unknown printer, 65 the profile\n"
-		"given to --show is invalid.  See docs/printers.md.\n",
-		STRATUM_DATADIR);
+		"given to --show is invalid.  See docs/printers.md.\n");
 }
 
 /* "0.4" when every nozzle is the same, else "0.4,0.6". */
@@ -145,17 +151,25 @@ static int finish_output(void)
 	return ST_EXIT_OK;
 }
 
-/* `--show`: one profile's resolved settings. */
-static int show_one(const char *which, bool json)
+/* `--show`: one profile's resolved settings (which NULL: the options' alone). */
+static int show_one(const char *which, const struct cfgopt *cfg, bool json)
 {
 	struct st_error err = {0};
 	struct profile *p = NULL;
 	int rc;
 
-	rc = profile_find(which, &p, &err);
-	if (rc) {
+	if (which && (rc = profile_find(which, &p, &err))) {
 		fprintf(stderr, "stratum printers: %s\n", err.msg);
 		return profile_exit_status(rc);
+	}
+	if (cfg->n || cfg->presets.printer) {
+		struct profile *layered = NULL;
+
+		rc = cfgopt_load(cfg, "stratum printers", p, &layered);
+		profile_free(p);
+		if (rc)
+			return rc;
+		p = layered;
 	}
 	if (json) {
 		json_t *o = profile_to_json(p);
@@ -250,9 +264,12 @@ out_free_list:
 /* Parse the options and run the listing or --show. */
 int cmd_printers(int argc, char **argv)
 {
+	static struct cfgopt cfg; /* large; one per process */
 	const char *show = NULL;
-	bool json = false;
+	bool json = false, showing = false;
+	int taken;
 
+	memset(&cfg, 0, sizeof(cfg));
 	for (int i = 1; i < argc; i++) {
 		const char *a = argv[i];
 
@@ -267,21 +284,32 @@ int cmd_printers(int argc, char **argv)
 				return ST_EXIT_SOFTWARE;
 			return ST_EXIT_OK;
 		} else if (!strcmp(a, "--show") || !strcmp(a, "--printer")) {
-			if (i + 1 >= argc) {
-				fprintf(stderr,
-					"stratum printers: %s needs a printer name or file\n", a);
-				return ST_EXIT_USAGE;
-			}
-			show = argv[++i];
+			showing = true;
+			if (i + 1 < argc && argv[i + 1][0] != '-')
+				show = argv[++i];
 		} else if (!strncmp(a, "--show=", 7)) {
+			showing = true;
 			show = a + 7;
 		} else if (!strncmp(a, "--printer=", 10)) {
+			showing = true;
 			show = a + 10;
+		} else if ((taken = cfgopt_parse(&cfg, "stratum printers", argc, argv, &i)) != 0) {
+			if (taken < 0)
+				return ST_EXIT_USAGE;
 		} else {
 			fprintf(stderr, "stratum printers: unknown argument '%s'\n", a);
 			printers_usage(stderr);
 			return ST_EXIT_USAGE;
 		}
 	}
-	return show ? show_one(show, json) : list_all(json);
+	if ((cfg.n || cfg.presets.printer) && !showing) {
+		fprintf(stderr, "stratum printers: the settings options go with --show\n");
+		return ST_EXIT_USAGE;
+	}
+	if (showing && !show && !cfg.has_files) {
+		fprintf(stderr, "stratum printers: --show needs a printer name or file, or "
+				"--load FILE\n");
+		return ST_EXIT_USAGE;
+	}
+	return showing ? show_one(show, &cfg, json) : list_all(json);
 }

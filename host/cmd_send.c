@@ -24,6 +24,7 @@
 #include "commands.h"
 #include "st_clock.h"
 #include "gcode.h"
+#include "guard.h"
 #include "printer.h"
 #include "printer_profile.h"
 #include "profile.h"
@@ -59,13 +60,15 @@ bool send_has_ext(const char *path, const char *ext)
 static void send_usage(FILE *out)
 {
 	fprintf(out,
-		"usage: stratum send FILE --port PATH --printer NAME [--json] [--baud N]\n"
+		"usage: stratum send FILE --port PATH --printer NAME [--json] [--baud N] [--force]\n"
 		"Streams FILE to the printer on PATH (a serial device, a pty or\n"
 		"tcp://HOST:PORT); progress goes to stderr, the report to stdout (one JSON\n"
 		"object with --json).  Ctrl-C stops safely: heaters and motors off.\n"
 		"  Marlin printers: FILE.gcode, with line numbers, checksums and resends.\n"
 		"  Sailfish printers (FlashForge Creator Pro): FILE.gcode, translated to X3G\n"
-		"  as it streams (as 'stratum x3g' does), or FILE.x3g; S3G packets.\n");
+		"  as it streams (as 'stratum x3g' does), or FILE.x3g; S3G packets.\n"
+		"G-code sliced for another printer is refused (exit 2).\n"
+		"  --force  " GUARD_FORCE_HELP "\n");
 }
 
 /* Parse argv; returns 0, or an exit status (-1 = --help shown). */
@@ -77,6 +80,8 @@ static int send_parse(int argc, char **argv, struct send_args *a)
 		if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
 			send_usage(stdout);
 			return -1;
+		} else if (!strcmp(s, "--force")) {
+			a->force = true;
 		} else if (!strcmp(s, "--json")) {
 			a->json = true;
 		} else if (cmd_is_opt(s, "--port")) {
@@ -394,6 +399,8 @@ int cmd_send(int argc, char **argv)
 		status = ST_EXIT_USAGE;
 		goto out_profile;
 	}
+	if (!job.x3g && (status = guard_cli(SEND_CMD, a.file, prof, a.force)))
+		goto out_profile;
 	if ((rc = printer_check(ops, &o, &job, send_warning, (void *)SEND_CMD, &info, &err))) {
 		fprintf(stderr, SEND_CMD ": %s%s\n", err.msg,
 			strstr(err.msg, "nothing was sent") ? "" : "; nothing was sent");

@@ -3,8 +3,8 @@
  * [--flavor reprap|makerbot] [--json]` translates G-code for a Sailfish
  * printer into X3G (serial/x3g.h); `stratum x3g --decode FILE.x3g [--json]`
  * lists the commands of an X3G file, one per line.
- * Exit 0 done, 1 OUT could not be written, 2 usage or a printer that is not
- * a Sailfish one, 65 bad G-code/X3G input or printer profile, 70 internal.
+ * Exit 0 done, 1 OUT could not be written, 2 usage, a printer that is not
+ * a Sailfish one or G-code for another printer (host/guard.h), 65 bad G-code/X3G input or printer profile, 70 internal.
  *
  * The printer profile is mapped to struct x3g_machine here, so serial/
  * never includes host/.
@@ -21,6 +21,7 @@
 
 #include "commands.h"
 #include "gcode.h"
+#include "guard.h"
 #include "profile.h"
 #include "profile_x3g.h"
 #include "st_error.h"
@@ -35,7 +36,7 @@ static void x3g_usage(FILE *out)
 {
 	fprintf(out,
 		"usage: stratum x3g IN.gcode -o OUT.x3g --printer NAME|FILE.ini\n"
-		"                   [--flavor reprap|makerbot] [--json]\n"
+		"                   [--flavor reprap|makerbot] [--json] [--force]\n"
 		"       stratum x3g --decode FILE.x3g [--json]\n"
 		"\n"
 		"Translates G-code into X3G, the binary command stream of Sailfish printers\n"
@@ -48,15 +49,17 @@ static void x3g_usage(FILE *out)
 		"  --flavor F         reprap (default; makerware profiles: makerbot) or makerbot:\n"
 		"                     how M106/M107, M109 and T words are read, as GPX -r / -g\n"
 		"  --decode FILE      list FILE's commands instead of translating\n"
+		"  --force            " GUARD_FORCE_HELP "\n"
 		"  --json             one JSON object on stdout instead of the text output\n"
 		"\n"
-		"Exit status: 0 done, 1 OUT could not be written, 2 usage or not a sailfish\n"
-		"printer, 65 bad G-code, X3G or printer profile, 70 internal error.\n");
+		"Exit status: 0 done, 1 OUT could not be written, 2 usage, not a sailfish\n"
+		"printer or G-code sliced for another printer, 65 bad G-code, X3G or printer\n"
+		"profile, 70 internal error.\n");
 }
 
 struct x3g_args {
 	const char *in, *out, *printer, *decode, *flavor;
-	bool json;
+	bool json, force;
 };
 
 /* Parse argv; 0 to go on, -1 after --help, else the exit status. */
@@ -71,6 +74,9 @@ static int parse_args(int argc, char **argv, struct x3g_args *a)
 			return -1;
 		} else if (!strcmp(s, "--json")) {
 			a->json = true;
+			continue;
+		} else if (!strcmp(s, "--force")) {
+			a->force = true;
 			continue;
 		} else if (!strcmp(s, "-o")) {
 			a->out = i + 1 < argc ? argv[++i] : NULL;
@@ -105,7 +111,7 @@ static int parse_args(int argc, char **argv, struct x3g_args *a)
 		}
 	}
 	if (a->decode) {
-		if (a->in || a->out || a->printer || a->flavor) {
+		if (a->in || a->out || a->printer || a->flavor || a->force) {
 			fprintf(stderr, X3G_CMD ": --decode takes only the X3G file (and --json)\n");
 			return ST_EXIT_USAGE;
 		}
@@ -259,6 +265,10 @@ static int run_translate(const struct x3g_args *a)
 	if (!in) {
 		fprintf(stderr, X3G_CMD ": %s: cannot open: %s\n", a->in, strerror(errno));
 		status = ST_EXIT_DATAERR;
+		goto out_translator;
+	}
+	if ((status = guard_cli(X3G_CMD, a->in, p, a->force))) {
+		fclose(in);
 		goto out_translator;
 	}
 	if (a->json)

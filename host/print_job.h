@@ -11,6 +11,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "cfgopt.h"
 #include "journal.h"
 #include "profile.h"
 #include "slicejob.h"
@@ -20,7 +21,9 @@
 struct print_args {
 	const char *in, *printer, *port, *out, *resume, *sim_log;
 	bool dry_run, json, yes, preview;
+	bool force; /* --force: past the wrong-printer guard (guard.h) */
 	double speedup;
+	struct cfgopt cfg; /* --load, --set, --KEY-NAME ... (cfgopt.h) */
 };
 
 /* What the input file is, from its name. */

@@ -351,6 +351,13 @@ int profile_load_file(const char *path, struct profile **out, struct st_error *e
  * Raw access
  */
 
+const char *profile_printer_name(const struct profile *p)
+{
+	const char *preset = profile_get(p, "printer_settings_id");
+
+	return preset && *preset ? preset : p->id;
+}
+
 const char *profile_get(const struct profile *p, const char *key)
 {
 	const struct profile_kv *kv = p && key ? prof_find_kv(p->keys, key) : NULL;

@@ -13,11 +13,18 @@
  *
  * Resolving a name: profile_find("NAME") reads NAME.ini from the first of
  *   1. $STRATUM_PRINTERS_DIR, when set and not empty;
- *   2. the printers/ folder beside the build tree: <exe dir>/../printers, or
+ *   2. the user's profiles, $XDG_CONFIG_HOME/stratum/printers (default
+ *      ~/.config/stratum/printers), when it exists;
+ *   3. the printers/ folder beside the build tree: <exe dir>/../printers, or
  *      <exe dir>/../../printers when the first does not exist
  *      (build/stratum and build/asan/stratum both find the source tree's);
- *   3. STRATUM_DATADIR, the installed profiles (default
- *      /usr/local/share/stratum/printers).
+ *   4. STRATUM_DATADIR, the installed profiles (default
+ *      /usr/local/share/stratum/printers);
+ *   5. a [printer:NAME] preset of PrusaSlicer's installed vendor bundles
+ *      ($STRATUM_VENDOR_DIR, else PROFILE_VENDOR_DIR), by its name ("Original
+ *      Prusa i3 MK3S & MK3S+") or its slug (original-prusa-i3-mk3s-mk3s:
+ *      lower-case letters and digits, '-' for the rest), with the preset's
+ *      default print and filament presets.
  * An argument containing '/' or ending in ".ini" is a file path instead.
  *
  * Errors: every function that can fail fills a caller-supplied struct
@@ -40,6 +47,10 @@
 
 #include "st_error.h"
 
+#ifndef PROFILE_VENDOR_DIR
+#define PROFILE_VENDOR_DIR "/usr/share/PrusaSlicer/profiles" /* PrusaSlicer's bundles */
+#endif
+
 #ifndef STRATUM_DATADIR
 #define STRATUM_DATADIR "/usr/local/share/stratum/printers"
 #endif
@@ -47,7 +58,7 @@
 #define PROFILE_MAX_EXTRUDERS 8	    /* per-extruder lists hold at most this many */
 #define PROFILE_MAX_USB_IDS 16	    /* usb_ids entries */
 #define PROFILE_MAX_BED_POINTS 1024 /* bed_shape polygon corners */
-#define PROFILE_MAX_DIRS 3	    /* search directories, see above */
+#define PROFILE_MAX_DIRS 4	    /* search directories, see above */
 #define PROFILE_PATH_MAX 4096	    /* longest directory or file path handled */
 
 /* Wire protocol the printer speaks (our key `protocol`). */
@@ -326,7 +337,8 @@ int profile_load_layers(const struct profile *base, const struct profile_layer *
  * profile_find - load a profile by NAME or by path.
  * @name_or_path: a value containing '/' or ending in ".ini" is a file path;
  *                anything else is a NAME looked up as NAME.ini in the
- *                directories of profile_search_dirs(), first match wins.
+ *                directories of profile_search_dirs(), first match wins,
+ *                then as a PrusaSlicer printer preset (see the top).
  * @out, @err: as profile_load_file.
  * Returns 0; ST_ERR_ARG when NAME is empty, not a plain name, or no
  * directory has it (the message lists where it looked); else as
@@ -376,6 +388,12 @@ void profile_free(struct profile *p);
  * This is how later code reads keys the loader does not type yet.
  */
 const char *profile_get(const struct profile *p, const char *key);
+
+/*
+ * profile_printer_name - the printer as G-code headers name it
+ * (printer_settings_id): a bundle's printer preset, else the profile's id.
+ */
+const char *profile_printer_name(const struct profile *p);
 
 /*
  * profile_key_line - the line (from 1) that set key, or 0 when the file

@@ -28,8 +28,18 @@ void profile_search_dirs(struct profile_dirs *dirs)
 	char exe[PROFILE_PATH_MAX], cand[PROFILE_PATH_MAX + 32], real[PATH_MAX];
 	ssize_t n;
 
+	const char *xdg = getenv("XDG_CONFIG_HOME"), *home = getenv("HOME");
+
 	dirs->count = 0;
 	dirs_add(dirs, getenv("STRATUM_PRINTERS_DIR"));
+	/* the user's own profiles (XDG base directories) */
+	if ((xdg && *xdg) || (home && *home)) {
+		snprintf(cand, sizeof(cand), "%s%s/stratum/printers", xdg && *xdg ? xdg : home,
+			 xdg && *xdg ? "" : "/.config");
+		struct stat st;
+		if (stat(cand, &st) == 0 && S_ISDIR(st.st_mode))
+			dirs_add(dirs, cand);
+	}
 	n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
 	if (n > 0) {
 		char *slash;
@@ -91,17 +101,21 @@ int profile_find(const char *name_or_path, struct profile **out, struct st_error
 	len = strlen(name_or_path);
 	if (strchr(name_or_path, '/') || (len >= 4 && !strcmp(name_or_path + len - 4, ".ini")))
 		return profile_load_file(name_or_path, out, err);
-	if (!valid_name(name_or_path))
-		return st_error_set(err, ST_ERR_ARG,
-				    "'%.64s' is not a printer name (letters, digits, '.', '_' and "
-				    "'-'); give a file as a path ending in .ini",
-				    name_or_path);
 	profile_search_dirs(&dirs);
-	for (size_t i = 0; i < dirs.count; i++) {
+	for (size_t i = 0; valid_name(name_or_path) && i < dirs.count; i++) {
 		snprintf(path, sizeof(path), "%s/%s.ini", dirs.path[i], name_or_path);
 		if (is_regular_file(path))
 			return profile_load_file(path, out, err);
 	}
+	int rc = prof_find_vendor(name_or_path, out, err);
+	if (rc <= 0)
+		return rc;
+	if (!valid_name(name_or_path))
+		return st_error_set(err, ST_ERR_ARG,
+				    "'%.64s' is neither a printer name (letters, digits, '.', '_' "
+				    "and '-') nor a printer preset of PrusaSlicer's bundles; give a "
+				    "file as a path ending in .ini",
+				    name_or_path);
 	looked[0] = '\0';
 	for (size_t i = 0; i < dirs.count && o < sizeof(looked); i++) {
 		int w =
@@ -111,8 +125,8 @@ int profile_find(const char *name_or_path, struct profile **out, struct st_error
 		o += (size_t)w;
 	}
 	return st_error_set(err, ST_ERR_ARG,
-			    "no printer profile named '%.64s' (looked in %s); 'stratum printers' "
-			    "lists them",
+			    "no printer profile named '%.64s' (looked in %s and PrusaSlicer's "
+			    "bundles); 'stratum printers' lists them",
 			    name_or_path, looked);
 }
 

@@ -94,6 +94,14 @@ const struct key_def *prof_find_def(const char *key);
 const struct setting *prof_decl(const struct key_def *d);
 
 char *prof_dup(const char *s, size_t len);
+
+/*
+ * prof_find_vendor - the printer preset called name (or its slug) in
+ * PrusaSlicer's vendor bundles ($STRATUM_VENDOR_DIR, else PROFILE_VENDOR_DIR),
+ * loaded with its default print and filament presets.  Returns 0 with *out,
+ * 1 when no bundle has it, or the loader's error (profile_vendor.c).
+ */
+int prof_find_vendor(const char *name, struct profile **out, struct st_error *err);
 void prof_trim(const char **s, size_t *len);
 void prof_fmt_double(char *buf, size_t cap, double v);
 struct profile_kv *prof_find_kv(const struct profile_keys *keys, const char *key);

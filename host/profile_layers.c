@@ -12,7 +12,11 @@
  * names in *stars* are abstract presets).  [vendor] and [printer_model:...]
  * sections describe the bundle and set no print setting.  The printer
  * preset's default_print_profile and default_filament_profile pick the
- * others unless named.
+ * others unless named; when the bundle has no preset of that name (or the
+ * printer names none), the first non-abstract one compatible with the
+ * printer (its compatible_printers list, else its
+ * compatible_printers_condition on the printer's keys), as PrusaSlicer
+ * picks one.
  */
 #include "profile_int.h"
 
@@ -20,6 +24,7 @@
 #include <string.h>
 
 #include "ini.h"
+#include "placeholder.h"
 #include "st_grow.h"
 
 #define BUNDLE_DEPTH_MAX 16 /* inherits chains longer than this are a loop */
@@ -210,6 +215,92 @@ static const char *resolved(const struct profile *p, const char *key, size_t *le
 	return *len ? s : NULL;
 }
 
+/* The value of key in preset sec of kind through its inherits (its own key,
+ * else the last parent that has it), or NULL. */
+static const char *preset_value(const struct file_read *f, const char *kind,
+				const struct section *sec, const char *key, int depth)
+{
+	const struct profile_kv *kv = prof_find_kv(&sec->keys, key);
+	const char *found = NULL;
+
+	if (kv)
+		return kv->value;
+	if (depth > BUNDLE_DEPTH_MAX || !(kv = prof_find_kv(&sec->keys, "inherits")))
+		return NULL;
+	for (const char *s = kv->value; *s;) {
+		const char *semi = strchr(s, ';'), *t = s, *v;
+		size_t n = semi ? (size_t)(semi - s) : strlen(s);
+		const struct section *parent;
+
+		unquote(&t, &n);
+		if (n && (parent = find_section(f, kind, t, n)) &&
+		    (v = preset_value(f, kind, parent, key, depth + 1)))
+			found = v;
+		s = semi ? semi + 1 : s + strlen(s);
+	}
+	return found;
+}
+
+/* Is preset sec of kind for printer (p's keys so far): in its
+ * compatible_printers list, else true by its compatible_printers_condition? */
+static bool compatible(struct profile *p, const struct file_read *f, const char *kind,
+		       const struct section *sec, const char *printer)
+{
+	const char *list = preset_value(f, kind, sec, "compatible_printers", 0);
+	const char *cond = preset_value(f, kind, sec, "compatible_printers_condition", 0);
+	struct st_error e = {0};
+	bool ok = false;
+
+	if (list && *list) {
+		size_t n = strlen(printer);
+		for (const char *at = strstr(list, printer); at; at = strstr(at + 1, printer))
+			if ((at == list || at[-1] == '"' || at[-1] == ';') &&
+			    (!at[n] || at[n] == '"' || at[n] == ';'))
+				return true;
+		return false;
+	}
+	if (!cond || !*cond)
+		return true;
+	size_t len = strlen(cond);
+	char *expr = prof_dup(cond, len);
+	if (!expr)
+		return false;
+	if (len >= 2 && expr[0] == '"' && expr[len - 1] == '"') {
+		memmove(expr, expr + 1, len - 2);
+		expr[len - 2] = '\0';
+	}
+	/* a condition that does not evaluate (a variable we lack) does not match */
+	if (ph_eval_bool(expr, "compatible_printers_condition", p->vars, &ok, &e))
+		ok = false;
+	free(expr);
+	return ok;
+}
+
+/* PrusaSlicer's choice when the printer's default preset of kind is missing:
+ * the first non-abstract one compatible with it, one whose name starts with
+ * the default's (want, wlen: "0.15mm 0.4nozzle" for "0.15mm 0.4nozzle V2")
+ * first; NULL when none is. */
+static const char *first_compatible(struct profile *p, const struct file_read *f,
+				    const char *kind, const char *printer, const char *want,
+				    size_t wlen, size_t *len)
+{
+	size_t kl = strlen(kind);
+
+	for (int pass = want && wlen ? 0 : 1; pass < 2; pass++)
+		for (size_t i = 0; i < f->n; i++) {
+			const char *s = f->sec[i].name;
+
+			if (strncmp(s, kind, kl) || s[kl] != ':' || s[kl + 1] == '*' ||
+			    (pass == 0 && strncmp(s + kl + 1, want, wlen)))
+				continue;
+			if (compatible(p, f, kind, &f->sec[i], printer)) {
+				*len = strlen(s + kl + 1);
+				return s + kl + 1;
+			}
+		}
+	return NULL;
+}
+
 /* The printers of a bundle, for the message when none is named. */
 static void list_printers(const struct file_read *f, char *buf, size_t cap)
 {
@@ -237,6 +328,7 @@ static int apply_bundle(struct profile *p, const struct file_read *f,
 	const char *dflt[] = {"default_print_profile", "default_filament_profile"};
 	const char *ids[] = {"print_settings_id", "filament_settings_id"};
 	char list[300];
+	bool vars_built = false;
 	int rc;
 
 	if (!pre || !pre->printer) {
@@ -254,10 +346,23 @@ static int apply_bundle(struct profile *p, const struct file_read *f,
 		const char *name = names[k];
 		char *copy;
 
-		if (name)
+		if (name) {
 			len = strlen(name);
-		else
-			name = resolved(p, dflt[k], &len);
+		} else if ((name = resolved(p, dflt[k], &len))) {
+			/* a multi-extruder printer's default filaments: "A; B"; the
+			 * first extruder's prints */
+			const char *semi = memchr(name, ';', len);
+			if (semi)
+				len = (size_t)(semi - name);
+		}
+		if (!names[k] && (!name || !find_section(f, kinds[k], name, len))) {
+			/* the condition sees the printer's keys */
+			if (!vars_built && (rc = prof_build_vars(p, err)))
+				return rc;
+			vars_built = true;
+			name = first_compatible(p, f, kinds[k], pre->printer, name, name ? len : 0,
+						&len);
+		}
 		if (!name)
 			return st_error_set(err, ST_ERR_ARG,
 					    "%s: printer '%s' names no %s preset; choose one with "

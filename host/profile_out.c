@@ -42,8 +42,17 @@ static void put_value(FILE *f, const struct profile *p, const struct key_def *d)
 
 	switch (d->type) {
 	case KT_STRING:
-	case KT_FIRST_STRING:
 		put_escaped(f, *(const char *const *)field);
+		break;
+	case KT_FIRST_STRING:
+		/* per filament in PrusaSlicer: quoted, or it splits the text at ';' */
+		fputc('"', f);
+		for (const char *c = *(const char *const *)field; *c; c++) {
+			if (*c == '"')
+				fputc('\\', f);
+			put_escaped(f, (char[]){*c, '\0'});
+		}
+		fputc('"', f);
 		break;
 	case KT_DOUBLE:
 	case KT_FIRST_DOUBLE:

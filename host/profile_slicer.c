@@ -155,6 +155,10 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	g->start_filament_gcode = p->start_filament_gcode;
 	g->end_filament_gcode = p->end_filament_gcode;
 	g->vars = p->vars;
+	g->printer_settings_id = profile_printer_name(p);
+	g->printer_model = p->printer_model;
+	if (profile_get(p, "bed_shape"))
+		g->bed_shape = profile_get(p, "bed_shape");
 	return 0;
 }
 

@@ -21,7 +21,8 @@
 struct send_args {
 	const char *file, *port, *printer;
 	bool json;
-	long baud; /* 0 = the profile's */
+	bool force; /* --force: past the wrong-printer guard (guard.h) */
+	long baud;  /* 0 = the profile's */
 };
 
 /*

@@ -148,6 +148,13 @@ struct gcodew_settings {
 	 * host/profile.h), under the writer's own variables; NULL: none.  Not
 	 * owned; must outlive the writer. */
 	const struct ph_vars *vars;
+
+	/* The printer, recorded in the header under PrusaSlicer's keys so that
+	 * a sender can refuse the file for another printer (docs/printing.md);
+	 * not owned, not NULL. */
+	const char *printer_settings_id; /* the profile's name; "" */
+	const char *printer_model;	 /* "" */
+	const char *bed_shape;		 /* PrusaSlicer's text, "0x0,200x0,200x200,0x200" */
 };
 
 /* What a written print will take; also written into the G-code header. */

@@ -13,7 +13,7 @@ int main(void)
 					  xport_suite, sim_suite, marlin_suite, printer_suite,
 					  slicer_suite, gcodewriter_suite, infill_suite, support_suite,
 					  slicecli_suite, region_suite, x3g_suite, s3g_suite, serve_suite,
-					  preview_suite, portpick_suite, send_suite, print_suite, cli_suite};
+					  preview_suite, portpick_suite, send_suite, guard_suite, print_suite, cli_suite};
 	SRunner *sr = srunner_create(NULL);
 	int failed;
 

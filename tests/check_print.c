@@ -551,6 +551,35 @@ START_TEST(test_dry_run_is_slice)
 }
 END_TEST
 
+/* The settings options of `stratum slice` take effect on print too (issue 18
+ * item 5): the G-code is what slice writes with the same options. */
+START_TEST(test_settings_options_as_slice)
+{
+	char a[512], b[512];
+	int rc;
+
+	snprintf(a, sizeof(a), "%s", tu_path("slice-set.gcode"));
+	snprintf(b, sizeof(b), "%s", tu_path("dry-set.gcode"));
+	rc = tu_run(out, sizeof(out), "slice " MODEL " -o %s --printer " MARLIN_PRINTER
+		    " --layer-height 0.3 --set bed_temperature=55 --brim-width 3", a);
+	ck_assert_msg(rc == 0, "slice: exit %d: %s", rc, out);
+	rc = tu_run(out, sizeof(out), "print " MODEL " --printer " MARLIN_PRINTER " --dry-run -o %s"
+		    " --layer-height 0.3 --set bed_temperature=55 --brim-width 3 && cmp %s %s",
+		    b, a, b);
+	ck_assert_msg(rc == 0, "exit %d: %s", rc, out);
+	size_t len;
+	char *text = tu_slurp(b, &len);
+	ck_assert(strstr(text, "\n; layer_height = 0.3\n") &&
+		  strstr(text, "\nM140 S55 ; set bed temperature"));
+	free(text);
+	rc = tu_run(out, sizeof(out), "print " MODEL " --printer " MARLIN_PRINTER " --dry-run -o %s"
+		    " --layer-height 5", b);
+	ck_assert_msg(rc == 2 && strstr(out, "stratum print: --layer-height: layer_height: 5 is "
+					     "out of range"),
+		      "exit %d: %s", rc, out);
+}
+END_TEST
+
 Suite *print_suite(void)
 {
 	Suite *s = suite_create("print");
@@ -558,6 +587,7 @@ Suite *print_suite(void)
 
 	tcase_set_timeout(tc, 120);
 	tcase_add_test(tc, test_dry_run_is_slice);
+	tcase_add_test(tc, test_settings_options_as_slice);
 	tcase_add_test(tc, test_unsliceable_profile_exit_2);
 	tcase_add_test(tc, test_marlin_prints_every_line_once);
 	tcase_add_test(tc, test_sailfish_prints_every_command_once);

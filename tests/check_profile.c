@@ -936,5 +936,6 @@ Suite *profile_suite(void)
 	tcase_add_test(access, test_bindings_match_declaration);
 	tcase_set_timeout(cli, 60);
 	suite_add_tcase(s, cli);
+	profile_find_tcases(s);
 	return s;
 }

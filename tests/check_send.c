@@ -375,6 +375,36 @@ START_TEST(marlin_prusaslicer_as_written)
 }
 END_TEST
 
+/* The PrusaSlicer corpus on a fixed sample (bench/prusa_corpus.sh; make bench
+ * runs every preset): presets of three vendors, resolved from the installed
+ * bundles, sliced by prusa-slicer, sent to the simulator (log == file, exit
+ * 0), previewed and printed through a farm node (issue 18 item 2). */
+START_TEST(prusaslicer_corpus_sample)
+{
+	static char text[1 << 14];
+	char cmd[2048];
+	size_t n;
+	FILE *p;
+
+	if (system("command -v prusa-slicer >/dev/null 2>&1") != 0 ||
+	    !tu_file_exists("/usr/share/PrusaSlicer/profiles/PrusaResearch.ini")) {
+		fprintf(stderr, "send: prusa-slicer or its bundles not installed, corpus sample "
+				"skipped\n");
+		return;
+	}
+	snprintf(cmd, sizeof(cmd),
+		 "bench/prusa_corpus.sh '%s' '%s' 'PrusaResearch:Original Prusa i3 MK3S & MK3S+' "
+		 "'Creality:Creality Ender-3 (0.4 mm nozzle)' 'LulzBot:Taz6 Aero 0.5mm' 2>&1",
+		 bin(), tu_path("corpus"));
+	p = popen(cmd, "r");
+	ck_assert_ptr_nonnull(p);
+	n = fread(text, 1, sizeof(text) - 1, p);
+	text[n] = '\0';
+	ck_assert_msg(pclose(p) == 0, "%s", text);
+	ck_assert_msg(strstr(text, "corpus: 3 of 3 presets pass (0 skipped"), "%s", text);
+}
+END_TEST
+
 Suite *send_suite(void)
 {
 	Suite *s = suite_create("send");
@@ -391,6 +421,7 @@ Suite *send_suite(void)
 	tc = tcase_create("marlin");
 	tcase_set_timeout(tc, 120);
 	tcase_add_test(tc, marlin_prusaslicer_as_written);
+	tcase_add_test(tc, prusaslicer_corpus_sample);
 	suite_add_tcase(s, tc);
 	return s;
 }

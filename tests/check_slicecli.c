@@ -597,6 +597,47 @@ START_TEST(bundle_presets_slice)
 }
 END_TEST
 
+/* `stratum printers --show` with the settings options writes a bundle preset
+ * as one flat config that PrusaSlicer and Stratum both load as it was: the
+ * per-filament texts quoted (unquoted, PrusaSlicer splits them at ';'), a
+ * multi-extruder printer's default filaments "A; B" taken as A. */
+START_TEST(bundle_preset_as_flat_config)
+{
+	static char text[1 << 16], again[1 << 16];
+	char bundle[4096], flat[4096];
+	int status;
+
+	scratch(bundle, sizeof(bundle), "tiny-bundle.ini");
+	scratch(flat, sizeof(flat), "tiny-flat.ini");
+	tu_write_str(bundle, "[vendor]\nname = Tiny\n\n[printer:*common*]\nbed_shape = "
+			     "0x0,200x0,200x200,0x200\n\n[printer:Tiny Two]\ninherits = *common*\n"
+			     "printer_model = TINY2\ndefault_print_profile = 0.2mm\n"
+			     "default_filament_profile = PLA; PETG\n\n[print:0.2mm]\n"
+			     "layer_height = 0.2\n\n[filament:PLA]\nend_filament_gcode = "
+			     "\"; Filament-specific end gcode\"\n\n[filament:PETG]\n"
+			     "temperature = 240\n");
+	status = tu_run(text, sizeof(text), "printers --show --load '%s' --printer-preset "
+			"'Tiny Two' > '%s'", bundle, flat);
+	ck_assert_msg(status == 0, "exit %d: %s", status, text);
+	slurp(flat, text, sizeof(text));
+	ck_assert_msg(strstr(text, "\nend_filament_gcode = \"; Filament-specific end gcode\"\n") &&
+			      strstr(text, "\nprinter_settings_id = Tiny Two\n") &&
+			      strstr(text, "\nfilament_settings_id = \"PLA\"\n") &&
+			      strstr(text, "\nbed_shape = 0x0,200x0,200x200,0x200\n"),
+		      "%s", text);
+	/* Loaded again, the same config. */
+	status = tu_run(again, sizeof(again), "printers --show '%s' | grep -v '^#'", flat);
+	ck_assert_int_eq(status, 0);
+	status = tu_run(text, sizeof(text), "printers --show --load '%s' --printer-preset "
+			"'Tiny Two' | grep -v '^#'", bundle);
+	ck_assert_int_eq(status, 0);
+	ck_assert_str_eq(again, text);
+	status = tu_run(text, sizeof(text), "printers --set layer_height=0.3");
+	ck_assert_msg(status == 2 && strstr(text, "the settings options go with --show"), "%s",
+		      text);
+}
+END_TEST
+
 START_TEST(saved_default_config_loads)
 {
 	char model[4096], ini[4096], gc[4096], cmd[9000];
@@ -701,6 +742,7 @@ Suite *slicecli_suite(void)
 	tcase_add_test(tc, touching_parts_slice_as_parts);
 	tcase_add_test(tc, output_over_the_model_refused);
 	tcase_add_test(tc, bundle_presets_slice);
+	tcase_add_test(tc, bundle_preset_as_flat_config);
 	tcase_add_test(tc, saved_default_config_loads);
 	tcase_add_test(tc, load_order_and_set);
 	tcase_add_test(tc, settings_options_doc);

@@ -17,6 +17,7 @@ Suite *thicken_suite(void);	/* tests/check_thicken.c: sheets into closed slabs *
 Suite *heal_suite(void);	/* tests/check_heal.c: welding, stitching, hole filling */
 Suite *corpus_suite(void);	/* tests/check_corpus.c: repair on generated defect cases */
 Suite *profile_suite(void);	/* tests/check_profile.c: printer profiles */
+void profile_find_tcases(Suite *s); /* tests/check_profile_find.c: --printer lookup, part of profile */
 Suite *ini_suite(void);		/* tests/check_ini.c: the ini reader of profiles and the node config */
 Suite *placeholder_suite(void); /* tests/check_placeholder.c: PrusaSlicer's placeholder language */
 Suite *gcode_suite(void);	/* tests/check_gcode.c: G-code parser and reader */
@@ -37,6 +38,7 @@ Suite *serve_suite(void);		/* tests/check_serve.c: stratum serve, the farm node'
 Suite *preview_suite(void);	/* tests/check_preview.c: layer preview, move walker */
 Suite *portpick_suite(void);	/* tests/check_portpick.c: --port auto on fake enumerations */
 Suite *send_suite(void);	/* tests/check_send.c: stratum send to the simulated Sailfish */
+Suite *guard_suite(void);	/* tests/check_guard.c: the wrong-printer guard, send/print/x3g */
 Suite *print_suite(void);	/* tests/check_print.c: stratum print end to end, both simulators */
 Suite *cli_suite(void);		/* tests/check_cli.c: the stratum binary end to end */
 

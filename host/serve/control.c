@@ -10,6 +10,7 @@
 #include <sys/stat.h>
 #include <time.h>
 
+#include "guard.h"
 #include "node_int.h"
 #include "st_file.h"
 
@@ -132,13 +133,15 @@ static int make_folders(const char *base, const char *rel)
 }
 
 int node_store_file(struct node *n, struct node_printer *p, const char *tmp, const char *rel,
-		    bool select, bool print, int64_t *id, struct st_error *err)
+		    bool select, bool print, bool force, int64_t *id, struct st_error *err)
 {
 	char full[2 * NODE_PATH_MAX];
 
 	*id = 0;
 	if (snprintf(full, sizeof(full), "%s/%s", p->files_dir, rel) >= (int)sizeof(full))
 		return st_error_set(err, ST_ERR_ARG, "the file's path is too long");
+	if (node_file_kind(rel) == 'g' && !force && guard_check_file(tmp, rel, p->prof, err))
+		return err->code == ST_ERR_RANGE ? ST_ERR_RANGE : ST_ERR_IO;
 	if (node_queue_file_busy(n->q, p->cfg->name, full))
 		return st_error_set(err, ST_ERR_RANGE, "%.250s is being printed or waits in the "
 				    "queue; send it under another name", rel);

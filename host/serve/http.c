@@ -154,6 +154,9 @@ static enum MHD_Result post_iter(void *cls, enum MHD_ValueKind kind, const char 
 	} else if (!strcmp(key, "select")) {
 		size_t l = strlen(r->select);
 		field_add(r, r->select, sizeof(r->select), &l, key, data, size);
+	} else if (!strcmp(key, "force")) {
+		size_t l = strlen(r->force);
+		field_add(r, r->force, sizeof(r->force), &l, key, data, size);
 	} else if (!strcmp(key, "path")) {
 		field_add(r, r->path, sizeof(r->path), &r->path_len, key, data, size);
 	} else if (!strcmp(key, "file")) {
@@ -251,7 +254,8 @@ static enum MHD_Result finish_upload(struct node *n, struct MHD_Connection *c, s
 		return http_send_error(c, MHD_HTTP_INSUFFICIENT_STORAGE, "cannot store the upload");
 	}
 	r->fd = -1;
-	if ((rc = node_store_file(n, p, r->tmp, rel, select, print, &id, &err)))
+	if ((rc = node_store_file(n, p, r->tmp, rel, select, print, form_true(r->force), &id,
+				   &err)))
 		return http_send_error(c, rc == ST_ERR_RANGE ? MHD_HTTP_CONFLICT
 				       : MHD_HTTP_INTERNAL_SERVER_ERROR, err.msg);
 	r->tmp[0] = '\0';

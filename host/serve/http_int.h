@@ -45,7 +45,7 @@ struct req {
 	bool has_file;
 	char filename[NODE_FILE_NAME_MAX + 2];
 	size_t filename_len;
-	char print[16], select[16], path[HTTP_FIELD_MAX];
+	char print[16], select[16], force[16], path[HTTP_FIELD_MAX];
 	size_t path_len;
 };
 

@@ -12,7 +12,8 @@
  * "name"}; each id is recorded in the queue database before the command
  * runs, so a re-delivered command (QoS 1, a client that sends twice) runs
  * once.  The answer goes to PRINTER/result.  G-code never travels over MQTT:
- * enqueue downloads the file from url (libcurl: http and https only).
+ * enqueue downloads the file from url (libcurl: http and https only);
+ * "force": true takes G-code sliced for another printer (host/guard.h).
  *
  * Threads: libmosquitto's network thread only queues commands; the node's
  * MQTT thread runs them (a download may take a while) and publishes state.
@@ -268,7 +269,8 @@ static int cmd_enqueue(struct node *n, struct node_printer *p, json_t *o, int64_
 		return st_error_set(err, ST_ERR_ARG, "'%.100s': %s", fname, e.msg);
 	if ((rc = download(n, url, tmp, sizeof(tmp), err)))
 		return rc;
-	if ((rc = node_store_file(n, p, tmp, fname, true, true, job, err))) {
+	if ((rc = node_store_file(n, p, tmp, fname, true, true,
+				   json_is_true(json_object_get(o, "force")), job, err))) {
 		unlink(tmp);
 		return rc;
 	}

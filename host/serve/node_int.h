@@ -184,11 +184,13 @@ int node_control_job(struct node *n, struct node_printer *p, const char *cmd,
 /*
  * node_store_file - move the complete temporary file tmp (same file
  * system) to p's files as rel (checked by the caller), select it and, with
- * print, queue it (*id the job, else 0).  Returns 0, ST_ERR_RANGE (a
- * queued or running job uses that file: 409), ST_ERR_ARG, ST_ERR_IO.
+ * print, queue it (*id the job, else 0).  G-code sliced for another printer
+ * or leaving its bed (host/guard.h) is refused unless force.  Returns 0,
+ * ST_ERR_RANGE (a queued or running job uses that file, or the guard
+ * refused it: 409), ST_ERR_ARG, ST_ERR_IO.
  */
 int node_store_file(struct node *n, struct node_printer *p, const char *tmp, const char *rel,
-		    bool select, bool print, int64_t *id, struct st_error *err);
+		    bool select, bool print, bool force, int64_t *id, struct st_error *err);
 
 /*
  * node_check_kind - whether p takes a file called name: G-code and models
