@@ -403,7 +403,7 @@ int profile_key_line(const struct profile *p, const char *key);
 
 /*
  * profile_get_number - read an untyped key as a number, checked with the
- * loader's own number grammar ([+-]digits[.digits], no exponent) and range.
+ * loader's own number grammar ([+-]digits[.digits][e[+-]digits]) and range.
  * @dflt: stored in *out when the file does not set key.
  * Returns 0; ST_ERR_PARSE or ST_ERR_RANGE with "FILE: line N: KEY: ..." in err.
  */

@@ -3,9 +3,11 @@
  * bound to its struct profile field, the parsers of every value type, the
  * declared defaults, and pass 2 of loading (profile_int.h).
  *
- * Numbers are read with our own grammar, [+-]digits[.digits] (no exponent,
- * no hexadecimal, no decimal comma), and only a validated copy is handed to
- * strtod; the program never calls setlocale, so the C locale's '.' applies.
+ * Numbers are read with our own grammar, [+-]digits[.digits][e[+-]digits]
+ * (the exponent because PrusaSlicer writes one, e.g. bed_shape points at
+ * 5.51091e-15; no hexadecimal, no decimal comma), and only a validated copy
+ * is handed to strtod; the program never calls setlocale, so the C
+ * locale's '.' applies.
  */
 #include "profile_int.h"
 
@@ -192,10 +194,10 @@ static int hex_value(char c)
 	return -1;
 }
 
-/* s[0..len) as a decimal number without exponent; false if it is not one. */
+/* s[0..len) as a decimal number; false if it is not one. */
 static bool parse_number(const char *s, size_t len, double *out)
 {
-	return st_parse_double(s, len, 0, out) == ST_NUMBER_OK;
+	return st_parse_double(s, len, ST_NUMBER_EXPONENT, out) == ST_NUMBER_OK;
 }
 
 /* [+-]digits, at most 18 digits, into *out. */

@@ -327,7 +327,8 @@ START_TEST(test_bad_number)
 {
 	load_bad("# a comment\nnozzle_diameter = 0.4mm\n", ST_ERR_PARSE, "line 2",
 		 "nozzle_diameter", "'0.4mm' is not a number", NULL);
-	load_bad("layer_height = 1e-1\n", ST_ERR_PARSE, "line 1", "layer_height", "'1e-1'", NULL);
+	load_bad("layer_height = 1e\n", ST_ERR_PARSE, "line 1", "layer_height", "'1e'", NULL);
+	load_bad("layer_height = 1e+\n", ST_ERR_PARSE, "'1e+'", NULL);
 	load_bad("layer_height = 0,2\n", ST_ERR_PARSE, "'0,2' is not a number", NULL);
 	load_bad("layer_height = nan\n", ST_ERR_PARSE, "'nan'", NULL);
 	load_bad("layer_height = 0x10\n", ST_ERR_PARSE, NULL);
@@ -443,6 +444,11 @@ START_TEST(test_bad_bed_shape)
 	assert_close(p->bed_min_x, -115);
 	assert_close(p->bed_max_y, 78);
 	profile_free(p);
+	/* A round bed as PrusaSlicer writes it (TriLAB, FLSun bundles). */
+	p = load_ok("bed_shape = 90x0,5.51091e-15x90,-90x1.10218e-14,-1.65327e-14x-90\n");
+	assert_close(p->bed_min_x, -90);
+	assert_close(p->bed_max_y, 90);
+	profile_free(p);
 }
 END_TEST
 
@@ -521,7 +527,7 @@ START_TEST(test_raw_keys)
 {
 	struct profile *p = load_ok("printer_notes = PRINTER_VENDOR_X\\nsecond line\n"
 				    "max_print_speed = 150\n"
-				    "bad_number = 1e3\n"
+				    "bad_number = 1e3x\n"
 				    "nozzle_diameter = 0.4\n");
 	struct st_error err = {0};
 	const char *value;
