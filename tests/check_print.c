@@ -345,6 +345,52 @@ START_TEST(test_ctrl_c_stops_safely)
 }
 END_TEST
 
+/*
+ * The simulated Marlin's log after a Ctrl-C during the heat-up (issue 17
+ * defect 3): both waits (M190, then the M109 queued behind it) were broken,
+ * each by its own M108 (Marlin's M108 ends only the wait that runs), and
+ * the stop sequence ran after them: heaters off, fan off, motors off.
+ */
+static void check_heatup_stopped(const char *log)
+{
+	struct strs lg = {0};
+	size_t k, n108 = 0;
+
+	marlin_log(log, &lg);
+	k = strs_find(&lg, 0, "M190 S60");
+	ck_assert_msg(k < lg.len, "no M190 in the log");
+	ck_assert_msg(strs_find(&lg, k, "M109 S210") < lg.len, "the M109 never ran");
+	for (size_t i = k; i < lg.len; i++)
+		n108 += !strcmp(lg.v[i], "M108");
+	ck_assert_uint_ge(n108, 2);
+	k = strs_find(&lg, k, "M104 S0");
+	ck_assert_msg(k < lg.len, "the heaters were not switched off");
+	ck_assert_uint_lt(strs_find(&lg, k, "M140 S0"), lg.len);
+	ck_assert_uint_lt(strs_find(&lg, k, "M107"), lg.len);
+	ck_assert_str_eq(lg.v[lg.len - 1], "M84");
+	strs_free(&lg);
+}
+
+/* Ctrl-C while the bed heats, the nozzle's M109 queued behind (the bracket's
+ * start G-code): every wait is broken, the stop confirmed, exit 130.  Heating
+ * runs at twice real speed, so an unbroken M109 outlasts the 10 s stop. */
+START_TEST(test_ctrl_c_during_heatup)
+{
+	char dir[512], log[512];
+	int rc;
+
+	state_dir("st-heat", dir, sizeof(dir));
+	snprintf(log, sizeof(log), "%s", tu_path("heat.log"));
+	rc = tu_run(out, sizeof(out), "print " MODEL " --printer " MARLIN_PRINTER " --speedup 2 "
+		    "--sim-log %s >%s 2>&1 & P=$!; for i in $(seq 600); do grep -qs M190 %s "
+		    "&& break; sleep 0.1; done; sleep 1; kill -INT $P; wait $P; r=$?; cat %s; "
+		    "exit $r", log, tu_path("heat.out"), log, tu_path("heat.out"));
+	ck_assert_msg(rc == 130, "exit %d: %s", rc, out);
+	ck_assert_msg(strstr(out, "stopped safely"), "%s", out);
+	check_heatup_stopped(log);
+}
+END_TEST
+
 /* Print against an external `stratum sim FAULT`; returns print's status. */
 static int print_external(const char *fault, const char *dir)
 {
@@ -562,6 +608,7 @@ Suite *print_suite(void)
 	tcase_add_test(tc, test_marlin_prints_every_line_once);
 	tcase_add_test(tc, test_sailfish_prints_every_command_once);
 	tcase_add_test(tc, test_ctrl_c_stops_safely);
+	tcase_add_test(tc, test_ctrl_c_during_heatup);
 	tcase_add_test(tc, test_unplug_and_reset_exit_69);
 	tcase_add_test(tc, test_resume_absurd_coordinates);
 	tcase_add_test(tc, test_resume_after_kill);
