@@ -31,6 +31,7 @@
 #include "preview.h"
 #include "profile.h"
 #include "profile_slicer.h"
+#include "resume.h"
 #include "pvdraw.h"
 #include "send.h"
 #include "slicejob.h"
@@ -209,18 +210,25 @@ static int print_preview(struct print_job *job)
 	return 0;
 }
 
-/* Ask before a resume (or take --yes); true to go on. */
+/* Ask before a resume (or take --yes); true to go on.  It shows what the
+ * preamble will set (resume_locate), not the temperatures last reported. */
 static bool print_confirm(const struct print_job *job)
 {
 	char line[16] = "";
 	const struct print_layer *L = &job->layers.v[job->start_layer];
+	struct resume_state rs;
+	struct st_error err = {0};
 
+	if (resume_locate(job->gcode, L->offset, job->saved, &rs, &err)) {
+		fprintf(stderr, PRINT_CMD ": job %s: %s\n", job->j.id, err.msg);
+		return false;
+	}
 	fprintf(stderr, PRINT_CMD ": resume job %s: %s on %s, from layer %ld of %zu (Z %.2f mm, "
-			"line %llu); the printer reheats (bed %.0f, nozzle %.0f degC), homes X and "
-			"Y only, and goes on with the remaining layers.\n",
+			"line %llu); the printer heats the bed to %.0f and the nozzle to %.0f degC, "
+			"takes the nozzle's Z as %.3f mm (its last move), homes X and Y only, and "
+			"goes on with the remaining layers.\n",
 		job->j.id, job->gcode, job->prof->id, job->start_layer + 1, job->layers.n, L->z,
-		(unsigned long long)L->line, isfinite(job->j.bed_target) ? job->j.bed_target : 0,
-		isfinite(job->j.tool_target) ? job->j.tool_target : 0);
+		(unsigned long long)L->line, rs.bed, rs.tool, rs.z_nozzle);
 	if (job->a->yes)
 		return true;
 	fprintf(stderr, "Is the part still on the bed, untouched?  Continue? [y/N] ");
@@ -528,6 +536,8 @@ int cmd_print(int argc, char **argv)
 			status = ST_EXIT_DATAERR;
 			goto out;
 		}
+		if ((status = print_byte_after(job->gcode, job->j.last_line, &job->saved)))
+			goto out;
 		if (!print_confirm(job)) {
 			fprintf(stderr, PRINT_CMD ": not resumed\n");
 			status = ST_EXIT_FAILURE;

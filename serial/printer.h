@@ -76,8 +76,10 @@ struct printer_job {
 	uint64_t first_line;  /* file lines before offset, so progress counts file lines */
 	/* Continue an interrupted print at offset: the adapter first sends its
 	 * resume preamble (resume.h) that restores heat and position as the
-	 * file left them there.  saved: the position progress reports until
-	 * a command of the file is confirmed (the saved one; 0 = offset). */
+	 * file left them there.  saved: the byte just past the last command
+	 * the printer executed, so where the nozzle stands (its Z is set
+	 * there, resume_locate), and the position progress reports until a
+	 * command of the file is confirmed (0 = offset). */
 	bool resume;
 	int64_t saved;
 	uint64_t total;	      /* commands of the run (printer_check's), for progress */

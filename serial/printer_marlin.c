@@ -182,7 +182,7 @@ static int pm_preamble(const struct printer_job *job, char pre[][RESUME_LINE_MAX
 	*n = 0;
 	if (!job->resume)
 		return 0;
-	if ((rc = resume_scan(job->path, job->offset, &rs, err)))
+	if ((rc = resume_locate(job->path, job->offset, job->saved, &rs, err)))
 		return rc;
 	*n = resume_preamble(&rs, pre, RESUME_LINES);
 	return 0;

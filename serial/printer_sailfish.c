@@ -326,7 +326,7 @@ static int ps_run_init(struct ps_run *r, struct ps_state *s, const struct printe
 			return st_error_set(err, ST_ERR_UNSUPPORTED, "%s: an interrupted X3G print "
 					    "cannot be resumed: it has no layers to restart from",
 					    s->name);
-		if ((rc = resume_x3g_text(job->path, r->offset, r->pre, err)))
+		if ((rc = resume_x3g_text(job->path, r->offset, job->saved, r->pre, err)))
 			return rc;
 		r->has_pre = true;
 	}

@@ -470,6 +470,59 @@ START_TEST(test_resume_absurd_coordinates)
 }
 END_TEST
 
+/* The Z of the last G0/G1 with Z (absolute, as the slicer writes) at or
+ * before file line `line` of path: where the nozzle stands once the
+ * printer ran that line. */
+static double nozzle_z_at(const char *path, uint64_t line)
+{
+	FILE *f = fopen(path, "rb");
+	struct gcode_reader *r;
+	struct gcode_line g;
+	struct st_error err = {0};
+	double z = NAN, v;
+
+	ck_assert_ptr_nonnull(f);
+	ck_assert_int_eq(gcode_reader_new(f, path, &r, &err), 0);
+	while (gcode_reader_line(r) < line && gcode_reader_next(r, 0, &g, &err) == 1)
+		if (g.letter == 'G' && (g.number == 0 || g.number == 1) &&
+		    gcode_word_value(&g, 'Z', &v))
+			z = v;
+	gcode_reader_free(r);
+	fclose(f);
+	return z;
+}
+
+/* A resume from a layer start while the nozzle is already in that layer:
+ * both preambles set Z where the nozzle is (its last move), not at the
+ * layer below, and never go lower than it (issue 17 defect 4). */
+START_TEST(test_resume_z_is_the_nozzles)
+{
+	static const char gc[] = "G90\nG1 Z0.3 F600\nG1 X5 E1\n;LAYER_CHANGE\n;Z:0.6\n"
+				 "G1 Z0.6\nG1 X10 E2\n";
+	const char *path = tu_path("resume-z.gcode");
+	char pre[RESUME_LINES][RESUME_LINE_MAX + 1], text[RESUME_TEXT_MAX];
+	struct resume_state rs;
+	struct st_error err = {0};
+	int64_t layer = (int64_t)(strstr(gc, ";LAYER") - gc);
+
+	tu_write_str(path, gc);
+	ck_assert_int_eq(resume_locate(path, layer, (int64_t)strlen(gc), &rs, &err), 0);
+	ck_assert(fabs(rs.z - 0.3) < 1e-9 && fabs(rs.z_nozzle - 0.6) < 1e-9);
+	size_t n = resume_preamble(&rs, pre, RESUME_LINES), g92 = n, down = n;
+	for (size_t i = 0; i < n; i++) {
+		g92 = !strcmp(pre[i], "G92 Z0.600") ? i : g92;
+		down = !strcmp(pre[i], "G1 Z0.600 F600") ? i : down;
+	}
+	ck_assert_msg(g92 < n && down < n && g92 < down, "G92 Z or the way down is wrong");
+	ck_assert_int_eq(resume_x3g_text(path, layer, (int64_t)strlen(gc), text, &err), 0);
+	ck_assert_msg(strstr(text, "G92 X0 Y0 Z0.600 A0 B0\n") && strstr(text, "G1 Z0.600 F600\n"),
+		      "%s", text);
+	/* nothing executed past the layer start: the Z there */
+	ck_assert_int_eq(resume_locate(path, layer, 0, &rs, &err), 0);
+	ck_assert(fabs(rs.z_nozzle - 0.3) < 1e-9);
+}
+END_TEST
+
 START_TEST(test_resume_after_kill)
 {
 	char dir[512], log[512], log2[512], jpath[1024];
@@ -517,6 +570,14 @@ START_TEST(test_resume_after_kill)
 			      "Z was homed: %s", lg.v[i]);
 	k = strs_find(&lg, pre, "M109 S205");
 	ck_assert_uint_lt(k, lg.len);
+	/* Z is set where the nozzle stands, the last move it ran (issue 17
+	 * defect 4: it was the layer below's, and every later layer printed
+	 * one layer high) */
+	double zn = nozzle_z_at(jstr(j, "gcode"), (uint64_t)jint(j, "last_line")), zset = NAN;
+	for (size_t i = 0; i < pre; i++)
+		if (!strncmp(lg.v[i], "G92 Z", 5))
+			zset = atof(lg.v[i] + 5);
+	ck_assert_msg(fabs(zset - zn) < 1e-6, "G92 Z%.3f while the nozzle is at %.3f", zset, zn);
 	/* the preamble ends with the modes, E, feed rate and fan; the file follows */
 	while (k < lg.len && lg.len - k > cmds.len)
 		k++;
@@ -611,6 +672,7 @@ Suite *print_suite(void)
 	tcase_add_test(tc, test_ctrl_c_during_heatup);
 	tcase_add_test(tc, test_unplug_and_reset_exit_69);
 	tcase_add_test(tc, test_resume_absurd_coordinates);
+	tcase_add_test(tc, test_resume_z_is_the_nozzles);
 	tcase_add_test(tc, test_resume_after_kill);
 	tcase_add_test(tc, test_sailfish_resume_after_kill);
 	suite_add_tcase(s, tc);
