@@ -36,6 +36,7 @@ struct printer_options {
 	long baud;		    /* bits/s; default 115200 */
 	bool dtr_reset;		    /* opening a real serial port resets the board */
 	unsigned rx_buffer;	    /* Marlin: firmware RX ring (bytes), 0 = unknown */
+	unsigned bufsize;	    /* Marlin: firmware BUFSIZE (command slots), 0 = unknown */
 	double sim_speedup;	    /* port "sim": time divisor; default 1000 */
 	const char *sim_log;	    /* port "sim": execution log file, NULL none */
 	struct x3g_machine machine; /* Sailfish: the machine G-code is translated for */

@@ -76,6 +76,8 @@ static int pm_start_sim(struct pm_state *s, const struct printer_options *o, con
 	so.baud = printer_sim_baud(o);
 	if (o->rx_buffer > 0)
 		so.rx_buffer = o->rx_buffer;
+	if (o->bufsize > 0)
+		so.bufsize = o->bufsize;
 	so.advanced_ok = true;
 	so.log_path = o->sim_log;
 	if ((rc = sim_marlin_new(&so, &s->sim, err)) || (rc = sim_marlin_start_thread(s->sim, err)))
@@ -118,6 +120,7 @@ static int pm_open(const struct printer_options *o, void **state, struct st_erro
 		goto out_free;
 	marlin_options_init(&mo);
 	mo.rx_buffer = o->rx_buffer;
+	mo.bufsize = o->bufsize;
 	mo.trace = pm_trace;
 	mo.trace_ctx = s;
 	/* the simulator boots like a board; ptys and TCP bridges are not reset */
