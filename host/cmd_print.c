@@ -327,7 +327,7 @@ static void print_summary_text(const struct print_job *job)
 		printf(" = %s of printer time (simulated, %gx)", sim, job->a->speedup);
 	}
 	printf("\n");
-	if (job->journal_on)
+	if (job->journal_saved)
 		printf("  journal: %s\n", job->j.file);
 	if (job->fail)
 		printf("  stopped: %s\n", job->fail);
@@ -378,7 +378,7 @@ static void print_summary_json(const struct print_job *job)
 	json_object_set_new(o, "seconds", json_real(job->stream_s));
 	if (job->start_layer >= 0)
 		json_object_set_new(o, "resumed_from_layer", json_integer(job->start_layer + 1));
-	if (job->journal_on) {
+	if (job->journal_saved) {
 		json_object_set_new(o, "job", json_string(job->j.id));
 		json_object_set_new(o, "journal", json_string(job->j.file));
 	}

@@ -51,6 +51,7 @@ struct print_job {
 	struct print_layers layers;
 	struct journal j;
 	bool journal_on;	   /* G-code input: the journal is kept */
+	bool journal_saved;	   /* it was written at least once (the summary names it) */
 	bool simulated;
 	const char *port;	   /* the port opened */
 	char *port_auto;	   /* --port auto's choice (free) */

@@ -132,7 +132,11 @@ static void print_sync(struct print_job *job)
 	struct st_error err = {0};
 	static bool warned; /* once per process: a full disk is said once */
 
-	if (job->journal_on && journal_save(&job->j, &err) && !warned) {
+	if (!job->journal_on)
+		return;
+	if (!journal_save(&job->j, &err)) {
+		job->journal_saved = true;
+	} else if (!warned) {
 		warned = true;
 		fprintf(stderr, PRINT_CMD ": warning: %s; the print goes on but cannot be resumed "
 				"from here\n", err.msg);
@@ -214,7 +218,7 @@ static void print_stopped_at(struct print_job *job, const char *state, int statu
 		return;
 	snprintf(job->j.state, sizeof(job->j.state), "%s", state);
 	print_sync(job);
-	if (status != ST_EXIT_DATAERR)
+	if (status != ST_EXIT_DATAERR && job->journal_saved)
 		fprintf(stderr, PRINT_CMD ": the job is saved; continue it with 'stratum print "
 				"--resume %s'\n", job->j.id);
 }
@@ -326,7 +330,7 @@ int print_stream(struct print_job *job)
 		char why[512] = "";
 
 		if (portpick_auto(job->prof, &job->port_auto, why, sizeof(why), &err)) {
-			fprintf(stderr, PRINT_CMD ": --port auto: %s\n", err.msg);
+			fprintf(stderr, PRINT_CMD ": %s\n", err.msg); /* it says --port auto */
 			return ST_EXIT_UNAVAILABLE;
 		}
 		if (!job->a->json)

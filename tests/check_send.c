@@ -429,6 +429,30 @@ START_TEST(marlin_sigint_during_heatup)
 }
 END_TEST
 
+/* `--port auto` picks a port by the profile's usb_ids (host/portpick.h)
+ * for send as for print (issue 17 defect 8): send opened a file named
+ * "auto", print said "--port auto: " twice and named a journal it never
+ * wrote.  No port here has the MK3S's USB id: exit 69, said once. */
+START_TEST(port_auto_picks_or_says_why)
+{
+	char gc[512];
+	snprintf(gc, sizeof(gc), "%s", tu_path("auto.gcode"));
+	tu_write_str(gc, "G28\n;LAYER_CHANGE\nG1 X10 Y10 F3000\n");
+	setenv("STRATUM_STATE_DIR", tu_path("st-auto"), 1);
+	const char *cmds[] = {"send", "print"};
+	for (int i = 0; i < 2; i++) {
+		int rc = tu_run(out, sizeof(out), "%s %s --printer prusa-i3-mk3s --port auto 2>&1",
+				cmds[i], gc);
+		ck_assert_msg(rc == 69, "%s: exit %d: %s", cmds[i], rc, out);
+		const char *p = strstr(out, "--port auto: ");
+		ck_assert_msg(p && !strstr(p + 1, "--port auto: "), "%s: %s", cmds[i], out);
+		ck_assert_msg(strstr(out, "2c99:0002") && !strstr(out, "cannot open") &&
+			      !strstr(out, "journal:") && !strstr(out, "--resume"), "%s: %s",
+			      cmds[i], out);
+	}
+}
+END_TEST
+
 Suite *send_suite(void)
 {
 	Suite *s = suite_create("send");
@@ -446,6 +470,7 @@ Suite *send_suite(void)
 	tcase_set_timeout(tc, 120);
 	tcase_add_test(tc, marlin_prusaslicer_as_written);
 	tcase_add_test(tc, marlin_sigint_during_heatup);
+	tcase_add_test(tc, port_auto_picks_or_says_why);
 	suite_add_tcase(s, tc);
 	return s;
 }
