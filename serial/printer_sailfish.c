@@ -407,6 +407,7 @@ static void ps_counters(const struct ps_run *r, const struct s3g_status *st,
 		{"retries", (double)st->retries, false},
 		{"overflows", (double)st->overflows, false},
 		{"timeouts", (double)st->timeouts, false},
+		{"garbled", (double)st->garbled, false},
 		{"resolved", (double)st->resolved, false},
 		{"dup_risk", (double)st->dup_risk, false},
 		{"bytes_read", (double)st->bytes_in, false},
@@ -429,11 +430,12 @@ static void ps_counters(const struct ps_run *r, const struct s3g_status *st,
 		res->last.line = r->job->first_line + lines;
 	snprintf(res->detail, sizeof(res->detail),
 		 "%llu packets: retries %llu, errors %llu, unsupported commands %llu, buffer "
-		 "overflows %llu, time-outs %llu (%llu settled by asking, %llu resent unsure)",
+		 "overflows %llu, time-outs %llu, garbled replies %llu (%llu settled by asking, "
+		 "%llu resent unsure)",
 		 (unsigned long long)st->packets, (unsigned long long)st->retries,
 		 (unsigned long long)st->errors, (unsigned long long)st->skipped,
 		 (unsigned long long)st->overflows, (unsigned long long)st->timeouts,
-		 (unsigned long long)st->resolved, (unsigned long long)st->dup_risk);
+		 (unsigned long long)st->garbled, (unsigned long long)st->resolved, (unsigned long long)st->dup_risk);
 	if (!r->job->x3g)
 		snprintf(res->detail + strlen(res->detail), sizeof(res->detail) - strlen(res->detail),
 			 "\n  G-code lines %llu", (unsigned long long)lines);
