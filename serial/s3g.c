@@ -468,6 +468,14 @@ static int s3g_send(struct s3g *s, const uint8_t *payload, size_t len, uint8_t *
 		uint8_t code = resp[0];
 		if (code != S3G_RC_OK)
 			s->st.errors++;
+		if (code == S3G_RC_OK && (payload[0] & 0x80) && *rlen > 1) {
+			/* an action's success carries nothing: data means the
+			 * firmware read a query, the packet damaged where CRC-8
+			 * cannot see (two bit errors 127 bits apart); it never
+			 * queued the action, so it goes again */
+			s->st.misread++;
+			code = S3G_RC_GENERIC_ERROR;
+		}
 		switch (s3g_rc_action(code)) {
 		case S3G_ACT_NEXT:
 		case S3G_ACT_SKIP:
