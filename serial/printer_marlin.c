@@ -326,6 +326,7 @@ static int pm_stream(void *state, const struct printer_job *job, struct printer_
 	bool eof = false;
 	long layer = -1;
 	double z = NAN, t0 = printer_now(), t_cb = 0;
+	long layer_told = -2; /* the layer the hook was last called with */
 	uint64_t first_src, k;
 	FILE *f;
 	int rc, bad = 0;
@@ -384,8 +385,12 @@ static int pm_stream(void *state, const struct printer_job *job, struct printer_
 			pm_end(s, &st, rc, asked, res, err);
 			goto out_end;
 		}
-		if (job->progress && printer_now() - t_cb >= PM_PROGRESS_S) {
+		/* every 200 ms, and at once on a new layer: the journal print
+		 * keeps from the hook must not lag the printer by layers */
+		if (job->progress &&
+		    (printer_now() - t_cb >= PM_PROGRESS_S || res->last.layer != layer_told)) {
 			t_cb = printer_now();
+			layer_told = res->last.layer;
 			job->progress(job->ctx, &res->last);
 		}
 	}

@@ -66,6 +66,7 @@ struct ps_run {
 	bool seen_running;	    /* build statistics said running while held */
 	double t0;
 	struct printer_progress *last;
+	long layer_told;	    /* the layer the hook was last called with */
 	char why[256];		    /* why the link was lost */
 };
 
@@ -205,6 +206,7 @@ static void ps_progress(void *ctx, const struct s3g_status *st)
 
 	ps_progress_of(r, st);
 	ps_ask(r);
+	r->layer_told = r->last->layer;
 	if (r->job->progress)
 		r->job->progress(r->job->ctx, r->last);
 }
@@ -272,6 +274,10 @@ static int ps_next(void *src, struct s3g_cmd *cmd, struct st_error *err)
 		return rc;
 	if (r->stop)
 		return 0; /* the driver sees the stop flag and ends as interrupted */
+	/* a new layer is told at once, not at the next 0.1 s report: the
+	 * journal print keeps from the hook must not lag by layers */
+	if (!r->job->x3g && r->g.layer != r->layer_told)
+		ps_progress(r, s3g_status_get(r->s->d));
 	return ps_next_of_file(r, cmd, err);
 }
 
