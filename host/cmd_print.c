@@ -32,6 +32,7 @@
 #include "preview.h"
 #include "profile.h"
 #include "profile_slicer.h"
+#include "resume.h"
 #include "pvdraw.h"
 #include "send.h"
 #include "slicejob.h"
@@ -224,18 +225,25 @@ static int print_preview(struct print_job *job)
 	return 0;
 }
 
-/* Ask before a resume (or take --yes); true to go on. */
+/* Ask before a resume (or take --yes); true to go on.  It shows what the
+ * preamble will set (resume_locate), not the temperatures last reported. */
 static bool print_confirm(const struct print_job *job)
 {
 	char line[16] = "";
 	const struct print_layer *L = &job->layers.v[job->start_layer];
+	struct resume_state rs;
+	struct st_error err = {0};
 
+	if (resume_locate(job->gcode, L->offset, job->saved, &rs, &err)) {
+		fprintf(stderr, PRINT_CMD ": job %s: %s\n", job->j.id, err.msg);
+		return false;
+	}
 	fprintf(stderr, PRINT_CMD ": resume job %s: %s on %s, from layer %ld of %zu (Z %.2f mm, "
-			"line %llu); the printer reheats (bed %.0f, nozzle %.0f degC), homes X and "
-			"Y only, and goes on with the remaining layers.\n",
+			"line %llu); the printer heats the bed to %.0f and the nozzle to %.0f degC, "
+			"takes the nozzle's Z as %.3f mm (its last move), homes X and Y only, and "
+			"goes on with the remaining layers.\n",
 		job->j.id, job->gcode, job->prof->id, job->start_layer + 1, job->layers.n, L->z,
-		(unsigned long long)L->line, isfinite(job->j.bed_target) ? job->j.bed_target : 0,
-		isfinite(job->j.tool_target) ? job->j.tool_target : 0);
+		(unsigned long long)L->line, rs.bed, rs.tool, rs.z_nozzle);
 	if (job->a->yes)
 		return true;
 	fprintf(stderr, "Is the part still on the bed, untouched?  Continue? [y/N] ");
@@ -334,7 +342,7 @@ static void print_summary_text(const struct print_job *job)
 		printf(" = %s of printer time (simulated, %gx)", sim, job->a->speedup);
 	}
 	printf("\n");
-	if (job->journal_on)
+	if (job->journal_saved)
 		printf("  journal: %s\n", job->j.file);
 	if (job->fail)
 		printf("  stopped: %s\n", job->fail);
@@ -385,7 +393,7 @@ static void print_summary_json(const struct print_job *job)
 	json_object_set_new(o, "seconds", json_real(job->stream_s));
 	if (job->start_layer >= 0)
 		json_object_set_new(o, "resumed_from_layer", json_integer(job->start_layer + 1));
-	if (job->journal_on) {
+	if (job->journal_saved) {
 		json_object_set_new(o, "job", json_string(job->j.id));
 		json_object_set_new(o, "journal", json_string(job->j.file));
 	}
@@ -557,6 +565,8 @@ int cmd_print(int argc, char **argv)
 			status = ST_EXIT_DATAERR;
 			goto out;
 		}
+		if ((status = print_byte_after(job->gcode, job->j.last_line, &job->saved)))
+			goto out;
 		if (!print_confirm(job)) {
 			fprintf(stderr, PRINT_CMD ": not resumed\n");
 			status = ST_EXIT_FAILURE;

@@ -26,6 +26,7 @@
 #include "gcode.h"
 #include "guard.h"
 #include "printer.h"
+#include "portpick.h"
 #include "printer_profile.h"
 #include "profile.h"
 #include "send.h"
@@ -374,7 +375,7 @@ int cmd_send(int argc, char **argv)
 	struct send_run run;
 	struct printer_job job = {0};
 	struct st_error err = {0};
-	char firmware[96] = "";
+	char firmware[96] = "", *port_auto = NULL;
 	int status, rc;
 
 	status = send_parse(argc, argv, &a);
@@ -384,6 +385,18 @@ int cmd_send(int argc, char **argv)
 	if (rc) {
 		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
 		return profile_exit_status(rc);
+	}
+	if (!strcmp(a.port, "auto")) { /* the rules of host/portpick.h, as print's */
+		char why[512] = "";
+
+		if (portpick_auto(prof, &port_auto, why, sizeof(why), &err)) {
+			fprintf(stderr, SEND_CMD ": %s\n", err.msg);
+			status = ST_EXIT_UNAVAILABLE;
+			goto out_profile;
+		}
+		if (!a.json)
+			fprintf(stderr, SEND_CMD ": --port auto: %s\n", why);
+		a.port = port_auto;
 	}
 	if ((rc = printer_profile_options(prof, a.port, a.baud, &o, &ops, &err))) {
 		fprintf(stderr, SEND_CMD ": %s: %s\n", prof->path, err.msg);
@@ -434,5 +447,6 @@ int cmd_send(int argc, char **argv)
 	printer_close(pr);
 out_profile:
 	profile_free(prof);
+	free(port_auto);
 	return status;
 }

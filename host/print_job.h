@@ -54,12 +54,15 @@ struct print_job {
 	struct print_layers layers;
 	struct journal j;
 	bool journal_on;	   /* G-code input: the journal is kept */
+	bool journal_saved;	   /* it was written at least once (the summary names it) */
 	bool simulated;
 	const char *port;	   /* the port opened */
 	char *port_auto;	   /* --port auto's choice (free) */
 	char printer_desc[96];	   /* "Marlin 2.1.2 (simulated printer)" */
 	/* the streaming stage */
 	long start_layer;	   /* resume: the layer it starts at, else -1 */
+	int64_t saved;		   /* resume: byte just past the journal's last confirmed
+				    * line, where the nozzle stands (printer_job.saved) */
 	uint64_t done, total;	   /* lines (Marlin) or commands (Sailfish) */
 	uint64_t last_line;	   /* last file line the printer confirmed */
 	long layer;		   /* its layer, -1 unknown */
@@ -76,6 +79,13 @@ struct print_job {
  * before anything is sent).  Returns 0 or the exit status (message printed).
  */
 int print_scan(const char *path, struct print_layers *L);
+
+/*
+ * print_byte_after - the byte offset just past file line `line` (1-based)
+ * of the G-code at path, 0 for line 0, the file's size if it has fewer
+ * lines.  Returns 0 or the exit status (message printed).
+ */
+int print_byte_after(const char *path, uint64_t line, int64_t *byte);
 
 /*
  * print_stream - open the port the user asked for (or the simulator),

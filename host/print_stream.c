@@ -21,26 +21,38 @@
 
 #define PRINT_SYNC_S 3.0 /* journal sync period besides every layer change */
 
+/* Open path as a G-code reader (*f, *r); 0 or the exit status (message
+ * printed). */
+static int print_open(const char *path, FILE **f, struct gcode_reader **r)
+{
+	struct st_error err = {0};
+
+	*f = fopen(path, "rb");
+	if (!*f) {
+		fprintf(stderr, PRINT_CMD ": cannot open %s: %s\n", path, strerror(errno));
+		return ST_EXIT_DATAERR;
+	}
+	if (gcode_reader_new(*f, path, r, &err)) {
+		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
+		fclose(*f);
+		return ST_EXIT_SOFTWARE;
+	}
+	return 0;
+}
+
 int print_scan(const char *path, struct print_layers *L)
 {
 	struct gcode_reader *r;
 	struct gcode_line g;
 	struct st_error err = {0};
-	FILE *f = fopen(path, "rb");
+	FILE *f;
 	long layer = -1;
 	int64_t before = 0;
 	int rc, status = 0;
 
 	memset(L, 0, sizeof(*L));
-	if (!f) {
-		fprintf(stderr, PRINT_CMD ": cannot open %s: %s\n", path, strerror(errno));
-		return ST_EXIT_DATAERR;
-	}
-	if (gcode_reader_new(f, path, &r, &err)) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		fclose(f);
-		return ST_EXIT_SOFTWARE;
-	}
+	if ((status = print_open(path, &f, &r)))
+		return status;
 	while ((rc = gcode_reader_next(r, 0, &g, &err)) == 1) {
 		long l;
 		double z;
@@ -117,7 +129,11 @@ static void print_sync(struct print_job *job)
 	struct st_error err = {0};
 	static bool warned; /* once per process: a full disk is said once */
 
-	if (job->journal_on && journal_save(&job->j, &err) && !warned) {
+	if (!job->journal_on)
+		return;
+	if (!journal_save(&job->j, &err)) {
+		job->journal_saved = true;
+	} else if (!warned) {
 		warned = true;
 		fprintf(stderr, PRINT_CMD ": warning: %s; the print goes on but cannot be resumed "
 				"from here\n", err.msg);
@@ -199,9 +215,31 @@ static void print_stopped_at(struct print_job *job, const char *state, int statu
 		return;
 	snprintf(job->j.state, sizeof(job->j.state), "%s", state);
 	print_sync(job);
-	if (status != ST_EXIT_DATAERR)
+	if (status != ST_EXIT_DATAERR && job->journal_saved)
 		fprintf(stderr, PRINT_CMD ": the job is saved; continue it with 'stratum print "
 				"--resume %s'\n", job->j.id);
+}
+
+int print_byte_after(const char *path, uint64_t line, int64_t *byte)
+{
+	struct gcode_reader *r;
+	struct gcode_line g;
+	struct st_error err = {0};
+	FILE *f;
+	int rc = 0;
+
+	*byte = 0;
+	if ((rc = print_open(path, &f, &r)))
+		return rc;
+	while (gcode_reader_line(r) < line && (rc = gcode_reader_next(r, 0, &g, &err)) == 1)
+		*byte = (int64_t)gcode_reader_bytes(r);
+	gcode_reader_free(r);
+	fclose(f);
+	if (rc < 0) {
+		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
+		return ST_EXIT_DATAERR;
+	}
+	return 0;
 }
 
 /* Check, connect, stream job->gcode to the printer of o; the exit status. */
@@ -226,6 +264,7 @@ static int print_on(struct print_job *job, const struct printer_ops *ops,
 		pj.offset = job->layers.v[job->start_layer].offset;
 		pj.first_line = job->layers.v[job->start_layer].line - 1;
 		pj.resume = true;
+		pj.saved = job->saved;
 	}
 	if ((rc = printer_check(ops, o, &pj, send_warning, (void *)PRINT_CMD, &info, &err))) {
 		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
@@ -288,7 +327,7 @@ int print_stream(struct print_job *job)
 		char why[512] = "";
 
 		if (portpick_auto(job->prof, &job->port_auto, why, sizeof(why), &err)) {
-			fprintf(stderr, PRINT_CMD ": --port auto: %s\n", err.msg);
+			fprintf(stderr, PRINT_CMD ": %s\n", err.msg); /* it says --port auto */
 			return ST_EXIT_UNAVAILABLE;
 		}
 		if (!job->a->json)

@@ -16,6 +16,7 @@ int printer_profile_options(const struct profile *prof, const char *port, long b
 	o->baud = baud ? baud : prof->baudrate;
 	o->dtr_reset = prof->dtr_reset;
 	o->rx_buffer = prof->rx_buffer_size > 0 ? (unsigned)prof->rx_buffer_size : 0;
+	o->bufsize = prof->bufsize > 0 ? (unsigned)prof->bufsize : 0;
 	if (prof->protocol != PROFILE_PROTOCOL_SAILFISH) {
 		*ops = &printer_marlin_ops;
 		return 0;

@@ -139,6 +139,7 @@ struct profile {
 	struct profile_usb_id usb_ids[PROFILE_MAX_USB_IDS]; /* `usb_ids` */
 	size_t usb_id_count;
 	int rx_buffer_size;  /* `rx_buffer_size`: Marlin RX ring, bytes; default 128 */
+	int bufsize;	     /* `bufsize`: Marlin BUFSIZE (command slots), 0 = unknown */
 	bool dtr_reset;	     /* `dtr_reset`: opening the port resets the board; default 1 */
 	int x3g_buffer_size; /* `x3g_buffer_size`: bytes, 0 = ask the firmware; default 0 */
 

@@ -31,6 +31,7 @@ static const struct key_def key_defs[] = {
 	{"baudrate", KT_BAUD, OFF(baudrate)},
 	{"usb_ids", KT_USB, 0},
 	{"rx_buffer_size", KT_INT, OFF(rx_buffer_size)},
+	{"bufsize", KT_INT, OFF(bufsize)},
 	{"dtr_reset", KT_BOOL, OFF(dtr_reset)},
 	{"x3g_buffer_size", KT_INT, OFF(x3g_buffer_size)},
 	{"gcode_flavor", KT_FLAVOR, OFF(gcode_flavor)},

@@ -599,6 +599,32 @@ static void marlin_job_over(struct marlin *m)
 	m->st.fail_msg[0] = '\0';
 }
 
+/*
+ * During the safe stop: when the oldest line not yet acknowledged is a
+ * heat or user wait (the command the firmware runs, or the next it will
+ * run once the one before ends), break it with M108.  Marlin's M108 ends
+ * only the wait that runs when it arrives, and each M109/M190 starts its
+ * own, so every queued wait needs its own M108, sent once it is the head
+ * (M190 then M109, every slicer's start G-code).  Sent again every
+ * MARLIN_BREAK_REPEAT_S while the same wait stays at the head, in case it
+ * arrived before the wait began (docs/streaming.md "Stopping").
+ */
+static int marlin_break_wait(struct marlin *m, struct st_error *err)
+{
+	long head = m->n_acked + 1;
+	double now = marlin_now_s();
+	if (!m->caps.emergency_parser || head >= m->n_next || head > m->n_max_sent)
+		return 0;
+	const struct marlin_entry *e = marlin_hist_entry(m, head);
+	if (e->n != head || !e->heat_wait)
+		return 0;
+	if (m->broken_n == head && now - m->t_broken < MARLIN_BREAK_REPEAT_S)
+		return 0;
+	m->broken_n = head;
+	m->t_broken = now;
+	return marlin_emergency(m, "M108", err);
+}
+
 int marlin_safe_stop(struct marlin *m, int timeout_ms, struct st_error *err)
 {
 	double end = marlin_now_s() + timeout_ms / 1000.0;
@@ -607,13 +633,10 @@ int marlin_safe_stop(struct marlin *m, int timeout_ms, struct st_error *err)
 	m->stopping = true;
 	m->pend_count = 0;
 	m->st.paused = false;
-	if (m->caps.emergency_parser) {
-		bool heat = false;
-		for (long n = m->n_acked + 1; n < m->n_next; n++)
-			heat = heat || marlin_hist_entry(m, n)->heat_wait;
-		if ((heat && marlin_emergency(m, "M108", err)) || marlin_emergency(m, "M410", err))
-			return ST_ERR_IO;
-	}
+	m->broken_n = 0;
+	if (marlin_break_wait(m, err) ||
+	    (m->caps.emergency_parser && marlin_emergency(m, "M410", err)))
+		return ST_ERR_IO;
 	marlin_push_prio(m, "M104 S0");
 	marlin_push_prio(m, "M140 S0");
 	marlin_push_prio(m, "M107");
@@ -623,9 +646,9 @@ int marlin_safe_stop(struct marlin *m, int timeout_ms, struct st_error *err)
 		if (left <= 0)
 			return st_error_set(err, ST_ERR_IO,
 					    "the printer did not confirm heaters and motors off "
-					    "within %d s; switch it off by hand", timeout_ms / 1000);
+					    "within %d s", timeout_ms / 1000);
 		int rc = marlin_step(m, left < 0.05 ? (int)(left * 1000) : 50, err);
-		if (rc)
+		if (rc || (rc = marlin_break_wait(m, err)))
 			return rc;
 	}
 	marlin_job_over(m);

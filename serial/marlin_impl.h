@@ -31,6 +31,7 @@
 #define MARLIN_LINE_CAP 100	/* "N<n> <cmd>*<cs>\n" + NUL; Marlin keeps 95 */
 #define MARLIN_RX_MAX 1024	/* longest reply line kept (bytes) */
 #define MARLIN_WRITE_MS 5000	/* bound on one write to the port */
+#define MARLIN_BREAK_REPEAT_S 2.0 /* safe stop: M108 again while the same wait runs */
 
 /* One numbered line as written. */
 struct marlin_entry {
@@ -90,6 +91,8 @@ struct marlin {
 	unsigned bufsize_learnt; /* largest ADVANCED_OK B<n>: BUFSIZE - 1 */
 	long queued;		/* lines after n_acked surely in the firmware's queue */
 	double rtt;		/* smoothed write-to-ok time of clean lines (s) */
+	long broken_n;		/* safe stop: the heat wait M108 was sent for */
+	double t_broken;	/* when (s) */
 
 	double t_progress;	/* last reply showing the firmware works on us */
 	double t_rx;		/* last byte received (or first line in flight) */

@@ -36,6 +36,7 @@ struct printer_options {
 	long baud;		    /* bits/s; default 115200 */
 	bool dtr_reset;		    /* opening a real serial port resets the board */
 	unsigned rx_buffer;	    /* Marlin: firmware RX ring (bytes), 0 = unknown */
+	unsigned bufsize;	    /* Marlin: firmware BUFSIZE (command slots), 0 = unknown */
 	double sim_speedup;	    /* port "sim": time divisor; default 1000 */
 	const char *sim_log;	    /* port "sim": execution log file, NULL none */
 	struct x3g_machine machine; /* Sailfish: the machine G-code is translated for */
@@ -76,8 +77,10 @@ struct printer_job {
 	uint64_t first_line;  /* file lines before offset, so progress counts file lines */
 	/* Continue an interrupted print at offset: the adapter first sends its
 	 * resume preamble (resume.h) that restores heat and position as the
-	 * file left them there.  saved: the position progress reports until
-	 * a command of the file is confirmed (the saved one; 0 = offset). */
+	 * file left them there.  saved: the byte just past the last command
+	 * the printer executed, so where the nozzle stands (its Z is set
+	 * there, resume_locate), and the position progress reports until a
+	 * command of the file is confirmed (0 = offset). */
 	bool resume;
 	int64_t saved;
 	uint64_t total;	      /* commands of the run (printer_check's), for progress */

@@ -76,6 +76,8 @@ static int pm_start_sim(struct pm_state *s, const struct printer_options *o, con
 	so.baud = printer_sim_baud(o);
 	if (o->rx_buffer > 0)
 		so.rx_buffer = o->rx_buffer;
+	if (o->bufsize > 0)
+		so.bufsize = o->bufsize;
 	so.advanced_ok = true;
 	so.log_path = o->sim_log;
 	if ((rc = sim_marlin_new(&so, &s->sim, err)) || (rc = sim_marlin_start_thread(s->sim, err)))
@@ -118,6 +120,7 @@ static int pm_open(const struct printer_options *o, void **state, struct st_erro
 		goto out_free;
 	marlin_options_init(&mo);
 	mo.rx_buffer = o->rx_buffer;
+	mo.bufsize = o->bufsize;
 	mo.trace = pm_trace;
 	mo.trace_ctx = s;
 	/* the simulator boots like a board; ptys and TCP bridges are not reset */
@@ -182,7 +185,7 @@ static int pm_preamble(const struct printer_job *job, char pre[][RESUME_LINE_MAX
 	*n = 0;
 	if (!job->resume)
 		return 0;
-	if ((rc = resume_scan(job->path, job->offset, &rs, err)))
+	if ((rc = resume_locate(job->path, job->offset, job->saved, &rs, err)))
 		return rc;
 	*n = resume_preamble(&rs, pre, RESUME_LINES);
 	return 0;
@@ -323,6 +326,7 @@ static int pm_stream(void *state, const struct printer_job *job, struct printer_
 	bool eof = false;
 	long layer = -1;
 	double z = NAN, t0 = printer_now(), t_cb = 0;
+	long layer_told = -2; /* the layer the hook was last called with */
 	uint64_t first_src, k;
 	FILE *f;
 	int rc, bad = 0;
@@ -381,8 +385,12 @@ static int pm_stream(void *state, const struct printer_job *job, struct printer_
 			pm_end(s, &st, rc, asked, res, err);
 			goto out_end;
 		}
-		if (job->progress && printer_now() - t_cb >= PM_PROGRESS_S) {
+		/* every 200 ms, and at once on a new layer: the journal print
+		 * keeps from the hook must not lag the printer by layers */
+		if (job->progress &&
+		    (printer_now() - t_cb >= PM_PROGRESS_S || res->last.layer != layer_told)) {
 			t_cb = printer_now();
+			layer_told = res->last.layer;
 			job->progress(job->ctx, &res->last);
 		}
 	}

@@ -66,6 +66,7 @@ struct ps_run {
 	bool seen_running;	    /* build statistics said running while held */
 	double t0;
 	struct printer_progress *last;
+	long layer_told;	    /* the layer the hook was last called with */
 	char why[256];		    /* why the link was lost */
 };
 
@@ -205,6 +206,7 @@ static void ps_progress(void *ctx, const struct s3g_status *st)
 
 	ps_progress_of(r, st);
 	ps_ask(r);
+	r->layer_told = r->last->layer;
 	if (r->job->progress)
 		r->job->progress(r->job->ctx, r->last);
 }
@@ -272,6 +274,10 @@ static int ps_next(void *src, struct s3g_cmd *cmd, struct st_error *err)
 		return rc;
 	if (r->stop)
 		return 0; /* the driver sees the stop flag and ends as interrupted */
+	/* a new layer is told at once, not at the next 0.1 s report: the
+	 * journal print keeps from the hook must not lag by layers */
+	if (!r->job->x3g && r->g.layer != r->layer_told)
+		ps_progress(r, s3g_status_get(r->s->d));
 	return ps_next_of_file(r, cmd, err);
 }
 
@@ -326,7 +332,7 @@ static int ps_run_init(struct ps_run *r, struct ps_state *s, const struct printe
 			return st_error_set(err, ST_ERR_UNSUPPORTED, "%s: an interrupted X3G print "
 					    "cannot be resumed: it has no layers to restart from",
 					    s->name);
-		if ((rc = resume_x3g_text(job->path, r->offset, r->pre, err)))
+		if ((rc = resume_x3g_text(job->path, r->offset, job->saved, r->pre, err)))
 			return rc;
 		r->has_pre = true;
 	}
@@ -407,6 +413,8 @@ static void ps_counters(const struct ps_run *r, const struct s3g_status *st,
 		{"retries", (double)st->retries, false},
 		{"overflows", (double)st->overflows, false},
 		{"timeouts", (double)st->timeouts, false},
+		{"garbled", (double)st->garbled, false},
+		{"misread", (double)st->misread, false},
 		{"resolved", (double)st->resolved, false},
 		{"dup_risk", (double)st->dup_risk, false},
 		{"bytes_read", (double)st->bytes_in, false},
@@ -429,11 +437,12 @@ static void ps_counters(const struct ps_run *r, const struct s3g_status *st,
 		res->last.line = r->job->first_line + lines;
 	snprintf(res->detail, sizeof(res->detail),
 		 "%llu packets: retries %llu, errors %llu, unsupported commands %llu, buffer "
-		 "overflows %llu, time-outs %llu (%llu settled by asking, %llu resent unsure)",
+		 "overflows %llu, time-outs %llu, garbled replies %llu (%llu settled by asking, "
+		 "%llu resent unsure)",
 		 (unsigned long long)st->packets, (unsigned long long)st->retries,
 		 (unsigned long long)st->errors, (unsigned long long)st->skipped,
 		 (unsigned long long)st->overflows, (unsigned long long)st->timeouts,
-		 (unsigned long long)st->resolved, (unsigned long long)st->dup_risk);
+		 (unsigned long long)st->garbled, (unsigned long long)st->resolved, (unsigned long long)st->dup_risk);
 	if (!r->job->x3g)
 		snprintf(res->detail + strlen(res->detail), sizeof(res->detail) - strlen(res->detail),
 			 "\n  G-code lines %llu", (unsigned long long)lines);

@@ -107,7 +107,22 @@ int resume_scan(const char *path, int64_t end, struct resume_state *rs,
 	fclose(f);
 	if (rc < 0)
 		return rc;
+	rs->z_nozzle = rs->z;
 	return check_writable(path, end, rs, err);
+}
+
+int resume_locate(const char *path, int64_t offset, int64_t saved, struct resume_state *rs,
+		  struct st_error *err)
+{
+	struct resume_state at;
+	int rc = resume_scan(path, offset, rs, err);
+
+	if (rc || saved <= offset)
+		return rc;
+	if ((rc = resume_scan(path, saved, &at, err)))
+		return rc;
+	rs->z_nozzle = at.z;
+	return 0;
 }
 
 #define ADD(...) (n < cap ? (void)snprintf(out[n++], RESUME_LINE_MAX + 1, __VA_ARGS__) : (void)0)
@@ -117,7 +132,8 @@ int resume_scan(const char *path, int64_t end, struct resume_state *rs,
 static size_t resume_finish(const struct resume_state *rs, bool set_e,
 			    char out[][RESUME_LINE_MAX + 1], size_t n, size_t cap)
 {
-	ADD("G1 Z%.3f F600", rs->z);
+	/* the layer's own Z move follows; never lower into what it printed */
+	ADD("G1 Z%.3f F600", fmax(rs->z, rs->z_nozzle));
 	ADD("%s", rs->rel_e ? "M83" : "M82");
 	if (set_e)
 		ADD("G92 E%.5f", rs->rel_e ? 0.0 : rs->e);
@@ -141,7 +157,7 @@ size_t resume_preamble(const struct resume_state *rs, char out[][RESUME_LINE_MAX
 	}
 	if (rs->tool > 0)
 		ADD("M104 S%.0f", rs->tool);
-	ADD("G92 Z%.3f", rs->z);
+	ADD("G92 Z%.3f", rs->z_nozzle);
 	ADD("G91");
 	ADD("G1 Z2 F600");
 	ADD("G90");
@@ -165,8 +181,8 @@ size_t resume_preamble_x3g(const struct resume_state *rs, char out[][RESUME_LINE
 	if (rs->tool > 0)
 		ADD("M104 S%.0f T0", rs->tool);
 	ADD("G90");
-	ADD("G92 X0 Y0 Z%.3f A0 B0", rs->z);
-	ADD("G1 Z%.3f F600", rs->z + 2);
+	ADD("G92 X0 Y0 Z%.3f A0 B0", rs->z_nozzle);
+	ADD("G1 Z%.3f F600", rs->z_nozzle + 2);
 	ADD("G28 X Y");
 	ADD("M132 X Y");
 	if (rs->tool > 0)
@@ -178,13 +194,13 @@ size_t resume_preamble_x3g(const struct resume_state *rs, char out[][RESUME_LINE
 }
 #undef ADD
 
-int resume_x3g_text(const char *path, int64_t offset, char buf[RESUME_TEXT_MAX],
-		    struct st_error *err)
+int resume_x3g_text(const char *path, int64_t offset, int64_t saved,
+		    char buf[RESUME_TEXT_MAX], struct st_error *err)
 {
 	char pre[RESUME_LINES][RESUME_LINE_MAX + 1];
 	struct resume_state rs;
 	size_t n, len = 0;
-	int rc = resume_scan(path, offset, &rs, err);
+	int rc = resume_locate(path, offset, saved, &rs, err);
 
 	buf[0] = '\0';
 	if (rc)

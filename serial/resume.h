@@ -30,6 +30,9 @@ struct resume_state {
 	double x, y, z, e, f;	   /* positions (mm) in the file's own coordinates */
 	bool rel_xyz, rel_e;	   /* G91, M83 */
 	bool moved;		   /* a move was seen: x, y, z mean something */
+	double z_nozzle;	   /* where the nozzle stands (mm): the Z of the last
+				    * command the printer executed, which may be in the
+				    * layer after z's (resume_locate); resume_scan: z */
 };
 
 /*
@@ -42,10 +45,21 @@ struct resume_state {
 int resume_scan(const char *path, int64_t end, struct resume_state *rs, struct st_error *err);
 
 /*
+ * resume_locate - the state a resume needs: resume_scan at offset (where
+ * the stream starts again, a layer start) and rs->z_nozzle the Z at saved,
+ * the byte just past the last command the printer executed (0 or <= offset:
+ * the same as offset).  Resuming from a layer start while the nozzle is
+ * already in that layer, a Z set to the layer below would print every
+ * remaining layer one layer high.  Returns resume_scan's errors.
+ */
+int resume_locate(const char *path, int64_t offset, int64_t saved, struct resume_state *rs,
+		  struct st_error *err);
+
+/*
  * resume_preamble - the commands that bring a printer back to rs: bed heat
  * first so the part stays stuck, Z taken as it was (never homed: that
- * would drive into the part), lift, home X and Y only, nozzle heat, back
- * over the part, down, modes, extruder position, fan.  Writes at most cap
+ * would drive into the part; z_nozzle), lift, home X and Y only, nozzle heat, back
+ * over the part, down (no lower than z_nozzle, above the part), modes, extruder position, fan.  Writes at most cap
  * lines into out; returns how many.
  */
 size_t resume_preamble(const struct resume_state *rs, char out[][RESUME_LINE_MAX + 1], size_t cap);
@@ -70,13 +84,14 @@ size_t resume_preamble_x3g(const struct resume_state *rs, char out[][RESUME_LINE
 #define RESUME_TEXT_MAX (RESUME_LINES * (RESUME_LINE_MAX + 2))
 
 /*
- * resume_x3g_text - resume_scan of path up to byte offset, then
+ * resume_x3g_text - resume_locate of path at byte offset (saved: the byte
+ * past the last command executed, 0 = offset), then
  * resume_preamble_x3g as one string, '\n' after each line, the form the
  * Sailfish sources take (sf_source.h pre).  buf holds RESUME_TEXT_MAX
  * bytes.  Returns 0 or resume_scan's error.
  */
-int resume_x3g_text(const char *path, int64_t offset, char buf[RESUME_TEXT_MAX],
-		    struct st_error *err);
+int resume_x3g_text(const char *path, int64_t offset, int64_t saved,
+		    char buf[RESUME_TEXT_MAX], struct st_error *err);
 
 /*
  * resume_layer_start - where a Sailfish resume starts: the layer (by the

@@ -11,6 +11,10 @@
 
 #define S3G_RX_CAP 1024	     /* reply bytes kept while framing */
 #define S3G_MAX_TOOLS_OFF 2  /* tools switched off by s3g_cancel */
+#define S3G_GARBLED 2	     /* s3g_exchange: bytes came, no valid reply */
+#define S3G_PART_MS 100	     /* a reply begun but not complete: the firmware sends
+			      * one whole, so a stall this long means its length
+			      * byte was damaged */
 
 struct s3g {
 	struct xport *x;
@@ -347,7 +351,11 @@ static int s3g_link_error(struct s3g *s, const char *what, struct st_error *err)
 
 /*
  * One packet out, one reply in: returns 1 with the reply payload in resp,
- * 0 if no valid reply came within the time-out, or < 0 on a link error.
+ * 0 if nothing came within the time-out, S3G_GARBLED if bytes came but no
+ * valid reply and the line then stayed quiet for quiet_ms (all of them
+ * were noise or a frame with a bad CRC) or S3G_PART_MS (a frame begun, not
+ * ended): a damaged reply, no use waiting out the time-out for it.  Or < 0
+ * on a link error.
  */
 static int s3g_exchange(struct s3g *s, const uint8_t *pkt, size_t plen, uint8_t *resp,
 			size_t cap, size_t *rlen, const char *what, struct st_error *err)
@@ -360,6 +368,7 @@ static int s3g_exchange(struct s3g *s, const uint8_t *pkt, size_t plen, uint8_t 
 	s->st.packets++;
 	s->st.bytes_out += plen;
 	double end = s3g_now() + s->o.timeout_ms / 1000.0;
+	bool heard = false; /* bytes came since the packet went out */
 	for (;;) {
 		size_t used, n;
 		int f;
@@ -379,13 +388,19 @@ static int s3g_exchange(struct s3g *s, const uint8_t *pkt, size_t plen, uint8_t 
 		}
 		double left = end - s3g_now();
 		if (left <= 0)
-			return 0;
+			return heard ? S3G_GARBLED : 0;
 		if (s->rx_len == sizeof(s->rx))
 			s->rx_len = 0;
-		r = xport_read(s->x, s->rx + s->rx_len, sizeof(s->rx) - s->rx_len,
-			       (int)(left * 1000) + 1, err);
+		int wait_ms = (int)(left * 1000) + 1;
+		int settle_ms = s->rx_len ? S3G_PART_MS : s->o.quiet_ms;
+		if (heard && wait_ms > settle_ms)
+			wait_ms = settle_ms;
+		r = xport_read(s->x, s->rx + s->rx_len, sizeof(s->rx) - s->rx_len, wait_ms, err);
 		if (r < 0)
 			return s3g_link_error(s, what, err);
+		if (r == 0 && heard)
+			return S3G_GARBLED;
+		heard = heard || r > 0;
 		s->rx_len += (size_t)r;
 		s->st.bytes_in += (uint64_t)r;
 	}
@@ -425,8 +440,11 @@ static int s3g_send(struct s3g *s, const uint8_t *payload, size_t len, uint8_t *
 		int r = s3g_exchange(s, pkt, (size_t)plen, resp, cap, rlen, what, err);
 		if (r < 0)
 			return r;
-		if (r == 0) {
-			s->st.timeouts++;
+		if (r == 0 || r == S3G_GARBLED) {
+			if (r == 0)
+				s->st.timeouts++;
+			else
+				s->st.garbled++;
 			if (++retries > s->o.max_retries)
 				return s3g_why(s, S3G_FAIL_LINK,
 					       st_error_set(err, ST_ERR_IO,
@@ -450,6 +468,14 @@ static int s3g_send(struct s3g *s, const uint8_t *payload, size_t len, uint8_t *
 		uint8_t code = resp[0];
 		if (code != S3G_RC_OK)
 			s->st.errors++;
+		if (code == S3G_RC_OK && (payload[0] & 0x80) && *rlen > 1) {
+			/* an action's success carries nothing: data means the
+			 * firmware read a query, the packet damaged where CRC-8
+			 * cannot see (two bit errors 127 bits apart); it never
+			 * queued the action, so it goes again */
+			s->st.misread++;
+			code = S3G_RC_GENERIC_ERROR;
+		}
 		switch (s3g_rc_action(code)) {
 		case S3G_ACT_NEXT:
 		case S3G_ACT_SKIP:
@@ -467,7 +493,7 @@ static int s3g_send(struct s3g *s, const uint8_t *payload, size_t len, uint8_t *
 			int e = s3g_exchange(s, qp, (size_t)ql, qr, sizeof(qr), &qn, what, err);
 			if (e < 0)
 				return e;
-			if (e > 0 && qr[0] == S3G_RC_OK && qn >= 5) {
+			if (e == 1 && qr[0] == S3G_RC_OK && qn >= 5) {
 				uint32_t f = s3g_rd32(qr + 1);
 				s->st.buffer_free = f;
 				if (f != last_free)
@@ -951,7 +977,7 @@ int s3g_stream_pull(struct s3g *s, s3g_source_fn next, void *src, size_t total,
 				   err);
 		if (rc || s->st.interrupted)
 			goto out;
-		uint64_t timeouts = s->st.timeouts, overflows = s->st.overflows;
+		uint64_t lost = s->st.timeouts + s->st.garbled, overflows = s->st.overflows;
 		rc = s3g_send(s, k.payload, k.len, resp, sizeof(resp), &rlen, &res, err);
 		if (rc < 0) {
 			char inner[256];
@@ -960,7 +986,7 @@ int s3g_stream_pull(struct s3g *s, s3g_source_fn next, void *src, size_t total,
 			st_error_set(err, rc, "%s (%s)", inner, last);
 			goto out;
 		}
-		if (s->st.timeouts != timeouts)
+		if (s->st.timeouts + s->st.garbled != lost)
 			c->stats_due = true;
 		if (s->st.overflows != overflows || rc == 1)
 			free_est = 0; /* our count was off: ask again before the next */

@@ -240,7 +240,11 @@ struct s3g_status {
 	uint64_t retries;	 /* resends after retryable errors and time-outs */
 	uint64_t overflows;	 /* buffer-overflow replies */
 	uint64_t errors;	 /* error replies of any kind */
-	uint64_t timeouts;	 /* replies missing or garbled */
+	uint64_t timeouts;	 /* replies missing: the full time-out went by */
+	uint64_t garbled;	 /* replies that came damaged: settled as soon as
+				  * the line went quiet (quiet_ms), no time-out */
+	uint64_t misread;	 /* actions answered with a query's data: damaged
+				  * past the CRC, sent again */
 	uint64_t resolved;	 /* time-outs settled by asking the firmware */
 	uint64_t dup_risk;	 /* action packets resent without being able to tell */
 	uint64_t bytes_out, bytes_in;

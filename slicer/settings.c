@@ -77,6 +77,9 @@ static const struct setting table[] = {
      "USB VID:PID pairs that identify the board (lsusb's ID vvvv:pppp)"},
     {"rx_buffer_size", INT, S_, 16, 65536, 0, "bytes", "128", NULL, NULL, 0, NULL,
      "the firmware's RX_BUFFER_SIZE (Marlin)"},
+    {"bufsize", INT, S_, 0, 256, 0, "commands", "0", NULL, NULL, 0, NULL,
+     "the firmware's BUFSIZE, command queue slots (Marlin); 0 = unknown: learnt from "
+     "ADVANCED_OK, else only bytes are counted"},
     {"dtr_reset", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, NULL,
      "opening the port resets the board"},
     {"x3g_buffer_size", INT, S_, 0, 65536, SF, "bytes", "0", NULL, NULL, 0, NULL,

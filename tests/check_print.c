@@ -345,6 +345,52 @@ START_TEST(test_ctrl_c_stops_safely)
 }
 END_TEST
 
+/*
+ * The simulated Marlin's log after a Ctrl-C during the heat-up (issue 17
+ * defect 3): both waits (M190, then the M109 queued behind it) were broken,
+ * each by its own M108 (Marlin's M108 ends only the wait that runs), and
+ * the stop sequence ran after them: heaters off, fan off, motors off.
+ */
+static void check_heatup_stopped(const char *log)
+{
+	struct strs lg = {0};
+	size_t k, n108 = 0;
+
+	marlin_log(log, &lg);
+	k = strs_find(&lg, 0, "M190 S60");
+	ck_assert_msg(k < lg.len, "no M190 in the log");
+	ck_assert_msg(strs_find(&lg, k, "M109 S210") < lg.len, "the M109 never ran");
+	for (size_t i = k; i < lg.len; i++)
+		n108 += !strcmp(lg.v[i], "M108");
+	ck_assert_uint_ge(n108, 2);
+	k = strs_find(&lg, k, "M104 S0");
+	ck_assert_msg(k < lg.len, "the heaters were not switched off");
+	ck_assert_uint_lt(strs_find(&lg, k, "M140 S0"), lg.len);
+	ck_assert_uint_lt(strs_find(&lg, k, "M107"), lg.len);
+	ck_assert_str_eq(lg.v[lg.len - 1], "M84");
+	strs_free(&lg);
+}
+
+/* Ctrl-C while the bed heats, the nozzle's M109 queued behind (the bracket's
+ * start G-code): every wait is broken, the stop confirmed, exit 130.  Heating
+ * runs at twice real speed, so an unbroken M109 outlasts the 10 s stop. */
+START_TEST(test_ctrl_c_during_heatup)
+{
+	char dir[512], log[512];
+	int rc;
+
+	state_dir("st-heat", dir, sizeof(dir));
+	snprintf(log, sizeof(log), "%s", tu_path("heat.log"));
+	rc = tu_run(out, sizeof(out), "print " MODEL " --printer " MARLIN_PRINTER " --speedup 2 "
+		    "--sim-log %s >%s 2>&1 & P=$!; for i in $(seq 600); do grep -qs M190 %s "
+		    "&& break; sleep 0.1; done; sleep 1; kill -INT $P; wait $P; r=$?; cat %s; "
+		    "exit $r", log, tu_path("heat.out"), log, tu_path("heat.out"));
+	ck_assert_msg(rc == 130, "exit %d: %s", rc, out);
+	ck_assert_msg(strstr(out, "stopped safely"), "%s", out);
+	check_heatup_stopped(log);
+}
+END_TEST
+
 /* Print against an external `stratum sim FAULT`; returns print's status. */
 static int print_external(const char *fault, const char *dir)
 {
@@ -424,6 +470,59 @@ START_TEST(test_resume_absurd_coordinates)
 }
 END_TEST
 
+/* The Z of the last G0/G1 with Z (absolute, as the slicer writes) at or
+ * before file line `line` of path: where the nozzle stands once the
+ * printer ran that line. */
+static double nozzle_z_at(const char *path, uint64_t line)
+{
+	FILE *f = fopen(path, "rb");
+	struct gcode_reader *r;
+	struct gcode_line g;
+	struct st_error err = {0};
+	double z = NAN, v;
+
+	ck_assert_ptr_nonnull(f);
+	ck_assert_int_eq(gcode_reader_new(f, path, &r, &err), 0);
+	while (gcode_reader_line(r) < line && gcode_reader_next(r, 0, &g, &err) == 1)
+		if (g.letter == 'G' && (g.number == 0 || g.number == 1) &&
+		    gcode_word_value(&g, 'Z', &v))
+			z = v;
+	gcode_reader_free(r);
+	fclose(f);
+	return z;
+}
+
+/* A resume from a layer start while the nozzle is already in that layer:
+ * both preambles set Z where the nozzle is (its last move), not at the
+ * layer below, and never go lower than it (issue 17 defect 4). */
+START_TEST(test_resume_z_is_the_nozzles)
+{
+	static const char gc[] = "G90\nG1 Z0.3 F600\nG1 X5 E1\n;LAYER_CHANGE\n;Z:0.6\n"
+				 "G1 Z0.6\nG1 X10 E2\n";
+	const char *path = tu_path("resume-z.gcode");
+	char pre[RESUME_LINES][RESUME_LINE_MAX + 1], text[RESUME_TEXT_MAX];
+	struct resume_state rs;
+	struct st_error err = {0};
+	int64_t layer = (int64_t)(strstr(gc, ";LAYER") - gc);
+
+	tu_write_str(path, gc);
+	ck_assert_int_eq(resume_locate(path, layer, (int64_t)strlen(gc), &rs, &err), 0);
+	ck_assert(fabs(rs.z - 0.3) < 1e-9 && fabs(rs.z_nozzle - 0.6) < 1e-9);
+	size_t n = resume_preamble(&rs, pre, RESUME_LINES), g92 = n, down = n;
+	for (size_t i = 0; i < n; i++) {
+		g92 = !strcmp(pre[i], "G92 Z0.600") ? i : g92;
+		down = !strcmp(pre[i], "G1 Z0.600 F600") ? i : down;
+	}
+	ck_assert_msg(g92 < n && down < n && g92 < down, "G92 Z or the way down is wrong");
+	ck_assert_int_eq(resume_x3g_text(path, layer, (int64_t)strlen(gc), text, &err), 0);
+	ck_assert_msg(strstr(text, "G92 X0 Y0 Z0.600 A0 B0\n") && strstr(text, "G1 Z0.600 F600\n"),
+		      "%s", text);
+	/* nothing executed past the layer start: the Z there */
+	ck_assert_int_eq(resume_locate(path, layer, 0, &rs, &err), 0);
+	ck_assert(fabs(rs.z_nozzle - 0.3) < 1e-9);
+}
+END_TEST
+
 START_TEST(test_resume_after_kill)
 {
 	char dir[512], log[512], log2[512], jpath[1024];
@@ -471,6 +570,14 @@ START_TEST(test_resume_after_kill)
 			      "Z was homed: %s", lg.v[i]);
 	k = strs_find(&lg, pre, "M109 S205");
 	ck_assert_uint_lt(k, lg.len);
+	/* Z is set where the nozzle stands, the last move it ran (issue 17
+	 * defect 4: it was the layer below's, and every later layer printed
+	 * one layer high) */
+	double zn = nozzle_z_at(jstr(j, "gcode"), (uint64_t)jint(j, "last_line")), zset = NAN;
+	for (size_t i = 0; i < pre; i++)
+		if (!strncmp(lg.v[i], "G92 Z", 5))
+			zset = atof(lg.v[i] + 5);
+	ck_assert_msg(fabs(zset - zn) < 1e-6, "G92 Z%.3f while the nozzle is at %.3f", zset, zn);
 	/* the preamble ends with the modes, E, feed rate and fan; the file follows */
 	while (k < lg.len && lg.len - k > cmds.len)
 		k++;
@@ -592,8 +699,10 @@ Suite *print_suite(void)
 	tcase_add_test(tc, test_marlin_prints_every_line_once);
 	tcase_add_test(tc, test_sailfish_prints_every_command_once);
 	tcase_add_test(tc, test_ctrl_c_stops_safely);
+	tcase_add_test(tc, test_ctrl_c_during_heatup);
 	tcase_add_test(tc, test_unplug_and_reset_exit_69);
 	tcase_add_test(tc, test_resume_absurd_coordinates);
+	tcase_add_test(tc, test_resume_z_is_the_nozzles);
 	tcase_add_test(tc, test_resume_after_kill);
 	tcase_add_test(tc, test_sailfish_resume_after_kill);
 	suite_add_tcase(s, tc);

@@ -157,6 +157,7 @@ struct plan {
 	bool saw_paused, released;
 	int held_calls;		     /* progress calls while paused */
 	long max_layer;
+	long layer_jump;	     /* largest step between two reported layers */
 };
 
 static enum printer_control plan_control(void *ctx)
@@ -177,6 +178,8 @@ static void plan_progress(void *ctx, const struct printer_progress *pr)
 	struct plan *p = ctx;
 
 	p->done = pr->done;
+	if (p->max_layer >= 0 && pr->layer - p->max_layer > p->layer_jump)
+		p->layer_jump = pr->layer - p->max_layer;
 	if (pr->layer > p->max_layer)
 		p->max_layer = pr->layer;
 	if (pr->paused) {
@@ -243,6 +246,35 @@ START_TEST(stream_whole_job)
 	ck_assert_int_eq(t.pl.max_layer, PT_LAYERS - 1);
 	ck_assert(t.res.last.tool && t.res.last.bed);
 	ck_assert_uint_eq(executed(&t.r, &t.homed), t.info.commands);
+	rig_close(&t.r);
+}
+END_TEST
+
+/* Thin layers printed fast (15 short moves each): every layer change is
+ * reported, not one call per 200 ms, so the journal `stratum print` keeps
+ * from these calls never lags the printer by layers (issue 17 defect 4). */
+START_TEST(every_layer_reported)
+{
+	struct trial t;
+	FILE *f;
+
+	memset(&t, 0, sizeof(t));
+	rig_open(&t.r, _i, 0, 0);
+	f = fopen(t.r.gcode, "w");
+	ck_assert(f);
+	fprintf(f, "M73 P0\nG28\nG92 E0\n");
+	for (int l = 0; l < 60; l++) {
+		fprintf(f, ";LAYER:%d\nG1 Z%.2f F6000\n", l, 0.2 * (l + 1));
+		for (int k = 0; k < 15; k++)
+			fprintf(f, "G1 X%d Y%d F6000\n", 10 + (k + l) % 2, 10 + k);
+	}
+	fprintf(f, "M73 P100\n");
+	fclose(f);
+	run(&t.r, &t.pl, &t.job, &t.info, &t.res, &t.err);
+	ck_assert_msg(t.res.end == PRINTER_END_DONE, "end %d: %s", t.res.end, t.err.msg);
+	ck_assert_int_eq(t.pl.max_layer, 59);
+	ck_assert_msg(t.pl.layer_jump <= 1, "a progress call skipped %ld layers",
+		      t.pl.layer_jump - 1);
 	rig_close(&t.r);
 }
 END_TEST
@@ -374,6 +406,7 @@ Suite *printer_suite(void)
 
 	tcase_set_timeout(tc, 60);
 	tcase_add_loop_test(tc, stream_whole_job, 0, 2);
+	tcase_add_loop_test(tc, every_layer_reported, 0, 2);
 	tcase_add_loop_test(tc, hold_then_go_on, 0, 2);
 	tcase_add_loop_test(tc, cancel_safe_stop_then_next_job, 0, 2);
 	tcase_add_loop_test(tc, stop_is_not_cancel, 0, 2);

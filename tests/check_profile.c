@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include "ini.h"
+#include "printer_profile.h"
 #include "profile.h"
 #include "settings.h"
 #include "suites.h"
@@ -360,6 +361,27 @@ START_TEST(test_out_of_range)
 	load_bad("rx_buffer_size = 8\n", ST_ERR_RANGE, "rx_buffer_size", NULL);
 	load_bad("machine_max_feedrate_x = 200,100,50\n", ST_ERR_RANGE, "1 or 2", NULL);
 	load_bad("extruder_count = 9\n", ST_ERR_RANGE, "extruder_count", NULL);
+}
+END_TEST
+
+/* `bufsize` declares the firmware's BUFSIZE, so the Marlin window counts
+ * command slots without ADVANCED_OK (issue 17 defect 8); 0 = unknown. */
+START_TEST(test_bufsize_reaches_the_driver)
+{
+	struct profile *p = load_ok("bufsize = 4\n");
+	struct printer_options o;
+	const struct printer_ops *ops;
+	struct st_error err = {0};
+
+	ck_assert_int_eq(p->bufsize, 4);
+	ck_assert_int_eq(printer_profile_options(p, "sim", 0, &o, &ops, &err), 0);
+	ck_assert_uint_eq(o.bufsize, 4);
+	profile_free(p);
+	p = load_ok("nozzle_diameter = 0.4\n");
+	ck_assert_int_eq(printer_profile_options(p, "sim", 0, &o, &ops, &err), 0);
+	ck_assert_uint_eq(o.bufsize, 0);
+	profile_free(p);
+	load_bad("bufsize = 257\n", ST_ERR_RANGE, "bufsize", "between 0 and 256", NULL);
 }
 END_TEST
 
@@ -912,6 +934,7 @@ Suite *profile_suite(void)
 
 	tcase_add_test(errors, test_bad_number);
 	tcase_add_test(errors, test_out_of_range);
+	tcase_add_test(errors, test_bufsize_reaches_the_driver);
 	tcase_add_test(errors, test_cross_checks);
 	tcase_add_test(errors, test_extruder_counts);
 	tcase_add_test(errors, test_duplicate_key);

@@ -405,6 +405,84 @@ START_TEST(prusaslicer_corpus_sample)
 }
 END_TEST
 
+/*
+ * Ctrl-C while the bed heats (M190) with the nozzle's M109 queued behind,
+ * every slicer's start G-code (issue 17 defect 3): Marlin's M108 ends only
+ * the wait that runs, so each wait needs its own.  Both are broken, the
+ * heaters-off, fan and motor lines run after them and are confirmed, exit
+ * 130.  Heating runs at twice real speed: an unbroken M109 (25 to 210 degC
+ * at 2 degC/s) outlasts the 10 s the stop may take.
+ */
+START_TEST(marlin_sigint_during_heatup)
+{
+	char gc[512], link[512], log[512];
+	static char line[256];
+	FILE *f;
+
+	snprintf(gc, sizeof(gc), "%s", tu_path("heat.gcode"));
+	snprintf(link, sizeof(link), "%s", tu_path("marlin-tty"));
+	snprintf(log, sizeof(log), "%s", tu_path("marlin.log"));
+	f = fopen(gc, "w");
+	ck_assert_ptr_nonnull(f);
+	fputs("M190 S60\nM109 S210\nG28\nG1 Z0.2 F3000\n", f);
+	for (int i = 1; i <= 200; i++)
+		fprintf(f, "G1 X%d Y%d E%d F1200\n", 10 + i % 50, 10 + i % 30, i);
+	fclose(f);
+	int rc = tu_run(out, sizeof(out),
+			"sim --dialect marlin --speedup 2 --link %s --log %s >/dev/null 2>&1 & "
+			"P=$!; for i in $(seq 50); do [ -e %s ] && break; sleep 0.1; done; "
+			"%s send %s --port %s --printer prusa-i3-mk3s 2>&1 & S=$!; "
+			"for i in $(seq 100); do grep -qs M190 %s && break; sleep 0.1; done; "
+			"sleep 1; kill -INT $S; wait $S; r=$?; kill $P; wait $P; exit $r",
+			link, log, link, bin(), gc, link, log);
+	ck_assert_msg(rc == 130, "send: exit %d: %s", rc, out);
+	ck_assert_msg(strstr(out, "stopped safely"), "%s", out);
+
+	/* "<N> <command>" or "- <command>" (unnumbered: M108, M410) */
+	const char *want[] = {"M190 S60", "M109 S210", "M104 S0", "M140 S0", "M107", "M84"};
+	size_t next = 0, n108 = 0;
+	char last[256] = "";
+	f = fopen(log, "r");
+	ck_assert_ptr_nonnull(f);
+	while (fgets(line, sizeof(line), f)) {
+		const char *cmd = strchr(line, ' ');
+		ck_assert_ptr_nonnull(cmd);
+		snprintf(last, sizeof(last), "%.*s", (int)strcspn(cmd + 1, "\n"), cmd + 1);
+		if (next < 6 && !strcmp(last, want[next]))
+			next++;
+		n108 += next >= 1 && !strcmp(last, "M108");
+	}
+	fclose(f);
+	ck_assert_msg(next == 6, "the log lacks '%s' (in order)", want[next < 6 ? next : 0]);
+	ck_assert_uint_ge(n108, 2); /* one for each wait (logged when queued, not when acted on) */
+	ck_assert_str_eq(last, "M84");
+}
+END_TEST
+
+/* `--port auto` picks a port by the profile's usb_ids (host/portpick.h)
+ * for send as for print (issue 17 defect 8): send opened a file named
+ * "auto", print said "--port auto: " twice and named a journal it never
+ * wrote.  No port here has the MK3S's USB id: exit 69, said once. */
+START_TEST(port_auto_picks_or_says_why)
+{
+	char gc[512];
+	snprintf(gc, sizeof(gc), "%s", tu_path("auto.gcode"));
+	tu_write_str(gc, "G28\n;LAYER_CHANGE\nG1 X10 Y10 F3000\n");
+	setenv("STRATUM_STATE_DIR", tu_path("st-auto"), 1);
+	const char *cmds[] = {"send", "print"};
+	for (int i = 0; i < 2; i++) {
+		int rc = tu_run(out, sizeof(out), "%s %s --printer prusa-i3-mk3s --port auto 2>&1",
+				cmds[i], gc);
+		ck_assert_msg(rc == 69, "%s: exit %d: %s", cmds[i], rc, out);
+		const char *p = strstr(out, "--port auto: ");
+		ck_assert_msg(p && !strstr(p + 1, "--port auto: "), "%s: %s", cmds[i], out);
+		ck_assert_msg(strstr(out, "2c99:0002") && !strstr(out, "cannot open") &&
+			      !strstr(out, "journal:") && !strstr(out, "--resume"), "%s: %s",
+			      cmds[i], out);
+	}
+}
+END_TEST
+
 Suite *send_suite(void)
 {
 	Suite *s = suite_create("send");
@@ -422,6 +500,8 @@ Suite *send_suite(void)
 	tcase_set_timeout(tc, 120);
 	tcase_add_test(tc, marlin_prusaslicer_as_written);
 	tcase_add_test(tc, prusaslicer_corpus_sample);
+	tcase_add_test(tc, marlin_sigint_during_heatup);
+	tcase_add_test(tc, port_auto_picks_or_says_why);
 	suite_add_tcase(s, tc);
 	return s;
 }

@@ -202,8 +202,20 @@ double sfc_check_resumed(const char *gcode, uint64_t from, const char *log)
 	ngot = sf_log_read(log, &got, &text);
 	ck_assert_uint_lt(start, nwant);
 	ck_assert_uint_gt(ngot, nwant - start);
-	/* the file from that line on is exactly what ran after the preamble */
+	/* the file from that line on is exactly what ran after the preamble;
+	 * the layer's first move may go where the preamble already put the
+	 * nozzle (its Z), a move of no length the translator leaves out */
 	pre = ngot - (nwant - start);
+	if (got[pre].code != want[start].code && want[start].code == 155 && pre > 0) {
+		long at[5] = {0};
+		for (size_t i = 0; i < pre; i++)
+			if (got[i].code == 155 || got[i].code == 140)
+				memcpy(at, got[i].pos, sizeof(at));
+		if (!memcmp(at, want[start].pos, 3 * sizeof(at[0]))) {
+			start++;
+			pre++;
+		}
+	}
 	for (size_t i = 0; i < nwant - start; i++) {
 		const struct sfc_cmd *a = &got[pre + i], *b = &want[start + i];
 		ck_assert_msg(a->code == b->code, "command %zu after the preamble: executed %s, "

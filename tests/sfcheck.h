@@ -33,7 +33,8 @@ void sfc_check_log(FILE *f, json_t *cmds, bool fields);
  * a set position before the homing, the calibrated X/Y home offsets
  * recalled) and then exactly the commands of gcode from file line from on,
  * as one translation of the whole file gives them (X, Y, Z steps exact,
- * extruders within a step).  Returns the Z (mm) the set position gave.
+ * extruders within a step; a first move to where the preamble left the
+ * nozzle may be missing: it has no length).  Returns the Z (mm) the set position gave.
  */
 double sfc_check_resumed(const char *gcode, uint64_t from, const char *log);
 

@@ -58,6 +58,7 @@ struct sim_sailfish {
 	uint8_t wire[4096];	/* host bytes still crossing the link */
 	size_t wire_len;
 	double in_t, out_t;	/* last byte in / last reply byte out (wall s) */
+	long good_actions;	/* action packets received whole with a matching CRC */
 	double boot_until;
 
 	/* packet reader */
@@ -345,10 +346,14 @@ static void sf_rx_byte(struct sim_sailfish *s, uint8_t b, double now)
 			s->ps = SF_PS_CRC;
 		break;
 	case SF_PS_CRC:
-		if (s->pcrc == b)
+		if (s->pcrc == b) {
 			s->ps = SF_PS_LAST;
-		else
+			if (s->plen && (s->payload[0] & 0x80) &&
+			    ++s->good_actions == s->o.crc_escape_at)
+				s->payload[0] ^= 0x80;
+		} else {
 			sf_in_error(s, SF_E_CRC);
+		}
 		break;
 	default: /* a finished packet not yet taken: the byte is lost */
 		break;

@@ -50,6 +50,10 @@ struct sim_sailfish_options {
 	FILE *log_fp;	      /* or an open stream (stays the caller's) if log_path is NULL */
 	uint64_t seed;	      /* PRNG seed for faults; 0 picks a fixed default */
 	double boot_s;	      /* boot time after a reset (simulated s, input ignored); default 2 */
+	long crc_escape_at;   /* the Nth action packet (1-based) received whole arrives
+			       * with bit 7 of its command byte cleared and the CRC still
+			       * matching, as two bit errors 127 bits apart do under
+			       * CRC-8: the firmware answers it as a query; <= 0 never */
 };
 
 /* Opaque simulator. */
