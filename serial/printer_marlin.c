@@ -257,6 +257,35 @@ static void pm_progress(struct pm_state *s, const struct printer_job *job,
 	p->seconds = printer_now() - t0;
 }
 
+/*
+ * Tell the hook about every layer that started among the lines confirmed
+ * since the last call (sources from..to-1; the newest, to, is told by the
+ * caller): one driver step may confirm several short layers, and print's
+ * journal must not skip them.  Sources older than the ring holds (newest
+ * submitted - PM_RING) are gone and skipped.
+ */
+static void pm_tell_layers(struct pm_state *s, const struct printer_job *job, uint64_t from,
+			   uint64_t to, uint64_t newest, const struct printer_progress *now,
+			   long *layer_told)
+{
+	const uint64_t oldest = newest >= PM_RING ? newest - PM_RING + 1 : 1;
+
+	for (uint64_t i = from > oldest ? from : oldest; i < to; i++) {
+		const struct pm_src *src = &s->ring[i % PM_RING];
+		struct printer_progress p = *now;
+
+		if (src->layer == *layer_told)
+			continue;
+		p.line = job->first_line + src->line;
+		p.filepos = src->end;
+		p.layer = src->layer;
+		p.z = src->z;
+		p.done = now->done > to - i ? now->done - (to - i) : 0;
+		*layer_told = src->layer;
+		job->progress(job->ctx, &p);
+	}
+}
+
 /* The counters of a Marlin stream, for reports. */
 static void pm_counters(const struct marlin *m, const struct marlin_status *st,
 			struct printer_result *res)
@@ -327,6 +356,7 @@ static int pm_stream(void *state, const struct printer_job *job, struct printer_
 	long layer = -1;
 	double z = NAN, t0 = printer_now(), t_cb = 0;
 	long layer_told = -2; /* the layer the hook was last called with */
+	uint64_t src_told = 0; /* the newest source the hook was told of */
 	uint64_t first_src, k;
 	FILE *f;
 	int rc, bad = 0;
@@ -385,8 +415,13 @@ static int pm_stream(void *state, const struct printer_job *job, struct printer_
 			pm_end(s, &st, rc, asked, res, err);
 			goto out_end;
 		}
-		/* every 200 ms, and at once on a new layer: the journal print
-		 * keeps from the hook must not lag the printer by layers */
+		/* every 200 ms, and at once on each new layer: the journal
+		 * print keeps from the hook must not lag the printer by layers */
+		if (job->progress && st.last_acked_src > src_told) {
+			pm_tell_layers(s, job, src_told + 1, st.last_acked_src, k, &res->last,
+				       &layer_told);
+			src_told = st.last_acked_src;
+		}
 		if (job->progress &&
 		    (printer_now() - t_cb >= PM_PROGRESS_S || res->last.layer != layer_told)) {
 			t_cb = printer_now();
