@@ -1457,8 +1457,14 @@ START_TEST(test_sim_sailfish_resume)
 	tu_write_str(gc, g);
 	snprintf(path, sizeof(path), "%s/data/sim/fcp.log", np.dir);
 	z = sfc_check_resumed(gc, from, path);
-	/* Z is set where the layer before ended: never homed into the part */
-	ck_assert_msg(fabs(z - 0.2 * layer) < 0.01, "Z set to %g at layer %ld", z, layer);
+	/* Z is set where the nozzle stood, the last Z move before the saved
+	 * position (issue 17 defect 4: it was set one layer lower), and
+	 * never homed into the part */
+	double want_z = NAN;
+	for (const char *c = strstr(g, "G1 Z"); c && c - g < pos; c = strstr(c + 1, "G1 Z"))
+		want_z = strtod(c + 4, NULL);
+	ck_assert_msg(fabs(z - want_z) < 0.01, "Z set to %g at layer %ld, the nozzle at %g", z,
+		      layer, want_z);
 	node_stop(&np);
 	free(g);
 }
