@@ -37,11 +37,18 @@ static void sim_usage(FILE *out)
 		"                   [--speedup K] [--corrupt P] [--drop P] [--latency MS]\n"
 		"                   [--reset-at N] [--unplug-at N] [--baud N] [--seed N]\n"
 		"  marlin only:     [--rx-buffer N] [--bufsize N] [--advanced-ok]\n"
+		"                   [--keep-rx] [--lose-ok P] [--no-firmware-name]\n"
+		"                   [--freeze-at N [--freeze-s S]] [--busy-at N --busy-s S]\n"
 		"  sailfish only:   [--buffer-size N] [--corrupt-replies P]\n"
 		"Runs a simulated printer on a pseudo-terminal and prints its path; stops on\n"
 		"Ctrl-C.  --link makes PATH a symlink to the pty while it runs.  N of\n"
 		"--reset-at/--unplug-at is a line number (marlin) or the number of the\n"
-		"executed command (sailfish).\n");
+		"executed command (sailfish).  Marlin variants and hangs: --keep-rx keeps\n"
+		"the bytes behind a bad line in the receive ring (32-bit boards; AVR boards\n"
+		"flush it), --lose-ok loses each \"ok\" with probability P, --no-firmware-name\n"
+		"answers M115 with a bare \"ok\", --freeze-at hangs the board at line N (for\n"
+		"S seconds, default for ever), --busy-at holds line N for S seconds\n"
+		"answering \"busy: processing\".\n");
 }
 
 /* Read a non-negative number option; false with a message if malformed. */
@@ -153,6 +160,14 @@ int cmd_sim(int argc, char **argv)
 			o.advanced_ok = true;
 			marlin_only = a;
 			continue;
+		} else if (!strcmp(a, "--keep-rx")) {
+			o.keep_rx_on_error = true;
+			marlin_only = a;
+			continue;
+		} else if (!strcmp(a, "--no-firmware-name")) {
+			o.no_firmware_name = true;
+			marlin_only = a;
+			continue;
 		}
 		if (a[0] != '-' || !arg) {
 			fprintf(stderr, "stratum sim: %s '%s'\n",
@@ -189,6 +204,19 @@ int cmd_sim(int argc, char **argv)
 			if (!sim_number(a, arg, 0, 1, &so.reply_corrupt_p))
 				return ST_EXIT_USAGE;
 			sailfish_only = a;
+		} else if (!strcmp(a, "--lose-ok")) {
+			if (!sim_number(a, arg, 0, 1, &o.reply_loss_p))
+				return ST_EXIT_USAGE;
+			marlin_only = a;
+		} else if (!strcmp(a, "--freeze-at") || !strcmp(a, "--busy-at")) {
+			if (!sim_number(a, arg, 1, 2147483647, &v))
+				return ST_EXIT_USAGE;
+			*(a[2] == 'f' ? &o.freeze_at_line : &o.busy_at_line) = (long)v;
+			marlin_only = a;
+		} else if (!strcmp(a, "--freeze-s") || !strcmp(a, "--busy-s")) {
+			if (!sim_number(a, arg, 0, 86400, a[2] == 'f' ? &o.freeze_s : &o.busy_s))
+				return ST_EXIT_USAGE;
+			marlin_only = a;
 		} else if (!strcmp(a, "--corrupt")) {
 			if (!sim_number(a, arg, 0, 1, &o.corrupt_p))
 				return ST_EXIT_USAGE;
