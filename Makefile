@@ -35,8 +35,10 @@ DEB_PACKAGES := gcc g++ make pkg-config dpkg-dev \
 BENCH_PACKAGES := admesh time bc prusa-slicer printcore apache2-utils libcgal-demo
 # Only the tests need these (the serve suite's status page in headless
 # Chromium, skipped with a message without it; clang for libFuzzer, `make
-# fuzz`); `make check` installs them.
-TEST_PACKAGES := chromium clang
+# fuzz`; prusa-slicer for the send suite's sample of the PrusaSlicer
+# corpus, which bench/prusa_corpus.sh runs whole); `make check` installs
+# them.
+TEST_PACKAGES := chromium clang prusa-slicer
 
 WARN     := -Wall -Wextra -Werror
 CPPFLAGS := -D_XOPEN_SOURCE=700 -D_DEFAULT_SOURCE -MMD -MP
