@@ -390,7 +390,9 @@ if ! command -v gpx >/dev/null 2>&1; then
 fi
 [ -f "$out/dense-5k.gcode" ] || dense_gcode 5000 "$out/dense-5k.gcode"
 (cd "$out" && gpx -m fcp dense-5k.gcode dense-5k.x3g >/dev/null 2>&1)
-"$bin" x3g "$out/dense-5k.gcode" -o "$out/dense-5k-ours.x3g" --printer flashforge-creator-pro \
+# dense_gcode is centred at 100,100, off the Creator Pro's bed: --force
+# past the wrong-printer guard (the simulator has no bed to leave).
+"$bin" x3g "$out/dense-5k.gcode" -o "$out/dense-5k-ours.x3g" --printer flashforge-creator-pro --force \
 	>/dev/null 2>&1
 echo "| host | input | commands | bytes out | s | commands/s | bytes/s | link fraction (both ways) | log == X3G |"
 echo "|---|---|---|---|---|---|---|---|---|"
@@ -409,7 +411,7 @@ for host in gpx gcode x3g; do
 	else
 		j="$out/s3g-stratum-$host.json"
 		if [ "$host" = gcode ]; then in=dense-5k.gcode; ref=dense-5k-ours.x3g; else in=dense-5k.x3g; ref=dense-5k.x3g; fi
-		"$bin" send "$out/$in" --port "$out/s3g-tty" --printer flashforge-creator-pro \
+		"$bin" send "$out/$in" --port "$out/s3g-tty" --printer flashforge-creator-pro --force \
 			--baud 115200 --json >"$j" 2>"$out/s3g-stratum-$host.err" || true
 		n=$(json_any "$j" commands); bytes=$(json_any "$j" bytes_written); secs=$(json_any "$j" seconds)
 		if [ -z "$n" ] || [ -z "$secs" ]; then
@@ -478,7 +480,7 @@ for v in clean rx32 rx32-adv \
 done
 # The Sailfish simulator: the same file translated to X3G, every command
 # executed once and in order (its log against the X3G decoded).
-"$bin" x3g "$out/dense-100k.gcode" -o "$out/dense-100k.x3g" --printer flashforge-creator-pro \
+"$bin" x3g "$out/dense-100k.gcode" -o "$out/dense-100k.x3g" --printer flashforge-creator-pro --force \
 	>/dev/null 2>&1
 echo
 echo "| fault | simulator | commands sent | every command once, in order | retries | s |"
