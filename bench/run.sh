@@ -442,6 +442,22 @@ soak_check() {
 		END { printf "%s | %d | %d", (k == n && !gaps) ? "yes" : "NO", k, diff + 0 }' \
 		"$out/soak-want.txt" "$2"
 }
+# soak_run DIALECT NAME FILE PROFILE SIM-OPTIONS... - one soak row's run: a
+# fresh simulator, `stratum send` of FILE (bounded: the soak found ends of
+# jobs that wait for ever), the simulator stopped; sets log and j.
+soak_run() {
+	dia=$1; name=$2; file=$3; prof=$4; shift 4
+	log="$out/soak-$name.log"; j="$out/soak-$name.json"
+	rm -f "$out/soak-tty"
+	"$bin" sim --dialect "$dia" --baud 1000000 --speedup 1000000 --seed 7 "$@" \
+		--link "$out/soak-tty" --log "$log" >"$out/soak-sim.out" 2>&1 &
+	sim_pid=$!
+	i=0
+	while [ ! -L "$out/soak-tty" ] && [ $i -lt 100 ]; do sleep 0.05; i=$((i + 1)); done
+	timeout 1800 "$bin" send "$file" --port "$out/soak-tty" --printer "$prof" --baud 1000000 \
+		--json >"$j" 2>"$out/soak-$name.err" || true
+	sim_stop
+}
 soak_table() {
 [ -f "$out/dense-100k.gcode" ] || dense_gcode 100000 "$out/dense-100k.gcode"
 sed 's/^rx_buffer_size = .*/rx_buffer_size = 32/' printers/generic-marlin.ini >"$out/marlin-rx32.ini"
@@ -464,18 +480,8 @@ for v in clean rx32 rx32-adv \
 	keep-drop:*) extra="--keep-rx --drop $p" ;;
 	adv-corrupt:*) extra="--advanced-ok --corrupt $p --drop $p" ;;
 	esac
-	name=$(echo "$v" | tr ':' '-')
-	log="$out/soak-$name.log"; j="$out/soak-$name.json"
-	rm -f "$out/soak-tty"
 	# shellcheck disable=SC2086
-	"$bin" sim --dialect marlin --baud 1000000 --speedup 1000000 --seed 7 $extra \
-		--link "$out/soak-tty" --log "$log" >"$out/soak-sim.out" 2>&1 &
-	sim_pid=$!
-	i=0
-	while [ ! -L "$out/soak-tty" ] && [ $i -lt 100 ]; do sleep 0.05; i=$((i + 1)); done
-	"$bin" send "$out/dense-100k.gcode" --port "$out/soak-tty" --printer "$prof" --baud 1000000 \
-		--json >"$j" 2>"$out/soak-$name.err" || true
-	sim_stop
+	soak_run marlin "$(echo "$v" | tr ':' '-')" "$out/dense-100k.gcode" "$prof" $extra
 	echo "| $v | marlin ${extra:-defaults} | $(json_any "$j" lines) | $(soak_check "$out/dense-100k.gcode" "$log") | $(json_any "$j" resends) | $(json_any "$j" seconds) |"
 done
 # The Sailfish simulator: the same file translated to X3G, every command
@@ -492,18 +498,9 @@ for v in clean corrupt:0.005 corrupt:0.02 drop:0.005 drop:0.02 replies:0.005 rep
 	drop:*) extra="--drop $p" ;;
 	replies:*) extra="--corrupt-replies $p" ;;
 	esac
-	name=$(echo "$v" | tr ':' '-')
-	log="$out/soak-sf-$name.log"; j="$out/soak-sf-$name.json"
-	rm -f "$out/soak-tty"
 	# shellcheck disable=SC2086
-	"$bin" sim --dialect sailfish --baud 1000000 --speedup 1000000 --seed 7 $extra \
-		--link "$out/soak-tty" --log "$log" >"$out/soak-sim.out" 2>&1 &
-	sim_pid=$!
-	i=0
-	while [ ! -L "$out/soak-tty" ] && [ $i -lt 100 ]; do sleep 0.05; i=$((i + 1)); done
-	"$bin" send "$out/dense-100k.x3g" --port "$out/soak-tty" --printer flashforge-creator-pro \
-		--baud 1000000 --json >"$j" 2>"$out/soak-sf-$name.err" || true
-	sim_stop
+	soak_run sailfish "sf-$(echo "$v" | tr ':' '-')" "$out/dense-100k.x3g" \
+		flashforge-creator-pro $extra
 	echo "| $v | sailfish ${extra:-defaults} | $(json_any "$j" commands) | $(s3g_log_matches "$out/dense-100k.x3g" "$log") | $(json_any "$j" retries) | $(json_any "$j" seconds) |"
 done
 }
