@@ -33,11 +33,6 @@ typedef EK::Exact_kernel XK; /* the rationals behind Epeck */
 typedef XK::FT XFT;
 
 /* Exact coordinates of a point, as rationals, and the point as Epeck's. */
-inline void coords(const IK::Point_3 &p, XFT c[3])
-{
-	for (int k = 0; k < 3; k++)
-		c[k] = XFT(p[k]);
-}
 inline void coords(const EPoint &p, XFT c[3])
 {
 	const XK::Point_3 &e = CGAL::exact(p);
@@ -58,8 +53,7 @@ inline const EPoint &as_epoint(const EPoint &p)
  * normal n (exact), p and q strictly on opposite sides:
  * p + (q - p) * dp / (dp - dq) with dp = n.(p - a), dq = n.(q - a).
  */
-template <class P>
-EPoint edge_plane(const P &p, const P &q, const XFT a[3], const XFT n[3])
+inline EPoint edge_plane(const EPoint &p, const EPoint &q, const XFT a[3], const XFT n[3])
 {
 	XFT pp[3], qq[3];
 	XFT dp = 0, dq = 0;
