@@ -407,6 +407,8 @@ static int print_json(const struct repair_run *run, const struct repair_report *
 	json_object_set_new(obj, "second_pass", json_boolean(r->second_pass));
 	json_object_set_new(obj, "thickened_triangles", json_size(r->thickened_triangles));
 	json_object_set_new(obj, "second_sheet_triangles", json_size(r->second_sheet_triangles));
+	json_object_set_new(obj, "batches", json_size(r->batches));
+	json_object_set_new(obj, "batch_fallback", json_boolean(r->batch_fallback));
 	json_object_set_new(obj, "rounding_rounds", json_integer(r->rounding_rounds));
 	json_object_set_new(obj, "rounding_merged", json_size(r->rounding_merged));
 	json_object_set_new(obj, "solid_deviation", json_real(r->solid_deviation));
@@ -487,6 +489,11 @@ static void print_text(const struct repair_run *run, const struct repair_report 
 		       "left)\n", r->thickened_triangles, r->second_sheet_triangles);
 	else
 		printf("  second pass: no\n");
+	if (r->batches > 1)
+		printf("  independent groups: %zu, repaired apart\n", r->batches);
+	else if (r->batch_fallback)
+		printf("  independent groups: one lay inside another, so the whole was repaired "
+		       "at once\n");
 	printf("  rounding to %s: %d re-check round%s\n", run->ascii ? "float64" : "float32",
 	       r->rounding_rounds, r->rounding_rounds == 1 ? "" : "s");
 	printf("  deviation: solid parts %.3g mm, rounding %.3g mm", r->solid_deviation,

@@ -171,4 +171,14 @@ int mesh_analyze_known(const struct mesh *m, int threads, long long self_interse
 int mesh_analyze_parts(const struct mesh *m, int threads, long long self_intersections,
 		       struct mesh_report *rep, uint32_t *part, struct st_error *err);
 
+/*
+ * mesh_analyze_nesting - mesh_analyze_parts that also tells, for each part
+ * p, the part whose cavity holds it: around (m->ntris entries, enough for
+ * every part; or NULL) receives that part's number at index p, UINT32_MAX
+ * for a part in open space.
+ */
+int mesh_analyze_nesting(const struct mesh *m, int threads, long long self_intersections,
+			 struct mesh_report *rep, uint32_t *part, uint32_t *around,
+			 struct st_error *err);
+
 #endif /* STRATUM_REPAIR_MESH_H */

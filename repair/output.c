@@ -107,8 +107,34 @@ out:
  * than epsilon, number the parts for --split and fill the output half of
  * rep.  *m may be replaced.  Returns 0 or a negative class.
  */
+/*
+ * Whether every part of the analysed mesh holds one batch's triangles and
+ * every part in a cavity lies in a part of its own batch.
+ */
+static bool parts_within_batches(const struct mesh *m, const uint32_t *part,
+				 const uint32_t *around, size_t nparts, const uint32_t *batch)
+{
+	uint32_t *owner = malloc((nparts + 1) * sizeof(*owner));
+	bool within = owner != NULL;
+
+	for (size_t p = 0; within && p < nparts; p++)
+		owner[p] = UINT32_MAX;
+	for (size_t t = 0; within && t < m->ntris; t++) {
+		if (part[t] == UINT32_MAX)
+			continue;
+		if (owner[part[t]] == UINT32_MAX)
+			owner[part[t]] = batch[t];
+		within = owner[part[t]] == batch[t];
+	}
+	for (size_t p = 0; within && p < nparts; p++)
+		within = around[p] == UINT32_MAX || owner[around[p]] == owner[p];
+	free(owner);
+	return within;
+}
+
 int repair_finish_parts(struct mesh **m, const struct repair_options *opt, long long known,
-			uint32_t **component, struct repair_report *rep, struct st_error *err)
+			const uint32_t *batch, bool *apart, uint32_t **component,
+			struct repair_report *rep, struct st_error *err)
 {
 	uint32_t *part = malloc(((*m)->ntris + 1) * sizeof(*part));
 	struct mesh_report mr;
@@ -119,7 +145,22 @@ int repair_finish_parts(struct mesh **m, const struct repair_options *opt, long 
 
 	if (!part)
 		return st_error_set(err, ST_ERR_NOMEM, "out of memory numbering the parts");
-	rc = mesh_analyze_parts(*m, opt->threads, known, &mr, part, err);
+	uint32_t *around = batch ? malloc(((*m)->ntris + 1) * sizeof(*around)) : NULL;
+	if (batch && !around) {
+		free(part);
+		return st_error_set(err, ST_ERR_NOMEM, "out of memory numbering the parts");
+	}
+	rc = mesh_analyze_nesting(*m, opt->threads, known, &mr, part, around, err);
+	if (!rc && batch) {
+		*apart = !mr.misnested_shells &&
+			 parts_within_batches(*m, part, around, mr.parts, batch);
+		if (!*apart) {
+			free(around);
+			free(part);
+			return 0;
+		}
+	}
+	free(around);
 	if (!rc && repair_result_printable(&mr)) {
 		struct mesh *kept = drop_tiny_parts(*m, part, mr.parts, opt->epsilon, rep);
 		if (!kept) {

@@ -27,8 +27,16 @@ bool repair_result_printable(const struct mesh_report *mr);
  * number the parts into *component (when non-NULL; a part is a solid with
  * its cavities) and fill the output half of rep.  *m may be replaced by a
  * new mesh.  Returns 0 or a negative class with err filled.
+ *
+ * batch (NULL, or per triangle of *m the batch it was repaired in,
+ * repair/batch.h): *apart receives whether the batches' results are
+ * independent as their repairs assumed, that is no shell of one lies in
+ * a shell of another (then a part would hold two batches' triangles, or
+ * be misnested, or sit in another part's cavity, where repairing the
+ * whole would have deleted it).  When not apart nothing else is done.
  */
 int repair_finish_parts(struct mesh **m, const struct repair_options *opt, long long known,
-			uint32_t **component, struct repair_report *rep, struct st_error *err);
+			const uint32_t *batch, bool *apart, uint32_t **component,
+			struct repair_report *rep, struct st_error *err);
 
 #endif /* STRATUM_REPAIR_OUTPUT_H */

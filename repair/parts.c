@@ -173,7 +173,7 @@ static bool touching(const uint64_t *pairs, size_t n, uint32_t a, uint32_t b)
 }
 
 int parts_nest(const struct mesh *m, const uint8_t *in_layer, uint32_t *shell, size_t *nshells_io,
-	       bool nest, bool singular, uint32_t *part, struct parts_out *out,
+	       bool nest, bool singular, uint32_t *part, uint32_t *around, struct parts_out *out,
 	       struct st_error *err)
 {
 	struct shell_info *s = NULL;
@@ -187,6 +187,8 @@ int parts_nest(const struct mesh *m, const uint8_t *in_layer, uint32_t *shell, s
 	int rc = 0;
 
 	memset(out, 0, sizeof(*out));
+	for (size_t i = 0; around && i < m->ntris; i++)
+		around[i] = UINT32_MAX;
 	if (!nest || (nshells < 2 && !singular)) {
 		/* Nothing to group: each shell is a part (most files: one). */
 		out->parts = nshells;
@@ -304,6 +306,9 @@ int parts_nest(const struct mesh *m, const uint8_t *in_layer, uint32_t *shell, s
 		if (s[i].winding != 0 || inside != 1)
 			out->misnested++;
 		s[i].part = (uint32_t)out->parts++;
+		/* outer is shallower, so numbered; its part holds this one. */
+		if (around && outer[i] != UINT32_MAX)
+			around[s[i].part] = s[outer[i]].part;
 	}
 
 assign:

@@ -35,11 +35,13 @@ struct parts_out {
  * containment tests: walking in from empty space, an outward shell enters
  * material, an inward one leaves it, and a shell that does neither is
  * misnested.  part (NULL or m->ntris entries) receives each triangle's
- * part, UINT32_MAX for triangles not analysed.  Returns 0 or a negative
+ * part, UINT32_MAX for triangles not analysed; around (NULL or m->ntris
+ * entries) for each part the part whose cavity holds it, UINT32_MAX for
+ * none.  Returns 0 or a negative
  * class with err filled.
  */
 int parts_nest(const struct mesh *m, const uint8_t *in_layer, uint32_t *shell, size_t *nshells,
-	       bool nest, bool singular, uint32_t *part, struct parts_out *out,
+	       bool nest, bool singular, uint32_t *part, uint32_t *around, struct parts_out *out,
 	       struct st_error *err);
 
 #endif /* STRATUM_REPAIR_PARTS_H */

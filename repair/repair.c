@@ -13,11 +13,13 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "batch.h"
 #include "exact.h"
 #include "heal.h"
 #include "hull.h"
 #include "ids.h"
 #include "output.h"
+#include "repair_impl.h"
 #include "repair.h"
 #include "thicken.h"
 #include "vec3.h"
@@ -614,42 +616,6 @@ done:
 	return out;
 }
 
-/* Distance from p to the closed triangle abc, in doubles. */
-static double point_triangle_distance(const double p[3], const double a[3], const double b[3],
-				      const double c[3])
-{
-	const double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-	const double ac[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-	const double ap[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
-	const double n[3] = {ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2],
-			     ab[0] * ac[1] - ab[1] * ac[0]};
-	const double nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-	const double h = (ap[0] * n[0] + ap[1] * n[1] + ap[2] * n[2]) / nn;
-	const double q[3] = {p[0] - h * n[0], p[1] - h * n[1], p[2] - h * n[2]};
-	const double *v[3] = {a, b, c};
-	double best = HUGE_VAL;
-	bool inside = true;
-
-	/* q is p's foot in the plane; inside when on the inner side of
-	 * every edge, else the nearest point is on an edge. */
-	for (int k = 0; k < 3; k++) {
-		const double *u = v[k], *w = v[(k + 1) % 3];
-		const double e[3] = {w[0] - u[0], w[1] - u[1], w[2] - u[2]};
-		const double uq[3] = {q[0] - u[0], q[1] - u[1], q[2] - u[2]};
-		const double x[3] = {e[1] * uq[2] - e[2] * uq[1], e[2] * uq[0] - e[0] * uq[2],
-				     e[0] * uq[1] - e[1] * uq[0]};
-		if (x[0] * n[0] + x[1] * n[1] + x[2] * n[2] < 0)
-			inside = false;
-		const double up[3] = {p[0] - u[0], p[1] - u[1], p[2] - u[2]};
-		double t = (up[0] * e[0] + up[1] * e[1] + up[2] * e[2]) /
-			   (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
-		t = t < 0 ? 0 : t > 1 ? 1 : t;
-		const double f[3] = {u[0] + t * e[0], u[1] + t * e[1], u[2] + t * e[2]};
-		best = fmin(best, vec3_dist(p, f));
-	}
-	return inside ? fabs(h) * sqrt(nn) : best;
-}
-
 /*
  * Largest distance of a solid vertex from the input triangle it came from.
  * Pieces are constructed exactly in their triangle's plane, so this is 0
@@ -674,7 +640,7 @@ static double solid_deviation(const struct mesh *in, const struct exact_mesh *em
 			if (!memcmp(p, a, sizeof(double[3])) || !memcmp(p, b, sizeof(double[3])) ||
 			    !memcmp(p, c, sizeof(double[3])))
 				continue;
-			worst = fmax(worst, point_triangle_distance(p, a, b, c));
+			worst = fmax(worst, vec3_point_triangle_distance(p, a, b, c));
 		}
 	}
 	return worst;
@@ -703,38 +669,15 @@ static void report_core(struct repair_report *rep, const struct core_out *co)
 	rep->sheet_deviation = co->sheet_deviation;
 }
 
-int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct mesh **out,
-		uint32_t **component, struct repair_report *rep, struct st_error *err)
+/* repair_impl.h */
+int repair_rounded(const struct mesh *in, const struct repair_options *opt,
+		   struct mesh **rounded_out, long long *known, struct repair_report *rep,
+		   struct st_error *err)
 {
 	struct core_out co;
-	struct mesh *cur = NULL, *rounded = NULL, *healed = NULL;
+	struct mesh *cur = NULL, *rounded = NULL;
 	struct mesh_report mr;
 	int rc;
-
-	if (out)
-		*out = NULL;
-	if (component)
-		*component = NULL;
-	if (!in || !opt || !out || !rep)
-		return st_error_set(err, ST_ERR_ARG, "repair: NULL mesh, options or output");
-	if (!(opt->epsilon > 0) || !isfinite(opt->epsilon))
-		return st_error_set(err, ST_ERR_ARG,
-				    "repair: epsilon %g mm must be a positive thickness",
-				    opt->epsilon);
-	if (opt->precision != REPAIR_FLOAT32 && opt->precision != REPAIR_FLOAT64)
-		return st_error_set(err, ST_ERR_ARG, "repair: unknown output precision %d",
-				    (int)opt->precision);
-	if (opt->threads < 0)
-		return st_error_set(err, ST_ERR_ARG, "repair: thread count %d is negative",
-				    opt->threads);
-	memset(rep, 0, sizeof(*rep));
-	rep->input_triangles = in->ntris;
-	/* Weld, stitch and fill before anything is decided (heal.h). */
-	rc = heal_mesh(in, opt, &healed, rep, err);
-	if (rc)
-		return rc;
-	if (healed)
-		in = healed;
 
 	co.result = NULL;
 	rc = core(in, opt, true, &co, err);
@@ -798,25 +741,105 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 			goto out_free;
 		rep->rounding_dropped += co.sheet;
 	}
-
-	progress(opt, "checking", 0.95);
 	/* When rounding moved nothing and the last exact pass found no pair
 	 * to cut, that pass already proved the count is 0 for this mesh; a
 	 * mesh checked in the loop has its count already. */
-	rc = repair_finish_parts(&rounded, opt,
-			  checked ? (long long)mr.self_intersections
-				  : unchanged && co.proved_clean ? 0 : -1,
-			  component, rep, err);
-	if (rc)
-		goto out_free;
-	*out = rounded;
-	mesh_free(healed);
-	progress(opt, "done", 1);
+	*known = checked ? (long long)mr.self_intersections : unchanged && co.proved_clean ? 0 : -1;
+	*rounded_out = rounded;
 	return 0;
 
 out_free:
 	exact_mesh_free(co.result);
 	mesh_free(cur);
+	mesh_free(rounded);
+	return rc;
+}
+
+/*
+ * How close two triangles may come and still be repaired apart: what
+ * thickening may grow (BATCH_REACH epsilon) and both sides' rounding.
+ */
+static double batch_reach(const struct mesh *in, const struct repair_options *opt)
+{
+	const double ulp = output_ulp((const double(*)[3])in->verts, in->nverts, opt->precision);
+
+	return BATCH_REACH * opt->epsilon + 2 * SNAP_REACH_CELLS * ulp;
+}
+
+int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct mesh **out,
+		uint32_t **component, struct repair_report *rep, struct st_error *err)
+{
+	struct mesh *rounded = NULL, *healed = NULL;
+	struct batches bs = {0};
+	struct repair_report healed_rep;
+	uint32_t *batch_of = NULL;
+	long long known = -1;
+	bool apart = true;
+	int rc;
+
+	if (out)
+		*out = NULL;
+	if (component)
+		*component = NULL;
+	if (!in || !opt || !out || !rep)
+		return st_error_set(err, ST_ERR_ARG, "repair: NULL mesh, options or output");
+	if (!(opt->epsilon > 0) || !isfinite(opt->epsilon))
+		return st_error_set(err, ST_ERR_ARG,
+				    "repair: epsilon %g mm must be a positive thickness",
+				    opt->epsilon);
+	if (opt->precision != REPAIR_FLOAT32 && opt->precision != REPAIR_FLOAT64)
+		return st_error_set(err, ST_ERR_ARG, "repair: unknown output precision %d",
+				    (int)opt->precision);
+	if (opt->threads < 0)
+		return st_error_set(err, ST_ERR_ARG, "repair: thread count %d is negative",
+				    opt->threads);
+	memset(rep, 0, sizeof(*rep));
+	rep->input_triangles = in->ntris;
+	/* Weld, stitch and fill before anything is decided (heal.h). */
+	rc = heal_mesh(in, opt, &healed, rep, err);
+	if (rc)
+		return rc;
+	if (healed)
+		in = healed;
+
+	/* Groups that cannot touch, even thickened and rounded, are
+	 * repaired apart (batch.h). */
+	healed_rep = *rep;
+	rc = batches_find(in, batch_reach(in, opt), &bs, err);
+	if (!rc && bs.n > 1)
+		rc = repair_rounded_batches(in, opt, &bs, &rounded, &batch_of, &known, rep, err);
+	else if (!rc)
+		rc = repair_rounded(in, opt, &rounded, &known, rep, err);
+	rep->batches = bs.n > 1 ? bs.n : 1;
+	batches_free(&bs);
+	if (rc)
+		goto out_free;
+
+	progress(opt, "checking", 0.95);
+	rc = repair_finish_parts(&rounded, opt, known, batch_of, &apart, component, rep, err);
+	if (!rc && !apart) {
+		/* One group's result lies inside another's, where the outer
+		 * hull of the whole deletes it: repair the whole at once. */
+		mesh_free(rounded);
+		rounded = NULL;
+		*rep = healed_rep;
+		rep->batches = 1;
+		rep->batch_fallback = true;
+		rc = repair_rounded(in, opt, &rounded, &known, rep, err);
+		if (!rc)
+			rc = repair_finish_parts(&rounded, opt, known, NULL, NULL, component, rep,
+						 err);
+	}
+	if (rc)
+		goto out_free;
+	*out = rounded;
+	free(batch_of);
+	mesh_free(healed);
+	progress(opt, "done", 1);
+	return 0;
+
+out_free:
+	free(batch_of);
 	mesh_free(rounded);
 	mesh_free(healed);
 	return rc;

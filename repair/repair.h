@@ -106,6 +106,8 @@ struct repair_report {
 	size_t output_triangles;
 	size_t output_vertices;
 	size_t components;		/* parts: outward shells with their cavities */
+	size_t batches;			/* independent groups repaired apart (1: whole) */
+	bool batch_fallback;		/* one group's result lay in another's: redone whole */
 	bool printable;			/* the result passes Def. 3.11 after rounding */
 	char why[256];			/* when !printable: the reason, one sentence */
 };

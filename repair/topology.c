@@ -585,7 +585,7 @@ static void free_topology(struct topo *tp)
  * all counted misnested.
  */
 static int find_parts(struct topo *tp, struct mesh_report *rep, uint32_t *part,
-		      struct st_error *err)
+		      uint32_t *around, struct st_error *err)
 {
 	const struct mesh *m = tp->m;
 	const bool closed = rep->odd_edges == 0 && rep->open_singular_edges == 0 &&
@@ -599,7 +599,7 @@ static int find_parts(struct topo *tp, struct mesh_report *rep, uint32_t *part,
 	for (size_t t = 0; t < m->ntris; t++)
 		in_layer[t] = tp->tclass[t] == TRI_LAYER;
 	rc = parts_nest(m, in_layer, tp->shell, &rep->manifold_components,
-			closed && rep->consistently_oriented, rep->singular_edges > 0, part, &po,
+			closed && rep->consistently_oriented, rep->singular_edges > 0, part, around, &po,
 			err);
 	free(in_layer);
 	if (rc)
@@ -650,6 +650,13 @@ int mesh_analyze_known(const struct mesh *m, int threads, long long self_interse
 
 int mesh_analyze_parts(const struct mesh *m, int threads, long long self_intersections,
 		       struct mesh_report *rep, uint32_t *part, struct st_error *err)
+{
+	return mesh_analyze_nesting(m, threads, self_intersections, rep, part, NULL, err);
+}
+
+int mesh_analyze_nesting(const struct mesh *m, int threads, long long self_intersections,
+			 struct mesh_report *rep, uint32_t *part, uint32_t *around,
+			 struct st_error *err)
 {
 	struct topo tp = {.m = m};
 	struct exact_job job = {.m = m, .threads = threads};
@@ -706,7 +713,7 @@ int mesh_analyze_parts(const struct mesh *m, int threads, long long self_interse
 		goto out;
 	}
 	rep->self_intersections = job.count;
-	rc = find_parts(&tp, rep, part, err);
+	rc = find_parts(&tp, rep, part, around, err);
 	if (rc)
 		goto out;
 	judge(rep);

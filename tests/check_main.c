@@ -8,6 +8,7 @@
 int main(void)
 {
 	Suite *(*const suites[])(void) = {stfile_suite, mesh_suite,  meshio_suite, exact_suite, repair_suite,
+					  batch_suite,
 					  thicken_suite, heal_suite, corpus_suite,
 					  profile_suite, ini_suite, placeholder_suite, gcode_suite,
 					  xport_suite, sim_suite, marlin_suite, printer_suite,

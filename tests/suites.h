@@ -15,6 +15,7 @@ Suite *exact_suite(void);	/* tests/check_exact.c: CGAL bridge predicates */
 Suite *repair_suite(void);	/* tests/check_repair.c: seed 000 repair end to end */
 Suite *thicken_suite(void);	/* tests/check_thicken.c: sheets into closed slabs */
 Suite *heal_suite(void);	/* tests/check_heal.c: welding, stitching, hole filling */
+Suite *batch_suite(void);	/* tests/check_batch.c: independent groups repaired apart */
 Suite *corpus_suite(void);	/* tests/check_corpus.c: repair on generated defect cases */
 Suite *profile_suite(void);	/* tests/check_profile.c: printer profiles */
 void profile_find_tcases(Suite *s); /* tests/check_profile_find.c: --printer lookup, part of profile */
