@@ -373,7 +373,8 @@ START_TEST(repair_json_report)
 		"enclosed_deleted", "enclosed_components", "cavities", "parts_dropped",
 		"dropped_triangles", "ok", "exit", "error", "stage", "sheet_triangles", "sheet_area", "sheet_components", "wires",
 		"wire_length", "wires_discarded", "second_pass", "thickened_triangles",
-		"second_sheet_triangles", "rounding_rounds", "rounding_merged", "solid_deviation",
+		"second_sheet_triangles", "batches", "batch_fallback", "rounding_rounds",
+		"rounding_merged", "solid_deviation",
 		"rounding_deviation", "sheet_deviation", "output_triangles", "output_vertices",
 		"components", "printable", "outputs"};
 
