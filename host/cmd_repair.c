@@ -490,10 +490,10 @@ static void print_text(const struct repair_run *run, const struct repair_report 
 	else
 		printf("  second pass: no\n");
 	if (r->batches > 1)
-		printf("  independent groups: %zu, repaired apart\n", r->batches);
+		printf("  repaired apart: %zu batches of parts that cannot meet\n", r->batches);
 	else if (r->batch_fallback)
-		printf("  independent groups: one lay inside another, so the whole was repaired "
-		       "at once\n");
+		printf("  repaired apart: no (one batch's result lay inside another's, so the "
+		       "whole was repaired at once)\n");
 	printf("  rounding to %s: %d re-check round%s\n", run->ascii ? "float64" : "float32",
 	       r->rounding_rounds, r->rounding_rounds == 1 ? "" : "s");
 	printf("  deviation: solid parts %.3g mm, rounding %.3g mm", r->solid_deviation,

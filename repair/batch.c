@@ -3,10 +3,11 @@
  * (batch.h).
  *
  * Groups are the vertex-connected parts, joined where a triangle of one
- * comes within reach of a triangle of another.  Candidate pairs come from
- * a uniform grid of cubes about the size of a typical triangle's box: each
- * box, grown by half the reach, goes into the cells it covers, and the
- * boxes of one cell are swept in x order.
+ * comes within reach of a triangle of another, then to a closed part whose
+ * box holds theirs.  Candidate pairs come from a uniform grid of cubes
+ * about the size of a typical triangle's box: each box, grown by
+ * half the reach, goes into the cells it covers (hashed into buckets by a
+ * counting sort), and each overlapping pair is tested in one cell only.
  */
 #include <math.h>
 #include <pthread.h>
@@ -24,6 +25,10 @@
 #define ENTRIES_PER_TRIANGLE 8
 #define ENTRIES_FIXED ((size_t)1 << 20)
 
+/* Vertex-connected parts up to which only the triangles near another
+ * part's box are put on the grid. */
+#define MAX_FILTERED_PARTS 64
+
 /* Pairs of groups tried for enclosure before that test is left out. */
 #define MAX_ENCLOSURE_PAIRS 1e8
 
@@ -36,20 +41,11 @@ struct box {
 	double lo[3], hi[3];
 };
 
+/* A triangle in one grid cell. */
 struct entry {
 	uint64_t cell;
-	double xlo;
 	uint32_t tri;
 };
-
-static int entry_compare(const void *pa, const void *pb)
-{
-	const struct entry *a = pa, *b = pb;
-
-	if (a->cell != b->cell)
-		return a->cell < b->cell ? -1 : 1;
-	return a->xlo < b->xlo ? -1 : a->xlo > b->xlo;
-}
 
 static int double_compare(const void *pa, const void *pb)
 {
@@ -135,6 +131,12 @@ struct groups {
 	uint32_t *parent;	/* union-find over vertices */
 	struct box *box;	/* per triangle, grown by half the reach */
 	double *extent;		/* scratch: box sizes */
+	uint32_t *cand;		/* the triangles that may come near another part */
+	size_t ncand;
+	double origin[3], h;	/* the grid: low corner, cell size */
+	int bits;		/* 2^bits buckets of cells */
+	size_t left;		/* groups left (SIZE_MAX: not counted) */
+	size_t *start;		/* bucket b: entries[start[b] .. start[b + 1]) */
 	struct entry *entries;
 };
 
@@ -144,11 +146,11 @@ static size_t count_entries(const struct groups *g, const double origin[3], doub
 {
 	size_t n = 0;
 
-	for (size_t t = 0; t < g->m->ntris; t++) {
+	for (size_t i = 0; i < g->ncand; i++) {
 		size_t cells = 1;
 		for (int k = 0; k < 3; k++) {
 			uint64_t first, last;
-			cell_range(&g->box[t], origin, h, k, &first, &last);
+			cell_range(&g->box[g->cand[i]], origin, h, k, &first, &last);
 			cells *= (size_t)(last - first + 1);
 			if (cells > limit)
 				return SIZE_MAX;
@@ -160,28 +162,36 @@ static size_t count_entries(const struct groups *g, const double origin[3], doub
 	return n;
 }
 
+/* The bucket of a cell key among 2^bits (Fibonacci hashing). */
+static size_t bucket_of(uint64_t cell, int bits)
+{
+	return bits ? (size_t)((cell * 0x9e3779b97f4a7c15ull) >> (64 - bits)) : 0;
+}
+
 /*
- * Put every triangle into the grid cells its box covers: g->entries
- * sorted by cell and then by the box's low x; *n entries.  Returns 0, 1
- * when the boxes are too tangled for a grid, or ST_ERR_NOMEM.
+ * Put every candidate into the grid cells its box covers: g->entries,
+ * *n of them, grouped by bucket (a hash of the cell, counting sort) with
+ * bucket b at g->start[b] .. g->start[b + 1]; cells of size g->h from
+ * g->origin.  Returns 0, 1 when the boxes are too tangled for a grid, or
+ * ST_ERR_NOMEM.
  */
 static int fill_cells(struct groups *g, size_t *n)
 {
-	const size_t nt = g->m->ntris, limit = ENTRIES_PER_TRIANGLE * nt + ENTRIES_FIXED;
+	const size_t nt = g->ncand, limit = ENTRIES_PER_TRIANGLE * nt + ENTRIES_FIXED;
 	struct box all;
-	double h, span = 0;
-	size_t e = 0;
+	double span = 0;
+	size_t nb;
 
 	*n = SIZE_MAX;
 	for (int k = 0; k < 3; k++) {
 		all.lo[k] = INFINITY;
 		all.hi[k] = -INFINITY;
 	}
-	for (size_t t = 0; t < nt; t++) {
-		const struct box *b = &g->box[t];
-		g->extent[t] = 0;
+	for (size_t i = 0; i < nt; i++) {
+		const struct box *b = &g->box[g->cand[i]];
+		g->extent[i] = 0;
 		for (int k = 0; k < 3; k++) {
-			g->extent[t] = fmax(g->extent[t], b->hi[k] - b->lo[k]);
+			g->extent[i] = fmax(g->extent[i], b->hi[k] - b->lo[k]);
 			all.lo[k] = fmin(all.lo[k], b->lo[k]);
 			all.hi[k] = fmax(all.hi[k], b->hi[k]);
 		}
@@ -189,38 +199,63 @@ static int fill_cells(struct groups *g, size_t *n)
 	qsort(g->extent, nt, sizeof(*g->extent), double_compare);
 	for (int k = 0; k < 3; k++)
 		span = fmax(span, all.hi[k] - all.lo[k]);
+	memcpy(g->origin, all.lo, sizeof(g->origin));
 	/* A typical box, but never so small that an index overflows its bits. */
-	h = fmax(g->extent[nt / 2], span / ldexp(1.0, CELL_BITS - 1));
-	for (int tries = 0; tries < 64 && *n == SIZE_MAX; tries++, h *= 2)
-		*n = count_entries(g, all.lo, h, limit);
-	h /= 2;
+	g->h = fmax(g->extent[nt / 2], span / ldexp(1.0, CELL_BITS - 1));
+	for (int tries = 0; tries < 64 && *n == SIZE_MAX; tries++, g->h *= 2)
+		*n = count_entries(g, g->origin, g->h, limit);
+	g->h /= 2;
 	if (*n == SIZE_MAX)
 		return 1;
+	for (g->bits = 0; ((size_t)1 << g->bits) < *n; g->bits++)
+		;
+	nb = (size_t)1 << g->bits;
 	g->entries = malloc((*n + 1) * sizeof(*g->entries));
-	if (!g->entries)
+	g->start = calloc(nb + 2, sizeof(*g->start));
+	if (!g->entries || !g->start)
 		return ST_ERR_NOMEM;
-	for (size_t t = 0; t < nt; t++) {
-		const struct box *b = &g->box[t];
-		uint64_t f[3], l[3];
-		for (int k = 0; k < 3; k++)
-			cell_range(b, all.lo, h, k, &f[k], &l[k]);
-		for (uint64_t x = f[0]; x <= l[0]; x++)
-			for (uint64_t y = f[1]; y <= l[1]; y++)
-				for (uint64_t z = f[2]; z <= l[2]; z++)
-					g->entries[e++] = (struct entry){
-						.cell = (x << CELL_BITS | y) << CELL_BITS | z,
-						.xlo = b->lo[0],
-						.tri = (uint32_t)t,
-					};
+	/* Two passes over the cells: count per bucket, then place. */
+	for (int pass = 0; pass < 2; pass++) {
+		for (size_t i = 0; i < nt; i++) {
+			const uint32_t t = g->cand[i];
+			uint64_t f[3], l[3];
+			for (int k = 0; k < 3; k++)
+				cell_range(&g->box[t], g->origin, g->h, k, &f[k], &l[k]);
+			for (uint64_t x = f[0]; x <= l[0]; x++)
+				for (uint64_t y = f[1]; y <= l[1]; y++)
+					for (uint64_t z = f[2]; z <= l[2]; z++) {
+						const uint64_t cell = (x << CELL_BITS | y) << CELL_BITS | z;
+						const size_t b = bucket_of(cell, g->bits);
+						if (pass == 0)
+							g->start[b + 2]++;
+						else
+							g->entries[g->start[b + 1]++] = (struct entry){cell, t};
+					}
+		}
+		for (size_t b = 2; pass == 0 && b < nb + 2; b++)
+			g->start[b] += g->start[b - 1];
 	}
-	qsort(g->entries, e, sizeof(*g->entries), entry_compare);
 	return 0;
 }
 
+/* The cell of the low corner of the overlap of boxes a and b. */
+static uint64_t overlap_cell(const struct groups *g, const struct box *a, const struct box *b)
+{
+	struct box low;
+	uint64_t c[3], unused;
+
+	for (int k = 0; k < 3; k++)
+		low.lo[k] = low.hi[k] = fmax(a->lo[k], b->lo[k]);
+	for (int k = 0; k < 3; k++)
+		cell_range(&low, g->origin, g->h, k, &c[k], &unused);
+	return (c[0] << CELL_BITS | c[1]) << CELL_BITS | c[2];
+}
+
 /*
- * Join the groups of triangles that come within reach of each other
- * (tested for every pair whose grown boxes overlap).  Returns 0, 1 when
- * the boxes are too tangled for a grid, or ST_ERR_NOMEM.
+ * Join the groups of triangles that come within reach of each other.
+ * Every pair whose grown boxes overlap shares the cell of the low corner
+ * of their overlap, and is tested there only.  Returns 0, 1 when the
+ * boxes are too tangled for a grid, or ST_ERR_NOMEM.
  */
 static int join_near_triangles(struct groups *g)
 {
@@ -230,19 +265,23 @@ static int join_near_triangles(struct groups *g)
 
 	if (rc)
 		return rc;
-	for (size_t s = 0, end; s < e; s = end) {
+	for (size_t bk = 0; bk < ((size_t)1 << g->bits) && g->left > 1; bk++) {
 		const struct entry *c = g->entries;
-		for (end = s + 1; end < e && c[end].cell == c[s].cell; end++)
-			;
-		for (size_t i = s; i < end; i++) {
+		for (size_t i = g->start[bk]; i < g->start[bk + 1]; i++) {
 			const uint32_t t = c[i].tri;
-			for (size_t j = i + 1; j < end && c[j].xlo <= g->box[t].hi[0]; j++) {
+			for (size_t j = i + 1; j < g->start[bk + 1]; j++) {
 				const uint32_t u = c[j].tri;
+				if (c[j].cell != c[i].cell)
+					continue;
+				/* Cheapest first: most pairs are in one group already. */
 				const uint32_t a = uf_find(g->parent, m->tris[t][0]);
 				const uint32_t b = uf_find(g->parent, m->tris[u][0]);
 				if (a != b && boxes_overlap(&g->box[t], &g->box[u]) &&
-				    triangles_near(m, t, u, g->reach))
+				    overlap_cell(g, &g->box[t], &g->box[u]) == c[i].cell &&
+				    triangles_near(m, t, u, g->reach)) {
 					uf_union(g->parent, a, b);
+					g->left--;
+				}
 			}
 		}
 	}
@@ -342,6 +381,66 @@ out:
 	return rc;
 }
 
+/*
+ * g->cand: the triangles whose grown box overlaps the grown box of another
+ * vertex-connected part, the only ones that can join two parts (every
+ * triangle when there are more than MAX_FILTERED_PARTS parts); *nparts:
+ * the parts (1, or 2 for "more than one" when not counted).  Returns 0 or
+ * ST_ERR_NOMEM.
+ */
+static int pick_candidates(struct groups *g, size_t *nparts)
+{
+	const struct mesh *m = g->m;
+	uint32_t *slot = malloc((m->nverts + 1) * sizeof(*slot));
+	struct box part[MAX_FILTERED_PARTS];
+	size_t np = 0;
+	bool counted = true;
+
+	if (!slot)
+		return ST_ERR_NOMEM;
+	for (size_t t = 0; t < m->ntris; t++)
+		slot[uf_find(g->parent, m->tris[t][0])] = NO_ID;
+	for (size_t t = 0; t < m->ntris && counted; t++) {
+		const uint32_t r = uf_find(g->parent, m->tris[t][0]);
+		if (slot[r] == NO_ID) {
+			if (np == MAX_FILTERED_PARTS) {
+				counted = false;
+				break;
+			}
+			part[np] = g->box[t];
+			slot[r] = (uint32_t)np++;
+		}
+		for (int k = 0; k < 3; k++) {
+			part[slot[r]].lo[k] = fmin(part[slot[r]].lo[k], g->box[t].lo[k]);
+			part[slot[r]].hi[k] = fmax(part[slot[r]].hi[k], g->box[t].hi[k]);
+		}
+	}
+	g->ncand = 0;
+	for (size_t t = 0; t < m->ntris; t++) {
+		bool near = !counted;
+		for (size_t q = 0; q < np && !near; q++)
+			near = q != slot[uf_find(g->parent, m->tris[t][0])] &&
+			       boxes_overlap(&g->box[t], &part[q]);
+		if (near)
+			g->cand[g->ncand++] = (uint32_t)t;
+	}
+	*nparts = counted ? np : 2;
+	g->left = counted ? np : SIZE_MAX;
+	free(slot);
+	return 0;
+}
+
+/* How many groups g->parent holds (2 for "more than one"). */
+static size_t count_groups(const struct groups *g)
+{
+	const struct mesh *m = g->m;
+
+	for (size_t t = 1; t < m->ntris; t++)
+		if (uf_find(g->parent, m->tris[t][0]) != uf_find(g->parent, m->tris[0][0]))
+			return 2;
+	return m->ntris > 0;
+}
+
 /* Every triangle's box, grown by half the reach. */
 static void triangle_boxes(struct groups *g)
 {
@@ -427,7 +526,8 @@ int batches_find(const struct mesh *m, double reach, struct batches *out, struct
 		/* Per triangle, then (join_enclosed) per group's root vertex. */
 		g.box = malloc(((m->ntris > m->nverts ? m->ntris : m->nverts) + 1) * sizeof(*g.box));
 		g.extent = malloc((m->ntris + 1) * sizeof(*g.extent));
-		if (!g.parent || !g.box || !g.extent) {
+		g.cand = malloc((m->ntris + 1) * sizeof(*g.cand));
+		if (!g.parent || !g.box || !g.extent || !g.cand) {
 			rc = ST_ERR_NOMEM;
 			goto out;
 		}
@@ -437,8 +537,15 @@ int batches_find(const struct mesh *m, double reach, struct batches *out, struct
 			uf_union(g.parent, m->tris[t][0], m->tris[t][1]);
 			uf_union(g.parent, m->tris[t][0], m->tris[t][2]);
 		}
+		size_t nparts = 0;
 		triangle_boxes(&g);
-		rc = join_near_triangles(&g);
+		rc = pick_candidates(&g, &nparts);
+		if (!rc && nparts < 2)
+			rc = 1; /* one part: nothing to repair apart */
+		if (!rc && g.ncand)
+			rc = join_near_triangles(&g);
+		if (!rc && count_groups(&g) < 2)
+			rc = 1; /* all joined */
 		if (!rc)
 			rc = join_enclosed(&g);
 		if (rc == 1) {
@@ -452,7 +559,9 @@ out:
 	free(g.parent);
 	free(g.box);
 	free(g.extent);
+	free(g.cand);
 	free(g.entries);
+	free(g.start);
 	if (rc) {
 		batches_free(out);
 		return st_error_set(err, ST_ERR_NOMEM, "out of memory grouping the triangles");
