@@ -30,7 +30,7 @@ struct profile_keys {
 	struct profile_kv *kv;
 	size_t count, cap;
 	char **files; /* the files and options the keys came from (owned) */
-	size_t nfiles;
+	size_t nfiles, files_cap;
 };
 
 /* How a key is parsed and where it is stored (its range is declared in settings.c). */

@@ -95,7 +95,7 @@ static const char *own_file(struct profile_keys *keys, const char *file)
 	for (size_t i = 0; i < keys->nfiles; i++)
 		if (!strcmp(keys->files[i], file))
 			return keys->files[i];
-	grown = realloc(keys->files, (keys->nfiles + 1) * sizeof(*grown));
+	grown = st_grow(keys->files, &keys->files_cap, keys->nfiles + 1, sizeof(*grown));
 	if (!grown)
 		return NULL;
 	keys->files = grown;

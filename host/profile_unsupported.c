@@ -8,6 +8,7 @@
  * Every other key the profile sets is listed, with its value.
  */
 #include "profile_int.h"
+#include "st_grow.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -175,12 +176,12 @@ static bool honoured(const struct profile *p, const struct profile_kv *kv)
 }
 
 /* Append "KEY=VALUE" (value cut at 24 bytes and at a line end). */
-static int add_item(char **buf, size_t *len, const char *key, const char *value,
+static int add_item(char **buf, size_t *len, size_t *cap, const char *key, const char *value,
 		    const char *note)
 {
 	size_t vl = strcspn(value, "\n");
 	size_t need = strlen(key) + 40 + (note ? strlen(note) : 0);
-	char *grown = realloc(*buf, *len + need + 1);
+	char *grown = st_grow(*buf, cap, *len + need + 1, 1);
 
 	if (!grown)
 		return ST_ERR_NOMEM;
@@ -194,7 +195,7 @@ static int add_item(char **buf, size_t *len, const char *key, const char *value,
 int profile_unsupported(const struct profile *p, char **out)
 {
 	char *buf = NULL;
-	size_t len = 0;
+	size_t len = 0, cap = 0;
 	enum infill_pattern pat;
 	int rc = 0;
 
@@ -202,11 +203,11 @@ int profile_unsupported(const struct profile *p, char **out)
 	if (!p)
 		return ST_ERR_ARG;
 	if (infill_pattern_parse(p->fill_pattern, &pat, NULL))
-		rc = add_item(&buf, &len, "fill_pattern", p->fill_pattern,
+		rc = add_item(&buf, &len, &cap, "fill_pattern", p->fill_pattern,
 			      "(rectilinear used)");
 	for (size_t i = 0; rc == 0 && i < p->keys->count; i++)
 		if (!honoured(p, &p->keys->kv[i]))
-			rc = add_item(&buf, &len, p->keys->kv[i].key, p->keys->kv[i].value, NULL);
+			rc = add_item(&buf, &len, &cap, p->keys->kv[i].key, p->keys->kv[i].value, NULL);
 	if (rc) {
 		free(buf);
 		return rc;

@@ -577,7 +577,8 @@ int heal_mesh(const struct mesh *in, const struct repair_options *opt, struct me
 
 	w.nverts = in->nverts;
 	w.ntris = w.cap_tris = in->ntris;
-	w.verts = malloc((in->nverts + 1) * sizeof(*w.verts));
+	w.cap_verts = in->nverts + 1;
+	w.verts = malloc(w.cap_verts * sizeof(*w.verts));
 	w.tris = malloc((in->ntris + 1) * sizeof(*w.tris));
 	if (!w.verts || !w.tris) {
 		rc = st_error_set(err, ST_ERR_NOMEM, "heal: out of memory copying %zu triangles",

@@ -57,7 +57,7 @@ int heal_mesh(const struct mesh *in, const struct repair_options *opt, struct me
  */
 struct heal_work {
 	double (*verts)[3];
-	size_t nverts;
+	size_t nverts, cap_verts;
 	uint32_t (*tris)[3];
 	size_t ntris, cap_tris;
 };

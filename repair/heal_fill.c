@@ -248,7 +248,7 @@ static int add_points(struct heal_work *w, const double (*pts)[3], size_t np,
 		return 0;
 	if (w->nverts + np > MESH_MAX_ELEMENTS)
 		return st_error_set(err, ST_ERR_RANGE, "heal: too many vertices after filling");
-	nv = realloc(w->verts, (w->nverts + np) * sizeof(*nv));
+	nv = st_grow(w->verts, &w->cap_verts, w->nverts + np, sizeof(*nv));
 	if (!nv)
 		return st_error_set(err, ST_ERR_NOMEM, "heal: out of memory filling a hole");
 	memcpy(nv[w->nverts], pts, np * sizeof(*nv));

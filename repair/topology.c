@@ -205,16 +205,15 @@ static int compare_half(const void *a, const void *b)
 	return x->corner < y->corner ? -1 : x->corner > y->corner;
 }
 
-/* Start a new edge at position start of ecorner; grows eoff as needed. */
+/* Start a new edge at position start of ecorner; grows eoff (capacity
+ * *cap) as needed, keeping room for the end marker after the last edge. */
 static int push_edge(struct topo *tp, size_t *cap, uint32_t start)
 {
-	if (tp->nedges + 1 >= *cap) {
-		void *p = realloc(tp->eoff, (*cap * 2 + 1) * sizeof(*tp->eoff));
-		if (!p)
-			return -1;
-		tp->eoff = p;
-		*cap *= 2;
-	}
+	uint32_t *p = st_grow(tp->eoff, cap, tp->nedges + 2, sizeof(*tp->eoff));
+
+	if (!p)
+		return -1;
+	tp->eoff = p;
 	tp->eoff[tp->nedges++] = start;
 	return 0;
 }
@@ -227,11 +226,11 @@ static int push_edge(struct topo *tp, size_t *cap, uint32_t start)
 static int build_edges(struct topo *tp, struct st_error *err)
 {
 	const struct mesh *m = tp->m;
-	size_t cap = m->ntris * 3 / 2 + 16, hcap = 64, pos = 0;
+	size_t cap = m->ntris * 3 / 2 + 17, hcap = 64, pos = 0; /* eoff's */
 	struct half *h = malloc(hcap * sizeof(*h));
 	int rc = 0;
 
-	tp->eoff = malloc((cap + 1) * sizeof(*tp->eoff));
+	tp->eoff = malloc(cap * sizeof(*tp->eoff));
 	tp->ecorner = malloc((m->ntris * 3 + 1) * sizeof(*tp->ecorner));
 	if (!h || !tp->eoff || !tp->ecorner)
 		goto out_nomem;

@@ -1,9 +1,10 @@
 /*
  * marlin.c - Marlin text-protocol driver (see marlin.h, docs/streaming.md):
- * lifecycle, the command queue, transmit, reply handling, time-outs, the
- * safe stop and file streaming.  The window and Resend accounting are in
- * marlin_window.c, the handshake in marlin_connect.c, reply parsing in
- * marlin_reply.c; their shared state in marlin_impl.h.
+ * lifecycle, the command queue, transmit, reply handling, time-outs and the
+ * safe stop; files are streamed by printer_marlin.c (printer.h).  The window
+ * and Resend accounting are in marlin_window.c, the handshake in
+ * marlin_connect.c, reply parsing in marlin_reply.c; their shared state in
+ * marlin_impl.h.
  */
 #include <math.h>
 #include <stdarg.h>
@@ -652,57 +653,5 @@ int marlin_safe_stop(struct marlin *m, int timeout_ms, struct st_error *err)
 			return rc;
 	}
 	marlin_job_over(m);
-	return 0;
-}
-
-int marlin_stream_file(struct marlin *m, struct gcode_reader *r, const char *name,
-		       marlin_progress_fn progress, void *ctx, volatile sig_atomic_t *stop,
-		       struct st_error *err)
-{
-	struct gcode_line g;
-	long layer = -1;
-	double z = NAN, t_cb = 0;
-	bool eof = false;
-	int rc;
-
-	if (!name)
-		name = "<input>";
-	for (;;) {
-		if (stop && *stop)
-			marlin_request_cancel(m);
-		while (!eof && marlin_can_submit(m) && !m->dead && !m->cancelled) {
-			rc = gcode_reader_next(r, 0, &g, err);
-			if (rc == 0) {
-				eof = true;
-				break;
-			}
-			if (rc < 0)
-				return rc;
-			gcode_layer_follow(&g, &layer, &z);
-			if (g.kind == GCODE_KIND_HOST_ONLY || g.text_len == 0)
-				continue;
-			uint64_t src = gcode_reader_line(r);
-			if (g.text_len > MARLIN_CMD_MAX)
-				return st_error_set(err, ST_ERR_ARG,
-						    "%s: line %llu: the command is %zu bytes long; "
-						    "Marlin takes at most %d (shorten it)",
-						    name, (unsigned long long)src, g.text_len,
-						    MARLIN_CMD_MAX);
-			rc = marlin_submit(m, g.text, src, layer, z, err);
-			if (rc < 0)
-				return rc;
-		}
-		if (eof && marlin_idle(m))
-			break;
-		if ((rc = marlin_step(m, 50, err)))
-			return rc;
-		double now = marlin_now_s();
-		if (progress && now - t_cb >= 0.2) {
-			t_cb = now;
-			progress(ctx, &m->st, gcode_reader_bytes(r));
-		}
-	}
-	if (progress)
-		progress(ctx, &m->st, gcode_reader_bytes(r));
 	return 0;
 }

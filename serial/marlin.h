@@ -214,25 +214,6 @@ void marlin_request_cancel(struct marlin *m);
  */
 int marlin_safe_stop(struct marlin *m, int timeout_ms, struct st_error *err);
 
-/* Progress callback of marlin_stream_file, called about every 200 ms. */
-typedef void (*marlin_progress_fn)(void *ctx, const struct marlin_status *st,
-				   uint64_t bytes_read);
-
-/*
- * marlin_stream_file - send every command line of r, named name in messages
- * (comment-only and
- * host-only lines are skipped; layer comments set the layer) and wait until
- * all are acknowledged.  @stop (may be NULL): when it becomes non-zero the
- * job ends with MARLIN_FAIL_CANCELLED (the caller then calls
- * marlin_safe_stop).  Returns 0, ST_ERR_PARSE (a bad line: err names file
- * and line; lines before it were sent, status says up to where), ST_ERR_ARG
- * (a command too long for Marlin, named likewise) or ST_ERR_IO (the job
- * failed, see status.fail).
- */
-int marlin_stream_file(struct marlin *m, struct gcode_reader *r, const char *name,
-		       marlin_progress_fn progress, void *ctx, volatile sig_atomic_t *stop,
-		       struct st_error *err);
-
 /* ---- reply parsing, exposed for tests and other hosts ---- */
 
 /* What a reply line is. */

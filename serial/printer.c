@@ -96,6 +96,11 @@ const struct printer_ops *printer_ops_of(const struct printer *p)
 	return p->ops;
 }
 
+void *printer_state(const struct printer *p)
+{
+	return p->state;
+}
+
 int printer_check(const struct printer_ops *ops, const struct printer_options *o,
 		  const struct printer_job *job, printer_warn_fn warn, void *warn_ctx,
 		  struct printer_file_info *info, struct st_error *err)

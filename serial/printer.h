@@ -37,6 +37,11 @@ struct printer_options {
 	bool dtr_reset;		    /* opening a real serial port resets the board */
 	unsigned rx_buffer;	    /* Marlin: firmware RX ring (bytes), 0 = unknown */
 	unsigned bufsize;	    /* Marlin: firmware BUFSIZE (command slots), 0 = unknown */
+	/* Marlin: the driver's time-outs (struct marlin_options); 0 = its default */
+	int retry_ms, probe_ms, dead_ms;
+	/* Optional traffic log: dir is "<" (from the printer) or ">" (to it). */
+	void (*trace)(void *ctx, const char *dir, const char *line);
+	void *trace_ctx;
 	double sim_speedup;	    /* port "sim": time divisor; default 1000 */
 	const char *sim_log;	    /* port "sim": execution log file, NULL none */
 	struct x3g_machine machine; /* Sailfish: the machine G-code is translated for */
@@ -159,6 +164,11 @@ extern const struct printer_ops printer_sailfish_ops;
 /* Opaque: one open printer. */
 struct printer;
 
+struct marlin;
+/* printer_marlin_driver - the Marlin driver under p (marlin.h: its status
+ * and counters, for tests), NULL when p is not a Marlin printer. */
+struct marlin *printer_marlin_driver(const struct printer *p);
+
 /*
  * printer_open - open the printer o describes with ops (the options are
  * copied; the strings and machine must outlive the printer).  Connects:
@@ -231,6 +241,9 @@ struct xport;
  */
 int printer_port_open(const struct printer_options *o, const char *path, bool simulated,
 		      struct xport **x, struct st_error *err);
+
+/* printer_state - the adapter state p's open returned. */
+void *printer_state(const struct printer *p);
 
 /* printer_port_close - drain (1 s at most) and close; NULL is fine. */
 void printer_port_close(struct xport *x);

@@ -44,6 +44,8 @@ struct pm_src {
 
 struct pm_state {
 	char name[96];
+	void (*trace)(void *ctx, const char *dir, const char *line); /* the caller's */
+	void *trace_ctx;
 	bool simulated;
 	struct sim_marlin *sim; /* port = sim only */
 	struct xport *x;
@@ -92,6 +94,8 @@ static void pm_trace(void *ctx, const char *dir, const char *line)
 	struct pm_state *s = ctx;
 	size_t n = strcspn(line, "\r\n");
 
+	if (s->trace)
+		s->trace(s->trace_ctx, dir, line);
 	if (!s->reply || dir[0] != '<' || s->reply_len + n + 2 > s->reply_cap)
 		return;
 	memcpy(s->reply + s->reply_len, line, n);
@@ -121,8 +125,16 @@ static int pm_open(const struct printer_options *o, void **state, struct st_erro
 	marlin_options_init(&mo);
 	mo.rx_buffer = o->rx_buffer;
 	mo.bufsize = o->bufsize;
+	if (o->retry_ms > 0)
+		mo.retry_ms = o->retry_ms;
+	if (o->probe_ms > 0)
+		mo.probe_ms = o->probe_ms;
+	if (o->dead_ms > 0)
+		mo.dead_ms = o->dead_ms;
 	mo.trace = pm_trace;
 	mo.trace_ctx = s;
+	s->trace = o->trace;
+	s->trace_ctx = o->trace_ctx;
 	/* the simulator boots like a board; ptys and TCP bridges are not reset */
 	mo.expect_reset = s->simulated ||
 			  (o->dtr_reset && xport_backend_of(s->x) == XPORT_BACKEND_SERIALPORT);
@@ -541,6 +553,13 @@ static void pm_describe(void *state, char *out, size_t cap)
 
 	snprintf(out, cap, "%s%s", c->firmware_name[0] ? c->firmware_name : "Marlin",
 		 s->simulated ? " (simulated printer)" : "");
+}
+
+struct marlin *printer_marlin_driver(const struct printer *p)
+{
+	if (printer_ops_of(p) != &printer_marlin_ops)
+		return NULL;
+	return ((struct pm_state *)printer_state(p))->m;
 }
 
 const struct printer_ops printer_marlin_ops = {

@@ -714,11 +714,10 @@ static int plan_layer(struct gcodew *w, const struct layer_paths *l, size_t li)
 	w->plan_role = -1;
 	w->map = w->s->avoid_crossing_perimeters ? l->travel : NULL;
 	if (l->n > w->donecap) {
-		bool *grown = realloc(w->done, l->n * sizeof(*grown));
+		bool *grown = st_grow(w->done, &w->donecap, l->n, sizeof(*grown));
 		if (!grown)
 			return st_error_set(w->err, ST_ERR_NOMEM, "G-code: out of memory planning a layer");
 		w->done = grown;
-		w->donecap = l->n;
 	}
 	if (l->n)
 		memset(w->done, 0, l->n * sizeof(*w->done));

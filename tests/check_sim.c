@@ -20,6 +20,7 @@
 
 #include "gcode.h"
 #include "sim/marlin_sim.h"
+#include "st_clock.h"
 #include "suites.h"
 #include "testutil.h"
 
@@ -31,13 +32,6 @@ struct client {
 	size_t len;
 	FILE *log;
 };
-
-static double now_s(void)
-{
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
-}
 
 /* Options for fast tests: high speedup, fast link. */
 static void fast_opts(struct sim_marlin_options *o)
@@ -51,7 +45,7 @@ static void fast_opts(struct sim_marlin_options *o)
  * -2 on hang-up. */
 static int cl_line(struct client *c, char *out, size_t cap, double timeout)
 {
-	double end = now_s() + timeout;
+	double end = st_mono_s() + timeout;
 	for (;;) {
 		char *nl = memchr(c->buf, '\n', c->len);
 		if (nl) {
@@ -63,7 +57,7 @@ static int cl_line(struct client *c, char *out, size_t cap, double timeout)
 			c->len -= n + 1;
 			return (int)k;
 		}
-		double left = end - now_s();
+		double left = end - st_mono_s();
 		if (left <= 0)
 			return -1;
 		struct pollfd p = {.fd = c->fd, .events = POLLIN};
@@ -88,9 +82,9 @@ static int cl_line(struct client *c, char *out, size_t cap, double timeout)
 static void cl_expect(struct client *c, const char *prefix, char *out, size_t cap, double timeout)
 {
 	char line[512];
-	double end = now_s() + timeout;
+	double end = st_mono_s() + timeout;
 	for (;;) {
-		double left = end - now_s();
+		double left = end - st_mono_s();
 		int n = cl_line(c, line, sizeof(line), left > 0 ? left : 0);
 		ck_assert_msg(n >= 0, "no line starting with '%s' within %.1f s", prefix, timeout);
 		if (!strncmp(line, prefix, strlen(prefix))) {
@@ -489,7 +483,7 @@ START_TEST(m109_waits)
 	char line[512];
 	fast_opts(&o);
 	cl_start(&c, &o);
-	double t0 = now_s();
+	double t0 = st_mono_s();
 	cl_send_n(&c, 1, "M109 S200");
 	int reports = 0;
 	for (;;) {
@@ -502,7 +496,7 @@ START_TEST(m109_waits)
 			reports++;
 		}
 	}
-	double dt = now_s() - t0;
+	double dt = st_mono_s() - t0;
 	/* 25 -> 199 degC at 2 degC/s, 100 times faster: about 0.87 s. */
 	ck_assert_msg(dt > 0.7 && dt < 2.5, "M109 took %.2f s", dt);
 	ck_assert_int_gt(reports, 20);
@@ -536,13 +530,13 @@ START_TEST(m108_breaks_wait)
 	struct client c;
 	fast_opts(&o);
 	cl_start(&c, &o);
-	double t0 = now_s();
+	double t0 = st_mono_s();
 	cl_send_n(&c, 1, "M109 S300"); /* about 1.4 s of wall time */
 	usleep(200000);
 	cl_send_n(&c, 2, "M108"); /* acted on as it arrives, ahead of the queue */
 	cl_expect(&c, "ok", NULL, 0, 2.0);
 	cl_expect(&c, "ok", NULL, 0, 2.0);
-	double dt = now_s() - t0;
+	double dt = st_mono_s() - t0;
 	ck_assert_msg(dt < 0.8, "M108 took %.2f s to break the wait", dt);
 	cl_stop(&c);
 }
@@ -616,9 +610,9 @@ START_TEST(corrupt_and_drop_recover)
 	o.seed = 42;
 	cl_start(&c, &o);
 	long n = 1;
-	double give_up = now_s() + 8.0;
+	double give_up = st_mono_s() + 8.0;
 	while (n <= 40) {
-		ck_assert_msg(now_s() < give_up, "stuck at line %ld", n);
+		ck_assert_msg(st_mono_s() < give_up, "stuck at line %ld", n);
 		snprintf(cmd, sizeof(cmd), "G1 X%ld Y%ld F6000", n, n % 7);
 		cl_send(&c, "\n"); /* ends any fragment a lost newline left */
 		cl_send_n(&c, n, cmd);
@@ -658,7 +652,7 @@ START_TEST(pacing_after_idle)
 	o.baud = 115200; /* 11 520 bytes/s */
 	o.speedup = 1e6;
 	cl_start(&c, &o);
-	double t0 = now_s();
+	double t0 = st_mono_s();
 	for (long n = 1; n <= 60; n++) {
 		snprintf(cmd, sizeof(cmd), "G1 X%.3f Y100.000 E0.01660", 100 + n * 0.5);
 		ck_assert_int_gt(gcode_format_numbered(framed, sizeof(framed), n, cmd), 0);
@@ -667,7 +661,7 @@ START_TEST(pacing_after_idle)
 		cl_next_is(&c, "ok");
 		usleep(5000); /* idle: a token bucket would refill here */
 	}
-	double wire = (double)bytes / 11520.0, dt = now_s() - t0 - 60 * 0.005;
+	double wire = (double)bytes / 11520.0, dt = st_mono_s() - t0 - 60 * 0.005;
 	ck_assert_msg(dt > 0.97 * wire, "%zu bytes took %.3f s on the link, less than the %.3f s "
 		      "115200 baud needs", bytes, dt, wire);
 	cl_stop(&c);
@@ -681,10 +675,10 @@ START_TEST(pacing)
 	fast_opts(&o);
 	o.baud = 9600; /* 960 bytes/s */
 	cl_start(&c, &o);
-	double t0 = now_s();
+	double t0 = st_mono_s();
 	cl_send(&c, "M115\n"); /* about 1 KiB of reply */
 	cl_expect(&c, "ok", NULL, 0, 5.0);
-	double dt = now_s() - t0;
+	double dt = st_mono_s() - t0;
 	ck_assert_msg(dt > 0.8, "1 KiB at 9600 baud took only %.2f s", dt);
 	cl_stop(&c);
 }
@@ -785,9 +779,9 @@ START_TEST(printcore_streams)
 	}
 	/* printcore sleeps 2 s after connecting and polls once a second */
 	int status = 0;
-	double give_up = now_s() + 60.0;
+	double give_up = st_mono_s() + 60.0;
 	while (waitpid(pid, &status, WNOHANG) == 0) {
-		if (now_s() > give_up) {
+		if (st_mono_s() > give_up) {
 			kill(pid, SIGKILL);
 			waitpid(pid, &status, 0);
 			ck_abort_msg("printcore did not finish within 60 s; its output is in %s",

@@ -186,6 +186,39 @@ START_TEST(rename_failure_removes_the_temporary_file)
 END_TEST
 
 /* No directory to put the temporary file in: named, nothing created. */
+/* An output named after its data (the node's uploads): the temporary file
+ * is made in a directory of its own, stays readable once finished, and is
+ * published under its name; a publish that fails leaves nothing behind. */
+START_TEST(temp_then_publish)
+{
+	const char *tmpdir = fresh_dir("stf-temp");
+	char tdir[600], path[700], bad[700];
+	struct st_file_out o;
+	struct st_error err = {0};
+
+	snprintf(tdir, sizeof(tdir), "%s", tmpdir);
+	snprintf(path, sizeof(path), "%s/named.gcode", fresh_dir("stf-files"));
+	ck_assert_msg(st_file_begin_temp(&o, tdir, "upload", &err) == 0, "%s", err.msg);
+	ck_assert(strncmp(o.tmp, tdir, strlen(tdir)) == 0);
+	ck_assert(fputs("G28\n", o.f) != EOF);
+	ck_assert_msg(st_file_finish(&o, &err) == 0, "%s", err.msg);
+	ck_assert_ptr_null(o.f);
+	expect_content(o.tmp, "G28\n"); /* a check may read it before it has a name */
+	ck_assert_msg(st_file_publish(&o, path, &err) == 0, "%s", err.msg);
+	expect_content(path, "G28\n");
+	ck_assert_int_eq(tu_dir_entries(tdir), 0);
+
+	ck_assert_int_eq(st_file_begin_temp(&o, tdir, "upload", &err), 0);
+	ck_assert_int_eq(st_file_finish(&o, &err), 0);
+	snprintf(bad, sizeof(bad), "%s/no-such-folder/x.gcode", tdir);
+	errno = 0;
+	ck_assert_int_eq(st_file_publish(&o, bad, &err), ST_ERR_IO);
+	ck_assert_int_eq(errno, ENOENT); /* kept for the caller's message */
+	ck_assert_msg(strstr(err.msg, bad), "%s", err.msg);
+	ck_assert_int_eq(tu_dir_entries(tdir), 0);
+}
+END_TEST
+
 START_TEST(missing_directory_is_named)
 {
 	struct st_file_out o;
@@ -212,6 +245,7 @@ Suite *stfile_suite(void)
 	tcase_add_test(tc, rename_failure_removes_the_temporary_file);
 	tcase_add_test(tc, missing_directory_is_named);
 	tcase_add_test(tc, pipe_written_in_place);
+	tcase_add_test(tc, temp_then_publish);
 	suite_add_tcase(s, tc);
 	return s;
 }

@@ -1,6 +1,6 @@
 /*
- * suites.h - one Check suite per module; check_main.c runs them all in one
- * SRunner so `make check` ends with a single Check summary line.
+ * suites.h - one Check suite per module; check_main.c runs them (all, or a
+ * lane of them: tests/lanes.sh), and `make check` ends with one summary line.
  */
 #ifndef STRATUM_TESTS_SUITES_H
 #define STRATUM_TESTS_SUITES_H

@@ -90,6 +90,18 @@ int tu_run(char *out, size_t cap, const char *args_fmt, ...)
 /* tu_bin - the binary under test: $STRATUM_BIN, else build/stratum. */
 const char *tu_bin(void);
 
+/*
+ * TU_SANITIZED - 1 in make check's AddressSanitizer pass (make test-asan),
+ * 0 in the plain pass.  A long end-to-end case that the plain pass runs at
+ * full size runs there on a shorter input: the same code under the
+ * sanitizers, without paying the full run twice (make check's time budget).
+ */
+#ifdef __SANITIZE_ADDRESS__
+#define TU_SANITIZED 1
+#else
+#define TU_SANITIZED 0
+#endif
+
 /* tu_file_exists - 1 if path exists. */
 int tu_file_exists(const char *path);
 

@@ -132,7 +132,7 @@ static int make_folders(const char *base, const char *rel)
 	return 0;
 }
 
-int node_store_file(struct node *n, struct node_printer *p, const char *tmp, const char *rel,
+int node_store_file(struct node *n, struct node_printer *p, struct st_file_out *tmp, const char *rel,
 		    bool select, bool print, bool force, int64_t *id, struct st_error *err)
 {
 	char full[2 * NODE_PATH_MAX];
@@ -140,16 +140,15 @@ int node_store_file(struct node *n, struct node_printer *p, const char *tmp, con
 	*id = 0;
 	if (snprintf(full, sizeof(full), "%s/%s", p->files_dir, rel) >= (int)sizeof(full))
 		return st_error_set(err, ST_ERR_ARG, "the file's path is too long");
-	if (node_file_kind(rel) == 'g' && !force && guard_check_file(tmp, rel, p->prof, err))
+	if (node_file_kind(rel) == 'g' && !force && guard_check_file(tmp->tmp, rel, p->prof, err))
 		return err->code == ST_ERR_RANGE ? ST_ERR_RANGE : ST_ERR_IO;
 	if (node_queue_file_busy(n->q, p->cfg->name, full))
 		return st_error_set(err, ST_ERR_RANGE, "%.250s is being printed or waits in the "
 				    "queue; send it under another name", rel);
-	if (make_folders(p->files_dir, rel) || rename(tmp, full)) {
+	if (make_folders(p->files_dir, rel) || st_file_publish(tmp, full, NULL)) {
 		node_log("error", p->cfg->name, 0, "%s: cannot store: %s", full, strerror(errno));
 		return st_error_set(err, ST_ERR_IO, "cannot store the file");
 	}
-	st_file_sync_dir(full); /* the upload was synced before; now its name */
 	if ((select || print) && node_queue_set_selected(n->q, p->cfg->name, rel, err))
 		return ST_ERR_IO;
 	if (print) {

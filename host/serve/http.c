@@ -26,6 +26,7 @@
 
 #include "gcode.h"
 #include "http_int.h"
+#include "st_grow.h"
 
 #define HTTP_JSON_MAX 65536		/* body of a JSON command, bytes */
 #define HTTP_MULTIPART_SLACK 65536	/* multipart headers around the file */
@@ -96,14 +97,7 @@ enum MHD_Result http_no_content(struct MHD_Connection *c)
 /* Drop the upload's temporary file. */
 static void upload_discard(struct req *r)
 {
-	if (r->fd >= 0) {
-		close(r->fd);
-		r->fd = -1;
-	}
-	if (r->tmp[0]) {
-		unlink(r->tmp);
-		r->tmp[0] = '\0';
-	}
+	st_file_abort(&r->out);
 }
 
 /* Decide an error answer for the request (first one wins). */
@@ -168,12 +162,7 @@ static enum MHD_Result post_iter(void *cls, enum MHD_ValueKind kind, const char 
 			memcpy(r->filename, filename ? filename : "", flen);
 			r->filename[flen] = '\0';
 			r->filename_len = filename ? strlen(filename) : 0;
-			r->fd = snprintf(r->tmp, sizeof(r->tmp), "%s/upload-XXXXXX", n->tmp_dir) <
-					 (int)sizeof(r->tmp)
-					? mkstemp(r->tmp)
-					: -1;
-			if (r->fd < 0) {
-				r->tmp[0] = '\0';
+			if (st_file_begin_temp(&r->out, n->tmp_dir, "upload", NULL)) {
 				node_log("error", r->p->cfg->name, 0, "%s: cannot create an upload "
 								      "file: %s", n->tmp_dir,
 					 strerror(errno));
@@ -191,19 +180,11 @@ static enum MHD_Result post_iter(void *cls, enum MHD_ValueKind kind, const char 
 			req_fail(r, MHD_HTTP_CONTENT_TOO_LARGE, msg);
 			return MHD_YES;
 		}
-		for (size_t done = 0; done < size && r->fd >= 0;) {
-			ssize_t w = write(r->fd, data + done, size - done);
-
-			if (w < 0 && errno == EINTR)
-				continue;
-			if (w <= 0) {
-				node_log("error", r->p->cfg->name, 0, "writing an upload: %s",
-					 strerror(errno));
-				upload_discard(r);
-				req_fail(r, MHD_HTTP_INSUFFICIENT_STORAGE, "cannot store the upload");
-				break;
-			}
-			done += (size_t)w;
+		if (r->out.f && size && fwrite(data, 1, size, r->out.f) != size) {
+			node_log("error", r->p->cfg->name, 0, "writing an upload: %s",
+				 strerror(errno));
+			upload_discard(r);
+			req_fail(r, MHD_HTTP_INSUFFICIENT_STORAGE, "cannot store the upload");
 		}
 	}
 	/* Other fields (OctoPrint's userdata, foldername ...) are ignored. */
@@ -249,16 +230,12 @@ static enum MHD_Result finish_upload(struct node *n, struct MHD_Connection *c, s
 	}
 	snprintf(rel, sizeof(rel), "%s%s%s", folder, *folder && folder[strlen(folder) - 1] != '/'
 							 ? "/" : "", r->filename);
-	if (fsync(r->fd) || close(r->fd)) {
-		r->fd = -1;
+	if (st_file_finish(&r->out, NULL))
 		return http_send_error(c, MHD_HTTP_INSUFFICIENT_STORAGE, "cannot store the upload");
-	}
-	r->fd = -1;
-	if ((rc = node_store_file(n, p, r->tmp, rel, select, print, form_true(r->force), &id,
+	if ((rc = node_store_file(n, p, &r->out, rel, select, print, form_true(r->force), &id,
 				   &err)))
 		return http_send_error(c, rc == ST_ERR_RANGE ? MHD_HTTP_CONFLICT
 				       : MHD_HTTP_INTERNAL_SERVER_ERROR, err.msg);
-	r->tmp[0] = '\0';
 	snprintf(full, sizeof(full), "%s/%s", p->files_dir, rel);
 	node_log("info", p->cfg->name, id, "stored %s (%llu bytes)%s", rel,
 		 (unsigned long long)r->bytes, print ? ", queued" : "");
@@ -417,7 +394,6 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *u
 		r = calloc(1, sizeof(*r));
 		if (!r)
 			return MHD_NO;
-		r->fd = -1;
 		*con_cls = r;
 		first_call(n, c, url, method, r);
 		/* Answer at once when no body is on its way. */
@@ -433,7 +409,7 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *u
 			if (r->len + *upload_size > HTTP_JSON_MAX) {
 				req_fail(r, MHD_HTTP_CONTENT_TOO_LARGE, "the request body is too large");
 			} else {
-				char *b = realloc(r->body, r->len + *upload_size);
+				char *b = st_grow(r->body, &r->body_cap, r->len + *upload_size, 1);
 
 				if (!b)
 					return MHD_NO;

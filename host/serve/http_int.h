@@ -5,6 +5,7 @@
 #ifndef STRATUM_HOST_SERVE_HTTP_INT_H
 #define STRATUM_HOST_SERVE_HTTP_INT_H
 
+#include "st_file.h"
 #include <jansson.h>
 #include <microhttpd.h>
 #include <stdbool.h>
@@ -36,11 +37,10 @@ struct req {
 	char msg[300];
 	/* JSON body */
 	char *body;
-	size_t len;
+	size_t len, body_cap;
 	/* upload */
 	struct MHD_PostProcessor *pp;
-	int fd;
-	char tmp[NODE_PATH_MAX];
+	struct st_file_out out; /* the upload's temporary file (st_file.h) */
 	uint64_t bytes;
 	bool has_file;
 	char filename[NODE_FILE_NAME_MAX + 2];

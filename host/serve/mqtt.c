@@ -150,7 +150,7 @@ static void publish(struct node_mqtt *m, const char *printer, const char *what, 
 
 /* What a download writes to, with the size limit. */
 struct download {
-	int fd;
+	FILE *f;
 	uint64_t bytes, max;
 	bool too_big, write_failed;
 };
@@ -158,22 +158,15 @@ struct download {
 static size_t download_write(char *data, size_t size, size_t nmemb, void *ctx)
 {
 	struct download *d = ctx;
-	size_t n = size * nmemb, done = 0;
+	size_t n = size * nmemb;
 
 	if (d->bytes + n > d->max) {
 		d->too_big = true;
 		return 0;
 	}
-	while (done < n) {
-		ssize_t w = write(d->fd, data + done, n - done);
-
-		if (w < 0 && errno == EINTR)
-			continue;
-		if (w <= 0) {
-			d->write_failed = true;
-			return 0;
-		}
-		done += (size_t)w;
+	if (n && fwrite(data, 1, n, d->f) != n) {
+		d->write_failed = true;
+		return 0;
 	}
 	d->bytes += n;
 	return n;
@@ -189,8 +182,9 @@ static void name_of_url(const char *url, char *out, size_t cap)
 	snprintf(out, cap, "%.*s", (int)(end - s), s);
 }
 
-/* Download url into a temporary file tmp (cap bytes for its path). */
-static int download(struct node *n, const char *url, char *tmp, size_t cap, struct st_error *err)
+/* Download url into a finished temporary file out (st_file.h). */
+static int download(struct node *n, const char *url, struct st_file_out *out,
+		    struct st_error *err)
 {
 	struct download d = {.max = n->cfg.max_upload};
 	char curl_err[CURL_ERROR_SIZE] = "";
@@ -200,15 +194,13 @@ static int download(struct node *n, const char *url, char *tmp, size_t cap, stru
 
 	if (strncmp(url, "http://", 7) && strncmp(url, "https://", 8))
 		return st_error_set(err, ST_ERR_ARG, "url must be http:// or https://");
-	if (snprintf(tmp, cap, "%s/mqtt-XXXXXX", n->tmp_dir) >= (int)cap)
-		return st_error_set(err, ST_ERR_RANGE, "the data directory's path is too long");
-	d.fd = mkstemp(tmp);
-	if (d.fd < 0)
-		return st_error_set(err, ST_ERR_IO, "%s: %s", tmp, strerror(errno));
+	if (st_file_begin_temp(out, n->tmp_dir, "mqtt", NULL))
+		return st_error_set(err, ST_ERR_IO, "%s/mqtt-XXXXXX: %s", n->tmp_dir,
+				    strerror(errno));
+	d.f = out->f;
 	c = curl_easy_init();
 	if (!c) {
-		close(d.fd);
-		unlink(tmp);
+		st_file_abort(out);
 		return st_error_set(err, ST_ERR_NOMEM, "cannot start a download");
 	}
 	curl_easy_setopt(c, CURLOPT_URL, url);
@@ -226,7 +218,7 @@ static int download(struct node *n, const char *url, char *tmp, size_t cap, stru
 	cc = curl_easy_perform(c);
 	curl_easy_getinfo(c, CURLINFO_RESPONSE_CODE, &status);
 	curl_easy_cleanup(c);
-	if (cc == CURLE_OK && status == 200 && !fsync(d.fd) && !close(d.fd))
+	if (cc == CURLE_OK && status == 200 && !st_file_finish(out, NULL))
 		return 0;
 	if (cc == CURLE_OK && status == 200)
 		st_error_set(err, ST_ERR_IO, "cannot store the download: %s", strerror(errno));
@@ -240,8 +232,7 @@ static int download(struct node *n, const char *url, char *tmp, size_t cap, stru
 	else
 		st_error_set(err, ST_ERR_IO, "download failed: %s",
 			     curl_err[0] ? curl_err : curl_easy_strerror(cc));
-	close(d.fd);
-	unlink(tmp);
+	st_file_abort(out);
 	return err->code;
 }
 
@@ -251,7 +242,8 @@ static int cmd_enqueue(struct node *n, struct node_printer *p, json_t *o, int64_
 {
 	const char *url = json_string_value(json_object_get(o, "url"));
 	const char *name = json_string_value(json_object_get(o, "name"));
-	char fname[NODE_FILE_NAME_MAX + 1], tmp[NODE_PATH_MAX + 16];
+	char fname[NODE_FILE_NAME_MAX + 1];
+	struct st_file_out tmp;
 	struct st_error e = {0};
 	int rc;
 
@@ -267,11 +259,11 @@ static int cmd_enqueue(struct node *n, struct node_printer *p, json_t *o, int64_
 				    name && strlen(name) > NODE_FILE_NAME_MAX ? "too long" : err->msg);
 	if (node_check_kind(p, fname, &e))
 		return st_error_set(err, ST_ERR_ARG, "'%.100s': %s", fname, e.msg);
-	if ((rc = download(n, url, tmp, sizeof(tmp), err)))
+	if ((rc = download(n, url, &tmp, err)))
 		return rc;
-	if ((rc = node_store_file(n, p, tmp, fname, true, true,
+	if ((rc = node_store_file(n, p, &tmp, fname, true, true,
 				   json_is_true(json_object_get(o, "force")), job, err))) {
-		unlink(tmp);
+		st_file_abort(&tmp);
 		return rc;
 	}
 	node_log("info", p->cfg->name, *job, "mqtt: downloaded %s from %.200s, queued", fname,

@@ -16,6 +16,7 @@
 #include "node.h"
 #include "print.h"
 #include "profile.h"
+#include "st_file.h"
 
 /* Job states, as stored and as the API names them. */
 enum node_job_state {
@@ -182,14 +183,15 @@ int node_control_job(struct node *n, struct node_printer *p, const char *cmd,
 		     const char *action, struct st_error *err);
 
 /*
- * node_store_file - move the complete temporary file tmp (same file
- * system) to p's files as rel (checked by the caller), select it and, with
- * print, queue it (*id the job, else 0).  G-code sliced for another printer
+ * node_store_file - publish the finished temporary file tmp (st_file_finish
+ * done; same file system) as p's file rel (checked by the caller), select
+ * it and, with print, queue it (*id the job, else 0).  tmp is consumed when
+ * the file is stored; on an error before that it stays the caller's.  G-code sliced for another printer
  * or leaving its bed (host/guard.h) is refused unless force.  Returns 0,
  * ST_ERR_RANGE (a queued or running job uses that file, or the guard
  * refused it: 409), ST_ERR_ARG, ST_ERR_IO.
  */
-int node_store_file(struct node *n, struct node_printer *p, const char *tmp, const char *rel,
+int node_store_file(struct node *n, struct node_printer *p, struct st_file_out *tmp, const char *rel,
 		    bool select, bool print, bool force, int64_t *id, struct st_error *err);
 
 /*

@@ -156,18 +156,12 @@ static void sim_send(struct sim_marlin *s, const char *text)
 		return;
 	if (s->o.reply_loss_p > 0 && !strncmp(text, "ok", 2) && sim_rand(s) < s->o.reply_loss_p)
 		return;
-	if (s->tx_len + n + 1 > s->tx_cap) {
-		size_t cap = s->tx_cap ? s->tx_cap : 4096;
-		while (cap < s->tx_len + n + 1)
-			cap *= 2;
-		if (cap > SIM_TX_MAX)
-			return; /* host not reading at all: drop, as a UART would block */
-		char *p = realloc(s->tx, cap);
-		if (!p)
-			return;
-		s->tx = p;
-		s->tx_cap = cap;
-	}
+	if (s->tx_len + n + 1 > SIM_TX_MAX)
+		return; /* host not reading at all: drop, as a UART would block */
+	char *p = st_grow(s->tx, &s->tx_cap, s->tx_len + n + 1, 1);
+	if (!p)
+		return;
+	s->tx = p;
 	struct sim_txmark *m = st_grow(s->marks, &s->marks_cap, s->marks_n + 1, sizeof(*m));
 	if (!m)
 		return;

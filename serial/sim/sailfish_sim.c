@@ -24,6 +24,7 @@
 #include <unistd.h>
 
 #include "s3g.h"
+#include "st_grow.h"
 #include "sailfish_sim.h"
 #include "sim_util.h"
 
@@ -290,18 +291,12 @@ static void sf_reply(struct sim_sailfish *s, const uint8_t *payload, size_t n, d
 	int len = s3g_encode(payload, n, pkt, sizeof(pkt), NULL);
 	if (len < 0 || s->unplugged)
 		return;
-	if (s->tx_len + (size_t)len > s->tx_cap) {
-		size_t cap = s->tx_cap ? s->tx_cap * 2 : 1024;
-		while (cap < s->tx_len + (size_t)len)
-			cap *= 2;
-		if (cap > SF_TX_MAX)
-			return;
-		uint8_t *p = realloc(s->tx, cap);
-		if (!p)
-			return;
-		s->tx = p;
-		s->tx_cap = cap;
-	}
+	if (s->tx_len + (size_t)len > SF_TX_MAX)
+		return;
+	uint8_t *tx = st_grow(s->tx, &s->tx_cap, s->tx_len + (size_t)len, 1);
+	if (!tx)
+		return;
+	s->tx = tx;
 	for (int i = 0; i < len; i++)
 		if (s->o.reply_corrupt_p > 0 && sf_rand(s) < s->o.reply_corrupt_p)
 			pkt[i] ^= (uint8_t)(1u << (unsigned)(sf_rand(s) * 8));

@@ -4,6 +4,7 @@
  * (STYLE rule 14).  The containers are malloc'd here and freed here.
  */
 #include "clip.h"
+#include "st_grow.h"
 
 #include <cstdlib>
 #include <cstring>
@@ -23,22 +24,16 @@ using ClipperLib::IntPoint;
 using ClipperLib::Path;
 using ClipperLib::Paths;
 
-// Grow a malloc'd array to hold at least need elements; throws bad_alloc.
+// Grow a malloc'd array to hold at least need elements (st_grow.h's rule);
+// throws bad_alloc.
 template <class T> void reserve(T *&arr, size_t &cap, size_t need)
 {
 	if (need <= cap)
 		return;
-	size_t ncap = cap ? cap : 16;
-	while (ncap < need) {
-		if (ncap > std::numeric_limits<size_t>::max() / 2 / sizeof(T))
-			throw std::bad_alloc();
-		ncap *= 2;
-	}
-	T *grown = static_cast<T *>(std::realloc(arr, ncap * sizeof(T)));
+	T *grown = static_cast<T *>(st_grow(arr, &cap, need, sizeof(T)));
 	if (!grown)
 		throw std::bad_alloc();
 	arr = grown;
-	cap = ncap;
 }
 
 // Append one path to ps; throws bad_alloc (ps unchanged then).
