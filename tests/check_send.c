@@ -375,6 +375,15 @@ START_TEST(marlin_prusaslicer_as_written)
 }
 END_TEST
 
+/* Klipper's macros and extended commands (Voron's print_start, RatRig's
+ * START_PRINT, BED_MESH_CALIBRATE, SET_...), a text line and a bare T reach
+ * the printer as written, numbered and checksummed, exit 0 (issue 18). */
+START_TEST(marlin_text_commands_as_written)
+{
+	marlin_log_equals_file("tests/data/klipper-macros.gcode");
+}
+END_TEST
+
 /* The PrusaSlicer corpus on a fixed sample (bench/prusa_corpus.sh; make bench
  * runs every preset): presets of three vendors, resolved from the installed
  * bundles, sliced by prusa-slicer, sent to the simulator (log == file, exit
@@ -499,6 +508,7 @@ Suite *send_suite(void)
 	tc = tcase_create("marlin");
 	tcase_set_timeout(tc, 120);
 	tcase_add_test(tc, marlin_prusaslicer_as_written);
+	tcase_add_test(tc, marlin_text_commands_as_written);
 	tcase_add_test(tc, prusaslicer_corpus_sample);
 	tcase_add_test(tc, marlin_sigint_during_heatup);
 	tcase_add_test(tc, port_auto_picks_or_says_why);
