@@ -720,10 +720,12 @@ static int parse_line(struct parser *p, unsigned flags)
 		} else if (l->has_line_number && !is_blank(p->buf[p->pos - 1])) {
 			/* "N12x G1": Marlin skips N12x up to the blank and runs G1 */
 			return fail_token(p, p->pos, "is not a command");
-		} else if (is_alpha(c) && p->pos + 1 < p->len &&
+		} else if (is_alpha(c) && !memchr("GMT", c, 3) && p->pos + 1 < p->len &&
 			   memchr("0123456789+-.", p->buf[p->pos + 1], 13)) {
 			/* a word with no command: with Marlin's GCODE_MOTION_MODES
-			 * "X10 Y10" moves, and no reader here would see the move */
+			 * "X10 Y10" moves, and no reader here would see the move
+			 * (a signed "T-1" is a tool command to RepRapFirmware and
+			 * Marlin's switching toolheads, unknown to the others) */
 			return fail_token(p, p->pos,
 					  "is not a command; a line starts with G, M or T (or a "
 					  "macro name)");

@@ -330,6 +330,8 @@ START_TEST(test_text_commands)
 	    {"Start printing (the end)", "Start printing (the end)"},
 	    {"T", "T"},
 	    {"T ; active tool", "T"},
+	    {"T-1 ; Make sure nothing is parked on the carriage", "T-1"},
+	    {"G-1", "G-1"},
 	    {"TURN_OFF_HEATERS", "TURN_OFF_HEATERS"},
 	    {"M", "M"},
 	    {"G X10", "G X10"},
