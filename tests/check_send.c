@@ -385,7 +385,8 @@ START_TEST(marlin_text_commands_as_written)
 END_TEST
 
 /* The PrusaSlicer corpus on a fixed sample (bench/prusa_corpus.sh; make bench
- * runs every preset): presets of three vendors, resolved from the installed
+ * runs every preset): presets of five vendors (Voron's start G-code calls
+ * Klipper macros, FLSun's draws arcs), resolved from the installed
  * bundles, sliced by prusa-slicer, sent to the simulator (log == file, exit
  * 0), previewed and printed through a farm node (issue 18 item 2). */
 START_TEST(prusaslicer_corpus_sample)
@@ -403,14 +404,15 @@ START_TEST(prusaslicer_corpus_sample)
 	}
 	snprintf(cmd, sizeof(cmd),
 		 "bench/prusa_corpus.sh '%s' '%s' 'PrusaResearch:Original Prusa i3 MK3S & MK3S+' "
-		 "'Creality:Creality Ender-3 (0.4 mm nozzle)' 'LulzBot:Taz6 Aero 0.5mm' 2>&1",
+		 "'Creality:Creality Ender-3 (0.4 mm nozzle)' 'LulzBot:Taz6 Aero 0.5mm' "
+		 "'Voron:Voron_v2_250 0.4 nozzle' 'FLSun:FLSun Q5' 2>&1",
 		 bin(), tu_path("corpus"));
 	p = popen(cmd, "r");
 	ck_assert_ptr_nonnull(p);
 	n = fread(text, 1, sizeof(text) - 1, p);
 	text[n] = '\0';
 	ck_assert_msg(pclose(p) == 0, "%s", text);
-	ck_assert_msg(strstr(text, "corpus: 3 of 3 presets pass (0 skipped"), "%s", text);
+	ck_assert_msg(strstr(text, "corpus: 5 of 5 presets pass (0 skipped"), "%s", text);
 }
 END_TEST
 
