@@ -287,6 +287,11 @@ static int arc_start(struct gcwalk *w, const struct gcode_line *l, const double 
 				    w->name, line, circles, l->number, GCWALK_ARC_CIRCLES_MAX);
 	a->centre[0] = w->pos[0] + off[0];
 	a->centre[1] = w->pos[1] + off[1];
+	for (int k = 0; k < 2; k++)
+		if (fabs(a->centre[k]) + hypot(off[0], off[1]) > GCWALK_COORD_MAX)
+			return st_error_set(err, ST_ERR_RANGE,
+					    "%s: line %llu: the arc reaches beyond +-%g mm", w->name,
+					    line, GCWALK_COORD_MAX);
 	a->rvec[0] = -off[0];
 	a->rvec[1] = -off[1];
 	double rt[2] = {to[0] - a->centre[0], to[1] - a->centre[1]};

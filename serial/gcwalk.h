@@ -90,7 +90,7 @@ void gcwalk_free(struct gcwalk *w);
  * of the file, or a negative class with err filled as "NAME: line N: ...":
  * ST_ERR_PARSE (a line gcode.h refuses, an arc without its centre or with
  * P out of range), ST_ERR_IO, ST_ERR_UNSUPPORTED (G20), ST_ERR_RANGE (a
- * position beyond GCWALK_COORD_MAX).
+ * position, or an arc's circle, beyond GCWALK_COORD_MAX).
  */
 int gcwalk_next(struct gcwalk *w, struct gcwalk_move *m, struct st_error *err);
 

@@ -174,6 +174,7 @@ START_TEST(walker_refusals)
 	    {"G3 X0 Y0 R5\n", ST_ERR_PARSE, "line 1: G3 needs its centre"},
 	    {"G2 I1 P101\n", ST_ERR_PARSE, "line 1: P101: the full circles of G2 go from 0 to 100"},
 	    {"G1 X2000000\n", ST_ERR_RANGE, "beyond"},
+	    {"G2 I999999999999999\n", ST_ERR_RANGE, "line 1: the arc reaches beyond"},
 	    {"G1 X1..2\n", ST_ERR_PARSE, "line 1"},
 	};
 	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
