@@ -31,6 +31,7 @@
 
 #include <mosquitto.h>
 #include <pthread.h>
+#include <sqlite3.h>
 
 #include "fixtures.h"
 #include "gcode.h"
@@ -1117,6 +1118,48 @@ static json_t *get_json(int port, const char *path)
 	return o;
 }
 
+/* A queue.db a node wrote before per-job settings (no settings column)
+ * opens: the column is added and its jobs list with "settings": []. */
+START_TEST(test_queue_from_before_settings)
+{
+	struct node_proc np;
+	char dir[600], db[700];
+	sqlite3 *q;
+	json_t *queue, *jobs, *none = json_array();
+
+	write_config(&np, TWO_PRINTERS, 8);
+	snprintf(dir, sizeof(dir), "%s/data", np.dir);
+	mkdir(dir, 0700);
+	snprintf(db, sizeof(db), "%s/queue.db", dir);
+	ck_assert_int_eq(sqlite3_open(db, &q), SQLITE_OK);
+	ck_assert_int_eq(
+	    sqlite3_exec(q,
+			 "CREATE TABLE jobs (id INTEGER PRIMARY KEY AUTOINCREMENT,"
+			 " printer TEXT NOT NULL, name TEXT NOT NULL, file TEXT NOT NULL,"
+			 " gcode TEXT NOT NULL DEFAULT '', kind TEXT NOT NULL,"
+			 " state TEXT NOT NULL, interrupted INTEGER NOT NULL DEFAULT 0,"
+			 " resume INTEGER NOT NULL DEFAULT 0,"
+			 " filepos INTEGER NOT NULL DEFAULT 0, size INTEGER NOT NULL DEFAULT 0,"
+			 " error TEXT NOT NULL DEFAULT '', created INTEGER NOT NULL,"
+			 " started INTEGER NOT NULL DEFAULT 0, finished INTEGER NOT NULL DEFAULT 0);"
+			 "INSERT INTO jobs(printer, name, file, kind, state, created)"
+			 " VALUES('mk3s', 'old.gcode', '/gone', 'g', 'done', 1);",
+			 NULL, NULL, NULL),
+	    SQLITE_OK);
+	sqlite3_close(q);
+	node_start(&np);
+	queue = get_json(np.port, "/p/mk3s/api/stratum/queue");
+	jobs = json_object_get(queue, "jobs");
+	ck_assert_uint_eq(json_array_size(jobs), 1);
+	ck_assert_str_eq(json_string_value(json_object_get(json_array_get(jobs, 0), "name")),
+			 "old.gcode");
+	ck_assert(json_equal(json_object_get(json_array_get(jobs, 0), "settings"), none));
+	json_decref(none);
+	json_decref(queue);
+	node_stop(&np);
+}
+END_TEST
+
 START_TEST(test_sim_two_printers)
 {
 	struct node_proc np;
@@ -1859,6 +1902,7 @@ Suite *serve_suite(void)
 	tcase_add_test(tc, test_stl_two_printers);
 	tcase_add_test(tc, test_node_gcode_is_slice_gcode);
 	tcase_add_test(tc, test_upload_settings);
+	tcase_add_test(tc, test_queue_from_before_settings);
 	tcase_add_test(tc, test_pause_resume_cancel);
 	tcase_add_test(tc, test_kill9_restart);
 	tcase_add_test(tc, test_not_operational);
