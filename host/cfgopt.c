@@ -34,19 +34,15 @@ void cfgopt_usage(FILE *f)
 	fputs(usage_text, f);
 }
 
-/* A layer setting key (copied into o) to value. */
-static int add_key(struct cfgopt *o, const char *cmd, const char *opt, const char *key,
-		   size_t klen, const char *value)
+/* A layer setting key (copied into o) to value; 1, or ST_ERR_ARG with err set. */
+static int add_key(struct cfgopt *o, const char *opt, const char *key, size_t klen,
+		   const char *value, struct st_error *err)
 {
-	if (o->n == CFGOPT_MAX) {
-		fprintf(stderr, "%s: more than %d settings options\n", cmd, CFGOPT_MAX);
-		return -1;
-	}
-	if (klen == 0 || klen >= sizeof(o->keybuf[0])) {
-		fprintf(stderr, "%s: %s wants KEY=VALUE with a key such as layer_height\n", cmd,
-			opt);
-		return -1;
-	}
+	if (o->n == CFGOPT_MAX)
+		return st_error_set(err, ST_ERR_ARG, "more than %d settings options", CFGOPT_MAX);
+	if (klen == 0 || klen >= sizeof(o->keybuf[0]))
+		return st_error_set(err, ST_ERR_ARG,
+				    "%s wants KEY=VALUE with a key such as layer_height", opt);
 	memcpy(o->keybuf[o->n], key, klen);
 	o->keybuf[o->n][klen] = '\0';
 	o->layer[o->n] = (struct profile_layer){NULL, o->keybuf[o->n], value, opt};
@@ -76,7 +72,8 @@ static const struct setting *spelled(const char *a, bool *negated, size_t *len)
 	return settings_find(key);
 }
 
-int cfgopt_parse(struct cfgopt *o, const char *cmd, int argc, char **argv, int *i)
+/* cfgopt_parse without the printing: 1, 0, or ST_ERR_ARG with err set. */
+static int take(struct cfgopt *o, int argc, char **argv, int *i, struct st_error *err)
 {
 	const char *a = argv[*i], *v;
 	const struct setting *s;
@@ -85,12 +82,10 @@ int cfgopt_parse(struct cfgopt *o, const char *cmd, int argc, char **argv, int *
 
 	if (cmd_is_opt(a, "--load")) {
 		v = cmd_opt_value(argc, argv, i, "--load");
-		if (!v || !*v) {
-			fprintf(stderr, "%s: --load needs a config file\n", cmd);
-			return -1;
-		}
+		if (!v || !*v)
+			return st_error_set(err, ST_ERR_ARG, "--load needs a config file");
 		if (o->n == CFGOPT_MAX)
-			return add_key(o, cmd, "--load", "", 0, NULL);
+			return add_key(o, "--load", "", 0, NULL, err);
 		o->layer[o->n++] = (struct profile_layer){v, NULL, NULL, NULL};
 		o->has_files = true;
 		return 1;
@@ -105,10 +100,9 @@ int cfgopt_parse(struct cfgopt *o, const char *cmd, int argc, char **argv, int *
 			if (!cmd_is_opt(a, presets[k]))
 				continue;
 			v = cmd_opt_value(argc, argv, i, presets[k]);
-			if (!v || !*v) {
-				fprintf(stderr, "%s: %s needs a preset name\n", cmd, presets[k]);
-				return -1;
-			}
+			if (!v || !*v)
+				return st_error_set(err, ST_ERR_ARG, "%s needs a preset name",
+						    presets[k]);
 			*slot[k] = v;
 			return 1;
 		}
@@ -119,65 +113,116 @@ int cfgopt_parse(struct cfgopt *o, const char *cmd, int argc, char **argv, int *
 		v = cmd_opt_value(argc, argv, i, "--set");
 		eq = v ? strchr(v, '=') : NULL;
 		if (!eq)
-			return add_key(o, cmd, "--set", "", 0, NULL);
-		return add_key(o, cmd, "--set", v, (size_t)(eq - v), eq + 1);
+			return add_key(o, "--set", "", 0, NULL, err);
+		return add_key(o, "--set", v, (size_t)(eq - v), eq + 1, err);
 	}
 	if (strncmp(a, "--", 2) || !(s = spelled(a, &neg, &n)))
 		return 0;
 	if (s->type == SETTING_BOOL && !strchr(a, '='))
-		return add_key(o, cmd, a, s->name, strlen(s->name), neg ? "0" : "1");
+		return add_key(o, a, s->name, strlen(s->name), neg ? "0" : "1", err);
 	if (neg)
 		return 0;
 	{
 		char opt[80];
 		snprintf(opt, sizeof(opt), "%.*s", (int)(n + 2), a);
 		v = cmd_opt_value(argc, argv, i, opt);
-		if (!v) {
-			fprintf(stderr, "%s: %s needs a value (see 'stratum printers --keys')\n", cmd,
-				opt);
-			return -1;
-		}
+		if (!v)
+			return st_error_set(err, ST_ERR_ARG,
+					    "%s needs a value (see 'stratum printers --keys')", opt);
 		/* The option as written names it in messages (argv outlives the parse). */
-		return add_key(o, cmd, a, s->name, strlen(s->name), v);
+		return add_key(o, a, s->name, strlen(s->name), v, err);
 	}
+}
+
+int cfgopt_parse(struct cfgopt *o, const char *cmd, int argc, char **argv, int *i)
+{
+	struct st_error err = {0};
+	int rc = take(o, argc, argv, i, &err);
+
+	if (rc < 0) {
+		fprintf(stderr, "%s: %s\n", cmd, err.msg);
+		return -1;
+	}
+	return rc;
+}
+
+/* The declared setting a form field name spells ("layer-height"), or NULL. */
+static const struct setting *field_setting(const char *name)
+{
+	const struct setting *s;
+	char opt[72];
+	bool neg;
+	size_t n;
+
+	if ((size_t)snprintf(opt, sizeof(opt), "--%s", name) >= sizeof(opt) ||
+	    strchr(name, '=') || !(s = spelled(opt, &neg, &n)) || neg)
+		return NULL;
+	return s;
+}
+
+bool cfgopt_is_field(const char *name)
+{
+	return !strcmp(name, "set") || field_setting(name);
+}
+
+int cfgopt_field(struct cfgopt *o, const char *name, const char *value, struct st_error *err)
+{
+	const char *eq = strchr(value, '=');
+	const struct setting *s;
+
+	/* set=KEY=VALUE is --set KEY=VALUE; layer-height=0.2 is --layer-height 0.2 */
+	if (!strcmp(name, "set"))
+		return add_key(o, "set", value, eq ? (size_t)(eq - value) : 0, eq ? eq + 1 : NULL,
+			       err);
+	if (!(s = field_setting(name)))
+		return 0;
+	return add_key(o, name, s->name, strlen(s->name), value, err);
+}
+
+int cfgopt_apply(const struct cfgopt *o, const struct profile *base, struct profile **out,
+		 bool *usage, struct st_error *err)
+{
+	size_t files = 0;
+	int rc;
+
+	*out = NULL;
+	*usage = true;
+	/* The files alone first, so a bad file is the file's error and a bad
+	 * option value is a usage error (exit 2). */
+	while (files < o->n && o->layer[files].path)
+		files++;
+	for (size_t k = files; k < o->n; k++)
+		if (o->layer[k].path)
+			return st_error_set(err, ST_ERR_ARG,
+					    "give every --load before --set and the --KEY-NAME "
+					    "options (%s comes after one)",
+					    o->layer[k].path);
+	rc = profile_load_layers(base, o->layer, files, &o->presets, out, err);
+	if (rc) {
+		*usage = rc == ST_ERR_RANGE || rc == ST_ERR_ARG;
+		return rc;
+	}
+	if (files < o->n) {
+		struct profile *p = *out;
+
+		*out = NULL;
+		rc = profile_load_layers(p, o->layer + files, o->n - files, NULL, out, err);
+		profile_free(p);
+	}
+	return rc;
 }
 
 int cfgopt_load(const struct cfgopt *o, const char *cmd, const struct profile *base,
 		struct profile **out)
 {
 	struct st_error err = {0};
-	size_t files = 0;
-	int rc;
+	bool usage;
+	int rc = cfgopt_apply(o, base, out, &usage, &err);
 
-	*out = NULL;
-	/* The files alone first, so a bad file is the file's error and a bad
-	 * option value is a usage error (exit 2). */
-	while (files < o->n && o->layer[files].path)
-		files++;
-	for (size_t k = files; k < o->n; k++)
-		if (o->layer[k].path) {
-			fprintf(stderr, "%s: give every --load before --set and the --KEY-NAME "
-					"options (%s comes after one)\n",
-				cmd, o->layer[k].path);
-			return ST_EXIT_USAGE;
-		}
-	rc = profile_load_layers(base, o->layer, files, &o->presets, out, &err);
-	if (rc == 0 && files < o->n) {
-		struct profile *p = *out;
-
-		*out = NULL;
-		rc = profile_load_layers(p, o->layer + files, o->n - files, NULL, out, &err);
-		profile_free(p);
-		if (rc) {
-			fprintf(stderr, "%s: %s\n", cmd, err.msg);
-			return ST_EXIT_USAGE;
-		}
-	}
-	if (rc) {
-		fprintf(stderr, "%s: %s\n", cmd, err.msg);
-		return rc == ST_ERR_RANGE || rc == ST_ERR_ARG ? ST_EXIT_USAGE : st_exit_for(rc);
-	}
-	return 0;
+	if (!rc)
+		return 0;
+	fprintf(stderr, "%s: %s\n", cmd, err.msg);
+	return usage ? ST_EXIT_USAGE : st_exit_for(rc);
 }
 
 void cfgopt_warn_unsupported(const struct profile *p, const char *cmd)

@@ -36,6 +36,27 @@ struct cfgopt {
 int cfgopt_parse(struct cfgopt *o, const char *cmd, int argc, char **argv, int *i);
 
 /*
+ * cfgopt_field - one form field of a farm-node upload as the option of the
+ * same name (docs/serve.md): "set" with "KEY=VALUE" is --set KEY=VALUE, a
+ * PrusaSlicer spelling ("layer-height", "fill-density", "support-material"
+ * with 1 or 0) is --KEY-NAME VALUE.  name and value must outlive o.
+ * Returns 1 when taken, 0 when name is no settings field, or ST_ERR_ARG
+ * with err set ("set" without KEY=, too many).
+ */
+int cfgopt_field(struct cfgopt *o, const char *name, const char *value, struct st_error *err);
+
+/* cfgopt_is_field - whether cfgopt_field takes a field called name. */
+bool cfgopt_is_field(const char *name);
+
+/*
+ * cfgopt_apply - cfgopt_load without the printing: 0, or the class with
+ * err set and *usage true when the options (not a --load file) are at
+ * fault.
+ */
+int cfgopt_apply(const struct cfgopt *o, const struct profile *base, struct profile **out,
+		 bool *usage, struct st_error *err);
+
+/*
  * cfgopt_load - the profile: @base (NULL: none) under the --load files and
  * then the key options, in order.  Returns 0, or the exit status with the
  * message printed: 2 for a bad option value or preset name, else as the

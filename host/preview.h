@@ -97,8 +97,8 @@ void preview_opts_init(struct preview_opts *o);
  * then the chosen layer's moves).  On success *out is new (preview_free).
  * Errors (*out NULL): ST_ERR_ARG (no such layer or no layer at that Z: the
  * message gives the file's range), ST_ERR_IO, ST_ERR_PARSE (a bad line,
- * no filament diameter known), ST_ERR_RANGE (nothing extruded),
- * ST_ERR_UNSUPPORTED (G20, extruding arcs), ST_ERR_NOMEM.
+ * no filament diameter known, an arc without its centre), ST_ERR_RANGE
+ * (nothing extruded), ST_ERR_UNSUPPORTED (G20), ST_ERR_NOMEM.
  */
 int preview_load(const char *path, const struct preview_opts *o, struct preview **out,
 		 struct st_error *err);

@@ -109,7 +109,7 @@ void region_opts_init(struct region_opts *o);
  * (region_print_free) and 0 is returned.  Errors (*out NULL, err filled
  * with the file name and line): ST_ERR_IO (cannot open or read),
  * ST_ERR_PARSE (a line our parser refuses, no filament diameter known),
- * ST_ERR_UNSUPPORTED (G2/G3 arcs that extrude, G20 inches), ST_ERR_RANGE
+ * ST_ERR_UNSUPPORTED (G20 inches), ST_ERR_RANGE
  * (coordinates beyond +-1e6 mm, nothing of the part extruded),
  * ST_ERR_NOMEM.
  */

@@ -368,6 +368,23 @@ static int parse_line_number(struct parser *p)
 	return skip_space(p);
 }
 
+/* Does the G, M or T at p->pos start a command, as Marlin's parser reads
+ * it: a number follows (blanks allowed), or one of the Prusa MMU's T?, Tx,
+ * Tc?  Otherwise ("START_PRINT", "TURN_OFF_HEATERS", a bare "T") Marlin
+ * takes the line for an unknown command. */
+static bool starts_command(const struct parser *p)
+{
+	size_t q = p->pos + 1;
+
+	while (q < p->len && is_blank(p->buf[q]))
+		q++;
+	if (q < p->len && is_digit(p->buf[q]))
+		return true;
+	return upper(p->buf[p->pos]) == 'T' && q < p->len && memchr("?xc", p->buf[q], 3) &&
+	       (q + 1 >= p->len || is_blank(p->buf[q + 1]) || p->buf[q + 1] == ';' ||
+		p->buf[q + 1] == '*');
+}
+
 /* Parse the command letter and number: G1, M104, T0, G29.1. */
 static int parse_command(struct parser *p)
 {
@@ -380,11 +397,10 @@ static int parse_command(struct parser *p)
 	while (q < p->len && is_blank(p->buf[q]))
 		q++;
 	nd = read_digits(p, q, 5, &v);
-	if (nd == 0 && letter == 'T' && q < p->len && memchr("?xc", p->buf[q], 3) &&
-	    (q + 1 >= p->len || is_blank(p->buf[q + 1]) || p->buf[q + 1] == ';' ||
-	     p->buf[q + 1] == '*')) {
-		/* Prusa MMU: T? lets the user pick the filament, Tx and Tc load it
-		 * in two steps (Prusa firmware and Marlin's PRUSA_MMU2 read these) */
+	if (nd == 0) {
+		/* Prusa MMU (starts_command let no other through): T? lets the
+		 * user pick the filament, Tx and Tc load it in two steps (Prusa
+		 * firmware and Marlin's PRUSA_MMU2 read these) */
 		tmp[0] = 'T';
 		tmp[1] = p->buf[q];
 		l->letter = 'T';
@@ -395,11 +411,6 @@ static int parse_command(struct parser *p)
 		p->pos = q + 1;
 		return text_put(p, tmp, 2);
 	}
-	if (nd == 0)
-		return st_error_set(p->err, ST_ERR_PARSE,
-				    "column %zu: command letter '%c' without a number; "
-				    "write it as %c<number>",
-				    col + 1, letter, letter);
 	if (nd > 5)
 		return fail_token(p, col, "has a command number over 5 digits");
 	q += nd;
@@ -431,15 +442,17 @@ static int parse_command(struct parser *p)
 static int check_no_star(const struct parser *p, size_t s, size_t e)
 {
 	const char *star = memchr(p->buf + s, '*', e - s);
-	const char *cmd = p->l->text, *sp = memchr(cmd, ' ', p->l->text_len);
+	/* the command's name: the cleaned one, or a text command's first token */
+	const char *cmd = p->l->text_len ? p->l->text : p->buf + s;
+	size_t n = p->l->text_len ? p->l->text_len : token_end(p, s) - s;
+	const char *sp = memchr(cmd, ' ', n);
 
 	if (!star)
 		return 0;
 	return st_error_set(p->err, ST_ERR_PARSE,
 			    "column %zu: '*' inside the text of %.*s; the firmware takes '*' for "
 			    "the start of the checksum and would cut the text there, so remove it",
-			    (size_t)(star - p->buf) + 1,
-			    (int)(sp ? (size_t)(sp - cmd) : p->l->text_len), cmd);
+			    (size_t)(star - p->buf) + 1, (int)(sp ? (size_t)(sp - cmd) : n), cmd);
 }
 
 /* Rest of a string-argument command (or '@' host command, or the text that
@@ -480,7 +493,7 @@ static int parse_string(struct parser *p, size_t first)
 		e--;
 	if (l->letter != '@' && (rc = check_no_star(p, s, e)))
 		return rc;
-	if (l->letter != '@' && e > s && (rc = text_put(p, " ", 1)))
+	if (l->letter != '@' && l->text_len > 0 && e > s && (rc = text_put(p, " ", 1)))
 		return rc;
 	l->string_off = l->letter == '@' ? 1 : l->text_len;
 	l->has_string = true;
@@ -701,18 +714,32 @@ static int parse_line(struct parser *p, unsigned flags)
 				return st_error_set(p->err, ST_ERR_PARSE,
 						    "column %zu: '@' without a host command name",
 						    first + 1);
-		} else if (c == 'G' || c == 'M' || c == 'T') {
+		} else if ((c == 'G' || c == 'M' || c == 'T') && starts_command(p)) {
 			if ((rc = parse_command(p)))
 				return rc;
-		} else if (is_alpha(c)) {
-			return fail_token(p, p->pos,
-					  "is not a command; a line starts with G, M or T");
-		} else {
+		} else if (l->has_line_number && !is_blank(p->buf[p->pos - 1])) {
+			/* "N12x G1": Marlin skips N12x up to the blank and runs G1 */
 			return fail_token(p, p->pos, "is not a command");
+		} else if (is_alpha(c) && !memchr("GMT", c, 3) && p->pos + 1 < p->len &&
+			   memchr("0123456789+-.", p->buf[p->pos + 1], 13)) {
+			/* a word with no command: with Marlin's GCODE_MOTION_MODES
+			 * "X10 Y10" moves, and no reader here would see the move
+			 * (a signed "T-1" is a tool command to RepRapFirmware and
+			 * Marlin's switching toolheads, unknown to the others) */
+			return fail_token(p, p->pos,
+					  "is not a command; a line starts with G, M or T (or a "
+					  "macro name)");
+		} else if (is_alpha(c) || c == '_') {
+			/* Klipper's extended commands and macros, a bare T, text:
+			 * Marlin answers "Unknown command", Klipper runs them */
+			l->letter = GCODE_LETTER_TEXT;
+		} else {
+			return fail_token(p, p->pos,
+					  "is not a command; a line starts with a letter");
 		}
 	}
 
-	if (gcode_takes_string(l->letter, l->number)) {
+	if (gcode_takes_string(l->letter, l->number) || l->letter == GCODE_LETTER_TEXT) {
 		if ((rc = parse_string(p, first)))
 			return rc;
 	} else if (l->letter != '@' && (rc = parse_words(p, first))) {

@@ -13,6 +13,13 @@
  * - command: G<n>, M<n> or T<n> (letters in either case; G and M may carry
  *   a subcode, G29.1), the Prusa MMU tool commands T?, Tx and Tc, or an
  *   OctoPrint-style host command "@name args";
+ * - a line whose first token is not such a command but starts with a letter
+ *   or '_' (Klipper's extended commands and macros, "START_PRINT
+ *   EXTRUDER=215", "BED_MESH_CALIBRATE", a bare "T", a text "Start ...")
+ *   is a text command (letter GCODE_LETTER_TEXT): the rest of the line, as
+ *   written, up to ';' or the checksum, is its text.  Marlin's parser marks
+ *   such a line '?' and answers it with echo:Unknown command: "..." and ok;
+ *   Klipper runs it.  It has no words, so nothing reads a move from it;
  * - words: a letter A-Z, then optionally a number; "G28 X" gives a word
  *   with no value.  Spaces between words are optional (G1X10Y-2.5);
  * - numbers: [+-]digits[.digits] or [+-].digits, at most 15 significant
@@ -71,6 +78,10 @@
 /* Longest number token, sign and point included (characters). */
 #define GCODE_NUMBER_MAX 24
 
+/* struct gcode_line.letter of a text command (Marlin's own mark for a line
+ * without a command letter). */
+#define GCODE_LETTER_TEXT '?'
+
 /* What a line does, as far as a host needs to know. */
 enum gcode_kind {
 	GCODE_KIND_OTHER = 0,	 /* any other command: forward it */
@@ -91,6 +102,7 @@ enum gcode_kind {
 	GCODE_KIND_LINE_NUMBER,	 /* M110: protocol command */
 	GCODE_KIND_REPORT,	 /* M105 M114 M115 M119 M155 */
 	GCODE_KIND_MESSAGE,	 /* M73 M117 M118 */
+	GCODE_KIND_TEXT_COMMAND, /* not G/M/T: a Klipper macro, text; forward as written */
 	GCODE_KIND_COUNT_
 };
 
@@ -104,7 +116,8 @@ struct gcode_word {
 
 /* A parsed line.  Plain value type: copy it freely. */
 struct gcode_line {
-	char letter; /* 'G', 'M', 'T', '@' (host command) or 0 (no command) */
+	char letter; /* 'G', 'M', 'T', '@' (host command), GCODE_LETTER_TEXT
+		      * (text command) or 0 (no command) */
 	int number;  /* command number, -1 if letter is 0 or '@', and for the
 		      * Prusa MMU tool commands T?, Tx and Tc (the '?', 'x' or
 		      * 'c' is then the string) */
@@ -199,8 +212,9 @@ int gcode_format_numbered(char *out, size_t cap, long n, const char *cmd);
 const char *gcode_kind_name(enum gcode_kind kind);
 
 /* gcode_is_blocking - true for kinds whose "ok" may take long (G4, G28,
- * probing, M109/M190/M191/M116, M400, M0/M1/M600), so a driver extends its
- * time-out instead of resending. */
+ * probing, M109/M190/M191/M116, M400, M0/M1/M600, and text commands, since
+ * a Klipper macro such as START_PRINT heats, homes and probes), so a driver
+ * extends its time-out instead of resending. */
 bool gcode_is_blocking(enum gcode_kind kind);
 
 /* gcode_find_word - the word with this letter (either case), or NULL. */

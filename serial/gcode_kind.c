@@ -31,6 +31,8 @@ enum gcode_kind gcode_classify(char letter, int n)
 {
 	if (letter == 0 || letter == '@')
 		return GCODE_KIND_HOST_ONLY;
+	if (letter == GCODE_LETTER_TEXT)
+		return GCODE_KIND_TEXT_COMMAND;
 	if (letter == 'T')
 		return GCODE_KIND_TOOL_CHANGE;
 	if (letter == 'G') {
@@ -190,6 +192,7 @@ static const char *const kind_names[GCODE_KIND_COUNT_] = {
     [GCODE_KIND_LINE_NUMBER] = "line_number",
     [GCODE_KIND_REPORT] = "report",
     [GCODE_KIND_MESSAGE] = "message",
+    [GCODE_KIND_TEXT_COMMAND] = "text_command",
 };
 
 const char *gcode_kind_name(enum gcode_kind kind)
@@ -208,6 +211,7 @@ bool gcode_is_blocking(enum gcode_kind kind)
 	case GCODE_KIND_TEMP_WAIT:
 	case GCODE_KIND_FINISH_MOVES:
 	case GCODE_KIND_USER_WAIT:
+	case GCODE_KIND_TEXT_COMMAND:
 		return true;
 	default:
 		return false;

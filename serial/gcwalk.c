@@ -9,8 +9,20 @@
 
 #include "gcode.h"
 
+/* An arc being handed out in chords (Marlin's plan_arc, motion/G2_G3.cpp):
+ * the centre, the radius vector from it to the start, the signed angle
+ * swept, and the straight Z and E travel, each spread evenly. */
+struct arc {
+	unsigned seg, nseg; /* chords handed out, chords in all (0: no arc) */
+	int g;
+	double centre[2], rvec[2], angle;
+	double from[3], to[3], e0, e1;
+	uint64_t line;
+};
+
 struct gcwalk {
 	struct gcode_reader *r;
+	struct arc arc;
 	char *name;
 	double pos[3], e; /* mm */
 	double feed;	  /* mm/min */
@@ -201,6 +213,111 @@ static int walk_state(struct gcwalk *w, const struct gcode_line *l, struct st_er
 	return 0;
 }
 
+/* The next chord of w->arc into m. */
+static void arc_next(struct gcwalk *w, struct gcwalk_move *m)
+{
+	struct arc *a = &w->arc;
+	double to[3], e;
+
+	a->seg++;
+	if (a->seg == a->nseg) {
+		/* the last chord ends on the target, as Marlin's does */
+		memcpy(to, a->to, sizeof(to));
+		e = a->e1;
+		a->nseg = 0;
+	} else {
+		double f = (double)a->seg / a->nseg, t = a->angle * f;
+		double c = cos(t), sn = sin(t);
+
+		to[0] = a->centre[0] + a->rvec[0] * c - a->rvec[1] * sn;
+		to[1] = a->centre[1] + a->rvec[0] * sn + a->rvec[1] * c;
+		to[2] = a->from[2] + (a->to[2] - a->from[2]) * f;
+		e = a->e0 + (a->e1 - a->e0) * f;
+	}
+	*m = (struct gcwalk_move){.g = a->g,
+				  .de = e - w->e,
+				  .feed = w->feed,
+				  .type = w->type,
+				  .layer = w->layer,
+				  .layer_z = w->layer_z,
+				  .layer_height = w->layer_height,
+				  .line = a->line};
+	memcpy(m->from, w->pos, sizeof(m->from));
+	memcpy(m->to, to, sizeof(m->to));
+	memcpy(w->pos, to, sizeof(w->pos));
+	w->e = e;
+}
+
+/* Set up w->arc for the G2/G3 line l from w->pos to (to, e), as Marlin
+ * reads it: the centre is I J from the start, or from R on the side its
+ * sign and the direction give (at the chord's midpoint when R is shorter
+ * than half the chord); P full circles come first.  0 or an error. */
+static int arc_start(struct gcwalk *w, const struct gcode_line *l, const double to[3], double e,
+		     struct st_error *err)
+{
+	unsigned long long line = (unsigned long long)gcode_reader_line(w->r);
+	struct arc *a = &w->arc;
+	bool cw = l->number == 2;
+	double off[2] = {0, 0}, r, circles = 0;
+
+	if (gcode_word_value(l, 'R', &r)) {
+		double d[2] = {(to[0] - w->pos[0]) / 2, (to[1] - w->pos[1]) / 2};
+		double len = hypot(d[0], d[1]);
+
+		if (r != 0 && len > 0) {
+			double side = (cw != (r < 0)) ? -1 : 1, h2 = (r - len) * (r + len);
+			double h = h2 > 0 ? sqrt(h2) : 0;
+
+			off[0] = d[0] - d[1] / len * side * h;
+			off[1] = d[1] + d[0] / len * side * h;
+		}
+	} else {
+		gcode_word_value(l, 'I', &off[0]);
+		gcode_word_value(l, 'J', &off[1]);
+	}
+	if (off[0] == 0 && off[1] == 0)
+		return st_error_set(err, ST_ERR_PARSE,
+				    "%s: line %llu: G%d needs its centre: I and J, or R (and for R an "
+				    "end point other than the start)",
+				    w->name, line, l->number);
+	if (gcode_word_value(l, 'P', &circles) &&
+	    (circles < 0 || circles > GCWALK_ARC_CIRCLES_MAX || circles != floor(circles)))
+		return st_error_set(err, ST_ERR_PARSE,
+				    "%s: line %llu: P%g: the full circles of G%d go from 0 to %d",
+				    w->name, line, circles, l->number, GCWALK_ARC_CIRCLES_MAX);
+	a->centre[0] = w->pos[0] + off[0];
+	a->centre[1] = w->pos[1] + off[1];
+	for (int k = 0; k < 2; k++)
+		if (fabs(a->centre[k]) + hypot(off[0], off[1]) > GCWALK_COORD_MAX)
+			return st_error_set(err, ST_ERR_RANGE,
+					    "%s: line %llu: the arc reaches beyond +-%g mm", w->name,
+					    line, GCWALK_COORD_MAX);
+	a->rvec[0] = -off[0];
+	a->rvec[1] = -off[1];
+	double rt[2] = {to[0] - a->centre[0], to[1] - a->centre[1]};
+	double ang = atan2(a->rvec[0] * rt[1] - a->rvec[1] * rt[0],
+			   a->rvec[0] * rt[0] + a->rvec[1] * rt[1]);
+	if (ang < 0)
+		ang += 2 * M_PI;
+	if (cw)
+		ang -= 2 * M_PI;
+	if (fabs(ang) < 1e-9 && to[0] == w->pos[0] && to[1] == w->pos[1])
+		ang = 2 * M_PI; /* back to the start: a whole circle */
+	ang += (cw ? -2 * M_PI : 2 * M_PI) * circles;
+	double flat = hypot(off[0], off[1]) * fabs(ang), dz = to[2] - w->pos[2];
+	double mm = hypot(flat, dz), n = floor(mm / GCWALK_ARC_SEGMENT_MM);
+	a->nseg = n < 1 ? 1 : n > GCWALK_ARC_SEGMENTS_MAX ? GCWALK_ARC_SEGMENTS_MAX : (unsigned)n;
+	a->seg = 0;
+	a->g = l->number;
+	a->angle = ang;
+	memcpy(a->from, w->pos, sizeof(a->from));
+	memcpy(a->to, to, sizeof(a->to));
+	a->e0 = w->e;
+	a->e1 = e;
+	a->line = line;
+	return 0;
+}
+
 /* A G0-G3 line into m; 0 or an error. */
 static int walk_move(struct gcwalk *w, const struct gcode_line *l, struct gcwalk_move *m,
 		     struct st_error *err)
@@ -221,12 +338,13 @@ static int walk_move(struct gcwalk *w, const struct gcode_line *l, struct gcwalk
 		e = w->abs_e ? v : w->e + v;
 	if (gcode_word_value(l, 'F', &v))
 		w->feed = v;
-	bool moves = to[0] != w->pos[0] || to[1] != w->pos[1];
-	if (l->number >= 2 && e > w->e && moves)
-		return st_error_set(err, ST_ERR_UNSUPPORTED,
-				    "%s: line %llu: extruding arcs (G2/G3) are not supported; "
-				    "turn arc fitting off in the slicer",
-				    w->name, line);
+	if (l->number >= 2) {
+		int rc = arc_start(w, l, to, e, err);
+
+		if (rc == 0)
+			arc_next(w, m);
+		return rc;
+	}
 	*m = (struct gcwalk_move){.g = l->number,
 				  .de = e - w->e,
 				  .feed = w->feed,
@@ -247,6 +365,10 @@ int gcwalk_next(struct gcwalk *w, struct gcwalk_move *m, struct st_error *err)
 	struct gcode_line l;
 	int rc;
 
+	if (w->arc.nseg) {
+		arc_next(w, m);
+		return 1;
+	}
 	while ((rc = gcode_reader_next(w->r, 0, &l, err)) == 1) {
 		if (l.letter == 0) {
 			if (l.has_comment)

@@ -4,7 +4,7 @@
  * G28) kept once, on top of the one parser (gcode.h), for the region check
  * (host/region.c) and the layer preview (host/preview.c).
  *
- * Each G0-G3 line becomes one struct gcwalk_move with where the nozzle was
+ * Each G0/G1 line becomes one struct gcwalk_move with where the nozzle was
  * and where it goes (mm), the change of E (mm of filament) and what the
  * slicer's comments said about it: the last ";TYPE:" feature name
  * (Stratum, PrusaSlicer, SuperSlicer) and the layer counted from the layer
@@ -15,8 +15,12 @@
  * Machine model (Marlin's): positions start at 0 in absolute mode; G90/G91
  * set X, Y, Z and E, a later M82/M83 sets E alone; G92 sets the axes it
  * names; G28 puts X, Y and Z at 0 (homing positions are not known here).
- * G20 (inches) and arcs that extrude (G2/G3 with E growing while X/Y move)
- * are refused; arcs that do not extrude are taken as straight moves.
+ * G20 (inches) is refused.  An arc (G2 clockwise, G3 counter-clockwise, in
+ * the XY plane; the centre I J from the start, or the radius R; P full
+ * circles first) becomes chords of about GCWALK_ARC_SEGMENT_MM, as Marlin
+ * cuts it (motion/G2_G3.cpp), Z and E spread evenly over them, the last one
+ * ending on the target: one move per chord, all with the arc's line, so
+ * the preview draws the curve and the bed guard judges where it goes.
  *
  * Thread-safety: none shared; one walker per thread.
  */
@@ -31,10 +35,16 @@
 
 /* Farthest coordinate accepted, mm (keeps nm coordinates within int64). */
 #define GCWALK_COORD_MAX 1e6
+/* Arc chords: Marlin's MM_PER_ARC_SEGMENT (mm), a bound on their number
+ * per arc (a 1 m radius then strays under 0.001 mm from the circle), and
+ * Marlin's limit on P full circles. */
+#define GCWALK_ARC_SEGMENT_MM 1.0
+#define GCWALK_ARC_SEGMENTS_MAX 3600
+#define GCWALK_ARC_CIRCLES_MAX 100
 
 /* One motion line. */
 struct gcwalk_move {
-	int g;		       /* 0, 1, 2 or 3 */
+	int g;		       /* 0, 1, 2 or 3 (a chord of the arc) */
 	double from[3], to[3]; /* mm, absolute X Y Z before and after */
 	double de;	       /* mm of filament: > 0 extrudes, < 0 retracts */
 	double feed;	       /* mm/min, the modal F (0 before any) */
@@ -78,8 +88,9 @@ void gcwalk_free(struct gcwalk *w);
 /*
  * gcwalk_next - the next motion line.  Returns 1 with *m filled, 0 at the end
  * of the file, or a negative class with err filled as "NAME: line N: ...":
- * ST_ERR_PARSE (a line gcode.h refuses), ST_ERR_IO, ST_ERR_UNSUPPORTED (G20,
- * an extruding arc), ST_ERR_RANGE (a position beyond GCWALK_COORD_MAX).
+ * ST_ERR_PARSE (a line gcode.h refuses, an arc without its centre or with
+ * P out of range), ST_ERR_IO, ST_ERR_UNSUPPORTED (G20), ST_ERR_RANGE (a
+ * position, or an arc's circle, beyond GCWALK_COORD_MAX).
  */
 int gcwalk_next(struct gcwalk *w, struct gcwalk_move *m, struct st_error *err);
 

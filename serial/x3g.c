@@ -1126,6 +1126,12 @@ int x3g_translate(struct x3g_translator *t, const struct gcode_line *l, uint64_t
 		macro(t, l->comment);
 	if (l->letter == 0 || l->letter == '@')
 		return 0;
+	if (l->letter == GCODE_LETTER_TEXT) {
+		warn(t, "'%.60s' is not a G, M or T command (a Klipper macro or a text); X3G "
+			"cannot express it; nothing written",
+		     l->text);
+		return 0;
+	}
 	if (l->letter == 'T' && l->number < 0) {
 		warn(t, "%s (a Prusa MMU filament command) is not supported in X3G; nothing written",
 		     l->text);

@@ -288,7 +288,6 @@ START_TEST(test_tools)
 	parse_ok("M6 T2", &l);
 	ck_assert_int_eq(l.kind, GCODE_KIND_TOOL_CHANGE);
 	want_word(&l, 0, 'T', 2);
-	parse_bad("T", "column 1", "command letter 'T' without a number");
 	parse_bad("T1.5", "'T1.5' is not a command");
 
 	/* Prusa MMU filament commands (PrusaSlicer's MK2S MMU and MK3 MMU2
@@ -303,10 +302,71 @@ START_TEST(test_tools)
 	ck_assert_str_eq(l.text, "Tx");
 	parse_ok("Tc", &l);
 	ck_assert_str_eq(l.text + l.string_off, "c");
-	/* Nothing else without a number: Marlin reads only these three. */
-	parse_bad("TX", "without a number");
-	parse_bad("T?x", "without a number");
-	parse_bad("T#", "without a number");
+	/* Anything else without a number is, to Marlin, an unknown command
+	 * (its MMU reads x, not X): a text command, passed on as written. */
+	static const char *const unknown[] = {"TX", "T?x", "T#"};
+	for (size_t i = 0; i < sizeof(unknown) / sizeof(unknown[0]); i++) {
+		parse_ok(unknown[i], &l);
+		ck_assert_int_eq(l.letter, GCODE_LETTER_TEXT);
+		ck_assert_str_eq(l.text, unknown[i]);
+	}
+}
+END_TEST
+
+/* Lines that are not G, M or T commands but start with a name: Klipper's
+ * extended commands and macros, a toolchanger's bare T, text.  Marlin's
+ * parser marks them '?' and answers "Unknown command" (Marlin
+ * gcode/parser.cpp), Klipper runs them: kept as written, with their line
+ * number and checksum, no words (issue 18). */
+START_TEST(test_text_commands)
+{
+	static const struct {
+		const char *line, *text;
+	} cases[] = {
+	    {"print_start EXTRUDER=215 BED=60 CHAMBER=0", "print_start EXTRUDER=215 BED=60 CHAMBER=0"},
+	    {"START_PRINT ; the macro", "START_PRINT"},
+	    {"  BED_MESH_CALIBRATE\t", "BED_MESH_CALIBRATE"},
+	    {"SET_PRESSURE_ADVANCE ADVANCE=0.05 SMOOTH_TIME=0.04", "SET_PRESSURE_ADVANCE ADVANCE=0.05 SMOOTH_TIME=0.04"},
+	    {"Start printing (the end)", "Start printing (the end)"},
+	    {"T", "T"},
+	    {"T ; active tool", "T"},
+	    {"T-1 ; Make sure nothing is parked on the carriage", "T-1"},
+	    {"G-1", "G-1"},
+	    {"TURN_OFF_HEATERS", "TURN_OFF_HEATERS"},
+	    {"M", "M"},
+	    {"G X10", "G X10"},
+	    {"_CLIENT_LINEAR_MOVE X=10", "_CLIENT_LINEAR_MOVE X=10"},
+	    {"RESPOND MSG=\"Wärmen…\"", "RESPOND MSG=\"Wärmen…\""},
+	};
+	struct gcode_line l;
+	char line[128];
+	int n;
+
+	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+		parse_ok(cases[i].line, &l);
+		ck_assert_msg(l.letter == GCODE_LETTER_TEXT, "%s: letter %d", cases[i].line, l.letter);
+		ck_assert_int_eq(l.kind, GCODE_KIND_TEXT_COMMAND);
+		ck_assert_str_eq(l.text, cases[i].text);
+		ck_assert_uint_eq(l.nwords, 0);
+		ck_assert(l.has_string);
+		ck_assert_uint_eq(l.string_off, 0);
+		ck_assert(gcode_is_blocking(l.kind));
+	}
+	/* numbered as the sender writes it, then read back as Marlin reads it */
+	n = gcode_format_numbered(line, sizeof(line), 12, "START_PRINT EXTRUDER=215");
+	ck_assert_int_gt(n, 0);
+	parse_ok(line, &l);
+	ck_assert(l.has_line_number && l.line_number == 12);
+	ck_assert(l.has_checksum && l.checksum_ok);
+	ck_assert_str_eq(l.text, "START_PRINT EXTRUDER=215");
+	ck_assert_int_eq(l.kind, GCODE_KIND_TEXT_COMMAND);
+	parse_bad("N12 START_PRINT*1", "checksum 1 does not match");
+	/* '*' would cut the text at the firmware; a word alone could move */
+	parse_bad("SET_MSG A*B", "'*' inside the text of SET_MSG");
+	parse_bad("X10 Y10", "'X10' is not a command", "G, M or T");
+	parse_bad("N5 Z0.2", "column 4", "'Z0.2' is not a command");
+	parse_bad("#macro", "'#macro' is not a command");
+	parse_bad("\xc3\xa9t\xc3\xa9", "non-ASCII byte");
 }
 END_TEST
 
@@ -462,7 +522,6 @@ START_TEST(test_rejects)
 	parse_bad("X10 Y10", "column 1", "'X10' is not a command", "G, M or T");
 	parse_bad("N5 X10", "column 4", "'X10' is not a command");
 	parse_bad("10 G1", "'10' is not a command");
-	parse_bad("G", "column 1", "command letter 'G' without a number");
 	parse_bad("G123456", "over 5 digits");
 	parse_bad("G1-5", "'G1-5' is not a command");
 	parse_bad("G1.x", "bad subcode");
@@ -851,7 +910,7 @@ START_TEST(test_firmware_refusals)
 	/* a line that starts with no command is not sent (with Marlin's motion
 	 * modes "X10" would move) */
 	parse_bad("X10 Y10", "'X10' is not a command");
-	parse_bad("Hello", "is not a command");
+	parse_bad("e5", "'e5' is not a command");
 	/* a text longer than the cleaned command holds is refused, not cut */
 	n = (size_t)snprintf(line, sizeof(line), "M0 ");
 	memset(line + n, 'a', GCODE_LINE_MAX);
@@ -1180,6 +1239,7 @@ Suite *gcode_suite(void)
 	tcase_add_test(parse, test_checksums);
 	tcase_add_test(parse, test_tools);
 	tcase_add_test(parse, test_string_args);
+	tcase_add_test(parse, test_text_commands);
 	tcase_add_test(parse, test_number_reader);
 	tcase_add_test(parse, test_firmware_texts);
 	suite_add_tcase(s, parse);

@@ -132,6 +132,13 @@ START_TEST(moves_leave_the_bed)
 		 "creality-ender-3");
 	refused(";LAYER_CHANGE\n;TYPE:Perimeter\nG1 X10 Y10 E1\nG1 X145 Y275 E2\n",
 		"creality-ender-3", (const char *[]){"line 4", NULL});
+	/* An arc is judged by where it goes, not only where it ends: both ends
+	 * of this half circle are on the 200 x 200 mm bed, its top (Y 210) is
+	 * not (issue 18). */
+	refused(";LAYER_CHANGE\nG1 X20 Y130\nG2 X180 Y130 I80 J0 E5\n", "generic-marlin",
+		(const char *[]){"line 3: the move to X ", " leaves the bed of printer 'generic-marlin'",
+				 NULL});
+	accepted(";LAYER_CHANGE\nG1 X20 Y130\nG3 X180 Y130 I80 J0 E5\n", "generic-marlin");
 	/* Without layer comments every move counts. */
 	refused("G1 Y-3 F1000\nG1 X10 Y10 E1\n", "prusa-i3-mk3s", (const char *[]){"line 1", NULL});
 }

@@ -94,6 +94,74 @@ START_TEST(walker_tracks_modes)
 }
 END_TEST
 
+/* Arcs as Marlin cuts them (motion/G2_G3.cpp): chords of about 1 mm on
+ * the circle, E and Z spread over them, the last on the target, all with
+ * the arc's line: counter-clockwise with I J, clockwise with R, a whole
+ * circle (issue 18). */
+START_TEST(walker_arcs)
+{
+	static const struct {
+		const char *line;
+		double to[2], centre[2], r, de, lo[2], hi[2];
+		int chords;
+	} arcs[] = {
+	    /* a quarter from (10,0) to (0,10) round the origin: 15.7 mm */
+	    {"G3 X0 Y10 I-10 J0 E2", {0, 10}, {0, 0}, 10, 2, {0, 0}, {10, 10}, 15},
+	    /* back, clockwise, the short way (R > 0) */
+	    {"G2 X10 Y0 R10 E1", {10, 0}, {0, 0}, 10, 1, {0, 0}, {10, 10}, 15},
+	    /* the long way (R < 0): three quarters through the other side */
+	    {"G2 X0 Y10 R-10", {0, 10}, {0, 0}, 10, 0, {-10, -10}, {10, 10}, 47},
+	    /* a whole circle: no X Y, I J only */
+	    {"G3 I0 J-5 E3", {0, 10}, {0, 5}, 5, 3, {-5, 0}, {5, 10}, 31},
+	};
+	char text[512];
+	size_t n = (size_t)snprintf(text, sizeof(text), "M83\nG1 X10 Y0 Z0.2\n");
+	for (size_t i = 0; i < sizeof(arcs) / sizeof(arcs[0]); i++)
+		n += (size_t)snprintf(text + n, sizeof(text) - n, "%s\n", arcs[i].line);
+	snprintf(text + n, sizeof(text) - n, "G1 X1 Y1\n");
+	FILE *fp;
+	struct gcwalk_move m;
+	struct gcwalk *w = walker("arcs.gcode", text, &fp);
+
+	next_ok(w, &m);
+	for (size_t i = 0; i < sizeof(arcs) / sizeof(arcs[0]); i++) {
+		double de = 0, at[2] = {m.to[0], m.to[1]};
+		double lo[2] = {at[0], at[1]}, hi[2] = {at[0], at[1]};
+		int chords = 0;
+
+		do {
+			next_ok(w, &m);
+			ck_assert_msg(m.line == i + 3, "%s: move of line %llu", arcs[i].line,
+				      (unsigned long long)m.line);
+			ck_assert(m.from[0] == at[0] && m.from[1] == at[1] && m.to[2] == 0.2);
+			ck_assert_msg(fabs(hypot(m.to[0] - arcs[i].centre[0],
+						 m.to[1] - arcs[i].centre[1]) - arcs[i].r) < 1e-9,
+				      "%s: chord %d ends at %g %g, off the circle", arcs[i].line, chords,
+				      m.to[0], m.to[1]);
+			de += m.de;
+			for (int a = 0; a < 2; a++) {
+				lo[a] = fmin(lo[a], m.to[a]);
+				hi[a] = fmax(hi[a], m.to[a]);
+				at[a] = m.to[a];
+			}
+			chords++;
+		} while (chords < arcs[i].chords);
+		ck_assert_msg(m.to[0] == arcs[i].to[0] && m.to[1] == arcs[i].to[1],
+			      "%s: ends at %g %g", arcs[i].line, m.to[0], m.to[1]);
+		ck_assert_msg(fabs(de - arcs[i].de) < 1e-12, "%s: E %g", arcs[i].line, de);
+		for (int a = 0; a < 2; a++)
+			ck_assert_msg(fabs(lo[a] - arcs[i].lo[a]) < 0.05 &&
+					  fabs(hi[a] - arcs[i].hi[a]) < 0.05,
+				      "%s: spans %g..%g on axis %d", arcs[i].line, lo[a], hi[a], a);
+	}
+	/* then the next line, and no more chords */
+	next_ok(w, &m);
+	ck_assert(m.line == 7 && m.g == 1 && m.to[0] == 1 && m.to[1] == 1);
+	gcwalk_free(w);
+	fclose(fp);
+}
+END_TEST
+
 START_TEST(walker_refusals)
 {
 	static const struct {
@@ -102,8 +170,11 @@ START_TEST(walker_refusals)
 		const char *says;
 	} cases[] = {
 	    {"G20\n", ST_ERR_UNSUPPORTED, "line 1: G20"},
-	    {"G1 X1 Y1\nG2 X5 Y5 I2 J0 E1\n", ST_ERR_UNSUPPORTED, "line 2: extruding arcs"},
+	    {"G1 X1 Y1\nG2 X5 Y5 E1\n", ST_ERR_PARSE, "line 2: G2 needs its centre"},
+	    {"G3 X0 Y0 R5\n", ST_ERR_PARSE, "line 1: G3 needs its centre"},
+	    {"G2 I1 P101\n", ST_ERR_PARSE, "line 1: P101: the full circles of G2 go from 0 to 100"},
 	    {"G1 X2000000\n", ST_ERR_RANGE, "beyond"},
+	    {"G2 I999999999999999\n", ST_ERR_RANGE, "line 1: the arc reaches beyond"},
 	    {"G1 X1..2\n", ST_ERR_PARSE, "line 1"},
 	};
 	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
@@ -400,6 +471,34 @@ START_TEST(prusaslicer_output)
 }
 END_TEST
 
+/* The extruding arcs of PrusaSlicer's arc fitting (FLSun, TriLAB) are drawn
+ * as the curve they are: a half circle from (0,0) to (20,0) bulging to
+ * y = -10, framed to its apex (issue 18). */
+START_TEST(arcs_previewed)
+{
+	const char *path = tu_path("arc.gcode");
+	char buf[1024];
+	double lo[2], hi[2];
+
+	snprintf(buf, sizeof(buf),
+		 "; filament_diameter = 1.75\nM83\n;LAYER_CHANGE\n;Z:0.2\n;HEIGHT:0.2\n"
+		 "G1 Z0.2\nG1 X0 Y0\n;TYPE:External perimeter\nG3 X20 Y0 I10 J0 E%.5f\n",
+		 e_for(0.45, 0.2, 10 * M_PI));
+	tu_write_str(path, buf);
+	struct preview *pv = load(path, 1, 0);
+	const struct preview_path *p = first_of(pv, PREVIEW_OUTER_PERIMETER);
+	ck_assert_msg(p->n == 32, "%zu points", p->n); /* 31 chords of 31.4 mm */
+	path_box(p, lo, hi);
+	ck_assert_msg(fabs(lo[0]) < 1e-9 && fabs(hi[0] - 20) < 1e-9, "x %g..%g", lo[0], hi[0]);
+	ck_assert_msg(fabs(lo[1] + 10) < 0.02 && fabs(hi[1]) < 1e-9, "y %g..%g", lo[1], hi[1]);
+	ck_assert_msg(fabs(p->width - 0.45) < 1e-3, "width %g", p->width);
+	preview_free(pv);
+	ck_assert_msg(tu_run(out, sizeof(out), "preview %s --layer 1 -o %s", path,
+			     tu_path("arc.png")) == 0,
+		      "%s", out);
+}
+END_TEST
+
 /* No layer comments at all: layers are the extrusion heights; a Z hop stays in its layer. */
 START_TEST(layers_by_z)
 {
@@ -482,12 +581,14 @@ Suite *preview_suite(void)
 	tcase_set_timeout(tc, 60);
 	tcase_add_test(tc, walker_tracks_modes);
 	tcase_add_test(tc, walker_refusals);
+	tcase_add_test(tc, walker_arcs);
 	tcase_add_test(tc, box_layers_and_outline);
 	tcase_add_test(tc, box_svg);
 	tcase_add_test(tc, box_png);
 	tcase_add_test(tc, prusa_style_file);
 	tcase_add_test(tc, prusaslicer_output);
 	tcase_add_test(tc, layers_by_z);
+	tcase_add_test(tc, arcs_previewed);
 	tcase_add_test(tc, cli_refusals);
 	suite_add_tcase(s, tc);
 	return s;

@@ -331,6 +331,18 @@ START_TEST(test_bad_number)
 	load_bad("layer_height = 1e\n", ST_ERR_PARSE, "line 1", "layer_height", "'1e'", NULL);
 	load_bad("layer_height = 1e+\n", ST_ERR_PARSE, "'1e+'", NULL);
 	load_bad("layer_height = 0,2\n", ST_ERR_PARSE, "'0,2' is not a number", NULL);
+	/* a '#' comment after a number and a blank, as BIBO's bundle writes it
+	 * (PrusaSlicer reads the number); run into the number it is no comment */
+	{
+		struct profile *p = load_ok("retract_speed = 20\nderetract_speed = 0 # Setting "
+					    "this value to 0 uses the retract speed\n"
+					    "layer_height = 0.25\t# thin\n");
+		assert_close(p->deretract_speed[0], 0);
+		assert_close(p->layer_height, 0.25);
+		profile_free(p);
+	}
+	load_bad("layer_height = 0.2#x\n", ST_ERR_PARSE, "'0.2#x' is not a number", NULL);
+	load_bad("layer_height = # 0.2\n", ST_ERR_PARSE, "is not a number", NULL);
 	load_bad("layer_height = nan\n", ST_ERR_PARSE, "'nan'", NULL);
 	load_bad("layer_height = 0x10\n", ST_ERR_PARSE, NULL);
 	load_bad("layer_height = .\n", ST_ERR_PARSE, NULL);

@@ -379,8 +379,18 @@ START_TEST(marlin_prusaslicer_as_written)
 }
 END_TEST
 
+/* Klipper's macros and extended commands (Voron's print_start, RatRig's
+ * START_PRINT, BED_MESH_CALIBRATE, SET_...), a text line and a bare T reach
+ * the printer as written, numbered and checksummed, exit 0 (issue 18). */
+START_TEST(marlin_text_commands_as_written)
+{
+	marlin_log_equals_file("tests/data/klipper-macros.gcode");
+}
+END_TEST
+
 /* The PrusaSlicer corpus on a fixed sample (bench/prusa_corpus.sh; make bench
- * runs every preset): presets of three vendors, resolved from the installed
+ * runs every preset): presets of five vendors (Voron's start G-code calls
+ * Klipper macros, FLSun's draws arcs), resolved from the installed
  * bundles, sliced by prusa-slicer, sent to the simulator (log == file, exit
  * 0), previewed and printed through a farm node (issue 18 item 2).  The
  * sanitizer pass takes the first preset only: prusa-slicer's time is no
@@ -402,14 +412,15 @@ START_TEST(prusaslicer_corpus_sample)
 		 "bench/prusa_corpus.sh '%s' '%s' 'PrusaResearch:Original Prusa i3 MK3S & MK3S+' "
 		 "%s 2>&1", bin(), tu_path("corpus"),
 		 TU_SANITIZED ? "" : "'Creality:Creality Ender-3 (0.4 mm nozzle)' "
-				     "'LulzBot:Taz6 Aero 0.5mm'");
+				     "'LulzBot:Taz6 Aero 0.5mm' 'Voron:Voron_v2_250 0.4 nozzle' "
+				     "'FLSun:FLSun Q5'");
 	p = popen(cmd, "r");
 	ck_assert_ptr_nonnull(p);
 	n = fread(text, 1, sizeof(text) - 1, p);
 	text[n] = '\0';
 	ck_assert_msg(pclose(p) == 0, "%s", text);
 	ck_assert_msg(strstr(text, TU_SANITIZED ? "corpus: 1 of 1 presets pass (0 skipped"
-						: "corpus: 3 of 3 presets pass (0 skipped"),
+						: "corpus: 5 of 5 presets pass (0 skipped"),
 		      "%s", text);
 }
 END_TEST
@@ -508,6 +519,7 @@ Suite *send_suite(void)
 	tc = tcase_create("marlin");
 	tcase_set_timeout(tc, 120);
 	tcase_add_test(tc, marlin_prusaslicer_as_written);
+	tcase_add_test(tc, marlin_text_commands_as_written);
 	tcase_add_test(tc, prusaslicer_corpus_sample);
 	tcase_add_test(tc, marlin_sigint_during_heatup);
 	tcase_add_test(tc, port_auto_picks_or_says_why);

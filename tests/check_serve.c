@@ -31,6 +31,7 @@
 
 #include <mosquitto.h>
 #include <pthread.h>
+#include <sqlite3.h>
 
 #include "fixtures.h"
 #include "gcode.h"
@@ -738,6 +739,84 @@ START_TEST(test_node_gcode_is_slice_gcode)
 }
 END_TEST
 
+/* The value of the upload's "print" field followed by the form fields of
+ * pairs (name, value, ..., NULL): upload() writes print as it is, so the
+ * fields ride behind it as parts of their own, before the file. */
+static const char *print_and_fields(char *buf, size_t cap, const char *print,
+				    const char *const *pairs)
+{
+	size_t n = (size_t)snprintf(buf, cap, "%s", print);
+
+	for (; pairs[0]; pairs += 2)
+		n += (size_t)snprintf(buf + n, cap - n,
+				      "\r\n--" BOUNDARY "\r\nContent-Disposition: form-data; "
+				      "name=\"%s\"\r\n\r\n%s",
+				      pairs[0], pairs[1]);
+	ck_assert_uint_lt(n, cap);
+	return buf;
+}
+
+/*
+ * Per-job settings on the upload (issue 18 item 5): form fields spelled as
+ * `stratum slice`'s options (set=KEY=VALUE, layer-height=0.3) are checked
+ * at upload, kept with the job and sliced with: the node's G-code is what
+ * `stratum slice --layer-height 0.3 --set perimeters=3` writes.  A bad
+ * value, settings on G-code or without print=true are refused with 400.
+ */
+START_TEST(test_upload_settings)
+{
+	static const char *const good[] = {"layer-height", "0.3", "set", "perimeters=3", NULL};
+	static const struct {
+		const char *name, *fields[3], *print, *says;
+	} bad[] = {
+	    {"cube.stl", {"layer-height", "thick", NULL}, "true", "'thick' is not a number"},
+	    {"cube.stl", {"set", "perimeters", NULL}, "true", "set wants KEY=VALUE"},
+	    {"cube.stl", {"fill-density", "250%", NULL}, "true", "fill_density"},
+	    {"cube.stl", {"layer-height", "0.3", NULL}, "false", "come with print=true"},
+	    {"cube.gcode", {"layer-height", "0.3", NULL}, "true", "is sliced already"},
+	};
+	struct node_proc np;
+	struct resp r;
+	size_t len, i;
+	char *stl = cube_stl(&len), print[1024], path[600], mine[600], out[4096];
+	long long id;
+	json_t *j, *want = json_pack("[[ss][ss]]", "layer-height", "0.3", "set", "perimeters=3");
+	int rc;
+
+	write_config(&np, TWO_PRINTERS, 8);
+	node_start(&np);
+	for (i = 0; i < sizeof(bad) / sizeof(bad[0]); i++) {
+		upload(np.port, "/p/mk3s", KEY_UP, bad[i].name, strlen(bad[i].name), "", 0,
+		       print_and_fields(print, sizeof(print), bad[i].print, bad[i].fields), stl,
+		       len, NULL, true, &r);
+		ck_assert_msg(r.status == 400, "%s: %d %s", bad[i].says, r.status, r.body);
+		ck_assert_msg(has_text(r.body, bad[i].says), "'%s' not in %s", bad[i].says, r.body);
+		resp_free(&r);
+	}
+	upload(np.port, "/p/mk3s", KEY_UP, "cube.stl", 8, "", 0,
+	       print_and_fields(print, sizeof(print), "true", good), stl, len, NULL, true, &r);
+	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
+	id = job_of(&r);
+	resp_free(&r);
+	wait_state(np.port, "/p/mk3s", id, "done", 30);
+	http(np.port, "GET", "/p/mk3s/api/stratum/queue", "X-Api-Key: " KEY_READ, NULL, &r);
+	json_array_foreach(json_object_get(r.json, "jobs"), i, j)
+		if (json_integer_value(json_object_get(j, "id")) == id)
+			ck_assert_msg(json_equal(json_object_get(j, "settings"), want), "%s", r.body);
+	resp_free(&r);
+	json_decref(want);
+	node_stop(&np);
+	snprintf(path, sizeof(path), "%s/data/sliced/job-%lld.gcode", np.dir, id);
+	snprintf(mine, sizeof(mine), "%s", tu_path("slice-cube.gcode"));
+	rc = tu_run(out, sizeof(out),
+		    "slice %s -o %s --printer prusa-i3-mk3s --layer-height 0.3 --set perimeters=3 "
+		    ">/dev/null 2>&1 && cmp %s %s && grep -q '^; layer_height = 0.3$' %s",
+		    tu_path("cube.stl"), mine, path, mine, mine);
+	ck_assert_msg(rc == 0, "the node's G-code is not stratum slice's (%d): %s", rc, out);
+	free(stl);
+}
+END_TEST
+
 START_TEST(test_pause_resume_cancel)
 {
 	struct node_proc np;
@@ -1038,6 +1117,48 @@ static json_t *get_json(int port, const char *path)
 	resp_free(&r);
 	return o;
 }
+
+/* A queue.db a node wrote before per-job settings (no settings column)
+ * opens: the column is added and its jobs list with "settings": []. */
+START_TEST(test_queue_from_before_settings)
+{
+	struct node_proc np;
+	char dir[600], db[700];
+	sqlite3 *q;
+	json_t *queue, *jobs, *none = json_array();
+
+	write_config(&np, TWO_PRINTERS, 8);
+	snprintf(dir, sizeof(dir), "%s/data", np.dir);
+	mkdir(dir, 0700);
+	snprintf(db, sizeof(db), "%s/queue.db", dir);
+	ck_assert_int_eq(sqlite3_open(db, &q), SQLITE_OK);
+	ck_assert_int_eq(
+	    sqlite3_exec(q,
+			 "CREATE TABLE jobs (id INTEGER PRIMARY KEY AUTOINCREMENT,"
+			 " printer TEXT NOT NULL, name TEXT NOT NULL, file TEXT NOT NULL,"
+			 " gcode TEXT NOT NULL DEFAULT '', kind TEXT NOT NULL,"
+			 " state TEXT NOT NULL, interrupted INTEGER NOT NULL DEFAULT 0,"
+			 " resume INTEGER NOT NULL DEFAULT 0,"
+			 " filepos INTEGER NOT NULL DEFAULT 0, size INTEGER NOT NULL DEFAULT 0,"
+			 " error TEXT NOT NULL DEFAULT '', created INTEGER NOT NULL,"
+			 " started INTEGER NOT NULL DEFAULT 0, finished INTEGER NOT NULL DEFAULT 0);"
+			 "INSERT INTO jobs(printer, name, file, kind, state, created)"
+			 " VALUES('mk3s', 'old.gcode', '/gone', 'g', 'done', 1);",
+			 NULL, NULL, NULL),
+	    SQLITE_OK);
+	sqlite3_close(q);
+	node_start(&np);
+	queue = get_json(np.port, "/p/mk3s/api/stratum/queue");
+	jobs = json_object_get(queue, "jobs");
+	ck_assert_uint_eq(json_array_size(jobs), 1);
+	ck_assert_str_eq(json_string_value(json_object_get(json_array_get(jobs, 0), "name")),
+			 "old.gcode");
+	ck_assert(json_equal(json_object_get(json_array_get(jobs, 0), "settings"), none));
+	json_decref(none);
+	json_decref(queue);
+	node_stop(&np);
+}
+END_TEST
 
 START_TEST(test_sim_two_printers)
 {
@@ -1780,6 +1901,8 @@ Suite *serve_suite(void)
 	tcase_add_test(tc, test_nameless_part);
 	tcase_add_test(tc, test_stl_two_printers);
 	tcase_add_test(tc, test_node_gcode_is_slice_gcode);
+	tcase_add_test(tc, test_upload_settings);
+	tcase_add_test(tc, test_queue_from_before_settings);
 	tcase_add_test(tc, test_pause_resume_cancel);
 	tcase_add_test(tc, test_kill9_restart);
 	tcase_add_test(tc, test_not_operational);

@@ -359,6 +359,11 @@ START_TEST(test_firmware_texts)
 	    {"G29", "G29 is not supported", 1},
 	    {"T?", "T? (a Prusa MMU filament command) is not supported", 1},
 	    {"Tc", "Tc (a Prusa MMU", 1},
+	    /* Klipper's macros, a toolchanger's bare T, text (issue 18) */
+	    {"print_start EXTRUDER=215 BED=60", "'print_start EXTRUDER=215 BED=60' is not a G, M", 1},
+	    {"BED_MESH_CALIBRATE ; mesh", "'BED_MESH_CALIBRATE' is not a G, M or T command", 1},
+	    {"T", "'T' is not a G, M or T command", 1},
+	    {"Start printing", "X3G cannot express it", 1},
 	    /* GPX: "T1250 cannot select non-existant extruder", then M204 */
 	    {"M204 P1250 R1250 T1250", "M204 is not supported", 2},
 	};

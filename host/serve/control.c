@@ -5,11 +5,14 @@
  * steering a node behave the same.
  */
 #include <errno.h>
+#include <jansson.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <time.h>
 
+#include "cfgopt.h"
 #include "guard.h"
 #include "node_int.h"
 #include "st_file.h"
@@ -133,7 +136,8 @@ static int make_folders(const char *base, const char *rel)
 }
 
 int node_store_file(struct node *n, struct node_printer *p, struct st_file_out *tmp, const char *rel,
-		    bool select, bool print, bool force, int64_t *id, struct st_error *err)
+		    bool select, bool print, bool force, const char *settings, int64_t *id,
+		    struct st_error *err)
 {
 	char full[2 * NODE_PATH_MAX];
 
@@ -152,9 +156,50 @@ int node_store_file(struct node *n, struct node_printer *p, struct st_file_out *
 	if ((select || print) && node_queue_set_selected(n->q, p->cfg->name, rel, err))
 		return ST_ERR_IO;
 	if (print) {
-		if (node_queue_add(n->q, p->cfg->name, rel, full, node_file_kind(rel), id, err))
+		if (node_queue_add(n->q, p->cfg->name, rel, full, node_file_kind(rel), settings, id,
+				   err))
 			return ST_ERR_IO;
 		node_printer_wake(p);
 	}
 	return 0;
+}
+
+int node_settings_profile(const struct node_printer *p, const char *settings,
+			  struct profile **out, struct st_error *err)
+{
+	json_t *arr = json_loads(settings, 0, NULL), *pair;
+	struct cfgopt *o = calloc(1, sizeof(*o)); /* large: off the worker's stack */
+	bool usage;
+	size_t i;
+	int rc = 0;
+
+	*out = NULL;
+	if (!o)
+		rc = st_error_set(err, ST_ERR_NOMEM, "per-job settings: out of memory");
+	else if (!json_is_array(arr))
+		rc = st_error_set(err, ST_ERR_PARSE, "per-job settings: not a list of [field, "
+				  "value] pairs");
+	json_array_foreach(arr, i, pair) {
+		const char *name = json_string_value(json_array_get(pair, 0));
+		const char *value = json_string_value(json_array_get(pair, 1));
+
+		if (rc)
+			break;
+		if (!name || !value)
+			rc = st_error_set(err, ST_ERR_PARSE, "per-job settings: pair %zu is not "
+					  "[field, value]", i + 1);
+		else if ((rc = cfgopt_field(o, name, value, err)) == 0)
+			rc = st_error_set(err, ST_ERR_ARG,
+					  "form field '%.60s' is no setting: give set=KEY=VALUE or "
+					  "PrusaSlicer's spelling of a key ('stratum printers "
+					  "--keys'), e.g. layer-height=0.2",
+					  name);
+		else if (rc > 0)
+			rc = 0;
+	}
+	if (!rc)
+		rc = cfgopt_apply(o, p->prof, out, &usage, err);
+	free(o);
+	json_decref(arr);
+	return rc;
 }

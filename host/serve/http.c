@@ -24,6 +24,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "cfgopt.h"
 #include "gcode.h"
 #include "http_int.h"
 #include "st_grow.h"
@@ -137,7 +138,6 @@ static enum MHD_Result post_iter(void *cls, enum MHD_ValueKind kind, const char 
 	(void)kind;
 	(void)content_type;
 	(void)transfer_encoding;
-	(void)off;
 	/* A part without name= (or one libmicrohttpd could not read) has no
 	 * key: it is no field of ours, like the unknown ones below. */
 	if (r->status || !key)
@@ -153,6 +153,15 @@ static enum MHD_Result post_iter(void *cls, enum MHD_ValueKind kind, const char 
 		field_add(r, r->force, sizeof(r->force), &l, key, data, size);
 	} else if (!strcmp(key, "path")) {
 		field_add(r, r->path, sizeof(r->path), &r->path_len, key, data, size);
+	} else if (cfgopt_is_field(key)) {
+		/* a setting: its name and NUL open the pair, a NUL closes it */
+		if (off == 0) {
+			if (r->nsets++)
+				field_add(r, r->sets, sizeof(r->sets), &r->sets_len, key, "", 1);
+			field_add(r, r->sets, sizeof(r->sets), &r->sets_len, key, key,
+				  strlen(key) + 1);
+		}
+		field_add(r, r->sets, sizeof(r->sets), &r->sets_len, key, data, size);
 	} else if (!strcmp(key, "file")) {
 		if (!r->has_file) {
 			r->has_file = true;
@@ -198,12 +207,58 @@ static bool form_true(const char *v)
 	       !strcmp(v, "1");
 }
 
+/* The upload's per-job settings fields as the JSON of node_job.settings in
+ * out, checked against p's profile; 0, or an HTTP status with msg. */
+static int upload_settings(struct node_printer *p, const struct req *r, bool print, char *out,
+			   size_t cap, char *msg, size_t msgcap)
+{
+	const char *s = r->sets, *end = r->sets + r->sets_len;
+	struct st_error err = {0};
+	struct profile *prof = NULL;
+	json_t *arr = json_array();
+	char *text = NULL, *list = NULL;
+	int status = 0;
+
+	if (!print)
+		snprintf(msg, msgcap, "per-job settings (%.60s) come with print=true: they belong "
+			 "to the job the upload queues", s);
+	else if (node_file_kind(r->filename) != 'm')
+		snprintf(msg, msgcap, "per-job settings (%.60s) apply to models the node slices; "
+			 "%.100s is sliced already", s, r->filename);
+	for (size_t k = 0; !msg[0] && k < r->nsets; k++) {
+		const char *name = s, *value = s + strlen(s) + 1;
+
+		s = value + strlen(value) + 1;
+		if (value >= end || s > end + 1)
+			snprintf(msg, msgcap, "the form field %.60s holds a NUL byte", name);
+		else
+			json_array_append_new(arr, json_pack("[ss]", name, value));
+	}
+	if (!msg[0] && (!(text = json_dumps(arr, JSON_COMPACT)) || strlen(text) >= cap))
+		snprintf(msg, msgcap, "the per-job settings are longer than %zu bytes", cap - 1);
+	if (!msg[0] && node_settings_profile(p, text, &prof, &err))
+		snprintf(msg, msgcap, "per-job settings: %s", err.msg);
+	if (msg[0]) {
+		status = MHD_HTTP_BAD_REQUEST;
+	} else {
+		snprintf(out, cap, "%s", text);
+		if (profile_unsupported(prof, &list) == 0 && list)
+			node_log("warning", p->cfg->name, 0, "per-job settings of %s: not "
+				 "supported, ignored: %s", r->filename, list);
+	}
+	free(list);
+	free(text);
+	json_decref(arr);
+	profile_free(prof);
+	return status;
+}
+
 /* Store the finished upload and queue or select it. */
 static enum MHD_Result finish_upload(struct node *n, struct MHD_Connection *c, struct req *r)
 {
 	struct node_printer *p = r->p;
 	char rel[HTTP_FIELD_MAX + NODE_FILE_NAME_MAX + 2], full[NODE_PATH_MAX + sizeof(rel)];
-	char loc[2048], msg[400];
+	char loc[2048], msg[400] = "", settings[NODE_SETTINGS_MAX] = "";
 	const char *folder = r->path;
 	struct st_error err = {0};
 	bool print = form_true(r->print), select = print || form_true(r->select);
@@ -221,6 +276,9 @@ static enum MHD_Result finish_upload(struct node *n, struct MHD_Connection *c, s
 	}
 	if (node_check_kind(p, r->filename, &err))
 		return http_send_error(c, MHD_HTTP_UNSUPPORTED_MEDIA_TYPE, err.msg);
+	if (r->nsets && (rc = upload_settings(p, r, print, settings, sizeof(settings), msg,
+					      sizeof(msg))))
+		return http_send_error(c, (unsigned)rc, msg);
 	while (*folder == '/')
 		folder++; /* "/" and "" both mean the top folder */
 	if (strlen(folder) != r->path_len - (size_t)(folder - r->path) ||
@@ -232,8 +290,8 @@ static enum MHD_Result finish_upload(struct node *n, struct MHD_Connection *c, s
 							 ? "/" : "", r->filename);
 	if (st_file_finish(&r->out, NULL))
 		return http_send_error(c, MHD_HTTP_INSUFFICIENT_STORAGE, "cannot store the upload");
-	if ((rc = node_store_file(n, p, &r->out, rel, select, print, form_true(r->force), &id,
-				   &err)))
+	if ((rc = node_store_file(n, p, &r->out, rel, select, print, form_true(r->force), settings,
+				   &id, &err)))
 		return http_send_error(c, rc == ST_ERR_RANGE ? MHD_HTTP_CONFLICT
 				       : MHD_HTTP_INTERNAL_SERVER_ERROR, err.msg);
 	snprintf(full, sizeof(full), "%s/%s", p->files_dir, rel);

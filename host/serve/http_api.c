@@ -409,7 +409,7 @@ static enum MHD_Result job_start(struct node *n, struct MHD_Connection *c, struc
 	snprintf(full, sizeof(full), "%s/%s", p->files_dir, rel);
 	if (access(full, R_OK))
 		return http_send_error(c, MHD_HTTP_CONFLICT, "the selected file is gone");
-	if (node_queue_add(n->q, p->cfg->name, rel, full, node_file_kind(rel), &id, &err))
+	if (node_queue_add(n->q, p->cfg->name, rel, full, node_file_kind(rel), NULL, &id, &err))
 		return http_send_error(c, MHD_HTTP_INTERNAL_SERVER_ERROR, err.msg);
 	node_log("info", p->cfg->name, id, "queued %s", rel);
 	pthread_cond_signal(&p->cv);

@@ -47,6 +47,9 @@ struct req {
 	size_t filename_len;
 	char print[16], select[16], force[16], path[HTTP_FIELD_MAX];
 	size_t path_len;
+	/* per-job settings fields as "name\0value\0" pairs (cfgopt_field) */
+	char sets[NODE_SETTINGS_MAX];
+	size_t sets_len, nsets;
 };
 
 /* ---- responses (http.c) ---- */

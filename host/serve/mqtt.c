@@ -262,7 +262,7 @@ static int cmd_enqueue(struct node *n, struct node_printer *p, json_t *o, int64_
 	if ((rc = download(n, url, &tmp, err)))
 		return rc;
 	if ((rc = node_store_file(n, p, &tmp, fname, true, true,
-				   json_is_true(json_object_get(o, "force")), job, err))) {
+				   json_is_true(json_object_get(o, "force")), NULL, job, err))) {
 		st_file_abort(&tmp);
 		return rc;
 	}

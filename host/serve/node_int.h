@@ -33,6 +33,8 @@ enum node_job_state {
 const char *node_job_state_name(enum node_job_state s);
 
 /* One row of the queue. */
+#define NODE_SETTINGS_MAX 4096 /* a job's per-job settings as JSON, NUL included */
+
 struct node_job {
 	int64_t id;
 	char printer[NODE_NAME_MAX];
@@ -40,6 +42,9 @@ struct node_job {
 	char file[NODE_PATH_MAX];	   /* the stored upload */
 	char gcode[NODE_PATH_MAX];	   /* what is printed: file, or the sliced output ("" before) */
 	char kind;			   /* 'g' G-code, 'm' model to slice, 'x' X3G */
+	/* per-job settings of an uploaded model, a JSON array of [field, value]
+	 * pairs as the upload's form gave them ("" for none; docs/serve.md) */
+	char settings[NODE_SETTINGS_MAX];
 	enum node_job_state state;
 	bool interrupted; /* the node died or stopped while it printed */
 	bool resume;	  /* an operator asked to resume the interrupted print */
@@ -62,9 +67,11 @@ void node_queue_close(struct node_queue *q);
 int node_queue_recover(struct node_queue *q, int *interrupted, int *requeued,
 		       struct st_error *err);
 
-/* node_queue_add - a new queued job; *id its number. */
+/* node_queue_add - a new queued job with its per-job settings (NULL or
+ * "": none); *id its number. */
 int node_queue_add(struct node_queue *q, const char *printer, const char *name,
-		   const char *file, char kind, int64_t *id, struct st_error *err);
+		   const char *file, char kind, const char *settings, int64_t *id,
+		   struct st_error *err);
 
 /*
  * node_queue_next - the job printer's worker should take: an interrupted job
@@ -186,13 +193,25 @@ int node_control_job(struct node *n, struct node_printer *p, const char *cmd,
  * node_store_file - publish the finished temporary file tmp (st_file_finish
  * done; same file system) as p's file rel (checked by the caller), select
  * it and, with print, queue it (*id the job, else 0).  tmp is consumed when
- * the file is stored; on an error before that it stays the caller's.  G-code sliced for another printer
- * or leaving its bed (host/guard.h) is refused unless force.  Returns 0,
- * ST_ERR_RANGE (a queued or running job uses that file, or the guard
- * refused it: 409), ST_ERR_ARG, ST_ERR_IO.
+ * the file is stored; on an error before that it stays the caller's.  G-code
+ * sliced for another printer or leaving its bed (host/guard.h) is refused
+ * unless force.  settings (NULL or "": none) go with the queued job
+ * (node_job.settings, checked by the caller with node_settings_profile).
+ * Returns 0, ST_ERR_RANGE (a queued or running job uses that file, or the
+ * guard refused it: 409), ST_ERR_ARG, ST_ERR_IO.
  */
 int node_store_file(struct node *n, struct node_printer *p, struct st_file_out *tmp, const char *rel,
-		    bool select, bool print, bool force, int64_t *id, struct st_error *err);
+		    bool select, bool print, bool force, const char *settings, int64_t *id,
+		    struct st_error *err);
+
+/*
+ * node_settings_profile - p's profile under a job's per-job settings (the
+ * JSON of node_job.settings), read by the same options parser as `stratum
+ * slice --set` (host/cfgopt.h).  *out is new (profile_free).  Returns 0, or
+ * ST_ERR_ARG/ST_ERR_RANGE/ST_ERR_PARSE with err naming the field.
+ */
+int node_settings_profile(const struct node_printer *p, const char *settings,
+			  struct profile **out, struct st_error *err);
 
 /*
  * node_check_kind - whether p takes a file called name: G-code and models

@@ -45,7 +45,7 @@ static const char schema[] =
 	" filepos INTEGER NOT NULL DEFAULT 0, size INTEGER NOT NULL DEFAULT 0,"
 	" error TEXT NOT NULL DEFAULT '',"
 	" created INTEGER NOT NULL, started INTEGER NOT NULL DEFAULT 0,"
-	" finished INTEGER NOT NULL DEFAULT 0);"
+	" finished INTEGER NOT NULL DEFAULT 0, settings TEXT NOT NULL DEFAULT '');"
 	"CREATE INDEX IF NOT EXISTS jobs_printer_state ON jobs(printer, state);"
 	"CREATE TABLE IF NOT EXISTS printers ("
 	" name TEXT PRIMARY KEY, bed_clear INTEGER NOT NULL DEFAULT 1,"
@@ -55,11 +55,29 @@ static const char schema[] =
 
 #define JOB_COLUMNS                                                                       \
 	"id, printer, name, file, gcode, kind, state, interrupted, resume, filepos, size, " \
-	"error, created, started, finished"
+	"error, created, started, finished, settings"
 
 static int db_error(struct node_queue *q, struct st_error *err, const char *what)
 {
 	return st_error_set(err, ST_ERR_IO, "job queue: %s: %s", what, sqlite3_errmsg(q->db));
+}
+
+/* A queue written before per-job settings has no settings column: add it
+ * (0, or -1 with *msg from SQLite). */
+static int add_settings_column(struct node_queue *q, char **msg)
+{
+	sqlite3_stmt *st;
+
+	if (sqlite3_prepare_v2(q->db, "SELECT settings FROM jobs LIMIT 0", -1, &st, NULL) ==
+	    SQLITE_OK) {
+		sqlite3_finalize(st);
+		return 0;
+	}
+	return sqlite3_exec(q->db, "ALTER TABLE jobs ADD COLUMN settings TEXT NOT NULL "
+				   "DEFAULT ''",
+			    NULL, NULL, msg) == SQLITE_OK
+		   ? 0
+		   : -1;
 }
 
 int node_queue_open(const char *path, struct node_queue **out, struct st_error *err)
@@ -82,7 +100,8 @@ int node_queue_open(const char *path, struct node_queue **out, struct st_error *
 	sqlite3_busy_timeout(q->db, 5000);
 	if (sqlite3_exec(q->db, "PRAGMA journal_mode=WAL; PRAGMA synchronous=FULL;", NULL, NULL,
 			 &msg) != SQLITE_OK ||
-	    sqlite3_exec(q->db, schema, NULL, NULL, &msg) != SQLITE_OK) {
+	    sqlite3_exec(q->db, schema, NULL, NULL, &msg) != SQLITE_OK ||
+	    add_settings_column(q, &msg)) {
 		rc = st_error_set(err, ST_ERR_IO, "%s: cannot set up the job queue: %s", path,
 				  msg ? msg : sqlite3_errmsg(q->db));
 		sqlite3_free(msg);
@@ -162,6 +181,7 @@ static void row_to_job(sqlite3_stmt *st, struct node_job *j)
 	j->created = sqlite3_column_int64(st, 12);
 	j->started = sqlite3_column_int64(st, 13);
 	j->finished = sqlite3_column_int64(st, 14);
+	copy_text(j->settings, sizeof(j->settings), sqlite3_column_text(st, 15));
 }
 
 /* The first row of a one-job query with parameters (fmt as run); takes q->mu. */
@@ -223,15 +243,16 @@ out:
 }
 
 int node_queue_add(struct node_queue *q, const char *printer, const char *name,
-		   const char *file, char kind, int64_t *id, struct st_error *err)
+		   const char *file, char kind, const char *settings, int64_t *id,
+		   struct st_error *err)
 {
 	int rc = 0;
 	const char *k = kind == 'm' ? "m" : "g";
 
 	pthread_mutex_lock(&q->mu);
-	if (run(q, "INSERT INTO jobs(printer, name, file, gcode, kind, state, created) "
-		   "VALUES(?, ?, ?, ?, ?, 'queued', ?)", "sssssi", printer, name, file,
-		kind == 'm' ? "" : file, k, (int64_t)time(NULL)))
+	if (run(q, "INSERT INTO jobs(printer, name, file, gcode, kind, state, created, settings) "
+		   "VALUES(?, ?, ?, ?, ?, 'queued', ?, ?)", "sssssis", printer, name, file,
+		kind == 'm' ? "" : file, k, (int64_t)time(NULL), settings ? settings : ""))
 		rc = db_error(q, err, "adding a job");
 	else
 		*id = sqlite3_last_insert_rowid(q->db);
@@ -417,6 +438,8 @@ json_t *node_job_json(const struct node_job *j)
 	json_object_set_new(o, "created", json_integer(j->created));
 	json_object_set_new(o, "started", j->started ? json_integer(j->started) : json_null());
 	json_object_set_new(o, "finished", j->finished ? json_integer(j->finished) : json_null());
+	json_object_set_new(o, "settings",
+			    j->settings[0] ? json_loads(j->settings, 0, NULL) : json_array());
 	return o;
 }
 

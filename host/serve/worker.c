@@ -22,22 +22,29 @@ void node_printer_wake(struct node_printer *p)
 	pthread_mutex_unlock(&p->mu);
 }
 
-/* Slice job j's model into out as `stratum slice` does (slicejob.h). */
+/* Slice job j's model into out as `stratum slice` does (slicejob.h), with
+ * the job's own settings over the printer's profile. */
 static int slice_model(struct node_printer *p, const struct node_job *j, const char *out,
 		       struct st_error *err)
 {
 	struct slicer_config cfg;
 	struct slicejob_result res;
+	struct profile *job_prof = NULL;
 	int rc;
 
 	if (!out[0])
 		return st_error_set(err, ST_ERR_RANGE, "the data directory's path is too long");
-	if ((rc = profile_slicer_config(p->prof, &cfg, err)))
+	if (j->settings[0] && (rc = node_settings_profile(p, j->settings, &job_prof, err)))
 		return rc;
+	/* cfg points into the profile (start G-code ...): it lives to the end */
+	rc = profile_slicer_config(job_prof ? job_prof : p->prof, &cfg, err);
 	cfg.threads = p->node->cfg.slice_threads;
-	if ((rc = slicer_config_check(&cfg, err)))
-		return rc;
-	return slicejob_slice(j->file, &cfg, false, out, NULL, &res, err);
+	if (!rc)
+		rc = slicer_config_check(&cfg, err);
+	if (!rc)
+		rc = slicejob_slice(j->file, &cfg, false, out, NULL, &res, err);
+	profile_free(job_prof);
+	return rc;
 }
 
 /* Write j back; a failing database is logged (the job goes on in memory). */
@@ -62,8 +69,8 @@ static void run_slicing(struct node_printer *p, struct node_job *j)
 	if (snprintf(out, sizeof(out), "%s/job-%lld.gcode", p->node->sliced_dir,
 		     (long long)j->id) >= (int)sizeof(out))
 		out[0] = '\0'; /* slice_model refuses it */
-	node_log("info", p->cfg->name, j->id, "slicing %s with profile %s", j->name,
-		 p->prof->id);
+	node_log("info", p->cfg->name, j->id, "slicing %s with profile %s%s%.1000s", j->name,
+		 p->prof->id, j->settings[0] ? " and the job's settings " : "", j->settings);
 	pthread_mutex_unlock(&p->mu);
 	rc = slice_model(p, j, out, &err);
 	pthread_mutex_lock(&p->mu);
