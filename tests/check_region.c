@@ -183,9 +183,17 @@ START_TEST(refusals)
 	ck_assert_msg(strstr(err.msg, "filament_diameter"), "%s", err.msg);
 
 	tu_write_str(path, "; filament_diameter = 1.75\nM83\n;TYPE:Perimeter\nG1 Z0.2\n"
-			   "G2 X10 Y0 I5 J0 E1\n");
+			   "G20\n");
 	ck_assert_int_eq(region_read(path, NULL, &p, &err), ST_ERR_UNSUPPORTED);
 	ck_assert_msg(strstr(err.msg, "line 5"), "%s", err.msg);
+
+	/* An arc is read as the move walker's chords (gcwalk.h), a bead. */
+	tu_write_str(path, "; filament_diameter = 1.75\nM83\n;TYPE:Perimeter\nG1 Z0.2\n"
+			   "G2 X10 Y0 I5 J0 E1\n");
+	ck_assert_int_eq(region_read(path, NULL, &p, &err), 0);
+	ck_assert_ptr_nonnull(p);
+	region_print_free(p);
+	p = (struct region_print *)1;
 
 	/* Only skirt and start G-code: nothing of the part. */
 	tu_write_str(path, "; filament_diameter = 1.75\nM83\nG1 Z0.2\nG1 X10 E1\n"
