@@ -235,7 +235,8 @@ static bool marlin_m105_may(struct marlin *m, double now)
 		for (size_t i = 0; i < m->m105_n; i++)
 			m->m105[i].valid = false;
 	}
-	if (m->m105_n == MARLIN_M105_MAX || (m->m105_n && now - m->m105[m->m105_n - 1].t < MARLIN_M105_AGAIN_S))
+	if (m->m105_n == MARLIN_M105_MAX ||
+	    (m->m105_n && now - m->m105[m->m105_n - 1].t < MARLIN_M105_AGAIN_S))
 		return false;
 	for (long n = m->n_acked + 1; n < m->n_send; n++) {
 		const struct marlin_entry *e = marlin_hist_entry(m, n);
