@@ -772,7 +772,7 @@ static void sf_commands(struct sim_sailfish *s, double now)
 		 * buffer: the host may split one across packets, and a packet
 		 * spoilt past CRC-8 may carry a code of another length (run
 		 * early, it read stale bytes past the end of the buffer) */
-		if (len == 0 || (size_t)len > have)
+		if (len == 0 || (len > 0 && (size_t)len > have))
 			return;
 		if (len < 0) { /* not a command the firmware knows: skip the byte */
 			if (s->log)
