@@ -307,9 +307,6 @@ static int marlin_handle(struct marlin *m, const char *line, size_t len, double 
 	case MARLIN_REPLY_OK:
 		m->t_progress = now;
 		m->probed = false;
-		/* before skip_ok: the ok after a Resend is a bare "ok" */
-		if (r.has_temps && marlin_m105_answer(m))
-			break;
 		if (m->skip_ok) {
 			m->skip_ok--;
 			break;
@@ -475,19 +472,12 @@ static int marlin_timers(struct marlin *m, double now, struct st_error *err)
 	 * replies stop for several round trips, the ones still counted as
 	 * "on the way" are gone, and so is our resent line (flushed by one of
 	 * their errors).  Write it again without waiting for probe_ms.  Not
-	 * after a probe: a stalled firmware would get a window of copies.
-	 * Without a rewind, 8 round trips of silence (at least
-	 * MARLIN_M105_FAST_S) send the M105 probe, whose answer counts oks
-	 * that were lost; a blocking command in flight may have finished
-	 * with its ok lost, so that probe goes out then too. */
+	 * after a probe: a stalled firmware would get a window of copies. */
 	double quiet = m->o.probe_ms / 1000.0;
-	double fast = m->rtt > 0 && 8 * m->rtt < quiet ? 8 * m->rtt : quiet;
-	if (m->rewinding)
-		quiet = fast < 0.02 ? 0.02 : fast;
-	else
-		quiet = fast < MARLIN_M105_FAST_S ? MARLIN_M105_FAST_S : fast;
-	if (now - m->t_progress > quiet)
-		return marlin_probe(m, now, blocking, err);
+	if (m->rewinding && m->rtt > 0 && 8 * m->rtt < quiet)
+		quiet = 8 * m->rtt < 0.02 ? 0.02 : 8 * m->rtt;
+	if (!blocking && now - m->t_progress > quiet)
+		return marlin_probe(m, now, err);
 	return 0;
 }
 

@@ -167,9 +167,8 @@ static long check_log(struct rig *r, FILE *file)
 		if (line[0] == '-') {
 			/* A line whose "N" was lost on the wire: the firmware
 			 * takes it without a check (Marlin does the same); the
-			 * host cannot prevent it, only its numbered lines count.
-			 * The driver's own M105 probes are no fragments. */
-			r->unnumbered += strcmp(sp + 1, "M105\n") != 0;
+			 * host cannot prevent it, only its numbered lines count. */
+			r->unnumbered++;
 			continue;
 		}
 		n = strtol(line, NULL, 10);
