@@ -213,6 +213,25 @@ static int walk_state(struct gcwalk *w, const struct gcode_line *l, struct st_er
 	return 0;
 }
 
+/* The move G<g> of line `line` from w->pos to (to, e), in w's state; w
+ * moves there. */
+static void walk_to(struct gcwalk *w, int g, uint64_t line, const double to[3], double e,
+		    struct gcwalk_move *m)
+{
+	*m = (struct gcwalk_move){.g = g,
+				  .de = e - w->e,
+				  .feed = w->feed,
+				  .type = w->type,
+				  .layer = w->layer,
+				  .layer_z = w->layer_z,
+				  .layer_height = w->layer_height,
+				  .line = line};
+	memcpy(m->from, w->pos, sizeof(m->from));
+	memcpy(m->to, to, sizeof(m->to));
+	memcpy(w->pos, to, sizeof(w->pos));
+	w->e = e;
+}
+
 /* The next chord of w->arc into m. */
 static void arc_next(struct gcwalk *w, struct gcwalk_move *m)
 {
@@ -234,18 +253,7 @@ static void arc_next(struct gcwalk *w, struct gcwalk_move *m)
 		to[2] = a->from[2] + (a->to[2] - a->from[2]) * f;
 		e = a->e0 + (a->e1 - a->e0) * f;
 	}
-	*m = (struct gcwalk_move){.g = a->g,
-				  .de = e - w->e,
-				  .feed = w->feed,
-				  .type = w->type,
-				  .layer = w->layer,
-				  .layer_z = w->layer_z,
-				  .layer_height = w->layer_height,
-				  .line = a->line};
-	memcpy(m->from, w->pos, sizeof(m->from));
-	memcpy(m->to, to, sizeof(m->to));
-	memcpy(w->pos, to, sizeof(w->pos));
-	w->e = e;
+	walk_to(w, a->g, a->line, to, e, m);
 }
 
 /* Set up w->arc for the G2/G3 line l from w->pos to (to, e), as Marlin
@@ -345,18 +353,7 @@ static int walk_move(struct gcwalk *w, const struct gcode_line *l, struct gcwalk
 			arc_next(w, m);
 		return rc;
 	}
-	*m = (struct gcwalk_move){.g = l->number,
-				  .de = e - w->e,
-				  .feed = w->feed,
-				  .type = w->type,
-				  .layer = w->layer,
-				  .layer_z = w->layer_z,
-				  .layer_height = w->layer_height,
-				  .line = line};
-	memcpy(m->from, w->pos, sizeof(m->from));
-	memcpy(m->to, to, sizeof(m->to));
-	memcpy(w->pos, to, sizeof(w->pos));
-	w->e = e;
+	walk_to(w, l->number, line, to, e, m);
 	return 0;
 }
 
