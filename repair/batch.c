@@ -417,10 +417,10 @@ static int pick_candidates(struct groups *g, size_t *nparts)
 	}
 	g->ncand = 0;
 	for (size_t t = 0; t < m->ntris; t++) {
+		const uint32_t own = counted ? slot[uf_find(g->parent, m->tris[t][0])] : NO_ID;
 		bool near = !counted;
 		for (size_t q = 0; q < np && !near; q++)
-			near = q != slot[uf_find(g->parent, m->tris[t][0])] &&
-			       boxes_overlap(&g->box[t], &part[q]);
+			near = q != own && boxes_overlap(&g->box[t], &part[q]);
 		if (near)
 			g->cand[g->ncand++] = (uint32_t)t;
 	}

@@ -84,17 +84,14 @@ static struct mesh *repair_ok(const struct mesh *in, struct repair_report *rep)
 	return out;
 }
 
+/* The volume `stratum check` measures. */
 static double volume(const struct mesh *m)
 {
-	double v = 0;
+	struct mesh_report r;
+	struct st_error err = {0};
 
-	for (size_t t = 0; t < m->ntris; t++) {
-		const double *a = m->verts[m->tris[t][0]], *b = m->verts[m->tris[t][1]],
-			     *c = m->verts[m->tris[t][2]];
-		v += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
-		      a[2] * (b[0] * c[1] - b[1] * c[0])) / 6;
-	}
-	return v;
+	ck_assert_msg(mesh_analyze(m, 0, &r, &err) == 0, "%s", err.msg);
+	return r.volume;
 }
 
 /* Triangle t of a and triangle u of b have the same corners, in order. */
@@ -206,11 +203,8 @@ static struct mesh *inward_box(double x0, double y0, double z0, double x1, doubl
 {
 	struct mesh *m = fx_box(x0, y0, z0, x1, y1, z1);
 
-	for (size_t t = 0; t < m->ntris; t++) {
-		const uint32_t k = m->tris[t][1];
-		m->tris[t][1] = m->tris[t][2];
-		m->tris[t][2] = k;
-	}
+	for (size_t t = 0; t < m->ntris; t++)
+		fx_flip(m, t);
 	return m;
 }
 
