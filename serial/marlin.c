@@ -307,6 +307,9 @@ static int marlin_handle(struct marlin *m, const char *line, size_t len, double 
 	case MARLIN_REPLY_OK:
 		m->t_progress = now;
 		m->probed = false;
+		/* before skip_ok: the ok after a Resend is a bare "ok" */
+		if (r.has_temps && marlin_m105_answer(m))
+			break;
 		if (m->skip_ok) {
 			m->skip_ok--;
 			break;
@@ -329,14 +332,13 @@ static int marlin_handle(struct marlin *m, const char *line, size_t len, double 
 			 * answers "ok T:..." instead): this one belongs to an
 			 * unnumbered line, ours or a fragment the firmware took */
 			if (m->phantom_n)
-				memmove(m->phantom, m->phantom + 1,
-					--m->phantom_n * sizeof(m->phantom[0]));
+				marlin_phantom_pop(m);
 			else
 				m->st.stray_oks++;
 			break;
 		}
-		if (m->phantom_n && m->n_acked >= m->phantom[0]) {
-			memmove(m->phantom, m->phantom + 1, --m->phantom_n * sizeof(m->phantom[0]));
+		if (m->phantom_n && m->n_acked >= m->phantom[0].after) {
+			marlin_phantom_pop(m);
 			break;
 		}
 		if (m->n_acked + 1 < m->n_next && m->n_acked + 1 <= m->n_max_sent)
@@ -371,7 +373,7 @@ static int marlin_handle(struct marlin *m, const char *line, size_t len, double 
 		break;
 	case MARLIN_REPLY_BUSY:
 		m->st.busy++;
-		m->t_progress = now;
+		m->t_progress = m->t_busy = now;
 		m->probed = false;
 		m->talks_blocked = true;
 		break;
@@ -387,6 +389,8 @@ static int marlin_handle(struct marlin *m, const char *line, size_t len, double 
 			m->t_progress = now;
 			m->probed = false;
 			m->talks_blocked = m->talks_blocked || m->st.heating_wait;
+			if (m->st.heating_wait)
+				m->t_busy = now;
 		}
 		break;
 	case MARLIN_REPLY_START:
@@ -472,12 +476,19 @@ static int marlin_timers(struct marlin *m, double now, struct st_error *err)
 	 * replies stop for several round trips, the ones still counted as
 	 * "on the way" are gone, and so is our resent line (flushed by one of
 	 * their errors).  Write it again without waiting for probe_ms.  Not
-	 * after a probe: a stalled firmware would get a window of copies. */
+	 * after a probe: a stalled firmware would get a window of copies.
+	 * Without a rewind, 8 round trips of silence (at least
+	 * MARLIN_M105_FAST_S) send the M105 probe, whose answer counts oks
+	 * that were lost; a blocking command in flight may have finished
+	 * with its ok lost, so that probe goes out then too. */
 	double quiet = m->o.probe_ms / 1000.0;
-	if (m->rewinding && m->rtt > 0 && 8 * m->rtt < quiet)
-		quiet = 8 * m->rtt < 0.02 ? 0.02 : 8 * m->rtt;
-	if (!blocking && now - m->t_progress > quiet)
-		return marlin_probe(m, now, err);
+	double fast = m->rtt > 0 && 8 * m->rtt < quiet ? 8 * m->rtt : quiet;
+	if (m->rewinding)
+		quiet = fast < 0.02 ? 0.02 : fast;
+	else
+		quiet = fast < MARLIN_M105_FAST_S ? MARLIN_M105_FAST_S : fast;
+	if (now - m->t_progress > quiet)
+		return marlin_probe(m, now, blocking, err);
 	return 0;
 }
 
@@ -577,8 +588,8 @@ int marlin_emergency(struct marlin *m, const char *cmd, struct st_error *err)
 		char buf[GCODE_LINE_MAX + 2];
 		int k = snprintf(buf, sizeof(buf), "%s\n", g.text);
 		/* Marlin also queues the unnumbered line, which earns an ok */
-		if (g.number != 112 && m->phantom_n < MARLIN_PHANTOMS)
-			m->phantom[m->phantom_n++] = m->last_tx_n;
+		if (g.number != 112)
+			marlin_phantom_push(m, (size_t)k);
 		marlin_trace(m, ">", buf, (size_t)k);
 		return marlin_write(m, buf, (size_t)k, err);
 	}

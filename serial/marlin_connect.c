@@ -60,7 +60,7 @@ int marlin_connect(struct marlin *m, struct st_error *err)
 		/* Answer: ok (M110), FIRMWARE_NAME, Cap lines, ok (M115); some
 		 * boards and serial bridges answer M115 with a bare ok, and
 		 * then the capabilities stay unknown. */
-		bool fw = false, done = false;
+		bool fw = false, done = false, out_of_step = false;
 		int oks = 0;
 		double until = marlin_now_s() + m->o.retry_ms / 1000.0;
 		if (until > end)
@@ -96,7 +96,7 @@ int marlin_connect(struct marlin *m, struct st_error *err)
 					marlin_parse_reply(text, tl, &r, &m->st, &m->caps);
 				if (kind == MARLIN_REPLY_FIRMWARE) {
 					fw = true;
-				} else if (kind == MARLIN_REPLY_OK) {
+				} else if (kind == MARLIN_REPLY_OK && !out_of_step) {
 					marlin_learn_b(m, &r);
 					done = fw || ++oks == 2;
 				} else if (kind == MARLIN_REPLY_FATAL) {
@@ -104,15 +104,26 @@ int marlin_connect(struct marlin *m, struct st_error *err)
 							    "the printer on %s reports a fatal error: "
 							    "\"%.100s\"; fix it and reset the printer",
 							    xport_describe(m->x), text);
-				} else if (kind == MARLIN_REPLY_RESEND) {
-					until = now; /* out of step: try again */
+				} else if (kind == MARLIN_REPLY_RESEND ||
+					   kind == MARLIN_REPLY_LINE_ERROR) {
+					/* one of our two lines was spoilt: the "ok"
+					 * after the Resend is the error's, not an
+					 * answer (a bare-ok M115 would look answered
+					 * while the firmware still counts from N0) */
+					out_of_step = true;
+					until = now;
 				}
 				/* "start" may be an old banner still in the pipe:
 				 * let the attempt be answered or time out. */
 			}
 		}
-		if (!done)
+		if (!done) {
+			/* let the rest of a spoilt attempt's answer go by,
+			 * or it is taken for the next attempt's */
+			if (out_of_step && (rc = marlin_wait_quiet(m, 200, m->o.retry_ms, err)))
+				return rc;
 			continue;
+		}
 		/* Answers to an earlier attempt may follow; they must not count
 		 * as acks, and if one of them reset the line numbers (an M110
 		 * read after our M115), start over.  Two bare oks may also be
@@ -131,6 +142,8 @@ int marlin_connect(struct marlin *m, struct st_error *err)
 		m->n_acked = m->n_max_sent = m->last_tx_n = 1;
 		m->n_acked_hi = m->n_taken = 1;
 		m->probed = false;
+		m->m105_n = m->phantom_n = m->phantom_bytes = 0;
+		m->t_busy = 0;
 		marlin_hist_entry(m, 0)->n = 0;
 		marlin_hist_entry(m, 1)->n = 0; /* not resendable: connect lines are not kept */
 		m->connected = true;

@@ -32,6 +32,11 @@
 #define MARLIN_RX_MAX 1024	/* longest reply line kept (bytes) */
 #define MARLIN_WRITE_MS 5000	/* bound on one write to the port */
 #define MARLIN_BREAK_REPEAT_S 2.0 /* safe stop: M108 again while the same wait runs */
+#define MARLIN_M105_PROBE "\nM105\n" /* the lost-ok probe; the window keeps room for it */
+#define MARLIN_M105_MAX 2	/* its copies awaiting their "ok T:" */
+#define MARLIN_M105_FAST_S 0.05 /* shortest silence before one (s) */
+#define MARLIN_M105_AGAIN_S 0.25 /* another while one is unanswered, after (s) */
+#define MARLIN_BUSY_HOLD_S 2.5	/* busy/W: seen this recently: the firmware is alive (s) */
 
 /* One numbered line as written. */
 struct marlin_entry {
@@ -45,6 +50,24 @@ struct marlin_entry {
 	double z;
 	double t_sent;	 /* when written first (s); 0 once written again */
 	char text[MARLIN_LINE_CAP];
+};
+
+/* An unnumbered M105 written as a probe: its "ok T:" comes once every
+ * command queued before it has run, so it acknowledges every line written
+ * before it, if nothing went wrong since (docs/streaming.md "The window"). */
+struct marlin_m105 {
+	long after;	/* lines up to this one were written before it */
+	uint64_t marks;	/* errors, Resends and unknown commands when written */
+	double t;	/* when (s) */
+	bool valid;	/* false: its answer may be another's, acknowledges nothing */
+};
+
+/* An unnumbered emergency line (M108, M410): the emergency parser acts on
+ * it at once, but Marlin also queues it, so it sits in the RX ring until
+ * it runs and earns an ok. */
+struct marlin_phantom {
+	long after;	/* written after this line */
+	uint16_t len;	/* bytes, newline included */
 };
 
 /* A command not yet written. */
@@ -85,9 +108,12 @@ struct marlin {
 	long rewind_k;
 	bool rewinding;
 	unsigned silent_probes;	/* probes nothing answered since the last reply */
+	struct marlin_m105 m105[MARLIN_M105_MAX]; /* oldest first */
+	size_t m105_n;
 	unsigned skip_ok;	/* oks that belong to Resend requests */
-	long phantom[MARLIN_PHANTOMS]; /* unnumbered lines: written after line n */
-	size_t phantom_n;
+	struct marlin_phantom phantom[MARLIN_PHANTOMS]; /* oldest first */
+	size_t phantom_n, phantom_bytes;
+	double t_busy;		/* last busy or heat-wait report (s) */
 	unsigned bufsize_learnt; /* largest ADVANCED_OK B<n>: BUFSIZE - 1 */
 	long queued;		/* lines after n_acked surely in the firmware's queue */
 	double rtt;		/* smoothed write-to-ok time of clean lines (s) */
@@ -141,7 +167,15 @@ void marlin_ack_through(struct marlin *m, long n);
 int marlin_resend(struct marlin *m, long k, struct st_error *err);
 /* Is a blocking command (G28, M109, M400 ...) among the lines in flight? */
 bool marlin_blocking_inflight(const struct marlin *m);
-/* Nothing answered for probe_ms: newline, or one line written again. */
-int marlin_probe(struct marlin *m, double now, struct st_error *err);
+/* Nothing answered for a while: an M105 probe, a newline, or one line
+ * written again (blocking: a long command may be running). */
+int marlin_probe(struct marlin *m, double now, bool blocking, struct st_error *err);
+/* An emergency line of len bytes was written: it awaits its ok. */
+void marlin_phantom_push(struct marlin *m, size_t len);
+/* The oldest emergency line has its ok (or surely ran). */
+void marlin_phantom_pop(struct marlin *m);
+/* An "ok T:" reply: the answer to an M105 probe?  Then it acknowledges
+ * what it can and true is returned. */
+bool marlin_m105_answer(struct marlin *m);
 
 #endif /* STRATUM_SERIAL_MARLIN_IMPL_H */

@@ -4,6 +4,8 @@
  * (docs/streaming.md "The window").
  */
 
+#include <string.h>
+
 #include "marlin_impl.h"
 
 static void ghost_clear(struct marlin *m)
@@ -62,6 +64,23 @@ void marlin_learn_b(struct marlin *m, const struct marlin_reply *r)
  * while a slot is free, and answers "ok" only when the command is done);
  * the rest, plus copies written before a rewind, must fit in the ring.
  */
+/* Bytes in the RX ring as far as we count: lines in flight but the
+ * oldest `slots`, copies from before a rewind, and the unnumbered lines
+ * (probes, emergency lines) not yet answered: while a command blocks
+ * (M190), they wait in the ring like any line. */
+static size_t marlin_ring_bytes(const struct marlin *m, unsigned slots)
+{
+	size_t bytes = m->ghost_bytes + m->phantom_bytes +
+		       m->m105_n * (sizeof(MARLIN_M105_PROBE) - 1);
+	/* lines the firmware said it has (Resend) left the ring as well */
+	long first = m->n_acked + 1 + (long)slots;
+	if (first <= m->n_taken)
+		first = m->n_taken + 1;
+	for (long n = first; n < m->n_send; n++)
+		bytes += m->hist[(unsigned long)n % MARLIN_HIST].len;
+	return bytes;
+}
+
 bool marlin_window_open(const struct marlin *m, size_t len)
 {
 	long inflight = m->n_send - 1 - m->n_acked;
@@ -74,16 +93,12 @@ bool marlin_window_open(const struct marlin *m, size_t len)
 		return false;
 	if (!m->o.rx_buffer)
 		return slots && (unsigned long)inflight < slots;
-	bytes = m->ghost_bytes;
+	bytes = marlin_ring_bytes(m, slots);
 	if ((unsigned long)inflight >= slots)
 		bytes += len;
-	/* lines the firmware said it has (Resend) left the ring as well */
-	long first = m->n_acked + 1 + (long)slots;
-	if (first <= m->n_taken)
-		first = m->n_taken + 1;
-	for (long n = first; n < m->n_send; n++)
-		bytes += m->hist[(unsigned long)n % MARLIN_HIST].len;
-	return bytes + 1 <= m->o.rx_buffer; /* AVR rings hold size - 1 bytes */
+	/* AVR rings hold size - 1 bytes; room is kept for the M105 probe,
+	 * which must fit even when lost oks make the ring look full */
+	return bytes + 1 + sizeof(MARLIN_M105_PROBE) - 1 <= m->o.rx_buffer;
 }
 
 /* Account lines (n_acked, n] as acknowledged. */
@@ -105,6 +120,12 @@ void marlin_ack_through(struct marlin *m, long n)
 		m->st.layer = e->layer;
 		m->st.z = e->z;
 	}
+	/* unnumbered lines written before line n ran before it: their
+	 * answers, if still missing, were lost, and they left the ring */
+	while (m->m105_n && m->m105[0].after < n)
+		memmove(m->m105, m->m105 + 1, --m->m105_n * sizeof(m->m105[0]));
+	while (m->phantom_n && m->phantom[0].after < n)
+		marlin_phantom_pop(m);
 	m->queued = m->queued > n - m->n_acked ? m->queued - (n - m->n_acked) : 0;
 	m->n_acked = n;
 	if (n > m->n_acked_hi)
@@ -113,6 +134,22 @@ void marlin_ack_through(struct marlin *m, long n)
 		m->n_send = n + 1;
 	if (m->rewinding && n >= m->rewind_k)
 		ghost_clear(m); /* a copy after the rewind got through: the old ones are gone */
+}
+
+void marlin_phantom_push(struct marlin *m, size_t len)
+{
+	if (m->phantom_n == MARLIN_PHANTOMS)
+		marlin_phantom_pop(m); /* the oldest surely ran long ago */
+	m->phantom[m->phantom_n++] = (struct marlin_phantom){m->last_tx_n, (uint16_t)len};
+	m->phantom_bytes += len;
+}
+
+void marlin_phantom_pop(struct marlin *m)
+{
+	if (!m->phantom_n)
+		return;
+	m->phantom_bytes -= m->phantom[0].len;
+	memmove(m->phantom, m->phantom + 1, --m->phantom_n * sizeof(m->phantom[0]));
 }
 
 /* Undo the accounting of lines (n, n_acked]: the firmware says it never
@@ -143,8 +180,10 @@ static void marlin_firmware_has(struct marlin *m, long have)
 {
 	if (have > m->n_acked) {
 		long done = m->probed || m->n_acked_hi > have ? have : m->n_acked_hi;
-		if (done > m->n_acked)
+		if (done > m->n_acked) {
+			marlin_hist_entry(m, done)->t_sent = 0; /* no round-trip sample */
 			marlin_ack_through(m, done);
+		}
 	}
 	m->n_taken = have;
 }
@@ -186,18 +225,112 @@ int marlin_resend(struct marlin *m, long k, struct st_error *err)
 	return 0;
 }
 
-/* Is a blocking command (G28, M109, M400 ...) among the lines in flight? */
+/* Is a blocking command (G28, M109, M400 ...) among the lines in flight?
+ * During a rewind only the lines before the one asked for again: the
+ * firmware said it has none of the others, so none of them runs (a
+ * flushed M400 would make its temperature reports look like progress and
+ * the job wait for ever). */
 bool marlin_blocking_inflight(const struct marlin *m)
 {
 	long hi = m->n_max_sent < m->n_next ? m->n_max_sent : m->n_next - 1;
+	if (m->rewinding && hi >= m->rewind_k)
+		hi = m->rewind_k - 1;
 	for (long n = m->n_acked + 1; n <= hi; n++)
 		if (m->hist[(unsigned long)n % MARLIN_HIST].blocking)
 			return true;
 	return false;
 }
 
+/* The counters an M105 probe's answer must find unchanged. */
+static uint64_t marlin_marks(const struct marlin *m)
+{
+	return m->st.resend_requests + m->st.line_errors + m->st.other_errors +
+	       m->st.unknown_commands;
+}
+
 /*
- * Nothing answered for probe_ms.  Silence may be a stall (a busy host
+ * Is the oldest probe's answer no longer to be expected?  Without a
+ * blocking command in flight, after probe_ms.  With one (G28, M190), the
+ * probe waits in the ring behind it, its answer still to come while the
+ * firmware reports busy or heating: only a silence of probe_ms (at least
+ * MARLIN_BUSY_HOLD_S) since the probe or the last such report gives it up.
+ */
+static bool marlin_m105_overdue(const struct marlin *m, double now)
+{
+	double probe_s = m->o.probe_ms / 1000.0, since = m->m105[0].t;
+	if (!marlin_blocking_inflight(m))
+		return now - since > probe_s;
+	if (m->t_busy > since)
+		since = m->t_busy;
+	return now - since > (probe_s > MARLIN_BUSY_HOLD_S ? probe_s : MARLIN_BUSY_HOLD_S);
+}
+
+/*
+ * May an M105 probe go out now?  Not while one written less than
+ * MARLIN_M105_AGAIN_S ago waits for its answer, nor with a numbered
+ * M105 in flight (its "ok T:" would be taken for the probe's), nor while
+ * the firmware reports that it is busy or heating (it is alive, and
+ * probes would pile up in its ring), nor when one might not fit in the
+ * RX ring, nor with MARLIN_M105_MAX waiting.  Overdue probes are given
+ * up (their answers were lost); the answers still to come then cannot be
+ * told apart, and acknowledge nothing.
+ */
+static bool marlin_m105_may(struct marlin *m, double now)
+{
+	const size_t len = sizeof(MARLIN_M105_PROBE) - 1;
+	while (m->m105_n && marlin_m105_overdue(m, now)) {
+		memmove(m->m105, m->m105 + 1, --m->m105_n * sizeof(m->m105[0]));
+		for (size_t i = 0; i < m->m105_n; i++)
+			m->m105[i].valid = false;
+	}
+	if (m->m105_n == MARLIN_M105_MAX ||
+	    (m->m105_n && now - m->m105[m->m105_n - 1].t < MARLIN_M105_AGAIN_S))
+		return false;
+	if (m->t_busy > 0 && now - m->t_busy < MARLIN_BUSY_HOLD_S)
+		return false;
+	for (long n = m->n_acked + 1; n < m->n_send; n++) {
+		const struct marlin_entry *e = marlin_hist_entry(m, n);
+		if (e->n == n && strstr(e->text, "M105"))
+			return false;
+	}
+	return !m->o.rx_buffer || marlin_ring_bytes(m, marlin_slots(m)) + len + 1 <= m->o.rx_buffer;
+}
+
+/* Write an M105 probe ("\n" first ends a fragment whose newline was lost). */
+static int marlin_m105_write(struct marlin *m, double now, struct st_error *err)
+{
+	m->m105[m->m105_n++] = (struct marlin_m105){m->n_send - 1, marlin_marks(m), now, true};
+	marlin_trace(m, ">", "M105", 4);
+	return marlin_write(m, MARLIN_M105_PROBE, sizeof(MARLIN_M105_PROBE) - 1, err);
+}
+
+/*
+ * An "ok T:" with probes outstanding is the oldest one's answer (or, if
+ * that one's was lost, a later one's: it then says at least as much).
+ * Marlin runs its queue in order and answers M105 when it runs it, so
+ * every line written before the probe has run -- unless an error, a
+ * Resend or an unknown command (a line spoilt past its number) came since.
+ */
+bool marlin_m105_answer(struct marlin *m)
+{
+	if (!m->m105_n)
+		return false;
+	struct marlin_m105 e = m->m105[0];
+	memmove(m->m105, m->m105 + 1, --m->m105_n * sizeof(m->m105[0]));
+	if (e.valid && e.marks == marlin_marks(m) && e.after > m->n_acked &&
+	    e.after < m->n_next && e.after <= m->n_max_sent) {
+		marlin_hist_entry(m, e.after)->t_sent = 0; /* no round-trip sample */
+		marlin_ack_through(m, e.after);
+	}
+	return true;
+}
+
+/*
+ * Nothing answered for a while.  Without a rewind the first resort is
+ * the M105 probe above: lost oks are then counted within a few round
+ * trips, and it is harmless when the firmware is only slow (a long move,
+ * a G28): it waits in the ring.  Otherwise, after probe_ms and with no
+ * blocking command in flight, the older probe.  Silence may be a stall (a busy host
  * computer, a board held up) with every copy in flight still in the RX
  * ring: rewrites behind them would overflow it (the fragments would run)
  * and reach the firmware as old line numbers, each an error that empties
@@ -211,9 +344,13 @@ bool marlin_blocking_inflight(const struct marlin *m)
  * a rewind the silence means flushed copies: rewrite from the first line
  * it has not reported having.
  */
-int marlin_probe(struct marlin *m, double now, struct st_error *err)
+int marlin_probe(struct marlin *m, double now, bool blocking, struct st_error *err)
 {
 	bool rewinding = m->rewinding;
+	if (!rewinding && marlin_m105_may(m, now))
+		return marlin_m105_write(m, now, err);
+	if (!rewinding && (blocking || now - m->t_progress <= m->o.probe_ms / 1000.0))
+		return 0;
 	if (!m->probed)
 		m->silent_probes = 0; /* something answered since the last probe */
 	m->t_progress = now;

@@ -167,8 +167,9 @@ static long check_log(struct rig *r, FILE *file)
 		if (line[0] == '-') {
 			/* A line whose "N" was lost on the wire: the firmware
 			 * takes it without a check (Marlin does the same); the
-			 * host cannot prevent it, only its numbered lines count. */
-			r->unnumbered++;
+			 * host cannot prevent it, only its numbered lines count.
+			 * The driver's own M105 probes are no fragments. */
+			r->unnumbered += strcmp(sp + 1, "M105\n") != 0;
 			continue;
 		}
 		n = strtol(line, NULL, 10);
@@ -690,6 +691,54 @@ START_TEST(cancel_safe_stop)
 }
 END_TEST
 
+/* Count the log lines that hold text. */
+static long log_count(struct rig *r, const char *text)
+{
+	char line[256];
+	long k = 0;
+	fflush(r->log);
+	rewind(r->log);
+	while (fgets(line, sizeof(line), r->log))
+		k += strstr(line, text) != NULL;
+	return k;
+}
+
+/* Cancel while M190 waits, M109 queued behind it: every unnumbered line
+ * (probes, M108) waits in the RX ring with the job's lines and must be
+ * counted there.  Before they were, the ring overflowed: a stop line was
+ * spoilt and the M108 for the M109 was lost, so the heater wait ran on. */
+START_TEST(stop_in_heat_wait_no_overflow)
+{
+	static const char *const start[] = {"M140 S60", "M104 S200", "G28", "M190 S60",
+					    "M109 S200"};
+	struct rig r;
+	struct sim_marlin_options so;
+	struct printer_options mo;
+	struct st_error err = {0};
+	fast_sim(&so);
+	so.speedup = 5; /* heating takes seconds */
+	so.advanced_ok = true;
+	fast_driver(&mo);
+	rig_start(&r, &so, &mo);
+	for (size_t i = 0; i < sizeof(start) / sizeof(start[0]); i++)
+		ck_assert_int_eq(marlin_submit(r.m, start[i], i + 1, -1, NAN, &err), 1);
+	for (int i = 0; i < 40; i++)
+		ck_assert_int_eq(marlin_submit(r.m, "G1 X50 Y60 F3000", (uint64_t)i + 6, -1, NAN, &err), 1);
+	double end = st_mono_s() + 3;
+	while (st_mono_s() < end)
+		ck_assert_msg(marlin_step(r.m, 50, &err) == 0, "%s", err.msg);
+	marlin_request_cancel(r.m);
+	ck_assert_int_eq(marlin_step(r.m, 10, &err), ST_ERR_IO);
+	ck_assert_msg(marlin_safe_stop(r.m, 5000, &err) == 0, "%s", err.msg);
+	sim_marlin_stop(r.sim);
+	ck_assert_uint_eq(sim_marlin_dropped_bytes(r.sim), 0);
+	ck_assert_int_eq(log_count(&r, "M109"), 1);
+	ck_assert_int_eq(log_count(&r, "M108"), 2); /* one for each wait */
+	ck_assert_int_eq(log_count(&r, "M84"), 1);
+	rig_stop(&r);
+}
+END_TEST
+
 /* A printer that never answers: connect gives up with a clear error. */
 START_TEST(connect_no_answer)
 {
@@ -901,6 +950,7 @@ Suite *marlin_suite(void)
 	add_case(s, "unplug", unplug_detected, 60);
 	add_case(s, "halt", halt_stops_without_resend, 60);
 	add_case(s, "cancel", cancel_safe_stop, 60);
+	add_case(s, "stop_in_heat_wait", stop_in_heat_wait_no_overflow, 60);
 	add_case(s, "connect_no_answer", connect_no_answer, 60);
 	add_case(s, "frozen", frozen_detected, 20);
 	add_case(s, "frozen_heat_wait", frozen_in_heat_wait_detected, 40);

@@ -19,10 +19,13 @@
 #include <unistd.h>
 
 #include "gcode.h"
+#include "s3g.h"
 #include "sim/marlin_sim.h"
+#include "sim/sailfish_sim.h"
 #include "st_clock.h"
 #include "suites.h"
 #include "testutil.h"
+#include "xport.h"
 
 /* The host side of the link: the pty slave, with a line buffer. */
 struct client {
@@ -821,6 +824,69 @@ START_TEST(printcore_streams)
 }
 END_TEST
 
+/* Lines of the Sailfish simulator's execution log (comments left out). */
+static size_t sf_executed(const char *path)
+{
+	char line[512];
+	size_t n = 0;
+	FILE *log = fopen(path, "r");
+	ck_assert_ptr_nonnull(log);
+	while (fgets(line, sizeof(line), log))
+		n += line[0] != '#';
+	fclose(log);
+	return n;
+}
+
+/*
+ * Sailfish runs a command only once all its bytes are in the command
+ * buffer (runCommandSlice: "check for completion"), however the packets
+ * cut it.  The simulator ran a queue-point command as soon as its code
+ * byte came, popped more bytes than the buffer held and replayed the
+ * buffer's old contents for ever: the soak's 36 million executions after
+ * a packet spoilt past CRC-8 (issue 17).
+ */
+START_TEST(sailfish_command_across_packets)
+{
+	struct sim_sailfish_options so;
+	struct sim_sailfish *sim;
+	struct xport_options xo = {.baudrate = 115200};
+	struct xport *x;
+	struct s3g *d;
+	struct st_error err = {0};
+	uint8_t move[26] = {142, 10}, resp[8];
+	size_t n;
+	char log[512];
+
+	snprintf(log, sizeof(log), "%s", tu_path("sf-split.log"));
+	sim_sailfish_options_init(&so);
+	so.speedup = 1000;
+	so.baud = 1000000;
+	so.log_path = log;
+	ck_assert_int_eq(sim_sailfish_new(&so, &sim, &err), 0);
+	ck_assert_msg(xport_open(sim_sailfish_slave_path(sim), &xo, &x, &err) == 0, "%s", err.msg);
+	ck_assert_int_eq(s3g_new(x, NULL, &d, &err), 0);
+	ck_assert_int_eq(sim_sailfish_start_thread(sim, &err), 0);
+	move[21] = 100; /* 100 us per step */
+	move[13] = 0x80; /* Z's top byte: the second packet must look like an action */
+	/* a byte that starts no command is skipped, not waited on */
+	const uint8_t junk = 0xFE;
+	ck_assert_msg(s3g_transact(d, &junk, 1, resp, sizeof(resp), &n, &err) == 0, "%s", err.msg);
+	ck_assert_msg(s3g_transact(d, move, 13, resp, sizeof(resp), &n, &err) == 0, "%s", err.msg);
+	ck_assert_uint_eq(resp[0], S3G_RC_OK);
+	usleep(50000);
+	ck_assert_uint_le(sf_executed(log), 1); /* thousands, before: the log spilled */
+	ck_assert_msg(s3g_transact(d, move + 13, 13, resp, sizeof(resp), &n, &err) == 0, "%s",
+		      err.msg);
+	ck_assert_uint_eq(resp[0], S3G_RC_OK);
+	usleep(50000);
+	sim_sailfish_stop(sim);
+	s3g_free(d);
+	xport_close(x);
+	sim_sailfish_free(sim); /* the log is complete once closed */
+	ck_assert_uint_eq(sf_executed(log), 2); /* the skipped byte, the move */
+}
+END_TEST
+
 Suite *sim_suite(void)
 {
 	Suite *s = suite_create("sim");
@@ -852,6 +918,7 @@ Suite *sim_suite(void)
 	tcase_add_test(faults, m108_breaks_wait);
 	tcase_add_test(faults, unplug_at);
 	tcase_add_test(faults, reset_at);
+	tcase_add_test(faults, sailfish_command_across_packets);
 	/* printcore spends 3 s on fixed sleeps; 1250 ping-pong lines follow */
 	tcase_set_timeout(hosts, 90);
 	tcase_add_test(hosts, printcore_streams);

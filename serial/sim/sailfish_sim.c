@@ -752,7 +752,7 @@ static bool sf_mode_done(struct sim_sailfish *s, double now)
 /* The command processor (command::runCommandSlice). */
 static void sf_commands(struct sim_sailfish *s, double now)
 {
-	uint8_t c[64];
+	uint8_t c[4 + 255 + 61]; /* the longest command (136: 4 + 255) and then some */
 	while (!s->unplugged && !s->paused && now >= s->boot_until) {
 		if (s->mode != SF_READY) {
 			if (!sf_mode_done(s, now))
@@ -763,7 +763,11 @@ static void sf_commands(struct sim_sailfish *s, double now)
 			return;
 		size_t have = sf_cb_peek(s, c, sizeof(c));
 		int len = s3g_action_length(c, have);
-		if (len == 0)
+		/* runCommandSlice waits until the whole command is in the
+		 * buffer: the host may split one across packets, and a packet
+		 * spoilt past CRC-8 may carry a code of another length (run
+		 * early, it read stale bytes past the end of the buffer) */
+		if (len == 0 || (len > 0 && (size_t)len > have))
 			return;
 		if (len < 0) { /* not a command the firmware knows: skip the byte */
 			if (s->log)
