@@ -427,11 +427,11 @@ const char *profile_key_at(const struct profile *p, size_t i, const char **value
 
 /*
  * profile_unsupported - the keys p sets that Stratum does not honour, as
- * one list "raft_layers=3, ironing=1" (values cut at 24 bytes), and a
+ * one list "spiral_vase=1, ironing=1" (values cut at 24 bytes), and a
  * fill_pattern Stratum does not print ("fill_pattern=stars (rectilinear
  * used)").  A key is honoured when the loader types it, when it cannot
  * change what Stratum prints (notes, preset names, multi-material ...) or
- * when its value asks for what Stratum does anyway (raft_layers = 0).
+ * when its value asks for what Stratum does anyway (ironing = 0).
  * *out: a new string (free()), NULL when every key is honoured.
  * Returns 0 or ST_ERR_NOMEM.
  */

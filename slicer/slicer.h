@@ -157,7 +157,8 @@ void slicer_config_init(struct slicer_config *c, double nozzle_diameter);
  * work: layer heights not > 0 or above the nozzle, the walls' settings
  * (perim_settings_check for both layer heights), infill density outside
  * 0-100 %, negative layer or loop counts or brim width, a support threshold
- * outside 0-90, an empty bed or a height <= 0, a negative thread count.
+ * outside 0-90, raft keys outside their declared ranges (settings.h), an
+ * empty bed or a height <= 0, a negative thread count.
  * Returns 0 or ST_ERR_RANGE / ST_ERR_ARG with a message naming the setting
  * (PrusaSlicer's key), its value and what is allowed.
  */

@@ -175,6 +175,7 @@ START_TEST(json_summary_matches_gcode)
 	o = slice_json(args, 0);
 	read_gcode(gc, &g);
 	ck_assert_int_eq((long)num(o, "layers"), 100);
+	ck_assert_int_eq((long)num(o, "raft_layers"), 0);
 	ck_assert_int_eq(g.layers, 100);
 	ck_assert_double_eq_tol(num(o, "first_layer_height"), 0.2, 1e-12);
 	ck_assert_double_eq_tol(g.first_z, 0.2, 1e-9);
