@@ -15,6 +15,9 @@
 
 /* A layer top this close to the contact limit still counts as below it, mm. */
 #define SUPPORT_Z_EPS 1e-6
+/* How much more the raft grows below its contact layer, mm (PrusaSlicer's
+ * inflate_factor_fine). */
+#define RAFT_FINE_MM 0.5
 /* The steepest threshold used in the overhang distance, degrees. */
 #define SUPPORT_MAX_DEG 89.0
 
@@ -506,6 +509,22 @@ int support_raft_new(const struct support_settings *s, double first_layer_height
 	return 0;
 }
 
+/*
+ * How far (mm) raft layer i reaches beyond the footprint, PrusaSlicer's
+ * rule: the contact layer (the top) raft_expansion; under it, the raft
+ * grows 0.5 mm more for stability, and layer 0 reaches
+ * raft_first_layer_expansion beyond the footprint's raft_expansion, at
+ * least those 0.5 mm.  A one-layer raft is its contact layer.
+ */
+static double raft_growth(const struct support_settings *s, int i)
+{
+	if (s->raft_layers == 1 || i == s->raft_layers - 1)
+		return s->raft_expansion;
+	if (i > 0)
+		return s->raft_expansion + RAFT_FINE_MM;
+	return s->raft_expansion + fmax(s->raft_first_layer_expansion, RAFT_FINE_MM);
+}
+
 /* out = the part's first layer and the support's beads on it (support may be NULL). */
 static int raft_footprint(struct ctx *c, const struct layer_stack *support,
 			  struct clip_paths *out)
@@ -541,7 +560,7 @@ int support_raft(const struct support_settings *s, const struct slice_stack *st,
 	rc = raft_footprint(&c, support, &F);
 	for (int i = 0; i < n && !rc; i++) {
 		struct slice_layer *L = &raft->layers[i];
-		double grow = s->raft_expansion + (i == 0 ? s->raft_first_layer_expansion : 0.0);
+		double grow = raft_growth(s, i);
 		double sp = perim_spacing(c.w, L->height * SLICE_UNITS_PER_MM), pitch = sp;
 		enum path_role role = i < base ? PATH_SUPPORT : PATH_SUPPORT_INTERFACE;
 

@@ -118,8 +118,11 @@ int support_beads(const struct layer_paths *l, double arc, struct clip_paths *ou
  * (PrusaSlicer's first object layer over a raft).
  *
  * Area: the part's first-layer regions (with the support's first layer,
- * support_beads, when there is support) grown by raft_expansion (round
- * joins), layer 0 grown by raft_first_layer_expansion more.  Paths: lines
+ * support_beads, when there is support) grown (round joins) by
+ * raft_expansion on the raft's top (contact) layer, by 0.5 mm more on the
+ * layers under it, and on layer 0 by raft_expansion plus
+ * raft_first_layer_expansion (at least plus 0.5 mm); a one-layer raft is
+ * its contact layer.  Paths: lines
  * alternating X (even layers) and Y (odd layers), centre lines w/2 inside
  * the area, on the global grid of the support; layer 0 at
  * raft_first_layer_density of the flow spacing (PATH_SUPPORT), the other

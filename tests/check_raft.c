@@ -212,17 +212,34 @@ START_TEST(raft_reaches_past_the_footprint)
 	ck_assert_double_ge(box[1], fp[1] - 5.5 - TOL);
 	ck_assert_double_le(box[1], fp[1] - 5.5 + pitch0 + TOL);
 
-	/* Layer 1, lines along Y: raft_expansion beyond in Y. */
+	/* Layer 1, lines along Y, under the contact layer: raft_expansion and
+	 * PrusaSlicer's 0.5 mm beyond in Y. */
 	ck_assert(bead_box(&st->layers[1], PATH_SUPPORT_INTERFACE, PATH_SUPPORT_INTERFACE, box));
-	ck_assert_double_eq_tol(box[1], fp[1] - 2.5, TOL);
-	ck_assert_double_eq_tol(box[3], fp[3] + 2.5, TOL);
-	ck_assert_double_le(box[2], fp[2] + 2.5 + TOL);
-	ck_assert_double_ge(box[2], fp[2] + 2.5 - 0.5);
+	ck_assert_double_eq_tol(box[1], fp[1] - 3.0, TOL);
+	ck_assert_double_eq_tol(box[3], fp[3] + 3.0, TOL);
+	ck_assert_double_le(box[2], fp[2] + 3.0 + TOL);
+	ck_assert_double_ge(box[2], fp[2] + 3.0 - 0.5);
 
 	/* Layer 2 (the contact layer), lines along X: raft_expansion in X. */
 	ck_assert(bead_box(&st->layers[2], PATH_SUPPORT_INTERFACE, PATH_SUPPORT_INTERFACE, box));
 	ck_assert_double_eq_tol(box[0], fp[0] - 2.5, TOL);
 	ck_assert_double_eq_tol(box[2], fp[2] + 2.5, TOL);
+	layer_stack_free(st);
+
+	/* Without a first-layer expansion layer 0 still grows the 0.5 mm; a
+	 * one-layer raft is the contact layer, raft_expansion wide. */
+	config(&c, 2);
+	c.raft.first_layer_expansion = 0;
+	st = toolpaths_ok(m, &c, &s);
+	ck_assert(bead_box(&st->layers[0], PATH_SUPPORT, PATH_SUPPORT, box));
+	ck_assert_double_eq_tol(box[2], fp[2] + 1.5 + 0.5, TOL);
+	layer_stack_free(st);
+	config(&c, 1);
+	st = toolpaths_ok(m, &c, &s);
+	ck_assert(only_roles(&st->layers[0], PATH_SUPPORT_INTERFACE, PATH_SUPPORT_INTERFACE));
+	ck_assert(bead_box(&st->layers[0], PATH_SUPPORT_INTERFACE, PATH_SUPPORT_INTERFACE, box));
+	ck_assert_double_eq_tol(box[2], fp[2] + 1.5, TOL);
+	ck_assert_double_eq_tol(st->layers[1].z - st->layers[1].height, 0.2 + 0.1, 1e-9);
 	layer_stack_free(st);
 	mesh_free(m);
 }
