@@ -316,6 +316,7 @@ static int print_json(const struct slice_run *r, const struct slicer_summary *s)
 	json_object_set_new(o, "layers", json_integer((json_int_t)s->layers));
 	json_object_set_new(o, "layer_height", json_real(r->c->layer_height));
 	json_object_set_new(o, "first_layer_height", json_real(r->c->first_layer_height));
+	json_object_set_new(o, "raft_layers", json_integer((json_int_t)s->raft_layers));
 	json_object_set_new(o, "perimeters", json_integer(r->c->perim.perimeters));
 	json_object_set_new(o, "fill_density", json_real(r->c->infill.density));
 	json_object_set_new(o, "time_s", json_real(s->time_s));
@@ -358,10 +359,17 @@ static void print_text(const struct slice_run *r, const struct slicer_summary *s
 		printf("  not repaired (--no-repair)\n");
 	printf("printer: %s (%s), nozzle %g mm\n", r->prof->id, r->prof->name,
 	       r->c->perim.nozzle_diameter);
-	printf("placed: X %.2f to %.2f, Y %.2f to %.2f, Z 0 to %.2f mm\n", s->min[0], s->max[0],
-	       s->min[1], s->max[1], s->max[2]);
-	printf("layers: %zu (first %g mm, then %g mm)\n", s->layers, r->c->first_layer_height,
-	       r->c->layer_height);
+	if (s->raft_layers) {
+		printf("placed: X %.2f to %.2f, Y %.2f to %.2f, Z %.2f to %.2f mm (on the raft)\n",
+		       s->min[0], s->max[0], s->min[1], s->max[1], s->min[2], s->max[2]);
+		printf("layers: %zu (%zu of raft, the first %g mm; the part's %g mm)\n", s->layers,
+		       s->raft_layers, r->c->first_layer_height, r->c->layer_height);
+	} else {
+		printf("placed: X %.2f to %.2f, Y %.2f to %.2f, Z 0 to %.2f mm\n", s->min[0],
+		       s->max[0], s->min[1], s->max[1], s->max[2]);
+		printf("layers: %zu (first %g mm, then %g mm)\n", s->layers,
+		       r->c->first_layer_height, r->c->layer_height);
+	}
 	printf("paths: %zu external perimeters, %zu perimeters, %zu thin walls, %zu gap fills\n",
 	       s->paths[PATH_OUTER_PERIMETER], s->paths[PATH_INNER_PERIMETER],
 	       s->paths[PATH_THIN_WALL], s->paths[PATH_GAP_FILL]);

@@ -200,6 +200,11 @@ struct profile {
 	double brim_separation;		/* mm; default 0 */
 	bool support_material;		/* default 0 */
 	int support_material_threshold; /* degrees, 0 = automatic; default 0 */
+	int raft_layers;		/* 0 = no raft; default 0 */
+	double raft_contact_distance;	/* mm; default 0.1 */
+	double raft_expansion;		/* mm; default 1.5 */
+	double raft_first_layer_density; /* percent, 10-100; default 90 */
+	double raft_first_layer_expansion; /* mm; default 3 */
 
 	/* Speeds, mm/s (a percentage is of the key slicer/settings.h names) */
 	double travel_speed;			       /* default 130 */
@@ -215,6 +220,7 @@ struct profile {
 	double support_material_speed;		       /* default 60 */
 	struct profile_pct support_material_interface_speed; /* default 100% */
 	struct profile_pct first_layer_speed; /* a percentage is of each role's speed */
+	struct profile_pct first_layer_speed_over_raft; /* the part's first layer on a raft */
 
 	/* Travel */
 	bool avoid_crossing_perimeters;		    /* default 1 */
@@ -421,11 +427,11 @@ const char *profile_key_at(const struct profile *p, size_t i, const char **value
 
 /*
  * profile_unsupported - the keys p sets that Stratum does not honour, as
- * one list "raft_layers=3, ironing=1" (values cut at 24 bytes), and a
+ * one list "spiral_vase=1, ironing=1" (values cut at 24 bytes), and a
  * fill_pattern Stratum does not print ("fill_pattern=stars (rectilinear
  * used)").  A key is honoured when the loader types it, when it cannot
  * change what Stratum prints (notes, preset names, multi-material ...) or
- * when its value asks for what Stratum does anyway (raft_layers = 0).
+ * when its value asks for what Stratum does anyway (ironing = 0).
  * *out: a new string (free()), NULL when every key is honoured.
  * Returns 0 or ST_ERR_NOMEM.
  */

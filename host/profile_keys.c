@@ -87,6 +87,11 @@ static const struct key_def key_defs[] = {
 	{"brim_separation", KT_DOUBLE, OFF(brim_separation)},
 	{"support_material", KT_BOOL, OFF(support_material)},
 	{"support_material_threshold", KT_INT, OFF(support_material_threshold)},
+	{"raft_layers", KT_INT, OFF(raft_layers)},
+	{"raft_contact_distance", KT_DOUBLE, OFF(raft_contact_distance)},
+	{"raft_expansion", KT_DOUBLE, OFF(raft_expansion)},
+	{"raft_first_layer_density", KT_DENSITY, OFF(raft_first_layer_density)},
+	{"raft_first_layer_expansion", KT_DOUBLE, OFF(raft_first_layer_expansion)},
 	{"travel_speed", KT_DOUBLE, OFF(travel_speed)},
 	{"travel_speed_z", KT_DOUBLE, OFF(travel_speed_z)},
 	{"perimeter_speed", KT_DOUBLE, OFF(perimeter_speed)},
@@ -100,6 +105,7 @@ static const struct key_def key_defs[] = {
 	{"support_material_speed", KT_DOUBLE, OFF(support_material_speed)},
 	{"support_material_interface_speed", KT_NUM_PCT, OFF(support_material_interface_speed)},
 	{"first_layer_speed", KT_NUM_PCT, OFF(first_layer_speed)},
+	{"first_layer_speed_over_raft", KT_NUM_PCT, OFF(first_layer_speed_over_raft)},
 	{"avoid_crossing_perimeters", KT_BOOL, OFF(avoid_crossing_perimeters)},
 	{"only_retract_when_crossing_perimeters", KT_BOOL, OFF(only_retract_when_crossing_perimeters)},
 	{"max_unretracted_travel", KT_DOUBLE, OFF(max_unretracted_travel)},
@@ -720,12 +726,13 @@ int prof_apply_key(struct loader *L, const struct key_def *d, const struct profi
 			return rc;
 		if (!pct)
 			v *= 100; /* a bare number is a fraction, as in Slic3r */
-		if (!(v >= 0 && v <= 100))
+		if (!setting_in_range(prof_decl(d), v))
 			return prof_key_error(L, kv, NULL, ST_ERR_RANGE,
-					 "%s is out of range (must be 0%% to 100%%, or a fraction "
-					 "0 to 1)",
-					 kv->value);
-		p->fill_density = v;
+					 "%s is out of range (must be %g%% to %g%%, or a fraction "
+					 "%g to 1)",
+					 kv->value, prof_decl(d)->min, prof_decl(d)->max,
+					 prof_decl(d)->min / 100);
+		*(double *)field = v;
 		return 0;
 	case KT_PROTOCOL:
 		idx = name_index(decl->names, decl->nnames, kv->value);

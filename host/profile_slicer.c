@@ -88,6 +88,12 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	c->infill.top_infill_extrusion_width =
 	    width_of(&p->top_infill_extrusion_width, p, c->perim.extrusion_width);
 	c->infill.bridge_angle = p->bridge_angle;
+	c->raft = (struct slicer_raft_settings){
+	    .layers = p->raft_layers,
+	    .contact_distance = p->raft_contact_distance,
+	    .expansion = p->raft_expansion,
+	    .first_layer_density = p->raft_first_layer_density,
+	    .first_layer_expansion = p->raft_first_layer_expansion};
 	c->skirt = (struct slicer_skirt_settings){.skirts = p->skirts,
 						  .skirt_distance = p->skirt_distance,
 						  .skirt_height = p->skirt_height,
@@ -135,6 +141,8 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	/* A percentage scales each role's own speed (PrusaSlicer 2.5). */
 	g->first_layer_speed = p->first_layer_speed.value;
 	g->first_layer_speed_is_percent = p->first_layer_speed.is_percent;
+	g->first_layer_speed_over_raft = p->first_layer_speed_over_raft.value;
+	g->first_layer_speed_over_raft_is_percent = p->first_layer_speed_over_raft.is_percent;
 	g->cooling = p->cooling;
 	g->fan_always_on = p->fan_always_on;
 	g->fan_on_off = p->gcode_flavor == PROFILE_FLAVOR_MAKERWARE ||

@@ -4,7 +4,7 @@
  * loader types it (slicer/settings.h), when it cannot change what Stratum prints (names, notes,
  * the GUI's and the print host's keys, multi-material and wipe tower
  * settings of a single-extruder print ...), or when its value asks for
- * what Stratum does anyway (raft_layers = 0, ironing = 0, spiral_vase = 0).
+ * what Stratum does anyway (ironing = 0, spiral_vase = 0).
  * Every other key the profile sets is listed, with its value.
  */
 #include "profile_int.h"
@@ -21,7 +21,7 @@
  * Stratum does.  ok NULL: no effect on the printed G-code at any value.
  * Otherwise honoured when the value equals ok (numbers compared as
  * numbers, every item of a list); when_key set: no effect at all while
- * when_key has the value when_off (a raft setting with raft_layers = 0).
+ * when_key has the value when_off (an ironing setting with ironing = 0).
  * A name ending in '*' covers every key it starts.
  */
 struct known {
@@ -85,9 +85,8 @@ static const struct known known[] = {
     {"filament_retract_*", NULL, NULL, NULL}, {"filament_deretract_speed", NULL, NULL, NULL},
     {"filament_wipe", NULL, NULL, NULL},
     /* Features Stratum does not have, honoured while they are off */
-    {"raft_layers", "0", NULL, NULL}, {"raft_*", NULL, "raft_layers", "0"},
+    {"raft_*", NULL, "raft_layers", "0"}, /* beyond the raft keys settings.c declares */
     {"first_layer_acceleration_over_raft", NULL, "raft_layers", "0"},
-    {"first_layer_speed_over_raft", NULL, "raft_layers", "0"},
     {"ironing", "0", NULL, NULL}, {"ironing_*", NULL, "ironing", "0"},
     {"spiral_vase", "0", NULL, NULL}, {"complete_objects", "0", NULL, NULL},
     {"fuzzy_skin", "none", NULL, NULL}, {"fuzzy_skin_*", NULL, "fuzzy_skin", "none"},

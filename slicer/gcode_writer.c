@@ -53,11 +53,14 @@ struct key {
 	enum key_type type;
 	size_t off;	  /* in struct gcodew_settings */
 	bool vector;	  /* per extruder/filament in PrusaSlicer: {name[0]} allowed */
+	bool raft;	  /* in the header only when there is a raft */
 };
 
-#define KD(n, vec) {#n, KEY_DOUBLE, offsetof(struct gcodew_settings, n), vec}
-#define KI(n, vec) {#n, KEY_INT, offsetof(struct gcodew_settings, n), vec}
-#define KB(n, vec) {#n, KEY_BOOL, offsetof(struct gcodew_settings, n), vec}
+#define KD(n, vec) {#n, KEY_DOUBLE, offsetof(struct gcodew_settings, n), vec, false}
+#define KI(n, vec) {#n, KEY_INT, offsetof(struct gcodew_settings, n), vec, false}
+#define KB(n, vec) {#n, KEY_BOOL, offsetof(struct gcodew_settings, n), vec, false}
+#define KRD(n) {#n, KEY_DOUBLE, offsetof(struct gcodew_settings, n), false, true}
+#define KRI(n) {#n, KEY_INT, offsetof(struct gcodew_settings, n), false, true}
 
 static const struct key keys[] = {
     KD(nozzle_diameter, true),
@@ -103,6 +106,12 @@ static const struct key keys[] = {
     KD(fan_below_layer_time, true),
     KD(slowdown_below_layer_time, true),
     KD(min_print_speed, true),
+    KRI(raft_layers),
+    KRD(raft_contact_distance),
+    KRD(raft_expansion),
+    KRD(raft_first_layer_density),
+    KRD(raft_first_layer_expansion),
+    KRD(first_layer_speed_over_raft),
 };
 
 #define NKEYS (sizeof(keys) / sizeof(keys[0]))
@@ -576,15 +585,33 @@ static bool small_perimeter(const struct toolpath *p)
 
 /* Print speed of path p on layer li (0-based): its role's, or
  * small_perimeter_speed for a small wall loop; the first layer's replaces
- * it, or scales it when a percentage. */
+ * it, or scales it when a percentage, and so does the part's first layer
+ * on a raft (PrusaSlicer's first_layer_speed_over_raft). */
 static double path_speed(const struct gcodew_settings *s, const struct toolpath *p, size_t li)
 {
 	double v = small_perimeter(p) ? s->small_perimeter_speed : role_base_speed(s, p->role);
+	double f = s->first_layer_speed;
+	bool pct = s->first_layer_speed_is_percent;
 
-	if (li > 0 || s->first_layer_speed <= 0)
+	if (li > 0 && s->raft_layers > 0 && li == (size_t)s->raft_layers) {
+		f = s->first_layer_speed_over_raft;
+		pct = s->first_layer_speed_over_raft_is_percent;
+	} else if (li > 0) {
 		return v;
-	return s->first_layer_speed_is_percent ? v * s->first_layer_speed / 100
-					       : s->first_layer_speed;
+	}
+	if (f <= 0)
+		return v;
+	return pct ? v * f / 100 : f;
+}
+
+/* Whether key k of s is written as a percentage. */
+static bool key_is_pct(const struct gcodew_settings *s, const struct key *k)
+{
+	if (k->off == offsetof(struct gcodew_settings, first_layer_speed))
+		return s->first_layer_speed_is_percent;
+	if (k->off == offsetof(struct gcodew_settings, first_layer_speed_over_raft))
+		return s->first_layer_speed_over_raft_is_percent;
+	return k->off == offsetof(struct gcodew_settings, raft_first_layer_density);
 }
 
 /* Point index of step k (0 .. n or n-1) of a path printed forwards or
@@ -1079,8 +1106,10 @@ static void put_header(struct gcodew *w, const struct gcodew_summary *sum)
 	put(w, "; total layers count = %zu\n", sum->layers);
 	put(w, "; total moves = %zu\n", sum->moves);
 	for (size_t i = 0; i < NKEYS; i++) {
-		bool pct = keys[i].off == offsetof(struct gcodew_settings, first_layer_speed) &&
-			   w->s->first_layer_speed_is_percent;
+		bool pct = key_is_pct(w->s, &keys[i]);
+
+		if (keys[i].raft && w->s->raft_layers == 0)
+			continue; /* as before rafts were printed */
 		fmt_num(n, key_value(w->s, &keys[i]), 6);
 		put(w, "; %s = %s%s\n", keys[i].name, n, pct ? "%" : "");
 	}

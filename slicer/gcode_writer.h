@@ -114,6 +114,10 @@ struct gcodew_settings {
 	double travel_speed_z;			 /* 0 = machine_max_feedrate_z */
 	double first_layer_speed;		 /* every extrusion of layer 1; 30 (0 = off) */
 	bool first_layer_speed_is_percent;	 /* ... is a percentage of each role's speed */
+	/* Likewise for the part's first layer on a raft (layer raft_layers + 1,
+	 * with a raft only); 30 */
+	double first_layer_speed_over_raft;
+	bool first_layer_speed_over_raft_is_percent;
 
 	/* Cooling */
 	bool cooling;			  /* true */
@@ -130,6 +134,15 @@ struct gcodew_settings {
 	 * writes it for the makerware and sailfish flavours (their M106 drives
 	 * another fan); false: M106 S0-255 / M107 */
 	bool fan_on_off;
+
+	/* The raft the layers were sliced with (slicer.h), reported in the
+	 * header when raft_layers > 0; the writer prints whatever layers it
+	 * is given. */
+	int raft_layers;		   /* 0 */
+	double raft_contact_distance;	   /* mm; 0.1 */
+	double raft_expansion;		   /* mm; 1.5 */
+	double raft_first_layer_density;   /* percent; 90 */
+	double raft_first_layer_expansion; /* mm; 3 */
 
 	/* Machine limits, for the estimates and the layer times */
 	struct est_limits limits; /* est_limits_init */

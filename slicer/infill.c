@@ -786,8 +786,9 @@ static int classify(struct ctx *c, struct clip_paths cl[CL_N])
 					  c->err);
 		if (!rc)
 			rc = clip_paths_append(&taken, &cl[CL_TOP], c->err);
-		/* The bottom shell: skin when it rests on the bed, else solid over bridges. */
-		bool on_bed = z_bottom(st, i) < c->t_bot - INFILL_EPS_MM;
+		/* The bottom shell: skin when it rests on the bed (or on a raft,
+		 * which lifts the whole stack), else solid over bridges. */
+		bool on_bed = z_bottom(st, i) - z_bottom(st, 0) < c->t_bot - INFILL_EPS_MM;
 		if (!rc)
 			rc = shell(c, -1, shell_count(st, i, -1, c->t_bot), &t);
 		if (!rc)

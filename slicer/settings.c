@@ -181,6 +181,16 @@ static const struct setting table[] = {
     {"support_material", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL, ""},
     {"support_material_threshold", INT, S_, 0, 90, 0, "degrees", "0", NULL, NULL, 0, NULL,
      "0 = automatic"},
+    {"raft_layers", INT, S_, 0, 100, 0, "", "0", NULL, NULL, 0, NULL,
+     "layers of raft under the part, which is lifted onto it; 0 = no raft"},
+    {"raft_contact_distance", NUM, S_, 0, 10, 0, "mm", "0.1", NULL, NULL, 0, NULL,
+     "gap between the top of the raft and the part's first layer"},
+    {"raft_expansion", NUM, S_, 0, 100, 0, "mm", "1.5", NULL, NULL, 0, NULL,
+     "how far the raft reaches beyond the part's first layer"},
+    {"raft_first_layer_density", SETTING_PERCENT, S_, 10, 100, 0, "%", "90%", NULL, NULL, 0, NULL,
+     "density of the raft's first layer (a bare number is a fraction)"},
+    {"raft_first_layer_expansion", NUM, S_, 0, 100, 0, "mm", "3", NULL, NULL, 0, NULL,
+     "how much further the raft's first layer reaches"},
 
     {"travel_speed", NUM, S_, 0, 1000, GT, "mm/s", "130", NULL, NULL, 0, "Speed", ""},
     {"travel_speed_z", NUM, S_, 0, 1000, 0, "mm/s", "0", NULL, NULL, 0, NULL,
@@ -207,6 +217,8 @@ static const struct setting table[] = {
     {"first_layer_speed", PCT, S_, 0, 1000, 0, "mm/s", "30", NULL, NULL, 0, NULL,
      "every extrusion of the first layer; a percentage is of each one's own speed; 0 = not "
      "slowed"},
+    {"first_layer_speed_over_raft", PCT, S_, 0, 1000, 0, "mm/s", "30", NULL, NULL, 0, NULL,
+     "every extrusion of the part's first layer on a raft, likewise"},
 
     {"avoid_crossing_perimeters", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, "Travel",
      "route travels inside the part instead of across its walls"},
@@ -371,12 +383,14 @@ bool setting_default_number(const char *name, bool sailfish, double *out)
 	double base;
 
 	if (!s || (s->type != SETTING_NUMBER && s->type != SETTING_INT && s->type != SETTING_BOOL &&
-		   s->type != SETTING_NUMBER_OR_PCT))
+		   s->type != SETTING_NUMBER_OR_PCT && s->type != SETTING_PERCENT))
 		return false;
 	d = sailfish && s->sailfish_dflt ? s->sailfish_dflt : s->dflt;
 	if (!d)
 		return false;
 	len = strlen(d);
+	if (len && d[len - 1] == '%' && s->type == SETTING_PERCENT) /* percent itself */
+		return st_parse_double(d, len - 1, 0, out) == ST_NUMBER_OK;
 	if (len && d[len - 1] == '%') { /* a percentage of another key's default */
 		if (!setting_pct_of(s) || st_parse_double(d, len - 1, 0, out) != ST_NUMBER_OK ||
 		    !setting_default_number(setting_pct_of(s), sailfish, &base))

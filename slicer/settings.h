@@ -89,9 +89,11 @@ bool setting_in_range(const struct setting *s, double v);
 void setting_range_text(const struct setting *s, char *buf, size_t cap);
 
 /*
- * setting_default_number - the declared default of a numeric, whole-number
- * or bool setting (sailfish: the sailfish default); a percentage default
- * ("50%") is resolved against the default of the key it is of (setting_pct_of).
+ * setting_default_number - the declared default of a numeric, whole-number,
+ * percentage or bool setting (sailfish: the sailfish default); a percentage
+ * default ("50%") of a number-or-percentage key is resolved against the
+ * default of the key it is of (setting_pct_of), a percentage key's is its
+ * percent.
  * Returns false when name is not declared or has no numeric default.
  */
 bool setting_default_number(const char *name, bool sailfish, double *out);

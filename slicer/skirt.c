@@ -9,6 +9,7 @@
 #include "emit.h"
 #include "grow.h"
 #include "perimeters.h"
+#include "support.h"
 
 /* Loops added for min_skirt_length stop here (a guard against a length
  * that no sane skirt reaches). */
@@ -117,51 +118,6 @@ static int footprint(const struct clip_expolys *ex, struct clip_paths *out, stru
 	if (!rc)
 		rc = clip_paths_append(out, &outer, err);
 	clip_paths_free(&outer);
-	return rc;
-}
-
-/* out = the area covered by the support beads of layer l (open or closed). */
-static int support_beads(const struct layer_paths *l, struct clip_paths *out,
-			 struct ctx *c)
-{
-	struct clip_paths line = {0}, band = {0};
-	int64_t *xy = NULL;
-	size_t cap = 0;
-	int rc = 0;
-
-	clip_paths_clear(out);
-	for (size_t i = 0; i < l->n && !rc; i++) {
-		const struct toolpath *p = &l->paths[i];
-		size_t n = p->n + (p->closed ? 1 : 0);
-		int64_t wmax = 0;
-		int64_t *grown;
-
-		if (p->role != PATH_SUPPORT && p->role != PATH_SUPPORT_INTERFACE)
-			continue;
-		if (!(grown = slice_grow(xy, &cap, n, 2 * sizeof(*xy)))) {
-			rc = st_error_set(c->err, ST_ERR_NOMEM, "skirt: out of memory for support");
-			break;
-		}
-		xy = grown;
-		for (size_t k = 0; k < n; k++) {
-			const struct path_point *q = &p->pts[k % p->n];
-			xy[2 * k] = q->x;
-			xy[2 * k + 1] = q->y;
-			wmax = q->width > wmax ? q->width : wmax;
-		}
-		clip_paths_clear(&line);
-		rc = clip_paths_add(&line, xy, n, c->err);
-		if (!rc)
-			rc = clip_offset_open(&line, wmax / 2.0, CLIP_JOIN_ROUND, CLIP_END_ROUND, 2.0,
-					      c->arc, &band, c->err);
-		if (!rc)
-			rc = clip_paths_append(out, &band, c->err);
-	}
-	if (!rc)
-		rc = clip_boolean(CLIP_UNION, out, NULL, CLIP_NONZERO, out, c->err);
-	free(xy);
-	clip_paths_free(&line);
-	clip_paths_free(&band);
 	return rc;
 }
 
@@ -307,7 +263,7 @@ int skirt_generate(const struct skirt_settings *s, const struct slice_stack *st,
 	if (!rc)
 		rc = clip_offset(&model, ext, CLIP_JOIN_ROUND, 2.0, c.arc, &base, err);
 	if (!rc && support)
-		rc = support_beads(&support->layers[0], &beads, &c);
+		rc = support_beads(&support->layers[0], c.arc, &beads, err);
 	if (!rc && beads.n)
 		rc = clip_boolean(CLIP_UNION, &base, &beads, CLIP_NONZERO, &base, err);
 	if (!rc && s->skirts > 0) {

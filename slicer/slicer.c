@@ -12,8 +12,7 @@
 
 #include "grow.h"
 #include "infill.h"
-#include "skirt.h"
-#include "support.h"
+#include "stages.h"
 #include "travel.h"
 
 int slicer_place(const struct mesh *m, const struct slicer_bed *bed, double offset[3],
@@ -87,111 +86,6 @@ static void move_sections(struct slice_stack *st, int64_t dx, int64_t dy)
 			p->xy[2 * k + 1] += dy;
 		}
 	}
-}
-
-/* An empty stack with the layers (z, height) of the sections. */
-static struct layer_stack *stage_stack_new(const struct slice_stack *st, struct st_error *err)
-{
-	struct layer_stack *s = layer_stack_new(st->n, err);
-
-	if (s)
-		for (size_t i = 0; i < st->n; i++) {
-			s->layers[i].z = st->layers[i].z;
-			s->layers[i].height = st->layers[i].height;
-		}
-	return s;
-}
-
-/* Whether any layer of s holds a path. */
-static bool stack_has_paths(const struct layer_stack *s)
-{
-	for (size_t l = 0; l < s->nlayers; l++)
-		if (s->layers[l].n)
-			return true;
-	return false;
-}
-
-/*
- * Stage "support" (support.h): support material under overhangs, from the
- * bed, when the job asks for it.  Sets *ran when it produced paths.
- */
-static int stage_support(const struct slicer_config *c, const struct slice_stack *st,
-			 struct layer_stack *out, bool *ran, struct st_error *err)
-{
-	struct support_settings s;
-	int rc;
-
-	*ran = false;
-	if (!c->support.enabled)
-		return 0;
-	support_settings_init(&s, c->perim.nozzle_diameter);
-	s.support_material = true;
-	s.support_material_threshold = c->support.threshold;
-	s.extrusion_width = c->perim.extrusion_width;
-	rc = support_generate(&s, st, out, err);
-	*ran = !rc && stack_has_paths(out);
-	return rc;
-}
-
-/*
- * Stage "skirt/brim" (skirt.h), run after the support stage so the skirt
- * goes around the supports too.  Sets *ran when it produced paths.
- */
-static int stage_skirt(const struct slicer_config *c, const struct slice_stack *st,
-		       const struct layer_stack *support, struct layer_stack *out, bool *ran,
-		       struct st_error *err)
-{
-	struct skirt_settings s;
-	int rc;
-
-	skirt_settings_init(&s, c->perim.nozzle_diameter);
-	/* PrusaSlicer prints no skirt at skirt_height 0. */
-	s.skirts = c->skirt.skirt_height > 0 ? c->skirt.skirts : 0;
-	s.skirt_distance = c->skirt.skirt_distance;
-	s.skirt_height = c->skirt.skirt_height > 0 ? c->skirt.skirt_height : 1;
-	s.min_skirt_length = c->skirt.skirt_height > 0 ? c->skirt.min_skirt_length : 0;
-	s.brim_width = c->skirt.brim_width;
-	s.brim_separation = c->skirt.brim_separation;
-	s.extrusion_width = c->perim.extrusion_width;
-	s.filament_diameter = c->gcodew.filament_diameter;
-	rc = skirt_generate(&s, st, support, out, err);
-	*ran = !rc && stack_has_paths(out);
-	return rc;
-}
-
-/* A role's width w, or the walls' when w is 0. */
-static double width_or(double w, const struct slicer_config *c)
-{
-	return w > 0 ? w : c->perim.extrusion_width;
-}
-
-/* The infill job (infill.h) of the settings: the walls' width, the job's flow. */
-static int infill_job_for(const struct slicer_config *c, const struct slice_stack *st,
-			  struct infill_job **job, struct st_error *err)
-{
-	struct infill_settings s;
-	int rc;
-
-	infill_settings_init(&s, c->perim.nozzle_diameter);
-	rc = infill_pattern_parse(c->infill.pattern, &s.fill_pattern, err);
-	if (rc)
-		return rc;
-	s.fill_density = c->infill.density;
-	s.top_solid_layers = c->infill.top_solid_layers;
-	s.bottom_solid_layers = c->infill.bottom_solid_layers;
-	s.solid_infill_below_area = c->infill.solid_infill_below_area;
-	s.top_solid_min_thickness = c->infill.top_solid_min_thickness;
-	s.bottom_solid_min_thickness = c->infill.bottom_solid_min_thickness;
-	s.fill_angle = c->infill.fill_angle;
-	s.bridge_angle = c->infill.bridge_angle;
-	s.bridge_flow_ratio = c->infill.bridge_flow_ratio;
-	s.infill_overlap = c->infill.infill_overlap;
-	s.layer_height = c->layer_height;
-	s.perimeter_extrusion_width = c->perim.extrusion_width;
-	s.infill_extrusion_width = width_or(c->infill.infill_extrusion_width, c);
-	s.solid_infill_extrusion_width = width_or(c->infill.solid_infill_extrusion_width, c);
-	s.top_infill_extrusion_width = width_or(c->infill.top_infill_extrusion_width, c);
-	return infill_job_new(&s, st, job, err);
 }
 
 /* ---------------------------------------------------------------------------
@@ -407,6 +301,7 @@ struct sink {
 	int rc;			   /* the writer's first error: reported after any
 				    * of the stages', as when writing came last */
 	struct st_error err;
+	size_t base;		   /* layers before the part's (the raft) */
 };
 
 /* Hand the merged layer li to the sink; the sink takes or frees its paths. */
@@ -459,7 +354,35 @@ static int finish_layer(struct pipe *p, struct infill_job *job, struct layer_sta
 	res->any = res->any || m.n;
 	m.travel = p->maps[li];
 	p->maps[li] = NULL;
-	return sink_layer(k, &m, li);
+	return sink_layer(k, &m, k->base + li);
+}
+
+/*
+ * The raft's layers, skirt/brim then raft paths (whose paths are taken),
+ * counted and sunk below the part's.
+ */
+static int sink_raft(const struct slice_stack *raft, struct layer_stack *skirt,
+		     struct layer_stack *paths, struct sink *k, struct pipe_result *res,
+		     struct st_error *err)
+{
+	int rc = 0;
+
+	for (size_t i = 0; i < raft->n && !rc; i++) {
+		struct layer_paths m = {.z = raft->layers[i].z, .height = raft->layers[i].height};
+
+		rc = move_paths(&m, &skirt->layers[i], i, err);
+		if (!rc)
+			rc = move_paths(&m, &paths->layers[i], i, err);
+		if (rc) {
+			layer_paths_clear(&m);
+			break;
+		}
+		for (size_t j = 0; j < m.n; j++)
+			res->paths[m.paths[j].role]++;
+		res->any = res->any || m.n;
+		rc = sink_layer(k, &m, i);
+	}
+	return rc;
 }
 
 /* Free what the pipeline holds for layer i. */
@@ -495,7 +418,7 @@ static int run_pipe(const struct slicer_config *c, const struct slice_stack *st,
 		p.travel_inset = 1;
 	p.nchunks = (n + SLICER_CHUNK_LAYERS - 1) / SLICER_CHUNK_LAYERS;
 	p.window = (nworkers + 1) * SLICER_CHUNK_LAYERS;
-	rc = infill_job_for(c, st, &job, err);
+	rc = stage_infill_job(c, st, &job, err);
 	if (rc)
 		return rc;
 	p.job = job;
@@ -579,8 +502,9 @@ out_free:
 }
 
 /*
- * Stages 1-4 into the sink: place, slice, support and skirt/brim for the
- * whole stack, then the layer pipeline.  Errors in the order the stages
+ * Stages 1-4 into the sink: place, slice, the raft, support and
+ * skirt/brim for the whole stack, then the raft's layers and the layer
+ * pipeline.  Errors in the order the stages
  * come (the pipeline's before support's and skirt's, which are computed
  * first but reported as if they came after), then "nothing to print",
  * then the sink's.
@@ -589,13 +513,15 @@ static int toolpaths(const struct mesh *m, const struct slicer_config *c,
 		     struct layer_stack **shape, struct sink *k, struct slicer_summary *sum,
 		     struct st_error *err)
 {
-	enum { SKIRT, SUPPORT, STAGES };
+	enum { SKIRT, SUPPORT, RAFT_SKIRT, RAFT, STAGES };
 	struct slicer_summary s = {0};
-	struct slice_stack *st = NULL;
+	struct slice_stack *st = NULL, *raft = NULL;
 	struct layer_stack *stage[STAGES] = {0};
 	struct pipe_result res = {.any = false};
 	struct st_error late_err = {0};
 	bool ran[STAGES] = {false};
+	/* PrusaSlicer's first object layer over a raft is an ordinary layer. */
+	double first = c->raft.layers > 0 ? c->layer_height : c->first_layer_height, lift = 0.0;
 	int rc, late = 0;
 
 	rc = slicer_config_check(c, err);
@@ -605,7 +531,7 @@ static int toolpaths(const struct mesh *m, const struct slicer_config *c,
 		return rc;
 
 	progress(c, "slicing", 0.0);
-	rc = slice_mesh(m, c->first_layer_height, c->layer_height, &c->slice, &st, err);
+	rc = slice_mesh(m, first, c->layer_height, &c->slice, &st, err);
 	if (rc)
 		return rc;
 	progress(c, "slicing", 1.0);
@@ -613,7 +539,7 @@ static int toolpaths(const struct mesh *m, const struct slicer_config *c,
 		rc = st_error_set(err, ST_ERR_RANGE,
 				  "the model is %.3g mm tall, less than half the first layer "
 				  "(%g mm): there is nothing to slice",
-				  s.max[2] - s.min[2], c->first_layer_height);
+				  s.max[2] - s.min[2], first);
 		goto out_free;
 	}
 	move_sections(st, llround(s.offset[0] * SLICE_UNITS_PER_MM),
@@ -622,30 +548,45 @@ static int toolpaths(const struct mesh *m, const struct slicer_config *c,
 		s.open_dropped += st->layers[i].open_dropped;
 		rc = clip_expolys_clean(&st->layers[i].regions, SLICER_CLEAN_NM, err);
 	}
-	if (!rc && c->elefant_foot_compensation > 0)
+	if (!rc && c->elefant_foot_compensation > 0 && c->raft.layers == 0)
 		rc = slice_layer_shrink(&st->layers[0], c->elefant_foot_compensation,
 					SLICER_CLEAN_NM, err);
+	if (!rc && c->raft.layers > 0)
+		rc = stage_raft_layers(c, st, &raft, &lift, err);
 	if (rc)
 		goto out_free;
-	if (shape && !(*shape = stage_stack_new(st, err))) {
+	if (shape && !(*shape = stage_print_stack(raft, st, err))) {
 		rc = ST_ERR_NOMEM;
 		goto out_free;
 	}
 	if (shape)
 		k->stack = *shape;
+	k->base = raft ? raft->n : 0;
 	if (k->path) /* its errors wait until the stages have succeeded */
-		k->rc = gcodew_begin_file(k->gs, st->n, k->path, &k->w, &k->err);
+		k->rc = gcodew_begin_file(k->gs, k->base + st->n, k->path, &k->w, &k->err);
 	for (int j = 0; j < STAGES; j++)
-		if (!(stage[j] = stage_stack_new(st, err))) {
+		if ((j < RAFT_SKIRT || raft) &&
+		    !(stage[j] = stage_stack(j < RAFT_SKIRT ? st : raft, err))) {
 			rc = ST_ERR_NOMEM;
 			goto out_free;
 		}
 
 	late = stage_support(c, st, stage[SUPPORT], &ran[SUPPORT], &late_err);
-	if (!late)
+	if (raft) {
+		rc = stage_raft(c, st, ran[SUPPORT] ? stage[SUPPORT] : NULL, raft, stage[RAFT], err);
+		if (rc)
+			goto out_free;
+	}
+	/* The skirt and brim go around the raft when there is one. */
+	if (!late && raft)
+		late = stage_skirt(c, raft, NULL, stage[RAFT_SKIRT], &ran[SKIRT], &late_err);
+	else if (!late)
 		late = stage_skirt(c, st, ran[SUPPORT] ? stage[SUPPORT] : NULL, stage[SKIRT],
 				   &ran[SKIRT], &late_err);
-	rc = run_pipe(c, st, stage[SKIRT], stage[SUPPORT], k, &res, err);
+	if (raft)
+		rc = sink_raft(raft, stage[RAFT_SKIRT], stage[RAFT], k, &res, err);
+	if (!rc)
+		rc = run_pipe(c, st, stage[SKIRT], stage[SUPPORT], k, &res, err);
 	if (!rc && late) {
 		rc = late;
 		if (err)
@@ -661,7 +602,11 @@ static int toolpaths(const struct mesh *m, const struct slicer_config *c,
 		goto out_free;
 	}
 	memcpy(s.paths, res.paths, sizeof(s.paths));
-	s.layers = st->n;
+	s.layers = k->base + st->n;
+	s.raft_layers = k->base;
+	s.offset[2] += lift;
+	s.min[2] += lift;
+	s.max[2] += lift;
 	s.walls = true;
 	s.infill = res.infill;
 	s.support = ran[SUPPORT];
@@ -672,6 +617,7 @@ static int toolpaths(const struct mesh *m, const struct slicer_config *c,
 out_free:
 	for (int j = 0; j < STAGES; j++)
 		layer_stack_free(stage[j]);
+	slice_stack_free(raft);
 	slice_stack_free(st);
 	return rc;
 }
@@ -710,6 +656,11 @@ int slicer_run(const struct mesh *m, const struct slicer_config *c, const char *
 	gs.nozzle_diameter = c->perim.nozzle_diameter;
 	gs.layer_height = c->layer_height;
 	gs.first_layer_height = c->first_layer_height;
+	gs.raft_layers = c->raft.layers;
+	gs.raft_contact_distance = c->raft.contact_distance;
+	gs.raft_expansion = c->raft.expansion;
+	gs.raft_first_layer_density = c->raft.first_layer_density;
+	gs.raft_first_layer_expansion = c->raft.first_layer_expansion;
 	rc = toolpaths(m, c, NULL, &k, &s, err);
 	if (!rc && k.rc) {
 		rc = k.rc;

@@ -10,13 +10,19 @@
  *      vertices within SLICER_CLEAN_NM of their neighbours' line;
  *   3. support (support.h, when the job asks for it) and skirt/brim
  *      (skirt.h, around the first layer and its support), whole stack;
+ *      with raft.layers > 0, the raft (support.h, support_raft) under the
+ *      first layer: the part is sliced with a first layer of layer_height,
+ *      lifted onto the raft (no elefant foot compensation, as PrusaSlicer
+ *      compensates only on the bed), and the skirt/brim goes around the
+ *      raft's first layer on the raft's layers;
  *   4. the layer pipeline: walls (perimeters.h: walls, gap fill and thin
  *      walls) in chunks of SLICER_CHUNK_LAYERS layers and each layer's
  *      infill plan (infill.h: skins, bridges, solid and sparse infill in the
  *      region inside the walls) on worker threads; bottom to top, each
  *      layer's infill is emitted, its paths merged in the order skirt/brim,
  *      support, walls, infill, and the layer written (gcode_writer.h, to a
- *      temporary file renamed on success) and freed.
+ *      temporary file renamed on success) and freed; the raft's layers,
+ *      skirt/brim then raft, are written before the part's.
  * struct slicer_summary says which stages produced paths.
  * Each chunk of walls carries its own seam memory, warmed up on the layer
  * below the chunk, and infill is ordered from where the layer below ended,
@@ -37,6 +43,8 @@
 #include "section.h"
 #include "st_error.h"
 #include "toolpath.h"
+
+struct support_settings; /* support.h */
 
 /* Layers per unit of parallel wall work (and per seam-memory restart). */
 #define SLICER_CHUNK_LAYERS 32
@@ -81,6 +89,15 @@ struct slicer_support_settings {
 	int threshold;	/* degrees, 0-90, 0 = automatic (support_material_threshold) */
 };
 
+/* The raft (support.h, support_raft), PrusaSlicer's keys. */
+struct slicer_raft_settings {
+	int layers;		      /* raft_layers, 0 = no raft (0) */
+	double contact_distance;      /* mm, raft_contact_distance (0.1) */
+	double expansion;	      /* mm, raft_expansion (1.5) */
+	double first_layer_density;   /* percent, raft_first_layer_density (90) */
+	double first_layer_expansion; /* mm, raft_first_layer_expansion (3) */
+};
+
 struct slicer_skirt_settings {
 	int skirts;		 /* loops, >= 0 (1) */
 	double skirt_distance;	 /* mm, >= 0 (6) */
@@ -96,10 +113,11 @@ struct slicer_config {
 	double first_layer_height; /* mm, likewise (0.2) */
 	struct slice_settings slice;
 	struct perim_settings perim;
-	struct gcodew_settings gcodew; /* its layer heights and nozzle are overwritten
-					* from the fields above and perim */
+	struct gcodew_settings gcodew; /* its layer heights, nozzle and raft keys are
+					* overwritten from the fields here and perim */
 	struct slicer_infill_settings infill;
 	struct slicer_support_settings support;
+	struct slicer_raft_settings raft;
 	struct slicer_skirt_settings skirt;
 	struct slicer_bed bed;
 	double elefant_foot_compensation; /* mm the first layer's islands shrink, >= 0 (0) */
@@ -122,6 +140,7 @@ struct slicer_summary {
 	double offset[3];	       /* mm: translation applied to the mesh */
 	double min[3], max[3];	       /* mm: the part's bounding box as placed */
 	bool walls, infill, support, skirt; /* which stages produced paths in this build */
+	size_t raft_layers;	       /* of layers, those of the raft under the part */
 	size_t open_dropped;	       /* open contour pieces the slicer could not close */
 };
 
@@ -138,11 +157,18 @@ void slicer_config_init(struct slicer_config *c, double nozzle_diameter);
  * work: layer heights not > 0 or above the nozzle, the walls' settings
  * (perim_settings_check for both layer heights), infill density outside
  * 0-100 %, negative layer or loop counts or brim width, a support threshold
- * outside 0-90, an empty bed or a height <= 0, a negative thread count.
+ * outside 0-90, raft keys outside their declared ranges (settings.h), an
+ * empty bed or a height <= 0, a negative thread count.
  * Returns 0 or ST_ERR_RANGE / ST_ERR_ARG with a message naming the setting
  * (PrusaSlicer's key), its value and what is allowed.
  */
 int slicer_config_check(const struct slicer_config *c, struct st_error *err);
+
+/*
+ * slicer_raft_support - the settings of support_raft (support.h) for c:
+ * support's defaults for the nozzle, the walls' width, c's raft keys.
+ */
+void slicer_raft_support(const struct slicer_config *c, struct support_settings *s);
 
 /*
  * slicer_place - where the mesh goes on the bed: offset[3] (mm) to add to

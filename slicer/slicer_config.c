@@ -9,6 +9,7 @@
 
 #include "infill.h"
 #include "settings.h"
+#include "support.h"
 
 void slicer_config_init(struct slicer_config *c, double nozzle_diameter)
 {
@@ -25,6 +26,13 @@ void slicer_config_init(struct slicer_config *c, double nozzle_diameter)
 	    .solid_infill_below_area = 70, .fill_angle = 45, .bridge_flow_ratio = 1,
 	    .infill_overlap = 25};
 	c->support = (struct slicer_support_settings){.enabled = false, .threshold = 0};
+	/* The declared defaults, as the writer has them. */
+	c->raft = (struct slicer_raft_settings){
+	    .layers = c->gcodew.raft_layers,
+	    .contact_distance = c->gcodew.raft_contact_distance,
+	    .expansion = c->gcodew.raft_expansion,
+	    .first_layer_density = c->gcodew.raft_first_layer_density,
+	    .first_layer_expansion = c->gcodew.raft_first_layer_expansion};
 	c->skirt = (struct slicer_skirt_settings){.skirts = 1, .skirt_distance = 6, .skirt_height = 1};
 	c->bed = (struct slicer_bed){.max_x = 200, .max_y = 200, .max_height = 200};
 }
@@ -69,6 +77,11 @@ int slicer_config_check(const struct slicer_config *c, struct st_error *err)
 				    "support_material_threshold = %d is out of range; use 0 "
 				    "(automatic) to 90 degrees",
 				    c->support.threshold);
+	struct support_settings raft;
+	slicer_raft_support(c, &raft);
+	rc = support_settings_check(&raft, err);
+	if (rc)
+		return rc;
 	if (c->skirt.skirts < 0)
 		return st_error_set(err, ST_ERR_RANGE,
 				    "skirts = %d: the loop count cannot be negative; use 0 or more",
@@ -96,4 +109,15 @@ int slicer_config_check(const struct slicer_config *c, struct st_error *err)
 				    "threads = %d is out of range; use 0 (all cores) to %d",
 				    c->threads, SLICER_MAX_THREADS);
 	return 0;
+}
+
+void slicer_raft_support(const struct slicer_config *c, struct support_settings *s)
+{
+	support_settings_init(s, c->perim.nozzle_diameter);
+	s->extrusion_width = c->perim.extrusion_width;
+	s->raft_layers = c->raft.layers;
+	s->raft_contact_distance = c->raft.contact_distance;
+	s->raft_expansion = c->raft.expansion;
+	s->raft_first_layer_density = c->raft.first_layer_density;
+	s->raft_first_layer_expansion = c->raft.first_layer_expansion;
 }

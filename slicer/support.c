@@ -11,9 +11,13 @@
 #include "emit.h"
 #include "grow.h"
 #include "perimeters.h"
+#include "settings.h"
 
 /* A layer top this close to the contact limit still counts as below it, mm. */
 #define SUPPORT_Z_EPS 1e-6
+/* How much more the raft grows below its contact layer, mm (PrusaSlicer's
+ * inflate_factor_fine). */
+#define RAFT_FINE_MM 0.5
 /* The steepest threshold used in the overhang distance, degrees. */
 #define SUPPORT_MAX_DEG 89.0
 
@@ -32,6 +36,15 @@ struct piece {
 	int64_t along;	 /* smallest coordinate along the line */
 };
 
+/* The declared default of a raft key (settings.c). */
+static double declared(const char *name)
+{
+	double v = 0.0;
+
+	setting_default_number(name, false, &v);
+	return v;
+}
+
 void support_settings_init(struct support_settings *s, double nozzle_diameter)
 {
 	s->support_material = false;
@@ -43,6 +56,30 @@ void support_settings_init(struct support_settings *s, double nozzle_diameter)
 	s->extrusion_width = 1.125 * nozzle_diameter;
 	s->support_material_xy_spacing = 0.6 * s->extrusion_width;
 	s->arc_tolerance = 0.002;
+	s->raft_layers = (int)declared("raft_layers");
+	s->raft_contact_distance = declared("raft_contact_distance");
+	s->raft_expansion = declared("raft_expansion");
+	s->raft_first_layer_density = declared("raft_first_layer_density");
+	s->raft_first_layer_expansion = declared("raft_first_layer_expansion");
+}
+
+/* The raft's keys inside their declared ranges (settings.h). */
+static int raft_check(const struct support_settings *s, struct st_error *err)
+{
+	int rc = setting_check("support", "raft_layers", s->raft_layers, err);
+
+	if (!rc)
+		rc = setting_check("support", "raft_contact_distance", s->raft_contact_distance,
+				   err);
+	if (!rc)
+		rc = setting_check("support", "raft_expansion", s->raft_expansion, err);
+	if (!rc)
+		rc = setting_check("support", "raft_first_layer_density",
+				   s->raft_first_layer_density, err);
+	if (!rc)
+		rc = setting_check("support", "raft_first_layer_expansion",
+				   s->raft_first_layer_expansion, err);
+	return rc;
 }
 
 int support_settings_check(const struct support_settings *s, struct st_error *err)
@@ -89,7 +126,7 @@ int support_settings_check(const struct support_settings *s, struct st_error *er
 				    "support: arc tolerance %g mm is out of range; use (0, %g] mm (a "
 				    "quarter of the extrusion width)",
 				    s->arc_tolerance, s->extrusion_width / 4.0);
-	return 0;
+	return raft_check(s, err);
 }
 
 /* Regions of layer i as one polygon set (outer CCW, holes CW). */
@@ -382,5 +419,173 @@ out_free:
 	free_sets(G, st->n);
 	free(t);
 	clip_paths_free(&T);
+	return rc;
+}
+
+int support_beads(const struct layer_paths *l, double arc, struct clip_paths *out,
+		  struct st_error *err)
+{
+	struct clip_paths line = {0}, band = {0};
+	int64_t *xy = NULL;
+	size_t cap = 0;
+	int rc = 0;
+
+	clip_paths_clear(out);
+	for (size_t i = 0; i < l->n && !rc; i++) {
+		const struct toolpath *p = &l->paths[i];
+		size_t n = p->n + (p->closed ? 1 : 0);
+		int64_t wmax = 0;
+		int64_t *grown;
+
+		if (p->role != PATH_SUPPORT && p->role != PATH_SUPPORT_INTERFACE)
+			continue;
+		if (!(grown = slice_grow(xy, &cap, n, 2 * sizeof(*xy)))) {
+			rc = st_error_set(err, ST_ERR_NOMEM, "support: out of memory for its beads");
+			break;
+		}
+		xy = grown;
+		for (size_t k = 0; k < n; k++) {
+			const struct path_point *q = &p->pts[k % p->n];
+			xy[2 * k] = q->x;
+			xy[2 * k + 1] = q->y;
+			wmax = q->width > wmax ? q->width : wmax;
+		}
+		clip_paths_clear(&line);
+		rc = clip_paths_add(&line, xy, n, err);
+		if (!rc)
+			rc = clip_offset_open(&line, wmax / 2.0, CLIP_JOIN_ROUND, CLIP_END_ROUND, 2.0,
+					      arc, &band, err);
+		if (!rc)
+			rc = clip_paths_append(out, &band, err);
+	}
+	if (!rc)
+		rc = clip_boolean(CLIP_UNION, out, NULL, CLIP_NONZERO, out, err);
+	free(xy);
+	clip_paths_free(&line);
+	clip_paths_free(&band);
+	return rc;
+}
+
+/* ---------------------------------------------------------------------------
+ * The raft (support.h)
+ */
+
+/* Interface layers of a raft of n layers, PrusaSlicer's split: the upper half. */
+static int raft_interface_layers(int n)
+{
+	return (n + 1) / 2;
+}
+
+int support_raft_new(const struct support_settings *s, double first_layer_height,
+		     double layer_height, double nozzle_diameter, struct slice_stack *st,
+		     struct slice_stack **raft, double *lift, struct st_error *err)
+{
+	/* PrusaSlicer: the raft's upper layers as thick as the nozzle allows,
+	 * so the raft is quick and stiff. */
+	double upper = fmax(layer_height, 0.75 * nozzle_diameter), top = 0.0;
+	size_t n = s && s->raft_layers > 0 ? (size_t)s->raft_layers : 0;
+	struct slice_stack *r;
+
+	*raft = NULL;
+	if (!n || !st || !st->n)
+		return st_error_set(err, ST_ERR_ARG, "support: no raft layers or no part to lift");
+	r = calloc(1, sizeof(*r));
+	if (r)
+		r->layers = calloc(n, sizeof(*r->layers));
+	if (!r || !r->layers) {
+		slice_stack_free(r);
+		return st_error_set(err, ST_ERR_NOMEM, "support: out of memory for the raft");
+	}
+	r->n = n;
+	for (size_t i = 0; i < n; i++) {
+		r->layers[i].height = i == 0 ? first_layer_height : upper;
+		top += r->layers[i].height;
+		r->layers[i].z = top;
+	}
+	*lift = top + s->raft_contact_distance;
+	for (size_t i = 0; i < st->n; i++)
+		st->layers[i].z += *lift;
+	*raft = r;
+	return 0;
+}
+
+/*
+ * How far (mm) raft layer i reaches beyond the footprint, PrusaSlicer's
+ * rule: the contact layer (the top) raft_expansion; under it, the raft
+ * grows 0.5 mm more for stability, and layer 0 reaches
+ * raft_first_layer_expansion beyond the footprint's raft_expansion, at
+ * least those 0.5 mm.  A one-layer raft is its contact layer.
+ */
+static double raft_growth(const struct support_settings *s, int i)
+{
+	if (s->raft_layers == 1 || i == s->raft_layers - 1)
+		return s->raft_expansion;
+	if (i > 0)
+		return s->raft_expansion + RAFT_FINE_MM;
+	return s->raft_expansion + fmax(s->raft_first_layer_expansion, RAFT_FINE_MM);
+}
+
+/* out = the part's first layer and the support's beads on it (support may be NULL). */
+static int raft_footprint(struct ctx *c, const struct layer_stack *support,
+			  struct clip_paths *out)
+{
+	struct clip_paths beads = {0};
+	int rc = clip_paths_append(out, model(c, 0), c->err);
+
+	if (!rc && support && support->nlayers)
+		rc = support_beads(&support->layers[0], c->arc, &beads, c->err);
+	if (!rc && beads.n)
+		rc = clip_boolean(CLIP_UNION, out, &beads, CLIP_NONZERO, out, c->err);
+	clip_paths_free(&beads);
+	return rc;
+}
+
+int support_raft(const struct support_settings *s, const struct slice_stack *st,
+		 const struct layer_stack *support, struct slice_stack *raft,
+		 struct layer_stack *out, struct st_error *err)
+{
+	struct ctx c = {.s = s, .st = st, .err = err};
+	struct clip_paths F = {0}, R = {0};
+	int n = s ? s->raft_layers : 0, base, rc = support_settings_check(s, err);
+
+	if (rc)
+		return rc;
+	if (!st || !st->n || !raft || !out || raft->n != (size_t)n || out->nlayers != raft->n)
+		return st_error_set(err, ST_ERR_ARG,
+				    "support: the raft stacks must have raft_layers = %d layers", n);
+	c.w = s->extrusion_width * SLICE_UNITS_PER_MM;
+	c.arc = s->arc_tolerance * SLICE_UNITS_PER_MM;
+	c.body = s->support_material_spacing * SLICE_UNITS_PER_MM;
+	base = n - raft_interface_layers(n);
+	rc = raft_footprint(&c, support, &F);
+	for (int i = 0; i < n && !rc; i++) {
+		struct slice_layer *L = &raft->layers[i];
+		double grow = raft_growth(s, i);
+		double sp = perim_spacing(c.w, L->height * SLICE_UNITS_PER_MM), pitch = sp;
+		enum path_role role = i < base ? PATH_SUPPORT : PATH_SUPPORT_INTERFACE;
+
+		if (s->extrusion_width < L->height) {
+			rc = st_error_set(err, ST_ERR_RANGE,
+					  "support: extrusion width %g mm is narrower than the "
+					  "%g mm raft layer %d; use at least the layer height",
+					  s->extrusion_width, L->height, i + 1);
+			break;
+		}
+		if (i == 0)
+			pitch = sp * 100.0 / s->raft_first_layer_density;
+		else if (i < base)
+			pitch = c.body + sp; /* the spacing is the gap between beads */
+		if (i == 0 && base == 0)
+			role = PATH_SUPPORT_INTERFACE; /* a one-layer raft is its contact layer */
+		rc = clip_offset_ex(&F, grow * SLICE_UNITS_PER_MM, CLIP_JOIN_ROUND, 2.0, c.arc,
+				    &L->regions, err);
+		if (!rc)
+			rc = clip_offset(&L->regions.paths, -c.w / 2.0, CLIP_JOIN_ROUND, 2.0, c.arc,
+					 &R, err);
+		if (!rc)
+			rc = fill_lines(&c, &R, pitch, i & 1, role, &out->layers[i]);
+	}
+	clip_paths_free(&F);
+	clip_paths_free(&R);
 	return rc;
 }

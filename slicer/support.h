@@ -66,6 +66,12 @@ struct support_settings {
 						   * (60 % of the width) */
 	double extrusion_width;			  /* mm, support bead width (1.125 x nozzle) */
 	double arc_tolerance;			  /* mm, chord error of round offsets (0.002) */
+	/* The raft (support_raft), in the declared ranges of settings.h */
+	int raft_layers;		   /* 0 = no raft (0) */
+	double raft_contact_distance;	   /* mm, raft top to the part's bottom (0.1) */
+	double raft_expansion;		   /* mm beyond the part's first layer (1.5) */
+	double raft_first_layer_density;   /* percent, 10-100 (90) */
+	double raft_first_layer_expansion; /* mm, layer 0 reaches this much further (3) */
 };
 
 /* support_settings_init - PrusaSlicer's defaults for a nozzle of nozzle_diameter mm. */
@@ -92,5 +98,62 @@ int support_settings_check(const struct support_settings *s, struct st_error *er
  */
 int support_generate(const struct support_settings *s, const struct slice_stack *st,
 		     struct layer_stack *out, struct st_error *err);
+
+/*
+ * support_beads - out = the area the support beads (PATH_SUPPORT and
+ * PATH_SUPPORT_INTERFACE, open or closed) of layer l cover, each bead its
+ * width wide with round ends; arc: nm, > 0 (the offsets' arc tolerance).
+ * Returns 0 or a negative class with err filled.
+ */
+int support_beads(const struct layer_paths *l, double arc, struct clip_paths *out,
+		  struct st_error *err);
+
+/*
+ * The raft (PrusaSlicer's raft_layers), printed on the bed under the part,
+ * which is lifted onto it.  Its N = raft_layers layers split as PrusaSlicer
+ * splits them: ceil(N/2) interface layers on top, the N - ceil(N/2) below
+ * them base layers; the first layer of all is first_layer_height thick, the
+ * others max(layer_height, 0.75 nozzle).  The part's first layer starts
+ * raft_contact_distance above the raft's top and is layer_height thick
+ * (PrusaSlicer's first object layer over a raft).
+ *
+ * Area: the part's first-layer regions (with the support's first layer,
+ * support_beads, when there is support) grown (round joins) by
+ * raft_expansion on the raft's top (contact) layer, by 0.5 mm more on the
+ * layers under it, and on layer 0 by raft_expansion plus
+ * raft_first_layer_expansion (at least plus 0.5 mm); a one-layer raft is
+ * its contact layer.  Paths: lines
+ * alternating X (even layers) and Y (odd layers), centre lines w/2 inside
+ * the area, on the global grid of the support; layer 0 at
+ * raft_first_layer_density of the flow spacing (PATH_SUPPORT), the other
+ * base layers as support body (support_material_spacing between beads,
+ * PATH_SUPPORT), the interface layers dense (PATH_SUPPORT_INTERFACE).
+ */
+
+/*
+ * support_raft_new - the raft's layers under the part sliced as st (mm, as
+ * slice_mesh gives them, with a first layer of layer_height): *raft gets
+ * s->raft_layers layers with their z and height and no regions yet
+ * (slice_stack_free), and every layer of st is lifted by *lift mm, the
+ * raft's top plus raft_contact_distance.  Returns 0, or ST_ERR_ARG (no raft
+ * asked for, an empty st) / ST_ERR_NOMEM with err filled and st unchanged.
+ */
+int support_raft_new(const struct support_settings *s, double first_layer_height,
+		     double layer_height, double nozzle_diameter, struct slice_stack *st,
+		     struct slice_stack **raft, double *lift, struct st_error *err);
+
+/*
+ * support_raft - the raft under the part's first layer (st's layer 0) and
+ * the support's (support: support_generate's output, or NULL).
+ *   raft: support_raft_new's layers; each one's regions are replaced by its
+ *         raft area.
+ *   out:  as many layers (z and height set); the raft's paths are appended.
+ * Returns 0 or a negative class with err filled (bad settings, layer counts
+ * that do not match, a width narrower than a layer, ST_ERR_NOMEM,
+ * ST_ERR_INTERNAL).
+ */
+int support_raft(const struct support_settings *s, const struct slice_stack *st,
+		 const struct layer_stack *support, struct slice_stack *raft,
+		 struct layer_stack *out, struct st_error *err);
 
 #endif /* STRATUM_SLICER_SUPPORT_H */

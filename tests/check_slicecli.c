@@ -175,6 +175,7 @@ START_TEST(json_summary_matches_gcode)
 	o = slice_json(args, 0);
 	read_gcode(gc, &g);
 	ck_assert_int_eq((long)num(o, "layers"), 100);
+	ck_assert_int_eq((long)num(o, "raft_layers"), 0);
 	ck_assert_int_eq(g.layers, 100);
 	ck_assert_double_eq_tol(num(o, "first_layer_height"), 0.2, 1e-12);
 	ck_assert_double_eq_tol(g.first_z, 0.2, 1e-9);
@@ -714,11 +715,24 @@ START_TEST(load_order_and_set)
 		      out);
 	/* An unsupported key is named once, with its value. */
 	status = tu_run(out, sizeof(out),
-			"slice '%s' -o '%s' --load '%s' --set raft_layers=3 --set ironing=1", model,
+			"slice '%s' -o '%s' --load '%s' --set spiral_vase=1 --set ironing=1", model,
 			gc, a);
-	ck_assert_msg(status == 0 && strstr(out, "warning: not supported, ignored: raft_layers=3, "
+	ck_assert_msg(status == 0 && strstr(out, "warning: not supported, ignored: spiral_vase=1, "
 						 "ironing=1\n"),
 		      "exit %d: %s", status, out);
+	/* The raft is printed: its keys are not named, a raft key Stratum
+	 * does not print is, and the header lists the values used. */
+	status = tu_run(out, sizeof(out),
+			"slice '%s' -o '%s' --load '%s' --set raft_layers=3 --set raft_expansion=2 "
+			"--set first_layer_acceleration_over_raft=500",
+			model, gc, a);
+	ck_assert_msg(status == 0 && strstr(out, "warning: not supported, ignored: "
+						 "first_layer_acceleration_over_raft=500\n"),
+		      "exit %d: %s", status, out);
+	slurp(gc, gcode, sizeof(gcode));
+	ck_assert_msg(strstr(gcode, "; raft_layers = 3\n") && strstr(gcode, "; raft_expansion = 2\n"),
+		      "raft header");
+	ck_assert_msg(strstr(gcode, ";TYPE:Support material interface\n"), "raft paths");
 }
 END_TEST
 
