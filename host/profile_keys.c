@@ -68,6 +68,7 @@ static const struct key_def key_defs[] = {
 	{"external_perimeters_first", KT_BOOL, OFF(external_perimeters_first)},
 	{"thin_walls", KT_BOOL, OFF(thin_walls)},
 	{"gap_fill_enabled", KT_BOOL, OFF(gap_fill_enabled)},
+	{"spiral_vase", KT_BOOL, OFF(spiral_vase)},
 	{"top_solid_layers", KT_INT, OFF(top_solid_layers)},
 	{"bottom_solid_layers", KT_INT, OFF(bottom_solid_layers)},
 	{"top_solid_min_thickness", KT_DOUBLE, OFF(top_solid_min_thickness)},

@@ -59,6 +59,7 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	c->perim.outer_first = p->external_perimeters_first;
 	c->perim.thin_walls = p->thin_walls;
 	c->perim.gap_fill = p->gap_fill_enabled;
+	c->gcodew.spiral_vase = p->spiral_vase;
 	rc = perim_seam_parse(p->seam_position, &c->perim.seam, err);
 	if (rc)
 		return rc; /* not reached: the loader accepts the declared names only */

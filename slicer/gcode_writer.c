@@ -157,6 +157,7 @@ void gcodew_settings_init(struct gcodew_settings *s)
 	s->start_filament_gcode = s->end_filament_gcode = "";
 	s->printer_settings_id = s->printer_model = "";
 	s->bed_shape = settings_find("bed_shape")->dflt;
+	s->spiral_vase = setting_default_number("spiral_vase", false, &v) && v != 0;
 	est_limits_init(&s->limits);
 }
 
@@ -394,6 +395,7 @@ struct gcodew {
 	bool *done; /* per path of the layer: already planned */
 	size_t donecap;
 	struct travel_map *map;	  /* this layer's, NULL: straight travels */
+	bool spiral_below;	  /* the layer below was a spiral (layer_paths.spiral) */
 	struct travel_route route; /* the travel being planned */
 
 	/* Emission state */
@@ -622,13 +624,39 @@ static int record_wipe(struct gcodew *w, const struct toolpath *p, bool rev, siz
 	return 0;
 }
 
+/*
+ * Extrude from pa to pb (path pi of layer li; pb is its point at, for
+ * messages), ending at height z: a bead width nm wide, its filament from
+ * the flow model at the top of gcode_writer.h.  A bead narrower than the
+ * layer is refused; a segment of no length adds nothing.
+ */
+static int plan_segment(struct gcodew *w, const struct layer_paths *l, size_t li, size_t pi,
+			size_t at, const struct path_point *pa, const struct path_point *pb,
+			int64_t width, double z, double speed)
+{
+	double h = l->height, bead = width / SLICE_UNITS_PER_MM;
+	double len = hypot((double)(pb->x - pa->x), (double)(pb->y - pa->y)) / SLICE_UNITS_PER_MM;
+	double area = (bead - h) * h + M_PI * h * h / 4;
+
+	if (bead < h)
+		return st_error_set(w->err, ST_ERR_RANGE,
+				    "G-code: layer %zu, path %zu (%s), point %zu: bead width %.4f mm "
+				    "is below the layer height %.4f mm",
+				    li + 1, pi, path_role_name(l->paths[pi].role), at, bead, h);
+	if (len <= 0)
+		return 0;
+	return push_move(w, MV_EXTRUDE, true, pb->x / SLICE_UNITS_PER_MM,
+			 pb->y / SLICE_UNITS_PER_MM, z,
+			 area * len / w->fil_area * w->s->extrusion_multiplier, speed);
+}
+
 /* Plan path pi of layer li: travel to its start, then its segments. */
 static int plan_path(struct gcodew *w, const struct layer_paths *l, size_t li, size_t pi, bool rev)
 {
 	const struct gcodew_settings *s = w->s;
 	const struct toolpath *p = &l->paths[pi];
 	size_t steps = p->closed ? p->n + 1 : p->n;
-	double speed = path_speed(s, p, li), h = l->height;
+	double speed = path_speed(s, p, li);
 	const struct path_point *q0 = &p->pts[trav(p, rev, 0)];
 	int rc;
 
@@ -640,20 +668,8 @@ static int plan_path(struct gcodew *w, const struct layer_paths *l, size_t li, s
 	for (size_t k = 0; k + 1 < steps && rc == 0; k++) {
 		size_t a = trav(p, rev, k), b = trav(p, rev, k + 1);
 		const struct path_point *pa = &p->pts[a], *pb = &p->pts[b];
-		double bead = (rev ? pb : pa)->width / SLICE_UNITS_PER_MM;
-		double len = hypot((double)(pb->x - pa->x), (double)(pb->y - pa->y)) /
-			     SLICE_UNITS_PER_MM;
-		if (bead < h)
-			return st_error_set(w->err, ST_ERR_RANGE,
-					    "G-code: layer %zu, path %zu (%s), point %zu: bead width "
-					    "%.4f mm is below the layer height %.4f mm",
-					    li + 1, pi, path_role_name(p->role), rev ? b : a, bead, h);
-		if (len <= 0)
-			continue;
-		double area = (bead - h) * h + M_PI * h * h / 4;
-		double e = area * len / w->fil_area * s->extrusion_multiplier;
-		rc = push_move(w, MV_EXTRUDE, true, pb->x / SLICE_UNITS_PER_MM,
-			       pb->y / SLICE_UNITS_PER_MM, w->layer_z, e, speed);
+		rc = plan_segment(w, l, li, pi, rev ? b : a, pa, pb, (rev ? pb : pa)->width,
+				  w->layer_z, speed);
 	}
 	if (rc == 0 && s->wipe)
 		rc = record_wipe(w, p, rev, steps);
@@ -704,6 +720,51 @@ static int plan_run(struct gcodew *w, const struct layer_paths *l, size_t li, si
 	return 0;
 }
 
+/*
+ * Plan spiral layer li (layer_paths.spiral): its one loop from the vertex
+ * nearest the nozzle, Z rising with the length printed from the top of the
+ * layer below to l->z.  Reached from a spiral below by a plain move (no
+ * retraction: it is the loop's own continuation), else by a travel.
+ */
+static int plan_spiral(struct gcodew *w, const struct layer_paths *l, size_t li)
+{
+	const struct toolpath *p = &l->paths[0];
+	double h = l->height, z0 = l->z - h, speed = path_speed(w->s, p, li);
+	double total = 0, done = 0, best = INFINITY;
+	size_t first = 0;
+	int rc;
+
+	for (size_t k = 0; k < p->n; k++) {
+		const struct path_point *a = &p->pts[k], *b = &p->pts[(k + 1) % p->n];
+		double d = w->pos_known ? dist2(w, a->x, a->y) : 0;
+		total += hypot((double)(b->x - a->x), (double)(b->y - a->y)) / SLICE_UNITS_PER_MM;
+		if (d < best) {
+			best = d;
+			first = k;
+		}
+	}
+	w->layer_z = z0;
+	if (w->spiral_below && w->pos_known)
+		rc = push_move(w, MV_TRAVEL, true, p->pts[first].x / SLICE_UNITS_PER_MM,
+			       p->pts[first].y / SLICE_UNITS_PER_MM, z0, 0, w->s->travel_speed);
+	else
+		rc = plan_travel(w, p->pts[first].x / SLICE_UNITS_PER_MM,
+				 p->pts[first].y / SLICE_UNITS_PER_MM);
+	if (rc == 0)
+		rc = push(w, (struct op){.kind = OP_ROLE, .role = p->role});
+	for (size_t k = 0; k < p->n && rc == 0; k++) {
+		const struct path_point *pa = &p->pts[(first + k) % p->n];
+		const struct path_point *pb = &p->pts[(first + k + 1) % p->n];
+		done += hypot((double)(pb->x - pa->x), (double)(pb->y - pa->y)) / SLICE_UNITS_PER_MM;
+		rc = plan_segment(w, l, li, 0, (first + k) % p->n, pa, pb, pa->width,
+				  z0 + h * fmin(1, done / total), speed);
+	}
+	w->layer_z = l->z;
+	if (rc == 0 && w->s->wipe)
+		rc = record_wipe(w, p, false, p->n + 1);
+	return rc;
+}
+
 /* Plan every path of layer li into w->ops. */
 static int plan_layer(struct gcodew *w, const struct layer_paths *l, size_t li)
 {
@@ -721,6 +782,12 @@ static int plan_layer(struct gcodew *w, const struct layer_paths *l, size_t li)
 	}
 	if (l->n)
 		memset(w->done, 0, l->n * sizeof(*w->done));
+	if (l->spiral && l->n == 1 && l->paths[0].closed) {
+		rc = plan_spiral(w, l, li);
+		w->spiral_below = true;
+		return rc;
+	}
+	w->spiral_below = false;
 	for (size_t i = 0, j; i < l->n && rc == 0; i = j) {
 		for (j = i + 1; j < l->n && l->paths[j].role == l->paths[i].role; j++)
 			;
@@ -1084,6 +1151,8 @@ static void put_header(struct gcodew *w, const struct gcodew_summary *sum)
 		fmt_num(n, key_value(w->s, &keys[i]), 6);
 		put(w, "; %s = %s%s\n", keys[i].name, n, pct ? "%" : "");
 	}
+	if (w->s->spiral_vase)
+		put(w, "; spiral_vase = 1\n");
 	for (int a = 0; a < EST_AXES; a++) {
 		char f[NUM_MAX], acc[NUM_MAX], j[NUM_MAX];
 		fmt_num(f, lim->max_feedrate[a], 3);
@@ -1200,6 +1269,7 @@ static void add_widths(struct gcodew *w, const struct layer_paths *l)
 static void writer_start(struct gcodew *w)
 {
 	w->pos_known = false;
+	w->spiral_below = false;
 	w->px = w->py = w->pz = 0;
 	w->nwipe = 0;
 	w->ext_exact = w->r_exact = w->e_machine = 0;

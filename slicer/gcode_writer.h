@@ -23,6 +23,12 @@
  * of outer and inner perimeters keep their given order: the geometry stage
  * orders walls on purpose.
  *
+ * Spiral vase (PrusaSlicer's SpiralVase): a layer marked spiral is one
+ * closed loop entered at its vertex nearest the nozzle, so it continues
+ * where the loop below ended, and printed with Z rising linearly with the
+ * length printed, from the layer below's top (z - height) to z: no Z move,
+ * no seam and, after a spiral layer, no retraction.
+ *
  * Flow: a segment of bead width w (path_point.width of its first point)
  * and layer height h has the cross-section of a rectangle with semicircular
  * ends, A = (w - h)·h + π(h/2)²; it needs E = A·length / (π(d/2)²) ·
@@ -155,6 +161,10 @@ struct gcodew_settings {
 	const char *printer_settings_id; /* the profile's name; "" */
 	const char *printer_model;	 /* "" */
 	const char *bed_shape;		 /* PrusaSlicer's text, "0x0,200x0,200x200,0x200" */
+
+	/* Spiral vase (layer_paths.spiral marks the layers it shapes; the
+	 * slicer reads this flag); listed in the header when set. false */
+	bool spiral_vase;
 };
 
 /* What a written print will take; also written into the G-code header. */

@@ -145,6 +145,9 @@ static const struct setting table[] = {
      "one centre-line bead where two walls do not fit"},
     {"gap_fill_enabled", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, NULL,
      "beads in the strips left between walls"},
+    {"spiral_vase", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
+     "above the bottom layers one wall around the largest island (holes and smaller islands "
+     "dropped), printed as a spiral rising along each loop; no top layers, no infill there"},
     {"top_solid_layers", INT, S_, 0, 1000, 0, "", "3", NULL, NULL, 0, NULL, ""},
     {"bottom_solid_layers", INT, S_, 0, 1000, 0, "", "3", NULL, NULL, 0, NULL, ""},
     {"top_solid_min_thickness", NUM, S_, 0, 1000, 0, "mm", "0", NULL, NULL, 0, NULL,

@@ -71,6 +71,9 @@ struct layer_paths {
 	/* The layer's region for travels that avoid crossing perimeters
 	 * (travel.h), owned; NULL: travels go straight. */
 	struct travel_map *travel;
+	/* Spiral vase: the layer is one closed outer wall, printed with Z
+	 * rising from z - height to z along its length (gcode_writer.h). */
+	bool spiral;
 };
 
 /* Every layer of one print, bottom to top. */

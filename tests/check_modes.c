@@ -1,0 +1,273 @@
+/*
+ * check_modes.c - print modes of the slicing job, part of the slicer
+ * suite: spiral vase (slicer/spiral.h) on meshes built in code, checked on
+ * the layer stack and on the G-code the writer makes of it.
+ */
+#include <check.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fixtures.h"
+#include "mesh.h"
+#include "slicer.h"
+#include "suites.h"
+#include "testutil.h"
+#include "toolpath.h"
+
+#define NM SLICE_UNITS_PER_MM
+
+/* A 10 mm tall tube (radius 10, 4 mm hole) beside a 2 mm pillar, 10 mm tall. */
+static struct mesh *tube_and_pillar(void)
+{
+	struct mesh *outer = fx_cylinder(0, 0, 10, 10, 64), *hole = fx_cylinder(0, 0, 4, 10, 32);
+	struct mesh *pillar = fx_cylinder(20, 0, 2, 10, 16), *tube, *m;
+
+	ck_assert(outer && hole && pillar);
+	for (size_t i = 0; i < hole->ntris; i++)
+		fx_flip(hole, i);
+	tube = fx_concat(outer, hole);
+	m = fx_concat(tube, pillar);
+	ck_assert(tube && m);
+	mesh_free(outer);
+	mesh_free(hole);
+	mesh_free(pillar);
+	mesh_free(tube);
+	return m;
+}
+
+/* The job's defaults for a 0.4 mm nozzle, no skirt, one thread. */
+static void config(struct slicer_config *c, bool vase)
+{
+	slicer_config_init(c, 0.4);
+	c->skirt.skirts = 0;
+	c->threads = 1;
+	c->gcodew.spiral_vase = vase;
+}
+
+static struct layer_stack *toolpaths(const struct mesh *m, const struct slicer_config *c,
+				     struct slicer_summary *sum)
+{
+	struct layer_stack *st = NULL;
+	struct st_error err = {0};
+
+	ck_assert_msg(slicer_toolpaths(m, c, &st, sum, &err) == 0, "slicer_toolpaths: %s",
+		      err.msg);
+	return st;
+}
+
+/* The G-code of c's job on m, in memory (free() it). */
+static char *gcode_of(const struct mesh *m, const struct slicer_config *c)
+{
+	struct layer_stack *st = toolpaths(m, c, NULL);
+	struct gcodew_settings gs = c->gcodew;
+	struct st_error err = {0};
+	char *buf = NULL;
+	size_t len = 0;
+	FILE *fp = open_memstream(&buf, &len);
+	int rc;
+
+	ck_assert_ptr_nonnull(fp);
+	gs.layer_height = c->layer_height;
+	gs.first_layer_height = c->first_layer_height;
+	rc = gcodew_write_stream(st, &gs, fp, NULL, &err);
+	ck_assert_int_eq(fclose(fp), 0);
+	ck_assert_msg(rc == 0, "gcodew_write_stream: %s", err.msg);
+	layer_stack_free(st);
+	return buf;
+}
+
+/* Infill paths of any kind on layer l. */
+static size_t count_infill(const struct layer_paths *l)
+{
+	return tu_count_role(l, PATH_SOLID_INFILL) + tu_count_role(l, PATH_TOP_SKIN) +
+	       tu_count_role(l, PATH_BOTTOM_SKIN) + tu_count_role(l, PATH_SPARSE_INFILL) +
+	       tu_count_role(l, PATH_BRIDGE);
+}
+
+/*
+ * Above the 3 bottom layers every layer is one closed outer wall around
+ * the tube's outline (hole and pillar dropped), marked spiral, with no
+ * infill and no top skin; the bottom layers keep the hole, the pillar and
+ * their bottom skin.  Without spiral_vase the same layers have more.
+ */
+START_TEST(spiral_vase_one_wall_above_the_bottom)
+{
+	struct mesh *m = tube_and_pillar();
+	struct slicer_config c;
+	struct slicer_summary sum;
+	struct layer_stack *st;
+
+	config(&c, false);
+	st = toolpaths(m, &c, &sum);
+	ck_assert_uint_gt(st->layers[10].n, 1);
+	ck_assert_uint_gt(tu_count_role(&st->layers[st->nlayers - 1], PATH_TOP_SKIN), 0);
+	for (size_t i = 0; i < st->nlayers; i++)
+		ck_assert(!st->layers[i].spiral);
+	layer_stack_free(st);
+
+	config(&c, true);
+	st = toolpaths(m, &c, &sum);
+	ck_assert_uint_eq(st->nlayers, 50);
+	for (size_t i = 0; i < 3; i++) {
+		const struct layer_paths *l = &st->layers[i];
+		ck_assert_msg(!l->spiral, "bottom layer %zu is flat", i);
+		ck_assert_uint_gt(tu_count_role(l, PATH_BOTTOM_SKIN), 0);
+		/* tube outside and hole, pillar: 3 walls (one perimeter each) */
+		ck_assert_uint_eq(tu_count_role(l, PATH_OUTER_PERIMETER), 3);
+	}
+	for (size_t i = 3; i < st->nlayers; i++) {
+		const struct layer_paths *l = &st->layers[i];
+		const struct toolpath *p = &l->paths[0];
+		double cx = sum.offset[0] * NM, cy = sum.offset[1] * NM, rmin = INFINITY, rmax = 0;
+
+		ck_assert_msg(l->spiral && l->n == 1, "layer %zu: spiral %d, %zu paths", i,
+			      l->spiral, l->n);
+		ck_assert(p->closed && p->role == PATH_OUTER_PERIMETER);
+		ck_assert_uint_eq(count_infill(l), 0);
+		/* the tube's outline, centre line w/2 inside radius 10 (64-gon chords) */
+		for (size_t k = 0; k < p->n; k++) {
+			double r = hypot(p->pts[k].x - cx, p->pts[k].y - cy) / NM;
+			rmin = fmin(rmin, r);
+			rmax = fmax(rmax, r);
+		}
+		ck_assert_msg(rmax < 10.0 && rmin > 9.0, "layer %zu: radius %g..%g", i, rmin, rmax);
+	}
+	layer_stack_free(st);
+	mesh_free(m);
+}
+END_TEST
+
+/* What a replay of the spiral part of the G-code found. */
+struct spiral_replay {
+	int layers;	     /* layers seen */
+	int zs_last;	     /* distinct Z values on the last layer */
+	bool z_down;	     /* Z went down within or between spiral layers */
+	bool e_back;	     /* E went back (a retraction) between spiral layers */
+	bool outside;	     /* an extrusion Z outside (z - h, z] of its layer */
+};
+
+/* A number after letter c on line s (up to its end), or false. */
+static bool word(const char *s, const char *end, char c, double *v)
+{
+	for (const char *p = s; p < end && *p != ';'; p++)
+		if (*p == c) {
+			*v = strtod(p + 1, NULL);
+			return true;
+		}
+	return false;
+}
+
+/*
+ * Replay text (absolute E) from layer first (0-based) to the last layer's
+ * last XY move: Z and E of every G1, checked against each layer's ;Z:.
+ */
+static void replay(const char *text, int first, double h, struct spiral_replay *r)
+{
+	const char *last_xy = NULL, *p;
+	double z = 0, e = 0, lz = 0, prev_z = -1;
+	int layer = -1;
+
+	memset(r, 0, sizeof(*r));
+	for (p = text; *p; p = strchr(p, '\n') ? strchr(p, '\n') + 1 : p + strlen(p)) {
+		const char *end = strchr(p, '\n') ? strchr(p, '\n') : p + strlen(p);
+		double v;
+		if (!strncmp(p, "G1 ", 3) && (word(p, end, 'X', &v) || word(p, end, 'Y', &v)))
+			last_xy = p;
+	}
+	for (p = text; *p && p <= last_xy; p = strchr(p, '\n') + 1) {
+		const char *end = strchr(p, '\n');
+		double v, ne = e;
+		if (!strncmp(p, ";Z:", 3)) {
+			layer++;
+			lz = strtod(p + 3, NULL);
+			if (layer >= first)
+				r->layers++;
+			prev_z = -1;
+			r->zs_last = 0;
+			continue;
+		}
+		if (!strncmp(p, "G92 ", 4) && word(p, end, 'E', &v)) { /* each layer's reset */
+			e = v;
+			continue;
+		}
+		if (strncmp(p, "G1 ", 3))
+			continue;
+		if (word(p, end, 'Z', &v))
+			z = v;
+		if (word(p, end, 'E', &v))
+			ne = v;
+		if (layer >= first) {
+			if (ne < e - 1e-9)
+				r->e_back = true;
+			if (z < prev_z - 1e-9)
+				r->z_down = true;
+			if (ne > e && (z <= lz - h + 1e-9 || z > lz + 1e-9))
+				r->outside = true;
+			if (z != prev_z)
+				r->zs_last++;
+			prev_z = z;
+		}
+		e = ne;
+	}
+}
+
+/*
+ * The G-code of the spiral layers: Z rises within each loop (many distinct
+ * values, never down, every extrusion within its layer's (z - h, z]), and
+ * nothing retracts from one spiral layer to the next; the header says
+ * spiral_vase = 1.  The flat print of the same mesh has one Z per layer.
+ */
+START_TEST(spiral_vase_gcode_rises_without_retraction)
+{
+	struct mesh *m = tube_and_pillar();
+	struct slicer_config c;
+	struct spiral_replay r;
+	char *text;
+
+	config(&c, false);
+	text = gcode_of(m, &c);
+	replay(text, 4, c.layer_height, &r);
+	ck_assert_int_le(r.zs_last, 2);
+	ck_assert_ptr_null(strstr(text, "; spiral_vase"));
+	free(text);
+
+	config(&c, true);
+	text = gcode_of(m, &c);
+	/* from layer 4: the one below (3) is a spiral too */
+	replay(text, 4, c.layer_height, &r);
+	ck_assert_int_eq(r.layers, 46);
+	ck_assert_msg(r.zs_last > 20, "%d Z values on the last layer", r.zs_last);
+	ck_assert(!r.z_down);
+	ck_assert(!r.e_back);
+	ck_assert(!r.outside);
+	ck_assert_ptr_nonnull(strstr(text, "\n; spiral_vase = 1\n"));
+	free(text);
+	mesh_free(m);
+}
+END_TEST
+
+/* spiral_vase with support material is refused, as PrusaSlicer refuses it. */
+START_TEST(spiral_vase_refuses_support)
+{
+	struct slicer_config c;
+	struct st_error err = {0};
+
+	config(&c, true);
+	c.support.enabled = true;
+	ck_assert_int_eq(slicer_config_check(&c, &err), ST_ERR_RANGE);
+	ck_assert_ptr_nonnull(strstr(err.msg, "spiral_vase"));
+}
+END_TEST
+
+void slicer_modes_tcases(Suite *s)
+{
+	TCase *tc = tcase_create("modes");
+
+	tcase_set_timeout(tc, 120);
+	tcase_add_test(tc, spiral_vase_one_wall_above_the_bottom);
+	tcase_add_test(tc, spiral_vase_gcode_rises_without_retraction);
+	tcase_add_test(tc, spiral_vase_refuses_support);
+	suite_add_tcase(s, tc);
+}
