@@ -262,7 +262,7 @@ struct slice_run {
 static const char *const role_keys[] = {
     "outer_perimeter", "inner_perimeter", "thin_wall", "gap_fill", "solid_infill",
     "top_skin", "bottom_skin", "sparse_infill", "bridge", "skirt", "brim", "support",
-    "support_interface"};
+    "support_interface", "ironing"};
 _Static_assert(sizeof(role_keys) / sizeof(role_keys[0]) == PATH_ROLES,
 	       "one JSON key per path role");
 

@@ -193,6 +193,11 @@ struct profile {
 	double fill_density;				       /* percent, 0-100; default 20 */
 	const char *fill_pattern;	/* a PrusaSlicer pattern name; default "rectilinear" */
 	double solid_infill_below_area;	/* mm^2; default 70 */
+	bool ironing;			/* default 0 */
+	const char *ironing_type;	/* top, topmost or solid; default top */
+	double ironing_flowrate;	/* percent, 0-100; default 15 */
+	double ironing_spacing;		/* mm; default 0.1 */
+	double ironing_speed;		/* mm/s; default 15 */
 	int skirts;			/* loops; default 1 */
 	double skirt_distance;		/* mm; default 6 */
 	int skirt_height;		/* layers, 0 = no skirt; default 1 */

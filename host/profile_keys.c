@@ -80,6 +80,11 @@ static const struct key_def key_defs[] = {
 	{"fill_density", KT_DENSITY, OFF(fill_density)},
 	{"fill_pattern", KT_CHOICE, OFF(fill_pattern)},
 	{"solid_infill_below_area", KT_DOUBLE, OFF(solid_infill_below_area)},
+	{"ironing", KT_BOOL, OFF(ironing)},
+	{"ironing_type", KT_CHOICE, OFF(ironing_type)},
+	{"ironing_flowrate", KT_DENSITY, OFF(ironing_flowrate)},
+	{"ironing_spacing", KT_DOUBLE, OFF(ironing_spacing)},
+	{"ironing_speed", KT_DOUBLE, OFF(ironing_speed)},
 	{"skirts", KT_INT, OFF(skirts)},
 	{"skirt_distance", KT_DOUBLE, OFF(skirt_distance)},
 	{"skirt_height", KT_INT, OFF(skirt_height)},
@@ -726,7 +731,7 @@ int prof_apply_key(struct loader *L, const struct key_def *d, const struct profi
 					 "%s is out of range (must be 0%% to 100%%, or a fraction "
 					 "0 to 1)",
 					 kv->value);
-		p->fill_density = v;
+		*(double *)field = v;
 		return 0;
 	case KT_PROTOCOL:
 		idx = name_index(decl->names, decl->nnames, kv->value);

@@ -66,7 +66,7 @@ static void put_value(FILE *f, const struct profile *p, const struct key_def *d)
 			fputc('%', f);
 		break;
 	case KT_DENSITY:
-		put_double(f, p->fill_density);
+		put_double(f, *(const double *)field);
 		fputc('%', f);
 		break;
 	case KT_INT:
@@ -226,7 +226,7 @@ static json_t *json_value(const struct profile *p, const struct key_def *d)
 		return json_real(sp->value);
 	}
 	case KT_DENSITY:
-		return json_real(p->fill_density);
+		return json_real(*(const double *)field);
 	case KT_INT:
 	case KT_FIRST_INT:
 	case KT_EXTRUDERS:

@@ -4,7 +4,7 @@
  * loader types it (slicer/settings.h), when it cannot change what Stratum prints (names, notes,
  * the GUI's and the print host's keys, multi-material and wipe tower
  * settings of a single-extruder print ...), or when its value asks for
- * what Stratum does anyway (raft_layers = 0, ironing = 0).
+ * what Stratum does anyway (raft_layers = 0).
  * Every other key the profile sets is listed, with its value.
  */
 #include "profile_int.h"
@@ -88,7 +88,6 @@ static const struct known known[] = {
     {"raft_layers", "0", NULL, NULL}, {"raft_*", NULL, "raft_layers", "0"},
     {"first_layer_acceleration_over_raft", NULL, "raft_layers", "0"},
     {"first_layer_speed_over_raft", NULL, "raft_layers", "0"},
-    {"ironing", "0", NULL, NULL}, {"ironing_*", NULL, "ironing", "0"},
     {"complete_objects", "0", NULL, NULL},
     {"fuzzy_skin", "none", NULL, NULL}, {"fuzzy_skin_*", NULL, "fuzzy_skin", "none"},
     {"draft_shield", "disabled", NULL, NULL}, {"xy_size_compensation", "0", NULL, NULL},

@@ -25,6 +25,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "ironing.h"
 #include "placeholder.h"
 #include "settings.h"
 #include "st_file.h"
@@ -158,6 +159,11 @@ void gcodew_settings_init(struct gcodew_settings *s)
 	s->printer_settings_id = s->printer_model = "";
 	s->bed_shape = settings_find("bed_shape")->dflt;
 	s->spiral_vase = setting_default_number("spiral_vase", false, &v) && v != 0;
+	s->ironing = setting_default_number("ironing", false, &v) && v != 0;
+	s->ironing_type = settings_find("ironing_type")->dflt;
+	setting_default_number("ironing_flowrate", false, &s->ironing_flowrate);
+	setting_default_number("ironing_spacing", false, &s->ironing_spacing);
+	setting_default_number("ironing_speed", false, &s->ironing_speed);
 	est_limits_init(&s->limits);
 }
 
@@ -170,6 +176,18 @@ int gcodew_settings_check(const struct gcodew_settings *s, struct st_error *err)
 		if (rc)
 			return rc;
 	}
+	static const char *const ironing_keys[] = {"ironing_flowrate", "ironing_spacing",
+						   "ironing_speed"};
+	const double ironing_values[] = {s->ironing_flowrate, s->ironing_spacing, s->ironing_speed};
+	for (size_t i = 0; i < sizeof(ironing_keys) / sizeof(ironing_keys[0]); i++) {
+		int rc = setting_check("G-code settings", ironing_keys[i], ironing_values[i], err);
+		if (rc)
+			return rc;
+	}
+	enum iron_type type;
+	int rc = iron_type_parse(s->ironing_type, &type, err);
+	if (rc)
+		return rc;
 	if (s->min_fan_speed > s->max_fan_speed)
 		return st_error_set(err, ST_ERR_RANGE,
 				    "G-code settings: min_fan_speed %d is above max_fan_speed %d",
@@ -553,6 +571,8 @@ static double role_base_speed(const struct gcodew_settings *s, enum path_role ro
 		return s->support_material_speed;
 	case PATH_SUPPORT_INTERFACE:
 		return s->support_material_interface_speed;
+	case PATH_IRONING:
+		return s->ironing_speed;
 	default: /* inner perimeters */
 		return s->perimeter_speed;
 	}
@@ -636,9 +656,11 @@ static int plan_segment(struct gcodew *w, const struct layer_paths *l, size_t li
 {
 	double h = l->height, bead = width / SLICE_UNITS_PER_MM;
 	double len = hypot((double)(pb->x - pa->x), (double)(pb->y - pa->y)) / SLICE_UNITS_PER_MM;
-	double area = (bead - h) * h + M_PI * h * h / 4;
+	bool iron = l->paths[pi].role == PATH_IRONING;
+	double area = iron ? bead * w->s->layer_height * w->s->ironing_flowrate / 100
+			   : (bead - h) * h + M_PI * h * h / 4;
 
-	if (bead < h)
+	if (bead < h && !iron)
 		return st_error_set(w->err, ST_ERR_RANGE,
 				    "G-code: layer %zu, path %zu (%s), point %zu: bead width %.4f mm "
 				    "is below the layer height %.4f mm",
@@ -1153,6 +1175,15 @@ static void put_header(struct gcodew *w, const struct gcodew_summary *sum)
 	}
 	if (w->s->spiral_vase)
 		put(w, "; spiral_vase = 1\n");
+	if (w->s->ironing) {
+		fmt_num(n, w->s->ironing_flowrate, 6);
+		put(w, "; ironing = 1\n; ironing_type = %s\n; ironing_flowrate = %s%%\n",
+		    w->s->ironing_type, n);
+		fmt_num(n, w->s->ironing_spacing, 6);
+		put(w, "; ironing_spacing = %s\n", n);
+		fmt_num(n, w->s->ironing_speed, 6);
+		put(w, "; ironing_speed = %s\n", n);
+	}
 	for (int a = 0; a < EST_AXES; a++) {
 		char f[NUM_MAX], acc[NUM_MAX], j[NUM_MAX];
 		fmt_num(f, lim->max_feedrate[a], 3);

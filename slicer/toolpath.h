@@ -43,6 +43,7 @@ enum path_role {
 	PATH_BRIM,		  /* brim loops attached to the first layer */
 	PATH_SUPPORT,		  /* support body */
 	PATH_SUPPORT_INTERFACE,	  /* dense support layers under the part */
+	PATH_IRONING,		  /* second pass over a top surface at low flow (infill.h) */
 	PATH_ROLES		  /* number of roles */
 };
 

@@ -1,7 +1,8 @@
 /*
  * check_modes.c - print modes of the slicing job, part of the slicer
- * suite: spiral vase (slicer/spiral.h) on meshes built in code, checked on
- * the layer stack and on the G-code the writer makes of it.
+ * suite: spiral vase (slicer/spiral.h) and ironing (slicer/ironing.h) on
+ * meshes built in code, checked on the layer stack and on the G-code the
+ * writer makes of it.
  */
 #include <check.h>
 #include <math.h>
@@ -261,6 +262,214 @@ START_TEST(spiral_vase_refuses_support)
 }
 END_TEST
 
+/* A 20 x 20 x 5 mm block with a 10 x 10 x 5 mm block on its middle. */
+static struct mesh *step(void)
+{
+	struct mesh *a = fx_box(0, 0, 0, 20, 20, 5), *b = fx_box(5, 5, 5, 15, 15, 10);
+	struct mesh *m = fx_concat(a, b);
+
+	ck_assert(a && b && m);
+	mesh_free(a);
+	mesh_free(b);
+	return m;
+}
+
+static void iron_config(struct slicer_config *c, bool on, const char *type)
+{
+	config(c, false);
+	c->gcodew.ironing = on;
+	c->gcodew.ironing_type = type;
+	c->gcodew.cooling = false; /* speeds as set */
+}
+
+/* Ironing lines of layer l: their count, length (mm) and bounding box (mm). */
+struct iron_stats {
+	size_t n;
+	double len, x0, y0, x1, y1;
+};
+
+static struct iron_stats iron_of(const struct layer_paths *l)
+{
+	struct iron_stats s = {0, 0, INFINITY, INFINITY, -INFINITY, -INFINITY};
+
+	for (size_t i = 0; i < l->n; i++) {
+		const struct toolpath *p = &l->paths[i];
+		if (p->role != PATH_IRONING)
+			continue;
+		s.n++;
+		ck_assert_int_eq(p->pts[0].width, 100000); /* ironing_spacing */
+		for (size_t k = 0; k < p->n; k++) {
+			double x = p->pts[k].x / NM, y = p->pts[k].y / NM;
+			s.x0 = fmin(s.x0, x);
+			s.y0 = fmin(s.y0, y);
+			s.x1 = fmax(s.x1, x);
+			s.y1 = fmax(s.y1, y);
+			if (k)
+				s.len += hypot(x - p->pts[k - 1].x / NM, y - p->pts[k - 1].y / NM);
+		}
+	}
+	return s;
+}
+
+/*
+ * ironing_type top: the last layer's whole top and, on layer 24 (z 5), the
+ * ring the upper block leaves uncovered, each half a nozzle inside the
+ * outline, lines 0.1 mm apart covering it (length x spacing = area); no
+ * other layer.  topmost: the last layer only.  Every other path is what
+ * the print without ironing has.
+ */
+START_TEST(ironing_covers_the_top_surfaces)
+{
+	struct mesh *m = step();
+	struct slicer_config c;
+	struct slicer_summary sum;
+	struct layer_stack *off, *on, *most;
+
+	iron_config(&c, false, "top");
+	off = toolpaths(m, &c, &sum);
+	iron_config(&c, true, "top");
+	on = toolpaths(m, &c, &sum);
+	iron_config(&c, true, "topmost");
+	most = toolpaths(m, &c, &sum);
+	ck_assert_uint_eq(on->nlayers, 50);
+	for (size_t i = 0; i < on->nlayers; i++) {
+		const struct layer_paths *a = &off->layers[i], *b = &on->layers[i];
+		struct iron_stats s = iron_of(b), t = iron_of(&most->layers[i]);
+		size_t k = 0;
+
+		/* the same paths, ironing appended after them; above the first
+		 * ironing the infill starts from where it ended, so only the
+		 * roles are compared there */
+		ck_assert_uint_eq(b->n, a->n + s.n);
+		for (; k < a->n; k++) {
+			ck_assert_int_eq(a->paths[k].role, b->paths[k].role);
+			if (i > 24)
+				continue;
+			ck_assert_uint_eq(a->paths[k].n, b->paths[k].n);
+			ck_assert(!memcmp(a->paths[k].pts, b->paths[k].pts,
+					  a->paths[k].n * sizeof(*a->paths[k].pts)));
+		}
+		ck_assert_uint_eq(tu_count_role(a, PATH_IRONING), 0);
+		if (i == 24) { /* the ring around the upper block, 0.2 mm inside */
+			double ring = 19.6 * 19.6 - 10 * 10;
+			ck_assert_uint_gt(s.n, 0);
+			ck_assert_msg(fabs(s.len * 0.1 - ring) < 0.03 * ring, "ring: %g mm", s.len);
+			ck_assert(fabs(s.x0 - (sum.min[0] + 0.2)) < 0.11 &&
+				  fabs(s.x1 - (sum.max[0] - 0.2)) < 0.11);
+			ck_assert_uint_eq(t.n, 0);
+		} else if (i == on->nlayers - 1) { /* the upper block's top */
+			double top = 9.6 * 9.6;
+			ck_assert_msg(fabs(s.len * 0.1 - top) < 0.03 * top, "top: %g mm", s.len);
+			ck_assert(fabs(s.x0 - (sum.min[0] + 5.2)) < 0.11 &&
+				  fabs(s.y1 - (sum.max[1] - 5.2)) < 0.11);
+			ck_assert_uint_eq(t.n, s.n);
+		} else {
+			ck_assert_msg(s.n == 0 && t.n == 0, "layer %zu ironed", i);
+		}
+	}
+	layer_stack_free(off);
+	layer_stack_free(on);
+	layer_stack_free(most);
+	mesh_free(m);
+}
+END_TEST
+
+/*
+ * ironing_type solid at 100 % infill: every layer is solid throughout and
+ * ironed over its whole section (half a nozzle inside); at 20 % a middle
+ * layer of the lower block has only sparse infill and is not ironed.
+ */
+START_TEST(ironing_solid_irons_solid_layers)
+{
+	struct mesh *m = step();
+	struct slicer_config c;
+	struct slicer_summary sum;
+	struct layer_stack *st;
+	struct iron_stats s;
+
+	iron_config(&c, true, "solid");
+	st = toolpaths(m, &c, &sum);
+	ck_assert_uint_eq(iron_of(&st->layers[12]).n, 0);
+	layer_stack_free(st);
+	c.infill.density = 100;
+	st = toolpaths(m, &c, &sum);
+	s = iron_of(&st->layers[12]);
+	ck_assert_msg(fabs(s.len * 0.1 - 19.6 * 19.6) < 0.03 * 19.6 * 19.6, "%g mm", s.len);
+	s = iron_of(&st->layers[37]);
+	ck_assert_msg(fabs(s.len * 0.1 - 9.6 * 9.6) < 0.03 * 9.6 * 9.6, "%g mm", s.len);
+	layer_stack_free(st);
+	mesh_free(m);
+}
+END_TEST
+
+/*
+ * The G-code: the ironing of the last layer comes after its top skin, at
+ * that layer's Z, at ironing_speed, with PrusaSlicer's flow (layer_height
+ * x 15 % x 0.1 mm per mm of line); the header lists the five settings.
+ * Without ironing nothing of it is there.
+ */
+START_TEST(ironing_gcode_low_flow_at_the_top_z)
+{
+	struct mesh *m = fx_box(0, 0, 0, 20, 20, 2);
+	struct slicer_config c;
+	char *text, *at, *skin;
+	double fil = M_PI * 1.75 * 1.75 / 4, x = 0, y = 0, e = 0, len = 0, ext = 0;
+	int moves = 0;
+
+	iron_config(&c, false, "top");
+	text = gcode_of(m, &c);
+	ck_assert_ptr_null(strstr(text, "Ironing"));
+	ck_assert_ptr_null(strstr(text, "; ironing"));
+	free(text);
+
+	iron_config(&c, true, "top");
+	c.gcodew.use_relative_e_distances = true;
+	text = gcode_of(m, &c);
+	ck_assert_ptr_nonnull(strstr(text, "\n; ironing = 1\n; ironing_type = top\n"
+					   "; ironing_flowrate = 15%\n; ironing_spacing = 0.1\n"
+					   "; ironing_speed = 15\n"));
+	at = strstr(text, ";TYPE:Ironing\n");
+	skin = strstr(text, ";Z:2\n");
+	ck_assert(at && skin && skin < at);
+	ck_assert_ptr_nonnull(strstr(skin, ";TYPE:Top solid infill\n"));
+	ck_assert(strstr(skin, ";TYPE:Top solid infill\n") < at);
+	ck_assert_ptr_null(strstr(at + 1, ";TYPE:Ironing")); /* one layer, one run */
+	/* replay the run: position from the last XY before it */
+	for (char *p = skin; p < at; p = strchr(p, '\n') + 1) {
+		char *end = strchr(p, '\n');
+		double v;
+		if (!strncmp(p, "G1 ", 3) && word(p, end, 'X', &v))
+			x = v;
+		if (!strncmp(p, "G1 ", 3) && word(p, end, 'Y', &v))
+			y = v;
+	}
+	for (char *p = strchr(at, '\n') + 1; !strncmp(p, "G1 ", 3); p = strchr(p, '\n') + 1) {
+		char *end = strchr(p, '\n');
+		double nx = x, ny = y, v;
+		ck_assert_msg(!word(p, end, 'Z', &v), "a Z move in the ironing");
+		word(p, end, 'X', &nx);
+		word(p, end, 'Y', &ny);
+		e = 0;
+		if (word(p, end, 'E', &e) && e > 0) {
+			double d = hypot(nx - x, ny - y);
+			len += d;
+			ext += e;
+			moves++;
+			if (word(p, end, 'F', &v))
+				ck_assert_double_eq_tol(v, 15 * 60, 1e-9);
+		}
+		x = nx;
+		y = ny;
+	}
+	ck_assert_int_gt(moves, 100);
+	ck_assert_msg(fabs(ext / len - 0.2 * 0.15 * 0.1 / fil) < 1e-3 * 0.2 * 0.15 * 0.1 / fil,
+		      "%g mm of filament per mm", ext / len);
+	ck_assert_msg(fabs(len * 0.1 - 19.6 * 19.6) < 0.03 * 19.6 * 19.6, "%g mm", len);
+	free(text);
+	mesh_free(m);
+}
+END_TEST
+
 void slicer_modes_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("modes");
@@ -269,5 +478,8 @@ void slicer_modes_tcases(Suite *s)
 	tcase_add_test(tc, spiral_vase_one_wall_above_the_bottom);
 	tcase_add_test(tc, spiral_vase_gcode_rises_without_retraction);
 	tcase_add_test(tc, spiral_vase_refuses_support);
+	tcase_add_test(tc, ironing_covers_the_top_surfaces);
+	tcase_add_test(tc, ironing_solid_irons_solid_layers);
+	tcase_add_test(tc, ironing_gcode_low_flow_at_the_top_z);
 	suite_add_tcase(s, tc);
 }

@@ -714,11 +714,22 @@ START_TEST(load_order_and_set)
 		      out);
 	/* An unsupported key is named once, with its value. */
 	status = tu_run(out, sizeof(out),
-			"slice '%s' -o '%s' --load '%s' --set raft_layers=3 --set ironing=1", model,
-			gc, a);
+			"slice '%s' -o '%s' --load '%s' --set raft_layers=3 --set fuzzy_skin=random",
+			model, gc, a);
 	ck_assert_msg(status == 0 && strstr(out, "warning: not supported, ignored: raft_layers=3, "
-						 "ironing=1\n"),
+						 "fuzzy_skin=random\n"),
 		      "exit %d: %s", status, out);
+	/* Spiral vase and ironing are printed, so not named. */
+	status = tu_run(out, sizeof(out),
+			"slice '%s' -o '%s' --load '%s' --set spiral_vase=1 --set ironing=1 "
+			"--set ironing_type=solid --set ironing_flowrate=10%% --set ironing_speed=20",
+			model, gc, a);
+	ck_assert_msg(status == 0 && !strstr(out, "not supported"), "exit %d: %s", status, out);
+	slurp(gc, gcode, sizeof(gcode));
+	ck_assert_msg(strstr(gcode, "; spiral_vase = 1\n; ironing = 1\n; ironing_type = solid\n"
+				    "; ironing_flowrate = 10%\n; ironing_spacing = 0.1\n"
+				    "; ironing_speed = 20\n"),
+		      "header");
 }
 END_TEST
 
