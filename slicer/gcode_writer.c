@@ -618,8 +618,10 @@ static size_t trav(const struct toolpath *p, bool rev, size_t k)
 	return k == p->n ? 0 : k;
 }
 
-/* Remember the printed path backwards from its end, for a wipe. */
-static int record_wipe(struct gcodew *w, const struct toolpath *p, bool rev, size_t steps)
+/* Remember the printed path backwards from its end, for a wipe; a closed
+ * path printed from point first (a spiral loop) is rotated by first. */
+static int record_wipe(struct gcodew *w, const struct toolpath *p, bool rev, size_t steps,
+		       size_t first)
 {
 	const struct gcodew_settings *s = w->s;
 	double dist = s->retract_length / s->retract_speed * WIPE_SPEED_SHARE * s->travel_speed;
@@ -627,7 +629,7 @@ static int record_wipe(struct gcodew *w, const struct toolpath *p, bool rev, siz
 
 	w->nwipe = 0;
 	for (size_t k = steps; k-- > 0;) {
-		const struct path_point *q = &p->pts[trav(p, rev, k)];
+		const struct path_point *q = &p->pts[(trav(p, rev, k) + first) % p->n];
 		double x = q->x / SLICE_UNITS_PER_MM, y = q->y / SLICE_UNITS_PER_MM;
 		double *grown = st_grow(w->wipe, &w->wipecap, w->nwipe + 1, 2 * sizeof(*grown));
 		if (!grown)
@@ -647,12 +649,12 @@ static int record_wipe(struct gcodew *w, const struct toolpath *p, bool rev, siz
 /*
  * Extrude from pa to pb (path pi of layer li; pb is its point at, for
  * messages), ending at height z: a bead width nm wide, its filament from
- * the flow model at the top of gcode_writer.h.  A bead narrower than the
- * layer is refused; a segment of no length adds nothing.
+ * the flow model at the top of gcode_writer.h times share.  A bead
+ * narrower than the layer is refused; a segment of no length adds nothing.
  */
 static int plan_segment(struct gcodew *w, const struct layer_paths *l, size_t li, size_t pi,
 			size_t at, const struct path_point *pa, const struct path_point *pb,
-			int64_t width, double z, double speed)
+			int64_t width, double z, double speed, double share)
 {
 	double h = l->height, bead = width / SLICE_UNITS_PER_MM;
 	double len = hypot((double)(pb->x - pa->x), (double)(pb->y - pa->y)) / SLICE_UNITS_PER_MM;
@@ -669,7 +671,7 @@ static int plan_segment(struct gcodew *w, const struct layer_paths *l, size_t li
 		return 0;
 	return push_move(w, MV_EXTRUDE, true, pb->x / SLICE_UNITS_PER_MM,
 			 pb->y / SLICE_UNITS_PER_MM, z,
-			 area * len / w->fil_area * w->s->extrusion_multiplier, speed);
+			 share * area * len / w->fil_area * w->s->extrusion_multiplier, speed);
 }
 
 /* Plan path pi of layer li: travel to its start, then its segments. */
@@ -691,10 +693,10 @@ static int plan_path(struct gcodew *w, const struct layer_paths *l, size_t li, s
 		size_t a = trav(p, rev, k), b = trav(p, rev, k + 1);
 		const struct path_point *pa = &p->pts[a], *pb = &p->pts[b];
 		rc = plan_segment(w, l, li, pi, rev ? b : a, pa, pb, (rev ? pb : pa)->width,
-				  w->layer_z, speed);
+				  w->layer_z, speed, 1);
 	}
 	if (rc == 0 && s->wipe)
-		rc = record_wipe(w, p, rev, steps);
+		rc = record_wipe(w, p, rev, steps, 0);
 	return rc;
 }
 
@@ -746,7 +748,9 @@ static int plan_run(struct gcodew *w, const struct layer_paths *l, size_t li, si
  * Plan spiral layer li (layer_paths.spiral): its one loop from the vertex
  * nearest the nozzle, Z rising with the length printed from the top of the
  * layer below to l->z.  Reached from a spiral below by a plain move (no
- * retraction: it is the loop's own continuation), else by a travel.
+ * retraction: it is the loop's own continuation), else by a travel; then,
+ * as PrusaSlicer's transition layer, the flow rises with Z from nothing,
+ * since the gap under the nozzle starts at nothing.
  */
 static int plan_spiral(struct gcodew *w, const struct layer_paths *l, size_t li)
 {
@@ -777,13 +781,15 @@ static int plan_spiral(struct gcodew *w, const struct layer_paths *l, size_t li)
 	for (size_t k = 0; k < p->n && rc == 0; k++) {
 		const struct path_point *pa = &p->pts[(first + k) % p->n];
 		const struct path_point *pb = &p->pts[(first + k + 1) % p->n];
+		double t;
 		done += hypot((double)(pb->x - pa->x), (double)(pb->y - pa->y)) / SLICE_UNITS_PER_MM;
-		rc = plan_segment(w, l, li, 0, (first + k) % p->n, pa, pb, pa->width,
-				  z0 + h * fmin(1, done / total), speed);
+		t = fmin(1, done / total);
+		rc = plan_segment(w, l, li, 0, (first + k) % p->n, pa, pb, pa->width, z0 + h * t,
+				  speed, w->spiral_below ? 1 : t);
 	}
 	w->layer_z = l->z;
 	if (rc == 0 && w->s->wipe)
-		rc = record_wipe(w, p, false, p->n + 1);
+		rc = record_wipe(w, p, false, p->n + 1, first);
 	return rc;
 }
 

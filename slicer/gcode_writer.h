@@ -27,7 +27,9 @@
  * closed loop entered at its vertex nearest the nozzle, so it continues
  * where the loop below ended, and printed with Z rising linearly with the
  * length printed, from the layer below's top (z - height) to z: no Z move,
- * no seam and, after a spiral layer, no retraction.
+ * no seam and, after a spiral layer, no retraction.  On the first spiral
+ * layer (a flat one below) the flow rises in proportion, from nothing to
+ * full, as the gap under the nozzle does (PrusaSlicer's transition layer).
  *
  * Flow: a segment of bead width w (path_point.width of its first point)
  * and layer height h has the cross-section of a rectangle with semicircular

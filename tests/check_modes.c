@@ -249,6 +249,106 @@ START_TEST(spiral_vase_gcode_rises_without_retraction)
 }
 END_TEST
 
+/* E per mm of the first and last extrusion of the layer whose ;Z: is z (relative E). */
+static void flow_ends(const char *text, const char *z, double *first, double *last)
+{
+	const char *p = strstr(text, z);
+	double x = 0, y = 0;
+
+	*first = *last = -1;
+	ck_assert_ptr_nonnull(p);
+	for (const char *q = text; q < p; q = strchr(q, '\n') + 1) /* the position there */
+		if (!strncmp(q, "G1 ", 3)) {
+			word(q, strchr(q, '\n'), 'X', &x);
+			word(q, strchr(q, '\n'), 'Y', &y);
+		}
+	for (p = strchr(p, '\n') + 1; *p && strncmp(p, ";LAYER_CHANGE", 13); p = strchr(p, '\n') + 1) {
+		const char *end = strchr(p, '\n');
+		double nx = x, ny = y, e;
+		if (strncmp(p, "G1 ", 3))
+			continue;
+		word(p, end, 'X', &nx);
+		word(p, end, 'Y', &ny);
+		if (word(p, end, 'E', &e) && e > 0 && hypot(nx - x, ny - y) > 0.1) {
+			*last = e / hypot(nx - x, ny - y);
+			if (*first < 0)
+				*first = *last;
+		}
+		x = nx;
+		y = ny;
+	}
+}
+
+/*
+ * The first spiral layer (3, Z 0.8) starts with almost no flow and ends
+ * with the full flow, as the gap under the nozzle grows; the next one (4)
+ * has the full flow throughout.
+ */
+START_TEST(spiral_vase_first_loop_ramps_the_flow)
+{
+	struct mesh *m = tube_and_pillar();
+	struct slicer_config c;
+	double a, b, full = (0.45 - 0.2) * 0.2 + M_PI * 0.01; /* mm^2 of a 0.45 x 0.2 bead */
+	char *text;
+
+	full /= M_PI * 1.75 * 1.75 / 4;
+	config(&c, true);
+	c.gcodew.use_relative_e_distances = true;
+	text = gcode_of(m, &c);
+	flow_ends(text, "\n;Z:0.8\n", &a, &b);
+	ck_assert_msg(a > 0 && a < 0.1 * full && fabs(b - full) < 0.01 * full,
+		      "first spiral layer: %g to %g mm/mm (full %g)", a, b, full);
+	flow_ends(text, "\n;Z:1\n", &a, &b);
+	ck_assert_msg(fabs(a - full) < 0.01 * full && fabs(b - full) < 0.01 * full,
+		      "second spiral layer: %g to %g mm/mm (full %g)", a, b, full);
+	free(text);
+	mesh_free(m);
+}
+END_TEST
+
+/*
+ * With wipe, the final retraction after the last loop wipes back along
+ * that loop from where it ended: its first move is one chord (under 1 mm
+ * of a 64-gon of radius 10) from the end, not a jump across the vase.
+ */
+START_TEST(spiral_vase_wipes_back_along_the_loop)
+{
+	struct mesh *m = tube_and_pillar();
+	struct slicer_config c;
+	const char *p, *wipe = NULL, *last = NULL;
+	double x = 0, y = 0, wx = 0, wy = 0, e;
+	char *text;
+
+	config(&c, true);
+	c.gcodew.wipe = true;
+	c.gcodew.use_relative_e_distances = true;
+	text = gcode_of(m, &c);
+	for (p = text; *p; p = strchr(p, '\n') + 1) {
+		const char *end = strchr(p, '\n');
+		if (strncmp(p, "G1 ", 3) || !word(p, end, 'E', &e))
+			continue;
+		if (e > 0 && word(p, end, 'X', &x)) {
+			word(p, end, 'Y', &y);
+			last = p;
+		} else if (e < 0 && last && word(p, end, 'X', &wx)) {
+			word(p, end, 'Y', &wy);
+			wipe = p;
+		}
+	}
+	ck_assert(last && wipe && wipe > last);
+	/* wipe is the last wiping move: find the first one after last */
+	for (p = strchr(last, '\n') + 1; p < wipe; p = strchr(p, '\n') + 1)
+		if (!strncmp(p, "G1 ", 3) && word(p, strchr(p, '\n'), 'X', &wx)) {
+			word(p, strchr(p, '\n'), 'Y', &wy);
+			break;
+		}
+	ck_assert_msg(hypot(wx - x, wy - y) < 1.0, "the wipe starts %g mm from the loop's end",
+		      hypot(wx - x, wy - y));
+	free(text);
+	mesh_free(m);
+}
+END_TEST
+
 /* spiral_vase with support material is refused, as PrusaSlicer refuses it. */
 START_TEST(spiral_vase_refuses_support)
 {
@@ -477,6 +577,8 @@ void slicer_modes_tcases(Suite *s)
 	tcase_set_timeout(tc, 120);
 	tcase_add_test(tc, spiral_vase_one_wall_above_the_bottom);
 	tcase_add_test(tc, spiral_vase_gcode_rises_without_retraction);
+	tcase_add_test(tc, spiral_vase_first_loop_ramps_the_flow);
+	tcase_add_test(tc, spiral_vase_wipes_back_along_the_loop);
 	tcase_add_test(tc, spiral_vase_refuses_support);
 	tcase_add_test(tc, ironing_covers_the_top_surfaces);
 	tcase_add_test(tc, ironing_solid_irons_solid_layers);
