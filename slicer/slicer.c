@@ -616,7 +616,7 @@ static int toolpaths(const struct mesh *m, const struct slicer_config *c,
 		return rc;
 	if (c->gcodew.spiral_vase) {
 		vase = *c;
-		spiral_config(&vase);
+		slicer_config_modes(&vase);
 		c = &vase;
 	}
 

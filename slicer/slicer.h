@@ -134,6 +134,16 @@ struct slicer_summary {
 void slicer_config_init(struct slicer_config *c, double nozzle_diameter);
 
 /*
+ * slicer_config_modes - c as its print modes print it (PrusaSlicer's
+ * normalisation): with gcodew.spiral_vase one wall (perimeters 1), no top
+ * layers (top_solid_layers and top_solid_min_thickness 0) and no infill
+ * (density 0); otherwise c is left alone.  slicer_toolpaths and slicer_run
+ * apply it after slicer_config_check; callers apply it to report the
+ * values printed with.
+ */
+void slicer_config_modes(struct slicer_config *c);
+
+/*
  * slicer_config_check - refuse settings that cannot make a print before any
  * work: layer heights not > 0 or above the nozzle, the walls' settings
  * (perim_settings_check for both layer heights), infill density outside

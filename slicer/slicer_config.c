@@ -29,6 +29,16 @@ void slicer_config_init(struct slicer_config *c, double nozzle_diameter)
 	c->bed = (struct slicer_bed){.max_x = 200, .max_y = 200, .max_height = 200};
 }
 
+void slicer_config_modes(struct slicer_config *c)
+{
+	if (!c->gcodew.spiral_vase)
+		return;
+	c->perim.perimeters = 1;
+	c->infill.top_solid_layers = 0;
+	c->infill.top_solid_min_thickness = 0;
+	c->infill.density = 0;
+}
+
 int slicer_config_check(const struct slicer_config *c, struct st_error *err)
 {
 	int rc;

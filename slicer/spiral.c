@@ -5,14 +5,6 @@
 
 #include <math.h>
 
-void spiral_config(struct slicer_config *c)
-{
-	c->perim.perimeters = 1;
-	c->infill.top_solid_layers = 0;
-	c->infill.top_solid_min_thickness = 0;
-	c->infill.density = 0;
-}
-
 size_t spiral_first_layer(const struct slice_stack *st, int bottom_solid_layers,
 			  double bottom_solid_min_thickness)
 {

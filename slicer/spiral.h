@@ -3,7 +3,7 @@
  * docs/slicing.md "Spiral vase"): what the slicing job changes for it.
  *
  * As in PrusaSlicer: one wall, no top layers and no infill
- * (spiral_config); the bottom layers are sliced and filled as usual, and
+ * (slicer_config_modes, slicer.h); the bottom layers are sliced and filled as usual, and
  * above them each layer keeps only the outline of its largest island,
  * holes and smaller islands dropped (PrusaSlicer's "largest contour"
  * slicing mode), so its one wall is one loop.  A layer above the bottom
@@ -21,13 +21,6 @@
 #include "slicer.h"
 #include "st_error.h"
 #include "toolpath.h"
-
-/*
- * spiral_config - c's settings as spiral vase prints them (PrusaSlicer's
- * normalisation): perimeters 1, top_solid_layers 0 and no top shell
- * thickness, fill_density 0.
- */
-void spiral_config(struct slicer_config *c);
 
 /*
  * spiral_first_layer - index of the first layer above the bottom layers:

@@ -725,6 +725,10 @@ START_TEST(load_order_and_set)
 			"--set ironing_type=solid --set ironing_flowrate=10%% --set ironing_speed=20",
 			model, gc, a);
 	ck_assert_msg(status == 0 && !strstr(out, "not supported"), "exit %d: %s", status, out);
+	/* the summary shows what is printed: no infill (the vase's), and the ironing */
+	ck_assert_msg(strstr(out, " sparse (0% ") && strstr(out, " ironing\n") &&
+			      !strstr(out, " 0 ironing\n"),
+		      "%s", out);
 	slurp(gc, gcode, sizeof(gcode));
 	ck_assert_msg(strstr(gcode, "; spiral_vase = 1\n; ironing = 1\n; ironing_type = solid\n"
 				    "; ironing_flowrate = 10%\n; ironing_spacing = 0.1\n"
