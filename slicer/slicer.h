@@ -13,10 +13,13 @@
  *   4. the layer pipeline: walls (perimeters.h: walls, gap fill and thin
  *      walls) in chunks of SLICER_CHUNK_LAYERS layers and each layer's
  *      infill plan (infill.h: skins, bridges, solid and sparse infill in the
- *      region inside the walls) on worker threads; bottom to top, each
- *      layer's infill is emitted, its paths merged in the order skirt/brim,
- *      support, walls, infill, and the layer written (gcode_writer.h, to a
- *      temporary file renamed on success) and freed.
+ *      region inside the walls, then ironing, ironing.h) on worker threads;
+ *      bottom to top, each layer's infill is emitted, its paths merged in
+ *      the order skirt/brim, support, walls, infill, and the layer written
+ *      (gcode_writer.h, to a temporary file renamed on success) and freed.
+ * With gcodew.spiral_vase (spiral.h), after stage 2 the layers above the
+ * bottom ones keep their largest island's outline, get no infill, and
+ * those that are one outer wall are marked layer_paths.spiral.
  * struct slicer_summary says which stages produced paths.
  * Each chunk of walls carries its own seam memory, warmed up on the layer
  * below the chunk, and infill is ordered from where the layer below ended,

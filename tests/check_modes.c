@@ -506,7 +506,8 @@ END_TEST
  * The G-code: the ironing of the last layer comes after its top skin, at
  * that layer's Z, at ironing_speed, with PrusaSlicer's flow (layer_height
  * x 15 % x 0.1 mm per mm of line); the header lists the five settings.
- * Without ironing nothing of it is there.
+ * Without ironing nothing of it is there, and the other four settings
+ * change no byte.
  */
 START_TEST(ironing_gcode_low_flow_at_the_top_z)
 {
@@ -520,6 +521,13 @@ START_TEST(ironing_gcode_low_flow_at_the_top_z)
 	text = gcode_of(m, &c);
 	ck_assert_ptr_null(strstr(text, "Ironing"));
 	ck_assert_ptr_null(strstr(text, "; ironing"));
+	iron_config(&c, false, "solid");
+	c.gcodew.ironing_flowrate = 50;
+	c.gcodew.ironing_spacing = 0.3;
+	c.gcodew.ironing_speed = 99;
+	at = gcode_of(m, &c);
+	ck_assert_str_eq(text, at);
+	free(at);
 	free(text);
 
 	iron_config(&c, true, "top");
