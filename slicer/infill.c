@@ -830,9 +830,10 @@ static int plan_ironing(struct ctx *c, const struct clip_paths cl[CL_N], double 
 	struct clip_paths solid = {0}, area = {0}, segs = {0};
 	int rc = 0;
 
+	/* Sparse infill above 95 % counts as solid, as in PrusaSlicer. */
 	if (s->ironing_type == IRON_SOLID)
 		for (int k = CL_BOTTOM; k < CL_N && !rc; k++)
-			if (k != CL_BRIDGE && k != CL_SPARSE)
+			if (k != CL_BRIDGE && (k != CL_SPARSE || s->fill_density > 95.0))
 				rc = clip_paths_append(&solid, &cl[k], c->err);
 	if (!rc)
 		rc = iron_area(s->ironing_type, s->top_solid_layers > 0, c->st, c->layer, c->R,

@@ -8,9 +8,9 @@
  * (the flow is the writer's, gcode_writer.h).  What is ironed:
  *   top      the layer's top surfaces, its region not under the layer above;
  *   topmost  the same on the last layer only;
- *   solid    all of the layer when it is solid throughout (no sparse infill,
- *            bridge or void inside its walls), else its top surfaces, the
- *            first layer and its solid infill;
+ *   solid    all of the layer when it is solid throughout (no bridge, void
+ *            or sparse infill of 95 % or less inside its walls), else its
+ *            top surfaces, the first layer and its solid infill;
  * top and topmost only with top_solid_layers > 0.  Either way the area is
  * kept half a nozzle inside the layer's outline.
  */

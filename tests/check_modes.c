@@ -476,8 +476,9 @@ END_TEST
 
 /*
  * ironing_type solid at 100 % infill: every layer is solid throughout and
- * ironed over its whole section (half a nozzle inside); at 20 % a middle
- * layer of the lower block has only sparse infill and is not ironed.
+ * ironed over its whole section (half a nozzle inside), and so at 96 %
+ * (sparse above 95 % counts as solid); at 20 % a middle layer of the lower
+ * block has only sparse infill and is not ironed.
  */
 START_TEST(ironing_solid_irons_solid_layers)
 {
@@ -497,6 +498,12 @@ START_TEST(ironing_solid_irons_solid_layers)
 	ck_assert_msg(fabs(s.len * 0.1 - 19.6 * 19.6) < 0.03 * 19.6 * 19.6, "%g mm", s.len);
 	s = iron_of(&st->layers[37]);
 	ck_assert_msg(fabs(s.len * 0.1 - 9.6 * 9.6) < 0.03 * 9.6 * 9.6, "%g mm", s.len);
+	layer_stack_free(st);
+	c.infill.density = 96; /* sparse above 95 % counts as solid, as in PrusaSlicer */
+	st = toolpaths(m, &c, &sum);
+	ck_assert_uint_gt(tu_count_role(&st->layers[12], PATH_SPARSE_INFILL), 0);
+	s = iron_of(&st->layers[12]);
+	ck_assert_msg(fabs(s.len * 0.1 - 19.6 * 19.6) < 0.03 * 19.6 * 19.6, "96 %%: %g mm", s.len);
 	layer_stack_free(st);
 	mesh_free(m);
 }
