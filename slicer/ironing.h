@@ -44,8 +44,10 @@ int iron_area(enum iron_type type, bool top_layers, const struct slice_stack *st
 
 /*
  * iron_lines - straight lines of direction a (radians), spacing nm apart,
- * clipped to area, into segs (replaced).  Returns 0, ST_ERR_RANGE (too
- * many lines), ST_ERR_NOMEM.
+ * clipped to area, into segs (replaced) as zigzags: a line's end is linked
+ * to the nearer end of a line of the next row when they are at most three
+ * spacings apart and the link stays inside area (PrusaSlicer's monotonic
+ * ironing).  Returns 0, ST_ERR_RANGE (too many lines), ST_ERR_NOMEM.
  */
 int iron_lines(const struct clip_paths *area, double a, double spacing, struct clip_paths *segs,
 	       struct st_error *err);

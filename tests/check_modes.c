@@ -388,6 +388,23 @@ struct iron_stats {
 	double len, x0, y0, x1, y1;
 };
 
+/* Whether a segment of an ironing path of l passes inside the box (mm, 1 um in). */
+static bool crosses(const struct layer_paths *l, double x0, double y0, double x1, double y1)
+{
+	for (size_t i = 0; i < l->n; i++) {
+		const struct toolpath *p = &l->paths[i];
+		for (size_t k = 0; p->role == PATH_IRONING && k + 1 < p->n; k++)
+			for (int s = 1; s < 8; s++) {
+				double t = s / 8.0;
+				double x = (p->pts[k].x + t * (p->pts[k + 1].x - p->pts[k].x)) / NM;
+				double y = (p->pts[k].y + t * (p->pts[k + 1].y - p->pts[k].y)) / NM;
+				if (x > x0 + 1e-3 && x < x1 - 1e-3 && y > y0 + 1e-3 && y < y1 - 1e-3)
+					return true;
+			}
+	}
+	return false;
+}
+
 static struct iron_stats iron_of(const struct layer_paths *l)
 {
 	struct iron_stats s = {0, 0, INFINITY, INFINITY, -INFINITY, -INFINITY};
@@ -413,9 +430,9 @@ static struct iron_stats iron_of(const struct layer_paths *l)
 
 /*
  * ironing_type top: the last layer's whole top and, on layer 24 (z 5), the
- * ring the upper block leaves uncovered, each half a nozzle inside the
- * outline, lines 0.1 mm apart covering it (length x spacing = area); no
- * other layer.  topmost: the last layer only.  Every other path is what
+ * ring the upper block leaves uncovered (no line or link across the
+ * block), each half a nozzle inside the outline, lines 0.1 mm apart
+ * covering it (length x spacing = area); no other layer.  topmost: the last layer only.  Every other path is what
  * the print without ironing has.
  */
 START_TEST(ironing_covers_the_top_surfaces)
@@ -425,11 +442,16 @@ START_TEST(ironing_covers_the_top_surfaces)
 	struct slicer_summary sum;
 	struct layer_stack *off, *on, *most;
 
+	/* fill_angle 0: ironing at 45 degrees on layer 24, so links near the
+	 * block's corners would cut across them */
 	iron_config(&c, false, "top");
+	c.infill.fill_angle = 0;
 	off = toolpaths(m, &c, &sum);
 	iron_config(&c, true, "top");
+	c.infill.fill_angle = 0;
 	on = toolpaths(m, &c, &sum);
 	iron_config(&c, true, "topmost");
+	c.infill.fill_angle = 0;
 	most = toolpaths(m, &c, &sum);
 	ck_assert_uint_eq(on->nlayers, 50);
 	for (size_t i = 0; i < on->nlayers; i++) {
@@ -453,6 +475,9 @@ START_TEST(ironing_covers_the_top_surfaces)
 		if (i == 24) { /* the ring around the upper block, 0.2 mm inside */
 			double ring = 19.6 * 19.6 - 10 * 10;
 			ck_assert_uint_gt(s.n, 0);
+			ck_assert_msg(!crosses(b, sum.min[0] + 5, sum.min[1] + 5, sum.max[0] - 5,
+					       sum.max[1] - 5),
+				      "an ironing line or link crosses the upper block");
 			ck_assert_msg(fabs(s.len * 0.1 - ring) < 0.03 * ring, "ring: %g mm", s.len);
 			ck_assert(fabs(s.x0 - (sum.min[0] + 0.2)) < 0.11 &&
 				  fabs(s.x1 - (sum.max[0] - 0.2)) < 0.11);
