@@ -10,7 +10,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "clip.h"
 #include "fixtures.h"
+#include "ironing.h"
 #include "mesh.h"
 #include "slicer.h"
 #include "suites.h"
@@ -610,6 +612,54 @@ START_TEST(ironing_gcode_low_flow_at_the_top_z)
 }
 END_TEST
 
+/*
+ * iron_lines on a staircase (10 steps of 1 mm, each a concave corner) at
+ * 45 degrees: the lines are joined into zigzags (far fewer paths than
+ * lines), and no line or link leaves the area, although a link between
+ * the two line ends beside a concave corner would cut across it.
+ */
+START_TEST(ironing_links_stay_inside)
+{
+	int64_t xy[2 * 22];
+	struct clip_paths area = {0}, zig = {0};
+	struct clip_locator *loc;
+	struct st_error err = {0};
+	size_t n = 0, pts = 0;
+
+	/* (0,0) (10,0) then down the steps (10,1) (9,1) (9,2) ... (1,10) (0,10), in mm */
+	xy[n++] = 0, xy[n++] = 0;
+	for (int k = 0; k < 10; k++) {
+		xy[n++] = (int64_t)(10 - k) * 1000000, xy[n++] = (int64_t)k * 1000000;
+		xy[n++] = (int64_t)(10 - k) * 1000000, xy[n++] = (int64_t)(k + 1) * 1000000;
+	}
+	xy[n++] = 0, xy[n++] = 10000000;
+	ck_assert_int_eq(clip_paths_add(&area, xy, n / 2, &err), 0);
+	ck_assert_int_eq(iron_lines(&area, M_PI / 4, 100000, &zig, &err), 0);
+	loc = clip_locator_new(&area, &err);
+	ck_assert_ptr_nonnull(loc);
+	for (size_t i = 0; i < zig.n; i++) {
+		const int64_t *p = clip_path_xy(&zig, i);
+		size_t m = clip_path_len(&zig, i);
+		pts += m;
+		for (size_t k = 0; k + 1 < m; k++)
+			for (int s = 1; s < 16; s++) {
+				double t = s / 16.0;
+				int64_t x = llround(p[2 * k] + t * (double)(p[2 * k + 2] - p[2 * k]));
+				int64_t y = llround(p[2 * k + 1] + t * (double)(p[2 * k + 3] - p[2 * k + 1]));
+				ck_assert_msg(clip_locator_inside(loc, x, y),
+					      "path %zu segment %zu leaves the area at %g,%g mm", i, k,
+					      x / NM, y / NM);
+			}
+	}
+	/* about 10 * sqrt(2) / 0.1 = 141 lines of 2 points, joined */
+	ck_assert_uint_gt(pts, 200);
+	ck_assert_msg(zig.n < 40, "%zu paths", zig.n);
+	clip_locator_free(loc);
+	clip_paths_free(&area);
+	clip_paths_free(&zig);
+}
+END_TEST
+
 void slicer_modes_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("modes");
@@ -623,5 +673,6 @@ void slicer_modes_tcases(Suite *s)
 	tcase_add_test(tc, ironing_covers_the_top_surfaces);
 	tcase_add_test(tc, ironing_solid_irons_solid_layers);
 	tcase_add_test(tc, ironing_gcode_low_flow_at_the_top_z);
+	tcase_add_test(tc, ironing_links_stay_inside);
 	suite_add_tcase(s, tc);
 }
