@@ -240,6 +240,7 @@ static int config_from_profile(const struct profile *p, const struct slice_args 
 		c->perim.perimeters = a->perimeters;
 	if (a->has_infill)
 		c->infill.density = a->infill;
+	slicer_config_modes(c); /* the summary shows what is printed */
 	c->bed.has_center = a->has_center;
 	c->bed.center_x = a->center[0];
 	c->bed.center_y = a->center[1];
@@ -262,7 +263,7 @@ struct slice_run {
 static const char *const role_keys[] = {
     "outer_perimeter", "inner_perimeter", "thin_wall", "gap_fill", "solid_infill",
     "top_skin", "bottom_skin", "sparse_infill", "bridge", "skirt", "brim", "support",
-    "support_interface"};
+    "support_interface", "ironing"};
 _Static_assert(sizeof(role_keys) / sizeof(role_keys[0]) == PATH_ROLES,
 	       "one JSON key per path role");
 
@@ -377,9 +378,9 @@ static void print_text(const struct slice_run *r, const struct slicer_summary *s
 	       s->paths[PATH_TOP_SKIN], s->paths[PATH_BOTTOM_SKIN], s->paths[PATH_SOLID_INFILL],
 	       s->paths[PATH_SPARSE_INFILL], r->c->infill.density, r->c->infill.pattern,
 	       s->paths[PATH_BRIDGE]);
-	printf("       %zu support, %zu support interface, %zu skirt, %zu brim\n",
+	printf("       %zu support, %zu support interface, %zu skirt, %zu brim, %zu ironing\n",
 	       s->paths[PATH_SUPPORT], s->paths[PATH_SUPPORT_INTERFACE], s->paths[PATH_SKIRT],
-	       s->paths[PATH_BRIM]);
+	       s->paths[PATH_BRIM], s->paths[PATH_IRONING]);
 	printf("time: %ldh %02ldm %02lds (estimate, heating excluded)\n", secs / 3600,
 	       secs / 60 % 60, secs % 60);
 	printf("filament: %.1f mm, %.2f cm^3, %.2f g\n", s->filament_mm, s->filament_cm3,

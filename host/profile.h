@@ -182,6 +182,7 @@ struct profile {
 	const char *seam_position; /* aligned, nearest, random or rear; default aligned */
 	double elefant_foot_compensation; /* mm, first layer shrunk; default 0 */
 	bool external_perimeters_first, thin_walls, gap_fill_enabled; /* defaults 0, 1, 1 */
+	bool spiral_vase; /* default 0 */
 	double top_solid_min_thickness, bottom_solid_min_thickness; /* mm; defaults 0, 0 */
 	double fill_angle, bridge_angle; /* degrees; defaults 45, 0 (0 = per bridge) */
 	double bridge_flow_ratio;	 /* default 1 */
@@ -192,6 +193,11 @@ struct profile {
 	double fill_density;				       /* percent, 0-100; default 20 */
 	const char *fill_pattern;	/* a PrusaSlicer pattern name; default "rectilinear" */
 	double solid_infill_below_area;	/* mm^2; default 70 */
+	bool ironing;			/* default 0 */
+	const char *ironing_type;	/* top, topmost or solid; default top */
+	double ironing_flowrate;	/* percent, 0-100; default 15 */
+	double ironing_spacing;		/* mm; default 0.1 */
+	double ironing_speed;		/* mm/s; default 15 */
 	int skirts;			/* loops; default 1 */
 	double skirt_distance;		/* mm; default 6 */
 	int skirt_height;		/* layers, 0 = no skirt; default 1 */

@@ -49,7 +49,7 @@ enum key_type {
 	KT_FIRST_HEIGHT, /* first_layer_height: mm or % of layer_height */
 	KT_WIDTH,	 /* extrusion_width: mm or % of layer_height, 0 = auto */
 	KT_NUM_PCT,	 /* struct profile_pct: a number (mm/s, mm) or % */
-	KT_DENSITY,	 /* fill_density: N% or a fraction 0-1 */
+	KT_DENSITY,	 /* double: N% or a fraction 0-1 (fill_density, ironing_flowrate) */
 	KT_PROTOCOL,	 /* enum profile_protocol */
 	KT_FLAVOR,	 /* enum profile_flavor */
 	KT_BAUD,	 /* long, a standard rate */

@@ -59,6 +59,12 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	c->perim.outer_first = p->external_perimeters_first;
 	c->perim.thin_walls = p->thin_walls;
 	c->perim.gap_fill = p->gap_fill_enabled;
+	c->gcodew.spiral_vase = p->spiral_vase;
+	c->gcodew.ironing = p->ironing;
+	c->gcodew.ironing_type = p->ironing_type;
+	c->gcodew.ironing_flowrate = p->ironing_flowrate;
+	c->gcodew.ironing_spacing = p->ironing_spacing;
+	c->gcodew.ironing_speed = p->ironing_speed;
 	rc = perim_seam_parse(p->seam_position, &c->perim.seam, err);
 	if (rc)
 		return rc; /* not reached: the loader accepts the declared names only */

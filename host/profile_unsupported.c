@@ -4,7 +4,7 @@
  * loader types it (slicer/settings.h), when it cannot change what Stratum prints (names, notes,
  * the GUI's and the print host's keys, multi-material and wipe tower
  * settings of a single-extruder print ...), or when its value asks for
- * what Stratum does anyway (ironing = 0, spiral_vase = 0).
+ * what Stratum does anyway (complete_objects = 0, fuzzy_skin = none).
  * Every other key the profile sets is listed, with its value.
  */
 #include "profile_int.h"
@@ -87,8 +87,7 @@ static const struct known known[] = {
     /* Features Stratum does not have, honoured while they are off */
     {"raft_*", NULL, "raft_layers", "0"}, /* beyond the raft keys settings.c declares */
     {"first_layer_acceleration_over_raft", NULL, "raft_layers", "0"},
-    {"ironing", "0", NULL, NULL}, {"ironing_*", NULL, "ironing", "0"},
-    {"spiral_vase", "0", NULL, NULL}, {"complete_objects", "0", NULL, NULL},
+    {"complete_objects", "0", NULL, NULL},
     {"fuzzy_skin", "none", NULL, NULL}, {"fuzzy_skin_*", NULL, "fuzzy_skin", "none"},
     {"draft_shield", "disabled", NULL, NULL}, {"xy_size_compensation", "0", NULL, NULL},
     {"z_offset", "0", NULL, NULL},

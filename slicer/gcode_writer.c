@@ -25,6 +25,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "ironing.h"
 #include "placeholder.h"
 #include "settings.h"
 #include "st_file.h"
@@ -166,6 +167,12 @@ void gcodew_settings_init(struct gcodew_settings *s)
 	s->start_filament_gcode = s->end_filament_gcode = "";
 	s->printer_settings_id = s->printer_model = "";
 	s->bed_shape = settings_find("bed_shape")->dflt;
+	s->spiral_vase = setting_default_number("spiral_vase", false, &v) && v != 0;
+	s->ironing = setting_default_number("ironing", false, &v) && v != 0;
+	s->ironing_type = settings_find("ironing_type")->dflt;
+	setting_default_number("ironing_flowrate", false, &s->ironing_flowrate);
+	setting_default_number("ironing_spacing", false, &s->ironing_spacing);
+	setting_default_number("ironing_speed", false, &s->ironing_speed);
 	est_limits_init(&s->limits);
 }
 
@@ -178,6 +185,18 @@ int gcodew_settings_check(const struct gcodew_settings *s, struct st_error *err)
 		if (rc)
 			return rc;
 	}
+	static const char *const ironing_keys[] = {"ironing_flowrate", "ironing_spacing",
+						   "ironing_speed"};
+	const double ironing_values[] = {s->ironing_flowrate, s->ironing_spacing, s->ironing_speed};
+	for (size_t i = 0; i < sizeof(ironing_keys) / sizeof(ironing_keys[0]); i++) {
+		int rc = setting_check("G-code settings", ironing_keys[i], ironing_values[i], err);
+		if (rc)
+			return rc;
+	}
+	enum iron_type type;
+	int rc = iron_type_parse(s->ironing_type, &type, err);
+	if (rc)
+		return rc;
 	if (s->min_fan_speed > s->max_fan_speed)
 		return st_error_set(err, ST_ERR_RANGE,
 				    "G-code settings: min_fan_speed %d is above max_fan_speed %d",
@@ -403,6 +422,7 @@ struct gcodew {
 	bool *done; /* per path of the layer: already planned */
 	size_t donecap;
 	struct travel_map *map;	  /* this layer's, NULL: straight travels */
+	bool spiral_below;	  /* the layer below was a spiral (layer_paths.spiral) */
 	struct travel_route route; /* the travel being planned */
 
 	/* Emission state */
@@ -560,6 +580,8 @@ static double role_base_speed(const struct gcodew_settings *s, enum path_role ro
 		return s->support_material_speed;
 	case PATH_SUPPORT_INTERFACE:
 		return s->support_material_interface_speed;
+	case PATH_IRONING:
+		return s->ironing_speed;
 	default: /* inner perimeters */
 		return s->perimeter_speed;
 	}
@@ -623,8 +645,10 @@ static size_t trav(const struct toolpath *p, bool rev, size_t k)
 	return k == p->n ? 0 : k;
 }
 
-/* Remember the printed path backwards from its end, for a wipe. */
-static int record_wipe(struct gcodew *w, const struct toolpath *p, bool rev, size_t steps)
+/* Remember the printed path backwards from its end, for a wipe; a closed
+ * path printed from point first (a spiral loop) is rotated by first. */
+static int record_wipe(struct gcodew *w, const struct toolpath *p, bool rev, size_t steps,
+		       size_t first)
 {
 	const struct gcodew_settings *s = w->s;
 	double dist = s->retract_length / s->retract_speed * WIPE_SPEED_SHARE * s->travel_speed;
@@ -632,7 +656,7 @@ static int record_wipe(struct gcodew *w, const struct toolpath *p, bool rev, siz
 
 	w->nwipe = 0;
 	for (size_t k = steps; k-- > 0;) {
-		const struct path_point *q = &p->pts[trav(p, rev, k)];
+		const struct path_point *q = &p->pts[(trav(p, rev, k) + first) % p->n];
 		double x = q->x / SLICE_UNITS_PER_MM, y = q->y / SLICE_UNITS_PER_MM;
 		double *grown = st_grow(w->wipe, &w->wipecap, w->nwipe + 1, 2 * sizeof(*grown));
 		if (!grown)
@@ -649,13 +673,41 @@ static int record_wipe(struct gcodew *w, const struct toolpath *p, bool rev, siz
 	return 0;
 }
 
+/*
+ * Extrude from pa to pb (path pi of layer li; pb is its point at, for
+ * messages), ending at height z: a bead width nm wide, its filament from
+ * the flow model at the top of gcode_writer.h times share.  A bead
+ * narrower than the layer is refused; a segment of no length adds nothing.
+ */
+static int plan_segment(struct gcodew *w, const struct layer_paths *l, size_t li, size_t pi,
+			size_t at, const struct path_point *pa, const struct path_point *pb,
+			int64_t width, double z, double speed, double share)
+{
+	double h = l->height, bead = width / SLICE_UNITS_PER_MM;
+	double len = hypot((double)(pb->x - pa->x), (double)(pb->y - pa->y)) / SLICE_UNITS_PER_MM;
+	bool iron = l->paths[pi].role == PATH_IRONING;
+	double area = iron ? bead * w->s->layer_height * w->s->ironing_flowrate / 100
+			   : (bead - h) * h + M_PI * h * h / 4;
+
+	if (bead < h && !iron)
+		return st_error_set(w->err, ST_ERR_RANGE,
+				    "G-code: layer %zu, path %zu (%s), point %zu: bead width %.4f mm "
+				    "is below the layer height %.4f mm",
+				    li + 1, pi, path_role_name(l->paths[pi].role), at, bead, h);
+	if (len <= 0)
+		return 0;
+	return push_move(w, MV_EXTRUDE, true, pb->x / SLICE_UNITS_PER_MM,
+			 pb->y / SLICE_UNITS_PER_MM, z,
+			 share * area * len / w->fil_area * w->s->extrusion_multiplier, speed);
+}
+
 /* Plan path pi of layer li: travel to its start, then its segments. */
 static int plan_path(struct gcodew *w, const struct layer_paths *l, size_t li, size_t pi, bool rev)
 {
 	const struct gcodew_settings *s = w->s;
 	const struct toolpath *p = &l->paths[pi];
 	size_t steps = p->closed ? p->n + 1 : p->n;
-	double speed = path_speed(s, p, li), h = l->height;
+	double speed = path_speed(s, p, li);
 	const struct path_point *q0 = &p->pts[trav(p, rev, 0)];
 	int rc;
 
@@ -667,23 +719,11 @@ static int plan_path(struct gcodew *w, const struct layer_paths *l, size_t li, s
 	for (size_t k = 0; k + 1 < steps && rc == 0; k++) {
 		size_t a = trav(p, rev, k), b = trav(p, rev, k + 1);
 		const struct path_point *pa = &p->pts[a], *pb = &p->pts[b];
-		double bead = (rev ? pb : pa)->width / SLICE_UNITS_PER_MM;
-		double len = hypot((double)(pb->x - pa->x), (double)(pb->y - pa->y)) /
-			     SLICE_UNITS_PER_MM;
-		if (bead < h)
-			return st_error_set(w->err, ST_ERR_RANGE,
-					    "G-code: layer %zu, path %zu (%s), point %zu: bead width "
-					    "%.4f mm is below the layer height %.4f mm",
-					    li + 1, pi, path_role_name(p->role), rev ? b : a, bead, h);
-		if (len <= 0)
-			continue;
-		double area = (bead - h) * h + M_PI * h * h / 4;
-		double e = area * len / w->fil_area * s->extrusion_multiplier;
-		rc = push_move(w, MV_EXTRUDE, true, pb->x / SLICE_UNITS_PER_MM,
-			       pb->y / SLICE_UNITS_PER_MM, w->layer_z, e, speed);
+		rc = plan_segment(w, l, li, pi, rev ? b : a, pa, pb, (rev ? pb : pa)->width,
+				  w->layer_z, speed, 1);
 	}
 	if (rc == 0 && s->wipe)
-		rc = record_wipe(w, p, rev, steps);
+		rc = record_wipe(w, p, rev, steps, 0);
 	return rc;
 }
 
@@ -731,6 +771,55 @@ static int plan_run(struct gcodew *w, const struct layer_paths *l, size_t li, si
 	return 0;
 }
 
+/*
+ * Plan spiral layer li (layer_paths.spiral): its one loop from the vertex
+ * nearest the nozzle, Z rising with the length printed from the top of the
+ * layer below to l->z.  Reached from a spiral below by a plain move (no
+ * retraction: it is the loop's own continuation), else by a travel; then,
+ * as PrusaSlicer's transition layer, the flow rises with Z from nothing,
+ * since the gap under the nozzle starts at nothing.
+ */
+static int plan_spiral(struct gcodew *w, const struct layer_paths *l, size_t li)
+{
+	const struct toolpath *p = &l->paths[0];
+	double h = l->height, z0 = l->z - h, speed = path_speed(w->s, p, li);
+	double total = 0, done = 0, best = INFINITY;
+	size_t first = 0;
+	int rc;
+
+	for (size_t k = 0; k < p->n; k++) {
+		const struct path_point *a = &p->pts[k], *b = &p->pts[(k + 1) % p->n];
+		double d = w->pos_known ? dist2(w, a->x, a->y) : 0;
+		total += hypot((double)(b->x - a->x), (double)(b->y - a->y)) / SLICE_UNITS_PER_MM;
+		if (d < best) {
+			best = d;
+			first = k;
+		}
+	}
+	w->layer_z = z0;
+	if (w->spiral_below && w->pos_known)
+		rc = push_move(w, MV_TRAVEL, true, p->pts[first].x / SLICE_UNITS_PER_MM,
+			       p->pts[first].y / SLICE_UNITS_PER_MM, z0, 0, w->s->travel_speed);
+	else
+		rc = plan_travel(w, p->pts[first].x / SLICE_UNITS_PER_MM,
+				 p->pts[first].y / SLICE_UNITS_PER_MM);
+	if (rc == 0)
+		rc = push(w, (struct op){.kind = OP_ROLE, .role = p->role});
+	for (size_t k = 0; k < p->n && rc == 0; k++) {
+		const struct path_point *pa = &p->pts[(first + k) % p->n];
+		const struct path_point *pb = &p->pts[(first + k + 1) % p->n];
+		double t;
+		done += hypot((double)(pb->x - pa->x), (double)(pb->y - pa->y)) / SLICE_UNITS_PER_MM;
+		t = fmin(1, done / total);
+		rc = plan_segment(w, l, li, 0, (first + k) % p->n, pa, pb, pa->width, z0 + h * t,
+				  speed, w->spiral_below ? 1 : t);
+	}
+	w->layer_z = l->z;
+	if (rc == 0 && w->s->wipe)
+		rc = record_wipe(w, p, false, p->n + 1, first);
+	return rc;
+}
+
 /* Plan every path of layer li into w->ops. */
 static int plan_layer(struct gcodew *w, const struct layer_paths *l, size_t li)
 {
@@ -748,6 +837,12 @@ static int plan_layer(struct gcodew *w, const struct layer_paths *l, size_t li)
 	}
 	if (l->n)
 		memset(w->done, 0, l->n * sizeof(*w->done));
+	if (l->spiral && l->n == 1 && l->paths[0].closed) {
+		rc = plan_spiral(w, l, li);
+		w->spiral_below = true;
+		return rc;
+	}
+	w->spiral_below = false;
 	for (size_t i = 0, j; i < l->n && rc == 0; i = j) {
 		for (j = i + 1; j < l->n && l->paths[j].role == l->paths[i].role; j++)
 			;
@@ -1113,6 +1208,17 @@ static void put_header(struct gcodew *w, const struct gcodew_summary *sum)
 		fmt_num(n, key_value(w->s, &keys[i]), 6);
 		put(w, "; %s = %s%s\n", keys[i].name, n, pct ? "%" : "");
 	}
+	if (w->s->spiral_vase)
+		put(w, "; spiral_vase = 1\n");
+	if (w->s->ironing) {
+		fmt_num(n, w->s->ironing_flowrate, 6);
+		put(w, "; ironing = 1\n; ironing_type = %s\n; ironing_flowrate = %s%%\n",
+		    w->s->ironing_type, n);
+		fmt_num(n, w->s->ironing_spacing, 6);
+		put(w, "; ironing_spacing = %s\n", n);
+		fmt_num(n, w->s->ironing_speed, 6);
+		put(w, "; ironing_speed = %s\n", n);
+	}
 	for (int a = 0; a < EST_AXES; a++) {
 		char f[NUM_MAX], acc[NUM_MAX], j[NUM_MAX];
 		fmt_num(f, lim->max_feedrate[a], 3);
@@ -1229,6 +1335,7 @@ static void add_widths(struct gcodew *w, const struct layer_paths *l)
 static void writer_start(struct gcodew *w)
 {
 	w->pos_known = false;
+	w->spiral_below = false;
 	w->px = w->py = w->pz = 0;
 	w->nwipe = 0;
 	w->ext_exact = w->r_exact = w->e_machine = 0;

@@ -23,11 +23,22 @@
  * of outer and inner perimeters keep their given order: the geometry stage
  * orders walls on purpose.
  *
+ * Spiral vase (PrusaSlicer's SpiralVase): a layer marked spiral is one
+ * closed loop entered at its vertex nearest the nozzle, so it continues
+ * where the loop below ended, and printed with Z rising linearly with the
+ * length printed, from the layer below's top (z - height) to z: no Z move,
+ * no seam and, after a spiral layer, no retraction.  On the first spiral
+ * layer (a flat one below) the flow rises in proportion, from nothing to
+ * full, as the gap under the nozzle does (PrusaSlicer's transition layer).
+ *
  * Flow: a segment of bead width w (path_point.width of its first point)
  * and layer height h has the cross-section of a rectangle with semicircular
  * ends, A = (w - h)·h + π(h/2)²; it needs E = A·length / (π(d/2)²) ·
  * extrusion_multiplier mm of filament of diameter d.  A width below the
- * layer height has no such bead and is refused.
+ * layer height has no such bead and is refused.  Ironing (PATH_IRONING)
+ * only smooths: its lines are w = ironing_spacing apart and carry
+ * PrusaSlicer's flow, A = w · layer_height · ironing_flowrate / 100, at
+ * ironing_speed.
  *
  * Cooling, as PrusaSlicer's: layer time is estimated with the planner; the
  * fan is off for the first disable_fan_first_layers layers, at
@@ -168,6 +179,18 @@ struct gcodew_settings {
 	const char *printer_settings_id; /* the profile's name; "" */
 	const char *printer_model;	 /* "" */
 	const char *bed_shape;		 /* PrusaSlicer's text, "0x0,200x0,200x200,0x200" */
+
+	/* Spiral vase (layer_paths.spiral marks the layers it shapes; the
+	 * slicer reads this flag); listed in the header when set. false */
+	bool spiral_vase;
+	/* Ironing (the slicer plans it from ironing, ironing_type and
+	 * ironing_spacing, the writer prints it with ironing_flowrate and
+	 * ironing_speed); all five listed in the header when ironing is set. */
+	bool ironing;		 /* false */
+	const char *ironing_type; /* top, topmost or solid; "top"; not owned, not NULL */
+	double ironing_flowrate; /* percent of a layer_height bead's flow; 15 */
+	double ironing_spacing;	 /* mm between lines; 0.1 */
+	double ironing_speed;	 /* mm/s; 15 */
 };
 
 /* What a written print will take; also written into the G-code header. */

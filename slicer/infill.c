@@ -138,6 +138,9 @@ void infill_settings_init(struct infill_settings *s, double nozzle_diameter)
 		.solid_infill_below_area = 70.0,
 		.bridge_flow_ratio = 1.0,
 		.gap_fill_min = 0.1,
+		.ironing = false,
+		.ironing_type = IRON_TOP,
+		.ironing_spacing = 0.1,
 	};
 }
 
@@ -238,6 +241,12 @@ int infill_settings_check(const struct infill_settings *s, struct st_error *err)
 		return st_error_set(err, ST_ERR_RANGE,
 				    "infill: bridge_flow_ratio %g is out of range; use (0, 2]",
 				    s->bridge_flow_ratio);
+	if (s->ironing && !(s->ironing_spacing > 0.0 && s->ironing_spacing <= 10.0 &&
+			    (unsigned)s->ironing_type <= IRON_SOLID))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "infill: ironing_spacing %g mm or ironing type %d is out of "
+				    "range; use (0, 10] mm and top, topmost or solid",
+				    s->ironing_spacing, (int)s->ironing_type);
 	if (!(s->gap_fill_min >= 0.0 && s->gap_fill_min <= 10.0))
 		return st_error_set(err, ST_ERR_RANGE,
 				    "infill: gap_fill_min %g mm is out of range; use 0 to 10 mm",
@@ -811,6 +820,35 @@ static int classify(struct ctx *c, struct clip_paths cl[CL_N])
 	return rc;
 }
 
+/*
+ * Ironing of the layer (ironing.h) after its top skin, at the skin's angle
+ * a plus 45 degrees; cl are the layer's classes (empty without infill).
+ */
+static int plan_ironing(struct ctx *c, const struct clip_paths cl[CL_N], double a)
+{
+	const struct infill_settings *s = c->s;
+	double sp = s->ironing_spacing * SLICE_UNITS_PER_MM;
+	struct clip_paths solid = {0}, area = {0}, segs = {0};
+	int rc = 0;
+
+	/* Sparse infill above 95 % counts as solid, as in PrusaSlicer. */
+	if (s->ironing_type == IRON_SOLID)
+		for (int k = CL_BOTTOM; k < CL_N && !rc; k++)
+			if (k != CL_BRIDGE && (k != CL_SPARSE || s->fill_density > 95.0))
+				rc = clip_paths_append(&solid, &cl[k], c->err);
+	if (!rc)
+		rc = iron_area(s->ironing_type, s->top_solid_layers > 0, c->st, c->layer, c->R,
+			       &solid, s->nozzle_diameter, &area, c->err);
+	if (!rc)
+		rc = iron_lines(&area, a + M_PI / 4.0, sp, &segs, c->err);
+	if (!rc && segs.n)
+		rc = emit_segments(c, &segs, PATH_IRONING, sp);
+	clip_paths_free(&solid);
+	clip_paths_free(&area);
+	clip_paths_free(&segs);
+	return rc;
+}
+
 /* Classify and fill one layer. */
 static int fill_layer(struct ctx *c)
 {
@@ -828,10 +866,10 @@ static int fill_layer(struct ctx *c)
 	const struct bead top = {top_w * U, perim_spacing(top_w, c->h) * U, PATH_TOP_SKIN, true};
 	const struct bead bridge = {bridge_w * U, (thread + INFILL_BRIDGE_GAP_MM) * U, PATH_BRIDGE,
 				    false};
-	int rc;
+	int rc = 0;
 
 	if (!clip_paths_points(c->R))
-		return 0;
+		goto out_iron;
 	rc = classify(c, cl);
 	if (!rc)
 		rc = fill_solid(c, &cl[CL_BOTTOM], a, &bottom, NULL);
@@ -846,6 +884,9 @@ static int fill_layer(struct ctx *c)
 		rc = fill_sparse(c, &cl[CL_SPARSE], a);
 	if (!rc)
 		rc = fill_solid(c, &cl[CL_TOP], a, &top, NULL);
+out_iron:
+	if (!rc && s->ironing)
+		rc = plan_ironing(c, cl, a);
 	for (int k = 0; k < CL_N; k++)
 		clip_paths_free(&cl[k]);
 	return rc;

@@ -48,6 +48,7 @@
 #include <stdbool.h>
 
 #include "clip.h"
+#include "ironing.h"
 #include "section.h"
 #include "st_error.h"
 #include "toolpath.h"
@@ -85,6 +86,9 @@ struct infill_settings {
 	double solid_infill_below_area;	   /* mm^2; smaller sparse islands are solid (70) */
 	double bridge_flow_ratio;	   /* bridge thread area / nozzle area (1) */
 	double gap_fill_min;		   /* mm; narrower gaps stay empty (0.1) */
+	bool ironing;			   /* iron after the top skin (ironing.h; false) */
+	enum iron_type ironing_type;	   /* what is ironed (IRON_TOP) */
+	double ironing_spacing;		   /* mm between ironing lines (0.1) */
 };
 
 /* infill_settings_init - the defaults above for a nozzle of nozzle_diameter mm. */
@@ -118,7 +122,9 @@ int infill_settings_check(const struct infill_settings *s, struct st_error *err)
  *   out: st->n layers (z and height set by the caller, walls possibly
  *     already there); infill paths are appended, per layer in the order
  *     bottom skin, bridges, internal solid, gap fill, sparse, top skin,
- *     each class ordered nearest-neighbour.
+ *     then with ironing the PATH_IRONING lines (ironing.h, ironing_spacing
+ *     wide) at the top skin's angle plus 45 degrees, each class ordered
+ *     nearest-neighbour.
  * Layers thicker than the nozzle or not above 0 are refused.  Returns 0 or
  * a negative class with err filled (bad settings, mismatched sizes,
  * ST_ERR_NOMEM, ST_ERR_INTERNAL); on error out may hold some paths.

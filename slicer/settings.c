@@ -31,6 +31,9 @@ static const char *const pattern_names[] = {
 
 static const char *const home_names[] = {"min", "max"};
 
+/* PrusaSlicer's IroningType names, in enum iron_type order (slicer/ironing.h). */
+static const char *const ironing_names[] = {"top", "topmost", "solid"};
+
 /* PrusaSlicer's SeamPosition names, in enum perim_seam order. */
 static const char *const seam_names[] = {"aligned", "nearest", "random", "rear"};
 
@@ -145,6 +148,9 @@ static const struct setting table[] = {
      "one centre-line bead where two walls do not fit"},
     {"gap_fill_enabled", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, NULL,
      "beads in the strips left between walls"},
+    {"spiral_vase", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
+     "above the bottom layers one wall around the largest island (holes and smaller islands "
+     "dropped), printed as a spiral rising along each loop; no top layers, no infill there"},
     {"top_solid_layers", INT, S_, 0, 1000, 0, "", "3", NULL, NULL, 0, NULL, ""},
     {"bottom_solid_layers", INT, S_, 0, 1000, 0, "", "3", NULL, NULL, 0, NULL, ""},
     {"top_solid_min_thickness", NUM, S_, 0, 1000, 0, "mm", "0", NULL, NULL, 0, NULL,
@@ -168,6 +174,17 @@ static const struct setting table[] = {
      "warning"},
     {"solid_infill_below_area", NUM, S_, 0, 1e6, 0, "mm^2", "70", NULL, NULL, 0, NULL,
      "sparse infill islands smaller than this are solid"},
+    {"ironing", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
+     "after the top skin, a second pass over the same area at the same Z: lines ironing_spacing "
+     "apart, 45 degrees to the skin, at low flow"},
+    {"ironing_type", SETTING_CHOICE, S_, 0, 0, 0, "", "top", NULL, CHOICES(ironing_names), NULL,
+     "top: every top surface; topmost: the last layer only (both need top_solid_layers > 0); "
+     "solid: every solid surface, all of a layer that is solid throughout"},
+    {"ironing_flowrate", SETTING_PERCENT, S_, 0, 100, 0, "%", "15%", NULL, NULL, 0, NULL,
+     "of the flow of a layer_height bead over the line spacing; a bare number is a fraction"},
+    {"ironing_spacing", NUM, S_, 0, 10, GT, "mm", "0.1", NULL, NULL, 0, NULL,
+     "distance between ironing lines"},
+    {"ironing_speed", NUM, S_, 0, 1000, GT, "mm/s", "15", NULL, NULL, 0, NULL, ""},
     {"skirts", INT, S_, 0, 100, 0, "", "1", NULL, NULL, 0, NULL, "loops"},
     {"skirt_distance", NUM, S_, 0, 1000, 0, "mm", "6", NULL, NULL, 0, NULL,
      "gap between the skirt and the part, or its brim"},

@@ -13,6 +13,7 @@
 #include "grow.h"
 #include "infill.h"
 #include "stages.h"
+#include "spiral.h"
 #include "travel.h"
 
 int slicer_place(const struct mesh *m, const struct slicer_bed *bed, double offset[3],
@@ -111,6 +112,7 @@ struct pipe {
 	const struct infill_job *job;
 	int64_t travel_inset;	    /* nm, routing boundary inside the surface */
 	bool travel;		    /* make travel maps */
+	size_t vase_from;	    /* first spiral vase layer (spiral.h); SIZE_MAX: none */
 	size_t nchunks, window;	    /* window: layers that may start above taken */
 	struct layer_paths *walls;  /* st->n: the walls stage's paths */
 	struct clip_expolys *inner; /* st->n: the regions inside the walls */
@@ -170,6 +172,8 @@ static int walls_chunk(struct pipe *p, size_t k, struct st_error *err)
 
 		rc = perim_generate(ps, &l->regions, l->height, seams, &p->walls[i], &p->inner[i],
 				    err);
+		if (!rc && i >= p->vase_from) /* spiral vase: no infill above the bottom */
+			clip_expolys_clear(&p->inner[i]);
 		if (!rc && p->travel &&
 		    !(p->maps[i] = travel_map_new(&l->regions, p->travel_inset, err)))
 			rc = err->code;
@@ -349,6 +353,7 @@ static int finish_layer(struct pipe *p, struct infill_job *job, struct layer_sta
 		return rc;
 	}
 	res->infill = res->infill || m.n > walls_end;
+	m.spiral = li >= p->vase_from && spiral_layer_fits(&m);
 	for (size_t i = 0; i < m.n; i++)
 		res->paths[m.paths[i].role]++;
 	res->any = res->any || m.n;
@@ -401,10 +406,11 @@ static void drop_layer(struct pipe *p, size_t i)
  * stacks (whose paths are taken), into the sink bottom to top.
  */
 static int run_pipe(const struct slicer_config *c, const struct slice_stack *st,
-		    struct layer_stack *skirt, struct layer_stack *support, struct sink *k,
-		    struct pipe_result *res, struct st_error *err)
+		    size_t vase_from, struct layer_stack *skirt, struct layer_stack *support,
+		    struct sink *k, struct pipe_result *res, struct st_error *err)
 {
-	struct pipe p = {.c = c, .st = st, .travel = c->gcodew.avoid_crossing_perimeters};
+	struct pipe p = {.c = c, .st = st, .travel = c->gcodew.avoid_crossing_perimeters,
+			 .vase_from = vase_from};
 	struct infill_job *job = NULL;
 	pthread_t tid[SLICER_MAX_THREADS];
 	size_t nworkers = worker_count(c->threads), started = 0, n = st->n;
@@ -515,6 +521,8 @@ static int toolpaths(const struct mesh *m, const struct slicer_config *c,
 {
 	enum { SKIRT, SUPPORT, RAFT_SKIRT, RAFT, STAGES };
 	struct slicer_summary s = {0};
+	struct slicer_config vase;
+	size_t vase_from = SIZE_MAX;
 	struct slice_stack *st = NULL, *raft = NULL;
 	struct layer_stack *stage[STAGES] = {0};
 	struct pipe_result res = {.any = false};
@@ -529,6 +537,11 @@ static int toolpaths(const struct mesh *m, const struct slicer_config *c,
 		rc = slicer_place(m, &c->bed, s.offset, s.min, s.max, err);
 	if (rc)
 		return rc;
+	if (c->gcodew.spiral_vase) {
+		vase = *c;
+		slicer_config_modes(&vase);
+		c = &vase;
+	}
 
 	progress(c, "slicing", 0.0);
 	rc = slice_mesh(m, first, c->layer_height, &c->slice, &st, err);
@@ -553,6 +566,11 @@ static int toolpaths(const struct mesh *m, const struct slicer_config *c,
 					SLICER_CLEAN_NM, err);
 	if (!rc && c->raft.layers > 0)
 		rc = stage_raft_layers(c, st, &raft, &lift, err);
+	if (!rc && c->gcodew.spiral_vase)
+		vase_from = spiral_first_layer(st, c->infill.bottom_solid_layers,
+					       c->infill.bottom_solid_min_thickness);
+	for (size_t i = vase_from; !rc && i < st->n; i++)
+		rc = spiral_keep_outline(&st->layers[i], err);
 	if (rc)
 		goto out_free;
 	if (shape && !(*shape = stage_print_stack(raft, st, err))) {
@@ -586,7 +604,7 @@ static int toolpaths(const struct mesh *m, const struct slicer_config *c,
 	if (raft)
 		rc = sink_raft(raft, stage[RAFT_SKIRT], stage[RAFT], k, &res, err);
 	if (!rc)
-		rc = run_pipe(c, st, stage[SKIRT], stage[SUPPORT], k, &res, err);
+		rc = run_pipe(c, st, vase_from, stage[SKIRT], stage[SUPPORT], k, &res, err);
 	if (!rc && late) {
 		rc = late;
 		if (err)

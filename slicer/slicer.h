@@ -18,11 +18,14 @@
  *   4. the layer pipeline: walls (perimeters.h: walls, gap fill and thin
  *      walls) in chunks of SLICER_CHUNK_LAYERS layers and each layer's
  *      infill plan (infill.h: skins, bridges, solid and sparse infill in the
- *      region inside the walls) on worker threads; bottom to top, each
- *      layer's infill is emitted, its paths merged in the order skirt/brim,
- *      support, walls, infill, and the layer written (gcode_writer.h, to a
- *      temporary file renamed on success) and freed; the raft's layers,
- *      skirt/brim then raft, are written before the part's.
+ *      region inside the walls, then ironing, ironing.h) on worker threads;
+ *      bottom to top, each layer's infill is emitted, its paths merged in
+ *      the order skirt/brim, support, walls, infill, and the layer written
+ *      (gcode_writer.h, to a temporary file renamed on success) and freed;
+ *      the raft's layers, skirt/brim then raft, are written before the part's.
+ * With gcodew.spiral_vase (spiral.h), after stage 2 the layers above the
+ * bottom ones keep their largest island's outline, get no infill, and
+ * those that are one outer wall are marked layer_paths.spiral.
  * struct slicer_summary says which stages produced paths.
  * Each chunk of walls carries its own seam memory, warmed up on the layer
  * below the chunk, and infill is ordered from where the layer below ended,
@@ -151,6 +154,16 @@ struct slicer_summary {
  * layers, one skirt loop, no support, a 200 x 200 x 200 mm bed.
  */
 void slicer_config_init(struct slicer_config *c, double nozzle_diameter);
+
+/*
+ * slicer_config_modes - c as its print modes print it (PrusaSlicer's
+ * normalisation): with gcodew.spiral_vase one wall (perimeters 1), no top
+ * layers (top_solid_layers and top_solid_min_thickness 0) and no infill
+ * (density 0); otherwise c is left alone.  slicer_toolpaths and slicer_run
+ * apply it after slicer_config_check; callers apply it to report the
+ * values printed with.
+ */
+void slicer_config_modes(struct slicer_config *c);
 
 /*
  * slicer_config_check - refuse settings that cannot make a print before any

@@ -37,6 +37,16 @@ void slicer_config_init(struct slicer_config *c, double nozzle_diameter)
 	c->bed = (struct slicer_bed){.max_x = 200, .max_y = 200, .max_height = 200};
 }
 
+void slicer_config_modes(struct slicer_config *c)
+{
+	if (!c->gcodew.spiral_vase)
+		return;
+	c->perim.perimeters = 1;
+	c->infill.top_solid_layers = 0;
+	c->infill.top_solid_min_thickness = 0;
+	c->infill.density = 0;
+}
+
 int slicer_config_check(const struct slicer_config *c, struct st_error *err)
 {
 	int rc;
@@ -72,6 +82,10 @@ int slicer_config_check(const struct slicer_config *c, struct st_error *err)
 				    "top_solid_layers = %d, bottom_solid_layers = %d: layer counts "
 				    "cannot be negative; use 0 or more",
 				    c->infill.top_solid_layers, c->infill.bottom_solid_layers);
+	if (c->gcodew.spiral_vase && c->support.enabled)
+		return st_error_set(err, ST_ERR_RANGE,
+				    "spiral_vase = 1 cannot print support material "
+				    "(support_material = 1), as in PrusaSlicer; turn one of them off");
 	if (c->support.threshold < 0 || c->support.threshold > 90)
 		return st_error_set(err, ST_ERR_RANGE,
 				    "support_material_threshold = %d is out of range; use 0 "

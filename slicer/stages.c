@@ -145,5 +145,8 @@ int stage_infill_job(const struct slicer_config *c, const struct slice_stack *st
 	s.infill_extrusion_width = width_or(c->infill.infill_extrusion_width, c);
 	s.solid_infill_extrusion_width = width_or(c->infill.solid_infill_extrusion_width, c);
 	s.top_infill_extrusion_width = width_or(c->infill.top_infill_extrusion_width, c);
-	return infill_job_new(&s, st, job, err);
+	s.ironing = c->gcodew.ironing;
+	s.ironing_spacing = c->gcodew.ironing_spacing;
+	rc = iron_type_parse(c->gcodew.ironing_type, &s.ironing_type, err);
+	return rc ? rc : infill_job_new(&s, st, job, err);
 }

@@ -87,6 +87,7 @@ const char *path_role_name(enum path_role role)
 		[PATH_BRIM] = "Skirt/Brim",
 		[PATH_SUPPORT] = "Support material",
 		[PATH_SUPPORT_INTERFACE] = "Support material interface",
+		[PATH_IRONING] = "Ironing",
 	};
 	return (unsigned)role < PATH_ROLES ? names[role] : "Unknown";
 }

@@ -43,6 +43,7 @@ enum path_role {
 	PATH_BRIM,		  /* brim loops attached to the first layer */
 	PATH_SUPPORT,		  /* support body */
 	PATH_SUPPORT_INTERFACE,	  /* dense support layers under the part */
+	PATH_IRONING,		  /* second pass over a top surface at low flow (infill.h) */
 	PATH_ROLES		  /* number of roles */
 };
 
@@ -71,6 +72,9 @@ struct layer_paths {
 	/* The layer's region for travels that avoid crossing perimeters
 	 * (travel.h), owned; NULL: travels go straight. */
 	struct travel_map *travel;
+	/* Spiral vase: the layer is one closed outer wall, printed with Z
+	 * rising from z - height to z along its length (gcode_writer.h). */
+	bool spiral;
 };
 
 /* Every layer of one print, bottom to top. */

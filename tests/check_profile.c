@@ -632,6 +632,48 @@ START_TEST(test_write_round_trip)
 }
 END_TEST
 
+/* The ironing and spiral vase keys: their defaults, and a percentage that
+ * is not fill_density's written back as itself (file and JSON). */
+START_TEST(test_print_mode_keys)
+{
+	struct profile *p = load_ok(""), *b = NULL;
+	struct st_error err = {0};
+	const char *path = tu_path("modes.ini");
+	FILE *f;
+	json_t *o;
+
+	ck_assert(!p->spiral_vase && !p->ironing);
+	ck_assert_str_eq(p->ironing_type, "top");
+	assert_close(p->ironing_flowrate, 15);
+	assert_close(p->ironing_spacing, 0.1);
+	assert_close(p->ironing_speed, 15);
+	profile_free(p);
+	p = load_ok("spiral_vase = 1\nironing = 1\nironing_type = solid\n"
+		    "ironing_flowrate = 10%\nironing_spacing = 0.2\nironing_speed = 25\n");
+	ck_assert(p->spiral_vase && p->ironing);
+	ck_assert_str_eq(p->ironing_type, "solid");
+	assert_close(p->ironing_flowrate, 10);
+	f = fopen(path, "w");
+	ck_assert_ptr_nonnull(f);
+	ck_assert_int_eq(profile_write(p, f), 0);
+	ck_assert_int_eq(fclose(f), 0);
+	ck_assert_msg(profile_load_file(path, &b, &err) == 0, "%s", err.msg);
+	assert_close(b->ironing_flowrate, 10);
+	assert_close(b->fill_density, 20);
+	assert_close(b->ironing_spacing, 0.2);
+	assert_close(b->ironing_speed, 25);
+	o = profile_to_json(p);
+	assert_close(json_real_value(json_object_get(json_object_get(o, "settings"),
+						     "ironing_flowrate")),
+		     10);
+	json_decref(o);
+	load_bad("ironing_type = everything\n", ST_ERR_PARSE, "ironing_type", "topmost", NULL);
+	load_bad("ironing_flowrate = 150%\n", ST_ERR_RANGE, "ironing_flowrate", NULL);
+	profile_free(p);
+	profile_free(b);
+}
+END_TEST
+
 START_TEST(test_json)
 {
 	struct profile *p = load_shipped("flashforge-creator-pro");
@@ -961,6 +1003,7 @@ Suite *profile_suite(void)
 
 	tcase_add_test(access, test_raw_keys);
 	tcase_add_test(access, test_write_round_trip);
+	tcase_add_test(access, test_print_mode_keys);
 	tcase_add_test(access, test_json);
 	suite_add_tcase(s, access);
 

@@ -715,10 +715,10 @@ START_TEST(load_order_and_set)
 		      out);
 	/* An unsupported key is named once, with its value. */
 	status = tu_run(out, sizeof(out),
-			"slice '%s' -o '%s' --load '%s' --set spiral_vase=1 --set ironing=1", model,
-			gc, a);
-	ck_assert_msg(status == 0 && strstr(out, "warning: not supported, ignored: spiral_vase=1, "
-						 "ironing=1\n"),
+			"slice '%s' -o '%s' --load '%s' --set fuzzy_skin=random --set complete_objects=1",
+			model, gc, a);
+	ck_assert_msg(status == 0 && strstr(out, "warning: not supported, ignored: fuzzy_skin=random, "
+						 "complete_objects=1\n"),
 		      "exit %d: %s", status, out);
 	/* The raft is printed: its keys are not named, a raft key Stratum
 	 * does not print is, and the header lists the values used. */
@@ -733,6 +733,21 @@ START_TEST(load_order_and_set)
 	ck_assert_msg(strstr(gcode, "; raft_layers = 3\n") && strstr(gcode, "; raft_expansion = 2\n"),
 		      "raft header");
 	ck_assert_msg(strstr(gcode, ";TYPE:Support material interface\n"), "raft paths");
+	/* Spiral vase and ironing are printed, so not named. */
+	status = tu_run(out, sizeof(out),
+			"slice '%s' -o '%s' --load '%s' --set spiral_vase=1 --set ironing=1 "
+			"--set ironing_type=solid --set ironing_flowrate=10%% --set ironing_speed=20",
+			model, gc, a);
+	ck_assert_msg(status == 0 && !strstr(out, "not supported"), "exit %d: %s", status, out);
+	/* the summary shows what is printed: no infill (the vase's), and the ironing */
+	ck_assert_msg(strstr(out, " sparse (0% ") && strstr(out, " ironing\n") &&
+			      !strstr(out, " 0 ironing\n"),
+		      "%s", out);
+	slurp(gc, gcode, sizeof(gcode));
+	ck_assert_msg(strstr(gcode, "; spiral_vase = 1\n; ironing = 1\n; ironing_type = solid\n"
+				    "; ironing_flowrate = 10%\n; ironing_spacing = 0.1\n"
+				    "; ironing_speed = 20\n"),
+		      "header");
 }
 END_TEST
 

@@ -1042,5 +1042,6 @@ Suite *slicer_suite(void)
 	tcase_add_test(tc, retract_only_between_islands);
 	tcase_add_test(tc, gcode_same_for_any_thread_count);
 	suite_add_tcase(s, tc);
+	slicer_modes_tcases(s);
 	return s;
 }

@@ -16,6 +16,7 @@
 #include "section.h"
 #include "skirt.h"
 #include "suites.h"
+#include "testutil.h"
 #include "support.h"
 #include "toolpath.h"
 
@@ -97,18 +98,9 @@ static double box_dist(double x, double y, double x0, double y0, double x1, doub
 	return -fmin(fmin(x - x0 * NM, x1 * NM - x), fmin(y - y0 * NM, y1 * NM - y));
 }
 
-static size_t count_role(const struct layer_paths *l, enum path_role role)
-{
-	size_t c = 0;
-
-	for (size_t i = 0; i < l->n; i++)
-		c += l->paths[i].role == role;
-	return c;
-}
-
 static size_t count_support(const struct layer_paths *l)
 {
-	return count_role(l, PATH_SUPPORT) + count_role(l, PATH_SUPPORT_INTERFACE);
+	return tu_count_role(l, PATH_SUPPORT) + tu_count_role(l, PATH_SUPPORT_INTERFACE);
 }
 
 /* Smallest and largest distance from the points of path p to a box. */
@@ -237,7 +229,7 @@ START_TEST(skirt_one_loop_around_cube)
 	ls = skirt_ok(&s, st, NULL);
 	double sp = perim_spacing(s.extrusion_width, 0.2) * NM;
 	for (size_t l = 0; l < 2; l++) {
-		ck_assert_uint_eq(count_role(&ls->layers[l], PATH_SKIRT), 3);
+		ck_assert_uint_eq(tu_count_role(&ls->layers[l], PATH_SKIRT), 3);
 		for (size_t k = 0; k < 3; k++) {
 			assert_at(&ls->layers[l].paths[k], cube_box, want + (2 - (double)k) * sp,
 				  "skirt loop", k);
@@ -285,7 +277,7 @@ START_TEST(brim_attached_to_part)
 	const struct layer_paths *l = &ls->layers[0];
 
 	ck_assert_uint_eq(want, 13);
-	ck_assert_uint_eq(count_role(l, PATH_BRIM), want);
+	ck_assert_uint_eq(tu_count_role(l, PATH_BRIM), want);
 	ck_assert_uint_eq(l->n, want);
 	/* Outermost first; the last loop's inner edge touches the part. */
 	for (size_t k = 0; k < want; k++) {
@@ -379,7 +371,7 @@ static void check_cantilever(enum support_style style)
 	ck_assert(fabs(st->layers[25].z - 5.2) < 1e-9);
 	for (size_t j = 0; j < ls->nlayers; j++) {
 		const struct layer_paths *l = &ls->layers[j];
-		size_t body = count_role(l, PATH_SUPPORT), face = count_role(l, PATH_SUPPORT_INTERFACE);
+		size_t body = tu_count_role(l, PATH_SUPPORT), face = tu_count_role(l, PATH_SUPPORT_INTERFACE);
 		if (j >= 24) {
 			ck_assert_msg(l->n == 0, "layer %zu has %zu paths", j, l->n);
 			continue;
@@ -668,10 +660,10 @@ START_TEST(support_settings_refused)
 	s.support_material_contact_distance = 0;
 	layer_stack_free(ls);
 	ls = support_ok(&s, st);
-	ck_assert_uint_gt(count_role(&ls->layers[24], PATH_SUPPORT), 0);
+	ck_assert_uint_gt(tu_count_role(&ls->layers[24], PATH_SUPPORT), 0);
 	ck_assert_uint_eq(count_support(&ls->layers[25]), 0);
 	for (size_t j = 0; j < ls->nlayers; j++)
-		ck_assert_uint_eq(count_role(&ls->layers[j], PATH_SUPPORT_INTERFACE), 0);
+		ck_assert_uint_eq(tu_count_role(&ls->layers[j], PATH_SUPPORT_INTERFACE), 0);
 	layer_stack_free(ls);
 	layer_stack_free(short_ls);
 	slice_stack_free(st);
