@@ -1,7 +1,7 @@
 /*
  * hull.h - private to repair/: the outer hull of a self-intersection-free
  * exact mesh (seed 000 Algorithms 1 and 2, with cavities kept) and the
- * manifold-connected split (Def. 3.10).  repair.c and parts.c use it.
+ * manifold-connected split (Def. 3.10).  repair_core.c and parts.c use it.
  */
 #ifndef STRATUM_REPAIR_HULL_H
 #define STRATUM_REPAIR_HULL_H

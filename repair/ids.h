@@ -52,6 +52,23 @@ static inline void sort3(const uint32_t in[3], uint32_t out[3])
 	out[2] = c;
 }
 
+/* A triangle by its sorted corners (sort3) and its index t. */
+struct tri_key {
+	uint32_t v[3];
+	uint32_t t;
+};
+
+/* qsort order of tri_key: by corners, equal triangles by index. */
+static inline int tri_key_compare(const void *a, const void *b)
+{
+	const struct tri_key *x = a, *y = b;
+
+	for (int k = 0; k < 3; k++)
+		if (x->v[k] != y->v[k])
+			return x->v[k] < y->v[k] ? -1 : 1;
+	return x->t < y->t ? -1 : x->t > y->t;
+}
+
 /* An id and how many shells enclose it: sorted outermost first, then by id. */
 struct id_depth {
 	uint32_t depth, id;

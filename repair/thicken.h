@@ -1,6 +1,6 @@
 /*
  * thicken.h - private to repair/: sheets into thin closed slabs (seed 000
- * §4.2.1).  repair.c is the only user.
+ * §4.2.1).  repair_core.c is the only user.
  */
 #ifndef STRATUM_REPAIR_THICKEN_H
 #define STRATUM_REPAIR_THICKEN_H

@@ -1,7 +1,8 @@
 /*
- * emesh.cpp - exact meshes for the repair (exact.h, "exact mesh"): exact
- * self-intersection resolution (seed 000 §4.1) and the exact predicates the
- * outer-hull growing, containment and wire tests need.
+ * emesh.cpp - exact meshes for the repair (exact.h, "exact mesh"): building,
+ * appending and selecting, and exact self-intersection resolution (seed 000
+ * §4.1).  The queries the outer-hull growing, containment and wire tests
+ * make of a mesh are in equery.cpp.
  *
  * Vertices read from a file are doubles and exact as they are; only the
  * points created where triangles cross are rationals (CGAL Epeck), kept in a
@@ -39,6 +40,9 @@ namespace
 {
 
 using boxpairs::Box;
+using emesh::epoint;
+using emesh::finite3;
+using emesh::ipoint;
 using boxpairs::box_coord;
 using retri::cuts;
 using retri::add_intersection;
@@ -52,20 +56,6 @@ struct tri_hash {
 		       (static_cast<size_t>(t[1]) * 0xc2b2ae3d27d4eb4full) ^ t[2];
 	}
 };
-
-EPoint epoint(const exact_mesh &m, uint32_t v)
-{
-	if (m.slot[v] >= 0)
-		return m.ex[static_cast<size_t>(m.slot[v])];
-	const std::array<double, 3> &a = m.approx[v];
-	return EPoint(a[0], a[1], a[2]);
-}
-
-IK::Point_3 ipoint(const exact_mesh &m, uint32_t v)
-{
-	const std::array<double, 3> &a = m.approx[v];
-	return IK::Point_3(a[0], a[1], a[2]);
-}
 
 bool tri_is_double(const exact_mesh &m, size_t t)
 {
@@ -374,216 +364,7 @@ void refine(exact_mesh &m, int threads, exact_refine_stats &st)
 	m.parent_whole.swap(parent_whole);
 }
 
-/* Exact comparison of two vertices, lexicographic on (x, y, z). */
-CGAL::Comparison_result compare_vertices(const exact_mesh &m, uint32_t a, uint32_t b)
-{
-	if (m.slot[a] < 0 && m.slot[b] < 0) {
-		const std::array<double, 3> &p = m.approx[a], &q = m.approx[b];
-		for (int k = 0; k < 3; k++)
-			if (p[k] != q[k])
-				return p[k] < q[k] ? CGAL::SMALLER : CGAL::LARGER;
-		return CGAL::EQUAL;
-	}
-	return CGAL::compare_xyz(epoint(m, a), epoint(m, b));
-}
-
-/* See exact_mesh_seed. */
-void find_seed(const exact_mesh &m, const uint32_t *list, size_t n, uint32_t &seed, bool &flip)
-{
-	uint32_t v0 = m.tris[list[0]][0];
-	for (size_t i = 0; i < n; i++)
-		for (uint32_t v : m.tris[list[i]])
-			if (compare_vertices(m, v, v0) == CGAL::LARGER)
-				v0 = v;
-	const EPoint p0 = epoint(m, v0);
-
-	/* Edge at v0 whose direction has the smallest |x| part:
-	 * dx_i^2 / |e_i|^2 compared by cross-multiplying, exactly. */
-	bool have = false;
-	uint32_t w0 = 0;
-	EFT best_dx2, best_len2;
-	for (size_t i = 0; i < n; i++) {
-		const auto &t = m.tris[list[i]];
-		for (int k = 0; k < 3; k++) {
-			if (t[k] != v0)
-				continue;
-			for (int j = 1; j <= 2; j++) {
-				const uint32_t w = t[(k + j) % 3];
-				const EK::Vector_3 d = epoint(m, w) - p0;
-				const EFT dx2 = d.x() * d.x(), len2 = d.squared_length();
-				if (!have || dx2 * best_len2 < best_dx2 * len2) {
-					have = true;
-					w0 = w;
-					best_dx2 = dx2;
-					best_len2 = len2;
-				}
-			}
-		}
-	}
-	/* Triangle at edge v0-w0 whose normal has the largest |x| part. */
-	have = false;
-	EFT best_nx2, best_n2;
-	for (size_t i = 0; i < n; i++) {
-		const auto &t = m.tris[list[i]];
-		const bool has_v = t[0] == v0 || t[1] == v0 || t[2] == v0;
-		const bool has_w = t[0] == w0 || t[1] == w0 || t[2] == w0;
-		if (!has_v || !has_w)
-			continue;
-		const EK::Vector_3 nrm =
-		    CGAL::normal(epoint(m, t[0]), epoint(m, t[1]), epoint(m, t[2]));
-		const EFT nx2 = nrm.x() * nrm.x(), n2 = nrm.squared_length();
-		if (!have || nx2 * best_n2 > best_nx2 * n2) {
-			have = true;
-			seed = list[i];
-			flip = CGAL::sign(nrm.x()) == CGAL::NEGATIVE;
-			best_nx2 = nx2;
-			best_n2 = n2;
-		}
-	}
-}
-
-/* Directions for parity rays: skewed so axis-aligned models rarely graze. */
-EK::Vector_3 ray_direction(int k)
-{
-	static const int dirs[][3] = {{1000, 271, 137},	  {-311, 1000, 473}, {213, -389, 1000},
-				      {-1000, -157, 611}, {577, 1000, -293}, {-431, 619, -1000}};
-	const int nd = static_cast<int>(sizeof(dirs) / sizeof(dirs[0]));
-	if (k < nd)
-		return EK::Vector_3(dirs[k][0], dirs[k][1], dirs[k][2]);
-	/* Past the table: a deterministic spread of other directions. */
-	unsigned h = 2654435761u * static_cast<unsigned>(k + 1);
-	int x = static_cast<int>(h % 2001) - 1000, y = static_cast<int>((h / 2001) % 2001) - 1000;
-	return EK::Vector_3(x, y, 997 - (k % 7) * 311);
-}
-
-/*
- * Whether a ray from p in direction d might meet the box lo..hi, in
- * doubles with a margin: a false "maybe" only costs an exact test.
- */
-bool ray_may_hit(const double p[3], const double d[3], const double lo[3], const double hi[3])
-{
-	double t0 = 0, t1 = HUGE_VAL;
-	for (int k = 0; k < 3; k++) {
-		const double margin = 1e-9 * (1 + std::fabs(lo[k]) + std::fabs(hi[k]));
-		const double l = lo[k] - margin, h = hi[k] + margin;
-		if (d[k] == 0) {
-			if (p[k] < l - 1e-9 || p[k] > h + 1e-9)
-				return false;
-			continue;
-		}
-		double a = (l - p[k]) / d[k], b = (h - p[k]) / d[k];
-		if (a > b)
-			std::swap(a, b);
-		t0 = std::max(t0, a - 1e-9);
-		t1 = std::min(t1, b + 1e-9);
-		if (t0 > t1)
-			return false;
-	}
-	return true;
-}
-
-/*
- * Exact ray parity of point p against the closed triangles listed; a ray
- * through an edge, a vertex or in a triangle's plane is re-cast.
- */
-bool point_inside(const exact_mesh &m, const uint32_t *closed, size_t n, const EPoint &p)
-{
-	const double pd[3] = {CGAL::to_double(p.x()), CGAL::to_double(p.y()),
-			      CGAL::to_double(p.z())};
-	for (int attempt = 0; attempt < 64; attempt++) {
-		const EK::Vector_3 dir = ray_direction(attempt);
-		const double dd[3] = {CGAL::to_double(dir.x()), CGAL::to_double(dir.y()),
-				      CGAL::to_double(dir.z())};
-		const EK::Ray_3 ray(p, dir);
-		size_t crossings = 0;
-		bool graze = false;
-		for (size_t i = 0; i < n && !graze; i++) {
-			const auto &t = m.tris[closed[i]];
-			double lo[3], hi[3];
-			for (int k = 0; k < 3; k++) {
-				lo[k] = std::min(std::min(m.approx[t[0]][k], m.approx[t[1]][k]),
-						 m.approx[t[2]][k]);
-				hi[k] = std::max(std::max(m.approx[t[0]][k], m.approx[t[1]][k]),
-						 m.approx[t[2]][k]);
-			}
-			if (!ray_may_hit(pd, dd, lo, hi))
-				continue;
-			const EPoint a = epoint(m, t[0]), b = epoint(m, t[1]), c = epoint(m, t[2]);
-			const EK::Triangle_3 tri(a, b, c);
-			if (!CGAL::do_intersect(ray, tri))
-				continue;
-			auto r = CGAL::intersection(ray, tri);
-			const EPoint *x = r ? boost::get<EPoint>(&*r) : nullptr;
-			if (!x) {
-				graze = true; /* the ray runs in the triangle's plane */
-				break;
-			}
-			if (*x == p)
-				throw std::logic_error("probe point lies on the surface");
-			if (CGAL::collinear(a, b, *x) || CGAL::collinear(b, c, *x) ||
-			    CGAL::collinear(c, a, *x))
-				graze = true;
-			else
-				crossings++;
-		}
-		if (!graze)
-			return crossings % 2 == 1;
-	}
-	throw std::runtime_error("every parity ray grazed an edge");
-}
-
-/* See exact_segment_hidden. */
-bool segment_hidden(const exact_mesh &m, const uint32_t *surface, size_t ns,
-		    const uint32_t *closed, size_t nc, const EPoint &p, const EPoint &q)
-{
-	const EK::Segment_3 s(p, q);
-	const EK::Vector_3 d = q - p;
-	const EFT len2 = d.squared_length();
-	std::vector<EFT> cutsat = {EFT(0), EFT(1)};
-	auto param = [&](const EPoint &x) { return ((x - p) * d) / len2; };
-
-	/* Where the segment meets the surface splits it into pieces that are
-	 * each wholly on the surface or wholly off it. */
-	for (size_t i = 0; i < ns; i++) {
-		const auto &t = m.tris[surface[i]];
-		const EK::Triangle_3 tri(epoint(m, t[0]), epoint(m, t[1]), epoint(m, t[2]));
-		if (!CGAL::do_intersect(s, tri))
-			continue;
-		auto r = CGAL::intersection(s, tri);
-		if (!r)
-			continue;
-		if (const EPoint *x = boost::get<EPoint>(&*r)) {
-			cutsat.push_back(param(*x));
-		} else if (const EK::Segment_3 *g = boost::get<EK::Segment_3>(&*r)) {
-			cutsat.push_back(param(g->source()));
-			cutsat.push_back(param(g->target()));
-		}
-	}
-	std::sort(cutsat.begin(), cutsat.end());
-	cutsat.erase(std::unique(cutsat.begin(), cutsat.end()), cutsat.end());
-	for (size_t k = 0; k + 1 < cutsat.size(); k++) {
-		const EPoint mid = p + d * ((cutsat[k] + cutsat[k + 1]) / 2);
-		bool on_surface = false;
-		for (size_t i = 0; i < ns && !on_surface; i++) {
-			const auto &t = m.tris[surface[i]];
-			const EK::Triangle_3 tri(epoint(m, t[0]), epoint(m, t[1]),
-						 epoint(m, t[2]));
-			on_surface = tri.has_on(mid);
-		}
-		if (on_surface)
-			continue;
-		if (nc == 0 || !point_inside(m, closed, nc, mid))
-			return false;
-	}
-	return true;
-}
-
 using emesh::fail;
-
-bool finite3(const double p[3])
-{
-	return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
-}
 
 } /* namespace */
 
@@ -851,84 +632,6 @@ int exact_mesh_refine(struct exact_mesh *m, int threads, struct exact_refine_sta
 		return ST_OK;
 	} catch (...) {
 		return fail(err, "resolving self-intersections");
-	}
-}
-
-int exact_mesh_orient3d(const struct exact_mesh *m, uint32_t a, uint32_t b, uint32_t c,
-			uint32_t d)
-{
-	try {
-		CGAL::Orientation o;
-		if (m->slot[a] < 0 && m->slot[b] < 0 && m->slot[c] < 0 && m->slot[d] < 0)
-			o = CGAL::orientation(ipoint(*m, a), ipoint(*m, b), ipoint(*m, c),
-					      ipoint(*m, d));
-		else
-			o = CGAL::orientation(epoint(*m, a), epoint(*m, b), epoint(*m, c),
-					      epoint(*m, d));
-		return o == CGAL::POSITIVE ? 1 : o == CGAL::NEGATIVE ? -1 : 0;
-	} catch (...) {
-		return 0;
-	}
-}
-
-int exact_mesh_seed(const struct exact_mesh *m, const uint32_t *tris, size_t n, uint32_t *seed,
-		    bool *flip, struct st_error *err)
-{
-	if (!m || !tris || n == 0 || !seed || !flip)
-		return st_error_set(err, ST_ERR_ARG, "exact: seed needs a non-empty triangle list");
-	for (size_t i = 0; i < n; i++)
-		if (tris[i] >= m->tris.size())
-			return st_error_set(err, ST_ERR_ARG, "exact: seed candidate %lu out of range",
-					    (unsigned long)tris[i]);
-	try {
-		*seed = tris[0];
-		*flip = false;
-		find_seed(*m, tris, n, *seed, *flip);
-		return ST_OK;
-	} catch (...) {
-		return fail(err, "choosing the seed triangle");
-	}
-}
-
-int exact_mesh_inside(const struct exact_mesh *m, const uint32_t *closed, size_t n,
-		      uint32_t probe, bool *inside, struct st_error *err)
-{
-	if (!inside)
-		return st_error_set(err, ST_ERR_ARG, "exact: answer pointer is NULL");
-	*inside = false;
-	if (!m || (n && !closed) || probe >= m->tris.size())
-		return st_error_set(err, ST_ERR_ARG, "exact: bad containment query");
-	try {
-		const auto &t = m->tris[probe];
-		const EPoint c = CGAL::centroid(epoint(*m, t[0]), epoint(*m, t[1]),
-						epoint(*m, t[2]));
-		*inside = point_inside(*m, closed, n, c);
-		return ST_OK;
-	} catch (...) {
-		return fail(err, "testing containment");
-	}
-}
-
-int exact_segment_hidden(const struct exact_mesh *m, const uint32_t *surface, size_t n_surface,
-			 const uint32_t *closed, size_t n_closed, const double p[3],
-			 const double q[3], bool *hidden, struct st_error *err)
-{
-	if (!hidden)
-		return st_error_set(err, ST_ERR_ARG, "exact: answer pointer is NULL");
-	*hidden = false;
-	if (!m || (n_surface && !surface) || (n_closed && !closed) || !p || !q || !finite3(p) ||
-	    !finite3(q))
-		return st_error_set(err, ST_ERR_ARG, "exact: bad wire query");
-	try {
-		const EPoint a(p[0], p[1], p[2]), b(q[0], q[1], q[2]);
-		if (a == b) {
-			*hidden = true; /* a point draws nothing */
-			return ST_OK;
-		}
-		*hidden = segment_hidden(*m, surface, n_surface, closed, n_closed, a, b);
-		return ST_OK;
-	} catch (...) {
-		return fail(err, "testing a wire");
 	}
 }
 

@@ -1,6 +1,7 @@
 /*
  * emesh.hpp - private to repair/exact: the layout of struct exact_mesh,
- * shared by the refinement (emesh.cpp) and the snap rounding (snap.cpp).
+ * shared by the refinement (emesh.cpp), the queries (equery.cpp) and the
+ * snap rounding (snap.cpp).
  */
 #ifndef STRATUM_REPAIR_EXACT_EMESH_HPP
 #define STRATUM_REPAIR_EXACT_EMESH_HPP
@@ -9,6 +10,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <exception>
 #include <new>
@@ -53,6 +55,28 @@ struct exact_mesh {
 
 namespace emesh
 {
+
+/* Vertex v of m as an exact point. */
+inline EPoint epoint(const exact_mesh &m, uint32_t v)
+{
+	if (m.slot[v] >= 0)
+		return m.ex[static_cast<size_t>(m.slot[v])];
+	const std::array<double, 3> &a = m.approx[v];
+	return EPoint(a[0], a[1], a[2]);
+}
+
+/* Vertex v of m as a double point (exact only for a double vertex). */
+inline IK::Point_3 ipoint(const exact_mesh &m, uint32_t v)
+{
+	const std::array<double, 3> &a = m.approx[v];
+	return IK::Point_3(a[0], a[1], a[2]);
+}
+
+/* Whether all three coordinates of p are finite. */
+inline bool finite3(const double p[3])
+{
+	return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
+}
 
 /* Turn the current exception into an error class and message. */
 inline int fail(struct st_error *err, const char *what)

@@ -197,7 +197,12 @@ bool for_each_pair(std::vector<Box> &boxes, const std::vector<uint32_t> &use, in
 	off[0] = 0;
 
 	/* A pair is visited in the bucket of the cell holding the low corner
-	 * of the two boxes' intersection: a cell both boxes cover. */
+	 * of the two boxes' intersection: a cell both boxes cover.  keep()
+	 * goes first: most overlapping pairs are neighbours it turns away,
+	 * and finding that cell first cost three cell_of for each of them
+	 * (2 % of the instructions of reading and counting a 1M-triangle
+	 * sphere, 15 million overlapping pairs of which 2.3 million share
+	 * no corner). */
 	const size_t chunk = 4096;
 	boxpairs::for_each_index((nb + chunk - 1) / chunk, threads, [&](size_t c) {
 		const size_t end_b = std::min(nb, (c + 1) * chunk);
@@ -212,13 +217,13 @@ bool for_each_pair(std::vector<Box> &boxes, const std::vector<uint32_t> &use, in
 					if (t == entry[j - 1])
 						continue;
 					const Box &bt = sorted[t];
-					if (!overlap(bs, bt))
+					if (!overlap(bs, bt) || !keep(id[s], id[t]))
 						continue;
 					const uint64_t at = bucket_of(
 					    g, cell_of(g, 0, std::max(bs.min_coord(0), bt.min_coord(0))),
 					    cell_of(g, 1, std::max(bs.min_coord(1), bt.min_coord(1))),
 					    cell_of(g, 2, std::max(bs.min_coord(2), bt.min_coord(2))));
-					if (at == b && keep(id[s], id[t]))
+					if (at == b)
 						visit(id[s], id[t]);
 				}
 			}
