@@ -441,17 +441,28 @@ static int s3g_send(struct s3g *s, const uint8_t *payload, size_t len, uint8_t *
 		if (r < 0)
 			return r;
 		if (r == 0 || r == S3G_GARBLED) {
+			/* silence bounds the tries (a dead link); damaged
+			 * replies are the printer answering through noise, so
+			 * they count as rejects (at 2 % of reply bytes spoilt a
+			 * build-statistics query got six in a row) */
 			if (r == 0)
 				s->st.timeouts++;
 			else
 				s->st.garbled++;
-			if (++retries > s->o.max_retries)
+			if (r == 0 && ++retries > s->o.max_retries)
 				return s3g_why(s, S3G_FAIL_LINK,
 					       st_error_set(err, ST_ERR_IO,
 							    "no valid reply from the printer on %s "
 							    "to %s after %d tries of %d ms",
 							    xport_describe(s->x), what, retries,
 							    s->o.timeout_ms));
+			if (r == S3G_GARBLED && ++rejects > s->o.max_rejects)
+				return s3g_why(s, S3G_FAIL_LINK,
+					       st_error_set(err, ST_ERR_IO,
+							    "every reply from the printer on %s to "
+							    "%s came damaged (%d tries): check the "
+							    "cable and the baud rate",
+							    xport_describe(s->x), what, rejects));
 			s->st.retries++;
 			if (s3g_quiet(s, err) < 0)
 				return s3g_link_error(s, what, err);
@@ -513,6 +524,8 @@ static int s3g_send(struct s3g *s, const uint8_t *payload, size_t len, uint8_t *
 		case S3G_ACT_FAIL:
 			if (code == S3G_RC_QUERY_TOO_BIG && len <= S3G_MAX_PAYLOAD)
 				break; /* our length was fine: noise changed it */
+			if (code < S3G_RC_GENERIC_ERROR || code > S3G_RC_PACKET_TIMEOUT)
+				break; /* no such code: noise that CRC-8 missed */
 			return s3g_why(s, S3G_FAIL_PRINTER,
 				       st_error_set(err, ST_ERR_IO,
 						    "the printer answered %s with 0x%02X (%s)", what,
@@ -707,6 +720,7 @@ struct s3g_stream_ctx {
 	long base;		/* index of the last confirmed build start (153), -1 none */
 	uint32_t capacity;	/* largest free space seen (bytes) */
 	bool seen_running;	/* build statistics said running after our 153 */
+	bool running_before;	/* a build ran when the stream began */
 	uint32_t last_line;
 	double next_stats;
 	bool stats_due;		/* check now (after a time-out) */
@@ -770,8 +784,9 @@ static enum s3g_lost s3g_decide(struct s3g *s, void *ctx, struct st_error *err, 
 	*rc = s3g_check_reset(s, c, &b, err);
 	if (*rc)
 		return S3G_LOST_RESEND;
-	if (c->base < 0 || !(b.state == S3G_BUILD_RUNNING || b.state == S3G_BUILD_PAUSED) ||
-	    c->capacity == 0)
+	bool running = b.state == S3G_BUILD_RUNNING || b.state == S3G_BUILD_PAUSED;
+	bool starting = c->base < 0 && c->code[c->cur & S3G_HIST_MASK] == 153;
+	if ((c->base < 0 && !starting) || (!running && !starting) || c->capacity == 0)
 		goto unknown;
 	/* a stable snapshot: the free space did not move around the stats */
 	for (int tries = 0; tries < 50; tries++) {
@@ -784,6 +799,24 @@ static enum s3g_lost s3g_decide(struct s3g *s, void *ctx, struct st_error *err, 
 	}
 	if (f1 != f2 || f1 > c->capacity)
 		goto unknown;
+	running = b.state == S3G_BUILD_RUNNING || b.state == S3G_BUILD_PAUSED;
+	if (starting) {
+		/* the build start itself: no line count yet, but with no build
+		 * before ours, running means it ran, and the bytes queued say
+		 * whether it waits in the buffer (the only packet not yet run) */
+		uint64_t queued = c->capacity - f1;
+		if (c->running_before)
+			goto unknown;
+		if ((running && queued == 0) || (!running && queued == c->len[c->cur & S3G_HIST_MASK])) {
+			s->st.resolved++;
+			return S3G_LOST_QUEUED;
+		}
+		if (!running && queued == 0) {
+			s->st.resolved++;
+			return S3G_LOST_RESEND;
+		}
+		goto unknown;
+	}
 	{
 		size_t first = (size_t)c->base + 1 + b.line; /* first command still queued */
 		uint64_t queued = c->capacity - f1, without = 0;
@@ -944,8 +977,12 @@ int s3g_stream_pull(struct s3g *s, s3g_source_fn next, void *src, size_t total,
 	if ((rc = s3g_get_buffer_free(s, &free_est, err)))
 		goto out;
 	c->capacity = free_est;
-	if ((rc = s3g_check_reset(s, c, NULL, err)))
-		goto out;
+	{
+		struct s3g_build_stats b0;
+		if ((rc = s3g_check_reset(s, c, &b0, err)))
+			goto out;
+		c->running_before = b0.state == S3G_BUILD_RUNNING || b0.state == S3G_BUILD_PAUSED;
+	}
 	for (c->cur = 0;; c->cur++) {
 		struct s3g_cmd k;
 		double now = s3g_now();

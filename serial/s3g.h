@@ -25,7 +25,8 @@
  *   for a packet we know is <= 32 bytes (line noise turned the length byte
  *   into something larger) -> drain stray replies, resend; bounded by
  *                              max_rejects, apart from the time-outs'
- *                              max_retries (a reply shows the link alive)
+ *                              max_retries (a reply shows the link alive);
+ *                              so are replies damaged on the way (bad CRC)
  *   0x85 unsupported        -> skip the command, count it
  *   0x87, 0x89 cancelled on the printer, 0x8A building from SD, 0x8B
  *   overheat                -> stop with an error naming the code
@@ -210,7 +211,7 @@ int s3g_action_length(const uint8_t *buf, size_t avail);
 struct s3g_options {
 	int timeout_ms;		 /* wait for a reply (ms); default 1000 (GPX: 1 s) */
 	int max_retries;	 /* time-outs per packet; default 5 (s3g doc) */
-	int max_rejects;	 /* retryable error replies per packet; default 30:
+	int max_rejects;	 /* retryable error or damaged replies per packet; default 30:
 				  * the printer answers, so the link is alive but
 				  * noisy, and at 1 % of bytes hit 30 % of 35-byte
 				  * packets are spoilt: 5 tries give up once in
