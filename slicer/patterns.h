@@ -1,8 +1,9 @@
 /*
- * patterns.h - infill line patterns (private to slicer/infill.c): open
- * polylines covering a bounding box, in nm, to be clipped to the region
- * they fill.  Every pattern is anchored to the bed origin, so the same
- * parameters give the same lines on every layer and sparse infill stacks.
+ * patterns.h - infill line patterns (private to slicer/infill_fill.c and
+ * ironing.c): open polylines covering a bounding box, in nm, to be clipped
+ * to the region they fill.  Every pattern is anchored to the bed origin,
+ * so the same parameters give the same lines on every layer and sparse
+ * infill stacks.
  */
 #ifndef STRATUM_SLICER_PATTERNS_H
 #define STRATUM_SLICER_PATTERNS_H

@@ -6,7 +6,7 @@
  *
  * The geometry stages (perimeters, thin walls, skins, infill, skirt, brim,
  * supports) append paths to a struct layer_paths in the order they should
- * print; the writer (gcode_writer.c) adds travel, retraction, flow, speed,
+ * print; the writer (gcode_writer.h) adds travel, retraction, flow, speed,
  * fan and temperature.  A layer_stack owns every layer of one print.
  *
  * Ownership: toolpath_* functions copy what they are given; layer_stack_free

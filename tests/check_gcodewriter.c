@@ -1,5 +1,5 @@
 /*
- * check_gcodewriter.c - slicer/gcode_writer.c and slicer/estimate.c: the
+ * check_gcodewriter.c - slicer/gcode_writer*.c and slicer/estimate.c: the
  * written G-code is parsed back with serial/gcode.h and replayed like a
  * printer would: extruded amounts per layer against the bead model,
  * retractions matched by unretractions, travel retraction and z-hop, layer

@@ -28,6 +28,7 @@ Suite *marlin_suite(void);	/* tests/check_marlin.c: Marlin driver against the si
 Suite *printer_suite(void);	/* tests/check_printer.c: printer.h adapters on both simulators */
 Suite *slicer_suite(void);	/* tests/check_slicer.c: slicing, Clipper bridge, walls */
 void slicer_modes_tcases(Suite *s); /* tests/check_modes.c: spiral vase, part of slicer */
+void slicer_travel_tcases(Suite *s); /* tests/check_travel.c: travel and retraction, part of slicer */
 Suite *gcodewriter_suite(void); /* tests/check_gcodewriter.c: G-code writer and estimator */
 Suite *infill_suite(void);	/* tests/check_infill.c: skins, bridges, infill */
 Suite *support_suite(void);	/* tests/check_support.c: skirt, brim, support material */
