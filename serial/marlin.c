@@ -304,12 +304,18 @@ static int marlin_handle(struct marlin *m, const char *line, size_t len, double 
 
 	marlin_trace(m, "<", line, len);
 	switch (kind) {
-	case MARLIN_REPLY_OK:
+	case MARLIN_REPLY_OK: {
+		/* before skip_ok: the ok after a Resend is a bare "ok"; a
+		 * probe's answer that acknowledged nothing is no progress */
+		long acked = m->n_acked;
+		m->probed = false;
+		if (r.has_temps && marlin_m105_answer(m)) {
+			if (m->n_acked != acked)
+				m->t_progress = now;
+			break;
+		}
 		m->t_progress = now;
 		m->probed = false;
-		/* before skip_ok: the ok after a Resend is a bare "ok" */
-		if (r.has_temps && marlin_m105_answer(m))
-			break;
 		if (m->skip_ok) {
 			m->skip_ok--;
 			break;
@@ -346,6 +352,7 @@ static int marlin_handle(struct marlin *m, const char *line, size_t len, double 
 		else
 			m->st.stray_oks++;
 		break;
+	}
 	case MARLIN_REPLY_RESEND:
 		m->t_progress = now;
 		m->skip_ok++;

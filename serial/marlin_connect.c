@@ -143,6 +143,7 @@ int marlin_connect(struct marlin *m, struct st_error *err)
 		m->n_acked_hi = m->n_taken = 1;
 		m->probed = false;
 		m->m105_n = m->phantom_n = m->phantom_bytes = 0;
+		m->m105_spent = false;
 		m->t_busy = 0;
 		marlin_hist_entry(m, 0)->n = 0;
 		marlin_hist_entry(m, 1)->n = 0; /* not resendable: connect lines are not kept */

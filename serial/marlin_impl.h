@@ -60,6 +60,7 @@ struct marlin_m105 {
 	uint64_t marks;	/* errors, Resends and unknown commands when written */
 	double t;	/* when (s) */
 	bool valid;	/* false: its answer may be another's, acknowledges nothing */
+	bool after_taken; /* the firmware had said it has line `after` */
 };
 
 /* An unnumbered emergency line (M108, M410): the emergency parser acts on
@@ -110,6 +111,8 @@ struct marlin {
 	unsigned silent_probes;	/* probes nothing answered since the last reply */
 	struct marlin_m105 m105[MARLIN_M105_MAX]; /* oldest first */
 	size_t m105_n;
+	bool m105_spent;	/* a probe's answer acknowledged nothing new: the
+				 * older probe's turn (until something moves) */
 	unsigned skip_ok;	/* oks that belong to Resend requests */
 	struct marlin_phantom phantom[MARLIN_PHANTOMS]; /* oldest first */
 	size_t phantom_n, phantom_bytes;

@@ -128,6 +128,7 @@ void marlin_ack_through(struct marlin *m, long n)
 		marlin_phantom_pop(m);
 	m->queued = m->queued > n - m->n_acked ? m->queued - (n - m->n_acked) : 0;
 	m->n_acked = n;
+	m->m105_spent = false;
 	if (n > m->n_acked_hi)
 		m->n_acked_hi = n;
 	if (m->n_send <= n)
@@ -172,14 +173,18 @@ static void marlin_unack_to(struct marlin *m, long n)
  * while we count fewer acknowledged: it is ahead of us.  Lines we had seen
  * acknowledged before an un-ack (a late Resend taken for a new one) are
  * done again; after a probe nothing answered the firmware is idle, so all
- * of them are done; the rest sit in its command queue, out of the RX ring,
+ * of them but the last are done (a long move may still run it); the rest
+ * sit in its command queue, out of the RX ring,
  * their oks to come.  Without this the window stays shut on lines the
  * firmware no longer holds and the host rewrites them for ever.
  */
 static void marlin_firmware_has(struct marlin *m, long have)
 {
+	m->m105_spent = false; /* an M105 probe may now vouch for `have` */
 	if (have > m->n_acked) {
-		long done = m->probed || m->n_acked_hi > have ? have : m->n_acked_hi;
+		/* after a probe nothing answered, all but the last it has ran
+		 * (that one may still be running: an M105 probe settles it) */
+		long done = m->n_acked_hi > have ? have : m->probed ? have - 1 : m->n_acked_hi;
 		if (done > m->n_acked) {
 			marlin_hist_entry(m, done)->t_sent = 0; /* no round-trip sample */
 			marlin_ack_through(m, done);
@@ -205,6 +210,7 @@ int marlin_resend(struct marlin *m, long k, struct st_error *err)
 				   "(was the printer reset?); %s",
 				   k, k > m->n_max_sent ? "never sent" : "no longer keeps", where);
 	}
+	m->m105_spent = false;
 	if (m->rewinding && k == m->rewind_k && m->stale_left > 0) {
 		/* caused by a copy written before our rewind: already handled */
 		m->stale_left--;
@@ -283,7 +289,7 @@ static bool marlin_m105_may(struct marlin *m, double now)
 		for (size_t i = 0; i < m->m105_n; i++)
 			m->m105[i].valid = false;
 	}
-	if (m->m105_n == MARLIN_M105_MAX ||
+	if (m->m105_spent || m->m105_n == MARLIN_M105_MAX ||
 	    (m->m105_n && now - m->m105[m->m105_n - 1].t < MARLIN_M105_AGAIN_S))
 		return false;
 	if (m->t_busy > 0 && now - m->t_busy < MARLIN_BUSY_HOLD_S)
@@ -299,7 +305,8 @@ static bool marlin_m105_may(struct marlin *m, double now)
 /* Write an M105 probe ("\n" first ends a fragment whose newline was lost). */
 static int marlin_m105_write(struct marlin *m, double now, struct st_error *err)
 {
-	m->m105[m->m105_n++] = (struct marlin_m105){m->n_send - 1, marlin_marks(m), now, true};
+	m->m105[m->m105_n++] = (struct marlin_m105){m->n_send - 1, marlin_marks(m), now, true,
+						    m->n_taken >= m->n_send - 1};
 	marlin_trace(m, ">", "M105", 4);
 	return marlin_write(m, MARLIN_M105_PROBE, sizeof(MARLIN_M105_PROBE) - 1, err);
 }
@@ -317,10 +324,18 @@ bool marlin_m105_answer(struct marlin *m)
 		return false;
 	struct marlin_m105 e = m->m105[0];
 	memmove(m->m105, m->m105 + 1, --m->m105_n * sizeof(m->m105[0]));
-	if (e.valid && e.marks == marlin_marks(m) && e.after > m->n_acked &&
-	    e.after < m->n_next && e.after <= m->n_max_sent) {
-		marlin_hist_entry(m, e.after)->t_sent = 0; /* no round-trip sample */
-		marlin_ack_through(m, e.after);
+	/* Not the last line before it, unless the firmware had said it has
+	 * it: a copy of it whose number noise turned into the one before was
+	 * dropped silently as a duplicate (queue.cpp drops last_N - 1 and
+	 * last_N), and only a line after it would have drawn a Resend.  The
+	 * older probe then asks where the firmware is. */
+	long upto = e.after_taken ? e.after : e.after - 1;
+	if (e.valid && e.marks == marlin_marks(m) && upto > m->n_acked && upto < m->n_next &&
+	    upto <= m->n_max_sent) {
+		marlin_hist_entry(m, upto)->t_sent = 0; /* no round-trip sample */
+		marlin_ack_through(m, upto);
+	} else if (!m->m105_n) {
+		m->m105_spent = true;
 	}
 	return true;
 }
@@ -365,7 +380,7 @@ int marlin_probe(struct marlin *m, double now, bool blocking, struct st_error *e
 	unsigned k = m->silent_probes++;
 	if (marlin_write(m, "\n", 1, err))
 		return ST_ERR_IO;
-	long n = m->n_acked - 1;
+	long n = m->n_acked - 2; /* below the two the firmware drops silently */
 	struct marlin_entry *e = marlin_hist_entry(m, n);
 	if (!k || (k & (k + 1)) || n < 1 || e->n != n)
 		return 0;

@@ -121,6 +121,7 @@ struct sim_marlin {
 
 	bool halted, unplugged;
 	bool frozen;		/* freeze_at_line ran: no byte in or out any more */
+	bool number_spoilt;	/* spoil_number_at happened */
 	double thaw_at;		/* when a freeze_s stall ends (sim_now) */
 
 	struct sim_thread th;
@@ -411,6 +412,11 @@ static void sim_accept_line(struct sim_marlin *s)
 				npos = n2;
 		}
 		n = sim_read_long(npos + 1, cmd + len);
+		if (s->o.spoil_number_at > 0 && n == s->o.spoil_number_at && n == s->last_n + 1 &&
+		    !s->number_spoilt) {
+			s->number_spoilt = true;
+			n = s->last_n;
+		}
 		if (n != s->last_n + 1 && !m110) {
 			/* A duplicate sent before the host saw our Resend: Marlin
 			 * 2.1 drops last-1 and last silently (no error, no ok). */

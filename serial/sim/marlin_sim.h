@@ -63,6 +63,10 @@ struct sim_marlin_options {
 	long busy_at_line;   /* this line holds the queue for busy_s wall seconds,
 			      * sending "echo:busy: processing" every 2 s; <= 0: never */
 	double busy_s;
+	long spoil_number_at; /* the first copy of this line arrives with its number
+			       * spoilt into the one before (noise on a digit of N):
+			       * dropped silently as a duplicate, as queue.cpp drops
+			       * last_N - 1 and last_N; <= 0: never */
 };
 
 /* Opaque simulator. */
