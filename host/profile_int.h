@@ -3,9 +3,10 @@
  * outside them includes it.  The public contract is profile.h.
  *
  *   profile.c        loading (through ini.h), freeing, raw key access
- *   profile_keys.c   key typing: the binding of each declared setting
+ *   profile_bind.c   the binding of each declared setting
  *                    (slicer/settings.h) to its struct profile field, and
  *                    the declared defaults
+ *   profile_keys.c   key typing: the parsers of every value type
  *   profile_check.c  checks between keys, and the slicer's own check
  *   profile_find.c   search directories, NAME lookup, listing
  *   profile_out.c    profile_write and profile_to_json
