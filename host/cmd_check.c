@@ -99,7 +99,6 @@ static int print_json(const char *path, enum meshio_format fmt, const struct mes
 	json_t *bbox = json_pack("{s:[f,f,f], s:[f,f,f]}", "min", r->bbox_min[0],
 				 r->bbox_min[1], r->bbox_min[2], "max", r->bbox_max[0],
 				 r->bbox_max[1], r->bbox_max[2]);
-	int rc;
 
 	json_object_set_new(o, "file", json_string(path));
 	json_object_set_new(o, "format", json_string(meshio_format_name(fmt)));
@@ -137,11 +136,7 @@ static int print_json(const char *path, enum meshio_format fmt, const struct mes
 	json_object_set_new(o, "reasons", reasons_json(r, 0, MESH_REASON_FIRST_WARNING));
 	json_object_set_new(o, "warnings",
 			    reasons_json(r, MESH_REASON_FIRST_WARNING, MESH_REASON_COUNT));
-	rc = json_dumpf(o, stdout, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(10));
-	json_decref(o);
-	if (rc || putchar('\n') == EOF)
-		return -1;
-	return 0;
+	return cmd_json_out(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(10));
 }
 
 static const char *yes_no(bool b)

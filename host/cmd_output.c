@@ -1,7 +1,8 @@
 /*
  * cmd_output.c - checks on an output path made before a command does its
  * work (commands.h): the user's input is never overwritten, and a missing
- * or read-only directory is reported at once, not after a long repair.
+ * or read-only directory is reported at once, not after a long repair;
+ * and the one way a command writes its --json answer to stdout.
  */
 #include <errno.h>
 #include <limits.h>
@@ -10,6 +11,8 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
+
+#include <jansson.h>
 
 #include "commands.h"
 #include "st_error.h"
@@ -62,4 +65,15 @@ int cmd_output_check(const char *in, const char *out, char *msg, size_t cap)
 		return ST_EXIT_FAILURE;
 	}
 	return 0;
+}
+
+int cmd_json_out(json_t *o, size_t flags)
+{
+	int rc;
+
+	if (!o)
+		return -1;
+	rc = json_dumpf(o, stdout, flags);
+	json_decref(o);
+	return rc || putchar('\n') == EOF ? -1 : 0;
 }

@@ -91,7 +91,6 @@ static int print_json(const struct xport_port_info *ports, size_t n,
 		      const struct profile_set *set, const struct portpick_result *pick)
 {
 	json_t *arr = json_array();
-	int rc;
 
 	for (size_t i = 0; i < n; i++) {
 		const struct xport_port_info *p = &ports[i];
@@ -114,9 +113,7 @@ static int print_json(const struct xport_port_info *ports, size_t n,
 		json_object_set_new(o, "auto", json_boolean(pick->index == (long)i));
 		json_array_append_new(arr, o);
 	}
-	rc = json_dumpf(arr, stdout, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
-	json_decref(arr);
-	return rc || putchar('\n') == EOF ? -1 : 0;
+	return cmd_json_out(arr, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
 }
 
 int cmd_ports(int argc, char **argv)

@@ -210,7 +210,6 @@ static void print_text(const struct preview_args *a, const struct preview *pv, i
 static int print_json(const struct preview_args *a, const struct preview *pv, int w, int h)
 {
 	json_t *o = json_object(), *paths = json_object();
-	int rc;
 
 	for (int f = 0; f < PREVIEW_FEATURES; f++)
 		json_object_set_new(paths, preview_feature_id(f), json_integer((json_int_t)pv->count[f]));
@@ -226,9 +225,7 @@ static int print_json(const struct preview_args *a, const struct preview *pv, in
 	json_object_set_new(o, "output", json_string(a->out));
 	json_object_set_new(o, "width_px", json_integer(w));
 	json_object_set_new(o, "height_px", json_integer(h));
-	rc = json_dumpf(o, stdout, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
-	json_decref(o);
-	return rc || putchar('\n') == EOF ? -1 : 0;
+	return cmd_json_out(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
 }
 
 /* Exit status for a library error class. */

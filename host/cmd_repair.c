@@ -362,7 +362,6 @@ static int print_json(const struct repair_run *run, const struct repair_report *
 {
 	json_t *obj = json_object();
 	json_t *outs = json_array();
-	int rc;
 
 	if (!obj || !outs) {
 		json_decref(obj);
@@ -421,12 +420,7 @@ static int print_json(const struct repair_run *run, const struct repair_report *
 	json_object_set_new(obj, "why", r->printable ? json_null() : json_string(r->why));
 out_dump:
 	json_object_set_new(obj, "outputs", outs);
-	rc = json_dumpf(obj, stdout,
-			JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(10));
-	json_decref(obj);
-	if (rc || putchar('\n') == EOF)
-		return -1;
-	return 0;
+	return cmd_json_out(obj, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(10));
 }
 
 static const char *yes_no(bool b)
@@ -787,11 +781,7 @@ int cmd_repair(int argc, char **argv)
 			json_t *o = json_pack("{s:b, s:i, s:s, s:s}", "ok", 0, "exit", status,
 					      "error", "the command line was refused (the reason "
 					      "is on stderr)", "stage", "arguments");
-			if (o) {
-				json_dumpf(o, stdout, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
-				putchar('\n');
-				json_decref(o);
-			}
+			cmd_json_out(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
 		}
 	}
 	return status;

@@ -107,46 +107,53 @@ static void sim_catch_signals(void)
 	cmd_on_stop_signals(sim_on_signal);
 }
 
-/* The sailfish half of cmd_sim: options already checked. */
-static int sim_run_sailfish(const struct sim_sailfish_options *so, const char *link)
+/*
+ * Create the simulator of the chosen dialect (so non-NULL: sailfish), print
+ * its pty path, serve until a signal, then clean up; the exit code.
+ */
+static int sim_serve(const struct sim_marlin_options *mo, const struct sim_sailfish_options *so,
+		     const char *link)
 {
-	struct sim_sailfish *sim = NULL;
+	struct sim_marlin *m = NULL;
+	struct sim_sailfish *sf = NULL;
 	struct st_error err = {0};
-	int rc = sim_sailfish_new(so, &sim, &err);
+	const char *path;
+	int code = ST_EXIT_FAILURE; /* the link could not be made */
+	int rc = so ? sim_sailfish_new(so, &sf, &err) : sim_marlin_new(mo, &m, &err);
+
 	if (rc) {
 		fprintf(stderr, "stratum sim: %s\n", err.msg);
 		return rc == ST_ERR_ARG ? ST_EXIT_USAGE : ST_EXIT_SOFTWARE;
 	}
-	const char *path = sim_sailfish_slave_path(sim);
-	if (link && sim_make_link(link, path)) {
-		sim_sailfish_free(sim);
-		return ST_EXIT_FAILURE;
-	}
+	path = sf ? sim_sailfish_slave_path(sf) : sim_marlin_slave_path(m);
+	if (link && sim_make_link(link, path))
+		goto out_free;
 	printf("%s\n", path);
 	fflush(stdout);
 	sim_catch_signals();
-	rc = sim_sailfish_run(sim, &sim_stop_flag, &err);
+	rc = sf ? sim_sailfish_run(sf, &sim_stop_flag, &err)
+		: sim_marlin_run(m, &sim_stop_flag, &err);
 	if (rc)
 		fprintf(stderr, "stratum sim: %s\n", err.msg);
-	else if (sim_sailfish_unplugged(sim))
-		fprintf(stderr, "stratum sim: link unplugged after command %ld as asked "
-				"(--unplug-at)\n", so->unplug_at);
+	else if (sf ? sim_sailfish_unplugged(sf) : sim_marlin_unplugged(m))
+		fprintf(stderr, "stratum sim: link unplugged %s %ld as asked (--unplug-at)\n",
+			sf ? "after command" : "at line", sf ? so->unplug_at : mo->unplug_at_line);
 	if (link)
 		sim_remove_link(link, path);
-	sim_sailfish_free(sim);
-	return rc ? ST_EXIT_SOFTWARE : ST_EXIT_OK;
+	code = rc ? ST_EXIT_SOFTWARE : ST_EXIT_OK;
+out_free:
+	sim_sailfish_free(sf);
+	sim_marlin_free(m);
+	return code;
 }
 
 int cmd_sim(int argc, char **argv)
 {
 	struct sim_marlin_options o;
 	struct sim_sailfish_options so;
-	struct sim_marlin *sim = NULL;
 	const char *marlin_only = NULL, *sailfish_only = NULL;
-	struct st_error err = {0};
 	const char *dialect = NULL, *link = NULL;
 	double v;
-	int rc;
 
 	sim_marlin_options_init(&o);
 	sim_sailfish_options_init(&so);
@@ -269,7 +276,7 @@ int cmd_sim(int argc, char **argv)
 		so.reset_at = o.reset_at_line;
 		so.unplug_at = o.unplug_at_line;
 		so.seed = o.seed;
-		return sim_run_sailfish(&so, link);
+		return sim_serve(NULL, &so, link);
 	}
 	if (strcmp(dialect, "marlin")) {
 		fprintf(stderr, "stratum sim: unknown --dialect '%s'; use marlin or sailfish\n",
@@ -281,28 +288,5 @@ int cmd_sim(int argc, char **argv)
 		return ST_EXIT_USAGE;
 	}
 
-	rc = sim_marlin_new(&o, &sim, &err);
-	if (rc) {
-		fprintf(stderr, "stratum sim: %s\n", err.msg);
-		return rc == ST_ERR_ARG ? ST_EXIT_USAGE : ST_EXIT_SOFTWARE;
-	}
-	const char *path = sim_marlin_slave_path(sim);
-	if (link && sim_make_link(link, path)) {
-		sim_marlin_free(sim);
-		return ST_EXIT_FAILURE;
-	}
-	printf("%s\n", path);
-	fflush(stdout);
-
-	sim_catch_signals();
-	rc = sim_marlin_run(sim, &sim_stop_flag, &err);
-	if (rc)
-		fprintf(stderr, "stratum sim: %s\n", err.msg);
-	else if (sim_marlin_unplugged(sim))
-		fprintf(stderr, "stratum sim: link unplugged at line %ld as asked (--unplug-at)\n",
-			o.unplug_at_line);
-	if (link)
-		sim_remove_link(link, path);
-	sim_marlin_free(sim);
-	return rc ? ST_EXIT_SOFTWARE : ST_EXIT_OK;
+	return sim_serve(&o, NULL, link);
 }

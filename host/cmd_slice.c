@@ -280,7 +280,6 @@ static int print_json(const struct slice_run *r, const struct slicer_summary *s)
 {
 	json_t *o = json_object(), *paths = json_object(), *stages = json_object(),
 	       *place = json_object(), *rep = json_null();
-	int rc;
 
 	if (!o || !paths || !stages || !place)
 		goto out_nomem;
@@ -329,11 +328,7 @@ static int print_json(const struct slice_run *r, const struct slicer_summary *s)
 	json_object_set_new(o, "paths", paths);
 	json_object_set_new(o, "stages", stages);
 	json_object_set_new(o, "open_contours_dropped", json_integer((json_int_t)s->open_dropped));
-	rc = json_dumpf(o, stdout, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(10));
-	json_decref(o);
-	if (rc || putchar('\n') == EOF)
-		return -1;
-	return 0;
+	return cmd_json_out(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(10));
 
 out_nomem:
 	json_decref(o);

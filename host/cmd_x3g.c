@@ -289,9 +289,7 @@ static int run_translate(const struct x3g_args *a)
 		json_object_set_new(o, "warnings", json_integer((json_int_t)r.warnings));
 		json_object_set_new(o, "warning_list", r.jwarn);
 		r.jwarn = NULL;
-		json_dumpf(o, stdout, JSON_INDENT(2));
-		fputc('\n', stdout);
-		json_decref(o);
+		cmd_json_out(o, JSON_INDENT(2));
 	} else if (status == 0) {
 		printf("%s: %llu lines -> %s: %llu commands, %llu bytes, %llu warnings\n", a->in,
 		       (unsigned long long)r.lines, a->out, (unsigned long long)r.commands,
@@ -388,9 +386,7 @@ static int run_decode(const struct x3g_args *a)
 		json_object_set_new(o, "input", json_string(a->decode));
 		json_object_set_new(o, "bytes", json_integer((json_int_t)len));
 		json_object_set_new(o, "commands", arr);
-		json_dumpf(o, stdout, JSON_INDENT(2));
-		fputc('\n', stdout);
-		json_decref(o);
+		cmd_json_out(o, JSON_INDENT(2));
 	} else {
 		fprintf(stderr, "%s: %zu commands, %zu bytes\n", a->decode, count, len);
 	}

@@ -63,4 +63,12 @@ int cmd_output_check(const char *in, const char *out, char *msg, size_t cap);
 /* cmd_is_opt - true when a is NAME or NAME=...; the value may still be missing. */
 bool cmd_is_opt(const char *a, const char *name);
 
+struct json_t;
+/*
+ * cmd_json_out - write o to stdout with jansson's flags, then a newline;
+ * o is freed.  0, or -1 when o is NULL (nothing written) or the write
+ * failed (host/cmd_output.c).
+ */
+int cmd_json_out(struct json_t *o, size_t flags);
+
 #endif

@@ -90,17 +90,6 @@ void preview_opts_init(struct preview_opts *o)
 	o->layer = 1;
 }
 
-/* st_grow through a void **: 0 or ST_ERR_NOMEM (*arr kept on failure). */
-static int grow(void **arr, size_t *cap, size_t need, size_t elem)
-{
-	void *p = st_grow(*arr, cap, need, elem);
-
-	if (!p)
-		return ST_ERR_NOMEM;
-	*arr = p;
-	return 0;
-}
-
 static void box_add(double min[2], double max[2], const double p[2])
 {
 	for (int a = 0; a < 2; a++) {
@@ -141,7 +130,7 @@ struct table {
 /* Row of comment layer l, created (NAN) when new. */
 static struct row *table_row(struct table *t, long l)
 {
-	if (grow((void **)&t->v, &t->cap, (size_t)l + 1, sizeof(*t->v)))
+	if (st_grow_at((void **)&t->v, &t->cap, (size_t)l + 1, sizeof(*t->v)))
 		return NULL;
 	while (t->n <= (size_t)l)
 		t->v[t->n++] = (struct row){NAN, NAN};
@@ -167,7 +156,7 @@ static int table_move(struct table *t, const struct gcwalk_move *m, struct st_er
 	if (r && isnan(r->z))
 		r->z = m->to[2];
 	if (!t->nz || t->zs[t->nz - 1] != m->to[2]) {
-		if (grow((void **)&t->zs, &t->capz, t->nz + 1, sizeof(*t->zs)))
+		if (st_grow_at((void **)&t->zs, &t->capz, t->nz + 1, sizeof(*t->zs)))
 			return st_error_set(err, ST_ERR_NOMEM, "preview: out of memory");
 		t->zs[t->nz++] = m->to[2];
 	}
@@ -329,7 +318,7 @@ static int flush(struct builder *b)
 	if (!path.xy)
 		return ST_ERR_NOMEM;
 	memcpy(path.xy, b->xy, 2 * n * sizeof(*path.xy));
-	if (grow((void **)&pv->paths, &b->pcap, pv->n + 1, sizeof(*pv->paths))) {
+	if (st_grow_at((void **)&pv->paths, &b->pcap, pv->n + 1, sizeof(*pv->paths))) {
 		free(path.xy);
 		return ST_ERR_NOMEM;
 	}
@@ -353,7 +342,7 @@ static int add_move(struct builder *b, enum preview_feature f, const double from
 		b->w0 = w;
 		b->wsum = b->lsum = 0.0;
 	}
-	if (grow((void **)&b->xy, &b->cap, 2 * (b->n + 2), sizeof(*b->xy)))
+	if (st_grow_at((void **)&b->xy, &b->cap, 2 * (b->n + 2), sizeof(*b->xy)))
 		return ST_ERR_NOMEM;
 	if (!b->n) {
 		b->xy[0] = from[0];

@@ -3,9 +3,11 @@
  * outside them includes it.  The public contract is profile.h.
  *
  *   profile.c        loading (through ini.h), freeing, raw key access
- *   profile_keys.c   key typing: the binding of each declared setting
- *                    (slicer/settings.h) to its struct profile field, and
+ *   profile_bind.c   the binding of each declared setting
+ *                    (slicer/settings.h) to its struct profile field and
+ *                    to the slicer_config field it is copied into, and
  *                    the declared defaults
+ *   profile_keys.c   key typing: the parsers of every value type
  *   profile_check.c  checks between keys, and the slicer's own check
  *   profile_find.c   search directories, NAME lookup, listing
  *   profile_out.c    profile_write and profile_to_json
@@ -60,11 +62,23 @@ enum key_type {
 	KT_EXTRUDERS,	 /* extruder_count */
 };
 
-/* A declared setting bound to its field. */
+/* What a profile field and the slicer_config field it is copied into hold. */
+enum cfg_type {
+	CT_NONE,   /* no slicer field: the slicer does not take the key, or takes it
+		    * computed (profile_slicer.c) */
+	CT_DOUBLE, /* double (or an array's first) */
+	CT_INT,	   /* int (or an array's first); copied into an int or a double */
+	CT_BOOL,   /* bool */
+	CT_STRING, /* const char * */
+};
+
+/* A declared setting bound to its field, and to the slicer's (profile_bind.c). */
 struct key_def {
 	const char *key;
 	enum key_type type;
-	size_t off; /* offsetof(struct profile, field) */
+	size_t off;		      /* offsetof(struct profile, field) */
+	size_t cfg;		      /* offsetof(struct slicer_config, field) */
+	enum cfg_type held, cfg_type; /* the two fields' types; cfg_type CT_NONE: not copied */
 };
 
 /* Loading state: the profile being filled and where errors go. */

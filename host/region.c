@@ -60,17 +60,6 @@ double region_bead_width(double area, double h)
 	return area / h + h * (1.0 - M_PI / 4.0);
 }
 
-/* Grow an array of elem-sized items to hold need; 0 or ST_ERR_NOMEM. */
-static int grow(void **arr, size_t *cap, size_t need, size_t elem)
-{
-	void *p = st_grow(*arr, cap, need, elem);
-
-	if (!p)
-		return ST_ERR_NOMEM;
-	*arr = p;
-	return 0;
-}
-
 /* ---- reading ---- */
 
 /* Feature types that are not the part (both slicers' ;TYPE: names). */
@@ -102,7 +91,7 @@ static int read_beads(FILE *fp, const char *name, struct bead_vec *beads, struct
 			p->skipped++;
 			continue;
 		}
-		if (grow((void **)&beads->v, &beads->cap, beads->n + 1, sizeof(*beads->v))) {
+		if (st_grow_at((void **)&beads->v, &beads->cap, beads->n + 1, sizeof(*beads->v))) {
 			rc = st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", name);
 			break;
 		}
@@ -179,7 +168,7 @@ static int sweep_layer(const struct bead_vec *beads, const size_t *idx, size_t n
 		bool joins = b && npts && w == cur_w && pts[2 * npts - 2] == x0 &&
 			     pts[2 * npts - 1] == y0;
 		if (!joins && npts) {
-			if (grow((void **)&delta, &cap_delta, lines.n + 1, sizeof(*delta)))
+			if (st_grow_at((void **)&delta, &cap_delta, lines.n + 1, sizeof(*delta)))
 				goto out_nomem;
 			if ((rc = clip_paths_add(&lines, pts, npts, err)))
 				goto out;
@@ -188,7 +177,7 @@ static int sweep_layer(const struct bead_vec *beads, const size_t *idx, size_t n
 		}
 		if (!b)
 			break;
-		if (grow((void **)&pts, &cap_pts, 2 * (npts + 2), sizeof(*pts)))
+		if (st_grow_at((void **)&pts, &cap_pts, 2 * (npts + 2), sizeof(*pts)))
 			goto out_nomem;
 		if (!npts) {
 			pts[0] = x0;
@@ -529,7 +518,7 @@ struct samples {
 
 static int samples_push(struct samples *s, double d)
 {
-	if (grow((void **)&s->v, &s->cap, s->n + 1, sizeof(*s->v)))
+	if (st_grow_at((void **)&s->v, &s->cap, s->n + 1, sizeof(*s->v)))
 		return ST_ERR_NOMEM;
 	s->v[s->n++] = d;
 	return 0;

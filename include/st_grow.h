@@ -1,13 +1,15 @@
 /*
  * st_grow.h - the one growth rule for dynamic arrays, header-only like
  * st_error.h so every module may use it: double the capacity, starting at
- * 16, with overflow checks.  (slicer/grow.h and region.c wrap it.)
+ * 16, with overflow checks.  (slicer/grow.h wraps it.)
  */
 #ifndef STRATUM_ST_GROW_H
 #define STRATUM_ST_GROW_H
 
 #include <stdint.h>
 #include <stdlib.h>
+
+#include "st_error.h"
 
 /*
  * st_grow - arr (capacity *cap elements of elem bytes) reallocated to hold
@@ -31,6 +33,20 @@ static inline void *st_grow(void *arr, size_t *cap, size_t need, size_t elem)
 		return NULL;
 	*cap = ncap;
 	return grown;
+}
+
+/*
+ * st_grow_at - st_grow through a pointer to the array: *arr is replaced by
+ * the grown array.  Returns 0, or ST_ERR_NOMEM with *arr and *cap kept.
+ */
+static inline int st_grow_at(void **arr, size_t *cap, size_t need, size_t elem)
+{
+	void *p = st_grow(*arr, cap, need, elem);
+
+	if (!p)
+		return ST_ERR_NOMEM;
+	*arr = p;
+	return 0;
 }
 
 #endif /* STRATUM_ST_GROW_H */

@@ -17,17 +17,6 @@ struct mesh_builder {
 	size_t nslots;		/* power of two */
 };
 
-/* Grow an array of elem-sized items to hold at least need (st_grow); 0 or -1. */
-static int grow(void **arr, size_t *cap, size_t need, size_t elem)
-{
-	void *p = st_grow(*arr, cap, need, elem);
-
-	if (!p)
-		return -1;
-	*arr = p;
-	return 0;
-}
-
 /* Bit pattern of a coordinate with -0.0 folded onto +0.0 (same point). */
 static uint64_t coord_bits(double v)
 {
@@ -95,10 +84,10 @@ struct mesh_builder *mesh_builder_new(size_t tri_hint)
 		tri_hint = 0;
 	while (nslots < tri_hint + tri_hint / 4 && nslots < ((size_t)1 << 40))
 		nslots *= 2;
-	if (tri_hint && (grow((void **)&b->mesh->tris, &b->mesh->cap_tris, tri_hint,
-			      sizeof(*b->mesh->tris)) ||
-			 grow((void **)&b->mesh->verts, &b->mesh->cap_verts, tri_hint / 2 + 16,
-			      sizeof(*b->mesh->verts))))
+	if (tri_hint && (st_grow_at((void **)&b->mesh->tris, &b->mesh->cap_tris, tri_hint,
+				    sizeof(*b->mesh->tris)) ||
+			 st_grow_at((void **)&b->mesh->verts, &b->mesh->cap_verts,
+				    tri_hint / 2 + 16, sizeof(*b->mesh->verts))))
 		goto out_free_mesh;
 	if (rehash(b, nslots))
 		goto out_free_mesh;
@@ -128,7 +117,7 @@ int mesh_builder_vertex(struct mesh_builder *b, const double p[3], uint32_t *ind
 	if (m->nverts >= MESH_MAX_ELEMENTS)
 		return st_error_set(err, ST_ERR_RANGE, "more than %u distinct vertices",
 				    (unsigned)MESH_MAX_ELEMENTS);
-	if (grow((void **)&m->verts, &m->cap_verts, m->nverts + 1, sizeof(*m->verts)))
+	if (st_grow_at((void **)&m->verts, &m->cap_verts, m->nverts + 1, sizeof(*m->verts)))
 		goto out_nomem;
 	for (int k = 0; k < 3; k++)
 		m->verts[m->nverts][k] = p[k] == 0.0 ? 0.0 : p[k];
@@ -154,7 +143,7 @@ int mesh_builder_triangle(struct mesh_builder *b, uint32_t a, uint32_t c1, uint3
 	if (m->ntris >= MESH_MAX_ELEMENTS)
 		return st_error_set(err, ST_ERR_RANGE, "more than %u triangles",
 				    (unsigned)MESH_MAX_ELEMENTS);
-	if (grow((void **)&m->tris, &m->cap_tris, m->ntris + 1, sizeof(*m->tris)))
+	if (st_grow_at((void **)&m->tris, &m->cap_tris, m->ntris + 1, sizeof(*m->tris)))
 		return st_error_set(err, ST_ERR_NOMEM, "out of memory after %zu triangles",
 				    m->ntris);
 	m->tris[m->ntris][0] = a;

@@ -12,6 +12,7 @@
 
 #include "fixtures.h"
 #include "meshio.h"
+#include "profile_slicer.h"
 #include "suites.h"
 #include "testutil.h"
 
@@ -583,6 +584,43 @@ START_TEST(infill_overlap_and_bridge_flow_honoured)
 }
 END_TEST
 
+/*
+ * Keys copied into the slicer's fields as the profile holds them
+ * (host/profile_bind.c) land in the field each is bound to, of each kind:
+ * a whole number into an int and into a double, a per-extruder value,
+ * a renamed bool, a choice, a first-of-list string, the bed's height.
+ */
+START_TEST(profile_keys_reach_slicer_fields)
+{
+	static const char text[] = "temperature = 213\n"
+				   "fan_below_layer_time = 37\n"
+				   "support_material_threshold = 33\n"
+				   "external_perimeters_first = 1\n"
+				   "ironing_type = topmost\n"
+				   "start_filament_gcode = \"M117 a\";\"M117 b\"\n"
+				   "max_print_height = 123.5\n"
+				   "raft_first_layer_density = 70%\n"
+				   "layer_height = 0.15\n";
+	struct st_error err = {0};
+	struct profile *p = NULL;
+	struct slicer_config c;
+
+	ck_assert_msg(!profile_load_buffer(text, sizeof(text) - 1, "bound.ini", &p, &err), "%s",
+		      err.msg);
+	ck_assert_msg(!profile_slicer_config(p, &c, &err), "%s", err.msg);
+	ck_assert_int_eq(c.gcodew.temperature, 213);
+	ck_assert_double_eq(c.gcodew.fan_below_layer_time, 37);
+	ck_assert_int_eq(c.support.threshold, 33);
+	ck_assert(c.perim.outer_first);
+	ck_assert_str_eq(c.gcodew.ironing_type, "topmost");
+	ck_assert_str_eq(c.gcodew.start_filament_gcode, "M117 a");
+	ck_assert_double_eq(c.bed.max_height, 123.5);
+	ck_assert_double_eq(c.raft.first_layer_density, 70);
+	ck_assert_double_eq(c.layer_height, 0.15);
+	profile_free(p);
+}
+END_TEST
+
 void slicecli_settings_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("settings");
@@ -601,5 +639,6 @@ void slicecli_settings_tcases(Suite *s)
 	tcase_add_test(tc, fan_ramp_honoured);
 	tcase_add_test(tc, small_perimeter_speed_honoured);
 	tcase_add_test(tc, infill_overlap_and_bridge_flow_honoured);
+	tcase_add_test(tc, profile_keys_reach_slicer_fields);
 	suite_add_tcase(s, tc);
 }
