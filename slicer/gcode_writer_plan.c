@@ -290,10 +290,12 @@ static double dist2(const struct gcodew *w, int64_t x, int64_t y)
 	return dx * dx + dy * dy;
 }
 
-/* Perimeter runs keep their order; other runs go nearest first. */
-static bool keep_order(enum path_role role)
+/* Perimeters and closed sparse infill (concentric loops, outermost
+ * first) keep their order; other paths go nearest first. */
+static bool keep_order(const struct toolpath *p)
 {
-	return role == PATH_OUTER_PERIMETER || role == PATH_INNER_PERIMETER;
+	return p->role == PATH_OUTER_PERIMETER || p->role == PATH_INNER_PERIMETER ||
+	       (p->role == PATH_SPARSE_INFILL && p->closed);
 }
 
 /* Plan the paths [i, j) of one role run, nearest neighbour first. */
@@ -307,7 +309,7 @@ static int plan_run(struct gcodew *w, const struct layer_paths *l, size_t li, si
 			const struct toolpath *p = &l->paths[k];
 			if (w->done[k])
 				continue;
-			if (!w->pos_known || keep_order(p->role)) {
+			if (!w->pos_known || keep_order(p)) {
 				best = k;
 				break;
 			}

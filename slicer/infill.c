@@ -25,7 +25,8 @@ struct infill_job {
 };
 
 /* The patterns printed, for messages. */
-#define PATTERNS_PRINTED "rectilinear, grid, gyroid, triangles, stars or cubic"
+#define PATTERNS_PRINTED                                                                   \
+	"rectilinear, grid, gyroid, triangles, stars, cubic, line, concentric or honeycomb"
 
 /* PrusaSlicer's fill_pattern values; pattern -1: known there, not printed here. */
 static const struct {
@@ -38,12 +39,12 @@ static const struct {
 	{"triangles", INFILL_TRIANGLES},
 	{"stars", INFILL_STARS},
 	{"cubic", INFILL_CUBIC},
+	{"line", INFILL_LINE},
+	{"concentric", INFILL_CONCENTRIC},
+	{"honeycomb", INFILL_HONEYCOMB},
 	{"alignedrectilinear", -1},
 	{"monotonic", -1},
 	{"monotoniclines", -1},
-	{"line", -1},
-	{"concentric", -1},
-	{"honeycomb", -1},
 	{"3dhoneycomb", -1},
 	{"hilbertcurve", -1},
 	{"archimedeanchords", -1},
@@ -224,9 +225,13 @@ static double common_height(const struct slice_stack *st, struct st_error *err)
 	return best;
 }
 
-/* Append the lines of it to out, nearest first from (*lx, *ly). */
-static int order_segments(const struct item *it, int64_t *lx, int64_t *ly,
-			  struct layer_paths *out, struct st_error *err)
+/*
+ * Append the paths of it to out, nearest first from (*lx, *ly): lines from
+ * their nearer end, closed loops (it->loops) from their nearest vertex (a
+ * loop ends where it starts).
+ */
+static int order_paths(const struct item *it, int64_t *lx, int64_t *ly, struct layer_paths *out,
+		       struct st_error *err)
 {
 	const struct clip_paths *segs = &it->segs;
 	size_t n = segs->n, maxlen = 0;
@@ -238,42 +243,45 @@ static int order_segments(const struct item *it, int64_t *lx, int64_t *ly,
 		maxlen = clip_path_len(segs, i) > maxlen ? clip_path_len(segs, i) : maxlen;
 	pts = malloc((maxlen ? maxlen : 1) * sizeof(*pts));
 	if (!used || !pts) {
-		rc = st_error_set(err, ST_ERR_NOMEM, "infill: out of memory ordering %zu lines", n);
+		rc = st_error_set(err, ST_ERR_NOMEM, "infill: out of memory ordering %zu paths", n);
 		goto out_free;
 	}
 	for (size_t left = n; left && !rc; left--) {
-		size_t best = n;
+		size_t best = n, start = 0;
 		bool rev = false;
 		double bd = INFINITY;
 		for (size_t i = 0; i < n; i++) {
-			if (used[i])
-				continue;
 			const int64_t *xy = clip_path_xy(segs, i);
 			size_t m = clip_path_len(segs, i);
-			double d0 = hypot((double)(xy[0] - *lx), (double)(xy[1] - *ly));
-			double d1 = hypot((double)(xy[2 * m - 2] - *lx), (double)(xy[2 * m - 1] - *ly));
-			if (fmin(d0, d1) < bd) {
-				bd = fmin(d0, d1);
-				best = i;
-				rev = d1 < d0;
+			/* starts tried: every vertex of a loop, both ends of a line */
+			for (size_t k = 0; !used[i] && k < m; k += it->loops || m < 2 ? 1 : m - 1) {
+				double d = hypot((double)(xy[2 * k] - *lx), (double)(xy[2 * k + 1] - *ly));
+				if (d < bd) {
+					bd = d;
+					best = i;
+					start = k;
+					rev = !it->loops && k > 0;
+				}
 			}
 		}
+		if (best == n)
+			break;
 		used[best] = true;
 		const int64_t *xy = clip_path_xy(segs, best);
 		size_t m = clip_path_len(segs, best);
 		double len = 0;
 		for (size_t k = 0; k < m; k++) {
-			size_t j = rev ? m - 1 - k : k;
+			size_t j = it->loops ? (start + k) % m : rev ? m - 1 - k : k;
 			pts[k] = (struct path_point){xy[2 * j], xy[2 * j + 1], llround(it->w)};
 			if (k)
 				len += hypot((double)(pts[k].x - pts[k - 1].x),
 					     (double)(pts[k].y - pts[k - 1].y));
 		}
-		if (m < 2 || len < INFILL_MIN_SEGMENT_NM)
+		if (m < (it->loops ? 3u : 2u) || len < INFILL_MIN_SEGMENT_NM)
 			continue;
-		rc = layer_add_path(out, it->role, false, pts, m, err);
-		*lx = pts[m - 1].x;
-		*ly = pts[m - 1].y;
+		rc = layer_add_path(out, it->role, it->loops, pts, m, err);
+		*lx = pts[it->loops ? 0 : m - 1].x;
+		*ly = pts[it->loops ? 0 : m - 1].y;
 	}
 out_free:
 	free(used);
@@ -390,7 +398,7 @@ int infill_emit_layer(struct infill_job *job, const struct infill_plan *plan,
 	for (size_t i = 0; i < plan->n && !rc; i++) {
 		const struct item *it = &plan->v[i];
 		if (!it->fixed) {
-			rc = order_segments(it, &job->lx, &job->ly, out, err);
+			rc = order_paths(it, &job->lx, &job->ly, out, err);
 			continue;
 		}
 		rc = layer_add_path(out, it->role, it->closed, it->pts, it->n, err);

@@ -28,7 +28,10 @@
  * every other layer.  Sparse lines are spaced spacing / density and
  * anchored to the bed (rectilinear alternates like solid; grid lays both
  * directions on every layer at twice the spacing; gyroid samples the
- * gyroid's section at the layer's mid-height).  Bridges use bridge flow: a
+ * gyroid's section at the layer's mid-height; line alternates like
+ * rectilinear, each line its own path, every other line tilted as
+ * PrusaSlicer's; concentric loops from the region's edge inward, outermost
+ * first; honeycomb hexagons sized so the lines' length is the density's).  Bridges use bridge flow: a
  * round thread of diameter nozzle x sqrt(bridge_flow_ratio) (its bead width
  * is the one whose flow-model cross-section equals that thread's area) at
  * thread + 0.05 mm spacing, in the direction (tried every 5 degrees) that
@@ -61,6 +64,9 @@ enum infill_pattern {
 	INFILL_TRIANGLES,	/* "triangles": 3 line sets 60 degrees apart, through common points */
 	INFILL_STARS,		/* "stars": the same, the third set shifted half a period */
 	INFILL_CUBIC,		/* "cubic": the 3 sets shifted with z, stacking into cubes */
+	INFILL_LINE,		/* "line": parallel lines, every other one tilted */
+	INFILL_CONCENTRIC,	/* "concentric": closed loops offset inward from the region */
+	INFILL_HONEYCOMB,	/* "honeycomb": hexagons of zig-zag lines, turned 60 degrees a layer */
 	INFILL_PATTERNS
 };
 

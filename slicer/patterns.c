@@ -226,3 +226,124 @@ out_free:
 	free(keep);
 	return rc;
 }
+
+/* Append the line from (u0, v0) to (u1, v1), coordinates along and across
+ * direction (ca, sa), to out. */
+static int add_uv_line(double ca, double sa, double u0, double v0, double u1, double v1,
+		       struct clip_paths *out, struct st_error *err)
+{
+	int64_t xy[4] = {llround(u0 * ca - v0 * sa), llround(u0 * sa + v0 * ca),
+			 llround(u1 * ca - v1 * sa), llround(u1 * sa + v1 * ca)};
+
+	return clip_paths_add(out, xy, 2, err);
+}
+
+int pat_line_set(const struct clip_paths *ps, double a, double spacing, double osc,
+		 struct clip_paths *out, struct st_error *err)
+{
+	double ca = cos(a), sa = sin(a), vmin, vmax, umin, umax;
+
+	if (!(spacing > 0))
+		return st_error_set(err, ST_ERR_ARG, "infill: line spacing %g nm is not positive",
+				    spacing);
+	if (!clip_paths_points(ps))
+		return 0;
+	pat_extent(ps, a, &vmin, &vmax);
+	pat_extent(ps, a - M_PI / 2.0, &umin, &umax); /* v of a - 90 degrees is u */
+	double k0 = ceil((vmin - osc) / spacing), k1 = floor((vmax + osc) / spacing);
+	if (k1 - k0 > PAT_MAX_LINES)
+		return st_error_set(err, ST_ERR_RANGE,
+				    "infill: %.0f lines at spacing %g mm are too many; use a "
+				    "lower density or wider lines",
+				    k1 - k0 + 1, spacing / 1e6);
+	/* v changes by slope per nm along the tilted lines */
+	double slope = umax > umin ? -2.0 * osc / (umax - umin) : 0.0;
+	int rc = 0;
+	for (double k = k0; k <= k1 && !rc; k++) {
+		double v = k * spacing, lift = fmod(fabs(k), 2.0) == 1.0 ? osc : 0.0;
+		double t = lift ? slope : 0.0;
+		rc = add_uv_line(ca, sa, umin - spacing, v + lift - t * spacing, umax + spacing,
+				 v + lift + t * (umax - umin + spacing), out, err);
+	}
+	return rc;
+}
+
+int pat_honeycomb(double d, double inset, double theta, const struct pat_box *box,
+		  struct clip_paths *out, struct st_error *err)
+{
+	const double hs = 2.0 * d / sqrt(3.0), ys = hs / 2.0, yo = inset / sqrt(3.0);
+	const double period = 3.0 * hs, cx = d, cy = hs;
+	/* frame: columns along its y; world = C + R(theta - 90 deg) (frame - C) */
+	const double cp = cos(theta - M_PI / 2.0), sp = sin(theta - M_PI / 2.0);
+	const double wx[4] = {box->x0, box->x1, box->x1, box->x0};
+	const double wy[4] = {box->y0, box->y0, box->y1, box->y1};
+	double fx0 = INFINITY, fx1 = -INFINITY, fy0 = INFINITY, fy1 = -INFINITY;
+
+	if (!(inset > 0 && d > 2.0 * inset && isfinite(d)))
+		return st_error_set(err, ST_ERR_ARG,
+				    "infill: honeycomb cell %g nm too small for lines %g nm apart", d,
+				    2.0 * inset);
+	for (int i = 0; i < 4; i++) {
+		double x = cx + (wx[i] - cx) * cp + (wy[i] - cy) * sp;
+		double y = cy - (wx[i] - cx) * sp + (wy[i] - cy) * cp;
+		fx0 = fmin(fx0, x);
+		fx1 = fmax(fx1, x);
+		fy0 = fmin(fy0, y);
+		fy1 = fmax(fy1, y);
+	}
+	/* The grid is anchored at the origin, so cells stack from layer to layer. */
+	double x0 = floor(fx0 / (2.0 * d)) * 2.0 * d, y0 = floor(fy0 / period) * period;
+	double nx = floor((fx1 - x0) / (2.0 * d)) + 1, ny = floor((fy1 - y0) / period) + 1;
+	if (nx * ny > PAT_MAX_LINES)
+		return st_error_set(err, ST_ERR_RANGE,
+				    "infill: %.0f honeycomb cells of %g mm are too many; use a "
+				    "lower density or wider lines",
+				    nx * ny, d / 1e6);
+	size_t npts = 2 * (4 * (size_t)ny + 1);
+	double *f = malloc(2 * npts * sizeof(*f));
+	int64_t *xy = malloc(2 * npts * sizeof(*xy));
+	int rc = 0;
+	if (!f || !xy) {
+		rc = st_error_set(err, ST_ERR_NOMEM, "infill: out of memory for the honeycomb");
+		goto out_free;
+	}
+	for (double ix = 0; ix < nx && !rc; ix++) {
+		double ax0 = x0 + 2.0 * d * ix + inset, ax1 = x0 + 2.0 * d * ix + d - inset;
+		size_t m = 0;
+		for (int half = 0; half < 2; half++) {
+			/* the first column is traced downwards, the mirrored one upwards */
+			for (size_t i = 0, j = m - 1; half && i < j; i++, j--)
+				for (int c = 0; c < 2; c++) {
+					double t = f[2 * i + c];
+					f[2 * i + c] = f[2 * j + c];
+					f[2 * j + c] = t;
+				}
+			for (double j = 0; j < ny; j++) {
+				double y = y0 + j * period;
+				const double px[4] = {ax1, ax0, ax0, ax1};
+				const double py[4] = {y + yo, y + ys - yo, y + ys + hs + yo,
+						      y + 2.0 * ys + hs - yo};
+				for (int q = 0; q < 4; q++, m++) {
+					f[2 * m] = px[q];
+					f[2 * m + 1] = py[q];
+				}
+			}
+			f[2 * m] = ax1;
+			f[2 * m + 1] = y0 + ny * period + yo;
+			m++;
+			double t = ax0 + d;
+			ax0 = ax1 + d;
+			ax1 = t;
+		}
+		for (size_t i = 0; i < m; i++) {
+			double x = f[2 * i] - cx, y = f[2 * i + 1] - cy;
+			xy[2 * i] = llround(cx + x * cp - y * sp);
+			xy[2 * i + 1] = llround(cy + x * sp + y * cp);
+		}
+		rc = clip_paths_add(out, xy, m, err);
+	}
+out_free:
+	free(f);
+	free(xy);
+	return rc;
+}

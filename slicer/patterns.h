@@ -39,6 +39,31 @@ int pat_lines(double a, double spacing, double phase, const struct pat_box *box,
 	      struct clip_paths *out, struct st_error *err);
 
 /*
+ * pat_line_set - append to out PrusaSlicer's "line" pattern over the point
+ * set ps: straight lines of direction a at v = k spacing (v as in
+ * pat_extent), the odd-k ones tilted so that across ps (along the lines)
+ * they run from v + osc to v - osc (their ends come within spacing - osc of
+ * the neighbouring lines).  Each line reaches beyond ps on both sides.
+ * Returns 0, ST_ERR_ARG (spacing not > 0), ST_ERR_RANGE (more than
+ * PAT_MAX_LINES lines), ST_ERR_NOMEM.
+ */
+int pat_line_set(const struct clip_paths *ps, double a, double spacing, double osc,
+		 struct clip_paths *out, struct st_error *err);
+
+/*
+ * pat_honeycomb - append to out PrusaSlicer's 2D honeycomb covering box:
+ * hexagons of width d across the flats (side 2 d / sqrt 3), traced as
+ * pairs of mirrored zig-zag columns joined at one end, lines inset by inset
+ * nm from the cell walls so the walls two columns share are two beads side
+ * by side.  The columns run at direction theta (radians) turned about the
+ * centre of the hexagon at (d, 2 d / sqrt 3), which maps the lattice onto
+ * itself for multiples of 60 degrees.  d > 2 inset > 0.  Returns 0,
+ * ST_ERR_ARG, ST_ERR_RANGE (too many cells), ST_ERR_NOMEM.
+ */
+int pat_honeycomb(double d, double inset, double theta, const struct pat_box *box,
+		  struct clip_paths *out, struct st_error *err);
+
+/*
  * pat_gyroid - append to out the cross-section of the gyroid surface
  * sin x cos y + sin y cos z + sin z cos x = 0, with (x, y, z) = k (X, Y, Z)
  * for bed coordinates X, Y, Z in nm, at height z_nm, as polylines covering

@@ -170,8 +170,8 @@ static const struct setting table[] = {
      "a bare number is a fraction (0.15 = 15%), as old Slic3r wrote it"},
     {"fill_pattern", SETTING_CHOICE, S_, 0, 0, 0, "", "rectilinear", NULL, CHOICES(pattern_names),
      NULL, "PrusaSlicer's names (monotonous is read as monotonic); rectilinear, grid, gyroid, "
-     "triangles, stars and cubic are printed, any other prints rectilinear, named in the "
-     "warning"},
+     "triangles, stars, cubic, line, concentric and honeycomb are printed (docs/slicing.md), "
+     "any other prints rectilinear, named in the warning"},
     {"solid_infill_below_area", NUM, S_, 0, 1e6, 0, "mm^2", "70", NULL, NULL, 0, NULL,
      "sparse infill islands smaller than this are solid"},
     {"ironing", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,

@@ -438,6 +438,31 @@ START_TEST(test_retraction)
 }
 END_TEST
 
+/* Closed sparse infill (concentric loops) keeps the infill stage's order,
+ * outermost first, though the inner loop starts nearer the nozzle; open
+ * sparse lines still go nearest first. */
+START_TEST(test_loops_keep_order)
+{
+	static const double far[] = {60, 60, 70, 60}, near[] = {31, 31, 39, 31};
+	static const double lw[] = {0.45, 0.45};
+	struct layer_stack *st = stack_new(1, 0.2);
+	struct gcodew_settings s;
+	char *g;
+
+	add_square(&st->layers[0], PATH_OUTER_PERIMETER, 30.5, 30.5, 1, 0.45);
+	add_square(&st->layers[0], PATH_SPARSE_INFILL, 20, 20, 20, 0.45);
+	add_square(&st->layers[0], PATH_SPARSE_INFILL, 29, 29, 2, 0.45);
+	add_line(&st->layers[0], PATH_SOLID_INFILL, far, lw, 2);
+	add_line(&st->layers[0], PATH_SOLID_INFILL, near, lw, 2);
+	gcodew_settings_init(&s);
+	g = write_mem(st, &s, NULL);
+	ck_assert_int_lt(at(g, "X20 Y20"), at(g, "X29 Y29"));
+	ck_assert_int_lt(at(g, "X31 Y31"), at(g, "X60 Y60"));
+	free(g);
+	layer_stack_free(st);
+}
+END_TEST
+
 /* Numbers: fixed decimals at most, no exponent, no "-0", F an integer. */
 START_TEST(test_number_format)
 {
@@ -1074,6 +1099,7 @@ Suite *gcodewriter_suite(void)
 	tcase_add_loop_test(out, test_square_tower, 0, 2);
 	tcase_add_test(out, test_thin_wall);
 	tcase_add_loop_test(out, test_retraction, 0, 4);
+	tcase_add_test(out, test_loops_keep_order);
 	tcase_add_test(out, test_number_format);
 	tcase_add_test(out, test_placeholders);
 	tcase_add_test(out, test_header_estimate);

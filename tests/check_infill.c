@@ -102,15 +102,13 @@ static double region_area(const struct clip_expolys *ex)
 }
 
 /*
- * Area (nm^2) of region covered by the beads of the paths of the roles in
- * mask on layer l, each bead its width (or the given width when > 0) wide
- * with ends as end.
+ * Into all, the beads of the paths of the roles in mask on layer l, each
+ * its width (or the given width when > 0) wide with ends as end.
  */
-static double covered(const struct layer_paths *l, unsigned mask, double width,
-		      enum clip_end end, const struct clip_expolys *region)
+static void beads_of(const struct layer_paths *l, unsigned mask, double width,
+		     enum clip_end end, struct clip_paths *all)
 {
-	struct clip_paths line = {0}, bead = {0}, all = {0}, in = {0};
-	double a = 0;
+	struct clip_paths line = {0}, bead = {0};
 
 	for (size_t i = 0; i < l->n; i++) {
 		const struct toolpath *p = &l->paths[i];
@@ -129,17 +127,32 @@ static double covered(const struct layer_paths *l, unsigned mask, double width,
 		ck_assert_int_eq(clip_offset_open(&line, w / 2, CLIP_JOIN_ROUND, end, 2, ARC, &bead,
 						  NULL),
 				 0);
-		ck_assert_int_eq(clip_paths_append(&all, &bead, NULL), 0);
+		ck_assert_int_eq(clip_paths_append(all, &bead, NULL), 0);
 	}
-	ck_assert_int_eq(clip_boolean(CLIP_INTERSECTION, &all, &region->paths, CLIP_NONZERO, &in,
-				      NULL),
-			 0);
-	ck_assert_int_eq(clip_paths_area(&in, &a, NULL), 0);
 	clip_paths_free(&line);
 	clip_paths_free(&bead);
+}
+
+/* Area (nm^2) of the region ps covered by the beads of beads_of(l, ...). */
+static double covered_paths(const struct layer_paths *l, unsigned mask, double width,
+			    enum clip_end end, const struct clip_paths *ps)
+{
+	struct clip_paths all = {0}, in = {0};
+	double a = 0;
+
+	beads_of(l, mask, width, end, &all);
+	ck_assert_int_eq(clip_boolean(CLIP_INTERSECTION, &all, ps, CLIP_NONZERO, &in, NULL), 0);
+	ck_assert_int_eq(clip_paths_area(&in, &a, NULL), 0);
 	clip_paths_free(&all);
 	clip_paths_free(&in);
 	return a;
+}
+
+/* Area (nm^2) of region covered by the beads of beads_of(l, ...). */
+static double covered(const struct layer_paths *l, unsigned mask, double width,
+		      enum clip_end end, const struct clip_expolys *region)
+{
+	return covered_paths(l, mask, width, end, &region->paths);
 }
 
 /* Is (x, y) inside or on the polygon set ps? */
@@ -383,6 +396,125 @@ START_TEST(three_line_set_patterns)
 	ck_assert(!same_layer(&r[0].ls->layers[8], &r[1].ls->layers[8]));
 	for (size_t p = 0; p < 3; p++)
 		run_free(&r[p]);
+	mesh_free(m);
+}
+END_TEST
+
+/* Length (nm) of the sparse paths of layer l, closing segments included. */
+static double sparse_length(const struct layer_paths *l)
+{
+	double len = 0;
+
+	for (size_t k = 0; k < l->n; k++) {
+		const struct toolpath *p = &l->paths[k];
+		if (p->role != PATH_SPARSE_INFILL)
+			continue;
+		len += tu_path_length(p);
+		if (p->closed)
+			len += hypot((double)(p->pts[p->n - 1].x - p->pts[0].x),
+				     (double)(p->pts[p->n - 1].y - p->pts[0].y));
+	}
+	return len;
+}
+
+/* Sparse length of layers 3 .. n - 4 (between the shells) of a run. */
+static double sparse_total(const struct run *r)
+{
+	double len = 0;
+
+	for (size_t i = 3; i + 3 < r->st->n; i++)
+		len += sparse_length(&r->ls->layers[i]);
+	return len;
+}
+
+/*
+ * Line, concentric and honeycomb: as much line as rectilinear at the same
+ * density, inside the region, and each its own shape: line paths are
+ * single straight segments alternating 90 degrees, every other one tilted;
+ * concentric paths closed loops; honeycomb zig-zags turned 60 degrees a
+ * layer, repeating every 3 layers, their walls stacking.
+ */
+START_TEST(line_concentric_honeycomb)
+{
+	struct mesh *m = fx_box(0, 0, 0, 20, 20, 4), *ring = fx_box(30, 0, 0, 50, 20, 4);
+	struct mesh *hole = fx_box(36, 6, 0, 44, 14, 4), *both = fx_concat(m, ring);
+	const enum infill_pattern pats[] = {INFILL_LINE, INFILL_CONCENTRIC, INFILL_HONEYCOMB};
+	const double overlap = 0.25 * 0.45 * NM;
+	struct infill_settings is;
+
+	/* the second box gets a square hole: the inner walls are reversed */
+	for (size_t i = 0; i < hole->ntris; i++)
+		fx_flip(hole, i);
+	struct mesh *shape = fx_concat(both, hole);
+	for (double d = 15; d < 50; d += 20) {
+		struct run rect;
+		infill_settings_init(&is, 0.4);
+		is.fill_pattern = INFILL_RECTILINEAR;
+		is.fill_density = d;
+		run_infill(shape, 0.2, &is, &rect);
+		double want = sparse_total(&rect);
+		for (size_t p = 0; p < 3; p++) {
+			struct run r;
+			is.fill_pattern = pats[p];
+			run_infill(shape, 0.2, &is, &r);
+			double got = sparse_total(&r);
+			ck_assert_msg(fabs(got / want - 1) < 0.15, "%s at %g %%: %.1f mm, rectilinear %.1f",
+				      infill_pattern_name(pats[p]), d, got / NM, want / NM);
+			for (size_t i = 0; i < r.st->n; i++) {
+				const struct layer_paths *l = &r.ls->layers[i];
+				assert_inside(l, &r.inner[i], overlap + 1000);
+				for (size_t k = 0; i >= 3 && i + 3 < r.st->n && k < l->n; k++) {
+					const struct toolpath *t = &l->paths[k];
+					ck_assert(t->role == PATH_SPARSE_INFILL);
+					if (pats[p] == INFILL_LINE)
+						ck_assert_msg(t->n == 2 && !t->closed,
+							      "line path of %zu points", t->n);
+					else if (pats[p] == INFILL_CONCENTRIC)
+						ck_assert_msg(t->closed && t->n >= 3, "concentric path open");
+					else
+						ck_assert(!t->closed);
+				}
+			}
+			const struct layer_paths *l8 = &r.ls->layers[8], *l9 = &r.ls->layers[9];
+			ck_assert_msg(!same_layer(l8, &rect.ls->layers[8]), "%s prints rectilinear",
+				      infill_pattern_name(pats[p]));
+			if (pats[p] == INFILL_LINE) {
+				/* every other line at the fill angle, alternating by layer */
+				size_t n8 = segments_at(l8, 45), n9 = segments_at(l9, 135);
+				ck_assert_msg(n8 > l8->n / 3 && n8 < l8->n, "%zu of %zu at 45", n8, l8->n);
+				ck_assert_msg(n9 > l9->n / 3 && n9 < l9->n, "%zu of %zu at 135", n9, l9->n);
+				ck_assert_uint_eq(segments_at(l8, 135), 0);
+			}
+			if (pats[p] == INFILL_CONCENTRIC) /* no rotation: layers repeat */
+				ck_assert(same_layer(l8, l9));
+			if (pats[p] == INFILL_HONEYCOMB) {
+				ck_assert(!same_layer(l8, l9) && !same_layer(l9, &r.ls->layers[10]));
+				ck_assert(same_layer(l8, &r.ls->layers[11]));
+				/* turned about a cell centre: the walls stack */
+				struct clip_paths b8 = {0}, b9 = {0};
+				double a9 = 0, shared;
+				beads_of(l8, ROLE(PATH_SPARSE_INFILL), 0, CLIP_END_ROUND, &b8);
+				beads_of(l9, ROLE(PATH_SPARSE_INFILL), 0, CLIP_END_ROUND, &b9);
+				ck_assert_int_eq(clip_boolean(CLIP_UNION, &b9, NULL, CLIP_NONZERO, &b9,
+							      NULL),
+						 0);
+				ck_assert_int_eq(clip_paths_area(&b9, &a9, NULL), 0);
+				shared = covered_paths(l9, ROLE(PATH_SPARSE_INFILL), 0, CLIP_END_ROUND, &b8);
+				/* 77 % at 15 and 79 % at 35 %; 16 and 40 % turned
+				 * about the origin, inside a cell */
+				ck_assert_msg(shared > 0.7 * a9, "%.0f %% of layer 9 on layer 8",
+					      100 * shared / a9);
+				clip_paths_free(&b8);
+				clip_paths_free(&b9);
+			}
+			run_free(&r);
+		}
+		run_free(&rect);
+	}
+	mesh_free(shape);
+	mesh_free(both);
+	mesh_free(hole);
+	mesh_free(ring);
 	mesh_free(m);
 }
 END_TEST
@@ -639,7 +771,7 @@ START_TEST(bad_settings_refused)
 	ck_assert_int_eq(infill_settings_check(&is, &err), ST_ERR_RANGE);
 	ck_assert_ptr_nonnull(strstr(err.msg, "infill_extrusion_width"));
 	infill_settings_init(&is, 0.4);
-	is.fill_pattern = (enum infill_pattern)7;
+	is.fill_pattern = INFILL_PATTERNS;
 	ck_assert_int_eq(infill_settings_check(&is, &err), ST_ERR_ARG);
 	/* Names: PrusaSlicer's, three printed, the others refused as unsupported. */
 	ck_assert_int_eq(infill_pattern_parse("gyroid", &p, &err), 0);
@@ -649,9 +781,15 @@ START_TEST(bad_settings_refused)
 	ck_assert_str_eq(infill_pattern_name(INFILL_GRID), "grid");
 	ck_assert_int_eq(infill_pattern_parse("stars", &p, &err), 0);
 	ck_assert_int_eq(p, INFILL_STARS);
-	ck_assert_int_eq(infill_pattern_parse("honeycomb", &p, &err), ST_ERR_UNSUPPORTED);
-	ck_assert_ptr_nonnull(strstr(err.msg, "\"honeycomb\" is not supported"));
-	ck_assert_ptr_nonnull(strstr(err.msg, "rectilinear, grid, gyroid, triangles, stars or cubic"));
+	ck_assert_int_eq(infill_pattern_parse("honeycomb", &p, &err), 0);
+	ck_assert_int_eq(p, INFILL_HONEYCOMB);
+	ck_assert_int_eq(infill_pattern_parse("line", &p, &err), 0);
+	ck_assert_int_eq(p, INFILL_LINE);
+	ck_assert_int_eq(infill_pattern_parse("concentric", &p, &err), 0);
+	ck_assert_int_eq(p, INFILL_CONCENTRIC);
+	ck_assert_int_eq(infill_pattern_parse("3dhoneycomb", &p, &err), ST_ERR_UNSUPPORTED);
+	ck_assert_ptr_nonnull(strstr(err.msg, "\"3dhoneycomb\" is not supported"));
+	ck_assert_ptr_nonnull(strstr(err.msg, "stars, cubic, line, concentric or honeycomb"));
 	p = INFILL_RECTILINEAR;
 	ck_assert_int_eq(infill_pattern_parse("spaghetti", &p, &err), ST_ERR_ARG);
 	ck_assert_ptr_nonnull(strstr(err.msg, "\"spaghetti\" is unknown"));
@@ -688,6 +826,7 @@ Suite *infill_suite(void)
 	tcase_add_test(tc, cube_skins_and_sparse);
 	tcase_add_test(tc, patterns_stay_inside);
 	tcase_add_test(tc, three_line_set_patterns);
+	tcase_add_test(tc, line_concentric_honeycomb);
 	tcase_add_test(tc, bridge_between_pillars);
 	tcase_add_test(tc, shells_by_thickness);
 	tcase_add_test(tc, small_and_full_density_are_solid);

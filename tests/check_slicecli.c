@@ -425,10 +425,10 @@ START_TEST(bad_settings_exit_2)
 	expect_refused(cube, "--printer no-such-printer", 2, "no-such-printer");
 	expect_refused(cube, MK3S " --bogus", 2, "unknown option '--bogus'");
 
-	/* A pattern Stratum does not print (honeycomb): the profile slices
+	/* A pattern Stratum does not print (3dhoneycomb): the profile slices
 	 * with rectilinear and says so in its one warning line (issue 18: a
 	 * default PrusaSlicer config, then with stars, was refused here). */
-	static const char stars[] = "nozzle_diameter = 0.4\nfill_pattern = honeycomb\n";
+	static const char stars[] = "nozzle_diameter = 0.4\nfill_pattern = 3dhoneycomb\n";
 	char model[4096], ini[4096], gc[4096];
 	int status;
 	snprintf(model, sizeof(model), "%s", stl_file(fx_box(0, 0, 0, 20, 20, 20), "cube.stl"));
@@ -437,9 +437,20 @@ START_TEST(bad_settings_exit_2)
 	tu_write(ini, stars, sizeof(stars) - 1);
 	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' --printer '%s'", model, gc, ini);
 	ck_assert_msg(status == 0, "exit %d: %s", status, out);
-	ck_assert_msg(strstr(out, "warning: not supported, ignored: fill_pattern=honeycomb "
+	ck_assert_msg(strstr(out, "warning: not supported, ignored: fill_pattern=3dhoneycomb "
 				  "(rectilinear used)"),
 		      "%s", out);
+	/* line, concentric and honeycomb are printed: no warning */
+	static const char *const printed[] = {"line", "concentric", "honeycomb"};
+	for (size_t i = 0; i < 3; i++) {
+		char text[128];
+		int n = snprintf(text, sizeof(text), "nozzle_diameter = 0.4\nfill_pattern = %s\n",
+				 printed[i]);
+		tu_write(ini, text, (size_t)n);
+		status = tu_run(out, sizeof(out), "slice '%s' -o '%s' --printer '%s'", model, gc, ini);
+		ck_assert_msg(status == 0, "%s: exit %d: %s", printed[i], status, out);
+		ck_assert_msg(!strstr(out, "fill_pattern"), "%s: %s", printed[i], out);
+	}
 }
 END_TEST
 
