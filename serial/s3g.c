@@ -786,7 +786,8 @@ static enum s3g_lost s3g_decide(struct s3g *s, void *ctx, struct st_error *err, 
 		return S3G_LOST_RESEND;
 	bool running = b.state == S3G_BUILD_RUNNING || b.state == S3G_BUILD_PAUSED;
 	bool starting = c->base < 0 && c->code[c->cur & S3G_HIST_MASK] == 153;
-	if ((c->base < 0 && !starting) || (!running && !starting) || c->capacity == 0)
+	bool ending = c->base >= 0 && c->code[c->cur & S3G_HIST_MASK] == 154;
+	if ((c->base < 0 && !starting) || (!running && !starting && !ending) || c->capacity == 0)
 		goto unknown;
 	/* a stable snapshot: the free space did not move around the stats */
 	for (int tries = 0; tries < 50; tries++) {
@@ -800,6 +801,17 @@ static enum s3g_lost s3g_decide(struct s3g *s, void *ctx, struct st_error *err, 
 	if (f1 != f2 || f1 > c->capacity)
 		goto unknown;
 	running = b.state == S3G_BUILD_RUNNING || b.state == S3G_BUILD_PAUSED;
+	if (ending && !running) {
+		/* the build end ran: the build is finished, the buffer empty,
+		 * and its last line count takes in every command after our
+		 * build start, the build end included */
+		if (b.state == S3G_BUILD_FINISHED && f1 == c->capacity &&
+		    (size_t)b.line == c->cur - (size_t)c->base) {
+			s->st.resolved++;
+			return S3G_LOST_QUEUED;
+		}
+		goto unknown;
+	}
 	if (starting) {
 		/* the build start itself: no line count yet, but with no build
 		 * before ours, running means it ran, and the bytes queued say
