@@ -20,7 +20,7 @@ static const struct command commands[] = {
 	{"repair", cmd_repair, "repair a mesh exactly into printable solids and write STL"},
 	{"printers", cmd_printers, "list the printer profiles"},
 	{"ports", cmd_ports, "list serial ports and the printers they match"},
-	{"slice", cmd_slice, "slice a mesh into G-code for a printer (walls only so far)"},
+	{"slice", cmd_slice, "slice a mesh into G-code for a printer"},
 	{"print", cmd_print, "repair, slice and print a model in one go (simulated printer by default)"},
 	{"send", cmd_send, "stream a G-code file to a Marlin printer"},
 	{"sim", cmd_sim, "run a simulated printer on a pseudo-terminal"},
