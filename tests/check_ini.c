@@ -255,6 +255,9 @@ Suite *ini_suite(void)
 	Suite *s = suite_create("ini");
 	TCase *tc = tcase_create("readers");
 
+	/* about 20 profile and node loads: 0.6 s alone, past Check's default
+	 * 4 s once on a loaded machine */
+	tcase_set_timeout(tc, 60);
 	tcase_add_test(tc, test_profile_and_node_agree);
 	tcase_add_test(tc, test_line_limit_agrees);
 	tcase_add_test(tc, test_node_inline_comments);
