@@ -1,5 +1,5 @@
 /*
- * check_s3g.c - the S3G packet layer and driver (serial/s3g.c) and the
+ * check_s3g.c - the S3G packet layer and driver (serial/s3g*.c) and the
  * simulated Sailfish printer (serial/sim/sailfish_sim.c): CRC vectors,
  * framing and resync, command lengths, queries, thousands of packets
  * streamed over a pty with nothing lost or doubled (clean, 1 % corruption

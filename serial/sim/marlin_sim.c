@@ -9,6 +9,7 @@
  * a command-queue slot is free, as Marlin's get_serial_commands does, so a
  * host that over-fills the ring loses bytes.  Reply lines are paced the same
  * way and reach the host when their last byte has crossed the link.
+ * The executor and heaters are in marlin_sim_exec.c.
  */
 #define _GNU_SOURCE /* ppoll: the link's byte times are well under 1 ms */
 #include <errno.h>
@@ -24,108 +25,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "gcode.h"
-#include "marlin_sim.h"
-#include "sim_util.h"
-#include "st_grow.h"
-
-#define SIM_MAX_CMD 96		/* Marlin MAX_CMD_SIZE (bytes, NUL included) */
-#define SIM_PLANNER 16		/* Marlin BLOCK_BUFFER_SIZE */
-#define SIM_TX_MAX (1u << 20)	/* TX backlog cap (bytes) */
-#define SIM_AMBIENT 25.0	/* room temperature (degC) */
-#define SIM_ACCEL 1000.0	/* default acceleration (mm/s^2) */
-#define SIM_HOME_S 5.0		/* simulated G28 duration (s) */
-#define SIM_KEEPALIVE_S 2.0	/* HOST_KEEPALIVE interval (wall s) */
-
-/* A command waiting in (or running from) the queue. */
-struct sim_cmd {
-	bool has_n;
-	long n;
-	bool parsed;		/* gcode_parse accepted it */
-	struct gcode_line g;
-	char raw[SIM_MAX_CMD];	/* command text, for "Unknown command" */
-};
-
-/* What the command at the queue head is waiting for. */
-enum sim_block {
-	SIM_BLK_NONE = 0,
-	SIM_BLK_PLANNER_SLOT, /* G0/G1 with the planner full */
-	SIM_BLK_SYNC_TIMED,   /* planner empty, then wait dur (G4, G28, M400) */
-	SIM_BLK_HEAT,	      /* M109 / M190 */
-	SIM_BLK_BUSY,	      /* busy_at_line: held for busy_s wall seconds */
-};
-
-/* A reply line in the TX buffer: ends at byte end, may go out at ready. */
-struct sim_txmark {
-	size_t end;
-	double ready;
-};
-
-struct sim_heater {
-	double temp, target;	 /* degC */
-	double heat_rate, cool_rate; /* degC per simulated s */
-};
-
-struct sim_marlin {
-	struct sim_marlin_options o;
-	int master, slave;
-	char slave_path[128];
-	FILE *log;
-	bool own_log;
-	uint64_t rng;
-
-	double t_prev;		/* last loop time (wall s) */
-	uint8_t wire[4096];	/* bytes written by the host, still crossing the link */
-	size_t wire_len;
-	double in_t;		/* when the last byte delivered from wire arrived (wall s) */
-	double out_t;		/* when the last reply byte written finished crossing (wall s) */
-	double boot_until;	/* input ignored before this (wall s) */
-
-	uint8_t *rx;		/* RX ring as a linear buffer */
-	size_t rx_len;
-	bool rx_flush;		/* a line error asks to empty the ring */
-	uint64_t dropped;
-
-	char line[SIM_MAX_CMD];	/* line being assembled from the RX ring */
-	size_t line_len;
-	bool line_comment;
-	char ep[32];		/* emergency parser's view of the current line */
-	size_t ep_len;
-	bool ep_over;
-
-	struct sim_cmd *q;	/* command queue ring */
-	size_t q_head, q_count;
-	long last_n;
-
-	double planner_end[SIM_PLANNER]; /* end times of planned blocks (wall s) */
-	size_t planner_n;
-	double pos[4];		/* X Y Z E (mm) */
-	bool rel_xyz, rel_e;
-	double feed;		/* mm/s */
-
-	enum sim_block blk;
-	bool blk_synced;
-	double blk_dur, blk_until;
-	int blk_heater;		/* 0 hotend, 1 bed */
-	bool blk_heat_both;	/* R: wait for cooling too */
-	double next_temp_report, next_busy;
-	bool wait_cancel;
-
-	struct sim_heater heater[2];
-	double autoreport_s, next_autoreport;
-
-	char *tx;
-	size_t tx_len, tx_off, tx_cap;
-	struct sim_txmark *marks;
-	size_t marks_n, marks_cap;
-
-	bool halted, unplugged;
-	bool frozen;		/* freeze_at_line ran: no byte in or out any more */
-	bool number_spoilt;	/* spoil_number_at happened */
-	double thaw_at;		/* when a freeze_s stall ends (sim_now) */
-
-	struct sim_thread th;
-};
+#include "marlin_sim_int.h"
 
 /* Monotonic wall clock in seconds. */
 static double sim_now(void)
@@ -150,7 +50,7 @@ void sim_marlin_options_init(struct sim_marlin_options *o)
 }
 
 /* Append one reply line (newline added) to the TX buffer. */
-static void sim_send(struct sim_marlin *s, const char *text)
+void msim_send(struct sim_marlin *s, const char *text)
 {
 	size_t n = strlen(text);
 	if (s->unplugged)
@@ -175,33 +75,31 @@ static void sim_send(struct sim_marlin *s, const char *text)
 	s->marks_n++;
 }
 
-/* printf-style sim_send. */
-static void sim_sendf(struct sim_marlin *s, const char *fmt, ...)
-	__attribute__((format(printf, 2, 3)));
-static void sim_sendf(struct sim_marlin *s, const char *fmt, ...)
+/* printf-style msim_send. */
+void msim_sendf(struct sim_marlin *s, const char *fmt, ...)
 {
 	char buf[512];
 	va_list ap;
 	va_start(ap, fmt);
 	vsnprintf(buf, sizeof(buf), fmt, ap);
 	va_end(ap);
-	sim_send(s, buf);
+	msim_send(s, buf);
 }
 
 /* Send the boot banner and ignore input for the boot time. */
-static void sim_boot(struct sim_marlin *s, double now)
+void msim_boot(struct sim_marlin *s, double now)
 {
-	sim_send(s, "start");
-	sim_send(s, "echo:Marlin 2.1.2 (Stratum simulator)");
-	sim_send(s, "echo: Last Updated: 2023-03-20 | Author: (Stratum, sim)");
-	sim_send(s, "echo: Compiled: Stratum simulator");
-	sim_sendf(s, "echo: Free Memory: 2797  PlannerBufferBytes: %u", SIM_PLANNER * 77u);
-	sim_send(s, "echo:Hardcoded Default Settings Loaded");
+	msim_send(s, "start");
+	msim_send(s, "echo:Marlin 2.1.2 (Stratum simulator)");
+	msim_send(s, "echo: Last Updated: 2023-03-20 | Author: (Stratum, sim)");
+	msim_send(s, "echo: Compiled: Stratum simulator");
+	msim_sendf(s, "echo: Free Memory: 2797  PlannerBufferBytes: %u", SIM_PLANNER * 77u);
+	msim_send(s, "echo:Hardcoded Default Settings Loaded");
 	s->boot_until = now + s->o.boot_s / s->o.speedup;
 }
 
 /* Forget everything volatile, as a board reset does. */
-static void sim_reset_state(struct sim_marlin *s)
+void msim_reset_state(struct sim_marlin *s)
 {
 	s->rx_len = 0;
 	s->line_len = 0;
@@ -279,9 +177,9 @@ int sim_marlin_new(const struct sim_marlin_options *opts, struct sim_marlin **ou
 	s->o.log_path = NULL;
 	s->heater[0] = (struct sim_heater){SIM_AMBIENT, 0, 2.0, 1.0};
 	s->heater[1] = (struct sim_heater){SIM_AMBIENT, 0, 0.5, 0.3};
-	sim_reset_state(s);
+	msim_reset_state(s);
 	s->t_prev = sim_now();
-	sim_boot(s, s->t_prev);
+	msim_boot(s, s->t_prev);
 	s->th.run = sim_thread_run;
 	s->th.sim = s;
 	*out = s;
@@ -323,7 +221,7 @@ uint64_t sim_marlin_dropped_bytes(const struct sim_marlin *sim)
 }
 
 /* Free planner blocks at time now (finished blocks are retired). */
-static size_t sim_planner_free(struct sim_marlin *s, double now)
+size_t msim_planner_free(struct sim_marlin *s, double now)
 {
 	size_t k = 0;
 	for (size_t i = 0; i < s->planner_n; i++)
@@ -334,18 +232,18 @@ static size_t sim_planner_free(struct sim_marlin *s, double now)
 }
 
 /* "ok", or Marlin's ADVANCED_OK form. */
-static void sim_ok(struct sim_marlin *s, const struct sim_cmd *c, double now)
+void msim_ok(struct sim_marlin *s, const struct sim_cmd *c, double now)
 {
 	if (!s->o.advanced_ok) {
-		sim_send(s, "ok");
+		msim_send(s, "ok");
 		return;
 	}
-	size_t pf = sim_planner_free(s, now);
+	size_t pf = msim_planner_free(s, now);
 	size_t bf = s->o.bufsize - s->q_count;
 	if (c && c->has_n)
-		sim_sendf(s, "ok N%ld P%zu B%zu", c->n, pf, bf);
+		msim_sendf(s, "ok N%ld P%zu B%zu", c->n, pf, bf);
 	else
-		sim_sendf(s, "ok P%zu B%zu", pf, bf);
+		msim_sendf(s, "ok P%zu B%zu", pf, bf);
 }
 
 /*
@@ -360,13 +258,13 @@ static void sim_ok(struct sim_marlin *s, const struct sim_cmd *c, double now)
 static void sim_line_error(struct sim_marlin *s, const char *what)
 {
 	s->rx_flush = !s->o.keep_rx_on_error;
-	sim_sendf(s, "Error:%s, Last Line: %ld", what, s->last_n);
-	sim_sendf(s, "Resend: %ld", s->last_n + 1);
-	sim_send(s, "ok");
+	msim_sendf(s, "Error:%s, Last Line: %ld", what, s->last_n);
+	msim_sendf(s, "Resend: %ld", s->last_n + 1);
+	msim_send(s, "ok");
 }
 
 /* Temperature report as print_heater_states writes it (leading space). */
-static void sim_temp_string(const struct sim_marlin *s, char *buf, size_t cap)
+void msim_temp_string(const struct sim_marlin *s, char *buf, size_t cap)
 {
 	snprintf(buf, cap, " T:%.2f /%.2f B:%.2f /%.2f @:0 B@:0", s->heater[0].temp,
 		 s->heater[0].target, s->heater[1].temp, s->heater[1].target);
@@ -493,7 +391,7 @@ static void sim_emergency(struct sim_marlin *s, double now)
 		s->halted = true;
 		s->heater[0].target = s->heater[1].target = 0;
 		s->planner_n = 0;
-		sim_send(s, "Error:Printer halted. kill() called!");
+		msim_send(s, "Error:Printer halted. kill() called!");
 	} else if (!memcmp(p, "M108", 4)) {
 		s->wait_cancel = true;
 	} else if (!memcmp(p, "M410", 4)) {
@@ -533,7 +431,7 @@ static void sim_rx_byte(struct sim_marlin *s, uint8_t b, double now)
 /* Move bytes from the RX ring into lines while a queue slot is free and no
  * command blocks: Marlin reads serial input in its main loop, between
  * commands, not in the idle() a waiting command spins in. */
-static void sim_serial_commands(struct sim_marlin *s)
+void msim_serial_commands(struct sim_marlin *s)
 {
 	size_t i = 0;
 	if (s->blk != SIM_BLK_NONE || s->frozen)
@@ -563,307 +461,6 @@ static void sim_serial_commands(struct sim_marlin *s)
 }
 
 /* Write one execution-log line. */
-static void sim_log(struct sim_marlin *s, const struct sim_cmd *c)
-{
-	if (!s->log)
-		return;
-	if (c->has_n)
-		fprintf(s->log, "%ld %s\n", c->n, c->parsed ? c->g.text : c->raw);
-	else
-		fprintf(s->log, "- %s\n", c->parsed ? c->g.text : c->raw);
-	fflush(s->log);
-}
-
-/* Trapezoid move time (simulated s) for distance d (mm) at speed v (mm/s). */
-static double sim_move_time(double d, double v)
-{
-	if (d <= 0 || v <= 0)
-		return 0;
-	if (d >= v * v / SIM_ACCEL)
-		return d / v + v / SIM_ACCEL;
-	return 2.0 * sqrt(d / SIM_ACCEL);
-}
-
-/* Plan a G0/G1/G2/G3 into the planner (a free block is guaranteed). */
-static void sim_plan_move(struct sim_marlin *s, const struct gcode_line *g, double now)
-{
-	static const char axes[4] = {'X', 'Y', 'Z', 'E'};
-	double v, d2 = 0, de = 0;
-	if (gcode_word_value(g, 'F', &v) && v > 0)
-		s->feed = v / 60.0;
-	for (int a = 0; a < 4; a++) {
-		double target = s->pos[a];
-		bool rel = a == 3 ? s->rel_e : s->rel_xyz;
-		if (gcode_word_value(g, axes[a], &v))
-			target = rel ? s->pos[a] + v : v;
-		double dd = target - s->pos[a];
-		if (a < 3)
-			d2 += dd * dd;
-		else
-			de = fabs(dd);
-		s->pos[a] = target;
-	}
-	double d = d2 > 0 ? sqrt(d2) : de;
-	double dur = sim_move_time(d, s->feed) / s->o.speedup;
-	if (dur <= 0)
-		return;
-	double start = now;
-	for (size_t i = 0; i < s->planner_n; i++)
-		if (s->planner_end[i] > start)
-			start = s->planner_end[i];
-	s->planner_end[s->planner_n++] = start + dur;
-}
-
-/* M115 capability report. */
-static void sim_m115(struct sim_marlin *s)
-{
-	static const char *const caps[] = {
-		"SERIAL_XON_XOFF:0", "BINARY_FILE_TRANSFER:0", "EEPROM:0", "VOLUMETRIC:1",
-		"AUTOREPORT_POS:0", "AUTOREPORT_TEMP:1", "PROGRESS:0", "PRINT_JOB:1",
-		"AUTOLEVEL:0", "RUNOUT:0", "Z_PROBE:0", "LEVELING_DATA:0",
-		"BUILD_PERCENT:0", "SOFTWARE_POWER:0", "TOGGLE_LIGHTS:0",
-		"CASE_LIGHT_BRIGHTNESS:0", "EMERGENCY_PARSER:1", "HOST_ACTION_COMMANDS:1",
-		"PROMPT_SUPPORT:0", "SDCARD:0", "REPEAT:0", "SD_WRITE:0",
-		"AUTOREPORT_SD_STATUS:0", "LONG_FILENAME:0", "THERMAL_PROTECTION:1",
-		"MOTION_MODES:0", "ARCS:1", "BABYSTEPPING:0", "CHAMBER_TEMPERATURE:0",
-		"COOLER_TEMPERATURE:0", "MEATPACK:0",
-	};
-	if (s->o.no_firmware_name)
-		return; /* the ok alone */
-	sim_send(s, "FIRMWARE_NAME:Marlin 2.1.2 (Stratum simulator) "
-		    "SOURCE_CODE_URL:github.com/MarlinFirmware/Marlin PROTOCOL_VERSION:1.0 "
-		    "MACHINE_TYPE:Stratum Simulated Printer EXTRUDER_COUNT:1 "
-		    "UUID:cede2a2f-41a2-4748-9b12-c55c62f367ff");
-	for (size_t i = 0; i < sizeof(caps) / sizeof(caps[0]); i++)
-		sim_sendf(s, "Cap:%s", caps[i]);
-	sim_sendf(s, "Cap:ADVANCED_OK:%d", s->o.advanced_ok ? 1 : 0);
-}
-
-/* Start the queue-head command.  Returns true when it is finished. */
-static bool sim_exec_start(struct sim_marlin *s, struct sim_cmd *c, double now)
-{
-	const struct gcode_line *g = &c->g;
-	double v;
-	char buf[160];
-
-	if (!c->parsed || g->letter == 0) {
-		if (c->raw[0])
-			sim_sendf(s, "echo:Unknown command: \"%s\"", c->raw);
-		return true;
-	}
-	if (g->letter == 'G') {
-		switch (g->number) {
-		case 0: case 1: case 2: case 3:
-			if (sim_planner_free(s, now) == 0) {
-				s->blk = SIM_BLK_PLANNER_SLOT;
-				return false;
-			}
-			sim_plan_move(s, g, now);
-			return true;
-		case 4:
-			s->blk_dur = 0;
-			if (gcode_word_value(g, 'P', &v))
-				s->blk_dur = v / 1000.0;
-			if (gcode_word_value(g, 'S', &v))
-				s->blk_dur = v;
-			s->blk_dur /= s->o.speedup;
-			s->blk = SIM_BLK_SYNC_TIMED;
-			s->blk_synced = false;
-			return false;
-		case 28:
-			memset(s->pos, 0, 3 * sizeof(s->pos[0]));
-			s->blk_dur = SIM_HOME_S / s->o.speedup;
-			s->blk = SIM_BLK_SYNC_TIMED;
-			s->blk_synced = false;
-			return false;
-		case 90: s->rel_xyz = false; s->rel_e = false; return true;
-		case 91: s->rel_xyz = true; s->rel_e = true; return true;
-		case 92:
-			for (int a = 0; a < 4; a++)
-				if (gcode_word_value(g, "XYZE"[a], &v))
-					s->pos[a] = v;
-			return true;
-		case 20: case 21: case 29: case 80:
-			return true;
-		default:
-			break;
-		}
-	} else if (g->letter == 'M') {
-		switch (g->number) {
-		case 104: case 109: case 140: case 190: {
-			int h = (g->number == 140 || g->number == 190) ? 1 : 0;
-			bool wait = g->number == 109 || g->number == 190;
-			bool r = false;
-			if (gcode_word_value(g, 'S', &v)) {
-				s->heater[h].target = v;
-			} else if (gcode_word_value(g, 'R', &v)) {
-				s->heater[h].target = v;
-				r = true;
-			}
-			if (!wait)
-				return true;
-			s->blk = SIM_BLK_HEAT;
-			s->blk_heater = h;
-			s->blk_heat_both = r;
-			s->wait_cancel = false;
-			s->next_temp_report = now + 1.0 / s->o.speedup;
-			return false;
-		}
-		case 105:
-			sim_temp_string(s, buf, sizeof(buf));
-			sim_sendf(s, "ok%s", buf);
-			return true;
-		case 110:
-			if (!c->has_n && gcode_word_value(g, 'N', &v))
-				s->last_n = (long)v;
-			return true;
-		case 114:
-			sim_sendf(s, "X:%.2f Y:%.2f Z:%.2f E:%.2f Count X:0 Y:0 Z:0", s->pos[0],
-				  s->pos[1], s->pos[2], s->pos[3]);
-			return true;
-		case 115:
-			sim_m115(s);
-			return true;
-		case 155:
-			s->autoreport_s = gcode_word_value(g, 'S', &v) && v > 0 ? v : 0;
-			s->next_autoreport = now + s->autoreport_s;
-			return true;
-		case 400:
-			s->blk_dur = 0;
-			s->blk = SIM_BLK_SYNC_TIMED;
-			s->blk_synced = false;
-			return false;
-		case 82: s->rel_e = false; return true;
-		case 83: s->rel_e = true; return true;
-		case 17: case 18: case 84: case 106: case 107: case 108: case 112: case 410:
-		case 73: case 117: case 118: case 201: case 203: case 204: case 205: case 220:
-		case 221: case 302: case 500: case 501: case 502: case 503: case 900: case 876:
-			return true;
-		default:
-			break;
-		}
-	} else if (g->letter == 'T' && g->number == 0) {
-		return true;
-	}
-	sim_sendf(s, "echo:Unknown command: \"%s\"", c->raw);
-	return true;
-}
-
-/* Is the blocked head command done? */
-static bool sim_exec_poll(struct sim_marlin *s, struct sim_cmd *c, double now)
-{
-	switch (s->blk) {
-	case SIM_BLK_PLANNER_SLOT:
-		if (sim_planner_free(s, now) == 0)
-			return false;
-		sim_plan_move(s, &c->g, now);
-		return true;
-	case SIM_BLK_SYNC_TIMED:
-		if (!s->blk_synced) {
-			if (sim_planner_free(s, now) < SIM_PLANNER)
-				return false;
-			s->blk_synced = true;
-			s->blk_until = now + s->blk_dur;
-		}
-		return now >= s->blk_until;
-	case SIM_BLK_BUSY:
-		return now >= s->blk_until;
-	case SIM_BLK_HEAT: {
-		struct sim_heater *h = &s->heater[s->blk_heater];
-		if (s->wait_cancel)
-			return true;
-		bool done = s->blk_heat_both ? fabs(h->temp - h->target) < 1.0
-					     : h->temp >= h->target - 1.0;
-		if (done)
-			return true;
-		if (now >= s->next_temp_report) {
-			char buf[160];
-			sim_temp_string(s, buf, sizeof(buf));
-			sim_sendf(s, "%s W:?", buf);
-			s->next_temp_report = now + 1.0 / s->o.speedup;
-		}
-		return false;
-	}
-	default:
-		return true;
-	}
-}
-
-/* Run queued commands as far as they go at time now. */
-static void sim_execute(struct sim_marlin *s, double now)
-{
-	while (s->q_count && !s->halted && !s->unplugged) {
-		struct sim_cmd *c = &s->q[s->q_head];
-		bool done;
-		if (s->blk == SIM_BLK_NONE) {
-			if (c->has_n && s->o.freeze_at_line > 0 && c->n == s->o.freeze_at_line &&
-			    !s->thaw_at) {
-				/* hangs before running it; after a stall it runs */
-				s->frozen = true;
-				s->thaw_at = s->o.freeze_s > 0 ? now + s->o.freeze_s : INFINITY;
-				return;
-			}
-			sim_log(s, c);
-			if (c->has_n && s->o.unplug_at_line > 0 && c->n == s->o.unplug_at_line) {
-				s->unplugged = true;
-				return;
-			}
-			if (c->has_n && s->o.reset_at_line > 0 && c->n == s->o.reset_at_line) {
-				sim_reset_state(s);
-				s->tx_len = s->tx_off = s->marks_n = 0;
-				sim_boot(s, now);
-				return;
-			}
-			s->next_busy = now + SIM_KEEPALIVE_S;
-			if (c->has_n && s->o.busy_at_line > 0 && c->n == s->o.busy_at_line) {
-				s->blk = SIM_BLK_BUSY;
-				s->blk_until = now + s->o.busy_s;
-				done = false;
-			} else {
-				done = sim_exec_start(s, c, now);
-			}
-		} else {
-			done = sim_exec_poll(s, c, now);
-		}
-		if (!done) {
-			if (now >= s->next_busy) {
-				sim_send(s, "echo:busy: processing");
-				s->next_busy = now + SIM_KEEPALIVE_S;
-			}
-			return;
-		}
-		s->blk = SIM_BLK_NONE;
-		if (!(c->parsed && c->g.letter == 'M' && c->g.number == 105))
-			sim_ok(s, c, now);
-		s->q_head = (s->q_head + 1) % s->o.bufsize;
-		s->q_count--;
-		sim_serial_commands(s); /* the main loop reads input between commands */
-	}
-}
-
-/* Heaters move toward their targets; M155 auto-reports. */
-static void sim_physics(struct sim_marlin *s, double now, double dt)
-{
-	for (int i = 0; i < 2; i++) {
-		struct sim_heater *h = &s->heater[i];
-		double goal = h->target > SIM_AMBIENT ? h->target : SIM_AMBIENT;
-		double step = dt * s->o.speedup * (goal > h->temp ? h->heat_rate : h->cool_rate);
-		if (fabs(goal - h->temp) <= step)
-			h->temp = goal;
-		else
-			h->temp += goal > h->temp ? step : -step;
-	}
-	if (s->autoreport_s > 0 && now >= s->next_autoreport && !s->halted) {
-		char buf[160];
-		sim_temp_string(s, buf, sizeof(buf));
-		sim_send(s, buf);
-		s->next_autoreport = now + s->autoreport_s;
-	}
-}
-
-/* Write the reply lines whose last byte has crossed the link by now (each
- * starts when it is ready and the line before it is through); lower *wake
- * to when the next one will have. */
 static int sim_flush_tx(struct sim_marlin *s, double now, double *wake)
 {
 	const double byte_s = 10.0 / s->o.baud;
@@ -923,7 +520,7 @@ static void sim_wire_deliver(struct sim_marlin *s, double now, double *wake)
 		 * faster than bytes arrive, so a late loop delivering a batch
 		 * must not overflow a ring the real board would have drained. */
 		if (s->rx_len >= s->o.rx_buffer)
-			sim_serial_commands(s);
+			msim_serial_commands(s);
 	}
 	memmove(s->wire, s->wire + i, s->wire_len - i);
 	s->wire_len -= i;
@@ -969,10 +566,10 @@ int sim_marlin_run(struct sim_marlin *s, volatile sig_atomic_t *stop, struct st_
 			continue;
 		}
 		sim_wire_deliver(s, now, &wake);
-		sim_physics(s, now, dt);
-		sim_serial_commands(s);
-		sim_execute(s, now);
-		sim_serial_commands(s);
+		msim_physics(s, now, dt);
+		msim_serial_commands(s);
+		msim_execute(s, now);
+		msim_serial_commands(s);
 		if (s->unplugged)
 			break;
 		if (sim_flush_tx(s, now, &wake))
