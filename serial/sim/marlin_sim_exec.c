@@ -294,12 +294,8 @@ void msim_physics(struct sim_marlin *s, double now, double dt)
 {
 	for (int i = 0; i < 2; i++) {
 		struct sim_heater *h = &s->heater[i];
-		double goal = h->target > SIM_AMBIENT ? h->target : SIM_AMBIENT;
-		double step = dt * s->o.speedup * (goal > h->temp ? h->heat_rate : h->cool_rate);
-		if (fabs(goal - h->temp) <= step)
-			h->temp = goal;
-		else
-			h->temp += goal > h->temp ? step : -step;
+		h->temp = sim_heater_step(h->temp, h->target, SIM_AMBIENT, h->heat_rate, h->cool_rate,
+					  dt * s->o.speedup);
 	}
 	if (s->autoreport_s > 0 && now >= s->next_autoreport && !s->halted) {
 		char buf[160];

@@ -264,12 +264,8 @@ void sfsim_physics(struct sim_sailfish *s, double dt)
 {
 	for (int i = 0; i < 3; i++) {
 		struct sf_heater *h = &s->heater[i];
-		double goal = h->target > SF_AMBIENT ? h->target : SF_AMBIENT;
-		double step = dt * s->o.speedup * (goal > h->temp ? h->heat_rate : h->cool_rate);
-		if (fabs(goal - h->temp) <= step)
-			h->temp = goal;
-		else
-			h->temp += goal > h->temp ? step : -step;
+		h->temp = sim_heater_step(h->temp, h->target, SF_AMBIENT, h->heat_rate, h->cool_rate,
+					  dt * s->o.speedup);
 	}
 }
 

@@ -4,6 +4,7 @@
 #define _GNU_SOURCE /* ppoll: the link's byte times are well under 1 ms */
 #include <errno.h>
 #include <fcntl.h>
+#include <math.h>
 #include <poll.h>
 #include <pty.h>
 #include <termios.h>
@@ -16,6 +17,16 @@
 double sim_clock(void)
 {
 	return st_mono_s();
+}
+
+double sim_heater_step(double temp, double target, double ambient, double heat_rate,
+		       double cool_rate, double scaled)
+{
+	double goal = target > ambient ? target : ambient;
+	double step = scaled * (goal > temp ? heat_rate : cool_rate);
+	if (fabs(goal - temp) <= step)
+		return goal;
+	return temp + (goal > temp ? step : -step);
 }
 
 double sim_rand01(uint64_t *state)

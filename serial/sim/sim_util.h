@@ -17,6 +17,12 @@
 /* sim_clock - monotonic wall clock in seconds. */
 double sim_clock(void);
 
+/* sim_heater_step - one heater's temperature after `scaled` simulated
+ * seconds: toward max(target, ambient) at heat_rate or cool_rate (°C/s),
+ * never past it. */
+double sim_heater_step(double temp, double target, double ambient, double heat_rate,
+		       double cool_rate, double scaled);
+
 /* sim_rand01 - xorshift64* step on *state: uniform double in [0, 1). */
 double sim_rand01(uint64_t *state);
 
