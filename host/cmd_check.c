@@ -14,23 +14,17 @@
 #include "meshio.h"
 #include "st_error.h"
 
-static void check_usage(FILE *out)
-{
-	fprintf(out,
-		"usage: stratum check FILE [--json] [--threads N]\n"
-		"\n"
-		"Reads an STL (binary or ASCII), OBJ or OFF file and reports its topology:\n"
-		"edges, holes, singular edges, components, Euler characteristic and genus,\n"
-		"degenerate and duplicate triangles, exact self-intersections, orientation,\n"
-		"volume, parts and cavities - and whether it is printable as it stands\n"
-		"(Attene's Definition 3.11 for each part; parts may touch along edges or at\n"
-		"vertices, cavities are closed shells facing inwards).  See docs/check.md.\n"
-		"\n"
-		"  --json        one JSON object on stdout instead of the text report\n"
-		"  --threads N   cores for the self-intersection test (default: all)\n"
-		"\n"
-		"Exit status: 0 printable, 1 not printable, 2 usage, 65 unreadable input.\n");
-}
+/* The help text around the option lines. */
+static const char check_head[] =
+    "usage: stratum check FILE [--json] [--threads N]\n"
+    "\n"
+    "Reads an STL (binary or ASCII), OBJ or OFF file and reports its topology:\n"
+    "edges, holes, singular edges, components, Euler characteristic and genus,\n"
+    "degenerate and duplicate triangles, exact self-intersections, orientation,\n"
+    "volume, parts and cavities - and whether it is printable as it stands\n"
+    "(Attene's Definition 3.11 for each part; parts may touch along edges or at\n"
+    "vertices, cavities are closed shells facing inwards).  See docs/check.md.\n"
+    "\n";
 
 /* Figures that explain a reason, for the text and JSON messages. */
 static void reason_detail(const struct mesh_report *r, enum mesh_reason why, char *buf,
@@ -182,18 +176,6 @@ static void print_text(const char *path, enum meshio_format fmt, const struct me
 	}
 }
 
-int cmd_parse_threads(const char *s)
-{
-	char *end;
-	long n;
-
-	errno = 0;
-	n = strtol(s, &end, 10);
-	if (errno || end == s || *end || n < 1 || n > 256)
-		return -1;
-	return (int)n;
-}
-
 int cmd_check(int argc, char **argv)
 {
 	const char *path = NULL;
@@ -205,33 +187,22 @@ int cmd_check(int argc, char **argv)
 	enum meshio_format fmt;
 	int rc;
 
-	for (int i = 1; i < argc; i++) {
-		if (!strcmp(argv[i], "--json")) {
-			json = true;
-		} else if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
-			threads = cmd_parse_threads(argv[++i]);
-			if (threads < 0) {
-				fprintf(stderr, "stratum check: --threads wants a number from 1 to 256, "
-						"not '%s'\n", argv[i]);
-				return ST_EXIT_USAGE;
-			}
-		} else if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-			check_usage(stdout);
-			return ST_EXIT_OK;
-		} else if (argv[i][0] == '-' && argv[i][1]) {
-			fprintf(stderr, "stratum check: unknown option '%s'\n", argv[i]);
-			check_usage(stderr);
-			return ST_EXIT_USAGE;
-		} else if (!path) {
-			path = argv[i];
-		} else {
-			fprintf(stderr, "stratum check: one file at a time ('%s' and '%s')\n", path,
-				argv[i]);
-			return ST_EXIT_USAGE;
-		}
-	}
+	const struct cmd_opt opts[] = {
+	    {"--json", 0, CMD_FLAG, &json, 0, 0, 0, NULL, NULL,
+	     "one JSON object on stdout instead of the text report", NULL, NULL},
+	    CMD_OPT_THREADS(&threads, "cores for the self-intersection test (default: all)"),
+	};
+	const struct cmd_spec spec = {
+	    .cmd = "stratum check", .head = check_head, .opt = opts,
+	    .nopt = sizeof(opts) / sizeof(opts[0]), .col = 16,
+	    .tail = "\nExit status: 0 printable, 1 not printable, 2 usage, 65 unreadable input.\n",
+	    .pos = &path, .npos = 1, .extra = "one file at a time ('%s' and '%s')"};
+
+	rc = cmd_parse(&spec, argc, argv);
+	if (rc)
+		return rc < 0 ? ST_EXIT_OK : rc;
 	if (!path) {
-		check_usage(stderr);
+		cmd_usage(&spec, stderr);
 		return ST_EXIT_USAGE;
 	}
 

@@ -1,10 +1,12 @@
 /*
  * cmd_opts.c - option parsing helpers shared by the subcommands (commands.h).
  */
+#include <math.h>
 #include <signal.h>
 #include <stdio.h>
 #include <string.h>
 
+#include "cfgopt.h"
 #include "commands.h"
 #include "st_number.h"
 
@@ -44,4 +46,151 @@ bool cmd_number(const char *cmd, const char *opt, const char *v, const char *wha
 		return true;
 	fprintf(stderr, "%s: %s wants %s, not '%s'\n", cmd, opt, what, v ? v : "");
 	return false;
+}
+
+/* The table entry argv's a names (long name, NAME=..., or -L); NULL if none. */
+static const struct cmd_opt *find_opt(const struct cmd_spec *spec, const char *a)
+{
+	for (size_t k = 0; k < spec->nopt; k++) {
+		const struct cmd_opt *o = &spec->opt[k];
+
+		if (o->letter && a[0] == '-' && a[1] == o->letter && !a[2])
+			return o;
+		if (o->kind == CMD_FLAG ? !strcmp(a, o->name) : cmd_is_opt(a, o->name))
+			return o;
+	}
+	return NULL;
+}
+
+/* A number value into o->dest; false when it does not read or is out of range. */
+static bool read_number(const struct cmd_opt *o, const char *v)
+{
+	double d;
+	bool whole = o->kind != CMD_DOUBLE;
+
+	if (st_parse_double(v, strlen(v), 0, &d) != ST_NUMBER_OK || (whole && d != floor(d)))
+		return false;
+	if ((o->flags & CMD_RANGE) &&
+	    (d > o->hi || d < o->lo || ((o->flags & CMD_ABOVE_LO) && d == o->lo)))
+		return false;
+	switch (o->kind) {
+	case CMD_INT:
+		*(int *)o->dest = (int)d;
+		break;
+	case CMD_LONG:
+		*(long *)o->dest = (long)d;
+		break;
+	case CMD_UNSIGNED:
+		*(unsigned *)o->dest = (unsigned)d;
+		break;
+	case CMD_U64:
+		*(uint64_t *)o->dest = (uint64_t)d;
+		break;
+	default:
+		*(double *)o->dest = d;
+		break;
+	}
+	return true;
+}
+
+/* argv[*i] is option o: take its value; 0 or ST_EXIT_USAGE after the message. */
+static int take_opt(const struct cmd_spec *spec, const struct cmd_opt *o, int argc, char **argv,
+		    int *i)
+{
+	const char *a = argv[*i], *name = a[1] == '-' ? o->name : a, *v = NULL;
+	char wants[200];
+
+	snprintf(wants, sizeof(wants), o->wants ? o->wants : "a value", o->lo, o->hi);
+	if (o->kind != CMD_FLAG) {
+		v = a[1] == '-' ? cmd_opt_value(argc, argv, i, o->name)
+				: (*i + 1 < argc ? argv[++*i] : NULL);
+		if (!v || (!*v && (o->flags & CMD_NONEMPTY))) {
+			fprintf(stderr, "%s: %s needs %s\n", spec->cmd, name,
+				o->kind == CMD_STRING ? wants : "a value");
+			return ST_EXIT_USAGE;
+		}
+	}
+	if (o->kind == CMD_FLAG) {
+		*(bool *)o->dest = true;
+	} else if (o->kind == CMD_STRING) {
+		*(const char **)o->dest = v;
+	} else if (o->kind == CMD_CUSTOM ? !o->read(v, o->dest) : !read_number(o, v)) {
+		fprintf(stderr, "%s: %s wants %s, not '%s'\n", spec->cmd, name, wants, v);
+		return ST_EXIT_USAGE;
+	}
+	if (o->given)
+		*o->given = o->name;
+	return 0;
+}
+
+int cmd_parse(const struct cmd_spec *spec, int argc, char **argv)
+{
+	size_t npos = 0;
+
+	for (int i = 1; i < argc; i++) {
+		const char *a = argv[i];
+		const struct cmd_opt *o;
+		int rc;
+
+		if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+			cmd_usage(spec, stdout);
+			return -1;
+		}
+		if ((o = find_opt(spec, a)) != NULL) {
+			rc = take_opt(spec, o, argc, argv, &i);
+		} else if (spec->cfg && (rc = cfgopt_parse(spec->cfg, spec->cmd, argc, argv, &i))) {
+			rc = rc < 0 ? ST_EXIT_USAGE : 0;
+		} else if (a[0] == '-' && a[1]) {
+			fprintf(stderr, "%s: unknown option '%s'\n", spec->cmd, a);
+			cmd_usage(spec, stderr);
+			return ST_EXIT_USAGE;
+		} else if (npos < spec->npos) {
+			spec->pos[npos++] = a;
+			rc = 0;
+		} else if (spec->extra) {
+			fprintf(stderr, "%s: ", spec->cmd);
+			fprintf(stderr, spec->extra, spec->npos ? spec->pos[0] : "", a);
+			fputc('\n', stderr);
+			return ST_EXIT_USAGE;
+		} else {
+			fprintf(stderr, "%s: unexpected argument '%s'\n", spec->cmd, a);
+			cmd_usage(spec, stderr);
+			return ST_EXIT_USAGE;
+		}
+		if (rc)
+			return rc;
+	}
+	return 0;
+}
+
+/* One option's help line(s): label, then the text, its '\n's indented to col. */
+static void usage_line(const struct cmd_opt *o, int col, FILE *f)
+{
+	char label[80], text[600];
+	const char *sp = o->arg ? " " : "", *arg = o->arg ? o->arg : "";
+	int n = o->letter ? snprintf(label, sizeof(label), "  -%c, %s%s%s", o->letter, o->name, sp, arg)
+			  : snprintf(label, sizeof(label), "  %s%s%s", o->name, sp, arg);
+
+	snprintf(text, sizeof(text), o->help, o->lo, o->hi);
+	fprintf(f, "%-*s%s", col, label, n >= col ? " " : "");
+	for (const char *t = text; *t; t++) {
+		fputc(*t, f);
+		if (*t == '\n')
+			fprintf(f, "%*s", col, "");
+	}
+	fputc('\n', f);
+}
+
+void cmd_usage(const struct cmd_spec *spec, FILE *f)
+{
+	fputs(spec->head, f);
+	for (size_t k = 0; k < spec->nopt; k++)
+		if (spec->opt[k].help)
+			usage_line(&spec->opt[k], spec->col, f);
+	if (spec->mid)
+		fputs(spec->mid, f);
+	if (spec->cfg)
+		cfgopt_usage(f);
+	if (spec->tail)
+		fputs(spec->tail, f);
 }

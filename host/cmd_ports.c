@@ -128,29 +128,22 @@ int cmd_ports(int argc, char **argv)
 	size_t n = 0;
 	int rc = ST_EXIT_OK;
 
-	for (int i = 1; i < argc; i++) {
-		if (!strcmp(argv[i], "--json")) {
-			json = true;
-		} else if (cmd_is_opt(argv[i], "--printer")) {
-			printer = cmd_opt_value(argc, argv, &i, "--printer");
-			if (!printer || !*printer) {
-				fprintf(stderr, "stratum ports: --printer needs a printer name or file "
-						"(see 'stratum printers')\n");
-				return ST_EXIT_USAGE;
-			}
-		} else if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-			printf("usage: stratum ports [--printer NAME] [--json]\n\n"
-			       "Lists the serial ports (name, stable /dev/serial/by-id name, USB\n"
-			       "VID:PID, manufacturer, product, serial number) and the printer\n"
-			       "profiles whose usb_ids match each one, then which port '--port auto'\n"
-			       "would choose (for the printer NAME when given) and why.\n");
-			return ST_EXIT_OK;
-		} else {
-			fprintf(stderr, "stratum ports: unknown argument '%s' (try --help)\n",
-				argv[i]);
-			return ST_EXIT_USAGE;
-		}
-	}
+	const struct cmd_opt opts[] = {
+	    {"--json", 0, CMD_FLAG, &json, 0, 0, 0, NULL, NULL, NULL, NULL, NULL},
+	    {"--printer", 0, CMD_STRING, &printer, CMD_NONEMPTY, 0, 0,
+	     "a printer name or file (see 'stratum printers')", "NAME", NULL, NULL, NULL},
+	};
+	const struct cmd_spec spec = {
+	    .cmd = "stratum ports", .opt = opts, .nopt = sizeof(opts) / sizeof(opts[0]),
+	    .head = "usage: stratum ports [--printer NAME] [--json]\n\n"
+		    "Lists the serial ports (name, stable /dev/serial/by-id name, USB\n"
+		    "VID:PID, manufacturer, product, serial number) and the printer\n"
+		    "profiles whose usb_ids match each one, then which port '--port auto'\n"
+		    "would choose (for the printer NAME when given) and why.\n"};
+
+	rc = cmd_parse(&spec, argc, argv);
+	if (rc)
+		return rc < 0 ? ST_EXIT_OK : rc;
 	if (printer && profile_find(printer, &want, &err)) {
 		fprintf(stderr, "stratum ports: %s\n", err.msg);
 		return profile_exit_status(err.code);

@@ -32,52 +32,24 @@
 #define REPAIR_HEAL_MAX 10.0	     /* mm, for --weld and --stitch: more is a typo */
 #define REPAIR_PROGRESS_MIN 100000   /* triangles before progress is shown */
 
-static void repair_usage(FILE *out)
-{
-	fprintf(out,
-		"usage: stratum repair IN -o OUT [--printer NAME|FILE.ini | --epsilon MM]\n"
-		"                      [--split] [--json] [--threads N] [--ascii]\n"
-		"                      [--weld MM] [--stitch MM] [--keep-holes]\n"
-		"\n"
-		"Repairs a mesh (STL, OBJ or OFF) into printable solids with Attene's\n"
-		"as-exact-as-possible pipeline: welds vertices a few float ulps apart,\n"
-		"stitches boundary gaps narrower than the stitch distance and fills holes\n"
-		"small against their shell, removes degenerate and duplicate triangles,\n"
-		"resolves every self-intersection exactly, keeps the outer hull, thickens\n"
-		"sheets and wires to EPSILON, and writes the result as STL.  Nothing that was\n"
-		"already solid is moved (except by rounding to the output precision).\n"
-		"\n"
-		"  -o, --output OUT  the STL to write (written only when the result is printable)\n"
-		"  --printer P       take EPSILON from this printer's nozzle diameter\n"
-		"  --epsilon MM      thickness for sheets and wires, 0 < MM <= 10\n"
-		"                    (default: the printer's nozzle, else 0.4; wins over --printer)\n"
-		"  --split           one file per part: OUT part.stl gives part-1.stl, part-2.stl...\n"
-		"  --json            one JSON object on stdout instead of the text report\n"
-		"  --threads N       cores for the exact passes (default: all)\n"
-		"  --ascii           write ASCII STL (double precision) instead of binary (float)\n"
-		"  --weld MM         weld vertices closer than MM (default: 8 float32 ulps of\n"
-		"                    the largest coordinate; 0 = off)\n"
-		"  --stitch MM       stitch boundary gaps up to MM (default 1.5 * EPSILON; 0 = off)\n"
-		"  --keep-holes      no stitching, no hole filling: every open part is a sheet\n"
-		"\n"
-		"Exit status: 0 repaired, 1 no printable result or OUT not written, 2 usage,\n"
-		"65 unreadable input or printer profile, 70 internal error.  See docs/repair.md.\n");
-}
-
-/*
- * Parse a length in mm with the project's number reader: lo < v <= max
- * (zero_ok: 0 <= v <= max); false when out of range.
- */
-static bool parse_mm(const char *s, bool zero_ok, double max, double *out)
-{
-	double v;
-
-	if (!s || st_parse_double(s, strlen(s), 0, &v) != ST_NUMBER_OK || isnan(v) || v < 0.0 ||
-	    (v == 0.0 && !zero_ok) || v > max)
-		return false;
-	*out = v;
-	return true;
-}
+/* The help text around the option lines. */
+static const char repair_head[] =
+    "usage: stratum repair IN -o OUT [--printer NAME|FILE.ini | --epsilon MM]\n"
+    "                      [--split] [--json] [--threads N] [--ascii]\n"
+    "                      [--weld MM] [--stitch MM] [--keep-holes]\n"
+    "\n"
+    "Repairs a mesh (STL, OBJ or OFF) into printable solids with Attene's\n"
+    "as-exact-as-possible pipeline: welds vertices a few float ulps apart,\n"
+    "stitches boundary gaps narrower than the stitch distance and fills holes\n"
+    "small against their shell, removes degenerate and duplicate triangles,\n"
+    "resolves every self-intersection exactly, keeps the outer hull, thickens\n"
+    "sheets and wires to EPSILON, and writes the result as STL.  Nothing that was\n"
+    "already solid is moved (except by rounding to the output precision).\n"
+    "\n";
+static const char repair_tail[] =
+    "\n"
+    "Exit status: 0 repaired, 1 no printable result or OUT not written, 2 usage,\n"
+    "65 unreadable input or printer profile, 70 internal error.  See docs/repair.md.\n";
 
 /*
  * The name of part k (from 1) of OUT: "dir/part.stl" -> "dir/part-k.stl",
@@ -590,78 +562,46 @@ static int repair_command(int argc, char **argv, struct repair_run *run)
 	memset(&rep, 0, sizeof(rep));
 	uint32_t *component = NULL;
 
-	for (int i = 1; i < argc; i++) {
-		const char *a = argv[i];
+	const struct cmd_opt opts[] = {
+	    {"--output", 'o', CMD_STRING, &out, CMD_NONEMPTY, 0, 0, "the output file name", "OUT",
+	     "the STL to write (written only when the result is printable)", NULL, NULL},
+	    {"--printer", 0, CMD_STRING, &printer, CMD_NONEMPTY, 0, 0,
+	     "a printer name or file (see 'stratum printers')", "P",
+	     "take EPSILON from this printer's nozzle diameter", NULL, NULL},
+	    {"--epsilon", 0, CMD_DOUBLE, &run->epsilon, CMD_RANGE | CMD_ABOVE_LO, 0,
+	     REPAIR_EPSILON_MAX, "a thickness in mm greater than %g and at most %g", "MM",
+	     "thickness for sheets and wires, %g < MM <= %g\n"
+	     "(default: the printer's nozzle, else 0.4; wins over --printer)", NULL, &eps_arg},
+	    {"--split", 0, CMD_FLAG, &split, 0, 0, 0, NULL, NULL,
+	     "one file per part: OUT part.stl gives part-1.stl, part-2.stl...", NULL, NULL},
+	    {"--json", 0, CMD_FLAG, &json, 0, 0, 0, NULL, NULL,
+	     "one JSON object on stdout instead of the text report", NULL, NULL},
+	    CMD_OPT_THREADS(&threads, "cores for the exact passes (default: all)"),
+	    {"--ascii", 0, CMD_FLAG, &ascii, 0, 0, 0, NULL, NULL,
+	     "write ASCII STL (double precision) instead of binary (float)", NULL, NULL},
+	    {"--weld", 0, CMD_DOUBLE, &weld, CMD_RANGE, 0, REPAIR_HEAL_MAX,
+	     "a distance in mm from %g (off) to %g", "MM",
+	     "weld vertices closer than MM (default: 8 float32 ulps of\n"
+	     "the largest coordinate; 0 = off)", NULL, NULL},
+	    {"--stitch", 0, CMD_DOUBLE, &stitch, CMD_RANGE, 0, REPAIR_HEAL_MAX,
+	     "a distance in mm from %g (off) to %g", "MM",
+	     "stitch boundary gaps up to MM (default 1.5 * EPSILON; 0 = off)", NULL, NULL},
+	    {"--keep-holes", 0, CMD_FLAG, &keep_holes, 0, 0, 0, NULL, NULL,
+	     "no stitching, no hole filling: every open part is a sheet", NULL, NULL},
+	};
+	const struct cmd_spec spec = {
+	    .cmd = "stratum repair", .head = repair_head, .opt = opts,
+	    .nopt = sizeof(opts) / sizeof(opts[0]), .col = 20, .tail = repair_tail, .pos = &in,
+	    .npos = 1,
+	    .extra = "one input file at a time ('%s' and '%s'); name the output with -o"};
 
-		if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-			repair_usage(stdout);
-			return ST_EXIT_OK;
-		} else if (!strcmp(a, "--json")) {
-			json = true;
-		} else if (!strcmp(a, "--split")) {
-			split = true;
-		} else if (!strcmp(a, "--ascii")) {
-			ascii = true;
-		} else if (!strcmp(a, "-o") || cmd_is_opt(a, "--output")) {
-			out = !strcmp(a, "-o") ? (i + 1 < argc ? argv[++i] : NULL)
-					       : cmd_opt_value(argc, argv, &i, "--output");
-			if (!out || !*out) {
-				fprintf(stderr, "stratum repair: %s needs the output file name\n", a);
-				return ST_EXIT_USAGE;
-			}
-		} else if (cmd_is_opt(a, "--printer")) {
-			printer = cmd_opt_value(argc, argv, &i, "--printer");
-			if (!printer || !*printer) {
-				fprintf(stderr, "stratum repair: --printer needs a printer name or "
-						"file (see 'stratum printers')\n");
-				return ST_EXIT_USAGE;
-			}
-		} else if (cmd_is_opt(a, "--epsilon")) {
-			eps_arg = cmd_opt_value(argc, argv, &i, "--epsilon");
-			if (!eps_arg || !parse_mm(eps_arg, false, REPAIR_EPSILON_MAX, &run->epsilon)) {
-				fprintf(stderr, "stratum repair: --epsilon wants a thickness in mm "
-						"greater than 0 and at most %g, not '%s'\n",
-					REPAIR_EPSILON_MAX, eps_arg ? eps_arg : "");
-				return ST_EXIT_USAGE;
-			}
-		} else if (!strcmp(a, "--keep-holes")) {
-			keep_holes = true;
-		} else if (cmd_is_opt(a, "--weld") || cmd_is_opt(a, "--stitch")) {
-			const bool is_weld = cmd_is_opt(a, "--weld");
-			const char *name = is_weld ? "--weld" : "--stitch";
-			const char *v = cmd_opt_value(argc, argv, &i, name);
-
-			if (!parse_mm(v, true, REPAIR_HEAL_MAX, is_weld ? &weld : &stitch)) {
-				fprintf(stderr, "stratum repair: %s wants a distance in mm from 0 "
-						"(off) to %g, not '%s'\n", name, REPAIR_HEAL_MAX,
-					v ? v : "");
-				return ST_EXIT_USAGE;
-			}
-		} else if (cmd_is_opt(a, "--threads")) {
-			const char *v = cmd_opt_value(argc, argv, &i, "--threads");
-
-			threads = v ? cmd_parse_threads(v) : -1;
-			if (threads < 0) {
-				fprintf(stderr, "stratum repair: --threads wants a number from 1 to 256, "
-						"not '%s'\n", v ? v : "");
-				return ST_EXIT_USAGE;
-			}
-		} else if (a[0] == '-' && a[1]) {
-			fprintf(stderr, "stratum repair: unknown option '%s'\n", a);
-			repair_usage(stderr);
-			return ST_EXIT_USAGE;
-		} else if (!in) {
-			in = a;
-		} else {
-			fprintf(stderr, "stratum repair: one input file at a time ('%s' and '%s'); "
-					"name the output with -o\n", in, a);
-			return ST_EXIT_USAGE;
-		}
-	}
+	rc = cmd_parse(&spec, argc, argv);
+	if (rc)
+		return rc < 0 ? ST_EXIT_OK : rc;
 	if (!in || !out) {
 		fprintf(stderr, "stratum repair: %s\n",
 			!in ? "no input file given" : "no output file given; add -o OUT.stl");
-		repair_usage(stderr);
+		cmd_usage(&spec, stderr);
 		return ST_EXIT_USAGE;
 	}
 

@@ -58,71 +58,39 @@ bool send_has_ext(const char *path, const char *ext)
 	return n > k && !strcasecmp(path + n - k, ext);
 }
 
-static void send_usage(FILE *out)
-{
-	fprintf(out,
-		"usage: stratum send FILE --port PATH --printer NAME [--json] [--baud N] [--force]\n"
-		"Streams FILE to the printer on PATH (a serial device, a pty or\n"
-		"tcp://HOST:PORT); progress goes to stderr, the report to stdout (one JSON\n"
-		"object with --json).  Ctrl-C stops safely: heaters and motors off.\n"
-		"  Marlin printers: FILE.gcode, with line numbers, checksums and resends.\n"
-		"  Sailfish printers (FlashForge Creator Pro): FILE.gcode, translated to X3G\n"
-		"  as it streams (as 'stratum x3g' does), or FILE.x3g; S3G packets.\n"
-		"G-code sliced for another printer is refused (exit 2).\n"
-		"  --force  " GUARD_FORCE_HELP "\n");
-}
-
 /* Parse argv; returns 0, or an exit status (-1 = --help shown). */
 static int send_parse(int argc, char **argv, struct send_args *a)
 {
+	const struct cmd_opt opts[] = {
+	    {"--force", 0, CMD_FLAG, &a->force, 0, 0, 0, NULL, NULL, GUARD_FORCE_HELP, NULL, NULL},
+	    {"--json", 0, CMD_FLAG, &a->json, 0, 0, 0, NULL, NULL, NULL, NULL, NULL},
+	    {"--port", 0, CMD_STRING, &a->port, 0, 0, 0, NULL, "PATH", NULL, NULL, NULL},
+	    {"--printer", 0, CMD_STRING, &a->printer, 0, 0, 0, NULL, "NAME", NULL, NULL, NULL},
+	    {"--baud", 0, CMD_LONG, &a->baud, CMD_RANGE, 300, 10000000,
+	     "a whole number from %.0f to %.0f", "N", NULL, NULL, NULL},
+	};
+	const struct cmd_spec spec = {
+	    .cmd = SEND_CMD, .opt = opts, .nopt = sizeof(opts) / sizeof(opts[0]), .col = 11,
+	    .head = "usage: stratum send FILE --port PATH --printer NAME [--json] [--baud N] "
+		    "[--force]\n"
+		    "Streams FILE to the printer on PATH (a serial device, a pty or\n"
+		    "tcp://HOST:PORT); progress goes to stderr, the report to stdout (one JSON\n"
+		    "object with --json).  Ctrl-C stops safely: heaters and motors off.\n"
+		    "  Marlin printers: FILE.gcode, with line numbers, checksums and resends.\n"
+		    "  Sailfish printers (FlashForge Creator Pro): FILE.gcode, translated to X3G\n"
+		    "  as it streams (as 'stratum x3g' does), or FILE.x3g; S3G packets.\n"
+		    "G-code sliced for another printer is refused (exit 2).\n",
+	    .pos = &a->file, .npos = 1, .extra = "one file at a time ('%s' and '%s')"};
+	int rc;
+
 	memset(a, 0, sizeof(*a));
-	for (int i = 1; i < argc; i++) {
-		const char *s = argv[i], *v;
-		if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
-			send_usage(stdout);
-			return -1;
-		} else if (!strcmp(s, "--force")) {
-			a->force = true;
-		} else if (!strcmp(s, "--json")) {
-			a->json = true;
-		} else if (cmd_is_opt(s, "--port")) {
-			if (!(v = cmd_opt_value(argc, argv, &i, "--port")))
-				goto missing;
-			a->port = v;
-		} else if (cmd_is_opt(s, "--printer")) {
-			if (!(v = cmd_opt_value(argc, argv, &i, "--printer")))
-				goto missing;
-			a->printer = v;
-		} else if (cmd_is_opt(s, "--baud")) {
-			double b;
-			if (!(v = cmd_opt_value(argc, argv, &i, "--baud")))
-				goto missing;
-			if (gcode_read_number(v, strlen(v), &b, NULL) || b < 300 || b > 10000000 ||
-			    b != floor(b)) {
-				fprintf(stderr, SEND_CMD ": --baud wants a whole number from 300 to "
-							 "10000000, not '%s'\n", v);
-				return ST_EXIT_USAGE;
-			}
-			a->baud = (long)b;
-		} else if (s[0] == '-' && s[1]) {
-			fprintf(stderr, SEND_CMD ": unknown option '%s'\n", s);
-			send_usage(stderr);
-			return ST_EXIT_USAGE;
-		} else if (!a->file) {
-			a->file = s;
-		} else {
-			fprintf(stderr, SEND_CMD ": one file only ('%s' is extra)\n", s);
-			return ST_EXIT_USAGE;
-		}
-		continue;
-missing:
-		fprintf(stderr, SEND_CMD ": %s needs a value\n", s);
-		return ST_EXIT_USAGE;
-	}
+	rc = cmd_parse(&spec, argc, argv);
+	if (rc)
+		return rc;
 	if (!a->file || !a->port || !a->printer) {
 		fprintf(stderr, SEND_CMD ": %s is required\n",
 			!a->file ? "a FILE" : !a->port ? "--port" : "--printer");
-		send_usage(stderr);
+		cmd_usage(&spec, stderr);
 		return ST_EXIT_USAGE;
 	}
 	return 0;

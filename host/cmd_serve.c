@@ -17,25 +17,21 @@
 
 #define SERVE_CMD "stratum serve"
 
-static void serve_usage(FILE *out)
-{
-	fprintf(out,
-		"usage: stratum serve --config NODE.ini [--listen ADDR:PORT]\n"
-		"\n"
-		"Runs the farm node: every printer of the config with its own job queue,\n"
-		"behind an OctoPrint-compatible HTTP API that PrusaSlicer and Cura upload to.\n"
-		"Uploaded STL/OBJ models are repaired and sliced with the printer's profile.\n"
-		"The queue lives in DATA_DIR/queue.db and survives a crash; a print that was\n"
-		"running is marked interrupted and waits for an operator.  See docs/serve.md.\n"
-		"\n"
-		"  --config FILE      the node's config (docs/serve.md)\n"
-		"  --listen ADDR:PORT listen there instead of the config's listen = (port 0:\n"
-		"                     any free port, logged at start)\n"
-		"\n"
-		"Stops cleanly on SIGTERM or SIGINT.  Exit status: 0 stopped by a signal,\n"
-		"2 usage, 65 bad config or printer profile, 69 cannot listen, 70 internal\n"
-		"error.\n");
-}
+/* The help text around the option lines. */
+static const char serve_head[] =
+    "usage: stratum serve --config NODE.ini [--listen ADDR:PORT]\n"
+    "\n"
+    "Runs the farm node: every printer of the config with its own job queue,\n"
+    "behind an OctoPrint-compatible HTTP API that PrusaSlicer and Cura upload to.\n"
+    "Uploaded STL/OBJ models are repaired and sliced with the printer's profile.\n"
+    "The queue lives in DATA_DIR/queue.db and survives a crash; a print that was\n"
+    "running is marked interrupted and waits for an operator.  See docs/serve.md.\n"
+    "\n";
+static const char serve_tail[] =
+    "\n"
+    "Stops cleanly on SIGTERM or SIGINT.  Exit status: 0 stopped by a signal,\n"
+    "2 usage, 65 bad config or printer profile, 69 cannot listen, 70 internal\n"
+    "error.\n";
 
 /* Log sink: a UTC time stamp, then the record. */
 static void log_stderr(const char *line, void *ctx)
@@ -61,31 +57,23 @@ int cmd_serve(int argc, char **argv)
 	int sig = 0, rc;
 	static struct node_config cfg_store; /* large: kept off the stack */
 
-	for (int i = 1; i < argc; i++) {
-		if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-			serve_usage(stdout);
-			return ST_EXIT_OK;
-		} else if (cmd_is_opt(argv[i], "--config")) {
-			config = cmd_opt_value(argc, argv, &i, "--config");
-			if (!config || !*config) {
-				fprintf(stderr, SERVE_CMD ": --config needs the node's config file\n");
-				return ST_EXIT_USAGE;
-			}
-		} else if (cmd_is_opt(argv[i], "--listen")) {
-			listen = cmd_opt_value(argc, argv, &i, "--listen");
-			if (!listen) {
-				fprintf(stderr, SERVE_CMD ": --listen needs ADDR:PORT\n");
-				return ST_EXIT_USAGE;
-			}
-		} else {
-			fprintf(stderr, SERVE_CMD ": unknown option '%s'\n", argv[i]);
-			serve_usage(stderr);
-			return ST_EXIT_USAGE;
-		}
-	}
+	const struct cmd_opt opts[] = {
+	    {"--config", 0, CMD_STRING, &config, CMD_NONEMPTY, 0, 0, "the node's config file",
+	     "FILE", "the node's config (docs/serve.md)", NULL, NULL},
+	    {"--listen", 0, CMD_STRING, &listen, 0, 0, 0, "ADDR:PORT", "ADDR:PORT",
+	     "listen there instead of the config's listen = (port 0:\n"
+	     "any free port, logged at start)", NULL, NULL},
+	};
+	const struct cmd_spec spec = {.cmd = SERVE_CMD, .head = serve_head, .opt = opts,
+				      .nopt = sizeof(opts) / sizeof(opts[0]), .col = 21,
+				      .tail = serve_tail};
+
+	rc = cmd_parse(&spec, argc, argv);
+	if (rc)
+		return rc < 0 ? ST_EXIT_OK : rc;
 	if (!config) {
 		fprintf(stderr, SERVE_CMD ": no config given; add --config NODE.ini\n");
-		serve_usage(stderr);
+		cmd_usage(&spec, stderr);
 		return ST_EXIT_USAGE;
 	}
 	cfg = &cfg_store;

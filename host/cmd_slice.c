@@ -33,9 +33,70 @@
 
 #define SLICE_CMD "stratum slice"
 
-static void slice_usage(FILE *out)
+/* The command line, checked for form; values are checked with the profile. */
+struct slice_args {
+	const char *in, *out, *printer;
+	struct cfgopt cfg; /* --load, --set, --KEY-NAME ... */
+	bool json, no_repair;
+	int threads; /* 0 = all */
+	/* the option's name when it was given */
+	const char *has_layer, *has_first, *has_perimeters, *has_infill, *has_center;
+	double layer_height, first_layer_height, infill, center[2];
+	int perimeters;
+};
+
+/* --infill D or D%: a number of percent. */
+static bool read_percent(const char *v, void *dest)
 {
-	fprintf(out,
+	size_t n = strlen(v);
+
+	if (n && v[n - 1] == '%')
+		n--;
+	return n && st_parse_double(v, n, 0, dest) == ST_NUMBER_OK;
+}
+
+/* --center X,Y. */
+static bool read_center(const char *v, void *dest)
+{
+	const char *comma = strchr(v, ',');
+	double *c = dest;
+
+	return comma && st_parse_double(v, (size_t)(comma - v), 0, &c[0]) == ST_NUMBER_OK &&
+	       st_parse_double(comma + 1, strlen(comma + 1), 0, &c[1]) == ST_NUMBER_OK;
+}
+
+/* Parse argv; 0 to go on, -1 after --help, else the exit status. */
+static int parse_args(int argc, char **argv, struct slice_args *a)
+{
+	const struct cmd_opt opts[] = {
+	    {"--output", 'o', CMD_STRING, &a->out, CMD_NONEMPTY, 0, 0, "the output file name",
+	     "OUT", "the G-code file (written only when everything succeeded)", NULL, NULL},
+	    {"--printer", 0, CMD_STRING, &a->printer, CMD_NONEMPTY, 0, 0,
+	     "a printer name or file (see 'stratum printers')", "P",
+	     "printer profile name ('stratum printers') or .ini file", NULL, NULL},
+	    {"--layer-height", 0, CMD_DOUBLE, &a->layer_height, 0, 0, 0, "a height in mm", "H",
+	     "mm, > 0 and at most the nozzle (default: the profile's)", NULL, &a->has_layer},
+	    {"--first-layer-height", 0, CMD_DOUBLE, &a->first_layer_height, 0, 0, 0,
+	     "a height in mm", "H", "mm, likewise (default: the profile's)", NULL, &a->has_first},
+	    /* the range of --perimeters is checked with the settings */
+	    {"--perimeters", 0, CMD_INT, &a->perimeters, CMD_RANGE, -1e6, 1e6,
+	     "a whole number of walls", "N", "walls per island, 0 or more (default: the profile's)",
+	     NULL, &a->has_perimeters},
+	    {"--infill", 0, CMD_CUSTOM, &a->infill, 0, 0, 0, "a density in percent from 0 to 100",
+	     "D", "infill density in percent, 0 to 100 (fill_density)", read_percent,
+	     &a->has_infill},
+	    {"--center", 0, CMD_CUSTOM, a->center, 0, 0, 0, "X,Y in mm (such as 125,105)", "X,Y",
+	     "put the model's centre there, mm (default: bed centre)", read_center,
+	     &a->has_center},
+	    {"--no-repair", 0, CMD_FLAG, &a->no_repair, 0, 0, 0, NULL, NULL,
+	     "slice the mesh as it is read", NULL, NULL},
+	    {"--json", 0, CMD_FLAG, &a->json, 0, 0, 0, NULL, NULL,
+	     "one JSON object on stdout instead of the text summary", NULL, NULL},
+	    CMD_OPT_THREADS(&a->threads, "cores for the repair, walls and infill (default: all)"),
+	};
+	const struct cmd_spec spec = {
+	    .cmd = SLICE_CMD, .opt = opts, .nopt = sizeof(opts) / sizeof(opts[0]), .col = 26,
+	    .head =
 		"usage: stratum slice MODEL -o OUT.gcode --printer NAME|FILE.ini\n"
 		"                     [--load FILE.ini]... [--set KEY=VALUE]... [--KEY-NAME V]...\n"
 		"                     [--layer-height H] [--first-layer-height H] [--perimeters N]\n"
@@ -49,169 +110,27 @@ static void slice_usage(FILE *out)
 		"It prints walls (perimeters, gap fill, thin walls), skins and sparse infill,\n"
 		"bridges, supports, skirt/brim, a raft, spiral vases and ironing as the\n"
 		"settings ask.  See docs/slicing.md.\n"
-		"\n"
-		"  -o, --output OUT        the G-code file (written only when everything succeeded)\n"
-		"  --printer P             printer profile name ('stratum printers') or .ini file\n"
-		"  --layer-height H        mm, > 0 and at most the nozzle (default: the profile's)\n"
-		"  --first-layer-height H  mm, likewise (default: the profile's)\n"
-		"  --perimeters N          walls per island, 0 or more (default: the profile's)\n"
-		"  --infill D              infill density in percent, 0 to 100 (fill_density)\n"
-		"  --center X,Y            put the model's centre there, mm (default: bed centre)\n"
-		"  --no-repair             slice the mesh as it is read\n"
-		"  --json                  one JSON object on stdout instead of the text summary\n"
-		"  --threads N             cores for the repair, walls and infill (default: all)\n"
-		"\n"
-		"Settings (--printer may be left out when --load gives a whole config):\n");
-	cfgopt_usage(out);
-	fprintf(out,
+		"\n",
+	    .mid = "\nSettings (--printer may be left out when --load gives a whole config):\n",
+	    .cfg = &a->cfg,
+	    .tail =
 		"\n"
 		"Exit status: 0 written, 1 the job cannot be done (no printable repair, the model\n"
 		"does not fit, OUT not written), 2 usage or bad settings, 65 unreadable model or\n"
-		"printer profile, 70 internal error.\n");
-}
+		"printer profile, 70 internal error.\n",
+	    .pos = &a->in, .npos = 1,
+	    .extra = "one model at a time ('%s' and '%s'); name the output with -o"};
+	int rc = cmd_parse(&spec, argc, argv);
 
-/* The command line, checked for form; values are checked with the profile. */
-struct slice_args {
-	const char *in, *out, *printer;
-	struct cfgopt cfg; /* --load, --set, --KEY-NAME ... */
-	bool json, no_repair;
-	int threads; /* 0 = all */
-	bool has_layer, has_first, has_perimeters, has_infill, has_center;
-	double layer_height, first_layer_height, infill, center[2];
-	int perimeters;
-};
-
-/* A number for option opt; false (message printed) when it is not one. */
-static bool parse_number(const char *opt, const char *v, const char *what, double *out)
-{
-	return cmd_number(SLICE_CMD, opt, v, what, out);
-}
-
-/* --infill D or D%: a number of percent. */
-static bool parse_percent(const char *v, double *out)
-{
-	size_t n = v ? strlen(v) : 0;
-
-	if (n && v[n - 1] == '%')
-		n--;
-	if (v && n && st_parse_double(v, n, 0, out) == ST_NUMBER_OK)
-		return true;
-	fprintf(stderr, SLICE_CMD ": --infill wants a density in percent from 0 to 100, not '%s'\n",
-		v ? v : "");
-	return false;
-}
-
-/* --center X,Y. */
-static bool parse_center(const char *v, double c[2])
-{
-	const char *comma = v ? strchr(v, ',') : NULL;
-
-	if (comma && st_parse_double(v, (size_t)(comma - v), 0, &c[0]) == ST_NUMBER_OK &&
-	    st_parse_double(comma + 1, strlen(comma + 1), 0, &c[1]) == ST_NUMBER_OK)
-		return true;
-	fprintf(stderr, SLICE_CMD ": --center wants X,Y in mm (such as 125,105), not '%s'\n",
-		v ? v : "");
-	return false;
-}
-
-/* --perimeters N: a whole number (its range is checked with the settings). */
-static bool parse_count(const char *v, int *out)
-{
-	double d;
-
-	if (v && st_parse_double(v, strlen(v), 0, &d) == ST_NUMBER_OK && d == floor(d) &&
-	    fabs(d) <= 1e6) {
-		*out = (int)d;
-		return true;
-	}
-	fprintf(stderr, SLICE_CMD ": --perimeters wants a whole number of walls, not '%s'\n",
-		v ? v : "");
-	return false;
-}
-
-/* Parse argv; 0 to go on, -1 after --help, else the exit status. */
-static int parse_args(int argc, char **argv, struct slice_args *a)
-{
-	for (int i = 1; i < argc; i++) {
-		const char *s = argv[i];
-		const char *v;
-		int taken;
-
-		if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
-			slice_usage(stdout);
-			return -1;
-		} else if (!strcmp(s, "--json")) {
-			a->json = true;
-		} else if (!strcmp(s, "--no-repair")) {
-			a->no_repair = true;
-		} else if (!strcmp(s, "-o") || cmd_is_opt(s, "--output")) {
-			a->out = !strcmp(s, "-o") ? (i + 1 < argc ? argv[++i] : NULL)
-						  : cmd_opt_value(argc, argv, &i, "--output");
-			if (!a->out || !*a->out) {
-				fprintf(stderr, SLICE_CMD ": %s needs the output file name\n", s);
-				return ST_EXIT_USAGE;
-			}
-		} else if (cmd_is_opt(s, "--printer")) {
-			a->printer = cmd_opt_value(argc, argv, &i, "--printer");
-			if (!a->printer || !*a->printer) {
-				fprintf(stderr, SLICE_CMD ": --printer needs a printer name or file "
-							  "(see 'stratum printers')\n");
-				return ST_EXIT_USAGE;
-			}
-		} else if (cmd_is_opt(s, "--layer-height")) {
-			v = cmd_opt_value(argc, argv, &i, "--layer-height");
-			if (!parse_number("--layer-height", v, "a height in mm", &a->layer_height))
-				return ST_EXIT_USAGE;
-			a->has_layer = true;
-		} else if (cmd_is_opt(s, "--first-layer-height")) {
-			v = cmd_opt_value(argc, argv, &i, "--first-layer-height");
-			if (!parse_number("--first-layer-height", v, "a height in mm",
-					  &a->first_layer_height))
-				return ST_EXIT_USAGE;
-			a->has_first = true;
-		} else if (cmd_is_opt(s, "--perimeters")) {
-			if (!parse_count(cmd_opt_value(argc, argv, &i, "--perimeters"),
-					 &a->perimeters))
-				return ST_EXIT_USAGE;
-			a->has_perimeters = true;
-		} else if (cmd_is_opt(s, "--infill")) {
-			if (!parse_percent(cmd_opt_value(argc, argv, &i, "--infill"), &a->infill))
-				return ST_EXIT_USAGE;
-			a->has_infill = true;
-		} else if (cmd_is_opt(s, "--center")) {
-			if (!parse_center(cmd_opt_value(argc, argv, &i, "--center"), a->center))
-				return ST_EXIT_USAGE;
-			a->has_center = true;
-		} else if (cmd_is_opt(s, "--threads")) {
-			v = cmd_opt_value(argc, argv, &i, "--threads");
-			a->threads = v ? cmd_parse_threads(v) : -1;
-			if (a->threads < 0) {
-				fprintf(stderr, SLICE_CMD ": --threads wants a number from 1 to 256, "
-							  "not '%s'\n", v ? v : "");
-				return ST_EXIT_USAGE;
-			}
-		} else if ((taken = cfgopt_parse(&a->cfg, SLICE_CMD, argc, argv, &i)) != 0) {
-			if (taken < 0)
-				return ST_EXIT_USAGE;
-		} else if (s[0] == '-' && s[1]) {
-			fprintf(stderr, SLICE_CMD ": unknown option '%s'\n", s);
-			slice_usage(stderr);
-			return ST_EXIT_USAGE;
-		} else if (!a->in) {
-			a->in = s;
-		} else {
-			fprintf(stderr, SLICE_CMD ": one model at a time ('%s' and '%s'); name the "
-						  "output with -o\n", a->in, s);
-			return ST_EXIT_USAGE;
-		}
-	}
+	if (rc)
+		return rc;
 	if (!a->in || !a->out || (!a->printer && !a->cfg.has_files)) {
 		fprintf(stderr, SLICE_CMD ": %s\n",
 			!a->in	    ? "no model file given"
 			: !a->out   ? "no output file given; add -o OUT.gcode"
 				    : "no printer given; add --printer NAME ('stratum printers' "
 				      "lists them) or --load a PrusaSlicer config");
-		slice_usage(stderr);
+		cmd_usage(&spec, stderr);
 		return ST_EXIT_USAGE;
 	}
 	return 0;
@@ -241,7 +160,7 @@ static int config_from_profile(const struct profile *p, const struct slice_args 
 	if (a->has_infill)
 		c->infill.density = a->infill;
 	slicer_config_modes(c); /* the summary shows what is printed */
-	c->bed.has_center = a->has_center;
+	c->bed.has_center = a->has_center != NULL;
 	c->bed.center_x = a->center[0];
 	c->bed.center_y = a->center[1];
 	c->threads = a->threads;

@@ -32,31 +32,6 @@
 #define X3G_JSON_WARNINGS 100	   /* warnings listed in --json output */
 #define X3G_DECODE_MAX (1ul << 30) /* largest X3G file --decode reads, bytes */
 
-static void x3g_usage(FILE *out)
-{
-	fprintf(out,
-		"usage: stratum x3g IN.gcode -o OUT.x3g --printer NAME|FILE.ini\n"
-		"                   [--flavor reprap|makerbot] [--json] [--force]\n"
-		"       stratum x3g --decode FILE.x3g [--json]\n"
-		"\n"
-		"Translates G-code into X3G, the binary command stream of Sailfish printers\n"
-		"(FlashForge Creator Pro, Makerbot Replicator 1/2), as GPX does.  Commands\n"
-		"X3G cannot express are reported as warnings with their line number.\n"
-		"With --decode, lists the commands of an X3G file, one per line.\n"
-		"\n"
-		"  -o, --output OUT   the X3G file (written only when the whole input translated)\n"
-		"  --printer P        a sailfish printer profile ('stratum printers') or .ini file\n"
-		"  --flavor F         reprap (default; makerware profiles: makerbot) or makerbot:\n"
-		"                     how M106/M107, M109 and T words are read, as GPX -r / -g\n"
-		"  --decode FILE      list FILE's commands instead of translating\n"
-		"  --force            " GUARD_FORCE_HELP "\n"
-		"  --json             one JSON object on stdout instead of the text output\n"
-		"\n"
-		"Exit status: 0 done, 1 OUT could not be written, 2 usage, not a sailfish\n"
-		"printer or G-code sliced for another printer, 65 bad G-code, X3G or printer\n"
-		"profile, 70 internal error.\n");
-}
-
 struct x3g_args {
 	const char *in, *out, *printer, *decode, *flavor;
 	bool json, force;
@@ -65,51 +40,41 @@ struct x3g_args {
 /* Parse argv; 0 to go on, -1 after --help, else the exit status. */
 static int parse_args(int argc, char **argv, struct x3g_args *a)
 {
-	for (int i = 1; i < argc; i++) {
-		const char *s = argv[i];
-		const char **slot = NULL, *name = s;
+	const struct cmd_opt opts[] = {
+	    {"--output", 'o', CMD_STRING, &a->out, CMD_NONEMPTY, 0, 0, NULL, "OUT",
+	     "the X3G file (written only when the whole input translated)", NULL, NULL},
+	    {"--printer", 0, CMD_STRING, &a->printer, CMD_NONEMPTY, 0, 0, NULL, "P",
+	     "a sailfish printer profile ('stratum printers') or .ini file", NULL, NULL},
+	    {"--flavor", 0, CMD_STRING, &a->flavor, CMD_NONEMPTY, 0, 0, NULL, "F",
+	     "reprap (default; makerware profiles: makerbot) or makerbot:\n"
+	     "how M106/M107, M109 and T words are read, as GPX -r / -g", NULL, NULL},
+	    {"--decode", 0, CMD_STRING, &a->decode, CMD_NONEMPTY, 0, 0, NULL, "FILE",
+	     "list FILE's commands instead of translating", NULL, NULL},
+	    {"--force", 0, CMD_FLAG, &a->force, 0, 0, 0, NULL, NULL, GUARD_FORCE_HELP, NULL, NULL},
+	    {"--json", 0, CMD_FLAG, &a->json, 0, 0, 0, NULL, NULL,
+	     "one JSON object on stdout instead of the text output", NULL, NULL},
+	};
+	const struct cmd_spec spec = {
+	    .cmd = X3G_CMD, .opt = opts, .nopt = sizeof(opts) / sizeof(opts[0]), .col = 21,
+	    .head = "usage: stratum x3g IN.gcode -o OUT.x3g --printer NAME|FILE.ini\n"
+		    "                   [--flavor reprap|makerbot] [--json] [--force]\n"
+		    "       stratum x3g --decode FILE.x3g [--json]\n"
+		    "\n"
+		    "Translates G-code into X3G, the binary command stream of Sailfish printers\n"
+		    "(FlashForge Creator Pro, Makerbot Replicator 1/2), as GPX does.  Commands\n"
+		    "X3G cannot express are reported as warnings with their line number.\n"
+		    "With --decode, lists the commands of an X3G file, one per line.\n"
+		    "\n",
+	    .tail = "\n"
+		    "Exit status: 0 done, 1 OUT could not be written, 2 usage, not a sailfish\n"
+		    "printer or G-code sliced for another printer, 65 bad G-code, X3G or printer\n"
+		    "profile, 70 internal error.\n",
+	    .pos = &a->in, .npos = 1,
+	    .extra = "one G-code file at a time ('%s' and '%s'); name the output with -o"};
+	int rc = cmd_parse(&spec, argc, argv);
 
-		if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
-			x3g_usage(stdout);
-			return -1;
-		} else if (!strcmp(s, "--json")) {
-			a->json = true;
-			continue;
-		} else if (!strcmp(s, "--force")) {
-			a->force = true;
-			continue;
-		} else if (!strcmp(s, "-o")) {
-			a->out = i + 1 < argc ? argv[++i] : NULL;
-			slot = &a->out;
-		} else if (cmd_is_opt(s, "--output")) {
-			a->out = cmd_opt_value(argc, argv, &i, name = "--output");
-			slot = &a->out;
-		} else if (cmd_is_opt(s, "--printer")) {
-			a->printer = cmd_opt_value(argc, argv, &i, name = "--printer");
-			slot = &a->printer;
-		} else if (cmd_is_opt(s, "--decode")) {
-			a->decode = cmd_opt_value(argc, argv, &i, name = "--decode");
-			slot = &a->decode;
-		} else if (cmd_is_opt(s, "--flavor")) {
-			a->flavor = cmd_opt_value(argc, argv, &i, name = "--flavor");
-			slot = &a->flavor;
-		} else if (s[0] == '-' && s[1]) {
-			fprintf(stderr, X3G_CMD ": unknown option '%s'\n", s);
-			x3g_usage(stderr);
-			return ST_EXIT_USAGE;
-		} else if (!a->in) {
-			a->in = s;
-			continue;
-		} else {
-			fprintf(stderr, X3G_CMD ": one G-code file at a time ('%s' and '%s'); name "
-					"the output with -o\n", a->in, s);
-			return ST_EXIT_USAGE;
-		}
-		if (!*slot || !**slot) {
-			fprintf(stderr, X3G_CMD ": %s needs a value\n", name);
-			return ST_EXIT_USAGE;
-		}
-	}
+	if (rc)
+		return rc;
 	if (a->decode) {
 		if (a->in || a->out || a->printer || a->flavor || a->force) {
 			fprintf(stderr, X3G_CMD ": --decode takes only the X3G file (and --json)\n");
@@ -121,7 +86,7 @@ static int parse_args(int argc, char **argv, struct x3g_args *a)
 		fprintf(stderr, X3G_CMD ": %s\n",
 			!a->in ? "no G-code file given" : !a->out ? "no output given (-o OUT.x3g)"
 							  : "no printer given (--printer NAME)");
-		x3g_usage(stderr);
+		cmd_usage(&spec, stderr);
 		return ST_EXIT_USAGE;
 	}
 	if (a->flavor && strcmp(a->flavor, "reprap") && strcmp(a->flavor, "makerbot")) {

@@ -8,6 +8,8 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
 
 #include "st_error.h"
 #include "x3g.h"
@@ -23,12 +25,6 @@ int cmd_send(int argc, char **argv);	 /* host/cmd_send.c */
 int cmd_serve(int argc, char **argv);	 /* host/cmd_serve.c */
 int cmd_preview(int argc, char **argv);	 /* host/cmd_preview.c */
 int cmd_print(int argc, char **argv);	 /* host/cmd_print.c */
-
-/*
- * cmd_parse_threads - the value of --threads N: N as an int, or -1 when it
- * is not a whole number in 1..256 (host/cmd_check.c).
- */
-int cmd_parse_threads(const char *s);
 
 /*
  * cmd_opt_value - the value of option argv[*i] given as "NAME VALUE" (then
@@ -70,5 +66,78 @@ struct json_t;
  * failed (host/cmd_output.c).
  */
 int cmd_json_out(struct json_t *o, size_t flags);
+
+/*
+ * The option table of one subcommand: each option is declared once, with
+ * its value's kind, range and help line, and both cmd_parse and the --help
+ * text (cmd_usage) read it.
+ */
+enum cmd_kind {
+	CMD_FLAG,     /* bool *: set true */
+	CMD_STRING,   /* const char **: the value */
+	CMD_DOUBLE,   /* double * */
+	CMD_INT,      /* int *: a whole number */
+	CMD_LONG,     /* long *: a whole number */
+	CMD_UNSIGNED, /* unsigned *: a whole number */
+	CMD_U64,      /* uint64_t *: a whole number */
+	CMD_CUSTOM,   /* read by .read(value, dest); false: refused */
+};
+
+#define CMD_NONEMPTY 1u	 /* CMD_STRING: "" is refused as missing */
+#define CMD_ABOVE_LO 2u	 /* numbers: lo itself is refused (lo < v <= hi) */
+#define CMD_RANGE 4u	 /* numbers: refused outside lo..hi */
+
+struct cmd_opt {
+	const char *name; /* "--output" */
+	char letter;	  /* 'o' for -o, or 0 */
+	enum cmd_kind kind;
+	void *dest;
+	unsigned flags;
+	double lo, hi;
+	/* The refusal: "CMD: NAME wants WANTS, not 'V'" for a value that does
+	 * not read, "CMD: NAME needs WANTS" for a missing string (NULL: "a
+	 * value"); a printf format given lo and hi. */
+	const char *wants;
+	const char *arg;  /* the value's name in the help ("OUT"), or NULL */
+	const char *help; /* printf format given lo and hi; '\n' continues the
+			   * text under itself; NULL: not listed */
+	bool (*read)(const char *v, void *dest); /* CMD_CUSTOM */
+	const char **given; /* when not NULL, set to NAME when the option is given */
+};
+
+struct cfgopt;
+struct cmd_spec {
+	const char *cmd;   /* "stratum repair" */
+	const char *head;  /* the help text before the options */
+	const struct cmd_opt *opt;
+	size_t nopt;
+	int col;	   /* where the help lines start */
+	const char *mid;   /* after the options, before the settings options */
+	struct cfgopt *cfg; /* NULL, or takes the settings options (cfgopt.h) */
+	const char *tail;  /* the help text after them */
+	const char **pos;  /* slots for the arguments that are not options */
+	size_t npos;
+	/* "CMD: EXTRA" with the first and the extra argument when there are
+	 * more than npos; NULL: "unexpected argument 'A'" and the usage. */
+	const char *extra;
+};
+
+/*
+ * cmd_parse - read argv[1..argc) by spec: "NAME VALUE", "NAME=VALUE" and
+ * "-L VALUE" forms, the settings options, and arguments into spec->pos.
+ * Returns 0; -1 after printing the usage on stdout for --help or -h; or
+ * ST_EXIT_USAGE after printing "CMD: ..." naming the refused option (with
+ * the usage on stderr for an unknown one).
+ */
+/* --threads N of the commands with exact or parallel passes; help: what uses them. */
+#define CMD_OPT_THREADS(dest, help)                                                      \
+	{"--threads", 0, CMD_INT, dest, CMD_RANGE, 1, 256, "a number from %g to %g", "N", help, \
+	 NULL, NULL}
+
+int cmd_parse(const struct cmd_spec *spec, int argc, char **argv);
+
+/* cmd_usage - spec's help text: head, the option lines, mid, the settings
+ * options when spec->cfg, tail. */
+void cmd_usage(const struct cmd_spec *spec, FILE *f);
 
 #endif
