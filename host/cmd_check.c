@@ -188,13 +188,11 @@ int cmd_check(int argc, char **argv)
 	int rc;
 
 	const struct cmd_opt opts[] = {
-	    {"--json", 0, CMD_FLAG, &json, 0, 0, 0, NULL, NULL,
-	     "one JSON object on stdout instead of the text report", NULL, NULL},
+	    CMD_OPT_FLAG("--json", &json, "one JSON object on stdout instead of the text report"),
 	    CMD_OPT_THREADS(&threads, "cores for the self-intersection test (default: all)"),
 	};
 	const struct cmd_spec spec = {
-	    .cmd = "stratum check", .head = check_head, .opt = opts,
-	    .nopt = sizeof(opts) / sizeof(opts[0]), .col = 16,
+	    .cmd = "stratum check", .head = check_head, CMD_TABLE(opts), .col = 16,
 	    .tail = "\nExit status: 0 printable, 1 not printable, 2 usage, 65 unreadable input.\n",
 	    .pos = &path, .npos = 1, .extra = "one file at a time ('%s' and '%s')"};
 

@@ -1,5 +1,6 @@
 /*
- * cmd_opts.c - option parsing helpers shared by the subcommands (commands.h).
+ * cmd_opts.c - the subcommands' option parser and --help text, read from
+ * each command's option table (commands.h), and the helpers they share.
  */
 #include <math.h>
 #include <signal.h>
@@ -40,14 +41,6 @@ bool cmd_is_opt(const char *a, const char *name)
 	return !strncmp(a, name, len) && (a[len] == '\0' || a[len] == '=');
 }
 
-bool cmd_number(const char *cmd, const char *opt, const char *v, const char *what, double *out)
-{
-	if (v && st_parse_double(v, strlen(v), 0, out) == ST_NUMBER_OK)
-		return true;
-	fprintf(stderr, "%s: %s wants %s, not '%s'\n", cmd, opt, what, v ? v : "");
-	return false;
-}
-
 /* The table entry argv's a names (long name, NAME=..., or -L); NULL if none. */
 static const struct cmd_opt *find_opt(const struct cmd_spec *spec, const char *a)
 {
@@ -66,7 +59,7 @@ static const struct cmd_opt *find_opt(const struct cmd_spec *spec, const char *a
 static bool read_number(const struct cmd_opt *o, const char *v)
 {
 	double d;
-	bool whole = o->kind != CMD_DOUBLE;
+	bool whole = o->kind != CMD_DOUBLE && !(o->flags & CMD_TRUNCATE);
 
 	if (st_parse_double(v, strlen(v), 0, &d) != ST_NUMBER_OK || (whole && d != floor(d)))
 		return false;
@@ -101,7 +94,10 @@ static int take_opt(const struct cmd_spec *spec, const struct cmd_opt *o, int ar
 	char wants[200];
 
 	snprintf(wants, sizeof(wants), o->wants ? o->wants : "a value", o->lo, o->hi);
-	if (o->kind != CMD_FLAG) {
+	if ((o->flags & CMD_OPTIONAL) && !strcmp(a, o->name) &&
+	    (*i + 1 == argc || argv[*i + 1][0] == '-')) {
+		/* given without its value: leave dest as it is */
+	} else if (o->kind != CMD_FLAG) {
 		v = a[1] == '-' ? cmd_opt_value(argc, argv, i, o->name)
 				: (*i + 1 < argc ? argv[++*i] : NULL);
 		if (!v || (!*v && (o->flags & CMD_NONEMPTY))) {
@@ -113,7 +109,8 @@ static int take_opt(const struct cmd_spec *spec, const struct cmd_opt *o, int ar
 	if (o->kind == CMD_FLAG) {
 		*(bool *)o->dest = true;
 	} else if (o->kind == CMD_STRING) {
-		*(const char **)o->dest = v;
+		if (v)
+			*(const char **)o->dest = v;
 	} else if (o->kind == CMD_CUSTOM ? !o->read(v, o->dest) : !read_number(o, v)) {
 		fprintf(stderr, "%s: %s wants %s, not '%s'\n", spec->cmd, name, wants, v);
 		return ST_EXIT_USAGE;
@@ -163,16 +160,36 @@ int cmd_parse(const struct cmd_spec *spec, int argc, char **argv)
 	return 0;
 }
 
+/* The value at o->dest as a number (before parsing: the default), else 0. */
+static double value_of(const struct cmd_opt *o)
+{
+	switch (o->kind) {
+	case CMD_DOUBLE:
+		return *(const double *)o->dest;
+	case CMD_INT:
+		return *(const int *)o->dest;
+	case CMD_LONG:
+		return (double)*(const long *)o->dest;
+	case CMD_UNSIGNED:
+		return *(const unsigned *)o->dest;
+	case CMD_U64:
+		return (double)*(const uint64_t *)o->dest;
+	default:
+		return 0;
+	}
+}
+
 /* One option's help line(s): label, then the text, its '\n's indented to col. */
 static void usage_line(const struct cmd_opt *o, int col, FILE *f)
 {
 	char label[80], text[600];
 	const char *sp = o->arg ? " " : "", *arg = o->arg ? o->arg : "";
-	int n = o->letter ? snprintf(label, sizeof(label), "  -%c, %s%s%s", o->letter, o->name, sp, arg)
-			  : snprintf(label, sizeof(label), "  %s%s%s", o->name, sp, arg);
+	int n = o->letter
+		    ? snprintf(label, sizeof(label), "  -%c, %s%s%s", o->letter, o->name, sp, arg)
+		    : snprintf(label, sizeof(label), "  %s%s%s", o->name, sp, arg);
 
-	snprintf(text, sizeof(text), o->help, o->lo, o->hi);
-	fprintf(f, "%-*s%s", col, label, n >= col ? " " : "");
+	snprintf(text, sizeof(text), o->help, o->lo, o->hi, value_of(o));
+	fprintf(f, "%-*s%s", col, label, n >= col ? "  " : "");
 	for (const char *t = text; *t; t++) {
 		fputc(*t, f);
 		if (*t == '\n')

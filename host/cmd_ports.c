@@ -129,12 +129,12 @@ int cmd_ports(int argc, char **argv)
 	int rc = ST_EXIT_OK;
 
 	const struct cmd_opt opts[] = {
-	    {"--json", 0, CMD_FLAG, &json, 0, 0, 0, NULL, NULL, NULL, NULL, NULL},
-	    {"--printer", 0, CMD_STRING, &printer, CMD_NONEMPTY, 0, 0,
-	     "a printer name or file (see 'stratum printers')", "NAME", NULL, NULL, NULL},
+	    CMD_OPT_FLAG("--json", &json, NULL),
+	    CMD_OPT_STRING("--printer", 0, &printer, CMD_NONEMPTY,
+	     "a printer name or file (see 'stratum printers')", "NAME", NULL),
 	};
 	const struct cmd_spec spec = {
-	    .cmd = "stratum ports", .opt = opts, .nopt = sizeof(opts) / sizeof(opts[0]),
+	    .cmd = "stratum ports", CMD_TABLE(opts),
 	    .head = "usage: stratum ports [--printer NAME] [--json]\n\n"
 		    "Lists the serial ports (name, stable /dev/serial/by-id name, USB\n"
 		    "VID:PID, manufacturer, product, serial number) and the printer\n"

@@ -6,7 +6,6 @@
  * option, no such layer), 65 unreadable G-code or model, 70 internal.
  */
 #include <jansson.h>
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -21,133 +20,24 @@
 
 #define PREVIEW_CMD "stratum preview"
 
-static void preview_usage(FILE *out)
-{
-	fprintf(out,
-		"usage: stratum preview FILE.gcode (--layer N | --z Z) -o OUT.svg|OUT.png\n"
-		"                       [--model MODEL] [--center X,Y] [--width PX]\n"
-		"                       [--filament-diameter D] [--json]\n"
-		"\n"
-		"Draws one layer of a G-code file seen from above: outer and inner perimeters,\n"
-		"gap fill, solid and sparse infill, bridges, support, skirt/brim and other\n"
-		"extrusion in their own colours, each bead at the width its filament makes;\n"
-		"travels thin and dashed; a legend and a scale bar in mm.  See docs/preview.md.\n"
-		"\n"
-		"  --layer N         the N-th layer, from 1 (the slicer's layer comments, or\n"
-		"                    the distinct heights of the extrusion when there are none)\n"
-		"  --z Z             the layer printed at height Z mm\n"
-		"  -o, --output OUT  the picture, .svg or .png (written only when complete)\n"
-		"  --model MODEL     also draw the model's section (STL, OBJ or OFF) at the\n"
-		"                    layer's mid-height, placed as the slicer placed it\n"
-		"  --center X,Y      the model's centre on the bed, mm (default: the centre of\n"
-		"                    the printed part, right for 'stratum slice' and PrusaSlicer\n"
-		"                    unless the part is lopsided under --center)\n"
-		"  --width PX        picture width, %d to %d px (default %d)\n"
-		"  --filament-diameter D  mm, when the file has no '; filament_diameter =' line\n"
-		"  --json            one JSON object on stdout instead of the text summary\n"
-		"\n"
-		"Exit status: 0 written, 1 OUT not written, 2 usage or no such layer,\n"
-		"65 unreadable G-code or model, 70 internal error.\n",
-		PVDRAW_WIDTH_MIN, PVDRAW_WIDTH_MAX, PVDRAW_WIDTH_DEFAULT);
-}
-
 struct preview_args {
 	const char *in, *out, *model;
-	bool json, has_layer, has_z;
+	const char *has_layer, *has_z; /* the option's name when given */
+	bool json;
 	struct preview_opts o;
 	int width;
 };
 
-/* A number for opt; false (message printed) when v is not one. */
-static bool number_arg(const char *opt, const char *v, const char *what, double *out)
+/* --center X,Y into struct preview_opts. */
+static bool read_center(const char *v, void *dest)
 {
-	return cmd_number(PREVIEW_CMD, opt, v, what, out);
-}
+	struct preview_opts *o = dest;
+	const char *comma = strchr(v, ',');
 
-/* One option at argv[*i]; 0 to go on, -1 after --help, else the exit status. */
-static int parse_opt(int argc, char **argv, int *i, struct preview_args *a)
-{
-	const char *s = argv[*i];
-	double d;
-
-	if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
-		preview_usage(stdout);
-		return -1;
-	}
-	if (!strcmp(s, "--json")) {
-		a->json = true;
-	} else if (!strcmp(s, "-o") || cmd_is_opt(s, "--output")) {
-		a->out = !strcmp(s, "-o") ? (*i + 1 < argc ? argv[++*i] : NULL)
-					  : cmd_opt_value(argc, argv, i, "--output");
-		if (!a->out || !*a->out) {
-			fprintf(stderr, PREVIEW_CMD ": %s needs the picture's file name\n", s);
-			return ST_EXIT_USAGE;
-		}
-	} else if (cmd_is_opt(s, "--layer")) {
-		if (!number_arg("--layer", cmd_opt_value(argc, argv, i, "--layer"),
-				"a layer number from 1", &d))
-			return ST_EXIT_USAGE;
-		if (!(d >= 1 && d <= 1e9 && d == floor(d))) {
-			fprintf(stderr, PREVIEW_CMD ": --layer wants a layer number from 1, not %g\n",
-				d);
-			return ST_EXIT_USAGE;
-		}
-		a->o.layer = (long)d;
-		a->has_layer = true;
-	} else if (cmd_is_opt(s, "--z")) {
-		if (!number_arg("--z", cmd_opt_value(argc, argv, i, "--z"), "a height in mm",
-				&a->o.z))
-			return ST_EXIT_USAGE;
-		a->has_z = true;
-	} else if (cmd_is_opt(s, "--model")) {
-		a->model = cmd_opt_value(argc, argv, i, "--model");
-		if (!a->model || !*a->model) {
-			fprintf(stderr, PREVIEW_CMD ": --model needs a mesh file\n");
-			return ST_EXIT_USAGE;
-		}
-	} else if (cmd_is_opt(s, "--center")) {
-		const char *v = cmd_opt_value(argc, argv, i, "--center");
-		const char *comma = v ? strchr(v, ',') : NULL;
-		if (!comma ||
-		    st_parse_double(v, (size_t)(comma - v), 0, &a->o.center_x) != ST_NUMBER_OK ||
-		    st_parse_double(comma + 1, strlen(comma + 1), 0, &a->o.center_y) !=
-			    ST_NUMBER_OK) {
-			fprintf(stderr, PREVIEW_CMD ": --center wants X,Y in mm, not '%s'\n",
-				v ? v : "");
-			return ST_EXIT_USAGE;
-		}
-		a->o.has_center = true;
-	} else if (cmd_is_opt(s, "--width")) {
-		if (!number_arg("--width", cmd_opt_value(argc, argv, i, "--width"),
-				"a width in pixels", &d))
-			return ST_EXIT_USAGE;
-		if (!(d >= PVDRAW_WIDTH_MIN && d <= PVDRAW_WIDTH_MAX && d == floor(d))) {
-			fprintf(stderr, PREVIEW_CMD ": --width wants a whole number of pixels from "
-						    "%d to %d, not %g\n",
-				PVDRAW_WIDTH_MIN, PVDRAW_WIDTH_MAX, d);
-			return ST_EXIT_USAGE;
-		}
-		a->width = (int)d;
-	} else if (cmd_is_opt(s, "--filament-diameter")) {
-		if (!number_arg("--filament-diameter",
-				cmd_opt_value(argc, argv, i, "--filament-diameter"), "a diameter in mm",
-				&a->o.filament_diameter))
-			return ST_EXIT_USAGE;
-		if (!(a->o.filament_diameter > 0 && a->o.filament_diameter <= 10)) {
-			fprintf(stderr, PREVIEW_CMD ": --filament-diameter wants mm in (0, 10]\n");
-			return ST_EXIT_USAGE;
-		}
-	} else if (s[0] == '-' && s[1]) {
-		fprintf(stderr, PREVIEW_CMD ": unknown option '%s' (try --help)\n", s);
-		return ST_EXIT_USAGE;
-	} else if (!a->in) {
-		a->in = s;
-	} else {
-		fprintf(stderr, PREVIEW_CMD ": one G-code file at a time ('%s' and '%s')\n", a->in,
-			s);
-		return ST_EXIT_USAGE;
-	}
-	return 0;
+	o->has_center =
+	    comma && st_parse_double(v, (size_t)(comma - v), 0, &o->center_x) == ST_NUMBER_OK &&
+	    st_parse_double(comma + 1, strlen(comma + 1), 0, &o->center_y) == ST_NUMBER_OK;
+	return o->has_center;
 }
 
 /* Parse argv; 0 to go on, -1 after --help, else the exit status. */
@@ -155,20 +45,59 @@ static int parse_args(int argc, char **argv, struct preview_args *a)
 {
 	enum pvdraw_format fmt;
 
+	const struct cmd_opt opts[] = {
+	    {"--layer", 0, CMD_LONG, &a->o.layer, CMD_RANGE, 1, 1e9, "a layer number from %g", "N",
+	     "the N-th layer, from 1 (the slicer's layer comments, or\n"
+	     "the distinct heights of the extrusion when there are none)", NULL, &a->has_layer},
+	    {"--z", 0, CMD_DOUBLE, &a->o.z, 0, 0, 0, "a height in mm", "Z",
+	     "the layer printed at height Z mm", NULL, &a->has_z},
+	    CMD_OPT_STRING("--output", 'o', &a->out, CMD_NONEMPTY, "the picture's file name", "OUT",
+			   "the picture, .svg or .png (written only when complete)"),
+	    CMD_OPT_STRING("--model", 0, &a->model, CMD_NONEMPTY, "a mesh file", "MODEL",
+			   "also draw the model's section (STL, OBJ or OFF) at the\n"
+			   "layer's mid-height, placed as the slicer placed it"),
+	    {"--center", 0, CMD_CUSTOM, &a->o, 0, 0, 0, "X,Y in mm", "X,Y",
+	     "the model's centre on the bed, mm (default: the centre of\n"
+	     "the printed part, right for 'stratum slice' and PrusaSlicer\n"
+	     "unless the part is lopsided under --center)", read_center, NULL},
+	    {"--width", 0, CMD_INT, &a->width, CMD_RANGE, PVDRAW_WIDTH_MIN, PVDRAW_WIDTH_MAX,
+	     "a whole number of pixels from %g to %g", "PX",
+	     "picture width, %g to %g px (default %g)", NULL, NULL},
+	    {"--filament-diameter", 0, CMD_DOUBLE, &a->o.filament_diameter,
+	     CMD_RANGE | CMD_ABOVE_LO, 0, 10, "a diameter in mm in (%g, %g]", "D",
+	     "mm, when the file has no '; filament_diameter =' line", NULL, NULL},
+	    CMD_OPT_FLAG("--json", &a->json,
+	     "one JSON object on stdout instead of the text summary"),
+	};
+	const struct cmd_spec spec = {
+	    .cmd = PREVIEW_CMD, CMD_TABLE(opts), .col = 20,
+	    .head = "usage: stratum preview FILE.gcode (--layer N | --z Z) -o OUT.svg|OUT.png\n"
+		    "                       [--model MODEL] [--center X,Y] [--width PX]\n"
+		    "                       [--filament-diameter D] [--json]\n"
+		    "\n"
+		    "Draws one layer of a G-code file seen from above: outer and inner perimeters,\n"
+		    "gap fill, solid and sparse infill, bridges, support, skirt/brim and other\n"
+		    "extrusion in their own colours, each bead at the width its filament makes;\n"
+		    "travels thin and dashed; a legend and a scale bar in mm.  See docs/preview.md.\n"
+		    "\n",
+	    .tail = "\n"
+		    "Exit status: 0 written, 1 OUT not written, 2 usage or no such layer,\n"
+		    "65 unreadable G-code or model, 70 internal error.\n",
+	    .pos = &a->in, .npos = 1, .extra = "one G-code file at a time ('%s' and '%s')"};
+	int rc;
+
 	preview_opts_init(&a->o);
 	a->width = PVDRAW_WIDTH_DEFAULT;
-	for (int i = 1; i < argc; i++) {
-		int rc = parse_opt(argc, argv, &i, a);
-		if (rc)
-			return rc;
-	}
-	const char *missing = !a->in			 ? "no G-code file given"
-			      : !a->out			 ? "no picture given; add -o OUT.svg or -o OUT.png"
-			      : a->has_layer == a->has_z ? "give either --layer N or --z Z"
+	rc = cmd_parse(&spec, argc, argv);
+	if (rc)
+		return rc;
+	const char *missing = !a->in	  ? "no G-code file given"
+			      : !a->out	  ? "no picture given; add -o OUT.svg or -o OUT.png"
+			      : !a->has_layer == !a->has_z ? "give either --layer N or --z Z"
 							 : NULL;
 	if (missing) {
 		fprintf(stderr, PREVIEW_CMD ": %s\n", missing);
-		preview_usage(stderr);
+		cmd_usage(&spec, stderr);
 		return ST_EXIT_USAGE;
 	}
 	if (!pvdraw_format_of(a->out, &fmt)) {

@@ -41,105 +41,62 @@
 #define PRINT_SPEEDUP 1000.0	 /* built-in simulator: default time divisor */
 #define PRINT_PREVIEW_LAYERS 3	 /* --preview: the first layers drawn */
 
-static void print_usage(FILE *out)
+/* Parse argv; 0 to go on, -1 after --help, else the exit status. */
+static int print_parse(int argc, char **argv, struct print_args *a)
 {
-	fprintf(out,
+	const struct cmd_opt opts[] = {
+	    CMD_OPT_STRING("--printer", 0, &a->printer, 0, NULL, "NAME",
+			   "the printer profile ('stratum printers'); required"),
+	    CMD_OPT_STRING("--port", 0, &a->port, 0, NULL, "P",
+			   "a serial device, 'auto' (the port whose USB id the profile\n"
+			   "lists), tcp://HOST:PORT, or 'sim'.  Default: sim, the\n"
+			   "built-in simulated printer of the profile's firmware"),
+	    {"--speedup", 0, CMD_DOUBLE, &a->speedup, CMD_RANGE, 1, 1e6,
+	     "a factor from %.0f to %.0f", "K",
+	     "the simulated printer runs K times faster (default 1000)", NULL, NULL},
+	    {"--dry-run", 0, CMD_FLAG, &a->dry_run, 0, 0, 0, NULL, "-o OUT",
+	     "write the G-code (X3G for Sailfish printers unless OUT\n"
+	     "ends in .gcode) instead of printing", NULL, NULL},
+	    CMD_OPT_STRING("--output", 'o', &a->out, 0, NULL, "OUT", NULL),
+	    CMD_OPT_FLAG("--preview", &a->preview,
+			 "write PNGs of the first layers (MODEL-layerN.png) first"),
+	    CMD_OPT_FLAG("--json", &a->json, "the summary as one JSON object on stdout"),
+	    CMD_OPT_STRING("--resume", 0, &a->resume, 0, NULL, "JOB",
+			   "continue an interrupted print (G-code, Marlin or Sailfish)\n"
+			   "from the start of the last layer the printer confirmed:\n"
+			   "reheat, home X and Y only,\n"
+			   "restore Z and E.  Asks first; --yes answers for scripts"),
+	    {"--yes", 'y', CMD_FLAG, &a->yes, 0, 0, 0, NULL, NULL, NULL, NULL, NULL},
+	    CMD_OPT_FLAG("--force", &a->force, GUARD_FORCE_HELP),
+	    CMD_OPT_STRING("--sim-log", 0, &a->sim_log, 0, NULL, "FILE",
+			   "testing aid: the simulated printer's execution log"),
+	};
+	const struct cmd_spec spec = {
+	    .cmd = PRINT_CMD, CMD_TABLE(opts), .col = 21,
+	    .head =
 		"usage: stratum print MODEL --printer NAME [--port PATH|auto|tcp://HOST:PORT|sim]\n"
 		"                     [--dry-run -o OUT] [--preview] [--json] [--speedup K]\n"
 		"                     [--force] [--load FILE.ini ...] [--set KEY=VALUE ...]\n"
 		"       stratum print --resume JOB [--yes] [--port ...] [--json]\n"
 		"\n"
 		"Repairs and slices MODEL (STL, OBJ or OFF) as 'stratum slice' does, then prints\n"
-		"it; a .gcode file (or .x3g for Sailfish printers) is printed as it is.\n"
-		"  --printer NAME     the printer profile ('stratum printers'); required\n"
-		"  --port P           a serial device, 'auto' (the port whose USB id the profile\n"
-		"                     lists), tcp://HOST:PORT, or 'sim'.  Default: sim, the\n"
-		"                     built-in simulated printer of the profile's firmware\n"
-		"  --speedup K        the simulated printer runs K times faster (default 1000)\n"
-		"  --dry-run -o OUT   write the G-code (X3G for Sailfish printers unless OUT\n"
-		"                     ends in .gcode) instead of printing\n"
-		"  --preview          write PNGs of the first layers (MODEL-layerN.png) first\n"
-		"  --json             the summary as one JSON object on stdout\n"
-		"  --resume JOB       continue an interrupted print (G-code, Marlin or Sailfish)\n"
-		"                     from the start of the last layer the printer confirmed:\n"
-		"                     reheat, home X and Y only,\n"
-		"                     restore Z and E.  Asks first; --yes answers for scripts\n"
-		"  --force            " GUARD_FORCE_HELP "\n"
-		"  --sim-log FILE     testing aid: the simulated printer's execution log\n"
-		"Settings for slicing MODEL (on top of --printer, or instead of it), as\n"
-		"'stratum slice' takes them:\n");
-	cfgopt_usage(out);
-	fprintf(out,
+		"it; a .gcode file (or .x3g for Sailfish printers) is printed as it is.\n",
+	    .mid = "Settings for slicing MODEL (on top of --printer, or instead of it), as\n"
+		   "'stratum slice' takes them:\n",
+	    .cfg = &a->cfg,
+	    .tail =
 		"Ctrl-C stops safely (heaters and motors off).  Exit status: 0 printed, 1 the\n"
 		"job failed (firmware error, not repaired, resume declined), 2 usage or G-code\n"
 		"sliced for another printer, 65 bad input, 69 printer unavailable or lost,\n"
-		"70 internal error, 130 interrupted.\n");
-}
+		"70 internal error, 130 interrupted.\n",
+	    .pos = &a->in, .npos = 1, .extra = "one model at a time ('%s' and '%s')"};
+	int rc;
 
-/* Parse argv; 0 to go on, -1 after --help, else the exit status. */
-static int print_parse(int argc, char **argv, struct print_args *a)
-{
 	memset(a, 0, sizeof(*a));
 	a->speedup = PRINT_SPEEDUP;
-	for (int i = 1; i < argc; i++) {
-		const char *s = argv[i], *v = NULL;
-		int taken;
-
-		if (!strcmp(s, "--help") || !strcmp(s, "-h")) {
-			print_usage(stdout);
-			return -1;
-		} else if (!strcmp(s, "--json")) {
-			a->json = true;
-		} else if (!strcmp(s, "--yes") || !strcmp(s, "-y")) {
-			a->yes = true;
-		} else if (!strcmp(s, "--dry-run")) {
-			a->dry_run = true;
-		} else if (!strcmp(s, "--preview")) {
-			a->preview = true;
-		} else if (!strcmp(s, "--force")) {
-			a->force = true;
-		} else if (!strcmp(s, "-o") || cmd_is_opt(s, "--output")) {
-			v = !strcmp(s, "-o") ? (i + 1 < argc ? argv[++i] : NULL)
-					     : cmd_opt_value(argc, argv, &i, "--output");
-			a->out = v;
-		} else if (cmd_is_opt(s, "--printer")) {
-			a->printer = v = cmd_opt_value(argc, argv, &i, "--printer");
-		} else if (cmd_is_opt(s, "--port")) {
-			a->port = v = cmd_opt_value(argc, argv, &i, "--port");
-		} else if (cmd_is_opt(s, "--resume")) {
-			a->resume = v = cmd_opt_value(argc, argv, &i, "--resume");
-		} else if (cmd_is_opt(s, "--sim-log")) {
-			a->sim_log = v = cmd_opt_value(argc, argv, &i, "--sim-log");
-		} else if (cmd_is_opt(s, "--speedup")) {
-			v = cmd_opt_value(argc, argv, &i, "--speedup");
-			if (v && (!cmd_number(PRINT_CMD, "--speedup", v, "a factor from 1 to 1000000",
-					      &a->speedup) ||
-				  a->speedup < 1 || a->speedup > 1e6)) {
-				if (a->speedup < 1 || a->speedup > 1e6)
-					fprintf(stderr, PRINT_CMD ": --speedup wants a factor from 1 "
-							"to 1000000, not '%s'\n", v);
-				return ST_EXIT_USAGE;
-			}
-		} else if ((taken = cfgopt_parse(&a->cfg, PRINT_CMD, argc, argv, &i)) != 0) {
-			if (taken < 0)
-				return ST_EXIT_USAGE;
-			continue;
-		} else if (s[0] == '-' && s[1]) {
-			fprintf(stderr, PRINT_CMD ": unknown option '%s'\n", s);
-			print_usage(stderr);
-			return ST_EXIT_USAGE;
-		} else if (!a->in) {
-			a->in = v = s;
-		} else {
-			fprintf(stderr, PRINT_CMD ": one model at a time ('%s' and '%s')\n", a->in, s);
-			return ST_EXIT_USAGE;
-		}
-		if (!v && s[0] == '-' && strcmp(s, "--json") && strcmp(s, "--yes") && strcmp(s, "-y") &&
-		    strcmp(s, "--dry-run") && strcmp(s, "--preview") && strcmp(s, "--force")) {
-			fprintf(stderr, PRINT_CMD ": %s needs a value\n", s);
-			return ST_EXIT_USAGE;
-		}
-	}
+	rc = cmd_parse(&spec, argc, argv);
+	if (rc)
+		return rc;
 	if (a->resume && (a->in || a->dry_run || a->cfg.n || a->cfg.presets.printer)) {
 		fprintf(stderr, PRINT_CMD ": --resume JOB takes no model, no --dry-run and no "
 				"settings options: the job journal names the file\n");
@@ -150,7 +107,7 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 			!a->in ? "no model file given"
 			       : "no printer given; add --printer NAME ('stratum printers' lists "
 				 "them)");
-		print_usage(stderr);
+		cmd_usage(&spec, stderr);
 		return ST_EXIT_USAGE;
 	}
 	if (a->dry_run != (a->out != NULL)) {

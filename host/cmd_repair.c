@@ -563,22 +563,21 @@ static int repair_command(int argc, char **argv, struct repair_run *run)
 	uint32_t *component = NULL;
 
 	const struct cmd_opt opts[] = {
-	    {"--output", 'o', CMD_STRING, &out, CMD_NONEMPTY, 0, 0, "the output file name", "OUT",
-	     "the STL to write (written only when the result is printable)", NULL, NULL},
-	    {"--printer", 0, CMD_STRING, &printer, CMD_NONEMPTY, 0, 0,
+	    CMD_OPT_STRING("--output", 'o', &out, CMD_NONEMPTY, "the output file name", "OUT",
+	     "the STL to write (written only when the result is printable)"),
+	    CMD_OPT_STRING("--printer", 0, &printer, CMD_NONEMPTY,
 	     "a printer name or file (see 'stratum printers')", "P",
-	     "take EPSILON from this printer's nozzle diameter", NULL, NULL},
+	     "take EPSILON from this printer's nozzle diameter"),
 	    {"--epsilon", 0, CMD_DOUBLE, &run->epsilon, CMD_RANGE | CMD_ABOVE_LO, 0,
 	     REPAIR_EPSILON_MAX, "a thickness in mm greater than %g and at most %g", "MM",
 	     "thickness for sheets and wires, %g < MM <= %g\n"
 	     "(default: the printer's nozzle, else 0.4; wins over --printer)", NULL, &eps_arg},
-	    {"--split", 0, CMD_FLAG, &split, 0, 0, 0, NULL, NULL,
-	     "one file per part: OUT part.stl gives part-1.stl, part-2.stl...", NULL, NULL},
-	    {"--json", 0, CMD_FLAG, &json, 0, 0, 0, NULL, NULL,
-	     "one JSON object on stdout instead of the text report", NULL, NULL},
+	    CMD_OPT_FLAG("--split", &split,
+	     "one file per part: OUT part.stl gives part-1.stl, part-2.stl..."),
+	    CMD_OPT_FLAG("--json", &json, "one JSON object on stdout instead of the text report"),
 	    CMD_OPT_THREADS(&threads, "cores for the exact passes (default: all)"),
-	    {"--ascii", 0, CMD_FLAG, &ascii, 0, 0, 0, NULL, NULL,
-	     "write ASCII STL (double precision) instead of binary (float)", NULL, NULL},
+	    CMD_OPT_FLAG("--ascii", &ascii,
+	     "write ASCII STL (double precision) instead of binary (float)"),
 	    {"--weld", 0, CMD_DOUBLE, &weld, CMD_RANGE, 0, REPAIR_HEAL_MAX,
 	     "a distance in mm from %g (off) to %g", "MM",
 	     "weld vertices closer than MM (default: 8 float32 ulps of\n"
@@ -586,12 +585,11 @@ static int repair_command(int argc, char **argv, struct repair_run *run)
 	    {"--stitch", 0, CMD_DOUBLE, &stitch, CMD_RANGE, 0, REPAIR_HEAL_MAX,
 	     "a distance in mm from %g (off) to %g", "MM",
 	     "stitch boundary gaps up to MM (default 1.5 * EPSILON; 0 = off)", NULL, NULL},
-	    {"--keep-holes", 0, CMD_FLAG, &keep_holes, 0, 0, 0, NULL, NULL,
-	     "no stitching, no hole filling: every open part is a sheet", NULL, NULL},
+	    CMD_OPT_FLAG("--keep-holes", &keep_holes,
+	     "no stitching, no hole filling: every open part is a sheet"),
 	};
 	const struct cmd_spec spec = {
-	    .cmd = "stratum repair", .head = repair_head, .opt = opts,
-	    .nopt = sizeof(opts) / sizeof(opts[0]), .col = 20, .tail = repair_tail, .pos = &in,
+	    .cmd = "stratum repair", .head = repair_head, CMD_TABLE(opts), .col = 20, .tail = repair_tail, .pos = &in,
 	    .npos = 1,
 	    .extra = "one input file at a time ('%s' and '%s'); name the output with -o"};
 

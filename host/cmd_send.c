@@ -23,7 +23,6 @@
 
 #include "commands.h"
 #include "st_clock.h"
-#include "gcode.h"
 #include "guard.h"
 #include "printer.h"
 #include "portpick.h"
@@ -62,15 +61,15 @@ bool send_has_ext(const char *path, const char *ext)
 static int send_parse(int argc, char **argv, struct send_args *a)
 {
 	const struct cmd_opt opts[] = {
-	    {"--force", 0, CMD_FLAG, &a->force, 0, 0, 0, NULL, NULL, GUARD_FORCE_HELP, NULL, NULL},
-	    {"--json", 0, CMD_FLAG, &a->json, 0, 0, 0, NULL, NULL, NULL, NULL, NULL},
-	    {"--port", 0, CMD_STRING, &a->port, 0, 0, 0, NULL, "PATH", NULL, NULL, NULL},
-	    {"--printer", 0, CMD_STRING, &a->printer, 0, 0, 0, NULL, "NAME", NULL, NULL, NULL},
+	    CMD_OPT_FLAG("--force", &a->force, GUARD_FORCE_HELP),
+	    CMD_OPT_FLAG("--json", &a->json, NULL),
+	    CMD_OPT_STRING("--port", 0, &a->port, 0, NULL, "PATH", NULL),
+	    CMD_OPT_STRING("--printer", 0, &a->printer, 0, NULL, "NAME", NULL),
 	    {"--baud", 0, CMD_LONG, &a->baud, CMD_RANGE, 300, 10000000,
 	     "a whole number from %.0f to %.0f", "N", NULL, NULL, NULL},
 	};
 	const struct cmd_spec spec = {
-	    .cmd = SEND_CMD, .opt = opts, .nopt = sizeof(opts) / sizeof(opts[0]), .col = 11,
+	    .cmd = SEND_CMD, CMD_TABLE(opts), .col = 11,
 	    .head = "usage: stratum send FILE --port PATH --printer NAME [--json] [--baud N] "
 		    "[--force]\n"
 		    "Streams FILE to the printer on PATH (a serial device, a pty or\n"

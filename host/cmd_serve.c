@@ -58,14 +58,13 @@ int cmd_serve(int argc, char **argv)
 	static struct node_config cfg_store; /* large: kept off the stack */
 
 	const struct cmd_opt opts[] = {
-	    {"--config", 0, CMD_STRING, &config, CMD_NONEMPTY, 0, 0, "the node's config file",
-	     "FILE", "the node's config (docs/serve.md)", NULL, NULL},
-	    {"--listen", 0, CMD_STRING, &listen, 0, 0, 0, "ADDR:PORT", "ADDR:PORT",
+	    CMD_OPT_STRING("--config", 0, &config, CMD_NONEMPTY, "the node's config file", "FILE",
+	     "the node's config (docs/serve.md)"),
+	    CMD_OPT_STRING("--listen", 0, &listen, 0, "ADDR:PORT", "ADDR:PORT",
 	     "listen there instead of the config's listen = (port 0:\n"
-	     "any free port, logged at start)", NULL, NULL},
+	     "any free port, logged at start)"),
 	};
-	const struct cmd_spec spec = {.cmd = SERVE_CMD, .head = serve_head, .opt = opts,
-				      .nopt = sizeof(opts) / sizeof(opts[0]), .col = 21,
+	const struct cmd_spec spec = {.cmd = SERVE_CMD, .head = serve_head, CMD_TABLE(opts), .col = 21,
 				      .tail = serve_tail};
 
 	rc = cmd_parse(&spec, argc, argv);

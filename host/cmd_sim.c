@@ -15,7 +15,6 @@
 #include <unistd.h>
 
 #include "commands.h"
-#include "gcode.h"
 #include "sim/marlin_sim.h"
 #include "sim/sailfish_sim.h"
 #include "st_error.h"
@@ -30,39 +29,30 @@ static void sim_on_signal(int sig)
 	sim_stop_flag = 1;
 }
 
-static void sim_usage(FILE *out)
-{
-	fprintf(out,
-		"usage: stratum sim --dialect marlin|sailfish [--link PATH] [--log FILE]\n"
-		"                   [--speedup K] [--corrupt P] [--drop P] [--latency MS]\n"
-		"                   [--reset-at N] [--unplug-at N] [--baud N] [--seed N]\n"
-		"  marlin only:     [--rx-buffer N] [--bufsize N] [--advanced-ok]\n"
-		"                   [--keep-rx] [--lose-ok P] [--no-firmware-name]\n"
-		"                   [--freeze-at N [--freeze-s S]] [--busy-at N --busy-s S]\n"
-		"  sailfish only:   [--buffer-size N] [--corrupt-replies P]\n"
-		"Runs a simulated printer on a pseudo-terminal and prints its path; stops on\n"
-		"Ctrl-C.  --link makes PATH a symlink to the pty while it runs.  N of\n"
-		"--reset-at/--unplug-at is a line number (marlin) or the number of the\n"
-		"executed command (sailfish).  Marlin variants and hangs: --keep-rx keeps\n"
-		"the bytes behind a bad line in the receive ring (32-bit boards; AVR boards\n"
-		"flush it), --lose-ok loses each \"ok\" with probability P, --no-firmware-name\n"
-		"answers M115 with a bare \"ok\", --freeze-at hangs the board at line N (for\n"
-		"S seconds, default for ever), --busy-at holds line N for S seconds\n"
-		"answering \"busy: processing\".\n");
-}
+static const char sim_help[] =
+    "usage: stratum sim --dialect marlin|sailfish [--link PATH] [--log FILE]\n"
+    "                   [--speedup K] [--corrupt P] [--drop P] [--latency MS]\n"
+    "                   [--reset-at N] [--unplug-at N] [--baud N] [--seed N]\n"
+    "  marlin only:     [--rx-buffer N] [--bufsize N] [--advanced-ok]\n"
+    "                   [--keep-rx] [--lose-ok P] [--no-firmware-name]\n"
+    "                   [--freeze-at N [--freeze-s S]] [--busy-at N --busy-s S]\n"
+    "  sailfish only:   [--buffer-size N] [--corrupt-replies P]\n"
+    "Runs a simulated printer on a pseudo-terminal and prints its path; stops on\n"
+    "Ctrl-C.  --link makes PATH a symlink to the pty while it runs.  N of\n"
+    "--reset-at/--unplug-at is a line number (marlin) or the number of the\n"
+    "executed command (sailfish).  Marlin variants and hangs: --keep-rx keeps\n"
+    "the bytes behind a bad line in the receive ring (32-bit boards; AVR boards\n"
+    "flush it), --lose-ok loses each \"ok\" with probability P, --no-firmware-name\n"
+    "answers M115 with a bare \"ok\", --freeze-at hangs the board at line N (for\n"
+    "S seconds, default for ever), --busy-at holds line N for S seconds\n"
+    "answering \"busy: processing\".\n";
 
-/* Read a non-negative number option; false with a message if malformed. */
-static bool sim_number(const char *opt, const char *arg, double lo, double hi, double *out)
-{
-	double v;
-	if (gcode_read_number(arg, strlen(arg), &v, NULL) || v < lo || v > hi) {
-		fprintf(stderr, "stratum sim: %s wants a number from %g to %g, not '%s'\n", opt, lo,
-			hi, arg);
-		return false;
-	}
-	*out = v;
-	return true;
-}
+/* A number option of kind k in lo..hi (cut to a whole number); given: for one dialect only. */
+#define SIM_NUMBER(name, k, dest, lo, hi, given)                                                \
+	{name, 0, k, dest, CMD_RANGE | CMD_TRUNCATE, lo, hi, "a number from %g to %g", NULL, NULL, \
+	 NULL, given}
+#define SIM_FLAG(name, dest) \
+	{name, 0, CMD_FLAG, dest, 0, 0, 0, NULL, NULL, NULL, NULL, &marlin_only}
 
 /* Point link at target: symlink to a temp name, then rename over link. */
 static int sim_make_link(const char *link, const char *target)
@@ -153,112 +143,43 @@ int cmd_sim(int argc, char **argv)
 	struct sim_sailfish_options so;
 	const char *marlin_only = NULL, *sailfish_only = NULL;
 	const char *dialect = NULL, *link = NULL;
-	double v;
+	const long line_max = 2147483647;
+	const struct cmd_opt opts[] = {
+	    SIM_FLAG("--advanced-ok", &o.advanced_ok),
+	    SIM_FLAG("--keep-rx", &o.keep_rx_on_error),
+	    SIM_FLAG("--no-firmware-name", &o.no_firmware_name),
+	    CMD_OPT_STRING("--dialect", 0, &dialect, 0, NULL, NULL, NULL),
+	    CMD_OPT_STRING("--link", 0, &link, 0, NULL, NULL, NULL),
+	    CMD_OPT_STRING("--log", 0, &o.log_path, 0, NULL, NULL, NULL),
+	    SIM_NUMBER("--speedup", CMD_DOUBLE, &o.speedup, 1e-3, 1e6, NULL),
+	    SIM_NUMBER("--rx-buffer", CMD_UNSIGNED, &o.rx_buffer, 8, 65536, &marlin_only),
+	    SIM_NUMBER("--bufsize", CMD_UNSIGNED, &o.bufsize, 1, 1024, &marlin_only),
+	    SIM_NUMBER("--buffer-size", CMD_UNSIGNED, &so.buffer_size, 64, 65536, &sailfish_only),
+	    SIM_NUMBER("--corrupt-replies", CMD_DOUBLE, &so.reply_corrupt_p, 0, 1, &sailfish_only),
+	    SIM_NUMBER("--lose-ok", CMD_DOUBLE, &o.reply_loss_p, 0, 1, &marlin_only),
+	    SIM_NUMBER("--freeze-at", CMD_LONG, &o.freeze_at_line, 1, line_max, &marlin_only),
+	    SIM_NUMBER("--busy-at", CMD_LONG, &o.busy_at_line, 1, line_max, &marlin_only),
+	    SIM_NUMBER("--freeze-s", CMD_DOUBLE, &o.freeze_s, 0, 86400, &marlin_only),
+	    SIM_NUMBER("--busy-s", CMD_DOUBLE, &o.busy_s, 0, 86400, &marlin_only),
+	    SIM_NUMBER("--corrupt", CMD_DOUBLE, &o.corrupt_p, 0, 1, NULL),
+	    SIM_NUMBER("--drop", CMD_DOUBLE, &o.drop_p, 0, 1, NULL),
+	    SIM_NUMBER("--latency", CMD_UNSIGNED, &o.latency_ms, 0, 60000, NULL),
+	    SIM_NUMBER("--reset-at", CMD_LONG, &o.reset_at_line, 1, line_max, NULL),
+	    SIM_NUMBER("--unplug-at", CMD_LONG, &o.unplug_at_line, 1, line_max, NULL),
+	    SIM_NUMBER("--baud", CMD_UNSIGNED, &o.baud, 300, 100000000, NULL),
+	    SIM_NUMBER("--seed", CMD_U64, &o.seed, 0, 9007199254740992.0, NULL),
+	};
+	const struct cmd_spec spec = {.cmd = "stratum sim", .head = sim_help, CMD_TABLE(opts)};
+	int rc;
 
 	sim_marlin_options_init(&o);
 	sim_sailfish_options_init(&so);
-	for (int i = 1; i < argc; i++) {
-		const char *a = argv[i];
-		const char *arg = i + 1 < argc ? argv[i + 1] : NULL;
-		if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-			sim_usage(stdout);
-			return ST_EXIT_OK;
-		} else if (!strcmp(a, "--advanced-ok")) {
-			o.advanced_ok = true;
-			marlin_only = a;
-			continue;
-		} else if (!strcmp(a, "--keep-rx")) {
-			o.keep_rx_on_error = true;
-			marlin_only = a;
-			continue;
-		} else if (!strcmp(a, "--no-firmware-name")) {
-			o.no_firmware_name = true;
-			marlin_only = a;
-			continue;
-		}
-		if (a[0] != '-' || !arg) {
-			fprintf(stderr, "stratum sim: %s '%s'\n",
-				a[0] == '-' ? "missing value for" : "unexpected argument", a);
-			sim_usage(stderr);
-			return ST_EXIT_USAGE;
-		}
-		i++;
-		if (!strcmp(a, "--dialect")) {
-			dialect = arg;
-		} else if (!strcmp(a, "--link")) {
-			link = arg;
-		} else if (!strcmp(a, "--log")) {
-			o.log_path = arg;
-		} else if (!strcmp(a, "--speedup")) {
-			if (!sim_number(a, arg, 1e-3, 1e6, &o.speedup))
-				return ST_EXIT_USAGE;
-		} else if (!strcmp(a, "--rx-buffer")) {
-			if (!sim_number(a, arg, 8, 65536, &v))
-				return ST_EXIT_USAGE;
-			o.rx_buffer = (unsigned)v;
-			marlin_only = a;
-		} else if (!strcmp(a, "--bufsize")) {
-			if (!sim_number(a, arg, 1, 1024, &v))
-				return ST_EXIT_USAGE;
-			o.bufsize = (unsigned)v;
-			marlin_only = a;
-		} else if (!strcmp(a, "--buffer-size")) {
-			if (!sim_number(a, arg, 64, 65536, &v))
-				return ST_EXIT_USAGE;
-			so.buffer_size = (unsigned)v;
-			sailfish_only = a;
-		} else if (!strcmp(a, "--corrupt-replies")) {
-			if (!sim_number(a, arg, 0, 1, &so.reply_corrupt_p))
-				return ST_EXIT_USAGE;
-			sailfish_only = a;
-		} else if (!strcmp(a, "--lose-ok")) {
-			if (!sim_number(a, arg, 0, 1, &o.reply_loss_p))
-				return ST_EXIT_USAGE;
-			marlin_only = a;
-		} else if (!strcmp(a, "--freeze-at") || !strcmp(a, "--busy-at")) {
-			if (!sim_number(a, arg, 1, 2147483647, &v))
-				return ST_EXIT_USAGE;
-			*(a[2] == 'f' ? &o.freeze_at_line : &o.busy_at_line) = (long)v;
-			marlin_only = a;
-		} else if (!strcmp(a, "--freeze-s") || !strcmp(a, "--busy-s")) {
-			if (!sim_number(a, arg, 0, 86400, a[2] == 'f' ? &o.freeze_s : &o.busy_s))
-				return ST_EXIT_USAGE;
-			marlin_only = a;
-		} else if (!strcmp(a, "--corrupt")) {
-			if (!sim_number(a, arg, 0, 1, &o.corrupt_p))
-				return ST_EXIT_USAGE;
-		} else if (!strcmp(a, "--drop")) {
-			if (!sim_number(a, arg, 0, 1, &o.drop_p))
-				return ST_EXIT_USAGE;
-		} else if (!strcmp(a, "--latency")) {
-			if (!sim_number(a, arg, 0, 60000, &v))
-				return ST_EXIT_USAGE;
-			o.latency_ms = (unsigned)v;
-		} else if (!strcmp(a, "--reset-at")) {
-			if (!sim_number(a, arg, 1, 2147483647, &v))
-				return ST_EXIT_USAGE;
-			o.reset_at_line = (long)v;
-		} else if (!strcmp(a, "--unplug-at")) {
-			if (!sim_number(a, arg, 1, 2147483647, &v))
-				return ST_EXIT_USAGE;
-			o.unplug_at_line = (long)v;
-		} else if (!strcmp(a, "--baud")) {
-			if (!sim_number(a, arg, 300, 100000000, &v))
-				return ST_EXIT_USAGE;
-			o.baud = (unsigned)v;
-		} else if (!strcmp(a, "--seed")) {
-			if (!sim_number(a, arg, 0, 9007199254740992.0, &v))
-				return ST_EXIT_USAGE;
-			o.seed = (uint64_t)v;
-		} else {
-			fprintf(stderr, "stratum sim: unknown option '%s'\n", a);
-			sim_usage(stderr);
-			return ST_EXIT_USAGE;
-		}
-	}
+	rc = cmd_parse(&spec, argc, argv);
+	if (rc)
+		return rc < 0 ? ST_EXIT_OK : rc;
 	if (!dialect) {
 		fprintf(stderr, "stratum sim: --dialect is required (marlin or sailfish)\n");
-		sim_usage(stderr);
+		cmd_usage(&spec, stderr);
 		return ST_EXIT_USAGE;
 	}
 	if (!strcmp(dialect, "sailfish")) {

@@ -69,11 +69,11 @@ static bool read_center(const char *v, void *dest)
 static int parse_args(int argc, char **argv, struct slice_args *a)
 {
 	const struct cmd_opt opts[] = {
-	    {"--output", 'o', CMD_STRING, &a->out, CMD_NONEMPTY, 0, 0, "the output file name",
-	     "OUT", "the G-code file (written only when everything succeeded)", NULL, NULL},
-	    {"--printer", 0, CMD_STRING, &a->printer, CMD_NONEMPTY, 0, 0,
+	    CMD_OPT_STRING("--output", 'o', &a->out, CMD_NONEMPTY, "the output file name", "OUT",
+	     "the G-code file (written only when everything succeeded)"),
+	    CMD_OPT_STRING("--printer", 0, &a->printer, CMD_NONEMPTY,
 	     "a printer name or file (see 'stratum printers')", "P",
-	     "printer profile name ('stratum printers') or .ini file", NULL, NULL},
+	     "printer profile name ('stratum printers') or .ini file"),
 	    {"--layer-height", 0, CMD_DOUBLE, &a->layer_height, 0, 0, 0, "a height in mm", "H",
 	     "mm, > 0 and at most the nozzle (default: the profile's)", NULL, &a->has_layer},
 	    {"--first-layer-height", 0, CMD_DOUBLE, &a->first_layer_height, 0, 0, 0,
@@ -88,14 +88,13 @@ static int parse_args(int argc, char **argv, struct slice_args *a)
 	    {"--center", 0, CMD_CUSTOM, a->center, 0, 0, 0, "X,Y in mm (such as 125,105)", "X,Y",
 	     "put the model's centre there, mm (default: bed centre)", read_center,
 	     &a->has_center},
-	    {"--no-repair", 0, CMD_FLAG, &a->no_repair, 0, 0, 0, NULL, NULL,
-	     "slice the mesh as it is read", NULL, NULL},
-	    {"--json", 0, CMD_FLAG, &a->json, 0, 0, 0, NULL, NULL,
-	     "one JSON object on stdout instead of the text summary", NULL, NULL},
+	    CMD_OPT_FLAG("--no-repair", &a->no_repair, "slice the mesh as it is read"),
+	    CMD_OPT_FLAG("--json", &a->json,
+	     "one JSON object on stdout instead of the text summary"),
 	    CMD_OPT_THREADS(&a->threads, "cores for the repair, walls and infill (default: all)"),
 	};
 	const struct cmd_spec spec = {
-	    .cmd = SLICE_CMD, .opt = opts, .nopt = sizeof(opts) / sizeof(opts[0]), .col = 26,
+	    .cmd = SLICE_CMD, CMD_TABLE(opts), .col = 26,
 	    .head =
 		"usage: stratum slice MODEL -o OUT.gcode --printer NAME|FILE.ini\n"
 		"                     [--load FILE.ini]... [--set KEY=VALUE]... [--KEY-NAME V]...\n"

@@ -41,21 +41,21 @@ struct x3g_args {
 static int parse_args(int argc, char **argv, struct x3g_args *a)
 {
 	const struct cmd_opt opts[] = {
-	    {"--output", 'o', CMD_STRING, &a->out, CMD_NONEMPTY, 0, 0, NULL, "OUT",
-	     "the X3G file (written only when the whole input translated)", NULL, NULL},
-	    {"--printer", 0, CMD_STRING, &a->printer, CMD_NONEMPTY, 0, 0, NULL, "P",
-	     "a sailfish printer profile ('stratum printers') or .ini file", NULL, NULL},
-	    {"--flavor", 0, CMD_STRING, &a->flavor, CMD_NONEMPTY, 0, 0, NULL, "F",
+	    CMD_OPT_STRING("--output", 'o', &a->out, CMD_NONEMPTY, NULL, "OUT",
+	     "the X3G file (written only when the whole input translated)"),
+	    CMD_OPT_STRING("--printer", 0, &a->printer, CMD_NONEMPTY, NULL, "P",
+	     "a sailfish printer profile ('stratum printers') or .ini file"),
+	    CMD_OPT_STRING("--flavor", 0, &a->flavor, CMD_NONEMPTY, NULL, "F",
 	     "reprap (default; makerware profiles: makerbot) or makerbot:\n"
-	     "how M106/M107, M109 and T words are read, as GPX -r / -g", NULL, NULL},
-	    {"--decode", 0, CMD_STRING, &a->decode, CMD_NONEMPTY, 0, 0, NULL, "FILE",
-	     "list FILE's commands instead of translating", NULL, NULL},
-	    {"--force", 0, CMD_FLAG, &a->force, 0, 0, 0, NULL, NULL, GUARD_FORCE_HELP, NULL, NULL},
-	    {"--json", 0, CMD_FLAG, &a->json, 0, 0, 0, NULL, NULL,
-	     "one JSON object on stdout instead of the text output", NULL, NULL},
+	     "how M106/M107, M109 and T words are read, as GPX -r / -g"),
+	    CMD_OPT_STRING("--decode", 0, &a->decode, CMD_NONEMPTY, NULL, "FILE",
+	     "list FILE's commands instead of translating"),
+	    CMD_OPT_FLAG("--force", &a->force, GUARD_FORCE_HELP),
+	    CMD_OPT_FLAG("--json", &a->json,
+	     "one JSON object on stdout instead of the text output"),
 	};
 	const struct cmd_spec spec = {
-	    .cmd = X3G_CMD, .opt = opts, .nopt = sizeof(opts) / sizeof(opts[0]), .col = 21,
+	    .cmd = X3G_CMD, CMD_TABLE(opts), .col = 21,
 	    .head = "usage: stratum x3g IN.gcode -o OUT.x3g --printer NAME|FILE.ini\n"
 		    "                   [--flavor reprap|makerbot] [--json] [--force]\n"
 		    "       stratum x3g --decode FILE.x3g [--json]\n"

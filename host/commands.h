@@ -33,12 +33,6 @@ int cmd_print(int argc, char **argv);	 /* host/cmd_print.c */
  */
 const char *cmd_opt_value(int argc, char **argv, int *i, const char *name);
 
-/*
- * cmd_number - true and *out set when v is a number (st_number.h rules);
- * else prints "CMD: OPT wants WHAT, not 'V'" on stderr and returns false.
- */
-bool cmd_number(const char *cmd, const char *opt, const char *v, const char *what, double *out);
-
 /* cmd_on_stop_signals - SIGINT and SIGTERM call handler, which sets the
  * command's stop flag (host/cmd_opts.c). */
 void cmd_on_stop_signals(void (*handler)(int));
@@ -86,6 +80,9 @@ enum cmd_kind {
 #define CMD_NONEMPTY 1u	 /* CMD_STRING: "" is refused as missing */
 #define CMD_ABOVE_LO 2u	 /* numbers: lo itself is refused (lo < v <= hi) */
 #define CMD_RANGE 4u	 /* numbers: refused outside lo..hi */
+#define CMD_OPTIONAL 16u /* CMD_STRING: "NAME" alone when no value follows (the next
+			  * argument is missing or an option): dest stays NULL */
+#define CMD_TRUNCATE 8u /* whole-number kinds: a fraction is cut off, not refused */
 
 struct cmd_opt {
 	const char *name; /* "--output" */
@@ -129,6 +126,15 @@ struct cmd_spec {
  * ST_EXIT_USAGE after printing "CMD: ..." naming the refused option (with
  * the usage on stderr for an unknown one).
  */
+/* The spec's table: .opt and .nopt of an array. */
+#define CMD_TABLE(t) .opt = (t), .nopt = sizeof(t) / sizeof((t)[0])
+
+/* The common shapes of a table entry. */
+#define CMD_OPT_FLAG(name, dest, help) \
+	{name, 0, CMD_FLAG, dest, 0, 0, 0, NULL, NULL, help, NULL, NULL}
+#define CMD_OPT_STRING(name, letter, dest, flags, wants, arg, help) \
+	{name, letter, CMD_STRING, dest, flags, 0, 0, wants, arg, help, NULL, NULL}
+
 /* --threads N of the commands with exact or parallel passes; help: what uses them. */
 #define CMD_OPT_THREADS(dest, help)                                                      \
 	{"--threads", 0, CMD_INT, dest, CMD_RANGE, 1, 256, "a number from %g to %g", "N", help, \

@@ -176,6 +176,26 @@ START_TEST(usage_errors_exit_2)
 }
 END_TEST
 
+/* Every command reads its options through one table (host/cmd_opts.c):
+ * NAME VALUE and NAME=VALUE alike, a refusal naming the option with the
+ * range the help prints. */
+START_TEST(options_one_table)
+{
+	const char *path = write_mesh(fx_box(0, 0, 0, 10, 10, 10), "opts.stl");
+
+	ck_assert_int_eq(tu_run(out, sizeof(out), "check --threads=2 '%s'", path), 0);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "check --threads=300 '%s'", path), 2);
+	ck_assert_msg(strstr(out, "--threads wants a number from 1 to 256, not '300'"), "%s", out);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "sim --dialect=marlin --bufsize=0"), 2);
+	ck_assert_msg(strstr(out, "--bufsize wants a number from 1 to 1024, not '0'"), "%s", out);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "repair --help"), 0);
+	ck_assert_msg(strstr(out, "--epsilon MM      thickness for sheets and wires, 0 < MM <= 10\n"),
+		      "%s", out);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "preview --help"), 0);
+	ck_assert_msg(strstr(out, "picture width, 200 to 8192 px (default 1000)"), "%s", out);
+}
+END_TEST
+
 /* Every malformed input: exit 65, one message naming the file and where. */
 static void expect_bad(const char *name, const void *data, size_t len, const char *where)
 {
@@ -829,6 +849,7 @@ Suite *cli_suite(void)
 	tcase_add_test(tc, json_overlapping_cubes);
 	tcase_add_test(tc, text_report);
 	tcase_add_test(tc, usage_errors_exit_2);
+	tcase_add_test(tc, options_one_table);
 	tcase_add_test(tc, bad_inputs_exit_65);
 	tcase_add_test(tc, ports_json);
 	tcase_add_test(tc, sim_command_runs_and_cleans_up);
