@@ -16,33 +16,22 @@
 #include "settings.h"
 #include "st_error.h"
 
-/* The --help text. */
-static void printers_usage(FILE *out)
-{
-	fprintf(out,
-		"usage: stratum printers [--json]\n"
-		"       stratum printers --show NAME|FILE.ini [--json] [SETTINGS OPTIONS]\n"
-		"       stratum printers --show --load BUNDLE.ini --printer-preset NAME ...\n"
-		"       stratum printers --keys\n"
-		"\n"
-		"Lists the printer profiles (NAME.ini files) found in, in this order:\n"
-		"$STRATUM_PRINTERS_DIR, the printers/ folder of the build tree, and\n"
-		"%s.  NAME is what --printer takes.\n"
-		"\n"
-		"  --keys          every key a profile takes: the tables of docs/printers.md\n"
-		"  --json          a JSON array (or, with --show, one object) on stdout\n"
-		"  --show PRINTER  print every resolved setting of one profile, defaults\n"
-		"                  included, as a profile file (--printer is a synonym);\n"
-		"                  with the settings options of 'stratum slice', as they\n"
-		"                  resolve it:\n",
-		STRATUM_DATADIR);
-	cfgopt_usage(out);
-	fprintf(out,
-		"\n"
-		"A profile that fails to load is reported on stderr and left out of the\n"
-		"list.  Exit status: 0 ok, 2 usage error or unknown printer, 65 the profile\n"
-		"given to --show is invalid.  See docs/printers.md.\n");
-}
+/* The help text around the option lines. */
+static const char printers_head[] =
+    "usage: stratum printers [--json]\n"
+    "       stratum printers --show NAME|FILE.ini [--json] [SETTINGS OPTIONS]\n"
+    "       stratum printers --show --load BUNDLE.ini --printer-preset NAME ...\n"
+    "       stratum printers --keys\n"
+    "\n"
+    "Lists the printer profiles (NAME.ini files) found in, in this order:\n"
+    "$STRATUM_PRINTERS_DIR, the printers/ folder of the build tree, and\n"
+    STRATUM_DATADIR ".  NAME is what --printer takes.\n"
+    "\n";
+static const char printers_tail[] =
+    "\n"
+    "A profile that fails to load is reported on stderr and left out of the\n"
+    "list.  Exit status: 0 ok, 2 usage error or unknown printer, 65 the profile\n"
+    "given to --show is invalid.  See docs/printers.md.\n";
 
 /* "0.4" when every nozzle is the same, else "0.4,0.6". */
 static void nozzle_text(const struct profile *p, char *buf, size_t cap)
@@ -265,43 +254,32 @@ out_free_list:
 int cmd_printers(int argc, char **argv)
 {
 	static struct cfgopt cfg; /* large; one per process */
-	const char *show = NULL;
-	bool json = false, showing = false;
-	int taken;
+	const char *show = NULL, *showing = NULL;
+	bool json = false, keys = false;
+	const struct cmd_opt opts[] = {
+	    CMD_OPT_FLAG("--keys", &keys,
+			 "every key a profile takes: the tables of docs/printers.md"),
+	    CMD_OPT_FLAG("--json", &json, "a JSON array (or, with --show, one object) on stdout"),
+	    {"--show", 0, CMD_STRING, &show, CMD_OPTIONAL, 0, 0, NULL, "PRINTER",
+	     "print every resolved setting of one profile, defaults\n"
+	     "included, as a profile file (--printer is a synonym);\n"
+	     "with the settings options of 'stratum slice', as they\n"
+	     "resolve it:", NULL, &showing},
+	    {"--printer", 0, CMD_STRING, &show, CMD_OPTIONAL, 0, 0, NULL, NULL, NULL, NULL,
+	     &showing},
+	};
+	const struct cmd_spec spec = {.cmd = "stratum printers", .head = printers_head,
+				      CMD_TABLE(opts),
+				      .col = 18, .cfg = &cfg, .tail = printers_tail};
+	int rc;
 
 	memset(&cfg, 0, sizeof(cfg));
-	for (int i = 1; i < argc; i++) {
-		const char *a = argv[i];
-
-		if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-			printers_usage(stdout);
-			return ST_EXIT_OK;
-		} else if (!strcmp(a, "--json")) {
-			json = true;
-		} else if (!strcmp(a, "--keys")) {
-			/* docs/printers.md's key tables, from the one declaration */
-			if (settings_write_doc(stdout) || fflush(stdout) == EOF)
-				return ST_EXIT_SOFTWARE;
-			return ST_EXIT_OK;
-		} else if (!strcmp(a, "--show") || !strcmp(a, "--printer")) {
-			showing = true;
-			if (i + 1 < argc && argv[i + 1][0] != '-')
-				show = argv[++i];
-		} else if (!strncmp(a, "--show=", 7)) {
-			showing = true;
-			show = a + 7;
-		} else if (!strncmp(a, "--printer=", 10)) {
-			showing = true;
-			show = a + 10;
-		} else if ((taken = cfgopt_parse(&cfg, "stratum printers", argc, argv, &i)) != 0) {
-			if (taken < 0)
-				return ST_EXIT_USAGE;
-		} else {
-			fprintf(stderr, "stratum printers: unknown argument '%s'\n", a);
-			printers_usage(stderr);
-			return ST_EXIT_USAGE;
-		}
-	}
+	rc = cmd_parse(&spec, argc, argv);
+	if (rc)
+		return rc < 0 ? ST_EXIT_OK : rc;
+	if (keys) /* docs/printers.md's key tables, from the one declaration */
+		return settings_write_doc(stdout) || fflush(stdout) == EOF ? ST_EXIT_SOFTWARE
+									  : ST_EXIT_OK;
 	if ((cfg.n || cfg.presets.printer) && !showing) {
 		fprintf(stderr, "stratum printers: the settings options go with --show\n");
 		return ST_EXIT_USAGE;
