@@ -1,6 +1,6 @@
 /*
- * cmd_print.c - `stratum print MODEL [--printer NAME] [--port ...]`: one
- * command from a model to a printed part (docs/printing.md).  Stages:
+ * cmd_print.c - `stratum print MODEL... [--printer NAME] [--port ...]`: one
+ * command from models to printed parts (docs/printing.md).  Stages:
  * repair and slice (host/slicejob.c, the same path as `stratum slice`),
  * optional layer previews, then streaming through serial/printer.h, one
  * path whatever the printer's dialect.
@@ -44,13 +44,15 @@
 static void print_usage(FILE *out)
 {
 	fprintf(out,
-		"usage: stratum print MODEL --printer NAME [--port PATH|auto|tcp://HOST:PORT|sim]\n"
+		"usage: stratum print MODEL... --printer NAME [--port PATH|auto|tcp://HOST:PORT|sim]\n"
 		"                     [--dry-run -o OUT] [--preview] [--json] [--speedup K]\n"
 		"                     [--force] [--load FILE.ini ...] [--set KEY=VALUE ...]\n"
 		"       stratum print --resume JOB [--yes] [--port ...] [--json]\n"
 		"\n"
-		"Repairs and slices MODEL (STL, OBJ or OFF) as 'stratum slice' does, then prints\n"
-		"it; a .gcode file (or .x3g for Sailfish printers) is printed as it is.\n"
+		"Repairs and slices MODEL (STL, OBJ, OFF or 3MF) as 'stratum slice' does, then\n"
+		"prints it; several models are arranged on the bed and printed together, as\n"
+		"'stratum slice' arranges them.  A .gcode file (or .x3g for Sailfish printers)\n"
+		"is printed as it is, alone.\n"
 		"  --printer NAME     the printer profile ('stratum printers'); required\n"
 		"  --port P           a serial device, 'auto' (the port whose USB id the profile\n"
 		"                     lists), tcp://HOST:PORT, or 'sim'.  Default: sim, the\n"
@@ -128,10 +130,12 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 			fprintf(stderr, PRINT_CMD ": unknown option '%s'\n", s);
 			print_usage(stderr);
 			return ST_EXIT_USAGE;
-		} else if (!a->in) {
-			a->in = v = s;
+		} else if (a->nmodels < SLICEJOB_MODELS_MAX) {
+			a->models[a->nmodels++] = v = s;
+			a->in = a->models[0];
 		} else {
-			fprintf(stderr, PRINT_CMD ": one model at a time ('%s' and '%s')\n", a->in, s);
+			fprintf(stderr, PRINT_CMD ": more than %d models at once ('%s')\n",
+				SLICEJOB_MODELS_MAX, s);
 			return ST_EXIT_USAGE;
 		}
 		if (!v && s[0] == '-' && strcmp(s, "--json") && strcmp(s, "--yes") && strcmp(s, "-y") &&
@@ -187,7 +191,8 @@ static int print_slice(struct print_job *job, const char *out)
 		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
 		return ST_EXIT_DATAERR;
 	}
-	rc = slicejob_run(PRINT_CMD, job->a->in, &cfg, false, out, true, &job->slice);
+	rc = slicejob_run(PRINT_CMD, job->a->models, job->a->nmodels, &cfg, false, out, true,
+			  &job->slice);
 	job->sliced = rc == 0;
 	return rc;
 }
@@ -316,6 +321,12 @@ static void print_summary_text(const struct print_job *job)
 		       "resolved\n", job->slice.input_triangles, job->slice.rep.output_triangles,
 		       job->slice.rep.components, job->slice.rep.components == 1 ? "" : "s",
 		       (unsigned long long)job->slice.rep.intersecting_pairs);
+	if (job->sliced && job->slice.nmodels > 1) {
+		printf("  models:");
+		for (size_t i = 0; i < job->slice.nmodels; i++)
+			printf(" %s", job->slice.models[i].path);
+		printf(" (%s)\n", job->slice.arranged ? "arranged" : "kept as their 3MF files place them");
+	}
 	if (job->sliced)
 		printf("  slice: %zu layers, filament %.1f mm (%.2f g)\n", s->layers, s->filament_mm,
 		       s->filament_g);
@@ -376,6 +387,12 @@ static void print_summary_json(const struct print_job *job)
 		json_object_set_new(r, "intersecting_pairs",
 				    json_integer((json_int_t)job->slice.rep.intersecting_pairs));
 		json_object_set_new(o, "repair", r);
+	}
+	if (job->sliced) {
+		json_t *models = json_array();
+		for (size_t i = 0; i < job->slice.nmodels; i++)
+			json_array_append_new(models, json_string(job->slice.models[i].path));
+		json_object_set_new(o, "models", models);
 	}
 	json_object_set_new(o, "layers", json_integer((json_int_t)(job->sliced ? s->layers
 									       : job->layers.n)));
@@ -513,6 +530,14 @@ int cmd_print(int argc, char **argv)
 	if (!a.resume) {
 		job->input = print_input_of(a.in);
 		job->gcode = a.in;
+		for (size_t i = 0; i < a.nmodels && a.nmodels > 1; i++)
+			if (print_input_of(a.models[i]) != PRINT_MODEL) {
+				fprintf(stderr, PRINT_CMD ": %s is already G-code or X3G: only "
+						"models are printed together; print it alone\n",
+					a.models[i]);
+				status = ST_EXIT_USAGE;
+				goto out;
+			}
 	}
 	if (job->input == PRINT_X3G && job->prof->protocol != PROFILE_PROTOCOL_SAILFISH) {
 		fprintf(stderr, PRINT_CMD ": %s is X3G, which only Sailfish printers take; printer "
@@ -596,6 +621,7 @@ int cmd_print(int argc, char **argv)
 	if (job->sliced && !job->journal_on)
 		unlink(job->gcode);
 out:
+	slicejob_result_free(&job->slice);
 	free(job->port_auto);
 	free(job->layers.v);
 	profile_free(job->prof);
