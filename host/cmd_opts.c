@@ -143,10 +143,15 @@ int cmd_parse(const struct cmd_spec *spec, int argc, char **argv)
 			return ST_EXIT_USAGE;
 		} else if (npos < spec->npos) {
 			spec->pos[npos++] = a;
+			if (spec->ngot)
+				*spec->ngot = npos;
 			rc = 0;
 		} else if (spec->extra) {
 			fprintf(stderr, "%s: ", spec->cmd);
-			fprintf(stderr, spec->extra, spec->npos ? spec->pos[0] : "", a);
+			if (spec->npos > 1)
+				fprintf(stderr, spec->extra, (int)spec->npos, a);
+			else
+				fprintf(stderr, spec->extra, spec->npos ? spec->pos[0] : "", a);
 			fputc('\n', stderr);
 			return ST_EXIT_USAGE;
 		} else {

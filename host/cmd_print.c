@@ -1,6 +1,6 @@
 /*
- * cmd_print.c - `stratum print MODEL [--printer NAME] [--port ...]`: one
- * command from a model to a printed part (docs/printing.md).  Stages:
+ * cmd_print.c - `stratum print MODEL... [--printer NAME] [--port ...]`: one
+ * command from models to printed parts (docs/printing.md).  Stages:
  * repair and slice (host/slicejob.c, the same path as `stratum slice`),
  * optional layer previews, then streaming through serial/printer.h, one
  * path whatever the printer's dialect.
@@ -74,22 +74,24 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 	const struct cmd_spec spec = {
 	    .cmd = PRINT_CMD, CMD_TABLE(opts), .col = 21,
 	    .head =
-		"usage: stratum print MODEL --printer NAME [--port PATH|auto|tcp://HOST:PORT|sim]\n"
+		"usage: stratum print MODEL... --printer NAME [--port PATH|auto|tcp://HOST:PORT|sim]\n"
 		"                     [--dry-run -o OUT] [--preview] [--json] [--speedup K]\n"
 		"                     [--force] [--load FILE.ini ...] [--set KEY=VALUE ...]\n"
 		"       stratum print --resume JOB [--yes] [--port ...] [--json]\n"
 		"\n"
-		"Repairs and slices MODEL (STL, OBJ or OFF) as 'stratum slice' does, then prints\n"
-		"it; a .gcode file (or .x3g for Sailfish printers) is printed as it is.\n",
+		"Repairs and slices MODEL (STL, OBJ, OFF or 3MF) as 'stratum slice' does, then\n"
+		"prints it; several models are arranged on the bed and printed together, as\n"
+		"'stratum slice' arranges them.  A .gcode file (or .x3g for Sailfish printers)\n"
+		"is printed as it is, alone.\n",
 	    .mid = "Settings for slicing MODEL (on top of --printer, or instead of it), as\n"
 		   "'stratum slice' takes them:\n",
 	    .cfg = &a->cfg,
-	    .tail =
-		"Ctrl-C stops safely (heaters and motors off).  Exit status: 0 printed, 1 the\n"
-		"job failed (firmware error, not repaired, resume declined), 2 usage or G-code\n"
-		"sliced for another printer, 65 bad input, 69 printer unavailable or lost,\n"
-		"70 internal error, 130 interrupted.\n",
-	    .pos = &a->in, .npos = 1, .extra = "one model at a time ('%s' and '%s')"};
+	    .tail = "Ctrl-C stops safely (heaters and motors off).  Exit status: 0 printed, 1 the\n"
+		    "job failed (firmware error, not repaired, resume declined), 2 usage or G-code\n"
+		    "sliced for another printer, 65 bad input, 69 printer unavailable or lost,\n"
+		    "70 internal error, 130 interrupted.\n",
+	    .pos = a->models, .npos = SLICEJOB_MODELS_MAX, .ngot = &a->nmodels,
+	    .extra = "more than %d models at once ('%s')"};
 	int rc;
 
 	memset(a, 0, sizeof(*a));
@@ -97,6 +99,7 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 	rc = cmd_parse(&spec, argc, argv);
 	if (rc)
 		return rc;
+	a->in = a->models[0];
 	if (a->resume && (a->in || a->dry_run || a->cfg.n || a->cfg.presets.printer)) {
 		fprintf(stderr, PRINT_CMD ": --resume JOB takes no model, no --dry-run and no "
 				"settings options: the job journal names the file\n");
@@ -144,7 +147,8 @@ static int print_slice(struct print_job *job, const char *out)
 		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
 		return ST_EXIT_DATAERR;
 	}
-	rc = slicejob_run(PRINT_CMD, job->a->in, &cfg, false, out, true, &job->slice);
+	rc = slicejob_run(PRINT_CMD, job->a->models, job->a->nmodels, &cfg, false, out, true,
+			  &job->slice);
 	job->sliced = rc == 0;
 	return rc;
 }
@@ -273,6 +277,12 @@ static void print_summary_text(const struct print_job *job)
 		       "resolved\n", job->slice.input_triangles, job->slice.rep.output_triangles,
 		       job->slice.rep.components, job->slice.rep.components == 1 ? "" : "s",
 		       (unsigned long long)job->slice.rep.intersecting_pairs);
+	if (job->sliced && job->slice.nmodels > 1) {
+		printf("  models:");
+		for (size_t i = 0; i < job->slice.nmodels; i++)
+			printf(" %s", job->slice.models[i].path);
+		printf(" (%s)\n", job->slice.arranged ? "arranged" : "kept as their 3MF files place them");
+	}
 	if (job->sliced)
 		printf("  slice: %zu layers, filament %.1f mm (%.2f g)\n", s->layers, s->filament_mm,
 		       s->filament_g);
@@ -333,6 +343,12 @@ static void print_summary_json(const struct print_job *job)
 		json_object_set_new(r, "intersecting_pairs",
 				    json_integer((json_int_t)job->slice.rep.intersecting_pairs));
 		json_object_set_new(o, "repair", r);
+	}
+	if (job->sliced) {
+		json_t *models = json_array();
+		for (size_t i = 0; i < job->slice.nmodels; i++)
+			json_array_append_new(models, json_string(job->slice.models[i].path));
+		json_object_set_new(o, "models", models);
 	}
 	json_object_set_new(o, "layers", json_integer((json_int_t)(job->sliced ? s->layers
 									       : job->layers.n)));
@@ -470,6 +486,14 @@ int cmd_print(int argc, char **argv)
 	if (!a.resume) {
 		job->input = print_input_of(a.in);
 		job->gcode = a.in;
+		for (size_t i = 0; i < a.nmodels && a.nmodels > 1; i++)
+			if (print_input_of(a.models[i]) != PRINT_MODEL) {
+				fprintf(stderr, PRINT_CMD ": %s is already G-code or X3G: only "
+						"models are printed together; print it alone\n",
+					a.models[i]);
+				status = ST_EXIT_USAGE;
+				goto out;
+			}
 	}
 	if (job->input == PRINT_X3G && job->prof->protocol != PROFILE_PROTOCOL_SAILFISH) {
 		fprintf(stderr, PRINT_CMD ": %s is X3G, which only Sailfish printers take; printer "
@@ -553,6 +577,7 @@ int cmd_print(int argc, char **argv)
 	if (job->sliced && !job->journal_on)
 		unlink(job->gcode);
 out:
+	slicejob_result_free(&job->slice);
 	free(job->port_auto);
 	free(job->layers.v);
 	profile_free(job->prof);

@@ -1,9 +1,10 @@
 /*
- * cmd_slice.c - `stratum slice MODEL -o OUT.gcode --printer NAME
+ * cmd_slice.c - `stratum slice MODEL... -o OUT.gcode --printer NAME
  * [--layer-height H] [--first-layer-height H] [--perimeters N]
  * [--infill D] [--center X,Y] [--no-repair] [--json] [--threads N]`:
- * read a mesh, repair it (seed 000, epsilon = the nozzle diameter), place
- * it on the bed, slice it (slicer/slicer.h) and write G-code.
+ * read each mesh, repair it (seed 000, epsilon = the nozzle diameter),
+ * place it, or arrange several, on the bed (host/slicejob.h), slice them
+ * together (slicer/slicer.h) and write one G-code file.
  * Exit 0 written, 1 the job cannot be done (no printable repair, does not
  * fit, nothing to print, OUT not written), 2 usage or bad settings, 65
  * unreadable model or bad printer profile, 70 internal error.
@@ -35,7 +36,9 @@
 
 /* The command line, checked for form; values are checked with the profile. */
 struct slice_args {
-	const char *in, *out, *printer;
+	const char *in[SLICEJOB_MODELS_MAX]; /* the model files, in order */
+	size_t nin;
+	const char *out, *printer;
 	struct cfgopt cfg; /* --load, --set, --KEY-NAME ... */
 	bool json, no_repair;
 	int threads; /* 0 = all */
@@ -70,10 +73,10 @@ static int parse_args(int argc, char **argv, struct slice_args *a)
 {
 	const struct cmd_opt opts[] = {
 	    CMD_OPT_STRING("--output", 'o', &a->out, CMD_NONEMPTY, "the output file name", "OUT",
-	     "the G-code file (written only when everything succeeded)"),
+			   "the G-code file (written only when everything succeeded)"),
 	    CMD_OPT_STRING("--printer", 0, &a->printer, CMD_NONEMPTY,
-	     "a printer name or file (see 'stratum printers')", "P",
-	     "printer profile name ('stratum printers') or .ini file"),
+			   "a printer name or file (see 'stratum printers')", "P",
+			   "printer profile name ('stratum printers') or .ini file"),
 	    {"--layer-height", 0, CMD_DOUBLE, &a->layer_height, 0, 0, 0, "a height in mm", "H",
 	     "mm, > 0 and at most the nozzle (default: the profile's)", NULL, &a->has_layer},
 	    {"--first-layer-height", 0, CMD_DOUBLE, &a->first_layer_height, 0, 0, 0,
@@ -86,26 +89,30 @@ static int parse_args(int argc, char **argv, struct slice_args *a)
 	     "D", "infill density in percent, 0 to 100 (fill_density)", read_percent,
 	     &a->has_infill},
 	    {"--center", 0, CMD_CUSTOM, a->center, 0, 0, 0, "X,Y in mm (such as 125,105)", "X,Y",
-	     "put the model's centre there, mm (default: bed centre)", read_center,
-	     &a->has_center},
-	    CMD_OPT_FLAG("--no-repair", &a->no_repair, "slice the mesh as it is read"),
+	     "put the model's (or the models') centre there, mm\n(default: the bed centre)",
+	     read_center, &a->has_center},
+	    CMD_OPT_FLAG("--no-repair", &a->no_repair, "slice the meshes as they are read"),
 	    CMD_OPT_FLAG("--json", &a->json,
-	     "one JSON object on stdout instead of the text summary"),
+			 "one JSON object on stdout instead of the text summary"),
 	    CMD_OPT_THREADS(&a->threads, "cores for the repair, walls and infill (default: all)"),
 	};
 	const struct cmd_spec spec = {
 	    .cmd = SLICE_CMD, CMD_TABLE(opts), .col = 26,
 	    .head =
-		"usage: stratum slice MODEL -o OUT.gcode --printer NAME|FILE.ini\n"
+		"usage: stratum slice MODEL... -o OUT.gcode --printer NAME|FILE.ini\n"
 		"                     [--load FILE.ini]... [--set KEY=VALUE]... [--KEY-NAME V]...\n"
 		"                     [--layer-height H] [--first-layer-height H] [--perimeters N]\n"
 		"                     [--infill D] [--center X,Y] [--no-repair] [--json]\n"
 		"                     [--threads N]\n"
 		"\n"
-		"Slices a mesh (STL, OBJ or OFF) into G-code for the printer.  The model is\n"
-		"first repaired exactly (as 'stratum repair', epsilon = the nozzle diameter),\n"
+		"Slices a mesh (STL, OBJ, OFF or 3MF) into G-code for the printer.  The model\n"
+		"is first repaired exactly (as 'stratum repair', epsilon = the nozzle diameter),\n"
 		"then placed with its bounding box centred on the bed and its lowest point on\n"
 		"the bed, and refused when it does not fit the bed or the build height.\n"
+		"Several models are repaired one by one and printed together: arranged around\n"
+		"the bed centre with duplicate_distance (6 mm) between their footprints, or,\n"
+		"when all are 3MF files whose parts do not overlap, kept where the files put\n"
+		"them; a model that finds no room is named and nothing is written.\n"
 		"It prints walls (perimeters, gap fill, thin walls), skins and sparse infill,\n"
 		"bridges, supports, skirt/brim, a raft, spiral vases and ironing as the\n"
 		"settings ask.  See docs/slicing.md.\n"
@@ -117,15 +124,15 @@ static int parse_args(int argc, char **argv, struct slice_args *a)
 		"Exit status: 0 written, 1 the job cannot be done (no printable repair, the model\n"
 		"does not fit, OUT not written), 2 usage or bad settings, 65 unreadable model or\n"
 		"printer profile, 70 internal error.\n",
-	    .pos = &a->in, .npos = 1,
-	    .extra = "one model at a time ('%s' and '%s'); name the output with -o"};
+	    .pos = a->in, .npos = SLICEJOB_MODELS_MAX, .ngot = &a->nin,
+	    .extra = "more than %d models at once ('%s')"};
 	int rc = cmd_parse(&spec, argc, argv);
 
 	if (rc)
 		return rc;
-	if (!a->in || !a->out || (!a->printer && !a->cfg.has_files)) {
+	if (!a->nin || !a->out || (!a->printer && !a->cfg.has_files)) {
 		fprintf(stderr, SLICE_CMD ": %s\n",
-			!a->in	    ? "no model file given"
+			!a->nin	    ? "no model file given"
 			: !a->out   ? "no output file given; add -o OUT.gcode"
 				    : "no printer given; add --printer NAME ('stratum printers' "
 				      "lists them) or --load a PrusaSlicer config");
@@ -171,8 +178,7 @@ struct slice_run {
 	const struct slice_args *a;
 	const struct slicer_config *c;
 	const struct profile *prof;
-	enum meshio_format format;
-	size_t input_triangles;
+	const struct slicejob_result *res;
 	const struct repair_report *rep; /* NULL with --no-repair */
 };
 
@@ -194,25 +200,48 @@ static json_t *json_xyz(const double v[3])
 	return arr;
 }
 
+/* The repair's counts as JSON; null without a repair. */
+static json_t *json_repair(const struct repair_report *r)
+{
+	json_t *rep = r ? json_object() : json_null();
+
+	if (!r || !rep)
+		return rep;
+	json_object_set_new(rep, "input_triangles", json_integer((json_int_t)r->input_triangles));
+	json_object_set_new(rep, "intersecting_pairs",
+			    json_integer((json_int_t)r->intersecting_pairs));
+	json_object_set_new(rep, "output_triangles",
+			    json_integer((json_int_t)r->output_triangles));
+	json_object_set_new(rep, "components", json_integer((json_int_t)r->components));
+	return rep;
+}
+
+/* Every model of the job: file, format, its repair, where it was moved. */
+static json_t *json_models(const struct slice_run *r)
+{
+	json_t *arr = json_array();
+
+	for (size_t i = 0; arr && i < r->res->nmodels; i++) {
+		const struct slicejob_model *m = &r->res->models[i];
+		json_t *o = json_object();
+
+		json_object_set_new(o, "input", json_string(m->path));
+		json_object_set_new(o, "format", json_string(meshio_format_name(m->format)));
+		json_object_set_new(o, "input_triangles", json_integer((json_int_t)m->input_triangles));
+		json_object_set_new(o, "repair", json_repair(r->rep ? &m->rep : NULL));
+		json_object_set_new(o, "offset", json_xyz(m->offset));
+		json_array_append_new(arr, o);
+	}
+	return arr;
+}
+
 static int print_json(const struct slice_run *r, const struct slicer_summary *s)
 {
 	json_t *o = json_object(), *paths = json_object(), *stages = json_object(),
-	       *place = json_object(), *rep = json_null();
+	       *place = json_object(), *rep = json_repair(r->rep);
 
-	if (!o || !paths || !stages || !place)
+	if (!o || !paths || !stages || !place || !rep)
 		goto out_nomem;
-	if (r->rep) {
-		rep = json_object();
-		if (!rep)
-			goto out_nomem;
-		json_object_set_new(rep, "input_triangles",
-				    json_integer((json_int_t)r->rep->input_triangles));
-		json_object_set_new(rep, "intersecting_pairs",
-				    json_integer((json_int_t)r->rep->intersecting_pairs));
-		json_object_set_new(rep, "output_triangles",
-				    json_integer((json_int_t)r->rep->output_triangles));
-		json_object_set_new(rep, "components", json_integer((json_int_t)r->rep->components));
-	}
 	for (int k = 0; k < PATH_ROLES; k++)
 		json_object_set_new(paths, role_keys[k],
 				    json_integer((json_int_t)s->paths[k]));
@@ -224,9 +253,10 @@ static int print_json(const struct slice_run *r, const struct slicer_summary *s)
 	json_object_set_new(place, "min", json_xyz(s->min));
 	json_object_set_new(place, "max", json_xyz(s->max));
 
-	json_object_set_new(o, "input", json_string(r->a->in));
-	json_object_set_new(o, "format", json_string(meshio_format_name(r->format)));
-	json_object_set_new(o, "input_triangles", json_integer((json_int_t)r->input_triangles));
+	json_object_set_new(o, "input", json_string(r->a->in[0]));
+	json_object_set_new(o, "format", json_string(meshio_format_name(r->res->format)));
+	json_object_set_new(o, "input_triangles",
+			    json_integer((json_int_t)r->res->input_triangles));
 	json_object_set_new(o, "printer", json_string(r->prof->id));
 	json_object_set_new(o, "nozzle_diameter", json_real(r->c->perim.nozzle_diameter));
 	json_object_set_new(o, "repair", rep);
@@ -243,6 +273,8 @@ static int print_json(const struct slice_run *r, const struct slicer_summary *s)
 	json_object_set_new(o, "filament_g", json_real(s->filament_g));
 	json_object_set_new(o, "moves", json_integer((json_int_t)s->moves));
 	json_object_set_new(o, "placement", place);
+	json_object_set_new(o, "models", json_models(r));
+	json_object_set_new(o, "arranged", json_boolean(r->res->arranged));
 	json_object_set_new(o, "paths", paths);
 	json_object_set_new(o, "stages", stages);
 	json_object_set_new(o, "open_contours_dropped", json_integer((json_int_t)s->open_dropped));
@@ -261,16 +293,24 @@ static void print_text(const struct slice_run *r, const struct slicer_summary *s
 {
 	long secs = lround(s->time_s);
 
-	printf("%s: %s, %zu triangles\n", r->a->in, meshio_format_name(r->format),
-	       r->input_triangles);
-	if (r->rep)
-		printf("  repaired (epsilon %g mm): %zu triangles, %zu part%s, %llu intersecting "
-		       "pairs resolved\n",
-		       r->c->perim.nozzle_diameter, r->rep->output_triangles, r->rep->components,
-		       r->rep->components == 1 ? "" : "s",
-		       (unsigned long long)r->rep->intersecting_pairs);
-	else
-		printf("  not repaired (--no-repair)\n");
+	for (size_t i = 0; i < r->res->nmodels; i++) {
+		const struct slicejob_model *m = &r->res->models[i];
+
+		printf("%s: %s, %zu triangles\n", m->path, meshio_format_name(m->format),
+		       m->input_triangles);
+		if (r->rep)
+			printf("  repaired (epsilon %g mm): %zu triangles, %zu part%s, %llu "
+			       "intersecting pairs resolved\n",
+			       r->c->perim.nozzle_diameter, m->rep.output_triangles,
+			       m->rep.components, m->rep.components == 1 ? "" : "s",
+			       (unsigned long long)m->rep.intersecting_pairs);
+		else
+			printf("  not repaired (--no-repair)\n");
+		if (r->res->nmodels > 1)
+			printf("  %s by X %+.2f, Y %+.2f, Z %+.2f mm\n",
+			       r->res->arranged ? "arranged: moved" : "kept as its 3MF places it: moved",
+			       m->offset[0], m->offset[1], m->offset[2]);
+	}
 	printf("printer: %s (%s), nozzle %g mm\n", r->prof->id, r->prof->name,
 	       r->c->perim.nozzle_diameter);
 	if (s->raft_layers) {
@@ -356,10 +396,12 @@ int cmd_slice(int argc, char **argv)
 		/* Before any work: never over the model, and a writable directory. */
 		char why[512];
 
-		status = cmd_output_check(a.in, a.out, why, sizeof(why));
-		if (status) {
-			fprintf(stderr, SLICE_CMD ": %s; nothing was written\n", why);
-			return status;
+		for (size_t i = 0; i < a.nin; i++) {
+			status = cmd_output_check(a.in[i], a.out, why, sizeof(why));
+			if (status) {
+				fprintf(stderr, SLICE_CMD ": %s; nothing was written\n", why);
+				return status;
+			}
 		}
 	}
 
@@ -381,7 +423,7 @@ int cmd_slice(int argc, char **argv)
 			return status;
 	}
 	cfgopt_warn_unsupported(prof, SLICE_CMD);
-	status = input_vars(prof, a.in);
+	status = input_vars(prof, a.in[0]); /* the first model's, as PrusaSlicer */
 	if (status)
 		goto out_profile;
 	status = config_from_profile(prof, &a, &cfg);
@@ -393,16 +435,16 @@ int cmd_slice(int argc, char **argv)
 		status = ST_EXIT_USAGE;
 		goto out_profile;
 	}
-	status = slicejob_run(SLICE_CMD, a.in, &cfg, a.no_repair, a.out, true, &res);
-	if (status)
-		goto out_profile;
-	run.a = &a;
-	run.c = &cfg;
-	run.prof = prof;
-	run.format = res.format;
-	run.input_triangles = res.input_triangles;
-	run.rep = res.repaired ? &res.rep : NULL;
-	status = report(&run, &res.sum);
+	status = slicejob_run(SLICE_CMD, a.in, a.nin, &cfg, a.no_repair, a.out, true, &res);
+	if (!status) {
+		run.a = &a;
+		run.c = &cfg;
+		run.prof = prof;
+		run.res = &res;
+		run.rep = res.repaired ? &res.rep : NULL;
+		status = report(&run, &res.sum);
+	}
+	slicejob_result_free(&res);
 out_profile:
 	profile_free(prof);
 	return status;

@@ -114,8 +114,10 @@ struct cmd_spec {
 	const char *tail;  /* the help text after them */
 	const char **pos;  /* slots for the arguments that are not options */
 	size_t npos;
-	/* "CMD: EXTRA" with the first and the extra argument when there are
-	 * more than npos; NULL: "unexpected argument 'A'" and the usage. */
+	size_t *ngot;	   /* NULL, or set to how many slots were filled */
+	/* "CMD: EXTRA" when there are more than npos: a printf format given
+	 * the first and the surplus argument (npos 1), or npos as an int and
+	 * the surplus (npos > 1); NULL: "unexpected argument 'A'" and the usage. */
 	const char *extra;
 };
 

@@ -19,7 +19,10 @@
 #define PRINT_CMD "stratum print"
 
 struct print_args {
-	const char *in, *printer, *port, *out, *resume, *sim_log;
+	const char *in;	/* the file printed, or the first of the models */
+	const char *models[SLICEJOB_MODELS_MAX]; /* every model file given, models[0] = in */
+	size_t nmodels;
+	const char *printer, *port, *out, *resume, *sim_log;
 	bool dry_run, json, yes, preview;
 	bool force; /* --force: past the wrong-printer guard (guard.h) */
 	double speedup;

@@ -204,6 +204,7 @@ struct profile {
 	double min_skirt_length;	/* mm of filament; default 0 */
 	double brim_width;		/* mm; default 0 */
 	double brim_separation;		/* mm; default 0 */
+	double duplicate_distance;	/* mm between several models' footprints; default 6 */
 	bool support_material;		/* default 0 */
 	int support_material_threshold; /* degrees, 0 = automatic; default 0 */
 	int raft_layers;		/* 0 = no raft; default 0 */

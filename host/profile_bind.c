@@ -103,6 +103,7 @@ static const struct key_def key_defs[] = {
 	{"min_skirt_length", KT_DOUBLE, S(min_skirt_length, skirt.min_skirt_length)},
 	{"brim_width", KT_DOUBLE, S(brim_width, skirt.brim_width)},
 	{"brim_separation", KT_DOUBLE, S(brim_separation, skirt.brim_separation)},
+	{"duplicate_distance", KT_DOUBLE, S(duplicate_distance, bed.object_distance)},
 	{"support_material", KT_BOOL, S(support_material, support.enabled)},
 	{"support_material_threshold", KT_INT, S(support_material_threshold, support.threshold)},
 	{"raft_layers", KT_INT, S(raft_layers, raft.layers)},

@@ -52,7 +52,7 @@ static const struct known known[] = {
     {"threads", NULL, NULL, NULL}, {"variable_layer_height", NULL, NULL, NULL},
     {"color_change_gcode", NULL, NULL, NULL}, {"pause_print_gcode", NULL, NULL, NULL},
     {"template_custom_gcode", NULL, NULL, NULL}, {"between_objects_gcode", NULL, NULL, NULL},
-    {"gcode_comments", NULL, NULL, NULL}, {"duplicate_distance", NULL, NULL, NULL},
+    {"gcode_comments", NULL, NULL, NULL},
     {"extruder_clearance_height", NULL, NULL, NULL}, {"extruder_clearance_radius", NULL, NULL, NULL},
     {"machine_limits_usage", "time_estimate_only", NULL, NULL},
     {"machine_min_extruding_rate", NULL, NULL, NULL}, {"machine_min_travel_rate", NULL, NULL, NULL},

@@ -76,6 +76,7 @@ int marlin_new(struct xport *x, const struct marlin_options *opts, struct marlin
 		return st_error_set(err, ST_ERR_NOMEM, "Marlin driver: out of memory");
 	}
 	m->x = x;
+	m->cwnd = MARLIN_MAX_INFLIGHT;
 	m->n_next = m->n_send = 1;
 	m->st.layer = -1;
 	m->st.z = NAN;

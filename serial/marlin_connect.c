@@ -62,6 +62,7 @@ int marlin_connect(struct marlin *m, struct st_error *err)
 		 * then the capabilities stay unknown. */
 		bool fw = false, done = false, out_of_step = false;
 		int oks = 0;
+		double t_written = marlin_now_s(), first_ok_s = 0;
 		double until = marlin_now_s() + m->o.retry_ms / 1000.0;
 		if (until > end)
 			until = end;
@@ -98,6 +99,8 @@ int marlin_connect(struct marlin *m, struct st_error *err)
 					fw = true;
 				} else if (kind == MARLIN_REPLY_OK && !out_of_step) {
 					marlin_learn_b(m, &r);
+					if (!oks && !fw)
+						first_ok_s = now - t_written; /* M110's */
 					done = fw || ++oks == 2;
 				} else if (kind == MARLIN_REPLY_FATAL) {
 					return st_error_set(err, ST_ERR_INTERNAL,
@@ -148,6 +151,12 @@ int marlin_connect(struct marlin *m, struct st_error *err)
 		marlin_hist_entry(m, 0)->n = 0;
 		marlin_hist_entry(m, 1)->n = 0; /* not resendable: connect lines are not kept */
 		m->connected = true;
+		/* the round trip of M110 is the first sample: without one the
+		 * first lost ok would wait the whole probe_ms (an earlier
+		 * attempt's ok may make it short: a probe that comes early
+		 * only waits in the ring, and later samples correct it) */
+		if (first_ok_s > 0)
+			m->rtt = first_ok_s;
 		m->t_rx = m->t_progress = marlin_now_s();
 		if (m->caps.autoreport_temp && m->o.autoreport_s > 0) {
 			char cmd[32];

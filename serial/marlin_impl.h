@@ -120,6 +120,8 @@ struct marlin {
 	unsigned bufsize_learnt; /* largest ADVANCED_OK B<n>: BUFSIZE - 1 */
 	long queued;		/* lines after n_acked surely in the firmware's queue */
 	double rtt;		/* smoothed write-to-ok time of clean lines (s) */
+	double cwnd;		/* lines the window may hold: halved by each
+				 * rewind, grown by each ack (docs/streaming.md) */
 	long broken_n;		/* safe stop: the heat wait M108 was sent for */
 	double t_broken;	/* when (s) */
 

@@ -179,6 +179,11 @@ struct gcodew_settings {
 	const char *printer_settings_id; /* the profile's name; "" */
 	const char *printer_model;	 /* "" */
 	const char *bed_shape;		 /* PrusaSlicer's text, "0x0,200x0,200x200,0x200" */
+	/* The model files of a print of several models sliced together, one
+	 * "; input file = NAME" header line each when there are two or more
+	 * (none for one, as before several could be sliced); not owned. */
+	const char *const *input_files; /* NULL */
+	size_t input_file_count;	/* 0 */
 
 	/* Spiral vase (layer_paths.spiral marks the layers it shapes; the
 	 * slicer reads this flag); listed in the header when set. false */

@@ -395,6 +395,8 @@ void gcodew_put_header(struct gcodew *w, const struct gcodew_summary *sum)
 	put_header_text(w, "printer_settings_id", w->s->printer_settings_id);
 	put_header_text(w, "printer_model", w->s->printer_model);
 	put_header_text(w, "bed_shape", w->s->bed_shape);
+	for (size_t i = 0; w->s->input_file_count >= 2 && i < w->s->input_file_count; i++)
+		put_header_text(w, "input file", w->s->input_files[i]);
 	put_time(w, sum->time_s);
 	gcodew_fmt_num(n, sum->filament_mm, 2);
 	gcodew_put(w, "; filament used [mm] = %s\n", n);

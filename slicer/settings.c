@@ -195,6 +195,8 @@ static const struct setting table[] = {
     {"brim_width", NUM, S_, 0, 200, 0, "mm", "0", NULL, NULL, 0, NULL, ""},
     {"brim_separation", NUM, S_, 0, 100, 0, "mm", "0", NULL, NULL, 0, NULL,
      "gap between the brim and the part"},
+    {"duplicate_distance", NUM, S_, 0, 1000, 0, "mm", "6", NULL, NULL, 0, NULL,
+     "least gap between the footprints of several models sliced together, as arranged"},
     {"support_material", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL, ""},
     {"support_material_threshold", INT, S_, 0, 90, 0, "degrees", "0", NULL, NULL, 0, NULL,
      "0 = automatic"},

@@ -66,6 +66,8 @@ struct slicer_bed {
 	double max_height;		   /* mm, max_print_height */
 	bool has_center;		   /* place at center_x/y instead of the bed centre */
 	double center_x, center_y;	   /* mm, where the part's bounding-box centre goes */
+	double object_distance;		   /* mm between the footprints of several models
+					    * (arrange.h; duplicate_distance, 6) */
 };
 
 /*

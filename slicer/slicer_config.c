@@ -34,7 +34,8 @@ void slicer_config_init(struct slicer_config *c, double nozzle_diameter)
 	    .first_layer_density = c->gcodew.raft_first_layer_density,
 	    .first_layer_expansion = c->gcodew.raft_first_layer_expansion};
 	c->skirt = (struct slicer_skirt_settings){.skirts = 1, .skirt_distance = 6, .skirt_height = 1};
-	c->bed = (struct slicer_bed){.max_x = 200, .max_y = 200, .max_height = 200};
+	c->bed = (struct slicer_bed){.max_x = 200, .max_y = 200, .max_height = 200,
+				     .object_distance = 6};
 }
 
 void slicer_config_modes(struct slicer_config *c)

@@ -31,6 +31,7 @@ static const struct suite_entry suites[] = {
 	{"infill", infill_suite},     {"support", support_suite},
 	{"raft", raft_suite},
 	{"slicecli", slicecli_suite}, {"region", region_suite},
+	{"multimodel", multimodel_suite},
 	{"x3g", x3g_suite},	      {"s3g", s3g_suite},
 	{"serve", serve_suite},	      {"preview", preview_suite},
 	{"portpick", portpick_suite}, {"send", send_suite},

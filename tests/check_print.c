@@ -20,7 +20,9 @@
 #include <string.h>
 
 #include "commands.h"
+#include "fixtures.h"
 #include "gcode.h"
+#include "meshio.h"
 #include "profile.h"
 #include "resume.h"
 #include "sfcheck.h"
@@ -213,6 +215,41 @@ START_TEST(test_unsliceable_profile_exit_2)
 	ck_assert_msg(rc == 2, "exit %d: %s", rc, said);
 	ck_assert_msg(strstr(said, "min_print_speed"), "%s", said);
 	ck_assert_msg(!strstr(said, "repair"), "%s", said);
+}
+END_TEST
+
+/* Two models print together on the simulated Marlin: one arranged job,
+ * its log holding every command of the G-code once and in order. */
+START_TEST(test_two_models_print_together)
+{
+	char dir[512], log[512], a[512], b[512];
+	struct strs lg = {0}, cmds = {0};
+	struct st_error err = {0};
+	struct mesh *m;
+	json_t *o;
+	int rc;
+
+	state_dir("st-two", dir, sizeof(dir));
+	snprintf(log, sizeof(log), "%s", tu_path("two.log"));
+	snprintf(a, sizeof(a), "%s", tu_path("two-a.stl"));
+	snprintf(b, sizeof(b), "%s", tu_path("two-b.stl"));
+	m = fx_box(0, 0, 0, 12, 12, 2);
+	ck_assert_int_eq(meshio_write_stl(a, m, MESHIO_STL_BINARY, &err), 0);
+	ck_assert_int_eq(meshio_write_stl(b, m, MESHIO_STL_BINARY, &err), 0);
+	mesh_free(m);
+	rc = tu_run(out, sizeof(out), "print %s %s --printer " MARLIN_PRINTER " --json "
+		    "--sim-log %s 2>/dev/null", a, b, log);
+	ck_assert_msg(rc == 0, "exit %d: %s", rc, out);
+	o = last_json();
+	ck_assert(json_is_true(json_object_get(o, "ok")));
+	ck_assert_int_eq(json_array_size(json_object_get(o, "models")), 2);
+	ck_assert_int_eq(jint(o, "last_line"), jint(o, "total"));
+	gcode_commands(jstr(o, "gcode"), 0, &cmds, -1, NULL);
+	marlin_log(log, &lg);
+	check_tail(&lg, strs_find(&lg, 0, cmds.v[0]), &cmds);
+	strs_free(&lg);
+	strs_free(&cmds);
+	json_decref(o);
 }
 END_TEST
 
@@ -697,6 +734,7 @@ Suite *print_suite(void)
 	tcase_add_test(tc, test_settings_options_as_slice);
 	tcase_add_test(tc, test_unsliceable_profile_exit_2);
 	tcase_add_test(tc, test_marlin_prints_every_line_once);
+	tcase_add_test(tc, test_two_models_print_together);
 	tcase_add_test(tc, test_sailfish_prints_every_command_once);
 	tcase_add_test(tc, test_ctrl_c_stops_safely);
 	tcase_add_test(tc, test_ctrl_c_during_heatup);

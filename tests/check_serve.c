@@ -713,29 +713,56 @@ END_TEST
  * G-code it prints from an uploaded STL is byte for byte what `stratum
  * slice` writes for the same model and printer profile.
  */
-START_TEST(test_node_gcode_is_slice_gcode)
+/* Upload body (len bytes) as name to the MK3S of a fresh node, wait for its
+ * job, and check the node's G-code is what `stratum slice LOCAL` writes
+ * (the same slice job, host/slicejob.c). */
+static void expect_node_slice(const char *name, const char *local, const char *body, size_t len)
 {
 	struct node_proc np;
 	struct resp r;
-	size_t len;
-	char *stl = cube_stl(&len), path[600], mine[600], out[4096];
+	char path[600], mine[600], out[4096];
 	long long id;
 	int rc;
 
 	write_config(&np, TWO_PRINTERS, 8);
 	node_start(&np);
-	upload(np.port, "/p/mk3s", KEY_UP, "cube.stl", 8, "", 0, "true", stl, len, NULL, true, &r);
+	upload(np.port, "/p/mk3s", KEY_UP, name, strlen(name), "", 0, "true", body, len, NULL,
+	       true, &r);
 	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
 	id = job_of(&r);
 	resp_free(&r);
 	wait_state(np.port, "/p/mk3s", id, "done", 30);
 	node_stop(&np);
 	snprintf(path, sizeof(path), "%s/data/sliced/job-%lld.gcode", np.dir, id);
-	snprintf(mine, sizeof(mine), "%s", tu_path("slice-cube.gcode"));
+	snprintf(mine, sizeof(mine), "%s", tu_path("slice-node.gcode"));
 	rc = tu_run(out, sizeof(out), "slice %s -o %s --printer prusa-i3-mk3s >/dev/null 2>&1 && "
-		    "cmp %s %s", tu_path("cube.stl"), mine, path, mine);
+		    "cmp %s %s", local, mine, path, mine);
 	ck_assert_msg(rc == 0, "the node's G-code is not stratum slice's (%d): %s", rc, out);
+}
+
+START_TEST(test_node_gcode_is_slice_gcode)
+{
+	size_t len;
+	char *stl = cube_stl(&len), local[600];
+
+	snprintf(local, sizeof(local), "%s", tu_path("cube.stl"));
+	expect_node_slice("cube.stl", local, stl, len);
 	free(stl);
+}
+END_TEST
+
+/* A 3MF with two objects uploaded to the node slices with its placement. */
+START_TEST(test_node_slices_two_object_3mf)
+{
+	static const double plate[2][5] = {{20, 20, 5, 30, 40}, {10, 10, 5, 180, 150}};
+	size_t len;
+	char in[600], *body;
+
+	snprintf(in, sizeof(in), "%s", tu_path("plate.3mf"));
+	tu_write_3mf_boxes(in, plate, 2);
+	body = tu_slurp(in, &len);
+	expect_node_slice("plate.3mf", in, body, len);
+	free(body);
 }
 END_TEST
 
@@ -1904,6 +1931,7 @@ Suite *serve_suite(void)
 	tcase_add_test(tc, test_nameless_part);
 	tcase_add_test(tc, test_stl_two_printers);
 	tcase_add_test(tc, test_node_gcode_is_slice_gcode);
+	tcase_add_test(tc, test_node_slices_two_object_3mf);
 	tcase_add_test(tc, test_upload_settings);
 	tcase_add_test(tc, test_queue_from_before_settings);
 	tcase_add_test(tc, test_pause_resume_cancel);

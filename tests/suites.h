@@ -33,6 +33,7 @@ Suite *gcodewriter_suite(void); /* tests/check_gcodewriter.c: G-code writer and 
 Suite *infill_suite(void);	/* tests/check_infill.c: skins, bridges, infill */
 Suite *support_suite(void);	/* tests/check_support.c: skirt, brim, support material */
 Suite *raft_suite(void);	/* tests/check_raft.c: the raft under the part */
+Suite *multimodel_suite(void); /* tests/check_multimodel.c: several models in one slice */
 Suite *slicecli_suite(void);	/* tests/check_slicecli.c: stratum slice end to end */
 void slicecli_settings_tcases(Suite *s); /* tests/check_slicesettings.c: settings honoured, part of slicecli */
 Suite *region_suite(void);	/* tests/check_region.c: printed region against cross-sections */

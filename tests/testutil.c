@@ -1,5 +1,6 @@
 /* testutil.c - scratch files and CLI runs for the Check suites. */
 #include "testutil.h"
+#include "fixtures.h"
 
 #include <check.h>
 #include <dirent.h>
@@ -156,6 +157,43 @@ void tu_write_3mf_mesh(const char *path, const struct mesh *m)
 	ck_assert_msg(n < cap, "tu_write_3mf_mesh: buffer too small");
 	tu_write_3mf(path, xml);
 	free(xml);
+}
+
+void tu_write_3mf_boxes(const char *path, const double (*cubes)[5], int n)
+{
+	char xml[32768];
+	size_t k = 0;
+
+	k += (size_t)snprintf(xml + k, sizeof(xml) - k,
+			      "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<model unit=\"millimeter\" "
+			      "xmlns=\"http://schemas.microsoft.com/3dmanufacturing/core/2015/02\">"
+			      "<resources>\n");
+	for (int i = 0; i < n; i++) {
+		struct mesh *m = fx_box(0, 0, 0, cubes[i][0], cubes[i][1], cubes[i][2]);
+
+		k += (size_t)snprintf(xml + k, sizeof(xml) - k,
+				      "<object id=\"%d\" type=\"model\"><mesh><vertices>", i + 1);
+		for (size_t v = 0; v < m->nverts; v++)
+			k += (size_t)snprintf(xml + k, sizeof(xml) - k,
+					      "<vertex x=\"%g\" y=\"%g\" z=\"%g\"/>", m->verts[v][0],
+					      m->verts[v][1], m->verts[v][2]);
+		k += (size_t)snprintf(xml + k, sizeof(xml) - k, "</vertices><triangles>");
+		for (size_t t = 0; t < m->ntris; t++)
+			k += (size_t)snprintf(xml + k, sizeof(xml) - k,
+					      "<triangle v1=\"%u\" v2=\"%u\" v3=\"%u\"/>",
+					      (unsigned)m->tris[t][0], (unsigned)m->tris[t][1],
+					      (unsigned)m->tris[t][2]);
+		k += (size_t)snprintf(xml + k, sizeof(xml) - k, "</triangles></mesh></object>\n");
+		mesh_free(m);
+	}
+	k += (size_t)snprintf(xml + k, sizeof(xml) - k, "</resources><build>");
+	for (int i = 0; i < n; i++)
+		k += (size_t)snprintf(xml + k, sizeof(xml) - k,
+				      "<item objectid=\"%d\" transform=\"1 0 0 0 1 0 0 0 1 %g %g 0\"/>",
+				      i + 1, cubes[i][3], cubes[i][4]);
+	k += (size_t)snprintf(xml + k, sizeof(xml) - k, "</build></model>\n");
+	ck_assert_msg(k < sizeof(xml), "tu_write_3mf_boxes: XML too long");
+	tu_write_3mf(path, xml);
 }
 
 char *tu_read_between(const char *path, char *buf, size_t cap, const char *begin,

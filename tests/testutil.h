@@ -63,6 +63,10 @@ extern const char tu_3mf_rels[];
  */
 void tu_write_3mf(const char *path, const char *model_xml);
 void tu_write_3mf_mesh(const char *path, const struct mesh *m);
+/* tu_write_3mf_boxes - a 3MF at path with one w x d x h box object (fx_box)
+ * per row of cubes {w, d, h, x, y}, each placed once by a build item
+ * translated by x, y. */
+void tu_write_3mf_boxes(const char *path, const double (*cubes)[5], int n);
 
 /*
  * tu_read_between - read the text file path into buf (cap bytes) and return

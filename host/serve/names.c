@@ -46,7 +46,8 @@ char node_file_kind(const char *name)
 {
 	if (ends_with(name, ".gcode") || ends_with(name, ".gco") || ends_with(name, ".g"))
 		return 'g';
-	if (ends_with(name, ".stl") || ends_with(name, ".obj"))
+	if (ends_with(name, ".stl") || ends_with(name, ".obj") || ends_with(name, ".off") ||
+	    ends_with(name, ".3mf"))
 		return 'm';
 	if (ends_with(name, ".x3g"))
 		return 'x';

@@ -105,7 +105,8 @@ int node_check_file_name(const char *name, size_t len, struct st_error *err);
 
 /*
  * node_file_kind - 'g' for G-code (.gcode .gco .g), 'm' for a model the
- * node slices (.stl .obj), 'x' for X3G (.x3g, Sailfish printers only: see
+ * node slices (.stl .obj .off .3mf: every format meshio.h reads; a 3MF
+ * with several objects is sliced with its build placement), 'x' for X3G (.x3g, Sailfish printers only: see
  * node_check_kind), 0 for anything else (the API answers 415).
  * Case-insensitive on the extension.
  */

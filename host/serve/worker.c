@@ -41,8 +41,11 @@ static int slice_model(struct node_printer *p, const struct node_job *j, const c
 	cfg.threads = p->node->cfg.slice_threads;
 	if (!rc)
 		rc = slicer_config_check(&cfg, err);
-	if (!rc)
-		rc = slicejob_slice(j->file, &cfg, false, out, NULL, &res, err);
+	if (!rc) {
+		const char *in[1] = {j->file};
+		rc = slicejob_slice(in, 1, &cfg, false, out, NULL, &res, err);
+		slicejob_result_free(&res);
+	}
 	profile_free(job_prof);
 	return rc;
 }

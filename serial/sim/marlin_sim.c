@@ -428,6 +428,21 @@ static void sim_rx_byte(struct sim_marlin *s, uint8_t b, double now)
 	s->rx[s->rx_len++] = b;
 }
 
+/* Is the newline ending the line so far one that lose_newline_at loses? */
+static bool sim_newline_lost(struct sim_marlin *s)
+{
+	if (!s->line_len || s->line[0] != 'N')
+		return false;
+	long n = sim_read_long(s->line + 1, s->line + s->line_len);
+	for (size_t k = 0; k < SIM_MARLIN_CUTS; k++)
+		if (s->o.lose_newline_at[k] > 0 && s->o.lose_newline_at[k] == n &&
+		    !s->newline_lost[k]) {
+			s->newline_lost[k] = true;
+			return true;
+		}
+	return false;
+}
+
 /* Move bytes from the RX ring into lines while a queue slot is free and no
  * command blocks: Marlin reads serial input in its main loop, between
  * commands, not in the idle() a waiting command spins in. */
@@ -439,6 +454,8 @@ void msim_serial_commands(struct sim_marlin *s)
 	while (i < s->rx_len && s->q_count < s->o.bufsize && !s->halted) {
 		char ch = (char)s->rx[i++];
 		if (ch == '\n' || ch == '\r') {
+			if (!s->line_comment && sim_newline_lost(s))
+				continue;
 			if (!s->line_comment || s->line_len)
 				sim_accept_line(s);
 			s->line_len = 0;

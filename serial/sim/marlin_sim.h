@@ -31,6 +31,8 @@
 
 #include "st_error.h"
 
+#define SIM_MARLIN_CUTS 4 /* lose_newline_at entries */
+
 /* Options; sim_marlin_options_init fills the defaults. */
 struct sim_marlin_options {
 	unsigned rx_buffer; /* RX ring size (bytes), Marlin RX_BUFFER_SIZE; default 128 */
@@ -67,6 +69,9 @@ struct sim_marlin_options {
 			       * spoilt into the one before (noise on a digit of N):
 			       * dropped silently as a duplicate, as queue.cpp drops
 			       * last_N - 1 and last_N; <= 0: never */
+	long lose_newline_at[SIM_MARLIN_CUTS]; /* the first copy of each of these
+			       * lines loses its newline: the firmware waits for the
+			       * rest of it (0: unused) */
 };
 
 /* Opaque simulator. */

@@ -108,6 +108,7 @@ struct sim_marlin {
 	bool halted, unplugged;
 	bool frozen;		/* freeze_at_line ran: no byte in or out any more */
 	bool number_spoilt;	/* spoil_number_at happened */
+	bool newline_lost[SIM_MARLIN_CUTS]; /* lose_newline_at[i] happened */
 	double thaw_at;		/* when a freeze_s stall ends (sim_now) */
 
 	struct sim_thread th;
