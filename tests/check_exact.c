@@ -275,6 +275,27 @@ START_TEST(threads_agree)
 END_TEST
 
 /*
+ * counts[0]: pairs of sphere with one triangle in the plane z of half
+ * width 2w, small enough for the grid; counts[1]: the same triangle 100
+ * times larger, which makes the grid decline (CGAL's box intersection).
+ * Each on one core and on two, which must agree.
+ */
+static void count_cut_twice(const struct mesh *sphere, double z, double w, uint64_t counts[2])
+{
+	for (int i = 0; i < 2; i++) {
+		const double s = i ? 100 * w : w;
+		const double a[3] = {-2 * s, -s, z}, b[3] = {2 * s, -s, z}, c[3] = {0, 2 * s, z};
+		struct mesh *cut = fx_triangle(a, b, c);
+		struct mesh *m = fx_concat(sphere, cut);
+
+		counts[i] = count_mesh(m, NULL, 1);
+		ck_assert_uint_eq(count_mesh(m, NULL, 2), counts[i]);
+		mesh_free(cut);
+		mesh_free(m);
+	}
+}
+
+/*
  * A sphere cut by one triangle in a plane: with a triangle of 40 mm the
  * candidate pairs come from the grid (gridpairs.hpp); one of 4 m would
  * put it in millions of grid cells, so the grid declines and CGAL's box
@@ -285,20 +306,30 @@ START_TEST(grid_and_boxes_agree)
 	struct mesh *sphere = fx_sphere(0, 0, 0, 5, 32, 64);
 	uint64_t counts[2];
 
-	for (int i = 0; i < 2; i++) {
-		const double s = i ? 100 : 1;
-		const double a[3] = {-20 * s, -10 * s, 0.123}, b[3] = {20 * s, -10 * s, 0.123},
-			     c[3] = {0, 20 * s, 0.123};
-		struct mesh *cut = fx_triangle(a, b, c);
-		struct mesh *m = fx_concat(sphere, cut);
-
-		counts[i] = count_mesh(m, NULL, 1);
-		ck_assert_uint_eq(count_mesh(m, NULL, 2), counts[i]);
-		mesh_free(cut);
-		mesh_free(m);
-	}
+	count_cut_twice(sphere, 0.123, 10, counts);
 	/* The 64 quads (128 triangles) of the band the plane goes through. */
 	ck_assert_uint_eq(counts[0], 128);
+	ck_assert_uint_eq(counts[1], counts[0]);
+	mesh_free(sphere);
+}
+END_TEST
+
+/*
+ * The poles of a UV sphere put hundreds of slivers in a few grid cells,
+ * which the grid sweeps along x instead of comparing all against all
+ * (gridpairs.hpp).  A plane just below the north pole, between the first
+ * and second rings, crosses the 256 quads (512 triangles) of that band:
+ * the same count from the grid as from CGAL's box intersection (the cut
+ * 100 times larger makes the grid decline).
+ */
+START_TEST(crowded_pole_swept)
+{
+	struct mesh *sphere = fx_sphere(0, 0, 0, 5, 64, 256);
+	const double z = 5 * cos(M_PI * 1.5 / 64);
+	uint64_t counts[2];
+
+	count_cut_twice(sphere, z, 1, counts);
+	ck_assert_uint_eq(counts[0], 512);
 	ck_assert_uint_eq(counts[1], counts[0]);
 	mesh_free(sphere);
 }
@@ -701,6 +732,7 @@ Suite *exact_suite(void)
 	tcase_add_test(mesh, threads_agree);
 	tcase_add_test(mesh, grid_and_boxes_agree);
 	tcase_add_test(mesh, crowded_cell_falls_back);
+	tcase_add_test(mesh, crowded_pole_swept);
 	tcase_add_test(mesh, huge_coordinates);
 	tcase_add_test(mesh, snap_round_on_grid_and_off);
 	tcase_set_timeout(mesh, 30);

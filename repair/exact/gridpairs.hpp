@@ -35,6 +35,9 @@ const double MAX_ENTRIES_PER_BOX = 8, MAX_TESTS_PER_BOX = 48;
 /* Cell side, in median largest box sides: each box covers about
  * 2-4 cells and a cell holds a handful of boxes. */
 const double CELL_SIDE = 1.5;
+/* Buckets with more entries than this are swept along x, not compared
+ * all against all. */
+const uint32_t SWEEP_ENTRIES = 32;
 
 struct grid {
 	double origin[3], inv_side;
@@ -206,17 +209,35 @@ bool for_each_pair(std::vector<Box> &boxes, const std::vector<uint32_t> &use, in
 	const size_t chunk = 4096;
 	boxpairs::for_each_index((nb + chunk - 1) / chunk, threads, [&](size_t c) {
 		const size_t end_b = std::min(nb, (c + 1) * chunk);
-		for (size_t b = c * chunk; b < end_b; b++)
-			for (uint32_t i = off[b]; i < off[b + 1]; i++) {
+		for (size_t b = c * chunk; b < end_b; b++) {
+			const uint32_t first = off[b], last = off[b + 1];
+			/* A crowded bucket (the poles of a UV sphere put thousands
+			 * of slivers in a few cells) is swept along x: sorted by
+			 * low x, box i is compared only with the boxes that start
+			 * before it ends.  The same pairs as comparing all, since
+			 * min_x(i) <= min_x(j) makes that the only test on x that
+			 * can fail; ties go by index, so a box listed twice stays
+			 * next to itself. */
+			const bool sweep = last - first > SWEEP_ENTRIES;
+			if (sweep)
+				std::sort(entry.begin() + first, entry.begin() + last,
+					  [&](uint32_t u, uint32_t v) {
+						  const float a = sorted[u].min_coord(0),
+							      z = sorted[v].min_coord(0);
+						  return a < z || (a == z && u < v);
+					  });
+			for (uint32_t i = first; i < last; i++) {
 				const uint32_t s = entry[i];
-				if (i > off[b] && entry[i - 1] == s)
+				if (i > first && entry[i - 1] == s)
 					continue;
 				const Box &bs = sorted[s];
-				for (uint32_t j = i + 1; j < off[b + 1]; j++) {
+				for (uint32_t j = i + 1; j < last; j++) {
 					const uint32_t t = entry[j];
 					if (t == entry[j - 1])
 						continue;
 					const Box &bt = sorted[t];
+					if (sweep && bt.min_coord(0) > bs.max_coord(0))
+						break;
 					if (!overlap(bs, bt) || !keep(id[s], id[t]))
 						continue;
 					const uint64_t at = bucket_of(
@@ -227,6 +248,7 @@ bool for_each_pair(std::vector<Box> &boxes, const std::vector<uint32_t> &use, in
 						visit(id[s], id[t]);
 				}
 			}
+		}
 	});
 	return true;
 }
