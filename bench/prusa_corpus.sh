@@ -17,7 +17,7 @@
 # (detail)", then "corpus: P of N presets pass (S skipped: prusa-slicer
 # refused the preset)".  Exit 0 when every preset that PrusaSlicer slices
 # passes, 1 otherwise.  make bench runs it on the whole corpus; the
-# slicecli suite (tests/check_slicecli.c) on a fixed sample.
+# send suite (tests/check_send.c) on a fixed sample.
 set -u
 bin=$1
 dir=$2
