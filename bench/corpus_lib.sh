@@ -51,9 +51,10 @@ corpus_node_prints() {
 		if [ "$code" != 201 ]; then
 			echo "HTTP $code $(head -c 250 "$1/upload.json")" >"$1/node.why"
 		else
-			# up to 90 s: the test double waits out G4 dwells of up to 60 s
-			# (INAT's end G-code has G4 S180)
-			for _ in $(seq 900); do
+			# up to 180 s: the test double waits out each G4 dwell up to 60 s
+			# (INAT's end G-code has G4 S180; Cura's Cartesio definition
+			# dwells 20 + 20 + 9 s before the print and 7 + 90 s after)
+			for _ in $(seq 1800); do
 				curl -s -H "X-Api-Key: $key" "http://127.0.0.1:$port/api/stratum/queue" \
 					>"$1/queue.json"
 				grep -q '"state":"\(done\|failed\|cancelled\)"' "$1/queue.json" && break
