@@ -20,10 +20,15 @@ corpus_cube() {
 
 # The commands of a G-code file as the simulator logs them, compared without
 # blanks (the sender writes a line's words one blank apart: G28 XY is sent as
-# G28 X Y): comments removed, empty lines and OctoPrint's host commands
+# G28 X Y) and with the command number as the sender writes it (G01 as G1):
+# comments removed (`( )` ones too, but in the text of M0/M1/M117/M118 and
+# the file commands), empty lines and OctoPrint's host commands
 # (@BEDLEVELVISUALIZER: not for the printer) left out.
 corpus_commands() {
-	sed -e 's/;.*//' -e 's/[[:space:]]//g' "$1" | tr -d '\r' | grep -v '^$' | grep -v '^@'
+	sed -e 's/;.*//' \
+		-e '/^[[:space:]]*[Mm]\(0*0\|0*1\|117\|118\|23\|28\|30\|32\|33\)\([^0-9.]\|$\)/!s/([^)]*)//g' \
+		-e 's/^\([[:space:]]*[GMTgmt]\)0*\([0-9]\)/\1\2/' -e 's/[[:space:]]//g' "$1" |
+		tr -d '\r' | grep -v '^$' | grep -v '^@'
 }
 
 # corpus_node_prints DIR CONFIG GCODE: a `stratum serve` node for CONFIG on a
