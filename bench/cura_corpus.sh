@@ -9,7 +9,8 @@
 # PROFILE is the Stratum printer the G-code is sent with: the shipped profile
 # of the same printer where there is one, else printers/generic-marlin.ini
 # with the definition's bed (machine_width, machine_depth, machine_height).
-# CuraEngine leaves the {key} placeholders of a definition's start and end
+# CuraEngine leaves the {key} (and {key, EXTRUDER}) placeholders of a
+# definition's start and end
 # G-code as they are (Cura's front end replaces them before it calls the
 # engine); the script replaces them the same way, with the values the engine
 # reports it used.
@@ -54,9 +55,14 @@ for dp in "$@"; do
 		echo "FAIL $def: CuraEngine ($(grep -v '^\[' "$w/engine.log" | tail -n 1 | head -c 200))"
 		continue
 	fi
-	# the front end's {key} replacement
-	for key in $(grep -o '{[a-z_0-9]*}' "$raw" | sort -u | tr -d '{}'); do
-		printf 's|{%s}|%s|g\n' "$key" "$(setting "$key" "$w/engine.log")"
+	# the front end's {key} and {key, EXTRUDER} replacement (one extruder:
+	# the value the engine used)
+	grep -o '{[a-z_0-9]*\(, *[0-9]*\)\?}' "$raw" | sort -u | while read -r ph; do
+		key=$(echo "$ph" | sed 's/^{\([a-z_0-9]*\).*/\1/')
+		v=$(setting "$key" "$w/engine.log")
+		# the front end's own variable: the first extruder, T0
+		[ "$key" = initial_extruder_nr ] && v=0
+		printf 's|%s|%s|g\n' "$ph" "$v"
 	done >"$w/keys.sed"
 	sed -f "$w/keys.sed" "$raw" >"$gc"
 	if [ -n "$profile" ]; then
