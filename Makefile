@@ -32,13 +32,17 @@ DEB_PACKAGES := gcc g++ make pkg-config dpkg-dev \
 # used by the sim suite's faithfulness test, which is skipped without it;
 # libcgal-demo: CGAL's data meshes, the real broken models bench/cgal_corpus.sh
 # repairs).
-BENCH_PACKAGES := admesh time bc prusa-slicer printcore apache2-utils libcgal-demo
+# cura-engine + cura: CuraEngine and the printer definitions it slices with
+# (cura-engine ships no definitions; bench/cura_corpus.sh).
+BENCH_PACKAGES := admesh time bc prusa-slicer printcore apache2-utils libcgal-demo \
+	cura-engine cura
 # Only the tests need these (the serve suite's status page in headless
 # Chromium, skipped with a message without it; clang for libFuzzer, `make
 # fuzz`; prusa-slicer for the send suite's sample of the PrusaSlicer
-# corpus, which bench/prusa_corpus.sh runs whole); `make check` installs
-# them.
-TEST_PACKAGES := chromium clang prusa-slicer
+# corpus, which bench/prusa_corpus.sh runs whole; cura-engine and cura's
+# definitions for its sample of the CuraEngine corpus, bench/cura_corpus.sh);
+# `make check` installs them.
+TEST_PACKAGES := chromium clang prusa-slicer cura-engine cura
 
 WARN     := -Wall -Wextra -Werror
 CPPFLAGS := -D_XOPEN_SOURCE=700 -D_DEFAULT_SOURCE -MMD -MP

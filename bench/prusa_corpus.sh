@@ -17,7 +17,7 @@
 # (detail)", then "corpus: P of N presets pass (S skipped: prusa-slicer
 # refused the preset)".  Exit 0 when every preset that PrusaSlicer slices
 # passes, 1 otherwise.  make bench runs it on the whole corpus; the
-# slicecli suite (tests/check_slicecli.c) on a fixed sample.
+# send suite (tests/check_send.c) on a fixed sample.
 set -u
 bin=$1
 dir=$2
@@ -41,71 +41,9 @@ else
 	done >"$list"
 fi
 
-# A 10 mm cube, ASCII STL (12 facets).
+. "$(dirname "$0")/corpus_lib.sh"
 cube=$dir/cube.stl
-{
-	echo "solid cube"
-	for f in "0 0 0 10 10 0 10 0 0" "0 0 0 0 10 0 10 10 0" "0 0 10 10 0 10 10 10 10" \
-		 "0 0 10 10 10 10 0 10 10" "0 0 0 10 0 0 10 0 10" "0 0 0 10 0 10 0 0 10" \
-		 "0 10 0 10 10 10 10 10 0" "0 10 0 0 10 10 10 10 10" "0 0 0 0 0 10 0 10 10" \
-		 "0 0 0 0 10 10 0 10 0" "10 0 0 10 10 0 10 10 10" "10 0 0 10 10 10 10 0 10"; do
-		set -- $f
-		printf 'facet normal 0 0 0\nouter loop\nvertex %s %s %s\nvertex %s %s %s\nvertex %s %s %s\nendloop\nendfacet\n' "$@"
-	done
-	echo "endsolid cube"
-} >"$cube"
-
-# The commands of a G-code file as the simulator logs them, compared without
-# blanks (the sender writes a line's words one blank apart: G28 XY is sent as
-# G28 X Y): comments removed, empty lines and OctoPrint's host commands
-# (@BEDLEVELVISUALIZER: not for the printer) left out.
-commands() {
-	sed -e 's/;.*//' -e 's/[[:space:]]//g' "$1" | tr -d '\r' | grep -v '^$' | grep -v '^@'
-}
-
-# Stage 5 in folder $1: a node for config $2, G-code $3 uploaded and printed.
-node_prints() {
-	key=corpus-upload-key-0123
-	printf '[node]\nname = corpus\nlisten = 127.0.0.1:0\ndata_dir = %s/node\n\n[key up]\nkey = %s\nroles = read, upload\n\n[printer p]\nprofile = %s\nport = test-instant\n' \
-		"$1" "$key" "$2" >"$1/node.ini"
-	"$bin" serve --config "$1/node.ini" >/dev/null 2>"$1/node.log" &
-	node=$!
-	port=
-	for _ in $(seq 100); do
-		port=$(sed -n 's/.*listening on 127.0.0.1:\([0-9]*\).*/\1/p' "$1/node.log")
-		[ -n "$port" ] && break
-		sleep 0.1
-	done
-	ok=1
-	if [ -z "$port" ]; then
-		tail -n 1 "$1/node.log" >"$1/node.why"
-	else
-		code=$(curl -s -o "$1/upload.json" -w '%{http_code}' -H "X-Api-Key: $key" \
-			-F print=true -F "file=@$3;filename=cube.gcode" \
-			"http://127.0.0.1:$port/api/files/local")
-		if [ "$code" != 201 ]; then
-			echo "HTTP $code $(head -c 250 "$1/upload.json")" >"$1/node.why"
-		else
-			# up to 90 s: the test double waits out G4 dwells of up to 60 s
-			# (INAT's end G-code has G4 S180)
-			for _ in $(seq 900); do
-				curl -s -H "X-Api-Key: $key" "http://127.0.0.1:$port/api/stratum/queue" \
-					>"$1/queue.json"
-				grep -q '"state":"\(done\|failed\|cancelled\)"' "$1/queue.json" && break
-				sleep 0.1
-			done
-			size=$(wc -c <"$3")
-			if grep -q "\"state\":\"done\".*\"filepos\":$size,\"size\":$size" "$1/queue.json"; then
-				ok=0
-			else
-				head -c 300 "$1/queue.json" >"$1/node.why"
-			fi
-		fi
-	fi
-	kill "$node" 2>/dev/null
-	wait "$node" 2>/dev/null
-	return $ok
-}
+corpus_cube "$cube"
 
 pass=0 total=0 skipped=0 n=0
 tab=$(printf '\t')
@@ -129,40 +67,8 @@ while IFS=$tab read -r vendor preset; do
 	fi
 	dialect=marlin
 	grep -q '^protocol = sailfish' "$ini" && dialect=sailfish
-	link=$w/tty log=$w/sim.log
-	"$bin" sim --dialect "$dialect" --baud 4000000 --speedup 100000 --link "$link" \
-		--log "$log" >/dev/null 2>&1 &
-	sim=$!
-	for _ in $(seq 50); do [ -e "$link" ] && break; sleep 0.1; done
-	timeout 600 "$bin" send "$gc" --port "$link" --printer "$ini" --baud 4000000 \
-		>"$w/send.out" 2>"$w/send.err"
-	rc=$?
-	kill "$sim" 2>/dev/null
-	wait "$sim" 2>/dev/null
-	if [ $rc -ne 0 ]; then
-		fail "send exit $rc ($(tail -n 1 "$w/send.err" | head -c 300))"
-		continue
-	fi
-	if [ "$dialect" = marlin ]; then
-		commands "$gc" >"$w/want.txt"
-		want=$(wc -l <"$w/want.txt")
-		got=$(wc -l <"$log")
-		tail -n "$want" "$log" | cut -d' ' -f2- | sed 's/[[:space:]]//g' >"$w/got.txt"
-		if [ "$got" -lt "$want" ] || [ $((got - want)) -gt 8 ] ||
-			! cmp -s "$w/want.txt" "$w/got.txt"; then
-			fail "the simulator's log is not the file ($got logged, $want in the file)"
-			continue
-		fi
-	fi
-	layers=$(grep -c '^;LAYER_CHANGE' "$gc")
-	mid=$((layers / 2 > 0 ? layers / 2 : 1))
-	if ! "$bin" preview "$gc" --layer "$mid" -o "$w/mid.png" >/dev/null 2>"$w/preview.err" ||
-		[ ! -s "$w/mid.png" ]; then
-		fail "preview of layer $mid ($(tail -n 1 "$w/preview.err" | head -c 300))"
-		continue
-	fi
-	if ! node_prints "$w" "$ini" "$gc"; then
-		fail "node upload ($(head -c 300 "$w/node.why"))"
+	if ! why=$(corpus_stages "$w" "$gc" "$ini" "$dialect" "$(grep -c '^;LAYER_CHANGE' "$gc")"); then
+		fail "$why"
 		continue
 	fi
 	echo "pass $vendor: $preset"

@@ -15,7 +15,8 @@
 # status requests from concurrent clients; `corpus` runs the PrusaSlicer
 # corpus (bench/prusa_corpus.sh: every printer preset of every installed
 # vendor bundle, sliced by prusa-slicer, sent to the simulator, previewed)
-# and prints its failures and pass count; prints Markdown tables for
+# and the CuraEngine corpus (bench/cura_corpus.sh: ten Cura printer
+# definitions) and prints their failures and pass counts; prints Markdown tables for
 # docs/benchmarks.md.
 # Wall time, CPU time and peak RSS come from GNU time;
 # check and repair figures are the best of 3 runs; slice figures one run of
@@ -603,8 +604,18 @@ corpus_table() {
 	grep -v '^pass ' "$out/prusa-corpus.txt"
 }
 
+# The CuraEngine corpus (bench/cura_corpus.sh): failures listed, then the pass count.
+cura_table() {
+	if ! command -v CuraEngine >/dev/null 2>&1 || [ ! -d /usr/share/cura/resources/definitions ]; then
+		echo "CuraEngine or Cura's definitions are not installed (make bench installs them)" >&2
+		return 0
+	fi
+	bench/cura_corpus.sh "$bin" "$out/cura-corpus" >"$out/cura-corpus.txt" 2>&1 || true
+	grep -v '^pass ' "$out/cura-corpus.txt"
+}
+
 case $what in
-corpus) corpus_table ;;
+corpus) corpus_table; echo; cura_table ;;
 serve) serve_table ;;
 x3g) x3g_table ;;
 s3g) s3g_table ;;
@@ -615,6 +626,6 @@ intersect) intersect_table ;;
 slice) slice_table ;;
 stream) stream_table ;;
 soak) soak_table ;;
-all) check_table; echo; repair_table; echo; intersect_table; echo; slice_table; echo; region_table; echo; stream_table; echo; soak_table; echo; x3g_table; echo; s3g_table; echo; serve_table; echo; corpus_table ;;
+all) check_table; echo; repair_table; echo; intersect_table; echo; slice_table; echo; region_table; echo; stream_table; echo; soak_table; echo; x3g_table; echo; s3g_table; echo; serve_table; echo; corpus_table; echo; cura_table ;;
 esac
 

@@ -190,6 +190,7 @@ struct profile {
 	/* mm or % of layer_height; 0 = extrusion_width; defaults 0 */
 	struct profile_pct infill_extrusion_width, solid_infill_extrusion_width;
 	struct profile_pct top_infill_extrusion_width;
+	struct profile_pct support_material_extrusion_width; /* support and raft */
 	double fill_density;				       /* percent, 0-100; default 20 */
 	const char *fill_pattern;	/* a PrusaSlicer pattern name; default "rectilinear" */
 	double solid_infill_below_area;	/* mm^2; default 70 */

@@ -74,6 +74,7 @@ static const struct key_def key_defs[] = {
 	{"infill_extrusion_width", KT_NUM_PCT, P(infill_extrusion_width)},
 	{"solid_infill_extrusion_width", KT_NUM_PCT, P(solid_infill_extrusion_width)},
 	{"top_infill_extrusion_width", KT_NUM_PCT, P(top_infill_extrusion_width)},
+	{"support_material_extrusion_width", KT_NUM_PCT, P(support_material_extrusion_width)},
 	{"perimeters", KT_INT, S(perimeters, perim.perimeters)},
 	{"elefant_foot_compensation", KT_DOUBLE, S(elefant_foot_compensation, elefant_foot_compensation)},
 	{"seam_position", KT_CHOICE, P(seam_position)},

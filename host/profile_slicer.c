@@ -101,6 +101,8 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	    width_of(&p->solid_infill_extrusion_width, p, c->perim.extrusion_width);
 	c->infill.top_infill_extrusion_width =
 	    width_of(&p->top_infill_extrusion_width, p, c->perim.extrusion_width);
+	c->support.extrusion_width =
+	    width_of(&p->support_material_extrusion_width, p, c->perim.extrusion_width);
 	c->bed = (struct slicer_bed){.min_x = p->bed_min_x, .min_y = p->bed_min_y,
 				     .max_x = p->bed_max_x, .max_y = p->bed_max_y};
 

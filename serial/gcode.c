@@ -614,10 +614,12 @@ static int parse_line(struct parser *p, unsigned flags)
 		keep_comment(l->comment, &l->comment_len, &l->comment_truncated, p->buf + s, e - s);
 	}
 
-	/* Parameters that must have a value. */
+	/* Parameters that must have a value.  A bare F on a move keeps the
+	 * feed rate, as in Marlin (its G0-G3 take F only when above 0; Cura's
+	 * JGAurora A6 start G-code has `G1 Z15.0 F`). */
 	if (l->letter == 'G' && l->number <= 5 && l->number != -1) {
 		for (size_t i = 0; i < l->nwords; i++)
-			if (!l->words[i].has_value)
+			if (!l->words[i].has_value && !(l->words[i].letter == 'F' && l->number != 4))
 				return st_error_set(p->err, ST_ERR_PARSE,
 						    "column %u: '%c' without a value; G%d needs a "
 						    "number after each letter",

@@ -209,9 +209,9 @@ static void read_words(const struct x3g_translator *t, const struct gcode_line *
 			w->flag |= 1u << i;
 			w->v[i] = gcode_word_value(l, axes[i], &v) ? v : 0;
 		}
-	if (gcode_find_word(l, 'F')) {
+	if (gcode_word_value(l, 'F', &v)) { /* a bare F keeps the feed rate */
 		w->flag |= BIT_F;
-		w->f = gcode_word_value(l, 'F', &v) ? v : 0;
+		w->f = v;
 	}
 	if (gcode_find_word(l, 'P')) {
 		w->flag |= BIT_P;

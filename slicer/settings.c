@@ -136,6 +136,8 @@ static const struct setting table[] = {
      "solid infill and bottom skin; likewise"},
     {"top_infill_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
      "top skin; likewise"},
+    {"support_material_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "support and raft; likewise"},
     {"perimeters", INT, S_, 0, 100, 0, "", "3", NULL, NULL, 0, NULL, ""},
     {"elefant_foot_compensation", NUM, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
      "the first layer's islands shrunk by this much (one the shrink would remove is kept)"},

@@ -92,6 +92,8 @@ struct slicer_infill_settings {
 struct slicer_support_settings {
 	bool enabled;	/* support_material */
 	int threshold;	/* degrees, 0-90, 0 = automatic (support_material_threshold) */
+	/* mm, support's and the raft's beads; 0 = the walls' extrusion_width (0) */
+	double extrusion_width;
 };
 
 /* The raft (support.h, support_raft), PrusaSlicer's keys. */
@@ -180,8 +182,9 @@ void slicer_config_modes(struct slicer_config *c);
 int slicer_config_check(const struct slicer_config *c, struct st_error *err);
 
 /*
- * slicer_raft_support - the settings of support_raft (support.h) for c:
- * support's defaults for the nozzle, the walls' width, c's raft keys.
+ * slicer_raft_support - the settings of support_raft (support.h) for c,
+ * and the base of support's: support's defaults for the nozzle, c's support
+ * width (the walls' when 0), c's raft keys.
  */
 void slicer_raft_support(const struct slicer_config *c, struct support_settings *s);
 

@@ -129,7 +129,9 @@ int slicer_config_check(const struct slicer_config *c, struct st_error *err)
 void slicer_raft_support(const struct slicer_config *c, struct support_settings *s)
 {
 	support_settings_init(s, c->perim.nozzle_diameter);
-	s->extrusion_width = c->perim.extrusion_width;
+	/* PrusaSlicer prints the raft with support's width */
+	s->extrusion_width =
+	    c->support.extrusion_width > 0 ? c->support.extrusion_width : c->perim.extrusion_width;
 	s->raft_layers = c->raft.layers;
 	s->raft_contact_distance = c->raft.contact_distance;
 	s->raft_expansion = c->raft.expansion;

@@ -39,7 +39,8 @@ static bool stack_has_paths(const struct layer_stack *s)
 	return false;
 }
 
-/* Support with the job's threshold and the walls' width, support's other defaults. */
+/* Support with the job's threshold and the width it shares with the raft
+ * (slicer_raft_support), support's other defaults. */
 int stage_support(const struct slicer_config *c, const struct slice_stack *st,
 		  struct layer_stack *out, bool *ran, struct st_error *err)
 {
@@ -49,10 +50,9 @@ int stage_support(const struct slicer_config *c, const struct slice_stack *st,
 	*ran = false;
 	if (!c->support.enabled)
 		return 0;
-	support_settings_init(&s, c->perim.nozzle_diameter);
+	slicer_raft_support(c, &s);
 	s.support_material = true;
 	s.support_material_threshold = c->support.threshold;
-	s.extrusion_width = c->perim.extrusion_width;
 	rc = support_generate(&s, st, out, err);
 	*ran = !rc && stack_has_paths(out);
 	return rc;

@@ -116,6 +116,13 @@ START_TEST(test_word_details)
 	parse_ok("G28XY", &l);
 	ck_assert_str_eq(l.text, "G28 X Y");
 
+	/* A bare F on a move keeps the feed rate, as in Marlin. */
+	parse_ok("G1 Z15.0 F ;move the platform down 15mm", &l);
+	ck_assert_uint_eq(l.nwords, 2);
+	ck_assert(!l.words[1].has_value && l.words[1].letter == 'F');
+	ck_assert(!gcode_word_value(&l, 'F', &v));
+	ck_assert_str_eq(l.text, "G1 Z15.0 F");
+
 	/* Marlin and grbl read X1E3 as two words; the number reader alone refuses 1e3. */
 	parse_ok("G1 X1E3", &l);
 	want_word(&l, 0, 'X', 1);
@@ -519,6 +526,7 @@ START_TEST(test_rejects)
 	parse_bad("G1 X", "column 4", "'X' without a value", "G1");
 	parse_bad("G4 P", "'P' without a value");
 	parse_bad("G1 E", "'E' without a value");
+	parse_bad("G4 F", "'F' without a value");
 	parse_bad("X10 Y10", "column 1", "'X10' is not a command", "G, M or T");
 	parse_bad("N5 X10", "column 4", "'X10' is not a command");
 	parse_bad("10 G1", "'10' is not a command");

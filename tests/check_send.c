@@ -415,6 +415,20 @@ START_TEST(marlin_text_commands_as_written)
 }
 END_TEST
 
+/* Runs a corpus script (command cmd) and asserts exit 0 and its summary line. */
+static void corpus_passes(const char *cmd, const char *summary)
+{
+	static char text[1 << 14];
+	size_t n;
+	FILE *p = popen(cmd, "r");
+
+	ck_assert_ptr_nonnull(p);
+	n = fread(text, 1, sizeof(text) - 1, p);
+	text[n] = '\0';
+	ck_assert_msg(pclose(p) == 0, "%s", text);
+	ck_assert_msg(strstr(text, summary), "%s", text);
+}
+
 /* The PrusaSlicer corpus on a fixed sample (bench/prusa_corpus.sh; make bench
  * runs every preset): presets of five vendors (Voron's start G-code calls
  * Klipper macros, FLSun's draws arcs), resolved from the installed
@@ -424,10 +438,7 @@ END_TEST
  * code of ours. */
 START_TEST(prusaslicer_corpus_sample)
 {
-	static char text[1 << 14];
 	char cmd[2048];
-	size_t n;
-	FILE *p;
 
 	if (system("command -v prusa-slicer >/dev/null 2>&1") != 0 ||
 	    !tu_file_exists("/usr/share/PrusaSlicer/profiles/PrusaResearch.ini")) {
@@ -441,14 +452,31 @@ START_TEST(prusaslicer_corpus_sample)
 		 TU_SANITIZED ? "" : "'Creality:Creality Ender-3 (0.4 mm nozzle)' "
 				     "'LulzBot:Taz6 Aero 0.5mm' 'Voron:Voron_v2_250 0.4 nozzle' "
 				     "'FLSun:FLSun Q5'");
-	p = popen(cmd, "r");
-	ck_assert_ptr_nonnull(p);
-	n = fread(text, 1, sizeof(text) - 1, p);
-	text[n] = '\0';
-	ck_assert_msg(pclose(p) == 0, "%s", text);
-	ck_assert_msg(strstr(text, TU_SANITIZED ? "corpus: 1 of 1 presets pass (0 skipped"
-						: "corpus: 5 of 5 presets pass (0 skipped"),
-		      "%s", text);
+	corpus_passes(cmd, TU_SANITIZED ? "corpus: 1 of 1 presets pass (0 skipped"
+					: "corpus: 5 of 5 presets pass (0 skipped");
+}
+END_TEST
+
+/* The CuraEngine corpus on three of its definitions (bench/cura_corpus.sh;
+ * make bench runs all ten): Cura's Ender-3 and MK3 definitions sent with
+ * Stratum's profiles of the same printers, Cura's base definition with the
+ * generic Marlin profile; sliced by CuraEngine, sent to the simulator (log ==
+ * file, exit 0), previewed and printed through a farm node (issue 18 item 2). */
+START_TEST(curaengine_corpus_sample)
+{
+	char cmd[2048];
+
+	if (system("command -v CuraEngine >/dev/null 2>&1") != 0 ||
+	    !tu_file_exists("/usr/share/cura/resources/definitions/fdmprinter.def.json")) {
+		fprintf(stderr, "send: CuraEngine or Cura's definitions not installed, corpus "
+				"sample skipped\n");
+		return;
+	}
+	snprintf(cmd, sizeof(cmd),
+		 "bench/cura_corpus.sh '%s' '%s' creality_ender3=creality-ender-3 "
+		 "prusa_i3_mk3=prusa-i3-mk3s fdmprinter=generic-marlin 2>&1",
+		 bin(), tu_path("cura-corpus"));
+	corpus_passes(cmd, "cura corpus: 3 of 3 definitions pass");
 }
 END_TEST
 
@@ -639,6 +667,7 @@ Suite *send_suite(void)
 	tcase_add_test(tc, marlin_prusaslicer_as_written);
 	tcase_add_test(tc, marlin_text_commands_as_written);
 	tcase_add_test(tc, prusaslicer_corpus_sample);
+	tcase_add_test(tc, curaengine_corpus_sample);
 	tcase_add_test(tc, marlin_sigint_during_heatup);
 	tcase_add_test(tc, port_auto_picks_or_says_why);
 	suite_add_tcase(s, tc);

@@ -490,6 +490,80 @@ START_TEST(infill_widths_honoured)
 }
 END_TEST
 
+/* E per mm of XY of the extrusions whose ;TYPE: starts with "Support
+ * material" (support and its interface, the raft's lines), relative E. */
+static double support_e_per_mm(const char *text)
+{
+	double x = 0, y = 0, e = 0, len = 0;
+	bool in_support = false;
+
+	for (const char *l = text; *l; l = strchr(l, '\n') ? strchr(l, '\n') + 1 : l + strlen(l)) {
+		size_t n = strcspn(l, "\n");
+		const char *xw = memchr(l, 'X', n), *yw = memchr(l, 'Y', n), *ew = memchr(l, 'E', n);
+		const char *semi = memchr(l, ';', n);
+		double nx = x, ny = y;
+
+		if (!strncmp(l, ";TYPE:", 6))
+			in_support = !strncmp(l + 6, "Support material", 16);
+		if (strncmp(l, "G1 ", 3) && strncmp(l, "G0 ", 3))
+			continue;
+		if (xw && (!semi || xw < semi))
+			nx = strtod(xw + 1, NULL);
+		if (yw && (!semi || yw < semi))
+			ny = strtod(yw + 1, NULL);
+		if (in_support && ew && (!semi || ew < semi) && strtod(ew + 1, NULL) > 0 &&
+		    (nx != x || ny != y)) {
+			e += strtod(ew + 1, NULL);
+			len += hypot(nx - x, ny - y);
+		}
+		x = nx;
+		y = ny;
+	}
+	ck_assert_msg(len > 0, "no support or raft extrusion");
+	return e / len;
+}
+
+/* support_material_extrusion_width sets the beads of support and of the
+ * raft (PrusaSlicer prints the raft with support's width): more E per mm
+ * at 0.7 mm than at the walls' 0.45, in the ratio of the beads'
+ * cross-sections (PrusaSlicer's flow: (w - h) h + pi h^2 / 4). */
+START_TEST(support_width_honoured)
+{
+	char model[4096];
+	const char *with[2] = {STEADY "--set support_material=1 --set support_material_threshold=60 ",
+			       STEADY "--set raft_layers=2 "};
+	const double h = 0.2;
+	double want = ((0.7 - h) * h + M_PI * h * h / 4) / ((0.45 - h) * h + M_PI * h * h / 4);
+
+	model_file(wide_bridge(), "supportwidth.stl", model, sizeof(model));
+	for (int i = 0; i < 2; i++) {
+		char args[512];
+		char *g = slice(model, with[i]);
+		double base = support_e_per_mm(g);
+
+		free(g);
+		snprintf(args, sizeof(args), "%s--set support_material_extrusion_width=0.7", with[i]);
+		g = slice(model, args);
+		ck_assert_msg(!strstr(out, "support_material_extrusion_width="), "%s", out);
+		double wide = support_e_per_mm(g);
+
+		if (i == 0) {
+			assert_header(g, "extrusion width (Support material) = 0.7 mm");
+			/* support alone: every bead 0.2 mm high but the first layer's */
+			ck_assert_msg(fabs(wide / base - want) < 0.05 * want,
+				      "support E/mm %g at 0.7 mm, %g at 0.45 (ratio %g, wanted %g)",
+				      wide, base, wide / base, want);
+		} else {
+			/* the raft's upper layers are 0.3 mm high: a smaller ratio, still
+			 * well above 1 */
+			ck_assert_msg(wide / base > 1.2, "raft E/mm %g at 0.7 mm, %g at 0.45", wide,
+				      base);
+		}
+		free(g);
+	}
+}
+END_TEST
+
 /* full_fan_speed_layer ramps the fan up as PrusaSlicer 2.5 does: from
  * disable_fan_first_layers (1: fan from layer 2) to full on layer 5. */
 START_TEST(fan_ramp_honoured)
@@ -636,6 +710,7 @@ void slicecli_settings_tcases(Suite *s)
 	tcase_add_test(tc, elefant_foot_compensation_honoured);
 	tcase_add_test(tc, wall_order_and_fill_angle_honoured);
 	tcase_add_test(tc, infill_widths_honoured);
+	tcase_add_test(tc, support_width_honoured);
 	tcase_add_test(tc, fan_ramp_honoured);
 	tcase_add_test(tc, small_perimeter_speed_honoured);
 	tcase_add_test(tc, infill_overlap_and_bridge_flow_honoured);

@@ -184,6 +184,9 @@ START_TEST(test_moves)
 	 */
 	EXPECT(RR, ZERO "G1 X10 F600", ZERO_BYTES, 155, LE32(941), LE32(0), LE32(0), LE32(0),
 	       LE32(0), LE32(941), 0x18, LE32(0x41200000), LE16(640));
+	/* a bare F keeps the feed rate (F600), as in Marlin */
+	EXPECT(RR, ZERO "G1 F600\nG1 X10 F", ZERO_BYTES, 155, LE32(941), LE32(0), LE32(0),
+	       LE32(0), LE32(0), LE32(941), 0x18, LE32(0x41200000), LE16(640));
 	/* G0 is G1 in GPX: the current feed rate, not the maximum */
 	EXPECT(RR, ZERO "G1 F600\nG0 X10", ZERO_BYTES, 155, LE32(941), LE32(0), LE32(0),
 	       LE32(0), LE32(0), LE32(941), 0x18, LE32(0x41200000), LE16(640));
