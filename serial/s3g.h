@@ -248,6 +248,9 @@ struct s3g_status {
 				  * past the CRC, sent again */
 	uint64_t resolved;	 /* time-outs settled by asking the firmware */
 	uint64_t dup_risk;	 /* action packets resent without being able to tell */
+	uint64_t drifts;	 /* times the build's line count was found off from the
+				  * commands confirmed (a packet damaged past CRC-8 ran
+				  * as another number of commands) and re-based */
 	uint64_t bytes_out, bytes_in;
 	uint64_t action_bytes;	 /* bytes of confirmed action payloads */
 	uint32_t buffer_free;	 /* last reported free buffer space (bytes) */

@@ -13,6 +13,7 @@
 /* ---- streaming ---------------------------------------------------------- */
 
 #define S3G_HIST_MASK (S3G_STREAM_HISTORY - 1)
+#define S3G_NOISY_S 1.0 /* after a fault, baseline before each packet this long (s) */
 _Static_assert((S3G_STREAM_HISTORY & S3G_HIST_MASK) == 0, "history must be a power of two");
 
 /* What the stream knows for settling lost replies and spotting resets.
@@ -24,11 +25,19 @@ struct s3g_stream_ctx {
 	size_t n;		/* commands expected, 0 unknown */
 	size_t cur;		/* index of the packet in flight */
 	long base;		/* index of the last confirmed build start (153), -1 none */
+	/* The first command still queued is base + 1 + line + shift: shift
+	 * counts commands the firmware's line count does not (skipped ones,
+	 * and a packet damaged past CRC-8 that ran as another number of
+	 * commands), measured at the last baseline (s3g_rebase). */
+	long shift;
+	bool shift_known;	/* false: the last baseline found bytes queued that
+				 * no run of our commands adds up to */
+	double noisy_until;	/* a fault this recent: baseline before each packet */
 	uint32_t capacity;	/* largest free space seen (bytes) */
 	bool seen_running;	/* build statistics said running after our 153 */
 	bool running_before;	/* a build ran when the stream began */
 	uint32_t last_line;
-	double next_stats;
+	double next_stats, next_temps;
 	bool stats_due;		/* check now (after a time-out) */
 	uint8_t len[S3G_STREAM_HISTORY];  /* by index & S3G_HIST_MASK */
 	uint8_t code[S3G_STREAM_HISTORY];
@@ -80,12 +89,74 @@ static int s3g_check_reset(struct s3g *s, struct s3g_stream_ctx *c, struct s3g_b
 	return 0;
 }
 
+/* A stable snapshot: free space, build statistics, free space again until
+ * both free-space readings agree (nothing ran in between).  Returns 0, 1
+ * if it never settled, or an error. */
+static int s3g_snapshot(struct s3g *s, struct s3g_stream_ctx *c, uint32_t *free_bytes,
+			struct s3g_build_stats *b, struct st_error *err)
+{
+	uint32_t f2 = 0;
+	int rc;
+
+	for (int tries = 0; tries < 50; tries++) {
+		if ((rc = s3g_get_buffer_free(s, free_bytes, err)) ||
+		    (rc = s3g_check_reset(s, c, b, err)) || (rc = s3g_get_buffer_free(s, &f2, err)))
+			return rc;
+		if (*free_bytes == f2)
+			return 0;
+	}
+	return 1;
+}
+
+/*
+ * Measure shift at a definite point: every command before cur was
+ * answered (or settled), cur not yet sent.  The bytes queued are then the
+ * tail of our commands before cur, which tells the first one still queued
+ * whatever the line count says; the line count against it is the shift.
+ * A packet CRC-8 let through damaged can run as more or fewer commands
+ * than one (docs/reliability.md, "Fault matrix"): the shift absorbs that
+ * here, before a lost reply needs the count.  Returns 0 or an error.
+ */
+static int s3g_rebase(struct s3g *s, struct s3g_stream_ctx *c, struct st_error *err)
+{
+	struct s3g_build_stats b;
+	uint32_t f = 0;
+	int rc;
+
+	if (c->base < 0)
+		return 0;
+	if ((rc = s3g_snapshot(s, c, &f, &b, err)) < 0)
+		return rc;
+	bool running = b.state == S3G_BUILD_RUNNING || b.state == S3G_BUILD_PAUSED;
+	if (rc > 0 || !running || f > c->capacity) {
+		c->shift_known = rc == 0 && !running ? c->shift_known : false;
+		return 0;
+	}
+	uint64_t queued = c->capacity - f, sum = 0;
+	size_t first = c->cur, lowest = (size_t)c->base + 1;
+	while (first > lowest && c->cur - first < S3G_STREAM_HISTORY - 1 &&
+	       (sum < queued || c->len[(first - 1) & S3G_HIST_MASK] == 0)) {
+		first--;
+		sum += c->len[first & S3G_HIST_MASK];
+	}
+	if (sum != queued) {
+		c->shift_known = false;
+		return 0;
+	}
+	long shift = (long)first - (c->base + 1) - (long)b.line;
+	if (c->shift_known && shift != c->shift)
+		s->st.drifts++;
+	c->shift = shift;
+	c->shift_known = true;
+	return 0;
+}
+
 /* Settle a lost reply to command cur (see s3g.h "Exactly once"). */
 static enum s3g_lost s3g_decide(struct s3g *s, void *ctx, struct st_error *err, int *rc)
 {
 	struct s3g_stream_ctx *c = ctx;
 	struct s3g_build_stats b;
-	uint32_t f1 = 0, f2 = 1;
+	uint32_t f1 = 0;
 
 	*rc = s3g_check_reset(s, c, &b, err);
 	if (*rc)
@@ -93,18 +164,15 @@ static enum s3g_lost s3g_decide(struct s3g *s, void *ctx, struct st_error *err, 
 	bool running = b.state == S3G_BUILD_RUNNING || b.state == S3G_BUILD_PAUSED;
 	bool starting = c->base < 0 && c->code[c->cur & S3G_HIST_MASK] == 153;
 	bool ending = c->base >= 0 && c->code[c->cur & S3G_HIST_MASK] == 154;
-	if ((c->base < 0 && !starting) || (!running && !starting && !ending) || c->capacity == 0)
+	if ((c->base < 0 && !starting) || (!running && !starting && !ending) ||
+	    c->capacity == 0 || (c->base >= 0 && !c->shift_known))
 		goto unknown;
-	/* a stable snapshot: the free space did not move around the stats */
-	for (int tries = 0; tries < 50; tries++) {
-		if ((*rc = s3g_get_buffer_free(s, &f1, err)) ||
-		    (*rc = s3g_get_build_stats(s, &b, err)) ||
-		    (*rc = s3g_get_buffer_free(s, &f2, err)))
-			return S3G_LOST_RESEND;
-		if (f1 == f2)
-			break;
+	int snap = s3g_snapshot(s, c, &f1, &b, err);
+	if (snap < 0) {
+		*rc = snap;
+		return S3G_LOST_RESEND;
 	}
-	if (f1 != f2 || f1 > c->capacity)
+	if (snap > 0 || f1 > c->capacity)
 		goto unknown;
 	running = b.state == S3G_BUILD_RUNNING || b.state == S3G_BUILD_PAUSED;
 	if (ending && !running) {
@@ -112,7 +180,7 @@ static enum s3g_lost s3g_decide(struct s3g *s, void *ctx, struct st_error *err, 
 		 * and its last line count takes in every command after our
 		 * build start, the build end included */
 		if (b.state == S3G_BUILD_FINISHED && f1 == c->capacity &&
-		    (size_t)b.line == c->cur - (size_t)c->base) {
+		    (long)b.line + c->shift == (long)c->cur - c->base) {
 			s->st.resolved++;
 			return S3G_LOST_QUEUED;
 		}
@@ -136,8 +204,11 @@ static enum s3g_lost s3g_decide(struct s3g *s, void *ctx, struct st_error *err, 
 		goto unknown;
 	}
 	{
-		size_t first = (size_t)c->base + 1 + b.line; /* first command still queued */
+		long at = c->base + 1 + (long)b.line + c->shift; /* first command still queued */
+		size_t first = at < 0 ? 0 : (size_t)at;
 		uint64_t queued = c->capacity - f1, without = 0;
+		if (at < 0)
+			goto unknown;
 		if (first == c->cur + 1) { /* already taken out and counted */
 			s->st.resolved++;
 			return S3G_LOST_QUEUED;
@@ -319,9 +390,17 @@ int s3g_stream_pull(struct s3g *s, s3g_source_fn next, void *src, size_t total,
 		}
 		c->len[c->cur & S3G_HIST_MASK] = k.len;
 		c->code[c->cur & S3G_HIST_MASK] = k.payload[0];
-		if (c->stats_due || now >= c->next_stats) {
+		if (c->base >= 0 && (now < c->noisy_until || c->stats_due)) {
+			/* a fault just now: a damaged packet may have run as
+			 * something else; count again before the next can be lost */
+			if ((rc = s3g_rebase(s, c, err)))
+				goto out;
+		} else if (c->stats_due || now >= c->next_stats) {
 			if ((rc = s3g_check_reset(s, c, NULL, err)))
 				goto out;
+		}
+		if (now >= c->next_temps) {
+			c->next_temps = now + s->o.stats_ms / 1000.0;
 			s3g_get_temps(s, &temps, NULL);
 		}
 		if (progress && now >= next_report) {
@@ -333,6 +412,7 @@ int s3g_stream_pull(struct s3g *s, s3g_source_fn next, void *src, size_t total,
 		if (rc || s->st.interrupted)
 			goto out;
 		uint64_t lost = s->st.timeouts + s->st.garbled, overflows = s->st.overflows;
+		uint64_t faults = s->st.retries + s->st.errors + lost;
 		rc = s3g_send(s, k.payload, k.len, resp, sizeof(resp), &rlen, &res, err);
 		if (rc < 0) {
 			char inner[256];
@@ -343,12 +423,18 @@ int s3g_stream_pull(struct s3g *s, s3g_source_fn next, void *src, size_t total,
 		}
 		if (s->st.timeouts + s->st.garbled != lost)
 			c->stats_due = true;
+		if (s->st.retries + s->st.errors + s->st.timeouts + s->st.garbled != faults)
+			c->noisy_until = s3g_now() + S3G_NOISY_S;
 		if (s->st.overflows != overflows || rc == 1)
 			free_est = 0; /* our count was off: ask again before the next */
 		else if (free_est >= k.len)
 			free_est -= k.len;
 		if (rc == 0 && resp[0] == S3G_RC_UNSUPPORTED) {
 			s->st.skipped++;
+			/* not queued, never a line: the commands after it sit one
+			 * further from the line count */
+			c->len[c->cur & S3G_HIST_MASK] = 0;
+			c->shift++;
 		} else {
 			s->st.confirmed++;
 			s->st.action_bytes += k.len;
@@ -356,6 +442,8 @@ int s3g_stream_pull(struct s3g *s, s3g_source_fn next, void *src, size_t total,
 				c->base = (long)c->cur;
 				c->seen_running = false;
 				c->last_line = 0;
+				c->shift = 0;
+				c->shift_known = true;
 			}
 		}
 		rc = 0;
