@@ -354,6 +354,21 @@ int s3g_stream(struct s3g *s, const struct s3g_cmd *cmds, size_t n, s3g_progress
 	       void *ctx, volatile sig_atomic_t *stop, struct s3g_status *st,
 	       struct st_error *err);
 
+/* Longest build name s3g_frame_builds keeps: 153 is code, uint32, text,
+ * NUL in one payload. */
+#define S3G_FRAME_NAME_MAX (S3G_MAX_PAYLOAD - 6)
+
+/*
+ * s3g_frame_builds - from now on, a stream whose first command is not a
+ * build start (153) is framed as ReplicatorG frames a build over USB: a
+ * 153 named name (cut to S3G_FRAME_NAME_MAX) goes first, and a build end
+ * (154) last unless the stream's own last command is one.  Outside a
+ * build Sailfish reports no line count, and the line count is what
+ * settles a lost reply (see "Exactly once").  The framing commands are
+ * not counted in status.confirmed.  NULL or "" turns it off (the default).
+ */
+void s3g_frame_builds(struct s3g *s, const char *name);
+
 /*
  * s3g_source_fn - the command source of s3g_stream_pull: fill *cmd with the
  * next action command, its payload valid until the next call.  Returns 1,

@@ -39,6 +39,12 @@ struct s3g_stream_ctx {
 	uint32_t last_line;
 	double next_stats, next_temps;
 	bool stats_due;		/* check now (after a time-out) */
+	/* framing (s3g_frame_builds): our own 153 and 154 around the source's */
+	enum { FRAME_UNDECIDED, FRAME_NONE, FRAME_STARTED, FRAME_ENDED } frame;
+	bool held;		/* the source's first command waits behind our 153 */
+	struct s3g_cmd held_cmd;
+	uint8_t last_code;	/* of the source's last command */
+	uint8_t frame_cmd[S3G_MAX_PAYLOAD];
 	uint8_t len[S3G_STREAM_HISTORY];  /* by index & S3G_HIST_MASK */
 	uint8_t code[S3G_STREAM_HISTORY];
 };
@@ -72,8 +78,15 @@ static int s3g_check_reset(struct s3g *s, struct s3g_stream_ctx *c, struct s3g_b
 	if (out)
 		*out = b;
 	bool running = b.state == S3G_BUILD_RUNNING || b.state == S3G_BUILD_PAUSED;
-	if (c->seen_running &&
-	    (b.state == S3G_BUILD_NONE || (running && b.line < c->last_line))) {
+	if (c->seen_running && running && b.line < c->last_line) {
+		/* a running build counting from 0 again: a build start ran, and
+		 * only a packet damaged past CRC-8 brings one mid-stream (a
+		 * reboot answers "none" until a build starts): the count is
+		 * off until the next re-count */
+		c->shift_known = false;
+		c->stats_due = true;
+		s->st.drifts++;
+	} else if (c->seen_running && b.state == S3G_BUILD_NONE) {
 		s3g_last_desc(c, last, sizeof(last));
 		return s3g_why(s, S3G_FAIL_LINK,
 			       st_error_set(err, ST_ERR_IO,
@@ -231,6 +244,58 @@ unknown:
 	return S3G_LOST_RESEND;
 }
 
+void s3g_frame_builds(struct s3g *s, const char *name)
+{
+	if (s)
+		snprintf(s->frame_name, sizeof(s->frame_name), "%s", name ? name : "");
+}
+
+/* The next command: the source's, or a framing 153 before its first and a
+ * 154 after its last (s3g_frame_builds); *own says which.  Returns as an
+ * s3g_source_fn. */
+static int s3g_pull(struct s3g *s, struct s3g_stream_ctx *c, s3g_source_fn next, void *src,
+		    struct s3g_cmd *k, bool *own, struct st_error *err)
+{
+	*own = false;
+	if (c->held) {
+		c->held = false;
+		*k = c->held_cmd;
+		c->last_code = k->payload[0];
+		return 1;
+	}
+	if (c->frame == FRAME_ENDED)
+		return 0;
+	int rc = next(src, k, err);
+	if (rc > 0 && k->payload && k->len)
+		c->last_code = k->payload[0];
+	if (c->frame == FRAME_UNDECIDED) {
+		c->frame = FRAME_NONE;
+		if (rc > 0 && s->frame_name[0] && k->payload && k->len && k->payload[0] != 153) {
+			size_t l = strlen(s->frame_name);
+			c->held_cmd = *k;
+			c->held = true;
+			c->frame = FRAME_STARTED;
+			memset(c->frame_cmd, 0, 5); /* code, then uint32 steps 0 as GPX writes */
+			c->frame_cmd[0] = 153;
+			memcpy(c->frame_cmd + 5, s->frame_name, l + 1);
+			*k = (struct s3g_cmd){c->frame_cmd, (uint8_t)(l + 6)};
+			*own = true;
+			return 1;
+		}
+	}
+	if (rc == 0 && c->frame == FRAME_STARTED) {
+		c->frame = FRAME_ENDED;
+		if (c->last_code == 154)
+			return 0;
+		c->frame_cmd[0] = 154;
+		c->frame_cmd[1] = 0;
+		*k = (struct s3g_cmd){c->frame_cmd, 2};
+		*own = true;
+		return 1;
+	}
+	return rc;
+}
+
 /* Refresh temperatures for the status, then call the progress callback. */
 static void s3g_report(struct s3g *s, double t0, s3g_progress_fn progress, void *ctx)
 {
@@ -374,12 +439,13 @@ int s3g_stream_pull(struct s3g *s, s3g_source_fn next, void *src, size_t total,
 	}
 	for (c->cur = 0;; c->cur++) {
 		struct s3g_cmd k;
+		bool own;
 		double now = s3g_now();
 		if (stop && *stop) {
 			s->st.interrupted = true;
 			break;
 		}
-		rc = next(src, &k, err);
+		rc = s3g_pull(s, c, next, src, &k, &own, err);
 		if (rc == 0)
 			break;
 		if (rc > 0)
@@ -436,8 +502,10 @@ int s3g_stream_pull(struct s3g *s, s3g_source_fn next, void *src, size_t total,
 			c->len[c->cur & S3G_HIST_MASK] = 0;
 			c->shift++;
 		} else {
-			s->st.confirmed++;
-			s->st.action_bytes += k.len;
+			if (!own) {
+				s->st.confirmed++;
+				s->st.action_bytes += k.len;
+			}
 			if (k.payload[0] == 153) {
 				c->base = (long)c->cur;
 				c->seen_running = false;
