@@ -495,6 +495,11 @@ START_TEST(stream_drift_absorbed)
 	drift_case(144, 137, two, 2);
 	/* an unknown code: every byte of the move is skipped, no command */
 	drift_case(205, 200000, NULL, 0);
+	/* a build start (its text ends at the first zero byte): the running
+	 * build counts from 0 again, which is no reboot (that answers "no
+	 * build"); the job ended as "the printer reset" */
+	static const unsigned start[] = {153};
+	drift_case(153, 200000, start, 1);
 }
 END_TEST
 
