@@ -46,10 +46,18 @@
  * The same check runs before resending after an error reply, because a
  * damaged packet makes the firmware answer each of its noise bytes with
  * 0x80, and a late one can be taken for the reply to the next copy.
- * Where that cannot decide (no build start notification in the stream, or
- * neither count matches), the packet is resent as the protocol document
- * says and status.dup_risk counts it.  CRC-8 itself misses some two-bit
- * errors; a damaged packet it lets through is beyond any host's reach.
+ * The line number counts every action command Sailfish runs (Command.cc
+ * LINE_NUMBER_INCR; the build start clears it, queries never count), so
+ * a packet CRC-8 let through damaged, run as two commands or none, leaves
+ * it off from the commands confirmed: after any fault the stream counts
+ * again before the next packet (the bytes queued tell the first command
+ * still queued, the line number against it the offset, status.drifts
+ * counts the changes), so the offset is the one of a moment ago when a
+ * reply is lost.  Where that cannot decide (no build start notification
+ * in the stream, the reply to the damaged packet itself lost, or neither
+ * count matches), the packet is resent as the protocol document says and
+ * status.dup_risk counts it.  What a damaged packet that CRC-8 let
+ * through runs is beyond any host's reach.
  *
  * Reset detection.  Sailfish sends nothing when it reboots; it simply
  * answers as freshly booted: build statistics state 0 ("no build
