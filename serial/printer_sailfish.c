@@ -417,6 +417,7 @@ static void ps_counters(const struct ps_run *r, const struct s3g_status *st,
 		{"misread", (double)st->misread, false},
 		{"resolved", (double)st->resolved, false},
 		{"dup_risk", (double)st->dup_risk, false},
+		{"drifts", (double)st->drifts, false},
 		{"bytes_read", (double)st->bytes_in, false},
 		{"link_fraction_both_ways", both, true},
 		{"lines", (double)lines, false},
@@ -506,8 +507,12 @@ static int ps_stream(void *state, const struct printer_job *job, struct printer_
 	}
 	if ((rc = ps_source_open(r, f, err)))
 		goto out_source;
+	/* a file that starts no build gets one of its own: the build's line
+	 * count is what settles a lost reply (docs/streaming.md) */
+	s3g_frame_builds(s->d, build);
 	rc = s3g_stream_pull(s->d, ps_next, r, (size_t)job->total, ps_progress, r, &r->stop, &st,
 			     err);
+	s3g_frame_builds(s->d, NULL);
 	ps_progress_of(r, &st);
 	res->last.paused = false;
 	ps_end(r, &st, rc, res, err);

@@ -46,10 +46,18 @@
  * The same check runs before resending after an error reply, because a
  * damaged packet makes the firmware answer each of its noise bytes with
  * 0x80, and a late one can be taken for the reply to the next copy.
- * Where that cannot decide (no build start notification in the stream, or
- * neither count matches), the packet is resent as the protocol document
- * says and status.dup_risk counts it.  CRC-8 itself misses some two-bit
- * errors; a damaged packet it lets through is beyond any host's reach.
+ * The line number counts every action command Sailfish runs (Command.cc
+ * LINE_NUMBER_INCR; the build start clears it, queries never count), so
+ * a packet CRC-8 let through damaged, run as two commands or none, leaves
+ * it off from the commands confirmed: after any fault the stream counts
+ * again before the next packet (the bytes queued tell the first command
+ * still queued, the line number against it the offset, status.drifts
+ * counts the changes), so the offset is the one of a moment ago when a
+ * reply is lost.  Where that cannot decide (no build start notification
+ * in the stream, the reply to the damaged packet itself lost, or neither
+ * count matches), the packet is resent as the protocol document says and
+ * status.dup_risk counts it.  What a damaged packet that CRC-8 let
+ * through runs is beyond any host's reach.
  *
  * Reset detection.  Sailfish sends nothing when it reboots; it simply
  * answers as freshly booted: build statistics state 0 ("no build
@@ -248,6 +256,9 @@ struct s3g_status {
 				  * past the CRC, sent again */
 	uint64_t resolved;	 /* time-outs settled by asking the firmware */
 	uint64_t dup_risk;	 /* action packets resent without being able to tell */
+	uint64_t drifts;	 /* times the build's line count was found off from the
+				  * commands confirmed (a packet damaged past CRC-8 ran
+				  * as another number of commands) and re-based */
 	uint64_t bytes_out, bytes_in;
 	uint64_t action_bytes;	 /* bytes of confirmed action payloads */
 	uint32_t buffer_free;	 /* last reported free buffer space (bytes) */
@@ -350,6 +361,21 @@ int s3g_cancel(struct s3g *s, struct st_error *err);
 int s3g_stream(struct s3g *s, const struct s3g_cmd *cmds, size_t n, s3g_progress_fn progress,
 	       void *ctx, volatile sig_atomic_t *stop, struct s3g_status *st,
 	       struct st_error *err);
+
+/* Longest build name s3g_frame_builds keeps: 153 is code, uint32, text,
+ * NUL in one payload. */
+#define S3G_FRAME_NAME_MAX (S3G_MAX_PAYLOAD - 6)
+
+/*
+ * s3g_frame_builds - from now on, a stream whose first command is not a
+ * build start (153) is framed as ReplicatorG frames a build over USB: a
+ * 153 named name (cut to S3G_FRAME_NAME_MAX) goes first, and a build end
+ * (154) last unless the stream's own last command is one.  Outside a
+ * build Sailfish reports no line count, and the line count is what
+ * settles a lost reply (see "Exactly once").  The framing commands are
+ * not counted in status.confirmed.  NULL or "" turns it off (the default).
+ */
+void s3g_frame_builds(struct s3g *s, const char *name);
 
 /*
  * s3g_source_fn - the command source of s3g_stream_pull: fill *cmd with the

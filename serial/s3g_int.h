@@ -20,6 +20,7 @@ struct s3g {
 	uint8_t rx[S3G_RX_CAP];
 	size_t rx_len;
 	struct s3g_status st;
+	char frame_name[S3G_FRAME_NAME_MAX + 1]; /* s3g_frame_builds; "" off */
 };
 
 /* Outcome of s3g_send for a lost reply, decided by the stream. */

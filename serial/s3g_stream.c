@@ -13,6 +13,7 @@
 /* ---- streaming ---------------------------------------------------------- */
 
 #define S3G_HIST_MASK (S3G_STREAM_HISTORY - 1)
+#define S3G_NOISY_S 1.0 /* after a fault, baseline before each packet this long (s) */
 _Static_assert((S3G_STREAM_HISTORY & S3G_HIST_MASK) == 0, "history must be a power of two");
 
 /* What the stream knows for settling lost replies and spotting resets.
@@ -24,12 +25,26 @@ struct s3g_stream_ctx {
 	size_t n;		/* commands expected, 0 unknown */
 	size_t cur;		/* index of the packet in flight */
 	long base;		/* index of the last confirmed build start (153), -1 none */
+	/* The first command still queued is base + 1 + line + shift: shift
+	 * counts commands the firmware's line count does not (skipped ones,
+	 * and a packet damaged past CRC-8 that ran as another number of
+	 * commands), measured at the last baseline (s3g_rebase). */
+	long shift;
+	bool shift_known;	/* false: the last baseline found bytes queued that
+				 * no run of our commands adds up to */
+	double noisy_until;	/* a fault this recent: baseline before each packet */
 	uint32_t capacity;	/* largest free space seen (bytes) */
 	bool seen_running;	/* build statistics said running after our 153 */
 	bool running_before;	/* a build ran when the stream began */
 	uint32_t last_line;
-	double next_stats;
+	double next_stats, next_temps;
 	bool stats_due;		/* check now (after a time-out) */
+	/* framing (s3g_frame_builds): our own 153 and 154 around the source's */
+	enum { FRAME_UNDECIDED, FRAME_NONE, FRAME_STARTED, FRAME_ENDED } frame;
+	bool held;		/* the source's first command waits behind our 153 */
+	struct s3g_cmd held_cmd;
+	uint8_t last_code;	/* of the source's last command */
+	uint8_t frame_cmd[S3G_MAX_PAYLOAD];
 	uint8_t len[S3G_STREAM_HISTORY];  /* by index & S3G_HIST_MASK */
 	uint8_t code[S3G_STREAM_HISTORY];
 };
@@ -63,8 +78,15 @@ static int s3g_check_reset(struct s3g *s, struct s3g_stream_ctx *c, struct s3g_b
 	if (out)
 		*out = b;
 	bool running = b.state == S3G_BUILD_RUNNING || b.state == S3G_BUILD_PAUSED;
-	if (c->seen_running &&
-	    (b.state == S3G_BUILD_NONE || (running && b.line < c->last_line))) {
+	if (c->seen_running && running && b.line < c->last_line) {
+		/* a running build counting from 0 again: a build start ran, and
+		 * only a packet damaged past CRC-8 brings one mid-stream (a
+		 * reboot answers "none" until a build starts): the count is
+		 * off until the next re-count */
+		c->shift_known = false;
+		c->stats_due = true;
+		s->st.drifts++;
+	} else if (c->seen_running && b.state == S3G_BUILD_NONE) {
 		s3g_last_desc(c, last, sizeof(last));
 		return s3g_why(s, S3G_FAIL_LINK,
 			       st_error_set(err, ST_ERR_IO,
@@ -80,12 +102,74 @@ static int s3g_check_reset(struct s3g *s, struct s3g_stream_ctx *c, struct s3g_b
 	return 0;
 }
 
+/* A stable snapshot: free space, build statistics, free space again until
+ * both free-space readings agree (nothing ran in between).  Returns 0, 1
+ * if it never settled, or an error. */
+static int s3g_snapshot(struct s3g *s, struct s3g_stream_ctx *c, uint32_t *free_bytes,
+			struct s3g_build_stats *b, struct st_error *err)
+{
+	uint32_t f2 = 0;
+	int rc;
+
+	for (int tries = 0; tries < 50; tries++) {
+		if ((rc = s3g_get_buffer_free(s, free_bytes, err)) ||
+		    (rc = s3g_check_reset(s, c, b, err)) || (rc = s3g_get_buffer_free(s, &f2, err)))
+			return rc;
+		if (*free_bytes == f2)
+			return 0;
+	}
+	return 1;
+}
+
+/*
+ * Measure shift at a definite point: every command before cur was
+ * answered (or settled), cur not yet sent.  The bytes queued are then the
+ * tail of our commands before cur, which tells the first one still queued
+ * whatever the line count says; the line count against it is the shift.
+ * A packet CRC-8 let through damaged can run as more or fewer commands
+ * than one (docs/reliability.md, "Fault matrix"): the shift absorbs that
+ * here, before a lost reply needs the count.  Returns 0 or an error.
+ */
+static int s3g_rebase(struct s3g *s, struct s3g_stream_ctx *c, struct st_error *err)
+{
+	struct s3g_build_stats b;
+	uint32_t f = 0;
+	int rc;
+
+	if (c->base < 0)
+		return 0;
+	if ((rc = s3g_snapshot(s, c, &f, &b, err)) < 0)
+		return rc;
+	bool running = b.state == S3G_BUILD_RUNNING || b.state == S3G_BUILD_PAUSED;
+	if (rc > 0 || !running || f > c->capacity) {
+		c->shift_known = rc == 0 && !running ? c->shift_known : false;
+		return 0;
+	}
+	uint64_t queued = c->capacity - f, sum = 0;
+	size_t first = c->cur, lowest = (size_t)c->base + 1;
+	while (first > lowest && c->cur - first < S3G_STREAM_HISTORY - 1 &&
+	       (sum < queued || c->len[(first - 1) & S3G_HIST_MASK] == 0)) {
+		first--;
+		sum += c->len[first & S3G_HIST_MASK];
+	}
+	if (sum != queued) {
+		c->shift_known = false;
+		return 0;
+	}
+	long shift = (long)first - (c->base + 1) - (long)b.line;
+	if (c->shift_known && shift != c->shift)
+		s->st.drifts++;
+	c->shift = shift;
+	c->shift_known = true;
+	return 0;
+}
+
 /* Settle a lost reply to command cur (see s3g.h "Exactly once"). */
 static enum s3g_lost s3g_decide(struct s3g *s, void *ctx, struct st_error *err, int *rc)
 {
 	struct s3g_stream_ctx *c = ctx;
 	struct s3g_build_stats b;
-	uint32_t f1 = 0, f2 = 1;
+	uint32_t f1 = 0;
 
 	*rc = s3g_check_reset(s, c, &b, err);
 	if (*rc)
@@ -93,18 +177,15 @@ static enum s3g_lost s3g_decide(struct s3g *s, void *ctx, struct st_error *err, 
 	bool running = b.state == S3G_BUILD_RUNNING || b.state == S3G_BUILD_PAUSED;
 	bool starting = c->base < 0 && c->code[c->cur & S3G_HIST_MASK] == 153;
 	bool ending = c->base >= 0 && c->code[c->cur & S3G_HIST_MASK] == 154;
-	if ((c->base < 0 && !starting) || (!running && !starting && !ending) || c->capacity == 0)
+	if ((c->base < 0 && !starting) || (!running && !starting && !ending) ||
+	    c->capacity == 0 || (c->base >= 0 && !c->shift_known))
 		goto unknown;
-	/* a stable snapshot: the free space did not move around the stats */
-	for (int tries = 0; tries < 50; tries++) {
-		if ((*rc = s3g_get_buffer_free(s, &f1, err)) ||
-		    (*rc = s3g_get_build_stats(s, &b, err)) ||
-		    (*rc = s3g_get_buffer_free(s, &f2, err)))
-			return S3G_LOST_RESEND;
-		if (f1 == f2)
-			break;
+	int snap = s3g_snapshot(s, c, &f1, &b, err);
+	if (snap < 0) {
+		*rc = snap;
+		return S3G_LOST_RESEND;
 	}
-	if (f1 != f2 || f1 > c->capacity)
+	if (snap > 0 || f1 > c->capacity)
 		goto unknown;
 	running = b.state == S3G_BUILD_RUNNING || b.state == S3G_BUILD_PAUSED;
 	if (ending && !running) {
@@ -112,7 +193,7 @@ static enum s3g_lost s3g_decide(struct s3g *s, void *ctx, struct st_error *err, 
 		 * and its last line count takes in every command after our
 		 * build start, the build end included */
 		if (b.state == S3G_BUILD_FINISHED && f1 == c->capacity &&
-		    (size_t)b.line == c->cur - (size_t)c->base) {
+		    (long)b.line + c->shift == (long)c->cur - c->base) {
 			s->st.resolved++;
 			return S3G_LOST_QUEUED;
 		}
@@ -136,8 +217,11 @@ static enum s3g_lost s3g_decide(struct s3g *s, void *ctx, struct st_error *err, 
 		goto unknown;
 	}
 	{
-		size_t first = (size_t)c->base + 1 + b.line; /* first command still queued */
+		long at = c->base + 1 + (long)b.line + c->shift; /* first command still queued */
+		size_t first = at < 0 ? 0 : (size_t)at;
 		uint64_t queued = c->capacity - f1, without = 0;
+		if (at < 0)
+			goto unknown;
 		if (first == c->cur + 1) { /* already taken out and counted */
 			s->st.resolved++;
 			return S3G_LOST_QUEUED;
@@ -158,6 +242,58 @@ static enum s3g_lost s3g_decide(struct s3g *s, void *ctx, struct st_error *err, 
 unknown:
 	s->st.dup_risk++;
 	return S3G_LOST_RESEND;
+}
+
+void s3g_frame_builds(struct s3g *s, const char *name)
+{
+	if (s)
+		snprintf(s->frame_name, sizeof(s->frame_name), "%s", name ? name : "");
+}
+
+/* The next command: the source's, or a framing 153 before its first and a
+ * 154 after its last (s3g_frame_builds); *own says which.  Returns as an
+ * s3g_source_fn. */
+static int s3g_pull(struct s3g *s, struct s3g_stream_ctx *c, s3g_source_fn next, void *src,
+		    struct s3g_cmd *k, bool *own, struct st_error *err)
+{
+	*own = false;
+	if (c->held) {
+		c->held = false;
+		*k = c->held_cmd;
+		c->last_code = k->payload[0];
+		return 1;
+	}
+	if (c->frame == FRAME_ENDED)
+		return 0;
+	int rc = next(src, k, err);
+	if (rc > 0 && k->payload && k->len)
+		c->last_code = k->payload[0];
+	if (c->frame == FRAME_UNDECIDED) {
+		c->frame = FRAME_NONE;
+		if (rc > 0 && s->frame_name[0] && k->payload && k->len && k->payload[0] != 153) {
+			size_t l = strlen(s->frame_name);
+			c->held_cmd = *k;
+			c->held = true;
+			c->frame = FRAME_STARTED;
+			memset(c->frame_cmd, 0, 5); /* code, then uint32 steps 0 as GPX writes */
+			c->frame_cmd[0] = 153;
+			memcpy(c->frame_cmd + 5, s->frame_name, l + 1);
+			*k = (struct s3g_cmd){c->frame_cmd, (uint8_t)(l + 6)};
+			*own = true;
+			return 1;
+		}
+	}
+	if (rc == 0 && c->frame == FRAME_STARTED) {
+		c->frame = FRAME_ENDED;
+		if (c->last_code == 154)
+			return 0;
+		c->frame_cmd[0] = 154;
+		c->frame_cmd[1] = 0;
+		*k = (struct s3g_cmd){c->frame_cmd, 2};
+		*own = true;
+		return 1;
+	}
+	return rc;
 }
 
 /* Refresh temperatures for the status, then call the progress callback. */
@@ -303,12 +439,13 @@ int s3g_stream_pull(struct s3g *s, s3g_source_fn next, void *src, size_t total,
 	}
 	for (c->cur = 0;; c->cur++) {
 		struct s3g_cmd k;
+		bool own;
 		double now = s3g_now();
 		if (stop && *stop) {
 			s->st.interrupted = true;
 			break;
 		}
-		rc = next(src, &k, err);
+		rc = s3g_pull(s, c, next, src, &k, &own, err);
 		if (rc == 0)
 			break;
 		if (rc > 0)
@@ -319,9 +456,17 @@ int s3g_stream_pull(struct s3g *s, s3g_source_fn next, void *src, size_t total,
 		}
 		c->len[c->cur & S3G_HIST_MASK] = k.len;
 		c->code[c->cur & S3G_HIST_MASK] = k.payload[0];
-		if (c->stats_due || now >= c->next_stats) {
+		if (c->base >= 0 && (now < c->noisy_until || c->stats_due)) {
+			/* a fault just now: a damaged packet may have run as
+			 * something else; count again before the next can be lost */
+			if ((rc = s3g_rebase(s, c, err)))
+				goto out;
+		} else if (c->stats_due || now >= c->next_stats) {
 			if ((rc = s3g_check_reset(s, c, NULL, err)))
 				goto out;
+		}
+		if (now >= c->next_temps) {
+			c->next_temps = now + s->o.stats_ms / 1000.0;
 			s3g_get_temps(s, &temps, NULL);
 		}
 		if (progress && now >= next_report) {
@@ -333,6 +478,7 @@ int s3g_stream_pull(struct s3g *s, s3g_source_fn next, void *src, size_t total,
 		if (rc || s->st.interrupted)
 			goto out;
 		uint64_t lost = s->st.timeouts + s->st.garbled, overflows = s->st.overflows;
+		uint64_t faults = s->st.retries + s->st.errors + lost;
 		rc = s3g_send(s, k.payload, k.len, resp, sizeof(resp), &rlen, &res, err);
 		if (rc < 0) {
 			char inner[256];
@@ -343,19 +489,29 @@ int s3g_stream_pull(struct s3g *s, s3g_source_fn next, void *src, size_t total,
 		}
 		if (s->st.timeouts + s->st.garbled != lost)
 			c->stats_due = true;
+		if (s->st.retries + s->st.errors + s->st.timeouts + s->st.garbled != faults)
+			c->noisy_until = s3g_now() + S3G_NOISY_S;
 		if (s->st.overflows != overflows || rc == 1)
 			free_est = 0; /* our count was off: ask again before the next */
 		else if (free_est >= k.len)
 			free_est -= k.len;
 		if (rc == 0 && resp[0] == S3G_RC_UNSUPPORTED) {
 			s->st.skipped++;
+			/* not queued, never a line: the commands after it sit one
+			 * further from the line count */
+			c->len[c->cur & S3G_HIST_MASK] = 0;
+			c->shift++;
 		} else {
-			s->st.confirmed++;
-			s->st.action_bytes += k.len;
+			if (!own) {
+				s->st.confirmed++;
+				s->st.action_bytes += k.len;
+			}
 			if (k.payload[0] == 153) {
 				c->base = (long)c->cur;
 				c->seen_running = false;
 				c->last_line = 0;
+				c->shift = 0;
+				c->shift_known = true;
 			}
 		}
 		rc = 0;

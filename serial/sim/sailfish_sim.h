@@ -54,6 +54,10 @@ struct sim_sailfish_options {
 			       * with bit 7 of its command byte cleared and the CRC still
 			       * matching, as two bit errors 127 bits apart do under
 			       * CRC-8: the firmware answers it as a query; <= 0 never */
+	uint8_t crc_escape_code; /* non-zero: that packet's command byte becomes this code
+				  * instead (an action: the rest of its bytes are parsed
+				  * as whatever commands they read as, so the build's
+				  * line count drifts from what the host sent) */
 };
 
 /* Opaque simulator. */
