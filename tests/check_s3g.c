@@ -335,6 +335,18 @@ static struct s3g_status stream_and_check(struct sim_sailfish_options *so, size_
 	int rc = s3g_stream(r.d, c, n, NULL, NULL, NULL, &st, &err);
 	ck_assert_msg(rc == 0, "stream failed: %s", err.msg);
 	ck_assert_uint_eq(st.confirmed, n);
+	if (sim_sailfish_undetected(r.sim)) {
+		/* a spoilt packet matched its CRC-8 and ran as something else:
+		 * a limit of the protocol, which no host can see (about one
+		 * 3000-packet run in fifteen at 1 % noise); the log cannot be
+		 * compared, the stream still had to end confirmed */
+		fprintf(stderr, "s3g: %llu packets spoilt past CRC-8; log not compared\n",
+			(unsigned long long)sim_sailfish_undetected(r.sim));
+		rig_stop(&r);
+		free(c);
+		free(store);
+		return st;
+	}
 	ck_assert_msg(sim_sailfish_executed(r.sim) == n,
 		      "%llu commands executed for %zu sent (retries %llu, time-outs %llu, "
 		      "resolved %llu, unsure %llu)",
@@ -366,9 +378,10 @@ START_TEST(stream_corrupt)
 	so.corrupt_p = 0.01;
 	/* CRC-8 misses some two-bit errors (the polynomial's period is 127
 	 * bits), so at this noise level about one 3000-packet run in fifteen
-	 * lets a damaged packet through, as it would on the real firmware;
-	 * seed 11 is such a run.  This seed is not (the noise falls on
-	 * what the link carries, so the driver's queries move it too). */
+	 * lets a damaged packet through, as it would on the real firmware:
+	 * the simulator counts those and the log is then not compared.  The
+	 * noise falls on what the link carries, so the driver's queries move
+	 * it and no seed is sure to stay clean. */
 	so.seed = 12;
 	/* 1 000 packets in the sanitizer pass: the same code, in less time */
 	struct s3g_status st = stream_and_check(&so, TU_SANITIZED ? 1000 : 1500, 200000);

@@ -193,6 +193,11 @@ uint64_t sim_sailfish_executed(const struct sim_sailfish *sim)
 	return sim->seq;
 }
 
+uint64_t sim_sailfish_undetected(const struct sim_sailfish *sim)
+{
+	return sim->undetected;
+}
+
 unsigned sim_sailfish_resets(const struct sim_sailfish *sim)
 {
 	return sim->resets;
@@ -227,18 +232,25 @@ static void sf_reply_code(struct sim_sailfish *s, uint8_t code, double now)
 /* The UART interrupt: one byte into the packet reader (InPacket). */
 static void sf_rx_byte(struct sim_sailfish *s, uint8_t b, double now)
 {
-	if (s->o.drop_p > 0 && sf_rand(s) < s->o.drop_p)
+	bool hit = false;
+	if (s->o.drop_p > 0 && sf_rand(s) < s->o.drop_p) {
+		s->rx_hit = true;
 		return;
-	if (s->o.corrupt_p > 0 && sf_rand(s) < s->o.corrupt_p)
+	}
+	if (s->o.corrupt_p > 0 && sf_rand(s) < s->o.corrupt_p) {
 		b ^= (uint8_t)(1u << (unsigned)(sf_rand(s) * 8));
+		hit = s->rx_hit = true;
+	}
 	if (now < s->boot_until)
 		return;
 	switch (s->ps) {
 	case SF_PS_START:
-		if (b == S3G_START)
+		if (b == S3G_START) {
 			s->ps = SF_PS_LEN;
-		else
+			s->rx_hit = hit;
+		} else {
 			sf_in_error(s, SF_E_NOISE);
+		}
 		break;
 	case SF_PS_LEN:
 		if (b <= S3G_MAX_PAYLOAD) {
@@ -257,6 +269,7 @@ static void sf_rx_byte(struct sim_sailfish *s, uint8_t b, double now)
 	case SF_PS_CRC:
 		if (s->pcrc == b) {
 			s->ps = SF_PS_LAST;
+			s->undetected += s->rx_hit;
 			if (s->plen && (s->payload[0] & 0x80) &&
 			    ++s->good_actions == s->o.crc_escape_at)
 				s->payload[0] = s->o.crc_escape_code ? s->o.crc_escape_code
