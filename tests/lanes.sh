@@ -5,7 +5,8 @@
 # waiting on simulated printers and child processes rather than on a core,
 # so two lanes on two cores take little more than the longer one.  Each
 # lane's output is shown whole, one after the other, then one Check summary
-# line for both; the exit status is 1 when either lane failed.
+# line for both, and last the lines of the checks that failed (CI shows only
+# the tail of the output); the exit status is 1 when either lane failed.
 set -u
 bin=$1 stratum=$2 lane=$3
 dir=$(dirname "$bin")
@@ -30,4 +31,8 @@ awk '/^[0-9]+%: Checks: / { gsub(",", ""); c += $3; f += $5; e += $7; n++ }
      END { if (n != 2) { print "lanes: a lane ended without its summary line"; exit 1 }
 	   printf "%d%%: Checks: %d, Failures: %d, Errors: %d\n", c ? (c - f - e) * 100 / c : 0, c, f, e }' \
 	"$dir/check-lane1.log" "$dir/check-lane2.log" || exit 1
+if grep -aq ':[EF]:' "$dir/check-lane1.log" "$dir/check-lane2.log"; then
+	echo "lanes: the checks that failed:"
+	grep -ah ':[EF]:' "$dir/check-lane1.log" "$dir/check-lane2.log"
+fi
 [ $r1 -eq 0 ] && [ $r2 -eq 0 ]
