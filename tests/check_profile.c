@@ -1021,5 +1021,6 @@ Suite *profile_suite(void)
 	tcase_set_timeout(cli, 60);
 	suite_add_tcase(s, cli);
 	profile_find_tcases(s);
+	profile_shipped_tcases(s);
 	return s;
 }

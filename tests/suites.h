@@ -19,6 +19,7 @@ Suite *batch_suite(void);	/* tests/check_batch.c: independent groups repaired ap
 Suite *corpus_suite(void);	/* tests/check_corpus.c: repair on generated defect cases */
 Suite *profile_suite(void);	/* tests/check_profile.c: printer profiles */
 void profile_find_tcases(Suite *s); /* tests/check_profile_find.c: --printer lookup, part of profile */
+void profile_shipped_tcases(Suite *s); /* tests/check_profile_shipped.c: every shipped printers/NAME.ini slices, part of profile */
 Suite *ini_suite(void);		/* tests/check_ini.c: the ini reader of profiles and the node config */
 Suite *placeholder_suite(void); /* tests/check_placeholder.c: PrusaSlicer's placeholder language */
 Suite *gcode_suite(void);	/* tests/check_gcode.c: G-code parser and reader */
