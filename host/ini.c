@@ -42,8 +42,7 @@ void ini_show(char *buf, size_t cap, const char *s, size_t len)
 	buf[o] = '\0';
 }
 
-/* A key is letters, digits and '_'. */
-static bool good_key(const char *k, size_t len)
+bool ini_key_valid(const char *k, size_t len)
 {
 	for (size_t i = 0; i < len; i++)
 		if (!(k[i] >= '0' && k[i] <= '9') && !(k[i] >= 'a' && k[i] <= 'z') &&
@@ -93,7 +92,7 @@ static int one_line(const char *s, size_t len, int line, const char *origin,
 	e.key = s;
 	e.key_len = (size_t)(eq - s);
 	trim(&e.key, &e.key_len);
-	if (!good_key(e.key, e.key_len)) {
+	if (h->any_key ? e.key_len == 0 : !ini_key_valid(e.key, e.key_len)) {
 		ini_show(tok, sizeof(tok), e.key, e.key_len);
 		return st_error_set(err, ST_ERR_PARSE,
 				    "%s: line %d: '%s' is not a valid key (letters, digits and '_')",

@@ -304,7 +304,7 @@ int prof_finish(struct profile *p, const char *origin, struct profile **out,
 int profile_load_buffer(const char *text, size_t len, const char *origin, struct profile **out,
 			struct st_error *err)
 {
-	static const struct ini_handler handler = {on_section, on_entry, false};
+	static const struct ini_handler handler = {on_section, on_entry, false, false};
 	struct loader L = {0};
 	struct profile *p;
 	int rc;

@@ -84,6 +84,8 @@ static int on_entry(void *ctx, const struct ini_entry *e, struct st_error *err)
 {
 	struct file_read *f = ctx;
 
+	if (!ini_key_valid(e->key, e->key_len))
+		return 0; /* no setting of PrusaSlicer or Stratum: PrusaSlicer skips it too */
 	return prof_add_entry(&f->sec[f->n - 1].keys, e, f->path, err);
 }
 
@@ -394,7 +396,7 @@ static int apply_bundle(struct profile *p, const struct file_read *f,
 static int apply_file(struct profile *p, const char *path, const struct profile_presets *pre,
 		      struct st_error *err)
 {
-	static const struct ini_handler handler = {on_section, on_entry, false};
+	static const struct ini_handler handler = {on_section, on_entry, false, true};
 	struct file_read f = {.path = path};
 	bool bundle = false;
 	char *text;

@@ -451,7 +451,7 @@ static int resolve_data_dir(struct node_config *c, const char *path, struct st_e
 
 int node_config_load(const char *path, struct node_config *out, struct st_error *err)
 {
-	static const struct ini_handler handler = {on_section, on_entry, true};
+	static const struct ini_handler handler = {on_section, on_entry, true, false};
 	struct node_config *c = calloc(1, sizeof(*c));
 	struct cfg_parse p = {.file = path, .cfg = c, .err = err};
 	char *text = NULL;
