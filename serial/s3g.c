@@ -346,22 +346,34 @@ int s3g_transact(struct s3g *s, const uint8_t *payload, size_t len, uint8_t *res
 	return r > 0 ? 0 : r;
 }
 
-/* A query whose reply must carry at least need bytes after the code. */
+/* Times a query is asked again after a reply too short for it. */
+#define S3G_SHORT_REPLY_RETRIES 3
+
+/* A query whose reply must carry at least need bytes after the code.  A
+ * short reply is asked again: a query spoilt on the line whose CRC-8 still
+ * matched runs as another query (a link at 1 % of bytes hit, now and then),
+ * and a query changes nothing in the printer. */
 static int s3g_query(struct s3g *s, const uint8_t *q, size_t qlen, uint8_t *resp, size_t need,
 		     struct st_error *err)
 {
 	uint8_t r[S3G_MAX_PAYLOAD];
 	size_t n = 0;
-	int rc = s3g_transact(s, q, qlen, r, sizeof(r), &n, err);
-	if (rc)
-		return rc;
-	if (r[0] != S3G_RC_OK)
-		return st_error_set(err, ST_ERR_IO, "the printer does not support %s (0x%02X)",
-				    s3g_command_name(q[0]), r[0]);
-	if (n < need + 1)
-		return st_error_set(err, ST_ERR_RANGE,
-				    "reply to %s has %zu bytes, expected %zu",
-				    s3g_command_name(q[0]), n, need + 1);
+
+	for (int attempt = 0;; attempt++) {
+		int rc = s3g_transact(s, q, qlen, r, sizeof(r), &n, err);
+		if (rc)
+			return rc;
+		if (r[0] != S3G_RC_OK)
+			return st_error_set(err, ST_ERR_IO,
+					    "the printer does not support %s (0x%02X)",
+					    s3g_command_name(q[0]), r[0]);
+		if (n >= need + 1)
+			break;
+		if (attempt == S3G_SHORT_REPLY_RETRIES)
+			return st_error_set(err, ST_ERR_RANGE,
+					    "reply to %s has %zu bytes, expected %zu (asked %d times)",
+					    s3g_command_name(q[0]), n, need + 1, attempt + 1);
+	}
 	memcpy(resp, r + 1, need);
 	return 0;
 }
