@@ -103,8 +103,10 @@ static int s3g_check_reset(struct s3g *s, struct s3g_stream_ctx *c, struct s3g_b
 }
 
 /* A stable snapshot: free space, build statistics, free space again until
- * both free-space readings agree (nothing ran in between).  Returns 0, 1
- * if it never settled, or an error. */
+ * both free-space readings agree (nothing ran in between).  An empty
+ * buffer needs no second reading: Sailfish counts a command as it takes
+ * it out of the buffer, so with none queued (and none sent since) the
+ * count cannot move.  Returns 0, 1 if it never settled, or an error. */
 static int s3g_snapshot(struct s3g *s, struct s3g_stream_ctx *c, uint32_t *free_bytes,
 			struct s3g_build_stats *b, struct st_error *err)
 {
@@ -113,7 +115,11 @@ static int s3g_snapshot(struct s3g *s, struct s3g_stream_ctx *c, uint32_t *free_
 
 	for (int tries = 0; tries < 50; tries++) {
 		if ((rc = s3g_get_buffer_free(s, free_bytes, err)) ||
-		    (rc = s3g_check_reset(s, c, b, err)) || (rc = s3g_get_buffer_free(s, &f2, err)))
+		    (rc = s3g_check_reset(s, c, b, err)))
+			return rc;
+		if (*free_bytes == c->capacity)
+			return 0;
+		if ((rc = s3g_get_buffer_free(s, &f2, err)))
 			return rc;
 		if (*free_bytes == f2)
 			return 0;
