@@ -11,14 +11,12 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "marlin_impl.h"
-#include "st_clock.h"
 
-double marlin_now_s(void)
+double marlin_now_s(struct marlin *m)
 {
-	return st_mono_s();
+	return xport_clock_s(m->x);
 }
 
 void marlin_options_init(struct marlin_options *o)
@@ -269,7 +267,7 @@ static int marlin_transmit(struct marlin *m, struct st_error *err)
 			e->src = p.src;
 			e->layer = p.layer;
 			e->z = p.z;
-			e->t_sent = marlin_now_s();
+			e->t_sent = marlin_now_s(m);
 			if (p.job && !m->st.first_n)
 				m->st.first_n = e->n;
 			m->n_next++;
@@ -290,7 +288,7 @@ static int marlin_transmit(struct marlin *m, struct st_error *err)
 	}
 	if (len && was_empty) {
 		/* the clocks start when something is in flight again */
-		m->t_rx = m->t_progress = marlin_now_s();
+		m->t_rx = m->t_progress = marlin_now_s(m);
 	}
 	return marlin_write(m, buf, len, err);
 }
@@ -457,7 +455,7 @@ int marlin_read(struct marlin *m, int timeout_ms, struct st_error *err)
 		return marlin_port_failed(m, "reading from", &e, err);
 	if (n == 0)
 		return 0;
-	double now = marlin_now_s();
+	double now = marlin_now_s(m);
 	m->t_rx = now;
 	int rc = marlin_feed(m, buf, (size_t)n, now, err);
 	return rc ? rc : n;
@@ -548,7 +546,7 @@ void marlin_push_prio(struct marlin *m, const char *cmd)
 
 int marlin_step(struct marlin *m, int timeout_ms, struct st_error *err)
 {
-	double end = marlin_now_s() + (timeout_ms > 0 ? timeout_ms : 0) / 1000.0;
+	double end = marlin_now_s(m) + (timeout_ms > 0 ? timeout_ms : 0) / 1000.0;
 	int rc;
 
 	if (m->dead || (m->cancelled && !m->stopping))
@@ -571,13 +569,13 @@ int marlin_step(struct marlin *m, int timeout_ms, struct st_error *err)
 	for (;;) {
 		if ((rc = marlin_transmit(m, err)))
 			return rc;
-		double left = end - marlin_now_s();
+		double left = end - marlin_now_s(m);
 		rc = marlin_read(m, left > 0 ? (int)(left * 1000.0 + 0.5) : 0, err);
 		if (rc < 0)
 			return rc;
-		if ((rc = marlin_timers(m, marlin_now_s(), err)))
+		if ((rc = marlin_timers(m, marlin_now_s(m), err)))
 			return rc;
-		if (marlin_now_s() >= end || m->pend_count < MARLIN_QUEUE / 2)
+		if (marlin_now_s(m) >= end || m->pend_count < MARLIN_QUEUE / 2)
 			break;
 	}
 	return marlin_transmit(m, err);
@@ -632,7 +630,7 @@ static void marlin_job_over(struct marlin *m)
 static int marlin_break_wait(struct marlin *m, struct st_error *err)
 {
 	long head = m->n_acked + 1;
-	double now = marlin_now_s();
+	double now = marlin_now_s(m);
 	if (!m->caps.emergency_parser || head >= m->n_next || head > m->n_max_sent)
 		return 0;
 	const struct marlin_entry *e = marlin_hist_entry(m, head);
@@ -647,7 +645,7 @@ static int marlin_break_wait(struct marlin *m, struct st_error *err)
 
 int marlin_safe_stop(struct marlin *m, int timeout_ms, struct st_error *err)
 {
-	double end = marlin_now_s() + timeout_ms / 1000.0;
+	double end = marlin_now_s(m) + timeout_ms / 1000.0;
 	if (m->dead)
 		return marlin_failed_err(m, err);
 	m->stopping = true;
@@ -662,7 +660,7 @@ int marlin_safe_stop(struct marlin *m, int timeout_ms, struct st_error *err)
 	marlin_push_prio(m, "M107");
 	marlin_push_prio(m, "M84");
 	while (!marlin_idle(m)) {
-		double left = end - marlin_now_s();
+		double left = end - marlin_now_s(m);
 		if (left <= 0)
 			return st_error_set(err, ST_ERR_IO,
 					    "the printer did not confirm heaters and motors off "

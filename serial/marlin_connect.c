@@ -12,8 +12,8 @@
  * max_ms in all). */
 static int marlin_wait_quiet(struct marlin *m, int quiet_ms, int max_ms, struct st_error *err)
 {
-	double end = marlin_now_s() + max_ms / 1000.0;
-	while (marlin_now_s() < end) {
+	double end = marlin_now_s(m) + max_ms / 1000.0;
+	while (marlin_now_s(m) < end) {
 		int rc = marlin_read(m, quiet_ms, err);
 		if (rc <= 0)
 			return rc;
@@ -23,7 +23,7 @@ static int marlin_wait_quiet(struct marlin *m, int quiet_ms, int max_ms, struct 
 
 int marlin_connect(struct marlin *m, struct st_error *err)
 {
-	double t0 = marlin_now_s(), end = t0 + m->o.connect_timeout_ms / 1000.0;
+	double t0 = marlin_now_s(m), end = t0 + m->o.connect_timeout_ms / 1000.0;
 	char buf[2 * MARLIN_LINE_CAP + 2];
 	int rc;
 
@@ -32,7 +32,7 @@ int marlin_connect(struct marlin *m, struct st_error *err)
 		/* The bootloader must see no bytes: wait for the banner, then
 		 * for the rest of it. */
 		double boot_end = t0 + m->o.boot_wait_ms / 1000.0;
-		while (marlin_now_s() < boot_end) {
+		while (marlin_now_s(m) < boot_end) {
 			double last = m->t_rx;
 			rc = marlin_read(m, 100, err);
 			if (rc < 0)
@@ -41,7 +41,7 @@ int marlin_connect(struct marlin *m, struct st_error *err)
 				break; /* something came, then 100 ms of quiet */
 		}
 	}
-	for (int attempt = 0; marlin_now_s() < end; attempt++) {
+	for (int attempt = 0; marlin_now_s(m) < end; attempt++) {
 		int k = 0;
 		buf[k++] = '\n'; /* ends any fragment left in the firmware's line */
 		rc = gcode_format_numbered(buf + k, sizeof(buf) - (size_t)k - 2, 0, "M110 N0");
@@ -62,19 +62,19 @@ int marlin_connect(struct marlin *m, struct st_error *err)
 		 * then the capabilities stay unknown. */
 		bool fw = false, done = false, out_of_step = false;
 		int oks = 0;
-		double t_written = marlin_now_s(), first_ok_s = 0;
-		double until = marlin_now_s() + m->o.retry_ms / 1000.0;
+		double t_written = marlin_now_s(m), first_ok_s = 0;
+		double until = marlin_now_s(m) + m->o.retry_ms / 1000.0;
 		if (until > end)
 			until = end;
-		while (!done && marlin_now_s() < until) {
-			double left = until - marlin_now_s();
+		while (!done && marlin_now_s(m) < until) {
+			double left = until - marlin_now_s(m);
 			char b[1024];
 			struct st_error e = {0};
 			int n = xport_read(m->x, b, sizeof(b), (int)(left * 1000.0) + 1, &e);
 			if (n < 0)
 				return st_error_set(err, ST_ERR_IO, "%s: %s", xport_describe(m->x),
 						    e.msg);
-			double now = marlin_now_s();
+			double now = marlin_now_s(m);
 			if (n > 0)
 				m->t_rx = now;
 			for (int i = 0; i < n && !done; i++) {
@@ -157,13 +157,13 @@ int marlin_connect(struct marlin *m, struct st_error *err)
 		 * only waits in the ring, and later samples correct it) */
 		if (first_ok_s > 0)
 			m->rtt = first_ok_s;
-		m->t_rx = m->t_progress = marlin_now_s();
+		m->t_rx = m->t_progress = marlin_now_s(m);
 		if (m->caps.autoreport_temp && m->o.autoreport_s > 0) {
 			char cmd[32];
 			snprintf(cmd, sizeof(cmd), "M155 S%d", m->o.autoreport_s);
 			marlin_push_prio(m, cmd);
 			while (!marlin_idle(m)) {
-				if (marlin_now_s() > end)
+				if (marlin_now_s(m) > end)
 					return st_error_set(err, ST_ERR_IO,
 							    "the printer on %s did not acknowledge "
 							    "M155 within %d s",

@@ -141,8 +141,8 @@ static inline struct marlin_entry *marlin_hist_entry(struct marlin *m, long n)
 
 /* marlin.c */
 
-/* Monotonic clock, seconds. */
-double marlin_now_s(void);
+/* Seconds on the transport's clock (xport_clock_s). */
+double marlin_now_s(struct marlin *m);
 /* Where the job stands, for messages: "the last line acknowledged was ...". */
 void marlin_where(const struct marlin *m, char *buf, size_t cap);
 /* End the job: record why (first reason wins) and fill err; ST_ERR_IO. */

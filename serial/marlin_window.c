@@ -106,7 +106,7 @@ void marlin_ack_through(struct marlin *m, long n)
 {
 	struct marlin_entry *last = marlin_hist_entry(m, n);
 	if (last->n == n && last->t_sent > 0 && !last->blocking) {
-		double sample = marlin_now_s() - last->t_sent;
+		double sample = marlin_now_s(m) - last->t_sent;
 		m->rtt = m->rtt > 0 ? 0.875 * m->rtt + 0.125 * sample : sample;
 	}
 	for (long k = m->n_acked + 1; k <= n; k++) {

@@ -6,10 +6,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "s3g_int.h"
-#include "st_clock.h"
 
 #define S3G_MAX_TOOLS_OFF 2  /* tools switched off by s3g_cancel */
 #define S3G_GARBLED 2	     /* s3g_exchange: bytes came, no valid reply */
@@ -17,16 +15,14 @@
 			      * one whole, so a stall this long means its length
 			      * byte was damaged */
 
-double s3g_now(void)
+double s3g_now(struct s3g *s)
 {
-	return st_mono_s();
+	return xport_clock_s(s->x);
 }
 
-void s3g_sleep_ms(int ms)
+void s3g_sleep_ms(struct s3g *s, int ms)
 {
-	struct timespec ts = {ms / 1000, (long)(ms % 1000) * 1000000L};
-	while (nanosleep(&ts, &ts) != 0)
-		;
+	xport_pause_ms(s->x, ms);
 }
 
 static uint16_t s3g_rd16(const uint8_t *p)
@@ -112,12 +108,12 @@ static int s3g_discard(struct s3g *s, struct st_error *err)
 static int s3g_quiet(struct s3g *s, struct st_error *err)
 {
 	uint8_t junk[256];
-	double until = s3g_now() + 2.0; /* a babbling line still ends */
+	double until = s3g_now(s) + 2.0; /* a babbling line still ends */
 	int r;
 	s->rx_len = 0;
 	while ((r = xport_read(s->x, junk, sizeof(junk), s->o.quiet_ms, err)) > 0) {
 		s->st.bytes_in += (uint64_t)r;
-		if (s3g_now() > until)
+		if (s3g_now(s) > until)
 			break;
 	}
 	return r < 0 ? r : 0;
@@ -160,7 +156,7 @@ static int s3g_exchange(struct s3g *s, const uint8_t *pkt, size_t plen, uint8_t 
 		return s3g_link_error(s, what, err);
 	s->st.packets++;
 	s->st.bytes_out += plen;
-	double end = s3g_now() + s->o.timeout_ms / 1000.0;
+	double end = s3g_now(s) + s->o.timeout_ms / 1000.0;
 	bool heard = false; /* bytes came since the packet went out */
 	for (;;) {
 		size_t used, n;
@@ -179,7 +175,7 @@ static int s3g_exchange(struct s3g *s, const uint8_t *pkt, size_t plen, uint8_t 
 			memmove(s->rx, s->rx + used, s->rx_len - used);
 			s->rx_len -= used;
 		}
-		double left = end - s3g_now();
+		double left = end - s3g_now(s);
 		if (left <= 0)
 			return heard ? S3G_GARBLED : 0;
 		if (s->rx_len == sizeof(s->rx))
@@ -271,13 +267,13 @@ int s3g_send(struct s3g *s, const uint8_t *payload, size_t len, uint8_t *resp, s
 			return 0;
 		case S3G_ACT_WAIT_RESEND: {
 			s->st.overflows++;
-			double now = s3g_now();
+			double now = s3g_now(s);
 			if (overflow_since == 0)
 				overflow_since = now;
 			/* progress: the free space moved since the last look */
 			uint8_t q = S3G_Q_BUFFER_FREE, qr[8], qp[4];
 			size_t qn;
-			s3g_sleep_ms(s->o.poll_ms);
+			s3g_sleep_ms(s, s->o.poll_ms);
 			int ql = s3g_encode(&q, 1, qp, sizeof(qp), NULL);
 			int e = s3g_exchange(s, qp, (size_t)ql, qr, sizeof(qr), &qn, what, err);
 			if (e < 0)
@@ -286,10 +282,10 @@ int s3g_send(struct s3g *s, const uint8_t *payload, size_t len, uint8_t *resp, s
 				uint32_t f = s3g_rd32(qr + 1);
 				s->st.buffer_free = f;
 				if (f != last_free)
-					overflow_since = s3g_now();
+					overflow_since = s3g_now(s);
 				last_free = f;
 			}
-			if ((s3g_now() - overflow_since) * 1000.0 > s->o.overflow_deadline_ms)
+			if ((s3g_now(s) - overflow_since) * 1000.0 > s->o.overflow_deadline_ms)
 				return s3g_why(s, S3G_FAIL_PRINTER,
 					       st_error_set(err, ST_ERR_IO,
 							    "the printer's command buffer stayed full "
@@ -476,7 +472,7 @@ int s3g_cancel(struct s3g *s, struct st_error *err)
 	if (rc)
 		return rc; /* without the abort, heaters-off would queue behind moves */
 	/* the board resets once the reply is out; give it that moment */
-	s3g_sleep_ms(50);
+	s3g_sleep_ms(s, 50);
 	for (uint8_t t = 0; t < S3G_MAX_TOOLS_OFF; t++) {
 		uint8_t off[6] = {136, t, S3G_TA_SET_TEMP, 2, 0, 0};
 		rc = s3g_transact(s, off, sizeof(off), r, sizeof(r), &n, err);

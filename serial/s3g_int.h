@@ -32,9 +32,9 @@ struct s3g_resolver {
 	void *ctx;
 };
 
-/* Monotonic seconds. */
-double s3g_now(void);
-void s3g_sleep_ms(int ms);
+/* Seconds and sleeps on the transport's clock (xport_clock_s). */
+double s3g_now(struct s3g *s);
+void s3g_sleep_ms(struct s3g *s, int ms);
 
 /* Record why a call failed (status.fail); returns code, to wrap
  * st_error_set. */

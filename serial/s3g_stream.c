@@ -73,7 +73,7 @@ static int s3g_check_reset(struct s3g *s, struct s3g_stream_ctx *c, struct s3g_b
 	int rc = s3g_get_build_stats(s, &b, err);
 	if (rc)
 		return rc;
-	c->next_stats = s3g_now() + s->o.stats_ms / 1000.0;
+	c->next_stats = s3g_now(s) + s->o.stats_ms / 1000.0;
 	c->stats_due = false;
 	if (out)
 		*out = b;
@@ -305,7 +305,7 @@ static int s3g_pull(struct s3g *s, struct s3g_stream_ctx *c, s3g_source_fn next,
 /* Refresh temperatures for the status, then call the progress callback. */
 static void s3g_report(struct s3g *s, double t0, s3g_progress_fn progress, void *ctx)
 {
-	s->st.elapsed_s = s3g_now() - t0;
+	s->st.elapsed_s = s3g_now(s) - t0;
 	if (progress)
 		progress(ctx, &s->st);
 }
@@ -330,7 +330,7 @@ static int s3g_wait_room(struct s3g *s, struct s3g_stream_ctx *c, uint32_t *free
 			 uint8_t len, double t0, double *next_report, s3g_progress_fn progress,
 			 void *ctx, volatile sig_atomic_t *stop, struct st_error *err)
 {
-	double now = s3g_now(), idle_since = now;
+	double now = s3g_now(s), idle_since = now;
 	uint32_t seen = *free_est;
 	struct s3g_temps temps;
 	char last[160];
@@ -341,12 +341,12 @@ static int s3g_wait_room(struct s3g *s, struct s3g_stream_ctx *c, uint32_t *free
 			s->st.interrupted = true;
 			return 0;
 		}
-		s3g_sleep_ms(s->o.poll_ms);
+		s3g_sleep_ms(s, s->o.poll_ms);
 		if ((rc = s3g_get_buffer_free(s, free_est, err)))
 			return rc;
 		if (*free_est > c->capacity)
 			c->capacity = *free_est;
-		now = s3g_now();
+		now = s3g_now(s);
 		if (*free_est != seen) {
 			seen = *free_est;
 			idle_since = now;
@@ -392,7 +392,7 @@ static int s3g_wait_done(struct s3g *s, struct s3g_stream_ctx *c, double t0, dou
 		}
 		if ((rc = s3g_is_finished(s, &done, err)))
 			return rc;
-		double now = s3g_now();
+		double now = s3g_now(s);
 		if (now >= c->next_stats || done) {
 			if ((rc = s3g_check_reset(s, c, NULL, err)))
 				return rc;
@@ -403,7 +403,7 @@ static int s3g_wait_done(struct s3g *s, struct s3g_stream_ctx *c, double t0, dou
 			*next_report = now + 0.1;
 		}
 		if (!done)
-			s3g_sleep_ms(20);
+			s3g_sleep_ms(s, 20);
 	}
 	return 0;
 }
@@ -417,7 +417,7 @@ int s3g_stream_pull(struct s3g *s, s3g_source_fn next, void *src, size_t total,
 	uint8_t resp[S3G_MAX_PAYLOAD];
 	size_t rlen;
 	uint32_t free_est = 0;
-	double t0 = s3g_now(), next_report = t0;
+	double t0 = s3g_now(s), next_report = t0;
 	struct s3g_temps temps;
 	char last[160];
 	int rc = 0;
@@ -446,7 +446,7 @@ int s3g_stream_pull(struct s3g *s, s3g_source_fn next, void *src, size_t total,
 	for (c->cur = 0;; c->cur++) {
 		struct s3g_cmd k;
 		bool own;
-		double now = s3g_now();
+		double now = s3g_now(s);
 		if (stop && *stop) {
 			s->st.interrupted = true;
 			break;
@@ -496,7 +496,7 @@ int s3g_stream_pull(struct s3g *s, s3g_source_fn next, void *src, size_t total,
 		if (s->st.timeouts + s->st.garbled != lost)
 			c->stats_due = true;
 		if (s->st.retries + s->st.errors + s->st.timeouts + s->st.garbled != faults)
-			c->noisy_until = s3g_now() + S3G_NOISY_S;
+			c->noisy_until = s3g_now(s) + S3G_NOISY_S;
 		if (s->st.overflows != overflows || rc == 1)
 			free_est = 0; /* our count was off: ask again before the next */
 		else if (free_est >= k.len)
@@ -532,7 +532,7 @@ out:
 		st_error_set(err, rc, "%s (%s)", inner, last);
 	}
 	free(c);
-	s->st.elapsed_s = s3g_now() - t0;
+	s->st.elapsed_s = s3g_now(s) - t0;
 	if (progress)
 		progress(ctx, &s->st);
 	if (st)

@@ -38,10 +38,29 @@ void xport_sleep_ms(int ms)
 		;
 }
 
-/* Milliseconds left until deadline, never negative, as poll() wants it. */
-static int ms_left(int64_t deadline)
+int64_t xport_clock_ms(struct xport *x)
 {
-	int64_t left = deadline - xport_now_ms();
+	return x && x->ops->clock_us ? x->ops->clock_us(x) / 1000 : xport_now_ms();
+}
+
+double xport_clock_s(struct xport *x)
+{
+	return x && x->ops->clock_us ? (double)x->ops->clock_us(x) * 1e-6 : st_mono_s();
+}
+
+void xport_pause_ms(struct xport *x, int ms)
+{
+	if (x && x->ops->pause_ms)
+		x->ops->pause_ms(x, ms);
+	else
+		xport_sleep_ms(ms);
+}
+
+/* Milliseconds left on x's clock until deadline, never negative, as poll()
+ * wants it. */
+static int ms_left(struct xport *x, int64_t deadline)
+{
+	int64_t left = deadline - xport_clock_ms(x);
 
 	if (left <= 0)
 		return 0;
@@ -272,7 +291,15 @@ static int wait_fd(struct xport *x, short events, int64_t deadline, struct st_er
 {
 	for (;;) {
 		struct pollfd p = {.fd = x->fd, .events = events};
-		int n = poll(&p, 1, ms_left(deadline));
+		/* a simulated clock: look without blocking, then let the time
+		 * pass that poll() would have waited */
+		bool simulated = x->ops->pause_ms != NULL;
+		int n = poll(&p, 1, simulated ? 0 : ms_left(x, deadline));
+
+		if (n == 0 && simulated && ms_left(x, deadline) > 0) {
+			x->ops->pause_ms(x, ms_left(x, deadline));
+			continue;
+		}
 
 		if (n > 0) {
 			if (p.revents & POLLNVAL)
@@ -304,7 +331,7 @@ static int check_call(struct xport *x, const void *buf, size_t len, int timeout_
 
 int xport_read(struct xport *x, void *buf, size_t cap, int timeout_ms, struct st_error *err)
 {
-	int64_t deadline = xport_now_ms() + timeout_ms;
+	int64_t deadline = xport_clock_ms(x) + timeout_ms;
 	int rc = check_call(x, buf, cap, timeout_ms, "xport_read", err);
 
 	if (rc < 0)
@@ -335,7 +362,7 @@ int xport_read(struct xport *x, void *buf, size_t cap, int timeout_ms, struct st
 int xport_write_all(struct xport *x, const void *buf, size_t len, int timeout_ms, size_t *sent,
 		    struct st_error *err)
 {
-	int64_t deadline = xport_now_ms() + timeout_ms;
+	int64_t deadline = xport_clock_ms(x) + timeout_ms;
 	const unsigned char *p = buf;
 	size_t done = 0;
 	int rc = check_call(x, buf, len, timeout_ms, "xport_write_all", err);
@@ -382,7 +409,7 @@ int xport_write_all(struct xport *x, const void *buf, size_t len, int timeout_ms
 
 int xport_drain(struct xport *x, int timeout_ms, struct st_error *err)
 {
-	int64_t deadline = xport_now_ms() + timeout_ms;
+	int64_t deadline = xport_clock_ms(x) + timeout_ms;
 	int rc = check_call(x, NULL, 0, timeout_ms, "xport_drain", err);
 
 	if (rc < 0)
@@ -392,12 +419,12 @@ int xport_drain(struct xport *x, int timeout_ms, struct st_error *err)
 
 		if (q <= 0)
 			return 0; /* empty, or the back end cannot tell */
-		if (ms_left(deadline) == 0)
+		if (ms_left(x, deadline) == 0)
 			return st_error_set(err, ST_ERR_IO,
 					    "%s: drain timed out after %d ms with %ld bytes still "
 					    "queued; the device is not taking data",
 					    x->spec, timeout_ms, q);
-		xport_sleep_ms(ms_left(deadline) < 2 ? ms_left(deadline) : 2);
+		xport_pause_ms(x, ms_left(x, deadline) < 2 ? ms_left(x, deadline) : 2);
 	}
 }
 

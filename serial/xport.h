@@ -148,6 +148,18 @@ int xport_fd(const struct xport *x);
 /* xport_is_gone - true once the other end hung up (see the top comment). */
 bool xport_is_gone(const struct xport *x);
 
+/*
+ * xport_clock_s - the clock x's waits and time-outs run on, in seconds: the
+ * monotonic clock (st_clock.h) for every line xport_open makes (and for a
+ * NULL x).  Drivers
+ * measure their own time-outs with it, so a transport with a simulated
+ * clock (tests/fuzz) gets whole runs without real waiting.
+ */
+double xport_clock_s(struct xport *x);
+
+/* xport_pause_ms - sleep ms milliseconds on x's clock (signals restarted). */
+void xport_pause_ms(struct xport *x, int ms);
+
 /* How a listed port is attached. */
 enum xport_transport {
 	XPORT_TRANSPORT_NATIVE,	   /* on-board UART or unknown */

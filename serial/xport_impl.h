@@ -39,6 +39,15 @@ struct xport_ops {
 	long (*outq)(struct xport *x);
 	/* Release what open built; x itself is freed by xport_close. */
 	void (*close)(struct xport *x);
+	/*
+	 * Optional, NULL for every real line: the handle's own clock in
+	 * microseconds, and a pause on it.  A line whose other end is a
+	 * script in this process (the fuzz harness, tests/fuzz/util.c) knows
+	 * that waiting changes nothing, so its clock jumps where a wait would
+	 * block and the drivers' waits and time-outs take no real time.
+	 */
+	int64_t (*clock_us)(struct xport *x);
+	void (*pause_ms)(struct xport *x, int ms);
 };
 
 struct xport {
@@ -62,6 +71,9 @@ extern const struct xport_ops xport_tcp_ops;
 
 /* Milliseconds on the monotonic clock. */
 int64_t xport_now_ms(void);
+
+/* Milliseconds on x's clock (xport_clock_s). */
+int64_t xport_clock_ms(struct xport *x);
 
 /* Sleep ms milliseconds, restarting after signals. */
 void xport_sleep_ms(int ms);

@@ -16,15 +16,17 @@
  * the bytes up to ends[0] are there at once (a boot banner), and each write
  * makes the next turn, up to ends[i], readable, as a printer answers what it
  * was sent.  Between turns a read finds nothing (the caller polls and waits
- * as on a real port); after the last byte the other end is gone, so every
- * run ends.  ends[nturns - 1] must be len; turns may be empty (no answer).
+ * as on a real port, but on the transport's simulated clock, which jumps
+ * to the end of a wait that would block: no real time passes); after the
+ * last byte the other end is gone, so every run ends.  ends[nturns - 1] must be len; turns may be empty (no answer).
  * data and ends are copied; writes are dropped.  Close with xport_close.
  * NULL when out of memory or the pipe it polls on cannot be made.
  */
 struct xport *fuzz_xport_new(const uint8_t *data, size_t len, const size_t *ends,
 			     size_t nturns);
 
-/* fuzz_tmpdir - a private folder for this process, removed at exit. */
+/* fuzz_tmpdir - a private folder for this process, removed at exit: in
+ * $TMPDIR, else /dev/shm (memory), else /tmp. */
 const char *fuzz_tmpdir(void);
 
 #endif /* STRATUM_TESTS_FUZZ_H */

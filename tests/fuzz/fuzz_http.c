@@ -8,6 +8,7 @@
  */
 #include <arpa/inet.h>
 #include <netinet/in.h>
+#include <poll.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -29,6 +30,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 	"[key operator]\nkey = control-key-0123456789\nroles = read, upload, control\n"    \
 	"[printer mk3s]\nprofile = prusa-i3-mk3s\nport = test-instant\n"                   \
 	"[printer ff]\nprofile = flashforge-creator-pro\nport = test-instant\nprefix = /p/ff\n"
+
+#define SILENCE_MS 50
 
 static uint16_t port;
 
@@ -58,7 +61,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	struct sockaddr_in sa = {.sin_family = AF_INET};
 	/* A keep-alive connection stays open after the answer: 50 ms of
 	 * silence ends the read (the node answers in-process within that). */
-	struct timeval tv = {.tv_usec = 50000};
+	struct timeval tv = {.tv_usec = SILENCE_MS * 1000};
 	char buf[4096];
 	int fd;
 
@@ -81,6 +84,16 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 				break; /* the node answered and closed early */
 			done += (size_t)w;
 		}
+		/* The end of the input (FIN) only after the node has read the
+		 * bytes: its server (libmicrohttpd, edge-triggered epoll) takes
+		 * the data and an end already queued in one event and does not
+		 * come back for the end, so the connection stayed open until the
+		 * silence below ran out.  The first byte of an answer says the
+		 * request was read; a request that waits for more gets none, and
+		 * then the end goes after the same silence. */
+		struct pollfd p = {.fd = fd, .events = POLLIN};
+
+		(void)poll(&p, 1, SILENCE_MS);
 		shutdown(fd, SHUT_WR);
 		while (recv(fd, buf, sizeof(buf), 0) > 0)
 			;

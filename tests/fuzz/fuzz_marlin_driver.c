@@ -89,7 +89,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 			marlin_request_resume(m);
 		if (i == 10 && (mode & 32))
 			marlin_request_cancel(m);
-		if (marlin_step(m, 0, &err))
+		/* waits as the sender's do (serial/printer_marlin.c): on the
+		 * transport's clock they cost no real time */
+		if (marlin_step(m, 50, &err))
 			break;
 		if (i == sizeof(job) / sizeof(job[0]) && marlin_idle(m))
 			break;

@@ -1,7 +1,10 @@
 /*
  * util.c - the scripted transport and the temporary folder of fuzz.h.
  * The transport is polled like the others: its descriptor is a pipe that
- * holds one byte while there is something to read.
+ * holds one byte while there is something to read.  It runs on a clock of
+ * its own (xport_clock_s): only the host's writes change what the script
+ * lets through, so a wait that finds nothing to read would find nothing at
+ * its end either, and the clock jumps there instead of sleeping.
  */
 #include "fuzz.h"
 
@@ -9,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "xport_impl.h"
@@ -20,7 +24,12 @@ struct script {
 	size_t *ends, nturns, turn; /* bytes before ends[turn] may be read */
 	int pipe[2];
 	bool ready;		    /* the pipe holds its byte */
+	int64_t now_us;		    /* the simulated clock */
 };
+
+/* Time a look at the clock costs, as on a real one: a loop that only
+ * watches the clock still reaches its deadline. */
+#define SCRIPT_LOOK_US 10
 
 /* Keep the pipe readable exactly while bytes of this turn are left. */
 static void script_signal(struct script *s)
@@ -84,12 +93,29 @@ static void script_close(struct xport *x)
 	free(s);
 }
 
+static int64_t script_clock_us(struct xport *x)
+{
+	struct script *s = x->priv;
+
+	return s->now_us += SCRIPT_LOOK_US;
+}
+
+static void script_pause_ms(struct xport *x, int ms)
+{
+	struct script *s = x->priv;
+
+	if (ms > 0)
+		s->now_us += (int64_t)ms * 1000;
+}
+
 static const struct xport_ops script_ops = {
 	.name = "fuzz",
 	.read = script_read,
 	.write = script_write,
 	.outq = script_outq,
 	.close = script_close,
+	.clock_us = script_clock_us,
+	.pause_ms = script_pause_ms,
 };
 
 struct xport *fuzz_xport_new(const uint8_t *data, size_t len, const size_t *ends,
@@ -113,6 +139,7 @@ struct xport *fuzz_xport_new(const uint8_t *data, size_t len, const size_t *ends
 	memcpy(s->ends, ends, nturns * sizeof(*s->ends));
 	s->len = len;
 	s->nturns = nturns;
+	s->now_us = 1000000000; /* 1000 s: well past zero, which drivers read as "never" */
 	x->ops = &script_ops;
 	x->backend = XPORT_BACKEND_FD;
 	x->kind = "fuzz";
@@ -153,8 +180,14 @@ const char *fuzz_tmpdir(void)
 {
 	if (!tmpdir[0]) {
 		const char *base = getenv("TMPDIR");
+		struct stat st;
 
-		snprintf(tmpdir, sizeof(tmpdir), "%s/stratum-fuzz-XXXXXX", base ? base : "/tmp");
+		/* Targets write a file per input: in memory (tmpfs) rather than
+		 * on a disk, whose file system (ext4) writes a file truncated
+		 * and rewritten out at each close. */
+		if (!base)
+			base = !stat("/dev/shm", &st) && S_ISDIR(st.st_mode) ? "/dev/shm" : "/tmp";
+		snprintf(tmpdir, sizeof(tmpdir), "%s/stratum-fuzz-XXXXXX", base);
 		if (!mkdtemp(tmpdir)) {
 			perror("fuzz: mkdtemp");
 			abort();
