@@ -46,11 +46,6 @@ volatile sig_atomic_t *send_catch_signals(void)
 	return &send_stop;
 }
 
-double send_now(void)
-{
-	return st_mono_s();
-}
-
 bool send_has_ext(const char *path, const char *ext)
 {
 	size_t n = strlen(path), k = strlen(ext);
@@ -102,13 +97,13 @@ void send_progress_start(struct send_progress *p)
 	p->tag = "send";
 	p->tty = isatty(STDERR_FILENO);
 	p->last_decile = -1;
-	p->t0 = send_now();
+	p->t0 = st_mono_s();
 }
 
 void send_progress_show(struct send_progress *p, const struct send_view *v)
 {
 	double frac = v->total ? (double)v->done / (double)v->total : 1.0;
-	double el = send_now() - p->t0;
+	double el = st_mono_s() - p->t0;
 	char temps[96] = "", eta[32] = "", layer[32] = "";
 	int ela = (int)el;
 

@@ -16,6 +16,7 @@
 #include "print_job.h"
 #include "printer_profile.h"
 #include "send.h"
+#include "st_clock.h"
 #include "st_error.h"
 #include "st_grow.h"
 
@@ -176,7 +177,7 @@ static void print_progress(void *ctx, const struct printer_progress *p)
 {
 	struct print_run *c = ctx;
 	struct print_job *job = c->job;
-	double now = send_now();
+	double now = st_mono_s();
 	struct send_view v;
 
 	print_take(job, p);
@@ -348,6 +349,5 @@ int print_stream(struct print_job *job)
 	job->port = port;
 	if (job->a->port != job->j.port) /* a resume names the journal's own */
 		snprintf(job->j.port, sizeof(job->j.port), "%s", job->a->port ? job->a->port : "sim");
-	job->t0 = send_now();
 	return print_on(job, ops, &o);
 }

@@ -18,8 +18,6 @@
 #include "profile.h"
 #include "settings.h"
 
-#define PROF_TOKEN_SHOW 40 /* bytes of an offending value quoted in messages */
-
 /* One key = value line of the file. */
 struct profile_kv {
 	char *key;

@@ -64,13 +64,10 @@ struct send_progress {
 	const char *cmd; /* plain lines' prefix, SEND_CMD unless changed after start */
 	const char *tag; /* the bar's "[send]", likewise */
 	bool tty;
-	double t0;	 /* monotonic s */
+	double t0;	 /* st_mono_s() */
 	int last_decile; /* plain mode: last 10 % step printed */
 	size_t width;	 /* characters of the redrawn line */
 };
-
-/* send_now - monotonic clock, seconds. */
-double send_now(void);
 
 /* send_progress_start - decide tty or lines, start the clock. */
 void send_progress_start(struct send_progress *p);
