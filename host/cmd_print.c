@@ -468,21 +468,10 @@ int cmd_print(int argc, char **argv)
 	job->layer = -1;
 	if (a.resume && (status = print_setup_resume(job)))
 		goto out;
-	if (a.printer && (rc = profile_find(a.printer, &job->prof, &err))) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		status = profile_exit_status(rc);
+	if ((status = cfgopt_load(&a.cfg, PRINT_CMD, a.printer, &job->prof)))
 		goto out;
-	}
-	if (a.cfg.n || a.cfg.presets.printer) {
-		struct profile *layered = NULL;
-
-		status = cfgopt_load(&a.cfg, PRINT_CMD, job->prof, &layered);
-		profile_free(job->prof);
-		job->prof = layered;
-		if (status)
-			goto out;
+	if (a.cfg.n || a.cfg.presets.printer)
 		cfgopt_warn_unsupported(job->prof, PRINT_CMD);
-	}
 	if (!a.resume) {
 		job->input = print_input_of(a.in);
 		job->gcode = a.in;
