@@ -22,7 +22,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 #include <unistd.h>
 
 #include "commands.h"
@@ -123,9 +122,9 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 
 static enum print_input print_input_of(const char *path)
 {
-	if (send_has_ext(path, ".x3g"))
+	if (cmd_has_ext(path, ".x3g"))
 		return PRINT_X3G;
-	if (send_has_ext(path, ".gcode") || send_has_ext(path, ".gco") || send_has_ext(path, ".g"))
+	if (cmd_has_ext(path, ".gcode") || cmd_has_ext(path, ".gco") || cmd_has_ext(path, ".g"))
 		return PRINT_GCODE;
 	return PRINT_MODEL;
 }
@@ -380,7 +379,7 @@ static int print_dry_run(struct print_job *job)
 {
 	const char *out = job->a->out;
 	bool sailfish = job->prof->protocol == PROFILE_PROTOCOL_SAILFISH;
-	bool x3g = sailfish && !send_has_ext(out, ".gcode");
+	bool x3g = sailfish && !cmd_has_ext(out, ".gcode");
 	int status;
 
 	if (job->input != PRINT_MODEL && !(x3g && job->input == PRINT_GCODE)) {

@@ -17,7 +17,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -44,12 +43,6 @@ volatile sig_atomic_t *send_catch_signals(void)
 {
 	cmd_on_stop_signals(send_on_signal);
 	return &send_stop;
-}
-
-bool send_has_ext(const char *path, const char *ext)
-{
-	size_t n = strlen(path), k = strlen(ext);
-	return n > k && !strcasecmp(path + n - k, ext);
 }
 
 /* Parse argv; returns 0, or an exit status (-1 = --help shown). */
@@ -100,7 +93,7 @@ void send_progress_start(struct send_progress *p)
 	p->t0 = st_mono_s();
 }
 
-void send_progress_show(struct send_progress *p, const struct send_view *v)
+void send_progress_show(struct send_progress *p, const struct printer_progress *v)
 {
 	double frac = v->total ? (double)v->done / (double)v->total : 1.0;
 	double el = st_mono_s() - p->t0;
@@ -211,30 +204,9 @@ static enum printer_control send_run_control(void *ctx)
 	return *((struct send_run *)ctx)->stop ? PRINTER_CANCEL : PRINTER_GO;
 }
 
-static void send_run_progress(void *ctx, const struct printer_progress *pp)
+static void send_run_progress(void *ctx, const struct printer_progress *p)
 {
-	struct send_run *r = ctx;
-	struct send_view v;
-
-	send_view_of(pp, &v);
-	send_progress_show(&r->p, &v);
-}
-
-void send_view_of(const struct printer_progress *p, struct send_view *v)
-{
-	*v = (struct send_view){
-		.unit = p->unit,
-		.done = p->done,
-		.total = p->total,
-		.layer = p->layer,
-		.tool = p->tool,
-		.bed = p->bed,
-		.tool_actual = p->tool_actual,
-		.tool_target = p->tool_target,
-		.bed_actual = p->bed_actual,
-		.bed_target = p->bed_target,
-		.paused = p->paused,
-	};
+	send_progress_show(&((struct send_run *)ctx)->p, p);
 }
 
 void send_warning(void *ctx, const char *path, uint64_t line, const char *msg)
@@ -366,7 +338,7 @@ int cmd_send(int argc, char **argv)
 		goto out_profile;
 	}
 	job.path = a.file;
-	job.x3g = send_has_ext(a.file, ".x3g");
+	job.x3g = cmd_has_ext(a.file, ".x3g");
 	if (job.x3g && !ops->takes_x3g) {
 		fprintf(stderr, SEND_CMD ": %s is X3G, which only Sailfish printers take; printer "
 				     "'%s' speaks %s: send it the G-code\n", a.file, a.printer,

@@ -178,10 +178,9 @@ static void print_progress(void *ctx, const struct printer_progress *p)
 	struct print_run *c = ctx;
 	struct print_job *job = c->job;
 	double now = st_mono_s();
-	struct send_view v;
+	struct printer_progress v = *p;
 
 	print_take(job, p);
-	send_view_of(p, &v);
 	if (job->input != PRINT_X3G) { /* lines of the file, not of this run */
 		v.unit = "line";
 		v.done = job->last_line;

@@ -9,10 +9,10 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "commands.h"
 #include "st_file.h"
 
 #define MARGIN 16	/* px around everything */
@@ -62,13 +62,9 @@ struct layout {
 
 bool pvdraw_format_of(const char *path, enum pvdraw_format *f)
 {
-	size_t n = path ? strlen(path) : 0;
-
-	if (n < 5)
-		return false;
-	if (!strcasecmp(path + n - 4, ".svg"))
+	if (path && cmd_has_ext(path, ".svg"))
 		*f = PVDRAW_SVG;
-	else if (!strcasecmp(path + n - 4, ".png"))
+	else if (path && cmd_has_ext(path, ".png"))
 		*f = PVDRAW_PNG;
 	else
 		return false;

@@ -31,19 +31,6 @@ struct send_args {
  */
 volatile sig_atomic_t *send_catch_signals(void);
 
-/* What the progress line shows, from either driver's status. */
-struct send_view {
-	const char *unit;	 /* "line" (Marlin) or "command" (Sailfish) */
-	uint64_t done, total;	 /* of unit */
-	long layer;		 /* -1 unknown */
-	bool tool, bed;		 /* the temperatures below are known */
-	double tool_actual, tool_target, bed_actual, bed_target; /* degC */
-	bool paused;
-};
-
-/* send_view_of - a stream's progress as the progress line's view. */
-void send_view_of(const struct printer_progress *p, struct send_view *v);
-
 /* send_warning - printer_warn_fn printing "CMD: FILE:LINE: warning: MSG" (ctx = CMD). */
 void send_warning(void *ctx, const char *path, uint64_t line, const char *msg);
 
@@ -72,8 +59,9 @@ struct send_progress {
 /* send_progress_start - decide tty or lines, start the clock. */
 void send_progress_start(struct send_progress *p);
 
-/* send_progress_show - draw v (redrawn line or a line per 10 %). */
-void send_progress_show(struct send_progress *p, const struct send_view *v);
+/* send_progress_show - draw v's unit, done of total, layer (-1 unknown),
+ * temperatures and pause (redrawn line or a line per 10 %). */
+void send_progress_show(struct send_progress *p, const struct printer_progress *v);
 
 /* send_progress_end - end the redrawn line so the report starts clean. */
 void send_progress_end(struct send_progress *p);
@@ -111,8 +99,5 @@ void send_report_emit(json_t *o);
  */
 void send_report_text(const struct send_args *a, const struct send_summary *s,
 		      const char *detail);
-
-/* send_has_ext - true when path ends in ext (".x3g"), any case. */
-bool send_has_ext(const char *path, const char *ext);
 
 #endif /* STRATUM_HOST_SEND_H */
