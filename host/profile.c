@@ -75,7 +75,7 @@ int prof_key_error(struct loader *L, const struct profile_kv *kv, const char *ke
  */
 
 /* Decode PrusaSlicer's C-style escapes: \n \r \\ \" ; any other \X is kept as is. */
-char *prof_decode_value(const char *s, size_t len)
+static char *prof_decode_value(const char *s, size_t len)
 {
 	char *d = malloc(len + 1);
 	size_t i, o = 0;
