@@ -212,13 +212,25 @@ int cfgopt_apply(const struct cfgopt *o, const struct profile *base, struct prof
 	return rc;
 }
 
-int cfgopt_load(const struct cfgopt *o, const char *cmd, const struct profile *base,
+int cfgopt_load(const struct cfgopt *o, const char *cmd, const char *printer,
 		struct profile **out)
 {
 	struct st_error err = {0};
+	struct profile *base = NULL;
 	bool usage;
-	int rc = cfgopt_apply(o, base, out, &usage, &err);
+	int rc;
 
+	*out = NULL;
+	if (printer && (rc = profile_find(printer, &base, &err))) {
+		fprintf(stderr, "%s: %s\n", cmd, err.msg);
+		return profile_exit_status(rc);
+	}
+	if (!o->n && !o->presets.printer) {
+		*out = base;
+		return 0;
+	}
+	rc = cfgopt_apply(o, base, out, &usage, &err);
+	profile_free(base);
 	if (!rc)
 		return 0;
 	fprintf(stderr, "%s: %s\n", cmd, err.msg);

@@ -57,12 +57,13 @@ int cfgopt_apply(const struct cfgopt *o, const struct profile *base, struct prof
 		 bool *usage, struct st_error *err);
 
 /*
- * cfgopt_load - the profile: @base (NULL: none) under the --load files and
- * then the key options, in order.  Returns 0, or the exit status with the
- * message printed: 2 for a bad option value or preset name, else as the
- * profile's own errors.
+ * cfgopt_load - the profile a command works with: --printer's profile
+ * (@printer, NULL: none; profile_find) under the --load files and then the
+ * key options, in order.  Returns 0, or the exit status with the message
+ * printed: 2 for a bad option value or preset name, else as the profile's
+ * own errors (profile_exit_status for @printer's).
  */
-int cfgopt_load(const struct cfgopt *o, const char *cmd, const struct profile *base,
+int cfgopt_load(const struct cfgopt *o, const char *cmd, const char *printer,
 		struct profile **out);
 
 /* cfgopt_usage - the options' help lines. */

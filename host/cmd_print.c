@@ -22,7 +22,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 #include <unistd.h>
 
 #include "commands.h"
@@ -123,9 +122,9 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 
 static enum print_input print_input_of(const char *path)
 {
-	if (send_has_ext(path, ".x3g"))
+	if (cmd_has_ext(path, ".x3g"))
 		return PRINT_X3G;
-	if (send_has_ext(path, ".gcode") || send_has_ext(path, ".gco") || send_has_ext(path, ".g"))
+	if (cmd_has_ext(path, ".gcode") || cmd_has_ext(path, ".gco") || cmd_has_ext(path, ".g"))
 		return PRINT_GCODE;
 	return PRINT_MODEL;
 }
@@ -380,7 +379,7 @@ static int print_dry_run(struct print_job *job)
 {
 	const char *out = job->a->out;
 	bool sailfish = job->prof->protocol == PROFILE_PROTOCOL_SAILFISH;
-	bool x3g = sailfish && !send_has_ext(out, ".gcode");
+	bool x3g = sailfish && !cmd_has_ext(out, ".gcode");
 	int status;
 
 	if (job->input != PRINT_MODEL && !(x3g && job->input == PRINT_GCODE)) {
@@ -468,21 +467,10 @@ int cmd_print(int argc, char **argv)
 	job->layer = -1;
 	if (a.resume && (status = print_setup_resume(job)))
 		goto out;
-	if (a.printer && (rc = profile_find(a.printer, &job->prof, &err))) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		status = profile_exit_status(rc);
+	if ((status = cfgopt_load(&a.cfg, PRINT_CMD, a.printer, &job->prof)))
 		goto out;
-	}
-	if (a.cfg.n || a.cfg.presets.printer) {
-		struct profile *layered = NULL;
-
-		status = cfgopt_load(&a.cfg, PRINT_CMD, job->prof, &layered);
-		profile_free(job->prof);
-		job->prof = layered;
-		if (status)
-			goto out;
+	if (a.cfg.n || a.cfg.presets.printer)
 		cfgopt_warn_unsupported(job->prof, PRINT_CMD);
-	}
 	if (!a.resume) {
 		job->input = print_input_of(a.in);
 		job->gcode = a.in;

@@ -140,44 +140,28 @@ static int finish_output(void)
 	return ST_EXIT_OK;
 }
 
+/* Write o (stolen) as --json does; 0 or the exit status (message printed). */
+static int json_out(json_t *o)
+{
+	if (!cmd_json_out(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(15)))
+		return 0;
+	fprintf(stderr, "stratum printers: out of memory building the JSON\n");
+	return ST_EXIT_SOFTWARE;
+}
+
 /* `--show`: one profile's resolved settings (which NULL: the options' alone). */
 static int show_one(const char *which, const struct cfgopt *cfg, bool json)
 {
-	struct st_error err = {0};
-	struct profile *p = NULL;
-	int rc;
+	struct profile *p;
+	int rc = cfgopt_load(cfg, "stratum printers", which, &p);
 
-	if (which && (rc = profile_find(which, &p, &err))) {
-		fprintf(stderr, "stratum printers: %s\n", err.msg);
-		return profile_exit_status(rc);
-	}
-	if (cfg->n || cfg->presets.printer) {
-		struct profile *layered = NULL;
-
-		rc = cfgopt_load(cfg, "stratum printers", p, &layered);
-		profile_free(p);
-		if (rc)
-			return rc;
-		p = layered;
-	}
-	if (json) {
-		json_t *o = profile_to_json(p);
-
-		if (!o || json_dumpf(o, stdout,
-				     JSON_INDENT(2) | JSON_PRESERVE_ORDER |
-					 JSON_REAL_PRECISION(15)) != 0) {
-			fprintf(stderr, "stratum printers: out of memory building the JSON\n");
-			json_decref(o);
-			profile_free(p);
-			return ST_EXIT_SOFTWARE;
-		}
-		putchar('\n');
-		json_decref(o);
-	} else {
+	if (rc)
+		return rc;
+	rc = json ? json_out(profile_to_json(p)) : 0;
+	if (!json)
 		profile_write(p, stdout); /* a write error shows in finish_output() */
-	}
 	profile_free(p);
-	return finish_output();
+	return rc ? rc : finish_output();
 }
 
 /* The listing: load every profile, report the broken ones, print the rest. */
@@ -226,22 +210,12 @@ static int list_all(bool json)
 				json_decref(arr);
 				arr = NULL;
 			}
-		if (!arr || json_dumpf(arr, stdout,
-				       JSON_INDENT(2) | JSON_PRESERVE_ORDER |
-					   JSON_REAL_PRECISION(15)) != 0) {
-			fprintf(stderr, "stratum printers: out of memory building the JSON\n");
-			json_decref(arr);
-			status = ST_EXIT_SOFTWARE;
-			goto out_free_profiles;
-		}
-		putchar('\n');
-		json_decref(arr);
+		status = json_out(arr);
 	} else if (good) {
 		print_table(ps, good);
 	}
-	status = finish_output();
-
-out_free_profiles:
+	if (!status)
+		status = finish_output();
 	for (size_t i = 0; i < good; i++)
 		profile_free(ps[i]);
 	free(ps);

@@ -395,11 +395,6 @@ out_dump:
 	return cmd_json_out(obj, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(10));
 }
 
-static const char *yes_no(bool b)
-{
-	return b ? "yes" : "no";
-}
-
 /* What a run that stopped early got to, and why it stopped. */
 static void print_failure(const struct repair_run *run, const struct repair_outputs *o)
 {
@@ -473,7 +468,7 @@ static void print_text(const struct repair_run *run, const struct repair_report 
 		printf(" (%zu smaller than epsilon in every direction dropped, %zu triangles)",
 		       r->parts_dropped, r->dropped_triangles);
 	printf("\n");
-	printf("printable: %s\n", yes_no(r->printable));
+	printf("printable: %s\n", r->printable ? "yes" : "no");
 	if (!r->printable)
 		printf("  why: %s\n", r->why);
 	if (run->exit && run->error[0])

@@ -17,7 +17,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -30,6 +29,15 @@
 #include "profile.h"
 #include "send.h"
 #include "st_error.h"
+
+#define SEND_CMD "stratum send"
+
+struct send_args {
+	const char *file, *port, *printer;
+	bool json;
+	bool force; /* --force: past the wrong-printer guard (guard.h) */
+	long baud;  /* 0 = the profile's */
+};
 
 /* The stop flag SIGINT/SIGTERM set (STYLE rule 10 exception). */
 static volatile sig_atomic_t send_stop;
@@ -44,17 +52,6 @@ volatile sig_atomic_t *send_catch_signals(void)
 {
 	cmd_on_stop_signals(send_on_signal);
 	return &send_stop;
-}
-
-double send_now(void)
-{
-	return st_mono_s();
-}
-
-bool send_has_ext(const char *path, const char *ext)
-{
-	size_t n = strlen(path), k = strlen(ext);
-	return n > k && !strcasecmp(path + n - k, ext);
 }
 
 /* Parse argv; returns 0, or an exit status (-1 = --help shown). */
@@ -102,13 +99,13 @@ void send_progress_start(struct send_progress *p)
 	p->tag = "send";
 	p->tty = isatty(STDERR_FILENO);
 	p->last_decile = -1;
-	p->t0 = send_now();
+	p->t0 = st_mono_s();
 }
 
-void send_progress_show(struct send_progress *p, const struct send_view *v)
+void send_progress_show(struct send_progress *p, const struct printer_progress *v)
 {
 	double frac = v->total ? (double)v->done / (double)v->total : 1.0;
-	double el = send_now() - p->t0;
+	double el = st_mono_s() - p->t0;
 	char temps[96] = "", eta[32] = "", layer[32] = "";
 	int ela = (int)el;
 
@@ -150,34 +147,6 @@ void send_progress_end(struct send_progress *p)
 		fputc('\n', stderr);
 }
 
-json_t *send_report_json(const struct send_args *a, const struct send_summary *s)
-{
-	double cap = s->baud / 10.0;
-	double bps = s->seconds > 0 ? (double)s->bytes / s->seconds : 0;
-	json_t *o = json_object();
-
-	if (!o)
-		return NULL;
-	json_object_set_new(o, "ok", json_boolean(s->ok));
-	json_object_set_new(o, "file", json_string(a->file));
-	json_object_set_new(o, "port", json_string(a->port));
-	json_object_set_new(o, "printer", json_string(a->printer));
-	json_object_set_new(o, "protocol", json_string(s->protocol));
-	json_object_set_new(o, "firmware", json_string(s->firmware));
-	json_object_set_new(o, "resends", json_integer((json_int_t)s->resends));
-	json_object_set_new(o, "errors", json_integer((json_int_t)s->errors));
-	json_object_set_new(o, "unknown_commands", json_integer((json_int_t)s->unknown_commands));
-	json_object_set_new(o, "seconds", json_real(s->seconds));
-	json_object_set_new(o, "bytes", json_integer((json_int_t)s->bytes));
-	json_object_set_new(o, "bytes_written", json_integer((json_int_t)s->bytes_written));
-	json_object_set_new(o, "bytes_per_s", json_real(bps));
-	json_object_set_new(o, "baud", json_integer(s->baud));
-	json_object_set_new(o, "link_fraction", json_real(cap > 0 ? bps / cap : 0));
-	if (s->error)
-		json_object_set_new(o, "error", json_string(s->error));
-	return o;
-}
-
 void send_report_emit(json_t *o)
 {
 	char *text = o ? json_dumps(o, JSON_COMPACT) : NULL;
@@ -187,21 +156,6 @@ void send_report_emit(json_t *o)
 		fprintf(stderr, SEND_CMD ": out of memory writing the report\n");
 	free(text);
 	json_decref(o);
-}
-
-void send_report_text(const struct send_args *a, const struct send_summary *s,
-		      const char *detail)
-{
-	double cap = s->baud / 10.0;
-	double ups = s->seconds > 0 ? (double)s->done / s->seconds : 0;
-	double bps = s->seconds > 0 ? (double)s->bytes / s->seconds : 0;
-
-	printf("%s %s: %llu %s in %.2f s\n", s->ok ? "sent" : "stopped", a->file,
-	       (unsigned long long)s->done, s->unit, s->seconds);
-	if (detail)
-		printf("  %s\n", detail);
-	printf("  %.0f %s/s, %.0f bytes/s = %.1f%% of the link (%ld baud = %.0f bytes/s)\n", ups,
-	       s->unit, bps, cap > 0 ? 100.0 * bps / cap : 0, s->baud, cap);
 }
 
 /* One stream's progress line and the stop flag Ctrl-C sets. */
@@ -216,30 +170,9 @@ static enum printer_control send_run_control(void *ctx)
 	return *((struct send_run *)ctx)->stop ? PRINTER_CANCEL : PRINTER_GO;
 }
 
-static void send_run_progress(void *ctx, const struct printer_progress *pp)
+static void send_run_progress(void *ctx, const struct printer_progress *p)
 {
-	struct send_run *r = ctx;
-	struct send_view v;
-
-	send_view_of(pp, &v);
-	send_progress_show(&r->p, &v);
-}
-
-void send_view_of(const struct printer_progress *p, struct send_view *v)
-{
-	*v = (struct send_view){
-		.unit = p->unit,
-		.done = p->done,
-		.total = p->total,
-		.layer = p->layer,
-		.tool = p->tool,
-		.bed = p->bed,
-		.tool_actual = p->tool_actual,
-		.tool_target = p->tool_target,
-		.bed_actual = p->bed_actual,
-		.bed_target = p->bed_target,
-		.paused = p->paused,
-	};
+	send_progress_show(&((struct send_run *)ctx)->p, p);
 }
 
 void send_warning(void *ctx, const char *path, uint64_t line, const char *msg)
@@ -289,45 +222,52 @@ static void send_report(const struct send_args *a, const struct printer_ops *ops
 			const struct printer_result *res, const char *firmware, long baud,
 			const char *error)
 {
-	char units[16];
-	struct send_summary s = {
-		.ok = res->end == PRINTER_END_DONE,
-		.error = error,
-		.protocol = ops->name,
-		.firmware = firmware,
-		.unit = units,
-		.done = res->last.done,
-		.resends = res->last.resends,
-		.errors = res->errors,
-		.unknown_commands = res->unknown_commands,
-		.bytes = res->bytes_acked,
-		.bytes_written = res->bytes_written,
-		.seconds = res->last.seconds,
-		.baud = baud,
-	};
+	const char *unit = res->last.unit ? res->last.unit : "line";
+	double secs = res->last.seconds, cap = baud / 10.0;
+	double bps = secs > 0 ? (double)res->bytes_acked / secs : 0;
+	bool ok = res->end == PRINTER_END_DONE;
+	json_t *o;
 
-	snprintf(units, sizeof(units), "%ss", res->last.unit ? res->last.unit : "line");
-	if (a->json) {
-		json_t *o = send_report_json(a, &s);
-
-		if (o) {
-			json_object_set_new(o, "input", json_string(job->x3g ? "x3g" : "gcode"));
-			if (!job->x3g)
-				json_object_set_new(o, "warnings",
-						    json_integer((json_int_t)info->warnings));
-			for (size_t i = 0; i < res->ncounters; i++)
-				json_object_set_new(o, res->counters[i].name,
-						    res->counters[i].real
-							    ? json_real(res->counters[i].value)
-							    : json_integer((json_int_t)
-									   res->counters[i].value));
-		}
-		send_report_emit(o);
+	if (!a->json) {
+		printf("%s %s: %llu %ss in %.2f s\n", ok ? "sent" : "stopped", a->file,
+		       (unsigned long long)res->last.done, unit, secs);
+		printf("  %s\n", res->detail);
+		printf("  %.0f %ss/s, %.0f bytes/s = %.1f%% of the link (%ld baud = %.0f bytes/s)\n",
+		       secs > 0 ? (double)res->last.done / secs : 0, unit, bps,
+		       cap > 0 ? 100.0 * bps / cap : 0, baud, cap);
+		if (info->warnings)
+			printf("  translator warnings %llu\n", (unsigned long long)info->warnings);
 		return;
 	}
-	send_report_text(a, &s, res->detail);
-	if (info->warnings)
-		printf("  translator warnings %llu\n", (unsigned long long)info->warnings);
+	if ((o = json_object())) {
+		json_object_set_new(o, "ok", json_boolean(ok));
+		json_object_set_new(o, "file", json_string(a->file));
+		json_object_set_new(o, "port", json_string(a->port));
+		json_object_set_new(o, "printer", json_string(a->printer));
+		json_object_set_new(o, "protocol", json_string(ops->name));
+		json_object_set_new(o, "firmware", json_string(firmware));
+		json_object_set_new(o, "resends", json_integer((json_int_t)res->last.resends));
+		json_object_set_new(o, "errors", json_integer((json_int_t)res->errors));
+		json_object_set_new(o, "unknown_commands",
+				    json_integer((json_int_t)res->unknown_commands));
+		json_object_set_new(o, "seconds", json_real(secs));
+		json_object_set_new(o, "bytes", json_integer((json_int_t)res->bytes_acked));
+		json_object_set_new(o, "bytes_written", json_integer((json_int_t)res->bytes_written));
+		json_object_set_new(o, "bytes_per_s", json_real(bps));
+		json_object_set_new(o, "baud", json_integer(baud));
+		json_object_set_new(o, "link_fraction", json_real(cap > 0 ? bps / cap : 0));
+		if (error)
+			json_object_set_new(o, "error", json_string(error));
+		json_object_set_new(o, "input", json_string(job->x3g ? "x3g" : "gcode"));
+		if (!job->x3g)
+			json_object_set_new(o, "warnings", json_integer((json_int_t)info->warnings));
+		for (size_t i = 0; i < res->ncounters; i++)
+			json_object_set_new(o, res->counters[i].name,
+					    res->counters[i].real
+						    ? json_real(res->counters[i].value)
+						    : json_integer((json_int_t)res->counters[i].value));
+	}
+	send_report_emit(o);
 }
 
 int cmd_send(int argc, char **argv)
@@ -371,7 +311,7 @@ int cmd_send(int argc, char **argv)
 		goto out_profile;
 	}
 	job.path = a.file;
-	job.x3g = send_has_ext(a.file, ".x3g");
+	job.x3g = cmd_has_ext(a.file, ".x3g");
 	if (job.x3g && !ops->takes_x3g) {
 		fprintf(stderr, SEND_CMD ": %s is X3G, which only Sailfish printers take; printer "
 				     "'%s' speaks %s: send it the G-code\n", a.file, a.printer,

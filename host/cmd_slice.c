@@ -405,23 +405,9 @@ int cmd_slice(int argc, char **argv)
 		}
 	}
 
-	if (a.printer) {
-		rc = profile_find(a.printer, &prof, &err);
-		if (rc) {
-			/* Settings that cannot slice are refused like a bad --layer-height. */
-			fprintf(stderr, SLICE_CMD ": %s\n", err.msg);
-			return profile_exit_status(rc);
-		}
-	}
-	if (a.cfg.n || a.cfg.presets.printer) {
-		struct profile *layered = NULL;
-
-		status = cfgopt_load(&a.cfg, SLICE_CMD, prof, &layered);
-		profile_free(prof);
-		prof = layered;
-		if (status)
-			return status;
-	}
+	/* Settings that cannot slice are refused like a bad --layer-height. */
+	if ((status = cfgopt_load(&a.cfg, SLICE_CMD, a.printer, &prof)))
+		return status;
 	cfgopt_warn_unsupported(prof, SLICE_CMD);
 	status = input_vars(prof, a.in[0]); /* the first model's, as PrusaSlicer */
 	if (status)

@@ -37,6 +37,9 @@ const char *cmd_opt_value(int argc, char **argv, int *i, const char *name);
  * command's stop flag (host/cmd_opts.c). */
 void cmd_on_stop_signals(void (*handler)(int));
 
+/* cmd_has_ext - true when path ends in ext (".x3g") after a name, any case. */
+bool cmd_has_ext(const char *path, const char *ext);
+
 /* cmd_same_file - whether paths a and b name the same existing file (device
  * and inode, so through symlinks, hard links and any spelling of the path). */
 bool cmd_same_file(const char *a, const char *b);

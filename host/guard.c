@@ -137,7 +137,8 @@ out_close:
 	return rc;
 }
 
-int guard_exit_status(int rc)
+/* The exit status of a failed guard_check_file: 2 for a refusal, else by class. */
+static int guard_exit_status(int rc)
 {
 	return rc == ST_ERR_RANGE ? ST_EXIT_USAGE : st_exit_for(rc);
 }

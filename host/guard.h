@@ -57,10 +57,4 @@ int guard_check_file(const char *path, const char *name, const struct profile *p
  */
 int guard_cli(const char *cmd, const char *path, const struct profile *prof, bool force);
 
-/*
- * guard_exit_status - the exit status of a failed guard_check_file:
- * ST_EXIT_USAGE for a refusal, else by the error's class.
- */
-int guard_exit_status(int rc);
-
 #endif /* STRATUM_HOST_GUARD_H */

@@ -55,7 +55,8 @@ const char *preview_feature_id(enum preview_feature f)
 	return (unsigned)f < PREVIEW_FEATURES ? features[f].id : "unknown";
 }
 
-enum preview_feature preview_feature_of(const char *type)
+/* The feature of a ";TYPE:" text ("" gives OTHER). */
+static enum preview_feature preview_feature_of(const char *type)
 {
 	/* Stratum's and PrusaSlicer's ;TYPE: names; prefixes catch the
 	 * "Support material interface" and "Skirt/Brim" variants. */
@@ -448,7 +449,6 @@ int preview_load(const char *path, const struct preview_opts *o, struct preview 
 	pv->by_comments = t.marks > 0;
 	pv->z = t.v[chosen].z;
 	pv->height = t.v[chosen].height;
-	z_range(&t, &pv->first_z, &pv->last_z);
 	for (int a = 0, s = t.marks > 0; a < 2; a++) {
 		pv->min[a] = t.fmin[s][a] - PV_MARGIN;
 		pv->max[a] = t.fmax[s][a] + PV_MARGIN;

@@ -74,7 +74,6 @@ struct preview {
 	size_t layers;	       /* layers in the file */
 	bool by_comments;      /* layers from comments (else by Z) */
 	double z, height;      /* mm, the shown layer's */
-	double first_z, last_z; /* mm, lowest and highest layer */
 	double filament_diameter; /* mm, as used */
 	size_t n;	       /* paths, in file order */
 	struct preview_path *paths;
@@ -122,8 +121,5 @@ const char *preview_feature_name(enum preview_feature f);
 /* preview_feature_id - stable identifier, "outer-perimeter" ... "travel"
  * (the SVG group ids). */
 const char *preview_feature_id(enum preview_feature f);
-
-/* preview_feature_of - the feature of a ";TYPE:" text ("" gives OTHER). */
-enum preview_feature preview_feature_of(const char *type);
 
 #endif /* STRATUM_HOST_PREVIEW_H */

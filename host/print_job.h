@@ -70,7 +70,7 @@ struct print_job {
 	uint64_t last_line;	   /* last file line the printer confirmed */
 	long layer;		   /* its layer, -1 unknown */
 	uint64_t resends;
-	double stream_s, total_s, t0;
+	double stream_s;	   /* seconds of streaming */
 	const char *fail;	   /* why it stopped, NULL done */
 	char fail_buf[300];
 	int status;

@@ -16,6 +16,7 @@
 #include "print_job.h"
 #include "printer_profile.h"
 #include "send.h"
+#include "st_clock.h"
 #include "st_error.h"
 #include "st_grow.h"
 
@@ -176,11 +177,10 @@ static void print_progress(void *ctx, const struct printer_progress *p)
 {
 	struct print_run *c = ctx;
 	struct print_job *job = c->job;
-	double now = send_now();
-	struct send_view v;
+	double now = st_mono_s();
+	struct printer_progress v = *p;
 
 	print_take(job, p);
-	send_view_of(p, &v);
 	if (job->input != PRINT_X3G) { /* lines of the file, not of this run */
 		v.unit = "line";
 		v.done = job->last_line;
@@ -348,6 +348,5 @@ int print_stream(struct print_job *job)
 	job->port = port;
 	if (job->a->port != job->j.port) /* a resume names the journal's own */
 		snprintf(job->j.port, sizeof(job->j.port), "%s", job->a->port ? job->a->port : "sim");
-	job->t0 = send_now();
 	return print_on(job, ops, &o);
 }

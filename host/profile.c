@@ -75,7 +75,7 @@ int prof_key_error(struct loader *L, const struct profile_kv *kv, const char *ke
  */
 
 /* Decode PrusaSlicer's C-style escapes: \n \r \\ \" ; any other \X is kept as is. */
-char *prof_decode_value(const char *s, size_t len)
+static char *prof_decode_value(const char *s, size_t len)
 {
 	char *d = malloc(len + 1);
 	size_t i, o = 0;
@@ -363,58 +363,6 @@ const char *profile_get(const struct profile *p, const char *key)
 	const struct profile_kv *kv = p && key ? prof_find_kv(p->keys, key) : NULL;
 
 	return kv ? kv->value : NULL;
-}
-
-int profile_key_line(const struct profile *p, const char *key)
-{
-	const struct profile_kv *kv = p && key ? prof_find_kv(p->keys, key) : NULL;
-
-	return kv ? kv->line : 0;
-}
-
-int profile_get_number(const struct profile *p, const char *key, double min, double max,
-		       double dflt, double *out, struct st_error *err)
-{
-	const struct profile_kv *kv;
-	struct setting s = {.name = key, .type = SETTING_NUMBER, .min = min, .max = max, .unit = ""};
-	struct loader L = {0};
-	struct item it;
-
-	if (!p || !key || !out)
-		return st_error_set(err, ST_ERR_ARG, "profile_get_number: bad arguments");
-	kv = prof_find_kv(p->keys, key);
-	if (!kv) {
-		*out = dflt;
-		return 0;
-	}
-	L.p = (struct profile *)p;
-	L.origin = p->path;
-	L.err = err;
-	it.s = kv->value;
-	it.len = strlen(kv->value);
-	prof_trim(&it.s, &it.len);
-	return prof_number_item(&L, kv, &s, &it, 0, 1, out);
-}
-
-size_t profile_key_count(const struct profile *p)
-{
-	return p && p->keys ? p->keys->count : 0;
-}
-
-const char *profile_key_at(const struct profile *p, size_t i, const char **value, int *line)
-{
-	if (!p || !p->keys || i >= p->keys->count)
-		return NULL;
-	if (value)
-		*value = p->keys->kv[i].value;
-	if (line)
-		*line = p->keys->kv[i].line;
-	return p->keys->kv[i].key;
-}
-
-bool profile_key_known(const char *key)
-{
-	return key && prof_find_def(key) != NULL;
 }
 
 /* The declared name of an enum value, "?" when out of range. */

@@ -411,29 +411,6 @@ const char *profile_get(const struct profile *p, const char *key);
 const char *profile_printer_name(const struct profile *p);
 
 /*
- * profile_key_line - the line (from 1) that set key, or 0 when the file
- * does not set it.  For error messages about a key's value.
- */
-int profile_key_line(const struct profile *p, const char *key);
-
-/*
- * profile_get_number - read an untyped key as a number, checked with the
- * loader's own number grammar ([+-]digits[.digits][e[+-]digits]) and range.
- * @dflt: stored in *out when the file does not set key.
- * Returns 0; ST_ERR_PARSE or ST_ERR_RANGE with "FILE: line N: KEY: ..." in err.
- */
-int profile_get_number(const struct profile *p, const char *key, double min, double max,
-		       double dflt, double *out, struct st_error *err);
-
-/*
- * profile_key_count / profile_key_at - iterate over the file's keys in file
- * order.  profile_key_at returns the key and sets *value (decoded) and *line;
- * NULL when i is out of range.
- */
-size_t profile_key_count(const struct profile *p);
-const char *profile_key_at(const struct profile *p, size_t i, const char **value, int *line);
-
-/*
  * profile_unsupported - the keys p sets that Stratum does not honour, as
  * one list "spiral_vase=1, ironing=1" (values cut at 24 bytes), and a
  * fill_pattern Stratum does not print ("fill_pattern=stars (rectilinear
@@ -444,9 +421,6 @@ const char *profile_key_at(const struct profile *p, size_t i, const char **value
  * Returns 0 or ST_ERR_NOMEM.
  */
 int profile_unsupported(const struct profile *p, char **out);
-
-/* profile_key_known - true when the loader types and checks this key. */
-bool profile_key_known(const char *key);
 
 /* Names for the enums, as written in profile files ("marlin", "marlin2", "max"). */
 const char *profile_protocol_name(enum profile_protocol protocol);

@@ -158,8 +158,8 @@ static int keys_agree(struct loader *L, const struct pending *pend)
 	return 0;
 }
 
-
-int prof_cross_check(struct loader *L, const struct pending *pend)
+/* Checks between keys and the slicer's own check, once every value is read. */
+static int prof_cross_check(struct loader *L, const struct pending *pend)
 {
 	struct slicer_config c;
 	struct st_error e = {0};

@@ -18,8 +18,6 @@
 #include "profile.h"
 #include "settings.h"
 
-#define PROF_TOKEN_SHOW 40 /* bytes of an offending value quoted in messages */
-
 /* One key = value line of the file. */
 struct profile_kv {
 	char *key;
@@ -124,10 +122,6 @@ struct profile_kv *prof_find_kv(const struct profile_keys *keys, const char *key
 int prof_key_error(struct loader *L, const struct profile_kv *kv, const char *key, int code,
 		   const char *fmt, ...) __attribute__((format(printf, 5, 6)));
 
-/* A number item checked against decl's range; i of n names it in messages. */
-int prof_number_item(struct loader *L, const struct profile_kv *kv, const struct setting *decl,
-		     const struct item *it, int i, int n, double *out);
-
 /* Split a list value into at most cap trimmed items; the count or ST_ERR_PARSE. */
 int prof_split_list(struct loader *L, const struct profile_kv *kv, struct item *items, size_t cap);
 
@@ -149,9 +143,6 @@ struct ini_entry;
 int prof_add_entry(struct profile_keys *keys, const struct ini_entry *e, const char *origin,
 		   struct st_error *err);
 
-/* Decode PrusaSlicer's C-style escapes: \n \r \\ \" ; any other \X is kept. */
-char *prof_decode_value(const char *s, size_t len);
-
 /* A new empty profile named after origin (its base name without .ini). */
 struct profile *prof_new(const char *origin, struct st_error *err);
 
@@ -161,8 +152,5 @@ int prof_finish(struct profile *p, const char *origin, struct profile **out,
 
 /* The placeholder variables of a loaded profile (p->vars). */
 int prof_build_vars(struct profile *p, struct st_error *err);
-
-/* Checks between keys and the slicer's own check, once every value is read. */
-int prof_cross_check(struct loader *L, const struct pending *pend);
 
 #endif /* STRATUM_HOST_PROFILE_INT_H */

@@ -138,9 +138,10 @@ static bool number_then_comment(const struct item *it, double *out)
 	return len > 0 && parse_number(it->s, len, out);
 }
 
-/* Read a number item and check it against d's range. */
-int prof_number_item(struct loader *L, const struct profile_kv *kv, const struct setting *decl,
-		     const struct item *it, int i, int n, double *out)
+/* A number item checked against decl's range; i of n names it in messages. */
+static int prof_number_item(struct loader *L, const struct profile_kv *kv,
+			    const struct setting *decl, const struct item *it, int i, int n,
+			    double *out)
 {
 	char tok[INI_SHOW_MAX], where[48], range[96];
 

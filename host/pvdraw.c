@@ -9,10 +9,10 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "commands.h"
 #include "st_file.h"
 
 #define MARGIN 16	/* px around everything */
@@ -62,13 +62,9 @@ struct layout {
 
 bool pvdraw_format_of(const char *path, enum pvdraw_format *f)
 {
-	size_t n = path ? strlen(path) : 0;
-
-	if (n < 5)
-		return false;
-	if (!strcasecmp(path + n - 4, ".svg"))
+	if (path && cmd_has_ext(path, ".svg"))
 		*f = PVDRAW_SVG;
-	else if (!strcasecmp(path + n - 4, ".png"))
+	else if (path && cmd_has_ext(path, ".png"))
 		*f = PVDRAW_PNG;
 	else
 		return false;
@@ -200,8 +196,9 @@ static void svg_path(FILE *f, const struct preview_path *p, bool own_width)
 	fputs(p->closed ? " Z\"/>\n" : "\"/>\n", f);
 }
 
-int pvdraw_svg(const struct preview *pv, const struct pvdraw_opts *o, FILE *f,
-	       struct st_error *err)
+/* The picture as SVG into f (left open); 0, ST_ERR_ARG (as pvdraw_size) or ST_ERR_IO. */
+static int pvdraw_svg(const struct preview *pv, const struct pvdraw_opts *o, FILE *f,
+		      struct st_error *err)
 {
 	struct layout l;
 	char text[128];
@@ -369,8 +366,10 @@ static cairo_status_t png_write(void *closure, const unsigned char *data, unsign
 						    : CAIRO_STATUS_WRITE_ERROR;
 }
 
-int pvdraw_png(const struct preview *pv, const struct pvdraw_opts *o, FILE *f,
-	       struct st_error *err)
+/* The picture as PNG into f (left open); 0, ST_ERR_ARG, ST_ERR_IO, ST_ERR_NOMEM or
+ * ST_ERR_INTERNAL (cairo refused). */
+static int pvdraw_png(const struct preview *pv, const struct pvdraw_opts *o, FILE *f,
+		      struct st_error *err)
 {
 	struct layout l;
 	cairo_surface_t *surf;

@@ -61,20 +61,11 @@ int pvdraw_to_px(const struct preview *pv, const struct pvdraw_opts *o, double x
 		 double *px, double *py, struct st_error *err);
 
 /*
- * pvdraw_svg, pvdraw_png - write the picture to f (the caller's, left
- * open).  Return 0, ST_ERR_ARG (as pvdraw_size), ST_ERR_IO (a write
- * failed), ST_ERR_NOMEM or ST_ERR_INTERNAL (cairo refused).
- */
-int pvdraw_svg(const struct preview *pv, const struct pvdraw_opts *o, FILE *f,
-	       struct st_error *err);
-int pvdraw_png(const struct preview *pv, const struct pvdraw_opts *o, FILE *f,
-	       struct st_error *err);
-
-/*
  * pvdraw_write - write the picture to path in the format its extension
  * names, through a temporary file beside it renamed over path on success
- * (path is untouched on any error).  Errors as above, ST_ERR_ARG for an
- * extension other than .svg or .png, ST_ERR_IO naming path.
+ * (path is untouched on any error).  Returns 0, ST_ERR_ARG (as pvdraw_size,
+ * or an extension other than .svg or .png), ST_ERR_IO naming path,
+ * ST_ERR_NOMEM or ST_ERR_INTERNAL (cairo refused).
  */
 int pvdraw_write(const struct preview *pv, const struct pvdraw_opts *o, const char *path,
 		 struct st_error *err);

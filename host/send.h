@@ -1,7 +1,7 @@
 /*
  * send.h - what `stratum send` (host/cmd_send.c) and `stratum print`
- * (host/cmd_print.c) share on top of serial/printer.h: the options, the
- * stop flag Ctrl-C sets, the progress line, exit statuses and the final
+ * (host/cmd_print.c) share on top of serial/printer.h: the stop flag
+ * Ctrl-C sets, the progress line, exit statuses and the one-line JSON
  * report.
  */
 #ifndef STRATUM_HOST_SEND_H
@@ -14,35 +14,12 @@
 #include <stdint.h>
 
 #include "printer.h"
-#include "profile.h"
-
-#define SEND_CMD "stratum send"
-
-struct send_args {
-	const char *file, *port, *printer;
-	bool json;
-	bool force; /* --force: past the wrong-printer guard (guard.h) */
-	long baud;  /* 0 = the profile's */
-};
 
 /*
  * send_catch_signals - SIGINT/SIGTERM set the flag returned (STYLE rule 10
  * exception: the one stop flag); the drivers poll it and stop safely.
  */
 volatile sig_atomic_t *send_catch_signals(void);
-
-/* What the progress line shows, from either driver's status. */
-struct send_view {
-	const char *unit;	 /* "line" (Marlin) or "command" (Sailfish) */
-	uint64_t done, total;	 /* of unit */
-	long layer;		 /* -1 unknown */
-	bool tool, bed;		 /* the temperatures below are known */
-	double tool_actual, tool_target, bed_actual, bed_target; /* degC */
-	bool paused;
-};
-
-/* send_view_of - a stream's progress as the progress line's view. */
-void send_view_of(const struct printer_progress *p, struct send_view *v);
 
 /* send_warning - printer_warn_fn printing "CMD: FILE:LINE: warning: MSG" (ctx = CMD). */
 void send_warning(void *ctx, const char *path, uint64_t line, const char *msg);
@@ -64,58 +41,22 @@ struct send_progress {
 	const char *cmd; /* plain lines' prefix, SEND_CMD unless changed after start */
 	const char *tag; /* the bar's "[send]", likewise */
 	bool tty;
-	double t0;	 /* monotonic s */
+	double t0;	 /* st_mono_s() */
 	int last_decile; /* plain mode: last 10 % step printed */
 	size_t width;	 /* characters of the redrawn line */
 };
 
-/* send_now - monotonic clock, seconds. */
-double send_now(void);
-
 /* send_progress_start - decide tty or lines, start the clock. */
 void send_progress_start(struct send_progress *p);
 
-/* send_progress_show - draw v (redrawn line or a line per 10 %). */
-void send_progress_show(struct send_progress *p, const struct send_view *v);
+/* send_progress_show - draw v's unit, done of total, layer (-1 unknown),
+ * temperatures and pause (redrawn line or a line per 10 %). */
+void send_progress_show(struct send_progress *p, const struct printer_progress *v);
 
 /* send_progress_end - end the redrawn line so the report starts clean. */
 void send_progress_end(struct send_progress *p);
 
-/* The figures both report forms share. */
-struct send_summary {
-	bool ok;
-	const char *error;	  /* why the job stopped, NULL if ok */
-	const char *protocol;	  /* "marlin" or "sailfish" */
-	const char *firmware;	  /* what the firmware called itself */
-	const char *unit;	  /* "lines" or "commands" in the text report */
-	uint64_t done;		  /* of unit, acknowledged by the printer */
-	uint64_t resends, errors, unknown_commands;
-	uint64_t bytes;		  /* bytes of acknowledged commands as sent */
-	uint64_t bytes_written;	  /* every byte written */
-	double seconds;
-	long baud;
-};
-
-/*
- * send_report_json - the JSON report's shared keys (ok, file, port,
- * printer, protocol, firmware, resends, errors, unknown_commands, seconds,
- * bytes, bytes_written, bytes_per_s, baud, link_fraction, error); the
- * caller adds its own and passes it to send_report_emit.  NULL on NOMEM.
- */
-json_t *send_report_json(const struct send_args *a, const struct send_summary *s);
-
 /* send_report_emit - print o as one line on stdout; frees o. */
 void send_report_emit(json_t *o);
-
-/*
- * send_report_text - the text report: "sent FILE: N unit in S s", then
- * detail (the protocol's counters, one line, may be NULL), then rates and
- * the link fraction.
- */
-void send_report_text(const struct send_args *a, const struct send_summary *s,
-		      const char *detail);
-
-/* send_has_ext - true when path ends in ext (".x3g"), any case. */
-bool send_has_ext(const char *path, const char *ext);
 
 #endif /* STRATUM_HOST_SEND_H */

@@ -3,12 +3,10 @@
  * an ops table, and the port helpers the adapters share.
  */
 #include "printer.h"
-#include "st_clock.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "xport.h"
 
@@ -24,11 +22,6 @@ void printer_options_init(struct printer_options *o)
 	memset(o, 0, sizeof(*o));
 	o->baud = 115200;
 	o->sim_speedup = 1000;
-}
-
-double printer_now(void)
-{
-	return st_mono_s();
 }
 
 const char *printer_name(const struct printer_options *o)

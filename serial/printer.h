@@ -254,7 +254,4 @@ unsigned printer_sim_baud(const struct printer_options *o);
 /* printer_name - o's name for messages (name, else port). */
 const char *printer_name(const struct printer_options *o);
 
-/* printer_now - monotonic clock, seconds. */
-double printer_now(void);
-
 #endif /* STRATUM_SERIAL_PRINTER_H */

@@ -23,6 +23,7 @@
 #include "printer.h"
 #include "resume.h"
 #include "sim/marlin_sim.h"
+#include "st_clock.h"
 #include "xport.h"
 
 #define PM_STEP_MS 50	     /* longest wait for replies per loop turn */
@@ -266,7 +267,7 @@ static void pm_progress(struct pm_state *s, const struct printer_job *job,
 	p->bed_actual = st->bed.actual;
 	p->bed_target = st->bed.target;
 	p->resends = st->resends;
-	p->seconds = printer_now() - t0;
+	p->seconds = st_mono_s() - t0;
 }
 
 /*
@@ -366,7 +367,7 @@ static int pm_stream(void *state, const struct printer_job *job, struct printer_
 	enum printer_control asked = PRINTER_GO;
 	bool eof = false;
 	long layer = -1;
-	double z = NAN, t0 = printer_now(), t_cb = 0;
+	double z = NAN, t0 = st_mono_s(), t_cb = 0;
 	long layer_told = -2; /* the layer the hook was last called with */
 	uint64_t src_told = 0; /* the newest source the hook was told of */
 	uint64_t first_src, k;
@@ -435,8 +436,8 @@ static int pm_stream(void *state, const struct printer_job *job, struct printer_
 			src_told = st.last_acked_src;
 		}
 		if (job->progress &&
-		    (printer_now() - t_cb >= PM_PROGRESS_S || res->last.layer != layer_told)) {
-			t_cb = printer_now();
+		    (st_mono_s() - t_cb >= PM_PROGRESS_S || res->last.layer != layer_told)) {
+			t_cb = st_mono_s();
 			layer_told = res->last.layer;
 			job->progress(job->ctx, &res->last);
 		}
@@ -469,7 +470,7 @@ out_end:
 /* Send g's text and wait until the firmware acknowledged it. */
 static int pm_command_run(struct pm_state *s, const struct gcode_line *g, struct st_error *err)
 {
-	double until = printer_now() + PM_CMD_WAIT_MS / 1000.0;
+	double until = st_mono_s() + PM_CMD_WAIT_MS / 1000.0;
 	int rc;
 
 	while ((rc = marlin_submit(s->m, g->text, 0, -1, NAN, err)) == 0)
@@ -480,7 +481,7 @@ static int pm_command_run(struct pm_state *s, const struct gcode_line *g, struct
 	while (!marlin_idle(s->m)) {
 		if ((rc = marlin_step(s->m, PM_STEP_MS, err)))
 			return rc;
-		if (printer_now() > until)
+		if (st_mono_s() > until)
 			return st_error_set(err, ST_ERR_IO, "%s: no answer to %s within %d s",
 					    s->name, g->text, PM_CMD_WAIT_MS / 1000);
 	}

@@ -31,6 +31,7 @@
 #include "s3g.h"
 #include "sf_source.h"
 #include "sim/sailfish_sim.h"
+#include "st_clock.h"
 #include "xport.h"
 
 #define PS_POLL_S 2	/* temperature queries between jobs (s) */
@@ -185,7 +186,7 @@ static void ps_progress_of(struct ps_run *r, const struct s3g_status *st)
 	p->z = NAN;
 	ps_temps(st, p); /* paused is ps_hold's */
 	p->resends = st->retries;
-	p->seconds = printer_now() - r->t0;
+	p->seconds = st_mono_s() - r->t0;
 }
 
 /* Ask the hook; a cancel or stop sets the driver's stop flag. */
@@ -499,7 +500,7 @@ static int ps_stream(void *state, const struct printer_job *job, struct printer_
 	if ((rc = ps_run_init(r, s, job, build, sizeof(build), err)))
 		goto out;
 	r->last = &res->last;
-	r->t0 = printer_now();
+	r->t0 = st_mono_s();
 	f = fopen(job->path, "rb");
 	if (!f) {
 		rc = st_error_set(err, ST_ERR_IO, "%s: cannot open: %s", job->path, strerror(errno));

@@ -19,6 +19,7 @@
 #include "ini.h"
 #include "printer_profile.h"
 #include "profile.h"
+#include "profile_int.h"
 #include "settings.h"
 #include "suites.h"
 #include "testutil.h"
@@ -95,6 +96,14 @@ static void write_in(const char *dir, const char *file, const char *text)
 }
 
 /* ---- the shipped profiles ------------------------------------------------ */
+
+/* The file line that set key (0: not set), as the loader's messages name it. */
+static int key_line(const struct profile *p, const char *key)
+{
+	const struct profile_kv *kv = prof_find_kv(p->keys, key);
+
+	return kv ? kv->line : 0;
+}
 
 START_TEST(test_creator_pro)
 {
@@ -230,7 +239,7 @@ START_TEST(test_defaults)
 	ck_assert_ptr_nonnull(strstr(p->start_gcode, "G28"));
 	assert_close(p->steps_per_mm[0], 0); /* unknown on Marlin: the firmware knows */
 	ck_assert_ptr_null(profile_get(p, "nozzle_diameter"));
-	ck_assert_int_eq(profile_key_line(p, "nozzle_diameter"), 0);
+	ck_assert_int_eq(key_line(p, "nozzle_diameter"), 0);
 	profile_free(p);
 }
 END_TEST
@@ -271,7 +280,7 @@ START_TEST(test_syntax_accepted)
 	ck_assert_str_eq(profile_get(p, "printer_notes"), "");
 	ck_assert_str_eq(p->end_gcode, "M104 S0 ; nozzle off # not a comment");
 	ck_assert_str_eq(p->printer_model, "MK3S"); /* last line without a newline */
-	ck_assert_int_eq(profile_key_line(p, "nozzle_diameter"), 4);
+	ck_assert_int_eq(key_line(p, "nozzle_diameter"), 4);
 	profile_free(p);
 }
 END_TEST
@@ -563,30 +572,17 @@ START_TEST(test_raw_keys)
 				    "max_print_speed = 150\n"
 				    "bad_number = 1e3x\n"
 				    "nozzle_diameter = 0.4\n");
-	struct st_error err = {0};
-	const char *value;
-	double v = -1;
-	int line = 0;
-
 	ck_assert_str_eq(profile_get(p, "printer_notes"), "PRINTER_VENDOR_X\nsecond line");
 	ck_assert_str_eq(profile_get(p, "nozzle_diameter"), "0.4");
 	ck_assert_ptr_null(profile_get(p, "absent"));
-	ck_assert_int_eq(profile_key_line(p, "max_print_speed"), 2);
-	ck_assert_int_eq(profile_get_number(p, "max_print_speed", 0, 1000, 0, &v, &err), 0);
-	assert_close(v, 150);
-	ck_assert_int_eq(profile_get_number(p, "absent", 0, 1000, 7, &v, &err), 0);
-	assert_close(v, 7);
-	ck_assert_int_eq(profile_get_number(p, "bad_number", 0, 1000, 0, &v, &err), ST_ERR_PARSE);
-	ck_assert_ptr_nonnull(strstr(err.msg, "test.ini: line 3: bad_number"));
-	ck_assert_int_eq(profile_get_number(p, "max_print_speed", 0, 100, 0, &v, &err),
-			 ST_ERR_RANGE);
-	ck_assert_uint_eq(profile_key_count(p), 4);
-	ck_assert_str_eq(profile_key_at(p, 1, &value, &line), "max_print_speed");
-	ck_assert_str_eq(value, "150");
-	ck_assert_int_eq(line, 2);
-	ck_assert_ptr_null(profile_key_at(p, 4, &value, &line));
-	ck_assert(profile_key_known("bed_shape"));
-	ck_assert(!profile_key_known("printer_notes"));
+	ck_assert_int_eq(key_line(p, "max_print_speed"), 2);
+	/* every key of the file kept in file order */
+	ck_assert_uint_eq(p->keys->count, 4);
+	ck_assert_str_eq(p->keys->kv[1].key, "max_print_speed");
+	ck_assert_str_eq(p->keys->kv[1].value, "150");
+	ck_assert_int_eq(p->keys->kv[1].line, 2);
+	ck_assert_ptr_nonnull(prof_find_def("bed_shape"));
+	ck_assert_ptr_null(prof_find_def("printer_notes"));
 	profile_free(p);
 	profile_free(NULL);
 	profile_list_free(NULL, 0);
@@ -939,13 +935,13 @@ START_TEST(test_bindings_match_declaration)
 	for (size_t i = 0; i < n; i++) {
 		const struct setting *s = settings_at(i);
 
-		ck_assert_msg(profile_key_known(s->name), "%s", s->name);
+		ck_assert_msg(prof_find_def(s->name), "%s", s->name);
 		bound++;
 		prev = s->name;
 	}
 	ck_assert_ptr_nonnull(prev);
 	ck_assert_uint_gt(bound, 80);
-	ck_assert(!profile_key_known("no_such_key"));
+	ck_assert_ptr_null(prof_find_def("no_such_key"));
 }
 END_TEST
 

@@ -25,7 +25,6 @@ static void ctl_request(struct node_printer *p, int pause, bool cancel)
 		p->ctl.pause = pause != 0;
 	if (cancel)
 		p->ctl.cancel = true;
-	pthread_cond_broadcast(&p->ctl.cv);
 	pthread_mutex_unlock(&p->ctl.mu);
 }
 

@@ -4,8 +4,8 @@
  */
 #include <ctype.h>
 #include <string.h>
-#include <strings.h>
 
+#include "commands.h"
 #include "node.h"
 
 int node_check_file_name(const char *name, size_t len, struct st_error *err)
@@ -34,22 +34,14 @@ int node_check_file_name(const char *name, size_t len, struct st_error *err)
 	return 0;
 }
 
-/* True when name ends in ext (with its dot), case-insensitively. */
-static bool ends_with(const char *name, const char *ext)
-{
-	size_t n = strlen(name), e = strlen(ext);
-
-	return n > e && !strcasecmp(name + n - e, ext);
-}
-
 char node_file_kind(const char *name)
 {
-	if (ends_with(name, ".gcode") || ends_with(name, ".gco") || ends_with(name, ".g"))
+	if (cmd_has_ext(name, ".gcode") || cmd_has_ext(name, ".gco") || cmd_has_ext(name, ".g"))
 		return 'g';
-	if (ends_with(name, ".stl") || ends_with(name, ".obj") || ends_with(name, ".off") ||
-	    ends_with(name, ".3mf"))
+	if (cmd_has_ext(name, ".stl") || cmd_has_ext(name, ".obj") || cmd_has_ext(name, ".off") ||
+	    cmd_has_ext(name, ".3mf"))
 		return 'm';
-	if (ends_with(name, ".x3g"))
+	if (cmd_has_ext(name, ".x3g"))
 		return 'x';
 	return 0;
 }

@@ -42,7 +42,6 @@ static int setup_printer(struct node *n, size_t i, struct st_error *err)
 	pthread_mutex_init(&p->mu, NULL);
 	pthread_cond_init(&p->cv, NULL);
 	pthread_mutex_init(&p->ctl.mu, NULL);
-	pthread_cond_init(&p->ctl.cv, NULL);
 	p->want_connect = true; /* OctoPrint's autoconnect */
 	rc = profile_find(p->cfg->profile, &p->prof, &e);
 	if (rc)
@@ -191,7 +190,6 @@ void node_stop(struct node *n)
 		pthread_mutex_unlock(&p->mu);
 		pthread_mutex_lock(&p->ctl.mu);
 		p->ctl.stop = true;
-		pthread_cond_broadcast(&p->ctl.cv);
 		pthread_mutex_unlock(&p->ctl.mu);
 	}
 	for (size_t i = 0; i < n->nprinters; i++)
@@ -220,7 +218,6 @@ void node_free(struct node *n)
 		pthread_mutex_destroy(&p->mu);
 		pthread_cond_destroy(&p->cv);
 		pthread_mutex_destroy(&p->ctl.mu);
-		pthread_cond_destroy(&p->ctl.cv);
 	}
 	node_queue_close(n->q);
 	pthread_mutex_destroy(&n->tick_mu);

@@ -9,9 +9,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 #include <sys/stat.h>
 
+#include "commands.h"
 #include "print.h"
 #include "printer_profile.h"
 #include "resume.h"
@@ -158,10 +158,9 @@ int node_print_file(struct node_link *l, const char *path, int64_t start, bool r
 	struct printer_file_info info;
 	struct printer_result res;
 	struct stat sb;
-	size_t n = strlen(path);
 	int rc;
 
-	job.x3g = n > 4 && !strcasecmp(path + n - 4, ".x3g");
+	job.x3g = cmd_has_ext(path, ".x3g");
 	pthread_mutex_lock(&ctl->mu);
 	if (!stat(path, &sb))
 		ctl->size = sb.st_size;

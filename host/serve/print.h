@@ -28,7 +28,6 @@
 /* Shared between a print and the API; every field under mu. */
 struct node_print_ctl {
 	pthread_mutex_t mu;
-	pthread_cond_t cv; /* signalled on every request */
 	/* Requests, written by the API or node_stop. */
 	bool pause;  /* hold at the next line boundary until cleared */
 	bool cancel; /* stop this print: it ends as cancelled */

@@ -8,6 +8,7 @@
  * in progress).  It never touches a port.  A testing aid only.
  */
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -42,15 +43,6 @@ static void double_close(void *state)
 	free(state);
 }
 
-/* The value of word letter of l, or dflt. */
-static double word(const struct gcode_line *l, char letter, double dflt)
-{
-	for (size_t i = 0; i < l->nwords; i++)
-		if (l->words[i].letter == letter && l->words[i].has_value)
-			return l->words[i].value;
-	return dflt;
-}
-
 /* Temperatures a line sets, reached at once. */
 static void apply_temps(const struct gcode_line *l, struct printer_progress *p)
 {
@@ -58,11 +50,11 @@ static void apply_temps(const struct gcode_line *l, struct printer_progress *p)
 		return;
 	if (l->number == 104 || l->number == 109) {
 		p->tool = true;
-		p->tool_target = word(l, 'S', p->tool_target);
+		gcode_word_value(l, 'S', &p->tool_target);
 		p->tool_actual = p->tool_target;
 	} else if (l->number == 140 || l->number == 190) {
 		p->bed = true;
-		p->bed_target = word(l, 'S', p->bed_target);
+		gcode_word_value(l, 'S', &p->bed_target);
 		p->bed_actual = p->bed_target;
 	}
 }
@@ -121,7 +113,7 @@ static int double_run(struct double_state *s, const struct printer_job *job,
 	}
 	while ((n = getline(&line, &cap, f)) > 0) {
 		struct gcode_line l;
-		long dwell = 0;
+		double ms = 0, secs = 0; /* a dwell: G4 P and S */
 		enum printer_control c;
 
 		lineno++;
@@ -140,10 +132,10 @@ static int double_run(struct double_state *s, const struct printer_job *job,
 			info->commands += l.text_len > 0;
 			continue;
 		}
-		if (l.letter == 'G' && l.number == 4)
-			dwell = (long)(word(&l, 'P', 0) + 1000 * word(&l, 'S', 0));
-		if (dwell > DOUBLE_DWELL_MAX_MS)
-			dwell = DOUBLE_DWELL_MAX_MS;
+		if (l.letter == 'G' && l.number == 4) {
+			gcode_word_value(&l, 'P', &ms);
+			gcode_word_value(&l, 'S', &secs);
+		}
 		apply_temps(&l, &s->temps);
 		res->last = s->temps;
 		res->last.filepos = pos;
@@ -151,7 +143,8 @@ static int double_run(struct double_state *s, const struct printer_job *job,
 		res->last.layer = -1;
 		if (job->progress)
 			job->progress(job->ctx, &res->last);
-		c = wait_requests(job, &res->last, dwell);
+		c = wait_requests(job, &res->last,
+				  (long)fmin(ms + 1000 * secs, DOUBLE_DWELL_MAX_MS));
 		if (c != PRINTER_GO) {
 			res->end = c == PRINTER_STOP ? PRINTER_END_STOPPED : PRINTER_END_CANCELLED;
 			goto out_free;
