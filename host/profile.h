@@ -253,6 +253,9 @@ struct profile {
 	double machine_max_acceleration_retracting;    /* mm/s^2 */
 	double machine_max_acceleration_travel;	       /* mm/s^2, 0 = not limited separately */
 	double machine_max_jerk[PROFILE_AXES];	       /* mm/s, machine_max_jerk_x... */
+	double machine_min_extruding_rate;	       /* mm/s (M205 S) */
+	double machine_min_travel_rate;		       /* mm/s (M205 T) */
+	const char *machine_limits_usage; /* emit_to_gcode, time_estimate_only or ignore */
 
 	/* Sailfish machine definition for X3G (GPX `Machine`); 0 = unknown */
 	double steps_per_mm[3];		     /* X, Y, Z steps/mm: steps_per_mm_x/y/z */

@@ -8,6 +8,21 @@
 #include "infill.h"
 #include "profile_int.h"
 
+/* Whether and how the G-code carries the limits: PrusaSlicer writes them
+ * for Marlin only (X3G has no such commands). */
+static enum gcodew_limits_form limits_form(const struct profile *p)
+{
+	const char *usage = p->machine_limits_usage;
+
+	if (!usage || strcmp(usage, "emit_to_gcode") != 0)
+		return GCODEW_LIMITS_NONE;
+	if (p->gcode_flavor == PROFILE_FLAVOR_MARLIN)
+		return GCODEW_LIMITS_MARLIN_LEGACY;
+	if (p->gcode_flavor == PROFILE_FLAVOR_MARLIN2)
+		return GCODEW_LIMITS_MARLIN2;
+	return GCODEW_LIMITS_NONE;
+}
+
 /* Machine limits of the profile where it sets them (> 0), else the defaults. */
 static void limits_from_profile(const struct profile *p, struct est_limits *lim)
 {
@@ -122,6 +137,9 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	g->fan_on_off = p->gcode_flavor == PROFILE_FLAVOR_MAKERWARE ||
 			p->gcode_flavor == PROFILE_FLAVOR_SAILFISH;
 	limits_from_profile(p, &g->limits);
+	g->limits_form = limits_form(p);
+	g->min_extruding_rate = p->machine_min_extruding_rate;
+	g->min_travel_rate = p->machine_min_travel_rate;
 	g->vars = p->vars;
 	g->printer_settings_id = profile_printer_name(p);
 	if (profile_get(p, "bed_shape"))

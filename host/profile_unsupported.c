@@ -54,8 +54,6 @@ static const struct known known[] = {
     {"template_custom_gcode", NULL, NULL, NULL}, {"between_objects_gcode", NULL, NULL, NULL},
     {"gcode_comments", NULL, NULL, NULL},
     {"extruder_clearance_height", NULL, NULL, NULL}, {"extruder_clearance_radius", NULL, NULL, NULL},
-    {"machine_limits_usage", "time_estimate_only", NULL, NULL},
-    {"machine_min_extruding_rate", NULL, NULL, NULL}, {"machine_min_travel_rate", NULL, NULL, NULL},
     {"perimeter_generator", NULL, NULL, NULL}, /* Stratum's own wall generator */
     {"wall_*", NULL, NULL, NULL}, {"min_bead_width", NULL, NULL, NULL},
     {"min_feature_size", NULL, NULL, NULL}, {"slice_closing_radius", NULL, NULL, NULL},

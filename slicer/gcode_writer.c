@@ -243,7 +243,34 @@ static int put_expanded(struct gcodew *w, const char *text, const char *what, si
 	return rc;
 }
 
-/* The part before the first layer: temperatures, start G-code, modes. */
+/* The machine limits in PrusaSlicer 2.5's words (GCode.cpp
+ * print_machine_envelope), integers rounded, jerks with two decimals. */
+static void put_limits(struct gcodew *w)
+{
+	const struct gcodew_settings *s = w->s;
+	const struct est_limits *l = &s->limits;
+	const double *a = l->max_acceleration, *f = l->max_feedrate, *j = l->max_jerk;
+	double travel = s->limits_form == GCODEW_LIMITS_MARLIN2 ? l->accel_travel
+								 : l->accel_extruding;
+
+	if (s->limits_form == GCODEW_LIMITS_NONE)
+		return;
+	gcodew_put(w, "M201 X%d Y%d Z%d E%d ; sets maximum accelerations, mm/sec^2\n",
+		   (int)(a[0] + 0.5), (int)(a[1] + 0.5), (int)(a[2] + 0.5), (int)(a[3] + 0.5));
+	gcodew_put(w, "M203 X%d Y%d Z%d E%d ; sets maximum feedrates, mm / sec\n",
+		   (int)(f[0] + 0.5), (int)(f[1] + 0.5), (int)(f[2] + 0.5), (int)(f[3] + 0.5));
+	gcodew_put(w,
+		   "M204 P%d R%d T%d ; sets acceleration (P, T) and retract acceleration (R), "
+		   "mm/sec^2\n",
+		   (int)(l->accel_extruding + 0.5), (int)(l->accel_retracting + 0.5),
+		   (int)(travel + 0.5));
+	gcodew_put(w, "M205 X%.2f Y%.2f Z%.2f E%.2f ; sets the jerk limits, mm/sec\n", j[0], j[1],
+		   j[2], j[3]);
+	gcodew_put(w, "M205 S%d T%d ; sets the minimum extruding and travel feed rate, mm/sec\n",
+		   (int)(s->min_extruding_rate + 0.5), (int)(s->min_travel_rate + 0.5));
+}
+
+/* The part before the first layer: limits, temperatures, start G-code, modes. */
 static void put_start(struct gcodew *w)
 {
 	const struct gcodew_settings *s = w->s;
@@ -251,6 +278,7 @@ static void put_start(struct gcodew *w)
 	bool bed_set = gcodew_text_sets(start, 140, 190),
 	     nozzle_set = gcodew_text_sets(start, 104, 109);
 
+	put_limits(w);
 	if (!bed_set && s->first_layer_bed_temperature > 0)
 		gcodew_put(w, "M190 S%d ; set bed temperature and wait for it to be reached\n",
 			   s->first_layer_bed_temperature);

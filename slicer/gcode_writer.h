@@ -80,6 +80,15 @@
  * (host/profile.h) and the print settings.  Names are PrusaSlicer's keys;
  * units mm, mm/s, degrees C, percent, seconds.
  */
+/* How the machine limits are written (PrusaSlicer's print_machine_envelope):
+ * not at all; Marlin 1 (M204 T = the printing acceleration, as legacy
+ * Marlin takes travel from it); Marlin 2 (M204 T = the travel acceleration). */
+enum gcodew_limits_form {
+	GCODEW_LIMITS_NONE,
+	GCODEW_LIMITS_MARLIN_LEGACY,
+	GCODEW_LIMITS_MARLIN2,
+};
+
 struct gcodew_settings {
 	/* Machine and filament */
 	double nozzle_diameter;	       /* mm; 0.4 */
@@ -157,6 +166,11 @@ struct gcodew_settings {
 
 	/* Machine limits, for the estimates and the layer times */
 	struct est_limits limits; /* est_limits_init */
+	/* ... and, as PrusaSlicer's machine_limits_usage = emit_to_gcode, in
+	 * the G-code before the start G-code (M201, M203, M204, M205) */
+	enum gcodew_limits_form limits_form; /* GCODEW_LIMITS_NONE */
+	double min_extruding_rate;	     /* mm/s, M205 S; 0 */
+	double min_travel_rate;		     /* mm/s, M205 T; 0 */
 
 	/* Custom G-code in PrusaSlicer's placeholder language (placeholder.h);
 	 * not owned, not NULL.  Written where PrusaSlicer writes them: the start

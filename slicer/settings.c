@@ -29,6 +29,9 @@ static const char *const pattern_names[] = {
     "octagramspiral", "adaptivecubic", "supportcubic",   "lightning",		 "zigzag",
 };
 
+/* PrusaSlicer's MachineLimitsUsage names. */
+static const char *const limits_usage_names[] = {"emit_to_gcode", "time_estimate_only", "ignore"};
+
 static const char *const home_names[] = {"min", "max"};
 
 /* PrusaSlicer's IroningType names, in enum iron_type order (slicer/ironing.h). */
@@ -264,8 +267,11 @@ static const struct setting table[] = {
     {"min_print_speed", NUM, FI, 0, 1000, GT, "mm/s", "10", NULL, NULL, 0, NULL,
      "slow-down for short layers stops here"},
 
-    {"machine_max_feedrate_x", NUM, LI, 0, 100000, GT, "mm/s", "500", NULL, NULL, 0,
-     "Machine limits", ""},
+    {"machine_limits_usage", SETTING_CHOICE, S_, 0, 0, 0, "", "time_estimate_only", NULL,
+     CHOICES(limits_usage_names), "Machine limits",
+     "emit_to_gcode writes the limits (M201, M203, M204, M205) before the start G-code for "
+     "the marlin and marlin2 flavours; the estimate uses them in every case"},
+    {"machine_max_feedrate_x", NUM, LI, 0, 100000, GT, "mm/s", "500", NULL, NULL, 0, NULL, ""},
     {"machine_max_feedrate_y", NUM, LI, 0, 100000, GT, "mm/s", "500", NULL, NULL, 0, NULL, ""},
     {"machine_max_feedrate_z", NUM, LI, 0, 100000, GT, "mm/s", "12", NULL, NULL, 0, NULL, ""},
     {"machine_max_feedrate_e", NUM, LI, 0, 100000, GT, "mm/s", "120", NULL, NULL, 0, NULL, ""},
@@ -287,6 +293,10 @@ static const struct setting table[] = {
     {"machine_max_jerk_y", NUM, LI, 0, 1000, 0, "mm/s", "10", NULL, NULL, 0, NULL, ""},
     {"machine_max_jerk_z", NUM, LI, 0, 1000, 0, "mm/s", "0.2", NULL, NULL, 0, NULL, ""},
     {"machine_max_jerk_e", NUM, LI, 0, 1000, 0, "mm/s", "2.5", NULL, NULL, 0, NULL, ""},
+    {"machine_min_extruding_rate", NUM, LI, 0, 1000, 0, "mm/s", "0", NULL, NULL, 0, NULL,
+     "written as M205 S"},
+    {"machine_min_travel_rate", NUM, LI, 0, 1000, 0, "mm/s", "0", NULL, NULL, 0, NULL,
+     "written as M205 T"},
 
     /* The sailfish defaults are GPX's Replicator 1 machine (markwal/GPX
      * src/shared/std_machines.h), the family the Creator Pro belongs to. */

@@ -204,6 +204,38 @@ START_TEST(json_summary_matches_gcode)
 }
 END_TEST
 
+/* machine_limits_usage = emit_to_gcode writes PrusaSlicer 2.5's lines (as
+ * its --export-gcode wrote them for this config): legacy Marlin's M204 T is
+ * the printing acceleration, Marlin 2's the travel one. */
+START_TEST(machine_limits_written_as_prusaslicer)
+{
+	const char *cube = stl_file(fx_box(0, 0, 0, 10, 10, 10), "cube.stl");
+	const char *gc = tu_path("cube.gcode");
+	static const char *const flavor[] = {"marlin", "marlin2"}, *const t[] = {"T1500", "T1300"};
+
+	for (int k = 0; k < 2; k++) {
+		char want[160];
+		int status = tu_run(out, sizeof(out),
+				    "slice '%s' -o '%s' " MK3S " --set gcode_flavor=%s --set "
+				    "machine_limits_usage=emit_to_gcode --set "
+				    "machine_max_acceleration_extruding=1500 --set "
+				    "machine_max_acceleration_retracting=1100 --set "
+				    "machine_max_acceleration_travel=1300",
+				    cube, gc, flavor[k]);
+		ck_assert_msg(status == 0, "exit %d: %s", status, out);
+		size_t len;
+		char *text = tu_slurp(gc, &len);
+		snprintf(want, sizeof(want),
+			 "\nM204 P1500 R1100 %s ; sets acceleration (P, T) and retract "
+			 "acceleration (R), mm/sec^2\n",
+			 t[k]);
+		ck_assert_msg(strstr(text, want), "%s: no %s", flavor[k], want);
+		ck_assert_msg(strstr(text, "\nM205 S0 T0 ; sets the minimum extruding"), "no M205 S T");
+		free(text);
+	}
+}
+END_TEST
+
 START_TEST(center_option_moves_the_part)
 {
 	const char *cube = stl_file(fx_box(-3, 7, 5, 17, 27, 25), "cube.stl");
@@ -775,6 +807,7 @@ Suite *slicecli_suite(void)
 	tcase_add_test(tc, cube_gcode_reads_back);
 	tcase_add_test(tc, json_summary_matches_gcode);
 	tcase_add_test(tc, center_option_moves_the_part);
+	tcase_add_test(tc, machine_limits_written_as_prusaslicer);
 	tcase_add_test(tc, thin_plate_prints_thin_walls);
 	tcase_add_test(tc, threads_give_the_same_gcode);
 	tcase_add_test(tc, no_repair_slices_as_read);
