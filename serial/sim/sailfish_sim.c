@@ -274,6 +274,9 @@ static void sf_rx_byte(struct sim_sailfish *s, uint8_t b, double now)
 			    ++s->good_actions == s->o.crc_escape_at)
 				s->payload[0] = s->o.crc_escape_code ? s->o.crc_escape_code
 								    : s->payload[0] ^ 0x80;
+			else if (s->plen && !(s->payload[0] & 0x80) &&
+				 ++s->good_queries == s->o.query_escape_at)
+				s->payload[0] = s->o.query_escape_code;
 		} else {
 			sf_in_error(s, SF_E_CRC);
 		}

@@ -58,6 +58,11 @@ struct sim_sailfish_options {
 				  * instead (an action: the rest of its bytes are parsed
 				  * as whatever commands they read as, so the build's
 				  * line count drifts from what the host sent) */
+	long query_escape_at; /* the Nth query packet (1-based) received whole runs as
+			       * query query_escape_code, its CRC still matching (two
+			       * bit errors CRC-8 cannot see): the host gets the other
+			       * query's reply; <= 0 never */
+	uint8_t query_escape_code;
 };
 
 /* Opaque simulator. */

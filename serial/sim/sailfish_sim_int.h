@@ -47,6 +47,7 @@ struct sim_sailfish {
 	size_t wire_len;
 	double in_t, out_t;	/* last byte in / last reply byte out (wall s) */
 	long good_actions;	/* action packets received whole with a matching CRC */
+	long good_queries;	/* query packets received whole with a matching CRC */
 	bool rx_hit;		/* the packet being read lost or had a byte spoilt */
 	uint64_t undetected;	/* packets so spoilt whose CRC-8 still matched */
 	double boot_until;
