@@ -42,7 +42,8 @@ void ini_show(char *buf, size_t cap, const char *s, size_t len)
 	buf[o] = '\0';
 }
 
-bool ini_key_valid(const char *k, size_t len)
+/* A key is letters, digits and '_'. */
+static bool good_key(const char *k, size_t len)
 {
 	for (size_t i = 0; i < len; i++)
 		if (!(k[i] >= '0' && k[i] <= '9') && !(k[i] >= 'a' && k[i] <= 'z') &&
@@ -92,7 +93,9 @@ static int one_line(const char *s, size_t len, int line, const char *origin,
 	e.key = s;
 	e.key_len = (size_t)(eq - s);
 	trim(&e.key, &e.key_len);
-	if (h->any_key ? e.key_len == 0 : !ini_key_valid(e.key, e.key_len)) {
+	if (h->skip_bad_keys && e.key_len && !good_key(e.key, e.key_len))
+		return 0;
+	if (!good_key(e.key, e.key_len)) {
 		ini_show(tok, sizeof(tok), e.key, e.key_len);
 		return st_error_set(err, ST_ERR_PARSE,
 				    "%s: line %d: '%s' is not a valid key (letters, digits and '_')",

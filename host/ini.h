@@ -54,15 +54,13 @@ struct ini_handler {
 	/* true: a '#' after a blank ends the line (section and key lines);
 	 * so "key = #x" has an empty value. */
 	bool inline_comments;
-	/* true: any key text but an empty one reaches entry (PrusaSlicer's
-	 * own configs and bundles: its reader takes any key and ignores the
-	 * ones it does not know, such as "top solid_infill_speed" in Prusa's
-	 * 2.5.5 bundle); false: letters, digits and '_' only. */
-	bool any_key;
+	/* true: a key line whose key is not letters, digits and '_' is
+	 * skipped (PrusaSlicer's own configs and bundles: its reader skips
+	 * keys it does not know, such as "top solid_infill_speed" in Prusa's
+	 * 2.5.5 bundle, a setting of neither tool); false: refused.  An
+	 * empty key is refused either way. */
+	bool skip_bad_keys;
 };
-
-/* ini_key_valid - a key is letters, digits and '_', at least one. */
-bool ini_key_valid(const char *key, size_t len);
 
 /*
  * ini_parse - read text[0..len) line by line and call h for each section

@@ -84,8 +84,6 @@ static int on_entry(void *ctx, const struct ini_entry *e, struct st_error *err)
 {
 	struct file_read *f = ctx;
 
-	if (!ini_key_valid(e->key, e->key_len))
-		return 0; /* no setting of PrusaSlicer or Stratum: PrusaSlicer skips it too */
 	return prof_add_entry(&f->sec[f->n - 1].keys, e, f->path, err);
 }
 
