@@ -175,19 +175,19 @@ static void marlin_unack_to(struct marlin *m, long n)
  * The firmware says it has every line up to `have` (a "Resend: have + 1")
  * while we count fewer acknowledged: it is ahead of us.  Lines we had seen
  * acknowledged before an un-ack (a late Resend taken for a new one) are
- * done again; after a probe nothing answered the firmware is idle, so all
- * of them but the last are done (a long move may still run it); the rest
- * sit in its command queue, out of the RX ring,
- * their oks to come.  Without this the window stays shut on lines the
- * firmware no longer holds and the host rewrites them for ever.
+ * done again.  The others it has taken, not run: they may wait in its
+ * command queue, their oks to come (after a stall Marlin reads its ring
+ * before it runs the next command), so they leave the RX ring's count
+ * and nothing more.  Counting them as run made the oks that followed
+ * count for later lines, and a job ended before its last lines ran
+ * (marlin: stall_before_last_lines).  Oks lost meanwhile are settled by
+ * the next M105 probe, whose answer comes only after they ran.
  */
 static void marlin_firmware_has(struct marlin *m, long have)
 {
 	m->m105_spent = false; /* an M105 probe may now vouch for `have` */
 	if (have > m->n_acked) {
-		/* after a probe nothing answered, all but the last it has ran
-		 * (that one may still be running: an M105 probe settles it) */
-		long done = m->n_acked_hi > have ? have : m->probed ? have - 1 : m->n_acked_hi;
+		long done = m->n_acked_hi > have ? have : m->n_acked_hi;
 		if (done > m->n_acked) {
 			marlin_hist_entry(m, done)->t_sent = 0; /* no round-trip sample */
 			marlin_ack_through(m, done);

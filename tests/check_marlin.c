@@ -715,6 +715,51 @@ START_TEST(last_line_dropped_as_duplicate)
 }
 END_TEST
 
+/*
+ * The board stalls (freeze_s) just before the job's last two lines run,
+ * and the host's probes pile up in its ring.  After the stall Marlin
+ * reads its ring before it runs the next command, so the older probe's
+ * copy draws "Resend: last + 1" before any ok, with both lines still in
+ * its queue (BUFSIZE 32 holds them and the probes).  A Resend says which
+ * lines the firmware has, not which ran: counting them as run made the
+ * oks that followed count for later lines, and the job ended before the
+ * board ran its last line (here a 2 s one; long_busy and corrupt, once
+ * each in loaded two-lane runs).
+ */
+START_TEST(stall_before_last_lines)
+{
+	struct rig r;
+	struct sim_marlin_options so;
+	struct printer_options mo;
+	struct st_error err = {0};
+	const char *path = tu_path("marlin-stall.gcode");
+	FILE *f = fopen(path, "w");
+	ck_assert_ptr_nonnull(f);
+	fputs("G21\nG90\nM83\n", f);
+	for (int i = 0; i < 20; i++)
+		fprintf(f, "G1 X%d\n", i % 2 ? 0 : 5);
+	fclose(f);
+	long last = 2 + 23; /* M110 and M115 first */
+	fast_sim(&so);
+	so.bufsize = 32;
+	so.freeze_at_line = last - 1;
+	so.freeze_s = 4;
+	so.busy_at_line = last;
+	so.busy_s = 2;
+	fast_driver(&mo);
+	mo.probe_ms = 800;
+	rig_start(&r, &so, &mo);
+	ck_assert_int_eq(rig_stream(&r, path, &err), PRINTER_END_DONE);
+	long answered = sim_marlin_answered_line(r.sim);
+	struct marlin_status st;
+	marlin_status(r.m, &st);
+	ck_assert_uint_ge(st.resend_requests, 1); /* the stall drew the older probe */
+	ck_assert_msg(answered == last, "done with N%ld the last line answered, not N%ld",
+		      answered, last);
+	rig_stop(&r);
+}
+END_TEST
+
 /* Two lines lose their newline (the one after connect, M155, and one in
  * the job): each waits in the firmware until the M105 probe's "\n" ends
  * it.  The probe must come within a few round trips, not after probe_ms:
@@ -1029,6 +1074,7 @@ Suite *marlin_suite(void)
 	add_case(s, "lost_oks", stream_lost_oks_no_livelock, 60);
 	add_case(s, "advanced_ok_no_overflow", advanced_ok_no_overflow, 120);
 	add_case(s, "long_busy", long_busy_survives, 60);
+	add_case(s, "stall_before_last_lines", stall_before_last_lines, 60);
 	TCase *tc = tcase_create("parse");
 	tcase_add_test(tc, parse_ok);
 	tcase_add_test(tc, parse_resend_and_errors);

@@ -215,6 +215,11 @@ bool sim_marlin_frozen(const struct sim_marlin *sim)
 	return sim->frozen;
 }
 
+long sim_marlin_answered_line(const struct sim_marlin *sim)
+{
+	return atomic_load(&sim->answered_n);
+}
+
 uint64_t sim_marlin_dropped_bytes(const struct sim_marlin *sim)
 {
 	return sim->dropped;
@@ -568,9 +573,17 @@ int sim_marlin_run(struct sim_marlin *s, volatile sig_atomic_t *stop, struct st_
 		double wake = now + (busy ? 0.001 : 0.020);
 
 		if (s->frozen && now >= s->thaw_at) {
-			/* the stall is over: what came meanwhile is read at once */
+			/* The stall is over.  What the host wrote meanwhile is all
+			 * there (a stalled board's UART, or a stopped process's
+			 * pty, kept it) and is read before the next command runs,
+			 * as Marlin's loop reads its ring before it runs one. */
+			double arrived = 0;
 			s->frozen = false;
-			s->in_t = now;
+			if (sim_wait_input(s->master, true, now, s->wire, &s->wire_len,
+					   sizeof(s->wire), &arrived))
+				return st_error_set(err, ST_ERR_IO, "simulated Marlin: poll failed: %s",
+						    strerror(errno));
+			s->in_t = now - (double)s->wire_len * 10.0 / s->o.baud;
 		}
 		if (s->frozen) {
 			/* a hung board: the UART still fills the kernel's buffer

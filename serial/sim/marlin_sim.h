@@ -113,6 +113,11 @@ bool sim_marlin_halted(const struct sim_marlin *sim);
 /* sim_marlin_frozen - true once freeze_at_line hung the board. */
 bool sim_marlin_frozen(const struct sim_marlin *sim);
 
+/* sim_marlin_answered_line - the number of the last numbered line that ran
+ * to its end and was answered (its ok, or an M105's report); 0: none yet.
+ * Safe to call while the simulator thread runs. */
+long sim_marlin_answered_line(const struct sim_marlin *sim);
+
 /* sim_marlin_dropped_bytes - bytes lost so far: RX ring overflow plus
  * injected drops. */
 uint64_t sim_marlin_dropped_bytes(const struct sim_marlin *sim);

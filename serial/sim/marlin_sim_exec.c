@@ -283,6 +283,8 @@ void msim_execute(struct sim_marlin *s, double now)
 		s->blk = SIM_BLK_NONE;
 		if (!(c->parsed && c->g.letter == 'M' && c->g.number == 105))
 			msim_ok(s, c, now);
+		if (c->has_n)
+			atomic_store(&s->answered_n, c->n);
 		s->q_head = (s->q_head + 1) % s->o.bufsize;
 		s->q_count--;
 		msim_serial_commands(s); /* the main loop reads input between commands */

@@ -6,6 +6,7 @@
 #ifndef STRATUM_SERIAL_SIM_MARLIN_SIM_INT_H
 #define STRATUM_SERIAL_SIM_MARLIN_SIM_INT_H
 
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -110,6 +111,7 @@ struct sim_marlin {
 	bool number_spoilt;	/* spoil_number_at happened */
 	bool newline_lost[SIM_MARLIN_CUTS]; /* lose_newline_at[i] happened */
 	double thaw_at;		/* when a freeze_s stall ends (sim_now) */
+	_Atomic long answered_n; /* the last numbered line run and answered (read by tests) */
 
 	struct sim_thread th;
 };
