@@ -113,6 +113,8 @@ struct marlin {
 	size_t m105_n;
 	bool m105_spent;	/* a probe's answer acknowledged nothing new: the
 				 * older probe's turn (until something moves) */
+	size_t m105_gone_bytes;	/* probes given up, perhaps still in the RX ring */
+	long m105_gone_after;	/* ... until a line after this one is acknowledged */
 	unsigned skip_ok;	/* oks that belong to Resend requests */
 	struct marlin_phantom phantom[MARLIN_PHANTOMS]; /* oldest first */
 	size_t phantom_n, phantom_bytes;

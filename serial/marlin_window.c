@@ -70,7 +70,7 @@ void marlin_learn_b(struct marlin *m, const struct marlin_reply *r)
  * (M190), they wait in the ring like any line. */
 static size_t marlin_ring_bytes(const struct marlin *m, unsigned slots)
 {
-	size_t bytes = m->ghost_bytes + m->phantom_bytes +
+	size_t bytes = m->ghost_bytes + m->phantom_bytes + m->m105_gone_bytes +
 		       m->m105_n * (sizeof(MARLIN_M105_PROBE) - 1);
 	/* lines the firmware said it has (Resend) left the ring as well */
 	long first = m->n_acked + 1 + (long)slots;
@@ -124,6 +124,8 @@ void marlin_ack_through(struct marlin *m, long n)
 	 * answers, if still missing, were lost, and they left the ring */
 	while (m->m105_n && m->m105[0].after < n)
 		memmove(m->m105, m->m105 + 1, --m->m105_n * sizeof(m->m105[0]));
+	if (m->m105_gone_after < n)
+		m->m105_gone_bytes = 0;
 	while (m->phantom_n && m->phantom[0].after < n)
 		marlin_phantom_pop(m);
 	m->queued = m->queued > n - m->n_acked ? m->queued - (n - m->n_acked) : 0;
@@ -254,6 +256,18 @@ bool marlin_blocking_inflight(const struct marlin *m)
 	return false;
 }
 
+/* Is an M105 of the job among the lines in flight?  Its answer is an
+ * "ok T:" like a probe's. */
+static bool marlin_job_m105_inflight(struct marlin *m)
+{
+	for (long n = m->n_acked + 1; n < m->n_send; n++) {
+		const struct marlin_entry *e = marlin_hist_entry(m, n);
+		if (e->n == n && strstr(e->text, "M105"))
+			return true;
+	}
+	return false;
+}
+
 /* The counters an M105 probe's answer must find unchanged. */
 static uint64_t marlin_marks(const struct marlin *m)
 {
@@ -263,15 +277,17 @@ static uint64_t marlin_marks(const struct marlin *m)
 
 /*
  * Is the oldest probe's answer no longer to be expected?  Without a
- * blocking command in flight, after probe_ms.  With one (G28, M190), the
- * probe waits in the ring behind it, its answer still to come while the
- * firmware reports busy or heating: only a silence of probe_ms (at least
- * MARLIN_BUSY_HOLD_S) since the probe or the last such report gives it up.
+ * blocking command in flight, after probe_ms.  With one (G28, M190), or
+ * once the firmware reported busy since the probe (a command we cannot
+ * see as long holds its queue), the probe waits in the ring behind it,
+ * its answer still to come while the firmware reports busy or heating:
+ * only a silence of probe_ms (at least MARLIN_BUSY_HOLD_S) since the
+ * probe or the last such report gives it up.
  */
 static bool marlin_m105_overdue(const struct marlin *m, double now)
 {
 	double probe_s = m->o.probe_ms / 1000.0, since = m->m105[0].t;
-	if (!marlin_blocking_inflight(m))
+	if (!marlin_blocking_inflight(m) && m->t_busy <= since)
 		return now - since > probe_s;
 	if (m->t_busy > since)
 		since = m->t_busy;
@@ -292,6 +308,10 @@ static bool marlin_m105_may(struct marlin *m, double now)
 {
 	const size_t len = sizeof(MARLIN_M105_PROBE) - 1;
 	while (m->m105_n && marlin_m105_overdue(m, now)) {
+		/* a stalled board still holds it: its bytes count in the
+		 * ring until a line written after it is acknowledged */
+		m->m105_gone_bytes += len;
+		m->m105_gone_after = m->m105[0].after;
 		memmove(m->m105, m->m105 + 1, --m->m105_n * sizeof(m->m105[0]));
 		for (size_t i = 0; i < m->m105_n; i++)
 			m->m105[i].valid = false;
@@ -301,11 +321,8 @@ static bool marlin_m105_may(struct marlin *m, double now)
 		return false;
 	if (m->t_busy > 0 && now - m->t_busy < MARLIN_BUSY_HOLD_S)
 		return false;
-	for (long n = m->n_acked + 1; n < m->n_send; n++) {
-		const struct marlin_entry *e = marlin_hist_entry(m, n);
-		if (e->n == n && strstr(e->text, "M105"))
-			return false;
-	}
+	if (marlin_job_m105_inflight(m))
+		return false;
 	return !m->o.rx_buffer || marlin_ring_bytes(m, marlin_slots(m)) + len + 1 <= m->o.rx_buffer;
 }
 
@@ -341,8 +358,16 @@ static int marlin_m105_write(struct marlin *m, double now, struct st_error *err)
  */
 bool marlin_m105_answer(struct marlin *m)
 {
-	if (!m->m105_n)
-		return false;
+	if (!m->m105_n) {
+		/* No probe awaited: unless an M105 of the job is in flight,
+		 * this answers one given up as overdue, and acknowledges
+		 * nothing.  Taken for a line's ok, each such answer ended a
+		 * job a line early (marlin: late_probe_answers). */
+		if (marlin_job_m105_inflight(m))
+			return false;
+		m->st.stray_oks++;
+		return true;
+	}
 	struct marlin_m105 e = m->m105[0];
 	memmove(m->m105, m->m105 + 1, --m->m105_n * sizeof(m->m105[0]));
 	/* Not the last line before it, unless the firmware had said it has

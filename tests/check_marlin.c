@@ -214,6 +214,7 @@ struct rig_result {
 	uint64_t dropped; /* bytes the simulator lost (ring overflow, faults) */
 	long unnumbered;  /* fragments without a line number it ran */
 	double seconds;	  /* connecting and the stream */
+	long answered;	  /* the last line it had answered when the job was done */
 };
 
 /* Stream n generated lines through the rig; check the log; return status
@@ -233,6 +234,7 @@ static struct marlin_status stream_and_check_r(struct sim_marlin_options *so,
 	t0 = st_mono_s();
 	enum printer_end end = rig_stream(&r, GEN_PATH, &err);
 	ck_assert_msg(end == PRINTER_END_DONE, "stream: %s", err.msg);
+	long answered = sim_marlin_answered_line(r.sim);
 	double dt = st_mono_s() - t0;
 	marlin_status(r.m, &st);
 	sim_marlin_stop(r.sim);
@@ -249,6 +251,7 @@ static struct marlin_status stream_and_check_r(struct sim_marlin_options *so,
 		res->dropped = sim_marlin_dropped_bytes(r.sim);
 		res->unnumbered = r.unnumbered;
 		res->seconds = st_mono_s() - t_open;
+		res->answered = answered;
 	}
 	rig_stop(&r);
 	fclose(f);
@@ -723,7 +726,7 @@ END_TEST
  * its queue (BUFSIZE 32 holds them and the probes).  A Resend says which
  * lines the firmware has, not which ran: counting them as run made the
  * oks that followed count for later lines, and the job ended before the
- * board ran its last line (here a 2 s one; long_busy and corrupt, once
+ * board ran its last line, here a 2 s one (long_busy and corrupt, once
  * each in loaded two-lane runs).
  */
 START_TEST(stall_before_last_lines)
@@ -731,6 +734,7 @@ START_TEST(stall_before_last_lines)
 	struct rig r;
 	struct sim_marlin_options so;
 	struct printer_options mo;
+	struct marlin_status st;
 	struct st_error err = {0};
 	const char *path = tu_path("marlin-stall.gcode");
 	FILE *f = fopen(path, "w");
@@ -739,7 +743,7 @@ START_TEST(stall_before_last_lines)
 	for (int i = 0; i < 20; i++)
 		fprintf(f, "G1 X%d\n", i % 2 ? 0 : 5);
 	fclose(f);
-	long last = 2 + 23; /* M110 and M115 first */
+	const long last = 25; /* M110 and M115 first: the job is N3-N25 */
 	fast_sim(&so);
 	so.bufsize = 32;
 	so.freeze_at_line = last - 1;
@@ -751,12 +755,39 @@ START_TEST(stall_before_last_lines)
 	rig_start(&r, &so, &mo);
 	ck_assert_int_eq(rig_stream(&r, path, &err), PRINTER_END_DONE);
 	long answered = sim_marlin_answered_line(r.sim);
-	struct marlin_status st;
 	marlin_status(r.m, &st);
+	rig_stop(&r);
 	ck_assert_uint_ge(st.resend_requests, 1); /* the stall drew the older probe */
 	ck_assert_msg(answered == last, "done with N%ld the last line answered, not N%ld",
 		      answered, last);
-	rig_stop(&r);
+}
+END_TEST
+
+/*
+ * long_busy with its last line held for 1 s (a freeze), so that a job
+ * declared done early shows.  The M105 probes written before the first
+ * "busy" report were given up as overdue 3 s later, though the firmware
+ * said it was busy; their answers came after the busy line, and, taken
+ * for lines' oks, ended the job a line early per probe (long_busy,
+ * "stopped after 1001" of 1003, in CI, when the simulator was too slow
+ * to run the last lines before the test stopped it).
+ */
+START_TEST(long_busy_late_answers)
+{
+	struct sim_marlin_options so;
+	struct printer_options mo;
+	struct rig_result res;
+	fast_sim(&so);
+	fast_driver(&mo);
+	mo.probe_ms = 3000;
+	so.busy_at_line = 300;
+	so.busy_s = 8;
+	so.freeze_at_line = 1005; /* the last: M110 and M115 come first */
+	so.freeze_s = 1;
+	struct marlin_status st = stream_and_check_r(&so, &mo, 1000, &res);
+	ck_assert_uint_ge(st.busy, 3);
+	ck_assert_msg(res.answered == 1005, "done with N%ld the last line answered, not N1005",
+		      res.answered);
 }
 END_TEST
 
@@ -1075,6 +1106,7 @@ Suite *marlin_suite(void)
 	add_case(s, "advanced_ok_no_overflow", advanced_ok_no_overflow, 120);
 	add_case(s, "long_busy", long_busy_survives, 60);
 	add_case(s, "stall_before_last_lines", stall_before_last_lines, 60);
+	add_case(s, "long_busy_late_answers", long_busy_late_answers, 60);
 	TCase *tc = tcase_create("parse");
 	tcase_add_test(tc, parse_ok);
 	tcase_add_test(tc, parse_resend_and_errors);
