@@ -47,6 +47,20 @@ int simplify_mark(struct simplify_work *wk, const int64_t *xy, size_t n, double 
 		  struct st_error *err);
 
 /*
+ * simplify_balance - the kept points of the polyline xy[0 .. 2n) (keep
+ * from simplify_mark at tol) into out (2 per kept point, in order), the
+ * first and last as they are and each other moved along the bisector of
+ * its two segments, by the mean of the offsets that would make each
+ * segment enclose no area with the points it replaces: a chord of an arc
+ * moves outward by about two thirds of its sagitta, so a round wall keeps
+ * its area instead of shrinking by the chords' sagittas.  When a moved
+ * segment would leave any point of the polyline (dropped or kept) farther
+ * than tol less SIMPLIFY_SLACK_NM from it, out gets the kept points
+ * unmoved and false is returned; true when they moved.
+ */
+bool simplify_balance(const int64_t *xy, size_t n, const bool *keep, double tol, int64_t *out);
+
+/*
  * simplify_seg_dist - the distance (nm) from (px, py) to the segment from
  * (ax, ay) to (bx, by), computed as simplify_mark does; a segment of no
  * length is its end point.

@@ -1,9 +1,10 @@
 /*
  * check_simplify.c - gcode_resolution (part of the gcodewriter suite):
  * slicer/simplify.h's deviation bound on random and circle-like
- * polylines, and the writer's output for a dense stack of paths, byte for
- * byte tests/data/gcodew-dense-r0.gcode (written before gcode_resolution
- * existed).
+ * polylines, and the writer's use of it: filament preserved, closed loops
+ * closed, widths never merged, 0 = off byte for byte the output from
+ * before the key existed (tests/data/gcodew-dense-r0.gcode), and a sliced
+ * model written in fewer lines.
  */
 #include <check.h>
 #include <math.h>
@@ -11,7 +12,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "fixtures.h"
 #include "gcode_writer.h"
+#include "meshio.h"
 #include "simplify.h"
 #include "suites.h"
 #include "testutil.h"
@@ -132,6 +135,49 @@ START_TEST(bound_on_circles)
 }
 END_TEST
 
+/* A round wall's chords moved out (simplify_balance) keep the circle's
+ * area, where the kept points alone lose 1.5e-3 of it, and stay within
+ * the bound of every point of the circle. */
+START_TEST(balance_keeps_area)
+{
+	size_t n = 257, m = 0;
+	int64_t xy[2 * 257], out[2 * 257];
+	bool keep[257];
+	struct simplify_work wk = {0};
+	double a0 = 0, a1 = 0, a2 = 0;
+
+	for (size_t k = 0; k < n; k++) {
+		double a = 2 * M_PI * (double)(k % 256) / 256;
+		xy[2 * k] = llround(9.775 * NM * cos(a));
+		xy[2 * k + 1] = llround(9.775 * NM * sin(a));
+	}
+	ck_assert_int_eq(simplify_mark(&wk, xy, n, RES * NM, keep, NULL), 0);
+	ck_assert(simplify_balance(xy, n, keep, RES * NM, out));
+	for (size_t k = 0; k < n; k++)
+		m += keep[k];
+	ck_assert_uint_lt(m, 80);
+	/* The seam, first and last, stays where it was. */
+	ck_assert(out[0] == xy[0] && out[1] == xy[1]);
+	ck_assert(out[2 * m - 2] == xy[2 * n - 2] && out[2 * m - 1] == xy[2 * n - 1]);
+	for (size_t k = 0; k + 1 < n; k++)
+		a0 += (double)xy[2 * k] * (double)xy[2 * k + 3] - (double)xy[2 * k + 2] * (double)xy[2 * k + 1];
+	for (size_t j = 0, k = 0; j + 1 < m; j++) {
+		size_t next = k + 1, a = k;
+		while (!keep[next])
+			next++;
+		a1 += (double)out[2 * j] * (double)out[2 * j + 3] - (double)out[2 * j + 2] * (double)out[2 * j + 1];
+		a2 += (double)xy[2 * a] * (double)xy[2 * next + 1] - (double)xy[2 * next] * (double)xy[2 * a + 1];
+		for (size_t i = a; i <= next; i++)
+			ck_assert_msg(seg_dist(xy + 2 * i, out + 2 * j, out + 2 * j + 2) <= RES * NM,
+				      "point %zu off its moved chord", i);
+		k = next;
+	}
+	ck_assert_msg(fabs(a1 / a0 - 1) < 1e-4, "moved chords: area %.6g of the circle's", a1 / a0);
+	ck_assert_msg(a2 / a0 < 1 - 1e-3, "kept points: area %.6g of the circle's", a2 / a0);
+	simplify_work_free(&wk);
+}
+END_TEST
+
 /* At most the slack, nothing is dropped: even collinear points stay. */
 START_TEST(tiny_tolerance_keeps_everything)
 {
@@ -220,6 +266,7 @@ START_TEST(resolution_zero_is_output_before)
 	char *golden = tu_slurp(GOLDEN, &glen), *text;
 
 	gcodew_settings_init(&s);
+	s.gcode_resolution = 0;
 	text = tu_gcode_mem(st, &s, NULL);
 	tu_write_str(tu_path("dense-r0.gcode"), text);
 	ck_assert_msg(strlen(text) == glen && memcmp(text, golden, glen) == 0,
@@ -230,6 +277,275 @@ START_TEST(resolution_zero_is_output_before)
 }
 END_TEST
 
+/* ---------------------------------------------------------------------------
+ * The writer at the default resolution
+ */
+
+/* One extrusion move read back. */
+struct seg {
+	int layer;	     /* ;LAYER_CHANGE count */
+	char role[32];	     /* its ;TYPE: */
+	double x0, y0, x1, y1; /* mm */
+	double e;	     /* mm of filament */
+};
+
+/* The G1 lines and the extrusion moves of text (absolute E, G92 E0 resets;
+ * M83 not used). */
+struct readback {
+	size_t g1;
+	struct seg *segs;
+	size_t n;
+};
+
+static struct readback read_back(const char *text)
+{
+	struct readback r = {0};
+	size_t cap = 0;
+	double x = 0, y = 0, e = 0;
+	int layer = 0;
+	char role[32] = "";
+
+	for (const char *l = text; *l; l = strchr(l, '\n') ? strchr(l, '\n') + 1 : l + strlen(l)) {
+		size_t len = strcspn(l, "\n");
+		double nx = x, ny = y, ne = e;
+		bool has_e = false;
+
+		if (!strncmp(l, ";LAYER_CHANGE", 13))
+			layer++;
+		if (!strncmp(l, ";TYPE:", 6))
+			snprintf(role, sizeof(role), "%.*s", (int)(len - 6), l + 6);
+		if (!strncmp(l, "G92 E0", 6))
+			e = 0;
+		if (strncmp(l, "G1 ", 3))
+			continue;
+		r.g1++;
+		for (const char *c = l + 3; c < l + len; c++) {
+			if (*c == 'X')
+				nx = strtod(c + 1, NULL);
+			else if (*c == 'Y')
+				ny = strtod(c + 1, NULL);
+			else if (*c == 'E') {
+				ne = strtod(c + 1, NULL);
+				has_e = true;
+			}
+		}
+		if (has_e && ne > e && (nx != x || ny != y) && layer > 0) {
+			if (r.n == cap) {
+				cap = cap ? 2 * cap : 256;
+				r.segs = realloc(r.segs, cap * sizeof(*r.segs));
+				ck_assert_ptr_nonnull(r.segs);
+			}
+			r.segs[r.n] = (struct seg){.layer = layer, .x0 = x, .y0 = y, .x1 = nx, .y1 = ny,
+						   .e = ne - e};
+			snprintf(r.segs[r.n].role, sizeof(r.segs[r.n].role), "%s", role);
+			r.n++;
+		}
+		x = nx;
+		y = ny;
+		e = ne;
+	}
+	return r;
+}
+
+/* Filament of the moves of role (NULL: all) in r. */
+static double role_e(const struct readback *r, const char *role)
+{
+	double e = 0;
+
+	for (size_t k = 0; k < r->n; k++)
+		if (!role || !strcmp(r->segs[k].role, role))
+			e += r->segs[k].e;
+	return e;
+}
+
+/* The distance (mm) from (px, py) to the nearest extrusion move of the
+ * role on the layer. */
+static double dist_to_printed(const struct readback *r, int layer, const char *role, double px,
+			      double py)
+{
+	double best = INFINITY;
+
+	for (size_t k = 0; k < r->n; k++) {
+		const struct seg *g = &r->segs[k];
+		int64_t p[2] = {llround(px * NM), llround(py * NM)};
+		int64_t a[2] = {llround(g->x0 * NM), llround(g->y0 * NM)};
+		int64_t b[2] = {llround(g->x1 * NM), llround(g->y1 * NM)};
+		if (g->layer == layer && !strcmp(g->role, role))
+			best = fmin(best, (double)seg_dist(p, a, b) / NM);
+	}
+	return best;
+}
+
+/* At the default, the dense stack is written in a fifth fewer moves
+ * (the 120-gons' chords have a sagitta of 3.4 um), every point
+ * of every path within the tolerance of what is printed for it (plus the
+ * 1 um the written coordinates are rounded to), the filament of each role
+ * as at 0 within the rounding of E. */
+START_TEST(default_resolution_bound_and_filament)
+{
+	static const char *const roles[] = {"Perimeter", "External perimeter", "Internal infill",
+					    "Solid infill", "Thin wall"};
+	struct layer_stack *st = dense_stack();
+	struct gcodew_settings s;
+	char *off, *on;
+	struct readback r0, r1;
+
+	gcodew_settings_init(&s);
+	ck_assert_double_eq(s.gcode_resolution, RES);
+	on = tu_gcode_mem(st, &s, NULL);
+	s.gcode_resolution = 0;
+	off = tu_gcode_mem(st, &s, NULL);
+	r0 = read_back(off);
+	r1 = read_back(on);
+	ck_assert_msg(r1.g1 * 5 < r0.g1 * 4, "%zu G1 lines at %g mm, %zu at 0", r1.g1, RES, r0.g1);
+	ck_assert(strstr(on, "\n; gcode_resolution = 0.0125\n"));
+	ck_assert(!strstr(off, "gcode_resolution"));
+	for (size_t i = 0; i < sizeof(roles) / sizeof(roles[0]); i++) {
+		double e0 = role_e(&r0, roles[i]), e1 = role_e(&r1, roles[i]);
+		ck_assert_msg(e0 > 0 && fabs(e1 - e0) < 1e-4, "%s: %.6f mm of filament, %.6f at 0",
+			      roles[i], e1, e0);
+	}
+	for (size_t li = 0; li < st->nlayers; li++)
+		for (size_t pi = 0; pi < st->layers[li].n; pi++) {
+			const struct toolpath *p = &st->layers[li].paths[pi];
+			const char *role = path_role_name(p->role);
+			for (size_t k = 0; k < p->n; k++) {
+				double d = dist_to_printed(&r1, (int)li + 1, role, p->pts[k].x / NM,
+							   p->pts[k].y / NM);
+				ck_assert_msg(d <= RES + 0.001, "layer %zu %s point %zu: %.5f mm off",
+					      li + 1, role, k, d);
+			}
+		}
+	free(r0.segs);
+	free(r1.segs);
+	free(on);
+	free(off);
+	layer_stack_free(st);
+}
+END_TEST
+
+/* The thin wall's width steps every 7 points: every printed segment
+ * carries the flow of one of its three widths (a merged segment would
+ * carry a mix), and no fewer segments than there are steps. */
+START_TEST(widths_never_merged)
+{
+	struct layer_stack *st = dense_stack();
+	struct gcodew_settings s;
+	char *text;
+	struct readback r;
+	double fil = M_PI * 1.75 * 1.75 / 4, h = 0.2;
+	size_t thin = 0;
+
+	gcodew_settings_init(&s);
+	text = tu_gcode_mem(st, &s, NULL);
+	r = read_back(text);
+	for (size_t k = 0; k < r.n; k++) {
+		const struct seg *g = &r.segs[k];
+		double len = hypot(g->x1 - g->x0, g->y1 - g->y0), best = INFINITY;
+		if (strcmp(g->role, "Thin wall") || g->layer != 1)
+			continue;
+		thin++;
+		for (int step = 0; step < 3; step++) {
+			double w = 0.3 + 0.05 * step, flow = ((w - h) * h + M_PI * h * h / 4) / fil;
+			best = fmin(best, fabs(g->e / len / flow - 1));
+		}
+		ck_assert_msg(best < 0.005, "thin wall move %zu: %.5f mm over %.4f mm matches no width",
+			      k, g->e, len);
+	}
+	ck_assert_uint_ge(thin, 56 / 7);
+	ck_assert_uint_lt(thin, 56);
+	free(r.segs);
+	free(text);
+	layer_stack_free(st);
+}
+END_TEST
+
+/* A closed loop simplified still ends at its seam, where it started. */
+START_TEST(loops_stay_closed)
+{
+	struct layer_stack *st = layer_stack_new(1, NULL);
+	struct gcodew_settings s;
+	char *text;
+	struct readback r;
+
+	ck_assert_ptr_nonnull(st);
+	st->layers[0].z = st->layers[0].height = 0.2;
+	add_circle(&st->layers[0], PATH_OUTER_PERIMETER, 60, 70, 5, 500, 0.45);
+	gcodew_settings_init(&s);
+	text = tu_gcode_mem(st, &s, NULL);
+	r = read_back(text);
+	ck_assert_uint_gt(r.n, 10);
+	ck_assert_uint_lt(r.n, 150); /* of 500; an outer wall is held to half the tolerance */
+	ck_assert_double_eq_tol(r.segs[0].x0, 65, 1e-9);
+	ck_assert_double_eq_tol(r.segs[0].y0, 70, 1e-9);
+	ck_assert_double_eq_tol(r.segs[r.n - 1].x1, 65, 1e-9);
+	ck_assert_double_eq_tol(r.segs[r.n - 1].y1, 70, 1e-9);
+	free(r.segs);
+	free(text);
+	layer_stack_free(st);
+}
+END_TEST
+
+/* ---------------------------------------------------------------------------
+ * A sliced model
+ */
+
+/* stratum slice of a cylinder of 256 sides (generic-marlin) with args; the G-code. */
+static char *slice_cylinder(const char *args)
+{
+	static char out[1 << 14];
+	char model[4096], gc[4096];
+	struct st_error err = {0};
+	struct mesh *m = fx_cylinder(0, 0, 10, 6, 256);
+	size_t len;
+	int rc, status;
+
+	snprintf(model, sizeof(model), "%s", tu_path("cylinder.stl"));
+	snprintf(gc, sizeof(gc), "%s", tu_path("cylinder.gcode"));
+	rc = meshio_write_stl(model, m, MESHIO_STL_BINARY, &err);
+	mesh_free(m);
+	ck_assert_msg(rc == 0, "%s", err.msg);
+	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' --printer generic-marlin %s", model,
+			gc, args);
+	ck_assert_msg(status == 0, "exit %d: %s", status, out);
+	return tu_slurp(gc, &len);
+}
+
+/* Lines in text. */
+static size_t lines(const char *text)
+{
+	size_t n = 0;
+
+	for (const char *c = text; *c; c++)
+		n += *c == '\n';
+	return n;
+}
+
+/* The value of a "; KEY = V" header line. */
+static double header_value(const char *text, const char *key)
+{
+	const char *at = strstr(text, key);
+
+	ck_assert_msg(at, "no %s", key);
+	return strtod(at + strlen(key), NULL);
+}
+
+/* The default writes a sliced round part in a third fewer lines or better,
+ * with the filament of gcode_resolution = 0 to 0.1 %. */
+START_TEST(sliced_model_gets_fewer_lines)
+{
+	char *on = slice_cylinder(""), *off = slice_cylinder("--set gcode_resolution=0");
+	size_t n1 = lines(on), n0 = lines(off);
+	double f1 = header_value(on, "; filament used [mm] = ");
+	double f0 = header_value(off, "; filament used [mm] = ");
+
+	ck_assert_msg(3 * n1 < 2 * n0, "%zu lines at the default, %zu at 0", n1, n0);
+	ck_assert_msg(fabs(f1 - f0) <= 0.001 * f0, "filament %.2f mm, %.2f at 0", f1, f0);
+	free(on);
+	free(off);
+}
+END_TEST
+
 void gcodewriter_simplify_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("simplify");
@@ -237,6 +553,11 @@ void gcodewriter_simplify_tcases(Suite *s)
 	tcase_add_test(tc, bound_on_random_polylines);
 	tcase_add_test(tc, bound_on_circles);
 	tcase_add_test(tc, tiny_tolerance_keeps_everything);
+	tcase_add_test(tc, balance_keeps_area);
 	tcase_add_test(tc, resolution_zero_is_output_before);
+	tcase_add_test(tc, default_resolution_bound_and_filament);
+	tcase_add_test(tc, widths_never_merged);
+	tcase_add_test(tc, loops_stay_closed);
+	tcase_add_test(tc, sliced_model_gets_fewer_lines);
 	suite_add_tcase(s, tc);
 }
