@@ -223,15 +223,32 @@ for f in cube20 cylinder20 wall2 wall-eps plate-holes overhang bridge; do
 done
 }
 
-# lines_bytes_rate FILE -> "lines bytes G1-moves-per-second-of-print" (the
-# estimate from the file's "; estimated printing time" header, stratum's
-# or PrusaSlicer's "(normal mode)" one).
+# lines_bytes_rate FILE -> "lines bytes mean peak": G1 lines per second of
+# print (the file's "; estimated printing time", stratum's or PrusaSlicer's
+# "(normal mode)" one), and the most G1 lines within one second of XY
+# motion at the feed rates written (no acceleration, so the time is short
+# and the peak an upper figure; the same rule for both slicers).
 lines_bytes_rate() {
 	moves=$(grep -c '^G1 ' "$1" || true)
 	secs=$(grep -m1 'estimated printing time' "$1" | sed 's/.*= *//' |
 		awk '{ t = 0; for (i = 1; i <= NF; i++) { v = $i + 0; u = substr($i, length($i));
 			t += v * (u == "d" ? 86400 : u == "h" ? 3600 : u == "m" ? 60 : 1) } print t }')
-	echo "$(wc -l <"$1") $(wc -c <"$1") $(echo "$moves / $secs" | bc)"
+	peak=$(awk 'BEGIN { x = 0; y = 0; f = 1000; t = 0; n = 0; head = 0; best = 0 }
+		/^G1 / {
+			nx = x; ny = y
+			for (i = 2; i <= NF; i++) {
+				c = substr($i, 1, 1); v = substr($i, 2) + 0
+				if (c == ";") break
+				if (c == "X") nx = v; else if (c == "Y") ny = v; else if (c == "F") f = v
+			}
+			d = sqrt((nx - x) ^ 2 + (ny - y) ^ 2); x = nx; y = ny
+			if (d > 0 && f > 0) t += d / (f / 60)
+			ts[n++] = t
+			while (ts[head] < t - 1) head++
+			if (n - head > best) best = n - head
+		}
+		END { print best }' "$1")
+	echo "$(wc -l <"$1") $(wc -c <"$1") $(echo "$moves / $secs" | bc) $peak"
 }
 
 # G-code size at gcode_resolution 0 and at the default against PrusaSlicer
@@ -246,8 +263,8 @@ region_models
 [ -f "$out/sphere100.stl" ] || "$gen" sphere 100 200 "$out/sphere100.stl"
 prusa_ini full >"$out/prusa-full.ini"
 pver=$(prusa-slicer --help 2>/dev/null | sed -n 's/^PrusaSlicer-\([0-9.]*\).*/\1/p')
-echo "| model | slicer | lines | bytes | G1 moves per s of print | lines / PrusaSlicer's | bytes / PrusaSlicer's |"
-echo "|---|---|---|---|---|---|---|"
+echo "| model | slicer | lines | bytes | G1 moves per s of print (mean) | peak G1 moves in 1 s | lines / PrusaSlicer's | bytes / PrusaSlicer's |"
+echo "|---|---|---|---|---|---|---|---|"
 for f in cube20 cylinder20 plate-holes sphere100; do
 	path="$out/$f.stl"
 	prusa-slicer --export-gcode --load "$out/prusa-full.ini" --center 125,105 \
@@ -258,10 +275,10 @@ for f in cube20 cylinder20 plate-holes sphere100; do
 		"$bin" slice "$path" -o "$out/$f-r$r.gcode" --printer prusa-i3-mk3s --center 125,105 \
 			--set gcode_resolution=$r >/dev/null 2>&1 || echo "failed: stratum slice $f" >&2
 		set -- $(lines_bytes_rate "$out/$f-r$r.gcode")
-		echo "| $f | stratum, gcode_resolution = $r | $1 | $2 | $3 | $(ratio "$1" "$pl") | $(ratio "$2" "$pb") |"
+		echo "| $f | stratum, gcode_resolution = $r | $1 | $2 | $3 | $4 | $(ratio "$1" "$pl") | $(ratio "$2" "$pb") |"
 	done
 	set -- $(lines_bytes_rate "$out/$f-prusa.gcode")
-	echo "| $f | PrusaSlicer $pver | $1 | $2 | $3 | | |"
+	echo "| $f | PrusaSlicer $pver | $1 | $2 | $3 | $4 | | |"
 done
 }
 
