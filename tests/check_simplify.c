@@ -1,10 +1,11 @@
 /*
  * check_simplify.c - gcode_resolution (part of the gcodewriter suite):
  * slicer/simplify.h's deviation bound on random and circle-like
- * polylines, and the writer's use of it: filament preserved, closed loops
- * closed, widths never merged, 0 = off byte for byte the output from
- * before the key existed (tests/data/gcodew-dense-r0.gcode), and a sliced
- * model written in fewer lines.
+ * polylines, simplify_balance's area, and the writer's use of it: filament
+ * preserved, closed loops closed, widths never merged, routed travels
+ * simplified inside the part, 0 = off byte for byte the output from before
+ * the key existed (tests/data/gcodew-dense-r0.gcode), and a sliced model
+ * written in fewer lines.
  */
 #include <check.h>
 #include <math.h>
@@ -12,12 +13,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "clip.h"
 #include "fixtures.h"
 #include "gcode_writer.h"
 #include "meshio.h"
 #include "simplify.h"
 #include "suites.h"
 #include "testutil.h"
+#include "travel.h"
 
 #define NM 1000000.0 /* nm per mm */
 #define GOLDEN "tests/data/gcodew-dense-r0.gcode"
@@ -486,6 +489,96 @@ START_TEST(loops_stay_closed)
 }
 END_TEST
 
+/* A 30 mm square with a round hole of 7 mm radius (200 sides) around
+ * (115, 115), as a travel map; two lines either side of the hole. */
+static struct layer_stack *hole_stack(void)
+{
+	struct layer_stack *st = layer_stack_new(1, NULL);
+	struct clip_paths ring = {0};
+	struct clip_expolys ex = {0};
+	int64_t sq[8], hole[400];
+	double left[4] = {101, 112, 101, 118}, right[4] = {129, 118, 129, 112}, w[2] = {0.45, 0.45};
+
+	ck_assert_ptr_nonnull(st);
+	st->layers[0].z = st->layers[0].height = 0.2;
+	for (int k = 0; k < 4; k++) {
+		sq[2 * k] = llround((k == 1 || k == 2 ? 130 : 100) * NM);
+		sq[2 * k + 1] = llround((k >= 2 ? 130 : 100) * NM);
+	}
+	for (int k = 0; k < 200; k++) { /* clockwise: a hole */
+		double a = -2 * M_PI * k / 200;
+		hole[2 * k] = llround((115 + 7 * cos(a)) * NM);
+		hole[2 * k + 1] = llround((115 + 7 * sin(a)) * NM);
+	}
+	ck_assert_int_eq(clip_paths_add(&ring, sq, 4, NULL), 0);
+	ck_assert_int_eq(clip_paths_add(&ring, hole, 200, NULL), 0);
+	ck_assert_int_eq(clip_boolean_ex(CLIP_UNION, &ring, NULL, CLIP_NONZERO, &ex, NULL), 0);
+	st->layers[0].travel = travel_map_new(&ex, llround(0.6 * NM), NULL);
+	ck_assert_ptr_nonnull(st->layers[0].travel);
+	for (int k = 0; k < 2; k++) {
+		struct path_point p[2];
+		const double *xy = k ? right : left;
+		for (int i = 0; i < 2; i++)
+			p[i] = (struct path_point){llround(xy[2 * i] * NM), llround(xy[2 * i + 1] * NM),
+						   llround(w[i] * NM)};
+		ck_assert_int_eq(layer_add_path(&st->layers[0], PATH_GAP_FILL, false, p, 2, NULL), 0);
+	}
+	clip_expolys_free(&ex);
+	clip_paths_free(&ring);
+	return st;
+}
+
+/* XY moves without E after the first extrusion: the travel's segments,
+ * each checked inside the map. */
+static size_t routed_moves(const char *text, struct travel_map *m)
+{
+	double x = 0, y = 0;
+	bool started = false;
+	size_t n = 0;
+
+	for (const char *l = text; *l; l = strchr(l, '\n') ? strchr(l, '\n') + 1 : l + strlen(l)) {
+		size_t len = strcspn(l, "\n");
+		const char *xw = memchr(l, 'X', len), *yw = memchr(l, 'Y', len);
+		double nx = xw ? strtod(xw + 1, NULL) : x, ny = yw ? strtod(yw + 1, NULL) : y;
+		bool e = memchr(l, 'E', len) != NULL;
+
+		if (strncmp(l, "G1 ", 3) || !(xw || yw))
+			continue;
+		if (started && !e) {
+			n++;
+			ck_assert_msg(travel_segment_inside(m, llround(x * NM), llround(y * NM),
+							   llround(nx * NM), llround(ny * NM)),
+				      "travel %.3f,%.3f to %.3f,%.3f leaves the part", x, y, nx, ny);
+		}
+		started = started || e;
+		x = nx;
+		y = ny;
+	}
+	return n;
+}
+
+/* The travel round the hole follows its sides at 0; at the default it is
+ * simplified too, and still inside the part. */
+START_TEST(routed_travel_simplified)
+{
+	struct layer_stack *st = hole_stack();
+	struct gcodew_settings s;
+	char *on, *off;
+	size_t n1, n0;
+
+	gcodew_settings_init(&s);
+	on = tu_gcode_mem(st, &s, NULL);
+	s.gcode_resolution = 0;
+	off = tu_gcode_mem(st, &s, NULL);
+	n1 = routed_moves(on, st->layers[0].travel);
+	n0 = routed_moves(off, st->layers[0].travel);
+	ck_assert_msg(n0 > 20 && n1 * 2 < n0, "%zu travel moves, %zu at 0", n1, n0);
+	free(on);
+	free(off);
+	layer_stack_free(st);
+}
+END_TEST
+
 /* ---------------------------------------------------------------------------
  * A sliced model
  */
@@ -558,6 +651,7 @@ void gcodewriter_simplify_tcases(Suite *s)
 	tcase_add_test(tc, default_resolution_bound_and_filament);
 	tcase_add_test(tc, widths_never_merged);
 	tcase_add_test(tc, loops_stay_closed);
+	tcase_add_test(tc, routed_travel_simplified);
 	tcase_add_test(tc, sliced_model_gets_fewer_lines);
 	suite_add_tcase(s, tc);
 }
