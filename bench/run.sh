@@ -1,5 +1,5 @@
 #!/bin/sh
-# bench/run.sh BIN [check|repair|intersect|slice|region|stream|soak|x3g|s3g|serve|corpus|all] - time `stratum check`
+# bench/run.sh BIN [check|repair|intersect|slice|region|gcodesize|stream|soak|x3g|s3g|serve|corpus|all] - time `stratum check`
 # against admesh, `stratum repair` on generated files, the exact pass of the
 # repair on self-intersecting inputs (`intersect`: CGAL data meshes, spheres,
 # scattered soups; build/bench/refine_time), `stratum slice` against
@@ -7,7 +7,9 @@
 # `stratum send` against Printrun's printcore (`soak`: 100k lines under
 # faults, exactly once); `region` measures how well both
 # slicers' printed regions match the models' cross-sections (issue 5, with
-# build/bench/region_check); `x3g` times G-code -> X3G translation against
+# build/bench/region_check); `gcodesize` compares the G-code's lines, bytes
+# and moves per second of print with PrusaSlicer's at gcode_resolution 0
+# and at its default; `x3g` times G-code -> X3G translation against
 # gpx -m fcp on a model sliced for the Creator Pro; `s3g` streams G-code to
 # `stratum sim --dialect sailfish` with `stratum send` (translated on the fly)
 # against `gpx -s`; `serve` loads a `stratum serve` node on loopback with
@@ -29,7 +31,7 @@ mkdir -p "$out"
 gen=build/bench/gen_mesh
 refine=build/bench/refine_time
 
-case $what in check|repair|intersect|slice|region|stream|soak|x3g|s3g|serve|corpus|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|intersect|slice|region|stream|soak|x3g|s3g|serve|corpus|all]" >&2; exit 2;; esac
+case $what in check|repair|intersect|slice|region|gcodesize|stream|soak|x3g|s3g|serve|corpus|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|intersect|slice|region|gcodesize|stream|soak|x3g|s3g|serve|corpus|all]" >&2; exit 2;; esac
 
 if [ "$what" != slice ] && [ "$what" != region ] && [ "$what" != stream ] && [ "$what" != soak ] && [ "$what" != x3g ] && [ "$what" != s3g ] && [ "$what" != serve ]; then
 	[ -f "$out/torus-1m.stl" ] || "$gen" torus 1000 500 "$out/torus-1m.stl"
@@ -218,6 +220,65 @@ for f in cube20 cylinder20 wall2 wall-eps plate-holes overhang bridge; do
 		name=stratum; [ "$s" = prusa ] && name="PrusaSlicer $pver"
 		echo "| $f | $name | $(json_field "$j" layers) | $(json_field "$j" dev_p95) | $(json_field "$j" dev_max) | $(json_field "$j" outside_max) / $(json_field "$j" inside_max) | $(json_field "$j" area_error) | $(json_field "$j" area_error_raw) |"
 	done
+done
+}
+
+# lines_bytes_rate FILE -> "lines bytes mean peak": G1 lines per second of
+# print (the file's "; estimated printing time", stratum's or PrusaSlicer's
+# "(normal mode)" one), and the most G1 lines within one second of XY
+# motion at the feed rates written (no acceleration, so the time is short
+# and the peak an upper figure; the same rule for both slicers).
+lines_bytes_rate() {
+	moves=$(grep -c '^G1 ' "$1" || true)
+	secs=$(grep -m1 'estimated printing time' "$1" | sed 's/.*= *//' |
+		awk '{ t = 0; for (i = 1; i <= NF; i++) { v = $i + 0; u = substr($i, length($i));
+			t += v * (u == "d" ? 86400 : u == "h" ? 3600 : u == "m" ? 60 : 1) } print t }')
+	peak=$(awk 'BEGIN { x = 0; y = 0; f = 1000; t = 0; n = 0; head = 0; best = 0 }
+		/^G1 / {
+			nx = x; ny = y
+			for (i = 2; i <= NF; i++) {
+				c = substr($i, 1, 1); v = substr($i, 2) + 0
+				if (c == ";") break
+				if (c == "X") nx = v; else if (c == "Y") ny = v; else if (c == "F") f = v
+			}
+			d = sqrt((nx - x) ^ 2 + (ny - y) ^ 2); x = nx; y = ny
+			if (d > 0 && f > 0) t += d / (f / 60)
+			ts[n++] = t
+			while (ts[head] < t - 1) head++
+			if (n - head > best) best = n - head
+		}
+		END { print best }' "$1")
+	echo "$(wc -l <"$1") $(wc -c <"$1") $(echo "$moves / $secs" | bc) $peak"
+}
+
+# G-code size at gcode_resolution 0 and at the default against PrusaSlicer
+# ("full" ini, whose gcode_resolution is 0.0125 too), same models and
+# settings as region_table plus a sphere.
+gcodesize_table() {
+if ! command -v prusa-slicer >/dev/null 2>&1; then
+	echo "prusa-slicer is not installed (make bench installs it)" >&2
+	return 1
+fi
+region_models
+[ -f "$out/sphere100.stl" ] || "$gen" sphere 100 200 "$out/sphere100.stl"
+prusa_ini full >"$out/prusa-full.ini"
+pver=$(prusa-slicer --help 2>/dev/null | sed -n 's/^PrusaSlicer-\([0-9.]*\).*/\1/p')
+echo "| model | slicer | lines | bytes | G1 moves per s of print (mean) | peak G1 moves in 1 s | lines / PrusaSlicer's | bytes / PrusaSlicer's |"
+echo "|---|---|---|---|---|---|---|---|"
+for f in cube20 cylinder20 plate-holes sphere100; do
+	path="$out/$f.stl"
+	prusa-slicer --export-gcode --load "$out/prusa-full.ini" --center 125,105 \
+		-o "$out/$f-prusa.gcode" "$path" >/dev/null 2>&1 || echo "failed: prusa-slicer $f" >&2
+	set -- $(lines_bytes_rate "$out/$f-prusa.gcode")
+	pl=$1; pb=$2
+	for r in 0 0.0125; do
+		"$bin" slice "$path" -o "$out/$f-r$r.gcode" --printer prusa-i3-mk3s --center 125,105 \
+			--set gcode_resolution=$r >/dev/null 2>&1 || echo "failed: stratum slice $f" >&2
+		set -- $(lines_bytes_rate "$out/$f-r$r.gcode")
+		echo "| $f | stratum, gcode_resolution = $r | $1 | $2 | $3 | $4 | $(ratio "$1" "$pl") | $(ratio "$2" "$pb") |"
+	done
+	set -- $(lines_bytes_rate "$out/$f-prusa.gcode")
+	echo "| $f | PrusaSlicer $pver | $1 | $2 | $3 | $4 | | |"
 done
 }
 
@@ -620,12 +681,13 @@ serve) serve_table ;;
 x3g) x3g_table ;;
 s3g) s3g_table ;;
 region) region_table ;;
+gcodesize) gcodesize_table ;;
 check) check_table ;;
 repair) repair_table ;;
 intersect) intersect_table ;;
 slice) slice_table ;;
 stream) stream_table ;;
 soak) soak_table ;;
-all) check_table; echo; repair_table; echo; intersect_table; echo; slice_table; echo; region_table; echo; stream_table; echo; soak_table; echo; x3g_table; echo; s3g_table; echo; serve_table; echo; corpus_table; echo; cura_table ;;
+all) check_table; echo; repair_table; echo; intersect_table; echo; slice_table; echo; region_table; echo; gcodesize_table; echo; stream_table; echo; soak_table; echo; x3g_table; echo; s3g_table; echo; serve_table; echo; corpus_table; echo; cura_table ;;
 esac
 

@@ -57,7 +57,7 @@ static const struct known known[] = {
     {"perimeter_generator", NULL, NULL, NULL}, /* Stratum's own wall generator */
     {"wall_*", NULL, NULL, NULL}, {"min_bead_width", NULL, NULL, NULL},
     {"min_feature_size", NULL, NULL, NULL}, {"slice_closing_radius", NULL, NULL, NULL},
-    {"gcode_resolution", NULL, NULL, NULL}, {"resolution", "0", NULL, NULL},
+    {"resolution", "0", NULL, NULL},
     {"clip_multipart_objects", NULL, NULL, NULL}, {"slicing_mode", "regular", NULL, NULL},
     {"max_print_speed", NULL, NULL, NULL}, /* PrusaSlicer's auto speed only */
     /* One extruder, no tool changes */

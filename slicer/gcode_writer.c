@@ -381,6 +381,7 @@ void gcodew_free(struct gcodew *w)
 	free(w->wipe);
 	free(w->done);
 	travel_route_free(&w->route);
+	gcodew_simplify_free(w);
 	free(w->start);
 	free(w->start_filament);
 	ph_vars_free(w->vars);

@@ -210,6 +210,17 @@ struct gcodew_settings {
 	double ironing_flowrate; /* percent of a layer_height bead's flow; 15 */
 	double ironing_spacing;	 /* mm between lines; 0.1 */
 	double ironing_speed;	 /* mm/s; 15 */
+
+	/* Each path and routed travel is simplified (Douglas-Peucker,
+	 * simplify.h) before it is planned: no point of it lies farther than
+	 * this from the polyline printed (half of it for the outer wall, the
+	 * part's face); a path's kept points are moved so that it keeps its
+	 * area (simplify_balance).  Points where the bead width changes are
+	 * kept, and each run of one width keeps its filament (its segments
+	 * print with its original length over its new one); speeds are the
+	 * original path's.  Listed in the header when not 0.
+	 * mm; 0.0125 (PrusaSlicer's gcode_resolution), 0 = every point */
+	double gcode_resolution;
 };
 
 /* What a written print will take; also written into the G-code header. */

@@ -29,13 +29,15 @@ struct key {
 	size_t off;	  /* in struct gcodew_settings */
 	bool vector;	  /* per extruder/filament in PrusaSlicer: {name[0]} allowed */
 	bool raft;	  /* in the header only when there is a raft */
+	bool nonzero;	  /* in the header only when not 0 (as before the key was) */
 };
 
-#define KD(n, vec) {#n, KEY_DOUBLE, offsetof(struct gcodew_settings, n), vec, false}
-#define KI(n, vec) {#n, KEY_INT, offsetof(struct gcodew_settings, n), vec, false}
-#define KB(n, vec) {#n, KEY_BOOL, offsetof(struct gcodew_settings, n), vec, false}
-#define KRD(n) {#n, KEY_DOUBLE, offsetof(struct gcodew_settings, n), false, true}
-#define KRI(n) {#n, KEY_INT, offsetof(struct gcodew_settings, n), false, true}
+#define KD(n, vec) {#n, KEY_DOUBLE, offsetof(struct gcodew_settings, n), vec, false, false}
+#define KI(n, vec) {#n, KEY_INT, offsetof(struct gcodew_settings, n), vec, false, false}
+#define KB(n, vec) {#n, KEY_BOOL, offsetof(struct gcodew_settings, n), vec, false, false}
+#define KRD(n) {#n, KEY_DOUBLE, offsetof(struct gcodew_settings, n), false, true, false}
+#define KRI(n) {#n, KEY_INT, offsetof(struct gcodew_settings, n), false, true, false}
+#define KZD(n) {#n, KEY_DOUBLE, offsetof(struct gcodew_settings, n), false, false, true}
 
 static const struct key keys[] = {
     KD(nozzle_diameter, true),
@@ -87,6 +89,7 @@ static const struct key keys[] = {
     KRD(raft_first_layer_density),
     KRD(raft_first_layer_expansion),
     KRD(first_layer_speed_over_raft),
+    KZD(gcode_resolution),
 };
 
 #define NKEYS (sizeof(keys) / sizeof(keys[0]))
@@ -411,6 +414,8 @@ void gcodew_put_header(struct gcodew *w, const struct gcodew_summary *sum)
 
 		if (keys[i].raft && w->s->raft_layers == 0)
 			continue; /* as before rafts were printed */
+		if (keys[i].nonzero && key_value(w->s, &keys[i]) == 0)
+			continue;
 		gcodew_fmt_num(n, key_value(w->s, &keys[i]), 6);
 		gcodew_put(w, "; %s = %s%s\n", keys[i].name, n, pct ? "%" : "");
 	}

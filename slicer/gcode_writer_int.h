@@ -17,6 +17,7 @@
 #include "estimate.h"
 #include "gcode_writer.h"
 #include "placeholder.h"
+#include "simplify.h"
 #include "st_error.h"
 #include "st_file.h"
 #include "toolpath.h"
@@ -76,6 +77,20 @@ struct gcodew {
 	bool spiral_below;	  /* the layer below was a spiral (layer_paths.spiral) */
 	struct travel_route route; /* the travel being planned */
 
+	/* gcode_resolution: the path being planned as printed (simplify.h),
+	 * gcodew_simplify_path; per original point while marking, then per
+	 * kept point of view */
+	struct simplify_work simp;
+	int64_t *sxy;		 /* the path's points, the seam again at the end; nm */
+	int64_t *smv;		 /* ... where each kept one is printed (simplify_balance) */
+	int64_t *sbal;		 /* one run's kept points, moved */
+	bool *skeep;		 /* kept */
+	size_t *sidx;		 /* index in the original path */
+	double *sstretch;	 /* filament factor of the segment from the point */
+	struct path_point *spts; /* the kept points */
+	size_t sxycap, smvcap, sbalcap, skeepcap, sidxcap, sstretchcap, sptscap;
+	struct toolpath view;	 /* spts as a path of the original's role */
+
 	/* Emission state */
 	double ext_exact, r_exact; /* mm extruded since the last reset / retracted now */
 	int64_t ext_units, r_units, epos_units; /* the same in E units; position written */
@@ -116,6 +131,17 @@ void gcodew_put_header(struct gcodew *w, const struct gcodew_summary *sum);
 int gcodew_plan_layer(struct gcodew *w, const struct layer_paths *l, size_t li);
 /* Plan a retraction, wiping back over the last path when asked. */
 int gcodew_plan_retract(struct gcodew *w);
+
+/* gcode_writer_simplify.c */
+/* Path p within gcode_resolution into w->view (w->sidx, w->sstretch
+ * beside it); p itself when the key is 0.  Sets *out to the path to
+ * print. */
+int gcodew_simplify_path(struct gcodew *w, const struct toolpath *p, const struct toolpath **out);
+/* The turns of w->route (after the start (ax, ay), nm) within
+ * gcode_resolution: dropped ones removed from it. */
+int gcodew_simplify_route(struct gcodew *w, int64_t ax, int64_t ay);
+/* Release the scratch arrays above. */
+void gcodew_simplify_free(struct gcodew *w);
 
 /* gcode_writer_cool.c */
 /* Decide layer li's fan and slow its extrusions down if it is too fast;

@@ -90,6 +90,7 @@ static int plan_travel(struct gcodew *w, double x, double y)
 	const struct gcodew_settings *s = w->s;
 	struct travel_route *r = &w->route;
 	double lz = w->layer_z, tz = lz, d, len;
+	int64_t ax, ay; /* nm, where the route starts */
 	bool retract;
 	int rc = 0;
 
@@ -101,8 +102,9 @@ static int plan_travel(struct gcodew *w, double x, double y)
 	d = hypot(x - w->px, y - w->py);
 	if (d < MOVE_EPS && fabs(w->pz - lz) < 1e-9)
 		return 0;
-	rc = travel_plan(w->map, llround(w->px * SLICE_UNITS_PER_MM),
-			 llround(w->py * SLICE_UNITS_PER_MM), llround(x * SLICE_UNITS_PER_MM),
+	ax = llround(w->px * SLICE_UNITS_PER_MM);
+	ay = llround(w->py * SLICE_UNITS_PER_MM);
+	rc = travel_plan(w->map, ax, ay, llround(x * SLICE_UNITS_PER_MM),
 			 llround(y * SLICE_UNITS_PER_MM), r, w->err);
 	if (rc)
 		return rc;
@@ -118,6 +120,8 @@ static int plan_travel(struct gcodew *w, double x, double y)
 	}
 	if (rc == 0 && fabs(w->pz - tz) > 1e-9)
 		rc = push_move(w, MV_TRAVEL, false, 0, 0, tz, 0, z_speed(s));
+	if (rc == 0)
+		rc = gcodew_simplify_route(w, ax, ay);
 	for (size_t k = 0; k + 1 < r->n && rc == 0; k++) /* the route's turns */
 		rc = push_move(w, MV_TRAVEL, true, r->xy[2 * k] / SLICE_UNITS_PER_MM,
 			       r->xy[2 * k + 1] / SLICE_UNITS_PER_MM, tz, 0, s->travel_speed);
@@ -257,29 +261,33 @@ static int plan_segment(struct gcodew *w, const struct layer_paths *l, size_t li
 			 share * area * len / w->fil_area * w->s->extrusion_multiplier, speed);
 }
 
-/* Plan path pi of layer li: travel to its start, then its segments. */
+/* Plan path pi of layer li: travel to its start, then its segments, as
+ * simplified to gcode_resolution (the speed is the original path's). */
 static int plan_path(struct gcodew *w, const struct layer_paths *l, size_t li, size_t pi, bool rev)
 {
 	const struct gcodew_settings *s = w->s;
-	const struct toolpath *p = &l->paths[pi];
-	size_t steps = p->closed ? p->n + 1 : p->n;
+	const struct toolpath *p = &l->paths[pi], *q;
 	double speed = path_speed(s, p, li);
-	const struct path_point *q0 = &p->pts[trav(p, rev, 0)];
-	int rc;
+	int rc = gcodew_simplify_path(w, p, &q);
+	size_t steps = q->closed ? q->n + 1 : q->n;
+	bool simplified = q != p;
 
+	if (rc)
+		return rc;
+	const struct path_point *q0 = &q->pts[trav(q, rev, 0)];
 	rc = plan_travel(w, q0->x / SLICE_UNITS_PER_MM, q0->y / SLICE_UNITS_PER_MM);
 	if (rc == 0 && w->plan_role != (int)p->role) {
 		rc = push(w, (struct op){.kind = OP_ROLE, .role = p->role});
 		w->plan_role = (int)p->role;
 	}
 	for (size_t k = 0; k + 1 < steps && rc == 0; k++) {
-		size_t a = trav(p, rev, k), b = trav(p, rev, k + 1);
-		const struct path_point *pa = &p->pts[a], *pb = &p->pts[b];
-		rc = plan_segment(w, l, li, pi, rev ? b : a, pa, pb, (rev ? pb : pa)->width,
-				  w->layer_z, speed, 1);
+		size_t a = trav(q, rev, k), b = trav(q, rev, k + 1), f = rev ? b : a;
+		const struct path_point *pa = &q->pts[a], *pb = &q->pts[b];
+		rc = plan_segment(w, l, li, pi, simplified ? w->sidx[f] : f, pa, pb, q->pts[f].width,
+				  w->layer_z, speed, simplified ? w->sstretch[f] : 1);
 	}
 	if (rc == 0 && s->wipe)
-		rc = record_wipe(w, p, rev, steps, 0);
+		rc = record_wipe(w, q, rev, steps, 0);
 	return rc;
 }
 
@@ -335,20 +343,27 @@ static int plan_run(struct gcodew *w, const struct layer_paths *l, size_t li, si
  * layer below to l->z.  Reached from a spiral below by a plain move (no
  * retraction: it is the loop's own continuation), else by a travel; then,
  * as PrusaSlicer's transition layer, the flow rises with Z from nothing,
- * since the gap under the nozzle starts at nothing.
+ * since the gap under the nozzle starts at nothing.  Simplified to
+ * gcode_resolution, the loop starts at its kept vertex nearest the nozzle
+ * and Z and the flow ramp are taken at the kept vertices.
  */
 static int plan_spiral(struct gcodew *w, const struct layer_paths *l, size_t li)
 {
-	const struct toolpath *p = &l->paths[0];
+	const struct toolpath *p = &l->paths[0], *q;
 	double h = l->height, z0 = l->z - h, speed = path_speed(w->s, p, li);
 	double total = 0, done = 0, best = INFINITY;
 	size_t first = 0;
-	int rc;
+	int rc = gcodew_simplify_path(w, p, &q);
+	bool simplified = q != p;
 
+	if (rc)
+		return rc;
 	for (size_t k = 0; k < p->n; k++) {
 		const struct path_point *a = &p->pts[k], *b = &p->pts[(k + 1) % p->n];
-		double d = w->pos_known ? dist2(w, a->x, a->y) : 0;
 		total += hypot((double)(b->x - a->x), (double)(b->y - a->y)) / SLICE_UNITS_PER_MM;
+	}
+	for (size_t k = 0; k < q->n; k++) {
+		double d = w->pos_known ? dist2(w, q->pts[k].x, q->pts[k].y) : 0;
 		if (d < best) {
 			best = d;
 			first = k;
@@ -356,25 +371,31 @@ static int plan_spiral(struct gcodew *w, const struct layer_paths *l, size_t li)
 	}
 	w->layer_z = z0;
 	if (w->spiral_below && w->pos_known)
-		rc = push_move(w, MV_TRAVEL, true, p->pts[first].x / SLICE_UNITS_PER_MM,
-			       p->pts[first].y / SLICE_UNITS_PER_MM, z0, 0, w->s->travel_speed);
+		rc = push_move(w, MV_TRAVEL, true, q->pts[first].x / SLICE_UNITS_PER_MM,
+			       q->pts[first].y / SLICE_UNITS_PER_MM, z0, 0, w->s->travel_speed);
 	else
-		rc = plan_travel(w, p->pts[first].x / SLICE_UNITS_PER_MM,
-				 p->pts[first].y / SLICE_UNITS_PER_MM);
+		rc = plan_travel(w, q->pts[first].x / SLICE_UNITS_PER_MM,
+				 q->pts[first].y / SLICE_UNITS_PER_MM);
 	if (rc == 0)
 		rc = push(w, (struct op){.kind = OP_ROLE, .role = p->role});
-	for (size_t k = 0; k < p->n && rc == 0; k++) {
-		const struct path_point *pa = &p->pts[(first + k) % p->n];
-		const struct path_point *pb = &p->pts[(first + k + 1) % p->n];
+	for (size_t k = 0; k < q->n && rc == 0; k++) {
+		size_t a = (first + k) % q->n, b = (first + k + 1) % q->n;
+		size_t i = simplified ? w->sidx[a] : a, ib = simplified ? w->sidx[b] : b;
+		const struct path_point *pa = &q->pts[a], *pb = &q->pts[b];
 		double t;
-		done += hypot((double)(pb->x - pa->x), (double)(pb->y - pa->y)) / SLICE_UNITS_PER_MM;
+		do { /* Z rises with the original length, dropped points' included */
+			const struct path_point *u = &p->pts[i], *v = &p->pts[(i + 1) % p->n];
+			done += hypot((double)(v->x - u->x), (double)(v->y - u->y)) / SLICE_UNITS_PER_MM;
+			i = (i + 1) % p->n;
+		} while (i != ib);
 		t = fmin(1, done / total);
-		rc = plan_segment(w, l, li, 0, (first + k) % p->n, pa, pb, pa->width, z0 + h * t,
-				  speed, w->spiral_below ? 1 : t);
+		rc = plan_segment(w, l, li, 0, simplified ? w->sidx[a] : a, pa, pb, pa->width,
+				  z0 + h * t, speed,
+				  (w->spiral_below ? 1 : t) * (simplified ? w->sstretch[a] : 1));
 	}
 	w->layer_z = l->z;
 	if (rc == 0 && w->s->wipe)
-		rc = record_wipe(w, p, false, p->n + 1, first);
+		rc = record_wipe(w, q, false, q->n + 1, first);
 	return rc;
 }
 

@@ -215,6 +215,9 @@ static const struct setting table[] = {
      "density of the raft's first layer (a bare number is a fraction)"},
     {"raft_first_layer_expansion", NUM, S_, 0, 100, 0, "mm", "3", NULL, NULL, 0, NULL,
      "how much further the raft's first layer reaches"},
+    {"gcode_resolution", NUM, S_, 0, 1, 0, "mm", "0.0125", NULL, NULL, 0, NULL,
+     "every path and travel is written as a polyline with fewer points, none of the dropped "
+     "ones farther than this from it; filament and bead widths as sliced; 0 = every point"},
 
     {"travel_speed", NUM, S_, 0, 1000, GT, "mm/s", "130", NULL, NULL, 0, "Speed", ""},
     {"travel_speed_z", NUM, S_, 0, 1000, 0, "mm/s", "0", NULL, NULL, 0, NULL,

@@ -86,23 +86,6 @@ static double expected_e(const struct layer_paths *l, const struct gcodew_settin
 	return e * s->extrusion_multiplier;
 }
 
-/* Write the stack to memory; returns the text (free it), asserts success. */
-static char *write_mem(const struct layer_stack *st, const struct gcodew_settings *s,
-		       struct gcodew_summary *sum)
-{
-	char *buf = NULL;
-	size_t len = 0;
-	struct st_error err = {0};
-	FILE *fp = open_memstream(&buf, &len);
-	int rc;
-
-	ck_assert_ptr_nonnull(fp);
-	rc = gcodew_write_stream(st, s, fp, sum, &err);
-	ck_assert_int_eq(fclose(fp), 0);
-	ck_assert_msg(rc == 0, "gcodew_write_stream failed (%d): %s", rc, err.msg);
-	return buf;
-}
-
 /* ---------------------------------------------------------------------------
  * Replaying G-code like a printer
  */
@@ -252,7 +235,7 @@ static void replay(const char *text, struct replay *r)
 static char *write_replay(const struct layer_stack *st, const struct gcodew_settings *s,
 			  struct gcodew_summary *sum, struct replay *r)
 {
-	char *g = write_mem(st, s, sum);
+	char *g = tu_gcode_mem(st, s, sum);
 
 	memset(r, 0, sizeof(*r));
 	r->retract_before_travel = s->retract_before_travel;
@@ -455,7 +438,7 @@ START_TEST(test_loops_keep_order)
 	add_line(&st->layers[0], PATH_SOLID_INFILL, far, lw, 2);
 	add_line(&st->layers[0], PATH_SOLID_INFILL, near, lw, 2);
 	gcodew_settings_init(&s);
-	g = write_mem(st, &s, NULL);
+	g = tu_gcode_mem(st, &s, NULL);
 	ck_assert_int_lt(at(g, "X20 Y20"), at(g, "X29 Y29"));
 	ck_assert_int_lt(at(g, "X31 Y31"), at(g, "X60 Y60"));
 	free(g);
@@ -475,7 +458,7 @@ START_TEST(test_number_format)
 	for (int i = 0; i < 2; i++)
 		add_line(&st->layers[i], PATH_GAP_FILL, xy, w, 3);
 	gcodew_settings_init(&s);
-	g = write_mem(st, &s, NULL);
+	g = tu_gcode_mem(st, &s, NULL);
 	ck_assert_ptr_null(strstr(g, "X-0 "));
 	ck_assert_ptr_nonnull(strstr(g, "X0 Y5"));
 	ck_assert_ptr_nonnull(strstr(g, "X3 Y25"));
@@ -574,7 +557,7 @@ START_TEST(test_placeholders)
 	add_square(&st->layers[1], PATH_OUTER_PERIMETER, 0, 0, 10, 0.45);
 	s.start_gcode = "G28\nM117 nozzle {nozzle_diameter[0]} layer [layer_height]\n";
 	s.end_gcode = "M104 S0\nM117 done at [temperature]";
-	g = write_mem(st, &s, NULL);
+	g = tu_gcode_mem(st, &s, NULL);
 	ck_assert_ptr_nonnull(strstr(g, "\nM117 nozzle 0.4 layer 0.2\n"));
 	ck_assert_ptr_nonnull(strstr(g, "\nM117 done at 205\n"));
 	free(g);
@@ -599,7 +582,7 @@ START_TEST(test_temperatures)
 	s.temperature = 205;
 	s.first_layer_bed_temperature = 60;
 	s.bed_temperature = 55;
-	g = write_mem(st, &s, NULL);
+	g = tu_gcode_mem(st, &s, NULL);
 	/* Default start G-code sets no temperature: waits around it. */
 	ck_assert_int_lt(at(g, "\nM190 S60"), at(g, "\nG28"));
 	ck_assert_int_lt(at(g, "\nM104 S215"), at(g, "\nG28"));
@@ -617,7 +600,7 @@ START_TEST(test_temperatures)
 	/* A start G-code that heats itself gets no extra waits. */
 	s.start_gcode = "M140 S[first_layer_bed_temperature]\nM104 S[first_layer_temperature]\n"
 			"G28\nM190 S{first_layer_bed_temperature[0]}\nM109 S[first_layer_temperature]\n";
-	g = write_mem(st, &s, NULL);
+	g = tu_gcode_mem(st, &s, NULL);
 	ck_assert_int_eq(count(g, "\nM109 "), 1);
 	ck_assert_int_eq(count(g, "\nM190 "), 1);
 	ck_assert_int_eq(count(g, "\nM104 S215"), 1);
@@ -849,7 +832,7 @@ START_TEST(test_layer_at_a_time)
 	add_square(&st->layers[2], PATH_SPARSE_INFILL, 20, 0, 5, 0.45);
 	gcodew_settings_init(&s);
 	s.start_gcode = "M117 [total_layer_count] layers\n";
-	whole = write_mem(st, &s, &sum);
+	whole = tu_gcode_mem(st, &s, &sum);
 
 	ck_assert_int_eq(gcodew_begin_file(&s, 3, path, &w, &err), 0);
 	ck_assert_int_eq(gcodew_finish_file(w, NULL, &err), ST_ERR_ARG); /* 0 of 3 layers */
@@ -1116,5 +1099,6 @@ Suite *gcodewriter_suite(void)
 	suite_add_tcase(s, out);
 	suite_add_tcase(s, cool);
 	suite_add_tcase(s, est);
+	gcodewriter_simplify_tcases(s);
 	return s;
 }

@@ -674,7 +674,8 @@ START_TEST(profile_keys_reach_slicer_fields)
 				   "start_filament_gcode = \"M117 a\";\"M117 b\"\n"
 				   "max_print_height = 123.5\n"
 				   "raft_first_layer_density = 70%\n"
-				   "layer_height = 0.15\n";
+				   "layer_height = 0.15\n"
+				   "gcode_resolution = 0.02\n";
 	struct st_error err = {0};
 	struct profile *p = NULL;
 	struct slicer_config c;
@@ -691,6 +692,7 @@ START_TEST(profile_keys_reach_slicer_fields)
 	ck_assert_double_eq(c.bed.max_height, 123.5);
 	ck_assert_double_eq(c.raft.first_layer_density, 70);
 	ck_assert_double_eq(c.layer_height, 0.15);
+	ck_assert_double_eq(c.gcodew.gcode_resolution, 0.02);
 	profile_free(p);
 }
 END_TEST

@@ -31,6 +31,7 @@ Suite *slicer_suite(void);	/* tests/check_slicer.c: slicing, Clipper bridge, wal
 void slicer_modes_tcases(Suite *s); /* tests/check_modes.c: spiral vase, part of slicer */
 void slicer_travel_tcases(Suite *s); /* tests/check_travel.c: travel and retraction, part of slicer */
 Suite *gcodewriter_suite(void); /* tests/check_gcodewriter.c: G-code writer and estimator */
+void gcodewriter_simplify_tcases(Suite *s); /* tests/check_simplify.c: gcode_resolution, part of gcodewriter */
 Suite *infill_suite(void);	/* tests/check_infill.c: skins, bridges, infill */
 Suite *support_suite(void);	/* tests/check_support.c: skirt, brim, support material */
 Suite *raft_suite(void);	/* tests/check_raft.c: the raft under the part */

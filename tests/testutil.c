@@ -308,3 +308,19 @@ int tu_dir_entries(const char *dir)
 	closedir(d);
 	return n;
 }
+
+char *tu_gcode_mem(const struct layer_stack *st, const struct gcodew_settings *s,
+		   struct gcodew_summary *sum)
+{
+	char *buf = NULL;
+	size_t len = 0;
+	struct st_error err = {0};
+	FILE *fp = open_memstream(&buf, &len);
+	int rc;
+
+	ck_assert_ptr_nonnull(fp);
+	rc = gcodew_write_stream(st, s, fp, sum, &err);
+	ck_assert_int_eq(fclose(fp), 0);
+	ck_assert_msg(rc == 0, "gcodew_write_stream failed (%d): %s", rc, err.msg);
+	return buf;
+}

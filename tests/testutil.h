@@ -9,6 +9,7 @@
 #include <stddef.h>
 
 #include "meshio.h"
+#include "gcode_writer.h"
 #include "toolpath.h"
 
 /* tu_scratch_init / tu_scratch_cleanup - make and remove the scratch
@@ -108,6 +109,11 @@ const char *tu_bin(void);
 
 /* tu_file_exists - 1 if path exists. */
 int tu_file_exists(const char *path);
+
+/* tu_gcode_mem - stack st written with s to memory (sum filled when not
+ * NULL); the text (free it).  Aborts the test on failure. */
+char *tu_gcode_mem(const struct layer_stack *st, const struct gcodew_settings *s,
+		   struct gcodew_summary *sum);
 
 /* tu_count_role - number of paths of role on layer l. */
 size_t tu_count_role(const struct layer_paths *l, enum path_role role);
