@@ -4,16 +4,14 @@
  */
 #include "patterns.h"
 
+#include "simplify.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 /* Gyroid samples per period along the sampled axis. */
 #define PAT_GYROID_STEPS 48
-/* Samples closer than this to the chord of their neighbours are dropped, nm:
- * sparse infill needs no finer curve, and the full sampling made 70 % of
- * the G-code moves on the scan model. */
-#define PAT_GYROID_TOLERANCE 10000.0
 
 bool pat_box_of(const struct clip_paths *ps, struct pat_box *box)
 {
@@ -119,54 +117,15 @@ static void gyroid_branch(double k, double sz, double cz, bool swap, double sign
 	}
 }
 
-/*
- * The point of xy strictly between a and b farthest from the line through
- * them (from point a when they coincide) into *far; returns that distance
- * squared, nm^2 (-1 when there is no point between).
- */
-static double farthest(const int64_t *xy, size_t a, size_t b, size_t *far)
+/* Keep the points of the polyline xy (n points) that simplify_mark keeps
+ * at PAT_GYROID_TOLERANCE_NM, compacted in place; returns how many. */
+static size_t gyroid_simplify(struct simplify_work *wk, int64_t *xy, size_t n, bool *keep,
+			      struct st_error *err)
 {
-	double ax = (double)xy[2 * a], ay = (double)xy[2 * a + 1];
-	double dx = (double)xy[2 * b] - ax, dy = (double)xy[2 * b + 1] - ay;
-	double len2 = dx * dx + dy * dy, best = -1;
+	size_t m = 0;
 
-	for (size_t i = a + 1; i < b; i++) {
-		double px = (double)xy[2 * i] - ax, py = (double)xy[2 * i + 1] - ay;
-		double c = px * dy - py * dx;
-		double d2 = len2 > 0 ? c * c / len2 : px * px + py * py;
-		if (d2 > best) {
-			best = d2;
-			*far = i;
-		}
-	}
-	return best;
-}
-
-/*
- * Keep the points of the polyline xy (n points) that Douglas-Peucker keeps
- * at tolerance tol (first and last always), compacted in place; returns
- * how many.  stack has room for n indices.
- */
-static size_t simplify(int64_t *xy, size_t n, double tol, size_t *stack, unsigned char *keep)
-{
-	size_t top = 0, m = 0;
-
-	if (n < 3)
-		return n;
-	memset(keep, 0, n);
-	keep[0] = keep[n - 1] = 1;
-	stack[top++] = 0;
-	stack[top++] = n - 1;
-	while (top) {
-		size_t b = stack[--top], a = stack[--top], far = a;
-		if (farthest(xy, a, b, &far) > tol * tol) {
-			keep[far] = 1;
-			stack[top++] = a;
-			stack[top++] = far;
-			stack[top++] = far;
-			stack[top++] = b;
-		}
-	}
+	if (simplify_mark(wk, xy, n, PAT_GYROID_TOLERANCE_NM, keep, err))
+		return 0;
 	for (size_t i = 0; i < n; i++)
 		if (keep[i]) {
 			xy[2 * m] = xy[2 * i];
@@ -206,23 +165,22 @@ int pat_gyroid(double k, double z_nm, const struct pat_box *box, struct clip_pat
 				    2 * M_PI / k / 1e6);
 	size_t n = (size_t)steps;
 	int64_t *xy = malloc(2 * n * sizeof(*xy));
-	/* Each split pushes two ranges and pops one: at most 2 n entries. */
-	size_t *stack = malloc(4 * n * sizeof(*stack));
-	unsigned char *keep = malloc(n);
+	bool *keep = malloc(n * sizeof(*keep));
+	struct simplify_work wk = {0};
 	int rc = 0;
-	if (!xy || !stack || !keep) {
+	if (!xy || !keep) {
 		rc = st_error_set(err, ST_ERR_NOMEM, "infill: out of memory for the gyroid");
 		goto out_free;
 	}
 	for (double m = m0; m <= m1 && !rc; m++)
 		for (int sign = -1; sign <= 1 && !rc; sign += 2) {
 			gyroid_branch(k, sz, cz, swap, sign, m, t0, dt, n, xy);
-			rc = clip_paths_add(out, xy,
-					   simplify(xy, n, PAT_GYROID_TOLERANCE, stack, keep), err);
+			size_t kept = gyroid_simplify(&wk, xy, n, keep, err);
+			rc = kept ? clip_paths_add(out, xy, kept, err) : ST_ERR_NOMEM;
 		}
 out_free:
+	simplify_work_free(&wk);
 	free(xy);
-	free(stack);
 	free(keep);
 	return rc;
 }

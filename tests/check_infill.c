@@ -14,6 +14,7 @@
 #include "fixtures.h"
 #include "infill.h"
 #include "mesh.h"
+#include "patterns.h"
 #include "perimeters.h"
 #include "section.h"
 #include "suites.h"
@@ -737,6 +738,62 @@ START_TEST(narrow_strip_gets_one_bead)
 }
 END_TEST
 
+/* Distance (nm) from bed point (X, Y) at height Z (nm) to the gyroid
+ * section at scale k, to first order: |f| / |grad f| in the plane; a
+ * negative value where the gradient nearly vanishes (branches meet). */
+static double gyroid_distance(double k, double X, double Y, double Z)
+{
+	double x = k * X, y = k * Y, z = k * Z;
+	double f = sin(x) * cos(y) + sin(y) * cos(z) + sin(z) * cos(x);
+	double fx = cos(x) * cos(y) - sin(z) * sin(x), fy = -sin(x) * sin(y) + cos(y) * cos(z);
+	double g = hypot(fx, fy);
+	return g < 0.3 ? -1 : fabs(f) / g / k;
+}
+
+/*
+ * The gyroid's chords stay within PAT_GYROID_TOLERANCE_NM of the curve,
+ * and use most of it: sampled finer than sparse infill needs (10 um), the
+ * gyroid was written in 1.7 times PrusaSlicer's moves.
+ */
+START_TEST(gyroid_chords_within_tolerance)
+{
+	struct st_error err = {0};
+	const double k = 0.2 / (0.45e6 * PAT_GYROID_LENGTH); /* 20 %, 0.45 mm lines */
+	struct pat_box box = {0, 0, 20000000, 20000000};
+	double worst = 0, length = 0;
+	size_t chords = 0;
+	for (int layer = 0; layer < 12; layer++) {
+		double z = 0.2e6 * (layer * 7 + 1);
+		struct clip_paths lines = {0};
+		ck_assert_int_eq(pat_gyroid(k, z, &box, &lines, &err), 0);
+		for (size_t p = 0; p < lines.n; p++) {
+			const int64_t *xy = lines.xy + 2 * lines.start[p];
+			size_t n = lines.start[p + 1] - lines.start[p];
+			for (size_t i = 0; i + 1 < n; i++, chords++) {
+				length += hypot((double)(xy[2 * i + 2] - xy[2 * i]),
+						(double)(xy[2 * i + 3] - xy[2 * i + 1]));
+				for (int j = 1; j < 8; j++) {
+					double t = j / 8.0;
+					double X = xy[2 * i] + t * (double)(xy[2 * i + 2] - xy[2 * i]);
+					double Y = xy[2 * i + 1] +
+						   t * (double)(xy[2 * i + 3] - xy[2 * i + 1]);
+					worst = fmax(worst, gyroid_distance(k, X, Y, z));
+				}
+			}
+		}
+		clip_paths_free(&lines);
+	}
+	/* first order, and the 48 samples a period: a few per cent over */
+	ck_assert_msg(worst <= 1.05 * PAT_GYROID_TOLERANCE_NM, "a chord %.0f nm off the curve",
+		      worst);
+	ck_assert_msg(worst > 0.5 * PAT_GYROID_TOLERANCE_NM, "chords at most %.0f nm off: finer "
+		      "than the tolerance asks", worst);
+	/* 0.66 mm at 50 um; 10 um gave half that, twice the moves */
+	ck_assert_msg(length / (double)chords > 0.5e6, "mean chord %.3f mm",
+		      length / (double)chords / 1e6);
+}
+END_TEST
+
 START_TEST(bad_settings_refused)
 {
 	struct infill_settings is;
@@ -832,6 +889,7 @@ Suite *infill_suite(void)
 	tcase_add_test(tc, small_and_full_density_are_solid);
 	tcase_add_test(tc, narrow_strip_gets_one_bead);
 	tcase_add_test(tc, bad_settings_refused);
+	tcase_add_test(tc, gyroid_chords_within_tolerance);
 	suite_add_tcase(s, tc);
 	return s;
 }
