@@ -56,7 +56,7 @@ Point to_point(const double p[3])
 int count_pairs(const double (*verts)[3], size_t nverts, const uint32_t (*tris)[3], size_t ntris,
 		const uint8_t *skip, int threads, uint64_t *count, struct st_error *err)
 {
-	std::vector<Box> boxes; /* boxes[i] belongs to triangle use[i] */
+	std::vector<Box> boxes(ntris);
 	std::vector<uint32_t> use;
 	std::vector<uint8_t> usable(ntris, 0);
 	size_t nuse = 0;
@@ -65,7 +65,6 @@ int count_pairs(const double (*verts)[3], size_t nverts, const uint32_t (*tris)[
 		if (!(skip && skip[t]))
 			nuse++;
 	use.reserve(nuse);
-	boxes.reserve(nuse);
 	for (size_t t = 0; t < ntris; t++) {
 		const double *p[3];
 		float lo[3], hi[3];
@@ -86,7 +85,7 @@ int count_pairs(const double (*verts)[3], size_t nverts, const uint32_t (*tris)[
 			lo[k] = box_coord(std::min(std::min(p[0][k], p[1][k]), p[2][k]));
 			hi[k] = box_coord(std::max(std::max(p[0][k], p[1][k]), p[2][k]));
 		}
-		boxes.push_back(Box(lo, hi));
+		boxes[t] = Box(lo, hi);
 		use.push_back(static_cast<uint32_t>(t));
 		usable[t] = 1;
 	}
@@ -111,6 +110,9 @@ int count_pairs(const double (*verts)[3], size_t nverts, const uint32_t (*tris)[
 	std::vector<uint8_t>().swap(usable);
 
 	/* Pairs that share nothing: the boxes, on a grid where it is fast. */
+	auto apart = [tris](size_t s, size_t t) {
+		return pairtest::no_common_corner(tris[s], tris[t]);
+	};
 	typedef std::array<uint32_t, 3> corners;
 	auto corners_of = [tris](uint32_t t) { return corners{tris[t][0], tris[t][1], tris[t][2]}; };
 	std::atomic<uint64_t> far_hits{0};
@@ -126,15 +128,15 @@ int count_pairs(const double (*verts)[3], size_t nverts, const uint32_t (*tris)[
 		*count = near_hits + far_hits;
 		return ST_OK;
 	}
-	std::vector<const Box *> all(boxes.size());
-	for (size_t i = 0; i < boxes.size(); i++)
-		all[i] = &boxes[i];
+	std::vector<const Box *> all(use.size());
+	for (size_t i = 0; i < use.size(); i++)
+		all[i] = &boxes[use[i]];
+	std::vector<uint32_t>().swap(use);
 	std::vector<uint64_t> counts;
 	boxpairs::for_each_pair(
 	    boxes, std::move(all), threads, [&](size_t n) { counts.assign(n, 0); },
 	    [&](size_t leaf, size_t s, size_t t) {
-		    const uint32_t *u = tris[use[s]], *w = tris[use[t]];
-		    if (pairtest::no_common_corner(u, w) && pairtest::intersects<K>(u, w, get))
+		    if (apart(s, t) && pairtest::intersects<K>(tris[s], tris[t], get))
 			    counts[leaf]++;
 	    });
 	uint64_t total = near_hits;

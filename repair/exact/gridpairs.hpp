@@ -85,26 +85,30 @@ inline bool overlap(const Box &a, const Box &b)
 
 /*
  * Call visit(tag_s, tag_t) once, from any thread, for every pair of
- * overlapping boxes (closed, as boxpairs.hpp) among boxes for which
- * keep(tag_s, tag_t) is true, where tag_s = tag_of(use[s]) is what the
- * caller needs of box s (a triangle's corners; boxes[s] belongs to
- * triangle use[s]).  The tags are copied in the boxes' sorted order:
- * keep() runs for every overlapping pair (9 million on a 1M-triangle UV
- * sphere, most of them neighbours it turns away), and looking the
- * triangle up through its index missed the cache so often that one load
- * carried 17 % of the pair loop's samples.  Returns false, having called
- * nothing and changed nothing, when the grid would be slow for these
- * boxes.  On true, boxes and use are left empty: the boxes are sorted in
- * place into cell order (so that the pairs are walked through memory in
- * order) rather than copied, which would cost 24 bytes per triangle more
- * at the peak.
+ * overlapping boxes (closed, as boxpairs.hpp) among boxes[use[..]] for which
+ * keep(tag_s, tag_t) is true, where tag_s = tag_of(s) is what the caller
+ * needs of box s (a triangle's corners).  The tags are copied beside the
+ * sorted boxes: keep() runs for every overlapping pair (9 million on a
+ * 1M-triangle UV sphere, most of them neighbours it turns away), and
+ * looking the triangle up through its index missed the cache so often
+ * that one load carried 17 % of the pair loop's samples.  Returns false,
+ * having called nothing, when the grid would be slow for these boxes;
+ * boxes is then as given and use holds the same indices, perhaps in
+ * another order.  On true, boxes and use are left empty: the boxes are
+ * sorted into cell order (so that the pairs are walked through memory in
+ * order), and keeping the unsorted copy as well would cost 24 bytes per
+ * triangle.
  */
 template <class TagOf, class Keep, class Visit>
 bool for_each_pair(std::vector<Box> &boxes, std::vector<uint32_t> &use, int threads,
 		   TagOf tag_of, Keep keep, Visit visit)
 {
 	typedef typename std::decay<decltype(tag_of(uint32_t()))>::type Tag;
-	const size_t n = boxes.size();
+	struct item {
+		Box box;
+		Tag tag;
+	};
+	const size_t n = use.size();
 	grid g;
 
 	if (n < 2)
@@ -113,7 +117,7 @@ bool for_each_pair(std::vector<Box> &boxes, std::vector<uint32_t> &use, int thre
 	std::vector<float> side(n);
 	float lo[3] = {HUGE_VALF, HUGE_VALF, HUGE_VALF}, hi[3] = {-HUGE_VALF, -HUGE_VALF, -HUGE_VALF};
 	for (size_t i = 0; i < n; i++) {
-		const Box &b = boxes[i];
+		const Box &b = boxes[use[i]];
 		float s = 0;
 		for (int k = 0; k < 3; k++) {
 			s = std::max(s, b.max_coord(k) - b.min_coord(k));
@@ -139,7 +143,7 @@ bool for_each_pair(std::vector<Box> &boxes, std::vector<uint32_t> &use, int thre
 	/* Count cell entries first: decline before allocating much. */
 	double entries = 0;
 	for (size_t i = 0; i < n; i++) {
-		const Box &b = boxes[i];
+		const Box &b = boxes[use[i]];
 		double c = 1;
 		for (int k = 0; k < 3; k++)
 			c *= (double)(cell_of(g, k, b.max_coord(k)) - cell_of(g, k, b.min_coord(k)) + 1);
@@ -155,26 +159,11 @@ bool for_each_pair(std::vector<Box> &boxes, std::vector<uint32_t> &use, int thre
 	const size_t nb = (size_t)1 << bits;
 	g.mask = nb - 1;
 
-	/* Buckets in compressed rows; a box is listed once per cell, so twice
-	 * in a bucket when two of its cells share it (then next to itself).
-	 * A row's length does not depend on the order of the boxes, so the
-	 * grid can decline here, before anything is moved. */
-	std::vector<uint32_t> off(nb + 1, 0);
-	for (size_t i = 0; i < n; i++)
-		for_each_cell(g, boxes[i], [&](uint32_t b) { off[b + 1]++; });
-	double tests = 0;
-	for (size_t b = 0; b < nb; b++) {
-		tests += 0.5 * (double)off[b + 1] * (double)off[b + 1];
-		off[b + 1] += off[b];
-	}
-	if (tests > MAX_TESTS_PER_BOX * (double)n + 4096)
-		return false;
-
 	/*
 	 * Sort the boxes into raster order of their low corner's cell (a
-	 * counting sort on groups of 16 buckets, a table that stays in cache):
-	 * the passes below then walk through memory in order whatever the
-	 * order of the file.  id[i] is the box that goes to place i.
+	 * counting sort on groups of 16 buckets, a table that stays in cache),
+	 * keeping where each came from: the passes below then walk through
+	 * memory in order whatever the order of the file.
 	 */
 	const int group_bits = bits > 4 ? 4 : 0;
 	std::vector<uint32_t> id(n);
@@ -186,45 +175,51 @@ bool for_each_pair(std::vector<Box> &boxes, std::vector<uint32_t> &use, int thre
 			       group_bits;
 		};
 		for (size_t i = 0; i < n; i++)
-			first[group(boxes[i]) + 1]++;
+			first[group(boxes[use[i]]) + 1]++;
 		for (size_t b = 0; b + 1 < first.size(); b++)
 			first[b + 1] += first[b];
 		for (size_t i = 0; i < n; i++)
-			id[first[group(boxes[i])]++] = (uint32_t)i;
+			id[first[group(boxes[use[i]])]++] = use[i];
 	}
-	/* The tags, gathered on all cores: each read misses the cache (the
-	 * file's order is not the cells'), and the second core is idle here. */
-	std::vector<Tag> tag(n);
+	/* id holds the same indices as use: one copy is enough at the peak. */
+	std::vector<uint32_t>().swap(use);
+	/* The sorted copy replaces the given one (24 bytes per box less at
+	 * the peak); it is put back if the grid declines below. */
+	std::vector<item> sorted(n);
+	/* Gathered on all cores: each read misses the cache (the file's order
+	 * is not the cells'), and the second core is idle here. */
 	const size_t gather = 16384;
 	boxpairs::for_each_index((n + gather - 1) / gather, threads, [&](size_t c) {
 		const size_t end_i = std::min(n, (c + 1) * gather);
-		for (size_t i = c * gather; i < end_i; i++)
-			tag[i] = tag_of(use[id[i]]);
-	});
-	std::vector<uint32_t>().swap(use);
-	/* The boxes permuted in place, cycle by cycle: place j takes the box
-	 * at id[j]; id[j] = j marks place j done. */
-	for (size_t i = 0; i < n; i++) {
-		if (id[i] == i)
-			continue;
-		const Box start = boxes[i];
-		size_t j = i;
-		for (;;) {
-			const size_t k = id[j];
-			id[j] = (uint32_t)j;
-			if (k == i) {
-				boxes[j] = start;
-				break;
-			}
-			boxes[j] = boxes[k];
-			j = k;
+		for (size_t i = c * gather; i < end_i; i++) {
+			sorted[i].box = boxes[id[i]];
+			sorted[i].tag = tag_of(id[i]);
 		}
+	});
+	const size_t nboxes = boxes.size();
+	std::vector<Box>().swap(boxes);
+
+	/* Buckets in compressed rows; a box is listed once per cell, so twice
+	 * in a bucket when two of its cells share it (then next to itself). */
+	std::vector<uint32_t> off(nb + 1, 0);
+	for (size_t i = 0; i < n; i++)
+		for_each_cell(g, sorted[i].box, [&](uint32_t b) { off[b + 1]++; });
+	double tests = 0;
+	for (size_t b = 0; b < nb; b++) {
+		tests += 0.5 * (double)off[b + 1] * (double)off[b + 1];
+		off[b + 1] += off[b];
+	}
+	if (tests > MAX_TESTS_PER_BOX * (double)n + 4096) {
+		boxes.resize(nboxes);
+		for (size_t i = 0; i < n; i++)
+			boxes[id[i]] = sorted[i].box;
+		use = std::move(id);
+		return false;
 	}
 	std::vector<uint32_t>().swap(id);
-
 	std::vector<uint32_t> entry(off[nb]);
 	for (size_t i = 0; i < n; i++)
-		for_each_cell(g, boxes[i], [&](uint32_t b) { entry[off[b]++] = (uint32_t)i; });
+		for_each_cell(g, sorted[i].box, [&](uint32_t b) { entry[off[b]++] = (uint32_t)i; });
 	for (size_t b = nb; b > 0; b--)
 		off[b] = off[b - 1];
 	off[0] = 0;
@@ -252,35 +247,36 @@ bool for_each_pair(std::vector<Box> &boxes, std::vector<uint32_t> &use, int thre
 			if (sweep)
 				std::sort(entry.begin() + first, entry.begin() + last,
 					  [&](uint32_t u, uint32_t v) {
-						  const float a = boxes[u].min_coord(0),
-							      z = boxes[v].min_coord(0);
+						  const float a = sorted[u].box.min_coord(0),
+							      z = sorted[v].box.min_coord(0);
 						  return a < z || (a == z && u < v);
 					  });
 			for (uint32_t i = first; i < last; i++) {
 				const uint32_t s = entry[i];
 				if (i > first && entry[i - 1] == s)
 					continue;
-				const Box &bs = boxes[s];
+				const item &is = sorted[s];
+				const Box &bs = is.box;
 				for (uint32_t j = i + 1; j < last; j++) {
 					const uint32_t t = entry[j];
 					if (t == entry[j - 1])
 						continue;
-					const Box &bt = boxes[t];
+					const item &it = sorted[t];
+					const Box &bt = it.box;
 					if (sweep && bt.min_coord(0) > bs.max_coord(0))
 						break;
-					if (!overlap(bs, bt) || !keep(tag[s], tag[t]))
+					if (!overlap(bs, bt) || !keep(is.tag, it.tag))
 						continue;
 					const uint64_t at = bucket_of(
 					    g, cell_of(g, 0, std::max(bs.min_coord(0), bt.min_coord(0))),
 					    cell_of(g, 1, std::max(bs.min_coord(1), bt.min_coord(1))),
 					    cell_of(g, 2, std::max(bs.min_coord(2), bt.min_coord(2))));
 					if (at == b)
-						visit(tag[s], tag[t]);
+						visit(is.tag, it.tag);
 				}
 			}
 		}
 	});
-	std::vector<Box>().swap(boxes);
 	return true;
 }
 
