@@ -133,6 +133,11 @@ out_nomem:
 			    m->nverts);
 }
 
+void mesh_builder_prefetch(const struct mesh_builder *b, const double p[3])
+{
+	__builtin_prefetch(&b->slots[hash_point(p) & (b->nslots - 1)]);
+}
+
 int mesh_builder_triangle(struct mesh_builder *b, uint32_t a, uint32_t c1, uint32_t c2,
 			  struct st_error *err)
 {
@@ -163,8 +168,11 @@ int mesh_builder_append(struct mesh_builder *b, const struct mesh *part, struct 
 				    part->nverts);
 	/* part's vertices are in first-use order, so welding them in index
 	 * order keeps b's vertex order what one pass would have produced. */
-	for (size_t v = 0; v < part->nverts && !rc; v++)
+	for (size_t v = 0; v < part->nverts && !rc; v++) {
+		if (v + MESH_WELD_AHEAD < part->nverts)
+			mesh_builder_prefetch(b, part->verts[v + MESH_WELD_AHEAD]);
 		rc = mesh_builder_vertex(b, part->verts[v], &remap[v], err);
+	}
 	for (size_t t = 0; t < part->ntris && !rc; t++)
 		rc = mesh_builder_triangle(b, remap[part->tris[t][0]], remap[part->tris[t][1]],
 					   remap[part->tris[t][2]], err);

@@ -49,6 +49,19 @@ struct mesh_builder *mesh_builder_new(size_t tri_hint);
 int mesh_builder_vertex(struct mesh_builder *b, const double p[3], uint32_t *index,
 			struct st_error *err);
 
+/*
+ * mesh_builder_prefetch - hint that p (finite) will be welded soon: starts
+ * loading the hash slot mesh_builder_vertex probes first for it.  A reader
+ * that calls this some positions ahead does not wait for memory there
+ * (most lookups miss the cache: the table is larger than it).  Changes
+ * nothing the builder holds, so the mesh built is the same without it.
+ */
+void mesh_builder_prefetch(const struct mesh_builder *b, const double p[3]);
+
+/* How many positions ahead of mesh_builder_vertex to prefetch: enough for
+ * a slot to arrive from memory, few enough that it is still cached. */
+#define MESH_WELD_AHEAD 24
+
 /* mesh_builder_triangle - append a triangle by welded indices. 0 or <0. */
 int mesh_builder_triangle(struct mesh_builder *b, uint32_t a, uint32_t c1, uint32_t c2,
 			  struct st_error *err);

@@ -88,40 +88,92 @@ int stlio_binary_size_error(struct mio_src *s)
 }
 
 /* Read facets first .. first+count-1 from s (positioned at the first) into b. */
-static int read_facets(struct mio_src *s, struct mesh_builder *b, uint32_t first, uint32_t count)
+/* A facet read and checked, waiting to be welded. */
+struct facet {
+	double p[3][3];
+	uint64_t at; /* byte offset in the file */
+};
+
+/* Weld one facet's corners and add its triangle. */
+static int weld_facet(struct mio_src *s, struct mesh_builder *b, const struct facet *f)
 {
-	unsigned char fac[STL_FACET];
 	struct st_error berr;
 	uint32_t idx[3];
 
-	for (uint32_t i = first; i < first + count; i++) {
-		uint64_t at = s->off;
+	for (int k = 0; k < 3; k++)
+		if (mesh_builder_vertex(b, f->p[k], &idx[k], &berr))
+			return mio_builder_error(s, "byte", f->at, &berr);
+	if (mesh_builder_triangle(b, idx[0], idx[1], idx[2], &berr))
+		return mio_builder_error(s, "byte", f->at, &berr);
+	return 0;
+}
 
-		if (mio_read(s, fac, sizeof(fac)) != sizeof(fac))
-			return s->read_errno
-				   ? mio_read_error(s, s->off)
-				   : mio_err(s, ST_ERR_PARSE,
-					     "byte %llu: the file ends inside facet %lu (did it "
-					     "change while being read?)",
-					     (unsigned long long)s->off, (unsigned long)i);
-		/* Bytes 0-11 are the normal, ignored; 12-47 the corners. */
-		for (int k = 0; k < 3; k++) {
-			double p[3];
+/* Read and check facet i into f; its corners' hash slots are prefetched. */
+static int read_binary_facet(struct mio_src *s, const struct mesh_builder *b, uint32_t i,
+			     struct facet *f)
+{
+	unsigned char fac[STL_FACET];
 
-			for (int c = 0; c < 3; c++) {
-				size_t o = 12 + 12 * (size_t)k + 4 * (size_t)c;
-				p[c] = get_le_float(fac + o);
-				if (!isfinite(p[c]))
-					return mio_err(s, ST_ERR_PARSE,
-						       "byte %llu: facet %lu has a non-finite "
-						       "coordinate (NaN or infinity)",
-						       (unsigned long long)(at + o), (unsigned long)i);
-			}
-			if (mesh_builder_vertex(b, p, &idx[k], &berr))
-				return mio_builder_error(s, "byte", at, &berr);
+	f->at = s->off;
+	if (mio_read(s, fac, sizeof(fac)) != sizeof(fac))
+		return s->read_errno
+			   ? mio_read_error(s, s->off)
+			   : mio_err(s, ST_ERR_PARSE,
+				     "byte %llu: the file ends inside facet %lu (did it "
+				     "change while being read?)",
+				     (unsigned long long)s->off, (unsigned long)i);
+	/* Bytes 0-11 are the normal, ignored; 12-47 the corners. */
+	for (int k = 0; k < 3; k++) {
+		for (int c = 0; c < 3; c++) {
+			size_t o = 12 + 12 * (size_t)k + 4 * (size_t)c;
+			f->p[k][c] = get_le_float(fac + o);
+			if (!isfinite(f->p[k][c]))
+				return mio_err(s, ST_ERR_PARSE,
+					       "byte %llu: facet %lu has a non-finite "
+					       "coordinate (NaN or infinity)",
+					       (unsigned long long)(f->at + o), (unsigned long)i);
 		}
-		if (mesh_builder_triangle(b, idx[0], idx[1], idx[2], &berr))
-			return mio_builder_error(s, "byte", at, &berr);
+		mesh_builder_prefetch(b, f->p[k]);
+	}
+	return 0;
+}
+
+/*
+ * Facets are read a few ahead of welding, so that the hash slots their
+ * corners probe are on their way from memory when they are welded (most
+ * probes miss the cache).  The welding order, and so the mesh, is that of
+ * the file; an error is reported only after every facet before it is
+ * welded, so the first error in the file is the one reported.
+ */
+static int read_facets(struct mio_src *s, struct mesh_builder *b, uint32_t first, uint32_t count)
+{
+	enum { AHEAD = MESH_WELD_AHEAD / 3 };
+	struct facet ring[AHEAD];
+	uint32_t next = first; /* next facet to weld */
+	int rc;
+
+	for (uint32_t i = first; i < first + count; i++) {
+		if (i - first >= AHEAD) {
+			rc = weld_facet(s, b, &ring[next % AHEAD]);
+			if (rc)
+				return rc;
+			next++;
+		}
+		rc = read_binary_facet(s, b, i, &ring[i % AHEAD]);
+		if (rc) {
+			/* The facets before it come first. */
+			for (; next < i; next++) {
+				int wrc = weld_facet(s, b, &ring[next % AHEAD]);
+				if (wrc)
+					return wrc;
+			}
+			return rc;
+		}
+	}
+	for (; next < first + count; next++) {
+		rc = weld_facet(s, b, &ring[next % AHEAD]);
+		if (rc)
+			return rc;
 	}
 	return 0;
 }

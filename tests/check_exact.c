@@ -315,6 +315,45 @@ START_TEST(grid_and_boxes_agree)
 END_TEST
 
 /*
+ * Triangles the count leaves out (a degenerate one, one the caller skips)
+ * come before the sphere and the cut, so every later triangle's box sits
+ * at another place than its triangle's index: the pairs found must still
+ * be those of the right triangles, from the grid (cut of 20 mm) and from
+ * CGAL's box intersection (2 m) alike.
+ */
+START_TEST(left_out_triangles_shift_nothing)
+{
+	struct mesh *sphere = fx_sphere(0, 0, 0, 5, 32, 64);
+	const double d[3] = {1, 1, 1}, e[3] = {2, 2, 2}, f[3] = {3, 3, 3};
+	struct mesh *flat = fx_triangle(d, e, f);
+
+	for (int i = 0; i < 2; i++) {
+		const double s = i ? 1000 : 10;
+		const double a[3] = {-2 * s, -s, 0.123}, b[3] = {2 * s, -s, 0.123};
+		const double c[3] = {0, 2 * s, 0.123};
+		struct mesh *cut = fx_triangle(a, b, c);
+		struct mesh *lead = fx_concat(flat, cut); /* 1: a copy of cut, skipped */
+		struct mesh *body = fx_concat(lead, sphere);
+		struct mesh *m = fx_concat(body, cut);
+		uint8_t *skip = calloc(m->ntris, 1);
+
+		ck_assert_ptr_nonnull(skip);
+		skip[1] = 1;
+		/* The 128 triangles of the band the plane goes through. */
+		for (int threads = 1; threads <= 2; threads++)
+			ck_assert_uint_eq(count_mesh(m, skip, threads), 128);
+		free(skip);
+		mesh_free(m);
+		mesh_free(body);
+		mesh_free(lead);
+		mesh_free(cut);
+	}
+	mesh_free(flat);
+	mesh_free(sphere);
+}
+END_TEST
+
+/*
  * The poles of a UV sphere put hundreds of slivers in a few grid cells,
  * which the grid sweeps along x instead of comparing all against all
  * (gridpairs.hpp).  A plane just below the north pole, between the first
@@ -733,6 +772,7 @@ Suite *exact_suite(void)
 	tcase_add_test(mesh, grid_and_boxes_agree);
 	tcase_add_test(mesh, crowded_cell_falls_back);
 	tcase_add_test(mesh, crowded_pole_swept);
+	tcase_add_test(mesh, left_out_triangles_shift_nothing);
 	tcase_add_test(mesh, huge_coordinates);
 	tcase_add_test(mesh, snap_round_on_grid_and_off);
 	tcase_set_timeout(mesh, 30);

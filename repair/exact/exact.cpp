@@ -24,6 +24,7 @@
 #include "stars.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <exception>
@@ -112,11 +113,18 @@ int count_pairs(const double (*verts)[3], size_t nverts, const uint32_t (*tris)[
 	auto apart = [tris](size_t s, size_t t) {
 		return pairtest::no_common_corner(tris[s], tris[t]);
 	};
+	typedef std::array<uint32_t, 3> corners;
+	auto corners_of = [tris](uint32_t t) { return corners{tris[t][0], tris[t][1], tris[t][2]}; };
 	std::atomic<uint64_t> far_hits{0};
-	if (gridpairs::for_each_pair(boxes, use, threads, apart, [&](size_t s, size_t t) {
-		    if (pairtest::intersects<K>(tris[s], tris[t], get))
-			    far_hits++;
-	    })) {
+	if (gridpairs::for_each_pair(
+		boxes, use, threads, corners_of,
+		[](const corners &a, const corners &b) {
+			return pairtest::no_common_corner(a.data(), b.data());
+		},
+		[&](const corners &a, const corners &b) {
+			if (pairtest::intersects<K>(a.data(), b.data(), get))
+				far_hits++;
+		})) {
 		*count = near_hits + far_hits;
 		return ST_OK;
 	}

@@ -21,6 +21,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 namespace gridpairs
@@ -83,18 +84,30 @@ inline bool overlap(const Box &a, const Box &b)
 }
 
 /*
- * Call visit(s, t) once, from any thread, for every pair of overlapping
- * boxes (closed, as boxpairs.hpp) among boxes[use[..]] for which keep(s, t)
- * is true; s and t are indices into boxes as given.  Returns false, having
- * called nothing, when the grid would be slow for these boxes; boxes[use[..]]
- * are then as given.  On true, boxes is left empty: the boxes are sorted
- * into cell order (so that the pairs are walked through memory in order),
- * and keeping the unsorted copy as well would cost 24 bytes per triangle.
+ * Call visit(tag_s, tag_t) once, from any thread, for every pair of
+ * overlapping boxes (closed, as boxpairs.hpp) among boxes[use[..]] for which
+ * keep(tag_s, tag_t) is true, where tag_s = tag_of(s) is what the caller
+ * needs of box s (a triangle's corners).  The tags are copied beside the
+ * sorted boxes: keep() runs for every overlapping pair (9 million on a
+ * 1M-triangle UV sphere, most of them neighbours it turns away), and
+ * looking the triangle up through its index missed the cache so often
+ * that one load carried 17 % of the pair loop's samples.  Returns false,
+ * having called nothing, when the grid would be slow for these boxes;
+ * boxes is then as given and use holds the same indices, perhaps in
+ * another order.  On true, boxes and use are left empty: the boxes are
+ * sorted into cell order (so that the pairs are walked through memory in
+ * order), and keeping the unsorted copy as well would cost 24 bytes per
+ * triangle.
  */
-template <class Keep, class Visit>
-bool for_each_pair(std::vector<Box> &boxes, const std::vector<uint32_t> &use, int threads,
-		   Keep keep, Visit visit)
+template <class TagOf, class Keep, class Visit>
+bool for_each_pair(std::vector<Box> &boxes, std::vector<uint32_t> &use, int threads,
+		   TagOf tag_of, Keep keep, Visit visit)
 {
+	typedef typename std::decay<decltype(tag_of(uint32_t()))>::type Tag;
+	struct item {
+		Box box;
+		Tag tag;
+	};
 	const size_t n = use.size();
 	grid g;
 
@@ -168,11 +181,21 @@ bool for_each_pair(std::vector<Box> &boxes, const std::vector<uint32_t> &use, in
 		for (size_t i = 0; i < n; i++)
 			id[first[group(boxes[use[i]])]++] = use[i];
 	}
+	/* id holds the same indices as use: one copy is enough at the peak. */
+	std::vector<uint32_t>().swap(use);
 	/* The sorted copy replaces the given one (24 bytes per box less at
 	 * the peak); it is put back if the grid declines below. */
-	std::vector<Box> sorted(n);
-	for (size_t i = 0; i < n; i++)
-		sorted[i] = boxes[id[i]];
+	std::vector<item> sorted(n);
+	/* Gathered on all cores: each read misses the cache (the file's order
+	 * is not the cells'), and the second core is idle here. */
+	const size_t gather = 16384;
+	boxpairs::for_each_index((n + gather - 1) / gather, threads, [&](size_t c) {
+		const size_t end_i = std::min(n, (c + 1) * gather);
+		for (size_t i = c * gather; i < end_i; i++) {
+			sorted[i].box = boxes[id[i]];
+			sorted[i].tag = tag_of(id[i]);
+		}
+	});
 	const size_t nboxes = boxes.size();
 	std::vector<Box>().swap(boxes);
 
@@ -180,7 +203,7 @@ bool for_each_pair(std::vector<Box> &boxes, const std::vector<uint32_t> &use, in
 	 * in a bucket when two of its cells share it (then next to itself). */
 	std::vector<uint32_t> off(nb + 1, 0);
 	for (size_t i = 0; i < n; i++)
-		for_each_cell(g, sorted[i], [&](uint32_t b) { off[b + 1]++; });
+		for_each_cell(g, sorted[i].box, [&](uint32_t b) { off[b + 1]++; });
 	double tests = 0;
 	for (size_t b = 0; b < nb; b++) {
 		tests += 0.5 * (double)off[b + 1] * (double)off[b + 1];
@@ -189,12 +212,14 @@ bool for_each_pair(std::vector<Box> &boxes, const std::vector<uint32_t> &use, in
 	if (tests > MAX_TESTS_PER_BOX * (double)n + 4096) {
 		boxes.resize(nboxes);
 		for (size_t i = 0; i < n; i++)
-			boxes[id[i]] = sorted[i];
+			boxes[id[i]] = sorted[i].box;
+		use = std::move(id);
 		return false;
 	}
+	std::vector<uint32_t>().swap(id);
 	std::vector<uint32_t> entry(off[nb]);
 	for (size_t i = 0; i < n; i++)
-		for_each_cell(g, sorted[i], [&](uint32_t b) { entry[off[b]++] = (uint32_t)i; });
+		for_each_cell(g, sorted[i].box, [&](uint32_t b) { entry[off[b]++] = (uint32_t)i; });
 	for (size_t b = nb; b > 0; b--)
 		off[b] = off[b - 1];
 	off[0] = 0;
@@ -222,30 +247,32 @@ bool for_each_pair(std::vector<Box> &boxes, const std::vector<uint32_t> &use, in
 			if (sweep)
 				std::sort(entry.begin() + first, entry.begin() + last,
 					  [&](uint32_t u, uint32_t v) {
-						  const float a = sorted[u].min_coord(0),
-							      z = sorted[v].min_coord(0);
+						  const float a = sorted[u].box.min_coord(0),
+							      z = sorted[v].box.min_coord(0);
 						  return a < z || (a == z && u < v);
 					  });
 			for (uint32_t i = first; i < last; i++) {
 				const uint32_t s = entry[i];
 				if (i > first && entry[i - 1] == s)
 					continue;
-				const Box &bs = sorted[s];
+				const item &is = sorted[s];
+				const Box &bs = is.box;
 				for (uint32_t j = i + 1; j < last; j++) {
 					const uint32_t t = entry[j];
 					if (t == entry[j - 1])
 						continue;
-					const Box &bt = sorted[t];
+					const item &it = sorted[t];
+					const Box &bt = it.box;
 					if (sweep && bt.min_coord(0) > bs.max_coord(0))
 						break;
-					if (!overlap(bs, bt) || !keep(id[s], id[t]))
+					if (!overlap(bs, bt) || !keep(is.tag, it.tag))
 						continue;
 					const uint64_t at = bucket_of(
 					    g, cell_of(g, 0, std::max(bs.min_coord(0), bt.min_coord(0))),
 					    cell_of(g, 1, std::max(bs.min_coord(1), bt.min_coord(1))),
 					    cell_of(g, 2, std::max(bs.min_coord(2), bt.min_coord(2))));
 					if (at == b)
-						visit(id[s], id[t]);
+						visit(is.tag, it.tag);
 				}
 			}
 		}
