@@ -150,6 +150,8 @@ struct profile {
 	double bed_min_x, bed_min_y, bed_max_x, bed_max_y; /* bed_shape bounding box, mm */
 	double max_print_height;			   /* mm; default 200 */
 	bool use_relative_e_distances;			   /* M83 instead of M82; default 0 */
+	bool remaining_times; /* M73 progress lines; default 0 */
+	bool silent_mode;     /* ... with M73 Q S too (marlin flavours); default 1 */
 	int extruder_count; /* `extruder_count`, else the length of nozzle_diameter, else 1 */
 
 	/* Per extruder (comma lists; one value applies to every extruder) */

@@ -51,6 +51,8 @@ static const struct key_def key_defs[] = {
 	{"max_print_height", KT_DOUBLE, S(max_print_height, bed.max_height)},
 	{"extruder_count", KT_EXTRUDERS, P(extruder_count)},
 	{"use_relative_e_distances", KT_BOOL, G(use_relative_e_distances)},
+	{"remaining_times", KT_BOOL, G(remaining_times)},
+	{"silent_mode", KT_BOOL, P(silent_mode)},
 	{"nozzle_diameter", KT_EX_DOUBLE, P(nozzle_diameter)},
 	{"filament_diameter", KT_EX_DOUBLE, G(filament_diameter)},
 	{"extruder_offset", KT_EX_POINT, P(extruder_offset)},

@@ -96,8 +96,7 @@ static const struct known known[] = {
     {"post_process", "", NULL, NULL}, {"gcode_substitutions", "", NULL, NULL},
     {"gcode_label_objects", NULL, NULL, NULL}, /* comments for host plugins */
     {"thumbnails", "", NULL, NULL}, {"retract_lift_below", "0", NULL, NULL},
-    {"retract_layer_change", "0", NULL, NULL}, {"remaining_times", "0", NULL, NULL},
-    {"silent_mode", NULL, NULL, NULL}, /* only selects the estimate's limits */
+    {"retract_layer_change", "0", NULL, NULL},
     {"retract_lift_above", "0", NULL, NULL}, {"retract_restart_extra", "0", NULL, NULL},
     {"retract_before_wipe", NULL, "wipe", "0"}, {"max_volumetric_speed", "0", NULL, NULL},
     {"filament_max_volumetric_speed", "0", NULL, NULL},

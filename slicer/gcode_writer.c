@@ -198,6 +198,9 @@ static int do_layer(struct gcodew *w, const struct layer_paths *l, size_t li)
 	/* PrusaSlicer 2.5's order: the layer change comments, before_layer_gcode
 	 * (the new layer's number and Z, the old maximum), layer_gcode (the new
 	 * maximum). */
+	rc = gcodew_progress_mark(w, false);
+	if (rc)
+		return rc;
 	gcodew_put(w, ";LAYER_CHANGE\n;Z:%s\n;HEIGHT:%s\n", nz, nh);
 	rc = put_expanded(w, s->before_layer_gcode, "before_layer_gcode", li, l->z);
 	if (rc)
@@ -352,23 +355,6 @@ static void writer_start(struct gcodew *w)
 	w->filament_mm = 0;
 }
 
-/* Append everything of body (rewound here) to fp. */
-static int copy_body(FILE *body, FILE *fp, struct st_error *err)
-{
-	char buf[65536];
-	size_t n;
-
-	rewind(body);
-	while ((n = fread(buf, 1, sizeof(buf), body)) > 0)
-		if (fwrite(buf, 1, n, fp) != n)
-			return st_error_set(err, ST_ERR_IO, "G-code: write failed: %s",
-					    strerror(errno));
-	if (ferror(body))
-		return st_error_set(err, ST_ERR_IO, "G-code: cannot read back the temporary "
-				    "file: %s", strerror(errno));
-	return 0;
-}
-
 void gcodew_free(struct gcodew *w)
 {
 	if (!w)
@@ -382,6 +368,7 @@ void gcodew_free(struct gcodew *w)
 	free(w->done);
 	travel_route_free(&w->route);
 	gcodew_simplify_free(w);
+	free(w->m73);
 	free(w->start);
 	free(w->start_filament);
 	ph_vars_free(w->vars);
@@ -460,6 +447,9 @@ int gcodew_begin(const struct gcodew_settings *s, size_t nlayers, struct gcodew 
 	}
 	w->fp = w->body;
 	writer_start(w);
+	rc = gcodew_progress_mark(w, false);
+	if (rc)
+		goto out_free;
 	put_start(w);
 	*out = w;
 	return 0;
@@ -493,6 +483,8 @@ int gcodew_finish(struct gcodew *w, FILE *fp, struct gcodew_summary *sum, struct
 				    "written", w->next, w->nlayers);
 	w->err = err;
 	rc = put_end(w);
+	if (rc == 0)
+		rc = gcodew_progress_mark(w, true);
 	est_planner_result(w->est, &er);
 	if (rc == 0 && (fflush(w->body) != 0 || ferror(w->body)))
 		rc = st_error_set(err, ST_ERR_IO, "G-code: write failed: %s", strerror(errno));
@@ -508,7 +500,7 @@ int gcodew_finish(struct gcodew *w, FILE *fp, struct gcodew_summary *sum, struct
 	/* The header first, then the body as generated. */
 	w->fp = fp;
 	gcodew_put_header(w, &res);
-	rc = copy_body(w->body, fp, err);
+	rc = gcodew_copy_body(w, fp, res.time_s, err);
 	if (rc == 0 && (fflush(fp) != 0 || ferror(fp)))
 		rc = st_error_set(err, ST_ERR_IO, "G-code: write failed: %s", strerror(errno));
 	if (rc == 0 && sum)

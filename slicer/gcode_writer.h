@@ -221,6 +221,17 @@ struct gcodew_settings {
 	 * original path's.  Listed in the header when not 0.
 	 * mm; 0.0125 (PrusaSlicer's gcode_resolution), 0 = every point */
 	double gcode_resolution;
+
+	/* Progress for the firmware's display (PrusaSlicer's remaining_times):
+	 * M73 P<percent of the estimated time done> R<minutes left> first in
+	 * the body, before each layer change where either number changed, and
+	 * M73 P100 R0 after the end G-code; percent floored, minutes of the
+	 * seconds rounded then floored, as PrusaSlicer 2.5.  Listed in the
+	 * header when set.  false */
+	bool remaining_times;
+	/* ... each followed by M73 Q S with the same figures (the stealth
+	 * mode's; host code sets it for silent_mode and a marlin flavour) */
+	bool remaining_times_silent; /* false */
 };
 
 /* What a written print will take; also written into the G-code header. */

@@ -38,6 +38,7 @@ struct key {
 #define KRD(n) {#n, KEY_DOUBLE, offsetof(struct gcodew_settings, n), false, true, false}
 #define KRI(n) {#n, KEY_INT, offsetof(struct gcodew_settings, n), false, true, false}
 #define KZD(n) {#n, KEY_DOUBLE, offsetof(struct gcodew_settings, n), false, false, true}
+#define KZB(n) {#n, KEY_BOOL, offsetof(struct gcodew_settings, n), false, false, true}
 
 static const struct key keys[] = {
     KD(nozzle_diameter, true),
@@ -90,6 +91,7 @@ static const struct key keys[] = {
     KRD(raft_first_layer_expansion),
     KRD(first_layer_speed_over_raft),
     KZD(gcode_resolution),
+    KZB(remaining_times),
 };
 
 #define NKEYS (sizeof(keys) / sizeof(keys[0]))

@@ -13,6 +13,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <sys/types.h>
 
 #include "estimate.h"
 #include "gcode_writer.h"
@@ -44,6 +45,14 @@ struct op {
 	double x, y, z;	     /* mm, target */
 	double e;	     /* mm of filament, see enum move_kind */
 	double f;	     /* mm/s */
+};
+
+/* remaining_times: where an M73 line goes in the body, and the time planned
+ * before it (gcode_writer_progress.c). */
+struct gcodew_m73 {
+	off_t off;   /* bytes into the body */
+	double t;    /* s */
+	bool last;   /* the end of the print: P100 R0 */
 };
 
 struct gcodew {
@@ -103,6 +112,8 @@ struct gcodew {
 	int bridge_fan;	    /* percent for bridges on this layer; -1: layer_fan */
 	size_t moves;
 	double filament_mm;
+	struct gcodew_m73 *m73; /* remaining_times, in the order of the body */
+	size_t nm73, m73cap;
 };
 
 /* gcode_writer.c: printf to the writer's current output (w->fp). */
@@ -142,6 +153,13 @@ int gcodew_simplify_path(struct gcodew *w, const struct toolpath *p, const struc
 int gcodew_simplify_route(struct gcodew *w, int64_t ax, int64_t ay);
 /* Release the scratch arrays above. */
 void gcodew_simplify_free(struct gcodew *w);
+
+/* gcode_writer_progress.c */
+/* remaining_times: an M73 line here in the body (last: the end's P100 R0);
+ * nothing when the key is off. */
+int gcodew_progress_mark(struct gcodew *w, bool last);
+/* The body to fp, the M73 lines for a print of total s written in it. */
+int gcodew_copy_body(struct gcodew *w, FILE *fp, double total, struct st_error *err);
 
 /* gcode_writer_cool.c */
 /* Decide layer li's fan and slow its extrusions down if it is too fast;

@@ -100,6 +100,13 @@ static const struct setting table[] = {
      "Stratum's key; default: the length of nozzle_diameter, else 1 (sailfish: at most 2)"},
     {"use_relative_e_distances", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
      "M83 (relative E) instead of M82"},
+    {"remaining_times", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
+     "M73 P (percent done) R (minutes left, from the estimate) at the start, at each layer "
+     "change where either changes, and P100 R0 at the end"},
+    {"silent_mode", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, NULL,
+     "the firmware has a stealth mode: with remaining_times and the marlin or marlin2 "
+     "flavour, each M73 P R is followed by M73 Q S (the same figures: the estimate uses the "
+     "normal mode's limits)"},
 
     {"nozzle_diameter", NUM, EX, 0.05, 3, 0, "mm", "0.4", NULL, NULL, 0, "Extruders", ""},
     {"filament_diameter", NUM, EX, 1, 3.5, 0, "mm", "1.75", NULL, NULL, 0, NULL, ""},

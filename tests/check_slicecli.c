@@ -606,9 +606,14 @@ START_TEST(bundle_presets_slice)
 	ck_assert_msg(status == 0, "exit %d: %s", status, out);
 	/* One warning line, naming keys with their values. */
 	ck_assert_msg(strstr(out, "warning: not supported, ignored: ") &&
-			      strstr(out, "remaining_times=1") && !strstr(out, "raft_layers"),
+			      strstr(out, "ensure_vertical_shell_thickness=1") &&
+			      !strstr(out, "raft_layers") && !strstr(out, "remaining_times"),
 		      "%s", out);
 	slurp(gc, gcode, sizeof(gcode));
+	/* remaining_times = 1 and silent_mode = 1 of the MK3 presets, marlin. */
+	ck_assert_msg(strstr(gcode, "\nM73 P0 R") && strstr(gcode, "\nM73 Q0 S") &&
+			      strstr(gcode, "\nM73 P100 R0\nM73 Q100 S0\n"),
+		      "M73");
 	/* PrusaSlicer's own expansions of the MK3S start, filament and end G-code. */
 	ck_assert_msg(strstr(gcode, "M862.3 P \"MK3S\" ; printer model check\n"), "start");
 	ck_assert_msg(strstr(gcode, "M862.1 P0.4 ; nozzle diameter check\n"), "nozzle");

@@ -675,7 +675,8 @@ START_TEST(profile_keys_reach_slicer_fields)
 				   "max_print_height = 123.5\n"
 				   "raft_first_layer_density = 70%\n"
 				   "layer_height = 0.15\n"
-				   "gcode_resolution = 0.02\n";
+				   "gcode_resolution = 0.02\n"
+				   "remaining_times = 1\n";
 	struct st_error err = {0};
 	struct profile *p = NULL;
 	struct slicer_config c;
@@ -693,7 +694,31 @@ START_TEST(profile_keys_reach_slicer_fields)
 	ck_assert_double_eq(c.raft.first_layer_density, 70);
 	ck_assert_double_eq(c.layer_height, 0.15);
 	ck_assert_double_eq(c.gcodew.gcode_resolution, 0.02);
+	ck_assert(c.gcodew.remaining_times);
+	ck_assert(c.gcodew.remaining_times_silent); /* silent_mode's default, marlin2 */
 	profile_free(p);
+}
+END_TEST
+
+/* M73 Q S for silent_mode with a marlin flavour only, as PrusaSlicer. */
+START_TEST(silent_mode_needs_marlin)
+{
+	static const char *const texts[] = {"gcode_flavor = marlin\nsilent_mode = 1\n",
+					    "gcode_flavor = marlin2\nsilent_mode = 0\n",
+					    "gcode_flavor = klipper\nsilent_mode = 1\n"};
+	static const bool silent[] = {true, false, false};
+
+	for (size_t i = 0; i < sizeof(texts) / sizeof(texts[0]); i++) {
+		struct st_error err = {0};
+		struct profile *p = NULL;
+		struct slicer_config c;
+
+		ck_assert_msg(!profile_load_buffer(texts[i], strlen(texts[i]), "s.ini", &p, &err),
+			      "%s", err.msg);
+		ck_assert_msg(!profile_slicer_config(p, &c, &err), "%s", err.msg);
+		ck_assert_msg(c.gcodew.remaining_times_silent == silent[i], "%s", texts[i]);
+		profile_free(p);
+	}
 }
 END_TEST
 
@@ -717,5 +742,6 @@ void slicecli_settings_tcases(Suite *s)
 	tcase_add_test(tc, small_perimeter_speed_honoured);
 	tcase_add_test(tc, infill_overlap_and_bridge_flow_honoured);
 	tcase_add_test(tc, profile_keys_reach_slicer_fields);
+	tcase_add_test(tc, silent_mode_needs_marlin);
 	suite_add_tcase(s, tc);
 }
