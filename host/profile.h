@@ -165,9 +165,12 @@ struct profile {
 	double retract_length[PROFILE_MAX_EXTRUDERS];		     /* mm; default 2 */
 	double retract_speed[PROFILE_MAX_EXTRUDERS];		     /* mm/s; default 40 */
 	double retract_lift[PROFILE_MAX_EXTRUDERS];		     /* mm (Z hop); default 0 */
+	double retract_lift_above[PROFILE_MAX_EXTRUDERS]; /* mm, hop at or above; default 0 */
+	double retract_lift_below[PROFILE_MAX_EXTRUDERS]; /* mm, ... at or below, 0 = any; default 0 */
 	double deretract_speed[PROFILE_MAX_EXTRUDERS]; /* mm/s, 0 = retract_speed; default 0 */
 	double retract_before_travel[PROFILE_MAX_EXTRUDERS]; /* mm; default 2 */
 	bool wipe; /* the first extruder's (one prints); default 0 */
+	bool retract_layer_change; /* likewise; default 0 */
 	double min_layer_height[PROFILE_MAX_EXTRUDERS];		     /* mm; default 0.07 */
 	double max_layer_height[PROFILE_MAX_EXTRUDERS]; /* mm; 0 in the file = 75% of nozzle */
 	double steps_per_mm_e[PROFILE_MAX_EXTRUDERS];	/* steps/mm; sailfish only */

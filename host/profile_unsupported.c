@@ -95,9 +95,8 @@ static const struct known known[] = {
     {"infill_only_where_needed", "0", NULL, NULL}, {"colorprint_heights", "", NULL, NULL},
     {"post_process", "", NULL, NULL}, {"gcode_substitutions", "", NULL, NULL},
     {"gcode_label_objects", NULL, NULL, NULL}, /* comments for host plugins */
-    {"thumbnails", "", NULL, NULL}, {"retract_lift_below", "0", NULL, NULL},
-    {"retract_layer_change", "0", NULL, NULL},
-    {"retract_lift_above", "0", NULL, NULL}, {"retract_restart_extra", "0", NULL, NULL},
+    {"thumbnails", "", NULL, NULL},
+    {"retract_restart_extra", "0", NULL, NULL},
     {"retract_before_wipe", NULL, "wipe", "0"}, {"max_volumetric_speed", "0", NULL, NULL},
     {"filament_max_volumetric_speed", "0", NULL, NULL},
     {"max_volumetric_extrusion_rate_slope_*", "0", NULL, NULL},

@@ -110,8 +110,18 @@ struct gcodew_settings {
 	double retract_speed;	      /* mm/s; 40 */
 	double deretract_speed;	      /* mm/s; 0 = retract_speed */
 	double retract_lift;	      /* mm of Z hop while travelling retracted; 0 */
+	/* ... only where the layer's Z is at least retract_lift_above and, when
+	 * retract_lift_below is not 0, at most that (PrusaSlicer's range) */
+	double retract_lift_above; /* mm; 0 */
+	double retract_lift_below; /* mm; 0 = no upper limit */
 	double retract_before_travel; /* mm: retract on travels longer than this; 2 */
 	bool wipe;		      /* retract while moving back over the last path; false */
+	/* Retract (wiping when wipe is set) and lift before each layer change,
+	 * as PrusaSlicer's retract_layer_change: the first travel of the new
+	 * layer then unretracts; not between spiral vase layers, which
+	 * continue each other, nor before the first layer (PrusaSlicer
+	 * retracts there too, after the start G-code).  false */
+	bool retract_layer_change;
 	/* Travels that would leave the part and come back are routed inside
 	 * the layer's region (layer_paths.travel); true (PrusaSlicer: false) */
 	bool avoid_crossing_perimeters;

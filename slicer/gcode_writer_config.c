@@ -39,6 +39,8 @@ struct key {
 #define KRI(n) {#n, KEY_INT, offsetof(struct gcodew_settings, n), false, true, false}
 #define KZD(n) {#n, KEY_DOUBLE, offsetof(struct gcodew_settings, n), false, false, true}
 #define KZB(n) {#n, KEY_BOOL, offsetof(struct gcodew_settings, n), false, false, true}
+#define KZDV(n) {#n, KEY_DOUBLE, offsetof(struct gcodew_settings, n), true, false, true}
+#define KZBV(n) {#n, KEY_BOOL, offsetof(struct gcodew_settings, n), true, false, true}
 
 static const struct key keys[] = {
     KD(nozzle_diameter, true),
@@ -56,8 +58,11 @@ static const struct key keys[] = {
     KD(retract_speed, true),
     KD(deretract_speed, true),
     KD(retract_lift, true),
+    KZDV(retract_lift_above),
+    KZDV(retract_lift_below),
     KD(retract_before_travel, true),
     KB(wipe, true),
+    KZBV(retract_layer_change),
     KB(avoid_crossing_perimeters, false),
     KB(only_retract_when_crossing_perimeters, false),
     KD(max_unretracted_travel, false),

@@ -75,6 +75,7 @@ struct gcodew {
 	double px, py, pz;
 	double layer_z;
 	int plan_role; /* role of the last path planned in this layer, -1 none */
+	bool plan_retracted; /* retracted at the layer change, not yet unretracted */
 	double fil_area;
 	struct op *ops;
 	size_t nops, opcap;

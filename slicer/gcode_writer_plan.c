@@ -78,6 +78,24 @@ int gcodew_plan_retract(struct gcodew *w)
 	return rc;
 }
 
+/* Whether a retraction at Z z lifts: retract_lift within PrusaSlicer's
+ * retract_lift_above / retract_lift_below range. */
+static bool lifts_at(const struct gcodew_settings *s, double z)
+{
+	return s->retract_lift > 0 && z >= s->retract_lift_above &&
+	       (s->retract_lift_below == 0 || z <= s->retract_lift_below);
+}
+
+/* Push back what was retracted, at Z z. */
+static int plan_unretract(struct gcodew *w, double z)
+{
+	const struct gcodew_settings *s = w->s;
+
+	w->plan_retracted = false;
+	return push_move(w, MV_UNRETRACT, false, 0, 0, z, s->retract_length,
+			 s->deretract_speed > 0 ? s->deretract_speed : s->retract_speed);
+}
+
 /*
  * Travel to (x, y) on the current layer, routed inside the part when the
  * layer has a travel map: retract (and lift) when longer than
@@ -97,11 +115,13 @@ static int plan_travel(struct gcodew *w, double x, double y)
 	if (!w->pos_known) {
 		w->pos_known = true;
 		rc = push_move(w, MV_TRAVEL, false, 0, 0, lz, 0, z_speed(s));
-		return rc ? rc : push_move(w, MV_TRAVEL, true, x, y, lz, 0, s->travel_speed);
+		if (rc == 0)
+			rc = push_move(w, MV_TRAVEL, true, x, y, lz, 0, s->travel_speed);
+		return rc || !w->plan_retracted ? rc : plan_unretract(w, lz);
 	}
 	d = hypot(x - w->px, y - w->py);
 	if (d < MOVE_EPS && fabs(w->pz - lz) < 1e-9)
-		return 0;
+		return w->plan_retracted ? plan_unretract(w, lz) : 0;
 	ax = llround(w->px * SLICE_UNITS_PER_MM);
 	ay = llround(w->py * SLICE_UNITS_PER_MM);
 	rc = travel_plan(w->map, ax, ay, llround(x * SLICE_UNITS_PER_MM),
@@ -114,10 +134,16 @@ static int plan_travel(struct gcodew *w, double x, double y)
 	    (s->max_unretracted_travel == 0 || len <= s->max_unretracted_travel))
 		retract = false; /* any ooze falls inside the part */
 	if (retract) {
-		rc = gcodew_plan_retract(w);
-		if (s->retract_lift > 0)
+		/* Already retracted at the layer change: PrusaSlicer only lifts. */
+		if (!w->plan_retracted)
+			rc = gcodew_plan_retract(w);
+		if (lifts_at(s, lz))
 			tz = lz + s->retract_lift;
 	}
+	/* Still lifted above the new layer by the layer change's lift: as
+	 * PrusaSlicer, the travel stays there instead of going down, or up. */
+	if (w->plan_retracted && w->pz > lz + 1e-9)
+		tz = w->pz;
 	if (rc == 0 && fabs(w->pz - tz) > 1e-9)
 		rc = push_move(w, MV_TRAVEL, false, 0, 0, tz, 0, z_speed(s));
 	if (rc == 0)
@@ -129,9 +155,8 @@ static int plan_travel(struct gcodew *w, double x, double y)
 		rc = push_move(w, MV_TRAVEL, true, x, y, tz, 0, s->travel_speed);
 	if (rc == 0 && tz != lz)
 		rc = push_move(w, MV_TRAVEL, false, 0, 0, lz, 0, z_speed(s));
-	if (rc == 0 && retract)
-		rc = push_move(w, MV_UNRETRACT, false, 0, 0, lz, s->retract_length,
-			       s->deretract_speed > 0 ? s->deretract_speed : s->retract_speed);
+	if (rc == 0 && (retract || w->plan_retracted))
+		rc = plan_unretract(w, lz);
 	return rc;
 }
 
@@ -399,12 +424,37 @@ static int plan_spiral(struct gcodew *w, const struct layer_paths *l, size_t li)
 	return rc;
 }
 
+/*
+ * retract_layer_change: retract (wiping) and lift before the move to layer
+ * l, as PrusaSlicer does whenever Z is to change; the first travel on l
+ * unretracts.  Not between spiral layers (the loop goes on), for a layer
+ * with nothing to print, nor before the first layer (nothing printed yet;
+ * where the start G-code left the nozzle is not known).
+ */
+static int plan_layer_retract(struct gcodew *w, const struct layer_paths *l)
+{
+	const struct gcodew_settings *s = w->s;
+	int rc;
+
+	if (!s->retract_layer_change || s->retract_length <= 0 || l->n == 0 || !w->pos_known ||
+	    (l->spiral && w->spiral_below) || fabs(w->pz - l->z) < 1e-9)
+		return 0;
+	rc = gcodew_plan_retract(w);
+	w->plan_retracted = rc == 0;
+	if (rc == 0 && lifts_at(s, w->pz))
+		rc = push_move(w, MV_TRAVEL, false, 0, 0, w->pz + s->retract_lift, 0, z_speed(s));
+	return rc;
+}
+
 /* Plan every path of layer li into w->ops. */
 int gcodew_plan_layer(struct gcodew *w, const struct layer_paths *l, size_t li)
 {
-	int rc = 0;
+	int rc;
 
 	w->nops = 0;
+	rc = plan_layer_retract(w, l);
+	if (rc)
+		return rc;
 	w->layer_z = l->z;
 	w->plan_role = -1;
 	w->map = w->s->avoid_crossing_perimeters ? l->travel : NULL;

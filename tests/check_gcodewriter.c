@@ -1101,5 +1101,6 @@ Suite *gcodewriter_suite(void)
 	suite_add_tcase(s, est);
 	gcodewriter_simplify_tcases(s);
 	gcodewriter_progress_tcases(s);
+	gcodewriter_retract_tcases(s);
 	return s;
 }

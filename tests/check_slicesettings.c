@@ -676,7 +676,10 @@ START_TEST(profile_keys_reach_slicer_fields)
 				   "raft_first_layer_density = 70%\n"
 				   "layer_height = 0.15\n"
 				   "gcode_resolution = 0.02\n"
-				   "remaining_times = 1\n";
+				   "remaining_times = 1\n"
+				   "retract_layer_change = 1\n"
+				   "retract_lift_below = 209\n"
+				   "retract_lift_above = 0.6\n";
 	struct st_error err = {0};
 	struct profile *p = NULL;
 	struct slicer_config c;
@@ -695,6 +698,9 @@ START_TEST(profile_keys_reach_slicer_fields)
 	ck_assert_double_eq(c.layer_height, 0.15);
 	ck_assert_double_eq(c.gcodew.gcode_resolution, 0.02);
 	ck_assert(c.gcodew.remaining_times);
+	ck_assert(c.gcodew.retract_layer_change);
+	ck_assert_double_eq(c.gcodew.retract_lift_below, 209);
+	ck_assert_double_eq(c.gcodew.retract_lift_above, 0.6);
 	ck_assert(c.gcodew.remaining_times_silent); /* silent_mode's default, marlin2 */
 	profile_free(p);
 }
