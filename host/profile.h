@@ -170,6 +170,7 @@ struct profile {
 	double deretract_speed[PROFILE_MAX_EXTRUDERS]; /* mm/s, 0 = retract_speed; default 0 */
 	double retract_before_travel[PROFILE_MAX_EXTRUDERS]; /* mm; default 2 */
 	bool wipe; /* the first extruder's (one prints); default 0 */
+	double retract_before_wipe; /* percent, the first extruder's; default 0 */
 	bool retract_layer_change; /* likewise; default 0 */
 	double min_layer_height[PROFILE_MAX_EXTRUDERS];		     /* mm; default 0.07 */
 	double max_layer_height[PROFILE_MAX_EXTRUDERS]; /* mm; 0 in the file = 75% of nozzle */

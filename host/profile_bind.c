@@ -70,6 +70,7 @@ static const struct key_def key_defs[] = {
 	{"deretract_speed", KT_EX_DOUBLE, G(deretract_speed)},
 	{"retract_before_travel", KT_EX_DOUBLE, G(retract_before_travel)},
 	{"wipe", KT_FIRST_BOOL, G(wipe)},
+	{"retract_before_wipe", KT_DENSITY, G(retract_before_wipe)},
 	{"retract_layer_change", KT_FIRST_BOOL, G(retract_layer_change)},
 	{"min_layer_height", KT_EX_DOUBLE, P(min_layer_height)},
 	{"max_layer_height", KT_EX_DOUBLE, P(max_layer_height)},

@@ -97,7 +97,7 @@ static const struct known known[] = {
     {"gcode_label_objects", NULL, NULL, NULL}, /* comments for host plugins */
     {"thumbnails", "", NULL, NULL},
     {"retract_restart_extra", "0", NULL, NULL},
-    {"retract_before_wipe", NULL, "wipe", "0"}, {"max_volumetric_speed", "0", NULL, NULL},
+    {"max_volumetric_speed", "0", NULL, NULL},
     {"filament_max_volumetric_speed", "0", NULL, NULL},
     {"max_volumetric_extrusion_rate_slope_*", "0", NULL, NULL},
     {"infill_first", "0", NULL, NULL}, {"brim_*", NULL, "brim_width", "0"},

@@ -116,6 +116,10 @@ struct gcodew_settings {
 	double retract_lift_below; /* mm; 0 = no upper limit */
 	double retract_before_travel; /* mm: retract on travels longer than this; 2 */
 	bool wipe;		      /* retract while moving back over the last path; false */
+	/* With wipe, this share of the retraction is done standing before the
+	 * wipe (the wipe is then as long as the rest needs), as PrusaSlicer's
+	 * retract_before_wipe; listed in the header when not 0.  percent; 0 */
+	double retract_before_wipe;
 	/* Retract (wiping when wipe is set) and lift before each layer change,
 	 * as PrusaSlicer's retract_layer_change: the first travel of the new
 	 * layer then unretracts; not between spiral vase layers, which

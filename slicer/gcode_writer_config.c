@@ -62,6 +62,7 @@ static const struct key keys[] = {
     KZDV(retract_lift_below),
     KD(retract_before_travel, true),
     KB(wipe, true),
+    KZDV(retract_before_wipe),
     KZBV(retract_layer_change),
     KB(avoid_crossing_perimeters, false),
     KB(only_retract_when_crossing_perimeters, false),
@@ -366,7 +367,8 @@ static bool key_is_pct(const struct gcodew_settings *s, const struct key *k)
 		return s->first_layer_speed_is_percent;
 	if (k->off == offsetof(struct gcodew_settings, first_layer_speed_over_raft))
 		return s->first_layer_speed_over_raft_is_percent;
-	return k->off == offsetof(struct gcodew_settings, raft_first_layer_density);
+	return k->off == offsetof(struct gcodew_settings, raft_first_layer_density) ||
+	       k->off == offsetof(struct gcodew_settings, retract_before_wipe);
 }
 
 /* Write "; estimated printing time = 1h 2m 3s". */

@@ -56,15 +56,22 @@ int gcodew_plan_retract(struct gcodew *w)
 	int rc = 0;
 
 	if (s->wipe && w->nwipe >= 2) {
-		double speed = WIPE_SPEED_SHARE * s->travel_speed;
-		double dist = len / s->retract_speed * speed, walked = 0;
+		double speed = WIPE_SPEED_SHARE * s->travel_speed, walked = 0, dist;
+		double before = len * s->retract_before_wipe / 100, wlen = len - before;
+
+		if (before > 1e-9) { /* standing first; the wipe takes the rest */
+			rc = push_move(w, MV_RETRACT, false, w->px, w->py, w->pz, before,
+				       s->retract_speed);
+			taken = before;
+		}
+		dist = wlen / s->retract_speed * speed;
 		for (size_t k = 0; k + 1 < w->nwipe && walked < dist && rc == 0; k++) {
 			double x0 = w->wipe[2 * k], y0 = w->wipe[2 * k + 1];
 			double x1 = w->wipe[2 * k + 2], y1 = w->wipe[2 * k + 3];
 			double seg = hypot(x1 - x0, y1 - y0), step = fmin(seg, dist - walked);
 			if (seg <= 0)
 				continue;
-			double t = step / seg, r = len * step / dist;
+			double t = step / seg, r = wlen * step / dist;
 			rc = push_move(w, MV_RETRACT, true, x0 + t * (x1 - x0), y0 + t * (y1 - y0),
 				       w->pz, r, speed);
 			walked += step;

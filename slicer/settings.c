@@ -133,6 +133,9 @@ static const struct setting table[] = {
      "shorter travels do not retract"},
     {"wipe", BOOL, FI, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
      "retract while moving back over the last path"},
+    {"retract_before_wipe", SETTING_PERCENT, FI, 0, 100, 0, "%", "0%", NULL, NULL, 0, NULL,
+     "with wipe, this share of the retraction is done standing before the wipe, the rest "
+     "while wiping (a bare number is a fraction)"},
     {"retract_layer_change", BOOL, FI, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
      "retract (wiping, lifting) before each layer change; the first travel of the layer "
      "unretracts"},

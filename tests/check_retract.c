@@ -1,6 +1,6 @@
 /*
- * check_retract.c - retract_layer_change and the retract_lift_above /
- * retract_lift_below range (slicer/gcode_writer_plan.c), read back from
+ * check_retract.c - retract_layer_change, the retract_lift_above /
+ * retract_lift_below range and retract_before_wipe (slicer/gcode_writer_plan.c), read back from
  * the written G-code in relative E.  Part of the gcodewriter suite.
  */
 #include <check.h>
@@ -170,11 +170,67 @@ START_TEST(test_lift_range)
 }
 END_TEST
 
+/* Each retraction of g (a run of moves with E < 0): how many there are,
+ * how many start standing with first_e, and whether each takes 0.8 mm. */
+static void retractions(const char *g, double first_e, int *runs, int *standing)
+{
+	double sum = 0;
+	bool in_run = false;
+
+	*runs = *standing = 0;
+	for (const char *l = strstr(g, ";LAYER_CHANGE"); l && *l;
+	     l = strchr(l, '\n') ? strchr(l, '\n') + 1 : l + strlen(l)) {
+		const char *end = strchr(l, '\n');
+		bool he, hx, hy;
+		double e = strncmp(l, "G1 ", 3) ? 0 : field(l, end, " E", &he);
+
+		field(l, end, " X", &hx);
+		field(l, end, " Y", &hy);
+		if (e < 0 && !in_run) {
+			(*runs)++;
+			if (!hx && !hy && fabs(e - first_e) < 1e-9)
+				(*standing)++;
+			sum = 0;
+		}
+		if (e < 0)
+			sum += e;
+		else if (in_run)
+			ck_assert_msg(fabs(sum + 0.8) < 2e-5, "a retraction of %g mm", -sum);
+		in_run = e < 0;
+	}
+}
+
+/* retract_before_wipe = 50%: every wiping retraction starts with 0.4 mm
+ * standing, and still takes 0.8 mm in all. */
+START_TEST(test_retract_before_wipe)
+{
+	struct gcodew_settings s;
+	struct layer_stack *st = tower(true, &s);
+	int runs, standing;
+	char *g;
+
+	s.wipe = true;
+	g = tu_gcode_mem(st, &s, NULL);
+	retractions(g, -0.4, &runs, &standing);
+	free(g);
+	ck_assert_int_ge(runs, LAYERS);
+	ck_assert_int_eq(standing, 0);
+	s.retract_before_wipe = 50;
+	g = tu_gcode_mem(st, &s, NULL);
+	retractions(g, -0.4, &runs, &standing);
+	free(g);
+	ck_assert_int_ge(runs, LAYERS);
+	ck_assert_int_eq(standing, runs);
+	layer_stack_free(st);
+}
+END_TEST
+
 void gcodewriter_retract_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("retract_keys");
 
 	tcase_add_test(tc, test_retract_layer_change);
 	tcase_add_test(tc, test_lift_range);
+	tcase_add_test(tc, test_retract_before_wipe);
 	suite_add_tcase(s, tc);
 }

@@ -679,7 +679,8 @@ START_TEST(profile_keys_reach_slicer_fields)
 				   "remaining_times = 1\n"
 				   "retract_layer_change = 1\n"
 				   "retract_lift_below = 209\n"
-				   "retract_lift_above = 0.6\n";
+				   "retract_lift_above = 0.6\n"
+				   "retract_before_wipe = 70%\n";
 	struct st_error err = {0};
 	struct profile *p = NULL;
 	struct slicer_config c;
@@ -701,7 +702,25 @@ START_TEST(profile_keys_reach_slicer_fields)
 	ck_assert(c.gcodew.retract_layer_change);
 	ck_assert_double_eq(c.gcodew.retract_lift_below, 209);
 	ck_assert_double_eq(c.gcodew.retract_lift_above, 0.6);
+	ck_assert_double_eq(c.gcodew.retract_before_wipe, 70);
 	ck_assert(c.gcodew.remaining_times_silent); /* silent_mode's default, marlin2 */
+	profile_free(p);
+}
+END_TEST
+
+/* retract_before_wipe is per extruder in PrusaSlicer: a list loads, its
+ * first value used (the MMU bundles write 0%,0%,0%,0%). */
+START_TEST(retract_before_wipe_list)
+{
+	static const char text[] = "nozzle_diameter = 0.4,0.4\nretract_before_wipe = 30%,0%\n";
+	struct st_error err = {0};
+	struct profile *p = NULL;
+	struct slicer_config c;
+
+	ck_assert_msg(!profile_load_buffer(text, sizeof(text) - 1, "l.ini", &p, &err), "%s",
+		      err.msg);
+	ck_assert_msg(!profile_slicer_config(p, &c, &err), "%s", err.msg);
+	ck_assert_double_eq(c.gcodew.retract_before_wipe, 30);
 	profile_free(p);
 }
 END_TEST
@@ -749,5 +768,6 @@ void slicecli_settings_tcases(Suite *s)
 	tcase_add_test(tc, infill_overlap_and_bridge_flow_honoured);
 	tcase_add_test(tc, profile_keys_reach_slicer_fields);
 	tcase_add_test(tc, silent_mode_needs_marlin);
+	tcase_add_test(tc, retract_before_wipe_list);
 	suite_add_tcase(s, tc);
 }
