@@ -658,6 +658,19 @@ START_TEST(infill_overlap_and_bridge_flow_honoured)
 }
 END_TEST
 
+/* The slicer's settings of profile text (asserted to load); free the
+ * profile returned. */
+static struct profile *config_of(const char *text, struct slicer_config *c)
+{
+	struct st_error err = {0};
+	struct profile *p = NULL;
+
+	ck_assert_msg(!profile_load_buffer(text, strlen(text), "bound.ini", &p, &err), "%s",
+		      err.msg);
+	ck_assert_msg(!profile_slicer_config(p, c, &err), "%s", err.msg);
+	return p;
+}
+
 /*
  * Keys copied into the slicer's fields as the profile holds them
  * (host/profile_bind.c) land in the field each is bound to, of each kind:
@@ -681,13 +694,9 @@ START_TEST(profile_keys_reach_slicer_fields)
 				   "retract_lift_below = 209\n"
 				   "retract_lift_above = 0.6\n"
 				   "retract_before_wipe = 70%\n";
-	struct st_error err = {0};
-	struct profile *p = NULL;
 	struct slicer_config c;
+	struct profile *p = config_of(text, &c);
 
-	ck_assert_msg(!profile_load_buffer(text, sizeof(text) - 1, "bound.ini", &p, &err), "%s",
-		      err.msg);
-	ck_assert_msg(!profile_slicer_config(p, &c, &err), "%s", err.msg);
 	ck_assert_int_eq(c.gcodew.temperature, 213);
 	ck_assert_double_eq(c.gcodew.fan_below_layer_time, 37);
 	ck_assert_int_eq(c.support.threshold, 33);
@@ -712,14 +721,10 @@ END_TEST
  * first value used (the MMU bundles write 0%,0%,0%,0%). */
 START_TEST(retract_before_wipe_list)
 {
-	static const char text[] = "nozzle_diameter = 0.4,0.4\nretract_before_wipe = 30%,0%\n";
-	struct st_error err = {0};
-	struct profile *p = NULL;
 	struct slicer_config c;
+	struct profile *p =
+	    config_of("nozzle_diameter = 0.4,0.4\nretract_before_wipe = 30%,0%\n", &c);
 
-	ck_assert_msg(!profile_load_buffer(text, sizeof(text) - 1, "l.ini", &p, &err), "%s",
-		      err.msg);
-	ck_assert_msg(!profile_slicer_config(p, &c, &err), "%s", err.msg);
 	ck_assert_double_eq(c.gcodew.retract_before_wipe, 30);
 	profile_free(p);
 }
@@ -734,13 +739,9 @@ START_TEST(silent_mode_needs_marlin)
 	static const bool silent[] = {true, false, false};
 
 	for (size_t i = 0; i < sizeof(texts) / sizeof(texts[0]); i++) {
-		struct st_error err = {0};
-		struct profile *p = NULL;
 		struct slicer_config c;
+		struct profile *p = config_of(texts[i], &c);
 
-		ck_assert_msg(!profile_load_buffer(texts[i], strlen(texts[i]), "s.ini", &p, &err),
-			      "%s", err.msg);
-		ck_assert_msg(!profile_slicer_config(p, &c, &err), "%s", err.msg);
 		ck_assert_msg(c.gcodew.remaining_times_silent == silent[i], "%s", texts[i]);
 		profile_free(p);
 	}
