@@ -236,6 +236,11 @@ struct profile {
 	struct profile_pct support_material_interface_speed; /* default 100% */
 	struct profile_pct first_layer_speed; /* a percentage is of each role's speed */
 	struct profile_pct first_layer_speed_over_raft; /* the part's first layer on a raft */
+	double default_acceleration; /* mm/s^2, M204 S; default 0 */
+	double perimeter_acceleration; /* mm/s^2, M204 S; default 0 */
+	double infill_acceleration; /* mm/s^2, M204 S; default 0 */
+	double bridge_acceleration; /* mm/s^2, M204 S; default 0 */
+	double first_layer_acceleration; /* mm/s^2, M204 S; default 0 */
 
 	/* Travel */
 	bool avoid_crossing_perimeters;		    /* default 1 */

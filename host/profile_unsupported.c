@@ -103,9 +103,7 @@ static const struct known known[] = {
     {"infill_first", "0", NULL, NULL}, {"brim_*", NULL, "brim_width", "0"},
     {"support_material_*", NULL, "support_material", "0"},
     {"dont_support_bridges", NULL, "support_material", "0"},
-    {"default_acceleration", "0", NULL, NULL}, {"perimeter_acceleration", "0", NULL, NULL},
-    {"infill_acceleration", "0", NULL, NULL}, {"bridge_acceleration", "0", NULL, NULL},
-    {"first_layer_acceleration", "0", NULL, NULL}, {"travel_acceleration", "0", NULL, NULL},
+    {"travel_acceleration", "0", NULL, NULL},
     {"external_perimeter_acceleration", "0", NULL, NULL}, {"top_solid_infill_acceleration", "0", NULL, NULL},
     {"solid_infill_acceleration", "0", NULL, NULL},
 };

@@ -64,6 +64,22 @@ static void set_fan(struct gcodew *w, int percent)
 	w->fan = percent;
 }
 
+/* Write acceleration v (an OP_ACCEL) when it differs from the last, in
+ * the flavour's words, and time what follows with it. */
+static void set_accel(struct gcodew *w, double v)
+{
+	int a = gcodew_accel_written(w->s, v);
+
+	if (a <= 0 || a == w->accel)
+		return;
+	if (w->s->accel_form == GCODEW_ACCEL_M201_M202)
+		gcodew_put(w, "M201 X%d Y%d\nM202 X%d Y%d\n", a, a, a, a);
+	else
+		gcodew_put(w, "M204 %c%d\n", w->s->accel_form == GCODEW_ACCEL_M204_P ? 'P' : 'S', a);
+	w->accel = a;
+	est_planner_set_accel(w->est, &w->s->limits, a, a);
+}
+
 /* Write one move op and feed it to the estimator. */
 static int emit_move(struct gcodew *w, const struct op *o)
 {
@@ -151,7 +167,9 @@ static int emit_ops(struct gcodew *w)
 
 	for (size_t i = 0; i < w->nops && rc == 0; i++) {
 		const struct op *o = &w->ops[i];
-		if (o->kind == OP_ROLE) {
+		if (o->kind == OP_ACCEL) {
+			set_accel(w, o->f);
+		} else if (o->kind == OP_ROLE) {
 			gcodew_put(w, ";TYPE:%s\n", path_role_name(o->role));
 			set_fan(w, o->role == PATH_BRIDGE && w->bridge_fan >= 0 ? w->bridge_fan
 									       : w->layer_fan);
@@ -351,6 +369,7 @@ static void writer_start(struct gcodew *w)
 	w->wx = w->wy = w->wz = 0;
 	w->wf = 0;
 	w->fan = -1;
+	w->accel = 0;
 	w->moves = 0;
 	w->filament_mm = 0;
 }

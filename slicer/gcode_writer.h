@@ -89,6 +89,15 @@ enum gcodew_limits_form {
 	GCODEW_LIMITS_MARLIN2,
 };
 
+/* How an acceleration is set (PrusaSlicer's set_acceleration): M204 S
+ * (Marlin and most), M204 P (RepRapFirmware), M201 X Y then M202 X Y
+ * (Repetier). */
+enum gcodew_accel_form {
+	GCODEW_ACCEL_M204_S,
+	GCODEW_ACCEL_M204_P,
+	GCODEW_ACCEL_M201_M202,
+};
+
 struct gcodew_settings {
 	/* Machine and filament */
 	double nozzle_diameter;	       /* mm; 0.4 */
@@ -152,6 +161,20 @@ struct gcodew_settings {
 	 * with a raft only); 30 */
 	double first_layer_speed_over_raft;
 	bool first_layer_speed_over_raft_is_percent;
+
+	/* Accelerations, mm/s^2, PrusaSlicer 2.5's: with default_acceleration
+	 * above 0, each path is preceded by its value (first_layer_, else
+	 * perimeter_, bridge_ or infill_acceleration by role, each when above
+	 * 0, else the default) and followed by the default, written (rounded;
+	 * at most the machine's extruding limit when the limits are written)
+	 * only when it changes, as accel_form says; the estimate takes each
+	 * within the machine limits.  All listed in the header when not 0. */
+	double default_acceleration;	 /* 0 */
+	double perimeter_acceleration;	 /* 0 */
+	double infill_acceleration;	 /* 0 */
+	double bridge_acceleration;	 /* 0 */
+	double first_layer_acceleration; /* 0 */
+	enum gcodew_accel_form accel_form; /* GCODEW_ACCEL_M204_S */
 
 	/* Cooling */
 	bool cooling;			  /* true */

@@ -96,6 +96,11 @@ static const struct key keys[] = {
     KRD(raft_first_layer_density),
     KRD(raft_first_layer_expansion),
     KRD(first_layer_speed_over_raft),
+    KZD(default_acceleration),
+    KZD(perimeter_acceleration),
+    KZD(infill_acceleration),
+    KZD(bridge_acceleration),
+    KZD(first_layer_acceleration),
     KZD(gcode_resolution),
     KZB(remaining_times),
 };

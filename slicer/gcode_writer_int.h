@@ -28,7 +28,7 @@
 
 /* A layer is planned into operations (moves and role changes), cooled,
  * then emitted. */
-enum op_kind { OP_MOVE, OP_ROLE };
+enum op_kind { OP_MOVE, OP_ROLE, OP_ACCEL /* f: mm/s^2 */ };
 
 enum move_kind {
 	MV_TRAVEL,    /* no extrusion */
@@ -109,6 +109,7 @@ struct gcodew {
 	int64_t wx, wy, wz; /* um, last written */
 	long long wf;	    /* mm/min, last written, 0 none */
 	int fan;	    /* percent written, -1 unknown */
+	int accel;	    /* mm/s^2 last written (M204), 0 none */
 	int layer_fan;	    /* percent for this layer's non-bridge paths */
 	int bridge_fan;	    /* percent for bridges on this layer; -1: layer_fan */
 	size_t moves;
@@ -161,6 +162,10 @@ void gcodew_simplify_free(struct gcodew *w);
 int gcodew_progress_mark(struct gcodew *w, bool last);
 /* The body to fp, the M73 lines for a print of total s written in it. */
 int gcodew_copy_body(struct gcodew *w, FILE *fp, double total, struct st_error *err);
+
+/* gcode_writer_progress.c, beside the M73 lines: an acceleration op's
+ * value as written (rounded, capped), 0 = nothing to write. */
+int gcodew_accel_written(const struct gcodew_settings *s, double v);
 
 /* gcode_writer_cool.c */
 /* Decide layer li's fan and slow its extrusions down if it is too fast;

@@ -293,6 +293,24 @@ static int plan_segment(struct gcodew *w, const struct layer_paths *l, size_t li
 			 share * area * len / w->fil_area * w->s->extrusion_multiplier, speed);
 }
 
+/* PrusaSlicer 2.5's acceleration for a path of role on layer li (0-based):
+ * the first layer's, else by role, each when above 0, else the default. */
+static double path_accel(const struct gcodew_settings *s, enum path_role role, size_t li)
+{
+	double v = 0;
+
+	if (li == 0 && s->first_layer_acceleration > 0)
+		return s->first_layer_acceleration;
+	if (role == PATH_OUTER_PERIMETER || role == PATH_INNER_PERIMETER || role == PATH_THIN_WALL)
+		v = s->perimeter_acceleration;
+	else if (role == PATH_BRIDGE && s->bridge_acceleration > 0)
+		v = s->bridge_acceleration;
+	else if (role == PATH_BRIDGE || role == PATH_SOLID_INFILL || role == PATH_BOTTOM_SKIN ||
+		 role == PATH_TOP_SKIN || role == PATH_SPARSE_INFILL || role == PATH_IRONING)
+		v = s->infill_acceleration; /* a bridge is infill too */
+	return v > 0 ? v : s->default_acceleration;
+}
+
 /* Plan path pi of layer li: travel to its start, then its segments, as
  * simplified to gcode_resolution (the speed is the original path's). */
 static int plan_path(struct gcodew *w, const struct layer_paths *l, size_t li, size_t pi, bool rev)
@@ -308,6 +326,8 @@ static int plan_path(struct gcodew *w, const struct layer_paths *l, size_t li, s
 		return rc;
 	const struct path_point *q0 = &q->pts[trav(q, rev, 0)];
 	rc = plan_travel(w, q0->x / SLICE_UNITS_PER_MM, q0->y / SLICE_UNITS_PER_MM);
+	if (rc == 0 && s->default_acceleration > 0)
+		rc = push(w, (struct op){.kind = OP_ACCEL, .f = path_accel(s, p->role, li)});
 	if (rc == 0 && w->plan_role != (int)p->role) {
 		rc = push(w, (struct op){.kind = OP_ROLE, .role = p->role});
 		w->plan_role = (int)p->role;
@@ -318,6 +338,8 @@ static int plan_path(struct gcodew *w, const struct layer_paths *l, size_t li, s
 		rc = plan_segment(w, l, li, pi, simplified ? w->sidx[f] : f, pa, pb, q->pts[f].width,
 				  w->layer_z, speed, simplified ? w->sstretch[f] : 1);
 	}
+	if (rc == 0 && s->default_acceleration > 0) /* reset after the path, as PrusaSlicer */
+		rc = push(w, (struct op){.kind = OP_ACCEL, .f = s->default_acceleration});
 	if (rc == 0 && s->wipe)
 		rc = record_wipe(w, q, rev, steps, 0);
 	return rc;

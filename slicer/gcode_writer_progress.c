@@ -3,11 +3,13 @@
  * gcode_writer.h).  The total time is only known once the last move is
  * planned, after the body was generated, so the body records where each
  * line goes and the time planned up to there; the lines are written into
- * the body as it is copied after the header.
+ * the body as it is copied after the header.  Also how an acceleration
+ * op is written (default_acceleration and the per-role keys).
  */
 #include "gcode_writer_int.h"
 
 #include <errno.h>
+#include <math.h>
 #include <string.h>
 
 #include "st_grow.h"
@@ -29,6 +31,14 @@ int gcodew_progress_mark(struct gcodew *w, bool last)
 	est_planner_result(w->est, &er);
 	w->m73[w->nm73++] = (struct gcodew_m73){.off = off, .t = er.time_s, .last = last};
 	return 0;
+}
+
+int gcodew_accel_written(const struct gcodew_settings *s, double v)
+{
+	int a = (int)floor(v + 0.5), cap = (int)(s->limits.accel_extruding + 0.5);
+
+	/* PrusaSlicer caps it where it writes the limits (Marlin). */
+	return s->limits_form != GCODEW_LIMITS_NONE && a > cap ? cap : a;
 }
 
 /* Copy n bytes of body to fp, from where body is. */

@@ -1102,5 +1102,6 @@ Suite *gcodewriter_suite(void)
 	gcodewriter_simplify_tcases(s);
 	gcodewriter_progress_tcases(s);
 	gcodewriter_retract_tcases(s);
+	gcodewriter_accel_tcases(s);
 	return s;
 }

@@ -693,7 +693,8 @@ START_TEST(profile_keys_reach_slicer_fields)
 				   "retract_layer_change = 1\n"
 				   "retract_lift_below = 209\n"
 				   "retract_lift_above = 0.6\n"
-				   "retract_before_wipe = 70%\n";
+				   "retract_before_wipe = 70%\n"
+				   "bridge_acceleration = 1234\n";
 	struct slicer_config c;
 	struct profile *p = config_of(text, &c);
 
@@ -712,6 +713,8 @@ START_TEST(profile_keys_reach_slicer_fields)
 	ck_assert_double_eq(c.gcodew.retract_lift_below, 209);
 	ck_assert_double_eq(c.gcodew.retract_lift_above, 0.6);
 	ck_assert_double_eq(c.gcodew.retract_before_wipe, 70);
+	ck_assert_double_eq(c.gcodew.bridge_acceleration, 1234);
+	ck_assert_int_eq(c.gcodew.accel_form, GCODEW_ACCEL_M204_S);
 	ck_assert(c.gcodew.remaining_times_silent); /* silent_mode's default, marlin2 */
 	profile_free(p);
 }
