@@ -96,6 +96,7 @@ static const struct known known[] = {
     {"post_process", "", NULL, NULL}, {"gcode_substitutions", "", NULL, NULL},
     {"gcode_label_objects", NULL, NULL, NULL}, /* comments for host plugins */
     {"thumbnails", "", NULL, NULL},
+    {"thick_bridges", "1", NULL, NULL}, /* round threads of the nozzle's width (infill_classify.c) */
     {"retract_restart_extra", "0", NULL, NULL},
     {"max_volumetric_speed", "0", NULL, NULL},
     {"filament_max_volumetric_speed", "0", NULL, NULL},
