@@ -150,6 +150,8 @@ struct profile {
 	double bed_min_x, bed_min_y, bed_max_x, bed_max_y; /* bed_shape bounding box, mm */
 	double max_print_height;			   /* mm; default 200 */
 	bool use_relative_e_distances;			   /* M83 instead of M82; default 0 */
+	bool remaining_times; /* M73 progress lines; default 0 */
+	bool silent_mode;     /* ... with M73 Q S too (marlin flavours); default 1 */
 	int extruder_count; /* `extruder_count`, else the length of nozzle_diameter, else 1 */
 
 	/* Per extruder (comma lists; one value applies to every extruder) */
@@ -163,9 +165,13 @@ struct profile {
 	double retract_length[PROFILE_MAX_EXTRUDERS];		     /* mm; default 2 */
 	double retract_speed[PROFILE_MAX_EXTRUDERS];		     /* mm/s; default 40 */
 	double retract_lift[PROFILE_MAX_EXTRUDERS];		     /* mm (Z hop); default 0 */
+	double retract_lift_above[PROFILE_MAX_EXTRUDERS]; /* mm, hop at or above; default 0 */
+	double retract_lift_below[PROFILE_MAX_EXTRUDERS]; /* mm, ... at or below, 0 = any; default 0 */
 	double deretract_speed[PROFILE_MAX_EXTRUDERS]; /* mm/s, 0 = retract_speed; default 0 */
 	double retract_before_travel[PROFILE_MAX_EXTRUDERS]; /* mm; default 2 */
 	bool wipe; /* the first extruder's (one prints); default 0 */
+	double retract_before_wipe; /* percent, the first extruder's; default 0 */
+	bool retract_layer_change; /* likewise; default 0 */
 	double min_layer_height[PROFILE_MAX_EXTRUDERS];		     /* mm; default 0.07 */
 	double max_layer_height[PROFILE_MAX_EXTRUDERS]; /* mm; 0 in the file = 75% of nozzle */
 	double steps_per_mm_e[PROFILE_MAX_EXTRUDERS];	/* steps/mm; sailfish only */
@@ -230,6 +236,11 @@ struct profile {
 	struct profile_pct support_material_interface_speed; /* default 100% */
 	struct profile_pct first_layer_speed; /* a percentage is of each role's speed */
 	struct profile_pct first_layer_speed_over_raft; /* the part's first layer on a raft */
+	double default_acceleration; /* mm/s^2, M204 S; default 0 */
+	double perimeter_acceleration; /* mm/s^2, M204 S; default 0 */
+	double infill_acceleration; /* mm/s^2, M204 S; default 0 */
+	double bridge_acceleration; /* mm/s^2, M204 S; default 0 */
+	double first_layer_acceleration; /* mm/s^2, M204 S; default 0 */
 
 	/* Travel */
 	bool avoid_crossing_perimeters;		    /* default 1 */

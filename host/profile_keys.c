@@ -558,7 +558,22 @@ int prof_apply_key(struct loader *L, const struct key_def *d, const struct profi
 		}
 		return 0;
 	case KT_DENSITY:
-		rc = pct_or_number(L, kv, &v, &pct);
+		if (decl->shape == SETTING_FIRST) { /* a list per extruder: its first value */
+			struct profile_kv first = *kv;
+			char buf[64];
+
+			n = prof_split_list(L, kv, items, PROFILE_MAX_EXTRUDERS);
+			if (n < 0)
+				return n;
+			rc = check_count(L, kv, d, n);
+			if (rc)
+				return rc;
+			snprintf(buf, sizeof(buf), "%.*s", (int)items[0].len, items[0].s);
+			first.value = buf;
+			rc = pct_or_number(L, &first, &v, &pct);
+		} else {
+			rc = pct_or_number(L, kv, &v, &pct);
+		}
 		if (rc)
 			return rc;
 		if (!pct)

@@ -136,6 +136,12 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	g->first_layer_speed_over_raft_is_percent = p->first_layer_speed_over_raft.is_percent;
 	g->fan_on_off = p->gcode_flavor == PROFILE_FLAVOR_MAKERWARE ||
 			p->gcode_flavor == PROFILE_FLAVOR_SAILFISH;
+	/* PrusaSlicer times a stealth mode for these flavours only. */
+	g->remaining_times_silent = p->silent_mode && (p->gcode_flavor == PROFILE_FLAVOR_MARLIN ||
+						       p->gcode_flavor == PROFILE_FLAVOR_MARLIN2);
+	g->accel_form = p->gcode_flavor == PROFILE_FLAVOR_REPRAPFIRMWARE ? GCODEW_ACCEL_M204_P
+			: p->gcode_flavor == PROFILE_FLAVOR_REPETIER	   ? GCODEW_ACCEL_M201_M202
+									   : GCODEW_ACCEL_M204_S;
 	limits_from_profile(p, &g->limits);
 	g->limits_form = limits_form(p);
 	g->min_extruding_rate = p->machine_min_extruding_rate;

@@ -95,19 +95,16 @@ static const struct known known[] = {
     {"infill_only_where_needed", "0", NULL, NULL}, {"colorprint_heights", "", NULL, NULL},
     {"post_process", "", NULL, NULL}, {"gcode_substitutions", "", NULL, NULL},
     {"gcode_label_objects", NULL, NULL, NULL}, /* comments for host plugins */
-    {"thumbnails", "", NULL, NULL}, {"retract_lift_below", "0", NULL, NULL},
-    {"retract_layer_change", "0", NULL, NULL}, {"remaining_times", "0", NULL, NULL},
-    {"silent_mode", NULL, NULL, NULL}, /* only selects the estimate's limits */
-    {"retract_lift_above", "0", NULL, NULL}, {"retract_restart_extra", "0", NULL, NULL},
-    {"retract_before_wipe", NULL, "wipe", "0"}, {"max_volumetric_speed", "0", NULL, NULL},
+    {"thumbnails", "", NULL, NULL},
+    {"thick_bridges", "1", NULL, NULL}, /* round threads of the nozzle's width (infill_classify.c) */
+    {"retract_restart_extra", "0", NULL, NULL},
+    {"max_volumetric_speed", "0", NULL, NULL},
     {"filament_max_volumetric_speed", "0", NULL, NULL},
     {"max_volumetric_extrusion_rate_slope_*", "0", NULL, NULL},
     {"infill_first", "0", NULL, NULL}, {"brim_*", NULL, "brim_width", "0"},
     {"support_material_*", NULL, "support_material", "0"},
     {"dont_support_bridges", NULL, "support_material", "0"},
-    {"default_acceleration", "0", NULL, NULL}, {"perimeter_acceleration", "0", NULL, NULL},
-    {"infill_acceleration", "0", NULL, NULL}, {"bridge_acceleration", "0", NULL, NULL},
-    {"first_layer_acceleration", "0", NULL, NULL}, {"travel_acceleration", "0", NULL, NULL},
+    {"travel_acceleration", "0", NULL, NULL},
     {"external_perimeter_acceleration", "0", NULL, NULL}, {"top_solid_infill_acceleration", "0", NULL, NULL},
     {"solid_infill_acceleration", "0", NULL, NULL},
 };

@@ -133,6 +133,17 @@ struct est_planner *est_planner_new(const struct est_limits *lim, const double s
 	return p;
 }
 
+void est_planner_set_accel(struct est_planner *p, const struct est_limits *lim, double print,
+			   double travel)
+{
+	double tl = lim->accel_travel > 0 ? lim->accel_travel : lim->accel_extruding;
+
+	if (print > 0)
+		p->lim.accel_extruding = fmin(print, lim->accel_extruding);
+	if (travel > 0)
+		p->lim.accel_travel = fmin(travel, tl);
+}
+
 void est_planner_free(struct est_planner *p)
 {
 	free(p);

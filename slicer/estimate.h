@@ -80,6 +80,14 @@ void est_limits_init(struct est_limits *lim);
 struct est_planner *est_planner_new(const struct est_limits *lim, const double start[EST_AXES],
 				    struct st_error *err);
 
+/*
+ * est_planner_set_accel - moves added from now on accelerate at @print
+ * (with E) and @travel (without) mm/s^2, each at most the limit it
+ * replaces (M204 S within the machine's limits); values <= 0 are ignored.
+ */
+void est_planner_set_accel(struct est_planner *p, const struct est_limits *lim, double print,
+			   double travel);
+
 /* est_planner_free - free a planner; NULL is fine. */
 void est_planner_free(struct est_planner *p);
 

@@ -64,6 +64,22 @@ static void set_fan(struct gcodew *w, int percent)
 	w->fan = percent;
 }
 
+/* Write acceleration v (an OP_ACCEL) when it differs from the last, in
+ * the flavour's words, and time what follows with it. */
+static void set_accel(struct gcodew *w, double v)
+{
+	int a = gcodew_accel_written(w->s, v);
+
+	if (a <= 0 || a == w->accel)
+		return;
+	if (w->s->accel_form == GCODEW_ACCEL_M201_M202)
+		gcodew_put(w, "M201 X%d Y%d\nM202 X%d Y%d\n", a, a, a, a);
+	else
+		gcodew_put(w, "M204 %c%d\n", w->s->accel_form == GCODEW_ACCEL_M204_P ? 'P' : 'S', a);
+	w->accel = a;
+	est_planner_set_accel(w->est, &w->s->limits, a, a);
+}
+
 /* Write one move op and feed it to the estimator. */
 static int emit_move(struct gcodew *w, const struct op *o)
 {
@@ -151,7 +167,9 @@ static int emit_ops(struct gcodew *w)
 
 	for (size_t i = 0; i < w->nops && rc == 0; i++) {
 		const struct op *o = &w->ops[i];
-		if (o->kind == OP_ROLE) {
+		if (o->kind == OP_ACCEL) {
+			set_accel(w, o->f);
+		} else if (o->kind == OP_ROLE) {
 			gcodew_put(w, ";TYPE:%s\n", path_role_name(o->role));
 			set_fan(w, o->role == PATH_BRIDGE && w->bridge_fan >= 0 ? w->bridge_fan
 									       : w->layer_fan);
@@ -198,6 +216,9 @@ static int do_layer(struct gcodew *w, const struct layer_paths *l, size_t li)
 	/* PrusaSlicer 2.5's order: the layer change comments, before_layer_gcode
 	 * (the new layer's number and Z, the old maximum), layer_gcode (the new
 	 * maximum). */
+	rc = gcodew_progress_mark(w, false);
+	if (rc)
+		return rc;
 	gcodew_put(w, ";LAYER_CHANGE\n;Z:%s\n;HEIGHT:%s\n", nz, nh);
 	rc = put_expanded(w, s->before_layer_gcode, "before_layer_gcode", li, l->z);
 	if (rc)
@@ -348,25 +369,9 @@ static void writer_start(struct gcodew *w)
 	w->wx = w->wy = w->wz = 0;
 	w->wf = 0;
 	w->fan = -1;
+	w->accel = 0;
 	w->moves = 0;
 	w->filament_mm = 0;
-}
-
-/* Append everything of body (rewound here) to fp. */
-static int copy_body(FILE *body, FILE *fp, struct st_error *err)
-{
-	char buf[65536];
-	size_t n;
-
-	rewind(body);
-	while ((n = fread(buf, 1, sizeof(buf), body)) > 0)
-		if (fwrite(buf, 1, n, fp) != n)
-			return st_error_set(err, ST_ERR_IO, "G-code: write failed: %s",
-					    strerror(errno));
-	if (ferror(body))
-		return st_error_set(err, ST_ERR_IO, "G-code: cannot read back the temporary "
-				    "file: %s", strerror(errno));
-	return 0;
 }
 
 void gcodew_free(struct gcodew *w)
@@ -382,6 +387,7 @@ void gcodew_free(struct gcodew *w)
 	free(w->done);
 	travel_route_free(&w->route);
 	gcodew_simplify_free(w);
+	free(w->m73);
 	free(w->start);
 	free(w->start_filament);
 	ph_vars_free(w->vars);
@@ -460,6 +466,9 @@ int gcodew_begin(const struct gcodew_settings *s, size_t nlayers, struct gcodew 
 	}
 	w->fp = w->body;
 	writer_start(w);
+	rc = gcodew_progress_mark(w, false);
+	if (rc)
+		goto out_free;
 	put_start(w);
 	*out = w;
 	return 0;
@@ -493,6 +502,8 @@ int gcodew_finish(struct gcodew *w, FILE *fp, struct gcodew_summary *sum, struct
 				    "written", w->next, w->nlayers);
 	w->err = err;
 	rc = put_end(w);
+	if (rc == 0)
+		rc = gcodew_progress_mark(w, true);
 	est_planner_result(w->est, &er);
 	if (rc == 0 && (fflush(w->body) != 0 || ferror(w->body)))
 		rc = st_error_set(err, ST_ERR_IO, "G-code: write failed: %s", strerror(errno));
@@ -508,7 +519,7 @@ int gcodew_finish(struct gcodew *w, FILE *fp, struct gcodew_summary *sum, struct
 	/* The header first, then the body as generated. */
 	w->fp = fp;
 	gcodew_put_header(w, &res);
-	rc = copy_body(w->body, fp, err);
+	rc = gcodew_copy_body(w, fp, res.time_s, err);
 	if (rc == 0 && (fflush(fp) != 0 || ferror(fp)))
 		rc = st_error_set(err, ST_ERR_IO, "G-code: write failed: %s", strerror(errno));
 	if (rc == 0 && sum)

@@ -89,6 +89,15 @@ enum gcodew_limits_form {
 	GCODEW_LIMITS_MARLIN2,
 };
 
+/* How an acceleration is set (PrusaSlicer's set_acceleration): M204 S
+ * (Marlin and most), M204 P (RepRapFirmware), M201 X Y then M202 X Y
+ * (Repetier). */
+enum gcodew_accel_form {
+	GCODEW_ACCEL_M204_S,
+	GCODEW_ACCEL_M204_P,
+	GCODEW_ACCEL_M201_M202,
+};
+
 struct gcodew_settings {
 	/* Machine and filament */
 	double nozzle_diameter;	       /* mm; 0.4 */
@@ -110,8 +119,22 @@ struct gcodew_settings {
 	double retract_speed;	      /* mm/s; 40 */
 	double deretract_speed;	      /* mm/s; 0 = retract_speed */
 	double retract_lift;	      /* mm of Z hop while travelling retracted; 0 */
+	/* ... only where the layer's Z is at least retract_lift_above and, when
+	 * retract_lift_below is not 0, at most that (PrusaSlicer's range) */
+	double retract_lift_above; /* mm; 0 */
+	double retract_lift_below; /* mm; 0 = no upper limit */
 	double retract_before_travel; /* mm: retract on travels longer than this; 2 */
 	bool wipe;		      /* retract while moving back over the last path; false */
+	/* With wipe, this share of the retraction is done standing before the
+	 * wipe (the wipe is then as long as the rest needs), as PrusaSlicer's
+	 * retract_before_wipe; listed in the header when not 0.  percent; 0 */
+	double retract_before_wipe;
+	/* Retract (wiping when wipe is set) and lift before each layer change,
+	 * as PrusaSlicer's retract_layer_change: the first travel of the new
+	 * layer then unretracts; not between spiral vase layers, which
+	 * continue each other, nor before the first layer (PrusaSlicer
+	 * retracts there too, after the start G-code).  false */
+	bool retract_layer_change;
 	/* Travels that would leave the part and come back are routed inside
 	 * the layer's region (layer_paths.travel); true (PrusaSlicer: false) */
 	bool avoid_crossing_perimeters;
@@ -138,6 +161,20 @@ struct gcodew_settings {
 	 * with a raft only); 30 */
 	double first_layer_speed_over_raft;
 	bool first_layer_speed_over_raft_is_percent;
+
+	/* Accelerations, mm/s^2, PrusaSlicer 2.5's: with default_acceleration
+	 * above 0, each path is preceded by its value (first_layer_, else
+	 * perimeter_, bridge_ or infill_acceleration by role, each when above
+	 * 0, else the default) and followed by the default, written (rounded;
+	 * at most the machine's extruding limit when the limits are written)
+	 * only when it changes, as accel_form says; the estimate takes each
+	 * within the machine limits.  All listed in the header when not 0. */
+	double default_acceleration;	 /* 0 */
+	double perimeter_acceleration;	 /* 0 */
+	double infill_acceleration;	 /* 0 */
+	double bridge_acceleration;	 /* 0 */
+	double first_layer_acceleration; /* 0 */
+	enum gcodew_accel_form accel_form; /* GCODEW_ACCEL_M204_S */
 
 	/* Cooling */
 	bool cooling;			  /* true */
@@ -221,6 +258,17 @@ struct gcodew_settings {
 	 * original path's.  Listed in the header when not 0.
 	 * mm; 0.0125 (PrusaSlicer's gcode_resolution), 0 = every point */
 	double gcode_resolution;
+
+	/* Progress for the firmware's display (PrusaSlicer's remaining_times):
+	 * M73 P<percent of the estimated time done> R<minutes left> first in
+	 * the body, before each layer change where either number changed, and
+	 * M73 P100 R0 after the end G-code; percent floored, minutes of the
+	 * seconds rounded then floored, as PrusaSlicer 2.5.  Listed in the
+	 * header when set.  false */
+	bool remaining_times;
+	/* ... each followed by M73 Q S with the same figures (the stealth
+	 * mode's; host code sets it for silent_mode and a marlin flavour) */
+	bool remaining_times_silent; /* false */
 };
 
 /* What a written print will take; also written into the G-code header. */

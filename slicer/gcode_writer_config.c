@@ -38,6 +38,9 @@ struct key {
 #define KRD(n) {#n, KEY_DOUBLE, offsetof(struct gcodew_settings, n), false, true, false}
 #define KRI(n) {#n, KEY_INT, offsetof(struct gcodew_settings, n), false, true, false}
 #define KZD(n) {#n, KEY_DOUBLE, offsetof(struct gcodew_settings, n), false, false, true}
+#define KZB(n) {#n, KEY_BOOL, offsetof(struct gcodew_settings, n), false, false, true}
+#define KZDV(n) {#n, KEY_DOUBLE, offsetof(struct gcodew_settings, n), true, false, true}
+#define KZBV(n) {#n, KEY_BOOL, offsetof(struct gcodew_settings, n), true, false, true}
 
 static const struct key keys[] = {
     KD(nozzle_diameter, true),
@@ -55,8 +58,12 @@ static const struct key keys[] = {
     KD(retract_speed, true),
     KD(deretract_speed, true),
     KD(retract_lift, true),
+    KZDV(retract_lift_above),
+    KZDV(retract_lift_below),
     KD(retract_before_travel, true),
     KB(wipe, true),
+    KZDV(retract_before_wipe),
+    KZBV(retract_layer_change),
     KB(avoid_crossing_perimeters, false),
     KB(only_retract_when_crossing_perimeters, false),
     KD(max_unretracted_travel, false),
@@ -89,7 +96,13 @@ static const struct key keys[] = {
     KRD(raft_first_layer_density),
     KRD(raft_first_layer_expansion),
     KRD(first_layer_speed_over_raft),
+    KZD(default_acceleration),
+    KZD(perimeter_acceleration),
+    KZD(infill_acceleration),
+    KZD(bridge_acceleration),
+    KZD(first_layer_acceleration),
     KZD(gcode_resolution),
+    KZB(remaining_times),
 };
 
 #define NKEYS (sizeof(keys) / sizeof(keys[0]))
@@ -359,7 +372,8 @@ static bool key_is_pct(const struct gcodew_settings *s, const struct key *k)
 		return s->first_layer_speed_is_percent;
 	if (k->off == offsetof(struct gcodew_settings, first_layer_speed_over_raft))
 		return s->first_layer_speed_over_raft_is_percent;
-	return k->off == offsetof(struct gcodew_settings, raft_first_layer_density);
+	return k->off == offsetof(struct gcodew_settings, raft_first_layer_density) ||
+	       k->off == offsetof(struct gcodew_settings, retract_before_wipe);
 }
 
 /* Write "; estimated printing time = 1h 2m 3s". */

@@ -26,9 +26,15 @@ static int layer_time(struct gcodew *w, const double start[EST_AXES], double f, 
 
 	if (!p)
 		return w->err ? w->err->code : ST_ERR_NOMEM;
+	if (w->accel > 0) /* what the machine was last told */
+		est_planner_set_accel(p, &w->s->limits, w->accel, w->accel);
 	for (size_t i = 0; i < w->nops && rc == 0; i++) {
 		const struct op *o = &w->ops[i];
 		double v = o->f;
+		if (o->kind == OP_ACCEL) {
+			int a = gcodew_accel_written(w->s, o->f);
+			est_planner_set_accel(p, &w->s->limits, a, a);
+		}
 		if (o->kind != OP_MOVE)
 			continue;
 		if (o->xy) {

@@ -13,6 +13,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <sys/types.h>
 
 #include "estimate.h"
 #include "gcode_writer.h"
@@ -27,7 +28,7 @@
 
 /* A layer is planned into operations (moves and role changes), cooled,
  * then emitted. */
-enum op_kind { OP_MOVE, OP_ROLE };
+enum op_kind { OP_MOVE, OP_ROLE, OP_ACCEL /* f: mm/s^2 */ };
 
 enum move_kind {
 	MV_TRAVEL,    /* no extrusion */
@@ -44,6 +45,14 @@ struct op {
 	double x, y, z;	     /* mm, target */
 	double e;	     /* mm of filament, see enum move_kind */
 	double f;	     /* mm/s */
+};
+
+/* remaining_times: where an M73 line goes in the body, and the time planned
+ * before it (gcode_writer_progress.c). */
+struct gcodew_m73 {
+	off_t off;   /* bytes into the body */
+	double t;    /* s */
+	bool last;   /* the end of the print: P100 R0 */
 };
 
 struct gcodew {
@@ -66,6 +75,7 @@ struct gcodew {
 	double px, py, pz;
 	double layer_z;
 	int plan_role; /* role of the last path planned in this layer, -1 none */
+	bool plan_retracted; /* retracted at the layer change, not yet unretracted */
 	double fil_area;
 	struct op *ops;
 	size_t nops, opcap;
@@ -99,10 +109,13 @@ struct gcodew {
 	int64_t wx, wy, wz; /* um, last written */
 	long long wf;	    /* mm/min, last written, 0 none */
 	int fan;	    /* percent written, -1 unknown */
+	int accel;	    /* mm/s^2 last written (M204), 0 none */
 	int layer_fan;	    /* percent for this layer's non-bridge paths */
 	int bridge_fan;	    /* percent for bridges on this layer; -1: layer_fan */
 	size_t moves;
 	double filament_mm;
+	struct gcodew_m73 *m73; /* remaining_times, in the order of the body */
+	size_t nm73, m73cap;
 };
 
 /* gcode_writer.c: printf to the writer's current output (w->fp). */
@@ -142,6 +155,17 @@ int gcodew_simplify_path(struct gcodew *w, const struct toolpath *p, const struc
 int gcodew_simplify_route(struct gcodew *w, int64_t ax, int64_t ay);
 /* Release the scratch arrays above. */
 void gcodew_simplify_free(struct gcodew *w);
+
+/* gcode_writer_progress.c */
+/* remaining_times: an M73 line here in the body (last: the end's P100 R0);
+ * nothing when the key is off. */
+int gcodew_progress_mark(struct gcodew *w, bool last);
+/* The body to fp, the M73 lines for a print of total s written in it. */
+int gcodew_copy_body(struct gcodew *w, FILE *fp, double total, struct st_error *err);
+
+/* gcode_writer_progress.c, beside the M73 lines: an acceleration op's
+ * value as written (rounded, capped), 0 = nothing to write. */
+int gcodew_accel_written(const struct gcodew_settings *s, double v);
 
 /* gcode_writer_cool.c */
 /* Decide layer li's fan and slow its extrusions down if it is too fast;

@@ -56,15 +56,22 @@ int gcodew_plan_retract(struct gcodew *w)
 	int rc = 0;
 
 	if (s->wipe && w->nwipe >= 2) {
-		double speed = WIPE_SPEED_SHARE * s->travel_speed;
-		double dist = len / s->retract_speed * speed, walked = 0;
+		double speed = WIPE_SPEED_SHARE * s->travel_speed, walked = 0, dist;
+		double before = len * s->retract_before_wipe / 100, wlen = len - before;
+
+		if (before > 1e-9) { /* standing first; the wipe takes the rest */
+			rc = push_move(w, MV_RETRACT, false, w->px, w->py, w->pz, before,
+				       s->retract_speed);
+			taken = before;
+		}
+		dist = wlen / s->retract_speed * speed;
 		for (size_t k = 0; k + 1 < w->nwipe && walked < dist && rc == 0; k++) {
 			double x0 = w->wipe[2 * k], y0 = w->wipe[2 * k + 1];
 			double x1 = w->wipe[2 * k + 2], y1 = w->wipe[2 * k + 3];
 			double seg = hypot(x1 - x0, y1 - y0), step = fmin(seg, dist - walked);
 			if (seg <= 0)
 				continue;
-			double t = step / seg, r = len * step / dist;
+			double t = step / seg, r = wlen * step / dist;
 			rc = push_move(w, MV_RETRACT, true, x0 + t * (x1 - x0), y0 + t * (y1 - y0),
 				       w->pz, r, speed);
 			walked += step;
@@ -76,6 +83,24 @@ int gcodew_plan_retract(struct gcodew *w)
 		rc = push_move(w, MV_RETRACT, false, w->px, w->py, w->pz, len - taken,
 			       s->retract_speed);
 	return rc;
+}
+
+/* Whether a retraction at Z z lifts: retract_lift within PrusaSlicer's
+ * retract_lift_above / retract_lift_below range. */
+static bool lifts_at(const struct gcodew_settings *s, double z)
+{
+	return s->retract_lift > 0 && z >= s->retract_lift_above &&
+	       (s->retract_lift_below == 0 || z <= s->retract_lift_below);
+}
+
+/* Push back what was retracted, at Z z. */
+static int plan_unretract(struct gcodew *w, double z)
+{
+	const struct gcodew_settings *s = w->s;
+
+	w->plan_retracted = false;
+	return push_move(w, MV_UNRETRACT, false, 0, 0, z, s->retract_length,
+			 s->deretract_speed > 0 ? s->deretract_speed : s->retract_speed);
 }
 
 /*
@@ -97,11 +122,13 @@ static int plan_travel(struct gcodew *w, double x, double y)
 	if (!w->pos_known) {
 		w->pos_known = true;
 		rc = push_move(w, MV_TRAVEL, false, 0, 0, lz, 0, z_speed(s));
-		return rc ? rc : push_move(w, MV_TRAVEL, true, x, y, lz, 0, s->travel_speed);
+		if (rc == 0)
+			rc = push_move(w, MV_TRAVEL, true, x, y, lz, 0, s->travel_speed);
+		return rc || !w->plan_retracted ? rc : plan_unretract(w, lz);
 	}
 	d = hypot(x - w->px, y - w->py);
 	if (d < MOVE_EPS && fabs(w->pz - lz) < 1e-9)
-		return 0;
+		return w->plan_retracted ? plan_unretract(w, lz) : 0;
 	ax = llround(w->px * SLICE_UNITS_PER_MM);
 	ay = llround(w->py * SLICE_UNITS_PER_MM);
 	rc = travel_plan(w->map, ax, ay, llround(x * SLICE_UNITS_PER_MM),
@@ -114,10 +141,16 @@ static int plan_travel(struct gcodew *w, double x, double y)
 	    (s->max_unretracted_travel == 0 || len <= s->max_unretracted_travel))
 		retract = false; /* any ooze falls inside the part */
 	if (retract) {
-		rc = gcodew_plan_retract(w);
-		if (s->retract_lift > 0)
+		/* Already retracted at the layer change: PrusaSlicer only lifts. */
+		if (!w->plan_retracted)
+			rc = gcodew_plan_retract(w);
+		if (lifts_at(s, lz))
 			tz = lz + s->retract_lift;
 	}
+	/* Still lifted above the new layer by the layer change's lift: as
+	 * PrusaSlicer, the travel stays there instead of going down, or up. */
+	if (w->plan_retracted && w->pz > lz + 1e-9)
+		tz = w->pz;
 	if (rc == 0 && fabs(w->pz - tz) > 1e-9)
 		rc = push_move(w, MV_TRAVEL, false, 0, 0, tz, 0, z_speed(s));
 	if (rc == 0)
@@ -129,9 +162,8 @@ static int plan_travel(struct gcodew *w, double x, double y)
 		rc = push_move(w, MV_TRAVEL, true, x, y, tz, 0, s->travel_speed);
 	if (rc == 0 && tz != lz)
 		rc = push_move(w, MV_TRAVEL, false, 0, 0, lz, 0, z_speed(s));
-	if (rc == 0 && retract)
-		rc = push_move(w, MV_UNRETRACT, false, 0, 0, lz, s->retract_length,
-			       s->deretract_speed > 0 ? s->deretract_speed : s->retract_speed);
+	if (rc == 0 && (retract || w->plan_retracted))
+		rc = plan_unretract(w, lz);
 	return rc;
 }
 
@@ -261,6 +293,24 @@ static int plan_segment(struct gcodew *w, const struct layer_paths *l, size_t li
 			 share * area * len / w->fil_area * w->s->extrusion_multiplier, speed);
 }
 
+/* PrusaSlicer 2.5's acceleration for a path of role on layer li (0-based):
+ * the first layer's, else by role, each when above 0, else the default. */
+static double path_accel(const struct gcodew_settings *s, enum path_role role, size_t li)
+{
+	double v = 0;
+
+	if (li == 0 && s->first_layer_acceleration > 0)
+		return s->first_layer_acceleration;
+	if (role == PATH_OUTER_PERIMETER || role == PATH_INNER_PERIMETER || role == PATH_THIN_WALL)
+		v = s->perimeter_acceleration;
+	else if (role == PATH_BRIDGE && s->bridge_acceleration > 0)
+		v = s->bridge_acceleration;
+	else if (role == PATH_BRIDGE || role == PATH_SOLID_INFILL || role == PATH_BOTTOM_SKIN ||
+		 role == PATH_TOP_SKIN || role == PATH_SPARSE_INFILL || role == PATH_IRONING)
+		v = s->infill_acceleration; /* a bridge is infill too */
+	return v > 0 ? v : s->default_acceleration;
+}
+
 /* Plan path pi of layer li: travel to its start, then its segments, as
  * simplified to gcode_resolution (the speed is the original path's). */
 static int plan_path(struct gcodew *w, const struct layer_paths *l, size_t li, size_t pi, bool rev)
@@ -276,6 +326,8 @@ static int plan_path(struct gcodew *w, const struct layer_paths *l, size_t li, s
 		return rc;
 	const struct path_point *q0 = &q->pts[trav(q, rev, 0)];
 	rc = plan_travel(w, q0->x / SLICE_UNITS_PER_MM, q0->y / SLICE_UNITS_PER_MM);
+	if (rc == 0 && s->default_acceleration > 0)
+		rc = push(w, (struct op){.kind = OP_ACCEL, .f = path_accel(s, p->role, li)});
 	if (rc == 0 && w->plan_role != (int)p->role) {
 		rc = push(w, (struct op){.kind = OP_ROLE, .role = p->role});
 		w->plan_role = (int)p->role;
@@ -286,6 +338,8 @@ static int plan_path(struct gcodew *w, const struct layer_paths *l, size_t li, s
 		rc = plan_segment(w, l, li, pi, simplified ? w->sidx[f] : f, pa, pb, q->pts[f].width,
 				  w->layer_z, speed, simplified ? w->sstretch[f] : 1);
 	}
+	if (rc == 0 && s->default_acceleration > 0) /* reset after the path, as PrusaSlicer */
+		rc = push(w, (struct op){.kind = OP_ACCEL, .f = s->default_acceleration});
 	if (rc == 0 && s->wipe)
 		rc = record_wipe(w, q, rev, steps, 0);
 	return rc;
@@ -399,12 +453,37 @@ static int plan_spiral(struct gcodew *w, const struct layer_paths *l, size_t li)
 	return rc;
 }
 
+/*
+ * retract_layer_change: retract (wiping) and lift before the move to layer
+ * l, as PrusaSlicer does whenever Z is to change; the first travel on l
+ * unretracts.  Not between spiral layers (the loop goes on), for a layer
+ * with nothing to print, nor before the first layer (nothing printed yet;
+ * where the start G-code left the nozzle is not known).
+ */
+static int plan_layer_retract(struct gcodew *w, const struct layer_paths *l)
+{
+	const struct gcodew_settings *s = w->s;
+	int rc;
+
+	if (!s->retract_layer_change || s->retract_length <= 0 || l->n == 0 || !w->pos_known ||
+	    (l->spiral && w->spiral_below) || fabs(w->pz - l->z) < 1e-9)
+		return 0;
+	rc = gcodew_plan_retract(w);
+	w->plan_retracted = rc == 0;
+	if (rc == 0 && lifts_at(s, w->pz))
+		rc = push_move(w, MV_TRAVEL, false, 0, 0, w->pz + s->retract_lift, 0, z_speed(s));
+	return rc;
+}
+
 /* Plan every path of layer li into w->ops. */
 int gcodew_plan_layer(struct gcodew *w, const struct layer_paths *l, size_t li)
 {
-	int rc = 0;
+	int rc;
 
 	w->nops = 0;
+	rc = plan_layer_retract(w, l);
+	if (rc)
+		return rc;
 	w->layer_z = l->z;
 	w->plan_role = -1;
 	w->map = w->s->avoid_crossing_perimeters ? l->travel : NULL;

@@ -100,6 +100,13 @@ static const struct setting table[] = {
      "Stratum's key; default: the length of nozzle_diameter, else 1 (sailfish: at most 2)"},
     {"use_relative_e_distances", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
      "M83 (relative E) instead of M82"},
+    {"remaining_times", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
+     "M73 P (percent done) R (minutes left, from the estimate) at the start, at each layer "
+     "change where either changes, and P100 R0 at the end"},
+    {"silent_mode", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, NULL,
+     "the firmware has a stealth mode: with remaining_times and the marlin or marlin2 "
+     "flavour, each M73 P R is followed by M73 Q S (the same figures: the estimate uses the "
+     "normal mode's limits)"},
 
     {"nozzle_diameter", NUM, EX, 0.05, 3, 0, "mm", "0.4", NULL, NULL, 0, "Extruders", ""},
     {"filament_diameter", NUM, EX, 1, 3.5, 0, "mm", "1.75", NULL, NULL, 0, NULL, ""},
@@ -116,12 +123,22 @@ static const struct setting table[] = {
     {"retract_length", NUM, EX, 0, 50, 0, "mm", "2", NULL, NULL, 0, NULL, ""},
     {"retract_speed", NUM, EX, 0, 1000, GT, "mm/s", "40", NULL, NULL, 0, NULL, ""},
     {"retract_lift", NUM, EX, 0, 50, 0, "mm", "0", NULL, NULL, 0, NULL, "Z hop"},
+    {"retract_lift_above", NUM, EX, 0, 10000, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "Z hop only where the layer is at this Z or above"},
+    {"retract_lift_below", NUM, EX, 0, 10000, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "Z hop only where the layer is at this Z or below; 0 = no limit"},
     {"deretract_speed", NUM, EX, 0, 1000, 0, "mm/s", "0", NULL, NULL, 0, NULL,
      "0 = retract_speed"},
     {"retract_before_travel", NUM, EX, 0, 1e6, 0, "mm", "2", NULL, NULL, 0, NULL,
      "shorter travels do not retract"},
     {"wipe", BOOL, FI, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
      "retract while moving back over the last path"},
+    {"retract_before_wipe", SETTING_PERCENT, FI, 0, 100, 0, "%", "0%", NULL, NULL, 0, NULL,
+     "with wipe, this share of the retraction is done standing before the wipe, the rest "
+     "while wiping (a bare number is a fraction)"},
+    {"retract_layer_change", BOOL, FI, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
+     "retract (wiping, lifting) before each layer change; the first travel of the layer "
+     "unretracts"},
     {"min_layer_height", NUM, EX, 0, 3, 0, "mm", "0.07", NULL, NULL, 0, NULL,
      "at most the nozzle and max_layer_height"},
     {"max_layer_height", NUM, EX, 0, 3, 0, "mm", "0", NULL, NULL, 0, NULL,
@@ -246,6 +263,16 @@ static const struct setting table[] = {
      "slowed"},
     {"first_layer_speed_over_raft", PCT, S_, 0, 1000, 0, "mm/s", "30", NULL, NULL, 0, NULL,
      "every extrusion of the part's first layer on a raft, likewise"},
+    {"default_acceleration", NUM, S_, 0, 100000, 0, "mm/s^2", "0", NULL, NULL, 0, NULL,
+     "M204 S before each path's own value and after each path; 0 = never written, the per-role keys below unused"},
+    {"perimeter_acceleration", NUM, S_, 0, 100000, 0, "mm/s^2", "0", NULL, NULL, 0, NULL,
+     "walls (outer, inner, thin); 0 = default_acceleration"},
+    {"infill_acceleration", NUM, S_, 0, 100000, 0, "mm/s^2", "0", NULL, NULL, 0, NULL,
+     "sparse, solid and top infill, ironing (not gap fill); 0 = default_acceleration"},
+    {"bridge_acceleration", NUM, S_, 0, 100000, 0, "mm/s^2", "0", NULL, NULL, 0, NULL,
+     "bridges; 0 = default_acceleration"},
+    {"first_layer_acceleration", NUM, S_, 0, 100000, 0, "mm/s^2", "0", NULL, NULL, 0, NULL,
+     "every path of the first layer; 0 = the role's"},
 
     {"avoid_crossing_perimeters", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, "Travel",
      "route travels inside the part instead of across its walls"},

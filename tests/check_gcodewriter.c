@@ -1100,5 +1100,8 @@ Suite *gcodewriter_suite(void)
 	suite_add_tcase(s, cool);
 	suite_add_tcase(s, est);
 	gcodewriter_simplify_tcases(s);
+	gcodewriter_progress_tcases(s);
+	gcodewriter_retract_tcases(s);
+	gcodewriter_accel_tcases(s);
 	return s;
 }

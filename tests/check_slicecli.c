@@ -606,9 +606,14 @@ START_TEST(bundle_presets_slice)
 	ck_assert_msg(status == 0, "exit %d: %s", status, out);
 	/* One warning line, naming keys with their values. */
 	ck_assert_msg(strstr(out, "warning: not supported, ignored: ") &&
-			      strstr(out, "remaining_times=1") && !strstr(out, "raft_layers"),
+			      strstr(out, "ensure_vertical_shell_thickness=1") &&
+			      !strstr(out, "raft_layers") && !strstr(out, "remaining_times"),
 		      "%s", out);
 	slurp(gc, gcode, sizeof(gcode));
+	/* remaining_times = 1 and silent_mode = 1 of the MK3 presets, marlin. */
+	ck_assert_msg(strstr(gcode, "\nM73 P0 R") && strstr(gcode, "\nM73 Q0 S") &&
+			      strstr(gcode, "\nM73 P100 R0\nM73 Q100 S0\n"),
+		      "M73");
 	/* PrusaSlicer's own expansions of the MK3S start, filament and end G-code. */
 	ck_assert_msg(strstr(gcode, "M862.3 P \"MK3S\" ; printer model check\n"), "start");
 	ck_assert_msg(strstr(gcode, "M862.1 P0.4 ; nozzle diameter check\n"), "nozzle");
@@ -762,10 +767,11 @@ START_TEST(load_order_and_set)
 		      out);
 	/* An unsupported key is named once, with its value. */
 	status = tu_run(out, sizeof(out),
-			"slice '%s' -o '%s' --load '%s' --set fuzzy_skin=random --set complete_objects=1",
+			"slice '%s' -o '%s' --load '%s' --set fuzzy_skin=random --set complete_objects=1 "
+			"--set thick_bridges=0",
 			model, gc, a);
 	ck_assert_msg(status == 0 && strstr(out, "warning: not supported, ignored: fuzzy_skin=random, "
-						 "complete_objects=1\n"),
+						 "complete_objects=1, thick_bridges=0\n"),
 		      "exit %d: %s", status, out);
 	/* The raft is printed: its keys are not named, a raft key Stratum
 	 * does not print is, and the header lists the values used. */
@@ -780,9 +786,11 @@ START_TEST(load_order_and_set)
 	ck_assert_msg(strstr(gcode, "; raft_layers = 3\n") && strstr(gcode, "; raft_expansion = 2\n"),
 		      "raft header");
 	ck_assert_msg(strstr(gcode, ";TYPE:Support material interface\n"), "raft paths");
-	/* Spiral vase and ironing are printed, so not named. */
+	/* Spiral vase and ironing are printed, so not named; nor are thick
+	 * bridges, the only ones Stratum prints. */
 	status = tu_run(out, sizeof(out),
 			"slice '%s' -o '%s' --load '%s' --set spiral_vase=1 --set ironing=1 "
+			"--set thick_bridges=1 "
 			"--set ironing_type=solid --set ironing_flowrate=10%% --set ironing_speed=20",
 			model, gc, a);
 	ck_assert_msg(status == 0 && !strstr(out, "not supported"), "exit %d: %s", status, out);

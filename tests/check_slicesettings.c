@@ -658,6 +658,19 @@ START_TEST(infill_overlap_and_bridge_flow_honoured)
 }
 END_TEST
 
+/* The slicer's settings of profile text (asserted to load); free the
+ * profile returned. */
+static struct profile *config_of(const char *text, struct slicer_config *c)
+{
+	struct st_error err = {0};
+	struct profile *p = NULL;
+
+	ck_assert_msg(!profile_load_buffer(text, strlen(text), "bound.ini", &p, &err), "%s",
+		      err.msg);
+	ck_assert_msg(!profile_slicer_config(p, c, &err), "%s", err.msg);
+	return p;
+}
+
 /*
  * Keys copied into the slicer's fields as the profile holds them
  * (host/profile_bind.c) land in the field each is bound to, of each kind:
@@ -675,14 +688,16 @@ START_TEST(profile_keys_reach_slicer_fields)
 				   "max_print_height = 123.5\n"
 				   "raft_first_layer_density = 70%\n"
 				   "layer_height = 0.15\n"
-				   "gcode_resolution = 0.02\n";
-	struct st_error err = {0};
-	struct profile *p = NULL;
+				   "gcode_resolution = 0.02\n"
+				   "remaining_times = 1\n"
+				   "retract_layer_change = 1\n"
+				   "retract_lift_below = 209\n"
+				   "retract_lift_above = 0.6\n"
+				   "retract_before_wipe = 70%\n"
+				   "bridge_acceleration = 1234\n";
 	struct slicer_config c;
+	struct profile *p = config_of(text, &c);
 
-	ck_assert_msg(!profile_load_buffer(text, sizeof(text) - 1, "bound.ini", &p, &err), "%s",
-		      err.msg);
-	ck_assert_msg(!profile_slicer_config(p, &c, &err), "%s", err.msg);
 	ck_assert_int_eq(c.gcodew.temperature, 213);
 	ck_assert_double_eq(c.gcodew.fan_below_layer_time, 37);
 	ck_assert_int_eq(c.support.threshold, 33);
@@ -693,7 +708,46 @@ START_TEST(profile_keys_reach_slicer_fields)
 	ck_assert_double_eq(c.raft.first_layer_density, 70);
 	ck_assert_double_eq(c.layer_height, 0.15);
 	ck_assert_double_eq(c.gcodew.gcode_resolution, 0.02);
+	ck_assert(c.gcodew.remaining_times);
+	ck_assert(c.gcodew.retract_layer_change);
+	ck_assert_double_eq(c.gcodew.retract_lift_below, 209);
+	ck_assert_double_eq(c.gcodew.retract_lift_above, 0.6);
+	ck_assert_double_eq(c.gcodew.retract_before_wipe, 70);
+	ck_assert_double_eq(c.gcodew.bridge_acceleration, 1234);
+	ck_assert_int_eq(c.gcodew.accel_form, GCODEW_ACCEL_M204_S);
+	ck_assert(c.gcodew.remaining_times_silent); /* silent_mode's default, marlin2 */
 	profile_free(p);
+}
+END_TEST
+
+/* retract_before_wipe is per extruder in PrusaSlicer: a list loads, its
+ * first value used (the MMU bundles write 0%,0%,0%,0%). */
+START_TEST(retract_before_wipe_list)
+{
+	struct slicer_config c;
+	struct profile *p =
+	    config_of("nozzle_diameter = 0.4,0.4\nretract_before_wipe = 30%,0%\n", &c);
+
+	ck_assert_double_eq(c.gcodew.retract_before_wipe, 30);
+	profile_free(p);
+}
+END_TEST
+
+/* M73 Q S for silent_mode with a marlin flavour only, as PrusaSlicer. */
+START_TEST(silent_mode_needs_marlin)
+{
+	static const char *const texts[] = {"gcode_flavor = marlin\nsilent_mode = 1\n",
+					    "gcode_flavor = marlin2\nsilent_mode = 0\n",
+					    "gcode_flavor = klipper\nsilent_mode = 1\n"};
+	static const bool silent[] = {true, false, false};
+
+	for (size_t i = 0; i < sizeof(texts) / sizeof(texts[0]); i++) {
+		struct slicer_config c;
+		struct profile *p = config_of(texts[i], &c);
+
+		ck_assert_msg(c.gcodew.remaining_times_silent == silent[i], "%s", texts[i]);
+		profile_free(p);
+	}
 }
 END_TEST
 
@@ -717,5 +771,7 @@ void slicecli_settings_tcases(Suite *s)
 	tcase_add_test(tc, small_perimeter_speed_honoured);
 	tcase_add_test(tc, infill_overlap_and_bridge_flow_honoured);
 	tcase_add_test(tc, profile_keys_reach_slicer_fields);
+	tcase_add_test(tc, silent_mode_needs_marlin);
+	tcase_add_test(tc, retract_before_wipe_list);
 	suite_add_tcase(s, tc);
 }

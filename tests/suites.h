@@ -32,6 +32,9 @@ void slicer_modes_tcases(Suite *s); /* tests/check_modes.c: spiral vase, part of
 void slicer_travel_tcases(Suite *s); /* tests/check_travel.c: travel and retraction, part of slicer */
 Suite *gcodewriter_suite(void); /* tests/check_gcodewriter.c: G-code writer and estimator */
 void gcodewriter_simplify_tcases(Suite *s); /* tests/check_simplify.c: gcode_resolution, part of gcodewriter */
+void gcodewriter_retract_tcases(Suite *s); /* tests/check_retract.c: retract_layer_change, lift range, part of gcodewriter */
+void gcodewriter_accel_tcases(Suite *s); /* tests/check_accel.c: accelerations per role, part of gcodewriter */
+void gcodewriter_progress_tcases(Suite *s); /* tests/check_progress.c: remaining_times, part of gcodewriter */
 Suite *infill_suite(void);	/* tests/check_infill.c: skins, bridges, infill */
 Suite *support_suite(void);	/* tests/check_support.c: skirt, brim, support material */
 Suite *raft_suite(void);	/* tests/check_raft.c: the raft under the part */
