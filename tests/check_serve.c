@@ -585,6 +585,60 @@ START_TEST(test_hostile_names)
 }
 END_TEST
 
+/*
+ * Send a chunked body to path with key for up to 3 s; returns the bytes
+ * sent before the node ended the connection (or all of them if it never did).
+ */
+static size_t chunked_sent(int port, const char *path, const char *key, const char *type)
+{
+	struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
+	struct timeval tv = {.tv_sec = 1};
+	static char chunk[65536 + 16];
+	char head[512];
+	int fd = socket(AF_INET, SOCK_STREAM, 0), n;
+	size_t sent = 0;
+	time_t t0 = time(NULL);
+
+	ck_assert(fd >= 0);
+	inet_pton(AF_INET, "127.0.0.1", &sa.sin_addr);
+	setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof(tv));
+	ck_assert(connect(fd, (struct sockaddr *)&sa, sizeof(sa)) == 0);
+	n = snprintf(head, sizeof(head), "POST %s HTTP/1.1\r\nHost: x\r\nX-Api-Key: %s\r\n"
+			 "Content-Type: %s\r\nTransfer-Encoding: chunked\r\n\r\n", path, key, type);
+	ck_assert(send(fd, head, (size_t)n, MSG_NOSIGNAL) == n);
+	memcpy(chunk, "10000\r\n", 7);
+	memset(chunk + 7, ' ', 65536);
+	memcpy(chunk + 7 + 65536, "\r\n", 2);
+	while (time(NULL) - t0 < 3) {
+		ssize_t k = send(fd, chunk, 65536 + 9, MSG_NOSIGNAL);
+
+		if (k <= 0 && errno != EAGAIN)
+			break;
+		sent += k > 0 ? (size_t)k : 0;
+	}
+	close(fd);
+	return sent;
+}
+
+/* A chunked body has no length to refuse up front: once refused in its
+ * course (too large), the node stops reading it (issue 20). */
+START_TEST(test_chunked_refused_stops)
+{
+	struct node_proc np;
+	size_t sent;
+
+	write_config(&np, TWO_PRINTERS, 1);
+	node_start(&np);
+	sent = chunked_sent(np.port, "/api/job", KEY_CTL, "application/json");
+	ck_assert_msg(sent < (16u << 20), "%zu bytes", sent);
+	sent = chunked_sent(np.port, "/api/files/local", KEY_UP,
+			    "multipart/form-data; boundary=" BOUNDARY);
+	ck_assert_msg(sent < (16u << 20), "%zu bytes", sent);
+	expect(np.port, "GET", "/api/version", "X-Api-Key: " KEY_READ, NULL, 200);
+	node_stop(&np);
+}
+END_TEST
+
 /* POST a multipart body (boundary BOUNDARY) to /api/files/local with KEY_UP. */
 static void post_form(int port, const char *body, struct resp *r)
 {
@@ -2208,6 +2262,7 @@ Suite *serve_suite(void)
 	tcase_add_test(tc, test_tmp_cleaned_at_start);
 	tcase_add_test(tc, test_query_keys_not_logged);
 	tcase_add_test(tc, test_connection_limits);
+	tcase_add_test(tc, test_chunked_refused_stops);
 	tcase_add_test(tc, test_stl_two_printers);
 	tcase_add_test(tc, test_node_gcode_is_slice_gcode);
 	tcase_add_test(tc, test_node_slices_two_object_3mf);

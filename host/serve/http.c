@@ -363,6 +363,16 @@ static unsigned key_roles(struct node *n, struct MHD_Connection *c)
 	return roles;
 }
 
+/* Refuse an upload body longer than the file limit and the form around it. */
+static void upload_too_large(struct node *n, struct req *r)
+{
+	char msg[100];
+
+	snprintf(msg, sizeof(msg), "the upload is larger than the node's limit of %llu bytes",
+		 (unsigned long long)n->cfg.max_upload);
+	req_fail(r, MHD_HTTP_CONTENT_TOO_LARGE, msg);
+}
+
 /* Find the printer and route of url; sets r->p, r->base, r->route_path, r->rt. */
 static void resolve(struct node *n, const char *url, const char *method, struct req *r)
 {
@@ -427,11 +437,7 @@ static void first_call(struct node *n, struct MHD_Connection *c, const char *url
 	}
 	if (r->rt->upload) {
 		if (len > n->cfg.max_upload + HTTP_MULTIPART_SLACK) {
-			char msg[100];
-
-			snprintf(msg, sizeof(msg), "the upload is larger than the node's limit of "
-						   "%llu bytes", (unsigned long long)n->cfg.max_upload);
-			req_fail(r, MHD_HTTP_CONTENT_TOO_LARGE, msg);
+			upload_too_large(n, r);
 			return;
 		}
 		r->pp = MHD_create_post_processor(c, 65536, post_iter, r);
@@ -480,6 +486,11 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *u
 		return MHD_YES;
 	}
 	if (*upload_size) {
+		/* Counted here, not in post_iter: a chunked body that is no form
+		 * (no boundary ever) reaches no field and would be read forever. */
+		r->raw += *upload_size;
+		if (r->pp && r->raw > n->cfg.max_upload + HTTP_MULTIPART_SLACK)
+			upload_too_large(n, r);
 		if (!r->status && r->pp) {
 			if (MHD_post_process(r->pp, upload, *upload_size) != MHD_YES)
 				req_fail(r, MHD_HTTP_BAD_REQUEST, "the multipart form is malformed");
@@ -497,6 +508,10 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *u
 			}
 		}
 		*upload_size = 0;
+		/* A chunked body has no end the node knows: refused, it is not read on. */
+		if (r->status && MHD_lookup_connection_value(c, MHD_HEADER_KIND,
+							     MHD_HTTP_HEADER_TRANSFER_ENCODING))
+			return http_send_error(c, (unsigned)r->status, r->msg);
 		return MHD_YES;
 	}
 	/* The post processor tells only here whether the form was complete
