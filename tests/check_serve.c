@@ -7,8 +7,10 @@
  * roles, oversize uploads (413, with and without Expect: 100-continue),
  * hostile file names, STL upload sliced and printed, two printers with
  * their own queues, pause/resume/cancel, kill -9 and restart with the queue
- * intact and the interrupted job marked, the bed-clear gate, and config
- * errors.  Printers use `port = test-instant` (docs/serve.md).
+ * intact and the interrupted job marked, the bed-clear gate, config
+ * errors, and the bounds under abuse (refusal before the body, malformed
+ * forms, tmp/ cleaned at start, keys kept out of the log, connection
+ * limits and the idle timeout).  Printers use `port = test-instant` (docs/serve.md).
  */
 #include <arpa/inet.h>
 #include <check.h>
@@ -543,6 +545,9 @@ START_TEST(test_hostile_names)
 		{"x.gcode", 7, "/../../tmp", 10, 400},
 		{"x.gcode", 7, "a\0b", 3, 400},
 		{"x\tx.gcode", 9, "", 0, 400},
+		{"x\xff.gcode", 8, "", 0, 400},	  /* not UTF-8 */
+		{"\xc0\xaf.gcode", 8, "", 0, 400}, /* an overlong '/' */
+		{"x.gcode", 7, "caf\xe9", 4, 400},  /* Latin-1, not UTF-8 */
 		{"x.exe", 5, "", 0, 415},
 		{"", 0, "", 0, 400},
 	};
@@ -576,6 +581,323 @@ START_TEST(test_hostile_names)
 	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
 	resp_free(&r);
 	ck_assert(tu_file_exists(tu_path("node/data/files/mk3s/plates/left/x.gcode")));
+	node_stop(&np);
+}
+END_TEST
+
+/*
+ * Send a chunked body to path with key for up to 3 s; returns the bytes
+ * sent before the node ended the connection (or all of them if it never did).
+ */
+static size_t chunked_sent(int port, const char *path, const char *key, const char *type)
+{
+	struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
+	struct timeval tv = {.tv_sec = 1};
+	static char chunk[65536 + 16];
+	char head[512];
+	int fd = socket(AF_INET, SOCK_STREAM, 0), n;
+	size_t sent = 0;
+	time_t t0 = time(NULL);
+
+	ck_assert(fd >= 0);
+	inet_pton(AF_INET, "127.0.0.1", &sa.sin_addr);
+	setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof(tv));
+	ck_assert(connect(fd, (struct sockaddr *)&sa, sizeof(sa)) == 0);
+	n = snprintf(head, sizeof(head), "POST %s HTTP/1.1\r\nHost: x\r\nX-Api-Key: %s\r\n"
+			 "Content-Type: %s\r\nTransfer-Encoding: chunked\r\n\r\n", path, key, type);
+	ck_assert(send(fd, head, (size_t)n, MSG_NOSIGNAL) == n);
+	memcpy(chunk, "10000\r\n", 7);
+	memset(chunk + 7, ' ', 65536);
+	memcpy(chunk + 7 + 65536, "\r\n", 2);
+	while (time(NULL) - t0 < 3) {
+		ssize_t k = send(fd, chunk, 65536 + 9, MSG_NOSIGNAL);
+
+		if (k <= 0 && errno != EAGAIN)
+			break;
+		sent += k > 0 ? (size_t)k : 0;
+	}
+	close(fd);
+	return sent;
+}
+
+/* A chunked body has no length to refuse up front: once refused in its
+ * course (too large), the node stops reading it (issue 20). */
+START_TEST(test_chunked_refused_stops)
+{
+	struct node_proc np;
+	size_t sent;
+
+	write_config(&np, TWO_PRINTERS, 1);
+	node_start(&np);
+	sent = chunked_sent(np.port, "/api/job", KEY_CTL, "application/json");
+	ck_assert_msg(sent < (16u << 20), "%zu bytes", sent);
+	sent = chunked_sent(np.port, "/api/files/local", KEY_UP,
+			    "multipart/form-data; boundary=" BOUNDARY);
+	ck_assert_msg(sent < (16u << 20), "%zu bytes", sent);
+	expect(np.port, "GET", "/api/version", "X-Api-Key: " KEY_READ, NULL, 200);
+	node_stop(&np);
+}
+END_TEST
+
+/* POST a multipart body (boundary BOUNDARY) to /api/files/local with KEY_UP. */
+static void post_form(int port, const char *body, struct resp *r)
+{
+	char req[4096];
+	int n = snprintf(req, sizeof(req),
+			 "POST /api/files/local HTTP/1.1\r\nHost: 127.0.0.1:%d\r\n"
+			 "X-Api-Key: " KEY_UP "\r\nConnection: close\r\nContent-Length: %zu\r\n"
+			 "Content-Type: multipart/form-data; boundary=" BOUNDARY "\r\n\r\n%s",
+			 port, strlen(body), body);
+
+	ck_assert(n < (int)sizeof(req));
+	http_raw(port, req, (size_t)n, r);
+}
+
+/* Whether dir holds no entry but . and .. */
+static bool dir_empty(const char *dir)
+{
+	char cmd[600];
+
+	snprintf(cmd, sizeof(cmd), "test -z \"$(ls -A '%s')\"", dir);
+	return system(cmd) == 0;
+}
+
+/* Forms the node must refuse whole (issue 20): cut off before the closing
+ * boundary, or with two file parts; nothing is stored of either. */
+START_TEST(test_malformed_forms)
+{
+#define FILE_PART(name) "--" BOUNDARY "\r\nContent-Disposition: form-data; name=\"file\"; " \
+			"filename=\"" name "\"\r\nContent-Type: application/octet-stream\r\n\r\n"
+	static const char cut[] = FILE_PART("cut.gcode") "G28\nG1 X10\n";
+	static const char two[] = FILE_PART("a.gcode") "G28\n\r\n" FILE_PART("b.gcode")
+		"G1 X5\n\r\n--" BOUNDARY "--\r\n";
+	static const char same[] = FILE_PART("a.gcode") "G28\n\r\n" FILE_PART("a.gcode")
+		"G1 X5\n\r\n--" BOUNDARY "--\r\n";
+	static const char ok[] = FILE_PART("ok.gcode") "G28\n\r\n--" BOUNDARY "--\r\n";
+	struct node_proc np;
+	struct resp r;
+
+	write_config(&np, TWO_PRINTERS, 8);
+	node_start(&np);
+	post_form(np.port, cut, &r);
+	ck_assert_msg(r.status == 400 && has_text(r.body, "closing boundary"), "%d %s", r.status,
+		      r.body);
+	resp_free(&r);
+	post_form(np.port, two, &r);
+	ck_assert_msg(r.status == 400 && has_text(r.body, "more than one"), "%d %s", r.status,
+		      r.body);
+	resp_free(&r);
+	post_form(np.port, same, &r);
+	ck_assert_msg(r.status == 400, "%d %s", r.status, r.body);
+	resp_free(&r);
+	ck_assert(!tu_file_exists(tu_path("node/data/files/mk3s/cut.gcode")));
+	ck_assert(!tu_file_exists(tu_path("node/data/files/mk3s/a.gcode")));
+	ck_assert(!tu_file_exists(tu_path("node/data/files/mk3s/b.gcode")));
+	ck_assert(dir_empty(tu_path("node/data/tmp")));
+	post_form(np.port, ok, &r);
+	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
+	resp_free(&r);
+	ck_assert(tu_file_exists(tu_path("node/data/files/mk3s/ok.gcode")));
+	node_stop(&np);
+#undef FILE_PART
+}
+END_TEST
+
+/* An upload cut off by a crash leaves its temporary file; the next start
+ * removes it (issue 20). */
+START_TEST(test_tmp_cleaned_at_start)
+{
+	struct node_proc np;
+
+	write_config(&np, TWO_PRINTERS, 8);
+	node_start(&np);
+	node_stop(&np);
+	tu_write_str(tu_path("node/data/tmp/upload-Ab12Cd"), "G28\nG1 X");
+	tu_write_str(tu_path("node/data/tmp/mqtt-Ef34Gh"), "G28\n");
+	node_start(&np);
+	ck_assert(!tu_file_exists(tu_path("node/data/tmp/upload-Ab12Cd")));
+	ck_assert(!tu_file_exists(tu_path("node/data/tmp/mqtt-Ef34Gh")));
+	ck_assert(dir_empty(tu_path("node/data/tmp")));
+	expect(np.port, "GET", "/api/version", "X-Api-Key: " KEY_READ, NULL, 200);
+	node_stop(&np);
+}
+END_TEST
+
+/* Keys in a query (the status page's ?key=, OctoPrint's ?apikey=) stay out
+ * of the node's log (issue 20). */
+START_TEST(test_query_keys_not_logged)
+{
+	struct node_proc np;
+	struct resp r;
+	FILE *f;
+	char *log;
+	long size;
+
+	write_config(&np, TWO_PRINTERS, 8);
+	node_start(&np);
+	http(np.port, "GET", "/?key=" KEY_READ, NULL, NULL, &r);
+	ck_assert_int_eq(r.status, 200);
+	resp_free(&r);
+	expect(np.port, "GET", "/api/version?apikey=" KEY_CTL, "X-Api-Key: " KEY_READ, NULL, 200);
+	expect(np.port, "GET", "/api/job?x=1&apikey=" KEY_UP, NULL, NULL, 403);
+	node_stop(&np);
+	ck_assert((f = fopen(np.log, "r")) != NULL);
+	fseek(f, 0, SEEK_END);
+	size = ftell(f);
+	rewind(f);
+	ck_assert((log = calloc(1, (size_t)size + 1)) != NULL);
+	ck_assert(fread(log, 1, (size_t)size, f) == (size_t)size);
+	fclose(f);
+	ck_assert_msg(strstr(log, "request /api/version"), "%s", log);
+	ck_assert_msg(!strstr(log, KEY_READ) && !strstr(log, KEY_CTL) && !strstr(log, KEY_UP),
+		      "%s", log);
+	free(log);
+}
+END_TEST
+
+/* A connection to the node from loopback address src (127.0.0.x). */
+static int connect_from(int port, const char *src)
+{
+	struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
+	struct sockaddr_in me = {.sin_family = AF_INET};
+	struct timeval tv = {.tv_sec = 5};
+	int fd = socket(AF_INET, SOCK_STREAM, 0);
+
+	ck_assert(fd >= 0);
+	inet_pton(AF_INET, "127.0.0.1", &sa.sin_addr);
+	inet_pton(AF_INET, src, &me.sin_addr);
+	ck_assert(bind(fd, (struct sockaddr *)&me, sizeof(me)) == 0);
+	setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof(tv));
+	ck_assert_msg(connect(fd, (struct sockaddr *)&sa, sizeof(sa)) == 0, "connect: %s",
+		      strerror(errno));
+	return fd;
+}
+
+/* The status of GET /api/version from src; 0 when the node closed the
+ * connection without an answer. */
+static int version_from(int port, const char *src)
+{
+	char req[256], buf[1024];
+	int fd = connect_from(port, src), status = 0;
+	int n = snprintf(req, sizeof(req), "GET /api/version HTTP/1.1\r\nHost: x\r\n"
+			 "X-Api-Key: " KEY_READ "\r\nConnection: close\r\n\r\n");
+	struct timeval tv = {.tv_sec = 1}; /* a full node leaves it in the kernel's queue */
+	ssize_t k;
+
+	setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof(tv));
+	send(fd, req, (size_t)n, MSG_NOSIGNAL);
+	k = recv(fd, buf, sizeof(buf) - 1, 0);
+	buf[k > 0 ? k : 0] = '\0';
+	close(fd);
+	if (sscanf(buf, "HTTP/1.1 %d", &status) != 1)
+		status = 0;
+	return status;
+}
+
+/* Slow clients hold connections (issue 20): those from one address are
+ * capped so others are still answered, all of them are capped, and a
+ * silent one is closed after idle_timeout_s. */
+START_TEST(test_connection_limits)
+{
+	static const char limits[] =
+		"[node]\nname = test-node\nlisten = 127.0.0.1:0\ndata_dir = data\n"
+		"max_connections = 12\nmax_connections_per_ip = 5\nidle_timeout_s = 3\n"
+		"[key viewer]\nkey = " KEY_READ "\nroles = read\n"
+		"[printer mk3s]\nprofile = prusa-i3-mk3s\nport = test-instant\n";
+	struct node_proc np;
+	int held[12];
+	char buf[64];
+
+	write_config(&np, TWO_PRINTERS, 8);
+	tu_write_str(np.config, limits);
+	node_start(&np);
+	for (int i = 0; i < 5; i++)
+		held[i] = connect_from(np.port, "127.0.0.1");
+	usleep(200000);
+	ck_assert_int_eq(version_from(np.port, "127.0.0.1"), 0);
+	ck_assert_int_eq(version_from(np.port, "127.0.0.2"), 200);
+	/* 5 + 5 + 2 = 12 held: the node is full for every address. */
+	for (int i = 5; i < 10; i++)
+		held[i] = connect_from(np.port, "127.0.0.2");
+	for (int i = 10; i < 12; i++)
+		held[i] = connect_from(np.port, "127.0.0.3");
+	usleep(200000);
+	ck_assert_int_eq(version_from(np.port, "127.0.0.4"), 0);
+	/* Silent for idle_timeout_s: the node closed them all. */
+	sleep(5);
+	for (int i = 0; i < 12; i++) {
+		ck_assert_msg(recv(held[i], buf, sizeof(buf), 0) == 0, "connection %d is open", i);
+		close(held[i]);
+	}
+	ck_assert_int_eq(version_from(np.port, "127.0.0.1"), 200);
+	node_stop(&np);
+}
+END_TEST
+
+/*
+ * Send the head of a request announcing a 1 GB body and a few bytes of it,
+ * then wait at most 3 s for the answer (issue 20): a refused request is
+ * answered without its body being read.  Returns the status, 0 if none came.
+ */
+static int refused_at_once(int port, const char *method, const char *path, const char *key,
+			   const char *type)
+{
+	struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
+	struct timeval tv = {.tv_sec = 3};
+	char req[1024], buf[4096] = "";
+	int fd = socket(AF_INET, SOCK_STREAM, 0), n, status = 0;
+	size_t got = 0;
+	ssize_t k;
+
+	ck_assert(fd >= 0);
+	inet_pton(AF_INET, "127.0.0.1", &sa.sin_addr);
+	setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof(tv));
+	ck_assert(connect(fd, (struct sockaddr *)&sa, sizeof(sa)) == 0);
+	n = snprintf(req, sizeof(req),
+		     "%s %s HTTP/1.1\r\nHost: 127.0.0.1:%d\r\n%s%s%sContent-Type: %s\r\n"
+		     "Content-Length: 1073741824\r\n\r\n--" BOUNDARY "\r\nContent-Disp",
+		     method, path, port, key ? "X-Api-Key: " : "", key ? key : "",
+		     key ? "\r\n" : "", type);
+	ck_assert(send(fd, req, (size_t)n, MSG_NOSIGNAL) == n);
+	while (got < sizeof(buf) - 1 && !strstr(buf, "\r\n\r\n") &&
+	       (k = recv(fd, buf + got, sizeof(buf) - 1 - got, 0)) > 0) {
+		got += (size_t)k;
+		buf[got] = '\0';
+	}
+	buf[got] = '\0';
+	close(fd);
+	if (sscanf(buf, "HTTP/1.1 %d", &status) != 1)
+		status = 0;
+	return status;
+}
+
+START_TEST(test_refused_before_body)
+{
+	static const char multipart[] = "multipart/form-data; boundary=" BOUNDARY;
+	struct node_proc np;
+	struct timespec t0, t1;
+
+	write_config(&np, TWO_PRINTERS, 8);
+	node_start(&np);
+	clock_gettime(CLOCK_MONOTONIC, &t0);
+	ck_assert_int_eq(refused_at_once(np.port, "POST", "/api/files/local", NULL, multipart),
+			 403);
+	ck_assert_int_eq(refused_at_once(np.port, "POST", "/p/mk3s/api/files/local", "wrong-key",
+					 multipart), 403);
+	ck_assert_int_eq(refused_at_once(np.port, "POST", "/api/files/local", KEY_READ, multipart),
+			 403);
+	ck_assert_int_eq(refused_at_once(np.port, "POST", "/api/job", NULL, "application/json"),
+			 403);
+	ck_assert_int_eq(refused_at_once(np.port, "POST", "/api/nothing", KEY_CTL,
+					 "application/json"), 404);
+	/* With a key, a body over the limit is refused as promptly. */
+	ck_assert_int_eq(refused_at_once(np.port, "POST", "/api/files/local", KEY_UP, multipart),
+			 413);
+	ck_assert_int_eq(refused_at_once(np.port, "POST", "/api/job", KEY_CTL, "application/json"),
+			 413);
+	clock_gettime(CLOCK_MONOTONIC, &t1);
+	ck_assert_msg(t1.tv_sec - t0.tv_sec < 5, "%ld s", (long)(t1.tv_sec - t0.tv_sec));
+	expect(np.port, "GET", "/api/version", "X-Api-Key: " KEY_READ, NULL, 200);
 	node_stop(&np);
 }
 END_TEST
@@ -1001,6 +1323,10 @@ START_TEST(test_config_errors)
 		 "line 3: max_upload_mb: 99999999999999999999 is out of range"},
 		{"[node]\nslice_threads = -99999999999999999999\n",
 		 "line 2: slice_threads: -99999999999999999999 is out of range"},
+		{"[node]\nmax_connections = 4\n", "line 2: max_connections: 4 is out of range"},
+		{"[node]\nmax_connections_per_ip = 0\n",
+		 "line 2: max_connections_per_ip: 0 is out of range"},
+		{"[node]\nidle_timeout_s = 3601\n", "line 2: idle_timeout_s: 3601 is out of range"},
 		{"[node]\nlisten = 127.0.0.1:99999999999999999999\n",
 		 "line 2: listen: '127.0.0.1:99999999999999999999': port 99999999999999999999 is "
 		 "out of range"},
@@ -1931,6 +2257,12 @@ Suite *serve_suite(void)
 	tcase_add_test(tc, test_oversize);
 	tcase_add_test(tc, test_hostile_names);
 	tcase_add_test(tc, test_nameless_part);
+	tcase_add_test(tc, test_refused_before_body);
+	tcase_add_test(tc, test_malformed_forms);
+	tcase_add_test(tc, test_tmp_cleaned_at_start);
+	tcase_add_test(tc, test_query_keys_not_logged);
+	tcase_add_test(tc, test_connection_limits);
+	tcase_add_test(tc, test_chunked_refused_stops);
 	tcase_add_test(tc, test_stl_two_printers);
 	tcase_add_test(tc, test_node_gcode_is_slice_gcode);
 	tcase_add_test(tc, test_node_slices_two_object_3mf);

@@ -179,8 +179,28 @@ static int node_key_value(struct cfg_parse *p, const char *k, const char *v)
 		c->slice_threads = (int)d;
 		return 0;
 	}
+	if (!strcmp(k, "max_connections")) {
+		if ((rc = once(p, k, 5)) ||
+		    (rc = whole(p, k, v, NODE_CONN_MIN, NODE_CONN_MAX, &d)))
+			return rc;
+		c->max_connections = (unsigned)d;
+		return 0;
+	}
+	if (!strcmp(k, "max_connections_per_ip")) {
+		if ((rc = once(p, k, 6)) || (rc = whole(p, k, v, 1, NODE_CONN_MAX, &d)))
+			return rc;
+		c->max_connections_per_ip = (unsigned)d;
+		return 0;
+	}
+	if (!strcmp(k, "idle_timeout_s")) {
+		if ((rc = once(p, k, 7)) || (rc = whole(p, k, v, 1, 3600, &d)))
+			return rc;
+		c->idle_timeout_s = (unsigned)d;
+		return 0;
+	}
 	return CFG_FAIL(p, ST_ERR_PARSE, "unknown key '%s' in [node] (name, listen, data_dir, "
-					  "max_upload_mb, slice_threads)", k);
+					  "max_upload_mb, slice_threads, max_connections, "
+					  "max_connections_per_ip, idle_timeout_s)", k);
 }
 
 static int key_key_value(struct cfg_parse *p, const char *k, char *v)
@@ -475,6 +495,9 @@ int node_config_load(const char *path, struct node_config *out, struct st_error 
 	c->mqtt.keepalive = 30;
 	c->max_upload = NODE_UPLOAD_DEFAULT;
 	c->slice_threads = 1;
+	c->max_connections = NODE_CONN_DEFAULT;
+	c->max_connections_per_ip = NODE_CONN_PER_IP_DEFAULT;
+	c->idle_timeout_s = NODE_IDLE_TIMEOUT_DEFAULT;
 	if (!(rc = ini_parse(text, len, path, &handler, &p, err)) &&
 	    !(rc = check_complete(&p)) && !(rc = resolve_data_dir(c, path, err)))
 		*out = *c;

@@ -5,10 +5,13 @@
  * OctoPrint has no call for (the queue, the bed-clear confirmation).
  * Here: responses, uploads and routing; the handlers are in http_api.c.
  *
- * A request is decided in the first call of the handler (route, key, size)
- * but answered only once its body is read, unless the client waits for
- * "100 Continue": answering early otherwise leaves unread bytes that make
- * the kernel reset the connection before the client reads the answer.
+ * A request is decided in the first call of the handler (route, key, size).
+ * A refused one is answered once its body is read when that body is small
+ * (HTTP_DRAIN_MAX): answering early leaves unread bytes that can make the
+ * kernel reset the connection before the client reads the answer.  A client
+ * waiting for "100 Continue", or one announcing a larger or chunked body,
+ * is answered at once and its body never read (docs/serve.md, "Limits"):
+ * nobody without a key can make the node read a gigabyte.
  */
 #include <arpa/inet.h>
 #include <ctype.h>
@@ -31,8 +34,8 @@
 
 #define HTTP_JSON_MAX 65536		/* body of a JSON command, bytes */
 #define HTTP_MULTIPART_SLACK 65536	/* multipart headers around the file */
+#define HTTP_DRAIN_MAX 65536		/* body read before refusing, bytes */
 #define HTTP_POOL 4			/* HTTP threads */
-#define HTTP_TIMEOUT_S 60		/* idle connection timeout */
 
 /* ---- responses ---------------------------------------------------------- */
 
@@ -163,6 +166,15 @@ static enum MHD_Result post_iter(void *cls, enum MHD_ValueKind kind, const char 
 		}
 		field_add(r, r->sets, sizeof(r->sets), &r->sets_len, key, data, size);
 	} else if (!strcmp(key, "file")) {
+		/* A second file part would be appended to the first: refuse the form.
+		 * A part starts at offset 0; the first part's later calls do not. */
+		if (r->has_file && off == 0 &&
+		    (r->bytes || strcmp(filename ? filename : "", r->filename))) {
+			upload_discard(r);
+			req_fail(r, MHD_HTTP_BAD_REQUEST, "the multipart form has more than one "
+							  "part named 'file'; send one file per upload");
+			return MHD_YES;
+		}
 		if (!r->has_file) {
 			r->has_file = true;
 			flen = filename ? strlen(filename) : 0;
@@ -351,6 +363,16 @@ static unsigned key_roles(struct node *n, struct MHD_Connection *c)
 	return roles;
 }
 
+/* Refuse an upload body longer than the file limit and the form around it. */
+static void upload_too_large(struct node *n, struct req *r)
+{
+	char msg[100];
+
+	snprintf(msg, sizeof(msg), "the upload is larger than the node's limit of %llu bytes",
+		 (unsigned long long)n->cfg.max_upload);
+	req_fail(r, MHD_HTTP_CONTENT_TOO_LARGE, msg);
+}
+
 /* Find the printer and route of url; sets r->p, r->base, r->route_path, r->rt. */
 static void resolve(struct node *n, const char *url, const char *method, struct req *r)
 {
@@ -415,11 +437,7 @@ static void first_call(struct node *n, struct MHD_Connection *c, const char *url
 	}
 	if (r->rt->upload) {
 		if (len > n->cfg.max_upload + HTTP_MULTIPART_SLACK) {
-			char msg[100];
-
-			snprintf(msg, sizeof(msg), "the upload is larger than the node's limit of "
-						   "%llu bytes", (unsigned long long)n->cfg.max_upload);
-			req_fail(r, MHD_HTTP_CONTENT_TOO_LARGE, msg);
+			upload_too_large(n, r);
 			return;
 		}
 		r->pp = MHD_create_post_processor(c, 65536, post_iter, r);
@@ -430,12 +448,21 @@ static void first_call(struct node *n, struct MHD_Connection *c, const char *url
 	}
 }
 
-/* Whether the client sent the body already, or waits for 100 Continue. */
-static bool waits_for_continue(struct MHD_Connection *c)
+/* Whether a refusal is answered before the body: the client waits for 100
+ * Continue, or the body is chunked or longer than the node reads to refuse. */
+static bool refuse_at_once(struct MHD_Connection *c)
 {
 	const char *e = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_EXPECT);
+	const char *cl = MHD_lookup_connection_value(c, MHD_HEADER_KIND,
+						     MHD_HTTP_HEADER_CONTENT_LENGTH);
+	const char *te = MHD_lookup_connection_value(c, MHD_HEADER_KIND,
+						     MHD_HTTP_HEADER_TRANSFER_ENCODING);
 
-	return e && !strcasecmp(e, "100-continue");
+	if (e && !strcasecmp(e, "100-continue"))
+		return true;
+	if (te)
+		return true;
+	return cl && strtoull(cl, NULL, 10) > HTTP_DRAIN_MAX;
 }
 
 static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *url,
@@ -454,12 +481,16 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *u
 			return MHD_NO;
 		*con_cls = r;
 		first_call(n, c, url, method, r);
-		/* Answer at once when no body is on its way. */
-		if (r->status && waits_for_continue(c))
+		if (r->status && refuse_at_once(c))
 			return http_send_error(c, (unsigned)r->status, r->msg);
 		return MHD_YES;
 	}
 	if (*upload_size) {
+		/* Counted here, not in post_iter: a chunked body that is no form
+		 * (no boundary ever) reaches no field and would be read forever. */
+		r->raw += *upload_size;
+		if (r->pp && r->raw > n->cfg.max_upload + HTTP_MULTIPART_SLACK)
+			upload_too_large(n, r);
 		if (!r->status && r->pp) {
 			if (MHD_post_process(r->pp, upload, *upload_size) != MHD_YES)
 				req_fail(r, MHD_HTTP_BAD_REQUEST, "the multipart form is malformed");
@@ -477,7 +508,19 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *u
 			}
 		}
 		*upload_size = 0;
+		/* A chunked body has no end the node knows: refused, it is not read on. */
+		if (r->status && MHD_lookup_connection_value(c, MHD_HEADER_KIND,
+							     MHD_HTTP_HEADER_TRANSFER_ENCODING))
+			return http_send_error(c, (unsigned)r->status, r->msg);
 		return MHD_YES;
+	}
+	/* The post processor tells only here whether the form was complete
+	 * (its closing boundary came): a cut-off upload is refused, not stored. */
+	if (r->pp) {
+		if (MHD_destroy_post_processor(r->pp) != MHD_YES)
+			req_fail(r, MHD_HTTP_BAD_REQUEST, "the multipart form is incomplete (no "
+							  "closing boundary)");
+		r->pp = NULL;
 	}
 	if (r->status)
 		return http_send_error(c, (unsigned)r->status, r->msg);
@@ -503,12 +546,16 @@ static void completed(void *cls, struct MHD_Connection *c, void **con_cls,
 	*con_cls = NULL;
 }
 
-/* Log every request: method, URL, client. */
+/* Log every request's path.  Not its query: the status page takes the
+ * API key from ?key= (page.c), and a secret must not reach the log. */
 static void *log_uri(void *cls, const char *uri, struct MHD_Connection *c)
 {
+	size_t path_len = strcspn(uri, "?");
+
 	(void)cls;
 	(void)c;
-	node_log("debug", NULL, 0, "request %.200s", uri);
+	node_log("debug", NULL, 0, "request %.*s%s", (int)(path_len < 200 ? path_len : 200), uri,
+		 uri[path_len] ? "?(query not logged)" : "");
 	return NULL;
 }
 
@@ -523,7 +570,9 @@ int node_http_start(struct node *n, struct st_error *err)
 	n->httpd = MHD_start_daemon(MHD_USE_AUTO_INTERNAL_THREAD, n->cfg.listen_port, NULL, NULL,
 				    handle, n, MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&sa,
 				    MHD_OPTION_THREAD_POOL_SIZE, (unsigned)HTTP_POOL,
-				    MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)HTTP_TIMEOUT_S,
+				    MHD_OPTION_CONNECTION_TIMEOUT, n->cfg.idle_timeout_s,
+				    MHD_OPTION_CONNECTION_LIMIT, n->cfg.max_connections,
+				    MHD_OPTION_PER_IP_CONNECTION_LIMIT, n->cfg.max_connections_per_ip,
 				    MHD_OPTION_NOTIFY_COMPLETED, completed, n,
 				    MHD_OPTION_URI_LOG_CALLBACK, log_uri, n, MHD_OPTION_END);
 	if (!n->httpd)

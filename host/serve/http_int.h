@@ -41,7 +41,8 @@ struct req {
 	/* upload */
 	struct MHD_PostProcessor *pp;
 	struct st_file_out out; /* the upload's temporary file (st_file.h) */
-	uint64_t bytes;
+	uint64_t bytes; /* of the file part */
+	uint64_t raw;	/* of the whole body, as received */
 	bool has_file;
 	char filename[NODE_FILE_NAME_MAX + 2];
 	size_t filename_len;

@@ -3,6 +3,7 @@
  * refused, not rewritten, so what the slicer shows is what the node keeps.
  */
 #include <ctype.h>
+#include <jansson.h>
 #include <string.h>
 
 #include "commands.h"
@@ -30,6 +31,14 @@ int node_check_file_name(const char *name, size_t len, struct st_error *err)
 		if (c < 0x20 || c == 0x7f)
 			return st_error_set(err, ST_ERR_PARSE, "the file name contains the control "
 							       "byte 0x%02x at byte %zu", c, i);
+	}
+	/* The API lists names as JSON strings, which must be UTF-8 (jansson's check). */
+	{
+		json_t *s = json_stringn(name, len);
+
+		if (!s)
+			return st_error_set(err, ST_ERR_PARSE, "the file name is not valid UTF-8");
+		json_decref(s);
 	}
 	return 0;
 }

@@ -2,12 +2,14 @@
  * node.c - the node's life cycle (node.h): data directory, queue recovery,
  * profiles, worker threads, the progress ticker, the HTTP server.
  */
+#include <dirent.h>
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "node_int.h"
 
@@ -27,6 +29,35 @@ static int join(char *dst, size_t cap, const char *dir, const char *name, struct
 {
 	if (snprintf(dst, cap, "%s/%s", dir, name) >= (int)cap)
 		return st_error_set(err, ST_ERR_RANGE, "%s/%s: path too long", dir, name);
+	return 0;
+}
+
+/* Remove what uploads in progress left in tmp/ when the node last stopped
+ * (a crash, a kill): the folder is the node's own, and at start no upload
+ * is in progress, so every file in it is a leftover. */
+static int clean_tmp(const char *dir, struct st_error *err)
+{
+	DIR *d = opendir(dir);
+	struct dirent *e;
+	int removed = 0;
+
+	if (!d)
+		return st_error_set(err, ST_ERR_IO, "%s: %s", dir, strerror(errno));
+	while ((e = readdir(d))) {
+		if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, ".."))
+			continue;
+		if (unlinkat(dirfd(d), e->d_name, 0)) {
+			int code = errno;
+
+			closedir(d);
+			return st_error_set(err, ST_ERR_IO, "%s/%s: cannot remove a partial upload: %s",
+					    dir, e->d_name, strerror(code));
+		}
+		removed++;
+	}
+	closedir(d);
+	if (removed)
+		node_log("info", NULL, 0, "removed %d partial upload(s) from %s", removed, dir);
 	return 0;
 }
 
@@ -81,7 +112,7 @@ int node_new(const struct node_config *cfg, struct node **out, struct st_error *
 	pthread_cond_init(&n->tick_cv, NULL);
 	if ((rc = make_dir(cfg->data_dir, err)) ||
 	    (rc = join(n->tmp_dir, sizeof(n->tmp_dir), cfg->data_dir, "tmp", err)) ||
-	    (rc = make_dir(n->tmp_dir, err)) ||
+	    (rc = make_dir(n->tmp_dir, err)) || (rc = clean_tmp(n->tmp_dir, err)) ||
 	    (rc = join(n->sliced_dir, sizeof(n->sliced_dir), cfg->data_dir, "sliced", err)) ||
 	    (rc = make_dir(n->sliced_dir, err)) ||
 	    (rc = join(db, sizeof(db), cfg->data_dir, "queue.db", err)) ||

@@ -28,6 +28,14 @@
 #define NODE_PREFIX_MAX 128	/* a printer's URL path prefix */
 #define NODE_FILE_NAME_MAX 255	/* an uploaded file's name, bytes (NAME_MAX) */
 #define NODE_UPLOAD_DEFAULT (256ull << 20) /* max_upload_mb default: 256 MiB */
+/* HTTP connection bounds (docs/serve.md, "Limits"): the total stays under the
+ * usual 1024 open files so the node keeps descriptors for its own files;
+ * libmicrohttpd divides it among the HTTP threads (4), so at least 2 each. */
+#define NODE_CONN_DEFAULT 512	       /* max_connections */
+#define NODE_CONN_MIN 8
+#define NODE_CONN_MAX 65536
+#define NODE_CONN_PER_IP_DEFAULT 32    /* max_connections_per_ip */
+#define NODE_IDLE_TIMEOUT_DEFAULT 30   /* idle_timeout_s: no byte in either direction */
 
 /* Roles of an API key (bit set). */
 enum node_role {
@@ -69,6 +77,9 @@ struct node_config {
 	char data_dir[NODE_PATH_MAX];	/* relative paths are from the config's folder */
 	uint64_t max_upload;		/* bytes; max_upload_mb in the file */
 	int slice_threads;		/* cores per slicing job, 0 = all; default 1 */
+	unsigned max_connections;	/* HTTP connections in all; NODE_CONN_DEFAULT */
+	unsigned max_connections_per_ip; /* from one client address */
+	unsigned idle_timeout_s;	/* close a connection silent this long */
 	struct node_key keys[NODE_MAX_KEYS];
 	size_t nkeys;
 	struct node_printer_config printers[NODE_MAX_PRINTERS];
