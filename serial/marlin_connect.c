@@ -145,7 +145,7 @@ int marlin_connect(struct marlin *m, struct st_error *err)
 		m->n_acked = m->n_max_sent = m->last_tx_n = 1;
 		m->n_acked_hi = m->n_taken = 1;
 		m->probed = false;
-		m->m105_n = m->phantom_n = m->phantom_bytes = m->m105_gone_bytes = 0;
+		m->m105_n = m->phantom_n = m->phantom_bytes = m->m105_gone_bytes = m->m105_late = 0;
 		m->m105_spent = false;
 		m->t_busy = 0;
 		marlin_hist_entry(m, 0)->n = 0;

@@ -113,6 +113,9 @@ struct marlin {
 	size_t m105_n;
 	bool m105_spent;	/* a probe's answer acknowledged nothing new: the
 				 * older probe's turn (until something moves) */
+	size_t m105_late;	/* answers that may still come for probes no longer
+				 * awaited: none is written meanwhile (for probe_ms) */
+	double t_m105_late;
 	size_t m105_gone_bytes;	/* probes given up, perhaps still in the RX ring */
 	long m105_gone_after;	/* ... until a line after this one is acknowledged */
 	unsigned skip_ok;	/* oks that belong to Resend requests */
@@ -184,5 +187,11 @@ void marlin_phantom_pop(struct marlin *m);
 /* An "ok T:" reply: the answer to an M105 probe?  Then it acknowledges
  * what it can and true is returned. */
 bool marlin_m105_answer(struct marlin *m);
+/* An "Unknown command" echo of (line, len): does it quote a line in
+ * flight, or a fragment of a damaged one (whose ok is no line's)? */
+bool marlin_unknown_is_inflight(struct marlin *m, const char *line, size_t len);
+/* The same echo quotes an M105 probe with one byte spoilt: it will never
+ * be answered "ok T:", so it is no longer awaited. */
+void marlin_m105_spoilt(struct marlin *m, const char *line, size_t len);
 
 #endif /* STRATUM_SERIAL_MARLIN_IMPL_H */

@@ -268,6 +268,46 @@ static bool marlin_job_m105_inflight(struct marlin *m)
 	return false;
 }
 
+/*
+ * Marlin echoes a command it does not know, quoted ("echo:Unknown command:
+ * \"117\""), then answers it "ok".  A line of the job it does not know
+ * (M862.3 on another firmware) is in flight with that text.  Anything else
+ * is a fragment of a damaged line run without a number, most often a
+ * checksum's digits after its '*' turned into a newline: its ok is no
+ * line's, and counted for one it ended a job a line early (marlin:
+ * lost_oks, "stopped after 2002" of 2003).
+ */
+bool marlin_unknown_is_inflight(struct marlin *m, const char *line, size_t len)
+{
+	const char *q = memchr(line, '"', len), *end = line + len;
+	while (end > line && end[-1] != '"')
+		end--;
+	if (!q || end - 1 <= q)
+		return true; /* nothing quoted: cannot tell, count it as before */
+	q++;
+	size_t qlen = (size_t)(end - 1 - q);
+	for (long n = m->n_acked + 1; n < m->n_send; n++) {
+		const struct marlin_entry *e = marlin_hist_entry(m, n);
+		const char *c = e->n == n ? memchr(e->text, ' ', e->len) : NULL;
+		const char *star = c ? memchr(c, '*', e->len - (size_t)(c - e->text)) : NULL;
+		if (star && (size_t)(star - c - 1) == qlen && !memcmp(c + 1, q, qlen))
+			return true;
+	}
+	return false;
+}
+
+void marlin_m105_spoilt(struct marlin *m, const char *line, size_t len)
+{
+	const char *q = memchr(line, '"', len);
+	int diff = 0;
+	if (!m->m105_n || !q || (size_t)(q - line) + 6 > len || q[5] != '"')
+		return;
+	for (int i = 0; i < 4; i++)
+		diff += q[1 + i] != "M105"[i];
+	if (diff == 1) /* it ran, so every probe before it had its turn */
+		memmove(m->m105, m->m105 + 1, --m->m105_n * sizeof(m->m105[0]));
+}
+
 /* The counters an M105 probe's answer must find unchanged. */
 static uint64_t marlin_marks(const struct marlin *m)
 {
@@ -316,6 +356,9 @@ static bool marlin_m105_may(struct marlin *m, double now)
 		for (size_t i = 0; i < m->m105_n; i++)
 			m->m105[i].valid = false;
 	}
+	if (m->m105_late && now - m->t_m105_late < m->o.probe_ms / 1000.0)
+		return false;
+	m->m105_late = 0; /* those answers were lost */
 	if (m->m105_spent || m->m105_n == MARLIN_M105_MAX ||
 	    (m->m105_n && now - m->m105[m->m105_n - 1].t < MARLIN_M105_AGAIN_S))
 		return false;
@@ -362,8 +405,10 @@ bool marlin_m105_answer(struct marlin *m)
 		/* No probe awaited: unless an M105 of the job is in flight,
 		 * this answers one given up as overdue, and acknowledges
 		 * nothing.  Taken for a line's ok, each such answer ended a
-		 * job a line early (marlin: late_probe_answers). */
-		if (marlin_job_m105_inflight(m))
+		 * job a line early (marlin: long_busy_late_answers). */
+		if (m->m105_late)
+			m->m105_late--;
+		else if (marlin_job_m105_inflight(m))
 			return false;
 		m->st.stray_oks++;
 		return true;
@@ -385,6 +430,15 @@ bool marlin_m105_answer(struct marlin *m)
 		 * theirs: with one line in flight, each probe answered in
 		 * turn would vouch for nothing for ever */
 		m->m105_spent = true;
+		/* Which probe it answered is not known once one's answer was
+		 * lost (noise on an "ok T:"): counted for the one before it,
+		 * every later answer was, for ever, as a new probe went out
+		 * before the last one's answer came (marlin: lost_oks, a
+		 * livelock).  The others are no longer awaited, and no probe
+		 * goes out while their answers may still come. */
+		m->m105_late = m->m105_n;
+		m->m105_n = 0;
+		m->t_m105_late = marlin_now_s(m);
 	}
 	return true;
 }

@@ -448,6 +448,23 @@ static bool sim_newline_lost(struct sim_marlin *s)
 	return false;
 }
 
+/* Is the line so far the one whose '*' star_to_newline_at turns into a
+ * newline?  Then it ends there, and what followed the '*' goes to tail. */
+static bool sim_star_cut(struct sim_marlin *s, char *tail, size_t *tail_len)
+{
+	if (s->star_cut || s->o.star_to_newline_at <= 0 || !s->line_len || s->line[0] != 'N' ||
+	    sim_read_long(s->line + 1, s->line + s->line_len) != s->o.star_to_newline_at)
+		return false;
+	char *star = memchr(s->line, '*', s->line_len);
+	if (!star)
+		return false;
+	s->star_cut = true;
+	*tail_len = s->line_len - (size_t)(star + 1 - s->line);
+	memcpy(tail, star + 1, *tail_len);
+	s->line_len = (size_t)(star - s->line);
+	return true;
+}
+
 /* Move bytes from the RX ring into lines while a queue slot is free and no
  * command blocks: Marlin reads serial input in its main loop, between
  * commands, not in the idle() a waiting command spins in. */
@@ -459,8 +476,18 @@ void msim_serial_commands(struct sim_marlin *s)
 	while (i < s->rx_len && s->q_count < s->o.bufsize && !s->halted) {
 		char ch = (char)s->rx[i++];
 		if (ch == '\n' || ch == '\r') {
+			char tail[SIM_MAX_CMD];
+			size_t tail_len = 0;
 			if (!s->line_comment && sim_newline_lost(s))
 				continue;
+			if (!s->line_comment && sim_star_cut(s, tail, &tail_len)) {
+				/* the line errs; the digits after it, a byte time
+				 * or more behind, come after the error emptied the
+				 * ring, and end as a line of their own */
+				sim_accept_line(s);
+				memcpy(s->line, tail, tail_len);
+				s->line_len = tail_len;
+			}
 			if (!s->line_comment || s->line_len)
 				sim_accept_line(s);
 			s->line_len = 0;

@@ -72,6 +72,11 @@ struct sim_marlin_options {
 	long lose_newline_at[SIM_MARLIN_CUTS]; /* the first copy of each of these
 			       * lines loses its newline: the firmware waits for the
 			       * rest of it (0: unused) */
+	long star_to_newline_at; /* the first copy of this line has its '*' turned
+			       * into a newline (one bit flipped): the line errs for
+			       * its missing checksum, and its checksum digits,
+			       * arriving after the error emptied the ring, run as
+			       * an unknown command; <= 0: never */
 };
 
 /* Opaque simulator. */

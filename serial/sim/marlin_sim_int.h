@@ -109,6 +109,7 @@ struct sim_marlin {
 	bool halted, unplugged;
 	bool frozen;		/* freeze_at_line ran: no byte in or out any more */
 	bool number_spoilt;	/* spoil_number_at happened */
+	bool star_cut;		/* star_to_newline_at happened */
 	bool newline_lost[SIM_MARLIN_CUTS]; /* lose_newline_at[i] happened */
 	double thaw_at;		/* when a freeze_s stall ends (sim_now) */
 	_Atomic long answered_n; /* the last numbered line run and answered (read by tests) */
