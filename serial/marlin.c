@@ -389,11 +389,8 @@ static int marlin_handle(struct marlin *m, const char *line, size_t len, double 
 		m->st.last_warning[n] = '\0';
 		m->st.unknown_commands++;
 		/* a fragment's ok comes next; with ADVANCED_OK it has no N */
-		if (!marlin_unknown_is_inflight(m, line, len)) {
-			marlin_m105_spoilt(m, line, len);
-			if (!m->caps.advanced_ok)
-				m->skip_ok++;
-		}
+		if (marlin_unknown_fragment(m, line, len) && !m->caps.advanced_ok)
+			m->skip_ok++;
 		break;
 	}
 	case MARLIN_REPLY_TEMP:

@@ -187,11 +187,9 @@ void marlin_phantom_pop(struct marlin *m);
 /* An "ok T:" reply: the answer to an M105 probe?  Then it acknowledges
  * what it can and true is returned. */
 bool marlin_m105_answer(struct marlin *m);
-/* An "Unknown command" echo of (line, len): does it quote a line in
- * flight, or a fragment of a damaged one (whose ok is no line's)? */
-bool marlin_unknown_is_inflight(struct marlin *m, const char *line, size_t len);
-/* The same echo quotes an M105 probe with one byte spoilt: it will never
- * be answered "ok T:", so it is no longer awaited. */
-void marlin_m105_spoilt(struct marlin *m, const char *line, size_t len);
+/* An "Unknown command" echo of (line, len): a fragment of a damaged line
+ * (whose ok is no line's) rather than a line in flight?  A spoilt probe is
+ * then no longer awaited. */
+bool marlin_unknown_fragment(struct marlin *m, const char *line, size_t len);
 
 #endif /* STRATUM_SERIAL_MARLIN_IMPL_H */

@@ -8,6 +8,12 @@
 
 #include "marlin_impl.h"
 
+/* The oldest awaited probe is no longer awaited. */
+static void m105_pop(struct marlin *m)
+{
+	memmove(m->m105, m->m105 + 1, --m->m105_n * sizeof(m->m105[0]));
+}
+
 static void ghost_clear(struct marlin *m)
 {
 	m->ghost_head = m->ghost_n = m->ghost_bytes = 0;
@@ -123,7 +129,7 @@ void marlin_ack_through(struct marlin *m, long n)
 	/* unnumbered lines written before line n ran before it: their
 	 * answers, if still missing, were lost, and they left the ring */
 	while (m->m105_n && m->m105[0].after < n)
-		memmove(m->m105, m->m105 + 1, --m->m105_n * sizeof(m->m105[0]));
+		m105_pop(m);
 	if (m->m105_gone_after < n)
 		m->m105_gone_bytes = 0;
 	while (m->phantom_n && m->phantom[0].after < n)
@@ -275,15 +281,17 @@ static bool marlin_job_m105_inflight(struct marlin *m)
  * is a fragment of a damaged line run without a number, most often a
  * checksum's digits after its '*' turned into a newline: its ok is no
  * line's, and counted for one it ended a job a line early (marlin:
- * lost_oks, "stopped after 2002" of 2003).
+ * fragment_ok).  A fragment that is a probe with one byte spoilt will
+ * never be answered "ok T:": it ran, so every probe before it had its
+ * turn, and the oldest awaited is it.
  */
-bool marlin_unknown_is_inflight(struct marlin *m, const char *line, size_t len)
+bool marlin_unknown_fragment(struct marlin *m, const char *line, size_t len)
 {
 	const char *q = memchr(line, '"', len), *end = line + len;
 	while (end > line && end[-1] != '"')
 		end--;
 	if (!q || end - 1 <= q)
-		return true; /* nothing quoted: cannot tell, count it as before */
+		return false; /* nothing quoted: cannot tell, count it as before */
 	q++;
 	size_t qlen = (size_t)(end - 1 - q);
 	for (long n = m->n_acked + 1; n < m->n_send; n++) {
@@ -291,21 +299,14 @@ bool marlin_unknown_is_inflight(struct marlin *m, const char *line, size_t len)
 		const char *c = e->n == n ? memchr(e->text, ' ', e->len) : NULL;
 		const char *star = c ? memchr(c, '*', e->len - (size_t)(c - e->text)) : NULL;
 		if (star && (size_t)(star - c - 1) == qlen && !memcmp(c + 1, q, qlen))
-			return true;
+			return false;
 	}
-	return false;
-}
-
-void marlin_m105_spoilt(struct marlin *m, const char *line, size_t len)
-{
-	const char *q = memchr(line, '"', len);
 	int diff = 0;
-	if (!m->m105_n || !q || (size_t)(q - line) + 6 > len || q[5] != '"')
-		return;
-	for (int i = 0; i < 4; i++)
-		diff += q[1 + i] != "M105"[i];
-	if (diff == 1) /* it ran, so every probe before it had its turn */
-		memmove(m->m105, m->m105 + 1, --m->m105_n * sizeof(m->m105[0]));
+	for (size_t i = 0; qlen == 4 && i < 4; i++)
+		diff += q[i] != "M105"[i];
+	if (m->m105_n && diff == 1)
+		m105_pop(m);
+	return true;
 }
 
 /* The counters an M105 probe's answer must find unchanged. */
@@ -352,7 +353,7 @@ static bool marlin_m105_may(struct marlin *m, double now)
 		 * ring until a line written after it is acknowledged */
 		m->m105_gone_bytes += len;
 		m->m105_gone_after = m->m105[0].after;
-		memmove(m->m105, m->m105 + 1, --m->m105_n * sizeof(m->m105[0]));
+		m105_pop(m);
 		for (size_t i = 0; i < m->m105_n; i++)
 			m->m105[i].valid = false;
 	}
@@ -414,7 +415,7 @@ bool marlin_m105_answer(struct marlin *m)
 		return true;
 	}
 	struct marlin_m105 e = m->m105[0];
-	memmove(m->m105, m->m105 + 1, --m->m105_n * sizeof(m->m105[0]));
+	m105_pop(m);
 	/* Not the last line before it, unless the firmware had said it has
 	 * it: a copy of it whose number noise turned into the one before was
 	 * dropped silently as a duplicate (queue.cpp drops last_N - 1 and

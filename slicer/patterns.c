@@ -122,17 +122,9 @@ static void gyroid_branch(double k, double sz, double cz, bool swap, double sign
 static size_t gyroid_simplify(struct simplify_work *wk, int64_t *xy, size_t n, bool *keep,
 			      struct st_error *err)
 {
-	size_t m = 0;
-
 	if (simplify_mark(wk, xy, n, PAT_GYROID_TOLERANCE_NM, keep, err))
 		return 0;
-	for (size_t i = 0; i < n; i++)
-		if (keep[i]) {
-			xy[2 * m] = xy[2 * i];
-			xy[2 * m + 1] = xy[2 * i + 1];
-			m++;
-		}
-	return m;
+	return simplify_keep(xy, n, keep, xy);
 }
 
 /*

@@ -167,14 +167,20 @@ bool simplify_balance(const int64_t *xy, size_t n, const bool *keep, double tol,
 	}
 	if (ok)
 		return m > 2;
-	m = 0;
+	simplify_keep(xy, n, keep, out);
+	return false;
+}
+
+size_t simplify_keep(const int64_t *xy, size_t n, const bool *keep, int64_t *out)
+{
+	size_t m = 0;
 	for (size_t k = 0; k < n; k++)
 		if (keep[k]) {
 			out[2 * m] = xy[2 * k];
 			out[2 * m + 1] = xy[2 * k + 1];
 			m++;
 		}
-	return false;
+	return m;
 }
 
 void simplify_work_free(struct simplify_work *wk)

@@ -61,6 +61,12 @@ int simplify_mark(struct simplify_work *wk, const int64_t *xy, size_t n, double 
 bool simplify_balance(const int64_t *xy, size_t n, const bool *keep, double tol, int64_t *out);
 
 /*
+ * simplify_keep - the points of xy[0 .. 2n) whose keep is set into out, in
+ * order; returns how many.  out may be xy (compaction in place).
+ */
+size_t simplify_keep(const int64_t *xy, size_t n, const bool *keep, int64_t *out);
+
+/*
  * simplify_seg_dist - the distance (nm) from (px, py) to the segment from
  * (ax, ay) to (bx, by), computed as simplify_mark does; a segment of no
  * length is its end point.

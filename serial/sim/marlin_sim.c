@@ -236,6 +236,12 @@ size_t msim_planner_free(struct sim_marlin *s, double now)
 	return SIM_PLANNER - k;
 }
 
+/* Seconds one byte takes on the link (start, 8 data and stop bits). */
+static double sim_byte_s(const struct sim_marlin *s)
+{
+	return 10.0 / s->o.baud;
+}
+
 /* "ok", or Marlin's ADVANCED_OK form. */
 void msim_ok(struct sim_marlin *s, const struct sim_cmd *c, double now)
 {
@@ -512,7 +518,7 @@ void msim_serial_commands(struct sim_marlin *s)
 /* Write one execution-log line. */
 static int sim_flush_tx(struct sim_marlin *s, double now, double *wake)
 {
-	const double byte_s = 10.0 / s->o.baud;
+	const double byte_s = sim_byte_s(s);
 	size_t limit = s->tx_off, k = 0;
 	double t = s->out_t;
 	for (; k < s->marks_n; k++) {
@@ -560,7 +566,7 @@ static int sim_flush_tx(struct sim_marlin *s, double now, double *wake)
  * end (or the last staged byte) will have arrived. */
 static void sim_wire_deliver(struct sim_marlin *s, double now, double *wake)
 {
-	const double byte_s = 10.0 / s->o.baud;
+	const double byte_s = sim_byte_s(s);
 	size_t i = 0, j;
 	while (i < s->wire_len && s->in_t + byte_s <= now) {
 		s->in_t += byte_s;
@@ -613,7 +619,7 @@ int sim_marlin_run(struct sim_marlin *s, volatile sig_atomic_t *stop, struct st_
 					   sizeof(s->wire), &arrived))
 				return st_error_set(err, ST_ERR_IO, "simulated Marlin: poll failed: %s",
 						    strerror(errno));
-			s->in_t = now - (double)s->wire_len * 10.0 / s->o.baud;
+			s->in_t = now - (double)s->wire_len * sim_byte_s(s);
 		}
 		if (s->frozen) {
 			/* a hung board: the UART still fills the kernel's buffer
