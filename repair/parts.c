@@ -172,6 +172,111 @@ static bool touching(const uint64_t *pairs, size_t n, uint32_t a, uint32_t b)
 	return n && bsearch(&key, pairs, n, sizeof(*pairs), compare_pair) != NULL;
 }
 
+/* A shell by where its box starts along x, for the sweep below. */
+struct lo_x {
+	double x;
+	uint32_t id;
+};
+
+static int compare_lo_x(const void *pa, const void *pb)
+{
+	const struct lo_x *a = pa, *b = pb;
+
+	if (a->x != b->x)
+		return a->x < b->x ? -1 : 1;
+	return a->id < b->id ? -1 : a->id > b->id;
+}
+
+/*
+ * For every shell i, the shells j != i whose boxes hold i's box, in
+ * increasing j: shells j's[off[i]] .. j's[off[i + 1] - 1] of *within.
+ * A sweep along x (a box holding i's starts at or before i's and ends at
+ * or after it), not a test of every pair: a soup's repair leaves tens of
+ * thousands of parts.  Returns the pair count or -1 on OOM.
+ */
+static long boxes_within(const struct shell_info *s, size_t n, uint32_t *off, uint32_t **within)
+{
+	struct lo_x *by_lo = malloc((n + 1) * sizeof(*by_lo));
+	uint32_t *active = malloc((n + 1) * sizeof(*active));
+	uint64_t *pairs = NULL;
+	size_t np = 0, cap = 0, nactive = 0, next = 0;
+
+	*within = NULL;
+	if (!by_lo || !active)
+		goto nomem;
+	for (size_t i = 0; i < n; i++)
+		by_lo[i] = (struct lo_x){s[i].lo[0], (uint32_t)i};
+	qsort(by_lo, n, sizeof(*by_lo), compare_lo_x);
+	for (size_t q = 0; q < n; q++) {
+		const uint32_t i = by_lo[q].id;
+		const double x = by_lo[q].x;
+		size_t kept = 0;
+
+		while (next < n && by_lo[next].x <= x)
+			active[nactive++] = by_lo[next++].id;
+		for (size_t a = 0; a < nactive; a++) {
+			const uint32_t j = active[a];
+			if (s[j].hi[0] < x)
+				continue; /* ends before every later box starts */
+			active[kept++] = j;
+			if (j == i || !box_within(&s[i], &s[j]))
+				continue;
+			uint64_t *p = st_grow(pairs, &cap, np + 1, sizeof(*p));
+			if (!p)
+				goto nomem;
+			pairs = p;
+			pairs[np++] = (uint64_t)i << 32 | j;
+		}
+		nactive = kept;
+	}
+	if (np)
+		qsort(pairs, np, sizeof(*pairs), compare_pair);
+	*within = malloc((np + 1) * sizeof(**within));
+	if (!*within)
+		goto nomem;
+	memset(off, 0, (n + 1) * sizeof(*off));
+	for (size_t k = 0; k < np; k++) {
+		(*within)[k] = (uint32_t)pairs[k];
+		off[(pairs[k] >> 32) + 1]++;
+	}
+	for (size_t i = 0; i < n; i++)
+		off[i + 1] += off[i];
+	free(by_lo);
+	free(active);
+	free(pairs);
+	return (long)np;
+nomem:
+	free(by_lo);
+	free(active);
+	free(pairs);
+	return -1;
+}
+
+/*
+ * Whether shell j (rows off[j] .. off[j + 1] of list) holds triangle probe
+ * of another shell.  A shell of more than a few triangles is filed once
+ * (ix[j]) so each probe tests only the triangles its ray can meet: filing
+ * costs less than one plain scan (measured on a soup's 68 529 parts), and
+ * a shell is often asked about many probes.
+ */
+#define INDEX_MIN_TRIANGLES 64
+
+static int shell_holds(const struct exact_mesh *em, const uint32_t *list, const uint32_t *off,
+		       uint32_t j, uint32_t probe, struct exact_ray_index **ix, bool *inside,
+		       struct st_error *err)
+{
+	const size_t n = off[j + 1] - off[j];
+
+	if (n < INDEX_MIN_TRIANGLES)
+		return exact_mesh_inside(em, list + off[j], n, probe, inside, err);
+	if (!ix[j]) {
+		int rc = exact_ray_index_new(em, list + off[j], n, &ix[j], err);
+		if (rc)
+			return rc;
+	}
+	return exact_mesh_inside_indexed(em, ix[j], probe, inside, err);
+}
+
 int parts_nest(const struct mesh *m, const uint8_t *in_layer, uint32_t *shell, size_t *nshells_io,
 	       bool nest, bool singular, uint32_t *part, uint32_t *around, struct parts_out *out,
 	       struct st_error *err)
@@ -181,6 +286,8 @@ int parts_nest(const struct mesh *m, const uint8_t *in_layer, uint32_t *shell, s
 	struct id_depth *order = NULL;
 	struct exact_mesh *em = NULL;
 	uint64_t *touch = NULL;
+	uint32_t *within = NULL, *within_off = NULL;
+	struct exact_ray_index **ix = NULL;
 	long ntouch = 0;
 	size_t nl = 0, nshells = *nshells_io;
 	double c[3] = {0, 0, 0};
@@ -262,21 +369,23 @@ int parts_nest(const struct mesh *m, const uint8_t *in_layer, uint32_t *shell, s
 	off[0] = 0;
 
 	ntouch = touching_pairs(m, in_layer, shell, &touch);
-	if (ntouch < 0)
+	within_off = malloc((nshells + 1) * sizeof(*within_off));
+	if (ntouch < 0 || !within_off || boxes_within(s, nshells, within_off, &within) < 0)
+		goto out_nomem;
+	ix = calloc(nshells + 1, sizeof(*ix));
+	if (!ix)
 		goto out_nomem;
 	/* outer[i]: the innermost outward shell around i (UINT32_MAX: none);
 	 * depth and winding from every shell around i. */
 	for (size_t i = 0; i < nshells && !rc; i++) {
 		uint32_t best = UINT32_MAX;
-		for (size_t j = 0; j < nshells && !rc; j++) {
+		for (size_t w = within_off[i]; w < within_off[i + 1] && !rc; w++) {
+			const uint32_t j = within[w];
 			bool inside = false;
-			if (j == i || !box_within(&s[i], &s[j]))
-				continue;
 			if ((s[i].volume > 0) == (s[j].volume > 0) &&
 			    touching(touch, (size_t)ntouch, (uint32_t)i, (uint32_t)j))
 				continue;
-			rc = exact_mesh_inside(em, list + off[j], off[j + 1] - off[j], list[off[i]],
-					       &inside, err);
+			rc = shell_holds(em, list, off, j, list[off[i]], ix, &inside, err);
 			if (rc || !inside)
 				continue;
 			s[i].depth++;
@@ -328,5 +437,10 @@ out:
 	free(order);
 	free(outer);
 	free(touch);
+	free(within);
+	free(within_off);
+	for (size_t j = 0; ix && j < nshells; j++)
+		exact_ray_index_free(ix[j]);
+	free(ix);
 	return rc;
 }

@@ -215,6 +215,42 @@ START_TEST(nested_shells_cavity_or_misnested)
 }
 END_TEST
 
+/*
+ * Proves that many parts in the box of a big shell are told apart: a
+ * hollow sphere (an inward sphere inside it, a cavity), eight cubes
+ * standing in the cavity and eight beside the sphere in the corners of its
+ * box.  Every cube asks both spheres whether they hold it, so the spheres
+ * are filed for repeated ray tests (repair/parts.c); the answers must be
+ * the plain scan's: 17 parts, one cavity, printable.
+ */
+START_TEST(many_parts_in_one_box)
+{
+	struct mesh *outer = fx_sphere(0, 0, 0, 10, 16, 32), *in = fx_sphere(0, 0, 0, 6, 16, 32);
+	struct mesh *hole = inward(in), *all = fx_concat(outer, hole);
+	struct mesh_report r;
+
+	for (int c = 0; c < 16; c++) {
+		const double d = c < 8 ? 2 : 8.5; /* in the cavity, or beside the sphere */
+		const double x = c & 1 ? d : -d, y = c & 2 ? d : -d, z = c & 4 ? d : -d;
+		struct mesh *cube = fx_box(x, y, z, x + 0.5, y + 0.5, z + 0.5), *next;
+
+		next = fx_concat(all, cube);
+		mesh_free(all);
+		mesh_free(cube);
+		all = next;
+	}
+	r = analyze(all);
+	ck_assert(r.printable);
+	ck_assert_uint_eq(r.parts, 17);
+	ck_assert_uint_eq(r.cavities, 1);
+	ck_assert_uint_eq(r.misnested_shells, 0);
+	mesh_free(outer);
+	mesh_free(in);
+	mesh_free(hole);
+	mesh_free(all);
+}
+END_TEST
+
 /* A tetrahedron p q r s facing outwards: each face has the fourth corner behind it. */
 static struct mesh *tetra(const double p[3], const double q[3], const double r[3],
 			  const double s[3])
@@ -555,6 +591,7 @@ Suite *mesh_suite(void)
 	tcase_add_test(topo, cubes_sharing_a_vertex);
 	tcase_add_test(topo, nested_shells_cavity_or_misnested);
 	tcase_add_test(topo, cavity_touching_the_wall);
+	tcase_add_test(topo, many_parts_in_one_box);
 	tcase_add_test(topo, flat_cube);
 	tcase_add_test(topo, collinear_triangle_is_degenerate);
 	tcase_add_test(topo, duplicated_triangles);

@@ -226,6 +226,19 @@ int exact_mesh_inside(const struct exact_mesh *m, const uint32_t *closed, size_t
 		      uint32_t probe, bool *inside, struct st_error *err);
 
 /*
+ * exact_ray_index_new - the n triangles listed in closed, filed for
+ * exact_mesh_inside_indexed, which gives exact_mesh_inside's answer but
+ * tests only the triangles a ray from the probe can meet: for a surface
+ * asked about many probes.  Free with exact_ray_index_free.
+ */
+struct exact_ray_index;
+int exact_ray_index_new(const struct exact_mesh *m, const uint32_t *closed, size_t n,
+			struct exact_ray_index **out, struct st_error *err);
+void exact_ray_index_free(struct exact_ray_index *ix);
+int exact_mesh_inside_indexed(const struct exact_mesh *m, const struct exact_ray_index *ix,
+			      uint32_t probe, bool *inside, struct st_error *err);
+
+/*
  * exact_segment_hidden - seed 000 §4.2.1 wires: whether segment pq (double
  * points) is hidden, that is every part of it lies on one of the n_surface
  * triangles listed in surface or inside the closed surface of the n_closed
