@@ -115,10 +115,17 @@ struct point_index {
 	exact_mesh &m;
 	std::unordered_multimap<dkey, uint32_t, dkey_hash> map;
 
+	/* GMP's conversion truncates: like the nearest double it depends on
+	 * the value alone (and is that double when the value is one), at a
+	 * fraction of the cost of the correctly rounded conversion. */
+	static double key_double(const XPoint::FT &q)
+	{
+		return mpq_get_d(q.backend().data());
+	}
 	static dkey key(const EPoint &p)
 	{
 		const XPoint &e = CGAL::exact(p);
-		return dkey{{CGAL::to_double(e.x()), CGAL::to_double(e.y()), CGAL::to_double(e.z())}};
+		return dkey{{key_double(e.x()), key_double(e.y()), key_double(e.z())}};
 	}
 	/* Vertex v of m, once (distinct vertices are distinct points). */
 	void add_existing(uint32_t v)
