@@ -21,6 +21,8 @@
 #include <gmp.h>
 
 #include <algorithm>
+#include <array>
+#include <cstdint>
 #include <climits>
 #include <cmath>
 #include <utility>
@@ -179,11 +181,13 @@ class integer_plane
  * corner i, never all zero): one or two points, in *pts.  Double corners.
  */
 inline void plane_section(const IK::Point_3 t[3], const CGAL::Orientation o[3],
-			  const IK::Point_3 s[3], std::vector<EPoint> &pts)
+			  const IK::Point_3 s[3], std::vector<EPoint> &pts, std::vector<int8_t> &edge)
 {
 	for (int i = 0; i < 3; i++)
-		if (o[i] == CGAL::COPLANAR)
+		if (o[i] == CGAL::COPLANAR) {
 			pts.push_back(as_epoint(t[i]));
+			edge.push_back(NO_EDGE);
+		}
 	bool crosses = false;
 	for (int i = 0; i < 3; i++)
 		crosses |= o[i] != CGAL::COPLANAR && o[(i + 1) % 3] != CGAL::COPLANAR &&
@@ -196,19 +200,22 @@ inline void plane_section(const IK::Point_3 t[3], const CGAL::Orientation o[3],
 		if (o[i] == CGAL::COPLANAR || o[j] == CGAL::COPLANAR || o[i] == o[j])
 			continue;
 		pts.push_back(plane.cut(t[i], t[j]));
+		edge.push_back(static_cast<int8_t>(i));
 	}
 }
 
 /* The same with rational corners. */
 inline void plane_section(const EPoint t[3], const CGAL::Orientation o[3], const EPoint s[3],
-			  std::vector<EPoint> &pts)
+			  std::vector<EPoint> &pts, std::vector<int8_t> &edge)
 {
 	XFT a[3], n[3];
 	bool have_plane = false;
 
 	for (int i = 0; i < 3; i++)
-		if (o[i] == CGAL::COPLANAR)
+		if (o[i] == CGAL::COPLANAR) {
 			pts.push_back(as_epoint(t[i]));
+			edge.push_back(NO_EDGE);
+		}
 	for (int i = 0; i < 3; i++) {
 		const int j = (i + 1) % 3;
 		if (o[i] == CGAL::COPLANAR || o[j] == CGAL::COPLANAR || o[i] == o[j])
@@ -229,6 +236,7 @@ inline void plane_section(const EPoint t[3], const CGAL::Orientation o[3], const
 			have_plane = true;
 		}
 		pts.push_back(edge_plane(t[i], t[j], a, n));
+		edge.push_back(static_cast<int8_t>(i));
 	}
 }
 
@@ -244,13 +252,18 @@ inline bool xyz_less(const EPoint &a, const EPoint &b)
  * Returns false, adding nothing, when they lie in one plane (the caller
  * intersects them in general).  Otherwise appends their intersection to
  * *seg as a segment (two points) or a point (one), or nothing when they
- * miss.
+ * miss; *on gets, per point, the edge of u and the edge of w it is known
+ * to lie inside (edge k runs from corner k to corner k + 1; NO_EDGE when
+ * not known), so the re-triangulation can insert it there without
+ * locating it (retri.hpp).
  *
  * Both sections lie on the line where the two planes meet, and
  * lexicographic order is monotone along any line, so the intersection is
  * the overlap of the two sections in that order.
  */
-template <class P> bool intersect(const P u[3], const P w[3], std::vector<EPoint> &seg)
+template <class P>
+bool intersect(const P u[3], const P w[3], std::vector<EPoint> &seg,
+	       std::vector<std::array<int8_t, 2>> &on)
 {
 	CGAL::Orientation ou[3], ow[3];
 
@@ -267,20 +280,34 @@ template <class P> bool intersect(const P u[3], const P w[3], std::vector<EPoint
 		return true;
 
 	std::vector<EPoint> a, b;
-	plane_section(u, ou, w, a);
-	plane_section(w, ow, u, b);
-	if (a.size() == 2 && xyz_less(a[1], a[0]))
+	std::vector<int8_t> ea, eb;
+	plane_section(u, ou, w, a, ea);
+	plane_section(w, ow, u, b, eb);
+	if (a.size() == 2 && xyz_less(a[1], a[0])) {
 		std::swap(a[0], a[1]);
-	if (b.size() == 2 && xyz_less(b[1], b[0]))
+		std::swap(ea[0], ea[1]);
+	}
+	if (b.size() == 2 && xyz_less(b[1], b[0])) {
 		std::swap(b[0], b[1]);
-	const EPoint &lo = xyz_less(a.front(), b.front()) ? b.front() : a.front();
-	const EPoint &hi = xyz_less(a.back(), b.back()) ? a.back() : b.back();
+		std::swap(eb[0], eb[1]);
+	}
+	/* Each end is an end of u's section (on an edge of u) or of w's. */
+	const bool lo_b = xyz_less(a.front(), b.front()), hi_a = xyz_less(a.back(), b.back());
+	const EPoint &lo = lo_b ? b.front() : a.front();
+	const EPoint &hi = hi_a ? a.back() : b.back();
+	const std::array<int8_t, 2> lo_on = lo_b ? std::array<int8_t, 2>{{NO_EDGE, eb.front()}}
+						 : std::array<int8_t, 2>{{ea.front(), NO_EDGE}};
+	const std::array<int8_t, 2> hi_on = hi_a ? std::array<int8_t, 2>{{ea.back(), NO_EDGE}}
+						 : std::array<int8_t, 2>{{NO_EDGE, eb.back()}};
 	const CGAL::Comparison_result c = CGAL::compare_xyz(lo, hi);
 	if (c == CGAL::LARGER)
 		return true;
 	seg.push_back(lo);
-	if (c == CGAL::SMALLER)
+	on.push_back(lo_on);
+	if (c == CGAL::SMALLER) {
 		seg.push_back(hi);
+		on.push_back(hi_on);
+	}
 	return true;
 }
 

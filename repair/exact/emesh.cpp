@@ -250,43 +250,62 @@ void refine(exact_mesh &m, int threads, exact_refine_stats &st)
 
 	/* What each pair adds to both its triangles' cuts, found on all cores
 	 * (Epeck's lazy numbers are thread-safe since CGAL 5.5: each exact
-	 * value is computed under a once flag), then gathered in pair order. */
-	std::vector<cuts> meet(pairs.size());
+	 * value is computed under a once flag), then gathered in pair order.
+	 * The cuts carry the edges of the pair's first triangle; the same
+	 * points' edges in the second are beside them. */
+	struct pair_cut {
+		cuts c;
+		std::vector<int8_t> point_edge_w;
+		std::vector<std::array<int8_t, 2>> segment_edge_w;
+	};
+	std::vector<pair_cut> meet(pairs.size());
 	boxpairs::for_each_index(pairs.size(), threads, [&](size_t i) {
 		const uint32_t s = pairs[i].first, t = pairs[i].second;
 		const auto &u = m.tris[s], &w = m.tris[t];
+		pair_cut &pc = meet[i];
 		std::vector<EPoint> seg;
-		auto keep = [&](const std::vector<EPoint> &g) {
-			if (g.size() == 1)
-				meet[i].points.push_back(g[0]);
-			else if (g.size() == 2)
-				meet[i].segments.emplace_back(g[0], g[1]);
+		std::vector<std::array<int8_t, 2>> on;
+		auto keep = [&]() {
+			if (seg.size() == 1) {
+				pc.c.points.push_back(seg[0]);
+				pc.c.point_edge.push_back(on[0][0]);
+				pc.point_edge_w.push_back(on[0][1]);
+			} else if (seg.size() == 2) {
+				pc.c.segments.emplace_back(seg[0], seg[1]);
+				pc.c.segment_edge.push_back({{on[0][0], on[1][0]}});
+				pc.segment_edge_w.push_back({{on[0][1], on[1][1]}});
+			}
 		};
 		if (tri_is_double(m, s) && tri_is_double(m, t)) {
 			const IK::Point_3 pu[3] = {ipoint(m, u[0]), ipoint(m, u[1]), ipoint(m, u[2])};
 			const IK::Point_3 pw[3] = {ipoint(m, w[0]), ipoint(m, w[1]), ipoint(m, w[2])};
-			if (cutpair::intersect(pu, pw, seg))
-				return keep(seg);
+			if (cutpair::intersect(pu, pw, seg, on))
+				return keep();
 		} else {
 			const EPoint eu[3] = {epoint(m, u[0]), epoint(m, u[1]), epoint(m, u[2])};
 			const EPoint ew[3] = {epoint(m, w[0]), epoint(m, w[1]), epoint(m, w[2])};
-			if (cutpair::intersect(eu, ew, seg))
-				return keep(seg);
+			if (cutpair::intersect(eu, ew, seg, on))
+				return keep();
 		}
 		/* In one plane: the general intersection (an overlap polygon). */
 		EK::Triangle_3 a(epoint(m, u[0]), epoint(m, u[1]), epoint(m, u[2]));
 		EK::Triangle_3 b(epoint(m, w[0]), epoint(m, w[1]), epoint(m, w[2]));
-		add_intersection(a, b, meet[i]);
+		add_intersection(a, b, pc.c);
+		pc.point_edge_w.resize(pc.c.points.size(), NO_EDGE);
+		pc.segment_edge_w.resize(pc.c.segments.size(), {{NO_EDGE, NO_EDGE}});
 	});
 	std::unordered_map<uint32_t, cuts> cut;
+	auto append = [](auto &to, const auto &from) { to.insert(to.end(), from.begin(), from.end()); };
 	for (size_t i = 0; i < pairs.size(); i++)
-		for (uint32_t t : {pairs[i].first, pairs[i].second}) {
-			cuts &c = cut[t];
-			c.points.insert(c.points.end(), meet[i].points.begin(), meet[i].points.end());
-			c.segments.insert(c.segments.end(), meet[i].segments.begin(),
-					  meet[i].segments.end());
+		for (int side = 0; side < 2; side++) {
+			const pair_cut &pc = meet[i];
+			cuts &c = cut[side ? pairs[i].second : pairs[i].first];
+			append(c.points, pc.c.points);
+			append(c.segments, pc.c.segments);
+			append(c.point_edge, side ? pc.point_edge_w : pc.c.point_edge);
+			append(c.segment_edge, side ? pc.segment_edge_w : pc.c.segment_edge);
 		}
-	std::vector<cuts>().swap(meet);
+	std::vector<pair_cut>().swap(meet);
 
 	/* The cut triangles in order, each triangulated on any core. */
 	std::vector<uint32_t> order;

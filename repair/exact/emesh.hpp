@@ -24,6 +24,10 @@ typedef CGAL::Epick IK;
 typedef EK::Point_3 EPoint;
 typedef EK::FT EFT;
 
+/* For a point that cuts a triangle: not known to lie inside one of its
+ * edges (else the edge's index k, from corner k to corner k + 1). */
+static const int8_t NO_EDGE = -1;
+
 /* Largest vertex or triangle count an exact mesh indexes (as struct mesh). */
 static const size_t MESH_LIMIT = 0xfffffff0u;
 

@@ -32,10 +32,14 @@
 namespace retri
 {
 
-/* What cuts one triangle: points and segments in its plane. */
+/* What cuts one triangle: points and segments in its plane, and for each
+ * point and segment end the edge of the triangle it is known to lie
+ * inside (NO_EDGE when not known). */
 struct cuts {
 	std::vector<EPoint> points;
 	std::vector<std::pair<EPoint, EPoint>> segments;
+	std::vector<int8_t> point_edge;
+	std::vector<std::array<int8_t, 2>> segment_edge;
 };
 
 /* Add the intersection of two triangles to c. */
@@ -44,6 +48,7 @@ inline void add_intersection(const EK::Triangle_3 &a, const EK::Triangle_3 &b, c
 	auto r = CGAL::intersection(a, b);
 	if (!r)
 		return;
+
 	if (const EPoint *p = boost::get<EPoint>(&*r)) {
 		c.points.push_back(*p);
 	} else if (const EK::Segment_3 *s = boost::get<EK::Segment_3>(&*r)) {
@@ -55,6 +60,9 @@ inline void add_intersection(const EK::Triangle_3 &a, const EK::Triangle_3 &b, c
 		for (size_t k = 0; k < poly->size(); k++)
 			c.segments.emplace_back((*poly)[k], (*poly)[(k + 1) % poly->size()]);
 	}
+	/* Nothing is known of where these points lie. */
+	c.point_edge.resize(c.points.size(), NO_EDGE);
+	c.segment_edge.resize(c.segments.size(), {{NO_EDGE, NO_EDGE}});
 }
 
 /* Which 3D point a triangulation vertex is; NONE for a point the
@@ -93,13 +101,15 @@ inline void split(const EPoint &p0, const EPoint &p1, const EPoint &p2, const cu
 
 	std::vector<EPoint> pts;
 	CDT cdt;
-	auto insert = [&](const EPoint &p) {
-		const CDT::Vertex_handle v = cdt.insert(EK::Point_2(p[i], p[j]));
+	auto record = [&](const CDT::Vertex_handle v, const EPoint &p) {
 		if (v->info().index == source::NONE) {
 			v->info().index = static_cast<uint32_t>(pts.size());
 			pts.push_back(p);
 		}
 		return v;
+	};
+	auto insert = [&](const EPoint &p) {
+		return record(cdt.insert(EK::Point_2(p[i], p[j])), p);
 	};
 	/*
 	 * Every point in insertion order: the corners, the points, then both
@@ -109,19 +119,24 @@ inline void split(const EPoint &p0, const EPoint &p1, const EPoint &p2, const cu
 	 * triangulation's walk prove it equal to a vertex with exact
 	 * orientations, the costliest part of the split; equal points are
 	 * found here by sorting instead (exact comparisons of known values)
-	 * and each is inserted once, at its first place in the order, so the
-	 * triangulation is the one the full insertion sequence gives.
+	 * and each is inserted once.
 	 */
 	std::vector<const EPoint *> all;
+	std::vector<int8_t> on;
 	all.reserve(3 + c.points.size() + 2 * c.segments.size());
 	all.push_back(&p0);
 	all.push_back(&p1);
 	all.push_back(&p2);
-	for (const EPoint &p : c.points)
-		all.push_back(&p);
-	for (const auto &s : c.segments) {
-		all.push_back(&s.first);
-		all.push_back(&s.second);
+	on.assign(3, NO_EDGE);
+	for (size_t k = 0; k < c.points.size(); k++) {
+		all.push_back(&c.points[k]);
+		on.push_back(c.point_edge[k]);
+	}
+	for (size_t k = 0; k < c.segments.size(); k++) {
+		all.push_back(&c.segments[k].first);
+		all.push_back(&c.segments[k].second);
+		on.push_back(c.segment_edge[k][0]);
+		on.push_back(c.segment_edge[k][1]);
 	}
 	std::vector<uint32_t> order(all.size()), first(all.size());
 	for (uint32_t a = 0; a < order.size(); a++)
@@ -132,13 +147,53 @@ inline void split(const EPoint &p0, const EPoint &p1, const EPoint &p2, const cu
 	for (size_t r = 1; r < order.size(); r++)
 		if (CGAL::compare_xyz(*all[order[r - 1]], *all[order[r]]) == CGAL::EQUAL)
 			first[order[r]] = first[order[r - 1]]; /* stable: smallest first */
+	/* A point lies inside an edge when any of its copies is known to. */
+	for (size_t a = 3; a < all.size(); a++)
+		if (on[a] != NO_EDGE && first[a] >= 3)
+			on[first[a]] = on[a];
 	std::vector<CDT::Vertex_handle> vh(all.size());
-	auto place = [&](size_t a) { /* in order: first[a] <= a is placed */
-		vh[a] = first[a] == a ? insert(*all[a]) : vh[first[a]];
-		return vh[a];
+	auto place = [&](size_t a) { /* each point once, at its first copy */
+		if (vh[first[a]] == CDT::Vertex_handle())
+			vh[first[a]] = insert(*all[first[a]]);
+		return vh[a] = vh[first[a]];
 	};
+	for (size_t a = 0; a < 3; a++)
+		place(a);
+	/*
+	 * Points known to lie inside an edge go onto it in their order along
+	 * it, without being located: a walk to them ends in orientation tests
+	 * that are exactly zero (they are collinear with the edge's corners),
+	 * which the interval filter cannot decide, and falls back to
+	 * rationals.  The edges of the triangle are its triangulation's hull,
+	 * so no flip removes them.  The triangulation is the same whatever the
+	 * order of insertion (the constrained Delaunay one).
+	 */
+	for (int e = 0; e < 3; e++) {
+		std::vector<size_t> along;
+		for (size_t a = 3; a < all.size(); a++)
+			if (first[a] == a && on[a] == e)
+				along.push_back(a);
+		if (along.empty())
+			continue;
+		std::sort(along.begin(), along.end(), [&](size_t a, size_t b) {
+			return CGAL::compare_xyz(*all[a], *all[b]) == CGAL::SMALLER;
+		});
+		if (CGAL::compare_xyz(*all[e], *all[(e + 1) % 3]) == CGAL::LARGER)
+			std::reverse(along.begin(), along.end());
+		CDT::Vertex_handle prev = vh[e];
+		const CDT::Vertex_handle end = vh[(e + 1) % 3];
+		for (size_t a : along) {
+			CDT::Face_handle f;
+			int li;
+			const EPoint &p = *all[a];
+			vh[a] = cdt.is_edge(prev, end, f, li)
+				    ? record(cdt.insert(EK::Point_2(p[i], p[j]), CDT::EDGE, f, li), p)
+				    : insert(p);
+			prev = vh[a];
+		}
+	}
 	const size_t nfirst = 3 + c.points.size();
-	for (size_t a = 0; a < nfirst; a++)
+	for (size_t a = 3; a < nfirst; a++)
 		place(a);
 	const CDT::Vertex_handle v0 = vh[0], v1 = vh[1], v2 = vh[2];
 	for (size_t a = nfirst; a < all.size(); a += 2) {
