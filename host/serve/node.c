@@ -73,6 +73,7 @@ static int setup_printer(struct node *n, size_t i, struct st_error *err)
 	pthread_mutex_init(&p->mu, NULL);
 	pthread_cond_init(&p->cv, NULL);
 	pthread_mutex_init(&p->ctl.mu, NULL);
+	pthread_mutex_init(&p->gc_mu, NULL);
 	p->want_connect = true; /* OctoPrint's autoconnect */
 	rc = profile_find(p->cfg->profile, &p->prof, &e);
 	if (rc)
@@ -249,6 +250,8 @@ void node_free(struct node *n)
 		pthread_mutex_destroy(&p->mu);
 		pthread_cond_destroy(&p->cv);
 		pthread_mutex_destroy(&p->ctl.mu);
+		pthread_mutex_destroy(&p->gc_mu);
+		node_gcode_info_free(&p->gc);
 	}
 	node_queue_close(n->q);
 	pthread_mutex_destroy(&n->tick_mu);

@@ -122,6 +122,26 @@ json_t *node_queue_list(struct node_queue *q, const char *printer, int limit);
 /* node_job_json - one job as the /api/stratum/queue entry. */
 json_t *node_job_json(const struct node_job *job);
 
+/* What a G-code file says of itself (gcinfo.c), kept per printer. */
+struct node_gcode_mark {
+	int64_t pos;   /* byte offset of an M73 line with R */
+	double left_s; /* its R, in seconds */
+};
+
+struct node_gcode_info {
+	char path[NODE_PATH_MAX]; /* the file read, "" none */
+	int64_t mtime, size;	  /* its stat when read */
+	double time_s;		  /* the slicer's print-time estimate, s; -1 unknown */
+	double filament_mm, filament_cm3; /* filament of the print; -1 unknown */
+	struct node_gcode_mark *marks;
+	size_t nmarks;
+};
+
+struct node_gcode_estimate {
+	double time_s, filament_mm, filament_cm3; /* as in node_gcode_info */
+	double left_s; /* by the last M73 R before the byte asked for; -1 none */
+};
+
 #define NODE_CMD_QUEUE 16 /* printer commands waiting for an idle printer */
 #define NODE_CMD_MAX 257 /* one command line with its NUL (serial/gcode.h GCODE_LINE_MAX) */
 
@@ -148,7 +168,21 @@ struct node_printer {
 
 	struct node_link *link; /* the worker's alone */
 	struct node_print_ctl ctl;
+
+	pthread_mutex_t gc_mu;	 /* gc, the last G-code file read (gcinfo.c) */
+	struct node_gcode_info gc;
 };
+
+/*
+ * node_gcode_estimate - what the G-code file path (NULL or "": none; not
+ * G-code: nothing known) says of its print time and filament, and the time
+ * left at byte filepos by its M73 R marks.  Reads the file the first time
+ * it is asked for (or after it changed), under p->gc_mu; any thread.
+ */
+void node_gcode_estimate(struct node_printer *p, const char *path, int64_t filepos,
+			 struct node_gcode_estimate *out);
+/* node_gcode_info_free - what node_gcode_estimate kept. */
+void node_gcode_info_free(struct node_gcode_info *g);
 
 struct MHD_Daemon;
 
