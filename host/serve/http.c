@@ -531,16 +531,35 @@ static bool refuse_at_once(struct MHD_Connection *c)
 	return cl && strtoull(cl, NULL, 10) > HTTP_DRAIN_MAX;
 }
 
+/* The push API's paths (push.c), under a printer's prefix or, for the
+ * first printer, at /sockjs/...; no key: the client authenticates with its
+ * first message. */
+static bool push_route(struct node *n, struct MHD_Connection *c, const char *url,
+		       enum MHD_Result *ret)
+{
+	for (size_t i = 0; i < n->nprinters; i++) {
+		const char *pre = n->printers[i].cfg->prefix;
+		size_t len = strlen(pre);
+
+		if (!strncmp(url, pre, len) && url[len] == '/')
+			return node_push_route(n, &n->printers[i], c, url + len, ret);
+	}
+	return node_push_route(n, &n->printers[0], c, url, ret);
+}
+
 static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *url,
 			      const char *method, const char *version, const char *upload,
 			      size_t *upload_size, void **con_cls)
 {
 	struct node *n = cls;
 	struct req *r = *con_cls;
+	enum MHD_Result ret;
 
 	(void)version;
 	if (!r && !strcmp(method, "GET") && (!strcmp(url, "/") || !strcmp(url, "/index.html")))
 		return send_page(c);
+	if (!r && !strcmp(method, "GET") && push_route(n, c, url, &ret))
+		return ret;
 	if (!r) {
 		r = calloc(1, sizeof(*r));
 		if (!r)
@@ -635,7 +654,8 @@ int node_http_start(struct node *n, struct st_error *err)
 	if (inet_pton(AF_INET, n->cfg.listen_addr, &sa.sin_addr) != 1)
 		return st_error_set(err, ST_ERR_ARG, "listen address %s is not IPv4",
 				    n->cfg.listen_addr);
-	n->httpd = MHD_start_daemon(MHD_USE_AUTO_INTERNAL_THREAD, n->cfg.listen_port, NULL, NULL,
+	n->httpd = MHD_start_daemon(MHD_USE_AUTO_INTERNAL_THREAD | MHD_ALLOW_UPGRADE,
+				    n->cfg.listen_port, NULL, NULL,
 				    handle, n, MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&sa,
 				    MHD_OPTION_THREAD_POOL_SIZE, (unsigned)HTTP_POOL,
 				    MHD_OPTION_CONNECTION_TIMEOUT, n->cfg.idle_timeout_s,
@@ -653,6 +673,7 @@ int node_http_start(struct node *n, struct st_error *err)
 
 void node_http_stop(struct node *n)
 {
+	node_push_stop(n); /* libmicrohttpd wants upgraded sockets closed first */
 	if (n->httpd)
 		MHD_stop_daemon(n->httpd);
 	n->httpd = NULL;

@@ -2,7 +2,7 @@
  * http_account.c - OctoPrint's calls about who is asking and what serves
  * them (docs/serve.md): the passive login farm managers open with, the
  * current user, the server's version, the system commands.  The node has
- * no users or sessions: the API key is the user, named by its [key NAME]
+ * no users or passwords: the API key is the user, named by its [key NAME]
  * section, with OctoPrint's permissions for its roles.
  */
 #include <jansson.h>
@@ -33,16 +33,20 @@ static json_t *permissions(unsigned roles)
 	return arr;
 }
 
-/* The key as OctoPrint's user record (login response). */
-static json_t *user_json(const struct req *r)
+/* The key as OctoPrint's user record (login response); its session is
+ * what the push API's auth message takes (push.c). */
+static json_t *user_json(const struct node *n, const struct req *r)
 {
 	bool admin = (r->roles & NODE_ROLE_CONTROL) != 0;
+	char session[NODE_PUSH_SESSION_LEN + 1] = "";
 
-	/* apikey and session stay null: the caller holds the key, and the
-	 * node keeps no sessions. */
-	return json_pack("{s:s,s:b,s:b,s:b,s:n,s:{},s:n,s:[s],s:o,s:o,s:b,s:s}", "name",
+	for (size_t i = 0; i < n->cfg.nkeys; i++)
+		if (!strcmp(n->cfg.keys[i].name, r->key_name))
+			node_push_session(n->cfg.keys[i].secret, session);
+	/* apikey stays null: the caller holds the key */
+	return json_pack("{s:s,s:b,s:b,s:b,s:n,s:{},s:s,s:[s],s:o,s:o,s:b,s:s}", "name",
 			 r->key_name, "active", 1, "admin", admin, "user", 1, "apikey", "settings",
-			 "session", "groups", admin ? "admins" : "users", "permissions",
+			 "session", session, "groups", admin ? "admins" : "users", "permissions",
 			 permissions(r->roles), "roles", json_pack("[s]", admin ? "admin" : "user"),
 			 "_is_external_client", 0, "_login_mechanism", "apikey");
 }
@@ -56,7 +60,6 @@ enum MHD_Result http_post_login(struct node *n, struct MHD_Connection *c, struct
 	json_t *o = http_body_json(c, r, &ret);
 	bool passive;
 
-	(void)n;
 	if (!o)
 		return ret;
 	passive = json_object_get(o, "passive") != NULL;
@@ -69,7 +72,7 @@ enum MHD_Result http_post_login(struct node *n, struct MHD_Connection *c, struct
 	} else if (!r->key_name) {
 		ret = http_no_content(c);
 	} else {
-		ret = http_send_json(c, MHD_HTTP_OK, user_json(r), NULL);
+		ret = http_send_json(c, MHD_HTTP_OK, user_json(n, r), NULL);
 	}
 	json_decref(o);
 	return ret;

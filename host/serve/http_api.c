@@ -151,30 +151,37 @@ enum MHD_Result http_get_version(struct node *n, struct MHD_Connection *c, struc
 	return http_send_json(c, MHD_HTTP_OK, o, NULL);
 }
 
+json_t *http_flags_json(const struct http_view *v)
+{
+	json_t *flags = json_object();
+
+	json_object_set_new(flags, "operational", json_boolean(v->connected));
+	json_object_set_new(flags, "printing", json_boolean(v->printing && !v->paused));
+	json_object_set_new(flags, "paused", json_boolean(v->paused || (v->has_job && !v->printing &&
+								      v->job.state == NODE_JOB_PAUSED)));
+	json_object_set_new(flags, "pausing", json_boolean(v->pausing));
+	json_object_set_new(flags, "cancelling", json_false());
+	json_object_set_new(flags, "sdReady", json_false());
+	json_object_set_new(flags, "error", json_boolean(!v->connected && v->conn_error[0]));
+	/* ready: a print may start; not while a job holds the printer (paused,
+	 * interrupted, slicing) */
+	json_object_set_new(flags, "ready", json_boolean(v->connected && !v->printing &&
+							 !v->has_job));
+	json_object_set_new(flags, "closedOrError", json_boolean(!v->connected));
+	return flags;
+}
+
 enum MHD_Result http_get_printer(struct node *n, struct MHD_Connection *c, struct req *r)
 {
 	struct http_view v;
-	json_t *o, *flags;
+	json_t *o;
 
 	http_take_view(n, r->p, &v);
 	if (!v.connected)
 		return http_send_error(c, MHD_HTTP_CONFLICT, "Printer is not operational");
-	flags = json_object();
-	json_object_set_new(flags, "operational", json_true());
-	json_object_set_new(flags, "printing", json_boolean(v.printing && !v.paused));
-	json_object_set_new(flags, "paused", json_boolean(v.paused || (v.has_job && !v.printing &&
-								     v.job.state == NODE_JOB_PAUSED)));
-	json_object_set_new(flags, "pausing", json_boolean(v.pausing));
-	json_object_set_new(flags, "cancelling", json_false());
-	json_object_set_new(flags, "sdReady", json_false());
-	json_object_set_new(flags, "error", json_false());
-	/* ready: a print may start; not while a job holds the printer (paused,
-	 * interrupted, slicing) */
-	json_object_set_new(flags, "ready", json_boolean(!v.printing && !v.has_job));
-	json_object_set_new(flags, "closedOrError", json_false());
 	o = json_pack("{s:o,s:{s:b},s:{s:s,s:o}}", "temperature",
 		      http_temps_json(r->p, &v, true, true), "sd", "ready", 0, "state", "text",
-		      http_state_text(&v), "flags", flags);
+		      http_state_text(&v), "flags", http_flags_json(&v));
 	json_object_set_new(o, "stratum", link_json(r->p, &v));
 	return http_send_json(c, MHD_HTTP_OK, o, NULL);
 }
@@ -185,7 +192,7 @@ static json_t *str_or_null(const char *s)
 	return s && *s ? json_string(s) : json_null();
 }
 
-enum MHD_Result http_get_job(struct node *n, struct MHD_Connection *c, struct req *r)
+json_t *http_job_json(struct node *n, struct node_printer *p, struct http_view *out)
 {
 	struct http_view v;
 	json_t *file, *progress, *o, *filament = json_null();
@@ -196,9 +203,9 @@ enum MHD_Result http_get_job(struct node *n, struct MHD_Connection *c, struct re
 	double left = -1, done;
 	struct stat st;
 
-	http_take_view(n, r->p, &v);
-	snprintf(sel, sizeof(sel), "%s/%s", r->p->files_dir, v.selected);
-	node_gcode_estimate(r->p, v.has_job ? v.job.gcode : v.selected[0] ? sel : NULL,
+	http_take_view(n, p, &v);
+	snprintf(sel, sizeof(sel), "%s/%s", p->files_dir, v.selected);
+	node_gcode_estimate(p, v.has_job ? v.job.gcode : v.selected[0] ? sel : NULL,
 			    v.has_job ? v.filepos : 0, &est);
 	if (est.filament_mm >= 0 || est.filament_cm3 >= 0)
 		filament = json_pack("{s:{s:o,s:o}}", "tool0", "length", est.filament_mm >= 0
@@ -247,7 +254,14 @@ enum MHD_Result http_get_job(struct node *n, struct MHD_Connection *c, struct re
 		      "lastPrintTime", "filament", filament, "user", "progress", progress, "state",
 		      http_state_text(&v));
 	json_object_set_new(o, "stratum", v.has_job ? node_job_json(&v.job) : json_null());
-	return http_send_json(c, MHD_HTTP_OK, o, NULL);
+	if (out)
+		*out = v;
+	return o;
+}
+
+enum MHD_Result http_get_job(struct node *n, struct MHD_Connection *c, struct req *r)
+{
+	return http_send_json(c, MHD_HTTP_OK, http_job_json(n, r->p, NULL), NULL);
 }
 
 enum MHD_Result http_get_connection(struct node *n, struct MHD_Connection *c, struct req *r)

@@ -98,6 +98,11 @@ json_t *http_temp_json(const double t[2]);
  * and target null: the drivers report tool 0 only); bed when with_bed. */
 json_t *http_temps_json(const struct node_printer *p, const struct http_view *v, bool tools,
 			bool with_bed);
+/* OctoPrint's state flags of v (operational, printing, paused, ready ...). */
+json_t *http_flags_json(const struct http_view *v);
+/* The /api/job answer for p (job, progress, state; stratum's job), and the
+ * view it was made of in *out when out is not NULL. */
+json_t *http_job_json(struct node *n, struct node_printer *p, struct http_view *out);
 /* The JSON object of the body, or NULL with the error answer sent in *ret. */
 json_t *http_body_json(struct MHD_Connection *c, struct req *r, enum MHD_Result *ret);
 /* Queue count checked G-code lines for p's worker (sent between jobs):
@@ -153,5 +158,17 @@ void http_url_for(struct MHD_Connection *c, const struct req *r, const char *pat
 int http_check_rel(const char *rel, size_t len, struct st_error *err);
 json_t *http_file_json(struct MHD_Connection *c, const struct req *r, const char *rel,
 		       const struct stat *st);
+
+/* push.c: OctoPrint's push API (SockJS over WebSocket).  node_push_route
+ * answers path (after the printer's prefix) when it is one of /sockjs/...:
+ * true with *ret.  node_push_stop closes every client and waits for their
+ * threads (before the HTTP daemon stops).  node_push_session: the session
+ * a key's passive login gives and its auth message carries (hex, derived
+ * from the secret, which it does not reveal). */
+#define NODE_PUSH_SESSION_LEN 32
+bool node_push_route(struct node *n, struct node_printer *p, struct MHD_Connection *c,
+		     const char *path, enum MHD_Result *ret);
+void node_push_stop(struct node *n);
+void node_push_session(const char *secret, char out[NODE_PUSH_SESSION_LEN + 1]);
 
 #endif /* STRATUM_HOST_SERVE_HTTP_INT_H */

@@ -110,6 +110,8 @@ int node_new(const struct node_config *cfg, struct node **out, struct st_error *
 		return st_error_set(err, ST_ERR_NOMEM, "node: out of memory");
 	n->cfg = *cfg;
 	pthread_mutex_init(&n->tick_mu, NULL);
+	pthread_mutex_init(&n->push_mu, NULL);
+	pthread_cond_init(&n->push_cv, NULL);
 	pthread_cond_init(&n->tick_cv, NULL);
 	if ((rc = make_dir(cfg->data_dir, err)) ||
 	    (rc = join(n->tmp_dir, sizeof(n->tmp_dir), cfg->data_dir, "tmp", err)) ||
@@ -255,6 +257,8 @@ void node_free(struct node *n)
 	}
 	node_queue_close(n->q);
 	pthread_mutex_destroy(&n->tick_mu);
+	pthread_mutex_destroy(&n->push_mu);
+	pthread_cond_destroy(&n->push_cv);
 	pthread_cond_destroy(&n->tick_cv);
 	free(n);
 }

@@ -202,6 +202,11 @@ struct node {
 	pthread_mutex_t tick_mu;
 	pthread_cond_t tick_cv;
 	struct node_mqtt *mqtt; /* NULL without [mqtt] */
+	/* push API clients (push.c), each on its own detached thread */
+	pthread_mutex_t push_mu;
+	pthread_cond_t push_cv; /* npush went down */
+	int npush;
+	bool push_stop;
 };
 
 #define NODE_TICK_MS 500
