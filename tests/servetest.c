@@ -316,3 +316,21 @@ json_t *sv_get_json(int port, const char *path)
 	sv_resp_free(&r);
 	return o;
 }
+
+/* sv_http whose answer must have status want. */
+void sv_call(int port, const char *method, const char *path, const char *auth,
+	     const char *body, int want, struct resp *r)
+{
+	sv_http(port, method, path, auth, body, r);
+	ck_assert_msg(r->status == want, "%s %s: %d, not %d: %s", method, path, r->status, want,
+		      r->body);
+}
+
+/* The string member key of o, which must be there. */
+const char *sv_str(const json_t *o, const char *key)
+{
+	const char *s = json_string_value(json_object_get(o, key));
+
+	ck_assert_msg(s, "no string %s in %s", key, json_dumps(o, 0));
+	return s;
+}

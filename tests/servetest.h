@@ -55,6 +55,11 @@ void sv_http(int port, const char *method, const char *path, const char *auth,
 /* sv_expect - a request whose answer must have status want. */
 void sv_expect(int port, const char *method, const char *path, const char *auth,
 	       const char *json_body, int want);
+/* sv_call - sv_http whose answer must have status want; r keeps it (free it). */
+void sv_call(int port, const char *method, const char *path, const char *auth,
+	     const char *body, int want, struct resp *r);
+/* sv_str - the string member key of o; aborts the test when there is none. */
+const char *sv_str(const json_t *o, const char *key);
 /*
  * sv_upload - the multipart upload as PrusaSlicer sends it (fields print,
  * path, then file; libcurl's layout).  path_len and name_len allow NUL

@@ -442,7 +442,8 @@ json_t *http_body_json(struct MHD_Connection *c, struct req *r, enum MHD_Result 
 	return o;
 }
 
-enum MHD_Result http_start_selected(struct node *n, struct MHD_Connection *c, struct node_printer *p)
+enum MHD_Result http_start_selected(struct node *n, struct MHD_Connection *c,
+				    struct node_printer *p)
 {
 	char rel[NODE_PATH_MAX], full[NODE_PATH_MAX + NODE_PATH_MAX];
 	int64_t id;
