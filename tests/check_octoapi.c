@@ -276,6 +276,22 @@ START_TEST(test_files_list)
 		 np.port);
 	ck_assert_str_eq(sv_str(json_object_get(e, "refs"), "download"), want);
 	sv_resp_free(&r);
+	/* a large file: the footer is read (PrusaSlicer writes its estimate there) */
+	{
+		size_t n = 700000, k = 0;
+		char *big = malloc(n + 100);
+
+		ck_assert(big);
+		while (k + 10 < n)
+			k += (size_t)sprintf(big + k, "G1 X%d\n", (int)(k % 100));
+		sprintf(big + k, "; estimated printing time (normal mode) = 2h 0m 5s\n");
+		store(np.port, "", "big.gcode", big);
+		free(big);
+	}
+	sv_call(np.port, "GET", "/api/files/local/big.gcode", RO, NULL, 200, &r);
+	ck_assert_int_eq(json_integer_value(json_object_get(json_object_get(r.json, "gcodeAnalysis"),
+							   "estimatedPrintTime")), 7205);
+	sv_resp_free(&r);
 	/* the other printer's files are its own */
 	sv_call(np.port, "GET", "/p/ender/api/files", RO, NULL, 200, &r);
 	ck_assert_int_eq(json_array_size(json_object_get(r.json, "files")), 0);

@@ -8,6 +8,7 @@
  * and kept per printer until the file changes.
  */
 #include <stdio.h>
+#include <sys/types.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -15,6 +16,9 @@
 #include "node_int.h"
 #include "st_grow.h"
 #include "st_number.h"
+
+#define GCINFO_HEAD (64 << 10)  /* bytes read at the start for a summary */
+#define GCINFO_TAIL (256 << 10) /* and at the end (PrusaSlicer's footer, config after it) */
 
 /* The number at the start of s (digits and one '.'), or -1. */
 static double lead_number(const char *s)
@@ -103,25 +107,64 @@ static int take_line(struct node_gcode_info *g, const char *line, int64_t pos, s
 	return 0;
 }
 
-/* Read the file at path into g (whole: the M73 marks are all through it). */
-static void read_info(const char *path, struct node_gcode_info *g)
+/* Read the lines of path from byte from to byte to (-1: the end) into g;
+ * a line cut at from is skipped. */
+static void read_lines(FILE *f, int64_t from, int64_t to, struct node_gcode_info *g, size_t *cap)
 {
-	FILE *f = fopen(path, "r");
 	char *line = NULL;
-	size_t len = 0, cap = 0;
-	int64_t pos = 0;
+	size_t len = 0;
+	int64_t pos = from;
 	ssize_t got;
 
-	g->time_s = g->filament_mm = g->filament_cm3 = -1;
-	if (!f)
+	if (fseeko(f, from, SEEK_SET))
 		return;
-	while ((got = getline(&line, &len, f)) > 0) {
-		if (take_line(g, line, pos, &cap))
+	if (from > 0 && (got = getline(&line, &len, f)) > 0)
+		pos += got; /* the rest of a line begun before from */
+	while ((to < 0 || pos < to) && (got = getline(&line, &len, f)) > 0) {
+		if (take_line(g, line, pos, cap))
 			break;
 		pos += got;
 	}
 	free(line);
+}
+
+/* Read the file at path into g: whole with marks (the M73 marks are all
+ * through it), else its head and tail only. */
+static void read_info(const char *path, struct node_gcode_info *g, bool marks)
+{
+	FILE *f = fopen(path, "r");
+	size_t cap = 0;
+
+	g->time_s = g->filament_mm = g->filament_cm3 = -1;
+	if (!f)
+		return;
+	if (marks || g->size <= GCINFO_HEAD + GCINFO_TAIL) {
+		read_lines(f, 0, -1, g, &cap);
+	} else {
+		read_lines(f, 0, GCINFO_HEAD, g, &cap);
+		read_lines(f, g->size - GCINFO_TAIL, -1, g, &cap);
+	}
+	if (!marks) {
+		free(g->marks);
+		g->marks = NULL;
+		g->nmarks = 0;
+	}
 	fclose(f);
+}
+
+void node_gcode_summary(const char *path, struct node_gcode_estimate *out)
+{
+	struct node_gcode_info g = {0};
+	struct stat st;
+
+	out->time_s = out->filament_mm = out->filament_cm3 = out->left_s = -1;
+	if (node_file_kind(path) != 'g' || stat(path, &st))
+		return;
+	g.size = st.st_size;
+	read_info(path, &g, false);
+	out->time_s = g.time_s;
+	out->filament_mm = g.filament_mm;
+	out->filament_cm3 = g.filament_cm3;
 }
 
 void node_gcode_estimate(struct node_printer *p, const char *path, int64_t filepos,
@@ -140,7 +183,7 @@ void node_gcode_estimate(struct node_printer *p, const char *path, int64_t filep
 		snprintf(g->path, sizeof(g->path), "%s", path);
 		g->mtime = st.st_mtime;
 		g->size = st.st_size;
-		read_info(path, g);
+		read_info(path, g, true);
 	}
 	out->time_s = g->time_s;
 	out->filament_mm = g->filament_mm;

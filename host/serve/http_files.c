@@ -116,7 +116,7 @@ static json_t *entry_json(struct MHD_Connection *c, struct req *r, const char *r
 		o = http_file_json(c, r, rel, st);
 		json_object_set_new(o, "display", json_string(slash ? slash + 1 : rel));
 		snprintf(full, sizeof(full), "%s/%s", r->p->files_dir, rel);
-		node_gcode_estimate(r->p, full, 0, &est);
+		node_gcode_summary(full, &est);
 		if (est.time_s >= 0 || est.filament_mm >= 0)
 			json_object_set_new(o, "gcodeAnalysis", json_pack(
 				"{s:o,s:{s:{s:o,s:o}}}", "estimatedPrintTime",

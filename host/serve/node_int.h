@@ -181,6 +181,9 @@ struct node_printer {
  */
 void node_gcode_estimate(struct node_printer *p, const char *path, int64_t filepos,
 			 struct node_gcode_estimate *out);
+/* node_gcode_summary - the estimate and filament of the G-code file path
+ * (left_s -1), from its first 64 KiB and last 256 KiB only; no cache. */
+void node_gcode_summary(const char *path, struct node_gcode_estimate *out);
 /* node_gcode_info_free - what node_gcode_estimate kept. */
 void node_gcode_info_free(struct node_gcode_info *g);
 
