@@ -2,8 +2,8 @@
  * check_octopush.c - the node's push API (docs/serve.md, "Push API"),
  * part of the octoapi suite: SockJS over WebSocket, read by a client whose
  * WebSocket framing and masking wslay does, as OctoPrint's clients read it:
- * connected, auth with the passive login's session, history, and current
- * messages with a print's progress.
+ * connected, auth with the passive login's session, history, current
+ * messages with a print's progress, and the print's events.
  */
 #include <arpa/inet.h>
 #include <check.h>
@@ -262,6 +262,64 @@ START_TEST(test_push_raw)
 }
 END_TEST
 
+/* Run the client until an event of type has come (up to ms); whether it did. */
+static bool ws_event(struct ws *w, const char *type, int ms)
+{
+	for (int t = 0; t < ms; t += 100) {
+		size_t i;
+		json_t *m;
+
+		ws_until(w, NULL, 100);
+		json_array_foreach(w->got, i, m) {
+			const char *got = json_string_value(
+				json_object_get(json_object_get(m, "event"), "type"));
+
+			if (got && !strcmp(got, type))
+				return true;
+		}
+	}
+	return false;
+}
+
+/* Events as OctoPrint sends them for a print paused, resumed, cancelled,
+ * and one done. */
+START_TEST(test_push_events)
+{
+	struct node_proc np;
+	struct resp r;
+	struct ws w;
+	char auth[128];
+
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	sv_start(&np);
+	sv_call(np.port, "POST", "/api/login", "X-Api-Key: " KEY_READ, "{\"passive\":true}", 200,
+		&r);
+	snprintf(auth, sizeof(auth), "{\"auth\":\"viewer:%s\"}", sv_str(r.json, "session"));
+	sv_resp_free(&r);
+	ws_open(&w, np.port, "/sockjs/1/x/websocket", true);
+	ws_say(&w, auth);
+	ck_assert(ws_until(&w, "history", 3000));
+	sv_bed_clear(np.port, "", 204);
+	ck_assert(sv_print_text(np.port, "", "a.gcode", "G1 X1\nG4 S20\n") == 1);
+	ck_assert_msg(ws_event(&w, "PrintStarted", 5000), "no PrintStarted");
+	sv_expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL,
+		  "{\"command\":\"pause\",\"action\":\"pause\"}", 204);
+	ck_assert_msg(ws_event(&w, "PrintPaused", 5000), "no PrintPaused");
+	sv_expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL,
+		  "{\"command\":\"pause\",\"action\":\"resume\"}", 204);
+	ck_assert_msg(ws_event(&w, "PrintResumed", 5000), "no PrintResumed");
+	sv_expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL, "{\"command\":\"cancel\"}",
+		  204);
+	ck_assert_msg(ws_event(&w, "PrintCancelled", 5000), "no PrintCancelled");
+	ck_assert(!ws_event(&w, "PrintDone", 600));
+	sv_bed_clear(np.port, "", 204);
+	ck_assert(sv_print_text(np.port, "", "b.gcode", "G1 X1\nG4 S1\n") == 2);
+	ck_assert_msg(ws_event(&w, "PrintDone", 8000), "no PrintDone");
+	ws_close(&w);
+	sv_stop(&np);
+}
+END_TEST
+
 void octoapi_push_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("push");
@@ -269,5 +327,6 @@ void octoapi_push_tcases(Suite *s)
 	tcase_set_timeout(tc, 60);
 	tcase_add_test(tc, test_push_sockjs);
 	tcase_add_test(tc, test_push_raw);
+	tcase_add_test(tc, test_push_events);
 	suite_add_tcase(s, tc);
 }

@@ -5,8 +5,8 @@
  * /sockjs/SERVER/SESSION/websocket (SockJS framing: "o", "a[...]", "h")
  * or /sockjs/websocket (raw: one message per frame), gets "connected",
  * sends {"auth": "NAME:SESSION"} with the session of its passive login,
- * and then gets "history" once and "current" every PUSH_RATE_MS, as
- * OctoPrint sends them.  One thread per client, at most PUSH_MAX.
+ * and then gets "history" once, "current" every PUSH_RATE_MS as OctoPrint
+ * sends them, and "event" messages for the changes a tick sees.  One thread per client, at most PUSH_MAX.
  */
 #include <errno.h>
 #include <fcntl.h>
@@ -42,6 +42,9 @@ struct push_conn {
 	bool sockjs; /* SockJS framing, else raw messages */
 	bool authed;
 	bool history_due;
+	/* what the last tick saw, for events */
+	bool seen, connected, paused;
+	int64_t job; /* printing or paused, 0 none */
 	char *extra; /* bytes MHD read past the request, read first */
 	size_t extra_len, extra_off;
 	wslay_event_context_ptr ctx;
@@ -122,8 +125,56 @@ static void push_control(struct push_conn *pc, const char *frame)
 		wslay_event_queue_msg(pc->ctx, &m);
 }
 
-/* The "current" payload (also the body of "history"). */
-static json_t *current_json(struct push_conn *pc)
+/* One event message: type and the job's payload (NULL: none). */
+static void push_event(struct push_conn *pc, const char *type, const struct node_job *j)
+{
+	json_t *payload = json_object();
+
+	if (j) {
+		json_object_set_new(payload, "name", json_string(j->name));
+		json_object_set_new(payload, "path", json_string(j->name));
+		json_object_set_new(payload, "origin", json_string("local"));
+		json_object_set_new(payload, "size", json_integer(j->size));
+		if (j->finished && j->started)
+			json_object_set_new(payload, "time", json_integer(j->finished - j->started));
+		if (j->state == NODE_JOB_FAILED)
+			json_object_set_new(payload, "reason", json_string(j->error));
+	}
+	push_msg(pc, json_pack("{s:{s:s,s:o}}", "event", "type", type, "payload", payload));
+}
+
+/* OctoPrint's events for what changed since the last tick: Connected,
+ * Disconnected, PrintStarted, PrintPaused, PrintResumed, PrintDone,
+ * PrintFailed, PrintCancelled.  A job that starts and ends between two
+ * ticks (PUSH_RATE_MS) is not seen. */
+static void push_events(struct push_conn *pc, const struct http_view *v)
+{
+	int64_t job = v->has_job && (v->printing || v->job.state == NODE_JOB_PAUSED) ? v->job.id
+										       : 0;
+	bool paused = job && (v->paused || v->job.state == NODE_JOB_PAUSED);
+	struct node_job j;
+
+	if (pc->seen && v->connected != pc->connected)
+		push_event(pc, v->connected ? "Connected" : "Disconnected", NULL);
+	if (pc->seen && pc->job && pc->job != job &&
+	    node_queue_get(pc->n->q, pc->job, &j, NULL) == 1 &&
+	    (j.state == NODE_JOB_DONE || j.state == NODE_JOB_FAILED ||
+	     j.state == NODE_JOB_CANCELLED))
+		push_event(pc, j.state == NODE_JOB_DONE ? "PrintDone" : j.state == NODE_JOB_FAILED
+			   ? "PrintFailed" : "PrintCancelled", &j);
+	if (pc->seen && job && job != pc->job)
+		push_event(pc, "PrintStarted", &v->job);
+	else if (pc->seen && job && paused != pc->paused)
+		push_event(pc, paused ? "PrintPaused" : "PrintResumed", &v->job);
+	pc->seen = true;
+	pc->connected = v->connected;
+	pc->job = job;
+	pc->paused = paused;
+}
+
+/* The "current" payload (also the body of "history"); the view it shows
+ * in *v. */
+static json_t *current_json(struct push_conn *pc, struct http_view *out)
 {
 	struct http_view v;
 	json_t *job = http_job_json(pc->n, pc->p, &v), *o, *temps;
@@ -144,6 +195,7 @@ static json_t *current_json(struct push_conn *pc)
 		      v.has_job ? json_pack("[{s:s,s:s}]", "origin", "local", "path", v.job.name)
 				: json_array(), "serverTime", now);
 	json_decref(job);
+	*out = v;
 	return o;
 }
 
@@ -256,6 +308,7 @@ static void *push_main(void *arg)
 				       "permissions", "online", 1));
 		for (;;) {
 			struct pollfd pfd = {.fd = pc->fd};
+			struct http_view v;
 			bool stop;
 
 			pthread_mutex_lock(&n->push_mu);
@@ -267,10 +320,14 @@ static void *push_main(void *arg)
 			now = st_mono_ms();
 			if (pc->history_due) {
 				pc->history_due = false;
-				push_msg(pc, json_pack("{s:o}", "history", current_json(pc)));
+				push_msg(pc, json_pack("{s:o}", "history", current_json(pc, &v)));
+				push_events(pc, &v);
 				next_current = now + PUSH_RATE_MS;
 			} else if (pc->authed && now >= next_current) {
-				push_msg(pc, json_pack("{s:o}", "current", current_json(pc)));
+				json_t *cur = current_json(pc, &v);
+
+				push_events(pc, &v);
+				push_msg(pc, json_pack("{s:o}", "current", cur));
 				next_current = now + PUSH_RATE_MS;
 			}
 			if (now >= next_beat) {
