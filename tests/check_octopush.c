@@ -183,6 +183,18 @@ static void ws_close(struct ws *w)
 	json_decref(w->got);
 }
 
+/* The auth message of key (its header) named name: its passive login's session. */
+static void auth_of(int port, const char *key, const char *name, char *out, size_t cap)
+{
+	struct resp r;
+
+	sv_call(port, "POST", "/api/login", key, "{\"passive\":true}", 200, &r);
+	ck_assert_msg(!strstr(r.body, key + strlen("X-Api-Key: ")), "the key is echoed: %s",
+		      r.body);
+	snprintf(out, cap, "{\"auth\":\"%s:%s\"}", name, sv_str(r.json, "session"));
+	sv_resp_free(&r);
+}
+
 /* SockJS: info, "o", connected; auth with the login's session; history,
  * then current messages with the print's progress. */
 START_TEST(test_push_sockjs)
@@ -199,9 +211,7 @@ START_TEST(test_push_sockjs)
 	sv_call(np.port, "GET", "/sockjs/info", NULL, NULL, 200, &r);
 	ck_assert(json_is_true(json_object_get(r.json, "websocket")));
 	sv_resp_free(&r);
-	sv_call(np.port, "POST", "/api/login", "X-Api-Key: " KEY_CTL, "{\"passive\":true}", 200, &r);
-	snprintf(auth, sizeof(auth), "{\"auth\":\"operator:%s\"}", sv_str(r.json, "session"));
-	sv_resp_free(&r);
+	auth_of(np.port, "X-Api-Key: " KEY_CTL, "operator", auth, sizeof(auth));
 	ws_open(&w, np.port, "/sockjs/123/abcdefgh/websocket", true);
 	m = ws_until(&w, "connected", 3000);
 	ck_assert_msg(m && w.frames_o == 1, "no open frame and connected message");
@@ -236,16 +246,12 @@ END_TEST
 START_TEST(test_push_raw)
 {
 	struct node_proc np;
-	struct resp r;
 	struct ws w;
 	char auth[128];
 
 	sv_write_config(&np, TWO_PRINTERS, 8);
 	sv_start(&np);
-	sv_call(np.port, "POST", "/api/login", "X-Api-Key: " KEY_READ, "{\"passive\":true}", 200, &r);
-	snprintf(auth, sizeof(auth), "{\"auth\":\"viewer:%s\"}", sv_str(r.json, "session"));
-	ck_assert_msg(!strstr(r.body, KEY_READ), "%s", r.body);
-	sv_resp_free(&r);
+	auth_of(np.port, "X-Api-Key: " KEY_READ, "viewer", auth, sizeof(auth));
 	ws_open(&w, np.port, "/sockjs/websocket", false);
 	ck_assert(ws_until(&w, "connected", 3000));
 	ws_say(&w, "{\"auth\":\"viewer:0123456789abcdef0123456789abcdef\"}");
@@ -286,16 +292,12 @@ static bool ws_event(struct ws *w, const char *type, int ms)
 START_TEST(test_push_events)
 {
 	struct node_proc np;
-	struct resp r;
 	struct ws w;
 	char auth[128];
 
 	sv_write_config(&np, TWO_PRINTERS, 8);
 	sv_start(&np);
-	sv_call(np.port, "POST", "/api/login", "X-Api-Key: " KEY_READ, "{\"passive\":true}", 200,
-		&r);
-	snprintf(auth, sizeof(auth), "{\"auth\":\"viewer:%s\"}", sv_str(r.json, "session"));
-	sv_resp_free(&r);
+	auth_of(np.port, "X-Api-Key: " KEY_READ, "viewer", auth, sizeof(auth));
 	ws_open(&w, np.port, "/sockjs/1/x/websocket", true);
 	ws_say(&w, auth);
 	ck_assert(ws_until(&w, "history", 3000));
