@@ -45,6 +45,27 @@ static void start(struct node_proc *np, const char *printers)
 	sv_start(np);
 }
 
+/* Wait until prefix's printer is connected (its worker connects it after
+ * the node listens). */
+static void operational(int port, const char *prefix)
+{
+	char path[128];
+	struct resp r;
+
+	snprintf(path, sizeof(path), "%s/api/printer", prefix);
+	for (int i = 0; i < 500; i++) {
+		int status;
+
+		sv_http(port, "GET", path, RO, NULL, &r);
+		status = r.status;
+		sv_resp_free(&r);
+		if (status == 200)
+			return;
+		usleep(20000);
+	}
+	ck_abort_msg("%s is not operational", prefix);
+}
+
 /* Store a G-code text in folder (may be "") of mk3s without printing it. */
 static void store(int port, const char *folder, const char *name, const char *text)
 {
@@ -327,9 +348,10 @@ START_TEST(test_file_select)
 {
 	struct node_proc np;
 	struct resp r;
-	json_t *jobs;
+	json_t *queue;
 
 	start(&np, TWO_PRINTERS);
+	operational(np.port, "");
 	store(np.port, "", "a.gcode", dwell(3));
 	sv_expect(np.port, "POST", "/api/files/local/a.gcode", UP, "{\"command\":\"select\"}", 204);
 	sv_call(np.port, "GET", "/api/job", RO, NULL, 200, &r);
@@ -342,8 +364,9 @@ START_TEST(test_file_select)
 	sv_bed_clear(np.port, "", 204);
 	sv_expect(np.port, "POST", "/api/files/local/a.gcode", CTL,
 		  "{\"command\":\"select\",\"print\":true}", 204);
-	jobs = json_object_get(sv_get_json(np.port, "/api/stratum/queue"), "jobs");
-	ck_assert_int_eq(json_array_size(jobs), 1);
+	queue = sv_get_json(np.port, "/api/stratum/queue");
+	ck_assert_int_eq(json_array_size(json_object_get(queue, "jobs")), 1);
+	json_decref(queue);
 	sv_wait_state(np.port, "", 1, "printing", 10);
 	/* OctoPrint refuses a new selection while it prints */
 	sv_expect(np.port, "POST", "/api/files/local/a.gcode", CTL,
@@ -363,6 +386,7 @@ START_TEST(test_file_move_copy)
 	char want[256];
 
 	start(&np, TWO_PRINTERS);
+	operational(np.port, "");
 	store(np.port, "", "a.gcode", dwell(3));
 	store(np.port, "parts", "b.gcode", "G1 X2\n");
 	sv_call(np.port, "POST", "/api/files/local/a.gcode", UP,
@@ -405,6 +429,7 @@ START_TEST(test_file_delete)
 	struct node_proc np;
 
 	start(&np, TWO_PRINTERS);
+	operational(np.port, "");
 	store(np.port, "", "a.gcode", dwell(3));
 	store(np.port, "parts", "b.gcode", "G1 X2\n");
 	sv_expect(np.port, "DELETE", "/api/files/local/parts/b.gcode", RO, NULL, 403);
@@ -455,6 +480,8 @@ START_TEST(test_printer_tool)
 	json_t *t;
 
 	start(&np, MK3S_AND_CREATOR);
+	operational(np.port, "");
+	operational(np.port, "/p/cp");
 	sv_call(np.port, "GET", "/api/printer/tool", RO, NULL, 200, &r);
 	ck_assert(json_is_number(json_object_get(json_object_get(r.json, "tool0"), "actual")));
 	ck_assert(!json_object_get(r.json, "tool1"));
@@ -514,6 +541,7 @@ START_TEST(test_printer_bed)
 	struct resp r;
 
 	start(&np, TWO_PRINTERS);
+	operational(np.port, "");
 	sv_call(np.port, "GET", "/api/printer/bed", RO, NULL, 200, &r);
 	ck_assert(json_is_number(json_object_get(json_object_get(r.json, "bed"), "target")));
 	ck_assert(!json_object_get(r.json, "tool0"));
@@ -544,15 +572,7 @@ START_TEST(test_printer_printhead)
 	size_t len;
 
 	start(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\nsim_speedup = 1000\n");
-	for (int i = 0; i < 250; i++) { /* connected: the sim's boot done */
-		struct resp r;
-
-		sv_http(np.port, "GET", "/api/printer", RO, NULL, &r);
-		sv_resp_free(&r);
-		if (r.status == 200)
-			break;
-		usleep(20000);
-	}
+	operational(np.port, ""); /* the sim's boot done */
 	sv_expect(np.port, "POST", "/api/printer/printhead", CTL,
 		  "{\"command\":\"home\",\"axes\":[\"x\",\"y\"]}", 204);
 	sv_expect(np.port, "POST", "/api/printer/printhead", CTL,
