@@ -225,6 +225,25 @@ START_TEST(test_system_commands)
 }
 END_TEST
 
+/* The settings are the config file: OctoPrint's 403 for a user who may
+ * not change them. */
+START_TEST(test_settings_post)
+{
+	struct node_proc np;
+	struct resp r;
+
+	start(&np, TWO_PRINTERS);
+	sv_call(np.port, "POST", "/api/settings", CTL, "{\"appearance\":{\"name\":\"x\"}}", 403,
+		&r);
+	ck_assert_msg(strstr(sv_str(r.json, "error"), "config file"), "%s", r.body);
+	sv_resp_free(&r);
+	sv_call(np.port, "GET", "/api/settings", RO, NULL, 200, &r);
+	ck_assert(json_object_get(r.json, "feature"));
+	sv_resp_free(&r);
+	sv_stop(&np);
+}
+END_TEST
+
 START_TEST(test_printerprofile_by_id)
 {
 	struct node_proc np;
@@ -671,6 +690,7 @@ Suite *octoapi_suite(void)
 	tcase_add_test(tc, test_key_forms);
 	tcase_add_test(tc, test_head_options_405);
 	tcase_add_test(tc, test_system_commands);
+	tcase_add_test(tc, test_settings_post);
 	tcase_add_test(tc, test_printerprofile_by_id);
 	tcase_add_test(tc, test_files_list);
 	tcase_add_test(tc, test_file_get);

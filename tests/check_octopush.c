@@ -183,6 +183,18 @@ static void ws_close(struct ws *w)
 	json_decref(w->got);
 }
 
+/* The messages received with key. */
+static int count_of(struct ws *w, const char *key)
+{
+	size_t i;
+	json_t *m;
+	int n = 0;
+
+	json_array_foreach(w->got, i, m)
+		n += json_object_get(m, key) != NULL;
+	return n;
+}
+
 /* The auth message of key (its header) named name: its passive login's session. */
 static void auth_of(int port, const char *key, const char *name, char *out, size_t cap)
 {
@@ -242,7 +254,8 @@ START_TEST(test_push_sockjs)
 }
 END_TEST
 
-/* The raw endpoint: plain JSON messages; a wrong session gets no state. */
+/* The raw endpoint: plain JSON messages; a wrong session gets no state;
+ * the client's throttle slows its current messages. */
 START_TEST(test_push_raw)
 {
 	struct node_proc np;
@@ -258,6 +271,16 @@ START_TEST(test_push_raw)
 	ck_assert(!ws_until(&w, "current", 1500));
 	ws_say(&w, auth);
 	ck_assert(ws_until(&w, "current", 3000));
+	/* 2 per second; {"throttle": 4} makes it one each 2 s */
+	json_array_clear(w.got);
+	ws_until(&w, NULL, 2200);
+	ck_assert_msg(count_of(&w, "current") >= 3, "%d current in 2.2 s", count_of(&w, "current"));
+	ws_say(&w, "{\"throttle\":4}");
+	ws_until(&w, NULL, 600);
+	json_array_clear(w.got);
+	ws_until(&w, NULL, 3000);
+	ck_assert_msg(count_of(&w, "current") >= 1 && count_of(&w, "current") <= 2,
+		      "%d current in 3 s at throttle 4", count_of(&w, "current"));
 	ws_close(&w);
 	/* a printer's own push API, and no upgrade without its headers */
 	ws_open(&w, np.port, "/p/ender/sockjs/websocket", false);

@@ -361,6 +361,7 @@ static const struct route routes[] = {
 	{"GET", "/api/connection", false, NODE_ROLE_READ, false, http_get_connection},
 	{"POST", "/api/connection", false, NODE_ROLE_CONTROL, false, http_post_connection},
 	{"GET", "/api/settings", false, NODE_ROLE_READ, false, http_get_settings},
+	{"POST", "/api/settings", false, NODE_ROLE_READ, false, http_post_settings},
 	{"GET", "/api/printerprofiles", false, NODE_ROLE_READ, false, http_get_profiles},
 	{"GET", "/api/printerprofiles/", true, NODE_ROLE_READ, false, http_get_profile},
 	{"GET", "/api/files", false, NODE_ROLE_READ, false, http_get_files},

@@ -297,6 +297,18 @@ enum MHD_Result http_get_settings(struct node *n, struct MHD_Connection *c, stru
 	return http_send_json(c, MHD_HTTP_OK, o, NULL);
 }
 
+/* POST /api/settings: the node's settings are its config file, read at
+ * start; OctoPrint's answer to a user who may not change settings. */
+enum MHD_Result http_post_settings(struct node *n, struct MHD_Connection *c, struct req *r)
+{
+	char msg[NODE_PATH_MAX + 120];
+
+	(void)r;
+	snprintf(msg, sizeof(msg), "the node's settings are its config file %s: change it there "
+		 "and restart the node", n->cfg.path);
+	return http_send_error(c, MHD_HTTP_FORBIDDEN, msg);
+}
+
 /* The URL of route path on this request's host and printer prefix. */
 void http_url_for(struct MHD_Connection *c, const struct req *r, const char *path,
 		  const char *name, char *out, size_t cap)

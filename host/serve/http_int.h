@@ -123,6 +123,7 @@ enum MHD_Result http_get_printer(struct node *n, struct MHD_Connection *c, struc
 enum MHD_Result http_get_job(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_get_connection(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_get_settings(struct node *n, struct MHD_Connection *c, struct req *r);
+enum MHD_Result http_post_settings(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_get_profiles(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_get_file(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_get_queue(struct node *n, struct MHD_Connection *c, struct req *r);

@@ -42,6 +42,7 @@ struct push_conn {
 	bool sockjs; /* SockJS framing, else raw messages */
 	bool authed;
 	bool history_due;
+	int rate_ms; /* between current messages: PUSH_RATE_MS times the client's throttle */
 	/* what the last tick saw, for events */
 	bool seen, connected, paused;
 	int64_t job; /* printing or paused, 0 none */
@@ -235,12 +236,18 @@ static ssize_t send_cb(wslay_event_context_ptr ctx, const uint8_t *data, size_t 
 	return sent >= 0 ? sent : -1;
 }
 
-/* One client message: {"auth": "NAME:SESSION"}; others (throttle,
- * subscription) change nothing here. */
+/* One client message: {"auth": "NAME:SESSION"}, or {"throttle": N} for
+ * a current message every N ticks (OctoPrint's, 1-100); others
+ * (subscription) change nothing here. */
 static void on_message(struct push_conn *pc, const char *text, size_t len)
 {
 	json_t *o = json_loadb(text, len, 0, NULL);
 	const char *auth = json_string_value(json_object_get(o, "auth"));
+	json_t *throttle = json_object_get(o, "throttle");
+
+	if (json_is_integer(throttle) && json_integer_value(throttle) >= 1 &&
+	    json_integer_value(throttle) <= 100)
+		pc->rate_ms = PUSH_RATE_MS * (int)json_integer_value(throttle);
 
 	if (auth && !pc->authed && auth_ok(pc->n, auth)) {
 		pc->authed = true;
@@ -328,7 +335,7 @@ static void *push_main(void *arg)
 
 				push_events(pc, &v);
 				push_msg(pc, json_pack("{s:o}", "current", cur));
-				next_current = now + PUSH_RATE_MS;
+				next_current = now + pc->rate_ms;
 			}
 			if (now >= next_beat) {
 				push_control(pc, "h");
@@ -424,6 +431,7 @@ static enum MHD_Result handshake(struct node *n, struct node_printer *p,
 	pc->n = n;
 	pc->p = p;
 	pc->sockjs = sockjs;
+	pc->rate_ms = PUSH_RATE_MS;
 	MHD_add_response_header(resp, MHD_HTTP_HEADER_UPGRADE, "websocket");
 	MHD_add_response_header(resp, "Sec-WebSocket-Accept", (const char *)accept);
 	ret = MHD_queue_response(c, MHD_HTTP_SWITCHING_PROTOCOLS, resp);
