@@ -513,6 +513,10 @@ START_TEST(test_printer_tool)
 	sv_call(np.port, "GET", "/p/cp/api/printer", RO, NULL, 200, &r);
 	ck_assert(json_object_get(json_object_get(r.json, "temperature"), "tool1"));
 	sv_resp_free(&r);
+	sv_call(np.port, "GET", "/p/cp/api/printer?exclude=sd,temperature", RO, NULL, 200, &r);
+	ck_assert(!json_object_get(r.json, "temperature") && !json_object_get(r.json, "sd"));
+	ck_assert(json_object_get(r.json, "state"));
+	sv_resp_free(&r);
 	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
 		  "{\"command\":\"target\",\"targets\":{\"tool0\":205}}", 204);
 	/* the test double reaches a target at once: it was sent */

@@ -174,6 +174,7 @@ json_t *http_flags_json(const struct http_view *v)
 enum MHD_Result http_get_printer(struct node *n, struct MHD_Connection *c, struct req *r)
 {
 	struct http_view v;
+	const char *ex;
 	json_t *o;
 
 	http_take_view(n, r->p, &v);
@@ -183,6 +184,18 @@ enum MHD_Result http_get_printer(struct node *n, struct MHD_Connection *c, struc
 		      http_temps_json(r->p, &v, true, true), "sd", "ready", 0, "state", "text",
 		      http_state_text(&v), "flags", http_flags_json(&v));
 	json_object_set_new(o, "stratum", link_json(r->p, &v));
+	/* ?exclude=temperature,sd,state leaves those out, as OctoPrint */
+	if ((ex = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "exclude"))) {
+		static const char *const parts[] = {"temperature", "sd", "state"};
+
+		for (size_t i = 0; i < sizeof(parts) / sizeof(parts[0]); i++) {
+			size_t len = strlen(parts[i]);
+
+			for (const char *at = ex; (at = strstr(at, parts[i])); at += len)
+				if ((at == ex || at[-1] == ',') && (!at[len] || at[len] == ','))
+					json_object_del(o, parts[i]);
+		}
+	}
 	return http_send_json(c, MHD_HTTP_OK, o, NULL);
 }
 
