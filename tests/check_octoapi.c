@@ -571,6 +571,35 @@ START_TEST(test_printer_bed)
 	sv_resp_free(&r);
 	sv_expect(np.port, "POST", "/api/printer/bed", CTL, "{\"command\":\"target\",\"target\":60}",
 		  204);
+	/* the history: samples every 2 s, the last `limit` of them, oldest first */
+	for (int i = 0; i < 80; i++) {
+		json_t *h, *last;
+
+		sv_call(np.port, "GET", "/api/printer/bed?history=true&limit=2", RO, NULL, 200, &r);
+		h = json_object_get(r.json, "history");
+		ck_assert_msg(json_is_array(h) && json_array_size(h) <= 2, "%s", r.body);
+		last = json_array_get(h, json_array_size(h) - 1);
+		if (json_number_value(json_object_get(json_object_get(last, "bed"), "target")) == 60)
+			break;
+		sv_resp_free(&r);
+		usleep(100000);
+	}
+	ck_assert_msg(r.json, "no sample with the bed's target");
+	ck_assert(json_integer_value(json_object_get(json_array_get(json_object_get(r.json,
+											  "history"),
+								    0), "time")) > 0);
+	sv_resp_free(&r);
+	sv_call(np.port, "GET", "/api/printer/tool?history=true", RO, NULL, 200, &r);
+	ck_assert(!json_object_get(json_array_get(json_object_get(r.json, "history"), 0), "bed"));
+	ck_assert(json_object_get(json_array_get(json_object_get(r.json, "history"), 0), "tool0"));
+	sv_resp_free(&r);
+	sv_call(np.port, "GET", "/api/printer", RO, NULL, 200, &r);
+	ck_assert(!json_object_get(json_object_get(r.json, "temperature"), "history"));
+	sv_resp_free(&r);
+	sv_call(np.port, "GET", "/api/printer?history=true&limit=1", RO, NULL, 200, &r);
+	ck_assert_int_eq(json_array_size(json_object_get(json_object_get(r.json, "temperature"),
+							 "history")), 1);
+	sv_resp_free(&r);
 	sv_expect(np.port, "POST", "/api/printer/bed", CTL, "{\"command\":\"target\"}", 400);
 	sv_expect(np.port, "POST", "/api/printer/bed", CTL, "{\"command\":\"offset\",\"offset\":5}",
 		  400);

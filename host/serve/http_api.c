@@ -96,6 +96,53 @@ json_t *http_temps_json(const struct node_printer *p, const struct http_view *v,
 	return o;
 }
 
+json_t *http_temp_history(struct node_printer *p, int limit, bool tools, bool bed)
+{
+	json_t *arr = json_array();
+	size_t n, first;
+	char name[16];
+
+	pthread_mutex_lock(&p->ctl.mu);
+	n = limit > 0 && (size_t)limit < p->ntemps ? (size_t)limit : p->ntemps;
+	first = (p->temps_next + NODE_TEMP_HISTORY - n) % NODE_TEMP_HISTORY;
+	for (size_t i = 0; i < n; i++) {
+		const struct node_temp_sample *t = &p->temps[(first + i) % NODE_TEMP_HISTORY];
+		json_t *o = json_pack("{s:I}", "time", (json_int_t)t->time);
+
+		if (tools) {
+			json_object_set_new(o, "tool0", json_pack("{s:f,s:f}", "actual", t->tool[0],
+								  "target", t->tool[1]));
+			for (int k = 1; k < p->prof->extruder_count; k++) {
+				snprintf(name, sizeof(name), "tool%d", k);
+				json_object_set_new(o, name, json_pack("{s:n,s:n}", "actual",
+								       "target"));
+			}
+		}
+		if (bed)
+			json_object_set_new(o, "bed", json_pack("{s:f,s:f}", "actual", t->bed[0],
+								"target", t->bed[1]));
+		json_array_append_new(arr, o);
+	}
+	pthread_mutex_unlock(&p->ctl.mu);
+	return arr;
+}
+
+void http_add_history(struct MHD_Connection *c, struct node_printer *p, json_t *temps,
+		      bool tools, bool bed)
+{
+	const char *h = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "history");
+	const char *l = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "limit");
+	char *end = NULL;
+	long limit = l ? strtol(l, &end, 10) : 0;
+
+	if (!h || (strcasecmp(h, "true") && strcmp(h, "1")))
+		return;
+	if (l && (*end || limit < 1))
+		limit = 0; /* as OctoPrint: a bad limit is no limit */
+	json_object_set_new(temps, "history", http_temp_history(p, (int)(limit > 100000 ? 0 : limit),
+								tools, bed));
+}
+
 const char *http_tail(const struct req *r)
 {
 	return r->route_path + strlen(r->rt->path);
@@ -183,6 +230,7 @@ enum MHD_Result http_get_printer(struct node *n, struct MHD_Connection *c, struc
 	o = json_pack("{s:o,s:{s:b},s:{s:s,s:o}}", "temperature",
 		      http_temps_json(r->p, &v, true, true), "sd", "ready", 0, "state", "text",
 		      http_state_text(&v), "flags", http_flags_json(&v));
+	http_add_history(c, r->p, json_object_get(o, "temperature"), true, true);
 	json_object_set_new(o, "stratum", link_json(r->p, &v));
 	/* ?exclude=temperature,sd,state leaves those out, as OctoPrint */
 	if ((ex = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "exclude"))) {

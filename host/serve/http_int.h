@@ -103,6 +103,14 @@ json_t *http_flags_json(const struct http_view *v);
 /* The /api/job answer for p (job, progress, state; stratum's job), and the
  * view it was made of in *out when out is not NULL. */
 json_t *http_job_json(struct node *n, struct node_printer *p, struct http_view *out);
+/* p's temperature history, oldest first, its last limit samples (0: all),
+ * as OctoPrint's history entries ({"time", "tool0": {"actual", "target"},
+ * "bed": ...}), with the tools and/or the bed. */
+json_t *http_temp_history(struct node_printer *p, int limit, bool tools, bool bed);
+/* Add "history" to the temperature object temps when the query asks for
+ * it (?history=true, ?limit=N). */
+void http_add_history(struct MHD_Connection *c, struct node_printer *p, json_t *temps,
+		      bool tools, bool bed);
 /* The JSON object of the body, or NULL with the error answer sent in *ret. */
 json_t *http_body_json(struct MHD_Connection *c, struct req *r, enum MHD_Result *ret);
 /* Queue count checked G-code lines for p's worker (sent between jobs):

@@ -90,10 +90,13 @@ static bool operational(struct node *n, struct node_printer *p, struct http_view
 enum MHD_Result http_get_tool(struct node *n, struct MHD_Connection *c, struct req *r)
 {
 	struct http_view v;
+	json_t *o;
 
 	if (!operational(n, r->p, &v))
 		return http_send_error(c, MHD_HTTP_CONFLICT, "Printer is not operational");
-	return http_send_json(c, MHD_HTTP_OK, http_temps_json(r->p, &v, true, false), NULL);
+	o = http_temps_json(r->p, &v, true, false);
+	http_add_history(c, r->p, o, true, false);
+	return http_send_json(c, MHD_HTTP_OK, o, NULL);
 }
 
 /* The refusal of a temperature offset: the node sends the file's own
@@ -189,12 +192,15 @@ enum MHD_Result http_post_tool(struct node *n, struct MHD_Connection *c, struct 
 enum MHD_Result http_get_bed(struct node *n, struct MHD_Connection *c, struct req *r)
 {
 	struct http_view v;
+	json_t *o;
 
 	if (!operational(n, r->p, &v))
 		return http_send_error(c, MHD_HTTP_CONFLICT, "Printer is not operational");
 	if (r->p->prof->bed_temperature <= 0)
 		return http_send_error(c, MHD_HTTP_CONFLICT, "Printer does not have a heated bed");
-	return http_send_json(c, MHD_HTTP_OK, http_temps_json(r->p, &v, false, true), NULL);
+	o = http_temps_json(r->p, &v, false, true);
+	http_add_history(c, r->p, o, false, true);
+	return http_send_json(c, MHD_HTTP_OK, o, NULL);
 }
 
 enum MHD_Result http_post_bed(struct node *n, struct MHD_Connection *c, struct req *r)

@@ -141,11 +141,30 @@ out_free:
 	return rc;
 }
 
-/* Store every print's position, so a crash loses at most NODE_TICK_MS of it. */
+/* Keep p's temperatures in its history; p->mu held. */
+static void sample_temps(struct node_printer *p)
+{
+	struct node_temp_sample *t = &p->temps[p->temps_next];
+
+	pthread_mutex_lock(&p->ctl.mu);
+	t->time = time(NULL);
+	t->tool[0] = p->ctl.tool_actual;
+	t->tool[1] = p->ctl.tool_target;
+	t->bed[0] = p->ctl.bed_actual;
+	t->bed[1] = p->ctl.bed_target;
+	p->temps_next = (p->temps_next + 1) % NODE_TEMP_HISTORY;
+	if (p->ntemps < NODE_TEMP_HISTORY)
+		p->ntemps++;
+	pthread_mutex_unlock(&p->ctl.mu);
+}
+
+/* Store every print's position, so a crash loses at most NODE_TICK_MS of
+ * it; sample the connected printers' temperatures every NODE_TEMP_EVERY ticks. */
 static void *ticker_main(void *arg)
 {
 	struct node *n = arg;
 	struct timespec t;
+	unsigned ticks = 0;
 
 	pthread_mutex_lock(&n->tick_mu);
 	while (!n->ticker_stop) {
@@ -166,8 +185,11 @@ static void *ticker_main(void *arg)
 				pthread_mutex_unlock(&p->ctl.mu);
 				node_queue_progress(n->q, p->job_id, pos, size);
 			}
+			if (p->connected && ticks % NODE_TEMP_EVERY == 0)
+				sample_temps(p);
 			pthread_mutex_unlock(&p->mu);
 		}
+		ticks++;
 	}
 	pthread_mutex_unlock(&n->tick_mu);
 	return NULL;

@@ -142,6 +142,15 @@ struct node_gcode_estimate {
 	double left_s; /* by the last M73 R before the byte asked for; -1 none */
 };
 
+/* One temperature sample of a printer's history (/api/printer?history). */
+struct node_temp_sample {
+	int64_t time;		/* Unix time, s */
+	double tool[2], bed[2]; /* actual, target, degC */
+};
+
+#define NODE_TEMP_HISTORY 600 /* samples kept: 20 min at one per NODE_TEMP_EVERY ticks */
+#define NODE_TEMP_EVERY 4     /* ticks (NODE_TICK_MS) between samples: 2 s, as OctoPrint polls */
+
 #define NODE_CMD_QUEUE 16 /* printer commands waiting for an idle printer */
 #define NODE_CMD_MAX 257 /* one command line with its NUL (serial/gcode.h GCODE_LINE_MAX) */
 
@@ -168,6 +177,10 @@ struct node_printer {
 
 	struct node_link *link; /* the worker's alone */
 	struct node_print_ctl ctl;
+
+	/* temperature history, a ring written by the ticker, under ctl.mu */
+	struct node_temp_sample temps[NODE_TEMP_HISTORY];
+	size_t ntemps, temps_next; /* samples held; where the next goes */
 
 	pthread_mutex_t gc_mu;	 /* gc, the last G-code file read (gcinfo.c) */
 	struct node_gcode_info gc;

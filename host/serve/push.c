@@ -46,6 +46,7 @@ struct push_conn {
 	/* what the last tick saw, for events */
 	bool seen, connected, paused;
 	int64_t job; /* printing or paused, 0 none */
+	int64_t temps_sent; /* time of the newest temperature sample sent */
 	char *extra; /* bytes MHD read past the request, read first */
 	size_t extra_len, extra_off;
 	wslay_event_context_ptr ctx;
@@ -173,22 +174,24 @@ static void push_events(struct push_conn *pc, const struct http_view *v)
 	pc->paused = paused;
 }
 
-/* The "current" payload (also the body of "history"); the view it shows
- * in *v. */
-static json_t *current_json(struct push_conn *pc, struct http_view *out)
+/* The "current" payload: temps the samples since the last message (the
+ * node takes one each 2 s); as the body of "history", every sample the
+ * node keeps.  The view it shows in *out. */
+static json_t *current_json(struct push_conn *pc, bool history, struct http_view *out)
 {
 	struct http_view v;
-	json_t *job = http_job_json(pc->n, pc->p, &v), *o, *temps;
+	json_t *job = http_job_json(pc->n, pc->p, &v), *o;
+	json_t *temps = http_temp_history(pc->p, history ? 0 : 1, true, true), *last;
 	double now = (double)time(NULL);
-	char tool[16];
 
-	temps = json_pack("{s:f,s:o,s:o}", "time", now, "tool0", http_temp_json(v.tool), "bed",
-			  http_temp_json(v.bed));
-	for (int i = 1; i < pc->p->prof->extruder_count; i++) {
-		snprintf(tool, sizeof(tool), "tool%d", i);
-		json_object_set_new(temps, tool, json_pack("{s:n,s:n}", "actual", "target"));
-	}
-	o = json_pack("{s:{s:s,s:o,s:s},s:O,s:O,s:o,s:{},s:[o],s:[],s:[],s:o,s:f}", "state", "text",
+	last = json_array_get(temps, json_array_size(temps) - 1);
+	if (last && json_integer_value(json_object_get(last, "time")) == pc->temps_sent &&
+	    !history)
+		json_array_clear(temps);
+	else if (last)
+		pc->temps_sent = json_integer_value(json_object_get(last, "time"));
+
+	o = json_pack("{s:{s:s,s:o,s:s},s:O,s:O,s:o,s:{},s:o,s:[],s:[],s:o,s:f}", "state", "text",
 		      http_state_text(&v), "flags", http_flags_json(&v), "error", v.conn_error,
 		      "job", json_object_get(job, "job"), "progress", json_object_get(job, "progress"),
 		      "currentZ", v.printing && v.z == v.z ? json_real(v.z) : json_null(), "offsets",
@@ -327,11 +330,11 @@ static void *push_main(void *arg)
 			now = st_mono_ms();
 			if (pc->history_due) {
 				pc->history_due = false;
-				push_msg(pc, json_pack("{s:o}", "history", current_json(pc, &v)));
+				push_msg(pc, json_pack("{s:o}", "history", current_json(pc, true, &v)));
 				push_events(pc, &v);
 				next_current = now + PUSH_RATE_MS;
 			} else if (pc->authed && now >= next_current) {
-				json_t *cur = current_json(pc, &v);
+				json_t *cur = current_json(pc, false, &v);
 
 				push_events(pc, &v);
 				push_msg(pc, json_pack("{s:o}", "current", cur));
