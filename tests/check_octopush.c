@@ -345,6 +345,36 @@ START_TEST(test_push_events)
 }
 END_TEST
 
+/* A client that does not authenticate is closed after idle_timeout_s, as
+ * an idle HTTP connection is: it cannot hold a push slot for ever. */
+START_TEST(test_push_unauthenticated_closed)
+{
+	struct node_proc np;
+	struct ws w;
+	char text[1024];
+	bool closed = false;
+
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	snprintf(text, sizeof(text),
+		 "[node]\nname = test-node\nlisten = 127.0.0.1:0\ndata_dir = data\n"
+		 "idle_timeout_s = 2\n[key viewer]\nkey = " KEY_READ "\nroles = read\n"
+		 "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = test-instant\n");
+	tu_write_str(np.config, text);
+	sv_start(&np);
+	ws_open(&w, np.port, "/sockjs/websocket", false);
+	for (int t = 0; t < 5000 && !closed; t += 20) {
+		struct pollfd pfd = {w.fd, POLLIN, 0};
+
+		poll(&pfd, 1, 20);
+		if ((pfd.revents & POLLIN || w.extra_off < w.extra_len) && wslay_event_recv(w.ctx))
+			closed = true;
+	}
+	ck_assert_msg(closed, "an unauthenticated push client is still open after 5 s");
+	ws_close(&w);
+	sv_stop(&np);
+}
+END_TEST
+
 void octoapi_push_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("push");
@@ -353,5 +383,6 @@ void octoapi_push_tcases(Suite *s)
 	tcase_add_test(tc, test_push_sockjs);
 	tcase_add_test(tc, test_push_raw);
 	tcase_add_test(tc, test_push_events);
+	tcase_add_test(tc, test_push_unauthenticated_closed);
 	suite_add_tcase(s, tc);
 }

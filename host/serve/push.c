@@ -306,6 +306,8 @@ static void *push_main(void *arg)
 	struct node *n = pc->n;
 	struct wslay_event_callbacks cb = {recv_cb, send_cb, NULL, NULL, NULL, NULL, msg_cb};
 	int64_t now = st_mono_ms(), next_current = now, next_beat = now + PUSH_HEARTBEAT_MS;
+	/* a client that does not authenticate is closed as an idle connection is */
+	int64_t auth_by = now + (int64_t)n->cfg.idle_timeout_s * 1000;
 
 	fcntl(pc->fd, F_SETFL, fcntl(pc->fd, F_GETFL) | O_NONBLOCK);
 	if (!wslay_event_context_server_init(&pc->ctx, &cb, pc)) {
@@ -328,6 +330,8 @@ static void *push_main(void *arg)
 				     !wslay_event_want_write(pc->ctx)))
 				break;
 			now = st_mono_ms();
+			if (!pc->authed && now >= auth_by)
+				break;
 			if (pc->history_due) {
 				pc->history_due = false;
 				push_msg(pc, json_pack("{s:o}", "history", current_json(pc, true, &v)));
