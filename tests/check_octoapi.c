@@ -341,6 +341,56 @@ START_TEST(test_files_list)
 }
 END_TEST
 
+/* POST /api/files/local with foldername (and path) and no file: OctoPrint's
+ * new folder, 201; 409 when it exists. */
+static void new_folder(int port, const char *path, const char *name, int want, struct resp *r)
+{
+	char body[1024], req[2048];
+	int n = snprintf(body, sizeof(body),
+			 "--" BOUNDARY "\r\nContent-Disposition: form-data; name=\"foldername\"\r\n\r\n"
+			 "%s\r\n--" BOUNDARY "\r\nContent-Disposition: form-data; name=\"path\"\r\n\r\n"
+			 "%s\r\n--" BOUNDARY "--\r\n", name, path);
+	int m = snprintf(req, sizeof(req),
+			 "POST /api/files/local HTTP/1.1\r\nHost: 127.0.0.1:%d\r\n" UP "\r\n"
+			 "Connection: close\r\nContent-Length: %d\r\n"
+			 "Content-Type: multipart/form-data; boundary=" BOUNDARY "\r\n\r\n%s",
+			 port, n, body);
+
+	sv_http_raw(port, req, (size_t)m, r);
+	ck_assert_msg(r->status == want, "new folder %s/%s: %d, not %d: %s", path, name, r->status,
+		      want, r->body);
+}
+
+START_TEST(test_folder_create)
+{
+	struct node_proc np;
+	struct resp r;
+	char want[256];
+
+	start(&np, TWO_PRINTERS);
+	new_folder(np.port, "", "parts", 201, &r);
+	ck_assert_str_eq(sv_str(json_object_get(r.json, "folder"), "path"), "parts");
+	snprintf(want, sizeof(want), "Location: http://127.0.0.1:%d/api/files/local/parts", np.port);
+	ck_assert_msg(sv_has_text(r.head, want), "%s", r.head);
+	sv_resp_free(&r);
+	new_folder(np.port, "parts", "brackets", 201, &r);
+	ck_assert_str_eq(sv_str(json_object_get(r.json, "folder"), "path"), "parts/brackets");
+	sv_resp_free(&r);
+	ck_assert(stored(&np, "mk3s", "parts/brackets"));
+	new_folder(np.port, "", "parts", 409, &r);
+	sv_resp_free(&r);
+	new_folder(np.port, "none", "x", 409, &r);
+	sv_resp_free(&r);
+	new_folder(np.port, "", "..", 400, &r);
+	sv_resp_free(&r);
+	sv_call(np.port, "GET", "/api/files/local/parts?recursive=true", RO, NULL, 200, &r);
+	ck_assert_str_eq(sv_str(json_array_get(json_object_get(r.json, "children"), 0), "type"),
+			 "folder");
+	sv_resp_free(&r);
+	sv_stop(&np);
+}
+END_TEST
+
 START_TEST(test_file_get)
 {
 	struct node_proc np;
@@ -726,6 +776,7 @@ Suite *octoapi_suite(void)
 	tcase_add_test(tc, test_settings_post);
 	tcase_add_test(tc, test_printerprofile_by_id);
 	tcase_add_test(tc, test_files_list);
+	tcase_add_test(tc, test_folder_create);
 	tcase_add_test(tc, test_file_get);
 	tcase_add_test(tc, test_file_select);
 	tcase_add_test(tc, test_file_move_copy);

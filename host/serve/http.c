@@ -174,6 +174,8 @@ static enum MHD_Result post_iter(void *cls, enum MHD_ValueKind kind, const char 
 		field_add(r, r->force, sizeof(r->force), &l, key, data, size);
 	} else if (!strcmp(key, "path")) {
 		field_add(r, r->path, sizeof(r->path), &r->path_len, key, data, size);
+	} else if (!strcmp(key, "foldername")) {
+		field_add(r, r->foldername, sizeof(r->foldername), &r->foldername_len, key, data, size);
 	} else if (cfgopt_is_field(key)) {
 		/* a setting: its name and NUL open the pair, a NUL closes it */
 		if (off == 0) {
@@ -226,7 +228,7 @@ static enum MHD_Result post_iter(void *cls, enum MHD_ValueKind kind, const char 
 			req_fail(r, MHD_HTTP_INSUFFICIENT_STORAGE, "cannot store the upload");
 		}
 	}
-	/* Other fields (OctoPrint's userdata, foldername ...) are ignored. */
+	/* Other fields (OctoPrint's userdata ...) are ignored. */
 	return MHD_YES;
 }
 
@@ -297,6 +299,8 @@ static enum MHD_Result finish_upload(struct node *n, struct MHD_Connection *c, s
 	json_t *o;
 	int rc;
 
+	if (!r->has_file && r->foldername_len)
+		return http_make_folder(n, c, r);
 	if (!r->has_file)
 		return http_send_error(c, MHD_HTTP_BAD_REQUEST, "no file part named 'file' in the "
 							        "multipart form");

@@ -447,3 +447,42 @@ enum MHD_Result http_post_file(struct node *n, struct MHD_Connection *c, struct 
 	json_decref(o);
 	return ret;
 }
+
+enum MHD_Result http_make_folder(struct node *n, struct MHD_Connection *c, struct req *r)
+{
+	struct node_printer *p = r->p;
+	const char *folder = r->path;
+	char rel[HTTP_FIELD_MAX + NODE_FILE_NAME_MAX + 2], full[2 * NODE_PATH_MAX], res[2048];
+	char msg[400];
+	struct st_error err = {0};
+	struct stat st;
+
+	(void)n;
+	while (*folder == '/')
+		folder++;
+	if (node_check_file_name(r->foldername, r->foldername_len, &err) ||
+	    strlen(folder) != r->path_len - (size_t)(folder - r->path) ||
+	    http_check_rel(folder, strlen(folder), &err)) {
+		snprintf(msg, sizeof(msg), "bad folder name or path: %s", err.msg[0] ? err.msg
+											 : "NUL byte");
+		return http_send_error(c, MHD_HTTP_BAD_REQUEST, msg);
+	}
+	snprintf(rel, sizeof(rel), "%s%s%s", folder, *folder && folder[strlen(folder) - 1] != '/'
+							 ? "/" : "", r->foldername);
+	if (!full_path(p, rel, full, sizeof(full)))
+		return http_send_error(c, MHD_HTTP_BAD_REQUEST, "the folder's path is too long");
+	snprintf(res, sizeof(res), "%s", full);
+	*strrchr(res, '/') = '\0';
+	if (stat(res, &st) || !S_ISDIR(st.st_mode))
+		return http_send_error(c, MHD_HTTP_CONFLICT, "the parent folder does not exist");
+	if (mkdir(full, 0750))
+		return http_send_error(c, errno == EEXIST ? MHD_HTTP_CONFLICT
+				       : MHD_HTTP_INTERNAL_SERVER_ERROR, errno == EEXIST
+				       ? "File or folder does already exist" : "cannot create the folder");
+	node_log("info", p->cfg->name, 0, "created folder %s", rel);
+	http_url_for(c, r, "/api/files/local/", rel, res, sizeof(res));
+	return http_send_json(c, MHD_HTTP_CREATED,
+			      json_pack("{s:{s:s,s:s,s:s,s:{s:s}},s:b}", "folder", "name",
+					r->foldername, "path", rel, "origin", "local", "refs",
+					"resource", res, "done", 1), res);
+}

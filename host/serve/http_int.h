@@ -56,6 +56,8 @@ struct req {
 	size_t filename_len;
 	char print[16], select[16], force[16], path[HTTP_FIELD_MAX];
 	size_t path_len;
+	char foldername[NODE_FILE_NAME_MAX + 2]; /* OctoPrint's new folder (no file part) */
+	size_t foldername_len;
 	/* per-job settings fields as "name\0value\0" pairs (cfgopt_field) */
 	char sets[NODE_SETTINGS_MAX];
 	size_t sets_len, nsets;
@@ -141,7 +143,9 @@ enum MHD_Result http_post_command(struct node *n, struct MHD_Connection *c, stru
 enum MHD_Result http_post_connection(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_post_bed_clear(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_get_profile(struct node *n, struct MHD_Connection *c, struct req *r);
-/* http_files.c */
+/* http_files.c; http_make_folder: an upload form with foldername and no
+ * file, OctoPrint's way to create a folder under path. */
+enum MHD_Result http_make_folder(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_get_files(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_post_file(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_delete_file(struct node *n, struct MHD_Connection *c, struct req *r);
