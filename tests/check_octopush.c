@@ -310,8 +310,8 @@ static bool ws_event(struct ws *w, const char *type, int ms)
 	return false;
 }
 
-/* Events as OctoPrint sends them for a print paused, resumed, cancelled,
- * and one done. */
+/* Events as OctoPrint sends them for an upload, a print paused, resumed,
+ * cancelled, and one done. */
 START_TEST(test_push_events)
 {
 	struct node_proc np;
@@ -325,7 +325,9 @@ START_TEST(test_push_events)
 	ws_say(&w, auth);
 	ck_assert(ws_until(&w, "history", 3000));
 	sv_bed_clear(np.port, "", 204);
+	ck_assert(!ws_event(&w, "UpdatedFiles", 700));
 	ck_assert(sv_print_text(np.port, "", "a.gcode", "G1 X1\nG4 S20\n") == 1);
+	ck_assert_msg(ws_event(&w, "UpdatedFiles", 3000), "no UpdatedFiles after an upload");
 	ck_assert_msg(ws_event(&w, "PrintStarted", 5000), "no PrintStarted");
 	sv_expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL,
 		  "{\"command\":\"pause\",\"action\":\"pause\"}", 204);

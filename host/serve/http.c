@@ -331,6 +331,7 @@ static enum MHD_Result finish_upload(struct node *n, struct MHD_Connection *c, s
 	snprintf(full, sizeof(full), "%s/%s", p->files_dir, rel);
 	node_log("info", p->cfg->name, id, "stored %s (%llu bytes)%s", rel,
 		 (unsigned long long)r->bytes, print ? ", queued" : "");
+	http_files_changed(p);
 	stat(full, &st);
 	o = json_pack("{s:{s:o},s:b,s:b,s:b}", "files", "local", http_file_json(c, r, rel, &st), "done",
 		      1, "effectiveSelect", select, "effectivePrint", print);

@@ -34,6 +34,11 @@ static bool full_path(const struct node_printer *p, const char *rel, char *full,
 	return snprintf(full, cap, "%s/%s", p->files_dir, rel) < (int)cap;
 }
 
+void http_files_changed(struct node_printer *p)
+{
+	atomic_fetch_add(&p->files_version, 1);
+}
+
 /* Whether the query parameter name is OctoPrint's true. */
 static bool query_true(struct MHD_Connection *c, const char *name)
 {
@@ -259,6 +264,7 @@ enum MHD_Result http_delete_file(struct node *n, struct MHD_Connection *c, struc
 		if (selected_under(n, p, rel) && node_queue_set_selected(n->q, p->cfg->name, "", &err))
 			node_log("error", p->cfg->name, 0, "%s", err.msg);
 		node_log("info", p->cfg->name, 0, "deleted %s", rel);
+		http_files_changed(p);
 		ret = http_no_content(c);
 	}
 	pthread_mutex_unlock(&p->mu);
@@ -407,6 +413,7 @@ static enum MHD_Result file_move(struct node *n, struct MHD_Connection *c, struc
 		    node_queue_set_selected(n->q, p->cfg->name, to, &err))
 			node_log("error", p->cfg->name, 0, "%s", err.msg);
 		node_log("info", p->cfg->name, 0, "%s %s to %s", move ? "moved" : "copied", rel, to);
+		http_files_changed(p);
 		http_url_for(c, r, "/api/files/local/", to, res, sizeof(res));
 		http_url_for(c, r, "/downloads/files/local/", to, dl, sizeof(dl));
 		o = json_pack("{s:s,s:s,s:s,s:{s:s,s:s}}", "name", strrchr(to, '/') ?
@@ -480,6 +487,7 @@ enum MHD_Result http_make_folder(struct node *n, struct MHD_Connection *c, struc
 				       : MHD_HTTP_INTERNAL_SERVER_ERROR, errno == EEXIST
 				       ? "File or folder does already exist" : "cannot create the folder");
 	node_log("info", p->cfg->name, 0, "created folder %s", rel);
+	http_files_changed(p);
 	http_url_for(c, r, "/api/files/local/", rel, res, sizeof(res));
 	return http_send_json(c, MHD_HTTP_CREATED,
 			      json_pack("{s:{s:s,s:s,s:s,s:{s:s}},s:b}", "folder", "name",

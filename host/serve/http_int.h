@@ -123,6 +123,8 @@ enum MHD_Result http_queue_lines(struct MHD_Connection *c, struct node_printer *
  * when nothing is selected or the file is gone. */
 enum MHD_Result http_start_selected(struct node *n, struct MHD_Connection *c,
 				    struct node_printer *p);
+/* Tell the push clients that p's files changed (UpdatedFiles). */
+void http_files_changed(struct node_printer *p);
 /* The route path after the route's prefix ("a/b.gcode" of /api/files/local/a/b.gcode). */
 const char *http_tail(const struct req *r);
 

@@ -10,6 +10,7 @@
 
 #include <jansson.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <stdint.h>
 
@@ -177,6 +178,8 @@ struct node_printer {
 
 	struct node_link *link; /* the worker's alone */
 	struct node_print_ctl ctl;
+
+	atomic_uint files_version; /* bumped when its stored files change (push events) */
 
 	/* temperature history, a ring written by the ticker, under ctl.mu */
 	struct node_temp_sample temps[NODE_TEMP_HISTORY];

@@ -47,6 +47,7 @@ struct push_conn {
 	bool seen, connected, paused;
 	int64_t job; /* printing or paused, 0 none */
 	int64_t temps_sent; /* time of the newest temperature sample sent */
+	unsigned files_seen; /* the printer's files_version at the last tick */
 	char *extra; /* bytes MHD read past the request, read first */
 	size_t extra_len, extra_off;
 	wslay_event_context_ptr ctx;
@@ -146,8 +147,8 @@ static void push_event(struct push_conn *pc, const char *type, const struct node
 }
 
 /* OctoPrint's events for what changed since the last tick: Connected,
- * Disconnected, PrintStarted, PrintPaused, PrintResumed, PrintDone,
- * PrintFailed, PrintCancelled.  A job that starts and ends between two
+ * Disconnected, UpdatedFiles, PrintStarted, PrintPaused, PrintResumed,
+ * PrintDone, PrintFailed, PrintCancelled.  A job that starts and ends between two
  * ticks (PUSH_RATE_MS) is not seen. */
 static void push_events(struct push_conn *pc, const struct http_view *v)
 {
@@ -155,6 +156,7 @@ static void push_events(struct push_conn *pc, const struct http_view *v)
 										       : 0;
 	bool paused = job && (v->paused || v->job.state == NODE_JOB_PAUSED);
 	struct node_job j;
+	unsigned files;
 
 	if (pc->seen && v->connected != pc->connected)
 		push_event(pc, v->connected ? "Connected" : "Disconnected", NULL);
@@ -164,6 +166,11 @@ static void push_events(struct push_conn *pc, const struct http_view *v)
 	     j.state == NODE_JOB_CANCELLED))
 		push_event(pc, j.state == NODE_JOB_DONE ? "PrintDone" : j.state == NODE_JOB_FAILED
 			   ? "PrintFailed" : "PrintCancelled", &j);
+	files = atomic_load(&pc->p->files_version);
+	if (pc->seen && files != pc->files_seen)
+		push_msg(pc, json_pack("{s:{s:s,s:{s:s}}}", "event", "type", "UpdatedFiles",
+				       "payload", "type", "printables"));
+	pc->files_seen = files;
 	if (pc->seen && job && job != pc->job)
 		push_event(pc, "PrintStarted", &v->job);
 	else if (pc->seen && job && paused != pc->paused)
