@@ -1,15 +1,14 @@
 /*
  * check_octoapi.c - the OctoPrint calls of `stratum serve` beyond the
- * upload path (docs/serve.md, "OctoPrint conformance"): one test per call,
- * checking the status codes and JSON fields OctoPrint's REST API documents
- * (docs.octoprint.org, API 1.10): login, current user, server, files
- * (list, one, select, move, copy, delete, download), tool, bed, print head,
- * SD card, chamber, system commands, printer profiles, the key forms, HEAD
- * and OPTIONS, and /api/job's estimate, time left and filament (the push
- * API: check_octopush.c).  The node
- * runs as a child process (servetest.h) with `port = test-instant`
- * printers, or `port = sim` where the G-code that reached the printer is
- * checked in the simulator's log.
+ * upload path, one test per call, checking the status codes and JSON
+ * fields of OctoPrint's REST API (docs/serve.md, "OctoPrint conformance"):
+ * login, current user, server, settings, files (list, one, new folder,
+ * select, move, copy, delete, download), tool, bed, print head, SD card,
+ * chamber, system commands, printer profiles, the key forms, HEAD and
+ * OPTIONS, and /api/job's estimate, time left and filament (the push API:
+ * check_octopush.c).  The node runs as a child process (servetest.h) with
+ * `port = test-instant` printers, or `port = sim` where the G-code that
+ * reached the printer is checked in the simulator's log.
  */
 #include <check.h>
 #include <jansson.h>

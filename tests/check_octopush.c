@@ -104,7 +104,8 @@ static void ws_msg(wslay_event_context_ptr ctx, const struct wslay_event_on_msg_
 	}
 }
 
-/* Open path with the WebSocket handshake; RFC 6455's sample key and accept. */
+/* Open path with the WebSocket handshake (the standard's sample key and
+ * its accept value). */
 static void ws_open(struct ws *w, int port, const char *path, bool sockjs)
 {
 	struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};

@@ -32,7 +32,7 @@
 #define PUSH_HEARTBEAT_MS 25000 /* SockJS heartbeat ("h") */
 #define PUSH_POLL_MS 50
 #define PUSH_IN_MAX 65536   /* a client message, bytes */
-#define WS_GUID "258EAFA5-E914-47DA-95CA-C5AB0DC85B11" /* RFC 6455 */
+#define WS_GUID "258EAFA5-E914-47DA-95CA-C5AB0DC85B11" /* the WebSocket handshake's */
 
 struct push_conn {
 	struct node *n;
