@@ -23,11 +23,13 @@ CXX      := g++
 # OpenSSL is already on the machine for libcurl4-openssl-dev, nettle would be one more).
 # libzip-dev + libxml2-dev read 3MF (repair/threemf.c): a 3MF is a zip of XML
 # parts; both are C libraries (lib3mf-dev is C++ and Debian's is 1.8, old).
+# libwslay-dev frames the push API's WebSocket messages (host/serve/push.c)
+# over libmicrohttpd's upgraded connections.
 DEB_PACKAGES := gcc g++ make pkg-config dpkg-dev \
 	libserialport-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev libtbb-dev \
 	libpolyclipping-dev check libsqlite3-dev libmicrohttpd-dev libjansson-dev \
 	libmosquitto-dev mosquitto gpx libcairo2-dev libxml2-utils libcurl4-openssl-dev \
-	libssl-dev libeigen3-dev libzip-dev libxml2-dev
+	libssl-dev libeigen3-dev libzip-dev libxml2-dev libwslay-dev
 # Only the benchmark compares against these (printcore: Printrun's host, also
 # used by the sim suite's faithfulness test, which is skipped without it;
 # libcgal-demo: CGAL's data meshes, the real broken models bench/cgal_corpus.sh
@@ -76,7 +78,7 @@ CPPFLAGS += $(CAIRO_CFLAGS)
 ZIPXML_CFLAGS := $(patsubst -I%,-isystem %,$(shell pkg-config --cflags libzip libxml-2.0 2>/dev/null))
 ZIPXML_LIBS   := $(shell pkg-config --libs libzip libxml-2.0 2>/dev/null || echo -lzip -lxml2)
 CPPFLAGS += $(ZIPXML_CFLAGS)
-LDLIBS   := $(ZIPXML_LIBS) $(CAIRO_LIBS) -lcrypto -lmicrohttpd -lmosquitto -lcurl -lsqlite3 -lserialport -lutil -ljansson -lpolyclipping -ltbb -lgmp -lmpfr -lm -pthread
+LDLIBS   := $(ZIPXML_LIBS) $(CAIRO_LIBS) -lcrypto -lwslay -lmicrohttpd -lmosquitto -lcurl -lsqlite3 -lserialport -lutil -ljansson -lpolyclipping -ltbb -lgmp -lmpfr -lm -pthread
 TEST_LDLIBS := $(shell pkg-config --libs check 2>/dev/null || echo -lcheck -lsubunit -lrt) $(LDLIBS)
 
 # Sources: every .c under the module folders is library code except the CLI

@@ -40,303 +40,8 @@
 #include "meshio.h"
 #include "sfcheck.h"
 #include "suites.h"
+#include "servetest.h"
 #include "testutil.h"
-
-#define KEY_UP "upload-key-0123456789"	   /* read, upload */
-#define KEY_CTL "control-key-0123456789"   /* read, upload, control */
-#define KEY_READ "read-only-key-0123456789" /* read */
-#define BOUNDARY "------------------------d74496d66958873e" /* curl's form: 24 '-' + 16 hex */
-
-/* A running node. */
-struct node_proc {
-	pid_t pid;
-	int port;
-	size_t log_end; /* log bytes before the current start */
-	char dir[400], log[512], config[512];
-};
-
-/* Write the config with printers (lines of "[printer ...]" sections). */
-static void write_config(struct node_proc *np, const char *printers, int max_mb)
-{
-	char text[4096];
-
-	ck_assert(snprintf(np->dir, sizeof(np->dir), "%s", tu_path("node")) < (int)sizeof(np->dir));
-	mkdir(np->dir, 0700);
-	snprintf(np->config, sizeof(np->config), "%s/node.ini", np->dir);
-	snprintf(np->log, sizeof(np->log), "%s/node.log", np->dir);
-	snprintf(text, sizeof(text),
-		 "# test node\n[node]\nname = test-node\nlisten = 127.0.0.1:0\n"
-		 "data_dir = data\nmax_upload_mb = %d\n\n"
-		 "[key slicer]\nkey = " KEY_UP "\nroles = read, upload\n"
-		 "[key operator]\nkey = " KEY_CTL "\nroles = read, upload, control\n"
-		 "[key viewer]\nkey = " KEY_READ "\nroles = read\n\n%s",
-		 max_mb, printers);
-	tu_write_str(np->config, text);
-}
-
-#define TWO_PRINTERS                                                                 \
-	"[printer mk3s]\nprofile = prusa-i3-mk3s\nport = test-instant\n\n"          \
-	"[printer ender]\nprofile = creality-ender-3\nport = test-instant\n"
-
-/* Start the node of np's config; waits for its "listening" record. */
-static void node_start(struct node_proc *np)
-{
-	const char *bin = getenv("STRATUM_BIN");
-	char buf[8192];
-
-	ck_assert_msg(bin != NULL, "STRATUM_BIN is not set");
-	{
-		struct stat st;
-
-		np->log_end = stat(np->log, &st) ? 0 : (size_t)st.st_size;
-	}
-	np->pid = fork();
-	ck_assert(np->pid >= 0);
-	if (!np->pid) {
-		int fd = open(np->log, O_WRONLY | O_CREAT | O_APPEND, 0600);
-
-		dup2(fd, 2);
-		execl(bin, bin, "serve", "--config", np->config, (char *)NULL);
-		_exit(127);
-	}
-	np->port = 0;
-	for (int i = 0; i < 1000 && !np->port; i++) {
-		FILE *f = fopen(np->log, "r");
-		size_t n = 0;
-		char *at = NULL;
-
-		/* This start's records only: the log is appended across restarts. */
-		if (f && !fseek(f, (long)np->log_end, SEEK_SET))
-			n = fread(buf, 1, sizeof(buf) - 1, f);
-		if (f)
-			fclose(f);
-		buf[n] = '\0';
-		at = strstr(buf, "listening on 127.0.0.1:");
-		if (at)
-			np->port = atoi(at + strlen("listening on 127.0.0.1:"));
-		if (!np->port)
-			usleep(10000);
-	}
-	ck_assert_msg(np->port > 0, "the node did not start: %.3000s", buf);
-}
-
-/* Stop with SIGTERM and expect exit status 0. */
-static void node_stop(struct node_proc *np)
-{
-	int st;
-
-	ck_assert(kill(np->pid, SIGTERM) == 0);
-	ck_assert(waitpid(np->pid, &st, 0) == np->pid);
-	ck_assert_msg(WIFEXITED(st) && WEXITSTATUS(st) == 0, "serve exit status %d", st);
-}
-
-/* Whether text contains needle, ignoring case (for header names). */
-static bool has_text(const char *text, const char *needle)
-{
-	size_t n = strlen(needle);
-
-	for (; *text; text++)
-		if (!strncasecmp(text, needle, n))
-			return true;
-	return false;
-}
-
-/* An HTTP answer. */
-struct resp {
-	int status;
-	char head[4096];
-	char *body; /* NUL-terminated, malloc'd */
-	json_t *json;
-};
-
-static void resp_free(struct resp *r)
-{
-	free(r->body);
-	json_decref(r->json);
-	memset(r, 0, sizeof(*r));
-}
-
-/* Send req (len bytes) to the node and read the whole answer (Connection: close). */
-static void http_raw(int port, const char *req, size_t len, struct resp *r)
-{
-	struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
-	struct timeval tv = {.tv_sec = 20};
-	size_t cap = 1 << 16, got = 0;
-	char *buf = malloc(cap), *end;
-	int fd = socket(AF_INET, SOCK_STREAM, 0);
-	ssize_t n;
-
-	memset(r, 0, sizeof(*r));
-	ck_assert(fd >= 0 && buf);
-	inet_pton(AF_INET, "127.0.0.1", &sa.sin_addr);
-	setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof(tv));
-	ck_assert_msg(connect(fd, (struct sockaddr *)&sa, sizeof(sa)) == 0, "connect: %s",
-		      strerror(errno));
-	for (size_t done = 0; done < len; done += (size_t)n) {
-		n = send(fd, req + done, len - done, MSG_NOSIGNAL);
-		if (n <= 0)
-			break; /* the node may answer and close early: read what it said */
-	}
-	while ((n = recv(fd, buf + got, cap - got - 1, 0)) > 0) {
-		got += (size_t)n;
-		if (got + 1 == cap) {
-			buf = realloc(buf, cap *= 2);
-			ck_assert(buf);
-		}
-	}
-	close(fd);
-	buf[got] = '\0';
-	ck_assert_msg(sscanf(buf, "HTTP/1.1 %d", &r->status) == 1, "no HTTP answer: '%s'", buf);
-	end = strstr(buf, "\r\n\r\n");
-	ck_assert(end);
-	snprintf(r->head, sizeof(r->head), "%.*s", (int)(end - buf), buf);
-	r->body = strdup(end + 4);
-	r->json = json_loads(r->body, JSON_DECODE_ANY, NULL);
-	free(buf);
-}
-
-/* A request without body (or a JSON one) with the key header given (may be NULL). */
-static void http(int port, const char *method, const char *path, const char *auth,
-		 const char *json_body, struct resp *r)
-{
-	char req[8192];
-	int n = snprintf(req, sizeof(req),
-			 "%s %s HTTP/1.1\r\nHost: 127.0.0.1:%d\r\nUser-Agent: PrusaSlicer/2.7.1\r\n"
-			 "Accept: */*\r\n%s%s%sConnection: close\r\n",
-			 method, path, port, auth ? auth : "", auth ? "\r\n" : "", "");
-	if (json_body)
-		n += snprintf(req + n, sizeof(req) - (size_t)n,
-			      "Content-Type: application/json\r\nContent-Length: %zu\r\n\r\n%s",
-			      strlen(json_body), json_body);
-	else
-		n += snprintf(req + n, sizeof(req) - (size_t)n, "\r\n");
-	http_raw(port, req, (size_t)n, r);
-}
-
-/* A request whose answer must have status want; the body is not needed. */
-static void expect(int port, const char *method, const char *path, const char *auth,
-		   const char *json_body, int want)
-{
-	struct resp r;
-
-	http(port, method, path, auth, json_body, &r);
-	ck_assert_msg(r.status == want, "%s %s: %d, not %d: %s", method, path, r.status, want,
-		      r.body);
-	resp_free(&r);
-}
-
-/*
- * The multipart upload as PrusaSlicer sends it (Http::form_add "print",
- * "path", then form_add_file "file"; libcurl's mime layout).  path_len and
- * name_len allow NUL bytes; extra_headers go before the body.
- */
-static void upload(int port, const char *prefix, const char *key, const char *name,
-		   size_t name_len, const char *path, size_t path_len, const char *print,
-		   const void *data, size_t size, const char *extra_headers, bool send_body,
-		   struct resp *r)
-{
-	size_t cap = size + 4096 + name_len + path_len, n = 0, body_start;
-	char *req = malloc(cap), head[1024];
-	int hn;
-
-	ck_assert(req);
-#define PUT(s, l) (memcpy(req + n, (s), (l)), n += (l))
-#define PUTS(s) PUT((s), strlen(s))
-	PUTS("--" BOUNDARY "\r\nContent-Disposition: form-data; name=\"print\"\r\n\r\n");
-	PUTS(print);
-	PUTS("\r\n--" BOUNDARY "\r\nContent-Disposition: form-data; name=\"path\"\r\n\r\n");
-	PUT(path, path_len);
-	PUTS("\r\n--" BOUNDARY "\r\nContent-Disposition: form-data; name=\"file\"; filename=\"");
-	PUT(name, name_len);
-	PUTS("\"\r\nContent-Type: application/octet-stream\r\n\r\n");
-	PUT(data, size);
-	PUTS("\r\n--" BOUNDARY "--\r\n");
-	body_start = n;
-	hn = snprintf(head, sizeof(head),
-		      "POST %s/api/files/local HTTP/1.1\r\nHost: 127.0.0.1:%d\r\n"
-		      "User-Agent: PrusaSlicer/2.7.1\r\nAccept: */*\r\n%s%s%s"
-		      "Connection: close\r\nContent-Length: %zu\r\n%s"
-		      "Content-Type: multipart/form-data; boundary=" BOUNDARY "\r\n\r\n",
-		      prefix, port, key ? "X-Api-Key: " : "", key ? key : "", key ? "\r\n" : "",
-		      body_start, extra_headers ? extra_headers : "");
-	{
-		char *all = malloc((size_t)hn + n);
-
-		ck_assert(all);
-		memcpy(all, head, (size_t)hn);
-		memcpy(all + hn, req, n);
-		http_raw(port, all, (size_t)hn + (send_body ? n : 0), r);
-		free(all);
-	}
-	free(req);
-#undef PUT
-#undef PUTS
-}
-
-/* Upload a G-code text as PrusaSlicer does. */
-static void upload_text(int port, const char *prefix, const char *key, const char *name,
-			const char *gcode, const char *print, struct resp *r)
-{
-	upload(port, prefix, key, name, strlen(name), "", 0, print, gcode, strlen(gcode), NULL,
-	       true, r);
-}
-
-/* The state of job id in printer's queue (GET .../api/stratum/queue). */
-static const char *job_state(int port, const char *prefix, long long id, bool *interrupted)
-{
-	static char state[32];
-	char path[256];
-	struct resp r;
-	size_t i;
-	json_t *j;
-
-	snprintf(path, sizeof(path), "%s/api/stratum/queue", prefix);
-	http(port, "GET", path, "X-Api-Key: " KEY_READ, NULL, &r);
-	ck_assert_int_eq(r.status, 200);
-	state[0] = '\0';
-	json_array_foreach(json_object_get(r.json, "jobs"), i, j) {
-		if (json_integer_value(json_object_get(j, "id")) == id) {
-			snprintf(state, sizeof(state), "%s",
-				 json_string_value(json_object_get(j, "state")));
-			if (interrupted)
-				*interrupted = json_is_true(json_object_get(j, "interrupted"));
-		}
-	}
-	resp_free(&r);
-	return state;
-}
-
-/* Wait up to secs for job id to reach state. */
-static void wait_state(int port, const char *prefix, long long id, const char *want, int secs)
-{
-	const char *s = "";
-
-	for (int i = 0; i < secs * 50; i++) {
-		s = job_state(port, prefix, id, NULL);
-		if (!strcmp(s, want))
-			return;
-		usleep(20000);
-	}
-	ck_abort_msg("job %lld is '%s', not '%s'", id, s, want);
-}
-
-/* The job number of an upload answer. */
-static long long job_of(const struct resp *r)
-{
-	return (long long)json_integer_value(
-		json_object_get(json_object_get(r->json, "stratum"), "job"));
-}
-
-static void bed_clear(int port, const char *prefix, int want_status)
-{
-	char path[256];
-	struct resp r;
-
-	snprintf(path, sizeof(path), "%s/api/stratum/bed-clear", prefix);
-	http(port, "POST", path, "X-Api-Key: " KEY_CTL, "{}", &r);
-	ck_assert_msg(r.status == want_status, "bed-clear: %d %s", r.status, r.body);
-	resp_free(&r);
-}
 
 /* ---- tests ---------------------------------------------------------------- */
 
@@ -346,20 +51,20 @@ START_TEST(test_version_as_prusaslicer)
 	struct resp r;
 	const char *text;
 
-	write_config(&np, TWO_PRINTERS, 8);
-	node_start(&np);
-	http(np.port, "GET", "/api/version", "X-Api-Key: " KEY_UP, NULL, &r);
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	sv_start(&np);
+	sv_http(np.port, "GET", "/api/version", "X-Api-Key: " KEY_UP, NULL, &r);
 	ck_assert_int_eq(r.status, 200);
-	ck_assert_msg(has_text(r.head, "Content-Type: application/json"), "%s", r.head);
+	ck_assert_msg(sv_has_text(r.head, "Content-Type: application/json"), "%s", r.head);
 	/* PrusaSlicer's test(): "api" present, "text" starting with "OctoPrint". */
 	ck_assert_str_eq(json_string_value(json_object_get(r.json, "api")), "0.1");
 	ck_assert(json_is_string(json_object_get(r.json, "server")));
 	text = json_string_value(json_object_get(r.json, "text"));
 	ck_assert(text && !strncmp(text, "OctoPrint", 9));
-	resp_free(&r);
+	sv_resp_free(&r);
 	/* Bearer works as well, and under the printer's prefix. */
-	expect(np.port, "GET", "/p/ender/api/version", "Authorization: Bearer " KEY_READ, NULL, 200);
-	node_stop(&np);
+	sv_expect(np.port, "GET", "/p/ender/api/version", "Authorization: Bearer " KEY_READ, NULL, 200);
+	sv_stop(&np);
 }
 END_TEST
 
@@ -368,28 +73,28 @@ START_TEST(test_auth)
 	struct node_proc np;
 	struct resp r;
 
-	write_config(&np, TWO_PRINTERS, 8);
-	node_start(&np);
-	http(np.port, "GET", "/api/version", NULL, NULL, &r);
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	sv_start(&np);
+	sv_http(np.port, "GET", "/api/version", NULL, NULL, &r);
 	ck_assert_int_eq(r.status, 403);
 	ck_assert(json_is_string(json_object_get(r.json, "error")));
-	resp_free(&r);
-	expect(np.port, "GET", "/api/job", "X-Api-Key: " KEY_UP "x", NULL, 403);
-	expect(np.port, "GET", "/api/job", "X-Api-Key: upload-key-012345678", NULL, 403); /* a prefix of a key is not the key */
-	expect(np.port, "GET", "/api/printer", "Authorization: Bearer nope-nope-nope-nope", NULL, 403);
+	sv_resp_free(&r);
+	sv_expect(np.port, "GET", "/api/job", "X-Api-Key: " KEY_UP "x", NULL, 403);
+	sv_expect(np.port, "GET", "/api/job", "X-Api-Key: upload-key-012345678", NULL, 403); /* a prefix of a key is not the key */
+	sv_expect(np.port, "GET", "/api/printer", "Authorization: Bearer nope-nope-nope-nope", NULL, 403);
 	/* Roles: read cannot upload; upload cannot control. */
-	upload_text(np.port, "", KEY_READ, "a.gcode", "G28\n", "false", &r);
+	sv_upload_text(np.port, "", KEY_READ, "a.gcode", "G28\n", "false", &r);
 	ck_assert_int_eq(r.status, 403);
-	resp_free(&r);
-	upload_text(np.port, "", NULL, "a.gcode", "G28\n", "true", &r);
+	sv_resp_free(&r);
+	sv_upload_text(np.port, "", NULL, "a.gcode", "G28\n", "true", &r);
 	ck_assert_int_eq(r.status, 403);
-	resp_free(&r);
-	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_UP, "{\"command\":\"cancel\"}", 403);
-	expect(np.port, "POST", "/api/printer/command", "X-Api-Key: " KEY_READ,
+	sv_resp_free(&r);
+	sv_expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_UP, "{\"command\":\"cancel\"}", 403);
+	sv_expect(np.port, "POST", "/api/printer/command", "X-Api-Key: " KEY_READ,
 	     "{\"command\":\"G28\"}", 403);
 	/* Nothing was stored by the refused uploads. */
 	ck_assert(!tu_file_exists(tu_path("node/data/files/mk3s/a.gcode")));
-	node_stop(&np);
+	sv_stop(&np);
 }
 END_TEST
 
@@ -401,11 +106,11 @@ START_TEST(test_upload_as_prusaslicer)
 	long long id;
 	const char *gcode = "; sliced elsewhere\nM104 S215\nG28\nG1 X10 Y10 F3000\nM140 S60\n";
 
-	write_config(&np, TWO_PRINTERS, 8);
-	node_start(&np);
-	upload_text(np.port, "", KEY_UP, "part one.gcode", gcode, "true", &r);
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	sv_start(&np);
+	sv_upload_text(np.port, "", KEY_UP, "part one.gcode", gcode, "true", &r);
 	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
-	ck_assert_msg(has_text(r.head, "\r\nLocation: http://127.0.0.1:"), "%s", r.head);
+	ck_assert_msg(sv_has_text(r.head, "\r\nLocation: http://127.0.0.1:"), "%s", r.head);
 	ck_assert_msg(strstr(r.head, "/api/files/local/part%20one.gcode"), "%s", r.head);
 	local = json_object_get(json_object_get(r.json, "files"), "local");
 	ck_assert_str_eq(json_string_value(json_object_get(local, "name")), "part one.gcode");
@@ -413,10 +118,10 @@ START_TEST(test_upload_as_prusaslicer)
 	ck_assert(json_is_string(json_object_get(json_object_get(local, "refs"), "resource")));
 	ck_assert(json_is_true(json_object_get(r.json, "done")));
 	ck_assert(json_is_true(json_object_get(r.json, "effectivePrint")));
-	id = job_of(&r);
+	id = sv_job_of(&r);
 	ck_assert(id > 0);
-	resp_free(&r);
-	wait_state(np.port, "/p/mk3s", id, "done", 10);
+	sv_resp_free(&r);
+	sv_wait_state(np.port, "/p/mk3s", id, "done", 10);
 	/* Stored as is. */
 	{
 		FILE *f = fopen(tu_path("node/data/files/mk3s/part one.gcode"), "rb");
@@ -428,37 +133,37 @@ START_TEST(test_upload_as_prusaslicer)
 		ck_assert_str_eq(buf, gcode);
 	}
 	/* The job API names the file; the printer reports the temperatures it set. */
-	http(np.port, "GET", "/api/job", "X-Api-Key: " KEY_READ, NULL, &r);
+	sv_http(np.port, "GET", "/api/job", "X-Api-Key: " KEY_READ, NULL, &r);
 	ck_assert_int_eq(r.status, 200);
 	ck_assert_str_eq(json_string_value(json_object_get(
 				 json_object_get(json_object_get(r.json, "job"), "file"), "name")),
 			 "part one.gcode");
-	resp_free(&r);
-	http(np.port, "GET", "/api/printer", "X-Api-Key: " KEY_READ, NULL, &r);
+	sv_resp_free(&r);
+	sv_http(np.port, "GET", "/api/printer", "X-Api-Key: " KEY_READ, NULL, &r);
 	ck_assert_int_eq(r.status, 200);
 	ck_assert(json_real_value(json_object_get(
 			  json_object_get(json_object_get(r.json, "temperature"), "tool0"),
 			  "target")) == 215);
-	resp_free(&r);
+	sv_resp_free(&r);
 	/* GET /api/job always has job.file.name, null when nothing is selected. */
-	http(np.port, "GET", "/p/ender/api/job", "X-Api-Key: " KEY_READ, NULL, &r);
+	sv_http(np.port, "GET", "/p/ender/api/job", "X-Api-Key: " KEY_READ, NULL, &r);
 	ck_assert_int_eq(r.status, 200);
 	ck_assert(json_is_null(json_object_get(
 		json_object_get(json_object_get(r.json, "job"), "file"), "name")));
-	resp_free(&r);
+	sv_resp_free(&r);
 	/* The other OctoPrint calls slicers read. */
-	http(np.port, "GET", "/api/connection", "X-Api-Key: " KEY_READ, NULL, &r);
+	sv_http(np.port, "GET", "/api/connection", "X-Api-Key: " KEY_READ, NULL, &r);
 	ck_assert_int_eq(r.status, 200);
 	ck_assert_str_eq(json_string_value(json_object_get(json_object_get(r.json, "current"),
 							   "state")), "Operational");
-	resp_free(&r);
-	expect(np.port, "GET", "/api/settings", "X-Api-Key: " KEY_READ, NULL, 200);
-	http(np.port, "GET", "/api/printerprofiles", "X-Api-Key: " KEY_READ, NULL, &r);
+	sv_resp_free(&r);
+	sv_expect(np.port, "GET", "/api/settings", "X-Api-Key: " KEY_READ, NULL, 200);
+	sv_http(np.port, "GET", "/api/printerprofiles", "X-Api-Key: " KEY_READ, NULL, &r);
 	ck_assert_int_eq(r.status, 200);
 	ck_assert(json_real_value(json_object_get(json_object_get(json_object_get(json_object_get(
 			  r.json, "profiles"), "mk3s"), "volume"), "width")) > 200);
-	resp_free(&r);
-	node_stop(&np);
+	sv_resp_free(&r);
+	sv_stop(&np);
 }
 END_TEST
 
@@ -470,28 +175,28 @@ START_TEST(test_upload_for_another_printer)
 	/* The Creator Pro's G-code, uploaded to the MK3S. */
 	const char *gcode = "; generated by Stratum\n; printer_settings_id = flashforge-creator-pro\n"
 			    "; printer_model = FFCP\n;LAYER_CHANGE\nG1 X10 Y10 F3000\n";
-	/* upload() writes the print field's value raw: a force field follows it */
+	/* sv_upload() writes the print field's value raw: a force field follows it */
 	const char *forced = "true\r\n--" BOUNDARY "\r\nContent-Disposition: form-data; "
 			     "name=\"force\"\r\n\r\ntrue";
 	struct node_proc np;
 	struct resp r;
 
-	write_config(&np, TWO_PRINTERS, 8);
-	node_start(&np);
-	upload_text(np.port, "", KEY_UP, "ffcp.gcode", gcode, "true", &r);
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	sv_start(&np);
+	sv_upload_text(np.port, "", KEY_UP, "ffcp.gcode", gcode, "true", &r);
 	ck_assert_msg(r.status == 409, "%d %s", r.status, r.body);
 	ck_assert_msg(strstr(r.body, "ffcp.gcode was sliced for printer 'flashforge-creator-pro' "
 				     "(printer_model FFCP), not for 'prusa-i3-mk3s' "
 				     "(printer_model MK3S)"),
 		      "%s", r.body);
-	resp_free(&r);
+	sv_resp_free(&r);
 	ck_assert(!tu_file_exists(tu_path("node/data/files/mk3s/ffcp.gcode")));
-	upload_text(np.port, "", KEY_UP, "ffcp.gcode", gcode, forced, &r);
+	sv_upload_text(np.port, "", KEY_UP, "ffcp.gcode", gcode, forced, &r);
 	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
-	ck_assert(job_of(&r) > 0);
-	resp_free(&r);
+	ck_assert(sv_job_of(&r) > 0);
+	sv_resp_free(&r);
 	ck_assert(tu_file_exists(tu_path("node/data/files/mk3s/ffcp.gcode")));
-	node_stop(&np);
+	sv_stop(&np);
 }
 END_TEST
 
@@ -506,25 +211,25 @@ START_TEST(test_oversize)
 	ck_assert(data);
 	memset(data, ';', huge);
 	data[big - 1] = '\n';
-	write_config(&np, TWO_PRINTERS, 1);
-	node_start(&np);
+	sv_write_config(&np, TWO_PRINTERS, 1);
+	sv_start(&np);
 	/* curl sends Expect: 100-continue for a large body and waits: answered at once. */
-	upload(np.port, "", KEY_UP, "big.gcode", 9, "", 0, "false", data, huge,
+	sv_upload(np.port, "", KEY_UP, "big.gcode", 9, "", 0, "false", data, huge,
 	       "Expect: 100-continue\r\n", false, &r);
 	ck_assert_int_eq(r.status, 413);
-	resp_free(&r);
+	sv_resp_free(&r);
 	/* A body over the limit sent in full is counted and refused. */
-	upload(np.port, "", KEY_UP, "big.gcode", 9, "", 0, "false", data, big, NULL, true, &r);
+	sv_upload(np.port, "", KEY_UP, "big.gcode", 9, "", 0, "false", data, big, NULL, true, &r);
 	ck_assert_msg(r.status == 413, "%d %s", r.status, r.body);
-	resp_free(&r);
+	sv_resp_free(&r);
 	ck_assert(!tu_file_exists(tu_path("node/data/files/mk3s/big.gcode")));
 	/* Just under the limit is fine. */
-	upload(np.port, "", KEY_UP, "big.gcode", 9, "", 0, "false", data, 1u << 20, NULL, true,
+	sv_upload(np.port, "", KEY_UP, "big.gcode", 9, "", 0, "false", data, 1u << 20, NULL, true,
 	       &r);
 	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
-	resp_free(&r);
+	sv_resp_free(&r);
 	free(data);
-	node_stop(&np);
+	sv_stop(&np);
 }
 END_TEST
 
@@ -555,33 +260,33 @@ START_TEST(test_hostile_names)
 	struct node_proc np;
 	struct resp r;
 
-	write_config(&np, TWO_PRINTERS, 8);
-	node_start(&np);
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	sv_start(&np);
 	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
-		upload(np.port, "", KEY_UP, cases[i].name, cases[i].len, cases[i].path,
+		sv_upload(np.port, "", KEY_UP, cases[i].name, cases[i].len, cases[i].path,
 		       cases[i].path_len, "false", "G28\n", 4, NULL, true, &r);
 		ck_assert_msg(r.status == cases[i].status, "case %zu: %d %s", i, r.status, r.body);
 		ck_assert(json_is_string(json_object_get(r.json, "error")));
-		resp_free(&r);
+		sv_resp_free(&r);
 	}
 	memset(longname, 'a', sizeof(longname));
 	memcpy(longname + sizeof(longname) - 6, ".gcode", 6);
-	upload(np.port, "", KEY_UP, longname, sizeof(longname), "", 0, "false", "G28\n", 4, NULL,
+	sv_upload(np.port, "", KEY_UP, longname, sizeof(longname), "", 0, "false", "G28\n", 4, NULL,
 	       true, &r);
 	ck_assert_msg(r.status == 400, "%d %s", r.status, r.body);
-	resp_free(&r);
+	sv_resp_free(&r);
 	/* Nothing landed outside the files folder or in it. */
 	ck_assert(!tu_file_exists(tu_path("node/data/files/x.gcode")));
 	ck_assert(!tu_file_exists(tu_path("node/data/x.gcode")));
 	ck_assert(!tu_file_exists(tu_path("node/x.gcode")));
 	ck_assert(!tu_file_exists(tu_path("node/data/files/mk3s/x.exe")));
 	/* A folder given in path is fine when its parts are. */
-	upload(np.port, "", KEY_UP, "x.gcode", 7, "plates/left", 11, "false", "G28\n", 4, NULL,
+	sv_upload(np.port, "", KEY_UP, "x.gcode", 7, "plates/left", 11, "false", "G28\n", 4, NULL,
 	       true, &r);
 	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
-	resp_free(&r);
+	sv_resp_free(&r);
 	ck_assert(tu_file_exists(tu_path("node/data/files/mk3s/plates/left/x.gcode")));
-	node_stop(&np);
+	sv_stop(&np);
 }
 END_TEST
 
@@ -627,15 +332,15 @@ START_TEST(test_chunked_refused_stops)
 	struct node_proc np;
 	size_t sent;
 
-	write_config(&np, TWO_PRINTERS, 1);
-	node_start(&np);
+	sv_write_config(&np, TWO_PRINTERS, 1);
+	sv_start(&np);
 	sent = chunked_sent(np.port, "/api/job", KEY_CTL, "application/json");
 	ck_assert_msg(sent < (16u << 20), "%zu bytes", sent);
 	sent = chunked_sent(np.port, "/api/files/local", KEY_UP,
 			    "multipart/form-data; boundary=" BOUNDARY);
 	ck_assert_msg(sent < (16u << 20), "%zu bytes", sent);
-	expect(np.port, "GET", "/api/version", "X-Api-Key: " KEY_READ, NULL, 200);
-	node_stop(&np);
+	sv_expect(np.port, "GET", "/api/version", "X-Api-Key: " KEY_READ, NULL, 200);
+	sv_stop(&np);
 }
 END_TEST
 
@@ -650,7 +355,7 @@ static void post_form(int port, const char *body, struct resp *r)
 			 port, strlen(body), body);
 
 	ck_assert(n < (int)sizeof(req));
-	http_raw(port, req, (size_t)n, r);
+	sv_http_raw(port, req, (size_t)n, r);
 }
 
 /* Whether dir holds no entry but . and .. */
@@ -677,28 +382,28 @@ START_TEST(test_malformed_forms)
 	struct node_proc np;
 	struct resp r;
 
-	write_config(&np, TWO_PRINTERS, 8);
-	node_start(&np);
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	sv_start(&np);
 	post_form(np.port, cut, &r);
-	ck_assert_msg(r.status == 400 && has_text(r.body, "closing boundary"), "%d %s", r.status,
+	ck_assert_msg(r.status == 400 && sv_has_text(r.body, "closing boundary"), "%d %s", r.status,
 		      r.body);
-	resp_free(&r);
+	sv_resp_free(&r);
 	post_form(np.port, two, &r);
-	ck_assert_msg(r.status == 400 && has_text(r.body, "more than one"), "%d %s", r.status,
+	ck_assert_msg(r.status == 400 && sv_has_text(r.body, "more than one"), "%d %s", r.status,
 		      r.body);
-	resp_free(&r);
+	sv_resp_free(&r);
 	post_form(np.port, same, &r);
 	ck_assert_msg(r.status == 400, "%d %s", r.status, r.body);
-	resp_free(&r);
+	sv_resp_free(&r);
 	ck_assert(!tu_file_exists(tu_path("node/data/files/mk3s/cut.gcode")));
 	ck_assert(!tu_file_exists(tu_path("node/data/files/mk3s/a.gcode")));
 	ck_assert(!tu_file_exists(tu_path("node/data/files/mk3s/b.gcode")));
 	ck_assert(dir_empty(tu_path("node/data/tmp")));
 	post_form(np.port, ok, &r);
 	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
-	resp_free(&r);
+	sv_resp_free(&r);
 	ck_assert(tu_file_exists(tu_path("node/data/files/mk3s/ok.gcode")));
-	node_stop(&np);
+	sv_stop(&np);
 #undef FILE_PART
 }
 END_TEST
@@ -709,17 +414,17 @@ START_TEST(test_tmp_cleaned_at_start)
 {
 	struct node_proc np;
 
-	write_config(&np, TWO_PRINTERS, 8);
-	node_start(&np);
-	node_stop(&np);
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	sv_start(&np);
+	sv_stop(&np);
 	tu_write_str(tu_path("node/data/tmp/upload-Ab12Cd"), "G28\nG1 X");
 	tu_write_str(tu_path("node/data/tmp/mqtt-Ef34Gh"), "G28\n");
-	node_start(&np);
+	sv_start(&np);
 	ck_assert(!tu_file_exists(tu_path("node/data/tmp/upload-Ab12Cd")));
 	ck_assert(!tu_file_exists(tu_path("node/data/tmp/mqtt-Ef34Gh")));
 	ck_assert(dir_empty(tu_path("node/data/tmp")));
-	expect(np.port, "GET", "/api/version", "X-Api-Key: " KEY_READ, NULL, 200);
-	node_stop(&np);
+	sv_expect(np.port, "GET", "/api/version", "X-Api-Key: " KEY_READ, NULL, 200);
+	sv_stop(&np);
 }
 END_TEST
 
@@ -733,14 +438,15 @@ START_TEST(test_query_keys_not_logged)
 	char *log;
 	long size;
 
-	write_config(&np, TWO_PRINTERS, 8);
-	node_start(&np);
-	http(np.port, "GET", "/?key=" KEY_READ, NULL, NULL, &r);
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	sv_start(&np);
+	sv_http(np.port, "GET", "/?key=" KEY_READ, NULL, NULL, &r);
 	ck_assert_int_eq(r.status, 200);
-	resp_free(&r);
-	expect(np.port, "GET", "/api/version?apikey=" KEY_CTL, "X-Api-Key: " KEY_READ, NULL, 200);
-	expect(np.port, "GET", "/api/job?x=1&apikey=" KEY_UP, NULL, NULL, 403);
-	node_stop(&np);
+	sv_resp_free(&r);
+	sv_expect(np.port, "GET", "/api/version?apikey=" KEY_CTL, "X-Api-Key: " KEY_READ, NULL, 200);
+	/* OctoPrint's ?apikey= form is accepted (check_octoapi.c); as every query, not logged */
+	sv_expect(np.port, "GET", "/api/job?x=1&apikey=" KEY_UP, NULL, NULL, 200);
+	sv_stop(&np);
 	ck_assert((f = fopen(np.log, "r")) != NULL);
 	fseek(f, 0, SEEK_END);
 	size = ftell(f);
@@ -808,9 +514,9 @@ START_TEST(test_connection_limits)
 	int held[12];
 	char buf[64];
 
-	write_config(&np, TWO_PRINTERS, 8);
+	sv_write_config(&np, TWO_PRINTERS, 8);
 	tu_write_str(np.config, limits);
-	node_start(&np);
+	sv_start(&np);
 	for (int i = 0; i < 5; i++)
 		held[i] = connect_from(np.port, "127.0.0.1");
 	usleep(200000);
@@ -830,7 +536,7 @@ START_TEST(test_connection_limits)
 		close(held[i]);
 	}
 	ck_assert_int_eq(version_from(np.port, "127.0.0.1"), 200);
-	node_stop(&np);
+	sv_stop(&np);
 }
 END_TEST
 
@@ -877,8 +583,8 @@ START_TEST(test_refused_before_body)
 	struct node_proc np;
 	struct timespec t0, t1;
 
-	write_config(&np, TWO_PRINTERS, 8);
-	node_start(&np);
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	sv_start(&np);
 	clock_gettime(CLOCK_MONOTONIC, &t0);
 	ck_assert_int_eq(refused_at_once(np.port, "POST", "/api/files/local", NULL, multipart),
 			 403);
@@ -897,8 +603,8 @@ START_TEST(test_refused_before_body)
 			 413);
 	clock_gettime(CLOCK_MONOTONIC, &t1);
 	ck_assert_msg(t1.tv_sec - t0.tv_sec < 5, "%ld s", (long)(t1.tv_sec - t0.tv_sec));
-	expect(np.port, "GET", "/api/version", "X-Api-Key: " KEY_READ, NULL, 200);
-	node_stop(&np);
+	sv_expect(np.port, "GET", "/api/version", "X-Api-Key: " KEY_READ, NULL, 200);
+	sv_stop(&np);
 }
 END_TEST
 
@@ -920,8 +626,8 @@ START_TEST(test_nameless_part)
 	struct node_proc np;
 	struct resp r;
 
-	write_config(&np, TWO_PRINTERS, 8);
-	node_start(&np);
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	sv_start(&np);
 	for (size_t i = 0; i < sizeof(parts) / sizeof(parts[0]); i++) {
 		for (int with_file = 0; with_file < 2; with_file++) {
 			char body[1024], req[2048];
@@ -940,15 +646,15 @@ START_TEST(test_nameless_part)
 					 "boundary=" BOUNDARY "\r\n\r\n%s",
 					 np.port, bn, body);
 
-			http_raw(np.port, req, (size_t)n, &r);
+			sv_http_raw(np.port, req, (size_t)n, &r);
 			ck_assert_msg(r.status == (with_file ? 201 : 400), "part %zu, file %d: %d %s",
 				      i, with_file, r.status, r.body);
-			resp_free(&r);
-			expect(np.port, "GET", "/api/version", "X-Api-Key: " KEY_READ, NULL, 200);
+			sv_resp_free(&r);
+			sv_expect(np.port, "GET", "/api/version", "X-Api-Key: " KEY_READ, NULL, 200);
 		}
 	}
 	ck_assert(tu_file_exists(tu_path("node/data/files/mk3s/ok.gcode")));
-	node_stop(&np);
+	sv_stop(&np);
 }
 END_TEST
 
@@ -979,26 +685,26 @@ START_TEST(test_stl_two_printers)
 	char *stl = cube_stl(&len);
 	long long a, b, c;
 
-	write_config(&np, TWO_PRINTERS, 8);
-	node_start(&np);
-	upload(np.port, "/p/mk3s", KEY_UP, "cube.stl", 8, "", 0, "true", stl, len, NULL, true, &r);
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	sv_start(&np);
+	sv_upload(np.port, "/p/mk3s", KEY_UP, "cube.stl", 8, "", 0, "true", stl, len, NULL, true, &r);
 	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
-	a = job_of(&r);
-	resp_free(&r);
+	a = sv_job_of(&r);
+	sv_resp_free(&r);
 	/* the dwell outlasts the cube's repair, slice and print under a
 	 * sanitizer on a loaded machine (1.5 s did not, now and then) */
-	upload_text(np.port, "/p/ender", KEY_UP, "hold.gcode", "G28\nG4 P8000\nG1 X5\n", "true", &r);
+	sv_upload_text(np.port, "/p/ender", KEY_UP, "hold.gcode", "G28\nG4 P8000\nG1 X5\n", "true", &r);
 	ck_assert_int_eq(r.status, 201);
-	b = job_of(&r);
-	resp_free(&r);
+	b = sv_job_of(&r);
+	sv_resp_free(&r);
 	/* Both printers work at once: ender holds in its dwell while mk3s slices and prints. */
-	wait_state(np.port, "/p/ender", b, "printing", 5);
-	wait_state(np.port, "/p/mk3s", a, "done", 30);
-	ck_assert_str_eq(job_state(np.port, "/p/ender", b, NULL), "printing");
+	sv_wait_state(np.port, "/p/ender", b, "printing", 5);
+	sv_wait_state(np.port, "/p/mk3s", a, "done", 30);
+	ck_assert_str_eq(sv_job_state(np.port, "/p/ender", b, NULL), "printing");
 	/* Each queue holds its own jobs only. */
-	ck_assert_str_eq(job_state(np.port, "/p/mk3s", b, NULL), "");
-	ck_assert_str_eq(job_state(np.port, "/p/ender", a, NULL), "");
-	wait_state(np.port, "/p/ender", b, "done", 15);
+	ck_assert_str_eq(sv_job_state(np.port, "/p/mk3s", b, NULL), "");
+	ck_assert_str_eq(sv_job_state(np.port, "/p/ender", a, NULL), "");
+	sv_wait_state(np.port, "/p/ender", b, "done", 15);
 	/* The sliced G-code is the profile's (PrusaSlicer-style layer comments). */
 	{
 		char path[600];
@@ -1015,20 +721,20 @@ START_TEST(test_stl_two_printers)
 		ck_assert(strstr(buf, ";LAYER_CHANGE"));
 	}
 	/* Between jobs the printer waits until the bed is cleared. */
-	upload_text(np.port, "/p/mk3s", KEY_UP, "next.gcode", "G28\n", "true", &r);
-	c = job_of(&r);
-	resp_free(&r);
+	sv_upload_text(np.port, "/p/mk3s", KEY_UP, "next.gcode", "G28\n", "true", &r);
+	c = sv_job_of(&r);
+	sv_resp_free(&r);
 	usleep(1500000);
-	ck_assert_str_eq(job_state(np.port, "/p/mk3s", c, NULL), "queued");
-	bed_clear(np.port, "/p/mk3s", 204);
-	wait_state(np.port, "/p/mk3s", c, "done", 5);
+	ck_assert_str_eq(sv_job_state(np.port, "/p/mk3s", c, NULL), "queued");
+	sv_bed_clear(np.port, "/p/mk3s", 204);
+	sv_wait_state(np.port, "/p/mk3s", c, "done", 5);
 	/* A model that is no solid fails with a message, the node goes on. */
-	upload_text(np.port, "/p/ender", KEY_UP, "junk.stl", "solid x\nendsolid x\n", "true", &r);
+	sv_upload_text(np.port, "/p/ender", KEY_UP, "junk.stl", "solid x\nendsolid x\n", "true", &r);
 	ck_assert_int_eq(r.status, 201);
-	wait_state(np.port, "/p/ender", job_of(&r), "failed", 10);
-	resp_free(&r);
+	sv_wait_state(np.port, "/p/ender", sv_job_of(&r), "failed", 10);
+	sv_resp_free(&r);
 	free(stl);
-	node_stop(&np);
+	sv_stop(&np);
 }
 END_TEST
 
@@ -1048,15 +754,15 @@ static void expect_node_slice(const char *name, const char *local, const char *b
 	long long id;
 	int rc;
 
-	write_config(&np, TWO_PRINTERS, 8);
-	node_start(&np);
-	upload(np.port, "/p/mk3s", KEY_UP, name, strlen(name), "", 0, "true", body, len, NULL,
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	sv_start(&np);
+	sv_upload(np.port, "/p/mk3s", KEY_UP, name, strlen(name), "", 0, "true", body, len, NULL,
 	       true, &r);
 	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
-	id = job_of(&r);
-	resp_free(&r);
-	wait_state(np.port, "/p/mk3s", id, "done", 30);
-	node_stop(&np);
+	id = sv_job_of(&r);
+	sv_resp_free(&r);
+	sv_wait_state(np.port, "/p/mk3s", id, "done", 30);
+	sv_stop(&np);
 	snprintf(path, sizeof(path), "%s/data/sliced/job-%lld.gcode", np.dir, id);
 	snprintf(mine, sizeof(mine), "%s", tu_path("slice-node.gcode"));
 	rc = tu_run(out, sizeof(out), "slice %s -o %s --printer prusa-i3-mk3s >/dev/null 2>&1 && "
@@ -1091,7 +797,7 @@ START_TEST(test_node_slices_two_object_3mf)
 END_TEST
 
 /* The value of the upload's "print" field followed by the form fields of
- * pairs (name, value, ..., NULL): upload() writes print as it is, so the
+ * pairs (name, value, ..., NULL): sv_upload() writes print as it is, so the
  * fields ride behind it as parts of their own, before the file. */
 static const char *print_and_fields(char *buf, size_t cap, const char *print,
 				    const char *const *pairs)
@@ -1134,29 +840,29 @@ START_TEST(test_upload_settings)
 	json_t *j, *want = json_pack("[[ss][ss]]", "layer-height", "0.3", "set", "perimeters=3");
 	int rc;
 
-	write_config(&np, TWO_PRINTERS, 8);
-	node_start(&np);
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	sv_start(&np);
 	for (i = 0; i < sizeof(bad) / sizeof(bad[0]); i++) {
-		upload(np.port, "/p/mk3s", KEY_UP, bad[i].name, strlen(bad[i].name), "", 0,
+		sv_upload(np.port, "/p/mk3s", KEY_UP, bad[i].name, strlen(bad[i].name), "", 0,
 		       print_and_fields(print, sizeof(print), bad[i].print, bad[i].fields), stl,
 		       len, NULL, true, &r);
 		ck_assert_msg(r.status == 400, "%s: %d %s", bad[i].says, r.status, r.body);
-		ck_assert_msg(has_text(r.body, bad[i].says), "'%s' not in %s", bad[i].says, r.body);
-		resp_free(&r);
+		ck_assert_msg(sv_has_text(r.body, bad[i].says), "'%s' not in %s", bad[i].says, r.body);
+		sv_resp_free(&r);
 	}
-	upload(np.port, "/p/mk3s", KEY_UP, "cube.stl", 8, "", 0,
+	sv_upload(np.port, "/p/mk3s", KEY_UP, "cube.stl", 8, "", 0,
 	       print_and_fields(print, sizeof(print), "true", good), stl, len, NULL, true, &r);
 	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
-	id = job_of(&r);
-	resp_free(&r);
-	wait_state(np.port, "/p/mk3s", id, "done", 30);
-	http(np.port, "GET", "/p/mk3s/api/stratum/queue", "X-Api-Key: " KEY_READ, NULL, &r);
+	id = sv_job_of(&r);
+	sv_resp_free(&r);
+	sv_wait_state(np.port, "/p/mk3s", id, "done", 30);
+	sv_http(np.port, "GET", "/p/mk3s/api/stratum/queue", "X-Api-Key: " KEY_READ, NULL, &r);
 	json_array_foreach(json_object_get(r.json, "jobs"), i, j)
 		if (json_integer_value(json_object_get(j, "id")) == id)
 			ck_assert_msg(json_equal(json_object_get(j, "settings"), want), "%s", r.body);
-	resp_free(&r);
+	sv_resp_free(&r);
 	json_decref(want);
-	node_stop(&np);
+	sv_stop(&np);
 	snprintf(path, sizeof(path), "%s/data/sliced/job-%lld.gcode", np.dir, id);
 	snprintf(mine, sizeof(mine), "%s", tu_path("slice-cube.gcode"));
 	rc = tu_run(out, sizeof(out),
@@ -1174,40 +880,40 @@ START_TEST(test_pause_resume_cancel)
 	struct resp r;
 	long long id;
 
-	write_config(&np, TWO_PRINTERS, 8);
-	node_start(&np);
-	upload_text(np.port, "", KEY_UP, "long.gcode", "G28\nG4 P400\nG4 P400\nG4 P400\nG4 P20000\n",
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	sv_start(&np);
+	sv_upload_text(np.port, "", KEY_UP, "long.gcode", "G28\nG4 P400\nG4 P400\nG4 P400\nG4 P20000\n",
 		    "true", &r);
-	id = job_of(&r);
-	resp_free(&r);
-	wait_state(np.port, "", id, "printing", 5);
+	id = sv_job_of(&r);
+	sv_resp_free(&r);
+	sv_wait_state(np.port, "", id, "printing", 5);
 	/* Overwriting the file being printed is refused. */
-	upload_text(np.port, "", KEY_UP, "long.gcode", "G28\n", "false", &r);
+	sv_upload_text(np.port, "", KEY_UP, "long.gcode", "G28\n", "false", &r);
 	ck_assert_int_eq(r.status, 409);
-	resp_free(&r);
-	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL,
+	sv_resp_free(&r);
+	sv_expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL,
 	     "{\"command\":\"pause\",\"action\":\"pause\"}", 204);
-	ck_assert_str_eq(job_state(np.port, "", id, NULL), "paused");
+	ck_assert_str_eq(sv_job_state(np.port, "", id, NULL), "paused");
 	usleep(300000);
-	http(np.port, "GET", "/api/job", "X-Api-Key: " KEY_READ, NULL, &r);
+	sv_http(np.port, "GET", "/api/job", "X-Api-Key: " KEY_READ, NULL, &r);
 	ck_assert_str_eq(json_string_value(json_object_get(r.json, "state")), "Paused");
-	resp_free(&r);
+	sv_resp_free(&r);
 	/* Commands are taken between jobs only. */
-	expect(np.port, "POST", "/api/printer/command", "X-Api-Key: " KEY_CTL,
+	sv_expect(np.port, "POST", "/api/printer/command", "X-Api-Key: " KEY_CTL,
 	     "{\"commands\":[\"M105\"]}", 409);
-	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL,
+	sv_expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL,
 	     "{\"command\":\"pause\",\"action\":\"resume\"}", 204);
-	ck_assert_str_eq(job_state(np.port, "", id, NULL), "printing");
-	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL, "{\"command\":\"cancel\"}", 204);
-	wait_state(np.port, "", id, "cancelled", 5);
-	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL, "{\"command\":\"cancel\"}", 409); /* nothing printing */
+	ck_assert_str_eq(sv_job_state(np.port, "", id, NULL), "printing");
+	sv_expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL, "{\"command\":\"cancel\"}", 204);
+	sv_wait_state(np.port, "", id, "cancelled", 5);
+	sv_expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL, "{\"command\":\"cancel\"}", 409); /* nothing printing */
 	/* A bad command line is refused whole; a good one is accepted. */
-	expect(np.port, "POST", "/api/printer/command", "X-Api-Key: " KEY_CTL,
+	sv_expect(np.port, "POST", "/api/printer/command", "X-Api-Key: " KEY_CTL,
 	     "{\"commands\":[\"M105\",\"G1 X1 X2\"]}", 400);
-	expect(np.port, "POST", "/api/printer/command", "X-Api-Key: " KEY_CTL,
+	sv_expect(np.port, "POST", "/api/printer/command", "X-Api-Key: " KEY_CTL,
 	     "{\"command\":\"M105\"}", 204);
-	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL, "not json", 400);
-	node_stop(&np);
+	sv_expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL, "not json", 400);
+	sv_stop(&np);
 }
 END_TEST
 
@@ -1219,46 +925,46 @@ START_TEST(test_kill9_restart)
 	bool interrupted = false;
 	int st;
 
-	write_config(&np, TWO_PRINTERS, 8);
-	node_start(&np);
-	upload_text(np.port, "", KEY_UP, "first.gcode", "G28\nG1 X1\nG4 S30\nG1 X2\nG1 X3\n", "true",
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	sv_start(&np);
+	sv_upload_text(np.port, "", KEY_UP, "first.gcode", "G28\nG1 X1\nG4 S30\nG1 X2\nG1 X3\n", "true",
 		    &r);
-	a = job_of(&r);
-	resp_free(&r);
-	upload_text(np.port, "", KEY_UP, "second.gcode", "G28\n", "true", &r);
-	b = job_of(&r);
-	resp_free(&r);
-	wait_state(np.port, "", a, "printing", 5);
+	a = sv_job_of(&r);
+	sv_resp_free(&r);
+	sv_upload_text(np.port, "", KEY_UP, "second.gcode", "G28\n", "true", &r);
+	b = sv_job_of(&r);
+	sv_resp_free(&r);
+	sv_wait_state(np.port, "", a, "printing", 5);
 	usleep(1200000); /* the progress ticker stores the position */
 	ck_assert(kill(np.pid, SIGKILL) == 0);
 	ck_assert(waitpid(np.pid, &st, 0) == np.pid);
 
-	node_start(&np);
+	sv_start(&np);
 	/* Same jobs; the print is marked interrupted and not restarted on its own. */
-	ck_assert_str_eq(job_state(np.port, "", a, &interrupted), "paused");
+	ck_assert_str_eq(sv_job_state(np.port, "", a, &interrupted), "paused");
 	ck_assert(interrupted);
-	ck_assert_str_eq(job_state(np.port, "", b, NULL), "queued");
-	http(np.port, "GET", "/api/job", "X-Api-Key: " KEY_READ, NULL, &r);
+	ck_assert_str_eq(sv_job_state(np.port, "", b, NULL), "queued");
+	sv_http(np.port, "GET", "/api/job", "X-Api-Key: " KEY_READ, NULL, &r);
 	ck_assert_str_eq(json_string_value(json_object_get(r.json, "state")), "Paused");
 	ck_assert_str_eq(json_string_value(json_object_get(
 				 json_object_get(json_object_get(r.json, "job"), "file"), "name")),
 			 "first.gcode");
 	ck_assert(json_integer_value(json_object_get(json_object_get(r.json, "progress"),
 						     "filepos")) >= 14);
-	resp_free(&r);
+	sv_resp_free(&r);
 	usleep(1200000);
-	ck_assert_str_eq(job_state(np.port, "", a, NULL), "paused");
-	ck_assert_str_eq(job_state(np.port, "", b, NULL), "queued");
+	ck_assert_str_eq(sv_job_state(np.port, "", a, NULL), "paused");
+	ck_assert_str_eq(sv_job_state(np.port, "", b, NULL), "queued");
 	/* The bed is not clear while the interrupted part is on it. */
-	bed_clear(np.port, "", 409);
+	sv_bed_clear(np.port, "", 409);
 	/* Resume: it continues after the dwell it was in, then waits for the bed. */
-	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL,
+	sv_expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL,
 	     "{\"command\":\"pause\",\"action\":\"resume\"}", 204);
-	wait_state(np.port, "", a, "done", 5);
-	ck_assert_str_eq(job_state(np.port, "", b, NULL), "queued");
-	bed_clear(np.port, "", 204);
-	wait_state(np.port, "", b, "done", 5);
-	node_stop(&np);
+	sv_wait_state(np.port, "", a, "done", 5);
+	ck_assert_str_eq(sv_job_state(np.port, "", b, NULL), "queued");
+	sv_bed_clear(np.port, "", 204);
+	sv_wait_state(np.port, "", b, "done", 5);
+	sv_stop(&np);
 }
 END_TEST
 
@@ -1267,33 +973,33 @@ START_TEST(test_not_operational)
 	struct node_proc np;
 	struct resp r;
 
-	write_config(&np, "[printer real]\nprofile = generic-marlin\nport = /dev/ttyACM9\n", 8);
-	node_start(&np);
-	expect(np.port, "GET", "/api/printer", "X-Api-Key: " KEY_READ, NULL, 409);
+	sv_write_config(&np, "[printer real]\nprofile = generic-marlin\nport = /dev/ttyACM9\n", 8);
+	sv_start(&np);
+	sv_expect(np.port, "GET", "/api/printer", "X-Api-Key: " KEY_READ, NULL, 409);
 	/* The worker's first attempt to open the port may still be under way
 	 * (plain "Offline"); on a loaded machine that takes a while. */
 	char state[64] = "";
 	for (int i = 0; i < 100 && strcmp(state, "Offline after error"); i++) {
 		if (i)
 			usleep(100000);
-		http(np.port, "GET", "/p/real/api/connection", "X-Api-Key: " KEY_READ, NULL, &r);
+		sv_http(np.port, "GET", "/p/real/api/connection", "X-Api-Key: " KEY_READ, NULL, &r);
 		ck_assert_int_eq(r.status, 200);
 		const char *s = json_string_value(json_object_get(json_object_get(r.json, "current"),
 								  "state"));
 		snprintf(state, sizeof(state), "%s", s ? s : "");
-		resp_free(&r);
+		sv_resp_free(&r);
 		ck_assert_msg(!strcmp(state, "Offline") || !strcmp(state, "Offline after error"),
 			      "state '%s'", state);
 	}
 	ck_assert_str_eq(state, "Offline after error");
 	/* Uploads still queue; nothing prints until the printer is there. */
-	upload_text(np.port, "", KEY_UP, "wait.gcode", "G28\n", "true", &r);
+	sv_upload_text(np.port, "", KEY_UP, "wait.gcode", "G28\n", "true", &r);
 	ck_assert_int_eq(r.status, 201);
 	usleep(1200000);
-	ck_assert_str_eq(job_state(np.port, "", job_of(&r), NULL), "queued");
-	resp_free(&r);
-	expect(np.port, "GET", "/api/nothing", "X-Api-Key: " KEY_READ, NULL, 404);
-	node_stop(&np);
+	ck_assert_str_eq(sv_job_state(np.port, "", sv_job_of(&r), NULL), "queued");
+	sv_resp_free(&r);
+	sv_expect(np.port, "GET", "/api/nothing", "X-Api-Key: " KEY_READ, NULL, 404);
+	sv_stop(&np);
 }
 END_TEST
 
@@ -1447,31 +1153,7 @@ static char *sim_executed(const struct node_proc *np, const char *name)
 	return sim_executed_ex(np, name, false);
 }
 
-/* Upload a G-code text to print on prefix's printer; the job number. */
-static long long print_text(int port, const char *prefix, const char *name, const char *gcode)
-{
-	struct resp r;
-	long long id;
 
-	upload_text(port, prefix, KEY_UP, name, gcode, "true", &r);
-	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
-	id = job_of(&r);
-	resp_free(&r);
-	return id;
-}
-
-/* GET path with the read key; the JSON answer (caller decrefs). */
-static json_t *get_json(int port, const char *path)
-{
-	struct resp r;
-	json_t *o;
-
-	http(port, "GET", path, "X-Api-Key: " KEY_READ, NULL, &r);
-	ck_assert_msg(r.status == 200, "GET %s: %d %s", path, r.status, r.body);
-	o = json_incref(r.json);
-	resp_free(&r);
-	return o;
-}
 
 /* A queue.db a node wrote before per-job settings (no settings column)
  * opens: the column is added and its jobs list with "settings": []. */
@@ -1482,7 +1164,7 @@ START_TEST(test_queue_from_before_settings)
 	sqlite3 *q;
 	json_t *queue, *jobs, *none = json_array();
 
-	write_config(&np, TWO_PRINTERS, 8);
+	sv_write_config(&np, TWO_PRINTERS, 8);
 	snprintf(dir, sizeof(dir), "%s/data", np.dir);
 	mkdir(dir, 0700);
 	snprintf(db, sizeof(db), "%s/queue.db", dir);
@@ -1502,8 +1184,8 @@ START_TEST(test_queue_from_before_settings)
 			 NULL, NULL, NULL),
 	    SQLITE_OK);
 	sqlite3_close(q);
-	node_start(&np);
-	queue = get_json(np.port, "/p/mk3s/api/stratum/queue");
+	sv_start(&np);
+	queue = sv_get_json(np.port, "/p/mk3s/api/stratum/queue");
 	jobs = json_object_get(queue, "jobs");
 	ck_assert_uint_eq(json_array_size(jobs), 1);
 	ck_assert_str_eq(json_string_value(json_object_get(json_array_get(jobs, 0), "name")),
@@ -1511,7 +1193,7 @@ START_TEST(test_queue_from_before_settings)
 	ck_assert(json_equal(json_object_get(json_array_get(jobs, 0), "settings"), none));
 	json_decref(none);
 	json_decref(queue);
-	node_stop(&np);
+	sv_stop(&np);
 }
 END_TEST
 
@@ -1527,36 +1209,36 @@ START_TEST(test_sim_two_printers)
 	json_t *o;
 	int st = 0;
 
-	write_config(&np, TWO_SIMS, 8);
-	node_start(&np);
+	sv_write_config(&np, TWO_SIMS, 8);
+	sv_start(&np);
 	/* Reported as simulated, with the firmware the simulator announces. */
 	for (int i = 0; i < 200; i++) { /* 409 until the simulator has booted */
-		http(np.port, "GET", "/p/ender/api/printer", "X-Api-Key: " KEY_READ, NULL, &r);
+		sv_http(np.port, "GET", "/p/ender/api/printer", "X-Api-Key: " KEY_READ, NULL, &r);
 		st = r.status;
-		resp_free(&r);
+		sv_resp_free(&r);
 		if (st == 200)
 			break;
 		usleep(50000);
 	}
-	o = get_json(np.port, "/p/ender/api/printer");
+	o = sv_get_json(np.port, "/p/ender/api/printer");
 	ck_assert(json_is_true(json_object_get(json_object_get(o, "stratum"), "simulated")));
 	ck_assert(strstr(json_string_value(json_object_get(json_object_get(o, "stratum"),
 							   "firmware")), "simulated"));
 	json_decref(o);
-	a = print_text(np.port, "/p/mk3s", "a.gcode", g1);
-	b = print_text(np.port, "/p/ender", "b.gcode", g2);
+	a = sv_print_text(np.port, "/p/mk3s", "a.gcode", g1);
+	b = sv_print_text(np.port, "/p/ender", "b.gcode", g2);
 	/* Both print at the same time. */
 	for (int i = 0; i < 500 && !seen_both; i++) {
-		const char *sa = job_state(np.port, "/p/mk3s", a, NULL);
+		const char *sa = sv_job_state(np.port, "/p/mk3s", a, NULL);
 		bool pa = !strcmp(sa, "printing");
 
-		seen_both = pa && !strcmp(job_state(np.port, "/p/ender", b, NULL), "printing");
+		seen_both = pa && !strcmp(sv_job_state(np.port, "/p/ender", b, NULL), "printing");
 		if (!seen_both)
 			usleep(10000);
 	}
 	ck_assert_msg(seen_both, "the two printers never printed at the same time");
-	wait_state(np.port, "/p/mk3s", a, "done", 30);
-	wait_state(np.port, "/p/ender", b, "done", 30);
+	sv_wait_state(np.port, "/p/mk3s", a, "done", 30);
+	sv_wait_state(np.port, "/p/ender", b, "done", 30);
 	/* Every command ran once, in order, on its own printer. */
 	{
 		char *want1 = commands_of(g1), *want2 = commands_of(g2);
@@ -1570,7 +1252,7 @@ START_TEST(test_sim_two_printers)
 		free(got2);
 	}
 	/* Progress ends at the file's size. */
-	o = get_json(np.port, "/p/mk3s/api/stratum/queue");
+	o = sv_get_json(np.port, "/p/mk3s/api/stratum/queue");
 	{
 		json_t *j = json_array_get(json_object_get(o, "jobs"), 0);
 
@@ -1578,7 +1260,7 @@ START_TEST(test_sim_two_printers)
 		ck_assert(json_integer_value(json_object_get(j, "size")) == (json_int_t)strlen(g1));
 	}
 	json_decref(o);
-	node_stop(&np);
+	sv_stop(&np);
 	free(g1);
 	free(g2);
 }
@@ -1592,15 +1274,15 @@ START_TEST(test_sim_stl_print)
 	char *stl = cube_stl(&len);
 	long long id;
 
-	write_config(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\n"
+	sv_write_config(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\n"
 			  "sim_speedup = 1000\n", 8);
-	node_start(&np);
+	sv_start(&np);
 	/* PrusaSlicer's upload: print=true, path="", the STL as "file". */
-	upload(np.port, "", KEY_UP, "cube.stl", 8, "", 0, "true", stl, len, NULL, true, &r);
+	sv_upload(np.port, "", KEY_UP, "cube.stl", 8, "", 0, "true", stl, len, NULL, true, &r);
 	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
-	id = job_of(&r);
-	resp_free(&r);
-	wait_state(np.port, "", id, "done", 40);
+	id = sv_job_of(&r);
+	sv_resp_free(&r);
+	sv_wait_state(np.port, "", id, "done", 40);
 	/* What the printer ran is what the node sliced. */
 	{
 		char path[600], *text, *want, *got;
@@ -1625,7 +1307,7 @@ START_TEST(test_sim_stl_print)
 		free(want);
 		free(got);
 	}
-	node_stop(&np);
+	sv_stop(&np);
 	free(stl);
 }
 END_TEST
@@ -1651,19 +1333,19 @@ START_TEST(test_sim_sailfish)
 	int st = 0;
 	size_t n = 0;
 
-	write_config(&np, "[printer fcp]\nprofile = " SFC_PRINTER "\nport = sim\n"
+	sv_write_config(&np, "[printer fcp]\nprofile = " SFC_PRINTER "\nport = sim\n"
 			  "sim_speedup = 1000\n\n"
 			  "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\nsim_speedup = 1000\n",
 		     8);
-	node_start(&np);
+	sv_start(&np);
 	for (int i = 0; i < 200 && st != 200; i++) { /* 409 until connected */
-		http(np.port, "GET", "/p/fcp/api/printer", "X-Api-Key: " KEY_READ, NULL, &r);
+		sv_http(np.port, "GET", "/p/fcp/api/printer", "X-Api-Key: " KEY_READ, NULL, &r);
 		st = r.status;
-		resp_free(&r);
+		sv_resp_free(&r);
 		if (st != 200)
 			usleep(50000);
 	}
-	o = get_json(np.port, "/p/fcp/api/printer");
+	o = sv_get_json(np.port, "/p/fcp/api/printer");
 	ck_assert(json_is_true(json_object_get(json_object_get(o, "stratum"), "simulated")));
 	ck_assert(strstr(json_string_value(json_object_get(json_object_get(o, "stratum"),
 							   "firmware")), "Sailfish"));
@@ -1671,18 +1353,18 @@ START_TEST(test_sim_sailfish)
 								 "bed"), "actual")));
 	json_decref(o);
 	/* X3G files are for the Sailfish printer only. */
-	upload_text(np.port, "/p/mk3s", KEY_UP, "part.x3g", "\x99", "true", &r);
+	sv_upload_text(np.port, "/p/mk3s", KEY_UP, "part.x3g", "\x99", "true", &r);
 	ck_assert_msg(r.status == 415, "%d %s", r.status, r.body);
-	resp_free(&r);
-	upload(np.port, "/p/fcp", KEY_UP, "cube.stl", 8, "", 0, "true", stl, len, NULL, true, &r);
+	sv_resp_free(&r);
+	sv_upload(np.port, "/p/fcp", KEY_UP, "cube.stl", 8, "", 0, "true", stl, len, NULL, true, &r);
 	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
-	id = job_of(&r);
-	resp_free(&r);
-	idm = print_text(np.port, "/p/mk3s", "m.gcode", m);
-	wait_state(np.port, "/p/fcp", id, "done", 40);
-	wait_state(np.port, "/p/mk3s", idm, "done", 20);
+	id = sv_job_of(&r);
+	sv_resp_free(&r);
+	idm = sv_print_text(np.port, "/p/mk3s", "m.gcode", m);
+	sv_wait_state(np.port, "/p/fcp", id, "done", 40);
+	sv_wait_state(np.port, "/p/mk3s", idm, "done", 20);
 	/* Progress ends at the size of the sliced G-code. */
-	o = get_json(np.port, "/p/fcp/api/stratum/queue");
+	o = sv_get_json(np.port, "/p/fcp/api/stratum/queue");
 	{
 		json_t *j = json_array_get(json_object_get(o, "jobs"), 0);
 
@@ -1697,13 +1379,13 @@ START_TEST(test_sim_sailfish)
 	snprintf(path, sizeof(path), "%s", tu_path("long.gcode"));
 	tu_write_str(path, g);
 	cancelled = sfc_reference(path, tu_path("long.x3g"), tu_path("long.json"), 300);
-	bed_clear(np.port, "/p/fcp", 204);
-	idc = print_text(np.port, "/p/fcp", "long.gcode", g);
-	wait_state(np.port, "/p/fcp", idc, "printing", 10);
+	sv_bed_clear(np.port, "/p/fcp", 204);
+	idc = sv_print_text(np.port, "/p/fcp", "long.gcode", g);
+	sv_wait_state(np.port, "/p/fcp", idc, "printing", 10);
 	usleep(500000);
-	expect(np.port, "POST", "/p/fcp/api/job", "X-Api-Key: " KEY_CTL,
+	sv_expect(np.port, "POST", "/p/fcp/api/job", "X-Api-Key: " KEY_CTL,
 	       "{\"command\":\"cancel\"}", 204);
-	wait_state(np.port, "/p/fcp", idc, "cancelled", 10);
+	sv_wait_state(np.port, "/p/fcp", idc, "cancelled", 10);
 	/* The printer ran the sliced part exactly, then part of the long job,
 	 * then the safe stop: heaters off (tools, platform), motors off. */
 	snprintf(path, sizeof(path), "%s/data/sim/fcp.log", np.dir);
@@ -1725,7 +1407,7 @@ START_TEST(test_sim_sailfish)
 		      last[(n - 1) % 4]);
 	json_decref(cmds);
 	json_decref(cancelled);
-	node_stop(&np);
+	sv_stop(&np);
 	free(stl);
 	free(g);
 	free(m);
@@ -1742,10 +1424,10 @@ static json_int_t kill9_restart(struct node_proc *np, long long id)
 
 	ck_assert(kill(np->pid, SIGKILL) == 0);
 	ck_assert(waitpid(np->pid, &st, 0) == np->pid);
-	node_start(np);
-	ck_assert_str_eq(job_state(np->port, "", id, &interrupted), "paused");
+	sv_start(np);
+	ck_assert_str_eq(sv_job_state(np->port, "", id, &interrupted), "paused");
 	ck_assert(interrupted);
-	o = get_json(np->port, "/api/job");
+	o = sv_get_json(np->port, "/api/job");
 	pos = json_integer_value(json_object_get(json_object_get(o, "progress"), "filepos"));
 	json_decref(o);
 	return pos;
@@ -1760,16 +1442,16 @@ START_TEST(test_sim_kill9)
 	json_t *o;
 	json_int_t pos;
 
-	write_config(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\n"
+	sv_write_config(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\n"
 			  "sim_speedup = 50\n", 8);
-	node_start(&np);
-	upload_text(np.port, "", KEY_UP, "slow.gcode", g, "true", &r);
-	id = job_of(&r);
-	resp_free(&r);
-	wait_state(np.port, "", id, "printing", 10);
+	sv_start(&np);
+	sv_upload_text(np.port, "", KEY_UP, "slow.gcode", g, "true", &r);
+	id = sv_job_of(&r);
+	sv_resp_free(&r);
+	sv_wait_state(np.port, "", id, "printing", 10);
 	usleep(4500000); /* past heating, some moves, a stored position */
 	/* The temperatures the firmware reports reach the API. */
-	o = get_json(np.port, "/api/printer");
+	o = sv_get_json(np.port, "/api/printer");
 	ck_assert_msg(json_real_value(json_object_get(json_object_get(json_object_get(
 			      o, "temperature"), "tool0"), "actual")) > 200, "%s",
 		      json_dumps(o, JSON_COMPACT));
@@ -1780,7 +1462,7 @@ START_TEST(test_sim_kill9)
 	ck_assert_msg(pos > 0 && pos < (json_int_t)strlen(g), "filepos %lld", (long long)pos);
 	/* Not restarted: the new simulator ran only the connect commands. */
 	usleep(1500000);
-	ck_assert_str_eq(job_state(np.port, "", id, NULL), "paused");
+	ck_assert_str_eq(sv_job_state(np.port, "", id, NULL), "paused");
 	{
 		char *got = sim_executed(&np, "mk3s");
 
@@ -1788,9 +1470,9 @@ START_TEST(test_sim_kill9)
 		free(got);
 	}
 	/* Cancel it: the node stays usable. */
-	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL, "{\"command\":\"cancel\"}", 204);
-	wait_state(np.port, "", id, "cancelled", 5);
-	node_stop(&np);
+	sv_expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL, "{\"command\":\"cancel\"}", 204);
+	sv_wait_state(np.port, "", id, "cancelled", 5);
+	sv_stop(&np);
 	free(g);
 }
 END_TEST
@@ -1830,14 +1512,14 @@ START_TEST(test_sim_marlin_after_cancel)
 	json_int_t layer = 0;
 	size_t lg, lw;
 
-	write_config(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\n"
+	sv_write_config(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\n"
 			  "sim_speedup = 50\n", 8);
-	node_start(&np);
-	idc = print_text(np.port, "", "slow.gcode", slow);
-	wait_state(np.port, "", idc, "printing", 10);
+	sv_start(&np);
+	idc = sv_print_text(np.port, "", "slow.gcode", slow);
+	sv_wait_state(np.port, "", idc, "printing", 10);
 	/* the layer the printer confirmed is in the job's progress */
 	for (int i = 0; i < 200 && layer < 1; i++) {
-		json_t *o = get_json(np.port, "/api/job");
+		json_t *o = sv_get_json(np.port, "/api/job");
 
 		layer = json_integer_value(json_object_get(json_object_get(o, "progress"), "layer"));
 		json_decref(o);
@@ -1845,14 +1527,14 @@ START_TEST(test_sim_marlin_after_cancel)
 			usleep(20000);
 	}
 	ck_assert_msg(layer >= 1, "no layer in the job's progress");
-	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL, "{\"command\":\"cancel\"}", 204);
-	wait_state(np.port, "", idc, "cancelled", 10);
-	bed_clear(np.port, "", 204);
-	id2 = print_text(np.port, "", "two.gcode", g2);
-	wait_state(np.port, "", id2, "done", 30);
-	bed_clear(np.port, "", 204);
-	id3 = print_text(np.port, "", "three.gcode", g3);
-	wait_state(np.port, "", id3, "done", 30);
+	sv_expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL, "{\"command\":\"cancel\"}", 204);
+	sv_wait_state(np.port, "", idc, "cancelled", 10);
+	sv_bed_clear(np.port, "", 204);
+	id2 = sv_print_text(np.port, "", "two.gcode", g2);
+	sv_wait_state(np.port, "", id2, "done", 30);
+	sv_bed_clear(np.port, "", 204);
+	id3 = sv_print_text(np.port, "", "three.gcode", g3);
+	sv_wait_state(np.port, "", id3, "done", 30);
 	/* The log: part of the cancelled job, its safe stop, then both jobs whole. */
 	want = malloc(strlen(want2) + strlen(want3) + 1);
 	ck_assert(want);
@@ -1868,7 +1550,7 @@ START_TEST(test_sim_marlin_after_cancel)
 	free(got);
 	free(want2);
 	free(want3);
-	node_stop(&np);
+	sv_stop(&np);
 	free(slow);
 	free(g2);
 	free(g3);
@@ -1895,18 +1577,18 @@ START_TEST(test_sim_sailfish_resume)
 	double z;
 	json_t *o;
 
-	write_config(&np, "[printer fcp]\nprofile = " SFC_PRINTER "\nport = sim\n"
+	sv_write_config(&np, "[printer fcp]\nprofile = " SFC_PRINTER "\nport = sim\n"
 			  "sim_speedup = 50\n", 8);
-	node_start(&np);
-	upload_text(np.port, "", KEY_UP, "layers.gcode", g, "true", &r);
+	sv_start(&np);
+	sv_upload_text(np.port, "", KEY_UP, "layers.gcode", g, "true", &r);
 	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
-	id = job_of(&r);
-	resp_free(&r);
-	wait_state(np.port, "", id, "printing", 20);
+	id = sv_job_of(&r);
+	sv_resp_free(&r);
+	sv_wait_state(np.port, "", id, "printing", 20);
 	/* kill once the node saved a position past the third layer */
 	at = strstr(g, ";LAYER:3\n");
 	for (int i = 0; i < 600 && pos <= at - g; i++) {
-		o = get_json(np.port, "/api/stratum/queue");
+		o = sv_get_json(np.port, "/api/stratum/queue");
 		pos = json_integer_value(json_object_get(json_array_get(json_object_get(o, "jobs"),
 									 0), "filepos"));
 		json_decref(o);
@@ -1917,10 +1599,10 @@ START_TEST(test_sim_sailfish_resume)
 	ck_assert_msg(pos > at - g && pos < (json_int_t)strlen(g), "filepos %lld", (long long)pos);
 	/* nothing runs until the operator says so */
 	usleep(1000000);
-	ck_assert_str_eq(job_state(np.port, "", id, NULL), "paused");
-	expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL,
+	ck_assert_str_eq(sv_job_state(np.port, "", id, NULL), "paused");
+	sv_expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL,
 	       "{\"command\":\"pause\",\"action\":\"resume\"}", 204);
-	wait_state(np.port, "", id, "done", 40);
+	sv_wait_state(np.port, "", id, "done", 40);
 	/* the layer the saved position is in: its comment starts before it */
 	for (lay = strstr(g, ";LAYER:"); lay && lay - g < pos; lay = strstr(lay + 1, ";LAYER:")) {
 		layer++;
@@ -1941,7 +1623,7 @@ START_TEST(test_sim_sailfish_resume)
 		want_z = strtod(c + 4, NULL);
 	ck_assert_msg(fabs(z - want_z) < 0.01, "Z set to %g at layer %ld, the nozzle at %g", z,
 		      layer, want_z);
-	node_stop(&np);
+	sv_stop(&np);
 	free(g);
 }
 END_TEST
@@ -2099,7 +1781,7 @@ START_TEST(test_mqtt)
 	file_server_start(&fs, "G28\nG1 X5\nG4 P20000\nG1 X6\n");
 	snprintf(text, sizeof(text), "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = test-instant\n"
 				     "\n[mqtt]\nhost = 127.0.0.1\nport = %d\nkeepalive = 5\n", bport);
-	write_config(&np, text, 8);
+	sv_write_config(&np, text, 8);
 
 	pthread_mutex_init(&seen.mu, NULL);
 	mosquitto_lib_init();
@@ -2111,7 +1793,7 @@ START_TEST(test_mqtt)
 	/* The node only once the broker listens: a node that finds no
 	 * broker retries after 1, 2, 4, 8 s, and under ASan on a loaded
 	 * machine that once outlasted the 10 s wait for "online" below. */
-	node_start(&np);
+	sv_start(&np);
 	ck_assert_int_eq(mosquitto_subscribe(mq, NULL, "stratum/test-node/#", 1), 0);
 	ck_assert_int_eq(mosquitto_loop_start(mq), 0);
 	/* Retained state arrives on subscription. */
@@ -2137,7 +1819,7 @@ START_TEST(test_mqtt)
 	pthread_mutex_unlock(&seen.mu);
 	ck_assert_int_eq(fs.served, 1);
 	/* The job is printing (held in its dwell), as the job topic says. */
-	wait_state(np.port, "", id, "printing", 5);
+	sv_wait_state(np.port, "", id, "printing", 5);
 	wait_topic(&seen, "stratum/test-node/mk3s/status", "Printing", 5, NULL, 0);
 	wait_topic(&seen, "stratum/test-node/mk3s/job", "dwell.gcode", 5, NULL, 0);
 	/* Cancel over MQTT. */
@@ -2146,7 +1828,7 @@ START_TEST(test_mqtt)
 					   cmd, 1, false), 0);
 	wait_topic(&seen, "stratum/test-node/mk3s/result", "\"cmd-2\"", 10, out, sizeof(out));
 	ck_assert_msg(strstr(out, "\"ok\":true"), "%s", out);
-	wait_state(np.port, "", id, "cancelled", 5);
+	sv_wait_state(np.port, "", id, "cancelled", 5);
 	wait_topic(&seen, "stratum/test-node/mk3s/status", "Operational", 5, NULL, 0);
 	wait_topic(&seen, "stratum/test-node/mk3s/job", "null", 5, NULL, 0);
 	/* A command without id is refused. */
@@ -2193,25 +1875,25 @@ START_TEST(test_status_page)
 	for (size_t i = 0; i < sizeof(browsers) / sizeof(browsers[0]) && !browser; i++)
 		if (!access(browsers[i], X_OK))
 			browser = browsers[i];
-	write_config(&np, TWO_PRINTERS, 8);
-	node_start(&np);
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	sv_start(&np);
 	/* The page itself needs no key (it holds no data); the data does. */
-	http(np.port, "GET", "/", NULL, NULL, &r);
+	sv_http(np.port, "GET", "/", NULL, NULL, &r);
 	ck_assert_int_eq(r.status, 200);
-	ck_assert(has_text(r.head, "Content-Type: text/html"));
+	ck_assert(sv_has_text(r.head, "Content-Type: text/html"));
 	ck_assert(strstr(r.body, "api/stratum/node"));
-	resp_free(&r);
-	expect(np.port, "GET", "/api/stratum/node", NULL, NULL, 403);
+	sv_resp_free(&r);
+	sv_expect(np.port, "GET", "/api/stratum/node", NULL, NULL, 403);
 	if (!browser) {
 		printf("serve: status page browser test skipped: no chromium (make check installs "
 		       "it)\n");
-		node_stop(&np);
+		sv_stop(&np);
 		return;
 	}
-	upload_text(np.port, "/p/ender", KEY_UP, "hold.gcode", "M104 S205\nG4 P20000\n", "true", &r);
+	sv_upload_text(np.port, "/p/ender", KEY_UP, "hold.gcode", "M104 S205\nG4 P20000\n", "true", &r);
 	/* Printing (past the M104) before the browser looks, loaded or not. */
-	wait_state(np.port, "/p/ender", job_of(&r), "printing", 30);
-	resp_free(&r);
+	sv_wait_state(np.port, "/p/ender", sv_job_of(&r), "printing", 30);
+	sv_resp_free(&r);
 	usleep(300000);
 	snprintf(cmd, sizeof(cmd), "%s --headless --no-sandbox --disable-gpu --no-first-run "
 				   "--user-data-dir=%s --virtual-time-budget=4000 --dump-dom "
@@ -2240,7 +1922,7 @@ START_TEST(test_status_page)
 	ck_assert_msg(!strstr(dom, "data-updates=\"0\"") && strstr(dom, "data-updates=\""), "%.300s",
 		      dom);
 	free(dom);
-	node_stop(&np);
+	sv_stop(&np);
 }
 END_TEST
 

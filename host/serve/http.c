@@ -39,9 +39,10 @@
 
 /* ---- responses ---------------------------------------------------------- */
 
-/* Answer with body (stolen; NULL = no body) and status. */
-enum MHD_Result http_send_json(struct MHD_Connection *c, unsigned status, json_t *body,
-			       const char *location)
+/* Answer with body (stolen; NULL = no body) and status, and the header
+ * name: value when name is not NULL. */
+static enum MHD_Result send_json_with(struct MHD_Connection *c, unsigned status, json_t *body,
+				      const char *name, const char *value)
 {
 	char *text = body ? json_dumps(body, JSON_COMPACT) : NULL;
 	struct MHD_Response *resp;
@@ -57,11 +58,28 @@ enum MHD_Result http_send_json(struct MHD_Connection *c, unsigned status, json_t
 	if (text)
 		MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, "application/json");
 	MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-cache");
-	if (location)
-		MHD_add_response_header(resp, MHD_HTTP_HEADER_LOCATION, location);
+	if (name)
+		MHD_add_response_header(resp, name, value);
 	ret = MHD_queue_response(c, status, resp);
 	MHD_destroy_response(resp);
 	return ret;
+}
+
+enum MHD_Result http_send_json(struct MHD_Connection *c, unsigned status, json_t *body,
+			       const char *location)
+{
+	return send_json_with(c, status, body, location ? MHD_HTTP_HEADER_LOCATION : NULL,
+			      location);
+}
+
+/* The decided refusal of r ({"error": msg}); a 405 names the path's methods
+ * in Allow, as OctoPrint's (Flask's) does. */
+static enum MHD_Result send_refusal(struct MHD_Connection *c, const struct req *r)
+{
+	json_t *o = json_pack("{s:s}", "error", r->msg);
+
+	return send_json_with(c, (unsigned)r->status, o, r->status == MHD_HTTP_METHOD_NOT_ALLOWED
+			      ? MHD_HTTP_HEADER_ALLOW : NULL, r->allow);
 }
 
 /* {"error": msg} with status, as OctoPrint answers errors. */
@@ -156,6 +174,8 @@ static enum MHD_Result post_iter(void *cls, enum MHD_ValueKind kind, const char 
 		field_add(r, r->force, sizeof(r->force), &l, key, data, size);
 	} else if (!strcmp(key, "path")) {
 		field_add(r, r->path, sizeof(r->path), &r->path_len, key, data, size);
+	} else if (!strcmp(key, "foldername")) {
+		field_add(r, r->foldername, sizeof(r->foldername), &r->foldername_len, key, data, size);
 	} else if (cfgopt_is_field(key)) {
 		/* a setting: its name and NUL open the pair, a NUL closes it */
 		if (off == 0) {
@@ -208,7 +228,7 @@ static enum MHD_Result post_iter(void *cls, enum MHD_ValueKind kind, const char 
 			req_fail(r, MHD_HTTP_INSUFFICIENT_STORAGE, "cannot store the upload");
 		}
 	}
-	/* Other fields (OctoPrint's userdata, foldername ...) are ignored. */
+	/* Other fields (OctoPrint's userdata ...) are ignored. */
 	return MHD_YES;
 }
 
@@ -279,6 +299,8 @@ static enum MHD_Result finish_upload(struct node *n, struct MHD_Connection *c, s
 	json_t *o;
 	int rc;
 
+	if (!r->has_file && r->foldername_len)
+		return http_make_folder(n, c, r);
 	if (!r->has_file)
 		return http_send_error(c, MHD_HTTP_BAD_REQUEST, "no file part named 'file' in the "
 							        "multipart form");
@@ -309,6 +331,7 @@ static enum MHD_Result finish_upload(struct node *n, struct MHD_Connection *c, s
 	snprintf(full, sizeof(full), "%s/%s", p->files_dir, rel);
 	node_log("info", p->cfg->name, id, "stored %s (%llu bytes)%s", rel,
 		 (unsigned long long)r->bytes, print ? ", queued" : "");
+	http_files_changed(p);
 	stat(full, &st);
 	o = json_pack("{s:{s:o},s:b,s:b,s:b}", "files", "local", http_file_json(c, r, rel, &st), "done",
 		      1, "effectiveSelect", select, "effectivePrint", print);
@@ -322,31 +345,56 @@ static enum MHD_Result finish_upload(struct node *n, struct MHD_Connection *c, s
 
 static const struct route routes[] = {
 	{"GET", "/api/version", false, NODE_ROLE_READ, false, http_get_version},
+	{"GET", "/api/server", false, NODE_ROLE_READ, false, http_get_server},
+	{"POST", "/api/login", false, 0, false, http_post_login},
+	{"GET", "/api/currentuser", false, NODE_ROLE_READ, false, http_get_currentuser},
+	{"GET", "/api/system/commands", false, NODE_ROLE_CONTROL, false, http_get_system_commands},
+	{"GET", "/api/system/commands/", true, NODE_ROLE_CONTROL, false, http_get_system_commands},
 	{"GET", "/api/printer", false, NODE_ROLE_READ, false, http_get_printer},
 	{"POST", "/api/printer/command", false, NODE_ROLE_CONTROL, false, http_post_command},
+	{"GET", "/api/printer/tool", false, NODE_ROLE_READ, false, http_get_tool},
+	{"POST", "/api/printer/tool", false, NODE_ROLE_CONTROL, false, http_post_tool},
+	{"GET", "/api/printer/bed", false, NODE_ROLE_READ, false, http_get_bed},
+	{"POST", "/api/printer/bed", false, NODE_ROLE_CONTROL, false, http_post_bed},
+	{"GET", "/api/printer/chamber", false, NODE_ROLE_READ, false, http_chamber},
+	{"POST", "/api/printer/chamber", false, NODE_ROLE_CONTROL, false, http_chamber},
+	{"POST", "/api/printer/printhead", false, NODE_ROLE_CONTROL, false, http_post_printhead},
+	{"GET", "/api/printer/sd", false, NODE_ROLE_READ, false, http_sd},
+	{"POST", "/api/printer/sd", false, NODE_ROLE_CONTROL, false, http_sd},
 	{"GET", "/api/job", false, NODE_ROLE_READ, false, http_get_job},
 	{"POST", "/api/job", false, NODE_ROLE_CONTROL, false, http_post_job},
 	{"GET", "/api/connection", false, NODE_ROLE_READ, false, http_get_connection},
 	{"POST", "/api/connection", false, NODE_ROLE_CONTROL, false, http_post_connection},
 	{"GET", "/api/settings", false, NODE_ROLE_READ, false, http_get_settings},
+	{"POST", "/api/settings", false, NODE_ROLE_READ, false, http_post_settings},
 	{"GET", "/api/printerprofiles", false, NODE_ROLE_READ, false, http_get_profiles},
+	{"GET", "/api/printerprofiles/", true, NODE_ROLE_READ, false, http_get_profile},
+	{"GET", "/api/files", false, NODE_ROLE_READ, false, http_get_files},
+	{"GET", "/api/files/local", false, NODE_ROLE_READ, false, http_get_files},
 	{"POST", "/api/files/local", false, NODE_ROLE_UPLOAD, true, finish_upload},
 	{"GET", "/api/files/local/", true, NODE_ROLE_READ, false, http_get_file},
+	{"POST", "/api/files/local/", true, NODE_ROLE_UPLOAD, false, http_post_file},
+	{"DELETE", "/api/files/local/", true, NODE_ROLE_UPLOAD, false, http_delete_file},
+	{"GET", "/downloads/files/local/", true, NODE_ROLE_READ, false, http_download_file},
 	{"GET", "/api/stratum/queue", false, NODE_ROLE_READ, false, http_get_queue},
 	{"POST", "/api/stratum/bed-clear", false, NODE_ROLE_CONTROL, false, http_post_bed_clear},
 	{"GET", "/api/stratum/node", false, NODE_ROLE_READ, false, http_get_node},
 };
 
-/* The roles of the request's key (X-Api-Key or Authorization: Bearer); 0 if none. */
-static unsigned key_roles(struct node *n, struct MHD_Connection *c)
+/* The roles of the request's key (X-Api-Key, Authorization: Bearer, or
+ * OctoPrint's ?apikey=, in that order); 0 if none.  *who the key's name. */
+static unsigned key_roles(struct node *n, struct MHD_Connection *c, const char **who)
 {
 	const char *key = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "X-Api-Key");
 	const char *auth = MHD_lookup_connection_value(c, MHD_HEADER_KIND,
 						       MHD_HTTP_HEADER_AUTHORIZATION);
 	unsigned roles = 0;
 
+	*who = NULL;
 	if (!key && auth && !strncasecmp(auth, "Bearer ", 7))
 		key = auth + 7;
+	if (!key)
+		key = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "apikey");
 	if (!key)
 		return 0;
 	/* Compare with every key in full so the time does not tell which matched. */
@@ -357,8 +405,10 @@ static unsigned key_roles(struct node *n, struct MHD_Connection *c)
 
 		for (size_t k = 0; k < b; k++)
 			diff |= (unsigned char)(s[k] ^ key[k < a ? k : 0]);
-		if (!diff)
+		if (!diff) {
 			roles |= n->cfg.keys[i].roles;
+			*who = n->cfg.keys[i].name;
+		}
 	}
 	return roles;
 }
@@ -373,7 +423,21 @@ static void upload_too_large(struct node *n, struct req *r)
 	req_fail(r, MHD_HTTP_CONTENT_TOO_LARGE, msg);
 }
 
-/* Find the printer and route of url; sets r->p, r->base, r->route_path, r->rt. */
+/* Add method (and HEAD after GET) to the request's Allow list, once. */
+static void allow_add(struct req *r, const char *method)
+{
+	size_t len = strlen(r->allow), m = strlen(method);
+
+	for (const char *s = r->allow; (s = strstr(s, method)); s += m)
+		if ((s == r->allow || s[-1] == ' ') && (s[m] == ',' || !s[m]))
+			return;
+	snprintf(r->allow + len, sizeof(r->allow) - len, "%s%s", len ? ", " : "", method);
+	if (!strcmp(method, "GET"))
+		allow_add(r, "HEAD");
+}
+
+/* Find the printer and route of url; sets r->p, r->base, r->route_path, r->rt,
+ * r->allow (the methods of the path) and r->options for OPTIONS. */
 static void resolve(struct node *n, const char *url, const char *method, struct req *r)
 {
 	bool path_known = false;
@@ -388,7 +452,7 @@ static void resolve(struct node *n, const char *url, const char *method, struct 
 			r->route_path = url + len;
 		}
 	}
-	if (!r->p && !strncmp(url, "/api/", 5)) {
+	if (!r->p && (!strncmp(url, "/api/", 5) || !strncmp(url, "/downloads/", 11))) {
 		r->p = &n->printers[0];
 		r->route_path = url;
 	}
@@ -402,13 +466,18 @@ static void resolve(struct node *n, const char *url, const char *method, struct 
 		if (!match)
 			continue;
 		path_known = true;
-		if (!strcmp(method, rt->method)) {
+		if (!r->rt && (!strcmp(method, rt->method) ||
+			       (!strcmp(method, "HEAD") && !strcmp(rt->method, "GET"))))
 			r->rt = rt;
-			return;
-		}
+		allow_add(r, rt->method);
 	}
-	if (path_known)
-		r->status = MHD_HTTP_METHOD_NOT_ALLOWED;
+	if (path_known) {
+		allow_add(r, "OPTIONS");
+		if (!strcmp(method, "OPTIONS"))
+			r->options = true;
+		else if (!r->rt)
+			r->status = MHD_HTTP_METHOD_NOT_ALLOWED;
+	}
 }
 
 /* First call: decide what we can before the body. */
@@ -422,15 +491,18 @@ static void first_call(struct node *n, struct MHD_Connection *c, const char *url
 
 	resolve(n, url, method, r);
 	if (r->status) {
-		req_fail(r, r->status, "method not allowed here");
+		snprintf(r->msg, sizeof(r->msg), "method not allowed here (allowed: %s)", r->allow);
 		return;
 	}
+	if (r->options)
+		return; /* answered with Allow, no key needed: it tells nothing */
 	if (!r->rt) {
 		req_fail(r, MHD_HTTP_NOT_FOUND, "no such API call");
 		return;
 	}
-	roles = key_roles(n, c);
-	if (!(roles & r->rt->role)) {
+	roles = key_roles(n, c, &r->key_name);
+	r->roles = roles;
+	if (r->rt->role && !(roles & r->rt->role)) {
 		req_fail(r, MHD_HTTP_FORBIDDEN, roles ? "the API key lacks the role this call needs"
 						      : "a valid API key is needed (X-Api-Key)");
 		return;
@@ -465,16 +537,35 @@ static bool refuse_at_once(struct MHD_Connection *c)
 	return cl && strtoull(cl, NULL, 10) > HTTP_DRAIN_MAX;
 }
 
+/* The push API's paths (push.c), under a printer's prefix or, for the
+ * first printer, at /sockjs/...; no key: the client authenticates with its
+ * first message. */
+static bool push_route(struct node *n, struct MHD_Connection *c, const char *url,
+		       enum MHD_Result *ret)
+{
+	for (size_t i = 0; i < n->nprinters; i++) {
+		const char *pre = n->printers[i].cfg->prefix;
+		size_t len = strlen(pre);
+
+		if (!strncmp(url, pre, len) && url[len] == '/')
+			return node_push_route(n, &n->printers[i], c, url + len, ret);
+	}
+	return node_push_route(n, &n->printers[0], c, url, ret);
+}
+
 static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *url,
 			      const char *method, const char *version, const char *upload,
 			      size_t *upload_size, void **con_cls)
 {
 	struct node *n = cls;
 	struct req *r = *con_cls;
+	enum MHD_Result ret;
 
 	(void)version;
 	if (!r && !strcmp(method, "GET") && (!strcmp(url, "/") || !strcmp(url, "/index.html")))
 		return send_page(c);
+	if (!r && !strcmp(method, "GET") && push_route(n, c, url, &ret))
+		return ret;
 	if (!r) {
 		r = calloc(1, sizeof(*r));
 		if (!r)
@@ -482,7 +573,7 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *u
 		*con_cls = r;
 		first_call(n, c, url, method, r);
 		if (r->status && refuse_at_once(c))
-			return http_send_error(c, (unsigned)r->status, r->msg);
+			return send_refusal(c, r);
 		return MHD_YES;
 	}
 	if (*upload_size) {
@@ -511,7 +602,7 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *u
 		/* A chunked body has no end the node knows: refused, it is not read on. */
 		if (r->status && MHD_lookup_connection_value(c, MHD_HEADER_KIND,
 							     MHD_HTTP_HEADER_TRANSFER_ENCODING))
-			return http_send_error(c, (unsigned)r->status, r->msg);
+			return send_refusal(c, r);
 		return MHD_YES;
 	}
 	/* The post processor tells only here whether the form was complete
@@ -523,7 +614,9 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *u
 		r->pp = NULL;
 	}
 	if (r->status)
-		return http_send_error(c, (unsigned)r->status, r->msg);
+		return send_refusal(c, r);
+	if (r->options)
+		return send_json_with(c, MHD_HTTP_OK, NULL, MHD_HTTP_HEADER_ALLOW, r->allow);
 	return r->rt->fn(n, c, r);
 }
 
@@ -567,7 +660,8 @@ int node_http_start(struct node *n, struct st_error *err)
 	if (inet_pton(AF_INET, n->cfg.listen_addr, &sa.sin_addr) != 1)
 		return st_error_set(err, ST_ERR_ARG, "listen address %s is not IPv4",
 				    n->cfg.listen_addr);
-	n->httpd = MHD_start_daemon(MHD_USE_AUTO_INTERNAL_THREAD, n->cfg.listen_port, NULL, NULL,
+	n->httpd = MHD_start_daemon(MHD_USE_AUTO_INTERNAL_THREAD | MHD_ALLOW_UPGRADE,
+				    n->cfg.listen_port, NULL, NULL,
 				    handle, n, MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&sa,
 				    MHD_OPTION_THREAD_POOL_SIZE, (unsigned)HTTP_POOL,
 				    MHD_OPTION_CONNECTION_TIMEOUT, n->cfg.idle_timeout_s,
@@ -585,6 +679,7 @@ int node_http_start(struct node *n, struct st_error *err)
 
 void node_http_stop(struct node *n)
 {
+	node_push_stop(n); /* libmicrohttpd wants upgraded sockets closed first */
 	if (n->httpd)
 		MHD_stop_daemon(n->httpd);
 	n->httpd = NULL;

@@ -20,26 +20,10 @@
 #include "gcode.h"
 #include "http_int.h"
 
-#define HTTP_OCTOPRINT_VERSION "1.10.0" /* the OctoPrint API level answered */
 
 /* ---- printer state ------------------------------------------------------- */
 
-/* A consistent view of a printer for one answer. */
-struct view {
-	bool connected, printing, paused, pausing;
-	char conn_error[256];
-	char link_desc[128];
-	int64_t job_id;
-	int64_t filepos, size;
-	long layer;		/* of the last confirmed command (0-based), -1 unknown */
-	double z;		/* its Z (mm), NAN unknown */
-	double tool[2], bed[2]; /* actual, target */
-	bool has_job;
-	struct node_job job; /* the active job (printing, paused, slicing), if has_job */
-	char selected[NODE_PATH_MAX];
-};
-
-static void take_view(struct node *n, struct node_printer *p, struct view *v)
+void http_take_view(struct node *n, struct node_printer *p, struct http_view *v)
 {
 	memset(v, 0, sizeof(*v));
 	pthread_mutex_lock(&p->mu);
@@ -70,7 +54,7 @@ static void take_view(struct node *n, struct node_printer *p, struct view *v)
 }
 
 /* OctoPrint's state text. */
-static const char *state_text(const struct view *v)
+const char *http_state_text(const struct http_view *v)
 {
 	if (v->has_job && v->job.state == NODE_JOB_PAUSED && !v->printing)
 		return "Paused"; /* an interrupted print waiting for an operator */
@@ -83,7 +67,7 @@ static const char *state_text(const struct view *v)
 	return "Operational";
 }
 
-static json_t *temp_json(const double t[2])
+json_t *http_temp_json(const double t[2])
 {
 	json_t *o = json_object();
 
@@ -93,8 +77,79 @@ static json_t *temp_json(const double t[2])
 	return o;
 }
 
+json_t *http_temps_json(const struct node_printer *p, const struct http_view *v, bool tools,
+			bool with_bed)
+{
+	json_t *o = json_object();
+	char name[16];
+
+	if (tools) {
+		json_object_set_new(o, "tool0", http_temp_json(v->tool));
+		for (int i = 1; i < p->prof->extruder_count; i++) {
+			snprintf(name, sizeof(name), "tool%d", i);
+			json_object_set_new(o, name, json_pack("{s:n,s:n,s:i}", "actual", "target",
+							       "offset", 0));
+		}
+	}
+	if (with_bed)
+		json_object_set_new(o, "bed", http_temp_json(v->bed));
+	return o;
+}
+
+json_t *http_temp_history(struct node_printer *p, int limit, bool tools, bool bed)
+{
+	json_t *arr = json_array();
+	size_t n, first;
+	char name[16];
+
+	pthread_mutex_lock(&p->ctl.mu);
+	n = limit > 0 && (size_t)limit < p->ntemps ? (size_t)limit : p->ntemps;
+	first = (p->temps_next + NODE_TEMP_HISTORY - n) % NODE_TEMP_HISTORY;
+	for (size_t i = 0; i < n; i++) {
+		const struct node_temp_sample *t = &p->temps[(first + i) % NODE_TEMP_HISTORY];
+		json_t *o = json_pack("{s:I}", "time", (json_int_t)t->time);
+
+		if (tools) {
+			json_object_set_new(o, "tool0", json_pack("{s:f,s:f}", "actual", t->tool[0],
+								  "target", t->tool[1]));
+			for (int k = 1; k < p->prof->extruder_count; k++) {
+				snprintf(name, sizeof(name), "tool%d", k);
+				json_object_set_new(o, name, json_pack("{s:n,s:n}", "actual",
+								       "target"));
+			}
+		}
+		if (bed)
+			json_object_set_new(o, "bed", json_pack("{s:f,s:f}", "actual", t->bed[0],
+								"target", t->bed[1]));
+		json_array_append_new(arr, o);
+	}
+	pthread_mutex_unlock(&p->ctl.mu);
+	return arr;
+}
+
+void http_add_history(struct MHD_Connection *c, struct node_printer *p, json_t *temps,
+		      bool tools, bool bed)
+{
+	const char *h = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "history");
+	const char *l = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "limit");
+	char *end = NULL;
+	long limit = l ? strtol(l, &end, 10) : 0;
+
+	if (!h || (strcasecmp(h, "true") && strcmp(h, "1")))
+		return;
+	if (l && (*end || limit < 1))
+		limit = 0; /* as OctoPrint: a bad limit is no limit */
+	json_object_set_new(temps, "history", http_temp_history(p, (int)(limit > 100000 ? 0 : limit),
+								tools, bed));
+}
+
+const char *http_tail(const struct req *r)
+{
+	return r->route_path + strlen(r->rt->path);
+}
+
 /* What OctoPrint has no field for: which port, simulated or not, firmware. */
-static json_t *link_json(const struct node_printer *p, const struct view *v)
+static json_t *link_json(const struct node_printer *p, const struct http_view *v)
 {
 	return json_pack("{s:s,s:s,s:b,s:s,s:s*}", "printer", p->cfg->name, "port", p->cfg->port,
 			 "simulated", node_port_simulated(p->cfg->port), "firmware", v->link_desc,
@@ -102,7 +157,7 @@ static json_t *link_json(const struct node_printer *p, const struct view *v)
 }
 
 /* Completion in percent, or null. */
-static json_t *completion_json(const struct view *v)
+static json_t *completion_json(const struct http_view *v)
 {
 	return v->has_job && v->size > 0 ? json_real(100.0 * (double)v->filepos / (double)v->size)
 					  : json_null();
@@ -110,16 +165,16 @@ static json_t *completion_json(const struct view *v)
 
 json_t *node_printer_json(struct node *n, struct node_printer *p, int queue_limit)
 {
-	struct view v;
+	struct http_view v;
 	bool clear = false;
 	json_t *o;
 
-	take_view(n, p, &v);
+	http_take_view(n, p, &v);
 	node_queue_bed_clear(n->q, p->cfg->name, &clear);
 	o = json_pack("{s:s,s:s,s:s,s:o,s:{s:o,s:o},s:{s:o,s:I,s:I},s:o,s:b}", "name",
-		      p->cfg->name, "prefix", p->cfg->prefix, "state", state_text(&v), "link",
-		      link_json(p, &v), "temperature", "tool0", temp_json(v.tool), "bed",
-		      temp_json(v.bed), "progress", "completion", completion_json(&v), "filepos",
+		      p->cfg->name, "prefix", p->cfg->prefix, "state", http_state_text(&v), "link",
+		      link_json(p, &v), "temperature", "tool0", http_temp_json(v.tool), "bed",
+		      http_temp_json(v.bed), "progress", "completion", completion_json(&v), "filepos",
 		      (json_int_t)(v.has_job ? v.filepos : 0), "size",
 		      (json_int_t)(v.has_job ? v.size : 0), "job",
 		      v.has_job ? node_job_json(&v.job) : json_null(), "bedClear", clear);
@@ -143,29 +198,52 @@ enum MHD_Result http_get_version(struct node *n, struct MHD_Connection *c, struc
 	return http_send_json(c, MHD_HTTP_OK, o, NULL);
 }
 
-enum MHD_Result http_get_printer(struct node *n, struct MHD_Connection *c, struct req *r)
+json_t *http_flags_json(const struct http_view *v)
 {
-	struct view v;
-	json_t *o, *flags;
+	json_t *flags = json_object();
 
-	take_view(n, r->p, &v);
-	if (!v.connected)
-		return http_send_error(c, MHD_HTTP_CONFLICT, "Printer is not operational");
-	flags = json_object();
-	json_object_set_new(flags, "operational", json_true());
-	json_object_set_new(flags, "printing", json_boolean(v.printing && !v.paused));
-	json_object_set_new(flags, "paused", json_boolean(v.paused || (v.has_job && !v.printing &&
-								     v.job.state == NODE_JOB_PAUSED)));
-	json_object_set_new(flags, "pausing", json_boolean(v.pausing));
+	json_object_set_new(flags, "operational", json_boolean(v->connected));
+	json_object_set_new(flags, "printing", json_boolean(v->printing && !v->paused));
+	json_object_set_new(flags, "paused", json_boolean(v->paused || (v->has_job && !v->printing &&
+								      v->job.state == NODE_JOB_PAUSED)));
+	json_object_set_new(flags, "pausing", json_boolean(v->pausing));
 	json_object_set_new(flags, "cancelling", json_false());
 	json_object_set_new(flags, "sdReady", json_false());
-	json_object_set_new(flags, "error", json_false());
-	json_object_set_new(flags, "ready", json_boolean(!v.printing));
-	json_object_set_new(flags, "closedOrError", json_false());
-	o = json_pack("{s:{s:o,s:o},s:{s:b},s:{s:s,s:o}}", "temperature", "tool0", temp_json(v.tool),
-		      "bed", temp_json(v.bed), "sd", "ready", 0, "state", "text", state_text(&v),
-		      "flags", flags);
+	json_object_set_new(flags, "error", json_boolean(!v->connected && v->conn_error[0]));
+	/* ready: a print may start; not while a job holds the printer (paused,
+	 * interrupted, slicing) */
+	json_object_set_new(flags, "ready", json_boolean(v->connected && !v->printing &&
+							 !v->has_job));
+	json_object_set_new(flags, "closedOrError", json_boolean(!v->connected));
+	return flags;
+}
+
+enum MHD_Result http_get_printer(struct node *n, struct MHD_Connection *c, struct req *r)
+{
+	struct http_view v;
+	const char *ex;
+	json_t *o;
+
+	http_take_view(n, r->p, &v);
+	if (!v.connected)
+		return http_send_error(c, MHD_HTTP_CONFLICT, "Printer is not operational");
+	o = json_pack("{s:o,s:{s:b},s:{s:s,s:o}}", "temperature",
+		      http_temps_json(r->p, &v, true, true), "sd", "ready", 0, "state", "text",
+		      http_state_text(&v), "flags", http_flags_json(&v));
+	http_add_history(c, r->p, json_object_get(o, "temperature"), true, true);
 	json_object_set_new(o, "stratum", link_json(r->p, &v));
+	/* ?exclude=temperature,sd,state leaves those out, as OctoPrint */
+	if ((ex = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "exclude"))) {
+		static const char *const parts[] = {"temperature", "sd", "state"};
+
+		for (size_t i = 0; i < sizeof(parts) / sizeof(parts[0]); i++) {
+			size_t len = strlen(parts[i]);
+
+			for (const char *at = ex; (at = strstr(at, parts[i])); at += len)
+				if ((at == ex || at[-1] == ',') && (!at[len] || at[len] == ','))
+					json_object_del(o, parts[i]);
+		}
+	}
 	return http_send_json(c, MHD_HTTP_OK, o, NULL);
 }
 
@@ -175,14 +253,35 @@ static json_t *str_or_null(const char *s)
 	return s && *s ? json_string(s) : json_null();
 }
 
-enum MHD_Result http_get_job(struct node *n, struct MHD_Connection *c, struct req *r)
+json_t *http_job_json(struct node *n, struct node_printer *p, struct http_view *out)
 {
-	struct view v;
-	json_t *file, *progress, *o;
+	struct http_view v;
+	json_t *file, *progress, *o, *filament = json_null();
 	const char *name = NULL;
+	char sel[2 * NODE_PATH_MAX];
+	struct node_gcode_estimate est;
+	const char *origin = NULL;
+	double left = -1, done;
 	struct stat st;
 
-	take_view(n, r->p, &v);
+	http_take_view(n, p, &v);
+	snprintf(sel, sizeof(sel), "%s/%s", p->files_dir, v.selected);
+	node_gcode_estimate(p, v.has_job ? v.job.gcode : v.selected[0] ? sel : NULL,
+			    v.has_job ? v.filepos : 0, &est);
+	if (est.filament_mm >= 0 || est.filament_cm3 >= 0)
+		filament = json_pack("{s:{s:o,s:o}}", "tool0", "length", est.filament_mm >= 0
+				     ? json_real(est.filament_mm) : json_null(), "volume",
+				     est.filament_cm3 >= 0 ? json_real(est.filament_cm3) : json_null());
+	/* Time left: the file's M73 R marks (what the slicer planned for the
+	 * part still to print), else its estimate scaled by the bytes left. */
+	done = v.has_job && v.size > 0 ? (double)v.filepos / (double)v.size : 0;
+	if (v.has_job && est.left_s >= 0) {
+		left = est.left_s;
+		origin = "estimate";
+	} else if (v.has_job && est.time_s >= 0) {
+		left = est.time_s * (1 - done);
+		origin = "analysis";
+	}
 	name = v.has_job ? v.job.name : v.selected;
 	file = json_object();
 	json_object_set_new(file, "name", str_or_null(name));
@@ -207,23 +306,34 @@ enum MHD_Result http_get_job(struct node *n, struct MHD_Connection *c, struct re
 	json_object_set_new(progress, "layer", v.layer >= 0 ? json_integer(v.layer + 1)
 							    : json_null());
 	json_object_set_new(progress, "z", isfinite(v.z) ? json_real(v.z) : json_null());
-	json_object_set_new(progress, "printTimeLeft", json_null());
-	json_object_set_new(progress, "printTimeLeftOrigin", json_null());
-	o = json_pack("{s:{s:o,s:n,s:n,s:n},s:o,s:s}", "job", "file", file, "estimatedPrintTime",
-		      "filament", "user", "progress", progress, "state", state_text(&v));
+	json_object_set_new(progress, "printTimeLeft", left >= 0 ? json_integer((json_int_t)left)
+								    : json_null());
+	json_object_set_new(progress, "printTimeLeftOrigin", str_or_null(origin));
+	o = json_pack("{s:{s:o,s:o,s:n,s:o,s:n},s:o,s:s}", "job", "file", file,
+		      "estimatedPrintTime", est.time_s >= 0 ? json_integer((json_int_t)est.time_s)
+							    : json_null(),
+		      "lastPrintTime", "filament", filament, "user", "progress", progress, "state",
+		      http_state_text(&v));
 	json_object_set_new(o, "stratum", v.has_job ? node_job_json(&v.job) : json_null());
-	return http_send_json(c, MHD_HTTP_OK, o, NULL);
+	if (out)
+		*out = v;
+	return o;
+}
+
+enum MHD_Result http_get_job(struct node *n, struct MHD_Connection *c, struct req *r)
+{
+	return http_send_json(c, MHD_HTTP_OK, http_job_json(n, r->p, NULL), NULL);
 }
 
 enum MHD_Result http_get_connection(struct node *n, struct MHD_Connection *c, struct req *r)
 {
 	struct node_printer *p = r->p;
-	struct view v;
+	struct http_view v;
 	json_t *o;
 
-	take_view(n, p, &v);
+	http_take_view(n, p, &v);
 	o = json_pack("{s:{s:s,s:s,s:I,s:s},s:{s:[s],s:[I],s:[{s:s,s:s}],s:s,s:I,s:s,s:b}}",
-		      "current", "state", state_text(&v), "port", p->cfg->port, "baudrate",
+		      "current", "state", http_state_text(&v), "port", p->cfg->port, "baudrate",
 		      (json_int_t)p->prof->baudrate, "printerProfile", p->cfg->name, "options",
 		      "ports", p->cfg->port, "baudrates", (json_int_t)p->prof->baudrate,
 		      "printerProfiles", "id", p->cfg->name, "name", p->prof->name,
@@ -248,6 +358,18 @@ enum MHD_Result http_get_settings(struct node *n, struct MHD_Connection *c, stru
 	return http_send_json(c, MHD_HTTP_OK, o, NULL);
 }
 
+/* POST /api/settings: the node's settings are its config file, read at
+ * start; OctoPrint's answer to a user who may not change settings. */
+enum MHD_Result http_post_settings(struct node *n, struct MHD_Connection *c, struct req *r)
+{
+	char msg[NODE_PATH_MAX + 120];
+
+	(void)r;
+	snprintf(msg, sizeof(msg), "the node's settings are its config file %s: change it there "
+		 "and restart the node", n->cfg.path);
+	return http_send_error(c, MHD_HTTP_FORBIDDEN, msg);
+}
+
 /* The URL of route path on this request's host and printer prefix. */
 void http_url_for(struct MHD_Connection *c, const struct req *r, const char *path,
 		  const char *name, char *out, size_t cap)
@@ -256,9 +378,10 @@ void http_url_for(struct MHD_Connection *c, const struct req *r, const char *pat
 	size_t n;
 
 	n = (size_t)snprintf(out, cap, "http://%s%s%s", host ? host : "localhost", r->base, path);
-	/* Percent-encode the name: it may hold blanks and UTF-8. */
+	/* Percent-encode the name: it may hold blanks and UTF-8; its folders
+	 * stay apart by '/', as OctoPrint's links have them. */
 	for (const unsigned char *s = (const unsigned char *)name; s && *s && n + 4 < cap; s++) {
-		if (isalnum(*s) || strchr("-._~", *s))
+		if (isalnum(*s) || strchr("-._~/", *s))
 			out[n++] = (char)*s;
 		else
 			n += (size_t)snprintf(out + n, cap - n, "%%%02X", *s);
@@ -266,22 +389,22 @@ void http_url_for(struct MHD_Connection *c, const struct req *r, const char *pat
 	out[n < cap ? n : cap - 1] = '\0';
 }
 
-enum MHD_Result http_get_profiles(struct node *n, struct MHD_Connection *c, struct req *r)
+/* The printer's profile as OctoPrint's printer profile entry. */
+static json_t *profile_json(struct node *n, struct MHD_Connection *c, struct req *r)
 {
 	const struct profile *pf = r->p->prof;
 	char url[2048];
-	json_t *o, *offsets = json_array();
+	json_t *offsets = json_array();
 
-	(void)n;
 	http_url_for(c, r, "/api/printerprofiles/", r->p->cfg->name, url, sizeof(url));
 	for (int i = 0; i < pf->extruder_count; i++)
 		json_array_append_new(offsets, json_pack("[f,f]", pf->extruder_offset[i].x,
 							 pf->extruder_offset[i].y));
-	o = json_pack("{s:{s:{s:s,s:s,s:s,s:s,s:b,s:b,s:s,"
+	return json_pack("{s:s,s:s,s:s,s:s,s:b,s:b,s:s,"
 		      "s:{s:s,s:s,s:f,s:f,s:f,s:b},s:b,s:b,"
 		      "s:{s:{s:f,s:b},s:{s:f,s:b},s:{s:f,s:b},s:{s:f,s:b}},"
-		      "s:{s:i,s:o,s:f,s:b}}}}",
-		      "profiles", r->p->cfg->name, "id", r->p->cfg->name, "name", pf->name, "model",
+		      "s:{s:i,s:o,s:f,s:b}}",
+		      "id", r->p->cfg->name, "name", pf->name, "model",
 		      pf->printer_model, "color", "default", "current", 1, "default",
 		      r->p == &n->printers[0], "resource", url, "volume", "formFactor",
 		      "rectangular", "origin", "lowerleft", "width", pf->bed_max_x - pf->bed_min_x,
@@ -293,7 +416,20 @@ enum MHD_Result http_get_profiles(struct node *n, struct MHD_Connection *c, stru
 		      "inverted", 0, "e", "speed", pf->machine_max_feedrate[PROFILE_AXIS_E] * 60,
 		      "inverted", 0, "extruder", "count", pf->extruder_count, "offsets", offsets,
 		      "nozzleDiameter", pf->nozzle_diameter[0], "sharedNozzle", 0);
-	return http_send_json(c, MHD_HTTP_OK, o, NULL);
+}
+
+enum MHD_Result http_get_profiles(struct node *n, struct MHD_Connection *c, struct req *r)
+{
+	return http_send_json(c, MHD_HTTP_OK, json_pack("{s:{s:o}}", "profiles", r->p->cfg->name,
+							profile_json(n, c, r)), NULL);
+}
+
+/* GET /api/printerprofiles/ID: the printer's own profile is its only one. */
+enum MHD_Result http_get_profile(struct node *n, struct MHD_Connection *c, struct req *r)
+{
+	if (strcmp(http_tail(r), r->p->cfg->name))
+		return http_send_error(c, MHD_HTTP_NOT_FOUND, "Profile not found");
+	return http_send_json(c, MHD_HTTP_OK, profile_json(n, c, r), NULL);
 }
 
 /* The file entry OctoPrint gives for an uploaded file. */
@@ -337,22 +473,6 @@ int http_check_rel(const char *rel, size_t len, struct st_error *err)
 	return 0;
 }
 
-enum MHD_Result http_get_file(struct node *n, struct MHD_Connection *c, struct req *r)
-{
-	const char *rel = r->route_path + strlen(r->rt->path);
-	char full[NODE_PATH_MAX];
-	struct st_error err;
-	struct stat st;
-
-	(void)n;
-	if (http_check_rel(rel, strlen(rel), &err) || rel[0] == '/' || !rel[0])
-		return http_send_error(c, MHD_HTTP_NOT_FOUND, "File not found");
-	if (snprintf(full, sizeof(full), "%s/%s", r->p->files_dir, rel) >= (int)sizeof(full) ||
-	    stat(full, &st) || !S_ISREG(st.st_mode))
-		return http_send_error(c, MHD_HTTP_NOT_FOUND, "File not found");
-	return http_send_json(c, MHD_HTTP_OK, http_file_json(c, r, rel, &st), NULL);
-}
-
 enum MHD_Result http_get_queue(struct node *n, struct MHD_Connection *c, struct req *r)
 {
 	bool clear = false;
@@ -379,7 +499,7 @@ enum MHD_Result http_get_node(struct node *n, struct MHD_Connection *c, struct r
 						        arr), NULL);
 }
 
-static json_t *body_json(struct MHD_Connection *c, struct req *r, enum MHD_Result *ret)
+json_t *http_body_json(struct MHD_Connection *c, struct req *r, enum MHD_Result *ret)
 {
 	json_error_t je;
 	json_t *o = r->body ? json_loadb(r->body, r->len, 0, &je) : NULL;
@@ -395,8 +515,8 @@ static json_t *body_json(struct MHD_Connection *c, struct req *r, enum MHD_Resul
 	return o;
 }
 
-/* Queue the selected file (command "start"); p->mu held. */
-static enum MHD_Result job_start(struct node *n, struct MHD_Connection *c, struct node_printer *p)
+enum MHD_Result http_start_selected(struct node *n, struct MHD_Connection *c,
+				    struct node_printer *p)
 {
 	char rel[NODE_PATH_MAX], full[NODE_PATH_MAX + NODE_PATH_MAX];
 	int64_t id;
@@ -428,7 +548,7 @@ enum MHD_Result http_post_job(struct node *n, struct MHD_Connection *c, struct r
 {
 	struct node_printer *p = r->p;
 	enum MHD_Result ret;
-	json_t *o = body_json(c, r, &ret);
+	json_t *o = http_body_json(c, r, &ret);
 	const char *cmd, *action;
 	struct st_error err = {0};
 	int rc;
@@ -442,7 +562,7 @@ enum MHD_Result http_post_job(struct node *n, struct MHD_Connection *c, struct r
 							       "pause)");
 	} else if (!strcmp(cmd, "start")) {
 		pthread_mutex_lock(&p->mu);
-		ret = job_start(n, c, p);
+		ret = http_start_selected(n, c, p);
 		pthread_mutex_unlock(&p->mu);
 	} else if (!strcmp(cmd, "cancel") || !strcmp(cmd, "pause")) {
 		rc = node_control_job(n, p, cmd, action, &err);
@@ -454,11 +574,34 @@ enum MHD_Result http_post_job(struct node *n, struct MHD_Connection *c, struct r
 	return ret;
 }
 
+enum MHD_Result http_queue_lines(struct MHD_Connection *c, struct node_printer *p,
+				 char lines[][NODE_CMD_MAX], size_t count)
+{
+	enum MHD_Result ret;
+
+	pthread_mutex_lock(&p->mu);
+	if (!p->connected)
+		ret = http_send_error(c, MHD_HTTP_CONFLICT, "Printer is not operational");
+	else if (p->job_printing)
+		ret = http_send_error(c, MHD_HTTP_CONFLICT, "the printer is printing; commands are taken "
+						            "between jobs");
+	else if ((size_t)p->ncmds + count > NODE_CMD_QUEUE)
+		ret = http_send_error(c, MHD_HTTP_CONFLICT, "the printer has too many commands waiting");
+	else {
+		memcpy(p->cmds[p->ncmds], lines, sizeof(lines[0]) * count);
+		p->ncmds += (int)count;
+		pthread_cond_signal(&p->cv);
+		ret = http_no_content(c);
+	}
+	pthread_mutex_unlock(&p->mu);
+	return ret;
+}
+
 enum MHD_Result http_post_command(struct node *n, struct MHD_Connection *c, struct req *r)
 {
 	struct node_printer *p = r->p;
 	enum MHD_Result ret;
-	json_t *o = body_json(c, r, &ret), *list, *one;
+	json_t *o = http_body_json(c, r, &ret), *list, *one;
 	char lines[NODE_CMD_QUEUE][NODE_CMD_MAX];
 	size_t count = 0, i;
 
@@ -496,21 +639,7 @@ enum MHD_Result http_post_command(struct node *n, struct MHD_Connection *c, stru
 		}
 		snprintf(lines[count++], NODE_CMD_MAX, "%s", s);
 	}
-	pthread_mutex_lock(&p->mu);
-	if (!p->connected)
-		ret = http_send_error(c, MHD_HTTP_CONFLICT, "Printer is not operational");
-	else if (p->job_printing)
-		ret = http_send_error(c, MHD_HTTP_CONFLICT, "the printer is printing; commands are taken "
-						            "between jobs");
-	else if ((size_t)p->ncmds + count > NODE_CMD_QUEUE)
-		ret = http_send_error(c, MHD_HTTP_CONFLICT, "the printer has too many commands waiting");
-	else {
-		memcpy(p->cmds[p->ncmds], lines, sizeof(lines[0]) * count);
-		p->ncmds += (int)count;
-		pthread_cond_signal(&p->cv);
-		ret = http_no_content(c);
-	}
-	pthread_mutex_unlock(&p->mu);
+	ret = http_queue_lines(c, p, lines, count);
 out:
 	json_decref(list);
 	json_decref(o);
@@ -521,7 +650,7 @@ enum MHD_Result http_post_connection(struct node *n, struct MHD_Connection *c, s
 {
 	struct node_printer *p = r->p;
 	enum MHD_Result ret;
-	json_t *o = body_json(c, r, &ret);
+	json_t *o = http_body_json(c, r, &ret);
 	const char *cmd, *port;
 
 	(void)n;

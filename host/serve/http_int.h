@@ -1,6 +1,9 @@
 /*
  * http_int.h - what the node's HTTP front (http.c: responses, upload,
- * routing) and its API handlers (http_api.c) share; host/serve/ only.
+ * routing) and its API handlers share: http_api.c (state, job, settings,
+ * profiles, queue), http_files.c (file list and operations, downloads),
+ * http_printer.c (tool, bed, print head, SD, chamber) and http_account.c
+ * (login, user, server, system commands); host/serve/ only.
  */
 #ifndef STRATUM_HOST_SERVE_HTTP_INT_H
 #define STRATUM_HOST_SERVE_HTTP_INT_H
@@ -15,6 +18,7 @@
 #include "node_int.h"
 
 #define HTTP_FIELD_MAX 1024 /* a form field other than the file */
+#define HTTP_OCTOPRINT_VERSION "1.10.0" /* the OctoPrint version answered (/api/version, /api/server) */
 
 struct req;
 typedef enum MHD_Result (*route_fn)(struct node *n, struct MHD_Connection *c, struct req *r);
@@ -33,6 +37,10 @@ struct req {
 	const struct route *rt;
 	char base[NODE_PREFIX_MAX]; /* the prefix the client used ("" for /api/...) */
 	const char *route_path;	    /* url after base */
+	char allow[64];		    /* the methods of route_path, for Allow */
+	bool options;		    /* an OPTIONS request: answered with allow */
+	unsigned roles;		    /* of the request's key (enum node_role), 0 none */
+	const char *key_name;	    /* that key's [key NAME], NULL none */
 	int status;		    /* decided before the body: answer this */
 	char msg[300];
 	/* JSON body */
@@ -48,6 +56,8 @@ struct req {
 	size_t filename_len;
 	char print[16], select[16], force[16], path[HTTP_FIELD_MAX];
 	size_t path_len;
+	char foldername[NODE_FILE_NAME_MAX + 2]; /* OctoPrint's new folder (no file part) */
+	size_t foldername_len;
 	/* per-job settings fields as "name\0value\0" pairs (cfgopt_field) */
 	char sets[NODE_SETTINGS_MAX];
 	size_t sets_len, nsets;
@@ -63,13 +73,69 @@ enum MHD_Result http_send_error(struct MHD_Connection *c, unsigned status, const
 /* Answer 204 No Content. */
 enum MHD_Result http_no_content(struct MHD_Connection *c);
 
-/* ---- handlers (http_api.c): each a route_fn ---- */
+/* ---- a printer's state for one answer (http_api.c) ---- */
+
+/* A consistent view of a printer for one answer. */
+struct http_view {
+	bool connected, printing, paused, pausing;
+	char conn_error[256];
+	char link_desc[128];
+	int64_t job_id;
+	int64_t filepos, size;
+	long layer;		/* of the last confirmed command (0-based), -1 unknown */
+	double z;		/* its Z (mm), NAN unknown */
+	double tool[2], bed[2]; /* actual, target */
+	bool has_job;
+	struct node_job job; /* the active job (printing, paused, slicing), if has_job */
+	char selected[NODE_PATH_MAX];
+};
+
+void http_take_view(struct node *n, struct node_printer *p, struct http_view *v);
+/* OctoPrint's state text of v ("Operational", "Printing", ...). */
+const char *http_state_text(const struct http_view *v);
+/* {"actual", "target", "offset"} of t = {actual, target}. */
+json_t *http_temp_json(const double t[2]);
+/* The temperature object of /api/printer and /api/printer/tool: tool0,
+ * and tool1 ... for each further extruder of p's profile (their actual
+ * and target null: the drivers report tool 0 only); bed when with_bed. */
+json_t *http_temps_json(const struct node_printer *p, const struct http_view *v, bool tools,
+			bool with_bed);
+/* OctoPrint's state flags of v (operational, printing, paused, ready ...). */
+json_t *http_flags_json(const struct http_view *v);
+/* The /api/job answer for p (job, progress, state; stratum's job), and the
+ * view it was made of in *out when out is not NULL. */
+json_t *http_job_json(struct node *n, struct node_printer *p, struct http_view *out);
+/* p's temperature history, oldest first, its last limit samples (0: all),
+ * as OctoPrint's history entries ({"time", "tool0": {"actual", "target"},
+ * "bed": ...}), with the tools and/or the bed. */
+json_t *http_temp_history(struct node_printer *p, int limit, bool tools, bool bed);
+/* Add "history" to the temperature object temps when the query asks for
+ * it (?history=true, ?limit=N). */
+void http_add_history(struct MHD_Connection *c, struct node_printer *p, json_t *temps,
+		      bool tools, bool bed);
+/* The JSON object of the body, or NULL with the error answer sent in *ret. */
+json_t *http_body_json(struct MHD_Connection *c, struct req *r, enum MHD_Result *ret);
+/* Queue count checked G-code lines for p's worker (sent between jobs):
+ * 204, or 409 when not operational, printing or the queue is full. */
+enum MHD_Result http_queue_lines(struct MHD_Connection *c, struct node_printer *p,
+				 char lines[][NODE_CMD_MAX], size_t count);
+/* Queue p's selected file (POST /api/job "start"); p->mu held.  204, 409
+ * when nothing is selected or the file is gone. */
+enum MHD_Result http_start_selected(struct node *n, struct MHD_Connection *c,
+				    struct node_printer *p);
+/* Tell the push clients that p's files changed (UpdatedFiles). */
+void http_files_changed(struct node_printer *p);
+/* The route path after the route's prefix ("a/b.gcode" of /api/files/local/a/b.gcode). */
+const char *http_tail(const struct req *r);
+
+/* ---- handlers: each a route_fn ---- */
 
 enum MHD_Result http_get_version(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_get_printer(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_get_job(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_get_connection(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_get_settings(struct node *n, struct MHD_Connection *c, struct req *r);
+enum MHD_Result http_post_settings(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_get_profiles(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_get_file(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_get_queue(struct node *n, struct MHD_Connection *c, struct req *r);
@@ -78,13 +144,46 @@ enum MHD_Result http_post_job(struct node *n, struct MHD_Connection *c, struct r
 enum MHD_Result http_post_command(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_post_connection(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_post_bed_clear(struct node *n, struct MHD_Connection *c, struct req *r);
+enum MHD_Result http_get_profile(struct node *n, struct MHD_Connection *c, struct req *r);
+/* http_files.c; http_make_folder: an upload form with foldername and no
+ * file, OctoPrint's way to create a folder under path. */
+enum MHD_Result http_make_folder(struct node *n, struct MHD_Connection *c, struct req *r);
+enum MHD_Result http_get_files(struct node *n, struct MHD_Connection *c, struct req *r);
+enum MHD_Result http_post_file(struct node *n, struct MHD_Connection *c, struct req *r);
+enum MHD_Result http_delete_file(struct node *n, struct MHD_Connection *c, struct req *r);
+enum MHD_Result http_download_file(struct node *n, struct MHD_Connection *c, struct req *r);
+/* http_printer.c */
+enum MHD_Result http_get_tool(struct node *n, struct MHD_Connection *c, struct req *r);
+enum MHD_Result http_post_tool(struct node *n, struct MHD_Connection *c, struct req *r);
+enum MHD_Result http_get_bed(struct node *n, struct MHD_Connection *c, struct req *r);
+enum MHD_Result http_post_bed(struct node *n, struct MHD_Connection *c, struct req *r);
+enum MHD_Result http_chamber(struct node *n, struct MHD_Connection *c, struct req *r);
+enum MHD_Result http_post_printhead(struct node *n, struct MHD_Connection *c, struct req *r);
+enum MHD_Result http_sd(struct node *n, struct MHD_Connection *c, struct req *r);
+/* http_account.c */
+enum MHD_Result http_get_server(struct node *n, struct MHD_Connection *c, struct req *r);
+enum MHD_Result http_post_login(struct node *n, struct MHD_Connection *c, struct req *r);
+enum MHD_Result http_get_currentuser(struct node *n, struct MHD_Connection *c, struct req *r);
+enum MHD_Result http_get_system_commands(struct node *n, struct MHD_Connection *c, struct req *r);
 
-/* What the upload answer (http.c) uses: the file's URL, a checked relative
- * path (0 or ST_ERR_ARG), a file's JSON. */
+/* What the upload answer (http.c) and the file calls use: the file's URL,
+ * a checked relative path (0 or ST_ERR_ARG), a file's JSON. */
 void http_url_for(struct MHD_Connection *c, const struct req *r, const char *path,
 		  const char *name, char *out, size_t cap);
 int http_check_rel(const char *rel, size_t len, struct st_error *err);
 json_t *http_file_json(struct MHD_Connection *c, const struct req *r, const char *rel,
 		       const struct stat *st);
+
+/* push.c: OctoPrint's push API (SockJS over WebSocket).  node_push_route
+ * answers path (after the printer's prefix) when it is one of /sockjs/...:
+ * true with *ret.  node_push_stop closes every client and waits for their
+ * threads (before the HTTP daemon stops).  node_push_session: the session
+ * a key's passive login gives and its auth message carries (hex, derived
+ * from the secret, which it does not reveal). */
+#define NODE_PUSH_SESSION_LEN 32
+bool node_push_route(struct node *n, struct node_printer *p, struct MHD_Connection *c,
+		     const char *path, enum MHD_Result *ret);
+void node_push_stop(struct node *n);
+void node_push_session(const char *secret, char out[NODE_PUSH_SESSION_LEN + 1]);
 
 #endif /* STRATUM_HOST_SERVE_HTTP_INT_H */

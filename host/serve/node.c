@@ -73,6 +73,7 @@ static int setup_printer(struct node *n, size_t i, struct st_error *err)
 	pthread_mutex_init(&p->mu, NULL);
 	pthread_cond_init(&p->cv, NULL);
 	pthread_mutex_init(&p->ctl.mu, NULL);
+	pthread_mutex_init(&p->gc_mu, NULL);
 	p->want_connect = true; /* OctoPrint's autoconnect */
 	rc = profile_find(p->cfg->profile, &p->prof, &e);
 	if (rc)
@@ -109,6 +110,8 @@ int node_new(const struct node_config *cfg, struct node **out, struct st_error *
 		return st_error_set(err, ST_ERR_NOMEM, "node: out of memory");
 	n->cfg = *cfg;
 	pthread_mutex_init(&n->tick_mu, NULL);
+	pthread_mutex_init(&n->push_mu, NULL);
+	pthread_cond_init(&n->push_cv, NULL);
 	pthread_cond_init(&n->tick_cv, NULL);
 	if ((rc = make_dir(cfg->data_dir, err)) ||
 	    (rc = join(n->tmp_dir, sizeof(n->tmp_dir), cfg->data_dir, "tmp", err)) ||
@@ -138,11 +141,30 @@ out_free:
 	return rc;
 }
 
-/* Store every print's position, so a crash loses at most NODE_TICK_MS of it. */
+/* Keep p's temperatures in its history; p->mu held. */
+static void sample_temps(struct node_printer *p)
+{
+	struct node_temp_sample *t = &p->temps[p->temps_next];
+
+	pthread_mutex_lock(&p->ctl.mu);
+	t->time = time(NULL);
+	t->tool[0] = p->ctl.tool_actual;
+	t->tool[1] = p->ctl.tool_target;
+	t->bed[0] = p->ctl.bed_actual;
+	t->bed[1] = p->ctl.bed_target;
+	p->temps_next = (p->temps_next + 1) % NODE_TEMP_HISTORY;
+	if (p->ntemps < NODE_TEMP_HISTORY)
+		p->ntemps++;
+	pthread_mutex_unlock(&p->ctl.mu);
+}
+
+/* Store every print's position, so a crash loses at most NODE_TICK_MS of
+ * it; sample the connected printers' temperatures every NODE_TEMP_EVERY ticks. */
 static void *ticker_main(void *arg)
 {
 	struct node *n = arg;
 	struct timespec t;
+	unsigned ticks = 0;
 
 	pthread_mutex_lock(&n->tick_mu);
 	while (!n->ticker_stop) {
@@ -163,8 +185,11 @@ static void *ticker_main(void *arg)
 				pthread_mutex_unlock(&p->ctl.mu);
 				node_queue_progress(n->q, p->job_id, pos, size);
 			}
+			if (p->connected && ticks % NODE_TEMP_EVERY == 0)
+				sample_temps(p);
 			pthread_mutex_unlock(&p->mu);
 		}
+		ticks++;
 	}
 	pthread_mutex_unlock(&n->tick_mu);
 	return NULL;
@@ -249,9 +274,13 @@ void node_free(struct node *n)
 		pthread_mutex_destroy(&p->mu);
 		pthread_cond_destroy(&p->cv);
 		pthread_mutex_destroy(&p->ctl.mu);
+		pthread_mutex_destroy(&p->gc_mu);
+		node_gcode_info_free(&p->gc);
 	}
 	node_queue_close(n->q);
 	pthread_mutex_destroy(&n->tick_mu);
+	pthread_mutex_destroy(&n->push_mu);
+	pthread_cond_destroy(&n->push_cv);
 	pthread_cond_destroy(&n->tick_cv);
 	free(n);
 }

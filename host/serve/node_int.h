@@ -10,6 +10,7 @@
 
 #include <jansson.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <stdint.h>
 
@@ -122,6 +123,35 @@ json_t *node_queue_list(struct node_queue *q, const char *printer, int limit);
 /* node_job_json - one job as the /api/stratum/queue entry. */
 json_t *node_job_json(const struct node_job *job);
 
+/* What a G-code file says of itself (gcinfo.c), kept per printer. */
+struct node_gcode_mark {
+	int64_t pos;   /* byte offset of an M73 line with R */
+	double left_s; /* its R, in seconds */
+};
+
+struct node_gcode_info {
+	char path[NODE_PATH_MAX]; /* the file read, "" none */
+	int64_t mtime, size;	  /* its stat when read */
+	double time_s;		  /* the slicer's print-time estimate, s; -1 unknown */
+	double filament_mm, filament_cm3; /* filament of the print; -1 unknown */
+	struct node_gcode_mark *marks;
+	size_t nmarks;
+};
+
+struct node_gcode_estimate {
+	double time_s, filament_mm, filament_cm3; /* as in node_gcode_info */
+	double left_s; /* by the last M73 R before the byte asked for; -1 none */
+};
+
+/* One temperature sample of a printer's history (/api/printer?history). */
+struct node_temp_sample {
+	int64_t time;		/* Unix time, s */
+	double tool[2], bed[2]; /* actual, target, degC */
+};
+
+#define NODE_TEMP_HISTORY 600 /* samples kept: 20 min at one per NODE_TEMP_EVERY ticks */
+#define NODE_TEMP_EVERY 4     /* ticks (NODE_TICK_MS) between samples: 2 s, as OctoPrint polls */
+
 #define NODE_CMD_QUEUE 16 /* printer commands waiting for an idle printer */
 #define NODE_CMD_MAX 257 /* one command line with its NUL (serial/gcode.h GCODE_LINE_MAX) */
 
@@ -148,7 +178,30 @@ struct node_printer {
 
 	struct node_link *link; /* the worker's alone */
 	struct node_print_ctl ctl;
+
+	atomic_uint files_version; /* bumped when its stored files change (push events) */
+
+	/* temperature history, a ring written by the ticker, under ctl.mu */
+	struct node_temp_sample temps[NODE_TEMP_HISTORY];
+	size_t ntemps, temps_next; /* samples held; where the next goes */
+
+	pthread_mutex_t gc_mu;	 /* gc, the last G-code file read (gcinfo.c) */
+	struct node_gcode_info gc;
 };
+
+/*
+ * node_gcode_estimate - what the G-code file path (NULL or "": none; not
+ * G-code: nothing known) says of its print time and filament, and the time
+ * left at byte filepos by its M73 R marks.  Reads the file the first time
+ * it is asked for (or after it changed), under p->gc_mu; any thread.
+ */
+void node_gcode_estimate(struct node_printer *p, const char *path, int64_t filepos,
+			 struct node_gcode_estimate *out);
+/* node_gcode_summary - the estimate and filament of the G-code file path
+ * (left_s -1), from its first 64 KiB and last 256 KiB only; no cache. */
+void node_gcode_summary(const char *path, struct node_gcode_estimate *out);
+/* node_gcode_info_free - what node_gcode_estimate kept. */
+void node_gcode_info_free(struct node_gcode_info *g);
 
 struct MHD_Daemon;
 
@@ -168,6 +221,11 @@ struct node {
 	pthread_mutex_t tick_mu;
 	pthread_cond_t tick_cv;
 	struct node_mqtt *mqtt; /* NULL without [mqtt] */
+	/* push API clients (push.c), each on its own detached thread */
+	pthread_mutex_t push_mu;
+	pthread_cond_t push_cv; /* npush went down */
+	int npush;
+	bool push_stop;
 };
 
 #define NODE_TICK_MS 500

@@ -187,12 +187,15 @@ static int double_stream(void *state, const struct printer_job *job, struct prin
 static int double_command(void *state, const char *text, char *reply, size_t cap,
 			  struct st_error *err)
 {
+	struct double_state *s = state;
 	struct gcode_line l;
+	int rc = gcode_parse(text, strlen(text), 0, &l, err);
 
-	(void)state;
 	if (reply && cap)
 		snprintf(reply, cap, "ok\n");
-	return gcode_parse(text, strlen(text), 0, &l, err);
+	if (!rc) /* a target set between jobs is reached at once, as in a print */
+		apply_temps(&l, &s->temps);
+	return rc;
 }
 
 static int double_poll(void *state, struct printer_progress *t, struct st_error *err)

@@ -1,0 +1,791 @@
+/*
+ * check_octoapi.c - the OctoPrint calls of `stratum serve` beyond the
+ * upload path, one test per call, checking the status codes and JSON
+ * fields of OctoPrint's REST API (docs/serve.md, "OctoPrint conformance"):
+ * login, current user, server, settings, files (list, one, new folder,
+ * select, move, copy, delete, download), tool, bed, print head, SD card,
+ * chamber, system commands, printer profiles, the key forms, HEAD and
+ * OPTIONS, and /api/job's estimate, time left and filament (the push API:
+ * check_octopush.c).  The node runs as a child process (servetest.h) with
+ * `port = test-instant` printers, or `port = sim` where the G-code that
+ * reached the printer is checked in the simulator's log.
+ */
+#include <check.h>
+#include <jansson.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "servetest.h"
+#include "suites.h"
+#include "testutil.h"
+
+#define CTL "X-Api-Key: " KEY_CTL
+#define UP "X-Api-Key: " KEY_UP
+#define RO "X-Api-Key: " KEY_READ
+
+/* A test-instant Prusa and a test-instant Creator Pro (two extruders). */
+#define MK3S_AND_CREATOR                                                             \
+	"[printer mk3s]\nprofile = prusa-i3-mk3s\nport = test-instant\n\n"          \
+	"[printer cp]\nprofile = flashforge-creator-pro\nport = test-instant\n"
+
+/* G-code that says its estimate and filament as PrusaSlicer writes them,
+ * with M73 marks, and dwells so a test can hold it printing. */
+static const char estimated[] =
+	"M73 P0 R10\nG4 S1\nM73 P50 R5\nG4 S%d\nM73 P100 R0\n"
+	"; filament used [mm] = 812.5\n; filament used [cm3] = 1.95\n"
+	"; estimated printing time (normal mode) = 10m 2s\n";
+
+static void start(struct node_proc *np, const char *printers)
+{
+	sv_write_config(np, printers, 8);
+	sv_start(np);
+}
+
+/* Wait until prefix's printer is connected (its worker connects it after
+ * the node listens). */
+static void operational(int port, const char *prefix)
+{
+	char path[128];
+	struct resp r;
+
+	snprintf(path, sizeof(path), "%s/api/printer", prefix);
+	for (int i = 0; i < 500; i++) {
+		int status;
+
+		sv_http(port, "GET", path, RO, NULL, &r);
+		status = r.status;
+		sv_resp_free(&r);
+		if (status == 200)
+			return;
+		usleep(20000);
+	}
+	ck_abort_msg("%s is not operational", prefix);
+}
+
+/* Store a G-code text in folder (may be "") of mk3s without printing it. */
+static void store(int port, const char *folder, const char *name, const char *text)
+{
+	struct resp r;
+
+	sv_upload(port, "", KEY_UP, name, strlen(name), folder, strlen(folder), "false", text,
+		  strlen(text), NULL, true, &r);
+	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
+	sv_resp_free(&r);
+}
+
+/* Whether the file exists under the node's files of printer. */
+static bool stored(const struct node_proc *np, const char *printer, const char *rel)
+{
+	char path[1024];
+	struct stat st;
+
+	snprintf(path, sizeof(path), "%s/data/files/%s/%s", np->dir, printer, rel);
+	return stat(path, &st) == 0;
+}
+
+/* A G-code text that dwells secs seconds (a job held printing). */
+static char *dwell(int secs)
+{
+	static char text[512];
+
+	snprintf(text, sizeof(text), estimated, secs);
+	return text;
+}
+
+/* ---- who asks: login, current user, server, keys ------------------------ */
+
+START_TEST(test_login_passive)
+{
+	struct node_proc np;
+	struct resp r;
+	json_t *perm;
+
+	start(&np, TWO_PRINTERS);
+	sv_call(np.port, "POST", "/api/login", CTL, "{\"passive\":true}", 200, &r);
+	ck_assert_str_eq(sv_str(r.json, "name"), "operator");
+	ck_assert(json_is_true(json_object_get(r.json, "active")));
+	ck_assert(json_is_true(json_object_get(r.json, "admin")));
+	ck_assert(json_is_true(json_object_get(r.json, "user")));
+	ck_assert(json_object_get(r.json, "session"));
+	perm = json_object_get(r.json, "permissions");
+	ck_assert(json_is_array(perm) && json_array_size(perm) > 0);
+	ck_assert_msg(!strstr(r.body, KEY_CTL), "the key is echoed: %s", r.body);
+	sv_resp_free(&r);
+	sv_call(np.port, "POST", "/api/login", RO, "{\"passive\":true}", 200, &r);
+	ck_assert_str_eq(sv_str(r.json, "name"), "viewer");
+	ck_assert(json_is_false(json_object_get(r.json, "admin")));
+	ck_assert_msg(!strstr(r.body, "\"PRINT\""), "%s", r.body);
+	sv_resp_free(&r);
+	/* OctoPrint: a passive login without a user is 204; no passwords here */
+	sv_expect(np.port, "POST", "/api/login", NULL, "{\"passive\":true}", 204);
+	sv_expect(np.port, "POST", "/api/login", "X-Api-Key: wrong-key-000000000000",
+		  "{\"passive\":true}", 204);
+	sv_expect(np.port, "POST", "/api/login", NULL, "{\"user\":\"a\",\"pass\":\"b\"}", 403);
+	sv_expect(np.port, "POST", "/api/login", CTL, "{}", 400);
+	sv_stop(&np);
+}
+END_TEST
+
+START_TEST(test_currentuser)
+{
+	struct node_proc np;
+	struct resp r;
+
+	start(&np, TWO_PRINTERS);
+	sv_call(np.port, "GET", "/api/currentuser", UP, NULL, 200, &r);
+	ck_assert_str_eq(sv_str(r.json, "name"), "slicer");
+	ck_assert_msg(strstr(r.body, "\"FILES_UPLOAD\"") && !strstr(r.body, "\"CONTROL\""), "%s",
+		      r.body);
+	ck_assert(json_is_array(json_object_get(r.json, "groups")));
+	sv_resp_free(&r);
+	sv_expect(np.port, "GET", "/api/currentuser", NULL, NULL, 403);
+	sv_stop(&np);
+}
+END_TEST
+
+START_TEST(test_server)
+{
+	struct node_proc np;
+	struct resp r;
+
+	start(&np, TWO_PRINTERS);
+	sv_call(np.port, "GET", "/api/server", RO, NULL, 200, &r);
+	ck_assert_str_eq(sv_str(r.json, "version"), "1.10.0");
+	ck_assert(json_is_null(json_object_get(r.json, "safemode")));
+	sv_resp_free(&r);
+	sv_stop(&np);
+}
+END_TEST
+
+/* X-Api-Key, Authorization: Bearer and ?apikey= are the same key. */
+START_TEST(test_key_forms)
+{
+	struct node_proc np;
+
+	start(&np, TWO_PRINTERS);
+	sv_expect(np.port, "GET", "/api/job", "Authorization: Bearer " KEY_READ, NULL, 200);
+	sv_expect(np.port, "GET", "/api/job?apikey=" KEY_READ, NULL, NULL, 200);
+	sv_expect(np.port, "GET", "/api/job?apikey=not-a-key-0000000000", NULL, NULL, 403);
+	/* the query key has its roles, no more */
+	sv_expect(np.port, "POST", "/api/job?apikey=" KEY_READ, NULL, "{\"command\":\"cancel\"}",
+		  403);
+	sv_stop(&np);
+}
+END_TEST
+
+/* HEAD answers GET's head; OPTIONS and a wrong method name the methods. */
+START_TEST(test_head_options_405)
+{
+	struct node_proc np;
+	struct resp r;
+
+	start(&np, TWO_PRINTERS);
+	sv_call(np.port, "HEAD", "/api/version", RO, NULL, 200, &r);
+	ck_assert_msg(!r.body[0], "HEAD has a body: %s", r.body);
+	ck_assert(sv_has_text(r.head, "Content-Type: application/json"));
+	sv_resp_free(&r);
+	sv_call(np.port, "OPTIONS", "/api/job", NULL, NULL, 200, &r);
+	ck_assert_msg(sv_has_text(r.head, "Allow: GET, HEAD, POST, OPTIONS"), "%s", r.head);
+	sv_resp_free(&r);
+	sv_call(np.port, "PUT", "/api/job", CTL, "{}", 405, &r);
+	ck_assert_msg(sv_has_text(r.head, "Allow: GET, HEAD, POST, OPTIONS"), "%s", r.head);
+	ck_assert(json_string_value(json_object_get(r.json, "error")));
+	sv_resp_free(&r);
+	sv_call(np.port, "GET", "/api/printer/printhead", CTL, NULL, 405, &r);
+	ck_assert_msg(sv_has_text(r.head, "Allow: POST, OPTIONS"), "%s", r.head);
+	sv_resp_free(&r);
+	sv_call(np.port, "DELETE", "/api/files/local/x.gcode", CTL, NULL, 404, &r);
+	sv_resp_free(&r);
+	sv_expect(np.port, "OPTIONS", "/api/no-such-call", NULL, NULL, 404);
+	sv_stop(&np);
+}
+END_TEST
+
+START_TEST(test_system_commands)
+{
+	struct node_proc np;
+	struct resp r;
+
+	start(&np, TWO_PRINTERS);
+	sv_call(np.port, "GET", "/api/system/commands", CTL, NULL, 200, &r);
+	ck_assert(json_is_array(json_object_get(r.json, "core")) &&
+		  !json_array_size(json_object_get(r.json, "core")));
+	ck_assert(json_is_array(json_object_get(r.json, "custom")));
+	sv_resp_free(&r);
+	sv_call(np.port, "GET", "/api/system/commands/core", CTL, NULL, 200, &r);
+	ck_assert(json_is_array(r.json) && !json_array_size(r.json));
+	sv_resp_free(&r);
+	sv_expect(np.port, "GET", "/api/system/commands/other", CTL, NULL, 404);
+	sv_expect(np.port, "GET", "/api/system/commands", RO, NULL, 403);
+	sv_stop(&np);
+}
+END_TEST
+
+/* The settings are the config file: OctoPrint's 403 for a user who may
+ * not change them. */
+START_TEST(test_settings_post)
+{
+	struct node_proc np;
+	struct resp r;
+
+	start(&np, TWO_PRINTERS);
+	sv_call(np.port, "POST", "/api/settings", CTL, "{\"appearance\":{\"name\":\"x\"}}", 403,
+		&r);
+	ck_assert_msg(strstr(sv_str(r.json, "error"), "config file"), "%s", r.body);
+	sv_resp_free(&r);
+	sv_call(np.port, "GET", "/api/settings", RO, NULL, 200, &r);
+	ck_assert(json_object_get(r.json, "feature"));
+	sv_resp_free(&r);
+	sv_stop(&np);
+}
+END_TEST
+
+START_TEST(test_printerprofile_by_id)
+{
+	struct node_proc np;
+	struct resp r;
+
+	start(&np, MK3S_AND_CREATOR);
+	sv_call(np.port, "GET", "/p/cp/api/printerprofiles/cp", RO, NULL, 200, &r);
+	ck_assert_str_eq(sv_str(r.json, "id"), "cp");
+	ck_assert_int_eq(json_integer_value(json_object_get(json_object_get(r.json, "extruder"),
+							   "count")), 2);
+	ck_assert(json_is_object(json_object_get(r.json, "volume")));
+	sv_resp_free(&r);
+	sv_expect(np.port, "GET", "/api/printerprofiles/cp", RO, NULL, 404); /* mk3s's prefix */
+	sv_expect(np.port, "GET", "/api/printerprofiles/mk3s", RO, NULL, 200);
+	sv_stop(&np);
+}
+END_TEST
+
+/* ---- files ----------------------------------------------------------------- */
+
+/* The entry called name in a list, or NULL. */
+static json_t *entry(json_t *list, const char *name)
+{
+	size_t i;
+	json_t *e;
+
+	json_array_foreach(list, i, e)
+		if (!strcmp(json_string_value(json_object_get(e, "name")), name))
+			return e;
+	return NULL;
+}
+
+START_TEST(test_files_list)
+{
+	struct node_proc np;
+	struct resp r;
+	json_t *e, *dir, *an;
+	char want[256];
+
+	start(&np, TWO_PRINTERS);
+	store(np.port, "", "top.gcode", dwell(1));
+	store(np.port, "parts", "inner.gcode", "G1 X1\n");
+	for (int i = 0; i < 2; i++) {
+		sv_call(np.port, "GET", i ? "/api/files/local" : "/api/files", RO, NULL, 200, &r);
+		ck_assert(json_integer_value(json_object_get(r.json, "free")) > 0);
+		ck_assert(json_integer_value(json_object_get(r.json, "total")) > 0);
+		e = entry(json_object_get(r.json, "files"), "top.gcode");
+		ck_assert_msg(e, "%s", r.body);
+		ck_assert_str_eq(sv_str(e, "path"), "top.gcode");
+		ck_assert_str_eq(sv_str(e, "type"), "machinecode");
+		ck_assert_str_eq(sv_str(e, "origin"), "local");
+		snprintf(want, sizeof(want), "http://127.0.0.1:%d/api/files/local/top.gcode", np.port);
+		ck_assert_str_eq(sv_str(json_object_get(e, "refs"), "resource"), want);
+		snprintf(want, sizeof(want), "http://127.0.0.1:%d/downloads/files/local/top.gcode",
+			 np.port);
+		ck_assert_str_eq(sv_str(json_object_get(e, "refs"), "download"), want);
+		an = json_object_get(e, "gcodeAnalysis");
+		ck_assert_int_eq(json_integer_value(json_object_get(an, "estimatedPrintTime")), 602);
+		dir = entry(json_object_get(r.json, "files"), "parts");
+		ck_assert_str_eq(sv_str(dir, "type"), "folder");
+		ck_assert_msg(!json_object_get(dir, "children"), "not recursive: %s", r.body);
+		sv_resp_free(&r);
+	}
+	sv_call(np.port, "GET", "/api/files?recursive=true", RO, NULL, 200, &r);
+	dir = entry(json_object_get(r.json, "files"), "parts");
+	e = entry(json_object_get(dir, "children"), "inner.gcode");
+	ck_assert_msg(e, "%s", r.body);
+	ck_assert_str_eq(sv_str(e, "path"), "parts/inner.gcode");
+	snprintf(want, sizeof(want), "http://127.0.0.1:%d/downloads/files/local/parts/inner.gcode",
+		 np.port);
+	ck_assert_str_eq(sv_str(json_object_get(e, "refs"), "download"), want);
+	sv_resp_free(&r);
+	/* a large file: the footer is read (PrusaSlicer writes its estimate there) */
+	{
+		size_t n = 700000, k = 0;
+		char *big = malloc(n + 100);
+
+		ck_assert(big);
+		while (k + 10 < n)
+			k += (size_t)sprintf(big + k, "G1 X%d\n", (int)(k % 100));
+		sprintf(big + k, "; estimated printing time (normal mode) = 2h 0m 5s\n");
+		store(np.port, "", "big.gcode", big);
+		free(big);
+	}
+	sv_call(np.port, "GET", "/api/files/local/big.gcode", RO, NULL, 200, &r);
+	ck_assert_int_eq(json_integer_value(json_object_get(json_object_get(r.json, "gcodeAnalysis"),
+							   "estimatedPrintTime")), 7205);
+	sv_resp_free(&r);
+	/* the other printer's files are its own */
+	sv_call(np.port, "GET", "/p/ender/api/files", RO, NULL, 200, &r);
+	ck_assert_int_eq(json_array_size(json_object_get(r.json, "files")), 0);
+	sv_resp_free(&r);
+	sv_expect(np.port, "GET", "/api/files", NULL, NULL, 403);
+	sv_stop(&np);
+}
+END_TEST
+
+/* POST /api/files/local with foldername (and path) and no file: OctoPrint's
+ * new folder, 201; 409 when it exists. */
+static void new_folder(int port, const char *path, const char *name, int want, struct resp *r)
+{
+	char body[1024], req[2048];
+	int n = snprintf(body, sizeof(body),
+			 "--" BOUNDARY "\r\nContent-Disposition: form-data; name=\"foldername\"\r\n\r\n"
+			 "%s\r\n--" BOUNDARY "\r\nContent-Disposition: form-data; name=\"path\"\r\n\r\n"
+			 "%s\r\n--" BOUNDARY "--\r\n", name, path);
+	int m = snprintf(req, sizeof(req),
+			 "POST /api/files/local HTTP/1.1\r\nHost: 127.0.0.1:%d\r\n" UP "\r\n"
+			 "Connection: close\r\nContent-Length: %d\r\n"
+			 "Content-Type: multipart/form-data; boundary=" BOUNDARY "\r\n\r\n%s",
+			 port, n, body);
+
+	sv_http_raw(port, req, (size_t)m, r);
+	ck_assert_msg(r->status == want, "new folder %s/%s: %d, not %d: %s", path, name, r->status,
+		      want, r->body);
+}
+
+START_TEST(test_folder_create)
+{
+	struct node_proc np;
+	struct resp r;
+	char want[256];
+
+	start(&np, TWO_PRINTERS);
+	new_folder(np.port, "", "parts", 201, &r);
+	ck_assert_str_eq(sv_str(json_object_get(r.json, "folder"), "path"), "parts");
+	snprintf(want, sizeof(want), "Location: http://127.0.0.1:%d/api/files/local/parts", np.port);
+	ck_assert_msg(sv_has_text(r.head, want), "%s", r.head);
+	sv_resp_free(&r);
+	new_folder(np.port, "parts", "brackets", 201, &r);
+	ck_assert_str_eq(sv_str(json_object_get(r.json, "folder"), "path"), "parts/brackets");
+	sv_resp_free(&r);
+	ck_assert(stored(&np, "mk3s", "parts/brackets"));
+	new_folder(np.port, "", "parts", 409, &r);
+	sv_resp_free(&r);
+	new_folder(np.port, "none", "x", 409, &r);
+	sv_resp_free(&r);
+	new_folder(np.port, "", "..", 400, &r);
+	sv_resp_free(&r);
+	sv_call(np.port, "GET", "/api/files/local/parts?recursive=true", RO, NULL, 200, &r);
+	ck_assert_str_eq(sv_str(json_array_get(json_object_get(r.json, "children"), 0), "type"),
+			 "folder");
+	sv_resp_free(&r);
+	sv_stop(&np);
+}
+END_TEST
+
+START_TEST(test_file_get)
+{
+	struct node_proc np;
+	struct resp r;
+
+	start(&np, TWO_PRINTERS);
+	store(np.port, "parts", "inner.gcode", "G1 X1\n");
+	sv_call(np.port, "GET", "/api/files/local/parts/inner.gcode", RO, NULL, 200, &r);
+	ck_assert_str_eq(sv_str(r.json, "name"), "inner.gcode");
+	ck_assert_int_eq(json_integer_value(json_object_get(r.json, "size")), 6);
+	sv_resp_free(&r);
+	sv_call(np.port, "GET", "/api/files/local/parts", RO, NULL, 200, &r);
+	ck_assert_str_eq(sv_str(r.json, "type"), "folder");
+	ck_assert(entry(json_object_get(r.json, "children"), "inner.gcode"));
+	sv_resp_free(&r);
+	sv_expect(np.port, "GET", "/api/files/local/none.gcode", RO, NULL, 404);
+	sv_expect(np.port, "GET", "/api/files/local/../node.ini", RO, NULL, 404);
+	sv_expect(np.port, "GET", "/api/files/local/parts/%2e%2e/%2e%2e/node.ini", RO, NULL, 404);
+	sv_stop(&np);
+}
+END_TEST
+
+START_TEST(test_file_select)
+{
+	struct node_proc np;
+	struct resp r;
+	json_t *queue;
+
+	start(&np, TWO_PRINTERS);
+	operational(np.port, "");
+	store(np.port, "", "a.gcode", dwell(3));
+	sv_expect(np.port, "POST", "/api/files/local/a.gcode", UP, "{\"command\":\"select\"}", 204);
+	sv_call(np.port, "GET", "/api/job", RO, NULL, 200, &r);
+	ck_assert_str_eq(sv_str(json_object_get(json_object_get(r.json, "job"), "file"), "name"),
+			 "a.gcode");
+	sv_resp_free(&r);
+	/* print=true starts a print: the control role */
+	sv_expect(np.port, "POST", "/api/files/local/a.gcode", UP,
+		  "{\"command\":\"select\",\"print\":true}", 403);
+	sv_bed_clear(np.port, "", 204);
+	sv_expect(np.port, "POST", "/api/files/local/a.gcode", CTL,
+		  "{\"command\":\"select\",\"print\":true}", 204);
+	queue = sv_get_json(np.port, "/api/stratum/queue");
+	ck_assert_int_eq(json_array_size(json_object_get(queue, "jobs")), 1);
+	json_decref(queue);
+	sv_wait_state(np.port, "", 1, "printing", 10);
+	/* OctoPrint refuses a new selection while it prints */
+	sv_expect(np.port, "POST", "/api/files/local/a.gcode", CTL,
+		  "{\"command\":\"select\",\"print\":true}", 409);
+	sv_expect(np.port, "POST", "/api/files/local/none.gcode", CTL, "{\"command\":\"select\"}",
+		  404);
+	sv_expect(np.port, "POST", "/api/files/local/a.gcode", CTL, "{\"command\":\"frobnicate\"}",
+		  400);
+	sv_stop(&np);
+}
+END_TEST
+
+START_TEST(test_file_move_copy)
+{
+	struct node_proc np;
+	struct resp r;
+	char want[256];
+
+	start(&np, TWO_PRINTERS);
+	operational(np.port, "");
+	store(np.port, "", "a.gcode", dwell(3));
+	store(np.port, "parts", "b.gcode", "G1 X2\n");
+	sv_call(np.port, "POST", "/api/files/local/a.gcode", UP,
+	     "{\"command\":\"copy\",\"destination\":\"parts\"}", 201, &r);
+	snprintf(want, sizeof(want), "Location: http://127.0.0.1:%d/api/files/local/parts/a.gcode",
+		 np.port);
+	ck_assert_msg(sv_has_text(r.head, want), "%s", r.head);
+	ck_assert_str_eq(sv_str(r.json, "path"), "parts/a.gcode");
+	ck_assert(json_object_get(json_object_get(r.json, "refs"), "download"));
+	sv_resp_free(&r);
+	ck_assert(stored(&np, "mk3s", "a.gcode") && stored(&np, "mk3s", "parts/a.gcode"));
+	/* onto a file that exists: 409, nothing replaced */
+	sv_expect(np.port, "POST", "/api/files/local/a.gcode", UP,
+		  "{\"command\":\"move\",\"destination\":\"parts/b.gcode\"}", 409);
+	sv_call(np.port, "POST", "/api/files/local/parts/b.gcode", UP,
+	     "{\"command\":\"move\",\"destination\":\"c.gcode\"}", 201, &r);
+	ck_assert_str_eq(sv_str(r.json, "name"), "c.gcode");
+	sv_resp_free(&r);
+	ck_assert(!stored(&np, "mk3s", "parts/b.gcode") && stored(&np, "mk3s", "c.gcode"));
+	sv_expect(np.port, "POST", "/api/files/local/c.gcode", UP,
+		  "{\"command\":\"move\",\"destination\":\"../c.gcode\"}", 400);
+	sv_expect(np.port, "POST", "/api/files/local/c.gcode", UP,
+		  "{\"command\":\"move\",\"destination\":\"c.stl\"}", 400);
+	sv_expect(np.port, "POST", "/api/files/local/c.gcode", UP,
+		  "{\"command\":\"move\",\"destination\":\"nofolder/c.gcode\"}", 409);
+	/* a file a job prints does not move */
+	sv_bed_clear(np.port, "", 204);
+	sv_expect(np.port, "POST", "/api/files/local/a.gcode", CTL,
+		  "{\"command\":\"select\",\"print\":true}", 204);
+	sv_expect(np.port, "POST", "/api/files/local/a.gcode", UP,
+		  "{\"command\":\"move\",\"destination\":\"d.gcode\"}", 409);
+	sv_expect(np.port, "POST", "/api/files/local/a.gcode", UP,
+		  "{\"command\":\"copy\",\"destination\":\"d.gcode\"}", 201);
+	sv_stop(&np);
+}
+END_TEST
+
+START_TEST(test_file_delete)
+{
+	struct node_proc np;
+
+	start(&np, TWO_PRINTERS);
+	operational(np.port, "");
+	store(np.port, "", "a.gcode", dwell(3));
+	store(np.port, "parts", "b.gcode", "G1 X2\n");
+	sv_expect(np.port, "DELETE", "/api/files/local/parts/b.gcode", RO, NULL, 403);
+	sv_expect(np.port, "DELETE", "/api/files/local/parts/b.gcode", UP, NULL, 204);
+	ck_assert(!stored(&np, "mk3s", "parts/b.gcode"));
+	sv_expect(np.port, "DELETE", "/api/files/local/parts/b.gcode", UP, NULL, 404);
+	sv_expect(np.port, "DELETE", "/api/files/local/parts", UP, NULL, 204);
+	ck_assert(!stored(&np, "mk3s", "parts"));
+	/* 409 while printing that file */
+	sv_bed_clear(np.port, "", 204);
+	sv_expect(np.port, "POST", "/api/files/local/a.gcode", CTL,
+		  "{\"command\":\"select\",\"print\":true}", 204);
+	sv_wait_state(np.port, "", 1, "printing", 10);
+	sv_expect(np.port, "DELETE", "/api/files/local/a.gcode", UP, NULL, 409);
+	ck_assert(stored(&np, "mk3s", "a.gcode"));
+	sv_wait_state(np.port, "", 1, "done", 20);
+	sv_expect(np.port, "DELETE", "/api/files/local/a.gcode", UP, NULL, 204);
+	sv_stop(&np);
+}
+END_TEST
+
+START_TEST(test_download)
+{
+	struct node_proc np;
+	struct resp r;
+
+	start(&np, TWO_PRINTERS);
+	store(np.port, "parts", "b.gcode", "G1 X2\nG1 Y3\n");
+	sv_call(np.port, "GET", "/downloads/files/local/parts/b.gcode", RO, NULL, 200, &r);
+	ck_assert_str_eq(r.body, "G1 X2\nG1 Y3\n");
+	ck_assert(sv_has_text(r.head, "Content-Type: application/octet-stream"));
+	sv_resp_free(&r);
+	sv_call(np.port, "GET", "/p/mk3s/downloads/files/local/parts/b.gcode", RO, NULL, 200, &r);
+	sv_resp_free(&r);
+	sv_expect(np.port, "GET", "/downloads/files/local/parts/none.gcode", RO, NULL, 404);
+	sv_expect(np.port, "GET", "/downloads/files/local/parts", RO, NULL, 404);
+	sv_expect(np.port, "GET", "/downloads/files/local/parts/b.gcode", NULL, NULL, 403);
+	sv_stop(&np);
+}
+END_TEST
+
+/* ---- printer components ------------------------------------------------------ */
+
+START_TEST(test_printer_tool)
+{
+	struct node_proc np;
+	struct resp r;
+	json_t *t;
+
+	start(&np, MK3S_AND_CREATOR);
+	operational(np.port, "");
+	operational(np.port, "/p/cp");
+	sv_call(np.port, "GET", "/api/printer/tool", RO, NULL, 200, &r);
+	ck_assert(json_is_number(json_object_get(json_object_get(r.json, "tool0"), "actual")));
+	ck_assert(!json_object_get(r.json, "tool1"));
+	ck_assert(!json_object_get(r.json, "bed"));
+	sv_resp_free(&r);
+	/* the Creator Pro has two extruders: tool1 is there */
+	sv_call(np.port, "GET", "/p/cp/api/printer/tool", RO, NULL, 200, &r);
+	ck_assert(json_is_object(json_object_get(r.json, "tool1")));
+	sv_resp_free(&r);
+	sv_call(np.port, "GET", "/p/cp/api/printer", RO, NULL, 200, &r);
+	ck_assert(json_object_get(json_object_get(r.json, "temperature"), "tool1"));
+	sv_resp_free(&r);
+	sv_call(np.port, "GET", "/p/cp/api/printer?exclude=sd,temperature", RO, NULL, 200, &r);
+	ck_assert(!json_object_get(r.json, "temperature") && !json_object_get(r.json, "sd"));
+	ck_assert(json_object_get(r.json, "state"));
+	sv_resp_free(&r);
+	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
+		  "{\"command\":\"target\",\"targets\":{\"tool0\":205}}", 204);
+	/* the test double reaches a target at once: it was sent */
+	for (int i = 0; i < 100; i++) {
+		sv_call(np.port, "GET", "/api/printer/tool", RO, NULL, 200, &r);
+		t = json_object_get(r.json, "tool0");
+		if (json_number_value(json_object_get(t, "target")) == 205)
+			break;
+		sv_resp_free(&r);
+		usleep(20000);
+	}
+	ck_assert_msg(json_number_value(json_object_get(t, "target")) == 205, "%s", r.body);
+	sv_resp_free(&r);
+	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
+		  "{\"command\":\"target\",\"targets\":{\"tool1\":205}}", 400);
+	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
+		  "{\"command\":\"target\",\"targets\":{\"tool0\":9999}}", 400);
+	sv_expect(np.port, "POST", "/p/cp/api/printer/tool", CTL,
+		  "{\"command\":\"target\",\"targets\":{\"tool1\":210}}", 204);
+	sv_expect(np.port, "POST", "/p/cp/api/printer/tool", CTL,
+		  "{\"command\":\"select\",\"tool\":\"tool1\"}", 204);
+	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
+		  "{\"command\":\"extrude\",\"amount\":5}", 204);
+	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
+		  "{\"command\":\"flowrate\",\"factor\":95}", 204);
+	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
+		  "{\"command\":\"flowrate\",\"factor\":300}", 400);
+	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
+		  "{\"command\":\"offset\",\"offsets\":{\"tool0\":5}}", 400);
+	sv_expect(np.port, "POST", "/api/printer/tool", UP,
+		  "{\"command\":\"target\",\"targets\":{\"tool0\":205}}", 403);
+	/* not operational: 409 */
+	sv_expect(np.port, "POST", "/api/connection", CTL, "{\"command\":\"disconnect\"}", 204);
+	usleep(300000);
+	sv_expect(np.port, "GET", "/api/printer/tool", RO, NULL, 409);
+	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
+		  "{\"command\":\"target\",\"targets\":{\"tool0\":205}}", 409);
+	sv_stop(&np);
+}
+END_TEST
+
+START_TEST(test_printer_bed)
+{
+	struct node_proc np;
+	struct resp r;
+
+	start(&np, TWO_PRINTERS);
+	operational(np.port, "");
+	sv_call(np.port, "GET", "/api/printer/bed", RO, NULL, 200, &r);
+	ck_assert(json_is_number(json_object_get(json_object_get(r.json, "bed"), "target")));
+	ck_assert(!json_object_get(r.json, "tool0"));
+	sv_resp_free(&r);
+	sv_expect(np.port, "POST", "/api/printer/bed", CTL, "{\"command\":\"target\",\"target\":60}",
+		  204);
+	/* the history: samples every 2 s, the last `limit` of them, oldest first */
+	for (int i = 0; i < 80; i++) {
+		json_t *h, *last;
+
+		sv_call(np.port, "GET", "/api/printer/bed?history=true&limit=2", RO, NULL, 200, &r);
+		h = json_object_get(r.json, "history");
+		ck_assert_msg(json_is_array(h) && json_array_size(h) <= 2, "%s", r.body);
+		last = json_array_get(h, json_array_size(h) - 1);
+		if (json_number_value(json_object_get(json_object_get(last, "bed"), "target")) == 60)
+			break;
+		sv_resp_free(&r);
+		usleep(100000);
+	}
+	ck_assert_msg(r.json, "no sample with the bed's target");
+	ck_assert(json_integer_value(json_object_get(json_array_get(json_object_get(r.json,
+											  "history"),
+								    0), "time")) > 0);
+	sv_resp_free(&r);
+	sv_call(np.port, "GET", "/api/printer/tool?history=true", RO, NULL, 200, &r);
+	ck_assert(!json_object_get(json_array_get(json_object_get(r.json, "history"), 0), "bed"));
+	ck_assert(json_object_get(json_array_get(json_object_get(r.json, "history"), 0), "tool0"));
+	sv_resp_free(&r);
+	sv_call(np.port, "GET", "/api/printer", RO, NULL, 200, &r);
+	ck_assert(!json_object_get(json_object_get(r.json, "temperature"), "history"));
+	sv_resp_free(&r);
+	sv_call(np.port, "GET", "/api/printer?history=true&limit=1", RO, NULL, 200, &r);
+	ck_assert_int_eq(json_array_size(json_object_get(json_object_get(r.json, "temperature"),
+							 "history")), 1);
+	sv_resp_free(&r);
+	sv_expect(np.port, "POST", "/api/printer/bed", CTL, "{\"command\":\"target\"}", 400);
+	sv_expect(np.port, "POST", "/api/printer/bed", CTL, "{\"command\":\"offset\",\"offset\":5}",
+		  400);
+	/* no printer of the node has a heated chamber or an SD card */
+	sv_expect(np.port, "GET", "/api/printer/chamber", RO, NULL, 409);
+	sv_expect(np.port, "POST", "/api/printer/chamber", CTL,
+		  "{\"command\":\"target\",\"target\":40}", 409);
+	sv_call(np.port, "GET", "/api/printer/sd", RO, NULL, 404, &r);
+	ck_assert_str_eq(sv_str(r.json, "error"), "SD support is disabled");
+	sv_resp_free(&r);
+	sv_expect(np.port, "POST", "/api/printer/sd", CTL, "{\"command\":\"init\"}", 404);
+	sv_stop(&np);
+}
+END_TEST
+
+/* Jog, home and feed rate reach the simulated Marlin printer as OctoPrint
+ * sends them; refused while printing. */
+START_TEST(test_printer_printhead)
+{
+	struct node_proc np;
+	char path[600], *log = NULL;
+	size_t len;
+
+	start(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\nsim_speedup = 1000\n");
+	operational(np.port, ""); /* the sim's boot done */
+	sv_expect(np.port, "POST", "/api/printer/printhead", CTL,
+		  "{\"command\":\"home\",\"axes\":[\"x\",\"y\"]}", 204);
+	sv_expect(np.port, "POST", "/api/printer/printhead", CTL,
+		  "{\"command\":\"jog\",\"x\":10,\"y\":-5,\"speed\":3000}", 204);
+	sv_expect(np.port, "POST", "/api/printer/printhead", CTL,
+		  "{\"command\":\"feedrate\",\"factor\":90}", 204);
+	sv_expect(np.port, "POST", "/api/printer/printhead", CTL,
+		  "{\"command\":\"jog\",\"x\":\"far\"}", 400);
+	sv_expect(np.port, "POST", "/api/printer/printhead", CTL,
+		  "{\"command\":\"home\",\"axes\":[\"q\"]}", 400);
+	snprintf(path, sizeof(path), "%s/data/sim/mk3s.log", np.dir);
+	for (int i = 0; i < 250; i++) {
+		free(log);
+		log = access(path, R_OK) ? NULL : tu_slurp(path, &len);
+		if (log && strstr(log, "M220 S90"))
+			break;
+		usleep(20000);
+	}
+	ck_assert_msg(log && strstr(log, "G28 X0 Y0") && strstr(log, "G1 X10 Y-5 F3000") &&
+		      strstr(log, "M220 S90"), "%s", log ? log : "(no log)");
+	free(log);
+	/* while printing, OctoPrint refuses the print head: 409 */
+	sv_bed_clear(np.port, "", 204);
+	ck_assert(sv_print_text(np.port, "", "long.gcode", "G4 S30\n") == 1);
+	sv_wait_state(np.port, "", 1, "printing", 10);
+	sv_expect(np.port, "POST", "/api/printer/printhead", CTL,
+		  "{\"command\":\"home\",\"axes\":[\"z\"]}", 409);
+	sv_expect(np.port, "POST", "/api/job", CTL, "{\"command\":\"cancel\"}", 204);
+	sv_stop(&np);
+}
+END_TEST
+
+/* ---- job ---------------------------------------------------------------------- */
+
+/* /api/job: the file's estimate and filament, the time left by its M73
+ * marks; flags.ready false while a job holds the printer. */
+START_TEST(test_job_estimates)
+{
+	struct node_proc np;
+	struct resp r;
+	json_t *job, *prog, *fil;
+
+	start(&np, TWO_PRINTERS);
+	store(np.port, "", "a.gcode", dwell(4));
+	sv_expect(np.port, "POST", "/api/files/local/a.gcode", UP, "{\"command\":\"select\"}", 204);
+	sv_call(np.port, "GET", "/api/job", RO, NULL, 200, &r);
+	job = json_object_get(r.json, "job");
+	ck_assert_int_eq(json_integer_value(json_object_get(job, "estimatedPrintTime")), 602);
+	fil = json_object_get(json_object_get(job, "filament"), "tool0");
+	ck_assert(json_real_value(json_object_get(fil, "length")) == 812.5);
+	ck_assert(json_real_value(json_object_get(fil, "volume")) == 1.95);
+	ck_assert(json_is_null(json_object_get(json_object_get(r.json, "progress"),
+					       "printTimeLeft")));
+	sv_resp_free(&r);
+	sv_bed_clear(np.port, "", 204);
+	sv_expect(np.port, "POST", "/api/job", CTL, "{\"command\":\"start\"}", 204);
+	sv_wait_state(np.port, "", 1, "printing", 10);
+	/* past "M73 P50 R5" within the 4 s dwell */
+	for (int i = 0; i < 150; i++) {
+		sv_call(np.port, "GET", "/api/job", RO, NULL, 200, &r);
+		prog = json_object_get(r.json, "progress");
+		if (json_integer_value(json_object_get(prog, "printTimeLeft")) == 300)
+			break;
+		sv_resp_free(&r);
+		usleep(20000);
+	}
+	ck_assert_msg(json_integer_value(json_object_get(prog, "printTimeLeft")) == 300, "%s",
+		      r.body);
+	ck_assert_str_eq(sv_str(prog, "printTimeLeftOrigin"), "estimate");
+	sv_resp_free(&r);
+	sv_expect(np.port, "POST", "/api/job", CTL, "{\"command\":\"pause\",\"action\":\"pause\"}",
+		  204);
+	sv_call(np.port, "GET", "/api/printer", RO, NULL, 200, &r);
+	ck_assert(json_is_false(json_object_get(json_object_get(json_object_get(r.json, "state"),
+								"flags"), "ready")));
+	sv_resp_free(&r);
+	sv_expect(np.port, "POST", "/api/job", CTL, "{\"command\":\"cancel\"}", 204);
+	sv_wait_state(np.port, "", 1, "cancelled", 10);
+	sv_call(np.port, "GET", "/api/printer", RO, NULL, 200, &r);
+	ck_assert(json_is_true(json_object_get(json_object_get(json_object_get(r.json, "state"),
+							       "flags"), "ready")));
+	sv_resp_free(&r);
+	sv_stop(&np);
+}
+END_TEST
+
+Suite *octoapi_suite(void)
+{
+	Suite *s = suite_create("octoapi");
+	TCase *tc = tcase_create("calls");
+
+	tcase_set_timeout(tc, 60);
+	tcase_add_test(tc, test_login_passive);
+	tcase_add_test(tc, test_currentuser);
+	tcase_add_test(tc, test_server);
+	tcase_add_test(tc, test_key_forms);
+	tcase_add_test(tc, test_head_options_405);
+	tcase_add_test(tc, test_system_commands);
+	tcase_add_test(tc, test_settings_post);
+	tcase_add_test(tc, test_printerprofile_by_id);
+	tcase_add_test(tc, test_files_list);
+	tcase_add_test(tc, test_folder_create);
+	tcase_add_test(tc, test_file_get);
+	tcase_add_test(tc, test_file_select);
+	tcase_add_test(tc, test_file_move_copy);
+	tcase_add_test(tc, test_file_delete);
+	tcase_add_test(tc, test_download);
+	tcase_add_test(tc, test_printer_tool);
+	tcase_add_test(tc, test_printer_bed);
+	tcase_add_test(tc, test_printer_printhead);
+	tcase_add_test(tc, test_job_estimates);
+	suite_add_tcase(s, tc);
+	octoapi_push_tcases(s);
+	return s;
+}
