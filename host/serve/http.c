@@ -652,6 +652,42 @@ static void *log_uri(void *cls, const char *uri, struct MHD_Connection *c)
 	return NULL;
 }
 
+/*
+ * The node's total connection limit.  libmicrohttpd divides
+ * MHD_OPTION_CONNECTION_LIMIT among the pool's threads, and whichever
+ * thread accepts a connection refuses it when its own share is full, so
+ * the node refused clients with most of its slots free.  Each thread may
+ * hold the whole limit; the total is counted here, a slot taken when a
+ * connection is admitted and given back when it closes.  (The per-address
+ * limit is libmicrohttpd's, kept for the whole daemon, and checked before
+ * this.  A connection admitted here that libmicrohttpd then fails to set
+ * up, out of memory, keeps its slot.)
+ */
+static enum MHD_Result admit(void *cls, const struct sockaddr *addr, socklen_t len)
+{
+	struct node *n = cls;
+	unsigned held = atomic_load(&n->http_connections);
+
+	(void)addr;
+	(void)len;
+	do {
+		if (held >= n->cfg.max_connections)
+			return MHD_NO;
+	} while (!atomic_compare_exchange_weak(&n->http_connections, &held, held + 1));
+	return MHD_YES;
+}
+
+static void connection_event(void *cls, struct MHD_Connection *c, void **socket_context,
+			     enum MHD_ConnectionNotificationCode code)
+{
+	struct node *n = cls;
+
+	(void)c;
+	(void)socket_context;
+	if (code == MHD_CONNECTION_NOTIFY_CLOSED)
+		atomic_fetch_sub(&n->http_connections, 1);
+}
+
 int node_http_start(struct node *n, struct st_error *err)
 {
 	struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons(n->cfg.listen_port)};
@@ -660,12 +696,14 @@ int node_http_start(struct node *n, struct st_error *err)
 	if (inet_pton(AF_INET, n->cfg.listen_addr, &sa.sin_addr) != 1)
 		return st_error_set(err, ST_ERR_ARG, "listen address %s is not IPv4",
 				    n->cfg.listen_addr);
+	atomic_store(&n->http_connections, 0);
 	n->httpd = MHD_start_daemon(MHD_USE_AUTO_INTERNAL_THREAD | MHD_ALLOW_UPGRADE,
-				    n->cfg.listen_port, NULL, NULL,
+				    n->cfg.listen_port, admit, n,
 				    handle, n, MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&sa,
 				    MHD_OPTION_THREAD_POOL_SIZE, (unsigned)HTTP_POOL,
 				    MHD_OPTION_CONNECTION_TIMEOUT, n->cfg.idle_timeout_s,
-				    MHD_OPTION_CONNECTION_LIMIT, n->cfg.max_connections,
+				    MHD_OPTION_CONNECTION_LIMIT, n->cfg.max_connections * HTTP_POOL,
+				    MHD_OPTION_NOTIFY_CONNECTION, connection_event, n,
 				    MHD_OPTION_PER_IP_CONNECTION_LIMIT, n->cfg.max_connections_per_ip,
 				    MHD_OPTION_NOTIFY_COMPLETED, completed, n,
 				    MHD_OPTION_URI_LOG_CALLBACK, log_uri, n, MHD_OPTION_END);

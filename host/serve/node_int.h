@@ -214,6 +214,8 @@ struct node {
 	size_t nprinters;
 	struct MHD_Daemon *httpd;
 	uint16_t port;
+	/* HTTP connections admitted and not yet closed (http.c). */
+	atomic_uint http_connections;
 	bool started, stopped;
 	/* The ticker stores each print's position every NODE_TICK_MS. */
 	pthread_t ticker;
