@@ -193,7 +193,10 @@ struct profile {
 	double fill_angle, bridge_angle; /* degrees; defaults 45, 0 (0 = per bridge) */
 	double bridge_flow_ratio;	 /* default 1 */
 	struct profile_pct infill_overlap; /* mm or % of extrusion_width; default 25% */
+	/* mm or % of first_layer_height; 0 = each role's width; default 0 */
+	struct profile_pct first_layer_extrusion_width;
 	/* mm or % of layer_height; 0 = extrusion_width; defaults 0 */
+	struct profile_pct perimeter_extrusion_width, external_perimeter_extrusion_width;
 	struct profile_pct infill_extrusion_width, solid_infill_extrusion_width;
 	struct profile_pct top_infill_extrusion_width;
 	struct profile_pct support_material_extrusion_width; /* support and raft */

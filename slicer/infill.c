@@ -164,7 +164,10 @@ int infill_settings_check(const struct infill_settings *s, struct st_error *err)
 	    (rc = check_width(s, "infill_extrusion_width", s->infill_extrusion_width, err)) ||
 	    (rc = check_width(s, "solid_infill_extrusion_width", s->solid_infill_extrusion_width,
 			      err)) ||
-	    (rc = check_width(s, "top_infill_extrusion_width", s->top_infill_extrusion_width, err)))
+	    (rc = check_width(s, "top_infill_extrusion_width", s->top_infill_extrusion_width, err)) ||
+	    (s->first_layer_extrusion_width != 0.0 &&
+	     (rc = check_width(s, "first_layer_extrusion_width", s->first_layer_extrusion_width,
+			       err))))
 		return rc;
 	if (!(s->infill_overlap >= 0.0 && s->infill_overlap <= 100.0))
 		return st_error_set(err, ST_ERR_RANGE,
@@ -349,6 +352,7 @@ int infill_plan_layer(const struct infill_job *job, size_t i, const struct clip_
 		      struct infill_plan **out, struct st_error *err)
 {
 	struct clip_paths R = {0};
+	struct infill_settings first;
 	struct ctx c;
 	int rc;
 
@@ -364,7 +368,14 @@ int infill_plan_layer(const struct infill_job *job, size_t i, const struct clip_
 		clip_paths_free(&R);
 		return rc;
 	}
-	c = (struct ctx){.s = &job->s,
+	/* Layer 0 at the first layer's width, every class (PrusaSlicer's flow). */
+	first = job->s;
+	if (i == 0 && first.first_layer_extrusion_width > 0.0) {
+		first.infill_extrusion_width = first.first_layer_extrusion_width;
+		first.solid_infill_extrusion_width = first.first_layer_extrusion_width;
+		first.top_infill_extrusion_width = first.first_layer_extrusion_width;
+	}
+	c = (struct ctx){.s = i == 0 ? &first : &job->s,
 			 .st = job->st,
 			 .R = &R,
 			 .err = err,

@@ -87,6 +87,7 @@ struct infill_settings {
 	double infill_extrusion_width;	   /* mm, sparse lines (1.125 x nozzle) */
 	double solid_infill_extrusion_width; /* mm, bottom/internal solid (1.125 x nozzle) */
 	double top_infill_extrusion_width; /* mm, top skin (1.125 x nozzle) */
+	double first_layer_extrusion_width; /* mm, every class on layer 0; 0 = their own (0) */
 	double infill_overlap;		   /* percent of the perimeter width the
 					    * infill reaches into the walls (25) */
 	double solid_infill_below_area;	   /* mm^2; smaller sparse islands are solid (70) */

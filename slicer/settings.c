@@ -150,6 +150,14 @@ static const struct setting table[] = {
      "at most the smallest nozzle; a percentage is of layer_height"},
     {"extrusion_width", SETTING_NUMBER_OR_PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
      "0 = automatic; a percentage is of layer_height (as in PrusaSlicer)"},
+    {"first_layer_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "every bead of the first layer on the bed, skirt and brim too; 0 = each role's own "
+     "width; a percentage is of first_layer_height (PrusaSlicer's default is 200%)"},
+    {"perimeter_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "inner walls; 0 = extrusion_width; a percentage is of layer_height"},
+    {"external_perimeter_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "the outer wall, its outer face kept on the model's surface; 0 = extrusion_width; a "
+     "percentage is of layer_height"},
     {"infill_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
      "sparse infill; 0 = extrusion_width; a percentage is of layer_height"},
     {"solid_infill_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,

@@ -148,7 +148,8 @@ static void walls_made(struct pipe *p, size_t i)
  */
 static int walls_chunk(struct pipe *p, size_t k, struct st_error *err)
 {
-	const struct perim_settings *ps = &p->c->perim;
+	struct perim_settings first_walls; /* layer 0's (slicer_first_layer_walls) */
+	const struct perim_settings *ps;
 	size_t first = k * SLICER_CHUNK_LAYERS;
 	size_t last = first + SLICER_CHUNK_LAYERS < p->st->n ? first + SLICER_CHUNK_LAYERS
 							      : p->st->n;
@@ -157,12 +158,14 @@ static int walls_chunk(struct pipe *p, size_t k, struct st_error *err)
 
 	if (!seams)
 		return st_error_set(err, ST_ERR_NOMEM, "walls: out of memory for seams");
+	slicer_first_layer_walls(p->c, &first_walls);
 	if (first > 0) {
 		const struct slice_layer *below = &p->st->layers[first - 1];
 		struct layer_paths scratch = {0};
 		struct clip_expolys scratch_inner = {0};
 
-		rc = perim_generate(ps, &below->regions, below->height, seams, &scratch,
+		/* first > 0: never layer 0 */
+		rc = perim_generate(&p->c->perim, &below->regions, below->height, seams, &scratch,
 				    &scratch_inner, err);
 		layer_paths_clear(&scratch);
 		clip_expolys_free(&scratch_inner);
@@ -170,6 +173,7 @@ static int walls_chunk(struct pipe *p, size_t k, struct st_error *err)
 	for (size_t i = first; i < last && !rc; i++) {
 		const struct slice_layer *l = &p->st->layers[i];
 
+		ps = i == 0 ? &first_walls : &p->c->perim;
 		rc = perim_generate(ps, &l->regions, l->height, seams, &p->walls[i], &p->inner[i],
 				    err);
 		if (!rc && i >= p->vase_from) /* spiral vase: no infill above the bottom */

@@ -128,6 +128,10 @@ struct slicer_config {
 	struct slicer_skirt_settings skirt;
 	struct slicer_bed bed;
 	double elefant_foot_compensation; /* mm the first layer's islands shrink, >= 0 (0) */
+	/* mm, every bead of the part's first layer on the bed (walls, skins,
+	 * infill; not over a raft) and of the skirt and brim; 0 = each role's
+	 * own width (0) */
+	double first_layer_extrusion_width;
 	int threads; /* workers for walls and infill; 0 = all online cores */
 	/* Called with a stage name ("slicing", "layers", "writing G-code") and
 	 * 0..1 done; may be NULL. */
@@ -174,12 +178,19 @@ void slicer_config_modes(struct slicer_config *c);
  * work: layer heights not > 0 or above the nozzle, the walls' settings
  * (perim_settings_check for both layer heights), infill density outside
  * 0-100 %, negative layer or loop counts or brim width, a support threshold
- * outside 0-90, raft keys outside their declared ranges (settings.h), an
- * empty bed or a height <= 0, a negative thread count.
+ * outside 0-90, raft keys outside their declared ranges (settings.h), a
+ * first-layer width the first layer's walls cannot take, an empty bed or a height <= 0, a negative thread count.
  * Returns 0 or ST_ERR_RANGE / ST_ERR_ARG with a message naming the setting
  * (PrusaSlicer's key), its value and what is allowed.
  */
 int slicer_config_check(const struct slicer_config *c, struct st_error *err);
+
+/*
+ * slicer_first_layer_walls - the walls' settings of the part's first layer:
+ * c->perim with both widths first_layer_extrusion_width when that applies
+ * (set, and no raft), else c->perim as it is.
+ */
+void slicer_first_layer_walls(const struct slicer_config *c, struct perim_settings *out);
 
 /*
  * slicer_raft_support - the settings of support_raft (support.h) for c,

@@ -64,6 +64,16 @@ int slicer_config_check(const struct slicer_config *c, struct st_error *err)
 		rc = perim_settings_check(&c->perim, c->first_layer_height, err);
 	if (!rc)
 		rc = perim_settings_check(&c->perim, c->layer_height, err);
+	if (!rc && c->first_layer_extrusion_width != 0.0) {
+		struct perim_settings first;
+		slicer_first_layer_walls(c, &first);
+		if (!(c->first_layer_extrusion_width > 0.0))
+			return st_error_set(err, ST_ERR_RANGE,
+					    "first_layer_extrusion_width = %g mm is out of range; "
+					    "use 0 (each role's width) or more",
+					    c->first_layer_extrusion_width);
+		rc = perim_settings_check(&first, c->first_layer_height, err);
+	}
 	if (!rc)
 		rc = gcodew_settings_check(&c->gcodew, err);
 	if (rc)
@@ -124,6 +134,16 @@ int slicer_config_check(const struct slicer_config *c, struct st_error *err)
 				    "threads = %d is out of range; use 0 (all cores) to %d",
 				    c->threads, SLICER_MAX_THREADS);
 	return 0;
+}
+
+void slicer_first_layer_walls(const struct slicer_config *c, struct perim_settings *out)
+{
+	*out = c->perim;
+	/* Over a raft the part's first layer is not PrusaSlicer's first layer. */
+	if (c->first_layer_extrusion_width > 0.0 && c->raft.layers == 0) {
+		out->extrusion_width = c->first_layer_extrusion_width;
+		out->external_extrusion_width = c->first_layer_extrusion_width;
+	}
 }
 
 void slicer_raft_support(const struct slicer_config *c, struct support_settings *s)

@@ -90,7 +90,8 @@ int stage_raft(const struct slicer_config *c, const struct slice_stack *st,
 	return support_raft(&ss, st, support, raft, out, err);
 }
 
-/* Skirt and brim with the job's keys, the walls' width. */
+/* Skirt and brim with the job's keys, the first layer's width (PrusaSlicer's
+ * skirt and brim flow), else the walls'. */
 int stage_skirt(const struct slicer_config *c, const struct slice_stack *st,
 		const struct layer_stack *support, struct layer_stack *out, bool *ran,
 		struct st_error *err)
@@ -106,7 +107,8 @@ int stage_skirt(const struct slicer_config *c, const struct slice_stack *st,
 	s.min_skirt_length = c->skirt.skirt_height > 0 ? c->skirt.min_skirt_length : 0;
 	s.brim_width = c->skirt.brim_width;
 	s.brim_separation = c->skirt.brim_separation;
-	s.extrusion_width = c->perim.extrusion_width;
+	s.extrusion_width = c->first_layer_extrusion_width > 0 ? c->first_layer_extrusion_width
+							       : c->perim.extrusion_width;
 	s.filament_diameter = c->gcodew.filament_diameter;
 	rc = skirt_generate(&s, st, support, out, err);
 	*ran = !rc && stack_has_paths(out);
@@ -145,6 +147,8 @@ int stage_infill_job(const struct slicer_config *c, const struct slice_stack *st
 	s.infill_extrusion_width = width_or(c->infill.infill_extrusion_width, c);
 	s.solid_infill_extrusion_width = width_or(c->infill.solid_infill_extrusion_width, c);
 	s.top_infill_extrusion_width = width_or(c->infill.top_infill_extrusion_width, c);
+	/* Over a raft the part's first layer is not PrusaSlicer's first layer. */
+	s.first_layer_extrusion_width = c->raft.layers == 0 ? c->first_layer_extrusion_width : 0;
 	s.ironing = c->gcodew.ironing;
 	s.ironing_spacing = c->gcodew.ironing_spacing;
 	rc = iron_type_parse(c->gcodew.ironing_type, &s.ironing_type, err);

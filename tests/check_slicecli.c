@@ -834,5 +834,6 @@ Suite *slicecli_suite(void)
 	tcase_add_test(tc, slice_3mf_same_as_stl);
 	suite_add_tcase(s, tc);
 	slicecli_settings_tcases(s);
+	slicecli_widths_tcases(s);
 	return s;
 }

@@ -1,0 +1,223 @@
+/*
+ * check_slicewidths.c - PrusaSlicer's per-role extrusion widths honoured
+ * end to end (issue 18 item 4; part of the slicecli suite): `stratum slice`
+ * of a 20 mm box centred at (100, 100) with --set, its G-code read back for
+ * the filament per mm of each role's moves (the bead's width through the
+ * flow model) and where the walls run (the outer wall's centre line half
+ * its width inside the surface, the inner one the two spacings' mean
+ * further in, docs/slicing.md).
+ */
+#include <check.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fixtures.h"
+#include "meshio.h"
+#include "suites.h"
+#include "testutil.h"
+
+static char out[1 << 16];
+
+/* generic-marlin's filament, mm */
+#define FILAMENT_D 1.75
+/* The box's left face once centred at (100, 100), mm */
+#define BOX_X0 90.0
+
+/* The box as a binary STL scratch file, its path into buf. */
+static void box_file(char *buf, size_t cap)
+{
+	struct st_error err = {0};
+	struct mesh *m = fx_box(0, 0, 0, 20, 20, 3);
+	int rc;
+
+	snprintf(buf, cap, "%s", tu_path("widthbox.stl"));
+	rc = meshio_write_stl(buf, m, MESHIO_STL_BINARY, &err);
+	mesh_free(m);
+	ck_assert_msg(rc == 0, "%s", err.msg);
+}
+
+/* The box sliced for generic-marlin with args; the G-code (free it). */
+static char *slice_box(const char *args)
+{
+	char model[4096], gc[4096];
+	size_t len;
+	int status;
+
+	box_file(model, sizeof(model));
+	snprintf(gc, sizeof(gc), "%s", tu_path("widths.gcode"));
+	status = tu_run(out, sizeof(out),
+			"slice '%s' -o '%s' --printer generic-marlin --center 100,100 %s", model,
+			gc, args);
+	ck_assert_msg(status == 0, "exit %d: %s", status, out);
+	return tu_slurp(gc, &len);
+}
+
+/* Filament per mm of a bead w wide and h high (PrusaSlicer's flow model). */
+static double e_per_mm(double w, double h)
+{
+	return ((w - h) * h + M_PI * h * h / 4) / (M_PI * FILAMENT_D * FILAMENT_D / 4);
+}
+
+/* Centre distance of beads w wide, h high. */
+static double spacing(double w, double h)
+{
+	return w - h * (1 - M_PI / 4);
+}
+
+/* The extruding XY moves of one ;TYPE: on one layer (1 = the first). */
+struct role_moves {
+	double e, len; /* filament and path length, mm (relative E) */
+	double min_x;  /* smallest X the moves reach */
+};
+
+static struct role_moves moves_of(const char *text, const char *role, int layer)
+{
+	struct role_moves r = {0, 0, INFINITY};
+	double x = 0, y = 0;
+	int at = 0;
+	bool in_role = false;
+
+	for (const char *l = text; *l; l = strchr(l, '\n') ? strchr(l, '\n') + 1 : l + strlen(l)) {
+		size_t n = strcspn(l, "\n");
+		const char *semi = memchr(l, ';', n);
+		size_t code = semi ? (size_t)(semi - l) : n;
+		const char *xw = memchr(l, 'X', code), *yw = memchr(l, 'Y', code);
+		const char *ew = memchr(l, 'E', code);
+		double nx = xw ? strtod(xw + 1, NULL) : x, ny = yw ? strtod(yw + 1, NULL) : y;
+
+		if (!strncmp(l, ";LAYER_CHANGE", 13))
+			at++;
+		if (!strncmp(l, ";TYPE:", 6))
+			in_role = n == 6 + strlen(role) && !strncmp(l + 6, role, strlen(role));
+		if (strncmp(l, "G1 ", 3) && strncmp(l, "G0 ", 3))
+			continue;
+		if (in_role && at == layer && ew && strtod(ew + 1, NULL) > 0 &&
+		    (nx != x || ny != y)) {
+			r.e += strtod(ew + 1, NULL);
+			r.len += hypot(nx - x, ny - y);
+			r.min_x = fmin(r.min_x, fmin(x, nx));
+		}
+		x = nx;
+		y = ny;
+	}
+	ck_assert_msg(r.len > 0, "no %s extrusion on layer %d", role, layer);
+	return r;
+}
+
+/* role's beads on layer are w wide at height h, within tol (a share). */
+static void assert_width(const char *g, const char *role, int layer, double w, double h,
+			 double tol)
+{
+	struct role_moves r = moves_of(g, role, layer);
+	double want = e_per_mm(w, h), got = r.e / r.len;
+
+	ck_assert_msg(fabs(got - want) < tol * want,
+		      "%s on layer %d: %.5f mm of filament per mm, a %.3f mm bead wants %.5f", role,
+		      layer, got, w, want);
+}
+
+/* role's moves on layer reach at most x_in mm inside the box's left face. */
+static void assert_depth(const char *g, const char *role, int layer, double x_in)
+{
+	struct role_moves r = moves_of(g, role, layer);
+
+	ck_assert_msg(fabs(r.min_x - (BOX_X0 + x_in)) < 0.002,
+		      "%s on layer %d runs %.4f mm inside the surface, wanted %.4f", role, layer,
+		      r.min_x - BOX_X0, x_in);
+}
+
+/* The key is honoured: not named in the warning. */
+static void assert_not_warned(const char *key)
+{
+	char item[96];
+
+	snprintf(item, sizeof(item), " %s=", key);
+	ck_assert_msg(!strstr(out, item), "%s", out);
+}
+
+/* On layer (height h) the outer wall's beads are wo wide, their centre line
+ * wo/2 inside the face, and the inner wall's wi wide, the mean of both
+ * spacings further in. */
+static void assert_walls(const char *g, int layer, double wo, double wi, double h)
+{
+	assert_width(g, "External perimeter", layer, wo, h, 0.005);
+	assert_width(g, "Perimeter", layer, wi, h, 0.005);
+	assert_depth(g, "External perimeter", layer, wo / 2);
+	assert_depth(g, "Perimeter", layer, wo / 2 + (spacing(wo, h) + spacing(wi, h)) / 2);
+}
+
+/*
+ * external_perimeter_extrusion_width sets the outer wall (0.6 mm), the
+ * inner wall keeping the automatic 0.45 mm; perimeter_extrusion_width as a
+ * percentage of layer_height (300% of 0.2: 0.6 mm) sets the inner walls,
+ * the outer wall keeping extrusion_width (0.5), not the inner walls' width,
+ * as PrusaSlicer's Flow does.
+ */
+START_TEST(wall_widths_honoured)
+{
+	static const struct {
+		const char *args, *key;
+		double wo, wi;
+	} cases[] = {
+	    {"--set external_perimeter_extrusion_width=0.6", "external_perimeter_extrusion_width",
+	     0.6, 0.45},
+	    {"--set extrusion_width=0.5 --set perimeter_extrusion_width=300%",
+	     "perimeter_extrusion_width", 0.5, 0.6},
+	};
+
+	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+		char *g = slice_box(cases[i].args);
+
+		assert_not_warned(cases[i].key);
+		assert_walls(g, 2, cases[i].wo, cases[i].wi, 0.2);
+		free(g);
+	}
+}
+END_TEST
+
+/* first_layer_extrusion_width, a percentage of first_layer_height (240%
+ * of 0.25: 0.6 mm, where 240% of layer_height would be 0.48), sets every
+ * bead of the first layer, skirt included; the second layer keeps the
+ * walls' 0.45 mm. */
+START_TEST(first_layer_width_honoured)
+{
+	const double h1 = 0.25;
+	char *g = slice_box("--set first_layer_height=0.25 --set first_layer_extrusion_width=240%");
+
+	assert_not_warned("first_layer_extrusion_width");
+	assert_walls(g, 1, 0.6, 0.6, h1);
+	assert_width(g, "Skirt/Brim", 1, 0.6, h1, 0.005);
+	/* solid lines are spaced so a whole number spans the island */
+	assert_width(g, "Bottom solid infill", 1, 0.6, h1, 0.03);
+	assert_walls(g, 2, 0.45, 0.45, 0.2);
+	free(g);
+}
+END_TEST
+
+/* The per-role keys at the width they fall back to print the same file as
+ * without them (the walls' offsets are computed so, to the last bit). */
+START_TEST(role_widths_at_their_fallback_change_nothing)
+{
+	char *plain = slice_box("--set extrusion_width=0.5");
+	char *same = slice_box("--set extrusion_width=0.5 --set perimeter_extrusion_width=0.5 "
+			       "--set external_perimeter_extrusion_width=0.5 "
+			       "--set first_layer_extrusion_width=0");
+
+	ck_assert_msg(!strcmp(plain, same), "the G-code changed");
+	free(plain);
+	free(same);
+}
+END_TEST
+
+void slicecli_widths_tcases(Suite *s)
+{
+	TCase *tc = tcase_create("widths");
+
+	tcase_set_timeout(tc, 120);
+	tcase_add_test(tc, wall_widths_honoured);
+	tcase_add_test(tc, first_layer_width_honoured);
+	tcase_add_test(tc, role_widths_at_their_fallback_change_nothing);
+	suite_add_tcase(s, tc);
+}
