@@ -96,9 +96,11 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	int rc;
 
 	slicer_config_init(c, p->nozzle_diameter[0]);
-	/* Each role's key, else extrusion_width, else the automatic width
-	 * (PrusaSlicer's Flow); the walls' default is that automatic width. */
+	/* Each role's key, else extrusion_width, else the automatic width of
+	 * PrusaSlicer 2.5's Flow: the nozzle's for the top skin and support,
+	 * 1.125 x the nozzle's (the walls' default) for the others. */
 	double base = p->extrusion_width > 0 ? p->extrusion_width : c->perim.extrusion_width;
+	double thin = p->extrusion_width > 0 ? p->extrusion_width : p->nozzle_diameter[0];
 	c->perim.extrusion_width = width_of(&p->perimeter_extrusion_width, p->layer_height, base);
 	c->perim.external_extrusion_width =
 	    width_of(&p->external_perimeter_extrusion_width, p->layer_height, base);
@@ -120,9 +122,9 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	c->infill.solid_infill_extrusion_width =
 	    width_of(&p->solid_infill_extrusion_width, p->layer_height, base);
 	c->infill.top_infill_extrusion_width =
-	    width_of(&p->top_infill_extrusion_width, p->layer_height, base);
+	    width_of(&p->top_infill_extrusion_width, p->layer_height, thin);
 	c->support.extrusion_width =
-	    width_of(&p->support_material_extrusion_width, p->layer_height, base);
+	    width_of(&p->support_material_extrusion_width, p->layer_height, thin);
 	c->bed = (struct slicer_bed){.min_x = p->bed_min_x, .min_y = p->bed_min_y,
 				     .max_x = p->bed_max_x, .max_y = p->bed_max_y};
 

@@ -149,7 +149,8 @@ static const struct setting table[] = {
     {"first_layer_height", SETTING_NUMBER_OR_PCT, S_, 0, 3, GT, "mm", "0.2", NULL, NULL, 0, NULL,
      "at most the smallest nozzle; a percentage is of layer_height"},
     {"extrusion_width", SETTING_NUMBER_OR_PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
-     "0 = automatic; a percentage is of layer_height (as in PrusaSlicer)"},
+     "0 = automatic (PrusaSlicer 2.5's: the nozzle for the top skin and support, 1.125 x "
+     "the nozzle for the rest); a percentage is of layer_height (as in PrusaSlicer)"},
     {"first_layer_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
      "every bead of the first layer on the bed, skirt and brim too; 0 = each role's own "
      "width; a percentage is of first_layer_height (PrusaSlicer's default is 200%)"},
@@ -163,7 +164,8 @@ static const struct setting table[] = {
     {"solid_infill_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
      "solid infill and bottom skin; likewise"},
     {"top_infill_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
-     "top skin; likewise"},
+     "top skin; 0 = extrusion_width, or the nozzle when that is 0 too; a percentage is of "
+     "layer_height"},
     {"support_material_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
      "support and raft; likewise"},
     {"perimeters", INT, S_, 0, 100, 0, "", "3", NULL, NULL, 0, NULL, ""},

@@ -196,6 +196,22 @@ START_TEST(first_layer_width_honoured)
 }
 END_TEST
 
+/* With extrusion_width 0 (generic-marlin) every role's width is PrusaSlicer
+ * 2.5's automatic one: the top skin the nozzle's 0.4 mm, the walls and the
+ * other infill 1.125 x that; with extrusion_width set, that for all. */
+START_TEST(automatic_widths_are_prusaslicers)
+{
+	char *g = slice_box("");
+
+	assert_width(g, "Top solid infill", 15, 0.4, 0.2, 0.03);
+	assert_walls(g, 2, 0.45, 0.45, 0.2);
+	free(g);
+	g = slice_box("--set extrusion_width=0.5");
+	assert_width(g, "Top solid infill", 15, 0.5, 0.2, 0.03);
+	free(g);
+}
+END_TEST
+
 /* The per-role keys at the width they fall back to print the same file as
  * without them (the walls' offsets are computed so, to the last bit). */
 START_TEST(role_widths_at_their_fallback_change_nothing)
@@ -218,6 +234,7 @@ void slicecli_widths_tcases(Suite *s)
 	tcase_set_timeout(tc, 120);
 	tcase_add_test(tc, wall_widths_honoured);
 	tcase_add_test(tc, first_layer_width_honoured);
+	tcase_add_test(tc, automatic_widths_are_prusaslicers);
 	tcase_add_test(tc, role_widths_at_their_fallback_change_nothing);
 	suite_add_tcase(s, tc);
 }
