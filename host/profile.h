@@ -239,6 +239,8 @@ struct profile {
 	struct profile_pct support_material_interface_speed; /* default 100% */
 	struct profile_pct first_layer_speed; /* a percentage is of each role's speed */
 	struct profile_pct first_layer_speed_over_raft; /* the part's first layer on a raft */
+	/* mm^3/s, each extrusion's cap (the lower of those above 0); defaults 0 */
+	double max_volumetric_speed, filament_max_volumetric_speed;
 	double default_acceleration; /* mm/s^2, M204 S; default 0 */
 	double perimeter_acceleration; /* mm/s^2, M204 S; default 0 */
 	double infill_acceleration; /* mm/s^2, M204 S; default 0 */

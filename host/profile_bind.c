@@ -136,6 +136,8 @@ static const struct key_def key_defs[] = {
 	{"support_material_interface_speed", KT_NUM_PCT, P(support_material_interface_speed)},
 	{"first_layer_speed", KT_NUM_PCT, P(first_layer_speed)},
 	{"first_layer_speed_over_raft", KT_NUM_PCT, P(first_layer_speed_over_raft)},
+	{"max_volumetric_speed", KT_DOUBLE, G(max_volumetric_speed)},
+	{"filament_max_volumetric_speed", KT_FIRST_DOUBLE, G(filament_max_volumetric_speed)},
 	{"default_acceleration", KT_DOUBLE, G(default_acceleration)},
 	{"perimeter_acceleration", KT_DOUBLE, G(perimeter_acceleration)},
 	{"infill_acceleration", KT_DOUBLE, G(infill_acceleration)},

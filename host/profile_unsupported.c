@@ -98,8 +98,6 @@ static const struct known known[] = {
     {"thumbnails", "", NULL, NULL},
     {"thick_bridges", "1", NULL, NULL}, /* round threads of the nozzle's width (infill_classify.c) */
     {"retract_restart_extra", "0", NULL, NULL},
-    {"max_volumetric_speed", "0", NULL, NULL},
-    {"filament_max_volumetric_speed", "0", NULL, NULL},
     {"max_volumetric_extrusion_rate_slope_*", "0", NULL, NULL},
     {"infill_first", "0", NULL, NULL}, {"brim_*", NULL, "brim_width", "0"},
     {"support_material_*", NULL, "support_material", "0"},

@@ -96,6 +96,8 @@ static const struct key keys[] = {
     KRD(raft_first_layer_density),
     KRD(raft_first_layer_expansion),
     KRD(first_layer_speed_over_raft),
+    KZD(max_volumetric_speed),
+    KZDV(filament_max_volumetric_speed),
     KZD(default_acceleration),
     KZD(perimeter_acceleration),
     KZD(infill_acceleration),

@@ -268,8 +268,9 @@ static int record_wipe(struct gcodew *w, const struct toolpath *p, bool rev, siz
 /*
  * Extrude from pa to pb (path pi of layer li; pb is its point at, for
  * messages), ending at height z: a bead width nm wide, its filament from
- * the flow model at the top of gcode_writer.h times share.  A bead
- * narrower than the layer is refused; a segment of no length adds nothing.
+ * the flow model at the top of gcode_writer.h times share, at speed or
+ * slower where the volumetric limits ask it.  A bead narrower than the
+ * layer is refused; a segment of no length adds nothing.
  */
 static int plan_segment(struct gcodew *w, const struct layer_paths *l, size_t li, size_t pi,
 			size_t at, const struct path_point *pa, const struct path_point *pb,
@@ -288,6 +289,11 @@ static int plan_segment(struct gcodew *w, const struct layer_paths *l, size_t li
 				    li + 1, pi, path_role_name(l->paths[pi].role), at, bead, h);
 	if (len <= 0)
 		return 0;
+	/* PrusaSlicer caps with the path's cross-section, not the E written */
+	if (w->s->max_volumetric_speed > 0)
+		speed = fmin(speed, w->s->max_volumetric_speed / area);
+	if (w->s->filament_max_volumetric_speed > 0)
+		speed = fmin(speed, w->s->filament_max_volumetric_speed / area);
 	return push_move(w, MV_EXTRUDE, true, pb->x / SLICE_UNITS_PER_MM,
 			 pb->y / SLICE_UNITS_PER_MM, z,
 			 share * area * len / w->fil_area * w->s->extrusion_multiplier, speed);

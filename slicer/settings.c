@@ -273,6 +273,11 @@ static const struct setting table[] = {
      "slowed"},
     {"first_layer_speed_over_raft", PCT, S_, 0, 1000, 0, "mm/s", "30", NULL, NULL, 0, NULL,
      "every extrusion of the part's first layer on a raft, likewise"},
+    {"max_volumetric_speed", NUM, S_, 0, 1000, 0, "mm^3/s", "0", NULL, NULL, 0, NULL,
+     "every extrusion at most this fast in filament volume: its speed at most the limit "
+     "over its bead's cross-section (before the slow-down for short layers); 0 = no limit"},
+    {"filament_max_volumetric_speed", NUM, FI, 0, 1000, 0, "mm^3/s", "0", NULL, NULL, 0, NULL,
+     "the filament's limit, likewise; with both set the lower applies"},
     {"default_acceleration", NUM, S_, 0, 100000, 0, "mm/s^2", "0", NULL, NULL, 0, NULL,
      "M204 S before each path's own value and after each path; 0 = never written, the per-role keys below unused"},
     {"perimeter_acceleration", NUM, S_, 0, 100000, 0, "mm/s^2", "0", NULL, NULL, 0, NULL,

@@ -1,6 +1,6 @@
 /*
- * check_slicewidths.c - PrusaSlicer's per-role extrusion widths honoured
- * end to end (issue 18 item 4; part of the slicecli suite): `stratum slice`
+ * check_slicewidths.c - PrusaSlicer's per-role extrusion widths and
+ * volumetric speed limits honoured end to end (issue 18 item 4; part of the slicecli suite): `stratum slice`
  * of a 20 mm box centred at (100, 100) with --set, its G-code read back for
  * the filament per mm of each role's moves (the bead's width through the
  * flow model) and where the walls run (the outer wall's centre line half
@@ -212,6 +212,62 @@ START_TEST(automatic_widths_are_prusaslicers)
 }
 END_TEST
 
+/* The most filament volume per second of any extrusion of text after the
+ * start G-code (its prime line is the profile's), mm^3/s. */
+static double peak_volume_rate(const char *text)
+{
+	double x = 0, y = 0, f = 0, peak = 0;
+	bool sliced = false;
+
+	for (const char *l = text; *l; l = strchr(l, '\n') ? strchr(l, '\n') + 1 : l + strlen(l)) {
+		size_t n = strcspn(l, "\n");
+		const char *semi = memchr(l, ';', n);
+		size_t code = semi ? (size_t)(semi - l) : n;
+		const char *xw = memchr(l, 'X', code), *yw = memchr(l, 'Y', code);
+		const char *ew = memchr(l, 'E', code), *fw = memchr(l, 'F', code);
+		double nx = xw ? strtod(xw + 1, NULL) : x, ny = yw ? strtod(yw + 1, NULL) : y;
+
+		sliced = sliced || !strncmp(l, ";TYPE:", 6);
+		if (strncmp(l, "G1 ", 3))
+			continue;
+		if (fw)
+			f = strtod(fw + 1, NULL);
+		double len = hypot(nx - x, ny - y);
+		if (sliced && ew && strtod(ew + 1, NULL) > 0 && len > 0)
+			peak = fmax(peak, strtod(ew + 1, NULL) / len * M_PI * FILAMENT_D *
+					      FILAMENT_D / 4 * f / 60);
+		x = nx;
+		y = ny;
+	}
+	return peak;
+}
+
+/* filament_max_volumetric_speed and max_volumetric_speed cap every
+ * extrusion's speed so its bead's cross-section times its speed stays
+ * within the lower limit, and the cap binds (80 mm/s infill of 0.45 x 0.2
+ * mm beads would be 6.5 mm^3/s). */
+START_TEST(volumetric_speed_capped)
+{
+	static const char *const args[] = {
+	    "--set cooling=0 --set filament_max_volumetric_speed=2",
+	    "--set cooling=0 --set max_volumetric_speed=2 --set filament_max_volumetric_speed=3",
+	};
+
+	for (size_t i = 0; i < sizeof(args) / sizeof(args[0]); i++) {
+		char *g = slice_box(args[i]);
+		double peak = peak_volume_rate(g);
+
+		assert_not_warned("filament_max_volumetric_speed");
+		assert_not_warned("max_volumetric_speed");
+		/* E is the flow model's to the printed digits (and the
+		 * simplifier's stretch of at most a few per cent) */
+		ck_assert_msg(peak <= 2.0 * 1.03 && peak >= 2.0 * 0.97,
+			      "%s: peak %.3f mm^3/s, wanted 2", args[i], peak);
+		free(g);
+	}
+}
+END_TEST
+
 /* The per-role keys at the width they fall back to print the same file as
  * without them (the walls' offsets are computed so, to the last bit). */
 START_TEST(role_widths_at_their_fallback_change_nothing)
@@ -235,6 +291,7 @@ void slicecli_widths_tcases(Suite *s)
 	tcase_add_test(tc, wall_widths_honoured);
 	tcase_add_test(tc, first_layer_width_honoured);
 	tcase_add_test(tc, automatic_widths_are_prusaslicers);
+	tcase_add_test(tc, volumetric_speed_capped);
 	tcase_add_test(tc, role_widths_at_their_fallback_change_nothing);
 	suite_add_tcase(s, tc);
 }
