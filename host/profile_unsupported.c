@@ -97,6 +97,16 @@ static const struct known known[] = {
     {"gcode_label_objects", NULL, NULL, NULL}, /* comments for host plugins */
     {"thumbnails", "", NULL, NULL},
     {"thick_bridges", "1", NULL, NULL}, /* round threads of the nozzle's width (infill_classify.c) */
+    /* Solid skins are lines alternating 90 degrees a layer (infill_fill.c) */
+    {"external_fill_pattern", "rectilinear", NULL, NULL},
+    {"top_fill_pattern", "rectilinear", NULL, NULL}, {"bottom_fill_pattern", "rectilinear", NULL, NULL},
+    /* The shells are counted through every layer's whole region (infill.h),
+     * so slopes keep their vertical shell thickness: PrusaSlicer's 1 */
+    {"ensure_vertical_shell_thickness", "1", NULL, NULL},
+    {"extra_perimeters", "0", NULL, NULL}, /* no walls added for the layer above */
+    {"overhangs", "0", NULL, NULL}, /* overhanging walls print as the others */
+    /* Sparse lines are not joined along the walls: infill_anchor_max = 0 */
+    {"infill_anchor_max", "0", NULL, NULL}, {"infill_anchor", NULL, "infill_anchor_max", "0"},
     {"retract_restart_extra", "0", NULL, NULL},
     {"max_volumetric_extrusion_rate_slope_*", "0", NULL, NULL},
     {"infill_first", "0", NULL, NULL}, {"brim_*", NULL, "brim_width", "0"},

@@ -606,7 +606,7 @@ START_TEST(bundle_presets_slice)
 	ck_assert_msg(status == 0, "exit %d: %s", status, out);
 	/* One warning line, naming keys with their values. */
 	ck_assert_msg(strstr(out, "warning: not supported, ignored: ") &&
-			      strstr(out, "ensure_vertical_shell_thickness=1") &&
+			      strstr(out, "infill_anchor=2.5") &&
 			      !strstr(out, "raft_layers") && !strstr(out, "remaining_times"),
 		      "%s", out);
 	slurp(gc, gcode, sizeof(gcode));
