@@ -192,6 +192,7 @@ struct profile {
 	double top_solid_min_thickness, bottom_solid_min_thickness; /* mm; defaults 0, 0 */
 	double fill_angle, bridge_angle; /* degrees; defaults 45, 0 (0 = per bridge) */
 	double bridge_flow_ratio;	 /* default 1 */
+	bool thick_bridges;		 /* round bridge threads; default 1 */
 	struct profile_pct infill_overlap; /* mm or % of extrusion_width; default 25% */
 	/* mm or % of first_layer_height; 0 = each role's width; default 0 */
 	struct profile_pct first_layer_extrusion_width;

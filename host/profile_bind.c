@@ -98,6 +98,7 @@ static const struct key_def key_defs[] = {
 	{"fill_angle", KT_DOUBLE, S(fill_angle, infill.fill_angle)},
 	{"bridge_angle", KT_DOUBLE, S(bridge_angle, infill.bridge_angle)},
 	{"bridge_flow_ratio", KT_DOUBLE, S(bridge_flow_ratio, infill.bridge_flow_ratio)},
+	{"thick_bridges", KT_BOOL, S(thick_bridges, infill.thick_bridges)},
 	{"infill_overlap", KT_NUM_PCT, P(infill_overlap)},
 	{"fill_density", KT_DENSITY, S(fill_density, infill.density)},
 	{"fill_pattern", KT_CHOICE, P(fill_pattern)},

@@ -96,7 +96,6 @@ static const struct known known[] = {
     {"post_process", "", NULL, NULL}, {"gcode_substitutions", "", NULL, NULL},
     {"gcode_label_objects", NULL, NULL, NULL}, /* comments for host plugins */
     {"thumbnails", "", NULL, NULL},
-    {"thick_bridges", "1", NULL, NULL}, /* round threads of the nozzle's width (infill_classify.c) */
     /* Solid skins are lines alternating 90 degrees a layer (infill_fill.c) */
     {"external_fill_pattern", "rectilinear", NULL, NULL},
     {"top_fill_pattern", "rectilinear", NULL, NULL}, {"bottom_fill_pattern", "rectilinear", NULL, NULL},

@@ -76,6 +76,7 @@ void infill_settings_init(struct infill_settings *s, double nozzle_diameter)
 		.infill_overlap = 25.0,
 		.solid_infill_below_area = 70.0,
 		.bridge_flow_ratio = 1.0,
+		.thick_bridges = true,
 		.gap_fill_min = 0.1,
 		.ironing = false,
 		.ironing_type = IRON_TOP,

@@ -195,6 +195,10 @@ static const struct setting table[] = {
      "direction of bridges; 0 = the best one per bridge"},
     {"bridge_flow_ratio", NUM, S_, 0, 2, GT, "", "1", NULL, NULL, 0, NULL,
      "bridge thread area over the nozzle's"},
+    {"thick_bridges", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, NULL,
+     "bridges as round threads of the nozzle's diameter times the square root of "
+     "bridge_flow_ratio, 0.05 mm apart; 0: flat beads of the solid infill's width and the "
+     "layer's height at its spacing, their cross-section times bridge_flow_ratio"},
     {"infill_overlap", PCT, S_, 0, 10, 0, "mm", "25%", NULL, NULL, 0, NULL,
      "how far infill reaches into the innermost wall; a percentage (at most 100%) is of "
      "extrusion_width"},

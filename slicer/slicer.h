@@ -84,6 +84,7 @@ struct slicer_infill_settings {
 	double top_solid_min_thickness, bottom_solid_min_thickness; /* mm, >= 0 (0) */
 	double fill_angle, bridge_angle; /* degrees (45, 0 = per bridge) */
 	double bridge_flow_ratio;	 /* (0, 2] (1) */
+	bool thick_bridges;		 /* round threads, else flat beads (true) */
 	double infill_overlap;		 /* percent of the walls' width, 0-100 (25) */
 	/* mm: sparse, solid and bottom, top; 0 = the walls' extrusion_width (0) */
 	double infill_extrusion_width, solid_infill_extrusion_width, top_infill_extrusion_width;

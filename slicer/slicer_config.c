@@ -24,6 +24,7 @@ void slicer_config_init(struct slicer_config *c, double nozzle_diameter)
 	c->infill = (struct slicer_infill_settings){
 	    .density = 20, .pattern = "rectilinear", .top_solid_layers = 3, .bottom_solid_layers = 3,
 	    .solid_infill_below_area = 70, .fill_angle = 45, .bridge_flow_ratio = 1,
+	    .thick_bridges = true,
 	    .infill_overlap = 25};
 	c->support = (struct slicer_support_settings){.enabled = false, .threshold = 0};
 	/* The declared defaults, as the writer has them. */

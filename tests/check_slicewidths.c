@@ -26,28 +26,27 @@ static char out[1 << 16];
 /* The box's left face once centred at (100, 100), mm */
 #define BOX_X0 90.0
 
-/* The box as a binary STL scratch file, its path into buf. */
-static void box_file(char *buf, size_t cap)
+/* m as a binary STL scratch file (m is freed), its path into buf. */
+static void model_file(struct mesh *m, char *buf, size_t cap)
 {
 	struct st_error err = {0};
-	struct mesh *m = fx_box(0, 0, 0, 20, 20, 3);
 	int rc;
 
-	snprintf(buf, cap, "%s", tu_path("widthbox.stl"));
+	snprintf(buf, cap, "%s", tu_path("widthmodel.stl"));
 	rc = meshio_write_stl(buf, m, MESHIO_STL_BINARY, &err);
 	mesh_free(m);
 	ck_assert_msg(rc == 0, "%s", err.msg);
 }
 
-/* The box sliced with printer (the --printer or --load arguments) and
+/* m (freed) sliced with printer (the --printer or --load arguments) and
  * args; the G-code (free it). */
-static char *slice_box_for(const char *printer, const char *args)
+static char *slice_for(struct mesh *m, const char *printer, const char *args)
 {
 	char model[4096], gc[4096];
 	size_t len;
 	int status;
 
-	box_file(model, sizeof(model));
+	model_file(m, model, sizeof(model));
 	snprintf(gc, sizeof(gc), "%s", tu_path("widths.gcode"));
 	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' %s --center 100,100 %s", model, gc,
 			printer, args);
@@ -55,10 +54,10 @@ static char *slice_box_for(const char *printer, const char *args)
 	return tu_slurp(gc, &len);
 }
 
-/* The box sliced for generic-marlin with args. */
+/* A 20 x 20 x 3 mm box sliced for generic-marlin with args. */
 static char *slice_box(const char *args)
 {
-	return slice_box_for("--printer generic-marlin", args);
+	return slice_for(fx_box(0, 0, 0, 20, 20, 3), "--printer generic-marlin", args);
 }
 
 /* Filament per mm of a bead w wide and h high (PrusaSlicer's flow model). */
@@ -116,7 +115,7 @@ static void walk_moves(const char *text,
 	}
 }
 
-/* The extruding XY moves of one ;TYPE: on one layer. */
+/* The extruding XY moves of one ;TYPE: on one layer (0: on every one). */
 struct role_moves {
 	const char *role;
 	int layer;
@@ -130,7 +129,8 @@ static void add_role_move(void *ctx, const struct move_at *at, double x0, double
 	struct role_moves *r = ctx;
 
 	if (!at->role || at->role_len != strlen(r->role) ||
-	    strncmp(at->role, r->role, at->role_len) || at->layer != r->layer || e <= 0)
+	    strncmp(at->role, r->role, at->role_len) || (r->layer && at->layer != r->layer) ||
+	    e <= 0)
 		return;
 	r->e += e;
 	r->len += hypot(x1 - x0, y1 - y0);
@@ -298,6 +298,36 @@ START_TEST(volumetric_speed_capped)
 }
 END_TEST
 
+/* thick_bridges = 0: the bridge's beads are the solid infill's (0.45 x
+ * 0.2 mm here), their cross-section times bridge_flow_ratio; 1: round
+ * threads of the nozzle's diameter (PrusaSlicer's two bridge flows). */
+START_TEST(thick_bridges_honoured)
+{
+	const double fil = M_PI * FILAMENT_D * FILAMENT_D / 4;
+	static const struct {
+		const char *args;
+		double ratio;
+	} flat[] = {{"--set thick_bridges=0", 1.0},
+		    {"--set thick_bridges=0 --set bridge_flow_ratio=0.8", 0.8}};
+	char *g = slice_for(fx_bridge(), "--printer generic-marlin", "--set thick_bridges=1");
+	struct role_moves r = moves_of(g, "Bridge infill", 0);
+	double want = M_PI * 0.4 * 0.4 / 4 / fil;
+
+	ck_assert_msg(fabs(r.e / r.len - want) < 0.01 * want, "thick: %.5f, wanted %.5f",
+		      r.e / r.len, want);
+	free(g);
+	for (size_t i = 0; i < sizeof(flat) / sizeof(flat[0]); i++) {
+		g = slice_for(fx_bridge(), "--printer generic-marlin", flat[i].args);
+		assert_not_warned("thick_bridges");
+		r = moves_of(g, "Bridge infill", 0);
+		want = flat[i].ratio * e_per_mm(0.45, 0.2);
+		ck_assert_msg(fabs(r.e / r.len - want) < 0.01 * want, "%s: %.5f, wanted %.5f",
+			      flat[i].args, r.e / r.len, want);
+		free(g);
+	}
+}
+END_TEST
+
 /* The per-role keys at the width they fall back to print the same file as
  * without them (the walls' offsets are computed so, to the last bit). */
 START_TEST(role_widths_at_their_fallback_change_nothing)
@@ -322,7 +352,7 @@ START_TEST(bundled_presets_warn_only_unprinted_keys)
 		const char *bundle, *preset, *warning; /* NULL: no warning */
 	} cases[] = {
 	    {"PrusaResearch.ini", "Original Prusa i3 MK3S & MK3S+",
-	     "warning: not supported, ignored: thumbnails=160x120, thick_bridges=0, overhangs=1, "
+	     "warning: not supported, ignored: thumbnails=160x120, overhangs=1, "
 	     "infill_anchor=2.5, infill_anchor_max=12\n"},
 	    {"Creality.ini", "Creality Ender-3 (0.4 mm nozzle)", NULL},
 	};
@@ -338,7 +368,7 @@ START_TEST(bundled_presets_warn_only_unprinted_keys)
 		}
 		snprintf(printer, sizeof(printer), "--load '%s' --printer-preset '%s'", path,
 			 cases[i].preset);
-		free(slice_box_for(printer, ""));
+		free(slice_for(fx_box(0, 0, 0, 20, 20, 3), printer, ""));
 		if (cases[i].warning)
 			ck_assert_msg(strstr(out, cases[i].warning), "%s: %s", cases[i].preset, out);
 		else
@@ -356,6 +386,7 @@ void slicecli_widths_tcases(Suite *s)
 	tcase_add_test(tc, first_layer_width_honoured);
 	tcase_add_test(tc, automatic_widths_are_prusaslicers);
 	tcase_add_test(tc, volumetric_speed_capped);
+	tcase_add_test(tc, thick_bridges_honoured);
 	tcase_add_test(tc, bundled_presets_warn_only_unprinted_keys);
 	tcase_add_test(tc, role_widths_at_their_fallback_change_nothing);
 	suite_add_tcase(s, tc);
