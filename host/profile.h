@@ -290,6 +290,7 @@ struct profile {
 	const char *before_layer_gcode, *layer_gcode; /* around each layer change */
 	const char *start_filament_gcode, *end_filament_gcode; /* the first filament's */
 	const char *toolchange_gcode; /* checked only: one extruder prints */
+	const char *thumbnails;	      /* "WxH,..." (host/thumbnail.h); default "" */
 
 	struct profile_keys *keys; /* private: every key = value of the file */
 	/* Every key of the file, and every declared key's resolved value or

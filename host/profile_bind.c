@@ -200,6 +200,7 @@ static const struct key_def key_defs[] = {
 	{"start_filament_gcode", KT_FIRST_STRING, G(start_filament_gcode)},
 	{"end_filament_gcode", KT_FIRST_STRING, G(end_filament_gcode)},
 	{"toolchange_gcode", KT_STRING, P(toolchange_gcode)},
+	{"thumbnails", KT_STRING, G(thumbnails)},
 };
 
 #define KEY_DEFS (sizeof(key_defs) / sizeof(key_defs[0]))

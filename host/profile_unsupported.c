@@ -48,7 +48,7 @@ static const struct known known[] = {
     {"octoprint_*", NULL, NULL, NULL}, {"serial_port", NULL, NULL, NULL},
     {"serial_speed", NULL, NULL, NULL}, {"bed_custom_texture", NULL, NULL, NULL},
     {"bed_custom_model", NULL, NULL, NULL}, {"bed_model", NULL, NULL, NULL},
-    {"bed_texture", NULL, NULL, NULL}, {"thumbnails_format", NULL, NULL, NULL},
+    {"bed_texture", NULL, NULL, NULL}, {"thumbnails_format", "PNG", NULL, NULL},
     {"threads", NULL, NULL, NULL}, {"variable_layer_height", NULL, NULL, NULL},
     {"color_change_gcode", NULL, NULL, NULL}, {"pause_print_gcode", NULL, NULL, NULL},
     {"template_custom_gcode", NULL, NULL, NULL}, {"between_objects_gcode", NULL, NULL, NULL},
@@ -95,7 +95,6 @@ static const struct known known[] = {
     {"infill_only_where_needed", "0", NULL, NULL}, {"colorprint_heights", "", NULL, NULL},
     {"post_process", "", NULL, NULL}, {"gcode_substitutions", "", NULL, NULL},
     {"gcode_label_objects", NULL, NULL, NULL}, /* comments for host plugins */
-    {"thumbnails", "", NULL, NULL},
     /* Solid skins are lines alternating 90 degrees a layer (infill_fill.c) */
     {"external_fill_pattern", "rectilinear", NULL, NULL},
     {"top_fill_pattern", "rectilinear", NULL, NULL}, {"bottom_fill_pattern", "rectilinear", NULL, NULL},

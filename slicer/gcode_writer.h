@@ -225,6 +225,10 @@ struct gcodew_settings {
 	const char *before_layer_gcode;	  /* "" */
 	const char *layer_gcode;	  /* "" */
 	const char *start_filament_gcode; /* "" */
+	const char *thumbnails;		  /* the sizes, "WxH,..." ("": none); the host
+					   * draws them into thumbnail_block */
+	const char *thumbnail_block;	  /* comment lines written after the header's
+					   * first line; not owned; NULL: none */
 	const char *end_filament_gcode;	  /* "" */
 	/* The printer's config for the placeholders (every key of its files,
 	 * host/profile.h), under the writer's own variables; NULL: none.  Not

@@ -393,6 +393,9 @@ static const struct setting table[] = {
     {"end_filament_gcode", STR, FI, 0, 0, 0, "", "", NULL, NULL, 0, NULL, "before end_gcode"},
     {"toolchange_gcode", STR, S_, 0, 0, 0, "", "", NULL, NULL, 0, NULL,
      "checked, never written: one extruder prints (PrusaSlicer writes none either)"},
+    {"thumbnails", STR, S_, 0, 0, 0, "", "", NULL, NULL, 0, NULL,
+     "sizes WxH, comma-separated (160x120): per size a PNG picture of the part in the G-code "
+     "header, PrusaSlicer's thumbnail comments; empty = none"},
 
 };
 

@@ -835,5 +835,6 @@ Suite *slicecli_suite(void)
 	suite_add_tcase(s, tc);
 	slicecli_settings_tcases(s);
 	slicecli_widths_tcases(s);
+	slicecli_thumbnail_tcases(s);
 	return s;
 }

@@ -352,7 +352,7 @@ START_TEST(bundled_presets_warn_only_unprinted_keys)
 		const char *bundle, *preset, *warning; /* NULL: no warning */
 	} cases[] = {
 	    {"PrusaResearch.ini", "Original Prusa i3 MK3S & MK3S+",
-	     "warning: not supported, ignored: thumbnails=160x120, overhangs=1, "
+	     "warning: not supported, ignored: overhangs=1, "
 	     "infill_anchor=2.5, infill_anchor_max=12\n"},
 	    {"Creality.ini", "Creality Ender-3 (0.4 mm nozzle)", NULL},
 	};

@@ -42,6 +42,7 @@ Suite *multimodel_suite(void); /* tests/check_multimodel.c: several models in on
 Suite *slicecli_suite(void);	/* tests/check_slicecli.c: stratum slice end to end */
 void slicecli_settings_tcases(Suite *s); /* tests/check_slicesettings.c: settings honoured, part of slicecli */
 void slicecli_widths_tcases(Suite *s); /* tests/check_slicewidths.c: per-role widths, part of slicecli */
+void slicecli_thumbnail_tcases(Suite *s); /* tests/check_thumbnail.c: G-code thumbnails, part of slicecli */
 Suite *region_suite(void);	/* tests/check_region.c: printed region against cross-sections */
 Suite *x3g_suite(void);		/* tests/check_x3g.c: G-code to X3G, decoder, against gpx */
 Suite *s3g_suite(void);		/* tests/check_s3g.c: S3G packets, driver, simulated Sailfish */
