@@ -36,6 +36,7 @@ void gcodewriter_retract_tcases(Suite *s); /* tests/check_retract.c: retract_lay
 void gcodewriter_accel_tcases(Suite *s); /* tests/check_accel.c: accelerations per role, part of gcodewriter */
 void gcodewriter_progress_tcases(Suite *s); /* tests/check_progress.c: remaining_times, part of gcodewriter */
 Suite *infill_suite(void);	/* tests/check_infill.c: skins, bridges, infill */
+void infill_shell_tcases(Suite *s); /* tests/check_shells.c: vertical shells, part of infill */
 Suite *support_suite(void);	/* tests/check_support.c: skirt, brim, support material */
 Suite *raft_suite(void);	/* tests/check_raft.c: the raft under the part */
 Suite *multimodel_suite(void); /* tests/check_multimodel.c: several models in one slice */
