@@ -188,6 +188,7 @@ struct profile {
 	const char *seam_position; /* aligned, nearest, random or rear; default aligned */
 	double elefant_foot_compensation; /* mm, first layer shrunk; default 0 */
 	bool external_perimeters_first, thin_walls, gap_fill_enabled; /* defaults 0, 1, 1 */
+	bool overhangs; /* overhanging walls with bridge flow; default 0 */
 	bool spiral_vase; /* default 0 */
 	double top_solid_min_thickness, bottom_solid_min_thickness; /* mm; defaults 0, 0 */
 	double fill_angle, bridge_angle; /* degrees; defaults 45, 0 (0 = per bridge) */

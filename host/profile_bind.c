@@ -90,6 +90,7 @@ static const struct key_def key_defs[] = {
 	{"external_perimeters_first", KT_BOOL, S(external_perimeters_first, perim.outer_first)},
 	{"thin_walls", KT_BOOL, S(thin_walls, perim.thin_walls)},
 	{"gap_fill_enabled", KT_BOOL, S(gap_fill_enabled, perim.gap_fill)},
+	{"overhangs", KT_BOOL, S(overhangs, overhangs)},
 	{"spiral_vase", KT_BOOL, G(spiral_vase)},
 	{"top_solid_layers", KT_INT, S(top_solid_layers, infill.top_solid_layers)},
 	{"bottom_solid_layers", KT_INT, S(bottom_solid_layers, infill.bottom_solid_layers)},

@@ -184,6 +184,7 @@ static double role_base_speed(const struct gcodew_settings *s, enum path_role ro
 	case PATH_SPARSE_INFILL:
 		return s->infill_speed;
 	case PATH_BRIDGE:
+	case PATH_OVERHANG_PERIMETER:
 		return s->bridge_speed;
 	case PATH_SUPPORT:
 	case PATH_SKIRT:
@@ -307,7 +308,11 @@ static double path_accel(const struct gcodew_settings *s, enum path_role role, s
 
 	if (li == 0 && s->first_layer_acceleration > 0)
 		return s->first_layer_acceleration;
-	if (role == PATH_OUTER_PERIMETER || role == PATH_INNER_PERIMETER || role == PATH_THIN_WALL)
+	if (role == PATH_OVERHANG_PERIMETER) /* a wall, then a bridge, as PrusaSlicer */
+		v = s->perimeter_acceleration > 0 ? s->perimeter_acceleration
+						  : s->bridge_acceleration;
+	else if (role == PATH_OUTER_PERIMETER || role == PATH_INNER_PERIMETER ||
+		 role == PATH_THIN_WALL)
 		v = s->perimeter_acceleration;
 	else if (role == PATH_BRIDGE && s->bridge_acceleration > 0)
 		v = s->bridge_acceleration;

@@ -197,7 +197,7 @@ int infill_fill_layer(struct ctx *c)
 	double solid_w = s->solid_infill_extrusion_width, top_w = s->top_infill_extrusion_width;
 	/* Bridge flow: a round thread; the bead of equal cross-section. */
 	double thread = s->nozzle_diameter * sqrt(s->bridge_flow_ratio);
-	double bridge_w = fmax(c->h, c->h + M_PI * (thread * thread - c->h * c->h) / (4.0 * c->h));
+	double bridge_w = perim_round_bead(thread, c->h);
 	const double U = SLICE_UNITS_PER_MM;
 	const struct bead solid = {solid_w * U, perim_spacing(solid_w, c->h) * U, PATH_SOLID_INFILL,
 				   true};

@@ -74,6 +74,11 @@ static double outer_width(const struct perim_settings *s)
 						 : s->extrusion_width;
 }
 
+double perim_round_bead(double d, double height)
+{
+	return fmax(height, height + M_PI * (d * d - height * height) / (4.0 * height));
+}
+
 int perim_settings_check(const struct perim_settings *s, double layer_height,
 			 struct st_error *err)
 {

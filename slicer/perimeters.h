@@ -94,6 +94,12 @@ double perim_spacing(double width, double height);
 double perim_bead_area(double width, double height);
 
 /*
+ * perim_round_bead - the bead width whose cross-section at height h equals
+ * a round thread of diameter d (bridge flow), at least h, mm.
+ */
+double perim_round_bead(double d, double height);
+
+/*
  * perim_seams_new - seam memory seeded for PERIM_SEAM_RANDOM (the same seed
  * gives the same seams).  NULL when out of memory.
  */

@@ -180,6 +180,9 @@ static const struct setting table[] = {
      "one centre-line bead where two walls do not fit"},
     {"gap_fill_enabled", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, NULL,
      "beads in the strips left between walls"},
+    {"overhangs", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
+     "walls more than half the nozzle outside the layer below print with bridge flow, "
+     "bridge_speed and bridge_fan_speed (Overhang perimeter); PrusaSlicer's default is 1"},
     {"spiral_vase", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
      "above the bottom layers one wall around the largest island (holes and smaller islands "
      "dropped), printed as a spiral rising along each loop; no top layers, no infill there"},

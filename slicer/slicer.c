@@ -12,6 +12,7 @@
 
 #include "grow.h"
 #include "infill.h"
+#include "overhang.h"
 #include "stages.h"
 #include "spiral.h"
 #include "travel.h"
@@ -178,6 +179,13 @@ static int walls_chunk(struct pipe *p, size_t k, struct st_error *err)
 				    err);
 		if (!rc && i >= p->vase_from) /* spiral vase: no infill above the bottom */
 			clip_expolys_clear(&p->inner[i]);
+		if (!rc && p->c->overhangs && i > 0 && i < p->vase_from) {
+			struct overhang_settings os = {p->c->perim.nozzle_diameter,
+						       p->c->infill.thick_bridges,
+						       p->c->infill.bridge_flow_ratio};
+			rc = overhang_split(&p->walls[i], &l->regions.paths,
+					    &p->st->layers[i - 1].regions.paths, &os, err);
+		}
 		if (!rc && p->travel &&
 		    !(p->maps[i] = travel_map_new(&l->regions, p->travel_inset, err)))
 			rc = err->code;

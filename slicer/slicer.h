@@ -133,6 +133,9 @@ struct slicer_config {
 	 * infill; not over a raft) and of the skirt and brim; 0 = each role's
 	 * own width (0) */
 	double first_layer_extrusion_width;
+	/* walls' pieces over air printed with bridge flow, speed and fan
+	 * (overhang.h; PrusaSlicer's overhangs; false) */
+	bool overhangs;
 	int threads; /* workers for walls and infill; 0 = all online cores */
 	/* Called with a stage name ("slicing", "layers", "writing G-code") and
 	 * 0..1 done; may be NULL. */

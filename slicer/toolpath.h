@@ -44,6 +44,8 @@ enum path_role {
 	PATH_SUPPORT,		  /* support body */
 	PATH_SUPPORT_INTERFACE,	  /* dense support layers under the part */
 	PATH_IRONING,		  /* second pass over a top surface at low flow (infill.h) */
+	PATH_OVERHANG_PERIMETER,  /* a wall's piece over air: bridge flow, speed and fan
+				   * (overhang.h) */
 	PATH_ROLES		  /* number of roles */
 };
 

@@ -768,10 +768,10 @@ START_TEST(load_order_and_set)
 	/* An unsupported key is named once, with its value. */
 	status = tu_run(out, sizeof(out),
 			"slice '%s' -o '%s' --load '%s' --set fuzzy_skin=random --set complete_objects=1 "
-			"--set overhangs=1",
+			"--set infill_first=1",
 			model, gc, a);
 	ck_assert_msg(status == 0 && strstr(out, "warning: not supported, ignored: fuzzy_skin=random, "
-						 "complete_objects=1, overhangs=1\n"),
+						 "complete_objects=1, infill_first=1\n"),
 		      "exit %d: %s", status, out);
 	/* The raft is printed: its keys are not named, a raft key Stratum
 	 * does not print is, and the header lists the values used. */

@@ -328,6 +328,62 @@ START_TEST(thick_bridges_honoured)
 }
 END_TEST
 
+/* The feeds (mm/min) of every move of one ;TYPE: lie in [lo, hi], and the
+ * X of their ends in [x0, x1]. */
+struct role_span {
+	const char *role;
+	double lo, hi, x0, x1;
+	size_t moves;
+};
+
+static void span_move(void *ctx, const struct move_at *at, double x0, double y0, double x1,
+		      double y1, double e)
+{
+	struct role_span *r = ctx;
+
+	(void)y0;
+	(void)y1;
+	if (!at->role || at->role_len != strlen(r->role) ||
+	    strncmp(at->role, r->role, at->role_len) || e <= 0)
+		return;
+	r->lo = fmin(r->lo, at->feed);
+	r->hi = fmax(r->hi, at->feed);
+	r->x0 = fmin(r->x0, fmin(x0, x1));
+	r->x1 = fmax(r->x1, fmax(x0, x1));
+	r->moves++;
+}
+
+/* overhangs = 1: the walls' pieces over fx_bridge's 10 mm gap (x 5 to 15,
+ * placed 95 to 105) print as Overhang perimeter, at bridge_speed with
+ * bridge flow (a round thread of the nozzle's diameter); they start and
+ * end within half a sample of where the pillars grown by half the nozzle
+ * end (95.2 and 104.8); 0 (the default) prints no such piece. */
+#define OVERHANG_HALF_STEP 0.05 /* mm, overhang.h's sample step / 2 */
+START_TEST(overhangs_honoured)
+{
+	const double fil = M_PI * FILAMENT_D * FILAMENT_D / 4;
+	char *g = slice_for(fx_bridge(), "--printer generic-marlin",
+			    "--set cooling=0 --set overhangs=1 --set bridge_speed=17");
+	struct role_span sp = {"Overhang perimeter", INFINITY, -INFINITY, INFINITY, -INFINITY, 0};
+	struct role_moves r = moves_of(g, "Overhang perimeter", 0);
+	double want = M_PI * 0.4 * 0.4 / 4 / fil;
+
+	assert_not_warned("overhangs");
+	walk_moves(g, span_move, &sp);
+	ck_assert_msg(sp.moves > 0 && sp.lo == 17 * 60 && sp.hi == 17 * 60, "F%g to F%g", sp.lo,
+		      sp.hi);
+	ck_assert_msg(fabs(r.e / r.len - want) < 0.01 * want, "E/mm %.5f, wanted %.5f",
+		      r.e / r.len, want);
+	ck_assert_msg(fabs(sp.x0 - 95.2) <= OVERHANG_HALF_STEP &&
+			      fabs(sp.x1 - 104.8) <= OVERHANG_HALF_STEP,
+		      "overhang from X%g to X%g", sp.x0, sp.x1);
+	free(g);
+	g = slice_for(fx_bridge(), "--printer generic-marlin", "");
+	ck_assert_msg(!strstr(g, ";TYPE:Overhang perimeter"), "overhangs off by default");
+	free(g);
+}
+END_TEST
+
 /* The per-role keys at the width they fall back to print the same file as
  * without them (the walls' offsets are computed so, to the last bit). */
 START_TEST(role_widths_at_their_fallback_change_nothing)
@@ -352,8 +408,7 @@ START_TEST(bundled_presets_warn_only_unprinted_keys)
 		const char *bundle, *preset, *warning; /* NULL: no warning */
 	} cases[] = {
 	    {"PrusaResearch.ini", "Original Prusa i3 MK3S & MK3S+",
-	     "warning: not supported, ignored: overhangs=1, "
-	     "infill_anchor=2.5, infill_anchor_max=12\n"},
+	     "warning: not supported, ignored: infill_anchor=2.5, infill_anchor_max=12\n"},
 	    {"Creality.ini", "Creality Ender-3 (0.4 mm nozzle)", NULL},
 	};
 	const char *dir = "/usr/share/PrusaSlicer/profiles";
@@ -387,6 +442,7 @@ void slicecli_widths_tcases(Suite *s)
 	tcase_add_test(tc, automatic_widths_are_prusaslicers);
 	tcase_add_test(tc, volumetric_speed_capped);
 	tcase_add_test(tc, thick_bridges_honoured);
+	tcase_add_test(tc, overhangs_honoured);
 	tcase_add_test(tc, bundled_presets_warn_only_unprinted_keys);
 	tcase_add_test(tc, role_widths_at_their_fallback_change_nothing);
 	suite_add_tcase(s, tc);
