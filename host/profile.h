@@ -251,6 +251,7 @@ struct profile {
 
 	/* Travel */
 	bool avoid_crossing_perimeters;		    /* default 1 */
+	struct profile_pct avoid_crossing_perimeters_max_detour; /* mm or %; default 100% */
 	bool only_retract_when_crossing_perimeters; /* default 1 */
 	double max_unretracted_travel;		    /* mm; default 20 */
 

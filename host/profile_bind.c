@@ -146,6 +146,7 @@ static const struct key_def key_defs[] = {
 	{"bridge_acceleration", KT_DOUBLE, G(bridge_acceleration)},
 	{"first_layer_acceleration", KT_DOUBLE, G(first_layer_acceleration)},
 	{"avoid_crossing_perimeters", KT_BOOL, G(avoid_crossing_perimeters)},
+	{"avoid_crossing_perimeters_max_detour", KT_NUM_PCT, P(avoid_crossing_perimeters_max_detour)},
 	{"only_retract_when_crossing_perimeters", KT_BOOL, G(only_retract_when_crossing_perimeters)},
 	{"max_unretracted_travel", KT_DOUBLE, G(max_unretracted_travel)},
 	{"cooling", KT_FIRST_BOOL, G(cooling)},

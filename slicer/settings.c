@@ -298,6 +298,10 @@ static const struct setting table[] = {
 
     {"avoid_crossing_perimeters", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, "Travel",
      "route travels inside the part instead of across its walls"},
+    {"avoid_crossing_perimeters_max_detour", PCT, S_, 0, 1000, 0, "mm", "100%", NULL, NULL, 0,
+     NULL, "a route inside the part longer than the straight travel by more than this goes "
+     "straight; a percentage is of the straight travel; 0 = any detour (PrusaSlicer's "
+     "default)"},
     {"only_retract_when_crossing_perimeters", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, NULL,
      "no retraction for a travel that stays inside the part"},
     {"max_unretracted_travel", NUM, S_, 0, 1e6, 0, "mm", "20", NULL, NULL, 0, NULL,

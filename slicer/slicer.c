@@ -189,6 +189,9 @@ static int walls_chunk(struct pipe *p, size_t k, struct st_error *err)
 		if (!rc && p->travel &&
 		    !(p->maps[i] = travel_map_new(&l->regions, p->travel_inset, err)))
 			rc = err->code;
+		if (!rc && p->maps[i])
+			travel_map_set_detour(p->maps[i], p->c->max_detour,
+					      p->c->max_detour_is_percent);
 		if (!rc)
 			walls_made(p, i);
 	}

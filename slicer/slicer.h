@@ -133,6 +133,11 @@ struct slicer_config {
 	 * infill; not over a raft) and of the skirt and brim; 0 = each role's
 	 * own width (0) */
 	double first_layer_extrusion_width;
+	/* the longest detour of a travel routed inside the part (travel.h,
+	 * travel_map_set_detour): mm, or percent of the straight travel;
+	 * 0 = any (100%) */
+	double max_detour;
+	bool max_detour_is_percent;
 	/* walls' pieces over air printed with bridge flow, speed and fan
 	 * (overhang.h; PrusaSlicer's overhangs; false) */
 	bool overhangs;

@@ -10,6 +10,7 @@
 #include "infill.h"
 #include "settings.h"
 #include "support.h"
+#include "travel.h"
 
 void slicer_config_init(struct slicer_config *c, double nozzle_diameter)
 {
@@ -35,6 +36,8 @@ void slicer_config_init(struct slicer_config *c, double nozzle_diameter)
 	    .first_layer_density = c->gcodew.raft_first_layer_density,
 	    .first_layer_expansion = c->gcodew.raft_first_layer_expansion};
 	c->skirt = (struct slicer_skirt_settings){.skirts = 1, .skirt_distance = 6, .skirt_height = 1};
+	c->max_detour = TRAVEL_DETOUR_DEFAULT_PCT;
+	c->max_detour_is_percent = true;
 	c->bed = (struct slicer_bed){.max_x = 200, .max_y = 200, .max_height = 200,
 				     .object_distance = 6};
 }
