@@ -204,6 +204,7 @@ struct profile {
 	struct profile_pct support_material_extrusion_width; /* support and raft */
 	double fill_density;				       /* percent, 0-100; default 20 */
 	const char *fill_pattern;	/* a PrusaSlicer pattern name; default "rectilinear" */
+	const char *top_fill_pattern, *bottom_fill_pattern; /* default "rectilinear" */
 	double solid_infill_below_area;	/* mm^2; default 70 */
 	bool ironing;			/* default 0 */
 	const char *ironing_type;	/* top, topmost or solid; default top */

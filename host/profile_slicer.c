@@ -125,6 +125,8 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	    width_of(&p->top_infill_extrusion_width, p->layer_height, thin);
 	c->support.extrusion_width =
 	    width_of(&p->support_material_extrusion_width, p->layer_height, thin);
+	c->infill.top_monotonic = !strcmp(p->top_fill_pattern, "monotonic");
+	c->infill.bottom_monotonic = !strcmp(p->bottom_fill_pattern, "monotonic");
 	c->max_detour = p->avoid_crossing_perimeters_max_detour.value;
 	c->max_detour_is_percent = p->avoid_crossing_perimeters_max_detour.is_percent;
 	c->bed = (struct slicer_bed){.min_x = p->bed_min_x, .min_y = p->bed_min_y,

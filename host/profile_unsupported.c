@@ -97,7 +97,6 @@ static const struct known known[] = {
     {"gcode_label_objects", NULL, NULL, NULL}, /* comments for host plugins */
     /* Solid skins are lines alternating 90 degrees a layer (infill_fill.c) */
     {"external_fill_pattern", "rectilinear", NULL, NULL},
-    {"top_fill_pattern", "rectilinear", NULL, NULL}, {"bottom_fill_pattern", "rectilinear", NULL, NULL},
     /* The shells are counted through every layer's whole region (infill.h),
      * so slopes keep their vertical shell thickness: PrusaSlicer's 1 */
     {"ensure_vertical_shell_thickness", "1", NULL, NULL},
@@ -190,6 +189,12 @@ static int add_item(char **buf, size_t *len, size_t *cap, const char *key, const
 	return 0;
 }
 
+/* A top or bottom skin pattern Stratum prints. */
+static bool skin_pattern_printed(const char *name)
+{
+	return !strcmp(name, "rectilinear") || !strcmp(name, "monotonic");
+}
+
 int profile_unsupported(const struct profile *p, char **out)
 {
 	char *buf = NULL;
@@ -202,6 +207,13 @@ int profile_unsupported(const struct profile *p, char **out)
 		return ST_ERR_ARG;
 	if (infill_pattern_parse(p->fill_pattern, &pat, NULL))
 		rc = add_item(&buf, &len, &cap, "fill_pattern", p->fill_pattern,
+			      "(rectilinear used)");
+	/* the skins print rectilinear or monotonic lines (profile_slicer.c) */
+	if (!rc && !skin_pattern_printed(p->top_fill_pattern))
+		rc = add_item(&buf, &len, &cap, "top_fill_pattern", p->top_fill_pattern,
+			      "(rectilinear used)");
+	if (!rc && !skin_pattern_printed(p->bottom_fill_pattern))
+		rc = add_item(&buf, &len, &cap, "bottom_fill_pattern", p->bottom_fill_pattern,
 			      "(rectilinear used)");
 	for (size_t i = 0; rc == 0 && i < p->keys->count; i++)
 		if (!honoured(p, &p->keys->kv[i]))

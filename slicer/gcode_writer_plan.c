@@ -363,12 +363,13 @@ static double dist2(const struct gcodew *w, int64_t x, int64_t y)
 	return dx * dx + dy * dy;
 }
 
-/* Perimeters and closed sparse infill (concentric loops, outermost
- * first) keep their order; other paths go nearest first. */
+/* Perimeters, closed sparse infill (concentric loops, outermost first)
+ * and ordered paths (monotonic skins) keep their order; other paths go
+ * nearest first. */
 static bool keep_order(const struct toolpath *p)
 {
 	return p->role == PATH_OUTER_PERIMETER || p->role == PATH_INNER_PERIMETER ||
-	       (p->role == PATH_SPARSE_INFILL && p->closed);
+	       (p->role == PATH_SPARSE_INFILL && p->closed) || p->ordered;
 }
 
 /* Plan the paths [i, j) of one role run, nearest neighbour first. */

@@ -95,6 +95,10 @@ struct infill_settings {
 	double solid_infill_below_area;	   /* mm^2; smaller sparse islands are solid (70) */
 	double bridge_flow_ratio;	   /* bridge thread area / nozzle area (1) */
 	bool thick_bridges;		   /* round threads, else flat beads (true) */
+	/* top / bottom skin lines in one sweep across each island, each from
+	 * the end nearer the last (PrusaSlicer's monotonic), else nearest
+	 * first (false) */
+	bool top_monotonic, bottom_monotonic;
 	double gap_fill_min;		   /* mm; narrower gaps stay empty (0.1) */
 	bool ironing;			   /* iron after the top skin (ironing.h; false) */
 	enum iron_type ironing_type;	   /* what is ironed (IRON_TOP) */

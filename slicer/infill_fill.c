@@ -276,6 +276,9 @@ int infill_fill_solid(struct ctx *c, const struct clip_paths *X, double a, const
 			rc = fitted_lines(c, &P, ai, b->sp, NULL, &segs, &fit);
 		if (!rc)
 			rc = infill_plan_lines(c, &segs, b->role, b->w);
+		if (!rc && ((b->role == PATH_TOP_SKIN && c->s->top_monotonic) ||
+			    (b->role == PATH_BOTTOM_SKIN && c->s->bottom_monotonic)))
+			c->plan->v[c->plan->n - 1].monotonic = true;
 		if (!rc && b->gap_fill && segs.n)
 			rc = gap_fill(c, &P, &segs, fit);
 	}

@@ -29,6 +29,12 @@ static const char *const pattern_names[] = {
     "octagramspiral", "adaptivecubic", "supportcubic",   "lightning",		 "zigzag",
 };
 
+/* PrusaSlicer 2.5's top_fill_pattern and bottom_fill_pattern names. */
+static const char *const skin_pattern_names[] = {
+    "rectilinear", "monotonic", "alignedrectilinear", "concentric", "hilbertcurve",
+    "archimedeanchords", "octagramspiral",
+};
+
 /* PrusaSlicer's MachineLimitsUsage names. */
 static const char *const limits_usage_names[] = {"emit_to_gcode", "time_estimate_only", "ignore"};
 
@@ -211,6 +217,13 @@ static const struct setting table[] = {
      NULL, "PrusaSlicer's names (monotonous is read as monotonic); rectilinear, grid, gyroid, "
      "triangles, stars, cubic, line, concentric and honeycomb are printed (docs/slicing.md), "
      "any other prints rectilinear, named in the warning"},
+    {"top_fill_pattern", SETTING_CHOICE, S_, 0, 0, 0, "", "rectilinear", NULL,
+     CHOICES(skin_pattern_names), NULL,
+     "the top skin's lines: rectilinear (each line from the end nearest the nozzle) or "
+     "monotonic (in one sweep across each island, PrusaSlicer's default); any other prints "
+     "rectilinear, named in the warning"},
+    {"bottom_fill_pattern", SETTING_CHOICE, S_, 0, 0, 0, "", "rectilinear", NULL,
+     CHOICES(skin_pattern_names), NULL, "likewise for the bottom skin"},
     {"solid_infill_below_area", NUM, S_, 0, 1e6, 0, "mm^2", "70", NULL, NULL, 0, NULL,
      "sparse infill islands smaller than this are solid"},
     {"ironing", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,

@@ -142,6 +142,8 @@ int stage_infill_job(const struct slicer_config *c, const struct slice_stack *st
 	s.bridge_angle = c->infill.bridge_angle;
 	s.bridge_flow_ratio = c->infill.bridge_flow_ratio;
 	s.thick_bridges = c->infill.thick_bridges;
+	s.top_monotonic = c->infill.top_monotonic;
+	s.bottom_monotonic = c->infill.bottom_monotonic;
 	s.infill_overlap = c->infill.infill_overlap;
 	s.layer_height = c->layer_height;
 	s.perimeter_extrusion_width = c->perim.extrusion_width;

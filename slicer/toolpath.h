@@ -61,6 +61,8 @@ struct path_point {
 struct toolpath {
 	enum path_role role;
 	bool closed;
+	bool ordered;		 /* printed in the layer's order and direction (monotonic
+				  * skins); false: the writer may pick nearest first */
 	size_t n;		 /* points */
 	struct path_point *pts;	 /* n points, owned */
 };

@@ -384,6 +384,76 @@ START_TEST(overhangs_honoured)
 }
 END_TEST
 
+/* Where the extrusions of one ;TYPE: on one layer lie across their own
+ * direction (mm, by the first move's), in printing order. */
+struct across {
+	const char *role;
+	int layer;
+	double dx, dy; /* the first move's direction, 0 until one is seen */
+	size_t n;
+	double v[4096];
+};
+
+static void across_move(void *ctx, const struct move_at *at, double x0, double y0, double x1,
+			double y1, double e)
+{
+	struct across *a = ctx;
+	double len = hypot(x1 - x0, y1 - y0);
+
+	if (!at->role || at->role_len != strlen(a->role) ||
+	    strncmp(at->role, a->role, at->role_len) || at->layer != a->layer || e <= 0 ||
+	    len < 0.5 || a->n == sizeof(a->v) / sizeof(a->v[0]))
+		return;
+	if (a->dx == 0 && a->dy == 0) {
+		a->dx = (x1 - x0) / len;
+		a->dy = (y1 - y0) / len;
+	}
+	a->v[a->n++] = -a->dy * (x0 + x1) / 2 + a->dx * (y0 + y1) / 2;
+}
+
+/* Whether the lines are printed in one sweep (each no further back than a
+ * tenth of a mm from the one before), and how many there are. */
+static bool one_sweep(const char *g, int layer, size_t *n)
+{
+	static struct across a;
+	bool up = true, down = true;
+
+	memset(&a, 0, sizeof(a));
+	a.role = "Top solid infill";
+	a.layer = layer;
+	walk_moves(g, across_move, &a);
+	for (size_t k = 1; k < a.n; k++) {
+		up = up && a.v[k] > a.v[k - 1] - 0.1;
+		down = down && a.v[k] < a.v[k - 1] + 0.1;
+	}
+	*n = a.n;
+	return up || down;
+}
+
+/* top_fill_pattern = monotonic: the top skin of an L-shaped plate is
+ * printed in one sweep across it; rectilinear (nearest line first) is not
+ * here, its arms printed one after the other. */
+START_TEST(monotonic_top_skin)
+{
+	struct mesh *a = fx_box(0, 0, 0, 20, 6, 3), *b = fx_box(0, 0, 0, 6, 20, 3);
+	struct mesh *l = fx_concat(a, b), *l2 = fx_concat(a, b);
+	char *g = slice_for(l, "--printer generic-marlin", "--set top_fill_pattern=monotonic");
+	size_t n;
+
+	mesh_free(a);
+	mesh_free(b);
+	assert_not_warned("top_fill_pattern");
+	ck_assert_msg(one_sweep(g, 15, &n) && n > 20, "monotonic: %zu lines", n);
+	free(g);
+	g = slice_for(l2, "--printer generic-marlin", "");
+	ck_assert_msg(!one_sweep(g, 15, &n) && n > 20, "rectilinear: %zu lines in one sweep", n);
+	free(g);
+	g = slice_box("--set top_fill_pattern=concentric");
+	ck_assert_msg(strstr(out, " top_fill_pattern=concentric (rectilinear used)"), "%s", out);
+	free(g);
+}
+END_TEST
+
 /* The per-role keys at the width they fall back to print the same file as
  * without them (the walls' offsets are computed so, to the last bit). */
 START_TEST(role_widths_at_their_fallback_change_nothing)
@@ -443,6 +513,7 @@ void slicecli_widths_tcases(Suite *s)
 	tcase_add_test(tc, volumetric_speed_capped);
 	tcase_add_test(tc, thick_bridges_honoured);
 	tcase_add_test(tc, overhangs_honoured);
+	tcase_add_test(tc, monotonic_top_skin);
 	tcase_add_test(tc, bundled_presets_warn_only_unprinted_keys);
 	tcase_add_test(tc, role_widths_at_their_fallback_change_nothing);
 	suite_add_tcase(s, tc);
