@@ -158,7 +158,8 @@ static const struct setting table[] = {
      "0 = automatic (PrusaSlicer 2.5's: the nozzle for the top skin and support, 1.125 x "
      "the nozzle for the rest); a percentage is of layer_height (as in PrusaSlicer)"},
     {"first_layer_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
-     "every bead of the first layer on the bed, skirt and brim too; 0 = each role's own "
+     "every bead of the first layer on the bed (support and raft too), skirt and brim; 0 = "
+     "each role's own "
      "width; a percentage is of first_layer_height (PrusaSlicer's default is 200%)"},
     {"perimeter_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
      "inner walls; 0 = extrusion_width; a percentage is of layer_height"},

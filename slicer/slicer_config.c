@@ -156,6 +156,8 @@ void slicer_raft_support(const struct slicer_config *c, struct support_settings 
 	/* PrusaSlicer prints the raft with support's width */
 	s->extrusion_width =
 	    c->support.extrusion_width > 0 ? c->support.extrusion_width : c->perim.extrusion_width;
+	/* the stack's layer 0 is on the bed: the raft's, or support's without one */
+	s->first_layer_extrusion_width = c->first_layer_extrusion_width;
 	s->raft_layers = c->raft.layers;
 	s->raft_contact_distance = c->raft.contact_distance;
 	s->raft_expansion = c->raft.expansion;

@@ -51,6 +51,8 @@ int stage_support(const struct slicer_config *c, const struct slice_stack *st,
 	if (!c->support.enabled)
 		return 0;
 	slicer_raft_support(c, &s);
+	if (c->raft.layers > 0) /* support stands on the raft, not on the bed */
+		s.first_layer_extrusion_width = 0;
 	s.support_material = true;
 	s.support_material_threshold = c->support.threshold;
 	rc = support_generate(&s, st, out, err);

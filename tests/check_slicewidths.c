@@ -454,6 +454,27 @@ START_TEST(monotonic_top_skin)
 }
 END_TEST
 
+/* first_layer_extrusion_width sets support's beads on the bed and the
+ * raft's first layer too (PrusaSlicer's first-layer support flow); the
+ * layers above keep support's own (the nozzle's 0.4 mm here). */
+START_TEST(first_layer_width_of_support_and_raft)
+{
+	static const char *const args[] = {
+	    "--set cooling=0 --set support_material=1 --set support_material_threshold=60 "
+	    "--set first_layer_extrusion_width=0.6",
+	    "--set cooling=0 --set raft_layers=2 --set first_layer_extrusion_width=0.6"};
+
+	for (size_t i = 0; i < sizeof(args) / sizeof(args[0]); i++) {
+		char *g = slice_for(fx_bridge(), "--printer generic-marlin", args[i]);
+
+		assert_width(g, "Support material", 1, 0.6, 0.2, 0.005);
+		if (!i)
+			assert_width(g, "Support material", 2, 0.4, 0.2, 0.005);
+		free(g);
+	}
+}
+END_TEST
+
 /* The per-role keys at the width they fall back to print the same file as
  * without them (the walls' offsets are computed so, to the last bit). */
 START_TEST(role_widths_at_their_fallback_change_nothing)
@@ -514,6 +535,7 @@ void slicecli_widths_tcases(Suite *s)
 	tcase_add_test(tc, thick_bridges_honoured);
 	tcase_add_test(tc, overhangs_honoured);
 	tcase_add_test(tc, monotonic_top_skin);
+	tcase_add_test(tc, first_layer_width_of_support_and_raft);
 	tcase_add_test(tc, bundled_presets_warn_only_unprinted_keys);
 	tcase_add_test(tc, role_widths_at_their_fallback_change_nothing);
 	suite_add_tcase(s, tc);
