@@ -205,6 +205,8 @@ struct profile {
 	double fill_density;				       /* percent, 0-100; default 20 */
 	const char *fill_pattern;	/* a PrusaSlicer pattern name; default "rectilinear" */
 	const char *top_fill_pattern, *bottom_fill_pattern; /* default "rectilinear" */
+	/* mm or % of infill_extrusion_width; defaults 600%, 0 */
+	struct profile_pct infill_anchor, infill_anchor_max;
 	double solid_infill_below_area;	/* mm^2; default 70 */
 	bool ironing;			/* default 0 */
 	const char *ironing_type;	/* top, topmost or solid; default top */

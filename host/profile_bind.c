@@ -103,6 +103,8 @@ static const struct key_def key_defs[] = {
 	{"infill_overlap", KT_NUM_PCT, P(infill_overlap)},
 	{"fill_density", KT_DENSITY, S(fill_density, infill.density)},
 	{"fill_pattern", KT_CHOICE, P(fill_pattern)},
+	{"infill_anchor", KT_NUM_PCT, P(infill_anchor)},
+	{"infill_anchor_max", KT_NUM_PCT, P(infill_anchor_max)},
 	{"top_fill_pattern", KT_CHOICE, P(top_fill_pattern)},
 	{"bottom_fill_pattern", KT_CHOICE, P(bottom_fill_pattern)},
 	{"solid_infill_below_area", KT_DOUBLE, S(solid_infill_below_area, infill.solid_infill_below_area)},

@@ -125,6 +125,8 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	    width_of(&p->top_infill_extrusion_width, p->layer_height, thin);
 	c->support.extrusion_width =
 	    width_of(&p->support_material_extrusion_width, p->layer_height, thin);
+	c->infill.anchor = width_of(&p->infill_anchor, c->infill.infill_extrusion_width, 0);
+	c->infill.anchor_max = width_of(&p->infill_anchor_max, c->infill.infill_extrusion_width, 0);
 	c->infill.top_monotonic = !strcmp(p->top_fill_pattern, "monotonic");
 	c->infill.bottom_monotonic = !strcmp(p->bottom_fill_pattern, "monotonic");
 	c->max_detour = p->avoid_crossing_perimeters_max_detour.value;

@@ -101,8 +101,6 @@ static const struct known known[] = {
      * so slopes keep their vertical shell thickness: PrusaSlicer's 1 */
     {"ensure_vertical_shell_thickness", "1", NULL, NULL},
     {"extra_perimeters", "0", NULL, NULL}, /* no walls added for the layer above */
-    /* Sparse lines are not joined along the walls: infill_anchor_max = 0 */
-    {"infill_anchor_max", "0", NULL, NULL}, {"infill_anchor", NULL, "infill_anchor_max", "0"},
     {"retract_restart_extra", "0", NULL, NULL},
     {"max_volumetric_extrusion_rate_slope_*", "0", NULL, NULL},
     {"infill_first", "0", NULL, NULL}, {"brim_*", NULL, "brim_width", "0"},

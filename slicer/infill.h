@@ -99,6 +99,9 @@ struct infill_settings {
 	 * the end nearer the last (PrusaSlicer's monotonic), else nearest
 	 * first (false) */
 	bool top_monotonic, bottom_monotonic;
+	/* mm: sparse line ends joined along the boundary up to max apart, the
+	 * others anchored (anchors.h); max 0 = neither (0, 0) */
+	double infill_anchor, infill_anchor_max;
 	double gap_fill_min;		   /* mm; narrower gaps stay empty (0.1) */
 	bool ironing;			   /* iron after the top skin (ironing.h; false) */
 	enum iron_type ironing_type;	   /* what is ironed (IRON_TOP) */

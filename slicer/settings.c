@@ -218,6 +218,13 @@ static const struct setting table[] = {
      NULL, "PrusaSlicer's names (monotonous is read as monotonic); rectilinear, grid, gyroid, "
      "triangles, stars, cubic, line, concentric and honeycomb are printed (docs/slicing.md), "
      "any other prints rectilinear, named in the warning"},
+    {"infill_anchor", PCT, S_, 0, 1000, 0, "mm", "600%", NULL, NULL, 0, NULL,
+     "a sparse line end joined to no other gets this much of the boundary (at most half way "
+     "to its neighbour); a percentage is of infill_extrusion_width"},
+    {"infill_anchor_max", PCT, S_, 0, 1000, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "sparse line ends are joined along the boundary to their neighbours where that is at "
+     "most this long (not for line and concentric); 0 = not joined (PrusaSlicer's default "
+     "is 50); a percentage is of infill_extrusion_width"},
     {"top_fill_pattern", SETTING_CHOICE, S_, 0, 0, 0, "", "rectilinear", NULL,
      CHOICES(skin_pattern_names), NULL,
      "the top skin's lines: rectilinear (each line from the end nearest the nozzle) or "

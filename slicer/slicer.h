@@ -86,6 +86,7 @@ struct slicer_infill_settings {
 	double bridge_flow_ratio;	 /* (0, 2] (1) */
 	bool thick_bridges;		 /* round threads, else flat beads (true) */
 	bool top_monotonic, bottom_monotonic; /* skins' lines in one sweep (false) */
+	double anchor, anchor_max; /* mm, infill_anchor(_max) (anchors.h; 0, 0) */
 	double infill_overlap;		 /* percent of the walls' width, 0-100 (25) */
 	/* mm: sparse, solid and bottom, top; 0 = the walls' extrusion_width (0) */
 	double infill_extrusion_width, solid_infill_extrusion_width, top_infill_extrusion_width;

@@ -145,6 +145,8 @@ int stage_infill_job(const struct slicer_config *c, const struct slice_stack *st
 	s.bridge_flow_ratio = c->infill.bridge_flow_ratio;
 	s.thick_bridges = c->infill.thick_bridges;
 	s.top_monotonic = c->infill.top_monotonic;
+	s.infill_anchor = c->infill.anchor;
+	s.infill_anchor_max = c->infill.anchor_max;
 	s.bottom_monotonic = c->infill.bottom_monotonic;
 	s.infill_overlap = c->infill.infill_overlap;
 	s.layer_height = c->layer_height;

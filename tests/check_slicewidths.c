@@ -475,6 +475,55 @@ START_TEST(first_layer_width_of_support_and_raft)
 }
 END_TEST
 
+/* The travels within Internal infill runs, and its extrusions. */
+struct infill_runs {
+	size_t travels, moves;
+};
+
+static void count_infill(void *ctx, const struct move_at *at, double x0, double y0, double x1,
+			 double y1, double e)
+{
+	struct infill_runs *r = ctx;
+
+	(void)x0, (void)y0, (void)x1, (void)y1;
+	if (!at->role || at->role_len != 15 || strncmp(at->role, "Internal infill", 15))
+		return;
+	if (e > 0)
+		r->moves++;
+	else
+		r->travels++;
+}
+
+/* infill_anchor_max joins the sparse lines' ends along the boundary (the
+ * MK3S preset's 12 mm, anchors of 2.5 mm): a box's rectilinear infill is a
+ * few paths a layer instead of one per line; 0 (the default) joins none,
+ * and every pattern that joins slices. */
+START_TEST(infill_anchors_join_lines)
+{
+	static const char *const patterns[] = {"grid", "gyroid", "honeycomb", "cubic"};
+	struct infill_runs plain = {0}, joined = {0};
+	char *g = slice_box("--set fill_pattern=rectilinear");
+	char args[256];
+
+	walk_moves(g, count_infill, &plain);
+	free(g);
+	g = slice_box("--set fill_pattern=rectilinear --set infill_anchor_max=12 "
+		      "--set infill_anchor=2.5");
+	assert_not_warned("infill_anchor_max");
+	assert_not_warned("infill_anchor");
+	walk_moves(g, count_infill, &joined);
+	free(g);
+	ck_assert_msg(plain.travels > 3 * joined.travels && joined.moves > plain.moves,
+		      "travels %zu joined against %zu, moves %zu against %zu", joined.travels,
+		      plain.travels, joined.moves, plain.moves);
+	for (size_t i = 0; i < sizeof(patterns) / sizeof(patterns[0]); i++) {
+		snprintf(args, sizeof(args), "--set fill_pattern=%s --set infill_anchor_max=50",
+			 patterns[i]);
+		free(slice_box(args));
+	}
+}
+END_TEST
+
 /* The per-role keys at the width they fall back to print the same file as
  * without them (the walls' offsets are computed so, to the last bit). */
 START_TEST(role_widths_at_their_fallback_change_nothing)
@@ -491,15 +540,13 @@ START_TEST(role_widths_at_their_fallback_change_nothing)
 END_TEST
 
 /* The bundled MK3S and Ender-3 presets (PrusaSlicer 2.5's vendor bundles,
- * where installed) slice, the warning naming only what Stratum does not
- * print (docs/slicing.md says why each is left). */
+ * where installed) slice with every key honoured: no warning. */
 START_TEST(bundled_presets_warn_only_unprinted_keys)
 {
 	static const struct {
 		const char *bundle, *preset, *warning; /* NULL: no warning */
 	} cases[] = {
-	    {"PrusaResearch.ini", "Original Prusa i3 MK3S & MK3S+",
-	     "warning: not supported, ignored: infill_anchor=2.5, infill_anchor_max=12\n"},
+	    {"PrusaResearch.ini", "Original Prusa i3 MK3S & MK3S+", NULL},
 	    {"Creality.ini", "Creality Ender-3 (0.4 mm nozzle)", NULL},
 	};
 	const char *dir = "/usr/share/PrusaSlicer/profiles";
@@ -536,6 +583,7 @@ void slicecli_widths_tcases(Suite *s)
 	tcase_add_test(tc, overhangs_honoured);
 	tcase_add_test(tc, monotonic_top_skin);
 	tcase_add_test(tc, first_layer_width_of_support_and_raft);
+	tcase_add_test(tc, infill_anchors_join_lines);
 	tcase_add_test(tc, bundled_presets_warn_only_unprinted_keys);
 	tcase_add_test(tc, role_widths_at_their_fallback_change_nothing);
 	suite_add_tcase(s, tc);
