@@ -195,7 +195,9 @@ region_models() {
 
 # Printed region against the model's cross-sections: both slicers at the
 # profile's settings (PrusaSlicer's "full" ini above), the part centred on
-# 125,105 by both, so the check places the model there too.
+# 125,105 by both, so the check places the model there too.  REGION_SET
+# (space-separated KEY=VALUE, e.g. per-role extrusion widths) is given to
+# both: --set for stratum, lines of the ini for PrusaSlicer.
 region_table() {
 if ! command -v prusa-slicer >/dev/null 2>&1; then
 	echo "prusa-slicer is not installed (make bench installs it)" >&2
@@ -204,13 +206,19 @@ fi
 rc=build/bench/region_check
 region_models
 prusa_ini full >"$out/prusa-full.ini"
+sets=""
+for kv in ${REGION_SET:-}; do
+	echo "$kv" | sed 's/=/ = /' >>"$out/prusa-full.ini"
+	sets="$sets --set $kv"
+done
 pver=$(prusa-slicer --help 2>/dev/null | sed -n 's/^PrusaSlicer-\([0-9.]*\).*/\1/p')
 echo "| model | slicer | layers | p95 outer deviation mm | max mm | printed up to mm outside / inside | area error (voids filled) | area error (voids counted) |"
 echo "|---|---|---|---|---|---|---|---|"
 for f in cube20 cylinder20 wall2 wall-eps plate-holes overhang bridge; do
 	path="$out/$f.stl"
+	# shellcheck disable=SC2086 # $sets: words on purpose
 	"$bin" slice "$path" -o "$out/$f-stratum.gcode" --printer prusa-i3-mk3s --center 125,105 \
-		>/dev/null 2>&1 || echo "failed: stratum slice $f" >&2
+		$sets >/dev/null 2>&1 || echo "failed: stratum slice $f" >&2
 	prusa-slicer --export-gcode --load "$out/prusa-full.ini" --center 125,105 \
 		-o "$out/$f-prusa.gcode" "$path" >/dev/null 2>&1 || echo "failed: prusa-slicer $f" >&2
 	for s in stratum prusa; do

@@ -187,7 +187,7 @@ struct slice_run {
 static const char *const role_keys[] = {
     "outer_perimeter", "inner_perimeter", "thin_wall", "gap_fill", "solid_infill",
     "top_skin", "bottom_skin", "sparse_infill", "bridge", "skirt", "brim", "support",
-    "support_interface", "ironing"};
+    "support_interface", "ironing", "overhang_perimeter"};
 _Static_assert(sizeof(role_keys) / sizeof(role_keys[0]) == PATH_ROLES,
 	       "one JSON key per path role");
 
@@ -324,9 +324,12 @@ static void print_text(const struct slice_run *r, const struct slicer_summary *s
 		printf("layers: %zu (first %g mm, then %g mm)\n", s->layers,
 		       r->c->first_layer_height, r->c->layer_height);
 	}
-	printf("paths: %zu external perimeters, %zu perimeters, %zu thin walls, %zu gap fills\n",
+	printf("paths: %zu external perimeters, %zu perimeters, %zu thin walls, %zu gap fills",
 	       s->paths[PATH_OUTER_PERIMETER], s->paths[PATH_INNER_PERIMETER],
 	       s->paths[PATH_THIN_WALL], s->paths[PATH_GAP_FILL]);
+	if (s->paths[PATH_OVERHANG_PERIMETER]) /* overhangs = 1 only */
+		printf(", %zu overhang perimeters", s->paths[PATH_OVERHANG_PERIMETER]);
+	printf("\n");
 	printf("       %zu top, %zu bottom, %zu solid, %zu sparse (%g%% %s), %zu bridge infill\n",
 	       s->paths[PATH_TOP_SKIN], s->paths[PATH_BOTTOM_SKIN], s->paths[PATH_SOLID_INFILL],
 	       s->paths[PATH_SPARSE_INFILL], r->c->infill.density, r->c->infill.pattern,

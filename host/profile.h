@@ -188,17 +188,25 @@ struct profile {
 	const char *seam_position; /* aligned, nearest, random or rear; default aligned */
 	double elefant_foot_compensation; /* mm, first layer shrunk; default 0 */
 	bool external_perimeters_first, thin_walls, gap_fill_enabled; /* defaults 0, 1, 1 */
+	bool overhangs; /* overhanging walls with bridge flow; default 0 */
 	bool spiral_vase; /* default 0 */
 	double top_solid_min_thickness, bottom_solid_min_thickness; /* mm; defaults 0, 0 */
 	double fill_angle, bridge_angle; /* degrees; defaults 45, 0 (0 = per bridge) */
 	double bridge_flow_ratio;	 /* default 1 */
+	bool thick_bridges;		 /* round bridge threads; default 1 */
 	struct profile_pct infill_overlap; /* mm or % of extrusion_width; default 25% */
+	/* mm or % of first_layer_height; 0 = each role's width; default 0 */
+	struct profile_pct first_layer_extrusion_width;
 	/* mm or % of layer_height; 0 = extrusion_width; defaults 0 */
+	struct profile_pct perimeter_extrusion_width, external_perimeter_extrusion_width;
 	struct profile_pct infill_extrusion_width, solid_infill_extrusion_width;
 	struct profile_pct top_infill_extrusion_width;
 	struct profile_pct support_material_extrusion_width; /* support and raft */
 	double fill_density;				       /* percent, 0-100; default 20 */
 	const char *fill_pattern;	/* a PrusaSlicer pattern name; default "rectilinear" */
+	const char *top_fill_pattern, *bottom_fill_pattern; /* default "rectilinear" */
+	/* mm or % of infill_extrusion_width; defaults 600%, 0 */
+	struct profile_pct infill_anchor, infill_anchor_max;
 	double solid_infill_below_area;	/* mm^2; default 70 */
 	bool ironing;			/* default 0 */
 	const char *ironing_type;	/* top, topmost or solid; default top */
@@ -236,6 +244,8 @@ struct profile {
 	struct profile_pct support_material_interface_speed; /* default 100% */
 	struct profile_pct first_layer_speed; /* a percentage is of each role's speed */
 	struct profile_pct first_layer_speed_over_raft; /* the part's first layer on a raft */
+	/* mm^3/s, each extrusion's cap (the lower of those above 0); defaults 0 */
+	double max_volumetric_speed, filament_max_volumetric_speed;
 	double default_acceleration; /* mm/s^2, M204 S; default 0 */
 	double perimeter_acceleration; /* mm/s^2, M204 S; default 0 */
 	double infill_acceleration; /* mm/s^2, M204 S; default 0 */
@@ -244,6 +254,7 @@ struct profile {
 
 	/* Travel */
 	bool avoid_crossing_perimeters;		    /* default 1 */
+	struct profile_pct avoid_crossing_perimeters_max_detour; /* mm or %; default 100% */
 	bool only_retract_when_crossing_perimeters; /* default 1 */
 	double max_unretracted_travel;		    /* mm; default 20 */
 
@@ -284,6 +295,7 @@ struct profile {
 	const char *before_layer_gcode, *layer_gcode; /* around each layer change */
 	const char *start_filament_gcode, *end_filament_gcode; /* the first filament's */
 	const char *toolchange_gcode; /* checked only: one extruder prints */
+	const char *thumbnails;	      /* "WxH,..." (host/thumbnail.h); default "" */
 
 	struct profile_keys *keys; /* private: every key = value of the file */
 	/* Every key of the file, and every declared key's resolved value or

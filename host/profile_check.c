@@ -14,6 +14,7 @@
 
 #include "gcode_writer.h"
 #include "profile_slicer.h"
+#include "thumbnail.h"
 
 /* Bounding box of the bed polygon. */
 static void bed_box(struct profile *p)
@@ -74,6 +75,15 @@ static int keys_agree(struct loader *L, const struct pending *pend)
 	for (int i = 1; i < ec; i++)
 		if (p->nozzle_diameter[i] < min_nozzle)
 			min_nozzle = p->nozzle_diameter[i];
+
+	struct thumb_size sizes[THUMB_SIZES_MAX];
+	size_t nsizes;
+	struct st_error terr = {0};
+	if (thumb_parse(p->thumbnails, sizes, &nsizes, &terr)) {
+		const struct profile_kv *tkv = prof_find_kv(p->keys, "thumbnails");
+		return prof_key_error(L, tkv, tkv ? NULL : "thumbnails", ST_ERR_RANGE, "%s",
+				      terr.msg);
+	}
 
 	if (pend->flh_pct)
 		p->first_layer_height = pend->flh / 100 * p->layer_height;

@@ -50,10 +50,10 @@ static double speed_of(const struct profile_pct *sp, double base)
 	return sp->is_percent ? sp->value / 100 * base : sp->value;
 }
 
-/* A width in mm, or its percentage of the layer height; 0 means dflt. */
-static double width_of(const struct profile_pct *w, const struct profile *p, double dflt)
+/* A width in mm, or its percentage of the layer height h; 0 means dflt. */
+static double width_of(const struct profile_pct *w, double h, double dflt)
 {
-	double v = w->is_percent ? w->value / 100 * p->layer_height : w->value;
+	double v = w->is_percent ? w->value / 100 * h : w->value;
 
 	return v > 0 ? v : dflt;
 }
@@ -96,8 +96,16 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	int rc;
 
 	slicer_config_init(c, p->nozzle_diameter[0]);
-	if (p->extrusion_width > 0)
-		c->perim.extrusion_width = p->extrusion_width;
+	/* Each role's key, else extrusion_width, else the automatic width of
+	 * PrusaSlicer 2.5's Flow: the nozzle's for the top skin and support,
+	 * 1.125 x the nozzle's (the walls' default) for the others. */
+	double base = p->extrusion_width > 0 ? p->extrusion_width : c->perim.extrusion_width;
+	double thin = p->extrusion_width > 0 ? p->extrusion_width : p->nozzle_diameter[0];
+	c->perim.extrusion_width = width_of(&p->perimeter_extrusion_width, p->layer_height, base);
+	c->perim.external_extrusion_width =
+	    width_of(&p->external_perimeter_extrusion_width, p->layer_height, base);
+	c->first_layer_extrusion_width =
+	    width_of(&p->first_layer_extrusion_width, p->first_layer_height, 0);
 	rc = perim_seam_parse(p->seam_position, &c->perim.seam, err);
 	if (rc)
 		return rc; /* not reached: the loader accepts the declared names only */
@@ -110,14 +118,19 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	c->infill.infill_overlap = p->infill_overlap.is_percent
 				       ? p->infill_overlap.value
 				       : p->infill_overlap.value / c->perim.extrusion_width * 100;
-	c->infill.infill_extrusion_width =
-	    width_of(&p->infill_extrusion_width, p, c->perim.extrusion_width);
+	c->infill.infill_extrusion_width = width_of(&p->infill_extrusion_width, p->layer_height, base);
 	c->infill.solid_infill_extrusion_width =
-	    width_of(&p->solid_infill_extrusion_width, p, c->perim.extrusion_width);
+	    width_of(&p->solid_infill_extrusion_width, p->layer_height, base);
 	c->infill.top_infill_extrusion_width =
-	    width_of(&p->top_infill_extrusion_width, p, c->perim.extrusion_width);
+	    width_of(&p->top_infill_extrusion_width, p->layer_height, thin);
 	c->support.extrusion_width =
-	    width_of(&p->support_material_extrusion_width, p, c->perim.extrusion_width);
+	    width_of(&p->support_material_extrusion_width, p->layer_height, thin);
+	c->infill.anchor = width_of(&p->infill_anchor, c->infill.infill_extrusion_width, 0);
+	c->infill.anchor_max = width_of(&p->infill_anchor_max, c->infill.infill_extrusion_width, 0);
+	c->infill.top_monotonic = !strcmp(p->top_fill_pattern, "monotonic");
+	c->infill.bottom_monotonic = !strcmp(p->bottom_fill_pattern, "monotonic");
+	c->max_detour = p->avoid_crossing_perimeters_max_detour.value;
+	c->max_detour_is_percent = p->avoid_crossing_perimeters_max_detour.is_percent;
 	c->bed = (struct slicer_bed){.min_x = p->bed_min_x, .min_y = p->bed_min_y,
 				     .max_x = p->bed_max_x, .max_y = p->bed_max_y};
 

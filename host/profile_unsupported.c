@@ -48,7 +48,7 @@ static const struct known known[] = {
     {"octoprint_*", NULL, NULL, NULL}, {"serial_port", NULL, NULL, NULL},
     {"serial_speed", NULL, NULL, NULL}, {"bed_custom_texture", NULL, NULL, NULL},
     {"bed_custom_model", NULL, NULL, NULL}, {"bed_model", NULL, NULL, NULL},
-    {"bed_texture", NULL, NULL, NULL}, {"thumbnails_format", NULL, NULL, NULL},
+    {"bed_texture", NULL, NULL, NULL}, {"thumbnails_format", "PNG", NULL, NULL},
     {"threads", NULL, NULL, NULL}, {"variable_layer_height", NULL, NULL, NULL},
     {"color_change_gcode", NULL, NULL, NULL}, {"pause_print_gcode", NULL, NULL, NULL},
     {"template_custom_gcode", NULL, NULL, NULL}, {"between_objects_gcode", NULL, NULL, NULL},
@@ -95,11 +95,13 @@ static const struct known known[] = {
     {"infill_only_where_needed", "0", NULL, NULL}, {"colorprint_heights", "", NULL, NULL},
     {"post_process", "", NULL, NULL}, {"gcode_substitutions", "", NULL, NULL},
     {"gcode_label_objects", NULL, NULL, NULL}, /* comments for host plugins */
-    {"thumbnails", "", NULL, NULL},
-    {"thick_bridges", "1", NULL, NULL}, /* round threads of the nozzle's width (infill_classify.c) */
+    /* Solid skins are lines alternating 90 degrees a layer (infill_fill.c) */
+    {"external_fill_pattern", "rectilinear", NULL, NULL},
+    /* The shells are counted through every layer's whole region (infill.h),
+     * so slopes keep their vertical shell thickness: PrusaSlicer's 1 */
+    {"ensure_vertical_shell_thickness", "1", NULL, NULL},
+    {"extra_perimeters", "0", NULL, NULL}, /* no walls added for the layer above */
     {"retract_restart_extra", "0", NULL, NULL},
-    {"max_volumetric_speed", "0", NULL, NULL},
-    {"filament_max_volumetric_speed", "0", NULL, NULL},
     {"max_volumetric_extrusion_rate_slope_*", "0", NULL, NULL},
     {"infill_first", "0", NULL, NULL}, {"brim_*", NULL, "brim_width", "0"},
     {"support_material_*", NULL, "support_material", "0"},
@@ -185,6 +187,12 @@ static int add_item(char **buf, size_t *len, size_t *cap, const char *key, const
 	return 0;
 }
 
+/* A top or bottom skin pattern Stratum prints. */
+static bool skin_pattern_printed(const char *name)
+{
+	return !strcmp(name, "rectilinear") || !strcmp(name, "monotonic");
+}
+
 int profile_unsupported(const struct profile *p, char **out)
 {
 	char *buf = NULL;
@@ -197,6 +205,13 @@ int profile_unsupported(const struct profile *p, char **out)
 		return ST_ERR_ARG;
 	if (infill_pattern_parse(p->fill_pattern, &pat, NULL))
 		rc = add_item(&buf, &len, &cap, "fill_pattern", p->fill_pattern,
+			      "(rectilinear used)");
+	/* the skins print rectilinear or monotonic lines (profile_slicer.c) */
+	if (!rc && !skin_pattern_printed(p->top_fill_pattern))
+		rc = add_item(&buf, &len, &cap, "top_fill_pattern", p->top_fill_pattern,
+			      "(rectilinear used)");
+	if (!rc && !skin_pattern_printed(p->bottom_fill_pattern))
+		rc = add_item(&buf, &len, &cap, "bottom_fill_pattern", p->bottom_fill_pattern,
 			      "(rectilinear used)");
 	for (size_t i = 0; rc == 0 && i < p->keys->count; i++)
 		if (!honoured(p, &p->keys->kv[i]))

@@ -11,6 +11,7 @@
 #include "mesh.h"
 #include "progress.h"
 #include "st_error.h"
+#include "thumbnail.h"
 
 /* Exit status for a failed slicer_run (settings were checked before). */
 static int slicejob_exit(int rc)
@@ -233,7 +234,12 @@ int slicejob_slice(const char *const *in, size_t n, const struct slicer_config *
 			c.progress = progress_update;
 			c.progress_ctx = &prog;
 		}
-		rc = slicer_run(m[0], &c, out, &res->sum, err);
+		char *thumbs = NULL;
+		rc = thumb_block(m[0], c.gcodew.thumbnails, &thumbs, err);
+		c.gcodew.thumbnail_block = thumbs;
+		if (!rc)
+			rc = slicer_run(m[0], &c, out, &res->sum, err);
+		free(thumbs);
 		if (have_prog)
 			progress_end(&prog);
 		for (size_t i = 0; !rc && i < n; i++)

@@ -171,8 +171,8 @@ static int emit_ops(struct gcodew *w)
 			set_accel(w, o->f);
 		} else if (o->kind == OP_ROLE) {
 			gcodew_put(w, ";TYPE:%s\n", path_role_name(o->role));
-			set_fan(w, o->role == PATH_BRIDGE && w->bridge_fan >= 0 ? w->bridge_fan
-									       : w->layer_fan);
+			bool bridge = o->role == PATH_BRIDGE || o->role == PATH_OVERHANG_PERIMETER;
+			set_fan(w, bridge && w->bridge_fan >= 0 ? w->bridge_fan : w->layer_fan);
 		} else {
 			rc = emit_move(w, o);
 		}

@@ -162,6 +162,13 @@ struct gcodew_settings {
 	double first_layer_speed_over_raft;
 	bool first_layer_speed_over_raft_is_percent;
 
+	/* Volumetric limits, mm^3/s, PrusaSlicer's: each extrusion's speed at
+	 * most the lower of those above 0 over its bead's cross-section (the
+	 * flow model's, before extrusion_multiplier); listed in the header
+	 * when not 0. */
+	double max_volumetric_speed;	      /* 0 */
+	double filament_max_volumetric_speed; /* 0 */
+
 	/* Accelerations, mm/s^2, PrusaSlicer 2.5's: with default_acceleration
 	 * above 0, each path is preceded by its value (first_layer_, else
 	 * perimeter_, bridge_ or infill_acceleration by role, each when above
@@ -218,6 +225,10 @@ struct gcodew_settings {
 	const char *before_layer_gcode;	  /* "" */
 	const char *layer_gcode;	  /* "" */
 	const char *start_filament_gcode; /* "" */
+	const char *thumbnails;		  /* the sizes, "WxH,..." ("": none); the host
+					   * draws them into thumbnail_block */
+	const char *thumbnail_block;	  /* comment lines written after the header's
+					   * first line; not owned; NULL: none */
 	const char *end_filament_gcode;	  /* "" */
 	/* The printer's config for the placeholders (every key of its files,
 	 * host/profile.h), under the writer's own variables; NULL: none.  Not

@@ -184,6 +184,7 @@ static double role_base_speed(const struct gcodew_settings *s, enum path_role ro
 	case PATH_SPARSE_INFILL:
 		return s->infill_speed;
 	case PATH_BRIDGE:
+	case PATH_OVERHANG_PERIMETER:
 		return s->bridge_speed;
 	case PATH_SUPPORT:
 	case PATH_SKIRT:
@@ -268,8 +269,9 @@ static int record_wipe(struct gcodew *w, const struct toolpath *p, bool rev, siz
 /*
  * Extrude from pa to pb (path pi of layer li; pb is its point at, for
  * messages), ending at height z: a bead width nm wide, its filament from
- * the flow model at the top of gcode_writer.h times share.  A bead
- * narrower than the layer is refused; a segment of no length adds nothing.
+ * the flow model at the top of gcode_writer.h times share, at speed or
+ * slower where the volumetric limits ask it.  A bead narrower than the
+ * layer is refused; a segment of no length adds nothing.
  */
 static int plan_segment(struct gcodew *w, const struct layer_paths *l, size_t li, size_t pi,
 			size_t at, const struct path_point *pa, const struct path_point *pb,
@@ -288,6 +290,11 @@ static int plan_segment(struct gcodew *w, const struct layer_paths *l, size_t li
 				    li + 1, pi, path_role_name(l->paths[pi].role), at, bead, h);
 	if (len <= 0)
 		return 0;
+	/* PrusaSlicer caps with the path's cross-section, not the E written */
+	if (w->s->max_volumetric_speed > 0)
+		speed = fmin(speed, w->s->max_volumetric_speed / area);
+	if (w->s->filament_max_volumetric_speed > 0)
+		speed = fmin(speed, w->s->filament_max_volumetric_speed / area);
 	return push_move(w, MV_EXTRUDE, true, pb->x / SLICE_UNITS_PER_MM,
 			 pb->y / SLICE_UNITS_PER_MM, z,
 			 share * area * len / w->fil_area * w->s->extrusion_multiplier, speed);
@@ -301,7 +308,11 @@ static double path_accel(const struct gcodew_settings *s, enum path_role role, s
 
 	if (li == 0 && s->first_layer_acceleration > 0)
 		return s->first_layer_acceleration;
-	if (role == PATH_OUTER_PERIMETER || role == PATH_INNER_PERIMETER || role == PATH_THIN_WALL)
+	if (role == PATH_OVERHANG_PERIMETER) /* a wall, then a bridge, as PrusaSlicer */
+		v = s->perimeter_acceleration > 0 ? s->perimeter_acceleration
+						  : s->bridge_acceleration;
+	else if (role == PATH_OUTER_PERIMETER || role == PATH_INNER_PERIMETER ||
+		 role == PATH_THIN_WALL)
 		v = s->perimeter_acceleration;
 	else if (role == PATH_BRIDGE && s->bridge_acceleration > 0)
 		v = s->bridge_acceleration;
@@ -352,12 +363,13 @@ static double dist2(const struct gcodew *w, int64_t x, int64_t y)
 	return dx * dx + dy * dy;
 }
 
-/* Perimeters and closed sparse infill (concentric loops, outermost
- * first) keep their order; other paths go nearest first. */
+/* Perimeters, closed sparse infill (concentric loops, outermost first)
+ * and ordered paths (monotonic skins) keep their order; other paths go
+ * nearest first. */
 static bool keep_order(const struct toolpath *p)
 {
 	return p->role == PATH_OUTER_PERIMETER || p->role == PATH_INNER_PERIMETER ||
-	       (p->role == PATH_SPARSE_INFILL && p->closed);
+	       (p->role == PATH_SPARSE_INFILL && p->closed) || p->ordered;
 }
 
 /* Plan the paths [i, j) of one role run, nearest neighbour first. */

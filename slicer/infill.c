@@ -76,6 +76,7 @@ void infill_settings_init(struct infill_settings *s, double nozzle_diameter)
 		.infill_overlap = 25.0,
 		.solid_infill_below_area = 70.0,
 		.bridge_flow_ratio = 1.0,
+		.thick_bridges = true,
 		.gap_fill_min = 0.1,
 		.ironing = false,
 		.ironing_type = IRON_TOP,
@@ -164,7 +165,10 @@ int infill_settings_check(const struct infill_settings *s, struct st_error *err)
 	    (rc = check_width(s, "infill_extrusion_width", s->infill_extrusion_width, err)) ||
 	    (rc = check_width(s, "solid_infill_extrusion_width", s->solid_infill_extrusion_width,
 			      err)) ||
-	    (rc = check_width(s, "top_infill_extrusion_width", s->top_infill_extrusion_width, err)))
+	    (rc = check_width(s, "top_infill_extrusion_width", s->top_infill_extrusion_width, err)) ||
+	    (s->first_layer_extrusion_width != 0.0 &&
+	     (rc = check_width(s, "first_layer_extrusion_width", s->first_layer_extrusion_width,
+			       err))))
 		return rc;
 	if (!(s->infill_overlap >= 0.0 && s->infill_overlap <= 100.0))
 		return st_error_set(err, ST_ERR_RANGE,
@@ -225,24 +229,94 @@ static double common_height(const struct slice_stack *st, struct st_error *err)
 	return best;
 }
 
+/* A line of a monotonic sweep: where it lies across and along the lines. */
+struct swept {
+	double across, along;
+	size_t i;
+};
+
+static int by_sweep(const void *a, const void *b)
+{
+	const struct swept *p = a, *q = b;
+
+	if (p->across != q->across)
+		return p->across < q->across ? -1 : 1;
+	return (p->along > q->along) - (p->along < q->along);
+}
+
+/* Distance from (x, y) to the nearer end of line i. */
+static double end_dist(const struct clip_paths *segs, size_t i, int64_t x, int64_t y)
+{
+	const int64_t *xy = clip_path_xy(segs, i);
+	size_t m = clip_path_len(segs, i);
+	double a = hypot((double)(xy[0] - x), (double)(xy[1] - y));
+	double b = hypot((double)(xy[2 * m - 2] - x), (double)(xy[2 * m - 1] - y));
+
+	return fmin(a, b);
+}
+
+/*
+ * The monotonic order of the parallel lines segs (n > 0): by their
+ * midpoints' offset across the lines' direction, then along it, the sweep
+ * starting on the side nearer (x, y).  NULL when out of memory.
+ */
+static size_t *sweep_order(const struct clip_paths *segs, int64_t x, int64_t y)
+{
+	size_t n = segs->n;
+	struct swept *sw = malloc(n * sizeof(*sw));
+	size_t *ord = malloc(n * sizeof(*ord));
+	double dx = 1, dy = 0;
+
+	if (!sw || !ord) {
+		free(sw);
+		free(ord);
+		return NULL;
+	}
+	for (size_t i = 0; i < n; i++) { /* the direction of the first line with a length */
+		const int64_t *xy = clip_path_xy(segs, i);
+		size_t m = clip_path_len(segs, i);
+		double ex = (double)(xy[2 * m - 2] - xy[0]), ey = (double)(xy[2 * m - 1] - xy[1]);
+		if (m >= 2 && hypot(ex, ey) > 0) {
+			dx = ex / hypot(ex, ey);
+			dy = ey / hypot(ex, ey);
+			break;
+		}
+	}
+	for (size_t i = 0; i < n; i++) {
+		const int64_t *xy = clip_path_xy(segs, i);
+		size_t m = clip_path_len(segs, i);
+		double mx = ((double)xy[0] + (double)xy[2 * m - 2]) / 2;
+		double my = ((double)xy[1] + (double)xy[2 * m - 1]) / 2;
+		sw[i] = (struct swept){-dy * mx + dx * my, dx * mx + dy * my, i};
+	}
+	qsort(sw, n, sizeof(*sw), by_sweep);
+	bool back = end_dist(segs, sw[n - 1].i, x, y) < end_dist(segs, sw[0].i, x, y);
+	for (size_t k = 0; k < n; k++)
+		ord[k] = sw[back ? n - 1 - k : k].i;
+	free(sw);
+	return ord;
+}
+
 /*
  * Append the paths of it to out, nearest first from (*lx, *ly): lines from
  * their nearer end, closed loops (it->loops) from their nearest vertex (a
- * loop ends where it starts).
+ * loop ends where it starts); monotonic lines in their sweep order
+ * (sweep_order), each from its end nearer the last.
  */
 static int order_paths(const struct item *it, int64_t *lx, int64_t *ly, struct layer_paths *out,
 		       struct st_error *err)
 {
 	const struct clip_paths *segs = &it->segs;
-	size_t n = segs->n, maxlen = 0;
+	size_t n = segs->n, maxlen = 0, next = 0;
 	bool *used = calloc(n ? n : 1, sizeof(*used));
+	size_t *ord = it->monotonic && n ? sweep_order(segs, *lx, *ly) : NULL;
 	struct path_point *pts;
 	int rc = 0;
 
 	for (size_t i = 0; i < n; i++)
 		maxlen = clip_path_len(segs, i) > maxlen ? clip_path_len(segs, i) : maxlen;
 	pts = malloc((maxlen ? maxlen : 1) * sizeof(*pts));
-	if (!used || !pts) {
+	if (!used || !pts || (it->monotonic && n && !ord)) {
 		rc = st_error_set(err, ST_ERR_NOMEM, "infill: out of memory ordering %zu paths", n);
 		goto out_free;
 	}
@@ -250,7 +324,15 @@ static int order_paths(const struct item *it, int64_t *lx, int64_t *ly, struct l
 		size_t best = n, start = 0;
 		bool rev = false;
 		double bd = INFINITY;
-		for (size_t i = 0; i < n; i++) {
+		if (ord) { /* the next of the sweep, from its end nearer the last */
+			const int64_t *xy = clip_path_xy(segs, ord[next]);
+			size_t m = clip_path_len(segs, ord[next]);
+			best = ord[next++];
+			rev = hypot((double)(xy[2 * m - 2] - *lx), (double)(xy[2 * m - 1] - *ly)) <
+			      hypot((double)(xy[0] - *lx), (double)(xy[1] - *ly));
+			start = rev ? m - 1 : 0;
+		}
+		for (size_t i = 0; !ord && i < n; i++) {
 			const int64_t *xy = clip_path_xy(segs, i);
 			size_t m = clip_path_len(segs, i);
 			/* starts tried: every vertex of a loop, both ends of a line */
@@ -280,11 +362,14 @@ static int order_paths(const struct item *it, int64_t *lx, int64_t *ly, struct l
 		if (m < (it->loops ? 3u : 2u) || len < INFILL_MIN_SEGMENT_NM)
 			continue;
 		rc = layer_add_path(out, it->role, it->loops, pts, m, err);
+		if (!rc && ord)
+			out->paths[out->n - 1].ordered = true;
 		*lx = pts[it->loops ? 0 : m - 1].x;
 		*ly = pts[it->loops ? 0 : m - 1].y;
 	}
 out_free:
 	free(used);
+	free(ord);
 	free(pts);
 	return rc;
 }
@@ -349,6 +434,7 @@ int infill_plan_layer(const struct infill_job *job, size_t i, const struct clip_
 		      struct infill_plan **out, struct st_error *err)
 {
 	struct clip_paths R = {0};
+	struct infill_settings first;
 	struct ctx c;
 	int rc;
 
@@ -364,7 +450,14 @@ int infill_plan_layer(const struct infill_job *job, size_t i, const struct clip_
 		clip_paths_free(&R);
 		return rc;
 	}
-	c = (struct ctx){.s = &job->s,
+	/* Layer 0 at the first layer's width, every class (PrusaSlicer's flow). */
+	first = job->s;
+	if (i == 0 && first.first_layer_extrusion_width > 0.0) {
+		first.infill_extrusion_width = first.first_layer_extrusion_width;
+		first.solid_infill_extrusion_width = first.first_layer_extrusion_width;
+		first.top_infill_extrusion_width = first.first_layer_extrusion_width;
+	}
+	c = (struct ctx){.s = i == 0 ? &first : &job->s,
 			 .st = job->st,
 			 .R = &R,
 			 .err = err,

@@ -34,7 +34,9 @@
  * first; honeycomb hexagons sized so the lines' length is the density's).  Bridges use bridge flow: a
  * round thread of diameter nozzle x sqrt(bridge_flow_ratio) (its bead width
  * is the one whose flow-model cross-section equals that thread's area) at
- * thread + 0.05 mm spacing, in the direction (tried every 5 degrees) that
+ * thread + 0.05 mm spacing (with thick_bridges off: solid infill beads at
+ * their spacing, the cross-section times bridge_flow_ratio, PrusaSlicer's
+ * flat bridges), in the direction (tried every 5 degrees) that
  * anchors most of its lines on the layer below at both ends, the shortest
  * such lines first (bridge_angle overrides).  Line ends stop half a spacing inside the
  * region grown by infill_overlap, so beads reach into the innermost wall.
@@ -87,10 +89,19 @@ struct infill_settings {
 	double infill_extrusion_width;	   /* mm, sparse lines (1.125 x nozzle) */
 	double solid_infill_extrusion_width; /* mm, bottom/internal solid (1.125 x nozzle) */
 	double top_infill_extrusion_width; /* mm, top skin (1.125 x nozzle) */
+	double first_layer_extrusion_width; /* mm, every class on layer 0; 0 = their own (0) */
 	double infill_overlap;		   /* percent of the perimeter width the
 					    * infill reaches into the walls (25) */
 	double solid_infill_below_area;	   /* mm^2; smaller sparse islands are solid (70) */
 	double bridge_flow_ratio;	   /* bridge thread area / nozzle area (1) */
+	bool thick_bridges;		   /* round threads, else flat beads (true) */
+	/* top / bottom skin lines in one sweep across each island, each from
+	 * the end nearer the last (PrusaSlicer's monotonic), else nearest
+	 * first (false) */
+	bool top_monotonic, bottom_monotonic;
+	/* mm: sparse line ends joined along the boundary up to max apart, the
+	 * others anchored (anchors.h); max 0 = neither (0, 0) */
+	double infill_anchor, infill_anchor_max;
 	double gap_fill_min;		   /* mm; narrower gaps stay empty (0.1) */
 	bool ironing;			   /* iron after the top skin (ironing.h; false) */
 	enum iron_type ironing_type;	   /* what is ironed (IRON_TOP) */

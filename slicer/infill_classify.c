@@ -197,14 +197,22 @@ int infill_fill_layer(struct ctx *c)
 	double solid_w = s->solid_infill_extrusion_width, top_w = s->top_infill_extrusion_width;
 	/* Bridge flow: a round thread; the bead of equal cross-section. */
 	double thread = s->nozzle_diameter * sqrt(s->bridge_flow_ratio);
-	double bridge_w = fmax(c->h, c->h + M_PI * (thread * thread - c->h * c->h) / (4.0 * c->h));
+	double bridge_w = perim_round_bead(thread, c->h);
 	const double U = SLICE_UNITS_PER_MM;
 	const struct bead solid = {solid_w * U, perim_spacing(solid_w, c->h) * U, PATH_SOLID_INFILL,
 				   true};
 	const struct bead bottom = {solid_w * U, solid.sp, PATH_BOTTOM_SKIN, true};
 	const struct bead top = {top_w * U, perim_spacing(top_w, c->h) * U, PATH_TOP_SKIN, true};
-	const struct bead bridge = {bridge_w * U, (thread + INFILL_BRIDGE_GAP_MM) * U, PATH_BRIDGE,
-				    false};
+	const struct bead thick = {bridge_w * U, (thread + INFILL_BRIDGE_GAP_MM) * U, PATH_BRIDGE,
+				   false};
+	/* Flat: the solid bead, its area scaled keeping its spacing
+	 * (PrusaSlicer's Flow::with_flow_ratio; a width of equal area change). */
+	double flat_w = s->bridge_flow_ratio == 1.0
+			    ? solid_w
+			    : fmax(c->h, solid_w + (s->bridge_flow_ratio - 1.0) *
+						       perim_bead_area(solid_w, c->h) / c->h);
+	const struct bead flat = {flat_w * U, solid.sp, PATH_BRIDGE, false};
+	const struct bead bridge = s->thick_bridges ? thick : flat;
 	int rc = 0;
 
 	if (!clip_paths_points(c->R))

@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "anchors.h"
 #include "medial.h"
 #include "patterns.h"
 #include "perimeters.h"
@@ -276,6 +277,9 @@ int infill_fill_solid(struct ctx *c, const struct clip_paths *X, double a, const
 			rc = fitted_lines(c, &P, ai, b->sp, NULL, &segs, &fit);
 		if (!rc)
 			rc = infill_plan_lines(c, &segs, b->role, b->w);
+		if (!rc && ((b->role == PATH_TOP_SKIN && c->s->top_monotonic) ||
+			    (b->role == PATH_BOTTOM_SKIN && c->s->bottom_monotonic)))
+			c->plan->v[c->plan->n - 1].monotonic = true;
 		if (!rc && b->gap_fill && segs.n)
 			rc = gap_fill(c, &P, &segs, fit);
 	}
@@ -412,6 +416,7 @@ int infill_fill_sparse(struct ctx *c, const struct clip_paths *X, double a)
 	double sp = perim_spacing(s->infill_extrusion_width, c->h) * SLICE_UNITS_PER_MM;
 	double d = s->fill_density / 100.0, S = sp / d;
 	struct clip_paths lines = {0}, segs = {0};
+	struct grown B = {0};
 	struct pat_box box;
 	int rc = 0;
 
@@ -445,11 +450,16 @@ int infill_fill_sparse(struct ctx *c, const struct clip_paths *X, double a)
 	}
 	}
 	if (!rc)
-		rc = clip_to(c, &lines, X, c->overlap - sp / 2.0, NULL, &segs);
+		rc = clip_to(c, &lines, X, c->overlap - sp / 2.0, &B, &segs);
+	/* joined along B, where the line ends lie (PrusaSlicer's connect_infill) */
+	if (!rc && s->infill_anchor_max > 0)
+		rc = anchors_connect(&B.g, &segs, s->infill_anchor * SLICE_UNITS_PER_MM,
+				     s->infill_anchor_max * SLICE_UNITS_PER_MM, c->err);
 	if (!rc)
 		rc = infill_plan_lines(c, &segs, PATH_SPARSE_INFILL, w);
 	clip_paths_free(&lines);
 	clip_paths_free(&segs);
+	clip_paths_free(&B.g);
 	return rc;
 }
 

@@ -32,6 +32,7 @@
 struct item {
 	bool fixed;		/* a path as it is, else lines to order */
 	bool loops;		/* segs are closed loops to order (not fixed) */
+	bool monotonic;		/* segs (parallel lines) ordered across, not nearest */
 	enum path_role role;
 	double w;		/* nm, bead width of the lines */
 	struct clip_paths segs; /* the lines */

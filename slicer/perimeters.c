@@ -35,7 +35,9 @@ struct perim_seams {
 /* Everything one perim_generate call works with, lengths in nm. */
 struct ctx {
 	const struct perim_settings *s;
-	double w, sp, h, arc, eps;
+	double w, sp;	/* the inner walls' width and spacing */
+	double wo, spo; /* the outer wall's */
+	double h, arc, eps;
 	struct perim_seams *sm;
 	struct layer_paths *out;
 	struct st_error *err;
@@ -45,6 +47,7 @@ void perim_settings_init(struct perim_settings *s, double nozzle_diameter)
 {
 	s->nozzle_diameter = nozzle_diameter;
 	s->extrusion_width = 1.125 * nozzle_diameter;
+	s->external_extrusion_width = 0.0;
 	s->perimeters = 2;
 	s->outer_first = false;
 	s->seam = PERIM_SEAM_ALIGNED;
@@ -62,6 +65,18 @@ double perim_spacing(double width, double height)
 double perim_bead_area(double width, double height)
 {
 	return (width - height) * height + M_PI * (height / 2.0) * (height / 2.0);
+}
+
+/* The outer wall's bead width, mm. */
+static double outer_width(const struct perim_settings *s)
+{
+	return s->external_extrusion_width > 0.0 ? s->external_extrusion_width
+						 : s->extrusion_width;
+}
+
+double perim_round_bead(double d, double height)
+{
+	return fmax(height, height + M_PI * (d * d - height * height) / (4.0 * height));
 }
 
 int perim_settings_check(const struct perim_settings *s, double layer_height,
@@ -92,6 +107,16 @@ int perim_settings_check(const struct perim_settings *s, double layer_height,
 				    "perimeters: extrusion width %g mm is out of range; use between "
 				    "the layer height %g mm and 4 x the nozzle diameter (%g mm)",
 				    s->extrusion_width, layer_height, 4.0 * s->nozzle_diameter);
+	if (!(s->external_extrusion_width >= 0.0) ||
+	    (s->external_extrusion_width > 0.0 &&
+	     (s->external_extrusion_width < layer_height ||
+	      s->external_extrusion_width > 4.0 * s->nozzle_diameter)))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "perimeters: external_perimeter_extrusion_width %g mm is out of "
+				    "range; use 0 (the walls' width) or between the layer height %g "
+				    "mm and 4 x the nozzle diameter (%g mm)",
+				    s->external_extrusion_width, layer_height,
+				    4.0 * s->nozzle_diameter);
 	if (s->perimeters < 0)
 		return st_error_set(err, ST_ERR_RANGE,
 				    "perimeters: perimeter count %d is negative; use 0 or more",
@@ -110,11 +135,12 @@ int perim_settings_check(const struct perim_settings *s, double layer_height,
 				    "perimeters: gap fill minimum width %g mm is out of range; use "
 				    "[0, 10] mm",
 				    s->gap_fill_min);
-	if (!(s->arc_tolerance > 0.0 && s->arc_tolerance <= s->extrusion_width / 4.0))
+	double narrowest = fmin(s->extrusion_width, outer_width(s));
+	if (!(s->arc_tolerance > 0.0 && s->arc_tolerance <= narrowest / 4.0))
 		return st_error_set(err, ST_ERR_RANGE,
 				    "perimeters: arc tolerance %g mm is out of range; use (0, %g] mm "
 				    "(a quarter of the extrusion width)",
-				    s->arc_tolerance, s->extrusion_width / 4.0);
+				    s->arc_tolerance, narrowest / 4.0);
 	return 0;
 }
 
@@ -327,7 +353,7 @@ static int emit_loop(struct ctx *c, const int64_t *xy, size_t n, enum path_role 
 	for (size_t k = 0; k < n; k++) {
 		size_t i = (seam + k) % n;
 		pts[k] = (struct path_point){.x = xy[2 * i], .y = xy[2 * i + 1],
-					     .width = llround(c->w)};
+					     .width = llround(role == PATH_OUTER_PERIMETER ? c->wo : c->w)};
 	}
 	rc = layer_add_path(c->out, role, true, pts, n, c->err);
 	if (!rc)
@@ -456,20 +482,20 @@ static int narrow_paths(struct ctx *c, const struct clip_expolys *area, double m
 /*
  * Centre region of wall k of region R: the erosion of R by d (round joins,
  * so every point is exactly d from R's boundary), cut where two of its
- * sides come closer than the bead spacing (an opening by sp/2 whose
+ * sides come closer than its bead spacing sp (an opening by sp/2 whose
  * dilation uses miter joins, so sharp convex corners stay sharp, then
  * intersected with the erosion so no point moves outward).
  */
-static int wall_centre(struct ctx *c, const struct clip_paths *R, double d,
+static int wall_centre(struct ctx *c, const struct clip_paths *R, double d, double sp,
 		       struct clip_paths *out)
 {
 	struct clip_paths e = {0}, t = {0};
 	int rc = clip_offset(R, -d, CLIP_JOIN_ROUND, 0.0, c->arc, &e, c->err);
 
 	if (!rc)
-		rc = clip_offset(&e, -c->sp / 2.0, CLIP_JOIN_ROUND, 0.0, c->arc, &t, c->err);
+		rc = clip_offset(&e, -sp / 2.0, CLIP_JOIN_ROUND, 0.0, c->arc, &t, c->err);
 	if (!rc)
-		rc = clip_offset(&t, c->sp / 2.0, CLIP_JOIN_MITER, PERIM_MITER_LIMIT, c->arc, &t,
+		rc = clip_offset(&t, sp / 2.0, CLIP_JOIN_MITER, PERIM_MITER_LIMIT, c->arc, &t,
 				 c->err);
 	if (!rc)
 		rc = clip_boolean(CLIP_INTERSECTION, &e, &t, CLIP_NONZERO, out, c->err);
@@ -495,6 +521,22 @@ static int minus_grown(struct ctx *c, const struct clip_paths *a, const struct c
 	return rc;
 }
 
+/* Spacing of wall k, nm. */
+static double wall_spacing(const struct ctx *c, int k)
+{
+	return k == 0 ? c->spo : c->sp;
+}
+
+/*
+ * How far inside the surface wall k's centre line runs, nm (perimeters.h):
+ * w_o/2, then (s_o + s)/2 more, then s more per wall.  Written so that with
+ * one width it is w/2 + k s to the last bit.
+ */
+static double wall_depth(const struct ctx *c, int k)
+{
+	return k == 0 ? c->wo / 2.0 : c->wo / 2.0 + (c->spo - c->sp) / 2.0 + k * c->sp;
+}
+
 /* Walls, gap fill and thin walls of one island R; its infill part into acc. */
 static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *acc)
 {
@@ -509,7 +551,7 @@ static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *
 	if (!loops)
 		return st_error_set(c->err, ST_ERR_NOMEM, "perimeters: out of memory");
 	for (; made < N && !rc; made++) {
-		rc = wall_centre(c, R, c->w / 2.0 + made * c->sp, &loops[made]);
+		rc = wall_centre(c, R, wall_depth(c, made), wall_spacing(c, made), &loops[made]);
 		if (!rc && !loops[made].n)
 			break;
 	}
@@ -525,7 +567,8 @@ static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *
 	 * that wall k+1 cannot cover; after the last wall made short of N, all of
 	 * it.  After wall N the rest is infill. */
 	for (int k = 0; k < made && !rc; k++) {
-		rc = clip_offset(&loops[k], -c->sp / 2.0, CLIP_JOIN_ROUND, 0.0, c->arc, &m, c->err);
+		rc = clip_offset(&loops[k], -wall_spacing(c, k) / 2.0, CLIP_JOIN_ROUND, 0.0, c->arc,
+				 &m, c->err);
 		if (rc)
 			break;
 		if (k == N - 1) {
@@ -535,7 +578,7 @@ static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *
 		if (!c->s->gap_fill)
 			continue;
 		if (k + 1 < made) {
-			rc = minus_grown(c, &m, &loops[k + 1], c->sp / 2.0, &area);
+			rc = minus_grown(c, &m, &loops[k + 1], wall_spacing(c, k + 1) / 2.0, &area);
 		} else {
 			rc = clip_boolean_ex(CLIP_UNION, &m, NULL, CLIP_NONZERO, &area, c->err);
 		}
@@ -546,7 +589,7 @@ static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *
 	/* Thin walls: the part of R the outer wall's beads do not reach. */
 	if (!rc && c->s->thin_walls) {
 		if (made)
-			rc = minus_grown(c, R, &loops[0], c->w / 2.0, &area);
+			rc = minus_grown(c, R, &loops[0], c->wo / 2.0, &area);
 		else
 			rc = clip_boolean_ex(CLIP_UNION, R, NULL, CLIP_NONZERO, &area, c->err);
 		if (!rc)
@@ -580,6 +623,8 @@ int perim_generate(const struct perim_settings *s, const struct clip_expolys *re
 	c = (struct ctx){.s = s,
 			 .w = s->extrusion_width * SLICE_UNITS_PER_MM,
 			 .sp = perim_spacing(s->extrusion_width, layer_height) * SLICE_UNITS_PER_MM,
+			 .wo = outer_width(s) * SLICE_UNITS_PER_MM,
+			 .spo = perim_spacing(outer_width(s), layer_height) * SLICE_UNITS_PER_MM,
 			 .h = layer_height * SLICE_UNITS_PER_MM,
 			 .arc = s->arc_tolerance * SLICE_UNITS_PER_MM,
 			 .eps = s->nozzle_diameter * SLICE_UNITS_PER_MM,

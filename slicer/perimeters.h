@@ -4,10 +4,13 @@
  * Flow model: a bead of width w and height h has a rectangle-with-
  * semicircular-ends cross-section, area (w - h) h + pi (h/2)^2, so beads
  * laid side by side at spacing s = w - h (1 - pi/4) fill the layer exactly
- * (s h is that area).  The outer wall's centre line runs exactly w/2 inside
- * the surface (an erosion with round joins: every centre-line point is at
- * distance w/2 from the surface, concave corners included), so the printed
- * face lies on the model surface; wall k runs w/2 + (k-1) s inside.
+ * (s h is that area).  The outer wall's centre line runs exactly w_o/2
+ * inside the surface (an erosion with round joins: every centre-line point
+ * is at distance w_o/2 from the surface, concave corners included), so the
+ * printed face lies on the model surface; the first inner wall runs
+ * (s_o + s)/2 inside it, s_o the outer wall's spacing (PrusaSlicer's
+ * ext_perimeter_spacing2), and each further one s further in.  With one
+ * width for both, wall k runs w/2 + k s inside.
  *
  * A wall loop is kept only where it has room: where two sides of a loop
  * would come closer than s, the loop is cut there.  What the outer loop's
@@ -50,7 +53,8 @@ int perim_seam_parse(const char *name, enum perim_seam *out, struct st_error *er
 /* Wall settings; perim_settings_init gives the defaults. */
 struct perim_settings {
 	double nozzle_diameter; /* mm; also epsilon, the narrowest feature printed (0.4) */
-	double extrusion_width; /* mm, bead width w (1.125 x nozzle) */
+	double extrusion_width; /* mm, bead width w of the inner walls (1.125 x nozzle) */
+	double external_extrusion_width; /* mm, the outer wall's w_o; 0 = extrusion_width (0) */
 	int perimeters;		/* walls per island, >= 0 (2) */
 	bool outer_first;	/* print the outer wall first (false: inner to outer) */
 	enum perim_seam seam;	/* seam placement (PERIM_SEAM_ALIGNED); concave corners
@@ -90,6 +94,12 @@ double perim_spacing(double width, double height);
 double perim_bead_area(double width, double height);
 
 /*
+ * perim_round_bead - the bead width whose cross-section at height h equals
+ * a round thread of diameter d (bridge flow), at least h, mm.
+ */
+double perim_round_bead(double d, double height);
+
+/*
  * perim_seams_new - seam memory seeded for PERIM_SEAM_RANDOM (the same seed
  * gives the same seams).  NULL when out of memory.
  */
@@ -104,12 +114,13 @@ void perim_seams_free(struct perim_seams *sm);
  *   layer_height: mm, the bead height h.
  *   seams: seam memory (may be NULL: no memory across layers, seed 0).
  *   out: paths are appended in printing order, per island: the walls
- *        (inner to outer unless outer_first) as closed loops of width w
- *        with roles PATH_INNER_PERIMETER / PATH_OUTER_PERIMETER, then gap
+ *        (inner to outer unless outer_first) as closed loops of width w_o
+ *        (the outer) and w (the inner) with roles PATH_INNER_PERIMETER / PATH_OUTER_PERIMETER, then gap
  *        fill, then thin walls (open or closed, width per point).
  *   infill: replaced by the region left inside the innermost walls for
- *        infill (each wall counted as its flow-equivalent band of width s,
- *        so its inner edge is w/2 + (N - 1/2) s inside the surface).
+ *        infill (each wall counted as its flow-equivalent band of its
+ *        spacing, so with one width its inner edge is w/2 + (N - 1/2) s
+ *        inside the surface).
  * Returns 0 or a negative class with err filled (bad settings, ST_ERR_NOMEM,
  * ST_ERR_INTERNAL); on error out may hold some of this layer's paths.
  */

@@ -29,6 +29,12 @@ static const char *const pattern_names[] = {
     "octagramspiral", "adaptivecubic", "supportcubic",   "lightning",		 "zigzag",
 };
 
+/* PrusaSlicer 2.5's top_fill_pattern and bottom_fill_pattern names. */
+static const char *const skin_pattern_names[] = {
+    "rectilinear", "monotonic", "alignedrectilinear", "concentric", "hilbertcurve",
+    "archimedeanchords", "octagramspiral",
+};
+
 /* PrusaSlicer's MachineLimitsUsage names. */
 static const char *const limits_usage_names[] = {"emit_to_gcode", "time_estimate_only", "ignore"};
 
@@ -149,13 +155,24 @@ static const struct setting table[] = {
     {"first_layer_height", SETTING_NUMBER_OR_PCT, S_, 0, 3, GT, "mm", "0.2", NULL, NULL, 0, NULL,
      "at most the smallest nozzle; a percentage is of layer_height"},
     {"extrusion_width", SETTING_NUMBER_OR_PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
-     "0 = automatic; a percentage is of layer_height (as in PrusaSlicer)"},
+     "0 = automatic (PrusaSlicer 2.5's: the nozzle for the top skin and support, 1.125 x "
+     "the nozzle for the rest); a percentage is of layer_height (as in PrusaSlicer)"},
+    {"first_layer_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "every bead of the first layer on the bed (support and raft too), skirt and brim; 0 = "
+     "each role's own "
+     "width; a percentage is of first_layer_height (PrusaSlicer's default is 200%)"},
+    {"perimeter_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "inner walls; 0 = extrusion_width; a percentage is of layer_height"},
+    {"external_perimeter_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "the outer wall, its outer face kept on the model's surface; 0 = extrusion_width; a "
+     "percentage is of layer_height"},
     {"infill_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
      "sparse infill; 0 = extrusion_width; a percentage is of layer_height"},
     {"solid_infill_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
      "solid infill and bottom skin; likewise"},
     {"top_infill_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
-     "top skin; likewise"},
+     "top skin; 0 = extrusion_width, or the nozzle when that is 0 too; a percentage is of "
+     "layer_height"},
     {"support_material_extrusion_width", PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
      "support and raft; likewise"},
     {"perimeters", INT, S_, 0, 100, 0, "", "3", NULL, NULL, 0, NULL, ""},
@@ -170,6 +187,9 @@ static const struct setting table[] = {
      "one centre-line bead where two walls do not fit"},
     {"gap_fill_enabled", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, NULL,
      "beads in the strips left between walls"},
+    {"overhangs", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
+     "walls more than half the nozzle outside the layer below print with bridge flow, "
+     "bridge_speed and bridge_fan_speed (Overhang perimeter); PrusaSlicer's default is 1"},
     {"spiral_vase", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
      "above the bottom layers one wall around the largest island (holes and smaller islands "
      "dropped), printed as a spiral rising along each loop; no top layers, no infill there"},
@@ -185,6 +205,10 @@ static const struct setting table[] = {
      "direction of bridges; 0 = the best one per bridge"},
     {"bridge_flow_ratio", NUM, S_, 0, 2, GT, "", "1", NULL, NULL, 0, NULL,
      "bridge thread area over the nozzle's"},
+    {"thick_bridges", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, NULL,
+     "bridges as round threads of the nozzle's diameter times the square root of "
+     "bridge_flow_ratio, 0.05 mm apart; 0: flat beads of the solid infill's width and the "
+     "layer's height at its spacing, their cross-section times bridge_flow_ratio"},
     {"infill_overlap", PCT, S_, 0, 10, 0, "mm", "25%", NULL, NULL, 0, NULL,
      "how far infill reaches into the innermost wall; a percentage (at most 100%) is of "
      "extrusion_width"},
@@ -194,6 +218,20 @@ static const struct setting table[] = {
      NULL, "PrusaSlicer's names (monotonous is read as monotonic); rectilinear, grid, gyroid, "
      "triangles, stars, cubic, line, concentric and honeycomb are printed (docs/slicing.md), "
      "any other prints rectilinear, named in the warning"},
+    {"infill_anchor", PCT, S_, 0, 1000, 0, "mm", "600%", NULL, NULL, 0, NULL,
+     "a sparse line end joined to no other gets this much of the boundary (at most half way "
+     "to its neighbour); a percentage is of infill_extrusion_width"},
+    {"infill_anchor_max", PCT, S_, 0, 1000, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "sparse line ends are joined along the boundary to their neighbours where that is at "
+     "most this long (not for line and concentric); 0 = not joined (PrusaSlicer's default "
+     "is 50); a percentage is of infill_extrusion_width"},
+    {"top_fill_pattern", SETTING_CHOICE, S_, 0, 0, 0, "", "rectilinear", NULL,
+     CHOICES(skin_pattern_names), NULL,
+     "the top skin's lines: rectilinear (each line from the end nearest the nozzle) or "
+     "monotonic (in one sweep across each island, PrusaSlicer's default); any other prints "
+     "rectilinear, named in the warning"},
+    {"bottom_fill_pattern", SETTING_CHOICE, S_, 0, 0, 0, "", "rectilinear", NULL,
+     CHOICES(skin_pattern_names), NULL, "likewise for the bottom skin"},
     {"solid_infill_below_area", NUM, S_, 0, 1e6, 0, "mm^2", "70", NULL, NULL, 0, NULL,
      "sparse infill islands smaller than this are solid"},
     {"ironing", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
@@ -263,6 +301,11 @@ static const struct setting table[] = {
      "slowed"},
     {"first_layer_speed_over_raft", PCT, S_, 0, 1000, 0, "mm/s", "30", NULL, NULL, 0, NULL,
      "every extrusion of the part's first layer on a raft, likewise"},
+    {"max_volumetric_speed", NUM, S_, 0, 1000, 0, "mm^3/s", "0", NULL, NULL, 0, NULL,
+     "every extrusion at most this fast in filament volume: its speed at most the limit "
+     "over its bead's cross-section (before the slow-down for short layers); 0 = no limit"},
+    {"filament_max_volumetric_speed", NUM, FI, 0, 1000, 0, "mm^3/s", "0", NULL, NULL, 0, NULL,
+     "the filament's limit, likewise; with both set the lower applies"},
     {"default_acceleration", NUM, S_, 0, 100000, 0, "mm/s^2", "0", NULL, NULL, 0, NULL,
      "M204 S before each path's own value and after each path; 0 = never written, the per-role keys below unused"},
     {"perimeter_acceleration", NUM, S_, 0, 100000, 0, "mm/s^2", "0", NULL, NULL, 0, NULL,
@@ -276,6 +319,10 @@ static const struct setting table[] = {
 
     {"avoid_crossing_perimeters", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, "Travel",
      "route travels inside the part instead of across its walls"},
+    {"avoid_crossing_perimeters_max_detour", PCT, S_, 0, 1000, 0, "mm", "100%", NULL, NULL, 0,
+     NULL, "a route inside the part longer than the straight travel by more than this goes "
+     "straight; a percentage is of the straight travel; 0 = any detour (PrusaSlicer's "
+     "default)"},
     {"only_retract_when_crossing_perimeters", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, NULL,
      "no retraction for a travel that stays inside the part"},
     {"max_unretracted_travel", NUM, S_, 0, 1e6, 0, "mm", "20", NULL, NULL, 0, NULL,
@@ -374,6 +421,9 @@ static const struct setting table[] = {
     {"end_filament_gcode", STR, FI, 0, 0, 0, "", "", NULL, NULL, 0, NULL, "before end_gcode"},
     {"toolchange_gcode", STR, S_, 0, 0, 0, "", "", NULL, NULL, 0, NULL,
      "checked, never written: one extruder prints (PrusaSlicer writes none either)"},
+    {"thumbnails", STR, S_, 0, 0, 0, "", "", NULL, NULL, 0, NULL,
+     "sizes WxH, comma-separated (160x120): per size a PNG picture of the part in the G-code "
+     "header, PrusaSlicer's thumbnail comments; empty = none"},
 
 };
 

@@ -12,6 +12,7 @@
 
 #include "grow.h"
 #include "infill.h"
+#include "overhang.h"
 #include "stages.h"
 #include "spiral.h"
 #include "travel.h"
@@ -148,7 +149,8 @@ static void walls_made(struct pipe *p, size_t i)
  */
 static int walls_chunk(struct pipe *p, size_t k, struct st_error *err)
 {
-	const struct perim_settings *ps = &p->c->perim;
+	struct perim_settings first_walls; /* layer 0's (slicer_first_layer_walls) */
+	const struct perim_settings *ps;
 	size_t first = k * SLICER_CHUNK_LAYERS;
 	size_t last = first + SLICER_CHUNK_LAYERS < p->st->n ? first + SLICER_CHUNK_LAYERS
 							      : p->st->n;
@@ -157,12 +159,14 @@ static int walls_chunk(struct pipe *p, size_t k, struct st_error *err)
 
 	if (!seams)
 		return st_error_set(err, ST_ERR_NOMEM, "walls: out of memory for seams");
+	slicer_first_layer_walls(p->c, &first_walls);
 	if (first > 0) {
 		const struct slice_layer *below = &p->st->layers[first - 1];
 		struct layer_paths scratch = {0};
 		struct clip_expolys scratch_inner = {0};
 
-		rc = perim_generate(ps, &below->regions, below->height, seams, &scratch,
+		/* first > 0: never layer 0 */
+		rc = perim_generate(&p->c->perim, &below->regions, below->height, seams, &scratch,
 				    &scratch_inner, err);
 		layer_paths_clear(&scratch);
 		clip_expolys_free(&scratch_inner);
@@ -170,13 +174,24 @@ static int walls_chunk(struct pipe *p, size_t k, struct st_error *err)
 	for (size_t i = first; i < last && !rc; i++) {
 		const struct slice_layer *l = &p->st->layers[i];
 
+		ps = i == 0 ? &first_walls : &p->c->perim;
 		rc = perim_generate(ps, &l->regions, l->height, seams, &p->walls[i], &p->inner[i],
 				    err);
 		if (!rc && i >= p->vase_from) /* spiral vase: no infill above the bottom */
 			clip_expolys_clear(&p->inner[i]);
+		if (!rc && p->c->overhangs && i > 0 && i < p->vase_from) {
+			struct overhang_settings os = {p->c->perim.nozzle_diameter,
+						       p->c->infill.thick_bridges,
+						       p->c->infill.bridge_flow_ratio};
+			rc = overhang_split(&p->walls[i], &l->regions.paths,
+					    &p->st->layers[i - 1].regions.paths, &os, err);
+		}
 		if (!rc && p->travel &&
 		    !(p->maps[i] = travel_map_new(&l->regions, p->travel_inset, err)))
 			rc = err->code;
+		if (!rc && p->maps[i])
+			travel_map_set_detour(p->maps[i], p->c->max_detour,
+					      p->c->max_detour_is_percent);
 		if (!rc)
 			walls_made(p, i);
 	}

@@ -84,6 +84,9 @@ struct slicer_infill_settings {
 	double top_solid_min_thickness, bottom_solid_min_thickness; /* mm, >= 0 (0) */
 	double fill_angle, bridge_angle; /* degrees (45, 0 = per bridge) */
 	double bridge_flow_ratio;	 /* (0, 2] (1) */
+	bool thick_bridges;		 /* round threads, else flat beads (true) */
+	bool top_monotonic, bottom_monotonic; /* skins' lines in one sweep (false) */
+	double anchor, anchor_max; /* mm, infill_anchor(_max) (anchors.h; 0, 0) */
 	double infill_overlap;		 /* percent of the walls' width, 0-100 (25) */
 	/* mm: sparse, solid and bottom, top; 0 = the walls' extrusion_width (0) */
 	double infill_extrusion_width, solid_infill_extrusion_width, top_infill_extrusion_width;
@@ -128,6 +131,18 @@ struct slicer_config {
 	struct slicer_skirt_settings skirt;
 	struct slicer_bed bed;
 	double elefant_foot_compensation; /* mm the first layer's islands shrink, >= 0 (0) */
+	/* mm, every bead of the part's first layer on the bed (walls, skins,
+	 * infill; not over a raft) and of the skirt and brim; 0 = each role's
+	 * own width (0) */
+	double first_layer_extrusion_width;
+	/* the longest detour of a travel routed inside the part (travel.h,
+	 * travel_map_set_detour): mm, or percent of the straight travel;
+	 * 0 = any (100%) */
+	double max_detour;
+	bool max_detour_is_percent;
+	/* walls' pieces over air printed with bridge flow, speed and fan
+	 * (overhang.h; PrusaSlicer's overhangs; false) */
+	bool overhangs;
 	int threads; /* workers for walls and infill; 0 = all online cores */
 	/* Called with a stage name ("slicing", "layers", "writing G-code") and
 	 * 0..1 done; may be NULL. */
@@ -174,12 +189,19 @@ void slicer_config_modes(struct slicer_config *c);
  * work: layer heights not > 0 or above the nozzle, the walls' settings
  * (perim_settings_check for both layer heights), infill density outside
  * 0-100 %, negative layer or loop counts or brim width, a support threshold
- * outside 0-90, raft keys outside their declared ranges (settings.h), an
- * empty bed or a height <= 0, a negative thread count.
+ * outside 0-90, raft keys outside their declared ranges (settings.h), a
+ * first-layer width the first layer's walls cannot take, an empty bed or a height <= 0, a negative thread count.
  * Returns 0 or ST_ERR_RANGE / ST_ERR_ARG with a message naming the setting
  * (PrusaSlicer's key), its value and what is allowed.
  */
 int slicer_config_check(const struct slicer_config *c, struct st_error *err);
+
+/*
+ * slicer_first_layer_walls - the walls' settings of the part's first layer:
+ * c->perim with both widths first_layer_extrusion_width when that applies
+ * (set, and no raft), else c->perim as it is.
+ */
+void slicer_first_layer_walls(const struct slicer_config *c, struct perim_settings *out);
 
 /*
  * slicer_raft_support - the settings of support_raft (support.h) for c,

@@ -10,6 +10,7 @@
 #include "infill.h"
 #include "settings.h"
 #include "support.h"
+#include "travel.h"
 
 void slicer_config_init(struct slicer_config *c, double nozzle_diameter)
 {
@@ -24,6 +25,7 @@ void slicer_config_init(struct slicer_config *c, double nozzle_diameter)
 	c->infill = (struct slicer_infill_settings){
 	    .density = 20, .pattern = "rectilinear", .top_solid_layers = 3, .bottom_solid_layers = 3,
 	    .solid_infill_below_area = 70, .fill_angle = 45, .bridge_flow_ratio = 1,
+	    .thick_bridges = true,
 	    .infill_overlap = 25};
 	c->support = (struct slicer_support_settings){.enabled = false, .threshold = 0};
 	/* The declared defaults, as the writer has them. */
@@ -34,6 +36,8 @@ void slicer_config_init(struct slicer_config *c, double nozzle_diameter)
 	    .first_layer_density = c->gcodew.raft_first_layer_density,
 	    .first_layer_expansion = c->gcodew.raft_first_layer_expansion};
 	c->skirt = (struct slicer_skirt_settings){.skirts = 1, .skirt_distance = 6, .skirt_height = 1};
+	c->max_detour = TRAVEL_DETOUR_DEFAULT_PCT;
+	c->max_detour_is_percent = true;
 	c->bed = (struct slicer_bed){.max_x = 200, .max_y = 200, .max_height = 200,
 				     .object_distance = 6};
 }
@@ -64,6 +68,16 @@ int slicer_config_check(const struct slicer_config *c, struct st_error *err)
 		rc = perim_settings_check(&c->perim, c->first_layer_height, err);
 	if (!rc)
 		rc = perim_settings_check(&c->perim, c->layer_height, err);
+	if (!rc && c->first_layer_extrusion_width != 0.0) {
+		struct perim_settings first;
+		slicer_first_layer_walls(c, &first);
+		if (!(c->first_layer_extrusion_width > 0.0))
+			return st_error_set(err, ST_ERR_RANGE,
+					    "first_layer_extrusion_width = %g mm is out of range; "
+					    "use 0 (each role's width) or more",
+					    c->first_layer_extrusion_width);
+		rc = perim_settings_check(&first, c->first_layer_height, err);
+	}
 	if (!rc)
 		rc = gcodew_settings_check(&c->gcodew, err);
 	if (rc)
@@ -126,12 +140,24 @@ int slicer_config_check(const struct slicer_config *c, struct st_error *err)
 	return 0;
 }
 
+void slicer_first_layer_walls(const struct slicer_config *c, struct perim_settings *out)
+{
+	*out = c->perim;
+	/* Over a raft the part's first layer is not PrusaSlicer's first layer. */
+	if (c->first_layer_extrusion_width > 0.0 && c->raft.layers == 0) {
+		out->extrusion_width = c->first_layer_extrusion_width;
+		out->external_extrusion_width = c->first_layer_extrusion_width;
+	}
+}
+
 void slicer_raft_support(const struct slicer_config *c, struct support_settings *s)
 {
 	support_settings_init(s, c->perim.nozzle_diameter);
 	/* PrusaSlicer prints the raft with support's width */
 	s->extrusion_width =
 	    c->support.extrusion_width > 0 ? c->support.extrusion_width : c->perim.extrusion_width;
+	/* the stack's layer 0 is on the bed: the raft's, or support's without one */
+	s->first_layer_extrusion_width = c->first_layer_extrusion_width;
 	s->raft_layers = c->raft.layers;
 	s->raft_contact_distance = c->raft.contact_distance;
 	s->raft_expansion = c->raft.expansion;

@@ -51,6 +51,8 @@ int stage_support(const struct slicer_config *c, const struct slice_stack *st,
 	if (!c->support.enabled)
 		return 0;
 	slicer_raft_support(c, &s);
+	if (c->raft.layers > 0) /* support stands on the raft, not on the bed */
+		s.first_layer_extrusion_width = 0;
 	s.support_material = true;
 	s.support_material_threshold = c->support.threshold;
 	rc = support_generate(&s, st, out, err);
@@ -90,7 +92,8 @@ int stage_raft(const struct slicer_config *c, const struct slice_stack *st,
 	return support_raft(&ss, st, support, raft, out, err);
 }
 
-/* Skirt and brim with the job's keys, the walls' width. */
+/* Skirt and brim with the job's keys, the first layer's width (PrusaSlicer's
+ * skirt and brim flow), else the walls'. */
 int stage_skirt(const struct slicer_config *c, const struct slice_stack *st,
 		const struct layer_stack *support, struct layer_stack *out, bool *ran,
 		struct st_error *err)
@@ -106,7 +109,8 @@ int stage_skirt(const struct slicer_config *c, const struct slice_stack *st,
 	s.min_skirt_length = c->skirt.skirt_height > 0 ? c->skirt.min_skirt_length : 0;
 	s.brim_width = c->skirt.brim_width;
 	s.brim_separation = c->skirt.brim_separation;
-	s.extrusion_width = c->perim.extrusion_width;
+	s.extrusion_width = c->first_layer_extrusion_width > 0 ? c->first_layer_extrusion_width
+							       : c->perim.extrusion_width;
 	s.filament_diameter = c->gcodew.filament_diameter;
 	rc = skirt_generate(&s, st, support, out, err);
 	*ran = !rc && stack_has_paths(out);
@@ -139,12 +143,19 @@ int stage_infill_job(const struct slicer_config *c, const struct slice_stack *st
 	s.fill_angle = c->infill.fill_angle;
 	s.bridge_angle = c->infill.bridge_angle;
 	s.bridge_flow_ratio = c->infill.bridge_flow_ratio;
+	s.thick_bridges = c->infill.thick_bridges;
+	s.top_monotonic = c->infill.top_monotonic;
+	s.infill_anchor = c->infill.anchor;
+	s.infill_anchor_max = c->infill.anchor_max;
+	s.bottom_monotonic = c->infill.bottom_monotonic;
 	s.infill_overlap = c->infill.infill_overlap;
 	s.layer_height = c->layer_height;
 	s.perimeter_extrusion_width = c->perim.extrusion_width;
 	s.infill_extrusion_width = width_or(c->infill.infill_extrusion_width, c);
 	s.solid_infill_extrusion_width = width_or(c->infill.solid_infill_extrusion_width, c);
 	s.top_infill_extrusion_width = width_or(c->infill.top_infill_extrusion_width, c);
+	/* Over a raft the part's first layer is not PrusaSlicer's first layer. */
+	s.first_layer_extrusion_width = c->raft.layers == 0 ? c->first_layer_extrusion_width : 0;
 	s.ironing = c->gcodew.ironing;
 	s.ironing_spacing = c->gcodew.ironing_spacing;
 	rc = iron_type_parse(c->gcodew.ironing_type, &s.ironing_type, err);

@@ -54,6 +54,7 @@ void support_settings_init(struct support_settings *s, double nozzle_diameter)
 	s->support_material_interface_layers = 3;
 	s->support_material_spacing = 2.5;
 	s->extrusion_width = 1.125 * nozzle_diameter;
+	s->first_layer_extrusion_width = 0.0;
 	s->support_material_xy_spacing = 0.6 * s->extrusion_width;
 	s->arc_tolerance = 0.002;
 	s->raft_layers = (int)declared("raft_layers");
@@ -111,6 +112,11 @@ int support_settings_check(const struct support_settings *s, struct st_error *er
 		return st_error_set(err, ST_ERR_RANGE,
 				    "support: extrusion width %g mm is out of range; use (0, 20] mm",
 				    s->extrusion_width);
+	if (!(s->first_layer_extrusion_width >= 0.0 && s->first_layer_extrusion_width <= 20.0))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "support: first layer extrusion width %g mm is out of range; use "
+				    "0 (support's width) to 20 mm",
+				    s->first_layer_extrusion_width);
 	if (!(s->support_material_spacing > 0.0 && s->support_material_spacing <= 1000.0))
 		return st_error_set(err, ST_ERR_RANGE,
 				    "support: support_material_spacing = %g mm is out of range; use "
@@ -411,6 +417,11 @@ int support_generate(const struct support_settings *s, const struct slice_stack 
 		for (size_t i = j + 1; i < st->n && !rc; i++)
 			if (t[i] == (long)j && C[i].n)
 				rc = clip_boolean(CLIP_UNION, &T, &C[i], CLIP_NONZERO, &T, err);
+		/* layer 0 on the bed at the first layer's width (PrusaSlicer's
+		 * support_material_1st_layer_flow) */
+		c.w = (j == 0 && s->first_layer_extrusion_width > 0 ? s->first_layer_extrusion_width
+								     : s->extrusion_width) *
+		      SLICE_UNITS_PER_MM;
 		if (!rc && T.n)
 			rc = layer_support(&c, j, &T, G, C, t, &out->layers[j]);
 	}
@@ -561,6 +572,9 @@ int support_raft(const struct support_settings *s, const struct slice_stack *st,
 	for (int i = 0; i < n && !rc; i++) {
 		struct slice_layer *L = &raft->layers[i];
 		double grow = raft_growth(s, i);
+		c.w = (i == 0 && s->first_layer_extrusion_width > 0 ? s->first_layer_extrusion_width
+								     : s->extrusion_width) *
+		      SLICE_UNITS_PER_MM;
 		double sp = perim_spacing(c.w, L->height * SLICE_UNITS_PER_MM), pitch = sp;
 		enum path_role role = i < base ? PATH_SUPPORT : PATH_SUPPORT_INTERFACE;
 

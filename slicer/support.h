@@ -65,6 +65,9 @@ struct support_settings {
 	double support_material_xy_spacing;	  /* mm clearance from the model, >= 0
 						   * (60 % of the width) */
 	double extrusion_width;			  /* mm, support bead width (1.125 x nozzle) */
+	double first_layer_extrusion_width;	  /* mm, the beads of the stack's layer 0
+						   * (support on the bed, the raft's
+						   * first layer); 0 = extrusion_width (0) */
 	double arc_tolerance;			  /* mm, chord error of round offsets (0.002) */
 	/* The raft (support_raft), in the declared ranges of settings.h */
 	int raft_layers;		   /* 0 = no raft (0) */

@@ -88,6 +88,7 @@ const char *path_role_name(enum path_role role)
 		[PATH_SUPPORT] = "Support material",
 		[PATH_SUPPORT_INTERFACE] = "Support material interface",
 		[PATH_IRONING] = "Ironing",
+		[PATH_OVERHANG_PERIMETER] = "Overhang perimeter",
 	};
 	return (unsigned)role < PATH_ROLES ? names[role] : "Unknown";
 }

@@ -44,6 +44,8 @@ enum path_role {
 	PATH_SUPPORT,		  /* support body */
 	PATH_SUPPORT_INTERFACE,	  /* dense support layers under the part */
 	PATH_IRONING,		  /* second pass over a top surface at low flow (infill.h) */
+	PATH_OVERHANG_PERIMETER,  /* a wall's piece over air: bridge flow, speed and fan
+				   * (overhang.h) */
 	PATH_ROLES		  /* number of roles */
 };
 
@@ -59,6 +61,8 @@ struct path_point {
 struct toolpath {
 	enum path_role role;
 	bool closed;
+	bool ordered;		 /* printed in the layer's order and direction (monotonic
+				  * skins); false: the writer may pick nearest first */
 	size_t n;		 /* points */
 	struct path_point *pts;	 /* n points, owned */
 };

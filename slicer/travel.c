@@ -10,6 +10,7 @@
  */
 #include "travel.h"
 #include "st_grow.h"
+#include "toolpath.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -38,6 +39,8 @@ struct travel_map {
 	uint32_t *epoly; /* polygon of each edge */
 	/* grid */
 	int64_t gx, gy, cell;
+	double detour;	   /* the longest detour: nm, or percent (detour_pct); 0 = any */
+	bool detour_pct;
 	int nx, ny;
 	uint32_t *cstart; /* nx * ny + 1 */
 	uint32_t *cedge;
@@ -220,6 +223,12 @@ static int build_grid(struct travel_map *m, struct st_error *err)
 	return 0;
 }
 
+void travel_map_set_detour(struct travel_map *m, double v, bool pct)
+{
+	m->detour = pct ? v : v * SLICE_UNITS_PER_MM;
+	m->detour_pct = pct;
+}
+
 struct travel_map *travel_map_new(const struct clip_expolys *region, int64_t inset,
 				  struct st_error *err)
 {
@@ -234,6 +243,10 @@ struct travel_map *travel_map_new(const struct clip_expolys *region, int64_t ins
 		return NULL;
 	}
 	m = calloc(1, sizeof(*m));
+	if (m) {
+		m->detour = TRAVEL_DETOUR_DEFAULT_PCT;
+		m->detour_pct = true;
+	}
 	if (!m) {
 		st_error_set(err, ST_ERR_NOMEM, "travel: out of memory");
 		return NULL;
@@ -738,7 +751,7 @@ int travel_plan(struct travel_map *m, int64_t ax, int64_t ay, int64_t bx, int64_
 		return rc;
 
 	/* The route must not touch a wall anywhere, nor wander off: a detour
-	 * beyond TRAVEL_MAX_DETOUR costs more than the crossing it avoids. */
+	 * beyond the map's costs more than the crossing it avoids. */
 	{
 		int64_t p[2] = {ax, ay};
 		for (size_t k = 0; k < r->n; k++) {
@@ -750,7 +763,10 @@ int travel_plan(struct travel_map *m, int64_t ax, int64_t ay, int64_t bx, int64_
 			p[1] = q[1];
 		}
 	}
-	if (r->length > TRAVEL_MAX_DETOUR * hypot((double)(bx - ax), (double)(by - ay)))
+	double straight = hypot((double)(bx - ax), (double)(by - ay));
+	/* written so that 100% is 2 x straight to the last bit */
+	double limit = straight + (m->detour_pct ? straight * (m->detour / 100) : m->detour);
+	if (m->detour > 0 && r->length > limit)
 		return route_straight(r, ax, ay, bx, by, false, err);
 	return 0;
 }

@@ -11,8 +11,8 @@
  * then shortened where a straight cut stays inside the boundary.  Every
  * route is checked against the region's own walls at the end: a route that
  * cannot be made (ends in different islands, outside the part, an island
- * too thin for the boundary) or would be more than TRAVEL_MAX_DETOUR times
- * the straight distance is the straight segment, flagged as crossing.
+ * too thin for the boundary) or would detour more than the map allows
+ * (travel_map_set_detour) is the straight segment, flagged as crossing.
  *
  * Edges sit in a uniform grid, so a travel costs about the number of grid
  * cells it passes, not the size of the layer.
@@ -31,9 +31,10 @@
 #include "clip.h"
 #include "st_error.h"
 
-/* A route longer than this many times the straight distance is not taken
- * (PrusaSlicer's avoid_crossing_perimeters_max_detour, as 200 %). */
-#define TRAVEL_MAX_DETOUR 2.0
+/* A route whose detour beyond the straight distance is longer than this
+ * share of it is not taken, unless travel_map_set_detour says otherwise
+ * (PrusaSlicer's avoid_crossing_perimeters_max_detour), percent. */
+#define TRAVEL_DETOUR_DEFAULT_PCT 100.0
 
 struct travel_map;
 
@@ -53,6 +54,14 @@ struct travel_route {
  */
 struct travel_map *travel_map_new(const struct clip_expolys *region, int64_t inset,
 				  struct st_error *err);
+
+/*
+ * travel_map_set_detour - the longest detour (route length minus the
+ * straight distance) routes on m may take: v mm, or v percent of the
+ * straight distance (pct); 0 = any.  A new map allows
+ * TRAVEL_DETOUR_DEFAULT_PCT percent.
+ */
+void travel_map_set_detour(struct travel_map *m, double v, bool pct);
 
 /* travel_map_free - release a map; NULL is fine. */
 void travel_map_free(struct travel_map *m);

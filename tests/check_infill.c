@@ -891,5 +891,6 @@ Suite *infill_suite(void)
 	tcase_add_test(tc, bad_settings_refused);
 	tcase_add_test(tc, gyroid_chords_within_tolerance);
 	suite_add_tcase(s, tc);
+	infill_shell_tcases(s);
 	return s;
 }

@@ -225,6 +225,24 @@ START_TEST(travel_routes_around_a_hole)
 	ck_assert(!r.inside);
 	ck_assert_uint_eq(r.n, 1);
 
+	/* avoid_crossing_perimeters_max_detour: the route round the hole
+	 * detours some 8 mm beyond the 22 mm straight travel, so a limit of
+	 * 5 mm or 10% sends it straight across; 0 (any) and 100% route it. */
+	static const struct {
+		double v;
+		bool pct, routed;
+	} lim[] = {{5, false, false}, {10, true, false}, {0, false, true}, {100, true, true},
+		   {20, false, true}};
+	for (size_t i = 0; i < sizeof(lim) / sizeof(lim[0]); i++) {
+		travel_map_set_detour(m, lim[i].v, lim[i].pct);
+		ck_assert_int_eq(travel_plan(m, llround(4 * NM), llround(15 * NM), llround(26 * NM),
+					     llround(15.5 * NM), &r, &err),
+				 0);
+		ck_assert_msg(r.inside == lim[i].routed && (r.n > 1) == lim[i].routed,
+			      "detour %g%s: inside %d, %zu points", lim[i].v, lim[i].pct ? "%" : " mm",
+			      r.inside, r.n);
+	}
+
 	travel_route_free(&r);
 	travel_map_free(m);
 	clip_expolys_free(&ex);

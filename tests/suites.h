@@ -36,11 +36,14 @@ void gcodewriter_retract_tcases(Suite *s); /* tests/check_retract.c: retract_lay
 void gcodewriter_accel_tcases(Suite *s); /* tests/check_accel.c: accelerations per role, part of gcodewriter */
 void gcodewriter_progress_tcases(Suite *s); /* tests/check_progress.c: remaining_times, part of gcodewriter */
 Suite *infill_suite(void);	/* tests/check_infill.c: skins, bridges, infill */
+void infill_shell_tcases(Suite *s); /* tests/check_shells.c: vertical shells, part of infill */
 Suite *support_suite(void);	/* tests/check_support.c: skirt, brim, support material */
 Suite *raft_suite(void);	/* tests/check_raft.c: the raft under the part */
 Suite *multimodel_suite(void); /* tests/check_multimodel.c: several models in one slice */
 Suite *slicecli_suite(void);	/* tests/check_slicecli.c: stratum slice end to end */
 void slicecli_settings_tcases(Suite *s); /* tests/check_slicesettings.c: settings honoured, part of slicecli */
+void slicecli_widths_tcases(Suite *s); /* tests/check_slicewidths.c: per-role widths, part of slicecli */
+void slicecli_thumbnail_tcases(Suite *s); /* tests/check_thumbnail.c: G-code thumbnails, part of slicecli */
 Suite *region_suite(void);	/* tests/check_region.c: printed region against cross-sections */
 Suite *x3g_suite(void);		/* tests/check_x3g.c: G-code to X3G, decoder, against gpx */
 Suite *s3g_suite(void);		/* tests/check_s3g.c: S3G packets, driver, simulated Sailfish */
