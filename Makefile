@@ -6,6 +6,9 @@
 #   make bench    deps + build + benchmarks (bench/), figures for docs/benchmarks.md
 #   make fuzz [FUZZ_SECONDS=N]  every libFuzzer target of tests/fuzz/ for N s
 #                 (default 60), docs/reliability.md
+#   make install [PREFIX=/usr/local] [DESTDIR=]  the binary, printer profiles,
+#                 man pages, bash and zsh completion, the systemd unit, docs
+#   make uninstall [PREFIX=...] [DESTDIR=]  removes what install put there
 #   make clean
 
 MAKEFLAGS += --no-print-directory
@@ -90,9 +93,10 @@ TEST_SRC := $(sort $(wildcard tests/*.c))
 LIB_OBJ  := $(LIB_SRC:%.c=$(BUILD)/%.o) $(CXX_SRC:%.cpp=$(BUILD)/%.o)
 TEST_OBJ := $(TEST_SRC:%.c=$(BUILD)/%.o)
 
-.PHONY: all deps demo check test test-asan bench fuzz clean layers
+.PHONY: all deps demo check test test-asan bench fuzz clean layers install uninstall
 
-all: $(BUILD)/stratum
+all: $(BUILD)/stratum $(BUILD)/man/stamp $(BUILD)/completion/stratum.bash \
+	$(BUILD)/completion/_stratum
 
 $(BUILD)/%.o: %.c
 	@mkdir -p $(@D)
@@ -227,6 +231,62 @@ fuzz:
 	@$(MAKE) deps EXTRA_PACKAGES=clang
 	@$(MAKE) $(FUZZ_BINS) $(BUILD)/bench/gen_mesh $(BUILD)/stratum
 	tests/fuzz/run.sh $(FUZZ_BUILD) $(FUZZ_SECONDS) $(BUILD) $(FUZZ_CORPUS) $(FUZZ_NAMES)
+
+# Man pages and shell completion are printed by the binary from the option
+# tables its parser and --help read (host/cmd_help.c), so none can drift.
+$(BUILD)/man/stamp: $(BUILD)/stratum
+	@rm -rf $(@D) && mkdir -p $(@D)
+	$(BUILD)/stratum help --man > $(@D)/stratum.1
+	for c in $$($(BUILD)/stratum help --commands); do \
+	  $(BUILD)/stratum help --man $$c > $(@D)/stratum-$$c.1 || exit 1; done
+	@touch $@
+
+$(BUILD)/completion/stratum.bash $(BUILD)/completion/_stratum: $(BUILD)/completion/%: $(BUILD)/stratum
+	@mkdir -p $(@D)
+	$(BUILD)/stratum help --completion $(if $(filter _stratum,$*),zsh,bash) > $@.tmp && mv $@.tmp $@
+
+# make install: the GNU directory variables; DESTDIR stages the tree (for
+# packaging and tests/check_install.c) without changing the paths inside it.
+# The binary finds its profiles as PREFIX/bin/../share/stratum/printers
+# (host/profile.h), so a staged tree runs where it is.
+PREFIX      ?= /usr/local
+BINDIR      ?= $(PREFIX)/bin
+DATAROOTDIR ?= $(PREFIX)/share
+MANDIR      ?= $(DATAROOTDIR)/man/man1
+DOCDIR      ?= $(DATAROOTDIR)/doc/stratum
+BASHCOMPDIR ?= $(DATAROOTDIR)/bash-completion/completions
+ZSHCOMPDIR  ?= $(DATAROOTDIR)/zsh/site-functions
+# systemd reads /usr/local/lib/systemd/system and /usr/lib/systemd/system
+UNITDIR     ?= $(PREFIX)/lib/systemd/system
+PRINTERS    := $(notdir $(wildcard printers/*.ini))
+DOCS        := README.md $(wildcard docs/*.md)
+
+install: all
+	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(DATAROOTDIR)/stratum/printers \
+	  $(DESTDIR)$(MANDIR) $(DESTDIR)$(DOCDIR)/examples $(DESTDIR)$(BASHCOMPDIR) \
+	  $(DESTDIR)$(ZSHCOMPDIR) $(DESTDIR)$(UNITDIR)
+	install -m 755 $(BUILD)/stratum $(DESTDIR)$(BINDIR)/stratum
+	install -m 644 $(PRINTERS:%=printers/%) $(DESTDIR)$(DATAROOTDIR)/stratum/printers/
+	install -m 644 $(BUILD)/man/*.1 $(DESTDIR)$(MANDIR)/
+	install -m 644 $(BUILD)/completion/stratum.bash $(DESTDIR)$(BASHCOMPDIR)/stratum
+	install -m 644 $(BUILD)/completion/_stratum $(DESTDIR)$(ZSHCOMPDIR)/_stratum
+	sed 's|^ExecStart=/usr/local/bin/stratum |ExecStart=$(BINDIR)/stratum |' \
+	  docs/stratum-serve.service > $(DESTDIR)$(UNITDIR)/stratum-serve.service
+	chmod 644 $(DESTDIR)$(UNITDIR)/stratum-serve.service
+	install -m 644 $(DOCS) docs/stratum-serve.service $(DESTDIR)$(DOCDIR)/
+	install -m 644 docs/examples/* $(DESTDIR)$(DOCDIR)/examples/
+
+# What install wrote, by name (other files in the same folders are kept);
+# then the folders of our own when they are empty.
+uninstall:
+	rm -f $(DESTDIR)$(BINDIR)/stratum $(PRINTERS:%=$(DESTDIR)$(DATAROOTDIR)/stratum/printers/%) \
+	  $(DESTDIR)$(MANDIR)/stratum.1 $(DESTDIR)$(MANDIR)/stratum-*.1 \
+	  $(DESTDIR)$(BASHCOMPDIR)/stratum $(DESTDIR)$(ZSHCOMPDIR)/_stratum \
+	  $(DESTDIR)$(UNITDIR)/stratum-serve.service \
+	  $(addprefix $(DESTDIR)$(DOCDIR)/,$(notdir $(DOCS)) stratum-serve.service) \
+	  $(addprefix $(DESTDIR)$(DOCDIR)/examples/,$(notdir $(wildcard docs/examples/*)))
+	-rmdir $(DESTDIR)$(DATAROOTDIR)/stratum/printers $(DESTDIR)$(DATAROOTDIR)/stratum \
+	  $(DESTDIR)$(DOCDIR)/examples $(DESTDIR)$(DOCDIR) 2>/dev/null
 
 clean:
 	rm -rf build

@@ -239,8 +239,8 @@ int cmd_printers(int argc, char **argv)
 	     "included, as a profile file (--printer is a synonym);\n"
 	     "with the settings options of 'stratum slice', as they\n"
 	     "resolve it:", NULL, &showing},
-	    {"--printer", 0, CMD_STRING, &show, CMD_OPTIONAL, 0, 0, NULL, NULL, NULL, NULL,
-	     &showing},
+	    {"--printer", 0, CMD_STRING, &show, CMD_OPTIONAL, 0, 0, NULL, "PRINTER",
+	     "the same as --show", NULL, &showing},
 	};
 	const struct cmd_spec spec = {.cmd = "stratum printers", .head = printers_head,
 				      CMD_TABLE(opts),
