@@ -255,7 +255,8 @@ DATAROOTDIR ?= $(PREFIX)/share
 MANDIR      ?= $(DATAROOTDIR)/man/man1
 DOCDIR      ?= $(DATAROOTDIR)/doc/stratum
 BASHCOMPDIR ?= $(DATAROOTDIR)/bash-completion/completions
-ZSHCOMPDIR  ?= $(DATAROOTDIR)/zsh/site-functions
+# zsh's fpath on Debian: site-functions under /usr/local, vendor-completions under /usr
+ZSHCOMPDIR  ?= $(DATAROOTDIR)/zsh/$(if $(filter /usr,$(PREFIX)),vendor-completions,site-functions)
 # systemd reads /usr/local/lib/systemd/system and /usr/lib/systemd/system
 UNITDIR     ?= $(PREFIX)/lib/systemd/system
 PRINTERS    := $(notdir $(wildcard printers/*.ini))

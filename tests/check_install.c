@@ -39,7 +39,7 @@ START_TEST(install_into_destdir_and_run_there)
 	    "bin/stratum", "share/stratum/printers/prusa-i3-mk3s.ini",
 	    "share/stratum/printers/flashforge-creator-pro.ini", "share/man/man1/stratum.1",
 	    "share/man/man1/stratum-slice.1", "share/man/man1/stratum-serve.1",
-	    "share/bash-completion/completions/stratum", "share/zsh/site-functions/_stratum",
+	    "share/bash-completion/completions/stratum", "share/zsh/vendor-completions/_stratum",
 	    "lib/systemd/system/stratum-serve.service", "share/doc/stratum/README.md",
 	    "share/doc/stratum/serve.md", "share/doc/stratum/examples/bracket.stl"};
 	char path[800];
