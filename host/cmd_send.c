@@ -69,7 +69,7 @@ static int send_parse(int argc, char **argv, struct send_args *a)
 	     "link speed, %.0f to %.0f (default: the profile's baudrate)", NULL, NULL},
 	};
 	const struct cmd_spec spec = {
-	    .cmd = SEND_CMD, CMD_TABLE(opts), .col = 11,
+	    .cmd = SEND_CMD, CMD_TABLE(opts), .col = 18,
 	    .head = "usage: stratum send FILE --port PATH --printer NAME [--json] [--baud N] "
 		    "[--force]\n"
 		    "Streams FILE to the printer on PATH (a serial device, a pty or\n"
