@@ -9,6 +9,7 @@
 #   make install [PREFIX=/usr/local] [DESTDIR=]  the binary, printer profiles,
 #                 man pages, bash and zsh completion, the systemd unit, docs
 #   make uninstall [PREFIX=...] [DESTDIR=]  removes what install put there
+#   make deb      build/stratum_VERSION_ARCH.deb (dpkg-deb) of the install under /usr
 #   make clean
 
 MAKEFLAGS += --no-print-directory
@@ -93,7 +94,7 @@ TEST_SRC := $(sort $(wildcard tests/*.c))
 LIB_OBJ  := $(LIB_SRC:%.c=$(BUILD)/%.o) $(CXX_SRC:%.cpp=$(BUILD)/%.o)
 TEST_OBJ := $(TEST_SRC:%.c=$(BUILD)/%.o)
 
-.PHONY: all deps demo check test test-asan bench fuzz clean layers install uninstall
+.PHONY: all deps demo check test test-asan bench fuzz clean layers install uninstall deb
 
 all: $(BUILD)/stratum $(BUILD)/man/stamp $(BUILD)/completion/stratum.bash \
 	$(BUILD)/completion/_stratum
@@ -276,6 +277,33 @@ install: all
 	chmod 644 $(DESTDIR)$(UNITDIR)/stratum-serve.service
 	install -m 644 $(DOCS) docs/stratum-serve.service $(DESTDIR)$(DOCDIR)/
 	install -m 644 docs/examples/* $(DESTDIR)$(DOCDIR)/examples/
+
+# make deb: the install with PREFIX=/usr as a Debian package, built with
+# dpkg-deb, the binary stripped as Debian does.  Depends: the packages that
+# hold the shared libraries the binary links directly (its NEEDED entries:
+# the runtime halves of the -dev packages of DEB_PACKAGES), as
+# dpkg-shlibdeps names them, without its version bounds.
+DEB_ROOT := $(BUILD)/deb/root
+deb: all
+	rm -rf $(BUILD)/deb
+	$(MAKE) install DESTDIR=$(CURDIR)/$(DEB_ROOT) PREFIX=/usr
+	strip --strip-unneeded $(DEB_ROOT)/usr/bin/stratum
+	mkdir -p $(DEB_ROOT)/DEBIAN
+	ver=$$($(BUILD)/stratum --version | cut -d' ' -f2); arch=$$(dpkg --print-architecture); \
+	deps=$$(objdump -p $(BUILD)/stratum | awk '/NEEDED/ { print $$2 }' | while read lib; do \
+	  path=$$(ldd $(BUILD)/stratum | awk -v l="$$lib" '$$1 == l { print $$3 }'); \
+	  [ -n "$$path" ] || { echo "make deb: $$lib not found" >&2; exit 1; }; \
+	  dpkg -S "$$path" 2>/dev/null || dpkg -S "$$(realpath "$$path")" || exit 1; \
+	done | cut -d: -f1 | sort -u | paste -sd, - | sed 's/,/, /g') || exit 1; \
+	printf '%s\n' "Package: stratum" "Version: $$ver" "Architecture: $$arch" \
+	  "Maintainer: Stratum maintainers <stratum@localhost>" "Depends: $$deps" \
+	  "Section: misc" "Priority: optional" \
+	  "Description: repair, slice and print 3D models on FFF printers" \
+	  " One program from a downloaded STL to a print: exact mesh repair, a slicer," \
+	  " and a host that streams G-code (Marlin) or X3G (Sailfish) over USB serial;" \
+	  " plus a farm node with an OctoPrint-compatible API (stratum serve)." \
+	  > $(DEB_ROOT)/DEBIAN/control; \
+	dpkg-deb --root-owner-group -Zgzip --build $(DEB_ROOT) $(BUILD)/stratum_$${ver}_$$arch.deb
 
 # What install wrote, by name (other files in the same folders are kept);
 # then the folders of our own when they are empty.

@@ -3,7 +3,8 @@
  * DESTDIR staging tree, the installed binary run from another directory
  * finds its profiles under PREFIX/share/stratum/printers (host/profile.h)
  * and slices; the unit names the installed binary and passes
- * `systemd-analyze verify`; uninstall leaves no file behind.  The binary
+ * `systemd-analyze verify`; uninstall leaves no file behind; `make deb`
+ * packages the same tree.  The binary
  * installed is the one under test ($STRATUM_BIN's build folder).
  */
 #include <check.h>
@@ -12,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "commands.h"
 #include "suites.h"
 #include "testutil.h"
 
@@ -111,6 +113,37 @@ START_TEST(installed_unit_verifies)
 }
 END_TEST
 
+/* make deb: a package of the /usr install whose Depends names the
+ * libraries' packages, and whose extracted binary runs. */
+START_TEST(deb_package)
+{
+	char bin[1024], deb[1200], x[512];
+
+	if (tu_sh(out, sizeof(out), "command -v dpkg-deb && command -v objdump") != 0) {
+		fprintf(stderr, "install: dpkg-deb or objdump missing; make deb not tried\n");
+		return;
+	}
+	ck_assert_msg(make("deb", "") == 0, "make deb: %s", out);
+	snprintf(bin, sizeof(bin), "%s", tu_bin());
+	snprintf(deb, sizeof(deb), "%s/stratum_" STRATUM_VERSION "_$(dpkg --print-architecture).deb",
+		 dirname(bin));
+	ck_assert_msg(tu_sh(out, sizeof(out), "dpkg-deb -f %s Package Depends", deb) == 0, "%s",
+		      out);
+	ck_assert_msg(strstr(out, "Package: stratum\n"), "%s", out);
+	ck_assert_msg(strstr(out, "libserialport0") && strstr(out, "libc6"), "%s", out);
+	ck_assert_int_eq(tu_sh(out, sizeof(out), "dpkg-deb -c %s", deb), 0);
+	ck_assert_msg(strstr(out, " ./usr/bin/stratum\n") &&
+			  strstr(out, " ./usr/share/stratum/printers/prusa-i3-mk3s.ini\n") &&
+			  strstr(out, " ./usr/lib/systemd/system/stratum-serve.service\n") &&
+			  strstr(out, " ./usr/share/man/man1/stratum-print.1\n"),
+		      "%s", out);
+	snprintf(x, sizeof(x), "%s", tu_path("deb-x"));
+	ck_assert_int_eq(tu_sh(out, sizeof(out), "dpkg-deb -x %s '%s' && cd / && " CLEAN_ENV
+			       " HOME=/nonexistent '%s/usr/bin/stratum' printers", deb, x, x), 0);
+	ck_assert_msg(strstr(out, "prusa-i3-mk3s "), "%s", out);
+}
+END_TEST
+
 Suite *install_suite(void)
 {
 	Suite *s = suite_create("install");
@@ -119,6 +152,7 @@ Suite *install_suite(void)
 	tcase_set_timeout(tc, 600);
 	tcase_add_test(tc, install_into_destdir_and_run_there);
 	tcase_add_test(tc, installed_unit_verifies);
+	tcase_add_test(tc, deb_package);
 	suite_add_tcase(s, tc);
 	return s;
 }
