@@ -165,8 +165,9 @@ void cmd_opt_help(const struct cmd_opt *o, char *buf, size_t cap);
 
 /*
  * cmd_describe - spec in another form than --help (host/cmd_help.c), for
- * `stratum help` and the build (Makefile: man pages, completion): "man" a
- * stratum-CMD(1) page, "bash" or "zsh" the command's branch of the
+ * `stratum help` and the build (Makefile: man pages, completion): "man" the
+ * stratum-CMD(1) page after its .TH and NAME (cmd_help adds those, which
+ * need the command's summary), "bash" or "zsh" the command's branch of the
  * completion script, "options" one line per option (NAME, -L or -, the kind:
  * flag, value or optional, then the settings options when spec->cfg) for
  * tests/check_help.c.  cmd_parse calls it for a first argument
