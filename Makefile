@@ -286,7 +286,7 @@ install: all
 DEB_ROOT := $(BUILD)/deb/root
 deb: all
 	rm -rf $(BUILD)/deb
-	$(MAKE) install DESTDIR=$(CURDIR)/$(DEB_ROOT) PREFIX=/usr
+	$(MAKE) install DESTDIR=$(abspath $(DEB_ROOT)) PREFIX=/usr
 	strip --strip-unneeded $(DEB_ROOT)/usr/bin/stratum
 	mkdir -p $(DEB_ROOT)/DEBIAN
 	ver=$$($(BUILD)/stratum --version | cut -d' ' -f2); arch=$$(dpkg --print-architecture); \
