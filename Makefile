@@ -6,6 +6,10 @@
 #   make bench    deps + build + benchmarks (bench/), figures for docs/benchmarks.md
 #   make fuzz [FUZZ_SECONDS=N]  every libFuzzer target of tests/fuzz/ for N s
 #                 (default 60), docs/reliability.md
+#   make install [PREFIX=/usr/local] [DESTDIR=]  the binary, printer profiles,
+#                 man pages, bash and zsh completion, the systemd unit, docs
+#   make uninstall [PREFIX=...] [DESTDIR=]  removes what install put there
+#   make deb      build/stratum_VERSION_ARCH.deb (dpkg-deb) of the install under /usr
 #   make clean
 
 MAKEFLAGS += --no-print-directory
@@ -92,9 +96,10 @@ TEST_SRC := $(sort $(wildcard tests/*.c))
 LIB_OBJ  := $(LIB_SRC:%.c=$(BUILD)/%.o) $(CXX_SRC:%.cpp=$(BUILD)/%.o)
 TEST_OBJ := $(TEST_SRC:%.c=$(BUILD)/%.o)
 
-.PHONY: all deps demo check test test-asan bench fuzz clean layers
+.PHONY: all deps demo check test test-asan bench fuzz clean layers install uninstall deb
 
-all: $(BUILD)/stratum
+all: $(BUILD)/stratum $(BUILD)/man/stamp $(BUILD)/completion/stratum.bash \
+	$(BUILD)/completion/_stratum
 
 $(BUILD)/%.o: %.c
 	@mkdir -p $(@D)
@@ -229,6 +234,90 @@ fuzz:
 	@$(MAKE) deps EXTRA_PACKAGES=clang
 	@$(MAKE) $(FUZZ_BINS) $(BUILD)/bench/gen_mesh $(BUILD)/stratum
 	tests/fuzz/run.sh $(FUZZ_BUILD) $(FUZZ_SECONDS) $(BUILD) $(FUZZ_CORPUS) $(FUZZ_NAMES)
+
+# Man pages and shell completion are printed by the binary from the option
+# tables its parser and --help read (host/cmd_help.c), so none can drift.
+$(BUILD)/man/stamp: $(BUILD)/stratum
+	@rm -rf $(@D) && mkdir -p $(@D)
+	$(BUILD)/stratum help --man > $(@D)/stratum.1
+	for c in $$($(BUILD)/stratum help --commands); do \
+	  $(BUILD)/stratum help --man $$c > $(@D)/stratum-$$c.1 || exit 1; done
+	@touch $@
+
+$(BUILD)/completion/stratum.bash $(BUILD)/completion/_stratum: $(BUILD)/completion/%: $(BUILD)/stratum
+	@mkdir -p $(@D)
+	$(BUILD)/stratum help --completion $(if $(filter _stratum,$*),zsh,bash) > $@.tmp && mv $@.tmp $@
+
+# make install: the GNU directory variables; DESTDIR stages the tree (for
+# packaging and tests/check_install.c) without changing the paths inside it.
+# The binary finds its profiles as PREFIX/bin/../share/stratum/printers
+# (host/profile.h), so a staged tree runs where it is.
+PREFIX      ?= /usr/local
+BINDIR      ?= $(PREFIX)/bin
+DATAROOTDIR ?= $(PREFIX)/share
+MANDIR      ?= $(DATAROOTDIR)/man/man1
+DOCDIR      ?= $(DATAROOTDIR)/doc/stratum
+BASHCOMPDIR ?= $(DATAROOTDIR)/bash-completion/completions
+# zsh's fpath on Debian: site-functions under /usr/local, vendor-completions under /usr
+ZSHCOMPDIR  ?= $(DATAROOTDIR)/zsh/$(if $(filter /usr,$(PREFIX)),vendor-completions,site-functions)
+# systemd reads /usr/local/lib/systemd/system and /usr/lib/systemd/system
+UNITDIR     ?= $(PREFIX)/lib/systemd/system
+PRINTERS    := $(notdir $(wildcard printers/*.ini))
+DOCS        := README.md $(wildcard docs/*.md)
+
+install: all
+	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(DATAROOTDIR)/stratum/printers \
+	  $(DESTDIR)$(MANDIR) $(DESTDIR)$(DOCDIR)/examples $(DESTDIR)$(BASHCOMPDIR) \
+	  $(DESTDIR)$(ZSHCOMPDIR) $(DESTDIR)$(UNITDIR)
+	install -m 755 $(BUILD)/stratum $(DESTDIR)$(BINDIR)/stratum
+	install -m 644 $(PRINTERS:%=printers/%) $(DESTDIR)$(DATAROOTDIR)/stratum/printers/
+	install -m 644 $(BUILD)/man/*.1 $(DESTDIR)$(MANDIR)/
+	install -m 644 $(BUILD)/completion/stratum.bash $(DESTDIR)$(BASHCOMPDIR)/stratum
+	install -m 644 $(BUILD)/completion/_stratum $(DESTDIR)$(ZSHCOMPDIR)/_stratum
+	sed 's|^ExecStart=/usr/local/bin/stratum |ExecStart=$(BINDIR)/stratum |' \
+	  docs/stratum-serve.service > $(DESTDIR)$(UNITDIR)/stratum-serve.service
+	chmod 644 $(DESTDIR)$(UNITDIR)/stratum-serve.service
+	install -m 644 $(DOCS) docs/stratum-serve.service $(DESTDIR)$(DOCDIR)/
+	install -m 644 docs/examples/* $(DESTDIR)$(DOCDIR)/examples/
+
+# make deb: the install with PREFIX=/usr as a Debian package, built with
+# dpkg-deb, the binary stripped as Debian does.  Depends: the packages that
+# hold the shared libraries the binary links directly (its NEEDED entries:
+# the runtime halves of the -dev packages of DEB_PACKAGES), as
+# dpkg-shlibdeps names them, without its version bounds.
+DEB_ROOT := $(BUILD)/deb/root
+deb: all
+	rm -rf $(BUILD)/deb
+	$(MAKE) install DESTDIR=$(abspath $(DEB_ROOT)) PREFIX=/usr
+	strip --strip-unneeded $(DEB_ROOT)/usr/bin/stratum
+	mkdir -p $(DEB_ROOT)/DEBIAN
+	ver=$$($(BUILD)/stratum --version | cut -d' ' -f2); arch=$$(dpkg --print-architecture); \
+	deps=$$(objdump -p $(BUILD)/stratum | awk '/NEEDED/ { print $$2 }' | while read lib; do \
+	  path=$$(ldd $(BUILD)/stratum | awk -v l="$$lib" '$$1 == l { print $$3 }'); \
+	  [ -n "$$path" ] || { echo "make deb: $$lib not found" >&2; exit 1; }; \
+	  dpkg -S "$$path" 2>/dev/null || dpkg -S "$$(realpath "$$path")" || exit 1; \
+	done | cut -d: -f1 | sort -u | paste -sd, - | sed 's/,/, /g') || exit 1; \
+	printf '%s\n' "Package: stratum" "Version: $$ver" "Architecture: $$arch" \
+	  "Maintainer: Stratum maintainers <stratum@localhost>" "Depends: $$deps" \
+	  "Section: misc" "Priority: optional" \
+	  "Description: repair, slice and print 3D models on FFF printers" \
+	  " One program from a downloaded STL to a print: exact mesh repair, a slicer," \
+	  " and a host that streams G-code (Marlin) or X3G (Sailfish) over USB serial;" \
+	  " plus a farm node with an OctoPrint-compatible API (stratum serve)." \
+	  > $(DEB_ROOT)/DEBIAN/control; \
+	dpkg-deb --root-owner-group -Zgzip --build $(DEB_ROOT) $(BUILD)/stratum_$${ver}_$$arch.deb
+
+# What install wrote, by name (other files in the same folders are kept);
+# then the folders of our own when they are empty.
+uninstall:
+	rm -f $(DESTDIR)$(BINDIR)/stratum $(PRINTERS:%=$(DESTDIR)$(DATAROOTDIR)/stratum/printers/%) \
+	  $(DESTDIR)$(MANDIR)/stratum.1 $(DESTDIR)$(MANDIR)/stratum-*.1 \
+	  $(DESTDIR)$(BASHCOMPDIR)/stratum $(DESTDIR)$(ZSHCOMPDIR)/_stratum \
+	  $(DESTDIR)$(UNITDIR)/stratum-serve.service \
+	  $(addprefix $(DESTDIR)$(DOCDIR)/,$(notdir $(DOCS)) stratum-serve.service) \
+	  $(addprefix $(DESTDIR)$(DOCDIR)/examples/,$(notdir $(wildcard docs/examples/*)))
+	-rmdir $(DESTDIR)$(DATAROOTDIR)/stratum/printers $(DESTDIR)$(DATAROOTDIR)/stratum \
+	  $(DESTDIR)$(DOCDIR)/examples $(DESTDIR)$(DOCDIR) 2>/dev/null
 
 clean:
 	rm -rf build

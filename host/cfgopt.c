@@ -11,27 +11,77 @@
 #include "settings.h"
 #include "st_error.h"
 
-/* The help text, also docs/slicing.md's "Settings options" block. */
-static const char usage_text[] =
-    "  --load FILE.ini         a PrusaSlicer config (File > Export Config, or\n"
-    "                          'prusa-slicer --save') or vendor bundle; repeat it:\n"
-    "                          later files replace the keys of earlier ones\n"
-    "  --printer-preset NAME   the [printer:NAME] preset of a bundle given with --load\n"
-    "  --print-preset NAME     its [print:NAME] (default: the printer's\n"
-    "                          default_print_profile)\n"
-    "  --filament-preset NAME  its [filament:NAME] (default: the printer's\n"
-    "                          default_filament_profile)\n"
-    "  --set KEY=VALUE         any key, as in a profile file; repeatable\n"
-    "  --KEY-NAME VALUE        PrusaSlicer's spelling of any setting of 'stratum\n"
-    "                          printers --keys': --fill-density 20%, --temperature 215,\n"
-    "                          --bed-temperature 60, --brim-width 5, --nozzle-diameter\n"
-    "                          0.6, --support-material (a flag; --no-support-material)\n"
+/*
+ * The settings options, described once: take() parses them by these
+ * names, and --help (also docs/slicing.md's "Settings options" block), the
+ * man pages and the completion print them from here.  --KEY-NAME stands
+ * for every declared setting (cfgopt_each_setting).
+ */
+enum { OPT_LOAD, OPT_PRINTER_PRESET, OPT_PRINT_PRESET, OPT_FILAMENT_PRESET, OPT_SET, OPT_KEY };
+static const struct cmd_opt cfg_opts[] = {
+    [OPT_LOAD] = {"--load", 0, CMD_CUSTOM, NULL, 0, 0, 0, NULL, "FILE.ini",
+		  "a PrusaSlicer config (File > Export Config, or\n"
+		  "'prusa-slicer --save') or vendor bundle; repeat it:\n"
+		  "later files replace the keys of earlier ones", NULL, NULL},
+    [OPT_PRINTER_PRESET] = {"--printer-preset", 0, CMD_CUSTOM, NULL, 0, 0, 0, NULL, "NAME",
+			    "the [printer:NAME] preset of a bundle given with --load", NULL,
+			    NULL},
+    [OPT_PRINT_PRESET] = {"--print-preset", 0, CMD_CUSTOM, NULL, 0, 0, 0, NULL, "NAME",
+			  "its [print:NAME] (default: the printer's\n"
+			  "default_print_profile)", NULL, NULL},
+    [OPT_FILAMENT_PRESET] = {"--filament-preset", 0, CMD_CUSTOM, NULL, 0, 0, 0, NULL, "NAME",
+			     "its [filament:NAME] (default: the printer's\n"
+			     "default_filament_profile)", NULL, NULL},
+    [OPT_SET] = {"--set", 0, CMD_CUSTOM, NULL, 0, 0, 0, NULL, "KEY=VALUE",
+		 "any key, as in a profile file; repeatable", NULL, NULL},
+    [OPT_KEY] = {"--KEY-NAME", 0, CMD_CUSTOM, NULL, 0, 0, 0, NULL, "VALUE",
+		 "PrusaSlicer's spelling of any setting of 'stratum\n"
+		 "printers --keys': --fill-density 20%%, --temperature 215,\n"
+		 "--bed-temperature 60, --brim-width 5, --nozzle-diameter\n"
+		 "0.6, --support-material (a flag; --no-support-material)", NULL, NULL},
+};
+#define CFG_COL 26 /* where the help text starts */
+static const char usage_order[] =
     "  Order: --printer, then the --load files, then --set and --KEY-NAME in the\n"
     "  order given.  Keys Stratum does not honour are named in one warning.\n";
 
+const struct cmd_opt *cfgopt_options(size_t *n)
+{
+	*n = sizeof(cfg_opts) / sizeof(cfg_opts[0]);
+	return cfg_opts;
+}
+
+void cfgopt_each_setting(void (*fn)(const char *opt, bool flag, const char *help, void *ctx),
+			 void *ctx)
+{
+	for (size_t i = 0; i < settings_count(); i++) {
+		const struct setting *s = settings_at(i);
+		char opt[72];
+		size_t k;
+
+		snprintf(opt, sizeof(opt), "--%s", s->name);
+		for (k = 2; opt[k]; k++)
+			opt[k] = opt[k] == '_' ? '-' : opt[k];
+		fn(opt, s->type == SETTING_BOOL, s->help, ctx);
+		if (s->type == SETTING_BOOL) {
+			snprintf(opt, sizeof(opt), "--no-%s", s->name);
+			for (k = 5; opt[k]; k++)
+				opt[k] = opt[k] == '_' ? '-' : opt[k];
+			fn(opt, true, s->help, ctx);
+		}
+	}
+}
+
+const char *cfgopt_usage_tail(void)
+{
+	return usage_order;
+}
+
 void cfgopt_usage(FILE *f)
 {
-	fputs(usage_text, f);
+	for (size_t k = 0; k < sizeof(cfg_opts) / sizeof(cfg_opts[0]); k++)
+		cmd_usage_opt(&cfg_opts[k], CFG_COL, f);
+	fputs(usage_order, f);
 }
 
 /* A layer setting key (copied into o) to value; 1, or ST_ERR_ARG with err set. */
@@ -80,41 +130,41 @@ static int take(struct cfgopt *o, int argc, char **argv, int *i, struct st_error
 	bool neg;
 	size_t n;
 
-	if (cmd_is_opt(a, "--load")) {
-		v = cmd_opt_value(argc, argv, i, "--load");
+	if (cmd_is_opt(a, cfg_opts[OPT_LOAD].name)) {
+		v = cmd_opt_value(argc, argv, i, cfg_opts[OPT_LOAD].name);
 		if (!v || !*v)
 			return st_error_set(err, ST_ERR_ARG, "--load needs a config file");
 		if (o->n == CFGOPT_MAX)
-			return add_key(o, "--load", "", 0, NULL, err);
+			return add_key(o, cfg_opts[OPT_LOAD].name, "", 0, NULL, err);
 		o->layer[o->n++] = (struct profile_layer){v, NULL, NULL, NULL};
 		o->has_files = true;
 		return 1;
 	}
 	{
-		static const char *const presets[] = {"--printer-preset", "--print-preset",
-						      "--filament-preset"};
 		const char **slot[] = {&o->presets.printer, &o->presets.print,
 				       &o->presets.filament};
 
 		for (int k = 0; k < 3; k++) {
-			if (!cmd_is_opt(a, presets[k]))
+			const char *name = cfg_opts[OPT_PRINTER_PRESET + k].name;
+
+			if (!cmd_is_opt(a, name))
 				continue;
-			v = cmd_opt_value(argc, argv, i, presets[k]);
+			v = cmd_opt_value(argc, argv, i, name);
 			if (!v || !*v)
 				return st_error_set(err, ST_ERR_ARG, "%s needs a preset name",
-						    presets[k]);
+						    name);
 			*slot[k] = v;
 			return 1;
 		}
 	}
-	if (cmd_is_opt(a, "--set")) {
-		const char *eq;
+	if (cmd_is_opt(a, cfg_opts[OPT_SET].name)) {
+		const char *eq, *name = cfg_opts[OPT_SET].name;
 
-		v = cmd_opt_value(argc, argv, i, "--set");
+		v = cmd_opt_value(argc, argv, i, name);
 		eq = v ? strchr(v, '=') : NULL;
 		if (!eq)
-			return add_key(o, "--set", "", 0, NULL, err);
-		return add_key(o, "--set", v, (size_t)(eq - v), eq + 1, err);
+			return add_key(o, name, "", 0, NULL, err);
+		return add_key(o, name, v, (size_t)(eq - v), eq + 1, err);
 	}
 	if (strncmp(a, "--", 2) || !(s = spelled(a, &neg, &n)))
 		return 0;

@@ -69,6 +69,20 @@ int cfgopt_load(const struct cfgopt *o, const char *cmd, const char *printer,
 /* cfgopt_usage - the options' help lines. */
 void cfgopt_usage(FILE *f);
 
+/* cfgopt_usage_tail - the lines cfgopt_usage ends with: the order the
+ * settings options apply in. */
+const char *cfgopt_usage_tail(void);
+
+struct cmd_opt;
+/* cfgopt_options - the options' table (*n entries; the last, --KEY-NAME,
+ * stands for cfgopt_each_setting's); parsed by cfgopt_parse, not cmd_parse. */
+const struct cmd_opt *cfgopt_options(size_t *n);
+
+/* cfgopt_each_setting - fn for every --KEY-NAME option, --no-KEY-NAME too
+ * for a bool (flag true: takes no value), with the setting's help line. */
+void cfgopt_each_setting(void (*fn)(const char *opt, bool flag, const char *help, void *ctx),
+			 void *ctx);
+
 /*
  * cfgopt_warn_unsupported - print "CMD: warning: not supported, ignored:
  * KEY=VALUE, ..." on stderr when the profile sets keys Stratum does not

@@ -133,6 +133,13 @@ int cmd_parse(const struct cmd_spec *spec, int argc, char **argv)
 			cmd_usage(spec, stdout);
 			return -1;
 		}
+		/* stratum help --man/--completion/--options (host/cmd_help.c):
+		 * the table described instead of parsed */
+		if (i == 1 && !strncmp(a, "--help=", 7)) {
+			if (cmd_describe(spec, a + 7, stdout))
+				return ST_EXIT_USAGE;
+			return -1;
+		}
 		if ((o = find_opt(spec, a)) != NULL) {
 			rc = take_opt(spec, o, argc, argv, &i);
 		} else if (spec->cfg && (rc = cfgopt_parse(spec->cfg, spec->cmd, argc, argv, &i))) {
@@ -184,16 +191,21 @@ static double value_of(const struct cmd_opt *o)
 	}
 }
 
-/* One option's help line(s): label, then the text, its '\n's indented to col. */
-static void usage_line(const struct cmd_opt *o, int col, FILE *f)
+void cmd_opt_help(const struct cmd_opt *o, char *buf, size_t cap)
 {
-	char label[80], text[600];
+	snprintf(buf, cap, o->help ? o->help : "", o->lo, o->hi, value_of(o));
+}
+
+/* One option's help line(s): label, then the text, its '\n's indented to col. */
+void cmd_usage_opt(const struct cmd_opt *o, int col, FILE *f)
+{
+	char label[80], text[CMD_HELP_MAX];
 	const char *sp = o->arg ? " " : "", *arg = o->arg ? o->arg : "";
 	int n = o->letter
 		    ? snprintf(label, sizeof(label), "  -%c, %s%s%s", o->letter, o->name, sp, arg)
 		    : snprintf(label, sizeof(label), "  %s%s%s", o->name, sp, arg);
 
-	snprintf(text, sizeof(text), o->help, o->lo, o->hi, value_of(o));
+	cmd_opt_help(o, text, sizeof(text));
 	fprintf(f, "%-*s%s", col, label, n >= col ? "  " : "");
 	for (const char *t = text; *t; t++) {
 		fputc(*t, f);
@@ -207,8 +219,7 @@ void cmd_usage(const struct cmd_spec *spec, FILE *f)
 {
 	fputs(spec->head, f);
 	for (size_t k = 0; k < spec->nopt; k++)
-		if (spec->opt[k].help)
-			usage_line(&spec->opt[k], spec->col, f);
+		cmd_usage_opt(&spec->opt[k], spec->col, f);
 	if (spec->mid)
 		fputs(spec->mid, f);
 	if (spec->cfg)

@@ -129,9 +129,10 @@ int cmd_ports(int argc, char **argv)
 	int rc = ST_EXIT_OK;
 
 	const struct cmd_opt opts[] = {
-	    CMD_OPT_FLAG("--json", &json, NULL),
+	    CMD_OPT_FLAG("--json", &json, "one JSON object on stdout instead of the table"),
 	    CMD_OPT_STRING("--printer", 0, &printer, CMD_NONEMPTY,
-	     "a printer name or file (see 'stratum printers')", "NAME", NULL),
+	     "a printer name or file (see 'stratum printers')", "NAME",
+	     "say which port '--port auto' picks for this printer"),
 	};
 	const struct cmd_spec spec = {
 	    .cmd = "stratum ports", CMD_TABLE(opts),

@@ -56,7 +56,8 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 	    {"--dry-run", 0, CMD_FLAG, &a->dry_run, 0, 0, 0, NULL, "-o OUT",
 	     "write the G-code (X3G for Sailfish printers unless OUT\n"
 	     "ends in .gcode) instead of printing", NULL, NULL},
-	    CMD_OPT_STRING("--output", 'o', &a->out, 0, NULL, "OUT", NULL),
+	    CMD_OPT_STRING("--output", 'o', &a->out, 0, NULL, "OUT",
+			   "where --dry-run writes"),
 	    CMD_OPT_FLAG("--preview", &a->preview,
 			 "write PNGs of the first layers (MODEL-layerN.png) first"),
 	    CMD_OPT_FLAG("--json", &a->json, "the summary as one JSON object on stdout"),
@@ -65,7 +66,8 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 			   "from the start of the last layer the printer confirmed:\n"
 			   "reheat, home X and Y only,\n"
 			   "restore Z and E.  Asks first; --yes answers for scripts"),
-	    {"--yes", 'y', CMD_FLAG, &a->yes, 0, 0, 0, NULL, NULL, NULL, NULL, NULL},
+	    {"--yes", 'y', CMD_FLAG, &a->yes, 0, 0, 0, NULL, NULL,
+	     "answer yes to --resume's question", NULL, NULL},
 	    CMD_OPT_FLAG("--force", &a->force, GUARD_FORCE_HELP),
 	    CMD_OPT_STRING("--sim-log", 0, &a->sim_log, 0, NULL, "FILE",
 			   "testing aid: the simulated printer's execution log"),

@@ -24,7 +24,9 @@ static const char printers_head[] =
     "       stratum printers --keys\n"
     "\n"
     "Lists the printer profiles (NAME.ini files) found in, in this order:\n"
-    "$STRATUM_PRINTERS_DIR, the printers/ folder of the build tree, and\n"
+    "$STRATUM_PRINTERS_DIR, $XDG_CONFIG_HOME/stratum/printers (default\n"
+    "~/.config/stratum/printers), PREFIX/share/stratum/printers beside the\n"
+    "installed binary (or the printers/ folder of the build tree), and\n"
     STRATUM_DATADIR ".  NAME is what --printer takes.\n"
     "\n";
 static const char printers_tail[] =
@@ -234,17 +236,16 @@ int cmd_printers(int argc, char **argv)
 	    CMD_OPT_FLAG("--keys", &keys,
 			 "every key a profile takes: the tables of docs/printers.md"),
 	    CMD_OPT_FLAG("--json", &json, "a JSON array (or, with --show, one object) on stdout"),
+	    {"--printer", 0, CMD_STRING, &show, CMD_OPTIONAL, 0, 0, NULL, "PRINTER",
+	     "the same as --show", NULL, &showing},
 	    {"--show", 0, CMD_STRING, &show, CMD_OPTIONAL, 0, 0, NULL, "PRINTER",
 	     "print every resolved setting of one profile, defaults\n"
-	     "included, as a profile file (--printer is a synonym);\n"
-	     "with the settings options of 'stratum slice', as they\n"
-	     "resolve it:", NULL, &showing},
-	    {"--printer", 0, CMD_STRING, &show, CMD_OPTIONAL, 0, 0, NULL, NULL, NULL, NULL,
-	     &showing},
+	     "included, as a profile file; with the settings options\n"
+	     "of 'stratum slice', as they resolve it:", NULL, &showing},
 	};
 	const struct cmd_spec spec = {.cmd = "stratum printers", .head = printers_head,
 				      CMD_TABLE(opts),
-				      .col = 18, .cfg = &cfg, .tail = printers_tail};
+				      .col = 21, .cfg = &cfg, .tail = printers_tail};
 	int rc;
 
 	memset(&cfg, 0, sizeof(cfg));

@@ -59,14 +59,17 @@ static int send_parse(int argc, char **argv, struct send_args *a)
 {
 	const struct cmd_opt opts[] = {
 	    CMD_OPT_FLAG("--force", &a->force, GUARD_FORCE_HELP),
-	    CMD_OPT_FLAG("--json", &a->json, NULL),
-	    CMD_OPT_STRING("--port", 0, &a->port, 0, NULL, "PATH", NULL),
-	    CMD_OPT_STRING("--printer", 0, &a->printer, 0, NULL, "NAME", NULL),
+	    CMD_OPT_FLAG("--json", &a->json, "the report as one JSON object on stdout"),
+	    CMD_OPT_STRING("--port", 0, &a->port, 0, NULL, "PATH",
+			   "a serial device, a pty, tcp://HOST:PORT or 'auto' (required)"),
+	    CMD_OPT_STRING("--printer", 0, &a->printer, 0, NULL, "NAME",
+			   "the printer profile ('stratum printers'); required"),
 	    {"--baud", 0, CMD_LONG, &a->baud, CMD_RANGE, 300, 10000000,
-	     "a whole number from %.0f to %.0f", "N", NULL, NULL, NULL},
+	     "a whole number from %.0f to %.0f", "N",
+	     "link speed, %.0f to %.0f (default: the profile's baudrate)", NULL, NULL},
 	};
 	const struct cmd_spec spec = {
-	    .cmd = SEND_CMD, CMD_TABLE(opts), .col = 11,
+	    .cmd = SEND_CMD, CMD_TABLE(opts), .col = 18,
 	    .head = "usage: stratum send FILE --port PATH --printer NAME [--json] [--baud N] "
 		    "[--force]\n"
 		    "Streams FILE to the printer on PATH (a serial device, a pty or\n"

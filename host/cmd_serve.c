@@ -81,6 +81,16 @@ int cmd_serve(int argc, char **argv)
 		fprintf(stderr, SERVE_CMD ": %s\n", err.msg);
 		return rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
 	}
+	{
+		unsigned mode;
+
+		if (node_config_exposed(config, cfg, &mode))
+			fprintf(stderr,
+				SERVE_CMD ": warning: %s holds API keys and can be read by other "
+					  "users (mode %04o); make it readable by the node's user "
+					  "only: chmod 600 %s\n",
+				config, mode, config);
+	}
 	if (listen && node_parse_listen(listen, cfg->listen_addr, sizeof(cfg->listen_addr),
 					&cfg->listen_port, &err)) {
 		fprintf(stderr, SERVE_CMD ": --listen: %s\n", err.msg);

@@ -29,7 +29,7 @@ static void sim_on_signal(int sig)
 	sim_stop_flag = 1;
 }
 
-static const char sim_help[] =
+static const char sim_head[] =
     "usage: stratum sim --dialect marlin|sailfish [--link PATH] [--log FILE]\n"
     "                   [--speedup K] [--corrupt P] [--drop P] [--latency MS]\n"
     "                   [--reset-at N] [--unplug-at N] [--baud N] [--seed N]\n"
@@ -37,22 +37,18 @@ static const char sim_help[] =
     "                   [--keep-rx] [--lose-ok P] [--no-firmware-name]\n"
     "                   [--freeze-at N [--freeze-s S]] [--busy-at N --busy-s S]\n"
     "  sailfish only:   [--buffer-size N] [--corrupt-replies P]\n"
+    "\n"
     "Runs a simulated printer on a pseudo-terminal and prints its path; stops on\n"
-    "Ctrl-C.  --link makes PATH a symlink to the pty while it runs.  N of\n"
-    "--reset-at/--unplug-at is a line number (marlin) or the number of the\n"
-    "executed command (sailfish).  Marlin variants and hangs: --keep-rx keeps\n"
-    "the bytes behind a bad line in the receive ring (32-bit boards; AVR boards\n"
-    "flush it), --lose-ok loses each \"ok\" with probability P, --no-firmware-name\n"
-    "answers M115 with a bare \"ok\", --freeze-at hangs the board at line N (for\n"
-    "S seconds, default for ever), --busy-at holds line N for S seconds\n"
-    "answering \"busy: processing\".\n";
+    "Ctrl-C.  It answers as the firmware does, with its buffer sizes and the\n"
+    "time its moves and heating take (docs/streaming.md).\n"
+    "\n";
 
 /* A number option of kind k in lo..hi (cut to a whole number); given: for one dialect only. */
-#define SIM_NUMBER(name, k, dest, lo, hi, given)                                                \
-	{name, 0, k, dest, CMD_RANGE | CMD_TRUNCATE, lo, hi, "a number from %g to %g", NULL, NULL, \
+#define SIM_NUMBER(name, k, dest, lo, hi, given, arg, help)                                    \
+	{name, 0, k, dest, CMD_RANGE | CMD_TRUNCATE, lo, hi, "a number from %g to %g", arg, help, \
 	 NULL, given}
-#define SIM_FLAG(name, dest) \
-	{name, 0, CMD_FLAG, dest, 0, 0, 0, NULL, NULL, NULL, NULL, &marlin_only}
+#define SIM_FLAG(name, dest, help) \
+	{name, 0, CMD_FLAG, dest, 0, 0, 0, NULL, NULL, help, NULL, &marlin_only}
 
 /* Point link at target: symlink to a temp name, then rename over link. */
 static int sim_make_link(const char *link, const char *target)
@@ -145,31 +141,57 @@ int cmd_sim(int argc, char **argv)
 	const char *dialect = NULL, *link = NULL;
 	const long line_max = 2147483647;
 	const struct cmd_opt opts[] = {
-	    SIM_FLAG("--advanced-ok", &o.advanced_ok),
-	    SIM_FLAG("--keep-rx", &o.keep_rx_on_error),
-	    SIM_FLAG("--no-firmware-name", &o.no_firmware_name),
-	    CMD_OPT_STRING("--dialect", 0, &dialect, 0, NULL, NULL, NULL),
-	    CMD_OPT_STRING("--link", 0, &link, 0, NULL, NULL, NULL),
-	    CMD_OPT_STRING("--log", 0, &o.log_path, 0, NULL, NULL, NULL),
-	    SIM_NUMBER("--speedup", CMD_DOUBLE, &o.speedup, 1e-3, 1e6, NULL),
-	    SIM_NUMBER("--rx-buffer", CMD_UNSIGNED, &o.rx_buffer, 8, 65536, &marlin_only),
-	    SIM_NUMBER("--bufsize", CMD_UNSIGNED, &o.bufsize, 1, 1024, &marlin_only),
-	    SIM_NUMBER("--buffer-size", CMD_UNSIGNED, &so.buffer_size, 64, 65536, &sailfish_only),
-	    SIM_NUMBER("--corrupt-replies", CMD_DOUBLE, &so.reply_corrupt_p, 0, 1, &sailfish_only),
-	    SIM_NUMBER("--lose-ok", CMD_DOUBLE, &o.reply_loss_p, 0, 1, &marlin_only),
-	    SIM_NUMBER("--freeze-at", CMD_LONG, &o.freeze_at_line, 1, line_max, &marlin_only),
-	    SIM_NUMBER("--busy-at", CMD_LONG, &o.busy_at_line, 1, line_max, &marlin_only),
-	    SIM_NUMBER("--freeze-s", CMD_DOUBLE, &o.freeze_s, 0, 86400, &marlin_only),
-	    SIM_NUMBER("--busy-s", CMD_DOUBLE, &o.busy_s, 0, 86400, &marlin_only),
-	    SIM_NUMBER("--corrupt", CMD_DOUBLE, &o.corrupt_p, 0, 1, NULL),
-	    SIM_NUMBER("--drop", CMD_DOUBLE, &o.drop_p, 0, 1, NULL),
-	    SIM_NUMBER("--latency", CMD_UNSIGNED, &o.latency_ms, 0, 60000, NULL),
-	    SIM_NUMBER("--reset-at", CMD_LONG, &o.reset_at_line, 1, line_max, NULL),
-	    SIM_NUMBER("--unplug-at", CMD_LONG, &o.unplug_at_line, 1, line_max, NULL),
-	    SIM_NUMBER("--baud", CMD_UNSIGNED, &o.baud, 300, 100000000, NULL),
-	    SIM_NUMBER("--seed", CMD_U64, &o.seed, 0, 9007199254740992.0, NULL),
+	    CMD_OPT_STRING("--dialect", 0, &dialect, 0, NULL, "D",
+			   "marlin or sailfish: the firmware to simulate (required)"),
+	    CMD_OPT_STRING("--link", 0, &link, 0, NULL, "PATH",
+			   "make PATH a symlink to the pty while it runs"),
+	    CMD_OPT_STRING("--log", 0, &o.log_path, 0, NULL, "FILE",
+			   "write every executed command to FILE"),
+	    SIM_NUMBER("--speedup", CMD_DOUBLE, &o.speedup, 1e-3, 1e6, NULL, "K",
+		       "run moves, heating and boot K times faster, %g to\n%.0f (default %g)"),
+	    SIM_NUMBER("--corrupt", CMD_DOUBLE, &o.corrupt_p, 0, 1, NULL, "P",
+		       "flip a bit of each received byte with probability P"),
+	    SIM_NUMBER("--drop", CMD_DOUBLE, &o.drop_p, 0, 1, NULL, "P",
+		       "lose each received byte with probability P"),
+	    SIM_NUMBER("--latency", CMD_UNSIGNED, &o.latency_ms, 0, 60000, NULL, "MS",
+		       "wait MS ms before each reply line (%g to %g)"),
+	    SIM_NUMBER("--reset-at", CMD_LONG, &o.reset_at_line, 1, line_max, NULL, "N",
+		       "reset the board at line N (marlin) or at the N-th\n"
+		       "executed command (sailfish)"),
+	    SIM_NUMBER("--unplug-at", CMD_LONG, &o.unplug_at_line, 1, line_max, NULL, "N",
+		       "pull the cable there (N as for --reset-at)"),
+	    SIM_NUMBER("--baud", CMD_UNSIGNED, &o.baud, 300, 100000000, NULL, "N",
+		       "link speed in bits/s, N/10 bytes/s, %.0f to %.0f\n(default %g)"),
+	    SIM_NUMBER("--seed", CMD_U64, &o.seed, 0, 9007199254740992.0, NULL, "N",
+		       "seed of the fault injection (0: a fixed default)"),
+	    SIM_NUMBER("--rx-buffer", CMD_UNSIGNED, &o.rx_buffer, 8, 65536, &marlin_only, "N",
+		       "marlin: receive ring, %g to %g bytes (RX_BUFFER_SIZE,\ndefault %g)"),
+	    SIM_NUMBER("--bufsize", CMD_UNSIGNED, &o.bufsize, 1, 1024, &marlin_only, "N",
+		       "marlin: command queue, %g to %g slots (BUFSIZE, default %g)"),
+	    SIM_FLAG("--advanced-ok", &o.advanced_ok,
+		     "marlin: answer \"ok N P B\" (ADVANCED_OK)"),
+	    SIM_FLAG("--keep-rx", &o.keep_rx_on_error,
+		     "marlin: keep the bytes behind a bad line in the receive\n"
+		     "ring (32-bit boards; AVR boards flush it)"),
+	    SIM_NUMBER("--lose-ok", CMD_DOUBLE, &o.reply_loss_p, 0, 1, &marlin_only, "P",
+		       "marlin: lose each \"ok\" with probability P"),
+	    SIM_FLAG("--no-firmware-name", &o.no_firmware_name,
+		     "marlin: answer M115 with a bare \"ok\""),
+	    SIM_NUMBER("--freeze-at", CMD_LONG, &o.freeze_at_line, 1, line_max, &marlin_only, "N",
+		       "marlin: hang the board at line N"),
+	    SIM_NUMBER("--freeze-s", CMD_DOUBLE, &o.freeze_s, 0, 86400, &marlin_only, "S",
+		       "marlin: for S seconds (default: for ever)"),
+	    SIM_NUMBER("--busy-at", CMD_LONG, &o.busy_at_line, 1, line_max, &marlin_only, "N",
+		       "marlin: hold line N, answering \"busy: processing\""),
+	    SIM_NUMBER("--busy-s", CMD_DOUBLE, &o.busy_s, 0, 86400, &marlin_only, "S",
+		       "marlin: for S seconds"),
+	    SIM_NUMBER("--buffer-size", CMD_UNSIGNED, &so.buffer_size, 64, 65536, &sailfish_only,
+		       "N", "sailfish: command buffer, %g to %g bytes (default %g)"),
+	    SIM_NUMBER("--corrupt-replies", CMD_DOUBLE, &so.reply_corrupt_p, 0, 1, &sailfish_only,
+		       "P", "sailfish: flip a bit of each reply byte with probability P"),
 	};
-	const struct cmd_spec spec = {.cmd = "stratum sim", .head = sim_help, CMD_TABLE(opts)};
+	const struct cmd_spec spec = {.cmd = "stratum sim", .head = sim_head, CMD_TABLE(opts),
+				      .col = 23};
 	int rc;
 
 	sim_marlin_options_init(&o);

@@ -14,6 +14,8 @@
 #include "st_error.h"
 #include "x3g.h"
 
+#define STRATUM_VERSION "0.1.0" /* --version and the man pages */
+
 int cmd_check(int argc, char **argv);	 /* host/cmd_check.c */
 int cmd_repair(int argc, char **argv);	 /* host/cmd_repair.c */
 int cmd_printers(int argc, char **argv); /* host/cmd_printers.c */
@@ -99,8 +101,10 @@ struct cmd_opt {
 	 * value"); a printf format given lo and hi. */
 	const char *wants;
 	const char *arg;  /* the value's name in the help ("OUT"), or NULL */
-	const char *help; /* printf format given lo and hi; '\n' continues the
-			   * text under itself; NULL: not listed */
+	const char *help; /* printf format given lo, hi and the default; '\n'
+			   * continues the text under itself.  Every option has
+			   * one: --help, the man page and the completion all list
+			   * the whole table (tests/check_help.c) */
 	bool (*read)(const char *v, void *dest); /* CMD_CUSTOM */
 	const char **given; /* when not NULL, set to NAME when the option is given */
 };
@@ -150,5 +154,43 @@ int cmd_parse(const struct cmd_spec *spec, int argc, char **argv);
 /* cmd_usage - spec's help text: head, the option lines, mid, the settings
  * options when spec->cfg, tail. */
 void cmd_usage(const struct cmd_spec *spec, FILE *f);
+
+#define CMD_HELP_MAX 600 /* bytes of one option's help text */
+
+/* cmd_usage_opt - o's lines of --help: the label, then the text from column col. */
+void cmd_usage_opt(const struct cmd_opt *o, int col, FILE *f);
+
+/* cmd_opt_help - o's help text with its lo, hi and default filled in. */
+void cmd_opt_help(const struct cmd_opt *o, char *buf, size_t cap);
+
+/*
+ * cmd_describe - spec in another form than --help (host/cmd_help.c), for
+ * `stratum help` and the build (Makefile: man pages, completion): "man" the
+ * stratum-CMD(1) page after its .TH and NAME (cmd_help adds those, which
+ * need the command's summary), "bash" or "zsh" the command's branch of the
+ * completion script, "options" one line per option (NAME, -L or -, the kind:
+ * flag, value or optional, then the settings options when spec->cfg) for
+ * tests/check_help.c.  cmd_parse calls it for a first argument
+ * "--help=FORMAT".  0, or -1 after a message for an unknown format.
+ */
+int cmd_describe(const struct cmd_spec *spec, const char *format, FILE *f);
+
+/* One subcommand of `stratum` (host/main.c's table). */
+struct cmd_entry {
+	const char *name;
+	int (*run)(int argc, char **argv);
+	const char *summary;
+};
+
+/*
+ * cmd_help - `stratum help [CMD]`: the overview or CMD's --help; and for the
+ * build `help --man [CMD]` (stratum(1) or stratum-CMD(1)), `help
+ * --completion bash|zsh` and `help --commands` (the names, one a line).
+ * argv[0] is "help"; the exit status (host/cmd_help.c).
+ */
+int cmd_help(const struct cmd_entry *cmds, size_t n, int argc, char **argv);
+
+/* cmd_overview - the top-level usage: every command and its summary. */
+void cmd_overview(const struct cmd_entry *cmds, size_t n, FILE *f);
 
 #endif

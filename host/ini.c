@@ -52,6 +52,14 @@ static bool good_key(const char *k, size_t len)
 	return len > 0;
 }
 
+size_t ini_comment_at(const char *s, size_t len)
+{
+	for (size_t i = 1; i < len; i++)
+		if ((s[i] == '#' || s[i] == ';') && is_blank(s[i - 1]))
+			return i;
+	return len;
+}
+
 /* One line without its line end. */
 static int one_line(const char *s, size_t len, int line, const char *origin,
 		    const struct ini_handler *h, void *ctx, struct st_error *err)
@@ -68,11 +76,7 @@ static int one_line(const char *s, size_t len, int line, const char *origin,
 	if (len == 0 || s[0] == '#' || s[0] == ';')
 		return 0;
 	if (h->inline_comments) {
-		for (size_t i = 1; i < len; i++)
-			if (s[i] == '#' && is_blank(s[i - 1])) {
-				len = i;
-				break;
-			}
+		len = ini_comment_at(s, len);
 		trim(&s, &len);
 	}
 	if (s[0] == '[') {

@@ -9,13 +9,15 @@
  *     file larger than INI_FILE_MAX is refused;
  *   - blanks (space, tab) around keys and values are dropped;
  *   - a line starting with '#' or ';' is a comment;
- *   - after a value, a '#' that follows a blank starts a comment only where
- *     the caller asks for it (inline_comments: the node's configuration).
- *     Profiles keep it as part of the value: their G-code values hold ' #'
- *     (PrusaSlicer's own bundles have start_gcode = ; # # # START Header...)
- *     and cutting them there would drop G-code silently.  A '#' that does
- *     not follow a blank (API keys, URLs, colours) is always part of the
- *     value;
+ *   - after a value, a '#' or ';' that follows a blank starts a comment
+ *     (ini_comment_at) where the caller asks for it: on every line with
+ *     inline_comments (the node's configuration), or in the values of the
+ *     keys it knows are not text (profiles: numbers, lists, choices; see
+ *     profile_check.c).  Profiles keep it in text values: their G-code
+ *     holds ' ;' and ' #' (PrusaSlicer's own bundles have start_gcode = ;
+ *     # # # START Header...) and cutting there would drop G-code silently.
+ *     A '#' or ';' that does not follow a blank (API keys, URLs, colours,
+ *     "a";"b" lists) is always part of the value;
  *   - a line starting with '[' is a section line, handed to the caller;
  *   - every other line is KEY = VALUE, KEY of letters, digits and '_'; the
  *     value is everything after the first '=' (may be empty).
@@ -51,8 +53,8 @@ struct ini_handler {
 	 * lines are refused as "sections are not supported". */
 	int (*section)(void *ctx, int line, const char *text, size_t len, struct st_error *err);
 	int (*entry)(void *ctx, const struct ini_entry *e, struct st_error *err);
-	/* true: a '#' after a blank ends the line (section and key lines);
-	 * so "key = #x" has an empty value. */
+	/* true: a '#' or ';' after a blank ends the line (section and key
+	 * lines); so "key = #x" has an empty value. */
 	bool inline_comments;
 	/* true: a key line whose key is not letters, digits and '_' is
 	 * skipped (PrusaSlicer's own configs and bundles: its reader skips
@@ -78,6 +80,13 @@ int ini_parse(const char *text, size_t len, const char *origin, const struct ini
  * ST_ERR_PARSE or ST_ERR_NOMEM; *text is NULL on error.
  */
 int ini_read_file(const char *path, char **text, size_t *len, struct st_error *err);
+
+/*
+ * ini_comment_at - where an inline comment starts in s[0..len): the first
+ * '#' or ';' after a blank (not at 0), else len.  Blanks before it are the
+ * caller's to trim.
+ */
+size_t ini_comment_at(const char *s, size_t len);
 
 /*
  * ini_show - copy at most 40 bytes of s[0..len) into buf for a message,

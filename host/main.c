@@ -7,54 +7,42 @@
 #include "commands.h"
 #include "st_error.h"
 
-#define STRATUM_VERSION "0.1.0"
-
-struct command {
-	const char *name;
-	int (*run)(int argc, char **argv);
-	const char *summary;
-};
-
-static const struct command commands[] = {
+static const struct cmd_entry commands[] = {
 	{"check", cmd_check, "report a mesh's topology and whether it is printable"},
 	{"repair", cmd_repair, "repair a mesh exactly into printable solids and write STL"},
 	{"printers", cmd_printers, "list the printer profiles"},
 	{"ports", cmd_ports, "list serial ports and the printers they match"},
 	{"slice", cmd_slice, "slice a mesh into G-code for a printer"},
 	{"print", cmd_print, "repair, slice and print a model in one go (simulated printer by default)"},
-	{"send", cmd_send, "stream a G-code file to a Marlin printer"},
+	{"send", cmd_send, "stream a G-code or X3G file to a printer (Marlin or Sailfish)"},
 	{"sim", cmd_sim, "run a simulated printer on a pseudo-terminal"},
 	{"preview", cmd_preview, "draw one layer of a G-code file as SVG or PNG"},
 	{"x3g", cmd_x3g, "translate G-code to X3G for Sailfish printers, or list an X3G file"},
 	{"serve", cmd_serve, "run the farm node: OctoPrint-compatible API and job queue"},
 };
 
-static void usage(FILE *out)
-{
-	fprintf(out, "usage: stratum <command> [options]\n\ncommands:\n");
-	for (size_t i = 0; i < sizeof(commands) / sizeof(commands[0]); i++)
-		fprintf(out, "  %-10s %s\n", commands[i].name, commands[i].summary);
-	fprintf(out, "\n'stratum <command> --help' describes a command's options.\n");
-}
+#define NCOMMANDS (sizeof(commands) / sizeof(commands[0]))
 
 int main(int argc, char **argv)
 {
 	if (argc < 2) {
-		usage(stderr);
+		cmd_overview(commands, NCOMMANDS, stderr);
 		return ST_EXIT_USAGE;
 	}
-	if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {
-		usage(stdout);
+	if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
+		cmd_overview(commands, NCOMMANDS, stdout);
 		return ST_EXIT_OK;
 	}
+	if (!strcmp(argv[1], "help"))
+		return cmd_help(commands, NCOMMANDS, argc - 1, argv + 1);
 	if (!strcmp(argv[1], "--version")) {
 		printf("stratum %s\n", STRATUM_VERSION);
 		return ST_EXIT_OK;
 	}
-	for (size_t i = 0; i < sizeof(commands) / sizeof(commands[0]); i++)
+	for (size_t i = 0; i < NCOMMANDS; i++)
 		if (!strcmp(argv[1], commands[i].name))
 			return commands[i].run(argc - 1, argv + 1);
 	fprintf(stderr, "stratum: unknown command '%s'\n", argv[1]);
-	usage(stderr);
+	cmd_overview(commands, NCOMMANDS, stderr);
 	return ST_EXIT_USAGE;
 }

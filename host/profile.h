@@ -15,11 +15,14 @@
  *   1. $STRATUM_PRINTERS_DIR, when set and not empty;
  *   2. the user's profiles, $XDG_CONFIG_HOME/stratum/printers (default
  *      ~/.config/stratum/printers), when it exists;
- *   3. the printers/ folder beside the build tree: <exe dir>/../printers, or
- *      <exe dir>/../../printers when the first does not exist
+ *   3. the profiles installed beside the executable: <exe dir>/../share/
+ *      stratum/printers (PREFIX/bin/stratum of `make install`, wherever
+ *      PREFIX and DESTDIR put it); else the printers/ folder of the source
+ *      tree: <exe dir>/../printers, or <exe dir>/../../printers
  *      (build/stratum and build/asan/stratum both find the source tree's);
- *   4. STRATUM_DATADIR, the installed profiles (default
- *      /usr/local/share/stratum/printers);
+ *      the first of these three that exists;
+ *   4. STRATUM_DATADIR, the profiles of the default install (default
+ *      /usr/local/share/stratum/printers), for a binary copied elsewhere;
  *   5. a [printer:NAME] preset of PrusaSlicer's installed vendor bundles
  *      ($STRATUM_VENDOR_DIR, else PROFILE_VENDOR_DIR), by its name ("Original
  *      Prusa i3 MK3S & MK3S+") or its slug (original-prusa-i3-mk3s-mk3s:

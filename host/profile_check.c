@@ -7,6 +7,8 @@
  */
 #include "profile_int.h"
 
+#include "ini.h"
+
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -247,6 +249,31 @@ static int resolve_protocol(struct loader *L, struct pending *pend)
 	return 0;
 }
 
+/*
+ * Cut the comment after the value of every known key that is not text
+ * ("layer_height = 0.2   ; fine", "fill_pattern = gyroid # strong"), in
+ * place, before anything reads the values: the typed fields, --show and the
+ * placeholder variables all see the value alone.  Text (names, G-code,
+ * per-filament "a";"b") keeps its ' ;' and ' #' (ini.h).
+ */
+static void cut_comments(struct profile *p, const struct key_def *defs, size_t ndefs)
+{
+	for (size_t i = 0; i < ndefs; i++) {
+		const struct profile_kv *kv;
+		size_t len;
+
+		if (defs[i].type == KT_STRING || defs[i].type == KT_FIRST_STRING)
+			continue;
+		kv = prof_find_kv(p->keys, defs[i].key);
+		if (!kv)
+			continue;
+		len = ini_comment_at(kv->value, strlen(kv->value));
+		while (len && (kv->value[len - 1] == ' ' || kv->value[len - 1] == '\t'))
+			len--;
+		kv->value[len] = '\0';
+	}
+}
+
 /* Pass 2: type every known key, derive defaults that follow other keys, check. */
 int prof_apply_all(struct loader *L)
 {
@@ -256,6 +283,7 @@ int prof_apply_all(struct loader *L)
 	const struct key_def *defs = prof_defs(&ndefs);
 	int rc;
 
+	cut_comments(p, defs, ndefs);
 	rc = resolve_extruders(L, &pend);
 	if (rc)
 		return rc;

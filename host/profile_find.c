@@ -48,10 +48,14 @@ void profile_search_dirs(struct profile_dirs *dirs)
 		slash = strrchr(exe, '/');
 		if (slash) {
 			*slash = '\0'; /* the executable's directory */
-			/* <exe dir>/../printers, else <exe dir>/../../printers */
-			for (int up = 1; up <= 2; up++) {
-				snprintf(cand, sizeof(cand), "%s/%s", exe,
-					 up == 1 ? "../printers" : "../../printers");
+			/* PREFIX/bin/stratum: PREFIX/share/stratum/printers (make
+			 * install, under any PREFIX and DESTDIR); else the source
+			 * tree's, <exe dir>/../printers or <exe dir>/../../printers */
+			static const char *const rel[] = {"../share/stratum/printers",
+							  "../printers", "../../printers"};
+
+			for (size_t up = 0; up < sizeof(rel) / sizeof(rel[0]); up++) {
+				snprintf(cand, sizeof(cand), "%s/%s", exe, rel[up]);
 				if (realpath(cand, real)) {
 					struct stat st;
 					if (stat(real, &st) == 0 && S_ISDIR(st.st_mode)) {

@@ -123,21 +123,6 @@ static void item_where(char *buf, size_t cap, int i, int n)
 		buf[0] = '\0';
 }
 
-/* A number, blanks, then a '#' comment: BIBO's bundle writes "deretract_speed
- * = 0 # Setting this value to 0 uses the retract speed", which PrusaSlicer
- * reads as 0 (its number reader stops at the blank). */
-static bool number_then_comment(const struct item *it, double *out)
-{
-	const char *hash = memchr(it->s, '#', it->len);
-	size_t len = hash ? (size_t)(hash - it->s) : 0;
-
-	if (!hash || len == 0 || (it->s[len - 1] != ' ' && it->s[len - 1] != '\t'))
-		return false;
-	while (len > 0 && (it->s[len - 1] == ' ' || it->s[len - 1] == '\t'))
-		len--;
-	return len > 0 && parse_number(it->s, len, out);
-}
-
 /* A number item checked against decl's range; i of n names it in messages. */
 static int prof_number_item(struct loader *L, const struct profile_kv *kv,
 			    const struct setting *decl, const struct item *it, int i, int n,
@@ -146,7 +131,7 @@ static int prof_number_item(struct loader *L, const struct profile_kv *kv,
 	char tok[INI_SHOW_MAX], where[48], range[96];
 
 	item_where(where, sizeof(where), i, n);
-	if (!parse_number(it->s, it->len, out) && !number_then_comment(it, out)) {
+	if (!parse_number(it->s, it->len, out)) {
 		ini_show(tok, sizeof(tok), it->s, it->len);
 		return prof_key_error(L, kv, NULL, ST_ERR_PARSE,
 				 "%s'%s' is not a number (write digits with an optional sign and "

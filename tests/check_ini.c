@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "ini.h"
 #include "profile.h"
@@ -29,7 +30,8 @@ struct quirk {
 	bool bom, crlf;	   /* a BOM before the whole file; every LF a CRLF */
 	int bad_line;	   /* 0: both load; else the line (in text, from 1) both refuse */
 	const char *value; /* data_dir as both read it (when they load) */
-	const char *node_value; /* where the node differs: its inline ' #' comments */
+	const char *node_value; /* where the node differs: its inline ' #' and ' ;' comments
+				 * (data_dir is text to a profile, which keeps them) */
 };
 
 #define Q(s) s, sizeof(s) - 1
@@ -52,7 +54,7 @@ static const struct quirk quirks[] = {
 	{"no blanks around =", Q("data_dir=/d\n"), false, false, 0, "/d", NULL},
 	{"first = splits", Q("data_dir = /d = e\n"), false, false, 0, "/d = e", NULL},
 	{"# inside a value", Q("data_dir = /d#1\n"), false, false, 0, "/d#1", NULL},
-	{"; after a value", Q("data_dir = /d ; x\n"), false, false, 0, "/d ; x", NULL},
+	{"; after a value", Q("data_dir = /d ; x\n"), false, false, 0, "/d ; x", "/d"},
 	{"blank # after a value", Q("data_dir = /d   # where\n"), false, false, 0,
 	 "/d   # where", "/d"},
 	{"tab # after a value", Q("data_dir = /d\t#x#y\n"), false, false, 0, "/d\t#x#y", "/d"},
@@ -204,7 +206,7 @@ START_TEST(test_node_inline_comments)
 			   "password = # a value cannot begin with '#'\n");
 	ck_assert_int_eq(node_config_load(path, c, &err), ST_ERR_RANGE);
 	ck_assert_msg(strstr(err.msg, "line 11: password: empty value"), "%s", err.msg);
-	tu_write_str(path, INLINE_HEAD "roles = read, upload # two\n" INLINE_PRINTER);
+	tu_write_str(path, INLINE_HEAD "roles = read, upload ; two\n" INLINE_PRINTER);
 	ck_assert_msg(node_config_load(path, c, &err) == 0, "%s", err.msg);
 	ck_assert_str_eq(c->data_dir, "/srv/a#b");
 	ck_assert_str_eq(c->keys[0].secret, "0123456789#abcdef");
@@ -212,6 +214,123 @@ START_TEST(test_node_inline_comments)
 	free(c);
 #undef INLINE_HEAD
 #undef INLINE_PRINTER
+}
+END_TEST
+
+/* A config holding API keys that its group or others can read is named
+ * (node_config_exposed), and `stratum serve` warns before it starts. */
+START_TEST(test_node_config_mode_warning)
+{
+	struct node_config *c = calloc(1, sizeof(*c));
+	struct st_error err = {0};
+	char path[512], out[4096], blocker[512];
+	unsigned mode = 0;
+
+	ck_assert_ptr_nonnull(c);
+	snprintf(path, sizeof(path), "%s", tu_path("exposed.ini"));
+	snprintf(blocker, sizeof(blocker), "%s", tu_path("not-a-dir"));
+	tu_write_str(blocker, "a file where the data directory would go\n");
+	/* data_dir cannot be made, so serve stops (65) right after the warning */
+	snprintf(out, sizeof(out), "%sdata_dir = %s/data\n", node_head, blocker);
+	tu_write_str(path, out);
+	ck_assert_msg(node_config_load(path, c, &err) == 0, "%s", err.msg);
+	chmod(path, 0644);
+	ck_assert(node_config_exposed(path, c, &mode));
+	ck_assert_uint_eq(mode, 0644);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "serve --config '%s'", path), 65);
+	ck_assert_msg(strstr(out, "warning: ") && strstr(out, "holds API keys and can be read by "
+							      "other users (mode 0644)"),
+		      "%s", out);
+	chmod(path, 0640);
+	ck_assert(node_config_exposed(path, c, &mode));
+	chmod(path, 0600);
+	ck_assert(!node_config_exposed(path, c, &mode));
+	ck_assert_int_eq(tu_run(out, sizeof(out), "serve --config '%s'", path), 65);
+	ck_assert_msg(!strstr(out, "warning"), "%s", out);
+	free(c);
+}
+END_TEST
+
+/* A profile's comments after values: cut from every number, list, choice
+ * and bool, kept in text (G-code and names hold ' ;' and ' #'). */
+START_TEST(test_profile_inline_comments)
+{
+	struct profile *p = NULL;
+	struct st_error err = {0};
+	const char *path = tu_path("inline-profile.ini");
+
+	tu_write_str(path, "layer_height = 0.25 ; fine\n"
+			   "perimeters = 4\t# walls\n"
+			   "fill_pattern = gyroid ; strong\n"
+			   "fill_density = 15% # light\n"
+			   "nozzle_diameter = 0.4, 0.4   # two, so two extruders\n"
+			   "support_material = 1 ; on\n"
+			   "bed_shape = 0x0,220x0,220x220,0x220 # square\n"
+			   "start_gcode = G28 ; home all # then wait\n"
+			   "printer_model = MK ; 3 # x\n");
+	ck_assert_msg(profile_load_file(path, &p, &err) == 0, "%s", err.msg);
+	ck_assert_double_eq_tol(p->layer_height, 0.25, 1e-12);
+	ck_assert_int_eq(p->perimeters, 4);
+	ck_assert_str_eq(p->fill_pattern, "gyroid");
+	ck_assert_double_eq_tol(p->fill_density, 15, 1e-12);
+	ck_assert_int_eq(p->extruder_count, 2);
+	ck_assert(p->support_material);
+	ck_assert_double_eq_tol(p->bed_max_x, 220, 1e-12);
+	ck_assert_str_eq(p->start_gcode, "G28 ; home all # then wait");
+	ck_assert_str_eq(p->printer_model, "MK ; 3 # x");
+	ck_assert_str_eq(profile_get(p, "fill_pattern"), "gyroid"); /* the placeholder's too */
+	profile_free(p);
+	/* run into the value, ';' or '#' is part of it, and refused in a number */
+	tu_write_str(path, "layer_height = 0.25;fine\n");
+	ck_assert_int_eq(profile_load_file(path, &p, &err), ST_ERR_PARSE);
+	ck_assert_msg(strstr(err.msg, "'0.25;fine' is not a number"), "%s", err.msg);
+}
+END_TEST
+
+/* Every ```ini block of a doc, written out as it stands: serve.md's load as
+ * node configs, printers.md's as profiles.  The count guards against a
+ * block that stops being one. */
+START_TEST(test_doc_blocks_load)
+{
+	static const struct {
+		const char *doc;
+		bool node;
+		int min;
+	} docs[] = {{"docs/serve.md", true, 1}, {"docs/printers.md", false, 1}};
+
+	for (size_t d = 0; d < sizeof(docs) / sizeof(docs[0]); d++) {
+		size_t len;
+		char *text = tu_slurp(docs[d].doc, &len), *b = text;
+		int n = 0;
+
+		while ((b = strstr(b, "\n```ini\n")) != NULL) {
+			char *start = b + 8, *end = strstr(start, "\n```");
+			const char *path = tu_path("doc-block.ini");
+			struct st_error err = {0};
+
+			ck_assert_msg(end != NULL, "%s: an ini block is not closed", docs[d].doc);
+			end[1] = '\0';
+			tu_write_str(path, start);
+			if (docs[d].node) {
+				struct node_config *c = calloc(1, sizeof(*c));
+
+				ck_assert_ptr_nonnull(c);
+				ck_assert_msg(node_config_load(path, c, &err) == 0,
+					      "%s, block %d: %s", docs[d].doc, n + 1, err.msg);
+				free(c);
+			} else {
+				struct profile *p = NULL;
+
+				ck_assert_msg(profile_load_file(path, &p, &err) == 0,
+					      "%s, block %d: %s", docs[d].doc, n + 1, err.msg);
+				profile_free(p);
+			}
+			n++;
+			b = end + 2;
+		}
+		ck_assert_msg(n >= docs[d].min, "%s: %d ini blocks", docs[d].doc, n);
+		free(text);
+	}
 }
 END_TEST
 
@@ -262,6 +381,9 @@ Suite *ini_suite(void)
 	tcase_add_test(tc, test_line_limit_agrees);
 	tcase_add_test(tc, test_node_inline_comments);
 	tcase_add_test(tc, test_doc_example_loads);
+	tcase_add_test(tc, test_profile_inline_comments);
+	tcase_add_test(tc, test_doc_blocks_load);
+	tcase_add_test(tc, test_node_config_mode_warning);
 	suite_add_tcase(s, tc);
 	return s;
 }

@@ -37,7 +37,8 @@ static const struct suite_entry suites[] = {
 	{"preview", preview_suite},
 	{"portpick", portpick_suite}, {"send", send_suite},
 	{"guard", guard_suite},	      {"print", print_suite},
-	{"cli", cli_suite},
+	{"cli", cli_suite},	      {"help", help_suite},
+	{"install", install_suite},
 };
 #define NSUITES (sizeof(suites) / sizeof(suites[0]))
 

@@ -217,19 +217,13 @@ char *tu_read_between(const char *path, char *buf, size_t cap, const char *begin
 	return a;
 }
 
-int tu_run(char *out, size_t cap, const char *args_fmt, ...)
+/* Run cmd through the shell, its output into out; the exit status or -1. */
+static int run_shell(char *out, size_t cap, const char *cmd)
 {
-	const char *bin = getenv("STRATUM_BIN");
-	char args[2048], cmd[2300];
-	va_list ap;
 	FILE *p;
 	size_t n = 0;
 	int status;
 
-	va_start(ap, args_fmt);
-	vsnprintf(args, sizeof(args), args_fmt, ap);
-	va_end(ap);
-	snprintf(cmd, sizeof(cmd), "%s %s 2>&1", bin ? bin : "build/stratum", args);
 	p = popen(cmd, "r");
 	ck_assert_msg(p != NULL, "cannot run %s", cmd);
 	while (cap > 1 && n < cap - 1) {
@@ -250,6 +244,33 @@ int tu_run(char *out, size_t cap, const char *args_fmt, ...)
 	if (!WIFEXITED(status))
 		return -1;
 	return WEXITSTATUS(status);
+}
+
+int tu_run(char *out, size_t cap, const char *args_fmt, ...)
+{
+	const char *bin = getenv("STRATUM_BIN");
+	char args[2048], cmd[2300];
+	va_list ap;
+
+	va_start(ap, args_fmt);
+	vsnprintf(args, sizeof(args), args_fmt, ap);
+	va_end(ap);
+	snprintf(cmd, sizeof(cmd), "%s %s 2>&1", bin ? bin : "build/stratum", args);
+	return run_shell(out, cap, cmd);
+}
+
+int tu_sh(char *out, size_t cap, const char *cmd_fmt, ...)
+{
+	char cmd[4096];
+	va_list ap;
+	int n;
+
+	va_start(ap, cmd_fmt);
+	n = vsnprintf(cmd, sizeof(cmd) - 8, cmd_fmt, ap);
+	va_end(ap);
+	ck_assert_msg(n >= 0 && (size_t)n < sizeof(cmd) - 8, "command too long: %s", cmd);
+	strcat(cmd, " 2>&1");
+	return run_shell(out, cap, cmd);
 }
 
 int tu_file_exists(const char *path)

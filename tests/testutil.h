@@ -92,6 +92,9 @@ struct mesh *tu_round_trip(const struct mesh *m, const char *name, enum meshio_f
 int tu_run(char *out, size_t cap, const char *args_fmt, ...)
 	__attribute__((format(printf, 3, 4)));
 
+/* tu_sh - tu_run for any shell command line (stderr captured too). */
+int tu_sh(char *out, size_t cap, const char *cmd_fmt, ...) __attribute__((format(printf, 3, 4)));
+
 /* tu_bin - the binary under test: $STRATUM_BIN, else build/stratum. */
 const char *tu_bin(void);
 

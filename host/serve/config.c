@@ -2,8 +2,8 @@
  * config.c - the node's configuration (node.h node_config_load): [node],
  * [key NAME], [printer NAME] and [mqtt] sections of `key = value` lines,
  * read by the same ini reader as printer profiles (ini.h), so both take the
- * same line ends, BOM, blanks, comments and key syntax; here a ' #' also
- * starts a comment after a value.  Unknown sections and keys are errors so
+ * same line ends, BOM, blanks, comments and key syntax; here a ' #' or
+ * ' ;' also starts a comment after a value.  Unknown sections and keys are errors so
  * a typo never silently leaves a printer unprotected.
  */
 #include <arpa/inet.h>
@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "ini.h"
 #include "node.h"
@@ -506,6 +507,16 @@ out_free:
 	free(p.scratch);
 	free(c);
 	return rc;
+}
+
+bool node_config_exposed(const char *path, const struct node_config *cfg, unsigned *mode)
+{
+	struct stat st;
+
+	if (!cfg->nkeys || stat(path, &st) != 0)
+		return false;
+	*mode = (unsigned)st.st_mode & 07777u;
+	return (st.st_mode & 077) != 0;
 }
 
 int node_parse_listen(const char *s, char *addr, size_t cap, uint16_t *port,

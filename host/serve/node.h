@@ -89,7 +89,7 @@ struct node_config {
 
 /*
  * node_config_load - read and check a node config (docs/serve.md): the
- * syntax of host/ini.h, with a ' #' after a value starting a comment.
+ * syntax of host/ini.h, with a ' #' or ' ;' after a value starting a comment.
  * The whole file is checked before *cfg is used: any bad line rejects it.
  * Returns 0, or ST_ERR_IO (cannot read), ST_ERR_PARSE (syntax, unknown
  * section or key, duplicate), ST_ERR_RANGE (a value out of range, no key,
@@ -97,6 +97,14 @@ struct node_config {
  * ..." in err.
  */
 int node_config_load(const char *path, struct node_config *cfg, struct st_error *err);
+
+/*
+ * node_config_exposed - whether the config at path, loaded as cfg, holds
+ * API keys and can be read by its group or by others (mode & 077; *mode is
+ * set to the permission bits).  The caller warns: the keys give upload and
+ * control of the printers.  false when the file cannot be examined.
+ */
+bool node_config_exposed(const char *path, const struct node_config *cfg, unsigned *mode);
 
 /*
  * node_parse_listen - "ADDR:PORT" (IPv4 dotted quad, port 0-65535) into
