@@ -323,7 +323,13 @@ void refine(exact_mesh &m, int threads, exact_refine_stats &st)
 
 	/* Points of affected triangles are unified through this map; it starts
 	 * with their own corners so a cut point on a corner reuses it. */
+	size_t npieces = 0;
+	for (const auto &pc : pieces_of)
+		npieces += pc.size();
+	/* Sized once: on soups growing these maps rehashed them several
+	 * times over. */
 	point_index index{m, {}};
+	index.map.reserve(3 * order.size() + npieces);
 	for (uint32_t t : order)
 		for (uint32_t v : m.tris[t])
 			index.add_existing(v);
@@ -340,6 +346,9 @@ void refine(exact_mesh &m, int threads, exact_refine_stats &st)
 	 * the same piece from both triangles, and one layer is kept. */
 	std::unordered_set<std::array<uint32_t, 3>, tri_hash> emitted;
 	const size_t nverts0 = m.approx.size();
+
+	by_handle.reserve(2 * npieces);
+	emitted.reserve(npieces);
 
 	tris.reserve(m.tris.size() + 4 * cut.size());
 	origin.reserve(tris.capacity());
