@@ -67,10 +67,10 @@ inline EPoint edge_plane(const EPoint &p, const EPoint &q, const XFT a[3], const
 		dq += n[k] * (qq[k] - a[k]);
 	}
 	const XFT t = dp / (dp - dq);
-	EFT c[3];
+	XFT c[3];
 	for (int k = 0; k < 3; k++)
-		c[k] = EFT(XFT(pp[k] + (qq[k] - pp[k]) * t));
-	return EPoint(c[0], c[1], c[2]);
+		c[k] = pp[k] + (qq[k] - pp[k]) * t;
+	return EPoint(XK::Point_3(c[0], c[1], c[2]));
 }
 
 /*
@@ -145,7 +145,7 @@ class integer_plane
 			mpz_addmul(dq, n[k], t);
 		}
 		mpz_sub(den, dp, dq); /* not 0: p and q are on opposite sides */
-		EFT c[3];
+		XFT c[3];
 		for (int k = 0; k < 3; k++) { /* (q dp - p dq) / (dp - dq) * 2^e */
 			mpz_mul(mpq_numref(r_), v_[4][k], dp);
 			mpz_submul(mpq_numref(r_), v_[3][k], dq);
@@ -155,9 +155,9 @@ class integer_plane
 				mpq_mul_2exp(r_, r_, (mp_bitcnt_t)e);
 			else if (e < 0)
 				mpq_div_2exp(r_, r_, (mp_bitcnt_t)-e);
-			c[k] = EFT(XFT(r_));
+			c[k] = XFT(r_);
 		}
-		return EPoint(c[0], c[1], c[2]);
+		return EPoint(XK::Point_3(c[0], c[1], c[2]));
 	}
 
       private:

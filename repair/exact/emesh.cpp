@@ -63,16 +63,28 @@ bool tri_is_double(const exact_mesh &m, size_t t)
 	return m.slot[v[0]] < 0 && m.slot[v[1]] < 0 && m.slot[v[2]] < 0;
 }
 
-/* Add a vertex at exact point p; stored as a double when p is one. */
+/* Whether rational q is exactly the double d (its nearest). */
+bool is_double(const XPoint::FT &q, double d)
+{
+	/* A double's denominator is a power of two: most cut points fail
+	 * this test, which costs no allocation. */
+	if (mpz_popcount(mpq_denref(q.backend().data())) != 1)
+		return false;
+	return q == XPoint::FT(d);
+}
+
+/* Add a vertex at exact point p; stored as a double when p is one.  Read
+ * from p's exact value: its lazy coordinates would each be a new node. */
 uint32_t add_vertex(exact_mesh &m, const EPoint &p)
 {
-	const double x = CGAL::to_double(p.x()), y = CGAL::to_double(p.y()),
-		     z = CGAL::to_double(p.z());
+	const XPoint &e = CGAL::exact(p);
+	const double x = CGAL::to_double(e.x()), y = CGAL::to_double(e.y()),
+		     z = CGAL::to_double(e.z());
 
 	if (m.approx.size() >= MESH_LIMIT)
 		throw std::length_error("too many vertices");
 	m.approx.push_back({x, y, z});
-	if (EFT(x) == p.x() && EFT(y) == p.y() && EFT(z) == p.z()) {
+	if (is_double(e.x(), x) && is_double(e.y(), y) && is_double(e.z(), z)) {
 		m.slot.push_back(-1);
 	} else {
 		m.slot.push_back(static_cast<int32_t>(m.ex.size()));

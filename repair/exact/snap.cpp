@@ -379,6 +379,20 @@ uint32_t find_patch(std::vector<uint32_t> &p, uint32_t x)
 	return x;
 }
 
+/* Whether vertices a, b, c, d lie in one plane, exactly.  Double corners
+ * go through Epick's static filter: a thickened sheet's walls are nearly
+ * flat, and for them Epeck's interval filter fails into rationals. */
+bool coplanar(const snapper &s, uint32_t a, uint32_t b, uint32_t c, uint32_t d)
+{
+	if (s.isd[a] && s.isd[b] && s.isd[c] && s.isd[d]) {
+		auto p = [&s](uint32_t i) {
+			return IK::Point_3(s.cur[i][0], s.cur[i][1], s.cur[i][2]);
+		};
+		return CGAL::orientation(p(a), p(b), p(c), p(d)) == CGAL::COPLANAR;
+	}
+	return CGAL::orientation(s.pos[a], s.pos[b], s.pos[c], s.pos[d]) == CGAL::COPLANAR;
+}
+
 /* Union of triangles that share an edge and lie in one plane (exactly).
  * Pieces of one split triangle are known to (m.plane): for them the
  * predicate would only confirm an exact zero, its costliest answer. */
@@ -414,8 +428,7 @@ void build_patches(snapper &s, const exact_mesh &m)
 				const uint32_t c = third(e[a].t, e[a].lo, e[a].hi),
 					       d = third(e[b].t, e[b].lo, e[b].hi);
 				if (m.plane[e[a].t] != m.plane[e[b].t] &&
-				    CGAL::orientation(s.pos[e[a].lo], s.pos[e[a].hi], s.pos[c],
-						      s.pos[d]) != CGAL::COPLANAR)
+				    !coplanar(s, e[a].lo, e[a].hi, c, d))
 					continue;
 				const uint32_t ra = find_patch(s.patch, e[a].t),
 					       rb = find_patch(s.patch, e[b].t);
