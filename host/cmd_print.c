@@ -24,6 +24,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "clio.h"
 #include "commands.h"
 #include "gcode.h"
 #include "guard.h"
@@ -449,7 +450,8 @@ static int print_dry_run(struct print_job *job)
 	return 0;
 }
 
-int cmd_print(int argc, char **argv)
+/* The print; *answered is set when the JSON summary went out. */
+static int print_run(int argc, char **argv, bool *answered)
 {
 	struct print_args a;
 	struct print_job *job;
@@ -497,6 +499,7 @@ int cmd_print(int argc, char **argv)
 		goto out;
 	if (a.dry_run) {
 		status = print_dry_run(job);
+		*answered = a.json && status == 0;
 		goto out;
 	}
 	/* an X3G file has no G-code lines to resume from */
@@ -561,7 +564,7 @@ int cmd_print(int argc, char **argv)
 	status = print_stream(job);
 	job->status = status;
 	if (a.json)
-		print_summary_json(job);
+		print_summary_json(job), *answered = true;
 	else
 		print_summary_text(job);
 	if (job->sliced && !job->journal_on)
@@ -572,5 +575,34 @@ out:
 	free(job->layers.v);
 	profile_free(job->prof);
 	free(job);
+	return status;
+}
+
+/*
+ * --json answers with one object whatever happens: a command line refused,
+ * a bad profile or an unreadable model end before the summary, so their
+ * message on stderr is kept (clio_capture_begin) and becomes "error".
+ */
+int cmd_print(int argc, char **argv)
+{
+	bool json = false, answered = false;
+	char msg[512];
+	int status;
+
+	for (int i = 1; i < argc; i++)
+		json = json || !strcmp(argv[i], "--json");
+	if (!json)
+		return print_run(argc, argv, &answered);
+	clio_capture_begin();
+	status = print_run(argc, argv, &answered);
+	clio_capture_end(msg, sizeof(msg));
+	if (status && !answered) {
+		json_t *o = json_object();
+		json_object_set_new(o, "ok", json_false());
+		json_object_set_new(o, "exit", json_integer(status));
+		json_object_set_new(o, "error", json_string(msg[0] ? msg : "the print did not "
+								   "start; the reason is on stderr"));
+		send_report_emit(o);
+	}
 	return status;
 }
