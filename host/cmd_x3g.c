@@ -19,6 +19,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "clio.h"
 #include "commands.h"
 #include "gcode.h"
 #include "guard.h"
@@ -361,9 +362,15 @@ static int run_decode(const struct x3g_args *a)
 int cmd_x3g(int argc, char **argv)
 {
 	struct x3g_args a = {0};
+	struct clio io;
 	int status = parse_args(argc, argv, &a);
 
 	if (status)
 		return status < 0 ? ST_EXIT_OK : status;
-	return a.decode ? run_decode(&a) : run_translate(&a);
+	/* "-": G-code (or X3G to decode) from stdin, X3G to stdout when whole */
+	clio_init(&io, X3G_CMD);
+	if (!(status = clio_input(&io, a.decode ? &a.decode : &a.in, a.decode ? ".x3g" : ".gcode")) &&
+	    !(status = clio_output(&io, &a.out, true, ".x3g")))
+		status = a.decode ? run_decode(&a) : run_translate(&a);
+	return clio_finish(&io, status);
 }
