@@ -60,7 +60,9 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 	    CMD_OPT_STRING("--output", 'o', &a->out, 0, NULL, "OUT",
 			   "where --dry-run writes"),
 	    CMD_OPT_FLAG("--preview", &a->preview,
-			 "write PNGs of the first layers (MODEL-layerN.png) first"),
+			 "write PNGs of the first layers (MODEL-layerN.png) first;\n"
+			 "without --port only them (the print needs --yes);\n"
+			 "with --dry-run of the G-code written"),
 	    CMD_OPT_FLAG("--json", &a->json, "the summary as one JSON object on stdout"),
 	    CMD_OPT_STRING("--resume", 0, &a->resume, 0, NULL, "JOB",
 			   "continue an interrupted print (G-code, Marlin or Sailfish)\n"
@@ -68,7 +70,8 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 			   "reheat, home X and Y only,\n"
 			   "restore Z and E.  Asks first; --yes answers for scripts"),
 	    {"--yes", 'y', CMD_FLAG, &a->yes, 0, 0, 0, NULL, NULL,
-	     "answer yes to --resume's question", NULL, NULL},
+	     "answer yes to --resume's question; with --preview and no\n"
+	     "--port: print on the simulator after the preview", NULL, NULL},
 	    CMD_OPT_FLAG("--force", &a->force, GUARD_FORCE_HELP),
 	    CMD_OPT_STRING("--sim-log", 0, &a->sim_log, 0, NULL, "FILE",
 			   "testing aid: the simulated printer's execution log"),
@@ -186,6 +189,28 @@ static int print_preview(struct print_job *job)
 			fprintf(stderr, PRINT_CMD ": preview: %s\n", name);
 	}
 	return 0;
+}
+
+/* --preview without --port or --yes: say what was drawn, that nothing was
+ * printed, and how to print. */
+static void print_preview_stop(const struct print_job *job)
+{
+	size_t n = job->layers.n < PRINT_PREVIEW_LAYERS ? job->layers.n : PRINT_PREVIEW_LAYERS;
+
+	if (job->a->json) {
+		json_t *o = json_object();
+		json_object_set_new(o, "ok", json_true());
+		json_object_set_new(o, "exit", json_integer(0));
+		json_object_set_new(o, "input", json_string(job->a->in));
+		json_object_set_new(o, "printer", json_string(job->prof->id));
+		json_object_set_new(o, "printed", json_false());
+		json_object_set_new(o, "previews", json_integer((json_int_t)n));
+		send_report_emit(o);
+		return;
+	}
+	printf("preview: %zu layer%s of %s drawn; nothing was printed (add --yes to print on the "
+	       "simulated printer, or --port to print on a real one)\n", n, n == 1 ? "" : "s",
+	       job->a->in);
 }
 
 /* Ask before a resume (or take --yes); true to go on.  It shows what the
@@ -407,6 +432,13 @@ static int print_dry_run(struct print_job *job)
 		if ((status = print_slice(job, job->gcode)))
 			return status;
 	}
+	/* --preview draws what was written (the G-code the X3G comes from) */
+	if (job->a->preview && ((status = print_scan(job->gcode, &job->layers)) ||
+				(status = print_preview(job)))) {
+		if (x3g && job->input == PRINT_MODEL)
+			unlink(job->gcode);
+		return status;
+	}
 	if (x3g) {
 		/* the guard has judged the file already (cmd_print) */
 		char *argv[] = {"x3g", (char *)job->gcode, "-o", (char *)out, "--printer",
@@ -456,6 +488,7 @@ static int print_run(int argc, char **argv, bool *answered)
 	struct print_args a;
 	struct print_job *job;
 	struct st_error err = {0};
+	bool preview_only;
 	int status, rc;
 
 	status = print_parse(argc, argv, &a);
@@ -502,8 +535,11 @@ static int print_run(int argc, char **argv, bool *answered)
 		*answered = a.json && status == 0;
 		goto out;
 	}
-	/* an X3G file has no G-code lines to resume from */
-	job->journal_on = job->input != PRINT_X3G;
+	/* --preview alone on the simulator is a look, not a print: the PNGs,
+	 * then stop; --yes or a --port goes on to print */
+	preview_only = a.preview && !a.port && !a.yes && !a.resume && job->input != PRINT_X3G;
+	/* an X3G file has no G-code lines to resume from; a look keeps no job */
+	job->journal_on = job->input != PRINT_X3G && !preview_only;
 	if (!a.resume && job->journal_on && (rc = journal_init(&job->j, &err))) {
 		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
 		status = ST_EXIT_FAILURE;
@@ -560,13 +596,19 @@ static int print_run(int argc, char **argv, bool *answered)
 		job->j.lines = job->layers.lines;
 	}
 	if (a.preview && job->input != PRINT_X3G && (status = print_preview(job)))
-		goto out;
+		goto out_gcode;
+	if (preview_only) {
+		print_preview_stop(job);
+		*answered = a.json;
+		goto out_gcode;
+	}
 	status = print_stream(job);
 	job->status = status;
 	if (a.json)
 		print_summary_json(job), *answered = true;
 	else
 		print_summary_text(job);
+out_gcode:
 	if (job->sliced && !job->journal_on)
 		unlink(job->gcode);
 out:

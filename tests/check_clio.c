@@ -2,12 +2,14 @@
  * check_clio.c - "-" for stdin and stdout (host/clio.h) through the
  * binary: `repair - -o -` gives the bytes `repair IN -o OUT` writes, a
  * failing command writes nothing on stdout, binary data is refused for a
- * terminal; `print --json` answers with its object on early failures.
- * Part of the cli suite.
+ * terminal; `print --json` answers with its object on early failures; and
+ * `print --preview` without a port previews and stops.  Part of the cli
+ * suite.
  */
 #include <check.h>
 #include <fcntl.h>
 #include <jansson.h>
+#include <limits.h>
 #include <poll.h>
 #include <pty.h>
 #include <stdio.h>
@@ -228,6 +230,37 @@ START_TEST(print_json_on_early_failures)
 }
 END_TEST
 
+START_TEST(print_preview_stops_without_port)
+{
+	char dir[512], state[512], bin[PATH_MAX];
+	json_t *o;
+	int rc;
+
+	ck_assert_ptr_nonnull(realpath(tu_bin(), bin)); /* the test runs it elsewhere */
+	snprintf(dir, sizeof(dir), "%s", tu_path("rio-pv"));
+	snprintf(state, sizeof(state), "%s", tu_path("rio-pv-state"));
+	setenv("STRATUM_STATE_DIR", state, 1);
+	ck_assert_int_eq(tu_sh(out, sizeof(out), "mkdir -p %s && cp %s %s/cube.stl", dir,
+			       cube_stl("rio-pv.stl"), dir), 0);
+	rc = tu_sh(out, sizeof(out), "cd %s && '%s' print cube.stl --printer generic-marlin "
+		   "--preview --json 2>/dev/null", dir, bin);
+	ck_assert_msg(rc == 0, "exit %d: %s", rc, out);
+	o = json_answer(out);
+	ck_assert_ptr_nonnull(o);
+	ck_assert(json_is_false(json_object_get(o, "printed")));
+	json_decref(o);
+	ck_assert_int_eq(tu_sh(out, sizeof(out), "test -s %s/cube-layer1.png", dir), 0);
+	/* a look keeps no job */
+	ck_assert_int_eq(tu_sh(out, sizeof(out), "ls %s/jobs 2>/dev/null | wc -l", state), 0);
+	ck_assert_int_eq(atoi(out), 0);
+	/* --dry-run --preview draws what it wrote */
+	ck_assert_int_eq(tu_sh(out, sizeof(out), "rm -f %s/*.png && cd %s && '%s' print cube.stl "
+			       "--printer generic-marlin --dry-run -o cube.gcode --preview", dir, dir,
+			       bin), 0);
+	ck_assert_int_eq(tu_sh(out, sizeof(out), "test -s %s/cube-layer2.png", dir), 0);
+}
+END_TEST
+
 void cli_stdio_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("stdio");
@@ -239,5 +272,6 @@ void cli_stdio_tcases(Suite *s)
 	tcase_add_test(tc, check_reads_stdin);
 	tcase_add_test(tc, slice_stdin_stdout);
 	tcase_add_test(tc, print_json_on_early_failures);
+	tcase_add_test(tc, print_preview_stops_without_port);
 	suite_add_tcase(s, tc);
 }
