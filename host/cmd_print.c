@@ -28,6 +28,7 @@
 #include "commands.h"
 #include "gcode.h"
 #include "guard.h"
+#include "jobs.h"
 #include "print_job.h"
 #include "preview.h"
 #include "profile.h"
@@ -540,6 +541,14 @@ static int print_run(int argc, char **argv, bool *answered)
 	preview_only = a.preview && !a.port && !a.yes && !a.resume && job->input != PRINT_X3G;
 	/* an X3G file has no G-code lines to resume from; a look keeps no job */
 	job->journal_on = job->input != PRINT_X3G && !preview_only;
+	if (!a.resume && job->journal_on) { /* the jobs kept stay under their cap (jobs.h) */
+		uint64_t freed;
+		long n = jobs_trim(&freed, &err);
+		if (n > 0)
+			fprintf(stderr, PRINT_CMD ": removed %ld old job%s (%.1f MB) to keep the jobs "
+					"directory under its cap ('stratum jobs list')\n", n,
+				n == 1 ? "" : "s", (double)freed / 1e6);
+	}
 	if (!a.resume && job->journal_on && (rc = journal_init(&job->j, &err))) {
 		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
 		status = ST_EXIT_FAILURE;
