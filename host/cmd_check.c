@@ -24,7 +24,8 @@ static const char check_head[] =
     "degenerate and duplicate triangles, exact self-intersections, orientation,\n"
     "volume, parts and cavities - and whether it is printable as it stands\n"
     "(Attene's Definition 3.11 for each part; parts may touch along edges or at\n"
-    "vertices, cavities are closed shells facing inwards).  See docs/check.md.\n"
+    "vertices, cavities are closed shells facing inwards).  FILE '-' reads\n"
+    "stdin.  See docs/check.md.\n"
     "\n";
 
 /* Figures that explain a reason, for the text and JSON messages. */

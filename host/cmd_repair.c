@@ -560,7 +560,8 @@ static int repair_command(int argc, char **argv, struct repair_run *run, struct 
 
 	const struct cmd_opt opts[] = {
 	    CMD_OPT_STRING("--output", 'o', &out, CMD_NONEMPTY, "the output file name", "OUT",
-	     "the STL to write (written only when the result is printable)"),
+	     "the STL to write (written only when the result is printable);\n"
+	     "'-': stdout, and IN '-' reads stdin"),
 	    CMD_OPT_STRING("--printer", 0, &printer, CMD_NONEMPTY,
 	     "a printer name or file (see 'stratum printers')", "P",
 	     "take EPSILON from this printer's nozzle diameter"),

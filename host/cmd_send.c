@@ -79,7 +79,8 @@ static int send_parse(int argc, char **argv, struct send_args *a)
 		    "  Marlin printers: FILE.gcode, with line numbers, checksums and resends.\n"
 		    "  Sailfish printers (FlashForge Creator Pro): FILE.gcode, translated to X3G\n"
 		    "  as it streams (as 'stratum x3g' does), or FILE.x3g; S3G packets.\n"
-		    "G-code sliced for another printer is refused (exit 2).\n",
+		    "FILE '-' streams the G-code on stdin.  G-code sliced for another printer\n"
+		    "is refused (exit 2).\n",
 	    .pos = &a->file, .npos = 1, .extra = "one file at a time ('%s' and '%s')"};
 	int rc;
 

@@ -74,7 +74,8 @@ static int parse_args(int argc, char **argv, struct slice_args *a)
 {
 	const struct cmd_opt opts[] = {
 	    CMD_OPT_STRING("--output", 'o', &a->out, CMD_NONEMPTY, "the output file name", "OUT",
-			   "the G-code file (written only when everything succeeded)"),
+			   "the G-code file (written only when everything succeeded);\n"
+			   "'-': stdout, and a MODEL '-' reads stdin"),
 	    CMD_OPT_STRING("--printer", 0, &a->printer, CMD_NONEMPTY,
 			   "a printer name or file (see 'stratum printers')", "P",
 			   "printer profile name ('stratum printers') or .ini file"),

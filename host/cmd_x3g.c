@@ -43,7 +43,8 @@ static int parse_args(int argc, char **argv, struct x3g_args *a)
 {
 	const struct cmd_opt opts[] = {
 	    CMD_OPT_STRING("--output", 'o', &a->out, CMD_NONEMPTY, NULL, "OUT",
-	     "the X3G file (written only when the whole input translated)"),
+	     "the X3G file (written only when the whole input translated);\n"
+	     "'-': stdout, and IN '-' reads stdin"),
 	    CMD_OPT_STRING("--printer", 0, &a->printer, CMD_NONEMPTY, NULL, "P",
 	     "a sailfish printer profile ('stratum printers') or .ini file"),
 	    CMD_OPT_STRING("--flavor", 0, &a->flavor, CMD_NONEMPTY, NULL, "F",

@@ -182,6 +182,11 @@ START_TEST(slice_stdin_stdout)
 	free(x);
 	free(y);
 	ck_assert_int_eq(tu_sh(out, sizeof(out), "grep -q 'written: -' %s", err), 0);
+	/* and preview draws a layer of the G-code on stdin */
+	rc = tu_sh(out, sizeof(out), "{ '%s' preview - --layer 2 -o %s <%s; }", tu_bin(),
+		   tu_path("rio-slice.svg"), b);
+	ck_assert_msg(rc == 0, "exit %d: %s", rc, out);
+	ck_assert(tu_file_exists(tu_path("rio-slice.svg")));
 }
 END_TEST
 
