@@ -88,7 +88,7 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 		"Repairs and slices MODEL (STL, OBJ, OFF or 3MF) as 'stratum slice' does, then\n"
 		"prints it; several models are arranged on the bed and printed together, as\n"
 		"'stratum slice' arranges them.  A .gcode file (or .x3g for Sailfish printers)\n"
-		"is printed as it is, alone.\n",
+		"is printed as it is, alone.  MODEL '-' reads a model from stdin.\n",
 	    .mid = "Settings for slicing MODEL (on top of --printer, or instead of it), as\n"
 		   "'stratum slice' takes them:\n",
 	    .cfg = &a->cfg,
@@ -162,12 +162,13 @@ static int print_slice(struct print_job *job, const char *out)
 /* --preview: the first layers as MODEL-layerN.png; 0 or the exit status. */
 static int print_preview(struct print_job *job)
 {
-	const char *base = strrchr(job->a->in, '/');
+	const char *in = clio_is_std(job->a->in) ? "stdin" : job->a->in;
+	const char *base = strrchr(in, '/');
 	const char *dot;
 	char name[PATH_MAX];
 	int n;
 
-	base = base ? base + 1 : job->a->in;
+	base = base ? base + 1 : in;
 	dot = strrchr(base, '.');
 	n = dot && dot != base ? (int)(dot - base) : (int)strlen(base);
 	for (int l = 1; l <= PRINT_PREVIEW_LAYERS && (size_t)l <= job->layers.n; l++) {
@@ -483,8 +484,43 @@ static int print_dry_run(struct print_job *job)
 	return 0;
 }
 
+/*
+ * A model "-" is read from stdin (clio.h); a.in keeps "-" for the reports.
+ * G-code on stdin is refused: a print journals its file so that it can be
+ * resumed, and a spool removed at the end could not be.  0 or the exit status.
+ */
+static int print_stdin(struct print_args *a, struct clio *io)
+{
+	for (size_t i = 0; i < a->nmodels; i++) {
+		char head[64] = "";
+		size_t k = 0;
+		FILE *f;
+		int status;
+
+		if (!clio_is_std(a->models[i]))
+			continue;
+		if ((status = clio_input(io, &a->models[i], "")))
+			return status;
+		if ((f = fopen(a->models[i], "rb")) != NULL) {
+			head[fread(head, 1, sizeof(head) - 1, f)] = '\0';
+			fclose(f);
+		}
+		while (head[k] == ' ' || head[k] == '\t' || head[k] == '\r' || head[k] == '\n')
+			k++;
+		/* a comment or a command word ("G1", "M104"); a binary STL's header
+		 * may start with any text ("MeshLab"), not with these */
+		if (head[k] == ';' || (head[k] && strchr("GMTN", head[k]) && head[k + 1] >= '0' &&
+				       head[k + 1] <= '9')) {
+			fprintf(stderr, PRINT_CMD ": stdin holds G-code; print it from a file, so that "
+					"the job can be resumed ('-' takes a model)\n");
+			return ST_EXIT_USAGE;
+		}
+	}
+	return 0;
+}
+
 /* The print; *answered is set when the JSON summary went out. */
-static int print_run(int argc, char **argv, bool *answered)
+static int print_run(int argc, char **argv, bool *answered, struct clio *io)
 {
 	struct print_args a;
 	struct print_job *job;
@@ -495,6 +531,8 @@ static int print_run(int argc, char **argv, bool *answered)
 	status = print_parse(argc, argv, &a);
 	if (status)
 		return status < 0 ? ST_EXIT_OK : status;
+	if ((status = print_stdin(&a, io)))
+		return status;
 	job = calloc(1, sizeof(*job));
 	if (!job) {
 		fprintf(stderr, PRINT_CMD ": out of memory\n");
@@ -637,15 +675,17 @@ out:
 int cmd_print(int argc, char **argv)
 {
 	bool json = false, answered = false;
+	struct clio io;
 	char msg[512];
 	int status;
 
+	clio_init(&io, PRINT_CMD);
 	for (int i = 1; i < argc; i++)
 		json = json || !strcmp(argv[i], "--json");
 	if (!json)
-		return print_run(argc, argv, &answered);
+		return clio_finish(&io, print_run(argc, argv, &answered, &io));
 	clio_capture_begin();
-	status = print_run(argc, argv, &answered);
+	status = clio_finish(&io, print_run(argc, argv, &answered, &io));
 	clio_capture_end(msg, sizeof(msg));
 	if (status && !answered) {
 		json_t *o = json_object();

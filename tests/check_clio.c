@@ -266,6 +266,39 @@ START_TEST(print_preview_stops_without_port)
 }
 END_TEST
 
+START_TEST(print_model_from_stdin)
+{
+	char in[512], a[512], b[512];
+	char *x, *y;
+	int rc;
+
+	setenv("STRATUM_STATE_DIR", tu_path("rio-pstate"), 1);
+	snprintf(in, sizeof(in), "%s", cube_stl("rio-print.stl"));
+	{ /* a header that starts like a word of G-code is still a model */
+		size_t n;
+		char *stl = tu_slurp(in, &n);
+		memcpy(stl, "MeshLab", 7);
+		tu_write(in, stl, n);
+		free(stl);
+	}
+	snprintf(a, sizeof(a), "%s", tu_path("rio-print-a.gcode"));
+	snprintf(b, sizeof(b), "%s", tu_path("rio-print-b.gcode"));
+	rc = tu_run(out, sizeof(out), "print %s --printer generic-marlin --dry-run -o %s", in, a);
+	ck_assert_msg(rc == 0, "exit %d: %s", rc, out);
+	rc = tu_sh(out, sizeof(out), "'%s' print - --printer generic-marlin --dry-run -o %s <%s",
+		   tu_bin(), b, in);
+	ck_assert_msg(rc == 0, "exit %d: %s", rc, out);
+	x = tu_slurp(a, &(size_t){0});
+	y = tu_slurp(b, &(size_t){0});
+	ck_assert_str_eq(strstr(x, ";LAYER_CHANGE"), strstr(y, ";LAYER_CHANGE"));
+	free(x);
+	free(y);
+	/* G-code on stdin could not be resumed: refused */
+	rc = tu_sh(out, sizeof(out), "'%s' print - --printer generic-marlin <%s", tu_bin(), a);
+	ck_assert_msg(rc == 2 && strstr(out, "stdin holds G-code"), "exit %d: %s", rc, out);
+}
+END_TEST
+
 void cli_stdio_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("stdio");
@@ -278,5 +311,6 @@ void cli_stdio_tcases(Suite *s)
 	tcase_add_test(tc, slice_stdin_stdout);
 	tcase_add_test(tc, print_json_on_early_failures);
 	tcase_add_test(tc, print_preview_stops_without_port);
+	tcase_add_test(tc, print_model_from_stdin);
 	suite_add_tcase(s, tc);
 }
