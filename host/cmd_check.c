@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "clio.h"
 #include "commands.h"
 #include "mesh.h"
 #include "meshio.h"
@@ -23,7 +24,8 @@ static const char check_head[] =
     "degenerate and duplicate triangles, exact self-intersections, orientation,\n"
     "volume, parts and cavities - and whether it is printable as it stands\n"
     "(Attene's Definition 3.11 for each part; parts may touch along edges or at\n"
-    "vertices, cavities are closed shells facing inwards).  See docs/check.md.\n"
+    "vertices, cavities are closed shells facing inwards).  FILE '-' reads\n"
+    "stdin.  See docs/check.md.\n"
     "\n";
 
 /* Figures that explain a reason, for the text and JSON messages. */
@@ -176,9 +178,9 @@ static void print_text(const char *path, enum meshio_format fmt, const struct me
 	}
 }
 
-int cmd_check(int argc, char **argv)
+static int check_run(int argc, char **argv, struct clio *io)
 {
-	const char *path = NULL;
+	const char *path = NULL, *shown;
 	bool json = false;
 	int threads = 0;
 	struct st_error err = {0};
@@ -203,6 +205,9 @@ int cmd_check(int argc, char **argv)
 		cmd_usage(&spec, stderr);
 		return ST_EXIT_USAGE;
 	}
+	shown = path; /* the report names "-", not the spool */
+	if ((rc = clio_input(io, &path, "")))
+		return rc;
 
 	rc = meshio_read(path, MESHIO_AUTO, &m, &fmt, &err);
 	if (rc) {
@@ -216,16 +221,25 @@ int cmd_check(int argc, char **argv)
 		return ST_EXIT_SOFTWARE;
 	}
 	if (json) {
-		if (print_json(path, fmt, &rep)) {
+		if (print_json(shown, fmt, &rep)) {
 			fprintf(stderr, "stratum check: cannot write the JSON report\n");
 			return ST_EXIT_SOFTWARE;
 		}
 	} else {
-		print_text(path, fmt, &rep);
+		print_text(shown, fmt, &rep);
 	}
 	if (fflush(stdout) == EOF) {
 		fprintf(stderr, "stratum check: cannot write the report: %s\n", strerror(errno));
 		return ST_EXIT_SOFTWARE;
 	}
 	return rep.printable ? ST_EXIT_OK : ST_EXIT_FAILURE;
+}
+
+/* "stratum check -" reads the mesh from stdin (clio.h). */
+int cmd_check(int argc, char **argv)
+{
+	struct clio io;
+
+	clio_init(&io, "stratum check");
+	return clio_finish(&io, check_run(argc, argv, &io));
 }

@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "clio.h"
 #include "commands.h"
 #include "mesh.h"
 #include "meshio.h"
@@ -78,7 +79,8 @@ static int parse_args(int argc, char **argv, struct preview_args *a)
 		    "Draws one layer of a G-code file seen from above: outer and inner perimeters,\n"
 		    "gap fill, solid and sparse infill, bridges, support, skirt/brim and other\n"
 		    "extrusion in their own colours, each bead at the width its filament makes;\n"
-		    "travels thin and dashed; a legend and a scale bar in mm.  See docs/preview.md.\n"
+		    "travels thin and dashed; a legend and a scale bar in mm.  FILE '-' reads the\n"
+		    "G-code on stdin.  See docs/preview.md.\n"
 		    "\n",
 	    .tail = "\n"
 		    "Exit status: 0 written, 1 OUT not written, 2 usage or no such layer,\n"
@@ -164,7 +166,7 @@ static int exit_for(const struct st_error *err)
 	return err->code == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : st_exit_for(err->code);
 }
 
-int cmd_preview(int argc, char **argv)
+static int preview_run(int argc, char **argv, struct clio *io)
 {
 	struct preview_args a = {0};
 	struct preview *pv = NULL;
@@ -175,6 +177,8 @@ int cmd_preview(int argc, char **argv)
 
 	if (status)
 		return status < 0 ? ST_EXIT_OK : status;
+	if ((status = clio_input(io, &a.in, ".gcode")))
+		return status;
 	if (preview_load(a.in, &a.o, &pv, &err))
 		return exit_for(&err);
 	if (a.model) {
@@ -208,4 +212,13 @@ out:
 	mesh_free(m);
 	preview_free(pv);
 	return status;
+}
+
+/* "stratum preview -" draws the G-code on stdin (clio.h). */
+int cmd_preview(int argc, char **argv)
+{
+	struct clio io;
+
+	clio_init(&io, PREVIEW_CMD);
+	return clio_finish(&io, preview_run(argc, argv, &io));
 }

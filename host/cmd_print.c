@@ -24,9 +24,11 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "clio.h"
 #include "commands.h"
 #include "gcode.h"
 #include "guard.h"
+#include "jobs.h"
 #include "print_job.h"
 #include "preview.h"
 #include "profile.h"
@@ -59,7 +61,9 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 	    CMD_OPT_STRING("--output", 'o', &a->out, 0, NULL, "OUT",
 			   "where --dry-run writes"),
 	    CMD_OPT_FLAG("--preview", &a->preview,
-			 "write PNGs of the first layers (MODEL-layerN.png) first"),
+			 "write PNGs of the first layers (MODEL-layerN.png) first;\n"
+			 "without --port only them (the print needs --yes);\n"
+			 "with --dry-run of the G-code written"),
 	    CMD_OPT_FLAG("--json", &a->json, "the summary as one JSON object on stdout"),
 	    CMD_OPT_STRING("--resume", 0, &a->resume, 0, NULL, "JOB",
 			   "continue an interrupted print (G-code, Marlin or Sailfish)\n"
@@ -67,7 +71,8 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 			   "reheat, home X and Y only,\n"
 			   "restore Z and E.  Asks first; --yes answers for scripts"),
 	    {"--yes", 'y', CMD_FLAG, &a->yes, 0, 0, 0, NULL, NULL,
-	     "answer yes to --resume's question", NULL, NULL},
+	     "answer yes to --resume's question; with --preview and no\n"
+	     "--port: print on the simulator after the preview", NULL, NULL},
 	    CMD_OPT_FLAG("--force", &a->force, GUARD_FORCE_HELP),
 	    CMD_OPT_STRING("--sim-log", 0, &a->sim_log, 0, NULL, "FILE",
 			   "testing aid: the simulated printer's execution log"),
@@ -83,7 +88,7 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 		"Repairs and slices MODEL (STL, OBJ, OFF or 3MF) as 'stratum slice' does, then\n"
 		"prints it; several models are arranged on the bed and printed together, as\n"
 		"'stratum slice' arranges them.  A .gcode file (or .x3g for Sailfish printers)\n"
-		"is printed as it is, alone.\n",
+		"is printed as it is, alone.  MODEL '-' reads a model from stdin.\n",
 	    .mid = "Settings for slicing MODEL (on top of --printer, or instead of it), as\n"
 		   "'stratum slice' takes them:\n",
 	    .cfg = &a->cfg,
@@ -157,12 +162,13 @@ static int print_slice(struct print_job *job, const char *out)
 /* --preview: the first layers as MODEL-layerN.png; 0 or the exit status. */
 static int print_preview(struct print_job *job)
 {
-	const char *base = strrchr(job->a->in, '/');
+	const char *in = clio_is_std(job->a->in) ? "stdin" : job->a->in;
+	const char *base = strrchr(in, '/');
 	const char *dot;
 	char name[PATH_MAX];
 	int n;
 
-	base = base ? base + 1 : job->a->in;
+	base = base ? base + 1 : in;
 	dot = strrchr(base, '.');
 	n = dot && dot != base ? (int)(dot - base) : (int)strlen(base);
 	for (int l = 1; l <= PRINT_PREVIEW_LAYERS && (size_t)l <= job->layers.n; l++) {
@@ -185,6 +191,28 @@ static int print_preview(struct print_job *job)
 			fprintf(stderr, PRINT_CMD ": preview: %s\n", name);
 	}
 	return 0;
+}
+
+/* --preview without --port or --yes: say what was drawn, that nothing was
+ * printed, and how to print. */
+static void print_preview_stop(const struct print_job *job)
+{
+	size_t n = job->layers.n < PRINT_PREVIEW_LAYERS ? job->layers.n : PRINT_PREVIEW_LAYERS;
+
+	if (job->a->json) {
+		json_t *o = json_object();
+		json_object_set_new(o, "ok", json_true());
+		json_object_set_new(o, "exit", json_integer(0));
+		json_object_set_new(o, "input", json_string(job->a->in));
+		json_object_set_new(o, "printer", json_string(job->prof->id));
+		json_object_set_new(o, "printed", json_false());
+		json_object_set_new(o, "previews", json_integer((json_int_t)n));
+		send_report_emit(o);
+		return;
+	}
+	printf("preview: %zu layer%s of %s drawn; nothing was printed (add --yes to print on the "
+	       "simulated printer, or --port to print on a real one)\n", n, n == 1 ? "" : "s",
+	       job->a->in);
 }
 
 /* Ask before a resume (or take --yes); true to go on.  It shows what the
@@ -406,6 +434,13 @@ static int print_dry_run(struct print_job *job)
 		if ((status = print_slice(job, job->gcode)))
 			return status;
 	}
+	/* --preview draws what was written (the G-code the X3G comes from) */
+	if (job->a->preview && ((status = print_scan(job->gcode, &job->layers)) ||
+				(status = print_preview(job)))) {
+		if (x3g && job->input == PRINT_MODEL)
+			unlink(job->gcode);
+		return status;
+	}
 	if (x3g) {
 		/* the guard has judged the file already (cmd_print) */
 		char *argv[] = {"x3g", (char *)job->gcode, "-o", (char *)out, "--printer",
@@ -449,16 +484,55 @@ static int print_dry_run(struct print_job *job)
 	return 0;
 }
 
-int cmd_print(int argc, char **argv)
+/*
+ * A model "-" is read from stdin (clio.h); a.in keeps "-" for the reports.
+ * G-code on stdin is refused: a print journals its file so that it can be
+ * resumed, and a spool removed at the end could not be.  0 or the exit status.
+ */
+static int print_stdin(struct print_args *a, struct clio *io)
+{
+	for (size_t i = 0; i < a->nmodels; i++) {
+		char head[64] = "";
+		size_t k = 0;
+		FILE *f;
+		int status;
+
+		if (!clio_is_std(a->models[i]))
+			continue;
+		if ((status = clio_input(io, &a->models[i], "")))
+			return status;
+		if ((f = fopen(a->models[i], "rb")) != NULL) {
+			head[fread(head, 1, sizeof(head) - 1, f)] = '\0';
+			fclose(f);
+		}
+		while (head[k] == ' ' || head[k] == '\t' || head[k] == '\r' || head[k] == '\n')
+			k++;
+		/* a comment or a command word ("G1", "M104"); a binary STL's header
+		 * may start with any text ("MeshLab"), not with these */
+		if (head[k] == ';' || (head[k] && strchr("GMTN", head[k]) && head[k + 1] >= '0' &&
+				       head[k + 1] <= '9')) {
+			fprintf(stderr, PRINT_CMD ": stdin holds G-code; print it from a file, so that "
+					"the job can be resumed ('-' takes a model)\n");
+			return ST_EXIT_USAGE;
+		}
+	}
+	return 0;
+}
+
+/* The print; *answered is set when the JSON summary went out. */
+static int print_run(int argc, char **argv, bool *answered, struct clio *io)
 {
 	struct print_args a;
 	struct print_job *job;
 	struct st_error err = {0};
+	bool preview_only;
 	int status, rc;
 
 	status = print_parse(argc, argv, &a);
 	if (status)
 		return status < 0 ? ST_EXIT_OK : status;
+	if ((status = print_stdin(&a, io)))
+		return status;
 	job = calloc(1, sizeof(*job));
 	if (!job) {
 		fprintf(stderr, PRINT_CMD ": out of memory\n");
@@ -497,10 +571,22 @@ int cmd_print(int argc, char **argv)
 		goto out;
 	if (a.dry_run) {
 		status = print_dry_run(job);
+		*answered = a.json && status == 0;
 		goto out;
 	}
-	/* an X3G file has no G-code lines to resume from */
-	job->journal_on = job->input != PRINT_X3G;
+	/* --preview alone on the simulator is a look, not a print: the PNGs,
+	 * then stop; --yes or a --port goes on to print */
+	preview_only = a.preview && !a.port && !a.yes && !a.resume && job->input != PRINT_X3G;
+	/* an X3G file has no G-code lines to resume from; a look keeps no job */
+	job->journal_on = job->input != PRINT_X3G && !preview_only;
+	if (!a.resume && job->journal_on) { /* the jobs kept stay under their cap (jobs.h) */
+		uint64_t freed;
+		long n = jobs_trim(&freed, &err);
+		if (n > 0)
+			fprintf(stderr, PRINT_CMD ": removed %ld old job%s (%.1f MB) to keep the jobs "
+					"directory under its cap ('stratum jobs list')\n", n,
+				n == 1 ? "" : "s", (double)freed / 1e6);
+	}
 	if (!a.resume && job->journal_on && (rc = journal_init(&job->j, &err))) {
 		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
 		status = ST_EXIT_FAILURE;
@@ -557,13 +643,19 @@ int cmd_print(int argc, char **argv)
 		job->j.lines = job->layers.lines;
 	}
 	if (a.preview && job->input != PRINT_X3G && (status = print_preview(job)))
-		goto out;
+		goto out_gcode;
+	if (preview_only) {
+		print_preview_stop(job);
+		*answered = a.json;
+		goto out_gcode;
+	}
 	status = print_stream(job);
 	job->status = status;
 	if (a.json)
-		print_summary_json(job);
+		print_summary_json(job), *answered = true;
 	else
 		print_summary_text(job);
+out_gcode:
 	if (job->sliced && !job->journal_on)
 		unlink(job->gcode);
 out:
@@ -572,5 +664,36 @@ out:
 	free(job->layers.v);
 	profile_free(job->prof);
 	free(job);
+	return status;
+}
+
+/*
+ * --json answers with one object whatever happens: a command line refused,
+ * a bad profile or an unreadable model end before the summary, so their
+ * message on stderr is kept (clio_capture_begin) and becomes "error".
+ */
+int cmd_print(int argc, char **argv)
+{
+	bool json = false, answered = false;
+	struct clio io;
+	char msg[512];
+	int status;
+
+	clio_init(&io, PRINT_CMD);
+	for (int i = 1; i < argc; i++)
+		json = json || !strcmp(argv[i], "--json");
+	if (!json)
+		return clio_finish(&io, print_run(argc, argv, &answered, &io));
+	clio_capture_begin();
+	status = clio_finish(&io, print_run(argc, argv, &answered, &io));
+	clio_capture_end(msg, sizeof(msg));
+	if (status && !answered) {
+		json_t *o = json_object();
+		json_object_set_new(o, "ok", json_false());
+		json_object_set_new(o, "exit", json_integer(status));
+		json_object_set_new(o, "error", json_string(msg[0] ? msg : "the print did not "
+								   "start; the reason is on stderr"));
+		send_report_emit(o);
+	}
 	return status;
 }

@@ -18,6 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "clio.h"
 #include "commands.h"
 #include "mesh.h"
 #include "meshio.h"
@@ -540,10 +541,10 @@ static bool input_is_a_part(const char *in, const char *out)
 	return match;
 }
 
-static int repair_command(int argc, char **argv, struct repair_run *run)
+static int repair_command(int argc, char **argv, struct repair_run *run, struct clio *io)
 {
 	const char *in = NULL, *out = NULL, *printer = NULL, *eps_arg = NULL;
-	bool json = false, split = false, ascii = false, keep_holes = false;
+	bool json = false, split = false, ascii = false, keep_holes = false, out_std = false;
 	double weld = -1, stitch = -1; /* < 0: the defaults of repair_options_init */
 	int threads = 0, status = ST_EXIT_OK, rc;
 	struct st_error err = {0};
@@ -559,7 +560,8 @@ static int repair_command(int argc, char **argv, struct repair_run *run)
 
 	const struct cmd_opt opts[] = {
 	    CMD_OPT_STRING("--output", 'o', &out, CMD_NONEMPTY, "the output file name", "OUT",
-	     "the STL to write (written only when the result is printable)"),
+	     "the STL to write (written only when the result is printable);\n"
+	     "'-': stdout, and IN '-' reads stdin"),
 	    CMD_OPT_STRING("--printer", 0, &printer, CMD_NONEMPTY,
 	     "a printer name or file (see 'stratum printers')", "P",
 	     "take EPSILON from this printer's nozzle diameter"),
@@ -598,7 +600,17 @@ static int repair_command(int argc, char **argv, struct repair_run *run)
 		return ST_EXIT_USAGE;
 	}
 
+	if (split && clio_is_std(out)) {
+		fprintf(stderr, "stratum repair: --split writes one file per part; -o - takes "
+				"one stream (leave out --split)\n");
+		return ST_EXIT_USAGE;
+	}
 	run->input = in;
+	out_std = clio_is_std(out);
+	/* "-": stdin spooled, the STL held back until it is whole (clio.h) */
+	if ((status = clio_input(io, &in, "")) ||
+	    (status = clio_output(io, &out, !ascii, ".stl")))
+		return status;
 	run->ascii = ascii;
 	run->eps_source = eps_arg ? "--epsilon" : "default";
 	run->epsilon = eps_arg ? run->epsilon : REPAIR_EPSILON_DEFAULT;
@@ -680,6 +692,10 @@ static int repair_command(int argc, char **argv, struct repair_run *run)
 		say(run, "only %zu of %zu parts were written", outs.count, rep.components);
 	if (!status)
 		run->stage = "done";
+	if (outs.count == 1 && out_std) {
+		free(outs.path[0]);
+		outs.path[0] = strdup("-"); /* the report names stdout, not the spool */
+	}
 
 out_report:
 	run->exit = status;
@@ -700,11 +716,13 @@ out_report:
 int cmd_repair(int argc, char **argv)
 {
 	struct repair_run run;
+	struct clio io;
 	int status;
 
 	memset(&run, 0, sizeof(run));
 	run.stage = "arguments";
-	status = repair_command(argc, argv, &run);
+	clio_init(&io, "stratum repair");
+	status = repair_command(argc, argv, &run, &io);
 	if (status && !strcmp(run.stage, "arguments")) {
 		bool json = false;
 
@@ -717,5 +735,5 @@ int cmd_repair(int argc, char **argv)
 			cmd_json_out(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
 		}
 	}
-	return status;
+	return clio_finish(&io, status);
 }

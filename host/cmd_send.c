@@ -20,6 +20,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "clio.h"
 #include "commands.h"
 #include "st_clock.h"
 #include "guard.h"
@@ -78,7 +79,8 @@ static int send_parse(int argc, char **argv, struct send_args *a)
 		    "  Marlin printers: FILE.gcode, with line numbers, checksums and resends.\n"
 		    "  Sailfish printers (FlashForge Creator Pro): FILE.gcode, translated to X3G\n"
 		    "  as it streams (as 'stratum x3g' does), or FILE.x3g; S3G packets.\n"
-		    "G-code sliced for another printer is refused (exit 2).\n",
+		    "FILE '-' streams the G-code on stdin.  G-code sliced for another printer\n"
+		    "is refused (exit 2).\n",
 	    .pos = &a->file, .npos = 1, .extra = "one file at a time ('%s' and '%s')"};
 	int rc;
 
@@ -273,7 +275,7 @@ static void send_report(const struct send_args *a, const struct printer_ops *ops
 	send_report_emit(o);
 }
 
-int cmd_send(int argc, char **argv)
+static int send_run(int argc, char **argv, struct clio *io)
 {
 	struct send_args a;
 	struct profile *prof = NULL;
@@ -291,6 +293,8 @@ int cmd_send(int argc, char **argv)
 	status = send_parse(argc, argv, &a);
 	if (status)
 		return status < 0 ? ST_EXIT_OK : status;
+	if ((status = clio_input(io, &a.file, ".gcode"))) /* "-": G-code on stdin */
+		return status;
 	rc = profile_find(a.printer, &prof, &err);
 	if (rc) {
 		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
@@ -359,4 +363,13 @@ out_profile:
 	profile_free(prof);
 	free(port_auto);
 	return status;
+}
+
+/* "stratum send -" streams the G-code on stdin (clio.h). */
+int cmd_send(int argc, char **argv)
+{
+	struct clio io;
+
+	clio_init(&io, SEND_CMD);
+	return clio_finish(&io, send_run(argc, argv, &io));
 }

@@ -21,6 +21,7 @@
 #include <string.h>
 
 #include "cfgopt.h"
+#include "clio.h"
 #include "commands.h"
 #include "meshio.h"
 #include "placeholder.h"
@@ -73,7 +74,8 @@ static int parse_args(int argc, char **argv, struct slice_args *a)
 {
 	const struct cmd_opt opts[] = {
 	    CMD_OPT_STRING("--output", 'o', &a->out, CMD_NONEMPTY, "the output file name", "OUT",
-			   "the G-code file (written only when everything succeeded)"),
+			   "the G-code file (written only when everything succeeded);\n"
+			   "'-': stdout, and a MODEL '-' reads stdin"),
 	    CMD_OPT_STRING("--printer", 0, &a->printer, CMD_NONEMPTY,
 			   "a printer name or file (see 'stratum printers')", "P",
 			   "printer profile name ('stratum printers') or .ini file"),
@@ -382,7 +384,7 @@ static int input_vars(struct profile *p, const char *in)
 	return rc ? ST_EXIT_SOFTWARE : 0;
 }
 
-int cmd_slice(int argc, char **argv)
+static int slice_run(int argc, char **argv, struct clio *io)
 {
 	struct slice_args a = {0};
 	struct slice_run run = {0};
@@ -390,17 +392,26 @@ int cmd_slice(int argc, char **argv)
 	struct slicejob_result res;
 	struct st_error err = {0};
 	struct profile *prof = NULL;
+	const char *in[SLICEJOB_MODELS_MAX], *out;
 	int status, rc;
 
 	status = parse_args(argc, argv, &a);
 	if (status)
 		return status < 0 ? ST_EXIT_OK : status;
+	out = a.out;
+	/* "-": the files read and written; a.in and a.out keep the names shown */
+	memcpy(in, a.in, sizeof(in));
+	for (size_t i = 0; i < a.nin; i++)
+		if ((status = clio_input(io, &in[i], "")))
+			return status;
+	if ((status = clio_output(io, &out, false, ".gcode")))
+		return status;
 	{
 		/* Before any work: never over the model, and a writable directory. */
 		char why[512];
 
 		for (size_t i = 0; i < a.nin; i++) {
-			status = cmd_output_check(a.in[i], a.out, why, sizeof(why));
+			status = cmd_output_check(in[i], out, why, sizeof(why));
 			if (status) {
 				fprintf(stderr, SLICE_CMD ": %s; nothing was written\n", why);
 				return status;
@@ -424,7 +435,7 @@ int cmd_slice(int argc, char **argv)
 		status = ST_EXIT_USAGE;
 		goto out_profile;
 	}
-	status = slicejob_run(SLICE_CMD, a.in, a.nin, &cfg, a.no_repair, a.out, true, &res);
+	status = slicejob_run(SLICE_CMD, in, a.nin, &cfg, a.no_repair, out, true, &res);
 	if (!status) {
 		run.a = &a;
 		run.c = &cfg;
@@ -437,4 +448,13 @@ int cmd_slice(int argc, char **argv)
 out_profile:
 	profile_free(prof);
 	return status;
+}
+
+/* "stratum slice - -o -" reads stdin and writes stdout (clio.h). */
+int cmd_slice(int argc, char **argv)
+{
+	struct clio io;
+
+	clio_init(&io, SLICE_CMD);
+	return clio_finish(&io, slice_run(argc, argv, &io));
 }

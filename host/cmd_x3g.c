@@ -19,6 +19,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "clio.h"
 #include "commands.h"
 #include "gcode.h"
 #include "guard.h"
@@ -42,7 +43,8 @@ static int parse_args(int argc, char **argv, struct x3g_args *a)
 {
 	const struct cmd_opt opts[] = {
 	    CMD_OPT_STRING("--output", 'o', &a->out, CMD_NONEMPTY, NULL, "OUT",
-	     "the X3G file (written only when the whole input translated)"),
+	     "the X3G file (written only when the whole input translated);\n"
+	     "'-': stdout, and IN '-' reads stdin"),
 	    CMD_OPT_STRING("--printer", 0, &a->printer, CMD_NONEMPTY, NULL, "P",
 	     "a sailfish printer profile ('stratum printers') or .ini file"),
 	    CMD_OPT_STRING("--flavor", 0, &a->flavor, CMD_NONEMPTY, NULL, "F",
@@ -361,9 +363,15 @@ static int run_decode(const struct x3g_args *a)
 int cmd_x3g(int argc, char **argv)
 {
 	struct x3g_args a = {0};
+	struct clio io;
 	int status = parse_args(argc, argv, &a);
 
 	if (status)
 		return status < 0 ? ST_EXIT_OK : status;
-	return a.decode ? run_decode(&a) : run_translate(&a);
+	/* "-": G-code (or X3G to decode) from stdin, X3G to stdout when whole */
+	clio_init(&io, X3G_CMD);
+	if (!(status = clio_input(&io, a.decode ? &a.decode : &a.in, a.decode ? ".x3g" : ".gcode")) &&
+	    !(status = clio_output(&io, &a.out, true, ".x3g")))
+		status = a.decode ? run_decode(&a) : run_translate(&a);
+	return clio_finish(&io, status);
 }

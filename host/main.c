@@ -18,6 +18,7 @@ static const struct cmd_entry commands[] = {
 	{"sim", cmd_sim, "run a simulated printer on a pseudo-terminal"},
 	{"preview", cmd_preview, "draw one layer of a G-code file as SVG or PNG"},
 	{"x3g", cmd_x3g, "translate G-code to X3G for Sailfish printers, or list an X3G file"},
+	{"jobs", cmd_jobs, "list the print jobs kept for --resume, show one, prune them"},
 	{"serve", cmd_serve, "run the farm node: OctoPrint-compatible API and job queue"},
 };
 

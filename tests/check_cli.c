@@ -874,5 +874,6 @@ Suite *cli_suite(void)
 	tcase_add_test(tc, repair_refuses_to_overwrite_input);
 	tcase_add_test(tc, repair_json_on_every_exit);
 	suite_add_tcase(s, tc);
+	cli_stdio_tcases(s);
 	return s;
 }

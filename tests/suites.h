@@ -56,6 +56,8 @@ Suite *send_suite(void);	/* tests/check_send.c: stratum send to the simulated Sa
 Suite *guard_suite(void);	/* tests/check_guard.c: the wrong-printer guard, send/print/x3g */
 Suite *print_suite(void);	/* tests/check_print.c: stratum print end to end, both simulators */
 Suite *cli_suite(void);		/* tests/check_cli.c: the stratum binary end to end */
+void cli_stdio_tcases(Suite *s); /* tests/check_clio.c: "-" for stdin/stdout, print --json, part of cli */
+Suite *jobs_suite(void);	/* tests/check_jobs.c: stratum jobs list/show/prune, the size cap */
 Suite *help_suite(void);	/* tests/check_help.c: --help, man pages, completion = the option tables */
 Suite *install_suite(void);	/* tests/check_install.c: make install into a DESTDIR, run from there */
 
