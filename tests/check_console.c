@@ -20,6 +20,7 @@
 #include <unistd.h>
 
 #include "console.h"
+#include "printer.h"
 #include "suites.h"
 #include "testutil.h"
 
@@ -68,6 +69,14 @@ START_TEST(builtins_are_gcode)
 	expect("help", CONSOLE_HELP, NULL);
 	expect("quit", CONSOLE_QUIT, NULL);
 	expect("exit", CONSOLE_QUIT, NULL);
+}
+END_TEST
+
+/* What tells the two apart without a dialect switch in host/. */
+START_TEST(marlin_has_text_replies_sailfish_not)
+{
+	ck_assert(printer_marlin_ops.text_replies);
+	ck_assert(!printer_sailfish_ops.text_replies);
 }
 END_TEST
 
@@ -354,6 +363,7 @@ Suite *console_suite(void)
 
 	tcase_add_test(words, builtins_are_gcode);
 	tcase_add_test(words, builtins_used_wrongly_are_refused);
+	tcase_add_test(words, marlin_has_text_replies_sailfish_not);
 	tcase_add_test(send, send_command_prints_the_replies);
 	tcase_add_test(send, send_command_json);
 	tcase_add_test(send, send_command_bad_line_sends_nothing);
