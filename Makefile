@@ -29,11 +29,16 @@ CXX      := g++
 # parts; both are C libraries (lib3mf-dev is C++ and Debian's is 1.8, old).
 # libwslay-dev frames the push API's WebSocket messages (host/serve/push.c)
 # over libmicrohttpd's upgraded connections.
+# libreadline-dev edits the lines and keeps the history of `stratum console`
+# (host/cmd_console.c): its callback mode lets printer output appear above
+# the line being typed.  libedit-dev (BSD) was tried first: its readline
+# emulation (3.1-20221030) lost every other key in callback mode.  GNU
+# readline is GPL-3, so a binary linked with it is shared under GPL terms.
 DEB_PACKAGES := gcc g++ make pkg-config dpkg-dev \
 	libserialport-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev libtbb-dev \
 	libpolyclipping-dev check libsqlite3-dev libmicrohttpd-dev libjansson-dev \
 	libmosquitto-dev mosquitto gpx libcairo2-dev libxml2-utils libcurl4-openssl-dev \
-	libssl-dev libeigen3-dev libzip-dev libxml2-dev libwslay-dev
+	libssl-dev libeigen3-dev libzip-dev libxml2-dev libwslay-dev libreadline-dev
 # Only the benchmark compares against these (printcore: Printrun's host, also
 # used by the sim suite's faithfulness test, which is skipped without it;
 # libcgal-demo: CGAL's data meshes, the real broken models bench/cgal_corpus.sh
@@ -82,7 +87,7 @@ CPPFLAGS += $(CAIRO_CFLAGS)
 ZIPXML_CFLAGS := $(patsubst -I%,-isystem %,$(shell pkg-config --cflags libzip libxml-2.0 2>/dev/null))
 ZIPXML_LIBS   := $(shell pkg-config --libs libzip libxml-2.0 2>/dev/null || echo -lzip -lxml2)
 CPPFLAGS += $(ZIPXML_CFLAGS)
-LDLIBS   := $(ZIPXML_LIBS) $(CAIRO_LIBS) -lcrypto -lwslay -lmicrohttpd -lmosquitto -lcurl -lsqlite3 -lserialport -lutil -ljansson -lpolyclipping -ltbb -lgmp -lmpfr -lm -pthread
+LDLIBS   := -lreadline $(ZIPXML_LIBS) $(CAIRO_LIBS) -lcrypto -lwslay -lmicrohttpd -lmosquitto -lcurl -lsqlite3 -lserialport -lutil -ljansson -lpolyclipping -ltbb -lgmp -lmpfr -lm -pthread
 TEST_LDLIBS := $(shell pkg-config --libs check 2>/dev/null || echo -lcheck -lsubunit -lrt) $(LDLIBS)
 
 # Sources: every .c under the module folders is library code except the CLI

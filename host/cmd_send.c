@@ -38,6 +38,7 @@ struct send_args {
 	bool json;
 	bool force; /* --force: past the wrong-printer guard (guard.h) */
 	long baud;  /* 0 = the profile's */
+	struct send_commands commands; /* --command: instead of FILE (host/send_command.c) */
 };
 
 /* The stop flag SIGINT/SIGTERM set (STYLE rule 10 exception). */
@@ -68,11 +69,16 @@ static int send_parse(int argc, char **argv, struct send_args *a)
 	    {"--baud", 0, CMD_LONG, &a->baud, CMD_RANGE, 300, 10000000,
 	     "a whole number from %.0f to %.0f", "N",
 	     "link speed, %.0f to %.0f (default: the profile's baudrate)", NULL, NULL},
+	    {"--command", 0, CMD_CUSTOM, &a->commands, 0, 0, 0, "a G-code line (64 at most)",
+	     "LINE", "instead of FILE: send the G-code LINE and print the firmware's\n"
+	     "reply on stdout; repeatable, in order (Marlin: Sailfish sends no text)",
+	     send_command_add, NULL},
 	};
 	const struct cmd_spec spec = {
 	    .cmd = SEND_CMD, CMD_TABLE(opts), .col = 18,
 	    .head = "usage: stratum send FILE --port PATH --printer NAME [--json] [--baud N] "
 		    "[--force]\n"
+		    "       stratum send --command LINE... --port PATH --printer NAME [--json]\n"
 		    "Streams FILE to the printer on PATH (a serial device, a pty or\n"
 		    "tcp://HOST:PORT); progress goes to stderr, the report to stdout (one JSON\n"
 		    "object with --json).  Ctrl-C stops safely: heaters and motors off.\n"
@@ -88,9 +94,15 @@ static int send_parse(int argc, char **argv, struct send_args *a)
 	rc = cmd_parse(&spec, argc, argv);
 	if (rc)
 		return rc;
-	if (!a->file || !a->port || !a->printer) {
+	if (a->file && a->commands.n) {
+		fprintf(stderr, SEND_CMD ": give a FILE or --command, not both\n");
+		return ST_EXIT_USAGE;
+	}
+	if ((!a->file && !a->commands.n) || !a->port || !a->printer) {
 		fprintf(stderr, SEND_CMD ": %s is required\n",
-			!a->file ? "a FILE" : !a->port ? "--port" : "--printer");
+			!a->file && !a->commands.n ? "a FILE (or --command LINE)"
+			: !a->port		   ? "--port"
+						   : "--printer");
 		cmd_usage(&spec, stderr);
 		return ST_EXIT_USAGE;
 	}
@@ -315,6 +327,10 @@ static int send_run(int argc, char **argv, struct clio *io)
 	if ((rc = printer_profile_options(prof, a.port, a.baud, &o, &ops, &err))) {
 		fprintf(stderr, SEND_CMD ": %s: %s\n", prof->path, err.msg);
 		status = ST_EXIT_DATAERR;
+		goto out_profile;
+	}
+	if (a.commands.n) {
+		status = send_commands_run(&a.commands, ops, &o, a.printer, a.port, a.json);
 		goto out_profile;
 	}
 	job.path = a.file;

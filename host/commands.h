@@ -28,6 +28,7 @@ int cmd_serve(int argc, char **argv);	 /* host/cmd_serve.c */
 int cmd_preview(int argc, char **argv);	 /* host/cmd_preview.c */
 int cmd_print(int argc, char **argv);	 /* host/cmd_print.c */
 int cmd_jobs(int argc, char **argv);	 /* host/cmd_jobs.c */
+int cmd_console(int argc, char **argv);	 /* host/cmd_console.c */
 
 /*
  * cmd_opt_value - the value of option argv[*i] given as "NAME VALUE" (then

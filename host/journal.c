@@ -34,27 +34,33 @@ static int journal_mkdirs(char *path)
 	return mkdir(path, 0700) && errno != EEXIST ? -1 : 0;
 }
 
-int journal_dir(char *out, size_t cap, struct st_error *err)
+int journal_state_dir(char *out, size_t cap, const char *sub, const char *what,
+		      struct st_error *err)
 {
 	const char *env = getenv(JOURNAL_ENV), *xdg = getenv("XDG_STATE_HOME");
 	const char *home = getenv("HOME");
 	int n;
 
 	if (env && *env)
-		n = snprintf(out, cap, "%s/jobs", env);
+		n = snprintf(out, cap, "%s/%s", env, sub);
 	else if (xdg && *xdg == '/')
-		n = snprintf(out, cap, "%s/stratum/jobs", xdg);
+		n = snprintf(out, cap, "%s/stratum/%s", xdg, sub);
 	else if (home && *home)
-		n = snprintf(out, cap, "%s/.local/state/stratum/jobs", home);
+		n = snprintf(out, cap, "%s/.local/state/stratum/%s", home, sub);
 	else
-		return st_error_set(err, ST_ERR_IO, "no state directory for the job journal: set "
-				    "HOME, XDG_STATE_HOME or " JOURNAL_ENV);
+		return st_error_set(err, ST_ERR_IO, "no state directory for the %s: set "
+				    "HOME, XDG_STATE_HOME or " JOURNAL_ENV, what);
 	if (n < 0 || (size_t)n >= cap)
 		return st_error_set(err, ST_ERR_RANGE, "the state directory path is too long");
 	if (journal_mkdirs(out))
-		return st_error_set(err, ST_ERR_IO, "cannot create the job journal directory %s: "
-				    "%s", out, strerror(errno));
+		return st_error_set(err, ST_ERR_IO, "cannot create the %s directory %s: "
+				    "%s", what, out, strerror(errno));
 	return 0;
+}
+
+int journal_dir(char *out, size_t cap, struct st_error *err)
+{
+	return journal_state_dir(out, cap, "jobs", "job journal", err);
 }
 
 int journal_init(struct journal *j, struct st_error *err)

@@ -46,6 +46,14 @@ struct journal {
 int journal_dir(char *out, size_t cap, struct st_error *err);
 
 /*
+ * journal_state_dir - the folder sub of the same state directory, created
+ * if missing (journal_dir is its "jobs"); what names it in errors
+ * ("console history").  Same returns as journal_dir.
+ */
+int journal_state_dir(char *out, size_t cap, const char *sub, const char *what,
+		      struct st_error *err);
+
+/*
  * journal_init - a new record for a job: a fresh id (time and process),
  * the file in journal_dir, state "printing", layer -1, z NAN.
  * Returns 0 or journal_dir's error.

@@ -15,6 +15,7 @@ static const struct cmd_entry commands[] = {
 	{"slice", cmd_slice, "slice a mesh into G-code for a printer"},
 	{"print", cmd_print, "repair, slice and print a model in one go (simulated printer by default)"},
 	{"send", cmd_send, "stream a G-code or X3G file to a printer (Marlin or Sailfish)"},
+	{"console", cmd_console, "a terminal to a printer: G-code, replies, home, jog, preheat"},
 	{"sim", cmd_sim, "run a simulated printer on a pseudo-terminal"},
 	{"preview", cmd_preview, "draw one layer of a G-code file as SVG or PNG"},
 	{"x3g", cmd_x3g, "translate G-code to X3G for Sailfish printers, or list an X3G file"},

@@ -59,4 +59,27 @@ void send_progress_end(struct send_progress *p);
 /* send_report_emit - print o as one line on stdout; frees o. */
 void send_report_emit(json_t *o);
 
+/* `stratum send --command LINE` (repeatable): the lines, in order. */
+#define SEND_COMMANDS_MAX 64
+struct send_commands {
+	const char *line[SEND_COMMANDS_MAX];
+	size_t n;
+};
+
+/* send_command_add - the --command reader (struct cmd_opt.read): false when
+ * v is empty or the list is full. */
+bool send_command_add(const char *v, void *dest);
+
+/*
+ * send_commands_run - `stratum send --command`: check every line, open the
+ * printer of ops and o, send the lines one by one and print the firmware's
+ * reply to each on stdout (one JSON object with json; printer and port name
+ * the printer there).  A printer whose firmware sends no text
+ * (ops->text_replies false) is refused before it is opened: exit 2.
+ * Returns the exit status, after a message on stderr (host/send_command.c).
+ */
+int send_commands_run(const struct send_commands *c, const struct printer_ops *ops,
+		      const struct printer_options *o, const char *printer, const char *port,
+		      bool json);
+
 #endif /* STRATUM_HOST_SEND_H */

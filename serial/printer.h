@@ -144,6 +144,10 @@ struct printer_ops {
 	/* a resume restarts at the start of the layer holding the saved
 	 * position (resume_layer_start), not at the saved byte itself */
 	bool resume_from_layer;
+	/* the firmware answers in text lines (printer_command's reply, the
+	 * trace); Sailfish answers in binary packets, so a host has nothing to
+	 * print but what poll reads */
+	bool text_replies;
 	int (*open)(const struct printer_options *o, void **state, struct st_error *err);
 	void (*close)(void *state);
 	int (*check)(const struct printer_options *o, const struct printer_job *job,

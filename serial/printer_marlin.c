@@ -566,6 +566,7 @@ struct marlin *printer_marlin_driver(const struct printer *p)
 const struct printer_ops printer_marlin_ops = {
 	.name = "marlin",
 	.can_resume = true,
+	.text_replies = true,
 	.open = pm_open,
 	.close = pm_close,
 	.check = pm_check,

@@ -36,6 +36,7 @@ static const struct suite_entry suites[] = {
 	{"serve", serve_suite},	      {"octoapi", octoapi_suite},
 	{"preview", preview_suite},
 	{"portpick", portpick_suite}, {"send", send_suite},
+	{"console", console_suite},
 	{"guard", guard_suite},	      {"print", print_suite},
 	{"cli", cli_suite},	      {"help", help_suite},
 	{"install", install_suite},   {"jobs", jobs_suite},

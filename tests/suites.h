@@ -53,6 +53,7 @@ void octoapi_push_tcases(Suite *s); /* tests/check_octopush.c: the push API, par
 Suite *preview_suite(void);	/* tests/check_preview.c: layer preview, move walker */
 Suite *portpick_suite(void);	/* tests/check_portpick.c: --port auto on fake enumerations */
 Suite *send_suite(void);	/* tests/check_send.c: stratum send to the simulated Sailfish */
+Suite *console_suite(void);	/* tests/check_console.c: stratum console, send --command */
 Suite *guard_suite(void);	/* tests/check_guard.c: the wrong-printer guard, send/print/x3g */
 Suite *print_suite(void);	/* tests/check_print.c: stratum print end to end, both simulators */
 Suite *cli_suite(void);		/* tests/check_cli.c: the stratum binary end to end */
