@@ -124,7 +124,10 @@ inline void label(const double (*verts)[3], size_t nverts, const uint32_t (*tris
 		size_t at = 0;
 		for (int x = 2; x >= 0; x--) {
 			const double m = (a[x] + b[x] + c[x]) / 3;
-			const int i = std::min(dim[x] - 1, std::max(0, (int)((m - lo[x]) * inv)));
+			/* Clamped as a double: near the top of the double range
+			 * the sum overflows, and converting that is undefined. */
+			const double f = (m - lo[x]) * inv;
+			const int i = f >= dim[x] - 1 ? dim[x] - 1 : f > 0 ? (int)f : 0;
 			at = at * dim[x] + i;
 		}
 		pt.tri[t] = (uint32_t)at;
