@@ -788,5 +788,6 @@ Suite *exact_suite(void)
 	suite_add_tcase(s, pairs);
 	tcase_add_test(args, bad_arguments);
 	suite_add_tcase(s, args);
+	exact_patches_tcases(s);
 	return s;
 }

@@ -12,6 +12,7 @@ Suite *mesh_suite(void);	/* tests/check_mesh.c: welding, topology report */
 Suite *meshio_suite(void);	/* tests/check_meshio.c: STL/OBJ/OFF I/O, bad input */
 void meshio_3mf_tcases(Suite *s); /* tests/check_meshio_3mf.c: 3MF, part of the meshio suite */
 Suite *exact_suite(void);	/* tests/check_exact.c: CGAL bridge predicates */
+void exact_patches_tcases(Suite *s); /* tests/check_patches.c: flat patches of the count, part of exact */
 Suite *repair_suite(void);	/* tests/check_repair.c: seed 000 repair end to end */
 Suite *thicken_suite(void);	/* tests/check_thicken.c: sheets into closed slabs */
 Suite *heal_suite(void);	/* tests/check_heal.c: welding, stitching, hole filling */

@@ -8,11 +8,12 @@
  * Self-intersection count, in three steps:
  *  1. One float box per usable triangle (24 bytes); skipped and degenerate
  *     triangles are not used, so they meet nothing.
- *  2. Pairs that share a vertex: stars.hpp, star by star.
- *  3. Pairs that share nothing: every pair of overlapping boxes once, from
- *     gridpairs.hpp or, where it declines, boxpairs.hpp (split over the
- *     cores along planes); each is decided by pairtest.hpp with exact
- *     predicates.
+ *  2. Pairs that share a vertex: stars.hpp, star by star, but for stars
+ *     inside one flat patch (patches.hpp), proven free of intersections.
+ *  3. Pairs that share nothing and no trusted patch: every pair of
+ *     overlapping boxes once, from gridpairs.hpp or, where it declines,
+ *     boxpairs.hpp (split over the cores along planes); each is decided
+ *     by pairtest.hpp with exact predicates.
  */
 #include "exact.h"
 
@@ -21,6 +22,7 @@
 #include "boxpairs.hpp"
 #include "gridpairs.hpp"
 #include "pairtest.hpp"
+#include "patches.hpp"
 #include "stars.hpp"
 
 #include <algorithm>
@@ -90,39 +92,54 @@ int count_pairs(const double (*verts)[3], size_t nverts, const uint32_t (*tris)[
 		usable[t] = 1;
 	}
 
-	/* Pairs that share a vertex: from the stars, never from the boxes. */
+	/* Patches proven flat (patches.hpp) and pairs that share a vertex:
+	 * from the stars, never from the boxes; a star inside one patch
+	 * needs no test of its own. */
+	patches::table pt;
+	patches::label(verts, nverts, tris, ntris, usable, pt);
 	stars::table st;
 	stars::build(tris, ntris, nverts, usable, st);
 	auto get = [verts](uint32_t i) { return to_point(verts[i]); };
 	std::atomic<uint64_t> near_hits{0};
 	boxpairs::for_each_index(nverts, threads, [&](size_t v) {
 		static thread_local stars::scratch s;
+		static thread_local std::vector<uint32_t> sub;
 		const size_t k = st.off[v + 1] - st.off[v];
-		const uint64_t h = stars::count_in_star<K>(static_cast<uint32_t>(v),
-							    st.tri.data() + st.off[v], k, tris,
-							    get, s);
+		const uint32_t *list = st.tri.data() + st.off[v];
+		if (patches::check_vertex(verts, static_cast<uint32_t>(v), list, k, tris, pt, s,
+					  sub))
+			return;
+		const uint64_t h =
+		    stars::count_in_star<K>(static_cast<uint32_t>(v), list, k, tris, get, s);
 		if (h)
 			near_hits += h;
 	});
+	patches::settle(verts, tris, st.off.data(), st.tri.data(), pt);
 	std::vector<size_t>().swap(st.off);
 	std::vector<uint32_t>().swap(st.tri);
-
 	std::vector<uint8_t>().swap(usable);
+	patches::check_loops(verts, tris, ntris, pt);
+	const std::vector<uint32_t> &patch = pt.tri;
 
-	/* Pairs that share nothing: the boxes, on a grid where it is fast. */
-	auto apart = [tris](size_t s, size_t t) {
-		return pairtest::no_common_corner(tris[s], tris[t]);
+	/* Pairs that share nothing and no patch: the boxes, on a grid where
+	 * it is fast. */
+	auto apart = [tris, &patch](size_t s, size_t t) {
+		return (patch[s] == patches::NONE || patch[s] != patch[t]) &&
+		       pairtest::no_common_corner(tris[s], tris[t]);
 	};
-	typedef std::array<uint32_t, 3> corners;
-	auto corners_of = [tris](uint32_t t) { return corners{tris[t][0], tris[t][1], tris[t][2]}; };
+	static_assert(patches::NONE == gridpairs::NO_GROUP, "a triangle in no patch is in no group");
+	struct tag {
+		uint32_t c[3], patch;
+	};
+	auto tag_of = [tris, &patch](uint32_t t) {
+		return tag{{tris[t][0], tris[t][1], tris[t][2]}, patch[t]};
+	};
 	std::atomic<uint64_t> far_hits{0};
 	if (gridpairs::for_each_pair(
-		boxes, use, threads, corners_of,
-		[](const corners &a, const corners &b) {
-			return pairtest::no_common_corner(a.data(), b.data());
-		},
-		[&](const corners &a, const corners &b) {
-			if (pairtest::intersects<K>(a.data(), b.data(), get))
+		boxes, use, threads, tag_of, [](const tag &a) { return a.patch; },
+		[](const tag &a, const tag &b) { return pairtest::no_common_corner(a.c, b.c); },
+		[&](const tag &a, const tag &b) {
+			if (pairtest::intersects<K>(a.c, b.c, get))
 				far_hits++;
 		})) {
 		*count = near_hits + far_hits;

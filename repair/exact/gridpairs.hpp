@@ -29,6 +29,8 @@ namespace gridpairs
 
 using boxpairs::Box;
 
+/* What group() returns for a box that belongs to no group. */
+const uint32_t NO_GROUP = UINT32_MAX;
 /* Cells per axis at most (the cell key packs three 21-bit indices). */
 const int64_t MAX_CELLS = (int64_t)1 << 21;
 /* Declined above this many cell entries, or box comparisons, per box. */
@@ -86,29 +88,31 @@ inline bool overlap(const Box &a, const Box &b)
 /*
  * Call visit(tag_s, tag_t) once, from any thread, for every pair of
  * overlapping boxes (closed, as boxpairs.hpp) among boxes[use[..]] for which
- * keep(tag_s, tag_t) is true, where tag_s = tag_of(s) is what the caller
- * needs of box s (a triangle's corners).  The tags are copied beside the
+ * keep(tag_s, tag_t) is true and group(tag_s) is NO_GROUP or differs from
+ * group(tag_t), where tag_s = tag_of(s) is what the caller needs of box s
+ * (a triangle's corners and patch).  The tags are copied beside the
  * sorted boxes: keep() runs for every overlapping pair (9 million on a
  * 1M-triangle UV sphere, most of them neighbours it turns away), and
  * looking the triangle up through its index missed the cache so often
  * that one load carried 17 % of the pair loop's samples.  Returns false,
  * having called nothing, when the grid would be slow for these boxes;
- * boxes is then as given and use holds the same indices, perhaps in
- * another order.  On true, boxes and use are left empty: the boxes are
+ * use then holds the indices still to be compared (perhaps fewer, in
+ * another order: boxes that can meet none of another group are left
+ * out), and boxes holds at least those.  On true, boxes and use are left empty: the boxes are
  * sorted into cell order (so that the pairs are walked through memory in
  * order), and keeping the unsorted copy as well would cost 24 bytes per
  * triangle.
  */
-template <class TagOf, class Keep, class Visit>
+template <class TagOf, class Group, class Keep, class Visit>
 bool for_each_pair(std::vector<Box> &boxes, std::vector<uint32_t> &use, int threads,
-		   TagOf tag_of, Keep keep, Visit visit)
+		   TagOf tag_of, Group group, Keep keep, Visit visit)
 {
 	typedef typename std::decay<decltype(tag_of(uint32_t()))>::type Tag;
 	struct item {
 		Box box;
 		Tag tag;
 	};
-	const size_t n = use.size();
+	size_t n = use.size();
 	grid g;
 
 	if (n < 2)
@@ -165,21 +169,47 @@ bool for_each_pair(std::vector<Box> &boxes, std::vector<uint32_t> &use, int thre
 	 * keeping where each came from: the passes below then walk through
 	 * memory in order whatever the order of the file.
 	 */
-	const int group_bits = bits > 4 ? 4 : 0;
+	/*
+	 * A bucket whose boxes all belong to one group gives no pair, and a
+	 * box that only touches such buckets is left out before the sort:
+	 * on a smooth surface cut into patches that is most of them.  Any
+	 * two overlapping boxes share the cell of their overlap's low corner,
+	 * so a pair of two groups always lands in a mixed bucket.
+	 */
+	{
+		const uint32_t EMPTY = NO_GROUP - 1;
+		std::vector<uint32_t> sig(nb, EMPTY);
+		for (size_t i = 0; i < n; i++) {
+			const uint32_t gi = group(tag_of(use[i]));
+			for_each_cell(g, boxes[use[i]], [&](uint32_t b) {
+				sig[b] = sig[b] == EMPTY || sig[b] == gi ? gi : NO_GROUP;
+			});
+		}
+		size_t kept = 0;
+		for (size_t i = 0; i < n; i++) {
+			bool mixed = false;
+			for_each_cell(g, boxes[use[i]], [&](uint32_t b) { mixed |= sig[b] == NO_GROUP; });
+			if (mixed)
+				use[kept++] = use[i];
+		}
+		use.resize(kept);
+		n = kept;
+	}
+	const int block_bits = bits > 4 ? 4 : 0;
 	std::vector<uint32_t> id(n);
 	{
-		std::vector<uint32_t> first((nb >> group_bits) + 1, 0);
-		auto group = [&](const Box &b) {
+		std::vector<uint32_t> first((nb >> block_bits) + 1, 0);
+		auto block = [&](const Box &b) {
 			return bucket_of(g, cell_of(g, 0, b.min_coord(0)), cell_of(g, 1, b.min_coord(1)),
 					 cell_of(g, 2, b.min_coord(2))) >>
-			       group_bits;
+			       block_bits;
 		};
 		for (size_t i = 0; i < n; i++)
-			first[group(boxes[use[i]]) + 1]++;
+			first[block(boxes[use[i]]) + 1]++;
 		for (size_t b = 0; b + 1 < first.size(); b++)
 			first[b + 1] += first[b];
 		for (size_t i = 0; i < n; i++)
-			id[first[group(boxes[use[i]])]++] = use[i];
+			id[first[block(boxes[use[i]])]++] = use[i];
 	}
 	/* id holds the same indices as use: one copy is enough at the peak. */
 	std::vector<uint32_t>().swap(use);
@@ -232,10 +262,23 @@ bool for_each_pair(std::vector<Box> &boxes, std::vector<uint32_t> &use, int thre
 	 * sphere, 15 million overlapping pairs of which 2.3 million share
 	 * no corner). */
 	const size_t chunk = 4096;
+	/* Whether the bucket's boxes all belong to one group (a patch whose
+	 * pairs need no test): most buckets, on a smooth surface. */
+	auto one_group = [&](uint32_t first, uint32_t last) {
+		const uint32_t gr = group(sorted[entry[first]].tag);
+		if (gr == NO_GROUP)
+			return false;
+		for (uint32_t i = first + 1; i < last; i++)
+			if (group(sorted[entry[i]].tag) != gr)
+				return false;
+		return true;
+	};
 	boxpairs::for_each_index((nb + chunk - 1) / chunk, threads, [&](size_t c) {
 		const size_t end_b = std::min(nb, (c + 1) * chunk);
 		for (size_t b = c * chunk; b < end_b; b++) {
 			const uint32_t first = off[b], last = off[b + 1];
+			if (last - first < 2 || one_group(first, last))
+				continue;
 			/* A crowded bucket (the poles of a UV sphere put thousands
 			 * of slivers in a few cells) is swept along x: sorted by
 			 * low x, box i is compared only with the boxes that start
@@ -257,6 +300,7 @@ bool for_each_pair(std::vector<Box> &boxes, std::vector<uint32_t> &use, int thre
 					continue;
 				const item &is = sorted[s];
 				const Box &bs = is.box;
+				const uint32_t gs = group(is.tag);
 				for (uint32_t j = i + 1; j < last; j++) {
 					const uint32_t t = entry[j];
 					if (t == entry[j - 1])
@@ -265,6 +309,8 @@ bool for_each_pair(std::vector<Box> &boxes, std::vector<uint32_t> &use, int thre
 					const Box &bt = it.box;
 					if (sweep && bt.min_coord(0) > bs.max_coord(0))
 						break;
+					if (gs != NO_GROUP && gs == group(it.tag))
+						continue;
 					if (!overlap(bs, bt) || !keep(is.tag, it.tag))
 						continue;
 					const uint64_t at = bucket_of(

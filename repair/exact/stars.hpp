@@ -118,6 +118,31 @@ inline bool order_fan(uint32_t v, const uint32_t *list, size_t k, const uint32_t
 }
 
 /*
+ * Whether a fan of k wedges, each turning counterclockwise by less than
+ * half a turn, goes around its vertex v at most once: side(i) is the sign
+ * (1, 0, -1) of the side of the line v r_0 that ring vertex r_i is on,
+ * which must run + ... + [0] - ... -.  A zero after the first side is
+ * half a turn and anything else (back to + or 0 after -) is a full one.
+ */
+template <class Side> bool once_around(size_t k, bool closed, Side side)
+{
+	/* Fewer than five turns of less than half a turn each cannot make
+	 * two full turns, nor two of them one (an open fan). */
+	if (closed ? k < 5 : k < 3)
+		return true;
+	int phase = 0; /* 0: +, 1: the half turn, 2: - */
+	const size_t last = closed ? k - 1 : k;
+	for (size_t i = 1; i <= last; i++) {
+		const int h = side(i);
+		if (h >= 0 && phase != 0)
+			return false;
+		if (h <= 0)
+			phase = h == 0 ? 1 : 2;
+	}
+	return true;
+}
+
+/*
  * Whether the star of v is one fan that, seen along a direction n (the sum
  * of its triangles' normals), goes once around v with every triangle
  * turning counterclockwise: then its triangles meet only in the faces they
@@ -159,33 +184,11 @@ bool fan_is_embedded(uint32_t v, const uint32_t *list, size_t k, const uint32_t 
 	for (size_t i = 0; i < k; i++)
 		if (CGAL::orientation(pv, pt(r[i]), pt(r[(i + 1) % nring]), w) != CGAL::POSITIVE)
 			return false;
-	/*
-	 * Once around, not more: the side of the line v r_0 each later ring
-	 * vertex is on must run + ... + [0] - ... -.  Every step turns by less
-	 * than half a turn, so a zero after the first side is half a turn and
-	 * anything else (back to + or 0 after -) is a full one.
-	 */
-	/* Fewer than five turns of less than half a turn each cannot make
-	 * two full turns, nor two of them one (an open fan). */
-	if (closed ? k < 5 : k < 3)
-		return true;
 	const Point p0 = pt(r[0]);
-	int phase = 0; /* 0: +, 1: the half turn, 2: - */
-	const size_t last = closed ? k - 1 : k;
-	for (size_t i = 1; i <= last; i++) {
+	return once_around(k, closed, [&](size_t i) {
 		const CGAL::Orientation h = CGAL::orientation(pv, p0, pt(r[i]), w);
-		if (h == CGAL::POSITIVE) {
-			if (phase != 0)
-				return false;
-		} else if (h == CGAL::COPLANAR) {
-			if (phase != 0)
-				return false;
-			phase = 1;
-		} else {
-			phase = 2;
-		}
-	}
-	return true;
+		return h == CGAL::POSITIVE ? 1 : h == CGAL::COPLANAR ? 0 : -1;
+	});
 }
 
 /*
