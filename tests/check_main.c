@@ -38,7 +38,7 @@ static const struct suite_entry suites[] = {
 	{"portpick", portpick_suite}, {"send", send_suite},
 	{"guard", guard_suite},	      {"print", print_suite},
 	{"cli", cli_suite},	      {"help", help_suite},
-	{"install", install_suite},
+	{"install", install_suite},   {"progress", progress_suite},
 };
 #define NSUITES (sizeof(suites) / sizeof(suites[0]))
 

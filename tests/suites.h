@@ -57,6 +57,7 @@ Suite *guard_suite(void);	/* tests/check_guard.c: the wrong-printer guard, send/
 Suite *print_suite(void);	/* tests/check_print.c: stratum print end to end, both simulators */
 Suite *cli_suite(void);		/* tests/check_cli.c: the stratum binary end to end */
 Suite *help_suite(void);	/* tests/check_help.c: --help, man pages, completion = the option tables */
+Suite *progress_suite(void);	/* tests/check_hostprogress.c: progress lines, ETA, printer clock */
 Suite *install_suite(void);	/* tests/check_install.c: make install into a DESTDIR, run from there */
 
 #endif
