@@ -12,16 +12,12 @@
  */
 #include <errno.h>
 #include <jansson.h>
-#include <math.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
-#include <unistd.h>
 
 #include "commands.h"
-#include "st_clock.h"
 #include "guard.h"
 #include "printer.h"
 #include "portpick.h"
