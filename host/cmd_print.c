@@ -333,9 +333,9 @@ static void print_summary_text(const struct print_job *job)
 	} else {
 		printf("  time: took %s", took);
 	}
-	if (job->simulated) {
-		print_duration(sim, sizeof(sim), job->stream_s * job->a->speedup);
-		printf(" = %s of printer time (simulated, %gx)", sim, job->a->speedup);
+	if (job->simulated && isfinite(job->machine_s)) {
+		print_duration(sim, sizeof(sim), job->machine_s);
+		printf("; the simulated printer's clock ran %s", sim);
 	}
 	printf("\n");
 	if (job->journal_saved)
@@ -361,6 +361,8 @@ static void print_summary_json(const struct print_job *job)
 	json_object_set_new(o, "simulated", json_boolean(job->simulated));
 	if (job->simulated)
 		json_object_set_new(o, "speedup", json_real(job->a->speedup));
+	if (job->simulated && isfinite(job->machine_s))
+		json_object_set_new(o, "printer_s", json_real(job->machine_s));
 	if (job->sliced && job->slice.repaired) {
 		json_t *r = json_object();
 		json_object_set_new(r, "input_triangles",
@@ -541,6 +543,7 @@ static int print_run(int argc, char **argv, bool *answered, struct clio *io)
 	job->a = &a;
 	job->start_layer = -1;
 	job->layer = -1;
+	job->machine_s = NAN;
 	if (a.resume && (status = print_setup_resume(job)))
 		goto out;
 	if ((status = cfgopt_load(&a.cfg, PRINT_CMD, a.printer, &job->prof)))

@@ -17,6 +17,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "clio.h"
 #include "commands.h"
@@ -31,7 +32,7 @@
 #define REPAIR_EPSILON_DEFAULT 0.4   /* mm, when no printer is named */
 #define REPAIR_EPSILON_MAX 10.0	     /* mm; more is a typo, not a wall */
 #define REPAIR_HEAL_MAX 10.0	     /* mm, for --weld and --stitch: more is a typo */
-#define REPAIR_PROGRESS_MIN 100000   /* triangles before progress is shown */
+#define REPAIR_PROGRESS_MIN 100000   /* triangles before progress goes to a log */
 
 /* The help text around the option lines. */
 static const char repair_head[] =
@@ -663,7 +664,9 @@ static int repair_command(int argc, char **argv, struct repair_run *run, struct 
 	opt.weld = weld;
 	opt.stitch = stitch;
 	opt.keep_holes = keep_holes;
-	if (m->ntris >= REPAIR_PROGRESS_MIN && progress_start(&prog, "stratum repair")) {
+	/* a terminal always gets the line: a small soup can take a minute */
+	if ((m->ntris >= REPAIR_PROGRESS_MIN || isatty(STDERR_FILENO)) &&
+	    progress_start(&prog, "stratum repair")) {
 		opt.progress = progress_update;
 		opt.progress_ctx = &prog;
 	}

@@ -12,17 +12,13 @@
  */
 #include <errno.h>
 #include <jansson.h>
-#include <math.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
-#include <unistd.h>
 
 #include "clio.h"
 #include "commands.h"
-#include "st_clock.h"
 #include "guard.h"
 #include "printer.h"
 #include "portpick.h"
@@ -107,61 +103,6 @@ static int send_parse(int argc, char **argv, struct send_args *a)
 		return ST_EXIT_USAGE;
 	}
 	return 0;
-}
-
-void send_progress_start(struct send_progress *p)
-{
-	memset(p, 0, sizeof(*p));
-	p->cmd = SEND_CMD;
-	p->tag = "send";
-	p->tty = isatty(STDERR_FILENO);
-	p->last_decile = -1;
-	p->t0 = st_mono_s();
-}
-
-void send_progress_show(struct send_progress *p, const struct printer_progress *v)
-{
-	double frac = v->total ? (double)v->done / (double)v->total : 1.0;
-	double el = st_mono_s() - p->t0;
-	char temps[96] = "", eta[32] = "", layer[32] = "";
-	int ela = (int)el;
-
-	if (v->tool)
-		snprintf(temps, sizeof(temps), " T %.0f/%.0f", v->tool_actual, v->tool_target);
-	if (v->bed)
-		snprintf(temps + strlen(temps), sizeof(temps) - strlen(temps), " B %.0f/%.0f",
-			 v->bed_actual, v->bed_target);
-	if (frac > 0.01 && frac < 1) {
-		double left = el / frac - el;
-		snprintf(eta, sizeof(eta), " ETA %d:%02d", (int)(left / 60), (int)fmod(left, 60));
-	}
-	if (v->layer >= 0)
-		snprintf(layer, sizeof(layer), " layer %ld", v->layer);
-	if (p->tty) {
-		int n = fprintf(stderr, "\r[%s] %3d%% %d:%02d %s %llu/%llu%s%s%s%s", p->tag,
-				(int)(frac * 100), ela / 60, ela % 60, v->unit, (unsigned long long)v->done,
-				(unsigned long long)v->total, layer, temps, eta,
-				v->paused ? " (paused)" : "");
-		for (size_t w = n > 0 ? (size_t)n : 0; w < p->width; w++)
-			fputc(' ', stderr);
-		if (n > 0 && (size_t)n > p->width)
-			p->width = (size_t)n;
-		fflush(stderr);
-	} else {
-		int decile = (int)(frac * 10);
-		if (decile != p->last_decile) {
-			p->last_decile = decile;
-			fprintf(stderr, "%s: %d%% %s %llu/%llu%s%s%s\n", p->cmd, decile * 10, v->unit,
-				(unsigned long long)v->done, (unsigned long long)v->total, layer,
-				temps, eta);
-		}
-	}
-}
-
-void send_progress_end(struct send_progress *p)
-{
-	if (p->tty)
-		fputc('\n', stderr);
 }
 
 void send_report_emit(json_t *o)

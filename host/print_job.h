@@ -37,12 +37,14 @@ struct print_layer {
 	uint64_t line;	 /* file line of its layer comment */
 	int64_t offset;	 /* byte offset of that line */
 	double z;	 /* mm, NAN unknown */
+	double est;	 /* estimated seconds of printing before it (print_estimate) */
 };
 
 struct print_layers {
 	struct print_layer *v;
 	size_t n, cap;
 	uint64_t lines, commands; /* in the file */
+	double est_total;	  /* estimated seconds of printing, 0 unknown */
 };
 
 /* Everything one print holds, for the stages and the summary. */
@@ -71,6 +73,7 @@ struct print_job {
 	long layer;		   /* its layer, -1 unknown */
 	uint64_t resends;
 	double stream_s;	   /* seconds of streaming */
+	double machine_s;	   /* the simulator's clock over the stream, NAN real */
 	const char *fail;	   /* why it stopped, NULL done */
 	char fail_buf[300];
 	int status;
@@ -82,6 +85,23 @@ struct print_job {
  * before anything is sent).  Returns 0 or the exit status (message printed).
  */
 int print_scan(const char *path, struct print_layers *L);
+
+/*
+ * print_estimate - fill L's estimate (est of each layer, est_total) from
+ * the moves of the G-code at path, planned as the firmware plans them and
+ * scaled to stated_s, the total the file states (0: none).  Leaves
+ * est_total 0 when the file cannot be timed.  print_scan calls it.
+ */
+void print_estimate(const char *path, struct print_layers *L, double stated_s);
+
+/* print_time_comment - seconds of a "; estimated printing time[ (normal
+ * mode)] = 1d 2h 3m 4s" comment (c without the ';'), NAN for another. */
+double print_time_comment(const char *c);
+
+/* print_est_done - estimated seconds of printing done when the printer
+ * has confirmed file line `line` of layer `layer` (0-based, -1 before the
+ * first): the layers before it and its share of this one, by lines. */
+double print_est_done(const struct print_layers *L, long layer, uint64_t line);
 
 /*
  * print_byte_after - the byte offset just past file line `line` (1-based)

@@ -49,6 +49,7 @@ int print_scan(const char *path, struct print_layers *L)
 	FILE *f;
 	long layer = -1;
 	int64_t before = 0;
+	double stated = NAN, m73 = NAN; /* the file's own total estimate */
 	int rc, status = 0;
 
 	memset(L, 0, sizeof(*L));
@@ -76,13 +77,17 @@ int print_scan(const char *path, struct print_layers *L)
 					goto out;
 				}
 				L->v = p;
-				L->v[L->n++] = (struct print_layer){gcode_reader_line(r), before, NAN};
+				L->v[L->n++] = (struct print_layer){gcode_reader_line(r), before, NAN, 0};
 			}
-			L->v[layer] = (struct print_layer){gcode_reader_line(r), before, z};
+			L->v[layer] = (struct print_layer){gcode_reader_line(r), before, z, 0};
 		} else if (mark == GCODE_LAYER_Z && layer >= 0) {
 			L->v[layer].z = z;
 		}
 		before = (int64_t)gcode_reader_bytes(r);
+		if (g.has_comment && isnan(stated))
+			stated = print_time_comment(g.comment);
+		if (g.letter == 'M' && g.number == 73 && isnan(m73) && gcode_word_value(&g, 'R', &m73))
+			m73 *= 60; /* minutes left at the start: the whole */
 		if (g.kind == GCODE_KIND_HOST_ONLY || !g.text_len)
 			continue;
 		L->commands++;
@@ -91,6 +96,8 @@ int print_scan(const char *path, struct print_layers *L)
 	if (rc < 0) {
 		fprintf(stderr, PRINT_CMD ": %s; nothing was sent\n", err.msg);
 		status = ST_EXIT_DATAERR;
+	} else {
+		print_estimate(path, L, !isnan(stated) ? stated : !isnan(m73) ? m73 : 0);
 	}
 out:
 	gcode_reader_free(r);
@@ -122,6 +129,7 @@ struct print_run {
 	volatile sig_atomic_t *stop;
 	double last_sync;
 	long last_layer;
+	double est_base; /* a resume: the estimate of the layers skipped */
 };
 
 /* Sync the journal now; a failure is shown once, the print goes on. */
@@ -185,7 +193,9 @@ static void print_progress(void *ctx, const struct printer_progress *p)
 		v.unit = "line";
 		v.done = job->last_line;
 		v.total = job->layers.lines;
-		v.layer = job->layer >= 0 ? job->layer + 1 : -1;
+		v.layer = job->layer;
+		c->p.est_done = print_est_done(&job->layers, job->layer, job->last_line) -
+				c->est_base;
 	}
 	if (!job->a->json || c->p.tty)
 		send_progress_show(&c->p, &v);
@@ -280,6 +290,12 @@ static int print_on(struct print_job *job, const struct printer_ops *ops,
 	send_progress_start(&run.p);
 	run.p.cmd = PRINT_CMD;
 	run.p.tag = "print";
+	run.p.layers = job->layers.n;
+	run.p.est_total = job->layers.est_total;
+	if (job->start_layer >= 0) /* a resume: what is left of the estimate */
+		run.est_base = job->layers.v[job->start_layer].est;
+	run.p.est_total -= run.est_base;
+	run.p.pace0 = job->simulated ? job->a->speedup : 1;
 	job->total = job->input == PRINT_X3G ? info.commands : job->layers.lines;
 	if (!job->a->json || run.p.tty)
 		fprintf(stderr, PRINT_CMD ": printing on %s at %s, %llu %s\n", job->printer_desc,
@@ -288,6 +304,7 @@ static int print_on(struct print_job *job, const struct printer_ops *ops,
 	print_sync(job);
 	rc = printer_stream(pr, &pj, &res, &err);
 	job->stream_s = res.last.seconds;
+	job->machine_s = res.machine_s;
 	send_progress_end(&run.p);
 	print_take(job, &res.last);
 	status = send_exit_for(&res, rc);

@@ -36,21 +36,38 @@ int send_exit_for(const struct printer_result *res, int rc);
  */
 bool send_safe_stop(const char *cmd, struct printer *pr, const struct printer_result *res);
 
-/* Progress state: a redrawn line on a terminal, a line per 10 % otherwise. */
+/* Progress state: a redrawn line on a terminal, a line per 10 % otherwise
+ * (host/send_progress.c). */
 struct send_progress {
 	const char *cmd; /* plain lines' prefix, SEND_CMD unless changed after start */
-	const char *tag; /* the bar's "[send]", likewise */
+	const char *tag; /* the line's "[send]", likewise */
 	bool tty;
 	double t0;	 /* st_mono_s() */
 	int last_decile; /* plain mode: last 10 % step printed */
 	size_t width;	 /* characters of the redrawn line */
+	size_t layers;	 /* layers of the file, 0 unknown */
+	/* The print's time estimate, set before each show: est_total > 0 makes
+	 * the ETA follow it (progress_eta) rather than the line rate. */
+	double est_total, est_done; /* estimated printing seconds: all, done */
+	double pace0;	 /* estimated s per wall s before one is measured (the
+			  * simulator's speed-up, else 1) */
+	double t_moving; /* st_mono_s() when est_done first grew, 0 not yet */
 };
 
 /* send_progress_start - decide tty or lines, start the clock. */
 void send_progress_start(struct send_progress *p);
 
-/* send_progress_show - draw v's unit, done of total, layer (-1 unknown),
- * temperatures and pause (redrawn line or a line per 10 %). */
+/*
+ * send_progress_line - the line for v at time now in at most cols - 1
+ * characters: percent, layer N/M (counted from 1, as PrusaSlicer and
+ * OctoPrint show them; v->layer is 0-based), lines, temperatures, elapsed
+ * time and ETA as h:mm:ss, fields left out from the least wanted when the
+ * terminal is narrow.  Returns its length.
+ */
+size_t send_progress_line(struct send_progress *p, const struct printer_progress *v, double now,
+			  size_t cols, char *out, size_t cap);
+
+/* send_progress_show - draw v (redrawn line or a line per 10 %). */
 void send_progress_show(struct send_progress *p, const struct printer_progress *v);
 
 /* send_progress_end - end the redrawn line so the report starts clean. */

@@ -43,6 +43,7 @@ static int slicejob_repair(const struct mesh *m, const struct slicer_config *c,
 	opt.precision = REPAIR_FLOAT64; /* slicing reads doubles: no float32 rounding needed */
 	opt.threads = c->threads;
 	if (have_prog) {
+		prog.prefix = "repairing the mesh: ";
 		opt.progress = progress_update;
 		opt.progress_ctx = &prog;
 	}

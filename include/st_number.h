@@ -84,4 +84,36 @@ static inline enum st_number st_parse_double(const char *s, size_t len, unsigned
 	return ST_NUMBER_OK;
 }
 
+/*
+ * st_parse_duration - a slicer's "1d 2h 3m 4s" (any of the parts, in that
+ * form: "; estimated printing time = 45m 38s") in seconds, up to the end
+ * of s or a newline; -1 when s is not one.
+ */
+static inline double st_parse_duration(const char *s)
+{
+	double total = 0, v;
+	bool any = false;
+
+	while (*s == ' ')
+		s++;
+	while (*s && *s != '\n') {
+		size_t n = strspn(s, "0123456789");
+
+		if (!n || st_parse_double(s, n, 0, &v) != ST_NUMBER_OK)
+			return -1;
+		s += n;
+		switch (*s++) {
+		case 'd': total += v * 86400; break;
+		case 'h': total += v * 3600; break;
+		case 'm': total += v * 60; break;
+		case 's': total += v; break;
+		default: return -1;
+		}
+		any = true;
+		while (*s == ' ')
+			s++;
+	}
+	return any ? total : -1;
+}
+
 #endif /* STRATUM_ST_NUMBER_H */

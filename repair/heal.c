@@ -12,6 +12,7 @@
 
 #include "heal.h"
 #include "ids.h"
+#include "repair_impl.h"
 #include "vec3.h"
 #include "st_grow.h"
 
@@ -590,13 +591,19 @@ int heal_mesh(const struct mesh *in, const struct repair_options *opt, struct me
 	if (in->ntris)
 		memcpy(w.tris, in->tris, in->ntris * sizeof(*w.tris));
 
-	if (rep->weld_tolerance > 0)
+	if (rep->weld_tolerance > 0) {
+		repair_progress(opt, "welding the mesh", 0);
 		rc = weld(&w, rep->weld_tolerance, rep, err);
-	if (!rc && rep->stitch_tolerance > 0)
+	}
+	if (!rc && rep->stitch_tolerance > 0) {
+		repair_progress(opt, "stitching the gaps", 0);
 		rc = stitch(&w, rep->stitch_tolerance, rep, &n_boundary, err);
+	}
 	/* A closed mesh has no hole: skip the second walk over its edges. */
-	if (!rc && !opt->keep_holes && n_boundary > 0)
+	if (!rc && !opt->keep_holes && n_boundary > 0) {
+		repair_progress(opt, "filling the holes", 0);
 		rc = heal_fill(&w, rep, err);
+	}
 	if (!rc && (rep->welded_vertices || rep->stitched_vertices || rep->holes_filled))
 		rc = build(&w, out, err);
 out:

@@ -226,7 +226,7 @@ int repair_rounded(const struct mesh *in, const struct repair_options *opt,
 	for (;;) {
 		bool changed = false;
 		double moved = 0;
-		repair_progress(opt, "rounding", 0.9);
+		repair_progress(opt, "rounding the coordinates", 0);
 		rc = round_result(co.result, opt->precision, opt->threads, &rounded, &moved, &changed,
 				  &rep->rounding_merged, err);
 		/* Rounds add up: each moves the previous round's result. */
@@ -340,6 +340,7 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 	/* Groups that cannot touch, even thickened and rounded, are
 	 * repaired apart (batch.h). */
 	healed_rep = *rep;
+	repair_progress(opt, "finding the separate groups", 0);
 	rc = batches_find(in, batch_reach(in, opt), &bs, err);
 	if (!rc && bs.n > 1)
 		rc = repair_rounded_batches(in, opt, &bs, &rounded, &batch_of, &known, rep, err);
@@ -350,7 +351,7 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 	if (rc)
 		goto out_free;
 
-	repair_progress(opt, "checking", 0.95);
+	repair_progress(opt, "checking the repaired mesh", 0);
 	rc = repair_finish_parts(&rounded, opt, known, batch_of, &apart, component, rep, err);
 	if (!rc && !apart) {
 		/* One group's result lies inside another's, where the outer
@@ -370,7 +371,6 @@ int repair_mesh(const struct mesh *in, const struct repair_options *opt, struct 
 	*out = rounded;
 	free(batch_of);
 	mesh_free(healed);
-	repair_progress(opt, "done", 1);
 	return 0;
 
 out_free:

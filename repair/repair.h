@@ -50,7 +50,9 @@ struct repair_options {
 	double weld;		/* mm: weld vertices this close; default 8 float32 ulps */
 	double stitch;		/* mm: gamma, stitch boundary this close; default 1.5 eps */
 	bool keep_holes;	/* no stitching or hole filling (the seed's pipeline) */
-	/* Called now and then with a stage name and 0..1 done; may be NULL. */
+	/* Called now and then with the phase as a sentence ("cutting the
+	 * crossing triangles") and 0..1 of that phase done, from worker
+	 * threads too but one call at a time; may be NULL. */
 	void (*progress)(void *ctx, const char *stage, double done);
 	void *progress_ctx;
 };

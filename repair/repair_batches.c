@@ -3,6 +3,7 @@
  * (repair_impl.h, batch.h; docs/repair.md "Independent groups").
  */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 
 #include "batch.h"
@@ -40,10 +41,21 @@ static void report_add(struct repair_report *sum, const struct repair_report *b)
 /* The batches' results, filled by the worker threads. */
 struct batch_results {
 	const struct repair_options *opt;
+	size_t ntris; /* of the whole mesh */
 	struct mesh **rounded;
 	long long *known;
 	struct repair_report *rep;
 };
+
+/* The phases of the group that runs alone, named as its. */
+static void big_progress(void *ctx, const char *stage, double done)
+{
+	const struct batch_results *r = ctx;
+	char s[128];
+
+	snprintf(s, sizeof(s), "largest group: %s", stage);
+	r->opt->progress(r->opt->progress_ctx, s, done);
+}
 
 static int repair_batch(void *ctx, size_t b, const struct mesh *sub, int threads,
 			struct st_error *err)
@@ -54,7 +66,10 @@ static int repair_batch(void *ctx, size_t b, const struct mesh *sub, int threads
 	int rc;
 
 	o.threads = threads;
-	o.progress = NULL; /* batches_run reports, from one thread at a time */
+	/* batches_run reports, from one thread at a time; a group of most of
+	 * the mesh runs first and alone, so it tells its own phases */
+	o.progress = r->opt->progress && 2 * sub->ntris > r->ntris ? big_progress : NULL;
+	o.progress_ctx = r;
 	rc = repair_rounded(sub, &o, &r->rounded[b], &r->known[b], &r->rep[b], err);
 	/* Counted here, on this batch's core, rather than on the whole later. */
 	if (!rc && r->known[b] < 0) {
@@ -69,8 +84,7 @@ static void batch_done(void *ctx, double fraction)
 	struct batch_results *r = ctx;
 
 	if (r->opt->progress)
-		r->opt->progress(r->opt->progress_ctx, "resolving self-intersections",
-				 0.1 + 0.8 * fraction);
+		r->opt->progress(r->opt->progress_ctx, "repairing the separate groups", fraction);
 }
 
 /* repair_impl.h */
@@ -79,7 +93,7 @@ int repair_rounded_batches(const struct mesh *in, const struct repair_options *o
 				  uint32_t **batch_of, long long *known,
 				  struct repair_report *rep, struct st_error *err)
 {
-	struct batch_results r = {.opt = opt};
+	struct batch_results r = {.opt = opt, .ntris = in->ntris};
 	struct mesh_builder *all = NULL;
 	int rc;
 
@@ -91,6 +105,7 @@ int repair_rounded_batches(const struct mesh *in, const struct repair_options *o
 		rc = st_error_set(err, ST_ERR_NOMEM, "out of memory for %zu groups", bs->n);
 		goto out;
 	}
+	batch_done(&r, 0);
 	rc = batches_run(in, bs, opt->threads, repair_batch, &r, batch_done, err);
 	*known = 0;
 	for (size_t b = 0; b < bs->n; b++) {

@@ -105,11 +105,11 @@ static int clean(const struct mesh *in, uint32_t **layer, size_t *n_layer, struc
 }
 
 /* Steps 2-3 on em, in place: refine, then tag.  tag/flip are malloc'd. */
-static int refine_and_grow(struct exact_mesh *em, int threads, struct exact_refine_stats *rs,
-			   struct hull_stats *hs, uint8_t **tag, uint8_t **flip,
-			   struct st_error *err)
+static int refine_and_grow(struct exact_mesh *em, const struct repair_options *opt,
+			   struct exact_refine_stats *rs, struct hull_stats *hs, uint8_t **tag,
+			   uint8_t **flip, struct st_error *err)
 {
-	int rc = exact_mesh_refine(em, threads, rs, err);
+	int rc = exact_mesh_refine(em, opt->threads, rs, err);
 	size_t n;
 
 	*tag = *flip = NULL;
@@ -124,6 +124,7 @@ static int refine_and_grow(struct exact_mesh *em, int threads, struct exact_refi
 		*tag = *flip = NULL;
 		return st_error_set(err, ST_ERR_NOMEM, "out of memory tagging %zu triangles", n);
 	}
+	repair_progress(opt, "walking the outer hull", 0);
 	rc = hull_extract(em, *tag, *flip, hs, err);
 	if (rc) {
 		free(*tag);
@@ -245,7 +246,7 @@ static int thicken(const struct exact_mesh *em, const uint8_t *tag, const uint8_
 		uint32_t (*units)[3] = NULL, *ids = NULL;
 		uint8_t *free_edges = NULL;
 		size_t nunits = 0;
-		repair_progress(opt, "thickening sheets", 0.5);
+		repair_progress(opt, "thickening the sheets", 0);
 		rc = thicken_units(tris, sheet, nsheet, parent, whole, before, nbefore, n, &units,
 				   &free_edges, &nunits, err);
 		free(sheet);
@@ -293,7 +294,7 @@ static int thicken(const struct exact_mesh *em, const uint8_t *tag, const uint8_
 			rc = st_error_set(err, ST_ERR_NOMEM, "out of memory testing wires");
 			goto out;
 		}
-		repair_progress(opt, "thickening wires", 0);
+		repair_progress(opt, "thickening the wires", 0);
 	}
 	for (size_t i = 0; i < n_wires; i++) {
 		bool hidden;
@@ -342,7 +343,7 @@ int repair_core(const struct mesh *in, const struct repair_options *opt, bool th
 	int rc;
 
 	memset(co, 0, sizeof(*co));
-	repair_progress(opt, "cleaning", 0);
+	repair_progress(opt, "cleaning the mesh", 0);
 	rc = clean(in, &layer, &n_layer, &wires, &n_wires, co, err);
 	if (rc)
 		return rc;
@@ -358,8 +359,9 @@ int repair_core(const struct mesh *in, const struct repair_options *opt, bool th
 	if (rc)
 		goto out;
 
-	repair_progress(opt, "resolving self-intersections", 0.1);
-	rc = refine_and_grow(em, opt->threads, &rs, &hs, &tag, &flip, err);
+	exact_mesh_set_progress(em, opt->progress, opt->progress_ctx);
+	repair_progress(opt, "finding the crossing pairs", 0);
+	rc = refine_and_grow(em, opt, &rs, &hs, &tag, &flip, err);
 	if (rc)
 		goto out;
 	co->pairs = rs.intersecting_pairs;
@@ -387,8 +389,9 @@ int repair_core(const struct mesh *in, const struct repair_options *opt, bool th
 		em = next;
 		next = NULL;
 		co->second_pass = true;
-		repair_progress(opt, "second pass", 0.6);
-		rc = refine_and_grow(em, opt->threads, &rs, &hs, &tag, &flip, err);
+		exact_mesh_set_progress(em, opt->progress, opt->progress_ctx);
+		repair_progress(opt, "finding the crossing pairs of the thickened mesh", 0);
+		rc = refine_and_grow(em, opt, &rs, &hs, &tag, &flip, err);
 		if (rc)
 			goto out;
 		co->second_sheet = hs.sheet;

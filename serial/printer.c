@@ -4,6 +4,7 @@
  */
 #include "printer.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -107,6 +108,7 @@ int printer_stream(struct printer *p, const struct printer_job *job, struct prin
 {
 	memset(res, 0, sizeof(*res));
 	res->last.layer = -1;
+	res->machine_s = NAN;
 	return p->ops->stream(p->state, job, res, err);
 }
 

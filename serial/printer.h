@@ -134,6 +134,10 @@ struct printer_result {
 	struct printer_counter counters[PRINTER_COUNTERS_MAX];
 	size_t ncounters;
 	char detail[512];	/* the counters as text: lines, "\n  " between */
+	/* port "sim": the time the simulated machine spent on the stream
+	 * (its own clock: moves, waits, heating; not wall time x speed-up);
+	 * NAN for a real printer */
+	double machine_s;
 };
 
 /* The operations of one dialect (or a test double). */

@@ -368,6 +368,7 @@ static int pm_stream(void *state, const struct printer_job *job, struct printer_
 	bool eof = false;
 	long layer = -1;
 	double z = NAN, t0 = st_mono_s(), t_cb = 0;
+	double m0 = s->sim ? sim_marlin_machine_s(s->sim) : NAN;
 	long layer_told = -2; /* the layer the hook was last called with */
 	uint64_t src_told = 0; /* the newest source the hook was told of */
 	uint64_t first_src, k;
@@ -459,6 +460,8 @@ out_end:
 	if (res->end == PRINTER_END_DONE)
 		res->last.filepos = job->offset + (int64_t)gcode_reader_bytes(r);
 	pm_counters(s->m, &st, res);
+	if (s->sim)
+		res->machine_s = sim_marlin_machine_s(s->sim) - m0;
 	if (job->progress)
 		job->progress(job->ctx, &res->last);
 	gcode_reader_free(r);

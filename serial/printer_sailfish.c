@@ -492,6 +492,7 @@ static int ps_stream(void *state, const struct printer_job *job, struct printer_
 	struct s3g_status st;
 	struct stat sb;
 	FILE *f = NULL;
+	double m0;
 	int rc;
 
 	if (!r)
@@ -501,6 +502,7 @@ static int ps_stream(void *state, const struct printer_job *job, struct printer_
 		goto out;
 	r->last = &res->last;
 	r->t0 = st_mono_s();
+	m0 = s->sim ? sim_sailfish_machine_s(s->sim) : NAN;
 	f = fopen(job->path, "rb");
 	if (!f) {
 		rc = st_error_set(err, ST_ERR_IO, "%s: cannot open: %s", job->path, strerror(errno));
@@ -520,6 +522,8 @@ static int ps_stream(void *state, const struct printer_job *job, struct printer_
 	if (res->end == PRINTER_END_DONE && !fstat(fileno(f), &sb))
 		res->last.filepos = (int64_t)sb.st_size;
 	ps_counters(r, &st, res);
+	if (s->sim)
+		res->machine_s = sim_sailfish_machine_s(s->sim) - m0;
 	if (job->progress)
 		job->progress(job->ctx, &res->last);
 	rc = 0;

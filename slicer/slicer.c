@@ -6,6 +6,7 @@
 
 #include <math.h>
 #include <pthread.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -74,6 +75,17 @@ static void progress(const struct slicer_config *c, const char *stage, double do
 {
 	if (c->progress)
 		c->progress(c->progress_ctx, stage, done);
+}
+
+/* done of n layers written: "slicing layer 12 of 80" (the one under way). */
+static void progress_layer(const struct slicer_config *c, size_t done, size_t n)
+{
+	char stage[64];
+
+	if (!c->progress)
+		return;
+	snprintf(stage, sizeof(stage), "slicing layer %zu of %zu", done < n ? done + 1 : n, n);
+	c->progress(c->progress_ctx, stage, (double)done / (double)(n ? n : 1));
 }
 
 /* Move every section of st by (dx, dy) nm. */
@@ -466,7 +478,7 @@ static int run_pipe(const struct slicer_config *c, const struct slice_stack *st,
 		rc = st_error_set(err, ST_ERR_INTERNAL, "slicer: cannot create a condition");
 		goto out_free;
 	}
-	progress(c, "layers", 0.0);
+	progress_layer(c, 0, n);
 	/* The calling thread is one worker; a thread that cannot start is
 	 * only a lost core, the tasks are shared by those that run. */
 	for (size_t t = 1; t < nworkers && t < SLICER_MAX_THREADS; t++) {
@@ -503,7 +515,7 @@ static int run_pipe(const struct slicer_config *c, const struct slice_stack *st,
 		pthread_cond_broadcast(&p.cond);
 		pthread_mutex_unlock(&p.lock);
 		if (!rc)
-			progress(c, "layers", (double)(i + 1) / (double)n);
+			progress_layer(c, i + 1, n);
 	}
 	for (size_t t = 0; t < started; t++)
 		pthread_join(tid[t], NULL);
@@ -558,11 +570,11 @@ static int toolpaths(const struct mesh *m, const struct slicer_config *c,
 		c = &vase;
 	}
 
-	progress(c, "slicing", 0.0);
+	progress(c, "cutting the model into layers", 0.0);
 	rc = slice_mesh(m, first, c->layer_height, &c->slice, &st, err);
 	if (rc)
 		return rc;
-	progress(c, "slicing", 1.0);
+	progress(c, "cutting the model into layers", 1.0);
 	if (st->n == 0) {
 		rc = st_error_set(err, ST_ERR_RANGE,
 				  "the model is %.3g mm tall, less than half the first layer "
@@ -701,13 +713,13 @@ int slicer_run(const struct mesh *m, const struct slicer_config *c, const char *
 			*err = k.err;
 	}
 	if (!rc) {
-		progress(c, "writing G-code", 0.0);
+		progress(c, "writing the G-code", 0.0);
 		rc = gcodew_finish_file(k.w, &gsum, err);
 	}
 	gcodew_free(k.w);
 	if (rc)
 		return rc;
-	progress(c, "writing G-code", 1.0);
+	progress(c, "writing the G-code", 1.0);
 	s.layers = gsum.layers;
 	s.time_s = gsum.time_s;
 	s.filament_mm = gsum.filament_mm;

@@ -144,8 +144,9 @@ struct slicer_config {
 	 * (overhang.h; PrusaSlicer's overhangs; false) */
 	bool overhangs;
 	int threads; /* workers for walls and infill; 0 = all online cores */
-	/* Called with a stage name ("slicing", "layers", "writing G-code") and
-	 * 0..1 done; may be NULL. */
+	/* Called with the phase as a sentence ("cutting the model into
+	 * layers", "slicing layer 12 of 80", "writing the G-code") and 0..1 of
+	 * it done; may be NULL. */
 	void (*progress)(void *ctx, const char *stage, double done);
 	void *progress_ctx;
 };

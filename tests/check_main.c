@@ -40,6 +40,7 @@ static const struct suite_entry suites[] = {
 	{"guard", guard_suite},	      {"print", print_suite},
 	{"cli", cli_suite},	      {"help", help_suite},
 	{"install", install_suite},   {"jobs", jobs_suite},
+	{"progress", progress_suite},
 };
 #define NSUITES (sizeof(suites) / sizeof(suites[0]))
 

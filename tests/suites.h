@@ -61,6 +61,7 @@ Suite *cli_suite(void);		/* tests/check_cli.c: the stratum binary end to end */
 void cli_stdio_tcases(Suite *s); /* tests/check_clio.c: "-" for stdin/stdout, print --json, part of cli */
 Suite *jobs_suite(void);	/* tests/check_jobs.c: stratum jobs list/show/prune, the size cap */
 Suite *help_suite(void);	/* tests/check_help.c: --help, man pages, completion = the option tables */
+Suite *progress_suite(void);	/* tests/check_hostprogress.c: progress lines, ETA, printer clock */
 Suite *install_suite(void);	/* tests/check_install.c: make install into a DESTDIR, run from there */
 
 #endif

@@ -33,34 +33,6 @@ static double lead_number(const char *s)
 	return st_parse_double(s, n, 0, &v) == ST_NUMBER_OK ? v : -1;
 }
 
-/* "1d 2h 3m 4s" (any of the parts) in seconds, or -1. */
-static double duration(const char *s)
-{
-	double total = 0, v;
-	bool any = false;
-
-	while (*s == ' ')
-		s++;
-	while (*s && *s != '\n') {
-		size_t n = strspn(s, "0123456789");
-
-		if (!n || st_parse_double(s, n, 0, &v) != ST_NUMBER_OK)
-			return -1;
-		s += n;
-		switch (*s++) {
-		case 'd': total += v * 86400; break;
-		case 'h': total += v * 3600; break;
-		case 'm': total += v * 60; break;
-		case 's': total += v; break;
-		default: return -1;
-		}
-		any = true;
-		while (*s == ' ')
-			s++;
-	}
-	return any ? total : -1;
-}
-
 /* After "prefix" at the start of line, or NULL. */
 static const char *after(const char *line, const char *prefix)
 {
@@ -95,7 +67,7 @@ static int take_line(struct node_gcode_info *g, const char *line, int64_t pos, s
 		return 0;
 	if ((v = after(line, "; estimated printing time (normal mode) = ")) ||
 	    (v = after(line, "; estimated printing time = ")))
-		g->time_s = duration(v);
+		g->time_s = st_parse_duration(v);
 	else if ((v = after(line, ";TIME:")))
 		g->time_s = lead_number(v);
 	else if ((v = after(line, "; filament used [mm] = ")))

@@ -271,7 +271,9 @@ void refine(exact_mesh &m, int threads, exact_refine_stats &st)
 		std::vector<std::array<int8_t, 2>> segment_edge_w;
 	};
 	std::vector<pair_cut> meet(pairs.size());
+	progress_count meeting(m.progress, "intersecting the crossing pairs", pairs.size());
 	boxpairs::for_each_index(pairs.size(), threads, [&](size_t i) {
+		meeting.one();
 		const uint32_t s = pairs[i].first, t = pairs[i].second;
 		const auto &u = m.tris[s], &w = m.tris[t];
 		pair_cut &pc = meet[i];
@@ -329,8 +331,10 @@ void refine(exact_mesh &m, int threads, exact_refine_stats &st)
 	std::vector<int32_t> piece_slot(m.tris.size(), -1);
 	for (size_t i = 0; i < order.size(); i++)
 		piece_slot[order[i]] = static_cast<int32_t>(i);
+	progress_count cutting(m.progress, "cutting the crossing triangles", order.size());
 	boxpairs::for_each_index(order.size(), threads, [&](size_t i) {
 		split_triangle(m, order[i], cut.find(order[i])->second, pieces_of[i]);
+		cutting.one();
 	});
 
 	/* Points of affected triangles are unified through this map; it starts
@@ -658,6 +662,14 @@ bool exact_mesh_same_plane(const struct exact_mesh *m, uint32_t t, uint32_t u)
 bool exact_mesh_vertex_is_double(const struct exact_mesh *m, uint32_t v)
 {
 	return m && v < m->slot.size() && m->slot[v] < 0;
+}
+
+void exact_mesh_set_progress(struct exact_mesh *m, exact_progress_fn fn, void *ctx)
+{
+	if (m) {
+		m->progress.fn = fn;
+		m->progress.ctx = ctx;
+	}
 }
 
 int exact_mesh_refine(struct exact_mesh *m, int threads, struct exact_refine_stats *stats,

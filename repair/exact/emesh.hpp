@@ -10,13 +10,16 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <exception>
+#include <mutex>
 #include <new>
 #include <stdexcept>
 #include <vector>
 
+#include "exact.h"
 #include "st_error.h"
 
 typedef CGAL::Epeck EK;
@@ -31,7 +34,46 @@ static const int8_t NO_EDGE = -1;
 /* Largest vertex or triangle count an exact mesh indexes (as struct mesh). */
 static const size_t MESH_LIMIT = 0xfffffff0u;
 
+/*
+ * The caller's progress hook (exact_mesh_set_progress) counting a long
+ * loop: called with 0 at the start, then about every 1 % from whichever
+ * worker gets there, one call at a time (a worker finding another inside
+ * the hook skips its turn rather than wait).
+ */
+struct exact_progress {
+	exact_progress_fn fn = nullptr;
+	void *ctx = nullptr;
+};
+
+class progress_count {
+public:
+	progress_count(const exact_progress &p, const char *stage, size_t total)
+	    : p_(p), stage_(stage), total_(total), step_(total / 100 + 1)
+	{
+		if (p_.fn)
+			p_.fn(p_.ctx, stage_, 0);
+	}
+	void one()
+	{
+		if (!p_.fn)
+			return;
+		const size_t d = ++done_;
+		if (d % step_ == 0 && lock_.try_lock()) {
+			p_.fn(p_.ctx, stage_, static_cast<double>(d) / static_cast<double>(total_));
+			lock_.unlock();
+		}
+	}
+
+private:
+	const exact_progress &p_;
+	const char *stage_;
+	size_t total_, step_;
+	std::atomic<size_t> done_{0};
+	std::mutex lock_;
+};
+
 struct exact_mesh {
+	exact_progress progress;		    /* exact_mesh_set_progress's hook */
 	std::vector<std::array<double, 3>> approx; /* every vertex, mm */
 	std::vector<int32_t> slot;		    /* -1: approx is exact; else index in ex */
 	std::vector<EPoint> ex;			    /* exact positions of rational vertices */

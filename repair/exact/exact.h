@@ -143,6 +143,14 @@ bool exact_mesh_same_plane(const struct exact_mesh *m, uint32_t t, uint32_t u);
 /* Whether vertex v's double approximation is its exact position. */
 bool exact_mesh_vertex_is_double(const struct exact_mesh *m, uint32_t v);
 
+/* A progress hook: phase named as a sentence, 0..1 of it done. */
+typedef void (*exact_progress_fn)(void *ctx, const char *stage, double done);
+
+/* exact_mesh_set_progress - exact_mesh_refine reports the pairs it
+ * intersects and the triangles it cuts to fn (NULL: none), from worker
+ * threads, one call at a time.  Kept by copies of m. */
+void exact_mesh_set_progress(struct exact_mesh *m, exact_progress_fn fn, void *ctx);
+
 struct exact_refine_stats {
 	uint64_t intersecting_pairs;	/* pairs that met outside a shared face */
 	size_t triangles_split;		/* triangles re-triangulated */

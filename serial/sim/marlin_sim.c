@@ -220,6 +220,11 @@ long sim_marlin_answered_line(const struct sim_marlin *sim)
 	return atomic_load(&sim->answered_n);
 }
 
+double sim_marlin_machine_s(const struct sim_marlin *sim)
+{
+	return (double)atomic_load(&sim->machine_us) / 1e6;
+}
+
 uint64_t sim_marlin_dropped_bytes(const struct sim_marlin *sim)
 {
 	return sim->dropped;

@@ -123,6 +123,12 @@ bool sim_marlin_frozen(const struct sim_marlin *sim);
  * Safe to call while the simulator thread runs. */
 long sim_marlin_answered_line(const struct sim_marlin *sim);
 
+/* sim_marlin_machine_s - the simulated machine's own clock: seconds of
+ * motion (as planned), dwells, homing and heat waits it has run, in
+ * simulated time, so unchanged by the host's pace or load.  Safe to call
+ * while the simulator thread runs. */
+double sim_marlin_machine_s(const struct sim_marlin *sim);
+
 /* sim_marlin_dropped_bytes - bytes lost so far: RX ring overflow plus
  * injected drops. */
 uint64_t sim_marlin_dropped_bytes(const struct sim_marlin *sim);

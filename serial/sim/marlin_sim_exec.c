@@ -55,6 +55,7 @@ static void sim_plan_move(struct sim_marlin *s, const struct gcode_line *g, doub
 	double dur = sim_move_time(d, s->feed) / s->o.speedup;
 	if (dur <= 0)
 		return;
+	sim_machine_add(&s->machine_us, dur * s->o.speedup);
 	double start = now;
 	for (size_t i = 0; i < s->planner_n; i++)
 		if (s->planner_end[i] > start)
@@ -212,6 +213,7 @@ static bool sim_exec_poll(struct sim_marlin *s, struct sim_cmd *c, double now)
 				return false;
 			s->blk_synced = true;
 			s->blk_until = now + s->blk_dur;
+			sim_machine_add(&s->machine_us, s->blk_dur * s->o.speedup);
 		}
 		return now >= s->blk_until;
 	case SIM_BLK_BUSY:
@@ -299,6 +301,8 @@ void msim_physics(struct sim_marlin *s, double now, double dt)
 		h->temp = sim_heater_step(h->temp, h->target, SIM_AMBIENT, h->heat_rate, h->cool_rate,
 					  dt * s->o.speedup);
 	}
+	if (s->blk == SIM_BLK_HEAT && !s->halted) /* M109/M190: the machine waits */
+		sim_machine_add(&s->machine_us, dt * s->o.speedup);
 	if (s->autoreport_s > 0 && now >= s->next_autoreport && !s->halted) {
 		char buf[160];
 		msim_temp_string(s, buf, sizeof(buf));

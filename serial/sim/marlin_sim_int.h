@@ -113,6 +113,7 @@ struct sim_marlin {
 	bool newline_lost[SIM_MARLIN_CUTS]; /* lose_newline_at[i] happened */
 	double thaw_at;		/* when a freeze_s stall ends (sim_now) */
 	_Atomic long answered_n; /* the last numbered line run and answered (read by tests) */
+	_Atomic uint64_t machine_us; /* the machine's clock (sim_machine_add) */
 
 	struct sim_thread th;
 };

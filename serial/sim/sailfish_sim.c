@@ -193,6 +193,11 @@ uint64_t sim_sailfish_executed(const struct sim_sailfish *sim)
 	return sim->seq;
 }
 
+double sim_sailfish_machine_s(const struct sim_sailfish *sim)
+{
+	return (double)atomic_load(&sim->machine_us) / 1e6;
+}
+
 uint64_t sim_sailfish_undetected(const struct sim_sailfish *sim)
 {
 	return sim->undetected;

@@ -97,6 +97,12 @@ bool sim_sailfish_unplugged(const struct sim_sailfish *sim);
  * sequence number). */
 uint64_t sim_sailfish_executed(const struct sim_sailfish *sim);
 
+/* sim_sailfish_machine_s - the simulated machine's own clock: seconds of
+ * motion (as planned), delays, homing and heat waits it has run, in
+ * simulated time, so unchanged by the host's pace or load.  Safe to call
+ * while the simulator thread runs. */
+double sim_sailfish_machine_s(const struct sim_sailfish *sim);
+
 /* sim_sailfish_undetected - packets that lost or had a byte spoilt by the
  * drop_p/corrupt_p faults and still matched their CRC-8: damage no host
  * can see (about one in 1,300 at 2 % corruption). */

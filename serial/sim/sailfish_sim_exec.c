@@ -14,6 +14,7 @@ static void sf_plan(struct sim_sailfish *s, double dur, double now)
 {
 	if (dur <= 0)
 		return;
+	sim_machine_add(&s->machine_us, dur);
 	double start = now;
 	for (size_t i = 0; i < s->planner_n; i++)
 		if (s->planner_end[i] > start)
@@ -138,11 +139,13 @@ static void sf_execute(struct sim_sailfish *s, const uint8_t *c, size_t n, doubl
 		double t = sf_rd16(c + 6);
 		s->mode = SF_HOMING;
 		s->mode_until = now + (t > 0 && t < SF_HOME_S ? t : SF_HOME_S) / s->o.speedup;
+		sim_machine_add(&s->machine_us, t > 0 && t < SF_HOME_S ? t : SF_HOME_S);
 		break;
 	}
 	case 133:
 		s->mode = SF_DELAY;
 		s->mode_until = now + sf_rd32(c + 1) / 1000.0 / s->o.speedup;
+		sim_machine_add(&s->machine_us, sf_rd32(c + 1) / 1000.0);
 		break;
 	case 134:
 		s->tool = c[1] ? 1 : 0;
@@ -267,6 +270,8 @@ void sfsim_physics(struct sim_sailfish *s, double dt)
 		h->temp = sim_heater_step(h->temp, h->target, SF_AMBIENT, h->heat_rate, h->cool_rate,
 					  dt * s->o.speedup);
 	}
+	if (s->mode == SF_WAIT_TOOL || s->mode == SF_WAIT_PLATFORM) /* the machine waits */
+		sim_machine_add(&s->machine_us, dt * s->o.speedup);
 }
 
 /* Write the reply bytes that have crossed the link by now; lower *wake to

@@ -89,6 +89,7 @@ struct sim_sailfish {
 	bool unplugged;
 
 	double t_prev;
+	_Atomic uint64_t machine_us; /* the machine's clock (sim_machine_add) */
 	struct sim_thread th;
 };
 

@@ -6,8 +6,10 @@
 #ifndef STRATUM_SERIAL_SIM_SIM_UTIL_H
 #define STRATUM_SERIAL_SIM_SIM_UTIL_H
 
+#include <math.h>
 #include <pthread.h>
 #include <signal.h>
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -16,6 +18,15 @@
 
 /* sim_clock - monotonic wall clock in seconds. */
 double sim_clock(void);
+
+/* sim_machine_add - advance a simulator's machine clock (microseconds, read
+ * by other threads) by s simulated seconds of motion, waiting or heating:
+ * what the printer spent, whatever the host's pace or load. */
+static inline void sim_machine_add(_Atomic uint64_t *clock_us, double s)
+{
+	if (s > 0 && isfinite(s))
+		atomic_fetch_add(clock_us, (uint64_t)llround(s * 1e6));
+}
 
 /* sim_heater_step - one heater's temperature after `scaled` simulated
  * seconds: toward max(target, ambient) at heat_rate or cool_rate (°C/s),
