@@ -67,6 +67,16 @@ struct json_t;
 int cmd_json_out(struct json_t *o, size_t flags);
 
 /*
+ * cmd_json_set - set keys of o in order from pairs of "K:key" and a value,
+ * NULL after the last pair.  K is the value's C type: 'b' bool, 'i' int,
+ * 'z' size_t, 'I' json_int_t, 'f' double, 's' string, 'o' json_t * (taken
+ * over).  As json_object_set_new key by key, not json_pack: a value that
+ * cannot be made (a NULL or non-UTF-8 string, a NaN) leaves only its own
+ * key out, where json_pack would lose the whole object (host/cmd_output.c).
+ */
+void cmd_json_set(struct json_t *o, ...);
+
+/*
  * The option table of one subcommand: each option is declared once, with
  * its value's kind, range and help line, and both cmd_parse and the --help
  * text (cmd_usage) read it.
