@@ -3,7 +3,6 @@
  * report its topology (seed 001) and whether it is printable (seed 000
  * Definition 3.11).  Exit 0 printable, 1 not printable, 65 unreadable input.
  */
-#include <errno.h>
 #include <jansson.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -199,17 +198,9 @@ int cmd_check(int argc, char **argv)
 		fprintf(stderr, "stratum check: %s: %s\n", path, err.msg);
 		return ST_EXIT_SOFTWARE;
 	}
-	if (json) {
-		if (print_json(path, fmt, &rep)) {
-			fprintf(stderr, "stratum check: cannot write the JSON report\n");
-			return ST_EXIT_SOFTWARE;
-		}
-	} else {
-		print_text(path, fmt, &rep);
-	}
-	if (fflush(stdout) == EOF) {
-		fprintf(stderr, "stratum check: cannot write the report: %s\n", strerror(errno));
-		return ST_EXIT_SOFTWARE;
-	}
+	rc = cmd_report_end("stratum check", "report",
+			    json ? print_json(path, fmt, &rep) != 0 : (print_text(path, fmt, &rep), 0));
+	if (rc)
+		return rc;
 	return rep.printable ? ST_EXIT_OK : ST_EXIT_FAILURE;
 }

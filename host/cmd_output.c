@@ -123,3 +123,16 @@ void cmd_json_set(json_t *o, ...)
 	}
 	va_end(ap);
 }
+
+int cmd_report_end(const char *cmd, const char *what, bool json_failed)
+{
+	if (json_failed) {
+		fprintf(stderr, "%s: cannot write the JSON %s\n", cmd, what);
+		return ST_EXIT_SOFTWARE;
+	}
+	if (fflush(stdout) == EOF) {
+		fprintf(stderr, "%s: cannot write the %s: %s\n", cmd, what, strerror(errno));
+		return ST_EXIT_SOFTWARE;
+	}
+	return 0;
+}

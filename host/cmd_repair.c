@@ -8,7 +8,6 @@
  * the output could not be written, 2 usage, 65 unreadable input or bad
  * printer profile, 70 internal error.
  */
-#include <errno.h>
 #include <jansson.h>
 #include <limits.h>
 #include <stdarg.h>
@@ -458,25 +457,6 @@ static void print_text(const struct repair_run *run, const struct repair_report 
 		       "one file per part\n", r->components);
 }
 
-/* Print the report; 0 or the exit status for a failed stdout. */
-static int report(const struct repair_run *run, const struct repair_report *r,
-		  const struct repair_outputs *o, bool json)
-{
-	if (json) {
-		if (print_json(run, r, o)) {
-			fprintf(stderr, "stratum repair: cannot write the JSON report\n");
-			return ST_EXIT_SOFTWARE;
-		}
-	} else {
-		print_text(run, r, o);
-	}
-	if (fflush(stdout) == EOF) {
-		fprintf(stderr, "stratum repair: cannot write the report: %s\n", strerror(errno));
-		return ST_EXIT_SOFTWARE;
-	}
-	return 0;
-}
-
 /*
  * Is in named like one of the files --split makes from out ("dir/part.stl"
  * -> "dir/part-K.stl"), in the same directory however either is spelled?
@@ -659,7 +639,8 @@ static int repair_command(int argc, char **argv, struct repair_run *run)
 
 out_report:
 	run->exit = status;
-	rc = report(run, &rep, &outs, json);
+	rc = cmd_report_end("stratum repair", "report", json ? print_json(run, &rep, &outs) != 0
+							   : (print_text(run, &rep, &outs), 0));
 	if (!status && rc)
 		status = rc;
 	outputs_free(&outs);

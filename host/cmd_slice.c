@@ -12,7 +12,6 @@
  * The printer profile is mapped to struct slicer_config here, so slicer/
  * never includes host/.
  */
-#include <errno.h>
 #include <jansson.h>
 #include <math.h>
 #include <stdbool.h>
@@ -323,24 +322,6 @@ static void print_text(const struct slice_run *r, const struct slicer_summary *s
 	printf("written: %s\n", r->a->out);
 }
 
-/* Print the summary; 0 or the exit status for a failed stdout. */
-static int report(const struct slice_run *r, const struct slicer_summary *s)
-{
-	if (r->a->json) {
-		if (print_json(r, s)) {
-			fprintf(stderr, SLICE_CMD ": cannot write the JSON summary\n");
-			return ST_EXIT_SOFTWARE;
-		}
-	} else {
-		print_text(r, s);
-	}
-	if (fflush(stdout) == EOF) {
-		fprintf(stderr, SLICE_CMD ": cannot write the summary: %s\n", strerror(errno));
-		return ST_EXIT_SOFTWARE;
-	}
-	return 0;
-}
-
 /* PrusaSlicer's input_filename and input_filename_base for the custom G-code. */
 static int input_vars(struct profile *p, const char *in)
 {
@@ -410,7 +391,8 @@ int cmd_slice(int argc, char **argv)
 		run.prof = prof;
 		run.res = &res;
 		run.rep = res.repaired ? &res.rep : NULL;
-		status = report(&run, &res.sum);
+		status = cmd_report_end(SLICE_CMD, "summary", a.json ? print_json(&run, &res.sum) != 0
+								 : (print_text(&run, &res.sum), 0));
 	}
 	slicejob_result_free(&res);
 out_profile:

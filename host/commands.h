@@ -77,6 +77,14 @@ int cmd_json_out(struct json_t *o, size_t flags);
 void cmd_json_set(struct json_t *o, ...);
 
 /*
+ * cmd_report_end - after a command printed its report on stdout: json_failed
+ * (the --json report could not be made) gives "CMD: cannot write the JSON
+ * WHAT", a failed flush "CMD: cannot write the WHAT: REASON", both
+ * ST_EXIT_SOFTWARE; else 0 (host/cmd_output.c).
+ */
+int cmd_report_end(const char *cmd, const char *what, bool json_failed);
+
+/*
  * The option table of one subcommand: each option is declared once, with
  * its value's kind, range and help line, and both cmd_parse and the --help
  * text (cmd_usage) read it.
