@@ -3,7 +3,6 @@
  * report its topology (seed 001) and whether it is printable (seed 000
  * Definition 3.11).  Exit 0 printable, 1 not printable, 65 unreadable input.
  */
-#include <errno.h>
 #include <jansson.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -96,42 +95,26 @@ static int print_json(const char *path, enum meshio_format fmt, const struct mes
 				 r->bbox_min[1], r->bbox_min[2], "max", r->bbox_max[0],
 				 r->bbox_max[1], r->bbox_max[2]);
 
-	json_object_set_new(o, "file", json_string(path));
-	json_object_set_new(o, "format", json_string(meshio_format_name(fmt)));
-	json_object_set_new(o, "input_triangles", json_integer((json_int_t)r->input_triangles));
-	json_object_set_new(o, "vertices", json_integer((json_int_t)r->vertices));
-	json_object_set_new(o, "edges", json_integer((json_int_t)r->edges));
-	json_object_set_new(o, "triangles", json_integer((json_int_t)r->triangles));
-	json_object_set_new(o, "boundary_edges", json_integer((json_int_t)r->boundary_edges));
-	json_object_set_new(o, "singular_edges", json_integer((json_int_t)r->singular_edges));
-	json_object_set_new(o, "nonmanifold_vertices",
-			    json_integer((json_int_t)r->nonmanifold_vertices));
-	json_object_set_new(o, "components", json_integer((json_int_t)r->components));
-	json_object_set_new(o, "manifold_components",
-			    json_integer((json_int_t)r->manifold_components));
-	json_object_set_new(o, "parts", json_integer((json_int_t)r->parts));
-	json_object_set_new(o, "cavities", json_integer((json_int_t)r->cavities));
-	json_object_set_new(o, "misnested_shells", json_integer((json_int_t)r->misnested_shells));
-	json_object_set_new(o, "unpaired_singular_edges",
-			    json_integer((json_int_t)r->open_singular_edges));
-	json_object_set_new(o, "boundary_loops", json_integer((json_int_t)r->boundary_loops));
-	json_object_set_new(o, "euler", json_integer((json_int_t)r->euler));
-	json_object_set_new(o, "genus",
-			    r->genus_defined ? json_integer((json_int_t)r->genus) : json_null());
-	json_object_set_new(o, "irregular", json_integer((json_int_t)r->irregular));
-	json_object_set_new(o, "degenerate", json_integer((json_int_t)r->degenerate));
-	json_object_set_new(o, "duplicates", json_integer((json_int_t)r->duplicates));
-	json_object_set_new(o, "self_intersections",
-			    json_integer((json_int_t)r->self_intersections));
-	json_object_set_new(o, "orientable", json_boolean(r->orientable));
-	json_object_set_new(o, "consistently_oriented", json_boolean(r->consistently_oriented));
-	json_object_set_new(o, "flipped_edges", json_integer((json_int_t)r->flipped_edges));
-	json_object_set_new(o, "volume", json_real(r->volume));
-	json_object_set_new(o, "bbox", bbox);
-	json_object_set_new(o, "printable", json_boolean(r->printable));
-	json_object_set_new(o, "reasons", reasons_json(r, 0, MESH_REASON_FIRST_WARNING));
-	json_object_set_new(o, "warnings",
-			    reasons_json(r, MESH_REASON_FIRST_WARNING, MESH_REASON_COUNT));
+	cmd_json_set(o, "s:file", path, "s:format", meshio_format_name(fmt),
+		     "z:input_triangles", r->input_triangles, "z:vertices", r->vertices,
+		     "z:edges", r->edges, "z:triangles", r->triangles,
+		     "z:boundary_edges", r->boundary_edges, "z:singular_edges", r->singular_edges,
+		     "z:nonmanifold_vertices", r->nonmanifold_vertices,
+		     "z:components", r->components, "z:manifold_components", r->manifold_components,
+		     "z:parts", r->parts, "z:cavities", r->cavities,
+		     "z:misnested_shells", r->misnested_shells,
+		     "z:unpaired_singular_edges", r->open_singular_edges,
+		     "z:boundary_loops", r->boundary_loops, "I:euler", (json_int_t)r->euler,
+		     "o:genus", r->genus_defined ? json_integer((json_int_t)r->genus) : json_null(),
+		     "z:irregular", r->irregular, "z:degenerate", r->degenerate,
+		     "z:duplicates", r->duplicates,
+		     "I:self_intersections", (json_int_t)r->self_intersections,
+		     "b:orientable", r->orientable, "b:consistently_oriented", r->consistently_oriented,
+		     "z:flipped_edges", r->flipped_edges, "f:volume", r->volume, "o:bbox", bbox,
+		     "b:printable", r->printable,
+		     "o:reasons", reasons_json(r, 0, MESH_REASON_FIRST_WARNING),
+		     "o:warnings", reasons_json(r, MESH_REASON_FIRST_WARNING, MESH_REASON_COUNT),
+		     NULL);
 	return cmd_json_out(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(10));
 }
 
@@ -220,18 +203,10 @@ static int check_run(int argc, char **argv, struct clio *io)
 		fprintf(stderr, "stratum check: %s: %s\n", path, err.msg);
 		return ST_EXIT_SOFTWARE;
 	}
-	if (json) {
-		if (print_json(shown, fmt, &rep)) {
-			fprintf(stderr, "stratum check: cannot write the JSON report\n");
-			return ST_EXIT_SOFTWARE;
-		}
-	} else {
-		print_text(shown, fmt, &rep);
-	}
-	if (fflush(stdout) == EOF) {
-		fprintf(stderr, "stratum check: cannot write the report: %s\n", strerror(errno));
-		return ST_EXIT_SOFTWARE;
-	}
+	rc = cmd_report_end("stratum check", "report",
+			    json ? print_json(shown, fmt, &rep) != 0 : (print_text(shown, fmt, &rep), 0));
+	if (rc)
+		return rc;
 	return rep.printable ? ST_EXIT_OK : ST_EXIT_FAILURE;
 }
 

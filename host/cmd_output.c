@@ -2,10 +2,11 @@
  * cmd_output.c - checks on an output path made before a command does its
  * work (commands.h): the user's input is never overwritten, and a missing
  * or read-only directory is reported at once, not after a long repair;
- * and the one way a command writes its --json answer to stdout.
+ * and the one way a command builds and writes its --json answer.
  */
 #include <errno.h>
 #include <limits.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -84,4 +85,54 @@ int cmd_json_out(json_t *o, size_t flags)
 	rc = json_dumpf(o, stdout, flags);
 	json_decref(o);
 	return rc || putchar('\n') == EOF ? -1 : 0;
+}
+
+void cmd_json_set(json_t *o, ...)
+{
+	const char *k;
+	va_list ap;
+
+	va_start(ap, o);
+	while ((k = va_arg(ap, const char *)) != NULL) {
+		json_t *v;
+
+		switch (k[0]) {
+		case 'b':
+			v = json_boolean(va_arg(ap, int));
+			break;
+		case 'i':
+			v = json_integer(va_arg(ap, int));
+			break;
+		case 'z':
+			v = json_integer((json_int_t)va_arg(ap, size_t));
+			break;
+		case 'I':
+			v = json_integer(va_arg(ap, json_int_t));
+			break;
+		case 'f':
+			v = json_real(va_arg(ap, double));
+			break;
+		case 's':
+			v = json_string(va_arg(ap, const char *));
+			break;
+		default: /* 'o' */
+			v = va_arg(ap, json_t *);
+			break;
+		}
+		json_object_set_new(o, k + 2, v);
+	}
+	va_end(ap);
+}
+
+int cmd_report_end(const char *cmd, const char *what, bool json_failed)
+{
+	if (json_failed) {
+		fprintf(stderr, "%s: cannot write the JSON %s\n", cmd, what);
+		return ST_EXIT_SOFTWARE;
+	}
+	if (fflush(stdout) == EOF) {
+		fprintf(stderr, "%s: cannot write the %s: %s\n", cmd, what, strerror(errno));
+		return ST_EXIT_SOFTWARE;
+	}
+	return 0;
 }

@@ -101,16 +101,14 @@ static int print_json(const struct xport_port_info *ports, size_t n,
 			if (portpick_claims(set->items[k], p))
 				json_array_append_new(matches, json_string(set->items[k]->id));
 		snprintf(usb, sizeof(usb), "%04x:%04x", p->usb_vid & 0xffff, p->usb_pid & 0xffff);
-		json_object_set_new(o, "name", json_string(p->name));
-		json_object_set_new(o, "by_id", optional_string(p->by_id));
-		json_object_set_new(o, "transport", json_string(xport_transport_name(p->transport)));
-		json_object_set_new(o, "usb_id", p->usb_vid >= 0 ? json_string(usb) : json_null());
-		json_object_set_new(o, "manufacturer", optional_string(p->manufacturer));
-		json_object_set_new(o, "product", optional_string(p->product));
-		json_object_set_new(o, "serial_number", optional_string(p->serial));
-		json_object_set_new(o, "description", optional_string(p->description));
-		json_object_set_new(o, "printers", matches);
-		json_object_set_new(o, "auto", json_boolean(pick->index == (long)i));
+		cmd_json_set(o, "s:name", p->name, "o:by_id", optional_string(p->by_id),
+			     "s:transport", xport_transport_name(p->transport),
+			     "o:usb_id", p->usb_vid >= 0 ? json_string(usb) : json_null(),
+			     "o:manufacturer", optional_string(p->manufacturer),
+			     "o:product", optional_string(p->product),
+			     "o:serial_number", optional_string(p->serial),
+			     "o:description", optional_string(p->description), "o:printers", matches,
+			     "b:auto", pick->index == (long)i, NULL);
 		json_array_append_new(arr, o);
 	}
 	return cmd_json_out(arr, JSON_INDENT(2) | JSON_PRESERVE_ORDER);

@@ -144,18 +144,13 @@ static int print_json(const struct preview_args *a, const struct preview *pv, in
 
 	for (int f = 0; f < PREVIEW_FEATURES; f++)
 		json_object_set_new(paths, preview_feature_id(f), json_integer((json_int_t)pv->count[f]));
-	json_object_set_new(o, "file", json_string(a->in));
-	json_object_set_new(o, "layer", json_integer((json_int_t)pv->layer));
-	json_object_set_new(o, "layers", json_integer((json_int_t)pv->layers));
-	json_object_set_new(o, "layers_from", json_string(pv->by_comments ? "comments" : "z"));
-	json_object_set_new(o, "z", json_real(pv->z));
-	json_object_set_new(o, "height", json_real(pv->height));
-	json_object_set_new(o, "paths", paths);
-	json_object_set_new(o, "model_loops",
-			    pv->has_model ? json_integer((json_int_t)pv->noutline) : json_null());
-	json_object_set_new(o, "output", json_string(a->out));
-	json_object_set_new(o, "width_px", json_integer(w));
-	json_object_set_new(o, "height_px", json_integer(h));
+	cmd_json_set(o, "s:file", a->in, "I:layer", (json_int_t)pv->layer,
+		     "I:layers", (json_int_t)pv->layers,
+		     "s:layers_from", pv->by_comments ? "comments" : "z", "f:z", pv->z,
+		     "f:height", pv->height, "o:paths", paths,
+		     "o:model_loops",
+		     pv->has_model ? json_integer((json_int_t)pv->noutline) : json_null(),
+		     "s:output", a->out, "i:width_px", w, "i:height_px", h, NULL);
 	return cmd_json_out(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
 }
 

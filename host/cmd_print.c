@@ -351,28 +351,20 @@ static void print_summary_json(const struct print_job *job)
 
 	if (!o)
 		return;
-	json_object_set_new(o, "ok", json_boolean(job->status == 0));
-	json_object_set_new(o, "exit", json_integer(job->status));
-	json_object_set_new(o, "input", json_string(job->a->in ? job->a->in : job->gcode));
-	json_object_set_new(o, "gcode", json_string(job->gcode));
-	json_object_set_new(o, "printer", json_string(job->prof->id));
-	json_object_set_new(o, "port", json_string(job->port ? job->port : ""));
-	json_object_set_new(o, "firmware", json_string(job->printer_desc));
-	json_object_set_new(o, "simulated", json_boolean(job->simulated));
+	cmd_json_set(o, "b:ok", job->status == 0, "i:exit", job->status,
+		     "s:input", job->a->in ? job->a->in : job->gcode, "s:gcode", job->gcode,
+		     "s:printer", job->prof->id, "s:port", job->port ? job->port : "",
+		     "s:firmware", job->printer_desc, "b:simulated", job->simulated, NULL);
 	if (job->simulated)
-		json_object_set_new(o, "speedup", json_real(job->a->speedup));
+		cmd_json_set(o, "f:speedup", job->a->speedup, NULL);
 	if (job->simulated && isfinite(job->machine_s))
-		json_object_set_new(o, "printer_s", json_real(job->machine_s));
+		cmd_json_set(o, "f:printer_s", job->machine_s, NULL);
 	if (job->sliced && job->slice.repaired) {
 		json_t *r = json_object();
-		json_object_set_new(r, "input_triangles",
-				    json_integer((json_int_t)job->slice.input_triangles));
-		json_object_set_new(r, "output_triangles",
-				    json_integer((json_int_t)job->slice.rep.output_triangles));
-		json_object_set_new(r, "components",
-				    json_integer((json_int_t)job->slice.rep.components));
-		json_object_set_new(r, "intersecting_pairs",
-				    json_integer((json_int_t)job->slice.rep.intersecting_pairs));
+		cmd_json_set(r, "z:input_triangles", job->slice.input_triangles,
+			     "z:output_triangles", job->slice.rep.output_triangles,
+			     "z:components", job->slice.rep.components,
+			     "I:intersecting_pairs", (json_int_t)job->slice.rep.intersecting_pairs, NULL);
 		json_object_set_new(o, "repair", r);
 	}
 	if (job->sliced) {
@@ -381,28 +373,20 @@ static void print_summary_json(const struct print_job *job)
 			json_array_append_new(models, json_string(job->slice.models[i].path));
 		json_object_set_new(o, "models", models);
 	}
-	json_object_set_new(o, "layers", json_integer((json_int_t)(job->sliced ? s->layers
-									       : job->layers.n)));
-	if (job->sliced) {
-		json_object_set_new(o, "filament_mm", json_real(s->filament_mm));
-		json_object_set_new(o, "filament_g", json_real(s->filament_g));
-		json_object_set_new(o, "estimated_s", json_real(s->time_s));
-	}
-	json_object_set_new(o, "unit", json_string(job->input == PRINT_X3G ? "commands" : "lines"));
-	json_object_set_new(o, "done", json_integer((json_int_t)job->done));
-	json_object_set_new(o, "total", json_integer((json_int_t)job->total));
-	json_object_set_new(o, "last_line", json_integer((json_int_t)job->last_line));
-	json_object_set_new(o, "layer", json_integer(job->layer + 1));
-	json_object_set_new(o, "resends", json_integer((json_int_t)job->resends));
-	json_object_set_new(o, "seconds", json_real(job->stream_s));
+	cmd_json_set(o, "z:layers", job->sliced ? s->layers : job->layers.n, NULL);
+	if (job->sliced)
+		cmd_json_set(o, "f:filament_mm", s->filament_mm, "f:filament_g", s->filament_g,
+			     "f:estimated_s", s->time_s, NULL);
+	cmd_json_set(o, "s:unit", job->input == PRINT_X3G ? "commands" : "lines",
+		     "I:done", (json_int_t)job->done, "I:total", (json_int_t)job->total,
+		     "I:last_line", (json_int_t)job->last_line, "I:layer", (json_int_t)(job->layer + 1),
+		     "I:resends", (json_int_t)job->resends, "f:seconds", job->stream_s, NULL);
 	if (job->start_layer >= 0)
-		json_object_set_new(o, "resumed_from_layer", json_integer(job->start_layer + 1));
-	if (job->journal_saved) {
-		json_object_set_new(o, "job", json_string(job->j.id));
-		json_object_set_new(o, "journal", json_string(job->j.file));
-	}
+		cmd_json_set(o, "I:resumed_from_layer", (json_int_t)(job->start_layer + 1), NULL);
+	if (job->journal_saved)
+		cmd_json_set(o, "s:job", job->j.id, "s:journal", job->j.file, NULL);
 	if (job->fail)
-		json_object_set_new(o, "error", json_string(job->fail));
+		cmd_json_set(o, "s:error", job->fail, NULL);
 	send_report_emit(o);
 }
 
@@ -464,16 +448,12 @@ static int print_dry_run(struct print_job *job)
 	}
 	if (job->a->json) {
 		json_t *o = json_object();
-		json_object_set_new(o, "ok", json_true());
-		json_object_set_new(o, "input", json_string(job->a->in));
-		json_object_set_new(o, "printer", json_string(job->prof->id));
-		json_object_set_new(o, "output", json_string(out));
-		json_object_set_new(o, "format", json_string(x3g ? "x3g" : "gcode"));
-		if (job->sliced) {
-			json_object_set_new(o, "layers", json_integer((json_int_t)job->slice.sum.layers));
-			json_object_set_new(o, "filament_mm", json_real(job->slice.sum.filament_mm));
-			json_object_set_new(o, "estimated_s", json_real(job->slice.sum.time_s));
-		}
+		cmd_json_set(o, "o:ok", json_true(), "s:input", job->a->in, "s:printer", job->prof->id,
+			     "s:output", out, "s:format", x3g ? "x3g" : "gcode", NULL);
+		if (job->sliced)
+			cmd_json_set(o, "z:layers", job->slice.sum.layers,
+				     "f:filament_mm", job->slice.sum.filament_mm,
+				     "f:estimated_s", job->slice.sum.time_s, NULL);
 		send_report_emit(o);
 	} else {
 		printf("dry run: %s for %s written to %s", x3g ? "X3G" : "G-code", job->prof->id,

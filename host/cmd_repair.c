@@ -8,7 +8,6 @@
  * the output could not be written, 2 usage, 65 unreadable input or bad
  * printer profile, 70 internal error.
  */
-#include <errno.h>
 #include <jansson.h>
 #include <limits.h>
 #include <stdarg.h>
@@ -266,11 +265,6 @@ out_free:
 }
 
 
-static json_t *json_size(size_t n)
-{
-	return json_integer((json_int_t)n);
-}
-
 /* The healing figures (docs/repair.md "Healing") into obj. */
 static void json_heal(json_t *obj, const struct repair_report *r)
 {
@@ -280,21 +274,15 @@ static void json_heal(json_t *obj, const struct repair_report *r)
 
 	for (size_t i = 0; areas && i < listed; i++)
 		json_array_append_new(areas, json_real(r->hole_area[i]));
-	json_object_set_new(obj, "weld_tolerance", json_real(r->weld_tolerance));
-	json_object_set_new(obj, "welded_vertices", json_size(r->welded_vertices));
-	json_object_set_new(obj, "weld_collapsed", json_size(r->weld_collapsed));
-	json_object_set_new(obj, "stitch_tolerance", json_real(r->stitch_tolerance));
-	json_object_set_new(obj, "stitched_vertices", json_size(r->stitched_vertices));
-	json_object_set_new(obj, "stitched_gaps", json_size(r->stitched_gaps));
-	json_object_set_new(obj, "stitch_max_gap", json_real(r->stitch_max_gap));
-	json_object_set_new(obj, "stitch_collapsed", json_size(r->stitch_collapsed));
-	json_object_set_new(obj, "holes_filled", json_size(r->holes_filled));
-	json_object_set_new(obj, "fill_triangles", json_size(r->fill_triangles));
-	json_object_set_new(obj, "fill_area", json_real(r->fill_area));
-	json_object_set_new(obj, "hole_areas", areas ? areas : json_null());
-	json_object_set_new(obj, "holes_kept", json_size(r->holes_kept));
-	json_object_set_new(obj, "kept_patch_fraction", json_real(r->kept_patch_fraction));
-	json_object_set_new(obj, "holes_crossing", json_size(r->holes_crossing));
+	cmd_json_set(obj, "f:weld_tolerance", r->weld_tolerance,
+		     "z:welded_vertices", r->welded_vertices, "z:weld_collapsed", r->weld_collapsed,
+		     "f:stitch_tolerance", r->stitch_tolerance,
+		     "z:stitched_vertices", r->stitched_vertices, "z:stitched_gaps", r->stitched_gaps,
+		     "f:stitch_max_gap", r->stitch_max_gap, "z:stitch_collapsed", r->stitch_collapsed,
+		     "z:holes_filled", r->holes_filled, "z:fill_triangles", r->fill_triangles,
+		     "f:fill_area", r->fill_area, "o:hole_areas", areas ? areas : json_null(),
+		     "z:holes_kept", r->holes_kept, "f:kept_patch_fraction", r->kept_patch_fraction,
+		     "z:holes_crossing", r->holes_crossing, NULL);
 }
 
 /* One line of what the healing did, e.g. "welded 24 vertices, stitched ...". */
@@ -344,54 +332,41 @@ static int print_json(const struct repair_run *run, const struct repair_report *
 	}
 	for (size_t i = 0; i < o->count; i++)
 		json_array_append_new(outs, json_string(o->path[i]));
-	json_object_set_new(obj, "ok", json_boolean(run->exit == ST_EXIT_OK));
-	json_object_set_new(obj, "exit", json_integer(run->exit));
-	json_object_set_new(obj, "error", run->error[0] ? json_string(run->error) : json_null());
-	json_object_set_new(obj, "stage", json_string(run->stage));
-	json_object_set_new(obj, "input", run->input ? json_string(run->input) : json_null());
-	json_object_set_new(obj, "format", json_string(meshio_format_name(run->format)));
-	json_object_set_new(obj, "printer", run->printer ? json_string(run->printer) : json_null());
-	json_object_set_new(obj, "epsilon", json_real(run->epsilon));
-	json_object_set_new(obj, "epsilon_source", json_string(run->eps_source));
-	json_object_set_new(obj, "precision", json_string(run->ascii ? "float64" : "float32"));
-	json_object_set_new(obj, "input_triangles",
-			    run->read ? json_size(run->input_triangles) : json_null());
+	cmd_json_set(obj, "b:ok", run->exit == ST_EXIT_OK, "i:exit", run->exit,
+		     "o:error", run->error[0] ? json_string(run->error) : json_null(),
+		     "s:stage", run->stage,
+		     "o:input", run->input ? json_string(run->input) : json_null(),
+		     "s:format", meshio_format_name(run->format),
+		     "o:printer", run->printer ? json_string(run->printer) : json_null(),
+		     "f:epsilon", run->epsilon, "s:epsilon_source", run->eps_source,
+		     "s:precision", run->ascii ? "float64" : "float32",
+		     "o:input_triangles",
+		     run->read ? json_integer((json_int_t)run->input_triangles) : json_null(), NULL);
 	if (!run->repaired)
 		goto out_dump; /* nothing measured beyond the input */
 	json_heal(obj, r);
-	json_object_set_new(obj, "irregular_removed", json_size(r->irregular_removed));
-	json_object_set_new(obj, "degenerate_removed", json_size(r->degenerate_removed));
-	json_object_set_new(obj, "duplicates_removed", json_size(r->duplicates_removed));
-	json_object_set_new(obj, "intersecting_pairs",
-			    json_integer((json_int_t)r->intersecting_pairs));
-	json_object_set_new(obj, "triangles_split", json_size(r->triangles_split));
-	json_object_set_new(obj, "interior_deleted", json_size(r->interior_deleted));
-	json_object_set_new(obj, "enclosed_deleted", json_size(r->enclosed_deleted));
-	json_object_set_new(obj, "enclosed_components", json_size(r->enclosed_components));
-	json_object_set_new(obj, "cavities", json_size(r->cavities));
-	json_object_set_new(obj, "parts_dropped", json_size(r->parts_dropped));
-	json_object_set_new(obj, "dropped_triangles", json_size(r->dropped_triangles));
-	json_object_set_new(obj, "sheet_triangles", json_size(r->sheet_triangles));
-	json_object_set_new(obj, "sheet_area", json_real(r->sheet_area));
-	json_object_set_new(obj, "sheet_components", json_size(r->sheet_components));
-	json_object_set_new(obj, "wires", json_size(r->wires));
-	json_object_set_new(obj, "wire_length", json_real(r->wire_length));
-	json_object_set_new(obj, "wires_discarded", json_size(r->wires_discarded));
-	json_object_set_new(obj, "second_pass", json_boolean(r->second_pass));
-	json_object_set_new(obj, "thickened_triangles", json_size(r->thickened_triangles));
-	json_object_set_new(obj, "second_sheet_triangles", json_size(r->second_sheet_triangles));
-	json_object_set_new(obj, "batches", json_size(r->batches));
-	json_object_set_new(obj, "batch_fallback", json_boolean(r->batch_fallback));
-	json_object_set_new(obj, "rounding_rounds", json_integer(r->rounding_rounds));
-	json_object_set_new(obj, "rounding_merged", json_size(r->rounding_merged));
-	json_object_set_new(obj, "solid_deviation", json_real(r->solid_deviation));
-	json_object_set_new(obj, "rounding_deviation", json_real(r->rounding_deviation));
-	json_object_set_new(obj, "sheet_deviation", json_real(r->sheet_deviation));
-	json_object_set_new(obj, "output_triangles", json_size(r->output_triangles));
-	json_object_set_new(obj, "output_vertices", json_size(r->output_vertices));
-	json_object_set_new(obj, "components", json_size(r->components));
-	json_object_set_new(obj, "printable", json_boolean(r->printable));
-	json_object_set_new(obj, "why", r->printable ? json_null() : json_string(r->why));
+	cmd_json_set(obj, "z:irregular_removed", r->irregular_removed,
+		     "z:degenerate_removed", r->degenerate_removed,
+		     "z:duplicates_removed", r->duplicates_removed,
+		     "I:intersecting_pairs", (json_int_t)r->intersecting_pairs,
+		     "z:triangles_split", r->triangles_split, "z:interior_deleted", r->interior_deleted,
+		     "z:enclosed_deleted", r->enclosed_deleted,
+		     "z:enclosed_components", r->enclosed_components, "z:cavities", r->cavities,
+		     "z:parts_dropped", r->parts_dropped, "z:dropped_triangles", r->dropped_triangles,
+		     "z:sheet_triangles", r->sheet_triangles, "f:sheet_area", r->sheet_area,
+		     "z:sheet_components", r->sheet_components, "z:wires", r->wires,
+		     "f:wire_length", r->wire_length, "z:wires_discarded", r->wires_discarded,
+		     "b:second_pass", r->second_pass,
+		     "z:thickened_triangles", r->thickened_triangles,
+		     "z:second_sheet_triangles", r->second_sheet_triangles, "z:batches", r->batches,
+		     "b:batch_fallback", r->batch_fallback, "i:rounding_rounds", r->rounding_rounds,
+		     "z:rounding_merged", r->rounding_merged, "f:solid_deviation", r->solid_deviation,
+		     "f:rounding_deviation", r->rounding_deviation,
+		     "f:sheet_deviation", r->sheet_deviation,
+		     "z:output_triangles", r->output_triangles,
+		     "z:output_vertices", r->output_vertices, "z:components", r->components,
+		     "b:printable", r->printable,
+		     "o:why", r->printable ? json_null() : json_string(r->why), NULL);
 out_dump:
 	json_object_set_new(obj, "outputs", outs);
 	return cmd_json_out(obj, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(10));
@@ -482,25 +457,6 @@ static void print_text(const struct repair_run *run, const struct repair_report 
 	if (o->count == 1 && r->components > 1)
 		printf("note: the %zu parts are in one file (printable as it is); --split writes "
 		       "one file per part\n", r->components);
-}
-
-/* Print the report; 0 or the exit status for a failed stdout. */
-static int report(const struct repair_run *run, const struct repair_report *r,
-		  const struct repair_outputs *o, bool json)
-{
-	if (json) {
-		if (print_json(run, r, o)) {
-			fprintf(stderr, "stratum repair: cannot write the JSON report\n");
-			return ST_EXIT_SOFTWARE;
-		}
-	} else {
-		print_text(run, r, o);
-	}
-	if (fflush(stdout) == EOF) {
-		fprintf(stderr, "stratum repair: cannot write the report: %s\n", strerror(errno));
-		return ST_EXIT_SOFTWARE;
-	}
-	return 0;
 }
 
 /*
@@ -702,7 +658,8 @@ static int repair_command(int argc, char **argv, struct repair_run *run, struct 
 
 out_report:
 	run->exit = status;
-	rc = report(run, &rep, &outs, json);
+	rc = cmd_report_end("stratum repair", "report", json ? print_json(run, &rep, &outs) != 0
+							   : (print_text(run, &rep, &outs), 0));
 	if (!status && rc)
 		status = rc;
 	outputs_free(&outs);

@@ -198,27 +198,20 @@ static void send_report(const struct send_args *a, const struct printer_ops *ops
 		return;
 	}
 	if ((o = json_object())) {
-		json_object_set_new(o, "ok", json_boolean(ok));
-		json_object_set_new(o, "file", json_string(a->file));
-		json_object_set_new(o, "port", json_string(a->port));
-		json_object_set_new(o, "printer", json_string(a->printer));
-		json_object_set_new(o, "protocol", json_string(ops->name));
-		json_object_set_new(o, "firmware", json_string(firmware));
-		json_object_set_new(o, "resends", json_integer((json_int_t)res->last.resends));
-		json_object_set_new(o, "errors", json_integer((json_int_t)res->errors));
-		json_object_set_new(o, "unknown_commands",
-				    json_integer((json_int_t)res->unknown_commands));
-		json_object_set_new(o, "seconds", json_real(secs));
-		json_object_set_new(o, "bytes", json_integer((json_int_t)res->bytes_acked));
-		json_object_set_new(o, "bytes_written", json_integer((json_int_t)res->bytes_written));
-		json_object_set_new(o, "bytes_per_s", json_real(bps));
-		json_object_set_new(o, "baud", json_integer(baud));
-		json_object_set_new(o, "link_fraction", json_real(cap > 0 ? bps / cap : 0));
+		cmd_json_set(o, "b:ok", ok, "s:file", a->file, "s:port", a->port,
+			     "s:printer", a->printer, "s:protocol", ops->name, "s:firmware", firmware,
+			     "I:resends", (json_int_t)res->last.resends,
+			     "I:errors", (json_int_t)res->errors,
+			     "I:unknown_commands", (json_int_t)res->unknown_commands,
+			     "f:seconds", secs, "I:bytes", (json_int_t)res->bytes_acked,
+			     "I:bytes_written", (json_int_t)res->bytes_written, "f:bytes_per_s", bps,
+			     "I:baud", (json_int_t)baud, "f:link_fraction", cap > 0 ? bps / cap : 0,
+			     NULL);
 		if (error)
-			json_object_set_new(o, "error", json_string(error));
-		json_object_set_new(o, "input", json_string(job->x3g ? "x3g" : "gcode"));
+			cmd_json_set(o, "s:error", error, NULL);
+		cmd_json_set(o, "s:input", job->x3g ? "x3g" : "gcode", NULL);
 		if (!job->x3g)
-			json_object_set_new(o, "warnings", json_integer((json_int_t)info->warnings));
+			cmd_json_set(o, "I:warnings", (json_int_t)info->warnings, NULL);
 		for (size_t i = 0; i < res->ncounters; i++)
 			json_object_set_new(o, res->counters[i].name,
 					    res->counters[i].real

@@ -12,7 +12,6 @@
  * The printer profile is mapped to struct slicer_config here, so slicer/
  * never includes host/.
  */
-#include <errno.h>
 #include <jansson.h>
 #include <math.h>
 #include <stdbool.h>
@@ -209,12 +208,9 @@ static json_t *json_repair(const struct repair_report *r)
 
 	if (!r || !rep)
 		return rep;
-	json_object_set_new(rep, "input_triangles", json_integer((json_int_t)r->input_triangles));
-	json_object_set_new(rep, "intersecting_pairs",
-			    json_integer((json_int_t)r->intersecting_pairs));
-	json_object_set_new(rep, "output_triangles",
-			    json_integer((json_int_t)r->output_triangles));
-	json_object_set_new(rep, "components", json_integer((json_int_t)r->components));
+	cmd_json_set(rep, "z:input_triangles", r->input_triangles,
+		     "I:intersecting_pairs", (json_int_t)r->intersecting_pairs,
+		     "z:output_triangles", r->output_triangles, "z:components", r->components, NULL);
 	return rep;
 }
 
@@ -227,11 +223,10 @@ static json_t *json_models(const struct slice_run *r)
 		const struct slicejob_model *m = &r->res->models[i];
 		json_t *o = json_object();
 
-		json_object_set_new(o, "input", json_string(m->path));
-		json_object_set_new(o, "format", json_string(meshio_format_name(m->format)));
-		json_object_set_new(o, "input_triangles", json_integer((json_int_t)m->input_triangles));
-		json_object_set_new(o, "repair", json_repair(r->rep ? &m->rep : NULL));
-		json_object_set_new(o, "offset", json_xyz(m->offset));
+		cmd_json_set(o, "s:input", m->path, "s:format", meshio_format_name(m->format),
+			     "z:input_triangles", m->input_triangles,
+			     "o:repair", json_repair(r->rep ? &m->rep : NULL),
+			     "o:offset", json_xyz(m->offset), NULL);
 		json_array_append_new(arr, o);
 	}
 	return arr;
@@ -247,39 +242,22 @@ static int print_json(const struct slice_run *r, const struct slicer_summary *s)
 	for (int k = 0; k < PATH_ROLES; k++)
 		json_object_set_new(paths, role_keys[k],
 				    json_integer((json_int_t)s->paths[k]));
-	json_object_set_new(stages, "walls", json_boolean(s->walls));
-	json_object_set_new(stages, "infill", json_boolean(s->infill));
-	json_object_set_new(stages, "support", json_boolean(s->support));
-	json_object_set_new(stages, "skirt", json_boolean(s->skirt));
-	json_object_set_new(place, "offset", json_xyz(s->offset));
-	json_object_set_new(place, "min", json_xyz(s->min));
-	json_object_set_new(place, "max", json_xyz(s->max));
-
-	json_object_set_new(o, "input", json_string(r->a->in[0]));
-	json_object_set_new(o, "format", json_string(meshio_format_name(r->res->format)));
-	json_object_set_new(o, "input_triangles",
-			    json_integer((json_int_t)r->res->input_triangles));
-	json_object_set_new(o, "printer", json_string(r->prof->id));
-	json_object_set_new(o, "nozzle_diameter", json_real(r->c->perim.nozzle_diameter));
-	json_object_set_new(o, "repair", rep);
-	json_object_set_new(o, "output", json_string(r->a->out));
-	json_object_set_new(o, "layers", json_integer((json_int_t)s->layers));
-	json_object_set_new(o, "layer_height", json_real(r->c->layer_height));
-	json_object_set_new(o, "first_layer_height", json_real(r->c->first_layer_height));
-	json_object_set_new(o, "raft_layers", json_integer((json_int_t)s->raft_layers));
-	json_object_set_new(o, "perimeters", json_integer(r->c->perim.perimeters));
-	json_object_set_new(o, "fill_density", json_real(r->c->infill.density));
-	json_object_set_new(o, "time_s", json_real(s->time_s));
-	json_object_set_new(o, "filament_mm", json_real(s->filament_mm));
-	json_object_set_new(o, "filament_cm3", json_real(s->filament_cm3));
-	json_object_set_new(o, "filament_g", json_real(s->filament_g));
-	json_object_set_new(o, "moves", json_integer((json_int_t)s->moves));
-	json_object_set_new(o, "placement", place);
-	json_object_set_new(o, "models", json_models(r));
-	json_object_set_new(o, "arranged", json_boolean(r->res->arranged));
-	json_object_set_new(o, "paths", paths);
-	json_object_set_new(o, "stages", stages);
-	json_object_set_new(o, "open_contours_dropped", json_integer((json_int_t)s->open_dropped));
+	cmd_json_set(stages, "b:walls", s->walls, "b:infill", s->infill, "b:support", s->support,
+		     "b:skirt", s->skirt, NULL);
+	cmd_json_set(place, "o:offset", json_xyz(s->offset), "o:min", json_xyz(s->min),
+		     "o:max", json_xyz(s->max), NULL);
+	cmd_json_set(o, "s:input", r->a->in[0], "s:format", meshio_format_name(r->res->format),
+		     "z:input_triangles", r->res->input_triangles, "s:printer", r->prof->id,
+		     "f:nozzle_diameter", r->c->perim.nozzle_diameter, "o:repair", rep,
+		     "s:output", r->a->out, "z:layers", s->layers,
+		     "f:layer_height", r->c->layer_height,
+		     "f:first_layer_height", r->c->first_layer_height,
+		     "z:raft_layers", s->raft_layers, "i:perimeters", r->c->perim.perimeters,
+		     "f:fill_density", r->c->infill.density, "f:time_s", s->time_s,
+		     "f:filament_mm", s->filament_mm, "f:filament_cm3", s->filament_cm3,
+		     "f:filament_g", s->filament_g, "z:moves", s->moves, "o:placement", place,
+		     "o:models", json_models(r), "b:arranged", r->res->arranged, "o:paths", paths,
+		     "o:stages", stages, "z:open_contours_dropped", s->open_dropped, NULL);
 	return cmd_json_out(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(10));
 
 out_nomem:
@@ -344,24 +322,6 @@ static void print_text(const struct slice_run *r, const struct slicer_summary *s
 	printf("filament: %.1f mm, %.2f cm^3, %.2f g\n", s->filament_mm, s->filament_cm3,
 	       s->filament_g);
 	printf("written: %s\n", r->a->out);
-}
-
-/* Print the summary; 0 or the exit status for a failed stdout. */
-static int report(const struct slice_run *r, const struct slicer_summary *s)
-{
-	if (r->a->json) {
-		if (print_json(r, s)) {
-			fprintf(stderr, SLICE_CMD ": cannot write the JSON summary\n");
-			return ST_EXIT_SOFTWARE;
-		}
-	} else {
-		print_text(r, s);
-	}
-	if (fflush(stdout) == EOF) {
-		fprintf(stderr, SLICE_CMD ": cannot write the summary: %s\n", strerror(errno));
-		return ST_EXIT_SOFTWARE;
-	}
-	return 0;
 }
 
 /* PrusaSlicer's input_filename and input_filename_base for the custom G-code. */
@@ -442,7 +402,8 @@ static int slice_run(int argc, char **argv, struct clio *io)
 		run.prof = prof;
 		run.res = &res;
 		run.rep = res.repaired ? &res.rep : NULL;
-		status = report(&run, &res.sum);
+		status = cmd_report_end(SLICE_CMD, "summary", a.json ? print_json(&run, &res.sum) != 0
+								 : (print_text(&run, &res.sum), 0));
 	}
 	slicejob_result_free(&res);
 out_profile:

@@ -119,8 +119,7 @@ static int flush_call(struct x3g_run *r, int ncmds)
 		if (r->jwarn && json_array_size(r->jwarn) < X3G_JSON_WARNINGS) {
 			json_t *o = json_object();
 
-			json_object_set_new(o, "line", json_integer((json_int_t)w[i].line));
-			json_object_set_new(o, "message", json_string(w[i].msg));
+			cmd_json_set(o, "I:line", (json_int_t)w[i].line, "s:message", w[i].msg, NULL);
 			json_array_append_new(r->jwarn, o);
 		}
 	}
@@ -245,16 +244,11 @@ static int run_translate(const struct x3g_args *a)
 	if (status == 0 && a->json) {
 		json_t *o = json_object();
 
-		json_object_set_new(o, "input", json_string(a->in));
-		json_object_set_new(o, "output", json_string(a->out));
-		json_object_set_new(o, "printer", json_string(p->id));
-		json_object_set_new(o, "flavor", json_string(opt.flavor == X3G_FLAVOR_REPRAP
-								    ? "reprap" : "makerbot"));
-		json_object_set_new(o, "lines", json_integer((json_int_t)r.lines));
-		json_object_set_new(o, "commands", json_integer((json_int_t)r.commands));
-		json_object_set_new(o, "bytes", json_integer((json_int_t)r.bytes));
-		json_object_set_new(o, "warnings", json_integer((json_int_t)r.warnings));
-		json_object_set_new(o, "warning_list", r.jwarn);
+		cmd_json_set(o, "s:input", a->in, "s:output", a->out, "s:printer", p->id,
+			     "s:flavor", opt.flavor == X3G_FLAVOR_REPRAP ? "reprap" : "makerbot",
+			     "I:lines", (json_int_t)r.lines, "I:commands", (json_int_t)r.commands,
+			     "I:bytes", (json_int_t)r.bytes, "I:warnings", (json_int_t)r.warnings,
+			     "o:warning_list", r.jwarn, NULL);
 		r.jwarn = NULL;
 		cmd_json_out(o, JSON_INDENT(2));
 	} else if (status == 0) {
@@ -305,10 +299,8 @@ static json_t *command_json(const struct x3g_command *c)
 {
 	json_t *o = json_object(), *f = json_object();
 
-	json_object_set_new(o, "offset", json_integer((json_int_t)c->offset));
-	json_object_set_new(o, "code", json_integer(c->code));
-	json_object_set_new(o, "name", json_string(c->name));
-	json_object_set_new(o, "length", json_integer((json_int_t)c->length));
+	cmd_json_set(o, "I:offset", (json_int_t)c->offset, "i:code", (int)c->code, "s:name", c->name,
+		     "I:length", (json_int_t)c->length, NULL);
 	for (size_t i = 0; i < c->nfields; i++)
 		json_object_set_new(f, c->fields[i].name, json_real(c->fields[i].value));
 	json_object_set_new(o, "fields", f);
@@ -350,9 +342,8 @@ static int run_decode(const struct x3g_args *a)
 	if (arr) {
 		json_t *o = json_object();
 
-		json_object_set_new(o, "input", json_string(a->decode));
-		json_object_set_new(o, "bytes", json_integer((json_int_t)len));
-		json_object_set_new(o, "commands", arr);
+		cmd_json_set(o, "s:input", a->decode, "I:bytes", (json_int_t)len, "o:commands", arr,
+			     NULL);
 		cmd_json_out(o, JSON_INDENT(2));
 	} else {
 		fprintf(stderr, "%s: %zu commands, %zu bytes\n", a->decode, count, len);

@@ -69,6 +69,24 @@ struct json_t;
 int cmd_json_out(struct json_t *o, size_t flags);
 
 /*
+ * cmd_json_set - set keys of o in order from pairs of "K:key" and a value,
+ * NULL after the last pair.  K is the value's C type: 'b' bool, 'i' int,
+ * 'z' size_t, 'I' json_int_t, 'f' double, 's' string, 'o' json_t * (taken
+ * over).  As json_object_set_new key by key, not json_pack: a value that
+ * cannot be made (a NULL or non-UTF-8 string, a NaN) leaves only its own
+ * key out, where json_pack would lose the whole object (host/cmd_output.c).
+ */
+void cmd_json_set(struct json_t *o, ...);
+
+/*
+ * cmd_report_end - after a command printed its report on stdout: json_failed
+ * (the --json report could not be made) gives "CMD: cannot write the JSON
+ * WHAT", a failed flush "CMD: cannot write the WHAT: REASON", both
+ * ST_EXIT_SOFTWARE; else 0 (host/cmd_output.c).
+ */
+int cmd_report_end(const char *cmd, const char *what, bool json_failed);
+
+/*
  * The option table of one subcommand: each option is declared once, with
  * its value's kind, range and help line, and both cmd_parse and the --help
  * text (cmd_usage) read it.

@@ -8,6 +8,7 @@
  */
 #include <arpa/inet.h>
 #include <ctype.h>
+#include <stddef.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -140,178 +141,158 @@ static int once(struct cfg_parse *p, const char *key, unsigned bit)
 	return 0;
 }
 
-static int node_key_value(struct cfg_parse *p, const char *k, const char *v)
+/* name = a section name (good_name). */
+static int check_name(struct cfg_parse *p, char *v, void *base)
 {
-	struct node_config *c = p->cfg;
-	double d;
-	int rc;
-
-	if (!strcmp(k, "name")) {
-		if ((rc = once(p, k, 0)))
-			return rc;
-		if (!good_name(v))
-			return CFG_FAIL(p, ST_ERR_RANGE, "name: '%s' is not a name (letters, "
-						       "digits, '-', '_', '.'; at most 63)", v);
-		return copy_value(p, k, v, c->name, sizeof(c->name));
-	}
-	if (!strcmp(k, "listen")) {
-		struct st_error e;
-
-		if ((rc = once(p, k, 1)))
-			return rc;
-		if (node_parse_listen(v, c->listen_addr, sizeof(c->listen_addr), &c->listen_port, &e))
-			return CFG_FAIL(p, e.code, "listen: %s", e.msg);
-		return 0;
-	}
-	if (!strcmp(k, "data_dir")) {
-		if ((rc = once(p, k, 2)))
-			return rc;
-		return copy_value(p, k, v, c->data_dir, sizeof(c->data_dir));
-	}
-	if (!strcmp(k, "max_upload_mb")) {
-		if ((rc = once(p, k, 3)) || (rc = whole(p, k, v, 1, 1 << 20, &d)))
-			return rc;
-		c->max_upload = (uint64_t)d << 20;
-		return 0;
-	}
-	if (!strcmp(k, "slice_threads")) {
-		if ((rc = once(p, k, 4)) || (rc = whole(p, k, v, 0, 256, &d)))
-			return rc;
-		c->slice_threads = (int)d;
-		return 0;
-	}
-	if (!strcmp(k, "max_connections")) {
-		if ((rc = once(p, k, 5)) ||
-		    (rc = whole(p, k, v, NODE_CONN_MIN, NODE_CONN_MAX, &d)))
-			return rc;
-		c->max_connections = (unsigned)d;
-		return 0;
-	}
-	if (!strcmp(k, "max_connections_per_ip")) {
-		if ((rc = once(p, k, 6)) || (rc = whole(p, k, v, 1, NODE_CONN_MAX, &d)))
-			return rc;
-		c->max_connections_per_ip = (unsigned)d;
-		return 0;
-	}
-	if (!strcmp(k, "idle_timeout_s")) {
-		if ((rc = once(p, k, 7)) || (rc = whole(p, k, v, 1, 3600, &d)))
-			return rc;
-		c->idle_timeout_s = (unsigned)d;
-		return 0;
-	}
-	return CFG_FAIL(p, ST_ERR_PARSE, "unknown key '%s' in [node] (name, listen, data_dir, "
-					  "max_upload_mb, slice_threads, max_connections, "
-					  "max_connections_per_ip, idle_timeout_s)", k);
+	(void)base;
+	if (!good_name(v))
+		return CFG_FAIL(p, ST_ERR_RANGE, "name: '%s' is not a name (letters, "
+					       "digits, '-', '_', '.'; at most 63)", v);
+	return 0;
 }
 
-static int key_key_value(struct cfg_parse *p, const char *k, char *v)
+static int set_listen(struct cfg_parse *p, char *v, void *base)
 {
-	struct node_key *key = &p->cfg->keys[p->cfg->nkeys - 1];
-	int rc;
+	struct node_config *c = base;
+	struct st_error e;
 
-	if (!strcmp(k, "key")) {
-		size_t n = strlen(v);
-
-		if ((rc = once(p, k, 0)))
-			return rc;
-		if (n < NODE_KEY_MIN || n > NODE_KEY_MAX)
-			return CFG_FAIL(p, ST_ERR_RANGE, "key: %zu bytes; an API key has %d to %d",
-					n, NODE_KEY_MIN, NODE_KEY_MAX);
-		for (const char *s = v; *s; s++)
-			if (!isgraph((unsigned char)*s))
-				return CFG_FAIL(p, ST_ERR_RANGE, "key: only printable characters "
-								"without blanks");
-		memcpy(key->secret, v, n + 1);
-		return 0;
-	}
-	if (!strcmp(k, "roles")) {
-		if ((rc = once(p, k, 1)))
-			return rc;
-		return parse_roles(p, v, &key->roles);
-	}
-	return CFG_FAIL(p, ST_ERR_PARSE, "unknown key '%s' in [key %s] (key, roles)", k, key->name);
+	if (node_parse_listen(v, c->listen_addr, sizeof(c->listen_addr), &c->listen_port, &e))
+		return CFG_FAIL(p, e.code, "listen: %s", e.msg);
+	return 0;
 }
 
-static int printer_key_value(struct cfg_parse *p, const char *k, const char *v)
+static int set_secret(struct cfg_parse *p, char *v, void *base)
 {
-	struct node_printer_config *pc = &p->cfg->printers[p->cfg->nprinters - 1];
-	int rc;
+	struct node_key *key = base;
+	size_t n = strlen(v);
 
-	if (!strcmp(k, "profile")) {
-		if ((rc = once(p, k, 0)))
-			return rc;
-		return copy_value(p, k, v, pc->profile, sizeof(pc->profile));
-	}
-	if (!strcmp(k, "port")) {
-		if ((rc = once(p, k, 1)))
-			return rc;
-		return copy_value(p, k, v, pc->port, sizeof(pc->port));
-	}
-	if (!strcmp(k, "prefix")) {
-		size_t n = strlen(v);
-
-		if ((rc = once(p, k, 2)))
-			return rc;
-		if (n < 2 || v[0] != '/' || v[n - 1] == '/' || strstr(v, "//") ||
-		    strstr(v, "/.") || !strncmp(v, "/api", 4) || strspn(v, "/abcdefghijklmnopqrstuvwxyz"
-			"ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_.") != n)
-			return CFG_FAIL(p, ST_ERR_RANGE, "prefix: '%s' is not a URL path such as "
-							 "/p/mk3s (starts with '/', no trailing "
-							 "'/', not under /api)", v);
-		return copy_value(p, k, v, pc->prefix, sizeof(pc->prefix));
-	}
-	if (!strcmp(k, "sim_speedup")) {
-		double d;
-
-		if ((rc = once(p, k, 3)) || (rc = whole(p, k, v, 1, 100000, &d)))
-			return rc;
-		pc->sim_speedup = d;
-		return 0;
-	}
-	return CFG_FAIL(p, ST_ERR_PARSE, "unknown key '%s' in [printer %s] (profile, port, prefix, "
-			"sim_speedup)", k, pc->name);
+	if (n < NODE_KEY_MIN || n > NODE_KEY_MAX)
+		return CFG_FAIL(p, ST_ERR_RANGE, "key: %zu bytes; an API key has %d to %d", n,
+				NODE_KEY_MIN, NODE_KEY_MAX);
+	for (const char *s = v; *s; s++)
+		if (!isgraph((unsigned char)*s))
+			return CFG_FAIL(p, ST_ERR_RANGE, "key: only printable characters "
+							"without blanks");
+	memcpy(key->secret, v, n + 1);
+	return 0;
 }
 
-static int mqtt_key_value(struct cfg_parse *p, const char *k, const char *v)
+static int set_roles(struct cfg_parse *p, char *v, void *base)
 {
-	struct node_mqtt_config *m = &p->cfg->mqtt;
-	static const char *const keys[] = {"host", "port", "username", "password", "client_id",
-					   "topic", "keepalive"};
-	double d;
-	int rc;
+	return parse_roles(p, v, &((struct node_key *)base)->roles);
+}
 
-	for (unsigned i = 0; i < sizeof(keys) / sizeof(keys[0]); i++)
-		if (!strcmp(k, keys[i]) && (rc = once(p, k, i)))
+static int check_prefix(struct cfg_parse *p, char *v, void *base)
+{
+	size_t n = strlen(v);
+
+	(void)base;
+	if (n < 2 || v[0] != '/' || v[n - 1] == '/' || strstr(v, "//") || strstr(v, "/.") ||
+	    !strncmp(v, "/api", 4) ||
+	    strspn(v, "/abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_.") != n)
+		return CFG_FAIL(p, ST_ERR_RANGE, "prefix: '%s' is not a URL path such as "
+						 "/p/mk3s (starts with '/', no trailing "
+						 "'/', not under /api)", v);
+	return 0;
+}
+
+static int check_topic(struct cfg_parse *p, char *v, void *base)
+{
+	(void)base;
+	if (strpbrk(v, "+#") || v[0] == '/' || (*v && v[strlen(v) - 1] == '/'))
+		return CFG_FAIL(p, ST_ERR_RANGE, "topic: '%s' is not a topic root such as "
+						 "stratum (no + or #, no leading or "
+						 "trailing /)", v);
+	return 0;
+}
+
+/*
+ * One key of a section, declared once: the parser, the duplicate check
+ * (a key's bit is its place in the table) and the list of a section's keys
+ * in the message for an unknown one all read it.  After check (if any), a
+ * text key is copied to the field at off, a whole number in lo..hi is
+ * stored as the field's type, and a KEY_SET key's check does all.
+ */
+enum key_kind { KEY_TEXT, KEY_INT, KEY_UNSIGNED, KEY_U16, KEY_DOUBLE, KEY_MB, KEY_SET };
+struct cfg_key {
+	const char *name;
+	enum key_kind kind;
+	size_t off, size; /* the field in the section's struct */
+	double lo, hi;
+	int (*check)(struct cfg_parse *p, char *v, void *base);
+};
+#define TEXT(s, f, chk) {#f, KEY_TEXT, offsetof(s, f), sizeof(((s *)0)->f), 0, 0, chk}
+#define WHOLE(s, f, kind, lo, hi) {#f, kind, offsetof(s, f), 0, lo, hi, NULL}
+
+static const struct cfg_key node_keys[] = {
+    TEXT(struct node_config, name, check_name),
+    {"listen", KEY_SET, 0, 0, 0, 0, set_listen},
+    TEXT(struct node_config, data_dir, NULL),
+    {"max_upload_mb", KEY_MB, offsetof(struct node_config, max_upload), 0, 1, 1 << 20, NULL},
+    WHOLE(struct node_config, slice_threads, KEY_INT, 0, 256),
+    WHOLE(struct node_config, max_connections, KEY_UNSIGNED, NODE_CONN_MIN, NODE_CONN_MAX),
+    WHOLE(struct node_config, max_connections_per_ip, KEY_UNSIGNED, 1, NODE_CONN_MAX),
+    WHOLE(struct node_config, idle_timeout_s, KEY_UNSIGNED, 1, 3600),
+};
+static const struct cfg_key key_keys[] = {
+    {"key", KEY_SET, 0, 0, 0, 0, set_secret},
+    {"roles", KEY_SET, 0, 0, 0, 0, set_roles},
+};
+static const struct cfg_key printer_keys[] = {
+    TEXT(struct node_printer_config, profile, NULL),
+    TEXT(struct node_printer_config, port, NULL),
+    TEXT(struct node_printer_config, prefix, check_prefix),
+    WHOLE(struct node_printer_config, sim_speedup, KEY_DOUBLE, 1, 100000),
+};
+static const struct cfg_key mqtt_keys[] = {
+    TEXT(struct node_mqtt_config, host, NULL),
+    WHOLE(struct node_mqtt_config, port, KEY_U16, 1, 65535),
+    TEXT(struct node_mqtt_config, username, NULL),
+    TEXT(struct node_mqtt_config, password, NULL),
+    TEXT(struct node_mqtt_config, client_id, NULL),
+    TEXT(struct node_mqtt_config, topic, check_topic),
+    WHOLE(struct node_mqtt_config, keepalive, KEY_INT, 5, 3600),
+};
+#define KEYS(t) t, sizeof(t) / sizeof(t[0])
+
+/* k = v in the section whose keys are keys[n] and whose struct is base;
+ * section names it in the message for an unknown key ("[node]"). */
+static int set_key(struct cfg_parse *p, const struct cfg_key *keys, size_t n, void *base,
+		   const char *section, const char *k, char *v)
+{
+	char list[200] = "";
+	size_t used = 0;
+
+	for (size_t i = 0; i < n; i++) {
+		const struct cfg_key *d = &keys[i];
+		void *field = (char *)base + d->off;
+		double x = 0;
+		int rc;
+
+		if (strcmp(k, d->name))
+			continue;
+		if ((rc = once(p, k, (unsigned)i)) || (d->check && (rc = d->check(p, v, base))))
 			return rc;
-	if (!strcmp(k, "host"))
-		return copy_value(p, k, v, m->host, sizeof(m->host));
-	if (!strcmp(k, "username"))
-		return copy_value(p, k, v, m->username, sizeof(m->username));
-	if (!strcmp(k, "password"))
-		return copy_value(p, k, v, m->password, sizeof(m->password));
-	if (!strcmp(k, "client_id"))
-		return copy_value(p, k, v, m->client_id, sizeof(m->client_id));
-	if (!strcmp(k, "topic")) {
-		if (strpbrk(v, "+#") || v[0] == '/' || (*v && v[strlen(v) - 1] == '/'))
-			return CFG_FAIL(p, ST_ERR_RANGE, "topic: '%s' is not a topic root such as "
-							 "stratum (no + or #, no leading or "
-							 "trailing /)", v);
-		return copy_value(p, k, v, m->topic, sizeof(m->topic));
-	}
-	if (!strcmp(k, "port")) {
-		if ((rc = whole(p, k, v, 1, 65535, &d)))
+		if (d->kind == KEY_TEXT)
+			return copy_value(p, k, v, field, d->size);
+		if (d->kind != KEY_SET && (rc = whole(p, k, v, d->lo, d->hi, &x)))
 			return rc;
-		m->port = (uint16_t)d;
+		if (d->kind == KEY_INT)
+			*(int *)field = (int)x;
+		else if (d->kind == KEY_UNSIGNED)
+			*(unsigned *)field = (unsigned)x;
+		else if (d->kind == KEY_U16)
+			*(uint16_t *)field = (uint16_t)x;
+		else if (d->kind == KEY_DOUBLE)
+			*(double *)field = x;
+		else if (d->kind == KEY_MB)
+			*(uint64_t *)field = (uint64_t)x << 20;
 		return 0;
 	}
-	if (!strcmp(k, "keepalive")) {
-		if ((rc = whole(p, k, v, 5, 3600, &d)))
-			return rc;
-		m->keepalive = (int)d;
-		return 0;
-	}
-	return CFG_FAIL(p, ST_ERR_PARSE, "unknown key '%s' in [mqtt] (host, port, username, "
-					  "password, client_id, topic, keepalive)", k);
+	for (size_t i = 0; i < n; i++)
+		used += (size_t)snprintf(list + used, sizeof(list) - used, "%s%s", i ? ", " : "",
+					 keys[i].name);
+	return CFG_FAIL(p, ST_ERR_PARSE, "unknown key '%s' in %s (%s)", k, section, list);
 }
 
 /* "[node]", "[key NAME]", "[printer NAME]" or "[mqtt]". */
@@ -390,7 +371,7 @@ static int on_section(void *ctx, int line, const char *text, size_t len, struct 
 static int on_entry(void *ctx, const struct ini_entry *e, struct st_error *err)
 {
 	struct cfg_parse *p = ctx;
-	char *k = p->scratch, *v = p->scratch + e->key_len + 1;
+	char *k = p->scratch, *v = p->scratch + e->key_len + 1, sec[NODE_NAME_MAX + 16];
 
 	(void)err;
 	p->line = e->line;
@@ -400,13 +381,17 @@ static int on_entry(void *ctx, const struct ini_entry *e, struct st_error *err)
 	v[e->value_len] = '\0';
 	switch (p->sec) {
 	case SEC_NODE:
-		return node_key_value(p, k, v);
+		return set_key(p, KEYS(node_keys), p->cfg, "[node]", k, v);
 	case SEC_KEY:
-		return key_key_value(p, k, v);
+		snprintf(sec, sizeof(sec), "[key %s]", p->cfg->keys[p->cfg->nkeys - 1].name);
+		return set_key(p, KEYS(key_keys), &p->cfg->keys[p->cfg->nkeys - 1], sec, k, v);
 	case SEC_PRINTER:
-		return printer_key_value(p, k, v);
+		snprintf(sec, sizeof(sec), "[printer %s]",
+			 p->cfg->printers[p->cfg->nprinters - 1].name);
+		return set_key(p, KEYS(printer_keys), &p->cfg->printers[p->cfg->nprinters - 1], sec,
+			       k, v);
 	case SEC_MQTT:
-		return mqtt_key_value(p, k, v);
+		return set_key(p, KEYS(mqtt_keys), &p->cfg->mqtt, "[mqtt]", k, v);
 	default:
 		return CFG_FAIL(p, ST_ERR_PARSE, "'%s' before any [section]", k);
 	}

@@ -187,35 +187,25 @@ json_t *node_printer_json(struct node *n, struct node_printer *p, int queue_limi
 
 enum MHD_Result http_get_version(struct node *n, struct MHD_Connection *c, struct req *r)
 {
-	json_t *o = json_object();
+	json_t *o = json_pack("{s:s,s:s,s:s,s:{s:s}}", "api", "0.1", "server",
+			      HTTP_OCTOPRINT_VERSION, "text",
+			      "OctoPrint " HTTP_OCTOPRINT_VERSION " (Stratum farm node)", "stratum",
+			      "node", n->cfg.name);
 
 	(void)r;
-	json_object_set_new(o, "api", json_string("0.1"));
-	json_object_set_new(o, "server", json_string(HTTP_OCTOPRINT_VERSION));
-	json_object_set_new(o, "text", json_string("OctoPrint " HTTP_OCTOPRINT_VERSION
-						   " (Stratum farm node)"));
-	json_object_set_new(o, "stratum", json_pack("{s:s}", "node", n->cfg.name));
 	return http_send_json(c, MHD_HTTP_OK, o, NULL);
 }
 
 json_t *http_flags_json(const struct http_view *v)
 {
-	json_t *flags = json_object();
-
-	json_object_set_new(flags, "operational", json_boolean(v->connected));
-	json_object_set_new(flags, "printing", json_boolean(v->printing && !v->paused));
-	json_object_set_new(flags, "paused", json_boolean(v->paused || (v->has_job && !v->printing &&
-								      v->job.state == NODE_JOB_PAUSED)));
-	json_object_set_new(flags, "pausing", json_boolean(v->pausing));
-	json_object_set_new(flags, "cancelling", json_false());
-	json_object_set_new(flags, "sdReady", json_false());
-	json_object_set_new(flags, "error", json_boolean(!v->connected && v->conn_error[0]));
 	/* ready: a print may start; not while a job holds the printer (paused,
 	 * interrupted, slicing) */
-	json_object_set_new(flags, "ready", json_boolean(v->connected && !v->printing &&
-							 !v->has_job));
-	json_object_set_new(flags, "closedOrError", json_boolean(!v->connected));
-	return flags;
+	return json_pack("{s:b,s:b,s:b,s:b,s:b,s:b,s:b,s:b,s:b}", "operational", v->connected,
+			 "printing", v->printing && !v->paused, "paused",
+			 v->paused || (v->has_job && !v->printing && v->job.state == NODE_JOB_PAUSED),
+			 "pausing", v->pausing, "cancelling", 0, "sdReady", 0, "error",
+			 !v->connected && v->conn_error[0], "ready",
+			 v->connected && !v->printing && !v->has_job, "closedOrError", !v->connected);
 }
 
 enum MHD_Result http_get_printer(struct node *n, struct MHD_Connection *c, struct req *r)

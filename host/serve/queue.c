@@ -338,24 +338,34 @@ static int printer_row(struct node_queue *q, const char *printer)
 	return run(q, "INSERT OR IGNORE INTO printers(name) VALUES(?)", "s", printer);
 }
 
-int node_queue_bed_clear(struct node_queue *q, const char *printer, bool *clear)
+/* Column 0 of sql (one parameter: the printer's name) for printer's row:
+ * as text into text[cap], or as a flag into *flag.  0, or -1. */
+static int printer_value(struct node_queue *q, const char *printer, const char *sql,
+			 char *text, size_t cap, bool *flag)
 {
 	sqlite3_stmt *st;
 	int rc = -1;
 
 	pthread_mutex_lock(&q->mu);
-	if (!printer_row(q, printer) &&
-	    sqlite3_prepare_v2(q->db, "SELECT bed_clear FROM printers WHERE name=?", -1, &st,
-			       NULL) == SQLITE_OK) {
+	if (!printer_row(q, printer) && sqlite3_prepare_v2(q->db, sql, -1, &st, NULL) == SQLITE_OK) {
 		sqlite3_bind_text(st, 1, printer, -1, SQLITE_TRANSIENT);
 		if (sqlite3_step(st) == SQLITE_ROW) {
-			*clear = sqlite3_column_int(st, 0) != 0;
+			if (text)
+				copy_text(text, cap, sqlite3_column_text(st, 0));
+			else
+				*flag = sqlite3_column_int(st, 0) != 0;
 			rc = 0;
 		}
 		sqlite3_finalize(st);
 	}
 	pthread_mutex_unlock(&q->mu);
 	return rc;
+}
+
+int node_queue_bed_clear(struct node_queue *q, const char *printer, bool *clear)
+{
+	return printer_value(q, printer, "SELECT bed_clear FROM printers WHERE name=?", NULL, 0,
+			     clear);
 }
 
 int node_queue_set_bed_clear(struct node_queue *q, const char *printer, bool clear,
@@ -373,23 +383,9 @@ int node_queue_set_bed_clear(struct node_queue *q, const char *printer, bool cle
 
 int node_queue_selected(struct node_queue *q, const char *printer, char *name, size_t cap)
 {
-	sqlite3_stmt *st;
-	int rc = -1;
-
 	name[0] = '\0';
-	pthread_mutex_lock(&q->mu);
-	if (!printer_row(q, printer) &&
-	    sqlite3_prepare_v2(q->db, "SELECT selected FROM printers WHERE name=?", -1, &st,
-			       NULL) == SQLITE_OK) {
-		sqlite3_bind_text(st, 1, printer, -1, SQLITE_TRANSIENT);
-		if (sqlite3_step(st) == SQLITE_ROW) {
-			copy_text(name, cap, sqlite3_column_text(st, 0));
-			rc = 0;
-		}
-		sqlite3_finalize(st);
-	}
-	pthread_mutex_unlock(&q->mu);
-	return rc;
+	return printer_value(q, printer, "SELECT selected FROM printers WHERE name=?", name, cap,
+			     NULL);
 }
 
 int node_queue_set_selected(struct node_queue *q, const char *printer, const char *name,
