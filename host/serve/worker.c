@@ -106,6 +106,29 @@ static void drop_link(struct node_printer *p, const char *why)
 		 "{\"command\":\"connect\"} to reconnect)", why, p->cfg->prefix);
 }
 
+/*
+ * After job j ended (done, failed, cancelled): the bed waits for an
+ * operator, unless the printer confirmed no command of j that moves the
+ * machine.  Such a job left the bed as it found it, clear (a print starts
+ * only on a clear bed), so the next one need not wait.  A resumed job's
+ * part is on the bed whatever this run did.  p->mu held.
+ */
+static void bed_after(struct node_printer *p, const struct node_job *j, bool resumed)
+{
+	struct st_error err = {0};
+
+	if (resumed || node_gcode_moved(j->gcode, j->filepos)) {
+		node_log("info", p->cfg->name, 0, "waiting for the bed to be cleared "
+						  "(POST %s/api/stratum/bed-clear)", p->cfg->prefix);
+		return;
+	}
+	if (node_queue_set_bed_clear(p->node->q, p->cfg->name, true, &err))
+		node_log("error", p->cfg->name, j->id, "%s", err.msg);
+	else
+		node_log("info", p->cfg->name, j->id, "the printer confirmed no move of the job: "
+			 "the bed is still clear");
+}
+
 /* Print job j; p->mu held on entry and exit. */
 static void run_print(struct node_printer *p, struct node_job *j)
 {
@@ -179,8 +202,7 @@ static void run_print(struct node_printer *p, struct node_job *j)
 	node_log(j->state == NODE_JOB_FAILED ? "error" : "info", p->cfg->name, j->id, "%s%s%s",
 		 node_job_state_name(j->state), j->error[0] ? ": " : "", j->error);
 	if (j->state != NODE_JOB_PAUSED)
-		node_log("info", p->cfg->name, 0, "waiting for the bed to be cleared "
-						  "(POST %s/api/stratum/bed-clear)", p->cfg->prefix);
+		bed_after(p, j, resume);
 }
 
 /* One step of work; p->mu held.  True when something was done. */
