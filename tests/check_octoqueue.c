@@ -284,6 +284,50 @@ START_TEST(test_bed_untouched)
 }
 END_TEST
 
+/* Cancel mk3s's job id (a sim Marlin) while it waits for its bed to heat. */
+static void cancel_in_heat_wait(int port, long long id)
+{
+	sv_wait_state(port, "", id, "printing", 10);
+	usleep(800000); /* in M190: the bed needs several seconds at this speed-up */
+	sv_expect(port, "POST", "/api/job", CTL, "{\"command\":\"cancel\"}", 204);
+	sv_wait_state(port, "", id, "cancelled", 10);
+}
+
+/* The Marlin driver: what a cancel leaves in flight still runs (its safe
+ * stop breaks the heat wait), so a move written after the wait counts,
+ * confirmed or not; one never written does not. */
+START_TEST(test_bed_untouched_marlin)
+{
+	struct node_proc np;
+	char text[2048], log[1024], *ran;
+	size_t len = 0;
+	bool clear = false;
+
+	sv_write_config(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\n"
+			  "sim_speedup = 10\n", 8);
+	sv_start(&np);
+	/* the move lies beyond what the driver writes ahead of the wait */
+	len = (size_t)snprintf(text, sizeof(text), "M140 S90\nM190 S90\n");
+	for (int i = 0; i < 40; i++)
+		len += (size_t)snprintf(text + len, sizeof(text) - len, "M117 warming %d\n", i);
+	snprintf(text + len, sizeof(text) - len, "G28\nG1 X10 F3000\n");
+	cancel_in_heat_wait(np.port, sv_print_text(np.port, "", "far.gcode", text));
+	waiting(np.port, &clear, NULL, 0);
+	ck_assert_msg(clear, "a job whose moves were never sent asks for the bed");
+	/* right after the wait: written with it, and run by the safe stop */
+	cancel_in_heat_wait(np.port, sv_print_text(np.port, "", "near.gcode",
+						   "M140 S90\nM190 S90\nG28\nG1 X10 F3000\n"));
+	waiting(np.port, &clear, NULL, 0);
+	snprintf(log, sizeof(log), "%s/data/sim/mk3s.log", np.dir);
+	ran = tu_slurp(log, &len);
+	ck_assert(ran);
+	ck_assert_msg(strstr(ran, " G28\n"), "%s", ran);
+	ck_assert_msg(!clear, "the printer homed, yet the bed counts as clear");
+	free(ran);
+	sv_stop(&np);
+}
+END_TEST
+
 void octoapi_queue_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("queue");
@@ -293,5 +337,6 @@ void octoapi_queue_tcases(Suite *s)
 	tcase_add_test(tc, test_job_restart);
 	tcase_add_test(tc, test_queue_api);
 	tcase_add_test(tc, test_bed_untouched);
+	tcase_add_test(tc, test_bed_untouched_marlin);
 	suite_add_tcase(s, tc);
 }

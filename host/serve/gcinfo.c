@@ -175,25 +175,30 @@ void node_gcode_info_free(struct node_gcode_info *g)
 	memset(g, 0, sizeof(*g));
 }
 
-bool node_gcode_moved(const char *path, int64_t upto)
+bool node_gcode_moved(const char *path, int64_t upto, int64_t commands)
 {
 	FILE *f;
 	struct gcode_reader *r = NULL;
 	struct gcode_line g;
 	bool moved = false;
+	int64_t seen = 0;
 	int rc = 1;
 
-	if (upto <= 0)
-		return false; /* the printer confirmed nothing */
+	if (upto <= 0 && commands <= 0)
+		return false; /* nothing went to the printer */
 	if (node_file_kind(path) != 'g' || !(f = fopen(path, "rb")))
 		return true;
 	if (gcode_reader_new(f, path, &r, NULL)) {
 		fclose(f);
 		return true;
 	}
-	/* a command counts when its line starts before upto */
-	while (!moved && (int64_t)gcode_reader_bytes(r) < upto &&
+	/* a command counts when its line starts before upto, or it is one of
+	 * the first commands sent (lines with no command are not sent) */
+	while (!moved && ((int64_t)gcode_reader_bytes(r) < upto || seen < commands) &&
 	       (rc = gcode_reader_next(r, 0, &g, NULL)) == 1) {
+		if (g.kind == GCODE_KIND_HOST_ONLY || !g.text_len)
+			continue;
+		seen++;
 		switch (g.kind) {
 		case GCODE_KIND_MOTION:
 		case GCODE_KIND_HOME:

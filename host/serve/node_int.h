@@ -225,9 +225,10 @@ void node_gcode_estimate(struct node_printer *p, const char *path, int64_t filep
 void node_gcode_summary(const char *path, struct node_gcode_estimate *out);
 /* node_gcode_moved - whether the G-code file path has a command that moves
  * the machine (motion, homing, probing, tool change, user wait) starting
- * before byte upto: what the printer confirmed of a job.  True when the
- * file cannot be read as G-code (X3G, gone): when in doubt, it moved. */
-bool node_gcode_moved(const char *path, int64_t upto);
+ * before byte upto (what the printer confirmed of a job) or among its first
+ * commands sent (lines with a command; what it may run besides).  True when
+ * the file cannot be read as G-code (X3G, gone): when in doubt, it moved. */
+bool node_gcode_moved(const char *path, int64_t upto, int64_t commands);
 /* node_gcode_info_free - what node_gcode_estimate kept. */
 void node_gcode_info_free(struct node_gcode_info *g);
 
