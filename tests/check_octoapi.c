@@ -787,5 +787,6 @@ Suite *octoapi_suite(void)
 	tcase_add_test(tc, test_job_estimates);
 	suite_add_tcase(s, tc);
 	octoapi_push_tcases(s);
+	octoapi_queue_tcases(s);
 	return s;
 }

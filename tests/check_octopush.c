@@ -348,6 +348,43 @@ START_TEST(test_push_events)
 }
 END_TEST
 
+/* The bed-clear gate and the queue in current messages: OctoPrint's state
+ * text and flags, and Stratum's own object with the queued jobs. */
+START_TEST(test_push_bed_gate)
+{
+	struct node_proc np;
+	struct ws w;
+	char auth[128];
+	const char *text = "";
+	json_t *m, *cur = NULL, *st;
+
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	sv_start(&np);
+	sv_wait_state(np.port, "", sv_print_text(np.port, "", "moved.gcode", "G28\n"), "done", 10);
+	ck_assert(sv_print_text(np.port, "", "next.gcode", "G1 X1\n") == 2);
+	auth_of(np.port, "X-Api-Key: " KEY_READ, "viewer", auth, sizeof(auth));
+	ws_open(&w, np.port, "/sockjs/websocket", false);
+	ws_say(&w, auth);
+	for (int i = 0; i < 20 && strcmp(text, "Waiting for bed clear"); i++) {
+		json_array_clear(w.got);
+		m = ws_until(&w, "current", 2000);
+		ck_assert_msg(m, "no current message");
+		cur = json_object_get(m, "current");
+		text = sv_str(json_object_get(cur, "state"), "text");
+	}
+	ck_assert_str_eq(text, "Waiting for bed clear");
+	ck_assert(json_is_false(json_object_get(json_object_get(json_object_get(cur, "state"),
+								"flags"), "ready")));
+	st = json_object_get(cur, "stratum");
+	ck_assert(json_is_false(json_object_get(st, "bedClear")));
+	m = json_array_get(json_object_get(st, "waiting"), 0);
+	ck_assert_str_eq(sv_str(m, "name"), "next.gcode");
+	ck_assert_int_eq(json_integer_value(json_object_get(m, "position")), 1);
+	ws_close(&w);
+	sv_stop(&np);
+}
+END_TEST
+
 /* A client that does not authenticate is closed after idle_timeout_s, as
  * an idle HTTP connection is: it cannot hold a push slot for ever. */
 START_TEST(test_push_unauthenticated_closed)
@@ -386,6 +423,7 @@ void octoapi_push_tcases(Suite *s)
 	tcase_add_test(tc, test_push_sockjs);
 	tcase_add_test(tc, test_push_raw);
 	tcase_add_test(tc, test_push_events);
+	tcase_add_test(tc, test_push_bed_gate);
 	tcase_add_test(tc, test_push_unauthenticated_closed);
 	suite_add_tcase(s, tc);
 }

@@ -151,11 +151,12 @@ START_TEST(test_upload_as_prusaslicer)
 	ck_assert(json_is_null(json_object_get(
 		json_object_get(json_object_get(r.json, "job"), "file"), "name")));
 	sv_resp_free(&r);
-	/* The other OctoPrint calls slicers read. */
+	/* The other OctoPrint calls slicers read; the print moved the printer,
+	 * so the bed waits for an operator, and the state says so. */
 	sv_http(np.port, "GET", "/api/connection", "X-Api-Key: " KEY_READ, NULL, &r);
 	ck_assert_int_eq(r.status, 200);
 	ck_assert_str_eq(json_string_value(json_object_get(json_object_get(r.json, "current"),
-							   "state")), "Operational");
+							   "state")), "Waiting for bed clear");
 	sv_resp_free(&r);
 	sv_expect(np.port, "GET", "/api/settings", "X-Api-Key: " KEY_READ, NULL, 200);
 	sv_http(np.port, "GET", "/api/printerprofiles", "X-Api-Key: " KEY_READ, NULL, &r);
@@ -1751,6 +1752,13 @@ static void wait_topic(struct mqtt_seen *s, const char *topic, const char *want,
 	ck_abort_msg("%s: '%s', waited for '%s'", topic, last, want);
 }
 
+/* Publish a command to mk3s of the test node (QoS 1). */
+static void send_cmd(struct mosquitto *mq, const char *cmd)
+{
+	ck_assert_int_eq(mosquitto_publish(mq, NULL, "stratum/test-node/mk3s/cmd", (int)strlen(cmd),
+					   cmd, 1, false), 0);
+}
+
 START_TEST(test_mqtt)
 {
 	struct node_proc np;
@@ -1807,16 +1815,14 @@ START_TEST(test_mqtt)
 	/* Enqueue by URL; the same id delivered twice runs once. */
 	snprintf(cmd, sizeof(cmd), "{\"id\":\"cmd-1\",\"command\":\"enqueue\",\"url\":"
 				   "\"http://127.0.0.1:%d/files/dwell.gcode\"}", fs.port);
-	ck_assert_int_eq(mosquitto_publish(mq, NULL, "stratum/test-node/mk3s/cmd", (int)strlen(cmd),
-					   cmd, 1, false), 0);
+	send_cmd(mq, cmd);
 	wait_topic(&seen, "stratum/test-node/mk3s/result", "\"cmd-1\"", 10, out, sizeof(out));
 	ck_assert_msg(strstr(out, "\"ok\":true") && strstr(out, "\"job\":"), "%s", out);
 	id = atoll(strstr(out, "\"job\":") + 6);
 	pthread_mutex_lock(&seen.mu);
 	results = seen.results;
 	pthread_mutex_unlock(&seen.mu);
-	ck_assert_int_eq(mosquitto_publish(mq, NULL, "stratum/test-node/mk3s/cmd", (int)strlen(cmd),
-					   cmd, 1, false), 0);
+	send_cmd(mq, cmd);
 	wait_topic(&seen, "stratum/test-node/mk3s/result", "\"duplicate\":true", 10, NULL, 0);
 	pthread_mutex_lock(&seen.mu);
 	ck_assert_int_eq(seen.results, results + 1);
@@ -1828,24 +1834,34 @@ START_TEST(test_mqtt)
 	wait_topic(&seen, "stratum/test-node/mk3s/job", "dwell.gcode", 5, NULL, 0);
 	/* Cancel over MQTT. */
 	snprintf(cmd, sizeof(cmd), "{\"id\":\"cmd-2\",\"command\":\"cancel\"}");
-	ck_assert_int_eq(mosquitto_publish(mq, NULL, "stratum/test-node/mk3s/cmd", (int)strlen(cmd),
-					   cmd, 1, false), 0);
+	send_cmd(mq, cmd);
 	wait_topic(&seen, "stratum/test-node/mk3s/result", "\"cmd-2\"", 10, out, sizeof(out));
 	ck_assert_msg(strstr(out, "\"ok\":true"), "%s", out);
 	sv_wait_state(np.port, "", id, "cancelled", 5);
-	wait_topic(&seen, "stratum/test-node/mk3s/status", "Operational", 5, NULL, 0);
 	wait_topic(&seen, "stratum/test-node/mk3s/job", "null", 5, NULL, 0);
+	/* It moved the printer: the bed-clear gate is in the state, its own
+	 * topic, and the queue topic holds the job that waits for it. */
+	wait_topic(&seen, "stratum/test-node/mk3s/status", "Waiting for bed clear", 5, NULL, 0);
+	wait_topic(&seen, "stratum/test-node/mk3s/bed_clear", "false", 5, NULL, 0);
+	snprintf(cmd, sizeof(cmd), "{\"id\":\"cmd-4\",\"command\":\"enqueue\",\"name\":"
+				   "\"next.gcode\",\"url\":\"http://127.0.0.1:%d/files/d.gcode\"}",
+		 fs.port);
+	send_cmd(mq, cmd);
+	wait_topic(&seen, "stratum/test-node/mk3s/queue", "\"name\":\"next.gcode\"", 10, out,
+		   sizeof(out));
+	ck_assert_msg(strstr(out, "\"position\":1"), "%s", out);
+	sv_bed_clear(np.port, "", 204);
+	wait_topic(&seen, "stratum/test-node/mk3s/queue", "[]", 10, NULL, 0);
+	wait_topic(&seen, "stratum/test-node/mk3s/job", "next.gcode", 10, NULL, 0);
 	/* A command without id is refused. */
-	ck_assert_int_eq(mosquitto_publish(mq, NULL, "stratum/test-node/mk3s/cmd", 20,
-					   "{\"command\":\"pause\"}", 1, false), 0);
+	send_cmd(mq, "{\"command\":\"pause\"}");
 	wait_topic(&seen, "stratum/test-node/mk3s/result", "id is required", 10, NULL, 0);
 	/* A refused name: the reason is wrapped whole, not formatted over itself
 	 * (issue 17: the message once garbled). */
 	snprintf(cmd, sizeof(cmd), "{\"id\":\"cmd-3\",\"command\":\"enqueue\",\"name\":"
 				   "\"../x.gcode\",\"url\":\"http://127.0.0.1:%d/files/x.gcode\"}",
 		 fs.port);
-	ck_assert_int_eq(mosquitto_publish(mq, NULL, "stratum/test-node/mk3s/cmd", (int)strlen(cmd),
-					   cmd, 1, false), 0);
+	send_cmd(mq, cmd);
 	wait_topic(&seen, "stratum/test-node/mk3s/result", "\"cmd-3\"", 10, out, sizeof(out));
 	ck_assert_msg(strstr(out, "\"bad file name '../x.gcode': the file name starts with '.' "
 				  "(hidden files and '..' are refused)\""),
@@ -1894,6 +1910,10 @@ START_TEST(test_status_page)
 		sv_stop(&np);
 		return;
 	}
+	/* mk3s: a print that moved it is done, the next waits for the bed */
+	sv_wait_state(np.port, "", sv_print_text(np.port, "", "moved.gcode", "G28\nG1 X5\n"), "done",
+		      10);
+	ck_assert(sv_print_text(np.port, "", "next.gcode", "G28\n") == 2);
 	sv_upload_text(np.port, "/p/ender", KEY_UP, "hold.gcode", "M104 S205\nG4 P20000\n", "true", &r);
 	/* Printing (past the M104) before the browser looks, loaded or not. */
 	sv_wait_state(np.port, "/p/ender", sv_job_of(&r), "printing", 30);
@@ -1919,7 +1939,10 @@ START_TEST(test_status_page)
 	/* The script ran, polled with the key from the address and filled the table. */
 	ck_assert_msg(strstr(dom, "<span id=\"node\">test-node</span>"), "%.3000s", dom);
 	ck_assert_msg(strstr(dom, "data-printer=\"mk3s\""), "%.3000s", dom);
-	ck_assert_msg(strstr(dom, "<td class=\"state\">Operational</td>"), "%.3000s", dom);
+	ck_assert_msg(strstr(dom, "<td class=\"state\">Waiting for bed clear</td>"), "%.3000s", dom);
+	ck_assert_msg(strstr(dom, "not confirmed clear"), "%.3000s", dom);
+	ck_assert_msg(strstr(dom, "<td class=\"queue\" style=\"white-space: pre-line;\">1. #2 "
+				  "next.gcode</td>"), "%.3000s", dom);
 	ck_assert_msg(strstr(dom, "<td class=\"state\">Printing</td>"), "%.3000s", dom);
 	ck_assert_msg(strstr(dom, "205 °C"), "%.3000s", dom);
 	ck_assert_msg(strstr(dom, "hold.gcode (printing)"), "%.3000s", dom);

@@ -51,6 +51,7 @@ Suite *s3g_suite(void);		/* tests/check_s3g.c: S3G packets, driver, simulated Sa
 Suite *serve_suite(void);		/* tests/check_serve.c: stratum serve, the farm node's API and queue */
 Suite *octoapi_suite(void);	/* tests/check_octoapi.c: the node's OctoPrint calls, one test each */
 void octoapi_push_tcases(Suite *s); /* tests/check_octopush.c: the push API, part of octoapi */
+void octoapi_queue_tcases(Suite *s); /* tests/check_octoqueue.c: job calls and the queue, part of octoapi */
 Suite *preview_suite(void);	/* tests/check_preview.c: layer preview, move walker */
 Suite *portpick_suite(void);	/* tests/check_portpick.c: --port auto on fake enumerations */
 Suite *send_suite(void);	/* tests/check_send.c: stratum send to the simulated Sailfish */

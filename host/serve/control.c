@@ -11,6 +11,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "cfgopt.h"
 #include "guard.h"
@@ -71,6 +72,22 @@ static int job_pause(struct node *n, struct node_printer *p, struct node_job *j,
 	return 0;
 }
 
+/* Cancel p's active job j: the worker's print stops safely, a job not on
+ * the worker (interrupted, slicing) ends at once.  p->mu held. */
+static int cancel_active(struct node *n, struct node_printer *p, struct node_job *j,
+			 struct st_error *err)
+{
+	if (p->job_printing && p->job_id == j->id) {
+		ctl_request(p, -1, true);
+		node_log("info", p->cfg->name, j->id, "cancel requested");
+		return 0;
+	}
+	j->state = NODE_JOB_CANCELLED;
+	j->finished = time(NULL);
+	node_log("info", p->cfg->name, j->id, "cancelled");
+	return node_queue_update(n->q, j, err) ? ST_ERR_IO : 0;
+}
+
 int node_control_job(struct node *n, struct node_printer *p, const char *cmd,
 		     const char *action, struct st_error *err)
 {
@@ -79,27 +96,97 @@ int node_control_job(struct node *n, struct node_printer *p, const char *cmd,
 
 	pthread_mutex_lock(&p->mu);
 	have = node_queue_active(n->q, p->cfg->name, &j, NULL);
-	if (have != 1) {
+	if (have != 1)
 		rc = st_error_set(err, ST_ERR_RANGE, "no job is printing");
-	} else if (!strcmp(cmd, "cancel")) {
-		rc = 0;
-		if (p->job_printing && p->job_id == j.id) {
-			ctl_request(p, -1, true);
-			node_log("info", p->cfg->name, j.id, "cancel requested");
-		} else {
-			j.state = NODE_JOB_CANCELLED;
-			j.finished = time(NULL);
-			if (node_queue_update(n->q, &j, err))
-				rc = ST_ERR_IO;
-			node_log("info", p->cfg->name, j.id, "cancelled");
-		}
-	} else if (!strcmp(cmd, "pause")) {
+	else if (!strcmp(cmd, "cancel"))
+		rc = cancel_active(n, p, &j, err);
+	else if (!strcmp(cmd, "pause"))
 		rc = job_pause(n, p, &j, action ? action : "toggle", err);
-	} else {
+	else
 		rc = st_error_set(err, ST_ERR_ARG, "command is cancel or pause, not '%s'", cmd);
+	pthread_mutex_unlock(&p->mu);
+	return rc;
+}
+
+int node_control_restart(struct node *n, struct node_printer *p, int64_t *id,
+			 struct st_error *err)
+{
+	struct node_job j;
+	int rc;
+
+	*id = 0;
+	pthread_mutex_lock(&p->mu);
+	if (node_queue_active(n->q, p->cfg->name, &j, NULL) != 1 || j.state != NODE_JOB_PAUSED)
+		rc = st_error_set(err, ST_ERR_RANGE, "Printer does not have an active print job "
+				  "or is not paused");
+	else if (!p->connected)
+		rc = st_error_set(err, ST_ERR_RANGE, "Printer is not operational");
+	else if (access(j.file, R_OK))
+		rc = st_error_set(err, ST_ERR_RANGE, "the job's file %.200s is gone", j.name);
+	else if (!(rc = cancel_active(n, p, &j, err)) &&
+		 !(rc = node_queue_copy(n->q, &j, true, id, err))) {
+		node_log("info", p->cfg->name, *id, "restart of job %lld: %s queued first",
+			 (long long)j.id, j.name);
+		pthread_cond_signal(&p->cv);
 	}
 	pthread_mutex_unlock(&p->mu);
 	return rc;
+}
+
+int node_control_cancel(struct node *n, struct node_printer *p, int64_t id, struct st_error *err)
+{
+	struct node_job j;
+	int rc;
+
+	pthread_mutex_lock(&p->mu);
+	if ((rc = node_queue_get(n->q, id, &j, err)) == 1 && strcmp(j.printer, p->cfg->name))
+		rc = 0; /* another printer's */
+	if (rc == 1 && j.state == NODE_JOB_QUEUED) {
+		/* the worker takes a job only under p->mu: this one has not started */
+		j.state = NODE_JOB_CANCELLED;
+		j.finished = time(NULL);
+		rc = node_queue_update(n->q, &j, err) ? ST_ERR_IO : 0;
+		if (!rc)
+			node_log("info", p->cfg->name, id, "cancelled before it started");
+	} else if (rc == 1 && (j.state == NODE_JOB_SLICING || j.state == NODE_JOB_PRINTING ||
+			       j.state == NODE_JOB_PAUSED)) {
+		rc = cancel_active(n, p, &j, err);
+	} else if (rc == 1) {
+		rc = st_error_set(err, ST_ERR_RANGE, "job %lld is %s already", (long long)id,
+				  node_job_state_name(j.state));
+	} else if (rc == 0) {
+		rc = st_error_set(err, ST_ERR_RANGE, "no job %lld", (long long)id);
+	}
+	pthread_mutex_unlock(&p->mu);
+	return rc;
+}
+
+int node_control_requeue(struct node *n, struct node_printer *p, int64_t id, int64_t *out,
+			 struct st_error *err)
+{
+	struct node_job j;
+	int rc = node_queue_get(n->q, id, &j, err);
+
+	*out = 0;
+	if (rc == 1 && strcmp(j.printer, p->cfg->name))
+		rc = 0; /* another printer's */
+	if (rc == 0)
+		return st_error_set(err, ST_ERR_RANGE, "no job %lld", (long long)id);
+	if (rc < 0)
+		return rc;
+	if (j.state != NODE_JOB_DONE && j.state != NODE_JOB_FAILED &&
+	    j.state != NODE_JOB_CANCELLED)
+		return st_error_set(err, ST_ERR_RANGE, "job %lld is %s: only a done, failed or "
+				    "cancelled job is queued again", (long long)id,
+				    node_job_state_name(j.state));
+	if (access(j.file, R_OK))
+		return st_error_set(err, ST_ERR_RANGE, "the file of job %lld, %.200s, is gone",
+				    (long long)id, j.name);
+	if ((rc = node_queue_copy(n->q, &j, false, out, err)))
+		return rc;
+	node_log("info", p->cfg->name, *out, "job %lld (%s) queued again", (long long)id, j.name);
+	node_printer_wake(p);
+	return 0;
 }
 
 int node_check_kind(const struct node_printer *p, const char *name, struct st_error *err)

@@ -13,6 +13,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "gcode.h"
 #include "node_int.h"
 #include "st_grow.h"
 #include "st_number.h"
@@ -172,4 +173,45 @@ void node_gcode_info_free(struct node_gcode_info *g)
 {
 	free(g->marks);
 	memset(g, 0, sizeof(*g));
+}
+
+bool node_gcode_moved(const char *path, int64_t upto, int64_t commands)
+{
+	FILE *f;
+	struct gcode_reader *r = NULL;
+	struct gcode_line g;
+	bool moved = false;
+	int64_t seen = 0;
+	int rc = 1;
+
+	if (upto <= 0 && commands <= 0)
+		return false; /* nothing went to the printer */
+	if (node_file_kind(path) != 'g' || !(f = fopen(path, "rb")))
+		return true;
+	if (gcode_reader_new(f, path, &r, NULL)) {
+		fclose(f);
+		return true;
+	}
+	/* a command counts when its line starts before upto, or it is one of
+	 * the first commands sent (lines with no command are not sent) */
+	while (!moved && ((int64_t)gcode_reader_bytes(r) < upto || seen < commands) &&
+	       (rc = gcode_reader_next(r, 0, &g, NULL)) == 1) {
+		if (g.kind == GCODE_KIND_HOST_ONLY || !g.text_len)
+			continue;
+		seen++;
+		switch (g.kind) {
+		case GCODE_KIND_MOTION:
+		case GCODE_KIND_HOME:
+		case GCODE_KIND_PROBE:
+		case GCODE_KIND_TOOL_CHANGE:
+		case GCODE_KIND_USER_WAIT:
+			moved = true;
+			break;
+		default:
+			break;
+		}
+	}
+	gcode_reader_free(r);
+	fclose(f);
+	return moved || rc < 0;
 }

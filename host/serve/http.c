@@ -377,6 +377,8 @@ static const struct route routes[] = {
 	{"DELETE", "/api/files/local/", true, NODE_ROLE_UPLOAD, false, http_delete_file},
 	{"GET", "/downloads/files/local/", true, NODE_ROLE_READ, false, http_download_file},
 	{"GET", "/api/stratum/queue", false, NODE_ROLE_READ, false, http_get_queue},
+	{"GET", "/api/stratum/queue/", true, NODE_ROLE_READ, false, http_get_queue_job},
+	{"POST", "/api/stratum/queue/", true, NODE_ROLE_CONTROL, false, http_post_queue_job},
 	{"POST", "/api/stratum/bed-clear", false, NODE_ROLE_CONTROL, false, http_post_bed_clear},
 	{"GET", "/api/stratum/node", false, NODE_ROLE_READ, false, http_get_node},
 };

@@ -1,8 +1,7 @@
 /*
  * http_api.c - the node's API handlers (docs/serve.md): the OctoPrint
- * subset (version, printer, job, connection, settings, printer profiles,
- * files) and /api/stratum/... (queue, node, bed clear); http.c routes
- * requests to them.
+ * subset (version, printer, job, connection, settings, printer profiles)
+ * and /api/stratum/node; http.c routes requests to them.
  */
 #include <ctype.h>
 #include <errno.h>
@@ -51,6 +50,8 @@ void http_take_view(struct node *n, struct node_printer *p, struct http_view *v)
 		v->size = v->job.size;
 	}
 	node_queue_selected(n->q, p->cfg->name, v->selected, sizeof(v->selected));
+	v->bed_clear = true; /* as a printer the queue has no row for yet */
+	node_queue_bed_clear(n->q, p->cfg->name, &v->bed_clear);
 }
 
 /* OctoPrint's state text. */
@@ -64,6 +65,10 @@ const char *http_state_text(const struct http_view *v)
 		return v->paused ? "Paused" : v->pausing ? "Pausing" : "Printing";
 	if (v->has_job && v->job.state == NODE_JOB_SLICING)
 		return "Slicing";
+	/* Stratum's gate: no print starts until an operator confirms the bed
+	 * clear (POST /api/stratum/bed-clear); OctoPrint has no such state. */
+	if (!v->bed_clear)
+		return HTTP_STATE_BED;
 	return "Operational";
 }
 
@@ -166,18 +171,17 @@ static json_t *completion_json(const struct http_view *v)
 json_t *node_printer_json(struct node *n, struct node_printer *p, int queue_limit)
 {
 	struct http_view v;
-	bool clear = false;
 	json_t *o;
 
 	http_take_view(n, p, &v);
-	node_queue_bed_clear(n->q, p->cfg->name, &clear);
 	o = json_pack("{s:s,s:s,s:s,s:o,s:{s:o,s:o},s:{s:o,s:I,s:I},s:o,s:b}", "name",
 		      p->cfg->name, "prefix", p->cfg->prefix, "state", http_state_text(&v), "link",
 		      link_json(p, &v), "temperature", "tool0", http_temp_json(v.tool), "bed",
 		      http_temp_json(v.bed), "progress", "completion", completion_json(&v), "filepos",
 		      (json_int_t)(v.has_job ? v.filepos : 0), "size",
 		      (json_int_t)(v.has_job ? v.size : 0), "job",
-		      v.has_job ? node_job_json(&v.job) : json_null(), "bedClear", clear);
+		      v.has_job ? node_job_json(&v.job) : json_null(), "bedClear", v.bed_clear);
+	json_object_set_new(o, "waiting", node_queue_waiting(n->q, p->cfg->name));
 	if (o && queue_limit > 0)
 		json_object_set_new(o, "queue", node_queue_list(n->q, p->cfg->name, queue_limit));
 	return o;
@@ -199,13 +203,14 @@ enum MHD_Result http_get_version(struct node *n, struct MHD_Connection *c, struc
 json_t *http_flags_json(const struct http_view *v)
 {
 	/* ready: a print may start; not while a job holds the printer (paused,
-	 * interrupted, slicing) */
+	 * interrupted, slicing) nor while the bed waits to be confirmed clear */
 	return json_pack("{s:b,s:b,s:b,s:b,s:b,s:b,s:b,s:b,s:b}", "operational", v->connected,
 			 "printing", v->printing && !v->paused, "paused",
 			 v->paused || (v->has_job && !v->printing && v->job.state == NODE_JOB_PAUSED),
 			 "pausing", v->pausing, "cancelling", 0, "sdReady", 0, "error",
 			 !v->connected && v->conn_error[0], "ready",
-			 v->connected && !v->printing && !v->has_job, "closedOrError", !v->connected);
+			 v->connected && !v->printing && !v->has_job && v->bed_clear, "closedOrError",
+			 !v->connected);
 }
 
 enum MHD_Result http_get_printer(struct node *n, struct MHD_Connection *c, struct req *r)
@@ -463,17 +468,6 @@ int http_check_rel(const char *rel, size_t len, struct st_error *err)
 	return 0;
 }
 
-enum MHD_Result http_get_queue(struct node *n, struct MHD_Connection *c, struct req *r)
-{
-	bool clear = false;
-	json_t *o;
-
-	node_queue_bed_clear(n->q, r->p->cfg->name, &clear);
-	o = json_pack("{s:s,s:b,s:o}", "printer", r->p->cfg->name, "bedClear", clear, "jobs",
-		      node_queue_list(n->q, r->p->cfg->name, 200));
-	return http_send_json(c, MHD_HTTP_OK, o, NULL);
-}
-
 /* ---- POST handlers with JSON bodies ------------------------------------------ */
 
 /* The JSON object of the body, or NULL with the error answer sent in *ret. */
@@ -508,10 +502,22 @@ json_t *http_body_json(struct MHD_Connection *c, struct req *r, enum MHD_Result 
 enum MHD_Result http_start_selected(struct node *n, struct MHD_Connection *c,
 				    struct node_printer *p)
 {
-	char rel[NODE_PATH_MAX], full[NODE_PATH_MAX + NODE_PATH_MAX];
+	char rel[NODE_PATH_MAX], full[NODE_PATH_MAX + NODE_PATH_MAX], msg[400];
 	int64_t id;
+	struct node_job j;
 	struct st_error err = {0};
 
+	if (!p->connected)
+		return http_send_error(c, MHD_HTTP_CONFLICT, "Printer is not operational");
+	/* OctoPrint's printer has one job: start once, not one copy per click */
+	if (node_queue_active(n->q, p->cfg->name, &j, NULL) == 1 ||
+	    node_queue_next(n->q, p->cfg->name, &j, NULL) == 1) {
+		snprintf(msg, sizeof(msg), "Printer already has an active print job (job %lld, "
+			 "%.200s: %s)%s", (long long)j.id, j.name, node_job_state_name(j.state),
+			 j.state == NODE_JOB_QUEUED ? "; more jobs are queued by an upload with "
+			 "print=true" : ", did you mean 'restart'?");
+		return http_send_error(c, MHD_HTTP_CONFLICT, msg);
+	}
 	node_queue_selected(n->q, p->cfg->name, rel, sizeof(rel));
 	if (!rel[0])
 		return http_send_error(c, MHD_HTTP_CONFLICT, "no file is selected; upload one with "
@@ -548,8 +554,8 @@ enum MHD_Result http_post_job(struct node *n, struct MHD_Connection *c, struct r
 	cmd = json_string_value(json_object_get(o, "command"));
 	action = json_string_value(json_object_get(o, "action"));
 	if (!cmd) {
-		ret = http_send_error(c, MHD_HTTP_BAD_REQUEST, "command is missing (start, cancel, "
-							       "pause)");
+		ret = http_send_error(c, MHD_HTTP_BAD_REQUEST, "command is missing (start, restart, "
+							       "cancel, pause)");
 	} else if (!strcmp(cmd, "start")) {
 		pthread_mutex_lock(&p->mu);
 		ret = http_start_selected(n, c, p);
@@ -557,8 +563,14 @@ enum MHD_Result http_post_job(struct node *n, struct MHD_Connection *c, struct r
 	} else if (!strcmp(cmd, "cancel") || !strcmp(cmd, "pause")) {
 		rc = node_control_job(n, p, cmd, action, &err);
 		ret = rc ? http_send_error(c, control_status(rc), err.msg) : http_no_content(c);
+	} else if (!strcmp(cmd, "restart")) {
+		int64_t id;
+
+		rc = node_control_restart(n, p, &id, &err);
+		ret = rc ? http_send_error(c, control_status(rc), err.msg) : http_no_content(c);
 	} else {
-		ret = http_send_error(c, MHD_HTTP_BAD_REQUEST, "command is start, cancel or pause");
+		ret = http_send_error(c, MHD_HTTP_BAD_REQUEST, "command is start, restart, cancel "
+							       "or pause");
 	}
 	json_decref(o);
 	return ret;
@@ -677,26 +689,3 @@ enum MHD_Result http_post_connection(struct node *n, struct MHD_Connection *c, s
 	json_decref(o);
 	return ret;
 }
-
-enum MHD_Result http_post_bed_clear(struct node *n, struct MHD_Connection *c, struct req *r)
-{
-	struct node_printer *p = r->p;
-	struct node_job j;
-	struct st_error err = {0};
-	enum MHD_Result ret;
-
-	pthread_mutex_lock(&p->mu);
-	if (p->job_id || node_queue_active(n->q, p->cfg->name, &j, NULL) == 1) {
-		ret = http_send_error(c, MHD_HTTP_CONFLICT, "a job is on the printer (printing, paused "
-						            "or interrupted); finish or cancel it first");
-	} else if (node_queue_set_bed_clear(n->q, p->cfg->name, true, &err)) {
-		ret = http_send_error(c, MHD_HTTP_INTERNAL_SERVER_ERROR, err.msg);
-	} else {
-		node_log("info", p->cfg->name, 0, "bed confirmed clear");
-		pthread_cond_signal(&p->cv);
-		ret = http_no_content(c);
-	}
-	pthread_mutex_unlock(&p->mu);
-	return ret;
-}
-

@@ -1,7 +1,7 @@
 /*
  * http_int.h - what the node's HTTP front (http.c: responses, upload,
  * routing) and its API handlers share: http_api.c (state, job, settings,
- * profiles, queue), http_files.c (file list and operations, downloads),
+ * profiles), http_queue.c (Stratum's queue API), http_files.c (file list and operations, downloads),
  * http_printer.c (tool, bed, print head, SD, chamber) and http_account.c
  * (login, user, server, system commands); host/serve/ only.
  */
@@ -88,7 +88,11 @@ struct http_view {
 	bool has_job;
 	struct node_job job; /* the active job (printing, paused, slicing), if has_job */
 	char selected[NODE_PATH_MAX];
+	bool bed_clear; /* an operator confirmed the bed clear since the last print */
 };
+
+/* The state text while the bed waits for an operator's confirmation. */
+#define HTTP_STATE_BED "Waiting for bed clear"
 
 void http_take_view(struct node *n, struct node_printer *p, struct http_view *v);
 /* OctoPrint's state text of v ("Operational", "Printing", ...). */
@@ -138,13 +142,18 @@ enum MHD_Result http_get_settings(struct node *n, struct MHD_Connection *c, stru
 enum MHD_Result http_post_settings(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_get_profiles(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_get_file(struct node *n, struct MHD_Connection *c, struct req *r);
-enum MHD_Result http_get_queue(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_get_node(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_post_job(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_post_command(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_post_connection(struct node *n, struct MHD_Connection *c, struct req *r);
-enum MHD_Result http_post_bed_clear(struct node *n, struct MHD_Connection *c, struct req *r);
 enum MHD_Result http_get_profile(struct node *n, struct MHD_Connection *c, struct req *r);
+/* http_queue.c; http_queue_json: p's queue for the push API's current
+ * messages, {"bedClear", "waiting": [jobs in order, with "position"]}. */
+json_t *http_queue_json(struct node *n, struct node_printer *p, const struct http_view *v);
+enum MHD_Result http_get_queue(struct node *n, struct MHD_Connection *c, struct req *r);
+enum MHD_Result http_get_queue_job(struct node *n, struct MHD_Connection *c, struct req *r);
+enum MHD_Result http_post_queue_job(struct node *n, struct MHD_Connection *c, struct req *r);
+enum MHD_Result http_post_bed_clear(struct node *n, struct MHD_Connection *c, struct req *r);
 /* http_files.c; http_make_folder: an upload form with foldername and no
  * file, OctoPrint's way to create a folder under path. */
 enum MHD_Result http_make_folder(struct node *n, struct MHD_Connection *c, struct req *r);

@@ -7,6 +7,8 @@
  *   PRINTER/temperatures        {"tool0":{"actual","target"},"bed":{...}}
  *   PRINTER/progress            {"completion","filepos","size"}
  *   PRINTER/job                 the active job as /api/stratum/queue has it, or null
+ *   PRINTER/queue               the queued jobs in order, with their positions
+ *   PRINTER/bed_clear           true, or false while the bed waits for an operator
  * all retained and published when they change.  Commands arrive on
  * PRINTER/cmd as JSON {"id", "command": enqueue|cancel|pause|resume, "url",
  * "name"}; each id is recorded in the queue database before the command
@@ -35,10 +37,10 @@
 #define MQTT_PAYLOAD_MAX 4096	  /* largest command accepted, bytes */
 #define MQTT_ID_MAX 128		  /* longest command id, bytes */
 #define MQTT_DOWNLOAD_S 600	  /* longest download */
-#define MQTT_TOPICS 4		  /* status, temperatures, progress, job */
+#define MQTT_TOPICS 6		  /* status ... bed_clear, below */
 
 static const char *const state_topics[MQTT_TOPICS] = {"status", "temperatures", "progress",
-						      "job"};
+						      "job", "queue", "bed_clear"};
 
 struct node_mqtt {
 	struct node *n;
@@ -336,6 +338,8 @@ static void publish_state(struct node_mqtt *m, size_t i, bool force)
 	text[1] = json_dumps(json_object_get(o, "temperature"), JSON_COMPACT);
 	text[2] = json_dumps(json_object_get(o, "progress"), JSON_COMPACT);
 	text[3] = json_dumps(json_object_get(o, "job"), JSON_COMPACT | JSON_ENCODE_ANY);
+	text[4] = json_dumps(json_object_get(o, "waiting"), JSON_COMPACT);
+	text[5] = json_dumps(json_object_get(o, "bedClear"), JSON_COMPACT | JSON_ENCODE_ANY);
 	json_decref(o);
 	for (int t = 0; t < MQTT_TOPICS; t++) {
 		if (!text[t])

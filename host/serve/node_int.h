@@ -52,7 +52,10 @@ struct node_job {
 	int64_t filepos, size; /* bytes printed, bytes of gcode */
 	char error[256];
 	int64_t created, started, finished; /* Unix time, s; 0 = not yet */
+	int64_t position; /* order among the printer's queued jobs (lower first) */
 };
+
+#define NODE_QUEUE_MAX 1000 /* queued jobs listed, and a queue that can be reordered */
 
 struct node_queue;
 
@@ -73,6 +76,26 @@ int node_queue_recover(struct node_queue *q, int *interrupted, int *requeued,
 int node_queue_add(struct node_queue *q, const char *printer, const char *name,
 		   const char *file, char kind, const char *settings, int64_t *id,
 		   struct st_error *err);
+
+/* node_queue_copy - a new queued job of from's printer, file, name, kind
+ * and settings (requeue, restart): last in the queue, or ahead of every
+ * queued job with first.  *id its number. */
+int node_queue_copy(struct node_queue *q, const struct node_job *from, bool first, int64_t *id,
+		    struct st_error *err);
+
+/*
+ * node_queue_move - move printer's queued job id to position to (1-based;
+ * past the end is the end) of its queued jobs.  Returns 1, 0 when id is no
+ * queued job of printer, ST_ERR_RANGE (more than NODE_QUEUE_MAX queued) or
+ * ST_ERR_IO.
+ */
+int node_queue_move(struct node_queue *q, const char *printer, int64_t id, int64_t to,
+		    struct st_error *err);
+
+/* node_queue_waiting - printer's queued jobs in the order they will print
+ * (at most NODE_QUEUE_MAX), each /api/stratum/queue entry with its
+ * "position" (from 1), as JSON. */
+json_t *node_queue_waiting(struct node_queue *q, const char *printer);
 
 /*
  * node_queue_next - the job printer's worker should take: an interrupted job
@@ -200,6 +223,12 @@ void node_gcode_estimate(struct node_printer *p, const char *path, int64_t filep
 /* node_gcode_summary - the estimate and filament of the G-code file path
  * (left_s -1), from its first 64 KiB and last 256 KiB only; no cache. */
 void node_gcode_summary(const char *path, struct node_gcode_estimate *out);
+/* node_gcode_moved - whether the G-code file path has a command that moves
+ * the machine (motion, homing, probing, tool change, user wait) starting
+ * before byte upto (what the printer confirmed of a job) or among its first
+ * commands sent (lines with a command; what it may run besides).  True when
+ * the file cannot be read as G-code (X3G, gone): when in doubt, it moved. */
+bool node_gcode_moved(const char *path, int64_t upto, int64_t commands);
 /* node_gcode_info_free - what node_gcode_estimate kept. */
 void node_gcode_info_free(struct node_gcode_info *g);
 
@@ -248,6 +277,33 @@ void node_printer_wake(struct node_printer *p);
  */
 int node_control_job(struct node *n, struct node_printer *p, const char *cmd,
 		     const char *action, struct st_error *err);
+
+/*
+ * node_control_restart - OctoPrint's "restart": p's paused job (paused by
+ * an operator, or interrupted) is cancelled and its file queued again ahead
+ * of every queued job, *id the new job.  It prints from the start once the
+ * bed is confirmed clear, as every job after a print does.  Returns 0,
+ * ST_ERR_RANGE (no paused job, printer offline, file gone: HTTP 409),
+ * ST_ERR_IO.
+ */
+int node_control_restart(struct node *n, struct node_printer *p, int64_t *id,
+			 struct st_error *err);
+
+/*
+ * node_control_cancel - cancel p's job id: a queued one ends at once (it
+ * never started), an active one as node_control_job's cancel.  Returns 0,
+ * ST_ERR_RANGE (no such job, or finished: HTTP 409), ST_ERR_IO.
+ */
+int node_control_cancel(struct node *n, struct node_printer *p, int64_t id, struct st_error *err);
+
+/*
+ * node_control_requeue - queue p's finished job id (done, failed or
+ * cancelled) again, last in the queue, as a new job *out with the same file
+ * (as it is now) and settings.  Returns 0, ST_ERR_RANGE (not finished, no
+ * such job, file gone: HTTP 409), ST_ERR_IO.
+ */
+int node_control_requeue(struct node *n, struct node_printer *p, int64_t id, int64_t *out,
+			 struct st_error *err);
 
 /*
  * node_store_file - publish the finished temporary file tmp (st_file_finish

@@ -2,6 +2,7 @@
  * page.c - the status page at GET / (node_int.h node_status_page): plain
  * HTML and a script, no build step and nothing fetched from elsewhere.  The
  * page holds no data; its script polls GET /api/stratum/node every second
+ * (each printer's state, bed-clear gate, queue in order and recent jobs)
  * with the API key taken from the address (#key=... or ?key=...) or typed
  * into its form, and writes every value with textContent, never as HTML,
  * since file names come from uploads.
@@ -17,7 +18,7 @@ const char node_status_page[] =
 "body{font:14px/1.4 sans-serif;margin:1em;color:#222}\n"
 "table{border-collapse:collapse;margin-top:.5em}\n"
 "th,td{border:1px solid #ccc;padding:.3em .6em;text-align:left;vertical-align:top}\n"
-".sim{color:#a60;font-size:.85em}.err{color:#b00}\n"
+".sim{color:#a60;font-size:.85em}.err,.bedwait{color:#b00}\n"
 "progress{width:8em}\n"
 "</style></head><body>\n"
 "<h1>Stratum node <span id=\"node\"></span></h1>\n"
@@ -25,7 +26,7 @@ const char node_status_page[] =
 "<button>Show</button></form>\n"
 "<p id=\"status\">Give an API key with the read role.</p>\n"
 "<table id=\"printers\"><thead><tr><th>Printer</th><th>State</th><th>Nozzle</th>"
-"<th>Bed</th><th>Progress</th><th>Job</th><th>Queue</th></tr></thead>\n"
+"<th>Bed</th><th>Progress</th><th>Job</th><th>Queue</th><th>Recent jobs</th></tr></thead>\n"
 "<tbody></tbody></table>\n"
 "<script>\n"
 "'use strict';\n"
@@ -60,7 +61,12 @@ const char node_status_page[] =
 "    td.appendChild(e);\n"
 "  }\n"
 "  cell(tr, temp(p.temperature.tool0), 'tool');\n"
-"  cell(tr, temp(p.temperature.bed), 'bed');\n"
+"  td = cell(tr, temp(p.temperature.bed), 'bed');\n"
+"  if (!p.bedClear) {\n"
+"    var b = document.createElement('div');\n"
+"    b.className = 'bedwait'; b.textContent = 'not confirmed clear';\n"
+"    td.appendChild(b);\n"
+"  }\n"
 "  td = cell(tr, '', 'progress');\n"
 "  if (p.progress.completion !== null) {\n"
 "    bar = document.createElement('progress');\n"
@@ -70,8 +76,11 @@ const char node_status_page[] =
 "  }\n"
 "  cell(tr, p.job ? p.job.name + ' (' + p.job.state + (p.job.interrupted ? ', interrupted' : '')"
 " + ')' : '', 'job');\n"
-"  (p.queue || []).forEach(function (j) { q.push('#' + j.id + ' ' + j.name + ': ' + j.state); });\n"
+"  (p.waiting || []).forEach(function (j) { q.push(j.position + '. #' + j.id + ' ' + j.name); });\n"
 "  cell(tr, q.join('\\n'), 'queue').style.whiteSpace = 'pre-line';\n"
+"  q = [];\n"
+"  (p.queue || []).forEach(function (j) { q.push('#' + j.id + ' ' + j.name + ': ' + j.state); });\n"
+"  cell(tr, q.join('\\n'), 'recent').style.whiteSpace = 'pre-line';\n"
 "  return tr;\n"
 "}\n"
 "function show(data) {\n"

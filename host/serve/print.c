@@ -12,6 +12,7 @@
 #include <sys/stat.h>
 
 #include "commands.h"
+#include "marlin.h"
 #include "print.h"
 #include "printer_profile.h"
 #include "resume.h"
@@ -157,6 +158,8 @@ int node_print_file(struct node_link *l, const char *path, int64_t start, bool r
 	};
 	struct printer_file_info info;
 	struct printer_result res;
+	struct marlin *m = printer_marlin_driver(l->p);
+	struct marlin_status before, after;
 	struct stat sb;
 	int rc;
 
@@ -166,6 +169,7 @@ int node_print_file(struct node_link *l, const char *path, int64_t start, bool r
 		ctl->size = sb.st_size;
 	ctl->layer = -1;
 	ctl->z = NAN;
+	ctl->sent = m ? 0 : -1;
 	pthread_mutex_unlock(&ctl->mu);
 	if (resume && l->ops->resume_from_layer && !job.x3g) {
 		long layer;
@@ -177,9 +181,19 @@ int node_print_file(struct node_link *l, const char *path, int64_t start, bool r
 	if ((rc = printer_check(l->ops, &l->o, &job, NULL, NULL, &info, err)))
 		return rc;
 	job.total = info.commands;
+	if (m)
+		marlin_status(m, &before);
 	rc = printer_stream(l->p, &job, &res, err);
+	if (m)
+		marlin_status(m, &after);
 	pthread_mutex_lock(&ctl->mu);
 	ctl->paused = false;
+	/* Marlin runs what it holds after a cancel (the safe stop breaks its
+	 * waits): the lines written, not only those it confirmed, may move it.
+	 * The job's numbered lines, each written once besides resends. */
+	if (m)
+		ctl->sent = (int64_t)((after.transmitted - before.transmitted) -
+				      (after.resends - before.resends));
 	pthread_mutex_unlock(&ctl->mu);
 	switch (res.end) {
 	case PRINTER_END_DONE:

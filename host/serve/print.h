@@ -35,6 +35,10 @@ struct node_print_ctl {
 	/* Status, written by the back end. */
 	bool paused;		 /* the printer is holding (pause acknowledged) */
 	int64_t filepos, size;	 /* bytes of the file sent, and its size */
+	/* after a print: the file's commands written to the printer (a Marlin
+	 * runs them all, confirmed or not), -1 unknown: then only the ones up
+	 * to filepos, which the printer confirmed, are known to have gone */
+	int64_t sent;
 	long layer;		 /* layer of the last confirmed command (0-based), -1 unknown */
 	double z;		 /* its Z (mm), NAN unknown */
 	double tool_actual, tool_target, bed_actual, bed_target; /* degrees C */

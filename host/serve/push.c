@@ -206,6 +206,8 @@ static json_t *current_json(struct push_conn *pc, bool history, struct http_view
 		      v.has_job ? json_pack("[{s:s,s:s}]", "origin", "local", "path", v.job.name)
 				: json_array(), "serverTime", now);
 	json_decref(job);
+	/* what OctoPrint has no field for: the bed-clear gate and the queue */
+	json_object_set_new(o, "stratum", http_queue_json(pc->n, pc->p, &v));
 	*out = v;
 	return o;
 }

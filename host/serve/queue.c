@@ -45,7 +45,8 @@ static const char schema[] =
 	" filepos INTEGER NOT NULL DEFAULT 0, size INTEGER NOT NULL DEFAULT 0,"
 	" error TEXT NOT NULL DEFAULT '',"
 	" created INTEGER NOT NULL, started INTEGER NOT NULL DEFAULT 0,"
-	" finished INTEGER NOT NULL DEFAULT 0, settings TEXT NOT NULL DEFAULT '');"
+	" finished INTEGER NOT NULL DEFAULT 0, settings TEXT NOT NULL DEFAULT '',"
+	" position INTEGER NOT NULL DEFAULT 0);"
 	"CREATE INDEX IF NOT EXISTS jobs_printer_state ON jobs(printer, state);"
 	"CREATE TABLE IF NOT EXISTS printers ("
 	" name TEXT PRIMARY KEY, bed_clear INTEGER NOT NULL DEFAULT 1,"
@@ -55,29 +56,28 @@ static const char schema[] =
 
 #define JOB_COLUMNS                                                                       \
 	"id, printer, name, file, gcode, kind, state, interrupted, resume, filepos, size, " \
-	"error, created, started, finished, settings"
+	"error, created, started, finished, settings, position"
 
 static int db_error(struct node_queue *q, struct st_error *err, const char *what)
 {
 	return st_error_set(err, ST_ERR_IO, "job queue: %s: %s", what, sqlite3_errmsg(q->db));
 }
 
-/* A queue written before per-job settings has no settings column: add it
- * (0, or -1 with *msg from SQLite). */
-static int add_settings_column(struct node_queue *q, char **msg)
+/* A queue written by an older node lacks the columns added since (per-job
+ * settings, queue positions): add column name as decl (0, or -1 with *msg
+ * from SQLite).  Old rows keep position 0 and so stay first, by id. */
+static int add_column(struct node_queue *q, const char *name, const char *decl, char **msg)
 {
+	char sql[200];
 	sqlite3_stmt *st;
 
-	if (sqlite3_prepare_v2(q->db, "SELECT settings FROM jobs LIMIT 0", -1, &st, NULL) ==
-	    SQLITE_OK) {
+	snprintf(sql, sizeof(sql), "SELECT %s FROM jobs LIMIT 0", name);
+	if (sqlite3_prepare_v2(q->db, sql, -1, &st, NULL) == SQLITE_OK) {
 		sqlite3_finalize(st);
 		return 0;
 	}
-	return sqlite3_exec(q->db, "ALTER TABLE jobs ADD COLUMN settings TEXT NOT NULL "
-				   "DEFAULT ''",
-			    NULL, NULL, msg) == SQLITE_OK
-		   ? 0
-		   : -1;
+	snprintf(sql, sizeof(sql), "ALTER TABLE jobs ADD COLUMN %s %s", name, decl);
+	return sqlite3_exec(q->db, sql, NULL, NULL, msg) == SQLITE_OK ? 0 : -1;
 }
 
 int node_queue_open(const char *path, struct node_queue **out, struct st_error *err)
@@ -101,7 +101,8 @@ int node_queue_open(const char *path, struct node_queue **out, struct st_error *
 	if (sqlite3_exec(q->db, "PRAGMA journal_mode=WAL; PRAGMA synchronous=FULL;", NULL, NULL,
 			 &msg) != SQLITE_OK ||
 	    sqlite3_exec(q->db, schema, NULL, NULL, &msg) != SQLITE_OK ||
-	    add_settings_column(q, &msg)) {
+	    add_column(q, "settings", "TEXT NOT NULL DEFAULT ''", &msg) ||
+	    add_column(q, "position", "INTEGER NOT NULL DEFAULT 0", &msg)) {
 		rc = st_error_set(err, ST_ERR_IO, "%s: cannot set up the job queue: %s", path,
 				  msg ? msg : sqlite3_errmsg(q->db));
 		sqlite3_free(msg);
@@ -182,6 +183,7 @@ static void row_to_job(sqlite3_stmt *st, struct node_job *j)
 	j->started = sqlite3_column_int64(st, 13);
 	j->finished = sqlite3_column_int64(st, 14);
 	copy_text(j->settings, sizeof(j->settings), sqlite3_column_text(st, 15));
+	j->position = sqlite3_column_int64(st, 16);
 }
 
 /* The first row of a one-job query with parameters (fmt as run); takes q->mu. */
@@ -242,20 +244,47 @@ out:
 	return rc;
 }
 
+/* Insert a queued job of printer, last in its queue or, with first, ahead
+ * of every queued one; q->mu held.  0 with *id, or -1. */
+static int insert_job(struct node_queue *q, const char *printer, const char *name,
+		      const char *file, char kind, const char *settings, bool first, int64_t *id)
+{
+	const char *pos = first ? "(SELECT COALESCE(MIN(position), 1) - 1 FROM jobs WHERE "
+				  "printer=? AND state='queued')"
+				: "(SELECT COALESCE(MAX(position), 0) + 1 FROM jobs WHERE printer=?)";
+	char sql[400];
+
+	snprintf(sql, sizeof(sql), "INSERT INTO jobs(printer, name, file, gcode, kind, state, "
+		 "created, settings, position) VALUES(?, ?, ?, ?, ?, 'queued', ?, ?, %s)", pos);
+	if (run(q, sql, "sssssiss", printer, name, file, kind == 'm' ? "" : file,
+		kind == 'm' ? "m" : "g", (int64_t)time(NULL), settings ? settings : "", printer))
+		return -1;
+	*id = sqlite3_last_insert_rowid(q->db);
+	return 0;
+}
+
 int node_queue_add(struct node_queue *q, const char *printer, const char *name,
 		   const char *file, char kind, const char *settings, int64_t *id,
 		   struct st_error *err)
 {
 	int rc = 0;
-	const char *k = kind == 'm' ? "m" : "g";
 
 	pthread_mutex_lock(&q->mu);
-	if (run(q, "INSERT INTO jobs(printer, name, file, gcode, kind, state, created, settings) "
-		   "VALUES(?, ?, ?, ?, ?, 'queued', ?, ?)", "sssssis", printer, name, file,
-		kind == 'm' ? "" : file, k, (int64_t)time(NULL), settings ? settings : ""))
+	if (insert_job(q, printer, name, file, kind, settings, false, id))
 		rc = db_error(q, err, "adding a job");
-	else
-		*id = sqlite3_last_insert_rowid(q->db);
+	pthread_mutex_unlock(&q->mu);
+	return rc;
+}
+
+int node_queue_copy(struct node_queue *q, const struct node_job *from, bool first, int64_t *id,
+		    struct st_error *err)
+{
+	int rc = 0;
+
+	pthread_mutex_lock(&q->mu);
+	if (insert_job(q, from->printer, from->name, from->file, from->kind, from->settings, first,
+		       id))
+		rc = db_error(q, err, "queueing a job again");
 	pthread_mutex_unlock(&q->mu);
 	return rc;
 }
@@ -265,7 +294,7 @@ int node_queue_next(struct node_queue *q, const char *printer, struct node_job *
 {
 	return one_job(q, "SELECT " JOB_COLUMNS " FROM jobs WHERE printer=? AND "
 			  "((state='paused' AND interrupted=1 AND resume=1) OR state='queued') "
-			  "ORDER BY resume DESC, id LIMIT 1", job, err, "s", printer);
+			  "ORDER BY resume DESC, position, id LIMIT 1", job, err, "s", printer);
 }
 
 int node_queue_get(struct node_queue *q, int64_t id, struct node_job *job, struct st_error *err)
@@ -456,6 +485,98 @@ json_t *node_queue_list(struct node_queue *q, const char *printer, int limit)
 		while (sqlite3_step(st) == SQLITE_ROW) {
 			row_to_job(st, &j);
 			json_array_append_new(arr, node_job_json(&j));
+		}
+		sqlite3_finalize(st);
+	}
+	pthread_mutex_unlock(&q->mu);
+	return arr;
+}
+
+/* The ids of printer's queued jobs in the order the worker takes them, into
+ * ids (cap); their count, -2 when more than cap wait, or -1.  q->mu held. */
+static int queued_ids(struct node_queue *q, const char *printer, int64_t *ids, int cap)
+{
+	sqlite3_stmt *st;
+	int n = 0, rc;
+
+	if (sqlite3_prepare_v2(q->db, "SELECT id FROM jobs WHERE printer=? AND state='queued' "
+				      "ORDER BY position, id", -1, &st, NULL) != SQLITE_OK)
+		return -1;
+	sqlite3_bind_text(st, 1, printer, -1, SQLITE_TRANSIENT);
+	while ((rc = sqlite3_step(st)) == SQLITE_ROW && n < cap)
+		ids[n++] = sqlite3_column_int64(st, 0);
+	sqlite3_finalize(st);
+	return rc == SQLITE_ROW ? -2 : rc == SQLITE_DONE ? n : -1;
+}
+
+int node_queue_move(struct node_queue *q, const char *printer, int64_t id, int64_t to,
+		    struct st_error *err)
+{
+	int64_t ids[NODE_QUEUE_MAX];
+	int n, at = -1, rc = 1;
+
+	pthread_mutex_lock(&q->mu);
+	n = queued_ids(q, printer, ids, NODE_QUEUE_MAX);
+	for (int i = 0; i < n; i++)
+		if (ids[i] == id)
+			at = i;
+	if (n == -2) {
+		rc = st_error_set(err, ST_ERR_RANGE, "more than %d jobs wait; a job can be moved "
+				  "in a queue of at most %d", NODE_QUEUE_MAX, NODE_QUEUE_MAX);
+		goto out;
+	}
+	if (n < 0) {
+		rc = db_error(q, err, "reading the queue");
+		goto out;
+	}
+	if (at < 0) {
+		rc = 0;
+		goto out;
+	}
+	/* to is 1-based; past the end is the end */
+	to = to > n ? n : to;
+	memmove(&ids[at], &ids[at + 1], sizeof(ids[0]) * (size_t)(n - at - 1));
+	memmove(&ids[to], &ids[to - 1], sizeof(ids[0]) * (size_t)(n - to));
+	ids[to - 1] = id;
+	if (run(q, "BEGIN IMMEDIATE", "")) {
+		rc = db_error(q, err, "reordering the queue");
+		goto out;
+	}
+	for (int i = 0; i < n && rc == 1; i++)
+		if (run(q, "UPDATE jobs SET position=? WHERE id=?", "ii", (int64_t)i + 1, ids[i]))
+			rc = db_error(q, err, "reordering the queue");
+	if (rc == 1 && run(q, "COMMIT", ""))
+		rc = db_error(q, err, "reordering the queue");
+	if (rc != 1)
+		run(q, "ROLLBACK", "");
+out:
+	pthread_mutex_unlock(&q->mu);
+	return rc;
+}
+
+json_t *node_queue_waiting(struct node_queue *q, const char *printer)
+{
+	json_t *arr = json_array();
+	sqlite3_stmt *st;
+	json_int_t position = 0;
+
+	if (!arr)
+		return NULL;
+	pthread_mutex_lock(&q->mu);
+	if (sqlite3_prepare_v2(q->db, "SELECT " JOB_COLUMNS " FROM jobs WHERE printer=? AND "
+				      "state='queued' ORDER BY position, id LIMIT ?", -1, &st,
+			       NULL) == SQLITE_OK) {
+		struct node_job j;
+
+		sqlite3_bind_text(st, 1, printer, -1, SQLITE_TRANSIENT);
+		sqlite3_bind_int(st, 2, NODE_QUEUE_MAX);
+		while (sqlite3_step(st) == SQLITE_ROW) {
+			json_t *o;
+
+			row_to_job(st, &j);
+			o = node_job_json(&j);
+			json_object_set_new(o, "position", json_integer(++position));
+			json_array_append_new(arr, o);
 		}
 		sqlite3_finalize(st);
 	}

@@ -106,13 +106,38 @@ static void drop_link(struct node_printer *p, const char *why)
 		 "{\"command\":\"connect\"} to reconnect)", why, p->cfg->prefix);
 }
 
+/*
+ * After job j ended (done, failed, cancelled): the bed waits for an
+ * operator, unless no command of j that moves the machine reached the
+ * printer (confirmed, up to j's filepos, or written: sent, -1 unknown).
+ * Such a job left the bed as it found it, clear (a print starts only on a
+ * clear bed), so the next one need not wait.  A resumed job's part is on
+ * the bed whatever this run did.  p->mu held.
+ */
+static void bed_after(struct node_printer *p, const struct node_job *j, bool resumed,
+		      int64_t sent)
+{
+	struct st_error err = {0};
+
+	if (resumed || node_gcode_moved(j->gcode, j->filepos, sent)) {
+		node_log("info", p->cfg->name, 0, "waiting for the bed to be cleared "
+						  "(POST %s/api/stratum/bed-clear)", p->cfg->prefix);
+		return;
+	}
+	if (node_queue_set_bed_clear(p->node->q, p->cfg->name, true, &err))
+		node_log("error", p->cfg->name, j->id, "%s", err.msg);
+	else
+		node_log("info", p->cfg->name, j->id, "no command of the job that moves the "
+			 "printer reached it: the bed is still clear");
+}
+
 /* Print job j; p->mu held on entry and exit. */
 static void run_print(struct node_printer *p, struct node_job *j)
 {
 	struct node *n = p->node;
 	struct st_error err = {0};
 	bool resume = j->resume;
-	int64_t start = resume ? j->filepos : 0;
+	int64_t start = resume ? j->filepos : 0, sent;
 	int rc;
 
 	/* The bed is taken before the first byte goes out, so a crash leaves it so. */
@@ -146,6 +171,7 @@ static void run_print(struct node_printer *p, struct node_job *j)
 	pthread_mutex_lock(&p->ctl.mu);
 	j->filepos = p->ctl.filepos;
 	j->size = p->ctl.size;
+	sent = p->ctl.sent;
 	pthread_mutex_unlock(&p->ctl.mu);
 	switch (rc) {
 	case NODE_PRINT_DONE:
@@ -179,8 +205,7 @@ static void run_print(struct node_printer *p, struct node_job *j)
 	node_log(j->state == NODE_JOB_FAILED ? "error" : "info", p->cfg->name, j->id, "%s%s%s",
 		 node_job_state_name(j->state), j->error[0] ? ": " : "", j->error);
 	if (j->state != NODE_JOB_PAUSED)
-		node_log("info", p->cfg->name, 0, "waiting for the bed to be cleared "
-						  "(POST %s/api/stratum/bed-clear)", p->cfg->prefix);
+		bed_after(p, j, resume, sent);
 }
 
 /* One step of work; p->mu held.  True when something was done. */
