@@ -125,12 +125,17 @@ static cairo_status_t png_out(void *closure, const unsigned char *data, unsigned
 }
 
 /* The plot as PNG into f. */
-static int plot_png(const struct layer_span *l, size_t n, const struct layerplot_opts *o,
-		    FILE *f, struct st_error *err)
+static int plot_png(const struct layer_span *l, size_t n, const struct layerplot_opts *o, FILE *f,
+		    struct st_error *err)
 {
-	struct frame fr = {.z0 = 0.0, .z1 = l[n - 1].z, .h0 = 0.0, .h1 = 0.0,
-			   .left = MARGIN_LEFT, .right = LAYERPLOT_WIDTH - MARGIN_RIGHT,
-			   .top = MARGIN_TOP, .bottom = LAYERPLOT_HEIGHT - MARGIN_BOTTOM};
+	struct frame fr = {.z0 = 0.0,
+			   .z1 = l[n - 1].z,
+			   .h0 = 0.0,
+			   .h1 = 0.0,
+			   .left = MARGIN_LEFT,
+			   .right = LAYERPLOT_WIDTH - MARGIN_RIGHT,
+			   .top = MARGIN_TOP,
+			   .bottom = LAYERPLOT_HEIGHT - MARGIN_BOTTOM};
 	cairo_surface_t *surf;
 	cairo_t *cr;
 	cairo_status_t st;

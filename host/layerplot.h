@@ -19,8 +19,8 @@
 
 /* What to draw besides the layers. */
 struct layerplot_opts {
-	const char *title;	   /* top line (the model and the mode), may be NULL */
-	size_t raft_layers;	   /* the first layers that are the raft's */
+	const char *title;	       /* top line (the model and the mode), may be NULL */
+	size_t raft_layers;	       /* the first layers that are the raft's */
 	double min_height, max_height; /* mm, the dashed bounds; 0 = not drawn */
 };
 

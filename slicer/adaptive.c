@@ -61,8 +61,8 @@ static size_t next_free(size_t *next, size_t k)
  * each filling the cells of its span still free, so every cell is written
  * once.  Cells no sloped facet reaches stay INFINITY.
  */
-static int cell_limits(const struct mesh *m, double zmin, double cusp, double cell,
-		       double *limit, size_t ncells, struct st_error *err)
+static int cell_limits(const struct mesh *m, double zmin, double cusp, double cell, double *limit,
+		       size_t ncells, struct st_error *err)
 {
 	struct facet_limit *f = malloc((m->ntris ? m->ntris : 1) * sizeof(*f));
 	size_t *next = malloc((ncells + 1) * sizeof(*next)), nf = 0;
@@ -70,8 +70,10 @@ static int cell_limits(const struct mesh *m, double zmin, double cusp, double ce
 	if (!f || !next) {
 		free(f);
 		free(next);
-		return st_error_set(err, ST_ERR_NOMEM, "adaptive layers: out of memory for %zu "
-				    "triangles", m->ntris);
+		return st_error_set(err, ST_ERR_NOMEM,
+				    "adaptive layers: out of memory for %zu "
+				    "triangles",
+				    m->ntris);
 	}
 	for (size_t t = 0; t < m->ntris; t++) {
 		double lo, hi, nz, area;
@@ -134,6 +136,18 @@ static int check_settings(const struct adaptive_settings *s, struct st_error *er
 	return 0;
 }
 
+/* h in whole ADAPTIVE_STEP_MM, rounded down or up (a rounding error's
+ * worth of slack either way). */
+static double steps_down(double h)
+{
+	return floor(h / ADAPTIVE_STEP_MM + 1e-6) * ADAPTIVE_STEP_MM;
+}
+
+static double steps_up(double h)
+{
+	return ceil(h / ADAPTIVE_STEP_MM - 1e-6) * ADAPTIVE_STEP_MM;
+}
+
 /* The height of the layer starting at z: the smallest limit of the cells it touches. */
 static double layer_height_at(const double *limit, size_t ncells, double cell, double z,
 			      const struct adaptive_settings *s)
@@ -145,8 +159,8 @@ static double layer_height_at(const double *limit, size_t ncells, double cell, d
 	return fmax(h, s->min_height);
 }
 
-int adaptive_plan(const struct mesh *m, const struct adaptive_settings *s,
-		  struct layer_span **plan, size_t *n, struct st_error *err)
+int adaptive_plan(const struct mesh *m, const struct adaptive_settings *s, struct layer_span **plan,
+		  size_t *n, struct st_error *err)
 {
 	double lo[3], hi[3], height, cell = ADAPTIVE_CELL_MM, z;
 	struct layer_span *out = NULL;
@@ -187,11 +201,14 @@ int adaptive_plan(const struct mesh *m, const struct adaptive_settings *s,
 	for (z = 0.0; z < height && count < cap;) {
 		double h = count ? layer_height_at(limit, ncells, cell, z, s) : s->first_height;
 
-		if (count > 0 && z + h > height) /* the last layer ends at the top */
-			h = fmax(height - z, s->min_height);
+		if (count > 0) /* whole steps, the last layer up to the top */
+			h = z + h > height ? fmax(steps_up(height - z), steps_up(s->min_height))
+					   : fmax(steps_down(h), steps_up(s->min_height));
 		if (!(z + h / 2 < height))
 			break;
-		z += h;
+		z = count ? out[0].z + (double)llround((z + h - out[0].z) / ADAPTIVE_STEP_MM) *
+					   ADAPTIVE_STEP_MM
+			  : h;
 		out[count++] = (struct layer_span){.z = z, .height = h};
 	}
 out_free:

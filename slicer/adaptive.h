@@ -38,12 +38,15 @@
  * taller than ADAPTIVE_MAX_CELLS of it). */
 #define ADAPTIVE_CELL_MM 0.001
 #define ADAPTIVE_MAX_CELLS (1u << 22)
+/* Heights above the first layer are whole multiples of this, mm: the
+ * G-code's Z resolution, so the Z written is the layer's top. */
+#define ADAPTIVE_STEP_MM 0.001
 
 struct adaptive_settings {
-	double first_height;	   /* mm, layer 0's, fixed (first_layer_height) */
-	double min_height;	   /* mm, > 0 (min_layer_height) */
-	double max_height;	   /* mm, >= min_height (max_layer_height, at most 0.75 x nozzle) */
-	double max_cusp;	   /* mm, > 0: the bound on h |n_z| */
+	double first_height; /* mm, layer 0's, fixed (first_layer_height) */
+	double min_height;   /* mm, > 0 (min_layer_height) */
+	double max_height;   /* mm, >= min_height (max_layer_height, at most 0.75 x nozzle) */
+	double max_cusp;     /* mm, > 0: the bound on h |n_z| */
 };
 
 /* The cusp of a plan over a mesh's sloped facets. */
@@ -62,8 +65,8 @@ struct adaptive_cusp {
  * allowed; more than SLICE_MAX_LAYERS layers), ST_ERR_ARG (empty mesh),
  * ST_ERR_NOMEM; *plan is then NULL.
  */
-int adaptive_plan(const struct mesh *m, const struct adaptive_settings *s,
-		  struct layer_span **plan, size_t *n, struct st_error *err);
+int adaptive_plan(const struct mesh *m, const struct adaptive_settings *s, struct layer_span **plan,
+		  size_t *n, struct st_error *err);
 
 /*
  * adaptive_measure - the cusp of the n layers of plan (Z from m's lowest
