@@ -377,8 +377,15 @@ static void print_text(const struct slice_run *r, const struct slicer_summary *s
 	if (s->raft_layers) {
 		printf("placed: X %.2f to %.2f, Y %.2f to %.2f, Z %.2f to %.2f mm (on the raft)\n",
 		       s->min[0], s->max[0], s->min[1], s->max[1], s->min[2], s->max[2]);
-		printf("layers: %zu (%zu of raft, the first %g mm; the part's %g mm)\n", s->layers,
-		       s->raft_layers, r->c->first_layer_height, r->c->layer_height);
+		if (s->adaptive)
+			printf("layers: %zu (%zu of raft, the first %g mm; the part's from %g mm, "
+			       "then adaptive)\n",
+			       s->layers, s->raft_layers, r->c->first_layer_height,
+			       r->c->layer_height);
+		else
+			printf("layers: %zu (%zu of raft, the first %g mm; the part's %g mm)\n",
+			       s->layers, s->raft_layers, r->c->first_layer_height,
+			       r->c->layer_height);
 	} else {
 		printf("placed: X %.2f to %.2f, Y %.2f to %.2f, Z 0 to %.2f mm\n", s->min[0],
 		       s->max[0], s->min[1], s->max[1], s->max[2]);

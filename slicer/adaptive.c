@@ -201,9 +201,18 @@ int adaptive_plan(const struct mesh *m, const struct adaptive_settings *s, struc
 	for (z = 0.0; z < height && count < cap;) {
 		double h = count ? layer_height_at(limit, ncells, cell, z, s) : s->first_height;
 
-		if (count > 0) /* whole steps, the last layer up to the top */
-			h = z + h > height ? fmax(steps_up(height - z), steps_up(s->min_height))
-					   : fmax(steps_down(h), steps_up(s->min_height));
+		if (count > 0 && z + h > height) { /* the last layer, up to the top */
+			h = fmax(steps_up(height - z), steps_up(s->min_height));
+		} else if (count > 0) {
+			double rest = height - (z + h);
+
+			/* a rest thinner than the minimum: this layer leaves the
+			 * last one the minimum, rather than a sliver above the top */
+			if (rest > 0 && rest < s->min_height &&
+			    h - (s->min_height - rest) >= s->min_height)
+				h -= s->min_height - rest;
+			h = fmax(steps_down(h), steps_up(s->min_height));
+		}
 		if (!(z + h / 2 < height))
 			break;
 		z = count ? out[0].z + (double)llround((z + h - out[0].z) / ADAPTIVE_STEP_MM) *
