@@ -207,6 +207,7 @@ bench:
 	  $(BUILD)/bench/adaptive_cusp
 	bench/run.sh $(BUILD)/stratum
 	bench/cgal_corpus.sh $(BUILD)/stratum
+	bench/adaptive_cusp.sh
 
 # libFuzzer targets (tests/fuzz/fuzz_NAME.c, one per parser of outside data;
 # docs/reliability.md).  The C library is built again with clang under
