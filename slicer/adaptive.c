@@ -177,6 +177,10 @@ int adaptive_plan(const struct mesh *m, const struct adaptive_settings *s, struc
 		return st_error_set(err, ST_ERR_ARG, "adaptive layers: the mesh is empty");
 	mesh_bbox(m, lo, hi);
 	height = hi[2] - lo[2];
+	if (!isfinite(height))
+		return st_error_set(
+		    err, ST_ERR_ARG,
+		    "adaptive layers: the mesh has coordinates that are not finite");
 	if (height / s->min_height > SLICE_MAX_LAYERS)
 		return st_error_set(err, ST_ERR_RANGE,
 				    "adaptive layers: a %g mm tall mesh in layers down to %g mm "

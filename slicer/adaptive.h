@@ -62,7 +62,8 @@ struct adaptive_cusp {
  * layer's mid-plane lies below the mesh's top; Z from the mesh's lowest
  * point.  *plan is a new array of *n layers (free).  Returns 0, or
  * ST_ERR_RANGE (settings out of range, with the value and what is
- * allowed; more than SLICE_MAX_LAYERS layers), ST_ERR_ARG (empty mesh),
+ * allowed; more than SLICE_MAX_LAYERS layers), ST_ERR_ARG (empty mesh,
+ * coordinates that are not finite),
  * ST_ERR_NOMEM; *plan is then NULL.
  */
 int adaptive_plan(const struct mesh *m, const struct adaptive_settings *s, struct layer_span **plan,

@@ -333,6 +333,24 @@ START_TEST(adaptive_settings_refused)
 	ck_assert_ptr_nonnull(strstr(err.msg, "adaptive_max_cusp"));
 	c.adaptive.enabled = false; /* off: not looked at */
 	ck_assert_int_eq(slicer_config_check(&c, &err), 0);
+
+	/* the plan itself: bad settings and meshes */
+	const double a[3] = {0, 0, 0}, b[3] = {1, 0, 0}, far[3] = {0, 1, INFINITY};
+	struct mesh *bad = fx_triangle(a, b, far), *box = fx_box(0, 0, 0, 1, 1, 1);
+	struct adaptive_settings s = settings(0.2, 0.07, 0.3, 0.1);
+	struct layer_span *plan = (struct layer_span *)&s; /* set to NULL on failure */
+	size_t n = 1;
+
+	ck_assert_int_eq(adaptive_plan(bad, &s, &plan, &n, &err), ST_ERR_ARG);
+	ck_assert_ptr_null(plan);
+	ck_assert_uint_eq(n, 0);
+	s.min_height = 0.4; /* above the maximum */
+	ck_assert_int_eq(adaptive_plan(box, &s, &plan, &n, &err), ST_ERR_RANGE);
+	ck_assert_ptr_nonnull(strstr(err.msg, "min_layer_height"));
+	s = settings(0.2, 0.07, 0.3, 0);
+	ck_assert_int_eq(adaptive_plan(box, &s, &plan, &n, &err), ST_ERR_RANGE);
+	mesh_free(bad);
+	mesh_free(box);
 }
 END_TEST
 
