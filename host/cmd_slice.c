@@ -97,12 +97,13 @@ static int parse_args(int argc, char **argv, struct slice_args *a)
 	     "put the model's (or the models') centre there, mm\n(default: the bed centre)",
 	     read_center, &a->has_center},
 	    CMD_OPT_FLAG("--adaptive", &a->adaptive,
-			 "adaptive layer heights: each layer between min_layer_height and\n"
-			 "max_layer_height as thick as the cusp bound allows\n"
-			 "(adaptive_layer_height = 1; docs/slicing.md)"),
+			 "adaptive layer heights: each layer as thick as the\n"
+			 "cusp bound allows, from min_layer_height to\n"
+			 "max_layer_height (adaptive_layer_height = 1)"),
 	    {"--max-cusp", 0, CMD_DOUBLE, &a->max_cusp, 0, 0, 0, "a height in mm", "MM",
-	     "the adaptive layers' largest staircase step, mm; implies\n"
-	     "--adaptive (adaptive_max_cusp; default: the profile's)",
+	     "the adaptive layers' largest staircase step, mm;\n"
+	     "implies --adaptive (adaptive_max_cusp; default: the\n"
+	     "profile's)",
 	     NULL, &a->has_cusp},
 	    CMD_OPT_STRING("--png", 0, &a->png, CMD_NONEMPTY, "a file name", "PLOT.png",
 			   "also plot the layer heights against Z into PLOT.png"),
