@@ -115,11 +115,11 @@ static void smooth_limits(double *limit, size_t ncells, double cell)
 
 static int check_settings(const struct adaptive_settings *s, struct st_error *err)
 {
-	if (!(s->min_height > 0.0))
+	if (!(s->min_height >= ADAPTIVE_STEP_MM))
 		return st_error_set(err, ST_ERR_RANGE,
-				    "adaptive layers: min_layer_height = %g mm; it must be more "
-				    "than 0",
-				    s->min_height);
+				    "adaptive layers: min_layer_height = %g mm; it must be at "
+				    "least %g mm",
+				    s->min_height, ADAPTIVE_STEP_MM);
 	if (!(s->max_height >= s->min_height))
 		return st_error_set(err, ST_ERR_RANGE,
 				    "adaptive layers: the largest layer height %g mm is below "
@@ -159,9 +159,11 @@ static double layer_height_at(const double *limit, size_t ncells, double cell, d
 	return fmax(h, s->min_height);
 }
 
-int adaptive_plan(const struct mesh *m, const struct adaptive_settings *s, struct layer_span **plan,
-		  size_t *n, struct st_error *err)
+int adaptive_plan(const struct mesh *m, const struct adaptive_settings *given,
+		  struct layer_span **plan, size_t *n, struct st_error *err)
 {
+	/* the heights in whole steps, never above the largest given */
+	struct adaptive_settings q = *given, *s = &q;
 	double lo[3], hi[3], height, cell = ADAPTIVE_CELL_MM, z;
 	struct layer_span *out = NULL;
 	size_t ncells, count = 0, cap;
@@ -170,9 +172,11 @@ int adaptive_plan(const struct mesh *m, const struct adaptive_settings *s, struc
 
 	*plan = NULL;
 	*n = 0;
-	rc = check_settings(s, err);
+	rc = check_settings(given, err);
 	if (rc)
 		return rc;
+	q.max_height = steps_down(given->max_height);
+	q.min_height = fmin(steps_up(given->min_height), q.max_height);
 	if (!m || !m->ntris)
 		return st_error_set(err, ST_ERR_ARG, "adaptive layers: the mesh is empty");
 	mesh_bbox(m, lo, hi);
@@ -206,7 +210,7 @@ int adaptive_plan(const struct mesh *m, const struct adaptive_settings *s, struc
 		double h = count ? layer_height_at(limit, ncells, cell, z, s) : s->first_height;
 
 		if (count > 0 && z + h > height) { /* the last layer, up to the top */
-			h = fmax(steps_up(height - z), steps_up(s->min_height));
+			h = fmin(fmax(steps_up(height - z), s->min_height), s->max_height);
 		} else if (count > 0) {
 			double rest = height - (z + h);
 
@@ -215,7 +219,7 @@ int adaptive_plan(const struct mesh *m, const struct adaptive_settings *s, struc
 			if (rest > 0 && rest < s->min_height &&
 			    h - (s->min_height - rest) >= s->min_height)
 				h -= s->min_height - rest;
-			h = fmax(steps_down(h), steps_up(s->min_height));
+			h = fmax(steps_down(h), s->min_height);
 		}
 		if (!(z + h / 2 < height))
 			break;

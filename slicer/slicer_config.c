@@ -172,12 +172,13 @@ static int adaptive_check(const struct slicer_config *c, struct st_error *err)
 	if (rc)
 		return rc;
 	slicer_adaptive_settings(c, &a);
-	if (!(a.min_height > 0.0 && a.min_height <= a.max_height))
+	if (!(a.min_height >= ADAPTIVE_STEP_MM && a.min_height <= a.max_height))
 		return st_error_set(err, ST_ERR_RANGE,
-				    "adaptive layer heights: min_layer_height = %g mm must be more "
-				    "than 0 and at most the largest layer height %g mm "
+				    "adaptive layer heights: min_layer_height = %g mm must be at "
+				    "least %g mm and at most the largest layer height %g mm "
 				    "(max_layer_height, at most 75%% of the %g mm nozzle)",
-				    a.min_height, a.max_height, c->perim.nozzle_diameter);
+				    a.min_height, ADAPTIVE_STEP_MM, a.max_height,
+				    c->perim.nozzle_diameter);
 	rc = perim_settings_check(&c->perim, a.min_height, err);
 	return rc ? rc : perim_settings_check(&c->perim, a.max_height, err);
 }
