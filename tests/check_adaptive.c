@@ -378,6 +378,16 @@ START_TEST(adaptive_command_summary_and_plot)
 	ck_assert_uint_eq(fread(magic, 1, 8, f), 8);
 	fclose(f);
 	ck_assert_int_eq(memcmp(magic, "\x89PNG\r\n\x1a\n", 8), 0);
+	/* the JSON summary: the bound, the cusp and every layer of the part */
+	rc = tu_run(out, sizeof(out),
+		    "slice %s -o %s --printer generic-marlin --adaptive --json --threads 1 "
+		    "2>/dev/null",
+		    stl, gc);
+	ck_assert_msg(rc == 0, "%s", out);
+	ck_assert_ptr_nonnull(strstr(out, "\"adaptive\": true"));
+	ck_assert_ptr_nonnull(strstr(out, "\"max_cusp\": 0.1"));
+	ck_assert_ptr_nonnull(strstr(out, "\"cusp_max\": "));
+	ck_assert_ptr_nonnull(strstr(out, "\"layer_profile\": ["));
 	/* a printer that does not allow it: refused as a bad setting, nothing written */
 	remove(gc);
 	rc = tu_run(out, sizeof(out),
