@@ -197,11 +197,17 @@ $(BUILD)/bench/region_check: $(BUILD)/bench/region_check.o $(BUILD)/libstratum.a
 $(BUILD)/bench/refine_time: $(BUILD)/bench/refine_time.o $(BUILD)/libstratum.a
 	$(CXX) -pthread $(LDEXTRA) -o $@ $^ $(LDLIBS)
 
+# Issue 21 item 3: the cusp of adaptive against uniform layers.
+$(BUILD)/bench/adaptive_cusp: $(BUILD)/bench/adaptive_cusp.o $(BUILD)/libstratum.a
+	$(CXX) -pthread $(LDEXTRA) -o $@ $^ $(LDLIBS)
+
 bench:
 	@$(MAKE) deps EXTRA_PACKAGES="$(BENCH_PACKAGES)"
-	@$(MAKE) all $(BUILD)/bench/gen_mesh $(BUILD)/bench/region_check $(BUILD)/bench/refine_time
+	@$(MAKE) all $(BUILD)/bench/gen_mesh $(BUILD)/bench/region_check $(BUILD)/bench/refine_time \
+	  $(BUILD)/bench/adaptive_cusp
 	bench/run.sh $(BUILD)/stratum
 	bench/cgal_corpus.sh $(BUILD)/stratum
+	bench/adaptive_cusp.sh
 
 # libFuzzer targets (tests/fuzz/fuzz_NAME.c, one per parser of outside data;
 # docs/reliability.md).  The C library is built again with clang under

@@ -1,7 +1,8 @@
 /*
  * cmd_slice.c - `stratum slice MODEL... -o OUT.gcode --printer NAME
  * [--layer-height H] [--first-layer-height H] [--perimeters N]
- * [--infill D] [--center X,Y] [--no-repair] [--json] [--threads N]`:
+ * [--infill D] [--center X,Y] [--adaptive [--max-cusp MM]] [--png PLOT.png]
+ * [--no-repair] [--json] [--threads N]`:
  * read each mesh, repair it (seed 000, epsilon = the nozzle diameter),
  * place it, or arrange several, on the bed (host/slicejob.h), slice them
  * together (slicer/slicer.h) and write one G-code file.
@@ -21,7 +22,9 @@
 
 #include "cfgopt.h"
 #include "clio.h"
+#include "adaptive.h"
 #include "commands.h"
+#include "layerplot.h"
 #include "meshio.h"
 #include "placeholder.h"
 #include "profile.h"
@@ -40,11 +43,12 @@ struct slice_args {
 	size_t nin;
 	const char *out, *printer;
 	struct cfgopt cfg; /* --load, --set, --KEY-NAME ... */
-	bool json, no_repair;
+	bool json, no_repair, adaptive;
+	const char *png; /* the layer-height plot, or NULL */
 	int threads; /* 0 = all */
 	/* the option's name when it was given */
-	const char *has_layer, *has_first, *has_perimeters, *has_infill, *has_center;
-	double layer_height, first_layer_height, infill, center[2];
+	const char *has_layer, *has_first, *has_perimeters, *has_infill, *has_center, *has_cusp;
+	double layer_height, first_layer_height, infill, center[2], max_cusp;
 	int perimeters;
 };
 
@@ -92,6 +96,17 @@ static int parse_args(int argc, char **argv, struct slice_args *a)
 	    {"--center", 0, CMD_CUSTOM, a->center, 0, 0, 0, "X,Y in mm (such as 125,105)", "X,Y",
 	     "put the model's (or the models') centre there, mm\n(default: the bed centre)",
 	     read_center, &a->has_center},
+	    CMD_OPT_FLAG("--adaptive", &a->adaptive,
+			 "adaptive layer heights: each layer as thick as the\n"
+			 "cusp bound allows, from min_layer_height to\n"
+			 "max_layer_height (adaptive_layer_height = 1)"),
+	    {"--max-cusp", 0, CMD_DOUBLE, &a->max_cusp, 0, 0, 0, "a height in mm", "MM",
+	     "the adaptive layers' largest staircase step, mm;\n"
+	     "implies --adaptive (adaptive_max_cusp; default: the\n"
+	     "profile's)",
+	     NULL, &a->has_cusp},
+	    CMD_OPT_STRING("--png", 0, &a->png, CMD_NONEMPTY, "a file name", "PLOT.png",
+			   "also plot the layer heights against Z into PLOT.png"),
 	    CMD_OPT_FLAG("--no-repair", &a->no_repair, "slice the meshes as they are read"),
 	    CMD_OPT_FLAG("--json", &a->json,
 			 "one JSON object on stdout instead of the text summary"),
@@ -103,8 +118,8 @@ static int parse_args(int argc, char **argv, struct slice_args *a)
 		"usage: stratum slice MODEL... -o OUT.gcode --printer NAME|FILE.ini\n"
 		"                     [--load FILE.ini]... [--set KEY=VALUE]... [--KEY-NAME V]...\n"
 		"                     [--layer-height H] [--first-layer-height H] [--perimeters N]\n"
-		"                     [--infill D] [--center X,Y] [--no-repair] [--json]\n"
-		"                     [--threads N]\n"
+		"                     [--infill D] [--center X,Y] [--adaptive [--max-cusp MM]]\n"
+		"                     [--png PLOT.png] [--no-repair] [--json] [--threads N]\n"
 		"\n"
 		"Slices a mesh (STL, OBJ, OFF or 3MF) into G-code for the printer.  The model\n"
 		"is first repaired exactly (as 'stratum repair', epsilon = the nozzle diameter),\n"
@@ -166,12 +181,32 @@ static int config_from_profile(const struct profile *p, const struct slice_args 
 		c->perim.perimeters = a->perimeters;
 	if (a->has_infill)
 		c->infill.density = a->infill;
+	if (a->adaptive || a->has_cusp)
+		c->adaptive.enabled = true;
+	if (a->has_cusp)
+		c->adaptive.max_cusp = a->max_cusp;
 	slicer_config_modes(c); /* the summary shows what is printed */
 	c->bed.has_center = a->has_center != NULL;
 	c->bed.center_x = a->center[0];
 	c->bed.center_y = a->center[1];
 	c->threads = a->threads;
 	return 0;
+}
+
+/* The layers as printed (slicer_config.planned): the raft's, then the part's. */
+struct plan_copy {
+	struct layer_span *v;
+	size_t n;
+};
+
+static void keep_plan(void *ctx, const struct layer_span *layers, size_t n)
+{
+	struct plan_copy *p = ctx;
+
+	p->v = malloc((n ? n : 1) * sizeof(*p->v));
+	p->n = p->v ? n : 0; /* out of memory: no profile shown, the G-code still written */
+	if (p->v)
+		memcpy(p->v, layers, n * sizeof(*layers));
 }
 
 /* What the summary shows besides struct slicer_summary. */
@@ -181,7 +216,49 @@ struct slice_run {
 	const struct profile *prof;
 	const struct slicejob_result *res;
 	const struct repair_report *rep; /* NULL with --no-repair */
+	const struct plan_copy *plan;
 };
+
+/* Bands of Z the text summary's layer-height profile shows. */
+#define PROFILE_BANDS 8
+
+/* The part's layers, one JSON [z, height] pair each. */
+static json_t *json_profile(const struct slice_run *r, size_t raft)
+{
+	json_t *arr = json_array();
+
+	for (size_t i = raft; arr && i < r->plan->n; i++) {
+		json_t *pair = json_array();
+
+		json_array_append_new(pair, json_real(r->plan->v[i].z));
+		json_array_append_new(pair, json_real(r->plan->v[i].height));
+		json_array_append_new(arr, pair);
+	}
+	return arr;
+}
+
+/* The part's layers in PROFILE_BANDS equal spans of Z: count and heights of each. */
+static void print_profile(const struct slice_run *r, size_t raft)
+{
+	const struct layer_span *l = r->plan->v + raft;
+	size_t n = r->plan->n > raft ? r->plan->n - raft : 0, i = 0;
+	double z0 = n ? l[0].z - l[0].height : 0.0, span = n ? (l[n - 1].z - z0) / PROFILE_BANDS : 0;
+
+	for (int b = 0; b < PROFILE_BANDS && i < n; b++) {
+		double top = b == PROFILE_BANDS - 1 ? INFINITY : z0 + (b + 1) * span;
+		double lo = INFINITY, hi = 0.0, from = l[i].z - l[i].height, to = from;
+		size_t count = 0;
+
+		for (; i < n && (l[i].z - l[i].height / 2 < top); i++, count++) {
+			lo = fmin(lo, l[i].height);
+			hi = fmax(hi, l[i].height);
+			to = l[i].z;
+		}
+		if (count)
+			printf("  Z %7.2f to %7.2f mm: %4zu layers of %.3f to %.3f mm\n", from, to,
+			       count, lo, hi);
+	}
+}
 
 /* JSON keys of the path roles, in enum path_role order (the G-code names
  * of path_role_name are not unique: skirt and brim share one). */
@@ -258,6 +335,11 @@ static int print_json(const struct slice_run *r, const struct slicer_summary *s)
 		     "f:filament_g", s->filament_g, "z:moves", s->moves, "o:placement", place,
 		     "o:models", json_models(r), "b:arranged", r->res->arranged, "o:paths", paths,
 		     "o:stages", stages, "z:open_contours_dropped", s->open_dropped, NULL);
+	if (s->adaptive)
+		cmd_json_set(o, "b:adaptive", true, "f:max_cusp", r->c->adaptive.max_cusp,
+			     "f:layer_height_min", s->height_min, "f:layer_height_max", s->height_max,
+			     "f:cusp_max", s->cusp_max, "f:cusp_mean", s->cusp_mean,
+			     "o:layer_profile", json_profile(r, s->raft_layers), NULL);
 	return cmd_json_out(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(10));
 
 out_nomem:
@@ -296,13 +378,31 @@ static void print_text(const struct slice_run *r, const struct slicer_summary *s
 	if (s->raft_layers) {
 		printf("placed: X %.2f to %.2f, Y %.2f to %.2f, Z %.2f to %.2f mm (on the raft)\n",
 		       s->min[0], s->max[0], s->min[1], s->max[1], s->min[2], s->max[2]);
-		printf("layers: %zu (%zu of raft, the first %g mm; the part's %g mm)\n", s->layers,
-		       s->raft_layers, r->c->first_layer_height, r->c->layer_height);
+		if (s->adaptive)
+			printf("layers: %zu (%zu of raft, the first %g mm; the part's from %g mm, "
+			       "then adaptive)\n",
+			       s->layers, s->raft_layers, r->c->first_layer_height,
+			       r->c->layer_height);
+		else
+			printf("layers: %zu (%zu of raft, the first %g mm; the part's %g mm)\n",
+			       s->layers, s->raft_layers, r->c->first_layer_height,
+			       r->c->layer_height);
 	} else {
 		printf("placed: X %.2f to %.2f, Y %.2f to %.2f, Z 0 to %.2f mm\n", s->min[0],
 		       s->max[0], s->min[1], s->max[1], s->max[2]);
-		printf("layers: %zu (first %g mm, then %g mm)\n", s->layers,
-		       r->c->first_layer_height, r->c->layer_height);
+		if (s->adaptive)
+			printf("layers: %zu (first %g mm, then adaptive)\n", s->layers,
+			       r->c->first_layer_height);
+		else
+			printf("layers: %zu (first %g mm, then %g mm)\n", s->layers,
+			       r->c->first_layer_height, r->c->layer_height);
+	}
+	if (s->adaptive) {
+		printf("adaptive layers: %zu of the part, above the first %.3f to %.3f mm thick, their "
+		       "cusp at most %.3f mm (bound %g mm), mean %.3f mm\n",
+		       s->layers - s->raft_layers, s->height_min, s->height_max, s->cusp_max,
+		       r->c->adaptive.max_cusp, s->cusp_mean);
+		print_profile(r, s->raft_layers);
 	}
 	printf("paths: %zu external perimeters, %zu perimeters, %zu thin walls, %zu gap fills",
 	       s->paths[PATH_OUTER_PERIMETER], s->paths[PATH_INNER_PERIMETER],
@@ -322,6 +422,30 @@ static void print_text(const struct slice_run *r, const struct slicer_summary *s
 	printf("filament: %.1f mm, %.2f cm^3, %.2f g\n", s->filament_mm, s->filament_cm3,
 	       s->filament_g);
 	printf("written: %s\n", r->a->out);
+}
+
+/* --png: the layer heights as printed; 0 or the exit status with the message printed. */
+static int write_plot(const struct slice_args *a, const struct slicer_config *c,
+		      const struct slicer_summary *s, const struct plan_copy *plan)
+{
+	struct st_error err = {0};
+	struct adaptive_settings as;
+	char title[256];
+	struct layerplot_opts o = {.title = title, .raft_layers = s->raft_layers};
+	int rc;
+
+	slicer_adaptive_settings(c, &as);
+	if (s->adaptive) {
+		o.min_height = as.min_height;
+		o.max_height = as.max_height;
+	}
+	snprintf(title, sizeof(title), "%s: %zu layers, %s", a->in[0], s->layers,
+		 s->adaptive ? "adaptive" : "uniform");
+	rc = layerplot_write(a->png, plan->v, plan->n, &o, &err);
+	if (rc)
+		fprintf(stderr, SLICE_CMD ": %s: %s; the G-code %s was written\n", a->png, err.msg,
+			a->out);
+	return rc ? ST_EXIT_FAILURE : 0;
 }
 
 /* PrusaSlicer's input_filename and input_filename_base for the custom G-code. */
@@ -350,6 +474,7 @@ static int slice_run(int argc, char **argv, struct clio *io)
 	struct slice_run run = {0};
 	struct slicer_config cfg;
 	struct slicejob_result res;
+	struct plan_copy plan = {0};
 	struct st_error err = {0};
 	struct profile *prof = NULL;
 	const char *in[SLICEJOB_MODELS_MAX], *out;
@@ -372,6 +497,8 @@ static int slice_run(int argc, char **argv, struct clio *io)
 
 		for (size_t i = 0; i < a.nin; i++) {
 			status = cmd_output_check(in[i], out, why, sizeof(why));
+			if (!status && a.png)
+				status = cmd_output_check(in[i], a.png, why, sizeof(why));
 			if (status) {
 				fprintf(stderr, SLICE_CMD ": %s; nothing was written\n", why);
 				return status;
@@ -395,8 +522,13 @@ static int slice_run(int argc, char **argv, struct clio *io)
 		status = ST_EXIT_USAGE;
 		goto out_profile;
 	}
+	cfg.planned = keep_plan;
+	cfg.planned_ctx = &plan;
 	status = slicejob_run(SLICE_CMD, in, a.nin, &cfg, a.no_repair, out, true, &res);
+	if (!status && a.png)
+		status = write_plot(&a, &cfg, &res.sum, &plan);
 	if (!status) {
+		run.plan = &plan;
 		run.a = &a;
 		run.c = &cfg;
 		run.prof = prof;
@@ -407,6 +539,7 @@ static int slice_run(int argc, char **argv, struct clio *io)
 	}
 	slicejob_result_free(&res);
 out_profile:
+	free(plan.v);
 	profile_free(prof);
 	return status;
 }

@@ -175,6 +175,7 @@ struct profile {
 	bool wipe; /* the first extruder's (one prints); default 0 */
 	double retract_before_wipe; /* percent, the first extruder's; default 0 */
 	bool retract_layer_change; /* likewise; default 0 */
+	bool variable_layer_height; /* the printer allows adaptive layers; default 1 */
 	double min_layer_height[PROFILE_MAX_EXTRUDERS];		     /* mm; default 0.07 */
 	double max_layer_height[PROFILE_MAX_EXTRUDERS]; /* mm; 0 in the file = 75% of nozzle */
 	double steps_per_mm_e[PROFILE_MAX_EXTRUDERS];	/* steps/mm; sailfish only */
@@ -186,6 +187,8 @@ struct profile {
 	/* Print settings */
 	double layer_height;	   /* mm, > 0 and <= the smallest nozzle; default 0.2 */
 	double first_layer_height; /* mm (a percentage in the file is of layer_height) */
+	bool adaptive_layer_height; /* Stratum's: adaptive layers; default 0 */
+	double adaptive_max_cusp;   /* mm, Stratum's: their cusp bound; default 0.1 */
 	double extrusion_width;	   /* mm, 0 = auto (a percentage is of layer_height) */
 	int perimeters, top_solid_layers, bottom_solid_layers; /* defaults 3, 3, 3 */
 	const char *seam_position; /* aligned, nearest, random or rear; default aligned */

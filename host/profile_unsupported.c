@@ -49,7 +49,7 @@ static const struct known known[] = {
     {"serial_speed", NULL, NULL, NULL}, {"bed_custom_texture", NULL, NULL, NULL},
     {"bed_custom_model", NULL, NULL, NULL}, {"bed_model", NULL, NULL, NULL},
     {"bed_texture", NULL, NULL, NULL}, {"thumbnails_format", "PNG", NULL, NULL},
-    {"threads", NULL, NULL, NULL}, {"variable_layer_height", NULL, NULL, NULL},
+    {"threads", NULL, NULL, NULL},
     {"color_change_gcode", NULL, NULL, NULL}, {"pause_print_gcode", NULL, NULL, NULL},
     {"template_custom_gcode", NULL, NULL, NULL}, {"between_objects_gcode", NULL, NULL, NULL},
     {"gcode_comments", NULL, NULL, NULL},

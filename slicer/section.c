@@ -15,8 +15,6 @@
 
 /* Largest |coordinate| we accept, mm: keeps nm values far inside int64. */
 #define SLICE_MAX_COORD 1e6
-/* Most layers one mesh may produce. */
-#define SLICE_MAX_LAYERS 10000000u
 
 /*
  * One cut segment: it enters the triangle through mesh edge `from` and
@@ -430,14 +428,58 @@ static int cut_all(const struct mesh *m, const struct slice_stack *st, struct se
 	return 0;
 }
 
+int slice_plan_uniform(double height, double first_layer_height, double layer_height,
+		       struct layer_span **plan, size_t *n, struct st_error *err)
+{
+	size_t count = 0;
+
+	*plan = NULL;
+	*n = 0;
+	if (height / fmin(first_layer_height, layer_height) > SLICE_MAX_LAYERS)
+		return st_error_set(err, ST_ERR_RANGE,
+				    "slice: a %g mm tall mesh in %g mm layers needs more than %u "
+				    "layers; use thicker layers",
+				    height, layer_height, SLICE_MAX_LAYERS);
+	while (layer_mid(count, first_layer_height, layer_height) < height)
+		count++;
+	if (count && !(*plan = calloc(count, sizeof(**plan))))
+		return st_error_set(err, ST_ERR_NOMEM, "slice: out of memory for %zu layers", count);
+	for (size_t i = 0; i < count; i++)
+		(*plan)[i] = (struct layer_span){
+		    .z = i == 0 ? first_layer_height : first_layer_height + (double)i * layer_height,
+		    .height = i == 0 ? first_layer_height : layer_height};
+	*n = count;
+	return 0;
+}
+
+/* Heights within (0, nozzle] and tops rising: what cut_all and the stages rely on. */
+static int check_plan(const struct layer_span *plan, size_t n, double nozzle,
+		      struct st_error *err)
+{
+	if (n > SLICE_MAX_LAYERS)
+		return st_error_set(err, ST_ERR_RANGE, "slice: %zu layers are more than %u", n,
+				    SLICE_MAX_LAYERS);
+	for (size_t i = 0; i < n; i++) {
+		if (!(plan[i].height > 0.0 && plan[i].height <= nozzle))
+			return st_error_set(err, ST_ERR_RANGE,
+					    "slice: layer %zu is %g mm thick; it must be > 0 and "
+					    "at most the nozzle diameter %g mm",
+					    i + 1, plan[i].height, nozzle);
+		if (!(plan[i].z >= plan[i].height) || (i > 0 && !(plan[i].z > plan[i - 1].z)))
+			return st_error_set(err, ST_ERR_ARG,
+					    "slice: layer %zu's top %g mm is below its height or "
+					    "the layer under it",
+					    i + 1, plan[i].z);
+	}
+	return 0;
+}
+
 int slice_mesh(const struct mesh *m, double first_layer_height, double layer_height,
 	       const struct slice_settings *s, struct slice_stack **out, struct st_error *err)
 {
 	struct slice_settings defaults;
-	struct slice_stack *st;
-	struct seg_list *lists = NULL;
-	struct clip_paths loops = {0};
-	double zmin[3], zmax[3], height;
+	struct layer_span *plan = NULL;
+	double zmin[3], zmax[3];
 	size_t n = 0;
 	int rc;
 
@@ -454,14 +496,37 @@ int slice_mesh(const struct mesh *m, double first_layer_height, double layer_hei
 	if (rc)
 		return rc;
 	mesh_bbox(m, zmin, zmax);
-	height = zmax[2] - zmin[2];
-	if (height / fmin(first_layer_height, layer_height) > SLICE_MAX_LAYERS)
-		return st_error_set(err, ST_ERR_RANGE,
-				    "slice: a %g mm tall mesh in %g mm layers needs more than %u "
-				    "layers; use thicker layers",
-				    height, layer_height, SLICE_MAX_LAYERS);
-	while (layer_mid(n, first_layer_height, layer_height) < height)
-		n++;
+	rc = slice_plan_uniform(zmax[2] - zmin[2], first_layer_height, layer_height, &plan, &n,
+				err);
+	if (!rc)
+		rc = slice_mesh_plan(m, plan, n, s, out, err);
+	free(plan);
+	return rc;
+}
+
+int slice_mesh_plan(const struct mesh *m, const struct layer_span *plan, size_t n,
+		    const struct slice_settings *s, struct slice_stack **out, struct st_error *err)
+{
+	struct slice_settings defaults;
+	struct slice_stack *st;
+	struct seg_list *lists = NULL;
+	struct clip_paths loops = {0};
+	double zmin[3], zmax[3];
+	int rc;
+
+	if (!out)
+		return st_error_set(err, ST_ERR_ARG, "slice: slice_mesh_plan needs an out pointer");
+	*out = NULL;
+	if (!s) {
+		slice_settings_init(&defaults);
+		s = &defaults;
+	}
+	rc = check_mesh(m, err);
+	if (!rc)
+		rc = check_plan(plan, n, s->nozzle_diameter, err);
+	if (rc)
+		return rc;
+	mesh_bbox(m, zmin, zmax);
 	st = calloc(1, sizeof(*st));
 	if (!st || (n && !(st->layers = calloc(n, sizeof(*st->layers)))) ||
 	    !(lists = calloc(n ? n : 1, sizeof(*lists)))) {
@@ -471,9 +536,9 @@ int slice_mesh(const struct mesh *m, double first_layer_height, double layer_hei
 	st->n = n;
 	for (size_t i = 0; i < n; i++) {
 		struct slice_layer *l = &st->layers[i];
-		l->height = i == 0 ? first_layer_height : layer_height;
-		l->z = i == 0 ? first_layer_height : first_layer_height + (double)i * layer_height;
-		l->slice_z = zmin[2] + layer_mid(i, first_layer_height, layer_height);
+		l->height = plan[i].height;
+		l->z = plan[i].z;
+		l->slice_z = zmin[2] + (plan[i].z - plan[i].height / 2);
 	}
 	rc = cut_all(m, st, lists, err);
 	for (size_t i = 0; i < n && !rc; i++) {

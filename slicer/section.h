@@ -15,10 +15,13 @@
  * fill rule (non-zero by default), so outer walls and holes come out
  * right whatever the nesting.
  *
- * Layers: the mesh's lowest point sits on the bed (z = 0).  Layer 0 is
- * first_layer_height thick, every later layer layer_height; layer i is
- * sliced at its mid-height, and layers are made while that plane lies
- * strictly below the top of the mesh.
+ * Layers: the mesh's lowest point sits on the bed (z = 0).  A plan lists
+ * each layer's top and thickness (struct layer_span); every stage after
+ * this one reads the heights from the stack, so uniform and adaptive
+ * (adaptive.h) layers print alike.  The uniform plan: layer 0 is
+ * first_layer_height thick, every later layer layer_height.  Layer i is
+ * sliced at its mid-height, and the uniform plan makes layers while that
+ * plane lies strictly below the top of the mesh.
  */
 #ifndef STRATUM_SLICER_SECTION_H
 #define STRATUM_SLICER_SECTION_H
@@ -28,6 +31,14 @@
 #include "clip.h"
 #include "mesh.h"
 #include "st_error.h"
+
+/* Most layers one mesh may produce. */
+#define SLICE_MAX_LAYERS 10000000u
+
+/* One planned layer, mm above the bed: its top and its thickness. */
+struct layer_span {
+	double z, height;
+};
 
 /* How to slice; slice_settings_init gives the defaults. */
 struct slice_settings {
@@ -65,7 +76,8 @@ int slice_settings_check(const struct slice_settings *s, double first_layer_heig
 
 /*
  * slice_mesh - slice m (mm, closed surface as the repair leaves it) into
- * layers of first_layer_height then layer_height mm.  s may be NULL for the
+ * layers of first_layer_height then layer_height mm (slice_plan_uniform,
+ * slice_mesh_plan).  s may be NULL for the
  * defaults.  On success *out is a new stack (slice_stack_free) and 0 is
  * returned; on error *out is NULL and err says why: ST_ERR_ARG / ST_ERR_RANGE
  * (settings, empty mesh, coordinates beyond +-1e6 mm, too many layers),
@@ -73,6 +85,24 @@ int slice_settings_check(const struct slice_settings *s, double first_layer_heig
  */
 int slice_mesh(const struct mesh *m, double first_layer_height, double layer_height,
 	       const struct slice_settings *s, struct slice_stack **out, struct st_error *err);
+
+/*
+ * slice_plan_uniform - the uniform plan of a mesh height mm tall: layer 0
+ * first_layer_height thick, the others layer_height (heights > 0, checked
+ * by the caller), while the layer's mid-plane is below height.  *plan is
+ * a new array of *n layers (free; NULL when none).  Returns 0, ST_ERR_RANGE
+ * (more than SLICE_MAX_LAYERS) or ST_ERR_NOMEM.
+ */
+int slice_plan_uniform(double height, double first_layer_height, double layer_height,
+		       struct layer_span **plan, size_t *n, struct st_error *err);
+
+/*
+ * slice_mesh_plan - slice m at the n layers of plan (tops above the mesh's
+ * lowest point, rising; heights in (0, nozzle]), each at its mid-height.
+ * Returns as slice_mesh (ST_ERR_RANGE / ST_ERR_ARG for a bad plan).
+ */
+int slice_mesh_plan(const struct mesh *m, const struct layer_span *plan, size_t n,
+		    const struct slice_settings *s, struct slice_stack **out, struct st_error *err);
 
 /*
  * slice_layer_shrink - elefant_foot_compensation: the islands of l shrunk

@@ -145,6 +145,9 @@ static const struct setting table[] = {
     {"retract_layer_change", BOOL, FI, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
      "retract (wiping, lifting) before each layer change; the first travel of the layer "
      "unretracts"},
+    {"variable_layer_height", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, NULL,
+     "the printer can print layers of varying height: adaptive_layer_height is refused "
+     "when 0"},
     {"min_layer_height", NUM, EX, 0, 3, 0, "mm", "0.07", NULL, NULL, 0, NULL,
      "at most the nozzle and max_layer_height"},
     {"max_layer_height", NUM, EX, 0, 3, 0, "mm", "0", NULL, NULL, 0, NULL,
@@ -154,6 +157,13 @@ static const struct setting table[] = {
      "at most the smallest nozzle"},
     {"first_layer_height", SETTING_NUMBER_OR_PCT, S_, 0, 3, GT, "mm", "0.2", NULL, NULL, 0, NULL,
      "at most the smallest nozzle; a percentage is of layer_height"},
+    {"adaptive_layer_height", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
+     "Stratum's key (`stratum slice --adaptive`): above the first layer, each layer between "
+     "min_layer_height and max_layer_height (at most 75% of the nozzle) as thick as "
+     "adaptive_max_cusp allows (docs/slicing.md)"},
+    {"adaptive_max_cusp", NUM, S_, 0, 1, GT, "mm", "0.1", NULL, NULL, 0, NULL,
+     "Stratum's key (`--max-cusp`): the largest staircase step (layer height times the facet normal's Z, unsigned) "
+     "adaptive layers leave on a sloped facet"},
     {"extrusion_width", SETTING_NUMBER_OR_PCT, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0, NULL,
      "0 = automatic (PrusaSlicer 2.5's: the nozzle for the top skin and support, 1.125 x "
      "the nozzle for the rest); a percentage is of layer_height (as in PrusaSlicer)"},

@@ -571,7 +571,7 @@ static int toolpaths(const struct mesh *m, const struct slicer_config *c,
 	}
 
 	progress(c, "cutting the model into layers", 0.0);
-	rc = slice_mesh(m, first, c->layer_height, &c->slice, &st, err);
+	rc = stage_slice(m, c, &st, &s, err);
 	if (rc)
 		return rc;
 	progress(c, "cutting the model into layers", 1.0);
@@ -598,6 +598,8 @@ static int toolpaths(const struct mesh *m, const struct slicer_config *c,
 					       c->infill.bottom_solid_min_thickness);
 	for (size_t i = vase_from; !rc && i < st->n; i++)
 		rc = spiral_keep_outline(&st->layers[i], err);
+	if (!rc)
+		rc = stage_report_plan(c, raft, st, err);
 	if (rc)
 		goto out_free;
 	if (shape && !(*shape = stage_print_stack(raft, st, err))) {

@@ -47,7 +47,8 @@
 #include "st_error.h"
 #include "toolpath.h"
 
-struct support_settings; /* support.h */
+struct support_settings;  /* support.h */
+struct adaptive_settings; /* adaptive.h */
 
 /* Layers per unit of parallel wall work (and per seam-memory restart). */
 #define SLICER_CHUNK_LAYERS 32
@@ -117,6 +118,16 @@ struct slicer_skirt_settings {
 	double brim_separation;	 /* mm, >= 0 (0) */
 };
 
+/* Adaptive layer heights (adaptive.h): keys of the printer and Stratum's. */
+struct slicer_adaptive_settings {
+	bool enabled;	   /* adaptive_layer_height (false) */
+	bool allowed;	   /* variable_layer_height: the printer allows it (true) */
+	double max_cusp;   /* mm, adaptive_max_cusp (0.1) */
+	double min_height; /* mm, min_layer_height (0.07) */
+	double max_height; /* mm, max_layer_height, 0 = 75 % of the nozzle; at most
+			    * that in any case (0) */
+};
+
 /* Everything a job needs; slicer_config_init gives the defaults. */
 struct slicer_config {
 	double layer_height;	   /* mm, > 0, at most the nozzle diameter (0.2) */
@@ -129,6 +140,7 @@ struct slicer_config {
 	struct slicer_support_settings support;
 	struct slicer_raft_settings raft;
 	struct slicer_skirt_settings skirt;
+	struct slicer_adaptive_settings adaptive;
 	struct slicer_bed bed;
 	double elefant_foot_compensation; /* mm the first layer's islands shrink, >= 0 (0) */
 	/* mm, every bead of the part's first layer on the bed (walls, skins,
@@ -149,6 +161,11 @@ struct slicer_config {
 	 * it done; may be NULL. */
 	void (*progress)(void *ctx, const char *stage, double done);
 	void *progress_ctx;
+	/* Called once with the layers as printed (the raft's, then the
+	 * part's: tops above the bed, heights), before any is written; may be
+	 * NULL. */
+	void (*planned)(void *ctx, const struct layer_span *layers, size_t n);
+	void *planned_ctx;
 };
 
 /* What a job produced. */
@@ -165,6 +182,11 @@ struct slicer_summary {
 	bool walls, infill, support, skirt; /* which stages produced paths in this build */
 	size_t raft_layers;	       /* of layers, those of the raft under the part */
 	size_t open_dropped;	       /* open contour pieces the slicer could not close */
+	bool adaptive;		       /* the part's layers are adaptive (adaptive.h) */
+	double height_min, height_max; /* mm: the part's thinnest and thickest layer above
+					* its first */
+	double cusp_max, cusp_mean;    /* mm, adaptive only: the cusp of the part's layers above
+					* its first (adaptive_measure) */
 };
 
 /*
@@ -191,7 +213,11 @@ void slicer_config_modes(struct slicer_config *c);
  * (perim_settings_check for both layer heights), infill density outside
  * 0-100 %, negative layer or loop counts or brim width, a support threshold
  * outside 0-90, raft keys outside their declared ranges (settings.h), a
- * first-layer width the first layer's walls cannot take, an empty bed or a height <= 0, a negative thread count.
+ * first-layer width the first layer's walls cannot take, an empty bed or a height <= 0, a negative thread count;
+ * with adaptive layers, a printer that does not allow them
+ * (variable_layer_height), a cusp bound outside its declared range, and
+ * min/max_layer_height the walls cannot take or whose minimum is above the
+ * largest height (max_layer_height, at most 75 % of the nozzle).
  * Returns 0 or ST_ERR_RANGE / ST_ERR_ARG with a message naming the setting
  * (PrusaSlicer's key), its value and what is allowed.
  */
@@ -203,6 +229,13 @@ int slicer_config_check(const struct slicer_config *c, struct st_error *err);
  * (set, and no raft), else c->perim as it is.
  */
 void slicer_first_layer_walls(const struct slicer_config *c, struct perim_settings *out);
+
+/*
+ * slicer_adaptive_settings - the settings of adaptive_plan (adaptive.h)
+ * for c: the part's first layer as slicer_toolpaths slices it, c's
+ * minimum, and c's maximum capped at 75 % of the nozzle.
+ */
+void slicer_adaptive_settings(const struct slicer_config *c, struct adaptive_settings *out);
 
 /*
  * slicer_raft_support - the settings of support_raft (support.h) for c,

@@ -7,6 +7,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "adaptive.h"
 #include "infill.h"
 #include "settings.h"
 #include "support.h"
@@ -36,6 +37,10 @@ void slicer_config_init(struct slicer_config *c, double nozzle_diameter)
 	    .first_layer_density = c->gcodew.raft_first_layer_density,
 	    .first_layer_expansion = c->gcodew.raft_first_layer_expansion};
 	c->skirt = (struct slicer_skirt_settings){.skirts = 1, .skirt_distance = 6, .skirt_height = 1};
+	c->adaptive.allowed = true;
+	setting_default_number("adaptive_max_cusp", false, &c->adaptive.max_cusp);
+	setting_default_number("min_layer_height", false, &c->adaptive.min_height);
+	setting_default_number("max_layer_height", false, &c->adaptive.max_height);
 	c->max_detour = TRAVEL_DETOUR_DEFAULT_PCT;
 	c->max_detour_is_percent = true;
 	c->bed = (struct slicer_bed){.max_x = 200, .max_y = 200, .max_height = 200,
@@ -51,6 +56,8 @@ void slicer_config_modes(struct slicer_config *c)
 	c->infill.top_solid_min_thickness = 0;
 	c->infill.density = 0;
 }
+
+static int adaptive_check(const struct slicer_config *c, struct st_error *err);
 
 int slicer_config_check(const struct slicer_config *c, struct st_error *err)
 {
@@ -137,7 +144,43 @@ int slicer_config_check(const struct slicer_config *c, struct st_error *err)
 		return st_error_set(err, ST_ERR_RANGE,
 				    "threads = %d is out of range; use 0 (all cores) to %d",
 				    c->threads, SLICER_MAX_THREADS);
-	return 0;
+	return c->adaptive.enabled ? adaptive_check(c, err) : 0;
+}
+
+void slicer_adaptive_settings(const struct slicer_config *c, struct adaptive_settings *out)
+{
+	double top = 0.75 * c->perim.nozzle_diameter; /* PrusaSlicer's largest height */
+
+	out->first_height = c->raft.layers > 0 ? c->layer_height : c->first_layer_height;
+	out->min_height = c->adaptive.min_height;
+	out->max_height = c->adaptive.max_height > 0 ? fmin(c->adaptive.max_height, top) : top;
+	out->max_cusp = c->adaptive.max_cusp;
+}
+
+/* Adaptive layers: allowed by the printer, heights every stage can print. */
+static int adaptive_check(const struct slicer_config *c, struct st_error *err)
+{
+	struct adaptive_settings a;
+	int rc;
+
+	if (!c->adaptive.allowed)
+		return st_error_set(err, ST_ERR_RANGE,
+				    "adaptive layer heights: the printer does not allow variable "
+				    "layer heights (variable_layer_height = 0); slice with uniform "
+				    "layers or set variable_layer_height = 1");
+	rc = setting_check("slicer", "adaptive_max_cusp", c->adaptive.max_cusp, err);
+	if (rc)
+		return rc;
+	slicer_adaptive_settings(c, &a);
+	if (!(a.min_height >= ADAPTIVE_STEP_MM && a.min_height <= a.max_height))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "adaptive layer heights: min_layer_height = %g mm must be at "
+				    "least %g mm and at most the largest layer height %g mm "
+				    "(max_layer_height, at most 75%% of the %g mm nozzle)",
+				    a.min_height, ADAPTIVE_STEP_MM, a.max_height,
+				    c->perim.nozzle_diameter);
+	rc = perim_settings_check(&c->perim, a.min_height, err);
+	return rc ? rc : perim_settings_check(&c->perim, a.max_height, err);
 }
 
 void slicer_first_layer_walls(const struct slicer_config *c, struct perim_settings *out)

@@ -4,8 +4,10 @@
  */
 #include "stages.h"
 
+#include <math.h>
 #include <stdlib.h>
 
+#include "adaptive.h"
 #include "skirt.h"
 #include "support.h"
 
@@ -22,6 +24,64 @@ struct layer_stack *stage_print_stack(const struct slice_stack *raft, const stru
 		s->layers[i].height = l->height;
 	}
 	return s;
+}
+
+int stage_slice(const struct mesh *m, const struct slicer_config *c, struct slice_stack **st,
+		struct slicer_summary *sum, struct st_error *err)
+{
+	struct adaptive_settings as;
+	struct adaptive_cusp cusp;
+	struct layer_span *plan = NULL;
+	double lo[3], hi[3];
+	size_t n = 0;
+	int rc;
+
+	*st = NULL;
+	slicer_adaptive_settings(c, &as);
+	mesh_bbox(m, lo, hi);
+	if (c->adaptive.enabled)
+		rc = adaptive_plan(m, &as, &plan, &n, err);
+	else
+		rc = slice_plan_uniform(hi[2] - lo[2], as.first_height, c->layer_height, &plan, &n,
+					err);
+	if (!rc)
+		rc = slice_mesh_plan(m, plan, n, &c->slice, st, err);
+	if (!rc && c->adaptive.enabled) /* the first layer's height is fixed */
+		rc = adaptive_measure(m, plan + (n > 1), n - (n > 1), NULL, &cusp, err);
+	if (!rc) {
+		sum->adaptive = c->adaptive.enabled;
+		sum->height_min = n > 1 ? INFINITY : 0.0;
+		sum->height_max = 0.0;
+		for (size_t i = 1; i < n; i++) {
+			sum->height_min = fmin(sum->height_min, plan[i].height);
+			sum->height_max = fmax(sum->height_max, plan[i].height);
+		}
+		sum->cusp_max = c->adaptive.enabled ? cusp.max : 0.0;
+		sum->cusp_mean = c->adaptive.enabled ? cusp.mean : 0.0;
+	}
+	free(plan);
+	return rc;
+}
+
+int stage_report_plan(const struct slicer_config *c, const struct slice_stack *raft,
+		      const struct slice_stack *st, struct st_error *err)
+{
+	size_t nr = raft ? raft->n : 0;
+	struct layer_span *all;
+
+	if (!c->planned)
+		return 0;
+	all = malloc((nr + st->n ? nr + st->n : 1) * sizeof(*all));
+	if (!all)
+		return st_error_set(err, ST_ERR_NOMEM, "slicer: out of memory for %zu layers",
+				    nr + st->n);
+	for (size_t i = 0; i < nr + st->n; i++) {
+		const struct slice_layer *l = i < nr ? &raft->layers[i] : &st->layers[i - nr];
+		all[i] = (struct layer_span){.z = l->z, .height = l->height};
+	}
+	c->planned(c->planned_ctx, all, nr + st->n);
+	free(all);
+	return 0;
 }
 
 /* The sections' layers alone. */

@@ -24,6 +24,22 @@ struct layer_stack *stage_print_stack(const struct slice_stack *raft, const stru
 struct layer_stack *stage_stack(const struct slice_stack *st, struct st_error *err);
 
 /*
+ * stage_slice - the part's layers (uniform, or adaptive.h's plan with
+ * c->adaptive.enabled; the first layer is layer_height thick over a raft)
+ * cut from m into *st; sum gets the plan's heights and, adaptive, its cusp
+ * (adaptive_measure).  Returns 0 or the plan's or slice_mesh_plan's error.
+ */
+int stage_slice(const struct mesh *m, const struct slicer_config *c, struct slice_stack **st,
+		struct slicer_summary *sum, struct st_error *err);
+
+/*
+ * stage_report_plan - c->planned (when set) with the raft's layers (may
+ * be NULL), then st's.  Returns 0 or ST_ERR_NOMEM.
+ */
+int stage_report_plan(const struct slicer_config *c, const struct slice_stack *raft,
+		      const struct slice_stack *st, struct st_error *err);
+
+/*
  * stage_support - support material under overhangs, from the bed
  * (support.h), into out when the job asks for it; *ran is set when it
  * produced paths.  Returns 0 or support_generate's error.

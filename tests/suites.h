@@ -40,6 +40,7 @@ Suite *infill_suite(void);	/* tests/check_infill.c: skins, bridges, infill */
 void infill_shell_tcases(Suite *s); /* tests/check_shells.c: vertical shells, part of infill */
 Suite *support_suite(void);	/* tests/check_support.c: skirt, brim, support material */
 Suite *raft_suite(void);	/* tests/check_raft.c: the raft under the part */
+Suite *adaptive_suite(void);	/* tests/check_adaptive.c: adaptive layer heights */
 Suite *multimodel_suite(void); /* tests/check_multimodel.c: several models in one slice */
 Suite *slicecli_suite(void);	/* tests/check_slicecli.c: stratum slice end to end */
 void slicecli_settings_tcases(Suite *s); /* tests/check_slicesettings.c: settings honoured, part of slicecli */
