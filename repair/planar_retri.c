@@ -187,6 +187,7 @@ int planar_retriangulate(struct planar_ctx *x, uint32_t c, size_t **refusal,
 		goto out_nomem;
 	if (rc > 0 || (l.nprobe && !loops_nest(m, &l, cl->normal))) {
 		*refusal = &rep->refused_shape;
+		rc = 0;
 		goto out;
 	}
 	if (l.nprobe == 0)

@@ -155,6 +155,30 @@ START_TEST(plate_with_hole_to_minimum)
 END_TEST
 
 /*
+ * tests/fixtures.h's plate with a square and a round (64-gon) hole,
+ * generated with its faces in strips: V = 8 outer corners + 8 around the
+ * square hole + 2 x 64 around the round one = 144, genus 2, so
+ * chi = -2 and F = 2 (V - chi) = 292.
+ */
+START_TEST(plate_two_holes_to_minimum)
+{
+	const int corners = 8 + 8 + 2 * 64, genus = 2, chi = 2 - 2 * genus;
+	struct mesh *plate = fx_plate_holes();
+	struct simplified s;
+
+	ck_assert_uint_gt(plate->ntris, (size_t)(2 * (corners - chi)));
+	s = simplify(plate, PLANAR_ANGLE_DEFAULT, PLANAR_FLATNESS_DEFAULT);
+	ck_assert_uint_eq(s.out->ntris, (size_t)(2 * (corners - chi)));
+	ck_assert_uint_eq(s.out->nverts, (size_t)corners);
+	ck_assert_int_eq(s.check.genus, genus);
+	ck_assert(s.check.printable);
+	ck_assert_double_eq_tol(s.rep.volume_after, s.rep.volume_before, 1e-9);
+	mesh_free(s.out);
+	mesh_free(plate);
+}
+END_TEST
+
+/*
  * A cylinder of radius 10 whose side is n strips, each cut into rows:
  * row vertices lie on the strips' vertical edges, caps are fans around
  * their centres.
@@ -394,6 +418,7 @@ Suite *planar_suite(void)
 	tcase_set_timeout(cli, 60);
 	tcase_add_test(shapes, subdivided_cube_to_12);
 	tcase_add_test(shapes, plate_with_hole_to_minimum);
+	tcase_add_test(shapes, plate_two_holes_to_minimum);
 	tcase_add_test(shapes, cylinder_side_keeps_angle_limit);
 	tcase_add_test(shapes, bumps_above_flatness_stay);
 	tcase_add_test(shapes, crossing_cluster_left_as_it_was);
