@@ -202,6 +202,7 @@ bench:
 	@$(MAKE) all $(BUILD)/bench/gen_mesh $(BUILD)/bench/region_check $(BUILD)/bench/refine_time
 	bench/run.sh $(BUILD)/stratum
 	bench/cgal_corpus.sh $(BUILD)/stratum
+	bench/planar_simplify.sh $(BUILD)/stratum
 
 # libFuzzer targets (tests/fuzz/fuzz_NAME.c, one per parser of outside data;
 # docs/reliability.md).  The C library is built again with clang under
