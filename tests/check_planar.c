@@ -400,6 +400,24 @@ START_TEST(cli_simplified_is_printable)
 	ck_assert_msg(strstr(buf, "\"triangles_after\": 32"), "%s", buf);
 	rc = tu_run(buf, sizeof(buf), "check %s", out);
 	ck_assert_msg(rc == 0 && strstr(buf, "printable: yes"), "%s", buf);
+	/* --split: each part keeps its own triangles (a subdivided cube
+	 * beside the frame comes back as 12 in a file of its own). */
+	{
+		struct mesh *cube = subdivided_cube(8, 4), *both;
+		const char *parts = tu_path("parts.stl");
+		for (size_t v = 0; v < cube->nverts; v++)
+			cube->verts[v][0] += 40;
+		both = fx_concat(boxes, cube);
+		ck_assert_int_eq(meshio_write_stl(in, both, MESHIO_STL_BINARY, &err), 0);
+		rc = tu_run(buf, sizeof(buf), "repair %s -o %s --simplify-planar --split", in, parts);
+		ck_assert_msg(rc == 0, "%s", buf);
+		rc = tu_run(buf, sizeof(buf), "check %s", tu_path("parts-1.stl"));
+		ck_assert_msg(rc == 0 && strstr(buf, "binary STL, 32 triangles"), "%s", buf);
+		rc = tu_run(buf, sizeof(buf), "check %s", tu_path("parts-2.stl"));
+		ck_assert_msg(rc == 0 && strstr(buf, "binary STL, 12 triangles"), "%s", buf);
+		mesh_free(both);
+		mesh_free(cube);
+	}
 	/* --angle and --flatness belong to --simplify-planar. */
 	rc = tu_run(buf, sizeof(buf), "repair %s -o %s --flatness 0.1", in, out);
 	ck_assert_msg(rc == 2 && strstr(buf, "--simplify-planar"), "%s", buf);
