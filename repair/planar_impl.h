@@ -65,7 +65,7 @@ struct planar_ctx {
 	size_t ncl;
 	uint8_t *role;		/* enum planar_role per vertex */
 	uint8_t *kept;		/* per vertex: a refused cluster keeps it */
-	/* Scratch for planar_retriangulate, nverts entries each. */
+	/* Scratch marks per vertex (growth and loops), each use a new stamp_gen. */
 	uint32_t *next, *stamp, *seen;
 	uint32_t stamp_gen;
 };
