@@ -90,7 +90,7 @@ struct repair_run {
 	const char *eps_source;	/* "--epsilon", "printer" or "default" */
 	bool ascii;
 	/* How far the run got, for the report printed on every exit. */
-	const char *stage;	/* "arguments", "reading", "repairing", "writing", "done" */
+	const char *stage;	/* "arguments", "reading", "repairing", "simplifying", "writing", "done" */
 	bool read, repaired;	/* the input was read / repair_mesh returned */
 	bool simplify;		/* --simplify-planar */
 	struct planar_options planar;
@@ -568,7 +568,7 @@ static int simplify_result(struct repair_run *run, const char *in, struct mesh *
 	rc = planar_simplify(*m, &run->planar, &simple, &origin, &run->simp, &err);
 	if (rc) {
 		say(run, "%s: %s", in, err.msg);
-		return st_exit_for(rc);
+		return ST_EXIT_SOFTWARE; /* NOMEM, INTERNAL; ARG only from a bug here */
 	}
 	run->simplified = true;
 	if (component) { /* the part of each output triangle's origin, in origin's place */
