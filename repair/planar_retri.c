@@ -131,6 +131,8 @@ static int find_loops(struct planar_ctx *x, const struct planar_cluster *cl, str
 			return 1;
 		l->end[l->n++] = l->nvert;
 	}
+	if (l->n == 0)
+		return 1; /* closed: a flat pillow, two faces on each other */
 	/* A disk with h holes: V - E + F = 1 - h, E = (3F + boundary) / 2. */
 	if ((long long)nverts - (long long)(3 * cl->n + nbound) / 2 + (long long)cl->n !=
 	    2 - (long long)l->n)
