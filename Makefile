@@ -208,6 +208,7 @@ bench:
 	bench/run.sh $(BUILD)/stratum
 	bench/cgal_corpus.sh $(BUILD)/stratum
 	bench/adaptive_cusp.sh
+	bench/planar_simplify.sh $(BUILD)/stratum
 
 # libFuzzer targets (tests/fuzz/fuzz_NAME.c, one per parser of outside data;
 # docs/reliability.md).  The C library is built again with clang under

@@ -1,9 +1,11 @@
 /*
  * cmd_repair.c - `stratum repair IN -o OUT [--printer NAME|FILE.ini |
  * --epsilon MM] [--split] [--json] [--threads N] [--ascii] [--weld MM]
- * [--stitch MM] [--keep-holes]`: read a mesh,
- * repair it with seed 000's pipeline (repair/repair.h) and write the
- * printable result as STL, one file or one per manifold-connected part.
+ * [--stitch MM] [--keep-holes] [--simplify-planar [--angle DEG]
+ * [--flatness MM]]`: read a mesh, repair it with seed 000's pipeline
+ * (repair/repair.h), optionally merge its flat faces (seed 001 §4,
+ * repair/simplify_planar.h), and write the printable result as STL, one
+ * file or one per manifold-connected part.
  * Exit 0 repaired and written, 1 no printable result (nothing written) or
  * the output could not be written, 2 usage, 65 unreadable input or bad
  * printer profile, 70 internal error.
@@ -25,6 +27,7 @@
 #include "profile.h"
 #include "progress.h"
 #include "repair.h"
+#include "simplify_planar.h"
 #include "st_error.h"
 #include "st_number.h"
 
@@ -38,6 +41,7 @@ static const char repair_head[] =
     "usage: stratum repair IN -o OUT [--printer NAME|FILE.ini | --epsilon MM]\n"
     "                      [--split] [--json] [--threads N] [--ascii]\n"
     "                      [--weld MM] [--stitch MM] [--keep-holes]\n"
+    "                      [--simplify-planar [--angle DEG] [--flatness MM]]\n"
     "\n"
     "Repairs a mesh (STL, OBJ or OFF) into printable solids with Attene's\n"
     "as-exact-as-possible pipeline: welds vertices a few float ulps apart,\n"
@@ -46,6 +50,9 @@ static const char repair_head[] =
     "resolves every self-intersection exactly, keeps the outer hull, thickens\n"
     "sheets and wires to EPSILON, and writes the result as STL.  Nothing that was\n"
     "already solid is moved (except by rounding to the output precision).\n"
+    "With --simplify-planar, nearly flat faces are then re-triangulated with the\n"
+    "fewest triangles, never changing the topology or moving a surface by more\n"
+    "than the flatness.\n"
     "\n";
 static const char repair_tail[] =
     "\n"
@@ -83,8 +90,12 @@ struct repair_run {
 	const char *eps_source;	/* "--epsilon", "printer" or "default" */
 	bool ascii;
 	/* How far the run got, for the report printed on every exit. */
-	const char *stage;	/* "arguments", "reading", "repairing", "writing", "done" */
+	const char *stage;	/* "arguments", "reading", "repairing", "simplifying", "writing", "done" */
 	bool read, repaired;	/* the input was read / repair_mesh returned */
+	bool simplify;		/* --simplify-planar */
+	struct planar_options planar;
+	bool simplified;	/* planar_simplify returned, simp holds its report */
+	struct planar_report simp;
 	size_t input_triangles;
 	int exit;		/* the exit status */
 	char error[512];	/* the last error message, "" when none */
@@ -319,6 +330,46 @@ static void print_heal(const struct repair_report *r)
 	printf("\n");
 }
 
+/* The planar simplification's figures, or null when it did not run. */
+static json_t *json_simplify(const struct repair_run *run)
+{
+	const struct planar_report *s = &run->simp;
+	json_t *obj;
+
+	if (!run->simplified)
+		return json_null();
+	obj = json_object();
+	if (obj)
+		cmd_json_set(obj, "f:angle", run->planar.angle, "f:flatness", run->planar.flatness,
+			     "z:triangles_before", s->triangles_before,
+			     "z:triangles_after", s->triangles_after,
+			     "z:vertices_before", s->vertices_before,
+			     "z:vertices_after", s->vertices_after, "z:clusters", s->clusters,
+			     "z:retriangulated", s->retriangulated,
+			     "z:refused_shape", s->refused_shape,
+			     "z:refused_deviation", s->refused_deviation,
+			     "z:refused_topology", s->refused_topology,
+			     "z:refused_crossing", s->refused_crossing,
+			     "f:max_deviation", s->max_deviation, "f:volume_before", s->volume_before,
+			     "f:volume_after", s->volume_after, "f:area", s->area, NULL);
+	return obj ? obj : json_null();
+}
+
+/* One line of what --simplify-planar did. */
+static void print_simplify(const struct repair_run *run)
+{
+	const struct planar_report *s = &run->simp;
+	const size_t refused = s->refused_shape + s->refused_deviation + s->refused_topology +
+			       s->refused_crossing;
+
+	printf("  planar simplification (angle %g deg, flatness %g mm): %zu -> %zu triangles, "
+	       "%zu -> %zu vertices; %zu of %zu flat faces re-triangulated, %zu left as they "
+	       "were; largest deviation %.3g mm; volume %.9g -> %.9g mm^3\n",
+	       run->planar.angle, run->planar.flatness, s->triangles_before, s->triangles_after,
+	       s->vertices_before, s->vertices_after, s->retriangulated, s->clusters, refused,
+	       s->max_deviation, s->volume_before, s->volume_after);
+}
+
 static int print_json(const struct repair_run *run, const struct repair_report *r,
 		      const struct repair_outputs *o)
 {
@@ -366,7 +417,8 @@ static int print_json(const struct repair_run *run, const struct repair_report *
 		     "z:output_triangles", r->output_triangles,
 		     "z:output_vertices", r->output_vertices, "z:components", r->components,
 		     "b:printable", r->printable,
-		     "o:why", r->printable ? json_null() : json_string(r->why), NULL);
+		     "o:why", r->printable ? json_null() : json_string(r->why),
+		     "o:simplify", json_simplify(run), NULL);
 out_dump:
 	json_object_set_new(obj, "outputs", outs);
 	return cmd_json_out(obj, JSON_INDENT(2) | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(10));
@@ -445,6 +497,8 @@ static void print_text(const struct repair_run *run, const struct repair_report 
 		printf(" (%zu smaller than epsilon in every direction dropped, %zu triangles)",
 		       r->parts_dropped, r->dropped_triangles);
 	printf("\n");
+	if (run->simplified)
+		print_simplify(run);
 	printf("printable: %s\n", r->printable ? "yes" : "no");
 	if (!r->printable)
 		printf("  why: %s\n", r->why);
@@ -498,9 +552,40 @@ static bool input_is_a_part(const char *in, const char *out)
 	return match;
 }
 
+/*
+ * Planar simplification of the repaired mesh *m, in place; component
+ * (the part of each triangle, or NULL) follows the triangles.  Returns 0
+ * or the exit status, with the message said.
+ */
+static int simplify_result(struct repair_run *run, const char *in, struct mesh **m,
+			   uint32_t *component)
+{
+	struct st_error err = {0};
+	struct mesh *simple = NULL;
+	uint32_t *origin = NULL;
+	int rc;
+
+	rc = planar_simplify(*m, &run->planar, &simple, &origin, &run->simp, &err);
+	if (rc) {
+		say(run, "%s: %s", in, err.msg);
+		return ST_EXIT_SOFTWARE; /* NOMEM, INTERNAL; ARG only from a bug here */
+	}
+	run->simplified = true;
+	if (component) { /* the part of each output triangle's origin, in origin's place */
+		for (size_t i = 0; i < simple->ntris; i++)
+			origin[i] = component[origin[i]];
+		memcpy(component, origin, simple->ntris * sizeof(*component));
+	}
+	free(origin);
+	mesh_free(*m);
+	*m = simple;
+	return 0;
+}
+
 static int repair_command(int argc, char **argv, struct repair_run *run, struct clio *io)
 {
 	const char *in = NULL, *out = NULL, *printer = NULL, *eps_arg = NULL;
+	const char *angle_arg = NULL, *flat_arg = NULL;
 	bool json = false, split = false, ascii = false, keep_holes = false, out_std = false;
 	double weld = -1, stitch = -1; /* < 0: the defaults of repair_options_init */
 	int threads = 0, status = ST_EXIT_OK, rc;
@@ -514,6 +599,7 @@ static int repair_command(int argc, char **argv, struct repair_run *run, struct 
 
 	memset(&rep, 0, sizeof(rep));
 	uint32_t *component = NULL;
+	planar_options_init(&run->planar); /* before the table: --help shows the defaults */
 
 	const struct cmd_opt opts[] = {
 	    CMD_OPT_STRING("--output", 'o', &out, CMD_NONEMPTY, "the output file name", "OUT",
@@ -541,6 +627,18 @@ static int repair_command(int argc, char **argv, struct repair_run *run, struct 
 	     "stitch boundary gaps up to MM (default 1.5 * EPSILON; 0 = off)", NULL, NULL},
 	    CMD_OPT_FLAG("--keep-holes", &keep_holes,
 	     "no stitching, no hole filling: every open part is a sheet"),
+	    CMD_OPT_FLAG("--simplify-planar", &run->simplify,
+	     "then re-triangulate nearly flat faces with the fewest\n"
+	     "triangles (topology, solidity and volume kept)"),
+	    {"--angle", 0, CMD_DOUBLE, &run->planar.angle, CMD_RANGE, 0, PLANAR_ANGLE_MAX,
+	     "an angle in degrees from %g to %g", "DEG",
+	     "with --simplify-planar: largest angle between a facet and\n"
+	     "its face's plane, %g..%g (default %g)", NULL, &angle_arg},
+	    {"--flatness", 0, CMD_DOUBLE, &run->planar.flatness, CMD_RANGE, 0, PLANAR_FLATNESS_MAX,
+	     "a distance in mm from %g to %g", "MM",
+	     "with --simplify-planar: largest distance of a vertex from\n"
+	     "its face's plane, and of a removed vertex from the new\n"
+	     "triangles, %g..%g (default %g)", NULL, &flat_arg},
 	};
 	const struct cmd_spec spec = {
 	    .cmd = "stratum repair", .head = repair_head, CMD_TABLE(opts), .col = 20, .tail = repair_tail, .pos = &in,
@@ -557,6 +655,12 @@ static int repair_command(int argc, char **argv, struct repair_run *run, struct 
 		return ST_EXIT_USAGE;
 	}
 
+	if ((angle_arg || flat_arg) && !run->simplify) {
+		fprintf(stderr, "stratum repair: %s applies to --simplify-planar; add it or leave "
+				"%s out\n", angle_arg ? angle_arg : flat_arg,
+			angle_arg ? angle_arg : flat_arg);
+		return ST_EXIT_USAGE;
+	}
 	if (split && clio_is_std(out)) {
 		fprintf(stderr, "stratum repair: --split writes one file per part; -o - takes "
 				"one stream (leave out --split)\n");
@@ -643,6 +747,13 @@ static int repair_command(int argc, char **argv, struct repair_run *run, struct 
 		say(run, "%s: could not reach a printable result: %s", in, rep.why);
 		status = ST_EXIT_FAILURE;
 		goto out_report;
+	}
+	if (run->simplify) {
+		run->stage = "simplifying";
+		run->planar.threads = threads;
+		status = simplify_result(run, in, &fixed, component);
+		if (status)
+			goto out_report;
 	}
 	run->stage = "writing";
 	status = write_outputs(run, out, fixed, component, rep.components, split,

@@ -10,6 +10,7 @@
  */
 #include "meshio_impl.h"
 #include "st_file.h"
+#include "vec3.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -503,15 +504,9 @@ out_free_state:
 /* Unit normal of triangle abc by the right-hand rule; zero if degenerate. */
 static void facet_normal(const double a[3], const double b[3], const double c[3], double n[3])
 {
-	double u[3], v[3], len;
+	double len;
 
-	for (int k = 0; k < 3; k++) {
-		u[k] = b[k] - a[k];
-		v[k] = c[k] - a[k];
-	}
-	n[0] = u[1] * v[2] - u[2] * v[1];
-	n[1] = u[2] * v[0] - u[0] * v[2];
-	n[2] = u[0] * v[1] - u[1] * v[0];
+	vec3_area_normal(a, b, c, n);
 	len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
 	for (int k = 0; k < 3; k++)
 		n[k] = len > 0.0 && isfinite(len) ? n[k] / len : 0.0;

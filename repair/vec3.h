@@ -17,14 +17,25 @@ static inline double vec3_dist(const double a[3], const double b[3])
 	return sqrt(dx * dx + dy * dy + dz * dz);
 }
 
-/* Area of triangle abc. */
-static inline double vec3_tri_area(const double a[3], const double b[3], const double c[3])
+/* n = (b - a) x (c - a): normal of triangle abc by the right-hand rule,
+ * twice its area long. */
+static inline void vec3_area_normal(const double a[3], const double b[3], const double c[3],
+				    double n[3])
 {
 	const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
 	const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-	const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
-			     u[0] * v[1] - u[1] * v[0]};
 
+	n[0] = u[1] * v[2] - u[2] * v[1];
+	n[1] = u[2] * v[0] - u[0] * v[2];
+	n[2] = u[0] * v[1] - u[1] * v[0];
+}
+
+/* Area of triangle abc. */
+static inline double vec3_tri_area(const double a[3], const double b[3], const double c[3])
+{
+	double n[3];
+
+	vec3_area_normal(a, b, c, n);
 	return 0.5 * sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
 }
 

@@ -22,7 +22,7 @@ static const struct suite_entry suites[] = {
 	{"meshio", meshio_suite},     {"exact", exact_suite},
 	{"repair", repair_suite},     {"batch", batch_suite},
 	{"thicken", thicken_suite},   {"heal", heal_suite},
-	{"corpus", corpus_suite},
+	{"corpus", corpus_suite},     {"planar", planar_suite},
 	{"profile", profile_suite},   {"ini", ini_suite},
 	{"placeholder", placeholder_suite}, {"gcode", gcode_suite},
 	{"xport", xport_suite},	      {"sim", sim_suite},
