@@ -1068,7 +1068,7 @@ START_TEST(test_config_errors)
 }
 END_TEST
 
-/* ---- simulated printers (port = sim), MQTT, status page -------------------- */
+/* ---- simulated printers (port = sim), MQTT ---------------------------------- */
 
 #define TWO_SIMS                                                                      \
 	"[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\nsim_speedup = 1000\n\n"    \
@@ -1881,78 +1881,6 @@ START_TEST(test_mqtt)
 }
 END_TEST
 
-START_TEST(test_status_page)
-{
-	static const char *const browsers[] = {"/usr/bin/chromium", "/usr/bin/chromium-browser",
-					       "/usr/bin/google-chrome"};
-	const char *browser = NULL;
-	struct node_proc np;
-	struct resp r;
-	char cmd[1024], *dom;
-	size_t cap = 1 << 20, len = 0;
-	FILE *p;
-
-	for (size_t i = 0; i < sizeof(browsers) / sizeof(browsers[0]) && !browser; i++)
-		if (!access(browsers[i], X_OK))
-			browser = browsers[i];
-	sv_write_config(&np, TWO_PRINTERS, 8);
-	sv_start(&np);
-	/* The page itself needs no key (it holds no data); the data does. */
-	sv_http(np.port, "GET", "/", NULL, NULL, &r);
-	ck_assert_int_eq(r.status, 200);
-	ck_assert(sv_has_text(r.head, "Content-Type: text/html"));
-	ck_assert(strstr(r.body, "api/stratum/node"));
-	sv_resp_free(&r);
-	sv_expect(np.port, "GET", "/api/stratum/node", NULL, NULL, 403);
-	if (!browser) {
-		printf("serve: status page browser test skipped: no chromium (make check installs "
-		       "it)\n");
-		sv_stop(&np);
-		return;
-	}
-	/* mk3s: a print that moved it is done, the next waits for the bed */
-	sv_wait_state(np.port, "", sv_print_text(np.port, "", "moved.gcode", "G28\nG1 X5\n"), "done",
-		      10);
-	ck_assert(sv_print_text(np.port, "", "next.gcode", "G28\n") == 2);
-	sv_upload_text(np.port, "/p/ender", KEY_UP, "hold.gcode", "M104 S205\nG4 P20000\n", "true", &r);
-	/* Printing (past the M104) before the browser looks, loaded or not. */
-	sv_wait_state(np.port, "/p/ender", sv_job_of(&r), "printing", 30);
-	sv_resp_free(&r);
-	usleep(300000);
-	snprintf(cmd, sizeof(cmd), "%s --headless --no-sandbox --disable-gpu --no-first-run "
-				   "--user-data-dir=%s --virtual-time-budget=4000 --dump-dom "
-				   "'http://127.0.0.1:%d/#key=%s' 2>/dev/null",
-		 browser, tu_path("chromium-profile"), np.port, KEY_READ);
-	p = popen(cmd, "r");
-	ck_assert(p);
-	dom = malloc(cap);
-	ck_assert(dom);
-	while (len + 1 < cap) {
-		size_t n = fread(dom + len, 1, cap - len - 1, p);
-
-		if (!n)
-			break;
-		len += n;
-	}
-	dom[len] = '\0';
-	pclose(p);
-	/* The script ran, polled with the key from the address and filled the table. */
-	ck_assert_msg(strstr(dom, "<span id=\"node\">test-node</span>"), "%.3000s", dom);
-	ck_assert_msg(strstr(dom, "data-printer=\"mk3s\""), "%.3000s", dom);
-	ck_assert_msg(strstr(dom, "<td class=\"state\">Waiting for bed clear</td>"), "%.3000s", dom);
-	ck_assert_msg(strstr(dom, "not confirmed clear"), "%.3000s", dom);
-	ck_assert_msg(strstr(dom, "<td class=\"queue\" style=\"white-space: pre-line;\">1. #2 "
-				  "next.gcode</td>"), "%.3000s", dom);
-	ck_assert_msg(strstr(dom, "<td class=\"state\">Printing</td>"), "%.3000s", dom);
-	ck_assert_msg(strstr(dom, "205 °C"), "%.3000s", dom);
-	ck_assert_msg(strstr(dom, "hold.gcode (printing)"), "%.3000s", dom);
-	ck_assert_msg(!strstr(dom, "data-updates=\"0\"") && strstr(dom, "data-updates=\""), "%.300s",
-		      dom);
-	free(dom);
-	sv_stop(&np);
-}
-END_TEST
-
 Suite *serve_suite(void)
 {
 	Suite *s = suite_create("serve");
@@ -1988,7 +1916,7 @@ Suite *serve_suite(void)
 	tcase_add_test(tc, test_sim_sailfish);
 	tcase_add_test(tc, test_sim_sailfish_resume);
 	tcase_add_test(tc, test_mqtt);
-	tcase_add_test(tc, test_status_page);
 	suite_add_tcase(s, tc);
+	serve_page_tcases(s);
 	return s;
 }

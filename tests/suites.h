@@ -53,6 +53,7 @@ Suite *s3g_suite(void);		/* tests/check_s3g.c: S3G packets, driver, simulated Sa
 Suite *serve_suite(void);		/* tests/check_serve.c: stratum serve, the farm node's API and queue */
 Suite *octoapi_suite(void);	/* tests/check_octoapi.c: the node's OctoPrint calls, one test each */
 void octoapi_push_tcases(Suite *s); /* tests/check_octopush.c: the push API, part of octoapi */
+void serve_page_tcases(Suite *s);   /* tests/check_servepage.c: the status page in Chromium, part of serve */
 void octoapi_queue_tcases(Suite *s); /* tests/check_octoqueue.c: job calls and the queue, part of octoapi */
 Suite *preview_suite(void);	/* tests/check_preview.c: layer preview, move walker */
 Suite *portpick_suite(void);	/* tests/check_portpick.c: --port auto on fake enumerations */

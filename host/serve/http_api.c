@@ -479,8 +479,10 @@ enum MHD_Result http_get_node(struct node *n, struct MHD_Connection *c, struct r
 	(void)r;
 	for (size_t i = 0; i < n->nprinters; i++)
 		json_array_append_new(arr, node_printer_json(n, &n->printers[i], 10));
-	return http_send_json(c, MHD_HTTP_OK, json_pack("{s:s,s:o}", "node", n->cfg.name, "printers",
-						        arr), NULL);
+	/* maxUpload: the page refuses a larger file before sending it */
+	return http_send_json(c, MHD_HTTP_OK, json_pack("{s:s,s:I,s:o}", "node", n->cfg.name,
+						        "maxUpload", (json_int_t)n->cfg.max_upload,
+						        "printers", arr), NULL);
 }
 
 json_t *http_body_json(struct MHD_Connection *c, struct req *r, enum MHD_Result *ret)
