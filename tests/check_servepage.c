@@ -26,9 +26,35 @@
 #define MSG_ABOUT(what) \
 	"/" what "/.test(document.getElementById('msg').textContent) && " \
 	"document.getElementById('msg').textContent"
-/* Click a button twice (the page asks for a second click to cancel or
- * confirm the bed clear), in one turn of the page's event loop. */
-#define CLICK_TWICE(b) "(function (b) { b.click(); b.click(); return true; })(" b ")"
+/* Click button b (an expression) times times once it is there, in one turn
+ * of the page's event loop (the page asks for a second click to cancel a
+ * print or confirm the bed clear). */
+#define CLICK_WHEN_THERE(b, times) \
+	"(function (b) { if (!b) return false;" \
+	" for (var i = 0; i < " times "; i++) b.click(); return true; })(" b ")"
+#define CLICK_TWICE(b) CLICK_WHEN_THERE(b, "2")
+
+/* The name of mk3s's next queued job. */
+static const char *first_waiting(int port)
+{
+	static char name[100];
+	json_t *q = sv_get_json(port, "/api/stratum/queue");
+
+	snprintf(name, sizeof(name), "%s",
+		 sv_str(json_array_get(json_object_get(q, "waiting"), 0), "name"));
+	json_decref(q);
+	return name;
+}
+
+/* Click the button that sel_fmt, with %lld for the job id, selects. */
+static void click_job(struct browser *b, const char *sel_fmt, long long id)
+{
+	char sel[300], js[400];
+
+	snprintf(sel, sizeof(sel), sel_fmt, id);
+	snprintf(js, sizeof(js), CLICK_WHEN_THERE("%s", "1"), sel);
+	json_decref(browser_until(b, js, 5));
+}
 
 /* Start a browser on the page of np with key; false (test skipped) without
  * chromium. */
@@ -141,7 +167,7 @@ START_TEST(test_page_acts)
 	struct node_proc np;
 	struct browser b;
 	struct resp r;
-	long long hold, next;
+	long long hold, next, later, requeued;
 	json_t *q, *v;
 
 	sv_write_config(&np, TWO_PRINTERS, 8);
@@ -173,10 +199,28 @@ START_TEST(test_page_acts)
 	sv_wait_state(np.port, "/p/ender", hold, "cancelled", 10);
 	expect_text(&b, MSG_ABOUT("cancel"), "cancel: done");
 
-	/* Confirm the bed clear: the queued job then prints. */
+	/* The queue: move a job up, cancel one, requeue it (a new job, last). */
+	later = sv_print_text(np.port, "", "later.gcode", "G28\n");
+	click_job(&b, ROW("mk3s", "li[data-job=\"%lld\"] button[data-action=move-up]"), later);
+	expect_text(&b, MSG_ABOUT("move"), "move-up: done");
+	ck_assert_str_eq(first_waiting(np.port), "later.gcode");
+	click_job(&b, ROW("mk3s", "td.queue li[data-job=\"%lld\"] button[data-action=cancel-queued]"), next);
+	sv_wait_state(np.port, "", next, "cancelled", 5);
+	click_job(&b, ROW("mk3s", "td.recent li[data-job=\"%lld\"] button[data-action=requeue]"), next);
+	expect_text(&b, MSG_ABOUT("requeue"), "requeue: done");
+	q = sv_get_json(np.port, "/api/stratum/queue");
+	ck_assert_str_eq(sv_str(json_array_get(json_object_get(q, "waiting"), 1), "name"),
+			 "next.gcode");
+	requeued = json_integer_value(json_object_get(json_array_get(json_object_get(q, "waiting"),
+								     1), "id"));
+	json_decref(q);
+
+	/* Confirm the bed clear: the first queued job prints (and homes: the
+	 * requeued one waits for the next confirmation). */
 	json_decref(
 		browser_until(&b, CLICK_TWICE(ROW("mk3s", "button[data-action=bed-clear]")), 5));
-	sv_wait_state(np.port, "", next, "done", 10);
+	sv_wait_state(np.port, "", later, "done", 10);
+	ck_assert_str_eq(sv_job_state(np.port, "", requeued, NULL), "queued");
 
 	/* Upload to ender and print: the form posts the multipart upload. */
 	json_decref(browser_eval(&b, "(function () {"
