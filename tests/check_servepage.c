@@ -204,9 +204,11 @@ START_TEST(test_page_acts)
 	click_job(&b, ROW("mk3s", "li[data-job=\"%lld\"] button[data-action=move-up]"), later);
 	expect_text(&b, MSG_ABOUT("move"), "move-up: done");
 	ck_assert_str_eq(first_waiting(np.port), "later.gcode");
-	click_job(&b, ROW("mk3s", "td.queue li[data-job=\"%lld\"] button[data-action=cancel-queued]"), next);
+	click_job(&b, ROW("mk3s", "td.queue li[data-job=\"%lld\"] button[data-action=cancel-queued]"),
+		  next);
 	sv_wait_state(np.port, "", next, "cancelled", 5);
-	click_job(&b, ROW("mk3s", "td.recent li[data-job=\"%lld\"] button[data-action=requeue]"), next);
+	click_job(&b, ROW("mk3s", "td.recent li[data-job=\"%lld\"] button[data-action=requeue]"),
+		  next);
 	expect_text(&b, MSG_ABOUT("requeue"), "requeue: done");
 	q = sv_get_json(np.port, "/api/stratum/queue");
 	ck_assert_str_eq(sv_str(json_array_get(json_object_get(q, "waiting"), 1), "name"),
