@@ -161,7 +161,8 @@ START_TEST(test_page_shows)
 }
 END_TEST
 
-/* With a control key: cancel, bed clear and the upload form act through the API. */
+/* With a control key: pause, resume, cancel, the queue, bed clear and the
+ * upload form act through the API. */
 START_TEST(test_page_acts)
 {
 	struct node_proc np;
@@ -193,6 +194,14 @@ START_TEST(test_page_acts)
 	v = browser_eval(&b, "!!" ROW("mk3s", "button[data-action=pause]"));
 	ck_assert(json_is_false(v));
 	json_decref(v);
+
+	/* Pause and resume the running job, each as the API then reports it. */
+	json_decref(browser_until(&b, CLICK_WHEN_THERE(ROW("ender", "button[data-action=pause]"),
+						       "1"), 5));
+	sv_wait_state(np.port, "/p/ender", hold, "paused", 5);
+	json_decref(browser_until(&b, CLICK_WHEN_THERE(ROW("ender", "button[data-action=resume]"),
+						       "1"), 5));
+	sv_wait_state(np.port, "/p/ender", hold, "printing", 5);
 
 	/* Cancel the running job: two clicks, then the API says cancelled. */
 	json_decref(browser_until(&b, CLICK_TWICE(ROW("ender", "button[data-action=cancel]")), 5));
