@@ -162,7 +162,8 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 			: p->gcode_flavor == PROFILE_FLAVOR_REPETIER	   ? GCODEW_ACCEL_M201_M202
 									   : GCODEW_ACCEL_M204_S;
 	/* Lines where the firmware has no arcs (profile_unsupported says so). */
-	g->arc_fitting = !strcmp(p->arc_fitting, "emit_center") && prof_flavor_arcs(p->gcode_flavor);
+	g->arc_fitting =
+	    !strcmp(p->arc_fitting, "emit_center") && prof_flavor_arcs(p->gcode_flavor);
 	limits_from_profile(p, &g->limits);
 	g->limits_form = limits_form(p);
 	g->min_extruding_rate = p->machine_min_extruding_rate;

@@ -302,8 +302,9 @@ static int arc_start(struct gcwalk *w, const struct gcode_line *l, const double 
 					    line, GCWALK_COORD_MAX);
 	a->rvec[0] = -off[0];
 	a->rvec[1] = -off[1];
+	bool back = to[0] == w->pos[0] && to[1] == w->pos[1]; /* a whole circle */
 	double ang = st_arc_sweep(a->rvec[0], a->rvec[1], to[0] - a->centre[0],
-				  to[1] - a->centre[1], cw, to[0] == w->pos[0] && to[1] == w->pos[1]);
+				  to[1] - a->centre[1], cw, back);
 	ang += (cw ? -2 * M_PI : 2 * M_PI) * circles;
 	double flat = hypot(off[0], off[1]) * fabs(ang), dz = to[2] - w->pos[2];
 	a->nseg = st_arc_segments(hypot(flat, dz));

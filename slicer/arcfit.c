@@ -18,8 +18,8 @@
 #include "simplify.h"
 #include "st_grow.h"
 
-#define GN_STEPS 4	 /* Gauss-Newton refinements of the centre */
-#define ANGLE_EPS 1e-7	 /* rad: the polyline's turning must equal the arc's */
+#define GN_STEPS 4     /* Gauss-Newton refinements of the centre */
+#define ANGLE_EPS 1e-7 /* rad: the polyline's turning must equal the arc's */
 
 /* Point k of xy, as doubles relative to (cx, cy). */
 static inline void rel(const int64_t *xy, size_t k, double cx, double cy, double *x, double *y)
@@ -141,8 +141,8 @@ static bool fit(const int64_t *xy, size_t i, size_t j, double lim, struct arcfit
 	dev = arcfit_deviation(xy, i, j, cx, cy, side < 0, &sweep);
 	if (!(dev <= lim))
 		return false;
-	*a = (struct arcfit_arc){.first = i, .last = j, .cx = cx, .cy = cy, .radius = a->radius,
-				 .sweep = sweep};
+	*a = (struct arcfit_arc){
+	    .first = i, .last = j, .cx = cx, .cy = cy, .radius = a->radius, .sweep = sweep};
 	return true;
 }
 

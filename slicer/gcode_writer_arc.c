@@ -26,8 +26,11 @@ int gcodew_arcs_run(struct gcodew *w, size_t i, size_t j, double tol,
 			w->smv[2 * k] = w->sxy[2 * k];
 			w->smv[2 * k + 1] = w->sxy[2 * k + 1];
 		}
-		w->sarc[f] = (struct gcodew_arcseg){.arc = true, .ccw = a->sweep > 0, .cx = a->cx,
-						     .cy = a->cy, .len = a->radius * fabs(a->sweep)};
+		w->sarc[f] = (struct gcodew_arcseg){.arc = true,
+						    .ccw = a->sweep > 0,
+						    .cx = a->cx,
+						    .cy = a->cy,
+						    .len = a->radius * fabs(a->sweep)};
 		prev = l;
 	}
 	if (rc == 0 && j > prev)

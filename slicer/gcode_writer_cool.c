@@ -52,8 +52,8 @@ static int layer_time(struct gcodew *w, const double start[EST_AXES], double f, 
 			e += o->e;
 		}
 		if (o->arc)
-			rc = gcodew_arc_estimate(p, from, (double[EST_AXES]){x, y, z, e}, o->cx, o->cy,
-						 o->ccw, v, w->err);
+			rc = gcodew_arc_estimate(p, from, (double[EST_AXES]){x, y, z, e}, o->cx,
+						 o->cy, o->ccw, v, w->err);
 		else
 			rc = est_planner_add(p, &(struct est_move){x, y, o->z, e, v}, w->err);
 	}
