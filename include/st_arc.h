@@ -35,6 +35,28 @@ static inline double st_arc_sweep(double rx, double ry, double tx, double ty, bo
 	return ang;
 }
 
+/*
+ * st_arc_r_offset - the centre, from the start, of an arc given by its
+ * radius r (R) to a target (dx, dy) from the start, as Marlin reads it:
+ * on the side the sign of r and the direction give, at the chord's
+ * midpoint when |r| is shorter than half the chord.  false (off left at
+ * 0) when r is 0 or the target is the start.
+ */
+static inline bool st_arc_r_offset(double dx, double dy, double r, bool cw, double off[2])
+{
+	double hx = dx / 2, hy = dy / 2, len = hypot(hx, hy);
+
+	off[0] = off[1] = 0;
+	if (r == 0 || len == 0)
+		return false;
+	double side = (cw != (r < 0)) ? -1 : 1, h2 = (r - len) * (r + len);
+	double h = h2 > 0 ? sqrt(h2) : 0;
+
+	off[0] = hx - hy / len * side * h;
+	off[1] = hy + hx / len * side * h;
+	return true;
+}
+
 /* st_arc_segments - the chords Marlin cuts an arc mm long (with its Z
  * travel) into: whole MM_PER_ARC_SEGMENTs, at least 1. */
 static inline unsigned st_arc_segments(double mm)

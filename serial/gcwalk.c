@@ -269,16 +269,7 @@ static int arc_start(struct gcwalk *w, const struct gcode_line *l, const double 
 	double off[2] = {0, 0}, r, circles = 0;
 
 	if (gcode_word_value(l, 'R', &r)) {
-		double d[2] = {(to[0] - w->pos[0]) / 2, (to[1] - w->pos[1]) / 2};
-		double len = hypot(d[0], d[1]);
-
-		if (r != 0 && len > 0) {
-			double side = (cw != (r < 0)) ? -1 : 1, h2 = (r - len) * (r + len);
-			double h = h2 > 0 ? sqrt(h2) : 0;
-
-			off[0] = d[0] - d[1] / len * side * h;
-			off[1] = d[1] + d[0] / len * side * h;
-		}
+		st_arc_r_offset(to[0] - w->pos[0], to[1] - w->pos[1], r, cw, off);
 	} else {
 		gcode_word_value(l, 'I', &off[0]);
 		gcode_word_value(l, 'J', &off[1]);
