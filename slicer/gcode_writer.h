@@ -277,7 +277,8 @@ struct gcodew_settings {
 	 * rest simplified as above; an arc is written as G2 (clockwise) or G3
 	 * with its centre as I J from its start, its filament the arc's
 	 * length times the run's flow (the run keeps its filament as above).
-	 * Travels stay lines, as PrusaSlicer's.  The estimate (and M73) times
+	 * Travels stay lines, as PrusaSlicer's, and so does the spiral vase's
+	 * transition layer (its flow ramp).  The estimate (and M73) times
 	 * an arc as Marlin prints it, in chords (st_arc.h).  Listed in the
 	 * header when set.  false (PrusaSlicer's disabled) */
 	bool arc_fitting;

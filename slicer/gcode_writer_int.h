@@ -111,6 +111,7 @@ struct gcodew {
 	struct path_point *spts; /* the kept points */
 	struct gcodew_arcseg *sarc; /* arc_fitting: the segment from the point */
 	struct arcfit_work afit;
+	bool no_arcs;		 /* the path being planned gets lines only */
 	size_t sxycap, smvcap, sbalcap, skeepcap, sidxcap, sstretchcap, sptscap, sarccap;
 	struct toolpath view;	 /* spts as a path of the original's role */
 
@@ -197,6 +198,12 @@ int gcodew_accel_written(const struct gcodew_settings *s, double v);
 /* Decide layer li's fan and slow its extrusions down if it is too fast;
  * start is the nozzle's position before the layer. */
 int gcodew_cool_layer(struct gcodew *w, size_t li, const double start[EST_AXES]);
+
+/* Whether the path being simplified is fitted with arcs (arc_fitting). */
+static inline bool gcodew_arcs(const struct gcodew *w)
+{
+	return w->s->arc_fitting && !w->no_arcs;
+}
 
 /* Point index of step k (0 .. n or n-1) of a path printed forwards or
  * reversed; a closed loop ends back at its seam. */

@@ -314,7 +314,7 @@ static int plan_segment(struct gcodew *w, const struct layer_paths *l, size_t li
 /* The arc from kept point f of the path being planned, or NULL for a line. */
 static const struct gcodew_arcseg *arc_at(const struct gcodew *w, bool simplified, size_t f)
 {
-	return simplified && w->s->arc_fitting && w->sarc[f].arc ? &w->sarc[f] : NULL;
+	return simplified && gcodew_arcs(w) && w->sarc[f].arc ? &w->sarc[f] : NULL;
 }
 
 /* PrusaSlicer 2.5's acceleration for a path of role on layer li (0-based):
@@ -440,9 +440,14 @@ static int plan_spiral(struct gcodew *w, const struct layer_paths *l, size_t li)
 	double h = l->height, z0 = l->z - h, speed = path_speed(w->s, p, li);
 	double total = 0, done = 0, best = INFINITY;
 	size_t first = 0;
-	int rc = gcodew_simplify_path(w, p, &q);
-	bool simplified = q != p;
+	int rc;
+	bool simplified;
 
+	/* The transition layer's flow rises along the loop, point by point:
+	 * lines only, so the ramp is not one arc long. */
+	w->no_arcs = !w->spiral_below;
+	rc = gcodew_simplify_path(w, p, &q);
+	simplified = q != p;
 	if (rc)
 		return rc;
 	for (size_t k = 0; k < p->n; k++) {
@@ -482,6 +487,7 @@ static int plan_spiral(struct gcodew *w, const struct layer_paths *l, size_t li)
 				  arc_at(w, simplified, a), false);
 	}
 	w->layer_z = l->z;
+	w->no_arcs = false;
 	if (rc == 0 && w->s->wipe && w->s->arc_fitting)
 		rc = record_wipe(w, p, false, p->n + 1, simplified ? w->sidx[first] : first);
 	else if (rc == 0 && w->s->wipe)

@@ -54,7 +54,7 @@ static double kept_length(const struct gcodew *w, size_t i, size_t j)
 
 	for (size_t a = i, b = i + 1; b <= j; b++)
 		if (w->skeep[b]) {
-			if (w->s->arc_fitting && w->sarc[a].arc)
+			if (gcodew_arcs(w) && w->sarc[a].arc)
 				len += w->sarc[a].len;
 			else
 				len += hypot((double)(xy[2 * b] - xy[2 * a]),
@@ -100,7 +100,7 @@ static int mark_run(struct gcodew *w, size_t i, size_t j, double tol)
 	size_t kept = 0;
 	int rc;
 
-	if (w->s->arc_fitting) {
+	if (gcodew_arcs(w)) {
 		for (size_t k = i; k <= j; k++)
 			w->sarc[k].arc = false;
 		rc = gcodew_arcs_run(w, i, j, tol, mark_lines);
@@ -118,7 +118,7 @@ static int mark_run(struct gcodew *w, size_t i, size_t j, double tol)
 		 * smaller than the tolerance): kept as it is. */
 		for (size_t k = i; k <= j; k++)
 			w->skeep[k] = true;
-		if (w->s->arc_fitting)
+		if (gcodew_arcs(w))
 			for (size_t k = i; k <= j; k++)
 				w->sarc[k].arc = false;
 		memcpy(w->smv + 2 * i, w->sxy + 2 * i, 2 * (j - i + 1) * sizeof(*w->smv));
@@ -157,7 +157,7 @@ int gcodew_simplify_path(struct gcodew *w, const struct toolpath *p, const struc
 	GROW(sidx, m);
 	GROW(sstretch, m);
 	GROW(spts, m);
-	if (w->s->arc_fitting)
+	if (gcodew_arcs(w))
 		GROW(sarc, m);
 	for (size_t k = 0; k < m; k++) {
 		w->sxy[2 * k] = p->pts[k % p->n].x;
@@ -179,7 +179,7 @@ int gcodew_simplify_path(struct gcodew *w, const struct toolpath *p, const struc
 			w->spts[c].y = w->smv[2 * k + 1];
 			w->sidx[c] = k;
 			w->sstretch[c] = w->sstretch[k];
-			if (w->s->arc_fitting)
+			if (gcodew_arcs(w))
 				w->sarc[c] = w->sarc[k];
 			c++;
 		}

@@ -422,6 +422,32 @@ START_TEST(arcs_only_where_the_firmware_takes_them)
 }
 END_TEST
 
+/* A spiral vase gets one helical arc a layer, but its transition layer,
+ * whose flow rises from nothing along the loop, stays lines: the filament
+ * is the same as without arcs (an arc there would carry full flow). */
+START_TEST(spiral_vase_arcs_keep_the_ramp)
+{
+	static char out[1 << 14];
+	char *on = slice_cylinder_for(6, "generic-marlin",
+				      "--set spiral_vase=1 --set arc_fitting=emit_center "
+				      "--set use_relative_e_distances=0",
+				      out, sizeof(out));
+	char *off = slice_cylinder_for(6, "generic-marlin",
+				       "--set spiral_vase=1 --set use_relative_e_distances=0", out,
+				       sizeof(out));
+	struct tu_moves r1 = tu_read_moves(on), r0 = tu_read_moves(off);
+	double e1 = tu_moves_e(&r1, NULL), e0 = tu_moves_e(&r0, NULL);
+
+	ck_assert_msg(r1.arcs >= 10 && r1.g1 + r1.arcs < r0.g1 / 2, "%zu arcs, %zu G1, %zu without",
+		      r1.arcs, r1.g1, r0.g1);
+	ck_assert_msg(fabs(e1 - e0) < 1e-4 * e0, "%.4f mm of filament, %.4f without arcs", e1, e0);
+	free(r0.m);
+	free(r1.m);
+	free(on);
+	free(off);
+}
+END_TEST
+
 void gcodewriter_arcfit_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("arcfit");
@@ -433,6 +459,7 @@ void gcodewriter_arcfit_tcases(Suite *s)
 	tcase_add_test(tc, writer_arcs_bound_filament_time);
 	tcase_add_test(tc, off_is_output_before);
 	tcase_add_test(tc, arcs_only_where_the_firmware_takes_them);
+	tcase_add_test(tc, spiral_vase_arcs_keep_the_ramp);
 	tcase_set_timeout(tc, 60);
 	suite_add_tcase(s, tc);
 }
