@@ -2,9 +2,11 @@
  * gcode_writer_int.h - what the G-code writer's parts share:
  * gcode_writer.c (emission and the writer's life), gcode_writer_config.c
  * (the settings table: defaults, checks, placeholders, the header),
- * gcode_writer_plan.c (a layer's paths into moves) and
- * gcode_writer_cool.c (fan and slow-down per layer); nothing else
- * includes it.  The contract is gcode_writer.h.
+ * gcode_writer_plan.c (a layer's paths into moves),
+ * gcode_writer_cool.c (fan and slow-down per layer), gcode_writer_simplify.c
+ * and gcode_writer_arc.c (gcode_resolution, arc_fitting) and
+ * gcode_writer_progress.c (M73); nothing else includes it.  The contract
+ * is gcode_writer.h.
  */
 #ifndef STRATUM_SLICER_GCODE_WRITER_INT_H
 #define STRATUM_SLICER_GCODE_WRITER_INT_H
