@@ -1,8 +1,10 @@
 /*
  * st_arc.h - how Marlin draws a G2/G3 arc (motion/G2_G3.cpp, ARC_SUPPORT):
  * as chords of MM_PER_ARC_SEGMENT, Z and E spread evenly over them, the
- * last one ending on the target.  Shared by whatever reads or times arcs:
- * the G-code walker (serial/gcwalk.h), the simulated Marlin and the
+ * last one ending on the target (Marlin 1.1 and 2.0; 2.1 also cuts at
+ * least MIN_CIRCLE_SEGMENTS, 72, to a circle, which is not modelled here).
+ * Shared by whatever reads or times arcs: the G-code walker
+ * (serial/gcwalk.h), the simulated Marlin, the X3G translator and the
  * G-code writer's time estimate (slicer/gcode_writer.h).
  */
 #ifndef STRATUM_ST_ARC_H
