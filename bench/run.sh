@@ -231,11 +231,12 @@ for f in cube20 cylinder20 wall2 wall-eps plate-holes overhang bridge; do
 done
 }
 
-# lines_bytes_rate FILE -> "lines bytes mean peak": G1 lines per second of
-# print (the file's "; estimated printing time", stratum's or PrusaSlicer's
-# "(normal mode)" one), and the most G1 lines within one second of XY
-# motion at the feed rates written (no acceleration, so the time is short
-# and the peak an upper figure; the same rule for both slicers).
+# lines_bytes_rate FILE -> "lines bytes mean peak": move lines (G1, G2,
+# G3) per second of print (the file's "; estimated printing time",
+# stratum's or PrusaSlicer's "(normal mode)" one), and the most move lines
+# within one second of XY motion at the feed rates written, an arc's along
+# its length (no acceleration, so the time is short and the peak an upper
+# figure; the same rule for both slicers).
 lines_bytes_rate() {
 	moves=$(grep -c '^G[123] ' "$1" || true)
 	secs=$(grep -m1 'estimated printing time' "$1" | sed 's/.*= *//' |
