@@ -1,0 +1,384 @@
+/*
+ * check_servemqtt.c - the farm node on an MQTT broker that others share
+ * (docs/serve.md "MQTT"), part of the serve suite: commands run only with a
+ * key with the control role or signed with one, a second node of one name
+ * is refused, the broker's credentials and TLS, downloads only from the
+ * configured hosts (redirects too), and the broker examples of the docs
+ * loaded by mosquitto.  Each test runs its own mosquitto on loopback.
+ */
+#include <check.h>
+#include <openssl/evp.h>
+#include <openssl/hmac.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "mqtttest.h"
+#include "servetest.h"
+#include "suites.h"
+#include "testutil.h"
+
+#define CMD_TOPIC "stratum/test-node/mk3s/cmd"
+#define RESULT_TOPIC "stratum/test-node/mk3s/result"
+#define ONE_PRINTER "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = test-instant\n"
+
+/* Whether mosquitto is here (make deps installs it); prints why not. */
+static bool have_broker(const char *test)
+{
+	if (!access(MOSQUITTO_BIN, X_OK))
+		return true;
+	printf("serve: %s skipped: %s is not installed (make deps)\n", test, MOSQUITTO_BIN);
+	return false;
+}
+
+/* An anonymous broker on a free port; its port in *port. */
+static pid_t open_broker(int *port)
+{
+	char conf[256];
+
+	*port = free_port();
+	snprintf(conf, sizeof(conf), "listener %d 127.0.0.1\nallow_anonymous true\n"
+				     "persistence false\n", *port);
+	return broker_start(*port, conf);
+}
+
+/* np's config: one test-instant printer and [mqtt] on the broker at port
+ * with the lines extra. */
+static void write_mqtt_config(struct node_proc *np, int port, const char *extra)
+{
+	char text[2048];
+
+	snprintf(text, sizeof(text), ONE_PRINTER "\n[mqtt]\nhost = 127.0.0.1\nport = %d\n"
+					       "keepalive = 5\n%s", port, extra);
+	sv_write_config(np, text, 8);
+}
+
+/* A broker, the node on it with the [mqtt] lines extra, and a client
+ * watching the node's topics, once the node says it is online. */
+static pid_t node_on_broker(struct node_proc *np, int *port, const char *extra,
+			    struct mqtt_seen *seen, struct mosquitto **mq)
+{
+	pid_t broker = open_broker(port);
+
+	write_mqtt_config(np, *port, extra);
+	sv_start(np);
+	*mq = watch_start(seen, *port, NULL, NULL, "stratum/test-node/#");
+	wait_topic(seen, "stratum/test-node/status", "online", 10, NULL, 0);
+	return broker;
+}
+
+/* The signed form of the command text for topic, signed with secret as
+ * key name by. */
+static void sign(char *out, size_t cap, const char *topic, const char *text, const char *by,
+		 const char *secret)
+{
+	unsigned char mac[32];
+	unsigned int len = 0;
+	char msg[1024], hex[65];
+	json_t *env;
+	char *dump;
+
+	snprintf(msg, sizeof(msg), "%s\n%s", topic, text);
+	HMAC(EVP_sha256(), secret, (int)strlen(secret), (const unsigned char *)msg, strlen(msg), mac,
+	     &len);
+	ck_assert_uint_eq(len, 32);
+	for (int i = 0; i < 32; i++)
+		snprintf(hex + 2 * i, 3, "%02x", mac[i]);
+	env = json_pack("{s:s,s:s,s:s}", "signed", text, "by", by, "hmac", hex);
+	dump = json_dumps(env, JSON_COMPACT);
+	snprintf(out, cap, "%s", dump);
+	free(dump);
+	json_decref(env);
+}
+
+/* Send payload and wait for its answer, which must contain want; the answer in out. */
+static void command(struct mosquitto *mq, struct mqtt_seen *seen, const char *payload,
+		    const char *want, char *out, size_t cap)
+{
+	watch_send(mq, CMD_TOPIC, payload);
+	wait_topic(seen, RESULT_TOPIC, want, 10, out, cap);
+}
+
+/* Commands without a key, with a wrong one, with one lacking the control
+ * role, signed wrongly, late or for another topic are refused (and use up
+ * no id); a control key or a good signature runs them.  No key is logged. */
+START_TEST(test_mqtt_command_keys)
+{
+	struct node_proc np;
+	struct mqtt_seen seen;
+	struct mosquitto *mq;
+	char out[2048], cmd[1024], text[512];
+	int bport;
+	pid_t broker;
+	long long id;
+	size_t len;
+	char *log;
+
+	if (!have_broker("MQTT command keys"))
+		return;
+	broker = node_on_broker(&np, &bport, "", &seen, &mq);
+	id = sv_print_text(np.port, "", "hold.gcode", "G28\nG4 P20000\nG1 X5\n");
+	sv_wait_state(np.port, "", id, "printing", 10);
+
+	command(mq, &seen, "{\"id\":\"k-1\",\"command\":\"pause\"}", "\"k-1\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "\"ok\":false") && strstr(out, "a key with the control role is "
+								 "needed"), "%s", out);
+	command(mq, &seen, "{\"id\":\"k-2\",\"command\":\"pause\",\"key\":\"wrong-key-0123456789\"}",
+		"\"k-2\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "the key is not a key of this node"), "%s", out);
+	ck_assert_msg(!strstr(out, "wrong-key"), "the answer holds the key: %s", out);
+	command(mq, &seen, "{\"id\":\"k-3\",\"command\":\"pause\",\"key\":\"" KEY_UP "\"}", "\"k-3\"",
+		out, sizeof(out));
+	ck_assert_msg(strstr(out, "the key lacks the control role"), "%s", out);
+	command(mq, &seen, "{\"id\":\"k-4\",\"command\":\"pause\",\"key\":\"" KEY_READ "\"}",
+		"\"k-4\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "the key lacks the control role"), "%s", out);
+	/* Signed: with the wrong secret, too late, for another printer's topic. */
+	snprintf(text, sizeof(text), "{\"id\":\"k-5\",\"command\":\"pause\",\"time\":%lld}",
+		 (long long)time(NULL));
+	sign(cmd, sizeof(cmd), CMD_TOPIC, text, "operator", "not-the-operator-key-01");
+	command(mq, &seen, cmd, "\"k-5\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "the signature does not match a key of this node"), "%s", out);
+	snprintf(text, sizeof(text), "{\"id\":\"k-6\",\"command\":\"pause\",\"time\":%lld}",
+		 (long long)time(NULL) - 1000);
+	sign(cmd, sizeof(cmd), CMD_TOPIC, text, "operator", KEY_CTL);
+	command(mq, &seen, cmd, "\"k-6\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "a signed command is taken within 300 s"), "%s", out);
+	snprintf(text, sizeof(text), "{\"id\":\"k-7\",\"command\":\"pause\",\"time\":%lld}",
+		 (long long)time(NULL));
+	sign(cmd, sizeof(cmd), "stratum/test-node/ender/cmd", text, "operator", KEY_CTL);
+	command(mq, &seen, cmd, "\"k-7\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "the signature does not match"), "%s", out);
+	snprintf(text, sizeof(text), "{\"id\":\"k-8\",\"command\":\"pause\",\"time\":%lld}",
+		 (long long)time(NULL));
+	sign(cmd, sizeof(cmd), CMD_TOPIC, text, "slicer", KEY_UP);
+	command(mq, &seen, cmd, "\"k-8\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "the key lacks the control role"), "%s", out);
+	ck_assert_str_eq(sv_job_state(np.port, "", id, NULL), "printing");
+
+	/* The control key: k-1 runs now, its refusal used up nothing. */
+	command(mq, &seen, "{\"id\":\"k-1\",\"command\":\"pause\",\"key\":\"" KEY_CTL "\"}",
+		"\"ok\":true", out, sizeof(out));
+	ck_assert_msg(strstr(out, "\"k-1\"") && strstr(out, "\"duplicate\":false"), "%s", out);
+	sv_wait_state(np.port, "", id, "paused", 10);
+	/* Signed with the control key; the same message again is a duplicate. */
+	snprintf(text, sizeof(text), "{\"id\":\"k-9\",\"command\":\"resume\",\"time\":%lld}",
+		 (long long)time(NULL));
+	sign(cmd, sizeof(cmd), CMD_TOPIC, text, "operator", KEY_CTL);
+	command(mq, &seen, cmd, "\"k-9\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "\"ok\":true"), "%s", out);
+	sv_wait_state(np.port, "", id, "printing", 10);
+	command(mq, &seen, cmd, "\"duplicate\":true", out, sizeof(out));
+	command(mq, &seen, "{\"id\":\"k-10\",\"command\":\"cancel\",\"key\":\"" KEY_CTL "\"}",
+		"\"k-10\"", out, sizeof(out));
+	sv_wait_state(np.port, "", id, "cancelled", 10);
+
+	watch_stop(mq, &seen);
+	sv_stop(&np);
+	log = tu_slurp(np.log, &len);
+	ck_assert_msg(strstr(log, "mqtt: command pause (id k-2) refused: the key is not a key of "
+				  "this node"), "%s", log);
+	ck_assert_msg(!strstr(log, "wrong-key") && !strstr(log, KEY_UP) && !strstr(log, KEY_CTL) &&
+			      !strstr(log, KEY_READ),
+		      "a key is in the log: %s", log);
+	free(log);
+	broker_stop(broker);
+}
+END_TEST
+
+/* A second node with a name another node holds on the broker is refused
+ * (exit 65) without knocking the first off or opening its printers; a
+ * stale "online" with no node behind it does not block the name. */
+START_TEST(test_mqtt_same_name)
+{
+	struct node_proc np;
+	struct mqtt_seen seen;
+	struct mosquitto *mq;
+	char out[4096], text[1024], dir[512], conf[600];
+	int bport, rc;
+	pid_t broker;
+	size_t len;
+	char *log;
+
+	if (!have_broker("MQTT same name"))
+		return;
+	broker = node_on_broker(&np, &bport, "", &seen, &mq);
+	/* The same name from another config and data directory. */
+	snprintf(dir, sizeof(dir), "%s", tu_path("second"));
+	mkdir(dir, 0700);
+	snprintf(conf, sizeof(conf), "%s/node.ini", dir);
+	snprintf(text, sizeof(text), "[node]\nname = test-node\nlisten = 127.0.0.1:0\n"
+				     "data_dir = data\n[key k]\nkey = " KEY_CTL "\nroles = control\n"
+				     ONE_PRINTER "[mqtt]\nhost = 127.0.0.1\nport = %d\n", bport);
+	tu_write_str(conf, text);
+	chmod(conf, 0600);
+	rc = tu_run(out, sizeof(out), "serve --config '%s'", conf);
+	ck_assert_msg(rc == 65, "exit %d: %s", rc, out);
+	ck_assert_msg(strstr(out, "mqtt: another node named test-node is connected to the broker "
+				  "127.0.0.1:") && strstr(out, "give this node another name"),
+		      "%s", out);
+	ck_assert_msg(!strstr(out, "test-instant"), "the refused node opened its printer: %s", out);
+	/* The first node was never off the broker and still answers commands. */
+	command(mq, &seen, "{\"id\":\"n-1\",\"command\":\"pause\",\"key\":\"" KEY_CTL "\"}",
+		"\"n-1\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "no job"), "%s", out);
+	sv_stop(&np);
+	log = tu_slurp(np.log, &len);
+	ck_assert_msg(!strstr(log, "connection lost"), "%s", log);
+	ck_assert_msg(strstr(log, "a node asked whether the name test-node is held"), "%s", log);
+	free(log);
+	/* Stopped cleanly: offline.  A stale online (a node the broker has not yet
+	 * seen die) delays the start by the ping's wait only. */
+	wait_topic(&seen, "stratum/test-node/status", "offline", 10, NULL, 0);
+	ck_assert_int_eq(mosquitto_publish(mq, NULL, "stratum/test-node/status", 6, "online", 1,
+					   true), 0);
+	wait_topic(&seen, "stratum/test-node/status", "online", 10, NULL, 0);
+	sv_start(&np);
+	wait_topic(&seen, "stratum/test-node/mk3s/status", "Operational", 10, NULL, 0);
+	sv_stop(&np);
+	log = tu_slurp(np.log, &len);
+	ck_assert_msg(strstr(log, "no node answered; taking the name"), "%s", log);
+	free(log);
+	watch_stop(mq, &seen);
+	broker_stop(broker);
+}
+END_TEST
+
+/* A broker that requires a user name and password: the right ones connect;
+ * a wrong password refuses the start (65) without printing it, and the
+ * config holding it is named when others can read it. */
+START_TEST(test_mqtt_password)
+{
+	struct node_proc np;
+	struct mqtt_seen seen;
+	struct mosquitto *mq;
+	char out[4096], conf[1024], passwd[512];
+	int bport, rc;
+	pid_t broker;
+	size_t len;
+	char *log;
+
+	if (!have_broker("MQTT password"))
+		return;
+	if (access("/usr/bin/mosquitto_passwd", X_OK)) {
+		printf("serve: MQTT password test skipped: no /usr/bin/mosquitto_passwd\n");
+		return;
+	}
+	bport = free_port();
+	snprintf(passwd, sizeof(passwd), "%s", tu_path("broker.passwd"));
+	rc = tu_sh(out, sizeof(out), "mosquitto_passwd -c -b '%s' test-node node-pass-123 && "
+				     "mosquitto_passwd -b '%s' watcher watch-pass-123", passwd, passwd);
+	ck_assert_msg(rc == 0, "%s", out);
+	snprintf(conf, sizeof(conf), "listener %d 127.0.0.1\nallow_anonymous false\n"
+				     "password_file %s\npersistence false\n", bport, passwd);
+	broker = broker_start(bport, conf);
+	mq = watch_start(&seen, bport, "watcher", "watch-pass-123", "stratum/test-node/#");
+
+	write_mqtt_config(&np, bport, "username = test-node\npassword = not-the-pass-99\n");
+	chmod(np.config, 0644);
+	rc = tu_run(out, sizeof(out), "serve --config '%s'", np.config);
+	ck_assert_msg(rc == 65, "exit %d: %s", rc, out);
+	ck_assert_msg(strstr(out, "mqtt: the broker 127.0.0.1:") &&
+			      strstr(out, "refused the connection: Connection Refused: not "
+					  "authorised"), "%s", out);
+	ck_assert_msg(strstr(out, "holds API keys and the MQTT password and can be read by other "
+				  "users (mode 0644)"), "%s", out);
+	ck_assert_msg(!strstr(out, "not-the-pass-99"), "the password is printed: %s", out);
+	write_mqtt_config(&np, bport, "");
+	rc = tu_run(out, sizeof(out), "serve --config '%s'", np.config);
+	ck_assert_msg(rc == 65 && strstr(out, "not authorised"), "exit %d: %s", rc, out);
+
+	write_mqtt_config(&np, bport, "username = test-node\npassword = node-pass-123\n");
+	sv_start(&np);
+	wait_topic(&seen, "stratum/test-node/status", "online", 10, NULL, 0);
+	wait_topic(&seen, "stratum/test-node/mk3s/status", "Operational", 10, NULL, 0);
+	sv_stop(&np);
+	log = tu_slurp(np.log, &len);
+	ck_assert_msg(!strstr(log, "node-pass-123"), "the password is logged: %s", log);
+	free(log);
+	watch_stop(mq, &seen);
+	broker_stop(broker);
+}
+END_TEST
+
+/* enqueue downloads nothing by default, and then only from the hosts of
+ * download_hosts: another host, another port, or a redirect to either is
+ * refused before any byte is fetched from it. */
+START_TEST(test_mqtt_downloads)
+{
+	struct node_proc np;
+	struct file_server allowed, other;
+	struct mqtt_seen seen;
+	struct mosquitto *mq;
+	char out[2048], cmd[1024], extra[256], redirect[256];
+	int bport;
+	pid_t broker;
+
+	if (!have_broker("MQTT downloads"))
+		return;
+	file_server_start(&allowed, "G28\nG1 X5\n");
+	file_server_start(&other, "G28\n");
+	broker = node_on_broker(&np, &bport, "", &seen, &mq);
+#define ENQUEUE(id, port, file)                                                               \
+	snprintf(cmd, sizeof(cmd), "{\"id\":\"" id "\",\"command\":\"enqueue\",\"key\":\"" KEY_CTL  \
+		 "\",\"url\":\"http://%s/" file "\"}", port)
+	snprintf(extra, sizeof(extra), "127.0.0.1:%d", allowed.port);
+	ENQUEUE("d-1", extra, "part.gcode");
+	command(mq, &seen, cmd, "\"d-1\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "downloads are off: [mqtt] download_hosts lists no host"), "%s",
+		      out);
+	ck_assert_int_eq(allowed.served, 0);
+	sv_stop(&np);
+
+	snprintf(extra, sizeof(extra), "download_hosts = localhost, 127.0.0.1:%d\n", allowed.port);
+	write_mqtt_config(&np, bport, extra);
+	sv_start(&np);
+	wait_topic(&seen, "stratum/test-node/status", "online", 10, NULL, 0);
+	snprintf(extra, sizeof(extra), "127.0.0.1:%d", other.port);
+	ENQUEUE("d-2", extra, "part.gcode");
+	command(mq, &seen, cmd, "\"d-2\"", out, sizeof(out));
+	snprintf(extra, sizeof(extra), "127.0.0.1:%d is not in [mqtt] download_hosts", other.port);
+	ck_assert_msg(strstr(out, extra), "%s", out);
+	/* a bare host name allows the scheme's own port (80) only */
+	snprintf(extra, sizeof(extra), "localhost:%d", other.port);
+	ENQUEUE("d-3", extra, "part.gcode");
+	command(mq, &seen, cmd, "\"d-3\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "is not in [mqtt] download_hosts"), "%s", out);
+	/* a redirect from the allowed host to another is checked before it is followed */
+	snprintf(redirect, sizeof(redirect), "http://127.0.0.1:%d/evil.gcode", other.port);
+	allowed.redirect = redirect;
+	snprintf(extra, sizeof(extra), "127.0.0.1:%d", allowed.port);
+	ENQUEUE("d-4", extra, "part.gcode");
+	command(mq, &seen, cmd, "\"d-4\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "redirected to http://127.0.0.1:") &&
+			      strstr(out, "is not in [mqtt] download_hosts"), "%s", out);
+	ck_assert_int_eq(allowed.served, 1);
+	ck_assert_int_eq(other.served, 0);
+	allowed.redirect = NULL;
+	ENQUEUE("d-5", extra, "part.gcode");
+	command(mq, &seen, cmd, "\"d-5\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "\"ok\":true") && strstr(out, "\"job\":"), "%s", out);
+	ck_assert_int_eq(allowed.served, 2);
+#undef ENQUEUE
+	watch_stop(mq, &seen);
+	sv_stop(&np);
+	file_server_stop(&allowed);
+	file_server_stop(&other);
+	broker_stop(broker);
+}
+END_TEST
+
+void serve_mqtt_tcases(Suite *s)
+{
+	TCase *tc = tcase_create("mqtt");
+
+	tcase_set_timeout(tc, 60);
+	tcase_add_test(tc, test_mqtt_command_keys);
+	tcase_add_test(tc, test_mqtt_same_name);
+	tcase_add_test(tc, test_mqtt_password);
+	tcase_add_test(tc, test_mqtt_downloads);
+	suite_add_tcase(s, tc);
+}
