@@ -371,6 +371,121 @@ START_TEST(test_mqtt_downloads)
 }
 END_TEST
 
+/* Every occurrence of from in text replaced by to, into out (cap bytes). */
+static void replace_all(char *out, size_t cap, const char *text, const char *from, const char *to)
+{
+	size_t used = 0, fl = strlen(from);
+	const char *at;
+
+	while ((at = strstr(text, from)) != NULL) {
+		used += (size_t)snprintf(out + used, cap - used, "%.*s%s", (int)(at - text), text, to);
+		ck_assert(used < cap);
+		text = at + fl;
+	}
+	used += (size_t)snprintf(out + used, cap - used, "%s", text);
+	ck_assert(used < cap);
+}
+
+/* The broker of docs/serve.md ("What the broker must restrict"), its two
+ * files as they stand there: the node connects over TLS with its password,
+ * the controller's signed command is answered, another node's user cannot
+ * command it; the broker's host name is checked unless tls_insecure = 1. */
+START_TEST(test_mqtt_broker_example)
+{
+	static char doc[1 << 17], doc2[1 << 17];
+	struct node_proc np;
+	struct mqtt_seen seen, intruder_seen;
+	struct mosquitto *mq, *intruder;
+	char dir[512], etc[600], conf[4096], text[1024], cmd[1024], out[4096], ca[700];
+	const char *conf_doc, *acl_doc;
+	int bport, rc, results;
+	pid_t broker;
+	size_t len;
+	char *log;
+
+	if (!have_broker("MQTT broker example"))
+		return;
+	if (access("/usr/bin/mosquitto_passwd", X_OK) || access("/usr/bin/openssl", X_OK)) {
+		printf("serve: MQTT broker example test skipped: no mosquitto_passwd or openssl\n");
+		return;
+	}
+	conf_doc = tu_read_between("docs/serve.md", doc, sizeof(doc),
+				   "# /etc/mosquitto/conf.d/stratum.conf\n", "```");
+	acl_doc = tu_read_between("docs/serve.md", doc2, sizeof(doc2),
+				  "# /etc/mosquitto/stratum.acl\n", "```");
+	snprintf(dir, sizeof(dir), "%s", tu_path("etc-mosquitto"));
+	snprintf(etc, sizeof(etc), "%s/", dir);
+	rc = tu_sh(out, sizeof(out),
+		   "{ mkdir -p '%s/certs' && cd '%s/certs' && printf 'subjectAltName=IP:127.0.0.1\\n' "
+		   "> san.ext && openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 "
+		   "-nodes -keyout ca.key -out ca.crt -days 2 -subj /CN=test-ca && openssl req "
+		   "-newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes -keyout broker.key -out "
+		   "broker.csr -subj /CN=127.0.0.1 && openssl x509 -req -in broker.csr -CA ca.crt "
+		   "-CAkey ca.key -CAcreateserial -days 2 -extfile san.ext -out broker.crt && "
+		   "mosquitto_passwd -c -b ../stratum.passwd test-node node-pass-123 && "
+		   "mosquitto_passwd -b ../stratum.passwd controller ctl-pass-123 && "
+		   "mosquitto_passwd -b ../stratum.passwd farm-2 other-pass-123; }", dir, dir);
+	ck_assert_msg(rc == 0, "%s", out);
+	bport = free_port();
+	replace_all(text, sizeof(text), conf_doc, "/etc/mosquitto/", etc);
+	snprintf(cmd, sizeof(cmd), "listener %d 127.0.0.1", bport);
+	replace_all(conf, sizeof(conf), text, "listener 8883", cmd);
+	snprintf(text, sizeof(text), "%sstratum.acl", etc);
+	tu_write_str(text, acl_doc);
+	broker = broker_start(bport, conf);
+	snprintf(ca, sizeof(ca), "%scerts/ca.crt", etc);
+	mq = watch_start_tls(&seen, bport, "controller", "ctl-pass-123", "stratum/#", ca);
+
+	snprintf(text, sizeof(text), "username = test-node\npassword = node-pass-123\ntls = 1\n"
+				     "ca_file = %s\n", ca);
+	write_mqtt_config(&np, bport, text);
+	sv_start(&np);
+	wait_topic(&seen, "stratum/test-node/status", "online", 10, NULL, 0);
+	/* Another node's user publishes a command with a good key: the broker drops it. */
+	intruder = watch_start_tls(&intruder_seen, bport, "farm-2", "other-pass-123",
+				   "stratum/farm-2/#", ca);
+	watch_send(intruder, CMD_TOPIC, "{\"id\":\"x-1\",\"command\":\"pause\",\"key\":\"" KEY_CTL
+					"\"}");
+	usleep(300000);
+	pthread_mutex_lock(&seen.mu);
+	results = seen.results;
+	pthread_mutex_unlock(&seen.mu);
+	snprintf(text, sizeof(text), "{\"id\":\"x-2\",\"command\":\"pause\",\"time\":%lld}",
+		 (long long)time(NULL));
+	sign(cmd, sizeof(cmd), CMD_TOPIC, text, "operator", KEY_CTL);
+	command(mq, &seen, cmd, "\"x-2\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "no job"), "%s", out);
+	pthread_mutex_lock(&seen.mu);
+	ck_assert_int_eq(seen.results, results + 1);
+	pthread_mutex_unlock(&seen.mu);
+	watch_stop(intruder, &intruder_seen);
+	sv_stop(&np);
+	log = tu_slurp(np.log, &len);
+	ck_assert_msg(!strstr(log, "x-1"), "the intruder's command arrived: %s", log);
+	free(log);
+
+	/* The certificate names 127.0.0.1, not localhost: refused, unless insecure. */
+	snprintf(text, sizeof(text), "username = test-node\npassword = node-pass-123\ntls = 1\n"
+				     "ca_file = %s\n", ca);
+	snprintf(conf, sizeof(conf), ONE_PRINTER "\n[mqtt]\nhost = localhost\nport = %d\n%s",
+		 bport, text);
+	sv_write_config(&np, conf, 8);
+	sv_start(&np);
+	sv_stop(&np);
+	log = tu_slurp(np.log, &len);
+	ck_assert_msg(strstr(log + np.log_end, "mqtt: cannot reach localhost:") &&
+			      strstr(log + np.log_end, "TLS"), "%s", log + np.log_end);
+	free(log);
+	snprintf(conf + strlen(conf), sizeof(conf) - strlen(conf), "tls_insecure = 1\n");
+	sv_write_config(&np, conf, 8);
+	sv_start(&np);
+	wait_topic(&seen, "stratum/test-node/status", "online", 10, NULL, 0);
+	sv_stop(&np);
+	watch_stop(mq, &seen);
+	broker_stop(broker);
+}
+END_TEST
+
 void serve_mqtt_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("mqtt");
@@ -380,5 +495,6 @@ void serve_mqtt_tcases(Suite *s)
 	tcase_add_test(tc, test_mqtt_same_name);
 	tcase_add_test(tc, test_mqtt_password);
 	tcase_add_test(tc, test_mqtt_downloads);
+	tcase_add_test(tc, test_mqtt_broker_example);
 	suite_add_tcase(s, tc);
 }

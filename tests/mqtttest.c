@@ -176,6 +176,12 @@ void broker_stop(pid_t broker)
 struct mosquitto *watch_start(struct mqtt_seen *seen, int port, const char *user,
 			      const char *pass, const char *filter)
 {
+	return watch_start_tls(seen, port, user, pass, filter, NULL);
+}
+
+struct mosquitto *watch_start_tls(struct mqtt_seen *seen, int port, const char *user,
+				  const char *pass, const char *filter, const char *cafile)
+{
 	struct mosquitto *mq;
 
 	memset(seen, 0, sizeof(*seen));
@@ -185,6 +191,8 @@ struct mosquitto *watch_start(struct mqtt_seen *seen, int port, const char *user
 	ck_assert(mq);
 	if (user)
 		ck_assert_int_eq(mosquitto_username_pw_set(mq, user, pass), 0);
+	if (cafile)
+		ck_assert_int_eq(mosquitto_tls_set(mq, cafile, NULL, NULL, NULL, NULL), 0);
 	mosquitto_message_callback_set(mq, seen_message);
 	ck_assert_int_eq(mosquitto_connect(mq, "127.0.0.1", port, 30), 0);
 	ck_assert_int_eq(mosquitto_subscribe(mq, NULL, filter, 1), 0);

@@ -50,9 +50,12 @@ pid_t broker_start(int port, const char *conf);
 void broker_stop(pid_t broker);
 
 /* watch_start - a client (user NULL: anonymous) that subscribes to filter
- * and fills seen; watch_stop ends it. */
+ * and fills seen; watch_stop ends it.  watch_start_tls: over TLS, the
+ * broker's certificate checked with cafile. */
 struct mosquitto *watch_start(struct mqtt_seen *seen, int port, const char *user,
 			      const char *pass, const char *filter);
+struct mosquitto *watch_start_tls(struct mqtt_seen *seen, int port, const char *user,
+				  const char *pass, const char *filter, const char *cafile);
 void watch_stop(struct mosquitto *mq, struct mqtt_seen *seen);
 /* watch_send - publish payload on topic (QoS 1). */
 void watch_send(struct mosquitto *mq, const char *topic, const char *payload);
