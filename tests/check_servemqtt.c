@@ -7,6 +7,7 @@
  * loaded by mosquitto.  Each test runs its own mosquitto on loopback.
  */
 #include <check.h>
+#include <pthread.h>
 #include <openssl/evp.h>
 #include <openssl/hmac.h>
 #include <stdio.h>
@@ -371,6 +372,97 @@ START_TEST(test_mqtt_downloads)
 }
 END_TEST
 
+/* A client that takes a node's client id, as a second node of its name
+ * would: it says online and answers pings; kicks counts how often the
+ * broker dropped it for another client with its id. */
+struct impostor {
+	int kicks;
+	pthread_mutex_t mu;
+};
+
+static void impostor_connect(struct mosquitto *mosq, void *ctx, int rc)
+{
+	(void)ctx;
+	if (rc)
+		return;
+	mosquitto_publish(mosq, NULL, "stratum/test-node/status", 6, "online", 1, true);
+	mosquitto_subscribe(mosq, NULL, "stratum/test-node/ping", 0);
+}
+
+static void impostor_message(struct mosquitto *mosq, void *ctx, const struct mosquitto_message *m)
+{
+	char answer[200];
+
+	(void)ctx;
+	snprintf(answer, sizeof(answer), "%.*s: the impostor", m->payloadlen > 64 ? 64 : m->payloadlen,
+		 (const char *)m->payload);
+	mosquitto_publish(mosq, NULL, "stratum/test-node/pong", (int)strlen(answer), answer, 0, false);
+}
+
+static void impostor_disconnect(struct mosquitto *mosq, void *ctx, int rc)
+{
+	struct impostor *im = ctx;
+
+	(void)mosq;
+	pthread_mutex_lock(&im->mu);
+	im->kicks += rc != 0;
+	pthread_mutex_unlock(&im->mu);
+}
+
+/* A running node whose client id another client takes (two nodes of one
+ * name that both found it free) checks the name before it reconnects,
+ * finds the other, and stays off the broker instead of knocking it off. */
+START_TEST(test_mqtt_name_taken_while_running)
+{
+	struct node_proc np;
+	struct mqtt_seen seen;
+	struct mosquitto *mq, *other;
+	struct impostor im = {0};
+	char *log = NULL;
+	size_t len;
+	int bport, kicks;
+	pid_t broker;
+
+	if (!have_broker("MQTT name taken while running"))
+		return;
+	broker = node_on_broker(&np, &bport, "", &seen, &mq);
+	pthread_mutex_init(&im.mu, NULL);
+	other = mosquitto_new("stratum-test-node", false, &im);
+	ck_assert(other);
+	mosquitto_connect_callback_set(other, impostor_connect);
+	mosquitto_message_callback_set(other, impostor_message);
+	mosquitto_disconnect_callback_set(other, impostor_disconnect);
+	mosquitto_reconnect_delay_set(other, 1, 1, false);
+	ck_assert_int_eq(mosquitto_connect(other, "127.0.0.1", bport, 30), 0);
+	ck_assert_int_eq(mosquitto_loop_start(other), 0);
+	for (int i = 0; i < 100; i++) {
+		free(log);
+		log = tu_slurp(np.log, &len);
+		if (strstr(log, "MQTT is off until the node restarts"))
+			break;
+		usleep(50000);
+	}
+	ck_assert_msg(strstr(log, "mqtt: another node named test-node is connected to the broker") &&
+			      strstr(log, "the impostor") &&
+			      strstr(log, "MQTT is off until the node restarts"),
+		      "%s", log);
+	free(log);
+	/* The node stays off (it would be back within 1 s): the other keeps its connection. */
+	sleep(2);
+	pthread_mutex_lock(&im.mu);
+	kicks = im.kicks;
+	pthread_mutex_unlock(&im.mu);
+	ck_assert_int_eq(kicks, 0);
+	mosquitto_disconnect(other);
+	mosquitto_loop_stop(other, false);
+	mosquitto_destroy(other);
+	pthread_mutex_destroy(&im.mu);
+	sv_stop(&np);
+	watch_stop(mq, &seen);
+	broker_stop(broker);
+}
+END_TEST
+
 /* Every occurrence of from in text replaced by to, into out (cap bytes). */
 static void replace_all(char *out, size_t cap, const char *text, const char *from, const char *to)
 {
@@ -493,6 +585,7 @@ void serve_mqtt_tcases(Suite *s)
 	tcase_set_timeout(tc, 60);
 	tcase_add_test(tc, test_mqtt_command_keys);
 	tcase_add_test(tc, test_mqtt_same_name);
+	tcase_add_test(tc, test_mqtt_name_taken_while_running);
 	tcase_add_test(tc, test_mqtt_password);
 	tcase_add_test(tc, test_mqtt_downloads);
 	tcase_add_test(tc, test_mqtt_broker_example);
