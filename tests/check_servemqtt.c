@@ -18,6 +18,7 @@
 #include <unistd.h>
 
 #include "mqtttest.h"
+#include "serve/node.h"
 #include "servetest.h"
 #include "suites.h"
 #include "testutil.h"
@@ -56,6 +57,58 @@ static void write_mqtt_config(struct node_proc *np, int port, const char *extra)
 					       "keepalive = 5\n%s", port, extra);
 	sv_write_config(np, text, 8);
 }
+
+/* The [mqtt] keys that would leave a link open or a setting ignored are
+ * refused when the config is read, with the key named. */
+START_TEST(test_mqtt_config_errors)
+{
+	static const struct {
+		const char *lines, *want;
+	} cases[] = {
+		{"ca_file = ca.pem\n", "[mqtt] ca_file is a TLS setting: add tls = 1"},
+		{"tls_insecure = 1\n", "[mqtt] tls_insecure is a TLS setting"},
+		{"tls = 1\ncert_file = c.pem\n", "cert_file and key_file go together"},
+		{"tls = 1\ncert_file = c.pem\nkey_file = k.pem\n", "a client certificate needs "
+								   "ca_file or ca_dir"},
+		{"tls = 1\ntls_version = tlsv1.1\n", "line 12: tls_version: 'tlsv1.1' is not tlsv1.2 "
+						     "or tlsv1.3"},
+		{"tls = 2\n", "line 11: tls: 2 is out of range (0 to 1)"},
+		{"password = p\n", "[mqtt] password needs username"},
+		{"download_hosts = files.farm, http://x\n", "line 11: download_hosts: 'http://x' is "
+							    "not HOST or HOST:PORT"},
+		{"download_hosts = h:0\n", "'h:0' is not HOST or HOST:PORT"},
+		{"download_hosts = [::1]:99999\n", "'[::1]:99999' is not HOST or HOST:PORT"},
+		{"client_id = x\n", "line 11: unknown key 'client_id' in [mqtt]"},
+	};
+	struct node_config *c = calloc(1, sizeof(*c));
+	struct st_error err = {0};
+	const char *path = tu_path("mqtt-config.ini");
+	char text[1024];
+
+	ck_assert_ptr_nonnull(c);
+	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+		snprintf(text, sizeof(text), "[node]\ndata_dir = d\n[key k]\nkey = " KEY_CTL "\n"
+					     "roles = control\n" ONE_PRINTER "[mqtt]\nhost = b\n%s",
+			 cases[i].lines);
+		tu_write_str(path, text);
+		ck_assert_msg(node_config_load(path, c, &err) != 0, "%s loads", cases[i].lines);
+		ck_assert_msg(strstr(err.msg, cases[i].want), "%s: %s", cases[i].lines, err.msg);
+	}
+	/* What loads: hosts lower-cased, ports by scheme, the client id from the name. */
+	snprintf(text, sizeof(text), "[node]\nname = farm-7\ndata_dir = d\n[key k]\nkey = " KEY_CTL
+				     "\nroles = control\n" ONE_PRINTER "[mqtt]\nhost = b\ntls = 1\n"
+				     "ca_dir = certs\ndownload_hosts = Files.Farm, [::1]:8080\n");
+	tu_write_str(path, text);
+	ck_assert_msg(node_config_load(path, c, &err) == 0, "%s", err.msg);
+	ck_assert_uint_eq(c->mqtt.port, 8883);
+	ck_assert_str_eq(c->mqtt.client_id, "stratum-farm-7");
+	ck_assert_str_eq(c->mqtt.download_hosts[0], "files.farm");
+	ck_assert_str_eq(c->mqtt.download_hosts[1], "[::1]:8080");
+	ck_assert_msg(strstr(c->mqtt.ca_dir, "/certs") && c->mqtt.ca_dir[0] == '/', "%s",
+		      c->mqtt.ca_dir);
+	free(c);
+}
+END_TEST
 
 /* A broker, the node on it with the [mqtt] lines extra, and a client
  * watching the node's topics, once the node says it is online. */
@@ -583,6 +636,7 @@ void serve_mqtt_tcases(Suite *s)
 	TCase *tc = tcase_create("mqtt");
 
 	tcase_set_timeout(tc, 60);
+	tcase_add_test(tc, test_mqtt_config_errors);
 	tcase_add_test(tc, test_mqtt_command_keys);
 	tcase_add_test(tc, test_mqtt_same_name);
 	tcase_add_test(tc, test_mqtt_name_taken_while_running);

@@ -476,6 +476,10 @@ static int check_mqtt(struct cfg_parse *p)
 		return st_error_set(p->err, ST_ERR_RANGE, "%s: [mqtt] cert_file and key_file go "
 							  "together (the client certificate and its "
 							  "key)", p->file);
+	if (m->cert_file[0] && !m->ca_file[0] && !m->ca_dir[0])
+		return st_error_set(p->err, ST_ERR_RANGE, "%s: [mqtt] a client certificate needs "
+							  "ca_file or ca_dir (the broker's CA)",
+				    p->file);
 	if (m->password[0] && !m->username[0])
 		return st_error_set(p->err, ST_ERR_RANGE, "%s: [mqtt] password needs username",
 				    p->file);

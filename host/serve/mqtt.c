@@ -217,7 +217,7 @@ static void name_of_url(const char *url, char *out, size_t cap)
 }
 
 /* One request of a download, redirects not followed: 0 with *status, or
- * ST_ERR_* with err.  A redirect's target goes to *next (curl_free). */
+ * ST_ERR_* with err.  A redirect's target goes to *next (free it). */
 static int fetch_once(CURL *c, const char *url, struct download *d, long *status, char **next,
 		      struct st_error *err)
 {
@@ -391,7 +391,7 @@ static void run_command(struct node_mqtt *m, struct node_printer *p, const char 
 	else if (!duplicate)
 		node_log("info", p->cfg->name, job, "mqtt: command %.40s (id %.60s) by key %s", cmd,
 			 id, who);
-	else if (duplicate)
+	else
 		node_log("info", p->cfg->name, 0, "mqtt: command id %.60s was received before; not "
 			 "run again", id);
 	res = json_pack("{s:s?,s:s?,s:b,s:b}", "id", id, "command", cmd, "ok", rc >= 0,
