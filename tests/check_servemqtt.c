@@ -462,6 +462,58 @@ static void impostor_disconnect(struct mosquitto *mosq, void *ctx, int rc)
 	pthread_mutex_unlock(&im->mu);
 }
 
+/* The impostor, connected to the broker at port (it may take the id from a
+ * node connected there), or NULL to end it. */
+static struct mosquitto *impostor_start(struct impostor *im, int port)
+{
+	struct mosquitto *other;
+
+	pthread_mutex_init(&im->mu, NULL);
+	im->kicks = 0;
+	other = mosquitto_new("stratum-test-node", false, im);
+	ck_assert(other);
+	mosquitto_connect_callback_set(other, impostor_connect);
+	mosquitto_message_callback_set(other, impostor_message);
+	mosquitto_disconnect_callback_set(other, impostor_disconnect);
+	mosquitto_reconnect_delay_set(other, 1, 1, false);
+	ck_assert_int_eq(mosquitto_connect(other, "127.0.0.1", port, 30), 0);
+	ck_assert_int_eq(mosquitto_loop_start(other), 0);
+	return other;
+}
+
+/* Wait for the node's log to say it found the impostor and turned MQTT
+ * off; then the impostor must keep its connection (the node would be back
+ * within 1 s). */
+static void expect_node_yields(struct node_proc *np, struct impostor *im, struct mosquitto *other)
+{
+	char *log = NULL;
+	size_t len;
+	int kicks;
+
+	for (int i = 0; i < 200; i++) {
+		free(log);
+		log = tu_slurp(np->log, &len);
+		if (strstr(log + np->log_end, "MQTT is off until the node restarts"))
+			break;
+		usleep(50000);
+	}
+	ck_assert_msg(strstr(log + np->log_end, "mqtt: another node named test-node is connected "
+						"to the broker") &&
+			      strstr(log + np->log_end, "the impostor") &&
+			      strstr(log + np->log_end, "MQTT is off until the node restarts"),
+		      "%s", log + np->log_end);
+	free(log);
+	sleep(2);
+	pthread_mutex_lock(&im->mu);
+	kicks = im->kicks;
+	pthread_mutex_unlock(&im->mu);
+	ck_assert_int_eq(kicks, 0);
+	mosquitto_disconnect(other);
+	mosquitto_loop_stop(other, false);
+	mosquitto_destroy(other);
+	pthread_mutex_destroy(&im->mu);
+}
+
 /* A running node whose client id another client takes (two nodes of one
  * name that both found it free) checks the name before it reconnects,
  * finds the other, and stays off the broker instead of knocking it off. */
@@ -470,48 +522,53 @@ START_TEST(test_mqtt_name_taken_while_running)
 	struct node_proc np;
 	struct mqtt_seen seen;
 	struct mosquitto *mq, *other;
-	struct impostor im = {0};
-	char *log = NULL;
-	size_t len;
-	int bport, kicks;
+	struct impostor im;
+	int bport;
 	pid_t broker;
 
 	if (!have_broker("MQTT name taken while running"))
 		return;
 	broker = node_on_broker(&np, &bport, "", &seen, &mq);
-	pthread_mutex_init(&im.mu, NULL);
-	other = mosquitto_new("stratum-test-node", false, &im);
-	ck_assert(other);
-	mosquitto_connect_callback_set(other, impostor_connect);
-	mosquitto_message_callback_set(other, impostor_message);
-	mosquitto_disconnect_callback_set(other, impostor_disconnect);
-	mosquitto_reconnect_delay_set(other, 1, 1, false);
-	ck_assert_int_eq(mosquitto_connect(other, "127.0.0.1", bport, 30), 0);
-	ck_assert_int_eq(mosquitto_loop_start(other), 0);
-	for (int i = 0; i < 100; i++) {
-		free(log);
-		log = tu_slurp(np.log, &len);
-		if (strstr(log, "MQTT is off until the node restarts"))
-			break;
-		usleep(50000);
-	}
-	ck_assert_msg(strstr(log, "mqtt: another node named test-node is connected to the broker") &&
-			      strstr(log, "the impostor") &&
-			      strstr(log, "MQTT is off until the node restarts"),
-		      "%s", log);
-	free(log);
-	/* The node stays off (it would be back within 1 s): the other keeps its connection. */
-	sleep(2);
-	pthread_mutex_lock(&im.mu);
-	kicks = im.kicks;
-	pthread_mutex_unlock(&im.mu);
-	ck_assert_int_eq(kicks, 0);
-	mosquitto_disconnect(other);
-	mosquitto_loop_stop(other, false);
-	mosquitto_destroy(other);
-	pthread_mutex_destroy(&im.mu);
+	other = impostor_start(&im, bport);
+	expect_node_yields(&np, &im, other);
 	sv_stop(&np);
 	watch_stop(mq, &seen);
+	broker_stop(broker);
+}
+END_TEST
+
+/* A broker that is down when the node starts: the node runs, and checks
+ * its name once the broker is there; a node that took the name meanwhile
+ * keeps it.  Then, with the name free, it connects. */
+START_TEST(test_mqtt_broker_later)
+{
+	struct node_proc np;
+	struct mqtt_seen seen;
+	struct mosquitto *mq, *other;
+	struct impostor im;
+	char conf[256];
+	int bport = free_port();
+	pid_t broker;
+
+	if (!have_broker("MQTT broker later"))
+		return;
+	write_mqtt_config(&np, bport, "");
+	sv_start(&np);
+	snprintf(conf, sizeof(conf), "listener %d 127.0.0.1\nallow_anonymous true\n"
+				     "persistence false\n", bport);
+	broker = broker_start(bport, conf);
+	other = impostor_start(&im, bport);
+	expect_node_yields(&np, &im, other);
+	sv_stop(&np);
+	/* a new broker (nothing retained): the name is free when it comes */
+	broker_stop(broker);
+	sv_start(&np);
+	broker = broker_start(bport, conf);
+	mq = watch_start(&seen, bport, NULL, NULL, "stratum/test-node/#");
+	wait_topic(&seen, "stratum/test-node/status", "online", 10, NULL, 0);
+	wait_topic(&seen, "stratum/test-node/mk3s/status", "Operational", 10, NULL, 0);
+	watch_stop(mq, &seen);
+	sv_stop(&np);
 	broker_stop(broker);
 }
 END_TEST
@@ -640,6 +697,7 @@ void serve_mqtt_tcases(Suite *s)
 	tcase_add_test(tc, test_mqtt_command_keys);
 	tcase_add_test(tc, test_mqtt_same_name);
 	tcase_add_test(tc, test_mqtt_name_taken_while_running);
+	tcase_add_test(tc, test_mqtt_broker_later);
 	tcase_add_test(tc, test_mqtt_password);
 	tcase_add_test(tc, test_mqtt_downloads);
 	tcase_add_test(tc, test_mqtt_broker_example);

@@ -478,7 +478,7 @@ static void *mqtt_main(void *arg)
 {
 	struct node_mqtt *m = arg;
 	struct timespec t;
-	time_t next_try = 0;
+	time_t next_try = time(NULL) + 1; /* node_mqtt_start made the first try */
 	int wait_s = 1;
 
 	pthread_mutex_lock(&m->mu);
