@@ -109,7 +109,7 @@ static void on_disconnect(struct mosquitto *mosq, void *ctx, int rc)
 	/* node_mqtt_stop cancels this thread: not in the middle of the check
 	 * (which sees stopping and ends within 0.1 s). */
 	pthread_setcancelstate(PTHREAD_CANCEL_DISABLE, &cancel_state);
-	held = node_mqtt_claim(&m->n->cfg, &m->stopping, &err) == ST_ERR_RANGE;
+	node_mqtt_claim(&m->n->cfg, &m->stopping, &held, &err);
 	pthread_setcancelstate(cancel_state, NULL);
 	if (held) {
 		node_log("error", NULL, 0, "%s; MQTT is off until the node restarts", err.msg);
@@ -457,18 +457,21 @@ static void link_up(struct node_mqtt *m)
 static void retry_link(struct node_mqtt *m, time_t *next_try, int *wait_s)
 {
 	struct st_error err = {0};
+	bool held = false;
 	int rc;
 
 	if (time(NULL) < *next_try)
 		return;
-	rc = node_mqtt_claim(&m->n->cfg, &m->stopping, &err);
+	rc = node_mqtt_claim(&m->n->cfg, &m->stopping, &held, &err);
 	if (!rc) {
 		link_up(m);
-	} else if (rc == ST_ERR_RANGE) {
+	} else if (held) {
 		node_log("error", NULL, 0, "%s; MQTT is off until the node restarts", err.msg);
 		pthread_mutex_lock(&m->mu);
 		m->off = true;
 		pthread_mutex_unlock(&m->mu);
+	} else if (rc == ST_ERR_RANGE) {
+		node_log("error", NULL, 0, "%s; retrying", err.msg); /* credentials */
 	}
 	*wait_s = *wait_s * 2 > MQTT_RETRY_MAX_S ? MQTT_RETRY_MAX_S : *wait_s * 2;
 	*next_try = time(NULL) + *wait_s;
@@ -526,6 +529,7 @@ int node_mqtt_start(struct node *n, struct st_error *err)
 	const struct node_mqtt_config *c = &n->cfg.mqtt;
 	struct node_mqtt *m;
 	char topic[300];
+	bool held;
 	int rc;
 
 	if (!c->host[0])
@@ -553,7 +557,7 @@ int node_mqtt_start(struct node *n, struct st_error *err)
 	/* The name first: a node that holds it is not knocked off (mqtt_name.c).
 	 * A broker that is down now is retried by the MQTT thread; the node
 	 * runs meanwhile. */
-	rc = node_mqtt_claim(&n->cfg, &m->stopping, err);
+	rc = node_mqtt_claim(&n->cfg, &m->stopping, &held, err);
 	if (rc == ST_ERR_RANGE)
 		return rc;
 	if (rc)

@@ -28,12 +28,12 @@ int node_mqtt_client(const struct node_mqtt_config *c, const char *id, bool clea
  * broker, asked before it connects with its client id (which would knock a
  * holder off): a short connection of its own reads the retained status and,
  * when it says online, pings the holder.  An answer within MQTT_PING_WAIT_MS
- * means another node holds the name.  *stop cuts the wait short.
- * Returns 0 (free, or held by a node that no longer answers), ST_ERR_RANGE
- * (held by a live node, or the broker refused the credentials: err says
- * which), ST_ERR_IO (broker unreachable).
+ * means another node holds the name (*held true).  *stop cuts the wait
+ * short.  Returns 0 (free, or held by a node that no longer answers),
+ * ST_ERR_RANGE (held by a live node, or the broker refused the credentials:
+ * err says which), ST_ERR_IO (broker unreachable).
  */
-int node_mqtt_claim(const struct node_config *cfg, const atomic_bool *stop,
+int node_mqtt_claim(const struct node_config *cfg, const atomic_bool *stop, bool *held,
 		    struct st_error *err);
 
 /* node_mqtt_pong - the holder's answer to a ping message (its payload, a

@@ -166,7 +166,7 @@ static int claim_run(const struct node_config *cfg, struct mosquitto *mosq, stru
 			    rc == MOSQ_ERR_ERRNO ? strerror(errno) : mosquitto_strerror(rc));
 }
 
-int node_mqtt_claim(const struct node_config *cfg, const atomic_bool *stop,
+int node_mqtt_claim(const struct node_config *cfg, const atomic_bool *stop, bool *held,
 		    struct st_error *err)
 {
 	const struct node_mqtt_config *c = &cfg->mqtt;
@@ -176,6 +176,7 @@ int node_mqtt_claim(const struct node_config *cfg, const atomic_bool *stop,
 	char id[sizeof(cfg->mqtt.client_id) + 48];
 	int rc;
 
+	*held = false;
 	if (RAND_bytes(rnd, sizeof(rnd)) != 1)
 		return st_error_set(err, ST_ERR_INTERNAL, "mqtt: no random bytes for a nonce");
 	for (size_t i = 0; i < sizeof(rnd); i++)
@@ -190,6 +191,7 @@ int node_mqtt_claim(const struct node_config *cfg, const atomic_bool *stop,
 	mosquitto_subscribe_callback_set(mosq, claim_subscribe);
 	mosquitto_message_callback_set(mosq, claim_message);
 	rc = claim_run(cfg, mosq, &cl, stop, err);
+	*held = cl.answered;
 	mosquitto_disconnect(mosq);
 	mosquitto_loop(mosq, 10, 1); /* sends the DISCONNECT */
 	mosquitto_destroy(mosq);
