@@ -59,6 +59,7 @@ Suite *region_suite(void);	/* tests/check_region.c: printed region against cross
 Suite *x3g_suite(void);		/* tests/check_x3g.c: G-code to X3G, decoder, against gpx */
 Suite *s3g_suite(void);		/* tests/check_s3g.c: S3G packets, driver, simulated Sailfish */
 Suite *serve_suite(void);		/* tests/check_serve.c: stratum serve, the farm node's API and queue */
+void serve_mqtt_tcases(Suite *s); /* tests/check_servemqtt.c: the node on a shared broker, part of serve */
 Suite *octoapi_suite(void);	/* tests/check_octoapi.c: the node's OctoPrint calls, one test each */
 void octoapi_push_tcases(Suite *s); /* tests/check_octopush.c: the push API, part of octoapi */
 void octoapi_queue_tcases(Suite *s); /* tests/check_octoqueue.c: job calls and the queue, part of octoapi */
