@@ -129,6 +129,7 @@ START_TEST(role_speeds_honoured)
 			  "--set support_material_speed=37 --set first_layer_speed=23 "
 			  "--set travel_speed_z=7");
 	assert_feed(g, "External perimeter", false, 25 * 60);
+	assert_feed(g, "Solid infill", false, 33 * 60);
 	assert_feed(g, "Perimeter", false, 40 * 60);
 	assert_feed(g, "Internal infill", false, 70 * 60);
 	assert_feed(g, "Top solid infill", false, 19 * 60);
@@ -143,6 +144,21 @@ START_TEST(role_speeds_honoured)
 	assert_header(g, "top_solid_infill_speed = 19");
 	assert_header(g, "bridge_speed = 17");
 	assert_header(g, "travel_speed_z = 7");
+	free(g);
+}
+END_TEST
+
+/* A 2 mm strip with three walls asked: no room for the third, so the
+ * middle is gap fill (tests/check_slicer.c), at gap_fill_speed. */
+START_TEST(gap_fill_speed_honoured)
+{
+	char model[4096];
+	char *g;
+
+	model_file(fx_box(0, 0, 0, 20, 2, 1), "strip.stl", model, sizeof(model));
+	g = slice(model, STEADY "--set perimeters=3 --set gap_fill_speed=13");
+	assert_feed(g, "Gap fill", false, 13 * 60);
+	assert_header(g, "gap_fill_speed = 13");
 	free(g);
 }
 END_TEST
@@ -759,6 +775,7 @@ void slicecli_settings_tcases(Suite *s)
 	tcase_set_timeout(tc, 120);
 	tcase_add_test(tc, role_speeds_honoured);
 	tcase_add_test(tc, speed_percentages_resolved);
+	tcase_add_test(tc, gap_fill_speed_honoured);
 	tcase_add_test(tc, fan_always_on_honoured);
 	tcase_add_test(tc, sailfish_fan_is_m126);
 	tcase_add_test(tc, skirt_settings_honoured);
