@@ -21,8 +21,9 @@ enum { OPT_LOAD, OPT_PRINTER_PRESET, OPT_PRINT_PRESET, OPT_FILAMENT_PRESET, OPT_
 static const struct cmd_opt cfg_opts[] = {
     [OPT_LOAD] = {"--load", 0, CMD_CUSTOM, NULL, 0, 0, 0, NULL, "FILE.ini",
 		  "a PrusaSlicer config (File > Export Config, or\n"
-		  "'prusa-slicer --save') or vendor bundle; repeat it:\n"
-		  "later files replace the keys of earlier ones", NULL, NULL},
+		  "'prusa-slicer --save'), vendor bundle, or project\n"
+		  "3MF (the settings it carries); repeat it: later\n"
+		  "files replace the keys of earlier ones", NULL, NULL},
     [OPT_PRINTER_PRESET] = {"--printer-preset", 0, CMD_CUSTOM, NULL, 0, 0, 0, NULL, "NAME",
 			    "the [printer:NAME] preset of a bundle given with --load", NULL,
 			    NULL},
