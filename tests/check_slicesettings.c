@@ -163,6 +163,23 @@ START_TEST(gap_fill_speed_honoured)
 }
 END_TEST
 
+/* Support under the bridge's deck at support_material_speed, its interface
+ * at support_material_interface_speed (a percentage of it, as in PrusaSlicer). */
+START_TEST(support_speeds_honoured)
+{
+	char model[4096];
+	char *g;
+
+	model_file(wide_bridge(), "bridge.stl", model, sizeof(model));
+	g = slice(model, STEADY "--set support_material=1 --set support_material_speed=37 "
+			  "--set support_material_interface_speed=50% "
+			  "--set support_material_interface_layers=2");
+	assert_feed(g, "Support material", false, 37 * 60);
+	assert_feed(g, "Support material interface", false, 18.5 * 60);
+	free(g);
+}
+END_TEST
+
 /* Percentages, PrusaSlicer's way: each of its own base key, and the
  * first layer's of each role's own speed. */
 START_TEST(speed_percentages_resolved)
@@ -776,6 +793,7 @@ void slicecli_settings_tcases(Suite *s)
 	tcase_add_test(tc, role_speeds_honoured);
 	tcase_add_test(tc, speed_percentages_resolved);
 	tcase_add_test(tc, gap_fill_speed_honoured);
+	tcase_add_test(tc, support_speeds_honoured);
 	tcase_add_test(tc, fan_always_on_honoured);
 	tcase_add_test(tc, sailfish_fan_is_m126);
 	tcase_add_test(tc, skirt_settings_honoured);
