@@ -6,8 +6,10 @@
 
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "commands.h"
+#include "meshio.h"
 #include "settings.h"
 #include "st_error.h"
 
@@ -295,4 +297,36 @@ void cfgopt_warn_unsupported(const struct profile *p, const char *cmd)
 	if (profile_unsupported(p, &list) == 0 && list)
 		fprintf(stderr, "%s: warning: not supported, ignored: %s\n", cmd, list);
 	free(list);
+}
+
+/* Whether path names the same file as one of o's --load files. */
+static bool is_loaded(const struct cfgopt *o, const char *path)
+{
+	struct stat a, b;
+
+	if (stat(path, &a))
+		return false;
+	for (size_t i = 0; i < o->n; i++)
+		if (o->layer[i].path && !stat(o->layer[i].path, &b) && a.st_dev == b.st_dev &&
+		    a.st_ino == b.st_ino)
+			return true;
+	return false;
+}
+
+void cfgopt_note_project_settings(const struct cfgopt *o, const char *cmd,
+				  const char *const *models, size_t n)
+{
+	for (size_t i = 0; i < n; i++) {
+		struct st_error err = {0};
+		char *text = NULL;
+
+		/* Not a 3MF, or unreadable: the model reader says so, not this note. */
+		if (strcmp(models[i], "-") && meshio_3mf_config(models[i], &text, &err) == 0 &&
+		    text && !is_loaded(o, models[i]))
+			fprintf(stderr,
+				"%s: note: %s carries PrusaSlicer settings (" MESHIO_3MF_CONFIG_ENTRY
+				"), not applied; add --load %s to slice with them\n",
+				cmd, models[i], models[i]);
+		free(text);
+	}
 }

@@ -789,8 +789,9 @@ START_TEST(load_project_3mf_config)
 	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' " MK3S " --load '%s'", proj, gc,
 			proj);
 	ck_assert_msg(status == 0, "exit %d: %s", status, out);
-	ck_assert_msg(strstr(out, "warning: not supported, ignored: fuzzy_skin=random\n"), "%s",
-		      out);
+	ck_assert_msg(strstr(out, "warning: not supported, ignored: fuzzy_skin=random\n") &&
+			      !strstr(out, "note:"),
+		      "%s", out);
 	slurp(gc, gcode, sizeof(gcode));
 	ck_assert_msg(strstr(gcode, "\n; project 222\nG28\n") &&
 			      strstr(gcode, "\n; layer_height = 0.25\n"),
@@ -801,6 +802,21 @@ START_TEST(load_project_3mf_config)
 	ck_assert_msg(status == 0, "exit %d: %s", status, out);
 	slurp(gc, gcode, sizeof(gcode));
 	ck_assert_msg(strstr(gcode, "\n; project 230\nG28\n"), "later.ini wins");
+	/* Given as a model only, its settings are not applied, and that is said. */
+	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' " MK3S, proj, gc);
+	ck_assert_msg(status == 0 && strstr(out, "stratum slice: note: ") &&
+			      strstr(out, "project.3mf carries PrusaSlicer settings "
+					  "(Metadata/Slic3r_PE.config), not applied; add --load "),
+		      "exit %d: %s", status, out);
+	slurp(gc, gcode, sizeof(gcode));
+	ck_assert_msg(!strstr(gcode, "; project"), "the profile's start G-code");
+	/* print takes --load PROJECT.3mf, and says the same without it. */
+	status = tu_run(out, sizeof(out), "print '%s' " MK3S " --dry-run -o '%s' --load '%s' && "
+			"grep -q '^; project 222$' '%s'", proj, gc, proj, gc);
+	ck_assert_msg(status == 0 && !strstr(out, "note:"), "exit %d: %s", status, out);
+	status = tu_run(out, sizeof(out), "print '%s' " MK3S " --dry-run -o '%s'", proj, gc);
+	ck_assert_msg(status == 0 && strstr(out, "stratum print: note: "), "exit %d: %s", status,
+		      out);
 	/* Errors name the entry and its line; a 3MF without settings says so. */
 	write_project(proj, PROJECT_CONFIG_HEAD "; layer_height = thick\n");
 	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' " MK3S " --load '%s'", proj, gc,
@@ -813,9 +829,8 @@ START_TEST(load_project_3mf_config)
 			bare);
 	ck_assert_msg(status == 65 && strstr(out, "bare.3mf: a 3MF without PrusaSlicer settings"),
 		      "exit %d: %s", status, out);
-	/* Without --load, the project's model alone: the profile's settings. */
 	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' " MK3S, bare, gc);
-	ck_assert_msg(status == 0, "exit %d: %s", status, out);
+	ck_assert_msg(status == 0 && !strstr(out, "note:"), "exit %d: %s", status, out);
 }
 END_TEST
 
