@@ -180,6 +180,35 @@ START_TEST(support_speeds_honoured)
 }
 END_TEST
 
+/* The header lists the slicer's own settings as printed: a per-job
+ * override, a pattern Stratum does not print as the rectilinear it prints,
+ * a spiral vase's one wall and no infill. */
+START_TEST(header_lists_slicing_settings)
+{
+	char model[4096];
+	char *g;
+
+	model_file(fx_box(0, 0, 0, 20, 20, 4), "hdrbox.stl", model, sizeof(model));
+	g = slice(model, "--perimeters 4 --fill-density 25% --set fill_pattern=lightning "
+			 "--brim-width 3 --support-material --set seam_position=rear "
+			 "--set skirts=2 --set elefant_foot_compensation=0.2");
+	assert_header(g, "perimeters = 4");
+	assert_header(g, "fill_density = 25%");
+	assert_header(g, "fill_pattern = rectilinear");
+	assert_header(g, "brim_width = 3");
+	assert_header(g, "support_material = 1");
+	assert_header(g, "seam_position = rear");
+	assert_header(g, "skirts = 2");
+	assert_header(g, "elefant_foot_compensation = 0.2");
+	free(g);
+	g = slice(model, "--set spiral_vase=1 --perimeters 3 --fill-density 40%");
+	assert_header(g, "perimeters = 1");
+	assert_header(g, "top_solid_layers = 0");
+	assert_header(g, "fill_density = 0%");
+	free(g);
+}
+END_TEST
+
 /* Percentages, PrusaSlicer's way: each of its own base key, and the
  * first layer's of each role's own speed. */
 START_TEST(speed_percentages_resolved)
@@ -794,6 +823,7 @@ void slicecli_settings_tcases(Suite *s)
 	tcase_add_test(tc, speed_percentages_resolved);
 	tcase_add_test(tc, gap_fill_speed_honoured);
 	tcase_add_test(tc, support_speeds_honoured);
+	tcase_add_test(tc, header_lists_slicing_settings);
 	tcase_add_test(tc, fan_always_on_honoured);
 	tcase_add_test(tc, sailfish_fan_is_m126);
 	tcase_add_test(tc, skirt_settings_honoured);
