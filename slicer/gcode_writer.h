@@ -229,6 +229,9 @@ struct gcodew_settings {
 					   * draws them into thumbnail_block */
 	const char *thumbnail_block;	  /* comment lines written after the header's
 					   * first line; not owned; NULL: none */
+	const char *slicer_block;	  /* the slicer's own settings' header lines
+					   * (slicer_settings_text), written after the
+					   * writer's; not owned; NULL: none */
 	const char *end_filament_gcode;	  /* "" */
 	/* The printer's config for the placeholders (every key of its files,
 	 * host/profile.h), under the writer's own variables; NULL: none.  Not

@@ -452,6 +452,8 @@ void gcodew_put_header(struct gcodew *w, const struct gcodew_summary *sum)
 		gcodew_fmt_num(n, w->s->ironing_speed, 6);
 		gcodew_put(w, "; ironing_speed = %s\n", n);
 	}
+	if (w->s->slicer_block)
+		gcodew_put(w, "%s", w->s->slicer_block);
 	for (int a = 0; a < EST_AXES; a++) {
 		char f[NUM_MAX], acc[NUM_MAX], j[NUM_MAX];
 		gcodew_fmt_num(f, lim->max_feedrate[a], 3);
