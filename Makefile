@@ -51,9 +51,10 @@ BENCH_PACKAGES := admesh time bc prusa-slicer printcore apache2-utils libcgal-de
 # Chromium, skipped with a message without it; clang for libFuzzer, `make
 # fuzz`; prusa-slicer for the send suite's sample of the PrusaSlicer
 # corpus, which bench/prusa_corpus.sh runs whole; cura-engine and cura's
-# definitions for its sample of the CuraEngine corpus, bench/cura_corpus.sh);
-# `make check` installs them.
-TEST_PACKAGES := chromium clang prusa-slicer cura-engine cura
+# definitions for its sample of the CuraEngine corpus, bench/cura_corpus.sh;
+# openssl, the command, for the CA and broker certificate of the serve
+# suite's TLS broker, tests/check_servemqtt.c); `make check` installs them.
+TEST_PACKAGES := chromium clang prusa-slicer cura-engine cura openssl
 
 WARN     := -Wall -Wextra -Werror
 CPPFLAGS := -D_XOPEN_SOURCE=700 -D_DEFAULT_SOURCE -MMD -MP

@@ -8,8 +8,8 @@
 # faults, exactly once); `region` measures how well both
 # slicers' printed regions match the models' cross-sections (issue 5, with
 # build/bench/region_check); `gcodesize` compares the G-code's lines, bytes
-# and moves per second of print with PrusaSlicer's at gcode_resolution 0
-# and at its default; `x3g` times G-code -> X3G translation against
+# and moves per second of print with PrusaSlicer's at gcode_resolution 0,
+# at its default and with arc_fitting; `x3g` times G-code -> X3G translation against
 # gpx -m fcp on a model sliced for the Creator Pro; `s3g` streams G-code to
 # `stratum sim --dialect sailfish` with `stratum send` (translated on the fly)
 # against `gpx -s`; `serve` loads a `stratum serve` node on loopback with
@@ -231,25 +231,35 @@ for f in cube20 cylinder20 wall2 wall-eps plate-holes overhang bridge; do
 done
 }
 
-# lines_bytes_rate FILE -> "lines bytes mean peak": G1 lines per second of
-# print (the file's "; estimated printing time", stratum's or PrusaSlicer's
-# "(normal mode)" one), and the most G1 lines within one second of XY
-# motion at the feed rates written (no acceleration, so the time is short
-# and the peak an upper figure; the same rule for both slicers).
+# lines_bytes_rate FILE -> "lines bytes mean peak": move lines (G1, G2,
+# G3) per second of print (the file's "; estimated printing time",
+# stratum's or PrusaSlicer's "(normal mode)" one), and the most move lines
+# within one second of XY motion at the feed rates written, an arc's along
+# its length (no acceleration, so the time is short and the peak an upper
+# figure; the same rule for both slicers).
 lines_bytes_rate() {
-	moves=$(grep -c '^G1 ' "$1" || true)
+	moves=$(grep -c '^G[123] ' "$1" || true)
 	secs=$(grep -m1 'estimated printing time' "$1" | sed 's/.*= *//' |
 		awk '{ t = 0; for (i = 1; i <= NF; i++) { v = $i + 0; u = substr($i, length($i));
 			t += v * (u == "d" ? 86400 : u == "h" ? 3600 : u == "m" ? 60 : 1) } print t }')
 	peak=$(awk 'BEGIN { x = 0; y = 0; f = 1000; t = 0; n = 0; head = 0; best = 0 }
-		/^G1 / {
-			nx = x; ny = y
+		/^G[123] / {
+			nx = x; ny = y; ci = 0; cj = 0
 			for (i = 2; i <= NF; i++) {
 				c = substr($i, 1, 1); v = substr($i, 2) + 0
 				if (c == ";") break
 				if (c == "X") nx = v; else if (c == "Y") ny = v; else if (c == "F") f = v
+				else if (c == "I") ci = v; else if (c == "J") cj = v
 			}
-			d = sqrt((nx - x) ^ 2 + (ny - y) ^ 2); x = nx; y = ny
+			d = sqrt((nx - x) ^ 2 + (ny - y) ^ 2)
+			if ($1 != "G1" && (ci != 0 || cj != 0)) { # an arc: its length
+				a = atan2((-ci) * (ny - y - cj) - (-cj) * (nx - x - ci), \
+					  (-ci) * (nx - x - ci) + (-cj) * (ny - y - cj))
+				if ($1 == "G3" && a <= 0) a += 2 * 3.14159265358979
+				if ($1 == "G2" && a >= 0) a -= 2 * 3.14159265358979
+				d = sqrt(ci * ci + cj * cj) * (a < 0 ? -a : a)
+			}
+			x = nx; y = ny
 			if (d > 0 && f > 0) t += d / (f / 60)
 			ts[n++] = t
 			while (ts[head] < t - 1) head++
@@ -259,7 +269,8 @@ lines_bytes_rate() {
 	echo "$(wc -l <"$1") $(wc -c <"$1") $(echo "$moves / $secs" | bc) $peak"
 }
 
-# G-code size at gcode_resolution 0 and at the default against PrusaSlicer
+# G-code size at gcode_resolution 0, at the default and with arc_fitting
+# against PrusaSlicer
 # ("full" ini, whose gcode_resolution is 0.0125 too), same models and
 # settings as region_table plus a sphere.
 gcodesize_table() {
@@ -271,7 +282,7 @@ region_models
 [ -f "$out/sphere100.stl" ] || "$gen" sphere 100 200 "$out/sphere100.stl"
 prusa_ini full >"$out/prusa-full.ini"
 pver=$(prusa-slicer --help 2>/dev/null | sed -n 's/^PrusaSlicer-\([0-9.]*\).*/\1/p')
-echo "| model | slicer | lines | bytes | G1 moves per s of print (mean) | peak G1 moves in 1 s | lines / PrusaSlicer's | bytes / PrusaSlicer's |"
+echo "| model | slicer | lines | bytes | moves (G1, G2, G3) per s of print (mean) | peak moves in 1 s | lines / PrusaSlicer's | bytes / PrusaSlicer's |"
 echo "|---|---|---|---|---|---|---|---|"
 for f in cube20 cylinder20 plate-holes sphere100; do
 	path="$out/$f.stl"
@@ -279,11 +290,17 @@ for f in cube20 cylinder20 plate-holes sphere100; do
 		-o "$out/$f-prusa.gcode" "$path" >/dev/null 2>&1 || echo "failed: prusa-slicer $f" >&2
 	set -- $(lines_bytes_rate "$out/$f-prusa.gcode")
 	pl=$1; pb=$2
-	for r in 0 0.0125; do
+	for r in 0 0.0125 arcs; do
+		set -- --set gcode_resolution=$r
+		what="gcode_resolution = $r"
+		if [ $r = arcs ]; then
+			set -- --set arc_fitting=emit_center
+			what="gcode_resolution = 0.0125, arc_fitting = emit_center"
+		fi
 		"$bin" slice "$path" -o "$out/$f-r$r.gcode" --printer prusa-i3-mk3s --center 125,105 \
-			--set gcode_resolution=$r >/dev/null 2>&1 || echo "failed: stratum slice $f" >&2
+			"$@" >/dev/null 2>&1 || echo "failed: stratum slice $f" >&2
 		set -- $(lines_bytes_rate "$out/$f-r$r.gcode")
-		echo "| $f | stratum, gcode_resolution = $r | $1 | $2 | $3 | $4 | $(ratio "$1" "$pl") | $(ratio "$2" "$pb") |"
+		echo "| $f | stratum, $what | $1 | $2 | $3 | $4 | $(ratio "$1" "$pl") | $(ratio "$2" "$pb") |"
 	done
 	set -- $(lines_bytes_rate "$out/$f-prusa.gcode")
 	echo "| $f | PrusaSlicer $pver | $1 | $2 | $3 | $4 | | |"

@@ -6,8 +6,10 @@
 
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "commands.h"
+#include "meshio.h"
 #include "settings.h"
 #include "st_error.h"
 
@@ -21,8 +23,9 @@ enum { OPT_LOAD, OPT_PRINTER_PRESET, OPT_PRINT_PRESET, OPT_FILAMENT_PRESET, OPT_
 static const struct cmd_opt cfg_opts[] = {
     [OPT_LOAD] = {"--load", 0, CMD_CUSTOM, NULL, 0, 0, 0, NULL, "FILE.ini",
 		  "a PrusaSlicer config (File > Export Config, or\n"
-		  "'prusa-slicer --save') or vendor bundle; repeat it:\n"
-		  "later files replace the keys of earlier ones", NULL, NULL},
+		  "'prusa-slicer --save'), vendor bundle, or project\n"
+		  "3MF (the settings it carries); repeat it: later\n"
+		  "files replace the keys of earlier ones", NULL, NULL},
     [OPT_PRINTER_PRESET] = {"--printer-preset", 0, CMD_CUSTOM, NULL, 0, 0, 0, NULL, "NAME",
 			    "the [printer:NAME] preset of a bundle given with --load", NULL,
 			    NULL},
@@ -294,4 +297,36 @@ void cfgopt_warn_unsupported(const struct profile *p, const char *cmd)
 	if (profile_unsupported(p, &list) == 0 && list)
 		fprintf(stderr, "%s: warning: not supported, ignored: %s\n", cmd, list);
 	free(list);
+}
+
+/* Whether path names the same file as one of o's --load files. */
+static bool is_loaded(const struct cfgopt *o, const char *path)
+{
+	struct stat a, b;
+
+	if (stat(path, &a))
+		return false;
+	for (size_t i = 0; i < o->n; i++)
+		if (o->layer[i].path && !stat(o->layer[i].path, &b) && a.st_dev == b.st_dev &&
+		    a.st_ino == b.st_ino)
+			return true;
+	return false;
+}
+
+void cfgopt_note_project_settings(const struct cfgopt *o, const char *cmd,
+				  const char *const *models, size_t n)
+{
+	for (size_t i = 0; i < n; i++) {
+		struct st_error err = {0};
+		char *text = NULL;
+
+		/* Not a 3MF, or unreadable: the model reader says so, not this note. */
+		if (strcmp(models[i], "-") && meshio_3mf_config(models[i], &text, &err) == 0 &&
+		    text && !is_loaded(o, models[i]))
+			fprintf(stderr,
+				"%s: note: %s carries PrusaSlicer settings (" MESHIO_3MF_CONFIG_ENTRY
+				"), not applied; add --load %s to slice with them\n",
+				cmd, models[i], models[i]);
+		free(text);
+	}
 }

@@ -14,6 +14,7 @@
 #define STRATUM_HOST_CFGOPT_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdio.h>
 
 #include "profile.h"
@@ -89,5 +90,15 @@ void cfgopt_each_setting(void (*fn)(const char *opt, bool flag, const char *help
  * honour (profile_unsupported); nothing otherwise.
  */
 void cfgopt_warn_unsupported(const struct profile *p, const char *cmd);
+
+/*
+ * cfgopt_note_project_settings - for each of the n models that is a 3MF
+ * carrying PrusaSlicer settings (a saved project) but is not among o's
+ * --load files, print "CMD: note: MODEL carries PrusaSlicer settings ...,
+ * not applied; add --load MODEL to slice with them" on stderr: a model
+ * gives only its meshes (docs/slicing.md).
+ */
+void cfgopt_note_project_settings(const struct cfgopt *o, const char *cmd,
+				  const char *const *models, size_t n);
 
 #endif /* STRATUM_HOST_CFGOPT_H */

@@ -541,6 +541,8 @@ static int print_run(int argc, char **argv, bool *answered, struct clio *io)
 				status = ST_EXIT_USAGE;
 				goto out;
 			}
+		if (job->input == PRINT_MODEL)
+			cfgopt_note_project_settings(&a.cfg, PRINT_CMD, a.models, a.nmodels);
 	}
 	if (job->input == PRINT_X3G && job->prof->protocol != PROFILE_PROTOCOL_SAILFISH) {
 		fprintf(stderr, PRINT_CMD ": %s is X3G, which only Sailfish printers take; printer "

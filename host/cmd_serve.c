@@ -86,10 +86,11 @@ int cmd_serve(int argc, char **argv)
 
 		if (node_config_exposed(config, cfg, &mode))
 			fprintf(stderr,
-				SERVE_CMD ": warning: %s holds API keys and can be read by other "
+				SERVE_CMD ": warning: %s holds API keys%s and can be read by other "
 					  "users (mode %04o); make it readable by the node's user "
 					  "only: chmod 600 %s\n",
-				config, mode, config);
+				config, cfg->mqtt.password[0] ? " and the MQTT password" : "", mode,
+				config);
 	}
 	if (listen && node_parse_listen(listen, cfg->listen_addr, sizeof(cfg->listen_addr),
 					&cfg->listen_port, &err)) {
@@ -116,7 +117,11 @@ int cmd_serve(int argc, char **argv)
 	if (rc) {
 		fprintf(stderr, SERVE_CMD ": %s\n", err.msg);
 		node_free(n);
-		return rc == ST_ERR_IO ? ST_EXIT_UNAVAILABLE : ST_EXIT_SOFTWARE;
+		/* RANGE: the node's name is held on the MQTT broker, or a TLS
+		 * file cannot be read: the config must change, as for 65 above. */
+		return rc == ST_ERR_IO ? ST_EXIT_UNAVAILABLE
+		       : rc == ST_ERR_RANGE ? ST_EXIT_DATAERR
+					    : ST_EXIT_SOFTWARE;
 	}
 	sigwait(&set, &sig);
 	fprintf(stderr, SERVE_CMD ": %s received, stopping\n", sig == SIGTERM ? "SIGTERM" : "SIGINT");

@@ -510,6 +510,7 @@ static int slice_run(int argc, char **argv, struct clio *io)
 	if ((status = cfgopt_load(&a.cfg, SLICE_CMD, a.printer, &prof)))
 		return status;
 	cfgopt_warn_unsupported(prof, SLICE_CMD);
+	cfgopt_note_project_settings(&a.cfg, SLICE_CMD, a.in, a.nin);
 	status = input_vars(prof, a.in[0]); /* the first model's, as PrusaSlicer */
 	if (status)
 		goto out_profile;

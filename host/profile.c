@@ -226,7 +226,8 @@ int prof_build_vars(struct profile *p, struct st_error *err)
 	return rc;
 }
 
-/* The id: base name of origin without a trailing ".ini". */
+/* The id: base name of origin without a trailing ".ini" (or the ".3mf" of a
+ * PrusaSlicer project whose settings are loaded). */
 static char *id_of(const char *origin)
 {
 	const char *base = strrchr(origin, '/');
@@ -234,7 +235,7 @@ static char *id_of(const char *origin)
 
 	base = base ? base + 1 : origin;
 	len = strlen(base);
-	if (len > 4 && !strcmp(base + len - 4, ".ini"))
+	if (len > 4 && (!strcmp(base + len - 4, ".ini") || !strcmp(base + len - 4, ".3mf")))
 		len -= 4;
 	return prof_dup(base, len);
 }

@@ -234,6 +234,7 @@ struct profile {
 	double raft_first_layer_density; /* percent, 10-100; default 90 */
 	double raft_first_layer_expansion; /* mm; default 3 */
 	double gcode_resolution;	/* mm, paths simplified within it, 0 = off; default 0.0125 */
+	const char *arc_fitting;	/* disabled or emit_center; default disabled */
 
 	/* Speeds, mm/s (a percentage is of the key slicer/settings.h names) */
 	double travel_speed;			       /* default 130 */

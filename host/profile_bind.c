@@ -131,6 +131,7 @@ static const struct key_def key_defs[] = {
 	{"raft_first_layer_density", KT_DENSITY, S(raft_first_layer_density, raft.first_layer_density)},
 	{"raft_first_layer_expansion", KT_DOUBLE, S(raft_first_layer_expansion, raft.first_layer_expansion)},
 	{"gcode_resolution", KT_DOUBLE, G(gcode_resolution)},
+	{"arc_fitting", KT_CHOICE, P(arc_fitting)},
 	{"travel_speed", KT_DOUBLE, G(travel_speed)},
 	{"travel_speed_z", KT_DOUBLE, G(travel_speed_z)},
 	{"perimeter_speed", KT_DOUBLE, G(perimeter_speed)},

@@ -153,4 +153,9 @@ int prof_finish(struct profile *p, const char *origin, struct profile **out,
 /* The placeholder variables of a loaded profile (p->vars). */
 int prof_build_vars(struct profile *p, struct st_error *err);
 
+/* profile_slicer.c: whether firmware of flavour f takes G2/G3 arcs, so
+ * arc_fitting is honoured (Marlin's ARC_SUPPORT is on by default;
+ * RepRapFirmware has them; X3G and the others get lines). */
+bool prof_flavor_arcs(enum profile_flavor f);
+
 #endif /* STRATUM_HOST_PROFILE_INT_H */

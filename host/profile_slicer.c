@@ -23,6 +23,12 @@ static enum gcodew_limits_form limits_form(const struct profile *p)
 	return GCODEW_LIMITS_NONE;
 }
 
+bool prof_flavor_arcs(enum profile_flavor f)
+{
+	return f == PROFILE_FLAVOR_MARLIN || f == PROFILE_FLAVOR_MARLIN2 ||
+	       f == PROFILE_FLAVOR_REPRAPFIRMWARE;
+}
+
 /* Machine limits of the profile where it sets them (> 0), else the defaults. */
 static void limits_from_profile(const struct profile *p, struct est_limits *lim)
 {
@@ -155,6 +161,9 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	g->accel_form = p->gcode_flavor == PROFILE_FLAVOR_REPRAPFIRMWARE ? GCODEW_ACCEL_M204_P
 			: p->gcode_flavor == PROFILE_FLAVOR_REPETIER	   ? GCODEW_ACCEL_M201_M202
 									   : GCODEW_ACCEL_M204_S;
+	/* Lines where the firmware has no arcs (profile_unsupported says so). */
+	g->arc_fitting =
+	    !strcmp(p->arc_fitting, "emit_center") && prof_flavor_arcs(p->gcode_flavor);
 	limits_from_profile(p, &g->limits);
 	g->limits_form = limits_form(p);
 	g->min_extruding_rate = p->machine_min_extruding_rate;

@@ -10,6 +10,7 @@
 #include "profile_int.h"
 #include "st_grow.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -213,6 +214,13 @@ int profile_unsupported(const struct profile *p, char **out)
 	if (!rc && !skin_pattern_printed(p->bottom_fill_pattern))
 		rc = add_item(&buf, &len, &cap, "bottom_fill_pattern", p->bottom_fill_pattern,
 			      "(rectilinear used)");
+	/* arcs only where the firmware takes them (profile_slicer.c) */
+	if (!rc && strcmp(p->arc_fitting, "disabled") && !prof_flavor_arcs(p->gcode_flavor)) {
+		char note[80];
+		snprintf(note, sizeof(note), "(gcode_flavor = %s has no G2/G3: lines written)",
+			 profile_flavor_name(p->gcode_flavor));
+		rc = add_item(&buf, &len, &cap, "arc_fitting", p->arc_fitting, note);
+	}
 	for (size_t i = 0; rc == 0 && i < p->keys->count; i++)
 		if (!honoured(p, &p->keys->kv[i]))
 			rc = add_item(&buf, &len, &cap, p->keys->kv[i].key, p->keys->kv[i].value, NULL);

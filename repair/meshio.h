@@ -70,6 +70,8 @@ int meshio_read_buffer_info(const void *buf, size_t len, const char *name,
 			    enum meshio_format fmt, struct mesh **out,
 			    struct meshio_info *info, struct st_error *err);
 
+#define MESHIO_3MF_CONFIG_ENTRY "Metadata/Slic3r_PE.config" /* PrusaSlicer's, in a 3MF */
+
 /*
  * meshio_3mf_config - the text of Metadata/Slic3r_PE.config (PrusaSlicer's
  * print, filament and printer settings) inside the 3MF at path: *text gets

@@ -30,8 +30,6 @@
 /* The model part when there is no _rels/.rels, and the rels part. */
 #define TMF_DEFAULT_MODEL "3D/3dmodel.model"
 #define TMF_RELS "_rels/.rels"
-/* PrusaSlicer's copy of the print, filament and printer settings. */
-#define TMF_PRUSA_CONFIG "Metadata/Slic3r_PE.config"
 
 /* An open 3MF file and the model parts read from it. */
 struct tmf_doc {
@@ -480,7 +478,7 @@ int threemf_config(struct mio_src *s, char **text)
 	d.cap = d.budget = TMF_CONFIG_MAX;
 	if ((rc = open_zip(s, &d.z)))
 		return rc;
-	rc = open_entry(&d, TMF_PRUSA_CONFIG, &st);
+	rc = open_entry(&d, MESHIO_3MF_CONFIG_ENTRY, &st);
 	if (rc == 1) {
 		rc = 0;
 		goto out;
@@ -489,7 +487,7 @@ int threemf_config(struct mio_src *s, char **text)
 		goto out;
 	buf = malloc(TMF_CONFIG_MAX + 1);
 	if (!buf) {
-		rc = mio_err(s, ST_ERR_NOMEM, "out of memory for " TMF_PRUSA_CONFIG);
+		rc = mio_err(s, ST_ERR_NOMEM, "out of memory for " MESHIO_3MF_CONFIG_ENTRY);
 		goto out_close;
 	}
 	for (;;) {

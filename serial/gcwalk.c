@@ -269,16 +269,7 @@ static int arc_start(struct gcwalk *w, const struct gcode_line *l, const double 
 	double off[2] = {0, 0}, r, circles = 0;
 
 	if (gcode_word_value(l, 'R', &r)) {
-		double d[2] = {(to[0] - w->pos[0]) / 2, (to[1] - w->pos[1]) / 2};
-		double len = hypot(d[0], d[1]);
-
-		if (r != 0 && len > 0) {
-			double side = (cw != (r < 0)) ? -1 : 1, h2 = (r - len) * (r + len);
-			double h = h2 > 0 ? sqrt(h2) : 0;
-
-			off[0] = d[0] - d[1] / len * side * h;
-			off[1] = d[1] + d[0] / len * side * h;
-		}
+		st_arc_r_offset(to[0] - w->pos[0], to[1] - w->pos[1], r, cw, off);
 	} else {
 		gcode_word_value(l, 'I', &off[0]);
 		gcode_word_value(l, 'J', &off[1]);
@@ -302,19 +293,12 @@ static int arc_start(struct gcwalk *w, const struct gcode_line *l, const double 
 					    line, GCWALK_COORD_MAX);
 	a->rvec[0] = -off[0];
 	a->rvec[1] = -off[1];
-	double rt[2] = {to[0] - a->centre[0], to[1] - a->centre[1]};
-	double ang = atan2(a->rvec[0] * rt[1] - a->rvec[1] * rt[0],
-			   a->rvec[0] * rt[0] + a->rvec[1] * rt[1]);
-	if (ang < 0)
-		ang += 2 * M_PI;
-	if (cw)
-		ang -= 2 * M_PI;
-	if (fabs(ang) < 1e-9 && to[0] == w->pos[0] && to[1] == w->pos[1])
-		ang = 2 * M_PI; /* back to the start: a whole circle */
+	bool back = to[0] == w->pos[0] && to[1] == w->pos[1]; /* a whole circle */
+	double ang = st_arc_sweep(a->rvec[0], a->rvec[1], to[0] - a->centre[0],
+				  to[1] - a->centre[1], cw, back);
 	ang += (cw ? -2 * M_PI : 2 * M_PI) * circles;
 	double flat = hypot(off[0], off[1]) * fabs(ang), dz = to[2] - w->pos[2];
-	double mm = hypot(flat, dz), n = floor(mm / GCWALK_ARC_SEGMENT_MM);
-	a->nseg = n < 1 ? 1 : n > GCWALK_ARC_SEGMENTS_MAX ? GCWALK_ARC_SEGMENTS_MAX : (unsigned)n;
+	a->nseg = st_arc_segments(hypot(flat, dz));
 	a->seg = 0;
 	a->g = l->number;
 	a->angle = ang;

@@ -31,15 +31,15 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "st_arc.h"
 #include "st_error.h"
 
 /* Farthest coordinate accepted, mm (keeps nm coordinates within int64). */
 #define GCWALK_COORD_MAX 1e6
-/* Arc chords: Marlin's MM_PER_ARC_SEGMENT (mm), a bound on their number
- * per arc (a 1 m radius then strays under 0.001 mm from the circle), and
- * Marlin's limit on P full circles. */
-#define GCWALK_ARC_SEGMENT_MM 1.0
-#define GCWALK_ARC_SEGMENTS_MAX 3600
+/* Arc chords as Marlin cuts them (st_arc.h), and Marlin's limit on P full
+ * circles. */
+#define GCWALK_ARC_SEGMENT_MM ST_ARC_SEGMENT_MM
+#define GCWALK_ARC_SEGMENTS_MAX ST_ARC_SEGMENTS_MAX
 #define GCWALK_ARC_CIRCLES_MAX 100
 
 /* One motion line. */

@@ -287,6 +287,10 @@ static void g_code(struct x3g_translator *t, const struct gcode_line *l, struct 
 	case 1:
 		x3g_move(t, w);
 		break;
+	case 2:
+	case 3:
+		x3g_arc(t, l, w);
+		break;
 	case 4:
 		if (w->flag & BIT_P) {
 			x3g_begin(t, 133);

@@ -12,6 +12,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "st_arc.h"
 #include "x3g.h"
 
 /* Axis bits, as S3G's axes bitfields and GPX's word flags use them. */
@@ -36,7 +37,9 @@ enum {
 #define AX_B 4
 #define NOZZLE_MAX 280u	   /* GPX clamps nozzle targets here (C) */
 #define WAIT_FOREVER 0xffffu /* GPX MAX_TIMEOUT: wait timeouts when no P (s) */
-#define OUT_CAP 1024	   /* bytes one line can produce, with room to spare */
+/* Bytes one line can produce, with room to spare: an arc's chords
+ * (x3g_arc) are the most, one 32-byte point each. */
+#define OUT_CAP (40 * (ST_ARC_SEGMENTS_MAX + 25))
 
 enum prog_state { PROG_READY, PROG_RUNNING, PROG_ENDED };
 
@@ -115,6 +118,8 @@ void x3g_cmd_message(struct x3g_translator *t, const char *msg, unsigned row, un
 
 /* G0/G1 to the line's target. */
 void x3g_move(struct x3g_translator *t, const struct x3g_words *w);
+/* G2/G3 (l's I J or R): X3G has no arc, so its chords as Marlin cuts them. */
+void x3g_arc(struct x3g_translator *t, const struct gcode_line *l, const struct x3g_words *w);
 void x3g_queue_absolute(struct x3g_translator *t);
 /* After homing or M132: the axes in flag have no known position. */
 void x3g_after_homing(struct x3g_translator *t, unsigned flag);

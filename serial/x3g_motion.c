@@ -233,6 +233,65 @@ void x3g_move(struct x3g_translator *t, const struct x3g_words *w)
 		t->known |= w->flag & t->mask;
 }
 
+/*
+ * The arc of a G2/G3 as the chords Marlin's ARC_SUPPORT cuts it into
+ * (st_arc.h), each one point: the centre from I J (from the start) or R,
+ * Z and E spread evenly, the last chord ending on the target; in the
+ * line's own frame (work offset, relative or absolute axes).
+ */
+void x3g_arc(struct x3g_translator *t, const struct gcode_line *l, const struct x3g_words *w)
+{
+	const double *off = t->offset[t->cur_offset];
+	int ax = t->cur_tool == 0 ? AX_A : AX_B;
+	bool cw = l->number == 2, rel_e = t->rel_xyz || t->rel_e;
+	double from[3], to[3], o[2] = {0, 0}, r, de = 0, prev[3];
+
+	if ((t->known & BITS_XYZ) != BITS_XYZ) {
+		x3g_warn(t, "G%d from a position not known (before homing or G92); nothing written",
+			 l->number);
+		return;
+	}
+	for (int i = 0; i < 3; i++) {
+		from[i] = prev[i] = t->cur[i] - off[i];
+		to[i] = !(w->flag & (1u << i)) ? from[i] : t->rel_xyz ? from[i] + w->v[i] : w->v[i];
+	}
+	if (gcode_word_value(l, 'R', &r)) {
+		st_arc_r_offset(to[0] - from[0], to[1] - from[1], r, cw, o);
+	} else {
+		gcode_word_value(l, 'I', &o[0]);
+		gcode_word_value(l, 'J', &o[1]);
+	}
+	if (o[0] == 0 && o[1] == 0) {
+		x3g_warn(t, "G%d needs its centre: I and J, or R; nothing written", l->number);
+		return;
+	}
+	if (w->flag & (1u << ax))
+		de = rel_e ? w->v[ax] : w->v[ax] - t->cur[ax];
+	double ang = st_arc_sweep(-o[0], -o[1], to[0] - from[0] - o[0], to[1] - from[1] - o[1], cw,
+				  to[0] == from[0] && to[1] == from[1]);
+	unsigned n = st_arc_segments(hypot(hypot(o[0], o[1]) * fabs(ang), to[2] - from[2]));
+	double e0 = t->cur[ax];
+
+	for (unsigned k = 1; k <= n; k++) {
+		double f = (double)k / n, c = cos(ang * f), s = sin(ang * f), p[3];
+		struct x3g_words cw_ = {.flag = BITS_XYZ | (w->flag & BIT_F), .f = w->f};
+
+		p[0] = from[0] + o[0] - o[0] * c + o[1] * s;
+		p[1] = from[1] + o[1] - o[0] * s - o[1] * c;
+		p[2] = from[2] + (to[2] - from[2]) * f;
+		if (k == n)
+			memcpy(p, to, sizeof(p));
+		for (int i = 0; i < 3; i++)
+			cw_.v[i] = t->rel_xyz ? p[i] - prev[i] : p[i];
+		if (de != 0) {
+			cw_.flag |= 1u << ax;
+			cw_.v[ax] = rel_e ? de * f - de * (k - 1) / n : e0 + de * f;
+		}
+		x3g_move(t, &cw_);
+		memcpy(prev, p, sizeof(prev));
+	}
+}
+
 /* 131/132 find axes minimum/maximum at the slowest homing rate of the axes. */
 static void home_axes(struct x3g_translator *t, unsigned axes, enum x3g_endstop dir,
 		      const struct x3g_words *w)

@@ -80,14 +80,16 @@ static void set_accel(struct gcodew *w, double v)
 	est_planner_set_accel(w->est, &w->s->limits, a, a);
 }
 
-/* Write one move op and feed it to the estimator. */
+/* Write one move op (G1, or G2/G3 for an arc) and feed it to the
+ * estimator. */
 static int emit_move(struct gcodew *w, const struct op *o)
 {
 	int64_t x = o->xy ? llround(o->x * XYZ_UNITS) : w->wx;
 	int64_t y = o->xy ? llround(o->y * XYZ_UNITS) : w->wy;
-	int64_t z = llround(o->z * XYZ_UNITS), epos, de;
+	int64_t z = llround(o->z * XYZ_UNITS), epos, de, ci = 0, cj = 0;
 	long long f = llround(o->f * 60);
-	bool mx, my, mz;
+	bool mx, my, mz, arc;
+	int arc_rc = 0;
 	char line[6 * NUM_MAX];
 	size_t len;
 
@@ -117,9 +119,17 @@ static int emit_move(struct gcodew *w, const struct op *o)
 		return 0;
 	if (f < 1)
 		f = 1;
+	/* An arc's centre, from its start as written (I J); a line when its
+	 * ends meet once written, which G2/G3 would read as a whole circle. */
+	arc = o->arc && w->xy_known && (mx || my);
+	if (arc) {
+		ci = llround(o->cx * XYZ_UNITS) - w->wx;
+		cj = llround(o->cy * XYZ_UNITS) - w->wy;
+		arc = ci || cj;
+	}
 	/* The line is assembled here and written at once (see gcodew_fmt_units). */
 	len = 2;
-	memcpy(line, "G1", 2);
+	memcpy(line, arc ? (o->ccw ? "G3" : "G2") : "G1", 2);
 	if (mx) {
 		memcpy(line + len, " X", 2);
 		len += 2 + gcodew_fmt_units(line + len + 2, x, XYZ_DIGITS);
@@ -127,6 +137,12 @@ static int emit_move(struct gcodew *w, const struct op *o)
 	if (my) {
 		memcpy(line + len, " Y", 2);
 		len += 2 + gcodew_fmt_units(line + len + 2, y, XYZ_DIGITS);
+	}
+	if (arc) {
+		memcpy(line + len, " I", 2);
+		len += 2 + gcodew_fmt_units(line + len + 2, ci, XYZ_DIGITS);
+		memcpy(line + len, " J", 2);
+		len += 2 + gcodew_fmt_units(line + len + 2, cj, XYZ_DIGITS);
 	}
 	if (mz) {
 		memcpy(line + len, " Z", 2);
@@ -144,6 +160,14 @@ static int emit_move(struct gcodew *w, const struct op *o)
 	line[len++] = '\n';
 	fwrite(line, 1, len, w->fp);
 	w->moves++;
+	if (arc) {
+		double from[EST_AXES] = {w->wx / XYZ_UNITS, w->wy / XYZ_UNITS, w->wz / XYZ_UNITS,
+					 w->e_machine};
+		double to[EST_AXES] = {x / XYZ_UNITS, y / XYZ_UNITS, z / XYZ_UNITS,
+				       w->e_machine + de / E_UNITS};
+		arc_rc = gcodew_arc_estimate(w->est, from, to, (w->wx + ci) / XYZ_UNITS,
+					     (w->wy + cj) / XYZ_UNITS, o->ccw, f / 60.0, w->err);
+	}
 	if (o->xy) {
 		w->wx = x;
 		w->wy = y;
@@ -154,6 +178,8 @@ static int emit_move(struct gcodew *w, const struct op *o)
 	w->wf = f;
 	w->epos_units = epos;
 	w->e_machine += de / E_UNITS;
+	if (arc)
+		return arc_rc;
 	return est_planner_add(w->est,
 			       &(struct est_move){x / XYZ_UNITS, y / XYZ_UNITS, z / XYZ_UNITS,
 						  w->e_machine, f / 60.0},

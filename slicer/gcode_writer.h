@@ -229,6 +229,9 @@ struct gcodew_settings {
 					   * draws them into thumbnail_block */
 	const char *thumbnail_block;	  /* comment lines written after the header's
 					   * first line; not owned; NULL: none */
+	const char *slicer_block;	  /* the slicer's own settings' header lines
+					   * (slicer_settings_text), written after the
+					   * writer's; not owned; NULL: none */
 	const char *end_filament_gcode;	  /* "" */
 	/* The printer's config for the placeholders (every key of its files,
 	 * host/profile.h), under the writer's own variables; NULL: none.  Not
@@ -269,6 +272,19 @@ struct gcodew_settings {
 	 * original path's.  Listed in the header when not 0.
 	 * mm; 0.0125 (PrusaSlicer's gcode_resolution), 0 = every point */
 	double gcode_resolution;
+	/* PrusaSlicer 2.6's arc_fitting = emit_center (host code sets it only
+	 * for a flavour whose firmware takes arcs): each run of one bead width
+	 * of an extrusion path is first fitted with circular arcs within the
+	 * same tolerance as gcode_resolution (arcfit.h: every point of the
+	 * path within it of the arc and the arc within it of the path), the
+	 * rest simplified as above; an arc is written as G2 (clockwise) or G3
+	 * with its centre as I J from its start, its filament the arc's
+	 * length times the run's flow (the run keeps its filament as above).
+	 * Travels stay lines, as PrusaSlicer's, and so does the spiral vase's
+	 * transition layer (its flow ramp).  The estimate (and M73) times
+	 * an arc as Marlin prints it, in chords (st_arc.h).  Listed in the
+	 * header when set.  false (PrusaSlicer's disabled) */
+	bool arc_fitting;
 
 	/* Progress for the firmware's display (PrusaSlicer's remaining_times):
 	 * M73 P<percent of the estimated time done> R<minutes left> first in

@@ -163,6 +163,7 @@ void gcodew_settings_init(struct gcodew_settings *s)
 	s->spiral_vase = setting_default_number("spiral_vase", false, &v) && v != 0;
 	s->ironing = setting_default_number("ironing", false, &v) && v != 0;
 	s->ironing_type = settings_find("ironing_type")->dflt;
+	s->arc_fitting = !strcmp(settings_find("arc_fitting")->dflt, "emit_center");
 	setting_default_number("ironing_flowrate", false, &s->ironing_flowrate);
 	setting_default_number("ironing_spacing", false, &s->ironing_spacing);
 	setting_default_number("ironing_speed", false, &s->ironing_speed);
@@ -440,6 +441,8 @@ void gcodew_put_header(struct gcodew *w, const struct gcodew_summary *sum)
 	}
 	if (w->s->spiral_vase)
 		gcodew_put(w, "; spiral_vase = 1\n");
+	if (w->s->arc_fitting)
+		gcodew_put(w, "; arc_fitting = emit_center\n");
 	if (w->s->ironing) {
 		gcodew_fmt_num(n, w->s->ironing_flowrate, 6);
 		gcodew_put(w, "; ironing = 1\n; ironing_type = %s\n; ironing_flowrate = %s%%\n",
@@ -449,6 +452,8 @@ void gcodew_put_header(struct gcodew *w, const struct gcodew_summary *sum)
 		gcodew_fmt_num(n, w->s->ironing_speed, 6);
 		gcodew_put(w, "; ironing_speed = %s\n", n);
 	}
+	if (w->s->slicer_block)
+		gcodew_put(w, "%s", w->s->slicer_block);
 	for (int a = 0; a < EST_AXES; a++) {
 		char f[NUM_MAX], acc[NUM_MAX], j[NUM_MAX];
 		gcodew_fmt_num(f, lim->max_feedrate[a], 3);

@@ -21,7 +21,7 @@ static int layer_time(struct gcodew *w, const double start[EST_AXES], double f, 
 {
 	struct est_planner *p = est_planner_new(&w->s->limits, start, w->err);
 	struct est_result r;
-	double x = start[EST_X], y = start[EST_Y], e = 0;
+	double x = start[EST_X], y = start[EST_Y], z = start[EST_Z], e = 0;
 	int rc = 0;
 
 	if (!p)
@@ -37,10 +37,12 @@ static int layer_time(struct gcodew *w, const double start[EST_AXES], double f, 
 		}
 		if (o->kind != OP_MOVE)
 			continue;
+		double from[EST_AXES] = {x, y, z, e};
 		if (o->xy) {
 			x = o->x;
 			y = o->y;
 		}
+		z = o->z;
 		if (o->mv == MV_EXTRUDE) {
 			e += o->e;
 			v = slowed(v, f, w->s->min_print_speed);
@@ -49,7 +51,11 @@ static int layer_time(struct gcodew *w, const double start[EST_AXES], double f, 
 		} else if (o->mv == MV_UNRETRACT) {
 			e += o->e;
 		}
-		rc = est_planner_add(p, &(struct est_move){x, y, o->z, e, v}, w->err);
+		if (o->arc)
+			rc = gcodew_arc_estimate(p, from, (double[EST_AXES]){x, y, z, e}, o->cx,
+						 o->cy, o->ccw, v, w->err);
+		else
+			rc = est_planner_add(p, &(struct est_move){x, y, o->z, e, v}, w->err);
 	}
 	est_planner_result(p, &r);
 	est_planner_free(p);

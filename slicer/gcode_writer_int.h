@@ -2,9 +2,11 @@
  * gcode_writer_int.h - what the G-code writer's parts share:
  * gcode_writer.c (emission and the writer's life), gcode_writer_config.c
  * (the settings table: defaults, checks, placeholders, the header),
- * gcode_writer_plan.c (a layer's paths into moves) and
- * gcode_writer_cool.c (fan and slow-down per layer); nothing else
- * includes it.  The contract is gcode_writer.h.
+ * gcode_writer_plan.c (a layer's paths into moves),
+ * gcode_writer_cool.c (fan and slow-down per layer), gcode_writer_simplify.c
+ * and gcode_writer_arc.c (gcode_resolution, arc_fitting) and
+ * gcode_writer_progress.c (M73); nothing else includes it.  The contract
+ * is gcode_writer.h.
  */
 #ifndef STRATUM_SLICER_GCODE_WRITER_INT_H
 #define STRATUM_SLICER_GCODE_WRITER_INT_H
@@ -15,6 +17,7 @@
 #include <stdio.h>
 #include <sys/types.h>
 
+#include "arcfit.h"
 #include "estimate.h"
 #include "gcode_writer.h"
 #include "placeholder.h"
@@ -42,9 +45,19 @@ struct op {
 	enum move_kind mv;
 	enum path_role role; /* OP_ROLE */
 	bool xy;	     /* the move has an XY target */
+	bool arc, ccw;	     /* arc_fitting: an arc (G3 when ccw, else G2) around (cx, cy) */
+	double cx, cy;	     /* mm */
 	double x, y, z;	     /* mm, target */
 	double e;	     /* mm of filament, see enum move_kind */
 	double f;	     /* mm/s */
+};
+
+/* arc_fitting: the segment from a point of a simplified path to the
+ * next, when it is an arc (arcfit.h), printed forwards. */
+struct gcodew_arcseg {
+	bool arc, ccw;
+	double cx, cy; /* centre, nm */
+	double len;    /* arc length, nm */
 };
 
 /* remaining_times: where an M73 line goes in the body, and the time planned
@@ -98,7 +111,10 @@ struct gcodew {
 	size_t *sidx;		 /* index in the original path */
 	double *sstretch;	 /* filament factor of the segment from the point */
 	struct path_point *spts; /* the kept points */
-	size_t sxycap, smvcap, sbalcap, skeepcap, sidxcap, sstretchcap, sptscap;
+	struct gcodew_arcseg *sarc; /* arc_fitting: the segment from the point */
+	struct arcfit_work afit;
+	bool no_arcs;		 /* the path being planned gets lines only */
+	size_t sxycap, smvcap, sbalcap, skeepcap, sidxcap, sstretchcap, sptscap, sarccap;
 	struct toolpath view;	 /* spts as a path of the original's role */
 
 	/* Emission state */
@@ -147,14 +163,27 @@ int gcodew_plan_retract(struct gcodew *w);
 
 /* gcode_writer_simplify.c */
 /* Path p within gcode_resolution into w->view (w->sidx, w->sstretch
- * beside it); p itself when the key is 0.  Sets *out to the path to
- * print. */
+ * and, with arc_fitting, w->sarc beside it); p itself when the key is 0.
+ * Sets *out to the path to print. */
 int gcodew_simplify_path(struct gcodew *w, const struct toolpath *p, const struct toolpath **out);
 /* The turns of w->route (after the start (ax, ay), nm) within
  * gcode_resolution: dropped ones removed from it. */
 int gcodew_simplify_route(struct gcodew *w, int64_t ax, int64_t ay);
 /* Release the scratch arrays above. */
 void gcodew_simplify_free(struct gcodew *w);
+
+/* gcode_writer_arc.c: arc_fitting */
+/* Fit arcs to the run of points i .. j of w->sxy within tol nm: their
+ * ends kept and w->sarc set, the points between dropped; the stretches
+ * between arcs (lines) are marked with mark_lines(w, a, b, tol). */
+int gcodew_arcs_run(struct gcodew *w, size_t i, size_t j, double tol,
+		    int (*mark_lines)(struct gcodew *w, size_t a, size_t b, double tol));
+/* Add the arc from `from` to `to` (X Y Z E, mm) around (cx, cy) (mm),
+ * counter-clockwise when ccw, to the estimator p in the chords Marlin
+ * cuts it into (st_arc.h), Z and E spread evenly, at v mm/s. */
+int gcodew_arc_estimate(struct est_planner *p, const double from[EST_AXES],
+			const double to[EST_AXES], double cx, double cy, bool ccw, double v,
+			struct st_error *err);
 
 /* gcode_writer_progress.c */
 /* remaining_times: an M73 line here in the body (last: the end's P100 R0);
@@ -171,6 +200,12 @@ int gcodew_accel_written(const struct gcodew_settings *s, double v);
 /* Decide layer li's fan and slow its extrusions down if it is too fast;
  * start is the nozzle's position before the layer. */
 int gcodew_cool_layer(struct gcodew *w, size_t li, const double start[EST_AXES]);
+
+/* Whether the path being simplified is fitted with arcs (arc_fitting). */
+static inline bool gcodew_arcs(const struct gcodew *w)
+{
+	return w->s->arc_fitting && !w->no_arcs;
+}
 
 /* Point index of step k (0 .. n or n-1) of a path printed forwards or
  * reversed; a closed loop ends back at its seam. */

@@ -270,15 +270,19 @@ static int record_wipe(struct gcodew *w, const struct toolpath *p, bool rev, siz
  * Extrude from pa to pb (path pi of layer li; pb is its point at, for
  * messages), ending at height z: a bead width nm wide, its filament from
  * the flow model at the top of gcode_writer.h times share, at speed or
- * slower where the volumetric limits ask it.  A bead narrower than the
- * layer is refused; a segment of no length adds nothing.
+ * slower where the volumetric limits ask it; along the arc when arc is
+ * not NULL (printed backwards when rev).  A bead narrower than the layer
+ * is refused; a segment of no length adds nothing.
  */
 static int plan_segment(struct gcodew *w, const struct layer_paths *l, size_t li, size_t pi,
 			size_t at, const struct path_point *pa, const struct path_point *pb,
-			int64_t width, double z, double speed, double share)
+			int64_t width, double z, double speed, double share,
+			const struct gcodew_arcseg *arc, bool rev)
 {
 	double h = l->height, bead = width / SLICE_UNITS_PER_MM;
-	double len = hypot((double)(pb->x - pa->x), (double)(pb->y - pa->y)) / SLICE_UNITS_PER_MM;
+	double len = (arc ? arc->len : hypot((double)(pb->x - pa->x), (double)(pb->y - pa->y))) /
+		     SLICE_UNITS_PER_MM;
+	int rc;
 	bool iron = l->paths[pi].role == PATH_IRONING;
 	double area = iron ? bead * w->s->layer_height * w->s->ironing_flowrate / 100
 			   : (bead - h) * h + M_PI * h * h / 4;
@@ -295,9 +299,22 @@ static int plan_segment(struct gcodew *w, const struct layer_paths *l, size_t li
 		speed = fmin(speed, w->s->max_volumetric_speed / area);
 	if (w->s->filament_max_volumetric_speed > 0)
 		speed = fmin(speed, w->s->filament_max_volumetric_speed / area);
-	return push_move(w, MV_EXTRUDE, true, pb->x / SLICE_UNITS_PER_MM,
-			 pb->y / SLICE_UNITS_PER_MM, z,
-			 share * area * len / w->fil_area * w->s->extrusion_multiplier, speed);
+	rc = push_move(w, MV_EXTRUDE, true, pb->x / SLICE_UNITS_PER_MM, pb->y / SLICE_UNITS_PER_MM,
+		       z, share * area * len / w->fil_area * w->s->extrusion_multiplier, speed);
+	if (rc == 0 && arc) {
+		struct op *o = &w->ops[w->nops - 1];
+		o->arc = true;
+		o->ccw = arc->ccw != rev;
+		o->cx = arc->cx / SLICE_UNITS_PER_MM;
+		o->cy = arc->cy / SLICE_UNITS_PER_MM;
+	}
+	return rc;
+}
+
+/* The arc from kept point f of the path being planned, or NULL for a line. */
+static const struct gcodew_arcseg *arc_at(const struct gcodew *w, bool simplified, size_t f)
+{
+	return simplified && gcodew_arcs(w) && w->sarc[f].arc ? &w->sarc[f] : NULL;
 }
 
 /* PrusaSlicer 2.5's acceleration for a path of role on layer li (0-based):
@@ -347,11 +364,15 @@ static int plan_path(struct gcodew *w, const struct layer_paths *l, size_t li, s
 		size_t a = trav(q, rev, k), b = trav(q, rev, k + 1), f = rev ? b : a;
 		const struct path_point *pa = &q->pts[a], *pb = &q->pts[b];
 		rc = plan_segment(w, l, li, pi, simplified ? w->sidx[f] : f, pa, pb, q->pts[f].width,
-				  w->layer_z, speed, simplified ? w->sstretch[f] : 1);
+				  w->layer_z, speed, simplified ? w->sstretch[f] : 1,
+				  arc_at(w, simplified, f), rev);
 	}
 	if (rc == 0 && s->default_acceleration > 0) /* reset after the path, as PrusaSlicer */
 		rc = push(w, (struct op){.kind = OP_ACCEL, .f = s->default_acceleration});
-	if (rc == 0 && s->wipe)
+	/* With arcs the wipe follows the path as sliced, not the arcs' chords. */
+	if (rc == 0 && s->wipe && s->arc_fitting)
+		rc = record_wipe(w, p, rev, p->closed ? p->n + 1 : p->n, 0);
+	else if (rc == 0 && s->wipe)
 		rc = record_wipe(w, q, rev, steps, 0);
 	return rc;
 }
@@ -419,9 +440,14 @@ static int plan_spiral(struct gcodew *w, const struct layer_paths *l, size_t li)
 	double h = l->height, z0 = l->z - h, speed = path_speed(w->s, p, li);
 	double total = 0, done = 0, best = INFINITY;
 	size_t first = 0;
-	int rc = gcodew_simplify_path(w, p, &q);
-	bool simplified = q != p;
+	int rc;
+	bool simplified;
 
+	/* The transition layer's flow rises along the loop, point by point:
+	 * lines only, so the ramp is not one arc long. */
+	w->no_arcs = !w->spiral_below;
+	rc = gcodew_simplify_path(w, p, &q);
+	simplified = q != p;
 	if (rc)
 		return rc;
 	for (size_t k = 0; k < p->n; k++) {
@@ -457,10 +483,14 @@ static int plan_spiral(struct gcodew *w, const struct layer_paths *l, size_t li)
 		t = fmin(1, done / total);
 		rc = plan_segment(w, l, li, 0, simplified ? w->sidx[a] : a, pa, pb, pa->width,
 				  z0 + h * t, speed,
-				  (w->spiral_below ? 1 : t) * (simplified ? w->sstretch[a] : 1));
+				  (w->spiral_below ? 1 : t) * (simplified ? w->sstretch[a] : 1),
+				  arc_at(w, simplified, a), false);
 	}
 	w->layer_z = l->z;
-	if (rc == 0 && w->s->wipe)
+	w->no_arcs = false;
+	if (rc == 0 && w->s->wipe && w->s->arc_fitting)
+		rc = record_wipe(w, p, false, p->n + 1, simplified ? w->sidx[first] : first);
+	else if (rc == 0 && w->s->wipe)
 		rc = record_wipe(w, q, false, q->n + 1, first);
 	return rc;
 }

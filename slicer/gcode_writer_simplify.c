@@ -6,7 +6,10 @@
  * kept points are moved so that it encloses the area it did (a round
  * wall's chords would otherwise print it smaller), within the same bound;
  * each run's filament is kept by printing its simplified segments with
- * the run's original length over its simplified length.
+ * the run's original length over its simplified length.  With
+ * arc_fitting a run is first fitted with arcs (gcode_writer_arc.c) and
+ * only the stretches between them are simplified to lines; its length
+ * is then along the arcs.
  */
 #include "gcode_writer_int.h"
 
@@ -42,7 +45,8 @@ static double run_length(const int64_t *xy, size_t i, size_t j)
 	return len;
 }
 
-/* Length (nm) of the kept points (as moved, w->smv) from point i to point j. */
+/* Length (nm) of the kept points (as moved, w->smv) from point i to point
+ * j, along the arcs where arc_fitting fitted them. */
 static double kept_length(const struct gcodew *w, size_t i, size_t j)
 {
 	const int64_t *xy = w->smv;
@@ -50,20 +54,20 @@ static double kept_length(const struct gcodew *w, size_t i, size_t j)
 
 	for (size_t a = i, b = i + 1; b <= j; b++)
 		if (w->skeep[b]) {
-			len += hypot((double)(xy[2 * b] - xy[2 * a]), (double)(xy[2 * b + 1] - xy[2 * a + 1]));
+			if (gcodew_arcs(w) && w->sarc[a].arc)
+				len += w->sarc[a].len;
+			else
+				len += hypot((double)(xy[2 * b] - xy[2 * a]),
+					     (double)(xy[2 * b + 1] - xy[2 * a + 1]));
 			a = b;
 		}
 	return len;
 }
 
-/*
- * Mark the run of segments [i, j) (points i to j), move its kept points so
- * it keeps its area (simplify_balance), and set its filament factor at
- * each of its points.
- */
-static int mark_run(struct gcodew *w, size_t i, size_t j, double tol)
+/* Mark the points i to j as lines within tol and move the kept ones so
+ * the lines keep the area (simplify_balance); the ends stay. */
+static int mark_lines(struct gcodew *w, size_t i, size_t j, double tol)
 {
-	double orig, now;
 	size_t kept = 0;
 	int rc = simplify_mark(&w->simp, w->sxy + 2 * i, j - i + 1, tol, w->skeep + i, w->err);
 
@@ -82,6 +86,31 @@ static int mark_run(struct gcodew *w, size_t i, size_t j, double tol)
 				c++;
 			}
 	}
+	return 0;
+}
+
+/*
+ * Mark the run of segments [i, j) (points i to j): arcs where arc_fitting
+ * fits them, lines between; then set its filament factor at each of its
+ * points.
+ */
+static int mark_run(struct gcodew *w, size_t i, size_t j, double tol)
+{
+	double orig, now;
+	size_t kept = 0;
+	int rc;
+
+	if (gcodew_arcs(w)) {
+		for (size_t k = i; k <= j; k++)
+			w->sarc[k].arc = false;
+		rc = gcodew_arcs_run(w, i, j, tol, mark_lines);
+	} else {
+		rc = mark_lines(w, i, j, tol);
+	}
+	if (rc)
+		return rc;
+	for (size_t k = i; k <= j; k++)
+		kept += w->skeep[k];
 	orig = run_length(w->sxy, i, j);
 	now = kept_length(w, i, j);
 	if (kept == j - i + 1 || !(now > 0)) {
@@ -89,6 +118,9 @@ static int mark_run(struct gcodew *w, size_t i, size_t j, double tol)
 		 * smaller than the tolerance): kept as it is. */
 		for (size_t k = i; k <= j; k++)
 			w->skeep[k] = true;
+		if (gcodew_arcs(w))
+			for (size_t k = i; k <= j; k++)
+				w->sarc[k].arc = false;
 		memcpy(w->smv + 2 * i, w->sxy + 2 * i, 2 * (j - i + 1) * sizeof(*w->smv));
 		orig = now = 1;
 	}
@@ -125,6 +157,8 @@ int gcodew_simplify_path(struct gcodew *w, const struct toolpath *p, const struc
 	GROW(sidx, m);
 	GROW(sstretch, m);
 	GROW(spts, m);
+	if (gcodew_arcs(w))
+		GROW(sarc, m);
 	for (size_t k = 0; k < m; k++) {
 		w->sxy[2 * k] = p->pts[k % p->n].x;
 		w->sxy[2 * k + 1] = p->pts[k % p->n].y;
@@ -145,6 +179,8 @@ int gcodew_simplify_path(struct gcodew *w, const struct toolpath *p, const struc
 			w->spts[c].y = w->smv[2 * k + 1];
 			w->sidx[c] = k;
 			w->sstretch[c] = w->sstretch[k];
+			if (gcodew_arcs(w))
+				w->sarc[c] = w->sarc[k];
 			c++;
 		}
 	w->view = (struct toolpath){.role = p->role, .closed = p->closed, .n = c, .pts = w->spts};
@@ -190,4 +226,6 @@ void gcodew_simplify_free(struct gcodew *w)
 	free(w->sidx);
 	free(w->sstretch);
 	free(w->spts);
+	free(w->sarc);
+	arcfit_work_free(&w->afit);
 }

@@ -40,6 +40,9 @@ static const char *const limits_usage_names[] = {"emit_to_gcode", "time_estimate
 
 static const char *const home_names[] = {"min", "max"};
 
+/* PrusaSlicer 2.6's ArcFittingType names. */
+static const char *const arc_fitting_names[] = {"disabled", "emit_center"};
+
 /* PrusaSlicer's IroningType names, in enum iron_type order (slicer/ironing.h). */
 static const char *const ironing_names[] = {"top", "topmost", "solid"};
 
@@ -283,6 +286,11 @@ static const struct setting table[] = {
     {"gcode_resolution", NUM, S_, 0, 1, 0, "mm", "0.0125", NULL, NULL, 0, NULL,
      "every path and travel is written as a polyline with fewer points, none of the dropped "
      "ones farther than this from it; filament and bead widths as sliced; 0 = every point"},
+    {"arc_fitting", SETTING_CHOICE, S_, 0, 0, 0, "", "disabled", NULL,
+     CHOICES(arc_fitting_names), NULL,
+     "emit_center: runs of extrusion that an arc holds within gcode_resolution (half of it on "
+     "the outer wall) are written as G2/G3 with the centre as I J; only for the marlin, marlin2 "
+     "and reprapfirmware flavours (any other is warned about and gets lines)"},
 
     {"travel_speed", NUM, S_, 0, 1000, GT, "mm/s", "130", NULL, NULL, 0, "Speed", ""},
     {"travel_speed_z", NUM, S_, 0, 1000, 0, "mm/s", "0", NULL, NULL, 0, NULL,

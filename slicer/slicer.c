@@ -693,6 +693,7 @@ int slicer_run(const struct mesh *m, const struct slicer_config *c, const char *
 	struct gcodew_settings gs;
 	struct gcodew_summary gsum;
 	struct sink k = {.gs = &gs, .path = path};
+	char block[2048];
 	int rc;
 
 	if (!path || !*path)
@@ -700,6 +701,8 @@ int slicer_run(const struct mesh *m, const struct slicer_config *c, const char *
 	if (!c)
 		return slicer_config_check(c, err);
 	gs = c->gcodew;
+	if (slicer_settings_text(c, block, sizeof(block)) < sizeof(block))
+		gs.slicer_block = block;
 	gs.nozzle_diameter = c->perim.nozzle_diameter;
 	gs.layer_height = c->layer_height;
 	gs.first_layer_height = c->first_layer_height;

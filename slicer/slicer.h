@@ -208,6 +208,17 @@ void slicer_config_init(struct slicer_config *c, double nozzle_diameter);
 void slicer_config_modes(struct slicer_config *c);
 
 /*
+ * slicer_settings_text - the G-code header's lines ("; key = value", under
+ * PrusaSlicer's keys) of the settings the slicer itself prints with and the
+ * G-code writer does not list: walls, skins, sparse infill, skirt and brim,
+ * support, seam, elephant foot; as c prints them (after slicer_config_modes:
+ * a spiral vase lists its one wall and no infill; a fill_pattern Stratum does
+ * not print lists the rectilinear printed instead).  Writes at most cap
+ * bytes, NUL included; returns the length of the whole text (as snprintf).
+ */
+size_t slicer_settings_text(const struct slicer_config *c, char *buf, size_t cap);
+
+/*
  * slicer_config_check - refuse settings that cannot make a print before any
  * work: layer heights not > 0 or above the nozzle, the walls' settings
  * (perim_settings_check for both layer heights), infill density outside

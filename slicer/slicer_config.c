@@ -5,6 +5,7 @@
 #include "slicer.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "adaptive.h"
@@ -206,4 +207,31 @@ void slicer_raft_support(const struct slicer_config *c, struct support_settings 
 	s->raft_expansion = c->raft.expansion;
 	s->raft_first_layer_density = c->raft.first_layer_density;
 	s->raft_first_layer_expansion = c->raft.first_layer_expansion;
+}
+
+size_t slicer_settings_text(const struct slicer_config *c, char *buf, size_t cap)
+{
+	struct slicer_config m = *c;
+	const struct setting *seam = settings_find("seam_position");
+	int n;
+
+	slicer_config_modes(&m);
+	n = snprintf(buf, cap,
+		     "; perimeters = %d\n; top_solid_layers = %d\n; bottom_solid_layers = %d\n"
+		     "; fill_density = %g%%\n; fill_pattern = %s\n; top_fill_pattern = %s\n"
+		     "; bottom_fill_pattern = %s\n; fill_angle = %g\n"
+		     "; solid_infill_below_area = %g\n; external_perimeters_first = %d\n"
+		     "; seam_position = %s\n; skirts = %d\n; skirt_distance = %g\n"
+		     "; skirt_height = %d\n; brim_width = %g\n; support_material = %d\n"
+		     "; support_material_threshold = %d\n; elefant_foot_compensation = %g\n",
+		     m.perim.perimeters, m.infill.top_solid_layers, m.infill.bottom_solid_layers,
+		     m.infill.density, m.infill.pattern,
+		     m.infill.top_monotonic ? "monotonic" : "rectilinear",
+		     m.infill.bottom_monotonic ? "monotonic" : "rectilinear", m.infill.fill_angle,
+		     m.infill.solid_infill_below_area, m.perim.outer_first,
+		     seam && (size_t)m.perim.seam < seam->nnames ? seam->names[m.perim.seam] : "?",
+		     m.skirt.skirts, m.skirt.skirt_distance, m.skirt.skirt_height,
+		     m.skirt.brim_width, m.support.enabled, m.support.threshold,
+		     m.elefant_foot_compensation);
+	return n < 0 ? 0 : (size_t)n;
 }

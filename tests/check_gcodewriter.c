@@ -1100,6 +1100,7 @@ Suite *gcodewriter_suite(void)
 	suite_add_tcase(s, cool);
 	suite_add_tcase(s, est);
 	gcodewriter_simplify_tcases(s);
+	gcodewriter_arcfit_tcases(s);
 	gcodewriter_progress_tcases(s);
 	gcodewriter_retract_tcases(s);
 	gcodewriter_accel_tcases(s);

@@ -362,9 +362,13 @@ START_TEST(test_doc_example_loads)
 	ck_assert_str_eq(c->printers[1].prefix, "/p/bench-sim");
 	ck_assert_double_eq(c->printers[1].sim_speedup, 100);
 	ck_assert_str_eq(c->mqtt.host, "broker.local");
-	ck_assert_str_eq(c->mqtt.username, "farm");
+	ck_assert_str_eq(c->mqtt.username, "farm-1");
 	ck_assert_str_eq(c->mqtt.client_id, "stratum-farm-1");
 	ck_assert_int_eq(c->mqtt.keepalive, 30);
+	ck_assert_int_eq(c->mqtt.tls, 1);
+	ck_assert_str_eq(c->mqtt.tls_version, "tlsv1.2");
+	ck_assert_uint_eq(c->mqtt.ndownload_hosts, 2);
+	ck_assert_str_eq(c->mqtt.download_hosts[1], "10.0.0.5:8080");
 	free(c);
 }
 END_TEST

@@ -216,6 +216,29 @@ START_TEST(two_cubes_two_islands)
 }
 END_TEST
 
+/* `stratum print` takes several models as slice does: its --dry-run G-code
+ * is slice's, byte for byte; G-code among models is refused. */
+START_TEST(print_takes_several_models)
+{
+	char a[PATH_CAP], b[PATH_CAP], gs[PATH_CAP], gp[PATH_CAP];
+	int rc;
+
+	cube_stl(a, "print-a.stl", 20, 20, 5);
+	cube_stl(b, "print-b.stl", 10, 30, 5);
+	snprintf(gs, sizeof(gs), "%s", tu_path("print-slice.gcode"));
+	snprintf(gp, sizeof(gp), "%s", tu_path("print-dry.gcode"));
+	rc = tu_run(out, sizeof(out), "slice '%s' '%s' -o '%s' " MK3S, a, b, gs);
+	ck_assert_msg(rc == 0, "exit %d: %s", rc, out);
+	rc = tu_run(out, sizeof(out), "print '%s' '%s' " MK3S " --dry-run -o '%s' && cmp '%s' '%s'",
+		    a, b, gp, gs, gp);
+	ck_assert_msg(rc == 0, "exit %d: %s", rc, out);
+	rc = tu_run(out, sizeof(out), "print '%s' '%s' " MK3S " --dry-run -o '%s'", a, gs, gp);
+	ck_assert_msg(rc == 2 && strstr(out, "is already G-code or X3G: only models are printed "
+					     "together"),
+		      "exit %d: %s", rc, out);
+}
+END_TEST
+
 START_TEST(model_that_does_not_fit_is_named)
 {
 	char wide[PATH_CAP], plate[PATH_CAP], cube[PATH_CAP], gc[PATH_CAP];
@@ -325,6 +348,7 @@ Suite *multimodel_suite(void)
 	tcase_set_timeout(tc, 120);
 	tcase_add_test(tc, two_cubes_two_islands);
 	tcase_add_test(tc, model_that_does_not_fit_is_named);
+	tcase_add_test(tc, print_takes_several_models);
 	tcase_add_test(tc, one_model_placed_as_before);
 	tcase_add_test(tc, threemf_placement_kept);
 	suite_add_tcase(s, tc);

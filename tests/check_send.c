@@ -448,6 +448,20 @@ START_TEST(marlin_text_commands_as_written)
 }
 END_TEST
 
+/* G-code sliced with arc_fitting (G2/G3 with I J) reaches the printer as
+ * written, and the simulated Marlin runs its arcs (issue 19). */
+START_TEST(marlin_arcs_as_written)
+{
+	static char said[1 << 14];
+	char *gcode = slice_cylinder_for(3, "prusa-i3-mk3s", "--set arc_fitting=emit_center", said,
+					 sizeof(said));
+
+	ck_assert_msg(strstr(gcode, "\nG3 ") || strstr(gcode, "\nG2 "), "no arc written");
+	free(gcode);
+	marlin_log_equals_file(tu_path("cylinder.gcode"));
+}
+END_TEST
+
 /* Runs a corpus script (command cmd) and asserts exit 0 and its summary line. */
 static void corpus_passes(const char *cmd, const char *summary)
 {
@@ -700,6 +714,7 @@ Suite *send_suite(void)
 	tcase_set_timeout(tc, 120);
 	tcase_add_test(tc, marlin_prusaslicer_as_written);
 	tcase_add_test(tc, marlin_text_commands_as_written);
+	tcase_add_test(tc, marlin_arcs_as_written);
 	tcase_add_test(tc, prusaslicer_corpus_sample);
 	tcase_add_test(tc, curaengine_corpus_sample);
 	tcase_add_test(tc, marlin_sigint_during_heatup);

@@ -38,6 +38,7 @@
 #include "fixtures.h"
 #include "gcode.h"
 #include "meshio.h"
+#include "mqtttest.h"
 #include "sfcheck.h"
 #include "suites.h"
 #include "servetest.h"
@@ -1633,130 +1634,10 @@ START_TEST(test_sim_sailfish_resume)
 }
 END_TEST
 
-/* A free loopback TCP port (bound once, then released). */
-static int free_port(void)
-{
-	struct sockaddr_in sa = {.sin_family = AF_INET};
-	socklen_t len = sizeof(sa);
-	int fd = socket(AF_INET, SOCK_STREAM, 0), port;
-
-	inet_pton(AF_INET, "127.0.0.1", &sa.sin_addr);
-	ck_assert(fd >= 0 && bind(fd, (struct sockaddr *)&sa, sizeof(sa)) == 0);
-	ck_assert(getsockname(fd, (struct sockaddr *)&sa, &len) == 0);
-	port = ntohs(sa.sin_port);
-	close(fd);
-	return port;
-}
-
-/* A one-file HTTP server for the node's MQTT downloads. */
-struct file_server {
-	int fd, port;
-	const char *body;
-	pthread_t thread;
-	int served;
-};
-
-static void *file_server_main(void *arg)
-{
-	struct file_server *fs = arg;
-	int c;
-
-	while ((c = accept(fs->fd, NULL, NULL)) >= 0) {
-		char req[4096], head[256];
-		ssize_t n = recv(c, req, sizeof(req) - 1, 0);
-		int hn = snprintf(head, sizeof(head), "HTTP/1.1 200 OK\r\nContent-Length: %zu\r\n"
-					 "Connection: close\r\n\r\n", strlen(fs->body));
-
-		if (n > 0) {
-			send(c, head, (size_t)hn, MSG_NOSIGNAL);
-			send(c, fs->body, strlen(fs->body), MSG_NOSIGNAL);
-			fs->served++;
-		}
-		close(c);
-	}
-	return NULL;
-}
-
-static void file_server_start(struct file_server *fs, const char *body)
-{
-	struct sockaddr_in sa = {.sin_family = AF_INET};
-	socklen_t len = sizeof(sa);
-
-	memset(fs, 0, sizeof(*fs));
-	fs->body = body;
-	fs->fd = socket(AF_INET, SOCK_STREAM, 0);
-	inet_pton(AF_INET, "127.0.0.1", &sa.sin_addr);
-	ck_assert(bind(fs->fd, (struct sockaddr *)&sa, sizeof(sa)) == 0 && listen(fs->fd, 4) == 0);
-	getsockname(fs->fd, (struct sockaddr *)&sa, &len);
-	fs->port = ntohs(sa.sin_port);
-	ck_assert(pthread_create(&fs->thread, NULL, file_server_main, fs) == 0);
-}
-
-static void file_server_stop(struct file_server *fs)
-{
-	shutdown(fs->fd, SHUT_RDWR);
-	close(fs->fd);
-	pthread_join(fs->thread, NULL);
-}
-
-/* What the test's MQTT client saw: the last payload of each topic. */
-#define SEEN_MAX 64
-struct mqtt_seen {
-	pthread_mutex_t mu;
-	int n;
-	char topic[SEEN_MAX][128];
-	char payload[SEEN_MAX][2048];
-	int results; /* messages on .../result */
-};
-
-static void seen_message(struct mosquitto *mosq, void *ctx, const struct mosquitto_message *m)
-{
-	struct mqtt_seen *s = ctx;
-	int i;
-
-	(void)mosq;
-	pthread_mutex_lock(&s->mu);
-	for (i = 0; i < s->n && strcmp(s->topic[i], m->topic); i++)
-		;
-	if (i < SEEN_MAX) {
-		if (i == s->n)
-			s->n++;
-		snprintf(s->topic[i], sizeof(s->topic[i]), "%s", m->topic);
-		snprintf(s->payload[i], sizeof(s->payload[i]), "%.*s", m->payloadlen,
-			 (const char *)m->payload);
-	}
-	if (strstr(m->topic, "/result"))
-		s->results++;
-	pthread_mutex_unlock(&s->mu);
-}
-
-/* Wait up to secs for topic's last payload to contain want; returns a copy in out. */
-static void wait_topic(struct mqtt_seen *s, const char *topic, const char *want, int secs,
-		       char *out, size_t cap)
-{
-	char last[2048] = "";
-
-	for (int t = 0; t < secs * 50; t++) {
-		pthread_mutex_lock(&s->mu);
-		for (int i = 0; i < s->n; i++)
-			if (!strcmp(s->topic[i], topic))
-				snprintf(last, sizeof(last), "%s", s->payload[i]);
-		pthread_mutex_unlock(&s->mu);
-		if (strstr(last, want)) {
-			if (out)
-				snprintf(out, cap, "%s", last);
-			return;
-		}
-		usleep(20000);
-	}
-	ck_abort_msg("%s: '%s', waited for '%s'", topic, last, want);
-}
-
 /* Publish a command to mk3s of the test node (QoS 1). */
 static void send_cmd(struct mosquitto *mq, const char *cmd)
 {
-	ck_assert_int_eq(mosquitto_publish(mq, NULL, "stratum/test-node/mk3s/cmd", (int)strlen(cmd),
-					   cmd, 1, false), 0);
+	watch_send(mq, "stratum/test-node/mk3s/cmd", cmd);
 }
 
 START_TEST(test_mqtt)
@@ -1765,7 +1646,7 @@ START_TEST(test_mqtt)
 	struct file_server fs;
 	struct mqtt_seen seen = {.n = 0};
 	struct mosquitto *mq;
-	char conf[512], text[4096], out[2048], cmd[512];
+	char text[4096], out[2048], cmd[512];
 	int bport, st, results;
 	pid_t broker;
 	long long id;
@@ -1776,23 +1657,13 @@ START_TEST(test_mqtt)
 	}
 	/* The broker, on a loopback port of its own. */
 	bport = free_port();
-	snprintf(conf, sizeof(conf), "%s", tu_path("mosquitto.conf"));
 	snprintf(text, sizeof(text), "listener %d 127.0.0.1\nallow_anonymous true\n"
 				     "persistence false\n", bport);
-	tu_write_str(conf, text);
-	broker = fork();
-	ck_assert(broker >= 0);
-	if (!broker) {
-		int fd = open("/dev/null", O_WRONLY);
-
-		dup2(fd, 1);
-		dup2(fd, 2);
-		execl("/usr/sbin/mosquitto", "mosquitto", "-c", conf, (char *)NULL);
-		_exit(127);
-	}
+	broker = broker_start(bport, text);
 	file_server_start(&fs, "G28\nG1 X5\nG4 P20000\nG1 X6\n");
 	snprintf(text, sizeof(text), "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = test-instant\n"
-				     "\n[mqtt]\nhost = 127.0.0.1\nport = %d\nkeepalive = 5\n", bport);
+				     "\n[mqtt]\nhost = 127.0.0.1\nport = %d\nkeepalive = 5\n"
+				     "download_hosts = 127.0.0.1:%d\n", bport, fs.port);
 	sv_write_config(&np, text, 8);
 
 	pthread_mutex_init(&seen.mu, NULL);
@@ -1813,7 +1684,8 @@ START_TEST(test_mqtt)
 	wait_topic(&seen, "stratum/test-node/mk3s/status", "Operational", 10, NULL, 0);
 	wait_topic(&seen, "stratum/test-node/mk3s/temperatures", "\"tool0\"", 5, NULL, 0);
 	/* Enqueue by URL; the same id delivered twice runs once. */
-	snprintf(cmd, sizeof(cmd), "{\"id\":\"cmd-1\",\"command\":\"enqueue\",\"url\":"
+	snprintf(cmd, sizeof(cmd), "{\"id\":\"cmd-1\",\"command\":\"enqueue\",\"key\":\"" KEY_CTL
+				   "\",\"url\":"
 				   "\"http://127.0.0.1:%d/files/dwell.gcode\"}", fs.port);
 	send_cmd(mq, cmd);
 	wait_topic(&seen, "stratum/test-node/mk3s/result", "\"cmd-1\"", 10, out, sizeof(out));
@@ -1833,7 +1705,7 @@ START_TEST(test_mqtt)
 	wait_topic(&seen, "stratum/test-node/mk3s/status", "Printing", 5, NULL, 0);
 	wait_topic(&seen, "stratum/test-node/mk3s/job", "dwell.gcode", 5, NULL, 0);
 	/* Cancel over MQTT. */
-	snprintf(cmd, sizeof(cmd), "{\"id\":\"cmd-2\",\"command\":\"cancel\"}");
+	snprintf(cmd, sizeof(cmd), "{\"id\":\"cmd-2\",\"command\":\"cancel\",\"key\":\"" KEY_CTL "\"}");
 	send_cmd(mq, cmd);
 	wait_topic(&seen, "stratum/test-node/mk3s/result", "\"cmd-2\"", 10, out, sizeof(out));
 	ck_assert_msg(strstr(out, "\"ok\":true"), "%s", out);
@@ -1843,7 +1715,8 @@ START_TEST(test_mqtt)
 	 * topic, and the queue topic holds the job that waits for it. */
 	wait_topic(&seen, "stratum/test-node/mk3s/status", "Waiting for bed clear", 5, NULL, 0);
 	wait_topic(&seen, "stratum/test-node/mk3s/bed_clear", "false", 5, NULL, 0);
-	snprintf(cmd, sizeof(cmd), "{\"id\":\"cmd-4\",\"command\":\"enqueue\",\"name\":"
+	snprintf(cmd, sizeof(cmd), "{\"id\":\"cmd-4\",\"command\":\"enqueue\",\"key\":\"" KEY_CTL
+				   "\",\"name\":"
 				   "\"next.gcode\",\"url\":\"http://127.0.0.1:%d/files/d.gcode\"}",
 		 fs.port);
 	send_cmd(mq, cmd);
@@ -1854,11 +1727,13 @@ START_TEST(test_mqtt)
 	wait_topic(&seen, "stratum/test-node/mk3s/queue", "[]", 10, NULL, 0);
 	wait_topic(&seen, "stratum/test-node/mk3s/job", "next.gcode", 10, NULL, 0);
 	/* A command without id is refused. */
-	send_cmd(mq, "{\"command\":\"pause\"}");
+	snprintf(cmd, sizeof(cmd), "{\"command\":\"pause\",\"key\":\"" KEY_CTL "\"}");
+	send_cmd(mq, cmd);
 	wait_topic(&seen, "stratum/test-node/mk3s/result", "id is required", 10, NULL, 0);
 	/* A refused name: the reason is wrapped whole, not formatted over itself
 	 * (issue 17: the message once garbled). */
-	snprintf(cmd, sizeof(cmd), "{\"id\":\"cmd-3\",\"command\":\"enqueue\",\"name\":"
+	snprintf(cmd, sizeof(cmd), "{\"id\":\"cmd-3\",\"command\":\"enqueue\",\"key\":\"" KEY_CTL
+				   "\",\"name\":"
 				   "\"../x.gcode\",\"url\":\"http://127.0.0.1:%d/files/x.gcode\"}",
 		 fs.port);
 	send_cmd(mq, cmd);
@@ -1875,8 +1750,7 @@ START_TEST(test_mqtt)
 	mosquitto_destroy(mq);
 	mosquitto_lib_cleanup();
 	file_server_stop(&fs);
-	kill(broker, SIGTERM);
-	waitpid(broker, &st, 0);
+	broker_stop(broker);
 	pthread_mutex_destroy(&seen.mu);
 }
 END_TEST
@@ -1917,6 +1791,7 @@ Suite *serve_suite(void)
 	tcase_add_test(tc, test_sim_sailfish_resume);
 	tcase_add_test(tc, test_mqtt);
 	suite_add_tcase(s, tc);
+	serve_mqtt_tcases(s);
 	serve_page_tcases(s);
 	return s;
 }

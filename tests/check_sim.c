@@ -353,6 +353,36 @@ START_TEST(m105_format)
 }
 END_TEST
 
+/* G2/G3 run as Marlin's ARC_SUPPORT does, in 1 mm chords on the circle:
+ * they end on the target, take the arc's length of machine time (not the
+ * chord's), and an arc without its centre is refused with Marlin's words. */
+START_TEST(arcs_in_chords)
+{
+	struct sim_marlin_options o;
+	struct client c;
+	double t0, t1;
+	fast_opts(&o);
+	cl_start(&c, &o);
+	cl_send(&c, "G1 X10 Y0 F600\nM400\n");
+	cl_next_is(&c, "ok");
+	cl_next_is(&c, "ok");
+	t0 = sim_marlin_machine_s(c.sim);
+	/* a quarter round the origin: 15.7 mm at 10 mm/s in 15 chords (a
+	 * straight line would be 14.1 mm) */
+	cl_send(&c, "G3 X0 Y10 I-10 J0 E1\nM400\nM114\n");
+	cl_next_is(&c, "ok");
+	cl_next_is(&c, "ok");
+	cl_next_is(&c, "X:0.00 Y:10.00 Z:0.00 E:1.00 Count X:0 Y:0 Z:0");
+	cl_next_is(&c, "ok");
+	t1 = sim_marlin_machine_s(c.sim) - t0;
+	ck_assert_msg(t1 > 15 * (1.047 / 10 + 10 / 1000.0) - 0.01 && t1 < 1.8, "%.3f s", t1);
+	cl_send(&c, "G2 X5 Y5\n");
+	cl_next_is(&c, "Error:G2/G3 bad parameters");
+	cl_next_is(&c, "ok");
+	cl_stop(&c);
+}
+END_TEST
+
 START_TEST(m115_caps)
 {
 	struct sim_marlin_options o;
@@ -905,6 +935,7 @@ Suite *sim_suite(void)
 	tcase_add_test(proto, m110_renumbers);
 	tcase_add_test(proto, m110_negative_line_number);
 	tcase_add_test(proto, m105_format);
+	tcase_add_test(proto, arcs_in_chords);
 	tcase_add_test(proto, m115_caps);
 	tcase_add_test(proto, advanced_ok);
 	tcase_add_test(proto, m109_waits);

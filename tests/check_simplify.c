@@ -237,7 +237,7 @@ static void add_wave(struct layer_paths *l, enum path_role role, double x0, doub
 
 /* Two layers of 0.2 mm: round walls, a gyroid-like wave, a straight
  * line of collinear points, a thin wall whose width steps every 7 points. */
-static struct layer_stack *dense_stack(void)
+struct layer_stack *dense_stack(void)
 {
 	struct layer_stack *st = layer_stack_new(2, NULL);
 
@@ -259,25 +259,32 @@ static struct layer_stack *dense_stack(void)
  * 0 = off
  */
 
+/* The writer's output for dense_stack() with s is the file golden, byte
+ * for byte. */
+void dense_stack_matches(const struct gcodew_settings *s, const char *golden)
+{
+	struct layer_stack *st = dense_stack();
+	size_t glen;
+	char *want = tu_slurp(golden, &glen), *text = tu_gcode_mem(st, s, NULL);
+
+	ck_assert_msg(strlen(text) == glen && memcmp(text, want, glen) == 0,
+		      "output differs from %s", golden);
+	free(text);
+	free(want);
+	layer_stack_free(st);
+}
+
 /* The golden file is the writer's output for dense_stack() at the commit
  * before gcode_resolution existed; with the key at 0 not a byte differs.
  * A change meant to alter the writer's output replaces it with this
  * test's output at 0, in the same commit. */
 START_TEST(resolution_zero_is_output_before)
 {
-	struct layer_stack *st = dense_stack();
 	struct gcodew_settings s;
-	size_t glen;
-	char *golden = tu_slurp(GOLDEN, &glen), *text;
 
 	gcodew_settings_init(&s);
 	s.gcode_resolution = 0;
-	text = tu_gcode_mem(st, &s, NULL);
-	ck_assert_msg(strlen(text) == glen && memcmp(text, golden, glen) == 0,
-		      "output differs from " GOLDEN);
-	free(text);
-	free(golden);
-	layer_stack_free(st);
+	dense_stack_matches(&s, GOLDEN);
 }
 END_TEST
 
@@ -285,92 +292,15 @@ END_TEST
  * The writer at the default resolution
  */
 
-/* One extrusion move read back. */
-struct seg {
-	int layer;	     /* ;LAYER_CHANGE count */
-	char role[32];	     /* its ;TYPE: */
-	double x0, y0, x1, y1; /* mm */
-	double e;	     /* mm of filament */
-};
-
-/* The G1 lines and the extrusion moves of text (absolute E, G92 E0 resets;
- * M83 not used). */
-struct readback {
-	size_t g1;
-	struct seg *segs;
-	size_t n;
-};
-
-static struct readback read_back(const char *text)
-{
-	struct readback r = {0};
-	size_t cap = 0;
-	double x = 0, y = 0, e = 0;
-	int layer = 0;
-	char role[32] = "";
-
-	for (const char *l = text; *l; l = strchr(l, '\n') ? strchr(l, '\n') + 1 : l + strlen(l)) {
-		size_t len = strcspn(l, "\n");
-		double nx = x, ny = y, ne = e;
-		bool has_e = false;
-
-		if (!strncmp(l, ";LAYER_CHANGE", 13))
-			layer++;
-		if (!strncmp(l, ";TYPE:", 6))
-			snprintf(role, sizeof(role), "%.*s", (int)(len - 6), l + 6);
-		if (!strncmp(l, "G92 E0", 6))
-			e = 0;
-		if (strncmp(l, "G1 ", 3))
-			continue;
-		r.g1++;
-		for (const char *c = l + 3; c < l + len; c++) {
-			if (*c == 'X')
-				nx = strtod(c + 1, NULL);
-			else if (*c == 'Y')
-				ny = strtod(c + 1, NULL);
-			else if (*c == 'E') {
-				ne = strtod(c + 1, NULL);
-				has_e = true;
-			}
-		}
-		if (has_e && ne > e && (nx != x || ny != y) && layer > 0) {
-			if (r.n == cap) {
-				cap = cap ? 2 * cap : 256;
-				r.segs = realloc(r.segs, cap * sizeof(*r.segs));
-				ck_assert_ptr_nonnull(r.segs);
-			}
-			r.segs[r.n] = (struct seg){.layer = layer, .x0 = x, .y0 = y, .x1 = nx, .y1 = ny,
-						   .e = ne - e};
-			snprintf(r.segs[r.n].role, sizeof(r.segs[r.n].role), "%s", role);
-			r.n++;
-		}
-		x = nx;
-		y = ny;
-		e = ne;
-	}
-	return r;
-}
-
-/* Filament of the moves of role (NULL: all) in r. */
-static double role_e(const struct readback *r, const char *role)
-{
-	double e = 0;
-
-	for (size_t k = 0; k < r->n; k++)
-		if (!role || !strcmp(r->segs[k].role, role))
-			e += r->segs[k].e;
-	return e;
-}
-
 /* The distance (mm) from (px, py) to the nearest extrusion move of the
  * role on the layer. */
-static double dist_to_printed(const struct readback *r, int layer, const char *role, double px,
+static double dist_to_printed(const struct tu_moves *r, int layer, const char *role, double px,
 			      double py)
 {
 	double best = INFINITY;
 
 	for (size_t k = 0; k < r->n; k++) {
-		const struct seg *g = &r->segs[k];
+		const struct tu_move *g = &r->m[k];
 		int64_t p[2] = {llround(px * NM), llround(py * NM)};
 		int64_t a[2] = {llround(g->x0 * NM), llround(g->y0 * NM)};
 		int64_t b[2] = {llround(g->x1 * NM), llround(g->y1 * NM)};
@@ -392,20 +322,20 @@ START_TEST(default_resolution_bound_and_filament)
 	struct layer_stack *st = dense_stack();
 	struct gcodew_settings s;
 	char *off, *on;
-	struct readback r0, r1;
+	struct tu_moves r0, r1;
 
 	gcodew_settings_init(&s);
 	ck_assert_double_eq(s.gcode_resolution, RES);
 	on = tu_gcode_mem(st, &s, NULL);
 	s.gcode_resolution = 0;
 	off = tu_gcode_mem(st, &s, NULL);
-	r0 = read_back(off);
-	r1 = read_back(on);
+	r0 = tu_read_moves(off);
+	r1 = tu_read_moves(on);
 	ck_assert_msg(r1.g1 * 5 < r0.g1 * 4, "%zu G1 lines at %g mm, %zu at 0", r1.g1, RES, r0.g1);
 	ck_assert(strstr(on, "\n; gcode_resolution = 0.0125\n"));
 	ck_assert(!strstr(off, "gcode_resolution"));
 	for (size_t i = 0; i < sizeof(roles) / sizeof(roles[0]); i++) {
-		double e0 = role_e(&r0, roles[i]), e1 = role_e(&r1, roles[i]);
+		double e0 = tu_moves_e(&r0, roles[i]), e1 = tu_moves_e(&r1, roles[i]);
 		ck_assert_msg(e0 > 0 && fabs(e1 - e0) < 1e-4, "%s: %.6f mm of filament, %.6f at 0",
 			      roles[i], e1, e0);
 	}
@@ -420,8 +350,8 @@ START_TEST(default_resolution_bound_and_filament)
 					      li + 1, role, k, d);
 			}
 		}
-	free(r0.segs);
-	free(r1.segs);
+	free(r0.m);
+	free(r1.m);
 	free(on);
 	free(off);
 	layer_stack_free(st);
@@ -436,15 +366,15 @@ START_TEST(widths_never_merged)
 	struct layer_stack *st = dense_stack();
 	struct gcodew_settings s;
 	char *text;
-	struct readback r;
+	struct tu_moves r;
 	double fil = M_PI * 1.75 * 1.75 / 4, h = 0.2;
 	size_t thin = 0;
 
 	gcodew_settings_init(&s);
 	text = tu_gcode_mem(st, &s, NULL);
-	r = read_back(text);
+	r = tu_read_moves(text);
 	for (size_t k = 0; k < r.n; k++) {
-		const struct seg *g = &r.segs[k];
+		const struct tu_move *g = &r.m[k];
 		double len = hypot(g->x1 - g->x0, g->y1 - g->y0), best = INFINITY;
 		if (strcmp(g->role, "Thin wall") || g->layer != 1)
 			continue;
@@ -458,7 +388,7 @@ START_TEST(widths_never_merged)
 	}
 	ck_assert_uint_ge(thin, 56 / 7);
 	ck_assert_uint_lt(thin, 56);
-	free(r.segs);
+	free(r.m);
 	free(text);
 	layer_stack_free(st);
 }
@@ -470,21 +400,21 @@ START_TEST(loops_stay_closed)
 	struct layer_stack *st = layer_stack_new(1, NULL);
 	struct gcodew_settings s;
 	char *text;
-	struct readback r;
+	struct tu_moves r;
 
 	ck_assert_ptr_nonnull(st);
 	st->layers[0].z = st->layers[0].height = 0.2;
 	add_circle(&st->layers[0], PATH_OUTER_PERIMETER, 60, 70, 5, 500, 0.45);
 	gcodew_settings_init(&s);
 	text = tu_gcode_mem(st, &s, NULL);
-	r = read_back(text);
+	r = tu_read_moves(text);
 	ck_assert_uint_gt(r.n, 10);
 	ck_assert_uint_lt(r.n, 150); /* of 500; an outer wall is held to half the tolerance */
-	ck_assert_double_eq_tol(r.segs[0].x0, 65, 1e-9);
-	ck_assert_double_eq_tol(r.segs[0].y0, 70, 1e-9);
-	ck_assert_double_eq_tol(r.segs[r.n - 1].x1, 65, 1e-9);
-	ck_assert_double_eq_tol(r.segs[r.n - 1].y1, 70, 1e-9);
-	free(r.segs);
+	ck_assert_double_eq_tol(r.m[0].x0, 65, 1e-9);
+	ck_assert_double_eq_tol(r.m[0].y0, 70, 1e-9);
+	ck_assert_double_eq_tol(r.m[r.n - 1].x1, 65, 1e-9);
+	ck_assert_double_eq_tol(r.m[r.n - 1].y1, 70, 1e-9);
+	free(r.m);
 	free(text);
 	layer_stack_free(st);
 }
@@ -584,13 +514,13 @@ END_TEST
  * A sliced model
  */
 
-/* stratum slice of a cylinder of 256 sides (generic-marlin) with args; the G-code. */
-static char *slice_cylinder(const char *args)
+/* stratum slice of a cylinder of 256 sides, 10 mm radius and h mm high for
+ * printer with args; the G-code, and what the command said in out. */
+char *slice_cylinder_for(double h, const char *printer, const char *args, char *out, size_t cap)
 {
-	static char out[1 << 14];
 	char model[4096], gc[4096];
 	struct st_error err = {0};
-	struct mesh *m = fx_cylinder(0, 0, 10, 6, 256);
+	struct mesh *m = fx_cylinder(0, 0, 10, h, 256);
 	size_t len;
 	int rc, status;
 
@@ -599,10 +529,18 @@ static char *slice_cylinder(const char *args)
 	rc = meshio_write_stl(model, m, MESHIO_STL_BINARY, &err);
 	mesh_free(m);
 	ck_assert_msg(rc == 0, "%s", err.msg);
-	status = tu_run(out, sizeof(out), "slice '%s' -o '%s' --printer generic-marlin %s", model,
-			gc, args);
+	status = tu_run(out, cap, "slice '%s' -o '%s' --printer %s %s 2>&1", model, gc, printer,
+			args);
 	ck_assert_msg(status == 0, "exit %d: %s", status, out);
 	return tu_slurp(gc, &len);
+}
+
+/* stratum slice of a 6 mm cylinder (generic-marlin) with args; the G-code. */
+static char *slice_cylinder(const char *args)
+{
+	static char out[1 << 14];
+
+	return slice_cylinder_for(6, "generic-marlin", args, out, sizeof(out));
 }
 
 /* Lines in text. */

@@ -129,6 +129,7 @@ START_TEST(role_speeds_honoured)
 			  "--set support_material_speed=37 --set first_layer_speed=23 "
 			  "--set travel_speed_z=7");
 	assert_feed(g, "External perimeter", false, 25 * 60);
+	assert_feed(g, "Solid infill", false, 33 * 60);
 	assert_feed(g, "Perimeter", false, 40 * 60);
 	assert_feed(g, "Internal infill", false, 70 * 60);
 	assert_feed(g, "Top solid infill", false, 19 * 60);
@@ -143,6 +144,67 @@ START_TEST(role_speeds_honoured)
 	assert_header(g, "top_solid_infill_speed = 19");
 	assert_header(g, "bridge_speed = 17");
 	assert_header(g, "travel_speed_z = 7");
+	free(g);
+}
+END_TEST
+
+/* A 2 mm strip with three walls asked: no room for the third, so the
+ * middle is gap fill (tests/check_slicer.c), at gap_fill_speed. */
+START_TEST(gap_fill_speed_honoured)
+{
+	char model[4096];
+	char *g;
+
+	model_file(fx_box(0, 0, 0, 20, 2, 1), "strip.stl", model, sizeof(model));
+	g = slice(model, STEADY "--set perimeters=3 --set gap_fill_speed=13");
+	assert_feed(g, "Gap fill", false, 13 * 60);
+	assert_header(g, "gap_fill_speed = 13");
+	free(g);
+}
+END_TEST
+
+/* Support under the bridge's deck at support_material_speed, its interface
+ * at support_material_interface_speed (a percentage of it, as in PrusaSlicer). */
+START_TEST(support_speeds_honoured)
+{
+	char model[4096];
+	char *g;
+
+	model_file(wide_bridge(), "bridge.stl", model, sizeof(model));
+	g = slice(model, STEADY "--set support_material=1 --set support_material_speed=37 "
+			  "--set support_material_interface_speed=50% "
+			  "--set support_material_interface_layers=2");
+	assert_feed(g, "Support material", false, 37 * 60);
+	assert_feed(g, "Support material interface", false, 18.5 * 60);
+	free(g);
+}
+END_TEST
+
+/* The header lists the slicer's own settings as printed: a per-job
+ * override, a pattern Stratum does not print as the rectilinear it prints,
+ * a spiral vase's one wall and no infill. */
+START_TEST(header_lists_slicing_settings)
+{
+	char model[4096];
+	char *g;
+
+	model_file(fx_box(0, 0, 0, 20, 20, 4), "hdrbox.stl", model, sizeof(model));
+	g = slice(model, "--perimeters 4 --fill-density 25% --set fill_pattern=lightning "
+			 "--brim-width 3 --support-material --set seam_position=rear "
+			 "--set skirts=2 --set elefant_foot_compensation=0.2");
+	assert_header(g, "perimeters = 4");
+	assert_header(g, "fill_density = 25%");
+	assert_header(g, "fill_pattern = rectilinear");
+	assert_header(g, "brim_width = 3");
+	assert_header(g, "support_material = 1");
+	assert_header(g, "seam_position = rear");
+	assert_header(g, "skirts = 2");
+	assert_header(g, "elefant_foot_compensation = 0.2");
+	free(g);
+	g = slice(model, "--set spiral_vase=1 --perimeters 3 --fill-density 40%");
+	assert_header(g, "perimeters = 1");
+	assert_header(g, "top_solid_layers = 0");
+	assert_header(g, "fill_density = 0%");
 	free(g);
 }
 END_TEST
@@ -759,6 +821,9 @@ void slicecli_settings_tcases(Suite *s)
 	tcase_set_timeout(tc, 120);
 	tcase_add_test(tc, role_speeds_honoured);
 	tcase_add_test(tc, speed_percentages_resolved);
+	tcase_add_test(tc, gap_fill_speed_honoured);
+	tcase_add_test(tc, support_speeds_honoured);
+	tcase_add_test(tc, header_lists_slicing_settings);
 	tcase_add_test(tc, fan_always_on_honoured);
 	tcase_add_test(tc, sailfish_fan_is_m126);
 	tcase_add_test(tc, skirt_settings_honoured);

@@ -232,6 +232,50 @@ START_TEST(test_moves)
 }
 END_TEST
 
+/* Little-endian int32 at b. */
+static int32_t le32_at(const uint8_t *b)
+{
+	return (int32_t)((uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 |
+			 (uint32_t)b[3] << 24);
+}
+
+/* G2/G3, which X3G has no command for, become the chords Marlin cuts
+ * them into (1 mm): a quarter of radius 10 mm is 15 points on the circle,
+ * the last on the target, E spread over them; clockwise back the same. */
+START_TEST(test_arcs_in_chords)
+{
+	static const char *const arcs[] = {"G3 X0 Y10 I-10 J0 E1", "G2 X0 Y10 R10 E1"};
+	const double spm = 941 / 10.0; /* X and Y steps per mm (Creator Pro) */
+
+	for (size_t a = 0; a < 2; a++) {
+		struct tr r;
+		char text[200];
+		int points = 0;
+		int32_t e = 0;
+		size_t at = 21; /* past the G92's 140 */
+
+		snprintf(text, sizeof(text), ZERO "M83\nG1 X10 F600\n%s", arcs[a]);
+		tr_open(&r, RR);
+		tr_lines(&r, text);
+		ck_assert_msg(r.warnings == 0, "%s: %s", arcs[a], r.warning);
+		at += 32; /* the G1 */
+		for (; at + 32 <= r.len && r.out[at] == 155; at += 32, points++) {
+			double x = le32_at(r.out + at + 1) / spm, y = le32_at(r.out + at + 5) / spm;
+			double cy = a == 0 ? 0 : 10, cx = a == 0 ? 0 : 10;
+			e += le32_at(r.out + at + 13);
+			ck_assert_msg(fabs(hypot(x - cx, y - cy) - 10) < 0.02, "%s: point %d at %g %g",
+				      arcs[a], points, x, y);
+		}
+		ck_assert_uint_eq(at, r.len);
+		ck_assert_msg(points == 15, "%s: %d points", arcs[a], points);
+		ck_assert_int_eq(le32_at(r.out + at - 32 + 1), 0);
+		ck_assert_int_eq(le32_at(r.out + at - 32 + 5), 941);
+		ck_assert_int_eq(e, -96);
+		x3g_free(r.t);
+	}
+}
+END_TEST
+
 START_TEST(test_unknown_positions)
 {
 	/*
@@ -810,6 +854,7 @@ Suite *x3g_suite(void)
 	tcase_add_test(tr, test_simple_commands);
 	tcase_add_test(tr, test_homing);
 	tcase_add_test(tr, test_moves);
+	tcase_add_test(tr, test_arcs_in_chords);
 	tcase_add_test(tr, test_unknown_positions);
 	tcase_add_test(tr, test_tools);
 	tcase_add_test(tr, test_build_and_messages);

@@ -34,6 +34,14 @@ void slicer_modes_tcases(Suite *s); /* tests/check_modes.c: spiral vase, part of
 void slicer_travel_tcases(Suite *s); /* tests/check_travel.c: travel and retraction, part of slicer */
 Suite *gcodewriter_suite(void); /* tests/check_gcodewriter.c: G-code writer and estimator */
 void gcodewriter_simplify_tcases(Suite *s); /* tests/check_simplify.c: gcode_resolution, part of gcodewriter */
+/* tests/check_simplify.c, shared with check_arcfit.c: a stack of round walls, waves and a thin
+ * wall; the writer's output for it with s equal to a golden file; a sliced 256-sided cylinder */
+struct layer_stack *dense_stack(void);
+struct gcodew_settings;
+void dense_stack_matches(const struct gcodew_settings *s, const char *golden);
+char *slice_cylinder_for(double h, const char *printer, const char *args, char *out, size_t cap);
+/* tests/check_arcfit.c: arc_fitting, part of gcodewriter */
+void gcodewriter_arcfit_tcases(Suite *s);
 void gcodewriter_retract_tcases(Suite *s); /* tests/check_retract.c: retract_layer_change, lift range, part of gcodewriter */
 void gcodewriter_accel_tcases(Suite *s); /* tests/check_accel.c: accelerations per role, part of gcodewriter */
 void gcodewriter_progress_tcases(Suite *s); /* tests/check_progress.c: remaining_times, part of gcodewriter */
@@ -51,6 +59,7 @@ Suite *region_suite(void);	/* tests/check_region.c: printed region against cross
 Suite *x3g_suite(void);		/* tests/check_x3g.c: G-code to X3G, decoder, against gpx */
 Suite *s3g_suite(void);		/* tests/check_s3g.c: S3G packets, driver, simulated Sailfish */
 Suite *serve_suite(void);		/* tests/check_serve.c: stratum serve, the farm node's API and queue */
+void serve_mqtt_tcases(Suite *s); /* tests/check_servemqtt.c: the node on a shared broker, part of serve */
 Suite *octoapi_suite(void);	/* tests/check_octoapi.c: the node's OctoPrint calls, one test each */
 void octoapi_push_tcases(Suite *s); /* tests/check_octopush.c: the push API, part of octoapi */
 void serve_page_tcases(Suite *s);   /* tests/check_servepage.c: the status page in Chromium, part of serve */

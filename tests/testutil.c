@@ -345,3 +345,67 @@ char *tu_gcode_mem(const struct layer_stack *st, const struct gcodew_settings *s
 	ck_assert_msg(rc == 0, "gcodew_write_stream failed (%d): %s", rc, err.msg);
 	return buf;
 }
+
+struct tu_moves tu_read_moves(const char *text)
+{
+	struct tu_moves r = {0};
+	size_t cap = 0;
+	double x = 0, y = 0, e = 0;
+	int layer = 0;
+	char role[32] = "";
+
+	for (const char *l = text; *l; l = strchr(l, '\n') ? strchr(l, '\n') + 1 : l + strlen(l)) {
+		size_t len = strcspn(l, "\n");
+		double nx = x, ny = y, ne = e, i = 0, j = 0;
+		bool has_e = false;
+		bool arc = l[0] == 'G' && (l[1] == '2' || l[1] == '3') && l[2] == ' ';
+
+		if (!strncmp(l, ";LAYER_CHANGE", 13))
+			layer++;
+		if (!strncmp(l, ";TYPE:", 6))
+			snprintf(role, sizeof(role), "%.*s", (int)(len - 6), l + 6);
+		if (!strncmp(l, "G92 E0", 6))
+			e = 0;
+		if (strncmp(l, "G1 ", 3) && !arc)
+			continue;
+		r.g1 += !arc;
+		r.arcs += arc;
+		for (const char *c = l + 3; c < l + len; c++) {
+			double v = strtod(c + 1, NULL);
+			nx = *c == 'X' ? v : nx;
+			ny = *c == 'Y' ? v : ny;
+			i = *c == 'I' ? v : i;
+			j = *c == 'J' ? v : j;
+			if (*c == 'E') {
+				ne = v;
+				has_e = true;
+			}
+		}
+		if (has_e && ne > e && (arc || nx != x || ny != y) && layer > 0) {
+			if (r.n == cap) {
+				cap = cap ? 2 * cap : 256;
+				r.m = realloc(r.m, cap * sizeof(*r.m));
+				ck_assert_ptr_nonnull(r.m);
+			}
+			r.m[r.n] = (struct tu_move){.layer = layer, .arc = arc, .ccw = l[1] == '3',
+						    .x0 = x, .y0 = y, .x1 = nx, .y1 = ny,
+						    .cx = x + i, .cy = y + j, .e = ne - e};
+			snprintf(r.m[r.n].role, sizeof(r.m[r.n].role), "%s", role);
+			r.n++;
+		}
+		x = nx;
+		y = ny;
+		e = ne;
+	}
+	return r;
+}
+
+double tu_moves_e(const struct tu_moves *r, const char *role)
+{
+	double e = 0;
+
+	for (size_t k = 0; k < r->n; k++)
+		if (!role || !strcmp(r->m[k].role, role))
+			e += r->m[k].e;
+	return e;
+}

@@ -6,6 +6,7 @@
 #ifndef STRATUM_TESTS_TESTUTIL_H
 #define STRATUM_TESTS_TESTUTIL_H
 
+#include <stdbool.h>
 #include <stddef.h>
 
 #include "meshio.h"
@@ -117,6 +118,29 @@ int tu_file_exists(const char *path);
  * NULL); the text (free it).  Aborts the test on failure. */
 char *tu_gcode_mem(const struct layer_stack *st, const struct gcodew_settings *s,
 		   struct gcodew_summary *sum);
+
+/* One extrusion move read back from G-code: a line, or an arc around
+ * (cx, cy) (G2 clockwise, G3 counter-clockwise, centre as I J). */
+struct tu_move {
+	int layer;	/* ;LAYER_CHANGE count */
+	char role[32];	/* its ;TYPE: */
+	bool arc, ccw;
+	double x0, y0, x1, y1, cx, cy; /* mm */
+	double e;	/* mm of filament */
+};
+
+struct tu_moves {
+	struct tu_move *m; /* free() it */
+	size_t n;
+	size_t g1, arcs; /* G1 lines, G2/G3 lines */
+};
+
+/* tu_read_moves - the extrusions (moves in XY that push filament) of the
+ * G-code text, absolute E with G92 E0 resets (not M83). */
+struct tu_moves tu_read_moves(const char *text);
+
+/* tu_moves_e - filament of the moves of role in r (NULL: all). */
+double tu_moves_e(const struct tu_moves *r, const char *role);
 
 /* tu_count_role - number of paths of role on layer l. */
 size_t tu_count_role(const struct layer_paths *l, enum path_role role);

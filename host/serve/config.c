@@ -196,6 +196,55 @@ static int check_prefix(struct cfg_parse *p, char *v, void *base)
 	return 0;
 }
 
+static int check_tls_version(struct cfg_parse *p, char *v, void *base)
+{
+	(void)base;
+	if (strcmp(v, "tlsv1.2") && strcmp(v, "tlsv1.3"))
+		return CFG_FAIL(p, ST_ERR_RANGE, "tls_version: '%s' is not tlsv1.2 or tlsv1.3", v);
+	return 0;
+}
+
+/* download_hosts = HOST[:PORT], ...: names, IPv4 or [IPv6] addresses. */
+static int set_download_hosts(struct cfg_parse *p, char *v, void *base)
+{
+	struct node_mqtt_config *m = base;
+	char *next = v, *tok;
+
+	m->ndownload_hosts = 0;
+	while (next) {
+		const char *host_end, *port;
+		double d = 0;
+
+		tok = next;
+		next = strchr(tok, ',');
+		if (next)
+			*next++ = '\0';
+		tok = trim(tok);
+		for (char *s = tok; *s; s++)
+			*s = (char)tolower((unsigned char)*s);
+		host_end = tok[0] == '[' ? strchr(tok, ']') : tok + strcspn(tok, ":");
+		if (host_end && tok[0] == '[')
+			host_end++;
+		port = host_end && *host_end == ':' ? host_end + 1 : NULL;
+		if (!host_end || host_end == tok || (*host_end && !port) ||
+		    strspn(tok, tok[0] == '[' ? "[]:0123456789abcdef." :
+			   "abcdefghijklmnopqrstuvwxyz0123456789.-") < (size_t)(host_end - tok) ||
+		    (port && (st_parse_double(port, strlen(port), 0, &d) != ST_NUMBER_OK ||
+			      !(d >= 1 && d <= 65535) || d != floor(d) || strchr(port, '.'))))
+			return CFG_FAIL(p, ST_ERR_RANGE, "download_hosts: '%s' is not HOST or "
+							 "HOST:PORT (a name or address, port 1 to "
+							 "65535)", tok);
+		if (m->ndownload_hosts == NODE_MQTT_HOSTS_MAX)
+			return CFG_FAIL(p, ST_ERR_RANGE, "download_hosts: more than %d hosts",
+					NODE_MQTT_HOSTS_MAX);
+		if (strlen(tok) >= sizeof(m->download_hosts[0]))
+			return CFG_FAIL(p, ST_ERR_RANGE, "download_hosts: '%.40s...' is too long", tok);
+		snprintf(m->download_hosts[m->ndownload_hosts++], sizeof(m->download_hosts[0]), "%s",
+			 tok);
+	}
+	return 0;
+}
+
 static int check_topic(struct cfg_parse *p, char *v, void *base)
 {
 	(void)base;
@@ -249,9 +298,16 @@ static const struct cfg_key mqtt_keys[] = {
     WHOLE(struct node_mqtt_config, port, KEY_U16, 1, 65535),
     TEXT(struct node_mqtt_config, username, NULL),
     TEXT(struct node_mqtt_config, password, NULL),
-    TEXT(struct node_mqtt_config, client_id, NULL),
     TEXT(struct node_mqtt_config, topic, check_topic),
     WHOLE(struct node_mqtt_config, keepalive, KEY_INT, 5, 3600),
+    WHOLE(struct node_mqtt_config, tls, KEY_INT, 0, 1),
+    TEXT(struct node_mqtt_config, ca_file, NULL),
+    TEXT(struct node_mqtt_config, ca_dir, NULL),
+    TEXT(struct node_mqtt_config, cert_file, NULL),
+    TEXT(struct node_mqtt_config, key_file, NULL),
+    TEXT(struct node_mqtt_config, tls_version, check_tls_version),
+    WHOLE(struct node_mqtt_config, tls_insecure, KEY_INT, 0, 1),
+    {"download_hosts", KEY_SET, 0, 0, 0, 0, set_download_hosts},
 };
 #define KEYS(t) t, sizeof(t) / sizeof(t[0])
 
@@ -397,6 +453,46 @@ static int on_entry(void *ctx, const struct ini_entry *e, struct st_error *err)
 	}
 }
 
+/* [mqtt] as a whole: the broker, TLS keys only with tls = 1, the defaults
+ * that follow from other keys. */
+static int check_mqtt(struct cfg_parse *p)
+{
+	struct node_mqtt_config *m = &p->cfg->mqtt;
+	const char *tls_key = m->ca_file[0]	 ? "ca_file"
+			      : m->ca_dir[0]	 ? "ca_dir"
+			      : m->cert_file[0]	 ? "cert_file"
+			      : m->key_file[0]	 ? "key_file"
+			      : m->tls_version[0] ? "tls_version"
+			      : m->tls_insecure	 ? "tls_insecure"
+						 : NULL;
+
+	if (p->mqtt_seen && !m->host[0])
+		return st_error_set(p->err, ST_ERR_RANGE, "%s: [mqtt] needs host =", p->file);
+	if (tls_key && !m->tls)
+		return st_error_set(p->err, ST_ERR_RANGE, "%s: [mqtt] %s is a TLS setting: add "
+							  "tls = 1 (without it the link is not "
+							  "encrypted)", p->file, tls_key);
+	if (!m->cert_file[0] != !m->key_file[0])
+		return st_error_set(p->err, ST_ERR_RANGE, "%s: [mqtt] cert_file and key_file go "
+							  "together (the client certificate and its "
+							  "key)", p->file);
+	if (m->cert_file[0] && !m->ca_file[0] && !m->ca_dir[0])
+		return st_error_set(p->err, ST_ERR_RANGE, "%s: [mqtt] a client certificate needs "
+							  "ca_file or ca_dir (the broker's CA)",
+				    p->file);
+	if (m->password[0] && !m->username[0])
+		return st_error_set(p->err, ST_ERR_RANGE, "%s: [mqtt] password needs username",
+				    p->file);
+	if (!m->port)
+		m->port = m->tls ? NODE_MQTT_TLS_PORT : NODE_MQTT_PORT;
+	if (!m->topic[0])
+		snprintf(m->topic, sizeof(m->topic), "stratum");
+	/* One client id per node name: a second node of that name is refused
+	 * before it connects with it (mqtt_name.c), never knocks the first off. */
+	snprintf(m->client_id, sizeof(m->client_id), "stratum-%s", p->cfg->name);
+	return 0;
+}
+
 /* What every section must have, checked once the whole file is read. */
 static int check_complete(struct cfg_parse *p)
 {
@@ -428,31 +524,39 @@ static int check_complete(struct cfg_parse *p)
 						    p->file, c->printers[j].name, pc->name,
 						    pc->prefix);
 	}
-	if (p->mqtt_seen && !c->mqtt.host[0])
-		return st_error_set(p->err, ST_ERR_RANGE, "%s: [mqtt] needs host =", p->file);
-	if (!c->mqtt.topic[0])
-		snprintf(c->mqtt.topic, sizeof(c->mqtt.topic), "stratum");
-	if (!c->mqtt.client_id[0])
-		snprintf(c->mqtt.client_id, sizeof(c->mqtt.client_id), "stratum-%s", c->name);
+	return check_mqtt(p);
+}
+
+/* A path key (field, cap NODE_PATH_MAX) relative to the config file's folder. */
+static int resolve_path(const char *path, const char *key, char *field, struct st_error *err)
+{
+	char full[NODE_PATH_MAX];
+	const char *slash = strrchr(path, '/');
+
+	if (!field[0] || field[0] == '/' || !slash)
+		return 0;
+	if (snprintf(full, sizeof(full), "%.*s/%s", (int)(slash - path), path, field) >=
+	    (int)sizeof(full))
+		return st_error_set(err, ST_ERR_RANGE, "%s: %s: path too long", path, key);
+	memcpy(field, full, sizeof(full));
 	return 0;
 }
 
-/* data_dir relative to the config file's folder. */
-static int resolve_data_dir(struct node_config *c, const char *path, struct st_error *err)
+/* data_dir and the TLS files relative to the config file's folder. */
+static int resolve_paths(struct node_config *c, const char *path, struct st_error *err)
 {
-	char dir[NODE_PATH_MAX];
-	const char *slash = strrchr(path, '/');
+	struct node_mqtt_config *m = &c->mqtt;
+	int rc;
 
 	if (!c->data_dir[0])
 		return st_error_set(err, ST_ERR_RANGE, "%s: [node] needs data_dir = (where the "
 						       "queue and the files are kept)", path);
-	if (c->data_dir[0] == '/' || !slash)
-		return 0;
-	if (snprintf(dir, sizeof(dir), "%.*s/%s", (int)(slash - path), path, c->data_dir) >=
-	    (int)sizeof(dir))
-		return st_error_set(err, ST_ERR_RANGE, "%s: data_dir: path too long", path);
-	memcpy(c->data_dir, dir, sizeof(dir));
-	return 0;
+	if ((rc = resolve_path(path, "data_dir", c->data_dir, err)) ||
+	    (rc = resolve_path(path, "ca_file", m->ca_file, err)) ||
+	    (rc = resolve_path(path, "ca_dir", m->ca_dir, err)) ||
+	    (rc = resolve_path(path, "cert_file", m->cert_file, err)))
+		return rc;
+	return resolve_path(path, "key_file", m->key_file, err);
 }
 
 int node_config_load(const char *path, struct node_config *out, struct st_error *err)
@@ -477,7 +581,6 @@ int node_config_load(const char *path, struct node_config *out, struct st_error 
 	snprintf(c->name, sizeof(c->name), "stratum");
 	snprintf(c->listen_addr, sizeof(c->listen_addr), "127.0.0.1");
 	c->listen_port = 5000;
-	c->mqtt.port = 1883;
 	c->mqtt.keepalive = 30;
 	c->max_upload = NODE_UPLOAD_DEFAULT;
 	c->slice_threads = 1;
@@ -485,7 +588,7 @@ int node_config_load(const char *path, struct node_config *out, struct st_error 
 	c->max_connections_per_ip = NODE_CONN_PER_IP_DEFAULT;
 	c->idle_timeout_s = NODE_IDLE_TIMEOUT_DEFAULT;
 	if (!(rc = ini_parse(text, len, path, &handler, &p, err)) &&
-	    !(rc = check_complete(&p)) && !(rc = resolve_data_dir(c, path, err)))
+	    !(rc = check_complete(&p)) && !(rc = resolve_paths(c, path, err)))
 		*out = *c;
 out_free:
 	free(text);
@@ -498,7 +601,7 @@ bool node_config_exposed(const char *path, const struct node_config *cfg, unsign
 {
 	struct stat st;
 
-	if (!cfg->nkeys || stat(path, &st) != 0)
+	if ((!cfg->nkeys && !cfg->mqtt.password[0]) || stat(path, &st) != 0)
 		return false;
 	*mode = (unsigned)st.st_mode & 07777u;
 	return (st.st_mode & 077) != 0;

@@ -390,7 +390,6 @@ static unsigned key_roles(struct node *n, struct MHD_Connection *c, const char *
 	const char *key = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "X-Api-Key");
 	const char *auth = MHD_lookup_connection_value(c, MHD_HEADER_KIND,
 						       MHD_HTTP_HEADER_AUTHORIZATION);
-	unsigned roles = 0;
 
 	*who = NULL;
 	if (!key && auth && !strncasecmp(auth, "Bearer ", 7))
@@ -399,20 +398,7 @@ static unsigned key_roles(struct node *n, struct MHD_Connection *c, const char *
 		key = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "apikey");
 	if (!key)
 		return 0;
-	/* Compare with every key in full so the time does not tell which matched. */
-	for (size_t i = 0; i < n->cfg.nkeys; i++) {
-		const char *s = n->cfg.keys[i].secret;
-		size_t a = strlen(key), b = strlen(s);
-		unsigned char diff = a != b;
-
-		for (size_t k = 0; k < b; k++)
-			diff |= (unsigned char)(s[k] ^ key[k < a ? k : 0]);
-		if (!diff) {
-			roles |= n->cfg.keys[i].roles;
-			*who = n->cfg.keys[i].name;
-		}
-	}
-	return roles;
+	return node_key_roles(n, key, who);
 }
 
 /* Refuse an upload body longer than the file limit and the form around it. */

@@ -11,11 +11,14 @@
  *   PRINTER/bed_clear           true, or false while the bed waits for an operator
  * all retained and published when they change.  Commands arrive on
  * PRINTER/cmd as JSON {"id", "command": enqueue|cancel|pause|resume, "url",
- * "name"}; each id is recorded in the queue database before the command
- * runs, so a re-delivered command (QoS 1, a client that sends twice) runs
- * once.  The answer goes to PRINTER/result.  G-code never travels over MQTT:
- * enqueue downloads the file from url (libcurl: http and https only);
- * "force": true takes G-code sliced for another printer (host/guard.h).
+ * "name"} with a key with the control role, or signed with one (auth.c);
+ * each id is recorded in the queue database before the command runs, so a
+ * re-delivered command (QoS 1, a client that sends twice) runs once.  The
+ * answer goes to PRINTER/result.  G-code never travels over MQTT: enqueue
+ * downloads the file from url (libcurl: http and https, from the hosts of
+ * download_hosts only, each redirect checked); "force": true takes G-code
+ * sliced for another printer (host/guard.h).  The node's name on the broker
+ * (one node per name; ping and pong) is mqtt_name.c's.
  *
  * Threads: libmosquitto's network thread only queues commands; the node's
  * MQTT thread runs them (a download may take a while) and publishes state.
@@ -30,7 +33,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "node_int.h"
+#include "mqtt_int.h"
 
 #define MQTT_TICK_MS 500	  /* state publishing period */
 #define MQTT_PENDING 32		  /* commands waiting to run */
@@ -38,6 +41,8 @@
 #define MQTT_ID_MAX 128		  /* longest command id, bytes */
 #define MQTT_DOWNLOAD_S 600	  /* longest download */
 #define MQTT_TOPICS 6		  /* status ... bed_clear, below */
+#define MQTT_REDIRECTS 5	  /* redirects an enqueue download follows */
+#define MQTT_RETRY_MAX_S 30	  /* longest wait between two tries to reach the broker */
 
 static const char *const state_topics[MQTT_TOPICS] = {"status", "temperatures", "progress",
 						      "job", "queue", "bed_clear"};
@@ -48,9 +53,12 @@ struct node_mqtt {
 	char base[256]; /* ROOT/NODE */
 	pthread_t thread;
 	bool thread_started, loop_started;
+	time_t since;	   /* when the node started, for its answer to a ping */
+	atomic_bool stopping; /* node_mqtt_stop began: cuts a name check short */
 	pthread_mutex_t mu; /* the fields below */
 	pthread_cond_t cv;
 	bool stop, connected, republish;
+	bool off; /* another node took the name: no more connecting */
 	struct {
 		size_t printer;
 		char *payload;
@@ -71,6 +79,8 @@ static void on_connect(struct mosquitto *mosq, void *ctx, int rc)
 	}
 	snprintf(topic, sizeof(topic), "%s/+/cmd", m->base);
 	mosquitto_subscribe(mosq, NULL, topic, 1);
+	snprintf(topic, sizeof(topic), "%s/ping", m->base);
+	mosquitto_subscribe(mosq, NULL, topic, 0); /* answered only while connected */
 	snprintf(topic, sizeof(topic), "%s/status", m->base);
 	mosquitto_publish(mosq, NULL, topic, 6, "online", 1, true);
 	pthread_mutex_lock(&m->mu);
@@ -81,17 +91,35 @@ static void on_connect(struct mosquitto *mosq, void *ctx, int rc)
 		 m->n->cfg.mqtt.host, m->n->cfg.mqtt.port, m->n->cfg.mqtt.client_id, m->base);
 }
 
+/* A lost connection: before libmosquitto reconnects with the node's client
+ * id, check that no other node took the name meanwhile (two nodes of one
+ * name started together, or one started while this one was away). */
 static void on_disconnect(struct mosquitto *mosq, void *ctx, int rc)
 {
 	struct node_mqtt *m = ctx;
+	struct st_error err = {0};
+	int cancel_state;
+	bool held;
 
-	(void)mosq;
 	pthread_mutex_lock(&m->mu);
 	m->connected = false;
 	pthread_mutex_unlock(&m->mu);
-	if (rc)
-		node_log("warning", NULL, 0, "mqtt: connection lost (%s); reconnecting",
-			 mosquitto_strerror(rc));
+	if (!rc || atomic_load(&m->stopping))
+		return;
+	node_log("warning", NULL, 0, "mqtt: connection lost (%s); reconnecting",
+		 mosquitto_strerror(rc));
+	/* node_mqtt_stop cancels this thread: not in the middle of the check
+	 * (which sees stopping and ends within 0.1 s). */
+	pthread_setcancelstate(PTHREAD_CANCEL_DISABLE, &cancel_state);
+	node_mqtt_claim(&m->n->cfg, &m->stopping, &held, &err);
+	pthread_setcancelstate(cancel_state, NULL);
+	if (held) {
+		node_log("error", NULL, 0, "%s; MQTT is off until the node restarts", err.msg);
+		pthread_mutex_lock(&m->mu);
+		m->off = true;
+		pthread_mutex_unlock(&m->mu);
+		mosquitto_disconnect(mosq); /* ends libmosquitto's reconnecting */
+	}
 }
 
 /* Queue a command for the MQTT thread (the network thread must not block). */
@@ -102,10 +130,16 @@ static void on_message(struct mosquitto *mosq, void *ctx, const struct mosquitto
 	const char *rest;
 	char *copy;
 
-	(void)mosq;
 	if (strncmp(msg->topic, m->base, blen) || msg->topic[blen] != '/')
 		return;
 	rest = msg->topic + blen + 1;
+	if (!strcmp(rest, "ping")) {
+		node_log("warning", NULL, 0, "mqtt: a node asked whether the name %s is held on "
+					     "the broker (one starting with this node's name?); "
+					     "answered", m->n->cfg.name);
+		node_mqtt_pong(mosq, m->base, msg, m->since);
+		return;
+	}
 	for (i = 0; i < m->n->nprinters; i++) {
 		size_t pl = strlen(m->n->printers[i].cfg->name);
 
@@ -184,58 +218,100 @@ static void name_of_url(const char *url, char *out, size_t cap)
 	snprintf(out, cap, "%.*s", (int)(end - s), s);
 }
 
-/* Download url into a finished temporary file out (st_file.h). */
+/* One request of a download, redirects not followed: 0 with *status, or
+ * ST_ERR_* with err.  A redirect's target goes to *next (free it). */
+static int fetch_once(CURL *c, const char *url, struct download *d, long *status, char **next,
+		      struct st_error *err)
+{
+	char curl_err[CURL_ERROR_SIZE] = "";
+	char *location = NULL;
+	CURLcode cc;
+
+	curl_easy_setopt(c, CURLOPT_URL, url);
+	curl_easy_setopt(c, CURLOPT_ERRORBUFFER, curl_err);
+	cc = curl_easy_perform(c);
+	*status = 0;
+	*next = NULL;
+	curl_easy_getinfo(c, CURLINFO_RESPONSE_CODE, status);
+	if (cc == CURLE_OK && *status / 100 == 3 &&
+	    curl_easy_getinfo(c, CURLINFO_REDIRECT_URL, &location) == CURLE_OK && location)
+		*next = strdup(location);
+	if (cc == CURLE_OK)
+		return 0;
+	if (d->too_big || cc == CURLE_FILESIZE_EXCEEDED)
+		return st_error_set(err, ST_ERR_RANGE, "the file is larger than the node's limit "
+						       "of %llu bytes", (unsigned long long)d->max);
+	if (d->write_failed)
+		return st_error_set(err, ST_ERR_IO, "cannot store the download: %s",
+				    strerror(errno));
+	return st_error_set(err, ST_ERR_IO, "download failed: %s",
+			    curl_err[0] ? curl_err : curl_easy_strerror(cc));
+}
+
+/* Download url into a finished temporary file out (st_file.h): only from
+ * the hosts of download_hosts, each redirect's target checked before it is
+ * followed (libcurl would follow it anywhere). */
 static int download(struct node *n, const char *url, struct st_file_out *out,
 		    struct st_error *err)
 {
 	struct download d = {.max = n->cfg.max_upload};
-	char curl_err[CURL_ERROR_SIZE] = "";
+	char *at = strdup(url), *next = NULL;
 	CURL *c;
-	CURLcode cc;
 	long status = 0;
+	int rc = 0, hops;
 
-	if (strncmp(url, "http://", 7) && strncmp(url, "https://", 8))
-		return st_error_set(err, ST_ERR_ARG, "url must be http:// or https://");
-	if (st_file_begin_temp(out, n->tmp_dir, "mqtt", NULL))
+	if (!at)
+		return st_error_set(err, ST_ERR_NOMEM, "out of memory");
+	if ((rc = node_mqtt_url_allowed(&n->cfg.mqtt, url, err))) {
+		free(at);
+		return rc;
+	}
+	if (st_file_begin_temp(out, n->tmp_dir, "mqtt", NULL)) {
+		free(at);
 		return st_error_set(err, ST_ERR_IO, "%s/mqtt-XXXXXX: %s", n->tmp_dir,
 				    strerror(errno));
+	}
 	d.f = out->f;
 	c = curl_easy_init();
 	if (!c) {
+		free(at);
 		st_file_abort(out);
 		return st_error_set(err, ST_ERR_NOMEM, "cannot start a download");
 	}
-	curl_easy_setopt(c, CURLOPT_URL, url);
 	curl_easy_setopt(c, CURLOPT_PROTOCOLS_STR, "http,https");
-	curl_easy_setopt(c, CURLOPT_REDIR_PROTOCOLS_STR, "http,https");
-	curl_easy_setopt(c, CURLOPT_FOLLOWLOCATION, 1L);
-	curl_easy_setopt(c, CURLOPT_MAXREDIRS, 5L);
+	curl_easy_setopt(c, CURLOPT_FOLLOWLOCATION, 0L);
 	curl_easy_setopt(c, CURLOPT_TIMEOUT, (long)MQTT_DOWNLOAD_S);
 	curl_easy_setopt(c, CURLOPT_NOSIGNAL, 1L);
 	curl_easy_setopt(c, CURLOPT_MAXFILESIZE_LARGE, (curl_off_t)d.max);
 	curl_easy_setopt(c, CURLOPT_WRITEFUNCTION, download_write);
 	curl_easy_setopt(c, CURLOPT_WRITEDATA, &d);
-	curl_easy_setopt(c, CURLOPT_ERRORBUFFER, curl_err);
 	curl_easy_setopt(c, CURLOPT_USERAGENT, "stratum-node");
-	cc = curl_easy_perform(c);
-	curl_easy_getinfo(c, CURLINFO_RESPONSE_CODE, &status);
+	for (hops = 0; !rc; hops++) {
+		/* a redirect's own body is not the file */
+		fflush(d.f);
+		if (ftruncate(fileno(d.f), 0) || fseek(d.f, 0, SEEK_SET))
+			rc = st_error_set(err, ST_ERR_IO, "cannot store the download: %s",
+					  strerror(errno));
+		d.bytes = 0;
+		if (rc || (rc = fetch_once(c, at, &d, &status, &next, err)) || !next)
+			break;
+		free(at);
+		at = next;
+		if (hops == MQTT_REDIRECTS)
+			rc = st_error_set(err, ST_ERR_IO, "download failed: more than %d redirects",
+					  MQTT_REDIRECTS);
+		else if ((rc = node_mqtt_url_allowed(&n->cfg.mqtt, at, err)))
+			st_error_set(err, rc, "redirected to %.200s: %s", at, err->msg);
+	}
 	curl_easy_cleanup(c);
-	if (cc == CURLE_OK && status == 200 && !st_file_finish(out, NULL))
-		return 0;
-	if (cc == CURLE_OK && status == 200)
-		st_error_set(err, ST_ERR_IO, "cannot store the download: %s", strerror(errno));
-	else if (d.too_big || cc == CURLE_FILESIZE_EXCEEDED)
-		st_error_set(err, ST_ERR_RANGE, "the file is larger than the node's limit of %llu "
-			     "bytes", (unsigned long long)d.max);
-	else if (d.write_failed)
-		st_error_set(err, ST_ERR_IO, "cannot store the download: %s", strerror(errno));
-	else if (cc == CURLE_OK)
-		st_error_set(err, ST_ERR_IO, "the server answered HTTP %ld", status);
-	else
-		st_error_set(err, ST_ERR_IO, "download failed: %s",
-			     curl_err[0] ? curl_err : curl_easy_strerror(cc));
-	st_file_abort(out);
-	return err->code;
+	free(at);
+	if (!rc && status != 200)
+		rc = st_error_set(err, ST_ERR_IO, "the server answered HTTP %ld", status);
+	if (!rc && st_file_finish(out, NULL))
+		rc = st_error_set(err, ST_ERR_IO, "cannot store the download: %s", strerror(errno));
+	if (rc)
+		st_file_abort(out);
+	return rc;
 }
 
 /* enqueue: fetch url and queue it like an upload with print=true. */
@@ -251,6 +327,9 @@ static int cmd_enqueue(struct node *n, struct node_printer *p, json_t *o, int64_
 
 	if (!url)
 		return st_error_set(err, ST_ERR_ARG, "enqueue needs url");
+	/* Before the name: a refused host is the first thing to say. */
+	if ((rc = node_mqtt_url_allowed(&n->cfg.mqtt, url, err)))
+		return rc;
 	if (name)
 		snprintf(fname, sizeof(fname), "%s", name);
 	else
@@ -273,21 +352,24 @@ static int cmd_enqueue(struct node *n, struct node_printer *p, json_t *o, int64_
 	return 0;
 }
 
-/* Run one command and publish its result. */
+/* Run one command and publish its result (never with its key). */
 static void run_command(struct node_mqtt *m, struct node_printer *p, const char *payload)
 {
 	struct st_error err = {0};
-	json_error_t je;
-	json_t *o = json_loads(payload, 0, &je), *res;
-	const char *id = json_string_value(json_object_get(o, "id"));
-	const char *cmd = json_string_value(json_object_get(o, "command"));
+	char topic[400];
+	json_t *o, *res;
+	const char *id, *cmd, *who;
 	int64_t job = 0;
 	bool duplicate = false;
 	char *text;
 	int rc;
 
-	if (!json_is_object(o)) {
-		rc = st_error_set(&err, ST_ERR_PARSE, "the command is not a JSON object");
+	snprintf(topic, sizeof(topic), "%s/%s/cmd", m->base, p->cfg->name);
+	rc = node_mqtt_authorize(m->n, topic, payload, time(NULL), &o, &who, &err);
+	id = json_string_value(json_object_get(o, "id"));
+	cmd = json_string_value(json_object_get(o, "command"));
+	if (rc) {
+		/* refused before its id is recorded: a forged command cannot use up an id */
 	} else if (!id || !*id || strlen(id) > MQTT_ID_MAX) {
 		rc = st_error_set(&err, ST_ERR_ARG, "id is required (a string of 1 to %d bytes) so "
 				  "that a re-delivered command runs once", MQTT_ID_MAX);
@@ -308,7 +390,10 @@ static void run_command(struct node_mqtt *m, struct node_printer *p, const char 
 	if (rc < 0)
 		node_log("warning", p->cfg->name, 0, "mqtt: command %.40s (id %.60s) refused: %s",
 			 cmd ? cmd : "?", id ? id : "?", err.msg);
-	else if (duplicate)
+	else if (!duplicate)
+		node_log("info", p->cfg->name, job, "mqtt: command %.40s (id %.60s) by key %s", cmd,
+			 id, who);
+	else
 		node_log("info", p->cfg->name, 0, "mqtt: command id %.60s was received before; not "
 			 "run again", id);
 	res = json_pack("{s:s?,s:s?,s:b,s:b}", "id", id, "command", cmd, "ok", rc >= 0,
@@ -354,13 +439,63 @@ static void publish_state(struct node_mqtt *m, size_t i, bool force)
 	}
 }
 
+/* Connect with the node's client id once its name is free: libmosquitto's
+ * network thread keeps the connection from then on. */
+static void link_up(struct node_mqtt *m)
+{
+	const struct node_mqtt_config *c = &m->n->cfg.mqtt;
+	int rc = mosquitto_connect_async(m->mosq, c->host, c->port, c->keepalive);
+
+	if (rc != MOSQ_ERR_SUCCESS)
+		node_log("warning", NULL, 0, "mqtt: cannot reach %s:%u yet (%s); retrying",
+			 c->host, c->port, rc == MOSQ_ERR_ERRNO ? strerror(errno)
+								 : mosquitto_strerror(rc));
+	if (mosquitto_loop_start(m->mosq) == MOSQ_ERR_SUCCESS)
+		m->loop_started = true;
+	else
+		node_log("error", NULL, 0, "mqtt: cannot start the network thread");
+}
+
+/* Not linked yet (the broker was down at start): check the name again and
+ * connect, trying every 1, 2, 4 ... MQTT_RETRY_MAX_S seconds. */
+static void retry_link(struct node_mqtt *m, time_t *next_try, int *wait_s)
+{
+	struct st_error err = {0};
+	bool held = false;
+	int rc;
+
+	if (time(NULL) < *next_try)
+		return;
+	rc = node_mqtt_claim(&m->n->cfg, &m->stopping, &held, &err);
+	if (!rc) {
+		link_up(m);
+	} else if (held) {
+		node_log("error", NULL, 0, "%s; MQTT is off until the node restarts", err.msg);
+		pthread_mutex_lock(&m->mu);
+		m->off = true;
+		pthread_mutex_unlock(&m->mu);
+	} else if (rc == ST_ERR_RANGE) {
+		node_log("error", NULL, 0, "%s; retrying", err.msg); /* credentials */
+	}
+	*wait_s = *wait_s * 2 > MQTT_RETRY_MAX_S ? MQTT_RETRY_MAX_S : *wait_s * 2;
+	*next_try = time(NULL) + *wait_s;
+}
+
 static void *mqtt_main(void *arg)
 {
 	struct node_mqtt *m = arg;
 	struct timespec t;
+	time_t next_try = time(NULL) + 1; /* node_mqtt_start made the first try */
+	int wait_s = 1;
 
 	pthread_mutex_lock(&m->mu);
 	while (!m->stop) {
+		if (!m->loop_started && !m->off) {
+			pthread_mutex_unlock(&m->mu);
+			retry_link(m, &next_try, &wait_s);
+			pthread_mutex_lock(&m->mu);
+			continue;
+		}
 		if (m->npending) {
 			size_t i = m->pending[0].printer;
 			char *payload = m->pending[0].payload;
@@ -398,6 +533,7 @@ int node_mqtt_start(struct node *n, struct st_error *err)
 	const struct node_mqtt_config *c = &n->cfg.mqtt;
 	struct node_mqtt *m;
 	char topic[300];
+	bool held;
 	int rc;
 
 	if (!c->host[0])
@@ -412,28 +548,26 @@ int node_mqtt_start(struct node *n, struct st_error *err)
 	snprintf(m->base, sizeof(m->base), "%s/%s", c->topic, n->cfg.name);
 	mosquitto_lib_init();
 	curl_global_init(CURL_GLOBAL_DEFAULT);
+	m->since = time(NULL);
 	/* A kept session: commands sent while the node was away still arrive. */
-	m->mosq = mosquitto_new(c->client_id, false, m);
-	if (!m->mosq)
-		return st_error_set(err, ST_ERR_NOMEM, "mqtt: cannot create the client");
+	if ((rc = node_mqtt_client(c, c->client_id, false, m, &m->mosq, err)))
+		return rc;
 	snprintf(topic, sizeof(topic), "%s/status", m->base);
 	mosquitto_will_set(m->mosq, topic, 7, "offline", 1, true);
-	if (c->username[0])
-		mosquitto_username_pw_set(m->mosq, c->username,
-					  c->password[0] ? c->password : NULL);
 	mosquitto_connect_callback_set(m->mosq, on_connect);
 	mosquitto_disconnect_callback_set(m->mosq, on_disconnect);
 	mosquitto_message_callback_set(m->mosq, on_message);
-	mosquitto_reconnect_delay_set(m->mosq, 1, 30, true);
-	/* A broker that is down now is retried; the node runs meanwhile. */
-	rc = mosquitto_connect_async(m->mosq, c->host, c->port, c->keepalive);
-	if (rc != MOSQ_ERR_SUCCESS)
-		node_log("warning", NULL, 0, "mqtt: cannot reach %s:%u yet (%s); retrying",
-			 c->host, c->port, rc == MOSQ_ERR_ERRNO ? strerror(errno)
-								 : mosquitto_strerror(rc));
-	if (mosquitto_loop_start(m->mosq) != MOSQ_ERR_SUCCESS)
-		return st_error_set(err, ST_ERR_INTERNAL, "mqtt: cannot start the network thread");
-	m->loop_started = true;
+	mosquitto_reconnect_delay_set(m->mosq, 1, MQTT_RETRY_MAX_S, true);
+	/* The name first: a node that holds it is not knocked off (mqtt_name.c).
+	 * A broker that is down now is retried by the MQTT thread; the node
+	 * runs meanwhile. */
+	rc = node_mqtt_claim(&n->cfg, &m->stopping, &held, err);
+	if (rc == ST_ERR_RANGE)
+		return rc;
+	if (rc)
+		node_log("warning", NULL, 0, "%s; retrying", err->msg);
+	else
+		link_up(m);
 	if (pthread_create(&m->thread, NULL, mqtt_main, m))
 		return st_error_set(err, ST_ERR_INTERNAL, "mqtt: cannot start its thread");
 	m->thread_started = true;
@@ -447,6 +581,7 @@ void node_mqtt_stop(struct node *n)
 
 	if (!m)
 		return;
+	atomic_store(&m->stopping, true);
 	if (m->thread_started) {
 		pthread_mutex_lock(&m->mu);
 		m->stop = true;

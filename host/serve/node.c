@@ -199,8 +199,14 @@ int node_start(struct node *n, struct st_error *err)
 {
 	int rc;
 
-	if (pthread_create(&n->ticker, NULL, ticker_main, n))
-		return st_error_set(err, ST_ERR_INTERNAL, "cannot start the progress thread");
+	/* MQTT first: a node whose name another node holds on the broker stops
+	 * here, before it opens a printer's port (and resets its board). */
+	if ((rc = node_mqtt_start(n, err)))
+		goto out_stop;
+	if (pthread_create(&n->ticker, NULL, ticker_main, n)) {
+		rc = st_error_set(err, ST_ERR_INTERNAL, "cannot start the progress thread");
+		goto out_stop;
+	}
 	n->ticker_started = true;
 
 	for (size_t i = 0; i < n->nprinters; i++) {
@@ -214,7 +220,7 @@ int node_start(struct node *n, struct st_error *err)
 		p->thread_started = true;
 	}
 	n->started = true;
-	if ((rc = node_http_start(n, err)) || (rc = node_mqtt_start(n, err)))
+	if ((rc = node_http_start(n, err)))
 		goto out_stop;
 	node_log("info", NULL, 0, "node %s listening on %s:%u with %zu printer(s)", n->cfg.name,
 		 n->cfg.listen_addr, n->port, n->nprinters);

@@ -59,14 +59,25 @@ struct node_printer_config {
 	char sim_log[NODE_PATH_MAX];	/* port = sim: execution log (set by node_new) */
 };
 
-/* [mqtt]: optional; host empty = no MQTT. */
+/* [mqtt]: optional; host empty = no MQTT (docs/serve.md "MQTT"). */
+#define NODE_MQTT_HOSTS_MAX 16		/* download_hosts entries */
+#define NODE_MQTT_PORT 1883		/* port default */
+#define NODE_MQTT_TLS_PORT 8883		/* port default with tls = 1 */
 struct node_mqtt_config {
 	char host[256];
-	uint16_t port;			/* default 1883 */
+	uint16_t port;			/* NODE_MQTT_PORT, or NODE_MQTT_TLS_PORT with tls */
 	char username[128], password[128]; /* "" = none */
-	char client_id[NODE_NAME_MAX + 16]; /* default "stratum-NODE" */
+	char client_id[NODE_NAME_MAX + 16]; /* "stratum-NODE": one per node name */
 	char topic[128];		/* topic root; default "stratum" */
 	int keepalive;			/* seconds; default 30 */
+	int tls;			/* 1: TLS, the broker's certificate checked */
+	char ca_file[NODE_PATH_MAX], ca_dir[NODE_PATH_MAX]; /* "" both: the system's CAs */
+	char cert_file[NODE_PATH_MAX], key_file[NODE_PATH_MAX]; /* client certificate */
+	char tls_version[16];		/* lowest accepted: "" (tlsv1.2), tlsv1.2, tlsv1.3 */
+	int tls_insecure;		/* 1: the broker's host name is not checked */
+	/* "host" or "host:port" (lower case) that enqueue may download from */
+	char download_hosts[NODE_MQTT_HOSTS_MAX][264];
+	size_t ndownload_hosts;
 };
 
 struct node_config {
@@ -100,9 +111,10 @@ int node_config_load(const char *path, struct node_config *cfg, struct st_error 
 
 /*
  * node_config_exposed - whether the config at path, loaded as cfg, holds
- * API keys and can be read by its group or by others (mode & 077; *mode is
- * set to the permission bits).  The caller warns: the keys give upload and
- * control of the printers.  false when the file cannot be examined.
+ * secrets (API keys, an MQTT password) and can be read by its group or by
+ * others (mode & 077; *mode is set to the permission bits).  The caller
+ * warns: the keys give upload and control of the printers, the password
+ * the node's place on the broker.  false when the file cannot be examined.
  */
 bool node_config_exposed(const char *path, const struct node_config *cfg, unsigned *mode);
 

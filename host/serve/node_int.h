@@ -13,6 +13,7 @@
 #include <stdatomic.h>
 #include <stdbool.h>
 #include <stdint.h>
+#include <time.h>
 
 #include "node.h"
 #include "print.h"
@@ -335,6 +336,38 @@ int node_settings_profile(const struct node_printer *p, const char *settings,
  * ST_ERR_UNSUPPORTED with the reason (HTTP 415).
  */
 int node_check_kind(const struct node_printer *p, const char *name, struct st_error *err);
+
+/*
+ * auth.c.  node_key_roles - the roles of the config's key whose secret is
+ * key (0 for none; *who its [key NAME], else NULL), compared in constant time.
+ */
+unsigned node_key_roles(const struct node *n, const char *key, const char **who);
+
+/* A signed MQTT command's "time" is taken this many seconds either way. */
+#define NODE_MQTT_SIGNED_WINDOW_S 300
+
+/*
+ * node_mqtt_authorize - whether the command payload that came on topic may
+ * run: a JSON object with "key" (a key with the control role), or the signed
+ * form {"signed": TEXT, "by": KEY_NAME, "hmac": HEX}, HEX the HMAC-SHA256 of
+ * topic "\n" TEXT with that key, TEXT the command with "time" (Unix seconds,
+ * within NODE_MQTT_SIGNED_WINDOW_S of now).  *cmd is the command object (new
+ * reference; NULL when it is not JSON) even when refused, for the id of the
+ * answer; *who the key's name.  Returns 0, or ST_ERR_PARSE, ST_ERR_ARG,
+ * ST_ERR_RANGE (no key, a wrong one, no control role, stale) with err,
+ * which never holds the key.
+ */
+int node_mqtt_authorize(const struct node *n, const char *topic, const char *payload, time_t now,
+			json_t **cmd, const char **who, struct st_error *err);
+
+/*
+ * node_mqtt_url_allowed - whether an MQTT enqueue may download url: http or
+ * https from a host of c->download_hosts ("host" for the scheme's port,
+ * "host:port").  Returns 0, ST_ERR_ARG (not an http(s) URL) or ST_ERR_RANGE
+ * (downloads off, or the host not listed) with err.
+ */
+int node_mqtt_url_allowed(const struct node_mqtt_config *c, const char *url,
+			  struct st_error *err);
 
 /* mqtt.c: started and stopped with the node; does nothing without [mqtt]. */
 struct node_mqtt;

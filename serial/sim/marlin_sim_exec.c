@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "marlin_sim_int.h"
+#include "st_arc.h"
 
 static void sim_log(struct sim_marlin *s, const struct sim_cmd *c)
 {
@@ -32,25 +33,14 @@ static double sim_move_time(double d, double v)
 	return 2.0 * sqrt(d / SIM_ACCEL);
 }
 
-/* Plan a G0/G1/G2/G3 into the planner (a free block is guaranteed). */
-static void sim_plan_move(struct sim_marlin *s, const struct gcode_line *g, double now)
+/* Plan a straight move from s->pos to target (X Y Z E) into the planner
+ * (a free block is guaranteed), at the modal feed rate. */
+static void sim_plan_block(struct sim_marlin *s, const double target[4], double now)
 {
-	static const char axes[4] = {'X', 'Y', 'Z', 'E'};
-	double v, d2 = 0, de = 0;
-	if (gcode_word_value(g, 'F', &v) && v > 0)
-		s->feed = v / 60.0;
-	for (int a = 0; a < 4; a++) {
-		double target = s->pos[a];
-		bool rel = a == 3 ? s->rel_e : s->rel_xyz;
-		if (gcode_word_value(g, axes[a], &v))
-			target = rel ? s->pos[a] + v : v;
-		double dd = target - s->pos[a];
-		if (a < 3)
-			d2 += dd * dd;
-		else
-			de = fabs(dd);
-		s->pos[a] = target;
-	}
+	double d2 = 0, de = fabs(target[3] - s->pos[3]);
+	for (int a = 0; a < 3; a++)
+		d2 += (target[a] - s->pos[a]) * (target[a] - s->pos[a]);
+	memcpy(s->pos, target, sizeof(s->pos));
 	double d = d2 > 0 ? sqrt(d2) : de;
 	double dur = sim_move_time(d, s->feed) / s->o.speedup;
 	if (dur <= 0)
@@ -61,6 +51,73 @@ static void sim_plan_move(struct sim_marlin *s, const struct gcode_line *g, doub
 		if (s->planner_end[i] > start)
 			start = s->planner_end[i];
 	s->planner_end[s->planner_n++] = start + dur;
+}
+
+/* The target of a G0-G3 (X Y Z E, absolute), its F taken. */
+static void sim_target(struct sim_marlin *s, const struct gcode_line *g, double target[4])
+{
+	static const char axes[4] = {'X', 'Y', 'Z', 'E'};
+	double v;
+	if (gcode_word_value(g, 'F', &v) && v > 0)
+		s->feed = v / 60.0;
+	for (int a = 0; a < 4; a++) {
+		bool rel = a == 3 ? s->rel_e : s->rel_xyz;
+		target[a] = s->pos[a];
+		if (gcode_word_value(g, axes[a], &v))
+			target[a] = rel ? s->pos[a] + v : v;
+	}
+}
+
+/* Set up s->arc for the G2/G3 g as Marlin's plan_arc reads it (I J from
+ * the start, or R); false for an arc without its centre. */
+static bool sim_arc_start(struct sim_marlin *s, const struct gcode_line *g)
+{
+	struct sim_arc *a = &s->arc;
+	bool cw = g->number == 2;
+	double to[4], off[2] = {0, 0}, r;
+
+	sim_target(s, g, to);
+	if (gcode_word_value(g, 'R', &r)) {
+		st_arc_r_offset(to[0] - s->pos[0], to[1] - s->pos[1], r, cw, off);
+	} else {
+		gcode_word_value(g, 'I', &off[0]);
+		gcode_word_value(g, 'J', &off[1]);
+	}
+	if (off[0] == 0 && off[1] == 0)
+		return false;
+	a->centre[0] = s->pos[0] + off[0];
+	a->centre[1] = s->pos[1] + off[1];
+	a->rvec[0] = -off[0];
+	a->rvec[1] = -off[1];
+	a->angle = st_arc_sweep(a->rvec[0], a->rvec[1], to[0] - a->centre[0], to[1] - a->centre[1],
+				cw, to[0] == s->pos[0] && to[1] == s->pos[1]);
+	a->nseg = st_arc_segments(hypot(hypot(off[0], off[1]) * fabs(a->angle), to[2] - s->pos[2]));
+	a->seg = 0;
+	memcpy(a->from, s->pos, sizeof(a->from));
+	memcpy(a->to, to, sizeof(a->to));
+	return true;
+}
+
+/* Plan the arc's chords while the planner has room; true when all are
+ * planned (the last one ends on the target, as Marlin's). */
+static bool sim_arc_plan(struct sim_marlin *s, double now)
+{
+	struct sim_arc *a = &s->arc;
+
+	while (a->seg < a->nseg && msim_planner_free(s, now) > 0) {
+		double p[4], f = (double)++a->seg / a->nseg, c = cos(a->angle * f),
+			     sn = sin(a->angle * f);
+		if (a->seg == a->nseg) {
+			memcpy(p, a->to, sizeof(p));
+		} else {
+			p[0] = a->centre[0] + a->rvec[0] * c - a->rvec[1] * sn;
+			p[1] = a->centre[1] + a->rvec[0] * sn + a->rvec[1] * c;
+			p[2] = a->from[2] + (a->to[2] - a->from[2]) * f;
+			p[3] = a->from[3] + (a->to[3] - a->from[3]) * f;
+		}
+		sim_plan_block(s, p, now);
+	}
+	return a->seg == a->nseg;
 }
 
 /* M115 capability report. */
@@ -92,7 +149,7 @@ static void sim_m115(struct sim_marlin *s)
 static bool sim_exec_start(struct sim_marlin *s, struct sim_cmd *c, double now)
 {
 	const struct gcode_line *g = &c->g;
-	double v;
+	double v, target[4];
 	char buf[160];
 
 	if (!c->parsed || g->letter == 0) {
@@ -102,13 +159,23 @@ static bool sim_exec_start(struct sim_marlin *s, struct sim_cmd *c, double now)
 	}
 	if (g->letter == 'G') {
 		switch (g->number) {
-		case 0: case 1: case 2: case 3:
+		case 0: case 1:
 			if (msim_planner_free(s, now) == 0) {
 				s->blk = SIM_BLK_PLANNER_SLOT;
 				return false;
 			}
-			sim_plan_move(s, g, now);
+			sim_target(s, g, target);
+			sim_plan_block(s, target, now);
 			return true;
+		case 2: case 3: /* chords of MM_PER_ARC_SEGMENT, as Marlin's ARC_SUPPORT */
+			if (!sim_arc_start(s, g)) {
+				msim_send(s, "Error:G2/G3 bad parameters");
+				return true;
+			}
+			if (sim_arc_plan(s, now))
+				return true;
+			s->blk = SIM_BLK_ARC;
+			return false;
 		case 4:
 			s->blk_dur = 0;
 			if (gcode_word_value(g, 'P', &v))
@@ -201,12 +268,17 @@ static bool sim_exec_start(struct sim_marlin *s, struct sim_cmd *c, double now)
 /* Is the blocked head command done? */
 static bool sim_exec_poll(struct sim_marlin *s, struct sim_cmd *c, double now)
 {
+	double target[4];
+
 	switch (s->blk) {
 	case SIM_BLK_PLANNER_SLOT:
 		if (msim_planner_free(s, now) == 0)
 			return false;
-		sim_plan_move(s, &c->g, now);
+		sim_target(s, &c->g, target);
+		sim_plan_block(s, target, now);
 		return true;
+	case SIM_BLK_ARC:
+		return sim_arc_plan(s, now);
 	case SIM_BLK_SYNC_TIMED:
 		if (!s->blk_synced) {
 			if (msim_planner_free(s, now) < SIM_PLANNER)

@@ -37,6 +37,7 @@ struct sim_cmd {
 enum sim_block {
 	SIM_BLK_NONE = 0,
 	SIM_BLK_PLANNER_SLOT, /* G0/G1 with the planner full */
+	SIM_BLK_ARC,	      /* G2/G3 with chords left and the planner full */
 	SIM_BLK_SYNC_TIMED,   /* planner empty, then wait dur (G4, G28, M400) */
 	SIM_BLK_HEAT,	      /* M109 / M190 */
 	SIM_BLK_BUSY,	      /* busy_at_line: held for busy_s wall seconds */
@@ -46,6 +47,15 @@ enum sim_block {
 struct sim_txmark {
 	size_t end;
 	double ready;
+};
+
+/* A G2/G3 being planned in chords (st_arc.h): the centre, the radius
+ * vector from it to the start, the signed angle, and X Y Z E before and
+ * after (Z and E spread evenly). */
+struct sim_arc {
+	unsigned seg, nseg; /* chords planned, chords in all */
+	double centre[2], rvec[2], angle;
+	double from[4], to[4];
 };
 
 struct sim_heater {
@@ -89,6 +99,7 @@ struct sim_marlin {
 	double pos[4];		/* X Y Z E (mm) */
 	bool rel_xyz, rel_e;
 	double feed;		/* mm/s */
+	struct sim_arc arc;	/* the G2/G3 being planned */
 
 	enum sim_block blk;
 	bool blk_synced;

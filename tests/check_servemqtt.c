@@ -1,0 +1,705 @@
+/*
+ * check_servemqtt.c - the farm node on an MQTT broker that others share
+ * (docs/serve.md "MQTT"), part of the serve suite: commands run only with a
+ * key with the control role or signed with one, a second node of one name
+ * is refused, the broker's credentials and TLS, downloads only from the
+ * configured hosts (redirects too), and the broker examples of the docs
+ * loaded by mosquitto.  Each test runs its own mosquitto on loopback.
+ */
+#include <check.h>
+#include <pthread.h>
+#include <openssl/evp.h>
+#include <openssl/hmac.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "mqtttest.h"
+#include "serve/node.h"
+#include "servetest.h"
+#include "suites.h"
+#include "testutil.h"
+
+#define CMD_TOPIC "stratum/test-node/mk3s/cmd"
+#define RESULT_TOPIC "stratum/test-node/mk3s/result"
+#define ONE_PRINTER "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = test-instant\n"
+
+/* Whether mosquitto is here (make deps installs it); prints why not. */
+static bool have_broker(const char *test)
+{
+	if (!access(MOSQUITTO_BIN, X_OK))
+		return true;
+	printf("serve: %s skipped: %s is not installed (make deps)\n", test, MOSQUITTO_BIN);
+	return false;
+}
+
+/* An anonymous broker on a free port; its port in *port. */
+static pid_t open_broker(int *port)
+{
+	char conf[256];
+
+	*port = free_port();
+	snprintf(conf, sizeof(conf), "listener %d 127.0.0.1\nallow_anonymous true\n"
+				     "persistence false\n", *port);
+	return broker_start(*port, conf);
+}
+
+/* np's config: one test-instant printer and [mqtt] on the broker at port
+ * with the lines extra. */
+static void write_mqtt_config(struct node_proc *np, int port, const char *extra)
+{
+	char text[2048];
+
+	snprintf(text, sizeof(text), ONE_PRINTER "\n[mqtt]\nhost = 127.0.0.1\nport = %d\n"
+					       "keepalive = 5\n%s", port, extra);
+	sv_write_config(np, text, 8);
+}
+
+/* The [mqtt] keys that would leave a link open or a setting ignored are
+ * refused when the config is read, with the key named. */
+START_TEST(test_mqtt_config_errors)
+{
+	static const struct {
+		const char *lines, *want;
+	} cases[] = {
+		{"ca_file = ca.pem\n", "[mqtt] ca_file is a TLS setting: add tls = 1"},
+		{"tls_insecure = 1\n", "[mqtt] tls_insecure is a TLS setting"},
+		{"tls = 1\ncert_file = c.pem\n", "cert_file and key_file go together"},
+		{"tls = 1\ncert_file = c.pem\nkey_file = k.pem\n", "a client certificate needs "
+								   "ca_file or ca_dir"},
+		{"tls = 1\ntls_version = tlsv1.1\n", "line 12: tls_version: 'tlsv1.1' is not tlsv1.2 "
+						     "or tlsv1.3"},
+		{"tls = 2\n", "line 11: tls: 2 is out of range (0 to 1)"},
+		{"password = p\n", "[mqtt] password needs username"},
+		{"download_hosts = files.farm, http://x\n", "line 11: download_hosts: 'http://x' is "
+							    "not HOST or HOST:PORT"},
+		{"download_hosts = h:0\n", "'h:0' is not HOST or HOST:PORT"},
+		{"download_hosts = [::1]:99999\n", "'[::1]:99999' is not HOST or HOST:PORT"},
+		{"client_id = x\n", "line 11: unknown key 'client_id' in [mqtt]"},
+	};
+	struct node_config *c = calloc(1, sizeof(*c));
+	struct st_error err = {0};
+	const char *path = tu_path("mqtt-config.ini");
+	char text[1024];
+
+	ck_assert_ptr_nonnull(c);
+	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+		snprintf(text, sizeof(text), "[node]\ndata_dir = d\n[key k]\nkey = " KEY_CTL "\n"
+					     "roles = control\n" ONE_PRINTER "[mqtt]\nhost = b\n%s",
+			 cases[i].lines);
+		tu_write_str(path, text);
+		ck_assert_msg(node_config_load(path, c, &err) != 0, "%s loads", cases[i].lines);
+		ck_assert_msg(strstr(err.msg, cases[i].want), "%s: %s", cases[i].lines, err.msg);
+	}
+	/* What loads: hosts lower-cased, ports by scheme, the client id from the name. */
+	snprintf(text, sizeof(text), "[node]\nname = farm-7\ndata_dir = d\n[key k]\nkey = " KEY_CTL
+				     "\nroles = control\n" ONE_PRINTER "[mqtt]\nhost = b\ntls = 1\n"
+				     "ca_dir = certs\ndownload_hosts = Files.Farm, [::1]:8080\n");
+	tu_write_str(path, text);
+	ck_assert_msg(node_config_load(path, c, &err) == 0, "%s", err.msg);
+	ck_assert_uint_eq(c->mqtt.port, 8883);
+	ck_assert_str_eq(c->mqtt.client_id, "stratum-farm-7");
+	ck_assert_str_eq(c->mqtt.download_hosts[0], "files.farm");
+	ck_assert_str_eq(c->mqtt.download_hosts[1], "[::1]:8080");
+	ck_assert_msg(strstr(c->mqtt.ca_dir, "/certs") && c->mqtt.ca_dir[0] == '/', "%s",
+		      c->mqtt.ca_dir);
+	free(c);
+}
+END_TEST
+
+/* A broker, the node on it with the [mqtt] lines extra, and a client
+ * watching the node's topics, once the node says it is online. */
+static pid_t node_on_broker(struct node_proc *np, int *port, const char *extra,
+			    struct mqtt_seen *seen, struct mosquitto **mq)
+{
+	pid_t broker = open_broker(port);
+
+	write_mqtt_config(np, *port, extra);
+	sv_start(np);
+	*mq = watch_start(seen, *port, NULL, NULL, "stratum/test-node/#");
+	wait_topic(seen, "stratum/test-node/status", "online", 10, NULL, 0);
+	return broker;
+}
+
+/* The signed form of the command text for topic, signed with secret as
+ * key name by. */
+static void sign(char *out, size_t cap, const char *topic, const char *text, const char *by,
+		 const char *secret)
+{
+	unsigned char mac[32];
+	unsigned int len = 0;
+	char msg[1024], hex[65];
+	json_t *env;
+	char *dump;
+
+	snprintf(msg, sizeof(msg), "%s\n%s", topic, text);
+	HMAC(EVP_sha256(), secret, (int)strlen(secret), (const unsigned char *)msg, strlen(msg), mac,
+	     &len);
+	ck_assert_uint_eq(len, 32);
+	for (int i = 0; i < 32; i++)
+		snprintf(hex + 2 * i, 3, "%02x", mac[i]);
+	env = json_pack("{s:s,s:s,s:s}", "signed", text, "by", by, "hmac", hex);
+	dump = json_dumps(env, JSON_COMPACT);
+	snprintf(out, cap, "%s", dump);
+	free(dump);
+	json_decref(env);
+}
+
+/* Send payload and wait for its answer, which must contain want; the answer in out. */
+static void command(struct mosquitto *mq, struct mqtt_seen *seen, const char *payload,
+		    const char *want, char *out, size_t cap)
+{
+	watch_send(mq, CMD_TOPIC, payload);
+	wait_topic(seen, RESULT_TOPIC, want, 10, out, cap);
+}
+
+/* Commands without a key, with a wrong one, with one lacking the control
+ * role, signed wrongly, late or for another topic are refused (and use up
+ * no id); a control key or a good signature runs them.  No key is logged. */
+START_TEST(test_mqtt_command_keys)
+{
+	struct node_proc np;
+	struct mqtt_seen seen;
+	struct mosquitto *mq;
+	char out[2048], cmd[1024], text[512];
+	int bport;
+	pid_t broker;
+	long long id;
+	size_t len;
+	char *log;
+
+	if (!have_broker("MQTT command keys"))
+		return;
+	broker = node_on_broker(&np, &bport, "", &seen, &mq);
+	id = sv_print_text(np.port, "", "hold.gcode", "G28\nG4 P20000\nG1 X5\n");
+	sv_wait_state(np.port, "", id, "printing", 10);
+
+	command(mq, &seen, "{\"id\":\"k-1\",\"command\":\"pause\"}", "\"k-1\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "\"ok\":false") && strstr(out, "a key with the control role is "
+								 "needed"), "%s", out);
+	command(mq, &seen, "{\"id\":\"k-2\",\"command\":\"pause\",\"key\":\"wrong-key-0123456789\"}",
+		"\"k-2\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "the key is not a key of this node"), "%s", out);
+	ck_assert_msg(!strstr(out, "wrong-key"), "the answer holds the key: %s", out);
+	command(mq, &seen, "{\"id\":\"k-3\",\"command\":\"pause\",\"key\":\"" KEY_UP "\"}", "\"k-3\"",
+		out, sizeof(out));
+	ck_assert_msg(strstr(out, "the key lacks the control role"), "%s", out);
+	command(mq, &seen, "{\"id\":\"k-4\",\"command\":\"pause\",\"key\":\"" KEY_READ "\"}",
+		"\"k-4\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "the key lacks the control role"), "%s", out);
+	/* Signed: with the wrong secret, too late, for another printer's topic. */
+	snprintf(text, sizeof(text), "{\"id\":\"k-5\",\"command\":\"pause\",\"time\":%lld}",
+		 (long long)time(NULL));
+	sign(cmd, sizeof(cmd), CMD_TOPIC, text, "operator", "not-the-operator-key-01");
+	command(mq, &seen, cmd, "\"k-5\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "the signature does not match a key of this node"), "%s", out);
+	snprintf(text, sizeof(text), "{\"id\":\"k-6\",\"command\":\"pause\",\"time\":%lld}",
+		 (long long)time(NULL) - 1000);
+	sign(cmd, sizeof(cmd), CMD_TOPIC, text, "operator", KEY_CTL);
+	command(mq, &seen, cmd, "\"k-6\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "a signed command is taken within 300 s"), "%s", out);
+	snprintf(text, sizeof(text), "{\"id\":\"k-7\",\"command\":\"pause\",\"time\":%lld}",
+		 (long long)time(NULL));
+	sign(cmd, sizeof(cmd), "stratum/test-node/ender/cmd", text, "operator", KEY_CTL);
+	command(mq, &seen, cmd, "\"k-7\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "the signature does not match"), "%s", out);
+	snprintf(text, sizeof(text), "{\"id\":\"k-8\",\"command\":\"pause\",\"time\":%lld}",
+		 (long long)time(NULL));
+	sign(cmd, sizeof(cmd), CMD_TOPIC, text, "slicer", KEY_UP);
+	command(mq, &seen, cmd, "\"k-8\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "the key lacks the control role"), "%s", out);
+	ck_assert_str_eq(sv_job_state(np.port, "", id, NULL), "printing");
+
+	/* The control key: k-1 runs now, its refusal used up nothing. */
+	command(mq, &seen, "{\"id\":\"k-1\",\"command\":\"pause\",\"key\":\"" KEY_CTL "\"}",
+		"\"ok\":true", out, sizeof(out));
+	ck_assert_msg(strstr(out, "\"k-1\"") && strstr(out, "\"duplicate\":false"), "%s", out);
+	sv_wait_state(np.port, "", id, "paused", 10);
+	/* Signed with the control key; the same message again is a duplicate. */
+	snprintf(text, sizeof(text), "{\"id\":\"k-9\",\"command\":\"resume\",\"time\":%lld}",
+		 (long long)time(NULL));
+	sign(cmd, sizeof(cmd), CMD_TOPIC, text, "operator", KEY_CTL);
+	command(mq, &seen, cmd, "\"k-9\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "\"ok\":true"), "%s", out);
+	sv_wait_state(np.port, "", id, "printing", 10);
+	command(mq, &seen, cmd, "\"duplicate\":true", out, sizeof(out));
+	command(mq, &seen, "{\"id\":\"k-10\",\"command\":\"cancel\",\"key\":\"" KEY_CTL "\"}",
+		"\"k-10\"", out, sizeof(out));
+	sv_wait_state(np.port, "", id, "cancelled", 10);
+
+	watch_stop(mq, &seen);
+	sv_stop(&np);
+	log = tu_slurp(np.log, &len);
+	ck_assert_msg(strstr(log, "mqtt: command pause (id k-2) refused: the key is not a key of "
+				  "this node"), "%s", log);
+	ck_assert_msg(!strstr(log, "wrong-key") && !strstr(log, KEY_UP) && !strstr(log, KEY_CTL) &&
+			      !strstr(log, KEY_READ),
+		      "a key is in the log: %s", log);
+	free(log);
+	broker_stop(broker);
+}
+END_TEST
+
+/* A second node with a name another node holds on the broker is refused
+ * (exit 65) without knocking the first off or opening its printers; a
+ * stale "online" with no node behind it does not block the name. */
+START_TEST(test_mqtt_same_name)
+{
+	struct node_proc np;
+	struct mqtt_seen seen;
+	struct mosquitto *mq;
+	char out[4096], text[1024], dir[512], conf[600];
+	int bport, rc;
+	pid_t broker;
+	size_t len;
+	char *log;
+
+	if (!have_broker("MQTT same name"))
+		return;
+	broker = node_on_broker(&np, &bport, "", &seen, &mq);
+	/* The same name from another config and data directory. */
+	snprintf(dir, sizeof(dir), "%s", tu_path("second"));
+	mkdir(dir, 0700);
+	snprintf(conf, sizeof(conf), "%s/node.ini", dir);
+	snprintf(text, sizeof(text), "[node]\nname = test-node\nlisten = 127.0.0.1:0\n"
+				     "data_dir = data\n[key k]\nkey = " KEY_CTL "\nroles = control\n"
+				     ONE_PRINTER "[mqtt]\nhost = 127.0.0.1\nport = %d\n", bport);
+	tu_write_str(conf, text);
+	chmod(conf, 0600);
+	rc = tu_run(out, sizeof(out), "serve --config '%s'", conf);
+	ck_assert_msg(rc == 65, "exit %d: %s", rc, out);
+	ck_assert_msg(strstr(out, "mqtt: another node named test-node is connected to the broker "
+				  "127.0.0.1:") && strstr(out, "give this node another name"),
+		      "%s", out);
+	ck_assert_msg(!strstr(out, "test-instant"), "the refused node opened its printer: %s", out);
+	/* The first node was never off the broker and still answers commands. */
+	command(mq, &seen, "{\"id\":\"n-1\",\"command\":\"pause\",\"key\":\"" KEY_CTL "\"}",
+		"\"n-1\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "no job"), "%s", out);
+	sv_stop(&np);
+	log = tu_slurp(np.log, &len);
+	ck_assert_msg(!strstr(log, "connection lost"), "%s", log);
+	ck_assert_msg(strstr(log, "a node asked whether the name test-node is held"), "%s", log);
+	free(log);
+	/* Stopped cleanly: offline.  A stale online (a node the broker has not yet
+	 * seen die) delays the start by the ping's wait only. */
+	wait_topic(&seen, "stratum/test-node/status", "offline", 10, NULL, 0);
+	ck_assert_int_eq(mosquitto_publish(mq, NULL, "stratum/test-node/status", 6, "online", 1,
+					   true), 0);
+	wait_topic(&seen, "stratum/test-node/status", "online", 10, NULL, 0);
+	sv_start(&np);
+	wait_topic(&seen, "stratum/test-node/mk3s/status", "Operational", 10, NULL, 0);
+	sv_stop(&np);
+	log = tu_slurp(np.log, &len);
+	ck_assert_msg(strstr(log, "no node answered; taking the name"), "%s", log);
+	free(log);
+	watch_stop(mq, &seen);
+	broker_stop(broker);
+}
+END_TEST
+
+/* A broker that requires a user name and password: the right ones connect;
+ * a wrong password refuses the start (65) without printing it, and the
+ * config holding it is named when others can read it. */
+START_TEST(test_mqtt_password)
+{
+	struct node_proc np;
+	struct mqtt_seen seen;
+	struct mosquitto *mq;
+	char out[4096], conf[1024], passwd[512];
+	int bport, rc;
+	pid_t broker;
+	size_t len;
+	char *log;
+
+	if (!have_broker("MQTT password"))
+		return;
+	if (access("/usr/bin/mosquitto_passwd", X_OK)) {
+		printf("serve: MQTT password test skipped: no /usr/bin/mosquitto_passwd\n");
+		return;
+	}
+	bport = free_port();
+	snprintf(passwd, sizeof(passwd), "%s", tu_path("broker.passwd"));
+	rc = tu_sh(out, sizeof(out), "mosquitto_passwd -c -b '%s' test-node node-pass-123 && "
+				     "mosquitto_passwd -b '%s' watcher watch-pass-123", passwd, passwd);
+	ck_assert_msg(rc == 0, "%s", out);
+	snprintf(conf, sizeof(conf), "listener %d 127.0.0.1\nallow_anonymous false\n"
+				     "password_file %s\npersistence false\n", bport, passwd);
+	broker = broker_start(bport, conf);
+	mq = watch_start(&seen, bport, "watcher", "watch-pass-123", "stratum/test-node/#");
+
+	write_mqtt_config(&np, bport, "username = test-node\npassword = not-the-pass-99\n");
+	chmod(np.config, 0644);
+	rc = tu_run(out, sizeof(out), "serve --config '%s'", np.config);
+	ck_assert_msg(rc == 65, "exit %d: %s", rc, out);
+	ck_assert_msg(strstr(out, "mqtt: the broker 127.0.0.1:") &&
+			      strstr(out, "refused the connection: Connection Refused: not "
+					  "authorised"), "%s", out);
+	ck_assert_msg(strstr(out, "holds API keys and the MQTT password and can be read by other "
+				  "users (mode 0644)"), "%s", out);
+	ck_assert_msg(!strstr(out, "not-the-pass-99"), "the password is printed: %s", out);
+	write_mqtt_config(&np, bport, "");
+	rc = tu_run(out, sizeof(out), "serve --config '%s'", np.config);
+	ck_assert_msg(rc == 65 && strstr(out, "not authorised"), "exit %d: %s", rc, out);
+
+	write_mqtt_config(&np, bport, "username = test-node\npassword = node-pass-123\n");
+	sv_start(&np);
+	wait_topic(&seen, "stratum/test-node/status", "online", 10, NULL, 0);
+	wait_topic(&seen, "stratum/test-node/mk3s/status", "Operational", 10, NULL, 0);
+	sv_stop(&np);
+	log = tu_slurp(np.log, &len);
+	ck_assert_msg(!strstr(log, "node-pass-123"), "the password is logged: %s", log);
+	free(log);
+	watch_stop(mq, &seen);
+	broker_stop(broker);
+}
+END_TEST
+
+/* enqueue downloads nothing by default, and then only from the hosts of
+ * download_hosts: another host, another port, or a redirect to either is
+ * refused before any byte is fetched from it. */
+START_TEST(test_mqtt_downloads)
+{
+	struct node_proc np;
+	struct file_server allowed, other;
+	struct mqtt_seen seen;
+	struct mosquitto *mq;
+	char out[2048], cmd[1024], extra[256], redirect[256];
+	int bport;
+	pid_t broker;
+
+	if (!have_broker("MQTT downloads"))
+		return;
+	file_server_start(&allowed, "G28\nG1 X5\n");
+	file_server_start(&other, "G28\n");
+	broker = node_on_broker(&np, &bport, "", &seen, &mq);
+#define ENQUEUE(id, port, file)                                                               \
+	snprintf(cmd, sizeof(cmd), "{\"id\":\"" id "\",\"command\":\"enqueue\",\"key\":\"" KEY_CTL  \
+		 "\",\"url\":\"http://%s/" file "\"}", port)
+	snprintf(extra, sizeof(extra), "127.0.0.1:%d", allowed.port);
+	ENQUEUE("d-1", extra, "part.gcode");
+	command(mq, &seen, cmd, "\"d-1\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "downloads are off: [mqtt] download_hosts lists no host"), "%s",
+		      out);
+	ck_assert_int_eq(allowed.served, 0);
+	sv_stop(&np);
+
+	snprintf(extra, sizeof(extra), "download_hosts = localhost, 127.0.0.1:%d\n", allowed.port);
+	write_mqtt_config(&np, bport, extra);
+	sv_start(&np);
+	wait_topic(&seen, "stratum/test-node/status", "online", 10, NULL, 0);
+	snprintf(extra, sizeof(extra), "127.0.0.1:%d", other.port);
+	ENQUEUE("d-2", extra, "part.gcode");
+	command(mq, &seen, cmd, "\"d-2\"", out, sizeof(out));
+	snprintf(extra, sizeof(extra), "127.0.0.1:%d is not in [mqtt] download_hosts", other.port);
+	ck_assert_msg(strstr(out, extra), "%s", out);
+	/* a bare host name allows the scheme's own port (80) only */
+	snprintf(extra, sizeof(extra), "localhost:%d", other.port);
+	ENQUEUE("d-3", extra, "part.gcode");
+	command(mq, &seen, cmd, "\"d-3\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "is not in [mqtt] download_hosts"), "%s", out);
+	/* a redirect from the allowed host to another is checked before it is followed */
+	snprintf(redirect, sizeof(redirect), "http://127.0.0.1:%d/evil.gcode", other.port);
+	allowed.redirect = redirect;
+	snprintf(extra, sizeof(extra), "127.0.0.1:%d", allowed.port);
+	ENQUEUE("d-4", extra, "part.gcode");
+	command(mq, &seen, cmd, "\"d-4\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "redirected to http://127.0.0.1:") &&
+			      strstr(out, "is not in [mqtt] download_hosts"), "%s", out);
+	ck_assert_int_eq(allowed.served, 1);
+	ck_assert_int_eq(other.served, 0);
+	allowed.redirect = NULL;
+	ENQUEUE("d-5", extra, "part.gcode");
+	command(mq, &seen, cmd, "\"d-5\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "\"ok\":true") && strstr(out, "\"job\":"), "%s", out);
+	ck_assert_int_eq(allowed.served, 2);
+#undef ENQUEUE
+	watch_stop(mq, &seen);
+	sv_stop(&np);
+	file_server_stop(&allowed);
+	file_server_stop(&other);
+	broker_stop(broker);
+}
+END_TEST
+
+/* A client that takes a node's client id, as a second node of its name
+ * would: it says online and answers pings; kicks counts how often the
+ * broker dropped it for another client with its id. */
+struct impostor {
+	int kicks;
+	pthread_mutex_t mu;
+};
+
+static void impostor_connect(struct mosquitto *mosq, void *ctx, int rc)
+{
+	(void)ctx;
+	if (rc)
+		return;
+	mosquitto_publish(mosq, NULL, "stratum/test-node/status", 6, "online", 1, true);
+	mosquitto_subscribe(mosq, NULL, "stratum/test-node/ping", 0);
+}
+
+static void impostor_message(struct mosquitto *mosq, void *ctx, const struct mosquitto_message *m)
+{
+	char answer[200];
+
+	(void)ctx;
+	snprintf(answer, sizeof(answer), "%.*s: the impostor", m->payloadlen > 64 ? 64 : m->payloadlen,
+		 (const char *)m->payload);
+	mosquitto_publish(mosq, NULL, "stratum/test-node/pong", (int)strlen(answer), answer, 0, false);
+}
+
+static void impostor_disconnect(struct mosquitto *mosq, void *ctx, int rc)
+{
+	struct impostor *im = ctx;
+
+	(void)mosq;
+	pthread_mutex_lock(&im->mu);
+	im->kicks += rc != 0;
+	pthread_mutex_unlock(&im->mu);
+}
+
+/* The impostor, connected to the broker at port (it may take the id from a
+ * node connected there), or NULL to end it. */
+static struct mosquitto *impostor_start(struct impostor *im, int port)
+{
+	struct mosquitto *other;
+
+	pthread_mutex_init(&im->mu, NULL);
+	im->kicks = 0;
+	other = mosquitto_new("stratum-test-node", false, im);
+	ck_assert(other);
+	mosquitto_connect_callback_set(other, impostor_connect);
+	mosquitto_message_callback_set(other, impostor_message);
+	mosquitto_disconnect_callback_set(other, impostor_disconnect);
+	mosquitto_reconnect_delay_set(other, 1, 1, false);
+	ck_assert_int_eq(mosquitto_connect(other, "127.0.0.1", port, 30), 0);
+	ck_assert_int_eq(mosquitto_loop_start(other), 0);
+	return other;
+}
+
+/* Wait for the node's log to say it found the impostor and turned MQTT
+ * off; then the impostor must keep its connection (the node would be back
+ * within 1 s). */
+static void expect_node_yields(struct node_proc *np, struct impostor *im, struct mosquitto *other)
+{
+	char *log = NULL;
+	size_t len;
+	int kicks;
+
+	for (int i = 0; i < 200; i++) {
+		free(log);
+		log = tu_slurp(np->log, &len);
+		if (strstr(log + np->log_end, "MQTT is off until the node restarts"))
+			break;
+		usleep(50000);
+	}
+	ck_assert_msg(strstr(log + np->log_end, "mqtt: another node named test-node is connected "
+						"to the broker") &&
+			      strstr(log + np->log_end, "the impostor") &&
+			      strstr(log + np->log_end, "MQTT is off until the node restarts"),
+		      "%s", log + np->log_end);
+	free(log);
+	sleep(2);
+	pthread_mutex_lock(&im->mu);
+	kicks = im->kicks;
+	pthread_mutex_unlock(&im->mu);
+	ck_assert_int_eq(kicks, 0);
+	mosquitto_disconnect(other);
+	mosquitto_loop_stop(other, false);
+	mosquitto_destroy(other);
+	pthread_mutex_destroy(&im->mu);
+}
+
+/* A running node whose client id another client takes (two nodes of one
+ * name that both found it free) checks the name before it reconnects,
+ * finds the other, and stays off the broker instead of knocking it off. */
+START_TEST(test_mqtt_name_taken_while_running)
+{
+	struct node_proc np;
+	struct mqtt_seen seen;
+	struct mosquitto *mq, *other;
+	struct impostor im;
+	int bport;
+	pid_t broker;
+
+	if (!have_broker("MQTT name taken while running"))
+		return;
+	broker = node_on_broker(&np, &bport, "", &seen, &mq);
+	other = impostor_start(&im, bport);
+	expect_node_yields(&np, &im, other);
+	sv_stop(&np);
+	watch_stop(mq, &seen);
+	broker_stop(broker);
+}
+END_TEST
+
+/* A broker that is down when the node starts: the node runs, and checks
+ * its name once the broker is there; a node that took the name meanwhile
+ * keeps it.  Then, with the name free, it connects. */
+START_TEST(test_mqtt_broker_later)
+{
+	struct node_proc np;
+	struct mqtt_seen seen;
+	struct mosquitto *mq, *other;
+	struct impostor im;
+	char conf[256];
+	int bport = free_port();
+	pid_t broker;
+
+	if (!have_broker("MQTT broker later"))
+		return;
+	write_mqtt_config(&np, bport, "");
+	sv_start(&np);
+	snprintf(conf, sizeof(conf), "listener %d 127.0.0.1\nallow_anonymous true\n"
+				     "persistence false\n", bport);
+	broker = broker_start(bport, conf);
+	other = impostor_start(&im, bport);
+	expect_node_yields(&np, &im, other);
+	sv_stop(&np);
+	/* a new broker (nothing retained): the name is free when it comes */
+	broker_stop(broker);
+	sv_start(&np);
+	broker = broker_start(bport, conf);
+	mq = watch_start(&seen, bport, NULL, NULL, "stratum/test-node/#");
+	wait_topic(&seen, "stratum/test-node/status", "online", 10, NULL, 0);
+	wait_topic(&seen, "stratum/test-node/mk3s/status", "Operational", 10, NULL, 0);
+	watch_stop(mq, &seen);
+	sv_stop(&np);
+	broker_stop(broker);
+}
+END_TEST
+
+/* Every occurrence of from in text replaced by to, into out (cap bytes). */
+static void replace_all(char *out, size_t cap, const char *text, const char *from, const char *to)
+{
+	size_t used = 0, fl = strlen(from);
+	const char *at;
+
+	while ((at = strstr(text, from)) != NULL) {
+		used += (size_t)snprintf(out + used, cap - used, "%.*s%s", (int)(at - text), text, to);
+		ck_assert(used < cap);
+		text = at + fl;
+	}
+	used += (size_t)snprintf(out + used, cap - used, "%s", text);
+	ck_assert(used < cap);
+}
+
+/* The broker of docs/serve.md ("What the broker must restrict"), its two
+ * files as they stand there: the node connects over TLS with its password,
+ * the controller's signed command is answered, another node's user cannot
+ * command it; the broker's host name is checked unless tls_insecure = 1. */
+START_TEST(test_mqtt_broker_example)
+{
+	static char doc[1 << 17], doc2[1 << 17];
+	struct node_proc np;
+	struct mqtt_seen seen, intruder_seen;
+	struct mosquitto *mq, *intruder;
+	char dir[512], etc[600], conf[4096], text[1024], cmd[1024], out[4096], ca[700];
+	const char *conf_doc, *acl_doc;
+	int bport, rc, results;
+	pid_t broker;
+	size_t len;
+	char *log;
+
+	if (!have_broker("MQTT broker example"))
+		return;
+	if (access("/usr/bin/mosquitto_passwd", X_OK) || access("/usr/bin/openssl", X_OK)) {
+		printf("serve: MQTT broker example test skipped: no mosquitto_passwd or openssl\n");
+		return;
+	}
+	conf_doc = tu_read_between("docs/serve.md", doc, sizeof(doc),
+				   "# /etc/mosquitto/conf.d/stratum.conf\n", "```");
+	acl_doc = tu_read_between("docs/serve.md", doc2, sizeof(doc2),
+				  "# /etc/mosquitto/stratum.acl\n", "```");
+	snprintf(dir, sizeof(dir), "%s", tu_path("etc-mosquitto"));
+	snprintf(etc, sizeof(etc), "%s/", dir);
+	rc = tu_sh(out, sizeof(out),
+		   "{ mkdir -p '%s/certs' && cd '%s/certs' && printf 'subjectAltName=IP:127.0.0.1\\n' "
+		   "> san.ext && openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 "
+		   "-nodes -keyout ca.key -out ca.crt -days 2 -subj /CN=test-ca && openssl req "
+		   "-newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes -keyout broker.key -out "
+		   "broker.csr -subj /CN=127.0.0.1 && openssl x509 -req -in broker.csr -CA ca.crt "
+		   "-CAkey ca.key -CAcreateserial -days 2 -extfile san.ext -out broker.crt && "
+		   "mosquitto_passwd -c -b ../stratum.passwd test-node node-pass-123 && "
+		   "mosquitto_passwd -b ../stratum.passwd controller ctl-pass-123 && "
+		   "mosquitto_passwd -b ../stratum.passwd farm-2 other-pass-123; }", dir, dir);
+	ck_assert_msg(rc == 0, "%s", out);
+	bport = free_port();
+	replace_all(text, sizeof(text), conf_doc, "/etc/mosquitto/", etc);
+	snprintf(cmd, sizeof(cmd), "listener %d 127.0.0.1", bport);
+	replace_all(conf, sizeof(conf), text, "listener 8883", cmd);
+	snprintf(text, sizeof(text), "%sstratum.acl", etc);
+	tu_write_str(text, acl_doc);
+	broker = broker_start(bport, conf);
+	snprintf(ca, sizeof(ca), "%scerts/ca.crt", etc);
+	mq = watch_start_tls(&seen, bport, "controller", "ctl-pass-123", "stratum/#", ca);
+
+	snprintf(text, sizeof(text), "username = test-node\npassword = node-pass-123\ntls = 1\n"
+				     "ca_file = %s\n", ca);
+	write_mqtt_config(&np, bport, text);
+	sv_start(&np);
+	wait_topic(&seen, "stratum/test-node/status", "online", 10, NULL, 0);
+	/* Another node's user publishes a command with a good key: the broker drops it. */
+	intruder = watch_start_tls(&intruder_seen, bport, "farm-2", "other-pass-123",
+				   "stratum/farm-2/#", ca);
+	watch_send(intruder, CMD_TOPIC, "{\"id\":\"x-1\",\"command\":\"pause\",\"key\":\"" KEY_CTL
+					"\"}");
+	usleep(300000);
+	pthread_mutex_lock(&seen.mu);
+	results = seen.results;
+	pthread_mutex_unlock(&seen.mu);
+	snprintf(text, sizeof(text), "{\"id\":\"x-2\",\"command\":\"pause\",\"time\":%lld}",
+		 (long long)time(NULL));
+	sign(cmd, sizeof(cmd), CMD_TOPIC, text, "operator", KEY_CTL);
+	command(mq, &seen, cmd, "\"x-2\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "no job"), "%s", out);
+	pthread_mutex_lock(&seen.mu);
+	ck_assert_int_eq(seen.results, results + 1);
+	pthread_mutex_unlock(&seen.mu);
+	watch_stop(intruder, &intruder_seen);
+	sv_stop(&np);
+	log = tu_slurp(np.log, &len);
+	ck_assert_msg(!strstr(log, "x-1"), "the intruder's command arrived: %s", log);
+	free(log);
+
+	/* The certificate names 127.0.0.1, not localhost: refused, unless insecure. */
+	snprintf(text, sizeof(text), "username = test-node\npassword = node-pass-123\ntls = 1\n"
+				     "ca_file = %s\n", ca);
+	snprintf(conf, sizeof(conf), ONE_PRINTER "\n[mqtt]\nhost = localhost\nport = %d\n%s",
+		 bport, text);
+	sv_write_config(&np, conf, 8);
+	sv_start(&np);
+	sv_stop(&np);
+	log = tu_slurp(np.log, &len);
+	ck_assert_msg(strstr(log + np.log_end, "mqtt: cannot reach localhost:") &&
+			      strstr(log + np.log_end, "TLS"), "%s", log + np.log_end);
+	free(log);
+	snprintf(conf + strlen(conf), sizeof(conf) - strlen(conf), "tls_insecure = 1\n");
+	sv_write_config(&np, conf, 8);
+	sv_start(&np);
+	wait_topic(&seen, "stratum/test-node/status", "online", 10, NULL, 0);
+	sv_stop(&np);
+	watch_stop(mq, &seen);
+	broker_stop(broker);
+}
+END_TEST
+
+void serve_mqtt_tcases(Suite *s)
+{
+	TCase *tc = tcase_create("mqtt");
+
+	tcase_set_timeout(tc, 60);
+	tcase_add_test(tc, test_mqtt_config_errors);
+	tcase_add_test(tc, test_mqtt_command_keys);
+	tcase_add_test(tc, test_mqtt_same_name);
+	tcase_add_test(tc, test_mqtt_name_taken_while_running);
+	tcase_add_test(tc, test_mqtt_broker_later);
+	tcase_add_test(tc, test_mqtt_password);
+	tcase_add_test(tc, test_mqtt_downloads);
+	tcase_add_test(tc, test_mqtt_broker_example);
+	suite_add_tcase(s, tc);
+}

@@ -1,0 +1,63 @@
+/*
+ * mqtttest.h - what the serve suite's MQTT tests share (check_serve.c,
+ * check_servemqtt.c): a mosquitto broker on a loopback port, a client that
+ * keeps the last message of each topic, and a small HTTP file server for
+ * the node's downloads.
+ */
+#ifndef STRATUM_TESTS_MQTTTEST_H
+#define STRATUM_TESTS_MQTTTEST_H
+
+#include <mosquitto.h>
+#include <pthread.h>
+#include <stddef.h>
+#include <sys/types.h>
+
+#define MOSQUITTO_BIN "/usr/sbin/mosquitto"
+
+/* free_port - a free loopback TCP port (bound once, then released). */
+int free_port(void);
+
+/* A one-file HTTP server: answers every request with body, or with a 302
+ * to redirect when that is set; served counts the requests. */
+struct file_server {
+	int fd, port;
+	const char *body, *redirect;
+	pthread_t thread;
+	int served;
+};
+void file_server_start(struct file_server *fs, const char *body);
+void file_server_stop(struct file_server *fs);
+
+/* What a test's MQTT client saw: the last payload of each topic. */
+#define SEEN_MAX 64
+struct mqtt_seen {
+	pthread_mutex_t mu;
+	int n;
+	char topic[SEEN_MAX][128];
+	char payload[SEEN_MAX][2048];
+	int results; /* messages on .../result */
+};
+/* seen_message - the message callback that fills a struct mqtt_seen (ctx). */
+void seen_message(struct mosquitto *mosq, void *ctx, const struct mosquitto_message *m);
+/* wait_topic - wait up to secs for topic's last payload to contain want;
+ * a copy in out (cap bytes) when out is not NULL.  Fails the test otherwise. */
+void wait_topic(struct mqtt_seen *s, const char *topic, const char *want, int secs, char *out,
+		size_t cap);
+
+/* broker_start - mosquitto with the config text conf (written to a file
+ * named after port), listening on port; waits until it accepts. */
+pid_t broker_start(int port, const char *conf);
+void broker_stop(pid_t broker);
+
+/* watch_start - a client (user NULL: anonymous) that subscribes to filter
+ * and fills seen; watch_stop ends it.  watch_start_tls: over TLS, the
+ * broker's certificate checked with cafile. */
+struct mosquitto *watch_start(struct mqtt_seen *seen, int port, const char *user,
+			      const char *pass, const char *filter);
+struct mosquitto *watch_start_tls(struct mqtt_seen *seen, int port, const char *user,
+				  const char *pass, const char *filter, const char *cafile);
+void watch_stop(struct mosquitto *mq, struct mqtt_seen *seen);
+/* watch_send - publish payload on topic (QoS 1). */
+void watch_send(struct mosquitto *mq, const char *topic, const char *payload);
+
+#endif /* STRATUM_TESTS_MQTTTEST_H */
