@@ -107,8 +107,11 @@ corpus_stages() {
 	if [ "$dialect" = marlin ]; then
 		corpus_commands "$gc" >"$w/want.txt"
 		want=$(wc -l <"$w/want.txt")
-		got=$(wc -l <"$log")
-		tail -n "$want" "$log" | cut -d' ' -f2- | sed 's/[[:space:]]//g' >"$w/got.txt"
+		# "- M105": the driver's own unnumbered probes when the board is
+		# slow to answer (a loaded machine), not lines of the file
+		grep -v '^- M105$' "$log" >"$w/sim-lines.log"
+		got=$(wc -l <"$w/sim-lines.log")
+		tail -n "$want" "$w/sim-lines.log" | cut -d' ' -f2- | sed 's/[[:space:]]//g' >"$w/got.txt"
 		if [ "$got" -lt "$want" ] || [ $((got - want)) -gt 8 ] ||
 			! cmp -s "$w/want.txt" "$w/got.txt"; then
 			echo "the simulator's log is not the file ($got logged, $want in the file)"
