@@ -472,9 +472,13 @@ START_TEST(pillar_of_nozzle_width_gets_a_bead)
 		ck_assert_double_eq_tol(perim_bead_area(w, h) * len, 0.16 * h, 0.01 * 0.16 * h);
 		free_paths(&out);
 	}
-	/* Narrower than eps: may vanish, as before. */
+	/* Narrower than eps: a bead of min_bead_width whose flow fills it. */
 	walls_ok(&s, &st_thin->layers[1], &out, &inner);
-	ck_assert_uint_eq(out.n, 0);
+	ck_assert_uint_eq(tu_count_role(&out, PATH_THIN_WALL), 1);
+	ck_assert_int_eq(out.paths[0].pts[0].width, llround(s.min_bead_width * NM));
+	ck_assert_double_eq_tol(perim_bead_area(s.min_bead_width, 0.2) *
+					tu_path_length(&out.paths[0]) / NM,
+				0.09 * 0.2, 0.01 * 0.09 * 0.2);
 	free_paths(&out);
 	clip_expolys_free(&inner);
 	slice_stack_free(st);
