@@ -19,7 +19,10 @@
  * region (PATH_THIN_WALL), as long as it is at least the nozzle diameter
  * (epsilon) wide; a piece whose medial axis is only a point (a square or
  * round pillar about epsilon across) gets one short bead through its
- * centre whose flow fills its area.  Strips left between walls are filled
+ * centre whose flow fills its area.  A thin-wall piece narrower than
+ * epsilon that gets no such bead is printed the same way down to
+ * min_feature_size, each bead at least min_bead_width wide (perim_generate).
+ * Strips left between walls are filled
  * the same way (PATH_GAP_FILL) when at least gap_fill_min wide.
  *
  * All lengths in settings are mm; geometry is in nm (toolpath.h).
@@ -64,7 +67,8 @@ struct perim_settings {
 	double gap_fill_min;	/* mm; narrower strips stay empty (0.1; never below
 				 * the layer height, the flow model's narrowest bead) */
 	double min_feature_size; /* mm; a thin wall narrower than the nozzle but at least
-				  * this wide still prints (0.25 x nozzle; 0: any) */
+				  * this wide still prints (0.25 x nozzle; 0: down to
+				  * 10 um) */
 	double min_bead_width;	/* mm; such a wall's bead is at least this wide, and at
 				 * least the layer height (0.85 x nozzle) */
 	double arc_tolerance;	/* mm; chord error of rounded offsets (0.002) */

@@ -664,8 +664,8 @@ static int toolpaths(const struct mesh *m, const struct slicer_config *c,
 	if (!res.any) {
 		rc = st_error_set(err, ST_ERR_RANGE,
 				  "no layer has anything to print: every feature of the model is "
-				  "narrower than the nozzle (%g mm)",
-				  c->perim.nozzle_diameter);
+				  "narrower than min_feature_size (%g mm)",
+				  c->perim.min_feature_size);
 		goto out_free;
 	}
 	memcpy(s.paths, res.paths, sizeof(s.paths));
