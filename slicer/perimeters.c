@@ -465,14 +465,27 @@ out:
 	return rc;
 }
 
+/* Length of a medial line, nm. */
+static double line_length(const struct medial_line *l)
+{
+	double len = 0;
+
+	for (size_t j = 0; j + 1 < l->n + (l->closed ? 1 : 0); j++) {
+		const struct path_point *p = &l->pts[j], *q = &l->pts[(j + 1) % l->n];
+		len += sqrt(dist2(p->x, p->y, q->x, q->y));
+	}
+	return len;
+}
+
 /*
  * A thin-wall piece (area nm^2) the nozzle-wide beads left empty: its
- * centre lines where at least min_feature_size wide, each point's bead
- * widened to min_bead_width where the piece is narrower; on an island with
- * no wall, a pillar bead if it has no centre line, else the island is
- * dropped.  Widened beads and dropped islands are counted in c->thin.
+ * centre lines at least min_len nm long where at least min_feature_size
+ * wide, each point's bead widened to min_bead_width where the piece is
+ * narrower; on an island with no wall, a pillar bead if it has no centre
+ * line, else the island is dropped.  Widened beads and dropped islands are
+ * counted in c->thin.
  */
-static int sub_nozzle(struct ctx *c, const struct clip_paths *piece, double a)
+static int sub_nozzle(struct ctx *c, const struct clip_paths *piece, double a, double min_len)
 {
 	struct medial_lines ml = {0};
 	double minw = fmax(c->min_feature - PERIM_EPS_SLACK, PERIM_MIN_FEATURE_NM);
@@ -484,6 +497,8 @@ static int sub_nozzle(struct ctx *c, const struct clip_paths *piece, double a)
 		rc = perim_medial_axis(piece, minw, fmax(minw / 4.0, 1000.0), c->arc, &ml, c->err);
 	for (size_t k = 0; k < ml.n && !rc; k++) {
 		struct medial_line *l = &ml.v[k];
+		if (min_len > 0 && line_length(l) < min_len)
+			continue;
 		for (size_t j = 0; j < l->n; j++) {
 			double w = (double)l->pts[j].width;
 			if (w >= bead)
@@ -505,9 +520,70 @@ static int sub_nozzle(struct ctx *c, const struct clip_paths *piece, double a)
 }
 
 /*
+ * What the thin-wall lines ml leave of piece where it narrows below the
+ * nozzle (a wedge's tip): the piece minus every segment swept at its
+ * width, printed by sub_nozzle where a disk of min_feature_size fits and
+ * the centre line is at least a nozzle long (a wall's square end leaves
+ * corners the round bead end does not reach: too short to print).
+ */
+static int thin_tips(struct ctx *c, const struct clip_paths *piece,
+		     const struct medial_lines *ml)
+{
+	struct clip_paths segs = {0}, swept = {0}, core = {0}, rest_piece = {0};
+	struct clip_expolys rest = {0};
+	double minw = fmax(c->min_feature - PERIM_EPS_SLACK, PERIM_MIN_FEATURE_NM), a = 0;
+	double *delta = NULL;
+	size_t cap = 0;
+	bool bare = c->bare;
+	int rc = 0;
+
+	for (size_t k = 0; k < ml->n && !rc; k++) {
+		const struct medial_line *l = &ml->v[k];
+		size_t nseg = l->closed ? l->n : l->n - 1;
+		for (size_t j = 0; j < nseg && !rc; j++) {
+			const struct path_point *p = &l->pts[j], *q = &l->pts[(j + 1) % l->n];
+			int64_t xy[4] = {p->x, p->y, q->x, q->y};
+			double *grown = slice_grow(delta, &cap, segs.n + 1, sizeof(*delta));
+			if (!grown) {
+				rc = st_error_set(c->err, ST_ERR_NOMEM, "perimeters: out of memory");
+				break;
+			}
+			delta = grown;
+			delta[segs.n] = p->width / 2.0 + PERIM_HAIRLINE;
+			rc = clip_paths_add(&segs, xy, 2, c->err);
+		}
+	}
+	if (!rc && segs.n)
+		rc = clip_sweep(&segs, delta, c->arc, &swept, c->err);
+	if (!rc)
+		rc = clip_boolean_ex(CLIP_DIFFERENCE, piece, &swept, CLIP_NONZERO, &rest, c->err);
+	/* Most pieces leave only slivers along the beads: nothing holds the disk. */
+	if (!rc)
+		rc = clip_offset(&rest.paths, -(minw / 2.0 - PERIM_HAIRLINE), CLIP_JOIN_ROUND, 0.0,
+				 c->arc, &core, c->err);
+	c->bare = false; /* the piece has its lines: nothing of it is dropped */
+	for (size_t i = 0; i < rest.n && core.n && !rc; i++) {
+		rc = clip_expolys_get(&rest, i, &rest_piece, c->err);
+		if (!rc)
+			rc = clip_paths_area(&rest_piece, &a, c->err);
+		if (!rc)
+			rc = sub_nozzle(c, &rest_piece, a, c->eps);
+	}
+	c->bare = bare;
+	free(delta);
+	clip_paths_free(&segs);
+	clip_paths_free(&swept);
+	clip_paths_free(&core);
+	clip_paths_free(&rest_piece);
+	clip_expolys_free(&rest);
+	return rc;
+}
+
+/*
  * Centre lines of every piece of area at least min_width wide, appended as
  * paths of role; a thin-wall piece with none gets pillar_path's bead, and
- * one that still has nothing sub_nozzle's beads.  Pieces whose area cannot
+ * one that still has nothing sub_nozzle's beads; thin_tips prints what
+ * narrows below the nozzle beyond the lines.  Pieces whose area cannot
  * hold a disk of that diameter are not sampled for min_width.
  */
 static int narrow_paths(struct ctx *c, const struct clip_expolys *area, double min_width,
@@ -532,10 +608,12 @@ static int narrow_paths(struct ctx *c, const struct clip_expolys *area, double m
 				rc = emit_medial(c, &ml.v[k], role);
 			if (!rc && !ml.n && role == PATH_THIN_WALL)
 				rc = pillar_path(c, &piece, a, min_width, c->eps);
+			if (!rc && ml.n && role == PATH_THIN_WALL)
+				rc = thin_tips(c, &piece, &ml);
 			perim_medial_free(&ml);
 		}
 		if (!rc && role == PATH_THIN_WALL && c->out->n == before)
-			rc = sub_nozzle(c, &piece, a);
+			rc = sub_nozzle(c, &piece, a, 0);
 	}
 	clip_paths_free(&piece);
 	return rc;

@@ -1,11 +1,13 @@
 /*
  * check_thin.c - walls thinner than the nozzle (issue 19 item 2): printed
  * as one bead of min_bead_width down to min_feature_size, with a warning;
- * dropped and counted below it.  Their gap and overlap by the region
+ * dropped and counted below it; a wedge's tip printed beyond the
+ * nozzle-wide centre line.  Their gap and overlap by the region
  * verifier's measures are in check_region.c.
  */
 #include <check.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -143,6 +145,64 @@ START_TEST(wall_0_05_dropped_and_counted)
 }
 END_TEST
 
+/* A wedge 1 mm tall: its tip at the origin, 2 mm wide at x = LEN. */
+static struct mesh *wedge(void)
+{
+	struct mesh_builder *b = mesh_builder_new(0);
+	const double x[3] = {0, LEN, LEN}, y[3] = {0, -1, 1};
+	uint32_t lo[3], hi[3];
+
+	ck_assert_ptr_nonnull(b);
+	for (int i = 0; i < 3; i++) {
+		const double p[3] = {x[i], y[i], 0}, q[3] = {x[i], y[i], 1};
+		ck_assert_int_eq(mesh_builder_vertex(b, p, &lo[i], NULL), 0);
+		ck_assert_int_eq(mesh_builder_vertex(b, q, &hi[i], NULL), 0);
+	}
+	ck_assert_int_eq(mesh_builder_triangle(b, lo[0], lo[2], lo[1], NULL), 0);
+	ck_assert_int_eq(mesh_builder_triangle(b, hi[0], hi[1], hi[2], NULL), 0);
+	for (int i = 0; i < 3; i++) {
+		int j = (i + 1) % 3;
+		ck_assert_int_eq(mesh_builder_triangle(b, lo[i], lo[j], hi[j], NULL), 0);
+		ck_assert_int_eq(mesh_builder_triangle(b, lo[i], hi[j], hi[i], NULL), 0);
+	}
+	return mesh_builder_finish(b);
+}
+
+/* The tip of a wedge, narrower than the nozzle beyond x = 4 mm, is printed
+ * down to min_feature_size (0.1 mm, x = 1 mm) at min_bead_width. */
+START_TEST(wedge_tip_printed)
+{
+	struct mesh *m = wedge();
+	struct slice_stack *st = NULL;
+	struct clip_expolys inner = {0};
+	struct st_error err = {0};
+	struct perim_settings s;
+	struct layer_paths out = {0};
+	struct perim_thin thin;
+	int64_t tip = INT64_MAX, tip_width = 0;
+
+	perim_settings_init(&s, 0.4);
+	ck_assert_msg(slice_mesh(m, 0.2, 0.2, NULL, &st, &err) == 0, "%s", err.msg);
+	ck_assert_msg(perim_generate(&s, &st->layers[2].regions, st->layers[2].height, NULL, &out,
+				     &inner, &thin, &err) == 0,
+		      "%s", err.msg);
+	for (size_t p = 0; p < out.n; p++)
+		for (size_t k = 0; out.paths[p].role == PATH_THIN_WALL && k < out.paths[p].n; k++)
+			if (out.paths[p].pts[k].x < tip) {
+				tip = out.paths[p].pts[k].x;
+				tip_width = out.paths[p].pts[k].width;
+			}
+	ck_assert_msg(tip < 2.0 * NM, "thin walls start at x = %g mm", tip / NM);
+	ck_assert_int_eq(tip_width, llround(0.34 * NM));
+	ck_assert_uint_gt(thin.widened, 0);
+	ck_assert_uint_eq(thin.dropped, 0);
+	free_layer(&out);
+	clip_expolys_free(&inner);
+	slice_stack_free(st);
+	mesh_free(m);
+}
+END_TEST
+
 /* The command line warns once, naming the layers and the widening. */
 START_TEST(cli_warns_once)
 {
@@ -173,6 +233,7 @@ Suite *thin_suite(void)
 	tcase_add_test(tc, wall_0_3_one_bead_filling_it);
 	tcase_add_test(tc, wall_0_1_at_min_bead_width);
 	tcase_add_test(tc, wall_0_05_dropped_and_counted);
+	tcase_add_test(tc, wedge_tip_printed);
 	tcase_add_test(tc, cli_warns_once);
 	suite_add_tcase(s, tc);
 	return s;
