@@ -50,6 +50,7 @@ static void print_json(const struct region_print *p, const struct region_report 
 	printf("  \"outside_max\": %.6f,\n  \"inside_max\": %.6f,\n", r->outside_max, r->inside_max);
 	printf("  \"area_error\": %.6f,\n  \"area_error_raw\": %.6f,\n", r->area_error,
 	       r->area_error_raw);
+	printf("  \"gap\": %.6f,\n  \"overlap\": %.6f,\n", r->gap, r->overlap);
 	printf("  \"layer_area_error_max\": %.6f,\n  \"empty_sections\": %zu", r->layer_area_error_max,
 	       r->empty_sections);
 	if (layers) {
@@ -81,6 +82,8 @@ static void print_text(const struct region_print *p, const struct region_report 
 	       r->outside_max, r->inside_max);
 	printf("area error: %.5f (voids filled), %.5f (voids counted), worst layer %.5f\n",
 	       r->area_error, r->area_error_raw, r->layer_area_error_max);
+	printf("gap: %.5f of the section no bead covers; overlap: %.5f under two or more runs\n",
+	       r->gap, r->overlap);
 	for (size_t i = 0; layers && i < r->layers; i++) {
 		const struct region_layer_result *l = &r->per_layer[i];
 		printf("  z %.3f h %.3f: section %.3f mm2, envelope %.3f, xor %.4f, raw xor %.3f, "

@@ -334,7 +334,12 @@ static int print_json(const struct slice_run *r, const struct slicer_summary *s)
 		     "f:filament_mm", s->filament_mm, "f:filament_cm3", s->filament_cm3,
 		     "f:filament_g", s->filament_g, "z:moves", s->moves, "o:placement", place,
 		     "o:models", json_models(r), "b:arranged", r->res->arranged, "o:paths", paths,
-		     "o:stages", stages, "z:open_contours_dropped", s->open_dropped, NULL);
+		     "o:stages", stages, "z:open_contours_dropped", s->open_dropped,
+		     "z:thin_dropped", s->thin.dropped, "z:thin_widened_layers",
+		     s->thin.widened_layers, NULL);
+	if (s->thin.widened_layers)
+		cmd_json_set(o, "f:thin_designed_mm", s->thin.designed, "f:thin_printed_mm",
+			     s->thin.printed, NULL);
 	if (s->adaptive)
 		cmd_json_set(o, "b:adaptive", true, "f:max_cusp", r->c->adaptive.max_cusp,
 			     "f:layer_height_min", s->height_min, "f:layer_height_max", s->height_max,
@@ -422,6 +427,26 @@ static void print_text(const struct slice_run *r, const struct slicer_summary *s
 	printf("filament: %.1f mm, %.2f cm^3, %.2f g\n", s->filament_mm, s->filament_cm3,
 	       s->filament_g);
 	printf("written: %s\n", r->a->out);
+}
+
+/*
+ * One warning on stderr for thin walls printed wider than the model
+ * (min_bead_width) or dropped (narrower than min_feature_size).
+ */
+static void warn_thin(const struct slicer_config *c, const struct slicer_thin *t)
+{
+	if (t->widened_layers)
+		fprintf(stderr,
+			SLICE_CMD ": warning: thin walls on %zu layer%s (%zu to %zu) are narrower "
+			"than min_bead_width and print wider than designed: down to %.3f mm wide, "
+			"printed %.3f mm (%.3f mm wider)\n",
+			t->widened_layers, t->widened_layers == 1 ? "" : "s", t->first, t->last,
+			t->designed, t->printed, t->printed - t->designed);
+	if (t->dropped)
+		fprintf(stderr,
+			SLICE_CMD ": warning: %zu island%s narrower than min_feature_size (%g mm) "
+			"not printed\n",
+			t->dropped, t->dropped == 1 ? "" : "s", c->perim.min_feature_size);
 }
 
 /* --png: the layer heights as printed; 0 or the exit status with the message printed. */
@@ -528,6 +553,8 @@ static int slice_run(int argc, char **argv, struct clio *io)
 	status = slicejob_run(SLICE_CMD, in, a.nin, &cfg, a.no_repair, out, true, &res);
 	if (!status && a.png)
 		status = write_plot(&a, &cfg, &res.sum, &plan);
+	if (!status)
+		warn_thin(&cfg, &res.sum.thin);
 	if (!status) {
 		run.plan = &plan;
 		run.a = &a;

@@ -201,6 +201,8 @@ struct profile {
 	double bridge_flow_ratio;	 /* default 1 */
 	bool thick_bridges;		 /* round bridge threads; default 1 */
 	struct profile_pct infill_overlap; /* mm or % of extrusion_width; default 25% */
+	/* mm or % of nozzle_diameter; defaults 25%, 85% */
+	struct profile_pct min_feature_size, min_bead_width;
 	/* mm or % of first_layer_height; 0 = each role's width; default 0 */
 	struct profile_pct first_layer_extrusion_width;
 	/* mm or % of layer_height; 0 = extrusion_width; defaults 0 */

@@ -104,6 +104,8 @@ static const struct key_def key_defs[] = {
 	{"bridge_flow_ratio", KT_DOUBLE, S(bridge_flow_ratio, infill.bridge_flow_ratio)},
 	{"thick_bridges", KT_BOOL, S(thick_bridges, infill.thick_bridges)},
 	{"infill_overlap", KT_NUM_PCT, P(infill_overlap)},
+	{"min_feature_size", KT_NUM_PCT, P(min_feature_size)},
+	{"min_bead_width", KT_NUM_PCT, P(min_bead_width)},
 	{"fill_density", KT_DENSITY, S(fill_density, infill.density)},
 	{"fill_pattern", KT_CHOICE, P(fill_pattern)},
 	{"infill_anchor", KT_NUM_PCT, P(infill_anchor)},

@@ -110,6 +110,10 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	c->perim.extrusion_width = width_of(&p->perimeter_extrusion_width, p->layer_height, base);
 	c->perim.external_extrusion_width =
 	    width_of(&p->external_perimeter_extrusion_width, p->layer_height, base);
+	/* Percentages of the nozzle, as PrusaSlicer's Arachne takes them. */
+	c->perim.min_feature_size = width_of(&p->min_feature_size, p->nozzle_diameter[0], 0);
+	c->perim.min_bead_width =
+	    width_of(&p->min_bead_width, p->nozzle_diameter[0], c->perim.min_bead_width);
 	c->first_layer_extrusion_width =
 	    width_of(&p->first_layer_extrusion_width, p->first_layer_height, 0);
 	rc = perim_seam_parse(p->seam_position, &c->perim.seam, err);

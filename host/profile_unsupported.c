@@ -56,8 +56,7 @@ static const struct known known[] = {
     {"gcode_comments", NULL, NULL, NULL},
     {"extruder_clearance_height", NULL, NULL, NULL}, {"extruder_clearance_radius", NULL, NULL, NULL},
     {"perimeter_generator", NULL, NULL, NULL}, /* Stratum's own wall generator */
-    {"wall_*", NULL, NULL, NULL}, {"min_bead_width", NULL, NULL, NULL},
-    {"min_feature_size", NULL, NULL, NULL}, {"slice_closing_radius", NULL, NULL, NULL},
+    {"wall_*", NULL, NULL, NULL}, {"slice_closing_radius", NULL, NULL, NULL},
     {"resolution", "0", NULL, NULL},
     {"clip_multipart_objects", NULL, NULL, NULL}, {"slicing_mode", "regular", NULL, NULL},
     {"max_print_speed", NULL, NULL, NULL}, /* PrusaSlicer's auto speed only */

@@ -40,6 +40,8 @@ struct bead_vec {
 	struct bead *v;
 };
 
+static int area_mm2(const struct clip_paths *ps, double *a, struct st_error *err);
+
 void region_opts_init(struct region_opts *o)
 {
 	o->filament_diameter = 0.0;
@@ -142,7 +144,34 @@ static double bead_width_nm(const struct bead *b, double h, double fil_area)
 	return fmax(REGION_WIDTH_QUANTUM, round(w * NM / REGION_WIDTH_QUANTUM) * REGION_WIDTH_QUANTUM);
 }
 
-/* Sweep the beads of one layer (indices idx[0..n), print order) into l->printed. */
+/*
+ * Add to l->runs_mm2 the swept area of lines[from..) (one continuous run of
+ * extrusion, its pieces of different widths united, so they do not count
+ * as overlapping one another).
+ */
+static int add_run(const struct clip_paths *lines, const double *delta, size_t from,
+		   double tol_nm, struct region_layer *l, struct st_error *err)
+{
+	struct clip_paths run = {0}, swept = {0};
+	double a = 0;
+	int rc = 0;
+
+	for (size_t i = from; i < lines->n && !rc; i++)
+		rc = clip_paths_add(&run, clip_path_xy(lines, i), clip_path_len(lines, i), err);
+	if (!rc && run.n)
+		rc = clip_sweep(&run, delta + from, tol_nm, &swept, err);
+	if (!rc && run.n)
+		rc = area_mm2(&swept, &a, err);
+	l->runs_mm2 += a;
+	clip_paths_free(&run);
+	clip_paths_free(&swept);
+	return rc;
+}
+
+/*
+ * Sweep the beads of one layer (indices idx[0..n), print order) into
+ * l->printed, and each continuous run alone into l->runs_mm2.
+ */
 static int sweep_layer(const struct bead_vec *beads, const size_t *idx, size_t n,
 		       struct region_layer *l, double fil_area, double tol_nm,
 		       struct region_print *p, struct st_error *err)
@@ -150,7 +179,7 @@ static int sweep_layer(const struct bead_vec *beads, const size_t *idx, size_t n
 	struct clip_paths lines = {0};
 	double *delta = NULL;
 	int64_t *pts = NULL;
-	size_t cap_delta = 0, cap_pts = 0, npts = 0;
+	size_t cap_delta = 0, cap_pts = 0, npts = 0, run_from = 0;
 	double cur_w = 0.0;
 	int rc = 0;
 
@@ -164,9 +193,10 @@ static int sweep_layer(const struct bead_vec *beads, const size_t *idx, size_t n
 			p->width_min = fmin(p->width_min, w / NM);
 			p->width_max = fmax(p->width_max, w / NM);
 		}
-		/* A polyline goes on while beads join end to start at one width. */
-		bool joins = b && npts && w == cur_w && pts[2 * npts - 2] == x0 &&
-			     pts[2 * npts - 1] == y0;
+		/* A polyline goes on while beads join end to start at one width;
+		 * a run, while they join at any width. */
+		bool touches = b && npts && pts[2 * npts - 2] == x0 && pts[2 * npts - 1] == y0;
+		bool joins = touches && w == cur_w;
 		if (!joins && npts) {
 			if (st_grow_at((void **)&delta, &cap_delta, lines.n + 1, sizeof(*delta)))
 				goto out_nomem;
@@ -174,6 +204,15 @@ static int sweep_layer(const struct bead_vec *beads, const size_t *idx, size_t n
 				goto out;
 			delta[lines.n - 1] = cur_w / 2.0;
 			npts = 0;
+			if (touches) { /* the run goes on at another width */
+				pts[0] = x0;
+				pts[1] = y0;
+				npts = 1;
+			} else {
+				if ((rc = add_run(&lines, delta, run_from, tol_nm, l, err)))
+					goto out;
+				run_from = lines.n;
+			}
 		}
 		if (!b)
 			break;
@@ -649,6 +688,7 @@ static int compare_layer(const struct mesh *m, const struct region_layer *l, dou
 {
 	struct clip_paths sec = {0}, env = {0}, x = {0};
 	struct seg_grid gs = {0}, ge = {0};
+	double printed_mm2 = 0;
 	int rc;
 
 	lr->z = l->z;
@@ -660,8 +700,12 @@ static int compare_layer(const struct mesh *m, const struct region_layer *l, dou
 	    (rc = clip_boolean(CLIP_XOR, &env, &sec, CLIP_NONZERO, &x, err)) ||
 	    (rc = area_mm2(&x, &lr->xor_mm2, err)) ||
 	    (rc = clip_boolean(CLIP_XOR, &l->printed, &sec, CLIP_NONZERO, &x, err)) ||
-	    (rc = area_mm2(&x, &lr->xor_raw_mm2, err)))
+	    (rc = area_mm2(&x, &lr->xor_raw_mm2, err)) ||
+	    (rc = clip_boolean(CLIP_DIFFERENCE, &sec, &l->printed, CLIP_NONZERO, &x, err)) ||
+	    (rc = area_mm2(&x, &lr->gap_mm2, err)) ||
+	    (rc = area_mm2(&l->printed, &printed_mm2, err)))
 		goto out;
+	lr->overlap_mm2 = fmax(0.0, l->runs_mm2 - printed_mm2);
 	if (!sec.n) {
 		r->empty_sections++;
 		goto out;
@@ -710,7 +754,7 @@ int region_compare(const struct mesh *m, const struct region_print *p,
 {
 	struct region_opts defaults;
 	struct samples s[3] = {{0}};
-	double sec_sum = 0, xor_sum = 0, raw_sum = 0;
+	double sec_sum = 0, xor_sum = 0, raw_sum = 0, gap_sum = 0, over_sum = 0;
 	struct region_report *r;
 	int rc = 0;
 
@@ -740,6 +784,8 @@ int region_compare(const struct mesh *m, const struct region_print *p,
 		sec_sum += lr->section_mm2;
 		xor_sum += lr->xor_mm2;
 		raw_sum += lr->xor_raw_mm2;
+		gap_sum += lr->gap_mm2;
+		over_sum += lr->overlap_mm2;
 		if (lr->section_mm2 > 0)
 			r->layer_area_error_max =
 				fmax(r->layer_area_error_max, lr->xor_mm2 / lr->section_mm2);
@@ -749,6 +795,8 @@ int region_compare(const struct mesh *m, const struct region_print *p,
 	r->samples = s[0].n;
 	r->area_error = sec_sum > 0 ? xor_sum / sec_sum : INFINITY;
 	r->area_error_raw = sec_sum > 0 ? raw_sum / sec_sum : INFINITY;
+	r->gap = sec_sum > 0 ? gap_sum / sec_sum : INFINITY;
+	r->overlap = sec_sum > 0 ? over_sum / sec_sum : INFINITY;
 	r->dev_p95 = p95(&s[0]);
 	r->dev_p95_printed = p95(&s[1]);
 	r->dev_p95_model = p95(&s[2]);

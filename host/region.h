@@ -28,7 +28,13 @@
  *    along the cross-section's boundary to the envelope's boundary (both
  *    directions pooled into one distribution);
  *  - area error: area(envelope XOR section) / area(section), summed over
- *    the layers; area_error_raw counts the voids too (printed XOR section).
+ *    the layers; area_error_raw counts the voids too (printed XOR section);
+ *  - gap: area(section minus printed) / area(section), the model's area no
+ *    bead covers (sparse infill's gaps count);
+ *  - overlap: the area two or more runs of extrusion (moves joined end to
+ *    start) both cover, / area(section): each run swept alone, the areas
+ *    summed, minus the union.  Beads side by side at the flow model's
+ *    spacing overlap by h (1 - pi/4) by design (their round edges).
  *
  * Units: mm in every field and setting; nm inside the clip containers.
  * Thread-safety: no shared state.
@@ -60,6 +66,8 @@ struct region_layer {
 	double height;		  /* mm, z minus the previous layer's z (z for the first) */
 	size_t beads;		  /* extruding moves of the part */
 	struct clip_paths printed; /* union of the beads, nm: outer CCW, holes CW */
+	double runs_mm2;	  /* sum over the runs (moves joined end to start) of
+				   * each run's own swept area */
 };
 
 /* The part as printed by one G-code file. */
@@ -81,6 +89,9 @@ struct region_layer_result {
 	double xor_mm2;	       /* area(envelope XOR section) */
 	double xor_raw_mm2;    /* area(printed XOR section) */
 	double dev_max;	       /* mm, largest boundary distance in this layer */
+	double gap_mm2;	       /* area(section minus printed): the model no bead covers */
+	double overlap_mm2;    /* area under two or more runs: the runs' own areas
+				* summed minus their union */
 };
 
 /* The answer. */
@@ -97,6 +108,8 @@ struct region_report {
 	double area_error;		 /* sum xor / sum section */
 	double area_error_raw;		 /* sum xor_raw / sum section */
 	double layer_area_error_max;	 /* largest per-layer xor / section */
+	double gap;			 /* sum gap_mm2 / sum section */
+	double overlap;			 /* sum overlap_mm2 / sum section */
 	struct region_layer_result *per_layer; /* layers entries */
 };
 

@@ -23,6 +23,8 @@
 #define PERIM_CLEAN_NM 10.0
 /* Beyond the arc tolerance, slivers this thin between two offsets are noise, nm. */
 #define PERIM_HAIRLINE 5.0
+/* With min_feature_size 0, thin walls down to this width still print, nm. */
+#define PERIM_MIN_FEATURE_NM 10000.0
 
 struct perim_seams {
 	int64_t *prev, *cur;	/* seam points (x, y pairs) of the last and this layer */
@@ -38,6 +40,9 @@ struct ctx {
 	double w, sp;	/* the inner walls' width and spacing */
 	double wo, spo; /* the outer wall's */
 	double h, arc, eps;
+	double min_feature, min_bead; /* nm: the thinnest wall printed, its narrowest bead */
+	bool bare;		      /* the island being made has no wall loop */
+	struct perim_thin *thin;
 	struct perim_seams *sm;
 	struct layer_paths *out;
 	struct st_error *err;
@@ -54,6 +59,8 @@ void perim_settings_init(struct perim_settings *s, double nozzle_diameter)
 	s->thin_walls = true;
 	s->gap_fill = true;
 	s->gap_fill_min = 0.1;
+	s->min_feature_size = 0.25 * nozzle_diameter;
+	s->min_bead_width = 0.85 * nozzle_diameter;
 	s->arc_tolerance = 0.002;
 }
 
@@ -135,6 +142,16 @@ int perim_settings_check(const struct perim_settings *s, double layer_height,
 				    "perimeters: gap fill minimum width %g mm is out of range; use "
 				    "[0, 10] mm",
 				    s->gap_fill_min);
+	if (!(s->min_feature_size >= 0.0 && s->min_feature_size <= s->nozzle_diameter))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "perimeters: min_feature_size %g mm is out of range; use 0 to "
+				    "the nozzle diameter %g mm",
+				    s->min_feature_size, s->nozzle_diameter);
+	if (!(s->min_bead_width > 0.0 && s->min_bead_width <= 4.0 * s->nozzle_diameter))
+		return st_error_set(err, ST_ERR_RANGE,
+				    "perimeters: min_bead_width %g mm is out of range; use (0, %g] "
+				    "mm (4 x the nozzle diameter)",
+				    s->min_bead_width, 4.0 * s->nozzle_diameter);
 	double narrowest = fmin(s->extrusion_width, outer_width(s));
 	if (!(s->arc_tolerance > 0.0 && s->arc_tolerance <= narrowest / 4.0))
 		return st_error_set(err, ST_ERR_RANGE,
@@ -391,17 +408,17 @@ static int emit_medial(struct ctx *c, struct medial_line *l, enum path_role role
  * A piece that holds a disk of diameter min_width but has no centre line (a
  * square or round pillar about as wide as long, whose medial axis is a
  * point): one short bead through the centre of the disk's possible
- * positions, along the piece's longest extent, as wide as the nozzle and
+ * positions, along the piece's longest extent, bead wide (or min_width) and
  * long enough that its flow fills the piece's area (area nm^2).  Adds
  * nothing when no such disk fits.
  */
 static int pillar_path(struct ctx *c, const struct clip_paths *piece, double area,
-		       double min_width)
+		       double min_width, double bead)
 {
 	struct clip_paths core = {0};
 	const int64_t *o = clip_path_xy(piece, 0);
 	size_t n = clip_path_len(piece, 0);
-	double w = fmax(fmax(c->eps, min_width), c->h * 1.01), best = -1, dx = 1, dy = 0, len;
+	double w = fmax(fmax(bead, min_width), c->h * 1.01), best = -1, dx = 1, dy = 0, len;
 	int64_t x0 = INT64_MAX, y0 = INT64_MAX, x1 = INT64_MIN, y1 = INT64_MIN;
 	int rc = clip_offset(piece, -(min_width / 2.0 - PERIM_HAIRLINE), CLIP_JOIN_ROUND, 0.0,
 			     c->arc, &core, c->err);
@@ -448,10 +465,126 @@ out:
 	return rc;
 }
 
+/* Length of a medial line, nm. */
+static double line_length(const struct medial_line *l)
+{
+	double len = 0;
+
+	for (size_t j = 0; j + 1 < l->n + (l->closed ? 1 : 0); j++) {
+		const struct path_point *p = &l->pts[j], *q = &l->pts[(j + 1) % l->n];
+		len += sqrt(dist2(p->x, p->y, q->x, q->y));
+	}
+	return len;
+}
+
+/*
+ * A thin-wall piece (area nm^2) the nozzle-wide beads left empty: its
+ * centre lines at least min_len nm long where at least min_feature_size
+ * wide, each point's bead widened to min_bead_width where the piece is
+ * narrower; on an island with no wall, a pillar bead if it has no centre
+ * line, else the island is dropped.  Widened beads and dropped islands are
+ * counted in c->thin.
+ */
+static int sub_nozzle(struct ctx *c, const struct clip_paths *piece, double a, double min_len)
+{
+	struct medial_lines ml = {0};
+	double minw = fmax(c->min_feature - PERIM_EPS_SLACK, PERIM_MIN_FEATURE_NM);
+	double bead = fmax(c->min_bead, c->h * 1.01);
+	size_t before = c->out->n;
+	int rc = 0;
+
+	if (a >= M_PI / 4.0 * minw * minw)
+		rc = perim_medial_axis(piece, minw, fmax(minw / 4.0, 1000.0), c->arc, &ml, c->err);
+	for (size_t k = 0; k < ml.n && !rc; k++) {
+		struct medial_line *l = &ml.v[k];
+		if (min_len > 0 && line_length(l) < min_len)
+			continue;
+		for (size_t j = 0; j < l->n; j++) {
+			double w = (double)l->pts[j].width;
+			if (w >= bead)
+				continue;
+			if (!c->thin->widened || w / SLICE_UNITS_PER_MM < c->thin->designed)
+				c->thin->designed = w / SLICE_UNITS_PER_MM;
+			c->thin->printed = bead / SLICE_UNITS_PER_MM;
+			c->thin->widened++;
+			l->pts[j].width = llround(bead);
+		}
+		rc = emit_medial(c, l, PATH_THIN_WALL);
+	}
+	perim_medial_free(&ml);
+	if (!rc && c->bare && c->out->n == before && a >= M_PI / 4.0 * minw * minw)
+		rc = pillar_path(c, piece, a, minw, bead);
+	if (!rc && c->bare && c->out->n == before)
+		c->thin->dropped++;
+	return rc;
+}
+
+/*
+ * What the thin-wall lines ml leave of piece where it narrows below the
+ * nozzle (a wedge's tip): the piece minus every segment swept at its
+ * width, printed by sub_nozzle where a disk of min_feature_size fits and
+ * the centre line is at least a nozzle long (a wall's square end leaves
+ * corners the round bead end does not reach: too short to print).
+ */
+static int thin_tips(struct ctx *c, const struct clip_paths *piece,
+		     const struct medial_lines *ml)
+{
+	struct clip_paths segs = {0}, swept = {0}, core = {0}, rest_piece = {0};
+	struct clip_expolys rest = {0};
+	double minw = fmax(c->min_feature - PERIM_EPS_SLACK, PERIM_MIN_FEATURE_NM), a = 0;
+	double *delta = NULL;
+	size_t cap = 0;
+	bool bare = c->bare;
+	int rc = 0;
+
+	for (size_t k = 0; k < ml->n && !rc; k++) {
+		const struct medial_line *l = &ml->v[k];
+		size_t nseg = l->closed ? l->n : l->n - 1;
+		for (size_t j = 0; j < nseg && !rc; j++) {
+			const struct path_point *p = &l->pts[j], *q = &l->pts[(j + 1) % l->n];
+			int64_t xy[4] = {p->x, p->y, q->x, q->y};
+			double *grown = slice_grow(delta, &cap, segs.n + 1, sizeof(*delta));
+			if (!grown) {
+				rc = st_error_set(c->err, ST_ERR_NOMEM, "perimeters: out of memory");
+				break;
+			}
+			delta = grown;
+			delta[segs.n] = p->width / 2.0 + PERIM_HAIRLINE;
+			rc = clip_paths_add(&segs, xy, 2, c->err);
+		}
+	}
+	if (!rc && segs.n)
+		rc = clip_sweep(&segs, delta, c->arc, &swept, c->err);
+	if (!rc)
+		rc = clip_boolean_ex(CLIP_DIFFERENCE, piece, &swept, CLIP_NONZERO, &rest, c->err);
+	/* Most pieces leave only slivers along the beads: nothing holds the disk. */
+	if (!rc)
+		rc = clip_offset(&rest.paths, -(minw / 2.0 - PERIM_HAIRLINE), CLIP_JOIN_ROUND, 0.0,
+				 c->arc, &core, c->err);
+	c->bare = false; /* the piece has its lines: nothing of it is dropped */
+	for (size_t i = 0; i < rest.n && core.n && !rc; i++) {
+		rc = clip_expolys_get(&rest, i, &rest_piece, c->err);
+		if (!rc)
+			rc = clip_paths_area(&rest_piece, &a, c->err);
+		if (!rc)
+			rc = sub_nozzle(c, &rest_piece, a, c->eps);
+	}
+	c->bare = bare;
+	free(delta);
+	clip_paths_free(&segs);
+	clip_paths_free(&swept);
+	clip_paths_free(&core);
+	clip_paths_free(&rest_piece);
+	clip_expolys_free(&rest);
+	return rc;
+}
+
 /*
  * Centre lines of every piece of area at least min_width wide, appended as
- * paths of role; a thin-wall piece with none gets pillar_path's bead.  Pieces whose area cannot hold a disk of that diameter
- * are skipped without sampling.
+ * paths of role; a thin-wall piece with none gets pillar_path's bead, and
+ * one that still has nothing sub_nozzle's beads; thin_tips prints what
+ * narrows below the nozzle beyond the lines.  Pieces whose area cannot
+ * hold a disk of that diameter are not sampled for min_width.
  */
 static int narrow_paths(struct ctx *c, const struct clip_expolys *area, double min_width,
 			enum path_role role)
@@ -463,17 +596,24 @@ static int narrow_paths(struct ctx *c, const struct clip_expolys *area, double m
 
 	for (size_t i = 0; i < area->n && !rc; i++) {
 		double a = 0.0;
+		size_t before = c->out->n;
 		rc = clip_expolys_get(area, i, &piece, c->err);
 		if (!rc)
 			rc = clip_paths_area(&piece, &a, c->err);
-		if (rc || a < M_PI / 4.0 * min_width * min_width)
+		if (rc)
 			continue;
-		rc = perim_medial_axis(&piece, min_width, step, c->arc, &ml, c->err);
-		for (size_t k = 0; k < ml.n && !rc; k++)
-			rc = emit_medial(c, &ml.v[k], role);
-		if (!rc && !ml.n && role == PATH_THIN_WALL)
-			rc = pillar_path(c, &piece, a, min_width);
-		perim_medial_free(&ml);
+		if (a >= M_PI / 4.0 * min_width * min_width) {
+			rc = perim_medial_axis(&piece, min_width, step, c->arc, &ml, c->err);
+			for (size_t k = 0; k < ml.n && !rc; k++)
+				rc = emit_medial(c, &ml.v[k], role);
+			if (!rc && !ml.n && role == PATH_THIN_WALL)
+				rc = pillar_path(c, &piece, a, min_width, c->eps);
+			if (!rc && ml.n && role == PATH_THIN_WALL)
+				rc = thin_tips(c, &piece, &ml);
+			perim_medial_free(&ml);
+		}
+		if (!rc && role == PATH_THIN_WALL && c->out->n == before)
+			rc = sub_nozzle(c, &piece, a, 0);
 	}
 	clip_paths_free(&piece);
 	return rc;
@@ -587,6 +727,7 @@ static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *
 					  PATH_GAP_FILL);
 	}
 	/* Thin walls: the part of R the outer wall's beads do not reach. */
+	c->bare = made == 0;
 	if (!rc && c->s->thin_walls) {
 		if (made)
 			rc = minus_grown(c, R, &loops[0], c->wo / 2.0, &area);
@@ -606,9 +747,10 @@ static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *
 
 int perim_generate(const struct perim_settings *s, const struct clip_expolys *region,
 		   double layer_height, struct perim_seams *seams, struct layer_paths *out,
-		   struct clip_expolys *infill, struct st_error *err)
+		   struct clip_expolys *infill, struct perim_thin *thin, struct st_error *err)
 {
 	struct perim_seams local = {.rng = 0x9E3779B97F4A7C15ull};
+	struct perim_thin thin_local;
 	struct clip_paths R = {0}, acc = {0};
 	struct ctx c;
 	int rc;
@@ -628,9 +770,13 @@ int perim_generate(const struct perim_settings *s, const struct clip_expolys *re
 			 .h = layer_height * SLICE_UNITS_PER_MM,
 			 .arc = s->arc_tolerance * SLICE_UNITS_PER_MM,
 			 .eps = s->nozzle_diameter * SLICE_UNITS_PER_MM,
+			 .min_feature = s->min_feature_size * SLICE_UNITS_PER_MM,
+			 .min_bead = s->min_bead_width * SLICE_UNITS_PER_MM,
+			 .thin = thin ? thin : &thin_local,
 			 .sm = seams ? seams : &local,
 			 .out = out,
 			 .err = err};
+	*c.thin = (struct perim_thin){0};
 	seams_next_layer(c.sm);
 	for (size_t i = 0; i < region->n && !rc; i++) {
 		rc = clip_expolys_get(region, i, &R, err);

@@ -19,7 +19,10 @@
  * region (PATH_THIN_WALL), as long as it is at least the nozzle diameter
  * (epsilon) wide; a piece whose medial axis is only a point (a square or
  * round pillar about epsilon across) gets one short bead through its
- * centre whose flow fills its area.  Strips left between walls are filled
+ * centre whose flow fills its area.  A thin-wall piece narrower than
+ * epsilon that gets no such bead is printed the same way down to
+ * min_feature_size, each bead at least min_bead_width wide (perim_generate).
+ * Strips left between walls are filled
  * the same way (PATH_GAP_FILL) when at least gap_fill_min wide.
  *
  * All lengths in settings are mm; geometry is in nm (toolpath.h).
@@ -63,7 +66,20 @@ struct perim_settings {
 	bool gap_fill;		/* beads in strips left between walls (true) */
 	double gap_fill_min;	/* mm; narrower strips stay empty (0.1; never below
 				 * the layer height, the flow model's narrowest bead) */
+	double min_feature_size; /* mm; a thin wall narrower than the nozzle but at least
+				  * this wide still prints (0.25 x nozzle; 0: down to
+				  * 10 um) */
+	double min_bead_width;	/* mm; such a wall's bead is at least this wide, and at
+				 * least the layer height (0.85 x nozzle) */
 	double arc_tolerance;	/* mm; chord error of rounded offsets (0.002) */
+};
+
+/* What one layer's thin walls left out or printed wider than the model. */
+struct perim_thin {
+	size_t dropped;	 /* islands narrower than min_feature_size, not printed */
+	size_t widened;	 /* thin-wall beads widened to min_bead_width */
+	double designed; /* mm, the narrowest widened feature's width */
+	double printed;	 /* mm, the width its bead prints at */
 };
 
 /*
@@ -121,11 +137,16 @@ void perim_seams_free(struct perim_seams *sm);
  *        infill (each wall counted as its flow-equivalent band of its
  *        spacing, so with one width its inner edge is w/2 + (N - 1/2) s
  *        inside the surface).
+ *   thin: may be NULL; else set to what this layer's thin walls dropped
+ *        or widened.  A piece the nozzle-wide thin walls leave empty is
+ *        printed along its centre line where at least min_feature_size
+ *        wide, each bead max(local width, min_bead_width) wide; an island
+ *        with no wall, no bead and narrower than that is dropped.
  * Returns 0 or a negative class with err filled (bad settings, ST_ERR_NOMEM,
  * ST_ERR_INTERNAL); on error out may hold some of this layer's paths.
  */
 int perim_generate(const struct perim_settings *s, const struct clip_expolys *region,
 		   double layer_height, struct perim_seams *seams, struct layer_paths *out,
-		   struct clip_expolys *infill, struct st_error *err);
+		   struct clip_expolys *infill, struct perim_thin *thin, struct st_error *err);
 
 #endif /* STRATUM_SLICER_PERIMETERS_H */

@@ -200,6 +200,13 @@ static const struct setting table[] = {
      "one centre-line bead where two walls do not fit"},
     {"gap_fill_enabled", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, NULL,
      "beads in the strips left between walls"},
+    {"min_feature_size", PCT, S_, 0, 10, 0, "mm", "25%", NULL, NULL, 0, NULL,
+     "thin walls narrower than the nozzle but at least this wide print as one bead of "
+     "min_bead_width (a warning says how much wider); an island narrower is dropped and "
+     "counted; a percentage is of nozzle_diameter (PrusaSlicer's Arachne key)"},
+    {"min_bead_width", PCT, S_, 0, 10, 0, "mm", "85%", NULL, NULL, 0, NULL,
+     "the narrowest bead printed for a feature of min_feature_size or wider; a percentage "
+     "is of nozzle_diameter (PrusaSlicer's Arachne key)"},
     {"overhangs", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
      "walls more than half the nozzle outside the layer below print with bridge flow, "
      "bridge_speed and bridge_fan_speed (Overhang perimeter); PrusaSlicer's default is 1"},

@@ -129,6 +129,7 @@ struct pipe {
 	size_t nchunks, window;	    /* window: layers that may start above taken */
 	struct layer_paths *walls;  /* st->n: the walls stage's paths */
 	struct clip_expolys *inner; /* st->n: the regions inside the walls */
+	struct perim_thin *thin;    /* st->n: what the thin walls dropped or widened */
 	struct travel_map **maps;   /* st->n: travel maps, or NULL */
 	struct infill_plan **plans; /* st->n */
 	unsigned char *lstate;	    /* st->n layer states */
@@ -179,7 +180,7 @@ static int walls_chunk(struct pipe *p, size_t k, struct st_error *err)
 
 		/* first > 0: never layer 0 */
 		rc = perim_generate(&p->c->perim, &below->regions, below->height, seams, &scratch,
-				    &scratch_inner, err);
+				    &scratch_inner, NULL, err);
 		layer_paths_clear(&scratch);
 		clip_expolys_free(&scratch_inner);
 	}
@@ -188,7 +189,7 @@ static int walls_chunk(struct pipe *p, size_t k, struct st_error *err)
 
 		ps = i == 0 ? &first_walls : &p->c->perim;
 		rc = perim_generate(ps, &l->regions, l->height, seams, &p->walls[i], &p->inner[i],
-				    err);
+				    &p->thin[i], err);
 		if (!rc && i >= p->vase_from) /* spiral vase: no infill above the bottom */
 			clip_expolys_clear(&p->inner[i]);
 		if (!rc && p->c->overhangs && i > 0 && i < p->vase_from) {
@@ -354,7 +355,23 @@ static int sink_layer(struct sink *k, struct layer_paths *m, size_t li)
 struct pipe_result {
 	size_t paths[PATH_ROLES];
 	bool any, infill;
+	struct slicer_thin thin;
 };
+
+/* Add layer number layer's (1-based, raft included) thin-wall counts to t. */
+static void thin_add(struct slicer_thin *t, const struct perim_thin *l, size_t layer)
+{
+	t->dropped += l->dropped;
+	if (!l->widened)
+		return;
+	if (!t->widened_layers++)
+		t->first = layer;
+	t->last = layer;
+	if (!t->designed || l->designed < t->designed) {
+		t->designed = l->designed;
+		t->printed = l->printed;
+	}
+}
 
 /*
  * Layer li, ready: emit its infill, merge the stages in the order
@@ -380,6 +397,7 @@ static int finish_layer(struct pipe *p, struct infill_job *job, struct layer_sta
 		return rc;
 	}
 	res->infill = res->infill || m.n > walls_end;
+	thin_add(&res->thin, &p->thin[li], k->base + li + 1);
 	m.spiral = li >= p->vase_from && spiral_layer_fits(&m);
 	for (size_t i = 0; i < m.n; i++)
 		res->paths[m.paths[i].role]++;
@@ -457,11 +475,12 @@ static int run_pipe(const struct slicer_config *c, const struct slice_stack *st,
 	p.job = job;
 	p.walls = calloc(n, sizeof(*p.walls));
 	p.inner = calloc(n, sizeof(*p.inner));
+	p.thin = calloc(n ? n : 1, sizeof(*p.thin));
 	p.maps = calloc(n, sizeof(*p.maps));
 	p.plans = calloc(n, sizeof(*p.plans));
 	p.lstate = calloc(n, sizeof(*p.lstate));
 	p.cstate = calloc(p.nchunks ? p.nchunks : 1, sizeof(*p.cstate));
-	if (!p.walls || !p.inner || !p.maps || !p.plans || !p.lstate || !p.cstate) {
+	if (!p.walls || !p.inner || !p.thin || !p.maps || !p.plans || !p.lstate || !p.cstate) {
 		rc = st_error_set(err, ST_ERR_NOMEM, "slicer: out of memory for %zu layers", n);
 		goto out_free;
 	}
@@ -526,6 +545,7 @@ out_free:
 		drop_layer(&p, i);
 	free(p.walls);
 	free(p.inner);
+	free(p.thin);
 	free(p.maps);
 	free(p.plans);
 	free(p.lstate);
@@ -644,11 +664,12 @@ static int toolpaths(const struct mesh *m, const struct slicer_config *c,
 	if (!res.any) {
 		rc = st_error_set(err, ST_ERR_RANGE,
 				  "no layer has anything to print: every feature of the model is "
-				  "narrower than the nozzle (%g mm)",
-				  c->perim.nozzle_diameter);
+				  "narrower than min_feature_size (%g mm)",
+				  c->perim.min_feature_size);
 		goto out_free;
 	}
 	memcpy(s.paths, res.paths, sizeof(s.paths));
+	s.thin = res.thin;
 	s.layers = k->base + st->n;
 	s.raft_layers = k->base;
 	s.offset[2] += lift;

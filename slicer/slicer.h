@@ -168,6 +168,14 @@ struct slicer_config {
 	void *planned_ctx;
 };
 
+/* Thin walls narrower than the nozzle (perimeters.h struct perim_thin). */
+struct slicer_thin {
+	size_t dropped;		/* islands narrower than min_feature_size, not printed */
+	size_t widened_layers;	/* layers with beads widened to min_bead_width */
+	size_t first, last;	/* the first and last such layer, 1-based (raft included) */
+	double designed, printed; /* mm: the narrowest widened feature, its bead's width */
+};
+
 /* What a job produced. */
 struct slicer_summary {
 	size_t layers;		       /* layers written */
@@ -182,6 +190,7 @@ struct slicer_summary {
 	bool walls, infill, support, skirt; /* which stages produced paths in this build */
 	size_t raft_layers;	       /* of layers, those of the raft under the part */
 	size_t open_dropped;	       /* open contour pieces the slicer could not close */
+	struct slicer_thin thin;       /* thin walls dropped or printed wider than designed */
 	bool adaptive;		       /* the part's layers are adaptive (adaptive.h) */
 	double height_min, height_max; /* mm: the part's thinnest and thickest layer above
 					* its first */

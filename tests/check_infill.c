@@ -46,7 +46,7 @@ static void run_infill(const struct mesh *m, double h, const struct infill_setti
 	for (size_t i = 0; i < r->st->n; i++) {
 		memset(&walls, 0, sizeof(walls));
 		ck_assert_msg(perim_generate(&ps, &r->st->layers[i].regions, h, NULL, &walls,
-					     &r->inner[i], &err) == 0,
+					     &r->inner[i], NULL, &err) == 0,
 			      "perim_generate: %s", err.msg);
 		for (size_t k = 0; k < walls.n; k++)
 			free(walls.paths[k].pts);

@@ -31,7 +31,7 @@ static const struct suite_entry suites[] = {
 	{"infill", infill_suite},     {"support", support_suite},
 	{"raft", raft_suite},	      {"adaptive", adaptive_suite},
 	{"slicecli", slicecli_suite}, {"region", region_suite},
-	{"multimodel", multimodel_suite},
+	{"multimodel", multimodel_suite}, {"thin", thin_suite},
 	{"x3g", x3g_suite},	      {"s3g", s3g_suite},
 	{"serve", serve_suite},	      {"octoapi", octoapi_suite},
 	{"preview", preview_suite},

@@ -209,8 +209,10 @@ START_TEST(refusals)
 END_TEST
 
 /* Slice m with the library defaults (0.2 mm layers, 0.45 mm walls, bed
- * centre 100,100) and measure the result. */
-static struct region_report *slice_and_check(struct mesh *m, const char *name)
+ * centre 100,100) and measure the result; the job's summary into sum
+ * unless NULL. */
+static struct region_report *slice_and_check(struct mesh *m, const char *name,
+					     struct slicer_summary *sum)
 {
 	struct slicer_config c;
 	struct region_opts o;
@@ -221,7 +223,7 @@ static struct region_report *slice_and_check(struct mesh *m, const char *name)
 
 	slicer_config_init(&c, 0.4);
 	c.threads = 1;
-	ck_assert_msg(slicer_run(m, &c, path, NULL, &err) == 0, "%s", err.msg);
+	ck_assert_msg(slicer_run(m, &c, path, sum, &err) == 0, "%s", err.msg);
 	region_opts_init(&o);
 	o.has_center = true;
 	o.center_x = (c.bed.min_x + c.bed.max_x) / 2;
@@ -236,7 +238,7 @@ static struct region_report *slice_and_check(struct mesh *m, const char *name)
 START_TEST(our_cube_within_bound)
 {
 	struct mesh *m = fx_box(0, 0, 0, 20, 20, 20);
-	struct region_report *r = slice_and_check(m, "cube.gcode");
+	struct region_report *r = slice_and_check(m, "cube.gcode", NULL);
 
 	ck_assert_uint_eq(r->layers, 100);
 	ck_assert_msg(r->dev_p95 <= 0.02, "cube p95 %g mm", r->dev_p95);
@@ -251,7 +253,7 @@ END_TEST
 START_TEST(our_cylinder_within_bound)
 {
 	struct mesh *m = fx_cylinder(0, 0, 10, 20, 256);
-	struct region_report *r = slice_and_check(m, "cylinder.gcode");
+	struct region_report *r = slice_and_check(m, "cylinder.gcode", NULL);
 
 	ck_assert_uint_eq(r->layers, 100);
 	ck_assert_msg(r->dev_p95 <= 0.02, "cylinder p95 %g mm", r->dev_p95);
@@ -259,6 +261,34 @@ START_TEST(our_cylinder_within_bound)
 	ck_assert_msg(r->area_error <= 5e-4, "area error %g", r->area_error);
 	region_report_free(r);
 	mesh_free(m);
+}
+END_TEST
+
+/*
+ * Thin walls (issue 19 item 2): a 0.3 mm wall as one bead of min_bead_width,
+ * a 0.6 mm one as one bead of its width; no gap but at the round bead ends,
+ * no overlap.
+ */
+START_TEST(thin_walls_without_gap_or_overlap)
+{
+	static const double t[] = {0.3, 0.6};
+	struct slicer_summary sum;
+
+	for (int k = 0; k < 2; k++) {
+		struct mesh *m = fx_box(0, 0, 0, 20, t[k], 1);
+		struct region_report *r = slice_and_check(m, "thin.gcode", &sum);
+
+		ck_assert_msg(r->gap <= 0.01, "%g mm wall: gap %g", t[k], r->gap);
+		ck_assert_msg(r->overlap <= 1e-4, "%g mm wall: overlap %g", t[k], r->overlap);
+		ck_assert_uint_eq(sum.paths[PATH_THIN_WALL], r->layers);
+		ck_assert_uint_eq(sum.thin.widened_layers, k == 0 ? r->layers : 0);
+		if (k == 0) {
+			ck_assert_uint_eq(sum.thin.first, 1);
+			ck_assert_uint_eq(sum.thin.last, r->layers);
+		}
+		region_report_free(r);
+		mesh_free(m);
+	}
 }
 END_TEST
 
@@ -274,6 +304,7 @@ Suite *region_suite(void)
 	tcase_add_test(tc, refusals);
 	tcase_add_test(tc, our_cube_within_bound);
 	tcase_add_test(tc, our_cylinder_within_bound);
+	tcase_add_test(tc, thin_walls_without_gap_or_overlap);
 	suite_add_tcase(s, tc);
 	return s;
 }

@@ -46,7 +46,7 @@ static size_t points_without_shell(int n, size_t within)
 	for (size_t i = 0; i < st->n; i++) {
 		struct layer_paths walls = {0};
 
-		ck_assert_msg(perim_generate(&ps, &st->layers[i].regions, h, NULL, &walls, &inner[i],
+		ck_assert_msg(perim_generate(&ps, &st->layers[i].regions, h, NULL, &walls, &inner[i], NULL,
 					     &err) == 0,
 			      "walls: %s", err.msg);
 		layer_paths_clear(&walls);

@@ -166,7 +166,7 @@ static void walls_ok(const struct perim_settings *s, const struct slice_layer *s
 	struct st_error err = {0};
 
 	memset(out, 0, sizeof(*out));
-	ck_assert_msg(perim_generate(s, &sl->regions, sl->height, NULL, out, inner, &err) == 0,
+	ck_assert_msg(perim_generate(s, &sl->regions, sl->height, NULL, out, inner, NULL, &err) == 0,
 		      "perim_generate: %s", err.msg);
 }
 
@@ -348,8 +348,8 @@ START_TEST(cylinder_outer_wall_within_chord)
 	struct perim_seams *sm = perim_seams_new(1);
 	struct layer_paths l1 = {0}, l2 = {0};
 	struct st_error err = {0};
-	ck_assert_int_eq(perim_generate(&s, &st->layers[4].regions, 0.2, sm, &l1, &inner, &err), 0);
-	ck_assert_int_eq(perim_generate(&s, &st->layers[5].regions, 0.2, sm, &l2, &inner, &err), 0);
+	ck_assert_int_eq(perim_generate(&s, &st->layers[4].regions, 0.2, sm, &l1, &inner, NULL, &err), 0);
+	ck_assert_int_eq(perim_generate(&s, &st->layers[5].regions, 0.2, sm, &l2, &inner, NULL, &err), 0);
 	const struct toolpath *o1 = first_role(&l1, PATH_OUTER_PERIMETER),
 			      *o2 = first_role(&l2, PATH_OUTER_PERIMETER);
 	ck_assert(hypot((double)(o1->pts[0].x - o2->pts[0].x),
@@ -472,9 +472,13 @@ START_TEST(pillar_of_nozzle_width_gets_a_bead)
 		ck_assert_double_eq_tol(perim_bead_area(w, h) * len, 0.16 * h, 0.01 * 0.16 * h);
 		free_paths(&out);
 	}
-	/* Narrower than eps: may vanish, as before. */
+	/* Narrower than eps: a bead of min_bead_width whose flow fills it. */
 	walls_ok(&s, &st_thin->layers[1], &out, &inner);
-	ck_assert_uint_eq(out.n, 0);
+	ck_assert_uint_eq(tu_count_role(&out, PATH_THIN_WALL), 1);
+	ck_assert_int_eq(out.paths[0].pts[0].width, llround(s.min_bead_width * NM));
+	ck_assert_double_eq_tol(perim_bead_area(s.min_bead_width, 0.2) *
+					tu_path_length(&out.paths[0]) / NM,
+				0.09 * 0.2, 0.01 * 0.09 * 0.2);
 	free_paths(&out);
 	clip_expolys_free(&inner);
 	slice_stack_free(st);
@@ -692,7 +696,7 @@ START_TEST(bad_settings_refused)
 	struct layer_paths out = {0};
 	s.seam = PERIM_SEAM_ALIGNED;
 	s.perimeters = -3;
-	ck_assert_int_eq(perim_generate(&s, &none, 0.2, NULL, &out, &inner, &err), ST_ERR_RANGE);
+	ck_assert_int_eq(perim_generate(&s, &none, 0.2, NULL, &out, &inner, NULL, &err), ST_ERR_RANGE);
 	ck_assert_uint_eq(out.n, 0);
 	mesh_free(m);
 }
@@ -716,7 +720,7 @@ START_TEST(seam_hides_in_concave_corner)
 	perim_settings_init(&s, 0.4);
 	for (int mode = 0; mode < PERIM_SEAMS; mode++) {
 		s.seam = mode;
-		ck_assert_int_eq(perim_generate(&s, &region, 0.2, NULL, &out, &inner, &err), 0);
+		ck_assert_int_eq(perim_generate(&s, &region, 0.2, NULL, &out, &inner, NULL, &err), 0);
 		const struct toolpath *o = first_role(&out, PATH_OUTER_PERIMETER);
 		/* The outer wall's concave corner is an arc of radius w/2 around (10, 10). */
 		double d = hypot(o->pts[0].x - 10 * NM, o->pts[0].y - 10 * NM);

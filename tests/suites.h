@@ -56,6 +56,7 @@ void slicecli_settings_tcases(Suite *s); /* tests/check_slicesettings.c: setting
 void slicecli_widths_tcases(Suite *s); /* tests/check_slicewidths.c: per-role widths, part of slicecli */
 void slicecli_thumbnail_tcases(Suite *s); /* tests/check_thumbnail.c: G-code thumbnails, part of slicecli */
 Suite *region_suite(void);	/* tests/check_region.c: printed region against cross-sections */
+Suite *thin_suite(void);	/* tests/check_thin.c: walls thinner than the nozzle */
 Suite *x3g_suite(void);		/* tests/check_x3g.c: G-code to X3G, decoder, against gpx */
 Suite *s3g_suite(void);		/* tests/check_s3g.c: S3G packets, driver, simulated Sailfish */
 Suite *serve_suite(void);		/* tests/check_serve.c: stratum serve, the farm node's API and queue */

@@ -1,0 +1,240 @@
+/*
+ * check_thin.c - walls thinner than the nozzle (issue 19 item 2): printed
+ * as one bead of min_bead_width down to min_feature_size, with a warning;
+ * dropped and counted below it; a wedge's tip printed beyond the
+ * nozzle-wide centre line.  Their gap and overlap by the region
+ * verifier's measures are in check_region.c.
+ */
+#include <check.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fixtures.h"
+#include "meshio.h"
+#include "perimeters.h"
+#include "section.h"
+#include "slicer.h"
+#include "suites.h"
+#include "testutil.h"
+
+#define NM SLICE_UNITS_PER_MM
+#define LEN 20.0 /* mm, the walls' length */
+
+/* The walls of layer i of a LEN x t x 1 mm wall, with s; stats into *thin. */
+static void wall_layer(double t, const struct perim_settings *s, size_t i,
+		       struct layer_paths *out, struct perim_thin *thin, double *h)
+{
+	struct mesh *m = fx_box(0, 0, 0, LEN, t, 1);
+	struct slice_stack *st = NULL;
+	struct clip_expolys inner = {0};
+	struct st_error err = {0};
+
+	ck_assert_msg(slice_mesh(m, 0.2, 0.2, NULL, &st, &err) == 0, "%s", err.msg);
+	ck_assert_uint_gt(st->n, i);
+	memset(out, 0, sizeof(*out));
+	*h = st->layers[i].height;
+	ck_assert_msg(perim_generate(s, &st->layers[i].regions, *h, NULL, out, &inner, thin,
+				     &err) == 0,
+		      "%s", err.msg);
+	ck_assert_uint_eq(inner.n, 0);
+	clip_expolys_free(&inner);
+	slice_stack_free(st);
+	mesh_free(m);
+}
+
+/* The filament cross-section times length of every path of l, mm^3 / mm. */
+static double bead_volume(const struct layer_paths *l, double h)
+{
+	double v = 0;
+
+	for (size_t p = 0; p < l->n; p++)
+		for (size_t k = 0; k + 1 < l->paths[p].n; k++) {
+			const struct path_point *a = &l->paths[p].pts[k], *b = a + 1;
+			v += perim_bead_area(a->width / NM, h) *
+			     hypot((double)(b->x - a->x), (double)(b->y - a->y)) / NM;
+		}
+	return v;
+}
+
+static void free_layer(struct layer_paths *l)
+{
+	for (size_t i = 0; i < l->n; i++)
+		free(l->paths[i].pts);
+	free(l->paths);
+}
+
+START_TEST(wall_0_3_one_bead_filling_it)
+{
+	struct perim_settings s;
+
+	perim_settings_init(&s, 0.4);
+	for (size_t i = 0; i < 5; i++) {
+		struct layer_paths out;
+		struct perim_thin thin;
+		double h;
+
+		wall_layer(0.3, &s, i, &out, &thin, &h);
+		ck_assert_uint_eq(out.n, 1);
+		ck_assert_uint_eq(tu_count_role(&out, PATH_THIN_WALL), 1);
+		for (size_t k = 0; k < out.paths[0].n; k++)
+			ck_assert_int_eq(out.paths[0].pts[k].width, llround(0.34 * NM));
+		/* Its filament is the wall's cross-section, less the round ends. */
+		double want = LEN * 0.3 * h, got = bead_volume(&out, h);
+		ck_assert_msg(fabs(got - want) <= 0.03 * want, "layer %zu: %g mm^3 for %g", i, got,
+			      want);
+		ck_assert_uint_gt(thin.widened, 0);
+		ck_assert_double_eq_tol(thin.designed, 0.3, 0.002);
+		ck_assert_double_eq_tol(thin.printed, 0.34, 1e-9);
+		ck_assert_uint_eq(thin.dropped, 0);
+		free_layer(&out);
+	}
+}
+END_TEST
+
+START_TEST(wall_0_1_at_min_bead_width)
+{
+	struct perim_settings s;
+	struct layer_paths out;
+	struct perim_thin thin;
+	double h;
+
+	perim_settings_init(&s, 0.4);
+	s.min_feature_size = 0.1;
+	wall_layer(0.1, &s, 2, &out, &thin, &h);
+	ck_assert_uint_eq(tu_count_role(&out, PATH_THIN_WALL), 1);
+	ck_assert_int_eq(out.paths[0].pts[0].width, llround(s.min_bead_width * NM));
+	ck_assert_double_eq_tol(thin.designed, 0.1, 0.002);
+	free_layer(&out);
+	/* A wider min_feature_size drops it, and says so. */
+	s.min_feature_size = 0.15;
+	wall_layer(0.1, &s, 2, &out, &thin, &h);
+	ck_assert_uint_eq(out.n, 0);
+	ck_assert_uint_eq(thin.dropped, 1);
+	free_layer(&out);
+}
+END_TEST
+
+START_TEST(wall_0_05_dropped_and_counted)
+{
+	struct mesh *m = fx_box(0, 0, 0, LEN, 0.05, 1);
+	struct slicer_config c;
+	struct slicer_summary sum;
+	struct st_error err = {0};
+	struct perim_settings s;
+	struct layer_paths out;
+	struct perim_thin thin;
+	double h;
+
+	perim_settings_init(&s, 0.4);
+	wall_layer(0.05, &s, 1, &out, &thin, &h);
+	ck_assert_uint_eq(out.n, 0);
+	ck_assert_uint_eq(thin.dropped, 1);
+	ck_assert_uint_eq(thin.widened, 0);
+	free_layer(&out);
+	/* The whole print: only the skirt, every layer's wall counted. */
+	slicer_config_init(&c, 0.4);
+	c.threads = 1;
+	ck_assert_msg(slicer_run(m, &c, tu_path("w005.gcode"), &sum, &err) == 0, "%s", err.msg);
+	ck_assert_uint_eq(sum.paths[PATH_THIN_WALL], 0);
+	ck_assert_uint_eq(sum.thin.dropped, sum.layers);
+	ck_assert_uint_eq(sum.layers, 5);
+	mesh_free(m);
+}
+END_TEST
+
+/* A wedge 1 mm tall: its tip at the origin, 2 mm wide at x = LEN. */
+static struct mesh *wedge(void)
+{
+	struct mesh_builder *b = mesh_builder_new(0);
+	const double x[3] = {0, LEN, LEN}, y[3] = {0, -1, 1};
+	uint32_t lo[3], hi[3];
+
+	ck_assert_ptr_nonnull(b);
+	for (int i = 0; i < 3; i++) {
+		const double p[3] = {x[i], y[i], 0}, q[3] = {x[i], y[i], 1};
+		ck_assert_int_eq(mesh_builder_vertex(b, p, &lo[i], NULL), 0);
+		ck_assert_int_eq(mesh_builder_vertex(b, q, &hi[i], NULL), 0);
+	}
+	ck_assert_int_eq(mesh_builder_triangle(b, lo[0], lo[2], lo[1], NULL), 0);
+	ck_assert_int_eq(mesh_builder_triangle(b, hi[0], hi[1], hi[2], NULL), 0);
+	for (int i = 0; i < 3; i++) {
+		int j = (i + 1) % 3;
+		ck_assert_int_eq(mesh_builder_triangle(b, lo[i], lo[j], hi[j], NULL), 0);
+		ck_assert_int_eq(mesh_builder_triangle(b, lo[i], hi[j], hi[i], NULL), 0);
+	}
+	return mesh_builder_finish(b);
+}
+
+/* The tip of a wedge, narrower than the nozzle beyond x = 4 mm, is printed
+ * down to min_feature_size (0.1 mm, x = 1 mm) at min_bead_width. */
+START_TEST(wedge_tip_printed)
+{
+	struct mesh *m = wedge();
+	struct slice_stack *st = NULL;
+	struct clip_expolys inner = {0};
+	struct st_error err = {0};
+	struct perim_settings s;
+	struct layer_paths out = {0};
+	struct perim_thin thin;
+	int64_t tip = INT64_MAX, tip_width = 0;
+
+	perim_settings_init(&s, 0.4);
+	ck_assert_msg(slice_mesh(m, 0.2, 0.2, NULL, &st, &err) == 0, "%s", err.msg);
+	ck_assert_msg(perim_generate(&s, &st->layers[2].regions, st->layers[2].height, NULL, &out,
+				     &inner, &thin, &err) == 0,
+		      "%s", err.msg);
+	for (size_t p = 0; p < out.n; p++)
+		for (size_t k = 0; out.paths[p].role == PATH_THIN_WALL && k < out.paths[p].n; k++)
+			if (out.paths[p].pts[k].x < tip) {
+				tip = out.paths[p].pts[k].x;
+				tip_width = out.paths[p].pts[k].width;
+			}
+	ck_assert_msg(tip < 2.0 * NM, "thin walls start at x = %g mm", tip / NM);
+	ck_assert_int_eq(tip_width, llround(0.34 * NM));
+	ck_assert_uint_gt(thin.widened, 0);
+	ck_assert_uint_eq(thin.dropped, 0);
+	free_layer(&out);
+	clip_expolys_free(&inner);
+	slice_stack_free(st);
+	mesh_free(m);
+}
+END_TEST
+
+/* The command line warns once, naming the layers and the widening. */
+START_TEST(cli_warns_once)
+{
+	static char out[1 << 14];
+	struct mesh *m = fx_box(0, 0, 0, LEN, 0.2, 1);
+	struct st_error err = {0};
+	const char *stl = tu_path("w02.stl");
+
+	ck_assert_int_eq(meshio_write_stl(stl, m, MESHIO_STL_BINARY, &err), 0);
+	mesh_free(m);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "slice '%s' -o '%s' --printer prusa-i3-mk3s", stl,
+				tu_path("w02.gcode")),
+			 0);
+	const char *w = strstr(out, "warning: thin walls on 5 layers (1 to 5)");
+	ck_assert_msg(w, "%s", out);
+	ck_assert_msg(strstr(w, "down to 0.200 mm wide, printed 0.340 mm (0.140 mm wider)"), "%s",
+		      out);
+	ck_assert_ptr_null(strstr(w + 1, "warning: thin walls"));
+}
+END_TEST
+
+Suite *thin_suite(void)
+{
+	Suite *s = suite_create("thin");
+	TCase *tc = tcase_create("thin");
+
+	tcase_set_timeout(tc, 60);
+	tcase_add_test(tc, wall_0_3_one_bead_filling_it);
+	tcase_add_test(tc, wall_0_1_at_min_bead_width);
+	tcase_add_test(tc, wall_0_05_dropped_and_counted);
+	tcase_add_test(tc, wedge_tip_printed);
+	tcase_add_test(tc, cli_warns_once);
+	suite_add_tcase(s, tc);
+	return s;
+}
