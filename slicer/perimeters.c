@@ -612,8 +612,11 @@ static int narrow_paths(struct ctx *c, const struct clip_expolys *area, double m
 				rc = thin_tips(c, &piece, &ml);
 			perim_medial_free(&ml);
 		}
+		/* Beside walls, a piece whose centre line is shorter than a
+		 * nozzle is what a wide bead's round corner leaves (a 200 %
+		 * first layer's square corners), not a feature of the model. */
 		if (!rc && role == PATH_THIN_WALL && c->out->n == before)
-			rc = sub_nozzle(c, &piece, a, 0);
+			rc = sub_nozzle(c, &piece, a, c->bare ? 0 : c->eps);
 	}
 	clip_paths_free(&piece);
 	return rc;
