@@ -143,8 +143,13 @@ int main(int argc, char **argv)
 			o.sample_step = num_arg(argv[i], argv[i + 1]);
 			i++;
 		} else if (!strcmp(argv[i], "--support") && i + 1 < argc) {
-			if (sscanf(argv[++i], "%lf,%lf,%lf", &sup[0], &sup[1], &sup[2]) != 3)
-				usage();
+			if (sscanf(argv[++i], "%lf,%lf,%lf", &sup[0], &sup[1], &sup[2]) != 3 ||
+			    !(sup[0] > 0 && sup[0] < 90 && sup[1] >= 0 && sup[2] >= 0)) {
+				fprintf(stderr, "region_check: --support needs DEG (0 to 90, "
+						"exclusive),GAP,REACH (mm, >= 0), got '%s'\n",
+					argv[i]);
+				exit(ST_EXIT_USAGE);
+			}
 		} else if (argv[i][0] == '-' || nfiles == 2) {
 			usage();
 		} else {
