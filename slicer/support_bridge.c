@@ -6,11 +6,12 @@
  *
  * For the contact area C of layer i: P = C grown by SUPPORT_BRIDGE_REACH
  * bead widths (as far as bridge infill reaches into its anchors), within
- * M_i.  In each of SUPPORT_BRIDGE_DIRS directions lines one flow spacing
- * apart are cut to P; a piece spans the air when its midpoint is off
- * M_{i-1}, and is anchored when both its ends (a micrometre inward) lie on
- * M_{i-1}.  The direction anchoring the largest share of the spanning
- * length is the bridge's; its anchored spanning pieces, each swept a line
+ * M_i.  In each of SUPPORT_BRIDGE_DIRS directions lines
+ * SUPPORT_BRIDGE_SCORE_STRIDE flow spacings apart are cut to P; a piece
+ * spans the air when its midpoint is off M_{i-1}, and is anchored when
+ * both its ends (a micrometre inward) lie on M_{i-1}.  The direction
+ * anchoring the largest share of the spanning length is the bridge's; its
+ * anchored spanning pieces, lines one flow spacing apart, each swept a
  * spacing to either side (so neighbours overlap and reach the edges), are
  * taken out of C.  A cantilever keeps its support: its lines have a free
  * end in every direction.
@@ -27,6 +28,10 @@
 /* How far lines reach into their anchors, bead widths (the infill's bridge
  * anchor margin). */
 #define SUPPORT_BRIDGE_REACH 3.0
+/* The directions are scored with lines this many flow spacings apart (the
+ * score is a share of length, which sparser lines estimate well); the
+ * bridge's own lines, taken out of the contact, are one spacing apart. */
+#define SUPPORT_BRIDGE_SCORE_STRIDE 4.0
 /* A line end is nudged this far inward before the anchor test, nm. */
 #define SUPPORT_BRIDGE_NUDGE_NM 1000.0
 
@@ -83,7 +88,7 @@ int support_drop_bridges(struct support_ctx *c, size_t i, struct clip_paths *con
 		rc = c->err ? c->err->code : ST_ERR_NOMEM;
 	for (int k = 0; k < SUPPORT_BRIDGE_DIRS && !rc; k++) {
 		double a = k * M_PI / SUPPORT_BRIDGE_DIRS, h, span;
-		rc = support_line_pieces(c, &P, sp, a, 0, &cut);
+		rc = support_line_pieces(c, &P, SUPPORT_BRIDGE_SCORE_STRIDE * sp, a, 0, &cut);
 		if (!rc)
 			rc = score_pieces(c, &cut, below, &h, &span, NULL);
 		if (!rc && span > 0 && h / span > best) {
