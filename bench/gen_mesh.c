@@ -34,10 +34,11 @@
  *   gen_mesh same A B                exit 0 when meshes A and B have the same triangles
  *                                    in the same order over bit-identical corners
  *                                    (normals and headers aside), else 1
- *   gen_mesh plate|overhang|bridge OUT.stl
+ *   gen_mesh plate|overhang|bridge|shelf OUT.stl
  *                                    the slicer's test models (tests/fixtures.h):
  *                                    a plate with a square and a round hole, a 45
- *                                    degree overhang, a 10 mm bridge between pillars
+ *                                    degree overhang, a 10 mm bridge between pillars,
+ *                                    a shelf over a lower step of the same part
  * Every mesh is deterministic: the same arguments give the same file.
  */
 #include <math.h>
@@ -138,7 +139,7 @@ static void usage(void)
 			"OUT.stl\n"
 			"       gen_mesh box SX SY SZ OUT.stl | gen_mesh cylinder R H N OUT.stl\n"
 			"       gen_mesh soup N SIZE SEED OUT.stl | gen_mesh convert IN SIZE OUT.stl\n"
-			"       gen_mesh same A B | gen_mesh plate|overhang|bridge OUT.stl\n");
+			"       gen_mesh same A B | gen_mesh plate|overhang|bridge|shelf OUT.stl\n");
 	exit(2);
 }
 
@@ -216,6 +217,8 @@ int main(int argc, char **argv)
 		m = fx_overhang();
 	} else if (argc == 3 && !strcmp(argv[1], "bridge")) {
 		m = fx_bridge();
+	} else if (argc == 3 && !strcmp(argv[1], "shelf")) {
+		m = fx_shelf();
 	} else {
 		usage();
 	}

@@ -4,7 +4,11 @@
  * model's cross-sections?  See host/region.h for what is measured.
  *
  *   region_check MODEL GCODE [--center X,Y] [--filament-diameter D]
- *                [--step MM] [--json] [--layers]
+ *                [--step MM] [--json] [--layers] [--support DEG,GAP,REACH]
+ *
+ * --support also checks the support the file prints (region.h,
+ * region_support_check): overhang threshold DEG degrees, top contact
+ * distance GAP mm, REACH mm around support counted as holding the part.
  *
  * Exit status: 0 measured, 2 usage, 65 unreadable model or G-code,
  * 70 internal error.
@@ -19,7 +23,7 @@
 static void usage(void)
 {
 	fprintf(stderr, "usage: region_check MODEL GCODE [--center X,Y] [--filament-diameter D]\n"
-			"                    [--step MM] [--json] [--layers]\n");
+			"                    [--step MM] [--json] [--layers] [--support DEG,GAP,REACH]\n");
 	exit(ST_EXIT_USAGE);
 }
 
@@ -36,7 +40,9 @@ static double num_arg(const char *opt, const char *s)
 	return v;
 }
 
-static void print_json(const struct region_print *p, const struct region_report *r, bool layers)
+/* s: the support check, NULL when not asked for. */
+static void print_json(const struct region_print *p, const struct region_report *r, bool layers,
+		       const struct region_support_report *s)
 {
 	printf("{\n  \"layers\": %zu,\n  \"beads\": %zu,\n  \"skipped_moves\": %zu,\n", r->layers,
 	       p->beads, p->skipped);
@@ -65,7 +71,19 @@ static void print_json(const struct region_print *p, const struct region_report 
 		}
 		printf("\n  ]");
 	}
+	if (s)
+		printf(",\n  \"support\": {\"moves\": %zu, \"stray_moves\": %zu, \"inside_mm2\": "
+		       "%.5f, \"overhang_mm2\": %.4f, \"unsupported_mm2\": %.5f, \"worst_z\": %.4f}",
+		       s->beads, s->stray, s->inside_mm2, s->overhang_mm2, s->unsupported_mm2,
+		       s->worst_z);
 	printf("\n}\n");
+}
+
+static void print_support(const struct region_support_report *s)
+{
+	printf("support: %zu moves (%zu on no layer of the part), %.5f mm2 inside the part; "
+	       "overhang %.4f mm2, %.5f mm2 of it unsupported (worst at z %.2f)\n",
+	       s->beads, s->stray, s->inside_mm2, s->overhang_mm2, s->unsupported_mm2, s->worst_z);
 }
 
 static void print_text(const struct region_print *p, const struct region_report *r, bool layers)
@@ -102,6 +120,8 @@ int main(int argc, char **argv)
 	struct region_report *r = NULL;
 	const char *files[2] = {NULL, NULL};
 	bool json = false, layers = false;
+	double sup[3] = {0, 0, 0}; /* --support: degrees, gap, reach */
+	struct region_support_report sr;
 	int nfiles = 0, rc;
 
 	region_opts_init(&o);
@@ -125,6 +145,14 @@ int main(int argc, char **argv)
 		} else if (!strcmp(argv[i], "--step") && i + 1 < argc) {
 			o.sample_step = num_arg(argv[i], argv[i + 1]);
 			i++;
+		} else if (!strcmp(argv[i], "--support") && i + 1 < argc) {
+			if (sscanf(argv[++i], "%lf,%lf,%lf", &sup[0], &sup[1], &sup[2]) != 3 ||
+			    !(sup[0] > 0 && sup[0] < 90 && sup[1] >= 0 && sup[2] >= 0)) {
+				fprintf(stderr, "region_check: --support needs DEG (0 to 90, "
+						"exclusive),GAP,REACH (mm, >= 0), got '%s'\n",
+					argv[i]);
+				exit(ST_EXIT_USAGE);
+			}
 		} else if (argv[i][0] == '-' || nfiles == 2) {
 			usage();
 		} else {
@@ -134,16 +162,20 @@ int main(int argc, char **argv)
 	if (nfiles != 2)
 		usage();
 	if ((rc = meshio_read(files[0], MESHIO_AUTO, &m, NULL, &err)) ||
-	    (rc = region_read(files[1], &o, &p, &err)) || (rc = region_compare(m, p, &o, &r, &err))) {
+	    (rc = region_read(files[1], &o, &p, &err)) || (rc = region_compare(m, p, &o, &r, &err)) ||
+	    (sup[0] != 0 &&
+	     (rc = region_support_check(files[1], m, p, &o, sup[0], sup[1], sup[2], &sr, &err)))) {
 		fprintf(stderr, "region_check: %s\n", err.msg);
 		mesh_free(m);
 		region_print_free(p);
 		return st_exit_for(rc);
 	}
 	if (json)
-		print_json(p, r, layers);
+		print_json(p, r, layers, sup[0] != 0 ? &sr : NULL);
 	else
 		print_text(p, r, layers);
+	if (!json && sup[0] != 0)
+		print_support(&sr);
 	region_report_free(r);
 	region_print_free(p);
 	mesh_free(m);

@@ -230,6 +230,17 @@ struct profile {
 	double duplicate_distance;	/* mm between several models' footprints; default 6 */
 	bool support_material;		/* default 0 */
 	int support_material_threshold; /* degrees, 0 = automatic; default 0 */
+	bool support_material_buildplate_only; /* default 0 */
+	/* mm; defaults 0.2, 0 (= the top's) */
+	double support_material_contact_distance, support_material_bottom_contact_distance;
+	/* layers; defaults 3, -1 (= the top's) */
+	int support_material_interface_layers, support_material_bottom_interface_layers;
+	double support_material_interface_spacing; /* mm, 0 = solid; default 0 */
+	double support_material_spacing;	   /* mm; default 2.5 */
+	double support_material_angle;		   /* degrees; default 0 */
+	/* mm or % of external_perimeter_extrusion_width; default 50% */
+	struct profile_pct support_material_xy_spacing;
+	bool dont_support_bridges; /* default 1 */
 	int raft_layers;		/* 0 = no raft; default 0 */
 	double raft_contact_distance;	/* mm; default 0.1 */
 	double raft_expansion;		/* mm; default 1.5 */

@@ -135,6 +135,9 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	    width_of(&p->top_infill_extrusion_width, p->layer_height, thin);
 	c->support.extrusion_width =
 	    width_of(&p->support_material_extrusion_width, p->layer_height, thin);
+	/* PrusaSlicer: a percentage of the outer wall's width; 0 is no gap */
+	c->support.xy_spacing =
+	    width_of(&p->support_material_xy_spacing, c->perim.external_extrusion_width, 0);
 	c->infill.anchor = width_of(&p->infill_anchor, c->infill.infill_extrusion_width, 0);
 	c->infill.anchor_max = width_of(&p->infill_anchor_max, c->infill.infill_extrusion_width, 0);
 	c->infill.top_monotonic = !strcmp(p->top_fill_pattern, "monotonic");

@@ -661,9 +661,8 @@ static int envelope(const struct clip_paths *printed, const struct clip_paths *s
 	return rc;
 }
 
-/* Cross-section of m at mesh height zm, moved by (dx, dy) nm, as regions. */
-static int section_at(const struct mesh *m, double zm, int64_t dx, int64_t dy,
-		      struct clip_paths *sec, struct st_error *err)
+int region_section(const struct mesh *m, double zm, int64_t dx, int64_t dy,
+		   struct clip_paths *sec, struct st_error *err)
 {
 	struct clip_paths loops = {0};
 	int rc = slice_plane(m, zm, REGION_CLOSE_GAP, &loops, NULL, err);
@@ -693,7 +692,7 @@ static int compare_layer(const struct mesh *m, const struct region_layer *l, dou
 
 	lr->z = l->z;
 	lr->height = l->height;
-	if ((rc = section_at(m, zmin + l->z - l->height / 2, d[0], d[1], &sec, err)) ||
+	if ((rc = region_section(m, zmin + l->z - l->height / 2, d[0], d[1], &sec, err)) ||
 	    (rc = envelope(&l->printed, &sec, &env, err)) ||
 	    (rc = area_mm2(&sec, &lr->section_mm2, err)) ||
 	    (rc = area_mm2(&env, &lr->envelope_mm2, err)) ||

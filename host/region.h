@@ -44,6 +44,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #include "clip.h"
 #include "mesh.h"
@@ -153,6 +154,47 @@ void region_place(const struct mesh *m, const struct region_opts *o, const doubl
 
 /* region_report_free - NULL is safe. */
 void region_report_free(struct region_report *r);
+
+/*
+ * region_section - the cross-section of m at mesh height zm (mm), moved by
+ * (dx, dy) nm, as regions (outer CCW, holes CW) in sec.  Returns 0 or the
+ * errors of slice_plane / clip.
+ */
+int region_section(const struct mesh *m, double zm, int64_t dx, int64_t dy,
+		   struct clip_paths *sec, struct st_error *err);
+
+/*
+ * The support a G-code file prints (region_support.c): the moves under
+ * ";TYPE:Support material" (and "... interface"), swept like the part's
+ * beads, on the part's layers (same Z), against m placed as region_compare
+ * places it (offset from region_place) and cut at each layer's mid-height:
+ *  - inside: the area of support beads inside the cross-section;
+ *  - overhangs: on layer i >= 1, O_i = section_i minus section_{i-1} grown
+ *    by h_i / tan(threshold), what reaches out flatter than the threshold;
+ *    a point of O_i is supported when it lies within reach of support
+ *    printed under layer i's bottom, on the layers from just below it down
+ *    to the first one at least gap below it.
+ */
+struct region_support_report {
+	size_t layers;		/* printed layers checked */
+	size_t beads;		/* support moves swept */
+	size_t stray;		/* support moves on no layer of the part (a raft) */
+	double inside_mm2;	/* support inside the model */
+	double overhang_mm2;	/* O_i summed over the layers */
+	double unsupported_mm2; /* of it, not within reach of support */
+	double worst_z;		/* mm, the layer with the most unsupported area (0: none) */
+};
+
+/*
+ * region_support_check - read the support of the G-code file at path (the
+ * file p was read from) and check it against m as above.  threshold_deg in
+ * (0, 90), gap (the top contact distance) and reach >= 0, mm.  Returns 0
+ * with *out filled, or ST_ERR_ARG (bad arguments), the errors of
+ * region_read, region_section and clip.
+ */
+int region_support_check(const char *path, const struct mesh *m, const struct region_print *p,
+			 const struct region_opts *o, double threshold_deg, double gap,
+			 double reach, struct region_support_report *out, struct st_error *err);
 
 /*
  * region_bead_width - the width (mm) of a bead of height h (mm) whose

@@ -280,6 +280,31 @@ static const struct setting table[] = {
     {"support_material", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL, ""},
     {"support_material_threshold", INT, S_, 0, 90, 0, "degrees", "0", NULL, NULL, 0, NULL,
      "0 = automatic"},
+    {"support_material_buildplate_only", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
+     "support only where it stands on the bed; 0: on the model too, where it meets it"},
+    {"support_material_contact_distance", NUM, S_, 0, 10, 0, "mm", "0.2", NULL, NULL, 0, NULL,
+     "Z gap between the support's top and the overhang, whole layers; 0 = none (soluble), "
+     "no bottom gap either"},
+    {"support_material_bottom_contact_distance", NUM, S_, 0, 10, 0, "mm", "0", NULL, NULL, 0,
+     NULL, "Z gap between the model's top surface and support standing on it, whole layers; "
+     "0 = support_material_contact_distance"},
+    {"support_material_interface_layers", INT, S_, 0, 1000, 0, "", "3", NULL, NULL, 0, NULL,
+     "dense layers under the top gap"},
+    {"support_material_bottom_interface_layers", INT, S_, -1, 1000, 0, "", "-1", NULL, NULL, 0,
+     NULL, "dense layers at the foot of support standing on the model; -1 = "
+     "support_material_interface_layers"},
+    {"support_material_interface_spacing", NUM, S_, 0, 1000, 0, "mm", "0", NULL, NULL, 0, NULL,
+     "gap between interface beads; 0 = solid"},
+    {"support_material_spacing", NUM, S_, 0, 1000, GT, "mm", "2.5", NULL, NULL, 0, NULL,
+     "gap between the support body's beads"},
+    {"support_material_angle", NUM, S_, 0, 359, 0, "degrees", "0", NULL, NULL, 0, NULL,
+     "the support's lines turned by this much (interface and body alike)"},
+    {"support_material_xy_spacing", PCT, S_, 0, 10, 0, "mm", "50%", NULL, NULL, 0, NULL,
+     "least gap between support beads and the model on the same layer; a percentage is of "
+     "external_perimeter_extrusion_width"},
+    {"dont_support_bridges", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, NULL,
+     "no support under a bridge: an overhang whose lines rest on the layer below at both "
+     "ends"},
     {"raft_layers", INT, S_, 0, 100, 0, "", "0", NULL, NULL, 0, NULL,
      "layers of raft under the part, which is lifted onto it; 0 = no raft"},
     {"raft_contact_distance", NUM, S_, 0, 10, 0, "mm", "0.1", NULL, NULL, 0, NULL,

@@ -96,6 +96,12 @@ struct slicer_infill_settings {
 struct slicer_support_settings {
 	bool enabled;	/* support_material */
 	int threshold;	/* degrees, 0-90, 0 = automatic (support_material_threshold) */
+	/* The other support_material_* keys and dont_support_bridges, as
+	 * support.h's struct support_settings has them (xy_spacing in mm). */
+	bool buildplate_only, dont_support_bridges;
+	double contact_distance, bottom_contact_distance;
+	int interface_layers, bottom_interface_layers;
+	double interface_spacing, spacing, angle, xy_spacing;
 	/* mm, support's and the raft's beads; 0 = the walls' extrusion_width (0) */
 	double extrusion_width;
 };
@@ -260,7 +266,8 @@ void slicer_adaptive_settings(const struct slicer_config *c, struct adaptive_set
 /*
  * slicer_raft_support - the settings of support_raft (support.h) for c,
  * and the base of support's: support's defaults for the nozzle, c's support
- * width (the walls' when 0), c's raft keys.
+ * width (the walls' when 0), c's other support keys (c->support) and raft
+ * keys.
  */
 void slicer_raft_support(const struct slicer_config *c, struct support_settings *s);
 

@@ -14,6 +14,27 @@
 #include "support.h"
 #include "travel.h"
 
+/* Support's keys as support.h defaults them (the declared defaults). */
+static void support_defaults(struct slicer_support_settings *c, double nozzle_diameter)
+{
+	struct support_settings s;
+
+	support_settings_init(&s, nozzle_diameter);
+	*c = (struct slicer_support_settings){
+	    .enabled = s.support_material,
+	    .threshold = (int)s.support_material_threshold,
+	    .buildplate_only = s.support_material_buildplate_only,
+	    .dont_support_bridges = s.dont_support_bridges,
+	    .contact_distance = s.support_material_contact_distance,
+	    .bottom_contact_distance = s.support_material_bottom_contact_distance,
+	    .interface_layers = s.support_material_interface_layers,
+	    .bottom_interface_layers = s.support_material_bottom_interface_layers,
+	    .interface_spacing = s.support_material_interface_spacing,
+	    .spacing = s.support_material_spacing,
+	    .angle = s.support_material_angle,
+	    .xy_spacing = s.support_material_xy_spacing};
+}
+
 void slicer_config_init(struct slicer_config *c, double nozzle_diameter)
 {
 	memset(c, 0, sizeof(*c));
@@ -29,7 +50,7 @@ void slicer_config_init(struct slicer_config *c, double nozzle_diameter)
 	    .solid_infill_below_area = 70, .fill_angle = 45, .bridge_flow_ratio = 1,
 	    .thick_bridges = true,
 	    .infill_overlap = 25};
-	c->support = (struct slicer_support_settings){.enabled = false, .threshold = 0};
+	support_defaults(&c->support, nozzle_diameter);
 	/* The declared defaults, as the writer has them. */
 	c->raft = (struct slicer_raft_settings){
 	    .layers = c->gcodew.raft_layers,
@@ -202,6 +223,16 @@ void slicer_raft_support(const struct slicer_config *c, struct support_settings 
 	    c->support.extrusion_width > 0 ? c->support.extrusion_width : c->perim.extrusion_width;
 	/* the stack's layer 0 is on the bed: the raft's, or support's without one */
 	s->first_layer_extrusion_width = c->first_layer_extrusion_width;
+	s->support_material_buildplate_only = c->support.buildplate_only;
+	s->support_material_contact_distance = c->support.contact_distance;
+	s->support_material_bottom_contact_distance = c->support.bottom_contact_distance;
+	s->support_material_interface_layers = c->support.interface_layers;
+	s->support_material_bottom_interface_layers = c->support.bottom_interface_layers;
+	s->support_material_interface_spacing = c->support.interface_spacing;
+	s->support_material_spacing = c->support.spacing;
+	s->support_material_angle = c->support.angle;
+	s->support_material_xy_spacing = c->support.xy_spacing;
+	s->dont_support_bridges = c->support.dont_support_bridges;
 	s->raft_layers = c->raft.layers;
 	s->raft_contact_distance = c->raft.contact_distance;
 	s->raft_expansion = c->raft.expansion;

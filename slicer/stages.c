@@ -99,8 +99,8 @@ static bool stack_has_paths(const struct layer_stack *s)
 	return false;
 }
 
-/* Support with the job's threshold and the width it shares with the raft
- * (slicer_raft_support), support's other defaults. */
+/* Support with the job's threshold, and its other keys and the width it
+ * shares with the raft (slicer_raft_support). */
 int stage_support(const struct slicer_config *c, const struct slice_stack *st,
 		  struct layer_stack *out, bool *ran, struct st_error *err)
 {

@@ -12,20 +12,38 @@
  * unsupported strip around it, C_i = (M_i - M_{i-1}) within d + w of O_i,
  * so the strips of a slope close up across layers.
  *
+ * Bridges (dont_support_bridges, support_bridge.c): the part of C_i that
+ * lines resting on layer i-1 at both ends cross is no contact; only
+ * threads with a free end are held up.
+ *
  * Columns: the contact area of layer i starts at the top support layer
  * t(i), the highest layer whose top is at most
  * support_material_contact_distance below the bottom of layer i (the
- * interface gap; 0 puts the support right under the overhang).  Going down
- * a column stops where it meets the model, and only support that reaches
- * the bed is kept (buildplate_only, the one mode offered): on layer j the
- * support area is every column passing j minus everything the model
- * occupies on layers 0 .. j grown by support_material_xy_spacing.
+ * interface gap; 0 puts the support right under the overhang).  Gaps are
+ * whole layers, as support shares the part's layers.  Going down:
+ *   on the model (support_material_buildplate_only off, PrusaSlicer's
+ *     default): a column stops where it meets B_j, the model on the layers
+ *     k <= j whose top lies less than the bottom gap under layer j's bottom
+ *     (support_material_bottom_contact_distance, 0 = the top gap; no gap
+ *     when the top gap is 0, as PrusaSlicer has it), so it stands on the
+ *     model's top surfaces that gap above them; the support area of layer
+ *     j is every column passing j minus B_j grown by
+ *     support_material_xy_spacing;
+ *   buildplate_only: a column stops where it meets the model, and only
+ *     support that reaches the bed is kept: the support area of layer j is
+ *     every column passing j minus everything the model occupies on layers
+ *     0 .. j grown by support_material_xy_spacing.
  *
  * Paths: on layers t(i) - interface_layers + 1 .. t(i) the area under C_i
- * is interface, dense lines at the flow spacing (perimeters.h) alternating
- * X and Y by layer (PATH_SUPPORT_INTERFACE); the rest is body
- * (PATH_SUPPORT), lines support_material_spacing apart edge to edge (a
- * pitch of that plus the flow spacing, as PrusaSlicer reads the key):
+ * is interface, and so is a column's foot on the model: the area of layer
+ * j that B_{j-1} .. B_{j-m} cut off, m the bottom interface layers
+ * (support_material_bottom_interface_layers, -1 = interface_layers).
+ * Interface is lines support_material_interface_spacing apart edge to edge
+ * (0: solid, at the flow spacing of perimeters.h) alternating direction by
+ * layer (PATH_SUPPORT_INTERFACE); the rest is body (PATH_SUPPORT), lines
+ * support_material_spacing apart edge to edge (a pitch of that plus the
+ * flow spacing, as PrusaSlicer reads the key).  Directions are X and Y
+ * turned by support_material_angle:
  *   SUPPORT_GRID: the column areas closed by the line spacing (nearby
  *     islands and notches merged into blocks) and filled with a grid of
  *     lines in X and Y;
@@ -59,11 +77,19 @@ struct support_settings {
 	double support_material_threshold;	  /* degrees from horizontal, [0, 90];
 						   * 0 = automatic (0) */
 	enum support_style support_material_style; /* SUPPORT_GRID */
+	bool support_material_buildplate_only;	  /* only support standing on the bed (false) */
 	double support_material_contact_distance; /* mm, top Z gap, >= 0 (0.2) */
+	double support_material_bottom_contact_distance; /* mm, Z gap above the model,
+							  * 0 = the top's (0) */
 	int support_material_interface_layers;	  /* dense layers under the gap, >= 0 (3) */
+	int support_material_bottom_interface_layers; /* on the model; -1 = the top's (-1) */
+	double support_material_interface_spacing; /* mm of air between interface lines,
+						    * 0 = solid (0) */
 	double support_material_spacing;	  /* mm of air between body lines, > 0 (2.5) */
+	double support_material_angle;		  /* degrees the lines turn, 0-359 (0) */
 	double support_material_xy_spacing;	  /* mm clearance from the model, >= 0
-						   * (60 % of the width) */
+						   * (50 % of the width) */
+	bool dont_support_bridges;		  /* no support under bridges (true) */
 	double extrusion_width;			  /* mm, support bead width (1.125 x nozzle) */
 	double first_layer_extrusion_width;	  /* mm, the beads of the stack's layer 0
 						   * (support on the bed, the raft's
@@ -84,7 +110,9 @@ void support_settings_init(struct support_settings *s, double nozzle_diameter);
  * support_settings_check - refuse settings that cannot make support: a
  * threshold outside [0, 90] degrees, a negative gap, xy spacing or
  * interface count, a line spacing or width <= 0, a bad style, an arc
- * tolerance outside (0, w/4].  Returns 0 or ST_ERR_ARG / ST_ERR_RANGE with
+ * tolerance outside (0, w/4], a key outside its declared range
+ * (settings.h: the raft's, the bottom gap and interface layers, the
+ * interface spacing, the angle).  Returns 0 or ST_ERR_ARG / ST_ERR_RANGE with
  * a message naming the setting, its value and what is allowed.
  */
 int support_settings_check(const struct support_settings *s, struct st_error *err);

@@ -29,6 +29,7 @@ static const struct suite_entry suites[] = {
 	{"marlin", marlin_suite},     {"printer", printer_suite},
 	{"slicer", slicer_suite},     {"gcodewriter", gcodewriter_suite},
 	{"infill", infill_suite},     {"support", support_suite},
+	{"supportmodel", supportmodel_suite},
 	{"raft", raft_suite},	      {"adaptive", adaptive_suite},
 	{"slicecli", slicecli_suite}, {"region", region_suite},
 	{"multimodel", multimodel_suite}, {"thin", thin_suite},

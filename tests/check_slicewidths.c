@@ -460,8 +460,9 @@ END_TEST
 START_TEST(first_layer_width_of_support_and_raft)
 {
 	static const char *const args[] = {
+	    /* a bridge: supported only with dont_support_bridges = 0 */
 	    "--set cooling=0 --set support_material=1 --set support_material_threshold=60 "
-	    "--set first_layer_extrusion_width=0.6",
+	    "--set dont_support_bridges=0 --set first_layer_extrusion_width=0.6",
 	    "--set cooling=0 --set raft_layers=2 --set first_layer_extrusion_width=0.6"};
 
 	for (size_t i = 0; i < sizeof(args) / sizeof(args[0]); i++) {

@@ -530,8 +530,9 @@ END_TEST
 START_TEST(support_only_from_the_bed)
 {
 	/* A stem at x 0-4, a step on the bed at x 4-12 up to z 2, a plate at
-	 * z 9-10 over x 0-20: the plate is held from the bed at x 12-20 only;
-	 * over the step the support would stand on the part. */
+	 * z 9-10 over x 0-20: with support_material_buildplate_only the plate
+	 * is held from the bed at x 12-20 only; over the step the support
+	 * would stand on the part (check_support_model.c has it there). */
 	struct mesh *stem = fx_box(0, 0, 0, 4, 10, 10), *step = fx_box(3, 0, 0, 12, 10, 2);
 	struct mesh *plate = fx_box(0, 0, 9, 20, 10, 10);
 	struct mesh *a = fx_concat(stem, step), *m = fx_concat(a, plate);
@@ -541,6 +542,7 @@ START_TEST(support_only_from_the_bed)
 
 	support_settings_init(&s, 0.4);
 	s.support_material = true;
+	s.support_material_buildplate_only = true;
 	double w = s.extrusion_width * NM, clear = s.support_material_xy_spacing * NM;
 	for (int style = 0; style < SUPPORT_STYLES; style++) {
 		s.support_material_style = style;

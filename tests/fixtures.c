@@ -518,6 +518,14 @@ struct mesh *fx_bridge(void)
 	return extrude_y(x, z, 8, t, 6, 10);
 }
 
+struct mesh *fx_shelf(void)
+{
+	static const double x[] = {0, 12, 12, 4, 4, 20, 20, 0}, z[] = {0, 0, 2, 2, 9, 9, 10, 10};
+	static const int t[][3] = {{0, 1, 2}, {0, 2, 3}, {0, 3, 7}, {3, 4, 7}, {4, 5, 6}, {4, 6, 7}};
+
+	return extrude_y(x, z, 8, t, 6, 10);
+}
+
 struct mesh *fx_cube_without(double size, unsigned drop)
 {
 	struct mesh *m = fx_box(0, 0, 0, size, size, size);

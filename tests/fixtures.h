@@ -90,6 +90,14 @@ struct mesh *fx_overhang(void);
 struct mesh *fx_bridge(void);
 
 /*
+ * fx_shelf - a shelf over a step of the same part: a stem x 0..4 up to
+ * z 10, a step x 4..12 up to z 2 and a plate z 9..10 reaching to x 20 (its
+ * underside over the step at x 4..12, over the bed at x 12..20); profile
+ * in x-z, extruded along y 0..10.
+ */
+struct mesh *fx_shelf(void);
+
+/*
  * fx_jitter - m with every triangle on corners of its own (nothing shared),
  * each corner moved by up to amount mm in each coordinate (uniform, from a
  * fixed generator seeded by seed): an export that lost its vertex welding.

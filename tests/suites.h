@@ -48,6 +48,7 @@ void gcodewriter_progress_tcases(Suite *s); /* tests/check_progress.c: remaining
 Suite *infill_suite(void);	/* tests/check_infill.c: skins, bridges, infill */
 void infill_shell_tcases(Suite *s); /* tests/check_shells.c: vertical shells, part of infill */
 Suite *support_suite(void);	/* tests/check_support.c: skirt, brim, support material */
+Suite *supportmodel_suite(void); /* tests/check_support_model.c: support on the model, bridges, verified */
 Suite *raft_suite(void);	/* tests/check_raft.c: the raft under the part */
 Suite *adaptive_suite(void);	/* tests/check_adaptive.c: adaptive layer heights */
 Suite *multimodel_suite(void); /* tests/check_multimodel.c: several models in one slice */
