@@ -171,7 +171,9 @@ START_TEST(support_speeds_honoured)
 	char *g;
 
 	model_file(wide_bridge(), "bridge.stl", model, sizeof(model));
-	g = slice(model, STEADY "--set support_material=1 --set support_material_speed=37 "
+	/* the model is a bridge: supported only with dont_support_bridges = 0 */
+	g = slice(model, STEADY "--set support_material=1 --set dont_support_bridges=0 "
+			  "--set support_material_speed=37 "
 			  "--set support_material_interface_speed=50% "
 			  "--set support_material_interface_layers=2");
 	assert_feed(g, "Support material", false, 37 * 60);
