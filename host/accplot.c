@@ -275,7 +275,7 @@ static struct facet_depth *visible_facets(const struct mesh *m, const double tow
 	return f;
 }
 
-static void draw_view(cairo_t *cr, const struct mesh *m, const float *value, double vmax,
+static void draw_view(cairo_t *cr, const struct mesh *m, const struct accplot_values *val,
 		      double vx, double vy, double vw, double vh)
 {
 	double right[3], up[3], toward[3], lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
@@ -308,7 +308,11 @@ static void draw_view(cairo_t *cr, const struct mesh *m, const float *value, dou
 		len = sqrt(dot3(nrm, nrm));
 		/* lit from the viewer: facets turned away are darker */
 		double light = 0.45 + 0.55 * (len > 0 ? dot3(nrm, toward) / len : 0);
-		scale_colour(vmax > 0 ? value[f[i].t] / vmax : 0, col);
+		double value = val->value[f[i].t];
+		if (value <= val->grey_to)
+			col[0] = col[1] = col[2] = 0.8;
+		else
+			scale_colour(val->vmax > 0 ? value / val->vmax : 0, col);
 		cairo_set_source_rgb(cr, col[0] * light, col[1] * light, col[2] * light);
 		for (int k = 0; k < 3; k++) {
 			double x = ox + s * dot3(m->verts[c[k]], right);
@@ -322,10 +326,10 @@ static void draw_view(cairo_t *cr, const struct mesh *m, const float *value, dou
 	free(f);
 }
 
-static void draw_scale(cairo_t *cr, double vmax, const char *what, double x, double y, double h)
+static void draw_scale(cairo_t *cr, const struct accplot_values *v, double x, double y, double h)
 {
-	char label[64];
-	double step = tick_step(vmax > 0 ? vmax : 1), col[3];
+	char label[80];
+	double vmax = v->vmax, step = tick_step(vmax > 0 ? vmax : 1), col[3];
 
 	for (int i = 0; i < (int)h; i++) {
 		scale_colour(1.0 - i / h, col);
@@ -334,13 +338,21 @@ static void draw_scale(cairo_t *cr, double vmax, const char *what, double x, dou
 		cairo_fill(cr);
 	}
 	rgb(cr, 0x000000);
-	for (double v = 0; vmax > 0 && v <= vmax + 1e-12; v += step) {
-		snprintf(label, sizeof(label), "%g", v);
-		text_at(cr, x + BAR_W + 6, y + h - v / vmax * h + 4, label);
+	for (double t = 0; vmax > 0 && t <= vmax + 1e-12; t += step) {
+		snprintf(label, sizeof(label), "%g", t);
+		text_at(cr, x + BAR_W + 6, y + h - t / vmax * h + 4, label);
 	}
-	text_at(cr, x - 10, y - 10, what);
+	text_at(cr, x - 10, y - 10, v->what);
 	snprintf(label, sizeof(label), "mm (max %.4g)", vmax);
 	text_at(cr, x - 10, y + h + 18, label);
+	if (v->grey_to >= 0) {
+		cairo_set_source_rgb(cr, 0.8, 0.8, 0.8);
+		cairo_rectangle(cr, x - 10, y + h + 30, BAR_W, 10);
+		cairo_fill(cr);
+		rgb(cr, 0x000000);
+		snprintf(label, sizeof(label), "up to %g mm", v->grey_to);
+		text_at(cr, x + BAR_W - 4, y + h + 40, label);
+	}
 }
 
 static void draw_hist(cairo_t *cr, const struct accplot_hist *hist, double x, double y, double w,
@@ -367,7 +379,7 @@ static void draw_hist(cairo_t *cr, const struct accplot_hist *hist, double x, do
 	}
 }
 
-int accplot_mesh(const struct mesh *m, const float *value, double vmax, const char *what,
+int accplot_mesh(const struct mesh *m, const struct accplot_values *v,
 		 const struct accplot_hist *hist, const char *title, const char *path,
 		 struct st_error *err)
 {
@@ -376,8 +388,8 @@ int accplot_mesh(const struct mesh *m, const float *value, double vmax, const ch
 	cairo_t *cr = start(MESH_W, h, title, &surf);
 	double vy = MARGIN + TITLE_H, vw = MESH_W - 2 * MARGIN - BAR_AREA;
 
-	draw_view(cr, m, value, vmax, MARGIN, vy, vw, VIEW_H);
-	draw_scale(cr, vmax, what, MESH_W - BAR_AREA + 10, vy + 40, VIEW_H - 120);
+	draw_view(cr, m, v, MARGIN, vy, vw, VIEW_H);
+	draw_scale(cr, v, MESH_W - BAR_AREA + 10, vy + 40, VIEW_H - 120);
 	if (hist)
 		draw_hist(cr, hist, MARGIN + 20, vy + VIEW_H + 20, MESH_W - 2 * MARGIN - 40,
 			  HIST_H - 20);

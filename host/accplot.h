@@ -7,8 +7,9 @@
  *   lines, as seed 004's figure 14 plots them;
  * - a mesh coloured by a value per facet (`stratum compare --png`): the
  *   mesh seen from the front left and above, shaded, each facet in the
- *   colour of its value on a blue-to-red scale, the scale beside it, and
- *   under it the histogram of the distances when there is one.
+ *   colour of its value on a blue-to-red scale (or grey when the value is
+ *   within a tolerance), the scale beside it, and under it the histogram
+ *   of the distances when there is one.
  *
  * Both are written through a temporary file renamed over the path, so the
  * path is untouched on any error.
@@ -34,12 +35,19 @@ struct accplot_hist {
 	double bin_width;
 };
 
+/* What accplot_mesh colours and how. */
+struct accplot_values {
+	const float *value; /* per facet, mm */
+	double vmax;	    /* the scale's top; values above it get its colour */
+	double grey_to;	    /* values up to this are drawn grey (< 0: none are) */
+	const char *what;   /* the scale's name ("distance to B") */
+};
+
 /*
- * accplot_mesh - m with facet t coloured by value[t] (mm) on the scale 0 ..
- * vmax (above it: the top colour), what names the value on the scale
- * ("distance to B"), hist under it (NULL: none).  Errors as accplot_cusp.
+ * accplot_mesh - m with facet t coloured by v->value[t] on the scale 0 ..
+ * vmax, hist under it (NULL: none).  Errors as accplot_cusp.
  */
-int accplot_mesh(const struct mesh *m, const float *value, double vmax, const char *what,
+int accplot_mesh(const struct mesh *m, const struct accplot_values *v,
 		 const struct accplot_hist *hist, const char *title, const char *path,
 		 struct st_error *err);
 

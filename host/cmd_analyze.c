@@ -19,10 +19,8 @@
 #include "meshio.h"
 #include "st_error.h"
 
-/* Cloud points per layer height when --spacing is not given: each box's
- * best point is refined on its facet (repair/cusp_measure.h), so a coarse
- * cloud finds the boxes' largest values within a fraction of a per cent. */
-#define POINTS_PER_LAYER 4
+#define TEXT_OF_(x) #x
+#define TEXT_OF(x) TEXT_OF_(x) /* a macro's value as a string */
 
 static const char analyze_head[] =
     "usage: stratum analyze MODEL --layer-height H [--spacing MM] [--json]\n"
@@ -90,7 +88,9 @@ static int analyze_run(int argc, char **argv, struct clio *io)
 	     &a.has_layer_height},
 	    {"--spacing", 0, CMD_DOUBLE, &a.spacing, CMD_RANGE | CMD_ABOVE_LO, 0, 100,
 	     "a distance above %g and up to %g mm", "MM",
-	     "cloud points MM apart (default: the layer height / 4)", NULL, NULL},
+	     "cloud points MM apart (default: the layer height / " TEXT_OF(
+		 CUSP_MEASURE_POINTS_PER_LAYER) ")",
+	     NULL, NULL},
 	    CMD_OPT_FLAG("--json", &a.json, "one JSON object on stdout instead of the text report"),
 	    CMD_OPT_STRING("--png", 0, &a.png, CMD_NONEMPTY, "a file name", "PLOT.png",
 			   "the cusp height against Z as a PNG plot"),
@@ -111,7 +111,7 @@ static int analyze_run(int argc, char **argv, struct clio *io)
 		return ST_EXIT_USAGE;
 	}
 	if (!a.spacing)
-		a.spacing = a.layer_height / POINTS_PER_LAYER;
+		a.spacing = a.layer_height / CUSP_MEASURE_POINTS_PER_LAYER;
 	if (a.png && (rc = cmd_output_check(a.in, a.png, msg, sizeof(msg)))) {
 		fprintf(stderr, "stratum analyze: %s\n", msg);
 		return rc;

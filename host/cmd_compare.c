@@ -17,6 +17,7 @@
 #include "mesh.h"
 #include "meshio.h"
 #include "st_error.h"
+#include "surfsample.h"
 
 #define FACETS_SHOWN 20 /* over-tolerance facets the text report names */
 
@@ -50,7 +51,12 @@ static int read_model(const char *path, struct mesh **m)
 
 	if (rc)
 		fprintf(stderr, "stratum compare: %s\n", err.msg);
-	return !rc ? 0 : rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
+	else if (!(surfsample_area(*m) > 0))
+		fprintf(stderr, "stratum compare: %s: no triangle has an area; there is no surface "
+				"to measure\n", path);
+	else
+		return 0;
+	return rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
 }
 
 static json_t *side_json(const struct deviation_side *s)
@@ -130,12 +136,15 @@ static int draw(const struct compare_args *a, const struct mesh *ma,
 		struct accplot_hist h = {d->hist, DEVIATION_BINS, d->bin_width};
 		snprintf(title, sizeof(title), "%s against %s: max %.4g mm, mean %.4g mm, 95%% %.4g mm",
 			 a->pos[0], a->pos[1], d->max, d->mean, d->p95);
-		rc = accplot_mesh(ma, d->facet_a, d->max, "distance to B", &h, title, a->png, &err);
+		struct accplot_values v = {d->facet_a, d->max, -1, "distance to B"};
+		rc = accplot_mesh(ma, &v, &h, title, a->png, &err);
 	} else {
 		snprintf(title, sizeof(title),
 			 "chordal error of %s against %s: max %.4g mm, %zu facets over %g mm",
 			 a->pos[0], a->reference, c->max, c->nover, c->tolerance);
-		rc = accplot_mesh(ma, c->facet, c->max, "chordal error", NULL, title, a->png, &err);
+		/* seed 003's isolation: the facets within the tolerance grey */
+		struct accplot_values v = {c->facet, c->max, c->tolerance, "chordal error"};
+		rc = accplot_mesh(ma, &v, NULL, title, a->png, &err);
 	}
 	if (rc)
 		fprintf(stderr, "stratum compare: %s\n", err.msg);
@@ -182,10 +191,11 @@ int cmd_compare(int argc, char **argv)
 			   "a finer mesh of the same part: chordal error of A's facets"),
 	    {"--tolerance", 0, CMD_DOUBLE, &a.tolerance, CMD_RANGE, 0, 1000,
 	     "a distance from %g to %g mm", "MM",
-	     "facets whose chordal error is above MM are isolated\n(default %3$g)", NULL, NULL},
-	    {"--samples", 0, CMD_LONG, &a.samples, CMD_RANGE, 1000, 1e8, "a number from %g to %g",
-	     "N", "about N samples on each surface, at least one a facet\n(default %3$g)", NULL,
+	     "facets whose chordal error is above MM are isolated,\n%g to %g mm (default %g)", NULL,
 	     NULL},
+	    {"--samples", 0, CMD_LONG, &a.samples, CMD_RANGE, 1000, 1e8, "a number from %g to %g",
+	     "N", "about N samples on each surface, at least one a facet,\n%g to %g (default %g)",
+	     NULL, NULL},
 	    CMD_OPT_FLAG("--json", &a.json, "one JSON object on stdout instead of the text report"),
 	    CMD_OPT_STRING("--png", 0, &a.png, CMD_NONEMPTY, "a file name", "PICTURE.png",
 			   "A coloured by its distance to B, or by its chordal error"),

@@ -223,19 +223,25 @@ void deviation_report_free(struct deviation_report *r)
 
 /* ---- chordal error ---- */
 
+/* Farther along the normal than this many times the nearest point, the
+ * line has missed the part of the reference the facet stands for (it
+ * passed a tip the finer surface rounds off) and met another. */
+#define CHORDAL_REACH 3.0
+
 static int chordal_flush(struct chordal_report *r, struct batch *b, const struct surfdist *ref,
-			 double *sum, struct st_error *err)
+			 double *near, double *sum, struct st_error *err)
 {
 	int rc = surfdist_along(ref, (const double (*)[3])b->pts, (const double (*)[3])b->dirs,
 				b->n, b->dist, err);
 
+	if (!rc)
+		rc = surfdist_nearest(ref, (const double (*)[3])b->pts, b->n, near, NULL, err);
 	if (rc)
 		return rc;
 	for (size_t i = 0; i < b->n; i++) {
 		double d = b->dist[i];
-		if (d < 0 && (rc = surfdist_nearest(ref, (const double (*)[3])&b->pts[i], 1, &d,
-						    NULL, err)))
-			return rc; /* the normal's line misses: the nearest point */
+		if (d < 0 || d > CHORDAL_REACH * near[i] + 1e-9)
+			d = near[i];
 		*sum += d;
 		if (d > r->facet[b->facet[i]])
 			r->facet[b->facet[i]] = (float)d;
@@ -247,13 +253,16 @@ static int chordal_flush(struct chordal_report *r, struct batch *b, const struct
 static int chordal_points(const struct mesh *a, const struct surfdist *ref, double spacing,
 			  struct chordal_report *r, struct batch *b, struct st_error *err)
 {
-	double sum = 0;
+	double sum = 0, *near = malloc(CHUNK * sizeof(*near));
 	int rc;
 	double (*tmp)[3] = malloc(((size_t)SURFSAMPLE_K_MAX + 1) * (SURFSAMPLE_K_MAX + 2) / 2 *
 				  sizeof(*tmp));
 
-	if (!tmp)
+	if (!tmp || !near) {
+		free(tmp);
+		free(near);
 		return st_error_set(err, ST_ERR_NOMEM, "chordal error: out of memory");
+	}
 	for (size_t t = 0; t < a->ntris; t++) {
 		const double *p = a->verts[a->tris[t][0]], *q = a->verts[a->tris[t][1]],
 			     *s = a->verts[a->tris[t][2]];
@@ -270,8 +279,9 @@ static int chordal_points(const struct mesh *a, const struct surfdist *ref, doub
 		npts = (k + 1) * (k + 2) / 2;
 		surfsample_grid(p, q, s, k, tmp);
 		for (size_t i = 0; i < npts; i++) {
-			if (b->n == CHUNK && (rc = chordal_flush(r, b, ref, &sum, err))) {
+			if (b->n == CHUNK && (rc = chordal_flush(r, b, ref, near, &sum, err))) {
 				free(tmp);
+				free(near);
 				return rc;
 			}
 			memcpy(b->pts[b->n], tmp[i], sizeof(tmp[i]));
@@ -281,7 +291,9 @@ static int chordal_points(const struct mesh *a, const struct surfdist *ref, doub
 		r->points += npts;
 	}
 	free(tmp);
-	if (b->n && (rc = chordal_flush(r, b, ref, &sum, err)))
+	rc = b->n ? chordal_flush(r, b, ref, near, &sum, err) : 0;
+	free(near);
+	if (rc)
 		return rc;
 	r->mean = r->points ? sum / (double)r->points : 0;
 	return 0;
