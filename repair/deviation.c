@@ -18,6 +18,11 @@
 #define CHUNK (1u << 18) /* samples per batch of queries */
 #define P_SHARE 0.95	 /* the percentile reported */
 
+static double longest_edge(const double a[3], const double b[3], const double c[3])
+{
+	return fmax(vec3_dist(a, b), fmax(vec3_dist(b, c), vec3_dist(c, a)));
+}
+
 /* The spacing that gives about `samples` samples on m: a triangle whose
  * longest edge is L gets (L / spacing)^2. */
 static double spacing_for(const struct mesh *m, size_t samples)
@@ -25,9 +30,8 @@ static double spacing_for(const struct mesh *m, size_t samples)
 	double sum = 0;
 
 	for (size_t t = 0; t < m->ntris; t++) {
-		const double *a = m->verts[m->tris[t][0]], *b = m->verts[m->tris[t][1]],
-			     *c = m->verts[m->tris[t][2]];
-		double l = fmax(vec3_dist(a, b), fmax(vec3_dist(b, c), vec3_dist(c, a)));
+		double l = longest_edge(m->verts[m->tris[t][0]], m->verts[m->tris[t][1]],
+					m->verts[m->tris[t][2]]);
 		sum += l * l;
 	}
 	return sqrt(sum / (double)(samples ? samples : 1));
@@ -240,7 +244,7 @@ static int chordal_flush(struct chordal_report *r, struct batch *b, const struct
 		return rc;
 	for (size_t i = 0; i < b->n; i++) {
 		double d = b->dist[i];
-		if (d < 0 || d > CHORDAL_REACH * near[i] + 1e-9)
+		if (d < 0 || d > fmax(CHORDAL_REACH * near[i], b->w[i]))
 			d = near[i];
 		*sum += d;
 		if (d > r->facet[b->facet[i]])
@@ -286,6 +290,7 @@ static int chordal_points(const struct mesh *a, const struct surfdist *ref, doub
 			}
 			memcpy(b->pts[b->n], tmp[i], sizeof(tmp[i]));
 			memcpy(b->dirs[b->n], n, sizeof(n));
+			b->w[b->n] = longest_edge(p, q, s); /* how far a crossing may lie */
 			b->facet[b->n++] = (uint32_t)t;
 		}
 		r->points += npts;

@@ -64,8 +64,9 @@ struct chordal_report {
  * chordal_measure - for each facet of a, points on a grid over it (about
  * `samples` over all of a, corners and edges included), the distance along
  * the facet's normal, forwards or back, to ref's surface (where the line
- * misses it, or meets it more than three times as far as its nearest
- * point, so on another part of it, the distance to that nearest point);
+ * misses it, or meets it farther than three times its nearest point and
+ * than the facet's longest edge, so on another part of it, the distance
+ * to that nearest point);
  * the facet's chordal error is the largest.  The facets above tolerance (mm, >= 0) are isolated
  * (seed 003): listed, counted in edge-connected regions.  Returns 0 or a
  * negative class as deviation_measure; *r is then empty.
