@@ -149,6 +149,26 @@ START_TEST(cli_reports_draws_and_refuses)
 }
 END_TEST
 
+/* A disc 0.1 mm thick: every point of a side facet is within 0.05 mm of a
+ * cap of the fine disc, nearer than the side (0.19 mm along the normal);
+ * the crossing along the normal still counts (deviation.h, CHORDAL_REACH). */
+START_TEST(chordal_error_beside_a_crease)
+{
+	struct mesh *coarse = fx_cylinder(0, 0, R, 0.1, 16), *fine = fx_cylinder(0, 0, R, 0.1, 256);
+	const double sagitta = R * (1 - cos(M_PI / 16));
+	struct chordal_report c;
+	struct st_error err;
+
+	ck_assert_int_eq(chordal_measure(coarse, fine, SAMPLES, 0.01, &c, &err), 0);
+	ck_assert_msg(fabs(c.max - sagitta) <= 1e-6 * sagitta, "max %.9f mm, sagitta %.9f mm",
+		      c.max, sagitta);
+	ck_assert_uint_eq(c.nover, 32);
+	chordal_report_free(&c);
+	mesh_free(coarse);
+	mesh_free(fine);
+}
+END_TEST
+
 Suite *compare_suite(void)
 {
 	Suite *s = suite_create("compare");
@@ -158,6 +178,7 @@ Suite *compare_suite(void)
 	tcase_add_test(tc, mesh_against_itself_is_zero);
 	tcase_add_test(tc, sphere_moved_by_d_is_d_away);
 	tcase_add_test(tc, coarse_cylinder_chordal_error_is_the_sagitta);
+	tcase_add_test(tc, chordal_error_beside_a_crease);
 	tcase_add_test(tc, cli_reports_draws_and_refuses);
 	suite_add_tcase(s, tc);
 	return s;
