@@ -210,6 +210,7 @@ bench:
 	bench/cgal_corpus.sh $(BUILD)/stratum
 	bench/adaptive_cusp.sh
 	bench/planar_simplify.sh $(BUILD)/stratum
+	bench/accuracy_scan.sh $(BUILD)/stratum
 
 # libFuzzer targets (tests/fuzz/fuzz_NAME.c, one per parser of outside data;
 # docs/reliability.md).  The C library is built again with clang under
@@ -276,7 +277,7 @@ ZSHCOMPDIR  ?= $(DATAROOTDIR)/zsh/$(if $(filter /usr,$(PREFIX)),vendor-completio
 # systemd reads /usr/local/lib/systemd/system and /usr/lib/systemd/system
 UNITDIR     ?= $(PREFIX)/lib/systemd/system
 PRINTERS    := $(notdir $(wildcard printers/*.ini))
-DOCS        := README.md $(wildcard docs/*.md)
+DOCS        := README.md $(wildcard docs/*.md) $(wildcard docs/*.png) # the pictures the pages show
 
 install: all
 	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(DATAROOTDIR)/stratum/printers \

@@ -29,6 +29,8 @@ int cmd_preview(int argc, char **argv);	 /* host/cmd_preview.c */
 int cmd_print(int argc, char **argv);	 /* host/cmd_print.c */
 int cmd_jobs(int argc, char **argv);	 /* host/cmd_jobs.c */
 int cmd_console(int argc, char **argv);	 /* host/cmd_console.c */
+int cmd_analyze(int argc, char **argv);	 /* host/cmd_analyze.c */
+int cmd_compare(int argc, char **argv);	 /* host/cmd_compare.c */
 
 /*
  * cmd_opt_value - the value of option argv[*i] given as "NAME VALUE" (then

@@ -42,6 +42,7 @@ static const struct suite_entry suites[] = {
 	{"cli", cli_suite},	      {"help", help_suite},
 	{"install", install_suite},   {"jobs", jobs_suite},
 	{"progress", progress_suite},
+	{"analyze", analyze_suite},   {"compare", compare_suite},
 };
 #define NSUITES (sizeof(suites) / sizeof(suites[0]))
 

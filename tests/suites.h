@@ -78,5 +78,7 @@ Suite *jobs_suite(void);	/* tests/check_jobs.c: stratum jobs list/show/prune, th
 Suite *help_suite(void);	/* tests/check_help.c: --help, man pages, completion = the option tables */
 Suite *progress_suite(void);	/* tests/check_hostprogress.c: progress lines, ETA, printer clock */
 Suite *install_suite(void);	/* tests/check_install.c: make install into a DESTDIR, run from there */
+Suite *analyze_suite(void);	/* tests/check_analyze.c: cusp height (seed 004), stratum analyze */
+Suite *compare_suite(void);	/* tests/check_compare.c: surface deviation, chordal error, stratum compare */
 
 #endif

@@ -1,0 +1,56 @@
+#!/bin/sh
+# bench/accuracy_scan.sh BIN - `stratum analyze` and `stratum compare` on
+# CGAL's data meshes (Debian's libcgal-demo), the figures and pictures of
+# docs/accuracy.md:
+# - bunny00.off, the Stanford bunny scan (75,408 triangles) scaled to 100 mm
+#   (build/bench/gen_mesh convert): its cusp height in 0.2 mm layers, and
+#   its distance to what `stratum repair` makes of it;
+# - elephant.off (5,558 triangles) against refined_elephant.off (88,928, a
+#   smoothed refinement of it), both scaled by the same factor 100 so they
+#   still fit each other: the surface distance and the coarse facets'
+#   chordal error, the facets over 0.3 mm isolated.
+# Works in bench/out/accuracy, writes its *.png there and prints each command's report with its
+# wall time, CPU time and peak RSS from GNU time.
+set -eu
+bin=$(realpath "${1:-build/stratum}")
+gen=$(realpath "${GEN_MESH:-build/bench/gen_mesh}")
+out=bench/out/accuracy
+tarball=/usr/share/doc/libcgal-demo/data.tar.gz
+[ -f "$tarball" ] || { echo "accuracy_scan: $tarball missing (make deps EXTRA_PACKAGES=libcgal-demo)" >&2; exit 1; }
+mkdir -p "$out"
+cd "$out" # the pictures' titles name the files as given
+tar -xzf "$tarball" data/meshes/bunny00.off data/meshes/elephant.off data/meshes/refined_elephant.off
+
+# OFF with every coordinate times 100 (the header, blank lines and faces unchanged)
+scale_off() {
+	awk 'NF == 0 || NR == 1 { print; next }
+	     !nv { nv = $1; print; next }
+	     done < nv { printf "%.9g %.9g %.9g\n", $1 * 100, $2 * 100, $3 * 100; done++; next }
+	     { print }' "$1" > "$2"
+}
+
+timed() {
+	label=$1; shift
+	/usr/bin/time -f '%e %U %M' -o time.txt "$@"
+	read -r wall cpu kib < time.txt
+	echo "($label: ${wall} s wall, ${cpu} s CPU, $((kib / 1024)) MiB peak)" >&2
+}
+
+"$gen" convert data/meshes/bunny00.off 100 bunny.stl >/dev/null
+scale_off data/meshes/elephant.off elephant.off
+scale_off data/meshes/refined_elephant.off refined-elephant.off
+
+timed "analyze, bunny" "$bin" analyze bunny.stl --layer-height 0.2 --png bunny-cusp.png \
+	> bunny-cusp.txt
+head -2 bunny-cusp.txt
+"$bin" repair bunny.stl -o bunny-repaired.stl >/dev/null
+timed "compare, bunny and its repair" "$bin" compare bunny.stl bunny-repaired.stl \
+	> bunny-repair.txt
+head -5 bunny-repair.txt
+timed "compare, elephants: distance" "$bin" compare elephant.off refined-elephant.off \
+	--png elephant-distance.png > elephant.txt
+cat elephant.txt
+timed "compare, elephants: chordal error" "$bin" compare elephant.off \
+	--reference refined-elephant.off --tolerance 0.3 --png elephant-chordal.png \
+	> elephant-chordal.txt
+cat elephant-chordal.txt
