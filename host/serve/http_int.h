@@ -70,8 +70,16 @@ enum MHD_Result http_send_json(struct MHD_Connection *c, unsigned status, json_t
 			       const char *location);
 /* Answer {"error": msg} with status. */
 enum MHD_Result http_send_error(struct MHD_Connection *c, unsigned status, const char *msg);
+/* Answer with page, a static HTML page whose script is inline (page.c,
+ * farm_page.c): nothing loaded from elsewhere (the Content-Security-Policy). */
+enum MHD_Result http_send_page(struct MHD_Connection *c, const char *page);
 /* Answer 204 No Content. */
 enum MHD_Result http_no_content(struct MHD_Connection *c);
+/* The roles of the request's key among cfg's keys (X-Api-Key, Authorization:
+ * Bearer, or OctoPrint's ?apikey=, in that order); 0 if none.  *who the
+ * key's name.  The node's API and the farm view's alike. */
+unsigned http_key_roles(const struct node_config *cfg, struct MHD_Connection *c,
+			const char **who);
 
 /* ---- a printer's state for one answer (http_api.c) ---- */
 
