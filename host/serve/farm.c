@@ -17,9 +17,12 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/time.h>
+#include <time.h>
 
 #include "farm_int.h"
 #include "mqtt_int.h"
+
+#define FARM_RETRY_MAX_S 30 /* longest wait between two tries to reach the broker */
 
 /* A printer's retained topics, as mqtt.c publishes them. */
 static const char *const printer_topics[] = {"status", "temperatures", "progress",
@@ -399,8 +402,43 @@ int farm_new(const struct farm_config *cfg, struct farm **out, struct st_error *
 	}
 	f->cfg = *cfg;
 	pthread_mutex_init(&f->mu, NULL);
+	pthread_cond_init(&f->cv, NULL);
 	*out = f;
 	return 0;
+}
+
+/* Connect, trying every 1, 2, 4 ... FARM_RETRY_MAX_S seconds while the
+ * broker does not answer; once it has, libmosquitto's loop keeps the link
+ * (and reconnects itself), but it does not retry a first connection. */
+static void *link_main(void *arg)
+{
+	struct farm *f = arg;
+	const struct node_mqtt_config *c = &f->cfg.base.mqtt;
+	int wait_s = 1, rc;
+	struct timespec t;
+
+	pthread_mutex_lock(&f->mu);
+	while (!f->stop) {
+		pthread_mutex_unlock(&f->mu);
+		rc = mosquitto_connect_async(f->mosq, c->host, c->port, c->keepalive);
+		pthread_mutex_lock(&f->mu);
+		if (rc == MOSQ_ERR_SUCCESS) {
+			if (mosquitto_loop_start(f->mosq) == MOSQ_ERR_SUCCESS)
+				f->loop_started = true;
+			else
+				node_log("error", NULL, 0, "farm: cannot start the MQTT loop");
+			break;
+		}
+		node_log("warning", NULL, 0, "farm: cannot reach the broker %s:%u (%s); retrying "
+					     "in %d s", c->host, c->port,
+			 rc == MOSQ_ERR_ERRNO ? strerror(errno) : mosquitto_strerror(rc), wait_s);
+		clock_gettime(CLOCK_REALTIME, &t);
+		t.tv_sec += wait_s;
+		pthread_cond_timedwait(&f->cv, &f->mu, &t);
+		wait_s = wait_s * 2 > FARM_RETRY_MAX_S ? FARM_RETRY_MAX_S : wait_s * 2;
+	}
+	pthread_mutex_unlock(&f->mu);
+	return NULL;
 }
 
 int farm_start(struct farm *f, struct st_error *err)
@@ -425,15 +463,10 @@ int farm_start(struct farm *f, struct st_error *err)
 	mosquitto_connect_callback_set(f->mosq, on_connect);
 	mosquitto_disconnect_callback_set(f->mosq, on_disconnect);
 	mosquitto_message_callback_set(f->mosq, on_message);
-	mosquitto_reconnect_delay_set(f->mosq, 1, 30, true);
-	rc = mosquitto_connect_async(f->mosq, c->host, c->port, c->keepalive);
-	if (rc != MOSQ_ERR_SUCCESS)
-		node_log("warning", NULL, 0, "farm: cannot reach the broker %s:%u yet (%s); "
-					     "retrying", c->host, c->port,
-			 rc == MOSQ_ERR_ERRNO ? strerror(errno) : mosquitto_strerror(rc));
-	if (mosquitto_loop_start(f->mosq) != MOSQ_ERR_SUCCESS)
+	mosquitto_reconnect_delay_set(f->mosq, 1, FARM_RETRY_MAX_S, true);
+	if (pthread_create(&f->linker, NULL, link_main, f))
 		return st_error_set(err, ST_ERR_INTERNAL, "farm: cannot start the MQTT thread");
-	f->loop_started = true;
+	f->linker_started = true;
 	if ((rc = farm_http_start(f, err)))
 		return rc;
 	node_log("info", NULL, 0, "farm %s listening on %s:%u, broker %s:%u", f->cfg.base.name,
@@ -451,6 +484,13 @@ void farm_free(struct farm *f)
 	if (!f)
 		return;
 	farm_http_stop(f);
+	if (f->linker_started) {
+		pthread_mutex_lock(&f->mu);
+		f->stop = true;
+		pthread_cond_signal(&f->cv);
+		pthread_mutex_unlock(&f->mu);
+		pthread_join(f->linker, NULL);
+	}
 	if (f->mosq) {
 		mosquitto_disconnect(f->mosq);
 		if (f->loop_started)
@@ -461,5 +501,6 @@ void farm_free(struct farm *f)
 	}
 	json_decref(f->nodes);
 	pthread_mutex_destroy(&f->mu);
+	pthread_cond_destroy(&f->cv);
 	free(f);
 }

@@ -22,10 +22,14 @@
 struct farm {
 	struct farm_config cfg;
 	struct mosquitto *mosq;
-	bool loop_started;
+	pthread_t linker; /* connects until the broker answers, then starts the loop */
+	bool linker_started;
+	bool loop_started; /* the linker's until it ends */
 	struct MHD_Daemon *httpd;
 	uint16_t port;
 	pthread_mutex_t mu; /* the fields below; libmosquitto's thread writes them */
+	pthread_cond_t cv;  /* wakes the linker to stop */
+	bool stop;	    /* farm_free began */
 	bool connected;	    /* to the broker */
 	/* {NODE: {"status": TEXT, "info": {...}, "printers": {PRINTER: {TOPIC:
 	 * value, ..., "reservedUntil": ms}}}} as the topics say */
