@@ -93,7 +93,14 @@ void sv_stop(struct node_proc *np)
 
 	ck_assert(kill(np->pid, SIGTERM) == 0);
 	ck_assert(waitpid(np->pid, &st, 0) == np->pid);
-	ck_assert_msg(WIFEXITED(st) && WEXITSTATUS(st) == 0, "serve exit status %d", st);
+	if (!WIFEXITED(st) || WEXITSTATUS(st)) {
+		size_t len;
+		char *log = tu_slurp(np->log, &len);
+
+		/* the end of its log says why (a sanitizer's report, an error) */
+		ck_abort_msg("exit status %d of the process of %s; its log ends: %s", st,
+			     np->config, log + (len > 3000 ? len - 3000 : 0));
+	}
 }
 
 /* Whether text contains needle, ignoring case (for header names). */

@@ -180,7 +180,7 @@ static enum MHD_Result dispatch(struct farm *f, struct MHD_Connection *c, struct
 	struct st_error err = {0};
 	struct farm_pick pick;
 	char answer[4096], curl_err[CURL_ERROR_SIZE], why[300] = "", msg[700], loc[1024];
-	json_t *tried = json_array(), *o;
+	json_t *tried, *o;
 	long status = 0;
 	int rc = 0;
 
@@ -197,6 +197,7 @@ static enum MHD_Result dispatch(struct farm *f, struct MHD_Connection *c, struct
 					"(.gcode .gco .g), a model (.stl .obj .off .3mf) or .x3g");
 	if (fflush(r->file))
 		return http_send_error(c, MHD_HTTP_INTERNAL_SERVER_ERROR, "cannot hold the file");
+	tried = json_array(); /* "NODE/PRINTER" of each printer that refused */
 	for (int i = 0; i < FARM_TRIES && !(rc = farm_pick(f, r->profile, tried, &pick, &err));
 	     i++) {
 		status = send_job(r, &pick, answer, curl_err);
