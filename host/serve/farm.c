@@ -110,18 +110,20 @@ static void on_message(struct mosquitto *mosq, void *ctx, const struct mosquitto
 	char node[NODE_NAME_MAX], printer[NODE_NAME_MAX], topic[NODE_NAME_MAX];
 	json_t *value = NULL, *where;
 	const char *rest;
+	int parts;
 
 	(void)mosq;
 	if (strncmp(m->topic, f->cfg.base.mqtt.topic, rl) || m->topic[rl] != '/')
 		return;
 	rest = m->topic + rl + 1;
-	printer[0] = '\0';
-	if (sscanf(rest, "%63[^/]/%63[^/]/%63[^/]", node, printer, topic) == 3)
-		;
-	else if (sscanf(rest, "%63[^/]/%63[^/]", node, topic) == 2)
+	/* NODE/TOPIC or NODE/PRINTER/TOPIC (the subscriptions allow no other) */
+	parts = sscanf(rest, "%63[^/]/%63[^/]/%63[^/]", node, printer, topic);
+	if (parts == 2) {
+		memcpy(topic, printer, sizeof(topic));
 		printer[0] = '\0';
-	else
+	} else if (parts != 3) {
 		return;
+	}
 	if (m->payloadlen > 0 && strcmp(topic, "status"))
 		value = json_loadb(m->payload, (size_t)m->payloadlen, JSON_DECODE_ANY, NULL);
 	else if (m->payloadlen > 0)
@@ -273,8 +275,14 @@ json_t *farm_json(struct farm *f)
 	json_array_foreach(names, i, nm) {
 		json_t *node = json_object_get(f->nodes, json_string_value(nm));
 		const char *url = node_url(node);
-		json_t *pnames = printer_names(node), *printers = json_array(), *pn;
+		json_t *pnames, *printers, *pn;
 		size_t j;
+
+		/* a node taken out of the farm: its status and info were cleared */
+		if (!json_object_get(node, "status") && !json_object_get(node, "info"))
+			continue;
+		pnames = printer_names(node);
+		printers = json_array();
 
 		json_array_foreach(pnames, j, pn) {
 			json_t *p = printer_json(node, json_string_value(pn), url, now);
