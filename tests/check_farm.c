@@ -98,6 +98,23 @@ static json_t *wait_farm(int port, int idle)
 	return NULL;
 }
 
+/* Wait up to 10 s for node number i to be shown offline. */
+static json_t *wait_offline(int port, size_t i)
+{
+	json_t *o = NULL;
+
+	for (int k = 0; k < 100; k++) {
+		json_decref(o);
+		o = farm_state(port);
+		if (json_is_false(json_object_get(json_array_get(json_object_get(o, "nodes"), i),
+						  "online")))
+			return o;
+		usleep(100000);
+	}
+	ck_abort_msg("node %zu is not shown offline: %s", i, json_dumps(o, JSON_COMPACT));
+	return NULL;
+}
+
 static void farm_up(struct farm_env *e)
 {
 	static const char *const names[2] = {"a", "b"}, *const keys[2] = {FARM_KEY_A, FARM_KEY_B};
@@ -130,11 +147,13 @@ static void farm_up(struct farm_env *e)
 	sv_start_cmd(&e->farm, "farm");
 }
 
+/* Stop what farm_up started and a test did not stop (pid 0). */
 static void farm_down(struct farm_env *e)
 {
 	sv_stop(&e->farm);
-	sv_stop(&e->node[1]);
-	sv_stop(&e->node[0]);
+	for (int i = 1; i >= 0; i--)
+		if (e->node[i].pid)
+			sv_stop(&e->node[i]);
 	broker_stop(e->broker);
 }
 
@@ -266,12 +285,23 @@ START_TEST(test_farm_api_and_jobs)
 	ck_assert_msg(strstr(sv_str(r.json, "error"), "no printer with the profile "
 			     "'creality-ender-3' is idle (2 of them"), "%s", r.body);
 	sv_resp_free(&r);
-	/* an MK3S job: the first node's */
+	/* an MK3S job: the first node's; the next goes on to farm-b */
 	send_job(e.farm.port, "X-Api-Key: " KEY_UP, MK3S, "mk.gcode", "G28\n", &r);
 	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
 	ck_assert_str_eq(sv_str(r.json, "node"), "farm-a");
 	ck_assert_str_eq(sv_str(r.json, "printer"), "mk3s");
 	sv_resp_free(&r);
+	send_job(e.farm.port, "X-Api-Key: " KEY_UP, MK3S, "mk2.gcode", "G28\n", &r);
+	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
+	ck_assert_str_eq(sv_str(r.json, "node"), "farm-b");
+	sv_resp_free(&r);
+	/* farm-b stops: still listed, offline, its printers neither idle nor as they were */
+	sv_stop(&e.node[1]);
+	e.node[1].pid = 0;
+	farm = wait_offline(e.farm.port, 1);
+	ck_assert_int_eq(json_integer_value(json_object_get(farm, "printers")), 4);
+	ck_assert_str_eq(sv_str(farm_printer(farm, 1, "mk3s"), "state"), "Offline");
+	json_decref(farm);
 	send_job(e.farm.port, "X-Api-Key: " KEY_UP, "no-such-printer", "x.gcode", "G28\n", &r);
 	ck_assert_msg(r.status == 404, "%d %s", r.status, r.body);
 	sv_resp_free(&r);

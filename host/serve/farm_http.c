@@ -174,7 +174,8 @@ static void node_reason(const char *answer, const char *curl_err, char *out, siz
 }
 
 /* POST /api/farm/jobs once the form is read: pick, send, and on a refusal
- * (busy after all, unreachable) the next idle printer. */
+ * (busy after all, the farm's key refused, unreachable) the next idle
+ * printer. */
 static enum MHD_Result dispatch(struct farm *f, struct MHD_Connection *c, struct farm_req *r)
 {
 	struct st_error err = {0};
@@ -207,8 +208,10 @@ static enum MHD_Result dispatch(struct farm *f, struct MHD_Connection *c, struct
 		node_reason(answer, curl_err, why, sizeof(why));
 		node_log("warning", NULL, 0, "farm: %s/%s did not take %s: %s%s", pick.node,
 			 pick.printer, r->filename, status ? "" : "unreachable: ", why);
-		if (status && status != MHD_HTTP_CONFLICT && status / 100 == 4) {
-			/* the file itself is refused: another printer would refuse it too */
+		if (status / 100 == 4 && status != MHD_HTTP_CONFLICT &&
+		    status != MHD_HTTP_FORBIDDEN) {
+			/* the file itself is refused: another printer would refuse it too
+			 * (busy, or the farm's key refused, is that printer's alone) */
 			json_decref(tried);
 			snprintf(msg, sizeof(msg), "%s/%s refused the job: %s", pick.node,
 				 pick.printer, why);
