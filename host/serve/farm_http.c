@@ -20,8 +20,6 @@
 #include "farm_int.h"
 #include "http_int.h"
 
-#define FARM_SLACK 65536	/* multipart headers and fields around the file */
-#define FARM_DRAIN_MAX 65536	/* body read before a refusal is answered */
 #define FARM_TRIES 8		/* printers tried for one job before giving up */
 #define FARM_CONNECT_S 5	/* to reach a node */
 #define FARM_SEND_S 600		/* to send it a job */
@@ -182,6 +180,7 @@ static enum MHD_Result dispatch(struct farm *f, struct MHD_Connection *c, struct
 	struct farm_pick pick;
 	char answer[4096], curl_err[CURL_ERROR_SIZE], why[300] = "", msg[700], loc[1024];
 	json_t *tried, *o;
+	json_int_t job;
 	long status = 0;
 	int rc = 0;
 
@@ -220,6 +219,9 @@ static enum MHD_Result dispatch(struct farm *f, struct MHD_Connection *c, struct
 		json_array_append_new(tried, json_sprintf("%s/%s", pick.node, pick.printer));
 	}
 	json_decref(tried);
+	if (status != MHD_HTTP_CREATED && !rc)
+		st_error_set(&err, ST_ERR_RANGE, "%d printers with the profile '%.100s' refused the "
+				 "job", FARM_TRIES, r->profile);
 	if (status != MHD_HTTP_CREATED) {
 		snprintf(msg, sizeof(msg), "%s%s%s", err.msg, why[0] ? "; the last refusal: " : "",
 			 why);
@@ -227,7 +229,7 @@ static enum MHD_Result dispatch(struct farm *f, struct MHD_Connection *c, struct
 				       msg);
 	}
 	o = json_loads(answer, 0, NULL);
-	json_int_t job = json_integer_value(json_object_get(json_object_get(o, "stratum"), "job"));
+	job = json_integer_value(json_object_get(json_object_get(o, "stratum"), "job"));
 	json_decref(o);
 	node_log("info", NULL, 0, "farm: %s handed to %s/%s as job %lld (key %s)", r->filename,
 		 pick.node, pick.printer, (long long)job, r->who ? r->who : "?");
@@ -249,12 +251,12 @@ static void first_call(struct farm *f, struct MHD_Connection *c, const char *url
 		r->route = FR_STATE;
 		need = NODE_ROLE_READ;
 		if (strcmp(method, "GET") && strcmp(method, "HEAD"))
-			fail(r, MHD_HTTP_METHOD_NOT_ALLOWED, "GET /api/farm");
+			fail(r, MHD_HTTP_METHOD_NOT_ALLOWED, "method not allowed here (allowed: GET)");
 	} else if (!strcmp(url, "/api/farm/jobs")) {
 		r->route = FR_JOBS;
 		need = NODE_ROLE_UPLOAD;
 		if (strcmp(method, "POST"))
-			fail(r, MHD_HTTP_METHOD_NOT_ALLOWED, "POST /api/farm/jobs");
+			fail(r, MHD_HTTP_METHOD_NOT_ALLOWED, "method not allowed here (allowed: POST)");
 	} else {
 		fail(r, MHD_HTTP_NOT_FOUND, "no such API call (GET /api/farm, POST /api/farm/jobs)");
 		return;
@@ -264,24 +266,11 @@ static void first_call(struct farm *f, struct MHD_Connection *c, const char *url
 						   : "a valid API key is needed (X-Api-Key)");
 	if (r->status || r->route != FR_JOBS)
 		return;
-	if (cl && strtoull(cl, NULL, 10) > f->cfg.base.max_upload + FARM_SLACK)
+	if (cl && strtoull(cl, NULL, 10) > f->cfg.base.max_upload + HTTP_MULTIPART_SLACK)
 		fail(r, MHD_HTTP_CONTENT_TOO_LARGE, "the job is larger than the farm's limit "
 						    "(max_upload_mb)");
 	else if (!(r->pp = MHD_create_post_processor(c, 65536, post_iter, r)))
 		fail(r, MHD_HTTP_BAD_REQUEST, "a job is a multipart form with file and profile");
-}
-
-/* A refusal is answered before the body when the client waits for 100
- * Continue or the body is chunked or large: it is never read. */
-static bool refuse_at_once(struct MHD_Connection *c)
-{
-	const char *e = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_EXPECT);
-	const char *cl = MHD_lookup_connection_value(c, MHD_HEADER_KIND,
-						     MHD_HTTP_HEADER_CONTENT_LENGTH);
-
-	return (e && !strcasecmp(e, "100-continue")) ||
-	       MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_TRANSFER_ENCODING) ||
-	       (cl && strtoull(cl, NULL, 10) > FARM_DRAIN_MAX);
 }
 
 static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *url,
@@ -299,21 +288,21 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *u
 			return MHD_NO;
 		*con_cls = r;
 		first_call(f, c, url, method, r);
-		if (r->status && refuse_at_once(c))
+		if (r->status && http_refuse_at_once(c))
 			return http_send_error(c, (unsigned)r->status, r->msg);
 		return MHD_YES;
 	}
 	if (*upload_size) {
 		r->raw += *upload_size;
-		if (r->pp && r->raw > f->cfg.base.max_upload + FARM_SLACK)
+		if (r->pp && r->raw > f->cfg.base.max_upload + HTTP_MULTIPART_SLACK)
 			fail(r, MHD_HTTP_CONTENT_TOO_LARGE, "the job is larger than the farm's limit "
 							    "(max_upload_mb)");
 		if (!r->status && r->pp && MHD_post_process(r->pp, upload, *upload_size) != MHD_YES)
 			fail(r, MHD_HTTP_BAD_REQUEST, "the multipart form is malformed");
-		if (!r->status && !r->pp && r->raw > FARM_DRAIN_MAX)
+		if (!r->status && !r->pp && r->raw > HTTP_DRAIN_MAX)
 			fail(r, MHD_HTTP_CONTENT_TOO_LARGE, "the request body is too large");
 		*upload_size = 0;
-		if (r->status && r->raw > FARM_DRAIN_MAX)
+		if (r->status && r->raw > HTTP_DRAIN_MAX)
 			return http_send_error(c, (unsigned)r->status, r->msg);
 		return MHD_YES;
 	}

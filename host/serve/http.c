@@ -33,8 +33,6 @@
 #include "st_grow.h"
 
 #define HTTP_JSON_MAX 65536		/* body of a JSON command, bytes */
-#define HTTP_MULTIPART_SLACK 65536	/* multipart headers around the file */
-#define HTTP_DRAIN_MAX 65536		/* body read before refusing, bytes */
 #define HTTP_POOL 4			/* HTTP threads */
 
 /* ---- responses ---------------------------------------------------------- */
@@ -506,9 +504,7 @@ static void first_call(struct node *n, struct MHD_Connection *c, const char *url
 	}
 }
 
-/* Whether a refusal is answered before the body: the client waits for 100
- * Continue, or the body is chunked or longer than the node reads to refuse. */
-static bool refuse_at_once(struct MHD_Connection *c)
+bool http_refuse_at_once(struct MHD_Connection *c)
 {
 	const char *e = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_EXPECT);
 	const char *cl = MHD_lookup_connection_value(c, MHD_HEADER_KIND,
@@ -558,7 +554,7 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *u
 			return MHD_NO;
 		*con_cls = r;
 		first_call(n, c, url, method, r);
-		if (r->status && refuse_at_once(c))
+		if (r->status && http_refuse_at_once(c))
 			return send_refusal(c, r);
 		return MHD_YES;
 	}
