@@ -4,7 +4,8 @@
  * two test-instant printers each (farm-a and farm-b: an Ender-3 and an
  * MK3S on each) and the farm view on it, whose JSON shows all four printers
  * with their nodes' links, whose job call hands a file to the first idle
- * printer of a profile (and refuses when none is), and whose page shows
+ * printer of a profile (and refuses when none is; farm-b through the URL
+ * the farm's config pins for it), and whose page shows
  * both nodes in headless Chromium without a JavaScript error.
  */
 #include <check.h>
@@ -142,7 +143,9 @@ static void farm_up(struct farm_env *e)
 		 "[key viewer]\nkey = " KEY_READ "\nroles = read\n"
 		 "[key dispatcher]\nkey = " KEY_UP "\nroles = read, upload\n"
 		 "[remote farm-a]\nkey = " FARM_KEY_A "\n[remote farm-b]\nkey = " FARM_KEY_B "\n"
-		 "[mqtt]\nhost = 127.0.0.1\nport = %d\nkeepalive = 5\n", e->broker_port);
+		 "url = http://localhost:%d\n"
+		 "[mqtt]\nhost = 127.0.0.1\nport = %d\nkeepalive = 5\n", e->node[1].port,
+		 e->broker_port);
 	write_proc(&e->farm, "farm", text);
 	sv_start_cmd(&e->farm, "farm");
 }
@@ -178,7 +181,8 @@ static void send_job(int port, const char *auth, const char *profile, const char
 }
 
 /* The config: [farm] takes the HTTP keys of [node] and node_key, [remote
- * NODE] the farm's key on that node; a node's sections are refused. */
+ * NODE] the farm's key on that node and its URL; a node's sections are
+ * refused. */
 START_TEST(test_farm_config)
 {
 	static const struct {
@@ -191,6 +195,7 @@ START_TEST(test_farm_config)
 		{"[remote farm-1]\n", "[remote farm-1] needs key ="},
 		{"[remote farm-1]\nkey = short\n", "line 2: key: 5 bytes; an API key has 16 to 128"},
 		{"[remote x]\nkey = " FARM_KEY_A "\n[remote x]\n", "line 3: [remote x] given twice"},
+		{"[remote x]\nurl = farm-1:5000\n", "line 2: url: 'farm-1:5000' is not a URL"},
 	};
 	struct farm_config *c = calloc(1, sizeof(*c));
 	struct node_config *n = calloc(1, sizeof(*n));
@@ -208,11 +213,13 @@ START_TEST(test_farm_config)
 	}
 	tu_write_str(path, "[farm]\nname = north\nnode_key = " FARM_KEY_A "\nlisten = 0.0.0.0:5100\n"
 			   "[key k]\nkey = " KEY_READ "\nroles = read\n"
-			   "[remote farm-2]\nkey = " FARM_KEY_B "\n[mqtt]\nhost = broker\n");
+			   "[remote farm-2]\nkey = " FARM_KEY_B "\nurl = https://farm-2.lan:5000\n"
+			   "[mqtt]\nhost = broker\n");
 	ck_assert_msg(farm_config_load(path, c, &err) == 0, "%s", err.msg);
 	ck_assert_str_eq(c->node_key, FARM_KEY_A);
 	ck_assert_str_eq(c->remotes[0].name, "farm-2");
 	ck_assert_str_eq(c->remotes[0].key, FARM_KEY_B);
+	ck_assert_str_eq(c->remotes[0].url, "https://farm-2.lan:5000");
 	ck_assert_str_eq(c->base.mqtt.client_id, "stratum-farm-north");
 	ck_assert_uint_eq(c->base.listen_port, 5100);
 	/* and a node's config takes neither node_key nor [remote] */
@@ -242,7 +249,9 @@ START_TEST(test_farm_api_and_jobs)
 		json_t *node = json_array_get(json_object_get(farm, "nodes"), i);
 		char url[64];
 
-		snprintf(url, sizeof(url), "http://127.0.0.1:%d", e.node[i].port);
+		/* farm-a as it announces itself, farm-b where the farm's config pins it */
+		snprintf(url, sizeof(url), "http://%s:%d", i ? "localhost" : "127.0.0.1",
+			 e.node[i].port);
 		ck_assert_str_eq(sv_str(node, "name"), i ? "farm-b" : "farm-a");
 		ck_assert(json_is_true(json_object_get(node, "online")));
 		ck_assert_str_eq(sv_str(node, "url"), url);
@@ -351,7 +360,7 @@ START_TEST(test_farm_page)
 			       "farm-b/mk3s:Operational (idle) farm-b/ender:Operational (idle)");
 	free(text);
 	/* each node's name links to its own page */
-	snprintf(url, sizeof(url), "http://127.0.0.1:%d/", e.node[1].port);
+	snprintf(url, sizeof(url), "http://localhost:%d/", e.node[1].port);
 	text = browser_text(&b, "document.querySelector('h2[data-node=farm-b] a').href", 5);
 	ck_assert_str_eq(text, url);
 	free(text);

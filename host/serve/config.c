@@ -322,6 +322,7 @@ static const struct cfg_key node_keys[] = {
 #define FARM_KEYS 7
 static const struct cfg_key remote_keys[] = {
     {"key", KEY_SET, 0, 0, 0, 0, set_remote_key},
+    TEXT(struct farm_remote, url, check_url),
 };
 static const struct cfg_key key_keys[] = {
     {"key", KEY_SET, 0, 0, 0, 0, set_secret},

@@ -206,9 +206,23 @@ static json_t *printer_info(json_t *node, const char *name)
 	return NULL;
 }
 
-/* The URL node announces in its info, or NULL. */
-static const char *node_url(json_t *node)
+/* The [remote] section of node name, or NULL. */
+static const struct farm_remote *remote_of(const struct farm_config *c, const char *name)
 {
+	for (size_t i = 0; i < c->nremotes; i++)
+		if (!strcmp(c->remotes[i].name, name))
+			return &c->remotes[i];
+	return NULL;
+}
+
+/* Where node name is reached: its [remote] url, else the URL it announces
+ * in its info (NULL before that). */
+static const char *node_url(const struct farm *f, const char *name, json_t *node)
+{
+	const struct farm_remote *r = remote_of(&f->cfg, name);
+
+	if (r && r->url[0])
+		return r->url;
 	return json_string_value(json_object_get(json_object_get(node, "info"), "url"));
 }
 
@@ -274,7 +288,7 @@ json_t *farm_json(struct farm *f)
 	names = sorted_keys(f->nodes);
 	json_array_foreach(names, i, nm) {
 		json_t *node = json_object_get(f->nodes, json_string_value(nm));
-		const char *url = node_url(node);
+		const char *url = node_url(f, json_string_value(nm), node);
 		json_t *pnames, *printers, *pn;
 		size_t j;
 
@@ -308,10 +322,9 @@ json_t *farm_json(struct farm *f)
 /* The farm's key on node: its [remote] key, else node_key ("" none). */
 static const char *key_for(const struct farm_config *c, const char *node)
 {
-	for (size_t i = 0; i < c->nremotes; i++)
-		if (!strcmp(c->remotes[i].name, node))
-			return c->remotes[i].key;
-	return c->node_key;
+	const struct farm_remote *r = remote_of(c, node);
+
+	return r ? r->key : c->node_key;
 }
 
 static bool was_tried(json_t *tried, const char *node, const char *printer)
@@ -339,7 +352,7 @@ int farm_pick(struct farm *f, const char *profile, json_t *tried, struct farm_pi
 	names = sorted_keys(f->nodes);
 	json_array_foreach(names, i, nm) {
 		json_t *node = json_object_get(f->nodes, json_string_value(nm));
-		const char *url = node_url(node);
+		const char *url = node_url(f, json_string_value(nm), node);
 		const char *key = key_for(&f->cfg, json_string_value(nm));
 		json_t *pnames = printer_names(node), *pn;
 		size_t j;

@@ -118,12 +118,14 @@ int node_config_load(const char *path, struct node_config *cfg, struct st_error 
  * [farm] with the [node] keys that apply (name, listen, max_upload_mb and
  * the connection limits) and node_key, [key NAME] (its own API's keys),
  * [mqtt] (the broker, as a node's) and [remote NODE] (key: the farm's key
- * on that node, instead of node_key).  No printers.
+ * on that node, instead of node_key; url: its address, instead of the one
+ * it announces).  No printers.
  */
 #define FARM_MAX_REMOTES 256
 struct farm_remote {
 	char name[NODE_NAME_MAX];	/* the node's [node] name */
 	char key[NODE_KEY_MAX + 1];	/* a key of that node with the upload role */
+	char url[NODE_URL_MAX];		/* where it is reached; "" = what it announces */
 };
 struct farm_config {
 	struct node_config base; /* name, listen, limits, keys, mqtt; no printers */
