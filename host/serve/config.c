@@ -561,9 +561,9 @@ static int check_complete(struct cfg_parse *p)
 
 	p->line = 0;
 	if (!c->nkeys)
-		return st_error_set(p->err, ST_ERR_RANGE, "%s: no [key NAME] section: the node "
+		return st_error_set(p->err, ST_ERR_RANGE, "%s: no [key NAME] section: the %s "
 							  "refuses every request without a key",
-				    p->file);
+				    p->file, p->farm ? "farm view" : "node");
 	for (size_t i = 0; i < c->nkeys; i++)
 		if (!c->keys[i].secret[0] || !c->keys[i].roles)
 			return st_error_set(p->err, ST_ERR_RANGE, "%s: [key %s] needs key = and "
