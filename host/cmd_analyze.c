@@ -19,9 +19,6 @@
 #include "meshio.h"
 #include "st_error.h"
 
-#define TEXT_OF_(x) #x
-#define TEXT_OF(x) TEXT_OF_(x) /* a macro's value as a string */
-
 static const char analyze_head[] =
     "usage: stratum analyze MODEL --layer-height H [--spacing MM] [--json]\n"
     "                       [--png PLOT.png]\n"
@@ -88,7 +85,7 @@ static int analyze_run(int argc, char **argv, struct clio *io)
 	     &a.has_layer_height},
 	    {"--spacing", 0, CMD_DOUBLE, &a.spacing, CMD_RANGE | CMD_ABOVE_LO, 0, 100,
 	     "a distance above %g and up to %g mm", "MM",
-	     "cloud points MM apart (default: the layer height / " TEXT_OF(
+	     "cloud points MM apart (default: the layer height / " CMD_TEXT_OF(
 		 CUSP_MEASURE_POINTS_PER_LAYER) ")",
 	     NULL, NULL},
 	    CMD_OPT_FLAG("--json", &a.json, "one JSON object on stdout instead of the text report"),

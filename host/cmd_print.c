@@ -39,22 +39,15 @@
 #include "slicejob.h"
 #include "st_error.h"
 
-#define PRINT_SPEEDUP 1000.0	 /* built-in simulator: default time divisor */
 #define PRINT_PREVIEW_LAYERS 3	 /* --preview: the first layers drawn */
 
 /* Parse argv; 0 to go on, -1 after --help, else the exit status. */
 static int print_parse(int argc, char **argv, struct print_args *a)
 {
 	const struct cmd_opt opts[] = {
-	    CMD_OPT_STRING("--printer", 0, &a->printer, 0, NULL, "NAME",
-			   "the printer profile ('stratum printers'); required"),
-	    CMD_OPT_STRING("--port", 0, &a->port, 0, NULL, "P",
-			   "a serial device, 'auto' (the port whose USB id the profile\n"
-			   "lists), tcp://HOST:PORT, or 'sim'.  Default: sim, the\n"
-			   "built-in simulated printer of the profile's firmware"),
-	    {"--speedup", 0, CMD_DOUBLE, &a->speedup, CMD_RANGE, 1, 1e6,
-	     "a factor from %.0f to %.0f", "K",
-	     "the simulated printer runs K times faster (default 1000)", NULL, NULL},
+	    CMD_OPT_PRINTER_NAME(&a->printer),
+	    CMD_OPT_PORT_OR_SIM(&a->port),
+	    CMD_OPT_SPEEDUP(&a->speedup),
 	    {"--dry-run", 0, CMD_FLAG, &a->dry_run, 0, 0, 0, NULL, "-o OUT",
 	     "write the G-code (X3G for Sailfish printers unless OUT\n"
 	     "ends in .gcode) instead of printing", NULL, NULL},
@@ -74,8 +67,7 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 	     "answer yes to --resume's question; with --preview and no\n"
 	     "--port: print on the simulator after the preview", NULL, NULL},
 	    CMD_OPT_FLAG("--force", &a->force, GUARD_FORCE_HELP),
-	    CMD_OPT_STRING("--sim-log", 0, &a->sim_log, 0, NULL, "FILE",
-			   "testing aid: the simulated printer's execution log"),
+	    CMD_OPT_SIM_LOG(&a->sim_log),
 	};
 	const struct cmd_spec spec = {
 	    .cmd = PRINT_CMD, CMD_TABLE(opts), .col = 21,
@@ -101,7 +93,7 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 	int rc;
 
 	memset(a, 0, sizeof(*a));
-	a->speedup = PRINT_SPEEDUP;
+	a->speedup = CMD_SIM_SPEEDUP;
 	rc = cmd_parse(&spec, argc, argv);
 	if (rc)
 		return rc;

@@ -21,7 +21,6 @@
 #include "commands.h"
 #include "guard.h"
 #include "printer.h"
-#include "portpick.h"
 #include "printer_profile.h"
 #include "profile.h"
 #include "send.h"
@@ -60,11 +59,8 @@ static int send_parse(int argc, char **argv, struct send_args *a)
 	    CMD_OPT_FLAG("--json", &a->json, "the report as one JSON object on stdout"),
 	    CMD_OPT_STRING("--port", 0, &a->port, 0, NULL, "PATH",
 			   "a serial device, a pty, tcp://HOST:PORT or 'auto' (required)"),
-	    CMD_OPT_STRING("--printer", 0, &a->printer, 0, NULL, "NAME",
-			   "the printer profile ('stratum printers'); required"),
-	    {"--baud", 0, CMD_LONG, &a->baud, CMD_RANGE, 300, 10000000,
-	     "a whole number from %.0f to %.0f", "N",
-	     "link speed, %.0f to %.0f (default: the profile's baudrate)", NULL, NULL},
+	    CMD_OPT_PRINTER_NAME(&a->printer),
+	    CMD_OPT_BAUD(&a->baud),
 	    {"--command", 0, CMD_CUSTOM, &a->commands, 0, 0, 0, "a G-code line (64 at most)",
 	     "LINE", "instead of FILE: send the G-code LINE and print the firmware's\n"
 	     "reply on stdout; repeatable, in order (Marlin: Sailfish sends no text)",
@@ -246,23 +242,9 @@ static int send_run(int argc, char **argv, struct clio *io)
 		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
 		return profile_exit_status(rc);
 	}
-	if (!strcmp(a.port, "auto")) { /* the rules of host/portpick.h, as print's */
-		char why[512] = "";
-
-		if (portpick_auto(prof, &port_auto, why, sizeof(why), &err)) {
-			fprintf(stderr, SEND_CMD ": %s\n", err.msg);
-			status = ST_EXIT_UNAVAILABLE;
-			goto out_profile;
-		}
-		if (!a.json)
-			fprintf(stderr, SEND_CMD ": --port auto: %s\n", why);
-		a.port = port_auto;
-	}
-	if ((rc = printer_profile_options(prof, a.port, a.baud, &o, &ops, &err))) {
-		fprintf(stderr, SEND_CMD ": %s: %s\n", prof->path, err.msg);
-		status = ST_EXIT_DATAERR;
+	if ((status = printer_profile_cli(SEND_CMD, prof, &a.port, a.baud, a.json, &port_auto, &o,
+					  &ops)))
 		goto out_profile;
-	}
 	if (a.commands.n) {
 		status = send_commands_run(&a.commands, ops, &o, a.printer, a.port, a.json);
 		goto out_profile;

@@ -12,7 +12,6 @@
 #include <string.h>
 
 #include "gcode.h"
-#include "portpick.h"
 #include "print_job.h"
 #include "printer_profile.h"
 #include "send.h"
@@ -336,25 +335,12 @@ int print_stream(struct print_job *job)
 	const char *port = job->a->port ? job->a->port : "sim";
 	struct printer_options o;
 	const struct printer_ops *ops;
-	struct st_error err = {0};
 	int rc;
 
 	job->simulated = !strcmp(port, "sim");
-	if (!job->simulated && !strcmp(port, "auto")) {
-		char why[512] = "";
-
-		if (portpick_auto(job->prof, &job->port_auto, why, sizeof(why), &err)) {
-			fprintf(stderr, PRINT_CMD ": %s\n", err.msg); /* it says --port auto */
-			return ST_EXIT_UNAVAILABLE;
-		}
-		if (!job->a->json)
-			fprintf(stderr, PRINT_CMD ": --port auto: %s\n", why);
-		port = job->port_auto;
-	}
-	if ((rc = printer_profile_options(job->prof, port, 0, &o, &ops, &err))) {
-		fprintf(stderr, PRINT_CMD ": %s: %s\n", job->prof->path, err.msg);
-		return ST_EXIT_DATAERR;
-	}
+	if ((rc = printer_profile_cli(PRINT_CMD, job->prof, &port, 0, job->a->json,
+				      &job->port_auto, &o, &ops)))
+		return rc;
 	o.sim_speedup = job->a->speedup;
 	o.sim_log = job->a->sim_log;
 	if (job->simulated && !job->a->json)
