@@ -97,12 +97,9 @@ static int console_parse(int argc, char **argv, struct console_args *a)
 	rc = cmd_parse(&spec, argc, argv);
 	if (rc)
 		return rc;
-	if (!a->printer) {
-		fprintf(stderr, CONSOLE_CMD ": no printer given; add --printer NAME ('stratum "
-					    "printers' lists them)\n");
-		cmd_usage(&spec, stderr);
-		return ST_EXIT_USAGE;
-	}
+	if (!a->printer)
+		return cmd_refuse(
+		    &spec, "no printer given; add --printer NAME ('stratum printers' lists them)");
 	return 0;
 }
 
@@ -338,10 +335,8 @@ static int console_open(struct console *c, const struct console_args *a,
 	o.sim_log = a->sim_log;
 	o.trace = console_trace;
 	o.trace_ctx = c;
-	if ((rc = printer_open(c->ops, &o, &c->pr, &err))) {
-		fprintf(stderr, CONSOLE_CMD ": %s\n", err.msg);
-		return send_exit_for_open(rc);
-	}
+	if ((rc = printer_open(c->ops, &o, &c->pr, &err)))
+		return cmd_fail(CONSOLE_CMD, send_exit_for_open(rc), "%s", err.msg);
 	printer_describe(c->pr, firmware, sizeof(firmware));
 	fprintf(stderr, CONSOLE_CMD ": %s on %s%s; 'help' lists the built-ins, 'quit' leaves\n",
 		firmware, port, c->ops->text_replies ? "" : " (no text replies: temperatures shown)");
@@ -362,10 +357,8 @@ int cmd_console(int argc, char **argv)
 
 	if ((status = console_parse(argc, argv, &a)))
 		return status < 0 ? ST_EXIT_OK : status;
-	if ((rc = profile_find(a.printer, &prof, &err))) {
-		fprintf(stderr, CONSOLE_CMD ": %s\n", err.msg);
-		return profile_exit_status(rc);
-	}
+	if ((rc = profile_find(a.printer, &prof, &err)))
+		return cmd_fail(CONSOLE_CMD, profile_exit_status(rc), "%s", err.msg);
 	port = a.port ? a.port : "sim";
 	if (!(c = calloc(1, sizeof(*c)))) {
 		fprintf(stderr, CONSOLE_CMD ": out of memory\n");

@@ -3,6 +3,7 @@
  * each command's option table (commands.h), and the helpers they share.
  */
 #include <math.h>
+#include <stdarg.h>
 #include <signal.h>
 #include <stdio.h>
 #include <string.h>
@@ -100,11 +101,9 @@ static int take_opt(const struct cmd_spec *spec, const struct cmd_opt *o, int ar
 	} else if (o->kind != CMD_FLAG) {
 		v = a[1] == '-' ? cmd_opt_value(argc, argv, i, o->name)
 				: (*i + 1 < argc ? argv[++*i] : NULL);
-		if (!v || (!*v && (o->flags & CMD_NONEMPTY))) {
-			fprintf(stderr, "%s: %s needs %s\n", spec->cmd, name,
-				o->kind == CMD_STRING ? wants : "a value");
-			return ST_EXIT_USAGE;
-		}
+		if (!v || (!*v && (o->flags & CMD_NONEMPTY)))
+			return cmd_fail(spec->cmd, ST_EXIT_USAGE, "%s needs %s", name,
+					o->kind == CMD_STRING ? wants : "a value");
 	}
 	if (o->kind == CMD_FLAG) {
 		*(bool *)o->dest = true;
@@ -226,4 +225,19 @@ void cmd_usage(const struct cmd_spec *spec, FILE *f)
 		cfgopt_usage(f);
 	if (spec->tail)
 		fputs(spec->tail, f);
+}
+
+int cmd_refuse(const struct cmd_spec *spec, const char *fmt, ...)
+{
+	va_list ap;
+
+	flockfile(stderr); /* one message, whatever other threads write */
+	fprintf(stderr, "%s: ", spec->cmd);
+	va_start(ap, fmt);
+	vfprintf(stderr, fmt, ap);
+	va_end(ap);
+	fputc('\n', stderr);
+	cmd_usage(spec, stderr);
+	funlockfile(stderr);
+	return ST_EXIT_USAGE;
 }

@@ -143,10 +143,8 @@ int cmd_ports(int argc, char **argv)
 	rc = cmd_parse(&spec, argc, argv);
 	if (rc)
 		return rc < 0 ? ST_EXIT_OK : rc;
-	if (printer && profile_find(printer, &want, &err)) {
-		fprintf(stderr, "stratum ports: %s\n", err.msg);
-		return profile_exit_status(err.code);
-	}
+	if (printer && profile_find(printer, &want, &err))
+		return cmd_fail("stratum ports", profile_exit_status(err.code), "%s", err.msg);
 	if (xport_list(&ports, &n, &err)) {
 		fprintf(stderr, "stratum ports: %s\n", err.msg);
 		profile_free(want);

@@ -98,24 +98,20 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 	if (rc)
 		return rc;
 	a->in = a->models[0];
-	if (a->resume && (a->in || a->dry_run || a->cfg.n || a->cfg.presets.printer)) {
-		fprintf(stderr, PRINT_CMD ": --resume JOB takes no model, no --dry-run and no "
-				"settings options: the job journal names the file\n");
-		return ST_EXIT_USAGE;
-	}
-	if (!a->resume && (!a->in || (!a->printer && !a->cfg.has_files))) {
-		fprintf(stderr, PRINT_CMD ": %s\n",
-			!a->in ? "no model file given"
-			       : "no printer given; add --printer NAME ('stratum printers' lists "
-				 "them)");
-		cmd_usage(&spec, stderr);
-		return ST_EXIT_USAGE;
-	}
-	if (a->dry_run != (a->out != NULL)) {
-		fprintf(stderr, PRINT_CMD ": %s\n", a->dry_run ? "--dry-run needs -o OUT"
-							       : "-o OUT goes with --dry-run");
-		return ST_EXIT_USAGE;
-	}
+	if (a->resume && (a->in || a->dry_run || a->cfg.n || a->cfg.presets.printer))
+		return cmd_fail(PRINT_CMD, ST_EXIT_USAGE,
+				"--resume JOB takes no model, no --dry-run and no settings "
+				"options: the job journal names the file");
+	if (!a->resume && (!a->in || (!a->printer && !a->cfg.has_files)))
+		return cmd_refuse(
+		    &spec, "%s",
+		    !a->in ? "no model file given"
+			   : "no printer given; add --printer NAME ('stratum printers' lists "
+			     "them)");
+	if (a->dry_run != (a->out != NULL))
+		return cmd_fail(PRINT_CMD, ST_EXIT_USAGE, "%s",
+				a->dry_run ? "--dry-run needs -o OUT"
+					   : "-o OUT goes with --dry-run");
 	return 0;
 }
 
@@ -137,14 +133,10 @@ static int print_slice(struct print_job *job, const char *out)
 	struct st_error err = {0};
 	int rc = profile_slicer_config(job->prof, &cfg, &err);
 
-	if (rc) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		return profile_exit_status(rc);
-	}
-	if ((rc = slicer_config_check(&cfg, &err))) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		return ST_EXIT_DATAERR;
-	}
+	if (rc)
+		return cmd_fail(PRINT_CMD, profile_exit_status(rc), "%s", err.msg);
+	if ((rc = slicer_config_check(&cfg, &err)))
+		return cmd_fail(PRINT_CMD, ST_EXIT_DATAERR, "%s", err.msg);
 	rc = slicejob_run(PRINT_CMD, job->a->models, job->a->nmodels, &cfg, false, out, true,
 			  &job->slice);
 	job->sliced = rc == 0;
@@ -245,25 +237,19 @@ static int print_setup_resume(struct print_job *job)
 	char hex[65];
 	int rc;
 
-	if ((rc = journal_load(job->a->resume, &job->j, &err))) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		return rc == ST_ERR_PARSE ? ST_EXIT_DATAERR : ST_EXIT_USAGE;
-	}
-	if (!strcmp(job->j.state, "done")) {
-		fprintf(stderr, PRINT_CMD ": job %s finished printing; there is nothing to "
-				"resume\n", job->j.id);
-		return ST_EXIT_USAGE;
-	}
-	if ((rc = journal_sha256(job->j.gcode, hex, &err))) {
-		fprintf(stderr, PRINT_CMD ": job %s: %s\n", job->j.id, err.msg);
-		return ST_EXIT_DATAERR;
-	}
-	if (strcmp(hex, job->j.sha256)) {
-		fprintf(stderr, PRINT_CMD ": job %s: %s changed since the print started (SHA-256 "
-				"%.12s..., the journal has %.12s...); refusing to resume with "
-				"another file\n", job->j.id, job->j.gcode, hex, job->j.sha256);
-		return ST_EXIT_DATAERR;
-	}
+	if ((rc = journal_load(job->a->resume, &job->j, &err)))
+		return cmd_fail(PRINT_CMD, rc == ST_ERR_PARSE ? ST_EXIT_DATAERR : ST_EXIT_USAGE,
+				"%s", err.msg);
+	if (!strcmp(job->j.state, "done"))
+		return cmd_fail(PRINT_CMD, ST_EXIT_USAGE,
+				"job %s finished printing; there is nothing to resume", job->j.id);
+	if ((rc = journal_sha256(job->j.gcode, hex, &err)))
+		return cmd_fail(PRINT_CMD, ST_EXIT_DATAERR, "job %s: %s", job->j.id, err.msg);
+	if (strcmp(hex, job->j.sha256))
+		return cmd_fail(PRINT_CMD, ST_EXIT_DATAERR,
+				"job %s: %s changed since the print started (SHA-256 %.12s..., the "
+				"journal has %.12s...); refusing to resume with another file",
+				job->j.id, job->j.gcode, hex, job->j.sha256);
 	snprintf(job->gcode_buf, sizeof(job->gcode_buf), "%s", job->j.gcode);
 	job->gcode = job->gcode_buf;
 	if (!job->a->printer)
@@ -390,19 +376,15 @@ static int print_dry_run(struct print_job *job)
 	bool x3g = sailfish && !cmd_has_ext(out, ".gcode");
 	int status;
 
-	if (job->input != PRINT_MODEL && !(x3g && job->input == PRINT_GCODE)) {
-		fprintf(stderr, PRINT_CMD ": --dry-run: %s is already what would be printed\n",
-			job->a->in);
-		return ST_EXIT_USAGE;
-	}
+	if (job->input != PRINT_MODEL && !(x3g && job->input == PRINT_GCODE))
+		return cmd_fail(PRINT_CMD, ST_EXIT_USAGE,
+				"--dry-run: %s is already what would be printed", job->a->in);
 	if (job->input == PRINT_MODEL) {
 		if (x3g) {
 			struct st_error err = {0};
 			char dir[JOURNAL_PATH_MAX - 64];
-			if (journal_dir(dir, sizeof(dir), &err)) {
-				fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-				return ST_EXIT_FAILURE;
-			}
+			if (journal_dir(dir, sizeof(dir), &err))
+				return cmd_fail(PRINT_CMD, ST_EXIT_FAILURE, "%s", err.msg);
 			snprintf(job->gcode_buf, sizeof(job->gcode_buf), "%s/dry-run-%ld.gcode", dir,
 				 (long)getpid());
 		} else {
@@ -484,11 +466,10 @@ static int print_stdin(struct print_args *a, struct clio *io)
 		/* a comment or a command word ("G1", "M104"); a binary STL's header
 		 * may start with any text ("MeshLab"), not with these */
 		if (head[k] == ';' || (head[k] && strchr("GMTN", head[k]) && head[k + 1] >= '0' &&
-				       head[k + 1] <= '9')) {
-			fprintf(stderr, PRINT_CMD ": stdin holds G-code; print it from a file, so that "
-					"the job can be resumed ('-' takes a model)\n");
-			return ST_EXIT_USAGE;
-		}
+				       head[k + 1] <= '9'))
+			return cmd_fail(PRINT_CMD, ST_EXIT_USAGE,
+					"stdin holds G-code; print it from a file, so that the job "
+					"can be resumed ('-' takes a model)");
 	}
 	return 0;
 }
@@ -508,10 +489,8 @@ static int print_run(int argc, char **argv, bool *answered, struct clio *io)
 	if ((status = print_stdin(&a, io)))
 		return status;
 	job = calloc(1, sizeof(*job));
-	if (!job) {
-		fprintf(stderr, PRINT_CMD ": out of memory\n");
-		return ST_EXIT_SOFTWARE;
-	}
+	if (!job)
+		return cmd_fail(PRINT_CMD, ST_EXIT_SOFTWARE, "out of memory");
 	job->a = &a;
 	job->start_layer = -1;
 	job->layer = -1;

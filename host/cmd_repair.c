@@ -427,24 +427,19 @@ static int repair_command(int argc, char **argv, struct repair_run *run, struct 
 	rc = cmd_parse(&spec, argc, argv);
 	if (rc)
 		return rc < 0 ? ST_EXIT_OK : rc;
-	if (!in || !out) {
-		fprintf(stderr, "stratum repair: %s\n",
-			!in ? "no input file given" : "no output file given; add -o OUT.stl");
-		cmd_usage(&spec, stderr);
-		return ST_EXIT_USAGE;
-	}
+	if (!in || !out)
+		return cmd_refuse(&spec, "%s",
+				  !in ? "no input file given"
+				      : "no output file given; add -o OUT.stl");
 
-	if ((angle_arg || flat_arg) && !run->simplify) {
-		fprintf(stderr, "stratum repair: %s applies to --simplify-planar; add it or leave "
-				"%s out\n", angle_arg ? angle_arg : flat_arg,
-			angle_arg ? angle_arg : flat_arg);
-		return ST_EXIT_USAGE;
-	}
-	if (split && clio_is_std(out)) {
-		fprintf(stderr, "stratum repair: --split writes one file per part; -o - takes "
-				"one stream (leave out --split)\n");
-		return ST_EXIT_USAGE;
-	}
+	if ((angle_arg || flat_arg) && !run->simplify)
+		return cmd_fail("stratum repair", ST_EXIT_USAGE,
+				"%s applies to --simplify-planar; add it or leave %s out",
+				angle_arg ? angle_arg : flat_arg, angle_arg ? angle_arg : flat_arg);
+	if (split && clio_is_std(out))
+		return cmd_fail(
+		    "stratum repair", ST_EXIT_USAGE,
+		    "--split writes one file per part; -o - takes one stream (leave out --split)");
 	run->input = in;
 	out_std = clio_is_std(out);
 	/* "-": stdin spooled, the STL held back until it is whole (clio.h) */

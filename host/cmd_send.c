@@ -86,18 +86,13 @@ static int send_parse(int argc, char **argv, struct send_args *a)
 	rc = cmd_parse(&spec, argc, argv);
 	if (rc)
 		return rc;
-	if (a->file && a->commands.n) {
-		fprintf(stderr, SEND_CMD ": give a FILE or --command, not both\n");
-		return ST_EXIT_USAGE;
-	}
-	if ((!a->file && !a->commands.n) || !a->port || !a->printer) {
-		fprintf(stderr, SEND_CMD ": %s is required\n",
-			!a->file && !a->commands.n ? "a FILE (or --command LINE)"
-			: !a->port		   ? "--port"
-						   : "--printer");
-		cmd_usage(&spec, stderr);
-		return ST_EXIT_USAGE;
-	}
+	if (a->file && a->commands.n)
+		return cmd_fail(SEND_CMD, ST_EXIT_USAGE, "give a FILE or --command, not both");
+	if ((!a->file && !a->commands.n) || !a->port || !a->printer)
+		return cmd_refuse(&spec, "%s is required",
+				  !a->file && !a->commands.n ? "a FILE (or --command LINE)"
+				  : !a->port		     ? "--port"
+							     : "--printer");
 	return 0;
 }
 
@@ -238,10 +233,8 @@ static int send_run(int argc, char **argv, struct clio *io)
 	if ((status = clio_input(io, &a.file, ".gcode"))) /* "-": G-code on stdin */
 		return status;
 	rc = profile_find(a.printer, &prof, &err);
-	if (rc) {
-		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
-		return profile_exit_status(rc);
-	}
+	if (rc)
+		return cmd_fail(SEND_CMD, profile_exit_status(rc), "%s", err.msg);
 	if ((status = printer_profile_cli(SEND_CMD, prof, &a.port, a.baud, a.json, &port_auto, &o,
 					  &ops)))
 		goto out_profile;

@@ -70,17 +70,13 @@ int cmd_serve(int argc, char **argv)
 	rc = cmd_parse(&spec, argc, argv);
 	if (rc)
 		return rc < 0 ? ST_EXIT_OK : rc;
-	if (!config) {
-		fprintf(stderr, SERVE_CMD ": no config given; add --config NODE.ini\n");
-		cmd_usage(&spec, stderr);
-		return ST_EXIT_USAGE;
-	}
+	if (!config)
+		return cmd_refuse(&spec, "no config given; add --config NODE.ini");
 	cfg = &cfg_store;
 	rc = node_config_load(config, cfg, &err);
-	if (rc) {
-		fprintf(stderr, SERVE_CMD ": %s\n", err.msg);
-		return rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
-	}
+	if (rc)
+		return cmd_fail(SERVE_CMD, rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR,
+				"%s", err.msg);
 	{
 		unsigned mode;
 
@@ -93,10 +89,8 @@ int cmd_serve(int argc, char **argv)
 				config);
 	}
 	if (listen && node_parse_listen(listen, cfg->listen_addr, sizeof(cfg->listen_addr),
-					&cfg->listen_port, &err)) {
-		fprintf(stderr, SERVE_CMD ": --listen: %s\n", err.msg);
-		return ST_EXIT_USAGE;
-	}
+					&cfg->listen_port, &err))
+		return cmd_fail(SERVE_CMD, ST_EXIT_USAGE, "--listen: %s", err.msg);
 
 	/* Signals are taken by sigwait here only; every thread inherits the mask. */
 	sigemptyset(&set);

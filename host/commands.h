@@ -59,6 +59,14 @@ bool cmd_same_file(const char *a, const char *b);
  */
 int cmd_output_check(const char *in, const char *out, char *msg, size_t cap);
 
+/*
+ * cmd_fail - print "CMD: MESSAGE" on stderr (fmt without its newline) and
+ * return status: an error path is `return cmd_fail(CMD, STATUS, ...)`
+ * (host/cmd_output.c).
+ */
+int cmd_fail(const char *cmd, int status, const char *fmt, ...)
+	__attribute__((format(printf, 3, 4)));
+
 /* cmd_is_opt - true when a is NAME or NAME=...; the value may still be missing. */
 bool cmd_is_opt(const char *a, const char *name);
 
@@ -200,6 +208,11 @@ int cmd_parse(const struct cmd_spec *spec, int argc, char **argv);
 /* cmd_usage - spec's help text: head, the option lines, mid, the settings
  * options when spec->cfg, tail. */
 void cmd_usage(const struct cmd_spec *spec, FILE *f);
+
+/* cmd_refuse - a command line refused: "CMD: MESSAGE" and the usage on
+ * stderr; ST_EXIT_USAGE (host/cmd_opts.c). */
+int cmd_refuse(const struct cmd_spec *spec, const char *fmt, ...)
+	__attribute__((format(printf, 2, 3)));
 
 #define CMD_HELP_MAX 600 /* bytes of one option's help text */
 

@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "commands.h"
 #include "gcode.h"
 #include "print_job.h"
 #include "printer_profile.h"
@@ -28,10 +29,9 @@ static int print_open(const char *path, FILE **f, struct gcode_reader **r)
 	struct st_error err = {0};
 
 	*f = fopen(path, "rb");
-	if (!*f) {
-		fprintf(stderr, PRINT_CMD ": cannot open %s: %s\n", path, strerror(errno));
-		return ST_EXIT_DATAERR;
-	}
+	if (!*f)
+		return cmd_fail(PRINT_CMD, ST_EXIT_DATAERR, "cannot open %s: %s", path,
+				strerror(errno));
 	if (gcode_reader_new(*f, path, r, &err)) {
 		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
 		fclose(*f);
@@ -244,10 +244,8 @@ int print_byte_after(const char *path, uint64_t line, int64_t *byte)
 		*byte = (int64_t)gcode_reader_bytes(r);
 	gcode_reader_free(r);
 	fclose(f);
-	if (rc < 0) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		return ST_EXIT_DATAERR;
-	}
+	if (rc < 0)
+		return cmd_fail(PRINT_CMD, ST_EXIT_DATAERR, "%s", err.msg);
 	return 0;
 }
 
@@ -275,16 +273,12 @@ static int print_on(struct print_job *job, const struct printer_ops *ops,
 		pj.resume = true;
 		pj.saved = job->saved;
 	}
-	if ((rc = printer_check(ops, o, &pj, send_warning, (void *)PRINT_CMD, &info, &err))) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		return send_exit_for_check(rc);
-	}
+	if ((rc = printer_check(ops, o, &pj, send_warning, (void *)PRINT_CMD, &info, &err)))
+		return cmd_fail(PRINT_CMD, send_exit_for_check(rc), "%s", err.msg);
 	pj.total = info.commands;
 	run.stop = send_catch_signals();
-	if ((rc = printer_open(ops, o, &pr, &err))) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		return send_exit_for_open(rc);
-	}
+	if ((rc = printer_open(ops, o, &pr, &err)))
+		return cmd_fail(PRINT_CMD, send_exit_for_open(rc), "%s", err.msg);
 	printer_describe(pr, job->printer_desc, sizeof(job->printer_desc));
 	send_progress_start(&run.p);
 	run.p.cmd = PRINT_CMD;

@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "commands.h"
 #include "portpick.h"
 #include "profile_x3g.h"
 
@@ -48,9 +49,7 @@ int printer_profile_cli(const char *cmd, const struct profile *prof, const char 
 			fprintf(stderr, "%s: --port auto: %s\n", cmd, why);
 		*port = *port_auto;
 	}
-	if (printer_profile_options(prof, *port, baud, o, ops, &err)) {
-		fprintf(stderr, "%s: %s: %s\n", cmd, prof->path, err.msg);
-		return ST_EXIT_DATAERR;
-	}
+	if (printer_profile_options(prof, *port, baud, o, ops, &err))
+		return cmd_fail(cmd, ST_EXIT_DATAERR, "%s: %s", prof->path, err.msg);
 	return 0;
 }
