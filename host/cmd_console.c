@@ -361,8 +361,7 @@ int cmd_console(int argc, char **argv)
 		return cmd_fail(CONSOLE_CMD, profile_exit_status(rc), "%s", err.msg);
 	port = a.port ? a.port : "sim";
 	if (!(c = calloc(1, sizeof(*c)))) {
-		fprintf(stderr, CONSOLE_CMD ": out of memory\n");
-		status = ST_EXIT_SOFTWARE;
+		status = cmd_fail(CONSOLE_CMD, ST_EXIT_SOFTWARE, "out of memory");
 		goto out_profile;
 	}
 	if ((status = printer_profile_cli(CONSOLE_CMD, prof, &port, a.baud, false, &port_auto, &o,

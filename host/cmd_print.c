@@ -506,20 +506,20 @@ static int print_run(int argc, char **argv, bool *answered, struct clio *io)
 		job->gcode = a.in;
 		for (size_t i = 0; i < a.nmodels && a.nmodels > 1; i++)
 			if (print_input_of(a.models[i]) != PRINT_MODEL) {
-				fprintf(stderr, PRINT_CMD ": %s is already G-code or X3G: only "
-						"models are printed together; print it alone\n",
-					a.models[i]);
-				status = ST_EXIT_USAGE;
+				status = cmd_fail(PRINT_CMD, ST_EXIT_USAGE,
+						  "%s is already G-code or X3G: only models are "
+						  "printed together; print it alone",
+						  a.models[i]);
 				goto out;
 			}
 		if (job->input == PRINT_MODEL)
 			cfgopt_note_project_settings(&a.cfg, PRINT_CMD, a.models, a.nmodels);
 	}
 	if (job->input == PRINT_X3G && job->prof->protocol != PROFILE_PROTOCOL_SAILFISH) {
-		fprintf(stderr, PRINT_CMD ": %s is X3G, which only Sailfish printers take; printer "
-				"'%s' speaks %s: print the model or its G-code\n", a.in,
-			job->prof->id, profile_protocol_name(job->prof->protocol));
-		status = ST_EXIT_USAGE;
+		status = cmd_fail(PRINT_CMD, ST_EXIT_USAGE,
+				  "%s is X3G, which only Sailfish printers take; printer '%s' "
+				  "speaks %s: print the model or its G-code",
+				  a.in, job->prof->id, profile_protocol_name(job->prof->protocol));
 		goto out;
 	}
 	if (job->input == PRINT_GCODE &&
@@ -544,15 +544,13 @@ static int print_run(int argc, char **argv, bool *answered, struct clio *io)
 				n == 1 ? "" : "s", (double)freed / 1e6);
 	}
 	if (!a.resume && job->journal_on && (rc = journal_init(&job->j, &err))) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		status = ST_EXIT_FAILURE;
+		status = cmd_fail(PRINT_CMD, ST_EXIT_FAILURE, "%s", err.msg);
 		goto out;
 	}
 	if (job->input == PRINT_MODEL) {
 		char dir[JOURNAL_PATH_MAX - 64];
 		if (!job->journal_on && (rc = journal_dir(dir, sizeof(dir), &err))) {
-			fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-			status = ST_EXIT_FAILURE;
+			status = cmd_fail(PRINT_CMD, ST_EXIT_FAILURE, "%s", err.msg);
 			goto out;
 		}
 		/* the sliced G-code is kept beside the journal so the job can resume */
@@ -573,25 +571,23 @@ static int print_run(int argc, char **argv, bool *answered, struct clio *io)
 		job->start_layer = job->j.layer >= 0 && (size_t)job->j.layer < job->layers.n
 					   ? job->j.layer : 0;
 		if (!job->layers.n) {
-			fprintf(stderr, PRINT_CMD ": %s has no layer comments; cannot tell where to "
-					"resume\n", job->gcode);
-			status = ST_EXIT_DATAERR;
+			status = cmd_fail(PRINT_CMD, ST_EXIT_DATAERR,
+					  "%s has no layer comments; cannot tell where to resume",
+					  job->gcode);
 			goto out;
 		}
 		if ((status = print_byte_after(job->gcode, job->j.last_line, &job->saved)))
 			goto out;
 		if (!print_confirm(job)) {
-			fprintf(stderr, PRINT_CMD ": not resumed\n");
-			status = ST_EXIT_FAILURE;
+			status = cmd_fail(PRINT_CMD, ST_EXIT_FAILURE, "not resumed");
 			goto out;
 		}
 		snprintf(job->j.state, sizeof(job->j.state), "printing");
 	} else if (job->journal_on) {
 		char path[PATH_MAX];
 		if (!realpath(job->gcode, path) || journal_sha256(path, job->j.sha256, &err)) {
-			fprintf(stderr, PRINT_CMD ": %s: %s\n", job->gcode,
-				err.msg[0] ? err.msg : strerror(errno));
-			status = ST_EXIT_DATAERR;
+			status = cmd_fail(PRINT_CMD, ST_EXIT_DATAERR, "%s: %s", job->gcode,
+					  err.msg[0] ? err.msg : strerror(errno));
 			goto out;
 		}
 		snprintf(job->j.gcode, sizeof(job->j.gcode), "%s", path);

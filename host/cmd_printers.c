@@ -178,8 +178,7 @@ static int list_all(bool json)
 	if (n) {
 		ps = calloc(n, sizeof(*ps));
 		if (!ps) {
-			fprintf(stderr, "stratum printers: out of memory\n");
-			status = ST_EXIT_SOFTWARE;
+			status = cmd_fail("stratum printers", ST_EXIT_SOFTWARE, "out of memory");
 			goto out_free_list;
 		}
 	}

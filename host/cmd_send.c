@@ -245,24 +245,22 @@ static int send_run(int argc, char **argv, struct clio *io)
 	job.path = a.file;
 	job.x3g = cmd_has_ext(a.file, ".x3g");
 	if (job.x3g && !ops->takes_x3g) {
-		fprintf(stderr, SEND_CMD ": %s is X3G, which only Sailfish printers take; printer "
-				     "'%s' speaks %s: send it the G-code\n", a.file, a.printer,
-			profile_protocol_name(prof->protocol));
-		status = ST_EXIT_USAGE;
+		status = cmd_fail(SEND_CMD, ST_EXIT_USAGE,
+				  "%s is X3G, which only Sailfish printers take; printer '%s' "
+				  "speaks %s: send it the G-code",
+				  a.file, a.printer, profile_protocol_name(prof->protocol));
 		goto out_profile;
 	}
 	if (!job.x3g && (status = guard_cli(SEND_CMD, a.file, prof, a.force)))
 		goto out_profile;
 	if ((rc = printer_check(ops, &o, &job, send_warning, (void *)SEND_CMD, &info, &err))) {
-		fprintf(stderr, SEND_CMD ": %s%s\n", err.msg,
-			strstr(err.msg, "nothing was sent") ? "" : "; nothing was sent");
-		status = send_exit_for_check(rc);
+		status = cmd_fail(SEND_CMD, send_exit_for_check(rc), "%s%s", err.msg,
+				  strstr(err.msg, "nothing was sent") ? "" : "; nothing was sent");
 		goto out_profile;
 	}
 	run.stop = send_catch_signals();
 	if ((rc = printer_open(ops, &o, &pr, &err))) {
-		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
-		status = send_exit_for_open(rc);
+		status = cmd_fail(SEND_CMD, send_exit_for_open(rc), "%s", err.msg);
 		goto out_profile;
 	}
 	printer_describe(pr, firmware, sizeof(firmware));

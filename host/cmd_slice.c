@@ -538,8 +538,7 @@ static int slice_run(int argc, char **argv, struct clio *io)
 		goto out_profile;
 	rc = slicer_config_check(&cfg, &err);
 	if (rc) {
-		fprintf(stderr, SLICE_CMD ": %s\n", err.msg);
-		status = ST_EXIT_USAGE;
+		status = cmd_fail(SLICE_CMD, ST_EXIT_USAGE, "%s", err.msg);
 		goto out_profile;
 	}
 	cfg.planned = keep_plan;

@@ -196,15 +196,14 @@ static int run_translate(const struct x3g_args *a)
 	if (profile_find(a->printer, &p, &err))
 		return cmd_fail(X3G_CMD, profile_exit_status(err.code), "%s", err.msg);
 	if (p->protocol != PROFILE_PROTOCOL_SAILFISH) {
-		fprintf(stderr, X3G_CMD ": printer '%s' speaks %s, not sailfish; X3G is for "
-				"Sailfish printers (send its G-code with 'stratum send')\n",
-			p->id, profile_protocol_name(p->protocol));
-		status = ST_EXIT_USAGE;
+		status = cmd_fail(X3G_CMD, ST_EXIT_USAGE,
+				  "printer '%s' speaks %s, not sailfish; X3G is for Sailfish "
+				  "printers (send its G-code with 'stratum send')",
+				  p->id, profile_protocol_name(p->protocol));
 		goto out_profile;
 	}
 	if (profile_x3g_machine(p, &m, &opt.flavor, &err)) {
-		fprintf(stderr, X3G_CMD ": %s\n", err.msg);
-		status = ST_EXIT_DATAERR;
+		status = cmd_fail(X3G_CMD, ST_EXIT_DATAERR, "%s", err.msg);
 		goto out_profile;
 	}
 	if (a->flavor)
@@ -212,14 +211,15 @@ static int run_translate(const struct x3g_args *a)
 	x3g_build_name(a->out, name, sizeof(name));
 	opt.build_name = name;
 	if (x3g_new(&m, &opt, &r.t, &err)) {
-		fprintf(stderr, X3G_CMD ": %s: %s\n", p->path, err.msg);
-		status = err.code == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
+		status =
+		    cmd_fail(X3G_CMD, err.code == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR,
+			     "%s: %s", p->path, err.msg);
 		goto out_profile;
 	}
 	in = fopen(a->in, "rb");
 	if (!in) {
-		fprintf(stderr, X3G_CMD ": %s: cannot open: %s\n", a->in, strerror(errno));
-		status = ST_EXIT_DATAERR;
+		status = cmd_fail(X3G_CMD, ST_EXIT_DATAERR, "%s: cannot open: %s", a->in,
+				  strerror(errno));
 		goto out_translator;
 	}
 	if ((status = guard_cli(X3G_CMD, a->in, p, a->force))) {

@@ -62,17 +62,17 @@ int print_scan(const char *path, struct print_layers *L)
 		if (mark == GCODE_LAYER_START) {
 			layer = l >= 0 ? l : layer + 1;
 			if (layer < 0 || (size_t)layer > L->n + 100000) {
-				fprintf(stderr, PRINT_CMD ": %s: line %llu: layer number %ld is out "
-						"of order\n", path,
-					(unsigned long long)gcode_reader_line(r), layer);
-				status = ST_EXIT_DATAERR;
+				status =
+				    cmd_fail(PRINT_CMD, ST_EXIT_DATAERR,
+					     "%s: line %llu: layer number %ld is out of order",
+					     path, (unsigned long long)gcode_reader_line(r), layer);
 				goto out;
 			}
 			while (L->n <= (size_t)layer) {
 				void *p = st_grow(L->v, &L->cap, L->n + 1, sizeof(*L->v));
 				if (!p) {
-					fprintf(stderr, PRINT_CMD ": out of memory\n");
-					status = ST_EXIT_SOFTWARE;
+					status =
+					    cmd_fail(PRINT_CMD, ST_EXIT_SOFTWARE, "out of memory");
 					goto out;
 				}
 				L->v = p;

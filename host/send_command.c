@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "commands.h"
 #include "gcode.h"
 #include "printer.h"
 #include "send.h"
@@ -75,8 +76,7 @@ int send_commands_run(const struct send_commands *c, const struct printer_ops *o
 	int status = 0, rc;
 
 	if (!reply || (json && (!out || !replies))) {
-		fprintf(stderr, SC_CMD ": out of memory\n");
-		status = ST_EXIT_SOFTWARE;
+		status = cmd_fail(SC_CMD, ST_EXIT_SOFTWARE, "out of memory");
 		goto out_free;
 	}
 	if (!ops->text_replies) {
