@@ -172,6 +172,15 @@ int clio_finish(struct clio *c, int status)
 	return status;
 }
 
+int clio_run(const char *cmd, int (*run)(int argc, char **argv, struct clio *io), int argc,
+	     char **argv)
+{
+	struct clio io;
+
+	clio_init(&io, cmd);
+	return clio_finish(&io, run(argc, argv, &io));
+}
+
 /* -------- the stderr capture -------- */
 
 static struct {

@@ -139,8 +139,5 @@ static int analyze_run(int argc, char **argv, struct clio *io)
 
 int cmd_analyze(int argc, char **argv)
 {
-	struct clio io;
-
-	clio_init(&io, "stratum analyze");
-	return clio_finish(&io, analyze_run(argc, argv, &io));
+	return clio_run("stratum analyze", analyze_run, argc, argv);
 }

@@ -211,8 +211,5 @@ static int check_run(int argc, char **argv, struct clio *io)
 /* "stratum check -" reads the mesh from stdin (clio.h). */
 int cmd_check(int argc, char **argv)
 {
-	struct clio io;
-
-	clio_init(&io, "stratum check");
-	return clio_finish(&io, check_run(argc, argv, &io));
+	return clio_run("stratum check", check_run, argc, argv);
 }

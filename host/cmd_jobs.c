@@ -186,9 +186,8 @@ static int jobs_show_cmd(const struct jobs_args *a, const struct jobs_list *l)
 	if (a->json) {
 		json_t *o = json_load_file(j->file, 0, NULL);
 		if (o) {
-			json_object_set_new(o, "kind", json_string(jobs_kind_name(e->kind)));
-			json_object_set_new(o, "journal", json_string(j->file));
-			json_object_set_new(o, "bytes", json_integer((json_int_t)e->bytes));
+			cmd_json_set(o, "s:kind", jobs_kind_name(e->kind), "s:journal", j->file,
+				     "I:bytes", (json_int_t)e->bytes, NULL);
 		}
 		rc = cmd_json_out(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER) ? ST_EXIT_FAILURE : 0;
 		free(j);

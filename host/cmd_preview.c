@@ -208,8 +208,5 @@ out:
 /* "stratum preview -" draws the G-code on stdin (clio.h). */
 int cmd_preview(int argc, char **argv)
 {
-	struct clio io;
-
-	clio_init(&io, PREVIEW_CMD);
-	return clio_finish(&io, preview_run(argc, argv, &io));
+	return clio_run(PREVIEW_CMD, preview_run, argc, argv);
 }

@@ -185,12 +185,8 @@ static void print_preview_stop(const struct print_job *job)
 
 	if (job->a->json) {
 		json_t *o = json_object();
-		json_object_set_new(o, "ok", json_true());
-		json_object_set_new(o, "exit", json_integer(0));
-		json_object_set_new(o, "input", json_string(job->a->in));
-		json_object_set_new(o, "printer", json_string(job->prof->id));
-		json_object_set_new(o, "printed", json_false());
-		json_object_set_new(o, "previews", json_integer((json_int_t)n));
+		cmd_json_set(o, "b:ok", true, "i:exit", 0, "s:input", job->a->in, "s:printer",
+			     job->prof->id, "b:printed", false, "z:previews", n, NULL);
 		send_report_emit(o);
 		return;
 	}
@@ -641,10 +637,8 @@ int cmd_print(int argc, char **argv)
 	clio_capture_end(msg, sizeof(msg));
 	if (status && !answered) {
 		json_t *o = json_object();
-		json_object_set_new(o, "ok", json_false());
-		json_object_set_new(o, "exit", json_integer(status));
-		json_object_set_new(o, "error", json_string(msg[0] ? msg : "the print did not "
-								   "start; the reason is on stderr"));
+		cmd_json_set(o, "b:ok", false, "i:exit", status, "s:error",
+			     msg[0] ? msg : "the print did not start; the reason is on stderr", NULL);
 		send_report_emit(o);
 	}
 	return status;

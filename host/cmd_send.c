@@ -291,8 +291,5 @@ out_profile:
 /* "stratum send -" streams the G-code on stdin (clio.h). */
 int cmd_send(int argc, char **argv)
 {
-	struct clio io;
-
-	clio_init(&io, SEND_CMD);
-	return clio_finish(&io, send_run(argc, argv, &io));
+	return clio_run(SEND_CMD, send_run, argc, argv);
 }

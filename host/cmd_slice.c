@@ -568,8 +568,5 @@ out_profile:
 /* "stratum slice - -o -" reads stdin and writes stdout (clio.h). */
 int cmd_slice(int argc, char **argv)
 {
-	struct clio io;
-
-	clio_init(&io, SLICE_CMD);
-	return clio_finish(&io, slice_run(argc, argv, &io));
+	return clio_run(SLICE_CMD, slice_run, argc, argv);
 }

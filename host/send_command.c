@@ -113,15 +113,12 @@ out_report:
 	if (status)
 		fprintf(stderr, SC_CMD ": %s\n", err.msg);
 	if (json) {
-		json_object_set_new(out, "ok", json_boolean(status == 0));
-		json_object_set_new(out, "port", json_string(port));
-		json_object_set_new(out, "printer", json_string(printer));
-		json_object_set_new(out, "protocol", json_string(ops->name));
-		json_object_set_new(out, "firmware", json_string(firmware));
-		json_object_set_new(out, "replies", replies);
+		cmd_json_set(out, "b:ok", status == 0, "s:port", port, "s:printer", printer,
+			     "s:protocol", ops->name, "s:firmware", firmware, "o:replies", replies,
+			     NULL);
 		replies = NULL;
 		if (status)
-			json_object_set_new(out, "error", json_string(err.msg));
+			cmd_json_set(out, "s:error", err.msg, NULL);
 		send_report_emit(out);
 		out = NULL;
 	}
