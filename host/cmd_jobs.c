@@ -171,17 +171,16 @@ static int jobs_show_cmd(const struct jobs_args *a, const struct jobs_list *l)
 			e = &l->v[i];
 	if (!j)
 		return cmd_fail(JOBS_CMD, ST_EXIT_SOFTWARE, "out of memory");
-	if (!e || e->kind == JOBS_LEFTOVER || (e->kind == JOBS_RUNNING && !strcmp(e->state, "leftover"))) {
-		fprintf(stderr, JOBS_CMD ": no job %s in %s%s\n", a->pos[1], l->dir,
-			e ? " (files without a journal; 'stratum jobs prune' removes them)"
-			  : "; 'stratum jobs list' shows them");
+	if (!e || e->kind == JOBS_LEFTOVER ||
+	    (e->kind == JOBS_RUNNING && !strcmp(e->state, "leftover"))) {
 		free(j);
-		return ST_EXIT_USAGE;
+		return cmd_fail(JOBS_CMD, ST_EXIT_USAGE, "no job %s in %s%s", a->pos[1], l->dir,
+				e ? " (files without a journal; 'stratum jobs prune' removes them)"
+				  : "; 'stratum jobs list' shows them");
 	}
 	if (journal_load(e->id, j, &err)) {
-		fprintf(stderr, JOBS_CMD ": %s\n", err.msg);
 		free(j);
-		return ST_EXIT_FAILURE;
+		return cmd_fail(JOBS_CMD, ST_EXIT_FAILURE, "%s", err.msg);
 	}
 	if (a->json) {
 		json_t *o = json_load_file(j->file, 0, NULL);

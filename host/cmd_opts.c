@@ -144,9 +144,7 @@ int cmd_parse(const struct cmd_spec *spec, int argc, char **argv)
 		} else if (spec->cfg && (rc = cfgopt_parse(spec->cfg, spec->cmd, argc, argv, &i))) {
 			rc = rc < 0 ? ST_EXIT_USAGE : 0;
 		} else if (a[0] == '-' && a[1]) {
-			fprintf(stderr, "%s: unknown option '%s'\n", spec->cmd, a);
-			cmd_usage(spec, stderr);
-			return ST_EXIT_USAGE;
+			return cmd_refuse(spec, "unknown option '%s'", a);
 		} else if (npos < spec->npos) {
 			spec->pos[npos++] = a;
 			if (spec->ngot)
@@ -161,9 +159,7 @@ int cmd_parse(const struct cmd_spec *spec, int argc, char **argv)
 			fputc('\n', stderr);
 			return ST_EXIT_USAGE;
 		} else {
-			fprintf(stderr, "%s: unexpected argument '%s'\n", spec->cmd, a);
-			cmd_usage(spec, stderr);
-			return ST_EXIT_USAGE;
+			return cmd_refuse(spec, "unexpected argument '%s'", a);
 		}
 		if (rc)
 			return rc;

@@ -164,11 +164,10 @@ static int print_preview(struct print_job *job)
 		preview_opts_init(&o);
 		o.layer = l;
 		snprintf(name, sizeof(name), "%.*s-layer%d.png", n, base, l);
-		if (preview_load(job->gcode, &o, &pv, &err) ||
-		    pvdraw_write(pv, &d, name, &err)) {
-			fprintf(stderr, PRINT_CMD ": preview of layer %d: %s\n", l, err.msg);
+		if (preview_load(job->gcode, &o, &pv, &err) || pvdraw_write(pv, &d, name, &err)) {
 			preview_free(pv);
-			return ST_EXIT_FAILURE;
+			return cmd_fail(PRINT_CMD, ST_EXIT_FAILURE, "preview of layer %d: %s", l,
+					err.msg);
 		}
 		preview_free(pv);
 		if (!job->a->json)

@@ -324,9 +324,8 @@ static int run_decode(const struct x3g_args *a)
 	}
 	free(buf);
 	if (rc < 0) {
-		fprintf(stderr, X3G_CMD ": %s: %s\n", a->decode, err.msg);
 		json_decref(arr);
-		return ST_EXIT_DATAERR;
+		return cmd_fail(X3G_CMD, ST_EXIT_DATAERR, "%s: %s", a->decode, err.msg);
 	}
 	if (arr) {
 		json_t *o = json_object();

@@ -33,9 +33,8 @@ static int print_open(const char *path, FILE **f, struct gcode_reader **r)
 		return cmd_fail(PRINT_CMD, ST_EXIT_DATAERR, "cannot open %s: %s", path,
 				strerror(errno));
 	if (gcode_reader_new(*f, path, r, &err)) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
 		fclose(*f);
-		return ST_EXIT_SOFTWARE;
+		return cmd_fail(PRINT_CMD, ST_EXIT_SOFTWARE, "%s", err.msg);
 	}
 	return 0;
 }
