@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "pngout.h"
 #include "st_file.h"
 
 #define FONT_PX 12
@@ -84,40 +85,23 @@ static void scale_colour(double f, double rgb_out[3])
 		rgb_out[c] = stops[i][c] + (x - i) * (stops[i + 1][c] - stops[i][c]);
 }
 
-static cairo_status_t png_write(void *closure, const unsigned char *data, unsigned int len)
-{
-	return fwrite(data, 1, len, closure) == len ? CAIRO_STATUS_SUCCESS
-						    : CAIRO_STATUS_WRITE_ERROR;
-}
-
 /* Whatever was drawn on cr into path as PNG, atomically; cr and surf are freed. */
 static int finish_png(cairo_t *cr, cairo_surface_t *surf, const char *path, struct st_error *err)
 {
 	struct st_file_out out;
-	cairo_status_t st = cairo_status(cr);
-	int rc = 0;
+	int rc = st_file_begin(&out, path, err);
 
-	if (st == CAIRO_STATUS_SUCCESS && !(rc = st_file_begin(&out, path, err))) {
-		cairo_surface_flush(surf);
-		st = cairo_surface_write_to_png_stream(surf, png_write, out.f);
-		if (st != CAIRO_STATUS_SUCCESS)
-			st_file_abort(&out);
-		else
-			rc = st_file_commit(&out, err);
-	}
-	cairo_destroy(cr);
-	cairo_surface_destroy(surf);
-	if (rc)
+	if (rc) {
+		cairo_destroy(cr);
+		cairo_surface_destroy(surf);
 		return rc;
-	if (st == CAIRO_STATUS_WRITE_ERROR)
-		return st_error_set(err, ST_ERR_IO, "%s: cannot write the PNG: %s", path,
-				    strerror(errno));
-	if (st == CAIRO_STATUS_NO_MEMORY)
-		return st_error_set(err, ST_ERR_NOMEM, "%s: out of memory drawing the picture", path);
-	if (st != CAIRO_STATUS_SUCCESS)
-		return st_error_set(err, ST_ERR_INTERNAL, "%s: cairo: %s", path,
-				    cairo_status_to_string(st));
-	return 0;
+	}
+	rc = pngout_write(cr, surf, out.f, path, " drawing the picture", err);
+	if (rc) {
+		st_file_abort(&out);
+		return rc;
+	}
+	return st_file_commit(&out, err);
 }
 
 static cairo_t *start(int w, int h, const char *title, cairo_surface_t **surf)

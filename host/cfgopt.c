@@ -192,10 +192,8 @@ int cfgopt_parse(struct cfgopt *o, const char *cmd, int argc, char **argv, int *
 	struct st_error err = {0};
 	int rc = take(o, argc, argv, i, &err);
 
-	if (rc < 0) {
-		fprintf(stderr, "%s: %s\n", cmd, err.msg);
-		return -1;
-	}
+	if (rc < 0)
+		return cmd_fail(cmd, -1, "%s", err.msg);
 	return rc;
 }
 
@@ -274,10 +272,8 @@ int cfgopt_load(const struct cfgopt *o, const char *cmd, const char *printer,
 	int rc;
 
 	*out = NULL;
-	if (printer && (rc = profile_find(printer, &base, &err))) {
-		fprintf(stderr, "%s: %s\n", cmd, err.msg);
-		return profile_exit_status(rc);
-	}
+	if (printer && (rc = profile_find(printer, &base, &err)))
+		return cmd_fail(cmd, profile_exit_status(rc), "%s", err.msg);
 	if (!o->n && !o->presets.printer) {
 		*out = base;
 		return 0;

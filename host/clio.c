@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "clio.h"
+#include "commands.h"
 #include "st_error.h"
 
 #define CLIO_LINE_MAX 1024
@@ -101,16 +102,13 @@ int clio_input(struct clio *c, const char **path, const char *ext)
 
 	if (!clio_is_std(*path))
 		return 0;
-	if (c->in_tmp[0]) {
-		fprintf(stderr, "%s: '-' (stdin) is given twice; stdin can be read once\n",
-			c->cmd);
-		return ST_EXIT_USAGE;
-	}
-	if (isatty(STDIN_FILENO)) {
-		fprintf(stderr, "%s: '-' reads the input from stdin, which is a terminal; pipe "
-				"or redirect a file into it\n", c->cmd);
-		return ST_EXIT_USAGE;
-	}
+	if (c->in_tmp[0])
+		return cmd_fail(c->cmd, ST_EXIT_USAGE,
+				"'-' (stdin) is given twice; stdin can be read once");
+	if (isatty(STDIN_FILENO))
+		return cmd_fail(c->cmd, ST_EXIT_USAGE,
+				"'-' reads the input from stdin, which is a terminal; pipe or "
+				"redirect a file into it");
 	fd = temp_file("stdin", ext, c->in_tmp, sizeof(c->in_tmp));
 	if (fd < 0 || copy_fd(STDIN_FILENO, fd) || close(fd)) {
 		fprintf(stderr, "%s: cannot read stdin into a temporary file%s%s: %s\n", c->cmd,
@@ -128,17 +126,14 @@ int clio_output(struct clio *c, const char **path, bool binary, const char *ext)
 
 	if (!clio_is_std(*path))
 		return 0;
-	if (binary && isatty(STDOUT_FILENO)) {
-		fprintf(stderr, "%s: -o - would write binary data to the terminal; redirect "
-				"stdout to a file or a pipe\n", c->cmd);
-		return ST_EXIT_USAGE;
-	}
+	if (binary && isatty(STDOUT_FILENO))
+		return cmd_fail(c->cmd, ST_EXIT_USAGE,
+				"-o - would write binary data to the terminal; redirect stdout to "
+				"a file or a pipe");
 	fd = temp_file("stdout", ext, c->out_tmp, sizeof(c->out_tmp));
-	if (fd < 0) {
-		fprintf(stderr, "%s: cannot make a temporary file for -o -: %s\n", c->cmd,
-			strerror(errno));
-		return ST_EXIT_FAILURE;
-	}
+	if (fd < 0)
+		return cmd_fail(c->cmd, ST_EXIT_FAILURE,
+				"cannot make a temporary file for -o -: %s", strerror(errno));
 	close(fd);
 	/* stdout carries the data only: the reports go to stderr meanwhile */
 	fflush(stdout);
@@ -175,6 +170,15 @@ int clio_finish(struct clio *c, int status)
 	remove_temp(c->out_tmp);
 	remove_temp(c->in_tmp);
 	return status;
+}
+
+int clio_run(const char *cmd, int (*run)(int argc, char **argv, struct clio *io), int argc,
+	     char **argv)
+{
+	struct clio io;
+
+	clio_init(&io, cmd);
+	return clio_finish(&io, run(argc, argv, &io));
 }
 
 /* -------- the stderr capture -------- */

@@ -56,6 +56,13 @@ int clio_output(struct clio *c, const char **path, bool binary, const char *ext)
 int clio_finish(struct clio *c, int status);
 
 /*
+ * clio_run - a whole command that may read or write "-": run(argc, argv,
+ * io) between clio_init (cmd prefixes the messages) and clio_finish.
+ */
+int clio_run(const char *cmd, int (*run)(int argc, char **argv, struct clio *io), int argc,
+	     char **argv);
+
+/*
  * clio_capture_begin - from now on stderr also keeps, besides showing it,
  * the last line written that starts with "stratum " (the commands'
  * messages; usage text and progress bars do not).  clio_capture_end puts

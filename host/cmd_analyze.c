@@ -19,9 +19,6 @@
 #include "meshio.h"
 #include "st_error.h"
 
-#define TEXT_OF_(x) #x
-#define TEXT_OF(x) TEXT_OF_(x) /* a macro's value as a string */
-
 static const char analyze_head[] =
     "usage: stratum analyze MODEL --layer-height H [--spacing MM] [--json]\n"
     "                       [--png PLOT.png]\n"
@@ -88,7 +85,7 @@ static int analyze_run(int argc, char **argv, struct clio *io)
 	     &a.has_layer_height},
 	    {"--spacing", 0, CMD_DOUBLE, &a.spacing, CMD_RANGE | CMD_ABOVE_LO, 0, 100,
 	     "a distance above %g and up to %g mm", "MM",
-	     "cloud points MM apart (default: the layer height / " TEXT_OF(
+	     "cloud points MM apart (default: the layer height / " CMD_TEXT_OF(
 		 CUSP_MEASURE_POINTS_PER_LAYER) ")",
 	     NULL, NULL},
 	    CMD_OPT_FLAG("--json", &a.json, "one JSON object on stdout instead of the text report"),
@@ -104,25 +101,20 @@ static int analyze_run(int argc, char **argv, struct clio *io)
 	rc = cmd_parse(&spec, argc, argv);
 	if (rc)
 		return rc < 0 ? ST_EXIT_OK : rc;
-	if (!a.in || !a.has_layer_height) {
-		fprintf(stderr, "stratum analyze: %s\n",
-			!a.in ? "no model given" : "--layer-height H is needed");
-		cmd_usage(&spec, stderr);
-		return ST_EXIT_USAGE;
-	}
+	if (!a.in || !a.has_layer_height)
+		return cmd_refuse(&spec, "%s",
+				  !a.in ? "no model given" : "--layer-height H is needed");
 	if (!a.spacing)
 		a.spacing = a.layer_height / CUSP_MEASURE_POINTS_PER_LAYER;
-	if (a.png && (rc = cmd_output_check(a.in, a.png, msg, sizeof(msg)))) {
-		fprintf(stderr, "stratum analyze: %s\n", msg);
-		return rc;
-	}
+	if (a.png && (rc = cmd_output_check(a.in, a.png, msg, sizeof(msg))))
+		return cmd_fail("stratum analyze", rc, "%s", msg);
 	shown = a.in;
 	if ((rc = clio_input(io, &a.in, "")))
 		return rc;
-	if ((rc = meshio_read(a.in, MESHIO_AUTO, &m, NULL, &err))) {
-		fprintf(stderr, "stratum analyze: %s\n", err.msg);
-		return rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
-	}
+	if ((rc = meshio_read(a.in, MESHIO_AUTO, &m, NULL, &err)))
+		return cmd_fail("stratum analyze",
+				rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR, "%s",
+				err.msg);
 	if ((rc = cusp_measure(m, a.layer_height, a.spacing, &r, &err))) {
 		fprintf(stderr, "stratum analyze: %s: %s\n", shown, err.msg);
 		mesh_free(m);
@@ -147,8 +139,5 @@ static int analyze_run(int argc, char **argv, struct clio *io)
 
 int cmd_analyze(int argc, char **argv)
 {
-	struct clio io;
-
-	clio_init(&io, "stratum analyze");
-	return clio_finish(&io, analyze_run(argc, argv, &io));
+	return clio_run("stratum analyze", analyze_run, argc, argv);
 }

@@ -193,16 +193,14 @@ static int check_run(int argc, char **argv, struct clio *io)
 		return rc;
 
 	rc = meshio_read(path, MESHIO_AUTO, &m, &fmt, &err);
-	if (rc) {
-		fprintf(stderr, "stratum check: %s\n", err.msg);
-		return rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
-	}
+	if (rc)
+		return cmd_fail("stratum check",
+				rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR, "%s",
+				err.msg);
 	rc = mesh_analyze(m, threads, &rep, &err);
 	mesh_free(m);
-	if (rc) {
-		fprintf(stderr, "stratum check: %s: %s\n", path, err.msg);
-		return ST_EXIT_SOFTWARE;
-	}
+	if (rc)
+		return cmd_fail("stratum check", ST_EXIT_SOFTWARE, "%s: %s", path, err.msg);
 	rc = cmd_report_end("stratum check", "report",
 			    json ? print_json(shown, fmt, &rep) != 0 : (print_text(shown, fmt, &rep), 0));
 	if (rc)
@@ -213,8 +211,5 @@ static int check_run(int argc, char **argv, struct clio *io)
 /* "stratum check -" reads the mesh from stdin (clio.h). */
 int cmd_check(int argc, char **argv)
 {
-	struct clio io;
-
-	clio_init(&io, "stratum check");
-	return clio_finish(&io, check_run(argc, argv, &io));
+	return clio_run("stratum check", check_run, argc, argv);
 }

@@ -210,16 +210,12 @@ int cmd_compare(int argc, char **argv)
 	rc = cmd_parse(&spec, argc, argv);
 	if (rc)
 		return rc < 0 ? ST_EXIT_OK : rc;
-	if (!a.npos || (a.npos < 2 && !a.reference)) {
-		fprintf(stderr, "stratum compare: %s\n",
-			!a.npos ? "no model given" : "give a second model B or --reference FINE");
-		cmd_usage(&spec, stderr);
-		return ST_EXIT_USAGE;
-	}
-	if (a.png && (rc = cmd_output_check(a.pos[0], a.png, msg, sizeof(msg)))) {
-		fprintf(stderr, "stratum compare: %s\n", msg);
-		return rc;
-	}
+	if (!a.npos || (a.npos < 2 && !a.reference))
+		return cmd_refuse(&spec, "%s",
+				  !a.npos ? "no model given"
+					  : "give a second model B or --reference FINE");
+	if (a.png && (rc = cmd_output_check(a.pos[0], a.png, msg, sizeof(msg))))
+		return cmd_fail("stratum compare", rc, "%s", msg);
 	if (!(rc = read_model(a.pos[0], &ma)) && !(a.npos == 2 && (rc = read_model(a.pos[1], &mb))) &&
 	    !(a.reference && (rc = read_model(a.reference, &mref))))
 		rc = compare_models(&a, ma, mb, mref);

@@ -28,7 +28,6 @@
 #include "commands.h"
 #include "console.h"
 #include "journal.h"
-#include "portpick.h"
 #include "printer.h"
 #include "printer_profile.h"
 #include "profile.h"
@@ -68,20 +67,11 @@ static struct console *console_now;
 static int console_parse(int argc, char **argv, struct console_args *a)
 {
 	const struct cmd_opt opts[] = {
-	    CMD_OPT_STRING("--printer", 0, &a->printer, 0, NULL, "NAME",
-			   "the printer profile ('stratum printers'); required"),
-	    CMD_OPT_STRING("--port", 0, &a->port, 0, NULL, "P",
-			   "a serial device, 'auto' (the port whose USB id the profile\n"
-			   "lists), tcp://HOST:PORT, or 'sim'.  Default: sim, the\n"
-			   "built-in simulated printer of the profile's firmware"),
-	    {"--baud", 0, CMD_LONG, &a->baud, CMD_RANGE, 300, 10000000,
-	     "a whole number from %.0f to %.0f", "N",
-	     "link speed, %.0f to %.0f (default: the profile's baudrate)", NULL, NULL},
-	    {"--speedup", 0, CMD_DOUBLE, &a->speedup, CMD_RANGE, 1, 1e6,
-	     "a factor from %.0f to %.0f", "K",
-	     "the simulated printer runs K times faster (default 1000)", NULL, NULL},
-	    CMD_OPT_STRING("--sim-log", 0, &a->sim_log, 0, NULL, "FILE",
-			   "testing aid: the simulated printer's execution log"),
+	    CMD_OPT_PRINTER_NAME(&a->printer),
+	    CMD_OPT_PORT_OR_SIM(&a->port),
+	    CMD_OPT_BAUD(&a->baud),
+	    CMD_OPT_SPEEDUP(&a->speedup),
+	    CMD_OPT_SIM_LOG(&a->sim_log),
 	};
 	const struct cmd_spec spec = {
 	    .cmd = CONSOLE_CMD, CMD_TABLE(opts), .col = 18,
@@ -103,16 +93,13 @@ static int console_parse(int argc, char **argv, struct console_args *a)
 	int rc;
 
 	memset(a, 0, sizeof(*a));
-	a->speedup = 1000;
+	a->speedup = CMD_SIM_SPEEDUP;
 	rc = cmd_parse(&spec, argc, argv);
 	if (rc)
 		return rc;
-	if (!a->printer) {
-		fprintf(stderr, CONSOLE_CMD ": no printer given; add --printer NAME ('stratum "
-					    "printers' lists them)\n");
-		cmd_usage(&spec, stderr);
-		return ST_EXIT_USAGE;
-	}
+	if (!a->printer)
+		return cmd_refuse(
+		    &spec, "no printer given; add --printer NAME ('stratum printers' lists them)");
 	return 0;
 }
 
@@ -336,27 +323,20 @@ static void console_edit_end(struct console *c)
 	console_now = NULL;
 }
 
-/* Open the printer of prof on port; 0 or the exit status after a message. */
+/* Open the printer of o on port; 0 or the exit status after a message. */
 static int console_open(struct console *c, const struct console_args *a,
-			const struct profile *prof, const char *port)
+			struct printer_options o, const char *port)
 {
-	struct printer_options o;
 	struct st_error err = {0};
 	char firmware[96] = "";
 	int rc;
 
-	if ((rc = printer_profile_options(prof, port, a->baud, &o, &c->ops, &err))) {
-		fprintf(stderr, CONSOLE_CMD ": %s: %s\n", prof->path, err.msg);
-		return ST_EXIT_DATAERR;
-	}
 	o.sim_speedup = a->speedup;
 	o.sim_log = a->sim_log;
 	o.trace = console_trace;
 	o.trace_ctx = c;
-	if ((rc = printer_open(c->ops, &o, &c->pr, &err))) {
-		fprintf(stderr, CONSOLE_CMD ": %s\n", err.msg);
-		return send_exit_for_open(rc);
-	}
+	if ((rc = printer_open(c->ops, &o, &c->pr, &err)))
+		return cmd_fail(CONSOLE_CMD, send_exit_for_open(rc), "%s", err.msg);
 	printer_describe(c->pr, firmware, sizeof(firmware));
 	fprintf(stderr, CONSOLE_CMD ": %s on %s%s; 'help' lists the built-ins, 'quit' leaves\n",
 		firmware, port, c->ops->text_replies ? "" : " (no text replies: temperatures shown)");
@@ -369,6 +349,7 @@ int cmd_console(int argc, char **argv)
 	struct console_args a;
 	struct console *c = NULL;
 	struct profile *prof = NULL;
+	struct printer_options o;
 	struct st_error err = {0};
 	char *port_auto = NULL, prompt[140];
 	const char *port;
@@ -376,31 +357,20 @@ int cmd_console(int argc, char **argv)
 
 	if ((status = console_parse(argc, argv, &a)))
 		return status < 0 ? ST_EXIT_OK : status;
-	if ((rc = profile_find(a.printer, &prof, &err))) {
-		fprintf(stderr, CONSOLE_CMD ": %s\n", err.msg);
-		return profile_exit_status(rc);
-	}
+	if ((rc = profile_find(a.printer, &prof, &err)))
+		return cmd_fail(CONSOLE_CMD, profile_exit_status(rc), "%s", err.msg);
 	port = a.port ? a.port : "sim";
-	if (!strcmp(port, "auto")) { /* the rules of host/portpick.h, as print's */
-		char why[512] = "";
-
-		if (portpick_auto(prof, &port_auto, why, sizeof(why), &err)) {
-			fprintf(stderr, CONSOLE_CMD ": %s\n", err.msg);
-			status = ST_EXIT_UNAVAILABLE;
-			goto out_profile;
-		}
-		fprintf(stderr, CONSOLE_CMD ": --port auto: %s\n", why);
-		port = port_auto;
-	}
 	if (!(c = calloc(1, sizeof(*c)))) {
-		fprintf(stderr, CONSOLE_CMD ": out of memory\n");
-		status = ST_EXIT_SOFTWARE;
+		status = cmd_fail(CONSOLE_CMD, ST_EXIT_SOFTWARE, "out of memory");
 		goto out_profile;
 	}
+	if ((status = printer_profile_cli(CONSOLE_CMD, prof, &port, a.baud, false, &port_auto, &o,
+					  &c->ops)))
+		goto out_console;
 	c->heat = (struct console_heat){prof->temperature[0], prof->bed_temperature};
 	c->tty = isatty(STDIN_FILENO) && isatty(STDOUT_FILENO);
 	c->stop = send_catch_signals();
-	if ((status = console_open(c, &a, prof, port)))
+	if ((status = console_open(c, &a, o, port)))
 		goto out_console;
 	snprintf(prompt, sizeof(prompt), "%s> ", a.printer);
 	if (c->tty)

@@ -504,10 +504,8 @@ int cmd_help(const struct cmd_entry *cmds, size_t n, int argc, char **argv)
 	if (!strcmp(a, "--completion")) {
 		bool bash = b && !strcmp(b, "bash"), zsh = b && !strcmp(b, "zsh");
 
-		if (!bash && !zsh) {
-			fprintf(stderr, HELP_CMD ": --completion takes bash or zsh\n");
-			return ST_EXIT_USAGE;
-		}
+		if (!bash && !zsh)
+			return cmd_fail(HELP_CMD, ST_EXIT_USAGE, "--completion takes bash or zsh");
 		(bash ? bash_frame : zsh_frame)(cmds, n, true, stdout);
 		for (size_t i = 0; i < n && !rc; i++) {
 			fflush(stdout);
@@ -520,10 +518,9 @@ int cmd_help(const struct cmd_entry *cmds, size_t n, int argc, char **argv)
 	for (size_t i = 0; name && i < n; i++)
 		if (!strcmp(name, cmds[i].name))
 			cmd = &cmds[i];
-	if (name && !cmd) {
-		fprintf(stderr, HELP_CMD ": no command '%s'; 'stratum help' lists them\n", name);
-		return ST_EXIT_USAGE;
-	}
+	if (name && !cmd)
+		return cmd_fail(HELP_CMD, ST_EXIT_USAGE,
+				"no command '%s'; 'stratum help' lists them", name);
 	if (!strcmp(a, "--man")) {
 		if (!cmd) {
 			man_overview(cmds, n, stdout);
@@ -533,9 +530,7 @@ int cmd_help(const struct cmd_entry *cmds, size_t n, int argc, char **argv)
 	}
 	if (!strcmp(a, "--options") && cmd)
 		return describe(cmd, "options");
-	if (a[0] == '-' || argc > 2) {
-		fprintf(stderr, HELP_CMD ": usage: stratum help [COMMAND]\n");
-		return ST_EXIT_USAGE;
-	}
+	if (a[0] == '-' || argc > 2)
+		return cmd_fail(HELP_CMD, ST_EXIT_USAGE, "usage: stratum help [COMMAND]");
 	return describe(cmd, "");
 }

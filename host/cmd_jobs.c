@@ -76,22 +76,17 @@ static int jobs_parse(int argc, char **argv, struct jobs_args *a)
 	if ((rc = cmd_parse(&spec, argc, argv)))
 		return rc;
 	act = a->pos[0];
-	if (!act || (strcmp(act, "list") && strcmp(act, "show") && strcmp(act, "prune"))) {
-		fprintf(stderr, JOBS_CMD ": %s%s%s\n", act ? "'" : "", act ? act : "no action given",
-			act ? "' is not an action: list, show ID or prune" : "");
-		cmd_usage(&spec, stderr);
-		return ST_EXIT_USAGE;
-	}
-	if (!strcmp(act, "show") != (a->npos == 2)) {
-		fprintf(stderr, JOBS_CMD ": %s\n", a->npos == 2 ? "only 'show' takes a job ID"
-								: "show needs a job ID ('stratum jobs list')");
-		return ST_EXIT_USAGE;
-	}
-	if (strcmp(act, "prune") && (a->older_given || a->max_given || a->resumable || a->dry_run)) {
-		fprintf(stderr, JOBS_CMD ": --older-than, --max-size, --resumable and --dry-run go "
-				"with 'prune'\n");
-		return ST_EXIT_USAGE;
-	}
+	if (!act || (strcmp(act, "list") && strcmp(act, "show") && strcmp(act, "prune")))
+		return cmd_refuse(&spec, "%s%s%s", act ? "'" : "", act ? act : "no action given",
+				  act ? "' is not an action: list, show ID or prune" : "");
+	if (!strcmp(act, "show") != (a->npos == 2))
+		return cmd_fail(JOBS_CMD, ST_EXIT_USAGE, "%s",
+				a->npos == 2 ? "only 'show' takes a job ID"
+					     : "show needs a job ID ('stratum jobs list')");
+	if (strcmp(act, "prune") && (a->older_given || a->max_given || a->resumable || a->dry_run))
+		return cmd_fail(
+		    JOBS_CMD, ST_EXIT_USAGE,
+		    "--older-than, --max-size, --resumable and --dry-run go with 'prune'");
 	return 0;
 }
 
@@ -174,28 +169,24 @@ static int jobs_show_cmd(const struct jobs_args *a, const struct jobs_list *l)
 	for (size_t i = 0; i < l->n; i++)
 		if (!strcmp(l->v[i].id, a->pos[1]))
 			e = &l->v[i];
-	if (!j) {
-		fprintf(stderr, JOBS_CMD ": out of memory\n");
-		return ST_EXIT_SOFTWARE;
-	}
-	if (!e || e->kind == JOBS_LEFTOVER || (e->kind == JOBS_RUNNING && !strcmp(e->state, "leftover"))) {
-		fprintf(stderr, JOBS_CMD ": no job %s in %s%s\n", a->pos[1], l->dir,
-			e ? " (files without a journal; 'stratum jobs prune' removes them)"
-			  : "; 'stratum jobs list' shows them");
+	if (!j)
+		return cmd_fail(JOBS_CMD, ST_EXIT_SOFTWARE, "out of memory");
+	if (!e || e->kind == JOBS_LEFTOVER ||
+	    (e->kind == JOBS_RUNNING && !strcmp(e->state, "leftover"))) {
 		free(j);
-		return ST_EXIT_USAGE;
+		return cmd_fail(JOBS_CMD, ST_EXIT_USAGE, "no job %s in %s%s", a->pos[1], l->dir,
+				e ? " (files without a journal; 'stratum jobs prune' removes them)"
+				  : "; 'stratum jobs list' shows them");
 	}
 	if (journal_load(e->id, j, &err)) {
-		fprintf(stderr, JOBS_CMD ": %s\n", err.msg);
 		free(j);
-		return ST_EXIT_FAILURE;
+		return cmd_fail(JOBS_CMD, ST_EXIT_FAILURE, "%s", err.msg);
 	}
 	if (a->json) {
 		json_t *o = json_load_file(j->file, 0, NULL);
 		if (o) {
-			json_object_set_new(o, "kind", json_string(jobs_kind_name(e->kind)));
-			json_object_set_new(o, "journal", json_string(j->file));
-			json_object_set_new(o, "bytes", json_integer((json_int_t)e->bytes));
+			cmd_json_set(o, "s:kind", jobs_kind_name(e->kind), "s:journal", j->file,
+				     "I:bytes", (json_int_t)e->bytes, NULL);
 		}
 		rc = cmd_json_out(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER) ? ST_EXIT_FAILURE : 0;
 		free(j);
@@ -279,10 +270,8 @@ int cmd_jobs(int argc, char **argv)
 
 	if (status)
 		return status < 0 ? ST_EXIT_OK : status;
-	if (jobs_scan(&l, &err)) {
-		fprintf(stderr, JOBS_CMD ": %s\n", err.msg);
-		return ST_EXIT_FAILURE;
-	}
+	if (jobs_scan(&l, &err))
+		return cmd_fail(JOBS_CMD, ST_EXIT_FAILURE, "%s", err.msg);
 	if (!strcmp(a.pos[0], "list"))
 		status = jobs_list_cmd(&a, &l);
 	else if (!strcmp(a.pos[0], "show"))

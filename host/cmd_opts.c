@@ -3,6 +3,7 @@
  * each command's option table (commands.h), and the helpers they share.
  */
 #include <math.h>
+#include <stdarg.h>
 #include <signal.h>
 #include <stdio.h>
 #include <string.h>
@@ -100,11 +101,9 @@ static int take_opt(const struct cmd_spec *spec, const struct cmd_opt *o, int ar
 	} else if (o->kind != CMD_FLAG) {
 		v = a[1] == '-' ? cmd_opt_value(argc, argv, i, o->name)
 				: (*i + 1 < argc ? argv[++*i] : NULL);
-		if (!v || (!*v && (o->flags & CMD_NONEMPTY))) {
-			fprintf(stderr, "%s: %s needs %s\n", spec->cmd, name,
-				o->kind == CMD_STRING ? wants : "a value");
-			return ST_EXIT_USAGE;
-		}
+		if (!v || (!*v && (o->flags & CMD_NONEMPTY)))
+			return cmd_fail(spec->cmd, ST_EXIT_USAGE, "%s needs %s", name,
+					o->kind == CMD_STRING ? wants : "a value");
 	}
 	if (o->kind == CMD_FLAG) {
 		*(bool *)o->dest = true;
@@ -145,9 +144,7 @@ int cmd_parse(const struct cmd_spec *spec, int argc, char **argv)
 		} else if (spec->cfg && (rc = cfgopt_parse(spec->cfg, spec->cmd, argc, argv, &i))) {
 			rc = rc < 0 ? ST_EXIT_USAGE : 0;
 		} else if (a[0] == '-' && a[1]) {
-			fprintf(stderr, "%s: unknown option '%s'\n", spec->cmd, a);
-			cmd_usage(spec, stderr);
-			return ST_EXIT_USAGE;
+			return cmd_refuse(spec, "unknown option '%s'", a);
 		} else if (npos < spec->npos) {
 			spec->pos[npos++] = a;
 			if (spec->ngot)
@@ -162,9 +159,7 @@ int cmd_parse(const struct cmd_spec *spec, int argc, char **argv)
 			fputc('\n', stderr);
 			return ST_EXIT_USAGE;
 		} else {
-			fprintf(stderr, "%s: unexpected argument '%s'\n", spec->cmd, a);
-			cmd_usage(spec, stderr);
-			return ST_EXIT_USAGE;
+			return cmd_refuse(spec, "unexpected argument '%s'", a);
 		}
 		if (rc)
 			return rc;
@@ -226,4 +221,19 @@ void cmd_usage(const struct cmd_spec *spec, FILE *f)
 		cfgopt_usage(f);
 	if (spec->tail)
 		fputs(spec->tail, f);
+}
+
+int cmd_refuse(const struct cmd_spec *spec, const char *fmt, ...)
+{
+	va_list ap;
+
+	flockfile(stderr); /* one message, whatever other threads write */
+	fprintf(stderr, "%s: ", spec->cmd);
+	va_start(ap, fmt);
+	vfprintf(stderr, fmt, ap);
+	va_end(ap);
+	fputc('\n', stderr);
+	cmd_usage(spec, stderr);
+	funlockfile(stderr);
+	return ST_EXIT_USAGE;
 }

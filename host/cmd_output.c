@@ -126,13 +126,24 @@ void cmd_json_set(json_t *o, ...)
 
 int cmd_report_end(const char *cmd, const char *what, bool json_failed)
 {
-	if (json_failed) {
-		fprintf(stderr, "%s: cannot write the JSON %s\n", cmd, what);
-		return ST_EXIT_SOFTWARE;
-	}
-	if (fflush(stdout) == EOF) {
-		fprintf(stderr, "%s: cannot write the %s: %s\n", cmd, what, strerror(errno));
-		return ST_EXIT_SOFTWARE;
-	}
+	if (json_failed)
+		return cmd_fail(cmd, ST_EXIT_SOFTWARE, "cannot write the JSON %s", what);
+	if (fflush(stdout) == EOF)
+		return cmd_fail(cmd, ST_EXIT_SOFTWARE, "cannot write the %s: %s", what,
+				strerror(errno));
 	return 0;
+}
+
+int cmd_fail(const char *cmd, int status, const char *fmt, ...)
+{
+	va_list ap;
+
+	flockfile(stderr); /* one message, whatever other threads write */
+	fprintf(stderr, "%s: ", cmd);
+	va_start(ap, fmt);
+	vfprintf(stderr, fmt, ap);
+	va_end(ap);
+	fputc('\n', stderr);
+	funlockfile(stderr);
+	return status;
 }

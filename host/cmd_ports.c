@@ -143,14 +143,11 @@ int cmd_ports(int argc, char **argv)
 	rc = cmd_parse(&spec, argc, argv);
 	if (rc)
 		return rc < 0 ? ST_EXIT_OK : rc;
-	if (printer && profile_find(printer, &want, &err)) {
-		fprintf(stderr, "stratum ports: %s\n", err.msg);
-		return profile_exit_status(err.code);
-	}
+	if (printer && profile_find(printer, &want, &err))
+		return cmd_fail("stratum ports", profile_exit_status(err.code), "%s", err.msg);
 	if (xport_list(&ports, &n, &err)) {
-		fprintf(stderr, "stratum ports: %s\n", err.msg);
 		profile_free(want);
-		return ST_EXIT_UNAVAILABLE;
+		return cmd_fail("stratum ports", ST_EXIT_UNAVAILABLE, "%s", err.msg);
 	}
 	load_profiles(&set);
 	/* Only the explanation is wanted here; "nothing fits" is not an error. */

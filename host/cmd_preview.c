@@ -97,15 +97,11 @@ static int parse_args(int argc, char **argv, struct preview_args *a)
 			      : !a->out	  ? "no picture given; add -o OUT.svg or -o OUT.png"
 			      : !a->has_layer == !a->has_z ? "give either --layer N or --z Z"
 							 : NULL;
-	if (missing) {
-		fprintf(stderr, PREVIEW_CMD ": %s\n", missing);
-		cmd_usage(&spec, stderr);
-		return ST_EXIT_USAGE;
-	}
-	if (!pvdraw_format_of(a->out, &fmt)) {
-		fprintf(stderr, PREVIEW_CMD ": %s: the picture must end in .svg or .png\n", a->out);
-		return ST_EXIT_USAGE;
-	}
+	if (missing)
+		return cmd_refuse(&spec, "%s", missing);
+	if (!pvdraw_format_of(a->out, &fmt))
+		return cmd_fail(PREVIEW_CMD, ST_EXIT_USAGE,
+				"%s: the picture must end in .svg or .png", a->out);
 	if (a->has_z)
 		a->o.layer = 0;
 	return 0;
@@ -212,8 +208,5 @@ out:
 /* "stratum preview -" draws the G-code on stdin (clio.h). */
 int cmd_preview(int argc, char **argv)
 {
-	struct clio io;
-
-	clio_init(&io, PREVIEW_CMD);
-	return clio_finish(&io, preview_run(argc, argv, &io));
+	return clio_run(PREVIEW_CMD, preview_run, argc, argv);
 }

@@ -39,22 +39,15 @@
 #include "slicejob.h"
 #include "st_error.h"
 
-#define PRINT_SPEEDUP 1000.0	 /* built-in simulator: default time divisor */
 #define PRINT_PREVIEW_LAYERS 3	 /* --preview: the first layers drawn */
 
 /* Parse argv; 0 to go on, -1 after --help, else the exit status. */
 static int print_parse(int argc, char **argv, struct print_args *a)
 {
 	const struct cmd_opt opts[] = {
-	    CMD_OPT_STRING("--printer", 0, &a->printer, 0, NULL, "NAME",
-			   "the printer profile ('stratum printers'); required"),
-	    CMD_OPT_STRING("--port", 0, &a->port, 0, NULL, "P",
-			   "a serial device, 'auto' (the port whose USB id the profile\n"
-			   "lists), tcp://HOST:PORT, or 'sim'.  Default: sim, the\n"
-			   "built-in simulated printer of the profile's firmware"),
-	    {"--speedup", 0, CMD_DOUBLE, &a->speedup, CMD_RANGE, 1, 1e6,
-	     "a factor from %.0f to %.0f", "K",
-	     "the simulated printer runs K times faster (default 1000)", NULL, NULL},
+	    CMD_OPT_PRINTER_NAME(&a->printer),
+	    CMD_OPT_PORT_OR_SIM(&a->port),
+	    CMD_OPT_SPEEDUP(&a->speedup),
 	    {"--dry-run", 0, CMD_FLAG, &a->dry_run, 0, 0, 0, NULL, "-o OUT",
 	     "write the G-code (X3G for Sailfish printers unless OUT\n"
 	     "ends in .gcode) instead of printing", NULL, NULL},
@@ -74,8 +67,7 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 	     "answer yes to --resume's question; with --preview and no\n"
 	     "--port: print on the simulator after the preview", NULL, NULL},
 	    CMD_OPT_FLAG("--force", &a->force, GUARD_FORCE_HELP),
-	    CMD_OPT_STRING("--sim-log", 0, &a->sim_log, 0, NULL, "FILE",
-			   "testing aid: the simulated printer's execution log"),
+	    CMD_OPT_SIM_LOG(&a->sim_log),
 	};
 	const struct cmd_spec spec = {
 	    .cmd = PRINT_CMD, CMD_TABLE(opts), .col = 21,
@@ -101,29 +93,25 @@ static int print_parse(int argc, char **argv, struct print_args *a)
 	int rc;
 
 	memset(a, 0, sizeof(*a));
-	a->speedup = PRINT_SPEEDUP;
+	a->speedup = CMD_SIM_SPEEDUP;
 	rc = cmd_parse(&spec, argc, argv);
 	if (rc)
 		return rc;
 	a->in = a->models[0];
-	if (a->resume && (a->in || a->dry_run || a->cfg.n || a->cfg.presets.printer)) {
-		fprintf(stderr, PRINT_CMD ": --resume JOB takes no model, no --dry-run and no "
-				"settings options: the job journal names the file\n");
-		return ST_EXIT_USAGE;
-	}
-	if (!a->resume && (!a->in || (!a->printer && !a->cfg.has_files))) {
-		fprintf(stderr, PRINT_CMD ": %s\n",
-			!a->in ? "no model file given"
-			       : "no printer given; add --printer NAME ('stratum printers' lists "
-				 "them)");
-		cmd_usage(&spec, stderr);
-		return ST_EXIT_USAGE;
-	}
-	if (a->dry_run != (a->out != NULL)) {
-		fprintf(stderr, PRINT_CMD ": %s\n", a->dry_run ? "--dry-run needs -o OUT"
-							       : "-o OUT goes with --dry-run");
-		return ST_EXIT_USAGE;
-	}
+	if (a->resume && (a->in || a->dry_run || a->cfg.n || a->cfg.presets.printer))
+		return cmd_fail(PRINT_CMD, ST_EXIT_USAGE,
+				"--resume JOB takes no model, no --dry-run and no settings "
+				"options: the job journal names the file");
+	if (!a->resume && (!a->in || (!a->printer && !a->cfg.has_files)))
+		return cmd_refuse(
+		    &spec, "%s",
+		    !a->in ? "no model file given"
+			   : "no printer given; add --printer NAME ('stratum printers' lists "
+			     "them)");
+	if (a->dry_run != (a->out != NULL))
+		return cmd_fail(PRINT_CMD, ST_EXIT_USAGE, "%s",
+				a->dry_run ? "--dry-run needs -o OUT"
+					   : "-o OUT goes with --dry-run");
 	return 0;
 }
 
@@ -145,14 +133,10 @@ static int print_slice(struct print_job *job, const char *out)
 	struct st_error err = {0};
 	int rc = profile_slicer_config(job->prof, &cfg, &err);
 
-	if (rc) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		return profile_exit_status(rc);
-	}
-	if ((rc = slicer_config_check(&cfg, &err))) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		return ST_EXIT_DATAERR;
-	}
+	if (rc)
+		return cmd_fail(PRINT_CMD, profile_exit_status(rc), "%s", err.msg);
+	if ((rc = slicer_config_check(&cfg, &err)))
+		return cmd_fail(PRINT_CMD, ST_EXIT_DATAERR, "%s", err.msg);
 	rc = slicejob_run(PRINT_CMD, job->a->models, job->a->nmodels, &cfg, false, out, true,
 			  &job->slice);
 	job->sliced = rc == 0;
@@ -180,11 +164,10 @@ static int print_preview(struct print_job *job)
 		preview_opts_init(&o);
 		o.layer = l;
 		snprintf(name, sizeof(name), "%.*s-layer%d.png", n, base, l);
-		if (preview_load(job->gcode, &o, &pv, &err) ||
-		    pvdraw_write(pv, &d, name, &err)) {
-			fprintf(stderr, PRINT_CMD ": preview of layer %d: %s\n", l, err.msg);
+		if (preview_load(job->gcode, &o, &pv, &err) || pvdraw_write(pv, &d, name, &err)) {
 			preview_free(pv);
-			return ST_EXIT_FAILURE;
+			return cmd_fail(PRINT_CMD, ST_EXIT_FAILURE, "preview of layer %d: %s", l,
+					err.msg);
 		}
 		preview_free(pv);
 		if (!job->a->json)
@@ -201,12 +184,8 @@ static void print_preview_stop(const struct print_job *job)
 
 	if (job->a->json) {
 		json_t *o = json_object();
-		json_object_set_new(o, "ok", json_true());
-		json_object_set_new(o, "exit", json_integer(0));
-		json_object_set_new(o, "input", json_string(job->a->in));
-		json_object_set_new(o, "printer", json_string(job->prof->id));
-		json_object_set_new(o, "printed", json_false());
-		json_object_set_new(o, "previews", json_integer((json_int_t)n));
+		cmd_json_set(o, "b:ok", true, "i:exit", 0, "s:input", job->a->in, "s:printer",
+			     job->prof->id, "b:printed", false, "z:previews", n, NULL);
 		send_report_emit(o);
 		return;
 	}
@@ -253,25 +232,19 @@ static int print_setup_resume(struct print_job *job)
 	char hex[65];
 	int rc;
 
-	if ((rc = journal_load(job->a->resume, &job->j, &err))) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		return rc == ST_ERR_PARSE ? ST_EXIT_DATAERR : ST_EXIT_USAGE;
-	}
-	if (!strcmp(job->j.state, "done")) {
-		fprintf(stderr, PRINT_CMD ": job %s finished printing; there is nothing to "
-				"resume\n", job->j.id);
-		return ST_EXIT_USAGE;
-	}
-	if ((rc = journal_sha256(job->j.gcode, hex, &err))) {
-		fprintf(stderr, PRINT_CMD ": job %s: %s\n", job->j.id, err.msg);
-		return ST_EXIT_DATAERR;
-	}
-	if (strcmp(hex, job->j.sha256)) {
-		fprintf(stderr, PRINT_CMD ": job %s: %s changed since the print started (SHA-256 "
-				"%.12s..., the journal has %.12s...); refusing to resume with "
-				"another file\n", job->j.id, job->j.gcode, hex, job->j.sha256);
-		return ST_EXIT_DATAERR;
-	}
+	if ((rc = journal_load(job->a->resume, &job->j, &err)))
+		return cmd_fail(PRINT_CMD, rc == ST_ERR_PARSE ? ST_EXIT_DATAERR : ST_EXIT_USAGE,
+				"%s", err.msg);
+	if (!strcmp(job->j.state, "done"))
+		return cmd_fail(PRINT_CMD, ST_EXIT_USAGE,
+				"job %s finished printing; there is nothing to resume", job->j.id);
+	if ((rc = journal_sha256(job->j.gcode, hex, &err)))
+		return cmd_fail(PRINT_CMD, ST_EXIT_DATAERR, "job %s: %s", job->j.id, err.msg);
+	if (strcmp(hex, job->j.sha256))
+		return cmd_fail(PRINT_CMD, ST_EXIT_DATAERR,
+				"job %s: %s changed since the print started (SHA-256 %.12s..., the "
+				"journal has %.12s...); refusing to resume with another file",
+				job->j.id, job->j.gcode, hex, job->j.sha256);
 	snprintf(job->gcode_buf, sizeof(job->gcode_buf), "%s", job->j.gcode);
 	job->gcode = job->gcode_buf;
 	if (!job->a->printer)
@@ -398,19 +371,15 @@ static int print_dry_run(struct print_job *job)
 	bool x3g = sailfish && !cmd_has_ext(out, ".gcode");
 	int status;
 
-	if (job->input != PRINT_MODEL && !(x3g && job->input == PRINT_GCODE)) {
-		fprintf(stderr, PRINT_CMD ": --dry-run: %s is already what would be printed\n",
-			job->a->in);
-		return ST_EXIT_USAGE;
-	}
+	if (job->input != PRINT_MODEL && !(x3g && job->input == PRINT_GCODE))
+		return cmd_fail(PRINT_CMD, ST_EXIT_USAGE,
+				"--dry-run: %s is already what would be printed", job->a->in);
 	if (job->input == PRINT_MODEL) {
 		if (x3g) {
 			struct st_error err = {0};
 			char dir[JOURNAL_PATH_MAX - 64];
-			if (journal_dir(dir, sizeof(dir), &err)) {
-				fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-				return ST_EXIT_FAILURE;
-			}
+			if (journal_dir(dir, sizeof(dir), &err))
+				return cmd_fail(PRINT_CMD, ST_EXIT_FAILURE, "%s", err.msg);
 			snprintf(job->gcode_buf, sizeof(job->gcode_buf), "%s/dry-run-%ld.gcode", dir,
 				 (long)getpid());
 		} else {
@@ -492,11 +461,10 @@ static int print_stdin(struct print_args *a, struct clio *io)
 		/* a comment or a command word ("G1", "M104"); a binary STL's header
 		 * may start with any text ("MeshLab"), not with these */
 		if (head[k] == ';' || (head[k] && strchr("GMTN", head[k]) && head[k + 1] >= '0' &&
-				       head[k + 1] <= '9')) {
-			fprintf(stderr, PRINT_CMD ": stdin holds G-code; print it from a file, so that "
-					"the job can be resumed ('-' takes a model)\n");
-			return ST_EXIT_USAGE;
-		}
+				       head[k + 1] <= '9'))
+			return cmd_fail(PRINT_CMD, ST_EXIT_USAGE,
+					"stdin holds G-code; print it from a file, so that the job "
+					"can be resumed ('-' takes a model)");
 	}
 	return 0;
 }
@@ -516,10 +484,8 @@ static int print_run(int argc, char **argv, bool *answered, struct clio *io)
 	if ((status = print_stdin(&a, io)))
 		return status;
 	job = calloc(1, sizeof(*job));
-	if (!job) {
-		fprintf(stderr, PRINT_CMD ": out of memory\n");
-		return ST_EXIT_SOFTWARE;
-	}
+	if (!job)
+		return cmd_fail(PRINT_CMD, ST_EXIT_SOFTWARE, "out of memory");
 	job->a = &a;
 	job->start_layer = -1;
 	job->layer = -1;
@@ -535,20 +501,20 @@ static int print_run(int argc, char **argv, bool *answered, struct clio *io)
 		job->gcode = a.in;
 		for (size_t i = 0; i < a.nmodels && a.nmodels > 1; i++)
 			if (print_input_of(a.models[i]) != PRINT_MODEL) {
-				fprintf(stderr, PRINT_CMD ": %s is already G-code or X3G: only "
-						"models are printed together; print it alone\n",
-					a.models[i]);
-				status = ST_EXIT_USAGE;
+				status = cmd_fail(PRINT_CMD, ST_EXIT_USAGE,
+						  "%s is already G-code or X3G: only models are "
+						  "printed together; print it alone",
+						  a.models[i]);
 				goto out;
 			}
 		if (job->input == PRINT_MODEL)
 			cfgopt_note_project_settings(&a.cfg, PRINT_CMD, a.models, a.nmodels);
 	}
 	if (job->input == PRINT_X3G && job->prof->protocol != PROFILE_PROTOCOL_SAILFISH) {
-		fprintf(stderr, PRINT_CMD ": %s is X3G, which only Sailfish printers take; printer "
-				"'%s' speaks %s: print the model or its G-code\n", a.in,
-			job->prof->id, profile_protocol_name(job->prof->protocol));
-		status = ST_EXIT_USAGE;
+		status = cmd_fail(PRINT_CMD, ST_EXIT_USAGE,
+				  "%s is X3G, which only Sailfish printers take; printer '%s' "
+				  "speaks %s: print the model or its G-code",
+				  a.in, job->prof->id, profile_protocol_name(job->prof->protocol));
 		goto out;
 	}
 	if (job->input == PRINT_GCODE &&
@@ -573,15 +539,13 @@ static int print_run(int argc, char **argv, bool *answered, struct clio *io)
 				n == 1 ? "" : "s", (double)freed / 1e6);
 	}
 	if (!a.resume && job->journal_on && (rc = journal_init(&job->j, &err))) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		status = ST_EXIT_FAILURE;
+		status = cmd_fail(PRINT_CMD, ST_EXIT_FAILURE, "%s", err.msg);
 		goto out;
 	}
 	if (job->input == PRINT_MODEL) {
 		char dir[JOURNAL_PATH_MAX - 64];
 		if (!job->journal_on && (rc = journal_dir(dir, sizeof(dir), &err))) {
-			fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-			status = ST_EXIT_FAILURE;
+			status = cmd_fail(PRINT_CMD, ST_EXIT_FAILURE, "%s", err.msg);
 			goto out;
 		}
 		/* the sliced G-code is kept beside the journal so the job can resume */
@@ -602,25 +566,23 @@ static int print_run(int argc, char **argv, bool *answered, struct clio *io)
 		job->start_layer = job->j.layer >= 0 && (size_t)job->j.layer < job->layers.n
 					   ? job->j.layer : 0;
 		if (!job->layers.n) {
-			fprintf(stderr, PRINT_CMD ": %s has no layer comments; cannot tell where to "
-					"resume\n", job->gcode);
-			status = ST_EXIT_DATAERR;
+			status = cmd_fail(PRINT_CMD, ST_EXIT_DATAERR,
+					  "%s has no layer comments; cannot tell where to resume",
+					  job->gcode);
 			goto out;
 		}
 		if ((status = print_byte_after(job->gcode, job->j.last_line, &job->saved)))
 			goto out;
 		if (!print_confirm(job)) {
-			fprintf(stderr, PRINT_CMD ": not resumed\n");
-			status = ST_EXIT_FAILURE;
+			status = cmd_fail(PRINT_CMD, ST_EXIT_FAILURE, "not resumed");
 			goto out;
 		}
 		snprintf(job->j.state, sizeof(job->j.state), "printing");
 	} else if (job->journal_on) {
 		char path[PATH_MAX];
 		if (!realpath(job->gcode, path) || journal_sha256(path, job->j.sha256, &err)) {
-			fprintf(stderr, PRINT_CMD ": %s: %s\n", job->gcode,
-				err.msg[0] ? err.msg : strerror(errno));
-			status = ST_EXIT_DATAERR;
+			status = cmd_fail(PRINT_CMD, ST_EXIT_DATAERR, "%s: %s", job->gcode,
+					  err.msg[0] ? err.msg : strerror(errno));
 			goto out;
 		}
 		snprintf(job->j.gcode, sizeof(job->j.gcode), "%s", path);
@@ -674,10 +636,8 @@ int cmd_print(int argc, char **argv)
 	clio_capture_end(msg, sizeof(msg));
 	if (status && !answered) {
 		json_t *o = json_object();
-		json_object_set_new(o, "ok", json_false());
-		json_object_set_new(o, "exit", json_integer(status));
-		json_object_set_new(o, "error", json_string(msg[0] ? msg : "the print did not "
-								   "start; the reason is on stderr"));
+		cmd_json_set(o, "b:ok", false, "i:exit", status, "s:error",
+			     msg[0] ? msg : "the print did not start; the reason is on stderr", NULL);
 		send_report_emit(o);
 	}
 	return status;

@@ -135,10 +135,8 @@ static void print_table(struct profile **ps, size_t n)
 /* Make sure stdout reached its destination (a full disk, a closed pipe). */
 static int finish_output(void)
 {
-	if (fflush(stdout) != 0 || ferror(stdout)) {
-		fprintf(stderr, "stratum printers: could not write the output\n");
-		return ST_EXIT_FAILURE;
-	}
+	if (fflush(stdout) != 0 || ferror(stdout))
+		return cmd_fail("stratum printers", ST_EXIT_FAILURE, "could not write the output");
 	return ST_EXIT_OK;
 }
 
@@ -175,15 +173,12 @@ static int list_all(bool json)
 	size_t n = 0, good = 0;
 	int status = ST_EXIT_OK;
 
-	if (profile_list(&list, &n, &err)) {
-		fprintf(stderr, "stratum printers: %s\n", err.msg);
-		return ST_EXIT_SOFTWARE;
-	}
+	if (profile_list(&list, &n, &err))
+		return cmd_fail("stratum printers", ST_EXIT_SOFTWARE, "%s", err.msg);
 	if (n) {
 		ps = calloc(n, sizeof(*ps));
 		if (!ps) {
-			fprintf(stderr, "stratum printers: out of memory\n");
-			status = ST_EXIT_SOFTWARE;
+			status = cmd_fail("stratum printers", ST_EXIT_SOFTWARE, "out of memory");
 			goto out_free_list;
 		}
 	}
@@ -255,14 +250,11 @@ int cmd_printers(int argc, char **argv)
 	if (keys) /* docs/printers.md's key tables, from the one declaration */
 		return settings_write_doc(stdout) || fflush(stdout) == EOF ? ST_EXIT_SOFTWARE
 									  : ST_EXIT_OK;
-	if ((cfg.n || cfg.presets.printer) && !showing) {
-		fprintf(stderr, "stratum printers: the settings options go with --show\n");
-		return ST_EXIT_USAGE;
-	}
-	if (showing && !show && !cfg.has_files) {
-		fprintf(stderr, "stratum printers: --show needs a printer name or file, or "
-				"--load FILE\n");
-		return ST_EXIT_USAGE;
-	}
+	if ((cfg.n || cfg.presets.printer) && !showing)
+		return cmd_fail("stratum printers", ST_EXIT_USAGE,
+				"the settings options go with --show");
+	if (showing && !show && !cfg.has_files)
+		return cmd_fail("stratum printers", ST_EXIT_USAGE,
+				"--show needs a printer name or file, or --load FILE");
 	return showing ? show_one(show, &cfg, json) : list_all(json);
 }

@@ -5,15 +5,13 @@
  * [--flatness MM]]`: read a mesh, repair it with seed 000's pipeline
  * (repair/repair.h), optionally merge its flat faces (seed 001 §4,
  * repair/simplify_planar.h), and write the printable result as STL, one
- * file or one per manifold-connected part.
+ * file or one per manifold-connected part (host/stl_parts.h).
  * Exit 0 repaired and written, 1 no printable result (nothing written) or
  * the output could not be written, 2 usage, 65 unreadable input or bad
  * printer profile, 70 internal error.
  */
 #include <jansson.h>
-#include <limits.h>
 #include <stdarg.h>
-#include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -30,6 +28,7 @@
 #include "simplify_planar.h"
 #include "st_error.h"
 #include "st_number.h"
+#include "stl_parts.h"
 
 #define REPAIR_EPSILON_DEFAULT 0.4   /* mm, when no printer is named */
 #define REPAIR_EPSILON_MAX 10.0	     /* mm; more is a typo, not a wall */
@@ -58,28 +57,6 @@ static const char repair_tail[] =
     "\n"
     "Exit status: 0 repaired, 1 no printable result or OUT not written, 2 usage,\n"
     "65 unreadable input or printer profile, 70 internal error.  See docs/repair.md.\n";
-
-/*
- * The name of part k (from 1) of OUT: "dir/part.stl" -> "dir/part-k.stl",
- * "part" -> "part-k".  Returns a malloc'd string or NULL on OOM.
- */
-static char *part_path(const char *out, size_t k)
-{
-	const char *slash = strrchr(out, '/');
-	const char *base = slash ? slash + 1 : out;
-	const char *dot = strrchr(base, '.');
-	size_t stem, cap;
-	char *s;
-
-	if (!dot || dot == base) /* no extension, or a dot file like ".stl" */
-		dot = out + strlen(out);
-	stem = (size_t)(dot - out);
-	cap = strlen(out) + 24;
-	s = malloc(cap);
-	if (s)
-		snprintf(s, cap, "%.*s-%zu%s", (int)stem, out, k, dot);
-	return s;
-}
 
 /* Everything the report shows besides struct repair_report. */
 struct repair_run {
@@ -113,166 +90,6 @@ static void say(struct repair_run *run, const char *fmt, ...)
 	vsnprintf(run->error, sizeof(run->error), fmt, ap);
 	va_end(ap);
 	fprintf(stderr, "stratum repair: %s\n", run->error);
-}
-
-/* Exit status for a failed meshio_write_stl. */
-static int write_exit(int rc)
-{
-	switch (rc) {
-	case ST_ERR_IO:
-		return ST_EXIT_FAILURE;	/* the job could not finish; input was fine */
-	case ST_ERR_RANGE:
-		return ST_EXIT_DATAERR; /* coordinates that binary STL cannot hold */
-	default:
-		return ST_EXIT_SOFTWARE;
-	}
-}
-
-/*
- * Write component c of m (triangles tri[first..first+n) of the bucketed
- * order) to path.  Returns 0 or the exit status, with the message printed.
- */
-static int write_part(struct repair_run *run, const char *path, const struct mesh *m,
-		      const size_t *order, size_t n, enum meshio_format fmt)
-{
-	struct st_error err = {0};
-	struct mesh_builder *b = mesh_builder_new(n);
-	struct mesh *part;
-	int rc;
-
-	if (!b) {
-		say(run, "%s: out of memory splitting the parts", path);
-		return ST_EXIT_SOFTWARE;
-	}
-	if (cmd_same_file(run->input, path)) {
-		mesh_builder_free(b);
-		say(run, "%s is the input file %s; name another output so the input is kept",
-		    path, run->input);
-		return ST_EXIT_USAGE;
-	}
-	for (size_t i = 0; i < n; i++) {
-		const uint32_t *t = m->tris[order[i]];
-		uint32_t v[3];
-
-		for (int k = 0; k < 3; k++)
-			if (mesh_builder_vertex(b, m->verts[t[k]], &v[k], &err))
-				goto out_builder;
-		if (mesh_builder_triangle(b, v[0], v[1], v[2], &err))
-			goto out_builder;
-	}
-	part = mesh_builder_finish(b);
-	if (!part) {
-		say(run, "%s: out of memory splitting the parts", path);
-		return ST_EXIT_SOFTWARE;
-	}
-	rc = meshio_write_stl(path, part, fmt, &err);
-	mesh_free(part);
-	if (rc) {
-		say(run, "%s", err.msg);
-		return write_exit(rc);
-	}
-	return 0;
-
-out_builder:
-	mesh_builder_free(b);
-	say(run, "%s: %s", path, err.msg);
-	return ST_EXIT_SOFTWARE;
-}
-
-/* The list of files written (for the report). */
-struct repair_outputs {
-	char **path;
-	size_t count;
-};
-
-static void outputs_free(struct repair_outputs *o)
-{
-	for (size_t i = 0; i < o->count; i++)
-		free(o->path[i]);
-	free(o->path);
-	o->path = NULL;
-	o->count = 0;
-}
-
-/*
- * Write the result: one file, or with split one file per component.
- * Returns 0 or the exit status (message printed); o lists what was
- * written, also when a later part failed.
- */
-static int write_outputs(struct repair_run *run, const char *out, const struct mesh *m,
-			 const uint32_t *component, size_t ncomp, bool split,
-			 enum meshio_format fmt, struct repair_outputs *o)
-{
-	size_t *start = NULL, *order = NULL;
-	int status = ST_EXIT_SOFTWARE;
-
-	if (!split || ncomp <= 1 || !component) {
-		struct st_error err = {0};
-		int rc = meshio_write_stl(out, m, fmt, &err);
-
-		if (rc) {
-			say(run, "%s", err.msg);
-			return write_exit(rc);
-		}
-		o->path = malloc(sizeof(*o->path));
-		if (!o->path || !(o->path[0] = strdup(out))) {
-			say(run, "out of memory");
-			return ST_EXIT_SOFTWARE;
-		}
-		o->count = 1;
-		return 0;
-	}
-
-	/* Bucket the triangles by component (counting sort, input order kept). */
-	if (ncomp > SIZE_MAX / sizeof(*start) - 1 || m->ntris > SIZE_MAX / sizeof(*order))
-		goto out_nomem;
-	start = calloc(ncomp + 1, sizeof(*start));
-	order = malloc((m->ntris ? m->ntris : 1) * sizeof(*order));
-	o->path = calloc(ncomp, sizeof(*o->path));
-	if (!start || !order || !o->path)
-		goto out_nomem;
-	for (size_t t = 0; t < m->ntris; t++) {
-		if (component[t] >= ncomp) {
-			say(run, "internal error: triangle %zu is in part %lu of %zu", t,
-			    (unsigned long)component[t], ncomp);
-			goto out_free;
-		}
-		start[component[t] + 1]++;
-	}
-	for (size_t c = 0; c < ncomp; c++)
-		start[c + 1] += start[c];
-	{
-		size_t *fill = calloc(ncomp, sizeof(*fill));
-
-		if (!fill)
-			goto out_nomem;
-		for (size_t t = 0; t < m->ntris; t++)
-			order[start[component[t]] + fill[component[t]]++] = t;
-		free(fill);
-	}
-	for (size_t c = 0; c < ncomp; c++) {
-		char *path = part_path(out, c + 1);
-		int rc;
-
-		if (!path)
-			goto out_nomem;
-		rc = write_part(run, path, m, order + start[c], start[c + 1] - start[c], fmt);
-		if (rc) {
-			free(path);
-			status = rc;
-			goto out_free;
-		}
-		o->path[o->count++] = path;
-	}
-	status = 0;
-	goto out_free;
-
-out_nomem:
-	say(run, "out of memory splitting the parts");
-out_free:
-	free(order);
-	free(start);
-	return status;
 }
 
 
@@ -371,7 +188,7 @@ static void print_simplify(const struct repair_run *run)
 }
 
 static int print_json(const struct repair_run *run, const struct repair_report *r,
-		      const struct repair_outputs *o)
+		      const struct stl_outputs *o)
 {
 	json_t *obj = json_object();
 	json_t *outs = json_array();
@@ -425,7 +242,7 @@ out_dump:
 }
 
 /* What a run that stopped early got to, and why it stopped. */
-static void print_failure(const struct repair_run *run, const struct repair_outputs *o)
+static void print_failure(const struct repair_run *run, const struct stl_outputs *o)
 {
 	if (run->read)
 		printf("%s: %s, %zu triangles\n", run->input, meshio_format_name(run->format),
@@ -440,7 +257,7 @@ static void print_failure(const struct repair_run *run, const struct repair_outp
 }
 
 static void print_text(const struct repair_run *run, const struct repair_report *r,
-		       const struct repair_outputs *o)
+		       const struct stl_outputs *o)
 {
 	if (!run->repaired) {
 		print_failure(run, o);
@@ -514,45 +331,6 @@ static void print_text(const struct repair_run *run, const struct repair_report 
 }
 
 /*
- * Is in named like one of the files --split makes from out ("dir/part.stl"
- * -> "dir/part-K.stl"), in the same directory however either is spelled?
- */
-static bool input_is_a_part(const char *in, const char *out)
-{
-	char *probe = part_path(out, 1);
-	char real_in[PATH_MAX], real_dir[PATH_MAX], dir[PATH_MAX];
-	const char *slash, *base, *dot, *ibase;
-	size_t stem;
-	bool match = false;
-
-	if (!probe)
-		return false;
-	slash = strrchr(probe, '/');
-	snprintf(dir, sizeof(dir), "%.*s", slash ? (int)(slash - probe) : 1, slash ? probe : ".");
-	base = slash ? slash + 1 : probe;
-	/* probe's base is STEM-1EXT: the stem ends at the "-1". */
-	dot = strstr(base, "-1");
-	while (dot && strstr(dot + 1, "-1"))
-		dot = strstr(dot + 1, "-1");
-	if (dot && realpath(in, real_in) && realpath(dir, real_dir)) {
-		const char *islash = strrchr(real_in, '/');
-		const char *ext = dot + 2, *k;
-
-		stem = (size_t)(dot - base);
-		ibase = islash + 1;
-		if ((size_t)(islash - real_in) == strlen(real_dir) &&
-		    !strncmp(real_in, real_dir, strlen(real_dir)) && !strncmp(ibase, base, stem + 1)) {
-			k = ibase + stem + 1;
-			while (*k >= '0' && *k <= '9')
-				k++;
-			match = k > ibase + stem + 1 && !strcmp(k, ext);
-		}
-	}
-	free(probe);
-	return match;
-}
-
-/*
  * Planar simplification of the repaired mesh *m, in place; component
  * (the part of each triangle, or NULL) follows the triangles.  Returns 0
  * or the exit status, with the message said.
@@ -589,12 +367,13 @@ static int repair_command(int argc, char **argv, struct repair_run *run, struct 
 	bool json = false, split = false, ascii = false, keep_holes = false, out_std = false;
 	double weld = -1, stitch = -1; /* < 0: the defaults of repair_options_init */
 	int threads = 0, status = ST_EXIT_OK, rc;
+	char msg[sizeof(run->error)];
 	struct st_error err = {0};
 	struct profile *prof = NULL;
 	struct repair_options opt;
 	struct repair_report rep;
 	struct progress prog;
-	struct repair_outputs outs = {0};
+	struct stl_outputs outs = {0};
 	struct mesh *m = NULL, *fixed = NULL;
 
 	memset(&rep, 0, sizeof(rep));
@@ -648,24 +427,19 @@ static int repair_command(int argc, char **argv, struct repair_run *run, struct 
 	rc = cmd_parse(&spec, argc, argv);
 	if (rc)
 		return rc < 0 ? ST_EXIT_OK : rc;
-	if (!in || !out) {
-		fprintf(stderr, "stratum repair: %s\n",
-			!in ? "no input file given" : "no output file given; add -o OUT.stl");
-		cmd_usage(&spec, stderr);
-		return ST_EXIT_USAGE;
-	}
+	if (!in || !out)
+		return cmd_refuse(&spec, "%s",
+				  !in ? "no input file given"
+				      : "no output file given; add -o OUT.stl");
 
-	if ((angle_arg || flat_arg) && !run->simplify) {
-		fprintf(stderr, "stratum repair: %s applies to --simplify-planar; add it or leave "
-				"%s out\n", angle_arg ? angle_arg : flat_arg,
-			angle_arg ? angle_arg : flat_arg);
-		return ST_EXIT_USAGE;
-	}
-	if (split && clio_is_std(out)) {
-		fprintf(stderr, "stratum repair: --split writes one file per part; -o - takes "
-				"one stream (leave out --split)\n");
-		return ST_EXIT_USAGE;
-	}
+	if ((angle_arg || flat_arg) && !run->simplify)
+		return cmd_fail("stratum repair", ST_EXIT_USAGE,
+				"%s applies to --simplify-planar; add it or leave %s out",
+				angle_arg ? angle_arg : flat_arg, angle_arg ? angle_arg : flat_arg);
+	if (split && clio_is_std(out))
+		return cmd_fail(
+		    "stratum repair", ST_EXIT_USAGE,
+		    "--split writes one file per part; -o - takes one stream (leave out --split)");
 	run->input = in;
 	out_std = clio_is_std(out);
 	/* "-": stdin spooled, the STL held back until it is whole (clio.h) */
@@ -680,7 +454,7 @@ static int repair_command(int argc, char **argv, struct repair_run *run, struct 
 	 * With --split the parts are OUT-1, OUT-2, ...; each is checked
 	 * against the input again just before it is written. */
 	status = cmd_output_check(in, out, run->error, sizeof(run->error));
-	if (!status && split && input_is_a_part(in, out)) {
+	if (!status && split && stl_input_is_a_part(in, out)) {
 		snprintf(run->error, sizeof(run->error),
 			 "%s is named like a part of %s (--split writes PART-1, PART-2, ...); name "
 			 "another output so the input is kept", in, out);
@@ -756,8 +530,11 @@ static int repair_command(int argc, char **argv, struct repair_run *run, struct 
 			goto out_report;
 	}
 	run->stage = "writing";
-	status = write_outputs(run, out, fixed, component, rep.components, split,
-			       ascii ? MESHIO_STL_ASCII : MESHIO_STL_BINARY, &outs);
+	status = stl_write_outputs(run->input, out, fixed, component, rep.components, split,
+				   ascii ? MESHIO_STL_ASCII : MESHIO_STL_BINARY, &outs, msg,
+				   sizeof(msg));
+	if (status)
+		say(run, "%s", msg);
 	if (status && outs.count)
 		say(run, "only %zu of %zu parts were written", outs.count, rep.components);
 	if (!status)
@@ -773,7 +550,7 @@ out_report:
 							   : (print_text(run, &rep, &outs), 0));
 	if (!status && rc)
 		status = rc;
-	outputs_free(&outs);
+	stl_outputs_free(&outs);
 	free(component); /* NULL unless repair_mesh set them */
 	mesh_free(fixed);
 	profile_free(prof);

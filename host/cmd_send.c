@@ -21,7 +21,6 @@
 #include "commands.h"
 #include "guard.h"
 #include "printer.h"
-#include "portpick.h"
 #include "printer_profile.h"
 #include "profile.h"
 #include "send.h"
@@ -60,11 +59,8 @@ static int send_parse(int argc, char **argv, struct send_args *a)
 	    CMD_OPT_FLAG("--json", &a->json, "the report as one JSON object on stdout"),
 	    CMD_OPT_STRING("--port", 0, &a->port, 0, NULL, "PATH",
 			   "a serial device, a pty, tcp://HOST:PORT or 'auto' (required)"),
-	    CMD_OPT_STRING("--printer", 0, &a->printer, 0, NULL, "NAME",
-			   "the printer profile ('stratum printers'); required"),
-	    {"--baud", 0, CMD_LONG, &a->baud, CMD_RANGE, 300, 10000000,
-	     "a whole number from %.0f to %.0f", "N",
-	     "link speed, %.0f to %.0f (default: the profile's baudrate)", NULL, NULL},
+	    CMD_OPT_PRINTER_NAME(&a->printer),
+	    CMD_OPT_BAUD(&a->baud),
 	    {"--command", 0, CMD_CUSTOM, &a->commands, 0, 0, 0, "a G-code line (64 at most)",
 	     "LINE", "instead of FILE: send the G-code LINE and print the firmware's\n"
 	     "reply on stdout; repeatable, in order (Marlin: Sailfish sends no text)",
@@ -90,18 +86,13 @@ static int send_parse(int argc, char **argv, struct send_args *a)
 	rc = cmd_parse(&spec, argc, argv);
 	if (rc)
 		return rc;
-	if (a->file && a->commands.n) {
-		fprintf(stderr, SEND_CMD ": give a FILE or --command, not both\n");
-		return ST_EXIT_USAGE;
-	}
-	if ((!a->file && !a->commands.n) || !a->port || !a->printer) {
-		fprintf(stderr, SEND_CMD ": %s is required\n",
-			!a->file && !a->commands.n ? "a FILE (or --command LINE)"
-			: !a->port		   ? "--port"
-						   : "--printer");
-		cmd_usage(&spec, stderr);
-		return ST_EXIT_USAGE;
-	}
+	if (a->file && a->commands.n)
+		return cmd_fail(SEND_CMD, ST_EXIT_USAGE, "give a FILE or --command, not both");
+	if ((!a->file && !a->commands.n) || !a->port || !a->printer)
+		return cmd_refuse(&spec, "%s is required",
+				  !a->file && !a->commands.n ? "a FILE (or --command LINE)"
+				  : !a->port		     ? "--port"
+							     : "--printer");
 	return 0;
 }
 
@@ -242,27 +233,11 @@ static int send_run(int argc, char **argv, struct clio *io)
 	if ((status = clio_input(io, &a.file, ".gcode"))) /* "-": G-code on stdin */
 		return status;
 	rc = profile_find(a.printer, &prof, &err);
-	if (rc) {
-		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
-		return profile_exit_status(rc);
-	}
-	if (!strcmp(a.port, "auto")) { /* the rules of host/portpick.h, as print's */
-		char why[512] = "";
-
-		if (portpick_auto(prof, &port_auto, why, sizeof(why), &err)) {
-			fprintf(stderr, SEND_CMD ": %s\n", err.msg);
-			status = ST_EXIT_UNAVAILABLE;
-			goto out_profile;
-		}
-		if (!a.json)
-			fprintf(stderr, SEND_CMD ": --port auto: %s\n", why);
-		a.port = port_auto;
-	}
-	if ((rc = printer_profile_options(prof, a.port, a.baud, &o, &ops, &err))) {
-		fprintf(stderr, SEND_CMD ": %s: %s\n", prof->path, err.msg);
-		status = ST_EXIT_DATAERR;
+	if (rc)
+		return cmd_fail(SEND_CMD, profile_exit_status(rc), "%s", err.msg);
+	if ((status = printer_profile_cli(SEND_CMD, prof, &a.port, a.baud, a.json, &port_auto, &o,
+					  &ops)))
 		goto out_profile;
-	}
 	if (a.commands.n) {
 		status = send_commands_run(&a.commands, ops, &o, a.printer, a.port, a.json);
 		goto out_profile;
@@ -270,24 +245,22 @@ static int send_run(int argc, char **argv, struct clio *io)
 	job.path = a.file;
 	job.x3g = cmd_has_ext(a.file, ".x3g");
 	if (job.x3g && !ops->takes_x3g) {
-		fprintf(stderr, SEND_CMD ": %s is X3G, which only Sailfish printers take; printer "
-				     "'%s' speaks %s: send it the G-code\n", a.file, a.printer,
-			profile_protocol_name(prof->protocol));
-		status = ST_EXIT_USAGE;
+		status = cmd_fail(SEND_CMD, ST_EXIT_USAGE,
+				  "%s is X3G, which only Sailfish printers take; printer '%s' "
+				  "speaks %s: send it the G-code",
+				  a.file, a.printer, profile_protocol_name(prof->protocol));
 		goto out_profile;
 	}
 	if (!job.x3g && (status = guard_cli(SEND_CMD, a.file, prof, a.force)))
 		goto out_profile;
 	if ((rc = printer_check(ops, &o, &job, send_warning, (void *)SEND_CMD, &info, &err))) {
-		fprintf(stderr, SEND_CMD ": %s%s\n", err.msg,
-			strstr(err.msg, "nothing was sent") ? "" : "; nothing was sent");
-		status = send_exit_for_check(rc);
+		status = cmd_fail(SEND_CMD, send_exit_for_check(rc), "%s%s", err.msg,
+				  strstr(err.msg, "nothing was sent") ? "" : "; nothing was sent");
 		goto out_profile;
 	}
 	run.stop = send_catch_signals();
 	if ((rc = printer_open(ops, &o, &pr, &err))) {
-		fprintf(stderr, SEND_CMD ": %s\n", err.msg);
-		status = send_exit_for_open(rc);
+		status = cmd_fail(SEND_CMD, send_exit_for_open(rc), "%s", err.msg);
 		goto out_profile;
 	}
 	printer_describe(pr, firmware, sizeof(firmware));
@@ -318,8 +291,5 @@ out_profile:
 /* "stratum send -" streams the G-code on stdin (clio.h). */
 int cmd_send(int argc, char **argv)
 {
-	struct clio io;
-
-	clio_init(&io, SEND_CMD);
-	return clio_finish(&io, send_run(argc, argv, &io));
+	return clio_run(SEND_CMD, send_run, argc, argv);
 }

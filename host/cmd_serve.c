@@ -100,23 +100,17 @@ int cmd_serve(int argc, char **argv)
 	rc = cmd_parse(&spec, argc, argv);
 	if (rc)
 		return rc < 0 ? ST_EXIT_OK : rc;
-	if (!config) {
-		fprintf(stderr, SERVE_CMD ": no config given; add --config NODE.ini\n");
-		cmd_usage(&spec, stderr);
-		return ST_EXIT_USAGE;
-	}
+	if (!config)
+		return cmd_refuse(&spec, "no config given; add --config NODE.ini");
 	cfg = &cfg_store;
 	rc = node_config_load(config, cfg, &err);
-	if (rc) {
-		fprintf(stderr, SERVE_CMD ": %s\n", err.msg);
-		return rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
-	}
+	if (rc)
+		return cmd_fail(SERVE_CMD, rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR,
+				"%s", err.msg);
 	warn_exposed(SERVE_CMD, "node", config, cfg);
 	if (listen && node_parse_listen(listen, cfg->listen_addr, sizeof(cfg->listen_addr),
-					&cfg->listen_port, &err)) {
-		fprintf(stderr, SERVE_CMD ": --listen: %s\n", err.msg);
-		return ST_EXIT_USAGE;
-	}
+					&cfg->listen_port, &err))
+		return cmd_fail(SERVE_CMD, ST_EXIT_USAGE, "--listen: %s", err.msg);
 
 	block_signals(&set);
 
@@ -183,21 +177,15 @@ int cmd_farm(int argc, char **argv)
 	rc = cmd_parse(&spec, argc, argv);
 	if (rc)
 		return rc < 0 ? ST_EXIT_OK : rc;
-	if (!config) {
-		fprintf(stderr, FARM_CMD ": no config given; add --config FARM.ini\n");
-		cmd_usage(&spec, stderr);
-		return ST_EXIT_USAGE;
-	}
-	if ((rc = farm_config_load(config, &cfg, &err))) {
-		fprintf(stderr, FARM_CMD ": %s\n", err.msg);
-		return rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
-	}
+	if (!config)
+		return cmd_refuse(&spec, "no config given; add --config FARM.ini");
+	if ((rc = farm_config_load(config, &cfg, &err)))
+		return cmd_fail(FARM_CMD, rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR,
+				"%s", err.msg);
 	warn_exposed(FARM_CMD, "farm view", config, &cfg.base);
 	if (listen && node_parse_listen(listen, cfg.base.listen_addr, sizeof(cfg.base.listen_addr),
-					&cfg.base.listen_port, &err)) {
-		fprintf(stderr, FARM_CMD ": --listen: %s\n", err.msg);
-		return ST_EXIT_USAGE;
-	}
+					&cfg.base.listen_port, &err))
+		return cmd_fail(FARM_CMD, ST_EXIT_USAGE, "--listen: %s", err.msg);
 	if (broker) {
 		const char *colon = strrchr(broker, ':');
 		char *end = NULL;
@@ -205,20 +193,17 @@ int cmd_farm(int argc, char **argv)
 		size_t host_len = colon ? (size_t)(colon - broker) : strlen(broker);
 
 		if ((colon && (*end || end == colon + 1 || port < 1 || port > 65535)) ||
-		    !host_len || host_len >= sizeof(m->host)) {
-			fprintf(stderr, FARM_CMD ": --broker: '%s' is not HOST or HOST:PORT (port 1 "
-						 "to 65535)\n", broker);
-			return ST_EXIT_USAGE;
-		}
+		    !host_len || host_len >= sizeof(m->host))
+			return cmd_fail(FARM_CMD, ST_EXIT_USAGE,
+					"--broker: '%s' is not HOST or HOST:PORT (port 1 to 65535)",
+					broker);
 		snprintf(m->host, sizeof(m->host), "%.*s", (int)host_len, broker);
 		if (colon)
 			m->port = (uint16_t)port;
 	}
-	if (!m->host[0]) {
-		fprintf(stderr, FARM_CMD ": no broker: give --broker HOST or [mqtt] host = in %s\n",
-			config);
-		return ST_EXIT_USAGE;
-	}
+	if (!m->host[0])
+		return cmd_fail(FARM_CMD, ST_EXIT_USAGE,
+				"no broker: give --broker HOST or [mqtt] host = in %s", config);
 	block_signals(&set);
 	rc = farm_new(&cfg, &f, &err);
 	if (!rc)

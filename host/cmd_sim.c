@@ -56,15 +56,13 @@ static int sim_make_link(const char *link, const char *target)
 	char tmp[PATH_MAX];
 	struct stat st;
 
-	if (lstat(link, &st) == 0 && !S_ISLNK(st.st_mode)) {
-		fprintf(stderr, "stratum sim: --link %s exists and is not a symlink; "
-				"remove it or choose another path\n", link);
-		return -1;
-	}
-	if (snprintf(tmp, sizeof(tmp), "%s.tmp%ld", link, (long)getpid()) >= (int)sizeof(tmp)) {
-		fprintf(stderr, "stratum sim: --link path is too long\n");
-		return -1;
-	}
+	if (lstat(link, &st) == 0 && !S_ISLNK(st.st_mode))
+		return cmd_fail(
+		    "stratum sim", -1,
+		    "--link %s exists and is not a symlink; remove it or choose another path",
+		    link);
+	if (snprintf(tmp, sizeof(tmp), "%s.tmp%ld", link, (long)getpid()) >= (int)sizeof(tmp))
+		return cmd_fail("stratum sim", -1, "--link path is too long");
 	unlink(tmp);
 	if (symlink(target, tmp) < 0 || rename(tmp, link) < 0) {
 		fprintf(stderr, "stratum sim: cannot create symlink %s -> %s: %s\n", link, target,
@@ -107,10 +105,9 @@ static int sim_serve(const struct sim_marlin_options *mo, const struct sim_sailf
 	int code = ST_EXIT_FAILURE; /* the link could not be made */
 	int rc = so ? sim_sailfish_new(so, &sf, &err) : sim_marlin_new(mo, &m, &err);
 
-	if (rc) {
-		fprintf(stderr, "stratum sim: %s\n", err.msg);
-		return rc == ST_ERR_ARG ? ST_EXIT_USAGE : ST_EXIT_SOFTWARE;
-	}
+	if (rc)
+		return cmd_fail("stratum sim", rc == ST_ERR_ARG ? ST_EXIT_USAGE : ST_EXIT_SOFTWARE,
+				"%s", err.msg);
 	path = sf ? sim_sailfish_slave_path(sf) : sim_marlin_slave_path(m);
 	if (link && sim_make_link(link, path))
 		goto out_free;
@@ -199,17 +196,12 @@ int cmd_sim(int argc, char **argv)
 	rc = cmd_parse(&spec, argc, argv);
 	if (rc)
 		return rc < 0 ? ST_EXIT_OK : rc;
-	if (!dialect) {
-		fprintf(stderr, "stratum sim: --dialect is required (marlin or sailfish)\n");
-		cmd_usage(&spec, stderr);
-		return ST_EXIT_USAGE;
-	}
+	if (!dialect)
+		return cmd_refuse(&spec, "--dialect is required (marlin or sailfish)");
 	if (!strcmp(dialect, "sailfish")) {
-		if (marlin_only) {
-			fprintf(stderr, "stratum sim: %s applies to --dialect marlin only\n",
-				marlin_only);
-			return ST_EXIT_USAGE;
-		}
+		if (marlin_only)
+			return cmd_fail("stratum sim", ST_EXIT_USAGE,
+					"%s applies to --dialect marlin only", marlin_only);
 		so.log_path = o.log_path;
 		so.speedup = o.speedup;
 		so.baud = o.baud;
@@ -221,15 +213,12 @@ int cmd_sim(int argc, char **argv)
 		so.seed = o.seed;
 		return sim_serve(NULL, &so, link);
 	}
-	if (strcmp(dialect, "marlin")) {
-		fprintf(stderr, "stratum sim: unknown --dialect '%s'; use marlin or sailfish\n",
-			dialect);
-		return ST_EXIT_USAGE;
-	}
-	if (sailfish_only) {
-		fprintf(stderr, "stratum sim: %s applies to --dialect sailfish only\n", sailfish_only);
-		return ST_EXIT_USAGE;
-	}
+	if (strcmp(dialect, "marlin"))
+		return cmd_fail("stratum sim", ST_EXIT_USAGE,
+				"unknown --dialect '%s'; use marlin or sailfish", dialect);
+	if (sailfish_only)
+		return cmd_fail("stratum sim", ST_EXIT_USAGE,
+				"%s applies to --dialect sailfish only", sailfish_only);
 
 	return sim_serve(&o, NULL, link);
 }

@@ -146,15 +146,13 @@ static int parse_args(int argc, char **argv, struct slice_args *a)
 
 	if (rc)
 		return rc;
-	if (!a->nin || !a->out || (!a->printer && !a->cfg.has_files)) {
-		fprintf(stderr, SLICE_CMD ": %s\n",
-			!a->nin	    ? "no model file given"
-			: !a->out   ? "no output file given; add -o OUT.gcode"
-				    : "no printer given; add --printer NAME ('stratum printers' "
-				      "lists them) or --load a PrusaSlicer config");
-		cmd_usage(&spec, stderr);
-		return ST_EXIT_USAGE;
-	}
+	if (!a->nin || !a->out || (!a->printer && !a->cfg.has_files))
+		return cmd_refuse(&spec, "%s",
+				  !a->nin ? "no model file given"
+				  : !a->out
+				      ? "no output file given; add -o OUT.gcode"
+				      : "no printer given; add --printer NAME ('stratum printers' "
+					"lists them) or --load a PrusaSlicer config");
 	return 0;
 }
 
@@ -169,10 +167,8 @@ static int config_from_profile(const struct profile *p, const struct slice_args 
 	struct st_error err = {0};
 	int rc = profile_slicer_config(p, c, &err);
 
-	if (rc) {
-		fprintf(stderr, SLICE_CMD ": %s\n", err.msg);
-		return profile_exit_status(rc);
-	}
+	if (rc)
+		return cmd_fail(SLICE_CMD, profile_exit_status(rc), "%s", err.msg);
 	if (a->has_layer)
 		c->layer_height = a->layer_height;
 	if (a->has_first)
@@ -524,10 +520,8 @@ static int slice_run(int argc, char **argv, struct clio *io)
 			status = cmd_output_check(in[i], out, why, sizeof(why));
 			if (!status && a.png)
 				status = cmd_output_check(in[i], a.png, why, sizeof(why));
-			if (status) {
-				fprintf(stderr, SLICE_CMD ": %s; nothing was written\n", why);
-				return status;
-			}
+			if (status)
+				return cmd_fail(SLICE_CMD, status, "%s; nothing was written", why);
 		}
 	}
 
@@ -544,8 +538,7 @@ static int slice_run(int argc, char **argv, struct clio *io)
 		goto out_profile;
 	rc = slicer_config_check(&cfg, &err);
 	if (rc) {
-		fprintf(stderr, SLICE_CMD ": %s\n", err.msg);
-		status = ST_EXIT_USAGE;
+		status = cmd_fail(SLICE_CMD, ST_EXIT_USAGE, "%s", err.msg);
 		goto out_profile;
 	}
 	cfg.planned = keep_plan;
@@ -575,8 +568,5 @@ out_profile:
 /* "stratum slice - -o -" reads stdin and writes stdout (clio.h). */
 int cmd_slice(int argc, char **argv)
 {
-	struct clio io;
-
-	clio_init(&io, SLICE_CMD);
-	return clio_finish(&io, slice_run(argc, argv, &io));
+	return clio_run(SLICE_CMD, slice_run, argc, argv);
 }

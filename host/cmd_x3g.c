@@ -78,23 +78,19 @@ static int parse_args(int argc, char **argv, struct x3g_args *a)
 	if (rc)
 		return rc;
 	if (a->decode) {
-		if (a->in || a->out || a->printer || a->flavor || a->force) {
-			fprintf(stderr, X3G_CMD ": --decode takes only the X3G file (and --json)\n");
-			return ST_EXIT_USAGE;
-		}
+		if (a->in || a->out || a->printer || a->flavor || a->force)
+			return cmd_fail(X3G_CMD, ST_EXIT_USAGE,
+					"--decode takes only the X3G file (and --json)");
 		return 0;
 	}
-	if (!a->in || !a->out || !a->printer) {
-		fprintf(stderr, X3G_CMD ": %s\n",
-			!a->in ? "no G-code file given" : !a->out ? "no output given (-o OUT.x3g)"
-							  : "no printer given (--printer NAME)");
-		cmd_usage(&spec, stderr);
-		return ST_EXIT_USAGE;
-	}
-	if (a->flavor && strcmp(a->flavor, "reprap") && strcmp(a->flavor, "makerbot")) {
-		fprintf(stderr, X3G_CMD ": --flavor is reprap or makerbot, not '%s'\n", a->flavor);
-		return ST_EXIT_USAGE;
-	}
+	if (!a->in || !a->out || !a->printer)
+		return cmd_refuse(&spec, "%s",
+				  !a->in    ? "no G-code file given"
+				  : !a->out ? "no output given (-o OUT.x3g)"
+					    : "no printer given (--printer NAME)");
+	if (a->flavor && strcmp(a->flavor, "reprap") && strcmp(a->flavor, "makerbot"))
+		return cmd_fail(X3G_CMD, ST_EXIT_USAGE, "--flavor is reprap or makerbot, not '%s'",
+				a->flavor);
 	return 0;
 }
 
@@ -125,10 +121,9 @@ static int flush_call(struct x3g_run *r, int ncmds)
 	}
 	r->commands += (uint64_t)ncmds;
 	r->bytes += len;
-	if (len && fwrite(bytes, 1, len, r->out) != len) {
-		fprintf(stderr, X3G_CMD ": %s: write failed: %s\n", r->a->out, strerror(errno));
-		return ST_EXIT_FAILURE;
-	}
+	if (len && fwrite(bytes, 1, len, r->out) != len)
+		return cmd_fail(X3G_CMD, ST_EXIT_FAILURE, "%s: write failed: %s", r->a->out,
+				strerror(errno));
 	return 0;
 }
 
@@ -140,10 +135,8 @@ static int translate_all(struct x3g_run *r, FILE *in)
 	struct st_error err = {0};
 	int rc, status = 0;
 
-	if (gcode_reader_new(in, r->a->in, &rd, &err)) {
-		fprintf(stderr, X3G_CMD ": %s\n", err.msg);
-		return ST_EXIT_SOFTWARE;
-	}
+	if (gcode_reader_new(in, r->a->in, &rd, &err))
+		return cmd_fail(X3G_CMD, ST_EXIT_SOFTWARE, "%s", err.msg);
 	while ((rc = gcode_reader_next(rd, 0, &line, &err)) > 0) {
 		r->lines++;
 		rc = x3g_translate(r->t, &line, gcode_reader_line(rd), &err);
@@ -173,10 +166,10 @@ static int translate_to_file(struct x3g_run *r, FILE *in)
 	struct st_error err = {0};
 	int status;
 
-	if (st_file_begin(&out, r->a->out, &err)) {
-		fprintf(stderr, X3G_CMD ": %s\n", err.msg);
-		return err.code == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_FAILURE;
-	}
+	if (st_file_begin(&out, r->a->out, &err))
+		return cmd_fail(X3G_CMD,
+				err.code == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_FAILURE, "%s",
+				err.msg);
 	r->out = out.f;
 	status = translate_all(r, in);
 	r->out = NULL;
@@ -184,10 +177,8 @@ static int translate_to_file(struct x3g_run *r, FILE *in)
 		st_file_abort(&out);
 		return status;
 	}
-	if (st_file_commit(&out, &err)) {
-		fprintf(stderr, X3G_CMD ": %s\n", err.msg);
-		return ST_EXIT_FAILURE;
-	}
+	if (st_file_commit(&out, &err))
+		return cmd_fail(X3G_CMD, ST_EXIT_FAILURE, "%s", err.msg);
 	return 0;
 }
 
@@ -202,20 +193,17 @@ static int run_translate(const struct x3g_args *a)
 	FILE *in;
 	int status;
 
-	if (profile_find(a->printer, &p, &err)) {
-		fprintf(stderr, X3G_CMD ": %s\n", err.msg);
-		return profile_exit_status(err.code);
-	}
+	if (profile_find(a->printer, &p, &err))
+		return cmd_fail(X3G_CMD, profile_exit_status(err.code), "%s", err.msg);
 	if (p->protocol != PROFILE_PROTOCOL_SAILFISH) {
-		fprintf(stderr, X3G_CMD ": printer '%s' speaks %s, not sailfish; X3G is for "
-				"Sailfish printers (send its G-code with 'stratum send')\n",
-			p->id, profile_protocol_name(p->protocol));
-		status = ST_EXIT_USAGE;
+		status = cmd_fail(X3G_CMD, ST_EXIT_USAGE,
+				  "printer '%s' speaks %s, not sailfish; X3G is for Sailfish "
+				  "printers (send its G-code with 'stratum send')",
+				  p->id, profile_protocol_name(p->protocol));
 		goto out_profile;
 	}
 	if (profile_x3g_machine(p, &m, &opt.flavor, &err)) {
-		fprintf(stderr, X3G_CMD ": %s\n", err.msg);
-		status = ST_EXIT_DATAERR;
+		status = cmd_fail(X3G_CMD, ST_EXIT_DATAERR, "%s", err.msg);
 		goto out_profile;
 	}
 	if (a->flavor)
@@ -223,14 +211,15 @@ static int run_translate(const struct x3g_args *a)
 	x3g_build_name(a->out, name, sizeof(name));
 	opt.build_name = name;
 	if (x3g_new(&m, &opt, &r.t, &err)) {
-		fprintf(stderr, X3G_CMD ": %s: %s\n", p->path, err.msg);
-		status = err.code == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
+		status =
+		    cmd_fail(X3G_CMD, err.code == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR,
+			     "%s: %s", p->path, err.msg);
 		goto out_profile;
 	}
 	in = fopen(a->in, "rb");
 	if (!in) {
-		fprintf(stderr, X3G_CMD ": %s: cannot open: %s\n", a->in, strerror(errno));
-		status = ST_EXIT_DATAERR;
+		status = cmd_fail(X3G_CMD, ST_EXIT_DATAERR, "%s: cannot open: %s", a->in,
+				  strerror(errno));
 		goto out_translator;
 	}
 	if ((status = guard_cli(X3G_CMD, a->in, p, a->force))) {
@@ -335,9 +324,8 @@ static int run_decode(const struct x3g_args *a)
 	}
 	free(buf);
 	if (rc < 0) {
-		fprintf(stderr, X3G_CMD ": %s: %s\n", a->decode, err.msg);
 		json_decref(arr);
-		return ST_EXIT_DATAERR;
+		return cmd_fail(X3G_CMD, ST_EXIT_DATAERR, "%s: %s", a->decode, err.msg);
 	}
 	if (arr) {
 		json_t *o = json_object();

@@ -60,6 +60,14 @@ bool cmd_same_file(const char *a, const char *b);
  */
 int cmd_output_check(const char *in, const char *out, char *msg, size_t cap);
 
+/*
+ * cmd_fail - print "CMD: MESSAGE" on stderr (fmt without its newline) and
+ * return status: an error path is `return cmd_fail(CMD, STATUS, ...)`
+ * (host/cmd_output.c).
+ */
+int cmd_fail(const char *cmd, int status, const char *fmt, ...)
+	__attribute__((format(printf, 3, 4)));
+
 /* cmd_is_opt - true when a is NAME or NAME=...; the value may still be missing. */
 bool cmd_is_opt(const char *a, const char *name);
 
@@ -172,11 +180,40 @@ struct cmd_spec {
 	{"--threads", 0, CMD_INT, dest, CMD_RANGE, 1, 256, "a number from %g to %g", "N", help, \
 	 NULL, NULL}
 
+/* The options of the commands that drive a printer (send, print, console). */
+#define CMD_SIM_SPEEDUP 1000 /* --speedup's default: the built-in simulator's time divisor */
+#define CMD_TEXT_OF_(x) #x
+#define CMD_TEXT_OF(x) CMD_TEXT_OF_(x) /* a macro's value as a string, for help texts */
+#define CMD_OPT_PRINTER_NAME(dest) \
+	CMD_OPT_STRING("--printer", 0, dest, 0, NULL, "NAME", \
+		       "the printer profile ('stratum printers'); required")
+#define CMD_OPT_PORT_OR_SIM(dest)                                                    \
+	CMD_OPT_STRING("--port", 0, dest, 0, NULL, "P",                              \
+		       "a serial device, 'auto' (the port whose USB id the profile\n" \
+		       "lists), tcp://HOST:PORT, or 'sim'.  Default: sim, the\n"      \
+		       "built-in simulated printer of the profile's firmware")
+#define CMD_OPT_BAUD(dest)                                                          \
+	{"--baud", 0, CMD_LONG, dest, CMD_RANGE, 300, 10000000,                     \
+	 "a whole number from %.0f to %.0f", "N",                                   \
+	 "link speed, %.0f to %.0f (default: the profile's baudrate)", NULL, NULL}
+#define CMD_OPT_SPEEDUP(dest)                                                       \
+	{"--speedup", 0, CMD_DOUBLE, dest, CMD_RANGE, 1, 1e6, "a factor from %.0f to %.0f", \
+	 "K", "the simulated printer runs K times faster (default " CMD_TEXT_OF(CMD_SIM_SPEEDUP) ")", \
+	 NULL, NULL}
+#define CMD_OPT_SIM_LOG(dest) \
+	CMD_OPT_STRING("--sim-log", 0, dest, 0, NULL, "FILE", \
+		       "testing aid: the simulated printer's execution log")
+
 int cmd_parse(const struct cmd_spec *spec, int argc, char **argv);
 
 /* cmd_usage - spec's help text: head, the option lines, mid, the settings
  * options when spec->cfg, tail. */
 void cmd_usage(const struct cmd_spec *spec, FILE *f);
+
+/* cmd_refuse - a command line refused: "CMD: MESSAGE" and the usage on
+ * stderr; ST_EXIT_USAGE (host/cmd_opts.c). */
+int cmd_refuse(const struct cmd_spec *spec, const char *fmt, ...)
+	__attribute__((format(printf, 2, 3)));
 
 #define CMD_HELP_MAX 600 /* bytes of one option's help text */
 

@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "pngout.h"
 #include "st_file.h"
 
 #define MARGIN_LEFT 70.0
@@ -118,12 +119,6 @@ static void draw_layers(cairo_t *cr, const struct frame *f, const struct layer_s
 	cairo_stroke(cr);
 }
 
-static cairo_status_t png_out(void *closure, const unsigned char *data, unsigned int len)
-{
-	return fwrite(data, 1, len, closure) == len ? CAIRO_STATUS_SUCCESS
-						    : CAIRO_STATUS_WRITE_ERROR;
-}
-
 /* The plot as PNG into f. */
 static int plot_png(const struct layer_span *l, size_t n, const struct layerplot_opts *o, FILE *f,
 		    struct st_error *err)
@@ -138,7 +133,6 @@ static int plot_png(const struct layer_span *l, size_t n, const struct layerplot
 			   .bottom = LAYERPLOT_HEIGHT - MARGIN_BOTTOM};
 	cairo_surface_t *surf;
 	cairo_t *cr;
-	cairo_status_t st;
 
 	for (size_t i = 0; i < n; i++)
 		fr.h1 = fmax(fr.h1, l[i].height);
@@ -159,22 +153,7 @@ static int plot_png(const struct layer_span *l, size_t n, const struct layerplot
 		cairo_set_source_rgb(cr, 0, 0, 0);
 		text_at(cr, MARGIN_LEFT, MARGIN_TOP - 14, o->title, 0.0);
 	}
-	st = cairo_status(cr);
-	if (st == CAIRO_STATUS_SUCCESS) {
-		cairo_surface_flush(surf);
-		st = cairo_surface_write_to_png_stream(surf, png_out, f);
-	}
-	cairo_destroy(cr);
-	cairo_surface_destroy(surf);
-	if (st == CAIRO_STATUS_WRITE_ERROR)
-		return st_error_set(err, ST_ERR_IO, "layer plot: cannot write the PNG: %s",
-				    strerror(errno));
-	if (st == CAIRO_STATUS_NO_MEMORY)
-		return st_error_set(err, ST_ERR_NOMEM, "layer plot: out of memory");
-	if (st != CAIRO_STATUS_SUCCESS)
-		return st_error_set(err, ST_ERR_INTERNAL, "layer plot: cairo: %s",
-				    cairo_status_to_string(st));
-	return 0;
+	return pngout_write(cr, surf, f, "layer plot", "", err);
 }
 
 int layerplot_write(const char *path, const struct layer_span *layers, size_t n,

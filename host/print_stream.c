@@ -11,8 +11,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "commands.h"
 #include "gcode.h"
-#include "portpick.h"
 #include "print_job.h"
 #include "printer_profile.h"
 #include "send.h"
@@ -29,14 +29,12 @@ static int print_open(const char *path, FILE **f, struct gcode_reader **r)
 	struct st_error err = {0};
 
 	*f = fopen(path, "rb");
-	if (!*f) {
-		fprintf(stderr, PRINT_CMD ": cannot open %s: %s\n", path, strerror(errno));
-		return ST_EXIT_DATAERR;
-	}
+	if (!*f)
+		return cmd_fail(PRINT_CMD, ST_EXIT_DATAERR, "cannot open %s: %s", path,
+				strerror(errno));
 	if (gcode_reader_new(*f, path, r, &err)) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
 		fclose(*f);
-		return ST_EXIT_SOFTWARE;
+		return cmd_fail(PRINT_CMD, ST_EXIT_SOFTWARE, "%s", err.msg);
 	}
 	return 0;
 }
@@ -63,17 +61,17 @@ int print_scan(const char *path, struct print_layers *L)
 		if (mark == GCODE_LAYER_START) {
 			layer = l >= 0 ? l : layer + 1;
 			if (layer < 0 || (size_t)layer > L->n + 100000) {
-				fprintf(stderr, PRINT_CMD ": %s: line %llu: layer number %ld is out "
-						"of order\n", path,
-					(unsigned long long)gcode_reader_line(r), layer);
-				status = ST_EXIT_DATAERR;
+				status =
+				    cmd_fail(PRINT_CMD, ST_EXIT_DATAERR,
+					     "%s: line %llu: layer number %ld is out of order",
+					     path, (unsigned long long)gcode_reader_line(r), layer);
 				goto out;
 			}
 			while (L->n <= (size_t)layer) {
 				void *p = st_grow(L->v, &L->cap, L->n + 1, sizeof(*L->v));
 				if (!p) {
-					fprintf(stderr, PRINT_CMD ": out of memory\n");
-					status = ST_EXIT_SOFTWARE;
+					status =
+					    cmd_fail(PRINT_CMD, ST_EXIT_SOFTWARE, "out of memory");
 					goto out;
 				}
 				L->v = p;
@@ -245,10 +243,8 @@ int print_byte_after(const char *path, uint64_t line, int64_t *byte)
 		*byte = (int64_t)gcode_reader_bytes(r);
 	gcode_reader_free(r);
 	fclose(f);
-	if (rc < 0) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		return ST_EXIT_DATAERR;
-	}
+	if (rc < 0)
+		return cmd_fail(PRINT_CMD, ST_EXIT_DATAERR, "%s", err.msg);
 	return 0;
 }
 
@@ -276,16 +272,12 @@ static int print_on(struct print_job *job, const struct printer_ops *ops,
 		pj.resume = true;
 		pj.saved = job->saved;
 	}
-	if ((rc = printer_check(ops, o, &pj, send_warning, (void *)PRINT_CMD, &info, &err))) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		return send_exit_for_check(rc);
-	}
+	if ((rc = printer_check(ops, o, &pj, send_warning, (void *)PRINT_CMD, &info, &err)))
+		return cmd_fail(PRINT_CMD, send_exit_for_check(rc), "%s", err.msg);
 	pj.total = info.commands;
 	run.stop = send_catch_signals();
-	if ((rc = printer_open(ops, o, &pr, &err))) {
-		fprintf(stderr, PRINT_CMD ": %s\n", err.msg);
-		return send_exit_for_open(rc);
-	}
+	if ((rc = printer_open(ops, o, &pr, &err)))
+		return cmd_fail(PRINT_CMD, send_exit_for_open(rc), "%s", err.msg);
 	printer_describe(pr, job->printer_desc, sizeof(job->printer_desc));
 	send_progress_start(&run.p);
 	run.p.cmd = PRINT_CMD;
@@ -336,25 +328,12 @@ int print_stream(struct print_job *job)
 	const char *port = job->a->port ? job->a->port : "sim";
 	struct printer_options o;
 	const struct printer_ops *ops;
-	struct st_error err = {0};
 	int rc;
 
 	job->simulated = !strcmp(port, "sim");
-	if (!job->simulated && !strcmp(port, "auto")) {
-		char why[512] = "";
-
-		if (portpick_auto(job->prof, &job->port_auto, why, sizeof(why), &err)) {
-			fprintf(stderr, PRINT_CMD ": %s\n", err.msg); /* it says --port auto */
-			return ST_EXIT_UNAVAILABLE;
-		}
-		if (!job->a->json)
-			fprintf(stderr, PRINT_CMD ": --port auto: %s\n", why);
-		port = job->port_auto;
-	}
-	if ((rc = printer_profile_options(job->prof, port, 0, &o, &ops, &err))) {
-		fprintf(stderr, PRINT_CMD ": %s: %s\n", job->prof->path, err.msg);
-		return ST_EXIT_DATAERR;
-	}
+	if ((rc = printer_profile_cli(PRINT_CMD, job->prof, &port, 0, job->a->json,
+				      &job->port_auto, &o, &ops)))
+		return rc;
 	o.sim_speedup = job->a->speedup;
 	o.sim_log = job->a->sim_log;
 	if (job->simulated && !job->a->json)

@@ -3,6 +3,11 @@
  */
 #include "printer_profile.h"
 
+#include <stdio.h>
+#include <string.h>
+
+#include "commands.h"
+#include "portpick.h"
 #include "profile_x3g.h"
 
 int printer_profile_options(const struct profile *prof, const char *port, long baud,
@@ -24,5 +29,27 @@ int printer_profile_options(const struct profile *prof, const char *port, long b
 	*ops = &printer_sailfish_ops;
 	if ((rc = profile_x3g_machine(prof, &o->machine, &o->x3g.flavor, err)))
 		return rc;
+	return 0;
+}
+
+int printer_profile_cli(const char *cmd, const struct profile *prof, const char **port,
+			long baud, bool quiet, char **port_auto, struct printer_options *o,
+			const struct printer_ops **ops)
+{
+	struct st_error err = {0};
+
+	if (!strcmp(*port, "auto")) {
+		char why[512] = "";
+
+		if (portpick_auto(prof, port_auto, why, sizeof(why), &err)) {
+			fprintf(stderr, "%s: %s\n", cmd, err.msg); /* it says --port auto */
+			return ST_EXIT_UNAVAILABLE;
+		}
+		if (!quiet)
+			fprintf(stderr, "%s: --port auto: %s\n", cmd, why);
+		*port = *port_auto;
+	}
+	if (printer_profile_options(prof, *port, baud, o, ops, &err))
+		return cmd_fail(cmd, ST_EXIT_DATAERR, "%s: %s", prof->path, err.msg);
 	return 0;
 }

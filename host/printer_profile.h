@@ -21,4 +21,15 @@ int printer_profile_options(const struct profile *prof, const char *port, long b
 			    struct printer_options *o, const struct printer_ops **ops,
 			    struct st_error *err);
 
+/*
+ * printer_profile_cli - what `stratum send`, `print` and `console` do
+ * before they open a printer: *port "auto" becomes the port host/portpick.h
+ * picks (why it was picked said on stderr unless quiet; *port_auto holds
+ * it, free it), then printer_profile_options.  0, or the exit status
+ * (st_error.h) after "CMD: ..." on stderr.
+ */
+int printer_profile_cli(const char *cmd, const struct profile *prof, const char **port,
+			long baud, bool quiet, char **port_auto, struct printer_options *o,
+			const struct printer_ops **ops);
+
 #endif /* STRATUM_HOST_PRINTER_PROFILE_H */

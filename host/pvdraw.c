@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "commands.h"
+#include "pngout.h"
 #include "st_file.h"
 
 #define MARGIN 16	/* px around everything */
@@ -360,12 +361,6 @@ static void draw_furniture(cairo_t *cr, const struct preview *pv, const struct l
 	draw_text(cr, bx + bl + 8, by + 4, text);
 }
 
-static cairo_status_t png_write(void *closure, const unsigned char *data, unsigned int len)
-{
-	return fwrite(data, 1, len, closure) == len ? CAIRO_STATUS_SUCCESS
-						    : CAIRO_STATUS_WRITE_ERROR;
-}
-
 /* The picture as PNG into f (left open); 0, ST_ERR_ARG, ST_ERR_IO, ST_ERR_NOMEM or
  * ST_ERR_INTERNAL (cairo refused). */
 static int pvdraw_png(const struct preview *pv, const struct pvdraw_opts *o, FILE *f,
@@ -374,7 +369,7 @@ static int pvdraw_png(const struct preview *pv, const struct pvdraw_opts *o, FIL
 	struct layout l;
 	cairo_surface_t *surf;
 	cairo_t *cr;
-	cairo_status_t st;
+	char nomem[64];
 	int rc = layout(pv, o, &l, err);
 
 	if (rc)
@@ -385,23 +380,8 @@ static int pvdraw_png(const struct preview *pv, const struct pvdraw_opts *o, FIL
 	cairo_paint(cr);
 	draw_layer(cr, pv, &l);
 	draw_furniture(cr, pv, &l);
-	st = cairo_status(cr);
-	if (st == CAIRO_STATUS_SUCCESS) {
-		cairo_surface_flush(surf);
-		st = cairo_surface_write_to_png_stream(surf, png_write, f);
-	}
-	cairo_destroy(cr);
-	cairo_surface_destroy(surf);
-	if (st == CAIRO_STATUS_WRITE_ERROR)
-		return st_error_set(err, ST_ERR_IO, "preview: cannot write the PNG: %s",
-				    strerror(errno));
-	if (st == CAIRO_STATUS_NO_MEMORY)
-		return st_error_set(err, ST_ERR_NOMEM, "preview: out of memory drawing %d x %d px",
-				    l.w, l.h);
-	if (st != CAIRO_STATUS_SUCCESS)
-		return st_error_set(err, ST_ERR_INTERNAL, "preview: cairo: %s",
-				    cairo_status_to_string(st));
-	return 0;
+	snprintf(nomem, sizeof(nomem), " drawing %d x %d px", l.w, l.h);
+	return pngout_write(cr, surf, f, "preview", nomem, err);
 }
 
 /* ---- the file ---- */

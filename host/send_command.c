@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "commands.h"
 #include "gcode.h"
 #include "printer.h"
 #include "send.h"
@@ -75,8 +76,7 @@ int send_commands_run(const struct send_commands *c, const struct printer_ops *o
 	int status = 0, rc;
 
 	if (!reply || (json && (!out || !replies))) {
-		fprintf(stderr, SC_CMD ": out of memory\n");
-		status = ST_EXIT_SOFTWARE;
+		status = cmd_fail(SC_CMD, ST_EXIT_SOFTWARE, "out of memory");
 		goto out_free;
 	}
 	if (!ops->text_replies) {
@@ -113,15 +113,12 @@ out_report:
 	if (status)
 		fprintf(stderr, SC_CMD ": %s\n", err.msg);
 	if (json) {
-		json_object_set_new(out, "ok", json_boolean(status == 0));
-		json_object_set_new(out, "port", json_string(port));
-		json_object_set_new(out, "printer", json_string(printer));
-		json_object_set_new(out, "protocol", json_string(ops->name));
-		json_object_set_new(out, "firmware", json_string(firmware));
-		json_object_set_new(out, "replies", replies);
+		cmd_json_set(out, "b:ok", status == 0, "s:port", port, "s:printer", printer,
+			     "s:protocol", ops->name, "s:firmware", firmware, "o:replies", replies,
+			     NULL);
 		replies = NULL;
 		if (status)
-			json_object_set_new(out, "error", json_string(err.msg));
+			cmd_json_set(out, "s:error", err.msg, NULL);
 		send_report_emit(out);
 		out = NULL;
 	}
