@@ -21,6 +21,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <type_traits>
 #include <vector>
 
@@ -177,21 +178,42 @@ bool for_each_pair(std::vector<Box> &boxes, std::vector<uint32_t> &use, int thre
 	 * so a pair of two groups always lands in a mixed bucket.
 	 */
 	{
+		/* On all cores: each bucket's signature ends the same whatever
+		 * the order of the updates (one group, or mixed). */
 		const uint32_t EMPTY = NO_GROUP - 1;
-		std::vector<uint32_t> sig(nb, EMPTY);
-		for (size_t i = 0; i < n; i++) {
-			const uint32_t gi = group(tag_of(use[i]));
-			for_each_cell(g, boxes[use[i]], [&](uint32_t b) {
-				sig[b] = sig[b] == EMPTY || sig[b] == gi ? gi : NO_GROUP;
-			});
-		}
+		const size_t span = 16384, spans = (n + span - 1) / span;
+		std::unique_ptr<std::atomic<uint32_t>[]> sig(new std::atomic<uint32_t>[nb]);
+		boxpairs::for_each_index((nb + span - 1) / span, threads, [&](size_t c) {
+			for (size_t b = c * span; b < std::min(nb, (c + 1) * span); b++)
+				sig[b].store(EMPTY, std::memory_order_relaxed);
+		});
+		boxpairs::for_each_index(spans, threads, [&](size_t c) {
+			for (size_t i = c * span; i < std::min(n, (c + 1) * span); i++) {
+				const uint32_t gi = group(tag_of(use[i]));
+				for_each_cell(g, boxes[use[i]], [&](uint32_t b) {
+					uint32_t was = sig[b].load(std::memory_order_relaxed);
+					while (was != gi && was != NO_GROUP &&
+					       !sig[b].compare_exchange_weak(
+						   was, was == EMPTY ? gi : NO_GROUP,
+						   std::memory_order_relaxed))
+						;
+				});
+			}
+		});
+		std::vector<uint8_t> mixed(n);
+		boxpairs::for_each_index(spans, threads, [&](size_t c) {
+			for (size_t i = c * span; i < std::min(n, (c + 1) * span); i++) {
+				bool m = false;
+				for_each_cell(g, boxes[use[i]], [&](uint32_t b) {
+					m |= sig[b].load(std::memory_order_relaxed) == NO_GROUP;
+				});
+				mixed[i] = m;
+			}
+		});
 		size_t kept = 0;
-		for (size_t i = 0; i < n; i++) {
-			bool mixed = false;
-			for_each_cell(g, boxes[use[i]], [&](uint32_t b) { mixed |= sig[b] == NO_GROUP; });
-			if (mixed)
+		for (size_t i = 0; i < n; i++)
+			if (mixed[i])
 				use[kept++] = use[i];
-		}
 		use.resize(kept);
 		n = kept;
 	}
