@@ -74,21 +74,29 @@ static uint64_t hash_bits(const uint32_t b[3])
 	return h;
 }
 
-/* A zeroed table of n slots; large ones on huge pages where the kernel
- * has them, as each probe lands on a page of its own and 4 KiB pages
- * made most probes walk the page tables. */
-static struct weld_slot *new_slots(size_t n)
+/* Memory for a large table read in random order (the slots here, the
+ * mesh's vertices and triangles in every pass of the check), on huge
+ * pages where the kernel has them: with 4 KiB pages most lookups in
+ * such a table walk the page tables first. */
+static void *huge_alloc(size_t bytes)
 {
-	const size_t huge = (size_t)2 << 20, bytes = n * sizeof(struct weld_slot);
-	struct weld_slot *s;
+	const size_t huge = (size_t)2 << 20;
+	void *p;
 
 	if (bytes < huge)
-		return calloc(n, sizeof(*s));
-	s = aligned_alloc(huge, bytes);
-	if (!s)
-		return NULL;
-	madvise(s, bytes, MADV_HUGEPAGE); /* a hint: 4 KiB pages work too */
-	memset(s, 0, bytes);
+		return malloc(bytes ? bytes : 1);
+	p = aligned_alloc(huge, (bytes + huge - 1) / huge * huge);
+	if (p)
+		madvise(p, bytes, MADV_HUGEPAGE); /* a hint: 4 KiB pages work too */
+	return p;
+}
+
+static struct weld_slot *new_slots(size_t n)
+{
+	struct weld_slot *s = huge_alloc(n * sizeof(*s));
+
+	if (s)
+		memset(s, 0, n * sizeof(*s));
 	return s;
 }
 
@@ -186,7 +194,7 @@ static int number_vertices(struct weld_part *w, unsigned parts, struct mesh *m,
 	}
 	if (total > MESH_MAX_ELEMENTS)
 		return ST_ERR_RANGE;
-	m->verts = malloc((total ? total : 1) * sizeof(*m->verts));
+	m->verts = huge_alloc(total * sizeof(*m->verts));
 	if (!m->verts)
 		return ST_ERR_NOMEM;
 	m->cap_verts = total ? total : 1;
@@ -230,7 +238,7 @@ int mesh_weld_corners(const float (*corner)[3], size_t ntris, int threads, struc
 	uint32_t *global[WELD_MAX_PARTS] = {0};
 	bool started[WELD_MAX_PARTS] = {0};
 	struct mesh *m = calloc(1, sizeof(*m));
-	uint32_t *ids = malloc((ncorners ? ncorners : 1) * sizeof(*ids));
+	uint32_t *ids = huge_alloc(ncorners * sizeof(*ids));
 	size_t nslots = 1024;
 	int rc = 0;
 
@@ -242,8 +250,9 @@ int mesh_weld_corners(const float (*corner)[3], size_t ntris, int threads, struc
 				    ntris);
 	}
 	/* The builder's table size (a closed mesh has about half as many
-	 * vertices as triangles), shared out between the parts. */
-	while (nslots < (ntris + ntris / 4) / parts)
+	 * vertices as triangles, 5/8 of that fills a part to a load of 0.4),
+	 * shared out between the parts. */
+	while (nslots < (ntris + ntris / 4) / 2 / parts)
 		nslots *= 2;
 	memset(w, 0, sizeof(w));
 	if (!m || !ids)
