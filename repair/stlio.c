@@ -214,9 +214,9 @@ static void *decode_run(void *arg)
  * Files from SPLIT_MIN facets up are decoded in two runs on two threads,
  * then welded all at once on several (mesh_weld_corners): the same mesh,
  * index for index, as welding corner by corner.  Returns 1 when that could
- * not be done (a facet that does not decode, or no memory for the corner
- * array): the caller then reads the file in one pass, which names the
- * first bad byte.
+ * not be done (a facet that does not decode, no memory, more vertices than
+ * a mesh holds): the caller then reads the file in one pass, which names
+ * the first bad byte.
  */
 #define SPLIT_MIN 100000u
 
@@ -256,11 +256,10 @@ static int read_welded(struct mio_src *s, uint32_t count, struct mesh **out)
 	free(j[0].src.chunk);
 	free(j[1].src.chunk);
 	if (j[0].ok && j[1].ok) {
-		rc = mesh_weld_corners((const float(*)[3])corner, count, 0, out, &werr);
-		if (rc == ST_ERR_RANGE)
-			rc = mio_builder_error(s, "byte", binary_size(0), &werr);
-		else if (rc)
-			rc = 1; /* out of memory: one pass needs less */
+		/* Out of memory or out of range: the one pass needs less
+		 * memory, and names the byte where a range runs out. */
+		if (mesh_weld_corners((const float(*)[3])corner, count, 0, out, &werr) == 0)
+			rc = 0;
 	}
 	free(corner);
 	return rc;
