@@ -76,6 +76,19 @@ int mesh_builder_triangle(struct mesh_builder *b, uint32_t a, uint32_t c1, uint3
 int mesh_builder_append(struct mesh_builder *b, const struct mesh *part, struct st_error *err);
 
 /*
+ * mesh_weld_corners - the mesh of ntris triangles whose corners are
+ * corner[3 t + k] (finite floats, as a binary STL holds them): exactly the
+ * mesh mesh_builder_vertex and mesh_builder_triangle make corner by
+ * corner in that order (the same vertices, numbered in order of first
+ * use, the same triangles), welded on up to `threads` threads (0: the
+ * cores there are, at most 8), each welding the points of one part of the
+ * hash range.  Returns 0 with *out set, or ST_ERR_NOMEM / ST_ERR_RANGE
+ * (more than MESH_MAX_ELEMENTS vertices or 2^32 corners) with err filled.
+ */
+int mesh_weld_corners(const float (*corner)[3], size_t ntris, int threads, struct mesh **out,
+		      struct st_error *err);
+
+/*
  * mesh_builder_finish - hand over the finished mesh (caller frees it with
  * mesh_free) and free the builder.  Returns NULL only on OOM.
  */

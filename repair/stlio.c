@@ -179,79 +179,89 @@ static int read_facets(struct mio_src *s, struct mesh_builder *b, uint32_t first
 	return 0;
 }
 
-/* The second half of a large binary STL, read on its own thread through a
- * positioned source on the same file, into its own builder. */
-struct half_job {
+/* A run of facets of a large binary STL, decoded on its own thread through
+ * a positioned source on the same file into the corner array. */
+struct decode_job {
 	struct mio_src src;
 	struct st_error err;
-	struct mesh_builder *b;
+	float (*corner)[3];
 	uint32_t first, count;
-	int rc;
+	bool ok;
 };
 
-static void *read_half(void *arg)
+static void *decode_run(void *arg)
 {
-	struct half_job *j = arg;
+	struct decode_job *j = arg;
+	unsigned char fac[STL_FACET];
 
-	j->rc = read_facets(&j->src, j->b, j->first, j->count);
+	for (uint32_t i = j->first; i < j->first + j->count; i++) {
+		if (mio_read(&j->src, fac, sizeof(fac)) != sizeof(fac))
+			return NULL;
+		/* Bytes 0-11 are the normal, ignored; 12-47 the corners. */
+		for (int k = 0; k < 3; k++)
+			for (int c = 0; c < 3; c++) {
+				float f = (float)get_le_float(fac + 12 + 12 * k + 4 * c);
+				if (!isfinite(f))
+					return NULL;
+				j->corner[3 * (size_t)i + k][c] = f;
+			}
+	}
+	j->ok = true;
 	return NULL;
 }
 
 /*
- * Read the facets after the header.  Welding is the slow part, so files
- * from SPLIT_MIN facets up are read in two halves on two threads and the
- * second half is appended to the first (mesh_builder_append keeps the result
- * identical to one sequential pass).  Errors in the first half win, so the
- * message names the earliest bad byte either way.
+ * Files from SPLIT_MIN facets up are decoded in two runs on two threads,
+ * then welded all at once on several (mesh_weld_corners): the same mesh,
+ * index for index, as welding corner by corner.  Returns 1 when that could
+ * not be done (a facet that does not decode, no memory, more vertices than
+ * a mesh holds): the caller then reads the file in one pass, which names
+ * the first bad byte.
  */
 #define SPLIT_MIN 100000u
 
-static int read_all_facets(struct mio_src *s, struct mesh_builder *b, uint32_t count)
+static int read_welded(struct mio_src *s, uint32_t count, struct mesh **out)
 {
-	struct half_job j;
+	struct decode_job j[2];
 	pthread_t thread;
-	struct mesh *second = NULL;
-	struct st_error berr;
-	int rc;
+	bool started;
+	float(*corner)[3] = malloc((size_t)count * 3 * sizeof(*corner));
+	struct st_error werr;
+	int rc = 1;
 
-	if (!s->f || count < SPLIT_MIN)
-		return read_facets(s, b, 0, count);
-	memset(&j, 0, sizeof(j));
-	j.first = count / 2;
-	j.count = count - j.first;
-	j.src.name = s->name;
-	j.src.err = &j.err;
-	j.src.size = s->size;
-	j.src.positioned = true;
-	j.src.pread_fd = fileno(s->f);
-	j.src.off = j.src.pread_pos = binary_size(j.first);
-	j.src.chunk = malloc(MIO_CHUNK);
-	j.src.p = j.src.end = j.src.chunk;
-	j.b = mesh_builder_new(j.count);
-	if (!j.src.chunk || !j.b || pthread_create(&thread, NULL, read_half, &j)) {
-		/* Not enough for two: one pass does the same job. */
-		free(j.src.chunk);
-		mesh_builder_free(j.b);
-		return read_facets(s, b, 0, count);
+	if (!corner)
+		return 1;
+	memset(j, 0, sizeof(j));
+	for (int h = 0; h < 2; h++) {
+		j[h].first = h ? count / 2 : 0;
+		j[h].count = h ? count - count / 2 : count / 2;
+		j[h].corner = corner;
+		j[h].src.name = s->name;
+		j[h].src.err = &j[h].err;
+		j[h].src.size = s->size;
+		j[h].src.positioned = true;
+		j[h].src.pread_fd = fileno(s->f);
+		j[h].src.off = j[h].src.pread_pos = binary_size(j[h].first);
+		j[h].src.chunk = malloc(MIO_CHUNK);
+		j[h].src.p = j[h].src.end = j[h].src.chunk;
 	}
-	rc = read_facets(s, b, 0, j.first);
-	pthread_join(thread, NULL);
-	free(j.src.chunk);
-	if (!rc && j.rc) {
-		if (s->err)
-			*s->err = j.err;
-		rc = j.rc;
+	if (j[0].src.chunk && j[1].src.chunk) {
+		started = pthread_create(&thread, NULL, decode_run, &j[1]) == 0;
+		decode_run(&j[0]);
+		if (started)
+			pthread_join(thread, NULL);
+		else
+			decode_run(&j[1]);
 	}
-	if (!rc) {
-		second = mesh_builder_finish(j.b);
-		j.b = NULL;
-		if (!second)
-			rc = mio_err(s, ST_ERR_NOMEM, "out of memory finishing the mesh");
-		else if (mesh_builder_append(b, second, &berr))
-			rc = mio_builder_error(s, "byte", binary_size(j.first), &berr);
+	free(j[0].src.chunk);
+	free(j[1].src.chunk);
+	if (j[0].ok && j[1].ok) {
+		/* Out of memory or out of range: the one pass needs less
+		 * memory, and names the byte where a range runs out. */
+		if (mesh_weld_corners((const float(*)[3])corner, count, 0, out, &werr) == 0)
+			rc = 0;
 	}
-	mesh_free(second);
-	mesh_builder_free(j.b);
+	free(corner);
 	return rc;
 }
 
@@ -272,12 +282,14 @@ int stlio_read_binary(struct mio_src *s, struct mesh **out)
 		return mio_err(
 		    s, ST_ERR_PARSE,
 		    "byte 80: binary STL header says 0 triangles; the file contains no triangles");
+	if (s->f && count >= SPLIT_MIN && (rc = read_welded(s, count, out)) != 1)
+		return rc;
 	/* count is now bounded by the file size, so it may size the tables. */
 	b = mesh_builder_new(count);
 	if (!b)
 		return mio_err(s, ST_ERR_NOMEM, "out of memory for %lu triangles",
 			       (unsigned long)count);
-	rc = read_all_facets(s, b, count);
+	rc = read_facets(s, b, 0, count);
 	if (rc) {
 		mesh_builder_free(b);
 		return rc;

@@ -5,6 +5,7 @@
 #include <check.h>
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "fixtures.h"
 #include "mesh.h"
@@ -72,6 +73,68 @@ START_TEST(weld_many_vertices_grows_table)
 	m = mesh_builder_finish(b);
 	ck_assert_uint_eq(m->nverts, 50000);
 	mesh_free(m);
+}
+END_TEST
+
+/*
+ * mesh_weld_corners must make the builder's mesh index for index, whatever
+ * the number of parts: corners drawn from a small grid (so most repeat,
+ * many first seen late), with -0.0 and +0.0 mixed, and sizes that make
+ * the parts' tables grow.  A wrong merge of the parts numbers the
+ * vertices out of first-use order; a lost -0.0 fold makes extra ones.
+ */
+START_TEST(weld_corners_matches_builder)
+{
+	const size_t sizes[] = {1, 7, 3000, 40000};
+
+	for (size_t n = 0; n < sizeof(sizes) / sizeof(sizes[0]); n++) {
+		const size_t ntris = sizes[n];
+		float(*corner)[3] = malloc(3 * ntris * sizeof(*corner));
+		struct mesh_builder *b = mesh_builder_new(0);
+		uint32_t seed = 12345;
+		struct mesh *want;
+
+		ck_assert_ptr_nonnull(corner);
+		for (size_t c = 0; c < 3 * ntris; c++) {
+			for (int k = 0; k < 3; k++) {
+				seed = seed * 1103515245u + 12345u;
+				/* Grid steps of 0.5 from -20 to 20: -0.0 for half the zeros. */
+				int step = (int)((seed >> 8) % 81) - 40;
+				corner[c][k] = step == 0 && (seed & 0x10000) ? -0.0f : 0.5f * (float)step;
+			}
+			/* Late in the file, points the start never had. */
+			if (c > 2 * ntris)
+				corner[c][2] += 100.0f;
+		}
+		for (size_t t = 0; t < ntris; t++) {
+			uint32_t w[3];
+			for (int k = 0; k < 3; k++) {
+				const double p[3] = {corner[3 * t + k][0], corner[3 * t + k][1],
+						     corner[3 * t + k][2]};
+				ck_assert_int_eq(mesh_builder_vertex(b, p, &w[k], NULL), 0);
+			}
+			ck_assert_int_eq(mesh_builder_triangle(b, w[0], w[1], w[2], NULL), 0);
+		}
+		want = mesh_builder_finish(b);
+		for (int parts = 1; parts <= 9; parts += 2) {
+			struct mesh *got = NULL;
+			struct st_error err = {0};
+
+			ck_assert_int_eq(mesh_weld_corners((const float(*)[3])corner, ntris, parts,
+							   &got, &err),
+					 0);
+			ck_assert_uint_eq(got->nverts, want->nverts);
+			ck_assert_uint_eq(got->ntris, want->ntris);
+			ck_assert_int_eq(memcmp(got->verts, want->verts,
+						want->nverts * sizeof(*want->verts)),
+					 0);
+			ck_assert_int_eq(
+			    memcmp(got->tris, want->tris, want->ntris * sizeof(*want->tris)), 0);
+			mesh_free(got);
+		}
+		mesh_free(want);
+		free(corner);
+	}
 }
 END_TEST
 
@@ -581,6 +644,7 @@ Suite *mesh_suite(void)
 
 	tcase_add_test(weld, weld_is_exact);
 	tcase_add_test(weld, weld_many_vertices_grows_table);
+	tcase_add_test(weld, weld_corners_matches_builder);
 	suite_add_tcase(s, weld);
 	tcase_add_test(topo, cube_is_printable);
 	tcase_add_test(topo, sphere_genus_0);

@@ -885,11 +885,12 @@ static struct mesh *weld_in_file_order(const unsigned char *data, size_t ntris)
 }
 
 /*
- * Large binary files are read in two halves on two threads; the result must
- * be the very mesh one sequential pass makes (the buffer reader is one pass),
- * index for index, and errors must still name the first bad byte.  Both
- * read facets a few ahead of welding them (mesh_builder_prefetch), and must
- * still weld in file order.
+ * Large binary files are decoded in two halves on two threads and welded
+ * in parts on several (mesh_weld_corners); the result must be the very
+ * mesh one sequential pass makes (the buffer reader is one pass), index
+ * for index, and errors must still name the first bad byte.  The one-pass
+ * reader reads facets a few ahead of welding them (mesh_builder_prefetch),
+ * and must still weld in file order.
  */
 START_TEST(binary_split_read_matches_one_pass)
 {

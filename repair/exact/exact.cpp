@@ -61,42 +61,54 @@ int count_pairs(const double (*verts)[3], size_t nverts, const uint32_t (*tris)[
 	std::vector<Box> boxes(ntris);
 	std::vector<uint32_t> use;
 	std::vector<uint8_t> usable(ntris, 0);
+
+	/* The boxes on all cores; the first triangle with a non-finite
+	 * corner is the one reported, as a single pass would. */
+	const size_t span = 16384;
+	std::atomic<size_t> first_bad{ntris};
+	boxpairs::for_each_index((ntris + span - 1) / span, threads, [&](size_t c) {
+		for (size_t t = c * span; t < std::min(ntris, (c + 1) * span); t++) {
+			const double *p[3];
+			float lo[3], hi[3];
+
+			if (skip && skip[t])
+				continue;
+			for (int k = 0; k < 3; k++)
+				p[k] = verts[tris[t][k]];
+			if (!finite3(p[0]) || !finite3(p[1]) || !finite3(p[2])) {
+				size_t was = first_bad.load();
+				while (t < was && !first_bad.compare_exchange_weak(was, t))
+					;
+				return;
+			}
+			if (CGAL::collinear(to_point(p[0]), to_point(p[1]), to_point(p[2])))
+				continue; /* degenerate: no box, as if skipped */
+			for (int k = 0; k < 3; k++) {
+				lo[k] = box_coord(std::min(std::min(p[0][k], p[1][k]), p[2][k]));
+				hi[k] = box_coord(std::max(std::max(p[0][k], p[1][k]), p[2][k]));
+			}
+			boxes[t] = Box(lo, hi);
+			usable[t] = 1;
+		}
+	});
+	if (first_bad < ntris)
+		return st_error_set(err, ST_ERR_ARG,
+				    "exact: triangle %zu has a non-finite vertex "
+				    "coordinate; check the input before counting",
+				    first_bad.load());
 	size_t nuse = 0;
-
 	for (size_t t = 0; t < ntris; t++)
-		if (!(skip && skip[t]))
-			nuse++;
+		nuse += usable[t];
 	use.reserve(nuse);
-	for (size_t t = 0; t < ntris; t++) {
-		const double *p[3];
-		float lo[3], hi[3];
-
-		if (skip && skip[t])
-			continue;
-		for (int k = 0; k < 3; k++) {
-			p[k] = verts[tris[t][k]];
-			if (!finite3(p[k]))
-				return st_error_set(err, ST_ERR_ARG,
-						    "exact: triangle %zu has a non-finite vertex "
-						    "coordinate; check the input before counting",
-						    t);
-		}
-		if (CGAL::collinear(to_point(p[0]), to_point(p[1]), to_point(p[2])))
-			continue; /* degenerate: no box, as if skipped */
-		for (int k = 0; k < 3; k++) {
-			lo[k] = box_coord(std::min(std::min(p[0][k], p[1][k]), p[2][k]));
-			hi[k] = box_coord(std::max(std::max(p[0][k], p[1][k]), p[2][k]));
-		}
-		boxes[t] = Box(lo, hi);
-		use.push_back(static_cast<uint32_t>(t));
-		usable[t] = 1;
-	}
+	for (size_t t = 0; t < ntris; t++)
+		if (usable[t])
+			use.push_back(static_cast<uint32_t>(t));
 
 	/* Patches proven flat (patches.hpp) and pairs that share a vertex:
 	 * from the stars, never from the boxes; a star inside one patch
 	 * needs no test of its own. */
 	patches::table pt;
-	patches::label(verts, nverts, tris, ntris, usable, pt);
+	patches::label(verts, nverts, tris, ntris, usable, threads, pt);
 	stars::table st;
 	stars::build(tris, ntris, nverts, usable, st);
 	auto get = [verts](uint32_t i) { return to_point(verts[i]); };

@@ -18,9 +18,11 @@
 #include "boxpairs.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <type_traits>
 #include <vector>
 
@@ -117,19 +119,33 @@ bool for_each_pair(std::vector<Box> &boxes, std::vector<uint32_t> &use, int thre
 
 	if (n < 2)
 		return n == 1 || n == 0;
-	/* Cell side from the median largest box side. */
+	/* Cell side from the median largest box side.  This pass and the
+	 * next run on all cores, each span of boxes writing its own
+	 * results (min, max and sums of whole numbers: the same whatever
+	 * the order). */
+	const size_t span = 16384, spans = (n + span - 1) / span;
 	std::vector<float> side(n);
-	float lo[3] = {HUGE_VALF, HUGE_VALF, HUGE_VALF}, hi[3] = {-HUGE_VALF, -HUGE_VALF, -HUGE_VALF};
-	for (size_t i = 0; i < n; i++) {
-		const Box &b = boxes[use[i]];
-		float s = 0;
-		for (int k = 0; k < 3; k++) {
-			s = std::max(s, b.max_coord(k) - b.min_coord(k));
-			lo[k] = std::min(lo[k], b.min_coord(k));
-			hi[k] = std::max(hi[k], b.max_coord(k));
+	std::vector<std::array<float, 6>> span_box(spans);
+	boxpairs::for_each_index(spans, threads, [&](size_t c) {
+		std::array<float, 6> &r = span_box[c];
+		r = {HUGE_VALF, HUGE_VALF, HUGE_VALF, -HUGE_VALF, -HUGE_VALF, -HUGE_VALF};
+		for (size_t i = c * span; i < std::min(n, (c + 1) * span); i++) {
+			const Box &b = boxes[use[i]];
+			float s = 0;
+			for (int k = 0; k < 3; k++) {
+				s = std::max(s, b.max_coord(k) - b.min_coord(k));
+				r[k] = std::min(r[k], b.min_coord(k));
+				r[3 + k] = std::max(r[3 + k], b.max_coord(k));
+			}
+			side[i] = s;
 		}
-		side[i] = s;
-	}
+	});
+	float lo[3] = {HUGE_VALF, HUGE_VALF, HUGE_VALF}, hi[3] = {-HUGE_VALF, -HUGE_VALF, -HUGE_VALF};
+	for (const std::array<float, 6> &r : span_box)
+		for (int k = 0; k < 3; k++) {
+			lo[k] = std::min(lo[k], r[k]);
+			hi[k] = std::max(hi[k], r[3 + k]);
+		}
 	std::nth_element(side.begin(), side.begin() + n / 2, side.end());
 	const double cell = CELL_SIDE * side[n / 2];
 	std::vector<float>().swap(side);
@@ -145,14 +161,20 @@ bool for_each_pair(std::vector<Box> &boxes, std::vector<uint32_t> &use, int thre
 	g.dim[1] = cell_of(g, 1, hi[1]) + 1;
 
 	/* Count cell entries first: decline before allocating much. */
+	std::vector<double> span_entries(spans, 0);
+	boxpairs::for_each_index(spans, threads, [&](size_t c) {
+		for (size_t i = c * span; i < std::min(n, (c + 1) * span); i++) {
+			const Box &b = boxes[use[i]];
+			double e = 1;
+			for (int k = 0; k < 3; k++)
+				e *= (double)(cell_of(g, k, b.max_coord(k)) -
+					      cell_of(g, k, b.min_coord(k)) + 1);
+			span_entries[c] += e;
+		}
+	});
 	double entries = 0;
-	for (size_t i = 0; i < n; i++) {
-		const Box &b = boxes[use[i]];
-		double c = 1;
-		for (int k = 0; k < 3; k++)
-			c *= (double)(cell_of(g, k, b.max_coord(k)) - cell_of(g, k, b.min_coord(k)) + 1);
-		entries += c;
-	}
+	for (double e : span_entries)
+		entries += e;
 	if (entries > MAX_ENTRIES_PER_BOX * (double)n + 1024 || entries >= (double)UINT32_MAX)
 		return false;
 	/* A bucket per two entries: a cell holds about three, so most buckets
@@ -177,21 +199,41 @@ bool for_each_pair(std::vector<Box> &boxes, std::vector<uint32_t> &use, int thre
 	 * so a pair of two groups always lands in a mixed bucket.
 	 */
 	{
+		/* On all cores: each bucket's signature ends the same whatever
+		 * the order of the updates (one group, or mixed). */
 		const uint32_t EMPTY = NO_GROUP - 1;
-		std::vector<uint32_t> sig(nb, EMPTY);
-		for (size_t i = 0; i < n; i++) {
-			const uint32_t gi = group(tag_of(use[i]));
-			for_each_cell(g, boxes[use[i]], [&](uint32_t b) {
-				sig[b] = sig[b] == EMPTY || sig[b] == gi ? gi : NO_GROUP;
-			});
-		}
+		std::unique_ptr<std::atomic<uint32_t>[]> sig(new std::atomic<uint32_t>[nb]);
+		boxpairs::for_each_index((nb + span - 1) / span, threads, [&](size_t c) {
+			for (size_t b = c * span; b < std::min(nb, (c + 1) * span); b++)
+				sig[b].store(EMPTY, std::memory_order_relaxed);
+		});
+		boxpairs::for_each_index(spans, threads, [&](size_t c) {
+			for (size_t i = c * span; i < std::min(n, (c + 1) * span); i++) {
+				const uint32_t gi = group(tag_of(use[i]));
+				for_each_cell(g, boxes[use[i]], [&](uint32_t b) {
+					uint32_t was = sig[b].load(std::memory_order_relaxed);
+					while (was != gi && was != NO_GROUP &&
+					       !sig[b].compare_exchange_weak(
+						   was, was == EMPTY ? gi : NO_GROUP,
+						   std::memory_order_relaxed))
+						;
+				});
+			}
+		});
+		std::vector<uint8_t> mixed(n);
+		boxpairs::for_each_index(spans, threads, [&](size_t c) {
+			for (size_t i = c * span; i < std::min(n, (c + 1) * span); i++) {
+				bool m = false;
+				for_each_cell(g, boxes[use[i]], [&](uint32_t b) {
+					m |= sig[b].load(std::memory_order_relaxed) == NO_GROUP;
+				});
+				mixed[i] = m;
+			}
+		});
 		size_t kept = 0;
-		for (size_t i = 0; i < n; i++) {
-			bool mixed = false;
-			for_each_cell(g, boxes[use[i]], [&](uint32_t b) { mixed |= sig[b] == NO_GROUP; });
-			if (mixed)
+		for (size_t i = 0; i < n; i++)
+			if (mixed[i])
 				use[kept++] = use[i];
-		}
 		use.resize(kept);
 		n = kept;
 	}

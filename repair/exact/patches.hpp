@@ -27,6 +27,7 @@
 #ifndef STRATUM_REPAIR_EXACT_PATCHES_HPP
 #define STRATUM_REPAIR_EXACT_PATCHES_HPP
 
+#include "boxpairs.hpp"
 #include "stars.hpp"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -75,32 +76,50 @@ struct table {
 
 /* Label every usable triangle (condition 1 decided here). */
 inline void label(const double (*verts)[3], size_t nverts, const uint32_t (*tris)[3], size_t ntris,
-		  const std::vector<uint8_t> &usable, table &pt)
+		  const std::vector<uint8_t> &usable, int threads, table &pt)
 {
 	pt.tri.assign(ntris, NONE);
 	pt.open.assign(3 * ntris, 0);
 	pt.pinch.assign(nverts, 0);
 	pt.bad.reset(new std::atomic<uint8_t>[1]());
-	/* Cell side from a sample of box sides; any partition is sound. */
-	std::vector<double> side;
-	double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+	/* Cell side from a sample of box sides; any partition is sound.
+	 * Every pass over the triangles runs on all cores in spans, each
+	 * span writing only its own results, so the labels do not depend
+	 * on the number of threads. */
+	const size_t span = 16384, spans = (ntris + span - 1) / span;
 	const size_t stride = ntris / 8192 + 1;
-	for (size_t t = 0; t < ntris; t++) {
-		if (!usable[t])
-			continue;
-		double s = 0;
-		for (int k = 0; k < 3; k++) {
-			const double a = verts[tris[t][0]][k], b = verts[tris[t][1]][k],
-				     c = verts[tris[t][2]][k];
-			const double l = std::min(a, std::min(b, c)),
-				     h = std::max(a, std::max(b, c));
-			s = std::max(s, h - l);
-			lo[k] = std::min(lo[k], l);
-			hi[k] = std::max(hi[k], h);
+	std::vector<double> sampled((ntris + stride - 1) / stride, -1);
+	std::vector<std::array<double, 6>> span_box(spans);
+	boxpairs::for_each_index(spans, threads, [&](size_t c) {
+		std::array<double, 6> &r = span_box[c];
+		r = {HUGE_VAL, HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+		for (size_t t = c * span; t < std::min(ntris, (c + 1) * span); t++) {
+			if (!usable[t])
+				continue;
+			double s = 0;
+			for (int k = 0; k < 3; k++) {
+				const double a = verts[tris[t][0]][k], b = verts[tris[t][1]][k],
+					     c3 = verts[tris[t][2]][k];
+				const double l = std::min(a, std::min(b, c3)),
+					     h = std::max(a, std::max(b, c3));
+				s = std::max(s, h - l);
+				r[k] = std::min(r[k], l);
+				r[3 + k] = std::max(r[3 + k], h);
+			}
+			if (t % stride == 0)
+				sampled[t / stride] = s;
 		}
-		if (t % stride == 0)
+	});
+	double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+	for (const std::array<double, 6> &r : span_box)
+		for (int k = 0; k < 3; k++) {
+			lo[k] = std::min(lo[k], r[k]);
+			hi[k] = std::max(hi[k], r[3 + k]);
+		}
+	std::vector<double> side;
+	for (double s : sampled)
+		if (s >= 0)
 			side.push_back(s);
-	}
 	if (side.empty())
 		return;
 	std::nth_element(side.begin(), side.begin() + side.size() / 2, side.end());
@@ -114,30 +133,43 @@ inline void label(const double (*verts)[3], size_t nverts, const uint32_t (*tris
 	for (int k = 0; k < 3; k++)
 		dim[k] = std::min(MAX_CELLS, (int)((hi[k] - lo[k]) * inv) + 1);
 	const size_t ncell = (size_t)dim[0] * dim[1] * dim[2];
-	/* First the cell of each triangle (kept in tri for now) and how much
-	 * area the cell's triangles show along each of the six directions. */
+	/* First the cell of each triangle (kept in tri for now) and its
+	 * normal; then, in triangle order, how much area each cell's
+	 * triangles show along each of the six directions. */
+	std::vector<std::array<float, 3>> normal(ntris);
+	boxpairs::for_each_index(spans, threads, [&](size_t c) {
+		for (size_t t = c * span; t < std::min(ntris, (c + 1) * span); t++) {
+			if (!usable[t])
+				continue;
+			const double *a = verts[tris[t][0]], *b = verts[tris[t][1]],
+				     *c3 = verts[tris[t][2]];
+			size_t at = 0;
+			for (int x = 2; x >= 0; x--) {
+				const double m = (a[x] + b[x] + c3[x]) / 3;
+				/* Clamped as a double: near the top of the double
+				 * range the sum overflows, and converting that is
+				 * undefined. */
+				const double f = (m - lo[x]) * inv;
+				const int i = f >= dim[x] - 1 ? dim[x] - 1 : f > 0 ? (int)f : 0;
+				at = at * dim[x] + i;
+			}
+			pt.tri[t] = (uint32_t)at;
+			const double e[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+			const double f[3] = {c3[0] - a[0], c3[1] - a[1], c3[2] - a[2]};
+			normal[t] = {(float)(e[1] * f[2] - e[2] * f[1]),
+				     (float)(e[2] * f[0] - e[0] * f[2]),
+				     (float)(e[0] * f[1] - e[1] * f[0])};
+		}
+	});
 	std::vector<float> shown(6 * ncell, 0);
 	for (size_t t = 0; t < ntris; t++) {
 		if (!usable[t])
 			continue;
-		const double *a = verts[tris[t][0]], *b = verts[tris[t][1]], *c = verts[tris[t][2]];
-		size_t at = 0;
-		for (int x = 2; x >= 0; x--) {
-			const double m = (a[x] + b[x] + c[x]) / 3;
-			/* Clamped as a double: near the top of the double range
-			 * the sum overflows, and converting that is undefined. */
-			const double f = (m - lo[x]) * inv;
-			const int i = f >= dim[x] - 1 ? dim[x] - 1 : f > 0 ? (int)f : 0;
-			at = at * dim[x] + i;
-		}
-		pt.tri[t] = (uint32_t)at;
-		const double e[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-		const double f[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-		const double n[3] = {e[1] * f[2] - e[2] * f[1], e[2] * f[0] - e[0] * f[2],
-				     e[0] * f[1] - e[1] * f[0]};
 		for (int k = 0; k < 3; k++)
-			shown[6 * at + 2 * k + (n[k] < 0)] += (float)std::fabs(n[k]);
+			shown[6 * (size_t)pt.tri[t] + 2 * k + (normal[t][k] < 0)] +=
+			    std::fabs(normal[t][k]);
 	}
+	std::vector<std::array<float, 3>>().swap(normal);
 	/*
 	 * Each triangle then takes the first direction, in its cell's order of
 	 * most area shown, along which it turns counterclockwise (exactly).
@@ -155,25 +187,38 @@ inline void label(const double (*verts)[3], size_t nverts, const uint32_t (*tris
 		std::sort(o, o + 6, [w](uint8_t x, uint8_t y) { return w[x] > w[y]; });
 	}
 	std::vector<float>().swap(shown);
+	const uint8_t NO_CODE = 6;
+	std::vector<uint8_t> chosen(ntris, NO_CODE);
+	boxpairs::for_each_index(spans, threads, [&](size_t c) {
+		for (size_t t = c * span; t < std::min(ntris, (c + 1) * span); t++) {
+			if (!usable[t])
+				continue;
+			const double *a = verts[tris[t][0]], *b = verts[tris[t][1]],
+				     *c3 = verts[tris[t][2]];
+			for (int x = 0; x < 6; x++) {
+				const unsigned code = order[6 * (size_t)pt.tri[t] + x];
+				if (orient(a, b, c3, code) > 0) {
+					chosen[t] = (uint8_t)code;
+					break;
+				}
+			}
+		}
+	});
+	/* Patch numbers in order of first use, as one pass would give. */
 	std::vector<uint32_t> dense(6 * ncell, NONE);
 	for (size_t t = 0; t < ntris; t++) {
 		if (!usable[t])
 			continue;
 		const size_t at = pt.tri[t];
 		pt.tri[t] = NONE;
-		const double *a = verts[tris[t][0]], *b = verts[tris[t][1]], *c = verts[tris[t][2]];
-		for (int x = 0; x < 6; x++) {
-			const unsigned code = order[6 * at + x];
-			if (orient(a, b, c, code) <= 0)
-				continue;
-			uint32_t &d = dense[6 * at + code];
-			if (d == NONE) {
-				d = (uint32_t)pt.code.size();
-				pt.code.push_back((uint8_t)code);
-			}
-			pt.tri[t] = d;
-			break;
+		if (chosen[t] == NO_CODE)
+			continue;
+		uint32_t &d = dense[6 * at + chosen[t]];
+		if (d == NONE) {
+			d = (uint32_t)pt.code.size();
+			pt.code.push_back(chosen[t]);
 		}
+		pt.tri[t] = d;
 	}
 	pt.bad.reset(new std::atomic<uint8_t>[pt.code.size() + 1]());
 }
