@@ -938,6 +938,10 @@ Suite *meshio_suite(void)
 	TCase *wr = tcase_create("writer");
 	TCase *fz = tcase_create("robustness");
 
+	/* The round trips write and read files of 100k facets and more (the
+	 * parallel reader starts there): several seconds under ASan on a
+	 * loaded machine, over Check's default 4 s. */
+	tcase_set_timeout(io, 60);
 	tcase_add_test(io, binary_round_trip);
 	tcase_add_test(io, binary_layout);
 	tcase_add_test(io, ascii_round_trip_exact);
