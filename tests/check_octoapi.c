@@ -25,6 +25,7 @@
 #define CTL "X-Api-Key: " KEY_CTL
 #define UP "X-Api-Key: " KEY_UP
 #define RO "X-Api-Key: " KEY_READ
+#define NODE_KEY_LEN 32 /* OctoPrint's API key: 32 hex digits */
 
 /* A test-instant Prusa and a test-instant Creator Pro (two extruders). */
 #define MK3S_AND_CREATOR                                                             \
@@ -172,6 +173,61 @@ START_TEST(test_key_forms)
 	/* the query key has its roles, no more */
 	sv_expect(np.port, "POST", "/api/job?apikey=" KEY_READ, NULL, "{\"command\":\"cancel\"}",
 		  403);
+	sv_stop(&np);
+}
+END_TEST
+
+/* `stratum serve --new-key NAME --roles ...` (issue 20): OctoPrint's key
+ * form, added to the config (mode 0600), taken in each of the three forms
+ * with its roles only; a second key of the name is refused. */
+START_TEST(test_new_key)
+{
+	struct node_proc np;
+	char out[512], hdr[128], path[128], key[NODE_KEY_LEN + 1], *before, *after;
+	size_t len;
+	struct stat st;
+	struct resp r;
+
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	chmod(np.config, 0644);
+	/* stdout has the key alone */
+	ck_assert_int_eq(tu_sh(out, sizeof(out), "('%s' serve --config '%s' --new-key farm-app "
+				  "--roles 'read, control' >'%s')", tu_bin(), np.config,
+			       tu_path("key.txt")), 0);
+	ck_assert_msg(strstr(out, "added [key farm-app]"), "%s", out);
+	before = tu_slurp(tu_path("key.txt"), &len);
+	ck_assert_msg(strlen(before) == NODE_KEY_LEN + 1 && before[NODE_KEY_LEN] == '\n' &&
+		      strspn(before, "0123456789ABCDEF") == NODE_KEY_LEN, "not a key: '%s'", before);
+	memcpy(key, before, NODE_KEY_LEN);
+	free(before);
+	key[NODE_KEY_LEN] = '\0';
+	ck_assert(stat(np.config, &st) == 0);
+	ck_assert_int_eq(st.st_mode & 0777, 0600);
+	before = tu_slurp(np.config, &len);
+	ck_assert_int_eq(tu_sh(out, sizeof(out), "'%s' serve --config '%s' --new-key farm-app "
+				  "--roles read", tu_bin(), np.config), 65);
+	ck_assert_msg(strstr(out, "[key farm-app] exists already"), "%s", out);
+	after = tu_slurp(np.config, &len);
+	ck_assert_str_eq(before, after);
+	free(before);
+	free(after);
+	ck_assert_int_eq(tu_sh(out, sizeof(out), "'%s' serve --config '%s' --new-key x "
+				  "--roles admin", tu_bin(), np.config), 2);
+	ck_assert_msg(strstr(out, "--roles: 'admin'"), "%s", out);
+	sv_start(&np);
+	snprintf(hdr, sizeof(hdr), "X-Api-Key: %s", key);
+	sv_call(np.port, "GET", "/api/currentuser", hdr, NULL, 200, &r);
+	ck_assert_str_eq(sv_str(r.json, "name"), "farm-app");
+	sv_resp_free(&r);
+	sv_expect(np.port, "POST", "/api/job", hdr, "{\"command\":\"cancel\"}", 409);
+	snprintf(hdr, sizeof(hdr), "Authorization: Bearer %s", key);
+	sv_expect(np.port, "GET", "/api/job", hdr, NULL, 200);
+	snprintf(path, sizeof(path), "/api/job?apikey=%s", key);
+	sv_expect(np.port, "GET", path, NULL, NULL, 200);
+	/* read and control, not upload */
+	sv_upload_text(np.port, "", key, "a.gcode", "G28\n", "false", &r);
+	ck_assert_int_eq(r.status, 403);
+	sv_resp_free(&r);
 	sv_stop(&np);
 }
 END_TEST
@@ -770,6 +826,7 @@ Suite *octoapi_suite(void)
 	tcase_add_test(tc, test_currentuser);
 	tcase_add_test(tc, test_server);
 	tcase_add_test(tc, test_key_forms);
+	tcase_add_test(tc, test_new_key);
 	tcase_add_test(tc, test_head_options_405);
 	tcase_add_test(tc, test_system_commands);
 	tcase_add_test(tc, test_settings_post);

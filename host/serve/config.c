@@ -61,8 +61,7 @@ static char *trim(char *s)
 	return s;
 }
 
-/* A name for a section: letters, digits, '-', '_' and '.', 1-63 bytes. */
-static bool good_name(const char *s)
+bool node_good_name(const char *s)
 {
 	size_t n = strlen(s);
 
@@ -105,8 +104,7 @@ static int whole(struct cfg_parse *p, const char *key, const char *v, double lo,
 	return 0;
 }
 
-/* roles = read, upload, control (any of them, comma separated); v is cut up. */
-static int parse_roles(struct cfg_parse *p, char *v, unsigned *roles)
+int node_parse_roles(char *v, unsigned *roles, struct st_error *err)
 {
 	char *next = v, *tok;
 
@@ -124,11 +122,22 @@ static int parse_roles(struct cfg_parse *p, char *v, unsigned *roles)
 		else if (!strcmp(tok, "control"))
 			*roles |= NODE_ROLE_CONTROL;
 		else
-			return CFG_FAIL(p, ST_ERR_PARSE,
-					"roles: '%s' is not a role (read, upload, control)", tok);
+			return st_error_set(err, ST_ERR_PARSE, "roles: '%.60s' is not a role (read, "
+							       "upload, control)", tok);
 	}
 	if (!*roles)
-		return CFG_FAIL(p, ST_ERR_RANGE, "roles: give at least one of read, upload, control");
+		return st_error_set(err, ST_ERR_RANGE, "roles: give at least one of read, upload, "
+						       "control");
+	return 0;
+}
+
+/* roles = ... in a [key] section, with the file and line in the message. */
+static int parse_roles(struct cfg_parse *p, char *v, unsigned *roles)
+{
+	struct st_error e;
+
+	if (node_parse_roles(v, roles, &e))
+		return CFG_FAIL(p, e.code, "%s", e.msg);
 	return 0;
 }
 
@@ -145,7 +154,7 @@ static int once(struct cfg_parse *p, const char *key, unsigned bit)
 static int check_name(struct cfg_parse *p, char *v, void *base)
 {
 	(void)base;
-	if (!good_name(v))
+	if (!node_good_name(v))
 		return CFG_FAIL(p, ST_ERR_RANGE, "name: '%s' is not a name (letters, "
 					       "digits, '-', '_', '.'; at most 63)", v);
 	return 0;
@@ -383,7 +392,7 @@ static int section_line(struct cfg_parse *p, char *s)
 						 "printer NAME, mqtt)", s);
 	*name = '\0';
 	name = trim(name + 1);
-	if (!good_name(name))
+	if (!node_good_name(name))
 		return CFG_FAIL(p, ST_ERR_RANGE, "'%s' is not a name (letters, digits, '-', '_', "
 						 "'.'; at most 63)", name);
 	if (!strcmp(s, "key")) {
@@ -493,13 +502,14 @@ static int check_mqtt(struct cfg_parse *p)
 	return 0;
 }
 
-/* What every section must have, checked once the whole file is read. */
-static int check_complete(struct cfg_parse *p)
+/* What every section must have, checked once the whole file is read;
+ * keys_required false lets a file without [key] through (--new-key). */
+static int check_complete(struct cfg_parse *p, bool keys_required)
 {
 	struct node_config *c = p->cfg;
 
 	p->line = 0;
-	if (!c->nkeys)
+	if (!c->nkeys && keys_required)
 		return st_error_set(p->err, ST_ERR_RANGE, "%s: no [key NAME] section: the node "
 							  "refuses every request without a key",
 				    p->file);
@@ -559,7 +569,8 @@ static int resolve_paths(struct node_config *c, const char *path, struct st_erro
 	return resolve_path(path, "key_file", m->key_file, err);
 }
 
-int node_config_load(const char *path, struct node_config *out, struct st_error *err)
+int node_config_read(const char *path, struct node_config *out, bool keys_required,
+		     struct st_error *err)
 {
 	static const struct ini_handler handler = {on_section, on_entry, true, false};
 	struct node_config *c = calloc(1, sizeof(*c));
@@ -588,13 +599,18 @@ int node_config_load(const char *path, struct node_config *out, struct st_error 
 	c->max_connections_per_ip = NODE_CONN_PER_IP_DEFAULT;
 	c->idle_timeout_s = NODE_IDLE_TIMEOUT_DEFAULT;
 	if (!(rc = ini_parse(text, len, path, &handler, &p, err)) &&
-	    !(rc = check_complete(&p)) && !(rc = resolve_paths(c, path, err)))
+	    !(rc = check_complete(&p, keys_required)) && !(rc = resolve_paths(c, path, err)))
 		*out = *c;
 out_free:
 	free(text);
 	free(p.scratch);
 	free(c);
 	return rc;
+}
+
+int node_config_load(const char *path, struct node_config *out, struct st_error *err)
+{
+	return node_config_read(path, out, true, err);
 }
 
 bool node_config_exposed(const char *path, const struct node_config *cfg, unsigned *mode)
