@@ -291,6 +291,8 @@ static const struct cfg_key node_keys[] = {
     WHOLE(struct node_config, max_connections, KEY_UNSIGNED, NODE_CONN_MIN, NODE_CONN_MAX),
     WHOLE(struct node_config, max_connections_per_ip, KEY_UNSIGNED, 1, NODE_CONN_MAX),
     WHOLE(struct node_config, idle_timeout_s, KEY_UNSIGNED, 1, 3600),
+    WHOLE(struct node_config, header_timeout_s, KEY_UNSIGNED, 1, 3600),
+    WHOLE(struct node_config, min_body_rate, KEY_UNSIGNED, 0, 1 << 30),
 };
 static const struct cfg_key key_keys[] = {
     {"key", KEY_SET, 0, 0, 0, 0, set_secret},
@@ -598,6 +600,8 @@ int node_config_read(const char *path, struct node_config *out, bool keys_requir
 	c->max_connections = NODE_CONN_DEFAULT;
 	c->max_connections_per_ip = NODE_CONN_PER_IP_DEFAULT;
 	c->idle_timeout_s = NODE_IDLE_TIMEOUT_DEFAULT;
+	c->header_timeout_s = NODE_HEADER_TIMEOUT_DEFAULT;
+	c->min_body_rate = NODE_MIN_BODY_RATE_DEFAULT;
 	if (!(rc = ini_parse(text, len, path, &handler, &p, err)) &&
 	    !(rc = check_complete(&p, keys_required)) && !(rc = resolve_paths(c, path, err)))
 		*out = *c;

@@ -195,4 +195,21 @@ bool node_push_route(struct node *n, struct node_printer *p, struct MHD_Connecti
 void node_push_stop(struct node *n);
 void node_push_session(const char *secret, char out[NODE_PUSH_SESSION_LEN + 1]);
 
+/*
+ * http_deadline.c - the bounds on a slow client (docs/serve.md, "Limits"),
+ * which libmicrohttpd's inactivity time-out does not give: the header whole
+ * within header_timeout_s, the body at min_body_rate.  http.c tells it each
+ * connection's start and close and where its request is.
+ */
+int http_deadlines_start(struct node *n, struct st_error *err);
+void http_deadlines_stop(struct node *n); /* after the HTTP daemon stopped */
+void http_deadline_open(struct node *n, struct MHD_Connection *c, void **socket_context);
+void http_deadline_close(void **socket_context);
+/* The header is whole (bytes 0), or bytes of the body came. */
+void http_deadline_body(struct MHD_Connection *c, size_t bytes);
+/* The request is read: answering, or upgraded (not bounded here). */
+void http_deadline_answered(struct MHD_Connection *c);
+/* The request is done: a kept-alive connection waits for the next header. */
+void http_deadline_next(struct MHD_Connection *c);
+
 #endif /* STRATUM_HOST_SERVE_HTTP_INT_H */

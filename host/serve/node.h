@@ -36,6 +36,8 @@
 #define NODE_CONN_MAX 65536
 #define NODE_CONN_PER_IP_DEFAULT 32    /* max_connections_per_ip */
 #define NODE_IDLE_TIMEOUT_DEFAULT 30   /* idle_timeout_s: no byte in either direction */
+#define NODE_HEADER_TIMEOUT_DEFAULT 30 /* header_timeout_s: a whole request header */
+#define NODE_MIN_BODY_RATE_DEFAULT 1024 /* min_body_rate: bytes/s over each header_timeout_s */
 
 /* Roles of an API key (bit set). */
 enum node_role {
@@ -91,6 +93,8 @@ struct node_config {
 	unsigned max_connections;	/* HTTP connections in all; NODE_CONN_DEFAULT */
 	unsigned max_connections_per_ip; /* from one client address */
 	unsigned idle_timeout_s;	/* close a connection silent this long */
+	unsigned header_timeout_s;	/* a request's header must be whole within this */
+	unsigned min_body_rate;		/* bytes/s a body brings over each header_timeout_s; 0 = any */
 	struct node_key keys[NODE_MAX_KEYS];
 	size_t nkeys;
 	struct node_printer_config printers[NODE_MAX_PRINTERS];
