@@ -762,6 +762,143 @@ START_TEST(test_printer_printhead)
 }
 END_TEST
 
+/*
+ * Commands during a print (OctoPrint queues them between the job's lines):
+ * on a Marlin printer (`port = sim`) a command and a tool target posted
+ * while the job streams run once each, between two lines of the job, whose
+ * lines all run once and in order (the simulator's log: every line number
+ * once, in order); the print head's jog and a tool select stay 409.
+ */
+START_TEST(test_command_during_print)
+{
+	static const char *const ours[] = {"M117 sent during the print", "M104 S205"};
+	struct node_proc np;
+	char path[600], *job, *log, *from, *end, *rest;
+	size_t cap = 64 * 1024, len = 0, n;
+	int seen[2] = {0, 0}, inside[2] = {0, 0};
+	long last = -1;
+	json_t *o;
+	double pos = 0;
+
+	job = malloc(cap);
+	ck_assert(job);
+	len += (size_t)snprintf(job + len, cap - len, "M117 job start\nG28\n");
+	for (int k = 0; k < 160; k++)
+		len += (size_t)snprintf(job + len, cap - len, "G1 X%d Y%d F60\n", 10 + k % 2, 10 + k);
+	snprintf(job + len, cap - len, "M117 job end\n");
+	start(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\nsim_speedup = 40\n");
+	operational(np.port, "");
+	ck_assert(sv_print_text(np.port, "", "moves.gcode", job) == 1);
+	sv_wait_state(np.port, "", 1, "printing", 10);
+	for (int i = 0; i < 250 && pos <= 0; i++) {
+		o = sv_get_json(np.port, "/api/job");
+		pos = json_number_value(json_object_get(json_object_get(o, "progress"), "filepos"));
+		json_decref(o);
+		usleep(20000);
+	}
+	ck_assert_msg(pos > 0, "the job did not start streaming");
+	sv_expect(np.port, "POST", "/api/printer/command", CTL,
+		  "{\"command\":\"M117 sent during the print\"}", 204);
+	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
+		  "{\"command\":\"target\",\"targets\":{\"tool0\":205}}", 204);
+	/* as OctoPrint: no jog, home, tool select or extrusion while printing */
+	sv_expect(np.port, "POST", "/api/printer/printhead", CTL,
+		  "{\"command\":\"jog\",\"x\":10}", 409);
+	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
+		  "{\"command\":\"extrude\",\"amount\":5}", 409);
+	sv_wait_state(np.port, "", 1, "done", 30);
+	/* The simulator's log from the job's first line: the job whole, in
+	 * order, with each command once inside it. */
+	snprintf(path, sizeof(path), "%s/data/sim/mk3s.log", np.dir);
+	log = tu_slurp(path, &n);
+	from = strstr(log, " M117 job start\n");
+	ck_assert_msg(from, "the job's first line did not run: %.300s", log);
+	while (from > log && from[-1] != '\n')
+		from--;
+	rest = job;
+	for (char *line = from; *line; line = end + 1) {
+		char *text = strchr(line, ' ') + 1;
+		long num = atol(line);
+		size_t tl;
+
+		end = strchr(line, '\n');
+		ck_assert(end);
+		if (!strncmp(line, "- M105\n", 7))
+			continue; /* the driver's unnumbered probe when a reply is slow */
+		tl = (size_t)(end - text);
+		ck_assert_msg(last < 0 || num == last + 1, "line %ld ran after line %ld: %.400s", num,
+			      last, from);
+		last = num;
+		for (int i = 0; i < 2; i++) {
+			if (tl == strlen(ours[i]) && !strncmp(text, ours[i], tl)) {
+				seen[i]++;
+				inside[i] = rest != job && *rest; /* after the first job line, before the last */
+				goto next;
+			}
+		}
+		ck_assert_msg(!strncmp(rest, text, tl + 1), "the job ran '%.*s' where '%.40s' was due",
+			      (int)tl, text, rest);
+		rest += tl + 1;
+next:;
+	}
+	ck_assert_msg(!*rest, "the job's lines from '%.40s' did not run", rest);
+	for (int i = 0; i < 2; i++)
+		ck_assert_msg(seen[i] == 1 && inside[i], "'%s' ran %d times%s", ours[i], seen[i],
+			      inside[i] ? "" : ", not between two lines of the job");
+	free(log);
+	free(job);
+	sv_stop(&np);
+}
+END_TEST
+
+/*
+ * Temperature offsets (OctoPrint's "offset" of the tool and the bed): on a
+ * Marlin printer they are reported and added to the file's targets as it
+ * streams (a heater turned off stays off); test-instant printers refuse
+ * them (400, test_printer_tool).
+ */
+START_TEST(test_temperature_offsets)
+{
+	struct node_proc np;
+	struct resp r;
+	char path[600], *log = NULL;
+	json_t *temp;
+	size_t len;
+
+	start(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\nsim_speedup = 1000\n");
+	operational(np.port, "");
+	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
+		  "{\"command\":\"offset\",\"offsets\":{\"tool0\":10}}", 204);
+	sv_expect(np.port, "POST", "/api/printer/bed", CTL, "{\"command\":\"offset\",\"offset\":-5}",
+		  204);
+	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
+		  "{\"command\":\"offset\",\"offsets\":{\"tool0\":60}}", 400);
+	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
+		  "{\"command\":\"offset\",\"offsets\":{\"tool3\":5}}", 400);
+	sv_expect(np.port, "POST", "/api/printer/tool", UP,
+		  "{\"command\":\"offset\",\"offsets\":{\"tool0\":5}}", 403);
+	sv_call(np.port, "GET", "/api/printer", RO, NULL, 200, &r);
+	temp = json_object_get(r.json, "temperature");
+	ck_assert_msg(json_number_value(json_object_get(json_object_get(temp, "tool0"), "offset")) ==
+			      10 &&
+		      json_number_value(json_object_get(json_object_get(temp, "bed"), "offset")) ==
+			      -5, "%s", r.body);
+	sv_resp_free(&r);
+	sv_bed_clear(np.port, "", 204);
+	ck_assert(sv_print_text(np.port, "", "temps.gcode",
+				"M104 S200\nM140 S60\nG1 X5 F600\nM104 S0\nM140 S0\n") == 1);
+	sv_wait_state(np.port, "", 1, "done", 20);
+	snprintf(path, sizeof(path), "%s/data/sim/mk3s.log", np.dir);
+	log = tu_slurp(path, &len);
+	ck_assert_msg(strstr(log, " M104 S210\n") && strstr(log, " M140 S55\n") &&
+		      strstr(log, " M104 S0\n") && strstr(log, " M140 S0\n") &&
+		      !strstr(log, " M104 S200\n") && !strstr(log, " M140 S60\n"),
+		      "the offsets were not applied: %s", log);
+	free(log);
+	sv_stop(&np);
+}
+END_TEST
+
 /* ---- job ---------------------------------------------------------------------- */
 
 /* /api/job: the file's estimate and filament, the time left by its M73
@@ -841,6 +978,8 @@ Suite *octoapi_suite(void)
 	tcase_add_test(tc, test_printer_tool);
 	tcase_add_test(tc, test_printer_bed);
 	tcase_add_test(tc, test_printer_printhead);
+	tcase_add_test(tc, test_command_during_print);
+	tcase_add_test(tc, test_temperature_offsets);
 	tcase_add_test(tc, test_job_estimates);
 	suite_add_tcase(s, tc);
 	octoapi_push_tcases(s);

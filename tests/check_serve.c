@@ -971,7 +971,7 @@ START_TEST(test_pause_resume_cancel)
 	sv_http(np.port, "GET", "/api/job", "X-Api-Key: " KEY_READ, NULL, &r);
 	ck_assert_str_eq(json_string_value(json_object_get(r.json, "state")), "Paused");
 	sv_resp_free(&r);
-	/* Commands are taken between jobs only. */
+	/* A paused print takes no command (nor does a test-instant one). */
 	sv_expect(np.port, "POST", "/api/printer/command", "X-Api-Key: " KEY_CTL,
 	     "{\"commands\":[\"M105\"]}", 409);
 	sv_expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL,

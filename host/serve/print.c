@@ -129,6 +129,37 @@ static void ctl_progress(void *ctx, const struct printer_progress *p)
 	pthread_mutex_unlock(&ctl->mu);
 }
 
+/* The inject hook: the operator's next command for between two lines. */
+static bool ctl_inject(void *ctx, char *line, size_t cap)
+{
+	struct node_print_ctl *ctl = ctx;
+
+	return ctl->next_command(ctl->commands, line, cap);
+}
+
+/* The temperature offset hook: the operator's offset for heater. */
+static double ctl_temp_offset(void *ctx, int heater)
+{
+	struct node_print_ctl *ctl = ctx;
+	double d = 0;
+
+	pthread_mutex_lock(&ctl->mu);
+	if (heater == PRINTER_HEATER_BED)
+		d = ctl->bed_offset;
+	else if (heater >= 0 && heater < NODE_PRINT_TOOLS)
+		d = ctl->tool_offset[heater];
+	pthread_mutex_unlock(&ctl->mu);
+	return d;
+}
+
+bool node_print_takes_commands(const struct node_printer_config *pc, const struct profile *prof)
+{
+	struct printer_options o;
+	const struct printer_ops *ops;
+
+	return !options_for(pc, prof, &o, &ops, NULL) && ops->takes_injected;
+}
+
 /* After a stream that ended with the printer answering: leave it safe. */
 static int safe_stop(struct node_link *l, int rc, struct st_error *err)
 {
@@ -154,6 +185,8 @@ int node_print_file(struct node_link *l, const char *path, int64_t start, bool r
 		.resume = resume,
 		.control = ctl_control,
 		.progress = ctl_progress,
+		.inject = ctl->next_command && l->ops->takes_injected ? ctl_inject : NULL,
+		.temp_offset = l->ops->takes_injected ? ctl_temp_offset : NULL,
 		.ctx = ctl,
 	};
 	struct printer_file_info info;
