@@ -69,6 +69,8 @@ struct printer_progress {
 	double z;		 /* that layer's Z (mm), NAN unknown */
 	bool tool, bed;		 /* the temperatures below were reported */
 	double tool_actual, tool_target, bed_actual, bed_target; /* degC */
+	bool tool1;		 /* a second extruder's were (Sailfish, two extruders) */
+	double tool1_actual, tool1_target; /* degC */
 	bool paused;		 /* holding, and the printer has run out what it had */
 	uint64_t resends;	 /* lines or packets sent again */
 	double seconds;		 /* since the stream started */

@@ -899,6 +899,43 @@ START_TEST(test_temperature_offsets)
 }
 END_TEST
 
+/*
+ * The Creator Pro's second extruder (issue 20): the Sailfish driver reads
+ * tool 1 too, so /api/printer/tool has its temperatures, and a target set
+ * for it shows (the simulated printer heats it); a one-extruder printer
+ * has no tool1.
+ */
+START_TEST(test_sailfish_tool1)
+{
+	struct node_proc np;
+	struct resp r;
+	json_t *t1 = NULL;
+	double target = 0;
+
+	start(&np, "[printer cp]\nprofile = flashforge-creator-pro\nport = sim\n"
+		   "sim_speedup = 1000\n");
+	operational(np.port, "");
+	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
+		  "{\"command\":\"target\",\"targets\":{\"tool1\":150}}", 204);
+	/* temperatures are read every 2 s between jobs */
+	for (int i = 0; i < 300 && target != 150; i++) {
+		sv_call(np.port, "GET", "/api/printer/tool", RO, NULL, 200, &r);
+		t1 = json_object_get(r.json, "tool1");
+		target = json_number_value(json_object_get(t1, "target"));
+		if (target == 150) {
+			ck_assert_msg(json_is_number(json_object_get(t1, "actual")), "%s", r.body);
+			ck_assert_msg(json_number_value(json_object_get(json_object_get(r.json,
+				      "tool0"), "target")) == 0, "%s", r.body);
+		}
+		sv_resp_free(&r);
+		if (target != 150)
+			usleep(20000);
+	}
+	ck_assert_msg(target == 150, "tool1's target never showed");
+	sv_stop(&np);
+}
+END_TEST
+
 /* ---- job ---------------------------------------------------------------------- */
 
 /* /api/job: the file's estimate and filament, the time left by its M73
@@ -980,6 +1017,7 @@ Suite *octoapi_suite(void)
 	tcase_add_test(tc, test_printer_printhead);
 	tcase_add_test(tc, test_command_during_print);
 	tcase_add_test(tc, test_temperature_offsets);
+	tcase_add_test(tc, test_sailfish_tool1);
 	tcase_add_test(tc, test_job_estimates);
 	suite_add_tcase(s, tc);
 	octoapi_push_tcases(s);

@@ -45,6 +45,8 @@ void http_take_view(struct node *n, struct node_printer *p, struct http_view *v)
 	v->tool[2] = p->ctl.tool_offset[0];
 	v->bed[2] = p->ctl.bed_offset;
 	memcpy(v->tool_offset, p->ctl.tool_offset, sizeof(v->tool_offset));
+	v->tool1[0] = p->ctl.tool1_actual;
+	v->tool1[1] = p->ctl.tool1_target;
 	pthread_mutex_unlock(&p->ctl.mu);
 	pthread_mutex_unlock(&p->mu);
 	v->has_job = node_queue_active(n->q, p->cfg->name, &v->job, NULL) == 1;
@@ -95,8 +97,16 @@ json_t *http_temps_json(const struct node_printer *p, const struct http_view *v,
 	if (tools) {
 		json_object_set_new(o, "tool0", http_temp_json(v->tool));
 		for (int i = 1; i < p->prof->extruder_count; i++) {
+			/* tool 1 as the driver reads it (Sailfish), the others unknown */
+			bool known = i == 1 && !isnan(v->tool1[0]);
+
 			snprintf(name, sizeof(name), "tool%d", i);
-			json_object_set_new(o, name, json_pack("{s:n,s:n,s:f}", "actual", "target",
+			json_object_set_new(o, name, json_pack("{s:o,s:o,s:f}", "actual",
+							       known ? json_real(v->tool1[0])
+								     : json_null(),
+							       "target",
+							       known ? json_real(v->tool1[1])
+								     : json_null(),
 							       "offset", i < NODE_PRINT_TOOLS
 							       ? v->tool_offset[i] : 0.0));
 		}

@@ -86,6 +86,7 @@ struct http_view {
 	double z;		/* its Z (mm), NAN unknown */
 	double tool[3], bed[3]; /* actual, target, offset (tool 0) */
 	double tool_offset[NODE_PRINT_TOOLS]; /* every tool's offset */
+	double tool1[2]; /* the second extruder's actual, target; NAN unknown */
 	bool has_job;
 	struct node_job job; /* the active job (printing, paused, slicing), if has_job */
 	char selected[NODE_PATH_MAX];
@@ -101,8 +102,8 @@ const char *http_state_text(const struct http_view *v);
 /* {"actual", "target", "offset"} of t = {actual, target}. */
 json_t *http_temp_json(const double t[3]);
 /* The temperature object of /api/printer and /api/printer/tool: tool0,
- * and tool1 ... for each further extruder of p's profile (their actual
- * and target null: the drivers report tool 0 only); bed when with_bed. */
+ * and tool1 ... for each further extruder of p's profile (actual and target
+ * null unless read: Sailfish reads tool 1); bed when with_bed. */
 json_t *http_temps_json(const struct node_printer *p, const struct http_view *v, bool tools,
 			bool with_bed);
 /* OctoPrint's state flags of v (operational, printing, paused, ready ...). */

@@ -113,6 +113,10 @@ static void ctl_temps(struct node_print_ctl *ctl, const struct printer_progress 
 		ctl->bed_actual = p->bed_actual;
 		ctl->bed_target = p->bed_target;
 	}
+	if (p->tool1) {
+		ctl->tool1_actual = p->tool1_actual;
+		ctl->tool1_target = p->tool1_target;
+	}
 }
 
 /* The progress hook: position, layer, temperatures into ctl. */

@@ -44,6 +44,7 @@ struct node_print_ctl {
 	long layer;		 /* layer of the last confirmed command (0-based), -1 unknown */
 	double z;		 /* its Z (mm), NAN unknown */
 	double tool_actual, tool_target, bed_actual, bed_target; /* degrees C */
+	double tool1_actual, tool1_target; /* a second extruder's, NAN unknown */
 	/* Operators' commands for between the file's lines (printer.h inject),
 	 * set by the caller before node_print_file: next_command(commands, ...)
 	 * copies the next one and returns true, false when none; NULL = none.
