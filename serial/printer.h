@@ -12,8 +12,10 @@
  *
  * A print is: printer_check (the whole file, before anything is sent: a
  * bad file sends nothing), then printer_stream with hooks the adapter
- * calls as it goes: control (go, hold, cancel, stop) and progress (line
- * or command, byte position, layer, Z, temperatures).  A stream that ends
+ * calls as it goes: control (go, hold, cancel, stop), progress (line
+ * or command, byte position, layer, Z, temperatures) and, where the
+ * dialect can (takes_injected), an operator's lines and temperature
+ * offsets.  A stream that ends
  * with the printer still answering but not done leaves it to the caller
  * to call printer_safe_stop (heaters and motors off).
  *
