@@ -1,14 +1,18 @@
 /*
  * cmd_serve.c - `stratum serve --config node.ini [--listen ADDR:PORT]`: run
- * the farm node (host/serve/node.h) until SIGTERM or SIGINT; with --new-key
- * NAME --roles ROLES, add a new API key to the config and print it.  Log records go
+ * the farm node (host/serve/node.h) until SIGTERM or SIGINT (with --new-key
+ * NAME --roles ROLES: add a new API key to the config and print it); and
+ * `stratum farm --config farm.ini [--broker HOST[:PORT]] [--listen ADDR:PORT]`:
+ * the farm view over every node on the broker, the same way.  Log records go
  * to stderr, one line each, with a UTC time stamp (journald adds its own,
  * but a plain terminal needs one).
  * Exit 0 after a signal, 2 usage, 65 bad config or printer profile,
  * 69 cannot listen, 70 internal error.
  */
+#include <pthread.h>
 #include <signal.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
@@ -17,6 +21,7 @@
 #include "st_error.h"
 
 #define SERVE_CMD "stratum serve"
+#define FARM_CMD "stratum farm"
 
 /* The help text around the option lines. */
 static const char serve_head[] =
@@ -75,6 +80,31 @@ static int new_key_command(const struct cmd_spec *spec, const char *config, cons
 	return ST_EXIT_OK;
 }
 
+/* Warn when the config at path, holding secrets, is readable by others. */
+static void warn_exposed(const char *cmd, const char *who, const char *path,
+			 const struct node_config *cfg)
+{
+	unsigned mode;
+
+	if (node_config_exposed(path, cfg, &mode))
+		fprintf(stderr, "%s: warning: %s holds API keys%s and can be read by other users "
+				"(mode %04o); make it readable by the %s's user only: chmod 600 %s\n",
+			cmd, path, cfg->mqtt.password[0] ? " and the MQTT password" : "", mode, who,
+			path);
+}
+
+/* SIGTERM and SIGINT are taken by sigwait in set only (every thread
+ * inherits the mask); the log goes to stderr. */
+static void block_signals(sigset_t *set)
+{
+	sigemptyset(set);
+	sigaddset(set, SIGTERM);
+	sigaddset(set, SIGINT);
+	pthread_sigmask(SIG_BLOCK, set, NULL);
+	signal(SIGPIPE, SIG_IGN);
+	node_set_log(log_stderr, NULL);
+}
+
 int cmd_serve(int argc, char **argv)
 {
 	const char *config = NULL, *listen = NULL, *new_key = NULL, *roles = NULL;
@@ -117,30 +147,14 @@ int cmd_serve(int argc, char **argv)
 		fprintf(stderr, SERVE_CMD ": %s\n", err.msg);
 		return rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
 	}
-	{
-		unsigned mode;
-
-		if (node_config_exposed(config, cfg, &mode))
-			fprintf(stderr,
-				SERVE_CMD ": warning: %s holds API keys%s and can be read by other "
-					  "users (mode %04o); make it readable by the node's user "
-					  "only: chmod 600 %s\n",
-				config, cfg->mqtt.password[0] ? " and the MQTT password" : "", mode,
-				config);
-	}
+	warn_exposed(SERVE_CMD, "node", config, cfg);
 	if (listen && node_parse_listen(listen, cfg->listen_addr, sizeof(cfg->listen_addr),
 					&cfg->listen_port, &err)) {
 		fprintf(stderr, SERVE_CMD ": --listen: %s\n", err.msg);
 		return ST_EXIT_USAGE;
 	}
 
-	/* Signals are taken by sigwait here only; every thread inherits the mask. */
-	sigemptyset(&set);
-	sigaddset(&set, SIGTERM);
-	sigaddset(&set, SIGINT);
-	pthread_sigmask(SIG_BLOCK, &set, NULL);
-	signal(SIGPIPE, SIG_IGN);
-	node_set_log(log_stderr, NULL);
+	block_signals(&set);
 
 	rc = node_new(cfg, &n, &err);
 	if (rc) {
@@ -162,5 +176,98 @@ int cmd_serve(int argc, char **argv)
 	sigwait(&set, &sig);
 	fprintf(stderr, SERVE_CMD ": %s received, stopping\n", sig == SIGTERM ? "SIGTERM" : "SIGINT");
 	node_free(n);
+	return ST_EXIT_OK;
+}
+
+static const char farm_head[] =
+    "usage: stratum farm --config FARM.ini [--broker HOST[:PORT]] [--listen ADDR:PORT]\n"
+    "\n"
+    "Runs the farm view: reads every node's state on the MQTT broker and serves\n"
+    "one page and one JSON API (GET /api/farm) with all printers of all nodes;\n"
+    "POST /api/farm/jobs hands a job to the first idle printer of a profile,\n"
+    "through its node's upload API.  See docs/serve.md, \"The farm view\".\n"
+    "\n";
+static const char farm_tail[] =
+    "\n"
+    "Stops cleanly on SIGTERM or SIGINT.  Exit status: 0 stopped by a signal,\n"
+    "2 usage, 65 bad config, 69 cannot listen, 70 internal error.\n";
+
+int cmd_farm(int argc, char **argv)
+{
+	const char *config = NULL, *listen = NULL, *broker = NULL;
+	static struct farm_config cfg; /* large: kept off the stack */
+	struct node_mqtt_config *m = &cfg.base.mqtt;
+	struct farm *f = NULL;
+	struct st_error err = {0};
+	sigset_t set;
+	int sig = 0, rc;
+
+	const struct cmd_opt opts[] = {
+	    CMD_OPT_STRING("--config", 0, &config, CMD_NONEMPTY, "the farm's config file", "FILE",
+	     "the farm view's config: its keys, the broker, the keys it\n"
+	     "sends jobs to nodes with (docs/serve.md)"),
+	    CMD_OPT_STRING("--broker", 0, &broker, CMD_NONEMPTY, "HOST or HOST:PORT",
+	     "HOST[:PORT]", "the MQTT broker instead of the config's [mqtt] host\n"
+	     "(and port)"),
+	    CMD_OPT_STRING("--listen", 0, &listen, 0, "ADDR:PORT", "ADDR:PORT",
+	     "listen there instead of the config's listen = (port 0:\n"
+	     "any free port, logged at start)"),
+	};
+	const struct cmd_spec spec = {.cmd = FARM_CMD, .head = farm_head, CMD_TABLE(opts), .col = 23,
+				      .tail = farm_tail};
+
+	rc = cmd_parse(&spec, argc, argv);
+	if (rc)
+		return rc < 0 ? ST_EXIT_OK : rc;
+	if (!config) {
+		fprintf(stderr, FARM_CMD ": no config given; add --config FARM.ini\n");
+		cmd_usage(&spec, stderr);
+		return ST_EXIT_USAGE;
+	}
+	if ((rc = farm_config_load(config, &cfg, &err))) {
+		fprintf(stderr, FARM_CMD ": %s\n", err.msg);
+		return rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
+	}
+	warn_exposed(FARM_CMD, "farm view", config, &cfg.base);
+	if (listen && node_parse_listen(listen, cfg.base.listen_addr, sizeof(cfg.base.listen_addr),
+					&cfg.base.listen_port, &err)) {
+		fprintf(stderr, FARM_CMD ": --listen: %s\n", err.msg);
+		return ST_EXIT_USAGE;
+	}
+	if (broker) {
+		const char *colon = strrchr(broker, ':');
+		char *end = NULL;
+		long port = colon ? strtol(colon + 1, &end, 10) : 0;
+		size_t host_len = colon ? (size_t)(colon - broker) : strlen(broker);
+
+		if ((colon && (*end || end == colon + 1 || port < 1 || port > 65535)) ||
+		    !host_len || host_len >= sizeof(m->host)) {
+			fprintf(stderr, FARM_CMD ": --broker: '%s' is not HOST or HOST:PORT (port 1 "
+						 "to 65535)\n", broker);
+			return ST_EXIT_USAGE;
+		}
+		snprintf(m->host, sizeof(m->host), "%.*s", (int)host_len, broker);
+		if (colon)
+			m->port = (uint16_t)port;
+	}
+	if (!m->host[0]) {
+		fprintf(stderr, FARM_CMD ": no broker: give --broker HOST or [mqtt] host = in %s\n",
+			config);
+		return ST_EXIT_USAGE;
+	}
+	block_signals(&set);
+	rc = farm_new(&cfg, &f, &err);
+	if (!rc)
+		rc = farm_start(f, &err);
+	if (rc) {
+		fprintf(stderr, FARM_CMD ": %s\n", err.msg);
+		farm_free(f);
+		return rc == ST_ERR_IO ? ST_EXIT_UNAVAILABLE
+		       : rc == ST_ERR_RANGE ? ST_EXIT_DATAERR
+					    : ST_EXIT_SOFTWARE;
+	}
+	sigwait(&set, &sig);
+	fprintf(stderr, FARM_CMD ": %s received, stopping\n", sig == SIGTERM ? "SIGTERM" : "SIGINT");
+	farm_free(f);
 	return ST_EXIT_OK;
 }

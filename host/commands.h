@@ -25,6 +25,7 @@ int cmd_slice(int argc, char **argv);	 /* host/cmd_slice.c */
 int cmd_x3g(int argc, char **argv);	 /* host/cmd_x3g.c */
 int cmd_send(int argc, char **argv);	 /* host/cmd_send.c */
 int cmd_serve(int argc, char **argv);	 /* host/cmd_serve.c */
+int cmd_farm(int argc, char **argv);	 /* host/cmd_serve.c */
 int cmd_preview(int argc, char **argv);	 /* host/cmd_preview.c */
 int cmd_print(int argc, char **argv);	 /* host/cmd_print.c */
 int cmd_jobs(int argc, char **argv);	 /* host/cmd_jobs.c */

@@ -23,6 +23,7 @@ static const struct cmd_entry commands[] = {
 	{"x3g", cmd_x3g, "translate G-code to X3G for Sailfish printers, or list an X3G file"},
 	{"jobs", cmd_jobs, "list the print jobs kept for --resume, show one, prune them"},
 	{"serve", cmd_serve, "run the farm node: OctoPrint-compatible API and job queue"},
+	{"farm", cmd_farm, "the farm view: every node's printers on one page, jobs to idle printers"},
 };
 
 #define NCOMMANDS (sizeof(commands) / sizeof(commands[0]))

@@ -288,7 +288,8 @@ START_TEST(test_profile_inline_comments)
 END_TEST
 
 /* Every ```ini block of a doc, written out as it stands: serve.md's load as
- * node configs, printers.md's as profiles.  The count guards against a
+ * node configs (a farm view's config when it starts with [farm]),
+ * printers.md's as profiles.  The count guards against a
  * block that stops being one. */
 START_TEST(test_doc_blocks_load)
 {
@@ -311,7 +312,15 @@ START_TEST(test_doc_blocks_load)
 			ck_assert_msg(end != NULL, "%s: an ini block is not closed", docs[d].doc);
 			end[1] = '\0';
 			tu_write_str(path, start);
-			if (docs[d].node) {
+			if (docs[d].node && !strncmp(start, "[farm]", 6)) {
+				struct farm_config *f = calloc(1, sizeof(*f));
+
+				ck_assert_ptr_nonnull(f);
+				ck_assert_msg(farm_config_load(path, f, &err) == 0,
+					      "%s, block %d (a farm view's): %s", docs[d].doc, n + 1,
+					      err.msg);
+				free(f);
+			} else if (docs[d].node) {
 				struct node_config *c = calloc(1, sizeof(*c));
 
 				ck_assert_ptr_nonnull(c);

@@ -35,6 +35,7 @@ static const struct suite_entry suites[] = {
 	{"multimodel", multimodel_suite}, {"thin", thin_suite},
 	{"x3g", x3g_suite},	      {"s3g", s3g_suite},
 	{"serve", serve_suite},	      {"octoapi", octoapi_suite},
+	{"farm", farm_suite},
 	{"preview", preview_suite},
 	{"portpick", portpick_suite}, {"send", send_suite},
 	{"console", console_suite},

@@ -42,6 +42,11 @@ void sv_write_config(struct node_proc *np, const char *printers, int max_mb)
 /* Start the node of np's config; waits for its "listening" record. */
 void sv_start(struct node_proc *np)
 {
+	sv_start_cmd(np, "serve");
+}
+
+void sv_start_cmd(struct node_proc *np, const char *command)
+{
 	const char *bin = getenv("STRATUM_BIN");
 	char buf[8192];
 
@@ -57,7 +62,7 @@ void sv_start(struct node_proc *np)
 		int fd = open(np->log, O_WRONLY | O_CREAT | O_APPEND, 0600);
 
 		dup2(fd, 2);
-		execl(bin, bin, "serve", "--config", np->config, (char *)NULL);
+		execl(bin, bin, command, "--config", np->config, (char *)NULL);
 		_exit(127);
 	}
 	np->port = 0;
@@ -78,7 +83,7 @@ void sv_start(struct node_proc *np)
 		if (!np->port)
 			usleep(10000);
 	}
-	ck_assert_msg(np->port > 0, "the node did not start: %.3000s", buf);
+	ck_assert_msg(np->port > 0, "stratum %s did not start: %.3000s", command, buf);
 }
 
 /* Stop with SIGTERM and expect exit status 0. */
@@ -88,7 +93,14 @@ void sv_stop(struct node_proc *np)
 
 	ck_assert(kill(np->pid, SIGTERM) == 0);
 	ck_assert(waitpid(np->pid, &st, 0) == np->pid);
-	ck_assert_msg(WIFEXITED(st) && WEXITSTATUS(st) == 0, "serve exit status %d", st);
+	if (!WIFEXITED(st) || WEXITSTATUS(st)) {
+		size_t len;
+		char *log = tu_slurp(np->log, &len);
+
+		/* the end of its log says why (a sanitizer's report, an error) */
+		ck_abort_msg("exit status %d of the process of %s; its log ends: %s", st,
+			     np->config, log + (len > 3000 ? len - 3000 : 0));
+	}
 }
 
 /* Whether text contains needle, ignoring case (for header names). */

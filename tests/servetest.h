@@ -41,6 +41,8 @@ struct resp {
 void sv_write_config(struct node_proc *np, const char *printers, int max_mb);
 /* sv_start - start the node of np's config; waits for its "listening" record. */
 void sv_start(struct node_proc *np);
+/* sv_start_cmd - the same for `stratum COMMAND --config` (serve, farm). */
+void sv_start_cmd(struct node_proc *np, const char *command);
 /* sv_stop - stop with SIGTERM and expect exit status 0. */
 void sv_stop(struct node_proc *np);
 /* sv_has_text - whether text contains needle, ignoring case (header names). */

@@ -65,6 +65,7 @@ void serve_mqtt_tcases(Suite *s); /* tests/check_servemqtt.c: the node on a shar
 Suite *octoapi_suite(void);	/* tests/check_octoapi.c: the node's OctoPrint calls, one test each */
 void octoapi_push_tcases(Suite *s); /* tests/check_octopush.c: the push API, part of octoapi */
 void serve_page_tcases(Suite *s);   /* tests/check_servepage.c: the status page in Chromium, part of serve */
+Suite *farm_suite(void);	/* tests/check_farm.c: stratum farm, the farm view over two nodes */
 void octoapi_queue_tcases(Suite *s); /* tests/check_octoqueue.c: job calls and the queue, part of octoapi */
 Suite *preview_suite(void);	/* tests/check_preview.c: layer preview, move walker */
 Suite *portpick_suite(void);	/* tests/check_portpick.c: --port auto on fake enumerations */

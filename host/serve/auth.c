@@ -16,23 +16,23 @@
 
 #include "node_int.h"
 
-unsigned node_key_roles(const struct node *n, const char *key, const char **who)
+unsigned node_key_roles(const struct node_config *cfg, const char *key, const char **who)
 {
 	unsigned roles = 0;
 	size_t a = strlen(key);
 
 	*who = NULL;
 	/* Compare with every key in full so the time does not tell which matched. */
-	for (size_t i = 0; i < n->cfg.nkeys; i++) {
-		const char *s = n->cfg.keys[i].secret;
+	for (size_t i = 0; i < cfg->nkeys; i++) {
+		const char *s = cfg->keys[i].secret;
 		size_t b = strlen(s);
 		unsigned char diff = a != b;
 
 		for (size_t k = 0; k < b; k++)
 			diff |= (unsigned char)(s[k] ^ key[k < a ? k : 0]);
 		if (!diff) {
-			roles |= n->cfg.keys[i].roles;
-			*who = n->cfg.keys[i].name;
+			roles |= cfg->keys[i].roles;
+			*who = cfg->keys[i].name;
 		}
 	}
 	return roles;
@@ -125,7 +125,7 @@ int node_mqtt_authorize(const struct node *n, const char *topic, const char *pay
 		return st_error_set(err, ST_ERR_RANGE, "a key with the control role is needed "
 						       "(\"key\", or the command signed with "
 						       "one)");
-	roles = node_key_roles(n, key, who);
+	roles = node_key_roles(&n->cfg, key, who);
 	if (!roles)
 		return st_error_set(err, ST_ERR_RANGE, "the key is not a key of this node");
 	if (!(roles & NODE_ROLE_CONTROL))

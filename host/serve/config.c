@@ -19,7 +19,7 @@
 #include "node.h"
 #include "st_number.h"
 
-enum section { SEC_NONE, SEC_NODE, SEC_KEY, SEC_PRINTER, SEC_MQTT };
+enum section { SEC_NONE, SEC_NODE, SEC_KEY, SEC_PRINTER, SEC_MQTT, SEC_REMOTE };
 
 /* Parse state: where we are, for messages and duplicate checks. */
 struct cfg_parse {
@@ -29,6 +29,8 @@ struct cfg_parse {
 	unsigned seen; /* bit per key of the current section */
 	bool node_seen, mqtt_seen;
 	struct node_config *cfg;
+	struct farm_config *farm; /* a farm view's config (cfg is its base); NULL: a node's */
+	bool keys_optional;	  /* no [key] section is fine (node_config_read) */
 	struct st_error *err;
 	char *scratch; /* the current line's key and value, NUL-terminated */
 };
@@ -170,9 +172,9 @@ static int set_listen(struct cfg_parse *p, char *v, void *base)
 	return 0;
 }
 
-static int set_secret(struct cfg_parse *p, char *v, void *base)
+/* An API key: NODE_KEY_MIN to NODE_KEY_MAX printable bytes, into secret. */
+static int copy_secret(struct cfg_parse *p, const char *v, char secret[NODE_KEY_MAX + 1])
 {
-	struct node_key *key = base;
 	size_t n = strlen(v);
 
 	if (n < NODE_KEY_MIN || n > NODE_KEY_MAX)
@@ -182,8 +184,24 @@ static int set_secret(struct cfg_parse *p, char *v, void *base)
 		if (!isgraph((unsigned char)*s))
 			return CFG_FAIL(p, ST_ERR_RANGE, "key: only printable characters "
 							"without blanks");
-	memcpy(key->secret, v, n + 1);
+	memcpy(secret, v, n + 1);
 	return 0;
+}
+
+static int set_secret(struct cfg_parse *p, char *v, void *base)
+{
+	return copy_secret(p, v, ((struct node_key *)base)->secret);
+}
+
+static int set_node_key(struct cfg_parse *p, char *v, void *base)
+{
+	(void)base;
+	return copy_secret(p, v, p->farm->node_key);
+}
+
+static int set_remote_key(struct cfg_parse *p, char *v, void *base)
+{
+	return copy_secret(p, v, ((struct farm_remote *)base)->key);
 }
 
 static int set_roles(struct cfg_parse *p, char *v, void *base)
@@ -202,6 +220,21 @@ static int check_prefix(struct cfg_parse *p, char *v, void *base)
 		return CFG_FAIL(p, ST_ERR_RANGE, "prefix: '%s' is not a URL path such as "
 						 "/p/mk3s (starts with '/', no trailing "
 						 "'/', not under /api)", v);
+	return 0;
+}
+
+/* url = http(s)://HOST[:PORT][/PATH], no trailing '/', nothing to quote. */
+static int check_url(struct cfg_parse *p, char *v, void *base)
+{
+	size_t n = strlen(v);
+	size_t scheme = !strncmp(v, "http://", 7) ? 7 : !strncmp(v, "https://", 8) ? 8 : 0;
+
+	(void)base;
+	if (!scheme || n == scheme || v[n - 1] == '/' ||
+	    strspn(v, "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-._~:/[]%") != n)
+		return CFG_FAIL(p, ST_ERR_RANGE, "url: '%s' is not a URL such as "
+						 "http://farm-1.lan:5000 (http or https, no "
+						 "trailing '/')", v);
 	return 0;
 }
 
@@ -282,17 +315,26 @@ struct cfg_key {
 #define TEXT(s, f, chk) {#f, KEY_TEXT, offsetof(s, f), sizeof(((s *)0)->f), 0, 0, chk}
 #define WHOLE(s, f, kind, lo, hi) {#f, kind, offsetof(s, f), 0, lo, hi, NULL}
 
+/* [node] is entries 1 to the end; a farm's [farm] is 0 to FARM_KEYS - 1:
+ * node_key and the keys that set up the HTTP server, declared once for both. */
 static const struct cfg_key node_keys[] = {
+    {"node_key", KEY_SET, 0, 0, 0, 0, set_node_key},
     TEXT(struct node_config, name, check_name),
     {"listen", KEY_SET, 0, 0, 0, 0, set_listen},
-    TEXT(struct node_config, data_dir, NULL),
     {"max_upload_mb", KEY_MB, offsetof(struct node_config, max_upload), 0, 1, 1 << 20, NULL},
-    WHOLE(struct node_config, slice_threads, KEY_INT, 0, 256),
     WHOLE(struct node_config, max_connections, KEY_UNSIGNED, NODE_CONN_MIN, NODE_CONN_MAX),
     WHOLE(struct node_config, max_connections_per_ip, KEY_UNSIGNED, 1, NODE_CONN_MAX),
     WHOLE(struct node_config, idle_timeout_s, KEY_UNSIGNED, 1, 3600),
     WHOLE(struct node_config, header_timeout_s, KEY_UNSIGNED, 1, 3600),
     WHOLE(struct node_config, min_body_rate, KEY_UNSIGNED, 0, 1 << 30),
+    TEXT(struct node_config, url, check_url),
+    TEXT(struct node_config, data_dir, NULL),
+    WHOLE(struct node_config, slice_threads, KEY_INT, 0, 256),
+};
+#define FARM_KEYS 7
+static const struct cfg_key remote_keys[] = {
+    {"key", KEY_SET, 0, 0, 0, 0, set_remote_key},
+    TEXT(struct farm_remote, url, check_url),
 };
 static const struct cfg_key key_keys[] = {
     {"key", KEY_SET, 0, 0, 0, 0, set_secret},
@@ -362,21 +404,24 @@ static int set_key(struct cfg_parse *p, const struct cfg_key *keys, size_t n, vo
 	return CFG_FAIL(p, ST_ERR_PARSE, "unknown key '%s' in %s (%s)", k, section, list);
 }
 
-/* "[node]", "[key NAME]", "[printer NAME]" or "[mqtt]". */
+/* "[node]", "[key NAME]", "[printer NAME]" or "[mqtt]"; in a farm view's
+ * config "[farm]", "[key NAME]", "[remote NODE]" or "[mqtt]". */
 static int section_line(struct cfg_parse *p, char *s)
 {
 	struct node_config *c = p->cfg;
+	const char *main_sec = p->farm ? "farm" : "node", *named = p->farm ? "remote" : "printer";
+	const char *list = p->farm ? "farm, key NAME, remote NODE, mqtt"
+				   : "node, key NAME, printer NAME, mqtt";
 	char *end = strchr(s, ']'), *name;
 
 	if (!end || trim(end + 1)[0])
-		return CFG_FAIL(p, ST_ERR_PARSE, "a section line is [node], [key NAME], "
-						 "[printer NAME] or [mqtt]");
+		return CFG_FAIL(p, ST_ERR_PARSE, "a section line is one of [%s]", list);
 	*end = '\0';
 	s = trim(s + 1);
 	p->seen = 0;
-	if (!strcmp(s, "node")) {
+	if (!strcmp(s, main_sec)) {
 		if (p->node_seen)
-			return CFG_FAIL(p, ST_ERR_PARSE, "[node] given twice");
+			return CFG_FAIL(p, ST_ERR_PARSE, "[%s] given twice", main_sec);
 		p->node_seen = true;
 		p->sec = SEC_NODE;
 		return 0;
@@ -390,8 +435,7 @@ static int section_line(struct cfg_parse *p, char *s)
 	}
 	name = strchr(s, ' ');
 	if (!name)
-		return CFG_FAIL(p, ST_ERR_PARSE, "unknown section [%s] (node, key NAME, "
-						 "printer NAME, mqtt)", s);
+		return CFG_FAIL(p, ST_ERR_PARSE, "unknown section [%s] (%s)", s, list);
 	*name = '\0';
 	name = trim(name + 1);
 	if (!node_good_name(name))
@@ -407,19 +451,29 @@ static int section_line(struct cfg_parse *p, char *s)
 		p->sec = SEC_KEY;
 		return 0;
 	}
-	if (!strcmp(s, "printer")) {
-		if (c->nprinters == NODE_MAX_PRINTERS)
-			return CFG_FAIL(p, ST_ERR_RANGE, "more than %d printers", NODE_MAX_PRINTERS);
-		for (size_t i = 0; i < c->nprinters; i++)
-			if (!strcmp(c->printers[i].name, name))
-				return CFG_FAIL(p, ST_ERR_PARSE, "[printer %s] given twice", name);
-		snprintf(c->printers[c->nprinters].name, NODE_NAME_MAX, "%s", name);
-		c->printers[c->nprinters++].sim_speedup = 100;
-		p->sec = SEC_PRINTER;
+	if (strcmp(s, named))
+		return CFG_FAIL(p, ST_ERR_PARSE, "unknown section [%s %s] (%s)", s, name, list);
+	if (p->farm) {
+		struct farm_config *f = p->farm;
+
+		if (f->nremotes == FARM_MAX_REMOTES)
+			return CFG_FAIL(p, ST_ERR_RANGE, "more than %d remotes", FARM_MAX_REMOTES);
+		for (size_t i = 0; i < f->nremotes; i++)
+			if (!strcmp(f->remotes[i].name, name))
+				return CFG_FAIL(p, ST_ERR_PARSE, "[remote %s] given twice", name);
+		snprintf(f->remotes[f->nremotes++].name, NODE_NAME_MAX, "%s", name);
+		p->sec = SEC_REMOTE;
 		return 0;
 	}
-	return CFG_FAIL(p, ST_ERR_PARSE, "unknown section [%s %s] (node, key NAME, printer NAME, mqtt)",
-			s, name);
+	if (c->nprinters == NODE_MAX_PRINTERS)
+		return CFG_FAIL(p, ST_ERR_RANGE, "more than %d printers", NODE_MAX_PRINTERS);
+	for (size_t i = 0; i < c->nprinters; i++)
+		if (!strcmp(c->printers[i].name, name))
+			return CFG_FAIL(p, ST_ERR_PARSE, "[printer %s] given twice", name);
+	snprintf(c->printers[c->nprinters].name, NODE_NAME_MAX, "%s", name);
+	c->printers[c->nprinters++].sim_speedup = 100;
+	p->sec = SEC_PRINTER;
+	return 0;
 }
 
 /* A section line from the ini reader: copied so it can be cut up. */
@@ -448,7 +502,14 @@ static int on_entry(void *ctx, const struct ini_entry *e, struct st_error *err)
 	v[e->value_len] = '\0';
 	switch (p->sec) {
 	case SEC_NODE:
-		return set_key(p, KEYS(node_keys), p->cfg, "[node]", k, v);
+		if (p->farm)
+			return set_key(p, node_keys, FARM_KEYS, p->cfg, "[farm]", k, v);
+		return set_key(p, node_keys + 1, sizeof(node_keys) / sizeof(node_keys[0]) - 1,
+			       p->cfg, "[node]", k, v);
+	case SEC_REMOTE:
+		snprintf(sec, sizeof(sec), "[remote %s]", p->farm->remotes[p->farm->nremotes - 1].name);
+		return set_key(p, KEYS(remote_keys), &p->farm->remotes[p->farm->nremotes - 1], sec,
+			       k, v);
 	case SEC_KEY:
 		snprintf(sec, sizeof(sec), "[key %s]", p->cfg->keys[p->cfg->nkeys - 1].name);
 		return set_key(p, KEYS(key_keys), &p->cfg->keys[p->cfg->nkeys - 1], sec, k, v);
@@ -500,26 +561,31 @@ static int check_mqtt(struct cfg_parse *p)
 		snprintf(m->topic, sizeof(m->topic), "stratum");
 	/* One client id per node name: a second node of that name is refused
 	 * before it connects with it (mqtt_name.c), never knocks the first off. */
-	snprintf(m->client_id, sizeof(m->client_id), "stratum-%s", p->cfg->name);
+	snprintf(m->client_id, sizeof(m->client_id), "stratum-%s%s", p->farm ? "farm-" : "",
+		 p->cfg->name);
 	return 0;
 }
 
 /* What every section must have, checked once the whole file is read;
- * keys_required false lets a file without [key] through (--new-key). */
-static int check_complete(struct cfg_parse *p, bool keys_required)
+ * p->keys_optional lets a file without [key] through (--new-key). */
+static int check_complete(struct cfg_parse *p)
 {
 	struct node_config *c = p->cfg;
 
 	p->line = 0;
-	if (!c->nkeys && keys_required)
-		return st_error_set(p->err, ST_ERR_RANGE, "%s: no [key NAME] section: the node "
+	if (!c->nkeys && !p->keys_optional)
+		return st_error_set(p->err, ST_ERR_RANGE, "%s: no [key NAME] section: the %s "
 							  "refuses every request without a key",
-				    p->file);
+				    p->file, p->farm ? "farm view" : "node");
 	for (size_t i = 0; i < c->nkeys; i++)
 		if (!c->keys[i].secret[0] || !c->keys[i].roles)
 			return st_error_set(p->err, ST_ERR_RANGE, "%s: [key %s] needs key = and "
 								  "roles =", p->file, c->keys[i].name);
-	if (!c->nprinters)
+	for (size_t i = 0; p->farm && i < p->farm->nremotes; i++)
+		if (!p->farm->remotes[i].key[0])
+			return st_error_set(p->err, ST_ERR_RANGE, "%s: [remote %s] needs key =",
+					    p->file, p->farm->remotes[i].name);
+	if (!c->nprinters && !p->farm)
 		return st_error_set(p->err, ST_ERR_RANGE, "%s: no [printer NAME] section", p->file);
 	for (size_t i = 0; i < c->nprinters; i++) {
 		struct node_printer_config *pc = &c->printers[i];
@@ -555,12 +621,12 @@ static int resolve_path(const char *path, const char *key, char *field, struct s
 }
 
 /* data_dir and the TLS files relative to the config file's folder. */
-static int resolve_paths(struct node_config *c, const char *path, struct st_error *err)
+static int resolve_paths(struct node_config *c, bool farm, const char *path, struct st_error *err)
 {
 	struct node_mqtt_config *m = &c->mqtt;
 	int rc;
 
-	if (!c->data_dir[0])
+	if (!c->data_dir[0] && !farm)
 		return st_error_set(err, ST_ERR_RANGE, "%s: [node] needs data_dir = (where the "
 						       "queue and the files are kept)", path);
 	if ((rc = resolve_path(path, "data_dir", c->data_dir, err)) ||
@@ -571,19 +637,21 @@ static int resolve_paths(struct node_config *c, const char *path, struct st_erro
 	return resolve_path(path, "key_file", m->key_file, err);
 }
 
-int node_config_read(const char *path, struct node_config *out, bool keys_required,
-		     struct st_error *err)
+/* Read a node's config into *c, or with farm a farm view's (c its base);
+ * keys_optional lets a node's config without [key] through (--new-key). */
+static int config_load(const char *path, struct node_config *c, struct farm_config *farm,
+		       bool keys_optional, struct st_error *err)
 {
 	static const struct ini_handler handler = {on_section, on_entry, true, false};
-	struct node_config *c = calloc(1, sizeof(*c));
-	struct cfg_parse p = {.file = path, .cfg = c, .err = err};
+	struct cfg_parse p = {.file = path, .cfg = c, .farm = farm, .keys_optional = keys_optional,
+			      .err = err};
 	char *text = NULL;
 	size_t len;
 	int rc;
 
 	/* a line's key and value, each at most a line long, plus their NULs */
 	p.scratch = malloc(2 * INI_LINE_MAX + 2);
-	if (!c || !p.scratch) {
+	if (!p.scratch) {
 		rc = st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", path);
 		goto out_free;
 	}
@@ -602,12 +670,24 @@ int node_config_read(const char *path, struct node_config *out, bool keys_requir
 	c->idle_timeout_s = NODE_IDLE_TIMEOUT_DEFAULT;
 	c->header_timeout_s = NODE_HEADER_TIMEOUT_DEFAULT;
 	c->min_body_rate = NODE_MIN_BODY_RATE_DEFAULT;
-	if (!(rc = ini_parse(text, len, path, &handler, &p, err)) &&
-	    !(rc = check_complete(&p, keys_required)) && !(rc = resolve_paths(c, path, err)))
-		*out = *c;
+	if (!(rc = ini_parse(text, len, path, &handler, &p, err)) && !(rc = check_complete(&p)))
+		rc = resolve_paths(c, farm != NULL, path, err);
 out_free:
 	free(text);
 	free(p.scratch);
+	return rc;
+}
+
+int node_config_read(const char *path, struct node_config *out, bool keys_required,
+		     struct st_error *err)
+{
+	struct node_config *c = calloc(1, sizeof(*c));
+	int rc;
+
+	if (!c)
+		return st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", path);
+	if (!(rc = config_load(path, c, NULL, !keys_required, err)))
+		*out = *c;
 	free(c);
 	return rc;
 }
@@ -615,6 +695,19 @@ out_free:
 int node_config_load(const char *path, struct node_config *out, struct st_error *err)
 {
 	return node_config_read(path, out, true, err);
+}
+
+int farm_config_load(const char *path, struct farm_config *out, struct st_error *err)
+{
+	struct farm_config *f = calloc(1, sizeof(*f));
+	int rc;
+
+	if (!f)
+		return st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", path);
+	if (!(rc = config_load(path, &f->base, f, false, err)))
+		*out = *f;
+	free(f);
+	return rc;
 }
 
 bool node_config_exposed(const char *path, const struct node_config *cfg, unsigned *mode)

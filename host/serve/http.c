@@ -33,8 +33,6 @@
 #include "st_grow.h"
 
 #define HTTP_JSON_MAX 65536		/* body of a JSON command, bytes */
-#define HTTP_MULTIPART_SLACK 65536	/* multipart headers around the file */
-#define HTTP_DRAIN_MAX 65536		/* body read before refusing, bytes */
 #define HTTP_POOL 4			/* HTTP threads */
 
 /* ---- responses ---------------------------------------------------------- */
@@ -91,11 +89,10 @@ enum MHD_Result http_send_error(struct MHD_Connection *c, unsigned status, const
 	return http_send_json(c, status, o, NULL);
 }
 
-/* The status page (page.c); it holds no data, so it needs no key. */
-static enum MHD_Result send_page(struct MHD_Connection *c)
+enum MHD_Result http_send_page(struct MHD_Connection *c, const char *page)
 {
 	struct MHD_Response *resp = MHD_create_response_from_buffer(
-		strlen(node_status_page), (void *)node_status_page, MHD_RESPMEM_PERSISTENT);
+		strlen(page), (void *)page, MHD_RESPMEM_PERSISTENT);
 	enum MHD_Result ret;
 
 	if (!resp)
@@ -383,9 +380,8 @@ static const struct route routes[] = {
 	{"GET", "/api/stratum/node", false, NODE_ROLE_READ, false, http_get_node},
 };
 
-/* The roles of the request's key (X-Api-Key, Authorization: Bearer, or
- * OctoPrint's ?apikey=, in that order); 0 if none.  *who the key's name. */
-static unsigned key_roles(struct node *n, struct MHD_Connection *c, const char **who)
+unsigned http_key_roles(const struct node_config *cfg, struct MHD_Connection *c,
+			const char **who)
 {
 	const char *key = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "X-Api-Key");
 	const char *auth = MHD_lookup_connection_value(c, MHD_HEADER_KIND,
@@ -398,7 +394,7 @@ static unsigned key_roles(struct node *n, struct MHD_Connection *c, const char *
 		key = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "apikey");
 	if (!key)
 		return 0;
-	return node_key_roles(n, key, who);
+	return node_key_roles(cfg, key, who);
 }
 
 /* Refuse an upload body longer than the file limit and the form around it. */
@@ -488,7 +484,7 @@ static void first_call(struct node *n, struct MHD_Connection *c, const char *url
 		req_fail(r, MHD_HTTP_NOT_FOUND, "no such API call");
 		return;
 	}
-	roles = key_roles(n, c, &r->key_name);
+	roles = http_key_roles(&n->cfg, c, &r->key_name);
 	r->roles = roles;
 	if (r->rt->role && !(roles & r->rt->role)) {
 		req_fail(r, MHD_HTTP_FORBIDDEN, roles ? "the API key lacks the role this call needs"
@@ -508,9 +504,7 @@ static void first_call(struct node *n, struct MHD_Connection *c, const char *url
 	}
 }
 
-/* Whether a refusal is answered before the body: the client waits for 100
- * Continue, or the body is chunked or longer than the node reads to refuse. */
-static bool refuse_at_once(struct MHD_Connection *c)
+bool http_refuse_at_once(struct MHD_Connection *c)
 {
 	const char *e = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_EXPECT);
 	const char *cl = MHD_lookup_connection_value(c, MHD_HEADER_KIND,
@@ -551,7 +545,7 @@ static enum MHD_Result handle_request(void *cls, struct MHD_Connection *c, const
 
 	(void)version;
 	if (!r && !strcmp(method, "GET") && (!strcmp(url, "/") || !strcmp(url, "/index.html")))
-		return send_page(c);
+		return http_send_page(c, node_status_page); /* no data: no key */
 	if (!r && !strcmp(method, "GET") && push_route(n, c, url, &ret))
 		return ret;
 	if (!r) {
@@ -560,7 +554,7 @@ static enum MHD_Result handle_request(void *cls, struct MHD_Connection *c, const
 			return MHD_NO;
 		*con_cls = r;
 		first_call(n, c, url, method, r);
-		if (r->status && refuse_at_once(c))
+		if (r->status && http_refuse_at_once(c))
 			return send_refusal(c, r);
 		return MHD_YES;
 	}

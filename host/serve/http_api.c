@@ -183,18 +183,47 @@ static json_t *completion_json(const struct http_view *v)
 					  : json_null();
 }
 
+/* Seconds left of v's job (-1 unknown) from est, the estimate of its file at
+ * its position: the file's M73 R marks (what the slicer planned for the
+ * part still to print), else its estimate scaled by the bytes left.
+ * *origin is OctoPrint's printTimeLeftOrigin (NULL when unknown). */
+static double time_left(const struct http_view *v, const struct node_gcode_estimate *est,
+			const char **origin)
+{
+	double done = v->has_job && v->size > 0 ? (double)v->filepos / (double)v->size : 0;
+
+	*origin = NULL;
+	if (v->has_job && est->left_s >= 0) {
+		*origin = "estimate";
+		return est->left_s;
+	}
+	if (v->has_job && est->time_s >= 0) {
+		*origin = "analysis";
+		return est->time_s * (1 - done);
+	}
+	return -1;
+}
+
 json_t *node_printer_json(struct node *n, struct node_printer *p, int queue_limit)
 {
 	struct http_view v;
+	struct node_gcode_estimate est;
+	const char *origin;
+	double left = -1;
 	json_t *o;
 
 	http_take_view(n, p, &v);
-	o = json_pack("{s:s,s:s,s:s,s:o,s:{s:o,s:o},s:{s:o,s:I,s:I},s:o,s:b}", "name",
+	if (v.has_job) {
+		node_gcode_estimate(p, v.job.gcode, v.filepos, &est);
+		left = time_left(&v, &est, &origin);
+	}
+	o = json_pack("{s:s,s:s,s:s,s:o,s:{s:o,s:o},s:{s:o,s:I,s:I,s:o},s:o,s:b}", "name",
 		      p->cfg->name, "prefix", p->cfg->prefix, "state", http_state_text(&v), "link",
 		      link_json(p, &v), "temperature", "tool0", http_temp_json(v.tool), "bed",
 		      http_temp_json(v.bed), "progress", "completion", completion_json(&v), "filepos",
 		      (json_int_t)(v.has_job ? v.filepos : 0), "size",
-		      (json_int_t)(v.has_job ? v.size : 0), "job",
+		      (json_int_t)(v.has_job ? v.size : 0), "printTimeLeft",
+		      left >= 0 ? json_integer((json_int_t)left) : json_null(), "job",
 		      v.has_job ? node_job_json(&v.job) : json_null(), "bedClear", v.bed_clear);
 	json_object_set_new(o, "waiting", node_queue_waiting(n->q, p->cfg->name));
 	if (o && queue_limit > 0)
@@ -270,8 +299,8 @@ json_t *http_job_json(struct node *n, struct node_printer *p, struct http_view *
 	const char *name = NULL;
 	char sel[2 * NODE_PATH_MAX];
 	struct node_gcode_estimate est;
-	const char *origin = NULL;
-	double left = -1, done;
+	const char *origin;
+	double left;
 	struct stat st;
 
 	http_take_view(n, p, &v);
@@ -282,16 +311,7 @@ json_t *http_job_json(struct node *n, struct node_printer *p, struct http_view *
 		filament = json_pack("{s:{s:o,s:o}}", "tool0", "length", est.filament_mm >= 0
 				     ? json_real(est.filament_mm) : json_null(), "volume",
 				     est.filament_cm3 >= 0 ? json_real(est.filament_cm3) : json_null());
-	/* Time left: the file's M73 R marks (what the slicer planned for the
-	 * part still to print), else its estimate scaled by the bytes left. */
-	done = v.has_job && v.size > 0 ? (double)v.filepos / (double)v.size : 0;
-	if (v.has_job && est.left_s >= 0) {
-		left = est.left_s;
-		origin = "estimate";
-	} else if (v.has_job && est.time_s >= 0) {
-		left = est.time_s * (1 - done);
-		origin = "analysis";
-	}
+	left = time_left(&v, &est, &origin);
 	name = v.has_job ? v.job.name : v.selected;
 	file = json_object();
 	json_object_set_new(file, "name", str_or_null(name));

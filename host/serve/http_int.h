@@ -18,6 +18,8 @@
 #include "node_int.h"
 
 #define HTTP_FIELD_MAX 1024 /* a form field other than the file */
+#define HTTP_MULTIPART_SLACK 65536 /* multipart headers and fields around the file */
+#define HTTP_DRAIN_MAX 65536	    /* body read before refusing, bytes */
 #define HTTP_OCTOPRINT_VERSION "1.10.0" /* the OctoPrint version answered (/api/version, /api/server) */
 
 struct req;
@@ -70,8 +72,21 @@ enum MHD_Result http_send_json(struct MHD_Connection *c, unsigned status, json_t
 			       const char *location);
 /* Answer {"error": msg} with status. */
 enum MHD_Result http_send_error(struct MHD_Connection *c, unsigned status, const char *msg);
+/* http_refuse_at_once - whether a refusal is answered before the body: the
+ * client waits for 100 Continue, or the body is chunked or longer than
+ * HTTP_DRAIN_MAX (answering early may reset a connection with unread
+ * bytes, so a small body is read first).  The node's API and the farm's. */
+bool http_refuse_at_once(struct MHD_Connection *c);
+/* Answer with page, a static HTML page whose script is inline (page.c,
+ * farm_page.c): nothing loaded from elsewhere (the Content-Security-Policy). */
+enum MHD_Result http_send_page(struct MHD_Connection *c, const char *page);
 /* Answer 204 No Content. */
 enum MHD_Result http_no_content(struct MHD_Connection *c);
+/* The roles of the request's key among cfg's keys (X-Api-Key, Authorization:
+ * Bearer, or OctoPrint's ?apikey=, in that order); 0 if none.  *who the
+ * key's name.  The node's API and the farm view's alike. */
+unsigned http_key_roles(const struct node_config *cfg, struct MHD_Connection *c,
+			const char **who);
 
 /* ---- a printer's state for one answer (http_api.c) ---- */
 

@@ -3,6 +3,7 @@
  * when the config has an [mqtt] section.  Under ROOT/NODE/ (ROOT = the
  * `topic` key, default "stratum"):
  *   status                      "online", or "offline" (the last will)
+ *   info                        {"url", "printers": [{"name", "profile", "prefix"}]}
  *   PRINTER/status              OctoPrint's state text
  *   PRINTER/temperatures        {"tool0":{"actual","target"},"bed":{...}}
  *   PRINTER/progress            {"completion","filepos","size"}
@@ -59,6 +60,7 @@ struct node_mqtt {
 	pthread_cond_t cv;
 	bool stop, connected, republish;
 	bool off; /* another node took the name: no more connecting */
+	uint16_t http_port; /* the node's HTTP port once it listens (for info), else 0 */
 	struct {
 		size_t printer;
 		char *payload;
@@ -439,6 +441,41 @@ static void publish_state(struct node_mqtt *m, size_t i, bool force)
 	}
 }
 
+/* The node's retained info: where it is reached and its printers with
+ * their profiles, for the farm view (docs/serve.md "The farm view"). */
+static void publish_info(struct node_mqtt *m, uint16_t port)
+{
+	struct node *n = m->n;
+	char url[NODE_URL_MAX + 64], host[128] = "localhost", topic[300];
+	json_t *o, *printers = json_array();
+	char *text;
+
+	if (n->cfg.url[0]) {
+		snprintf(url, sizeof(url), "%s", n->cfg.url);
+	} else {
+		/* every address: the host's name is what another machine can reach */
+		if (strcmp(n->cfg.listen_addr, "0.0.0.0"))
+			snprintf(host, sizeof(host), "%s", n->cfg.listen_addr);
+		else
+			gethostname(host, sizeof(host) - 1);
+		snprintf(url, sizeof(url), "http://%s:%u", host, port);
+	}
+	for (size_t i = 0; i < n->nprinters; i++)
+		json_array_append_new(printers, json_pack("{s:s,s:s,s:s,s:s}", "name",
+							  n->printers[i].cfg->name, "profile",
+							  n->printers[i].prof->id, "profileName",
+							  n->printers[i].prof->name, "prefix",
+							  n->printers[i].cfg->prefix));
+	o = json_pack("{s:s,s:o}", "url", url, "printers", printers);
+	text = o ? json_dumps(o, JSON_COMPACT) : NULL;
+	json_decref(o);
+	if (!text)
+		return;
+	snprintf(topic, sizeof(topic), "%s/info", m->base);
+	mosquitto_publish(m->mosq, NULL, topic, (int)strlen(text), text, 1, true);
+	free(text);
+}
+
 /* Connect with the node's client id once its name is free: libmosquitto's
  * network thread keeps the connection from then on. */
 static void link_up(struct node_mqtt *m)
@@ -510,9 +547,12 @@ static void *mqtt_main(void *arg)
 		}
 		if (m->connected) {
 			bool force = m->republish;
+			uint16_t port = m->http_port;
 
 			m->republish = false;
 			pthread_mutex_unlock(&m->mu);
+			if (force && port)
+				publish_info(m, port);
 			for (size_t i = 0; i < m->n->nprinters; i++)
 				publish_state(m, i, force);
 			pthread_mutex_lock(&m->mu);
@@ -572,6 +612,19 @@ int node_mqtt_start(struct node *n, struct st_error *err)
 		return st_error_set(err, ST_ERR_INTERNAL, "mqtt: cannot start its thread");
 	m->thread_started = true;
 	return 0;
+}
+
+void node_mqtt_listening(struct node *n, uint16_t port)
+{
+	struct node_mqtt *m = n->mqtt;
+
+	if (!m)
+		return;
+	pthread_mutex_lock(&m->mu);
+	m->http_port = port;
+	m->republish = true;
+	pthread_cond_signal(&m->cv);
+	pthread_mutex_unlock(&m->mu);
 }
 
 void node_mqtt_stop(struct node *n)

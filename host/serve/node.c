@@ -224,6 +224,7 @@ int node_start(struct node *n, struct st_error *err)
 	n->started = true;
 	if ((rc = node_http_start(n, err)))
 		goto out_stop;
+	node_mqtt_listening(n, n->port);
 	node_log("info", NULL, 0, "node %s listening on %s:%u with %zu printer(s)", n->cfg.name,
 		 n->cfg.listen_addr, n->port, n->nprinters);
 	return 0;

@@ -26,6 +26,7 @@
 #define NODE_KEY_MAX 128	/* longest API key, bytes */
 #define NODE_PATH_MAX 1024	/* data directory, profile and port paths */
 #define NODE_PREFIX_MAX 128	/* a printer's URL path prefix */
+#define NODE_URL_MAX 256	/* a node's URL, bytes with the NUL */
 #define NODE_FILE_NAME_MAX 255	/* an uploaded file's name, bytes (NAME_MAX) */
 #define NODE_UPLOAD_DEFAULT (256ull << 20) /* max_upload_mb default: 256 MiB */
 /* HTTP connection bounds (docs/serve.md, "Limits"): the total stays under the
@@ -86,6 +87,9 @@ struct node_config {
 	char path[NODE_PATH_MAX];	/* the file it was read from */
 	char name[NODE_NAME_MAX];	/* [node] name; default "stratum" */
 	char listen_addr[64];		/* IPv4 address; default 127.0.0.1 */
+	/* where clients reach the node ("http://farm-1.lan:5000"), announced on
+	 * MQTT for the farm view; "" = from listen (the host name for 0.0.0.0) */
+	char url[NODE_URL_MAX];
 	uint16_t listen_port;		/* default 5000 (OctoPrint's); 0 = any free port */
 	char data_dir[NODE_PATH_MAX];	/* relative paths are from the config's folder */
 	uint64_t max_upload;		/* bytes; max_upload_mb in the file */
@@ -141,6 +145,34 @@ int node_parse_roles(char *v, unsigned *roles, struct st_error *err);
  */
 int node_config_new_key(const char *path, const char *name, const char *roles,
 			char key[NODE_NEW_KEY_LEN + 1], struct st_error *err);
+
+/*
+ * The farm view's config (`stratum farm`, docs/serve.md "The farm view"):
+ * [farm] with the [node] keys that apply (name, listen, max_upload_mb and
+ * the connection limits) and node_key, [key NAME] (its own API's keys),
+ * [mqtt] (the broker, as a node's) and [remote NODE] (key: the farm's key
+ * on that node, instead of node_key; url: its address, instead of the one
+ * it announces).  No printers.
+ */
+#define FARM_MAX_REMOTES 256
+struct farm_remote {
+	char name[NODE_NAME_MAX];	/* the node's [node] name */
+	char key[NODE_KEY_MAX + 1];	/* a key of that node with the upload role */
+	char url[NODE_URL_MAX];		/* where it is reached; "" = what it announces */
+};
+struct farm_config {
+	struct node_config base; /* name, listen, limits, keys, mqtt; no printers */
+	char node_key[NODE_KEY_MAX + 1]; /* the farm's key on nodes without a [remote] */
+	struct farm_remote remotes[FARM_MAX_REMOTES];
+	size_t nremotes;
+};
+
+/*
+ * farm_config_load - read and check a farm view's config, as
+ * node_config_load does a node's (same syntax, same errors and codes).
+ * The MQTT client id is "stratum-farm-NAME".
+ */
+int farm_config_load(const char *path, struct farm_config *cfg, struct st_error *err);
 
 /*
  * node_config_exposed - whether the config at path, loaded as cfg, holds
@@ -214,5 +246,18 @@ void node_stop(struct node *n);
 
 /* node_free - stop if needed and free; NULL is fine. */
 void node_free(struct node *n);
+
+/*
+ * The farm view (host/serve/farm*.c): every node's printers on one page and
+ * one JSON API, read from the broker, and jobs handed to idle printers.
+ * farm_new copies cfg; farm_start connects to the broker (retried while it
+ * is down) and listens: 0, ST_ERR_ARG (no broker host), ST_ERR_RANGE (TLS
+ * files), ST_ERR_IO (cannot listen).  farm_free stops and frees (NULL ok).
+ */
+struct farm;
+int farm_new(const struct farm_config *cfg, struct farm **out, struct st_error *err);
+int farm_start(struct farm *f, struct st_error *err);
+uint16_t farm_port(const struct farm *f); /* the port listened on, after farm_start */
+void farm_free(struct farm *f);
 
 #endif /* STRATUM_HOST_SERVE_NODE_H */

@@ -343,7 +343,7 @@ int node_check_kind(const struct node_printer *p, const char *name, struct st_er
  * auth.c.  node_key_roles - the roles of the config's key whose secret is
  * key (0 for none; *who its [key NAME], else NULL), compared in constant time.
  */
-unsigned node_key_roles(const struct node *n, const char *key, const char **who);
+unsigned node_key_roles(const struct node_config *cfg, const char *key, const char **who);
 
 /* A signed MQTT command's "time" is taken this many seconds either way. */
 #define NODE_MQTT_SIGNED_WINDOW_S 300
@@ -375,10 +375,33 @@ int node_mqtt_url_allowed(const struct node_mqtt_config *c, const char *url,
 struct node_mqtt;
 int node_mqtt_start(struct node *n, struct st_error *err);
 void node_mqtt_stop(struct node *n);
+/* node_mqtt_listening - the HTTP server listens on port: announce the
+ * node's info (its URL, printers and profiles) on the broker. */
+void node_mqtt_listening(struct node *n, uint16_t port);
 
 /* http.c; node_printer_json - p's state, temperatures, progress, job and
  * its newest queue_limit jobs (0: no queue), for /api/stratum/node and MQTT. */
 json_t *node_printer_json(struct node *n, struct node_printer *p, int queue_limit);
+
+/* The script both pages begin with (page.c, farm_page.c): the API key from
+ * the address (#key= or ?key=), a new element with its text, and a result
+ * said to the operator in the page's #msg. */
+#define PAGE_SCRIPT_BASICS \
+	"function fromAddress() {\n" \
+	"  var m = /[#&?]key=([^&]*)/.exec(location.hash + '&' + location.search);\n" \
+	"  return m ? decodeURIComponent(m[1]) : '';\n" \
+	"}\n" \
+	"function el(tag, text, cls) {\n" \
+	"  var e = document.createElement(tag);\n" \
+	"  if (text) e.textContent = text;\n" \
+	"  if (cls) e.className = cls;\n" \
+	"  return e;\n" \
+	"}\n" \
+	"function say(text, ok) {\n" \
+	"  var m = document.getElementById('msg');\n" \
+	"  m.textContent = text;\n" \
+	"  m.className = ok ? 'ok' : '';\n" \
+	"}\n"
 
 /* page.c: the status page served at GET / (HTML with its script). */
 extern const char node_status_page[];
