@@ -1,8 +1,9 @@
 /*
  * cmd_serve.c - `stratum serve --config node.ini [--listen ADDR:PORT]`: run
- * the farm node (host/serve/node.h) until SIGTERM or SIGINT; and `stratum
- * farm --config farm.ini [--broker HOST[:PORT]] [--listen ADDR:PORT]`: the
- * farm view over every node on the broker, the same way.  Log records go
+ * the farm node (host/serve/node.h) until SIGTERM or SIGINT (with --new-key
+ * NAME --roles ROLES: add a new API key to the config and print it); and
+ * `stratum farm --config farm.ini [--broker HOST[:PORT]] [--listen ADDR:PORT]`:
+ * the farm view over every node on the broker, the same way.  Log records go
  * to stderr, one line each, with a UTC time stamp (journald adds its own,
  * but a plain terminal needs one).
  * Exit 0 after a signal, 2 usage, 65 bad config or printer profile,
@@ -25,6 +26,7 @@
 /* The help text around the option lines. */
 static const char serve_head[] =
     "usage: stratum serve --config NODE.ini [--listen ADDR:PORT]\n"
+    "       stratum serve --config NODE.ini --new-key NAME --roles ROLE,...\n"
     "\n"
     "Runs the farm node: every printer of the config with its own job queue,\n"
     "behind an OctoPrint-compatible HTTP API that PrusaSlicer and Cura upload to.\n"
@@ -50,6 +52,26 @@ static void log_stderr(const char *line, void *ctx)
 	strftime(ts, sizeof(ts), "%Y-%m-%dT%H:%M:%SZ", &tm);
 	fprintf(stderr, "%s %s\n", ts, line);
 	fflush(stderr);
+}
+
+/* --new-key NAME --roles ROLES: the key on stdout, nothing else. */
+static int new_key_command(const struct cmd_spec *spec, const char *config, const char *name,
+			   const char *roles)
+{
+	char key[NODE_NEW_KEY_LEN + 1];
+	struct st_error err = {0};
+	int rc;
+
+	if (!name || !roles)
+		return cmd_refuse(spec, "%s", name ? "--new-key needs --roles (read, upload, control)"
+						   : "--roles goes with --new-key NAME");
+	rc = node_config_new_key(config, name, roles, key, &err);
+	if (rc)
+		return cmd_fail(SERVE_CMD, st_exit_for(rc), "%s", err.msg);
+	printf("%s\n", key);
+	fprintf(stderr, SERVE_CMD ": added [key %s] to %s (mode 0600); restart the node to use "
+			"it\n", name, config);
+	return ST_EXIT_OK;
 }
 
 /* Warn when the config at path, holding secrets, is readable by others. */
@@ -79,7 +101,7 @@ static void block_signals(sigset_t *set)
 
 int cmd_serve(int argc, char **argv)
 {
-	const char *config = NULL, *listen = NULL;
+	const char *config = NULL, *listen = NULL, *new_key = NULL, *roles = NULL;
 	struct node_config *cfg;
 	struct node *n = NULL;
 	struct st_error err = {0};
@@ -93,6 +115,12 @@ int cmd_serve(int argc, char **argv)
 	    CMD_OPT_STRING("--listen", 0, &listen, 0, "ADDR:PORT", "ADDR:PORT",
 	     "listen there instead of the config's listen = (port 0:\n"
 	     "any free port, logged at start)"),
+	    CMD_OPT_STRING("--new-key", 0, &new_key, CMD_NONEMPTY, "a key name", "NAME",
+	     "add [key NAME] with a new random key (OctoPrint's form:\n"
+	     "32 hex digits) to the config, print the key and exit;\n"
+	     "restart the node to use it"),
+	    CMD_OPT_STRING("--roles", 0, &roles, CMD_NONEMPTY, "roles such as read,upload",
+	     "ROLE,...", "the new key's roles: read, upload, control"),
 	};
 	const struct cmd_spec spec = {.cmd = SERVE_CMD, .head = serve_head, CMD_TABLE(opts), .col = 21,
 				      .tail = serve_tail};
@@ -102,6 +130,8 @@ int cmd_serve(int argc, char **argv)
 		return rc < 0 ? ST_EXIT_OK : rc;
 	if (!config)
 		return cmd_refuse(&spec, "no config given; add --config NODE.ini");
+	if (new_key || roles)
+		return new_key_command(&spec, config, new_key, roles);
 	cfg = &cfg_store;
 	rc = node_config_load(config, cfg, &err);
 	if (rc)

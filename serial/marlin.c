@@ -501,8 +501,9 @@ static int marlin_timers(struct marlin *m, double now, struct st_error *err)
 	return 0;
 }
 
-int marlin_submit(struct marlin *m, const char *cmd, uint64_t src_line, long layer, double z,
-		  struct st_error *err)
+/* marlin_submit, at the end of the queue or (first) at its head. */
+static int submit(struct marlin *m, const char *cmd, uint64_t src_line, long layer, double z,
+		  bool first, struct st_error *err)
 {
 	struct gcode_line g;
 	size_t len = cmd ? strlen(cmd) : 0;
@@ -517,7 +518,10 @@ int marlin_submit(struct marlin *m, const char *cmd, uint64_t src_line, long lay
 		return ST_ERR_ARG;
 	if (!marlin_can_submit(m))
 		return 0;
-	struct marlin_pend *p = &m->pend[(m->pend_head + m->pend_count) % MARLIN_QUEUE];
+	if (first)
+		m->pend_head = (m->pend_head + MARLIN_QUEUE - 1) % MARLIN_QUEUE;
+	struct marlin_pend *p = &m->pend[first ? m->pend_head
+					       : (m->pend_head + m->pend_count) % MARLIN_QUEUE];
 	memcpy(p->cmd, cmd, len + 1);
 	p->job = true;
 	p->blocking = gcode_is_blocking(g.kind);
@@ -528,6 +532,17 @@ int marlin_submit(struct marlin *m, const char *cmd, uint64_t src_line, long lay
 	m->pend_count++;
 	m->st.submitted++;
 	return 1;
+}
+
+int marlin_submit(struct marlin *m, const char *cmd, uint64_t src_line, long layer, double z,
+		  struct st_error *err)
+{
+	return submit(m, cmd, src_line, layer, z, false, err);
+}
+
+int marlin_submit_next(struct marlin *m, const char *cmd, struct st_error *err)
+{
+	return submit(m, cmd, 0, -1, NAN, true, err);
 }
 
 /* Queue a driver command (M155, the stop sequence) ahead of job lines. */

@@ -163,6 +163,14 @@ int marlin_submit(struct marlin *m, const char *cmd, uint64_t src_line, long lay
 		  struct st_error *err);
 
 /*
+ * marlin_submit_next - marlin_submit of a command that is not the job's
+ * (src 0), ahead of every submitted command not yet written: the next
+ * numbered line.  An operator's command during a print goes in there,
+ * between two job lines, instead of after the queue's MARLIN_QUEUE.
+ */
+int marlin_submit_next(struct marlin *m, const char *cmd, struct st_error *err);
+
+/*
  * marlin_step - write what the window allows, then wait at most timeout_ms
  * (>= 0) for replies and handle them, time-outs included.  Returns 0, or
  * ST_ERR_IO when the job failed (status.fail and err say why: link,

@@ -12,8 +12,10 @@
  *
  * A print is: printer_check (the whole file, before anything is sent: a
  * bad file sends nothing), then printer_stream with hooks the adapter
- * calls as it goes: control (go, hold, cancel, stop) and progress (line
- * or command, byte position, layer, Z, temperatures).  A stream that ends
+ * calls as it goes: control (go, hold, cancel, stop), progress (line
+ * or command, byte position, layer, Z, temperatures) and, where the
+ * dialect can (takes_injected), an operator's lines and temperature
+ * offsets.  A stream that ends
  * with the printer still answering but not done leaves it to the caller
  * to call printer_safe_stop (heaters and motors off).
  *
@@ -69,6 +71,8 @@ struct printer_progress {
 	double z;		 /* that layer's Z (mm), NAN unknown */
 	bool tool, bed;		 /* the temperatures below were reported */
 	double tool_actual, tool_target, bed_actual, bed_target; /* degC */
+	bool tool1;		 /* a second extruder's were (Sailfish, two extruders) */
+	double tool1_actual, tool1_target; /* degC */
 	bool paused;		 /* holding, and the printer has run out what it had */
 	uint64_t resends;	 /* lines or packets sent again */
 	double seconds;		 /* since the stream started */
@@ -93,8 +97,21 @@ struct printer_job {
 	enum printer_control (*control)(void *ctx);
 	/* called about every 200 ms and at the end; may be NULL */
 	void (*progress)(void *ctx, const struct printer_progress *p);
+	/* called with control while going (not holding), by adapters whose
+	 * ops say takes_injected: a G-code line to send next, between two of
+	 * the file's (an operator's command during a print), copied into line
+	 * (cap bytes) and true; false when none.  A line that does not parse
+	 * or fit the firmware is dropped.  NULL = none. */
+	bool (*inject)(void *ctx, char *line, size_t cap);
+	/* the operator's temperature offset (degC) for heater: a tool's
+	 * number, or PRINTER_HEATER_BED; added to the S of the file's M104,
+	 * M109, M140 and M190 above 0 (OctoPrint's offsets), by adapters whose
+	 * ops say takes_injected.  Called at each such line.  NULL = none. */
+	double (*temp_offset)(void *ctx, int heater);
 	void *ctx;
 };
+
+#define PRINTER_HEATER_BED (-1) /* printer_job.temp_offset's heater for the bed */
 
 /* What printer_check found. */
 struct printer_file_info {
@@ -152,6 +169,10 @@ struct printer_ops {
 	 * trace); Sailfish answers in binary packets, so a host has nothing to
 	 * print but what poll reads */
 	bool text_replies;
+	/* the stream sends job->inject's lines between the file's (Marlin:
+	 * one more numbered line; Sailfish translates G-code as it streams,
+	 * with the translator's position and state, and takes none) */
+	bool takes_injected;
 	int (*open)(const struct printer_options *o, void **state, struct st_error *err);
 	void (*close)(void *state);
 	int (*check)(const struct printer_options *o, const struct printer_job *job,

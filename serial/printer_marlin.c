@@ -355,6 +355,56 @@ static void pm_end(const struct pm_state *s, const struct marlin_status *st, int
 }
 
 
+/* The next line job->inject has for between the file's lines, parsed into
+ * g (its text in buf): true, or false when it has none.  One that does not
+ * parse or is too long for the firmware is dropped: a caller's command must
+ * not fail the print. */
+static bool pm_injected(const struct printer_job *job, char *buf, size_t cap,
+			struct gcode_line *g)
+{
+	while (job->inject && job->inject(job->ctx, buf, cap)) {
+		struct st_error e;
+
+		if (!gcode_parse(buf, strlen(buf), 0, g, &e) && g->text_len &&
+		    g->kind != GCODE_KIND_HOST_ONLY && g->text_len <= MARLIN_CMD_MAX)
+			return true;
+	}
+	return false;
+}
+
+/* Add the operator's offset to the S (above 0: off stays off) of a
+ * heater's M104, M109, M140 or M190 in g's text. */
+static void pm_temp_offset(const struct printer_job *job, struct gcode_line *g)
+{
+	char text[GCODE_LINE_MAX + 1];
+	double s, t = 0, delta;
+	size_t len;
+	int n;
+
+	if (!job->temp_offset || g->letter != 'M' ||
+	    (g->number != 104 && g->number != 109 && g->number != 140 && g->number != 190) ||
+	    !gcode_word_value(g, 'S', &s) || s <= 0)
+		return;
+	gcode_word_value(g, 'T', &t);
+	delta = job->temp_offset(job->ctx, g->number == 140 || g->number == 190
+						     ? PRINTER_HEATER_BED : (int)t);
+	if (delta == 0 || !isfinite(delta))
+		return;
+	len = (size_t)snprintf(text, sizeof(text), "M%d", g->number);
+	for (size_t i = 0; i < g->nwords && len < sizeof(text); i++) {
+		const struct gcode_word *w = &g->words[i];
+
+		n = !w->has_value ? snprintf(text + len, sizeof(text) - len, " %c", w->letter)
+		    : snprintf(text + len, sizeof(text) - len, " %c%.10g", w->letter,
+			       w->letter == 'S' ? (s + delta > 0 ? s + delta : 0) : w->value);
+		len += (size_t)n;
+	}
+	if (len < sizeof(text) && len <= MARLIN_CMD_MAX) {
+		memcpy(g->text, text, len + 1);
+		g->text_len = len;
+	}
+}
+
 static int pm_stream(void *state, const struct printer_job *job, struct printer_result *res,
 		     struct st_error *err)
 {
@@ -364,6 +414,7 @@ static int pm_stream(void *state, const struct printer_job *job, struct printer_
 	struct marlin_status st;
 	struct gcode_reader *r = NULL;
 	struct gcode_line g;
+	char injected[GCODE_LINE_MAX + 1];
 	enum printer_control asked = PRINTER_GO;
 	bool eof = false;
 	long layer = -1;
@@ -393,6 +444,12 @@ static int pm_stream(void *state, const struct printer_job *job, struct printer_
 			else
 				marlin_request_resume(s->m);
 		}
+		/* An operator's line goes next, between two of the file's
+		 * written ones, not behind the lines queued in the driver. */
+		if (asked == PRINTER_GO && ipre == npre && marlin_can_submit(s->m) &&
+		    pm_injected(job, injected, sizeof(injected), &g) &&
+		    (rc = marlin_submit_next(s->m, g.text, err)) < 0)
+			goto out_bad_line;
 		while (asked == PRINTER_GO && marlin_can_submit(s->m) && (ipre < npre || !eof)) {
 			if (ipre < npre) {
 				/* src 0: a preamble line, not the file's */
@@ -404,6 +461,7 @@ static int pm_stream(void *state, const struct printer_job *job, struct printer_
 				gcode_layer_follow(&g, &layer, &z);
 				if (g.kind == GCODE_KIND_HOST_ONLY || !g.text_len)
 					continue;
+				pm_temp_offset(job, &g);
 				if (g.text_len > MARLIN_CMD_MAX) {
 					rc = pm_too_long(job->path, job->first_line +
 							 gcode_reader_line(r), g.text_len, err);
@@ -570,6 +628,7 @@ const struct printer_ops printer_marlin_ops = {
 	.name = "marlin",
 	.can_resume = true,
 	.text_replies = true,
+	.takes_injected = true,
 	.open = pm_open,
 	.close = pm_close,
 	.check = pm_check,

@@ -102,6 +102,7 @@ static int ps_start_sim(struct ps_state *s, const struct printer_options *o, con
 static int ps_open(const struct printer_options *o, void **state, struct st_error *err)
 {
 	struct ps_state *s = calloc(1, sizeof(*s));
+	struct s3g_options so;
 	const char *path = o->port;
 	struct st_error e = {0};
 	uint16_t fw = 0;
@@ -120,7 +121,9 @@ static int ps_open(const struct printer_options *o, void **state, struct st_erro
 	}
 	if ((rc = printer_port_open(o, path, s->simulated, &s->x, err)))
 		goto out_free;
-	if ((rc = s3g_new(s->x, NULL, &s->d, &e))) {
+	s3g_options_init(&so);
+	so.tools = s->m.extruder_count > 1 ? 2 : 1;
+	if ((rc = s3g_new(s->x, &so, &s->d, &e))) {
 		rc = st_error_set(err, rc, "%s: %s", s->name, e.msg);
 		goto out_free;
 	}
@@ -155,6 +158,9 @@ static void ps_temps(const struct s3g_status *st, struct printer_progress *p)
 	p->tool_target = st->tool_target;
 	p->bed_actual = st->platform_temp;
 	p->bed_target = st->platform_target;
+	p->tool1 = st->tool1_temp || st->tool1_target; /* 0, 0: not read (one tool) */
+	p->tool1_actual = st->tool1_temp;
+	p->tool1_target = st->tool1_target;
 }
 
 /* G-code lines done: up to that of the last command taken (one pulled ahead at most). */

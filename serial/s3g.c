@@ -49,6 +49,7 @@ void s3g_options_init(struct s3g_options *o)
 	o->stats_ms = 1000;
 	o->quiet_ms = 10;
 	o->wait_finished = true;
+	o->tools = 1;
 }
 
 int s3g_new(struct xport *x, const struct s3g_options *opts, struct s3g **out,
@@ -412,6 +413,13 @@ int s3g_get_temps(struct s3g *s, struct s3g_temps *t, struct st_error *err)
 	    (rc = s3g_tool_i16(s, 0, S3G_TQ_PLATFORM_TEMP, &t->platform, err)) ||
 	    (rc = s3g_tool_i16(s, 0, S3G_TQ_PLATFORM_TARGET, &t->platform_target, err)))
 		return rc;
+	t->tool1 = t->tool1_target = 0;
+	if (s->o.tools > 1 &&
+	    ((rc = s3g_tool_i16(s, 1, S3G_TQ_TEMP, &t->tool1, err)) ||
+	     (rc = s3g_tool_i16(s, 1, S3G_TQ_TARGET, &t->tool1_target, err))))
+		return rc;
+	s->st.tool1_temp = t->tool1;
+	s->st.tool1_target = t->tool1_target;
 	s->st.tool_temp = t->tool;
 	s->st.tool_target = t->tool_target;
 	s->st.platform_temp = t->platform;

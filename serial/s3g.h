@@ -229,6 +229,7 @@ struct s3g_options {
 	int stats_ms;		 /* reset check interval while streaming (ms); default 1000 */
 	int quiet_ms;		 /* line must be silent this long after an error (ms); default 10 */
 	bool wait_finished;	 /* s3g_stream waits until the printer is idle; default true */
+	int tools;		 /* extruders whose temperatures are read: 1 (default) or 2 */
 };
 
 /* Why a stream ended early, for the caller's exit status. */
@@ -263,6 +264,7 @@ struct s3g_status {
 	uint64_t action_bytes;	 /* bytes of confirmed action payloads */
 	uint32_t buffer_free;	 /* last reported free buffer space (bytes) */
 	int tool_temp, tool_target, platform_temp, platform_target; /* degC */
+	int tool1_temp, tool1_target; /* the second extruder's (options.tools 2), degC */
 	uint32_t line;		 /* firmware's line number (commands processed) */
 	int build_state;	 /* enum s3g_build_state, -1 unknown */
 	double elapsed_s;	 /* since s3g_stream started */
@@ -289,9 +291,10 @@ struct s3g_position {
 	uint16_t endstops;
 };
 
-/* Temperatures of tool 0 and the platform (degC). */
+/* Temperatures of tool 0, the platform and (options.tools 2) tool 1 (degC). */
 struct s3g_temps {
 	int tool, tool_target, platform, platform_target;
+	int tool1, tool1_target; /* 0 with one tool */
 };
 
 /* Progress callback: called about every 100 ms while streaming. */

@@ -25,6 +25,7 @@
 #define CTL "X-Api-Key: " KEY_CTL
 #define UP "X-Api-Key: " KEY_UP
 #define RO "X-Api-Key: " KEY_READ
+#define NODE_KEY_LEN 32 /* OctoPrint's API key: 32 hex digits */
 
 /* A test-instant Prusa and a test-instant Creator Pro (two extruders). */
 #define MK3S_AND_CREATOR                                                             \
@@ -172,6 +173,61 @@ START_TEST(test_key_forms)
 	/* the query key has its roles, no more */
 	sv_expect(np.port, "POST", "/api/job?apikey=" KEY_READ, NULL, "{\"command\":\"cancel\"}",
 		  403);
+	sv_stop(&np);
+}
+END_TEST
+
+/* `stratum serve --new-key NAME --roles ...` (issue 20): OctoPrint's key
+ * form, added to the config (mode 0600), taken in each of the three forms
+ * with its roles only; a second key of the name is refused. */
+START_TEST(test_new_key)
+{
+	struct node_proc np;
+	char out[512], hdr[128], path[128], key[NODE_KEY_LEN + 1], *before, *after;
+	size_t len;
+	struct stat st;
+	struct resp r;
+
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	chmod(np.config, 0644);
+	/* stdout has the key alone */
+	ck_assert_int_eq(tu_sh(out, sizeof(out), "('%s' serve --config '%s' --new-key farm-app "
+				  "--roles 'read, control' >'%s')", tu_bin(), np.config,
+			       tu_path("key.txt")), 0);
+	ck_assert_msg(strstr(out, "added [key farm-app]"), "%s", out);
+	before = tu_slurp(tu_path("key.txt"), &len);
+	ck_assert_msg(strlen(before) == NODE_KEY_LEN + 1 && before[NODE_KEY_LEN] == '\n' &&
+		      strspn(before, "0123456789ABCDEF") == NODE_KEY_LEN, "not a key: '%s'", before);
+	memcpy(key, before, NODE_KEY_LEN);
+	free(before);
+	key[NODE_KEY_LEN] = '\0';
+	ck_assert(stat(np.config, &st) == 0);
+	ck_assert_int_eq(st.st_mode & 0777, 0600);
+	before = tu_slurp(np.config, &len);
+	ck_assert_int_eq(tu_sh(out, sizeof(out), "'%s' serve --config '%s' --new-key farm-app "
+				  "--roles read", tu_bin(), np.config), 65);
+	ck_assert_msg(strstr(out, "[key farm-app] exists already"), "%s", out);
+	after = tu_slurp(np.config, &len);
+	ck_assert_str_eq(before, after);
+	free(before);
+	free(after);
+	ck_assert_int_eq(tu_sh(out, sizeof(out), "'%s' serve --config '%s' --new-key x "
+				  "--roles admin", tu_bin(), np.config), 2);
+	ck_assert_msg(strstr(out, "--roles: 'admin'"), "%s", out);
+	sv_start(&np);
+	snprintf(hdr, sizeof(hdr), "X-Api-Key: %s", key);
+	sv_call(np.port, "GET", "/api/currentuser", hdr, NULL, 200, &r);
+	ck_assert_str_eq(sv_str(r.json, "name"), "farm-app");
+	sv_resp_free(&r);
+	sv_expect(np.port, "POST", "/api/job", hdr, "{\"command\":\"cancel\"}", 409);
+	snprintf(hdr, sizeof(hdr), "Authorization: Bearer %s", key);
+	sv_expect(np.port, "GET", "/api/job", hdr, NULL, 200);
+	snprintf(path, sizeof(path), "/api/job?apikey=%s", key);
+	sv_expect(np.port, "GET", path, NULL, NULL, 200);
+	/* read and control, not upload */
+	sv_upload_text(np.port, "", key, "a.gcode", "G28\n", "false", &r);
+	ck_assert_int_eq(r.status, 403);
+	sv_resp_free(&r);
 	sv_stop(&np);
 }
 END_TEST
@@ -706,6 +762,180 @@ START_TEST(test_printer_printhead)
 }
 END_TEST
 
+/*
+ * Commands during a print (OctoPrint queues them between the job's lines):
+ * on a Marlin printer (`port = sim`) a command and a tool target posted
+ * while the job streams run once each, between two lines of the job, whose
+ * lines all run once and in order (the simulator's log: every line number
+ * once, in order); the print head's jog and a tool select stay 409.
+ */
+START_TEST(test_command_during_print)
+{
+	static const char *const ours[] = {"M117 sent during the print", "M104 S205"};
+	struct node_proc np;
+	char path[600], *job, *log, *from, *end, *rest;
+	size_t cap = 64 * 1024, len = 0, n;
+	int seen[2] = {0, 0}, inside[2] = {0, 0};
+	long last = -1;
+	json_t *o;
+	double pos = 0;
+
+	job = malloc(cap);
+	ck_assert(job);
+	len += (size_t)snprintf(job + len, cap - len, "M117 job start\nG28\n");
+	for (int k = 0; k < 160; k++)
+		len += (size_t)snprintf(job + len, cap - len, "G1 X%d Y%d F60\n", 10 + k % 2, 10 + k);
+	snprintf(job + len, cap - len, "M117 job end\n");
+	start(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\nsim_speedup = 40\n");
+	operational(np.port, "");
+	ck_assert(sv_print_text(np.port, "", "moves.gcode", job) == 1);
+	sv_wait_state(np.port, "", 1, "printing", 10);
+	for (int i = 0; i < 250 && pos <= 0; i++) {
+		o = sv_get_json(np.port, "/api/job");
+		pos = json_number_value(json_object_get(json_object_get(o, "progress"), "filepos"));
+		json_decref(o);
+		usleep(20000);
+	}
+	ck_assert_msg(pos > 0, "the job did not start streaming");
+	sv_expect(np.port, "POST", "/api/printer/command", CTL,
+		  "{\"command\":\"M117 sent during the print\"}", 204);
+	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
+		  "{\"command\":\"target\",\"targets\":{\"tool0\":205}}", 204);
+	/* as OctoPrint: no jog, home, tool select or extrusion while printing */
+	sv_expect(np.port, "POST", "/api/printer/printhead", CTL,
+		  "{\"command\":\"jog\",\"x\":10}", 409);
+	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
+		  "{\"command\":\"extrude\",\"amount\":5}", 409);
+	sv_wait_state(np.port, "", 1, "done", 30);
+	/* The simulator's log from the job's first line: the job whole, in
+	 * order, with each command once inside it. */
+	snprintf(path, sizeof(path), "%s/data/sim/mk3s.log", np.dir);
+	log = tu_slurp(path, &n);
+	from = strstr(log, " M117 job start\n");
+	ck_assert_msg(from, "the job's first line did not run: %.300s", log);
+	while (from > log && from[-1] != '\n')
+		from--;
+	rest = job;
+	for (char *line = from; *line; line = end + 1) {
+		char *text = strchr(line, ' ') + 1;
+		long num = atol(line);
+		size_t tl;
+
+		end = strchr(line, '\n');
+		ck_assert(end);
+		if (!strncmp(line, "- M105\n", 7))
+			continue; /* the driver's unnumbered probe when a reply is slow */
+		tl = (size_t)(end - text);
+		ck_assert_msg(last < 0 || num == last + 1, "line %ld ran after line %ld: %.400s", num,
+			      last, from);
+		last = num;
+		for (int i = 0; i < 2; i++) {
+			if (tl == strlen(ours[i]) && !strncmp(text, ours[i], tl)) {
+				seen[i]++;
+				inside[i] = rest != job && *rest; /* after the first job line, before the last */
+				goto next;
+			}
+		}
+		ck_assert_msg(!strncmp(rest, text, tl + 1), "the job ran '%.*s' where '%.40s' was due",
+			      (int)tl, text, rest);
+		rest += tl + 1;
+next:;
+	}
+	ck_assert_msg(!*rest, "the job's lines from '%.40s' did not run", rest);
+	for (int i = 0; i < 2; i++)
+		ck_assert_msg(seen[i] == 1 && inside[i], "'%s' ran %d times%s", ours[i], seen[i],
+			      inside[i] ? "" : ", not between two lines of the job");
+	free(log);
+	free(job);
+	sv_stop(&np);
+}
+END_TEST
+
+/*
+ * Temperature offsets (OctoPrint's "offset" of the tool and the bed): on a
+ * Marlin printer they are reported and added to the file's targets as it
+ * streams (a heater turned off stays off); test-instant printers refuse
+ * them (400, test_printer_tool).
+ */
+START_TEST(test_temperature_offsets)
+{
+	struct node_proc np;
+	struct resp r;
+	char path[600], *log = NULL;
+	json_t *temp;
+	size_t len;
+
+	start(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\nsim_speedup = 1000\n");
+	operational(np.port, "");
+	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
+		  "{\"command\":\"offset\",\"offsets\":{\"tool0\":10}}", 204);
+	sv_expect(np.port, "POST", "/api/printer/bed", CTL, "{\"command\":\"offset\",\"offset\":-5}",
+		  204);
+	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
+		  "{\"command\":\"offset\",\"offsets\":{\"tool0\":60}}", 400);
+	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
+		  "{\"command\":\"offset\",\"offsets\":{\"tool3\":5}}", 400);
+	sv_expect(np.port, "POST", "/api/printer/tool", UP,
+		  "{\"command\":\"offset\",\"offsets\":{\"tool0\":5}}", 403);
+	sv_call(np.port, "GET", "/api/printer", RO, NULL, 200, &r);
+	temp = json_object_get(r.json, "temperature");
+	ck_assert_msg(json_number_value(json_object_get(json_object_get(temp, "tool0"), "offset")) ==
+			      10 &&
+		      json_number_value(json_object_get(json_object_get(temp, "bed"), "offset")) ==
+			      -5, "%s", r.body);
+	sv_resp_free(&r);
+	sv_bed_clear(np.port, "", 204);
+	ck_assert(sv_print_text(np.port, "", "temps.gcode",
+				"M104 S200\nM140 S60\nG1 X5 F600\nM104 S0\nM140 S0\n") == 1);
+	sv_wait_state(np.port, "", 1, "done", 20);
+	snprintf(path, sizeof(path), "%s/data/sim/mk3s.log", np.dir);
+	log = tu_slurp(path, &len);
+	ck_assert_msg(strstr(log, " M104 S210\n") && strstr(log, " M140 S55\n") &&
+		      strstr(log, " M104 S0\n") && strstr(log, " M140 S0\n") &&
+		      !strstr(log, " M104 S200\n") && !strstr(log, " M140 S60\n"),
+		      "the offsets were not applied: %s", log);
+	free(log);
+	sv_stop(&np);
+}
+END_TEST
+
+/*
+ * The Creator Pro's second extruder (issue 20): the Sailfish driver reads
+ * tool 1 too, so /api/printer/tool has its temperatures, and a target set
+ * for it shows (the simulated printer heats it); a one-extruder printer
+ * has no tool1.
+ */
+START_TEST(test_sailfish_tool1)
+{
+	struct node_proc np;
+	struct resp r;
+	json_t *t1 = NULL;
+	double target = 0;
+
+	start(&np, "[printer cp]\nprofile = flashforge-creator-pro\nport = sim\n"
+		   "sim_speedup = 1000\n");
+	operational(np.port, "");
+	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
+		  "{\"command\":\"target\",\"targets\":{\"tool1\":150}}", 204);
+	/* temperatures are read every 2 s between jobs */
+	for (int i = 0; i < 300 && target != 150; i++) {
+		sv_call(np.port, "GET", "/api/printer/tool", RO, NULL, 200, &r);
+		t1 = json_object_get(r.json, "tool1");
+		target = json_number_value(json_object_get(t1, "target"));
+		if (target == 150) {
+			ck_assert_msg(json_is_number(json_object_get(t1, "actual")), "%s", r.body);
+			ck_assert_msg(json_number_value(json_object_get(json_object_get(r.json,
+				      "tool0"), "target")) == 0, "%s", r.body);
+		}
+		sv_resp_free(&r);
+		if (target != 150)
+			usleep(20000);
+	}
+	ck_assert_msg(target == 150, "tool1's target never showed");
+	sv_stop(&np);
+}
+END_TEST
+
 /* ---- job ---------------------------------------------------------------------- */
 
 /* /api/job: the file's estimate and filament, the time left by its M73
@@ -770,6 +1000,7 @@ Suite *octoapi_suite(void)
 	tcase_add_test(tc, test_currentuser);
 	tcase_add_test(tc, test_server);
 	tcase_add_test(tc, test_key_forms);
+	tcase_add_test(tc, test_new_key);
 	tcase_add_test(tc, test_head_options_405);
 	tcase_add_test(tc, test_system_commands);
 	tcase_add_test(tc, test_settings_post);
@@ -784,6 +1015,9 @@ Suite *octoapi_suite(void)
 	tcase_add_test(tc, test_printer_tool);
 	tcase_add_test(tc, test_printer_bed);
 	tcase_add_test(tc, test_printer_printhead);
+	tcase_add_test(tc, test_command_during_print);
+	tcase_add_test(tc, test_temperature_offsets);
+	tcase_add_test(tc, test_sailfish_tool1);
 	tcase_add_test(tc, test_job_estimates);
 	suite_add_tcase(s, tc);
 	octoapi_push_tcases(s);

@@ -40,6 +40,7 @@
 #include "meshio.h"
 #include "mqtttest.h"
 #include "sfcheck.h"
+#include "st_clock.h"
 #include "suites.h"
 #include "servetest.h"
 #include "testutil.h"
@@ -546,6 +547,72 @@ START_TEST(test_connection_limits)
 }
 END_TEST
 
+/* Whether the node has closed fd (a read finds its end or a reset). */
+static bool closed_by_node(int fd)
+{
+	char buf[256];
+	ssize_t k;
+
+	while ((k = recv(fd, buf, sizeof(buf), MSG_DONTWAIT)) > 0)
+		;
+	return k == 0 || (k < 0 && errno != EAGAIN && errno != EWOULDBLOCK);
+}
+
+/*
+ * A slow-loris client (issue 20): one byte every 250 ms never lets
+ * idle_timeout_s (3 s) run out, yet a header not whole within
+ * header_timeout_s (1 s), and a body below min_body_rate over that time,
+ * lose their connection; a client sending its request at once is answered.
+ */
+START_TEST(test_slow_header_and_body)
+{
+	static const char cfg[] =
+		"[node]\nname = test-node\nlisten = 127.0.0.1:0\ndata_dir = data\n"
+		"idle_timeout_s = 3\nheader_timeout_s = 1\nmin_body_rate = 1000\n"
+		"[key slicer]\nkey = " KEY_UP "\nroles = read, upload\n"
+		"[key viewer]\nkey = " KEY_READ "\nroles = read\n"
+		"[printer mk3s]\nprofile = prusa-i3-mk3s\nport = test-instant\n";
+	static const char head[] = "GET /api/version HTTP/1.1\r\nHost: x\r\nX-Api-Key: " KEY_UP
+				   "\r\n";
+	char body_head[512];
+	struct node_proc np;
+	int fd[2], n;
+	double closed_at[2] = {0, 0}, t0;
+
+	sv_write_config(&np, TWO_PRINTERS, 8);
+	tu_write_str(np.config, cfg);
+	sv_start(&np);
+	n = snprintf(body_head, sizeof(body_head),
+		     "POST /api/files/local HTTP/1.1\r\nHost: x\r\nX-Api-Key: " KEY_UP "\r\n"
+		     "Content-Type: multipart/form-data; boundary=" BOUNDARY "\r\n"
+		     "Content-Length: 100000\r\n\r\n--" BOUNDARY "\r\n");
+	fd[0] = connect_from(np.port, "127.0.0.1");
+	fd[1] = connect_from(np.port, "127.0.0.1");
+	ck_assert(send(fd[0], head, sizeof(head) - 1, MSG_NOSIGNAL) == (ssize_t)sizeof(head) - 1);
+	ck_assert(send(fd[1], body_head, (size_t)n, MSG_NOSIGNAL) == n);
+	t0 = st_mono_s();
+	while (st_mono_s() - t0 < 2.8 && !(closed_at[0] && closed_at[1])) {
+		usleep(250000);
+		for (int i = 0; i < 2; i++) {
+			if (closed_at[i])
+				continue;
+			if (closed_by_node(fd[i]))
+				closed_at[i] = st_mono_s() - t0;
+			else
+				send(fd[i], i ? "x" : "X", 1, MSG_NOSIGNAL);
+		}
+	}
+	ck_assert_msg(closed_at[0] > 0.8 && closed_at[0] < 2.0,
+		      "a header trickled for %.1f s kept its connection", st_mono_s() - t0);
+	ck_assert_msg(closed_at[1] > 0.8 && closed_at[1] < 2.0,
+		      "a body trickled for %.1f s kept its connection", st_mono_s() - t0);
+	close(fd[0]);
+	close(fd[1]);
+	ck_assert_int_eq(version_from(np.port, "127.0.0.1"), 200);
+	sv_stop(&np);
+}
+END_TEST
+
 /*
  * Send the head of a request announcing a 1 GB body and a few bytes of it,
  * then wait at most 3 s for the answer (issue 20): a refused request is
@@ -904,7 +971,7 @@ START_TEST(test_pause_resume_cancel)
 	sv_http(np.port, "GET", "/api/job", "X-Api-Key: " KEY_READ, NULL, &r);
 	ck_assert_str_eq(json_string_value(json_object_get(r.json, "state")), "Paused");
 	sv_resp_free(&r);
-	/* Commands are taken between jobs only. */
+	/* A paused print takes no command (nor does a test-instant one). */
 	sv_expect(np.port, "POST", "/api/printer/command", "X-Api-Key: " KEY_CTL,
 	     "{\"commands\":[\"M105\"]}", 409);
 	sv_expect(np.port, "POST", "/api/job", "X-Api-Key: " KEY_CTL,
@@ -1773,6 +1840,7 @@ Suite *serve_suite(void)
 	tcase_add_test(tc, test_tmp_cleaned_at_start);
 	tcase_add_test(tc, test_query_keys_not_logged);
 	tcase_add_test(tc, test_connection_limits);
+	tcase_add_test(tc, test_slow_header_and_body);
 	tcase_add_test(tc, test_chunked_refused_stops);
 	tcase_add_test(tc, test_stl_two_printers);
 	tcase_add_test(tc, test_node_gcode_is_slice_gcode);

@@ -30,6 +30,7 @@ struct cfg_parse {
 	bool node_seen, mqtt_seen;
 	struct node_config *cfg;
 	struct farm_config *farm; /* a farm view's config (cfg is its base); NULL: a node's */
+	bool keys_optional;	  /* no [key] section is fine (node_config_read) */
 	struct st_error *err;
 	char *scratch; /* the current line's key and value, NUL-terminated */
 };
@@ -62,8 +63,7 @@ static char *trim(char *s)
 	return s;
 }
 
-/* A name for a section: letters, digits, '-', '_' and '.', 1-63 bytes. */
-static bool good_name(const char *s)
+bool node_good_name(const char *s)
 {
 	size_t n = strlen(s);
 
@@ -106,8 +106,7 @@ static int whole(struct cfg_parse *p, const char *key, const char *v, double lo,
 	return 0;
 }
 
-/* roles = read, upload, control (any of them, comma separated); v is cut up. */
-static int parse_roles(struct cfg_parse *p, char *v, unsigned *roles)
+int node_parse_roles(char *v, unsigned *roles, struct st_error *err)
 {
 	char *next = v, *tok;
 
@@ -125,11 +124,22 @@ static int parse_roles(struct cfg_parse *p, char *v, unsigned *roles)
 		else if (!strcmp(tok, "control"))
 			*roles |= NODE_ROLE_CONTROL;
 		else
-			return CFG_FAIL(p, ST_ERR_PARSE,
-					"roles: '%s' is not a role (read, upload, control)", tok);
+			return st_error_set(err, ST_ERR_PARSE, "roles: '%.60s' is not a role (read, "
+							       "upload, control)", tok);
 	}
 	if (!*roles)
-		return CFG_FAIL(p, ST_ERR_RANGE, "roles: give at least one of read, upload, control");
+		return st_error_set(err, ST_ERR_RANGE, "roles: give at least one of read, upload, "
+						       "control");
+	return 0;
+}
+
+/* roles = ... in a [key] section, with the file and line in the message. */
+static int parse_roles(struct cfg_parse *p, char *v, unsigned *roles)
+{
+	struct st_error e;
+
+	if (node_parse_roles(v, roles, &e))
+		return CFG_FAIL(p, e.code, "%s", e.msg);
 	return 0;
 }
 
@@ -146,7 +156,7 @@ static int once(struct cfg_parse *p, const char *key, unsigned bit)
 static int check_name(struct cfg_parse *p, char *v, void *base)
 {
 	(void)base;
-	if (!good_name(v))
+	if (!node_good_name(v))
 		return CFG_FAIL(p, ST_ERR_RANGE, "name: '%s' is not a name (letters, "
 					       "digits, '-', '_', '.'; at most 63)", v);
 	return 0;
@@ -315,6 +325,8 @@ static const struct cfg_key node_keys[] = {
     WHOLE(struct node_config, max_connections, KEY_UNSIGNED, NODE_CONN_MIN, NODE_CONN_MAX),
     WHOLE(struct node_config, max_connections_per_ip, KEY_UNSIGNED, 1, NODE_CONN_MAX),
     WHOLE(struct node_config, idle_timeout_s, KEY_UNSIGNED, 1, 3600),
+    WHOLE(struct node_config, header_timeout_s, KEY_UNSIGNED, 1, 3600),
+    WHOLE(struct node_config, min_body_rate, KEY_UNSIGNED, 0, 1 << 30),
     TEXT(struct node_config, url, check_url),
     TEXT(struct node_config, data_dir, NULL),
     WHOLE(struct node_config, slice_threads, KEY_INT, 0, 256),
@@ -426,7 +438,7 @@ static int section_line(struct cfg_parse *p, char *s)
 		return CFG_FAIL(p, ST_ERR_PARSE, "unknown section [%s] (%s)", s, list);
 	*name = '\0';
 	name = trim(name + 1);
-	if (!good_name(name))
+	if (!node_good_name(name))
 		return CFG_FAIL(p, ST_ERR_RANGE, "'%s' is not a name (letters, digits, '-', '_', "
 						 "'.'; at most 63)", name);
 	if (!strcmp(s, "key")) {
@@ -554,13 +566,14 @@ static int check_mqtt(struct cfg_parse *p)
 	return 0;
 }
 
-/* What every section must have, checked once the whole file is read. */
+/* What every section must have, checked once the whole file is read;
+ * p->keys_optional lets a file without [key] through (--new-key). */
 static int check_complete(struct cfg_parse *p)
 {
 	struct node_config *c = p->cfg;
 
 	p->line = 0;
-	if (!c->nkeys)
+	if (!c->nkeys && !p->keys_optional)
 		return st_error_set(p->err, ST_ERR_RANGE, "%s: no [key NAME] section: the %s "
 							  "refuses every request without a key",
 				    p->file, p->farm ? "farm view" : "node");
@@ -624,12 +637,14 @@ static int resolve_paths(struct node_config *c, bool farm, const char *path, str
 	return resolve_path(path, "key_file", m->key_file, err);
 }
 
-/* Read a node's config into *c, or with farm a farm view's (c its base). */
+/* Read a node's config into *c, or with farm a farm view's (c its base);
+ * keys_optional lets a node's config without [key] through (--new-key). */
 static int config_load(const char *path, struct node_config *c, struct farm_config *farm,
-		       struct st_error *err)
+		       bool keys_optional, struct st_error *err)
 {
 	static const struct ini_handler handler = {on_section, on_entry, true, false};
-	struct cfg_parse p = {.file = path, .cfg = c, .farm = farm, .err = err};
+	struct cfg_parse p = {.file = path, .cfg = c, .farm = farm, .keys_optional = keys_optional,
+			      .err = err};
 	char *text = NULL;
 	size_t len;
 	int rc;
@@ -653,6 +668,8 @@ static int config_load(const char *path, struct node_config *c, struct farm_conf
 	c->max_connections = NODE_CONN_DEFAULT;
 	c->max_connections_per_ip = NODE_CONN_PER_IP_DEFAULT;
 	c->idle_timeout_s = NODE_IDLE_TIMEOUT_DEFAULT;
+	c->header_timeout_s = NODE_HEADER_TIMEOUT_DEFAULT;
+	c->min_body_rate = NODE_MIN_BODY_RATE_DEFAULT;
 	if (!(rc = ini_parse(text, len, path, &handler, &p, err)) && !(rc = check_complete(&p)))
 		rc = resolve_paths(c, farm != NULL, path, err);
 out_free:
@@ -661,17 +678,23 @@ out_free:
 	return rc;
 }
 
-int node_config_load(const char *path, struct node_config *out, struct st_error *err)
+int node_config_read(const char *path, struct node_config *out, bool keys_required,
+		     struct st_error *err)
 {
 	struct node_config *c = calloc(1, sizeof(*c));
 	int rc;
 
 	if (!c)
 		return st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", path);
-	if (!(rc = config_load(path, c, NULL, err)))
+	if (!(rc = config_load(path, c, NULL, !keys_required, err)))
 		*out = *c;
 	free(c);
 	return rc;
+}
+
+int node_config_load(const char *path, struct node_config *out, struct st_error *err)
+{
+	return node_config_read(path, out, true, err);
 }
 
 int farm_config_load(const char *path, struct farm_config *out, struct st_error *err)
@@ -681,7 +704,7 @@ int farm_config_load(const char *path, struct farm_config *out, struct st_error 
 
 	if (!f)
 		return st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", path);
-	if (!(rc = config_load(path, &f->base, f, err)))
+	if (!(rc = config_load(path, &f->base, f, false, err)))
 		*out = *f;
 	free(f);
 	return rc;

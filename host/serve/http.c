@@ -535,9 +535,9 @@ static bool push_route(struct node *n, struct MHD_Connection *c, const char *url
 	return node_push_route(n, &n->printers[0], c, url, ret);
 }
 
-static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *url,
-			      const char *method, const char *version, const char *upload,
-			      size_t *upload_size, void **con_cls)
+static enum MHD_Result handle_request(void *cls, struct MHD_Connection *c, const char *url,
+				      const char *method, const char *version, const char *upload,
+				      size_t *upload_size, void **con_cls)
 {
 	struct node *n = cls;
 	struct req *r = *con_cls;
@@ -602,6 +602,28 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *u
 	return r->rt->fn(n, c, r);
 }
 
+/* handle_request, telling the slow-client bounds (http_deadline.c) where
+ * the request is: its header came (the first call), a piece of its body
+ * came, or it is all read (the last call, or the page and the push API,
+ * answered in their first call). */
+static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *url,
+			      const char *method, const char *version, const char *upload,
+			      size_t *upload_size, void **con_cls)
+{
+	bool first = !*con_cls;
+	size_t piece = *upload_size;
+	enum MHD_Result ret = handle_request(cls, c, url, method, version, upload, upload_size,
+					     con_cls);
+
+	if (first && *con_cls)
+		http_deadline_body(c, 0);
+	else if (!first && piece)
+		http_deadline_body(c, piece);
+	else
+		http_deadline_answered(c);
+	return ret;
+}
+
 /* Free a request's state and log it once it is answered. */
 static void completed(void *cls, struct MHD_Connection *c, void **con_cls,
 		      enum MHD_RequestTerminationCode toe)
@@ -609,8 +631,8 @@ static void completed(void *cls, struct MHD_Connection *c, void **con_cls,
 	struct req *r = *con_cls;
 
 	(void)cls;
-	(void)c;
 	(void)toe;
+	http_deadline_next(c);
 	if (!r)
 		return;
 	if (r->pp)
@@ -664,10 +686,12 @@ static void connection_event(void *cls, struct MHD_Connection *c, void **socket_
 {
 	struct node *n = cls;
 
-	(void)c;
-	(void)socket_context;
-	if (code == MHD_CONNECTION_NOTIFY_CLOSED)
+	if (code == MHD_CONNECTION_NOTIFY_STARTED) {
+		http_deadline_open(n, c, socket_context);
+	} else if (code == MHD_CONNECTION_NOTIFY_CLOSED) {
+		http_deadline_close(socket_context);
 		atomic_fetch_sub(&n->http_connections, 1);
+	}
 }
 
 int node_http_start(struct node *n, struct st_error *err)
@@ -679,6 +703,8 @@ int node_http_start(struct node *n, struct st_error *err)
 		return st_error_set(err, ST_ERR_ARG, "listen address %s is not IPv4",
 				    n->cfg.listen_addr);
 	atomic_store(&n->http_connections, 0);
+	if (http_deadlines_start(n, err))
+		return err->code;
 	n->httpd = MHD_start_daemon(MHD_USE_AUTO_INTERNAL_THREAD | MHD_ALLOW_UPGRADE,
 				    n->cfg.listen_port, admit, n,
 				    handle, n, MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&sa,
@@ -689,9 +715,13 @@ int node_http_start(struct node *n, struct st_error *err)
 				    MHD_OPTION_PER_IP_CONNECTION_LIMIT, n->cfg.max_connections_per_ip,
 				    MHD_OPTION_NOTIFY_COMPLETED, completed, n,
 				    MHD_OPTION_URI_LOG_CALLBACK, log_uri, n, MHD_OPTION_END);
-	if (!n->httpd)
-		return st_error_set(err, ST_ERR_IO, "cannot listen on %s:%u: %s", n->cfg.listen_addr,
-				    n->cfg.listen_port, strerror(errno));
+	if (!n->httpd) {
+		int rc = st_error_set(err, ST_ERR_IO, "cannot listen on %s:%u: %s",
+				      n->cfg.listen_addr, n->cfg.listen_port, strerror(errno));
+
+		http_deadlines_stop(n);
+		return rc;
+	}
 	info = MHD_get_daemon_info(n->httpd, MHD_DAEMON_INFO_BIND_PORT);
 	n->port = info ? info->port : n->cfg.listen_port;
 	return 0;
@@ -703,4 +733,5 @@ void node_http_stop(struct node *n)
 	if (n->httpd)
 		MHD_stop_daemon(n->httpd);
 	n->httpd = NULL;
+	http_deadlines_stop(n);
 }

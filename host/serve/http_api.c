@@ -42,6 +42,11 @@ void http_take_view(struct node *n, struct node_printer *p, struct http_view *v)
 	v->tool[1] = p->ctl.tool_target;
 	v->bed[0] = p->ctl.bed_actual;
 	v->bed[1] = p->ctl.bed_target;
+	v->tool[2] = p->ctl.tool_offset[0];
+	v->bed[2] = p->ctl.bed_offset;
+	memcpy(v->tool_offset, p->ctl.tool_offset, sizeof(v->tool_offset));
+	v->tool1[0] = p->ctl.tool1_actual;
+	v->tool1[1] = p->ctl.tool1_target;
 	pthread_mutex_unlock(&p->ctl.mu);
 	pthread_mutex_unlock(&p->mu);
 	v->has_job = node_queue_active(n->q, p->cfg->name, &v->job, NULL) == 1;
@@ -72,13 +77,14 @@ const char *http_state_text(const struct http_view *v)
 	return "Operational";
 }
 
-json_t *http_temp_json(const double t[2])
+json_t *http_temp_json(const double t[3])
 {
 	json_t *o = json_object();
 
 	json_object_set_new(o, "actual", json_real(t[0]));
 	json_object_set_new(o, "target", json_real(t[1]));
-	json_object_set_new(o, "offset", json_integer(0));
+	json_object_set_new(o, "offset", t[2] == floor(t[2]) ? json_integer((json_int_t)t[2])
+							     : json_real(t[2]));
 	return o;
 }
 
@@ -91,9 +97,18 @@ json_t *http_temps_json(const struct node_printer *p, const struct http_view *v,
 	if (tools) {
 		json_object_set_new(o, "tool0", http_temp_json(v->tool));
 		for (int i = 1; i < p->prof->extruder_count; i++) {
+			/* tool 1 as the driver reads it (Sailfish), the others unknown */
+			bool known = i == 1 && !isnan(v->tool1[0]);
+
 			snprintf(name, sizeof(name), "tool%d", i);
-			json_object_set_new(o, name, json_pack("{s:n,s:n,s:i}", "actual", "target",
-							       "offset", 0));
+			json_object_set_new(o, name, json_pack("{s:o,s:o,s:f}", "actual",
+							       known ? json_real(v->tool1[0])
+								     : json_null(),
+							       "target",
+							       known ? json_real(v->tool1[1])
+								     : json_null(),
+							       "offset", i < NODE_PRINT_TOOLS
+							       ? v->tool_offset[i] : 0.0));
 		}
 	}
 	if (with_bed)
@@ -599,16 +614,27 @@ enum MHD_Result http_post_job(struct node *n, struct MHD_Connection *c, struct r
 }
 
 enum MHD_Result http_queue_lines(struct MHD_Connection *c, struct node_printer *p,
-				 char lines[][NODE_CMD_MAX], size_t count)
+				 char lines[][NODE_CMD_MAX], size_t count, bool in_print)
 {
 	enum MHD_Result ret;
+	bool paused;
 
 	pthread_mutex_lock(&p->mu);
+	pthread_mutex_lock(&p->ctl.mu);
+	paused = p->ctl.pause;
+	pthread_mutex_unlock(&p->ctl.mu);
 	if (!p->connected)
 		ret = http_send_error(c, MHD_HTTP_CONFLICT, "Printer is not operational");
-	else if (p->job_printing)
-		ret = http_send_error(c, MHD_HTTP_CONFLICT, "the printer is printing; commands are taken "
-						            "between jobs");
+	else if (p->job_printing && !in_print)
+		ret = http_send_error(c, MHD_HTTP_CONFLICT, "the printer is printing; this command is "
+						            "taken between jobs");
+	else if (p->job_printing && !node_print_takes_commands(p->cfg, p->prof))
+		ret = http_send_error(c, MHD_HTTP_CONFLICT, "the printer is printing; its print stream "
+						            "takes no other line (Sailfish): commands "
+							    "are taken between jobs");
+	else if (p->job_printing && paused)
+		ret = http_send_error(c, MHD_HTTP_CONFLICT, "the print is paused; commands go between "
+						            "its lines: resume it first");
 	else if ((size_t)p->ncmds + count > NODE_CMD_QUEUE)
 		ret = http_send_error(c, MHD_HTTP_CONFLICT, "the printer has too many commands waiting");
 	else {
@@ -663,7 +689,7 @@ enum MHD_Result http_post_command(struct node *n, struct MHD_Connection *c, stru
 		}
 		snprintf(lines[count++], NODE_CMD_MAX, "%s", s);
 	}
-	ret = http_queue_lines(c, p, lines, count);
+	ret = http_queue_lines(c, p, lines, count, true);
 out:
 	json_decref(list);
 	json_decref(o);

@@ -99,7 +99,9 @@ struct http_view {
 	int64_t filepos, size;
 	long layer;		/* of the last confirmed command (0-based), -1 unknown */
 	double z;		/* its Z (mm), NAN unknown */
-	double tool[2], bed[2]; /* actual, target */
+	double tool[3], bed[3]; /* actual, target, offset (tool 0) */
+	double tool_offset[NODE_PRINT_TOOLS]; /* every tool's offset */
+	double tool1[2]; /* the second extruder's actual, target; NAN unknown */
 	bool has_job;
 	struct node_job job; /* the active job (printing, paused, slicing), if has_job */
 	char selected[NODE_PATH_MAX];
@@ -113,10 +115,10 @@ void http_take_view(struct node *n, struct node_printer *p, struct http_view *v)
 /* OctoPrint's state text of v ("Operational", "Printing", ...). */
 const char *http_state_text(const struct http_view *v);
 /* {"actual", "target", "offset"} of t = {actual, target}. */
-json_t *http_temp_json(const double t[2]);
+json_t *http_temp_json(const double t[3]);
 /* The temperature object of /api/printer and /api/printer/tool: tool0,
- * and tool1 ... for each further extruder of p's profile (their actual
- * and target null: the drivers report tool 0 only); bed when with_bed. */
+ * and tool1 ... for each further extruder of p's profile (actual and target
+ * null unless read: Sailfish reads tool 1); bed when with_bed. */
 json_t *http_temps_json(const struct node_printer *p, const struct http_view *v, bool tools,
 			bool with_bed);
 /* OctoPrint's state flags of v (operational, printing, paused, ready ...). */
@@ -134,10 +136,12 @@ void http_add_history(struct MHD_Connection *c, struct node_printer *p, json_t *
 		      bool tools, bool bed);
 /* The JSON object of the body, or NULL with the error answer sent in *ret. */
 json_t *http_body_json(struct MHD_Connection *c, struct req *r, enum MHD_Result *ret);
-/* Queue count checked G-code lines for p's worker (sent between jobs):
- * 204, or 409 when not operational, printing or the queue is full. */
+/* Queue count checked G-code lines for p's worker: sent between jobs or,
+ * when in_print and the printer's link takes them (Marlin), between two
+ * lines of the print.  204, or 409 when not operational, the queue is full,
+ * or printing and the lines cannot go in (or the print is paused). */
 enum MHD_Result http_queue_lines(struct MHD_Connection *c, struct node_printer *p,
-				 char lines[][NODE_CMD_MAX], size_t count);
+				 char lines[][NODE_CMD_MAX], size_t count, bool in_print);
 /* Queue p's selected file (POST /api/job "start"); p->mu held.  204, 409
  * when nothing is selected or the file is gone. */
 enum MHD_Result http_start_selected(struct node *n, struct MHD_Connection *c,
@@ -209,5 +213,22 @@ bool node_push_route(struct node *n, struct node_printer *p, struct MHD_Connecti
 		     const char *path, enum MHD_Result *ret);
 void node_push_stop(struct node *n);
 void node_push_session(const char *secret, char out[NODE_PUSH_SESSION_LEN + 1]);
+
+/*
+ * http_deadline.c - the bounds on a slow client (docs/serve.md, "Limits"),
+ * which libmicrohttpd's inactivity time-out does not give: the header whole
+ * within header_timeout_s, the body at min_body_rate.  http.c tells it each
+ * connection's start and close and where its request is.
+ */
+int http_deadlines_start(struct node *n, struct st_error *err);
+void http_deadlines_stop(struct node *n); /* after the HTTP daemon stopped */
+void http_deadline_open(struct node *n, struct MHD_Connection *c, void **socket_context);
+void http_deadline_close(void **socket_context);
+/* The header is whole (bytes 0), or bytes of the body came. */
+void http_deadline_body(struct MHD_Connection *c, size_t bytes);
+/* The request is read: answering, or upgraded (not bounded here). */
+void http_deadline_answered(struct MHD_Connection *c);
+/* The request is done: a kept-alive connection waits for the next header. */
+void http_deadline_next(struct MHD_Connection *c);
 
 #endif /* STRATUM_HOST_SERVE_HTTP_INT_H */

@@ -25,6 +25,7 @@ struct lines {
 	char l[NODE_CMD_QUEUE][NODE_CMD_MAX];
 	size_t n;
 	char msg[200]; /* why the command is refused (400), "" if not */
+	bool in_print; /* may go between a print's lines (OctoPrint allows it then) */
 };
 
 static void add(struct lines *ls, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
@@ -57,7 +58,7 @@ static enum MHD_Result send_lines(struct MHD_Connection *c, struct node_printer 
 {
 	if (ls->msg[0])
 		return http_send_error(c, MHD_HTTP_BAD_REQUEST, ls->msg);
-	return http_queue_lines(c, p, ls->l, ls->n);
+	return http_queue_lines(c, p, ls->l, ls->n, ls->in_print);
 }
 
 /* The tool number of "toolN" for p, or -1. */
@@ -99,10 +100,58 @@ enum MHD_Result http_get_tool(struct node *n, struct MHD_Connection *c, struct r
 	return http_send_json(c, MHD_HTTP_OK, o, NULL);
 }
 
-/* The refusal of a temperature offset: the node sends the file's own
- * temperatures, so an offset would be stored and never applied. */
-#define NO_OFFSETS "temperature offsets are not supported: the node sends the temperatures " \
-		   "of the file as they are"
+#define OFFSET_MAX 50.0 /* OctoPrint's bound on a temperature offset, degC */
+
+/*
+ * The "offset" command: offsets, {"tool0": 5, ...}, or for the bed (offsets
+ * NULL) the number bed.  Kept with the printer and added to the targets of
+ * the file's lines as they stream (print.h), as OctoPrint does; only where
+ * the stream can (Marlin): elsewhere an offset would be stored and never
+ * applied, so it is refused.
+ */
+static enum MHD_Result set_offsets(struct node *n, struct MHD_Connection *c,
+				   struct node_printer *p, const json_t *offsets, const json_t *bed)
+{
+	double tool[NODE_PRINT_TOOLS];
+	bool set[NODE_PRINT_TOOLS] = {false};
+	struct http_view v;
+	const char *name;
+	json_t *val;
+
+	if (!operational(n, p, &v))
+		return http_send_error(c, MHD_HTTP_CONFLICT, "Printer is not operational");
+	if (!node_print_takes_commands(p->cfg, p->prof))
+		return http_send_error(c, MHD_HTTP_BAD_REQUEST, "temperature offsets are applied by "
+					"a Marlin printer's stream only: this printer's sends the "
+					"file's temperatures as they are");
+	if (!offsets) {
+		if (!json_is_number(bed) || fabs(json_number_value(bed)) > OFFSET_MAX)
+			return http_send_error(c, MHD_HTTP_BAD_REQUEST, "offset is degrees, -50 to 50");
+		pthread_mutex_lock(&p->ctl.mu);
+		p->ctl.bed_offset = json_number_value(bed);
+		pthread_mutex_unlock(&p->ctl.mu);
+		return http_no_content(c);
+	}
+	if (!json_is_object(offsets) || !json_object_size(offsets))
+		return http_send_error(c, MHD_HTTP_BAD_REQUEST, "offsets is an object of tool names "
+							       "and degrees");
+	json_object_foreach((json_t *)offsets, name, val) {
+		int i = tool_index(p, name);
+
+		if (i < 0 || i >= NODE_PRINT_TOOLS || !json_is_number(val) ||
+		    fabs(json_number_value(val)) > OFFSET_MAX)
+			return http_send_error(c, MHD_HTTP_BAD_REQUEST, "offsets: a tool of this "
+					       "printer and degrees, -50 to 50, each");
+		tool[i] = json_number_value(val);
+		set[i] = true;
+	}
+	pthread_mutex_lock(&p->ctl.mu);
+	for (int i = 0; i < NODE_PRINT_TOOLS; i++)
+		if (set[i])
+			p->ctl.tool_offset[i] = tool[i];
+	pthread_mutex_unlock(&p->ctl.mu);
+	return http_no_content(c);
+}
 
 /* "target" of {"targets": {"tool0": 220, ...}}. */
 static void tool_targets(struct node_printer *p, const json_t *targets, struct lines *ls)
@@ -137,7 +186,6 @@ enum MHD_Result http_post_tool(struct node *n, struct MHD_Connection *c, struct 
 	const char *cmd;
 	double v;
 
-	(void)n;
 	if (!o)
 		return ret;
 	cmd = json_string_value(json_object_get(o, "command"));
@@ -145,9 +193,12 @@ enum MHD_Result http_post_tool(struct node *n, struct MHD_Connection *c, struct 
 		snprintf(ls.msg, sizeof(ls.msg), "command is target, offset, select, extrude or "
 						 "flowrate");
 	} else if (!strcmp(cmd, "target")) {
+		ls.in_print = true;
 		tool_targets(p, json_object_get(o, "targets"), &ls);
 	} else if (!strcmp(cmd, "offset")) {
-		snprintf(ls.msg, sizeof(ls.msg), NO_OFFSETS);
+		ret = set_offsets(n, c, p, json_object_get(o, "offsets"), NULL);
+		json_decref(o);
+		return ret;
 	} else if (!strcmp(cmd, "select")) {
 		const char *t = json_string_value(json_object_get(o, "tool"));
 		int i = t ? tool_index(p, t) : -1;
@@ -177,6 +228,7 @@ enum MHD_Result http_post_tool(struct node *n, struct MHD_Connection *c, struct 
 		v = json_number_value(json_object_get(o, "factor"));
 		if (v > 0 && v <= 2) /* OctoPrint takes 0.75 or 75 */
 			v *= 100;
+		ls.in_print = true;
 		if (!json_is_number(json_object_get(o, "factor")) || v < 75 || v > 125)
 			snprintf(ls.msg, sizeof(ls.msg), "factor is 75 to 125 (percent)");
 		else
@@ -211,17 +263,20 @@ enum MHD_Result http_post_bed(struct node *n, struct MHD_Connection *c, struct r
 	const char *cmd;
 	double t;
 
-	(void)n;
 	if (r->p->prof->bed_temperature <= 0)
 		return http_send_error(c, MHD_HTTP_CONFLICT, "Printer does not have a heated bed");
 	if (!(o = http_body_json(c, r, &ret)))
 		return ret;
 	cmd = json_string_value(json_object_get(o, "command"));
 	t = temp_of(json_object_get(o, "target"));
+	ls.in_print = true;
+	if (cmd && !strcmp(cmd, "offset")) {
+		ret = set_offsets(n, c, r->p, NULL, json_object_get(o, "offset"));
+		json_decref(o);
+		return ret;
+	}
 	if (cmd && !strcmp(cmd, "target") && !isnan(t))
 		add(&ls, "M140 S%g", t);
-	else if (cmd && !strcmp(cmd, "offset"))
-		snprintf(ls.msg, sizeof(ls.msg), NO_OFFSETS);
 	else
 		snprintf(ls.msg, sizeof(ls.msg), "command is target, with target 0-%.0f", TEMP_MAX);
 	json_decref(o);
@@ -318,6 +373,7 @@ enum MHD_Result http_post_printhead(struct node *n, struct MHD_Connection *c, st
 
 		if (f > 0 && f <= 2) /* OctoPrint takes 1.0 or 100 */
 			f *= 100;
+		ls.in_print = true;
 		if (!json_is_number(json_object_get(o, "factor")) || f < 50 || f > 200)
 			snprintf(ls.msg, sizeof(ls.msg), "factor is 50 to 200 (percent)");
 		else

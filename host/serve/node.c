@@ -4,6 +4,7 @@
  */
 #include <dirent.h>
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -73,6 +74,7 @@ static int setup_printer(struct node *n, size_t i, struct st_error *err)
 	pthread_mutex_init(&p->mu, NULL);
 	pthread_cond_init(&p->cv, NULL);
 	pthread_mutex_init(&p->ctl.mu, NULL);
+	p->ctl.tool1_actual = p->ctl.tool1_target = NAN; /* until a driver reads it */
 	pthread_mutex_init(&p->gc_mu, NULL);
 	p->want_connect = true; /* OctoPrint's autoconnect */
 	rc = profile_find(p->cfg->profile, &p->prof, &e);

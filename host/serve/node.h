@@ -37,6 +37,8 @@
 #define NODE_CONN_MAX 65536
 #define NODE_CONN_PER_IP_DEFAULT 32    /* max_connections_per_ip */
 #define NODE_IDLE_TIMEOUT_DEFAULT 30   /* idle_timeout_s: no byte in either direction */
+#define NODE_HEADER_TIMEOUT_DEFAULT 30 /* header_timeout_s: a whole request header */
+#define NODE_MIN_BODY_RATE_DEFAULT 1024 /* min_body_rate: bytes/s over each header_timeout_s */
 
 /* Roles of an API key (bit set). */
 enum node_role {
@@ -95,6 +97,8 @@ struct node_config {
 	unsigned max_connections;	/* HTTP connections in all; NODE_CONN_DEFAULT */
 	unsigned max_connections_per_ip; /* from one client address */
 	unsigned idle_timeout_s;	/* close a connection silent this long */
+	unsigned header_timeout_s;	/* a request's header must be whole within this */
+	unsigned min_body_rate;		/* bytes/s a body brings over each header_timeout_s; 0 = any */
 	struct node_key keys[NODE_MAX_KEYS];
 	size_t nkeys;
 	struct node_printer_config printers[NODE_MAX_PRINTERS];
@@ -112,6 +116,35 @@ struct node_config {
  * ..." in err.
  */
 int node_config_load(const char *path, struct node_config *cfg, struct st_error *err);
+
+/* node_config_read - node_config_load, and with keys_required false a file
+ * without any [key NAME] section is accepted too (to add the first key). */
+int node_config_read(const char *path, struct node_config *cfg, bool keys_required,
+		     struct st_error *err);
+
+/* node_good_name - whether s may name a node, printer or key: letters,
+ * digits, '-', '_' and '.', not starting with '.', at most 63 bytes. */
+bool node_good_name(const char *s);
+
+/* node_parse_roles - "read, upload, control" (any of them, comma separated)
+ * into enum node_role bits; v is cut up.  ST_ERR_PARSE for an unknown role,
+ * ST_ERR_RANGE for none, with "roles: ..." in err. */
+int node_parse_roles(char *v, unsigned *roles, struct st_error *err);
+
+/* An API key made by the node: OctoPrint's form, 16 random bytes as 32
+ * upper-case hexadecimal digits (0-9, A-F). */
+#define NODE_NEW_KEY_LEN 32
+
+/*
+ * node_config_new_key - add [key name] with roles (node_parse_roles' form)
+ * and a new random key to the config at path, written whole (st_file.h),
+ * mode 0600, checked by node_config_load before it replaces the file; the
+ * key into key.  Returns 0; ST_ERR_ARG for a bad name or roles; ST_ERR_RANGE
+ * when the file has a key of that name; the reader's error when the config
+ * is bad; ST_ERR_IO when it cannot be written (then it is left as it was).
+ */
+int node_config_new_key(const char *path, const char *name, const char *roles,
+			char key[NODE_NEW_KEY_LEN + 1], struct st_error *err);
 
 /*
  * The farm view's config (`stratum farm`, docs/serve.md "The farm view"):

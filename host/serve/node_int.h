@@ -246,6 +246,8 @@ struct node {
 	uint16_t port;
 	/* HTTP connections admitted and not yet closed (http.c). */
 	atomic_uint http_connections;
+	/* The header and body bounds' watchdog (http_deadline.c). */
+	struct http_deadlines *deadlines;
 	bool started, stopped;
 	/* The ticker stores each print's position every NODE_TICK_MS. */
 	pthread_t ticker;

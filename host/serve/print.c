@@ -113,6 +113,10 @@ static void ctl_temps(struct node_print_ctl *ctl, const struct printer_progress 
 		ctl->bed_actual = p->bed_actual;
 		ctl->bed_target = p->bed_target;
 	}
+	if (p->tool1) {
+		ctl->tool1_actual = p->tool1_actual;
+		ctl->tool1_target = p->tool1_target;
+	}
 }
 
 /* The progress hook: position, layer, temperatures into ctl. */
@@ -127,6 +131,37 @@ static void ctl_progress(void *ctx, const struct printer_progress *p)
 	ctl->paused = p->paused;
 	ctl_temps(ctl, p);
 	pthread_mutex_unlock(&ctl->mu);
+}
+
+/* The inject hook: the operator's next command for between two lines. */
+static bool ctl_inject(void *ctx, char *line, size_t cap)
+{
+	struct node_print_ctl *ctl = ctx;
+
+	return ctl->next_command(ctl->commands, line, cap);
+}
+
+/* The temperature offset hook: the operator's offset for heater. */
+static double ctl_temp_offset(void *ctx, int heater)
+{
+	struct node_print_ctl *ctl = ctx;
+	double d = 0;
+
+	pthread_mutex_lock(&ctl->mu);
+	if (heater == PRINTER_HEATER_BED)
+		d = ctl->bed_offset;
+	else if (heater >= 0 && heater < NODE_PRINT_TOOLS)
+		d = ctl->tool_offset[heater];
+	pthread_mutex_unlock(&ctl->mu);
+	return d;
+}
+
+bool node_print_takes_commands(const struct node_printer_config *pc, const struct profile *prof)
+{
+	struct printer_options o;
+	const struct printer_ops *ops;
+
+	return !options_for(pc, prof, &o, &ops, NULL) && ops->takes_injected;
 }
 
 /* After a stream that ended with the printer answering: leave it safe. */
@@ -154,6 +189,8 @@ int node_print_file(struct node_link *l, const char *path, int64_t start, bool r
 		.resume = resume,
 		.control = ctl_control,
 		.progress = ctl_progress,
+		.inject = ctl->next_command && l->ops->takes_injected ? ctl_inject : NULL,
+		.temp_offset = l->ops->takes_injected ? ctl_temp_offset : NULL,
 		.ctx = ctl,
 	};
 	struct printer_file_info info;

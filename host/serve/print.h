@@ -26,6 +26,8 @@
 #include "st_error.h"
 
 /* Shared between a print and the API; every field under mu. */
+#define NODE_PRINT_TOOLS 8 /* tools whose temperature offset is kept */
+
 struct node_print_ctl {
 	pthread_mutex_t mu;
 	/* Requests, written by the API or node_stop. */
@@ -42,6 +44,16 @@ struct node_print_ctl {
 	long layer;		 /* layer of the last confirmed command (0-based), -1 unknown */
 	double z;		 /* its Z (mm), NAN unknown */
 	double tool_actual, tool_target, bed_actual, bed_target; /* degrees C */
+	double tool1_actual, tool1_target; /* a second extruder's, NAN unknown */
+	/* Operators' commands for between the file's lines (printer.h inject),
+	 * set by the caller before node_print_file: next_command(commands, ...)
+	 * copies the next one and returns true, false when none; NULL = none.
+	 * Called without ctl->mu held. */
+	bool (*next_command)(void *commands, char *line, size_t cap);
+	void *commands;
+	/* Operators' temperature offsets (OctoPrint's), degC, written by the
+	 * API: added to the file's heater targets above 0 as they stream. */
+	double tool_offset[NODE_PRINT_TOOLS], bed_offset;
 };
 
 /* node_print_file results besides negative errors. */
@@ -86,6 +98,11 @@ int node_print_file(struct node_link *l, const char *path, int64_t start, bool r
  * line changes nothing.  Returns 0, ST_ERR_PARSE, ST_ERR_IO.
  */
 int node_print_command(struct node_link *l, const char *line, struct st_error *err);
+
+/* node_print_takes_commands - whether the prints of the printer of pc
+ * send ctl->next_command's lines between the file's and apply ctl's
+ * temperature offsets (Marlin; not Sailfish, not test-instant). */
+bool node_print_takes_commands(const struct node_printer_config *pc, const struct profile *prof);
 
 /*
  * node_print_poll - between jobs: read what the printer reported

@@ -131,6 +131,28 @@ static void bed_after(struct node_printer *p, const struct node_job *j, bool res
 			 "printer reached it: the bed is still clear");
 }
 
+/* Take the first waiting printer command into line (cap bytes); p->mu held. */
+static bool pop_command(struct node_printer *p, char *line, size_t cap)
+{
+	if (!p->ncmds)
+		return false;
+	snprintf(line, cap, "%s", p->cmds[0]);
+	memmove(p->cmds[0], p->cmds[1], sizeof(p->cmds[0]) * (size_t)(--p->ncmds));
+	return true;
+}
+
+/* The print's source of commands for between its lines (print.h). */
+static bool next_command(void *commands, char *line, size_t cap)
+{
+	struct node_printer *p = commands;
+	bool got;
+
+	pthread_mutex_lock(&p->mu);
+	got = pop_command(p, line, cap);
+	pthread_mutex_unlock(&p->mu);
+	return got;
+}
+
 /* Print job j; p->mu held on entry and exit. */
 static void run_print(struct node_printer *p, struct node_job *j)
 {
@@ -156,6 +178,8 @@ static void run_print(struct node_printer *p, struct node_job *j)
 	p->job_printing = true;
 	pthread_mutex_lock(&p->ctl.mu);
 	p->ctl.pause = p->ctl.cancel = p->ctl.paused = false;
+	p->ctl.next_command = next_command;
+	p->ctl.commands = p;
 	p->ctl.filepos = start;
 	p->ctl.size = j->size;
 	pthread_mutex_unlock(&p->ctl.mu);
@@ -278,10 +302,8 @@ static bool command(struct node_printer *p)
 	char line[NODE_CMD_MAX];
 	struct st_error err = {0};
 
-	if (!p->connected || !p->ncmds)
+	if (!p->connected || !pop_command(p, line, sizeof(line)))
 		return false;
-	memcpy(line, p->cmds[0], sizeof(line));
-	memmove(p->cmds[0], p->cmds[1], sizeof(p->cmds[0]) * (size_t)(--p->ncmds));
 	pthread_mutex_unlock(&p->mu);
 	if (node_print_command(p->link, line, &err))
 		node_log("error", p->cfg->name, 0, "command %s: %s", line, err.msg);
