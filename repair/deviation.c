@@ -231,6 +231,13 @@ void deviation_report_free(struct deviation_report *r)
  * line has missed the part of the reference the facet stands for (it
  * passed a tip the finer surface rounds off) and met another. */
 #define CHORDAL_REACH 3.0
+/* chordal_measure_near, which judges small facets: at least this grid on
+ * each, so points inside it too, where a curved surface strays furthest
+ * from a small facet; and on each facet of the reference at least its
+ * centroid and two points on each edge besides its corners (fewer let the
+ * elephant of docs/accuracy.md end 9 % over the tolerance by `compare`). */
+#define NEAR_K_MIN 6
+#define BACK_K_MIN 3
 
 static int chordal_flush(struct chordal_report *r, struct batch *b, const struct surfdist *ref,
 			 double *near, double *sum, struct st_error *err)
@@ -281,6 +288,8 @@ static int chordal_points(const struct mesh *a, const struct surfdist *ref, doub
 		if (!surfsample_normal(p, q, s, n, &area))
 			continue;
 		k += k % 2;
+		if (!edge_reach && k < NEAR_K_MIN)
+			k = NEAR_K_MIN;
 		if (k > SURFSAMPLE_K_MAX)
 			k = SURFSAMPLE_K_MAX;
 		npts = (k + 1) * (k + 2) / 2;
@@ -436,7 +445,9 @@ int chordal_measure_back(const struct mesh *a, const struct mesh *ref, size_t sa
 	for (size_t t = 0; !rc && t < ref->ntris; t++) {
 		const double *p = ref->verts[ref->tris[t][0]], *q = ref->verts[ref->tris[t][1]],
 			     *s = ref->verts[ref->tris[t][2]];
-		size_t k = surfsample_k(p, q, s, spacing), npts = (k + 1) * (k + 2) / 2;
+		size_t k = surfsample_k(p, q, s, spacing);
+		k = k < BACK_K_MIN ? BACK_K_MIN : k;
+		size_t npts = (k + 1) * (k + 2) / 2;
 
 		surfsample_grid(p, q, s, k, tmp);
 		for (size_t i = 0; i < npts && !rc; i++) {
