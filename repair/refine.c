@@ -78,7 +78,7 @@ static int rounded_copy(const struct mesh *in, struct mesh **out, struct st_erro
 			const double *q = in->verts[in->tris[t][k]];
 			if (!to_float(q[0], &p[0]) || !to_float(q[1], &p[1]) || !to_float(q[2], &p[2]))
 				rc = st_error_set(err, ST_ERR_RANGE,
-						  "refine: a vertex of the coarse mesh lies beyond "
+						  "a vertex lies beyond "
 						  "float32's range, which STL stores");
 			else
 				rc = mesh_builder_vertex(b, p, &v[k], err);
@@ -231,7 +231,7 @@ static int add_vertices(struct mesh *m, struct round *r, size_t nmarked, struct 
 		if (!to_float(p[0], &v[m->nverts][0]) || !to_float(p[1], &v[m->nverts][1]) ||
 		    !to_float(p[2], &v[m->nverts][2]))
 			return st_error_set(err, ST_ERR_RANGE,
-					    "refine: a new vertex lies beyond float32's range");
+					    "a new vertex lies beyond float32's range");
 		for (int k = 0; k < 3; k++)
 			r->home[j][k] = (float)mid[k];
 		r->moved[j] = r->kind[r->slot[ed]] != PLACE_ON_EDGE;
