@@ -98,6 +98,57 @@ START_TEST(corners_off_the_reference_need_move_vertices)
 }
 END_TEST
 
+/* The plate's sides and bottom, its top an upside-down pyramid dipping
+ * to z = -0.5 mm under the middle (a surface, not a solid: it pierces the
+ * bottom). */
+static struct mesh *dipped_plate(void)
+{
+	const double p[9][3] = {{0, 0, 0},	 {10, 0, 0},   {10, 10, 0},   {0, 10, 0},
+				{0, 0, 0.2},	 {10, 0, 0.2}, {10, 10, 0.2}, {0, 10, 0.2},
+				{5, 5, -0.5}};
+	const uint32_t t[14][3] = {{0, 2, 1}, {0, 3, 2}, {0, 1, 5}, {0, 5, 4}, {1, 2, 6},
+				   {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7},
+				   {4, 5, 8}, {5, 6, 8}, {6, 7, 8}, {7, 4, 8}};
+	struct mesh_builder *b = mesh_builder_new(14);
+	uint32_t v[9];
+	struct st_error err;
+
+	for (int i = 0; i < 9; i++)
+		ck_assert_int_eq(mesh_builder_vertex(b, p[i], &v[i], &err), 0);
+	for (int i = 0; i < 14; i++)
+		ck_assert_int_eq(mesh_builder_triangle(b, v[t[i][0]], v[t[i][1]], v[t[i][2]], &err),
+				 0);
+	return mesh_builder_finish(b);
+}
+
+/* A plate 0.2 mm thick against dipped_plate: the top's first new vertex,
+ * on its diagonal, goes straight down to the nearest crossing, the
+ * bottom, where its triangles would touch the bottom's (exact test), so
+ * the move is refused and the plate stays whole and printable, short of
+ * the tolerance. */
+START_TEST(moves_that_would_cross_are_refused)
+{
+	struct mesh *plate = fx_box(0, 0, 0, 10, 10, 0.2), *dipped = dipped_plate();
+	struct mesh *out = NULL;
+	struct refine_options o = options();
+	struct refine_report r;
+	struct mesh_report check;
+	struct st_error err;
+
+	o.tolerance = 0.05;
+	ck_assert_int_eq(refine_mesh(plate, dipped, &o, &out, &r, &err), 0);
+	ck_assert(r.vertex_error < 1e-6); /* 0.2 as float32 */
+	ck_assert(!r.reached);
+	ck_assert_uint_gt(r.refused, 0);
+	ck_assert_int_eq(mesh_analyze(out, 0, &check, &err), 0);
+	ck_assert(check.printable && !check.self_intersections);
+	refine_report_free(&r);
+	mesh_free(out);
+	mesh_free(plate);
+	mesh_free(dipped);
+}
+END_TEST
+
 /* The command: the file, the report, and the exit statuses. */
 START_TEST(cli_writes_reports_and_refuses)
 {
@@ -169,6 +220,7 @@ Suite *refine_suite(void)
 	tcase_set_timeout(tc, 120); /* ASan makes the queries several times slower */
 	tcase_add_test(tc, cylinder_reaches_tolerance_with_fewer_triangles_than_uniform);
 	tcase_add_test(tc, corners_off_the_reference_need_move_vertices);
+	tcase_add_test(tc, moves_that_would_cross_are_refused);
 	tcase_add_test(tc, cli_writes_reports_and_refuses);
 	suite_add_tcase(s, tc);
 	return s;
