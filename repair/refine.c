@@ -30,7 +30,9 @@
 #define STALL_ROUNDS 4	   /* rounds without a smaller largest error: no progress */
 /* A facet's error comes from an edge when that edge's midpoint moves by a
  * quarter of it; edges within this share of the largest move tie, and the
- * longest of them is split (longest-edge bisection keeps shapes). */
+ * shortest of them is split (on a cylinder's side the rim before the
+ * diagonal, which the cap's facet shares cheaply).  When no edge carries
+ * the error the longest is split (longest-edge bisection keeps shapes). */
 #define EDGE_SHARE 0.25
 #define TIE_SHARE 0.8
 
@@ -184,7 +186,7 @@ static int pick_candidates(const struct mesh *m, const float *facet,
 }
 
 /* The edge of facet t to split: the one whose new vertex moves farthest
- * from its midpoint (the error is there), the longest among near ties;
+ * from its midpoint (the error is there), the shortest among near ties;
  * the longest when no edge carries the facet's error (a bump inside). */
 static uint32_t edge_to_split(const struct mesh *m, const struct round *r, uint32_t t,
 			      double error)
@@ -200,9 +202,10 @@ static uint32_t edge_to_split(const struct mesh *m, const struct round *r, uint3
 		len[k] = vec3_dist(m->verts[r->e.ends[ed][0]], m->verts[r->e.ends[ed][1]]);
 		maxdev = fmax(maxdev, dev[k]);
 	}
+	bool carried = maxdev >= EDGE_SHARE * error;
 	for (int k = 0; k < 3; k++) {
-		bool tied = maxdev >= EDGE_SHARE * error ? dev[k] >= TIE_SHARE * maxdev : true;
-		if (tied && (best < 0 || len[k] < best)) {
+		bool better = best < 0 || (carried ? len[k] < best : len[k] > best);
+		if ((!carried || dev[k] >= TIE_SHARE * maxdev) && better) {
 			best = len[k];
 			pick = r->e.of_tri[t][k];
 		}
