@@ -9,6 +9,7 @@
 #   smoothed refinement of it), both scaled by the same factor 100 so they
 #   still fit each other: the surface distance and the coarse facets'
 #   chordal error, the facets over 0.3 mm isolated.
+# - `stratum refine`: the cylinder and the elephants, below.
 # Works in bench/out/accuracy, writes its *.png there and prints each command's report with its
 # wall time, CPU time and peak RSS from GNU time.
 set -eu
@@ -54,3 +55,22 @@ timed "compare, elephants: chordal error" "$bin" compare elephant.off \
 	--reference refined-elephant.off --tolerance 0.3 --png elephant-chordal.png \
 	> elephant-chordal.txt
 cat elephant-chordal.txt
+
+# `stratum refine` (seed 003's vertex translation): a 16-sided cylinder
+# (radius 10 mm, 20 mm tall) against a 256-sided one at 0.01 mm, and the
+# coarse elephant against the refined one at 0.1 mm (its corners lie up to
+# 0.62 mm off the refined surface: --move-vertices), each with --uniform,
+# the uniform subdivision reaching the same tolerance, for its size.
+"$gen" cylinder 10 20 16 cylinder16.stl >/dev/null
+"$gen" cylinder 10 20 256 cylinder256.stl >/dev/null
+timed "refine, cylinder" "$bin" refine cylinder16.stl --reference cylinder256.stl \
+	--tolerance 0.01 -o cylinder-refined.stl --uniform --png cylinder-refined.png \
+	> cylinder-refined.txt
+cat cylinder-refined.txt
+"$bin" compare cylinder-refined.stl cylinder256.stl | sed -n 4p
+timed "refine, elephant" "$bin" refine elephant.off --reference refined-elephant.off \
+	--tolerance 0.1 --move-vertices -o elephant-refined.stl --uniform \
+	--png elephant-refined.png > elephant-refined.txt
+cat elephant-refined.txt
+"$bin" check elephant-refined.stl | tail -1
+"$bin" compare elephant-refined.stl refined-elephant.off | sed -n 4p

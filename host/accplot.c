@@ -305,6 +305,9 @@ static void draw_view(cairo_t *cr, const struct mesh *m, const struct accplot_va
 		}
 		cairo_close_path(cr);
 		cairo_fill_preserve(cr); /* the stroke closes hairline gaps */
+		if (val->outline)
+			cairo_set_source_rgb(cr, col[0] * light * 0.6, col[1] * light * 0.6,
+					     col[2] * light * 0.6);
 		cairo_stroke(cr);
 	}
 	free(f);

@@ -17,6 +17,7 @@
 #ifndef STRATUM_HOST_ACCPLOT_H
 #define STRATUM_HOST_ACCPLOT_H
 
+#include <stdbool.h>
 #include <stddef.h>
 
 #include "cusp_measure.h"
@@ -41,6 +42,7 @@ struct accplot_values {
 	double vmax;	    /* the scale's top; values above it get its colour */
 	double grey_to;	    /* values up to this are drawn grey (< 0: none are) */
 	const char *what;   /* the scale's name ("distance to B") */
+	bool outline;	    /* edges drawn darker, to show the facets' sizes */
 };
 
 /*

@@ -136,14 +136,14 @@ static int draw(const struct compare_args *a, const struct mesh *ma,
 		struct accplot_hist h = {d->hist, DEVIATION_BINS, d->bin_width};
 		snprintf(title, sizeof(title), "%s against %s: max %.4g mm, mean %.4g mm, 95%% %.4g mm",
 			 a->pos[0], a->pos[1], d->max, d->mean, d->p95);
-		struct accplot_values v = {d->facet_a, d->max, -1, "distance to B"};
+		struct accplot_values v = {d->facet_a, d->max, -1, "distance to B", false};
 		rc = accplot_mesh(ma, &v, &h, title, a->png, &err);
 	} else {
 		snprintf(title, sizeof(title),
 			 "chordal error of %s against %s: max %.4g mm, %zu facets over %g mm",
 			 a->pos[0], a->reference, c->max, c->nover, c->tolerance);
 		/* seed 003's isolation: the facets within the tolerance grey */
-		struct accplot_values v = {c->facet, c->max, c->tolerance, "chordal error"};
+		struct accplot_values v = {c->facet, c->max, c->tolerance, "chordal error", false};
 		rc = accplot_mesh(ma, &v, NULL, title, a->png, &err);
 	}
 	if (rc)

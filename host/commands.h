@@ -32,6 +32,7 @@ int cmd_jobs(int argc, char **argv);	 /* host/cmd_jobs.c */
 int cmd_console(int argc, char **argv);	 /* host/cmd_console.c */
 int cmd_analyze(int argc, char **argv);	 /* host/cmd_analyze.c */
 int cmd_compare(int argc, char **argv);	 /* host/cmd_compare.c */
+int cmd_refine(int argc, char **argv);	 /* host/cmd_refine.c */
 
 /*
  * cmd_opt_value - the value of option argv[*i] given as "NAME VALUE" (then

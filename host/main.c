@@ -19,6 +19,7 @@ static const struct cmd_entry commands[] = {
 	{"sim", cmd_sim, "run a simulated printer on a pseudo-terminal"},
 	{"analyze", cmd_analyze, "measure the staircase error (cusp height) of printing a mesh in layers"},
 	{"compare", cmd_compare, "the surface distance between two meshes, and chordal error against a finer one"},
+	{"refine", cmd_refine, "split and move a coarse mesh's facets onto a finer one until within a tolerance"},
 	{"preview", cmd_preview, "draw one layer of a G-code file as SVG or PNG"},
 	{"x3g", cmd_x3g, "translate G-code to X3G for Sailfish printers, or list an X3G file"},
 	{"jobs", cmd_jobs, "list the print jobs kept for --resume, show one, prune them"},

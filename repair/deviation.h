@@ -74,6 +74,31 @@ struct chordal_report {
 int chordal_measure(const struct mesh *a, const struct mesh *ref, size_t samples,
 		    double tolerance, struct chordal_report *r, struct st_error *err);
 
+/*
+ * chordal_measure_near - chordal_measure where a crossing farther than
+ * three times the nearest point always counts as that nearest point, the
+ * facet's size aside: on a strongly curved surface a line along the normal
+ * grazes it and meets it far off, which is no error a smaller facet would
+ * remove (the refinement's measure, refine.h).  Every facet gets at least
+ * the grid of 28 points that includes 10 inside it, whatever `samples`.
+ */
+int chordal_measure_near(const struct mesh *a, const struct mesh *ref, size_t samples,
+			 double tolerance, struct chordal_report *r, struct st_error *err);
+
 void chordal_report_free(struct chordal_report *r);
+
+/*
+ * chordal_measure_back - the other way round, for the facets of a against
+ * ref: points on a grid over ref's facets (about `samples`, corners and
+ * edges included), each with its distance to the nearest point of a; each
+ * facet of a that is nearest to a point has facet[t] raised to that
+ * distance (facet: a->ntris values, left as they are elsewhere).  So a
+ * bump of ref that a facet passes over counts against that facet even
+ * where no ray from the facet meets it.  Every facet of ref gets at least
+ * a grid of 10 points (corners, two on each edge, the centroid).  0 or a
+ * negative class as deviation_measure.
+ */
+int chordal_measure_back(const struct mesh *a, const struct mesh *ref, size_t samples,
+			 float *facet, struct st_error *err);
 
 #endif /* STRATUM_REPAIR_DEVIATION_H */

@@ -44,6 +44,7 @@ static const struct suite_entry suites[] = {
 	{"install", install_suite},   {"jobs", jobs_suite},
 	{"progress", progress_suite},
 	{"analyze", analyze_suite},   {"compare", compare_suite},
+	{"refine", refine_suite},
 };
 #define NSUITES (sizeof(suites) / sizeof(suites[0]))
 

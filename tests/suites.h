@@ -81,5 +81,6 @@ Suite *progress_suite(void);	/* tests/check_hostprogress.c: progress lines, ETA,
 Suite *install_suite(void);	/* tests/check_install.c: make install into a DESTDIR, run from there */
 Suite *analyze_suite(void);	/* tests/check_analyze.c: cusp height (seed 004), stratum analyze */
 Suite *compare_suite(void);	/* tests/check_compare.c: surface deviation, chordal error, stratum compare */
+Suite *refine_suite(void);	/* tests/check_refine.c: vertex translation (seed 003), stratum refine */
 
 #endif

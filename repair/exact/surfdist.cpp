@@ -36,18 +36,24 @@ K::Point_3 point(const double p[3])
 /* Below this many points a batch is not worth splitting over threads. */
 const size_t PARALLEL_GRAIN = 256;
 
-/* The nearer end of what a ray met: a point, or a segment when the ray
- * runs inside a triangle's plane. */
+/* The nearer end of what a ray met (a point, or a segment when the ray
+ * runs inside a triangle's plane) into *at; its distance, or -1 for none. */
 double hit_distance(const K::Point_3 &from,
-		    const boost::optional<Tree::Intersection_and_primitive_id<K::Ray_3>::Type> &hit)
+		    const boost::optional<Tree::Intersection_and_primitive_id<K::Ray_3>::Type> &hit,
+		    K::Point_3 *at)
 {
 	if (!hit)
 		return -1.0;
-	if (const K::Point_3 *p = boost::get<K::Point_3>(&hit->first))
+	if (const K::Point_3 *p = boost::get<K::Point_3>(&hit->first)) {
+		*at = *p;
 		return std::sqrt(CGAL::squared_distance(from, *p));
-	if (const K::Segment_3 *s = boost::get<K::Segment_3>(&hit->first))
-		return std::sqrt(std::min(CGAL::squared_distance(from, s->source()),
-					  CGAL::squared_distance(from, s->target())));
+	}
+	if (const K::Segment_3 *s = boost::get<K::Segment_3>(&hit->first)) {
+		double ds = CGAL::squared_distance(from, s->source()),
+		       dt = CGAL::squared_distance(from, s->target());
+		*at = ds <= dt ? s->source() : s->target();
+		return std::sqrt(std::min(ds, dt));
+	}
 	return -1.0;
 }
 
@@ -58,6 +64,32 @@ struct surfdist {
 	std::vector<uint32_t> ids; /* the caller's index of each triangle kept */
 	Tree tree;
 };
+
+namespace {
+
+/* Where the line through q along d meets t's surface, the nearer way:
+ * the distance (-1 when it misses both ways), the point in *at and the
+ * caller's index of its triangle in *which. */
+double line_hit(const surfdist *t, const double q_[3], const double d_[3], K::Point_3 *at,
+		uint32_t *which)
+{
+	K::Point_3 q = point(q_), p;
+	K::Vector_3 d(d_[0], d_[1], d_[2]);
+	double best = -1.0;
+
+	for (int sign = 1; sign >= -1; sign -= 2) {
+		auto hit = t->tree.first_intersection(K::Ray_3(q, sign * d));
+		double h = hit_distance(q, hit, &p);
+		if (h >= 0 && (best < 0 || h < best)) {
+			best = h;
+			*at = p;
+			*which = t->ids[hit->second - t->tris.cbegin()];
+		}
+	}
+	return best;
+}
+
+} /* namespace */
 
 extern "C" int surfdist_new(const double (*verts)[3], size_t nverts, const uint32_t (*tris)[3],
 			    size_t ntris, struct surfdist **out, struct st_error *err)
@@ -100,49 +132,64 @@ extern "C" void surfdist_free(struct surfdist *t)
 	delete t;
 }
 
-extern "C" int surfdist_nearest(const struct surfdist *t, const double (*pts)[3], size_t n,
-				double *dist, uint32_t *tri, struct st_error *err)
+/* fn(i) for i in 0..n on all cores; 0, or the failure in err. */
+template <class Fn> int each_point(size_t n, const char *what, struct st_error *err, Fn fn)
 {
 	try {
 		tbb::parallel_for(tbb::blocked_range<size_t>(0, n, PARALLEL_GRAIN),
 				  [&](const tbb::blocked_range<size_t> &r) {
-					  for (size_t i = r.begin(); i != r.end(); i++) {
-						  K::Point_3 q = point(pts[i]);
-						  Tree::Point_and_primitive_id pp =
-						      t->tree.closest_point_and_primitive(q);
-						  dist[i] = std::sqrt(CGAL::squared_distance(q, pp.first));
-						  if (tri)
-							  tri[i] = t->ids[pp.second - t->tris.cbegin()];
-					  }
+					  for (size_t i = r.begin(); i != r.end(); i++)
+						  fn(i);
 				  });
 		return 0;
 	} catch (...) {
-		return emesh::fail(err, "nearest-point queries");
+		return emesh::fail(err, what);
 	}
+}
+
+extern "C" int surfdist_nearest(const struct surfdist *t, const double (*pts)[3], size_t n,
+				double *dist, uint32_t *tri, struct st_error *err)
+{
+	return each_point(n, "nearest-point queries", err, [&](size_t i) {
+		K::Point_3 q = point(pts[i]);
+		Tree::Point_and_primitive_id pp = t->tree.closest_point_and_primitive(q);
+		dist[i] = std::sqrt(CGAL::squared_distance(q, pp.first));
+		if (tri)
+			tri[i] = t->ids[pp.second - t->tris.cbegin()];
+	});
 }
 
 extern "C" int surfdist_along(const struct surfdist *t, const double (*pts)[3],
 			      const double (*dirs)[3], size_t n, double *dist, struct st_error *err)
 {
-	try {
-		tbb::parallel_for(tbb::blocked_range<size_t>(0, n, PARALLEL_GRAIN),
-				  [&](const tbb::blocked_range<size_t> &r) {
-					  for (size_t i = r.begin(); i != r.end(); i++) {
-						  K::Point_3 q = point(pts[i]);
-						  K::Vector_3 d(dirs[i][0], dirs[i][1], dirs[i][2]);
-						  double best = -1.0;
-						  for (int sign = 1; sign >= -1; sign -= 2) {
-							  K::Ray_3 ray(q, sign * d);
-							  double h = hit_distance(
-							      q, t->tree.first_intersection(ray));
-							  if (h >= 0 && (best < 0 || h < best))
-								  best = h;
-						  }
-						  dist[i] = best;
-					  }
-				  });
-		return 0;
-	} catch (...) {
-		return emesh::fail(err, "ray queries");
-	}
+	return each_point(n, "ray queries", err, [&](size_t i) {
+		K::Point_3 at;
+		uint32_t which;
+		dist[i] = line_hit(t, pts[i], dirs[i], &at, &which);
+	});
+}
+
+extern "C" int surfdist_closest(const struct surfdist *t, const double (*pts)[3], size_t n,
+				double (*out)[3], uint32_t *tri, struct st_error *err)
+{
+	return each_point(n, "nearest-point queries", err, [&](size_t i) {
+		Tree::Point_and_primitive_id pp = t->tree.closest_point_and_primitive(point(pts[i]));
+		for (int k = 0; k < 3; k++)
+			out[i][k] = pp.first[k];
+		if (tri)
+			tri[i] = t->ids[pp.second - t->tris.cbegin()];
+	});
+}
+
+extern "C" int surfdist_hit(const struct surfdist *t, const double (*pts)[3],
+			    const double (*dirs)[3], size_t n, double (*out)[3], uint32_t *tri,
+			    double *dist, struct st_error *err)
+{
+	return each_point(n, "ray queries", err, [&](size_t i) {
+		K::Point_3 at;
+		tri[i] = UINT32_MAX;
+		dist[i] = line_hit(t, pts[i], dirs[i], &at, &tri[i]);
+		for (int k = 0; k < 3; k++)
+			out[i][k] = dist[i] >= 0 ? at[k] : pts[i][k];
+	});
 }

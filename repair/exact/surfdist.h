@@ -56,6 +56,23 @@ int surfdist_nearest(const struct surfdist *t, const double (*pts)[3], size_t n,
 int surfdist_along(const struct surfdist *t, const double (*pts)[3], const double (*dirs)[3],
 		   size_t n, double *dist, struct st_error *err);
 
+/*
+ * surfdist_closest - for each of the n points pts[i], the closest point of
+ * the surface into out[i] and its triangle's index in tri[i] (tri may be
+ * NULL).  0 or a negative class with err filled.
+ */
+int surfdist_closest(const struct surfdist *t, const double (*pts)[3], size_t n,
+		     double (*out)[3], uint32_t *tri, struct st_error *err);
+
+/*
+ * surfdist_hit - surfdist_along that also tells where: the nearer point
+ * where the line through pts[i] along dirs[i] meets the surface into
+ * out[i], its triangle in tri[i], the distance in dist[i]; tri[i] is
+ * UINT32_MAX and dist[i] -1 when the line misses the surface both ways.
+ */
+int surfdist_hit(const struct surfdist *t, const double (*pts)[3], const double (*dirs)[3],
+		 size_t n, double (*out)[3], uint32_t *tri, double *dist, struct st_error *err);
+
 #ifdef __cplusplus
 }
 #endif

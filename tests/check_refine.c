@@ -1,0 +1,227 @@
+/*
+ * check_refine.c - seed 003's vertex translation against a finer mesh
+ * (repair/refine.h) and `stratum refine`.
+ *
+ * A 16-sided cylinder of radius r against a 256-sided one: a side facet's
+ * chordal error is the sagitta r (1 - cos(pi / 16)) = 0.19 mm; reaching
+ * 0.02 mm takes chords of at most 2 acos(1 - 0.02 / r) = 0.13 rad, so 64
+ * sides (2 halvings, 0.012 mm; 32 sides leave 0.048 mm).  Uniform
+ * subdivision halves every edge, the caps' and the height's too:
+ * 60 * 4^2 = 960 triangles.  The refinement only needs the sides cut around, so it must
+ * come out smaller; its new rim vertices must stay on the rim (the crease
+ * where cap and side meet), or the rim is cut short and the error stalls.
+ */
+#include <check.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fixtures.h"
+#include "meshio.h"
+#include "refine.h"
+#include "suites.h"
+#include "testutil.h"
+
+#define R 10.0	       /* mm, the cylinders' radius */
+#define H 20.0	       /* mm, their height */
+#define TOL 0.02       /* mm (0.01 takes 3 times as long) */
+#define SAMPLES 2000   /* per measurement: each facet still gets its grid */
+
+static struct refine_options options(void)
+{
+	struct refine_options o;
+
+	refine_options_init(&o);
+	o.tolerance = TOL;
+	o.samples = SAMPLES;
+	return o;
+}
+
+START_TEST(cylinder_reaches_tolerance_with_fewer_triangles_than_uniform)
+{
+	struct mesh *coarse = fx_cylinder(0, 0, R, H, 16), *fine = fx_cylinder(0, 0, R, H, 256);
+	struct mesh *out = NULL, *uout = NULL;
+	struct refine_options o = options();
+	struct refine_report r, u;
+	struct mesh_report check;
+	struct st_error err;
+
+	ck_assert_int_eq(refine_mesh(coarse, fine, &o, &out, &r, &err), 0);
+	ck_assert_msg(r.reached && r.error_after <= TOL, "largest %g mm, %zu facets over",
+		      r.error_after, r.facets_over);
+	ck_assert(fabs(r.error_before - R * (1 - cos(M_PI / 16))) < 1e-3);
+	ck_assert_uint_gt(r.on_creases, 0); /* the rim's new vertices */
+	ck_assert_uint_eq(r.triangles_after, out->ntris);
+	o.uniform = true;
+	ck_assert_int_eq(refine_mesh(coarse, fine, &o, &uout, &u, &err), 0);
+	ck_assert(u.reached);
+	ck_assert_uint_eq(u.triangles_after, 60 * 16);
+	ck_assert_msg(r.triangles_after < u.triangles_after, "refined %zu, uniform %zu",
+		      r.triangles_after, u.triangles_after);
+	ck_assert_int_eq(mesh_analyze(out, 0, &check, &err), 0);
+	ck_assert(check.printable && check.boundary_edges == 0 && !check.self_intersections);
+	refine_report_free(&r);
+	refine_report_free(&u);
+	mesh_free(out);
+	mesh_free(uout);
+	mesh_free(coarse);
+	mesh_free(fine);
+}
+END_TEST
+
+/* A coarse cylinder 0.2 mm too wide: its corners lie off the reference,
+ * which new vertices cannot mend; --move-vertices moves them too. */
+START_TEST(corners_off_the_reference_need_move_vertices)
+{
+	struct mesh *coarse = fx_cylinder(0, 0, R + 0.2, H, 16), *fine = fx_cylinder(0, 0, R, H, 256);
+	struct mesh *out = NULL;
+	struct refine_options o = options();
+	struct refine_report r;
+	struct st_error err;
+
+	o.tolerance = 0.05;
+	ck_assert_int_eq(refine_mesh(coarse, fine, &o, &out, &r, &err), 0);
+	ck_assert(!r.reached && r.rounds == 0);
+	ck_assert(fabs(r.vertex_error - 0.2) < 1e-3);
+	refine_report_free(&r);
+	mesh_free(out);
+	o.move_vertices = true;
+	ck_assert_int_eq(refine_mesh(coarse, fine, &o, &out, &r, &err), 0);
+	ck_assert_msg(r.reached, "largest %g mm", r.error_after);
+	ck_assert_uint_eq(r.vertices_moved, 32);
+	ck_assert(r.vertex_error < 1e-5);
+	refine_report_free(&r);
+	mesh_free(out);
+	mesh_free(coarse);
+	mesh_free(fine);
+}
+END_TEST
+
+/* The plate's sides and bottom, its top an upside-down pyramid dipping
+ * to z = -0.5 mm under the middle (a surface, not a solid: it pierces the
+ * bottom). */
+static struct mesh *dipped_plate(void)
+{
+	const double p[9][3] = {{0, 0, 0},	 {10, 0, 0},   {10, 10, 0},   {0, 10, 0},
+				{0, 0, 0.2},	 {10, 0, 0.2}, {10, 10, 0.2}, {0, 10, 0.2},
+				{5, 5, -0.5}};
+	const uint32_t t[14][3] = {{0, 2, 1}, {0, 3, 2}, {0, 1, 5}, {0, 5, 4}, {1, 2, 6},
+				   {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7},
+				   {4, 5, 8}, {5, 6, 8}, {6, 7, 8}, {7, 4, 8}};
+	struct mesh_builder *b = mesh_builder_new(14);
+	uint32_t v[9];
+	struct st_error err;
+
+	for (int i = 0; i < 9; i++)
+		ck_assert_int_eq(mesh_builder_vertex(b, p[i], &v[i], &err), 0);
+	for (int i = 0; i < 14; i++)
+		ck_assert_int_eq(mesh_builder_triangle(b, v[t[i][0]], v[t[i][1]], v[t[i][2]], &err),
+				 0);
+	return mesh_builder_finish(b);
+}
+
+/* A plate 0.2 mm thick against dipped_plate: the top's first new vertex,
+ * on its diagonal, goes straight down to the nearest crossing, the
+ * bottom, where its triangles would touch the bottom's (exact test), so
+ * the move is refused and the plate stays whole and printable, short of
+ * the tolerance. */
+START_TEST(moves_that_would_cross_are_refused)
+{
+	struct mesh *plate = fx_box(0, 0, 0, 10, 10, 0.2), *dipped = dipped_plate();
+	struct mesh *out = NULL;
+	struct refine_options o = options();
+	struct refine_report r;
+	struct mesh_report check;
+	struct st_error err;
+
+	o.tolerance = 0.05;
+	ck_assert_int_eq(refine_mesh(plate, dipped, &o, &out, &r, &err), 0);
+	ck_assert(r.vertex_error < 1e-6); /* 0.2 as float32 */
+	ck_assert(!r.reached);
+	ck_assert_uint_gt(r.refused, 0);
+	ck_assert_int_eq(mesh_analyze(out, 0, &check, &err), 0);
+	ck_assert(check.printable && !check.self_intersections);
+	refine_report_free(&r);
+	mesh_free(out);
+	mesh_free(plate);
+	mesh_free(dipped);
+}
+END_TEST
+
+/* The command: the file, the report, and the exit statuses. */
+START_TEST(cli_writes_reports_and_refuses)
+{
+	static char out[1 << 16];
+	char coarse[256], fine[256], result[256], missing[256], open_box[256], wide[256];
+	struct mesh *c = fx_cylinder(0, 0, R, H, 16), *f = fx_cylinder(0, 0, R, H, 256);
+	struct mesh *w = fx_cylinder(0, 0, R + 0.2, H, 16), *open = fx_cube_without(10, 1);
+	struct st_error err;
+
+	snprintf(coarse, sizeof(coarse), "%s", tu_path("cyl16.stl"));
+	snprintf(fine, sizeof(fine), "%s", tu_path("cyl256.stl"));
+	snprintf(wide, sizeof(wide), "%s", tu_path("wide16.stl"));
+	snprintf(open_box, sizeof(open_box), "%s", tu_path("open.stl"));
+	snprintf(result, sizeof(result), "%s", tu_path("refined.stl"));
+	snprintf(missing, sizeof(missing), "%s", tu_path("no-such-model.stl"));
+	ck_assert_int_eq(meshio_write_stl(coarse, c, MESHIO_STL_BINARY, &err), 0);
+	ck_assert_int_eq(meshio_write_stl(fine, f, MESHIO_STL_BINARY, &err), 0);
+	ck_assert_int_eq(meshio_write_stl(wide, w, MESHIO_STL_BINARY, &err), 0);
+	ck_assert_int_eq(meshio_write_stl(open_box, open, MESHIO_STL_BINARY, &err), 0);
+	mesh_free(c);
+	mesh_free(f);
+	mesh_free(w);
+	mesh_free(open);
+
+	ck_assert_int_eq(tu_run(out, sizeof(out),
+				"refine '%s' --reference '%s' --tolerance %g -o '%s' --samples %d "
+				"--json",
+				coarse, fine, TOL, result, SAMPLES), 0);
+	ck_assert_msg(strstr(out, "\"reached\": true"), "%s", out);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "check '%s'", result), 0);
+	ck_assert_msg(strstr(out, "printable: yes"), "%s", out);
+	/* within the tolerance by the symmetric surface distance, a measure
+	 * the refinement did not steer by */
+	ck_assert_int_eq(tu_run(out, sizeof(out), "compare '%s' '%s' --samples 20000 --json",
+				result, fine), 0);
+	char *max = strstr(out, "\"max\": ");
+	ck_assert_msg(max && strtod(max + 7, NULL) <= TOL, "%s", out);
+
+	/* 2 usage: no reference, no output, a tolerance not above 0 */
+	remove(result);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "refine '%s' -o '%s'", coarse, result), 2);
+	ck_assert_msg(strstr(out, "--reference"), "%s", out);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "refine '%s' --reference '%s'", coarse, fine), 2);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "refine '%s' --reference '%s' -o '%s' "
+						  "--tolerance 0", coarse, fine, result), 2);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "refine '%s' --reference '%s' -o '%s' "
+						  "--tolerance -0.1", coarse, fine, result), 2);
+	/* 65: a file that cannot be read, a coarse mesh that is not printable */
+	ck_assert_int_eq(tu_run(out, sizeof(out), "refine '%s' --reference '%s' -o '%s'", coarse,
+				missing, result), 65);
+	ck_assert_msg(strstr(out, missing), "%s", out);
+	ck_assert_int_eq(tu_run(out, sizeof(out), "refine '%s' --reference '%s' -o '%s'",
+				open_box, fine, result), 65);
+	ck_assert_msg(strstr(out, "not printable"), "%s", out);
+	/* 1: not reached (corners off the reference), and nothing written */
+	ck_assert_int_eq(tu_run(out, sizeof(out), "refine '%s' --reference '%s' -o '%s' "
+						  "--tolerance 0.05 --samples %d", wide, fine,
+				result, SAMPLES), 1);
+	ck_assert_msg(strstr(out, "--move-vertices"), "%s", out);
+	ck_assert(!tu_file_exists(result));
+}
+END_TEST
+
+Suite *refine_suite(void)
+{
+	Suite *s = suite_create("refine");
+	TCase *tc = tcase_create("refine");
+
+	tcase_set_timeout(tc, 120); /* ASan makes the queries several times slower */
+	tcase_add_test(tc, cylinder_reaches_tolerance_with_fewer_triangles_than_uniform);
+	tcase_add_test(tc, corners_off_the_reference_need_move_vertices);
+	tcase_add_test(tc, moves_that_would_cross_are_refused);
+	tcase_add_test(tc, cli_writes_reports_and_refuses);
+	suite_add_tcase(s, tc);
+	return s;
+}
