@@ -103,6 +103,9 @@ void perim_settings_init(struct perim_settings *s, double nozzle_diameter);
 int perim_settings_check(const struct perim_settings *s, double layer_height,
 			 struct st_error *err);
 
+/* perim_outer_width - the outer wall's bead width w_o, mm. */
+double perim_outer_width(const struct perim_settings *s);
+
 /* perim_spacing - centre distance of adjacent beads, mm: w - h (1 - pi/4). */
 double perim_spacing(double width, double height);
 

@@ -362,6 +362,17 @@ struct mesh *fx_cylinder(double cx, double cy, double r, double h, int n)
 	return finish(b);
 }
 
+struct mesh *fx_wedge(double len, double base, double h)
+{
+	struct mesh_builder *b = mesh_builder_new(6);
+	const double x[3] = {0, len, len}, y[3] = {0, -base / 2, base / 2};
+
+	if (!b)
+		die("out of memory");
+	add_prism(b, x, y, 3, 0, h);
+	return finish(b);
+}
+
 /* The square x0..x1, y0..y1 walked counter-clockwise from (x0, y0), a point
  * every step mm; returns the number of points written to xy (at most cap). */
 static int square_loop(double x0, double y0, double x1, double y1, double step, double (*xy)[2],
