@@ -311,3 +311,43 @@ int bead_strips(const struct clip_expolys *strip, double gmax, double min_len, d
 	clip_paths_free(&piece);
 	return rc;
 }
+
+int bead_split_line(const struct medial_line *l, double k, double min_width,
+		    struct path_point **out, size_t *n, struct st_error *err)
+{
+	size_t m = l->n;
+	struct path_point *q;
+
+	*out = NULL;
+	*n = 0;
+	if (l->closed || m < 2)
+		return 0;
+	for (size_t i = 0; i + 1 < m; i++)
+		if ((double)l->pts[i].width < min_width)
+			return 0;
+	q = malloc(2 * m * sizeof(*q));
+	if (!q)
+		return st_error_set(err, ST_ERR_NOMEM, "perimeters: out of memory for a thin wall");
+	for (size_t i = 0; i < m; i++) {
+		/* Segment s starts at point s; the last point takes the one before. */
+		size_t s = i + 1 < m ? i : i - 1, a = i ? i - 1 : 0, b = i + 1 < m ? i + 1 : i;
+		double W = (double)l->pts[s].width, w2 = (W + k) / 2.0, d = (W - k) / 4.0;
+		double ux = (double)(l->pts[b].x - l->pts[a].x), uy = (double)(l->pts[b].y - l->pts[a].y);
+		double len = hypot(ux, uy), x = (double)l->pts[i].x, y = (double)l->pts[i].y;
+		ux = len > 0.0 ? ux / len : 1.0;
+		uy = len > 0.0 ? uy / len : 0.0;
+		if (i == 0 || i + 1 == m) { /* the ends reach out as the single bead's */
+			double e = (W - w2) / 2.0 * (i ? 1.0 : -1.0);
+			x += e * ux;
+			y += e * uy;
+		}
+		/* Left on the way out, right on the way back. */
+		q[i] = (struct path_point){llround(x - d * uy), llround(y + d * ux), llround(w2)};
+		q[2 * m - 1 - i] = (struct path_point){llround(x + d * uy), llround(y - d * ux),
+						       llround(i ? (double)(l->pts[i - 1].width + k) / 2.0
+								 : w2)};
+	}
+	*out = q;
+	*n = 2 * m;
+	return 0;
+}

@@ -63,4 +63,18 @@ int bead_fit_loop(const int64_t *xy, size_t n, const struct clip_paths *inside,
 		  const struct clip_paths *outside, const struct bead_fit *f,
 		  struct path_point **out, size_t *nout, bool *changed, struct st_error *err);
 
+/*
+ * bead_split_line - one centre-line bead of an open line l (nm, medial.h)
+ * as two beads side by side that fill the same width W, as one closed
+ * loop: each (W + k) / 2 wide, their centres (W - k) / 4 either side of
+ * the line (k = h (1 - pi/4), the flow model's overlap of two beads), the
+ * loop's ends moved out by (W - (W + k) / 2) / 2 so its round ends reach
+ * as far as the single bead's did.  Only when every segment is at least
+ * min_width wide: else *n = 0.  *out is a new array (free it).  Returns 0
+ * or ST_ERR_NOMEM.
+ */
+struct medial_line;
+int bead_split_line(const struct medial_line *l, double k, double min_width,
+		    struct path_point **out, size_t *n, struct st_error *err);
+
 #endif /* STRATUM_SLICER_BEADWIDTH_H */

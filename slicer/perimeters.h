@@ -23,7 +23,14 @@
  * epsilon that gets no such bead is printed the same way down to
  * min_feature_size, each bead at least min_bead_width wide (perim_generate).
  * Strips left between walls are filled
- * the same way (PATH_GAP_FILL) when at least gap_fill_min wide.
+ * the same way (PATH_GAP_FILL) when at least gap_fill_min wide; a strip
+ * narrower than that (and than the layer height) is shared out to the
+ * wall beads on its two sides, each widened by half its width and moved
+ * by half of that towards it (beadwidth.h), so a 1.0 mm wall prints one
+ * loop of (T + h (1 - pi/4)) / 2 wide beads.  Centre-line beads are cut
+ * into pieces of constant width as wide as the region at their middles;
+ * a thin wall at least 1.5 outer spacings wide all along prints as two
+ * such beads in one loop (emit_thin).
  *
  * All lengths in settings are mm; geometry is in nm (toolpath.h).
  */
