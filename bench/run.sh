@@ -232,6 +232,12 @@ for f in cube20 cylinder20 wall2 wall-eps plate-holes overhang bridge; do
 done
 }
 
+# Thin walls against PrusaSlicer's at the "full" settings (bench/thin_walls.sh).
+thin_table() {
+	prusa_ini full >"$out/prusa-full.ini"
+	bench/thin_walls.sh "$bin" prusa
+}
+
 # lines_bytes_rate FILE -> "lines bytes mean peak": move lines (G1, G2,
 # G3) per second of print (the file's "; estimated printing time",
 # stratum's or PrusaSlicer's "(normal mode)" one), and the most move lines
@@ -707,7 +713,7 @@ serve) serve_table ;;
 x3g) x3g_table ;;
 s3g) s3g_table ;;
 region) region_table ;;
-thin) prusa_ini full >"$out/prusa-full.ini"; bench/thin_walls.sh "$bin" prusa ;;
+thin) thin_table ;;
 gcodesize) gcodesize_table ;;
 check) check_table ;;
 repair) repair_table ;;
@@ -715,6 +721,6 @@ intersect) intersect_table ;;
 slice) slice_table ;;
 stream) stream_table ;;
 soak) soak_table ;;
-all) check_table; echo; repair_table; echo; intersect_table; echo; slice_table; echo; region_table; echo; gcodesize_table; echo; stream_table; echo; soak_table; echo; x3g_table; echo; s3g_table; echo; serve_table; echo; corpus_table; echo; cura_table ;;
+all) check_table; echo; repair_table; echo; intersect_table; echo; slice_table; echo; region_table; echo; thin_table; echo; gcodesize_table; echo; stream_table; echo; soak_table; echo; x3g_table; echo; s3g_table; echo; serve_table; echo; corpus_table; echo; cura_table ;;
 esac
 
