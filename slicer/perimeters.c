@@ -24,7 +24,8 @@
 /* Beyond the arc tolerance, slivers this thin between two offsets are noise, nm. */
 #define PERIM_HAIRLINE 5.0
 /* A thin wall splits into two beads where the second would be at least
- * this share of a spacing wide (Arachne's wall_split_middle_threshold). */
+ * this share of a spacing wide (where Arachne splits a middle bead: Cura's
+ * wall_split_middle_threshold default; PrusaSlicer 2.5 has no key). */
 #define PERIM_SPLIT_SHARE 0.5
 /* With min_feature_size 0, thin walls down to this width still print, nm. */
 #define PERIM_MIN_FEATURE_NM 10000.0
@@ -304,8 +305,8 @@ static int emit_medial(struct ctx *c, struct medial_line *l, enum path_role role
 
 /*
  * A thin wall's centre line: where it is everywhere at least 1 + SPLIT
- * outer spacings wide (Arachne's wall_split_middle_threshold, 50 %: 0.61 mm
- * with 0.45 mm beads), two beads side by side in one loop
+ * outer spacings wide (PERIM_SPLIT_SHARE; 0.61 mm with 0.45 mm beads),
+ * two beads side by side in one loop
  * (bead_split_line), else one bead as wide as the wall.
  */
 static int emit_thin(struct ctx *c, struct medial_line *l)
