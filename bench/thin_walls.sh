@@ -1,7 +1,8 @@
 #!/bin/sh
 # bench/thin_walls.sh BIN [prusa] - thin walls against the region verifier
 # (issue 19 item 2): walls 20 mm long and 2 mm tall of 0.5, 0.8, 1.0, 1.2
-# and 1.5 mm and a wedge (20 mm long, 2 mm wide at its base), sliced by BIN
+# and 1.5 mm, a wedge (20 mm long, 2 mm wide at its base) and a tube (a
+# 1.0 mm wall around a 38 mm hole, a 256-gon), sliced by BIN
 # with the MK3S profile and, with "prusa", by PrusaSlicer with
 # bench/out/prusa-full.ini (`bench/run.sh BIN thin` writes it and runs
 # this); both centred on 125,105.  Prints one
@@ -43,13 +44,16 @@ json_field() {
 	sed -n "s/^  \"$2\": \([^,]*\),\{0,1\}\$/\1/p" "$1"
 }
 
-models="0.5 0.8 1.0 1.2 1.5 wedge"
+models="0.5 0.8 1.0 1.2 1.5 wedge tube"
 echo "| model | slicer | beads mm (narrowest–widest) | gap % | overlap % | filament / model volume |"
 echo "|---|---|---|---|---|---|"
 for t in $models; do
 	if [ "$t" = wedge ]; then
 		f=wedge; vol=40
 		[ -f "$out/$f.stl" ] || "$gen" wedge 20 2 2 "$out/$f.stl" >/dev/null
+	elif [ "$t" = tube ]; then
+		f=tube; vol=$(awk 'BEGIN { printf "%.4f", 128 * sin(3.14159265358979 / 128) * (400 - 361) * 2 }')
+		[ -f "$out/$f.stl" ] || "$gen" tube 20 19 2 256 "$out/$f.stl" >/dev/null
 	else
 		f=wall-$t; vol=$(echo "20 * $t * 2" | bc)
 		[ -f "$out/$f.stl" ] || "$gen" box 20 "$t" 2 "$out/$f.stl" >/dev/null

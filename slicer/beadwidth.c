@@ -16,6 +16,8 @@
 #define BEAD_MIN_STRIP_NM 10000.0
 /* Samples whose widths differ by at most this print as one segment, nm. */
 #define BEAD_WIDTH_TOL_NM 1000.0
+/* A strip's far side must cross the ray at least this steeply (45 degrees). */
+#define BEAD_MIN_SINE 0.70710678118654752
 /* A sample this close to the line of its neighbours is merged into it, nm. */
 #define BEAD_MERGE_NM 20.0
 
@@ -99,6 +101,7 @@ static double strip_width(const struct strip *s, double px, double py, double ux
 			  const struct bead_fit *f, double gmax)
 {
 	double edge = f->spacing / 2.0, reach = edge + f->tol + gmax, t1 = INFINITY, t2 = INFINITY;
+	double sin1 = 0.0, sin2 = 0.0; /* of the angle between the ray and the edge it crosses */
 
 	for (size_t k = 0; k < s->nnear; k++) {
 		const struct contour *c = &s->c[s->near[k]];
@@ -114,15 +117,21 @@ static double strip_width(const struct strip *s, double px, double py, double ux
 			double e = (wx * uy - wy * ux) / den; /* along the edge, [0, 1) */
 			if (!(t > 0.0 && t <= reach && e >= 0.0 && e < 1.0))
 				continue;
+			double sine = fabs(den) / hypot(ex, ey);
 			if (t < t1) {
 				t2 = t1;
+				sin2 = sin1;
 				t1 = t;
+				sin1 = sine;
 			} else if (t < t2) {
 				t2 = t;
+				sin2 = sine;
 			}
 		}
 	}
-	if (!(fabs(t1 - edge) <= f->tol) || !isfinite(t2))
+	/* The far side must face this one: a ray leaving through a side it
+	 * runs along (a strip's end, a corner) measures no width. */
+	if (!(fabs(t1 - edge) <= f->tol) || !isfinite(t2) || sin2 < BEAD_MIN_SINE)
 		return 0.0;
 	double g = t2 - t1;
 	return g >= BEAD_MIN_STRIP_NM && g < gmax ? g : 0.0;
@@ -267,6 +276,16 @@ int bead_fit_loop(const int64_t *xy, size_t n, const struct clip_paths *inside,
 		}
 		pts[k++] = q;
 	}
+	/* Widths within BEAD_WIDTH_TOL_NM of the run they continue take its
+	 * width, so the writer can merge their segments (it never merges
+	 * segments of different widths) instead of keeping every sample and
+	 * the loop's own short arc segments. */
+	for (size_t i = 1, run = 0; i < k && !rc; i++) {
+		if (llabs(pts[i].width - pts[run].width) <= BEAD_WIDTH_TOL_NM)
+			pts[i].width = pts[run].width;
+		else
+			run = i;
+	}
 	free(sp);
 	strip_free(&in);
 	strip_free(&outs);
@@ -288,8 +307,15 @@ int bead_strips(const struct clip_expolys *strip, double gmax, double min_len, d
 
 	for (size_t i = 0; strip && i < strip->n && !rc; i++) {
 		bool narrow = false;
+		double area = 0.0;
 		rc = clip_expolys_get(strip, i, &piece, err);
 		if (!rc)
+			rc = clip_paths_area(&piece, &area, err);
+		/* A piece as large as a strip gmax wide and min_len long is no
+		 * corner's speck: the rays measure it (its medial axis would cost
+		 * as much as gap fill's, per layer and wall). */
+		narrow = area >= gmax * min_len;
+		if (!rc && !narrow)
 			rc = perim_medial_axis(&piece, BEAD_MIN_STRIP_NM, fmax(gmax / 8.0, 1000.0), arc,
 					       &ml, err);
 		for (size_t k = 0; k < ml.n && !narrow; k++) {

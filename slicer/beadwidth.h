@@ -15,7 +15,8 @@
  * the strip inside the loop, right into the strip outside it) must enter
  * the strip within tol of half the loop's spacing (the strip's edge next
  * to this bead), and the distance it then runs inside the strip is the
- * strip's width there.  Widths below gmax are absorbed; each sample moves
+ * strip's width there, if it leaves through a side facing this one (at
+ * least 45 degrees across the ray, not a strip's end or corner).  Widths below gmax are absorbed; each sample moves
  * by (g_in - g_out) / 4 along its normal and its bead widens by
  * (g_in + g_out) / 2; the loop's corners move to where their two shifted
  * segments meet.  Every point's width is the width from it to the next
@@ -41,9 +42,10 @@ struct bead_fit {
 };
 
 /*
- * bead_strips - the pieces of strip (nm) that are strips: those with a
- * centre line (medial.h) at least min_len long that narrows below gmax
- * somewhere, appended to out.  A convex corner's speck between a sharp
+ * bead_strips - the pieces of strip (nm) that are strips: those of at
+ * least gmax x min_len area, and the smaller ones with a centre line
+ * (medial.h) at least min_len long that narrows below gmax somewhere,
+ * appended to out.  A convex corner's speck between a sharp
  * loop and the round one inside it (its centre lines are its two cusps,
  * shorter than the nozzle) is left out: it is no wall, and its beads stay
  * as they are.  arc: the chord tolerance (nm).  Returns 0 or ST_ERR_NOMEM.

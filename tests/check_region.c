@@ -211,7 +211,7 @@ END_TEST
 START_TEST(our_cube_within_bound)
 {
 	struct mesh *m = fx_box(0, 0, 0, 20, 20, 20);
-	struct region_report *r = tu_slice_region(m, "cube.gcode", NULL);
+	struct region_report *r = tu_slice_region(m, "cube.gcode", NULL, NULL);
 
 	ck_assert_uint_eq(r->layers, 100);
 	ck_assert_msg(r->dev_p95 <= 0.02, "cube p95 %g mm", r->dev_p95);
@@ -226,7 +226,7 @@ END_TEST
 START_TEST(our_cylinder_within_bound)
 {
 	struct mesh *m = fx_cylinder(0, 0, 10, 20, 256);
-	struct region_report *r = tu_slice_region(m, "cylinder.gcode", NULL);
+	struct region_report *r = tu_slice_region(m, "cylinder.gcode", NULL, NULL);
 
 	ck_assert_uint_eq(r->layers, 100);
 	ck_assert_msg(r->dev_p95 <= 0.02, "cylinder p95 %g mm", r->dev_p95);
@@ -249,7 +249,7 @@ START_TEST(thin_walls_without_gap_or_overlap)
 
 	for (int k = 0; k < 2; k++) {
 		struct mesh *m = fx_box(0, 0, 0, 20, t[k], 1);
-		struct region_report *r = tu_slice_region(m, "thin.gcode", &sum);
+		struct region_report *r = tu_slice_region(m, "thin.gcode", &sum, NULL);
 
 		ck_assert_msg(r->gap <= 0.01, "%g mm wall: gap %g", t[k], r->gap);
 		ck_assert_msg(r->overlap <= 1e-4, "%g mm wall: overlap %g", t[k], r->overlap);

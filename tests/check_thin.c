@@ -213,7 +213,7 @@ START_TEST(wall_0_8_two_beads)
 	free_layer(&out);
 
 	struct mesh *m = fx_box(0, 0, 0, LEN, 0.8, 1);
-	struct region_report *r = tu_slice_region(m, "w08.gcode", NULL);
+	struct region_report *r = tu_slice_region(m, "w08.gcode", NULL, NULL);
 	ck_assert_msg(r->gap < 0.005, "gap %g", r->gap);
 	ck_assert_msg(r->overlap < 0.001, "overlap %g", r->overlap);
 	region_report_free(r);
@@ -249,10 +249,32 @@ END_TEST
 START_TEST(wall_1_0_without_gap_or_overlap)
 {
 	struct mesh *m = fx_box(0, 0, 0, LEN, 1.0, 1);
-	struct region_report *r = tu_slice_region(m, "w10.gcode", NULL);
+	struct region_report *r = tu_slice_region(m, "w10.gcode", NULL, NULL);
 
 	ck_assert_msg(r->gap < 0.01, "gap %g", r->gap);
 	ck_assert_msg(r->overlap < 0.001, "overlap %g", r->overlap);
+	region_report_free(r);
+	mesh_free(m);
+}
+END_TEST
+
+/*
+ * A tube with a 1.0 mm wall: its outer and inner loops widen towards each
+ * other, 0.521 mm each (two runs, so the region verifier counts their
+ * h (1 - pi/4) by design: 4.3 %).  Their widths are one value along each
+ * run, so the writer merges the loops' short arc segments as before (when
+ * each sample kept its own width, 2 um segments printed at E-rounding
+ * widths up to 0.77 mm).
+ */
+START_TEST(tube_1_0_widened)
+{
+	struct mesh *m = fx_tube(10, 9, 1, 128);
+	double widest = 0;
+	struct region_report *r = tu_slice_region(m, "tube.gcode", NULL, &widest);
+
+	ck_assert_msg(r->gap < 0.01, "gap %g", r->gap);
+	ck_assert_msg(r->overlap < 0.05, "overlap %g", r->overlap);
+	ck_assert_msg(widest < 0.53, "widest bead %g mm", widest);
 	region_report_free(r);
 	mesh_free(m);
 }
@@ -318,7 +340,7 @@ START_TEST(wedge_beads_follow_its_width)
 	ck_assert_uint_gt(checked, 10);
 	free_layer(&out);
 
-	struct region_report *r = tu_slice_region(m, "wedge.gcode", NULL);
+	struct region_report *r = tu_slice_region(m, "wedge.gcode", NULL, NULL);
 	ck_assert_msg(r->overlap < 0.05, "overlap %g", r->overlap);
 	ck_assert_msg(r->gap < 0.03, "gap %g", r->gap);
 	region_report_free(r);
@@ -390,6 +412,7 @@ Suite *thin_suite(void)
 	tcase_add_test(tc, wall_0_8_two_beads);
 	tcase_add_test(tc, wall_1_0_loop_widened);
 	tcase_add_test(tc, wall_1_0_without_gap_or_overlap);
+	tcase_add_test(tc, tube_1_0_widened);
 	tcase_add_test(tc, wedge_tip_printed);
 	tcase_add_test(tc, wedge_beads_follow_its_width);
 	tcase_add_test(tc, wide_bead_corners_left_alone);

@@ -413,7 +413,7 @@ double tu_moves_e(const struct tu_moves *r, const char *role)
 }
 
 struct region_report *tu_slice_region(const struct mesh *m, const char *name,
-				      struct slicer_summary *sum)
+				      struct slicer_summary *sum, double *width_max)
 {
 	struct slicer_config c;
 	struct region_opts o;
@@ -432,6 +432,8 @@ struct region_report *tu_slice_region(const struct mesh *m, const char *name,
 	ck_assert_msg(region_read(path, &o, &p, &err) == 0, "%s", err.msg);
 	ck_assert_msg(region_compare(m, p, &o, &r, &err) == 0, "%s", err.msg);
 	ck_assert_uint_eq(r->empty_sections, 0);
+	if (width_max)
+		*width_max = p->width_max;
 	region_print_free(p);
 	return r;
 }

@@ -155,9 +155,10 @@ struct slicer_summary;
  * tu_slice_region - m sliced with the library defaults (0.2 mm layers,
  * 0.45 mm walls, bed centre 100,100) into tu_path(name) and measured by
  * the region verifier (region.h; every layer has a section); the job's
- * summary into sum unless NULL.  Free the report with region_report_free.
+ * summary into sum and the widest bead read back (mm) into width_max
+ * unless NULL.  Free the report with region_report_free.
  */
 struct region_report *tu_slice_region(const struct mesh *m, const char *name,
-				      struct slicer_summary *sum);
+				      struct slicer_summary *sum, double *width_max);
 
 #endif
