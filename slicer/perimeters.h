@@ -141,7 +141,8 @@ void perim_seams_free(struct perim_seams *sm);
  *   seams: seam memory (may be NULL: no memory across layers, seed 0).
  *   out: paths are appended in printing order, per island: the walls
  *        (inner to outer unless outer_first) as closed loops of width w_o
- *        (the outer) and w (the inner) with roles PATH_INNER_PERIMETER / PATH_OUTER_PERIMETER, then gap
+ *        (the outer) and w (the inner), wider beside a strip they absorb,
+ *        with roles PATH_INNER_PERIMETER / PATH_OUTER_PERIMETER, then gap
  *        fill, then thin walls (open or closed, width per point).
  *   infill: replaced by the region left inside the innermost walls for
  *        infill (each wall counted as its flow-equivalent band of its
