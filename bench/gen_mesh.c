@@ -19,6 +19,10 @@
  *                                    have decimals: "box 20 0.4 10" is a wall of 0.4)
  *   gen_mesh cylinder R H N OUT.stl  a cylinder of radius R, height H mm: a regular
  *                                    N-gon (3..256) prism
+ *   gen_mesh wedge L W H OUT.stl     a triangular prism H mm tall, its tip at the
+ *                                    origin and W mm wide at x = L (thin walls)
+ *   gen_mesh tube R r H N OUT.stl    a tube H mm tall between N-gons (3..256) of
+ *                                    radius r and R (a ring-shaped wall)
  *   gen_mesh soup N SIZE SEED OUT.stl
  *                                    N random triangles, each with corners uniform in
  *                                    its own SIZE mm cube, the cubes scattered
@@ -138,6 +142,7 @@ static void usage(void)
 			"       gen_mesh twospheres NLAT NLON OUT.stl | gen_mesh scan NU NV JITTER "
 			"OUT.stl\n"
 			"       gen_mesh box SX SY SZ OUT.stl | gen_mesh cylinder R H N OUT.stl\n"
+			"       gen_mesh wedge L W H OUT.stl | gen_mesh tube R r H N OUT.stl\n"
 			"       gen_mesh soup N SIZE SEED OUT.stl | gen_mesh convert IN SIZE OUT.stl\n"
 			"       gen_mesh same A B | gen_mesh plate|overhang|bridge|shelf OUT.stl\n");
 	exit(2);
@@ -199,6 +204,10 @@ int main(int argc, char **argv)
 		m = fx_box(0, 0, 0, mm_arg(argv[2]), mm_arg(argv[3]), mm_arg(argv[4]));
 	} else if (argc == 6 && !strcmp(argv[1], "cylinder")) {
 		m = fx_cylinder(0, 0, mm_arg(argv[2]), mm_arg(argv[3]), int_arg(argv[4], 3, 256));
+	} else if (argc == 6 && !strcmp(argv[1], "wedge")) {
+		m = fx_wedge(mm_arg(argv[2]), mm_arg(argv[3]), mm_arg(argv[4]));
+	} else if (argc == 7 && !strcmp(argv[1], "tube")) {
+		m = fx_tube(mm_arg(argv[2]), mm_arg(argv[3]), mm_arg(argv[4]), int_arg(argv[5], 3, 256));
 	} else if (argc == 6 && !strcmp(argv[1], "soup")) {
 		const int n = int_arg(argv[2], 1, 50000000);
 		const double size = mm_arg(argv[3]);

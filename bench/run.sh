@@ -1,5 +1,5 @@
 #!/bin/sh
-# bench/run.sh BIN [check|repair|intersect|slice|region|gcodesize|stream|soak|x3g|s3g|serve|corpus|all] - time `stratum check`
+# bench/run.sh BIN [check|repair|intersect|slice|region|thin|gcodesize|stream|soak|x3g|s3g|serve|corpus|all] - time `stratum check`
 # against admesh, `stratum repair` on generated files, the exact pass of the
 # repair on self-intersecting inputs (`intersect`: CGAL data meshes, spheres,
 # scattered soups; build/bench/refine_time), `stratum slice` against
@@ -7,7 +7,8 @@
 # `stratum send` against Printrun's printcore (`soak`: 100k lines under
 # faults, exactly once); `region` measures how well both
 # slicers' printed regions match the models' cross-sections (issue 5, with
-# build/bench/region_check); `gcodesize` compares the G-code's lines, bytes
+# build/bench/region_check), `thin` the gap and overlap of thin walls
+# (bench/thin_walls.sh); `gcodesize` compares the G-code's lines, bytes
 # and moves per second of print with PrusaSlicer's at gcode_resolution 0,
 # at its default and with arc_fitting; `x3g` times G-code -> X3G translation against
 # gpx -m fcp on a model sliced for the Creator Pro; `s3g` streams G-code to
@@ -31,15 +32,15 @@ mkdir -p "$out"
 gen=build/bench/gen_mesh
 refine=build/bench/refine_time
 
-case $what in check|repair|intersect|slice|region|gcodesize|stream|soak|x3g|s3g|serve|corpus|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|intersect|slice|region|gcodesize|stream|soak|x3g|s3g|serve|corpus|all]" >&2; exit 2;; esac
+case $what in check|repair|intersect|slice|region|thin|gcodesize|stream|soak|x3g|s3g|serve|corpus|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|intersect|slice|region|thin|gcodesize|stream|soak|x3g|s3g|serve|corpus|all]" >&2; exit 2;; esac
 
-if [ "$what" != slice ] && [ "$what" != region ] && [ "$what" != stream ] && [ "$what" != soak ] && [ "$what" != x3g ] && [ "$what" != s3g ] && [ "$what" != serve ]; then
+if [ "$what" != slice ] && [ "$what" != region ] && [ "$what" != thin ] && [ "$what" != stream ] && [ "$what" != soak ] && [ "$what" != x3g ] && [ "$what" != s3g ] && [ "$what" != serve ]; then
 	[ -f "$out/torus-1m.stl" ] || "$gen" torus 1000 500 "$out/torus-1m.stl"
 	[ -f "$out/torus-2m.stl" ] || "$gen" torus 1000 1000 "$out/torus-2m.stl"
 	[ -f "$out/sphere-1m.stl" ] || "$gen" sphere 501 1000 "$out/sphere-1m.stl"
 	[ -f "$out/spheres.stl" ] || "$gen" spheres 8 "$out/spheres.stl"
 fi
-if [ "$what" != check ] && [ "$what" != region ] && [ "$what" != stream ] && [ "$what" != soak ] && [ "$what" != x3g ] && [ "$what" != s3g ] && [ "$what" != serve ]; then
+if [ "$what" != check ] && [ "$what" != region ] && [ "$what" != thin ] && [ "$what" != stream ] && [ "$what" != soak ] && [ "$what" != x3g ] && [ "$what" != s3g ] && [ "$what" != serve ]; then
 	[ -f "$out/torus-100k.stl" ] || "$gen" torus 250 200 "$out/torus-100k.stl"
 	[ -f "$out/twospheres.stl" ] || "$gen" twospheres 100 80 "$out/twospheres.stl"
 	[ -f "$out/scan.stl" ] || "$gen" scan 250 120 0.7 "$out/scan.stl"
@@ -229,6 +230,12 @@ for f in cube20 cylinder20 wall2 wall-eps plate-holes overhang bridge; do
 		echo "| $f | $name | $(json_field "$j" layers) | $(json_field "$j" dev_p95) | $(json_field "$j" dev_max) | $(json_field "$j" outside_max) / $(json_field "$j" inside_max) | $(json_field "$j" area_error) | $(json_field "$j" area_error_raw) |"
 	done
 done
+}
+
+# Thin walls against PrusaSlicer's at the "full" settings (bench/thin_walls.sh).
+thin_table() {
+	prusa_ini full >"$out/prusa-full.ini"
+	bench/thin_walls.sh "$bin" prusa
 }
 
 # lines_bytes_rate FILE -> "lines bytes mean peak": move lines (G1, G2,
@@ -706,6 +713,7 @@ serve) serve_table ;;
 x3g) x3g_table ;;
 s3g) s3g_table ;;
 region) region_table ;;
+thin) thin_table ;;
 gcodesize) gcodesize_table ;;
 check) check_table ;;
 repair) repair_table ;;
@@ -713,6 +721,6 @@ intersect) intersect_table ;;
 slice) slice_table ;;
 stream) stream_table ;;
 soak) soak_table ;;
-all) check_table; echo; repair_table; echo; intersect_table; echo; slice_table; echo; region_table; echo; gcodesize_table; echo; stream_table; echo; soak_table; echo; x3g_table; echo; s3g_table; echo; serve_table; echo; corpus_table; echo; cura_table ;;
+all) check_table; echo; repair_table; echo; intersect_table; echo; slice_table; echo; region_table; echo; thin_table; echo; gcodesize_table; echo; stream_table; echo; soak_table; echo; x3g_table; echo; s3g_table; echo; serve_table; echo; corpus_table; echo; cura_table ;;
 esac
 

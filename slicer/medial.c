@@ -14,6 +14,10 @@
 
 /* Contacts of a kept disk must subtend at least 135 degrees at its centre. */
 #define MEDIAL_COS_MIN_ANGLE (-0.70710678118654752)
+/* A centre line's width varies along it, a bead's is constant from one
+ * point to the next (toolpath.h): segments are cut so that the width
+ * varies by at most this along each piece, which prints its mean, nm. */
+#define MEDIAL_WIDTH_STEP 10000.0
 /* Most boundary samples per piece; the step grows to stay below it. */
 #define MEDIAL_MAX_SAMPLES 2000000.0
 
@@ -391,6 +395,46 @@ static int simplify(const struct line *l, size_t i0, size_t i1, double tol, bool
 	return 0;
 }
 
+/*
+ * The points p[0..m) (each with the width there) as segments of constant
+ * width: each segment cut into pieces over which the width changes by at
+ * most MEDIAL_WIDTH_STEP, each piece as wide as the width at its middle.
+ * A closed line's last segment (back to the first point) too.  Returns the
+ * new array (*nout points; p is freed) or NULL when out of memory.
+ */
+static struct path_point *constant_widths(struct path_point *p, size_t m, bool closed,
+					  size_t *nout)
+{
+	size_t nseg = closed ? m : m - 1, total = closed ? 0 : 1;
+	struct path_point *q;
+
+	for (size_t i = 0; i < nseg; i++)
+		total += (size_t)fmax(1.0, ceil(fabs((double)(p[(i + 1) % m].width - p[i].width)) /
+						 MEDIAL_WIDTH_STEP));
+	q = malloc(total * sizeof(*q));
+	if (!q) {
+		free(p);
+		return NULL;
+	}
+	*nout = 0;
+	for (size_t i = 0; i < nseg; i++) {
+		const struct path_point *a = &p[i], *b = &p[(i + 1) % m];
+		double dw = (double)(b->width - a->width);
+		size_t k = (size_t)fmax(1.0, ceil(fabs(dw) / MEDIAL_WIDTH_STEP));
+		for (size_t j = 0; j < k; j++) {
+			double t = (double)j / (double)k;
+			q[(*nout)++] = (struct path_point){
+			    .x = llround((double)a->x + t * (double)(b->x - a->x)),
+			    .y = llround((double)a->y + t * (double)(b->y - a->y)),
+			    .width = llround((double)a->width + (j + 0.5) / (double)k * dw)};
+		}
+	}
+	if (!closed)
+		q[(*nout)++] = p[m - 1];
+	free(p);
+	return q;
+}
+
 /* Turn l into a medial_line appended to out (simplified, integer nm). */
 static int emit_line(const struct line *l, double tol, struct medial_lines *out,
 		     struct st_error *err)
@@ -428,6 +472,8 @@ static int emit_line(const struct line *l, double tol, struct medial_lines *out,
 		pts[m++] = p;
 	}
 	free(keep);
+	if (!rc && m >= (l->closed ? 3u : 2u) && !(pts = constant_widths(pts, m, l->closed, &m)))
+		return st_error_set(err, ST_ERR_NOMEM, "medial: out of memory");
 	if (!rc && m >= (l->closed ? 3u : 2u)) {
 		struct medial_line *grown = slice_grow(out->v, &out->cap, out->n + 1, sizeof(*grown));
 		if (!grown) {

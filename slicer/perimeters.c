@@ -9,9 +9,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "beadwidth.h"
 #include "grow.h"
 #include "medial.h"
-#include "settings.h"
 
 /* Miter limit (multiples of the offset) when restoring trimmed loops. */
 #define PERIM_MITER_LIMIT 3.0
@@ -23,6 +23,10 @@
 #define PERIM_CLEAN_NM 10.0
 /* Beyond the arc tolerance, slivers this thin between two offsets are noise, nm. */
 #define PERIM_HAIRLINE 5.0
+/* A thin wall splits into two beads where the second would be at least
+ * this share of a spacing wide (where Arachne splits a middle bead: Cura's
+ * wall_split_middle_threshold default; PrusaSlicer 2.5 has no key). */
+#define PERIM_SPLIT_SHARE 0.5
 /* With min_feature_size 0, thin walls down to this width still print, nm. */
 #define PERIM_MIN_FEATURE_NM 10000.0
 
@@ -47,135 +51,6 @@ struct ctx {
 	struct layer_paths *out;
 	struct st_error *err;
 };
-
-void perim_settings_init(struct perim_settings *s, double nozzle_diameter)
-{
-	s->nozzle_diameter = nozzle_diameter;
-	s->extrusion_width = 1.125 * nozzle_diameter;
-	s->external_extrusion_width = 0.0;
-	s->perimeters = 2;
-	s->outer_first = false;
-	s->seam = PERIM_SEAM_ALIGNED;
-	s->thin_walls = true;
-	s->gap_fill = true;
-	s->gap_fill_min = 0.1;
-	s->min_feature_size = 0.25 * nozzle_diameter;
-	s->min_bead_width = 0.85 * nozzle_diameter;
-	s->arc_tolerance = 0.002;
-}
-
-double perim_spacing(double width, double height)
-{
-	return width - height * (1.0 - M_PI / 4.0);
-}
-
-double perim_bead_area(double width, double height)
-{
-	return (width - height) * height + M_PI * (height / 2.0) * (height / 2.0);
-}
-
-/* The outer wall's bead width, mm. */
-static double outer_width(const struct perim_settings *s)
-{
-	return s->external_extrusion_width > 0.0 ? s->external_extrusion_width
-						 : s->extrusion_width;
-}
-
-double perim_round_bead(double d, double height)
-{
-	return fmax(height, height + M_PI * (d * d - height * height) / (4.0 * height));
-}
-
-int perim_settings_check(const struct perim_settings *s, double layer_height,
-			 struct st_error *err)
-{
-	if (!s)
-		return st_error_set(err, ST_ERR_ARG, "perimeters: no settings given");
-	if (!(s->nozzle_diameter > 0.0 && s->nozzle_diameter <= 5.0))
-		return st_error_set(err, ST_ERR_RANGE,
-				    "perimeters: nozzle diameter %g mm is out of range; use (0, 5] mm",
-				    s->nozzle_diameter);
-	if (!(layer_height > 0.0))
-		return st_error_set(err, ST_ERR_RANGE,
-				    "perimeters: layer height %g mm must be greater than 0",
-				    layer_height);
-	if (layer_height > s->nozzle_diameter)
-		return st_error_set(err, ST_ERR_RANGE,
-				    "perimeters: layer height %g mm is larger than the nozzle "
-				    "diameter %g mm; use layers of at most the nozzle diameter",
-				    layer_height, s->nozzle_diameter);
-	if (!(s->extrusion_width > 0.0))
-		return st_error_set(err, ST_ERR_RANGE,
-				    "perimeters: extrusion width %g mm must be greater than 0 "
-				    "(default 1.125 x nozzle diameter)",
-				    s->extrusion_width);
-	if (s->extrusion_width < layer_height || s->extrusion_width > 4.0 * s->nozzle_diameter)
-		return st_error_set(err, ST_ERR_RANGE,
-				    "perimeters: extrusion width %g mm is out of range; use between "
-				    "the layer height %g mm and 4 x the nozzle diameter (%g mm)",
-				    s->extrusion_width, layer_height, 4.0 * s->nozzle_diameter);
-	if (!(s->external_extrusion_width >= 0.0) ||
-	    (s->external_extrusion_width > 0.0 &&
-	     (s->external_extrusion_width < layer_height ||
-	      s->external_extrusion_width > 4.0 * s->nozzle_diameter)))
-		return st_error_set(err, ST_ERR_RANGE,
-				    "perimeters: external_perimeter_extrusion_width %g mm is out of "
-				    "range; use 0 (the walls' width) or between the layer height %g "
-				    "mm and 4 x the nozzle diameter (%g mm)",
-				    s->external_extrusion_width, layer_height,
-				    4.0 * s->nozzle_diameter);
-	if (s->perimeters < 0)
-		return st_error_set(err, ST_ERR_RANGE,
-				    "perimeters: perimeter count %d is negative; use 0 or more",
-				    s->perimeters);
-	if (s->perimeters > 1000)
-		return st_error_set(err, ST_ERR_RANGE,
-				    "perimeters: perimeter count %d is too large; use at most 1000",
-				    s->perimeters);
-	if ((unsigned)s->seam >= PERIM_SEAMS)
-		return st_error_set(err, ST_ERR_ARG,
-				    "perimeters: seam mode %d is unknown; use aligned, nearest, "
-				    "random or rear",
-				    (int)s->seam);
-	if (!(s->gap_fill_min >= 0.0 && s->gap_fill_min <= 10.0))
-		return st_error_set(err, ST_ERR_RANGE,
-				    "perimeters: gap fill minimum width %g mm is out of range; use "
-				    "[0, 10] mm",
-				    s->gap_fill_min);
-	if (!(s->min_feature_size >= 0.0 && s->min_feature_size <= s->nozzle_diameter))
-		return st_error_set(err, ST_ERR_RANGE,
-				    "perimeters: min_feature_size %g mm is out of range; use 0 to "
-				    "the nozzle diameter %g mm",
-				    s->min_feature_size, s->nozzle_diameter);
-	if (!(s->min_bead_width > 0.0 && s->min_bead_width <= 4.0 * s->nozzle_diameter))
-		return st_error_set(err, ST_ERR_RANGE,
-				    "perimeters: min_bead_width %g mm is out of range; use (0, %g] "
-				    "mm (4 x the nozzle diameter)",
-				    s->min_bead_width, 4.0 * s->nozzle_diameter);
-	double narrowest = fmin(s->extrusion_width, outer_width(s));
-	if (!(s->arc_tolerance > 0.0 && s->arc_tolerance <= narrowest / 4.0))
-		return st_error_set(err, ST_ERR_RANGE,
-				    "perimeters: arc tolerance %g mm is out of range; use (0, %g] mm "
-				    "(a quarter of the extrusion width)",
-				    s->arc_tolerance, narrowest / 4.0);
-	return 0;
-}
-
-/* The names are seam_position's declaration (settings.c), in enum order. */
-int perim_seam_parse(const char *name, enum perim_seam *out, struct st_error *err)
-{
-	const struct setting *d = settings_find("seam_position");
-
-	for (size_t i = 0; name && d && i < d->nnames && i < PERIM_SEAMS; i++)
-		if (!strcmp(name, d->names[i])) {
-			*out = (enum perim_seam)i;
-			return 0;
-		}
-	return st_error_set(err, ST_ERR_ARG,
-			    "perimeters: seam_position \"%.64s\" is unknown; use aligned, nearest, "
-			    "random or rear",
-			    name ? name : "(none)");
-}
 
 struct perim_seams *perim_seams_new(unsigned seed)
 {
@@ -238,6 +113,12 @@ static double dist2(int64_t ax, int64_t ay, int64_t bx, int64_t by)
 {
 	double dx = (double)ax - (double)bx, dy = (double)ay - (double)by;
 	return dx * dx + dy * dy;
+}
+
+/* The narrowest strip gap fill prints, nm: gap_fill_min, at least the layer. */
+static double gap_fill_width(const struct ctx *c)
+{
+	return fmax(c->s->gap_fill_min * SLICE_UNITS_PER_MM, c->h);
 }
 
 /* Signed turn at vertex i of a closed path, radians (> 0 left). */
@@ -354,30 +235,48 @@ static size_t pick_seam(struct ctx *c, const int64_t *xy, size_t n)
 	return pick;
 }
 
-/* Append one closed wall loop starting at its seam. */
-static int emit_loop(struct ctx *c, const int64_t *xy, size_t n, enum path_role role)
+/*
+ * Append wall loop xy[0..n) of role, its beads widened into the strips too
+ * narrow for gap fill inside (may be NULL) and outside it (beadwidth.h),
+ * starting at its seam.
+ */
+static int emit_loop(struct ctx *c, const int64_t *xy, size_t n, enum path_role role,
+		     const struct clip_paths *inside, const struct clip_paths *outside)
 {
-	struct path_point *pts;
+	bool outer = role == PATH_OUTER_PERIMETER, changed = false;
+	struct bead_fit f = {.width = outer ? c->wo : c->w,
+			     .spacing = outer ? c->spo : c->sp,
+			     .gmax = gap_fill_width(c),
+			     .step = c->w / 4.0,
+			     .tol = c->arc + PERIM_HAIRLINE + 1000.0};
+	struct path_point *fit = NULL, *pts = NULL;
+	int64_t *fxy = NULL;
 	size_t seam;
 	int rc;
 
 	if (n < 3)
 		return 0;
-	pts = malloc(n * sizeof(*pts));
-	if (!pts)
-		return st_error_set(c->err, ST_ERR_NOMEM, "perimeters: out of memory for a loop");
-	seam = pick_seam(c, xy, n);
-	for (size_t k = 0; k < n; k++) {
-		size_t i = (seam + k) % n;
-		pts[k] = (struct path_point){.x = xy[2 * i], .y = xy[2 * i + 1],
-					     .width = llround(role == PATH_OUTER_PERIMETER ? c->wo : c->w)};
+	rc = bead_fit_loop(xy, n, inside, outside, &f, &fit, &n, &changed, c->err);
+	if (!rc && n >= 3 && changed && (fxy = malloc(2 * n * sizeof(*fxy))))
+		for (size_t k = 0; k < n; k++) {
+			fxy[2 * k] = fit[k].x;
+			fxy[2 * k + 1] = fit[k].y;
+		}
+	if (!rc && n >= 3 && ((changed && !fxy) || !(pts = malloc(n * sizeof(*pts)))))
+		rc = st_error_set(c->err, ST_ERR_NOMEM, "perimeters: out of memory for a loop");
+	if (!rc && n >= 3) {
+		seam = pick_seam(c, changed ? fxy : xy, n);
+		for (size_t k = 0; k < n; k++)
+			pts[k] = fit[(seam + k) % n];
+		rc = layer_add_path(c->out, role, true, pts, n, c->err);
+		if (!rc)
+			rc = seams_record(c->sm, pts[0].x, pts[0].y, c->err);
+		c->sm->lx = pts[0].x;
+		c->sm->ly = pts[0].y;
+		c->sm->have_last = true;
 	}
-	rc = layer_add_path(c->out, role, true, pts, n, c->err);
-	if (!rc)
-		rc = seams_record(c->sm, pts[0].x, pts[0].y, c->err);
-	c->sm->lx = pts[0].x;
-	c->sm->ly = pts[0].y;
-	c->sm->have_last = true;
+	free(fit);
+	free(fxy);
 	free(pts);
 	return rc;
 }
@@ -401,6 +300,24 @@ static int emit_medial(struct ctx *c, struct medial_line *l, enum path_role role
 	c->sm->lx = l->closed ? p[0].x : p[n - 1].x;
 	c->sm->ly = l->closed ? p[0].y : p[n - 1].y;
 	c->sm->have_last = true;
+	return rc;
+}
+
+/*
+ * A thin wall's centre line: where it is everywhere at least 1 + SPLIT
+ * outer spacings wide (PERIM_SPLIT_SHARE; 0.61 mm with 0.45 mm beads),
+ * two beads side by side in one loop
+ * (bead_split_line), else one bead as wide as the wall.
+ */
+static int emit_thin(struct ctx *c, struct medial_line *l)
+{
+	struct medial_line two = {.closed = true};
+	int rc = bead_split_line(l, c->w - c->sp, (1.0 + PERIM_SPLIT_SHARE) * c->spo, &two.pts,
+				 &two.n, c->err);
+
+	if (!rc)
+		rc = emit_medial(c, two.n ? &two : l, PATH_THIN_WALL);
+	free(two.pts);
 	return rc;
 }
 
@@ -605,7 +522,8 @@ static int narrow_paths(struct ctx *c, const struct clip_expolys *area, double m
 		if (a >= M_PI / 4.0 * min_width * min_width) {
 			rc = perim_medial_axis(&piece, min_width, step, c->arc, &ml, c->err);
 			for (size_t k = 0; k < ml.n && !rc; k++)
-				rc = emit_medial(c, &ml.v[k], role);
+				rc = role == PATH_THIN_WALL ? emit_thin(c, &ml.v[k])
+							    : emit_medial(c, &ml.v[k], role);
 			if (!rc && !ml.n && role == PATH_THIN_WALL)
 				rc = pillar_path(c, &piece, a, min_width, c->eps);
 			if (!rc && ml.n && role == PATH_THIN_WALL)
@@ -684,27 +602,24 @@ static double wall_depth(const struct ctx *c, int k)
 static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *acc)
 {
 	int N = c->s->perimeters, made = 0, rc = 0;
-	struct clip_paths *loops;
-	struct clip_paths m = {0};
-	struct clip_expolys area = {0};
+	struct clip_paths *loops, *narrow, m = {0};
+	struct clip_expolys *strips, area = {0};
 
 	if (N == 0)
 		return clip_paths_append(acc, R, c->err);
 	loops = calloc((size_t)N, sizeof(*loops));
-	if (!loops)
+	strips = calloc((size_t)N, sizeof(*strips));
+	narrow = calloc((size_t)N, sizeof(*narrow));
+	if (!loops || !strips || !narrow) {
+		free(loops);
+		free(strips);
+		free(narrow);
 		return st_error_set(c->err, ST_ERR_NOMEM, "perimeters: out of memory");
+	}
 	for (; made < N && !rc; made++) {
 		rc = wall_centre(c, R, wall_depth(c, made), wall_spacing(c, made), &loops[made]);
 		if (!rc && !loops[made].n)
 			break;
-	}
-	/* Walls in printing order. */
-	for (int i = 0; i < made && !rc; i++) {
-		int k = c->s->outer_first ? i : made - 1 - i;
-		enum path_role role = k == 0 ? PATH_OUTER_PERIMETER : PATH_INNER_PERIMETER;
-		for (size_t p = 0; p < loops[k].n && !rc; p++)
-			rc = emit_loop(c, clip_path_xy(&loops[k], p), clip_path_len(&loops[k], p),
-				       role);
 	}
 	/* Strips between walls: what wall k leaves (its inner half-spacing edge)
 	 * that wall k+1 cannot cover; after the last wall made short of N, all of
@@ -712,23 +627,27 @@ static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *
 	for (int k = 0; k < made && !rc; k++) {
 		rc = clip_offset(&loops[k], -wall_spacing(c, k) / 2.0, CLIP_JOIN_ROUND, 0.0, c->arc,
 				 &m, c->err);
-		if (rc)
-			break;
-		if (k == N - 1) {
+		if (!rc && k == N - 1)
 			rc = clip_paths_append(acc, &m, c->err);
-			break;
-		}
-		if (!c->s->gap_fill)
-			continue;
-		if (k + 1 < made) {
-			rc = minus_grown(c, &m, &loops[k + 1], wall_spacing(c, k + 1) / 2.0, &area);
-		} else {
-			rc = clip_boolean_ex(CLIP_UNION, &m, NULL, CLIP_NONZERO, &area, c->err);
-		}
-		if (!rc)
-			rc = narrow_paths(c, &area, fmax(c->s->gap_fill_min * SLICE_UNITS_PER_MM, c->h),
-					  PATH_GAP_FILL);
+		else if (!rc && k + 1 < made)
+			rc = minus_grown(c, &m, &loops[k + 1], wall_spacing(c, k + 1) / 2.0, &strips[k]);
+		else if (!rc)
+			rc = clip_boolean_ex(CLIP_UNION, &m, NULL, CLIP_NONZERO, &strips[k], c->err);
+		if (!rc && k < N - 1)
+			rc = bead_strips(&strips[k], gap_fill_width(c), c->eps, c->arc, &narrow[k],
+					 c->err);
 	}
+	/* Walls in printing order, each widened into the strips beside it. */
+	for (int i = 0; i < made && !rc; i++) {
+		int k = c->s->outer_first ? i : made - 1 - i;
+		enum path_role role = k == 0 ? PATH_OUTER_PERIMETER : PATH_INNER_PERIMETER;
+		for (size_t p = 0; p < loops[k].n && !rc; p++)
+			rc = emit_loop(c, clip_path_xy(&loops[k], p), clip_path_len(&loops[k], p),
+				       role, k < N - 1 ? &narrow[k] : NULL, k ? &narrow[k - 1] : NULL);
+	}
+	/* Gap fill: the strips at least gap_fill_width wide. */
+	for (int k = 0; k < made && k < N - 1 && !rc && c->s->gap_fill; k++)
+		rc = narrow_paths(c, &strips[k], gap_fill_width(c), PATH_GAP_FILL);
 	/* Thin walls: the part of R the outer wall's beads do not reach. */
 	c->bare = made == 0;
 	if (!rc && c->s->thin_walls) {
@@ -740,9 +659,14 @@ static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *
 			rc = narrow_paths(c, &area, fmax(c->eps - PERIM_EPS_SLACK, c->h),
 					  PATH_THIN_WALL);
 	}
-	for (int k = 0; k < N; k++)
+	for (int k = 0; k < N; k++) {
 		clip_paths_free(&loops[k]);
+		clip_expolys_free(&strips[k]);
+		clip_paths_free(&narrow[k]);
+	}
 	free(loops);
+	free(strips);
+	free(narrow);
 	clip_paths_free(&m);
 	clip_expolys_free(&area);
 	return rc;
@@ -768,8 +692,8 @@ int perim_generate(const struct perim_settings *s, const struct clip_expolys *re
 	c = (struct ctx){.s = s,
 			 .w = s->extrusion_width * SLICE_UNITS_PER_MM,
 			 .sp = perim_spacing(s->extrusion_width, layer_height) * SLICE_UNITS_PER_MM,
-			 .wo = outer_width(s) * SLICE_UNITS_PER_MM,
-			 .spo = perim_spacing(outer_width(s), layer_height) * SLICE_UNITS_PER_MM,
+			 .wo = perim_outer_width(s) * SLICE_UNITS_PER_MM,
+			 .spo = perim_spacing(perim_outer_width(s), layer_height) * SLICE_UNITS_PER_MM,
 			 .h = layer_height * SLICE_UNITS_PER_MM,
 			 .arc = s->arc_tolerance * SLICE_UNITS_PER_MM,
 			 .eps = s->nozzle_diameter * SLICE_UNITS_PER_MM,

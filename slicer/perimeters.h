@@ -23,7 +23,14 @@
  * epsilon that gets no such bead is printed the same way down to
  * min_feature_size, each bead at least min_bead_width wide (perim_generate).
  * Strips left between walls are filled
- * the same way (PATH_GAP_FILL) when at least gap_fill_min wide.
+ * the same way (PATH_GAP_FILL) when at least gap_fill_min wide; a strip
+ * narrower than that (and than the layer height) is shared out to the
+ * wall beads on its two sides, each widened by half its width and moved
+ * by half of that towards it (beadwidth.h), so a 1.0 mm wall prints one
+ * loop of (T + h (1 - pi/4)) / 2 wide beads.  Centre-line beads are cut
+ * into pieces of constant width as wide as the region at their middles;
+ * a thin wall at least 1.5 outer spacings wide all along prints as two
+ * such beads in one loop (emit_thin).
  *
  * All lengths in settings are mm; geometry is in nm (toolpath.h).
  */
@@ -103,6 +110,9 @@ void perim_settings_init(struct perim_settings *s, double nozzle_diameter);
 int perim_settings_check(const struct perim_settings *s, double layer_height,
 			 struct st_error *err);
 
+/* perim_outer_width - the outer wall's bead width w_o, mm. */
+double perim_outer_width(const struct perim_settings *s);
+
 /* perim_spacing - centre distance of adjacent beads, mm: w - h (1 - pi/4). */
 double perim_spacing(double width, double height);
 
@@ -131,7 +141,8 @@ void perim_seams_free(struct perim_seams *sm);
  *   seams: seam memory (may be NULL: no memory across layers, seed 0).
  *   out: paths are appended in printing order, per island: the walls
  *        (inner to outer unless outer_first) as closed loops of width w_o
- *        (the outer) and w (the inner) with roles PATH_INNER_PERIMETER / PATH_OUTER_PERIMETER, then gap
+ *        (the outer) and w (the inner), wider beside a strip they absorb,
+ *        with roles PATH_INNER_PERIMETER / PATH_OUTER_PERIMETER, then gap
  *        fill, then thin walls (open or closed, width per point).
  *   infill: replaced by the region left inside the innermost walls for
  *        infill (each wall counted as its flow-equivalent band of its

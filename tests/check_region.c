@@ -208,37 +208,10 @@ START_TEST(refusals)
 }
 END_TEST
 
-/* Slice m with the library defaults (0.2 mm layers, 0.45 mm walls, bed
- * centre 100,100) and measure the result; the job's summary into sum
- * unless NULL. */
-static struct region_report *slice_and_check(struct mesh *m, const char *name,
-					     struct slicer_summary *sum)
-{
-	struct slicer_config c;
-	struct region_opts o;
-	struct region_print *p = NULL;
-	struct region_report *r = NULL;
-	struct st_error err = {0};
-	const char *path = tu_path(name);
-
-	slicer_config_init(&c, 0.4);
-	c.threads = 1;
-	ck_assert_msg(slicer_run(m, &c, path, sum, &err) == 0, "%s", err.msg);
-	region_opts_init(&o);
-	o.has_center = true;
-	o.center_x = (c.bed.min_x + c.bed.max_x) / 2;
-	o.center_y = (c.bed.min_y + c.bed.max_y) / 2;
-	ck_assert_msg(region_read(path, &o, &p, &err) == 0, "%s", err.msg);
-	ck_assert_msg(region_compare(m, p, &o, &r, &err) == 0, "%s", err.msg);
-	ck_assert_uint_eq(r->empty_sections, 0);
-	region_print_free(p);
-	return r;
-}
-
 START_TEST(our_cube_within_bound)
 {
 	struct mesh *m = fx_box(0, 0, 0, 20, 20, 20);
-	struct region_report *r = slice_and_check(m, "cube.gcode", NULL);
+	struct region_report *r = tu_slice_region(m, "cube.gcode", NULL, NULL);
 
 	ck_assert_uint_eq(r->layers, 100);
 	ck_assert_msg(r->dev_p95 <= 0.02, "cube p95 %g mm", r->dev_p95);
@@ -253,7 +226,7 @@ END_TEST
 START_TEST(our_cylinder_within_bound)
 {
 	struct mesh *m = fx_cylinder(0, 0, 10, 20, 256);
-	struct region_report *r = slice_and_check(m, "cylinder.gcode", NULL);
+	struct region_report *r = tu_slice_region(m, "cylinder.gcode", NULL, NULL);
 
 	ck_assert_uint_eq(r->layers, 100);
 	ck_assert_msg(r->dev_p95 <= 0.02, "cylinder p95 %g mm", r->dev_p95);
@@ -276,7 +249,7 @@ START_TEST(thin_walls_without_gap_or_overlap)
 
 	for (int k = 0; k < 2; k++) {
 		struct mesh *m = fx_box(0, 0, 0, 20, t[k], 1);
-		struct region_report *r = slice_and_check(m, "thin.gcode", &sum);
+		struct region_report *r = tu_slice_region(m, "thin.gcode", &sum, NULL);
 
 		ck_assert_msg(r->gap <= 0.01, "%g mm wall: gap %g", t[k], r->gap);
 		ck_assert_msg(r->overlap <= 1e-4, "%g mm wall: overlap %g", t[k], r->overlap);

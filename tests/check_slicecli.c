@@ -836,7 +836,7 @@ END_TEST
 
 START_TEST(settings_options_doc)
 {
-	static char doc[1 << 16], help[1 << 16];
+	static char doc[1 << 17], help[1 << 16];
 	const char *a = tu_read_between("docs/slicing.md", doc, sizeof(doc),
 					"<!-- cfgopt:begin -->\n```\n", "```\n<!-- cfgopt:end -->");
 

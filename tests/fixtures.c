@@ -362,6 +362,45 @@ struct mesh *fx_cylinder(double cx, double cy, double r, double h, int n)
 	return finish(b);
 }
 
+struct mesh *fx_wedge(double len, double base, double h)
+{
+	struct mesh_builder *b = mesh_builder_new(6);
+	const double x[3] = {0, len, len}, y[3] = {0, -base / 2, base / 2};
+
+	if (!b)
+		die("out of memory");
+	add_prism(b, x, y, 3, 0, h);
+	return finish(b);
+}
+
+struct mesh *fx_tube(double R, double r, double h, int n)
+{
+	struct mesh_builder *b = mesh_builder_new(8 * (size_t)n);
+	double ox[256], oy[256], ix[256], iy[256];
+	uint32_t o0[256], o1[256], i0[256], i1[256];
+
+	if (!b)
+		die("out of memory");
+	if (!(r > 0 && r < R))
+		die("fx_tube: the inner radius must be in (0, R)");
+	ngon(0, 0, R, n, ox, oy);
+	ngon(0, 0, r, n, ix, iy);
+	for (int k = 0; k < n; k++) {
+		o0[k] = vert(b, ox[k], oy[k], 0);
+		o1[k] = vert(b, ox[k], oy[k], h);
+		i0[k] = vert(b, ix[k], iy[k], 0);
+		i1[k] = vert(b, ix[k], iy[k], h);
+	}
+	for (int k = 0; k < n; k++) {
+		int j = (k + 1) % n;
+		quad(b, o0[k], o0[j], o1[j], o1[k]); /* outside, facing out */
+		quad(b, i0[j], i0[k], i1[k], i1[j]); /* inside, facing the axis */
+		quad(b, o1[k], o1[j], i1[j], i1[k]); /* top */
+		quad(b, o0[j], o0[k], i0[k], i0[j]); /* bottom */
+	}
+	return finish(b);
+}
+
 /* The square x0..x1, y0..y1 walked counter-clockwise from (x0, y0), a point
  * every step mm; returns the number of points written to xy (at most cap). */
 static int square_loop(double x0, double y0, double x1, double y1, double step, double (*xy)[2],

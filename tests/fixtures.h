@@ -71,6 +71,18 @@ struct mesh *fx_klein_bottle(double R, double scale, int nu, int nv);
 struct mesh *fx_cylinder(double cx, double cy, double r, double h, int n);
 
 /*
+ * fx_wedge - a triangular prism h tall: its tip at the origin, base wide at
+ * x = len (y -base/2..base/2): a wall whose thickness grows linearly.
+ */
+struct mesh *fx_wedge(double len, double base, double h);
+
+/*
+ * fx_tube - a tube h tall around the z axis between regular n-gons (3..256)
+ * of radius r and R: a ring-shaped wall R - r thick.
+ */
+struct mesh *fx_tube(double R, double r, double h, int n);
+
+/*
  * fx_plate_holes - a 40 x 40 x 3 mm plate with a square hole (x 8..16,
  * y 16..24) and a round one (64-gon, radius 4 around (28, 20)).
  */

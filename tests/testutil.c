@@ -1,6 +1,8 @@
 /* testutil.c - scratch files and CLI runs for the Check suites. */
 #include "testutil.h"
 #include "fixtures.h"
+#include "region.h"
+#include "slicer.h"
 
 #include <check.h>
 #include <dirent.h>
@@ -408,4 +410,30 @@ double tu_moves_e(const struct tu_moves *r, const char *role)
 		if (!role || !strcmp(r->m[k].role, role))
 			e += r->m[k].e;
 	return e;
+}
+
+struct region_report *tu_slice_region(const struct mesh *m, const char *name,
+				      struct slicer_summary *sum, double *width_max)
+{
+	struct slicer_config c;
+	struct region_opts o;
+	struct region_print *p = NULL;
+	struct region_report *r = NULL;
+	struct st_error err = {0};
+	const char *path = tu_path(name);
+
+	slicer_config_init(&c, 0.4);
+	c.threads = 1;
+	ck_assert_msg(slicer_run(m, &c, path, sum, &err) == 0, "%s", err.msg);
+	region_opts_init(&o);
+	o.has_center = true;
+	o.center_x = (c.bed.min_x + c.bed.max_x) / 2;
+	o.center_y = (c.bed.min_y + c.bed.max_y) / 2;
+	ck_assert_msg(region_read(path, &o, &p, &err) == 0, "%s", err.msg);
+	ck_assert_msg(region_compare(m, p, &o, &r, &err) == 0, "%s", err.msg);
+	ck_assert_uint_eq(r->empty_sections, 0);
+	if (width_max)
+		*width_max = p->width_max;
+	region_print_free(p);
+	return r;
 }

@@ -148,4 +148,17 @@ size_t tu_count_role(const struct layer_paths *l, enum path_role role);
 /* tu_path_length - length of the open polyline through p's points, nm. */
 double tu_path_length(const struct toolpath *p);
 
+struct region_report;
+struct slicer_summary;
+
+/*
+ * tu_slice_region - m sliced with the library defaults (0.2 mm layers,
+ * 0.45 mm walls, bed centre 100,100) into tu_path(name) and measured by
+ * the region verifier (region.h; every layer has a section); the job's
+ * summary into sum and the widest bead read back (mm) into width_max
+ * unless NULL.  Free the report with region_report_free.
+ */
+struct region_report *tu_slice_region(const struct mesh *m, const char *name,
+				      struct slicer_summary *sum, double *width_max);
+
 #endif
