@@ -731,31 +731,12 @@ START_TEST(test_nameless_part)
 }
 END_TEST
 
-/* An STL cube as a string of bytes. */
-static char *cube_stl(size_t *len)
-{
-	const char *path = tu_path("cube.stl");
-	struct st_error err = {0};
-	struct mesh *m = fx_box(0, 0, 0, 10, 10, 5);
-	FILE *f;
-	char *buf;
-
-	ck_assert_int_eq(meshio_write_stl(path, m, MESHIO_STL_BINARY, &err), 0);
-	mesh_free(m);
-	f = fopen(path, "rb");
-	ck_assert(f);
-	buf = malloc(4096);
-	*len = fread(buf, 1, 4096, f);
-	fclose(f);
-	return buf;
-}
-
 START_TEST(test_stl_two_printers)
 {
 	struct node_proc np;
 	struct resp r;
 	size_t len;
-	char *stl = cube_stl(&len);
+	char *stl = sv_cube_stl(&len);
 	long long a, b, c;
 
 	sv_write_config(&np, TWO_PRINTERS, 8);
@@ -846,7 +827,7 @@ static void expect_node_slice(const char *name, const char *local, const char *b
 START_TEST(test_node_gcode_is_slice_gcode)
 {
 	size_t len;
-	char *stl = cube_stl(&len), local[600];
+	char *stl = sv_cube_stl(&len), local[600];
 
 	snprintf(local, sizeof(local), "%s", tu_path("cube.stl"));
 	expect_node_slice("cube.stl", local, stl, len);
@@ -908,7 +889,7 @@ START_TEST(test_upload_settings)
 	struct node_proc np;
 	struct resp r;
 	size_t len, i;
-	char *stl = cube_stl(&len), print[1024], path[600], mine[600], out[4096];
+	char *stl = sv_cube_stl(&len), print[1024], path[600], mine[600], out[4096];
 	long long id;
 	json_t *j, *want = json_pack("[[ss][ss]]", "layer-height", "0.3", "set", "perimeters=3");
 	int rc;
@@ -1344,7 +1325,7 @@ START_TEST(test_sim_stl_print)
 	struct node_proc np;
 	struct resp r;
 	size_t len;
-	char *stl = cube_stl(&len);
+	char *stl = sv_cube_stl(&len);
 	long long id;
 
 	sv_write_config(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\n"
@@ -1398,7 +1379,7 @@ START_TEST(test_sim_sailfish)
 	struct node_proc np;
 	struct resp r;
 	size_t len;
-	char *stl = cube_stl(&len), *g = moves_gcode(300, 6), *m = moves_gcode(200, 6000);
+	char *stl = sv_cube_stl(&len), *g = moves_gcode(300, 6), *m = moves_gcode(200, 6000);
 	char path[600], line[512], last[4][512];
 	long long id, idm, idc;
 	json_t *o, *cmds, *cancelled;

@@ -17,6 +17,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "fixtures.h"
+#include "meshio.h"
 #include "servetest.h"
 #include "testutil.h"
 
@@ -345,4 +347,22 @@ const char *sv_str(const json_t *o, const char *key)
 
 	ck_assert_msg(s, "no string %s in %s", key, json_dumps(o, 0));
 	return s;
+}
+
+char *sv_cube_stl(size_t *len)
+{
+	const char *path = tu_path("cube.stl");
+	struct st_error err = {0};
+	struct mesh *m = fx_box(0, 0, 0, 10, 10, 5);
+	FILE *f;
+	char *buf;
+
+	ck_assert_int_eq(meshio_write_stl(path, m, MESHIO_STL_BINARY, &err), 0);
+	mesh_free(m);
+	f = fopen(path, "rb");
+	ck_assert(f);
+	buf = malloc(4096);
+	*len = fread(buf, 1, 4096, f);
+	fclose(f);
+	return buf;
 }
