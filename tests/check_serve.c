@@ -547,17 +547,6 @@ START_TEST(test_connection_limits)
 }
 END_TEST
 
-/* Whether the node has closed fd (a read finds its end or a reset). */
-static bool closed_by_node(int fd)
-{
-	char buf[256];
-	ssize_t k;
-
-	while ((k = recv(fd, buf, sizeof(buf), MSG_DONTWAIT)) > 0)
-		;
-	return k == 0 || (k < 0 && errno != EAGAIN && errno != EWOULDBLOCK);
-}
-
 /*
  * A slow-loris client (issue 20): one byte every 250 ms never lets
  * idle_timeout_s (3 s) run out, yet a header not whole within
@@ -572,42 +561,22 @@ START_TEST(test_slow_header_and_body)
 		"[key slicer]\nkey = " KEY_UP "\nroles = read, upload\n"
 		"[key viewer]\nkey = " KEY_READ "\nroles = read\n"
 		"[printer mk3s]\nprofile = prusa-i3-mk3s\nport = test-instant\n";
-	static const char head[] = "GET /api/version HTTP/1.1\r\nHost: x\r\nX-Api-Key: " KEY_UP
-				   "\r\n";
-	char body_head[512];
+	static const char *const head[2] = {
+		"GET /api/version HTTP/1.1\r\nHost: x\r\nX-Api-Key: " KEY_UP "\r\n",
+		"POST /api/files/local HTTP/1.1\r\nHost: x\r\nX-Api-Key: " KEY_UP "\r\n"
+		"Content-Type: multipart/form-data; boundary=" BOUNDARY "\r\n"
+		"Content-Length: 100000\r\n\r\n--" BOUNDARY "\r\n"};
 	struct node_proc np;
-	int fd[2], n;
-	double closed_at[2] = {0, 0}, t0;
+	double closed_at[2];
 
 	sv_write_config(&np, TWO_PRINTERS, 8);
 	tu_write_str(np.config, cfg);
 	sv_start(&np);
-	n = snprintf(body_head, sizeof(body_head),
-		     "POST /api/files/local HTTP/1.1\r\nHost: x\r\nX-Api-Key: " KEY_UP "\r\n"
-		     "Content-Type: multipart/form-data; boundary=" BOUNDARY "\r\n"
-		     "Content-Length: 100000\r\n\r\n--" BOUNDARY "\r\n");
-	fd[0] = connect_from(np.port, "127.0.0.1");
-	fd[1] = connect_from(np.port, "127.0.0.1");
-	ck_assert(send(fd[0], head, sizeof(head) - 1, MSG_NOSIGNAL) == (ssize_t)sizeof(head) - 1);
-	ck_assert(send(fd[1], body_head, (size_t)n, MSG_NOSIGNAL) == n);
-	t0 = st_mono_s();
-	while (st_mono_s() - t0 < 2.8 && !(closed_at[0] && closed_at[1])) {
-		usleep(250000);
-		for (int i = 0; i < 2; i++) {
-			if (closed_at[i])
-				continue;
-			if (closed_by_node(fd[i]))
-				closed_at[i] = st_mono_s() - t0;
-			else
-				send(fd[i], i ? "x" : "X", 1, MSG_NOSIGNAL);
-		}
-	}
+	sv_trickle(np.port, head, closed_at, 2.8);
 	ck_assert_msg(closed_at[0] > 0.8 && closed_at[0] < 2.0,
-		      "a header trickled for %.1f s kept its connection", st_mono_s() - t0);
+		      "a header trickled kept its connection (closed at %.1f s)", closed_at[0]);
 	ck_assert_msg(closed_at[1] > 0.8 && closed_at[1] < 2.0,
-		      "a body trickled for %.1f s kept its connection", st_mono_s() - t0);
-	close(fd[0]);
-	close(fd[1]);
+		      "a body trickled kept its connection (closed at %.1f s)", closed_at[1]);
 	ck_assert_int_eq(version_from(np.port, "127.0.0.1"), 200);
 	sv_stop(&np);
 }
