@@ -46,6 +46,9 @@ static int slicejob_repair(const struct mesh *m, const struct slicer_config *c,
 		prog.prefix = "repairing the mesh: ";
 		opt.progress = progress_update;
 		opt.progress_ctx = &prog;
+	} else if (c->progress) { /* the caller's own: the repair's phases too */
+		opt.progress = c->progress;
+		opt.progress_ctx = c->progress_ctx;
 	}
 	memset(rep, 0, sizeof(*rep));
 	rc = repair_mesh(m, &opt, fixed, NULL, rep, err);

@@ -57,7 +57,9 @@ struct slicejob_result {
  * footprints overlap, otherwise packed by arrange_footprints; each lowest
  * point goes on the bed and the pile is placed as one model.
  * progress_name non-NULL shows progress (bar or lines, progress.h) under
- * that name; nothing else is printed.  Returns 0, or the class with err
+ * that name; otherwise cfg->progress, when set, gets the repair's phases
+ * and then the slicer's (the farm node's slicingProgress).  Nothing else
+ * is printed.  Returns 0, or the class with err
  * filled (res->stage and res->failed say where): the reader's errors,
  * ST_ERR_RANGE (does not fit, not printable, nothing to print), ST_ERR_IO
  * (out not written), ST_ERR_PARSE (bad start/end G-code), ST_ERR_ARG (no

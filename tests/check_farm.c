@@ -327,6 +327,42 @@ START_TEST(test_farm_api_and_jobs)
 }
 END_TEST
 
+/* The farm view bounds a slow client as a node does (header_timeout_s,
+ * min_body_rate): a header or a job's body trickled one byte every 250 ms
+ * loses its connection after 1 s, though idle_timeout_s (3 s) never runs
+ * out.  No broker is needed: the page and the API answer without one. */
+START_TEST(test_farm_slow_client)
+{
+	static const char *const head[2] = {
+		"GET /api/farm HTTP/1.1\r\nHost: x\r\nX-Api-Key: " KEY_READ "\r\n",
+		"POST /api/farm/jobs HTTP/1.1\r\nHost: x\r\nX-Api-Key: " KEY_UP "\r\n"
+		"Content-Type: multipart/form-data; boundary=" BOUNDARY "\r\n"
+		"Content-Length: 100000\r\n\r\n--" BOUNDARY "\r\n"};
+	struct node_proc farm;
+	char text[1024];
+	double closed_at[2];
+	json_t *o;
+
+	snprintf(text, sizeof(text),
+		 "[farm]\nname = test-farm\nlisten = 127.0.0.1:0\nidle_timeout_s = 3\n"
+		 "header_timeout_s = 1\nmin_body_rate = 1000\n"
+		 "[key viewer]\nkey = " KEY_READ "\nroles = read\n"
+		 "[key dispatcher]\nkey = " KEY_UP "\nroles = read, upload\n"
+		 "[mqtt]\nhost = 127.0.0.1\nport = %d\nkeepalive = 5\n", free_port());
+	write_proc(&farm, "farm-slow", text);
+	sv_start_cmd(&farm, "farm");
+	sv_trickle(farm.port, head, closed_at, 2.8);
+	ck_assert_msg(closed_at[0] > 0.8 && closed_at[0] < 2.0,
+		      "a header trickled kept its connection (closed at %.1f s)", closed_at[0]);
+	ck_assert_msg(closed_at[1] > 0.8 && closed_at[1] < 2.0,
+		      "a body trickled kept its connection (closed at %.1f s)", closed_at[1]);
+	o = farm_state(farm.port);
+	ck_assert(json_is_array(json_object_get(o, "nodes")));
+	json_decref(o);
+	sv_stop(&farm);
+}
+END_TEST
+
 /* The page shows both nodes' printers from one page, with no JS error. */
 START_TEST(test_farm_page)
 {
@@ -380,6 +416,7 @@ Suite *farm_suite(void)
 	tcase_add_test(tc, test_farm_config);
 	tcase_add_test(tc, test_farm_api_and_jobs);
 	tcase_add_test(tc, test_farm_page);
+	tcase_add_test(tc, test_farm_slow_client);
 	suite_add_tcase(s, tc);
 	return s;
 }

@@ -292,23 +292,45 @@ START_TEST(test_push_raw)
 }
 END_TEST
 
+/* The payload of the first event of type received, or NULL. */
+static json_t *event_of(struct ws *w, const char *type)
+{
+	size_t i;
+	json_t *m;
+
+	json_array_foreach(w->got, i, m) {
+		json_t *e = json_object_get(m, "event");
+		const char *got = json_string_value(json_object_get(e, "type"));
+
+		if (got && !strcmp(got, type))
+			return json_object_get(e, "payload");
+	}
+	return NULL;
+}
+
 /* Run the client until an event of type has come (up to ms); whether it did. */
 static bool ws_event(struct ws *w, const char *type, int ms)
 {
 	for (int t = 0; t < ms; t += 100) {
-		size_t i;
-		json_t *m;
-
 		ws_until(w, NULL, 100);
-		json_array_foreach(w->got, i, m) {
-			const char *got = json_string_value(
-				json_object_get(json_object_get(m, "event"), "type"));
-
-			if (got && !strcmp(got, type))
-				return true;
-		}
+		if (event_of(w, type))
+			return true;
 	}
 	return false;
+}
+
+/* A node with TWO_PRINTERS and a client on path, authenticated as the
+ * read-only key, past its history message. */
+static void open_authed(struct node_proc *np, struct ws *w, const char *path, bool sockjs)
+{
+	char auth[128];
+
+	sv_write_config(np, TWO_PRINTERS, 8);
+	sv_start(np);
+	auth_of(np->port, "X-Api-Key: " KEY_READ, "viewer", auth, sizeof(auth));
+	ws_open(w, np->port, path, sockjs);
+	ws_say(w, auth);
+	ck_assert(ws_until(w, "history", 3000));
 }
 
 /* Events as OctoPrint sends them for an upload, a print paused, resumed,
@@ -317,14 +339,8 @@ START_TEST(test_push_events)
 {
 	struct node_proc np;
 	struct ws w;
-	char auth[128];
 
-	sv_write_config(&np, TWO_PRINTERS, 8);
-	sv_start(&np);
-	auth_of(np.port, "X-Api-Key: " KEY_READ, "viewer", auth, sizeof(auth));
-	ws_open(&w, np.port, "/sockjs/1/x/websocket", true);
-	ws_say(&w, auth);
-	ck_assert(ws_until(&w, "history", 3000));
+	open_authed(&np, &w, "/sockjs/1/x/websocket", true);
 	sv_bed_clear(np.port, "", 204);
 	ck_assert(!ws_event(&w, "UpdatedFiles", 700));
 	ck_assert(sv_print_text(np.port, "", "a.gcode", "G1 X1\nG4 S20\n") == 1);
@@ -415,6 +431,66 @@ START_TEST(test_push_unauthenticated_closed)
 }
 END_TEST
 
+/* An uploaded STL is sliced with slicingProgress messages as OctoPrint
+ * sends them (progress never going back, ending at 100) between
+ * SlicingStarted and SlicingDone; a model that cannot be read gives
+ * SlicingFailed with the reason. */
+START_TEST(test_push_slicing_progress)
+{
+	struct node_proc np;
+	struct ws w;
+	struct resp r;
+	size_t len, i;
+	char *stl = sv_cube_stl(&len);
+	double last = -1.0;
+	int nprog = 0;
+	json_t *m, *e;
+
+	open_authed(&np, &w, "/sockjs/websocket", false);
+	sv_upload(np.port, "", KEY_UP, "cube.stl", 8, "", 0, "true", stl, len, NULL, true, &r);
+	ck_assert_msg(r.status == 201, "%d %s", r.status, r.body);
+	sv_resp_free(&r);
+	ck_assert_msg(ws_event(&w, "SlicingDone", 20000), "no SlicingDone");
+	e = event_of(&w, "SlicingStarted");
+	ck_assert_msg(e, "no SlicingStarted");
+	ck_assert_str_eq(sv_str(e, "stl"), "cube.stl");
+	ck_assert_str_eq(sv_str(e, "gcode"), "cube.gcode");
+	ck_assert(json_is_true(json_object_get(e, "progressAvailable")));
+	ck_assert(json_is_number(json_object_get(event_of(&w, "SlicingDone"), "time")));
+	json_array_foreach(w.got, i, m) {
+		json_t *sp = json_object_get(m, "slicingProgress");
+		double pct;
+
+		if (!sp)
+			continue;
+		ck_assert_str_eq(sv_str(sp, "slicer"), "stratum");
+		ck_assert_str_eq(sv_str(sp, "source_location"), "local");
+		ck_assert_str_eq(sv_str(sp, "source_path"), "cube.stl");
+		ck_assert_str_eq(sv_str(sp, "dest_location"), "local");
+		ck_assert_str_eq(sv_str(sp, "dest_path"), "cube.gcode");
+		pct = json_number_value(json_object_get(sp, "progress"));
+		ck_assert_msg(pct >= last && pct >= 0.0 && pct <= 100.0, "progress %g after %g",
+			      pct, last);
+		last = pct;
+		nprog++;
+	}
+	ck_assert_msg(nprog >= 2, "%d slicingProgress messages", nprog);
+	ck_assert_msg(last == 100.0, "the last slicingProgress is at %g", last);
+	/* a model that cannot be read: SlicingFailed, no slicingProgress at 100 */
+	sv_bed_clear(np.port, "", 204);
+	sv_upload_text(np.port, "", KEY_UP, "junk.stl", "solid x\nendsolid x\n", "true", &r);
+	ck_assert_int_eq(r.status, 201);
+	sv_resp_free(&r);
+	ck_assert_msg(ws_event(&w, "SlicingFailed", 20000), "no SlicingFailed");
+	e = event_of(&w, "SlicingFailed");
+	ck_assert_str_eq(sv_str(e, "stl"), "junk.stl");
+	ck_assert(strlen(sv_str(e, "reason")) > 0);
+	ws_close(&w);
+	free(stl);
+	sv_stop(&np);
+}
+END_TEST
+
 void octoapi_push_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("push");
@@ -425,5 +501,6 @@ void octoapi_push_tcases(Suite *s)
 	tcase_add_test(tc, test_push_events);
 	tcase_add_test(tc, test_push_bed_gate);
 	tcase_add_test(tc, test_push_unauthenticated_closed);
+	tcase_add_test(tc, test_push_slicing_progress);
 	suite_add_tcase(s, tc);
 }

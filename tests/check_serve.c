@@ -547,17 +547,6 @@ START_TEST(test_connection_limits)
 }
 END_TEST
 
-/* Whether the node has closed fd (a read finds its end or a reset). */
-static bool closed_by_node(int fd)
-{
-	char buf[256];
-	ssize_t k;
-
-	while ((k = recv(fd, buf, sizeof(buf), MSG_DONTWAIT)) > 0)
-		;
-	return k == 0 || (k < 0 && errno != EAGAIN && errno != EWOULDBLOCK);
-}
-
 /*
  * A slow-loris client (issue 20): one byte every 250 ms never lets
  * idle_timeout_s (3 s) run out, yet a header not whole within
@@ -572,42 +561,22 @@ START_TEST(test_slow_header_and_body)
 		"[key slicer]\nkey = " KEY_UP "\nroles = read, upload\n"
 		"[key viewer]\nkey = " KEY_READ "\nroles = read\n"
 		"[printer mk3s]\nprofile = prusa-i3-mk3s\nport = test-instant\n";
-	static const char head[] = "GET /api/version HTTP/1.1\r\nHost: x\r\nX-Api-Key: " KEY_UP
-				   "\r\n";
-	char body_head[512];
+	static const char *const head[2] = {
+		"GET /api/version HTTP/1.1\r\nHost: x\r\nX-Api-Key: " KEY_UP "\r\n",
+		"POST /api/files/local HTTP/1.1\r\nHost: x\r\nX-Api-Key: " KEY_UP "\r\n"
+		"Content-Type: multipart/form-data; boundary=" BOUNDARY "\r\n"
+		"Content-Length: 100000\r\n\r\n--" BOUNDARY "\r\n"};
 	struct node_proc np;
-	int fd[2], n;
-	double closed_at[2] = {0, 0}, t0;
+	double closed_at[2];
 
 	sv_write_config(&np, TWO_PRINTERS, 8);
 	tu_write_str(np.config, cfg);
 	sv_start(&np);
-	n = snprintf(body_head, sizeof(body_head),
-		     "POST /api/files/local HTTP/1.1\r\nHost: x\r\nX-Api-Key: " KEY_UP "\r\n"
-		     "Content-Type: multipart/form-data; boundary=" BOUNDARY "\r\n"
-		     "Content-Length: 100000\r\n\r\n--" BOUNDARY "\r\n");
-	fd[0] = connect_from(np.port, "127.0.0.1");
-	fd[1] = connect_from(np.port, "127.0.0.1");
-	ck_assert(send(fd[0], head, sizeof(head) - 1, MSG_NOSIGNAL) == (ssize_t)sizeof(head) - 1);
-	ck_assert(send(fd[1], body_head, (size_t)n, MSG_NOSIGNAL) == n);
-	t0 = st_mono_s();
-	while (st_mono_s() - t0 < 2.8 && !(closed_at[0] && closed_at[1])) {
-		usleep(250000);
-		for (int i = 0; i < 2; i++) {
-			if (closed_at[i])
-				continue;
-			if (closed_by_node(fd[i]))
-				closed_at[i] = st_mono_s() - t0;
-			else
-				send(fd[i], i ? "x" : "X", 1, MSG_NOSIGNAL);
-		}
-	}
+	sv_trickle(np.port, head, closed_at, 2.8);
 	ck_assert_msg(closed_at[0] > 0.8 && closed_at[0] < 2.0,
-		      "a header trickled for %.1f s kept its connection", st_mono_s() - t0);
+		      "a header trickled kept its connection (closed at %.1f s)", closed_at[0]);
 	ck_assert_msg(closed_at[1] > 0.8 && closed_at[1] < 2.0,
-		      "a body trickled for %.1f s kept its connection", st_mono_s() - t0);
-	close(fd[0]);
-	close(fd[1]);
+		      "a body trickled kept its connection (closed at %.1f s)", closed_at[1]);
 	ck_assert_int_eq(version_from(np.port, "127.0.0.1"), 200);
 	sv_stop(&np);
 }
@@ -731,31 +700,12 @@ START_TEST(test_nameless_part)
 }
 END_TEST
 
-/* An STL cube as a string of bytes. */
-static char *cube_stl(size_t *len)
-{
-	const char *path = tu_path("cube.stl");
-	struct st_error err = {0};
-	struct mesh *m = fx_box(0, 0, 0, 10, 10, 5);
-	FILE *f;
-	char *buf;
-
-	ck_assert_int_eq(meshio_write_stl(path, m, MESHIO_STL_BINARY, &err), 0);
-	mesh_free(m);
-	f = fopen(path, "rb");
-	ck_assert(f);
-	buf = malloc(4096);
-	*len = fread(buf, 1, 4096, f);
-	fclose(f);
-	return buf;
-}
-
 START_TEST(test_stl_two_printers)
 {
 	struct node_proc np;
 	struct resp r;
 	size_t len;
-	char *stl = cube_stl(&len);
+	char *stl = sv_cube_stl(&len);
 	long long a, b, c;
 
 	sv_write_config(&np, TWO_PRINTERS, 8);
@@ -846,7 +796,7 @@ static void expect_node_slice(const char *name, const char *local, const char *b
 START_TEST(test_node_gcode_is_slice_gcode)
 {
 	size_t len;
-	char *stl = cube_stl(&len), local[600];
+	char *stl = sv_cube_stl(&len), local[600];
 
 	snprintf(local, sizeof(local), "%s", tu_path("cube.stl"));
 	expect_node_slice("cube.stl", local, stl, len);
@@ -908,7 +858,7 @@ START_TEST(test_upload_settings)
 	struct node_proc np;
 	struct resp r;
 	size_t len, i;
-	char *stl = cube_stl(&len), print[1024], path[600], mine[600], out[4096];
+	char *stl = sv_cube_stl(&len), print[1024], path[600], mine[600], out[4096];
 	long long id;
 	json_t *j, *want = json_pack("[[ss][ss]]", "layer-height", "0.3", "set", "perimeters=3");
 	int rc;
@@ -1344,7 +1294,7 @@ START_TEST(test_sim_stl_print)
 	struct node_proc np;
 	struct resp r;
 	size_t len;
-	char *stl = cube_stl(&len);
+	char *stl = sv_cube_stl(&len);
 	long long id;
 
 	sv_write_config(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\n"
@@ -1398,7 +1348,7 @@ START_TEST(test_sim_sailfish)
 	struct node_proc np;
 	struct resp r;
 	size_t len;
-	char *stl = cube_stl(&len), *g = moves_gcode(300, 6), *m = moves_gcode(200, 6000);
+	char *stl = sv_cube_stl(&len), *g = moves_gcode(300, 6), *m = moves_gcode(200, 6000);
 	char path[600], line[512], last[4][512];
 	long long id, idm, idc;
 	json_t *o, *cmds, *cancelled;

@@ -688,6 +688,55 @@ START_TEST(test_mqtt_broker_example)
 }
 END_TEST
 
+/* PRINTER/temperatures is /api/printer's temperature: a Marlin printer's
+ * offsets, and the Creator Pro's tool1 with the target it was given. */
+START_TEST(test_mqtt_temperatures)
+{
+	struct node_proc np;
+	struct mqtt_seen seen;
+	struct mosquitto *mq;
+	struct resp r;
+	char text[1024];
+	int port, status = 0;
+	pid_t broker;
+
+	if (!have_broker("test_mqtt_temperatures"))
+		return;
+	broker = open_broker(&port);
+	snprintf(text, sizeof(text), "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\n"
+		 "sim_speedup = 1000\n[printer cp]\nprofile = flashforge-creator-pro\n"
+		 "port = sim\nsim_speedup = 1000\n\n[mqtt]\nhost = 127.0.0.1\nport = %d\n"
+		 "keepalive = 5\n", port);
+	sv_write_config(&np, text, 8);
+	sv_start(&np);
+	mq = watch_start(&seen, port, NULL, NULL, "stratum/test-node/#");
+	wait_topic(&seen, "stratum/test-node/status", "online", 10, NULL, 0);
+	/* the simulated printers connect on their own; offsets need them operational */
+	for (int i = 0; i < 250 && status != 204; i++) {
+		sv_http(np.port, "POST", "/p/mk3s/api/printer/tool", "X-Api-Key: " KEY_CTL,
+			"{\"command\":\"offset\",\"offsets\":{\"tool0\":10}}", &r);
+		status = r.status;
+		sv_resp_free(&r);
+		if (status != 204)
+			usleep(20000);
+	}
+	ck_assert_int_eq(status, 204);
+	sv_expect(np.port, "POST", "/p/mk3s/api/printer/bed", "X-Api-Key: " KEY_CTL,
+		  "{\"command\":\"offset\",\"offset\":-5}", 204);
+	wait_topic(&seen, "stratum/test-node/mk3s/temperatures", "\"offset\":-5}", 10, text,
+		   sizeof(text));
+	ck_assert_msg(strstr(text, "\"offset\":10}") && !strstr(text, "tool1"), "%s", text);
+	sv_expect(np.port, "POST", "/p/cp/api/printer/tool", "X-Api-Key: " KEY_CTL,
+		  "{\"command\":\"target\",\"targets\":{\"tool1\":150}}", 204);
+	wait_topic(&seen, "stratum/test-node/cp/temperatures", "\"target\":150", 10, text,
+		   sizeof(text));
+	ck_assert_msg(strstr(text, "\"tool1\":{"), "%s", text);
+	watch_stop(mq, &seen);
+	sv_stop(&np);
+	broker_stop(broker);
+}
+END_TEST
+
 void serve_mqtt_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("mqtt");
@@ -701,5 +750,6 @@ void serve_mqtt_tcases(Suite *s)
 	tcase_add_test(tc, test_mqtt_password);
 	tcase_add_test(tc, test_mqtt_downloads);
 	tcase_add_test(tc, test_mqtt_broker_example);
+	tcase_add_test(tc, test_mqtt_temperatures);
 	suite_add_tcase(s, tc);
 }

@@ -17,7 +17,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "fixtures.h"
+#include "meshio.h"
 #include "servetest.h"
+#include "st_clock.h"
 #include "testutil.h"
 
 /* Write the config with printers (lines of "[printer ...]" sections). */
@@ -345,4 +348,65 @@ const char *sv_str(const json_t *o, const char *key)
 
 	ck_assert_msg(s, "no string %s in %s", key, json_dumps(o, 0));
 	return s;
+}
+
+char *sv_cube_stl(size_t *len)
+{
+	const char *path = tu_path("cube.stl");
+	struct st_error err = {0};
+	struct mesh *m = fx_box(0, 0, 0, 10, 10, 5);
+	FILE *f;
+	char *buf;
+
+	ck_assert_int_eq(meshio_write_stl(path, m, MESHIO_STL_BINARY, &err), 0);
+	mesh_free(m);
+	f = fopen(path, "rb");
+	ck_assert(f);
+	buf = malloc(4096);
+	*len = fread(buf, 1, 4096, f);
+	fclose(f);
+	return buf;
+}
+
+/* Whether the server has closed fd (a read finds its end or a reset). */
+static bool closed_by_server(int fd)
+{
+	char buf[256];
+	ssize_t k;
+
+	while ((k = recv(fd, buf, sizeof(buf), MSG_DONTWAIT)) > 0)
+		;
+	return k == 0 || (k < 0 && errno != EAGAIN && errno != EWOULDBLOCK);
+}
+
+void sv_trickle(int port, const char *const head[2], double closed_at[2], double max_s)
+{
+	struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
+	int fd[2];
+	double t0;
+
+	inet_pton(AF_INET, "127.0.0.1", &sa.sin_addr);
+	for (int i = 0; i < 2; i++) {
+		fd[i] = socket(AF_INET, SOCK_STREAM, 0);
+		ck_assert(fd[i] >= 0);
+		ck_assert_msg(connect(fd[i], (struct sockaddr *)&sa, sizeof(sa)) == 0,
+			      "connect: %s", strerror(errno));
+		ck_assert(send(fd[i], head[i], strlen(head[i]), MSG_NOSIGNAL) ==
+			  (ssize_t)strlen(head[i]));
+		closed_at[i] = 0;
+	}
+	t0 = st_mono_s();
+	while (st_mono_s() - t0 < max_s && !(closed_at[0] && closed_at[1])) {
+		usleep(250000);
+		for (int i = 0; i < 2; i++) {
+			if (closed_at[i])
+				continue;
+			if (closed_by_server(fd[i]))
+				closed_at[i] = st_mono_s() - t0;
+			else
+				send(fd[i], i ? "x" : "X", 1, MSG_NOSIGNAL);
+		}
+	}
+	close(fd[0]);
+	close(fd[1]);
 }

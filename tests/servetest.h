@@ -71,6 +71,15 @@ void sv_upload(int port, const char *prefix, const char *key, const char *name,
 	       size_t name_len, const char *path, size_t path_len, const char *print,
 	       const void *data, size_t size, const char *extra_headers, bool send_body,
 	       struct resp *r);
+/*
+ * sv_trickle - the slow client (issue 20): send head[0], a request header
+ * not yet whole, and head[1], a header with the start of a body, on two
+ * connections to port, then one byte on each every 250 ms for up to max_s;
+ * closed_at[i] is when the server closed connection i (s), 0 if it did not.
+ */
+void sv_trickle(int port, const char *const head[2], double closed_at[2], double max_s);
+/* sv_cube_stl - a 10 x 10 x 5 mm binary STL box as bytes (malloc'd; free it). */
+char *sv_cube_stl(size_t *len);
 /* sv_upload_text - upload a G-code text as PrusaSlicer does. */
 void sv_upload_text(int port, const char *prefix, const char *key, const char *name,
 		    const char *gcode, const char *print, struct resp *r);

@@ -331,7 +331,7 @@ static const struct cfg_key node_keys[] = {
     TEXT(struct node_config, data_dir, NULL),
     WHOLE(struct node_config, slice_threads, KEY_INT, 0, 256),
 };
-#define FARM_KEYS 7
+#define FARM_KEYS 9
 static const struct cfg_key remote_keys[] = {
     {"key", KEY_SET, 0, 0, 0, 0, set_remote_key},
     TEXT(struct farm_remote, url, check_url),

@@ -27,6 +27,7 @@ struct farm {
 	bool loop_started; /* the linker's until it ends */
 	struct MHD_Daemon *httpd;
 	uint16_t port;
+	struct http_deadlines *deadlines; /* the header and body bounds (http_deadline.c) */
 	pthread_mutex_t mu; /* the fields below; libmosquitto's thread writes them */
 	pthread_cond_t cv;  /* wakes the linker to stop */
 	bool stop;	    /* farm_free began */

@@ -610,18 +610,8 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *u
 			      const char *method, const char *version, const char *upload,
 			      size_t *upload_size, void **con_cls)
 {
-	bool first = !*con_cls;
-	size_t piece = *upload_size;
-	enum MHD_Result ret = handle_request(cls, c, url, method, version, upload, upload_size,
-					     con_cls);
-
-	if (first && *con_cls)
-		http_deadline_body(c, 0);
-	else if (!first && piece)
-		http_deadline_body(c, piece);
-	else
-		http_deadline_answered(c);
-	return ret;
+	return http_deadline_handle(handle_request, cls, c, url, method, version, upload,
+				    upload_size, con_cls);
 }
 
 /* Free a request's state and log it once it is answered. */
@@ -687,7 +677,7 @@ static void connection_event(void *cls, struct MHD_Connection *c, void **socket_
 	struct node *n = cls;
 
 	if (code == MHD_CONNECTION_NOTIFY_STARTED) {
-		http_deadline_open(n, c, socket_context);
+		http_deadline_open(n->deadlines, c, socket_context);
 	} else if (code == MHD_CONNECTION_NOTIFY_CLOSED) {
 		http_deadline_close(socket_context);
 		atomic_fetch_sub(&n->http_connections, 1);
@@ -703,7 +693,7 @@ int node_http_start(struct node *n, struct st_error *err)
 		return st_error_set(err, ST_ERR_ARG, "listen address %s is not IPv4",
 				    n->cfg.listen_addr);
 	atomic_store(&n->http_connections, 0);
-	if (http_deadlines_start(n, err))
+	if (http_deadlines_start(&n->cfg, &n->deadlines, err))
 		return err->code;
 	n->httpd = MHD_start_daemon(MHD_USE_AUTO_INTERNAL_THREAD | MHD_ALLOW_UPGRADE,
 				    n->cfg.listen_port, admit, n,
@@ -719,7 +709,7 @@ int node_http_start(struct node *n, struct st_error *err)
 		int rc = st_error_set(err, ST_ERR_IO, "cannot listen on %s:%u: %s",
 				      n->cfg.listen_addr, n->cfg.listen_port, strerror(errno));
 
-		http_deadlines_stop(n);
+		http_deadlines_stop(&n->deadlines);
 		return rc;
 	}
 	info = MHD_get_daemon_info(n->httpd, MHD_DAEMON_INFO_BIND_PORT);
@@ -733,5 +723,5 @@ void node_http_stop(struct node *n)
 	if (n->httpd)
 		MHD_stop_daemon(n->httpd);
 	n->httpd = NULL;
-	http_deadlines_stop(n);
+	http_deadlines_stop(&n->deadlines);
 }

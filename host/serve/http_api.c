@@ -217,10 +217,10 @@ json_t *node_printer_json(struct node *n, struct node_printer *p, int queue_limi
 		node_gcode_estimate(p, v.job.gcode, v.filepos, &est);
 		left = time_left(&v, &est, &origin);
 	}
-	o = json_pack("{s:s,s:s,s:s,s:o,s:{s:o,s:o},s:{s:o,s:I,s:I,s:o},s:o,s:b}", "name",
+	/* temperature as /api/printer has it (MQTT and the farm view show it) */
+	o = json_pack("{s:s,s:s,s:s,s:o,s:o,s:{s:o,s:I,s:I,s:o},s:o,s:b}", "name",
 		      p->cfg->name, "prefix", p->cfg->prefix, "state", http_state_text(&v), "link",
-		      link_json(p, &v), "temperature", "tool0", http_temp_json(v.tool), "bed",
-		      http_temp_json(v.bed), "progress", "completion", completion_json(&v), "filepos",
+		      link_json(p, &v), "temperature", http_temps_json(p, &v, true, true), "progress", "completion", completion_json(&v), "filepos",
 		      (json_int_t)(v.has_job ? v.filepos : 0), "size",
 		      (json_int_t)(v.has_job ? v.size : 0), "printTimeLeft",
 		      left >= 0 ? json_integer((json_int_t)left) : json_null(), "job",

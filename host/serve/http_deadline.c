@@ -107,15 +107,16 @@ static void *watchdog(void *arg)
 	return NULL;
 }
 
-int http_deadlines_start(struct node *n, struct st_error *err)
+int http_deadlines_start(const struct node_config *cfg, struct http_deadlines **out,
+			 struct st_error *err)
 {
 	struct http_deadlines *d = calloc(1, sizeof(*d));
 	pthread_condattr_t ca;
 
 	if (!d)
 		return st_error_set(err, ST_ERR_NOMEM, "out of memory");
-	d->header_ms = (int64_t)n->cfg.header_timeout_s * 1000;
-	d->min_bytes = (uint64_t)n->cfg.min_body_rate * n->cfg.header_timeout_s;
+	d->header_ms = (int64_t)cfg->header_timeout_s * 1000;
+	d->min_bytes = (uint64_t)cfg->min_body_rate * cfg->header_timeout_s;
 	pthread_mutex_init(&d->lock, NULL);
 	pthread_condattr_init(&ca);
 	pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
@@ -128,13 +129,13 @@ int http_deadlines_start(struct node *n, struct st_error *err)
 		return st_error_set(err, ST_ERR_INTERNAL, "cannot start a thread: %s",
 				    strerror(errno));
 	}
-	n->deadlines = d;
+	*out = d;
 	return 0;
 }
 
-void http_deadlines_stop(struct node *n)
+void http_deadlines_stop(struct http_deadlines **dp)
 {
-	struct http_deadlines *d = n->deadlines;
+	struct http_deadlines *d = *dp;
 
 	if (!d)
 		return;
@@ -147,12 +148,12 @@ void http_deadlines_stop(struct node *n)
 	pthread_cond_destroy(&d->wake);
 	pthread_mutex_destroy(&d->lock);
 	free(d);
-	n->deadlines = NULL;
+	*dp = NULL;
 }
 
-void http_deadline_open(struct node *n, struct MHD_Connection *c, void **socket_context)
+void http_deadline_open(struct http_deadlines *d, struct MHD_Connection *c,
+			void **socket_context)
 {
-	struct http_deadlines *d = n->deadlines;
 	const union MHD_ConnectionInfo *fd = MHD_get_connection_info(c,
 								      MHD_CONNECTION_INFO_CONNECTION_FD);
 	struct http_conn *k = calloc(1, sizeof(*k));
@@ -213,14 +214,22 @@ static void set_phase(struct MHD_Connection *c, enum phase phase, size_t bytes)
 	pthread_mutex_unlock(&k->d->lock);
 }
 
-void http_deadline_body(struct MHD_Connection *c, size_t bytes)
+enum MHD_Result http_deadline_handle(MHD_AccessHandlerCallback handler, void *cls,
+				     struct MHD_Connection *c, const char *url, const char *method,
+				     const char *version, const char *upload, size_t *upload_size,
+				     void **con_cls)
 {
-	set_phase(c, PHASE_BODY, bytes);
-}
+	bool first = !*con_cls;
+	size_t piece = *upload_size;
+	enum MHD_Result ret = handler(cls, c, url, method, version, upload, upload_size, con_cls);
 
-void http_deadline_answered(struct MHD_Connection *c)
-{
-	set_phase(c, PHASE_ANSWER, 0);
+	if (first && *con_cls)
+		set_phase(c, PHASE_BODY, 0); /* the header came */
+	else if (!first && piece)
+		set_phase(c, PHASE_BODY, piece);
+	else
+		set_phase(c, PHASE_ANSWER, 0);
+	return ret;
 }
 
 void http_deadline_next(struct MHD_Connection *c)

@@ -217,17 +217,26 @@ void node_push_session(const char *secret, char out[NODE_PUSH_SESSION_LEN + 1]);
 /*
  * http_deadline.c - the bounds on a slow client (docs/serve.md, "Limits"),
  * which libmicrohttpd's inactivity time-out does not give: the header whole
- * within header_timeout_s, the body at min_body_rate.  http.c tells it each
- * connection's start and close and where its request is.
+ * within cfg's header_timeout_s, the body at min_body_rate.  The node's
+ * server (http.c) and the farm view's (farm_http.c) tell it each
+ * connection's start and close (their MHD_OPTION_NOTIFY_CONNECTION) and
+ * where its request is.
  */
-int http_deadlines_start(struct node *n, struct st_error *err);
-void http_deadlines_stop(struct node *n); /* after the HTTP daemon stopped */
-void http_deadline_open(struct node *n, struct MHD_Connection *c, void **socket_context);
+struct http_deadlines;
+int http_deadlines_start(const struct node_config *cfg, struct http_deadlines **out,
+			 struct st_error *err);
+void http_deadlines_stop(struct http_deadlines **d); /* after the HTTP daemon stopped */
+void http_deadline_open(struct http_deadlines *d, struct MHD_Connection *c,
+			void **socket_context);
 void http_deadline_close(void **socket_context);
-/* The header is whole (bytes 0), or bytes of the body came. */
-void http_deadline_body(struct MHD_Connection *c, size_t bytes);
-/* The request is read: answering, or upgraded (not bounded here). */
-void http_deadline_answered(struct MHD_Connection *c);
+/* Call handler (a server's request handler) and note where the request is:
+ * its header came (the first call, which keeps state in *con_cls), a piece
+ * of its body came, or it is read and being answered (the last call, or a
+ * first one that answered at once; an upgrade is not bounded here). */
+enum MHD_Result http_deadline_handle(MHD_AccessHandlerCallback handler, void *cls,
+				     struct MHD_Connection *c, const char *url, const char *method,
+				     const char *version, const char *upload, size_t *upload_size,
+				     void **con_cls);
 /* The request is done: a kept-alive connection waits for the next header. */
 void http_deadline_next(struct MHD_Connection *c);
 

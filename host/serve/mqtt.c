@@ -5,7 +5,8 @@
  *   status                      "online", or "offline" (the last will)
  *   info                        {"url", "printers": [{"name", "profile", "prefix"}]}
  *   PRINTER/status              OctoPrint's state text
- *   PRINTER/temperatures        {"tool0":{"actual","target"},"bed":{...}}
+ *   PRINTER/temperatures        as /api/printer's temperature: {"tool0":{"actual",
+ *                               "target","offset"},"tool1" (second extruder),"bed"}
  *   PRINTER/progress            {"completion","filepos","size"}
  *   PRINTER/job                 the active job as /api/stratum/queue has it, or null
  *   PRINTER/queue               the queued jobs in order, with their positions

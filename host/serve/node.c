@@ -76,6 +76,7 @@ static int setup_printer(struct node *n, size_t i, struct st_error *err)
 	pthread_mutex_init(&p->ctl.mu, NULL);
 	p->ctl.tool1_actual = p->ctl.tool1_target = NAN; /* until a driver reads it */
 	pthread_mutex_init(&p->gc_mu, NULL);
+	pthread_mutex_init(&p->slice_mu, NULL);
 	p->want_connect = true; /* OctoPrint's autoconnect */
 	rc = profile_find(p->cfg->profile, &p->prof, &e);
 	if (rc)
@@ -284,6 +285,7 @@ void node_free(struct node *n)
 		pthread_cond_destroy(&p->cv);
 		pthread_mutex_destroy(&p->ctl.mu);
 		pthread_mutex_destroy(&p->gc_mu);
+		pthread_mutex_destroy(&p->slice_mu);
 		node_gcode_info_free(&p->gc);
 	}
 	node_queue_close(n->q);

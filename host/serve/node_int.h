@@ -179,6 +179,36 @@ struct node_temp_sample {
 #define NODE_CMD_QUEUE 16 /* printer commands waiting for an idle printer */
 #define NODE_CMD_MAX 257 /* one command line with its NUL (serial/gcode.h GCODE_LINE_MAX) */
 
+/*
+ * The model a printer's worker slices, as the push API reports it
+ * (slicingProgress and the Slicing* events, push.c).  The worker publishes
+ * its progress at start, at most every NODE_SLICING_EVERY_MS, and at the
+ * end; each client sends what it has not seen.  Under node_printer.slice_mu.
+ */
+#define NODE_SLICING_EVERY_MS 500
+
+enum node_slicing_state {
+	NODE_SLICING_NONE, /* nothing sliced since the node started */
+	NODE_SLICING_RUNNING,
+	NODE_SLICING_DONE,
+	NODE_SLICING_FAILED,
+};
+
+struct node_slicing {
+	unsigned gen;	/* bumped when a model starts being sliced */
+	unsigned seq;	/* bumped each time percent or state is published */
+	enum node_slicing_state state;
+	char source[NODE_FILE_NAME_MAX + 1]; /* the model, as the printer's files name it */
+	char dest[NODE_FILE_NAME_MAX + 1];   /* the G-code it becomes */
+	double percent;			     /* published, 0..100 */
+	double elapsed_s;		     /* DONE and FAILED: the time it took */
+	char reason[256];		     /* FAILED: why */
+	/* the worker's own: the whole job's fraction so far, and when it
+	 * started and last published (monotonic ms) */
+	double fraction;
+	int64_t t0_ms, published_ms;
+};
+
 /* A printer and its worker. */
 struct node_printer {
 	struct node *node;
@@ -211,6 +241,9 @@ struct node_printer {
 
 	pthread_mutex_t gc_mu;	 /* gc, the last G-code file read (gcinfo.c) */
 	struct node_gcode_info gc;
+
+	pthread_mutex_t slice_mu; /* slicing (worker.c writes, push.c reads) */
+	struct node_slicing slicing;
 };
 
 /*

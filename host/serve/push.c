@@ -6,7 +6,10 @@
  * or /sockjs/websocket (raw: one message per frame), gets "connected",
  * sends {"auth": "NAME:SESSION"} with the session of its passive login,
  * and then gets "history" once, "current" every PUSH_RATE_MS as OctoPrint
- * sends them, and "event" messages for the changes a tick sees.  One thread per client, at most PUSH_MAX.
+ * sends them, "event" messages for the changes a tick sees, and
+ * slicingProgress with the Slicing* events while the printer's worker
+ * slices a model (at most every NODE_SLICING_EVERY_MS, and at start and
+ * end).  One thread per client, at most PUSH_MAX.
  */
 #include <errno.h>
 #include <fcntl.h>
@@ -48,6 +51,7 @@ struct push_conn {
 	int64_t job; /* printing or paused, 0 none */
 	int64_t temps_sent; /* time of the newest temperature sample sent */
 	unsigned files_seen; /* the printer's files_version at the last tick */
+	unsigned slicing_gen, slicing_seq; /* the printer's slicing last reported */
 	char *extra; /* bytes MHD read past the request, read first */
 	size_t extra_len, extra_off;
 	wslay_event_context_ptr ctx;
@@ -179,6 +183,52 @@ static void push_events(struct push_conn *pc, const struct http_view *v)
 	pc->connected = v->connected;
 	pc->job = job;
 	pc->paused = paused;
+}
+
+/* A Slicing* event of s: OctoPrint's payload, with extra (stolen). */
+static void push_slicing_event(struct push_conn *pc, const char *type,
+			       const struct node_slicing *s, json_t *extra)
+{
+	json_t *payload = json_pack("{s:s,s:s,s:s,s:s,s:s}", "slicer", "stratum", "stl",
+				    s->source, "stl_location", "local", "gcode", s->dest,
+				    "gcode_location", "local");
+
+	json_object_update(payload, extra);
+	json_decref(extra);
+	push_msg(pc, json_pack("{s:{s:s,s:o}}", "event", "type", type, "payload", payload));
+}
+
+/* What the printer's worker published of the model it slices since the
+ * last look (node_int.h, struct node_slicing): SlicingStarted for a new
+ * one, slicingProgress, then SlicingDone or SlicingFailed.  history: the
+ * client has just authenticated, and only what comes next is news to it. */
+static void push_slicing(struct push_conn *pc, bool history)
+{
+	struct node_slicing s;
+
+	pthread_mutex_lock(&pc->p->slice_mu);
+	s = pc->p->slicing;
+	pthread_mutex_unlock(&pc->p->slice_mu);
+	if (history || s.seq == pc->slicing_seq) {
+		pc->slicing_gen = s.gen;
+		pc->slicing_seq = s.seq;
+		return;
+	}
+	if (s.gen != pc->slicing_gen)
+		push_slicing_event(pc, "SlicingStarted", &s,
+				   json_pack("{s:b}", "progressAvailable", 1));
+	pc->slicing_gen = s.gen;
+	pc->slicing_seq = s.seq;
+	if (s.state != NODE_SLICING_FAILED)
+		push_msg(pc, json_pack("{s:{s:s,s:s,s:s,s:s,s:s,s:f}}", "slicingProgress",
+				       "slicer", "stratum", "source_location", "local",
+				       "source_path", s.source, "dest_location", "local",
+				       "dest_path", s.dest, "progress", s.percent));
+	if (s.state == NODE_SLICING_DONE)
+		push_slicing_event(pc, "SlicingDone", &s, json_pack("{s:f}", "time", s.elapsed_s));
+	else if (s.state == NODE_SLICING_FAILED)
+		push_slicing_event(pc, "SlicingFailed", &s,
+				   json_pack("{s:s}", "reason", s.reason));
 }
 
 /* The "current" payload: temps the samples since the last message (the
@@ -345,6 +395,7 @@ static void *push_main(void *arg)
 				pc->history_due = false;
 				push_msg(pc, json_pack("{s:o}", "history", current_json(pc, true, &v)));
 				push_events(pc, &v);
+				push_slicing(pc, true);
 				next_current = now + PUSH_RATE_MS;
 			} else if (pc->authed && now >= next_current) {
 				json_t *cur = current_json(pc, false, &v);
@@ -353,6 +404,8 @@ static void *push_main(void *arg)
 				push_msg(pc, json_pack("{s:o}", "current", cur));
 				next_current = now + pc->rate_ms;
 			}
+			if (pc->authed)
+				push_slicing(pc, false);
 			if (now >= next_beat) {
 				push_control(pc, "h");
 				next_beat = now + PUSH_HEARTBEAT_MS;

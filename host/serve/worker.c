@@ -12,6 +12,7 @@
 #include "node_int.h"
 #include "profile_slicer.h"
 #include "slicejob.h"
+#include "st_clock.h"
 
 #define WORKER_IDLE_MS 1000 /* idle wake-up, for requests that did not signal */
 
@@ -20,6 +21,87 @@ void node_printer_wake(struct node_printer *p)
 	pthread_mutex_lock(&p->mu);
 	pthread_cond_signal(&p->cv);
 	pthread_mutex_unlock(&p->mu);
+}
+
+/* Where the slicer's phases (slicer_config.progress) lie in the whole job,
+ * as slicingProgress reports it; the repair's phases come before, in
+ * [0, SLICING_REPAIR_SHARE). */
+#define SLICING_REPAIR_SHARE 0.30
+static const struct {
+	const char *stage; /* the phase's name, up to its counts */
+	double from, to;
+} slicing_phases[] = {
+	{"cutting the model into layers", 0.30, 0.35},
+	{"slicing layer", 0.35, 0.90},
+	{"writing the G-code", 0.90, 1.00},
+};
+
+/* Publish s's fraction for the push API's clients; slice_mu held. */
+static void slicing_publish(struct node_slicing *s, int64_t now)
+{
+	s->percent = 100.0 * s->fraction;
+	s->published_ms = now;
+	s->seq++;
+}
+
+/* Progress callback of the repair and the slicer (any thread): the job's
+ * fraction never goes back, and is published at most every
+ * NODE_SLICING_EVERY_MS. */
+static void slicing_progress(void *ctx, const char *stage, double done)
+{
+	struct node_printer *p = ctx;
+	struct node_slicing *s = &p->slicing;
+	double from = 0.0, to = SLICING_REPAIR_SHARE, f;
+	int64_t now = st_mono_ms();
+
+	for (size_t i = 0; i < sizeof(slicing_phases) / sizeof(slicing_phases[0]); i++)
+		if (!strncmp(stage, slicing_phases[i].stage, strlen(slicing_phases[i].stage))) {
+			from = slicing_phases[i].from;
+			to = slicing_phases[i].to;
+		}
+	f = from + (to - from) * (done < 0.0 ? 0.0 : done > 1.0 ? 1.0 : done);
+	pthread_mutex_lock(&p->slice_mu);
+	if (f > s->fraction && f < 1.0) /* 100 % is said by slicing_end */
+		s->fraction = f;
+	if (now - s->published_ms >= NODE_SLICING_EVERY_MS)
+		slicing_publish(s, now);
+	pthread_mutex_unlock(&p->slice_mu);
+}
+
+/* Job j's model starts being sliced: slicingProgress at 0. */
+static void slicing_begin(struct node_printer *p, const struct node_job *j)
+{
+	struct node_slicing *s = &p->slicing;
+	const char *dot = strrchr(j->name, '.');
+	int stem = dot ? (int)(dot - j->name) : (int)strlen(j->name);
+
+	pthread_mutex_lock(&p->slice_mu);
+	s->gen++;
+	s->state = NODE_SLICING_RUNNING;
+	snprintf(s->source, sizeof(s->source), "%s", j->name);
+	/* OctoPrint's default destination: the model's name, .gcode */
+	snprintf(s->dest, sizeof(s->dest), "%.*s.gcode", stem < 240 ? stem : 240, j->name);
+	s->fraction = 0.0;
+	s->reason[0] = '\0';
+	s->t0_ms = st_mono_ms();
+	slicing_publish(s, s->t0_ms);
+	pthread_mutex_unlock(&p->slice_mu);
+}
+
+/* The slicing ended: 100 % and done, or failed with why. */
+static void slicing_end(struct node_printer *p, bool ok, const char *why)
+{
+	struct node_slicing *s = &p->slicing;
+	int64_t now = st_mono_ms();
+
+	pthread_mutex_lock(&p->slice_mu);
+	s->state = ok ? NODE_SLICING_DONE : NODE_SLICING_FAILED;
+	if (ok)
+		s->fraction = 1.0;
+	snprintf(s->reason, sizeof(s->reason), "%s", ok ? "" : why);
+	s->elapsed_s = (double)(now - s->t0_ms) / 1000.0;
+	slicing_publish(s, now);
+	pthread_mutex_unlock(&p->slice_mu);
 }
 
 /* Slice job j's model into out as `stratum slice` does (slicejob.h), with
@@ -39,6 +121,8 @@ static int slice_model(struct node_printer *p, const struct node_job *j, const c
 	/* cfg points into the profile (start G-code ...): it lives to the end */
 	rc = profile_slicer_config(job_prof ? job_prof : p->prof, &cfg, err);
 	cfg.threads = p->node->cfg.slice_threads;
+	cfg.progress = slicing_progress;
+	cfg.progress_ctx = p;
 	if (!rc)
 		rc = slicer_config_check(&cfg, err);
 	if (!rc) {
@@ -75,7 +159,9 @@ static void run_slicing(struct node_printer *p, struct node_job *j)
 	node_log("info", p->cfg->name, j->id, "slicing %s with profile %s%s%.1000s", j->name,
 		 p->prof->id, j->settings[0] ? " and the job's settings " : "", j->settings);
 	pthread_mutex_unlock(&p->mu);
+	slicing_begin(p, j);
 	rc = slice_model(p, j, out, &err);
+	slicing_end(p, !rc, err.msg);
 	pthread_mutex_lock(&p->mu);
 	p->job_id = 0;
 	/* The API may have cancelled it meanwhile. */
