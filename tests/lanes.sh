@@ -1,36 +1,31 @@
 #!/bin/sh
-# lanes.sh CHECK_ALL STRATUM "SUITE ..." ["SUITE ..."] - run the Check suites
-# of CHECK_ALL in two lanes at once (make test, test-asan, test-sample): the
-# suites named, and those of the second list or, without one, every other
-# suite (tests/check_main.c).  Most of the suites' time is spent
+# lanes.sh CHECK_ALL STRATUM "SUITE ..." - run the Check suites of CHECK_ALL
+# in two lanes at once (make test, make test-asan): the suites named, and
+# every other one (tests/check_main.c).  Most of the suites' time is spent
 # waiting on simulated printers and child processes rather than on a core,
 # so two lanes on two cores take little more than the longer one.  Each
 # lane's output is shown whole, one after the other, then one Check summary
 # line for both, and last the lines of the checks that failed (CI shows only
 # the tail of the output); the exit status is 1 when either lane failed.
 set -u
-bin=$1 stratum=$2 lane=$3 lane2=${4-}
+bin=$1 stratum=$2 lane=$3
 dir=$(dirname "$bin")
-# run_lane LOG VAR SUITES: the suites VAR=SUITES selects, output in LOG,
-# then a line "lane: S s" (its wall time) and the exit status in LOG.rc
+# run_lane LOG VAR: the suites VAR=$lane selects, output in LOG, then a
+# line "lane: S s" (its wall time) and the exit status in LOG.rc
 run_lane() {
 	t0=$(date +%s)
-	env STRATUM_BIN="$stratum" "$2=$3" "$bin" >"$1" 2>&1
+	env STRATUM_BIN="$stratum" "$2=$lane" "$bin" >"$1" 2>&1
 	echo $? >"$1.rc"
 	echo "lane: $(($(date +%s) - t0)) s" >>"$1"
 }
-run_lane "$dir/check-lane1.log" STRATUM_CHECK_ONLY "$lane" &
+run_lane "$dir/check-lane1.log" STRATUM_CHECK_ONLY &
 p1=$!
-if [ -n "$lane2" ]; then
-	run_lane "$dir/check-lane2.log" STRATUM_CHECK_ONLY "$lane2" &
-else
-	run_lane "$dir/check-lane2.log" STRATUM_CHECK_EXCEPT "$lane" &
-fi
+run_lane "$dir/check-lane2.log" STRATUM_CHECK_EXCEPT &
 p2=$!
 wait $p1 $p2
 r1=$(cat "$dir/check-lane1.log.rc")
 r2=$(cat "$dir/check-lane2.log.rc")
-echo "lanes: the first runs $lane${lane2:+, the second $lane2}"
+echo "lanes: the first runs $lane"
 cat "$dir/check-lane1.log" "$dir/check-lane2.log"
 awk '/^[0-9]+%: Checks: / { gsub(",", ""); c += $3; f += $5; e += $7; n++ }
      END { if (n != 2) { print "lanes: a lane ended without its summary line"; exit 1 }
