@@ -163,16 +163,12 @@ check:
 
 # The suites run in two lanes at once (tests/lanes.sh): CHECK_LANE, the
 # suites that wait longest on simulated printers, and every other suite.
-# Balanced by the per-suite times of a plain run (send 92 s, print 82 s,
-# marlin 59 s, s3g 39 s, serve 39 s, printer 29 s, the rest under 15 s each;
-# in two lanes 210 s and 187 s).  Under ASan the slicing and repair suites
-# cost several times more (slicecli 32 s, repair 29 s), so serve and
-# printer move to the first lane there (it was 169 s against 438 s), and
-# print and octoapi too since the second lane took in the support,
-# thin-wall, adaptive, planar, analyze and compare suites (2026-12-07:
-# 346 s against 615 s under ASan; plain 309 s against 278 s), and slicecli
-# (63 s under ASan) and compare (21 s) once the farm, refine and bead-width
-# work came in (488 s against 692 s).
+# Plain (make test) the waits dominate (send 92 s, print 82 s, marlin 59 s,
+# s3g 39 s, serve 39 s, printer 29 s, the rest under 15 s each).  Under ASan
+# the slicing, repair and measuring suites cost several times more, so the
+# first lane also takes serve, printer, print, octoapi, slicecli (63 s) and
+# compare (21 s): 607 s against 593 s at 642d2b2 (before: 488 s against
+# 692 s).
 CHECK_LANE := send marlin s3g corpus
 CHECK_LANE_ASAN := $(CHECK_LANE) serve printer print octoapi slicecli compare
 test: layers $(BUILD)/check_all $(BUILD)/stratum

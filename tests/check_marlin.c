@@ -1049,7 +1049,7 @@ END_TEST
 /*
  * The reply is (line, len) with no NUL after it (issue 17, found by
  * fuzzing): the parser once ran strstr past len.  The line sits in a heap
- * block of exactly len bytes, so ASan (make check's first pass) sees any read
+ * block of exactly len bytes, so ASan (make check's sanitizer pass) sees any read
  * beyond; a count past len is not the line's.
  */
 START_TEST(parse_m115_not_terminated)

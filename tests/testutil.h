@@ -100,10 +100,11 @@ int tu_sh(char *out, size_t cap, const char *cmd_fmt, ...) __attribute__((format
 const char *tu_bin(void);
 
 /*
- * TU_SANITIZED - 1 in make check's AddressSanitizer pass (make test-asan),
- * 0 in the plain pass.  A long end-to-end case that the plain pass runs at
- * full size runs there on a shorter input: the same code under the
- * sanitizers, without paying the full run twice (make check's time budget).
+ * TU_SANITIZED - 1 in the AddressSanitizer build (make test-asan, which
+ * make check runs for every suite), 0 in the plain build (make test).  A
+ * long end-to-end case that the plain build runs at full size runs under
+ * the sanitizers on a shorter input: the same code, in make check's time
+ * budget; the full sizes are in make test and make bench.
  */
 #ifdef __SANITIZE_ADDRESS__
 #define TU_SANITIZED 1
