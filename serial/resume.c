@@ -192,6 +192,19 @@ size_t resume_preamble_x3g(const struct resume_state *rs, char out[][RESUME_LINE
 	/* G92 E in relative mode would be one more set-position of all axes */
 	return resume_finish(rs, !rs->rel_e, out, n, cap);
 }
+/* The way back after an operator's commands in a hold. */
+size_t resume_return(const struct resume_state *rs, bool set_e, char out[][RESUME_LINE_MAX + 1],
+		     size_t cap)
+{
+	size_t n = 0;
+
+	ADD("G91");
+	ADD("G1 Z2 F600");
+	ADD("G90");
+	if (rs->moved)
+		ADD("G1 X%.3f Y%.3f F6000", rs->x, rs->y);
+	return resume_finish(rs, set_e, out, n, cap);
+}
 #undef ADD
 
 int resume_x3g_text(const char *path, int64_t offset, int64_t saved,
