@@ -227,6 +227,7 @@ struct node_printer {
 	char link_desc[128];  /* what is connected (firmware; simulated or not) */
 	int64_t job_id;	      /* the job the worker is on, 0 when idle */
 	bool job_printing;    /* job_id is at the print step */
+	bool job_x3g;	      /* and prints an X3G file: no line goes in between */
 	char cmds[NODE_CMD_QUEUE][NODE_CMD_MAX];
 	int ncmds;
 
