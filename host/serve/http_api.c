@@ -132,10 +132,15 @@ json_t *http_temp_history(struct node_printer *p, int limit, bool tools, bool be
 		if (tools) {
 			json_object_set_new(o, "tool0", json_pack("{s:f,s:f}", "actual", t->tool[0],
 								  "target", t->tool[1]));
+			/* the second extruder's as the driver reads it (Sailfish),
+			 * others unknown */
 			for (int k = 1; k < p->prof->extruder_count; k++) {
+				bool known = k == 1 && !isnan(t->tool1[0]) && !isnan(t->tool1[1]);
+
 				snprintf(name, sizeof(name), "tool%d", k);
-				json_object_set_new(o, name, json_pack("{s:n,s:n}", "actual",
-								       "target"));
+				json_object_set_new(o, name, known ? json_pack("{s:f,s:f}", "actual",
+								t->tool1[0], "target", t->tool1[1])
+							   : json_pack("{s:n,s:n}", "actual", "target"));
 			}
 		}
 		if (bed)
