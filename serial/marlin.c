@@ -66,7 +66,7 @@ int marlin_new(struct xport *x, const struct marlin_options *opts, struct marlin
 		return st_error_set(err, ST_ERR_ARG, "Marlin driver: an option is out of range");
 	}
 	m->hist = calloc(MARLIN_HIST, sizeof(*m->hist));
-	m->pend = calloc(MARLIN_QUEUE, sizeof(*m->pend));
+	m->pend = calloc(MARLIN_RING, sizeof(*m->pend));
 	if (!m->hist || !m->pend) {
 		free(m->hist);
 		free(m->pend);
@@ -120,6 +120,11 @@ size_t marlin_pending(const struct marlin *m)
 bool marlin_can_submit(const struct marlin *m)
 {
 	return m->pend_count < MARLIN_QUEUE;
+}
+
+size_t marlin_next_room(const struct marlin *m)
+{
+	return MARLIN_NEXT - m->next_count;
 }
 
 void marlin_request_pause(struct marlin *m)
@@ -217,12 +222,13 @@ static bool marlin_next_cmd(struct marlin *m, struct marlin_pend *out, bool take
 			memmove(m->prio, m->prio + 1, --m->prio_count * sizeof(m->prio[0]));
 		return true;
 	}
-	if (!m->pend_count || m->st.paused)
+	if (!m->pend_count || (m->st.paused && !m->pend[m->pend_head].next))
 		return false;
 	*out = m->pend[m->pend_head];
 	if (take) {
-		m->pend_head = (m->pend_head + 1) % MARLIN_QUEUE;
+		m->pend_head = (m->pend_head + 1) % MARLIN_RING;
 		m->pend_count--;
+		m->next_count -= out->next;
 	}
 	return true;
 }
@@ -417,7 +423,7 @@ static int marlin_handle(struct marlin *m, const char *line, size_t len, double 
 			m->st.paused = false;
 		} else if (!strcmp(r.action, "cancel")) {
 			marlin_where(m, where, sizeof(where));
-			m->pend_count = 0;
+			m->pend_count = m->next_count = 0;
 			return marlin_fail(m, MARLIN_FAIL_PRINTER_CANCEL, err,
 					   "the printer cancelled the job (//action:cancel); %s", where);
 		}
@@ -516,14 +522,21 @@ static int submit(struct marlin *m, const char *cmd, uint64_t src_line, long lay
 				    cmd ? cmd : "", len > 40 ? "..." : "", len, MARLIN_CMD_MAX);
 	if (gcode_parse(cmd, len, 0, &g, err))
 		return ST_ERR_ARG;
-	if (!marlin_can_submit(m))
+	if (first ? !marlin_next_room(m) : !marlin_can_submit(m))
 		return 0;
-	if (first)
-		m->pend_head = (m->pend_head + MARLIN_QUEUE - 1) % MARLIN_QUEUE;
-	struct marlin_pend *p = &m->pend[first ? m->pend_head
-					       : (m->pend_head + m->pend_count) % MARLIN_QUEUE];
+	size_t slot = (m->pend_head + m->pend_count) % MARLIN_RING;
+	if (first) {
+		/* after the earlier next lines not yet written, in their order */
+		m->pend_head = (m->pend_head + MARLIN_RING - 1) % MARLIN_RING;
+		for (size_t i = 0; i < m->next_count; i++)
+			m->pend[(m->pend_head + i) % MARLIN_RING] =
+				m->pend[(m->pend_head + i + 1) % MARLIN_RING];
+		slot = (m->pend_head + m->next_count++) % MARLIN_RING;
+	}
+	struct marlin_pend *p = &m->pend[slot];
 	memcpy(p->cmd, cmd, len + 1);
 	p->job = true;
+	p->next = first;
 	p->blocking = gcode_is_blocking(g.kind);
 	p->heat_wait = g.kind == GCODE_KIND_TEMP_WAIT || g.kind == GCODE_KIND_USER_WAIT;
 	p->src = src_line;
@@ -667,7 +680,7 @@ int marlin_safe_stop(struct marlin *m, int timeout_ms, struct st_error *err)
 	if (m->dead)
 		return marlin_failed_err(m, err);
 	m->stopping = true;
-	m->pend_count = 0;
+	m->pend_count = m->next_count = 0;
 	m->st.paused = false;
 	m->broken_n = 0;
 	if (marlin_break_wait(m, err) ||

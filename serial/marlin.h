@@ -164,11 +164,16 @@ int marlin_submit(struct marlin *m, const char *cmd, uint64_t src_line, long lay
 
 /*
  * marlin_submit_next - marlin_submit of a command that is not the job's
- * (src 0), ahead of every submitted command not yet written: the next
- * numbered line.  An operator's command during a print goes in there,
+ * (src 0), ahead of every submitted job command not yet written (after
+ * earlier such commands, in order): the next numbered line, written even
+ * while paused.  An operator's command during a print goes in there,
  * between two job lines, instead of after the queue's MARLIN_QUEUE.
+ * Returns 0 when marlin_next_room is 0.
  */
 int marlin_submit_next(struct marlin *m, const char *cmd, struct st_error *err);
+
+/* marlin_next_room - how many more marlin_submit_next takes now. */
+size_t marlin_next_room(const struct marlin *m);
 
 /*
  * marlin_step - write what the window allows, then wait at most timeout_ms

@@ -25,6 +25,8 @@
 
 #define MARLIN_HIST 1024	/* written lines kept for Resend (power of two) */
 #define MARLIN_QUEUE 256	/* submitted commands waiting to be written */
+#define MARLIN_NEXT 32		/* marlin_submit_next's lines waiting, beyond the queue */
+#define MARLIN_RING (MARLIN_QUEUE + MARLIN_NEXT) /* the pend ring holds both */
 #define MARLIN_MAX_INFLIGHT 512 /* lines in flight, whatever the buffers say */
 #define MARLIN_PRIO 8		/* emergency/stop commands ahead of the queue */
 #define MARLIN_PHANTOMS 8	/* unnumbered emergency lines awaiting their ok */
@@ -75,6 +77,7 @@ struct marlin_phantom {
 struct marlin_pend {
 	char cmd[MARLIN_CMD_MAX + 1];
 	bool job, blocking, heat_wait;
+	bool next;	/* marlin_submit_next's: written even while paused */
 	uint64_t src;
 	long layer;
 	double z;
@@ -98,6 +101,7 @@ struct marlin {
 
 	struct marlin_pend *pend;
 	size_t pend_head, pend_count;
+	size_t next_count;	/* of pend, marlin_submit_next's lines, at its head */
 	struct marlin_pend prio[MARLIN_PRIO];
 	size_t prio_count;
 

@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gcode.h"
 #include "xport.h"
 
 #define PRINTER_SIM_BAUD_MAX 20000000.0 /* sped-up simulated link, bits/s */
@@ -141,4 +142,40 @@ void printer_describe(struct printer *p, char *out, size_t cap)
 bool printer_can_resume(const struct printer_ops *ops)
 {
 	return ops->can_resume;
+}
+
+void printer_temp_offset(const struct printer_job *job, struct gcode_line *g, bool m109_bed,
+			 size_t text_max)
+{
+	char text[GCODE_LINE_MAX + 1];
+	double s, t = 0, delta, set;
+	bool bed = g->number == 140 || g->number == 190 || (g->number == 109 && m109_bed);
+	size_t len;
+	int n;
+
+	if (!job->temp_offset || g->letter != 'M' ||
+	    (g->number != 104 && g->number != 109 && g->number != 140 && g->number != 190) ||
+	    !gcode_word_value(g, 'S', &s) || s <= 0)
+		return;
+	gcode_word_value(g, 'T', &t);
+	delta = job->temp_offset(job->ctx, bed ? PRINTER_HEATER_BED : (int)t);
+	if (delta == 0 || !isfinite(delta))
+		return;
+	set = s + delta > 0 ? s + delta : 0;
+	len = (size_t)snprintf(text, sizeof(text), "M%d", g->number);
+	for (size_t i = 0; i < g->nwords && len < sizeof(text); i++) {
+		const struct gcode_word *w = &g->words[i];
+
+		n = !w->has_value ? snprintf(text + len, sizeof(text) - len, " %c", w->letter)
+		    : snprintf(text + len, sizeof(text) - len, " %c%.10g", w->letter,
+			       w->letter == 'S' ? set : w->value);
+		len += (size_t)n;
+	}
+	if (len >= sizeof(text) || len > text_max)
+		return;
+	memcpy(g->text, text, len + 1);
+	g->text_len = len;
+	for (size_t i = 0; i < g->nwords; i++)
+		if (g->words[i].letter == 'S')
+			g->words[i].value = set;
 }

@@ -97,9 +97,9 @@ struct printer_job {
 	enum printer_control (*control)(void *ctx);
 	/* called about every 200 ms and at the end; may be NULL */
 	void (*progress)(void *ctx, const struct printer_progress *p);
-	/* called with control while going (not holding), by adapters whose
-	 * ops say takes_injected: a G-code line to send next, between two of
-	 * the file's (an operator's command during a print), copied into line
+	/* called with control, going or holding, by adapters whose ops say
+	 * takes_injected: a G-code line to send next, between two of the
+	 * file's (an operator's command during a print), copied into line
 	 * (cap bytes) and true; false when none.  A line that does not parse
 	 * or fit the firmware is dropped.  NULL = none. */
 	bool (*inject)(void *ctx, char *line, size_t cap);
@@ -169,9 +169,12 @@ struct printer_ops {
 	 * trace); Sailfish answers in binary packets, so a host has nothing to
 	 * print but what poll reads */
 	bool text_replies;
-	/* the stream sends job->inject's lines between the file's (Marlin:
-	 * one more numbered line; Sailfish translates G-code as it streams,
-	 * with the translator's position and state, and takes none) */
+	/* the stream sends job->inject's lines between the file's and applies
+	 * job->temp_offset (Marlin: one more numbered line; Sailfish: the line
+	 * translated by the stream's own translator, so with the file's
+	 * position and modes, as S3G packets between the job's; G-code files
+	 * only, not X3G).  Held, they go too, and going again the adapter
+	 * first brings the head back where the file left it (resume_return). */
 	bool takes_injected;
 	int (*open)(const struct printer_options *o, void **state, struct st_error *err);
 	void (*close)(void *state);
@@ -260,6 +263,18 @@ void printer_describe(struct printer *p, char *out, size_t cap);
 bool printer_can_resume(const struct printer_ops *ops);
 
 /* ---- for adapters ---- */
+
+struct gcode_line;
+
+/*
+ * printer_temp_offset - add job->temp_offset's offset to the S (above 0:
+ * off stays off) of g when it sets a heater's target: M104 and M109 a
+ * tool's (T, else tool 0), M140 and M190 the bed's; M109 is the bed's when
+ * m109_bed (GPX's Makerbot flavour, x3g.h).  Both g's words and its cleaned
+ * text change; nothing changes when the text would pass text_max bytes.
+ */
+void printer_temp_offset(const struct printer_job *job, struct gcode_line *g, bool m109_bed,
+			 size_t text_max);
 
 struct xport;
 

@@ -372,37 +372,44 @@ static bool pm_injected(const struct printer_job *job, char *buf, size_t cap,
 	return false;
 }
 
-/* Add the operator's offset to the S (above 0: off stays off) of a
- * heater's M104, M109, M140 or M190 in g's text. */
-static void pm_temp_offset(const struct printer_job *job, struct gcode_line *g)
+/*
+ * The operator's part of one turn of the stream: the next line job->inject
+ * has goes in next, going or held (once the printer has run out what it
+ * had, so at says where the file left the head).  A line sent while held
+ * sets *back, and going again the way back there (resume_return) goes in
+ * first, whole.  Returns 0, 1 while the way back waits for room (the
+ * driver stays paused), or the driver's error.
+ */
+static int pm_operator(struct pm_state *s, const struct printer_job *job,
+		       enum printer_control asked, const struct printer_progress *at, bool *back,
+		       struct st_error *err)
 {
-	char text[GCODE_LINE_MAX + 1];
-	double s, t = 0, delta;
-	size_t len;
-	int n;
+	char line[GCODE_LINE_MAX + 1];
+	struct gcode_line g;
+	int rc = 0;
 
-	if (!job->temp_offset || g->letter != 'M' ||
-	    (g->number != 104 && g->number != 109 && g->number != 140 && g->number != 190) ||
-	    !gcode_word_value(g, 'S', &s) || s <= 0)
-		return;
-	gcode_word_value(g, 'T', &t);
-	delta = job->temp_offset(job->ctx, g->number == 140 || g->number == 190
-						     ? PRINTER_HEATER_BED : (int)t);
-	if (delta == 0 || !isfinite(delta))
-		return;
-	len = (size_t)snprintf(text, sizeof(text), "M%d", g->number);
-	for (size_t i = 0; i < g->nwords && len < sizeof(text); i++) {
-		const struct gcode_word *w = &g->words[i];
+	if (asked == PRINTER_GO && *back) {
+		char out[RESUME_LINES][RESUME_LINE_MAX + 1];
+		struct resume_state rs;
+		struct st_error e;
+		size_t n = 0;
 
-		n = !w->has_value ? snprintf(text + len, sizeof(text) - len, " %c", w->letter)
-		    : snprintf(text + len, sizeof(text) - len, " %c%.10g", w->letter,
-			       w->letter == 'S' ? (s + delta > 0 ? s + delta : 0) : w->value);
-		len += (size_t)n;
+		if (marlin_next_room(s->m) < RESUME_LINES)
+			return 1;
+		/* a file that cannot be read back leaves the head where it is */
+		if (!resume_scan(job->path, at->filepos, &rs, &e))
+			n = resume_return(&rs, true, out, RESUME_LINES);
+		for (size_t i = 0; i < n && rc >= 0; i++)
+			rc = marlin_submit_next(s->m, out[i], err);
+		*back = false;
+		return rc < 0 ? rc : 0;
 	}
-	if (len < sizeof(text) && len <= MARLIN_CMD_MAX) {
-		memcpy(g->text, text, len + 1);
-		g->text_len = len;
+	if ((asked == PRINTER_GO || (asked == PRINTER_HOLD && marlin_drained(s->m))) &&
+	    marlin_next_room(s->m) && pm_injected(job, line, sizeof(line), &g)) {
+		rc = marlin_submit_next(s->m, g.text, err);
+		*back = *back || asked == PRINTER_HOLD;
 	}
+	return rc < 0 ? rc : 0;
 }
 
 static int pm_stream(void *state, const struct printer_job *job, struct printer_result *res,
@@ -414,9 +421,8 @@ static int pm_stream(void *state, const struct printer_job *job, struct printer_
 	struct marlin_status st;
 	struct gcode_reader *r = NULL;
 	struct gcode_line g;
-	char injected[GCODE_LINE_MAX + 1];
 	enum printer_control asked = PRINTER_GO;
-	bool eof = false;
+	bool eof = false, back = false; /* back: operator lines ran while held */
 	long layer = -1;
 	double z = NAN, t0 = st_mono_s(), t_cb = 0;
 	double m0 = s->sim ? sim_marlin_machine_s(s->sim) : NAN;
@@ -437,19 +443,19 @@ static int pm_stream(void *state, const struct printer_job *job, struct printer_
 	for (;;) {
 		if (asked != PRINTER_CANCEL && asked != PRINTER_STOP) {
 			asked = job->control ? job->control(job->ctx) : PRINTER_GO;
+			/* An operator's line goes next, between two of the file's
+			 * written ones, not behind the lines queued in the driver. */
+			rc = asked == PRINTER_CANCEL || asked == PRINTER_STOP || ipre < npre ? 0
+			     : pm_operator(s, job, asked, &res->last, &back, err);
+			if (rc < 0)
+				goto out_bad_line;
 			if (asked == PRINTER_CANCEL || asked == PRINTER_STOP)
 				marlin_request_cancel(s->m);
-			else if (asked == PRINTER_HOLD)
+			else if (asked == PRINTER_HOLD || rc == 1)
 				marlin_request_pause(s->m);
 			else
 				marlin_request_resume(s->m);
 		}
-		/* An operator's line goes next, between two of the file's
-		 * written ones, not behind the lines queued in the driver. */
-		if (asked == PRINTER_GO && ipre == npre && marlin_can_submit(s->m) &&
-		    pm_injected(job, injected, sizeof(injected), &g) &&
-		    (rc = marlin_submit_next(s->m, g.text, err)) < 0)
-			goto out_bad_line;
 		while (asked == PRINTER_GO && marlin_can_submit(s->m) && (ipre < npre || !eof)) {
 			if (ipre < npre) {
 				/* src 0: a preamble line, not the file's */
@@ -461,7 +467,7 @@ static int pm_stream(void *state, const struct printer_job *job, struct printer_
 				gcode_layer_follow(&g, &layer, &z);
 				if (g.kind == GCODE_KIND_HOST_ONLY || !g.text_len)
 					continue;
-				pm_temp_offset(job, &g);
+				printer_temp_offset(job, &g, false, MARLIN_CMD_MAX);
 				if (g.text_len > MARLIN_CMD_MAX) {
 					rc = pm_too_long(job->path, job->first_line +
 							 gcode_reader_line(r), g.text_len, err);

@@ -16,6 +16,9 @@
  * preamble of resume_x3g_text (bed wait, Z set where it was, X/Y
  * homed, M132, nozzle wait), both through one translator so its positions
  * agree with the firmware's.  An X3G file has no layers to restart from.
+ * An operator's G-code line (job->inject) goes through that translator too,
+ * between two lines of the file, and so do the file's heater targets with
+ * the operator's offsets; holds begin between lines for the same reason.
  */
 #include <errno.h>
 #include <math.h>
@@ -65,6 +68,7 @@ struct ps_run {
 	enum printer_control asked;
 	bool link_lost;		    /* a query failed while a hold lasted */
 	bool seen_running;	    /* build statistics said running while held */
+	bool back;		    /* operator lines ran while held: the way back is due */
 	double t0;
 	struct printer_progress *last;
 	long layer_told;	    /* the layer the hook was last called with */
@@ -181,7 +185,7 @@ static void ps_progress_of(struct ps_run *r, const struct s3g_status *st)
 
 	p->unit = "command";
 	p->done = done;
-	p->total = r->job->total;
+	p->total = r->job->total + r->g.inserted; /* the operator's commands count too */
 	/* Within the preamble the saved position stands: the layer start would
 	 * read as the layer before, which a second resume would print again. */
 	p->filepos = end ? r->offset + (int64_t)end
@@ -226,8 +230,40 @@ static void ps_sleep_ms(long ms)
 	nanosleep(&ts, NULL);
 }
 
+/* The operator's waiting lines (job->inject) into the source, to go
+ * before the file's next line with the stream's translator, as many as it
+ * has room for; true when one did. */
+static bool ps_operator_lines(struct ps_run *r)
+{
+	char line[GCODE_LINE_MAX + 1];
+	bool any = false;
+
+	while (!r->job->x3g && r->job->inject && sfsrc_gcode_insert_room(&r->g) > sizeof(line) &&
+	       r->job->inject(r->job->ctx, line, sizeof(line)))
+		any = sfsrc_gcode_insert(&r->g, line) || any;
+	return any;
+}
+
+/* Going again after operator lines ran while held: the way back to where
+ * the file left the head (resume_return), before the file's next line. */
+static void ps_way_back(struct ps_run *r)
+{
+	char out[RESUME_LINES][RESUME_LINE_MAX + 1];
+	struct resume_state rs;
+	struct st_error e;
+	size_t n = 0;
+
+	r->back = false;
+	/* a file that cannot be read back leaves the head where it is */
+	if (!resume_scan(r->job->path, r->offset + (int64_t)r->g.end, &rs, &e))
+		n = resume_return(&rs, !rs.rel_e, out, RESUME_LINES);
+	for (size_t i = 0; i < n; i++)
+		sfsrc_gcode_insert(&r->g, out[i]);
+}
+
 /*
- * Hold while the hook says so.  The printer is queried every PS_HOLD_MS:
+ * Hold while the hook says so; the operator's lines go out meanwhile
+ * (returns 1 with one in the source).  The printer is queried every PS_HOLD_MS:
  * finished means paused; a failed query or a reboot ends the stream as a
  * lost link.
  */
@@ -259,6 +295,10 @@ static int ps_hold(struct ps_run *r, struct st_error *err)
 		r->last->paused = done;
 		if (r->job->progress)
 			r->job->progress(r->job->ctx, r->last);
+		if (ps_operator_lines(r)) {
+			r->back = true;
+			return 1;
+		}
 		ps_sleep_ms(PS_HOLD_MS);
 	}
 	r->last->paused = false;
@@ -271,16 +311,27 @@ static int ps_next_of_file(struct ps_run *r, struct s3g_cmd *cmd, struct st_erro
 	return r->job->x3g ? sfsrc_x3g_next(&r->x, cmd, err) : sfsrc_gcode_next(&r->g, cmd, err);
 }
 
-/* s3g_source_fn: hold, end on cancel or stop, else the file's next. */
+/* s3g_source_fn: hold, end on cancel or stop, the operator's lines, else
+ * the file's next. */
 static int ps_next(void *src, struct s3g_cmd *cmd, struct st_error *err)
 {
 	struct ps_run *r = src;
-	int rc = ps_hold(r, err);
+	int rc;
 
-	if (rc < 0)
-		return rc;
 	if (r->stop)
 		return 0; /* the driver sees the stop flag and ends as interrupted */
+	/* a line's commands go out together: holds and the operator's lines
+	 * come between lines, where the translator's position is the file's */
+	if (!r->job->x3g && (sfsrc_gcode_mid_line(&r->g) || r->g.ins_pos < r->g.ins_len))
+		return sfsrc_gcode_next(&r->g, cmd, err);
+	if ((rc = ps_hold(r, err)) < 0)
+		return rc;
+	if (r->stop)
+		return 0;
+	if (rc == 0 && r->back)
+		ps_way_back(r);
+	else if (rc == 0)
+		ps_operator_lines(r);
 	/* a new layer is told at once, not at the next 0.1 s report: the
 	 * journal print keeps from the hook must not lag by layers */
 	if (!r->job->x3g && r->g.layer != r->layer_told)
@@ -297,6 +348,14 @@ static void ps_warn(void *ctx, const char *name, const struct x3g_warning *w, si
 		r->warn(r->warn_ctx, name, w[i].line, w[i].msg);
 }
 
+/* The operator's temperature offsets on a line of the file. */
+static void ps_edit(void *ctx, struct gcode_line *line)
+{
+	struct ps_run *r = ctx;
+
+	printer_temp_offset(r->job, line, r->s->xo.flavor == X3G_FLAVOR_MAKERBOT, GCODE_LINE_MAX);
+}
+
 /* Open r's source over f from r->offset, preamble first; 0 or an error. */
 static int ps_source_open(struct ps_run *r, FILE *f, struct st_error *err)
 {
@@ -311,6 +370,8 @@ static int ps_source_open(struct ps_run *r, FILE *f, struct st_error *err)
 	}
 	r->g.warn = r->warn ? ps_warn : NULL;
 	r->g.warn_ctx = r;
+	r->g.edit = ps_edit;
+	r->g.edit_ctx = r;
 	if ((rc = sfsrc_gcode_open(&r->g, f, r->job->path, &r->s->m, &r->s->xo, err)))
 		return rc;
 	r->g.pre = r->has_pre ? r->pre : NULL;
@@ -619,6 +680,7 @@ const struct printer_ops printer_sailfish_ops = {
 	.can_resume = true,
 	.takes_x3g = true,
 	.resume_from_layer = true,
+	.takes_injected = true,
 	.open = ps_open,
 	.close = ps_close,
 	.check = ps_check,

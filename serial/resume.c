@@ -127,13 +127,14 @@ int resume_locate(const char *path, int64_t offset, int64_t saved, struct resume
 
 #define ADD(...) (n < cap ? (void)snprintf(out[n++], RESUME_LINE_MAX + 1, __VA_ARGS__) : (void)0)
 
-/* Both preambles' end, from line n on: down to Z, modes, E (set_e), feed
- * rate, fan.  Returns the line count. */
-static size_t resume_finish(const struct resume_state *rs, bool set_e,
+/* Both preambles' end, from line n on: down to Z (down), modes, E (set_e),
+ * feed rate, fan.  Returns the line count. */
+static size_t resume_finish(const struct resume_state *rs, bool down, bool set_e,
 			    char out[][RESUME_LINE_MAX + 1], size_t n, size_t cap)
 {
 	/* the layer's own Z move follows; never lower into what it printed */
-	ADD("G1 Z%.3f F600", fmax(rs->z, rs->z_nozzle));
+	if (down)
+		ADD("G1 Z%.3f F600", fmax(rs->z, rs->z_nozzle));
 	ADD("%s", rs->rel_e ? "M83" : "M82");
 	if (set_e)
 		ADD("G92 E%.5f", rs->rel_e ? 0.0 : rs->e);
@@ -166,7 +167,7 @@ size_t resume_preamble(const struct resume_state *rs, char out[][RESUME_LINE_MAX
 		ADD("M109 S%.0f", rs->tool);
 	if (rs->moved)
 		ADD("G1 X%.3f Y%.3f F6000", rs->x, rs->y);
-	return resume_finish(rs, true, out, n, cap);
+	return resume_finish(rs, true, true, out, n, cap);
 }
 
 /* The Sailfish form: what resume_preamble does, in the translator's words. */
@@ -190,7 +191,24 @@ size_t resume_preamble_x3g(const struct resume_state *rs, char out[][RESUME_LINE
 	if (rs->moved)
 		ADD("G1 X%.3f Y%.3f F6000", rs->x, rs->y);
 	/* G92 E in relative mode would be one more set-position of all axes */
-	return resume_finish(rs, !rs->rel_e, out, n, cap);
+	return resume_finish(rs, true, !rs->rel_e, out, n, cap);
+}
+/* The way back after an operator's commands in a hold. */
+size_t resume_return(const struct resume_state *rs, bool set_e, char out[][RESUME_LINE_MAX + 1],
+		     size_t cap)
+{
+	size_t n = 0;
+
+	/* before the file's first move there is no place to go back to */
+	if (rs->moved) {
+		ADD("G91");
+		ADD("G1 Z2 F600");
+		ADD("G90");
+		ADD("G1 X%.3f Y%.3f F6000", rs->x, rs->y);
+	} else {
+		ADD("G90");
+	}
+	return resume_finish(rs, rs->moved, set_e, out, n, cap);
 }
 #undef ADD
 

@@ -80,6 +80,19 @@ size_t resume_preamble(const struct resume_state *rs, char out[][RESUME_LINE_MAX
 size_t resume_preamble_x3g(const struct resume_state *rs, char out[][RESUME_LINE_MAX + 1],
 			   size_t cap);
 
+/*
+ * resume_return - the commands that bring a held print back to rs after an
+ * operator's commands ran while it held (printer.h inject: a jog, an
+ * extrusion, a mode change): lift, absolute mode, back over the part,
+ * down (none of the three before the file's first move), then the file's
+ * modes, extruder position and feed rate as resume_preamble ends (set_e
+ * false leaves E alone: G92 E would be a set-position of every axis in
+ * X3G).  Heat stays as the operator left it.
+ * Writes at most cap lines; returns how many.
+ */
+size_t resume_return(const struct resume_state *rs, bool set_e, char out[][RESUME_LINE_MAX + 1],
+		     size_t cap);
+
 /* Room for the text resume_x3g_text writes. */
 #define RESUME_TEXT_MAX (RESUME_LINES * (RESUME_LINE_MAX + 2))
 

@@ -13,12 +13,16 @@ int sfsrc_gcode_open(struct sfsrc_gcode *g, FILE *f, const char *name,
 {
 	sfsrc_warn_fn warn = g->warn;
 	void *warn_ctx = g->warn_ctx;
+	void (*edit)(void *, struct gcode_line *) = g->edit;
+	void *edit_ctx = g->edit_ctx;
 	int rc;
 
 	memset(g, 0, sizeof(*g));
 	g->name = name;
 	g->warn = warn;
 	g->warn_ctx = warn_ctx;
+	g->edit = edit;
+	g->edit_ctx = edit_ctx;
 	g->layer = -1;
 	if ((rc = x3g_new(m, xo, &g->t, err)))
 		return rc;
@@ -33,29 +37,71 @@ void sfsrc_gcode_close(struct sfsrc_gcode *g)
 	g->t = NULL;
 }
 
+/* Parse the next line of text (lines ending in '\n') at *pos into line. */
+static int text_line(const char *text, size_t len, size_t *pos, struct gcode_line *line,
+		     struct st_error *err)
+{
+	const char *p = text + *pos, *nl = memchr(p, '\n', len - *pos);
+	size_t n = nl ? (size_t)(nl - p) : len - *pos;
+
+	*pos += n + (nl != NULL);
+	return gcode_parse(p, n, 0, line, err);
+}
+
+bool sfsrc_gcode_insert(struct sfsrc_gcode *g, const char *text)
+{
+	size_t len = strlen(text);
+
+	if (len + 1 > sfsrc_gcode_insert_room(g))
+		return false;
+	memmove(g->ins, g->ins + g->ins_pos, g->ins_len - g->ins_pos);
+	g->ins_len -= g->ins_pos;
+	g->ins_pos = 0;
+	memcpy(g->ins + g->ins_len, text, len);
+	g->ins[g->ins_len + len] = '\n';
+	g->ins_len += len + 1;
+	return true;
+}
+
+size_t sfsrc_gcode_insert_room(const struct sfsrc_gcode *g)
+{
+	return sizeof(g->ins) - (g->ins_len - g->ins_pos);
+}
+
+bool sfsrc_gcode_mid_line(const struct sfsrc_gcode *g)
+{
+	return g->pos < g->out_len;
+}
+
 int sfsrc_gcode_next(void *src, struct s3g_cmd *cmd, struct st_error *err)
 {
 	struct sfsrc_gcode *g = src;
 	struct gcode_line line;
+	bool pre = false, ins = false;
 	int n, k;
 
 	while (g->pos >= g->out_len) {
 		if (g->finished)
 			return 0;
-		bool pre = g->pre_pos < g->pre_len;
+		pre = g->pre_pos < g->pre_len;
+		ins = !pre && g->ins_pos < g->ins_len;
 		if (pre) {
-			const char *p = g->pre + g->pre_pos, *nl = memchr(p, '\n', g->pre_len - g->pre_pos);
-			size_t len = nl ? (size_t)(nl - p) : g->pre_len - g->pre_pos;
-			g->pre_pos += len + (nl != NULL);
-			n = gcode_parse(p, len, 0, &line, err);
+			n = text_line(g->pre, g->pre_len, &g->pre_pos, &line, err);
 			n = n < 0 ? n : x3g_translate(g->t, &line, 0, err);
+		} else if (ins) {
+			struct st_error e;
+
+			/* an operator's line that does not parse must not fail the print */
+			n = text_line(g->ins, g->ins_len, &g->ins_pos, &line, &e) ? 0
+			    : x3g_translate_aside(g->t, &line, g->line, err);
 		} else {
 			n = gcode_reader_next(g->r, 0, &line, err);
 		}
 		if (n < 0)
 			return n;
-		if (pre) {
-			/* commands of the preamble: nothing of the file yet */
+		if (pre || ins) {
+			/* commands of the preamble: nothing of the file yet; inserted
+			 * ones: no further than the command before them */
 		} else if (n == 0) {
 			g->finished = true;
 			n = x3g_finish(g->t, err);
@@ -63,12 +109,14 @@ int sfsrc_gcode_next(void *src, struct s3g_cmd *cmd, struct st_error *err)
 			long l;
 			if (gcode_layer_comment(&line, &l, NULL) == GCODE_LAYER_START)
 				g->layer = l >= 0 ? l : g->layer + 1;
+			if (g->edit)
+				g->edit(g->edit_ctx, &line);
 			n = x3g_translate(g->t, &line, gcode_reader_line(g->r), err);
 		}
 		if (n < 0)
 			return n;
-		g->out_line = pre ? 0 : gcode_reader_line(g->r);
-		g->out_end = pre ? 0 : gcode_reader_bytes(g->r);
+		g->out_line = pre ? 0 : ins ? g->line : gcode_reader_line(g->r);
+		g->out_end = pre ? 0 : ins ? g->end : gcode_reader_bytes(g->r);
 		if (g->warn) {
 			const struct x3g_warning *w;
 			size_t nw = x3g_warnings(g->t, &w);
@@ -77,6 +125,7 @@ int sfsrc_gcode_next(void *src, struct s3g_cmd *cmd, struct st_error *err)
 		}
 		g->out = x3g_output(g->t, &g->out_len);
 		g->pos = 0;
+		g->out_inserted = ins;
 	}
 	k = s3g_action_length(g->out + g->pos, g->out_len - g->pos);
 	if (k <= 0 || k > S3G_MAX_PAYLOAD || (size_t)k > g->out_len - g->pos)
@@ -92,6 +141,7 @@ int sfsrc_gcode_next(void *src, struct s3g_cmd *cmd, struct st_error *err)
 	g->prev_end = g->end;
 	g->end = g->out_end;
 	g->pulled++;
+	g->inserted += g->out_inserted;
 	return 1;
 }
 

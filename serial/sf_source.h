@@ -24,6 +24,7 @@
  * (Host.cc), and RepG sends 40. */
 #define SFSRC_HOST_VERSION 40
 #define SFSRC_X3G_CHUNK 8192 /* X3G bytes read at a time */
+#define SFSRC_INSERT_MAX 4096 /* inserted G-code text waiting (bytes) */
 
 /* Called with the warnings of each translated line (n >= 1). */
 typedef void (*sfsrc_warn_fn)(void *ctx, const char *name, const struct x3g_warning *w,
@@ -41,6 +42,7 @@ struct sfsrc_gcode {
 	size_t out_len, pos;
 	uint64_t out_line;	  /* the line they came from */
 	uint64_t out_end;	  /* bytes read once that line was (its end) */
+	bool out_inserted;	  /* that line was sfsrc_gcode_insert's */
 	bool finished;		  /* x3g_finish done */
 	uint64_t line, prev_line; /* lines of the last two commands handed out */
 	uint64_t end, prev_end;	  /* their lines' ends (bytes from the reader's start) */
@@ -51,6 +53,17 @@ struct sfsrc_gcode {
 	 * as line 0, end 0 (nothing of the file done) */
 	const char *pre;
 	size_t pre_len, pre_pos;
+	/* G-code lines ('\n' after each) translated before the file's next
+	 * line, after the line under way (sfsrc_gcode_insert: an operator's
+	 * commands); their commands keep the line and end of the command
+	 * before them, so progress stands still */
+	char ins[SFSRC_INSERT_MAX];
+	size_t ins_len, ins_pos;
+	uint64_t inserted; /* commands of inserted lines handed out */
+	/* called with each of the file's lines before it is translated (the
+	 * operator's temperature offsets); may be NULL */
+	void (*edit)(void *ctx, struct gcode_line *line);
+	void *edit_ctx;
 };
 
 /* A command source over an X3G file, read in chunks. */
@@ -80,6 +93,21 @@ void sfsrc_gcode_close(struct sfsrc_gcode *g);
 
 /* sfsrc_gcode_next - s3g_source_fn over a struct sfsrc_gcode. */
 int sfsrc_gcode_next(void *src, struct s3g_cmd *cmd, struct st_error *err);
+
+/*
+ * sfsrc_gcode_insert - translate the G-code line text (no '\n') with the
+ * file's translator, so with its position and modes, before the file's
+ * next line.  A line that does not parse is dropped.  Returns false, with
+ * nothing kept, when the text waiting would pass SFSRC_INSERT_MAX.
+ */
+bool sfsrc_gcode_insert(struct sfsrc_gcode *g, const char *text);
+
+/* sfsrc_gcode_insert_room - bytes sfsrc_gcode_insert takes now ('\n' included). */
+size_t sfsrc_gcode_insert_room(const struct sfsrc_gcode *g);
+
+/* sfsrc_gcode_mid_line - whether commands of a line (the file's, or a
+ * preamble's or inserted one) are still to be handed out. */
+bool sfsrc_gcode_mid_line(const struct sfsrc_gcode *g);
 
 /* sfsrc_x3g_open - a source over f from its current position (0 assumed). */
 void sfsrc_x3g_open(struct sfsrc_x3g *x, FILE *f);

@@ -566,6 +566,17 @@ int x3g_translate(struct x3g_translator *t, const struct gcode_line *l, uint64_t
 	return t->ncmds;
 }
 
+int x3g_translate_aside(struct x3g_translator *t, const struct gcode_line *l, uint64_t lineno,
+			struct st_error *err)
+{
+	int tgt = t ? t->tgt_tool : 0;
+	int rc = x3g_translate(t, l, lineno, err);
+
+	if (rc >= 0 && l->letter != 'T')
+		t->tgt_tool = tgt;
+	return rc;
+}
+
 int x3g_finish(struct x3g_translator *t, struct st_error *err)
 {
 	if (!t)

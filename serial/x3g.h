@@ -118,6 +118,15 @@ int x3g_translate(struct x3g_translator *t, const struct gcode_line *line, uint6
 		  struct st_error *err);
 
 /*
+ * x3g_translate_aside - x3g_translate of a line from outside the file (an
+ * operator's command during a print): its T word, unless the line is a
+ * tool change, names the tool for that line only, as Marlin reads M104 T1,
+ * so the file's following lines keep their tool in either flavour.
+ */
+int x3g_translate_aside(struct x3g_translator *t, const struct gcode_line *line, uint64_t lineno,
+			struct st_error *err);
+
+/*
  * x3g_finish - the end of the input: closes the build (150 at 100 % and 154
  * build end) unless M2, M137 or M73 P100 already did.  Returns the number of
  * commands written, output and warnings as x3g_translate.

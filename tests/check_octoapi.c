@@ -45,27 +45,6 @@ static void start(struct node_proc *np, const char *printers)
 	sv_start(np);
 }
 
-/* Wait until prefix's printer is connected (its worker connects it after
- * the node listens). */
-static void operational(int port, const char *prefix)
-{
-	char path[128];
-	struct resp r;
-
-	snprintf(path, sizeof(path), "%s/api/printer", prefix);
-	for (int i = 0; i < 500; i++) {
-		int status;
-
-		sv_http(port, "GET", path, RO, NULL, &r);
-		status = r.status;
-		sv_resp_free(&r);
-		if (status == 200)
-			return;
-		usleep(20000);
-	}
-	ck_abort_msg("%s is not operational", prefix);
-}
-
 /* Store a G-code text in folder (may be "") of mk3s without printing it. */
 static void store(int port, const char *folder, const char *name, const char *text)
 {
@@ -475,7 +454,7 @@ START_TEST(test_file_select)
 	json_t *queue;
 
 	start(&np, TWO_PRINTERS);
-	operational(np.port, "");
+	sv_operational(np.port, "");
 	store(np.port, "", "a.gcode", dwell(3));
 	sv_expect(np.port, "POST", "/api/files/local/a.gcode", UP, "{\"command\":\"select\"}", 204);
 	sv_call(np.port, "GET", "/api/job", RO, NULL, 200, &r);
@@ -510,7 +489,7 @@ START_TEST(test_file_move_copy)
 	char want[256];
 
 	start(&np, TWO_PRINTERS);
-	operational(np.port, "");
+	sv_operational(np.port, "");
 	store(np.port, "", "a.gcode", dwell(3));
 	store(np.port, "parts", "b.gcode", "G1 X2\n");
 	sv_call(np.port, "POST", "/api/files/local/a.gcode", UP,
@@ -553,7 +532,7 @@ START_TEST(test_file_delete)
 	struct node_proc np;
 
 	start(&np, TWO_PRINTERS);
-	operational(np.port, "");
+	sv_operational(np.port, "");
 	store(np.port, "", "a.gcode", dwell(3));
 	store(np.port, "parts", "b.gcode", "G1 X2\n");
 	sv_expect(np.port, "DELETE", "/api/files/local/parts/b.gcode", RO, NULL, 403);
@@ -604,8 +583,8 @@ START_TEST(test_printer_tool)
 	json_t *t;
 
 	start(&np, MK3S_AND_CREATOR);
-	operational(np.port, "");
-	operational(np.port, "/p/cp");
+	sv_operational(np.port, "");
+	sv_operational(np.port, "/p/cp");
 	sv_call(np.port, "GET", "/api/printer/tool", RO, NULL, 200, &r);
 	ck_assert(json_is_number(json_object_get(json_object_get(r.json, "tool0"), "actual")));
 	ck_assert(!json_object_get(r.json, "tool1"));
@@ -669,7 +648,7 @@ START_TEST(test_printer_bed)
 	struct resp r;
 
 	start(&np, TWO_PRINTERS);
-	operational(np.port, "");
+	sv_operational(np.port, "");
 	sv_call(np.port, "GET", "/api/printer/bed", RO, NULL, 200, &r);
 	ck_assert(json_is_number(json_object_get(json_object_get(r.json, "bed"), "target")));
 	ck_assert(!json_object_get(r.json, "tool0"));
@@ -729,7 +708,7 @@ START_TEST(test_printer_printhead)
 	size_t len;
 
 	start(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\nsim_speedup = 1000\n");
-	operational(np.port, ""); /* the sim's boot done */
+	sv_operational(np.port, ""); /* the sim's boot done */
 	sv_expect(np.port, "POST", "/api/printer/printhead", CTL,
 		  "{\"command\":\"home\",\"axes\":[\"x\",\"y\"]}", 204);
 	sv_expect(np.port, "POST", "/api/printer/printhead", CTL,
@@ -769,14 +748,38 @@ END_TEST
  * lines all run once and in order (the simulator's log: every line number
  * once, in order); the print head's jog and a tool select stay 409.
  */
+/* The log walk of test_command_during_print: the job's lines and ours. */
+struct ours_in_job {
+	const char *const *ours;
+	const char *job, *rest; /* the job's text, and its lines still due */
+	int seen[2], inside[2];
+};
+
+static void ours_in_job_line(void *ctx, const char *text)
+{
+	struct ours_in_job *w = ctx;
+	size_t tl = strlen(text);
+
+	for (int i = 0; i < 2; i++) {
+		if (!strcmp(text, w->ours[i])) {
+			w->seen[i]++;
+			/* after the first job line, before the last */
+			w->inside[i] = w->rest != w->job && *w->rest;
+			return;
+		}
+	}
+	ck_assert_msg(!strncmp(w->rest, text, tl) && w->rest[tl] == '\n',
+		      "the job ran '%s' where '%.40s' was due", text, w->rest);
+	w->rest += tl + 1;
+}
+
 START_TEST(test_command_during_print)
 {
 	static const char *const ours[] = {"M117 sent during the print", "M104 S205"};
 	struct node_proc np;
-	char path[600], *job, *log, *from, *end, *rest;
-	size_t cap = 64 * 1024, len = 0, n;
-	int seen[2] = {0, 0}, inside[2] = {0, 0};
-	long last = -1;
+	struct ours_in_job w = {.ours = ours};
+	char path[600], *job;
+	size_t cap = 64 * 1024, len = 0;
 	json_t *o;
 	double pos = 0;
 
@@ -787,7 +790,7 @@ START_TEST(test_command_during_print)
 		len += (size_t)snprintf(job + len, cap - len, "G1 X%d Y%d F60\n", 10 + k % 2, 10 + k);
 	snprintf(job + len, cap - len, "M117 job end\n");
 	start(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\nsim_speedup = 40\n");
-	operational(np.port, "");
+	sv_operational(np.port, "");
 	ck_assert(sv_print_text(np.port, "", "moves.gcode", job) == 1);
 	sv_wait_state(np.port, "", 1, "printing", 10);
 	for (int i = 0; i < 250 && pos <= 0; i++) {
@@ -810,42 +813,12 @@ START_TEST(test_command_during_print)
 	/* The simulator's log from the job's first line: the job whole, in
 	 * order, with each command once inside it. */
 	snprintf(path, sizeof(path), "%s/data/sim/mk3s.log", np.dir);
-	log = tu_slurp(path, &n);
-	from = strstr(log, " M117 job start\n");
-	ck_assert_msg(from, "the job's first line did not run: %.300s", log);
-	while (from > log && from[-1] != '\n')
-		from--;
-	rest = job;
-	for (char *line = from; *line; line = end + 1) {
-		char *text = strchr(line, ' ') + 1;
-		long num = atol(line);
-		size_t tl;
-
-		end = strchr(line, '\n');
-		ck_assert(end);
-		if (!strncmp(line, "- M105\n", 7))
-			continue; /* the driver's unnumbered probe when a reply is slow */
-		tl = (size_t)(end - text);
-		ck_assert_msg(last < 0 || num == last + 1, "line %ld ran after line %ld: %.400s", num,
-			      last, from);
-		last = num;
-		for (int i = 0; i < 2; i++) {
-			if (tl == strlen(ours[i]) && !strncmp(text, ours[i], tl)) {
-				seen[i]++;
-				inside[i] = rest != job && *rest; /* after the first job line, before the last */
-				goto next;
-			}
-		}
-		ck_assert_msg(!strncmp(rest, text, tl + 1), "the job ran '%.*s' where '%.40s' was due",
-			      (int)tl, text, rest);
-		rest += tl + 1;
-next:;
-	}
-	ck_assert_msg(!*rest, "the job's lines from '%.40s' did not run", rest);
+	w.job = w.rest = job;
+	sv_marlin_log(path, "M117 job start", ours_in_job_line, &w);
+	ck_assert_msg(!*w.rest, "the job's lines from '%.40s' did not run", w.rest);
 	for (int i = 0; i < 2; i++)
-		ck_assert_msg(seen[i] == 1 && inside[i], "'%s' ran %d times%s", ours[i], seen[i],
-			      inside[i] ? "" : ", not between two lines of the job");
-	free(log);
+		ck_assert_msg(w.seen[i] == 1 && w.inside[i], "'%s' ran %d times%s", ours[i], w.seen[i],
+			      w.inside[i] ? "" : ", not between two lines of the job");
 	free(job);
 	sv_stop(&np);
 }
@@ -866,7 +839,7 @@ START_TEST(test_temperature_offsets)
 	size_t len;
 
 	start(&np, "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\nsim_speedup = 1000\n");
-	operational(np.port, "");
+	sv_operational(np.port, "");
 	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
 		  "{\"command\":\"offset\",\"offsets\":{\"tool0\":10}}", 204);
 	sv_expect(np.port, "POST", "/api/printer/bed", CTL, "{\"command\":\"offset\",\"offset\":-5}",
@@ -914,7 +887,7 @@ START_TEST(test_sailfish_tool1)
 
 	start(&np, "[printer cp]\nprofile = flashforge-creator-pro\nport = sim\n"
 		   "sim_speedup = 1000\n");
-	operational(np.port, "");
+	sv_operational(np.port, "");
 	sv_expect(np.port, "POST", "/api/printer/tool", CTL,
 		  "{\"command\":\"target\",\"targets\":{\"tool1\":150}}", 204);
 	/* temperatures are read every 2 s between jobs */
@@ -1022,5 +995,6 @@ Suite *octoapi_suite(void)
 	suite_add_tcase(s, tc);
 	octoapi_push_tcases(s);
 	octoapi_queue_tcases(s);
+	octoapi_inject_tcases(s);
 	return s;
 }

@@ -255,6 +255,47 @@ START_TEST(test_push_sockjs)
 }
 END_TEST
 
+/* The Creator Pro's second extruder in the history message: tool1's
+ * actual and target as the Sailfish driver reads them, not null. */
+START_TEST(test_push_history_tool1)
+{
+	struct node_proc np;
+	struct ws w;
+	char auth[128];
+	json_t *m, *temps, *last = NULL;
+	double target = 0;
+
+	sv_write_config(&np, "[printer cp]\nprofile = flashforge-creator-pro\nport = sim\n"
+			     "sim_speedup = 1000\n", 8);
+	sv_start(&np);
+	sv_operational(np.port, "");
+	sv_expect(np.port, "POST", "/api/printer/tool", "X-Api-Key: " KEY_CTL,
+		  "{\"command\":\"target\",\"targets\":{\"tool1\":150}}", 204);
+	/* read every 2 s between jobs, sampled every 2 s */
+	for (int i = 0; i < 400 && target != 150; i++) {
+		m = sv_get_json(np.port, "/api/printer/tool?history=true&limit=1");
+		target = json_number_value(json_object_get(json_object_get(json_array_get(
+				json_object_get(m, "history"), 0), "tool1"), "target"));
+		json_decref(m);
+		if (target != 150)
+			usleep(20000);
+	}
+	ck_assert_msg(target == 150, "no sample with tool1's target");
+	auth_of(np.port, "X-Api-Key: " KEY_READ, "viewer", auth, sizeof(auth));
+	ws_open(&w, np.port, "/sockjs/websocket", false);
+	ws_say(&w, auth);
+	m = ws_until(&w, "history", 3000);
+	ck_assert_msg(m, "no history after auth");
+	temps = json_object_get(json_object_get(m, "history"), "temps");
+	last = json_object_get(json_array_get(temps, json_array_size(temps) - 1), "tool1");
+	ck_assert_msg(json_number_value(json_object_get(last, "target")) == 150 &&
+		      json_is_number(json_object_get(last, "actual")), "tool1 in history: %s",
+		      json_dumps(last, JSON_COMPACT));
+	ws_close(&w);
+	sv_stop(&np);
+}
+END_TEST
+
 /* The raw endpoint: plain JSON messages; a wrong session gets no state;
  * the client's throttle slows its current messages. */
 START_TEST(test_push_raw)
@@ -498,6 +539,7 @@ void octoapi_push_tcases(Suite *s)
 	tcase_set_timeout(tc, 60);
 	tcase_add_test(tc, test_push_sockjs);
 	tcase_add_test(tc, test_push_raw);
+	tcase_add_test(tc, test_push_history_tool1);
 	tcase_add_test(tc, test_push_events);
 	tcase_add_test(tc, test_push_bed_gate);
 	tcase_add_test(tc, test_push_unauthenticated_closed);

@@ -498,9 +498,10 @@ START_TEST(test_resume_absurd_coordinates)
 	tu_write_str(path, "M140 S999999\nM104 S999999\nM106 S255\nG1 X-999999999.999 "
 			   "Y999999999.999 Z999999997.5 E999999999.99999 F99999999\n");
 	ck_assert_int_eq(resume_scan(path, 200, &rs, &err), 0);
-	for (int form = 0; form < 2; form++) {
-		size_t n = form ? resume_preamble_x3g(&rs, pre, RESUME_LINES)
-				: resume_preamble(&rs, pre, RESUME_LINES);
+	for (int form = 0; form < 3; form++) {
+		size_t n = form == 2 ? resume_return(&rs, true, pre, RESUME_LINES)
+			   : form ? resume_preamble_x3g(&rs, pre, RESUME_LINES)
+				  : resume_preamble(&rs, pre, RESUME_LINES);
 
 		ck_assert_uint_gt(n, 5);
 		for (size_t k = 0; k < n; k++) {
@@ -511,6 +512,26 @@ START_TEST(test_resume_absurd_coordinates)
 				      pre[k], err.msg);
 		}
 	}
+}
+END_TEST
+
+/* The way back after an operator's commands in a hold, before the file's
+ * first move: no move (no place to go back to), only the file's modes,
+ * E, feed rate (the default, 1500) and fan. */
+START_TEST(test_resume_return_before_first_move)
+{
+	const char *path = tu_path("return.gcode");
+	char back[RESUME_LINES][RESUME_LINE_MAX + 1], all[512] = "";
+	struct resume_state rs;
+	struct st_error err = {0};
+	size_t n, len = 0;
+
+	tu_write_str(path, "M83\nM106 S255\n");
+	ck_assert_int_eq(resume_scan(path, 100, &rs, &err), 0);
+	n = resume_return(&rs, true, back, RESUME_LINES);
+	for (size_t i = 0; i < n; i++)
+		len += (size_t)snprintf(all + len, sizeof(all) - len, "%s\n", back[i]);
+	ck_assert_str_eq(all, "G90\nM83\nG92 E0.00000\nG1 F1500\nM106 S255\n");
 }
 END_TEST
 
@@ -748,6 +769,7 @@ Suite *print_suite(void)
 	tcase_add_test(tc, test_unplug_and_reset_exit_69);
 	tcase_add_test(tc, test_resume_absurd_coordinates);
 	tcase_add_test(tc, test_resume_z_is_the_nozzles);
+	tcase_add_test(tc, test_resume_return_before_first_move);
 	tcase_add_test(tc, test_resume_after_kill);
 	tcase_add_test(tc, test_sailfish_resume_after_kill);
 	suite_add_tcase(s, tc);

@@ -737,6 +737,73 @@ START_TEST(test_mqtt_temperatures)
 }
 END_TEST
 
+/* The names of the jobs waiting in a list command's answer, in order,
+ * "a.gcode,b.gcode". */
+static const char *waiting_names(const char *answer)
+{
+	static char names[256];
+	json_t *o = json_loads(answer, 0, NULL), *j;
+	size_t i, len = 0;
+
+	ck_assert_msg(o, "not JSON (cut?): %s", answer);
+	names[0] = '\0';
+	json_array_foreach(json_object_get(o, "waiting"), i, j)
+		len += (size_t)snprintf(names + len, sizeof(names) - len, "%s%s", i ? "," : "",
+					json_string_value(json_object_get(j, "name")));
+	json_decref(o);
+	return names;
+}
+
+/* The queue over MQTT, as /api/stratum/queue has it: list, move, cancel
+ * and requeue a job, with the control key (without it, refused). */
+START_TEST(test_mqtt_queue_commands)
+{
+	struct node_proc np;
+	struct mqtt_seen seen;
+	struct mosquitto *mq;
+	char out[2048];
+	long long hold, c;
+	int bport;
+	pid_t broker;
+
+	if (!have_broker("MQTT queue commands"))
+		return;
+	broker = node_on_broker(&np, &bport, "", &seen, &mq);
+	hold = sv_print_text(np.port, "", "hold.gcode", "G28\nG4 P20000\n");
+	sv_wait_state(np.port, "", hold, "printing", 10);
+	sv_print_text(np.port, "", "a.gcode", "G28\n");
+	sv_print_text(np.port, "", "b.gcode", "G28\n");
+	c = sv_print_text(np.port, "", "c.gcode", "G28\n");
+	command(mq, &seen, "{\"id\":\"q-1\",\"command\":\"list\",\"key\":\"" KEY_CTL "\"}",
+		"\"q-1\"", out, sizeof(out));
+	ck_assert_str_eq(waiting_names(out), "a.gcode,b.gcode,c.gcode");
+	command(mq, &seen, "{\"id\":\"q-2\",\"command\":\"move\",\"job\":4,\"position\":1}",
+		"\"q-2\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "a key with the control role is needed"), "%s", out);
+	command(mq, &seen, "{\"id\":\"q-3\",\"command\":\"move\",\"job\":4,\"position\":1,"
+		"\"key\":\"" KEY_CTL "\"}", "\"q-3\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "\"ok\":true"), "%s", out);
+	command(mq, &seen, "{\"id\":\"q-4\",\"command\":\"move\",\"job\":1,\"position\":1,"
+		"\"key\":\"" KEY_CTL "\"}", "\"q-4\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "only a queued job can be moved"), "%s", out);
+	command(mq, &seen, "{\"id\":\"q-5\",\"command\":\"cancel\",\"job\":3,"
+		"\"key\":\"" KEY_CTL "\"}", "\"q-5\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "\"ok\":true"), "%s", out);
+	ck_assert_str_eq(sv_job_state(np.port, "", 3, NULL), "cancelled");
+	ck_assert_str_eq(sv_job_state(np.port, "", hold, NULL), "printing");
+	command(mq, &seen, "{\"id\":\"q-6\",\"command\":\"requeue\",\"job\":3,"
+		"\"key\":\"" KEY_CTL "\"}", "\"q-6\"", out, sizeof(out));
+	ck_assert_msg(strstr(out, "\"ok\":true") && strstr(out, "\"job\":5"), "%s", out);
+	command(mq, &seen, "{\"id\":\"q-7\",\"command\":\"list\",\"key\":\"" KEY_CTL "\"}",
+		"\"q-7\"", out, sizeof(out));
+	ck_assert_str_eq(waiting_names(out), "c.gcode,a.gcode,b.gcode");
+	ck_assert_int_eq(c, 4);
+	watch_stop(mq, &seen);
+	sv_stop(&np);
+	broker_stop(broker);
+}
+END_TEST
+
 void serve_mqtt_tcases(Suite *s)
 {
 	TCase *tc = tcase_create("mqtt");
@@ -751,5 +818,6 @@ void serve_mqtt_tcases(Suite *s)
 	tcase_add_test(tc, test_mqtt_downloads);
 	tcase_add_test(tc, test_mqtt_broker_example);
 	tcase_add_test(tc, test_mqtt_temperatures);
+	tcase_add_test(tc, test_mqtt_queue_commands);
 	suite_add_tcase(s, tc);
 }

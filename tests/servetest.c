@@ -320,6 +320,53 @@ long long sv_print_text(int port, const char *prefix, const char *name, const ch
 }
 
 /* GET path with the read key; the JSON answer (caller decrefs). */
+void sv_operational(int port, const char *prefix)
+{
+	char path[128];
+	struct resp r;
+
+	snprintf(path, sizeof(path), "%s/api/printer", prefix);
+	for (int i = 0; i < 500; i++) {
+		int status;
+
+		sv_http(port, "GET", path, "X-Api-Key: " KEY_READ, NULL, &r);
+		status = r.status;
+		sv_resp_free(&r);
+		if (status == 200)
+			return;
+		usleep(20000);
+	}
+	ck_abort_msg("%s is not operational", prefix);
+}
+
+void sv_marlin_log(const char *path, const char *first, void (*fn)(void *ctx, const char *text),
+		   void *ctx)
+{
+	char needle[128], *log, *from, *end;
+	size_t n;
+	long last = -1;
+
+	log = tu_slurp(path, &n);
+	snprintf(needle, sizeof(needle), " %s\n", first);
+	from = strstr(log, needle);
+	ck_assert_msg(from, "'%s' did not run: %.300s", first, log);
+	while (from > log && from[-1] != '\n')
+		from--;
+	for (char *line = from; *line; line = end + 1) {
+		long num = atol(line);
+
+		end = strchr(line, '\n');
+		ck_assert(end);
+		if (!strncmp(line, "- M105\n", 7))
+			continue; /* the driver's unnumbered probe when a reply is slow */
+		ck_assert_msg(last < 0 || num == last + 1, "line %ld ran after line %ld", num, last);
+		last = num;
+		*end = '\0';
+		fn(ctx, strchr(line, ' ') + 1);
+	}
+	free(log);
+}
+
 json_t *sv_get_json(int port, const char *path)
 {
 	struct resp r;

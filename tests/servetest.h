@@ -93,6 +93,15 @@ long long sv_job_of(const struct resp *r);
 void sv_bed_clear(int port, const char *prefix, int want_status);
 /* sv_print_text - upload a G-code text to print on prefix's printer; the job number. */
 long long sv_print_text(int port, const char *prefix, const char *name, const char *gcode);
+/* sv_operational - wait until prefix's printer is connected (its worker
+ * connects it after the node listens). */
+void sv_operational(int port, const char *prefix);
+/* sv_marlin_log - the numbered lines the simulated Marlin printer ran (its
+ * log at path), from the one whose text is first on: each one's text, in
+ * turn, to fn, once its number is checked to follow the last one's; the
+ * driver's unnumbered probes are left out. */
+void sv_marlin_log(const char *path, const char *first, void (*fn)(void *ctx, const char *text),
+		   void *ctx);
 /* sv_get_json - GET path with the read key; the JSON answer (caller decrefs). */
 json_t *sv_get_json(int port, const char *path);
 

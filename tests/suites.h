@@ -67,6 +67,7 @@ void octoapi_push_tcases(Suite *s); /* tests/check_octopush.c: the push API, par
 void serve_page_tcases(Suite *s);   /* tests/check_servepage.c: the status page in Chromium, part of serve */
 Suite *farm_suite(void);	/* tests/check_farm.c: stratum farm, the farm view over two nodes */
 void octoapi_queue_tcases(Suite *s); /* tests/check_octoqueue.c: job calls and the queue, part of octoapi */
+void octoapi_inject_tcases(Suite *s); /* tests/check_octoinject.c: commands inside a print, part of octoapi */
 Suite *preview_suite(void);	/* tests/check_preview.c: layer preview, move walker */
 Suite *portpick_suite(void);	/* tests/check_portpick.c: --port auto on fake enumerations */
 Suite *send_suite(void);	/* tests/check_send.c: stratum send to the simulated Sailfish */

@@ -1,7 +1,8 @@
 /*
  * control.c - what the HTTP API and MQTT commands both do to a printer
- * (node_int.h): cancel, pause and resume its job, and store a received
- * file into its files (queued or not).  One place, so both ways of
+ * (node_int.h): cancel, pause and resume its job, move, cancel and requeue
+ * jobs of its queue, and store a received file into its files (queued or
+ * not).  One place, so both ways of
  * steering a node behave the same.
  */
 #include <errno.h>
@@ -159,6 +160,28 @@ int node_control_cancel(struct node *n, struct node_printer *p, int64_t id, stru
 	}
 	pthread_mutex_unlock(&p->mu);
 	return rc;
+}
+
+int node_control_move(struct node *n, struct node_printer *p, int64_t id, int64_t to,
+		      struct st_error *err)
+{
+	struct node_job j;
+	int rc;
+
+	if (to < 1)
+		return st_error_set(err, ST_ERR_ARG, "position is a whole number from 1 (1: the "
+				    "next job to print)");
+	rc = node_queue_move(n->q, p->cfg->name, id, to, err);
+	if (rc == 0)
+		return node_queue_get(n->q, id, &j, NULL) == 1 && !strcmp(j.printer, p->cfg->name)
+			       ? st_error_set(err, ST_ERR_RANGE, "job %lld is %s: only a queued job "
+					      "can be moved", (long long)id,
+					      node_job_state_name(j.state))
+			       : st_error_set(err, ST_ERR_RANGE, "no job %lld", (long long)id);
+	if (rc < 0)
+		return rc;
+	node_log("info", p->cfg->name, id, "moved to position %lld of the queue", (long long)to);
+	return 0;
 }
 
 int node_control_requeue(struct node *n, struct node_printer *p, int64_t id, int64_t *out,

@@ -132,10 +132,15 @@ json_t *http_temp_history(struct node_printer *p, int limit, bool tools, bool be
 		if (tools) {
 			json_object_set_new(o, "tool0", json_pack("{s:f,s:f}", "actual", t->tool[0],
 								  "target", t->tool[1]));
+			/* the second extruder's as the driver reads it (Sailfish),
+			 * others unknown */
 			for (int k = 1; k < p->prof->extruder_count; k++) {
+				bool known = k == 1 && !isnan(t->tool1[0]) && !isnan(t->tool1[1]);
+
 				snprintf(name, sizeof(name), "tool%d", k);
-				json_object_set_new(o, name, json_pack("{s:n,s:n}", "actual",
-								       "target"));
+				json_object_set_new(o, name, known ? json_pack("{s:f,s:f}", "actual",
+								t->tool1[0], "target", t->tool1[1])
+							   : json_pack("{s:n,s:n}", "actual", "target"));
 			}
 		}
 		if (bed)
@@ -625,16 +630,15 @@ enum MHD_Result http_queue_lines(struct MHD_Connection *c, struct node_printer *
 	pthread_mutex_unlock(&p->ctl.mu);
 	if (!p->connected)
 		ret = http_send_error(c, MHD_HTTP_CONFLICT, "Printer is not operational");
-	else if (p->job_printing && !in_print)
+	else if (p->job_printing && !paused && !in_print)
 		ret = http_send_error(c, MHD_HTTP_CONFLICT, "the printer is printing; this command is "
-						            "taken between jobs");
-	else if (p->job_printing && !node_print_takes_commands(p->cfg, p->prof))
-		ret = http_send_error(c, MHD_HTTP_CONFLICT, "the printer is printing; its print stream "
-						            "takes no other line (Sailfish): commands "
-							    "are taken between jobs");
-	else if (p->job_printing && paused)
-		ret = http_send_error(c, MHD_HTTP_CONFLICT, "the print is paused; commands go between "
-						            "its lines: resume it first");
+						            "taken while paused or between jobs");
+	else if (p->job_printing && (p->job_x3g || !node_print_takes_commands(p->cfg, p->prof)))
+		ret = http_send_error(c, MHD_HTTP_CONFLICT, p->job_x3g ?
+				      "the printer is printing an X3G file, whose commands are "
+				      "not G-code lines: commands are taken between jobs" :
+				      "the printer is printing; its print stream takes no other "
+				      "line: commands are taken between jobs");
 	else if ((size_t)p->ncmds + count > NODE_CMD_QUEUE)
 		ret = http_send_error(c, MHD_HTTP_CONFLICT, "the printer has too many commands waiting");
 	else {

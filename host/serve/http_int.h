@@ -137,9 +137,11 @@ void http_add_history(struct MHD_Connection *c, struct node_printer *p, json_t *
 /* The JSON object of the body, or NULL with the error answer sent in *ret. */
 json_t *http_body_json(struct MHD_Connection *c, struct req *r, enum MHD_Result *ret);
 /* Queue count checked G-code lines for p's worker: sent between jobs or,
- * when in_print and the printer's link takes them (Marlin), between two
- * lines of the print.  204, or 409 when not operational, the queue is full,
- * or printing and the lines cannot go in (or the print is paused). */
+ * when the printer's link takes them (Marlin, Sailfish with a G-code file),
+ * between two lines of the print: while it is paused (a jog, an extrusion:
+ * OctoPrint takes them then) or, for in_print lines, while it runs.  204,
+ * or 409 when not operational, the queue is full, or printing and the
+ * lines cannot go in. */
 enum MHD_Result http_queue_lines(struct MHD_Connection *c, struct node_printer *p,
 				 char lines[][NODE_CMD_MAX], size_t count, bool in_print);
 /* Queue p's selected file (POST /api/job "start"); p->mu held.  204, 409

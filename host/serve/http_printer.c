@@ -106,8 +106,8 @@ enum MHD_Result http_get_tool(struct node *n, struct MHD_Connection *c, struct r
  * The "offset" command: offsets, {"tool0": 5, ...}, or for the bed (offsets
  * NULL) the number bed.  Kept with the printer and added to the targets of
  * the file's lines as they stream (print.h), as OctoPrint does; only where
- * the stream can (Marlin): elsewhere an offset would be stored and never
- * applied, so it is refused.
+ * the stream can (Marlin, Sailfish): elsewhere an offset would be stored
+ * and never applied, so it is refused.
  */
 static enum MHD_Result set_offsets(struct node *n, struct MHD_Connection *c,
 				   struct node_printer *p, const json_t *offsets, const json_t *bed)
@@ -122,8 +122,8 @@ static enum MHD_Result set_offsets(struct node *n, struct MHD_Connection *c,
 		return http_send_error(c, MHD_HTTP_CONFLICT, "Printer is not operational");
 	if (!node_print_takes_commands(p->cfg, p->prof))
 		return http_send_error(c, MHD_HTTP_BAD_REQUEST, "temperature offsets are applied by "
-					"a Marlin printer's stream only: this printer's sends the "
-					"file's temperatures as they are");
+					"a Marlin or Sailfish printer's stream only: this printer's "
+					"sends the file's temperatures as they are");
 	if (!offsets) {
 		if (!json_is_number(bed) || fabs(json_number_value(bed)) > OFFSET_MAX)
 			return http_send_error(c, MHD_HTTP_BAD_REQUEST, "offset is degrees, -50 to 50");

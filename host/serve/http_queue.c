@@ -82,24 +82,12 @@ static enum MHD_Result move_job(struct node *n, struct MHD_Connection *c, struct
 {
 	json_t *pos = json_object_get(body, "position");
 	struct st_error err = {0};
-	int rc;
+	int rc = node_control_move(n, r->p, j->id, json_is_integer(pos) ? json_integer_value(pos)
+								       : 0, &err);
 
-	if (!json_is_integer(pos) || json_integer_value(pos) < 1)
-		return http_send_error(c, MHD_HTTP_BAD_REQUEST, "position is a whole number from 1 "
-							        "(1: the next job to print)");
-	rc = node_queue_move(n->q, r->p->cfg->name, j->id, json_integer_value(pos), &err);
-	if (rc == 0) {
-		char msg[120];
-
-		snprintf(msg, sizeof(msg), "job %lld is %s: only a queued job can be moved",
-			 (long long)j->id, node_job_state_name(j->state));
-		return http_send_error(c, MHD_HTTP_CONFLICT, msg);
-	}
-	if (rc < 0)
-		return http_send_error(c, error_status(rc), err.msg);
-	node_log("info", r->p->cfg->name, j->id, "moved to position %lld of the queue",
-		 (long long)json_integer_value(pos));
-	return http_no_content(c);
+	if (rc == ST_ERR_ARG)
+		return http_send_error(c, MHD_HTTP_BAD_REQUEST, err.msg);
+	return rc ? http_send_error(c, error_status(rc), err.msg) : http_no_content(c);
 }
 
 enum MHD_Result http_post_queue_job(struct node *n, struct MHD_Connection *c, struct req *r)

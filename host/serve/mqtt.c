@@ -13,7 +13,9 @@
  *   PRINTER/bed_clear           true, or false while the bed waits for an operator
  * all retained and published when they change.  Commands arrive on
  * PRINTER/cmd as JSON {"id", "command": enqueue|cancel|pause|resume, "url",
- * "name"} with a key with the control role, or signed with one (auth.c);
+ * "name"}, or the queue's list|move|cancel|requeue {"job", "position"} as
+ * /api/stratum/queue has them, with a key with the control role, or signed
+ * with one (auth.c);
  * each id is recorded in the queue database before the command runs, so a
  * re-delivered command (QoS 1, a client that sends twice) runs once.  The
  * answer goes to PRINTER/result.  G-code never travels over MQTT: enqueue
@@ -45,6 +47,7 @@
 #define MQTT_TOPICS 6		  /* status ... bed_clear, below */
 #define MQTT_REDIRECTS 5	  /* redirects an enqueue download follows */
 #define MQTT_RETRY_MAX_S 30	  /* longest wait between two tries to reach the broker */
+#define MQTT_COMMANDS "enqueue, cancel, pause, resume, list, move or requeue"
 
 static const char *const state_topics[MQTT_TOPICS] = {"status", "temperatures", "progress",
 						      "job", "queue", "bed_clear"};
@@ -355,12 +358,51 @@ static int cmd_enqueue(struct node *n, struct node_printer *p, json_t *o, int64_
 	return 0;
 }
 
+/* The job number a queue command names ("job"), or 0. */
+static int64_t job_named(const json_t *o)
+{
+	json_t *v = json_object_get(o, "job");
+
+	return json_is_integer(v) && json_integer_value(v) > 0 ? json_integer_value(v) : 0;
+}
+
+/*
+ * The queue commands, as /api/stratum/queue has them: list (the jobs and
+ * the ones waiting, in order, into *out), move {"job", "position"},
+ * cancel {"job"} (without job: the active one, below) and requeue {"job"}
+ * (the new job in *job).  Returns 0, a negative class, or 1 when cmd is
+ * none of them.
+ */
+static int cmd_queue(struct node *n, struct node_printer *p, const char *cmd, json_t *o,
+		     json_t **out, int64_t *job, struct st_error *err)
+{
+	int64_t id = job_named(o);
+	json_t *pos = json_object_get(o, "position");
+
+	if (!strcmp(cmd, "list")) {
+		*out = json_pack("{s:o,s:o}", "waiting", node_queue_waiting(n->q, p->cfg->name),
+				 "jobs", node_queue_list(n->q, p->cfg->name, 200));
+		return 0;
+	}
+	if (strcmp(cmd, "move") && strcmp(cmd, "requeue") &&
+	    (strcmp(cmd, "cancel") || !json_object_get(o, "job")))
+		return 1;
+	if (!id)
+		return st_error_set(err, ST_ERR_ARG, "%s needs job, a job number", cmd);
+	if (!strcmp(cmd, "move"))
+		return node_control_move(n, p, id, json_is_integer(pos) ? json_integer_value(pos) : 0,
+					 err);
+	if (!strcmp(cmd, "cancel"))
+		return node_control_cancel(n, p, id, err);
+	return node_control_requeue(n, p, id, job, err);
+}
+
 /* Run one command and publish its result (never with its key). */
 static void run_command(struct node_mqtt *m, struct node_printer *p, const char *payload)
 {
 	struct st_error err = {0};
 	char topic[400];
-	json_t *o, *res;
+	json_t *o, *res, *out = NULL;
 	const char *id, *cmd, *who;
 	int64_t job = 0;
 	bool duplicate = false;
@@ -377,9 +419,11 @@ static void run_command(struct node_mqtt *m, struct node_printer *p, const char 
 		rc = st_error_set(&err, ST_ERR_ARG, "id is required (a string of 1 to %d bytes) so "
 				  "that a re-delivered command runs once", MQTT_ID_MAX);
 	} else if (!cmd) {
-		rc = st_error_set(&err, ST_ERR_ARG, "command is enqueue, cancel, pause or resume");
+		rc = st_error_set(&err, ST_ERR_ARG, "command is " MQTT_COMMANDS);
 	} else if ((rc = node_queue_command_once(m->n->q, id, p->cfg->name, &err)) <= 0) {
 		duplicate = rc == 0; /* seen before: it ran (or was refused) then */
+	} else if ((rc = cmd_queue(m->n, p, cmd, o, &out, &job, &err)) != 1) {
+		/* a queue command: ran */
 	} else if (!strcmp(cmd, "enqueue")) {
 		rc = cmd_enqueue(m->n, p, o, &job, &err);
 	} else if (!strcmp(cmd, "cancel")) {
@@ -387,8 +431,8 @@ static void run_command(struct node_mqtt *m, struct node_printer *p, const char 
 	} else if (!strcmp(cmd, "pause") || !strcmp(cmd, "resume")) {
 		rc = node_control_job(m->n, p, "pause", cmd, &err);
 	} else {
-		rc = st_error_set(&err, ST_ERR_ARG, "command is enqueue, cancel, pause or resume, "
-				  "not '%.40s'", cmd);
+		rc = st_error_set(&err, ST_ERR_ARG, "command is " MQTT_COMMANDS ", not '%.40s'",
+				  cmd);
 	}
 	if (rc < 0)
 		node_log("warning", p->cfg->name, 0, "mqtt: command %.40s (id %.60s) refused: %s",
@@ -405,6 +449,8 @@ static void run_command(struct node_mqtt *m, struct node_printer *p, const char 
 		json_object_set_new(res, "error", json_string(err.msg));
 	if (job)
 		json_object_set_new(res, "job", json_integer(job));
+	if (out)
+		json_object_update_new(res, out);
 	text = json_dumps(res, JSON_COMPACT);
 	if (text)
 		publish(m, p->cfg->name, "result", text, false);

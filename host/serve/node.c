@@ -155,6 +155,8 @@ static void sample_temps(struct node_printer *p)
 	t->tool[1] = p->ctl.tool_target;
 	t->bed[0] = p->ctl.bed_actual;
 	t->bed[1] = p->ctl.bed_target;
+	t->tool1[0] = p->ctl.tool1_actual;
+	t->tool1[1] = p->ctl.tool1_target;
 	p->temps_next = (p->temps_next + 1) % NODE_TEMP_HISTORY;
 	if (p->ntemps < NODE_TEMP_HISTORY)
 		p->ntemps++;

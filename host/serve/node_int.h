@@ -171,6 +171,7 @@ struct node_gcode_estimate {
 struct node_temp_sample {
 	int64_t time;		/* Unix time, s */
 	double tool[2], bed[2]; /* actual, target, degC */
+	double tool1[2];	/* a second extruder's, NAN unknown */
 };
 
 #define NODE_TEMP_HISTORY 600 /* samples kept: 20 min at one per NODE_TEMP_EVERY ticks */
@@ -227,6 +228,7 @@ struct node_printer {
 	char link_desc[128];  /* what is connected (firmware; simulated or not) */
 	int64_t job_id;	      /* the job the worker is on, 0 when idle */
 	bool job_printing;    /* job_id is at the print step */
+	bool job_x3g;	      /* and prints an X3G file: no line goes in between */
 	char cmds[NODE_CMD_QUEUE][NODE_CMD_MAX];
 	int ncmds;
 
@@ -331,6 +333,15 @@ int node_control_restart(struct node *n, struct node_printer *p, int64_t *id,
  * ST_ERR_RANGE (no such job, or finished: HTTP 409), ST_ERR_IO.
  */
 int node_control_cancel(struct node *n, struct node_printer *p, int64_t id, struct st_error *err);
+
+/*
+ * node_control_move - move p's queued job id to position to (1: the next to
+ * print; past the end is the end).  Returns 0, ST_ERR_ARG (to below 1:
+ * HTTP 400), ST_ERR_RANGE (no queued job id of p, or a queue too long to
+ * reorder: HTTP 409), ST_ERR_IO.
+ */
+int node_control_move(struct node *n, struct node_printer *p, int64_t id, int64_t to,
+		      struct st_error *err);
 
 /*
  * node_control_requeue - queue p's finished job id (done, failed or

@@ -101,7 +101,8 @@ int node_print_command(struct node_link *l, const char *line, struct st_error *e
 
 /* node_print_takes_commands - whether the prints of the printer of pc
  * send ctl->next_command's lines between the file's and apply ctl's
- * temperature offsets (Marlin; not Sailfish, not test-instant). */
+ * temperature offsets (Marlin and Sailfish, not test-instant), paused or
+ * not; on Sailfish for G-code files only (an X3G file is not G-code). */
 bool node_print_takes_commands(const struct node_printer_config *pc, const struct profile *prof);
 
 /*

@@ -262,6 +262,7 @@ static void run_print(struct node_printer *p, struct node_job *j)
 	save(p, j);
 	p->job_id = j->id;
 	p->job_printing = true;
+	p->job_x3g = j->kind == 'x';
 	pthread_mutex_lock(&p->ctl.mu);
 	p->ctl.pause = p->ctl.cancel = p->ctl.paused = false;
 	p->ctl.next_command = next_command;
