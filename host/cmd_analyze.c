@@ -111,10 +111,8 @@ static int analyze_run(int argc, char **argv, struct clio *io)
 	shown = a.in;
 	if ((rc = clio_input(io, &a.in, "")))
 		return rc;
-	if ((rc = meshio_read(a.in, MESHIO_AUTO, &m, NULL, &err)))
-		return cmd_fail("stratum analyze",
-				rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR, "%s",
-				err.msg);
+	if ((rc = cmd_read_mesh("stratum analyze", a.in, &m, NULL)))
+		return rc;
 	if ((rc = cusp_measure(m, a.layer_height, a.spacing, &r, &err))) {
 		fprintf(stderr, "stratum analyze: %s: %s\n", shown, err.msg);
 		mesh_free(m);

@@ -192,11 +192,8 @@ static int check_run(int argc, char **argv, struct clio *io)
 	if ((rc = clio_input(io, &path, "")))
 		return rc;
 
-	rc = meshio_read(path, MESHIO_AUTO, &m, &fmt, &err);
-	if (rc)
-		return cmd_fail("stratum check",
-				rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR, "%s",
-				err.msg);
+	if ((rc = cmd_read_mesh("stratum check", path, &m, &fmt)))
+		return rc;
 	rc = mesh_analyze(m, threads, &rep, &err);
 	mesh_free(m);
 	if (rc)

@@ -46,17 +46,12 @@ struct compare_args {
 
 static int read_model(const char *path, struct mesh **m)
 {
-	struct st_error err = {0};
-	int rc = meshio_read(path, MESHIO_AUTO, m, NULL, &err);
+	int rc = cmd_read_mesh("stratum compare", path, m, NULL);
 
-	if (rc)
-		fprintf(stderr, "stratum compare: %s\n", err.msg);
-	else if (!(surfsample_area(*m) > 0))
-		fprintf(stderr, "stratum compare: %s: no triangle has an area; there is no surface "
-				"to measure\n", path);
-	else
-		return 0;
-	return rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
+	if (rc || surfsample_area(*m) > 0)
+		return rc;
+	return cmd_fail("stratum compare", ST_EXIT_DATAERR,
+			"%s: no triangle has an area; there is no surface to measure", path);
 }
 
 static json_t *side_json(const struct deviation_side *s)

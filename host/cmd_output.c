@@ -134,6 +134,16 @@ int cmd_report_end(const char *cmd, const char *what, bool json_failed)
 	return 0;
 }
 
+int cmd_read_mesh(const char *cmd, const char *path, struct mesh **m, enum meshio_format *fmt)
+{
+	struct st_error err = {0};
+	int rc = meshio_read(path, MESHIO_AUTO, m, fmt, &err);
+
+	if (!rc)
+		return 0;
+	return cmd_fail(cmd, rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR, "%s", err.msg);
+}
+
 int cmd_fail(const char *cmd, int status, const char *fmt, ...)
 {
 	va_list ap;

@@ -42,16 +42,11 @@ struct refine_args {
 /* The model at path, or an exit status after the message. */
 static int read_model(const char *path, struct mesh **m)
 {
-	struct st_error err = {0};
-	int rc = meshio_read(path, MESHIO_AUTO, m, NULL, &err);
+	int rc = cmd_read_mesh("stratum refine", path, m, NULL);
 
-	if (rc)
-		fprintf(stderr, "stratum refine: %s\n", err.msg);
-	else if (!(surfsample_area(*m) > 0))
-		fprintf(stderr, "stratum refine: %s: no triangle has an area\n", path);
-	else
-		return 0;
-	return rc == ST_ERR_NOMEM ? ST_EXIT_SOFTWARE : ST_EXIT_DATAERR;
+	if (rc || surfsample_area(*m) > 0)
+		return rc;
+	return cmd_fail("stratum refine", ST_EXIT_DATAERR, "%s: no triangle has an area", path);
 }
 
 static json_t *run_json(const struct refine_report *r)

@@ -11,6 +11,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "meshio.h"
 #include "st_error.h"
 #include "x3g.h"
 
@@ -60,6 +61,13 @@ bool cmd_same_file(const char *a, const char *b);
  * written (host/cmd_output.c).
  */
 int cmd_output_check(const char *in, const char *out, char *msg, size_t cap);
+
+/*
+ * cmd_read_mesh - meshio_read of path (any format; fmt may be NULL): 0, or
+ * the exit status (ST_EXIT_DATAERR, ST_EXIT_SOFTWARE out of memory) after
+ * "CMD: MESSAGE" on stderr (host/cmd_output.c).
+ */
+int cmd_read_mesh(const char *cmd, const char *path, struct mesh **m, enum meshio_format *fmt);
 
 /*
  * cmd_fail - print "CMD: MESSAGE" on stderr (fmt without its newline) and

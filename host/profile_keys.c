@@ -422,7 +422,8 @@ int prof_apply_key(struct loader *L, const struct key_def *d, const struct profi
 	char tok[INI_SHOW_MAX], names[256], range[96];
 	int n, i, rc, idx;
 	double v;
-	bool pct;
+	bool pct, per_extruder;
+	size_t size;
 
 	if (!*kv->value && d->type != KT_STRING && d->type != KT_FIRST_STRING && d->type != KT_USB)
 		return prof_key_error(L, kv, NULL, ST_ERR_PARSE,
@@ -453,65 +454,40 @@ int prof_apply_key(struct loader *L, const struct key_def *d, const struct profi
 		n = prof_split_list(L, kv, items, PROFILE_MAX_EXTRUDERS);
 		if (n < 0)
 			return n;
+		/* Every item is checked; a per-extruder key keeps each, a FIRST key its first. */
+		per_extruder = d->type == KT_EX_DOUBLE || d->type == KT_EX_INT ||
+			       d->type == KT_EX_POINT;
+		size = d->type == KT_EX_DOUBLE || d->type == KT_FIRST_DOUBLE ? sizeof(double)
+		       : d->type == KT_EX_INT || d->type == KT_FIRST_INT     ? sizeof(int)
+		       : d->type == KT_EX_POINT				     ? sizeof(struct profile_point)
+										     : sizeof(bool);
 		for (i = 0; i < n; i++) {
-			double dv;
-			int iv;
-			bool bv;
-			struct profile_point pv;
+			union {
+				double d;
+				int i;
+				bool b;
+				struct profile_point pt;
+			} item;
 
-			switch (d->type) {
-			case KT_EX_DOUBLE:
-			case KT_FIRST_DOUBLE:
-				rc = prof_number_item(L, kv, decl, &items[i], i, n, &dv);
-				if (rc)
-					return rc;
-				if (d->type == KT_FIRST_DOUBLE) {
-					if (i == 0)
-						*(double *)field = dv;
-				} else {
-					((double *)field)[i] = dv;
-				}
-				break;
-			case KT_EX_INT:
-			case KT_FIRST_INT:
-				rc = int_item(L, kv, d, &items[i], i, n, &iv);
-				if (rc)
-					return rc;
-				if (d->type == KT_FIRST_INT) {
-					if (i == 0)
-						*(int *)field = iv;
-				} else {
-					((int *)field)[i] = iv;
-				}
-				break;
-			case KT_EX_POINT:
-				rc = point_item(L, kv, d, &items[i], i, n, &pv);
-				if (rc)
-					return rc;
-				((struct profile_point *)field)[i] = pv;
-				break;
-			default: /* KT_FIRST_BOOL */
-				rc = bool_item(L, kv, &items[i], i, n, &bv);
-				if (rc)
-					return rc;
-				if (i == 0)
-					*(bool *)field = bv;
-				break;
-			}
+			if (d->type == KT_EX_DOUBLE || d->type == KT_FIRST_DOUBLE)
+				rc = prof_number_item(L, kv, decl, &items[i], i, n, &item.d);
+			else if (d->type == KT_EX_INT || d->type == KT_FIRST_INT)
+				rc = int_item(L, kv, d, &items[i], i, n, &item.i);
+			else if (d->type == KT_EX_POINT)
+				rc = point_item(L, kv, d, &items[i], i, n, &item.pt);
+			else /* KT_FIRST_BOOL */
+				rc = bool_item(L, kv, &items[i], i, n, &item.b);
+			if (rc)
+				return rc;
+			if (per_extruder || i == 0)
+				memcpy((char *)field + (per_extruder ? (size_t)i * size : 0), &item, size);
 		}
 		rc = check_count(L, kv, d, n);
 		if (rc)
 			return rc;
 		/* One value applies to every extruder. */
-		for (i = n; n == 1 && i < p->extruder_count; i++) {
-			if (d->type == KT_EX_DOUBLE)
-				((double *)field)[i] = ((double *)field)[0];
-			else if (d->type == KT_EX_INT)
-				((int *)field)[i] = ((int *)field)[0];
-			else if (d->type == KT_EX_POINT)
-				((struct profile_point *)field)[i] =
-				    ((struct profile_point *)field)[0];
-		}
+		for (i = n; per_extruder && n == 1 && i < p->extruder_count; i++)
+			memcpy((char *)field + (size_t)i * size, field, size);
 		return 0;
 	case KT_FIRST_HEIGHT:
 	case KT_WIDTH:

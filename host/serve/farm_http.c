@@ -11,9 +11,7 @@
  * is closed as the node closes one (header_timeout_s, min_body_rate;
  * http_deadline.c).
  */
-#include <arpa/inet.h>
 #include <curl/curl.h>
-#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -321,79 +319,33 @@ static enum MHD_Result handle_request(void *cls, struct MHD_Connection *c, const
 	return dispatch(f, c, r);
 }
 
-/* handle_request, telling the slow-client bounds where the request is. */
-static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *url,
-			      const char *method, const char *version, const char *upload,
-			      size_t *upload_size, void **con_cls)
+/* Free a request's state once it is answered. */
+static void free_request(void *request)
 {
-	return http_deadline_handle(handle_request, cls, c, url, method, version, upload,
-				    upload_size, con_cls);
-}
+	struct farm_req *r = request;
 
-static void completed(void *cls, struct MHD_Connection *c, void **con_cls,
-		      enum MHD_RequestTerminationCode toe)
-{
-	struct farm_req *r = *con_cls;
-
-	(void)cls, (void)toe;
-	http_deadline_next(c);
-	if (!r)
-		return;
 	if (r->pp)
 		MHD_destroy_post_processor(r->pp);
 	if (r->file)
 		fclose(r->file);
 	free(r);
-	*con_cls = NULL;
-}
-
-static void connection_event(void *cls, struct MHD_Connection *c, void **socket_context,
-			     enum MHD_ConnectionNotificationCode code)
-{
-	struct farm *f = cls;
-
-	if (code == MHD_CONNECTION_NOTIFY_STARTED)
-		http_deadline_open(f->deadlines, c, socket_context);
-	else if (code == MHD_CONNECTION_NOTIFY_CLOSED)
-		http_deadline_close(socket_context);
 }
 
 int farm_http_start(struct farm *f, struct st_error *err)
 {
-	const struct node_config *c = &f->cfg.base;
-	struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons(c->listen_port)};
-	const union MHD_DaemonInfo *info;
+	const struct http_hooks hooks = {handle_request, free_request, NULL, f};
+	const struct MHD_OptionItem extra[] = {
+	    {MHD_OPTION_CONNECTION_LIMIT, (intptr_t)f->cfg.base.max_connections, NULL},
+	    {MHD_OPTION_END, 0, NULL},
+	};
 
-	if (inet_pton(AF_INET, c->listen_addr, &sa.sin_addr) != 1)
-		return st_error_set(err, ST_ERR_ARG, "listen address %s is not IPv4",
-				    c->listen_addr);
-	if (http_deadlines_start(c, &f->deadlines, err))
-		return err->code;
 	/* a thread per connection: a job being sent to a node holds its own */
-	f->httpd = MHD_start_daemon(MHD_USE_INTERNAL_POLLING_THREAD |
-				    MHD_USE_THREAD_PER_CONNECTION, c->listen_port, NULL, NULL,
-				    handle, f, MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&sa,
-				    MHD_OPTION_CONNECTION_TIMEOUT, c->idle_timeout_s,
-				    MHD_OPTION_CONNECTION_LIMIT, c->max_connections,
-				    MHD_OPTION_PER_IP_CONNECTION_LIMIT, c->max_connections_per_ip,
-				    MHD_OPTION_NOTIFY_CONNECTION, connection_event, f,
-				    MHD_OPTION_NOTIFY_COMPLETED, completed, f, MHD_OPTION_END);
-	if (!f->httpd) {
-		int rc = st_error_set(err, ST_ERR_IO, "cannot listen on %s:%u: %s",
-				      c->listen_addr, c->listen_port, strerror(errno));
-
-		http_deadlines_stop(&f->deadlines);
-		return rc;
-	}
-	info = MHD_get_daemon_info(f->httpd, MHD_DAEMON_INFO_BIND_PORT);
-	f->port = info ? info->port : c->listen_port;
-	return 0;
+	return http_server_start(&f->cfg.base,
+				 MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_THREAD_PER_CONNECTION,
+				 NULL, NULL, &hooks, extra, &f->httpd, &f->deadlines, &f->port, err);
 }
 
 void farm_http_stop(struct farm *f)
 {
-	if (f->httpd)
-		MHD_stop_daemon(f->httpd);
-	f->httpd = NULL;
-	http_deadlines_stop(&f->deadlines);
+	http_server_stop(&f->httpd, &f->deadlines);
 }

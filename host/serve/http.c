@@ -13,7 +13,6 @@
  * is answered at once and its body never read (docs/serve.md, "Limits"):
  * nobody without a key can make the node read a gigabyte.
  */
-#include <arpa/inet.h>
 #include <ctype.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -602,35 +601,16 @@ static enum MHD_Result handle_request(void *cls, struct MHD_Connection *c, const
 	return r->rt->fn(n, c, r);
 }
 
-/* handle_request, telling the slow-client bounds (http_deadline.c) where
- * the request is: its header came (the first call), a piece of its body
- * came, or it is all read (the last call, or the page and the push API,
- * answered in their first call). */
-static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *url,
-			      const char *method, const char *version, const char *upload,
-			      size_t *upload_size, void **con_cls)
+/* Free a request's state once it is answered. */
+static void free_request(void *request)
 {
-	return http_deadline_handle(handle_request, cls, c, url, method, version, upload,
-				    upload_size, con_cls);
-}
+	struct req *r = request;
 
-/* Free a request's state and log it once it is answered. */
-static void completed(void *cls, struct MHD_Connection *c, void **con_cls,
-		      enum MHD_RequestTerminationCode toe)
-{
-	struct req *r = *con_cls;
-
-	(void)cls;
-	(void)toe;
-	http_deadline_next(c);
-	if (!r)
-		return;
 	if (r->pp)
 		MHD_destroy_post_processor(r->pp);
 	upload_discard(r);
 	free(r->body);
 	free(r);
-	*con_cls = NULL;
 }
 
 /* Log every request's path.  Not its query: the status page takes the
@@ -671,57 +651,31 @@ static enum MHD_Result admit(void *cls, const struct sockaddr *addr, socklen_t l
 	return MHD_YES;
 }
 
-static void connection_event(void *cls, struct MHD_Connection *c, void **socket_context,
-			     enum MHD_ConnectionNotificationCode code)
+/* A connection closed: its slot is free (admit). */
+static void connection_closed(void *cls)
 {
 	struct node *n = cls;
 
-	if (code == MHD_CONNECTION_NOTIFY_STARTED) {
-		http_deadline_open(n->deadlines, c, socket_context);
-	} else if (code == MHD_CONNECTION_NOTIFY_CLOSED) {
-		http_deadline_close(socket_context);
-		atomic_fetch_sub(&n->http_connections, 1);
-	}
+	atomic_fetch_sub(&n->http_connections, 1);
 }
 
 int node_http_start(struct node *n, struct st_error *err)
 {
-	struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons(n->cfg.listen_port)};
-	const union MHD_DaemonInfo *info;
+	const struct http_hooks hooks = {handle_request, free_request, connection_closed, n};
+	const struct MHD_OptionItem extra[] = {
+	    {MHD_OPTION_THREAD_POOL_SIZE, HTTP_POOL, NULL},
+	    {MHD_OPTION_CONNECTION_LIMIT, (intptr_t)(n->cfg.max_connections * HTTP_POOL), NULL},
+	    {MHD_OPTION_URI_LOG_CALLBACK, (intptr_t)log_uri, n},
+	    {MHD_OPTION_END, 0, NULL},
+	};
 
-	if (inet_pton(AF_INET, n->cfg.listen_addr, &sa.sin_addr) != 1)
-		return st_error_set(err, ST_ERR_ARG, "listen address %s is not IPv4",
-				    n->cfg.listen_addr);
 	atomic_store(&n->http_connections, 0);
-	if (http_deadlines_start(&n->cfg, &n->deadlines, err))
-		return err->code;
-	n->httpd = MHD_start_daemon(MHD_USE_AUTO_INTERNAL_THREAD | MHD_ALLOW_UPGRADE,
-				    n->cfg.listen_port, admit, n,
-				    handle, n, MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&sa,
-				    MHD_OPTION_THREAD_POOL_SIZE, (unsigned)HTTP_POOL,
-				    MHD_OPTION_CONNECTION_TIMEOUT, n->cfg.idle_timeout_s,
-				    MHD_OPTION_CONNECTION_LIMIT, n->cfg.max_connections * HTTP_POOL,
-				    MHD_OPTION_NOTIFY_CONNECTION, connection_event, n,
-				    MHD_OPTION_PER_IP_CONNECTION_LIMIT, n->cfg.max_connections_per_ip,
-				    MHD_OPTION_NOTIFY_COMPLETED, completed, n,
-				    MHD_OPTION_URI_LOG_CALLBACK, log_uri, n, MHD_OPTION_END);
-	if (!n->httpd) {
-		int rc = st_error_set(err, ST_ERR_IO, "cannot listen on %s:%u: %s",
-				      n->cfg.listen_addr, n->cfg.listen_port, strerror(errno));
-
-		http_deadlines_stop(&n->deadlines);
-		return rc;
-	}
-	info = MHD_get_daemon_info(n->httpd, MHD_DAEMON_INFO_BIND_PORT);
-	n->port = info ? info->port : n->cfg.listen_port;
-	return 0;
+	return http_server_start(&n->cfg, MHD_USE_AUTO_INTERNAL_THREAD | MHD_ALLOW_UPGRADE, admit,
+				 n, &hooks, extra, &n->httpd, &n->deadlines, &n->port, err);
 }
 
 void node_http_stop(struct node *n)
 {
 	node_push_stop(n); /* libmicrohttpd wants upgraded sockets closed first */
-	if (n->httpd)
-		MHD_stop_daemon(n->httpd);
-	n->httpd = NULL;
-	http_deadlines_stop(&n->deadlines);
+	http_server_stop(&n->httpd, &n->deadlines);
 }

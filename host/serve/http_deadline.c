@@ -12,6 +12,8 @@
  * shutting its socket down (libmicrohttpd then reads the end and closes it
  * as if the client had).  The socket is shut down under the lock that its
  * close notification takes, so it is always still the connection's own.
+ * The server's own callbacks are called through these (struct http_hooks),
+ * so the node and the farm view set their daemons up in one place.
  */
 #include <arpa/inet.h>
 #include <errno.h>
@@ -51,6 +53,7 @@ struct http_deadlines {
 	struct http_conn *head;
 	int64_t header_ms;  /* header_timeout_s; the body's window too */
 	uint64_t min_bytes; /* min_body_rate x header_timeout_s; 0: the body is not bounded */
+	struct http_hooks hooks;
 };
 
 static void conn_log(int fd, const char *why, unsigned secs)
@@ -107,8 +110,8 @@ static void *watchdog(void *arg)
 	return NULL;
 }
 
-int http_deadlines_start(const struct node_config *cfg, struct http_deadlines **out,
-			 struct st_error *err)
+static int deadlines_start(const struct node_config *cfg, const struct http_hooks *hooks,
+			   struct http_deadlines **out, struct st_error *err)
 {
 	struct http_deadlines *d = calloc(1, sizeof(*d));
 	pthread_condattr_t ca;
@@ -117,6 +120,7 @@ int http_deadlines_start(const struct node_config *cfg, struct http_deadlines **
 		return st_error_set(err, ST_ERR_NOMEM, "out of memory");
 	d->header_ms = (int64_t)cfg->header_timeout_s * 1000;
 	d->min_bytes = (uint64_t)cfg->min_body_rate * cfg->header_timeout_s;
+	d->hooks = *hooks;
 	pthread_mutex_init(&d->lock, NULL);
 	pthread_condattr_init(&ca);
 	pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
@@ -133,7 +137,7 @@ int http_deadlines_start(const struct node_config *cfg, struct http_deadlines **
 	return 0;
 }
 
-void http_deadlines_stop(struct http_deadlines **dp)
+static void deadlines_stop(struct http_deadlines **dp)
 {
 	struct http_deadlines *d = *dp;
 
@@ -151,15 +155,15 @@ void http_deadlines_stop(struct http_deadlines **dp)
 	*dp = NULL;
 }
 
-void http_deadline_open(struct http_deadlines *d, struct MHD_Connection *c,
-			void **socket_context)
+/* A connection started: watch it from now. */
+static void conn_open(struct http_deadlines *d, struct MHD_Connection *c, void **socket_context)
 {
 	const union MHD_ConnectionInfo *fd = MHD_get_connection_info(c,
 								      MHD_CONNECTION_INFO_CONNECTION_FD);
 	struct http_conn *k = calloc(1, sizeof(*k));
 
 	*socket_context = k;
-	if (!k || !fd || !d) {
+	if (!k || !fd) {
 		/* Out of memory: the connection goes unwatched (idle_timeout_s still holds). */
 		free(k);
 		*socket_context = NULL;
@@ -177,7 +181,7 @@ void http_deadline_open(struct http_deadlines *d, struct MHD_Connection *c,
 	pthread_mutex_unlock(&d->lock);
 }
 
-void http_deadline_close(void **socket_context)
+static void conn_close(void **socket_context)
 {
 	struct http_conn *k = *socket_context;
 
@@ -214,14 +218,22 @@ static void set_phase(struct MHD_Connection *c, enum phase phase, size_t bytes)
 	pthread_mutex_unlock(&k->d->lock);
 }
 
-enum MHD_Result http_deadline_handle(MHD_AccessHandlerCallback handler, void *cls,
-				     struct MHD_Connection *c, const char *url, const char *method,
-				     const char *version, const char *upload, size_t *upload_size,
-				     void **con_cls)
+/*
+ * The server's handler, noting where the request is: its header came (the
+ * first call, which keeps state in *con_cls), a piece of its body came, or
+ * it is read and being answered (the last call, or a first one that
+ * answered at once, as the page and the push API do; an upgrade is not
+ * bounded here).
+ */
+static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *url,
+			      const char *method, const char *version, const char *upload,
+			      size_t *upload_size, void **con_cls)
 {
+	struct http_deadlines *d = cls;
 	bool first = !*con_cls;
 	size_t piece = *upload_size;
-	enum MHD_Result ret = handler(cls, c, url, method, version, upload, upload_size, con_cls);
+	enum MHD_Result ret = d->hooks.handle(d->hooks.cls, c, url, method, version, upload,
+					      upload_size, con_cls);
 
 	if (first && *con_cls)
 		set_phase(c, PHASE_BODY, 0); /* the header came */
@@ -232,7 +244,73 @@ enum MHD_Result http_deadline_handle(MHD_AccessHandlerCallback handler, void *cl
 	return ret;
 }
 
-void http_deadline_next(struct MHD_Connection *c)
+/* A request is answered: its state freed, and a kept-alive connection
+ * waits for the next header. */
+static void completed(void *cls, struct MHD_Connection *c, void **con_cls,
+		      enum MHD_RequestTerminationCode toe)
 {
+	struct http_deadlines *d = cls;
+
+	(void)toe;
 	set_phase(c, PHASE_HEADER, 0);
+	if (*con_cls)
+		d->hooks.free_request(*con_cls);
+	*con_cls = NULL;
+}
+
+static void connection_event(void *cls, struct MHD_Connection *c, void **socket_context,
+			     enum MHD_ConnectionNotificationCode code)
+{
+	struct http_deadlines *d = cls;
+
+	if (code == MHD_CONNECTION_NOTIFY_STARTED) {
+		conn_open(d, c, socket_context);
+	} else if (code == MHD_CONNECTION_NOTIFY_CLOSED) {
+		conn_close(socket_context);
+		if (d->hooks.closed)
+			d->hooks.closed(d->hooks.cls);
+	}
+}
+
+int http_server_start(const struct node_config *cfg, unsigned flags,
+		      MHD_AcceptPolicyCallback accept, void *accept_cls,
+		      const struct http_hooks *hooks, const struct MHD_OptionItem *extra,
+		      struct MHD_Daemon **httpd, struct http_deadlines **deadlines, uint16_t *port,
+		      struct st_error *err)
+{
+	struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons(cfg->listen_port)};
+	const union MHD_DaemonInfo *info;
+	struct http_deadlines *d = NULL;
+
+	if (inet_pton(AF_INET, cfg->listen_addr, &sa.sin_addr) != 1)
+		return st_error_set(err, ST_ERR_ARG, "listen address %s is not IPv4",
+				    cfg->listen_addr);
+	if (deadlines_start(cfg, hooks, &d, err))
+		return err->code;
+	*httpd = MHD_start_daemon(flags, cfg->listen_port, accept, accept_cls, handle, d,
+				  MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&sa,
+				  MHD_OPTION_CONNECTION_TIMEOUT, cfg->idle_timeout_s,
+				  MHD_OPTION_PER_IP_CONNECTION_LIMIT, cfg->max_connections_per_ip,
+				  MHD_OPTION_NOTIFY_CONNECTION, connection_event, d,
+				  MHD_OPTION_NOTIFY_COMPLETED, completed, d, MHD_OPTION_ARRAY, extra,
+				  MHD_OPTION_END);
+	if (!*httpd) {
+		int rc = st_error_set(err, ST_ERR_IO, "cannot listen on %s:%u: %s",
+				      cfg->listen_addr, cfg->listen_port, strerror(errno));
+
+		deadlines_stop(&d);
+		return rc;
+	}
+	*deadlines = d;
+	info = MHD_get_daemon_info(*httpd, MHD_DAEMON_INFO_BIND_PORT);
+	*port = info ? info->port : cfg->listen_port;
+	return 0;
+}
+
+void http_server_stop(struct MHD_Daemon **httpd, struct http_deadlines **deadlines)
+{
+	if (*httpd)
+		MHD_stop_daemon(*httpd);
+	*httpd = NULL;
+	deadlines_stop(deadlines); /* every connection was closed */
 }

@@ -217,29 +217,38 @@ void node_push_stop(struct node *n);
 void node_push_session(const char *secret, char out[NODE_PUSH_SESSION_LEN + 1]);
 
 /*
- * http_deadline.c - the bounds on a slow client (docs/serve.md, "Limits"),
- * which libmicrohttpd's inactivity time-out does not give: the header whole
- * within cfg's header_timeout_s, the body at min_body_rate.  The node's
- * server (http.c) and the farm view's (farm_http.c) tell it each
- * connection's start and close (their MHD_OPTION_NOTIFY_CONNECTION) and
- * where its request is.
+ * http_deadline.c - an HTTP server on libmicrohttpd with the bounds on a
+ * slow client (docs/serve.md, "Limits") that libmicrohttpd's inactivity
+ * time-out does not give: the header whole within cfg's header_timeout_s,
+ * the body at min_body_rate.  The node's server (http.c) and the farm
+ * view's (farm_http.c) each give their request handler and how to free
+ * what it keeps per request; the bounds see every call of the handler and
+ * every connection's start and close.
  */
+struct http_hooks {
+	/* libmicrohttpd's request handler, called with cls; it keeps its
+	 * state in *con_cls from the first call on */
+	MHD_AccessHandlerCallback handle;
+	void (*free_request)(void *request); /* the state it kept, once answered */
+	void (*closed)(void *cls);	     /* a connection closed; may be NULL */
+	void *cls;
+};
 struct http_deadlines;
-int http_deadlines_start(const struct node_config *cfg, struct http_deadlines **out,
-			 struct st_error *err);
-void http_deadlines_stop(struct http_deadlines **d); /* after the HTTP daemon stopped */
-void http_deadline_open(struct http_deadlines *d, struct MHD_Connection *c,
-			void **socket_context);
-void http_deadline_close(void **socket_context);
-/* Call handler (a server's request handler) and note where the request is:
- * its header came (the first call, which keeps state in *con_cls), a piece
- * of its body came, or it is read and being answered (the last call, or a
- * first one that answered at once; an upgrade is not bounded here). */
-enum MHD_Result http_deadline_handle(MHD_AccessHandlerCallback handler, void *cls,
-				     struct MHD_Connection *c, const char *url, const char *method,
-				     const char *version, const char *upload, size_t *upload_size,
-				     void **con_cls);
-/* The request is done: a kept-alive connection waits for the next header. */
-void http_deadline_next(struct MHD_Connection *c);
+/*
+ * http_server_start - listen on cfg's listen_addr:listen_port with
+ * libmicrohttpd's flags, cfg's idle_timeout_s and max_connections_per_ip
+ * and the options in extra (up to MHD_OPTION_END); accept (may be NULL)
+ * admits a connection, with accept_cls.  Sets *httpd, *deadlines and *port
+ * (the port bound: cfg's, or the one given for 0).  0, or ST_ERR_ARG (the
+ * address is not IPv4), ST_ERR_IO (cannot listen) or ST_ERR_NOMEM with
+ * nothing started.
+ */
+int http_server_start(const struct node_config *cfg, unsigned flags,
+		      MHD_AcceptPolicyCallback accept, void *accept_cls,
+		      const struct http_hooks *hooks, const struct MHD_OptionItem *extra,
+		      struct MHD_Daemon **httpd, struct http_deadlines **deadlines, uint16_t *port,
+		      struct st_error *err);
+/* http_server_stop - stop the server (closing its connections), then its bounds. */
+void http_server_stop(struct MHD_Daemon **httpd, struct http_deadlines **deadlines);
 
 #endif /* STRATUM_HOST_SERVE_HTTP_INT_H */
