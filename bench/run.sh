@@ -1,9 +1,11 @@
 #!/bin/sh
-# bench/run.sh BIN [check|repair|intersect|slice|region|thin|gcodesize|stream|soak|x3g|s3g|serve|corpus|all] - time `stratum check`
+# bench/run.sh BIN [check|repair|intersect|slice|speed|region|thin|gcodesize|stream|soak|x3g|s3g|serve|corpus|all] - time `stratum check`
 # against admesh, `stratum repair` on generated files, the exact pass of the
 # repair on self-intersecting inputs (`intersect`: CGAL data meshes, spheres,
 # scattered soups; build/bench/refine_time), `stratum slice` against
-# PrusaSlicer's `--export-gcode`, and streaming to `stratum sim` with
+# PrusaSlicer's `--export-gcode` (`speed`: on CGAL's armadillo and
+# ChineseDragon and a 1M-triangle sphere, at 1 and 2 threads, run
+# alternately), and streaming to `stratum sim` with
 # `stratum send` against Printrun's printcore (`soak`: 100k lines under
 # faults, exactly once); `region` measures how well both
 # slicers' printed regions match the models' cross-sections (issue 5, with
@@ -32,15 +34,15 @@ mkdir -p "$out"
 gen=build/bench/gen_mesh
 refine=build/bench/refine_time
 
-case $what in check|repair|intersect|slice|region|thin|gcodesize|stream|soak|x3g|s3g|serve|corpus|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|intersect|slice|region|thin|gcodesize|stream|soak|x3g|s3g|serve|corpus|all]" >&2; exit 2;; esac
+case $what in check|repair|intersect|slice|speed|region|thin|gcodesize|stream|soak|x3g|s3g|serve|corpus|all) ;; *) echo "usage: bench/run.sh BIN [check|repair|intersect|slice|speed|region|thin|gcodesize|stream|soak|x3g|s3g|serve|corpus|all]" >&2; exit 2;; esac
 
-if [ "$what" != slice ] && [ "$what" != region ] && [ "$what" != thin ] && [ "$what" != stream ] && [ "$what" != soak ] && [ "$what" != x3g ] && [ "$what" != s3g ] && [ "$what" != serve ]; then
+if [ "$what" != slice ] && [ "$what" != speed ] && [ "$what" != region ] && [ "$what" != thin ] && [ "$what" != stream ] && [ "$what" != soak ] && [ "$what" != x3g ] && [ "$what" != s3g ] && [ "$what" != serve ]; then
 	[ -f "$out/torus-1m.stl" ] || "$gen" torus 1000 500 "$out/torus-1m.stl"
 	[ -f "$out/torus-2m.stl" ] || "$gen" torus 1000 1000 "$out/torus-2m.stl"
 	[ -f "$out/sphere-1m.stl" ] || "$gen" sphere 501 1000 "$out/sphere-1m.stl"
 	[ -f "$out/spheres.stl" ] || "$gen" spheres 8 "$out/spheres.stl"
 fi
-if [ "$what" != check ] && [ "$what" != region ] && [ "$what" != thin ] && [ "$what" != stream ] && [ "$what" != soak ] && [ "$what" != x3g ] && [ "$what" != s3g ] && [ "$what" != serve ]; then
+if [ "$what" != check ] && [ "$what" != speed ] && [ "$what" != region ] && [ "$what" != thin ] && [ "$what" != stream ] && [ "$what" != soak ] && [ "$what" != x3g ] && [ "$what" != s3g ] && [ "$what" != serve ]; then
 	[ -f "$out/torus-100k.stl" ] || "$gen" torus 250 200 "$out/torus-100k.stl"
 	[ -f "$out/twospheres.stl" ] || "$gen" twospheres 100 80 "$out/twospheres.stl"
 	[ -f "$out/scan.stl" ] || "$gen" scan 250 120 0.7 "$out/scan.stl"
@@ -181,6 +183,58 @@ for f in cube20 scan; do
 		echo "| $f | $tris | PrusaSlicer $pver ($cfg) | $pl | $pt | $pc | $(echo "scale=1; $pm / 1024" | bc) | $(ratio "$st" "$pt") | $(ratio "$sc" "$pc") | $(ratio "$sm" "$pm") |"
 	done
 done
+}
+
+# speed_models: CGAL's armadillo and ChineseDragon (Debian's libcgal-demo,
+# scaled to 100 mm as bench/cgal_corpus.sh does) and the 1M-triangle sphere.
+speed_models() {
+	cgal=/usr/share/doc/libcgal-demo/data.tar.gz
+	for m in armadillo ChineseDragon-10kv; do
+		[ -f "$out/$m.stl" ] && continue
+		tar -xzf "$cgal" -O "data/meshes/$m.off" >"$out/$m.off" &&
+			"$gen" convert "$out/$m.off" 100 "$out/$m.stl" >/dev/null
+	done
+	[ -f "$out/sphere-1m.stl" ] || "$gen" sphere 501 1000 "$out/sphere-1m.stl"
+}
+
+# The whole `stratum slice` (repair included) against `prusa-slicer
+# --export-gcode` at the same settings ("full" ini) and thread count (issue
+# 19 item 5), run alternately, one run each: at 1 thread both pinned to
+# one core with taskset (PrusaSlicer 2.5 has no thread option; its TBB pool
+# follows the affinity mask), at 2 threads on both cores.  The load
+# average before and after is printed: the machine is shared, so the CPU
+# ratio is the steadier figure.
+speed_table() {
+if ! command -v prusa-slicer >/dev/null 2>&1; then
+	echo "prusa-slicer is not installed (make bench installs it)" >&2
+	return 1
+fi
+speed_models
+prusa_ini full >"$out/prusa-full.ini"
+pver=$(prusa-slicer --help 2>/dev/null | sed -n 's/^PrusaSlicer-\([0-9.]*\).*/\1/p')
+echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
+echo
+echo "| model | triangles | threads | stratum wall s | CPU s | peak MiB | PrusaSlicer $pver wall s | CPU s | peak MiB | wall ratio stratum/PrusaSlicer | CPU ratio | memory ratio |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
+for f in ${SPEED_MODELS:-ChineseDragon-10kv armadillo sphere-1m}; do
+	path="$out/$f.stl"
+	tris=$(( ($(stat -c %s "$path") - 84) / 50 ))
+	for t in ${SPEED_THREADS:-1 2}; do
+		pin=""
+		[ "$t" = 1 ] && pin="taskset -c 0"
+		# shellcheck disable=SC2086 # $pin: words on purpose
+		set -- $(once $pin "$bin" slice "$path" -o "$out/$f-speed-stratum.gcode" \
+			--printer prusa-i3-mk3s --center 125,105 --threads "$t")
+		st=$1; sc=$2; sm=$3
+		# shellcheck disable=SC2086
+		set -- $(once $pin prusa-slicer --export-gcode --load "$out/prusa-full.ini" \
+			--center 125,105 -o "$out/$f-speed-prusa.gcode" "$path")
+		pt=$1; pc=$2; pm=$3
+		echo "| $f | $tris | $t | $st | $sc | $(echo "scale=1; $sm / 1024" | bc) | $pt | $pc | $(echo "scale=1; $pm / 1024" | bc) | $(ratio "$st" "$pt") | $(ratio "$sc" "$pc") | $(ratio "$sm" "$pm") |"
+	done
+done
+echo
+echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"
 }
 
 # The issue 5 test models, written by gen_mesh (tests/fixtures.h).
@@ -719,8 +773,9 @@ check) check_table ;;
 repair) repair_table ;;
 intersect) intersect_table ;;
 slice) slice_table ;;
+speed) speed_table ;;
 stream) stream_table ;;
 soak) soak_table ;;
-all) check_table; echo; repair_table; echo; intersect_table; echo; slice_table; echo; region_table; echo; thin_table; echo; gcodesize_table; echo; stream_table; echo; soak_table; echo; x3g_table; echo; s3g_table; echo; serve_table; echo; corpus_table; echo; cura_table ;;
+all) check_table; echo; repair_table; echo; intersect_table; echo; slice_table; echo; speed_table; echo; region_table; echo; thin_table; echo; gcodesize_table; echo; stream_table; echo; soak_table; echo; x3g_table; echo; s3g_table; echo; serve_table; echo; corpus_table; echo; cura_table ;;
 esac
 

@@ -80,6 +80,27 @@ static void set_accel(struct gcodew *w, double v)
 	est_planner_set_accel(w->est, &w->s->limits, a, a);
 }
 
+/*
+ * Append " <letter><u / 10^digits>" to line at *len: a move's word, its
+ * zero before the point dropped as PrusaSlicer writes it ("E.03113",
+ * "Z.2"): a byte on almost every extrusion, and every G-code reader takes
+ * it (Marlin's number parser, and stratum's own: send, x3g, preview).
+ */
+static void put_word(char *line, size_t *len, char letter, int64_t u, int digits)
+{
+	char *v = line + *len + 2;
+	size_t n = gcodew_fmt_units(v, u, digits);
+	size_t sign = v[0] == '-';
+
+	line[*len] = ' ';
+	line[*len + 1] = letter;
+	if (n > sign + 1 && v[sign] == '0' && v[sign + 1] == '.') {
+		memmove(v + sign, v + sign + 1, n - sign); /* the '\0' too */
+		n--;
+	}
+	*len += 2 + n;
+}
+
 /* Write one move op (G1, or G2/G3 for an arc) and feed it to the
  * estimator. */
 static int emit_move(struct gcodew *w, const struct op *o)
@@ -130,33 +151,20 @@ static int emit_move(struct gcodew *w, const struct op *o)
 	/* The line is assembled here and written at once (see gcodew_fmt_units). */
 	len = 2;
 	memcpy(line, arc ? (o->ccw ? "G3" : "G2") : "G1", 2);
-	if (mx) {
-		memcpy(line + len, " X", 2);
-		len += 2 + gcodew_fmt_units(line + len + 2, x, XYZ_DIGITS);
-	}
-	if (my) {
-		memcpy(line + len, " Y", 2);
-		len += 2 + gcodew_fmt_units(line + len + 2, y, XYZ_DIGITS);
-	}
+	if (mx)
+		put_word(line, &len, 'X', x, XYZ_DIGITS);
+	if (my)
+		put_word(line, &len, 'Y', y, XYZ_DIGITS);
 	if (arc) {
-		memcpy(line + len, " I", 2);
-		len += 2 + gcodew_fmt_units(line + len + 2, ci, XYZ_DIGITS);
-		memcpy(line + len, " J", 2);
-		len += 2 + gcodew_fmt_units(line + len + 2, cj, XYZ_DIGITS);
+		put_word(line, &len, 'I', ci, XYZ_DIGITS);
+		put_word(line, &len, 'J', cj, XYZ_DIGITS);
 	}
-	if (mz) {
-		memcpy(line + len, " Z", 2);
-		len += 2 + gcodew_fmt_units(line + len + 2, z, XYZ_DIGITS);
-	}
-	if (de) {
-		memcpy(line + len, " E", 2);
-		len += 2 + gcodew_fmt_units(line + len + 2,
-					    w->s->use_relative_e_distances ? de : epos, E_DIGITS);
-	}
-	if (f != w->wf) {
-		memcpy(line + len, " F", 2);
-		len += 2 + gcodew_fmt_units(line + len + 2, f, 0);
-	}
+	if (mz)
+		put_word(line, &len, 'Z', z, XYZ_DIGITS);
+	if (de)
+		put_word(line, &len, 'E', w->s->use_relative_e_distances ? de : epos, E_DIGITS);
+	if (f != w->wf)
+		put_word(line, &len, 'F', f, 0);
 	line[len++] = '\n';
 	fwrite(line, 1, len, w->fp);
 	w->moves++;

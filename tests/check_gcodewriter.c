@@ -411,9 +411,9 @@ START_TEST(test_retraction)
 	}
 	/* The hop goes up after the retraction and down before the unretraction. */
 	if (!s.wipe && !s.use_relative_e_distances) {
-		long hop = at(g, "G1 Z0.6 F720\n"), retract = at(g, " F2400\n");
+		long hop = at(g, "G1 Z.6 F720\n"), retract = at(g, " F2400\n");
 		ck_assert_int_lt(retract, hop);
-		ck_assert_int_lt(hop, at(g + hop, "G1 Z0.2 F720\n") + hop);
+		ck_assert_int_lt(hop, at(g + hop, "G1 Z.2 F720\n") + hop);
 	}
 	free(g);
 	free(r.moves);
