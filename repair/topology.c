@@ -458,6 +458,14 @@ static int check_vertices_and_loops(struct topo *tp, struct mesh_report *rep,
 	for (size_t v = 0; v < m->nverts; v++) {
 		if (!(vstate[v] & 1))
 			continue;
+		/* The bounding box of the vertices the layer uses, once each. */
+		for (int k = 0; k < 3; k++) {
+			const double c = m->verts[v][k];
+			if (rep->vertices == 0 || c < rep->bbox_min[k])
+				rep->bbox_min[k] = c;
+			if (rep->vertices == 0 || c > rep->bbox_max[k])
+				rep->bbox_max[k] = c;
+		}
 		rep->vertices++;
 		if ((vstate[v] & 2) || (vstate[v] >> 2) > 1)
 			rep->nonmanifold_vertices++;
@@ -503,28 +511,13 @@ out:
 	return rc;
 }
 
-/* Signed volume (divergence theorem, about the bbox centre for precision)
- * and the bounding box of the vertices the layer uses. */
+/* Signed volume (divergence theorem, about the centre of the bounding box
+ * check_vertices_and_loops() found, for precision). */
 static void measure(const struct topo *tp, struct mesh_report *rep)
 {
 	const struct mesh *m = tp->m;
 	double c[3], vol = 0.0;
-	bool first = true;
 
-	for (size_t t = 0; t < m->ntris; t++) {
-		if (tp->tclass[t] != TRI_LAYER)
-			continue;
-		for (int k = 0; k < 3; k++) {
-			const double *p = m->verts[m->tris[t][k]];
-			for (int i = 0; i < 3; i++) {
-				if (first || p[i] < rep->bbox_min[i])
-					rep->bbox_min[i] = p[i];
-				if (first || p[i] > rep->bbox_max[i])
-					rep->bbox_max[i] = p[i];
-			}
-			first = false;
-		}
-	}
 	for (int i = 0; i < 3; i++)
 		c[i] = 0.5 * (rep->bbox_min[i] + rep->bbox_max[i]);
 	for (size_t t = 0; t < m->ntris; t++) {
