@@ -191,6 +191,23 @@ static void find_duplicates(struct topo *tp, struct mesh_report *rep)
 	}
 }
 
+/* Step 1d: the stars keep the layer's triangles only, as the exact pass
+ * takes them (a file with duplicates; most have none). */
+static void drop_duplicates_from_stars(struct topo *tp)
+{
+	uint32_t kept = 0;
+
+	for (size_t v = 0; v < tp->m->nverts; v++) {
+		uint32_t from = tp->voff[v], to = tp->voff[v + 1];
+
+		tp->voff[v] = kept;
+		for (uint32_t i = from; i < to; i++)
+			if (tp->tclass[tp->vtri[i]] == TRI_LAYER)
+				tp->vtri[kept++] = tp->vtri[i];
+	}
+	tp->voff[tp->m->nverts] = kept;
+}
+
 struct half {
 	uint32_t hi;	 /* the edge's other (higher) vertex */
 	uint32_t corner; /* 3*tri+k */
@@ -629,6 +646,7 @@ static int find_parts(struct topo *tp, struct mesh_report *rep, uint32_t *part,
 struct exact_job {
 	const struct mesh *m;
 	const uint8_t *skip;
+	const uint32_t *star_off, *star_tri; /* the layer's stars, shared */
 	int threads;
 	uint64_t count;
 	int rc;
@@ -640,10 +658,10 @@ static void *exact_job_run(void *arg)
 {
 	struct exact_job *job = arg;
 
-	job->rc = exact_count_self_intersections((const double(*)[3])job->m->verts,
-						 job->m->nverts,
-						 (const uint32_t(*)[3])job->m->tris, job->m->ntris,
-						 job->skip, job->threads, &job->count, &job->err);
+	job->rc = exact_count_self_intersections_stars(
+	    (const double(*)[3])job->m->verts, job->m->nverts, (const uint32_t(*)[3])job->m->tris,
+	    job->m->ntris, job->skip, job->star_off, job->star_tri, job->threads, &job->count,
+	    &job->err);
 	return NULL;
 }
 
@@ -691,17 +709,19 @@ int mesh_analyze_nesting(const struct mesh *m, int threads, long long self_inter
 	if (rc)
 		goto out;
 	find_duplicates(&tp, rep);
-	/* From here tclass is final and only read: the exact pass can start. */
+	if (rep->duplicates)
+		drop_duplicates_from_stars(&tp);
+	/* From here tclass and the stars are final and only read: the exact
+	 * pass can start, on the same stars (every degenerate triangle is
+	 * flagged in tclass, as it asks). */
 	job.skip = tp.tclass;
+	job.star_off = tp.voff;
+	job.star_tri = tp.vtri;
 	if (self_intersections >= 0)
 		job.done = true;
 	else if (threads != 1 && pthread_create(&exact_thread, NULL, exact_job_run, &job) == 0)
 		exact_running = true;
 	rc = build_edges(&tp, err);
-	/* The stars are not needed past this point. */
-	free(tp.voff);
-	free(tp.vtri);
-	tp.voff = tp.vtri = NULL;
 	if (!rc)
 		rc = count_edges_and_parts(&tp, rep, err);
 	if (!rc)
@@ -713,6 +733,10 @@ int mesh_analyze_nesting(const struct mesh *m, int threads, long long self_inter
 		pthread_join(exact_thread, NULL);
 	else if (!rc && !job.done)
 		exact_job_run(&job); /* one core, or no thread: run it here */
+	/* The stars are not needed past this point. */
+	free(tp.voff);
+	free(tp.vtri);
+	tp.voff = tp.vtri = NULL;
 	if (job.done)
 		job.count = (uint64_t)self_intersections;
 	if (rc)
