@@ -8,7 +8,8 @@
  *   2. edges and edge -> corner incidence (CSR) from the vertex stars;
  *   3. components, manifold components, vertex fans, orientation and
  *      boundary loops;
- *   4. free all of that, then count self-intersections exactly (CGAL bridge).
+ *   4. count self-intersections exactly (CGAL bridge), on its own thread
+ *      beside steps 2 and 3 and on the same vertex stars, then parts.
  */
 #include <math.h>
 #include <pthread.h>
