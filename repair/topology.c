@@ -8,7 +8,8 @@
  *   2. edges and edge -> corner incidence (CSR) from the vertex stars;
  *   3. components, manifold components, vertex fans, orientation and
  *      boundary loops;
- *   4. free all of that, then count self-intersections exactly (CGAL bridge).
+ *   4. count self-intersections exactly (CGAL bridge), on its own thread
+ *      beside steps 2 and 3 and on the same vertex stars, then parts.
  */
 #include <math.h>
 #include <pthread.h>
@@ -189,6 +190,23 @@ static void find_duplicates(struct topo *tp, struct mesh_report *rep)
 		}
 		rep->triangles += tp->tclass[t] == TRI_LAYER;
 	}
+}
+
+/* Step 1d: the stars keep the layer's triangles only, as the exact pass
+ * takes them (a file with duplicates; most have none). */
+static void drop_duplicates_from_stars(struct topo *tp)
+{
+	uint32_t kept = 0;
+
+	for (size_t v = 0; v < tp->m->nverts; v++) {
+		uint32_t from = tp->voff[v], to = tp->voff[v + 1];
+
+		tp->voff[v] = kept;
+		for (uint32_t i = from; i < to; i++)
+			if (tp->tclass[tp->vtri[i]] == TRI_LAYER)
+				tp->vtri[kept++] = tp->vtri[i];
+	}
+	tp->voff[tp->m->nverts] = kept;
 }
 
 struct half {
@@ -458,6 +476,14 @@ static int check_vertices_and_loops(struct topo *tp, struct mesh_report *rep,
 	for (size_t v = 0; v < m->nverts; v++) {
 		if (!(vstate[v] & 1))
 			continue;
+		/* The bounding box of the vertices the layer uses, once each. */
+		for (int k = 0; k < 3; k++) {
+			const double c = m->verts[v][k];
+			if (rep->vertices == 0 || c < rep->bbox_min[k])
+				rep->bbox_min[k] = c;
+			if (rep->vertices == 0 || c > rep->bbox_max[k])
+				rep->bbox_max[k] = c;
+		}
 		rep->vertices++;
 		if ((vstate[v] & 2) || (vstate[v] >> 2) > 1)
 			rep->nonmanifold_vertices++;
@@ -503,28 +529,13 @@ out:
 	return rc;
 }
 
-/* Signed volume (divergence theorem, about the bbox centre for precision)
- * and the bounding box of the vertices the layer uses. */
+/* Signed volume (divergence theorem, about the centre of the bounding box
+ * check_vertices_and_loops() found, for precision). */
 static void measure(const struct topo *tp, struct mesh_report *rep)
 {
 	const struct mesh *m = tp->m;
 	double c[3], vol = 0.0;
-	bool first = true;
 
-	for (size_t t = 0; t < m->ntris; t++) {
-		if (tp->tclass[t] != TRI_LAYER)
-			continue;
-		for (int k = 0; k < 3; k++) {
-			const double *p = m->verts[m->tris[t][k]];
-			for (int i = 0; i < 3; i++) {
-				if (first || p[i] < rep->bbox_min[i])
-					rep->bbox_min[i] = p[i];
-				if (first || p[i] > rep->bbox_max[i])
-					rep->bbox_max[i] = p[i];
-			}
-			first = false;
-		}
-	}
 	for (int i = 0; i < 3; i++)
 		c[i] = 0.5 * (rep->bbox_min[i] + rep->bbox_max[i]);
 	for (size_t t = 0; t < m->ntris; t++) {
@@ -636,6 +647,7 @@ static int find_parts(struct topo *tp, struct mesh_report *rep, uint32_t *part,
 struct exact_job {
 	const struct mesh *m;
 	const uint8_t *skip;
+	const uint32_t *star_off, *star_tri; /* the layer's stars, shared */
 	int threads;
 	uint64_t count;
 	int rc;
@@ -647,10 +659,10 @@ static void *exact_job_run(void *arg)
 {
 	struct exact_job *job = arg;
 
-	job->rc = exact_count_self_intersections((const double(*)[3])job->m->verts,
-						 job->m->nverts,
-						 (const uint32_t(*)[3])job->m->tris, job->m->ntris,
-						 job->skip, job->threads, &job->count, &job->err);
+	job->rc = exact_count_self_intersections_stars(
+	    (const double(*)[3])job->m->verts, job->m->nverts, (const uint32_t(*)[3])job->m->tris,
+	    job->m->ntris, job->skip, job->star_off, job->star_tri, job->threads, &job->count,
+	    &job->err);
 	return NULL;
 }
 
@@ -698,17 +710,19 @@ int mesh_analyze_nesting(const struct mesh *m, int threads, long long self_inter
 	if (rc)
 		goto out;
 	find_duplicates(&tp, rep);
-	/* From here tclass is final and only read: the exact pass can start. */
+	if (rep->duplicates)
+		drop_duplicates_from_stars(&tp);
+	/* From here tclass and the stars are final and only read: the exact
+	 * pass can start, on the same stars (every degenerate triangle is
+	 * flagged in tclass, as it asks). */
 	job.skip = tp.tclass;
+	job.star_off = tp.voff;
+	job.star_tri = tp.vtri;
 	if (self_intersections >= 0)
 		job.done = true;
 	else if (threads != 1 && pthread_create(&exact_thread, NULL, exact_job_run, &job) == 0)
 		exact_running = true;
 	rc = build_edges(&tp, err);
-	/* The stars are not needed past this point. */
-	free(tp.voff);
-	free(tp.vtri);
-	tp.voff = tp.vtri = NULL;
 	if (!rc)
 		rc = count_edges_and_parts(&tp, rep, err);
 	if (!rc)
@@ -720,6 +734,10 @@ int mesh_analyze_nesting(const struct mesh *m, int threads, long long self_inter
 		pthread_join(exact_thread, NULL);
 	else if (!rc && !job.done)
 		exact_job_run(&job); /* one core, or no thread: run it here */
+	/* The stars are not needed past this point. */
+	free(tp.voff);
+	free(tp.vtri);
+	tp.voff = tp.vtri = NULL;
 	if (job.done)
 		job.count = (uint64_t)self_intersections;
 	if (rc)

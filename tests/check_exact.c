@@ -558,6 +558,26 @@ static uint64_t count_fan(int n, double step, bool closed, int threads)
 	ck_assert_int_eq(exact_count_self_intersections(CVERTS(v), (size_t)n + 1, CTRIS(t),
 							 (size_t)ntris, NULL, threads, &count, &err),
 			 0);
+	/* The same count from stars the caller built, as the topology
+	 * report passes them: the pairs sharing the apex are decided there. */
+	uint32_t off[18] = {0}, star[48], fill[17];
+	uint8_t skip[16] = {0};
+	uint64_t given = 12345;
+	for (int i = 0; i < ntris; i++)
+		for (int k = 0; k < 3; k++)
+			off[t[i][k] + 1]++;
+	for (int x = 0; x <= n; x++) {
+		off[x + 1] += off[x];
+		fill[x] = off[x];
+	}
+	for (int i = 0; i < ntris; i++)
+		for (int k = 0; k < 3; k++)
+			star[fill[t[i][k]]++] = (uint32_t)i;
+	ck_assert_int_eq(exact_count_self_intersections_stars(CVERTS(v), (size_t)n + 1, CTRIS(t),
+							       (size_t)ntris, skip, off, star,
+							       threads, &given, &err),
+			 0);
+	ck_assert_uint_eq(given, count);
 	return count;
 }
 

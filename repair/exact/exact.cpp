@@ -54,9 +54,17 @@ Point to_point(const double p[3])
 	return Point(p[0], p[1], p[2]);
 }
 
-/* The body of exact_count_self_intersections once arguments are checked. */
+/* The stars a caller built (exact_count_self_intersections_stars). */
+struct given_stars {
+	const uint32_t *off, *tri;
+};
+
+/* The body of exact_count_self_intersections once arguments are checked;
+ * given: NULL, or the caller's stars, skip then flagging every degenerate
+ * triangle. */
 int count_pairs(const double (*verts)[3], size_t nverts, const uint32_t (*tris)[3], size_t ntris,
-		const uint8_t *skip, int threads, uint64_t *count, struct st_error *err)
+		const uint8_t *skip, const given_stars *given, int threads, uint64_t *count,
+		struct st_error *err)
 {
 	std::vector<Box> boxes(ntris);
 	std::vector<uint32_t> use;
@@ -81,7 +89,8 @@ int count_pairs(const double (*verts)[3], size_t nverts, const uint32_t (*tris)[
 					;
 				return;
 			}
-			if (CGAL::collinear(to_point(p[0]), to_point(p[1]), to_point(p[2])))
+			if (!given &&
+			    CGAL::collinear(to_point(p[0]), to_point(p[1]), to_point(p[2])))
 				continue; /* degenerate: no box, as if skipped */
 			for (int k = 0; k < 3; k++) {
 				lo[k] = box_coord(std::min(std::min(p[0][k], p[1][k]), p[2][k]));
@@ -110,14 +119,21 @@ int count_pairs(const double (*verts)[3], size_t nverts, const uint32_t (*tris)[
 	patches::table pt;
 	patches::label(verts, nverts, tris, ntris, usable, threads, pt);
 	stars::table st;
-	stars::build(tris, ntris, nverts, usable, st);
+	if (!given)
+		stars::build(tris, ntris, nverts, usable, st);
+	auto star_size = [&](size_t v) -> size_t {
+		return given ? given->off[v + 1] - given->off[v] : st.off[v + 1] - st.off[v];
+	};
+	auto star = [&](size_t v) {
+		return given ? given->tri + given->off[v] : st.tri.data() + st.off[v];
+	};
 	auto get = [verts](uint32_t i) { return to_point(verts[i]); };
 	std::atomic<uint64_t> near_hits{0};
 	boxpairs::for_each_index(nverts, threads, [&](size_t v) {
 		static thread_local stars::scratch s;
 		static thread_local std::vector<uint32_t> sub;
-		const size_t k = st.off[v + 1] - st.off[v];
-		const uint32_t *list = st.tri.data() + st.off[v];
+		const size_t k = star_size(v);
+		const uint32_t *list = star(v);
 		if (patches::check_vertex(verts, static_cast<uint32_t>(v), list, k, tris, pt, s,
 					  sub))
 			return;
@@ -126,7 +142,10 @@ int count_pairs(const double (*verts)[3], size_t nverts, const uint32_t (*tris)[
 		if (h)
 			near_hits += h;
 	});
-	patches::settle(verts, tris, st.off.data(), st.tri.data(), pt);
+	if (given)
+		patches::settle(verts, tris, given->off, given->tri, pt);
+	else
+		patches::settle(verts, tris, st.off.data(), st.tri.data(), pt);
 	std::vector<size_t>().swap(st.off);
 	std::vector<uint32_t>().swap(st.tri);
 	std::vector<uint8_t>().swap(usable);
@@ -211,9 +230,9 @@ int exact_orient3d(const double a[3], const double b[3], const double c[3], cons
 }
 
 /* Check the arguments, then count with exceptions turned into codes. */
-int exact_count_self_intersections(const double (*verts)[3], size_t nverts,
-				   const uint32_t (*tris)[3], size_t ntris, const uint8_t *skip,
-				   int threads, uint64_t *count, struct st_error *err)
+static int count_checked(const double (*verts)[3], size_t nverts, const uint32_t (*tris)[3],
+			 size_t ntris, const uint8_t *skip, const given_stars *given, int threads,
+			 uint64_t *count, struct st_error *err)
 {
 	if (!count)
 		return st_error_set(err, ST_ERR_ARG, "exact: count output pointer is NULL");
@@ -235,7 +254,7 @@ int exact_count_self_intersections(const double (*verts)[3], size_t nverts,
 						    "but there are only %zu vertices",
 						    t, k, (unsigned long)tris[t][k], nverts);
 	try {
-		return count_pairs(verts, nverts, tris, ntris, skip, threads, count, err);
+		return count_pairs(verts, nverts, tris, ntris, skip, given, threads, count, err);
 	} catch (const std::bad_alloc &) {
 		*count = 0;
 		return st_error_set(err, ST_ERR_NOMEM,
@@ -259,6 +278,29 @@ int exact_count_self_intersections(const double (*verts)[3], size_t nverts,
 				    "exact: self-intersection count failed with an unknown "
 				    "exception");
 	}
+}
+
+int exact_count_self_intersections(const double (*verts)[3], size_t nverts,
+				   const uint32_t (*tris)[3], size_t ntris, const uint8_t *skip,
+				   int threads, uint64_t *count, struct st_error *err)
+{
+	return count_checked(verts, nverts, tris, ntris, skip, NULL, threads, count, err);
+}
+
+int exact_count_self_intersections_stars(const double (*verts)[3], size_t nverts,
+					 const uint32_t (*tris)[3], size_t ntris,
+					 const uint8_t *skip, const uint32_t *star_off,
+					 const uint32_t *star_tri, int threads, uint64_t *count,
+					 struct st_error *err)
+{
+	if (ntris && (!skip || !star_off || !star_tri)) {
+		if (count)
+			*count = 0;
+		return st_error_set(err, ST_ERR_ARG,
+				    "exact: NULL skip flags or stars given to the count");
+	}
+	const given_stars given = {star_off, star_tri};
+	return count_checked(verts, nverts, tris, ntris, skip, &given, threads, count, err);
 }
 
 } /* extern "C" */

@@ -315,8 +315,9 @@ inline size_t corner(const uint32_t (*tris)[3], uint32_t t, uint32_t v)
  * others out of the patch; their other corners are checked again, as
  * their fans changed.  One thread, after check_vertex() on every vertex.
  */
-inline void settle(const double (*verts)[3], const uint32_t (*tris)[3], const size_t *off,
-		   const uint32_t *star, table &pt)
+template <class Off>
+void settle(const double (*verts)[3], const uint32_t (*tris)[3], const Off *off,
+	    const uint32_t *star, table &pt)
 {
 	std::vector<uint32_t> work, sub;
 	stars::scratch s;

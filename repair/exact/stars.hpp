@@ -62,6 +62,61 @@ struct scratch {
 	std::vector<uint32_t> ring;
 };
 
+/* Stars of up to this many triangles (nearly every vertex of a mesh) are
+ * ordered by linear scans instead of two sorts and a search per step,
+ * which took about 8 % of checking a 1M-triangle sphere. */
+const size_t SMALL_FAN = 16;
+
+/* order_fan() for 1 <= k <= SMALL_FAN: the same answer and the same ring
+ * (an open fan from its one start, a closed one from its least a). */
+inline bool order_small_fan(uint32_t v, const uint32_t *list, size_t k,
+			    const uint32_t (*tris)[3], scratch &s, bool &closed)
+{
+	uint32_t a[SMALL_FAN], b[SMALL_FAN]; /* triangle i is (v, a[i], b[i]) */
+	for (size_t i = 0; i < k; i++) {
+		const uint32_t *c = tris[list[i]];
+		const int j = c[0] == v ? 0 : c[1] == v ? 1 : 2;
+		a[i] = c[(j + 1) % 3];
+		b[i] = c[(j + 2) % 3];
+	}
+	for (size_t i = 1; i < k; i++)
+		for (size_t j = 0; j < i; j++)
+			if (a[i] == a[j] || b[i] == b[j])
+				return false;
+	size_t start = 0, starts = 0;
+	for (size_t i = 0; i < k; i++) {
+		bool is_b = false;
+		for (size_t j = 0; j < k && !is_b; j++)
+			is_b = b[j] == a[i];
+		if (!is_b) {
+			start = i;
+			starts++;
+		}
+	}
+	if (starts > 1)
+		return false;
+	closed = starts == 0;
+	if (closed)
+		for (size_t i = 1; i < k; i++)
+			if (a[i] < a[start])
+				start = i;
+	s.ring.clear();
+	s.ring.push_back(a[start]);
+	for (size_t step = 0, at = start; step < k; step++) {
+		const uint32_t next = b[at];
+		if (next == s.ring[0])
+			return closed && step + 1 == k;
+		s.ring.push_back(next);
+		if (step + 1 == k)
+			return !closed;
+		for (at = 0; at < k && a[at] != next; at++)
+			;
+		if (at == k)
+			return false; /* the walk ends early: several fans */
+	}
+	return false;
+}
+
 /*
  * Order the star of v (k triangles) into one fan: ring r_0 .. r_{k-1}
  * (closed, triangle i is (v, r_i, r_{i+1 mod k})) or r_0 .. r_k (open,
@@ -72,6 +127,8 @@ struct scratch {
 inline bool order_fan(uint32_t v, const uint32_t *list, size_t k, const uint32_t (*tris)[3],
 		      scratch &s, bool &closed)
 {
+	if (k >= 1 && k <= SMALL_FAN)
+		return order_small_fan(v, list, k, tris, s, closed);
 	s.next.clear();
 	s.ends.clear();
 	for (size_t i = 0; i < k; i++) {
