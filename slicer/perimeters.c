@@ -322,6 +322,29 @@ static int emit_thin(struct ctx *c, struct medial_line *l)
 }
 
 /*
+ * A gap fill's centre line: the strip it fills is measured between the
+ * spacing edges of the walls beside it, so its bead is k = h (1 - pi/4)
+ * wider than the strip (a bead w wide holds (w - k) h, the flow model's
+ * spacing); where that bead is everywhere at least 1 + SPLIT spacings wide
+ * (a 1.5 mm wall's 0.64 mm strip), two beads side by side in one loop, as
+ * Arachne prints the middle of a wall between three and four beads wide.
+ */
+static int emit_gap_fill(struct ctx *c, struct medial_line *l)
+{
+	double k = c->w - c->sp;
+	struct medial_line two = {.closed = true};
+	int rc;
+
+	for (size_t j = 0; j < l->n; j++)
+		l->pts[j].width += llround(k);
+	rc = bead_split_line(l, k, (1.0 + PERIM_SPLIT_SHARE) * c->sp, &two.pts, &two.n, c->err);
+	if (!rc)
+		rc = emit_medial(c, two.n ? &two : l, PATH_GAP_FILL);
+	free(two.pts);
+	return rc;
+}
+
+/*
  * A piece that holds a disk of diameter min_width but has no centre line (a
  * square or round pillar about as wide as long, whose medial axis is a
  * point): one short bead through the centre of the disk's possible
@@ -523,7 +546,7 @@ static int narrow_paths(struct ctx *c, const struct clip_expolys *area, double m
 			rc = perim_medial_axis(&piece, min_width, step, c->arc, &ml, c->err);
 			for (size_t k = 0; k < ml.n && !rc; k++)
 				rc = role == PATH_THIN_WALL ? emit_thin(c, &ml.v[k])
-							    : emit_medial(c, &ml.v[k], role);
+							    : emit_gap_fill(c, &ml.v[k]);
 			if (!rc && !ml.n && role == PATH_THIN_WALL)
 				rc = pillar_path(c, &piece, a, min_width, c->eps);
 			if (!rc && ml.n && role == PATH_THIN_WALL)
