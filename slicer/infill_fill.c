@@ -140,7 +140,9 @@ static int fitted_lines(struct ctx *c, const struct clip_paths *P, double a, dou
 /*
  * Gap fill of one solid island P: what beads of width fit along segs leave
  * uncovered, where at least gap_fill_min (and the layer height) wide, as
- * centre-line beads of the local width.
+ * centre-line beads of the local width plus the flow model's overlap
+ * h (1 - pi/4): P's edges are the walls' spacing edges, and a bead holds
+ * its spacing's worth of filament.
  */
 static int gap_fill(struct ctx *c, const struct clip_paths *P, const struct clip_paths *segs,
 		    double fit)
@@ -166,6 +168,8 @@ static int gap_fill(struct ctx *c, const struct clip_paths *P, const struct clip
 				       c->err);
 		for (size_t k = 0; k < ml.n && !rc; k++) {
 			struct medial_line *l = &ml.v[k];
+			for (size_t j = 0; j < l->n; j++)
+				l->pts[j].width += llround(-perim_spacing(0.0, c->h) * SLICE_UNITS_PER_MM);
 			rc = emit_path(c, PATH_GAP_FILL, l->closed, l->pts, l->n);
 		}
 		perim_medial_free(&ml);

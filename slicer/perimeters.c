@@ -605,6 +605,35 @@ static int minus_grown(struct ctx *c, const struct clip_paths *a, const struct c
 	return rc;
 }
 
+/*
+ * The pieces of the infill region m (inside the last wall, whose spacing is
+ * sp) narrower than sp everywhere, as expolygons: infill lines cannot
+ * cross them, and where they are narrower than gap fill too (a wedge's
+ * tip inside its inner loop) the last wall's beads take them up.
+ */
+static int narrow_infill(struct ctx *c, const struct clip_paths *m, double sp,
+			 struct clip_expolys *out)
+{
+	struct clip_expolys all = {0};
+	struct clip_paths piece = {0}, core = {0}, keep = {0};
+	int rc = clip_boolean_ex(CLIP_UNION, m, NULL, CLIP_NONZERO, &all, c->err);
+
+	for (size_t i = 0; i < all.n && !rc; i++) {
+		rc = clip_expolys_get(&all, i, &piece, c->err);
+		if (!rc)
+			rc = clip_offset(&piece, -sp / 2.0, CLIP_JOIN_ROUND, 0.0, c->arc, &core, c->err);
+		if (!rc && !core.n)
+			rc = clip_paths_append(&keep, &piece, c->err);
+	}
+	if (!rc)
+		rc = clip_boolean_ex(CLIP_UNION, &keep, NULL, CLIP_NONZERO, out, c->err);
+	clip_expolys_free(&all);
+	clip_paths_free(&piece);
+	clip_paths_free(&core);
+	clip_paths_free(&keep);
+	return rc;
+}
+
 /* Spacing of wall k, nm. */
 static double wall_spacing(const struct ctx *c, int k)
 {
@@ -646,17 +675,20 @@ static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *
 	}
 	/* Strips between walls: what wall k leaves (its inner half-spacing edge)
 	 * that wall k+1 cannot cover; after the last wall made short of N, all of
-	 * it.  After wall N the rest is infill. */
+	 * it.  After wall N the rest is infill, whose narrow pieces wall N's beads
+	 * may take up (strips[N - 1], never gap filled here). */
 	for (int k = 0; k < made && !rc; k++) {
 		rc = clip_offset(&loops[k], -wall_spacing(c, k) / 2.0, CLIP_JOIN_ROUND, 0.0, c->arc,
 				 &m, c->err);
 		if (!rc && k == N - 1)
 			rc = clip_paths_append(acc, &m, c->err);
+		if (!rc && k == N - 1)
+			rc = narrow_infill(c, &m, wall_spacing(c, k), &strips[k]);
 		else if (!rc && k + 1 < made)
 			rc = minus_grown(c, &m, &loops[k + 1], wall_spacing(c, k + 1) / 2.0, &strips[k]);
 		else if (!rc)
 			rc = clip_boolean_ex(CLIP_UNION, &m, NULL, CLIP_NONZERO, &strips[k], c->err);
-		if (!rc && k < N - 1)
+		if (!rc)
 			rc = bead_strips(&strips[k], gap_fill_width(c), c->eps, c->arc, &narrow[k],
 					 c->err);
 	}
@@ -666,7 +698,7 @@ static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *
 		enum path_role role = k == 0 ? PATH_OUTER_PERIMETER : PATH_INNER_PERIMETER;
 		for (size_t p = 0; p < loops[k].n && !rc; p++)
 			rc = emit_loop(c, clip_path_xy(&loops[k], p), clip_path_len(&loops[k], p),
-				       role, k < N - 1 ? &narrow[k] : NULL, k ? &narrow[k - 1] : NULL);
+				       role, &narrow[k], k ? &narrow[k - 1] : NULL);
 	}
 	/* Gap fill: the strips at least gap_fill_width wide. */
 	for (int k = 0; k < made && k < N - 1 && !rc && c->s->gap_fill; k++)

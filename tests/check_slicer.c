@@ -393,9 +393,11 @@ START_TEST(two_mm_wall_filled_by_walls)
 	ck_assert_uint_eq(tu_count_role(&out, PATH_THIN_WALL), 0);
 	ck_assert_uint_eq(tu_count_role(&out, PATH_GAP_FILL), 1);
 	ck_assert_uint_eq(inner.n, 0);
+	/* The strip runs between the walls' spacing edges: its bead is w - sp
+	 * wider, so that its flow fills iw (a bead w wide holds w - (w - sp)). */
 	const struct toolpath *g = first_role(&out, PATH_GAP_FILL);
 	for (size_t k = 0; k < g->n; k++) {
-		ck_assert_msg(fabs(g->pts[k].width - iw * NM) < 2 * UM, "gap width %lld",
+		ck_assert_msg(fabs(g->pts[k].width - (iw + w - sp) * NM) < 2 * UM, "gap width %lld",
 			      (long long)g->pts[k].width);
 		ck_assert(fabs(g->pts[k].y - 1 * NM) < 1 * UM);
 	}
