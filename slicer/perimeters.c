@@ -238,15 +238,17 @@ static size_t pick_seam(struct ctx *c, const int64_t *xy, size_t n)
 /*
  * Append wall loop xy[0..n) of role, its beads widened into the strips too
  * narrow for gap fill inside (may be NULL) and outside it (beadwidth.h),
- * starting at its seam.
+ * starting at its seam; the last wall (last) takes up the infill pieces
+ * inside it whole (narrow_infill).
  */
 static int emit_loop(struct ctx *c, const int64_t *xy, size_t n, enum path_role role,
-		     const struct clip_paths *inside, const struct clip_paths *outside)
+		     const struct clip_paths *inside, const struct clip_paths *outside, bool last)
 {
 	bool outer = role == PATH_OUTER_PERIMETER, changed = false;
 	struct bead_fit f = {.width = outer ? c->wo : c->w,
 			     .spacing = outer ? c->spo : c->sp,
 			     .gmax = gap_fill_width(c),
+			     .gmax_in = last ? (outer ? c->spo : c->sp) : 0.0,
 			     .step = c->w / 4.0,
 			     .tol = c->arc + PERIM_HAIRLINE + 1000.0};
 	struct path_point *fit = NULL, *pts = NULL;
@@ -681,16 +683,19 @@ static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *
 		rc = clip_offset(&loops[k], -wall_spacing(c, k) / 2.0, CLIP_JOIN_ROUND, 0.0, c->arc,
 				 &m, c->err);
 		if (!rc && k == N - 1)
-			rc = clip_paths_append(acc, &m, c->err);
-		if (!rc && k == N - 1)
 			rc = narrow_infill(c, &m, wall_spacing(c, k), &strips[k]);
 		else if (!rc && k + 1 < made)
 			rc = minus_grown(c, &m, &loops[k + 1], wall_spacing(c, k + 1) / 2.0, &strips[k]);
 		else if (!rc)
 			rc = clip_boolean_ex(CLIP_UNION, &m, NULL, CLIP_NONZERO, &strips[k], c->err);
 		if (!rc)
-			rc = bead_strips(&strips[k], gap_fill_width(c), c->eps, c->arc, &narrow[k],
-					 c->err);
+			rc = bead_strips(&strips[k], k == N - 1 ? wall_spacing(c, k) : gap_fill_width(c),
+					 c->eps, c->arc, &narrow[k], c->err);
+		/* What the last wall does not take up is infill. */
+		if (!rc && k == N - 1)
+			rc = clip_boolean(CLIP_DIFFERENCE, &m, &narrow[k], CLIP_NONZERO, &m, c->err);
+		if (!rc && k == N - 1)
+			rc = clip_paths_append(acc, &m, c->err);
 	}
 	/* Walls in printing order, each widened into the strips beside it. */
 	for (int i = 0; i < made && !rc; i++) {
@@ -698,7 +703,7 @@ static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *
 		enum path_role role = k == 0 ? PATH_OUTER_PERIMETER : PATH_INNER_PERIMETER;
 		for (size_t p = 0; p < loops[k].n && !rc; p++)
 			rc = emit_loop(c, clip_path_xy(&loops[k], p), clip_path_len(&loops[k], p),
-				       role, &narrow[k], k ? &narrow[k - 1] : NULL);
+				       role, &narrow[k], k ? &narrow[k - 1] : NULL, k == N - 1);
 	}
 	/* Gap fill: the strips at least gap_fill_width wide. */
 	for (int k = 0; k < made && k < N - 1 && !rc && c->s->gap_fill; k++)

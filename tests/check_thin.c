@@ -397,6 +397,27 @@ START_TEST(wedge_beads_follow_its_width)
 END_TEST
 
 /*
+ * A 2 mm wall: the 0.33 mm strip inside its inner loop, too narrow for
+ * infill lines, is taken up by that loop's beads (0.614 mm, PrusaSlicer's
+ * Arachne width) instead of a gap fill bead beside them: one run, so the
+ * region verifier finds under 5 % overlap (before 6.2 %: the gap fill's
+ * h (1 - pi/4) on both sides; PrusaSlicer 4.4 %) and under 0.15 % gap.
+ */
+START_TEST(wall_2_0_inner_loop_takes_its_strip)
+{
+	struct mesh *m = fx_box(0, 0, 0, LEN, 2.0, 1);
+	double widest = 0;
+	struct region_report *r = tu_slice_region(m, "w20.gcode", NULL, &widest);
+
+	ck_assert_msg(r->gap < 0.0015, "gap %g", r->gap);
+	ck_assert_msg(r->overlap < 0.05, "overlap %g", r->overlap);
+	ck_assert_msg(fabs(widest - 0.614) < 0.005, "widest bead %g mm", widest);
+	region_report_free(r);
+	mesh_free(m);
+}
+END_TEST
+
+/*
  * Inside the wedge's inner loop, the infill region narrows to nothing
  * (x 16.5 to 18.5 mm, narrower than gap fill): the inner loop's beads take
  * it up (before, 0.8 % of the wedge left uncovered there), and the region
@@ -493,6 +514,7 @@ Suite *thin_suite(void)
 	tcase_add_test(tc, wall_1_2_gap_fill_fills_its_strip);
 	tcase_add_test(tc, wall_1_5_gap_fill_two_beads);
 	tcase_add_test(tc, wedge_inner_loop_takes_narrow_infill);
+	tcase_add_test(tc, wall_2_0_inner_loop_takes_its_strip);
 	tcase_add_test(tc, wedge_tip_printed);
 	tcase_add_test(tc, wedge_beads_follow_its_width);
 	tcase_add_test(tc, wide_bead_corners_left_alone);
