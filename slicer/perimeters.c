@@ -27,6 +27,10 @@
  * this share of a spacing wide (where Arachne splits a middle bead: Cura's
  * wall_split_middle_threshold default; PrusaSlicer 2.5 has no key). */
 #define PERIM_SPLIT_SHARE 0.5
+/* Whether an infill piece holds a line spacing is decided with round
+ * joins this fine (a share of the spacing): only the offset's emptiness
+ * matters. */
+#define PERIM_CORE_ARC_SHARE 20.0
 /* With min_feature_size 0, thin walls down to this width still print, nm. */
 #define PERIM_MIN_FEATURE_NM 10000.0
 
@@ -623,11 +627,12 @@ static int narrow_infill(struct ctx *c, const struct clip_paths *m, double sp,
 	for (size_t i = 0; i < all.n && !rc; i++) {
 		rc = clip_expolys_get(&all, i, &piece, c->err);
 		if (!rc)
-			rc = clip_offset(&piece, -sp / 2.0, CLIP_JOIN_ROUND, 0.0, c->arc, &core, c->err);
+			rc = clip_offset(&piece, -sp / 2.0, CLIP_JOIN_ROUND, 0.0,
+					 fmax(c->arc, sp / PERIM_CORE_ARC_SHARE), &core, c->err);
 		if (!rc && !core.n)
 			rc = clip_paths_append(&keep, &piece, c->err);
 	}
-	if (!rc)
+	if (!rc && keep.n)
 		rc = clip_boolean_ex(CLIP_UNION, &keep, NULL, CLIP_NONZERO, out, c->err);
 	clip_expolys_free(&all);
 	clip_paths_free(&piece);
@@ -692,7 +697,7 @@ static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *
 			rc = bead_strips(&strips[k], k == N - 1 ? wall_spacing(c, k) : gap_fill_width(c),
 					 c->eps, c->arc, &narrow[k], c->err);
 		/* What the last wall does not take up is infill. */
-		if (!rc && k == N - 1)
+		if (!rc && k == N - 1 && narrow[k].n)
 			rc = clip_boolean(CLIP_DIFFERENCE, &m, &narrow[k], CLIP_NONZERO, &m, c->err);
 		if (!rc && k == N - 1)
 			rc = clip_paths_append(acc, &m, c->err);
