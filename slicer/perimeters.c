@@ -27,9 +27,7 @@
  * this share of a spacing wide (where Arachne splits a middle bead: Cura's
  * wall_split_middle_threshold default; PrusaSlicer 2.5 has no key). */
 #define PERIM_SPLIT_SHARE 0.5
-/* Whether an infill piece holds a line spacing is decided with round
- * joins this fine (a share of the spacing): only the offset's emptiness
- * matters. */
+/* Round joins this share of a spacing fine decide whether infill holds one. */
 #define PERIM_CORE_ARC_SHARE 20.0
 /* With min_feature_size 0, thin walls down to this width still print, nm. */
 #define PERIM_MIN_FEATURE_NM 10000.0
@@ -328,12 +326,10 @@ static int emit_thin(struct ctx *c, struct medial_line *l)
 }
 
 /*
- * A gap fill's centre line: the strip it fills is measured between the
- * spacing edges of the walls beside it, so its bead is k = h (1 - pi/4)
- * wider than the strip (a bead w wide holds (w - k) h, the flow model's
- * spacing); where that bead is everywhere at least 1 + SPLIT spacings wide
- * (a 1.5 mm wall's 0.64 mm strip), two beads side by side in one loop, as
- * Arachne prints the middle of a wall between three and four beads wide.
+ * A gap fill's centre line, its strip measured between the walls' spacing
+ * edges: its bead is k = h (1 - pi/4) wider, so its flow fills the strip;
+ * where that is at least 1 + SPLIT spacings all along (a 1.5 mm wall's
+ * middle), two beads side by side in one loop, as Arachne prints it.
  */
 static int emit_gap_fill(struct ctx *c, struct medial_line *l)
 {
@@ -622,8 +618,28 @@ static int narrow_infill(struct ctx *c, const struct clip_paths *m, double sp,
 {
 	struct clip_expolys all = {0};
 	struct clip_paths piece = {0}, core = {0}, keep = {0};
-	int rc = clip_boolean_ex(CLIP_UNION, m, NULL, CLIP_NONZERO, &all, c->err);
+	size_t outers = 0;
+	int rc = 0;
 
+	/* One outer contour (the usual island): one piece, no union needed. */
+	for (size_t i = 0; i < m->n && outers < 2; i++) {
+		const int64_t *xy = clip_path_xy(m, i);
+		size_t n = clip_path_len(m, i);
+		double a = 0.0;
+		for (size_t k = 0; k < n; k++)
+			a += (double)xy[2 * k] * (double)xy[2 * ((k + 1) % n) + 1] -
+			     (double)xy[2 * ((k + 1) % n)] * (double)xy[2 * k + 1];
+		outers += a > 0.0;
+	}
+	if (outers < 2) {
+		rc = clip_offset(m, -sp / 2.0, CLIP_JOIN_ROUND, 0.0,
+				 fmax(c->arc, sp / PERIM_CORE_ARC_SHARE), &core, c->err);
+		if (!rc && !core.n && m->n)
+			rc = clip_boolean_ex(CLIP_UNION, m, NULL, CLIP_NONZERO, out, c->err);
+		clip_paths_free(&core);
+		return rc;
+	}
+	rc = clip_boolean_ex(CLIP_UNION, m, NULL, CLIP_NONZERO, &all, c->err);
 	for (size_t i = 0; i < all.n && !rc; i++) {
 		rc = clip_expolys_get(&all, i, &piece, c->err);
 		if (!rc)
