@@ -1,7 +1,7 @@
 #!/bin/sh
 # bench/thin_walls.sh BIN [prusa] - thin walls against the region verifier
-# (issue 19 item 2): walls 20 mm long and 2 mm tall of 0.5, 0.8, 1.0, 1.2
-# and 1.5 mm, a wedge (20 mm long, 2 mm wide at its base) and a tube (a
+# (issue 19 item 2): walls 20 mm long and 2 mm tall of 0.5, 0.8, 1.0, 1.2,
+# 1.5 and 2.0 mm, a wedge (20 mm long, 2 mm wide at its base) and a tube (a
 # 1.0 mm wall around a 38 mm hole, a 256-gon), sliced by BIN
 # with the MK3S profile and, with "prusa", by PrusaSlicer with
 # bench/out/prusa-full.ini (`bench/run.sh BIN thin` writes it and runs
@@ -44,7 +44,7 @@ json_field() {
 	sed -n "s/^  \"$2\": \([^,]*\),\{0,1\}\$/\1/p" "$1"
 }
 
-models="0.5 0.8 1.0 1.2 1.5 wedge tube"
+models="0.5 0.8 1.0 1.2 1.5 2.0 wedge tube"
 echo "| model | slicer | beads mm (narrowest–widest) | gap % | overlap % | filament / model volume |"
 echo "|---|---|---|---|---|---|"
 for t in $models; do

@@ -230,6 +230,9 @@ struct profile {
 	double duplicate_distance;	/* mm between several models' footprints; default 6 */
 	bool support_material;		/* default 0 */
 	int support_material_threshold; /* degrees, 0 = automatic; default 0 */
+	const char *support_material_style;    /* grid or snug; default grid */
+	const char *support_material_pattern;  /* rectilinear, rectilinear-grid or honeycomb */
+	bool support_material_with_sheath;     /* default 1 */
 	bool support_material_buildplate_only; /* default 0 */
 	/* mm; defaults 0.2, 0 (= the top's) */
 	double support_material_contact_distance, support_material_bottom_contact_distance;

@@ -572,6 +572,11 @@ int prof_apply_key(struct loader *L, const struct key_def *d, const struct profi
 		idx = name_index(decl->names, decl->nnames, kv->value);
 		if (idx < 0 && !strcmp(d->key, "fill_pattern") && !strcmp(kv->value, "monotonous"))
 			idx = 1; /* PrusaSlicer's old name of monotonic */
+		if (idx < 0 && !strcmp(d->key, "support_material_style") &&
+		    !strcmp(kv->value, "organic"))
+			return prof_key_error(L, kv, NULL, ST_ERR_PARSE,
+					 "'organic' (PrusaSlicer 2.6's tree supports) is not "
+					 "supported; use grid or snug");
 		if (idx < 0) {
 			ini_show(tok, sizeof(tok), kv->value, strlen(kv->value));
 			join_names(names, sizeof(names), decl->names, decl->nnames);

@@ -185,7 +185,9 @@ static int sample_loop(const int64_t *xy, size_t n, struct strip *in, struct str
 		       const struct bead_fit *f, struct spot **out, size_t *nout, bool *changed,
 		       struct st_error *err)
 {
-	double gmax = fmin(f->gmax, f->spacing), reach = f->spacing / 2.0 + f->tol + gmax;
+	double gmax = fmin(f->gmax, f->spacing);
+	double gmax_in = fmin(f->gmax_in > 0.0 ? f->gmax_in : f->gmax, f->spacing);
+	double reach = f->spacing / 2.0 + f->tol + fmax(gmax, gmax_in);
 	struct spot *sp = NULL;
 	size_t cap = 0, m = 0;
 
@@ -212,7 +214,7 @@ static int sample_loop(const int64_t *xy, size_t n, struct strip *in, struct str
 			*p = (struct spot){.x = a[0] + t * (b[0] - a[0]), .y = a[1] + t * (b[1] - a[1]),
 					   .nx = -u[1], .ny = u[0], .seg = i};
 			if (near_in)
-				p->gin = strip_width(in, p->x, p->y, p->nx, p->ny, f, gmax);
+				p->gin = strip_width(in, p->x, p->y, p->nx, p->ny, f, gmax_in);
 			if (near_out)
 				p->gout = strip_width(outs, p->x, p->y, -p->nx, -p->ny, f, gmax);
 			*changed |= p->gin > 0.0 || p->gout > 0.0;

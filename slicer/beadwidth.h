@@ -37,6 +37,7 @@ struct bead_fit {
 	double width;	/* the loop's bead width */
 	double spacing; /* its spacing: the strips begin spacing / 2 from its centre line */
 	double gmax;	/* strips narrower than this are absorbed (and at most spacing) */
+	double gmax_in; /* the same for the strips inside; 0: gmax */
 	double step;	/* resampling distance along segments near a strip */
 	double tol;	/* how far from spacing / 2 a strip's edge may start */
 };

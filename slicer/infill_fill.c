@@ -140,7 +140,9 @@ static int fitted_lines(struct ctx *c, const struct clip_paths *P, double a, dou
 /*
  * Gap fill of one solid island P: what beads of width fit along segs leave
  * uncovered, where at least gap_fill_min (and the layer height) wide, as
- * centre-line beads of the local width.
+ * centre-line beads of the local width plus the flow model's overlap
+ * h (1 - pi/4): P's edges are the walls' spacing edges, and a bead holds
+ * its spacing's worth of filament.
  */
 static int gap_fill(struct ctx *c, const struct clip_paths *P, const struct clip_paths *segs,
 		    double fit)
@@ -166,6 +168,8 @@ static int gap_fill(struct ctx *c, const struct clip_paths *P, const struct clip
 				       c->err);
 		for (size_t k = 0; k < ml.n && !rc; k++) {
 			struct medial_line *l = &ml.v[k];
+			for (size_t j = 0; j < l->n; j++)
+				l->pts[j].width += llround(-perim_spacing(0.0, c->h) * SLICE_UNITS_PER_MM);
 			rc = emit_path(c, PATH_GAP_FILL, l->closed, l->pts, l->n);
 		}
 		perim_medial_free(&ml);
@@ -396,18 +400,6 @@ static int sparse_islands(struct ctx *c, const struct clip_paths *X, double a, d
 	return rc;
 }
 
-/*
- * Cell width of the honeycomb (nm) whose lines, sp apart where two columns
- * share a wall, have the length per area of lines S apart: a period of
- * the pattern (2 d wide, 2 sqrt 3 d tall) holds (16 d - 4 sp) / sqrt 3 of
- * line, so 3 d^2 - 4 S d + S sp = 0.  (PrusaSlicer takes d = S: 28 % more
- * than rectilinear on the infill test's two 20 mm boxes at 15 %.)
- */
-static double honeycomb_cell(double sp, double S)
-{
-	return (2.0 * S + sqrt(4.0 * S * S - 3.0 * S * sp)) / 3.0;
-}
-
 /* Sparse infill of X at fill_density with the chosen pattern. */
 int infill_fill_sparse(struct ctx *c, const struct clip_paths *X, double a)
 {
@@ -439,7 +431,7 @@ int infill_fill_sparse(struct ctx *c, const struct clip_paths *X, double a)
 		rc = three_line_sets(c, S, &box, &lines);
 		break;
 	case INFILL_HONEYCOMB: /* turned 60 degrees a layer, PrusaSlicer's sense */
-		rc = pat_honeycomb(honeycomb_cell(sp, S), sp / 2.0,
+		rc = pat_honeycomb(pat_honeycomb_cell(sp, S), sp / 2.0,
 				   -(s->fill_angle + 60.0 * (double)(c->layer % 3)) * M_PI / 180.0,
 				   &box, &lines, c->err);
 		break;

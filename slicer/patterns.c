@@ -218,6 +218,11 @@ int pat_line_set(const struct clip_paths *ps, double a, double spacing, double o
 	return rc;
 }
 
+double pat_honeycomb_cell(double sp, double S)
+{
+	return (2.0 * S + sqrt(4.0 * S * S - 3.0 * S * sp)) / 3.0;
+}
+
 int pat_honeycomb(double d, double inset, double theta, const struct pat_box *box,
 		  struct clip_paths *out, struct st_error *err)
 {

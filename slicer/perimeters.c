@@ -27,6 +27,8 @@
  * this share of a spacing wide (where Arachne splits a middle bead: Cura's
  * wall_split_middle_threshold default; PrusaSlicer 2.5 has no key). */
 #define PERIM_SPLIT_SHARE 0.5
+/* Round joins this share of a spacing fine decide whether infill holds one. */
+#define PERIM_CORE_ARC_SHARE 20.0
 /* With min_feature_size 0, thin walls down to this width still print, nm. */
 #define PERIM_MIN_FEATURE_NM 10000.0
 
@@ -238,15 +240,17 @@ static size_t pick_seam(struct ctx *c, const int64_t *xy, size_t n)
 /*
  * Append wall loop xy[0..n) of role, its beads widened into the strips too
  * narrow for gap fill inside (may be NULL) and outside it (beadwidth.h),
- * starting at its seam.
+ * starting at its seam; the last wall (last) takes up the infill pieces
+ * inside it whole (narrow_infill).
  */
 static int emit_loop(struct ctx *c, const int64_t *xy, size_t n, enum path_role role,
-		     const struct clip_paths *inside, const struct clip_paths *outside)
+		     const struct clip_paths *inside, const struct clip_paths *outside, bool last)
 {
 	bool outer = role == PATH_OUTER_PERIMETER, changed = false;
 	struct bead_fit f = {.width = outer ? c->wo : c->w,
 			     .spacing = outer ? c->spo : c->sp,
 			     .gmax = gap_fill_width(c),
+			     .gmax_in = last ? (outer ? c->spo : c->sp) : 0.0,
 			     .step = c->w / 4.0,
 			     .tol = c->arc + PERIM_HAIRLINE + 1000.0};
 	struct path_point *fit = NULL, *pts = NULL;
@@ -317,6 +321,27 @@ static int emit_thin(struct ctx *c, struct medial_line *l)
 
 	if (!rc)
 		rc = emit_medial(c, two.n ? &two : l, PATH_THIN_WALL);
+	free(two.pts);
+	return rc;
+}
+
+/*
+ * A gap fill's centre line, its strip measured between the walls' spacing
+ * edges: its bead is k = h (1 - pi/4) wider, so its flow fills the strip;
+ * where that is at least 1 + SPLIT spacings all along (a 1.5 mm wall's
+ * middle), two beads side by side in one loop, as Arachne prints it.
+ */
+static int emit_gap_fill(struct ctx *c, struct medial_line *l)
+{
+	double k = c->w - c->sp;
+	struct medial_line two = {.closed = true};
+	int rc;
+
+	for (size_t j = 0; j < l->n; j++)
+		l->pts[j].width += llround(k);
+	rc = bead_split_line(l, k, (1.0 + PERIM_SPLIT_SHARE) * c->sp, &two.pts, &two.n, c->err);
+	if (!rc)
+		rc = emit_medial(c, two.n ? &two : l, PATH_GAP_FILL);
 	free(two.pts);
 	return rc;
 }
@@ -523,7 +548,7 @@ static int narrow_paths(struct ctx *c, const struct clip_expolys *area, double m
 			rc = perim_medial_axis(&piece, min_width, step, c->arc, &ml, c->err);
 			for (size_t k = 0; k < ml.n && !rc; k++)
 				rc = role == PATH_THIN_WALL ? emit_thin(c, &ml.v[k])
-							    : emit_medial(c, &ml.v[k], role);
+							    : emit_gap_fill(c, &ml.v[k]);
 			if (!rc && !ml.n && role == PATH_THIN_WALL)
 				rc = pillar_path(c, &piece, a, min_width, c->eps);
 			if (!rc && ml.n && role == PATH_THIN_WALL)
@@ -582,6 +607,56 @@ static int minus_grown(struct ctx *c, const struct clip_paths *a, const struct c
 	return rc;
 }
 
+/*
+ * The pieces of the infill region m (inside the last wall, whose spacing is
+ * sp) narrower than sp everywhere, as expolygons: infill lines cannot
+ * cross them, and where they are narrower than gap fill too (a wedge's
+ * tip inside its inner loop) the last wall's beads take them up.
+ */
+static int narrow_infill(struct ctx *c, const struct clip_paths *m, double sp,
+			 struct clip_expolys *out)
+{
+	struct clip_expolys all = {0};
+	struct clip_paths piece = {0}, core = {0}, keep = {0};
+	size_t outers = 0;
+	int rc = 0;
+
+	/* One outer contour (the usual island): one piece, no union needed. */
+	for (size_t i = 0; i < m->n && outers < 2; i++) {
+		const int64_t *xy = clip_path_xy(m, i);
+		size_t n = clip_path_len(m, i);
+		double a = 0.0;
+		for (size_t k = 0; k < n; k++)
+			a += (double)xy[2 * k] * (double)xy[2 * ((k + 1) % n) + 1] -
+			     (double)xy[2 * ((k + 1) % n)] * (double)xy[2 * k + 1];
+		outers += a > 0.0;
+	}
+	if (outers < 2) {
+		rc = clip_offset(m, -sp / 2.0, CLIP_JOIN_ROUND, 0.0,
+				 fmax(c->arc, sp / PERIM_CORE_ARC_SHARE), &core, c->err);
+		if (!rc && !core.n && m->n)
+			rc = clip_boolean_ex(CLIP_UNION, m, NULL, CLIP_NONZERO, out, c->err);
+		clip_paths_free(&core);
+		return rc;
+	}
+	rc = clip_boolean_ex(CLIP_UNION, m, NULL, CLIP_NONZERO, &all, c->err);
+	for (size_t i = 0; i < all.n && !rc; i++) {
+		rc = clip_expolys_get(&all, i, &piece, c->err);
+		if (!rc)
+			rc = clip_offset(&piece, -sp / 2.0, CLIP_JOIN_ROUND, 0.0,
+					 fmax(c->arc, sp / PERIM_CORE_ARC_SHARE), &core, c->err);
+		if (!rc && !core.n)
+			rc = clip_paths_append(&keep, &piece, c->err);
+	}
+	if (!rc && keep.n)
+		rc = clip_boolean_ex(CLIP_UNION, &keep, NULL, CLIP_NONZERO, out, c->err);
+	clip_expolys_free(&all);
+	clip_paths_free(&piece);
+	clip_paths_free(&core);
+	clip_paths_free(&keep);
+	return rc;
+}
+
 /* Spacing of wall k, nm. */
 static double wall_spacing(const struct ctx *c, int k)
 {
@@ -623,19 +698,25 @@ static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *
 	}
 	/* Strips between walls: what wall k leaves (its inner half-spacing edge)
 	 * that wall k+1 cannot cover; after the last wall made short of N, all of
-	 * it.  After wall N the rest is infill. */
+	 * it.  After wall N the rest is infill, whose narrow pieces wall N's beads
+	 * may take up (strips[N - 1], never gap filled here). */
 	for (int k = 0; k < made && !rc; k++) {
 		rc = clip_offset(&loops[k], -wall_spacing(c, k) / 2.0, CLIP_JOIN_ROUND, 0.0, c->arc,
 				 &m, c->err);
 		if (!rc && k == N - 1)
-			rc = clip_paths_append(acc, &m, c->err);
+			rc = narrow_infill(c, &m, wall_spacing(c, k), &strips[k]);
 		else if (!rc && k + 1 < made)
 			rc = minus_grown(c, &m, &loops[k + 1], wall_spacing(c, k + 1) / 2.0, &strips[k]);
 		else if (!rc)
 			rc = clip_boolean_ex(CLIP_UNION, &m, NULL, CLIP_NONZERO, &strips[k], c->err);
-		if (!rc && k < N - 1)
-			rc = bead_strips(&strips[k], gap_fill_width(c), c->eps, c->arc, &narrow[k],
-					 c->err);
+		if (!rc)
+			rc = bead_strips(&strips[k], k == N - 1 ? wall_spacing(c, k) : gap_fill_width(c),
+					 c->eps, c->arc, &narrow[k], c->err);
+		/* What the last wall does not take up is infill. */
+		if (!rc && k == N - 1 && narrow[k].n)
+			rc = clip_boolean(CLIP_DIFFERENCE, &m, &narrow[k], CLIP_NONZERO, &m, c->err);
+		if (!rc && k == N - 1)
+			rc = clip_paths_append(acc, &m, c->err);
 	}
 	/* Walls in printing order, each widened into the strips beside it. */
 	for (int i = 0; i < made && !rc; i++) {
@@ -643,7 +724,7 @@ static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *
 		enum path_role role = k == 0 ? PATH_OUTER_PERIMETER : PATH_INNER_PERIMETER;
 		for (size_t p = 0; p < loops[k].n && !rc; p++)
 			rc = emit_loop(c, clip_path_xy(&loops[k], p), clip_path_len(&loops[k], p),
-				       role, k < N - 1 ? &narrow[k] : NULL, k ? &narrow[k - 1] : NULL);
+				       role, &narrow[k], k ? &narrow[k - 1] : NULL, k == N - 1);
 	}
 	/* Gap fill: the strips at least gap_fill_width wide. */
 	for (int k = 0; k < made && k < N - 1 && !rc && c->s->gap_fill; k++)

@@ -23,11 +23,18 @@
  * epsilon that gets no such bead is printed the same way down to
  * min_feature_size, each bead at least min_bead_width wide (perim_generate).
  * Strips left between walls are filled
- * the same way (PATH_GAP_FILL) when at least gap_fill_min wide; a strip
+ * the same way (PATH_GAP_FILL) when at least gap_fill_min wide, each bead
+ * h (1 - pi/4) wider than the strip between the walls' spacing edges so
+ * that its flow fills it, and as two beads side by side in one loop where
+ * that is at least 1.5 spacings (emit_gap_fill); a strip
  * narrower than that (and than the layer height) is shared out to the
  * wall beads on its two sides, each widened by half its width and moved
  * by half of that towards it (beadwidth.h), so a 1.0 mm wall prints one
- * loop of (T + h (1 - pi/4)) / 2 wide beads.  Centre-line beads are cut
+ * loop of (T + h (1 - pi/4)) / 2 wide beads.  Inside the last wall, an
+ * infill piece narrower than a spacing everywhere (a 2 mm wall's middle)
+ * is taken up by that wall's beads the same way and left out of the
+ * infill: a 2 mm wall prints 0.45 and 0.614 mm beads, as Arachne does.
+ * Centre-line beads are cut
  * into pieces of constant width as wide as the region at their middles;
  * a thin wall at least 1.5 outer spacings wide all along prints as two
  * such beads in one loop (emit_thin).

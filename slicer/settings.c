@@ -46,6 +46,14 @@ static const char *const arc_fitting_names[] = {"disabled", "emit_center"};
 /* PrusaSlicer's IroningType names, in enum iron_type order (slicer/ironing.h). */
 static const char *const ironing_names[] = {"top", "topmost", "solid"};
 
+/* PrusaSlicer's SupportMaterialStyle names, in enum support_style order
+ * (2.6's organic trees are refused: profile_keys.c says so). */
+static const char *const support_style_names[] = {"grid", "snug"};
+
+/* PrusaSlicer's SupportMaterialPattern names, in enum support_pattern order. */
+static const char *const support_pattern_names[] = {"rectilinear", "rectilinear-grid",
+						    "honeycomb"};
+
 /* PrusaSlicer's SeamPosition names, in enum perim_seam order. */
 static const char *const seam_names[] = {"aligned", "nearest", "random", "rear"};
 
@@ -280,6 +288,16 @@ static const struct setting table[] = {
     {"support_material", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL, ""},
     {"support_material_threshold", INT, S_, 0, 90, 0, "degrees", "0", NULL, NULL, 0, NULL,
      "0 = automatic"},
+    {"support_material_style", SETTING_CHOICE, S_, 0, 0, 0, "", "grid", NULL,
+     CHOICES(support_style_names), NULL,
+     "grid: the support's islands closed into blocks; snug: they follow the overhang's "
+     "outline (organic, PrusaSlicer 2.6's trees, is refused)"},
+    {"support_material_pattern", SETTING_CHOICE, S_, 0, 0, 0, "", "rectilinear", NULL,
+     CHOICES(support_pattern_names), NULL,
+     "the body's lines: along support_material_angle on every layer, turned 90 degrees "
+     "every other layer (rectilinear-grid), or hexagons (honeycomb)"},
+    {"support_material_with_sheath", BOOL, S_, 0, 0, 0, "", "1", NULL, NULL, 0, NULL,
+     "a loop around each island of the support's body"},
     {"support_material_buildplate_only", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
      "support only where it stands on the bed; 0: on the model too, where it meets it"},
     {"support_material_contact_distance", NUM, S_, 0, 10, 0, "mm", "0.2", NULL, NULL, 0, NULL,

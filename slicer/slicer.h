@@ -98,7 +98,8 @@ struct slicer_support_settings {
 	int threshold;	/* degrees, 0-90, 0 = automatic (support_material_threshold) */
 	/* The other support_material_* keys and dont_support_bridges, as
 	 * support.h's struct support_settings has them (xy_spacing in mm). */
-	bool buildplate_only, dont_support_bridges;
+	bool buildplate_only, dont_support_bridges, with_sheath;
+	const char *style, *pattern; /* declared names (settings.c), not owned */
 	double contact_distance, bottom_contact_distance;
 	int interface_layers, bottom_interface_layers;
 	double interface_spacing, spacing, angle, xy_spacing;

@@ -22,6 +22,9 @@ static void support_defaults(struct slicer_support_settings *c, double nozzle_di
 	support_settings_init(&s, nozzle_diameter);
 	*c = (struct slicer_support_settings){
 	    .enabled = s.support_material,
+	    .style = settings_find("support_material_style")->names[s.support_material_style],
+	    .pattern = settings_find("support_material_pattern")->names[s.support_material_pattern],
+	    .with_sheath = s.support_material_with_sheath,
 	    .threshold = (int)s.support_material_threshold,
 	    .buildplate_only = s.support_material_buildplate_only,
 	    .dont_support_bridges = s.dont_support_bridges,
@@ -135,6 +138,12 @@ int slicer_config_check(const struct slicer_config *c, struct st_error *err)
 				    "support_material_threshold = %d is out of range; use 0 "
 				    "(automatic) to 90 degrees",
 				    c->support.threshold);
+	int style, body;
+	rc = support_choice_parse("support_material_style", c->support.style, &style, err);
+	if (!rc)
+		rc = support_choice_parse("support_material_pattern", c->support.pattern, &body, err);
+	if (rc)
+		return rc;
 	struct support_settings raft;
 	slicer_raft_support(c, &raft);
 	rc = support_settings_check(&raft, err);
@@ -223,6 +232,12 @@ void slicer_raft_support(const struct slicer_config *c, struct support_settings 
 	    c->support.extrusion_width > 0 ? c->support.extrusion_width : c->perim.extrusion_width;
 	/* the stack's layer 0 is on the bed: the raft's, or support's without one */
 	s->first_layer_extrusion_width = c->first_layer_extrusion_width;
+	int style = SUPPORT_STYLES, pattern = SUPPORT_PATTERNS; /* unknown: refused by the check */
+	support_choice_parse("support_material_style", c->support.style, &style, NULL);
+	support_choice_parse("support_material_pattern", c->support.pattern, &pattern, NULL);
+	s->support_material_style = (enum support_style)style;
+	s->support_material_pattern = (enum support_pattern)pattern;
+	s->support_material_with_sheath = c->support.with_sheath;
 	s->support_material_buildplate_only = c->support.buildplate_only;
 	s->support_material_contact_distance = c->support.contact_distance;
 	s->support_material_bottom_contact_distance = c->support.bottom_contact_distance;

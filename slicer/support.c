@@ -5,6 +5,7 @@
 #include "support_int.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -33,6 +34,8 @@ void support_settings_init(struct support_settings *s, double nozzle_diameter)
 	s->support_material = false;
 	s->support_material_threshold = declared("support_material_threshold");
 	s->support_material_style = SUPPORT_GRID;
+	s->support_material_pattern = SUPPORT_RECTILINEAR;
+	s->support_material_with_sheath = declared("support_material_with_sheath") != 0;
 	s->support_material_buildplate_only = declared("support_material_buildplate_only") != 0;
 	s->support_material_contact_distance = declared("support_material_contact_distance");
 	s->support_material_bottom_contact_distance =
@@ -55,6 +58,23 @@ void support_settings_init(struct support_settings *s, double nozzle_diameter)
 	s->raft_expansion = declared("raft_expansion");
 	s->raft_first_layer_density = declared("raft_first_layer_density");
 	s->raft_first_layer_expansion = declared("raft_first_layer_expansion");
+}
+
+int support_choice_parse(const char *key, const char *name, int *out, struct st_error *err)
+{
+	const struct setting *d = settings_find(key);
+	char names[128] = "";
+
+	for (size_t i = 0; d && name && i < d->nnames; i++) {
+		if (!strcmp(d->names[i], name)) {
+			*out = (int)i;
+			return 0;
+		}
+		snprintf(names + strlen(names), sizeof(names) - strlen(names), "%s%s",
+			 i ? ", " : "", d->names[i]);
+	}
+	return st_error_set(err, ST_ERR_ARG, "support: %s \"%.32s\" is unknown; use %s", key,
+			    name ? name : "(none)", names);
 }
 
 /* The keys support.h checks against their declared ranges (settings.h). */
@@ -107,6 +127,11 @@ int support_settings_check(const struct support_settings *s, struct st_error *er
 		return st_error_set(err, ST_ERR_ARG,
 				    "support: support_material_style %d is unknown; use grid or snug",
 				    (int)s->support_material_style);
+	if ((unsigned)s->support_material_pattern >= SUPPORT_PATTERNS)
+		return st_error_set(err, ST_ERR_ARG,
+				    "support: support_material_pattern %d is unknown; use rectilinear, "
+				    "rectilinear-grid or honeycomb",
+				    (int)s->support_material_pattern);
 	if (!(s->support_material_contact_distance >= 0.0 &&
 	      s->support_material_contact_distance <= 10.0))
 		return st_error_set(err, ST_ERR_RANGE,
@@ -272,6 +297,14 @@ static int interface_area(struct support_ctx *c, size_t j, const struct clip_pat
 	return rc;
 }
 
+/* The axis of the body's lines on layer j: along support_material_angle
+ * (axis 0: X at 0 degrees, as PrusaSlicer 2.5 prints them), and with
+ * rectilinear-grid turned 90 degrees every other layer. */
+static int body_axis(const struct support_settings *s, size_t j)
+{
+	return s->support_material_pattern == SUPPORT_RECTILINEAR_GRID ? (int)(j & 1) : 0;
+}
+
 /* The support of layer j from the column area T (see support.h). */
 static int layer_support(struct support_ctx *c, size_t j, const struct clip_paths *T,
 			 const struct clip_paths *G, const struct clip_paths *C, const long *t,
@@ -283,6 +316,7 @@ static int layer_support(struct support_ctx *c, size_t j, const struct clip_path
 	double face = c->s->support_material_interface_spacing * SLICE_UNITS_PER_MM + sp;
 	int rc = 0;
 
+	c->sp = sp;
 	if (c->s->support_material_style == SUPPORT_GRID) {
 		rc = clip_offset(T, pitch / 2.0, CLIP_JOIN_SQUARE, 2.0, c->arc, &S, c->err);
 		if (!rc)
@@ -304,7 +338,7 @@ static int layer_support(struct support_ctx *c, size_t j, const struct clip_path
 	if (!rc)
 		rc = support_area_paths(c, &I, true, face, (int)(j & 1), l);
 	if (!rc)
-		rc = support_area_paths(c, &R, false, pitch, 0, l);
+		rc = support_area_paths(c, &R, false, pitch, body_axis(c->s, j), l);
 	clip_paths_free(&S);
 	clip_paths_free(&I);
 	clip_paths_free(&R);

@@ -71,12 +71,22 @@ enum support_style {
 	SUPPORT_STYLES
 };
 
+/* The body's lines (PrusaSlicer's support_material_pattern). */
+enum support_pattern {
+	SUPPORT_RECTILINEAR = 0,  /* along the angle on every layer */
+	SUPPORT_RECTILINEAR_GRID, /* along the angle and at 90 degrees, layers alternating */
+	SUPPORT_HONEYCOMB,	  /* hexagons, as the honeycomb infill */
+	SUPPORT_PATTERNS
+};
+
 /* Support settings (PrusaSlicer key names); support_settings_init. */
 struct support_settings {
 	bool support_material;			  /* generate support (false) */
 	double support_material_threshold;	  /* degrees from horizontal, [0, 90];
 						   * 0 = automatic (0) */
 	enum support_style support_material_style; /* SUPPORT_GRID */
+	enum support_pattern support_material_pattern; /* SUPPORT_RECTILINEAR */
+	bool support_material_with_sheath;	  /* a loop around each body island (true) */
 	bool support_material_buildplate_only;	  /* only support standing on the bed (false) */
 	double support_material_contact_distance; /* mm, top Z gap, >= 0 (0.2) */
 	double support_material_bottom_contact_distance; /* mm, Z gap above the model,
@@ -105,6 +115,14 @@ struct support_settings {
 
 /* support_settings_init - PrusaSlicer's defaults for a nozzle of nozzle_diameter mm. */
 void support_settings_init(struct support_settings *s, double nozzle_diameter);
+
+/*
+ * support_choice_parse - the index of name among the declared names of
+ * key (support_material_style or support_material_pattern: the enums'
+ * order) into *out.  Returns 0 or ST_ERR_ARG naming the key, the value and
+ * the names allowed.
+ */
+int support_choice_parse(const char *key, const char *name, int *out, struct st_error *err);
 
 /*
  * support_settings_check - refuse settings that cannot make support: a

@@ -13,6 +13,7 @@ struct support_ctx {
 	const struct support_settings *s;
 	const struct slice_stack *st;
 	double w, arc, body, xy;
+	double sp;    /* the flow spacing of the layer being made (perimeters.h) */
 	double angle; /* radians, the lines' direction (support_material_angle) */
 	struct st_error *err;
 };
@@ -40,7 +41,10 @@ int support_fill_lines(struct support_ctx *c, const struct clip_paths *R, double
 /*
  * support_area_paths - the paths of one support area A (nm) on layer l:
  * its centre region is A shrunk by w/2; interface lines along axis, or the
- * body of the chosen style, every gap nm.
+ * body: a loop around each island (support_material_with_sheath), then
+ * the pattern (support_material_pattern: lines along axis, or honeycomb)
+ * a spacing inside it, every gap nm, its lines joined along that inner
+ * boundary (support_lines.c).
  */
 int support_area_paths(struct support_ctx *c, const struct clip_paths *A, bool interface,
 		       double gap, int axis, struct layer_paths *l);

@@ -7,8 +7,15 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "anchors.h"
 #include "emit.h"
 #include "grow.h"
+#include "patterns.h"
+
+/* Body lines are joined along their boundary where the link is at most
+ * this many line pitches long (PrusaSlicer's link_max_length_factor for
+ * support, over the support's density). */
+#define SUPPORT_LINK_PITCHES 3.0
 
 /* One clipped line piece, for ordering the pieces of a layer. */
 struct piece {
@@ -81,44 +88,95 @@ static int piece_cmp(const void *a, const void *b)
 	return (p->along > q->along) - (p->along < q->along);
 }
 
-int support_fill_lines(struct support_ctx *c, const struct clip_paths *R, double gap, int axis,
-		       enum path_role role, struct layer_paths *l)
+/* Append the polylines of cut to l as role, ordered by the grid line their
+ * first point is on and then along it, every other line reversed. */
+static int emit_ordered(struct support_ctx *c, const struct clip_paths *cut, double gap,
+			int axis, enum path_role role, struct layer_paths *l)
 {
-	struct clip_paths cut = {0};
 	struct piece *pc = NULL;
 	double t[2], n[2];
-	int rc = support_line_pieces(c, R, gap, c->angle, axis, &cut);
+	int rc = 0;
 
 	line_frame(c->angle, axis, t, n);
-	if (!rc && cut.n && !(pc = calloc(cut.n, sizeof(*pc))))
+	if (cut->n && !(pc = calloc(cut->n, sizeof(*pc))))
 		rc = st_error_set(c->err, ST_ERR_NOMEM, "support: out of memory for lines");
-	for (size_t i = 0; !rc && i < cut.n; i++) {
-		const int64_t *xy = clip_path_xy(&cut, i);
-		size_t m = clip_path_len(&cut, i);
+	for (size_t i = 0; !rc && i < cut->n; i++) {
+		const int64_t *xy = clip_path_xy(cut, i);
+		size_t m = clip_path_len(cut, i);
 		double a0 = dot(t, xy), a1 = dot(t, &xy[2 * (m - 1)]);
 		pc[i] = (struct piece){.path = i,
 				       .line = llround(dot(n, xy) / gap),
 				       .along = llround(fmin(a0, a1))};
 	}
-	if (!rc && cut.n)
-		qsort(pc, cut.n, sizeof(*pc), piece_cmp);
+	if (!rc && cut->n)
+		qsort(pc, cut->n, sizeof(*pc), piece_cmp);
 	/* Zigzag: every other line runs backwards; pieces shorter than half a
 	 * bead are not worth a start and a stop. */
 	size_t line_no = 0;
-	for (size_t i = 0; !rc && i < cut.n; i++) {
-		const int64_t *xy = clip_path_xy(&cut, pc[i].path);
-		size_t m = clip_path_len(&cut, pc[i].path);
+	for (size_t i = 0; !rc && i < cut->n; i++) {
+		const int64_t *xy = clip_path_xy(cut, pc[i].path);
+		size_t m = clip_path_len(cut, pc[i].path);
 		double a0 = dot(t, xy), a1 = dot(t, &xy[2 * (m - 1)]);
 
 		if (i > 0 && pc[i].line != pc[i - 1].line)
 			line_no++;
-		if (fabs(a1 - a0) < c->w / 2.0)
+		if (m == 2 && fabs(a1 - a0) < c->w / 2.0)
 			continue;
 		rc = slice_emit_xy(l, role, false, xy, m, llround(c->w), 0, (a1 >= a0) == (line_no & 1),
 				   c->err);
 	}
 	free(pc);
+	return rc;
+}
+
+int support_fill_lines(struct support_ctx *c, const struct clip_paths *R, double gap, int axis,
+		       enum path_role role, struct layer_paths *l)
+{
+	struct clip_paths cut = {0};
+	int rc = support_line_pieces(c, R, gap, c->angle, axis, &cut);
+
+	if (!rc)
+		rc = emit_ordered(c, &cut, gap, axis, role, l);
 	clip_paths_free(&cut);
+	return rc;
+}
+
+/*
+ * The body in the centre region R (support_int.h, support_area_paths): the
+ * sheath, then the pattern in F (R, or a spacing inside the sheath), its
+ * lines joined along F's boundary.
+ */
+static int body_paths(struct support_ctx *c, const struct clip_paths *R, double gap, int axis,
+		      struct layer_paths *l)
+{
+	struct clip_paths in = {0}, cut = {0}, comb = {0};
+	const struct clip_paths *F = R;
+	struct pat_box box;
+	int rc = 0;
+
+	if (c->s->support_material_with_sheath) {
+		for (size_t i = 0; i < R->n && !rc; i++)
+			rc = slice_emit_xy(l, PATH_SUPPORT, true, clip_path_xy(R, i),
+					   clip_path_len(R, i), llround(c->w), 0, false, c->err);
+		if (!rc)
+			rc = clip_offset(R, -c->sp, CLIP_JOIN_ROUND, 2.0, c->arc, &in, c->err);
+		F = &in;
+	}
+	if (!rc && c->s->support_material_pattern == SUPPORT_HONEYCOMB && pat_box_of(F, &box)) {
+		rc = pat_honeycomb(pat_honeycomb_cell(c->sp, gap), c->sp / 2.0, -c->angle, &box,
+				   &comb, c->err);
+		if (!rc && comb.n)
+			rc = clip_lines(CLIP_INTERSECTION, &comb, F, CLIP_NONZERO, &cut, c->err);
+	} else if (!rc && c->s->support_material_pattern != SUPPORT_HONEYCOMB) {
+		rc = support_line_pieces(c, F, gap, c->angle, axis, &cut);
+	}
+	if (!rc && cut.n)
+		rc = anchors_connect(F, &cut, 0.0, SUPPORT_LINK_PITCHES * gap, c->err);
+	if (!rc)
+		rc = emit_ordered(c, &cut, gap, axis, PATH_SUPPORT, l);
+	clip_paths_free(&in);
+	clip_paths_free(&cut);
+	clip_paths_free(&comb);
 	return rc;
 }
 
@@ -133,17 +191,8 @@ int support_area_paths(struct support_ctx *c, const struct clip_paths *A, bool i
 	rc = clip_offset(A, -c->w / 2.0, CLIP_JOIN_ROUND, 2.0, c->arc, &R, c->err);
 	if (!rc && interface)
 		rc = support_fill_lines(c, &R, gap, axis, PATH_SUPPORT_INTERFACE, l);
-	else if (!rc && c->s->support_material_style == SUPPORT_SNUG) {
-		for (size_t i = 0; i < R.n && !rc; i++)
-			rc = slice_emit_xy(l, PATH_SUPPORT, true, clip_path_xy(&R, i),
-					   clip_path_len(&R, i), llround(c->w), 0, false, c->err);
-		if (!rc)
-			rc = support_fill_lines(c, &R, gap, 1, PATH_SUPPORT, l);
-	} else if (!rc) {
-		rc = support_fill_lines(c, &R, gap, 0, PATH_SUPPORT, l);
-		if (!rc)
-			rc = support_fill_lines(c, &R, gap, 1, PATH_SUPPORT, l);
-	}
+	else if (!rc)
+		rc = body_paths(c, &R, gap, axis, l);
 	clip_paths_free(&R);
 	return rc;
 }

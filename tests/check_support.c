@@ -400,26 +400,34 @@ static void check_cantilever(enum support_style style)
 			loop = loop || p->closed;
 		}
 	}
-	ck_assert(along_x && along_y);
-	if (style == SUPPORT_SNUG)
-		ck_assert(loop);
-	else
-		ck_assert(!loop);
-	/* Body lines along Y are support_material_spacing apart edge to edge. */
+	ck_assert(along_x && along_y); /* the interface's lines, alternating */
+	ck_assert(loop == s.support_material_with_sheath); /* the sheath, on by default */
+	/* Body lines along X (PrusaSlicer's at 0 degrees), on every layer,
+	 * support_material_spacing apart edge to edge, joined along the
+	 * boundary into one zigzag (before, separate lines in X and Y). */
 	const struct layer_paths *b = &ls->layers[10];
 	double pitch = (s.support_material_spacing + perim_spacing(s.extrusion_width, 0.2)) * NM;
 	int64_t prev = INT64_MIN;
-	size_t ylines = 0;
+	size_t xlines = 0, open = 0;
 	for (size_t i = 0; i < b->n; i++) {
 		const struct toolpath *p = &b->paths[i];
-		if (p->closed || p->pts[0].x != p->pts[p->n - 1].x || p->pts[0].x == prev)
+		if (p->closed)
 			continue;
-		if (ylines++)
-			ck_assert_msg(fabs((double)(p->pts[0].x - prev) - pitch) <= 1.0,
-				      "body lines %.4f mm apart", (p->pts[0].x - prev) / NM);
-		prev = p->pts[0].x;
+		open++;
+		for (size_t k = 0; k + 1 < p->n; k++) {
+			const struct path_point *q = &p->pts[k], *r = &p->pts[k + 1];
+			ck_assert_msg(q->y == r->y || fabs((double)(r->y - q->y)) <= pitch + 1.0,
+				      "layer 10: a segment across %.3f mm", (r->y - q->y) / NM);
+			if (q->y != r->y || llabs(r->x - q->x) < 1 * NM)
+				continue;
+			if (xlines++)
+				ck_assert_msg(fabs(fabs((double)(q->y - prev)) - pitch) <= 1.0,
+					      "body lines %.4f mm apart", (q->y - prev) / NM);
+			prev = q->y;
+		}
 	}
-	ck_assert_uint_eq(ylines, 3); /* x = 4, 5, 6 pitches: 11.6, 14.5, 17.4 mm */
+	ck_assert_uint_eq(xlines, 3); /* y = 1, 2, 3 pitches: 2.9, 5.8, 8.7 mm */
+	ck_assert_uint_eq(open, 1);
 	/* Interface lines are one flow spacing apart, alternating direction. */
 	const struct layer_paths *l = &ls->layers[23];
 	double sp = perim_spacing(s.extrusion_width, 0.2) * NM;
@@ -432,6 +440,50 @@ static void check_cantilever(enum support_style style)
 	ck_assert(ls->layers[22].paths[0].pts[0].y == ls->layers[22].paths[0].pts[1].y);
 	release(ls, st, m);
 }
+
+/*
+ * The body's patterns under the cantilever: rectilinear-grid turns its
+ * lines 90 degrees every other layer (layer 10 along X, 11 along Y);
+ * honeycomb's run at 60 degrees; without the sheath no loop.
+ */
+START_TEST(support_body_patterns)
+{
+	struct mesh *m = cantilever();
+	struct slice_stack *st = slice_ok(m);
+	struct support_settings s;
+
+	support_settings_init(&s, 0.4);
+	s.support_material = true;
+	s.support_material_with_sheath = false;
+	for (int pat = SUPPORT_RECTILINEAR_GRID; pat <= SUPPORT_HONEYCOMB; pat++) {
+		s.support_material_pattern = (enum support_pattern)pat;
+		struct layer_stack *ls = support_ok(&s, st);
+		for (size_t j = 10; j <= 11; j++) {
+			size_t along[3] = {0, 0, 0}; /* X, Y, slanted: segments over 0.5 mm */
+			for (size_t i = 0; i < ls->layers[j].n; i++) {
+				const struct toolpath *p = &ls->layers[j].paths[i];
+				ck_assert(!p->closed);
+				for (size_t k = 0; k + 1 < p->n; k++) {
+					int64_t dx = p->pts[k + 1].x - p->pts[k].x,
+						dy = p->pts[k + 1].y - p->pts[k].y;
+					if (hypot((double)dx, (double)dy) > 0.5 * NM)
+						along[dy == 0 ? 0 : dx == 0 ? 1 : 2]++;
+				}
+			}
+			if (pat == SUPPORT_HONEYCOMB)
+				ck_assert_uint_gt(along[2], 4);
+			else /* the lines, and the links between them across */
+				ck_assert_msg(along[2] == 0 && along[j & 1] >= 3 &&
+						  along[j & 1] > along[1 - (j & 1)],
+					      "layer %zu: %zu along X, %zu along Y", j, along[0],
+					      along[1]);
+		}
+		layer_stack_free(ls);
+	}
+	slice_stack_free(st);
+	mesh_free(m);
+}
+END_TEST
 
 START_TEST(support_under_cantilever_grid)
 {
@@ -685,6 +737,7 @@ Suite *support_suite(void)
 	tcase_add_test(tc, skirt_settings_refused);
 	tcase_add_test(tc, support_under_cantilever_grid);
 	tcase_add_test(tc, support_under_cantilever_snug);
+	tcase_add_test(tc, support_body_patterns);
 	tcase_add_test(tc, support_off_and_skirt_around_it);
 	tcase_add_test(tc, support_by_overhang_angle);
 	tcase_add_test(tc, support_only_from_the_bed);
