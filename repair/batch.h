@@ -66,7 +66,7 @@ typedef int (*batch_fn)(void *ctx, size_t batch, const struct mesh *sub, int thr
 /*
  * batches_run - call fn for every batch of b, on up to `threads` worker
  * threads (0 = all cores).  A batch with more than half the triangles runs
- * first, alone, with every core; the rest run one per core.  done, when not
+ * first, alone, with every core; the rest run one per core, largest first.  done, when not
  * NULL, is called after each batch (serialised) with the fraction of
  * triangles done.  Stops at the first failure and returns its class (err
  * filled), else 0.
