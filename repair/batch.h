@@ -66,10 +66,10 @@ typedef int (*batch_fn)(void *ctx, size_t batch, const struct mesh *sub, int thr
 /*
  * batches_run - call fn for every batch of b, on up to `threads` worker
  * threads (0 = all cores).  A batch with more than half the triangles runs
- * first, alone, with every core; the rest run one per core.  done, when not
- * NULL, is called after each batch (serialised) with the fraction of
- * triangles done.  Stops at the first failure and returns its class (err
- * filled), else 0.
+ * first, alone, with every core; the rest run one per core, largest
+ * first.  done, when not NULL, is called after each batch (serialised)
+ * with the fraction of triangles done.  Stops at the first failure and
+ * returns its class (err filled), else 0.
  */
 int batches_run(const struct mesh *m, const struct batches *b, int threads, batch_fn fn,
 		void *ctx, void (*done)(void *ctx, double fraction), struct st_error *err);

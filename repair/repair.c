@@ -46,11 +46,13 @@ void repair_options_init(struct repair_options *opt)
  * Round em's vertices to the output precision into a new welded mesh, by
  * snap rounding (exact_mesh_snap_round): no move that would make triangles
  * meet is made.  *moved: largest distance a vertex moved; *changed:
- * whether any did; *merged: vertices merged into a neighbour.
+ * whether any did; *merged: vertices merged into a neighbour; *clean:
+ * every vertex found a safe place, so the rounded mesh has no intersecting
+ * pair, as em has none (exact_mesh_snap_round in exact.h).
  */
 static int round_result(const struct exact_mesh *em, enum repair_precision prec, int threads,
 			struct mesh **out, double *moved, bool *changed, size_t *merged,
-			struct st_error *err)
+			bool *clean, struct st_error *err)
 {
 	const size_t nv = exact_mesh_nverts(em);
 	const double reach = SNAP_REACH_CELLS * repair_output_ulp(exact_mesh_verts(em), nv, prec);
@@ -67,6 +69,8 @@ static int round_result(const struct exact_mesh *em, enum repair_precision prec,
 	*merged += st.collapsed;
 	if (st.rounded || st.other_corner || st.collapsed || st.unplaced)
 		*changed = true;
+	*clean = st.unplaced == 0;
+	*clean = st.unplaced == 0;
 
 	const size_t n = exact_mesh_ntris(snapped);
 	const uint32_t (*tris)[3] = exact_mesh_tris(snapped);
@@ -221,14 +225,17 @@ int repair_rounded(const struct mesh *in, const struct repair_options *opt,
 		goto out_free;
 	rep->solid_deviation = solid_deviation(in, co.result);
 
-	/* Round, check, and run the core again on what rounding broke. */
-	bool unchanged = false, checked = false;
+	/* Round, check, and run the core again on what rounding broke.  The
+	 * exact passes leave no intersecting pair, and rounding that placed
+	 * every vertex safely keeps it so: then the analysis takes the count
+	 * as 0 instead of searching all pairs again (clean). */
+	bool checked = false, clean = false;
 	for (;;) {
 		bool changed = false;
 		double moved = 0;
 		repair_progress(opt, "rounding the coordinates", 0);
 		rc = round_result(co.result, opt->precision, opt->threads, &rounded, &moved, &changed,
-				  &rep->rounding_merged, err);
+				  &rep->rounding_merged, &clean, err);
 		/* Rounds add up: each moves the previous round's result. */
 		rep->rounding_deviation += moved;
 		exact_mesh_free(co.result);
@@ -237,10 +244,9 @@ int repair_rounded(const struct mesh *in, const struct repair_options *opt,
 		cur = NULL;
 		if (rc)
 			goto out_free;
-		unchanged = !changed;
 		if (!changed || rep->rounding_rounds >= MAX_ROUNDING_ROUNDS)
 			break;
-		rc = mesh_analyze(rounded, opt->threads, &mr, err);
+		rc = mesh_analyze_known(rounded, opt->threads, clean ? 0 : -1, &mr, err);
 		if (rc)
 			goto out_free;
 		checked = true;
@@ -255,7 +261,8 @@ int repair_rounded(const struct mesh *in, const struct repair_options *opt,
 				rc = st_error_set(err, ST_ERR_NOMEM, "out of memory after rounding");
 				goto out_free;
 			}
-			rc = mesh_analyze(pruned, opt->threads, &mr, err);
+			/* Fewer triangles than a mesh without crossings. */
+			rc = mesh_analyze_known(pruned, opt->threads, 0, &mr, err);
 			if (rc) {
 				mesh_free(pruned);
 				goto out_free;
@@ -276,10 +283,8 @@ int repair_rounded(const struct mesh *in, const struct repair_options *opt,
 			goto out_free;
 		rep->rounding_dropped += co.sheet;
 	}
-	/* When rounding moved nothing and the last exact pass found no pair
-	 * to cut, that pass already proved the count is 0 for this mesh; a
-	 * mesh checked in the loop has its count already. */
-	*known = checked ? (long long)mr.self_intersections : unchanged && co.proved_clean ? 0 : -1;
+	/* A mesh checked in the loop has its count already. */
+	*known = checked ? (long long)mr.self_intersections : clean ? 0 : -1;
 	*rounded_out = rounded;
 	return 0;
 

@@ -365,7 +365,6 @@ int repair_core(const struct mesh *in, const struct repair_options *opt, bool th
 	if (rc)
 		goto out;
 	co->pairs = rs.intersecting_pairs;
-	co->proved_clean = rs.intersecting_pairs == 0;
 	co->split = rs.triangles_split;
 	co->interior = hs.interior;
 	co->enclosed = hs.enclosed;
@@ -395,7 +394,6 @@ int repair_core(const struct mesh *in, const struct repair_options *opt, bool th
 		if (rc)
 			goto out;
 		co->second_sheet = hs.sheet;
-		co->proved_clean = rs.intersecting_pairs == 0;
 		/* Seed 000 §4.2.1: M_solid and closed slabs leave no sheet.
 		 * One left means a bug here, not bad input: no third pass
 		 * hides it. */

@@ -27,7 +27,6 @@ struct core_out {
 	double sheet_area, wire_length, sheet_deviation;
 	size_t wires, wires_discarded, thickened;
 	bool second_pass;
-	bool proved_clean;	/* the last refinement found nothing to cut */
 };
 
 /*

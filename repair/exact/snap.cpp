@@ -549,16 +549,56 @@ bool place(snapper &s, uint32_t v, exact_snap_stats &st)
 	return false;
 }
 
-/* Whether live triangle t is degenerate or meets a live candidate. */
-bool offends(const snapper &s, uint32_t t, std::vector<uint32_t> &with)
+/*
+ * What each live triangle of check (sorted, no repeats) offends: bad[i]
+ * (flat, or meets something) and with[i] (what it meets, none when flat)
+ * for check[i]; in_check is all 0 on entry and on return.  Near
+ * lists are symmetric between triangles that can move, so a pair of two
+ * listed triangles is tested once, from its lower one, not from both.
+ */
+void offenders(const snapper &s, const std::vector<uint32_t> &check, std::vector<char> &in_check,
+	       std::vector<char> &bad, std::vector<std::vector<uint32_t>> &with)
 {
-	with.clear();
-	if (degenerate(s, t))
-		return true;
-	for (uint32_t u : s.near[t])
-		if (u != t && s.alive[u] && meet(s, t, u))
-			with.push_back(u);
-	return !with.empty();
+	const size_t n = check.size();
+	std::vector<char> flat(n, 0);
+	bad.assign(n, 0);
+	with.assign(n, {});
+	for (size_t i = 0; i < n; i++)
+		if (s.alive[check[i]]) {
+			in_check[check[i]] = 1;
+			flat[i] = bad[i] = degenerate(s, check[i]);
+		}
+	auto at = [&check](uint32_t u) {
+		return static_cast<size_t>(std::lower_bound(check.begin(), check.end(), u) -
+					   check.begin());
+	};
+	for (size_t i = 0; i < n; i++) {
+		const uint32_t t = check[i];
+		if (!in_check[t])
+			continue;
+		for (uint32_t u : s.near[t]) {
+			if (u == t || !s.alive[u] || (in_check[u] && u < t))
+				continue;
+			/* A flat triangle offends whatever it meets: only
+			 * the other side of the pair needs the test. */
+			const size_t j = in_check[u] ? at(u) : n;
+			if ((flat[i] && (j == n || flat[j])) || !meet(s, t, u))
+				continue;
+			if (!flat[i]) {
+				bad[i] = 1;
+				with[i].push_back(u);
+			}
+			if (j < n && !flat[j]) {
+				bad[j] = 1;
+				with[j].push_back(t);
+			}
+		}
+	}
+	/* In near-list order. */
+	for (size_t i = 0; i < n; i++) {
+		std::sort(with[i].begin(), with[i].end());
+		in_check[check[i]] = 0;
+	}
 }
 
 /*
@@ -575,8 +615,9 @@ std::vector<uint32_t> round_plainly(snapper &s, const std::vector<uint32_t> &tod
 	const std::vector<EPoint> epos = s.pos;
 	const std::vector<std::array<double, 3>> ecur = s.cur;
 	const std::vector<char> eisd = s.isd;
-	std::vector<char> rounded(nv, 0), back(nv, 0);
-	std::vector<uint32_t> check, taken, with;
+	std::vector<char> rounded(nv, 0), back(nv, 0), in_check(s.tris.size(), 0), bad;
+	std::vector<uint32_t> check, taken;
+	std::vector<std::vector<uint32_t>> with;
 
 	for (uint32_t v : todo) {
 		const auto c = corners(s, v);
@@ -596,11 +637,12 @@ std::vector<uint32_t> round_plainly(snapper &s, const std::vector<uint32_t> &tod
 					fresh.push_back(x);
 				}
 		};
-		for (uint32_t t : check) {
-			if (!s.alive[t] || !offends(s, t, with))
+		offenders(s, check, in_check, bad, with);
+		for (size_t i = 0; i < check.size(); i++) {
+			if (!bad[i])
 				continue;
-			take(t);
-			for (uint32_t u : with)
+			take(check[i]);
+			for (uint32_t u : with[i])
 				take(u);
 		}
 		for (uint32_t x : fresh) {
