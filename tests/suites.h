@@ -64,6 +64,8 @@ Suite *serve_suite(void);		/* tests/check_serve.c: stratum serve, the farm node'
 void serve_mqtt_tcases(Suite *s); /* tests/check_servemqtt.c: the node on a shared broker, part of serve */
 Suite *octoapi_suite(void);	/* tests/check_octoapi.c: the node's OctoPrint calls, one test each */
 void octoapi_push_tcases(Suite *s); /* tests/check_octopush.c: the push API, part of octoapi */
+void serve_abuse_tcases(Suite *s); /* tests/check_serveabuse.c: the node bounded under abuse, part of serve */
+void serve_sim_tcases(Suite *s);   /* tests/check_servesim.c: the node with simulated printers and MQTT, part of serve */
 void serve_page_tcases(Suite *s);   /* tests/check_servepage.c: the status page in Chromium, part of serve */
 Suite *farm_suite(void);	/* tests/check_farm.c: stratum farm, the farm view over two nodes */
 void octoapi_queue_tcases(Suite *s); /* tests/check_octoqueue.c: job calls and the queue, part of octoapi */
