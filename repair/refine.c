@@ -29,6 +29,11 @@
 #define ROUNDS_MAX 64	   /* a hard stop; the cylinder takes a handful */
 #define STALL_ROUNDS 4	   /* rounds without progress (below): give up */
 #define AREA_PROGRESS 0.9  /* progress: the area over the tolerance down to this share */
+/* A new triangle may turn up to 120 degrees from the facet it was cut from:
+ * on a scan a small facet follows a bump's steep side, and what a fold would
+ * really break, a crossing, the exact test finds; beyond, it is refused as
+ * turned over. */
+#define TURN_COS (-0.5)
 /* A facet's error comes from an edge when that edge's midpoint moves by a
  * quarter of it; edges within this share of the largest move tie, and the
  * shortest of them is split (on a cylinder's side the rim before the
@@ -401,8 +406,8 @@ static bool step_back_corners(struct mesh *m, struct round *r, const uint32_t c[
 
 /*
  * The checks on the new triangles (fresh), until they pass: one that
- * collapses (collinear corners, exact), turns against the facet it was
- * cut from, or crosses another triangle (exact) gets its moving vertices
+ * collapses (collinear corners, exact), turns over against the facet it
+ * was cut from, or crosses another triangle (exact) gets its moving vertices
  * stepped back towards home, the last step onto their edges, where they make
  * a flat copy of the facet.
  */
@@ -424,7 +429,7 @@ static int check_moves(struct mesh *m, struct round *r, const uint32_t *parent,
 			refine_unit_normal(m, (uint32_t)t, n);
 			if (!exact_collinear(m->verts[c[0]], m->verts[c[1]], m->verts[c[2]]) &&
 			    n[0] * pnormal[parent[t]][0] + n[1] * pnormal[parent[t]][1] +
-				    n[2] * pnormal[parent[t]][2] > 0)
+				    n[2] * pnormal[parent[t]][2] > TURN_COS)
 				continue;
 			if (!step_back_corners(m, r, c))
 				rc = st_error_set(err, ST_ERR_INTERNAL,
