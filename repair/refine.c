@@ -526,6 +526,17 @@ static int pending_update(struct pending *pd, const struct mesh *m, const struct
 	return 0;
 }
 
+/* Whether a corner of the facet is short of its place: its error is that
+ * corner's to mend (by the retry); split, it would only give vertices that
+ * must move as far beside ever smaller triangles, and be refused in turn. */
+static bool has_short_corner(const struct pending *pd, const uint32_t c[3])
+{
+	for (int k = 0; k < 3; k++)
+		if (c[k] < pd->n && pd->short_of[c[k]])
+			return true;
+	return false;
+}
+
 /*
  * One round: split edges of the facets over the tolerance (all edges when
  * uniform), place and check the new vertices.  *stop when the round would
@@ -551,7 +562,7 @@ static int split_round(struct mesh *m, const float *facet, const struct refine_o
 		if (o->uniform)
 			for (int k = 0; k < 3; k++)
 				r.newv[r.e.of_tri[t][k]] = 0;
-		else if (facet[t] > o->tolerance)
+		else if (facet[t] > o->tolerance && !has_short_corner(pd, m->tris[t]))
 			r.newv[edge_to_split(m, &r, (uint32_t)t, facet[t])] = 0;
 	}
 	for (size_t ed = 0; !rc && ed < r.e.n; ed++)
