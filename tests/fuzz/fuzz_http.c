@@ -14,8 +14,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/ioctl.h>
 #include <sys/socket.h>
 #include <sys/time.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "fuzz.h"
@@ -32,8 +34,24 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 	"[printer ff]\nprofile = flashforge-creator-pro\nport = test-instant\nprefix = /p/ff\n"
 
 #define SILENCE_MS 50
+#define NAP_US 50 /* between looks at the node's progress */
 
 static uint16_t port;
+
+static int64_t now_us(void)
+{
+	struct timespec t;
+
+	clock_gettime(CLOCK_MONOTONIC, &t);
+	return (int64_t)t.tv_sec * 1000000 + t.tv_nsec / 1000;
+}
+
+static void nap(void)
+{
+	struct timespec t = {.tv_nsec = NAP_US * 1000};
+
+	nanosleep(&t, NULL);
+}
 
 static void start_node(void)
 {
@@ -54,6 +72,56 @@ static void start_node(void)
 		abort();
 	}
 	port = node_port(n); /* the node runs until the process ends */
+}
+
+/* The node's end of the connection on fd: the descriptor of this process
+ * (the node runs in it) whose peer is fd's own address; -1 while no node
+ * thread has accepted the connection. */
+static int node_side(int fd)
+{
+	struct sockaddr_in me, peer;
+	socklen_t len = sizeof(me);
+
+	if (getsockname(fd, (struct sockaddr *)&me, &len))
+		return -1;
+	/* accept() takes the lowest free descriptor: near fd */
+	for (int k = 0; k < fd + 64; k++) {
+		len = sizeof(peer);
+		if (k != fd && !getpeername(k, (struct sockaddr *)&peer, &len) &&
+		    len == sizeof(peer) && peer.sin_family == AF_INET &&
+		    peer.sin_port == me.sin_port && peer.sin_addr.s_addr == me.sin_addr.s_addr)
+			return k;
+	}
+	return -1;
+}
+
+/*
+ * Wait until the node has read every byte sent on fd (its end's receive
+ * queue is empty: what it read, its handler has seen), or has answered or
+ * closed, or SILENCE_MS have passed.  Only then may the end of the input
+ * go: libmicrohttpd's server (edge-triggered epoll) takes bytes and an end
+ * already queued behind them in one event and does not come back for the
+ * end, so the connection stayed open until the silence ran out.  Before,
+ * the harness waited for the first byte of an answer, and a request the
+ * node waits to see more of (most mutated ones) cost the whole silence.
+ */
+static void wait_read(int fd)
+{
+	int64_t deadline = now_us() + SILENCE_MS * 1000;
+	int node_fd = -1;
+
+	do {
+		struct pollfd p = {.fd = fd, .events = POLLIN};
+		int unread;
+
+		if (poll(&p, 1, 0) != 0)
+			return; /* an answer, or the node closed */
+		if (node_fd < 0)
+			node_fd = node_side(fd);
+		if (node_fd >= 0 && !ioctl(node_fd, FIONREAD, &unread) && unread == 0)
+			return;
+		nap();
+	} while (now_us() < deadline);
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
@@ -84,16 +152,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 				break; /* the node answered and closed early */
 			done += (size_t)w;
 		}
-		/* The end of the input (FIN) only after the node has read the
-		 * bytes: its server (libmicrohttpd, edge-triggered epoll) takes
-		 * the data and an end already queued in one event and does not
-		 * come back for the end, so the connection stayed open until the
-		 * silence below ran out.  The first byte of an answer says the
-		 * request was read; a request that waits for more gets none, and
-		 * then the end goes after the same silence. */
-		struct pollfd p = {.fd = fd, .events = POLLIN};
-
-		(void)poll(&p, 1, SILENCE_MS);
+		wait_read(fd);
 		shutdown(fd, SHUT_WR);
 		while (recv(fd, buf, sizeof(buf), 0) > 0)
 			;
