@@ -111,6 +111,10 @@ static char *sim_executed_ex(const struct node_proc *np, const char *name, bool 
 
 		if (emergency_ok && line[0] == '-' && line[1] == ' ')
 			continue;
+		/* the driver's own M105 probe after a silence (a loaded machine
+		 * makes one); the job's lines are always numbered */
+		if (!strcmp(line, "- M105\n"))
+			continue;
 		ck_assert_msg(sp && line[0] != '-', "unnumbered line executed: %s", line);
 		ck_assert_msg(n == last + 1, "line %ld ran after line %ld", n, last);
 		last = n;
