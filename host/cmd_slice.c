@@ -131,7 +131,8 @@ static int parse_args(int argc, char **argv, struct slice_args *a)
 		"them; a model that finds no room is named and nothing is written.\n"
 		"It prints walls (perimeters, gap fill, thin walls), skins and sparse infill,\n"
 		"bridges, supports, skirt/brim, a raft, spiral vases and ironing as the\n"
-		"settings ask.  See docs/slicing.md.\n"
+		"settings ask.  A 3MF project's layer height profile (PrusaSlicer's variable\n"
+		"layer height) gives the layers, as in PrusaSlicer.  See docs/slicing.md.\n"
 		"\n",
 	    .mid = "\nSettings (--printer may be left out when --load gives a whole config):\n",
 	    .cfg = &a->cfg,
@@ -336,6 +337,12 @@ static int print_json(const struct slice_run *r, const struct slicer_summary *s)
 	if (s->thin.widened_layers)
 		cmd_json_set(o, "f:thin_designed_mm", s->thin.designed, "f:thin_printed_mm",
 			     s->thin.printed, NULL);
+	if (s->profiled)
+		cmd_json_set(o, "s:layer_heights", "3mf_profile", "z:profile_clamped_layers",
+			     s->profile_clamped, "f:layer_height_min", s->height_min,
+			     "f:layer_height_max", s->height_max, "f:cusp_max", s->cusp_max,
+			     "f:cusp_mean", s->cusp_mean, "o:layer_profile",
+			     json_profile(r, s->raft_layers), NULL);
 	if (s->adaptive)
 		cmd_json_set(o, "b:adaptive", true, "f:max_cusp", r->c->adaptive.max_cusp,
 			     "f:layer_height_min", s->height_min, "f:layer_height_max", s->height_max,
@@ -379,11 +386,11 @@ static void print_text(const struct slice_run *r, const struct slicer_summary *s
 	if (s->raft_layers) {
 		printf("placed: X %.2f to %.2f, Y %.2f to %.2f, Z %.2f to %.2f mm (on the raft)\n",
 		       s->min[0], s->max[0], s->min[1], s->max[1], s->min[2], s->max[2]);
-		if (s->adaptive)
+		if (s->adaptive || s->profiled)
 			printf("layers: %zu (%zu of raft, the first %g mm; the part's from %g mm, "
-			       "then adaptive)\n",
+			       "then %s)\n",
 			       s->layers, s->raft_layers, r->c->first_layer_height,
-			       r->c->layer_height);
+			       r->c->layer_height, s->adaptive ? "adaptive" : "as the 3MF's profile");
 		else
 			printf("layers: %zu (%zu of raft, the first %g mm; the part's %g mm)\n",
 			       s->layers, s->raft_layers, r->c->first_layer_height,
@@ -391,9 +398,10 @@ static void print_text(const struct slice_run *r, const struct slicer_summary *s
 	} else {
 		printf("placed: X %.2f to %.2f, Y %.2f to %.2f, Z 0 to %.2f mm\n", s->min[0],
 		       s->max[0], s->min[1], s->max[1], s->max[2]);
-		if (s->adaptive)
-			printf("layers: %zu (first %g mm, then adaptive)\n", s->layers,
-			       r->c->first_layer_height);
+		if (s->adaptive || s->profiled)
+			printf("layers: %zu (first %g mm, then %s)\n", s->layers,
+			       r->c->first_layer_height,
+			       s->adaptive ? "adaptive" : "as the 3MF's profile");
 		else
 			printf("layers: %zu (first %g mm, then %g mm)\n", s->layers,
 			       r->c->first_layer_height, r->c->layer_height);
@@ -403,6 +411,14 @@ static void print_text(const struct slice_run *r, const struct slicer_summary *s
 		       "cusp at most %.3f mm (bound %g mm), mean %.3f mm\n",
 		       s->layers - s->raft_layers, s->height_min, s->height_max, s->cusp_max,
 		       r->c->adaptive.max_cusp, s->cusp_mean);
+		print_profile(r, s->raft_layers);
+	}
+	if (s->profiled) {
+		printf("layer height profile (" MESHIO_3MF_LAYER_PROFILE_ENTRY "): %zu layers of "
+		       "the part, above the first %.3f to %.3f mm thick, their cusp at most %.3f mm, "
+		       "mean %.3f mm\n",
+		       s->layers - s->raft_layers, s->height_min, s->height_max, s->cusp_max,
+		       s->cusp_mean);
 		print_profile(r, s->raft_layers);
 	}
 	printf("paths: %zu external perimeters, %zu perimeters, %zu thin walls, %zu gap fills",
@@ -445,6 +461,43 @@ static void warn_thin(const struct slicer_config *c, const struct slicer_thin *t
 			t->dropped, t->dropped == 1 ? "" : "s", c->perim.min_feature_size);
 }
 
+/* What became of a 3MF's layer height profile, when it is not used or not
+ * all of it: a note or a warning on stderr. */
+static void note_profile(const struct slice_args *a, const struct slicejob_result *res,
+			 const struct slicer_config *c)
+{
+	static const char *const why[] = {
+	    [SLICEJOB_PROFILE_ADAPTIVE] = "adaptive layers were asked for",
+	    [SLICEJOB_PROFILE_NOT_ALLOWED] = "the printer allows no variable layer heights "
+					     "(variable_layer_height = 0)",
+	    [SLICEJOB_PROFILE_SEVERAL] = "it is one object's, and the plate holds several, "
+					 "sliced in one set of layers",
+	};
+
+	if (res->profile == SLICEJOB_PROFILE_STALE)
+		fprintf(stderr,
+			SLICE_CMD ": note: %s carries a layer height profile ("
+			MESHIO_3MF_LAYER_PROFILE_ENTRY "), not used: it ends at Z %g mm, not at "
+			"the object's top, %g mm (the object changed since; PrusaSlicer drops "
+			"it too)\n",
+			a->in[0], res->profile_top, res->model_top);
+	else if (res->profile != SLICEJOB_PROFILE_NONE && res->profile != SLICEJOB_PROFILE_USED)
+		fprintf(stderr,
+			SLICE_CMD ": note: %s carries a layer height profile ("
+			MESHIO_3MF_LAYER_PROFILE_ENTRY "), not used: %s\n",
+			a->in[0], why[res->profile]);
+	struct adaptive_settings as;
+
+	slicer_adaptive_settings(c, &as);
+	if (res->sum.profiled && res->sum.profile_clamped)
+		fprintf(stderr,
+			SLICE_CMD ": warning: %zu layer%s of the 3MF's layer height profile lay "
+			"outside min_layer_height..max_layer_height (%g to %g mm) and were kept "
+			"within them\n",
+			res->sum.profile_clamped, res->sum.profile_clamped == 1 ? "" : "s",
+			as.min_height, as.max_height);
+}
+
 /* --png: the layer heights as printed; 0 or the exit status with the message printed. */
 static int write_plot(const struct slice_args *a, const struct slicer_config *c,
 		      const struct slicer_summary *s, const struct plan_copy *plan)
@@ -456,12 +509,12 @@ static int write_plot(const struct slice_args *a, const struct slicer_config *c,
 	int rc;
 
 	slicer_adaptive_settings(c, &as);
-	if (s->adaptive) {
+	if (s->adaptive || s->profiled) {
 		o.min_height = as.min_height;
 		o.max_height = as.max_height;
 	}
 	snprintf(title, sizeof(title), "%s: %zu layers, %s", a->in[0], s->layers,
-		 s->adaptive ? "adaptive" : "uniform");
+		 s->adaptive ? "adaptive" : s->profiled ? "the 3MF's layer height profile" : "uniform");
 	rc = layerplot_write(a->png, plan->v, plan->n, &o, &err);
 	if (rc)
 		fprintf(stderr, SLICE_CMD ": %s: %s; the G-code %s was written\n", a->png, err.msg,
@@ -546,8 +599,10 @@ static int slice_run(int argc, char **argv, struct clio *io)
 	status = slicejob_run(SLICE_CMD, in, a.nin, &cfg, a.no_repair, out, true, &res);
 	if (!status && a.png)
 		status = write_plot(&a, &cfg, &res.sum, &plan);
-	if (!status)
+	if (!status) {
 		warn_thin(&cfg, &res.sum.thin);
+		note_profile(&a, &res, &cfg);
+	}
 	if (!status) {
 		run.plan = &plan;
 		run.a = &a;

@@ -4,6 +4,7 @@
  */
 #include "slicejob.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -140,14 +141,17 @@ static void sum_repair(struct slicejob_result *res, const struct repair_report *
 static int read_one(const char *path, size_t i, const struct slicer_config *c, struct mesh **m,
 		    struct slicejob_result *res, struct st_error *err)
 {
+	struct meshio_info info;
 	double off[3];
 	int rc;
 
 	res->failed = i;
 	res->stage = SLICEJOB_READ;
 	res->models[i].path = path;
-	if ((rc = meshio_read(path, MESHIO_AUTO, m, &res->models[i].format, err)))
+	if ((rc = meshio_read_info(path, MESHIO_AUTO, m, &info, err)))
 		return rc;
+	res->models[i].format = info.format;
+	res->models[i].objects = info.objects;
 	if (i == 0)
 		res->format = res->models[0].format;
 	res->models[i].input_triangles = (*m)->ntris;
@@ -157,10 +161,63 @@ static int read_one(const char *path, size_t i, const struct slicer_config *c, s
 	return slicer_place(*m, &c->bed, off, NULL, NULL, err);
 }
 
+/*
+ * The layer height profile of the one 3MF model, when the job can use it
+ * (its object is the file's only one; it ends at the object's top, as
+ * PrusaSlicer requires): c->adaptive.profile points to *zh (the caller
+ * frees it).  m[] are the models as read.  0, or the reader's error (a
+ * profile that does not parse).
+ */
+static int layer_profile(const char *const *in, size_t n, struct mesh *const *m,
+			 struct slicer_config *c, struct slicejob_result *res, double **zh,
+			 struct st_error *err)
+{
+	size_t pairs = 0, profiles = 0;
+	double lo[3], hi[3];
+	int rc;
+
+	*zh = NULL;
+	res->profile = SLICEJOB_PROFILE_NONE;
+	for (size_t i = 0; i < n; i++) {
+		if (res->models[i].format != MESHIO_3MF)
+			continue;
+		res->stage = SLICEJOB_READ;
+		res->failed = i;
+		rc = meshio_3mf_layer_profile(in[i], 1, zh, &pairs, &profiles, err);
+		if (rc)
+			return rc;
+		if (!profiles)
+			continue;
+		if (n > 1 || res->models[i].objects != 1)
+			res->profile = SLICEJOB_PROFILE_SEVERAL;
+		else if (c->adaptive.enabled)
+			res->profile = SLICEJOB_PROFILE_ADAPTIVE;
+		else if (!c->adaptive.allowed)
+			res->profile = SLICEJOB_PROFILE_NOT_ALLOWED;
+		if (res->profile == SLICEJOB_PROFILE_NONE && *zh) {
+			mesh_bbox(m[i], lo, hi);
+			res->profile_top = (*zh)[2 * pairs - 2];
+			res->model_top = hi[2] - lo[2];
+			res->profile = fabs(res->profile_top - res->model_top) > SLICEJOB_PROFILE_TOP_MM
+					   ? SLICEJOB_PROFILE_STALE
+					   : SLICEJOB_PROFILE_USED;
+		}
+		if (res->profile == SLICEJOB_PROFILE_USED) {
+			c->adaptive.profile = *zh;
+			c->adaptive.profile_pairs = pairs;
+			return 0;
+		}
+		free(*zh);
+		*zh = NULL;
+	}
+	return 0;
+}
+
 /* Read, check and (unless no_repair) repair every model into m[]; then
- * several are arranged and merged into m[0].  0 or an error class. */
-static int prepare(const char *const *in, size_t n, const struct slicer_config *c,
-		   bool no_repair, const char *progress_name, struct mesh **m,
+ * several are arranged and merged into m[0].  A 3MF's layer height profile
+ * is read before the repairs (layer_profile).  0 or an error class. */
+static int prepare(const char *const *in, size_t n, struct slicer_config *c, bool no_repair,
+		   const char *progress_name, struct mesh **m, double **zh,
 		   struct slicejob_result *res, struct st_error *err)
 {
 	struct arrange_item *it = n > 1 ? calloc(n, sizeof(*it)) : NULL;
@@ -171,6 +228,8 @@ static int prepare(const char *const *in, size_t n, const struct slicer_config *
 		return st_error_set(err, ST_ERR_NOMEM, "out of memory for %zu models", n);
 	for (size_t i = 0; i < n && !rc; i++)
 		rc = read_one(in[i], i, c, &m[i], res, err);
+	if (!rc)
+		rc = layer_profile(in, n, m, c, res, zh, err);
 	/* Together too, before the repairs. */
 	if (!rc && n > 1)
 		rc = slicejob_arrange(m, n, c, it, res, err);
@@ -212,6 +271,7 @@ int slicejob_slice(const char *const *in, size_t n, const struct slicer_config *
 		   struct slicejob_result *res, struct st_error *err)
 {
 	struct slicer_config c = *cfg;
+	double *zh = NULL; /* the 3MF's layer height profile, while c points to it */
 	struct mesh **m;
 	struct progress prog;
 	bool have_prog;
@@ -228,7 +288,7 @@ int slicejob_slice(const char *const *in, size_t n, const struct slicer_config *
 		return st_error_set(err, ST_ERR_NOMEM, "out of memory for %zu models", n);
 	}
 	res->nmodels = n;
-	rc = prepare(in, n, &c, no_repair, progress_name, m, res, err);
+	rc = prepare(in, n, &c, no_repair, progress_name, m, &zh, res, err);
 	if (!rc) {
 		res->stage = SLICEJOB_SLICE;
 		c.gcodew.input_files = in;
@@ -253,6 +313,7 @@ int slicejob_slice(const char *const *in, size_t n, const struct slicer_config *
 	for (size_t i = 0; i < n; i++)
 		mesh_free(m[i]);
 	free(m);
+	free(zh);
 	return rc;
 }
 

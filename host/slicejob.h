@@ -22,10 +22,26 @@ enum slicejob_stage { SLICEJOB_READ, SLICEJOB_PLACE, SLICEJOB_REPAIR, SLICEJOB_S
 /* At most this many model files in one job (slicer/arrange.h). */
 #define SLICEJOB_MODELS_MAX ARRANGE_MAX_ITEMS
 
+/* What became of a 3MF's layer height profile (slicejob_result.profile). */
+enum slicejob_profile {
+	SLICEJOB_PROFILE_NONE,	      /* one model, and its file has none */
+	SLICEJOB_PROFILE_USED,	      /* the layers follow it (slicer_summary.profiled) */
+	SLICEJOB_PROFILE_ADAPTIVE,    /* not used: adaptive layers were asked for */
+	SLICEJOB_PROFILE_NOT_ALLOWED, /* not used: the printer's variable_layer_height = 0 */
+	SLICEJOB_PROFILE_SEVERAL,     /* not used: the 3MF holds several objects, or the
+				       * job several models (the plate is sliced as one) */
+	SLICEJOB_PROFILE_STALE,	      /* not used: it does not end at the object's top
+				       * (PrusaSlicer drops it too: the object changed) */
+};
+
+/* A profile ends at most this far (mm) from the object's top (PrusaSlicer's bound). */
+#define SLICEJOB_PROFILE_TOP_MM 1e-3
+
 /* One model file of the job. */
 struct slicejob_model {
 	const char *path;	   /* as given; not owned */
 	enum meshio_format format;
+	size_t objects;		   /* 3MF <object> resources; 1 for the other formats */
 	size_t input_triangles;
 	struct repair_report rep;  /* filled when the job repaired */
 	double offset[3];	   /* mm added to its vertices, all told, as printed */
@@ -45,6 +61,8 @@ struct slicejob_result {
 				    * 3MF files place them */
 	size_t nmodels;
 	struct slicejob_model *models; /* [nmodels], in the order given */
+	enum slicejob_profile profile; /* the 3MF's layer height profile, if any */
+	double profile_top, model_top; /* mm: the profile's last Z, the model's height */
 	struct slicer_summary sum;
 };
 
@@ -58,7 +76,11 @@ struct slicejob_result {
  * point goes on the bed and the pile is placed as one model.
  * progress_name non-NULL shows progress (bar or lines, progress.h) under
  * that name; otherwise cfg->progress, when set, gets the repair's phases
- * and then the slicer's (the farm node's slicingProgress).  Nothing else
+ * and then the slicer's (the farm node's slicingProgress).  One 3MF model
+ * of one object whose file keeps a layer height profile for it
+ * (meshio_3mf_layer_profile) is sliced in the profile's layers unless
+ * cfg asks for adaptive ones or the printer allows no variable heights
+ * (res->profile says which).  Nothing else
  * is printed.  Returns 0, or the class with err
  * filled (res->stage and res->failed say where): the reader's errors,
  * ST_ERR_RANGE (does not fit, not printable, nothing to print), ST_ERR_IO

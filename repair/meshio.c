@@ -366,7 +366,28 @@ int meshio_3mf_config(const char *path, char **text, struct st_error *err)
 		return st_error_set(err, ST_ERR_ARG, "meshio_3mf_config: no path or no output");
 	if ((rc = open_file(&s, path, err)))
 		return rc;
-	rc = threemf_config(&s, text);
+	rc = threemf_text(&s, MESHIO_3MF_CONFIG_ENTRY, text);
+	fclose(s.f);
+	return rc;
+}
+
+int meshio_3mf_layer_profile(const char *path, size_t object, double **zh, size_t *pairs,
+			     size_t *profiles, struct st_error *err)
+{
+	struct mio_src s;
+	int rc;
+
+	if (zh)
+		*zh = NULL;
+	if (pairs)
+		*pairs = 0;
+	if (profiles)
+		*profiles = 0;
+	if (!path || !zh || !pairs)
+		return st_error_set(err, ST_ERR_ARG, "meshio_3mf_layer_profile: no path or no output");
+	if ((rc = open_file(&s, path, err)))
+		return rc;
+	rc = threemf_layer_profile(&s, object, zh, pairs, profiles);
 	fclose(s.f);
 	return rc;
 }

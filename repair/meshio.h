@@ -81,6 +81,23 @@ int meshio_read_buffer_info(const void *buf, size_t len, const char *name,
  */
 int meshio_3mf_config(const char *path, char **text, struct st_error *err);
 
+/* The layer height profiles of PrusaSlicer's variable layer height tool. */
+#define MESHIO_3MF_LAYER_PROFILE_ENTRY "Metadata/Slic3r_PE_layer_heights_profile.txt"
+
+/*
+ * meshio_3mf_layer_profile - the layer height profile the 3MF at path keeps
+ * for its object number `object` (1 = the first, as PrusaSlicer numbers
+ * them): *zh gets 2 * *pairs doubles, (z, layer height) in mm, z from the
+ * object's bottom, rising; NULL and 0 when there is none for that object.
+ * *profiles (may be NULL) gets how many objects have one.  Each line of the
+ * entry is `object_id=N|z;h;z;h;...`.  Returns 0, ST_ERR_IO, ST_ERR_PARSE
+ * (not a zip; a line not of that form, z not rising, a height not > 0: the
+ * message names the entry and the line), ST_ERR_RANGE (more than 16 MiB),
+ * ST_ERR_NOMEM; *zh is NULL on error.
+ */
+int meshio_3mf_layer_profile(const char *path, size_t object, double **zh, size_t *pairs,
+			     size_t *profiles, struct st_error *err);
+
 /*
  * meshio_write_stl - write m as binary (fmt MESHIO_STL_BINARY) or ASCII
  * (MESHIO_STL_ASCII) STL, atomically.  Normals are computed from the vertex

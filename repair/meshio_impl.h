@@ -10,6 +10,7 @@
 #ifndef STRATUM_REPAIR_MESHIO_IMPL_H
 #define STRATUM_REPAIR_MESHIO_IMPL_H
 
+#include <stdarg.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -80,6 +81,11 @@ int mio_read_error(struct mio_src *s, uint64_t off);
 int mio_err(struct mio_src *s, int code, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 
+/* mio_verr_line - mio_err as "NAME: ENTRY line N: text" (a 3MF entry's
+ * line), the text from fmt and ap. */
+int mio_verr_line(struct mio_src *s, int code, const char *entry, unsigned long line,
+		  const char *fmt, va_list ap) __attribute__((format(printf, 5, 0)));
+
 /* Rewrap a builder error (berr, unprefixed) as "NAME: line N: ..." or byte. */
 int mio_builder_error(struct mio_src *s, const char *unit, uint64_t where,
 		      const struct st_error *berr);
@@ -131,8 +137,13 @@ int objoff_read_off(struct mio_src *s, struct mesh **out);
 /* 3MF (threemf.c): the zip is s's file by name, or s's whole buffer; info may be NULL. */
 int threemf_read(struct mio_src *s, struct mesh **out, struct meshio_info *info);
 
-/* threemf_config - the 3MF's Metadata/Slic3r_PE.config text or NULL (meshio_3mf_config). */
-int threemf_config(struct mio_src *s, char **text);
+/* threemf_text - the text of the 3MF's entry (a Metadata/ file) or NULL
+ * when it has none (meshio_3mf_config, meshio_3mf_layer_profile). */
+int threemf_text(struct mio_src *s, const char *entry, char **text);
+/* threemf_layer_profile - object's layer height profile and how many objects
+ * have one (meshio_3mf_layer_profile; threemf_profile.c). */
+int threemf_layer_profile(struct mio_src *s, size_t object, double **zh, size_t *pairs,
+			  size_t *profiles);
 
 /* True if the first window shows a binary STL: size == 84 + 50 * count. */
 bool stlio_binary_size_matches(const struct mio_src *s);

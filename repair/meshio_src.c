@@ -87,6 +87,15 @@ int mio_err(struct mio_src *s, int code, const char *fmt, ...)
 	return st_error_set(s->err, code, "%s: %s", s->name, text);
 }
 
+int mio_verr_line(struct mio_src *s, int code, const char *entry, unsigned long line,
+		  const char *fmt, va_list ap)
+{
+	char text[256];
+
+	vsnprintf(text, sizeof(text), fmt, ap);
+	return mio_err(s, code, "%s line %lu: %s", entry, line, text);
+}
+
 int mio_read_error(struct mio_src *s, uint64_t off)
 {
 	return mio_err(s, ST_ERR_IO, "byte %llu: read error: %s", (unsigned long long)off,

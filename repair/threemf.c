@@ -25,7 +25,8 @@
 #define TMF_NESTING_MAX 64
 /* Triangles the build may place (134 million, 6.7 GB as binary STL). */
 #define TMF_PLACED_MAX (1ull << 27)
-/* The slicer configuration text a 3MF may carry, at most. */
+/* A metadata entry (the slicer configuration, a layer height profile) may
+ * unpack to at most this many bytes. */
 #define TMF_CONFIG_MAX (16u << 20)
 /* The model part when there is no _rels/.rels, and the rels part. */
 #define TMF_DEFAULT_MODEL "3D/3dmodel.model"
@@ -464,7 +465,7 @@ int threemf_read(struct mio_src *s, struct mesh **out, struct meshio_info *info)
 	return rc;
 }
 
-int threemf_config(struct mio_src *s, char **text)
+int threemf_text(struct mio_src *s, const char *entry, char **text)
 {
 	struct tmf_doc d;
 	struct tmf_stream st;
@@ -478,7 +479,7 @@ int threemf_config(struct mio_src *s, char **text)
 	d.cap = d.budget = TMF_CONFIG_MAX;
 	if ((rc = open_zip(s, &d.z)))
 		return rc;
-	rc = open_entry(&d, MESHIO_3MF_CONFIG_ENTRY, &st);
+	rc = open_entry(&d, entry, &st);
 	if (rc == 1) {
 		rc = 0;
 		goto out;
@@ -487,7 +488,7 @@ int threemf_config(struct mio_src *s, char **text)
 		goto out;
 	buf = malloc(TMF_CONFIG_MAX + 1);
 	if (!buf) {
-		rc = mio_err(s, ST_ERR_NOMEM, "out of memory for " MESHIO_3MF_CONFIG_ENTRY);
+		rc = mio_err(s, ST_ERR_NOMEM, "out of memory for %s", entry);
 		goto out_close;
 	}
 	for (;;) {

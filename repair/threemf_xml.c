@@ -91,13 +91,13 @@ static int perr(struct tmf_parser *ps, int code, const char *fmt, ...)
 
 static int perr(struct tmf_parser *ps, int code, const char *fmt, ...)
 {
-	char text[200];
 	va_list ap;
+	int rc;
 
 	va_start(ap, fmt);
-	vsnprintf(text, sizeof(text), fmt, ap);
+	rc = mio_verr_line(ps->s, code, ps->entry, node_line(ps), fmt, ap);
 	va_end(ap);
-	return mio_err(ps->s, code, "%s line %lu: %s", ps->entry, node_line(ps), text);
+	return rc;
 }
 
 /* Grow *arr (of *cap elements of size) to hold one more than n (st_grow). */

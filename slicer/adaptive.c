@@ -239,6 +239,91 @@ out_free:
 	return 0;
 }
 
+/* The profile's height at z: linear between the pairs around it, the first
+ * below them and the last above; *k is the pair to start from (rises). */
+static double profile_height_at(const double *zh, size_t pairs, size_t *k, double z)
+{
+	double z1, z2;
+
+	while (*k + 1 < pairs && zh[2 * (*k + 1)] <= z)
+		(*k)++;
+	if (z < zh[0] || *k + 1 == pairs)
+		return zh[2 * *k + 1];
+	z1 = zh[2 * *k];
+	z2 = zh[2 * (*k + 1)];
+	if (!(z2 > z1))
+		return zh[2 * *k + 3];
+	return zh[2 * *k + 1] + (zh[2 * *k + 3] - zh[2 * *k + 1]) * (z - z1) / (z2 - z1);
+}
+
+int adaptive_plan_profile(double height, const struct adaptive_settings *given, const double *zh,
+			  size_t pairs, struct layer_span **plan, size_t *n, size_t *clamped,
+			  struct st_error *err)
+{
+	struct adaptive_settings s = *given;
+	struct layer_span *out;
+	size_t count = 0, cap, k = 0, outside = 0;
+	int rc;
+
+	*plan = NULL;
+	*n = 0;
+	if (clamped)
+		*clamped = 0;
+	rc = check_settings(given, err);
+	if (rc)
+		return rc;
+	if (!zh || !pairs)
+		return st_error_set(err, ST_ERR_ARG, "layer height profile: it is empty");
+	for (size_t i = 0; i < 2 * pairs; i++)
+		if (!isfinite(zh[i]))
+			return st_error_set(err, ST_ERR_ARG,
+					    "layer height profile: value %zu is not finite", i + 1);
+	if (!(height > 0) || !isfinite(height))
+		return st_error_set(err, ST_ERR_ARG, "layer height profile: the mesh is %g mm tall",
+				    height);
+	s.max_height = steps_down(given->max_height);
+	s.min_height = fmin(steps_up(given->min_height), s.max_height);
+	if (height / s.min_height > SLICE_MAX_LAYERS)
+		return st_error_set(err, ST_ERR_RANGE,
+				    "layer height profile: a %g mm tall mesh in layers down to %g "
+				    "mm needs more than %u layers; raise min_layer_height",
+				    height, s.min_height, SLICE_MAX_LAYERS);
+	cap = (size_t)ceil(height / s.min_height) + 2;
+	out = malloc(cap * sizeof(*out));
+	if (!out)
+		return st_error_set(err, ST_ERR_NOMEM, "layer height profile: out of memory");
+	for (double z = 0.0; count < cap;) {
+		double h = s.first_height;
+		bool held = false; /* the profile's height lay outside the bounds */
+
+		if (count) {
+			h = profile_height_at(zh, pairs, &k, z + s.min_height / 2);
+			held = h < s.min_height - 1e-9 || h > s.max_height + 1e-9;
+			h = fmin(fmax(h, s.min_height), s.max_height);
+		}
+		if (!(z + h / 2 < height))
+			break;
+		outside += held;
+		if (count) { /* the top in whole steps; rounding, not truncating, so
+			      * the layers do not drift below the profile */
+			double top = out[0].z + (double)llround((z + h - out[0].z) /
+								ADAPTIVE_STEP_MM) *
+						    ADAPTIVE_STEP_MM;
+
+			h = top - z;
+			z = top;
+		} else {
+			z = h;
+		}
+		out[count++] = (struct layer_span){.z = z, .height = h};
+	}
+	*plan = out;
+	*n = count;
+	if (clamped)
+		*clamped = outside;
+	return 0;
+}
+
 /* First layer whose top lies above z (tops rise with the index). */
 static size_t first_top_above(const struct layer_span *plan, size_t n, double z)
 {

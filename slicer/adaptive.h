@@ -70,6 +70,22 @@ int adaptive_plan(const struct mesh *m, const struct adaptive_settings *s, struc
 		  size_t *n, struct st_error *err);
 
 /*
+ * adaptive_plan_profile - the plan of a layer height profile (PrusaSlicer's
+ * variable layer height): zh holds pairs (z, height), z from the mesh's
+ * lowest point, rising.  Layer 0 is first_height thick; each later layer
+ * starting at z takes the profile's height at z + min_height / 2, linear
+ * between two pairs (below the first pair the first height, above the last
+ * the last), kept within min_height..max_height and in whole
+ * ADAPTIVE_STEP_MM; layers while a layer's mid-plane lies below the top,
+ * height mm above the lowest point.  *clamped (may be NULL) counts the
+ * layers whose profile height lay outside min_height..max_height.
+ * Returns as adaptive_plan (ST_ERR_ARG also for an empty profile).
+ */
+int adaptive_plan_profile(double height, const struct adaptive_settings *s, const double *zh,
+			  size_t pairs, struct layer_span **plan, size_t *n, size_t *clamped,
+			  struct st_error *err);
+
+/*
  * adaptive_measure - the cusp of the n layers of plan (Z from m's lowest
  * point) over m's sloped facets.  layer_cusp (may be NULL) receives n
  * values, each layer's largest (0 where it crosses no sloped facet).

@@ -133,6 +133,12 @@ struct slicer_adaptive_settings {
 	double min_height; /* mm, min_layer_height (0.07) */
 	double max_height; /* mm, max_layer_height, 0 = 75 % of the nozzle; at most
 			    * that in any case (0) */
+	/* A layer height profile (PrusaSlicer's variable layer height, as a
+	 * 3MF keeps it: meshio_3mf_layer_profile): profile_pairs (z, height)
+	 * pairs in mm, z from the part's bottom; not owned.  Used when set and
+	 * enabled is false (adaptive_plan_profile). */
+	const double *profile;
+	size_t profile_pairs;
 };
 
 /* Everything a job needs; slicer_config_init gives the defaults. */
@@ -199,9 +205,12 @@ struct slicer_summary {
 	size_t open_dropped;	       /* open contour pieces the slicer could not close */
 	struct slicer_thin thin;       /* thin walls dropped or printed wider than designed */
 	bool adaptive;		       /* the part's layers are adaptive (adaptive.h) */
+	bool profiled;		       /* the part's layers follow adaptive.profile */
+	size_t profile_clamped;	       /* of those, layers whose profile height lay outside
+					* min_layer_height..max_layer_height */
 	double height_min, height_max; /* mm: the part's thinnest and thickest layer above
 					* its first */
-	double cusp_max, cusp_mean;    /* mm, adaptive only: the cusp of the part's layers above
+	double cusp_max, cusp_mean;    /* mm, adaptive or profiled only: the cusp of the part's layers above
 					* its first (adaptive_measure) */
 };
 

@@ -175,7 +175,7 @@ int slicer_config_check(const struct slicer_config *c, struct st_error *err)
 		return st_error_set(err, ST_ERR_RANGE,
 				    "threads = %d is out of range; use 0 (all cores) to %d",
 				    c->threads, SLICER_MAX_THREADS);
-	return c->adaptive.enabled ? adaptive_check(c, err) : 0;
+	return c->adaptive.enabled || c->adaptive.profile ? adaptive_check(c, err) : 0;
 }
 
 void slicer_adaptive_settings(const struct slicer_config *c, struct adaptive_settings *out)

@@ -34,30 +34,37 @@ int stage_slice(const struct mesh *m, const struct slicer_config *c, struct slic
 	struct layer_span *plan = NULL;
 	double lo[3], hi[3];
 	size_t n = 0;
+	bool profiled = !c->adaptive.enabled && c->adaptive.profile, varying;
 	int rc;
 
 	*st = NULL;
 	slicer_adaptive_settings(c, &as);
 	mesh_bbox(m, lo, hi);
+	varying = c->adaptive.enabled || profiled;
 	if (c->adaptive.enabled)
 		rc = adaptive_plan(m, &as, &plan, &n, err);
+	else if (profiled)
+		rc = adaptive_plan_profile(hi[2] - lo[2], &as, c->adaptive.profile,
+					   c->adaptive.profile_pairs, &plan, &n,
+					   &sum->profile_clamped, err);
 	else
 		rc = slice_plan_uniform(hi[2] - lo[2], as.first_height, c->layer_height, &plan, &n,
 					err);
 	if (!rc)
 		rc = slice_mesh_plan(m, plan, n, &c->slice, st, err);
-	if (!rc && c->adaptive.enabled) /* the first layer's height is fixed */
+	if (!rc && varying) /* the first layer's height is fixed */
 		rc = adaptive_measure(m, plan + (n > 1), n - (n > 1), NULL, &cusp, err);
 	if (!rc) {
 		sum->adaptive = c->adaptive.enabled;
+		sum->profiled = profiled;
 		sum->height_min = n > 1 ? INFINITY : 0.0;
 		sum->height_max = 0.0;
 		for (size_t i = 1; i < n; i++) {
 			sum->height_min = fmin(sum->height_min, plan[i].height);
 			sum->height_max = fmax(sum->height_max, plan[i].height);
 		}
-		sum->cusp_max = c->adaptive.enabled ? cusp.max : 0.0;
-		sum->cusp_mean = c->adaptive.enabled ? cusp.mean : 0.0;
+		sum->cusp_max = varying ? cusp.max : 0.0;
+		sum->cusp_mean = varying ? cusp.mean : 0.0;
 	}
 	free(plan);
 	return rc;

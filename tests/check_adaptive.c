@@ -415,5 +415,6 @@ Suite *adaptive_suite(void)
 	tcase_add_test(tc, adaptive_settings_refused);
 	tcase_add_test(tc, adaptive_command_summary_and_plot);
 	suite_add_tcase(s, tc);
+	adaptive_3mf_tcases(s);
 	return s;
 }

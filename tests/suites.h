@@ -51,6 +51,7 @@ Suite *support_suite(void);	/* tests/check_support.c: skirt, brim, support mater
 Suite *supportmodel_suite(void); /* tests/check_support_model.c: support on the model, bridges, verified */
 Suite *raft_suite(void);	/* tests/check_raft.c: the raft under the part */
 Suite *adaptive_suite(void);	/* tests/check_adaptive.c: adaptive layer heights */
+void adaptive_3mf_tcases(Suite *s); /* tests/check_adaptive_3mf.c: a 3MF's layer height profile */
 Suite *multimodel_suite(void); /* tests/check_multimodel.c: several models in one slice */
 Suite *slicecli_suite(void);	/* tests/check_slicecli.c: stratum slice end to end */
 void slicecli_settings_tcases(Suite *s); /* tests/check_slicesettings.c: settings honoured, part of slicecli */

@@ -121,6 +121,19 @@ void tu_write_zip(const char *path, const char *const *names, const char *const 
 	ck_assert_msg(zip_close(z) == 0, "zip %s: %s", path, zip_strerror(z));
 }
 
+void tu_zip_add(const char *path, const char *name, const char *text)
+{
+	int zerr = 0;
+	zip_t *z = zip_open(path, 0, &zerr);
+	zip_source_t *src;
+
+	ck_assert_msg(z != NULL, "cannot open zip %s (libzip error %d)", path, zerr);
+	src = zip_source_buffer(z, text, strlen(text), 0);
+	ck_assert_msg(src && zip_file_add(z, name, src, ZIP_FL_OVERWRITE) >= 0,
+		      "zip %s: cannot add %s: %s", path, name, zip_strerror(z));
+	ck_assert_msg(zip_close(z) == 0, "zip %s: %s", path, zip_strerror(z));
+}
+
 const char tu_3mf_rels[] =
     "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
     "<Relationships xmlns=\"http://schemas.openxmlformats.org/package/2006/relationships\">\n"

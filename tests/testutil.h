@@ -69,6 +69,8 @@ void tu_write_3mf_mesh(const char *path, const struct mesh *m);
  * per row of cubes {w, d, h, x, y}, each placed once by a build item
  * translated by x, y. */
 void tu_write_3mf_boxes(const char *path, const double (*cubes)[5], int n);
+/* tu_zip_add - add (or replace) the entry name with text in the zip at path. */
+void tu_zip_add(const char *path, const char *name, const char *text);
 
 /*
  * tu_read_between - read the text file path into buf (cap bytes) and return
