@@ -24,10 +24,11 @@ struct layer_stack *stage_print_stack(const struct slice_stack *raft, const stru
 struct layer_stack *stage_stack(const struct slice_stack *st, struct st_error *err);
 
 /*
- * stage_slice - the part's layers (uniform, or adaptive.h's plan with
- * c->adaptive.enabled; the first layer is layer_height thick over a raft)
- * cut from m into *st; sum gets the plan's heights and, adaptive, its cusp
- * (adaptive_measure).  Returns 0 or the plan's or slice_mesh_plan's error.
+ * stage_slice - the part's layers (uniform, adaptive.h's plan with
+ * c->adaptive.enabled, or c->adaptive.profile's (adaptive_plan_profile)
+ * when set; the first layer is layer_height thick over a raft) cut from m
+ * into *st; sum gets the plan's heights and, adaptive or profiled, its
+ * cusp (adaptive_measure).  Returns 0 or the plan's or slice_mesh_plan's error.
  */
 int stage_slice(const struct mesh *m, const struct slicer_config *c, struct slice_stack **st,
 		struct slicer_summary *sum, struct st_error *err);
