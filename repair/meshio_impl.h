@@ -141,7 +141,10 @@ int threemf_read(struct mio_src *s, struct mesh **out, struct meshio_info *info)
  * when it has none (meshio_3mf_config, meshio_3mf_layer_profile). */
 int threemf_text(struct mio_src *s, const char *entry, char **text);
 /* threemf_layer_profile - object's layer height profile and how many objects
- * have one (meshio_3mf_layer_profile; threemf_profile.c). */
+ * have one (meshio_3mf_layer_profile; threemf_profile.c);
+ * threemf_parse_layer_profile - the same from the entry's text (NULL: none). */
+int threemf_parse_layer_profile(struct mio_src *s, const char *text, size_t object, double **zh,
+				size_t *pairs, size_t *profiles);
 int threemf_layer_profile(struct mio_src *s, size_t object, double **zh, size_t *pairs,
 			  size_t *profiles);
 

@@ -110,22 +110,24 @@ static int line_values(struct mio_src *s, size_t lineno, const char *p, const ch
 	return 0;
 }
 
-int threemf_layer_profile(struct mio_src *s, size_t object, double **zh, size_t *pairs,
-			  size_t *profiles)
+int threemf_parse_layer_profile(struct mio_src *s, const char *text, size_t object, double **zh,
+				size_t *pairs, size_t *profiles)
 {
-	char *text = NULL;
 	size_t lineno = 0, found = 0;
-	int rc = threemf_text(s, MESHIO_3MF_LAYER_PROFILE_ENTRY, &text);
+	int rc = 0;
 
+	*zh = NULL;
+	*pairs = 0;
 	for (const char *line = text; !rc && line && *line;) {
 		const char *nl = strchr(line, '\n'), *end = nl ? nl : line + strlen(line), *rest;
+		const char *next = nl ? nl + 1 : end; /* before end drops a '\r' */
 		size_t id;
 
 		lineno++;
 		if (end > line && end[-1] == '\r')
 			end--;
 		if (end == line) { /* blank lines, as at the end of the file */
-			line = nl ? nl + 1 : end;
+			line = next;
 			continue;
 		}
 		id = line_object(line, end, &rest);
@@ -145,9 +147,8 @@ int threemf_layer_profile(struct mio_src *s, size_t object, double **zh, size_t 
 			free(other);
 		}
 		found++;
-		line = nl ? nl + 1 : end;
+		line = next;
 	}
-	free(text);
 	if (rc) {
 		free(*zh);
 		*zh = NULL;
@@ -155,5 +156,17 @@ int threemf_layer_profile(struct mio_src *s, size_t object, double **zh, size_t 
 	} else if (profiles) {
 		*profiles = found;
 	}
+	return rc;
+}
+
+int threemf_layer_profile(struct mio_src *s, size_t object, double **zh, size_t *pairs,
+			  size_t *profiles)
+{
+	char *text = NULL;
+	int rc = threemf_text(s, MESHIO_3MF_LAYER_PROFILE_ENTRY, &text);
+
+	if (!rc)
+		rc = threemf_parse_layer_profile(s, text, object, zh, pairs, profiles);
+	free(text);
 	return rc;
 }

@@ -75,6 +75,12 @@ START_TEST(profile_entry_read)
 	ck_assert_uint_eq(pairs, 0);
 	ck_assert_uint_eq(profiles, 2);
 	free(path);
+	/* blank lines alone, a lone carriage return among them (once a loop) */
+	path = box_project("lp-blank.3mf", "\r");
+	ck_assert_int_eq(meshio_3mf_layer_profile(path, 1, &zh, &pairs, &profiles, &err), 0);
+	ck_assert_ptr_null(zh);
+	ck_assert_uint_eq(profiles, 0);
+	free(path);
 	/* a file with no profile at all */
 	path = box_project("lp-none.3mf", NULL);
 	ck_assert_int_eq(meshio_3mf_layer_profile(path, 1, &zh, &pairs, &profiles, &err), 0);
