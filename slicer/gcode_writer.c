@@ -33,7 +33,6 @@
 
 #define E_UNITS 100000.0 /* E written in 1e-5 mm */
 #define E_DIGITS 5
-#define XYZ_UNITS 1000.0 /* X, Y, Z written in um */
 #define XYZ_DIGITS 3
 
 /* ---------------------------------------------------------------------------

@@ -28,6 +28,7 @@
 #include "travel.h"
 
 #define NUM_MAX 48 /* longest formatted number */
+#define XYZ_UNITS 1000.0 /* X, Y, Z written in um */
 
 /* A layer is planned into operations (moves and role changes), cooled,
  * then emitted. */
@@ -114,6 +115,7 @@ struct gcodew {
 	struct gcodew_arcseg *sarc; /* arc_fitting: the segment from the point */
 	struct arcfit_work afit;
 	bool no_arcs;		 /* the path being planned gets lines only */
+	size_t sloop;		 /* its segments when a closed path of one width, else 0 */
 	size_t sxycap, smvcap, sbalcap, skeepcap, sidxcap, sstretchcap, sptscap, sarccap;
 	struct toolpath view;	 /* spts as a path of the original's role */
 

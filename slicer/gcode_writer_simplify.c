@@ -6,7 +6,9 @@
  * kept points are moved so that it encloses the area it did (a round
  * wall's chords would otherwise print it smaller), within the same bound;
  * each run's filament is kept by printing its simplified segments with
- * the run's original length over its simplified length.  With
+ * the run's original length over its simplified length.  A closed loop
+ * of one width is balanced whole, its seam moved too; the outer wall's
+ * points then go on the written grid where they move its face least.  With
  * arc_fitting a run is first fitted with arcs (gcode_writer_arc.c) and
  * only the stretches between them are simplified to lines; its length
  * is then along the arcs.
@@ -65,7 +67,8 @@ static double kept_length(const struct gcodew *w, size_t i, size_t j)
 }
 
 /* Mark the points i to j as lines within tol and move the kept ones so
- * the lines keep the area (simplify_balance); the ends stay. */
+ * the lines keep the area (simplify_balance); the ends stay, but for a
+ * whole closed loop's seam (simplify_balance_loop). */
 static int mark_lines(struct gcodew *w, size_t i, size_t j, double tol)
 {
 	size_t kept = 0;
@@ -78,7 +81,10 @@ static int mark_lines(struct gcodew *w, size_t i, size_t j, double tol)
 	memcpy(w->smv + 2 * i, w->sxy + 2 * i, 2 * (j - i + 1) * sizeof(*w->smv));
 	if (kept < j - i + 1) {
 		GROW(sbal, 2 * kept);
-		simplify_balance(w->sxy + 2 * i, j - i + 1, w->skeep + i, tol, w->sbal);
+		if (i == 0 && j == w->sloop)
+			simplify_balance_loop(w->sxy, j + 1, w->skeep, tol, w->sbal);
+		else
+			simplify_balance(w->sxy + 2 * i, j - i + 1, w->skeep + i, tol, w->sbal);
 		for (size_t k = i, c = 0; k <= j; k++)
 			if (w->skeep[k]) {
 				w->smv[2 * k] = w->sbal[2 * c];
@@ -139,6 +145,70 @@ static int mark_run(struct gcodew *w, size_t i, size_t j, double tol)
  */
 #define FACE_SHARE 0.5
 
+/* Grid points on each side of the nearest one snap_face looks at. */
+#define FACE_SNAP_REACH 2
+
+/* Unit normal (*nx, *ny) of the segment from a to b; false when it has no length. */
+static bool seg_normal(const struct path_point *a, const struct path_point *b, double *nx,
+		       double *ny)
+{
+	double dx = (double)(b->x - a->x), dy = (double)(b->y - a->y), len = hypot(dx, dy);
+
+	if (!(len > 0))
+		return false;
+	*nx = -dy / len;
+	*ny = dx / len;
+	return true;
+}
+
+/*
+ * The outer wall's points (pts[0 .. n), a loop when closed) put on the
+ * grid X and Y are written on (XYZ_UNITS): of the grid points within
+ * FACE_SNAP_REACH of the nearest, the one that moves the point least
+ * across the wall's segments on both sides of it.  Rounding to the nearest
+ * grid point moves the part's face by up to 0.7 um, either way, which the
+ * region check reads as the face standing out or in; along a smooth wall
+ * the point may move along it instead (its beads' filament is planned on
+ * the lengths as moved).  At a corner both segments hold it, so it goes
+ * to the nearest grid point.
+ */
+static void snap_face(struct path_point *pts, size_t n, bool closed)
+{
+	const double g = SLICE_UNITS_PER_MM / XYZ_UNITS;
+	struct path_point first = pts[0], prev = pts[closed ? n - 1 : 0];
+
+	for (size_t k = 0; k < n; k++) {
+		struct path_point here = pts[k];
+		const struct path_point *next = k + 1 < n ? &pts[k + 1] : closed ? &first : NULL;
+		double n1x = 0, n1y = 0, n2x = 0, n2y = 0;
+		bool h1 = (k > 0 || closed) && seg_normal(&prev, &here, &n1x, &n1y);
+		bool h2 = next && seg_normal(&here, next, &n2x, &n2y);
+		if (!h1) {
+			n1x = n2x;
+			n1y = n2y;
+		} else if (!h2) {
+			n2x = n1x;
+			n2y = n1y;
+		}
+		int64_t x0 = llround((double)here.x / g), y0 = llround((double)here.y / g);
+		double best = INFINITY;
+		for (int i = -FACE_SNAP_REACH; i <= FACE_SNAP_REACH && (h1 || h2); i++)
+			for (int j = -FACE_SNAP_REACH; j <= FACE_SNAP_REACH; j++) {
+				double dx = (double)(x0 + i) * g - (double)here.x;
+				double dy = (double)(y0 + j) * g - (double)here.y;
+				/* across first; of equals, the nearest */
+				double cost = fmax(fabs(dx * n1x + dy * n1y), fabs(dx * n2x + dy * n2y)) +
+					      1e-3 * hypot(dx, dy);
+				if (cost < best) {
+					best = cost;
+					pts[k].x = (int64_t)((x0 + i) * (int64_t)g);
+					pts[k].y = (int64_t)((y0 + j) * (int64_t)g);
+				}
+			}
+		prev = here;
+	}
+}
+
 int gcodew_simplify_path(struct gcodew *w, const struct toolpath *p, const struct toolpath **out)
 {
 	double tol = w->s->gcode_resolution * SLICE_UNITS_PER_MM *
@@ -164,9 +234,12 @@ int gcodew_simplify_path(struct gcodew *w, const struct toolpath *p, const struc
 		w->sxy[2 * k + 1] = p->pts[k % p->n].y;
 	}
 	w->sstretch[segs] = 1;
+	w->sloop = 0;
 	for (size_t i = 0, j; i < segs; i = j) {
 		for (j = i + 1; j < segs && p->pts[j].width == p->pts[i].width; j++)
 			;
+		if (p->closed && i == 0 && j == segs)
+			w->sloop = segs;
 		if ((rc = mark_run(w, i, j, tol)))
 			return rc;
 	}
@@ -183,6 +256,8 @@ int gcodew_simplify_path(struct gcodew *w, const struct toolpath *p, const struc
 				w->sarc[c] = w->sarc[k];
 			c++;
 		}
+	if (p->role == PATH_OUTER_PERIMETER && !gcodew_arcs(w))
+		snap_face(w->spts, c, p->closed);
 	w->view = (struct toolpath){.role = p->role, .closed = p->closed, .n = c, .pts = w->spts};
 	*out = &w->view;
 	return 0;

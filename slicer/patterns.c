@@ -117,14 +117,25 @@ static void gyroid_branch(double k, double sz, double cz, bool swap, double sign
 	}
 }
 
-/* Keep the points of the polyline xy (n points) that simplify_mark keeps
- * at PAT_GYROID_TOLERANCE_NM, compacted in place; returns how many. */
-static size_t gyroid_simplify(struct simplify_work *wk, int64_t *xy, size_t n, bool *keep,
-			      struct st_error *err)
+/*
+ * The points of the polyline xy (n points) that simplify_mark keeps at
+ * PAT_GYROID_TOLERANCE_NM, moved across the curve so each chord encloses
+ * no area with it on balance (simplify_balance), into out; returns how
+ * many.  Chords with their ends on the curve would be shorter than it: at
+ * 75 um the sparse infill printed 0.75 % less line than its curves, 0.26 %
+ * more balanced (tests/check_infill.c).
+ */
+static size_t gyroid_simplify(struct simplify_work *wk, const int64_t *xy, size_t n, bool *keep,
+			      int64_t *out, struct st_error *err)
 {
+	size_t m = 0;
+
 	if (simplify_mark(wk, xy, n, PAT_GYROID_TOLERANCE_NM, keep, err))
 		return 0;
-	return simplify_keep(xy, n, keep, xy);
+	simplify_balance(xy, n, keep, PAT_GYROID_TOLERANCE_NM, out);
+	for (size_t k = 0; k < n; k++)
+		m += keep[k];
+	return m;
 }
 
 /*
@@ -156,23 +167,24 @@ int pat_gyroid(double k, double z_nm, const struct pat_box *box, struct clip_pat
 				    "this large; use a lower density or wider lines",
 				    2 * M_PI / k / 1e6);
 	size_t n = (size_t)steps;
-	int64_t *xy = malloc(2 * n * sizeof(*xy));
+	int64_t *xy = malloc(2 * n * sizeof(*xy)), *moved = malloc(2 * n * sizeof(*moved));
 	bool *keep = malloc(n * sizeof(*keep));
 	struct simplify_work wk = {0};
 	int rc = 0;
-	if (!xy || !keep) {
+	if (!xy || !keep || !moved) {
 		rc = st_error_set(err, ST_ERR_NOMEM, "infill: out of memory for the gyroid");
 		goto out_free;
 	}
 	for (double m = m0; m <= m1 && !rc; m++)
 		for (int sign = -1; sign <= 1 && !rc; sign += 2) {
 			gyroid_branch(k, sz, cz, swap, sign, m, t0, dt, n, xy);
-			size_t kept = gyroid_simplify(&wk, xy, n, keep, err);
-			rc = kept ? clip_paths_add(out, xy, kept, err) : ST_ERR_NOMEM;
+			size_t kept = gyroid_simplify(&wk, xy, n, keep, moved, err);
+			rc = kept ? clip_paths_add(out, moved, kept, err) : ST_ERR_NOMEM;
 		}
 out_free:
 	simplify_work_free(&wk);
 	free(xy);
+	free(moved);
 	free(keep);
 	return rc;
 }

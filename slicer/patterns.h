@@ -77,7 +77,8 @@ double pat_honeycomb_cell(double sp, double S);
  * pat_gyroid - append to out the cross-section of the gyroid surface
  * sin x cos y + sin y cos z + sin z cos x = 0, with (x, y, z) = k (X, Y, Z)
  * for bed coordinates X, Y, Z in nm, at height z_nm, as polylines covering
- * box, their chords within PAT_GYROID_TOLERANCE_NM of the curve.  k > 0
+ * box, their chords within PAT_GYROID_TOLERANCE_NM of the curve and across
+ * it, as long as it to a few tenths of a per cent.  k > 0
  * (radians per nm) sets the period 2 pi / k.  Returns 0, ST_ERR_RANGE (too
  * many polylines), ST_ERR_NOMEM.
  */

@@ -1,8 +1,8 @@
 /*
  * perimeters.c - wall loops by exact erosion, thin walls and gap fill along
- * medial axes, seam placement (see perimeters.h).
+ * medial axes (see perimeters.h); where loops start is perimeters_seam.c.
  */
-#include "perimeters.h"
+#include "perimeters_int.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -15,8 +15,6 @@
 
 /* Miter limit (multiples of the offset) when restoring trimmed loops. */
 #define PERIM_MITER_LIMIT 3.0
-/* A turn of at least this much within one bead width is a corner, degrees. */
-#define PERIM_CORNER_DEG 30.0
 /* Thin features this much narrower than epsilon still count (float STL), nm. */
 #define PERIM_EPS_SLACK 5000.0
 /* Vertices closer than this to their neighbours' line are dropped from loops, nm. */
@@ -32,14 +30,6 @@
 /* With min_feature_size 0, thin walls down to this width still print, nm. */
 #define PERIM_MIN_FEATURE_NM 10000.0
 
-struct perim_seams {
-	int64_t *prev, *cur;	/* seam points (x, y pairs) of the last and this layer */
-	size_t nprev, ncur, capprev, capcur;
-	int64_t lx, ly;		/* where the nozzle was left */
-	bool have_last;
-	uint64_t rng;		/* xorshift64* state, never 0 */
-};
-
 /* Everything one perim_generate call works with, lengths in nm. */
 struct ctx {
 	const struct perim_settings *s;
@@ -54,187 +44,10 @@ struct ctx {
 	struct st_error *err;
 };
 
-struct perim_seams *perim_seams_new(unsigned seed)
-{
-	struct perim_seams *sm = calloc(1, sizeof(*sm));
-
-	if (sm) {
-		sm->rng = 0x9E3779B97F4A7C15ull ^ ((uint64_t)seed * 0xBF58476D1CE4E5B9ull);
-		if (!sm->rng)
-			sm->rng = 1;
-	}
-	return sm;
-}
-
-void perim_seams_free(struct perim_seams *sm)
-{
-	if (!sm)
-		return;
-	free(sm->prev);
-	free(sm->cur);
-	free(sm);
-}
-
-static uint64_t next_random(struct perim_seams *sm)
-{
-	sm->rng ^= sm->rng >> 12;
-	sm->rng ^= sm->rng << 25;
-	sm->rng ^= sm->rng >> 27;
-	return sm->rng * 0x2545F4914F6CDD1Dull;
-}
-
-/* Start a layer: this layer's seams become the reference of the next. */
-static void seams_next_layer(struct perim_seams *sm)
-{
-	if (!sm->ncur)
-		return; /* a layer without loops keeps the older reference */
-	int64_t *t = sm->prev;
-	size_t cap = sm->capprev;
-	sm->prev = sm->cur;
-	sm->capprev = sm->capcur;
-	sm->nprev = sm->ncur;
-	sm->cur = t;
-	sm->capcur = cap;
-	sm->ncur = 0;
-}
-
-static int seams_record(struct perim_seams *sm, int64_t x, int64_t y, struct st_error *err)
-{
-	int64_t *grown = slice_grow(sm->cur, &sm->capcur, sm->ncur + 1, 2 * sizeof(*grown));
-
-	if (!grown)
-		return st_error_set(err, ST_ERR_NOMEM, "perimeters: out of memory for seams");
-	sm->cur = grown;
-	sm->cur[2 * sm->ncur] = x;
-	sm->cur[2 * sm->ncur + 1] = y;
-	sm->ncur++;
-	return 0;
-}
-
-static double dist2(int64_t ax, int64_t ay, int64_t bx, int64_t by)
-{
-	double dx = (double)ax - (double)bx, dy = (double)ay - (double)by;
-	return dx * dx + dy * dy;
-}
-
 /* The narrowest strip gap fill prints, nm: gap_fill_min, at least the layer. */
 static double gap_fill_width(const struct ctx *c)
 {
 	return fmax(c->s->gap_fill_min * SLICE_UNITS_PER_MM, c->h);
-}
-
-/* Signed turn at vertex i of a closed path, radians (> 0 left). */
-static double turn_at(const int64_t *xy, size_t n, size_t i)
-{
-	size_t a = (i + n - 1) % n, b = (i + 1) % n;
-	double ux = (double)(xy[2 * i] - xy[2 * a]), uy = (double)(xy[2 * i + 1] - xy[2 * a + 1]);
-	double vx = (double)(xy[2 * b] - xy[2 * i]), vy = (double)(xy[2 * b + 1] - xy[2 * i + 1]);
-	return atan2(ux * vy - uy * vx, ux * vx + uy * vy);
-}
-
-static double edge_len(const int64_t *xy, size_t n, size_t i)
-{
-	size_t j = (i + 1) % n;
-	return sqrt(dist2(xy[2 * i], xy[2 * i + 1], xy[2 * j], xy[2 * j + 1]));
-}
-
-/*
- * Corner class of vertex i: 0 concave, 1 convex, 2 smooth.  The turn is
- * summed over the vertices within win nm along the loop, so a corner that
- * the round joins spread over an arc counts as one corner.  With the solid
- * on the left of every loop (outer CCW, holes CW), a right turn is a
- * concave corner of the part, where a seam hides best.
- */
-static int corner_class(const int64_t *xy, size_t n, size_t i, double win)
-{
-	double turn = turn_at(xy, n, i), d = 0.0;
-
-	for (size_t k = 1; k < n / 2; k++) { /* forward */
-		d += edge_len(xy, n, (i + k - 1) % n);
-		if (d > win)
-			break;
-		turn += turn_at(xy, n, (i + k) % n);
-	}
-	d = 0.0;
-	for (size_t k = 1; k < n / 2; k++) { /* backward */
-		d += edge_len(xy, n, (i + n - k) % n);
-		if (d > win)
-			break;
-		turn += turn_at(xy, n, (i + n - k) % n);
-	}
-	double lim = PERIM_CORNER_DEG * M_PI / 180.0;
-	return turn <= -lim ? 0 : turn >= lim ? 1 : 2;
-}
-
-/*
- * Seam vertex of a closed loop: among the concave corners if any, else the
- * convex ones, else all vertices, the one nearest the previous layer's
- * seams (aligned), nearest the nozzle (nearest) or a random one; the
- * rearmost (largest y, then smallest x) when there is no reference yet, and
- * always for rear.
- */
-static size_t pick_seam(struct ctx *c, const int64_t *xy, size_t n)
-{
-	int *cls = malloc(n * sizeof(*cls));
-	int best_cls = 2;
-	size_t pick = 0, ncand = 0;
-
-	if (!cls)
-		return 0; /* no memory for scoring: start where the loop starts */
-	for (size_t i = 0; i < n; i++) {
-		cls[i] = corner_class(xy, n, i, c->w);
-		if (cls[i] < best_cls)
-			best_cls = cls[i];
-	}
-	for (size_t i = 0; i < n; i++)
-		ncand += cls[i] == best_cls;
-	enum perim_seam mode = c->s->seam;
-	int64_t last[2] = {c->sm->lx, c->sm->ly};
-	const int64_t *ref = NULL;
-	size_t nref = 0;
-	if (mode == PERIM_SEAM_ALIGNED && c->sm->nprev) {
-		ref = c->sm->prev;
-		nref = c->sm->nprev;
-	} else if (mode == PERIM_SEAM_NEAREST && c->sm->have_last) {
-		ref = last;
-		nref = 1;
-	}
-	if (mode == PERIM_SEAM_RANDOM) {
-		size_t k = (size_t)(next_random(c->sm) % ncand);
-		for (size_t i = 0; i < n; i++)
-			if (cls[i] == best_cls && k-- == 0) {
-				pick = i;
-				break;
-			}
-	} else {
-		double bd = INFINITY;
-		bool have = false;
-		for (size_t i = 0; i < n; i++) {
-			if (cls[i] != best_cls)
-				continue;
-			int64_t x = xy[2 * i], y = xy[2 * i + 1];
-			double d;
-			if (nref) {
-				d = INFINITY;
-				for (size_t r = 0; r < nref; r++)
-					d = fmin(d, dist2(x, y, ref[2 * r], ref[2 * r + 1]));
-			} else {
-				/* rearmost: compare (-y, x) lexicographically */
-				if (!have || y > xy[2 * pick + 1] ||
-				    (y == xy[2 * pick + 1] && x < xy[2 * pick])) {
-					pick = i;
-					have = true;
-				}
-				continue;
-			}
-			if (d < bd) {
-				bd = d;
-				pick = i;
-			}
-		}
-	}
-	free(cls);
-	return pick;
 }
 
 /*
@@ -269,12 +82,12 @@ static int emit_loop(struct ctx *c, const int64_t *xy, size_t n, enum path_role 
 	if (!rc && n >= 3 && ((changed && !fxy) || !(pts = malloc(n * sizeof(*pts)))))
 		rc = st_error_set(c->err, ST_ERR_NOMEM, "perimeters: out of memory for a loop");
 	if (!rc && n >= 3) {
-		seam = pick_seam(c, changed ? fxy : xy, n);
+		seam = perim_seam_pick(c->sm, c->s->seam, c->w, changed ? fxy : xy, n);
 		for (size_t k = 0; k < n; k++)
 			pts[k] = fit[(seam + k) % n];
 		rc = layer_add_path(c->out, role, true, pts, n, c->err);
 		if (!rc)
-			rc = seams_record(c->sm, pts[0].x, pts[0].y, c->err);
+			rc = perim_seams_record(c->sm, pts[0].x, pts[0].y, c->err);
 		c->sm->lx = pts[0].x;
 		c->sm->ly = pts[0].y;
 		c->sm->have_last = true;
@@ -293,8 +106,8 @@ static int emit_medial(struct ctx *c, struct medial_line *l, enum path_role role
 	int rc;
 
 	if (!l->closed && c->sm->have_last &&
-	    dist2(p[n - 1].x, p[n - 1].y, c->sm->lx, c->sm->ly) <
-		    dist2(p[0].x, p[0].y, c->sm->lx, c->sm->ly))
+	    perim_dist2(p[n - 1].x, p[n - 1].y, c->sm->lx, c->sm->ly) <
+		    perim_dist2(p[0].x, p[0].y, c->sm->lx, c->sm->ly))
 		for (size_t i = 0, j = n - 1; i < j; i++, j--) {
 			struct path_point t = p[i];
 			p[i] = p[j];
@@ -414,7 +227,7 @@ static double line_length(const struct medial_line *l)
 
 	for (size_t j = 0; j + 1 < l->n + (l->closed ? 1 : 0); j++) {
 		const struct path_point *p = &l->pts[j], *q = &l->pts[(j + 1) % l->n];
-		len += sqrt(dist2(p->x, p->y, q->x, q->y));
+		len += sqrt(perim_dist2(p->x, p->y, q->x, q->y));
 	}
 	return len;
 }
@@ -785,7 +598,7 @@ int perim_generate(const struct perim_settings *s, const struct clip_expolys *re
 			 .out = out,
 			 .err = err};
 	*c.thin = (struct perim_thin){0};
-	seams_next_layer(c.sm);
+	perim_seams_next_layer(c.sm);
 	for (size_t i = 0; i < region->n && !rc; i++) {
 		rc = clip_expolys_get(region, i, &R, err);
 		if (!rc)

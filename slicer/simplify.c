@@ -126,12 +126,21 @@ static void meet(double px, double py, double n0x, double n0y, double c0, double
 	out[1] = llround(py + lambda * (n0y + n1y));
 }
 
-bool simplify_balance(const int64_t *xy, size_t n, const bool *keep, double tol, int64_t *out)
+/* simplify_balance, and simplify_balance_loop when loop: the first point
+ * (the last again) moved for the loop's last and first segments. */
+static bool balance(const int64_t *xy, size_t n, const bool *keep, double tol, bool loop,
+		    int64_t *out)
 {
 	double lim = tol - SIMPLIFY_SLACK_NM, pnx = 0, pny = 0, pc = 0;
 	size_t m = 0;
 	bool ok = true;
 
+	if (loop && n > 2) { /* the segment into the seam, from the last kept point */
+		size_t last = n - 2;
+		while (last > 0 && !keep[last])
+			last--;
+		pc = balance_offset(xy, last, n - 1, &pnx, &pny);
+	}
 	for (size_t k = 0; k < n; k++) {
 		double nx = 0, ny = 0, c = 0;
 		if (!keep[k])
@@ -142,7 +151,10 @@ bool simplify_balance(const int64_t *xy, size_t n, const bool *keep, double tol,
 				next++;
 			c = balance_offset(xy, k, next, &nx, &ny);
 		}
-		if (k == 0 || k + 1 == n) {
+		if (loop && k + 1 == n && m > 0) {
+			out[2 * m] = out[0];
+			out[2 * m + 1] = out[1];
+		} else if ((k == 0 && !loop) || k + 1 == n) {
 			out[2 * m] = xy[2 * k];
 			out[2 * m + 1] = xy[2 * k + 1];
 		} else {
@@ -169,6 +181,17 @@ bool simplify_balance(const int64_t *xy, size_t n, const bool *keep, double tol,
 		return m > 2;
 	simplify_keep(xy, n, keep, out);
 	return false;
+}
+
+bool simplify_balance(const int64_t *xy, size_t n, const bool *keep, double tol, int64_t *out)
+{
+	return balance(xy, n, keep, tol, false, out);
+}
+
+bool simplify_balance_loop(const int64_t *xy, size_t n, const bool *keep, double tol,
+			   int64_t *out)
+{
+	return balance(xy, n, keep, tol, true, out);
 }
 
 size_t simplify_keep(const int64_t *xy, size_t n, const bool *keep, int64_t *out)

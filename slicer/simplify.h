@@ -61,6 +61,16 @@ int simplify_mark(struct simplify_work *wk, const int64_t *xy, size_t n, double 
 bool simplify_balance(const int64_t *xy, size_t n, const bool *keep, double tol, int64_t *out);
 
 /*
+ * simplify_balance_loop - simplify_balance for a closed loop, xy's last
+ * point being its first again: that point (a wall's seam) moves too, for
+ * the loop's last and first segments, and out ends with it again; else a
+ * round wall's seam stays where the balanced chords around it have moved
+ * out from, a dent of about two thirds of their sagitta.
+ */
+bool simplify_balance_loop(const int64_t *xy, size_t n, const bool *keep, double tol,
+			   int64_t *out);
+
+/*
  * simplify_keep - the points of xy[0 .. 2n) whose keep is set into out, in
  * order; returns how many.  out may be xy (compaction in place).
  */

@@ -181,6 +181,50 @@ START_TEST(balance_keeps_area)
 }
 END_TEST
 
+/* A closed loop balanced as one (simplify_balance_loop): its seam moves
+ * out with the other kept points, where simplify_balance leaves it on the
+ * circle, a dent two thirds of a chord's sagitta deep; and every point of
+ * the circle stays within the bound of its moved chord. */
+START_TEST(balance_loop_moves_seam)
+{
+	size_t n = 257, m = 0;
+	int64_t xy[2 * 257], out[2 * 257];
+	bool keep[257];
+	struct simplify_work wk = {0};
+	double rmin = INFINITY, rmax = 0;
+
+	for (size_t k = 0; k < n; k++) {
+		double a = 2 * M_PI * (double)(k % 256) / 256;
+		xy[2 * k] = llround(9.775 * NM * cos(a));
+		xy[2 * k + 1] = llround(9.775 * NM * sin(a));
+	}
+	ck_assert_int_eq(simplify_mark(&wk, xy, n, RES * NM, keep, NULL), 0);
+	ck_assert(simplify_balance_loop(xy, n, keep, RES * NM, out));
+	for (size_t k = 0; k < n; k++)
+		m += keep[k];
+	ck_assert(out[0] == out[2 * m - 2] && out[1] == out[2 * m - 1]);
+	for (size_t j = 0; j < m; j++) {
+		double r = hypot((double)out[2 * j], (double)out[2 * j + 1]);
+		rmin = fmin(rmin, r);
+		rmax = fmax(rmax, r);
+	}
+	/* the kept points all move out alike: a few nm apart, not microns */
+	ck_assert_msg(rmax - rmin < 100, "kept points %.0f to %.0f nm from the centre", rmin,
+		      rmax);
+	ck_assert_msg(rmin > 9.775 * NM + 1000, "the seam at %.0f nm", rmin);
+	for (size_t j = 0, k = 0; j + 1 < m; j++) {
+		size_t next = k + 1;
+		while (!keep[next])
+			next++;
+		for (size_t i = k; i <= next; i++)
+			ck_assert_msg(seg_dist(xy + 2 * i, out + 2 * j, out + 2 * j + 2) <= RES * NM,
+				      "point %zu off its moved chord", i);
+		k = next;
+	}
+	simplify_work_free(&wk);
+}
+END_TEST
+
 /* At most the slack, nothing is dropped: even collinear points stay. */
 START_TEST(tiny_tolerance_keeps_everything)
 {
@@ -394,7 +438,9 @@ START_TEST(widths_never_merged)
 }
 END_TEST
 
-/* A closed loop simplified still ends at its seam, where it started. */
+/* A closed loop simplified still ends at its seam, where it started; the
+ * seam, balanced with the rest (simplify_balance_loop), stays within the
+ * outer wall's half of the tolerance of where it was sliced. */
 START_TEST(loops_stay_closed)
 {
 	struct layer_stack *st = layer_stack_new(1, NULL);
@@ -410,11 +456,50 @@ START_TEST(loops_stay_closed)
 	r = tu_read_moves(text);
 	ck_assert_uint_gt(r.n, 10);
 	ck_assert_uint_lt(r.n, 150); /* of 500; an outer wall is held to half the tolerance */
-	ck_assert_double_eq_tol(r.m[0].x0, 65, 1e-9);
-	ck_assert_double_eq_tol(r.m[0].y0, 70, 1e-9);
-	ck_assert_double_eq_tol(r.m[r.n - 1].x1, 65, 1e-9);
-	ck_assert_double_eq_tol(r.m[r.n - 1].y1, 70, 1e-9);
+	ck_assert_double_le(hypot(r.m[0].x0 - 65, r.m[0].y0 - 70), s.gcode_resolution / 2);
+	ck_assert_double_eq_tol(r.m[r.n - 1].x1, r.m[0].x0, 1e-9);
+	ck_assert_double_eq_tol(r.m[r.n - 1].y1, r.m[0].y0, 1e-9);
 	free(r.m);
+	free(text);
+	layer_stack_free(st);
+}
+END_TEST
+
+/*
+ * The outer wall's points go on the written micron grid where they move
+ * the face least (snap_face in gcode_writer_simplify.c): a round wall's
+ * written points stay within a fraction of a micron of one circle, where
+ * rounding each to the nearest grid point scatters them up to 0.7 um in
+ * and out, which the region check reads as the face standing out.
+ */
+START_TEST(outer_wall_rounded_along_the_face)
+{
+	struct layer_stack *st = layer_stack_new(1, NULL);
+	struct gcodew_settings s;
+	double r[400], lo = INFINITY, hi = 0;
+	size_t n = 0, wide = 0;
+	char *text;
+	struct tu_moves mv;
+
+	ck_assert_ptr_nonnull(st);
+	st->layers[0].z = st->layers[0].height = 0.2;
+	add_circle(&st->layers[0], PATH_OUTER_PERIMETER, 125, 105, 9.775, 2048, 0.45);
+	gcodew_settings_init(&s);
+	text = tu_gcode_mem(st, &s, NULL);
+	mv = tu_read_moves(text);
+	for (size_t k = 0; k < mv.n && n < 400; k++)
+		r[n++] = hypot(mv.m[k].x1 - 125, mv.m[k].y1 - 105);
+	ck_assert_uint_gt(n, 40);
+	for (size_t k = 0; k < n; k++) {
+		lo = fmin(lo, r[k]);
+		hi = fmax(hi, r[k]);
+	}
+	for (size_t k = 0; k < n; k++) /* off the mean radius by more than 0.25 um */
+		wide += fabs(r[k] - (lo + hi) / 2) > 0.25e-3;
+	/* 0.31 um and none wide; the nearest grid points: 1.0 um and 28 wide */
+	ck_assert_msg(hi - lo < 0.4e-3 && wide == 0, "written radii %.6f to %.6f mm, %zu wide", lo,
+		      hi, wide);
+	free(mv.m);
 	free(text);
 	layer_stack_free(st);
 }
@@ -586,10 +671,12 @@ void gcodewriter_simplify_tcases(Suite *s)
 	tcase_add_test(tc, bound_on_circles);
 	tcase_add_test(tc, tiny_tolerance_keeps_everything);
 	tcase_add_test(tc, balance_keeps_area);
+	tcase_add_test(tc, balance_loop_moves_seam);
 	tcase_add_test(tc, resolution_zero_is_output_before);
 	tcase_add_test(tc, default_resolution_bound_and_filament);
 	tcase_add_test(tc, widths_never_merged);
 	tcase_add_test(tc, loops_stay_closed);
+	tcase_add_test(tc, outer_wall_rounded_along_the_face);
 	tcase_add_test(tc, routed_travel_simplified);
 	tcase_add_test(tc, sliced_model_gets_fewer_lines);
 	suite_add_tcase(s, tc);
