@@ -88,6 +88,24 @@ int mesh_builder_append(struct mesh_builder *b, const struct mesh *part, struct 
 int mesh_weld_corners(const float (*corner)[3], size_t ntris, int threads, struct mesh **out,
 		      struct st_error *err);
 
+/* Facets mesh_weld_read asks for at a time, at most. */
+#define MESH_WELD_RUN 1024
+
+/*
+ * mesh_corner_reader - facets [first, first + count) of a file (count at
+ * most MESH_WELD_RUN) decoded into corner[3 i + k], finite floats; false
+ * when one does not read or decode.  Called from several threads at once.
+ */
+typedef bool (*mesh_corner_reader)(void *ctx, size_t first, size_t count, float (*corner)[3]);
+
+/*
+ * mesh_weld_read - mesh_weld_corners with the corners read through read
+ * (each thread reads every facet for itself, so no array of all the
+ * corners is kept).  Also ST_ERR_PARSE when read fails.
+ */
+int mesh_weld_read(mesh_corner_reader read, void *ctx, size_t ntris, int threads,
+		   struct mesh **out, struct st_error *err);
+
 /*
  * mesh_builder_finish - hand over the finished mesh (caller frees it with
  * mesh_free) and free the builder.  Returns NULL only on OOM.

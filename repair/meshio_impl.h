@@ -31,9 +31,6 @@
 /* A byte source: a file read in chunks or a buffer in memory. */
 struct mio_src {
 	FILE *f;		  /* NULL when reading from memory */
-	bool positioned;	  /* read with pread(pread_fd) at pread_pos instead */
-	int pread_fd;
-	uint64_t pread_pos;	  /* file offset of the next chunk to read */
 	const char *name;	  /* for messages */
 	const unsigned char *p;	  /* next unread byte of the window */
 	const unsigned char *end; /* end of the window */

@@ -17,7 +17,6 @@
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 long mio_fill(struct mio_src *s)
 {
@@ -25,21 +24,6 @@ long mio_fill(struct mio_src *s)
 
 	if (s->p < s->end)
 		return (long)(s->end - s->p);
-	if (s->positioned) {
-		ssize_t got;
-
-		do
-			got = pread(s->pread_fd, s->chunk, MIO_CHUNK, (off_t)s->pread_pos);
-		while (got < 0 && errno == EINTR);
-		if (got < 0) {
-			s->read_errno = errno;
-			return ST_ERR_IO;
-		}
-		s->pread_pos += (uint64_t)got;
-		s->p = s->chunk;
-		s->end = s->chunk + got;
-		return (long)got;
-	}
 	if (!s->f)
 		return 0;
 	errno = 0;

@@ -16,7 +16,6 @@
 #include <fcntl.h>
 #include <float.h>
 #include <math.h>
-#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -179,90 +178,57 @@ static int read_facets(struct mio_src *s, struct mesh_builder *b, uint32_t first
 	return 0;
 }
 
-/* A run of facets of a large binary STL, decoded on its own thread through
- * a positioned source on the same file into the corner array. */
-struct decode_job {
-	struct mio_src src;
-	struct st_error err;
-	float (*corner)[3];
-	uint32_t first, count;
-	bool ok;
-};
-
-static void *decode_run(void *arg)
+/* mesh_corner_reader over a binary STL (ctx: its file descriptor): one
+ * pread per run of facets, so that several threads may read at once. */
+static bool read_corners(void *ctx, size_t first, size_t count, float (*corner)[3])
 {
-	struct decode_job *j = arg;
-	unsigned char fac[STL_FACET];
+	const int fd = *(const int *)ctx;
+	unsigned char raw[MESH_WELD_RUN * STL_FACET];
+	size_t want = count * STL_FACET, got = 0;
 
-	for (uint32_t i = j->first; i < j->first + j->count; i++) {
-		if (mio_read(&j->src, fac, sizeof(fac)) != sizeof(fac))
-			return NULL;
+	if (count > MESH_WELD_RUN)
+		return false;
+	while (got < want) {
+		ssize_t n = pread(fd, raw + got, want - got,
+				  (off_t)(binary_size((uint32_t)first) + got));
+		if (n < 0 && errno == EINTR)
+			continue;
+		if (n <= 0)
+			return false;
+		got += (size_t)n;
+	}
+	for (size_t i = 0; i < count; i++)
 		/* Bytes 0-11 are the normal, ignored; 12-47 the corners. */
 		for (int k = 0; k < 3; k++)
 			for (int c = 0; c < 3; c++) {
-				float f = (float)get_le_float(fac + 12 + 12 * k + 4 * c);
+				float f = (float)get_le_float(raw + STL_FACET * i + 12 + 12 * k + 4 * c);
 				if (!isfinite(f))
-					return NULL;
-				j->corner[3 * (size_t)i + k][c] = f;
+					return false;
+				corner[3 * i + k][c] = f;
 			}
-	}
-	j->ok = true;
-	return NULL;
+	return true;
 }
 
 /*
- * Files from SPLIT_MIN facets up are decoded in two runs on two threads,
- * then welded all at once on several (mesh_weld_corners): the same mesh,
- * index for index, as welding corner by corner.  Returns 1 when that could
- * not be done (a facet that does not decode, no memory, more vertices than
- * a mesh holds): the caller then reads the file in one pass, which names
- * the first bad byte.
+ * Files from SPLIT_MIN facets up are read and welded by mesh_weld_read:
+ * the same mesh, index for index, as welding corner by corner, without
+ * an array of every corner.  One thread: each of several would read and
+ * hash every corner to find its own, which on a 1M-triangle sphere took
+ * twice the CPU time of one thread and, on a shared machine, more wall
+ * time too.  Returns 1 when that could not be done (a facet that does not
+ * read or decode, no memory, more vertices than a mesh holds): the caller
+ * then reads the file in one pass, which names the first bad byte.
  */
 #define SPLIT_MIN 100000u
 
 static int read_welded(struct mio_src *s, uint32_t count, struct mesh **out)
 {
-	struct decode_job j[2];
-	pthread_t thread;
-	bool started;
-	float(*corner)[3] = malloc((size_t)count * 3 * sizeof(*corner));
+	int fd = fileno(s->f);
 	struct st_error werr;
-	int rc = 1;
 
-	if (!corner)
-		return 1;
-	memset(j, 0, sizeof(j));
-	for (int h = 0; h < 2; h++) {
-		j[h].first = h ? count / 2 : 0;
-		j[h].count = h ? count - count / 2 : count / 2;
-		j[h].corner = corner;
-		j[h].src.name = s->name;
-		j[h].src.err = &j[h].err;
-		j[h].src.size = s->size;
-		j[h].src.positioned = true;
-		j[h].src.pread_fd = fileno(s->f);
-		j[h].src.off = j[h].src.pread_pos = binary_size(j[h].first);
-		j[h].src.chunk = malloc(MIO_CHUNK);
-		j[h].src.p = j[h].src.end = j[h].src.chunk;
-	}
-	if (j[0].src.chunk && j[1].src.chunk) {
-		started = pthread_create(&thread, NULL, decode_run, &j[1]) == 0;
-		decode_run(&j[0]);
-		if (started)
-			pthread_join(thread, NULL);
-		else
-			decode_run(&j[1]);
-	}
-	free(j[0].src.chunk);
-	free(j[1].src.chunk);
-	if (j[0].ok && j[1].ok) {
-		/* Out of memory or out of range: the one pass needs less
-		 * memory, and names the byte where a range runs out. */
-		if (mesh_weld_corners((const float(*)[3])corner, count, 0, out, &werr) == 0)
-			rc = 0;
-	}
-	free(corner);
-	return rc;
+	/* Out of memory or out of range: the one pass needs less memory,
+	 * and names the byte where a range runs out. */
+	return mesh_weld_read(read_corners, &fd, count, 1, out, &werr) == 0 ? 0 : 1;
 }
 
 int stlio_read_binary(struct mio_src *s, struct mesh **out)

@@ -451,8 +451,6 @@ int threemf_read(struct mio_src *s, struct mesh **out, struct meshio_info *info)
 	int rc;
 
 	*out = NULL;
-	if (s->positioned)
-		return mio_err(s, ST_ERR_ARG, "3MF cannot be read from a positioned source");
 	memset(&d, 0, sizeof(d));
 	d.s = s;
 	d.cap = d.budget = TMF_UNPACK_MAX;

@@ -1,6 +1,6 @@
 /*
  * weld.c - welding a whole file's corners at once on several threads
- * (mesh_weld_corners), for the binary STL reader.
+ * (mesh_weld_corners, mesh_weld_read), for the binary STL reader.
  *
  * Why: welding a 1M-triangle file corner by corner was a third of
  * `stratum check`'s time, nearly all of it waiting for hash slots and
@@ -23,6 +23,8 @@
 #define WELD_MAX_PARTS 8
 /* Corners hashed ahead of the one being welded (see MESH_WELD_AHEAD). */
 #define WELD_AHEAD 16
+/* Facets a part reads and welds at a time: their corners stay in cache. */
+#define WELD_RUN MESH_WELD_RUN
 
 /* A float's bits with -0 folded onto +0 (the same point). */
 static uint32_t float_bits(float v)
@@ -51,15 +53,19 @@ struct weld_slot {
 
 /* One part: its table, its vertices (first corner, position). */
 struct weld_part {
-	const float (*corner)[3];
-	size_t ncorners;
+	const float (*corner)[3]; /* the whole file's corners, or NULL: read */
+	mesh_corner_reader read;  /* runs of facets into buf, when corner is NULL */
+	void *ctx;
+	float (*buf)[3];	  /* WELD_RUN facets' corners */
+	size_t ntris;
 	unsigned index, parts;
 	struct weld_slot *slots;
 	size_t nslots;	 /* power of two */
 	uint32_t *first; /* [local] its first corner */
+	float (*pos)[3]; /* [local] its point */
 	size_t nlocal, cap;
 	uint32_t *out;	 /* [corner] local * parts + index, for this part's corners */
-	bool nomem;
+	bool nomem, unread;
 };
 
 static uint64_t hash_bits(const uint32_t b[3])
@@ -121,8 +127,9 @@ static bool grow_part(struct weld_part *w)
 	return true;
 }
 
-/* Weld corner c (its bits b, hash h) into part w. */
-static bool weld_one(struct weld_part *w, size_t c, const uint32_t b[3], uint64_t h)
+/* Weld corner c (its point p, bits b, hash h) into part w. */
+static bool weld_one(struct weld_part *w, size_t c, const float p[3], const uint32_t b[3],
+		     uint64_t h)
 {
 	size_t i = h & (w->nslots - 1);
 
@@ -139,41 +146,68 @@ static bool weld_one(struct weld_part *w, size_t c, const uint32_t b[3], uint64_
 		if (!f)
 			return false;
 		w->first = f;
+		float(*q)[3] = realloc(w->pos, cap * sizeof(*q));
+		if (!q)
+			return false;
+		w->pos = q;
 		w->cap = cap;
 	}
 	w->first[w->nlocal] = (uint32_t)c;
+	memcpy(w->pos[w->nlocal], p, sizeof(w->pos[0]));
 	w->slots[i] = (struct weld_slot){{b[0], b[1], b[2]}, (uint32_t)++w->nlocal};
 	w->out[c] = (uint32_t)(w->nlocal - 1) * w->parts + w->index;
 	/* Load factor at most 1/2, as the builder's. */
 	return w->nlocal * 2 <= w->nslots || grow_part(w);
 }
 
-/* Every corner in file order; those of this part are welded, their
- * slots prefetched WELD_AHEAD corners before. */
-static void *weld_part_run(void *arg)
+/* The n corners from corner c0 on (their points in corner[0..n)), in
+ * order; those of this part are welded, their slots prefetched
+ * WELD_AHEAD corners before. */
+static bool weld_run(struct weld_part *w, const float (*corner)[3], size_t c0, size_t n)
 {
-	struct weld_part *w = arg;
 	uint64_t ring[WELD_AHEAD];
 	uint32_t bits[WELD_AHEAD][3];
 
-	for (size_t c = 0; c < w->ncorners + WELD_AHEAD; c++) {
+	for (size_t c = 0; c < n + WELD_AHEAD; c++) {
 		if (c >= WELD_AHEAD) {
 			size_t at = c - WELD_AHEAD;
 			uint64_t h = ring[at % WELD_AHEAD];
 			if (part_of(h, w->parts) == w->index &&
-			    !weld_one(w, at, bits[at % WELD_AHEAD], h)) {
-				w->nomem = true;
-				return NULL;
-			}
+			    !weld_one(w, c0 + at, corner[at], bits[at % WELD_AHEAD], h))
+				return false;
 		}
-		if (c < w->ncorners) {
+		if (c < n) {
 			/* Into the entry of corner at, just welded. */
 			uint32_t *b = bits[c % WELD_AHEAD];
 			for (int k = 0; k < 3; k++)
-				b[k] = float_bits(w->corner[c][k]);
+				b[k] = float_bits(corner[c][k]);
 			ring[c % WELD_AHEAD] = hash_bits(b);
 			if (part_of(ring[c % WELD_AHEAD], w->parts) == w->index)
 				__builtin_prefetch(&w->slots[ring[c % WELD_AHEAD] & (w->nslots - 1)]);
+		}
+	}
+	return true;
+}
+
+/* Every facet in file order, WELD_RUN at a time: from the caller's
+ * array, or read into this part's buffer (each part reads every facet,
+ * so no array of all the corners is made: on a 1M-triangle file that
+ * array and its pass cost more than the reading). */
+static void *weld_part_run(void *arg)
+{
+	struct weld_part *w = arg;
+
+	for (size_t t = 0; t < w->ntris; t += WELD_RUN) {
+		const size_t n = w->ntris - t < WELD_RUN ? w->ntris - t : WELD_RUN;
+		const float(*corner)[3] = w->corner ? w->corner + 3 * t : (const float(*)[3])w->buf;
+
+		if (!w->corner && !w->read(w->ctx, t, n, w->buf)) {
+			w->unread = true;
+			return NULL;
+		}
+		if (!weld_run(w, corner, 3 * t, 3 * n)) {
+			w->nomem = true;
+			return NULL;
 		}
 	}
 	return NULL;
@@ -204,7 +238,7 @@ static int number_vertices(struct weld_part *w, unsigned parts, struct mesh *m,
 			if (at[p] < w[p].nlocal &&
 			    (best == parts || w[p].first[at[p]] < w[best].first[at[best]]))
 				best = p;
-		const float *q = w[best].corner[w[best].first[at[best]]];
+		const float *q = w[best].pos[at[best]];
 		for (int k = 0; k < 3; k++)
 			m->verts[g][k] = q[k] == 0.0f ? 0.0 : (double)q[k];
 		global[best][at[best]++] = (uint32_t)g;
@@ -228,8 +262,10 @@ static unsigned weld_parts(int threads, size_t ncorners)
 	return (unsigned)n;
 }
 
-int mesh_weld_corners(const float (*corner)[3], size_t ntris, int threads, struct mesh **out,
-		      struct st_error *err)
+/* The weld of mesh_weld_corners and mesh_weld_read: corners from the
+ * array corner, or through read when it is NULL. */
+static int weld(const float (*corner)[3], mesh_corner_reader read, void *ctx, size_t ntris,
+		int threads, struct mesh **out, struct st_error *err)
 {
 	const size_t ncorners = 3 * ntris;
 	const unsigned parts = weld_parts(threads, ncorners);
@@ -258,10 +294,12 @@ int mesh_weld_corners(const float (*corner)[3], size_t ntris, int threads, struc
 	if (!m || !ids)
 		rc = ST_ERR_NOMEM;
 	for (unsigned p = 0; p < parts && !rc; p++) {
-		w[p] = (struct weld_part){.corner = corner, .ncorners = ncorners, .index = p,
-					  .parts = parts, .nslots = nslots, .out = ids};
+		w[p] = (struct weld_part){.corner = corner, .read = read, .ctx = ctx, .ntris = ntris,
+					  .index = p, .parts = parts, .nslots = nslots, .out = ids};
 		w[p].slots = new_slots(nslots);
-		if (!w[p].slots)
+		if (!corner)
+			w[p].buf = malloc(3 * WELD_RUN * sizeof(*w[p].buf));
+		if (!w[p].slots || (!corner && !w[p].buf))
 			rc = ST_ERR_NOMEM;
 	}
 	/* Part 0 on this thread; a part whose thread cannot start runs here too. */
@@ -276,13 +314,16 @@ int mesh_weld_corners(const float (*corner)[3], size_t ntris, int threads, struc
 			weld_part_run(&w[p]);
 	}
 	for (unsigned p = 0; p < parts && !rc; p++)
-		if (w[p].nomem)
+		if (w[p].unread)
+			rc = ST_ERR_PARSE;
+		else if (w[p].nomem)
 			rc = ST_ERR_NOMEM;
 	if (!rc)
 		rc = number_vertices(w, parts, m, global);
 	if (!rc) {
-		/* Corner ids become vertex numbers in place. */
-		for (size_t c = 0; c < ncorners; c++)
+		/* Corner ids become vertex numbers in place (one part's
+		 * already are). */
+		for (size_t c = 0; parts > 1 && c < ncorners; c++)
 			ids[c] = global[ids[c] % parts][ids[c] / parts];
 		m->tris = (uint32_t(*)[3])ids;
 		m->ntris = m->cap_tris = ntris;
@@ -293,6 +334,8 @@ int mesh_weld_corners(const float (*corner)[3], size_t ntris, int threads, struc
 	for (unsigned p = 0; p < parts; p++) {
 		free(w[p].slots);
 		free(w[p].first);
+		free(w[p].pos);
+		free(w[p].buf);
 		free(global[p]);
 	}
 	free(ids);
@@ -300,7 +343,21 @@ int mesh_weld_corners(const float (*corner)[3], size_t ntris, int threads, struc
 	if (rc == ST_ERR_RANGE)
 		return st_error_set(err, rc, "more than %u distinct vertices",
 				    (unsigned)MESH_MAX_ELEMENTS);
+	if (rc == ST_ERR_PARSE)
+		return st_error_set(err, rc, "a facet of %zu did not read", ntris);
 	if (rc)
 		return st_error_set(err, rc, "out of memory welding %zu triangles", ntris);
 	return 0;
+}
+
+int mesh_weld_corners(const float (*corner)[3], size_t ntris, int threads, struct mesh **out,
+		      struct st_error *err)
+{
+	return weld(corner, NULL, NULL, ntris, threads, out, err);
+}
+
+int mesh_weld_read(mesh_corner_reader read, void *ctx, size_t ntris, int threads,
+		   struct mesh **out, struct st_error *err)
+{
+	return weld(NULL, read, ctx, ntris, threads, out, err);
 }

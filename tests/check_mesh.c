@@ -4,6 +4,7 @@
  */
 #include <check.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -76,6 +77,45 @@ START_TEST(weld_many_vertices_grows_table)
 }
 END_TEST
 
+/* Corners for mesh_weld_read from an array, failing from facet fail_at on. */
+struct corner_feed {
+	const float (*corner)[3];
+	size_t fail_at;
+};
+
+static bool feed_corners(void *ctx, size_t first, size_t count, float (*corner)[3])
+{
+	const struct corner_feed *f = ctx;
+
+	if (first + count > f->fail_at)
+		return false;
+	memcpy(corner, f->corner + 3 * first, 3 * count * sizeof(*corner));
+	return true;
+}
+
+/* The welds of a corner array (mesh_weld_corners, and mesh_weld_read
+ * when read), checked against the builder's mesh. */
+static void check_welds(const float (*corner)[3], size_t ntris, int parts, bool read,
+			const struct mesh *want)
+{
+	struct corner_feed feed = {corner, SIZE_MAX};
+
+	for (int how = 0; how < 1 + read; how++) {
+		struct mesh *got = NULL;
+		struct st_error err = {0};
+
+		ck_assert_int_eq(how ? mesh_weld_read(feed_corners, &feed, ntris, parts, &got, &err)
+				     : mesh_weld_corners(corner, ntris, parts, &got, &err),
+				 0);
+		ck_assert_uint_eq(got->nverts, want->nverts);
+		ck_assert_uint_eq(got->ntris, want->ntris);
+		ck_assert_int_eq(memcmp(got->verts, want->verts, want->nverts * sizeof(*want->verts)),
+				 0);
+		ck_assert_int_eq(memcmp(got->tris, want->tris, want->ntris * sizeof(*want->tris)), 0);
+		mesh_free(got);
+	}
+}
+
 /*
  * mesh_weld_corners must make the builder's mesh index for index, whatever
  * the number of parts: corners drawn from a small grid (so most repeat,
@@ -116,25 +156,38 @@ START_TEST(weld_corners_matches_builder)
 			ck_assert_int_eq(mesh_builder_triangle(b, w[0], w[1], w[2], NULL), 0);
 		}
 		want = mesh_builder_finish(b);
-		for (int parts = 1; parts <= 9; parts += 2) {
-			struct mesh *got = NULL;
-			struct st_error err = {0};
-
-			ck_assert_int_eq(mesh_weld_corners((const float(*)[3])corner, ntris, parts,
-							   &got, &err),
-					 0);
-			ck_assert_uint_eq(got->nverts, want->nverts);
-			ck_assert_uint_eq(got->ntris, want->ntris);
-			ck_assert_int_eq(memcmp(got->verts, want->verts,
-						want->nverts * sizeof(*want->verts)),
-					 0);
-			ck_assert_int_eq(
-			    memcmp(got->tris, want->tris, want->ntris * sizeof(*want->tris)), 0);
-			mesh_free(got);
-		}
+		/* The read shares the weld and its merge: one and two parts. */
+		for (int parts = 1; parts <= 9; parts += 2)
+			check_welds((const float(*)[3])corner, ntris, parts, parts == 1, want);
+		check_welds((const float(*)[3])corner, ntris, 2, true, want);
 		mesh_free(want);
 		free(corner);
 	}
+}
+END_TEST
+
+/* A facet that does not read stops mesh_weld_read with ST_ERR_PARSE and
+ * no mesh, on one part and on several, wherever the run it falls in. */
+START_TEST(weld_read_stops_at_unread_facet)
+{
+	const size_t ntris = 5000, fails[] = {0, 1023, 1024, 4999};
+	float(*corner)[3] = calloc(3 * ntris, sizeof(*corner));
+
+	ck_assert_ptr_nonnull(corner);
+	for (size_t c = 0; c < 3 * ntris; c++)
+		corner[c][0] = (float)c;
+	for (size_t i = 0; i < sizeof(fails) / sizeof(fails[0]); i++)
+		for (int parts = 1; parts <= 3; parts++) {
+			struct corner_feed feed = {(const float(*)[3])corner, fails[i]};
+			struct mesh *got = NULL;
+			struct st_error err = {0};
+
+			ck_assert_int_eq(
+			    mesh_weld_read(feed_corners, &feed, ntris, parts, &got, &err),
+			    ST_ERR_PARSE);
+			ck_assert_ptr_null(got);
+		}
+	free(corner);
 }
 END_TEST
 
@@ -645,6 +698,7 @@ Suite *mesh_suite(void)
 	tcase_add_test(weld, weld_is_exact);
 	tcase_add_test(weld, weld_many_vertices_grows_table);
 	tcase_add_test(weld, weld_corners_matches_builder);
+	tcase_add_test(weld, weld_read_stops_at_unread_facet);
 	suite_add_tcase(s, weld);
 	tcase_add_test(topo, cube_is_printable);
 	tcase_add_test(topo, sphere_genus_0);
