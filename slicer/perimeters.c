@@ -612,23 +612,16 @@ static void drop_fine_reflex(struct clip_paths *ps, double tol)
  * so every point is exactly d from R's boundary), cut where two of its
  * sides come closer than its bead spacing sp (an opening by sp/2 whose
  * dilation uses miter joins, so sharp convex corners stay sharp, then
- * intersected with the erosion so no point moves outward).  core gets the
- * opening's first step, the erosion by d + sp/2: what lies beyond the
- * wall's inner spacing edge.  It equals the centre region shrunk by sp/2,
- * for the opening lies between the two and eroding an opening by its own
- * radius gives the erosion, so the strips reuse it instead of one more
- * offset.
+ * intersected with the erosion so no point moves outward).
  */
 static int wall_centre(struct ctx *c, const struct clip_paths *R, double d, double sp,
-		       struct clip_paths *out, struct clip_paths *core)
+		       struct clip_paths *out)
 {
 	struct clip_paths e = {0}, t = {0};
 	int rc = clip_offset(R, -d, CLIP_JOIN_ROUND, 0.0, c->arc, &e, c->err);
 
 	if (!rc)
-		rc = clip_offset(&e, -sp / 2.0, CLIP_JOIN_ROUND, 0.0, c->arc, core, c->err);
-	if (!rc)
-		rc = clip_paths_append(&t, core, c->err);
+		rc = clip_offset(&e, -sp / 2.0, CLIP_JOIN_ROUND, 0.0, c->arc, &t, c->err);
 	if (!rc) {
 		drop_fine_reflex(&t, c->arc);
 		rc = clip_offset(&t, sp / 2.0, CLIP_JOIN_MITER, PERIM_MITER_LIMIT, c->arc, &t,
@@ -732,25 +725,22 @@ static double wall_depth(const struct ctx *c, int k)
 static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *acc)
 {
 	int N = c->s->perimeters, made = 0, rc = 0;
-	struct clip_paths *loops, *cores, *narrow, m = {0};
+	struct clip_paths *loops, *narrow, m = {0};
 	struct clip_expolys *strips, area = {0};
 
 	if (N == 0)
 		return clip_paths_append(acc, R, c->err);
 	loops = calloc((size_t)N, sizeof(*loops));
-	cores = calloc((size_t)N, sizeof(*cores));
 	strips = calloc((size_t)N, sizeof(*strips));
 	narrow = calloc((size_t)N, sizeof(*narrow));
-	if (!loops || !cores || !strips || !narrow) {
+	if (!loops || !strips || !narrow) {
 		free(loops);
-		free(cores);
 		free(strips);
 		free(narrow);
 		return st_error_set(c->err, ST_ERR_NOMEM, "perimeters: out of memory");
 	}
 	for (; made < N && !rc; made++) {
-		rc = wall_centre(c, R, wall_depth(c, made), wall_spacing(c, made), &loops[made],
-				 &cores[made]);
+		rc = wall_centre(c, R, wall_depth(c, made), wall_spacing(c, made), &loops[made]);
 		if (!rc && !loops[made].n)
 			break;
 	}
@@ -759,8 +749,8 @@ static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *
 	 * it.  After wall N the rest is infill, whose narrow pieces wall N's beads
 	 * may take up (strips[N - 1], never gap filled here). */
 	for (int k = 0; k < made && !rc; k++) {
-		clip_paths_clear(&m);
-		rc = clip_paths_append(&m, &cores[k], c->err);
+		rc = clip_offset(&loops[k], -wall_spacing(c, k) / 2.0, CLIP_JOIN_ROUND, 0.0, c->arc,
+				 &m, c->err);
 		if (!rc && k == N - 1)
 			rc = narrow_infill(c, &m, wall_spacing(c, k), &strips[k]);
 		else if (!rc && k + 1 < made)
@@ -800,12 +790,10 @@ static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *
 	}
 	for (int k = 0; k < N; k++) {
 		clip_paths_free(&loops[k]);
-		clip_paths_free(&cores[k]);
 		clip_expolys_free(&strips[k]);
 		clip_paths_free(&narrow[k]);
 	}
 	free(loops);
-	free(cores);
 	free(strips);
 	free(narrow);
 	clip_paths_free(&m);
