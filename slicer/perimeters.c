@@ -566,48 +566,6 @@ static int narrow_paths(struct ctx *c, const struct clip_expolys *area, double m
 }
 
 /*
- * In place, drop reflex vertices (right turns: the inside is on the left of
- * every contour Clipper returns) lying within tol of the line through
- * their neighbours, never two in a row, so each dropped one is measured
- * against the neighbours it really had.  The region only grows, by at most
- * tol and only in its concave parts.  A miter dilation turns each reflex
- * vertex into a spike its union must untangle; the round erosion's fine
- * concave arcs are most of the cost of wall_centre's opening.
- */
-static void drop_fine_reflex(struct clip_paths *ps, double tol)
-{
-	size_t w = 0;
-
-	for (size_t i = 0; i < ps->n; i++) {
-		size_t n = clip_path_len(ps, i), from = ps->start[i];
-		const int64_t *xy = ps->xy + 2 * from;
-		bool dropped = false;
-		ps->start[i] = w;
-		for (size_t k = 0; k < n; k++) {
-			const int64_t *b = xy + 2 * k;
-			/* The first and last vertices stay: no wrap-around to track. */
-			if (n >= 6 && !dropped && k > 0 && k + 1 < n) {
-				const int64_t *a = ps->xy + 2 * (w - 1), *c = b + 2;
-				double ux = (double)(b[0] - a[0]), uy = (double)(b[1] - a[1]);
-				double vx = (double)(c[0] - a[0]), vy = (double)(c[1] - a[1]);
-				double cross = vx * uy - vy * ux, len = hypot(vx, vy);
-				if (cross < 0.0 && len > 0.0 && -cross / len > PERIM_HAIRLINE &&
-				    -cross / len <= tol) {
-					dropped = true;
-					continue;
-				}
-			}
-			dropped = false;
-			ps->xy[2 * w] = b[0];
-			ps->xy[2 * w + 1] = b[1];
-			w++;
-		}
-	}
-	if (ps->n)
-		ps->start[ps->n] = w;
-}
-
-/*
  * Centre region of wall k of region R: the erosion of R by d (round joins,
  * so every point is exactly d from R's boundary), cut where two of its
  * sides come closer than its bead spacing sp (an opening by sp/2 whose
@@ -622,11 +580,9 @@ static int wall_centre(struct ctx *c, const struct clip_paths *R, double d, doub
 
 	if (!rc)
 		rc = clip_offset(&e, -sp / 2.0, CLIP_JOIN_ROUND, 0.0, c->arc, &t, c->err);
-	if (!rc) {
-		drop_fine_reflex(&t, c->arc);
+	if (!rc)
 		rc = clip_offset(&t, sp / 2.0, CLIP_JOIN_MITER, PERIM_MITER_LIMIT, c->arc, &t,
 				 c->err);
-	}
 	if (!rc)
 		rc = clip_boolean(CLIP_INTERSECTION, &e, &t, CLIP_NONZERO, out, c->err);
 	/* Where the two boundaries cross, Clipper leaves vertices nm apart. */
