@@ -241,8 +241,12 @@ static int bridge_direction(struct ctx *c, const struct clip_paths *P,
 static int too_narrow(struct ctx *c, const struct clip_paths *P, double sp, bool *narrow)
 {
 	struct clip_paths core = {0};
-	int rc = clip_offset(P, -sp / 2.0, CLIP_JOIN_ROUND, 0.0, INFILL_ARC_NM, &core, c->err);
+	int rc = 0;
 
+	*narrow = false;
+	if (clip_erosion_kept(P, sp / 2.0)) /* wide enough by its area alone */
+		return 0;
+	rc = clip_offset(P, -sp / 2.0, CLIP_JOIN_ROUND, 0.0, INFILL_ARC_NM, &core, c->err);
 	*narrow = !rc && core.n == 0;
 	clip_paths_free(&core);
 	return rc;

@@ -444,6 +444,8 @@ static int narrow_infill(struct ctx *c, const struct clip_paths *m, double sp,
 			     (double)xy[2 * ((k + 1) % n)] * (double)xy[2 * k + 1];
 		outers += a > 0.0;
 	}
+	if (outers < 2 && clip_erosion_kept(m, sp / 2.0))
+		return 0; /* wide enough by its area alone: nothing narrow */
 	if (outers < 2) {
 		rc = clip_offset(m, -sp / 2.0, CLIP_JOIN_ROUND, 0.0,
 				 fmax(c->arc, sp / PERIM_CORE_ARC_SHARE), &core, c->err);
@@ -455,6 +457,8 @@ static int narrow_infill(struct ctx *c, const struct clip_paths *m, double sp,
 	rc = clip_boolean_ex(CLIP_UNION, m, NULL, CLIP_NONZERO, &all, c->err);
 	for (size_t i = 0; i < all.n && !rc; i++) {
 		rc = clip_expolys_get(&all, i, &piece, c->err);
+		if (!rc && clip_erosion_kept(&piece, sp / 2.0))
+			continue;
 		if (!rc)
 			rc = clip_offset(&piece, -sp / 2.0, CLIP_JOIN_ROUND, 0.0,
 					 fmax(c->arc, sp / PERIM_CORE_ARC_SHARE), &core, c->err);

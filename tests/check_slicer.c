@@ -771,5 +771,6 @@ Suite *slicer_suite(void)
 	suite_add_tcase(s, tc);
 	slicer_modes_tcases(s);
 	slicer_travel_tcases(s);
+	slicer_clip_tcases(s);
 	return s;
 }

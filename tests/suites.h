@@ -32,6 +32,7 @@ Suite *printer_suite(void);	/* tests/check_printer.c: printer.h adapters on both
 Suite *slicer_suite(void);	/* tests/check_slicer.c: slicing, Clipper bridge, walls */
 void slicer_modes_tcases(Suite *s); /* tests/check_modes.c: spiral vase, part of slicer */
 void slicer_travel_tcases(Suite *s); /* tests/check_travel.c: travel and retraction, part of slicer */
+void slicer_clip_tcases(Suite *s); /* tests/check_clip_kept.c: clip_erosion_kept, part of slicer */
 Suite *gcodewriter_suite(void); /* tests/check_gcodewriter.c: G-code writer and estimator */
 void gcodewriter_simplify_tcases(Suite *s); /* tests/check_simplify.c: gcode_resolution, part of gcodewriter */
 /* tests/check_simplify.c, shared with check_arcfit.c: a stack of round walls, waves and a thin

@@ -225,6 +225,17 @@ int clip_area(const int64_t *xy, size_t npts, double *area, struct st_error *err
 int clip_paths_area(const struct clip_paths *ps, double *area, struct st_error *err);
 
 /*
+ * clip_erosion_kept - true when the region ps (as the operations return it:
+ * outer contours CCW, holes CW, none overlapping) surely keeps some area
+ * when shrunk by r nm, so the caller may skip an offset done only to see
+ * whether anything is left.  The points within r of the boundary lie in a
+ * strip of width r along each edge plus a sector of radius r at each
+ * reflex vertex; when the area exceeds that bound some point is farther
+ * than r from every edge.  false means "not known", never "empty".
+ */
+bool clip_erosion_kept(const struct clip_paths *ps, double r);
+
+/*
  * clip_point_in_polygon - where (x, y) lies against one closed path: *where
  * is 1 inside, 0 outside, -1 on the boundary.
  */
