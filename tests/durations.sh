@@ -1,0 +1,24 @@
+#!/bin/sh
+# durations.sh [N] XML... - where the time of a Check run went, from the XML
+# logs Check writes when CK_XML_LOG_FILE_NAME is set (tests/lanes.sh sets it
+# per lane): each suite's total, longest first, then the N (default 15)
+# longest tests.  Used to balance the lanes of make test and make test-asan.
+set -u
+n=15
+case ${1:-} in [0-9]*) n=$1; shift ;; esac
+awk '
+/<title>/   { gsub(/.*<title>|<\/title>.*/, ""); suite = $0 }
+/<id>/      { gsub(/.*<id>|<\/id>.*/, ""); id = $0 }
+/<duration>/ && suite != "" && id != "" {
+	gsub(/.*<duration>|<\/duration>.*/, "")
+	total[suite] += $0; count[suite]++
+	printf "test %10.2f %s:%s\n", $0, suite, id
+	id = ""
+}
+END { for (s in total) printf "suite %9.2f %4d %s\n", total[s], count[s], s }
+' "$@" >"${TMPDIR:-/tmp}/durations.$$"
+echo "suites (s, tests, name):"
+grep '^suite' "${TMPDIR:-/tmp}/durations.$$" | sort -k2,2 -rn | cut -c7-
+echo "the $n longest tests (s, suite:test):"
+grep '^test' "${TMPDIR:-/tmp}/durations.$$" | sort -k2,2 -rn | head -n "$n" | cut -c6-
+rm -f "${TMPDIR:-/tmp}/durations.$$"
