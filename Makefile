@@ -209,9 +209,12 @@ check-build: check-build-asan layers $(BUILD)/check_all $(BUILD)/stratum $(BUILD
 check-build-asan:
 	+@$(ASAN_MAKE) build/asan/check_all build/asan/stratum
 
-# Same suites under AddressSanitizer + UndefinedBehaviorSanitizer.
+# Same suites under AddressSanitizer + UndefinedBehaviorSanitizer.  -g1
+# (line tables, all a sanitizer's backtrace reads) as for the C++ bridges:
+# full debug info cost the C files a fifth more compile time (8 files:
+# 7.7 s of CPU with -g against 6.1 s).
 SAN := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
-ASAN_MAKE = $(MAKE) BUILD=build/asan CFLAGS="-O1 -g $(SAN)" \
+ASAN_MAKE = $(MAKE) BUILD=build/asan CFLAGS="-O1 -g1 $(SAN)" \
 	CXXFLAGS="-O1 -g1 -Wno-maybe-uninitialized $(SAN)" LDEXTRA="$(SAN)"
 test-asan:
 	@$(ASAN_MAKE) build/asan/check_all build/asan/stratum
