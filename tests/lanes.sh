@@ -75,11 +75,15 @@ for s in $queue; do
 	logs="$logs $dir/$s.log"
 	[ "$(cat "$dir/$s.rc" 2>/dev/null)" = 0 ] || status=1
 done
+missing=""
+for s in $queue; do
+	grep -aq '^[0-9]*%: Checks: ' "$dir/$s.log" || missing="$missing $s (exit $(cat "$dir/$s.rc"))"
+done
 cat "$dir"/lane[0-9]*
 echo "lanes: $nlanes lanes, $(($(date +%s) - t0)) s wall, $cpu s CPU (user + system)"
 # shellcheck disable=SC2086 # the logs' paths have no spaces (build folders)
-awk -v want="$n" '/^[0-9]+%: Checks: / { gsub(",", ""); c += $3; f += $5; e += $7; k++ }
-     END { if (k != want) { printf "lanes: %d of %d suites ended without their summary line\n", want - k, want; exit 1 }
+awk -v want="$n" -v missing="$missing" '/^[0-9]+%: Checks: / { gsub(",", ""); c += $3; f += $5; e += $7; k++ }
+     END { if (k != want) { printf "lanes: ended without their summary line:%s\n", missing; exit 1 }
 	   printf "%d%%: Checks: %d, Failures: %d, Errors: %d\n", c ? (c - f - e) * 100 / c : 0, c, f, e }' \
 	$logs || exit 1
 # shellcheck disable=SC2086
