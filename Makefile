@@ -173,12 +173,13 @@ check:
 # at 273f3a8).  The order lists the suites that took longest; the others
 # follow.  Plain (make test) the waits on simulated printers dominate (send
 # 92 s, print 82 s, marlin 59 s, s3g 39 s, serve 39 s, printer 29 s at
-# 642d2b2); under ASan the repair, slicing and measuring suites cost
-# several times more.  tests/durations.sh BUILD/lanes/*.xml lists the
+# 642d2b2), then install (make install, make deb) and help (every man
+# page through groff); under ASan the repair, slicing and measuring suites
+# cost several times more.  tests/durations.sh BUILD/lanes/*.xml lists the
 # suites by time.
-CHECK_ORDER := send print marlin corpus s3g serve repair slicecli printer
-CHECK_ORDER_ASAN := repair corpus marlin send s3g slicecli print serve meshio octoapi farm \
-	printer refine compare infill thicken region slicer
+CHECK_ORDER := send print marlin corpus s3g install serve repair help slicecli printer cli octoapi
+CHECK_ORDER_ASAN := repair corpus marlin send s3g slicecli print install help serve meshio octoapi \
+	cli farm printer refine compare infill progress thicken region slicer
 test: layers $(BUILD)/check_all $(BUILD)/stratum
 	@tests/lanes.sh ./$(BUILD)/check_all $(BUILD)/stratum "$(CHECK_ORDER)"
 
