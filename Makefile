@@ -102,10 +102,13 @@ MAIN_SRC := host/main.c
 LIB_SRC  := $(filter-out $(MAIN_SRC),$(C_SRC))
 TEST_SRC := $(sort $(wildcard tests/*.c))
 
-LIB_OBJ  := $(LIB_SRC:%.c=$(BUILD)/%.o) $(CXX_SRC:%.cpp=$(BUILD)/%.o)
+# The C++ bridges first: each compiles for minutes (CGAL's templates), so a
+# parallel build starts them early rather than ending on them alone.
+LIB_OBJ  := $(CXX_SRC:%.cpp=$(BUILD)/%.o) $(LIB_SRC:%.c=$(BUILD)/%.o)
 TEST_OBJ := $(TEST_SRC:%.c=$(BUILD)/%.o)
 
-.PHONY: all deps demo check test test-sample test-asan bench fuzz clean layers install uninstall deb
+.PHONY: all deps demo check test test-sample test-asan bench fuzz clean layers install uninstall deb \
+	check-build check-build-asan
 
 all: $(BUILD)/stratum $(BUILD)/man/stamp $(BUILD)/completion/stratum.bash \
 	$(BUILD)/completion/_stratum
@@ -125,8 +128,9 @@ $(BUILD)/libstratum.a: $(LIB_OBJ)
 $(BUILD)/stratum: $(BUILD)/$(MAIN_SRC:.c=.o) $(BUILD)/libstratum.a
 	$(CXX) -pthread $(LDEXTRA) -o $@ $^ $(LDLIBS)
 
-$(BUILD)/check_all: $(TEST_OBJ) $(BUILD)/libstratum.a
-	$(CXX) -pthread $(LDEXTRA) -o $@ $^ $(TEST_LDLIBS)
+# the library listed first so that its C++ bridges start first (LIB_OBJ)
+$(BUILD)/check_all: $(BUILD)/libstratum.a $(TEST_OBJ)
+	$(CXX) -pthread $(LDEXTRA) -o $@ $(TEST_OBJ) $(BUILD)/libstratum.a $(TEST_LDLIBS)
 
 deps:
 	@missing=""; for p in $(DEB_PACKAGES) $(EXTRA_PACKAGES); do \
@@ -156,23 +160,28 @@ demo: deps
 # (send's whole Sailfish parts, plain only, stream in `make demo` too.)
 check:
 	@$(MAKE) deps EXTRA_PACKAGES="$(TEST_PACKAGES)"
+	@$(MAKE) check-build
 	@$(MAKE) test-sample
 	@rm -rf build/fuzz/check-corpus
 	@$(MAKE) fuzz FUZZ_SECONDS=4 FUZZ_CORPUS=build/fuzz/check-corpus
 	@$(MAKE) test-asan
 
-# The suites run in two lanes at once (tests/lanes.sh): CHECK_LANE, the
-# suites that wait longest on simulated printers, and every other suite.
-# Plain (make test) the waits dominate (send 92 s, print 82 s, marlin 59 s,
-# s3g 39 s, serve 39 s, printer 29 s, the rest under 15 s each).  Under ASan
-# the slicing, repair and measuring suites cost several times more, so the
-# first lane also takes serve, printer, print, octoapi, slicecli (63 s) and
-# compare (21 s): 607 s against 593 s at 642d2b2 (before: 488 s against
-# 692 s).
-CHECK_LANE := send marlin s3g corpus
-CHECK_LANE_ASAN := $(CHECK_LANE) serve printer print octoapi slicecli compare
+# The suites run in $CHECK_LANES (environment; default 2) lanes at once
+# (tests/lanes.sh): each lane takes the next suite when it ends one, the
+# longest first, so the lanes end together without lists kept in balance
+# by hand (two fixed lists ended 586 s against 530 s on an idle machine
+# at 273f3a8).  The order lists the suites that took longest; the others
+# follow.  Plain (make test) the waits on simulated printers dominate (send
+# 92 s, print 82 s, marlin 59 s, s3g 39 s, serve 39 s, printer 29 s at
+# 642d2b2), then install (make install, make deb) and help (every man
+# page through groff); under ASan the repair, slicing and measuring suites
+# cost several times more.  tests/durations.sh BUILD/lanes/*.xml lists the
+# suites by time.
+CHECK_ORDER := send print marlin corpus s3g install serve repair help slicecli printer cli octoapi
+CHECK_ORDER_ASAN := repair corpus marlin send s3g slicecli print install help serve meshio octoapi \
+	cli farm printer refine compare infill progress thicken region slicer
 test: layers $(BUILD)/check_all $(BUILD)/stratum
-	@tests/lanes.sh ./$(BUILD)/check_all $(BUILD)/stratum "$(CHECK_LANE)"
+	@tests/lanes.sh ./$(BUILD)/check_all $(BUILD)/stratum "$(CHECK_ORDER)"
 
 # make check's plain pass: the corpus suite, on both cores (its repairs
 # run in parallel batches).
@@ -192,13 +201,26 @@ layers:
 	    echo "layers: probe $$hdr is not a header of the tree"; exit 1; fi; \
 	done; echo "layers: repair/, serial/ and slicer/ see no layer above them"
 
-# Same suites under AddressSanitizer + UndefinedBehaviorSanitizer.
+# make check's three builds (ASan, plain, fuzz) share one pool of jobs, so
+# none ends on its last long compile or link alone while the next waits
+# (one after the other, they left a core idle for minutes).  The ASan build
+# starts first: it is the longest.
+check-build: check-build-asan layers $(BUILD)/check_all $(BUILD)/stratum $(BUILD)/bench/gen_mesh \
+	$(FUZZ_BINS)
+check-build-asan:
+	+@$(ASAN_MAKE) build/asan/check_all build/asan/stratum
+
+# Same suites under AddressSanitizer + UndefinedBehaviorSanitizer.  -g1
+# (line tables, all a sanitizer's backtrace reads) as for the C++ bridges:
+# full debug info cost the C files a fifth more compile time (8 files:
+# 7.7 s of CPU with -g against 6.1 s).
 SAN := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
+ASAN_MAKE = $(MAKE) BUILD=build/asan CFLAGS="-O1 -g1 $(SAN)" \
+	CXXFLAGS="-O1 -g1 -Wno-maybe-uninitialized $(SAN)" LDEXTRA="$(SAN)"
 test-asan:
-	@$(MAKE) BUILD=build/asan CFLAGS="-O1 -g $(SAN)" CXXFLAGS="-O1 -g1 -Wno-maybe-uninitialized $(SAN)" \
-	  LDEXTRA="$(SAN)" build/asan/check_all build/asan/stratum
+	@$(ASAN_MAKE) build/asan/check_all build/asan/stratum
 	ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
-	  tests/lanes.sh ./build/asan/check_all build/asan/stratum "$(CHECK_LANE_ASAN)"
+	  tests/lanes.sh ./build/asan/check_all build/asan/stratum "$(CHECK_ORDER_ASAN)"
 
 $(BUILD)/bench/gen_mesh.o: CPPFLAGS += -Itests
 

@@ -1,9 +1,10 @@
 /*
  * check_main.c - run every module's suite; fork mode stays on so a crash
- * fails only its own test.  For make check's two lanes (see the Makefile):
+ * fails only its own test.  For make check's lanes (see the Makefile):
  * STRATUM_CHECK_ONLY="name ..." runs only those suites, STRATUM_CHECK_EXCEPT
- * every other one, so the two lanes cover every suite by construction; a
- * name that is no suite is an error.
+ * every other one; a name that is no suite is an error.  STRATUM_CHECK_LIST
+ * set prints the suites' names, one a line, and runs none: tests/lanes.sh
+ * runs each of them once, so its lanes cover every suite by construction.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -84,12 +85,18 @@ static int all_known(const char *var, const char *list)
 int main(void)
 {
 	const char *only = getenv("STRATUM_CHECK_ONLY"), *except = getenv("STRATUM_CHECK_EXCEPT");
-	SRunner *sr = srunner_create(NULL);
+	SRunner *sr;
 	int failed;
 
+	if (getenv("STRATUM_CHECK_LIST")) {
+		for (size_t i = 0; i < NSUITES; i++)
+			printf("%s\n", suites[i].name);
+		return EXIT_SUCCESS;
+	}
 	if ((only && !all_known("STRATUM_CHECK_ONLY", only)) ||
 	    (except && !all_known("STRATUM_CHECK_EXCEPT", except)))
 		return EXIT_FAILURE;
+	sr = srunner_create(NULL);
 	tu_scratch_init();
 	for (size_t i = 0; i < NSUITES; i++)
 		if ((!only || listed(only, suites[i].name)) &&
