@@ -9,7 +9,8 @@
 #   smoothed refinement of it), both scaled by the same factor 100 so they
 #   still fit each other: the surface distance and the coarse facets'
 #   chordal error, the facets over 0.3 mm isolated.
-# - `stratum refine`: the cylinder and the elephants, below.
+# - `stratum refine`: the cylinder, the elephants, a torus and the bunny
+#   decimated, below.
 # Works in bench/out/accuracy, writes its *.png there and prints each command's report with its
 # wall time, CPU time and peak RSS from GNU time.
 set -eu
@@ -33,7 +34,8 @@ scale_off() {
 timed() {
 	label=$1; shift
 	/usr/bin/time -f '%e %U %M' -o time.txt "$@"
-	read -r wall cpu kib < time.txt
+	tail -n 1 time.txt > time.last # after "Command exited with non-zero status"
+	read -r wall cpu kib < time.last
 	echo "($label: ${wall} s wall, ${cpu} s CPU, $((kib / 1024)) MiB peak)" >&2
 }
 
@@ -74,3 +76,27 @@ timed "refine, elephant" "$bin" refine elephant.off --reference refined-elephant
 cat elephant-refined.txt
 "$bin" check elephant-refined.stl | tail -1
 "$bin" compare elephant-refined.stl refined-elephant.off | sed -n 4p
+
+# A surface curved both ways: a torus of 12 x 6 quads against one of
+# 192 x 96 at 0.05 mm, with --uniform.  And a decimated scan: the bunny
+# after `repair --simplify-planar` (its vertices on the scan) against the
+# scan, at 0.3 mm (reached) and 0.1 mm (not reached: exit 1, the report
+# says how far it got), with compare --reference's own count.
+"$gen" torus 12 6 torus12.stl >/dev/null
+"$gen" torus 192 96 torus192.stl >/dev/null
+timed "refine, torus" "$bin" refine torus12.stl --reference torus192.stl --tolerance 0.05 \
+	-o torus-refined.stl --uniform > torus-refined.txt
+cat torus-refined.txt
+"$bin" compare torus-refined.stl torus192.stl | sed -n 4p
+"$bin" repair bunny.stl --simplify-planar --angle 30 --flatness 0.5 -o bunny-coarse.stl \
+	>/dev/null
+for tol in 0.3 0.1; do
+	rm -f "bunny-refined-$tol.stl"
+	timed "refine, bunny at $tol mm" "$bin" refine bunny-coarse.stl --reference bunny.stl \
+		--tolerance "$tol" -o "bunny-refined-$tol.stl" > "bunny-refined-$tol.txt" 2>&1 ||
+		true
+	cat "bunny-refined-$tol.txt"
+	[ ! -f "bunny-refined-$tol.stl" ] ||
+		"$bin" compare "bunny-refined-$tol.stl" --reference bunny.stl --tolerance "$tol" |
+		sed -n 2,3p
+done

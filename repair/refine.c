@@ -27,7 +27,13 @@
 #include "vec3.h"
 
 #define ROUNDS_MAX 64	   /* a hard stop; the cylinder takes a handful */
-#define STALL_ROUNDS 4	   /* rounds without a smaller largest error: no progress */
+#define STALL_ROUNDS 4	   /* rounds without progress (below): give up */
+#define AREA_PROGRESS 0.9  /* progress: the area over the tolerance down to this share */
+/* A new triangle may turn up to 120 degrees from the facet it was cut from:
+ * on a scan a small facet follows a bump's steep side, and what a fold would
+ * really break, a crossing, the exact test finds; beyond, it is refused as
+ * turned over. */
+#define TURN_COS (-0.5)
 /* A facet's error comes from an edge when that edge's midpoint moves by a
  * quarter of it; edges within this share of the largest move tie, and the
  * shortest of them is split (on a cylinder's side the rim before the
@@ -113,7 +119,8 @@ static int require_printable(const struct mesh *m, int threads, struct st_error 
 
 /* Every facet's chordal error, the larger of facet to ref and ref to facet. */
 static int measure(const struct mesh *m, const struct mesh *ref, const struct refine_options *o,
-		   float **facet, double *max, size_t *over, struct st_error *err)
+		   float **facet, double *max, size_t *over, double *over_area,
+		   struct st_error *err)
 {
 	struct chordal_report c;
 	int rc = chordal_measure_near(m, ref, o->samples, o->tolerance, &c, err);
@@ -128,9 +135,14 @@ static int measure(const struct mesh *m, const struct mesh *ref, const struct re
 		return rc;
 	*max = 0;
 	*over = 0;
+	*over_area = 0;
 	for (size_t t = 0; t < m->ntris; t++) {
+		const uint32_t *tri = m->tris[t];
 		*max = fmax(*max, (*facet)[t]);
 		*over += (*facet)[t] > o->tolerance;
+		if ((*facet)[t] > o->tolerance)
+			*over_area += vec3_tri_area(m->verts[tri[0]], m->verts[tri[1]],
+						    m->verts[tri[2]]);
 	}
 	return 0;
 }
@@ -144,16 +156,42 @@ struct round {
 	double (*pos)[3];     /* per candidate */
 	uint8_t *kind;
 	uint32_t *newv;	      /* per edge: its new vertex, or REFINE_NONE */
-	double (*home)[3];    /* per vertex moved: where it goes back to */
-	uint8_t *moved;	      /* per vertex moved: away from home */
-	size_t first_new;     /* index of the first vertex that may move */
+	/* per vertex of the mesh: */
+	double (*home)[3];    /* where a refused move puts it back */
+	double (*want)[3];    /* where it is moving to (on the reference) */
+	uint8_t *step;	      /* 0 at home; 1 at want, 2, 3 that share of the way */
+	size_t first_new;     /* index of the first vertex added this round */
+};
+
+/* Vertices whose move was refused or cut short in an earlier round, tried
+ * again each round: their neighbours have been split since, and a move that
+ * flipped a thin triangle may pass beside smaller ones. */
+struct pending {
+	double (*want)[3]; /* per vertex: its place on the reference */
+	uint8_t *short_of; /* per vertex: not there yet */
+	size_t n, cap_want, cap_short;
 };
 
 static void round_free(struct round *r)
 {
 	refine_edges_free(&r->e);
 	free(r->cand), free(r->slot), free(r->pos), free(r->kind), free(r->newv);
-	free(r->home), free(r->moved);
+	free(r->home), free(r->want), free(r->step);
+}
+
+/* home, want and step for nv vertices, each at home. */
+static int moves_alloc(struct round *r, struct mesh *m, size_t nv, struct st_error *err)
+{
+	r->home = malloc((nv ? nv : 1) * sizeof(*r->home));
+	r->want = malloc((nv ? nv : 1) * sizeof(*r->want));
+	r->step = calloc(nv ? nv : 1, 1);
+	if (!r->home || !r->want || !r->step)
+		return st_error_set(err, ST_ERR_NOMEM, "refine: out of memory");
+	for (size_t v = 0; v < m->nverts && v < nv; v++) {
+		memcpy(r->home[v], m->verts[v], sizeof(r->home[v]));
+		memcpy(r->want[v], m->verts[v], sizeof(r->want[v]));
+	}
+	return 0;
 }
 
 /* The candidate edges: all (uniform), or those of the facets over. */
@@ -202,7 +240,13 @@ static uint32_t edge_to_split(const struct mesh *m, const struct round *r, uint3
 		len[k] = vec3_dist(m->verts[r->e.ends[ed][0]], m->verts[r->e.ends[ed][1]]);
 		maxdev = fmax(maxdev, dev[k]);
 	}
-	bool carried = maxdev >= EDGE_SHARE * error;
+	/* an edge that stays near the surface runs along a straight line of it
+	 * (a cylinder's height): the surface curves one way here, and splitting
+	 * across that way is enough; where every edge strays, it curves both
+	 * ways (a torus, a scan) and long slivers would flip when their new
+	 * vertices move: longest-edge bisection keeps the shapes */
+	double mindev = fmin(dev[0], fmin(dev[1], dev[2]));
+	bool carried = maxdev >= EDGE_SHARE * error && mindev < EDGE_SHARE * maxdev;
 	for (int k = 0; k < 3; k++) {
 		bool better = best < 0 || (carried ? len[k] < best : len[k] > best);
 		if ((!carried || dev[k] >= TIE_SHARE * maxdev) && better) {
@@ -217,18 +261,19 @@ static uint32_t edge_to_split(const struct mesh *m, const struct round *r, uint3
 static int add_vertices(struct mesh *m, struct round *r, size_t nmarked, struct st_error *err)
 {
 	double (*v)[3] = st_grow(m->verts, &m->cap_verts, m->nverts + nmarked, sizeof(*v));
+	int rc;
 
-	r->home = malloc((nmarked ? nmarked : 1) * sizeof(*r->home));
-	r->moved = malloc(nmarked ? nmarked : 1);
-	if (!v || !r->home || !r->moved)
+	if (!v)
 		return st_error_set(err, ST_ERR_NOMEM, "refine: out of memory");
 	m->verts = v;
+	if ((rc = moves_alloc(r, m, m->nverts + nmarked, err)))
+		return rc;
 	r->first_new = m->nverts;
 	for (size_t ed = 0; ed < r->e.n; ed++) {
 		if (r->newv[ed] != 0)
 			continue;
 		const double *p = r->pos[r->slot[ed]];
-		size_t j = m->nverts - r->first_new;
+		size_t j = m->nverts;
 		double mid[3];
 		refine_midpoint(m, &r->e, ed, mid);
 		if (!to_float(p[0], &v[m->nverts][0]) || !to_float(p[1], &v[m->nverts][1]) ||
@@ -237,20 +282,24 @@ static int add_vertices(struct mesh *m, struct round *r, size_t nmarked, struct 
 					    "a new vertex lies beyond float32's range");
 		for (int k = 0; k < 3; k++)
 			r->home[j][k] = (float)mid[k];
-		r->moved[j] = r->kind[r->slot[ed]] != PLACE_ON_EDGE;
+		memcpy(r->want[j], v[j], sizeof(r->want[j]));
+		r->step[j] = r->kind[r->slot[ed]] != PLACE_ON_EDGE;
 		r->newv[ed] = (uint32_t)m->nverts++;
 	}
 	return 0;
 }
 
-/* Vertex w back home: a new one to its edge's midpoint (rounded as
- * stored), an input one to where it was. */
-static void put_back(struct mesh *m, struct round *r, uint32_t w)
-{
-	size_t j = w - r->first_new;
+/* The steps of a refused move: all the way, half, a quarter, then home (a
+ * new vertex's edge midpoint, rounded as stored; an old one's place). */
+#define STEP_LAST 3
 
-	memcpy(m->verts[w], r->home[j], sizeof(r->home[j]));
-	r->moved[j] = 0;
+/* Vertex w a step back towards home. */
+static void step_back(struct mesh *m, struct round *r, uint32_t w)
+{
+	r->step[w] = r->step[w] >= STEP_LAST ? 0 : r->step[w] + 1;
+	double f = r->step[w] ? ldexp(1, 1 - r->step[w]) : 0;
+	for (int k = 0; k < 3; k++)
+		m->verts[w][k] = (float)(r->home[w][k] + f * (r->want[w][k] - r->home[w][k]));
 }
 
 /* Facet (a, b, c) with new vertices ab, bc, ca (REFINE_NONE: edge whole)
@@ -314,8 +363,7 @@ static int cmp_placed(const void *x, const void *y)
 
 /* Moved new vertices that landed on another vertex go back to their edge;
  * a vertex on its edge that does so is an error. */
-static int separate_equal(struct mesh *m, struct round *r, size_t *refused, bool *changed,
-			  struct st_error *err)
+static int separate_equal(struct mesh *m, struct round *r, bool *changed, struct st_error *err)
 {
 	struct placed *all = malloc((m->nverts ? m->nverts : 1) * sizeof(*all));
 
@@ -329,30 +377,28 @@ static int separate_equal(struct mesh *m, struct round *r, size_t *refused, bool
 	for (size_t i = 1; i < m->nverts; i++) {
 		if (cmp_placed(&all[i - 1], &all[i]))
 			continue;
-		uint32_t w = all[i].v > all[i - 1].v ? all[i].v : all[i - 1].v;
-		if (w < r->first_new || !r->moved[w - r->first_new]) {
+		uint32_t hi = all[i].v > all[i - 1].v ? all[i].v : all[i - 1].v;
+		uint32_t w = r->step[hi] ? hi : all[i].v ^ all[i - 1].v ^ hi;
+		if (!r->step[w]) {
 			free(all);
 			return st_error_set(err, ST_ERR_INTERNAL,
 					    "refine: a new vertex on its edge falls on another vertex");
 		}
-		put_back(m, r, w);
-		++*refused;
+		step_back(m, r, w);
 		*changed = true;
 	}
 	free(all);
 	return 0;
 }
 
-/* Puts back the moved new vertices of triangle t; false when it has none. */
-static bool put_back_corners(struct mesh *m, struct round *r, const uint32_t c[3],
-			     size_t *refused)
+/* Steps back the moving corners of triangle t; false when it has none. */
+static bool step_back_corners(struct mesh *m, struct round *r, const uint32_t c[3])
 {
 	bool any = false;
 
 	for (int k = 0; k < 3; k++)
-		if (c[k] >= r->first_new && r->moved[c[k] - r->first_new]) {
-			put_back(m, r, c[k]);
-			++*refused;
+		if (r->step[c[k]]) {
+			step_back(m, r, c[k]);
 			any = true;
 		}
 	return any;
@@ -360,20 +406,20 @@ static bool put_back_corners(struct mesh *m, struct round *r, const uint32_t c[3
 
 /*
  * The checks on the new triangles (fresh), until they pass: one that
- * collapses (collinear corners, exact), turns against the facet it was
- * cut from, or crosses another triangle (exact) gets its new vertices put
- * back on their edges, where they make a flat copy of the facet.
+ * collapses (collinear corners, exact), turns over against the facet it
+ * was cut from, or crosses another triangle (exact) gets its moving vertices
+ * stepped back towards home, the last step onto their edges, where they make
+ * a flat copy of the facet.
  */
 static int check_moves(struct mesh *m, struct round *r, const uint32_t *parent,
-		       const double (*pnormal)[3], const uint8_t *fresh, size_t *refused,
-		       struct st_error *err)
+		       const double (*pnormal)[3], const uint8_t *fresh, struct st_error *err)
 {
 	uint8_t *hit = malloc(m->ntris ? m->ntris : 1);
 	int rc = hit ? 0 : st_error_set(err, ST_ERR_NOMEM, "refine: out of memory");
 
 	for (bool changed = true; !rc && changed;) {
 		changed = false;
-		if ((rc = separate_equal(m, r, refused, &changed, err)))
+		if ((rc = separate_equal(m, r, &changed, err)))
 			break;
 		for (size_t t = 0; t < m->ntris && !rc; t++) {
 			const uint32_t *c = m->tris[t];
@@ -383,9 +429,9 @@ static int check_moves(struct mesh *m, struct round *r, const uint32_t *parent,
 			refine_unit_normal(m, (uint32_t)t, n);
 			if (!exact_collinear(m->verts[c[0]], m->verts[c[1]], m->verts[c[2]]) &&
 			    n[0] * pnormal[parent[t]][0] + n[1] * pnormal[parent[t]][1] +
-				    n[2] * pnormal[parent[t]][2] > 0)
+				    n[2] * pnormal[parent[t]][2] > TURN_COS)
 				continue;
-			if (!put_back_corners(m, r, c, refused))
+			if (!step_back_corners(m, r, c))
 				rc = st_error_set(err, ST_ERR_INTERNAL,
 						  "refine: a split facet collapses with its new "
 						  "vertices on their edges");
@@ -399,7 +445,7 @@ static int check_moves(struct mesh *m, struct round *r, const uint32_t *parent,
 		for (size_t t = 0; !rc && t < m->ntris; t++) {
 			crossed |= hit[t] != 0;
 			/* of two new triangles that cross, one may be flat already */
-			changed |= hit[t] && put_back_corners(m, r, m->tris[t], refused);
+			changed |= hit[t] && step_back_corners(m, r, m->tris[t]);
 		}
 		if (!rc && crossed && !changed)
 			rc = st_error_set(err, ST_ERR_INTERNAL,
@@ -443,14 +489,62 @@ static int cut_all(struct mesh *m, struct round *r, size_t ntris_new, uint32_t *
 	return 0;
 }
 
+/* The pending vertices (earlier rounds') move again, from where they are
+ * to their place, and their triangles are checked (fresh, against their
+ * normal before the move). */
+static void retry_pending(struct mesh *m, struct round *r, const struct pending *pd,
+			  uint8_t *fresh)
+{
+	for (size_t v = 0; v < r->first_new && v < pd->n; v++)
+		if (pd->short_of[v]) {
+			memcpy(r->want[v], pd->want[v], sizeof(r->want[v]));
+			memcpy(m->verts[v], pd->want[v], sizeof(m->verts[v]));
+			r->step[v] = 1;
+		}
+	for (size_t t = 0; t < m->ntris; t++)
+		for (int k = 0; k < 3; k++)
+			fresh[t] |= m->tris[t][k] < r->first_new && r->step[m->tris[t][k]];
+}
+
+/* After the checks: which vertices that were to move fell short (counted
+ * in *refused), to be tried again next round. */
+static int pending_update(struct pending *pd, const struct mesh *m, const struct round *r,
+			  size_t *refused, struct st_error *err)
+{
+	if (st_grow_at((void **)&pd->want, &pd->cap_want, m->nverts, sizeof(*pd->want)) ||
+	    st_grow_at((void **)&pd->short_of, &pd->cap_short, m->nverts, 1))
+		return st_error_set(err, ST_ERR_NOMEM, "refine: out of memory");
+	for (size_t v = 0; v < m->nverts; v++) {
+		bool to_move = memcmp(r->want[v], r->home[v], sizeof(r->want[v])) != 0;
+		bool is_short = to_move && r->step[v] != 1;
+		if (v >= pd->n || to_move)
+			memcpy(pd->want[v], r->want[v], sizeof(pd->want[v]));
+		pd->short_of[v] = is_short;
+		*refused += is_short;
+	}
+	pd->n = m->nverts;
+	return 0;
+}
+
+/* Whether a corner of the facet is short of its place: its error is that
+ * corner's to mend (by the retry); split, it would only give vertices that
+ * must move as far beside ever smaller triangles, and be refused in turn. */
+static bool has_short_corner(const struct pending *pd, const uint32_t c[3])
+{
+	for (int k = 0; k < 3; k++)
+		if (c[k] < pd->n && pd->short_of[c[k]])
+			return true;
+	return false;
+}
+
 /*
  * One round: split edges of the facets over the tolerance (all edges when
  * uniform), place and check the new vertices.  *stop when the round would
  * pass max_triangles (m unchanged).
  */
 static int split_round(struct mesh *m, const float *facet, const struct refine_options *o,
-		       const struct refine_target *tg, struct refine_report *rep, bool *stop,
-		       struct st_error *err)
+		       const struct refine_target *tg, struct pending *pd,
+		       struct refine_report *rep, bool *stop, struct st_error *err)
 {
 	struct round r = {0};
 	uint32_t *parent = NULL;
@@ -468,7 +562,7 @@ static int split_round(struct mesh *m, const float *facet, const struct refine_o
 		if (o->uniform)
 			for (int k = 0; k < 3; k++)
 				r.newv[r.e.of_tri[t][k]] = 0;
-		else if (facet[t] > o->tolerance)
+		else if (facet[t] > o->tolerance && !has_short_corner(pd, m->tris[t]))
 			r.newv[edge_to_split(m, &r, (uint32_t)t, facet[t])] = 0;
 	}
 	for (size_t ed = 0; !rc && ed < r.e.n; ed++)
@@ -482,13 +576,13 @@ static int split_round(struct mesh *m, const float *facet, const struct refine_o
 	if (!rc && !*stop)
 		rc = cut_all(m, &r, ntris_new, &parent, &fresh, &pnormal, err);
 	if (!rc && !*stop) {
-		size_t refused = 0;
-		rc = check_moves(m, &r, parent, (const double (*)[3])pnormal, fresh, &refused, err);
-		rep->refused += refused;
+		retry_pending(m, &r, pd, fresh);
+		rc = check_moves(m, &r, parent, (const double (*)[3])pnormal, fresh, err);
+		if (!rc)
+			rc = pending_update(pd, m, &r, &rep->refused, err);
 		rep->vertices_added += nmarked;
 		for (size_t ed = 0; !rc && ed < r.e.n; ed++)
-			rep->on_creases += r.newv[ed] != REFINE_NONE &&
-					   r.moved[r.newv[ed] - r.first_new] &&
+			rep->on_creases += r.newv[ed] != REFINE_NONE && r.step[r.newv[ed]] == 1 &&
 					   r.kind[r.slot[ed]] == PLACE_ON_CREASE;
 	}
 	free(parent);
@@ -499,23 +593,22 @@ static int split_round(struct mesh *m, const float *facet, const struct refine_o
 }
 
 /* move_vertices: m's own vertices onto their nearest point of the
- * reference, each move kept where the checks of a split pass too. */
+ * reference, each move kept where the checks of a split pass too (those
+ * that fall short are tried again in the rounds, as pending). */
 static int move_input_vertices(struct mesh *m, const struct refine_target *tg,
-			       struct refine_report *rep, struct st_error *err)
+			       struct pending *pd, struct refine_report *rep, struct st_error *err)
 {
 	struct round r = {0};
-	size_t nv = m->nverts ? m->nverts : 1, nt = m->ntris ? m->ntris : 1, refused = 0;
+	size_t nv = m->nverts ? m->nverts : 1, nt = m->ntris ? m->ntris : 1;
 	double (*near)[3] = malloc(nv * sizeof(*near)), (*pnormal)[3] = malloc(nt * sizeof(*pnormal));
 	uint32_t *parent = malloc(nt * sizeof(*parent));
 	uint8_t *fresh = calloc(nt, 1);
-	int rc;
+	int rc = moves_alloc(&r, m, m->nverts, err);
 
-	r.home = malloc(nv * sizeof(*r.home));
-	r.moved = malloc(nv);
-	if (!near || !pnormal || !parent || !fresh || !r.home || !r.moved) {
+	if (!rc && (!near || !pnormal || !parent || !fresh))
 		rc = st_error_set(err, ST_ERR_NOMEM, "refine: out of memory");
+	if (rc)
 		goto done;
-	}
 	if ((rc = surfdist_closest(tg->tree, (const double (*)[3])m->verts, m->nverts, near, NULL,
 				   err)))
 		goto done;
@@ -524,18 +617,19 @@ static int move_input_vertices(struct mesh *m, const struct refine_target *tg,
 		parent[t] = (uint32_t)t;
 	}
 	for (size_t v = 0; v < m->nverts; v++) {
-		memcpy(r.home[v], m->verts[v], sizeof(r.home[v]));
 		for (int k = 0; k < 3; k++)
-			m->verts[v][k] = (float)near[v][k]; /* as refine_mesh rounded its copy */
-		r.moved[v] = memcmp(m->verts[v], r.home[v], sizeof(r.home[v])) != 0;
+			m->verts[v][k] = r.want[v][k] = (float)near[v][k]; /* as refine_mesh
+									  * rounded its copy */
+		r.step[v] = memcmp(r.want[v], r.home[v], sizeof(r.home[v])) != 0;
 	}
 	for (size_t t = 0; t < m->ntris; t++)
 		for (int k = 0; k < 3; k++)
-			fresh[t] |= r.moved[m->tris[t][k]];
-	rc = check_moves(m, &r, parent, (const double (*)[3])pnormal, fresh, &refused, err);
+			fresh[t] |= r.step[m->tris[t][k]];
+	rc = check_moves(m, &r, parent, (const double (*)[3])pnormal, fresh, err);
+	if (!rc)
+		rc = pending_update(pd, m, &r, &rep->refused, err);
 	for (size_t v = 0; !rc && v < m->nverts; v++)
-		rep->vertices_moved += r.moved[v];
-	rep->refused += refused;
+		rep->vertices_moved += r.step[v] == 1;
 done:
 	free(near), free(pnormal), free(parent), free(fresh);
 	round_free(&r);
@@ -569,25 +663,32 @@ static int check_options(const struct refine_options *o, struct st_error *err)
 
 /* The rounds on m until the tolerance, a stall or the triangle limit. */
 static int run_rounds(struct mesh *m, const struct mesh *ref, const struct refine_options *o,
-		      const struct refine_target *tg, struct refine_report *rep,
-		      struct st_error *err)
+		      const struct refine_target *tg, struct pending *pd,
+		      struct refine_report *rep, struct st_error *err)
 {
-	double best;
+	double best, area, best_area;
 	size_t stalled = 0;
 	bool stop = false;
-	int rc = measure(m, ref, o, &rep->facet_error, &rep->error_before, &rep->facets_over, err);
+	int rc = measure(m, ref, o, &rep->facet_error, &rep->error_before, &rep->facets_over,
+			 &best_area, err);
 
 	rep->error_after = best = rep->error_before;
-	/* an input vertex off the reference: new vertices cannot mend it */
-	while (!rc && rep->facets_over && rep->vertex_error <= o->tolerance &&
+	/* an input vertex off the reference: new vertices cannot mend it (one
+	 * that move_vertices left short is tried again) */
+	while (!rc && rep->facets_over && (rep->vertex_error <= o->tolerance || o->move_vertices) &&
 	       rep->rounds < ROUNDS_MAX && stalled < STALL_ROUNDS) {
-		if ((rc = split_round(m, rep->facet_error, o, tg, rep, &stop, err)) || stop)
+		if ((rc = split_round(m, rep->facet_error, o, tg, pd, rep, &stop, err)) || stop)
 			break;
 		rep->rounds++;
 		rc = measure(m, ref, o, &rep->facet_error, &rep->error_after, &rep->facets_over,
-			     err);
-		stalled = rep->error_after < best ? 0 : stalled + 1;
+			     &area, err);
+		/* progress: a smaller largest error, or a tenth less area over
+		 * the tolerance (a bumpy scan's worst facet may take a few rounds;
+		 * facets beside a surface the reference crosses only shrink) */
+		stalled = rep->error_after < best || area < AREA_PROGRESS * best_area ? 0
+										    : stalled + 1;
 		best = fmin(best, rep->error_after);
+		best_area = fmin(best_area, area);
 	}
 	return rc;
 }
@@ -598,6 +699,7 @@ int refine_mesh(const struct mesh *coarse, const struct mesh *ref,
 {
 	struct surfdist *tree = NULL;
 	struct mesh *m = NULL;
+	struct pending pd = {0};
 	struct refine_target tg = {ref, NULL, cos(opt->feature_angle * M_PI / 180)};
 	int rc;
 
@@ -610,12 +712,12 @@ int refine_mesh(const struct mesh *coarse, const struct mesh *ref,
 			  (const uint32_t (*)[3])ref->tris, ref->ntris, &tree, err);
 	tg.tree = tree;
 	if (!rc && opt->move_vertices)
-		rc = move_input_vertices(m, &tg, rep, err);
+		rc = move_input_vertices(m, &tg, &pd, rep, err);
 	if (!rc)
 		rc = vertex_error(m, tree, &rep->vertex_error, err);
 	rep->triangles_before = m->ntris;
 	if (!rc)
-		rc = run_rounds(m, ref, opt, &tg, rep, err);
+		rc = run_rounds(m, ref, opt, &tg, &pd, rep, err);
 	if (rc)
 		goto done;
 	rep->triangles_after = m->ntris;
@@ -630,6 +732,8 @@ int refine_mesh(const struct mesh *coarse, const struct mesh *ref,
 	*out = m;
 	m = NULL;
 done:
+	free(pd.want);
+	free(pd.short_of);
 	surfdist_free(tree);
 	mesh_free(m);
 	if (rc)

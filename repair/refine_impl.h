@@ -29,7 +29,8 @@ void refine_edges_free(struct refine_edges *e);
 
 /* How a new vertex was placed. */
 enum refine_place_kind {
-	PLACE_ON_EDGE,	 /* left at the edge's midpoint (not between two facets) */
+	PLACE_ON_EDGE,	 /* left at the edge's midpoint (not between two facets, or
+			  * the reference found there faces away) */
 	PLACE_ALONG,	 /* along the facets' normal onto the surface */
 	PLACE_NEAREST,	 /* the surface's nearest point (the line missed, or met another part) */
 	PLACE_ON_CREASE, /* onto the line where the reference's faces on either side meet */

@@ -110,7 +110,7 @@ static double dot(const double a[3], const double b[3])
  * the facets' normal; per crease edge a line from each facet. */
 struct queries {
 	double (*mid)[3], (*near)[3], (*along)[3], (*dir)[3], *dnear, *dalong;
-	uint32_t *talong;
+	uint32_t *talong, *tnear;
 	double (*cpts)[3], (*cdirs)[3], (*chit)[3], *dcrease;
 	uint32_t *tcrease;
 	size_t *crease_of; /* per edge: its first crease line, or SIZE_MAX */
@@ -120,7 +120,7 @@ struct queries {
 static void queries_free(struct queries *q)
 {
 	free(q->mid), free(q->near), free(q->along), free(q->dir), free(q->dnear);
-	free(q->dalong), free(q->talong), free(q->cpts), free(q->cdirs), free(q->chit);
+	free(q->dalong), free(q->talong), free(q->tnear), free(q->cpts), free(q->cdirs), free(q->chit);
 	free(q->dcrease), free(q->tcrease), free(q->crease_of);
 }
 
@@ -134,10 +134,12 @@ static int queries_alloc(struct queries *q, size_t n)
 	q->along = malloc(n * sizeof(*q->along)), q->dir = malloc(n * sizeof(*q->dir));
 	q->dnear = malloc(n * sizeof(*q->dnear)), q->dalong = malloc(n * sizeof(*q->dalong));
 	q->talong = malloc(n * sizeof(*q->talong)), q->crease_of = malloc(n * sizeof(size_t));
+	q->tnear = malloc(n * sizeof(*q->tnear));
 	q->cpts = malloc(c * sizeof(*q->cpts)), q->cdirs = malloc(c * sizeof(*q->cdirs));
 	q->chit = malloc(c * sizeof(*q->chit)), q->dcrease = malloc(c * sizeof(*q->dcrease));
 	q->tcrease = malloc(c * sizeof(*q->tcrease));
 	return q->mid && q->near && q->along && q->dir && q->dnear && q->dalong && q->talong &&
+	       q->tnear &&
 	       q->crease_of && q->cpts && q->cdirs && q->chit && q->dcrease && q->tcrease;
 }
 
@@ -193,6 +195,20 @@ static bool close_enough(double d, double near)
 	return d >= 0 && d <= PLACE_REACH * near;
 }
 
+/* Whether reference triangle t faces the way of dir, the facets' normal:
+ * where the coarse surface runs inside a thin part (an ear of a scan), the
+ * nearer crossing may be the far side, facing away, and a vertex moved
+ * there would cross the facets on that side. */
+static bool facing(const struct refine_target *tg, uint32_t t, const double dir[3])
+{
+	double n[3];
+
+	if (t == REFINE_NONE)
+		return false;
+	refine_unit_normal(tg->ref, t, n);
+	return dot(n, dir) > 0;
+}
+
 /* The lines and points of the batch, before asking the tree. */
 static void pose_queries(const struct mesh *m, const struct refine_edges *e, const uint32_t *which,
 			 size_t n, const struct refine_target *tg, struct queries *q)
@@ -233,7 +249,7 @@ int refine_place(const struct mesh *m, const struct refine_edges *e, const uint3
 		return st_error_set(err, ST_ERR_NOMEM, "refine: out of memory");
 	}
 	pose_queries(m, e, which, n, tg, &q);
-	rc = surfdist_closest(tg->tree, (const double (*)[3])q.mid, n, q.near, NULL, err);
+	rc = surfdist_closest(tg->tree, (const double (*)[3])q.mid, n, q.near, q.tnear, err);
 	if (!rc)
 		rc = surfdist_hit(tg->tree, (const double (*)[3])q.mid, (const double (*)[3])q.dir, n,
 				  q.along, q.talong, q.dalong, err);
@@ -258,12 +274,15 @@ int refine_place(const struct mesh *m, const struct refine_edges *e, const uint3
 			   close_enough(vec3_dist(pos[i], q.mid[i]),
 					fmax(near, fmax(q.dcrease[c], q.dcrease[c + 1])))) {
 			kind[i] = PLACE_ON_CREASE;
-		} else if (close_enough(q.dalong[i], near)) {
+		} else if (close_enough(q.dalong[i], near) && facing(tg, q.talong[i], q.dir[i])) {
 			memcpy(pos[i], q.along[i], sizeof(pos[i]));
 			kind[i] = PLACE_ALONG;
-		} else {
+		} else if (facing(tg, q.tnear[i], q.dir[i])) {
 			memcpy(pos[i], q.near[i], sizeof(pos[i]));
 			kind[i] = PLACE_NEAREST;
+		} else {
+			memcpy(pos[i], q.mid[i], sizeof(pos[i]));
+			kind[i] = PLACE_ON_EDGE;
 		}
 	}
 	queries_free(&q);
