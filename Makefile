@@ -86,8 +86,10 @@ override CFLAGS += -std=c11 -pedantic $(WARN) -Wstrict-prototypes -Wmissing-prot
 # file take 40 % longer to compile (repair/exact/snap.cpp: 236 s against
 # 143 s under ASan on a loaded machine) for nothing a backtrace uses.
 CXXFLAGS ?= -O2 -g1
+# -fno-tree-slp-vectorize as for C (above): the bridges round to float32
+# too (the snap rounding), with the same compiler.
 override CXXFLAGS += -std=c++17 $(WARN) -Wno-deprecated-declarations -pthread -DCGAL_LINKED_WITH_TBB -DNDEBUG \
-	-DCGAL_EIGEN3_ENABLED -isystem /usr/include/eigen3
+	-DCGAL_EIGEN3_ENABLED -isystem /usr/include/eigen3 -fno-tree-slp-vectorize
 # cairo draws the PNG layer previews (host/pvdraw.c); -isystem keeps its
 # headers out of -Werror.
 CAIRO_CFLAGS := $(patsubst -I%,-isystem %,$(shell pkg-config --cflags cairo 2>/dev/null))
