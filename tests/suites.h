@@ -25,6 +25,8 @@ void profile_shipped_tcases(Suite *s); /* tests/check_profile_shipped.c: every s
 Suite *ini_suite(void);		/* tests/check_ini.c: the ini reader of profiles and the node config */
 Suite *placeholder_suite(void); /* tests/check_placeholder.c: PrusaSlicer's placeholder language */
 Suite *gcode_suite(void);	/* tests/check_gcode.c: G-code parser and reader */
+void gcode_errors_tcases(Suite *s); /* tests/check_gcode_errors.c: refusals, classifier, part of gcode */
+void gcode_io_tcases(Suite *s); /* tests/check_gcode_io.c: the streaming reader, robustness, part of gcode */
 Suite *xport_suite(void);	/* tests/check_xport.c: serial transports (pty, TCP) */
 Suite *sim_suite(void);		/* tests/check_sim.c: simulated Marlin over a pty */
 Suite *marlin_suite(void);	/* tests/check_marlin.c: Marlin driver against the simulator */
