@@ -14,6 +14,7 @@ void meshio_3mf_tcases(Suite *s); /* tests/check_meshio_3mf.c: 3MF, part of the 
 Suite *exact_suite(void);	/* tests/check_exact.c: CGAL bridge predicates */
 void exact_patches_tcases(Suite *s); /* tests/check_patches.c: flat patches of the count, part of exact */
 Suite *repair_suite(void);	/* tests/check_repair.c: seed 000 repair end to end */
+void repair_sheet_tcases(Suite *s); /* tests/check_repair_sheet.c: sheets, wires, soups, part of repair */
 Suite *planar_suite(void);	/* tests/check_planar.c: planar simplification of flat faces */
 Suite *thicken_suite(void);	/* tests/check_thicken.c: sheets into closed slabs */
 Suite *heal_suite(void);	/* tests/check_heal.c: welding, stitching, hole filling */
