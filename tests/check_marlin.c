@@ -157,6 +157,7 @@ static long check_log(struct rig *r, FILE *file)
 	struct gcode_line g;
 	struct st_error err = {0};
 	char line[512];
+	const char *text;
 	long n = 0, checked = 0;
 
 	marlin_status(r->m, &st);
@@ -165,36 +166,31 @@ static long check_log(struct rig *r, FILE *file)
 	rewind(r->log);
 	rewind(file);
 	ck_assert_int_eq(gcode_reader_new(file, "gen", &gr, &err), 0);
-	while (fgets(line, sizeof(line), r->log)) {
-		char *sp = strchr(line, ' ');
-		ck_assert_ptr_nonnull(sp);
-		if (line[0] == '-') {
+	while (tu_marlin_log_next(r->log, line, sizeof(line), &n, &text)) {
+		if (n < 0) {
 			/* A line whose "N" was lost on the wire: the firmware
 			 * takes it without a check (Marlin does the same); the
-			 * host cannot prevent it, only its numbered lines count.
-			 * The driver's own M105 probes are no fragments. */
-			r->unnumbered += strcmp(sp + 1, "M105\n") != 0;
+			 * host cannot prevent it, only its numbered lines count. */
+			r->unnumbered++;
 			continue;
 		}
-		n = strtol(line, NULL, 10);
 		if (n < st.first_n)
 			continue;
-		line[strcspn(line, "\n")] = '\0';
 		int rc;
 		do
 			rc = gcode_reader_next(gr, 0, &g, &err);
 		while (rc == 1 && g.kind == GCODE_KIND_HOST_ONLY);
-		ck_assert_msg(rc == 1, "log has more than the file: %s", line);
+		ck_assert_msg(rc == 1, "log has more than the file: %ld %s", n, text);
 		ck_assert_msg(n == st.first_n + checked, "line N%ld out of order (want N%ld)", n,
 			      st.first_n + checked);
-		if (strcmp(sp + 1, g.text)) {
+		if (strcmp(text, g.text)) {
 			/* Damage that cancels out in Marlin's 8-bit XOR
 			 * checksum (the same bit flipped twice, a content bit
 			 * and a checksum digit, two equal bytes dropped): no
 			 * host can see it, so only faulty runs may have it,
 			 * and rarely. */
-			ck_assert_msg(r->corrupting, "N%ld executed '%s', the file has '%s'", n,
-				      sp + 1, g.text);
+			ck_assert_msg(r->corrupting, "N%ld executed '%s', the file has '%s'", n, text,
+				      g.text);
 			r->undetectable++;
 		}
 		checked++;

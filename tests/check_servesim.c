@@ -95,9 +95,10 @@ static char *commands_of(const char *gcode)
 static char *sim_executed_ex(const struct node_proc *np, const char *name, bool emergency_ok)
 {
 	char path[600], line[512];
+	const char *text;
 	size_t cap = 1 << 20, len = 0;
 	char *out = malloc(cap);
-	long last = -1;
+	long last = -1, n;
 	int skip = 3;
 	FILE *f;
 
@@ -105,25 +106,18 @@ static char *sim_executed_ex(const struct node_proc *np, const char *name, bool 
 	f = fopen(path, "r");
 	ck_assert_msg(f, "no simulator log %s", path);
 	ck_assert(out);
-	while (fgets(line, sizeof(line), f)) {
-		char *sp = strchr(line, ' ');
-		long n = atol(line);
-
-		if (emergency_ok && line[0] == '-' && line[1] == ' ')
+	while (tu_marlin_log_next(f, line, sizeof(line), &n, &text)) {
+		if (emergency_ok && n < 0)
 			continue;
-		/* the driver's own M105 probe after a silence (a loaded machine
-		 * makes one); the job's lines are always numbered */
-		if (!strcmp(line, "- M105\n"))
-			continue;
-		ck_assert_msg(sp && line[0] != '-', "unnumbered line executed: %s", line);
+		ck_assert_msg(n >= 0, "unnumbered line executed: %s", text);
 		ck_assert_msg(n == last + 1, "line %ld ran after line %ld", n, last);
 		last = n;
 		if (skip > 0) {
 			skip--;
 			continue;
 		}
-		ck_assert(len + strlen(sp + 1) < cap);
-		len += (size_t)snprintf(out + len, cap - len, "%s", sp + 1);
+		ck_assert(len + strlen(text) + 1 < cap);
+		len += (size_t)snprintf(out + len, cap - len, "%s\n", text);
 	}
 	fclose(f);
 	out[len] = '\0';
