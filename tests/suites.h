@@ -31,6 +31,8 @@ void gcode_io_tcases(Suite *s); /* tests/check_gcode_io.c: the streaming reader,
 Suite *xport_suite(void);	/* tests/check_xport.c: serial transports (pty, TCP) */
 Suite *sim_suite(void);		/* tests/check_sim.c: simulated Marlin over a pty */
 Suite *marlin_suite(void);	/* tests/check_marlin.c: Marlin driver against the simulator */
+void marlin_faults_tcases(Suite *s); /* tests/check_marlin_faults.c: hangs, lost replies, stops, part of marlin */
+void marlin_parse_tcases(Suite *s); /* tests/check_marlin_parse.c: reply parsing, part of marlin */
 Suite *printer_suite(void);	/* tests/check_printer.c: printer.h adapters on both simulators */
 Suite *slicer_suite(void);	/* tests/check_slicer.c: slicing, Clipper bridge, walls */
 void slicer_modes_tcases(Suite *s); /* tests/check_modes.c: spiral vase, part of slicer */
