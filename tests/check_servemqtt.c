@@ -8,6 +8,7 @@
  */
 #include <check.h>
 #include <pthread.h>
+#include <signal.h>
 #include <openssl/evp.h>
 #include <openssl/hmac.h>
 #include <stdio.h>
@@ -427,9 +428,11 @@ END_TEST
 
 /* A client that takes a node's client id, as a second node of its name
  * would: it says online and answers pings; kicks counts how often the
- * broker dropped it for another client with its id. */
+ * broker dropped it for another client with its id; ready, that its status
+ * is on the broker and its ping subscription acknowledged. */
 struct impostor {
 	int kicks;
+	bool ready;
 	pthread_mutex_t mu;
 };
 
@@ -440,6 +443,18 @@ static void impostor_connect(struct mosquitto *mosq, void *ctx, int rc)
 		return;
 	mosquitto_publish(mosq, NULL, "stratum/test-node/status", 6, "online", 1, true);
 	mosquitto_subscribe(mosq, NULL, "stratum/test-node/ping", 0);
+}
+
+/* The SUBACK comes after the broker took the status published before the
+ * subscription (one connection's packets are handled in order). */
+static void impostor_subscribed(struct mosquitto *mosq, void *ctx, int mid, int n, const int *qos)
+{
+	struct impostor *im = ctx;
+
+	(void)mosq, (void)mid, (void)n, (void)qos;
+	pthread_mutex_lock(&im->mu);
+	im->ready = true;
+	pthread_mutex_unlock(&im->mu);
 }
 
 static void impostor_message(struct mosquitto *mosq, void *ctx, const struct mosquitto_message *m)
@@ -462,22 +477,45 @@ static void impostor_disconnect(struct mosquitto *mosq, void *ctx, int rc)
 	pthread_mutex_unlock(&im->mu);
 }
 
-/* The impostor, connected to the broker at port (it may take the id from a
- * node connected there), or NULL to end it. */
-static struct mosquitto *impostor_start(struct impostor *im, int port)
+/* Hold (SIGSTOP) or release (SIGCONT) the node: what a test sets up on the
+ * broker while the node is held is there before the node looks, however
+ * loaded the machine is. */
+static void node_hold(const struct node_proc *np, bool hold)
+{
+	ck_assert_int_eq(kill(np->pid, hold ? SIGSTOP : SIGCONT), 0);
+}
+
+/*
+ * The impostor, connected to the broker at port, holding the name of the
+ * node np (held meanwhile, so it cannot take the name first: it would knock
+ * the impostor off once, which is not what the tests are about) before
+ * this returns.  End it with expect_node_yields.
+ */
+static struct mosquitto *impostor_start(struct impostor *im, int port, struct node_proc *np)
 {
 	struct mosquitto *other;
+	bool ready = false;
 
 	pthread_mutex_init(&im->mu, NULL);
 	im->kicks = 0;
+	im->ready = false;
 	other = mosquitto_new("stratum-test-node", false, im);
 	ck_assert(other);
 	mosquitto_connect_callback_set(other, impostor_connect);
+	mosquitto_subscribe_callback_set(other, impostor_subscribed);
 	mosquitto_message_callback_set(other, impostor_message);
 	mosquitto_disconnect_callback_set(other, impostor_disconnect);
 	mosquitto_reconnect_delay_set(other, 1, 1, false);
 	ck_assert_int_eq(mosquitto_connect(other, "127.0.0.1", port, 30), 0);
 	ck_assert_int_eq(mosquitto_loop_start(other), 0);
+	for (int i = 0; i < 400 && !ready; i++) {
+		usleep(25000);
+		pthread_mutex_lock(&im->mu);
+		ready = im->ready;
+		pthread_mutex_unlock(&im->mu);
+	}
+	ck_assert_msg(ready, "the impostor did not get onto the broker within 10 s");
+	node_hold(np, false);
 	return other;
 }
 
@@ -529,7 +567,8 @@ START_TEST(test_mqtt_name_taken_while_running)
 	if (!have_broker("MQTT name taken while running"))
 		return;
 	broker = node_on_broker(&np, &bport, "", &seen, &mq);
-	other = impostor_start(&im, bport);
+	node_hold(&np, true);
+	other = impostor_start(&im, bport, &np);
 	expect_node_yields(&np, &im, other);
 	sv_stop(&np);
 	watch_stop(mq, &seen);
@@ -556,8 +595,9 @@ START_TEST(test_mqtt_broker_later)
 	sv_start(&np);
 	snprintf(conf, sizeof(conf), "listener %d 127.0.0.1\nallow_anonymous true\n"
 				     "persistence false\n", bport);
+	node_hold(&np, true);
 	broker = broker_start(bport, conf);
-	other = impostor_start(&im, bport);
+	other = impostor_start(&im, bport, &np);
 	expect_node_yields(&np, &im, other);
 	sv_stop(&np);
 	/* a new broker (nothing retained): the name is free when it comes */
