@@ -24,29 +24,7 @@
 #include "suites.h"
 #include "testutil.h"
 
-#define CMD_TOPIC "stratum/test-node/mk3s/cmd"
-#define RESULT_TOPIC "stratum/test-node/mk3s/result"
 #define ONE_PRINTER "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = test-instant\n"
-
-/* Whether mosquitto is here (make deps installs it); prints why not. */
-static bool have_broker(const char *test)
-{
-	if (!access(MOSQUITTO_BIN, X_OK))
-		return true;
-	printf("serve: %s skipped: %s is not installed (make deps)\n", test, MOSQUITTO_BIN);
-	return false;
-}
-
-/* An anonymous broker on a free port; its port in *port. */
-static pid_t open_broker(int *port)
-{
-	char conf[256];
-
-	*port = free_port();
-	snprintf(conf, sizeof(conf), "listener %d 127.0.0.1\nallow_anonymous true\n"
-				     "persistence false\n", *port);
-	return broker_start(*port, conf);
-}
 
 /* np's config: one test-instant printer and [mqtt] on the broker at port
  * with the lines extra. */
@@ -116,7 +94,10 @@ END_TEST
 static pid_t node_on_broker(struct node_proc *np, int *port, const char *extra,
 			    struct mqtt_seen *seen, struct mosquitto **mq)
 {
-	pid_t broker = open_broker(port);
+	pid_t broker;
+
+	*port = free_port();
+	broker = anon_broker_start(*port);
 
 	write_mqtt_config(np, *port, extra);
 	sv_start(np);
@@ -149,14 +130,6 @@ static void sign(char *out, size_t cap, const char *topic, const char *text, con
 	json_decref(env);
 }
 
-/* Send payload and wait for its answer, which must contain want; the answer in out. */
-static void command(struct mosquitto *mq, struct mqtt_seen *seen, const char *payload,
-		    const char *want, char *out, size_t cap)
-{
-	watch_send(mq, CMD_TOPIC, payload);
-	wait_topic(seen, RESULT_TOPIC, want, 10, out, cap);
-}
-
 /* Commands without a key, with a wrong one, with one lacking the control
  * role, signed wrongly, late or for another topic are refused (and use up
  * no id); a control key or a good signature runs them.  No key is logged. */
@@ -178,57 +151,60 @@ START_TEST(test_mqtt_command_keys)
 	id = sv_print_text(np.port, "", "hold.gcode", "G28\nG4 P20000\nG1 X5\n");
 	sv_wait_state(np.port, "", id, "printing", 10);
 
-	command(mq, &seen, "{\"id\":\"k-1\",\"command\":\"pause\"}", "\"k-1\"", out, sizeof(out));
+	mqtt_command(mq, &seen, "{\"id\":\"k-1\",\"command\":\"pause\"}", "\"k-1\"", out,
+		     sizeof(out));
 	ck_assert_msg(strstr(out, "\"ok\":false") && strstr(out, "a key with the control role is "
-								 "needed"), "%s", out);
-	command(mq, &seen, "{\"id\":\"k-2\",\"command\":\"pause\",\"key\":\"wrong-key-0123456789\"}",
-		"\"k-2\"", out, sizeof(out));
+								 "needed"),
+		      "%s", out);
+	mqtt_command(mq, &seen,
+		     "{\"id\":\"k-2\",\"command\":\"pause\",\"key\":\"wrong-key-0123456789\"}",
+		     "\"k-2\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "the key is not a key of this node"), "%s", out);
 	ck_assert_msg(!strstr(out, "wrong-key"), "the answer holds the key: %s", out);
-	command(mq, &seen, "{\"id\":\"k-3\",\"command\":\"pause\",\"key\":\"" KEY_UP "\"}", "\"k-3\"",
-		out, sizeof(out));
+	mqtt_command(mq, &seen, "{\"id\":\"k-3\",\"command\":\"pause\",\"key\":\"" KEY_UP "\"}",
+		     "\"k-3\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "the key lacks the control role"), "%s", out);
-	command(mq, &seen, "{\"id\":\"k-4\",\"command\":\"pause\",\"key\":\"" KEY_READ "\"}",
-		"\"k-4\"", out, sizeof(out));
+	mqtt_command(mq, &seen, "{\"id\":\"k-4\",\"command\":\"pause\",\"key\":\"" KEY_READ "\"}",
+		     "\"k-4\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "the key lacks the control role"), "%s", out);
 	/* Signed: with the wrong secret, too late, for another printer's topic. */
 	snprintf(text, sizeof(text), "{\"id\":\"k-5\",\"command\":\"pause\",\"time\":%lld}",
 		 (long long)time(NULL));
 	sign(cmd, sizeof(cmd), CMD_TOPIC, text, "operator", "not-the-operator-key-01");
-	command(mq, &seen, cmd, "\"k-5\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"k-5\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "the signature does not match a key of this node"), "%s", out);
 	snprintf(text, sizeof(text), "{\"id\":\"k-6\",\"command\":\"pause\",\"time\":%lld}",
 		 (long long)time(NULL) - 1000);
 	sign(cmd, sizeof(cmd), CMD_TOPIC, text, "operator", KEY_CTL);
-	command(mq, &seen, cmd, "\"k-6\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"k-6\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "a signed command is taken within 300 s"), "%s", out);
 	snprintf(text, sizeof(text), "{\"id\":\"k-7\",\"command\":\"pause\",\"time\":%lld}",
 		 (long long)time(NULL));
 	sign(cmd, sizeof(cmd), "stratum/test-node/ender/cmd", text, "operator", KEY_CTL);
-	command(mq, &seen, cmd, "\"k-7\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"k-7\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "the signature does not match"), "%s", out);
 	snprintf(text, sizeof(text), "{\"id\":\"k-8\",\"command\":\"pause\",\"time\":%lld}",
 		 (long long)time(NULL));
 	sign(cmd, sizeof(cmd), CMD_TOPIC, text, "slicer", KEY_UP);
-	command(mq, &seen, cmd, "\"k-8\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"k-8\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "the key lacks the control role"), "%s", out);
 	ck_assert_str_eq(sv_job_state(np.port, "", id, NULL), "printing");
 
 	/* The control key: k-1 runs now, its refusal used up nothing. */
-	command(mq, &seen, "{\"id\":\"k-1\",\"command\":\"pause\",\"key\":\"" KEY_CTL "\"}",
-		"\"ok\":true", out, sizeof(out));
+	mqtt_command(mq, &seen, "{\"id\":\"k-1\",\"command\":\"pause\",\"key\":\"" KEY_CTL "\"}",
+		     "\"ok\":true", out, sizeof(out));
 	ck_assert_msg(strstr(out, "\"k-1\"") && strstr(out, "\"duplicate\":false"), "%s", out);
 	sv_wait_state(np.port, "", id, "paused", 10);
 	/* Signed with the control key; the same message again is a duplicate. */
 	snprintf(text, sizeof(text), "{\"id\":\"k-9\",\"command\":\"resume\",\"time\":%lld}",
 		 (long long)time(NULL));
 	sign(cmd, sizeof(cmd), CMD_TOPIC, text, "operator", KEY_CTL);
-	command(mq, &seen, cmd, "\"k-9\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"k-9\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "\"ok\":true"), "%s", out);
 	sv_wait_state(np.port, "", id, "printing", 10);
-	command(mq, &seen, cmd, "\"duplicate\":true", out, sizeof(out));
-	command(mq, &seen, "{\"id\":\"k-10\",\"command\":\"cancel\",\"key\":\"" KEY_CTL "\"}",
-		"\"k-10\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"duplicate\":true", out, sizeof(out));
+	mqtt_command(mq, &seen, "{\"id\":\"k-10\",\"command\":\"cancel\",\"key\":\"" KEY_CTL "\"}",
+		     "\"k-10\"", out, sizeof(out));
 	sv_wait_state(np.port, "", id, "cancelled", 10);
 
 	watch_stop(mq, &seen);
@@ -277,8 +253,8 @@ START_TEST(test_mqtt_same_name)
 		      "%s", out);
 	ck_assert_msg(!strstr(out, "test-instant"), "the refused node opened its printer: %s", out);
 	/* The first node was never off the broker and still answers commands. */
-	command(mq, &seen, "{\"id\":\"n-1\",\"command\":\"pause\",\"key\":\"" KEY_CTL "\"}",
-		"\"n-1\"", out, sizeof(out));
+	mqtt_command(mq, &seen, "{\"id\":\"n-1\",\"command\":\"pause\",\"key\":\"" KEY_CTL "\"}",
+		     "\"n-1\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "no job"), "%s", out);
 	sv_stop(&np);
 	log = tu_slurp(np.log, &len);
@@ -382,7 +358,7 @@ START_TEST(test_mqtt_downloads)
 		 "\",\"url\":\"http://%s/" file "\"}", port)
 	snprintf(extra, sizeof(extra), "127.0.0.1:%d", allowed.port);
 	ENQUEUE("d-1", extra, "part.gcode");
-	command(mq, &seen, cmd, "\"d-1\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"d-1\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "downloads are off: [mqtt] download_hosts lists no host"), "%s",
 		      out);
 	ck_assert_int_eq(allowed.served, 0);
@@ -394,27 +370,28 @@ START_TEST(test_mqtt_downloads)
 	wait_topic(&seen, "stratum/test-node/status", "online", 10, NULL, 0);
 	snprintf(extra, sizeof(extra), "127.0.0.1:%d", other.port);
 	ENQUEUE("d-2", extra, "part.gcode");
-	command(mq, &seen, cmd, "\"d-2\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"d-2\"", out, sizeof(out));
 	snprintf(extra, sizeof(extra), "127.0.0.1:%d is not in [mqtt] download_hosts", other.port);
 	ck_assert_msg(strstr(out, extra), "%s", out);
 	/* a bare host name allows the scheme's own port (80) only */
 	snprintf(extra, sizeof(extra), "localhost:%d", other.port);
 	ENQUEUE("d-3", extra, "part.gcode");
-	command(mq, &seen, cmd, "\"d-3\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"d-3\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "is not in [mqtt] download_hosts"), "%s", out);
 	/* a redirect from the allowed host to another is checked before it is followed */
 	snprintf(redirect, sizeof(redirect), "http://127.0.0.1:%d/evil.gcode", other.port);
 	allowed.redirect = redirect;
 	snprintf(extra, sizeof(extra), "127.0.0.1:%d", allowed.port);
 	ENQUEUE("d-4", extra, "part.gcode");
-	command(mq, &seen, cmd, "\"d-4\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"d-4\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "redirected to http://127.0.0.1:") &&
-			      strstr(out, "is not in [mqtt] download_hosts"), "%s", out);
+			  strstr(out, "is not in [mqtt] download_hosts"),
+		      "%s", out);
 	ck_assert_int_eq(allowed.served, 1);
 	ck_assert_int_eq(other.served, 0);
 	allowed.redirect = NULL;
 	ENQUEUE("d-5", extra, "part.gcode");
-	command(mq, &seen, cmd, "\"d-5\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"d-5\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "\"ok\":true") && strstr(out, "\"job\":"), "%s", out);
 	ck_assert_int_eq(allowed.served, 2);
 #undef ENQUEUE
@@ -585,7 +562,6 @@ START_TEST(test_mqtt_broker_later)
 	struct mqtt_seen seen;
 	struct mosquitto *mq, *other;
 	struct impostor im;
-	char conf[256];
 	int bport = free_port();
 	pid_t broker;
 
@@ -593,17 +569,15 @@ START_TEST(test_mqtt_broker_later)
 		return;
 	write_mqtt_config(&np, bport, "");
 	sv_start(&np);
-	snprintf(conf, sizeof(conf), "listener %d 127.0.0.1\nallow_anonymous true\n"
-				     "persistence false\n", bport);
 	node_hold(&np, true);
-	broker = broker_start(bport, conf);
+	broker = anon_broker_start(bport);
 	other = impostor_start(&im, bport, &np);
 	expect_node_yields(&np, &im, other);
 	sv_stop(&np);
 	/* a new broker (nothing retained): the name is free when it comes */
 	broker_stop(broker);
 	sv_start(&np);
-	broker = broker_start(bport, conf);
+	broker = anon_broker_start(bport);
 	mq = watch_start(&seen, bport, NULL, NULL, "stratum/test-node/#");
 	wait_topic(&seen, "stratum/test-node/status", "online", 10, NULL, 0);
 	wait_topic(&seen, "stratum/test-node/mk3s/status", "Operational", 10, NULL, 0);
@@ -695,7 +669,7 @@ START_TEST(test_mqtt_broker_example)
 	snprintf(text, sizeof(text), "{\"id\":\"x-2\",\"command\":\"pause\",\"time\":%lld}",
 		 (long long)time(NULL));
 	sign(cmd, sizeof(cmd), CMD_TOPIC, text, "operator", KEY_CTL);
-	command(mq, &seen, cmd, "\"x-2\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"x-2\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "no job"), "%s", out);
 	pthread_mutex_lock(&seen.mu);
 	ck_assert_int_eq(seen.results, results + 1);
@@ -742,7 +716,8 @@ START_TEST(test_mqtt_temperatures)
 
 	if (!have_broker("test_mqtt_temperatures"))
 		return;
-	broker = open_broker(&port);
+	port = free_port();
+	broker = anon_broker_start(port);
 	snprintf(text, sizeof(text), "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\n"
 		 "sim_speedup = 1000\n[printer cp]\nprofile = flashforge-creator-pro\n"
 		 "port = sim\nsim_speedup = 1000\n\n[mqtt]\nhost = 127.0.0.1\nport = %d\n"
@@ -814,28 +789,36 @@ START_TEST(test_mqtt_queue_commands)
 	sv_print_text(np.port, "", "a.gcode", "G28\n");
 	sv_print_text(np.port, "", "b.gcode", "G28\n");
 	c = sv_print_text(np.port, "", "c.gcode", "G28\n");
-	command(mq, &seen, "{\"id\":\"q-1\",\"command\":\"list\",\"key\":\"" KEY_CTL "\"}",
-		"\"q-1\"", out, sizeof(out));
+	mqtt_command(mq, &seen, "{\"id\":\"q-1\",\"command\":\"list\",\"key\":\"" KEY_CTL "\"}",
+		     "\"q-1\"", out, sizeof(out));
 	ck_assert_str_eq(waiting_names(out), "a.gcode,b.gcode,c.gcode");
-	command(mq, &seen, "{\"id\":\"q-2\",\"command\":\"move\",\"job\":4,\"position\":1}",
-		"\"q-2\"", out, sizeof(out));
+	mqtt_command(mq, &seen, "{\"id\":\"q-2\",\"command\":\"move\",\"job\":4,\"position\":1}",
+		     "\"q-2\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "a key with the control role is needed"), "%s", out);
-	command(mq, &seen, "{\"id\":\"q-3\",\"command\":\"move\",\"job\":4,\"position\":1,"
-		"\"key\":\"" KEY_CTL "\"}", "\"q-3\"", out, sizeof(out));
+	mqtt_command(mq, &seen,
+		     "{\"id\":\"q-3\",\"command\":\"move\",\"job\":4,\"position\":1,"
+		     "\"key\":\"" KEY_CTL "\"}",
+		     "\"q-3\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "\"ok\":true"), "%s", out);
-	command(mq, &seen, "{\"id\":\"q-4\",\"command\":\"move\",\"job\":1,\"position\":1,"
-		"\"key\":\"" KEY_CTL "\"}", "\"q-4\"", out, sizeof(out));
+	mqtt_command(mq, &seen,
+		     "{\"id\":\"q-4\",\"command\":\"move\",\"job\":1,\"position\":1,"
+		     "\"key\":\"" KEY_CTL "\"}",
+		     "\"q-4\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "only a queued job can be moved"), "%s", out);
-	command(mq, &seen, "{\"id\":\"q-5\",\"command\":\"cancel\",\"job\":3,"
-		"\"key\":\"" KEY_CTL "\"}", "\"q-5\"", out, sizeof(out));
+	mqtt_command(mq, &seen,
+		     "{\"id\":\"q-5\",\"command\":\"cancel\",\"job\":3,"
+		     "\"key\":\"" KEY_CTL "\"}",
+		     "\"q-5\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "\"ok\":true"), "%s", out);
 	ck_assert_str_eq(sv_job_state(np.port, "", 3, NULL), "cancelled");
 	ck_assert_str_eq(sv_job_state(np.port, "", hold, NULL), "printing");
-	command(mq, &seen, "{\"id\":\"q-6\",\"command\":\"requeue\",\"job\":3,"
-		"\"key\":\"" KEY_CTL "\"}", "\"q-6\"", out, sizeof(out));
+	mqtt_command(mq, &seen,
+		     "{\"id\":\"q-6\",\"command\":\"requeue\",\"job\":3,"
+		     "\"key\":\"" KEY_CTL "\"}",
+		     "\"q-6\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "\"ok\":true") && strstr(out, "\"job\":5"), "%s", out);
-	command(mq, &seen, "{\"id\":\"q-7\",\"command\":\"list\",\"key\":\"" KEY_CTL "\"}",
-		"\"q-7\"", out, sizeof(out));
+	mqtt_command(mq, &seen, "{\"id\":\"q-7\",\"command\":\"list\",\"key\":\"" KEY_CTL "\"}",
+		     "\"q-7\"", out, sizeof(out));
 	ck_assert_str_eq(waiting_names(out), "c.gcode,a.gcode,b.gcode");
 	ck_assert_int_eq(c, 4);
 	watch_stop(mq, &seen);

@@ -124,6 +124,23 @@ void wait_topic(struct mqtt_seen *s, const char *topic, const char *want, int se
 	ck_abort_msg("%s: '%s', waited for '%s'", topic, last, want);
 }
 
+bool have_broker(const char *test)
+{
+	if (!access(MOSQUITTO_BIN, X_OK))
+		return true;
+	printf("%s skipped: %s is not installed (make deps)\n", test, MOSQUITTO_BIN);
+	return false;
+}
+
+pid_t anon_broker_start(int port)
+{
+	char conf[256];
+
+	snprintf(conf, sizeof(conf), "listener %d 127.0.0.1\nallow_anonymous true\n"
+				     "persistence false\n", port);
+	return broker_start(port, conf);
+}
+
 pid_t broker_start(int port, const char *conf)
 {
 	struct passwd *me = getpwuid(getuid());
@@ -213,4 +230,11 @@ void watch_send(struct mosquitto *mq, const char *topic, const char *payload)
 {
 	ck_assert_int_eq(mosquitto_publish(mq, NULL, topic, (int)strlen(payload), payload, 1, false),
 			 0);
+}
+
+void mqtt_command(struct mosquitto *mq, struct mqtt_seen *seen, const char *payload,
+		  const char *want, char *out, size_t cap)
+{
+	watch_send(mq, CMD_TOPIC, payload);
+	wait_topic(seen, RESULT_TOPIC, want, 10, out, cap);
 }
