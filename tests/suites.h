@@ -38,6 +38,7 @@ Suite *slicer_suite(void);	/* tests/check_slicer.c: slicing, Clipper bridge, wal
 void slicer_modes_tcases(Suite *s); /* tests/check_modes.c: spiral vase, part of slicer */
 void slicer_travel_tcases(Suite *s); /* tests/check_travel.c: travel and retraction, part of slicer */
 Suite *gcodewriter_suite(void); /* tests/check_gcodewriter.c: G-code writer and estimator */
+void gcodewriter_cooling_tcases(Suite *s); /* tests/check_gcodewriter_cooling.c: fan, slow-down, planner, part of gcodewriter */
 void gcodewriter_simplify_tcases(Suite *s); /* tests/check_simplify.c: gcode_resolution, part of gcodewriter */
 /* tests/check_simplify.c, shared with check_arcfit.c: a stack of round walls, waves and a thin
  * wall; the writer's output for it with s equal to a golden file; a sliced 256-sided cylinder */
