@@ -21,6 +21,7 @@ Suite *heal_suite(void);	/* tests/check_heal.c: welding, stitching, hole filling
 Suite *batch_suite(void);	/* tests/check_batch.c: independent groups repaired apart */
 Suite *corpus_suite(void);	/* tests/check_corpus.c: repair on generated defect cases */
 Suite *profile_suite(void);	/* tests/check_profile.c: printer profiles */
+void profile_cli_tcases(Suite *s); /* tests/check_profile_cli.c: access, lookup, stratum printers, part of profile */
 void profile_find_tcases(Suite *s); /* tests/check_profile_find.c: --printer lookup, part of profile */
 void profile_shipped_tcases(Suite *s); /* tests/check_profile_shipped.c: every shipped printers/NAME.ini slices, part of profile */
 Suite *ini_suite(void);		/* tests/check_ini.c: the ini reader of profiles and the node config */
