@@ -70,6 +70,7 @@ Suite *s3g_suite(void);		/* tests/check_s3g.c: S3G packets, driver, simulated Sa
 Suite *serve_suite(void);		/* tests/check_serve.c: stratum serve, the farm node's API and queue */
 void serve_mqtt_tcases(Suite *s); /* tests/check_servemqtt.c: the node on a shared broker, part of serve */
 Suite *octoapi_suite(void);	/* tests/check_octoapi.c: the node's OctoPrint calls, one test each */
+void octoapi_printer_tests(TCase *tc); /* tests/check_octoapi_printer.c: printer and job calls, in octoapi's "calls" */
 void octoapi_push_tcases(Suite *s); /* tests/check_octopush.c: the push API, part of octoapi */
 void serve_abuse_tcases(Suite *s); /* tests/check_serveabuse.c: the node bounded under abuse, part of serve */
 void serve_sim_tcases(Suite *s);   /* tests/check_servesim.c: the node with simulated printers and MQTT, part of serve */
