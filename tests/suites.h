@@ -10,6 +10,7 @@
 Suite *stfile_suite(void);	/* tests/check_stfile.c: the atomic file writer of include/ */
 Suite *mesh_suite(void);	/* tests/check_mesh.c: welding, topology report */
 Suite *meshio_suite(void);	/* tests/check_meshio.c: STL/OBJ/OFF I/O, bad input */
+void meshio_bad_tcases(Suite *s); /* tests/check_meshio_bad.c: bad input, writer failures, part of meshio */
 void meshio_3mf_tcases(Suite *s); /* tests/check_meshio_3mf.c: 3MF, part of the meshio suite */
 Suite *exact_suite(void);	/* tests/check_exact.c: CGAL bridge predicates */
 void exact_patches_tcases(Suite *s); /* tests/check_patches.c: flat patches of the count, part of exact */
