@@ -61,6 +61,7 @@ Suite *raft_suite(void);	/* tests/check_raft.c: the raft under the part */
 Suite *adaptive_suite(void);	/* tests/check_adaptive.c: adaptive layer heights */
 Suite *multimodel_suite(void); /* tests/check_multimodel.c: several models in one slice */
 Suite *slicecli_suite(void);	/* tests/check_slicecli.c: stratum slice end to end */
+void slicecli_config_tests(TCase *tc); /* tests/check_slicecli_config.c: PrusaSlicer configs, in slicecli's "slice" */
 void slicecli_settings_tcases(Suite *s); /* tests/check_slicesettings.c: settings honoured, part of slicecli */
 void slicecli_widths_tcases(Suite *s); /* tests/check_slicewidths.c: per-role widths, part of slicecli */
 void slicecli_thumbnail_tcases(Suite *s); /* tests/check_thumbnail.c: G-code thumbnails, part of slicecli */
