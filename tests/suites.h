@@ -32,6 +32,7 @@ void gcode_errors_tcases(Suite *s); /* tests/check_gcode_errors.c: refusals, cla
 void gcode_io_tcases(Suite *s); /* tests/check_gcode_io.c: the streaming reader, robustness, part of gcode */
 Suite *xport_suite(void);	/* tests/check_xport.c: serial transports (pty, TCP) */
 Suite *sim_suite(void);		/* tests/check_sim.c: simulated Marlin over a pty */
+void sim_faults_tcases(Suite *s); /* tests/check_sim_faults.c: faults, printcore, part of sim */
 Suite *marlin_suite(void);	/* tests/check_marlin.c: Marlin driver against the simulator */
 void marlin_faults_tcases(Suite *s); /* tests/check_marlin_faults.c: hangs, lost replies, stops, part of marlin */
 void marlin_parse_tcases(Suite *s); /* tests/check_marlin_parse.c: reply parsing, part of marlin */
