@@ -55,6 +55,7 @@ void gcodewriter_retract_tcases(Suite *s); /* tests/check_retract.c: retract_lay
 void gcodewriter_accel_tcases(Suite *s); /* tests/check_accel.c: accelerations per role, part of gcodewriter */
 void gcodewriter_progress_tcases(Suite *s); /* tests/check_progress.c: remaining_times, part of gcodewriter */
 Suite *infill_suite(void);	/* tests/check_infill.c: skins, bridges, infill */
+void infill_solid_tests(TCase *tc); /* tests/check_infill_solid.c: shells, strips, gyroid, in infill's "infill" */
 void infill_shell_tcases(Suite *s); /* tests/check_shells.c: vertical shells, part of infill */
 Suite *support_suite(void);	/* tests/check_support.c: skirt, brim, support material */
 Suite *supportmodel_suite(void); /* tests/check_support_model.c: support on the model, bridges, verified */
