@@ -70,6 +70,7 @@ void slicecli_thumbnail_tcases(Suite *s); /* tests/check_thumbnail.c: G-code thu
 Suite *region_suite(void);	/* tests/check_region.c: printed region against cross-sections */
 Suite *thin_suite(void);	/* tests/check_thin.c: walls thinner than the nozzle */
 Suite *x3g_suite(void);		/* tests/check_x3g.c: G-code to X3G, decoder, against gpx */
+void x3g_gpx_tcases(Suite *s); /* tests/check_x3g_gpx.c: the decoder, against gpx, part of x3g */
 Suite *s3g_suite(void);		/* tests/check_s3g.c: S3G packets, driver, simulated Sailfish */
 Suite *serve_suite(void);		/* tests/check_serve.c: stratum serve, the farm node's API and queue */
 void serve_mqtt_tcases(Suite *s); /* tests/check_servemqtt.c: the node on a shared broker, part of serve */
