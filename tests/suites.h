@@ -90,6 +90,7 @@ Suite *console_suite(void);	/* tests/check_console.c: stratum console, send --co
 Suite *guard_suite(void);	/* tests/check_guard.c: the wrong-printer guard, send/print/x3g */
 Suite *print_suite(void);	/* tests/check_print.c: stratum print end to end, both simulators */
 Suite *cli_suite(void);		/* tests/check_cli.c: the stratum binary end to end */
+void cli_repair_tcases(Suite *s); /* tests/check_cli_repair.c: stratum repair end to end, part of cli */
 void cli_stdio_tcases(Suite *s); /* tests/check_clio.c: "-" for stdin/stdout, print --json, part of cli */
 Suite *jobs_suite(void);	/* tests/check_jobs.c: stratum jobs list/show/prune, the size cap */
 Suite *help_suite(void);	/* tests/check_help.c: --help, man pages, completion = the option tables */
