@@ -1,8 +1,9 @@
 /*
- * mqtttest.h - what the serve suite's MQTT tests share (check_serve.c,
- * check_servemqtt.c): a mosquitto broker on a loopback port, a client that
- * keeps the last message of each topic, and a small HTTP file server for
- * the node's downloads.
+ * mqtttest.h - what the serve suite's MQTT tests share (check_servesim.c,
+ * check_servemqtt.c, check_servemqtt_name.c, check_farm.c): a mosquitto
+ * broker on a loopback port, a client that keeps the last message of each
+ * topic, a node on a broker, and a small HTTP file server for the node's
+ * downloads.
  */
 #ifndef STRATUM_TESTS_MQTTTEST_H
 #define STRATUM_TESTS_MQTTTEST_H
@@ -15,6 +16,8 @@
 #include <stdbool.h>
 
 #define MOSQUITTO_BIN "/usr/sbin/mosquitto"
+/* One test-instant printer, mk3s, for a node's config. */
+#define ONE_PRINTER "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = test-instant\n"
 /* The command and result topics of printer mk3s of the test node. */
 #define CMD_TOPIC "stratum/test-node/mk3s/cmd"
 #define RESULT_TOPIC "stratum/test-node/mk3s/result"
@@ -76,5 +79,15 @@ void watch_send(struct mosquitto *mq, const char *topic, const char *payload);
  * bytes) when out is not NULL. */
 void mqtt_command(struct mosquitto *mq, struct mqtt_seen *seen, const char *payload,
 		  const char *want, char *out, size_t cap);
+
+struct node_proc;
+/* write_mqtt_config - np's config: one test-instant printer and [mqtt] on
+ * the broker at port with the lines extra. */
+void write_mqtt_config(struct node_proc *np, int port, const char *extra);
+/* node_on_broker - a broker (its port in *port, its pid returned), the node
+ * np on it with the [mqtt] lines extra, and a client *mq watching the
+ * node's topics into seen, once the node says it is online. */
+pid_t node_on_broker(struct node_proc *np, int *port, const char *extra,
+		     struct mqtt_seen *seen, struct mosquitto **mq);
 
 #endif /* STRATUM_TESTS_MQTTTEST_H */

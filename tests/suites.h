@@ -74,6 +74,7 @@ void x3g_gpx_tcases(Suite *s); /* tests/check_x3g_gpx.c: the decoder, against gp
 Suite *s3g_suite(void);		/* tests/check_s3g.c: S3G packets, driver, simulated Sailfish */
 Suite *serve_suite(void);		/* tests/check_serve.c: stratum serve, the farm node's API and queue */
 void serve_mqtt_tcases(Suite *s); /* tests/check_servemqtt.c: the node on a shared broker, part of serve */
+void serve_mqtt_name_tests(TCase *tc); /* tests/check_servemqtt_name.c: one node per name, in serve's "mqtt" */
 Suite *octoapi_suite(void);	/* tests/check_octoapi.c: the node's OctoPrint calls, one test each */
 void octoapi_printer_tests(TCase *tc); /* tests/check_octoapi_printer.c: printer and job calls, in octoapi's "calls" */
 void octoapi_push_tcases(Suite *s); /* tests/check_octopush.c: the push API, part of octoapi */
