@@ -65,6 +65,7 @@ Suite *multimodel_suite(void); /* tests/check_multimodel.c: several models in on
 Suite *slicecli_suite(void);	/* tests/check_slicecli.c: stratum slice end to end */
 void slicecli_config_tests(TCase *tc); /* tests/check_slicecli_config.c: PrusaSlicer configs, in slicecli's "slice" */
 void slicecli_settings_tcases(Suite *s); /* tests/check_slicesettings.c: settings honoured, part of slicecli */
+void slicecli_settings_more_tests(TCase *tc); /* tests/check_slicesettings_more.c: in slicecli's "settings" */
 void slicecli_widths_tcases(Suite *s); /* tests/check_slicewidths.c: per-role widths, part of slicecli */
 void slicecli_thumbnail_tcases(Suite *s); /* tests/check_thumbnail.c: G-code thumbnails, part of slicecli */
 Suite *region_suite(void);	/* tests/check_region.c: printed region against cross-sections */
