@@ -13,6 +13,7 @@ Suite *meshio_suite(void);	/* tests/check_meshio.c: STL/OBJ/OFF I/O, bad input *
 void meshio_bad_tcases(Suite *s); /* tests/check_meshio_bad.c: bad input, writer failures, part of meshio */
 void meshio_3mf_tcases(Suite *s); /* tests/check_meshio_3mf.c: 3MF, part of the meshio suite */
 Suite *exact_suite(void);	/* tests/check_exact.c: CGAL bridge predicates */
+void exact_pairs_tcases(Suite *s); /* tests/check_exact_pairs.c: hand-placed pairs, arguments, part of exact */
 void exact_patches_tcases(Suite *s); /* tests/check_patches.c: flat patches of the count, part of exact */
 Suite *repair_suite(void);	/* tests/check_repair.c: seed 000 repair end to end */
 void repair_sheet_tcases(Suite *s); /* tests/check_repair_sheet.c: sheets, wires, soups, part of repair */
