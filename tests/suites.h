@@ -74,6 +74,7 @@ Suite *thin_suite(void);	/* tests/check_thin.c: walls thinner than the nozzle */
 Suite *x3g_suite(void);		/* tests/check_x3g.c: G-code to X3G, decoder, against gpx */
 void x3g_gpx_tcases(Suite *s); /* tests/check_x3g_gpx.c: the decoder, against gpx, part of x3g */
 Suite *s3g_suite(void);		/* tests/check_s3g.c: S3G packets, driver, simulated Sailfish */
+void s3g_packets_tcases(Suite *s); /* tests/check_s3g_packets.c: CRC, framing, tables, part of s3g */
 Suite *serve_suite(void);		/* tests/check_serve.c: stratum serve, the farm node's API and queue */
 void serve_mqtt_tcases(Suite *s); /* tests/check_servemqtt.c: the node on a shared broker, part of serve */
 void serve_mqtt_name_tests(TCase *tc); /* tests/check_servemqtt_name.c: one node per name, in serve's "mqtt" */
