@@ -35,15 +35,6 @@ struct farm_env {
 	struct node_proc node[2], farm;
 };
 
-/* Whether mosquitto is here (make deps installs it); prints why not. */
-static bool have_broker(const char *test)
-{
-	if (!access(MOSQUITTO_BIN, X_OK))
-		return true;
-	printf("farm: %s skipped: %s is not installed (make deps)\n", test, MOSQUITTO_BIN);
-	return false;
-}
-
 /* np's files in the scratch folder dir, its config text. */
 static void write_proc(struct node_proc *np, const char *dir, const char *text)
 {
@@ -119,12 +110,10 @@ static json_t *wait_offline(int port, size_t i)
 static void farm_up(struct farm_env *e)
 {
 	static const char *const names[2] = {"a", "b"}, *const keys[2] = {FARM_KEY_A, FARM_KEY_B};
-	char conf[256], text[2048], dir[16];
+	char text[2048], dir[16];
 
 	e->broker_port = free_port();
-	snprintf(conf, sizeof(conf), "listener %d 127.0.0.1\nallow_anonymous true\n"
-				     "persistence false\n", e->broker_port);
-	e->broker = broker_start(e->broker_port, conf);
+	e->broker = anon_broker_start(e->broker_port);
 	for (int i = 0; i < 2; i++) {
 		snprintf(text, sizeof(text),
 			 "[node]\nname = farm-%s\nlisten = 127.0.0.1:0\ndata_dir = data\n"

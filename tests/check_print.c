@@ -104,26 +104,18 @@ static void gcode_commands(const char *path, uint64_t from, struct strs *s, long
 	fclose(f);
 }
 
-/*
- * The simulated Marlin's execution log: "N text" (n) or "- text" (-1).
- * The driver's own unnumbered M105 probes are left out: it sends one
- * after a silence (a loaded machine makes one), and Marlin queues and
- * runs it like any line; file lines are always numbered.
- */
+/* The simulated Marlin's execution log: "N text" (n) or "- text" (-1),
+ * without the driver's own M105 probes (tu_marlin_log_next). */
 static void marlin_log(const char *path, struct strs *s)
 {
 	FILE *f = fopen(path, "r");
 	char line[512];
+	const char *text;
+	long n;
 
 	ck_assert_msg(f != NULL, "%s", path);
-	while (fgets(line, sizeof(line), f)) {
-		char *sp = strchr(line, ' ');
-		line[strcspn(line, "\n")] = '\0';
-		ck_assert_msg(sp != NULL, "log line: %s", line);
-		if (!strcmp(line, "- M105"))
-			continue;
-		strs_add(s, sp + 1, line[0] == '-' ? -1 : atol(line));
-	}
+	while (tu_marlin_log_next(f, line, sizeof(line), &n, &text))
+		strs_add(s, text, n);
 	fclose(f);
 }
 

@@ -1,13 +1,14 @@
 /*
  * check_servemqtt.c - the farm node on an MQTT broker that others share
  * (docs/serve.md "MQTT"), part of the serve suite: commands run only with a
- * key with the control role or signed with one, a second node of one name
- * is refused, the broker's credentials and TLS, downloads only from the
+ * key with the control role or signed with one (a second node of one name
+ * is refused: check_servemqtt_name.c), the broker's credentials and TLS, downloads only from the
  * configured hosts (redirects too), and the broker examples of the docs
  * loaded by mosquitto.  Each test runs its own mosquitto on loopback.
  */
 #include <check.h>
 #include <pthread.h>
+#include <signal.h>
 #include <openssl/evp.h>
 #include <openssl/hmac.h>
 #include <stdio.h>
@@ -22,41 +23,6 @@
 #include "servetest.h"
 #include "suites.h"
 #include "testutil.h"
-
-#define CMD_TOPIC "stratum/test-node/mk3s/cmd"
-#define RESULT_TOPIC "stratum/test-node/mk3s/result"
-#define ONE_PRINTER "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = test-instant\n"
-
-/* Whether mosquitto is here (make deps installs it); prints why not. */
-static bool have_broker(const char *test)
-{
-	if (!access(MOSQUITTO_BIN, X_OK))
-		return true;
-	printf("serve: %s skipped: %s is not installed (make deps)\n", test, MOSQUITTO_BIN);
-	return false;
-}
-
-/* An anonymous broker on a free port; its port in *port. */
-static pid_t open_broker(int *port)
-{
-	char conf[256];
-
-	*port = free_port();
-	snprintf(conf, sizeof(conf), "listener %d 127.0.0.1\nallow_anonymous true\n"
-				     "persistence false\n", *port);
-	return broker_start(*port, conf);
-}
-
-/* np's config: one test-instant printer and [mqtt] on the broker at port
- * with the lines extra. */
-static void write_mqtt_config(struct node_proc *np, int port, const char *extra)
-{
-	char text[2048];
-
-	snprintf(text, sizeof(text), ONE_PRINTER "\n[mqtt]\nhost = 127.0.0.1\nport = %d\n"
-					       "keepalive = 5\n%s", port, extra);
-	sv_write_config(np, text, 8);
-}
 
 /* The [mqtt] keys that would leave a link open or a setting ignored are
  * refused when the config is read, with the key named. */
@@ -110,20 +76,6 @@ START_TEST(test_mqtt_config_errors)
 }
 END_TEST
 
-/* A broker, the node on it with the [mqtt] lines extra, and a client
- * watching the node's topics, once the node says it is online. */
-static pid_t node_on_broker(struct node_proc *np, int *port, const char *extra,
-			    struct mqtt_seen *seen, struct mosquitto **mq)
-{
-	pid_t broker = open_broker(port);
-
-	write_mqtt_config(np, *port, extra);
-	sv_start(np);
-	*mq = watch_start(seen, *port, NULL, NULL, "stratum/test-node/#");
-	wait_topic(seen, "stratum/test-node/status", "online", 10, NULL, 0);
-	return broker;
-}
-
 /* The signed form of the command text for topic, signed with secret as
  * key name by. */
 static void sign(char *out, size_t cap, const char *topic, const char *text, const char *by,
@@ -148,14 +100,6 @@ static void sign(char *out, size_t cap, const char *topic, const char *text, con
 	json_decref(env);
 }
 
-/* Send payload and wait for its answer, which must contain want; the answer in out. */
-static void command(struct mosquitto *mq, struct mqtt_seen *seen, const char *payload,
-		    const char *want, char *out, size_t cap)
-{
-	watch_send(mq, CMD_TOPIC, payload);
-	wait_topic(seen, RESULT_TOPIC, want, 10, out, cap);
-}
-
 /* Commands without a key, with a wrong one, with one lacking the control
  * role, signed wrongly, late or for another topic are refused (and use up
  * no id); a control key or a good signature runs them.  No key is logged. */
@@ -177,57 +121,60 @@ START_TEST(test_mqtt_command_keys)
 	id = sv_print_text(np.port, "", "hold.gcode", "G28\nG4 P20000\nG1 X5\n");
 	sv_wait_state(np.port, "", id, "printing", 10);
 
-	command(mq, &seen, "{\"id\":\"k-1\",\"command\":\"pause\"}", "\"k-1\"", out, sizeof(out));
+	mqtt_command(mq, &seen, "{\"id\":\"k-1\",\"command\":\"pause\"}", "\"k-1\"", out,
+		     sizeof(out));
 	ck_assert_msg(strstr(out, "\"ok\":false") && strstr(out, "a key with the control role is "
-								 "needed"), "%s", out);
-	command(mq, &seen, "{\"id\":\"k-2\",\"command\":\"pause\",\"key\":\"wrong-key-0123456789\"}",
-		"\"k-2\"", out, sizeof(out));
+								 "needed"),
+		      "%s", out);
+	mqtt_command(mq, &seen,
+		     "{\"id\":\"k-2\",\"command\":\"pause\",\"key\":\"wrong-key-0123456789\"}",
+		     "\"k-2\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "the key is not a key of this node"), "%s", out);
 	ck_assert_msg(!strstr(out, "wrong-key"), "the answer holds the key: %s", out);
-	command(mq, &seen, "{\"id\":\"k-3\",\"command\":\"pause\",\"key\":\"" KEY_UP "\"}", "\"k-3\"",
-		out, sizeof(out));
+	mqtt_command(mq, &seen, "{\"id\":\"k-3\",\"command\":\"pause\",\"key\":\"" KEY_UP "\"}",
+		     "\"k-3\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "the key lacks the control role"), "%s", out);
-	command(mq, &seen, "{\"id\":\"k-4\",\"command\":\"pause\",\"key\":\"" KEY_READ "\"}",
-		"\"k-4\"", out, sizeof(out));
+	mqtt_command(mq, &seen, "{\"id\":\"k-4\",\"command\":\"pause\",\"key\":\"" KEY_READ "\"}",
+		     "\"k-4\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "the key lacks the control role"), "%s", out);
 	/* Signed: with the wrong secret, too late, for another printer's topic. */
 	snprintf(text, sizeof(text), "{\"id\":\"k-5\",\"command\":\"pause\",\"time\":%lld}",
 		 (long long)time(NULL));
 	sign(cmd, sizeof(cmd), CMD_TOPIC, text, "operator", "not-the-operator-key-01");
-	command(mq, &seen, cmd, "\"k-5\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"k-5\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "the signature does not match a key of this node"), "%s", out);
 	snprintf(text, sizeof(text), "{\"id\":\"k-6\",\"command\":\"pause\",\"time\":%lld}",
 		 (long long)time(NULL) - 1000);
 	sign(cmd, sizeof(cmd), CMD_TOPIC, text, "operator", KEY_CTL);
-	command(mq, &seen, cmd, "\"k-6\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"k-6\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "a signed command is taken within 300 s"), "%s", out);
 	snprintf(text, sizeof(text), "{\"id\":\"k-7\",\"command\":\"pause\",\"time\":%lld}",
 		 (long long)time(NULL));
 	sign(cmd, sizeof(cmd), "stratum/test-node/ender/cmd", text, "operator", KEY_CTL);
-	command(mq, &seen, cmd, "\"k-7\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"k-7\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "the signature does not match"), "%s", out);
 	snprintf(text, sizeof(text), "{\"id\":\"k-8\",\"command\":\"pause\",\"time\":%lld}",
 		 (long long)time(NULL));
 	sign(cmd, sizeof(cmd), CMD_TOPIC, text, "slicer", KEY_UP);
-	command(mq, &seen, cmd, "\"k-8\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"k-8\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "the key lacks the control role"), "%s", out);
 	ck_assert_str_eq(sv_job_state(np.port, "", id, NULL), "printing");
 
 	/* The control key: k-1 runs now, its refusal used up nothing. */
-	command(mq, &seen, "{\"id\":\"k-1\",\"command\":\"pause\",\"key\":\"" KEY_CTL "\"}",
-		"\"ok\":true", out, sizeof(out));
+	mqtt_command(mq, &seen, "{\"id\":\"k-1\",\"command\":\"pause\",\"key\":\"" KEY_CTL "\"}",
+		     "\"ok\":true", out, sizeof(out));
 	ck_assert_msg(strstr(out, "\"k-1\"") && strstr(out, "\"duplicate\":false"), "%s", out);
 	sv_wait_state(np.port, "", id, "paused", 10);
 	/* Signed with the control key; the same message again is a duplicate. */
 	snprintf(text, sizeof(text), "{\"id\":\"k-9\",\"command\":\"resume\",\"time\":%lld}",
 		 (long long)time(NULL));
 	sign(cmd, sizeof(cmd), CMD_TOPIC, text, "operator", KEY_CTL);
-	command(mq, &seen, cmd, "\"k-9\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"k-9\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "\"ok\":true"), "%s", out);
 	sv_wait_state(np.port, "", id, "printing", 10);
-	command(mq, &seen, cmd, "\"duplicate\":true", out, sizeof(out));
-	command(mq, &seen, "{\"id\":\"k-10\",\"command\":\"cancel\",\"key\":\"" KEY_CTL "\"}",
-		"\"k-10\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"duplicate\":true", out, sizeof(out));
+	mqtt_command(mq, &seen, "{\"id\":\"k-10\",\"command\":\"cancel\",\"key\":\"" KEY_CTL "\"}",
+		     "\"k-10\"", out, sizeof(out));
 	sv_wait_state(np.port, "", id, "cancelled", 10);
 
 	watch_stop(mq, &seen);
@@ -239,64 +186,6 @@ START_TEST(test_mqtt_command_keys)
 			      !strstr(log, KEY_READ),
 		      "a key is in the log: %s", log);
 	free(log);
-	broker_stop(broker);
-}
-END_TEST
-
-/* A second node with a name another node holds on the broker is refused
- * (exit 65) without knocking the first off or opening its printers; a
- * stale "online" with no node behind it does not block the name. */
-START_TEST(test_mqtt_same_name)
-{
-	struct node_proc np;
-	struct mqtt_seen seen;
-	struct mosquitto *mq;
-	char out[4096], text[1024], dir[512], conf[600];
-	int bport, rc;
-	pid_t broker;
-	size_t len;
-	char *log;
-
-	if (!have_broker("MQTT same name"))
-		return;
-	broker = node_on_broker(&np, &bport, "", &seen, &mq);
-	/* The same name from another config and data directory. */
-	snprintf(dir, sizeof(dir), "%s", tu_path("second"));
-	mkdir(dir, 0700);
-	snprintf(conf, sizeof(conf), "%s/node.ini", dir);
-	snprintf(text, sizeof(text), "[node]\nname = test-node\nlisten = 127.0.0.1:0\n"
-				     "data_dir = data\n[key k]\nkey = " KEY_CTL "\nroles = control\n"
-				     ONE_PRINTER "[mqtt]\nhost = 127.0.0.1\nport = %d\n", bport);
-	tu_write_str(conf, text);
-	chmod(conf, 0600);
-	rc = tu_run(out, sizeof(out), "serve --config '%s'", conf);
-	ck_assert_msg(rc == 65, "exit %d: %s", rc, out);
-	ck_assert_msg(strstr(out, "mqtt: another node named test-node is connected to the broker "
-				  "127.0.0.1:") && strstr(out, "give this node another name"),
-		      "%s", out);
-	ck_assert_msg(!strstr(out, "test-instant"), "the refused node opened its printer: %s", out);
-	/* The first node was never off the broker and still answers commands. */
-	command(mq, &seen, "{\"id\":\"n-1\",\"command\":\"pause\",\"key\":\"" KEY_CTL "\"}",
-		"\"n-1\"", out, sizeof(out));
-	ck_assert_msg(strstr(out, "no job"), "%s", out);
-	sv_stop(&np);
-	log = tu_slurp(np.log, &len);
-	ck_assert_msg(!strstr(log, "connection lost"), "%s", log);
-	ck_assert_msg(strstr(log, "a node asked whether the name test-node is held"), "%s", log);
-	free(log);
-	/* Stopped cleanly: offline.  A stale online (a node the broker has not yet
-	 * seen die) delays the start by the ping's wait only. */
-	wait_topic(&seen, "stratum/test-node/status", "offline", 10, NULL, 0);
-	ck_assert_int_eq(mosquitto_publish(mq, NULL, "stratum/test-node/status", 6, "online", 1,
-					   true), 0);
-	wait_topic(&seen, "stratum/test-node/status", "online", 10, NULL, 0);
-	sv_start(&np);
-	wait_topic(&seen, "stratum/test-node/mk3s/status", "Operational", 10, NULL, 0);
-	sv_stop(&np);
-	log = tu_slurp(np.log, &len);
-	ck_assert_msg(strstr(log, "no node answered; taking the name"), "%s", log);
-	free(log);
-	watch_stop(mq, &seen);
 	broker_stop(broker);
 }
 END_TEST
@@ -381,7 +270,7 @@ START_TEST(test_mqtt_downloads)
 		 "\",\"url\":\"http://%s/" file "\"}", port)
 	snprintf(extra, sizeof(extra), "127.0.0.1:%d", allowed.port);
 	ENQUEUE("d-1", extra, "part.gcode");
-	command(mq, &seen, cmd, "\"d-1\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"d-1\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "downloads are off: [mqtt] download_hosts lists no host"), "%s",
 		      out);
 	ck_assert_int_eq(allowed.served, 0);
@@ -393,27 +282,28 @@ START_TEST(test_mqtt_downloads)
 	wait_topic(&seen, "stratum/test-node/status", "online", 10, NULL, 0);
 	snprintf(extra, sizeof(extra), "127.0.0.1:%d", other.port);
 	ENQUEUE("d-2", extra, "part.gcode");
-	command(mq, &seen, cmd, "\"d-2\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"d-2\"", out, sizeof(out));
 	snprintf(extra, sizeof(extra), "127.0.0.1:%d is not in [mqtt] download_hosts", other.port);
 	ck_assert_msg(strstr(out, extra), "%s", out);
 	/* a bare host name allows the scheme's own port (80) only */
 	snprintf(extra, sizeof(extra), "localhost:%d", other.port);
 	ENQUEUE("d-3", extra, "part.gcode");
-	command(mq, &seen, cmd, "\"d-3\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"d-3\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "is not in [mqtt] download_hosts"), "%s", out);
 	/* a redirect from the allowed host to another is checked before it is followed */
 	snprintf(redirect, sizeof(redirect), "http://127.0.0.1:%d/evil.gcode", other.port);
 	allowed.redirect = redirect;
 	snprintf(extra, sizeof(extra), "127.0.0.1:%d", allowed.port);
 	ENQUEUE("d-4", extra, "part.gcode");
-	command(mq, &seen, cmd, "\"d-4\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"d-4\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "redirected to http://127.0.0.1:") &&
-			      strstr(out, "is not in [mqtt] download_hosts"), "%s", out);
+			  strstr(out, "is not in [mqtt] download_hosts"),
+		      "%s", out);
 	ck_assert_int_eq(allowed.served, 1);
 	ck_assert_int_eq(other.served, 0);
 	allowed.redirect = NULL;
 	ENQUEUE("d-5", extra, "part.gcode");
-	command(mq, &seen, cmd, "\"d-5\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"d-5\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "\"ok\":true") && strstr(out, "\"job\":"), "%s", out);
 	ck_assert_int_eq(allowed.served, 2);
 #undef ENQUEUE
@@ -421,154 +311,6 @@ START_TEST(test_mqtt_downloads)
 	sv_stop(&np);
 	file_server_stop(&allowed);
 	file_server_stop(&other);
-	broker_stop(broker);
-}
-END_TEST
-
-/* A client that takes a node's client id, as a second node of its name
- * would: it says online and answers pings; kicks counts how often the
- * broker dropped it for another client with its id. */
-struct impostor {
-	int kicks;
-	pthread_mutex_t mu;
-};
-
-static void impostor_connect(struct mosquitto *mosq, void *ctx, int rc)
-{
-	(void)ctx;
-	if (rc)
-		return;
-	mosquitto_publish(mosq, NULL, "stratum/test-node/status", 6, "online", 1, true);
-	mosquitto_subscribe(mosq, NULL, "stratum/test-node/ping", 0);
-}
-
-static void impostor_message(struct mosquitto *mosq, void *ctx, const struct mosquitto_message *m)
-{
-	char answer[200];
-
-	(void)ctx;
-	snprintf(answer, sizeof(answer), "%.*s: the impostor", m->payloadlen > 64 ? 64 : m->payloadlen,
-		 (const char *)m->payload);
-	mosquitto_publish(mosq, NULL, "stratum/test-node/pong", (int)strlen(answer), answer, 0, false);
-}
-
-static void impostor_disconnect(struct mosquitto *mosq, void *ctx, int rc)
-{
-	struct impostor *im = ctx;
-
-	(void)mosq;
-	pthread_mutex_lock(&im->mu);
-	im->kicks += rc != 0;
-	pthread_mutex_unlock(&im->mu);
-}
-
-/* The impostor, connected to the broker at port (it may take the id from a
- * node connected there), or NULL to end it. */
-static struct mosquitto *impostor_start(struct impostor *im, int port)
-{
-	struct mosquitto *other;
-
-	pthread_mutex_init(&im->mu, NULL);
-	im->kicks = 0;
-	other = mosquitto_new("stratum-test-node", false, im);
-	ck_assert(other);
-	mosquitto_connect_callback_set(other, impostor_connect);
-	mosquitto_message_callback_set(other, impostor_message);
-	mosquitto_disconnect_callback_set(other, impostor_disconnect);
-	mosquitto_reconnect_delay_set(other, 1, 1, false);
-	ck_assert_int_eq(mosquitto_connect(other, "127.0.0.1", port, 30), 0);
-	ck_assert_int_eq(mosquitto_loop_start(other), 0);
-	return other;
-}
-
-/* Wait for the node's log to say it found the impostor and turned MQTT
- * off; then the impostor must keep its connection (the node would be back
- * within 1 s). */
-static void expect_node_yields(struct node_proc *np, struct impostor *im, struct mosquitto *other)
-{
-	char *log = NULL;
-	size_t len;
-	int kicks;
-
-	for (int i = 0; i < 200; i++) {
-		free(log);
-		log = tu_slurp(np->log, &len);
-		if (strstr(log + np->log_end, "MQTT is off until the node restarts"))
-			break;
-		usleep(50000);
-	}
-	ck_assert_msg(strstr(log + np->log_end, "mqtt: another node named test-node is connected "
-						"to the broker") &&
-			      strstr(log + np->log_end, "the impostor") &&
-			      strstr(log + np->log_end, "MQTT is off until the node restarts"),
-		      "%s", log + np->log_end);
-	free(log);
-	sleep(2);
-	pthread_mutex_lock(&im->mu);
-	kicks = im->kicks;
-	pthread_mutex_unlock(&im->mu);
-	ck_assert_int_eq(kicks, 0);
-	mosquitto_disconnect(other);
-	mosquitto_loop_stop(other, false);
-	mosquitto_destroy(other);
-	pthread_mutex_destroy(&im->mu);
-}
-
-/* A running node whose client id another client takes (two nodes of one
- * name that both found it free) checks the name before it reconnects,
- * finds the other, and stays off the broker instead of knocking it off. */
-START_TEST(test_mqtt_name_taken_while_running)
-{
-	struct node_proc np;
-	struct mqtt_seen seen;
-	struct mosquitto *mq, *other;
-	struct impostor im;
-	int bport;
-	pid_t broker;
-
-	if (!have_broker("MQTT name taken while running"))
-		return;
-	broker = node_on_broker(&np, &bport, "", &seen, &mq);
-	other = impostor_start(&im, bport);
-	expect_node_yields(&np, &im, other);
-	sv_stop(&np);
-	watch_stop(mq, &seen);
-	broker_stop(broker);
-}
-END_TEST
-
-/* A broker that is down when the node starts: the node runs, and checks
- * its name once the broker is there; a node that took the name meanwhile
- * keeps it.  Then, with the name free, it connects. */
-START_TEST(test_mqtt_broker_later)
-{
-	struct node_proc np;
-	struct mqtt_seen seen;
-	struct mosquitto *mq, *other;
-	struct impostor im;
-	char conf[256];
-	int bport = free_port();
-	pid_t broker;
-
-	if (!have_broker("MQTT broker later"))
-		return;
-	write_mqtt_config(&np, bport, "");
-	sv_start(&np);
-	snprintf(conf, sizeof(conf), "listener %d 127.0.0.1\nallow_anonymous true\n"
-				     "persistence false\n", bport);
-	broker = broker_start(bport, conf);
-	other = impostor_start(&im, bport);
-	expect_node_yields(&np, &im, other);
-	sv_stop(&np);
-	/* a new broker (nothing retained): the name is free when it comes */
-	broker_stop(broker);
-	sv_start(&np);
-	broker = broker_start(bport, conf);
-	mq = watch_start(&seen, bport, NULL, NULL, "stratum/test-node/#");
-	wait_topic(&seen, "stratum/test-node/status", "online", 10, NULL, 0);
-	wait_topic(&seen, "stratum/test-node/mk3s/status", "Operational", 10, NULL, 0);
-	watch_stop(mq, &seen);
-	sv_stop(&np);
 	broker_stop(broker);
 }
 END_TEST
@@ -655,7 +397,7 @@ START_TEST(test_mqtt_broker_example)
 	snprintf(text, sizeof(text), "{\"id\":\"x-2\",\"command\":\"pause\",\"time\":%lld}",
 		 (long long)time(NULL));
 	sign(cmd, sizeof(cmd), CMD_TOPIC, text, "operator", KEY_CTL);
-	command(mq, &seen, cmd, "\"x-2\"", out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"x-2\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "no job"), "%s", out);
 	pthread_mutex_lock(&seen.mu);
 	ck_assert_int_eq(seen.results, results + 1);
@@ -702,7 +444,8 @@ START_TEST(test_mqtt_temperatures)
 
 	if (!have_broker("test_mqtt_temperatures"))
 		return;
-	broker = open_broker(&port);
+	port = free_port();
+	broker = anon_broker_start(port);
 	snprintf(text, sizeof(text), "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = sim\n"
 		 "sim_speedup = 1000\n[printer cp]\nprofile = flashforge-creator-pro\n"
 		 "port = sim\nsim_speedup = 1000\n\n[mqtt]\nhost = 127.0.0.1\nport = %d\n"
@@ -774,28 +517,36 @@ START_TEST(test_mqtt_queue_commands)
 	sv_print_text(np.port, "", "a.gcode", "G28\n");
 	sv_print_text(np.port, "", "b.gcode", "G28\n");
 	c = sv_print_text(np.port, "", "c.gcode", "G28\n");
-	command(mq, &seen, "{\"id\":\"q-1\",\"command\":\"list\",\"key\":\"" KEY_CTL "\"}",
-		"\"q-1\"", out, sizeof(out));
+	mqtt_command(mq, &seen, "{\"id\":\"q-1\",\"command\":\"list\",\"key\":\"" KEY_CTL "\"}",
+		     "\"q-1\"", out, sizeof(out));
 	ck_assert_str_eq(waiting_names(out), "a.gcode,b.gcode,c.gcode");
-	command(mq, &seen, "{\"id\":\"q-2\",\"command\":\"move\",\"job\":4,\"position\":1}",
-		"\"q-2\"", out, sizeof(out));
+	mqtt_command(mq, &seen, "{\"id\":\"q-2\",\"command\":\"move\",\"job\":4,\"position\":1}",
+		     "\"q-2\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "a key with the control role is needed"), "%s", out);
-	command(mq, &seen, "{\"id\":\"q-3\",\"command\":\"move\",\"job\":4,\"position\":1,"
-		"\"key\":\"" KEY_CTL "\"}", "\"q-3\"", out, sizeof(out));
+	mqtt_command(mq, &seen,
+		     "{\"id\":\"q-3\",\"command\":\"move\",\"job\":4,\"position\":1,"
+		     "\"key\":\"" KEY_CTL "\"}",
+		     "\"q-3\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "\"ok\":true"), "%s", out);
-	command(mq, &seen, "{\"id\":\"q-4\",\"command\":\"move\",\"job\":1,\"position\":1,"
-		"\"key\":\"" KEY_CTL "\"}", "\"q-4\"", out, sizeof(out));
+	mqtt_command(mq, &seen,
+		     "{\"id\":\"q-4\",\"command\":\"move\",\"job\":1,\"position\":1,"
+		     "\"key\":\"" KEY_CTL "\"}",
+		     "\"q-4\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "only a queued job can be moved"), "%s", out);
-	command(mq, &seen, "{\"id\":\"q-5\",\"command\":\"cancel\",\"job\":3,"
-		"\"key\":\"" KEY_CTL "\"}", "\"q-5\"", out, sizeof(out));
+	mqtt_command(mq, &seen,
+		     "{\"id\":\"q-5\",\"command\":\"cancel\",\"job\":3,"
+		     "\"key\":\"" KEY_CTL "\"}",
+		     "\"q-5\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "\"ok\":true"), "%s", out);
 	ck_assert_str_eq(sv_job_state(np.port, "", 3, NULL), "cancelled");
 	ck_assert_str_eq(sv_job_state(np.port, "", hold, NULL), "printing");
-	command(mq, &seen, "{\"id\":\"q-6\",\"command\":\"requeue\",\"job\":3,"
-		"\"key\":\"" KEY_CTL "\"}", "\"q-6\"", out, sizeof(out));
+	mqtt_command(mq, &seen,
+		     "{\"id\":\"q-6\",\"command\":\"requeue\",\"job\":3,"
+		     "\"key\":\"" KEY_CTL "\"}",
+		     "\"q-6\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "\"ok\":true") && strstr(out, "\"job\":5"), "%s", out);
-	command(mq, &seen, "{\"id\":\"q-7\",\"command\":\"list\",\"key\":\"" KEY_CTL "\"}",
-		"\"q-7\"", out, sizeof(out));
+	mqtt_command(mq, &seen, "{\"id\":\"q-7\",\"command\":\"list\",\"key\":\"" KEY_CTL "\"}",
+		     "\"q-7\"", out, sizeof(out));
 	ck_assert_str_eq(waiting_names(out), "c.gcode,a.gcode,b.gcode");
 	ck_assert_int_eq(c, 4);
 	watch_stop(mq, &seen);
@@ -811,9 +562,7 @@ void serve_mqtt_tcases(Suite *s)
 	tcase_set_timeout(tc, 60);
 	tcase_add_test(tc, test_mqtt_config_errors);
 	tcase_add_test(tc, test_mqtt_command_keys);
-	tcase_add_test(tc, test_mqtt_same_name);
-	tcase_add_test(tc, test_mqtt_name_taken_while_running);
-	tcase_add_test(tc, test_mqtt_broker_later);
+	serve_mqtt_name_tests(tc);
 	tcase_add_test(tc, test_mqtt_password);
 	tcase_add_test(tc, test_mqtt_downloads);
 	tcase_add_test(tc, test_mqtt_broker_example);

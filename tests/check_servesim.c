@@ -95,9 +95,10 @@ static char *commands_of(const char *gcode)
 static char *sim_executed_ex(const struct node_proc *np, const char *name, bool emergency_ok)
 {
 	char path[600], line[512];
+	const char *text;
 	size_t cap = 1 << 20, len = 0;
 	char *out = malloc(cap);
-	long last = -1;
+	long last = -1, n;
 	int skip = 3;
 	FILE *f;
 
@@ -105,25 +106,18 @@ static char *sim_executed_ex(const struct node_proc *np, const char *name, bool 
 	f = fopen(path, "r");
 	ck_assert_msg(f, "no simulator log %s", path);
 	ck_assert(out);
-	while (fgets(line, sizeof(line), f)) {
-		char *sp = strchr(line, ' ');
-		long n = atol(line);
-
-		if (emergency_ok && line[0] == '-' && line[1] == ' ')
+	while (tu_marlin_log_next(f, line, sizeof(line), &n, &text)) {
+		if (emergency_ok && n < 0)
 			continue;
-		/* the driver's own M105 probe after a silence (a loaded machine
-		 * makes one); the job's lines are always numbered */
-		if (!strcmp(line, "- M105\n"))
-			continue;
-		ck_assert_msg(sp && line[0] != '-', "unnumbered line executed: %s", line);
+		ck_assert_msg(n >= 0, "unnumbered line executed: %s", text);
 		ck_assert_msg(n == last + 1, "line %ld ran after line %ld", n, last);
 		last = n;
 		if (skip > 0) {
 			skip--;
 			continue;
 		}
-		ck_assert(len + strlen(sp + 1) < cap);
-		len += (size_t)snprintf(out + len, cap - len, "%s", sp + 1);
+		ck_assert(len + strlen(text) + 1 < cap);
+		len += (size_t)snprintf(out + len, cap - len, "%s\n", text);
 	}
 	fclose(f);
 	out[len] = '\0';
@@ -610,51 +604,34 @@ START_TEST(test_sim_sailfish_resume)
 }
 END_TEST
 
-/* Publish a command to mk3s of the test node (QoS 1). */
-static void send_cmd(struct mosquitto *mq, const char *cmd)
-{
-	watch_send(mq, "stratum/test-node/mk3s/cmd", cmd);
-}
-
+/* The node on a broker of its own with printer mk3s: retained state,
+ * commands (enqueue by URL, a duplicate id, cancel, a refused name), the
+ * bed-clear gate and the queue on their topics, and the last will. */
 START_TEST(test_mqtt)
 {
 	struct node_proc np;
 	struct file_server fs;
-	struct mqtt_seen seen = {.n = 0};
+	struct mqtt_seen seen;
 	struct mosquitto *mq;
 	char text[4096], out[2048], cmd[512];
 	int bport, st, results;
 	pid_t broker;
 	long long id;
 
-	if (access("/usr/sbin/mosquitto", X_OK)) {
-		printf("serve: MQTT test skipped: /usr/sbin/mosquitto is not installed (make deps)\n");
+	if (!have_broker("MQTT test"))
 		return;
-	}
-	/* The broker, on a loopback port of its own. */
 	bport = free_port();
-	snprintf(text, sizeof(text), "listener %d 127.0.0.1\nallow_anonymous true\n"
-				     "persistence false\n", bport);
-	broker = broker_start(bport, text);
+	broker = anon_broker_start(bport);
 	file_server_start(&fs, "G28\nG1 X5\nG4 P20000\nG1 X6\n");
 	snprintf(text, sizeof(text), "[printer mk3s]\nprofile = prusa-i3-mk3s\nport = test-instant\n"
 				     "\n[mqtt]\nhost = 127.0.0.1\nport = %d\nkeepalive = 5\n"
 				     "download_hosts = 127.0.0.1:%d\n", bport, fs.port);
 	sv_write_config(&np, text, 8);
-
-	pthread_mutex_init(&seen.mu, NULL);
-	mosquitto_lib_init();
-	mq = mosquitto_new("check-serve", true, &seen);
-	ck_assert(mq);
-	mosquitto_message_callback_set(mq, seen_message);
-	for (int i = 0; i < 100 && mosquitto_connect(mq, "127.0.0.1", bport, 30); i++)
-		usleep(50000); /* the broker may still be starting */
-	/* The node only once the broker listens: a node that finds no
-	 * broker retries after 1, 2, 4, 8 s, and under ASan on a loaded
-	 * machine that once outlasted the 10 s wait for "online" below. */
+	/* The node only once the broker listens (broker_start waits for it): a
+	 * node that finds no broker retries after 1, 2, 4, 8 s, and under ASan
+	 * on a loaded machine that once outlasted the 10 s wait for "online". */
+	mq = watch_start(&seen, bport, NULL, NULL, "stratum/test-node/#");
 	sv_start(&np);
-	ck_assert_int_eq(mosquitto_subscribe(mq, NULL, "stratum/test-node/#", 1), 0);
-	ck_assert_int_eq(mosquitto_loop_start(mq), 0);
 	/* Retained state arrives on subscription. */
 	wait_topic(&seen, "stratum/test-node/status", "online", 10, NULL, 0);
 	wait_topic(&seen, "stratum/test-node/mk3s/status", "Operational", 10, NULL, 0);
@@ -663,15 +640,13 @@ START_TEST(test_mqtt)
 	snprintf(cmd, sizeof(cmd), "{\"id\":\"cmd-1\",\"command\":\"enqueue\",\"key\":\"" KEY_CTL
 				   "\",\"url\":"
 				   "\"http://127.0.0.1:%d/files/dwell.gcode\"}", fs.port);
-	send_cmd(mq, cmd);
-	wait_topic(&seen, "stratum/test-node/mk3s/result", "\"cmd-1\"", 10, out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"cmd-1\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "\"ok\":true") && strstr(out, "\"job\":"), "%s", out);
 	id = atoll(strstr(out, "\"job\":") + 6);
 	pthread_mutex_lock(&seen.mu);
 	results = seen.results;
 	pthread_mutex_unlock(&seen.mu);
-	send_cmd(mq, cmd);
-	wait_topic(&seen, "stratum/test-node/mk3s/result", "\"duplicate\":true", 10, NULL, 0);
+	mqtt_command(mq, &seen, cmd, "\"duplicate\":true", NULL, 0);
 	pthread_mutex_lock(&seen.mu);
 	ck_assert_int_eq(seen.results, results + 1);
 	pthread_mutex_unlock(&seen.mu);
@@ -681,9 +656,8 @@ START_TEST(test_mqtt)
 	wait_topic(&seen, "stratum/test-node/mk3s/status", "Printing", 5, NULL, 0);
 	wait_topic(&seen, "stratum/test-node/mk3s/job", "dwell.gcode", 5, NULL, 0);
 	/* Cancel over MQTT. */
-	snprintf(cmd, sizeof(cmd), "{\"id\":\"cmd-2\",\"command\":\"cancel\",\"key\":\"" KEY_CTL "\"}");
-	send_cmd(mq, cmd);
-	wait_topic(&seen, "stratum/test-node/mk3s/result", "\"cmd-2\"", 10, out, sizeof(out));
+	mqtt_command(mq, &seen, "{\"id\":\"cmd-2\",\"command\":\"cancel\",\"key\":\"" KEY_CTL "\"}",
+		     "\"cmd-2\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "\"ok\":true"), "%s", out);
 	sv_wait_state(np.port, "", id, "cancelled", 5);
 	wait_topic(&seen, "stratum/test-node/mk3s/job", "null", 5, NULL, 0);
@@ -695,7 +669,7 @@ START_TEST(test_mqtt)
 				   "\",\"name\":"
 				   "\"next.gcode\",\"url\":\"http://127.0.0.1:%d/files/d.gcode\"}",
 		 fs.port);
-	send_cmd(mq, cmd);
+	watch_send(mq, CMD_TOPIC, cmd);
 	wait_topic(&seen, "stratum/test-node/mk3s/queue", "\"name\":\"next.gcode\"", 10, out,
 		   sizeof(out));
 	ck_assert_msg(strstr(out, "\"position\":1"), "%s", out);
@@ -703,17 +677,15 @@ START_TEST(test_mqtt)
 	wait_topic(&seen, "stratum/test-node/mk3s/queue", "[]", 10, NULL, 0);
 	wait_topic(&seen, "stratum/test-node/mk3s/job", "next.gcode", 10, NULL, 0);
 	/* A command without id is refused. */
-	snprintf(cmd, sizeof(cmd), "{\"command\":\"pause\",\"key\":\"" KEY_CTL "\"}");
-	send_cmd(mq, cmd);
-	wait_topic(&seen, "stratum/test-node/mk3s/result", "id is required", 10, NULL, 0);
+	mqtt_command(mq, &seen, "{\"command\":\"pause\",\"key\":\"" KEY_CTL "\"}", "id is required",
+		     NULL, 0);
 	/* A refused name: the reason is wrapped whole, not formatted over itself
 	 * (issue 17: the message once garbled). */
 	snprintf(cmd, sizeof(cmd), "{\"id\":\"cmd-3\",\"command\":\"enqueue\",\"key\":\"" KEY_CTL
 				   "\",\"name\":"
 				   "\"../x.gcode\",\"url\":\"http://127.0.0.1:%d/files/x.gcode\"}",
 		 fs.port);
-	send_cmd(mq, cmd);
-	wait_topic(&seen, "stratum/test-node/mk3s/result", "\"cmd-3\"", 10, out, sizeof(out));
+	mqtt_command(mq, &seen, cmd, "\"cmd-3\"", out, sizeof(out));
 	ck_assert_msg(strstr(out, "\"bad file name '../x.gcode': the file name starts with '.' "
 				  "(hidden files and '..' are refused)\""),
 		      "%s", out);
@@ -722,12 +694,9 @@ START_TEST(test_mqtt)
 	ck_assert(waitpid(np.pid, &st, 0) == np.pid);
 	wait_topic(&seen, "stratum/test-node/status", "offline", 15, NULL, 0);
 
-	mosquitto_loop_stop(mq, true);
-	mosquitto_destroy(mq);
-	mosquitto_lib_cleanup();
+	watch_stop(mq, &seen);
 	file_server_stop(&fs);
 	broker_stop(broker);
-	pthread_mutex_destroy(&seen.mu);
 }
 END_TEST
 

@@ -328,19 +328,30 @@ START_TEST(wall_1_5_gap_fill_two_beads)
 }
 END_TEST
 
+/* The wedge of the wedge tests (fx_wedge: LEN long, 2 mm wide at x = LEN,
+ * 1 mm high) and the walls of its layer 2 with s's 0.4 mm nozzle defaults
+ * into out, stats into *thin; the mesh, to mesh_free. */
+static struct mesh *wedge_layer(struct perim_settings *s, struct layer_paths *out,
+				struct perim_thin *thin, double *h)
+{
+	struct mesh *m = fx_wedge(LEN, 2, 1);
+
+	perim_settings_init(s, 0.4);
+	mesh_layer(m, s, 2, out, thin, h);
+	return m;
+}
+
 /* The tip of a wedge, narrower than the nozzle beyond x = 4 mm, is printed
  * down to min_feature_size (0.1 mm, x = 1 mm) at min_bead_width. */
 START_TEST(wedge_tip_printed)
 {
-	struct mesh *m = fx_wedge(LEN, 2, 1);
 	struct perim_settings s;
-	struct layer_paths out = {0};
+	struct layer_paths out;
 	struct perim_thin thin;
 	int64_t tip = INT64_MAX, tip_width = 0;
 	double h;
+	struct mesh *m = wedge_layer(&s, &out, &thin, &h);
 
-	perim_settings_init(&s, 0.4);
-	mesh_layer(m, &s, 2, &out, &thin, &h);
 	for (size_t p = 0; p < out.n; p++)
 		for (size_t k = 0; out.paths[p].role == PATH_THIN_WALL && k < out.paths[p].n; k++)
 			if (out.paths[p].pts[k].x < tip) {
@@ -365,15 +376,13 @@ END_TEST
  */
 START_TEST(wedge_beads_follow_its_width)
 {
-	struct mesh *m = fx_wedge(LEN, 2, 1);
 	struct perim_settings s;
-	struct layer_paths out = {0};
+	struct layer_paths out;
 	struct perim_thin thin;
 	size_t checked = 0;
 	double h;
+	struct mesh *m = wedge_layer(&s, &out, &thin, &h);
 
-	perim_settings_init(&s, 0.4);
-	mesh_layer(m, &s, 2, &out, &thin, &h);
 	for (size_t p = 0; p < out.n; p++)
 		for (size_t k = 0; out.paths[p].role == PATH_THIN_WALL && k + 1 < out.paths[p].n; k++) {
 			const struct path_point *a = &out.paths[p].pts[k], *b = a + 1;
@@ -425,14 +434,12 @@ END_TEST
  */
 START_TEST(wedge_inner_loop_takes_narrow_infill)
 {
-	struct mesh *m = fx_wedge(LEN, 2, 1);
 	struct perim_settings s;
-	struct layer_paths out = {0};
+	struct layer_paths out;
 	struct perim_thin thin;
 	double h, widest = 0;
+	struct mesh *m = wedge_layer(&s, &out, &thin, &h);
 
-	perim_settings_init(&s, 0.4);
-	mesh_layer(m, &s, 2, &out, &thin, &h);
 	for (size_t p = 0; p < out.n; p++)
 		for (size_t k = 0; out.paths[p].role == PATH_INNER_PERIMETER && k < out.paths[p].n; k++)
 			widest = fmax(widest, out.paths[p].pts[k].width / NM);

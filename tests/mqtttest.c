@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "mqtttest.h"
+#include "servetest.h"
 #include "testutil.h"
 
 /* A free loopback TCP port (bound once, then released). */
@@ -124,6 +125,23 @@ void wait_topic(struct mqtt_seen *s, const char *topic, const char *want, int se
 	ck_abort_msg("%s: '%s', waited for '%s'", topic, last, want);
 }
 
+bool have_broker(const char *test)
+{
+	if (!access(MOSQUITTO_BIN, X_OK))
+		return true;
+	printf("%s skipped: %s is not installed (make deps)\n", test, MOSQUITTO_BIN);
+	return false;
+}
+
+pid_t anon_broker_start(int port)
+{
+	char conf[256];
+
+	snprintf(conf, sizeof(conf), "listener %d 127.0.0.1\nallow_anonymous true\n"
+				     "persistence false\n", port);
+	return broker_start(port, conf);
+}
+
 pid_t broker_start(int port, const char *conf)
 {
 	struct passwd *me = getpwuid(getuid());
@@ -213,4 +231,39 @@ void watch_send(struct mosquitto *mq, const char *topic, const char *payload)
 {
 	ck_assert_int_eq(mosquitto_publish(mq, NULL, topic, (int)strlen(payload), payload, 1, false),
 			 0);
+}
+
+void mqtt_command(struct mosquitto *mq, struct mqtt_seen *seen, const char *payload,
+		  const char *want, char *out, size_t cap)
+{
+	watch_send(mq, CMD_TOPIC, payload);
+	wait_topic(seen, RESULT_TOPIC, want, 10, out, cap);
+}
+
+/* np's config: one test-instant printer and [mqtt] on the broker at port
+ * with the lines extra. */
+void write_mqtt_config(struct node_proc *np, int port, const char *extra)
+{
+	char text[2048];
+
+	snprintf(text, sizeof(text), ONE_PRINTER "\n[mqtt]\nhost = 127.0.0.1\nport = %d\n"
+					       "keepalive = 5\n%s", port, extra);
+	sv_write_config(np, text, 8);
+}
+
+/* A broker, the node on it with the [mqtt] lines extra, and a client
+ * watching the node's topics, once the node says it is online. */
+pid_t node_on_broker(struct node_proc *np, int *port, const char *extra,
+		     struct mqtt_seen *seen, struct mosquitto **mq)
+{
+	pid_t broker;
+
+	*port = free_port();
+	broker = anon_broker_start(*port);
+
+	write_mqtt_config(np, *port, extra);
+	sv_start(np);
+	*mq = watch_start(seen, *port, NULL, NULL, "stratum/test-node/#");
+	wait_topic(seen, "stratum/test-node/status", "online", 10, NULL, 0);
+	return broker;
 }

@@ -342,29 +342,23 @@ void sv_operational(int port, const char *prefix)
 void sv_marlin_log(const char *path, const char *first, void (*fn)(void *ctx, const char *text),
 		   void *ctx)
 {
-	char needle[128], *log, *from, *end;
-	size_t n;
-	long last = -1;
+	FILE *log = fopen(path, "r");
+	char line[512];
+	const char *text;
+	long n, last = -1;
+	bool started = false;
 
-	log = tu_slurp(path, &n);
-	snprintf(needle, sizeof(needle), " %s\n", first);
-	from = strstr(log, needle);
-	ck_assert_msg(from, "'%s' did not run: %.300s", first, log);
-	while (from > log && from[-1] != '\n')
-		from--;
-	for (char *line = from; *line; line = end + 1) {
-		long num = atol(line);
-
-		end = strchr(line, '\n');
-		ck_assert(end);
-		if (!strncmp(line, "- M105\n", 7))
-			continue; /* the driver's unnumbered probe when a reply is slow */
-		ck_assert_msg(last < 0 || num == last + 1, "line %ld ran after line %ld", num, last);
-		last = num;
-		*end = '\0';
-		fn(ctx, strchr(line, ' ') + 1);
+	ck_assert_msg(log, "no simulator log %s", path);
+	while (tu_marlin_log_next(log, line, sizeof(line), &n, &text)) {
+		started = started || !strcmp(text, first);
+		if (!started)
+			continue;
+		ck_assert_msg(last < 0 || n == last + 1, "line %ld ran after line %ld", n, last);
+		last = n;
+		fn(ctx, text);
 	}
-	free(log);
+	fclose(log);
+	ck_assert_msg(started, "'%s' did not run (%s)", first, path);
 }
 
 json_t *sv_get_json(int port, const char *path)

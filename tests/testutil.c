@@ -288,6 +288,22 @@ int tu_sh(char *out, size_t cap, const char *cmd_fmt, ...)
 	return run_shell(out, cap, cmd);
 }
 
+int tu_marlin_log_next(FILE *log, char *line, size_t cap, long *n, const char **text)
+{
+	while (fgets(line, (int)cap, log)) {
+		char *sp = strchr(line, ' ');
+
+		line[strcspn(line, "\n")] = '\0';
+		ck_assert_msg(sp != NULL, "simulator log line without a command: %s", line);
+		if (line[0] == '-' && !strcmp(sp + 1, "M105"))
+			continue;
+		*n = line[0] == '-' ? -1 : strtol(line, NULL, 10);
+		*text = sp + 1;
+		return 1;
+	}
+	return 0;
+}
+
 int tu_file_exists(const char *path)
 {
 	struct stat st;

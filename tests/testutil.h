@@ -8,6 +8,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdio.h>
 
 #include "meshio.h"
 #include "gcode_writer.h"
@@ -113,6 +114,17 @@ const char *tu_bin(void);
 #else
 #define TU_SANITIZED 0
 #endif
+
+/*
+ * tu_marlin_log_next - the next entry of the simulated Marlin's execution
+ * log (sim/marlin_sim.h: "N text" per line run): *n is N, or -1 for a line
+ * that ran without a number ("- text"); *text is the command, in line (cap
+ * bytes), without its newline.  The driver's own unnumbered "M105" probes
+ * are left out: it sends one after a silence (a loaded machine makes one)
+ * and Marlin runs it like any line, while a job's lines are always
+ * numbered.  Returns 1 for an entry, 0 at the end of the log.
+ */
+int tu_marlin_log_next(FILE *log, char *line, size_t cap, long *n, const char **text);
 
 /* tu_file_exists - 1 if path exists. */
 int tu_file_exists(const char *path);
