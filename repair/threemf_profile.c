@@ -10,6 +10,7 @@
  * error naming the entry and the line rather than a profile half-used.
  */
 #include "meshio_impl.h"
+#include "st_grow.h"
 #include "st_number.h"
 
 #include <stdarg.h>
@@ -71,7 +72,7 @@ static int line_values(struct mio_src *s, size_t lineno, const char *p, const ch
 					   (int)(len > 40 ? 40 : len), p);
 		}
 		if (n == cap) {
-			double *g = realloc(v, (cap = cap ? 2 * cap : 64) * sizeof(*v));
+			double *g = st_grow(v, &cap, n + 1, sizeof(*v));
 
 			if (!g) {
 				free(v);
