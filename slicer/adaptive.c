@@ -148,6 +148,25 @@ static double steps_up(double h)
 	return ceil(h / ADAPTIVE_STEP_MM - 1e-6) * ADAPTIVE_STEP_MM;
 }
 
+/* The settings with heights in whole steps, never above the largest given,
+ * and the most layers a mesh height mm tall can take (*cap); what names
+ * the plan in the message of a mesh needing too many. */
+static int whole_step_bounds(const struct adaptive_settings *given, double height,
+			     const char *what, struct adaptive_settings *s, size_t *cap,
+			     struct st_error *err)
+{
+	*s = *given;
+	s->max_height = steps_down(given->max_height);
+	s->min_height = fmin(steps_up(given->min_height), s->max_height);
+	if (height / s->min_height > SLICE_MAX_LAYERS)
+		return st_error_set(err, ST_ERR_RANGE,
+				    "%s: a %g mm tall mesh in layers down to %g mm needs more than "
+				    "%u layers; raise min_layer_height",
+				    what, height, s->min_height, SLICE_MAX_LAYERS);
+	*cap = (size_t)ceil(height / s->min_height) + 2;
+	return 0;
+}
+
 /* The height of the layer starting at z: the smallest limit of the cells it touches. */
 static double layer_height_at(const double *limit, size_t ncells, double cell, double z,
 			      const struct adaptive_settings *s)
@@ -175,8 +194,6 @@ int adaptive_plan(const struct mesh *m, const struct adaptive_settings *given,
 	rc = check_settings(given, err);
 	if (rc)
 		return rc;
-	q.max_height = steps_down(given->max_height);
-	q.min_height = fmin(steps_up(given->min_height), q.max_height);
 	if (!m || !m->ntris)
 		return st_error_set(err, ST_ERR_ARG, "adaptive layers: the mesh is empty");
 	mesh_bbox(m, lo, hi);
@@ -185,15 +202,12 @@ int adaptive_plan(const struct mesh *m, const struct adaptive_settings *given,
 		return st_error_set(
 		    err, ST_ERR_ARG,
 		    "adaptive layers: the mesh has coordinates that are not finite");
-	if (height / s->min_height > SLICE_MAX_LAYERS)
-		return st_error_set(err, ST_ERR_RANGE,
-				    "adaptive layers: a %g mm tall mesh in layers down to %g mm "
-				    "needs more than %u layers; raise min_layer_height",
-				    height, s->min_height, SLICE_MAX_LAYERS);
+	rc = whole_step_bounds(given, height, "adaptive layers", &q, &cap, err);
+	if (rc)
+		return rc;
 	if (height / cell > ADAPTIVE_MAX_CELLS)
 		cell = height / ADAPTIVE_MAX_CELLS;
 	ncells = (size_t)ceil(height / cell) + 1;
-	cap = (size_t)ceil(height / s->min_height) + 2;
 	limit = malloc(ncells * sizeof(*limit));
 	out = malloc(cap * sizeof(*out));
 	if (!limit || !out) {
@@ -260,7 +274,7 @@ int adaptive_plan_profile(double height, const struct adaptive_settings *given, 
 			  size_t pairs, struct layer_span **plan, size_t *n, size_t *clamped,
 			  struct st_error *err)
 {
-	struct adaptive_settings s = *given;
+	struct adaptive_settings s;
 	struct layer_span *out;
 	size_t count = 0, cap, k = 0, outside = 0;
 	int rc;
@@ -281,14 +295,9 @@ int adaptive_plan_profile(double height, const struct adaptive_settings *given, 
 	if (!(height > 0) || !isfinite(height))
 		return st_error_set(err, ST_ERR_ARG, "layer height profile: the mesh is %g mm tall",
 				    height);
-	s.max_height = steps_down(given->max_height);
-	s.min_height = fmin(steps_up(given->min_height), s.max_height);
-	if (height / s.min_height > SLICE_MAX_LAYERS)
-		return st_error_set(err, ST_ERR_RANGE,
-				    "layer height profile: a %g mm tall mesh in layers down to %g "
-				    "mm needs more than %u layers; raise min_layer_height",
-				    height, s.min_height, SLICE_MAX_LAYERS);
-	cap = (size_t)ceil(height / s.min_height) + 2;
+	rc = whole_step_bounds(given, height, "layer height profile", &s, &cap, err);
+	if (rc)
+		return rc;
 	out = malloc(cap * sizeof(*out));
 	if (!out)
 		return st_error_set(err, ST_ERR_NOMEM, "layer height profile: out of memory");
