@@ -203,6 +203,9 @@ struct profile {
 	struct profile_pct infill_overlap; /* mm or % of extrusion_width; default 25% */
 	/* mm or % of nozzle_diameter; defaults 25%, 85% */
 	struct profile_pct min_feature_size, min_bead_width;
+	/* mm or % of nozzle_diameter, default 100%; degrees 1-59, default 10 */
+	struct profile_pct wall_transition_length;
+	double wall_transition_angle;
 	/* mm or % of first_layer_height; 0 = each role's width; default 0 */
 	struct profile_pct first_layer_extrusion_width;
 	/* mm or % of layer_height; 0 = extrusion_width; defaults 0 */

@@ -106,6 +106,8 @@ static const struct key_def key_defs[] = {
 	{"infill_overlap", KT_NUM_PCT, P(infill_overlap)},
 	{"min_feature_size", KT_NUM_PCT, P(min_feature_size)},
 	{"min_bead_width", KT_NUM_PCT, P(min_bead_width)},
+	{"wall_transition_length", KT_NUM_PCT, P(wall_transition_length)},
+	{"wall_transition_angle", KT_DOUBLE, S(wall_transition_angle, perim.transition_angle)},
 	{"fill_density", KT_DENSITY, S(fill_density, infill.density)},
 	{"fill_pattern", KT_CHOICE, P(fill_pattern)},
 	{"infill_anchor", KT_NUM_PCT, P(infill_anchor)},

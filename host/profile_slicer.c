@@ -114,6 +114,9 @@ int profile_slicer_config(const struct profile *p, struct slicer_config *c,
 	c->perim.min_feature_size = width_of(&p->min_feature_size, p->nozzle_diameter[0], 0);
 	c->perim.min_bead_width =
 	    width_of(&p->min_bead_width, p->nozzle_diameter[0], c->perim.min_bead_width);
+	c->perim.transition_length = p->wall_transition_length.is_percent
+					 ? p->wall_transition_length.value / 100 * p->nozzle_diameter[0]
+					 : p->wall_transition_length.value;
 	c->first_layer_extrusion_width =
 	    width_of(&p->first_layer_extrusion_width, p->first_layer_height, 0);
 	rc = perim_seam_parse(p->seam_position, &c->perim.seam, err);

@@ -494,6 +494,7 @@ static double wall_depth(const struct ctx *c, int k)
 static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *acc)
 {
 	int N = c->s->perimeters, made = 0, rc = 0;
+	size_t first = c->out->n;
 	struct clip_paths *loops, *narrow, m = {0};
 	struct clip_expolys *strips, area = {0};
 
@@ -556,6 +557,19 @@ static int island(struct ctx *c, const struct clip_paths *R, struct clip_paths *
 		if (!rc)
 			rc = narrow_paths(c, &area, fmax(c->eps - PERIM_EPS_SLACK, c->h),
 					  PATH_THIN_WALL);
+	}
+	/* Each loop's tip carries on into the centre-line bead beyond it. */
+	if (!rc && made) {
+		struct perim_join jp = {.k = c->w - c->sp,
+					.min_width = c->h * 1.01,
+					.length = c->s->transition_length * SLICE_UNITS_PER_MM,
+					.max_angle = c->s->transition_angle * M_PI / 180.0,
+					.reach = c->w / 4.0};
+		rc = perim_join_tips(c->out, first, PATH_OUTER_PERIMETER, PATH_THIN_WALL, &jp,
+				     c->err);
+		if (!rc)
+			rc = perim_join_tips(c->out, first, PATH_INNER_PERIMETER, PATH_GAP_FILL, &jp,
+					     c->err);
 	}
 	for (int k = 0; k < N; k++) {
 		clip_paths_free(&loops[k]);

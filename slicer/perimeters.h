@@ -85,6 +85,10 @@ struct perim_settings {
 				  * 10 um) */
 	double min_bead_width;	/* mm; such a wall's bead is at least this wide, and at
 				 * least the layer height (0.85 x nozzle) */
+	double transition_length; /* mm; a loop's two sides join the centre-line bead
+				   * beyond its tip over this run (the nozzle) */
+	double transition_angle;  /* degrees; a wedge blunter than this gets no join
+				   * (10) */
 	double arc_tolerance;	/* mm; chord error of rounded offsets (0.002) */
 };
 

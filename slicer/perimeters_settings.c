@@ -22,6 +22,8 @@ void perim_settings_init(struct perim_settings *s, double nozzle_diameter)
 	s->gap_fill_min = 0.1;
 	s->min_feature_size = 0.25 * nozzle_diameter;
 	s->min_bead_width = 0.85 * nozzle_diameter;
+	s->transition_length = nozzle_diameter;
+	s->transition_angle = 10.0;
 	s->arc_tolerance = 0.002;
 }
 
@@ -112,6 +114,11 @@ int perim_settings_check(const struct perim_settings *s, double layer_height,
 				    "perimeters: min_bead_width %g mm is out of range; use (0, %g] "
 				    "mm (4 x the nozzle diameter)",
 				    s->min_bead_width, 4.0 * s->nozzle_diameter);
+	int rc = setting_check("perimeters", "wall_transition_length", s->transition_length, err);
+	if (!rc)
+		rc = setting_check("perimeters", "wall_transition_angle", s->transition_angle, err);
+	if (rc)
+		return rc;
 	double narrowest = fmin(s->extrusion_width, perim_outer_width(s));
 	if (!(s->arc_tolerance > 0.0 && s->arc_tolerance <= narrowest / 4.0))
 		return st_error_set(err, ST_ERR_RANGE,

@@ -215,6 +215,13 @@ static const struct setting table[] = {
     {"min_bead_width", PCT, S_, 0, 10, 0, "mm", "85%", NULL, NULL, 0, NULL,
      "the narrowest bead printed for a feature of min_feature_size or wider; a percentage "
      "is of nozzle_diameter (PrusaSlicer's Arachne key)"},
+    {"wall_transition_length", PCT, S_, 0, 10, 0, "mm", "100%", NULL, NULL, 0, NULL,
+     "where a wall's two sides come closer than two beads, they run diagonally over this "
+     "length into the one centre-line bead that carries on, in one run; a percentage is of "
+     "nozzle_diameter (PrusaSlicer's Arachne key)"},
+    {"wall_transition_angle", NUM, S_, 1, 59, 0, "degrees", "10", NULL, NULL, 0, NULL,
+     "a wall that narrows faster than a wedge of this angle is not joined to its centre-line "
+     "bead (PrusaSlicer's Arachne key)"},
     {"overhangs", BOOL, S_, 0, 0, 0, "", "0", NULL, NULL, 0, NULL,
      "walls more than half the nozzle outside the layer below print with bridge flow, "
      "bridge_speed and bridge_fan_speed (Overhang perimeter); PrusaSlicer's default is 1"},
