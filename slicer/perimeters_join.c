@@ -222,6 +222,42 @@ static int join_one(const struct perim_join *jp, const struct toolpath *loop,
 	return 0;
 }
 
+/* A loop's bounding box, nm, grown by its widest bead's half width. */
+struct box {
+	double x0, y0, x1, y1;
+};
+
+static struct box loop_box(const struct toolpath *loop)
+{
+	struct box b = {INFINITY, INFINITY, -INFINITY, -INFINITY};
+	double w = 0;
+
+	for (size_t k = 0; k < loop->n; k++) {
+		b.x0 = fmin(b.x0, (double)loop->pts[k].x);
+		b.y0 = fmin(b.y0, (double)loop->pts[k].y);
+		b.x1 = fmax(b.x1, (double)loop->pts[k].x);
+		b.y1 = fmax(b.y1, (double)loop->pts[k].y);
+		w = fmax(w, (double)loop->pts[k].width);
+	}
+	b.x0 -= w / 2.0;
+	b.y0 -= w / 2.0;
+	b.x1 += w / 2.0;
+	b.y1 += w / 2.0;
+	return b;
+}
+
+/* Whether the line's end (first point when at_start) can touch a loop
+ * inside box b: join_one's distance test, against the box. */
+static bool end_near(const struct box *b, const struct toolpath *line, bool at_start,
+		     double reach)
+{
+	const struct path_point *e = at_start ? &line->pts[0] : &line->pts[line->n - 1];
+	double r = (double)(at_start ? line->pts[0].width : line->pts[line->n - 2].width) / 2.0 +
+		   reach;
+
+	return e->x >= b->x0 - r && e->x <= b->x1 + r && e->y >= b->y0 - r && e->y <= b->y1 + r;
+}
+
 int perim_join_tips(struct layer_paths *out, size_t first, enum path_role loop_role,
 		    enum path_role line_role, const struct perim_join *jp, struct st_error *err)
 {
@@ -229,16 +265,19 @@ int perim_join_tips(struct layer_paths *out, size_t first, enum path_role loop_r
 
 	for (size_t i = first; i < out->n && !rc; i++) {
 		struct toolpath *loop = &out->paths[i];
+		struct box near;
 		if (loop->role != loop_role || !loop->closed)
 			continue;
+		near = loop_box(loop);
 		for (size_t j = first; j < out->n && !rc; j++) {
 			struct toolpath *line = &out->paths[j];
 			struct path_point *joined = NULL;
 			size_t nj = 0;
 			if (line->role != line_role || line->closed || line->n < 2)
 				continue;
-			rc = join_one(jp, loop, line, false, &joined, &nj, err);
-			if (!rc && !nj)
+			if (end_near(&near, line, false, jp->reach))
+				rc = join_one(jp, loop, line, false, &joined, &nj, err);
+			if (!rc && !nj && end_near(&near, line, true, jp->reach))
 				rc = join_one(jp, loop, line, true, &joined, &nj, err);
 			if (rc || !nj)
 				continue;
