@@ -27,12 +27,18 @@ struct cand {
 	size_t a, b; /* ends; the boundary runs forward from a to b */
 };
 
+/* Gaps this close are equal, nm: parallel lines' ends differ by rounding. */
+#define ANCHOR_GAP_TIE_NM 1000.0
+
+/* Shortest first; equal gaps in line order, so that lines given in order
+ * across join into one zigzag (each line's free end the next's join). */
 static int by_gap(const void *x, const void *y)
 {
 	const struct cand *p = x, *q = y;
+	long long gp = llround(p->gap / ANCHOR_GAP_TIE_NM), gq = llround(q->gap / ANCHOR_GAP_TIE_NM);
 
-	if (p->gap != q->gap)
-		return p->gap < q->gap ? -1 : 1;
+	if (gp != gq)
+		return gp < gq ? -1 : 1;
 	return (p->a > q->a) - (p->a < q->a);
 }
 

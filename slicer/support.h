@@ -40,7 +40,9 @@
  * (support_material_bottom_interface_layers, -1 = interface_layers).
  * Interface is lines support_material_interface_spacing apart edge to edge
  * (0: solid, at the flow spacing of perimeters.h) alternating direction by
- * layer (PATH_SUPPORT_INTERFACE); the rest is body (PATH_SUPPORT), lines
+ * layer (PATH_SUPPORT_INTERFACE), joined along the area's boundary where
+ * the link is at most three lines long, as the body's and the raft's lines
+ * are (PrusaSlicer's link_max_length); the rest is body (PATH_SUPPORT), lines
  * support_material_spacing apart edge to edge (a pitch of that plus the
  * flow spacing, as PrusaSlicer reads the key).  Directions are X and Y
  * turned by support_material_angle:

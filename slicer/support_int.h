@@ -33,6 +33,7 @@ int support_line_pieces(struct support_ctx *c, const struct clip_paths *R, doubl
 
 /*
  * support_fill_lines - the pieces of support_line_pieces at c->angle,
+ * joined along R's boundary where the link is at most three lines long,
  * appended to l as role in a zigzag order (every other line reversed).
  */
 int support_fill_lines(struct support_ctx *c, const struct clip_paths *R, double gap, int axis,

@@ -12,9 +12,9 @@
 #include "grow.h"
 #include "patterns.h"
 
-/* Body lines are joined along their boundary where the link is at most
- * this many line pitches long (PrusaSlicer's link_max_length_factor for
- * support, over the support's density). */
+/* Support, interface and raft lines are joined along their boundary where
+ * the link is at most this many line pitches long (PrusaSlicer's
+ * link_max_length_factor for support, over the fill's density). */
 #define SUPPORT_LINK_PITCHES 3.0
 
 /* One clipped line piece, for ordering the pieces of a layer. */
@@ -129,6 +129,22 @@ static int emit_ordered(struct support_ctx *c, const struct clip_paths *cut, dou
 	return rc;
 }
 
+/* The pieces cut (lines every gap nm, clipped to F) joined along F's
+ * boundary where the link is at most SUPPORT_LINK_PITCHES lines long, as
+ * PrusaSlicer links every support and raft fill (link_max_length), then
+ * appended to l as role. */
+static int emit_linked(struct support_ctx *c, const struct clip_paths *F, struct clip_paths *cut,
+		       double gap, int axis, enum path_role role, struct layer_paths *l)
+{
+	int rc = 0;
+
+	if (cut->n)
+		rc = anchors_connect(F, cut, 0.0, SUPPORT_LINK_PITCHES * gap, c->err);
+	if (!rc)
+		rc = emit_ordered(c, cut, gap, axis, role, l);
+	return rc;
+}
+
 int support_fill_lines(struct support_ctx *c, const struct clip_paths *R, double gap, int axis,
 		       enum path_role role, struct layer_paths *l)
 {
@@ -136,7 +152,7 @@ int support_fill_lines(struct support_ctx *c, const struct clip_paths *R, double
 	int rc = support_line_pieces(c, R, gap, c->angle, axis, &cut);
 
 	if (!rc)
-		rc = emit_ordered(c, &cut, gap, axis, role, l);
+		rc = emit_linked(c, R, &cut, gap, axis, role, l);
 	clip_paths_free(&cut);
 	return rc;
 }
@@ -170,10 +186,8 @@ static int body_paths(struct support_ctx *c, const struct clip_paths *R, double 
 	} else if (!rc && c->s->support_material_pattern != SUPPORT_HONEYCOMB) {
 		rc = support_line_pieces(c, F, gap, c->angle, axis, &cut);
 	}
-	if (!rc && cut.n)
-		rc = anchors_connect(F, &cut, 0.0, SUPPORT_LINK_PITCHES * gap, c->err);
 	if (!rc)
-		rc = emit_ordered(c, &cut, gap, axis, PATH_SUPPORT, l);
+		rc = emit_linked(c, F, &cut, gap, axis, PATH_SUPPORT, l);
 	clip_paths_free(&in);
 	clip_paths_free(&cut);
 	clip_paths_free(&comb);

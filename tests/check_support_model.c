@@ -285,18 +285,28 @@ START_TEST(pattern_angle_and_interface_spacing)
 	ck_assert_uint_gt(turned, 100);
 	/* Interface lines 1 mm apart edge to edge: a pitch of 1 mm plus the
 	 * flow spacing, on the plate's top interface layer (43, odd: lines at
-	 * 30 + 90 degrees, so 30 degrees across them). */
+	 * 30 + 90 degrees, so 30 degrees across them), each a segment over a
+	 * millimetre long (the links between them along the edge are not). */
 	const struct layer_paths *l = &ls->layers[43];
 	double pitch = (1.0 + perim_spacing(s.extrusion_width, 0.2)) * NM;
-	for (size_t i = 1; i < l->n; i++) {
-		const struct path_point *p = &l->paths[i - 1].pts[0], *q = &l->paths[i].pts[0];
-		double across = fabs((q->x - p->x) * cos(M_PI / 6) + (q->y - p->y) * sin(M_PI / 6));
-		if (l->paths[i].role != PATH_SUPPORT_INTERFACE || across < 0.1 * NM)
-			continue;
-		faces++;
-		ck_assert_msg(fabs(fmod(across + pitch / 2, pitch) - pitch / 2) < 0.01 * NM,
-			      "interface lines %.4f mm apart, pitch %.4f", across / NM, pitch / NM);
-	}
+	const struct path_point *first = NULL;
+	for (size_t i = 0; i < l->n; i++)
+		for (size_t k = 0; l->paths[i].role == PATH_SUPPORT_INTERFACE && k + 1 < l->paths[i].n;
+		     k++) {
+			const struct path_point *p = &l->paths[i].pts[k], *q = p + 1;
+			double along = (q->x - p->x) * cos(2 * M_PI / 3) + (q->y - p->y) * sin(2 * M_PI / 3);
+			double side = (q->x - p->x) * cos(M_PI / 6) + (q->y - p->y) * sin(M_PI / 6);
+			if (fabs(along) < 1.0 * NM || fabs(side) > 0.01 * NM)
+				continue;
+			if (!first)
+				first = p;
+			double across = fabs((p->x - first->x) * cos(M_PI / 6) +
+					     (p->y - first->y) * sin(M_PI / 6));
+			faces++;
+			ck_assert_msg(fabs(fmod(across + pitch / 2, pitch) - pitch / 2) < 0.01 * NM,
+				      "interface lines %.4f mm apart, pitch %.4f", across / NM,
+				      pitch / NM);
+		}
 	ck_assert_uint_gt(faces, 3);
 	layer_stack_free(ls);
 	slice_stack_free(st);
