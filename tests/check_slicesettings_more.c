@@ -389,6 +389,28 @@ START_TEST(retract_before_wipe_list)
 }
 END_TEST
 
+/* wall_transition_length is a length or a percentage of the nozzle, 100 %
+ * by default as PrusaSlicer's; wall_transition_angle in degrees. */
+START_TEST(wall_transition_keys)
+{
+	struct slicer_config c;
+	struct profile *p = config_of("nozzle_diameter = 0.6\n", &c);
+
+	ck_assert_double_eq_tol(c.perim.transition_length, 0.6, 1e-12);
+	ck_assert_double_eq(c.perim.transition_angle, 10);
+	profile_free(p);
+	p = config_of("nozzle_diameter = 0.4\nwall_transition_length = 50%\n"
+		      "wall_transition_angle = 20\n",
+		      &c);
+	ck_assert_double_eq_tol(c.perim.transition_length, 0.2, 1e-12);
+	ck_assert_double_eq(c.perim.transition_angle, 20);
+	profile_free(p);
+	p = config_of("wall_transition_length = 0\n", &c);
+	ck_assert_double_eq(c.perim.transition_length, 0);
+	profile_free(p);
+}
+END_TEST
+
 /* M73 Q S for silent_mode with a marlin flavour only, as PrusaSlicer. */
 START_TEST(silent_mode_needs_marlin)
 {
@@ -420,4 +442,5 @@ void slicecli_settings_more_tests(TCase *tc)
 	tcase_add_test(tc, profile_keys_reach_slicer_fields);
 	tcase_add_test(tc, silent_mode_needs_marlin);
 	tcase_add_test(tc, retract_before_wipe_list);
+	tcase_add_test(tc, wall_transition_keys);
 }
