@@ -157,9 +157,10 @@ static int join_one(const struct perim_join *jp, const struct toolpath *loop,
 		double sx = (double)(p1->x - p0->x), sy = (double)(p1->y - p0->y);
 		double l2 = sx * sx + sy * sy, t = 0, cx, cy, d2;
 		if (l2 > 0)
-			t = fmin(fmax((((double)e->x - p0->x) * sx + ((double)e->y - p0->y) * sy) / l2,
-				      0.0),
-				 1.0);
+			t = fmin(
+			    fmax((((double)e->x - p0->x) * sx + ((double)e->y - p0->y) * sy) / l2,
+				 0.0),
+			    1.0);
 		cx = (double)p0->x + t * sx;
 		cy = (double)p0->y + t * sy;
 		d2 = (cx - f.ex) * (cx - f.ex) + (cy - f.ey) * (cy - f.ey);
@@ -201,7 +202,8 @@ static int join_one(const struct perim_join *jp, const struct toolpath *loop,
 	cnt = (ja + n - jb) % n + 1;
 	pts = malloc((keep + 2 * JOIN_PIECES + cnt + 4) * sizeof(*pts));
 	if (!pts)
-		return st_error_set(err, ST_ERR_NOMEM, "perimeters: out of memory for a transition");
+		return st_error_set(err, ST_ERR_NOMEM,
+				    "perimeters: out of memory for a transition");
 	k = 0;
 	for (size_t s = 0; s < keep; s++) {
 		struct path_point c = *oriented(line, at_start, s);
@@ -248,12 +250,11 @@ static struct box loop_box(const struct toolpath *loop)
 
 /* Whether the line's end (first point when at_start) can touch a loop
  * inside box b: join_one's distance test, against the box. */
-static bool end_near(const struct box *b, const struct toolpath *line, bool at_start,
-		     double reach)
+static bool end_near(const struct box *b, const struct toolpath *line, bool at_start, double reach)
 {
 	const struct path_point *e = at_start ? &line->pts[0] : &line->pts[line->n - 1];
-	double r = (double)(at_start ? line->pts[0].width : line->pts[line->n - 2].width) / 2.0 +
-		   reach;
+	double r =
+	    (double)(at_start ? line->pts[0].width : line->pts[line->n - 2].width) / 2.0 + reach;
 
 	return e->x >= b->x0 - r && e->x <= b->x1 + r && e->y >= b->y0 - r && e->y <= b->y1 + r;
 }
