@@ -46,7 +46,8 @@ static int64_t overhang_bead(const struct overhang_settings *s, int64_t w, doubl
 }
 
 /* Emit piece pc (its points, the last one included) of role into out and
- * start the next at its last point. */
+ * start the next at its last point; every point width wide, or with
+ * width 0 as wide as it was added (each point's width is its segment's). */
 static int piece_flush(struct piece *pc, struct layer_paths *out, enum path_role role,
 		       int64_t width, struct st_error *err)
 {
@@ -57,20 +58,26 @@ static int piece_flush(struct piece *pc, struct layer_paths *out, enum path_role
 	for (size_t k = 0; k < pc->n; k++)
 		if (!keep || pc->pts[k].x != pc->pts[keep - 1].x || pc->pts[k].y != pc->pts[keep - 1].y)
 			pc->pts[keep++] = pc->pts[k];
-	for (size_t k = 0; k < keep; k++)
+		else
+			pc->pts[keep - 1].width = pc->pts[k].width;
+	int64_t carried = keep ? pc->pts[keep - 1].width : 0; /* the next piece's */
+	for (size_t k = 0; k < keep && width; k++)
 		pc->pts[k].width = width;
 	if (keep >= 2)
 		rc = layer_add_path(out, role, false, pc->pts, keep, err);
 	if (keep) {
 		pc->pts[0] = pc->pts[keep - 1];
+		pc->pts[0].width = carried;
 		pc->n = 1;
 	}
 	return rc;
 }
 
-/* Loop p (closed) cut into its pieces from its seam, appended to out;
- * *cut false (nothing appended) when it lies wholly on one side. */
-static int split_loop(const struct toolpath *p, const struct clip_locator *lower, double h,
+/* Wall p (a closed loop, or an open run a loop's tip joined to its
+ * centre-line bead: perimeters_join.c) cut into its pieces from its start,
+ * appended to out, the supported ones keeping each segment's width; *cut
+ * false (nothing appended) when it lies wholly on one side. */
+static int split_wall(const struct toolpath *p, const struct clip_locator *lower, double h,
 		      const struct overhang_settings *s, struct layer_paths *out, bool *cut,
 		      struct st_error *err)
 {
@@ -78,16 +85,17 @@ static int split_loop(const struct toolpath *p, const struct clip_locator *lower
 	struct piece pc = {0};
 	bool first = clip_locator_inside(lower, p->pts[0].x, p->pts[0].y), in = first;
 	bool mixed = false;
+	size_t segs = p->closed ? p->n : p->n - 1;
 	int rc = 0;
 
-	/* a first pass only asks whether the loop is cut at all */
+	/* a first pass only asks whether the wall is cut at all */
 	for (int pass = 0; pass < 2 && !rc; pass++) {
 		if (pass == 1 && !mixed)
 			break;
 		in = first;
 		if (pass == 1)
-			rc = piece_add(&pc, p->pts[0].x, p->pts[0].y, 0);
-		for (size_t i = 0; i < p->n && !rc; i++) {
+			rc = piece_add(&pc, p->pts[0].x, p->pts[0].y, p->pts[0].width);
+		for (size_t i = 0; i < segs && !rc; i++) {
 			const struct path_point *a = &p->pts[i], *b = &p->pts[(i + 1) % p->n];
 			double len = hypot((double)(b->x - a->x), (double)(b->y - a->y));
 			size_t steps = (size_t)ceil(len / OVERHANG_STEP_NM);
@@ -103,12 +111,12 @@ static int split_loop(const struct toolpath *p, const struct clip_locator *lower
 					mixed = true;
 					if (pass == 1) {
 						rc = piece_add(&pc, llround((px + qx) / 2),
-							       llround((py + qy) / 2), 0);
+							       llround((py + qy) / 2), a->width);
 						if (!rc)
 							rc = piece_flush(&pc, out,
 									 in ? p->role
 									    : PATH_OVERHANG_PERIMETER,
-									 in ? a->width : bead, err);
+									 in ? 0 : bead, err);
 					}
 					in = q_in;
 				}
@@ -116,11 +124,11 @@ static int split_loop(const struct toolpath *p, const struct clip_locator *lower
 				py = qy;
 			}
 			if (pass == 1 && !rc)
-				rc = piece_add(&pc, b->x, b->y, 0);
+				rc = piece_add(&pc, b->x, b->y, b->width);
 		}
 		if (pass == 1 && !rc)
 			rc = piece_flush(&pc, out, in ? p->role : PATH_OVERHANG_PERIMETER,
-					 in ? p->pts[0].width : bead, err);
+					 in ? 0 : bead, err);
 	}
 	free(pc.pts);
 	*cut = mixed;
@@ -132,7 +140,7 @@ static int split_loop(const struct toolpath *p, const struct clip_locator *lower
 			return st_error_set(err, ST_ERR_NOMEM, "overhangs: out of memory");
 		for (size_t k = 0; k < p->n; k++)
 			q[k] = (struct path_point){p->pts[k].x, p->pts[k].y, bead};
-		rc = layer_add_path(out, PATH_OVERHANG_PERIMETER, true, q, p->n, err);
+		rc = layer_add_path(out, PATH_OVERHANG_PERIMETER, p->closed, q, p->n, err);
 		free(q);
 		*cut = true;
 	}
@@ -162,9 +170,8 @@ int overhang_split(struct layer_paths *l, const struct clip_paths *here,
 		const struct toolpath *p = &l->paths[i];
 		bool cut = false;
 
-		if (p->closed &&
-		    (p->role == PATH_OUTER_PERIMETER || p->role == PATH_INNER_PERIMETER))
-			rc = split_loop(p, lower, l->height, s, &out, &cut, err);
+		if (p->role == PATH_OUTER_PERIMETER || p->role == PATH_INNER_PERIMETER)
+			rc = split_wall(p, lower, l->height, s, &out, &cut, err);
 		if (!rc && !cut)
 			rc = layer_add_path(&out, p->role, p->closed, p->pts, p->n, err);
 		any = any || cut;

@@ -34,13 +34,14 @@ struct overhang_settings {
 };
 
 /*
- * overhang_split - cut the closed wall loops (PATH_OUTER_PERIMETER,
- * PATH_INNER_PERIMETER) of layer l, whose solid regions are here, where
- * they leave below (the solid regions of the layer under it, nm) grown by
- * half the nozzle: each loop
- * that does becomes its pieces in order from its seam, open paths of its
- * own role and of PATH_OVERHANG_PERIMETER (a loop wholly outside stays
- * closed, of that role).  Other paths and their order are kept.
+ * overhang_split - cut the walls (PATH_OUTER_PERIMETER,
+ * PATH_INNER_PERIMETER: closed loops, and the open runs where a loop's tip
+ * carries on into its centre-line bead) of layer l, whose solid regions
+ * are here, where they leave below (the solid regions of the layer under
+ * it, nm) grown by half the nozzle: each wall that does becomes its pieces
+ * in order from its start, open paths of its own role (each segment as
+ * wide as it was) and of PATH_OVERHANG_PERIMETER (a wall wholly outside
+ * stays as it is, of that role).  Other paths and their order are kept.
  * Returns 0, ST_ERR_NOMEM, or Clipper's error; on error l is unchanged.
  */
 int overhang_split(struct layer_paths *l, const struct clip_paths *here,

@@ -15,6 +15,7 @@
 
 #include "fixtures.h"
 #include "meshio.h"
+#include "overhang.h"
 #include "perimeters.h"
 #include "region.h"
 #include "section.h"
@@ -474,6 +475,44 @@ START_TEST(wedge_loop_joins_its_centre_bead)
 }
 END_TEST
 
+/*
+ * overhangs = 1 cuts a joined run (open, its widths varying) where it
+ * leaves the layer below as it cuts closed loops (before, open walls were
+ * left whole): a run from x 0 to 10 mm over a layer below reaching x 5 mm
+ * prints as a wall up to 5.2 mm (half the nozzle) keeping its 0.5 and 0.6
+ * mm segments, then an overhang piece at bridge flow.
+ */
+START_TEST(joined_run_split_over_air)
+{
+	const int64_t mm = (int64_t)NM;
+	struct path_point run[3] = {{0, 0, 5 * mm / 10}, {4 * mm, 0, 6 * mm / 10},
+				    {10 * mm, 0, 6 * mm / 10}};
+	int64_t here_xy[8] = {-mm, -mm, 11 * mm, -mm, 11 * mm, mm, -mm, mm};
+	int64_t below_xy[8] = {-mm, -mm, 5 * mm, -mm, 5 * mm, mm, -mm, mm};
+	struct clip_paths here = {0}, below = {0};
+	struct layer_paths l = {.z = 0.4, .height = 0.2};
+	struct overhang_settings os = {0.4, true, 1.0};
+	struct st_error err = {0};
+
+	ck_assert_int_eq(clip_paths_add(&here, here_xy, 4, &err), 0);
+	ck_assert_int_eq(clip_paths_add(&below, below_xy, 4, &err), 0);
+	ck_assert_int_eq(layer_add_path(&l, PATH_OUTER_PERIMETER, false, run, 3, &err), 0);
+	ck_assert_msg(overhang_split(&l, &here, &below, &os, &err) == 0, "%s", err.msg);
+	ck_assert_uint_eq(l.n, 2);
+	ck_assert_int_eq(l.paths[0].role, PATH_OUTER_PERIMETER);
+	ck_assert_uint_eq(l.paths[0].n, 3);
+	ck_assert_int_eq(l.paths[0].pts[0].width, run[0].width);
+	ck_assert_int_eq(l.paths[0].pts[1].width, run[1].width);
+	ck_assert(llabs(l.paths[0].pts[2].x - 52 * mm / 10) <= mm / 20);
+	ck_assert_int_eq(l.paths[1].role, PATH_OVERHANG_PERIMETER);
+	ck_assert_int_eq(l.paths[1].pts[l.paths[1].n - 1].x, 10 * mm);
+	ck_assert_int_gt(l.paths[1].pts[0].width, run[2].width);
+	free_layer(&l);
+	clip_paths_free(&here);
+	clip_paths_free(&below);
+}
+END_TEST
+
 /* wall_transition_angle is PrusaSlicer's 1 to 59 degrees. */
 START_TEST(transition_angle_range)
 {
@@ -612,6 +651,7 @@ Suite *thin_suite(void)
 	tcase_add_test(tc, wedge_beads_follow_its_width);
 	tcase_add_test(tc, wedge_loop_joins_its_centre_bead);
 	tcase_add_test(tc, transition_angle_range);
+	tcase_add_test(tc, joined_run_split_over_air);
 	tcase_add_test(tc, wide_bead_corners_left_alone);
 	tcase_add_test(tc, cli_warns_once);
 	suite_add_tcase(s, tc);
