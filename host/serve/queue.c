@@ -144,6 +144,7 @@ static sqlite3_stmt *prepare(struct node_queue *q, const char *sql, const char *
 	return st;
 }
 
+/* prepare, with the parameters as arguments. */
 static sqlite3_stmt *prepare_args(struct node_queue *q, const char *sql, const char *fmt, ...)
 {
 	sqlite3_stmt *st;
