@@ -4,15 +4,12 @@
 #include "accplot.h"
 
 #include <cairo.h>
-#include <errno.h>
 #include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
 
 #include "pngout.h"
-#include "st_file.h"
 
 #define FONT_PX 12
 #define MARGIN 16
@@ -33,27 +30,6 @@
 #define HIST_H 170
 #define VIEW_AZIMUTH (-35.0 * M_PI / 180) /* seen from the front left */
 #define VIEW_ELEVATION (25.0 * M_PI / 180)
-
-static void rgb(cairo_t *cr, unsigned c)
-{
-	cairo_set_source_rgb(cr, ((c >> 16) & 0xff) / 255.0, ((c >> 8) & 0xff) / 255.0,
-			     (c & 0xff) / 255.0);
-}
-
-static void text_at(cairo_t *cr, double x, double y, const char *s)
-{
-	cairo_move_to(cr, x, y);
-	cairo_show_text(cr, s);
-}
-
-/* Right-aligned at x. */
-static void text_right(cairo_t *cr, double x, double y, const char *s)
-{
-	cairo_text_extents_t e;
-
-	cairo_text_extents(cr, s, &e);
-	text_at(cr, x - e.x_advance, y, s);
-}
 
 /* The 1-2-5 step that labels 0 .. hi with at most TICKS_MAX ticks. */
 static double tick_step(double hi)
@@ -85,38 +61,12 @@ static void scale_colour(double f, double rgb_out[3])
 		rgb_out[c] = stops[i][c] + (x - i) * (stops[i + 1][c] - stops[i][c]);
 }
 
-/* Whatever was drawn on cr into path as PNG, atomically; cr and surf are freed. */
-static int finish_png(cairo_t *cr, cairo_surface_t *surf, const char *path, struct st_error *err)
-{
-	struct st_file_out out;
-	int rc = st_file_begin(&out, path, err);
-
-	if (rc) {
-		cairo_destroy(cr);
-		cairo_surface_destroy(surf);
-		return rc;
-	}
-	rc = pngout_write(cr, surf, out.f, path, " drawing the picture", err);
-	if (rc) {
-		st_file_abort(&out);
-		return rc;
-	}
-	return st_file_commit(&out, err);
-}
-
+/* A white w x h picture with its title, drawing in black. */
 static cairo_t *start(int w, int h, const char *title, cairo_surface_t **surf)
 {
-	cairo_t *cr;
+	cairo_t *cr = pngout_canvas(w, h, FONT_PX, surf);
 
-	*surf = cairo_image_surface_create(CAIRO_FORMAT_RGB24, w, h);
-	cr = cairo_create(*surf);
-	rgb(cr, 0xffffff);
-	cairo_paint(cr);
-	cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL,
-			       CAIRO_FONT_WEIGHT_NORMAL);
-	cairo_set_font_size(cr, FONT_PX);
-	rgb(cr, 0x000000);
-	text_at(cr, MARGIN, MARGIN + FONT_PX, title ? title : "");
+	pngout_text(cr, MARGIN, MARGIN + FONT_PX, title ? title : "", 0);
 	return cr;
 }
 
@@ -136,31 +86,31 @@ int accplot_cusp(const struct cusp_report *r, const char *title, const char *pat
 	/* axes, ticks and grid */
 	cairo_set_line_width(cr, 1);
 	for (double v = 0, s = tick_step(cmax); v <= cmax + 1e-12; v += s) {
-		rgb(cr, 0xdddddd);
+		pngout_rgb(cr, 0xdddddd);
 		cairo_move_to(cr, x0 + v * sx, y0);
 		cairo_line_to(cr, x0 + v * sx, y1);
 		cairo_stroke(cr);
-		rgb(cr, 0x000000);
+		pngout_rgb(cr, 0x000000);
 		snprintf(label, sizeof(label), "%g", v);
-		text_at(cr, x0 + v * sx - 8, y0 + 16, label);
+		pngout_text(cr, x0 + v * sx - 8, y0 + 16, label, 0);
 	}
 	for (double v = 0, s = tick_step(ztop); v <= ztop + 1e-12; v += s) {
-		rgb(cr, 0xdddddd);
+		pngout_rgb(cr, 0xdddddd);
 		cairo_move_to(cr, x0, y0 - v * sy);
 		cairo_line_to(cr, x1, y0 - v * sy);
 		cairo_stroke(cr);
-		rgb(cr, 0x000000);
+		pngout_rgb(cr, 0x000000);
 		snprintf(label, sizeof(label), "%g", v);
-		text_right(cr, x0 - 6, y0 - v * sy + 4, label);
+		pngout_text(cr, x0 - 6, y0 - v * sy + 4, label, 1);
 	}
-	rgb(cr, 0x000000);
+	pngout_rgb(cr, 0x000000);
 	cairo_rectangle(cr, x0, y1, x1 - x0, y0 - y1);
 	cairo_stroke(cr);
-	text_at(cr, (x0 + x1) / 2 - 60, PLOT_H - 12, "cusp height, mm");
+	pngout_text(cr, (x0 + x1) / 2 - 60, PLOT_H - 12, "cusp height, mm", 0);
 	cairo_save(cr);
 	cairo_translate(cr, 18, (y0 + y1) / 2 + 50);
 	cairo_rotate(cr, -M_PI / 2);
-	text_at(cr, 0, 0, "Z above the bed, mm");
+	pngout_text(cr, 0, 0, "Z above the bed, mm", 0);
 	cairo_restore(cr);
 	/* every box, then the layer lines over them */
 	cairo_set_source_rgba(cr, 0.45, 0.45, 0.45, 0.35);
@@ -170,7 +120,7 @@ int accplot_cusp(const struct cusp_report *r, const char *title, const char *pat
 	}
 	for (int line = 0; line < 2; line++) {
 		bool first = true;
-		rgb(cr, line ? 0x2f6fb2 : 0xc0392b);
+		pngout_rgb(cr, line ? 0x2f6fb2 : 0xc0392b);
 		cairo_set_line_width(cr, 1.5);
 		for (size_t i = 0; i < r->nslices; i++) {
 			const struct cusp_slice *s = &r->slices[i];
@@ -187,13 +137,13 @@ int accplot_cusp(const struct cusp_report *r, const char *title, const char *pat
 	const unsigned colours[3] = {0xc0392b, 0x2f6fb2, 0x999999};
 	for (int k = 0; k < 3; k++) {
 		double lx = x0 + 170 * k, ly = MARGIN + FONT_PX + 20;
-		rgb(cr, colours[k]);
+		pngout_rgb(cr, colours[k]);
 		cairo_rectangle(cr, lx, ly - 5, 20, k == 2 ? 3 : 2);
 		cairo_fill(cr);
-		rgb(cr, 0x000000);
-		text_at(cr, lx + 26, ly, names[k]);
+		pngout_rgb(cr, 0x000000);
+		pngout_text(cr, lx + 26, ly, names[k], 0);
 	}
-	return finish_png(cr, surf, path, err);
+	return pngout_save(cr, surf, path, path, " drawing the picture", err);
 }
 
 /* ---- a mesh coloured per facet ---- */
@@ -324,21 +274,21 @@ static void draw_scale(cairo_t *cr, const struct accplot_values *v, double x, do
 		cairo_rectangle(cr, x, y + i, BAR_W, 1);
 		cairo_fill(cr);
 	}
-	rgb(cr, 0x000000);
+	pngout_rgb(cr, 0x000000);
 	for (double t = 0; vmax > 0 && t <= vmax + 1e-12; t += step) {
 		snprintf(label, sizeof(label), "%g", t);
-		text_at(cr, x + BAR_W + 6, y + h - t / vmax * h + 4, label);
+		pngout_text(cr, x + BAR_W + 6, y + h - t / vmax * h + 4, label, 0);
 	}
-	text_at(cr, x - 10, y - 10, v->what);
+	pngout_text(cr, x - 10, y - 10, v->what, 0);
 	snprintf(label, sizeof(label), "mm (max %.4g)", vmax);
-	text_at(cr, x - 10, y + h + 18, label);
+	pngout_text(cr, x - 10, y + h + 18, label, 0);
 	if (v->grey_to >= 0) {
 		cairo_set_source_rgb(cr, 0.8, 0.8, 0.8);
 		cairo_rectangle(cr, x - 10, y + h + 30, BAR_W, 10);
 		cairo_fill(cr);
-		rgb(cr, 0x000000);
+		pngout_rgb(cr, 0x000000);
 		snprintf(label, sizeof(label), "up to %g mm", v->grey_to);
-		text_at(cr, x + BAR_W - 4, y + h + 40, label);
+		pngout_text(cr, x + BAR_W - 4, y + h + 40, label, 0);
 	}
 }
 
@@ -350,19 +300,19 @@ static void draw_hist(cairo_t *cr, const struct accplot_hist *hist, double x, do
 
 	for (size_t i = 0; i < hist->n; i++)
 		top = fmax(top, hist->share[i]);
-	rgb(cr, 0x000000);
-	text_at(cr, x, y - 8, "share of both surfaces' area by distance, mm");
+	pngout_rgb(cr, 0x000000);
+	pngout_text(cr, x, y - 8, "share of both surfaces' area by distance, mm", 0);
 	for (size_t i = 0; i < hist->n; i++) {
 		double col[3], bh = top > 0 ? hist->share[i] / top * (h - 30) : 0;
 		scale_colour(((double)i + 0.5) / (double)hist->n, col);
 		cairo_set_source_rgb(cr, col[0], col[1], col[2]);
 		cairo_rectangle(cr, x + i * bw + 1, y + h - 20 - bh, bw - 2, bh);
 		cairo_fill(cr);
-		rgb(cr, 0x000000);
+		pngout_rgb(cr, 0x000000);
 		snprintf(label, sizeof(label), "%.1f%%", 100 * hist->share[i]);
-		text_at(cr, x + i * bw + 4, y + h - 24 - bh, label);
+		pngout_text(cr, x + i * bw + 4, y + h - 24 - bh, label, 0);
 		snprintf(label, sizeof(label), "%.3g", hist->bin_width * (double)i);
-		text_at(cr, x + i * bw, y + h - 4, label);
+		pngout_text(cr, x + i * bw, y + h - 4, label, 0);
 	}
 }
 
@@ -380,5 +330,5 @@ int accplot_mesh(const struct mesh *m, const struct accplot_values *v,
 	if (hist)
 		draw_hist(cr, hist, MARGIN + 20, vy + VIEW_H + 20, MESH_W - 2 * MARGIN - 40,
 			  HIST_H - 20);
-	return finish_png(cr, surf, path, err);
+	return pngout_save(cr, surf, path, path, " drawing the picture", err);
 }

@@ -32,6 +32,7 @@
 #include "printer_profile.h"
 #include "profile.h"
 #include "send.h"
+#include "st_append.h"
 #include "st_error.h"
 
 #define CONSOLE_CMD "stratum console"
@@ -247,15 +248,14 @@ static void console_read_script(struct console *c)
 /* Temperatures of a printer that sends no text, when poll read them. */
 static void console_temps(struct console *c, const struct printer_progress *t)
 {
-	char line[96];
-	int n = 0;
+	char line[96] = "";
 
 	if (t->tool)
-		n = snprintf(line, sizeof(line), "T:%.1f /%.1f", t->tool_actual, t->tool_target);
-	if (t->bed && n >= 0)
-		n += snprintf(line + n, sizeof(line) - (size_t)n, "%sB:%.1f /%.1f", n ? " " : "",
-			      t->bed_actual, t->bed_target);
-	if (n > 0)
+		st_appendf(line, sizeof(line), "T:%.1f /%.1f", t->tool_actual, t->tool_target);
+	if (t->bed)
+		st_appendf(line, sizeof(line), "%sB:%.1f /%.1f", line[0] ? " " : "", t->bed_actual,
+			   t->bed_target);
+	if (line[0])
 		console_show(c, line, strlen(line));
 }
 

@@ -187,37 +187,32 @@ static void sh_quote(FILE *f, const char *s)
 	fputc('\'', f);
 }
 
-/* bash: opts (every option) and vals (those that take a value). */
-static void bash_branch(const struct cmd_spec *spec, FILE *f)
+/* bash: the names of spec's options (with values_only, those that take a
+ * value), and with the settings options the names of those. */
+static void bash_names(FILE *f, const struct cmd_spec *spec, bool values_only)
 {
 	size_t no;
 	const struct cmd_opt *cfg = cfgopt_options(&no);
 
-	fprintf(f, "\t%s)\n\t\topts='--help", short_name(spec));
 	for (size_t k = 0; k < spec->nopt; k++) {
-		if (spec->opt[k].letter)
-			fprintf(f, " -%c", spec->opt[k].letter);
-		fprintf(f, " %s", spec->opt[k].name);
-	}
-	fputs("'\n\t\tvals='", f);
-	for (size_t k = 0; k < spec->nopt; k++) {
-		if (spec->opt[k].kind == CMD_FLAG)
+		if (values_only && spec->opt[k].kind == CMD_FLAG)
 			continue;
 		if (spec->opt[k].letter)
 			fprintf(f, " -%c", spec->opt[k].letter);
 		fprintf(f, " %s", spec->opt[k].name);
 	}
-	fputs("'\n", f);
-	if (spec->cfg) {
-		fputs("\t\topts=\"$opts", f);
-		for (size_t k = 0; k + 1 < no; k++) /* the last is --KEY-NAME: the settings */
-			fprintf(f, " %s", cfg[k].name);
-		fputs(" $_stratum_settings\"\n\t\tvals=\"$vals", f);
-		for (size_t k = 0; k + 1 < no; k++)
-			fprintf(f, " %s", cfg[k].name);
-		fputs(" $_stratum_setting_vals\"\n", f);
-	}
-	fputs("\t\t;;\n", f);
+	for (size_t k = 0; spec->cfg && k + 1 < no; k++) /* the last is --KEY-NAME */
+		fprintf(f, " %s", cfg[k].name);
+}
+
+/* bash: opts (every option) and vals (those that take a value). */
+static void bash_branch(const struct cmd_spec *spec, FILE *f)
+{
+	fprintf(f, "\t%s)\n\t\topts=\"--help", short_name(spec));
+	bash_names(f, spec, false);
+	fprintf(f, "%s\"\n\t\tvals=\"", spec->cfg ? " $_stratum_settings" : "");
+	bash_names(f, spec, true);
+	fprintf(f, "%s\"\n\t\t;;\n", spec->cfg ? " $_stratum_setting_vals" : "");
 }
 
 /* zsh: text for inside an _arguments '[...]' description (single-quoted). */

@@ -161,36 +161,27 @@ static int jobs_list_cmd(const struct jobs_args *a, const struct jobs_list *l)
 static int jobs_show_cmd(const struct jobs_args *a, const struct jobs_list *l)
 {
 	const struct jobs_entry *e = NULL;
-	struct journal *j = calloc(1, sizeof(*j));
+	struct journal journal, *j = &journal;
 	struct st_error err = {0};
 	char size[32];
-	int rc = 0;
 
 	for (size_t i = 0; i < l->n; i++)
 		if (!strcmp(l->v[i].id, a->pos[1]))
 			e = &l->v[i];
-	if (!j)
-		return cmd_fail(JOBS_CMD, ST_EXIT_SOFTWARE, "out of memory");
 	if (!e || e->kind == JOBS_LEFTOVER ||
-	    (e->kind == JOBS_RUNNING && !strcmp(e->state, "leftover"))) {
-		free(j);
+	    (e->kind == JOBS_RUNNING && !strcmp(e->state, "leftover")))
 		return cmd_fail(JOBS_CMD, ST_EXIT_USAGE, "no job %s in %s%s", a->pos[1], l->dir,
 				e ? " (files without a journal; 'stratum jobs prune' removes them)"
 				  : "; 'stratum jobs list' shows them");
-	}
-	if (journal_load(e->id, j, &err)) {
-		free(j);
+	if (journal_load(e->id, j, &err))
 		return cmd_fail(JOBS_CMD, ST_EXIT_FAILURE, "%s", err.msg);
-	}
 	if (a->json) {
 		json_t *o = json_load_file(j->file, 0, NULL);
 		if (o) {
 			cmd_json_set(o, "s:kind", jobs_kind_name(e->kind), "s:journal", j->file,
 				     "I:bytes", (json_int_t)e->bytes, NULL);
 		}
-		rc = cmd_json_out(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER) ? ST_EXIT_FAILURE : 0;
-		free(j);
-		return rc;
+		return cmd_json_out(o, JSON_INDENT(2) | JSON_PRESERVE_ORDER) ? ST_EXIT_FAILURE : 0;
 	}
 	fmt_size(size, sizeof(size), e->bytes);
 	printf("job %s: %s (%s)\n", j->id, j->state, jobs_kind_name(e->kind));
@@ -207,7 +198,6 @@ static int jobs_show_cmd(const struct jobs_args *a, const struct jobs_list *l)
 	printf("\n  files here: %s\n", size);
 	if (e->kind == JOBS_RESUMABLE)
 		printf("  resume: stratum print --resume %s\n", j->id);
-	free(j);
 	return 0;
 }
 

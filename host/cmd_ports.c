@@ -35,11 +35,6 @@ static void load_profiles(struct profile_set *set)
 			skipped, skipped == 1 ? "" : "s", skipped == 1 ? "is" : "are");
 }
 
-static void free_profiles(struct profile_set *set)
-{
-	portpick_profiles_free(set->items, set->count);
-}
-
 static const char *or_dash(const char *s)
 {
 	return s && *s ? s : "-";
@@ -161,7 +156,7 @@ int cmd_ports(int argc, char **argv)
 	} else {
 		print_text(ports, n, &set, &pick, want);
 	}
-	free_profiles(&set);
+	portpick_profiles_free(set.items, set.count);
 	profile_free(want);
 	xport_list_free(ports, n);
 	if (fflush(stdout) == EOF)

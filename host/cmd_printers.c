@@ -14,6 +14,7 @@
 #include "commands.h"
 #include "profile.h"
 #include "settings.h"
+#include "st_append.h"
 #include "st_error.h"
 
 /* The help text around the option lines. */
@@ -39,17 +40,12 @@ static const char printers_tail[] =
 static void nozzle_text(const struct profile *p, char *buf, size_t cap)
 {
 	bool same = true;
-	size_t o = 0;
 
 	for (int i = 1; i < p->extruder_count; i++)
 		same = same && p->nozzle_diameter[i] == p->nozzle_diameter[0];
 	buf[0] = '\0';
-	for (int i = 0; i < (same ? 1 : p->extruder_count) && o < cap; i++) {
-		int w = snprintf(buf + o, cap - o, "%s%g", i ? "," : "", p->nozzle_diameter[i]);
-		if (w < 0)
-			break;
-		o += (size_t)w;
-	}
+	for (int i = 0; i < (same ? 1 : p->extruder_count); i++)
+		st_appendf(buf, cap, "%s%g", i ? "," : "", p->nozzle_diameter[i]);
 }
 
 /* One row of the listing as JSON (new reference, NULL when out of memory). */

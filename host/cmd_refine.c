@@ -252,10 +252,8 @@ int cmd_refine(int argc, char **argv)
 	a.opt.samples = (size_t)samples;
 	a.opt.max_triangles = (size_t)max_tris;
 	if ((rc = cmd_output_check(a.in, a.out, msg, sizeof(msg))) ||
-	    (a.png && (rc = cmd_output_check(a.in, a.png, msg, sizeof(msg))))) {
-		fprintf(stderr, "stratum refine: %s\n", msg);
-		return rc;
-	}
+	    (a.png && (rc = cmd_output_check(a.in, a.png, msg, sizeof(msg)))))
+		return cmd_fail("stratum refine", rc, "%s", msg);
 	if (!(rc = read_model(a.in, &coarse)) && !(rc = read_model(a.reference, &ref)))
 		rc = refine_models(&a, coarse, ref);
 	mesh_free(coarse);

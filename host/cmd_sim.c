@@ -85,12 +85,6 @@ static void sim_remove_link(const char *link, const char *target)
 		unlink(link);
 }
 
-/* Install the SIGINT/SIGTERM handler that sets sim_stop_flag. */
-static void sim_catch_signals(void)
-{
-	cmd_on_stop_signals(sim_on_signal);
-}
-
 /*
  * Create the simulator of the chosen dialect (so non-NULL: sailfish), print
  * its pty path, serve until a signal, then clean up; the exit code.
@@ -113,7 +107,7 @@ static int sim_serve(const struct sim_marlin_options *mo, const struct sim_sailf
 		goto out_free;
 	printf("%s\n", path);
 	fflush(stdout);
-	sim_catch_signals();
+	cmd_on_stop_signals(sim_on_signal);
 	rc = sf ? sim_sailfish_run(sf, &sim_stop_flag, &err)
 		: sim_marlin_run(m, &sim_stop_flag, &err);
 	if (rc)

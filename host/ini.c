@@ -11,6 +11,8 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "st_grow.h"
+
 #define SHOW 40 /* bytes of an offending line quoted in messages */
 
 static bool is_blank(char c)
@@ -159,19 +161,9 @@ int ini_read_file(const char *path, char **text, size_t *len, struct st_error *e
 	for (;;) {
 		size_t got;
 
-		if (n == cap) {
-			size_t ncap = cap ? cap * 2 : 16384;
-			char *nbuf;
-
-			if (ncap > max + 1)
-				ncap = max + 1;
-			nbuf = realloc(buf, ncap);
-			if (!nbuf) {
-				rc = st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", path);
-				goto out_close;
-			}
-			buf = nbuf;
-			cap = ncap;
+		if (n == cap && st_grow_at((void **)&buf, &cap, n + 16384, 1)) {
+			rc = st_error_set(err, ST_ERR_NOMEM, "%s: out of memory", path);
+			goto out_close;
 		}
 		got = fread(buf + n, 1, cap - n, f);
 		n += got;

@@ -13,6 +13,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "st_grow.h"
+
 const char *jobs_kind_name(enum jobs_kind k)
 {
 	static const char *const names[] = {"running", "resumable", "done", "leftover"};
@@ -46,14 +48,8 @@ static struct jobs_entry *entry_for(struct jobs_list *l, const char *id, size_t 
 	for (size_t i = 0; i < l->n; i++)
 		if (!strcmp(l->v[i].id, id))
 			return &l->v[i];
-	if (l->n == *cap) {
-		size_t ncap = *cap ? 2 * *cap : 32;
-		struct jobs_entry *v = realloc(l->v, ncap * sizeof(*v));
-		if (!v)
-			return NULL;
-		l->v = v;
-		*cap = ncap;
-	}
+	if (st_grow_at((void **)&l->v, cap, l->n + 1, sizeof(*l->v)))
+		return NULL;
 	memset(&l->v[l->n], 0, sizeof(l->v[0]));
 	snprintf(l->v[l->n].id, sizeof(l->v[0].id), "%s", id);
 	return &l->v[l->n++];
@@ -94,7 +90,7 @@ static int by_age(const void *a, const void *b)
 
 int jobs_scan(struct jobs_list *l, struct st_error *err)
 {
-	struct journal *j;
+	struct journal j;
 	struct dirent *d;
 	size_t cap = 0;
 	DIR *dir;
@@ -129,13 +125,8 @@ int jobs_scan(struct jobs_list *l, struct st_error *err)
 			e->updated = (int64_t)st.st_mtime;
 	}
 	closedir(dir);
-	if (!(j = malloc(sizeof(*j)))) {
-		jobs_free(l);
-		return st_error_set(err, ST_ERR_NOMEM, "out of memory listing the jobs");
-	}
 	for (size_t i = 0; i < l->n; i++)
-		classify(l, &l->v[i], j);
-	free(j);
+		classify(l, &l->v[i], &j);
 	if (l->n)
 		qsort(l->v, l->n, sizeof(l->v[0]), by_age);
 	return 0;

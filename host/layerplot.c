@@ -4,13 +4,10 @@
 #include "layerplot.h"
 
 #include <cairo.h>
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
-#include <string.h>
 
 #include "pngout.h"
-#include "st_file.h"
 
 #define MARGIN_LEFT 70.0
 #define MARGIN_RIGHT 20.0
@@ -43,15 +40,6 @@ static double tick_step(double range)
 	return raw <= p ? p : raw <= 2 * p ? 2 * p : raw <= 5 * p ? 5 * p : 10 * p;
 }
 
-static void text_at(cairo_t *cr, double x, double y, const char *s, double align)
-{
-	cairo_text_extents_t e;
-
-	cairo_text_extents(cr, s, &e);
-	cairo_move_to(cr, x - align * e.width, y);
-	cairo_show_text(cr, s);
-}
-
 static void draw_axes(cairo_t *cr, const struct frame *f)
 {
 	double zs = tick_step(f->z1 - f->z0), hs = tick_step(f->h1 - f->h0);
@@ -66,20 +54,20 @@ static void draw_axes(cairo_t *cr, const struct frame *f)
 		cairo_line_to(cr, px_x(f, z), f->bottom + 5);
 		cairo_stroke(cr);
 		snprintf(buf, sizeof(buf), "%g", z);
-		text_at(cr, px_x(f, z), f->bottom + 5 + FONT_PX, buf, 0.5);
+		pngout_text(cr, px_x(f, z), f->bottom + 5 + FONT_PX, buf, 0.5);
 	}
 	for (double h = ceil(f->h0 / hs) * hs; h <= f->h1 + 1e-9; h += hs) {
 		cairo_move_to(cr, f->left - 5, px_y(f, h));
 		cairo_line_to(cr, f->left, px_y(f, h));
 		cairo_stroke(cr);
 		snprintf(buf, sizeof(buf), "%g", h);
-		text_at(cr, f->left - 8, px_y(f, h) + FONT_PX / 3, buf, 1.0);
+		pngout_text(cr, f->left - 8, px_y(f, h) + FONT_PX / 3, buf, 1.0);
 	}
-	text_at(cr, (f->left + f->right) / 2, f->bottom + 10 + 2 * FONT_PX, "Z (mm)", 0.5);
+	pngout_text(cr, (f->left + f->right) / 2, f->bottom + 10 + 2 * FONT_PX, "Z (mm)", 0.5);
 	cairo_save(cr);
 	cairo_translate(cr, 18, (f->top + f->bottom) / 2);
 	cairo_rotate(cr, -M_PI / 2);
-	text_at(cr, 0, 0, "layer height (mm)", 0.5);
+	pngout_text(cr, 0, 0, "layer height (mm)", 0.5);
 	cairo_restore(cr);
 }
 
@@ -119,57 +107,32 @@ static void draw_layers(cairo_t *cr, const struct frame *f, const struct layer_s
 	cairo_stroke(cr);
 }
 
-/* The plot as PNG into f. */
-static int plot_png(const struct layer_span *l, size_t n, const struct layerplot_opts *o, FILE *f,
-		    struct st_error *err)
+int layerplot_write(const char *path, const struct layer_span *l, size_t n,
+		    const struct layerplot_opts *o, struct st_error *err)
 {
-	struct frame fr = {.z0 = 0.0,
-			   .z1 = l[n - 1].z,
-			   .h0 = 0.0,
-			   .h1 = 0.0,
-			   .left = MARGIN_LEFT,
+	struct frame fr = {.left = MARGIN_LEFT,
 			   .right = LAYERPLOT_WIDTH - MARGIN_RIGHT,
 			   .top = MARGIN_TOP,
 			   .bottom = LAYERPLOT_HEIGHT - MARGIN_BOTTOM};
 	cairo_surface_t *surf;
 	cairo_t *cr;
 
+	if (!l || !n)
+		return st_error_set(err, ST_ERR_ARG, "layer plot: no layers to plot");
+	fr.z1 = l[n - 1].z;
 	for (size_t i = 0; i < n; i++)
 		fr.h1 = fmax(fr.h1, l[i].height);
 	fr.h1 = fmax(fr.h1, o->max_height) * 1.1;
 	if (!(fr.z1 > fr.z0))
 		fr.z1 = fr.z0 + 1.0;
-	surf = cairo_image_surface_create(CAIRO_FORMAT_RGB24, LAYERPLOT_WIDTH, LAYERPLOT_HEIGHT);
-	cr = cairo_create(surf);
-	cairo_set_source_rgb(cr, 1, 1, 1);
-	cairo_paint(cr);
-	cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
-	cairo_set_font_size(cr, FONT_PX);
+	cr = pngout_canvas(LAYERPLOT_WIDTH, LAYERPLOT_HEIGHT, FONT_PX, &surf);
 	draw_axes(cr, &fr);
 	draw_bound(cr, &fr, o->min_height);
 	draw_bound(cr, &fr, o->max_height);
 	draw_layers(cr, &fr, l, n, o->raft_layers);
 	if (o->title) {
 		cairo_set_source_rgb(cr, 0, 0, 0);
-		text_at(cr, MARGIN_LEFT, MARGIN_TOP - 14, o->title, 0.0);
+		pngout_text(cr, MARGIN_LEFT, MARGIN_TOP - 14, o->title, 0.0);
 	}
-	return pngout_write(cr, surf, f, "layer plot", "", err);
-}
-
-int layerplot_write(const char *path, const struct layer_span *layers, size_t n,
-		    const struct layerplot_opts *o, struct st_error *err)
-{
-	struct st_file_out out;
-	int rc;
-
-	if (!layers || !n)
-		return st_error_set(err, ST_ERR_ARG, "layer plot: no layers to plot");
-	if ((rc = st_file_begin(&out, path, err)))
-		return rc;
-	rc = plot_png(layers, n, o, out.f, err);
-	if (rc) {
-		st_file_abort(&out);
-		return rc;
-	}
-	return st_file_commit(&out, err);
+	return pngout_save(cr, surf, path, "layer plot", "", err);
 }

@@ -3,10 +3,11 @@
  */
 #include "portpick.h"
 
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "st_append.h"
 
 bool portpick_claims(const struct profile *p, const struct xport_port_info *port)
 {
@@ -18,21 +19,6 @@ bool portpick_claims(const struct profile *p, const struct xport_port_info *port
 	return false;
 }
 
-/* Append printf text to buf (cap bytes), truncating quietly. */
-static void add(char *buf, size_t cap, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
-
-static void add(char *buf, size_t cap, const char *fmt, ...)
-{
-	size_t len = strlen(buf);
-	va_list ap;
-
-	if (len + 1 >= cap)
-		return;
-	va_start(ap, fmt);
-	vsnprintf(buf + len, cap - len, fmt, ap);
-	va_end(ap);
-}
-
 static const char *port_path(const struct xport_port_info *p)
 {
 	return p->by_id ? p->by_id : p->name;
@@ -41,17 +27,17 @@ static const char *port_path(const struct xport_port_info *p)
 /* "PATH (vvvv:pppp PRODUCT, serial S)" for lists. */
 static void add_port(char *buf, size_t cap, const struct xport_port_info *p)
 {
-	add(buf, cap, "%s", port_path(p));
+	st_appendf(buf, cap, "%s", port_path(p));
 	if (p->usb_vid < 0) {
-		add(buf, cap, " (%s, no USB id)", xport_transport_name(p->transport));
+		st_appendf(buf, cap, " (%s, no USB id)", xport_transport_name(p->transport));
 		return;
 	}
-	add(buf, cap, " (%04x:%04x", p->usb_vid, p->usb_pid);
+	st_appendf(buf, cap, " (%04x:%04x", p->usb_vid, p->usb_pid);
 	if (p->product)
-		add(buf, cap, " %s", p->product);
+		st_appendf(buf, cap, " %s", p->product);
 	if (p->serial)
-		add(buf, cap, ", serial %s", p->serial);
-	add(buf, cap, ")");
+		st_appendf(buf, cap, ", serial %s", p->serial);
+	st_appendf(buf, cap, ")");
 }
 
 /* The first profile of all that claims port, or NULL. */
@@ -67,7 +53,7 @@ static const struct profile *claimant(const struct profile *const *all, size_t n
 static void add_ids(char *buf, size_t cap, const struct profile *p)
 {
 	for (size_t i = 0; i < p->usb_id_count; i++)
-		add(buf, cap, "%s%04x:%04x", i ? ", " : "", p->usb_ids[i].vid, p->usb_ids[i].pid);
+		st_appendf(buf, cap, "%s%04x:%04x", i ? ", " : "", p->usb_ids[i].vid, p->usb_ids[i].pid);
 }
 
 /* Why nothing was chosen, into out->why. */
@@ -79,28 +65,28 @@ static void explain_none(const struct profile *want, bool by_profile,
 	size_t cap = sizeof(out->why);
 
 	if (n == 0) {
-		add(w, cap, "no serial ports found; is the printer plugged in and switched on?");
+		st_appendf(w, cap, "no serial ports found; is the printer plugged in and switched on?");
 		return;
 	}
 	if (by_profile) {
-		add(w, cap, "no port has a USB id that printer %s lists (", want->id);
+		st_appendf(w, cap, "no port has a USB id that printer %s lists (", want->id);
 		add_ids(w, cap, want);
-		add(w, cap, ")");
+		st_appendf(w, cap, ")");
 	} else if (usb) {
-		add(w, cap, "no printer profile lists the USB id of any of the %zu USB serial ports",
+		st_appendf(w, cap, "no printer profile lists the USB id of any of the %zu USB serial ports",
 		    usb);
 	} else {
-		add(w, cap, "no USB serial port found");
+		st_appendf(w, cap, "no USB serial port found");
 	}
-	add(w, cap, "; found: ");
+	st_appendf(w, cap, "; found: ");
 	for (size_t i = 0; i < n; i++) {
-		add(w, cap, "%s", i ? "; " : "");
+		st_appendf(w, cap, "%s", i ? "; " : "");
 		add_port(w, cap, &ports[i]);
 	}
 	if (by_profile)
-		add(w, cap, ". Give --port PATH, or add the id to usb_ids in %s", want->path);
+		st_appendf(w, cap, ". Give --port PATH, or add the id to usb_ids in %s", want->path);
 	else
-		add(w, cap, ". Give --port PATH");
+		st_appendf(w, cap, ". Give --port PATH");
 }
 
 int portpick_choose(const struct profile *want, const struct profile *const *all, size_t nall,
@@ -127,29 +113,29 @@ int portpick_choose(const struct profile *want, const struct profile *const *all
 		out->index = (long)(matches ? first : first_usb);
 		out->path = port_path(p);
 		out->profile = by_profile ? want : claimant(all, nall, p);
-		add(out->why, sizeof(out->why), "%s", out->path);
+		st_appendf(out->why, sizeof(out->why), "%s", out->path);
 		if (out->profile)
-			add(out->why, sizeof(out->why), ": its USB id %04x:%04x is in %s's usb_ids",
+			st_appendf(out->why, sizeof(out->why), ": its USB id %04x:%04x is in %s's usb_ids",
 			    p->usb_vid, p->usb_pid, out->profile->id);
 		else
-			add(out->why, sizeof(out->why),
+			st_appendf(out->why, sizeof(out->why),
 			    ": the only USB serial port (%04x:%04x; no printer profile lists it)",
 			    p->usb_vid, p->usb_pid);
 		if (!p->by_id)
-			add(out->why, sizeof(out->why), " (no /dev/serial/by-id/ name for it)");
+			st_appendf(out->why, sizeof(out->why), " (no /dev/serial/by-id/ name for it)");
 		return 0;
 	}
 	if (matches > 1) {
-		add(out->why, sizeof(out->why), "%zu ports match %s: ", matches,
+		st_appendf(out->why, sizeof(out->why), "%zu ports match %s: ", matches,
 		    by_profile ? want->id : "the printer profiles");
 		for (size_t i = 0, k = 0; i < n; i++) {
 			if (by_profile ? !portpick_claims(want, &ports[i])
 				       : !claimant(all, nall, &ports[i]))
 				continue;
-			add(out->why, sizeof(out->why), "%s", k++ ? "; " : "");
+			st_appendf(out->why, sizeof(out->why), "%s", k++ ? "; " : "");
 			add_port(out->why, sizeof(out->why), &ports[i]);
 		}
-		add(out->why, sizeof(out->why), ". Give --port with the one to use");
+		st_appendf(out->why, sizeof(out->why), ". Give --port with the one to use");
 	} else {
 		explain_none(want, by_profile, ports, n, usb, out);
 	}

@@ -3,6 +3,7 @@
  * NAME lookup and listing (profile.h).
  */
 #include "profile_int.h"
+#include "st_append.h"
 #include "st_grow.h"
 
 #include <dirent.h>
@@ -93,7 +94,7 @@ int profile_find(const char *name_or_path, struct profile **out, struct st_error
 {
 	struct profile_dirs dirs;
 	char path[PROFILE_PATH_MAX + 300], looked[200];
-	size_t len, o = 0;
+	size_t len;
 
 	if (!out)
 		return st_error_set(err, ST_ERR_ARG, "profile_find: bad arguments");
@@ -121,13 +122,8 @@ int profile_find(const char *name_or_path, struct profile **out, struct st_error
 				    "file as a path ending in .ini",
 				    name_or_path);
 	looked[0] = '\0';
-	for (size_t i = 0; i < dirs.count && o < sizeof(looked); i++) {
-		int w =
-		    snprintf(looked + o, sizeof(looked) - o, "%s%s", i ? ", " : "", dirs.path[i]);
-		if (w < 0)
-			break;
-		o += (size_t)w;
-	}
+	for (size_t i = 0; i < dirs.count; i++)
+		st_appendf(looked, sizeof(looked), "%s%s", i ? ", " : "", dirs.path[i]);
 	return st_error_set(err, ST_ERR_ARG,
 			    "no printer profile named '%.64s' (looked in %s and PrusaSlicer's "
 			    "bundles); 'stratum printers' lists them",

@@ -17,6 +17,7 @@
 #include <string.h>
 
 #include "ini.h"
+#include "st_append.h"
 #include "st_number.h"
 
 /* Locale-independent character classes. */
@@ -261,18 +262,15 @@ static int name_index(const char *const *names, size_t count, const char *s)
 	return -1;
 }
 
-/* Join names with ", " for a message. */
-static void join_names(char *buf, size_t cap, const char *const *names, size_t count)
+/* kv's value is none of decl's names: the error, naming them all. */
+static int not_one_of(struct loader *L, const struct profile_kv *kv, const struct setting *decl)
 {
-	size_t o = 0;
+	char tok[INI_SHOW_MAX], names[256] = "";
 
-	buf[0] = '\0';
-	for (size_t i = 0; i < count && o < cap; i++) {
-		int w = snprintf(buf + o, cap - o, "%s%s", i ? ", " : "", names[i]);
-		if (w < 0)
-			break;
-		o += (size_t)w;
-	}
+	ini_show(tok, sizeof(tok), kv->value, strlen(kv->value));
+	for (size_t i = 0; i < decl->nnames; i++)
+		st_appendf(names, sizeof(names), "%s%s", i ? ", " : "", decl->names[i]);
+	return prof_key_error(L, kv, NULL, ST_ERR_PARSE, "'%s' is not one of %s", tok, names);
 }
 
 /* usb_ids: a list of VVVV:PPPP, 4 hex digits each; empty = none. */
@@ -419,7 +417,7 @@ int prof_apply_key(struct loader *L, const struct key_def *d, const struct profi
 	void *field = (char *)p + d->off;
 	struct item items[PROFILE_MAX_EXTRUDERS];
 	struct item one = {kv->value, strlen(kv->value)};
-	char tok[INI_SHOW_MAX], names[256], range[96];
+	char tok[INI_SHOW_MAX], range[96];
 	int n, i, rc, idx;
 	double v;
 	bool pct, per_extruder;
@@ -560,12 +558,8 @@ int prof_apply_key(struct loader *L, const struct key_def *d, const struct profi
 		idx = name_index(decl->names, decl->nnames, kv->value);
 		if (idx < 0 && !strcmp(kv->value, "marlinfirmware"))
 			idx = PROFILE_FLAVOR_MARLIN2; /* PrusaSlicer 2.4 alpha's name */
-		if (idx < 0) {
-			ini_show(tok, sizeof(tok), kv->value, strlen(kv->value));
-			join_names(names, sizeof(names), decl->names, decl->nnames);
-			return prof_key_error(L, kv, NULL, ST_ERR_PARSE, "'%s' is not one of %s", tok,
-					 names);
-		}
+		if (idx < 0)
+			return not_one_of(L, kv, decl);
 		p->gcode_flavor = (enum profile_flavor)idx;
 		return 0;
 	case KT_CHOICE:
@@ -577,12 +571,8 @@ int prof_apply_key(struct loader *L, const struct key_def *d, const struct profi
 			return prof_key_error(L, kv, NULL, ST_ERR_PARSE,
 					 "'organic' (PrusaSlicer 2.6's tree supports) is not "
 					 "supported; use grid or snug");
-		if (idx < 0) {
-			ini_show(tok, sizeof(tok), kv->value, strlen(kv->value));
-			join_names(names, sizeof(names), decl->names, decl->nnames);
-			return prof_key_error(L, kv, NULL, ST_ERR_PARSE, "'%s' is not one of %s", tok,
-					 names);
-		}
+		if (idx < 0)
+			return not_one_of(L, kv, decl);
 		*(const char **)field = decl->names[idx];
 		return 0;
 	case KT_HOME:
@@ -603,21 +593,15 @@ int prof_apply_key(struct loader *L, const struct key_def *d, const struct profi
 		}
 		size_t nrates;
 		const long *rates = settings_baud_rates(&nrates);
-		char list[256];
-		size_t o = 0;
+		char list[256] = "";
 
 		for (size_t k = 0; k < nrates; k++)
 			if (rates[k] == b) {
 				p->baudrate = (long)b;
 				return 0;
 			}
-		list[0] = '\0';
-		for (size_t k = 0; k < nrates && o < sizeof(list); k++) {
-			int w = snprintf(list + o, sizeof(list) - o, "%s%ld", k ? ", " : "", rates[k]);
-			if (w < 0)
-				break;
-			o += (size_t)w;
-		}
+		for (size_t k = 0; k < nrates; k++)
+			st_appendf(list, sizeof(list), "%s%ld", k ? ", " : "", rates[k]);
 		return prof_key_error(L, kv, NULL, ST_ERR_RANGE,
 				      "%lld is not a standard baud rate (use one of %s)", b, list);
 	}

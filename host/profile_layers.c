@@ -26,6 +26,7 @@
 #include "ini.h"
 #include "meshio.h"
 #include "placeholder.h"
+#include "st_append.h"
 #include "st_grow.h"
 
 #define BUNDLE_DEPTH_MAX 16 /* inherits chains longer than this are a loop */
@@ -305,18 +306,18 @@ static const char *first_compatible(struct profile *p, const struct file_read *f
 /* The printers of a bundle, for the message when none is named. */
 static void list_printers(const struct file_read *f, char *buf, size_t cap)
 {
-	size_t o = 0, shown = 0;
+	size_t shown = 0;
 
 	buf[0] = '\0';
-	for (size_t i = 0; i < f->n && o + 1 < cap; i++) {
+	for (size_t i = 0; i < f->n; i++) {
 		const char *s = f->sec[i].name;
 		if (strncmp(s, "printer:", 8) || s[8] == '*')
 			continue;
 		if (shown++ == 3) {
-			snprintf(buf + o, cap - o, ", ...");
+			st_appendf(buf, cap, ", ...");
 			return;
 		}
-		o += (size_t)snprintf(buf + o, cap - o, "%s'%s'", shown > 1 ? ", " : "", s + 8);
+		st_appendf(buf, cap, "%s'%s'", shown > 1 ? ", " : "", s + 8);
 	}
 }
 

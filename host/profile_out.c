@@ -34,6 +34,18 @@ static void put_double(FILE *f, double v)
 	fputs(buf, f);
 }
 
+/* Write n points as "XxY,XxY...". */
+static void put_points(FILE *f, const struct profile_point *pt, size_t n)
+{
+	for (size_t i = 0; i < n; i++) {
+		if (i)
+			fputc(',', f);
+		put_double(f, pt[i].x);
+		fputc('x', f);
+		put_double(f, pt[i].y);
+	}
+}
+
 /* Write d's resolved value in file syntax. */
 static void put_value(FILE *f, const struct profile *p, const struct key_def *d)
 {
@@ -90,23 +102,10 @@ static void put_value(FILE *f, const struct profile *p, const struct key_def *d)
 			fprintf(f, "%s%d", i ? "," : "", ((const int *)field)[i]);
 		break;
 	case KT_EX_POINT:
-		for (int i = 0; i < ec; i++) {
-			const struct profile_point *pt = &((const struct profile_point *)field)[i];
-			if (i)
-				fputc(',', f);
-			put_double(f, pt->x);
-			fputc('x', f);
-			put_double(f, pt->y);
-		}
+		put_points(f, field, (size_t)ec);
 		break;
 	case KT_BED:
-		for (size_t i = 0; i < p->bed_points; i++) {
-			if (i)
-				fputc(',', f);
-			put_double(f, p->bed_shape[i].x);
-			fputc('x', f);
-			put_double(f, p->bed_shape[i].y);
-		}
+		put_points(f, p->bed_shape, p->bed_points);
 		break;
 	case KT_USB:
 		for (size_t i = 0; i < p->usb_id_count; i++)

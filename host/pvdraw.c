@@ -322,21 +322,12 @@ static void draw_layer(cairo_t *cr, const struct preview *pv, const struct layou
 	cairo_restore(cr);
 }
 
-static void draw_text(cairo_t *cr, double x, double y, const char *s)
-{
-	cairo_move_to(cr, x, y);
-	cairo_show_text(cr, s);
-}
-
 static void draw_furniture(cairo_t *cr, const struct preview *pv, const struct layout *l)
 {
 	char text[128];
 
-	cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL,
-			       CAIRO_FONT_WEIGHT_NORMAL);
-	cairo_set_font_size(cr, FONT_PX);
-	set_colour(cr, 0x000000, 1.0);
-	draw_text(cr, MARGIN, MARGIN + FONT_PX, l->title);
+	pngout_rgb(cr, 0x000000);
+	pngout_text(cr, MARGIN, MARGIN + FONT_PX, l->title, 0);
 	for (size_t k = 0; k < l->nleg; k++) {
 		double x, y;
 		int e = l->leg[k];
@@ -344,9 +335,9 @@ static void draw_furniture(cairo_t *cr, const struct preview *pv, const struct l
 		set_colour(cr, e < 0 ? OUTLINE_COLOUR : colours[e], 1.0);
 		cairo_rectangle(cr, x, y + 5, SWATCH_W, 8);
 		cairo_fill(cr);
-		set_colour(cr, 0x000000, 1.0);
+		pngout_rgb(cr, 0x000000);
 		legend_text(pv, e, text, sizeof(text));
-		draw_text(cr, x + SWATCH_W + 6, y + 13, text);
+		pngout_text(cr, x + SWATCH_W + 6, y + 13, text, 0);
 	}
 	double bx = MARGIN, bl = l->bar_mm * l->s, by = l->bar_y + 10;
 	cairo_set_line_width(cr, 2);
@@ -358,7 +349,7 @@ static void draw_furniture(cairo_t *cr, const struct preview *pv, const struct l
 	cairo_line_to(cr, bx + bl, by + 5);
 	cairo_stroke(cr);
 	snprintf(text, sizeof(text), "%g mm", l->bar_mm);
-	draw_text(cr, bx + bl + 8, by + 4, text);
+	pngout_text(cr, bx + bl + 8, by + 4, text, 0);
 }
 
 /* The picture as PNG into f (left open); 0, ST_ERR_ARG, ST_ERR_IO, ST_ERR_NOMEM or
@@ -374,10 +365,7 @@ static int pvdraw_png(const struct preview *pv, const struct pvdraw_opts *o, FIL
 
 	if (rc)
 		return rc;
-	surf = cairo_image_surface_create(CAIRO_FORMAT_RGB24, l.w, l.h);
-	cr = cairo_create(surf);
-	set_colour(cr, 0xffffff, 1.0);
-	cairo_paint(cr);
+	cr = pngout_canvas(l.w, l.h, FONT_PX, &surf);
 	draw_layer(cr, pv, &l);
 	draw_furniture(cr, pv, &l);
 	snprintf(nomem, sizeof(nomem), " drawing %d x %d px", l.w, l.h);

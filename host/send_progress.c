@@ -11,6 +11,7 @@
 
 #include "progress.h"
 #include "send.h"
+#include "st_append.h"
 #include "st_clock.h"
 
 #define SEND_HEATING_BAND 3.0 /* degC below target: still heating */
@@ -47,7 +48,6 @@ size_t send_progress_line(struct send_progress *p, const struct printer_progress
 	char tag[40], pct[8], layer[48] = "", count[64], temps[64] = "", el[24], eta[32] = "";
 	bool heating = (v->tool && v->tool_actual < v->tool_target - SEND_HEATING_BAND) ||
 		       (v->bed && v->bed_actual < v->bed_target - SEND_HEATING_BAND);
-	int n = 0;
 
 	tag[0] = '\0';
 	if (p->tag)
@@ -60,10 +60,10 @@ size_t send_progress_line(struct send_progress *p, const struct printer_progress
 	snprintf(count, sizeof(count), "%s %llu/%llu", v->unit ? v->unit : "line",
 		 (unsigned long long)v->done, (unsigned long long)v->total);
 	if (v->tool)
-		n = snprintf(temps, sizeof(temps), "T %.0f/%.0f", v->tool_actual, v->tool_target);
-	if (v->bed && n >= 0 && (size_t)n < sizeof(temps))
-		snprintf(temps + n, sizeof(temps) - (size_t)n, "%sB %.0f/%.0f", n ? " " : "",
-			 v->bed_actual, v->bed_target);
+		st_appendf(temps, sizeof(temps), "T %.0f/%.0f", v->tool_actual, v->tool_target);
+	if (v->bed)
+		st_appendf(temps, sizeof(temps), "%sB %.0f/%.0f", temps[0] ? " " : "",
+			   v->bed_actual, v->bed_target);
 	progress_hms(el, sizeof(el), now - p->t0);
 	strcat(el, " elapsed");
 	left = send_left(p, frac, now);

@@ -17,6 +17,7 @@
 
 #include "ini.h"
 #include "node.h"
+#include "st_append.h"
 #include "st_number.h"
 
 enum section { SEC_NONE, SEC_NODE, SEC_KEY, SEC_PRINTER, SEC_MQTT, SEC_REMOTE };
@@ -370,7 +371,6 @@ static int set_key(struct cfg_parse *p, const struct cfg_key *keys, size_t n, vo
 		   const char *section, const char *k, char *v)
 {
 	char list[200] = "";
-	size_t used = 0;
 
 	for (size_t i = 0; i < n; i++) {
 		const struct cfg_key *d = &keys[i];
@@ -399,8 +399,7 @@ static int set_key(struct cfg_parse *p, const struct cfg_key *keys, size_t n, vo
 		return 0;
 	}
 	for (size_t i = 0; i < n; i++)
-		used += (size_t)snprintf(list + used, sizeof(list) - used, "%s%s", i ? ", " : "",
-					 keys[i].name);
+		st_appendf(list, sizeof(list), "%s%s", i ? ", " : "", keys[i].name);
 	return CFG_FAIL(p, ST_ERR_PARSE, "unknown key '%s' in %s (%s)", k, section, list);
 }
 

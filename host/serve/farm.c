@@ -16,32 +16,19 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/time.h>
 #include <time.h>
 
 #include "farm_int.h"
 #include "mqtt_int.h"
+#include "st_clock.h"
 
 #define FARM_RETRY_MAX_S 30 /* longest wait between two tries to reach the broker */
-
-/* A printer's retained topics, as mqtt.c publishes them. */
-static const char *const printer_topics[] = {"status", "temperatures", "progress",
-					     "job", "queue", "bed_clear"};
-#define NTOPICS (sizeof(printer_topics) / sizeof(printer_topics[0]))
-
-static long long now_ms(void)
-{
-	struct timeval tv;
-
-	gettimeofday(&tv, NULL);
-	return (long long)tv.tv_sec * 1000 + tv.tv_usec / 1000;
-}
 
 static void on_connect(struct mosquitto *mosq, void *ctx, int rc)
 {
 	struct farm *f = ctx;
 	const char *root = f->cfg.base.mqtt.topic;
-	char topics[NTOPICS + 2][300], *subs[NTOPICS + 2];
+	char topics[MQTT_TOPICS + 2][300], *subs[MQTT_TOPICS + 2];
 
 	if (rc) {
 		node_log("error", NULL, 0, "farm: the broker refused the connection: %s",
@@ -50,16 +37,16 @@ static void on_connect(struct mosquitto *mosq, void *ctx, int rc)
 	}
 	snprintf(topics[0], sizeof(topics[0]), "%s/+/status", root);
 	snprintf(topics[1], sizeof(topics[1]), "%s/+/info", root);
-	for (size_t i = 0; i < NTOPICS; i++)
-		snprintf(topics[i + 2], sizeof(topics[0]), "%s/+/+/%s", root, printer_topics[i]);
-	for (size_t i = 0; i < NTOPICS + 2; i++)
+	for (size_t i = 0; i < MQTT_TOPICS; i++)
+		snprintf(topics[i + 2], sizeof(topics[0]), "%s/+/+/%s", root, node_mqtt_state_topics[i]);
+	for (size_t i = 0; i < MQTT_TOPICS + 2; i++)
 		subs[i] = topics[i];
 	pthread_mutex_lock(&f->mu);
 	/* the broker sends every retained topic again: start from them */
 	json_object_clear(f->nodes);
 	f->connected = true;
 	pthread_mutex_unlock(&f->mu);
-	mosquitto_subscribe_multiple(mosq, NULL, (int)(NTOPICS + 2), subs, 0, 0, NULL);
+	mosquitto_subscribe_multiple(mosq, NULL, (int)(MQTT_TOPICS + 2), subs, 0, 0, NULL);
 	node_log("info", NULL, 0, "farm: connected to %s:%u, reading %s/", f->cfg.base.mqtt.host,
 		 f->cfg.base.mqtt.port, root);
 }
@@ -234,7 +221,7 @@ static bool node_online(json_t *node)
 }
 
 /* Whether printer pr of a node (online or not) may take a job at now. */
-static bool printer_idle(bool online, json_t *pr, long long now)
+static bool printer_idle(bool online, json_t *pr, int64_t now)
 {
 	json_t *until = json_object_get(pr, "reservedUntil");
 
@@ -250,7 +237,7 @@ static json_t *topic_or_null(json_t *pr, const char *topic)
 }
 
 /* One printer as GET /api/farm lists it. */
-static json_t *printer_json(json_t *node, const char *name, const char *node_url, long long now)
+static json_t *printer_json(json_t *node, const char *name, const char *node_url, int64_t now)
 {
 	json_t *pr = json_object_get(json_object_get(node, "printers"), name);
 	json_t *info = printer_info(node, name), *queue = json_object_get(pr, "queue");
@@ -281,7 +268,7 @@ static json_t *printer_json(json_t *node, const char *name, const char *node_url
 json_t *farm_json(struct farm *f)
 {
 	json_t *out = json_object(), *nodes = json_array(), *names, *nm;
-	long long now = now_ms();
+	int64_t now = st_mono_ms();
 	size_t i, nprinters = 0, nidle = 0;
 
 	pthread_mutex_lock(&f->mu);
@@ -344,7 +331,7 @@ int farm_pick(struct farm *f, const char *profile, json_t *tried, struct farm_pi
 	      struct st_error *err)
 {
 	json_t *names, *nm;
-	long long now = now_ms();
+	int64_t now = st_mono_ms();
 	size_t i, have = 0, busy = 0, keyless = 0;
 	int rc = ST_ERR_ARG;
 
@@ -493,11 +480,6 @@ int farm_start(struct farm *f, struct st_error *err)
 	node_log("info", NULL, 0, "farm %s listening on %s:%u, broker %s:%u", f->cfg.base.name,
 		 f->cfg.base.listen_addr, f->port, c->host, c->port);
 	return 0;
-}
-
-uint16_t farm_port(const struct farm *f)
-{
-	return f->port;
 }
 
 void farm_free(struct farm *f)

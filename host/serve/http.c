@@ -29,6 +29,7 @@
 #include "cfgopt.h"
 #include "gcode.h"
 #include "http_int.h"
+#include "st_append.h"
 #include "st_grow.h"
 
 #define HTTP_JSON_MAX 65536		/* body of a JSON command, bytes */
@@ -409,12 +410,12 @@ static void upload_too_large(struct node *n, struct req *r)
 /* Add method (and HEAD after GET) to the request's Allow list, once. */
 static void allow_add(struct req *r, const char *method)
 {
-	size_t len = strlen(r->allow), m = strlen(method);
+	size_t m = strlen(method);
 
 	for (const char *s = r->allow; (s = strstr(s, method)); s += m)
 		if ((s == r->allow || s[-1] == ' ') && (s[m] == ',' || !s[m]))
 			return;
-	snprintf(r->allow + len, sizeof(r->allow) - len, "%s%s", len ? ", " : "", method);
+	st_appendf(r->allow, sizeof(r->allow), "%s%s", r->allow[0] ? ", " : "", method);
 	if (!strcmp(method, "GET"))
 		allow_add(r, "HEAD");
 }

@@ -77,7 +77,8 @@ const char *http_state_text(const struct http_view *v)
 	return "Operational";
 }
 
-json_t *http_temp_json(const double t[3])
+/* {"actual", "target", "offset"} of t = {actual, target, offset}. */
+static json_t *temp_json(const double t[3])
 {
 	json_t *o = json_object();
 
@@ -95,7 +96,7 @@ json_t *http_temps_json(const struct node_printer *p, const struct http_view *v,
 	char name[16];
 
 	if (tools) {
-		json_object_set_new(o, "tool0", http_temp_json(v->tool));
+		json_object_set_new(o, "tool0", temp_json(v->tool));
 		for (int i = 1; i < p->prof->extruder_count; i++) {
 			/* tool 1 as the driver reads it (Sailfish), the others unknown */
 			bool known = i == 1 && !isnan(v->tool1[0]);
@@ -112,7 +113,7 @@ json_t *http_temps_json(const struct node_printer *p, const struct http_view *v,
 		}
 	}
 	if (with_bed)
-		json_object_set_new(o, "bed", http_temp_json(v->bed));
+		json_object_set_new(o, "bed", temp_json(v->bed));
 	return o;
 }
 

@@ -8,6 +8,7 @@
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <ftw.h>
 #include <jansson.h>
 #include <microhttpd.h>
 #include <stdio.h>
@@ -47,9 +48,17 @@ static bool query_true(struct MHD_Connection *c, const char *name)
 	return v && (!strcasecmp(v, "true") || !strcmp(v, "1") || !strcasecmp(v, "yes"));
 }
 
-static int by_name(const void *a, const void *b)
+/* scandir's filter: the names the node would store (others are left out). */
+static int storable(const struct dirent *d)
 {
-	return strcmp(*(char *const *)a, *(char *const *)b);
+	struct st_error err;
+
+	return !node_check_file_name(d->d_name, strlen(d->d_name), &err);
+}
+
+static int by_name(const struct dirent **a, const struct dirent **b)
+{
+	return strcmp((*a)->d_name, (*b)->d_name);
 }
 
 static json_t *entry_json(struct MHD_Connection *c, struct req *r, const char *rel,
@@ -61,41 +70,20 @@ static void list_folder(struct MHD_Connection *c, struct req *r, const char *rel
 			int depth, json_t *arr, int64_t *size)
 {
 	char dir[2 * NODE_PATH_MAX], child[NODE_PATH_MAX + NODE_FILE_NAME_MAX + 2];
-	char **names = NULL;
-	size_t n = 0, cap = 0;
-	struct st_error err;
-	struct dirent *d;
-	DIR *dh;
+	struct dirent **names = NULL;
+	int n;
 
 	snprintf(dir, sizeof(dir), "%s%s%s", r->p->files_dir, rel[0] ? "/" : "", rel);
-	if (!(dh = opendir(dir)))
-		return;
-	while ((d = readdir(dh))) {
-		char **grown;
-
-		if (node_check_file_name(d->d_name, strlen(d->d_name), &err))
-			continue;
-		if (n == cap) {
-			grown = realloc(names, (cap = cap ? 2 * cap : 16) * sizeof(*names));
-			if (!grown)
-				break;
-			names = grown;
-		}
-		if (!(names[n] = strdup(d->d_name)))
-			break;
-		n++;
-	}
-	closedir(dh);
-	if (n)
-		qsort(names, n, sizeof(*names), by_name);
-	for (size_t i = 0; i < n; i++) {
+	n = scandir(dir, &names, storable, by_name); /* -1: none */
+	for (int i = 0; i < n; i++) {
+		const char *name = names[i]->d_name;
 		char full[sizeof(dir) + NODE_FILE_NAME_MAX + 2];
 		struct stat st;
 		json_t *e;
 
-		snprintf(child, sizeof(child), "%s%s%s", rel, rel[0] ? "/" : "", names[i]);
-		snprintf(full, sizeof(full), "%s/%s", dir, names[i]);
-		if (!stat(full, &st) && (S_ISDIR(st.st_mode) || node_file_kind(names[i])) &&
+		snprintf(child, sizeof(child), "%s%s%s", rel, rel[0] ? "/" : "", name);
+		snprintf(full, sizeof(full), "%s/%s", dir, name);
+		if (!stat(full, &st) && (S_ISDIR(st.st_mode) || node_file_kind(name)) &&
 		    (e = entry_json(c, r, child, &st, recursive, depth + 1, size)))
 			json_array_append_new(arr, e);
 		free(names[i]);
@@ -205,29 +193,13 @@ static bool in_use(struct node *n, struct node_printer *p, const char *full, int
 	return busy;
 }
 
-/* Remove full, a file or a folder with everything in it; 0 or -1 (errno). */
-static int remove_tree(const char *full, int depth)
+/* nftw's step of removing a tree: each entry after its contents. */
+static int remove_entry(const char *path, const struct stat *st, int type, struct FTW *ftw)
 {
-	struct dirent *d;
-	struct stat st;
-	int rc = 0;
-	DIR *dh;
-
-	if (lstat(full, &st))
-		return -1;
-	if (!S_ISDIR(st.st_mode))
-		return unlink(full);
-	if (depth > FILES_DEPTH_MAX || !(dh = opendir(full)))
-		return -1;
-	while (!rc && (d = readdir(dh))) {
-		char child[2 * NODE_PATH_MAX + NODE_FILE_NAME_MAX];
-
-		if (strcmp(d->d_name, ".") && strcmp(d->d_name, "..") &&
-		    snprintf(child, sizeof(child), "%s/%s", full, d->d_name) < (int)sizeof(child))
-			rc = remove_tree(child, depth + 1);
-	}
-	closedir(dh);
-	return rc ? rc : rmdir(full);
+	(void)st;
+	(void)type;
+	(void)ftw;
+	return remove(path);
 }
 
 /* The selected file is rel or under the folder rel. */
@@ -257,7 +229,7 @@ enum MHD_Result http_delete_file(struct node *n, struct MHD_Connection *c, struc
 	if (in_use(n, p, full, 0)) {
 		ret = http_send_error(c, MHD_HTTP_CONFLICT, "Trying to delete a file that is "
 					 "currently in use: a job of the queue prints it");
-	} else if (remove_tree(full, 0)) {
+	} else if (nftw(full, remove_entry, 16, FTW_DEPTH | FTW_PHYS)) {
 		node_log("error", p->cfg->name, 0, "%s: cannot delete: %s", full, strerror(errno));
 		ret = http_send_error(c, MHD_HTTP_INTERNAL_SERVER_ERROR, "cannot delete the file");
 	} else {

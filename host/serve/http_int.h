@@ -114,8 +114,6 @@ struct http_view {
 void http_take_view(struct node *n, struct node_printer *p, struct http_view *v);
 /* OctoPrint's state text of v ("Operational", "Printing", ...). */
 const char *http_state_text(const struct http_view *v);
-/* {"actual", "target", "offset"} of t = {actual, target}. */
-json_t *http_temp_json(const double t[3]);
 /* The temperature object of /api/printer and /api/printer/tool: tool0,
  * and tool1 ... for each further extruder of p's profile (actual and target
  * null unless read: Sailfish reads tool 1); bed when with_bed. */

@@ -16,6 +16,7 @@
 
 #include "gcode.h"
 #include "http_int.h"
+#include "st_append.h"
 
 #define TEMP_MAX 400.0	  /* highest target accepted, degC (no FFF hot end goes higher) */
 #define FEED_DEFAULT 6000 /* jog feed rate without "speed", mm/min */
@@ -305,7 +306,6 @@ static void jog(const json_t *o, struct lines *ls)
 {
 	static const char axes[] = "xyz";
 	char move[NODE_CMD_MAX] = "G1";
-	size_t len = 2;
 	json_t *speed = json_object_get(o, "speed");
 	bool absolute = json_is_true(json_object_get(o, "absolute")), any = false;
 
@@ -319,16 +319,15 @@ static void jog(const json_t *o, struct lines *ls)
 			snprintf(ls->msg, sizeof(ls->msg), "%s is a distance in mm", key);
 			return;
 		}
-		len += (size_t)snprintf(move + len, sizeof(move) - len, " %c%g", 'X' + i,
-					json_number_value(v));
+		st_appendf(move, sizeof(move), " %c%g", 'X' + i, json_number_value(v));
 		any = true;
 	}
 	if (!any || (speed && !json_is_number(speed) && !json_is_boolean(speed))) {
 		snprintf(ls->msg, sizeof(ls->msg), "jog needs x, y or z (mm), and speed in mm/min");
 		return;
 	}
-	snprintf(move + len, sizeof(move) - len, " F%g", json_is_number(speed) &&
-		 json_number_value(speed) > 0 ? json_number_value(speed) : FEED_DEFAULT);
+	st_appendf(move, sizeof(move), " F%g", json_is_number(speed) &&
+		   json_number_value(speed) > 0 ? json_number_value(speed) : FEED_DEFAULT);
 	add(ls, "%s", absolute ? "G90" : "G91");
 	add(ls, "%s", move);
 	if (!absolute)
@@ -360,8 +359,7 @@ enum MHD_Result http_post_printhead(struct node *n, struct MHD_Connection *c, st
 				snprintf(ls.msg, sizeof(ls.msg), "axes is a list of x, y, z");
 				break;
 			}
-			snprintf(line + strlen(line), sizeof(line) - strlen(line), " %c0",
-				 a[0] - 'a' + 'A');
+			st_appendf(line, sizeof(line), " %c0", a[0] - 'a' + 'A');
 		}
 		if (!json_is_array(axes) || !json_array_size(axes))
 			snprintf(ls.msg, sizeof(ls.msg), "axes is a list of x, y, z");

@@ -7,6 +7,7 @@
 #include <stdio.h>
 
 #include "node_int.h"
+#include "st_append.h"
 
 /* The process's one log sink (docs/architecture.md convention 10's allowed exception). */
 static node_log_fn log_fn;
@@ -22,7 +23,6 @@ void node_log(const char *level, const char *printer, int64_t job, const char *f
 {
 	char msg[512], line[700];
 	va_list ap;
-	int n;
 
 	if (!log_fn)
 		return;
@@ -33,11 +33,11 @@ void node_log(const char *level, const char *printer, int64_t job, const char *f
 	for (char *s = msg; *s; s++)
 		if (*s == '\n' || *s == '\r')
 			*s = ' ';
-	n = snprintf(line, sizeof(line), "level=%s", level);
+	snprintf(line, sizeof(line), "level=%s", level);
 	if (printer)
-		n += snprintf(line + n, sizeof(line) - (size_t)n, " printer=%s", printer);
+		st_appendf(line, sizeof(line), " printer=%s", printer);
 	if (job > 0)
-		n += snprintf(line + n, sizeof(line) - (size_t)n, " job=%lld", (long long)job);
-	snprintf(line + n, sizeof(line) - (size_t)n, " msg=\"%s\"", msg);
+		st_appendf(line, sizeof(line), " job=%lld", (long long)job);
+	st_appendf(line, sizeof(line), " msg=\"%s\"", msg);
 	log_fn(line, log_ctx);
 }

@@ -44,13 +44,12 @@
 #define MQTT_PAYLOAD_MAX 4096	  /* largest command accepted, bytes */
 #define MQTT_ID_MAX 128		  /* longest command id, bytes */
 #define MQTT_DOWNLOAD_S 600	  /* longest download */
-#define MQTT_TOPICS 6		  /* status ... bed_clear, below */
 #define MQTT_REDIRECTS 5	  /* redirects an enqueue download follows */
 #define MQTT_RETRY_MAX_S 30	  /* longest wait between two tries to reach the broker */
 #define MQTT_COMMANDS "enqueue, cancel, pause, resume, list, move or requeue"
 
-static const char *const state_topics[MQTT_TOPICS] = {"status", "temperatures", "progress",
-						      "job", "queue", "bed_clear"};
+const char *const node_mqtt_state_topics[MQTT_TOPICS] = {
+	"status", "temperatures", "progress", "job", "queue", "bed_clear"};
 
 struct node_mqtt {
 	struct node *n;
@@ -479,7 +478,7 @@ static void publish_state(struct node_mqtt *m, size_t i, bool force)
 		if (!text[t])
 			continue;
 		if (force || !m->last[i][t] || strcmp(m->last[i][t], text[t])) {
-			publish(m, p->cfg->name, state_topics[t], text[t], true);
+			publish(m, p->cfg->name, node_mqtt_state_topics[t], text[t], true);
 			free(m->last[i][t]);
 			m->last[i][t] = text[t];
 		} else {

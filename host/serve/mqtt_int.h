@@ -15,6 +15,11 @@
  * "ping" (a starting node asks whether the holder lives), "pong" (its answer). */
 #define MQTT_PING_WAIT_MS 2000 /* how long a starting node waits for the holder */
 
+/* A printer's retained state topics under ROOT/NODE/PRINTER/, in the order
+ * mqtt.c publishes them; the farm view (farm.c) subscribes to each. */
+#define MQTT_TOPICS 6
+extern const char *const node_mqtt_state_topics[MQTT_TOPICS];
+
 /*
  * node_mqtt_client - a new libmosquitto client for c with client id id,
  * a clean session or a kept one, credentials and TLS as c says.  Returns 0,

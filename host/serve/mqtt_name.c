@@ -17,10 +17,10 @@
 #include <openssl/rand.h>
 #include <stdio.h>
 #include <string.h>
-#include <sys/time.h>
 #include <unistd.h>
 
 #include "mqtt_int.h"
+#include "st_clock.h"
 
 #define CLAIM_CONNECT_MS 5000 /* to connect and subscribe */
 
@@ -116,20 +116,12 @@ static void claim_message(struct mosquitto *mosq, void *ctx, const struct mosqui
 	}
 }
 
-static long long now_ms(void)
-{
-	struct timeval tv;
-
-	gettimeofday(&tv, NULL);
-	return (long long)tv.tv_sec * 1000 + tv.tv_usec / 1000;
-}
-
 /* Run the check's connection until it can tell; see node_mqtt_claim. */
 static int claim_run(const struct node_config *cfg, struct mosquitto *mosq, struct claim *cl,
 		     const atomic_bool *stop, struct st_error *err)
 {
 	const struct node_mqtt_config *c = &cfg->mqtt;
-	long long deadline = now_ms() + CLAIM_CONNECT_MS, ping_until = 0;
+	int64_t deadline = st_mono_ms() + CLAIM_CONNECT_MS, ping_until = 0;
 	int rc = mosquitto_connect_async(mosq, c->host, c->port, c->keepalive);
 
 	while (rc == MOSQ_ERR_SUCCESS && !*stop && cl->connack <= 0) {
@@ -142,14 +134,14 @@ static int claim_run(const struct node_config *cfg, struct mosquitto *mosq, stru
 		if (cl->ping_back && !cl->online)
 			return 0;
 		if (cl->ping_back && !ping_until)
-			ping_until = now_ms() + MQTT_PING_WAIT_MS;
-		if (ping_until && now_ms() > ping_until) {
+			ping_until = st_mono_ms() + MQTT_PING_WAIT_MS;
+		if (ping_until && st_mono_ms() > ping_until) {
 			node_log("warning", NULL, 0, "mqtt: %s/status says online but no node "
 						     "answered; taking the name (its holder is gone)",
 				 c->topic);
 			return 0;
 		}
-		if (!ping_until && now_ms() > deadline)
+		if (!ping_until && st_mono_ms() > deadline)
 			return st_error_set(err, ST_ERR_IO, "mqtt: cannot reach %s:%u: no answer "
 							    "within %d s", c->host, c->port,
 					    CLAIM_CONNECT_MS / 1000);

@@ -257,7 +257,6 @@ void node_free(struct node *n);
 struct farm;
 int farm_new(const struct farm_config *cfg, struct farm **out, struct st_error *err);
 int farm_start(struct farm *f, struct st_error *err);
-uint16_t farm_port(const struct farm *f); /* the port listened on, after farm_start */
 void farm_free(struct farm *f);
 
 #endif /* STRATUM_HOST_SERVE_NODE_H */

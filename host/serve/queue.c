@@ -127,33 +127,71 @@ void node_queue_close(struct node_queue *q)
 	free(q);
 }
 
-/* Bind parameters by fmt: 's' text, 'i' int64. */
-static void bind_args(sqlite3_stmt *st, const char *fmt, va_list ap)
+/* sql prepared with its text/integer parameters bound (fmt: 's' text,
+ * 'i' int64), or NULL; q->mu held. */
+static sqlite3_stmt *prepare(struct node_queue *q, const char *sql, const char *fmt, va_list ap)
 {
+	sqlite3_stmt *st;
+
+	if (sqlite3_prepare_v2(q->db, sql, -1, &st, NULL) != SQLITE_OK)
+		return NULL;
 	for (int i = 0; fmt[i]; i++) {
 		if (fmt[i] == 's')
 			sqlite3_bind_text(st, i + 1, va_arg(ap, const char *), -1, SQLITE_TRANSIENT);
 		else
 			sqlite3_bind_int64(st, i + 1, va_arg(ap, int64_t));
 	}
+	return st;
 }
 
-/* Run sql with text/integer parameters (fmt: 's' text, 'i' int64); q->mu held. */
-static int run(struct node_queue *q, const char *sql, const char *fmt, ...)
+/* prepare, with the parameters as arguments. */
+static sqlite3_stmt *prepare_args(struct node_queue *q, const char *sql, const char *fmt, ...)
 {
 	sqlite3_stmt *st;
 	va_list ap;
-	int rc;
 
-	if (sqlite3_prepare_v2(q->db, sql, -1, &st, NULL) != SQLITE_OK)
-		return -1;
 	va_start(ap, fmt);
-	bind_args(st, fmt, ap);
+	st = prepare(q, sql, fmt, ap);
 	va_end(ap);
-	while ((rc = sqlite3_step(st)) == SQLITE_ROW)
+	return st;
+}
+
+/* Step st (NULL: not prepared) to its end and finalize it: 0, or -1. */
+static int step_all(sqlite3_stmt *st)
+{
+	int rc = SQLITE_ERROR;
+
+	while (st && (rc = sqlite3_step(st)) == SQLITE_ROW)
 		;
 	sqlite3_finalize(st);
 	return rc == SQLITE_DONE ? 0 : -1;
+}
+
+/* Run sql with its parameters (fmt as prepare); q->mu held.  0, or -1. */
+static int run(struct node_queue *q, const char *sql, const char *fmt, ...)
+{
+	va_list ap;
+	sqlite3_stmt *st;
+
+	va_start(ap, fmt);
+	st = prepare(q, sql, fmt, ap);
+	va_end(ap);
+	return step_all(st);
+}
+
+/* run with q->mu taken: 0, or the error of doing what. */
+static int run_locked(struct node_queue *q, struct st_error *err, const char *what,
+		      const char *sql, const char *fmt, ...)
+{
+	va_list ap;
+	int rc;
+
+	pthread_mutex_lock(&q->mu);
+	va_start(ap, fmt);
+	rc = step_all(prepare(q, sql, fmt, ap)) ? db_error(q, err, what) : 0;
+	va_end(ap);
+	pthread_mutex_unlock(&q->mu);
+	return rc;
 }
 
 static void copy_text(char *dst, size_t cap, const unsigned char *s)
@@ -195,15 +233,10 @@ static int one_job(struct node_queue *q, const char *sql, struct node_job *job,
 	int rc;
 
 	pthread_mutex_lock(&q->mu);
-	if (sqlite3_prepare_v2(q->db, sql, -1, &st, NULL) != SQLITE_OK) {
-		rc = db_error(q, err, "query");
-		pthread_mutex_unlock(&q->mu);
-		return rc;
-	}
 	va_start(ap, fmt);
-	bind_args(st, fmt, ap);
+	st = prepare(q, sql, fmt, ap);
 	va_end(ap);
-	rc = sqlite3_step(st);
+	rc = st ? sqlite3_step(st) : SQLITE_ERROR;
 	if (rc == SQLITE_ROW) {
 		row_to_job(st, job);
 		rc = 1;
@@ -220,26 +253,19 @@ static int one_job(struct node_queue *q, const char *sql, struct node_job *job,
 int node_queue_recover(struct node_queue *q, int *interrupted, int *requeued,
 		       struct st_error *err)
 {
-	int rc = 0;
+	int rc;
 
 	pthread_mutex_lock(&q->mu);
-	if (run(q, "BEGIN IMMEDIATE", "") ||
-	    run(q, "UPDATE jobs SET state='paused', interrupted=1, resume=0 "
-		   "WHERE state IN ('printing','paused')", "")) {
-		rc = db_error(q, err, "recovery");
-		goto out;
-	}
+	rc = run(q, "BEGIN IMMEDIATE", "") ||
+	     run(q, "UPDATE jobs SET state='paused', interrupted=1, resume=0 "
+		    "WHERE state IN ('printing','paused')", "");
 	*interrupted = sqlite3_changes(q->db);
-	if (run(q, "UPDATE jobs SET state='queued' WHERE state='slicing'", "")) {
-		rc = db_error(q, err, "recovery");
-		goto out;
-	}
+	rc = rc || run(q, "UPDATE jobs SET state='queued' WHERE state='slicing'", "");
 	*requeued = sqlite3_changes(q->db);
-	if (run(q, "COMMIT", ""))
+	if (rc || run(q, "COMMIT", "")) {
 		rc = db_error(q, err, "recovery");
-out:
-	if (rc)
 		run(q, "ROLLBACK", "");
+	}
 	pthread_mutex_unlock(&q->mu);
 	return rc;
 }
@@ -312,26 +338,20 @@ int node_queue_active(struct node_queue *q, const char *printer, struct node_job
 
 int node_queue_update(struct node_queue *q, const struct node_job *j, struct st_error *err)
 {
-	int rc = 0;
-
-	pthread_mutex_lock(&q->mu);
-	if (run(q, "UPDATE jobs SET gcode=?, state=?, interrupted=?, resume=?, filepos=?, "
-		   "size=?, error=?, started=?, finished=? WHERE id=?", "ssiiiisiii", j->gcode,
-		node_job_state_name(j->state), (int64_t)j->interrupted, (int64_t)j->resume,
-		j->filepos, j->size, j->error, j->started, j->finished, j->id))
-		rc = db_error(q, err, "updating a job");
-	pthread_mutex_unlock(&q->mu);
-	return rc;
+	return run_locked(q, err, "updating a job",
+			  "UPDATE jobs SET gcode=?, state=?, interrupted=?, resume=?, filepos=?, "
+			  "size=?, error=?, started=?, finished=? WHERE id=?", "ssiiiisiii",
+			  j->gcode, node_job_state_name(j->state), (int64_t)j->interrupted,
+			  (int64_t)j->resume, j->filepos, j->size, j->error, j->started,
+			  j->finished, j->id);
 }
 
 int node_queue_progress(struct node_queue *q, int64_t id, int64_t filepos, int64_t size)
 {
-	int rc;
+	struct st_error ignored;
 
-	pthread_mutex_lock(&q->mu);
-	rc = run(q, "UPDATE jobs SET filepos=?, size=? WHERE id=?", "iii", filepos, size, id);
-	pthread_mutex_unlock(&q->mu);
-	return rc;
+	return run_locked(q, &ignored, "progress", "UPDATE jobs SET filepos=?, size=? WHERE id=?",
+			  "iii", filepos, size, id) ? -1 : 0;
 }
 
 int node_queue_file_busy(struct node_queue *q, const char *printer, const char *file)
@@ -340,23 +360,12 @@ int node_queue_file_busy(struct node_queue *q, const char *printer, const char *
 	int busy = 1; /* when in doubt, do not overwrite */
 
 	pthread_mutex_lock(&q->mu);
-	if (sqlite3_prepare_v2(q->db, "SELECT 1 FROM jobs WHERE printer=? AND file=? AND state "
-				      "IN ('queued','slicing','printing','paused') LIMIT 1",
-			       -1, &st, NULL) == SQLITE_OK) {
-		sqlite3_bind_text(st, 1, printer, -1, SQLITE_TRANSIENT);
-		sqlite3_bind_text(st, 2, file, -1, SQLITE_TRANSIENT);
-		switch (sqlite3_step(st)) {
-		case SQLITE_ROW:
-			busy = 1;
-			break;
-		case SQLITE_DONE:
-			busy = 0;
-			break;
-		default:
-			break;
-		}
-		sqlite3_finalize(st);
-	}
+	st = prepare_args(q, "SELECT 1 FROM jobs WHERE printer=? AND file=? AND state "
+			     "IN ('queued','slicing','printing','paused') LIMIT 1", "ss", printer,
+			  file);
+	if (st && sqlite3_step(st) == SQLITE_DONE)
+		busy = 0;
+	sqlite3_finalize(st);
 	pthread_mutex_unlock(&q->mu);
 	return busy;
 }
@@ -376,17 +385,15 @@ static int printer_value(struct node_queue *q, const char *printer, const char *
 	int rc = -1;
 
 	pthread_mutex_lock(&q->mu);
-	if (!printer_row(q, printer) && sqlite3_prepare_v2(q->db, sql, -1, &st, NULL) == SQLITE_OK) {
-		sqlite3_bind_text(st, 1, printer, -1, SQLITE_TRANSIENT);
-		if (sqlite3_step(st) == SQLITE_ROW) {
-			if (text)
-				copy_text(text, cap, sqlite3_column_text(st, 0));
-			else
-				*flag = sqlite3_column_int(st, 0) != 0;
-			rc = 0;
-		}
-		sqlite3_finalize(st);
+	st = printer_row(q, printer) ? NULL : prepare_args(q, sql, "s", printer);
+	if (st && sqlite3_step(st) == SQLITE_ROW) {
+		if (text)
+			copy_text(text, cap, sqlite3_column_text(st, 0));
+		else
+			*flag = sqlite3_column_int(st, 0) != 0;
+		rc = 0;
 	}
+	sqlite3_finalize(st);
 	pthread_mutex_unlock(&q->mu);
 	return rc;
 }
@@ -400,14 +407,9 @@ int node_queue_bed_clear(struct node_queue *q, const char *printer, bool *clear)
 int node_queue_set_bed_clear(struct node_queue *q, const char *printer, bool clear,
 			     struct st_error *err)
 {
-	int rc = 0;
-
-	pthread_mutex_lock(&q->mu);
-	if (printer_row(q, printer) ||
-	    run(q, "UPDATE printers SET bed_clear=? WHERE name=?", "is", (int64_t)clear, printer))
-		rc = db_error(q, err, "bed state");
-	pthread_mutex_unlock(&q->mu);
-	return rc;
+	return run_locked(q, err, "bed state", "INSERT INTO printers(name, bed_clear) VALUES(?, ?) "
+			  "ON CONFLICT(name) DO UPDATE SET bed_clear=excluded.bed_clear", "si",
+			  printer, (int64_t)clear);
 }
 
 int node_queue_selected(struct node_queue *q, const char *printer, char *name, size_t cap)
@@ -420,14 +422,9 @@ int node_queue_selected(struct node_queue *q, const char *printer, char *name, s
 int node_queue_set_selected(struct node_queue *q, const char *printer, const char *name,
 			    struct st_error *err)
 {
-	int rc = 0;
-
-	pthread_mutex_lock(&q->mu);
-	if (printer_row(q, printer) ||
-	    run(q, "UPDATE printers SET selected=? WHERE name=?", "ss", name, printer))
-		rc = db_error(q, err, "selecting a file");
-	pthread_mutex_unlock(&q->mu);
-	return rc;
+	return run_locked(q, err, "selecting a file", "INSERT INTO printers(name, selected) "
+			  "VALUES(?, ?) ON CONFLICT(name) DO UPDATE SET selected=excluded.selected",
+			  "ss", printer, name);
 }
 
 int node_queue_command_once(struct node_queue *q, const char *id, const char *printer,
@@ -468,28 +465,37 @@ json_t *node_job_json(const struct node_job *j)
 	return o;
 }
 
-json_t *node_queue_list(struct node_queue *q, const char *printer, int limit)
+/* The jobs of printer that sql (parameters: the printer, a limit) selects,
+ * as JSON; with numbered, each with its "position" (1, 2, ...). */
+static json_t *job_list(struct node_queue *q, const char *sql, const char *printer, int limit,
+			bool numbered)
 {
 	json_t *arr = json_array();
 	sqlite3_stmt *st;
+	struct node_job j;
 
 	if (!arr)
 		return NULL;
 	pthread_mutex_lock(&q->mu);
-	if (sqlite3_prepare_v2(q->db, "SELECT " JOB_COLUMNS " FROM jobs WHERE printer=? "
-				      "ORDER BY id DESC LIMIT ?", -1, &st, NULL) == SQLITE_OK) {
-		struct node_job j;
+	st = prepare_args(q, sql, "si", printer, (int64_t)limit);
+	while (st && sqlite3_step(st) == SQLITE_ROW) {
+		json_t *o;
 
-		sqlite3_bind_text(st, 1, printer, -1, SQLITE_TRANSIENT);
-		sqlite3_bind_int(st, 2, limit);
-		while (sqlite3_step(st) == SQLITE_ROW) {
-			row_to_job(st, &j);
-			json_array_append_new(arr, node_job_json(&j));
-		}
-		sqlite3_finalize(st);
+		row_to_job(st, &j);
+		o = node_job_json(&j);
+		if (numbered)
+			json_object_set_new(o, "position", json_integer((json_int_t)json_array_size(arr) + 1));
+		json_array_append_new(arr, o);
 	}
+	sqlite3_finalize(st);
 	pthread_mutex_unlock(&q->mu);
 	return arr;
+}
+
+json_t *node_queue_list(struct node_queue *q, const char *printer, int limit)
+{
+	return job_list(q, "SELECT " JOB_COLUMNS " FROM jobs WHERE printer=? ORDER BY id DESC "
+			   "LIMIT ?", printer, limit, false);
 }
 
 /* The ids of printer's queued jobs in the order the worker takes them, into
@@ -499,10 +505,10 @@ static int queued_ids(struct node_queue *q, const char *printer, int64_t *ids, i
 	sqlite3_stmt *st;
 	int n = 0, rc;
 
-	if (sqlite3_prepare_v2(q->db, "SELECT id FROM jobs WHERE printer=? AND state='queued' "
-				      "ORDER BY position, id", -1, &st, NULL) != SQLITE_OK)
+	st = prepare_args(q, "SELECT id FROM jobs WHERE printer=? AND state='queued' "
+			     "ORDER BY position, id", "s", printer);
+	if (!st)
 		return -1;
-	sqlite3_bind_text(st, 1, printer, -1, SQLITE_TRANSIENT);
 	while ((rc = sqlite3_step(st)) == SQLITE_ROW && n < cap)
 		ids[n++] = sqlite3_column_int64(st, 0);
 	sqlite3_finalize(st);
@@ -556,30 +562,6 @@ out:
 
 json_t *node_queue_waiting(struct node_queue *q, const char *printer)
 {
-	json_t *arr = json_array();
-	sqlite3_stmt *st;
-	json_int_t position = 0;
-
-	if (!arr)
-		return NULL;
-	pthread_mutex_lock(&q->mu);
-	if (sqlite3_prepare_v2(q->db, "SELECT " JOB_COLUMNS " FROM jobs WHERE printer=? AND "
-				      "state='queued' ORDER BY position, id LIMIT ?", -1, &st,
-			       NULL) == SQLITE_OK) {
-		struct node_job j;
-
-		sqlite3_bind_text(st, 1, printer, -1, SQLITE_TRANSIENT);
-		sqlite3_bind_int(st, 2, NODE_QUEUE_MAX);
-		while (sqlite3_step(st) == SQLITE_ROW) {
-			json_t *o;
-
-			row_to_job(st, &j);
-			o = node_job_json(&j);
-			json_object_set_new(o, "position", json_integer(++position));
-			json_array_append_new(arr, o);
-		}
-		sqlite3_finalize(st);
-	}
-	pthread_mutex_unlock(&q->mu);
-	return arr;
+	return job_list(q, "SELECT " JOB_COLUMNS " FROM jobs WHERE printer=? AND state='queued' "
+			   "ORDER BY position, id LIMIT ?", printer, NODE_QUEUE_MAX, true);
 }
