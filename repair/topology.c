@@ -175,14 +175,17 @@ static void find_duplicates(struct topo *tp, struct mesh_report *rep)
 			continue;
 		sort3(m->tris[t], key);
 		for (uint32_t i = tp->voff[key[0]]; i < tp->voff[key[0] + 1]; i++) {
-			uint32_t other = tp->vtri[i], okey[3];
+			uint32_t other = tp->vtri[i];
 
 			if (other >= t)
 				break; /* stars list triangles in increasing order */
 			if (tp->tclass[other] != TRI_LAYER)
 				continue;
-			sort3(m->tris[other], okey);
-			if (okey[1] == key[1] && okey[2] == key[2]) {
+			/* other has key[0] (it is in its star): the same set iff it
+			 * has the other two as well. */
+			const uint32_t *o = m->tris[other];
+			if ((o[0] == key[1] || o[1] == key[1] || o[2] == key[1]) &&
+			    (o[0] == key[2] || o[1] == key[2] || o[2] == key[2])) {
 				tp->tclass[t] = TRI_DUPLICATE;
 				rep->duplicates++;
 				break;
@@ -273,21 +276,30 @@ static int build_edges(struct topo *tp, struct st_error *err)
 		goto out_nomem;
 	for (size_t lo = 0; lo < m->nverts; lo++) {
 		size_t nh = 0;
+		/* At most two half-edges per triangle of the star. */
+		void *p = st_grow(h, &hcap, 2 * (size_t)(tp->voff[lo + 1] - tp->voff[lo]) + 1,
+				  sizeof(*h));
 
+		if (!p)
+			goto out_nomem;
+		h = p;
 		for (uint32_t i = tp->voff[lo]; i < tp->voff[lo + 1]; i++) {
 			uint32_t t = tp->vtri[i];
 			if (tp->tclass[t] != TRI_LAYER)
 				continue;
-			for (uint32_t k = 0; k < 3; k++) {
-				uint32_t a = m->tris[t][k], b = m->tris[t][(k + 1) % 3];
-				if ((a < b ? a : b) != lo)
-					continue;
-				void *p = st_grow(h, &hcap, nh + 1, sizeof(*h));
-				if (!p)
-					goto out_nomem;
-				h = p;
-				h[nh].hi = a < b ? b : a;
+			/* Of a layer triangle's edges (corners distinct), only the
+			 * two at lo can start at lo as their lower vertex: the one
+			 * leaving lo (corner k) and the one arriving (corner k-1). */
+			const uint32_t *v = m->tris[t];
+			const uint32_t k = v[0] == lo ? 0 : v[1] == lo ? 1 : 2;
+			const uint32_t next = v[k == 2 ? 0 : k + 1], prev = v[k == 0 ? 2 : k - 1];
+			if (next > lo) {
+				h[nh].hi = next;
 				h[nh++].corner = 3 * t + k;
+			}
+			if (prev > lo) {
+				h[nh].hi = prev;
+				h[nh++].corner = 3 * t + (k == 0 ? 2 : k - 1);
 			}
 		}
 		sort_halves(h, nh);
@@ -324,6 +336,12 @@ static uint32_t edge_vertex(const struct topo *tp, size_t e, int end)
 static uint32_t corner_vertex(const struct mesh *m, uint32_t c)
 {
 	return m->tris[c / 3][c % 3];
+}
+
+/* The next corner of the same triangle. */
+static uint32_t next_corner(uint32_t c)
+{
+	return c % 3 == 2 ? c - 2 : c + 1;
 }
 
 static uint32_t corner_at(const struct mesh *m, uint32_t tri, uint32_t v)
@@ -457,11 +475,13 @@ static int check_vertices_and_loops(struct topo *tp, struct mesh_report *rep,
 			nb++;
 		if (n != 2)
 			continue;
-		for (int end = 0; end < 2; end++) {
-			uint32_t v = edge_vertex(tp, e, end);
-			uf_union(fan, corner_at(m, tp->ecorner[tp->eoff[e]] / 3, v),
-				 corner_at(m, tp->ecorner[tp->eoff[e] + 1] / 3, v));
-		}
+		/* The corners at each end of the edge: the first corner runs from
+		 * end 0 to end 1; the second starts at one of them. */
+		const uint32_t c0 = tp->ecorner[tp->eoff[e]], c1 = tp->ecorner[tp->eoff[e] + 1];
+		const uint32_t c0_end = next_corner(c0), c1_end = next_corner(c1);
+		const bool c1_from_start = corner_vertex(m, c1) == corner_vertex(m, c0);
+		uf_union(fan, c0, c1_from_start ? c1 : c1_end);
+		uf_union(fan, c0_end, c1_from_start ? c1_end : c1);
 	}
 	for (size_t c = 0; c < ncorners; c++) {
 		uint32_t v;

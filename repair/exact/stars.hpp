@@ -79,6 +79,38 @@ inline bool order_small_fan(uint32_t v, const uint32_t *list, size_t k,
 		a[i] = c[(j + 1) % 3];
 		b[i] = c[(j + 2) % 3];
 	}
+	/* The usual star, one closed fan, is found by walking it from the
+	 * first triangle: each step takes the first triangle whose a is the
+	 * last b, so coming back to a[0] after visiting all k proves the a
+	 * (and so the b) distinct and every a a b.  The ring then starts at
+	 * the least a, as below. */
+	{
+		uint8_t order[SMALL_FAN];
+		uint32_t seen = 1;
+		size_t at = 0, least = 0;
+		for (size_t step = 0; step < k; step++) {
+			order[step] = (uint8_t)at;
+			if (a[at] < a[order[least]])
+				least = step;
+			const uint32_t next = b[at];
+			for (at = 0; at < k && a[at] != next; at++)
+				;
+			if (at == k)
+				break;
+			if (step + 1 == k) {
+				if (at != 0)
+					break;
+				closed = true;
+				s.ring.clear();
+				for (size_t i = 0; i < k; i++)
+					s.ring.push_back(a[order[(least + i) % k]]);
+				return true;
+			}
+			if ((seen >> at) & 1)
+				break;
+			seen |= (uint32_t)1 << at;
+		}
+	}
 	for (size_t i = 1; i < k; i++)
 		for (size_t j = 0; j < i; j++)
 			if (a[i] == a[j] || b[i] == b[j])
