@@ -232,11 +232,12 @@ void deviation_report_free(struct deviation_report *r)
  * reference the facet stands for (it passed a tip the finer surface
  * rounds off) and met another. */
 #define CHORDAL_REACH 3.0
-/* A crossing counts only where the reference there faces the facet's way
- * within acos(1/3) = 70.5 degrees: the far side of a thin part faces away,
- * and a line that grazes a surface (a facet standing across a scan's
- * bump) overstates the distance to it there by more than CHORDAL_REACH
- * times (1 / cos of the angle). */
+/* The nearer crossing counts only where the reference there faces the
+ * facet's way within acos(1/3) = 70.5 degrees: the far side of a thin part
+ * faces away, as does the surface under a facet turned over on it, and a
+ * line that grazes a surface (a facet standing across a scan's bump)
+ * overstates the distance to it there by more than CHORDAL_REACH times
+ * (1 / cos of the angle). */
 #define CHORDAL_MIN_COS (1.0 / CHORDAL_REACH)
 /* At least this grid on each facet of a, so points inside it too, where a
  * curved surface strays furthest from a small facet; and on each facet of

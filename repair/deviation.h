@@ -70,11 +70,11 @@ struct chordal_report {
  * - from the facet (seed 003): on a grid over it (about `samples` points
  *   over all of a, at least 28 a facet, corners and edges' midpoints
  *   included), the distance along its normal, forwards or back, to where
- *   the line first meets a face of ref that faces the facet's way within
- *   70.5 degrees and lies no farther than three times ref's nearest point
- *   or the facet's longest edge; elsewhere (the line grazes ref, meets the
- *   far side of a thin part, passes a tip and meets another part, or
- *   misses) the distance to ref's nearest point;
+ *   the line first meets ref, the nearer way, when ref's face there faces
+ *   the facet's way within 70.5 degrees and lies no farther than three
+ *   times ref's nearest point or the facet's longest edge; else (the line
+ *   grazes ref, meets the far side of a thin part, passes a tip and meets
+ *   another part, or misses) the distance to ref's nearest point;
  * - from ref: on a grid over ref's facets (about `samples` points, at
  *   least 10 a facet), each point's distance to a, which raises the facet
  *   of a nearest to it, so a bump of ref that a facet passes over counts

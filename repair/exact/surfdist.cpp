@@ -79,28 +79,30 @@ bool faces_along(const K::Triangle_3 &tri, const K::Vector_3 &d, double min_cos)
 
 /* Where the line through q along d meets t's surface, the nearer way:
  * the distance (-1 when it misses both ways), the point in *at and the
- * caller's index of its triangle in *which.  A way whose first crossing is
- * with a triangle that does not face along d within min_cos (see
- * faces_along; below -1, any) counts as a miss. */
+ * caller's index of its triangle in *which.  When that triangle does not
+ * face along d within min_cos (see faces_along; below -1, any), -1 too:
+ * the line does not measure the surface there. */
 double line_hit(const surfdist *t, const double q_[3], const double d_[3], double min_cos,
 		K::Point_3 *at, uint32_t *which)
 {
 	K::Point_3 q = point(q_), p;
 	K::Vector_3 d(d_[0], d_[1], d_[2]);
 	double best = -1.0;
+	TriIt met = t->tris.cend();
 
 	for (int sign = 1; sign >= -1; sign -= 2) {
 		auto hit = t->tree.first_intersection(K::Ray_3(q, sign * d));
 		double h = hit_distance(q, hit, &p);
-		if (h >= 0 && min_cos >= -1 && !faces_along(*hit->second, d, min_cos))
-			continue;
 		if (h >= 0 && (best < 0 || h < best)) {
 			best = h;
 			*at = p;
-			*which = t->ids[hit->second - t->tris.cbegin()];
+			met = hit->second;
 		}
 	}
-	return best;
+	if (best < 0)
+		return best;
+	*which = t->ids[met - t->tris.cbegin()];
+	return min_cos >= -1 && !faces_along(*met, d, min_cos) ? -1.0 : best;
 }
 
 } /* namespace */

@@ -55,11 +55,10 @@ int surfdist_nearest(const struct surfdist *t, const double (*pts)[3], size_t n,
  * through it along dirs[i] (need not be unit) first meets the surface,
  * forwards or backwards, whichever is nearer: the distance in dist[i] (in
  * mm, not in units of dirs[i]), or -1 when the line misses the surface
- * both ways.  A way whose first crossing is with a triangle facing away
- * from dirs[i] by more than the angle whose cosine is min_cos (the angle
- * between the triangle's right-handed normal and dirs[i]) counts as a
- * miss; SURFDIST_ANY_FACING takes any.  0 or a negative class with err
- * filled.
+ * both ways.  When the triangle met there faces away from dirs[i] by more
+ * than the angle whose cosine is min_cos (the angle between its
+ * right-handed normal and dirs[i]), -1 as well; SURFDIST_ANY_FACING takes
+ * any.  0 or a negative class with err filled.
  */
 int surfdist_along(const struct surfdist *t, const double (*pts)[3], const double (*dirs)[3],
 		   size_t n, double min_cos, double *dist, struct st_error *err);
