@@ -227,10 +227,12 @@ void deviation_report_free(struct deviation_report *r)
 
 /* ---- chordal error ---- */
 
-/* Farther along the normal than this many times the nearest point, and
- * than the facet's longest edge, the line has missed the part of the
- * reference the facet stands for (it passed a tip the finer surface
- * rounds off) and met another. */
+/* Farther along the normal than this many times the nearest point, the
+ * line has missed the part of the reference the facet stands for (it
+ * passed a tip the finer surface rounds off, or grazed a bump) and met
+ * another.  Beside a crease (a cylinder's rim) the nearest point is on the
+ * cap while the side is a sagitta away along the normal: the reference's
+ * points find that sagitta (back_flush). */
 #define CHORDAL_REACH 3.0
 /* The nearer crossing counts only where the reference there faces the
  * facet's way within acos(1/3) = 70.5 degrees: the far side of a thin part
@@ -259,7 +261,7 @@ static int chordal_flush(struct chordal_report *r, struct batch *b, const struct
 		return rc;
 	for (size_t i = 0; i < b->n; i++) {
 		double d = b->dist[i];
-		if (d < 0 || d > fmax(CHORDAL_REACH * near[i], b->w[i]))
+		if (d < 0 || d > CHORDAL_REACH * near[i])
 			d = near[i];
 		*sum += d;
 		if (d > r->facet[b->facet[i]])
@@ -308,7 +310,6 @@ static int chordal_points(const struct mesh *a, const struct surfdist *ref, doub
 			}
 			memcpy(b->pts[b->n], tmp[i], sizeof(tmp[i]));
 			memcpy(b->dirs[b->n], n, sizeof(n));
-			b->w[b->n] = longest_edge(p, q, s); /* how far a crossing may lie */
 			b->facet[b->n++] = (uint32_t)t;
 		}
 		r->points += npts;

@@ -72,13 +72,14 @@ struct chordal_report {
  *   included), the distance along its normal, forwards or back, to where
  *   the line first meets ref, the nearer way, when ref's face there faces
  *   the facet's way within 70.5 degrees and lies no farther than three
- *   times ref's nearest point or the facet's longest edge; else (the line
- *   grazes ref, meets the far side of a thin part, passes a tip and meets
- *   another part, or misses) the distance to ref's nearest point;
+ *   times ref's nearest point; else (the line grazes ref, meets the far
+ *   side of a thin part, passes a tip and meets another part, or misses)
+ *   the distance to ref's nearest point;
  * - from ref: on a grid over ref's facets (about `samples` points, at
  *   least 10 a facet), each point's distance to a, which raises the facet
- *   of a nearest to it, so a bump of ref that a facet passes over counts
- *   against that facet.
+ *   of a nearest to it by its offset along that facet's normal, so a bump
+ *   of ref that a facet passes over counts against that facet, as does a
+ *   crease's sagitta where ref's nearest point is on the other face.
  * The facets above tolerance (mm, >= 0) are isolated (seed 003): listed,
  * counted in edge-connected regions.  Returns 0 or a negative class as
  * deviation_measure; *r is then empty.
