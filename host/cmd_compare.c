@@ -30,8 +30,10 @@ static const char compare_head[] =
     "the 95th percentile weighted by area, and a histogram - from even samples\n"
     "on each surface and the nearest point of the other (CGAL's AABB tree).\n"
     "With --reference FINE: seed 003's chordal error of every facet of A, the\n"
-    "distance along the facet's normal from points on it to the finer surface,\n"
-    "and the facets over the tolerance, in edge-connected regions.  --png draws\n"
+    "distance along the facet's normal from points on it to the finer surface\n"
+    "(or FINE's points nearest to the facet, if farther) - the measure `stratum\n"
+    "refine` stops by - and the facets over the tolerance, in edge-connected\n"
+    "regions.  --png draws\n"
     "A coloured by its distance to B (else by its chordal error).  See\n"
     "docs/accuracy.md.\n"
     "\n";
@@ -176,7 +178,7 @@ done:
 
 int cmd_compare(int argc, char **argv)
 {
-	struct compare_args a = {.tolerance = 0.01, .samples = 200000};
+	struct compare_args a = {.tolerance = 0.01, .samples = DEVIATION_SAMPLES_DEFAULT};
 	struct mesh *ma = NULL, *mb = NULL, *mref = NULL;
 	char msg[512];
 	int rc;

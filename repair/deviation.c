@@ -229,21 +229,31 @@ void deviation_report_free(struct deviation_report *r)
 
 /* Farther along the normal than this many times the nearest point, the
  * line has missed the part of the reference the facet stands for (it
- * passed a tip the finer surface rounds off) and met another. */
+ * passed a tip the finer surface rounds off, or grazed a bump) and met
+ * another.  Beside a crease (a cylinder's rim) the nearest point is on the
+ * cap while the side is a sagitta away along the normal: the reference's
+ * points find that sagitta (back_flush). */
 #define CHORDAL_REACH 3.0
-/* chordal_measure_near, which judges small facets: at least this grid on
- * each, so points inside it too, where a curved surface strays furthest
- * from a small facet; and on each facet of the reference at least its
- * centroid and two points on each edge besides its corners (fewer let the
- * elephant of docs/accuracy.md end 9 % over the tolerance by `compare`). */
-#define NEAR_K_MIN 6
+/* The nearer crossing counts only where the reference there faces the
+ * facet's way within acos(1/3) = 70.5 degrees: the far side of a thin part
+ * faces away, as does the surface under a facet turned over on it, and a
+ * line that grazes a surface (a facet standing across a scan's bump)
+ * overstates the distance to it there by more than CHORDAL_REACH times
+ * (1 / cos of the angle). */
+#define CHORDAL_MIN_COS (1.0 / CHORDAL_REACH)
+/* At least this grid on each facet of a, so points inside it too, where a
+ * curved surface strays furthest from a small facet; and on each facet of
+ * the reference at least its centroid and two points on each edge besides
+ * its corners (fewer let the elephant of docs/accuracy.md end 9 % over
+ * the tolerance by the surface distance). */
+#define FACET_K_MIN 6
 #define BACK_K_MIN 3
 
 static int chordal_flush(struct chordal_report *r, struct batch *b, const struct surfdist *ref,
 			 double *near, double *sum, struct st_error *err)
 {
 	int rc = surfdist_along(ref, (const double (*)[3])b->pts, (const double (*)[3])b->dirs,
-				b->n, b->dist, err);
+				b->n, CHORDAL_MIN_COS, b->dist, err);
 
 	if (!rc)
 		rc = surfdist_nearest(ref, (const double (*)[3])b->pts, b->n, near, NULL, err);
@@ -251,7 +261,7 @@ static int chordal_flush(struct chordal_report *r, struct batch *b, const struct
 		return rc;
 	for (size_t i = 0; i < b->n; i++) {
 		double d = b->dist[i];
-		if (d < 0 || d > fmax(CHORDAL_REACH * near[i], b->w[i]))
+		if (d < 0 || d > CHORDAL_REACH * near[i])
 			d = near[i];
 		*sum += d;
 		if (d > r->facet[b->facet[i]])
@@ -261,11 +271,9 @@ static int chordal_flush(struct chordal_report *r, struct batch *b, const struct
 	return 0;
 }
 
-/* edge_reach: a crossing as far as the facet's longest edge counts (else
- * only up to CHORDAL_REACH times the nearest point). */
+/* From a's facets: the distance along each facet's normal, on a grid. */
 static int chordal_points(const struct mesh *a, const struct surfdist *ref, double spacing,
-			  bool edge_reach, struct chordal_report *r, struct batch *b,
-			  struct st_error *err)
+			  struct chordal_report *r, struct batch *b, struct st_error *err)
 {
 	double sum = 0, *near = malloc(CHUNK * sizeof(*near));
 	int rc;
@@ -288,8 +296,8 @@ static int chordal_points(const struct mesh *a, const struct surfdist *ref, doub
 		if (!surfsample_normal(p, q, s, n, &area))
 			continue;
 		k += k % 2;
-		if (!edge_reach && k < NEAR_K_MIN)
-			k = NEAR_K_MIN;
+		if (k < FACET_K_MIN)
+			k = FACET_K_MIN;
 		if (k > SURFSAMPLE_K_MAX)
 			k = SURFSAMPLE_K_MAX;
 		npts = (k + 1) * (k + 2) / 2;
@@ -302,7 +310,6 @@ static int chordal_points(const struct mesh *a, const struct surfdist *ref, doub
 			}
 			memcpy(b->pts[b->n], tmp[i], sizeof(tmp[i]));
 			memcpy(b->dirs[b->n], n, sizeof(n));
-			b->w[b->n] = edge_reach ? longest_edge(p, q, s) : 0; /* how far a crossing may lie */
 			b->facet[b->n++] = (uint32_t)t;
 		}
 		r->points += npts;
@@ -314,6 +321,60 @@ static int chordal_points(const struct mesh *a, const struct surfdist *ref, doub
 		return rc;
 	r->mean = r->points ? sum / (double)r->points : 0;
 	return 0;
+}
+
+/* The queued points of ref: each raises its nearest facet of a to how far
+ * it lies from that facet's plane (along its normal, as seed 003 measures:
+ * where the nearest point is on an edge shared with a facet at an angle, a
+ * cylinder's rim, the offset sideways is the other facet's error). */
+static int back_flush(const struct mesh *a, struct batch *b, const struct surfdist *ta,
+		      double (*at)[3], float *facet, struct st_error *err)
+{
+	int rc = surfdist_closest(ta, (const double (*)[3])b->pts, b->n, at, b->facet, err);
+
+	for (size_t i = 0; !rc && i < b->n; i++) {
+		const uint32_t *c = a->tris[b->facet[i]];
+		double n[3], area, d = 0;
+		surfsample_normal(a->verts[c[0]], a->verts[c[1]], a->verts[c[2]], n, &area);
+		for (int k = 0; k < 3; k++)
+			d += (b->pts[i][k] - at[i][k]) * n[k];
+		d = fabs(d);
+		if (d > facet[b->facet[i]])
+			facet[b->facet[i]] = (float)d;
+	}
+	b->n = 0;
+	return rc;
+}
+
+/* From ref's facets: points on a grid over each, each raising the facet of
+ * a nearest to it (ta, the tree over a), as back_flush says. */
+static int back_points(const struct mesh *a, const struct mesh *ref, const struct surfdist *ta,
+		       double spacing, float *facet, struct batch *b, struct st_error *err)
+{
+	double (*tmp)[3] = malloc(((size_t)SURFSAMPLE_K_MAX + 1) * (SURFSAMPLE_K_MAX + 2) / 2 *
+				  sizeof(*tmp));
+	double (*at)[3] = malloc(CHUNK * sizeof(*at));
+	int rc = tmp && at ? 0 : st_error_set(err, ST_ERR_NOMEM, "chordal error: out of memory");
+
+	for (size_t t = 0; !rc && t < ref->ntris; t++) {
+		const double *p = ref->verts[ref->tris[t][0]], *q = ref->verts[ref->tris[t][1]],
+			     *s = ref->verts[ref->tris[t][2]];
+		size_t k = surfsample_k(p, q, s, spacing);
+		k = k < BACK_K_MIN ? BACK_K_MIN : k;
+		size_t npts = (k + 1) * (k + 2) / 2;
+
+		surfsample_grid(p, q, s, k, tmp);
+		for (size_t i = 0; i < npts && !rc; i++) {
+			if (b->n == CHUNK)
+				rc = back_flush(a, b, ta, at, facet, err);
+			memcpy(b->pts[b->n++], tmp[i], sizeof(tmp[i]));
+		}
+	}
+	if (!rc && b->n)
+		rc = back_flush(a, b, ta, at, facet, err);
+	free(tmp);
+	free(at);
+	return rc;
 }
 
 /* An edge of a facet over the tolerance, by its welded corners. */
@@ -379,11 +440,10 @@ static int isolate(const struct mesh *a, struct chordal_report *r, struct st_err
 	return 0;
 }
 
-static int chordal_run(const struct mesh *a, const struct mesh *ref, size_t samples,
-		       double tolerance, bool edge_reach, struct chordal_report *r,
-		       struct st_error *err)
+int chordal_measure(const struct mesh *a, const struct mesh *ref, size_t samples,
+		    double tolerance, struct chordal_report *r, struct st_error *err)
 {
-	struct surfdist *tr = NULL;
+	struct surfdist *tr = NULL, *ta = NULL;
 	struct batch bt;
 	int rc;
 
@@ -392,75 +452,18 @@ static int chordal_run(const struct mesh *a, const struct mesh *ref, size_t samp
 	if (!(r->facet = calloc(a->ntris ? a->ntris : 1, sizeof(*r->facet))))
 		return st_error_set(err, ST_ERR_NOMEM, "chordal error: out of memory");
 	if (!(rc = batch_init(&bt, true, err)) && !(rc = tree_of(ref, &tr, err)) &&
-	    !(rc = chordal_points(a, tr, spacing_for(a, samples), edge_reach, r, &bt, err))) {
+	    !(rc = chordal_points(a, tr, spacing_for(a, samples), r, &bt, err)) &&
+	    !(rc = tree_of(a, &ta, err)) &&
+	    !(rc = back_points(a, ref, ta, spacing_for(ref, samples), r->facet, &bt, err))) {
 		for (size_t t = 0; t < a->ntris; t++)
 			r->max = fmax(r->max, r->facet[t]);
 		rc = isolate(a, r, err);
 	}
 	batch_free(&bt);
 	surfdist_free(tr);
+	surfdist_free(ta);
 	if (rc)
 		chordal_report_free(r);
-	return rc;
-}
-
-int chordal_measure(const struct mesh *a, const struct mesh *ref, size_t samples,
-		    double tolerance, struct chordal_report *r, struct st_error *err)
-{
-	return chordal_run(a, ref, samples, tolerance, true, r, err);
-}
-
-int chordal_measure_near(const struct mesh *a, const struct mesh *ref, size_t samples,
-			 double tolerance, struct chordal_report *r, struct st_error *err)
-{
-	return chordal_run(a, ref, samples, tolerance, false, r, err);
-}
-
-/* The queued points of ref: each raises its nearest facet of a. */
-static int back_flush(struct batch *b, const struct surfdist *ta, float *facet,
-		      struct st_error *err)
-{
-	int rc = surfdist_nearest(ta, (const double (*)[3])b->pts, b->n, b->dist, b->facet, err);
-
-	for (size_t i = 0; !rc && i < b->n; i++)
-		if (b->dist[i] > facet[b->facet[i]])
-			facet[b->facet[i]] = (float)b->dist[i];
-	b->n = 0;
-	return rc;
-}
-
-int chordal_measure_back(const struct mesh *a, const struct mesh *ref, size_t samples,
-			 float *facet, struct st_error *err)
-{
-	struct surfdist *ta = NULL;
-	struct batch bt = {0};
-	double spacing = spacing_for(ref, samples);
-	double (*tmp)[3] = malloc(((size_t)SURFSAMPLE_K_MAX + 1) * (SURFSAMPLE_K_MAX + 2) / 2 *
-				  sizeof(*tmp));
-	int rc = tmp ? batch_init(&bt, false, err)
-		     : st_error_set(err, ST_ERR_NOMEM, "chordal error: out of memory");
-
-	if (!rc)
-		rc = tree_of(a, &ta, err);
-	for (size_t t = 0; !rc && t < ref->ntris; t++) {
-		const double *p = ref->verts[ref->tris[t][0]], *q = ref->verts[ref->tris[t][1]],
-			     *s = ref->verts[ref->tris[t][2]];
-		size_t k = surfsample_k(p, q, s, spacing);
-		k = k < BACK_K_MIN ? BACK_K_MIN : k;
-		size_t npts = (k + 1) * (k + 2) / 2;
-
-		surfsample_grid(p, q, s, k, tmp);
-		for (size_t i = 0; i < npts && !rc; i++) {
-			if (bt.n == CHUNK)
-				rc = back_flush(&bt, ta, facet, err);
-			memcpy(bt.pts[bt.n++], tmp[i], sizeof(tmp[i]));
-		}
-	}
-	if (!rc && bt.n)
-		rc = back_flush(&bt, ta, facet, err);
-	free(tmp);
-	batch_free(&bt);
-	surfdist_free(ta);
 	return rc;
 }
 

@@ -18,6 +18,9 @@
 #include "st_error.h"
 
 #define DEVIATION_BINS 10 /* the histogram's bins, 0 .. the largest distance */
+/* Points on each surface by default, for `compare` and `refine` alike: a
+ * refinement measured as `compare --reference` measures it. */
+#define DEVIATION_SAMPLES_DEFAULT 200000
 
 /* One direction: samples on one surface, distances to the other. */
 struct deviation_side {
@@ -61,44 +64,29 @@ struct chordal_report {
 };
 
 /*
- * chordal_measure - for each facet of a, points on a grid over it (about
- * `samples` over all of a, corners and edges included), the distance along
- * the facet's normal, forwards or back, to ref's surface (where the line
- * misses it, or meets it farther than three times its nearest point and
- * than the facet's longest edge, so on another part of it, the distance
- * to that nearest point);
- * the facet's chordal error is the largest.  The facets above tolerance (mm, >= 0) are isolated
- * (seed 003): listed, counted in edge-connected regions.  Returns 0 or a
- * negative class as deviation_measure; *r is then empty.
+ * chordal_measure - each facet's chordal error against ref, the one
+ * measure of `stratum compare --reference` and of `stratum refine`'s
+ * stopping test (docs/accuracy.md), the larger of two:
+ * - from the facet (seed 003): on a grid over it (about `samples` points
+ *   over all of a, at least 28 a facet, corners and edges' midpoints
+ *   included), the distance along its normal, forwards or back, to where
+ *   the line first meets ref, the nearer way, when ref's face there faces
+ *   the facet's way within 70.5 degrees and lies no farther than three
+ *   times ref's nearest point; else (the line grazes ref, meets the far
+ *   side of a thin part, passes a tip and meets another part, or misses)
+ *   the distance to ref's nearest point;
+ * - from ref: on a grid over ref's facets (about `samples` points, at
+ *   least 10 a facet), each point's distance to a, which raises the facet
+ *   of a nearest to it by its offset along that facet's normal, so a bump
+ *   of ref that a facet passes over counts against that facet, as does a
+ *   crease's sagitta where ref's nearest point is on the other face.
+ * The facets above tolerance (mm, >= 0) are isolated (seed 003): listed,
+ * counted in edge-connected regions.  Returns 0 or a negative class as
+ * deviation_measure; *r is then empty.
  */
 int chordal_measure(const struct mesh *a, const struct mesh *ref, size_t samples,
 		    double tolerance, struct chordal_report *r, struct st_error *err);
 
-/*
- * chordal_measure_near - chordal_measure where a crossing farther than
- * three times the nearest point always counts as that nearest point, the
- * facet's size aside: on a strongly curved surface a line along the normal
- * grazes it and meets it far off, which is no error a smaller facet would
- * remove (the refinement's measure, refine.h).  Every facet gets at least
- * the grid of 28 points that includes 10 inside it, whatever `samples`.
- */
-int chordal_measure_near(const struct mesh *a, const struct mesh *ref, size_t samples,
-			 double tolerance, struct chordal_report *r, struct st_error *err);
-
 void chordal_report_free(struct chordal_report *r);
-
-/*
- * chordal_measure_back - the other way round, for the facets of a against
- * ref: points on a grid over ref's facets (about `samples`, corners and
- * edges included), each with its distance to the nearest point of a; each
- * facet of a that is nearest to a point has facet[t] raised to that
- * distance (facet: a->ntris values, left as they are elsewhere).  So a
- * bump of ref that a facet passes over counts against that facet even
- * where no ray from the facet meets it.  Every facet of ref gets at least
- * a grid of 10 points (corners, two on each edge, the centroid).  0 or a
- * negative class as deviation_measure.
- */
-int chordal_measure_back(const struct mesh *a, const struct mesh *ref, size_t samples,
-			 float *facet, struct st_error *err);
 
 #endif /* STRATUM_REPAIR_DEVIATION_H */

@@ -46,7 +46,7 @@ void refine_options_init(struct refine_options *opt)
 {
 	opt->tolerance = 0.01;
 	opt->feature_angle = REFINE_FEATURE_ANGLE_DEFAULT;
-	opt->samples = REFINE_SAMPLES_DEFAULT;
+	opt->samples = DEVIATION_SAMPLES_DEFAULT;
 	opt->max_triangles = REFINE_MAX_TRIANGLES_DEFAULT;
 	opt->uniform = false;
 	opt->move_vertices = false;
@@ -117,33 +117,23 @@ static int require_printable(const struct mesh *m, int threads, struct st_error 
 	return 0;
 }
 
-/* Every facet's chordal error, the larger of facet to ref and ref to facet. */
+/* Every facet's chordal error, as `compare --reference` measures it. */
 static int measure(const struct mesh *m, const struct mesh *ref, const struct refine_options *o,
 		   float **facet, double *max, size_t *over, double *over_area,
 		   struct st_error *err)
 {
 	struct chordal_report c;
-	int rc = chordal_measure_near(m, ref, o->samples, o->tolerance, &c, err);
+	int rc = chordal_measure(m, ref, o->samples, o->tolerance, &c, err);
 
 	if (rc)
 		return rc;
 	free(*facet);
 	*facet = c.facet;
 	c.facet = NULL;
+	*max = c.max;
+	*over = c.nover;
+	*over_area = c.over_area;
 	chordal_report_free(&c);
-	if ((rc = chordal_measure_back(m, ref, o->samples, *facet, err)))
-		return rc;
-	*max = 0;
-	*over = 0;
-	*over_area = 0;
-	for (size_t t = 0; t < m->ntris; t++) {
-		const uint32_t *tri = m->tris[t];
-		*max = fmax(*max, (*facet)[t]);
-		*over += (*facet)[t] > o->tolerance;
-		if ((*facet)[t] > o->tolerance)
-			*over_area += vec3_tri_area(m->verts[tri[0]], m->verts[tri[1]],
-						    m->verts[tri[2]]);
-	}
 	return 0;
 }
 
@@ -666,7 +656,7 @@ static int run_rounds(struct mesh *m, const struct mesh *ref, const struct refin
 		      const struct refine_target *tg, struct pending *pd,
 		      struct refine_report *rep, struct st_error *err)
 {
-	double best, area, best_area;
+	double best, area = 0, best_area = 0;
 	size_t stalled = 0;
 	bool stop = false;
 	int rc = measure(m, ref, o, &rep->facet_error, &rep->error_before, &rep->facets_over,

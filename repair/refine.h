@@ -27,13 +27,13 @@
 
 /* The options' defaults and ranges (the CLI and the docs read these). */
 #define REFINE_FEATURE_ANGLE_DEFAULT 30.0 /* degrees between facets that make a crease */
-#define REFINE_SAMPLES_DEFAULT 50000	  /* points per error measurement, each way */
 #define REFINE_MAX_TRIANGLES_DEFAULT 4000000 /* give up beyond (about 200 MB of STL) */
 
 struct refine_options {
 	double tolerance;     /* mm, > 0: the largest chordal error allowed */
 	double feature_angle; /* degrees, 0..180: facets meeting at more make a crease */
-	size_t samples;	      /* about this many measuring points on each surface */
+	size_t samples;	      /* about this many measuring points on each surface
+			       * (chordal_measure, deviation.h) */
 	size_t max_triangles; /* stop, not reached, rather than grow past this */
 	bool uniform;	      /* split every edge each round: the comparison */
 	bool move_vertices;   /* first move coarse's own vertices onto ref too */

@@ -150,8 +150,10 @@ START_TEST(cli_reports_draws_and_refuses)
 END_TEST
 
 /* A disc 0.1 mm thick: every point of a side facet is within 0.05 mm of a
- * cap of the fine disc, nearer than the side (0.19 mm along the normal);
- * the crossing along the normal still counts (deviation.h, CHORDAL_REACH). */
+ * cap of the fine disc, nearer than the side (0.19 mm along the normal),
+ * so the line along the normal counts only near the cap; the fine side's
+ * points, nearest to the coarse side facet, still find the sagitta
+ * (chordal_measure, deviation.h). */
 START_TEST(chordal_error_beside_a_crease)
 {
 	struct mesh *coarse = fx_cylinder(0, 0, R, 0.1, 16), *fine = fx_cylinder(0, 0, R, 0.1, 256);

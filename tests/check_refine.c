@@ -212,6 +212,98 @@ START_TEST(vertices_left_on_their_edges_are_not_refused)
 }
 END_TEST
 
+/*
+ * A box 10 x 10 x 2 mm whose top folds up into a ridge along y: ridge_h
+ * high on a base ridge_w either side of x = 5, so its two long facets
+ * stand at 79 degrees to the box's top, within ridge_h of it.
+ */
+#define RIDGE_H 0.15
+#define RIDGE_W 0.03
+
+static struct mesh *ridged_box(void)
+{
+	const double x[7][2] = {{0, 0}, {10, 0}, {10, 2}, {5 + RIDGE_W, 2}, {5, 2 + RIDGE_H},
+				{5 - RIDGE_W, 2}, {0, 2}}; /* A..G: the front's (x, z) */
+	/* A B C D E F G at y = 0 are 0..6, at y = 10 are 7..13 */
+	const uint32_t t[24][3] = {
+	    {0, 1, 2},	 {0, 2, 3},    {0, 3, 5},    {3, 4, 5},	  {0, 5, 6},	 /* front */
+	    {7, 9, 8},	 {7, 10, 9},   {7, 12, 10},  {10, 12, 11}, {7, 13, 12},	 /* back */
+	    {6, 5, 12},	 {6, 12, 13},  {5, 4, 11},   {5, 11, 12},  {4, 3, 10},	 /* top */
+	    {4, 10, 11}, {3, 2, 9},    {3, 9, 10},   {0, 8, 1},	  {0, 7, 8},	 /* bottom */
+	    {1, 8, 9},	 {1, 9, 2},    {0, 6, 13},   {0, 13, 7}};		 /* sides */
+	struct mesh_builder *b = mesh_builder_new(24);
+	uint32_t v[14];
+	struct st_error err;
+
+	for (int i = 0; i < 14; i++) {
+		const double p[3] = {x[i % 7][0], i < 7 ? 0 : 10, x[i % 7][1]};
+		ck_assert_int_eq(mesh_builder_vertex(b, p, &v[i], &err), 0);
+	}
+	for (int i = 0; i < 24; i++)
+		ck_assert_int_eq(mesh_builder_triangle(b, v[t[i][0]], v[t[i][1]], v[t[i][2]], &err),
+				 0);
+	return mesh_builder_finish(b);
+}
+
+/* `compare --reference`'s count of facets over tol, from its --json. */
+static long facets_over(char *out, size_t cap, const char *a, const char *fine, double tol)
+{
+	ck_assert_int_eq(tu_run(out, cap, "compare '%s' --reference '%s' --tolerance %g --samples %d "
+					  "--json", a, fine, tol, SAMPLES), 0);
+	char *over = strstr(out, "\"facets_over\": ");
+	ck_assert_msg(over, "%s", out);
+	return strtol(over + strlen("\"facets_over\": "), NULL, 10);
+}
+
+/*
+ * What refine reaches, compare --reference passes at the same tolerance
+ * (issue 21): both measure with chordal_measure.  The ridged box against
+ * the plain box at 0.2 mm: every point of the ridge lies within 0.15 mm of
+ * the box's top, but a line along a ridge facet's normal grazes the top
+ * and meets it up to 0.15 / cos(79 deg) = 0.77 mm away, within the facet's
+ * 10 mm edge.  Refine counted the nearest point there and said reached;
+ * compare counted the crossing and found the ridge's facets over.  And the
+ * cylinder, refined to the tolerance, passes compare too.
+ */
+START_TEST(what_refine_reaches_compare_passes)
+{
+	static char out[1 << 16];
+	char ridged[256], box[256], coarse[256], fine[256], result[256];
+	struct mesh *r = ridged_box(), *bx = fx_box(0, 0, 0, 10, 10, 2);
+	struct mesh *c = fx_cylinder(0, 0, R, H, 16), *f = fx_cylinder(0, 0, R, H, 256);
+	struct mesh_report check;
+	struct st_error err;
+
+	ck_assert_int_eq(mesh_analyze(r, 0, &check, &err), 0);
+	ck_assert(check.printable && !check.self_intersections);
+	snprintf(ridged, sizeof(ridged), "%s", tu_path("ridged.stl"));
+	snprintf(box, sizeof(box), "%s", tu_path("box.stl"));
+	snprintf(coarse, sizeof(coarse), "%s", tu_path("cyl16.stl"));
+	snprintf(fine, sizeof(fine), "%s", tu_path("cyl256.stl"));
+	snprintf(result, sizeof(result), "%s", tu_path("refined.stl"));
+	ck_assert_int_eq(meshio_write_stl(ridged, r, MESHIO_STL_BINARY, &err), 0);
+	ck_assert_int_eq(meshio_write_stl(box, bx, MESHIO_STL_BINARY, &err), 0);
+	ck_assert_int_eq(meshio_write_stl(coarse, c, MESHIO_STL_BINARY, &err), 0);
+	ck_assert_int_eq(meshio_write_stl(fine, f, MESHIO_STL_BINARY, &err), 0);
+	mesh_free(r);
+	mesh_free(bx);
+	mesh_free(c);
+	mesh_free(f);
+
+	ck_assert_int_eq(tu_run(out, sizeof(out), "refine '%s' --reference '%s' --tolerance 0.2 "
+						  "-o '%s' --samples %d --json",
+				ridged, box, result, SAMPLES), 0);
+	ck_assert_msg(strstr(out, "\"reached\": true"), "%s", out);
+	ck_assert_int_eq(facets_over(out, sizeof(out), result, box, 0.2), 0);
+
+	ck_assert_int_eq(tu_run(out, sizeof(out), "refine '%s' --reference '%s' --tolerance %g "
+						  "-o '%s' --samples %d --json",
+				coarse, fine, TOL, result, SAMPLES), 0);
+	ck_assert_msg(strstr(out, "\"reached\": true"), "%s", out);
+	ck_assert_int_eq(facets_over(out, sizeof(out), result, fine, TOL), 0);
+}
+END_TEST
+
 /* The command: the file, the report, and the exit statuses. */
 START_TEST(cli_writes_reports_and_refuses)
 {
@@ -286,6 +378,7 @@ Suite *refine_suite(void)
 	tcase_add_test(tc, corners_off_the_reference_need_move_vertices);
 	tcase_add_test(tc, moves_that_would_cross_are_refused);
 	tcase_add_test(tc, vertices_left_on_their_edges_are_not_refused);
+	tcase_add_test(tc, what_refine_reaches_compare_passes);
 	tcase_add_test(tc, cli_writes_reports_and_refuses);
 	suite_add_tcase(s, tc);
 	return s;

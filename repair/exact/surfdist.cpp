@@ -67,15 +67,28 @@ struct surfdist {
 
 namespace {
 
+/* Whether triangle tri faces along d within the angle whose cosine is
+ * min_cos (its right-handed normal's angle to d). */
+bool faces_along(const K::Triangle_3 &tri, const K::Vector_3 &d, double min_cos)
+{
+	K::Vector_3 n = CGAL::cross_product(tri[1] - tri[0], tri[2] - tri[0]);
+	double dot = n * d, len = std::sqrt(n.squared_length() * d.squared_length());
+
+	return len > 0 && dot >= min_cos * len;
+}
+
 /* Where the line through q along d meets t's surface, the nearer way:
  * the distance (-1 when it misses both ways), the point in *at and the
- * caller's index of its triangle in *which. */
-double line_hit(const surfdist *t, const double q_[3], const double d_[3], K::Point_3 *at,
-		uint32_t *which)
+ * caller's index of its triangle in *which.  When that triangle does not
+ * face along d within min_cos (see faces_along; below -1, any), -1 too:
+ * the line does not measure the surface there. */
+double line_hit(const surfdist *t, const double q_[3], const double d_[3], double min_cos,
+		K::Point_3 *at, uint32_t *which)
 {
 	K::Point_3 q = point(q_), p;
 	K::Vector_3 d(d_[0], d_[1], d_[2]);
 	double best = -1.0;
+	TriIt met = t->tris.cend();
 
 	for (int sign = 1; sign >= -1; sign -= 2) {
 		auto hit = t->tree.first_intersection(K::Ray_3(q, sign * d));
@@ -83,10 +96,13 @@ double line_hit(const surfdist *t, const double q_[3], const double d_[3], K::Po
 		if (h >= 0 && (best < 0 || h < best)) {
 			best = h;
 			*at = p;
-			*which = t->ids[hit->second - t->tris.cbegin()];
+			met = hit->second;
 		}
 	}
-	return best;
+	if (best < 0)
+		return best;
+	*which = t->ids[met - t->tris.cbegin()];
+	return min_cos >= -1 && !faces_along(*met, d, min_cos) ? -1.0 : best;
 }
 
 } /* namespace */
@@ -160,12 +176,13 @@ extern "C" int surfdist_nearest(const struct surfdist *t, const double (*pts)[3]
 }
 
 extern "C" int surfdist_along(const struct surfdist *t, const double (*pts)[3],
-			      const double (*dirs)[3], size_t n, double *dist, struct st_error *err)
+			      const double (*dirs)[3], size_t n, double min_cos, double *dist,
+			      struct st_error *err)
 {
 	return each_point(n, "ray queries", err, [&](size_t i) {
 		K::Point_3 at;
 		uint32_t which;
-		dist[i] = line_hit(t, pts[i], dirs[i], &at, &which);
+		dist[i] = line_hit(t, pts[i], dirs[i], min_cos, &at, &which);
 	});
 }
 
@@ -188,7 +205,7 @@ extern "C" int surfdist_hit(const struct surfdist *t, const double (*pts)[3],
 	return each_point(n, "ray queries", err, [&](size_t i) {
 		K::Point_3 at;
 		tri[i] = UINT32_MAX;
-		dist[i] = line_hit(t, pts[i], dirs[i], &at, &tri[i]);
+		dist[i] = line_hit(t, pts[i], dirs[i], SURFDIST_ANY_FACING, &at, &tri[i]);
 		for (int k = 0; k < 3; k++)
 			out[i][k] = dist[i] >= 0 ? at[k] : pts[i][k];
 	});

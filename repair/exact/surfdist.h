@@ -46,15 +46,22 @@ void surfdist_free(struct surfdist *t);
 int surfdist_nearest(const struct surfdist *t, const double (*pts)[3], size_t n, double *dist,
 		     uint32_t *tri, struct st_error *err);
 
+/* surfdist_along's min_cos that takes a crossing whichever way its
+ * triangle faces. */
+#define SURFDIST_ANY_FACING (-2.0)
+
 /*
  * surfdist_along - for each of the n points pts[i], how far the line
  * through it along dirs[i] (need not be unit) first meets the surface,
  * forwards or backwards, whichever is nearer: the distance in dist[i] (in
  * mm, not in units of dirs[i]), or -1 when the line misses the surface
- * both ways.  0 or a negative class with err filled.
+ * both ways.  When the triangle met there faces away from dirs[i] by more
+ * than the angle whose cosine is min_cos (the angle between its
+ * right-handed normal and dirs[i]), -1 as well; SURFDIST_ANY_FACING takes
+ * any.  0 or a negative class with err filled.
  */
 int surfdist_along(const struct surfdist *t, const double (*pts)[3], const double (*dirs)[3],
-		   size_t n, double *dist, struct st_error *err);
+		   size_t n, double min_cos, double *dist, struct st_error *err);
 
 /*
  * surfdist_closest - for each of the n points pts[i], the closest point of
