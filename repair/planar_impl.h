@@ -44,7 +44,7 @@ struct planar_cluster {
 	bool dirty;		/* to re-triangulate (again) */
 	uint32_t (*tris)[3];	/* PLANAR_NEW: the new triangles */
 	size_t ntris;
-	double deviation;	/* mm: farthest removed vertex from them */
+	double deviation;	/* mm: widest gap between its old and new surfaces */
 };
 
 struct planar_ctx {

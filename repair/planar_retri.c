@@ -3,7 +3,7 @@
  * boundary loops (seed 001 §4.3: the outer one encloses the largest
  * area), the vertices that go, the constrained triangulation of the rest
  * (planar_cdt.h), and the checks that decide whether the cluster may
- * change: a disk with holes, removed vertices and the volume within the
+ * change: a disk with holes, the old and new surfaces and the volume within the
  * flatness tolerance.
  */
 #include <math.h>
@@ -60,6 +60,221 @@ static double volume6(const struct mesh *m, const uint32_t (*t)[3], size_t n, co
 		     p[2] * (q[0] * r[1] - q[1] * r[0]);
 	}
 	return v;
+}
+
+/*
+ * The gap between the old facets and the new triangles is measured along
+ * the cluster's normal n.  Both are height fields over the same outline
+ * seen along n (every old facet faces along it, the new ones are
+ * triangulated in that view), so a point of either surface lies at most
+ * that gap from the other, and the gap is linear on each cell of the two
+ * triangulations overlaid: its largest value is at a removed vertex or
+ * where an old edge crosses a new one (kept vertices are on both).
+ */
+struct view {
+	double u[3], v[3], n[3];
+};
+
+static void view_init(struct view *w, const double n[3])
+{
+	const double *axis =
+	    fabs(n[0]) < 0.6 ? (const double[3]){1, 0, 0} : (const double[3]){0, 1, 0};
+
+	memcpy(w->n, n, sizeof(w->n));
+	w->u[0] = axis[1] * n[2] - axis[2] * n[1];
+	w->u[1] = axis[2] * n[0] - axis[0] * n[2];
+	w->u[2] = axis[0] * n[1] - axis[1] * n[0];
+	const double len = sqrt(w->u[0] * w->u[0] + w->u[1] * w->u[1] + w->u[2] * w->u[2]);
+	for (int k = 0; k < 3; k++)
+		w->u[k] /= len;
+	w->v[0] = n[1] * w->u[2] - n[2] * w->u[1];
+	w->v[1] = n[2] * w->u[0] - n[0] * w->u[2];
+	w->v[2] = n[0] * w->u[1] - n[1] * w->u[0];
+}
+
+static double dot3(const double a[3], const double b[3])
+{
+	return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+/* A point seen along n: its place in the view and its height. */
+struct seen {
+	double x, y, h;
+};
+
+static struct seen see(const struct view *w, const double p[3])
+{
+	return (struct seen){dot3(p, w->u), dot3(p, w->v), dot3(p, w->n)};
+}
+
+/* Removed vertex p against the new triangle abc it lies over. */
+static double vertex_gap(const struct view *w, const double p[3], const double a[3],
+			 const double b[3], const double c[3])
+{
+	double nt[3];
+
+	vec3_area_normal(a, b, c, nt);
+	const double d[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
+	return fabs(dot3(d, nt) / dot3(w->n, nt));
+}
+
+/* Old edge pq against new edge ab: the gap where they cross, else 0. */
+static double crossing_gap(struct seen p, struct seen q, struct seen a, struct seen b)
+{
+	const double rx = q.x - p.x, ry = q.y - p.y, sx = b.x - a.x, sy = b.y - a.y;
+	const double den = rx * sy - ry * sx;
+	const double ex = a.x - p.x, ey = a.y - p.y;
+
+	if (den == 0)
+		return 0;
+	const double t = (ex * sy - ey * sx) / den, s = (ex * ry - ey * rx) / den;
+	if (!(t > 0 && t < 1 && s > 0 && s < 1))
+		return 0;
+	return fabs(p.h + t * (q.h - p.h) - (a.h + s * (b.h - a.h)));
+}
+
+/*
+ * The new edges in a grid of buckets over the view, each in the buckets
+ * its segment passes through, so an old edge meets only the new edges
+ * near it.
+ */
+struct edge_grid {
+	double x0, y0, cell;
+	size_t side;
+	size_t *first; /* bucket b holds edge[first[b] .. first[b + 1]) */
+	size_t *edge;
+	size_t *cells; /* scratch: one segment's buckets, 3 * side at most */
+};
+
+static size_t bucket_index(double f, size_t side)
+{
+	if (!(f > 0))
+		return 0;
+	return f >= (double)(side - 1) ? side - 1 : (size_t)f;
+}
+
+/* The buckets segment ab passes through, column by column, into g->cells. */
+static size_t segment_buckets(const struct edge_grid *g, struct seen a, struct seen b)
+{
+	const double ax = (a.x - g->x0) / g->cell, bx = (b.x - g->x0) / g->cell;
+	const double ay = (a.y - g->y0) / g->cell, by = (b.y - g->y0) / g->cell;
+	const size_t c1 = bucket_index(fmax(ax, bx), g->side);
+	size_t n = 0;
+
+	for (size_t c = bucket_index(fmin(ax, bx), g->side); c <= c1; c++) {
+		double lo = fmin(ay, by), hi = fmax(ay, by);
+		if (ax != bx) { /* the segment's y over this column's x range */
+			const double xl = fmax((double)c, fmin(ax, bx));
+			const double xh = fmin((double)c + 1, fmax(ax, bx));
+			const double yl = ay + (xl - ax) / (bx - ax) * (by - ay);
+			const double yh = ay + (xh - ax) / (bx - ax) * (by - ay);
+			lo = fmin(yl, yh);
+			hi = fmax(yl, yh);
+		}
+		const size_t r1 = bucket_index(hi, g->side);
+		for (size_t r = bucket_index(lo, g->side); r <= r1; r++)
+			g->cells[n++] = r * g->side + c;
+	}
+	return n;
+}
+
+static void edge_grid_free(struct edge_grid *g)
+{
+	free(g->first);
+	free(g->edge);
+	free(g->cells);
+}
+
+/* Buckets the n segments ends[2i], ends[2i + 1]; false when out of memory. */
+static bool edge_grid_build(struct edge_grid *g, const struct seen *ends, size_t n)
+{
+	double x1 = -INFINITY, y1 = -INFINITY;
+	size_t *fill;
+
+	g->x0 = g->y0 = INFINITY;
+	for (size_t i = 0; i < 2 * n; i++) {
+		g->x0 = fmin(g->x0, ends[i].x);
+		g->y0 = fmin(g->y0, ends[i].y);
+		x1 = fmax(x1, ends[i].x);
+		y1 = fmax(y1, ends[i].y);
+	}
+	g->side = (size_t)sqrt((double)n) + 1;
+	g->cell = fmax(x1 - g->x0, y1 - g->y0) / (double)g->side;
+	if (!(g->cell > 0))
+		g->cell = 1;
+	g->first = calloc(g->side * g->side + 1, sizeof(*g->first));
+	g->cells = malloc(3 * g->side * sizeof(*g->cells));
+	if (!g->first || !g->cells)
+		return false;
+	for (size_t e = 0; e < n; e++) {
+		const size_t k = segment_buckets(g, ends[2 * e], ends[2 * e + 1]);
+		for (size_t i = 0; i < k; i++)
+			g->first[g->cells[i] + 1]++;
+	}
+	for (size_t b = 0; b < g->side * g->side; b++)
+		g->first[b + 1] += g->first[b];
+	g->edge = malloc((g->first[g->side * g->side] + 1) * sizeof(*g->edge));
+	fill = malloc((g->side * g->side + 1) * sizeof(*fill));
+	if (!g->edge || !fill) {
+		free(fill);
+		return false;
+	}
+	memcpy(fill, g->first, g->side * g->side * sizeof(*fill));
+	for (size_t e = 0; e < n; e++) {
+		const size_t k = segment_buckets(g, ends[2 * e], ends[2 * e + 1]);
+		for (size_t i = 0; i < k; i++)
+			g->edge[fill[g->cells[i]]++] = e;
+	}
+	free(fill);
+	return true;
+}
+
+/*
+ * The largest gap along the normal between the old facets and the new
+ * triangles of a cluster, at its removed vertices and at every crossing
+ * of an old edge with a new one.  Returns a negative value when out of
+ * memory.
+ */
+static double overlay_gap(const struct mesh *m, const double n[3], const uint32_t (*old)[3],
+			  size_t nold, const uint32_t (*tris)[3], size_t ntris,
+			  const uint32_t *probe, const uint32_t *located, size_t nprobe)
+{
+	const size_t nedges = 3 * ntris;
+	struct view w;
+	struct edge_grid g = {0};
+	struct seen *ends = malloc((2 * nedges + 1) * sizeof(*ends));
+	double gap = 0;
+
+	view_init(&w, n);
+	for (size_t i = 0; i < nprobe; i++) {
+		const uint32_t *t = tris[located[i]];
+		gap = fmax(gap, vertex_gap(&w, m->verts[probe[i]], m->verts[t[0]], m->verts[t[1]],
+					   m->verts[t[2]]));
+	}
+	for (size_t e = 0; ends && e < nedges; e++) {
+		const uint32_t *t = tris[e / 3];
+		ends[2 * e] = see(&w, m->verts[t[e % 3]]);
+		ends[2 * e + 1] = see(&w, m->verts[t[(e + 1) % 3]]);
+	}
+	if (!ends || !edge_grid_build(&g, ends, nedges)) {
+		gap = -1;
+		goto out;
+	}
+	for (size_t i = 0; i < 3 * nold; i++) {
+		const uint32_t *t = old[i / 3];
+		const struct seen p = see(&w, m->verts[t[i % 3]]);
+		const struct seen q = see(&w, m->verts[t[(i + 1) % 3]]);
+		const size_t k = segment_buckets(&g, p, q);
+		for (size_t c = 0; c < k; c++)
+			for (size_t j = g.first[g.cells[c]]; j < g.first[g.cells[c] + 1]; j++) {
+				const size_t e = g.edge[j];
+				gap = fmax(gap, crossing_gap(p, q, ends[2 * e], ends[2 * e + 1]));
+			}
+	}
+out:
+	edge_grid_free(&g);
+	free(ends);
+	return gap;
 }
 
 /*
@@ -219,13 +434,10 @@ int planar_retriangulate(struct planar_ctx *x, uint32_t c, size_t **refusal,
 	/* An exactly planar cluster keeps its plane: nothing deviates. */
 	if (!cl->exact) {
 		double area = 0, dv;
-		for (size_t i = 0; i < l.nprobe; i++) {
-			const uint32_t *t = tris[located[i]];
-			deviation = fmax(deviation,
-					 vec3_point_triangle_distance(m->verts[l.probe[i]],
-								      m->verts[t[0]], m->verts[t[1]],
-								      m->verts[t[2]]));
-		}
+		deviation = overlay_gap(m, cl->normal, old, cl->n, (const uint32_t(*)[3])tris,
+					ntris, l.probe, located, l.nprobe);
+		if (deviation < 0)
+			goto out_nomem;
 		for (size_t i = 0; i < cl->n; i++)
 			area += x->area[x->cl_tris[cl->first + i]];
 		dv = (volume6(m, (const uint32_t(*)[3])tris, ntris, m->verts[l.vert[0]]) -

@@ -44,10 +44,10 @@ struct planar_report {
 	size_t retriangulated;	/* of those, re-triangulated with fewer triangles */
 	/* Clusters left as they were, by the check that refused them: */
 	size_t refused_shape;	  /* not a disk with holes, or no valid triangulation */
-	size_t refused_deviation; /* a removed vertex or the volume beyond flatness */
+	size_t refused_deviation; /* surfaces or volume apart beyond flatness */
 	size_t refused_topology;  /* an edge would not be closed and manifold */
 	size_t refused_crossing;  /* a new triangle would meet another (exact) */
-	double max_deviation;	/* mm: farthest removed vertex from the new triangles */
+	double max_deviation;	/* mm: widest gap between old and new surfaces */
 	double volume_before;	/* mm^3, signed (divergence theorem) */
 	double volume_after;
 	double area;		/* mm^2 of the input */
