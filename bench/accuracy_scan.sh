@@ -9,6 +9,8 @@
 #   smoothed refinement of it), both scaled by the same factor 100 so they
 #   still fit each other: the surface distance and the coarse facets'
 #   chordal error, the facets over 0.3 mm isolated.
+# - fandisk.off (12,946 triangles, a CAD part) scaled to 100 mm: what
+#   `stratum repair --simplify-planar` moves, by `stratum compare`;
 # - `stratum refine`: the cylinder, the elephants, a torus and the bunny
 #   decimated, below.
 # Works in bench/out/accuracy, writes its *.png there and prints each command's report with its
@@ -21,7 +23,8 @@ tarball=/usr/share/doc/libcgal-demo/data.tar.gz
 [ -f "$tarball" ] || { echo "accuracy_scan: $tarball missing (make deps EXTRA_PACKAGES=libcgal-demo)" >&2; exit 1; }
 mkdir -p "$out"
 cd "$out" # the pictures' titles name the files as given
-tar -xzf "$tarball" data/meshes/bunny00.off data/meshes/elephant.off data/meshes/refined_elephant.off
+tar -xzf "$tarball" data/meshes/bunny00.off data/meshes/elephant.off data/meshes/refined_elephant.off \
+	data/meshes/fandisk.off
 
 # OFF with every coordinate times 100 (the header, blank lines and faces unchanged)
 scale_off() {
@@ -57,6 +60,13 @@ timed "compare, elephants: chordal error" "$bin" compare elephant.off \
 	--reference refined-elephant.off --tolerance 0.3 --png elephant-chordal.png \
 	> elephant-chordal.txt
 cat elephant-chordal.txt
+
+"$gen" convert data/meshes/fandisk.off 100 fandisk.stl >/dev/null
+"$bin" repair fandisk.stl -o fandisk-repaired.stl >/dev/null
+"$bin" repair fandisk.stl -o fandisk-simplified.stl --simplify-planar | grep 'planar simplification'
+timed "compare, fandisk simplified and repaired" "$bin" compare fandisk-simplified.stl \
+	fandisk-repaired.stl --png fandisk-simplified.png > fandisk-simplified.txt
+sed -n 4p fandisk-simplified.txt
 
 # `stratum refine` (seed 003's vertex translation): a 16-sided cylinder
 # (radius 10 mm, 20 mm tall) against a 256-sided one at 0.01 mm, and the
