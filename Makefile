@@ -42,8 +42,7 @@ DEB_PACKAGES := gcc g++ make pkg-config dpkg-dev \
 	libserialport-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev libtbb-dev \
 	libpolyclipping-dev check libsqlite3-dev libmicrohttpd-dev libjansson-dev \
 	libmosquitto-dev mosquitto gpx libcairo2-dev libxml2-utils libcurl4-openssl-dev \
-	libssl-dev libeigen3-dev libzip-dev libxml2-dev libwslay-dev libreadline-dev \
-	libjemalloc-dev
+	libssl-dev libeigen3-dev libzip-dev libxml2-dev libwslay-dev libreadline-dev
 # Only the benchmark compares against these (printcore: Printrun's host, also
 # used by the sim suite's faithfulness test, which is skipped without it;
 # libcgal-demo: CGAL's data meshes, the real broken models bench/cgal_corpus.sh
@@ -138,11 +137,8 @@ $(BUILD)/libstratum.a: $(LIB_OBJ)
 	@rm -f $@
 	ar rcs $@ $^
 
-# The program alone gets jemalloc (DEB_PACKAGES); the sanitizer builds keep
-# the malloc their runtime replaces (MALLOC_LIBS= below).
-MALLOC_LIBS ?= -ljemalloc
 $(BUILD)/stratum: $(BUILD)/$(MAIN_SRC:.c=.o) $(BUILD)/libstratum.a
-	$(CXX) -pthread $(LDEXTRA) -o $@ $^ $(LDLIBS) $(MALLOC_LIBS)
+	$(CXX) -pthread $(LDEXTRA) -o $@ $^ $(LDLIBS)
 
 # the library listed first so that its C++ bridges start first (LIB_OBJ)
 $(BUILD)/check_all: $(BUILD)/libstratum.a $(TEST_OBJ)
@@ -231,7 +227,7 @@ check-build-asan:
 # full debug info cost the C files a fifth more compile time (8 files:
 # 7.7 s of CPU with -g against 6.1 s).
 SAN := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
-ASAN_MAKE = $(MAKE) BUILD=build/asan MALLOC_LIBS= CFLAGS="-O1 -g1 $(SAN)" \
+ASAN_MAKE = $(MAKE) BUILD=build/asan CFLAGS="-O1 -g1 $(SAN)" \
 	CXXFLAGS="-O1 -g1 -Wno-maybe-uninitialized $(SAN)" LDEXTRA="$(SAN)"
 test-asan:
 	@$(ASAN_MAKE) build/asan/check_all build/asan/stratum
