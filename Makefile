@@ -34,10 +34,6 @@ CXX      := g++
 # the line being typed.  libedit-dev (BSD) was tried first: its readline
 # emulation (3.1-20221030) lost every other key in callback mode.  GNU
 # readline is GPL-3, so a binary linked with it is shared under GPL terms.
-# libjemalloc-dev is the stratum program's malloc (MALLOC_LIBS): Clipper
-# allocates and frees every edge of every offset, and glibc's malloc was 8 %
-# of a slice's CPU; with jemalloc a slice takes about 13 % less CPU for
-# 3 MiB more peak, `stratum check` about 7 % more (docs/benchmarks.md).
 DEB_PACKAGES := gcc g++ make pkg-config dpkg-dev \
 	libserialport-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev libtbb-dev \
 	libpolyclipping-dev check libsqlite3-dev libmicrohttpd-dev libjansson-dev \
