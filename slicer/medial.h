@@ -9,8 +9,11 @@
  * region (the "shrinking ball": its centre lies on the inward normal, and
  * its radius is the smallest, over all boundary edges, of the radius of the
  * circle tangent at p through a point of that edge - found in closed form
- * per edge).  Such a disk is a maximal inscribed disk, so its centre is a
- * point of the medial axis and its diameter is the local width.  A centre
+ * per edge; the edges are binned in a grid and tried ring by ring around p,
+ * stopping where the rest are too far to give a smaller circle, since one
+ * through a point q has radius at least |pq| / 2).  Such a disk is a
+ * maximal inscribed disk, so its centre is a point of the medial axis and
+ * its diameter is the local width.  A centre
  * is kept only where the disk's two contacts face each other (the angle
  * between them seen from the centre is at least 135 degrees): that is the
  * strip's centre line, while the branches running into convex corners,

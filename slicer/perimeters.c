@@ -73,16 +73,19 @@ static int emit_loop(struct ctx *c, const int64_t *xy, size_t n, enum path_role 
 
 	if (n < 3)
 		return 0;
+	/* The seam is picked on the fitted points, changed or not: even when
+	 * nothing is absorbed they may number one more than xy (a sample left on
+	 * the closing edge), and xy read that far runs past the loop. */
 	rc = bead_fit_loop(xy, n, inside, outside, &f, &fit, &n, &changed, c->err);
-	if (!rc && n >= 3 && changed && (fxy = malloc(2 * n * sizeof(*fxy))))
+	if (!rc && n >= 3 && (fxy = malloc(2 * n * sizeof(*fxy))))
 		for (size_t k = 0; k < n; k++) {
 			fxy[2 * k] = fit[k].x;
 			fxy[2 * k + 1] = fit[k].y;
 		}
-	if (!rc && n >= 3 && ((changed && !fxy) || !(pts = malloc(n * sizeof(*pts)))))
+	if (!rc && n >= 3 && (!fxy || !(pts = malloc(n * sizeof(*pts)))))
 		rc = st_error_set(c->err, ST_ERR_NOMEM, "perimeters: out of memory for a loop");
 	if (!rc && n >= 3) {
-		seam = perim_seam_pick(c->sm, c->s->seam, c->w, changed ? fxy : xy, n);
+		seam = perim_seam_pick(c->sm, c->s->seam, c->w, fxy, n);
 		for (size_t k = 0; k < n; k++)
 			pts[k] = fit[(seam + k) % n];
 		rc = layer_add_path(c->out, role, true, pts, n, c->err);

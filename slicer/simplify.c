@@ -9,17 +9,38 @@
 
 #include "st_grow.h"
 
-double simplify_seg_dist(int64_t px, int64_t py, int64_t ax, int64_t ay, int64_t bx, int64_t by)
+/* Segment a-b with what every distance to it needs, computed once: a
+ * Douglas-Peucker pass measures each point of a range against one segment. */
+struct seg {
+	int64_t ax, ay, bx, by;
+	double dx, dy, l2, len;
+};
+
+static struct seg seg_make(int64_t ax, int64_t ay, int64_t bx, int64_t by)
 {
 	double dx = (double)(bx - ax), dy = (double)(by - ay);
-	double qx = (double)(px - ax), qy = (double)(py - ay);
-	double l2 = dx * dx + dy * dy, t = qx * dx + qy * dy;
 
-	if (l2 <= 0 || t <= 0)
+	return (struct seg){.ax = ax, .ay = ay, .bx = bx, .by = by, .dx = dx, .dy = dy,
+			    .l2 = dx * dx + dy * dy, .len = sqrt(dx * dx + dy * dy)};
+}
+
+static double seg_dist(const struct seg *s, int64_t px, int64_t py)
+{
+	double qx = (double)(px - s->ax), qy = (double)(py - s->ay);
+	double t = qx * s->dx + qy * s->dy;
+
+	if (s->l2 <= 0 || t <= 0)
 		return hypot(qx, qy);
-	if (t >= l2)
-		return hypot((double)(px - bx), (double)(py - by));
-	return fabs(dx * qy - dy * qx) / sqrt(l2);
+	if (t >= s->l2)
+		return hypot((double)(px - s->bx), (double)(py - s->by));
+	return fabs(s->dx * qy - s->dy * qx) / s->len;
+}
+
+double simplify_seg_dist(int64_t px, int64_t py, int64_t ax, int64_t ay, int64_t bx, int64_t by)
+{
+	struct seg s = seg_make(ax, ay, bx, by);
+
+	return seg_dist(&s, px, py);
 }
 
 /* Push the range [i, j] onto the work stack. */
@@ -68,9 +89,9 @@ int simplify_mark(struct simplify_work *wk, const int64_t *xy, size_t n, double 
 		top--;
 		i = wk->stack[2 * top];
 		j = wk->stack[2 * top + 1];
+		struct seg s = seg_make(xy[2 * i], xy[2 * i + 1], xy[2 * j], xy[2 * j + 1]);
 		for (size_t k = i + 1; k < j; k++) {
-			double d = simplify_seg_dist(xy[2 * k], xy[2 * k + 1], xy[2 * i], xy[2 * i + 1],
-						     xy[2 * j], xy[2 * j + 1]);
+			double d = seg_dist(&s, xy[2 * k], xy[2 * k + 1]);
 			if (d > dmax) {
 				dmax = d;
 				far = k;
@@ -172,9 +193,9 @@ static bool balance(const int64_t *xy, size_t n, const bool *keep, double tol, b
 		size_t next = k + 1;
 		while (!keep[next])
 			next++;
+		struct seg moved = seg_make(out[2 * j], out[2 * j + 1], out[2 * j + 2], out[2 * j + 3]);
 		for (size_t i = k; i <= next && ok; i++)
-			ok = simplify_seg_dist(xy[2 * i], xy[2 * i + 1], out[2 * j], out[2 * j + 1],
-					       out[2 * j + 2], out[2 * j + 3]) <= lim;
+			ok = seg_dist(&moved, xy[2 * i], xy[2 * i + 1]) <= lim;
 		k = next;
 	}
 	if (ok)
