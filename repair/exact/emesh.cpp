@@ -607,6 +607,7 @@ int exact_mesh_select(const struct exact_mesh *m, const uint8_t *keep, const uin
 			r->plane.push_back(m->plane[t]);
 		}
 		r->next_plane = m->next_plane;
+		r->planes = m->planes;
 		*out = r;
 		return ST_OK;
 	} catch (...) {

@@ -393,6 +393,31 @@ bool coplanar(const snapper &s, uint32_t a, uint32_t b, uint32_t c, uint32_t d)
 	return CGAL::orientation(s.pos[a], s.pos[b], s.pos[c], s.pos[d]) == CGAL::COPLANAR;
 }
 
+/*
+ * Whether triangles t and u of m, which share an edge, lie in one plane,
+ * exactly.  Each lies in the plane of the triangle its plane id was made
+ * for, so they do exactly when those two planes are one: when u's
+ * plane's corners lie in t's.  Those corners are doubles, which Epick's
+ * static filter decides; the pieces' own corners are mostly rational cut
+ * points, and on the thin pieces along a cut Epeck's interval filter
+ * fails into rationals.  abcd: the pieces' corners (shared edge ab), used
+ * when a plane's corners are not doubles or do not span it.
+ */
+bool same_plane(const snapper &s, const exact_mesh &m, uint32_t t, uint32_t u, uint32_t a,
+		uint32_t b, uint32_t c, uint32_t d)
+{
+	const exact_mesh::plane_corners &pt = m.planes[m.plane[t]], &pu = m.planes[m.plane[u]];
+	auto p = [](const std::array<double, 3> &x) { return IK::Point_3(x[0], x[1], x[2]); };
+	if ((s.isd[a] && s.isd[b] && s.isd[c] && s.isd[d]) || !pt.known || !pu.known ||
+	    CGAL::collinear(p(pt.corner[0]), p(pt.corner[1]), p(pt.corner[2])))
+		return coplanar(s, a, b, c, d);
+	for (const auto &x : pu.corner)
+		if (CGAL::orientation(p(pt.corner[0]), p(pt.corner[1]), p(pt.corner[2]), p(x)) !=
+		    CGAL::COPLANAR)
+			return false;
+	return true;
+}
+
 /* Union of triangles that share an edge and lie in one plane (exactly).
  * Pieces of one split triangle are known to (m.plane): for them the
  * predicate would only confirm an exact zero, its costliest answer. */
@@ -428,7 +453,7 @@ void build_patches(snapper &s, const exact_mesh &m)
 				const uint32_t c = third(e[a].t, e[a].lo, e[a].hi),
 					       d = third(e[b].t, e[b].lo, e[b].hi);
 				if (m.plane[e[a].t] != m.plane[e[b].t] &&
-				    !coplanar(s, e[a].lo, e[a].hi, c, d))
+				    !same_plane(s, m, e[a].t, e[b].t, e[a].lo, e[a].hi, c, d))
 					continue;
 				const uint32_t ra = find_patch(s.patch, e[a].t),
 					       rb = find_patch(s.patch, e[b].t);
