@@ -39,7 +39,7 @@ typedef XK::FT XFT;
 /* Exact coordinates of a point, as rationals, and the point as Epeck's. */
 inline void coords(const EPoint &p, XFT c[3])
 {
-	const XK::Point_3 &e = CGAL::exact(p);
+	const XK::Point_3 &e = emesh::exact_of(p);
 	for (int k = 0; k < 3; k++)
 		c[k] = e[k];
 }

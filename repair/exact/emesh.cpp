@@ -77,7 +77,7 @@ bool is_double(const XPoint::FT &q, double d)
  * from p's exact value: its lazy coordinates would each be a new node. */
 uint32_t add_vertex(exact_mesh &m, const EPoint &p)
 {
-	const XPoint &e = CGAL::exact(p);
+	const XPoint &e = emesh::exact_of(p);
 	const double x = CGAL::to_double(e.x()), y = CGAL::to_double(e.y()),
 		     z = CGAL::to_double(e.z());
 
@@ -136,7 +136,7 @@ struct point_index {
 	}
 	static dkey key(const EPoint &p)
 	{
-		const XPoint &e = CGAL::exact(p);
+		const XPoint &e = emesh::exact_of(p);
 		return dkey{{key_double(e.x()), key_double(e.y()), key_double(e.z())}};
 	}
 	/* Vertex v of m, once (distinct vertices are distinct points). */

@@ -112,6 +112,26 @@ struct exact_mesh {
 namespace emesh
 {
 
+/*
+ * The exact value of p, as CGAL::exact(p).  CGAL 5.5 guards the first
+ * read of each lazy object's exact value with std::call_once, and glibc
+ * ends every first call with a futex wake system call, even for a point
+ * built from its exact value (a cut point) where there is nothing to
+ * compute: about 3 % of a soup's repair.  A value that is already there
+ * is read as call_once's fast path would, through an acquire load of the
+ * pointer to it; anything else goes through CGAL::exact.
+ */
+template <class AT, class ET, class E2A> const ET &exact_of(const CGAL::Lazy<AT, ET, E2A> &x)
+{
+	if constexpr (CGAL::Lazy_rep_selector<AT>::value == 1) {
+		const auto *rep = static_cast<const CGAL::Lazy_rep<AT, ET, E2A> *>(
+		    static_cast<const CGAL::Rep *>(x.for_compact_container()));
+		if (const ET *e = rep->ptr_.load(std::memory_order_acquire))
+			return *e;
+	}
+	return CGAL::exact(x);
+}
+
 /* Vertex v of m as an exact point. */
 inline EPoint epoint(const exact_mesh &m, uint32_t v)
 {
