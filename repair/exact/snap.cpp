@@ -379,38 +379,25 @@ uint32_t find_patch(std::vector<uint32_t> &p, uint32_t x)
 	return x;
 }
 
-/* Whether vertices a, b, c, d lie in one plane, exactly.  Double corners
- * go through Epick's static filter: a thickened sheet's walls are nearly
- * flat, and for them Epeck's interval filter fails into rationals. */
-bool coplanar(const snapper &s, uint32_t a, uint32_t b, uint32_t c, uint32_t d)
-{
-	if (s.isd[a] && s.isd[b] && s.isd[c] && s.isd[d]) {
-		auto p = [&s](uint32_t i) {
-			return IK::Point_3(s.cur[i][0], s.cur[i][1], s.cur[i][2]);
-		};
-		return CGAL::orientation(p(a), p(b), p(c), p(d)) == CGAL::COPLANAR;
-	}
-	return CGAL::orientation(s.pos[a], s.pos[b], s.pos[c], s.pos[d]) == CGAL::COPLANAR;
-}
-
 /*
- * Whether triangles t and u of m, which share an edge, lie in one plane,
- * exactly.  Each lies in the plane of the triangle its plane id was made
- * for, so they do exactly when those two planes are one: when u's
- * plane's corners lie in t's.  Those corners are doubles, which Epick's
- * static filter decides; the pieces' own corners are mostly rational cut
- * points, and on the thin pieces along a cut Epeck's interval filter
- * fails into rationals.  abcd: the pieces' corners (shared edge ab), used
- * when a plane's corners are not doubles or do not span it.
+ * Whether triangles t and u of m, sharing edge ab (third corners c and d),
+ * lie in one plane, exactly.  Double corners go through Epick's static
+ * filter (Epeck's interval filter fails into rationals on nearly flat
+ * slab walls).  Each triangle lies in the plane of the triangle its plane
+ * id was made for, so t and u do exactly when u's plane's corners lie in
+ * t's: doubles again, where the thin pieces along a cut have rational ones.
  */
 bool same_plane(const snapper &s, const exact_mesh &m, uint32_t t, uint32_t u, uint32_t a,
 		uint32_t b, uint32_t c, uint32_t d)
 {
-	const exact_mesh::plane_corners &pt = m.planes[m.plane[t]], &pu = m.planes[m.plane[u]];
 	auto p = [](const std::array<double, 3> &x) { return IK::Point_3(x[0], x[1], x[2]); };
-	if ((s.isd[a] && s.isd[b] && s.isd[c] && s.isd[d]) || !pt.known || !pu.known ||
+	if (s.isd[a] && s.isd[b] && s.isd[c] && s.isd[d])
+		return CGAL::orientation(p(s.cur[a]), p(s.cur[b]), p(s.cur[c]), p(s.cur[d])) ==
+		       CGAL::COPLANAR;
+	const exact_mesh::plane_corners &pt = m.planes[m.plane[t]], &pu = m.planes[m.plane[u]];
+	if (!pt.known || !pu.known ||
 	    CGAL::collinear(p(pt.corner[0]), p(pt.corner[1]), p(pt.corner[2])))
-		return coplanar(s, a, b, c, d);
+		return CGAL::orientation(s.pos[a], s.pos[b], s.pos[c], s.pos[d]) == CGAL::COPLANAR;
 	for (const auto &x : pu.corner)
 		if (CGAL::orientation(p(pt.corner[0]), p(pt.corner[1]), p(pt.corner[2]), p(x)) !=
 		    CGAL::COPLANAR)
