@@ -17,6 +17,7 @@
 #include <mutex>
 #include <new>
 #include <stdexcept>
+#include <unordered_map>
 #include <vector>
 
 #include "exact.h"
@@ -83,14 +84,10 @@ struct exact_mesh {
 	 * (pieces of one split triangle); different ids tell nothing. */
 	std::vector<uint32_t> plane;
 	uint32_t next_plane = 0; /* an id no triangle has yet */
-	/* Per plane id: the corners of the triangle it was made for, when
-	 * they are doubles (known); every triangle with the id lies exactly in
-	 * their plane, so a test on it needs no rational corner. */
-	struct plane_corners {
-		std::array<std::array<double, 3>, 3> corner;
-		bool known;
-	};
-	std::vector<plane_corners> planes;
+	/* Per plane id of a triangle a refinement split: the corners of that
+	 * triangle when they were doubles.  Its pieces lie exactly in their
+	 * plane, so a test on them needs no rational cut point. */
+	std::unordered_map<uint32_t, std::array<std::array<double, 3>, 3>> split_planes;
 	/* Set by the last refinement only (empty after any other change):
 	 * per triangle, the index before it of the triangle it is a piece of;
 	 * per such index, 0 when a piece of it went to a coplanar overlap. */
@@ -102,8 +99,6 @@ struct exact_mesh {
 		tris.push_back(t);
 		origin.push_back(orig);
 		plane.push_back(next_plane++);
-		planes.push_back({{{approx[t[0]], approx[t[1]], approx[t[2]]}},
-				  slot[t[0]] < 0 && slot[t[1]] < 0 && slot[t[2]] < 0});
 		parent.clear();
 		parent_whole.clear();
 	}

@@ -383,8 +383,8 @@ uint32_t find_patch(std::vector<uint32_t> &p, uint32_t x)
  * Whether triangles t and u of m, sharing edge ab (third corners c and d),
  * lie in one plane, exactly.  Double corners go through Epick's static
  * filter (Epeck's interval filter fails into rationals on nearly flat
- * slab walls).  Each triangle lies in the plane of the triangle its plane
- * id was made for, so t and u do exactly when u's plane's corners lie in
+ * slab walls).  A piece of a split triangle lies in that triangle's plane
+ * (m.split_planes), so t and u do exactly when u's plane's corners lie in
  * t's: doubles again, where the thin pieces along a cut have rational ones.
  */
 bool same_plane(const snapper &s, const exact_mesh &m, uint32_t t, uint32_t u, uint32_t a,
@@ -394,13 +394,22 @@ bool same_plane(const snapper &s, const exact_mesh &m, uint32_t t, uint32_t u, u
 	if (s.isd[a] && s.isd[b] && s.isd[c] && s.isd[d])
 		return CGAL::orientation(p(s.cur[a]), p(s.cur[b]), p(s.cur[c]), p(s.cur[d])) ==
 		       CGAL::COPLANAR;
-	const exact_mesh::plane_corners &pt = m.planes[m.plane[t]], &pu = m.planes[m.plane[u]];
-	if (!pt.known || !pu.known ||
-	    CGAL::collinear(p(pt.corner[0]), p(pt.corner[1]), p(pt.corner[2])))
+	/* The double corners spanning triangle x's plane, if known. */
+	auto corners = [&m, &p](uint32_t x, IK::Point_3 q[3]) {
+		const auto it = m.split_planes.find(m.plane[x]);
+		for (int k = 0; k < 3; k++) {
+			const uint32_t v = m.tris[x][k];
+			if (it == m.split_planes.end() && m.slot[v] >= 0)
+				return false;
+			q[k] = p(it != m.split_planes.end() ? it->second[k] : m.approx[v]);
+		}
+		return true;
+	};
+	IK::Point_3 pt[3], pu[3];
+	if (!corners(t, pt) || !corners(u, pu) || CGAL::collinear(pt[0], pt[1], pt[2]))
 		return CGAL::orientation(s.pos[a], s.pos[b], s.pos[c], s.pos[d]) == CGAL::COPLANAR;
-	for (const auto &x : pu.corner)
-		if (CGAL::orientation(p(pt.corner[0]), p(pt.corner[1]), p(pt.corner[2]), p(x)) !=
-		    CGAL::COPLANAR)
+	for (const IK::Point_3 &x : pu)
+		if (CGAL::orientation(pt[0], pt[1], pt[2], x) != CGAL::COPLANAR)
 			return false;
 	return true;
 }
