@@ -77,7 +77,7 @@ bool is_double(const XPoint::FT &q, double d)
  * from p's exact value: its lazy coordinates would each be a new node. */
 uint32_t add_vertex(exact_mesh &m, const EPoint &p)
 {
-	const XPoint &e = CGAL::exact(p);
+	const XPoint &e = emesh::exact_of(p);
 	const double x = CGAL::to_double(e.x()), y = CGAL::to_double(e.y()),
 		     z = CGAL::to_double(e.z());
 
@@ -136,7 +136,7 @@ struct point_index {
 	}
 	static dkey key(const EPoint &p)
 	{
-		const XPoint &e = CGAL::exact(p);
+		const XPoint &e = emesh::exact_of(p);
 		return dkey{{key_double(e.x()), key_double(e.y()), key_double(e.z())}};
 	}
 	/* Vertex v of m, once (distinct vertices are distinct points). */
@@ -381,6 +381,10 @@ void refine(exact_mesh &m, int threads, exact_refine_stats &st)
 		const std::vector<std::array<EPoint, 3>> &pieces =
 		    pieces_of[static_cast<size_t>(piece_slot[t])];
 		st.triangles_split++;
+		if (tri_is_double(m, t)) /* kept when a piece of a piece */
+			m.split_planes.emplace(m.plane[t], std::array<std::array<double, 3>, 3>{
+							       {m.approx[m.tris[t][0]], m.approx[m.tris[t][1]],
+								m.approx[m.tris[t][2]]}});
 		for (const auto &pc : pieces) {
 			std::array<uint32_t, 3> v;
 			for (int k = 0; k < 3; k++) {
@@ -607,6 +611,7 @@ int exact_mesh_select(const struct exact_mesh *m, const uint8_t *keep, const uin
 			r->plane.push_back(m->plane[t]);
 		}
 		r->next_plane = m->next_plane;
+		r->split_planes = m->split_planes;
 		*out = r;
 		return ST_OK;
 	} catch (...) {

@@ -17,6 +17,7 @@
 #include <mutex>
 #include <new>
 #include <stdexcept>
+#include <unordered_map>
 #include <vector>
 
 #include "exact.h"
@@ -83,6 +84,10 @@ struct exact_mesh {
 	 * (pieces of one split triangle); different ids tell nothing. */
 	std::vector<uint32_t> plane;
 	uint32_t next_plane = 0; /* an id no triangle has yet */
+	/* Per plane id of a triangle a refinement split: the corners of that
+	 * triangle when they were doubles.  Its pieces lie exactly in their
+	 * plane, so a test on them needs no rational cut point. */
+	std::unordered_map<uint32_t, std::array<std::array<double, 3>, 3>> split_planes;
 	/* Set by the last refinement only (empty after any other change):
 	 * per triangle, the index before it of the triangle it is a piece of;
 	 * per such index, 0 when a piece of it went to a coplanar overlap. */
@@ -101,6 +106,26 @@ struct exact_mesh {
 
 namespace emesh
 {
+
+/*
+ * The exact value of p, as CGAL::exact(p).  CGAL 5.5 guards the first
+ * read of each lazy object's exact value with std::call_once, and glibc
+ * ends every first call with a futex wake system call, even for a point
+ * built from its exact value (a cut point) where there is nothing to
+ * compute: about 3 % of a soup's repair.  A value that is already there
+ * is read as call_once's fast path would, through an acquire load of the
+ * pointer to it; anything else goes through CGAL::exact.
+ */
+template <class AT, class ET, class E2A> const ET &exact_of(const CGAL::Lazy<AT, ET, E2A> &x)
+{
+	if constexpr (CGAL::Lazy_rep_selector<AT>::value == 1) {
+		const auto *rep = static_cast<const CGAL::Lazy_rep<AT, ET, E2A> *>(
+		    static_cast<const CGAL::Rep *>(x.for_compact_container()));
+		if (const ET *e = rep->ptr_.load(std::memory_order_acquire))
+			return *e;
+	}
+	return CGAL::exact(x);
+}
 
 /* Vertex v of m as an exact point. */
 inline EPoint epoint(const exact_mesh &m, uint32_t v)

@@ -205,13 +205,26 @@ inline void split(const EPoint &p0, const EPoint &p1, const EPoint &p2, const cu
 	 * triangle, or else every piece is reversed. */
 	const bool reverse =
 	    CGAL::orientation(v0->point(), v1->point(), v2->point()) == CGAL::CLOCKWISE;
-	/* A point where constraints cross, back on the triangle's plane. */
+	/*
+	 * A point where constraints cross, back on the triangle's plane,
+	 * computed in rationals: its exact value is always needed (the
+	 * welding keys it by that), and as lazy numbers each of the lift's
+	 * operations was a node evaluated exactly on its own.
+	 */
+	typedef EK::Exact_kernel XK;
+	const XK::Point_3 *a = nullptr; /* p0 and the normal, once needed */
+	const XK::Vector_3 *nx = nullptr;
 	auto lift = [&](const EK::Point_2 &q) {
-		EFT x[3];
-		x[i] = q.x();
-		x[j] = q.y();
-		x[k] = p0[k] - (n[i] * (q.x() - p0[i]) + n[j] * (q.y() - p0[j])) / n[k];
-		return EPoint(x[0], x[1], x[2]);
+		if (!a) {
+			a = &emesh::exact_of(p0);
+			nx = &emesh::exact_of(nrm);
+		}
+		const XK::Point_2 &e = emesh::exact_of(q);
+		XK::FT x[3];
+		x[i] = e.x();
+		x[j] = e.y();
+		x[k] = (*a)[k] - ((*nx)[i] * (x[i] - (*a)[i]) + (*nx)[j] * (x[j] - (*a)[j])) / (*nx)[k];
+		return EPoint(XK::Point_3(x[0], x[1], x[2]));
 	};
 	for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
 		std::array<EPoint, 3> t;

@@ -379,18 +379,39 @@ uint32_t find_patch(std::vector<uint32_t> &p, uint32_t x)
 	return x;
 }
 
-/* Whether vertices a, b, c, d lie in one plane, exactly.  Double corners
- * go through Epick's static filter: a thickened sheet's walls are nearly
- * flat, and for them Epeck's interval filter fails into rationals. */
-bool coplanar(const snapper &s, uint32_t a, uint32_t b, uint32_t c, uint32_t d)
+/*
+ * Whether triangles t and u of m, sharing edge ab (third corners c and d),
+ * lie in one plane, exactly.  Double corners go through Epick's static
+ * filter (Epeck's interval filter fails into rationals on nearly flat
+ * slab walls).  A piece of a split triangle lies in that triangle's plane
+ * (m.split_planes), so t and u do exactly when u's plane's corners lie in
+ * t's: doubles again, where the thin pieces along a cut have rational ones.
+ */
+bool same_plane(const snapper &s, const exact_mesh &m, uint32_t t, uint32_t u, uint32_t a,
+		uint32_t b, uint32_t c, uint32_t d)
 {
-	if (s.isd[a] && s.isd[b] && s.isd[c] && s.isd[d]) {
-		auto p = [&s](uint32_t i) {
-			return IK::Point_3(s.cur[i][0], s.cur[i][1], s.cur[i][2]);
-		};
-		return CGAL::orientation(p(a), p(b), p(c), p(d)) == CGAL::COPLANAR;
-	}
-	return CGAL::orientation(s.pos[a], s.pos[b], s.pos[c], s.pos[d]) == CGAL::COPLANAR;
+	auto p = [](const std::array<double, 3> &x) { return IK::Point_3(x[0], x[1], x[2]); };
+	if (s.isd[a] && s.isd[b] && s.isd[c] && s.isd[d])
+		return CGAL::orientation(p(s.cur[a]), p(s.cur[b]), p(s.cur[c]), p(s.cur[d])) ==
+		       CGAL::COPLANAR;
+	/* The double corners spanning triangle x's plane, if known. */
+	auto corners = [&m, &p](uint32_t x, IK::Point_3 q[3]) {
+		const auto it = m.split_planes.find(m.plane[x]);
+		for (int k = 0; k < 3; k++) {
+			const uint32_t v = m.tris[x][k];
+			if (it == m.split_planes.end() && m.slot[v] >= 0)
+				return false;
+			q[k] = p(it != m.split_planes.end() ? it->second[k] : m.approx[v]);
+		}
+		return true;
+	};
+	IK::Point_3 pt[3], pu[3];
+	if (!corners(t, pt) || !corners(u, pu) || CGAL::collinear(pt[0], pt[1], pt[2]))
+		return CGAL::orientation(s.pos[a], s.pos[b], s.pos[c], s.pos[d]) == CGAL::COPLANAR;
+	for (const IK::Point_3 &x : pu)
+		if (CGAL::orientation(pt[0], pt[1], pt[2], x) != CGAL::COPLANAR)
+			return false;
+	return true;
 }
 
 /* Union of triangles that share an edge and lie in one plane (exactly).
@@ -428,7 +449,7 @@ void build_patches(snapper &s, const exact_mesh &m)
 				const uint32_t c = third(e[a].t, e[a].lo, e[a].hi),
 					       d = third(e[b].t, e[b].lo, e[b].hi);
 				if (m.plane[e[a].t] != m.plane[e[b].t] &&
-				    !coplanar(s, e[a].lo, e[a].hi, c, d))
+				    !same_plane(s, m, e[a].t, e[b].t, e[a].lo, e[a].hi, c, d))
 					continue;
 				const uint32_t ra = find_patch(s.patch, e[a].t),
 					       rb = find_patch(s.patch, e[b].t);
