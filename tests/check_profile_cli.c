@@ -407,6 +407,20 @@ START_TEST(test_bindings_match_declaration)
 }
 END_TEST
 
+/* Every declared key is found by its name as itself (names are unique, so
+ * the sorted lookup finds what a scan in declaration order would). */
+START_TEST(test_every_key_found_as_itself)
+{
+	for (size_t i = 0; i < settings_count(); i++) {
+		const struct setting *s = settings_at(i);
+		ck_assert_msg(settings_find(s->name) == s, "%s", s->name);
+	}
+	ck_assert_ptr_null(settings_find("no_such_key"));
+	ck_assert_ptr_null(settings_find(""));
+	ck_assert_ptr_null(settings_find(NULL));
+}
+END_TEST
+
 /* docs/printers.md's key tables are `stratum printers --keys`, byte for byte. */
 START_TEST(test_doc_matches_declaration)
 {
@@ -432,6 +446,7 @@ void profile_cli_tcases(Suite *s)
 	tcase_add_test(access, test_print_mode_keys);
 	tcase_add_test(access, test_json);
 	tcase_add_test(access, test_bindings_match_declaration);
+	tcase_add_test(access, test_every_key_found_as_itself);
 	suite_add_tcase(s, access);
 
 	tcase_add_test(find, test_find_by_name);
